@@ -1,0 +1,27 @@
+/* Lemke's complementary pivoting algorithm for a small dense linear complementarity problem.
+ *
+ * Finds z >= 0 with w = M z + q >= 0 and z . w = 0 (method.md section 3), for any n <= LCP_MAX_N.
+ * Lexicographic minimum-ratio test (no cycling on degenerate problems), covering vector e = 1,
+ * pivot count bounded by the caller. No allocation: the workspace lives on the caller's stack.
+ * Plain C, no FMI types. */
+#ifndef DFO_LCP_H
+#define DFO_LCP_H
+
+#define LCP_MAX_N 8
+
+typedef enum {
+    LCP_OK = 0,          /* solution found */
+    LCP_RAY = 1,         /* secondary ray: no solution found (infeasible for this M) */
+    LCP_MAX_PIVOTS = 2,  /* pivot budget used up */
+    LCP_BAD_INPUT = 3    /* n out of range or a non-finite entry */
+} lcp_status;
+
+/* M: n x n, row-major. q: n. On LCP_OK, z and w (n each) hold the solution and basic[i] is
+ * 1 when z[i] is basic (its complementarity pair is "active" on the z side). pivots, if not NULL,
+ * receives the number of pivots done. */
+lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
+                     double *z, double *w, int *z_basic, int *pivots);
+
+const char *lcp_status_text(lcp_status s);
+
+#endif

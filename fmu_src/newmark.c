@@ -1,0 +1,510 @@
+/* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
+#include "newmark.h"
+
+#include "lcp.h"
+
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+
+#define TWO_PI (2.0 * DFO_PI)
+#define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
+#define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
+
+/* What is constant over one call of dfo_advance (inputs are held). */
+typedef struct {
+    const dfo_model *M;
+    double u;        /* external force */
+    double N;        /* normal force */
+    double muk_N;    /* kinetic friction force magnitude */
+    double Fb;       /* breakaway limit max(mu_s, mu_k) N */
+    int friction;    /* friction acts (the LCP is needed) */
+    dfo_status err;  /* first error met */
+    dfo_switch_fn on_switch;
+    void *switch_ctx;
+} step_ctx;
+
+/* One Bossak step of length h from the current state, before the velocity is known (eq. 4). */
+typedef struct {
+    double h, c1, A0, m_hat, x_pred, p_hat;
+} trial;
+
+static int sign_of(double x) { return (x > 0.0) - (x < 0.0); }
+
+static int stuck(const step_ctx *C, const dfo_state *s) { return C->friction && s->mode == 0; }
+
+/* Physical acceleration from the equation of motion in the current mode. */
+static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F)
+{
+    const dfo_model *M = C->M;
+    double f = dfo_excitation(M, t) + C->u - M->p.k * s->X + F;
+    if (M->damped) f -= M->p.c * s->V;
+    return f / M->p.m;
+}
+
+/* x''' from the time derivative of the equation of motion (0 while stuck). */
+static double jerk_of(const step_ctx *C, const dfo_state *s)
+{
+    if (stuck(C, s)) return 0.0;
+    const dfo_model *M = C->M;
+    const double F = -s->mode * C->muk_N;
+    double j = dfo_excitation_rate(M, s->t) - M->p.k * s->V;
+    if (M->damped) j -= M->p.c * accel_of(C, s, s->t, F);
+    return j / M->p.m;
+}
+
+static void predict(const step_ctx *C, const dfo_state *s, double h, trial *tr)
+{
+    const dfo_model *M = C->M;
+    const double a = M->p.alpha, g = M->gamma, b = M->beta, m = M->p.m, k = M->p.k;
+    double A0 = s->A;
+    /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). */
+    if (a != 0.0 && h != s->hA) A0 += a * (h - s->hA) * jerk_of(C, s);
+    const double c1 = 1.0 / (g * h);
+    double m_hat = (1.0 - a) * m * c1 + k * b * h / g;
+    if (M->damped) m_hat += M->p.c;
+    const double x_pred = s->X + h * (1.0 - b / g) * s->V + h * h * (0.5 - b / g) * A0;
+    const double P1 = dfo_excitation(M, s->t + h) + C->u;
+    tr->h = h;
+    tr->c1 = c1;
+    tr->A0 = A0;
+    tr->m_hat = m_hat;
+    tr->x_pred = x_pred;
+    tr->p_hat = P1 - a * m * A0 + (1.0 - a) * m * (s->V * c1 + (1.0 - g) / g * A0) - k * x_pred;
+}
+
+/* Complete the step with the end velocity V1 (X1 and A1 from Newmark's kinematics). */
+static void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
+{
+    const double g = C->M->gamma, b = C->M->beta;
+    s->X = tr->x_pred + b * tr->h / g * V1;
+    s->A = (V1 - s->V) * tr->c1 - (1.0 - g) / g * tr->A0;
+    s->V = V1;
+    s->hA = tr->h;
+    s->t += tr->h;
+}
+
+/* Friction at the end of the step: the LCP of method.md section 3 with limit muN. Lemke decides
+ * the active complementarity pair; the velocity then follows from that pair's equation. Returns
+ * the mode (+1, 0, -1). */
+static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
+{
+    const double mh = tr->m_hat, p = tr->p_hat;
+    if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
+        *V1 = p / mh;
+        *F1 = 0.0;
+        return sign_of(*V1);
+    }
+    const double Mx[4] = {mh, -mh, -mh, mh};
+    const double q[2] = {muN - p, muN + p};
+    double z[2], w[2];
+    int zb[2];
+    s->lcp_solves++;
+    const lcp_status st = lcp_lemke(2, Mx, q, LCP_MAX_PIVOT_COUNT, z, w, zb, NULL);
+    if (st != LCP_OK) {
+        if (C->err == DFO_OK) C->err = DFO_ERR_LCP;
+        *V1 = 0.0;
+        *F1 = 0.0;
+        return 0;
+    }
+    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) / mh; *F1 = -muN; return 1; }
+    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) / mh; *F1 = muN; return -1; }
+    *V1 = 0.0;
+    *F1 = -p;
+    return 0;
+}
+
+/* ---- observables ---------------------------------------------------------------------------- */
+
+/* Book-keeping after each phase [ta, s->t] spent in mode_during: switch reports and observables. */
+static void after_phase(const step_ctx *C, dfo_state *s, double ta, int mode_during, double dX, double F,
+                        int mode_before)
+{
+    const dfo_model *M = C->M;
+    if (C->on_switch && s->mode != mode_before) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
+    if (!M->p.observe) return;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop, tb = s->t;
+    if (tb < w0 || ta > w1) return;
+    if (mode_during == 0) s->t_stuck += fmax(fmin(tb, w1) - fmax(ta, w0), 0.0);
+    if (tb > w1) return;
+    if (!s->observed) { s->x_max = s->x_min = s->X; s->observed = 1; }
+    if (s->X > s->x_max) s->x_max = s->X;
+    if (s->X < s->x_min) s->x_min = s->X;
+    if (tb > w0) {
+        s->E_friction -= F * dX;
+        if (s->mode != mode_before) s->transitions++;
+    }
+}
+
+/* ---- the three variants --------------------------------------------------------------------- */
+
+/* Without friction every variant is plain Bossak-Newmark. */
+static void step_smooth(step_ctx *C, dfo_state *s, double h)
+{
+    trial tr;
+    double V1, F1;
+    const double ta = s->t, X0 = s->X;
+    const int m0 = s->mode;
+    predict(C, s, h, &tr);
+    s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1);
+    finish(C, s, &tr, V1);
+    s->F = F1;
+    after_phase(C, s, ta, s->mode, s->X - X0, s->F, m0);
+}
+
+/* The paper's literal scheme: LCP with the previous mode's coefficient, then frictionUpdates
+ * re-solves with the coefficient of the result; A follows Bossak's recursion throughout. */
+static void step_paper(step_ctx *C, dfo_state *s, double h)
+{
+    const dfo_model *M = C->M;
+    trial tr;
+    double V1, F1;
+    const double ta = s->t, X0 = s->X;
+    const int m0 = s->mode;
+    predict(C, s, h, &tr);
+    double mu = (s->mode == 0) ? M->mu_b : M->mu_k;
+    int o = solve_friction(C, s, &tr, mu * C->N, &V1, &F1);
+    for (int i = 0; i < M->p.frictionUpdates && M->update; i++) {
+        const double mu_new = (o == 0) ? M->mu_b : M->mu_k;
+        if (mu_new == mu) break;
+        mu = mu_new;
+        o = solve_friction(C, s, &tr, mu * C->N, &V1, &F1);
+    }
+    finish(C, s, &tr, V1);
+    s->mode = o;
+    s->F = F1;
+    after_phase(C, s, ta, o, s->X - X0, F1, m0);
+}
+
+/* Stick at the end of the step: V = A = 0 (A is then a physical acceleration). */
+static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
+{
+    finish(C, s, tr, 0.0);
+    s->A = 0.0;
+    s->hA = 0.0;
+    s->mode = 0;
+    s->F = -(dfo_excitation(C->M, s->t) + C->u - C->M->p.k * s->X);
+}
+
+/* Consistent stick test (method.md section 4, variant 1). */
+static void step_consistent(step_ctx *C, dfo_state *s, double h)
+{
+    const dfo_model *M = C->M;
+    trial tr;
+    double V1, F1;
+    const double ta = s->t, X0 = s->X;
+    const int m0 = s->mode;
+    predict(C, s, h, &tr);
+    if (s->mode == 0) {
+        /* A = V = 0: p_hat is exactly the static force P1 - k X */
+        int o = solve_friction(C, s, &tr, M->mu_b * C->N, &V1, &F1);
+        if (o == 0) {
+            stick_after(C, s, &tr);
+        } else {
+            if (M->update) o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
+            finish(C, s, &tr, V1);
+            s->mode = o;
+            s->F = F1;
+        }
+    } else {
+        const int sdir = s->mode;
+        const int o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
+        if (o == sdir) {
+            finish(C, s, &tr, V1);
+            s->F = F1;
+        } else {
+            /* the block stops in this step: stick or reverse, judged by the static force at the
+             * predicted rest position */
+            const double S = dfo_excitation(M, s->t + h) + C->u - M->p.k * tr.x_pred;
+            const int s2 = sign_of(S);
+            const double V2 = (tr.p_hat - s2 * C->muk_N) / tr.m_hat;
+            if (fabs(S) <= C->Fb || s2 * V2 <= 0.0) {
+                stick_after(C, s, &tr);
+            } else {
+                finish(C, s, &tr, V2);
+                s->mode = s2;
+                s->F = -s2 * C->muk_N;
+            }
+        }
+    }
+    after_phase(C, s, ta, s->mode, s->X - X0, s->F, m0);
+}
+
+/* Earliest theta >= th0 with cos(theta) > L, as an offset from th0; acosL = acos(L). */
+static double until_above(double th0, double L, double acosL)
+{
+    if (L >= 1.0) return INFINITY;
+    if (L < -1.0) return 0.0;
+    double psi = fmod(th0, TWO_PI);
+    if (psi < 0.0) psi += TWO_PI;
+    if (psi < acosL || psi > TWO_PI - acosL) return 0.0;
+    return TWO_PI - acosL - psi;
+}
+
+/* While stuck at X, the static force is S(t) = P_amp cos(w t + P_phase) + C0 with C0 = u - k X.
+ * Returns the first time in [ta, tb] where |S| exceeds Fb (dir: the side crossed), or INFINITY. Closed form, so a force
+ * that crosses the limit and comes back inside one step is not missed. */
+static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+{
+    const dfo_model *M = C->M;
+    const double C0 = C->u - M->p.k * s->X, Fb = C->Fb, w = M->p.omega, A = M->P_amp;
+    if (w == 0.0 || A == 0.0) {
+        const double S = dfo_excitation(M, ta) + C0;
+        *dir = sign_of(S);
+        return (fabs(S) > Fb) ? ta : INFINITY;
+    }
+    const double Lhi = (Fb - C0) / A;   /* S >  Fb  <=>  cos(theta)      > Lhi */
+    const double Llo = (Fb + C0) / A;   /* S < -Fb  <=>  cos(theta + pi) > Llo */
+    if (s->stick_C != C0 || s->stick_Fb != Fb) {
+        s->stick_C = C0;
+        s->stick_Fb = Fb;
+        s->acos_hi = (Lhi > -1.0 && Lhi < 1.0) ? acos(Lhi) : 0.0;
+        s->acos_lo = (Llo > -1.0 && Llo < 1.0) ? acos(Llo) : 0.0;
+    }
+    const double th = w * ta + M->P_phase;
+    const double up = until_above(th, Lhi, s->acos_hi), down = until_above(th + DFO_PI, Llo, s->acos_lo);
+    *dir = (up <= down) ? 1 : -1;
+    const double t = ta + fmin(up, down) / w;
+    return (t <= tb) ? t : INFINITY;
+}
+
+/* Start sliding from rest at the current time in direction sd, with the consistent acceleration.
+ * The net force is at least the breakaway limit (it may sit on it by rounding at a breakaway). */
+static void start_slide(const step_ctx *C, dfo_state *s, int sd, double S)
+{
+    s->V = 0.0;
+    s->hA = 0.0;
+    s->mode = sd;
+    s->A = sd * fmax(fmax(sd * S, C->Fb) - C->muk_N, 0.0) / C->M->p.m;
+    s->F = -sd * C->muk_N;
+}
+
+/* At rest after a stop: stick if the static force is inside the limit, else slide along it. */
+static void restart_from_rest(const step_ctx *C, dfo_state *s)
+{
+    const double S = dfo_excitation(C->M, s->t) + C->u - C->M->p.k * s->X;
+    if (fabs(S) <= C->Fb) {
+        s->V = s->A = s->hA = 0.0;
+        s->mode = 0;
+        s->F = -S;
+    } else {
+        start_slide(C, s, sign_of(S), S);
+    }
+}
+
+/* s V1 at the end of a sliding Bossak step of length h (friction -s mu_k N). */
+static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
+{
+    predict(C, s, h, tr);
+    return s->mode * (tr->p_hat - s->mode * C->muk_N) / tr->m_hat;
+}
+
+/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method to a few ulps of t + h. */
+static double stop_length(const step_ctx *C, const dfo_state *s, double lo, double flo, double hi, double fhi)
+{
+    trial tr;
+    double a = lo, b = hi, fa = flo, fb = fhi, c = a, fc = fa, d = b - a, e = d;
+    for (int it = 0; it < 200; it++) {
+        if (fb == 0.0) return b;
+        if ((fb > 0.0) == (fc > 0.0)) { c = a; fc = fa; d = e = b - a; }
+        if (fabs(fc) < fabs(fb)) { a = b; b = c; c = a; fa = fb; fb = fc; fc = fa; }
+        const double tol = 4.0 * DBL_EPSILON * (fabs(s->t) + fabs(b)) + DBL_MIN;
+        const double m = 0.5 * (c - b);
+        if (fabs(m) <= tol) break;
+        if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
+            double p, q, r;
+            const double sfb = fb / fa;
+            if (a == c) {
+                p = 2.0 * m * sfb;
+                q = 1.0 - sfb;
+            } else {
+                q = fa / fc;
+                r = fb / fc;
+                p = sfb * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
+                q = (q - 1.0) * (r - 1.0) * (sfb - 1.0);
+            }
+            if (p > 0.0) q = -q; else p = -p;
+            if (2.0 * p < fmin(3.0 * m * q - fabs(tol * q), fabs(e * q))) { e = d; d = p / q; }
+            else { d = m; e = m; }
+        } else {
+            d = m;
+            e = m;
+        }
+        a = b;
+        fa = fb;
+        b += (fabs(d) > tol) ? d : (m > 0.0 ? tol : -tol);
+        fb = slide_velocity(C, s, b, &tr);
+    }
+    /* return the bracket end on the stopped side: the block is at rest there */
+    return (fb <= 0.0) ? b : c;
+}
+
+/* Located switches (method.md section 4, variant 2, the default). */
+static void step_located(step_ctx *C, dfo_state *s, double t_end)
+{
+    const dfo_model *M = C->M;
+    trial tr;
+    double V1, F1;
+    for (int phase = 0; s->t < t_end; phase++) {
+        if (phase >= MAX_PHASES_PER_STEP) {
+            if (C->err == DFO_OK) C->err = DFO_ERR_NO_PROGRESS;
+            return;
+        }
+        const double ta = s->t, X0 = s->X;
+        const int m0 = s->mode;
+        if (s->mode == 0) {  /* stuck: X frozen, V = A = 0 */
+            int dir = 0;
+            const double tb = breakaway_time(C, s, ta, t_end, &dir);
+            if (tb == INFINITY) {
+                s->t = t_end;
+                s->F = -(dfo_excitation(M, t_end) + C->u - M->p.k * s->X);
+                after_phase(C, s, ta, 0, 0.0, s->F, 0);
+                continue;
+            }
+            s->t = tb;
+            start_slide(C, s, dir, dfo_excitation(M, tb) + C->u - M->p.k * s->X);
+            after_phase(C, s, ta, 0, 0.0, s->F, 0);
+            continue;
+        }
+        /* sliding in direction sd over the remainder r */
+        const int sd = s->mode;
+        const double r = t_end - ta;
+        predict(C, s, r, &tr);
+        const int o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
+        if (o == sd && sd * V1 > 0.0) {
+            finish(C, s, &tr, V1);
+            s->t = t_end;
+            s->F = F1;
+            after_phase(C, s, ta, sd, s->X - X0, F1, m0);
+            continue;
+        }
+        /* the block stops inside the remainder: find the sub-step that ends at V = 0 */
+        const double fhi = sd * (tr.p_hat - sd * C->muk_N) / tr.m_hat;
+        double lo = 0.0, flo = sd * s->V;
+        if (!(flo > 0.0)) {  /* started from rest: find a point where it is still moving */
+            lo = r;
+            flo = 0.0;
+            for (int i = 0; i < 60 && !(flo > 0.0); i++) {
+                lo *= 0.5;
+                flo = slide_velocity(C, s, lo, &tr);
+            }
+            if (!(flo > 0.0)) {  /* no motion resolvable in double precision: stays at rest */
+                const double S = dfo_excitation(M, t_end) + C->u - M->p.k * s->X;
+                s->t = t_end;
+                s->V = s->A = s->hA = 0.0;
+                s->mode = 0;
+                s->F = -fmax(-C->Fb, fmin(C->Fb, S));
+                after_phase(C, s, ta, 0, 0.0, s->F, m0);
+                continue;
+            }
+        }
+        const double hs = (fhi == 0.0) ? r : stop_length(C, s, lo, flo, r, fhi);
+        predict(C, s, hs, &tr);
+        finish(C, s, &tr, 0.0);
+        s->t = (hs >= r) ? t_end : fmax(ta + hs, nextafter(ta, INFINITY));
+        const double dX = s->X - X0;
+        restart_from_rest(C, s);
+        after_phase(C, s, ta, sd, dX, -sd * C->muk_N, m0);
+    }
+}
+
+/* ---- public API ----------------------------------------------------------------------------- */
+
+static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *u)
+{
+    C->on_switch = NULL;
+    C->switch_ctx = NULL;
+    C->M = M;
+    C->u = dfo_external_force(M, u);
+    C->N = dfo_normal_force(M, u);
+    C->muk_N = M->mu_k * C->N;
+    C->Fb = M->mu_b * C->N;
+    C->friction = C->Fb > 0.0;  /* Fb >= mu_k N */
+    C->err = DFO_OK;
+}
+
+void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
+{
+    step_ctx C;
+    make_ctx(&C, M, u);
+    const dfo_state zero = {0};
+    *s = zero;
+    s->t0 = s->t = t0;
+    s->X = M->p.x0;
+    s->V = M->p.v0;
+    s->stick_C = s->stick_Fb = NAN;
+    if (s->V == 0.0 && C.Fb > 0.0) {
+        restart_from_rest(&C, s);
+    } else {
+        s->mode = sign_of(s->V);
+        s->F = -s->mode * C.muk_N;
+        s->A = accel_of(&C, s, t0, s->F);
+    }
+    s->hA = 0.0;
+    if (M->p.observe && t0 >= M->p.t_obs_start && t0 <= M->p.t_obs_stop) {
+        s->x_max = s->x_min = s->X;
+        s->observed = 1;
+    }
+}
+
+static void step_to(step_ctx *C, dfo_state *s, double t_end)
+{
+    const double h = t_end - s->t;
+    s->steps++;
+    if (!C->friction) { step_smooth(C, s, h); s->t = t_end; return; }
+    switch (C->M->p.scheme) {
+    case DFO_SCHEME_PAPER: step_paper(C, s, h); break;
+    case DFO_SCHEME_CONSISTENT: step_consistent(C, s, h); break;
+    default: step_located(C, s, t_end); break;
+    }
+    s->t = t_end;
+}
+
+dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+                       dfo_switch_fn on_switch, void *switch_ctx)
+{
+    step_ctx C;
+    make_ctx(&C, M, u);
+    C.on_switch = on_switch;
+    C.switch_ctx = switch_ctx;
+    const double h = M->p.h, snap = 1e-9 * h;
+    while (s->t < t_target) {
+        const double grid = s->t0 + (double)(s->n + 1) * h;
+        double t_end;
+        if (grid <= t_target + snap) {
+            t_end = (fabs(grid - t_target) <= snap) ? t_target : grid;
+            s->n++;
+        } else {
+            t_end = t_target;
+        }
+        step_to(&C, s, t_end);
+        if (C.err != DFO_OK) return C.err;
+        if (!isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) || !isfinite(s->F)) return DFO_ERR_NONFINITE;
+    }
+    return DFO_OK;
+}
+
+double dfo_acceleration(const dfo_model *M, const dfo_inputs *u, const dfo_state *s)
+{
+    step_ctx C;
+    make_ctx(&C, M, u);
+    if (stuck(&C, s) && M->p.scheme != DFO_SCHEME_PAPER) return 0.0;
+    return accel_of(&C, s, s->t, s->F);
+}
+
+double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)
+{
+    const double span = fmin(s->t, M->p.t_obs_stop) - M->p.t_obs_start;
+    return span > 0.0 ? s->t_stuck / span : 0.0;
+}
+
+const char *dfo_status_text(dfo_status st)
+{
+    switch (st) {
+    case DFO_OK: return "ok";
+    case DFO_ERR_LCP: return "the friction LCP could not be solved (Lemke failed)";
+    case DFO_ERR_NO_PROGRESS: return "too many stick/slip switches inside one internal step";
+    case DFO_ERR_NONFINITE: return "the state became non-finite (overflow)";
+    }
+    return "unknown status";
+}

@@ -1,0 +1,76 @@
+/* The dry-friction oscillator: parameters, ranges, forces. See oscillator.h. */
+#include "oscillator.h"
+
+#include <math.h>
+#include <string.h>
+
+const char *dfo_value_range(const char *name, double v)
+{
+    if (!isfinite(v)) return "finite";
+    if (!strcmp(name, "m")) return v > 0.0 ? NULL : "> 0";
+    if (!strcmp(name, "h")) return v > 0.0 ? NULL : "> 0";
+    if (!strcmp(name, "k") || !strcmp(name, "c") || !strcmp(name, "N") || !strcmp(name, "mu_s") ||
+        !strcmp(name, "chi") || !strcmp(name, "omega"))
+        return v >= 0.0 ? NULL : ">= 0";
+    if (!strcmp(name, "alpha")) return (v >= -1.0 / 3.0 && v <= 0.0) ? NULL : "in [-1/3, 0]";
+    if (!strcmp(name, "scheme"))
+        return (v == DFO_SCHEME_PAPER || v == DFO_SCHEME_CONSISTENT || v == DFO_SCHEME_LOCATED)
+                   ? NULL : "one of 1 (paper), 2 (consistent), 3 (located)";
+    if (!strcmp(name, "frictionUpdates")) return (v >= 0 && v <= 100) ? NULL : "in [0, 100]";
+    return NULL;
+}
+
+const char *dfo_check_params(const dfo_params *p)
+{
+    if (p->t_obs_stop < p->t_obs_start)
+        return "The observation window is empty: t_obs_stop must be >= t_obs_start.";
+    return NULL;
+}
+
+void dfo_model_init(dfo_model *M, const dfo_params *p)
+{
+    M->p = *p;
+    M->gamma = 0.5 - p->alpha;
+    M->beta = 0.25 * (1.0 - p->alpha) * (1.0 - p->alpha);
+    M->mu_k = p->chi * p->mu_s;
+    M->mu_b = fmax(p->mu_s, M->mu_k);
+    M->P_amp = fabs(p->P0);
+    M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
+    M->fast = p->fastPaths != 0;
+    M->damped = !M->fast || p->c != 0.0;
+    M->update = !M->fast || M->mu_k != M->mu_b;
+}
+
+double dfo_excitation(const dfo_model *M, double t)
+{
+    return M->p.P0 * cos(M->p.omega * t + M->p.phi);
+}
+
+double dfo_excitation_rate(const dfo_model *M, double t)
+{
+    return -M->p.P0 * M->p.omega * sin(M->p.omega * t + M->p.phi);
+}
+
+double dfo_normal_force(const dfo_model *M, const dfo_inputs *u)
+{
+    if (!u->N_ext_set) return M->p.N;
+    return fmax(M->p.N + u->N_ext, 0.0);
+}
+
+double dfo_external_force(const dfo_model *M, const dfo_inputs *u)
+{
+    (void)M;
+    return u->F_ext_set ? u->F_ext : 0.0;
+}
+
+int dfo_effects(const dfo_model *M, const dfo_inputs *u)
+{
+    int e = 0;
+    if ((M->p.mu_s > 0.0 && M->p.N > 0.0 && M->mu_b > 0.0) || u->N_ext_set) e |= DFO_EFFECT_FRICTION;
+    if ((e & DFO_EFFECT_FRICTION) && M->mu_k != M->mu_b) e |= DFO_EFFECT_COEFF_UPDATE;
+    if (M->p.c != 0.0) e |= DFO_EFFECT_DAMPING;
+    if (u->F_ext_set) e |= DFO_EFFECT_FORCE_INPUT;
+    if (u->N_ext_set) e |= DFO_EFFECT_NORMAL_INPUT;
+    if (M->p.observe) e |= DFO_EFFECT_OBSERVABLES;
+    return e;
+}

@@ -1,0 +1,76 @@
+/* The dry-friction oscillator (method.md sections 1 and 7): parameters, their valid ranges, the
+ * forces, the derived constants of the Bossak-Newmark scheme and the "effects" a run pays for.
+ *
+ *     m x'' + c x' + k x = P0 cos(omega t + phi) + F_ext + F,
+ *     Coulomb friction F with mu_s (static), mu_k = chi mu_s (kinetic), normal force max(N + N_ext, 0),
+ *     breakaway limit max(mu_s, mu_k) N.
+ *
+ * Plain C, no FMI types. */
+#ifndef DFO_OSCILLATOR_H
+#define DFO_OSCILLATOR_H
+
+#define DFO_PI 3.14159265358979323846
+
+typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3 } dfo_scheme;
+
+/* Everything a user sets before a run; names as in modelDescription.xml. */
+typedef struct {
+    double m, k, c, P0, omega, phi, N, mu_s, chi, x0, v0;
+    double h, alpha;                 /* internal step (s), Bossak parameter */
+    double t_obs_start, t_obs_stop;  /* observation window (s) */
+    int scheme;                      /* dfo_scheme */
+    int frictionUpdates;             /* coefficient updates per step (scheme paper) */
+    int observe;                     /* compute the in-FMU observables */
+    int fastPaths;                   /* skip the physics a run does not need (same numbers) */
+} dfo_params;
+
+/* Co-simulation inputs, held constant over a communication step. An input never set is never read. */
+typedef struct {
+    double F_ext, N_ext;
+    int F_ext_set, N_ext_set;
+} dfo_inputs;
+
+/* Bits of the "effects" calculated parameter: what a run simulates. */
+enum {
+    DFO_EFFECT_FRICTION = 1,      /* friction LCP solved (mu N > 0 or N_ext connected) */
+    DFO_EFFECT_COEFF_UPDATE = 2,  /* static/kinetic coefficient update (chi != 1) */
+    DFO_EFFECT_DAMPING = 4,       /* viscous damping (c > 0) */
+    DFO_EFFECT_FORCE_INPUT = 8,   /* input F_ext read */
+    DFO_EFFECT_NORMAL_INPUT = 16, /* input N_ext read */
+    DFO_EFFECT_OBSERVABLES = 32   /* in-FMU observables computed */
+};
+
+/* Parameters plus the constants derived from them once, at initialisation. */
+typedef struct {
+    dfo_params p;
+    double gamma, beta;      /* Newmark coefficients: gamma = 1/2 - alpha, beta = (1 - alpha)^2 / 4 */
+    double mu_k, mu_b;       /* kinetic and breakaway coefficients, mu_b = max(mu_s, mu_k) */
+    double P_amp, P_phase;   /* P0 cos(w t + phi) written as P_amp cos(w t + P_phase), P_amp >= 0 */
+    int fast;                /* fast paths enabled */
+    int damped;              /* c != 0 (or fast paths off) */
+    int update;              /* mu_k != mu_b (or fast paths off) */
+} dfo_model;
+
+/* NULL when value is valid for the named variable, otherwise the valid range as text
+ * ("> 0", "in [-1/3, 0]", ...). Variables without a range only need to be finite. */
+const char *dfo_value_range(const char *name, double value);
+
+/* Checks that involve several parameters; NULL when consistent, else a sentence. */
+const char *dfo_check_params(const dfo_params *p);
+
+/* Derive the constants. The parameters must have passed the checks above. */
+void dfo_model_init(dfo_model *M, const dfo_params *p);
+
+/* Excitation P0 cos(omega t + phi) and its time derivative. */
+double dfo_excitation(const dfo_model *M, double t);
+double dfo_excitation_rate(const dfo_model *M, double t);
+
+/* Normal force used: max(N + N_ext, 0), N_ext read only when it has been set. */
+double dfo_normal_force(const dfo_model *M, const dfo_inputs *u);
+/* External force: F_ext when it has been set, else 0. */
+double dfo_external_force(const dfo_model *M, const dfo_inputs *u);
+
+/* The effects bitmask for these parameters and inputs. */
+int dfo_effects(const dfo_model *M, const dfo_inputs *u);
+
+#endif

@@ -1,0 +1,6 @@
+"""Dry-friction oscillator: FMI 2.0 co-simulation FMU tooling, analytical references and sweeps."""
+
+from .params import Oscillator
+
+__all__ = ["Oscillator"]
+__version__ = "0.1.0"

@@ -1,0 +1,252 @@
+"""A fast fmpy driver for the DryFrictionOscillator FMU.
+
+The FMU is unzipped and instantiated once; every run then costs only reset, setup, the parameter
+values and the steps (method used by fmpy's ``simulate_fmu(..., fmu_instance=...)``, without its
+per-call bookkeeping). Errors of the FMU are raised as :class:`FMUError` with the FMU's own logged
+sentence.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.fmi1 import calloc, free
+
+from .params import Oscillator
+
+SCHEMES = {"paper": 1, "consistent": 2, "located": 3}
+TRAJECTORY_OUTPUTS = ("x", "v", "a", "F_friction", "mode")
+OBSERVABLE_OUTPUTS = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
+EFFECT_BITS = {
+    1: "friction LCP",
+    2: "coefficient update",
+    4: "damping",
+    8: "input F_ext",
+    16: "input N_ext",
+    32: "observables",
+}
+
+
+class FMUError(RuntimeError):
+    """An FMI call returned an error; the message is the FMU's logged sentence."""
+
+
+def default_fmu_path() -> Path:
+    """The FMU built by CMake (``DFO_FMU`` overrides)."""
+    env = os.environ.get("DFO_FMU")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[2] / "build" / "DryFrictionOscillator.fmu"
+
+
+@dataclass
+class Settings:
+    """Numerical and scene settings of one run (FMU variable names)."""
+
+    h: float | None = None            # internal step, s (None: period / 1000)
+    alpha: float = -0.1
+    scheme: str = "located"
+    frictionUpdates: int = 1
+    observe: bool = False
+    t_obs_start: float = 0.0
+    t_obs_stop: float = 1e300
+    fastPaths: bool = True
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class OscillatorFMU:
+    """One loaded, instantiated FMU, reused across runs (not thread-safe: one per thread/worker)."""
+
+    def __init__(self, fmu_path: str | os.PathLike[str] | None = None, logging: bool = False) -> None:
+        path = Path(fmu_path) if fmu_path is not None else default_fmu_path()
+        if not path.is_file():
+            raise FileNotFoundError(f"FMU not found: {path} (build it with: cmake -S . -B build && cmake --build build)")
+        self.path = path
+        self.md = read_model_description(str(path))
+        self._dir = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="dfo-fmu-"))
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.messages: list[tuple[int, str, str]] = []
+        # keep the ctypes callbacks alive as long as the instance
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self.slave = FMU2Slave(
+            guid=self.md.guid,
+            unzipDirectory=self._dir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName="dfo",
+        )
+        self.slave.instantiate(callbacks=self._callbacks, loggingOn=logging)
+        self._closed = False
+
+    # ---- plumbing ----
+    def _log(self, env: Any, name: bytes, status: int, category: bytes, message: bytes) -> None:
+        self.messages.append((status, category.decode(), message.decode(errors="replace")))
+
+    def vr(self, name: str) -> int:
+        try:
+            return self.vars[name].valueReference
+        except KeyError:
+            raise KeyError(f"the FMU has no variable {name!r}") from None
+
+    def _error(self, e: Exception, since: int) -> FMUError:
+        errors = [m for s, _, m in self.messages[since:] if s >= 3]
+        return FMUError(errors[-1] if errors else str(e))
+
+    def _call(self, fn: Any, *args: Any) -> Any:
+        n = len(self.messages)
+        try:
+            return fn(*args)
+        except FMICallException as e:
+            raise self._error(e, n) from None
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            try:
+                self.slave.freeInstance()
+            finally:
+                shutil.rmtree(self._dir, ignore_errors=True)
+
+    def __enter__(self) -> "OscillatorFMU":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ---- values ----
+    def set(self, values: Mapping[str, Any]) -> None:
+        """Set variables by name, grouped per type, with the FMU's checks."""
+        reals: dict[int, float] = {}
+        ints: dict[int, int] = {}
+        bools: dict[int, bool] = {}
+        for name, value in values.items():
+            var = self.vars.get(name)
+            if var is None:
+                raise FMUError(f"unknown variable {name!r}")
+            if var.type == "Real":
+                reals[var.valueReference] = float(value)
+            elif var.type == "Boolean":
+                bools[var.valueReference] = bool(value)
+            else:
+                if name == "scheme" and isinstance(value, str):
+                    if value not in SCHEMES:
+                        raise FMUError(f"scheme must be one of {', '.join(SCHEMES)}, not {value!r}")
+                    value = SCHEMES[value]
+                ints[var.valueReference] = int(value)
+        s = self.slave
+        if reals:
+            self._call(s.setReal, list(reals), list(reals.values()))
+        if ints:
+            self._call(s.setInteger, list(ints), list(ints.values()))
+        if bools:
+            self._call(s.setBoolean, list(bools), list(bools.values()))
+
+    def get(self, names: Sequence[str]) -> dict[str, float]:
+        out: dict[str, float] = {}
+        for name in names:
+            var = self.vars[name]
+            if var.type == "Real":
+                out[name] = self._call(self.slave.getReal, [var.valueReference])[0]
+            elif var.type == "Boolean":
+                out[name] = self._call(self.slave.getBoolean, [var.valueReference])[0]
+            else:
+                out[name] = self._call(self.slave.getInteger, [var.valueReference])[0]
+        return out
+
+    # ---- runs ----
+    def start(self, p: Oscillator, settings: Settings | None = None, t0: float = 0.0) -> None:
+        """Reset, set every parameter and initialise: the FMU is then at t0 in step mode."""
+        st = settings or Settings()
+        values: dict[str, Any] = p.as_dict()
+        values.update(
+            h=st.h if st.h is not None else p.period / 1000.0,
+            alpha=st.alpha,
+            scheme=st.scheme,
+            frictionUpdates=st.frictionUpdates,
+            observe=st.observe,
+            t_obs_start=st.t_obs_start,
+            t_obs_stop=st.t_obs_stop,
+            fastPaths=st.fastPaths,
+        )
+        values.update(st.extra)
+        s = self.slave
+        self._call(s.reset)
+        self._call(s.setupExperiment, None, t0)
+        self.set(values)
+        self._call(s.enterInitializationMode)
+        self._call(s.exitInitializationMode)
+        self.time = t0
+
+    def step_to(self, t: float) -> None:
+        self._call(self.slave.doStep, self.time, t - self.time)
+        self.time = t
+
+    def trajectory(
+        self,
+        p: Oscillator,
+        times: Iterable[float] | np.ndarray,
+        settings: Settings | None = None,
+        outputs: Sequence[str] = TRAJECTORY_OUTPUTS,
+    ) -> dict[str, np.ndarray]:
+        """Outputs at the communication points ``times`` (the first is the start time)."""
+        t = np.asarray(list(times) if not isinstance(times, np.ndarray) else times, dtype=float)
+        if t.ndim != 1 or t.size < 1 or np.any(np.diff(t) <= 0):
+            raise ValueError("times must be a non-empty, strictly increasing 1-D sequence")
+        self.start(p, settings, float(t[0]))
+        vrs = [self.vr(n) for n in outputs]
+        reals = [i for i, n in enumerate(outputs) if self.vars[n].type == "Real"]
+        ints = [i for i, n in enumerate(outputs) if self.vars[n].type != "Real"]
+        out = np.empty((t.size, len(outputs)))
+        get_r, get_i, do = self.slave.getReal, self.slave.getInteger, self.slave.doStep
+        rv = [vrs[i] for i in reals]
+        iv = [vrs[i] for i in ints]
+        for j in range(t.size):
+            if j:
+                n = len(self.messages)
+                try:
+                    do(t[j - 1], t[j] - t[j - 1])
+                except FMICallException as e:
+                    self.time = t[j - 1]
+                    raise self._error(e, n) from None
+            if rv:
+                out[j, reals] = get_r(rv)
+            if iv:
+                out[j, ints] = get_i(iv)
+        self.time = float(t[-1])
+        res = {"t": t}
+        for i, n in enumerate(outputs):
+            res[n] = out[:, i]
+        return res
+
+    def observables(self, p: Oscillator, t_stop: float, t_obs_start: float, t_obs_stop: float | None = None,
+                    settings: Settings | None = None) -> dict[str, float]:
+        """Run to t_stop in one communication step and read the in-FMU observables."""
+        st = settings or Settings()
+        st = Settings(**{**st.__dict__, "observe": True, "t_obs_start": t_obs_start,
+                         "t_obs_stop": t_stop if t_obs_stop is None else t_obs_stop})
+        self.start(p, st)
+        self.step_to(t_stop)
+        return self.get(OBSERVABLE_OUTPUTS)
+
+    def effects(self) -> list[str]:
+        """Names of the effects the current run simulates (from the 'effects' parameter)."""
+        mask = int(self.get(["effects"])["effects"])
+        return [name for bit, name in EFFECT_BITS.items() if mask & bit]
