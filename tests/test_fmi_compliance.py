@@ -1,0 +1,152 @@
+"""FMI 2.0 conformance of DryFrictionOscillator.fmu: static checks by fmpy and the FMU Manipulation
+Toolbox, the model description as the single source of truth, a second host (libcosim), the
+source-code FMU rebuilt by fmpy, and the FMU's errors for bad values."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+
+from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.params import Oscillator
+
+
+def test_fmpy_validate_finds_no_problem(fmu_path: Path) -> None:
+    assert validate_fmu(str(fmu_path)) == []
+
+
+def test_fmutool_check_reports_compliant(fmu_path: Path) -> None:
+    exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
+    r = subprocess.run([exe, "-input", str(fmu_path), "-check"], capture_output=True, text=True, timeout=120)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0, out
+    assert "compliant with FMI-2.0" in out, out
+    assert "No semantic error" in out, out
+    assert "ERROR" not in out, out
+
+
+def test_archive_layout(fmu_path: Path) -> None:
+    names = set(zipfile.ZipFile(fmu_path).namelist())
+    assert "modelDescription.xml" in names
+    assert "binaries/linux64/DryFrictionOscillator.so" in names
+    md = read_model_description(str(fmu_path))
+    sources = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
+    assert sources
+    for src in sources:
+        assert f"sources/{src}" in names
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert md.coSimulation.canHandleVariableCommunicationStepSize
+
+
+def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
+    """Every variable of modelDescription.xml reads back through its value reference with the
+    declared start value, and unique value references per type."""
+    fmu.start(Oscillator(), Settings(h=1e-3, alpha=-0.1))  # h, alpha at their start values
+    md = fmu.md
+    seen: set[tuple[str, int]] = set()
+    for v in md.modelVariables:
+        key = ("Integer" if v.type == "Enumeration" else v.type, v.valueReference)
+        assert key not in seen, f"duplicate value reference {key}"
+        seen.add(key)
+        value = fmu.get([v.name])[v.name]
+        assert np.isfinite(float(value)), v.name
+        if v.causality == "parameter":
+            start = {"true": True, "false": False}.get(str(v.start), v.start)
+            assert float(value) == float(start), (v.name, value, v.start)
+
+
+def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU) -> None:
+    """A second host (libcosim via libcosimpy) steps the FMU to the same x(t) as fmpy (1e-12)."""
+    from libcosimpy.CosimEnums import CosimExecutionState  # noqa: F401  (import check)
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.ERROR)
+    dt, n = 0.01, 300
+    ex = CosimExecution.from_step_size(step_size=int(round(dt * 1e9)))
+    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(fmu_path), instance_name="dfo"))
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(observer=obs)
+    vr_x = fmu.vr("x")
+    xs = []
+    for _ in range(n):
+        assert ex.step()
+        xs.append(obs.last_real_values(slave_index=idx, variable_references=[vr_x])[0])
+    p = Oscillator()
+    ref = fmu.trajectory(p, np.arange(n + 1) * dt, Settings(h=1e-3), outputs=("x",))["x"][1:]
+    assert np.max(np.abs(np.array(xs) - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU, tmp_path: Path) -> None:
+    """A host can rebuild the binary from sources/ (fmpy's CMake build) and gets the same numbers."""
+    from fmpy import extract
+    from fmpy.build import build_platform_binary
+
+    unzip = Path(extract(str(fmu_path), unzipdir=str(tmp_path / "fmu")))
+    shutil.rmtree(unzip / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(unzip, build_dir=tmp_path / "build")
+    rebuilt = tmp_path / "rebuilt.fmu"
+    with zipfile.ZipFile(rebuilt, "w") as z:
+        for f in unzip.rglob("*"):
+            z.write(f, f.relative_to(unzip).as_posix())
+    p = Oscillator()
+    t = np.linspace(0, 4 * p.period, 81)
+    with OscillatorFMU(rebuilt) as other:
+        a = other.trajectory(p, t, Settings(h=p.period / 500))
+    b = fmu.trajectory(p, t, Settings(h=p.period / 500))
+    for k in ("x", "v", "F_friction", "mode"):
+        assert np.allclose(a[k], b[k], rtol=1e-12, atol=1e-15), k
+
+
+BAD_VALUES = [
+    ("m", 0.0, "> 0"),
+    ("m", -1.0, "> 0"),
+    ("k", -1.0, ">= 0"),
+    ("c", -0.1, ">= 0"),
+    ("N", -1.0, ">= 0"),
+    ("mu_s", -0.2, ">= 0"),
+    ("chi", -1.0, ">= 0"),
+    ("omega", -5.0, ">= 0"),
+    ("h", 0.0, "> 0"),
+    ("h", -1e-3, "> 0"),
+    ("alpha", 0.1, "in [-1/3, 0]"),
+    ("alpha", -0.5, "in [-1/3, 0]"),
+    ("m", math.nan, "finite"),
+    ("P0", math.inf, "finite"),
+    ("x0", -math.inf, "finite"),
+    ("scheme", 4, "one of 1 (paper), 2 (consistent), 3 (located)"),
+    ("scheme", 0, "one of 1 (paper), 2 (consistent), 3 (located)"),
+    ("frictionUpdates", -1, "in [0, 100]"),
+    ("F_ext", math.nan, "finite"),
+]
+
+
+@pytest.mark.parametrize("name,value,valid", BAD_VALUES)
+def test_bad_value_is_rejected_with_a_message(fmu: OscillatorFMU, name: str, value: float, valid: str) -> None:
+    fmu.slave.reset()
+    with pytest.raises(FMUError) as err:
+        fmu.set({name: value})
+    msg = str(err.value)
+    assert f"variable {name} " in msg and f"valid range: {valid}" in msg, msg
+    # the instance stays usable: a valid run after the rejected value
+    fmu.slave.reset()
+    r = fmu.trajectory(Oscillator(), [0.0, 0.5], Settings(h=1e-3))
+    assert np.all(np.isfinite(r["x"]))
+
+
+def test_empty_observation_window_is_rejected(fmu: OscillatorFMU) -> None:
+    with pytest.raises(FMUError, match="t_obs_stop must be >= t_obs_start"):
+        fmu.start(Oscillator(), Settings(observe=True, t_obs_start=2.0, t_obs_stop=1.0))
+    fmu.slave.reset()
