@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Set up everything on a fresh machine (Python 3.10+, pip, gcc, cmake): a virtual environment in
+# .venv with the package and its test tools, and the FMU built by CMake into build/.
+# Usage: bash scripts/setup.sh        (idempotent; later runs only rebuild what changed)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-python3}
+if [ ! -x .venv/bin/python ]; then
+  "$PY" -m venv .venv
+fi
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE="$PWD/.venv/bin/python" >/dev/null
+cmake --build build -j"$(nproc)" >/dev/null
+echo "setup: .venv ready, FMU at build/DryFrictionOscillator.fmu"
