@@ -41,13 +41,13 @@ H = 1 / (1 - lambda^2 + 2 i zeta lambda), |H| <= 1.16, is used instead.
 
 from __future__ import annotations
 
-import cmath
 import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Optional
 
 import numpy as np
+from scipy.optimize import brentq
 
 from .params import Oscillator
 
@@ -125,8 +125,11 @@ class ExactSolution:
         acc = np.zeros(t.shape)
         mode = np.empty(t.shape, dtype=int)
         mdl = self._model
-        for i in np.unique(idx):
-            sel = idx == i
+        order = np.argsort(idx, kind="stable")
+        uniq, first = np.unique(idx[order], return_index=True)
+        bounds = np.append(first, order.size)
+        for j, i in enumerate(uniq):
+            sel = order[bounds[j]:bounds[j + 1]]
             seg = self.segments[int(i)]
             mode[sel] = seg.mode
             if seg.mode == 0:
@@ -195,7 +198,7 @@ def solve_exact(p: Oscillator, t_end: float, max_segments: int = 10**6) -> Exact
     s = int(np.sign(v))
     stopped = v == 0.0
     for _ in range(4 * max_segments + 8):
-        if len(segs) > max_segments:
+        if len(segs) >= max_segments:
             break
         if stopped:
             dt, s = _stick_exit(mdl, t, x)
@@ -367,8 +370,6 @@ class _Slip:
 
 def _brentq(f: Any, a: float, b: float) -> float:
     """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision."""
-    from scipy.optimize import brentq
-
     fa, fb = f(a), f(b)
     if fa == 0.0:
         return a
@@ -442,7 +443,10 @@ def _scan_start(us: np.ndarray, svs: np.ndarray, sas: np.ndarray, tol: float,
         if svs[i] > tol:
             return i
         if svs[i] < -tol:                          # never started: stop where it leaves the band
-            return _brentq(lambda u: sv(u) + tol, float(us[i - 1]), float(us[i]))
+            lo, hi = float(us[i - 1]), float(us[i])
+            if svs[i - 1] > 0.0:
+                return _brentq(sv, lo, hi)
+            return _brentq(lambda u: sv(u) + tol, lo, hi)
         if sas[i - 1] > 0.0 > sas[i]:              # a maximum inside the interval
             um = _brentq(sa, float(us[i - 1]), float(us[i]))
             if sv(um) > tol:
