@@ -3,11 +3,14 @@
 
 #include <math.h>
 
+static double dmax(double a, double b) { return a > b ? a : b; }
+static double dabs(double a) { return a < 0.0 ? -a : a; }
+
 /* Tableau columns: [0, n) w, [n, 2n) z, 2n z0, 2n + 1 right-hand side. Variable ids equal the
  * column index of the variable. */
 #define COLS(n) (2 * (n) + 2)
 
-static void pivot(double *T, int n, int row, int col)
+static inline void pivot(double *T, const int n, int row, int col)
 {
     const int nc = COLS(n);
     double *pr = T + row * nc;
@@ -28,12 +31,12 @@ static void pivot(double *T, int n, int row, int col)
  * the row whose (rhs, B^-1 row) / d is lexicographically smallest. B^-1 sits in the w columns.
  * Rows whose basic variable is z0 win ties (so the artificial variable leaves as soon as it can).
  * Returns -1 when no row qualifies (a ray). */
-static int ratio_test(const double *T, int n, int col, const int *basis)
+static inline int ratio_test(const double *T, const int n, int col, const int *basis)
 {
     const int nc = COLS(n);
     const int rhs = 2 * n + 1;
     double colmax = 0.0;
-    for (int i = 0; i < n; i++) colmax = fmax(colmax, fabs(T[i * nc + col]));
+    for (int i = 0; i < n; i++) colmax = dmax(colmax, dabs(T[i * nc + col]));
     const double tol = 1e-13 * colmax;
     int best = -1;
     for (int i = 0; i < n; i++) {
@@ -46,7 +49,7 @@ static int ratio_test(const double *T, int n, int col, const int *basis)
         for (int k = -1; k < n && cmp == 0; k++) {
             const int c = (k < 0) ? rhs : k;
             const double a = T[i * nc + c] / d, b = T[best * nc + c] / db;
-            const double scale = fmax(fabs(a), fabs(b));
+            const double scale = dmax(dabs(a), dabs(b));
             if (a < b - 1e-15 * scale) cmp = -1;
             else if (a > b + 1e-15 * scale) cmp = 1;
             if (k < 0 && cmp == 0) {
@@ -59,8 +62,8 @@ static int ratio_test(const double *T, int n, int col, const int *basis)
     return best;
 }
 
-lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
-                     double *z, double *w, int *z_basic, int *pivots)
+static inline lcp_status lemke(const int n, const double *M, const double *q, int max_pivots,
+                               double *z, double *w, int *z_basic, int *pivots)
 {
     if (pivots) *pivots = 0;
     if (n < 1 || n > LCP_MAX_N) return LCP_BAD_INPUT;
@@ -109,11 +112,19 @@ lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
     for (int i = 0; i < n; i++) { z[i] = 0.0; w[i] = 0.0; }
     for (int i = 0; i < n; i++) {
         const int v = basis[i];
-        const double val = fmax(T[i * nc + rhs], 0.0);
+        const double val = dmax(T[i * nc + rhs], 0.0);
         if (v < n) w[v] = val;
         else if (v < 2 * n) { z[v - n] = val; z_basic[v - n] = 1; }
     }
     return LCP_OK;
+}
+
+lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
+                     double *z, double *w, int *z_basic, int *pivots)
+{
+    /* the friction problem of one degree of freedom is 2 x 2: a copy specialised for it */
+    if (n == 2) return lemke(2, M, q, max_pivots, z, w, z_basic, pivots);
+    return lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 const char *lcp_status_text(lcp_status s)
