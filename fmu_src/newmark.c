@@ -58,8 +58,11 @@ static void predict(const step_ctx *C, const dfo_state *s, double h, trial *tr)
     const dfo_model *M = C->M;
     const double a = M->p.alpha, g = M->gamma, b = M->beta, m = M->p.m, k = M->p.k;
     double A0 = s->A;
-    /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). */
-    if (a != 0.0 && h != s->hA) A0 += a * (h - s->hA) * jerk_of(C, s);
+    /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). The
+     * correction is a Taylor term: it is applied where the shift resolves the fastest time scale
+     * of the oscillator, and skipped where it does not (a stiff step), where it would amplify. */
+    if (a != 0.0 && h != s->hA && fabs(a * (h - s->hA)) * M->rate_max <= 0.5)
+        A0 += a * (h - s->hA) * jerk_of(C, s);
     const double c1 = 1.0 / (g * h);
     double m_hat = (1.0 - a) * m * c1 + k * b * h / g;
     if (M->damped) m_hat += M->p.c;
@@ -176,14 +179,17 @@ static void step_paper(step_ctx *C, dfo_state *s, double h)
     after_phase(C, s, ta, o, s->X - X0, F1, m0);
 }
 
-/* Stick at the end of the step: V = A = 0 (A is then a physical acceleration). */
+/* Stick at the end of the step: V = A = 0 (A is then a physical acceleration). The friction
+ * holds the static force; when the consistent scheme sticks a step whose solved velocity came out
+ * with the wrong sign, the static force may exceed the limit, and the friction is the limit. */
 static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
 {
     finish(C, s, tr, 0.0);
     s->A = 0.0;
     s->hA = 0.0;
     s->mode = 0;
-    s->F = -(dfo_excitation(C->M, s->t) + C->u - C->M->p.k * s->X);
+    const double S = dfo_excitation(C->M, s->t) + C->u - C->M->p.k * s->X;
+    s->F = -fmax(-C->Fb, fmin(C->Fb, S));
 }
 
 /* Consistent stick test (method.md section 4, variant 1). */

@@ -36,6 +36,7 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->mu_b = fmax(p->mu_s, M->mu_k);
     M->P_amp = fabs(p->P0);
     M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
+    M->rate_max = sqrt(p->k / p->m) + p->c / p->m + fabs(p->omega);
     M->fast = p->fastPaths != 0;
     M->damped = !M->fast || p->c != 0.0;
     M->update = !M->fast || M->mu_k != M->mu_b;

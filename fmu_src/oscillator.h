@@ -46,6 +46,7 @@ typedef struct {
     double gamma, beta;      /* Newmark coefficients: gamma = 1/2 - alpha, beta = (1 - alpha)^2 / 4 */
     double mu_k, mu_b;       /* kinetic and breakaway coefficients, mu_b = max(mu_s, mu_k) */
     double P_amp, P_phase;   /* P0 cos(w t + phi) written as P_amp cos(w t + P_phase), P_amp >= 0 */
+    double rate_max;         /* fastest rate of the model, sqrt(k/m) + c/m + |omega| (1/s) */
     int fast;                /* fast paths enabled */
     int damped;              /* c != 0 (or fast paths off) */
     int update;              /* mu_k != mu_b (or fast paths off) */
