@@ -150,3 +150,55 @@ def test_empty_observation_window_is_rejected(fmu: OscillatorFMU) -> None:
     with pytest.raises(FMUError, match="t_obs_stop must be >= t_obs_start"):
         fmu.start(Oscillator(), Settings(observe=True, t_obs_start=2.0, t_obs_stop=1.0))
     fmu.slave.reset()
+
+
+def test_only_fmi2_functions_are_exported(fmu_path: Path, tmp_path: Path) -> None:
+    with zipfile.ZipFile(fmu_path) as z:
+        so = tmp_path / "dfo.so"
+        so.write_bytes(z.read("binaries/linux64/DryFrictionOscillator.so"))
+    out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
+    symbols = {line.split()[-1] for line in out.splitlines() if line.split()[1:2] == ["T"]}
+    assert symbols, out
+    assert all(s.startswith("fmi2") for s in symbols), sorted(s for s in symbols if not s.startswith("fmi2"))
+    for required in ("fmi2Instantiate", "fmi2DoStep", "fmi2GetFMUstate", "fmi2DeSerializeFMUstate",
+                     "fmi2SetTime", "fmi2GetDerivatives", "fmi2Reset"):
+        assert required in symbols
+
+
+def test_wrong_guid_is_refused(fmu_path: Path, fmu: OscillatorFMU) -> None:
+    from fmpy.fmi2 import FMU2Slave
+
+    other = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=fmu._dir,
+                      modelIdentifier="DryFrictionOscillator", instanceName="wrong-guid")
+    messages: list[str] = []
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                           fmi2CallbackLoggerTYPE)
+    from fmpy.fmi1 import calloc, free
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, cat, msg: messages.append(msg.decode()))
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        other.instantiate(callbacks=cb)
+    assert any("does not match the FMU's GUID" in m for m in messages), messages
+    other.freeLibrary()
+
+
+def test_log_categories_are_honoured(fmu_path: Path) -> None:
+    """logEvents reports every stick/slip switch when on, nothing when off."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
+    for on in (True, False):
+        with OscillatorFMU(fmu_path, logging=on) as f:
+            f.trajectory(p, [0.0, 2 * p.period], Settings(h=p.period / 1000))
+            events = [m for s, c, m in f.messages if c == "logEvents" and "->" in m]
+            calls = [m for s, c, m in f.messages if c == "logAll"]
+            if on:
+                assert len(events) >= 4 and any("stick -> " in m for m in events), events
+                assert "fmi2DoStep" in calls
+            else:
+                assert events == [] and calls == []
+    with OscillatorFMU(fmu_path) as f:
+        with pytest.raises(Exception):
+            f._call(f.slave.setDebugLogging, True, ["noSuchCategory"])
+        assert any("unknown log category noSuchCategory" in m for s, c, m in f.messages)
