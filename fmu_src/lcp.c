@@ -35,28 +35,28 @@ static inline int ratio_test(const double *T, const int n, int col, const int *b
 {
     const int nc = COLS(n);
     const int rhs = 2 * n + 1;
-    double colmax = 0.0, rhsmax = 0.0;
-    for (int i = 0; i < n; i++) {
-        colmax = dmax(colmax, dabs(T[i * nc + col]));
-        rhsmax = dmax(rhsmax, dabs(T[i * nc + rhs]));
-    }
+    double colmax = 0.0;
+    for (int i = 0; i < n; i++) colmax = dmax(colmax, dabs(T[i * nc + col]));
     const double tol = 1e-13 * colmax;
-    /* ratios closer than this are ties (rounding of earlier pivots must not break a tie) */
-    const double tie = 1e-12 * (rhsmax + 1.0) / colmax;
     int best = -1;
     for (int i = 0; i < n; i++) {
         const double d = T[i * nc + col];
         if (!(d > tol)) continue;
         if (best < 0) { best = i; continue; }
         const double db = T[best * nc + col];
-        /* compare (T[i][k] / d) with (T[best][k] / db) for k = rhs, 0, 1, ..., n-1 */
+        /* compare a = T[i][k] / d with b = T[best][k] / db for k = rhs, 0, 1, ..., n-1, cross-
+         * multiplied (d, db > 0): a - b has the sign of T[i][k] db - T[best][k] d. Values closer
+         * than 1e-12 of the column's scale are ties: rounding of earlier pivots must not break a
+         * tie of the exact problem. */
         int cmp = 0;
         for (int k = -1; k < n && cmp == 0; k++) {
             const int c = (k < 0) ? rhs : k;
-            const double a = T[i * nc + c] / d, b = T[best * nc + c] / db;
-            const double eps = 1e-12 * dmax(dabs(a), dabs(b)) + tie;
-            if (a < b - eps) cmp = -1;
-            else if (a > b + eps) cmp = 1;
+            double cscale = 0.0;
+            for (int r = 0; r < n; r++) cscale = dmax(cscale, dabs(T[r * nc + c]));
+            const double ad = T[i * nc + c] * db, bd = T[best * nc + c] * d;
+            const double eps = 1e-12 * (dmax(dabs(ad), dabs(bd)) + cscale * d * db / colmax);
+            if (ad < bd - eps) cmp = -1;
+            else if (ad > bd + eps) cmp = 1;
             if (k < 0 && cmp == 0) {
                 if (basis[i] == 2 * n) { cmp = -1; }
                 else if (basis[best] == 2 * n) { cmp = 1; }
@@ -73,22 +73,22 @@ static inline lcp_status lemke(const int n, const double *M, const double *q, in
     if (pivots) *pivots = 0;
     if (n < 1 || n > LCP_MAX_N) return LCP_BAD_INPUT;
     int rmin = 0;
-    double scale = 0.0;
+    double sM = 0.0, sq = 0.0;
     for (int i = 0; i < n; i++) {
         if (!isfinite(q[i])) return LCP_BAD_INPUT;
-        scale = dmax(scale, dabs(q[i]));
+        sq = dmax(sq, dabs(q[i]));
         for (int j = 0; j < n; j++) {
             if (!isfinite(M[i * n + j])) return LCP_BAD_INPUT;
-            scale = dmax(scale, dabs(M[i * n + j]));
+            sM = dmax(sM, dabs(M[i * n + j]));
         }
         /* ties: the last index has the lexicographically smallest row (q_i, e_i) */
         if (q[i] <= q[rmin]) rmin = i;
     }
     for (int i = 0; i < n; i++) { z[i] = 0.0; w[i] = q[i]; z_basic[i] = 0; }
     if (q[rmin] >= 0.0) return LCP_OK; /* z = 0 solves it */
-    /* The solution is invariant under scaling (M, q) by a positive factor: bring far-out
-     * magnitudes (subnormal or huge) near 1 so that pivots neither overflow nor underflow. */
-    const double s = (scale < 1e-100 || scale > 1e100) ? scale : 1.0;
+    /* Solve the normalised problem M' = M / sM, q' = q / sq (entries of magnitude <= 1, so that the
+     * pivot tolerances are relative): w' = M' z' + q' with z = z' sq / sM and w = w' sq. */
+    if (sM == 0.0) sM = 1.0;
 
     const int nc = COLS(n);
     const int rhs = 2 * n + 1, z0 = 2 * n;
@@ -98,10 +98,10 @@ static inline lcp_status lemke(const int n, const double *M, const double *q, in
         double *r = T + i * nc;
         for (int j = 0; j < n; j++) {
             r[j] = (i == j) ? 1.0 : 0.0;
-            r[n + j] = -M[i * n + j] / s;
+            r[n + j] = -M[i * n + j] / sM;
         }
         r[z0] = -1.0;
-        r[rhs] = q[i] / s;
+        r[rhs] = q[i] / sq;
         basis[i] = i;
     }
     /* z0 enters at the most negative q (ties broken lexicographically, see above) */
@@ -125,8 +125,8 @@ static inline lcp_status lemke(const int n, const double *M, const double *q, in
     for (int i = 0; i < n; i++) {
         const int v = basis[i];
         const double val = dmax(T[i * nc + rhs], 0.0);
-        if (v < n) w[v] = val * s; /* w scales with (M, q); z does not */
-        else if (v < 2 * n) { z[v - n] = val; z_basic[v - n] = 1; }
+        if (v < n) w[v] = val * sq;
+        else if (v < 2 * n) { z[v - n] = val * (sq / sM); z_basic[v - n] = 1; }
     }
     return LCP_OK;
 }

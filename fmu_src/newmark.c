@@ -61,7 +61,7 @@ static void predict(const step_ctx *C, const dfo_state *s, double h, trial *tr)
     /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). The
      * correction is a Taylor term: it is applied where the shift resolves the fastest time scale
      * of the oscillator, and skipped where it does not (a stiff step), where it would amplify. */
-    if (a != 0.0 && h != s->hA && fabs(a * (h - s->hA)) * M->rate_max <= 0.5)
+    if (a != 0.0 && fabs(h - s->hA) > 1e-12 * h && fabs(a * (h - s->hA)) * M->rate_max <= 0.5)
         A0 += a * (h - s->hA) * jerk_of(C, s);
     const double c1 = 1.0 / (g * h);
     double m_hat = (1.0 - a) * m * c1 + k * b * h / g;
