@@ -105,15 +105,17 @@ static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN
     s->lcp_solves++;
     const lcp_status st = lcp_lemke(2, Mx, q, LCP_MAX_PIVOT_COUNT, z, w, zb, NULL);
     if (st != LCP_OK) {
-        if (C->err == DFO_OK) C->err = DFO_ERR_LCP;
+        /* non-finite data means the state overflowed before the LCP */
+        if (C->err == DFO_OK) C->err = (st == LCP_BAD_INPUT) ? DFO_ERR_NONFINITE : DFO_ERR_LCP;
         *V1 = 0.0;
         *F1 = 0.0;
         return 0;
     }
-    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) / mh; *F1 = -muN; return 1; }
+    /* 0.0 - x: a zero force is +0, as on the fast path */
+    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) / mh; *F1 = 0.0 - muN; return 1; }
     if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) / mh; *F1 = muN; return -1; }
     *V1 = 0.0;
-    *F1 = -p;
+    *F1 = 0.0 - p;
     return 0;
 }
 
