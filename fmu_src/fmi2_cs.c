@@ -47,6 +47,7 @@ typedef struct {
     int log_on[DFO_NUM_LOG_CATEGORIES];
 } Instance;
 
+#define MAX_STEPS_PER_CALL 1e9 /* internal steps one fmi2DoStep may take */
 #define STATE_MAGIC 0x444650534d555354ULL /* "DFPSMUST" */
 #define SERIAL_MAGIC "DFOSTATE"
 #define SERIAL_VERSION 1u
@@ -553,21 +554,32 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     (void)noSetFMUStatePriorToCurrentPoint;
     values_t *v = &in->v;
     const double t = v->s.t, tc = currentCommunicationPoint, dt = communicationStepSize;
-    if (!isfinite(tc) || !isfinite(dt) || !(dt > 0.0))
+    if (!isfinite(tc))
+        return fail(in, "fmi2DoStep: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", tc, t);
+    if (!isfinite(dt) || !(dt > 0.0))
         return fail(in, "fmi2DoStep: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", dt, tc);
     const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * v->p.h;
     if (fabs(tc - t) > tol)
         return fail(in, "fmi2DoStep: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", tc, t);
     const double t_target = tc + dt;
+    if (!(t_target > t))
+        return fail(in, "fmi2DoStep: communicationStepSize %.17g is below the time resolution at t = %.17g.", dt, t);
     if (v->stop_defined && t_target > v->stop_time + tol)
         return fail(in, "fmi2DoStep: the step would end at %.17g, after the stop time %.17g.", t_target,
                     v->stop_time);
+    if ((t_target - t) / v->p.h > MAX_STEPS_PER_CALL)
+        return fail(in, "fmi2DoStep: a communication step of %.17g s would take more than %.0e internal steps of "
+                    "h = %.17g s; use a larger h or shorter communication steps.", dt, MAX_STEPS_PER_CALL, v->p.h);
     const int events = in->cb.logger && in->log_on[LOG_EVENTS];
+    const dfo_state before = v->s;
     const dfo_status st = dfo_advance(&v->M, &v->u, &v->s, t_target, events ? report_switch : NULL, in);
     if (st != DFO_OK) {
+        const dfo_state failed = v->s;
+        v->s = before; /* the outputs stay those of the last good state */
         v->phase = ST_ERROR;
-        return fail(in, "fmi2DoStep: step from t = %.17g failed: %s (x = %.17g, v = %.17g). Reset the FMU or "
-                    "restore an earlier FMU state.", t, dfo_status_text(st), v->s.X, v->s.V);
+        return fail(in, "fmi2DoStep: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The FMU "
+                    "keeps the state at t = %.17g; reset it or restore an earlier FMU state.", t, failed.t,
+                    dfo_status_text(st), failed.X, failed.V, t);
     }
     return fmi2OK;
 }
@@ -730,11 +742,18 @@ static const char *implausible(const values_t *v)
     if (v->phase != ST_INSTANTIATED && v->phase != ST_INIT && v->phase != ST_STEP && v->phase != ST_TERMINATED &&
         v->phase != ST_ERROR)
         return "the life-cycle phase is invalid";
+    if (dfo_check_params(&v->p)) return "the observation window is empty";
+    if (!isfinite(v->u.F_ext) || !isfinite(v->u.N_ext) || !isfinite(v->start_time) || !isfinite(v->stop_time))
+        return "an input or the experiment's times are not finite";
     const dfo_state *s = &v->s;
-    if (!isfinite(s->t) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) || !isfinite(s->F) ||
-        !isfinite(s->hA) || s->n < 0)
+    if (!isfinite(s->t) || !isfinite(s->t0) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) ||
+        !isfinite(s->F) || !isfinite(s->hA) || s->n < 0)
         return "the state is not finite";
     if (s->mode < -1 || s->mode > 1) return "the mode is invalid";
+    /* the time lies on the internal grid's interval n: t0 + n h <= t < t0 + (n + 1) h */
+    const double h = v->p.h, slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
+    if (s->t < s->t0 || s->t0 + (double)s->n * h > s->t + slack || s->t0 + (double)(s->n + 1) * h < s->t - slack)
+        return "the time does not match the internal grid";
     return NULL;
 }
 
@@ -756,6 +775,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
         return fail(in, "fmi2DeSerializeFMUstate: checksum mismatch, the serialised state is corrupted.");
     const char *why = implausible(&v);
     if (why) return fail(in, "fmi2DeSerializeFMUstate: rejected, %s.", why);
+    dfo_model_init(&v.M, &v.p); /* derived constants follow from the parameters, never trusted */
     fmi2FMUstate st = *FMUstate;
     if (st && ((saved_state *)st)->magic != STATE_MAGIC)
         return fail(in, "fmi2DeSerializeFMUstate: *FMUstate is not a state of this FMU.");

@@ -10,6 +10,7 @@
 #define TWO_PI (2.0 * DFO_PI)
 #define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
 #define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
+#define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
 
 /* What is constant over one call of dfo_advance (inputs are held). */
 typedef struct {
@@ -59,9 +60,9 @@ static void predict(const step_ctx *C, const dfo_state *s, double h, trial *tr)
     const double a = M->p.alpha, g = M->gamma, b = M->beta, m = M->p.m, k = M->p.k;
     double A0 = s->A;
     /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). The
-     * correction is a Taylor term: it is applied where the shift resolves the fastest time scale
-     * of the oscillator, and skipped where it does not (a stiff step), where it would amplify. */
-    if (a != 0.0 && fabs(h - s->hA) > 1e-12 * h && fabs(a * (h - s->hA)) * M->rate_max <= 0.5)
+     * correction is a Taylor term that keeps second order where the steps resolve the fastest
+     * time scale of the oscillator; on steps that do not (stiff), it would amplify: skipped. */
+    if (a != 0.0 && fabs(h - s->hA) > 1e-12 * h && M->rate_max * fmax(h, s->hA) <= 1.0)
         A0 += a * (h - s->hA) * jerk_of(C, s);
     const double c1 = 1.0 / (g * h);
     double m_hat = (1.0 - a) * m * c1 + k * b * h / g;
@@ -463,7 +464,14 @@ static void step_to(step_ctx *C, dfo_state *s, double t_end)
     switch (C->M->p.scheme) {
     case DFO_SCHEME_PAPER: step_paper(C, s, h); break;
     case DFO_SCHEME_CONSISTENT: step_consistent(C, s, h); break;
-    default: step_located(C, s, t_end); break;
+    default:
+        /* Locating a switch inside a step needs steps that resolve the oscillator's fastest time
+         * scale; on a stiff step (several natural periods long) restarts from rest with the
+         * physical acceleration would feed the unresolved mode: there the consistent stick test,
+         * which is stable, takes the step. */
+        if (C->M->rate_max * h > STIFF_STEP) step_consistent(C, s, h);
+        else step_located(C, s, t_end);
+        break;
     }
     s->t = t_end;
 }
@@ -475,16 +483,17 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, do
     make_ctx(&C, M, u);
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
-    const double h = M->p.h, snap = 1e-9 * h;
+    const double h = M->p.h;
+    /* a grid point this close to the target is the target (rounding of the host's times) */
+    const double snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
     while (s->t < t_target) {
         const double grid = s->t0 + (double)(s->n + 1) * h;
-        double t_end;
-        if (grid <= t_target + snap) {
-            t_end = (fabs(grid - t_target) <= snap) ? t_target : grid;
+        double t_end = t_target;
+        if (grid - t_target <= snap) {  /* the next grid point is reached in this call */
+            if (t_target - grid > snap) t_end = grid;
             s->n++;
-        } else {
-            t_end = t_target;
         }
+        if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
         if (!isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) || !isfinite(s->F)) return DFO_ERR_NONFINITE;
@@ -513,6 +522,7 @@ const char *dfo_status_text(dfo_status st)
     case DFO_ERR_LCP: return "the friction LCP could not be solved (Lemke failed)";
     case DFO_ERR_NO_PROGRESS: return "too many stick/slip switches inside one internal step";
     case DFO_ERR_NONFINITE: return "the state became non-finite (overflow)";
+    case DFO_ERR_RESOLUTION: return "the internal step h is below the time resolution at this time";
     }
     return "unknown status";
 }

@@ -15,7 +15,8 @@ typedef enum {
     DFO_OK = 0,
     DFO_ERR_LCP = 1,          /* Lemke reported failure */
     DFO_ERR_NO_PROGRESS = 2,  /* too many switches inside one internal step */
-    DFO_ERR_NONFINITE = 3     /* the state overflowed */
+    DFO_ERR_NONFINITE = 3,    /* the state overflowed */
+    DFO_ERR_RESOLUTION = 4    /* a step would not advance time (h below the resolution of t) */
 } dfo_status;
 
 typedef struct {

@@ -1,14 +1,16 @@
 /* The dry-friction oscillator: parameters, ranges, forces. See oscillator.h. */
 #include "oscillator.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
 const char *dfo_value_range(const char *name, double v)
 {
     if (!isfinite(v)) return "finite";
-    if (!strcmp(name, "m")) return v > 0.0 ? NULL : "> 0";
-    if (!strcmp(name, "h")) return v > 0.0 ? NULL : "> 0";
+    /* m and h divide: they must be normal numbers, not subnormal */
+    if (!strcmp(name, "m")) return v >= DBL_MIN ? NULL : "> 0 (a normal number, >= 2.2250738585072014e-308)";
+    if (!strcmp(name, "h")) return v >= DBL_MIN ? NULL : "> 0 (a normal number, >= 2.2250738585072014e-308)";
     if (!strcmp(name, "k") || !strcmp(name, "c") || !strcmp(name, "N") || !strcmp(name, "mu_s") ||
         !strcmp(name, "chi") || !strcmp(name, "omega"))
         return v >= 0.0 ? NULL : ">= 0";

@@ -1,0 +1,400 @@
+/* Misuse of the FMI 2.0 API in C, linked against the FMU's shared library:
+ *
+ * 1. fmi2Instantiate rejections (NULL callbacks, wrong GUID, type, name);
+ * 2. a NULL instance given to every function: fmi2Error, no crash;
+ * 3. NULL arrays and buffers;
+ * 4. wrong call order, currentCommunicationPoint off, zero / negative / NaN steps;
+ * 5. every invalid parameter value (NaN, inf, out of range) refused with a sentence naming it;
+ * 6. unknown value references and wrong types;
+ * 7. FMU state get/set round trip: bit-exact continuation;
+ * 8. serialisation round trip; every truncation and every single-byte corruption rejected;
+ * 9. overflow reported as an error (never NaN outputs), reset recovers;
+ * 10. 10^4 instantiate/free cycles: allocations through the callbacks balance (ASan's leak
+ *     checker covers the rest in the sanitizer build).
+ *
+ * Each failed call must return fmi2Error or fmi2Discard with a logged sentence, and the instance
+ * must keep working. */
+#include "harness.h"
+
+#include <math.h>
+
+#define N_OUT 8
+
+static const fmi2ValueReference OUT_VR[N_OUT] = {VR_x, VR_v, VR_a, VR_F_friction, VR_x_max, VR_x_min,
+                                                 VR_stick_fraction, VR_E_friction};
+
+/* A call that must fail with a logged sentence containing `part`. */
+static void expect_fail(tally *T, log_sink *sink, fmi2Status st, const char *part, const char *what)
+{
+    if (!expect_(T, st == fmi2Error || st == fmi2Discard, __FILE__, __LINE__, what)) return;
+    if (!expect_(T, sink->last[0] != '\0', __FILE__, __LINE__, what)) return;
+    if (part && !strstr(sink->last, part)) {
+        char buf[1400];
+        snprintf(buf, sizeof buf, "%s: message \"%s\" lacks \"%s\"", what, sink->last, part);
+        expect_(T, 0, __FILE__, __LINE__, buf);
+    }
+    sink->last[0] = '\0';
+}
+
+#define FAILS(call, part) expect_fail(T, &sink, (call), (part), #call)
+
+static void test_instantiate(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    EXPECT(fmi2Instantiate("a", fmi2CoSimulation, MODEL_GUID, "", NULL, 0, 0) == NULL);
+    fmi2CallbackFunctions no_alloc = cb;
+    no_alloc.allocateMemory = NULL;
+    EXPECT(fmi2Instantiate("a", fmi2CoSimulation, MODEL_GUID, "", &no_alloc, 0, 0) == NULL);
+    EXPECT(fmi2Instantiate("a", fmi2CoSimulation, "{nope}", "", &cb, 0, 0) == NULL);
+    EXPECT(strstr(sink.last, "GUID") != NULL);
+    EXPECT(fmi2Instantiate("a", fmi2CoSimulation, NULL, "", &cb, 0, 0) == NULL);
+    EXPECT(fmi2Instantiate("a", fmi2ModelExchange, MODEL_GUID, "", &cb, 0, 0) == NULL);
+    EXPECT(strstr(sink.last, "co-simulation only") != NULL);
+    EXPECT(fmi2Instantiate("", fmi2CoSimulation, MODEL_GUID, "", &cb, 0, 0) == NULL);
+    EXPECT(fmi2Instantiate(NULL, fmi2CoSimulation, MODEL_GUID, NULL, &cb, 0, 0) == NULL);
+    fmi2CallbackFunctions no_logger = cb;
+    no_logger.logger = NULL;
+    fmi2Component c = new_instance("quiet", &no_logger);
+    EXPECT(c != NULL);
+    EXPECT(fmi2DoStep(c, 0.0, 1.0, fmi2True) == fmi2Error); /* no logger: still an error, no crash */
+    fmi2FreeInstance(c);
+    EXPECT(mem_outstanding() == 0);
+    EXPECT(strcmp(fmi2GetVersion(), "2.0") == 0 && strcmp(fmi2GetTypesPlatform(), "default") == 0);
+}
+
+static void test_null_instance(tally *T)
+{
+    fmi2Real r = 0;
+    fmi2Integer i = 0;
+    fmi2Boolean b = 0;
+    fmi2String s = NULL;
+    fmi2Status st = fmi2OK;
+    fmi2FMUstate fs = NULL;
+    size_t sz = 0;
+    fmi2Byte buf[16];
+    const fmi2ValueReference vr = VR_x;
+    const fmi2Integer order = 1;
+    EXPECT(fmi2SetDebugLogging(NULL, 1, 0, NULL) == fmi2Error);
+    EXPECT(fmi2SetupExperiment(NULL, 0, 0, 0, 0, 0) == fmi2Error);
+    EXPECT(fmi2EnterInitializationMode(NULL) == fmi2Error);
+    EXPECT(fmi2ExitInitializationMode(NULL) == fmi2Error);
+    EXPECT(fmi2Terminate(NULL) == fmi2Error);
+    EXPECT(fmi2Reset(NULL) == fmi2Error);
+    EXPECT(fmi2GetReal(NULL, &vr, 1, &r) == fmi2Error);
+    EXPECT(fmi2GetInteger(NULL, &vr, 1, &i) == fmi2Error);
+    EXPECT(fmi2GetBoolean(NULL, &vr, 1, &b) == fmi2Error);
+    EXPECT(fmi2GetString(NULL, &vr, 1, &s) == fmi2Error);
+    EXPECT(fmi2SetReal(NULL, &vr, 1, &r) == fmi2Error);
+    EXPECT(fmi2SetInteger(NULL, &vr, 1, &i) == fmi2Error);
+    EXPECT(fmi2SetBoolean(NULL, &vr, 1, &b) == fmi2Error);
+    EXPECT(fmi2SetString(NULL, &vr, 1, &s) == fmi2Error);
+    EXPECT(fmi2DoStep(NULL, 0, 1, 1) == fmi2Error);
+    EXPECT(fmi2CancelStep(NULL) == fmi2Error);
+    EXPECT(fmi2GetStatus(NULL, fmi2DoStepStatus, &st) == fmi2Error);
+    EXPECT(fmi2GetRealStatus(NULL, fmi2LastSuccessfulTime, &r) == fmi2Error);
+    EXPECT(fmi2GetIntegerStatus(NULL, fmi2DoStepStatus, &i) == fmi2Error);
+    EXPECT(fmi2GetBooleanStatus(NULL, fmi2Terminated, &b) == fmi2Error);
+    EXPECT(fmi2GetStringStatus(NULL, fmi2PendingStatus, &s) == fmi2Error);
+    EXPECT(fmi2GetFMUstate(NULL, &fs) == fmi2Error && fs == NULL);
+    EXPECT(fmi2SetFMUstate(NULL, fs) == fmi2Error);
+    EXPECT(fmi2FreeFMUstate(NULL, &fs) == fmi2Error);
+    EXPECT(fmi2SerializedFMUstateSize(NULL, fs, &sz) == fmi2Error);
+    EXPECT(fmi2SerializeFMUstate(NULL, fs, buf, sizeof buf) == fmi2Error);
+    EXPECT(fmi2DeSerializeFMUstate(NULL, buf, sizeof buf, &fs) == fmi2Error);
+    EXPECT(fmi2SetRealInputDerivatives(NULL, &vr, 1, &order, &r) == fmi2Error);
+    EXPECT(fmi2GetRealOutputDerivatives(NULL, &vr, 1, &order, &r) == fmi2Error);
+    EXPECT(fmi2GetDirectionalDerivative(NULL, &vr, 1, &vr, 1, &r, &r) == fmi2Error);
+    EXPECT(fmi2EnterEventMode(NULL) == fmi2Error);
+    EXPECT(fmi2SetTime(NULL, 0.0) == fmi2Error);
+    fmi2FreeInstance(NULL);
+}
+
+static void test_null_arrays(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    fmi2Component c = new_instance("nulls", &cb);
+    EXPECT(start_run(c, 1e-3, 0, NULL, NULL) == fmi2OK);
+    const fmi2ValueReference vr = VR_x;
+    fmi2Real r;
+    fmi2Integer i;
+    fmi2Boolean b;
+    fmi2FMUstate fs = NULL;
+    FAILS(fmi2GetReal(c, NULL, 1, &r), "NULL");
+    FAILS(fmi2GetReal(c, &vr, 1, NULL), "NULL");
+    FAILS(fmi2SetReal(c, NULL, 1, &r), "NULL");
+    FAILS(fmi2GetInteger(c, &vr, 1, NULL), "NULL");
+    FAILS(fmi2SetInteger(c, NULL, 1, &i), "NULL");
+    FAILS(fmi2GetBoolean(c, NULL, 1, &b), "NULL");
+    FAILS(fmi2SetBoolean(c, &vr, 1, NULL), "NULL");
+    EXPECT(fmi2GetReal(c, NULL, 0, NULL) == fmi2OK);
+    FAILS(fmi2GetFMUstate(c, NULL), "NULL");
+    FAILS(fmi2SetFMUstate(c, NULL), "NULL");
+    FAILS(fmi2FreeFMUstate(c, NULL), "NULL");
+    EXPECT(fmi2FreeFMUstate(c, &fs) == fmi2OK); /* freeing a NULL state is a no-op */
+    FAILS(fmi2SerializedFMUstateSize(c, NULL, NULL), "NULL");
+    FAILS(fmi2SerializeFMUstate(c, NULL, NULL, 0), "NULL");
+    FAILS(fmi2DeSerializeFMUstate(c, NULL, 10, &fs), "NULL");
+    FAILS(fmi2SetDebugLogging(c, 1, 3, NULL), "NULL");
+    FAILS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, NULL), NULL);
+    EXPECT(fmi2DoStep(c, 0.0, 0.01, fmi2True) == fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+static void test_call_order(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    fmi2Component c = new_instance("order", &cb);
+    const fmi2ValueReference vx = VR_x, vm = VR_m, vF = VR_F_ext;
+    fmi2Real r = 2.0;
+    FAILS(fmi2DoStep(c, 0.0, 0.1, fmi2True), "must not be called in instantiated");
+    FAILS(fmi2ExitInitializationMode(c), "must not be called");
+    FAILS(fmi2GetReal(c, &vx, 1, &r), "must not be called");
+    FAILS(fmi2Terminate(c), "must not be called");
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 0.0, 0, 0) == fmi2OK);
+    EXPECT(fmi2EnterInitializationMode(c) == fmi2OK);
+    FAILS(fmi2EnterInitializationMode(c), "initialization mode");
+    FAILS(fmi2SetupExperiment(c, 0, 0, 0.0, 0, 0), "initialization mode");
+    FAILS(fmi2DoStep(c, 0.0, 0.1, fmi2True), "initialization mode");
+    EXPECT(fmi2ExitInitializationMode(c) == fmi2OK);
+    FAILS(fmi2SetReal(c, &vm, 1, &r), "fixed parameter");
+    FAILS(fmi2DoStep(c, 0.5, 0.1, fmi2True), "currentCommunicationPoint");
+    FAILS(fmi2DoStep(c, 0.0, 0.0, fmi2True), "communicationStepSize 0");
+    FAILS(fmi2DoStep(c, 0.0, -1.0, fmi2True), "communicationStepSize -1");
+    FAILS(fmi2DoStep(c, 0.0, NAN, fmi2True), "communicationStepSize nan");
+    FAILS(fmi2DoStep(c, 0.0, INFINITY, fmi2True), "communicationStepSize inf");
+    r = 0.3;
+    EXPECT(fmi2SetReal(c, &vF, 1, &r) == fmi2OK);
+    EXPECT(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK);
+    EXPECT(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &r) == fmi2OK && r == 0.1);
+    EXPECT(fmi2Terminate(c) == fmi2OK);
+    FAILS(fmi2DoStep(c, 0.1, 0.1, fmi2True), "terminated");
+    EXPECT(fmi2Reset(c) == fmi2OK);
+    EXPECT(start_run(c, 1e-3, 0, NULL, NULL) == fmi2OK);
+    EXPECT(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+static void test_bad_values(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    fmi2Component c = new_instance("values", &cb);
+    const double specials[] = {NAN, INFINITY, -INFINITY};
+    char part[128];
+    /* every Real parameter and input: non-finite values */
+    for (int k = 0; k < DFO_NUM_VARS; k++) {
+        const dfo_var_info *v = &DFO_VARS[k];
+        if (v->type != DFO_REAL || (v->causality != DFO_PARAMETER && v->causality != DFO_INPUT)) continue;
+        for (int j = 0; j < 3; j++) {
+            snprintf(part, sizeof part, "for variable %s (value reference %u); valid range: finite", v->name, v->vr);
+            FAILS(fmi2SetReal(c, &v->vr, 1, &specials[j]), part);
+        }
+    }
+    /* ranges */
+    static const struct { fmi2ValueReference vr; double value; const char *text; } bad[] = {
+        {VR_m, 0.0, "invalid value 0 for variable m (value reference 1); valid range: > 0"},
+        {VR_m, -2.0, "invalid value -2 for variable m"},
+        {VR_k, -1.0, "valid range: >= 0"},
+        {VR_c, -1e-9, "invalid value -1.0000000000000001e-09 for variable c"},
+        {VR_N, -1.0, "variable N "},
+        {VR_mu_s, -0.5, "variable mu_s "},
+        {VR_chi, -0.5, "variable chi "},
+        {VR_h, 0.0, "variable h (value reference 12); valid range: > 0"},
+        {VR_alpha, -0.4, "valid range: in [-1/3, 0]"},
+        {VR_alpha, 1e-300, "valid range: in [-1/3, 0]"},
+        {VR_omega, -5.0, "variable omega "},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) FAILS(fmi2SetReal(c, &bad[k].vr, 1, &bad[k].value), bad[k].text);
+    const fmi2ValueReference vs = VR_scheme, vf = VR_frictionUpdates;
+    const fmi2Integer bad_scheme[] = {0, 4, -1}, bad_updates[] = {-1, 101, 2147483647};
+    for (int k = 0; k < 3; k++) {
+        FAILS(fmi2SetInteger(c, &vs, 1, &bad_scheme[k]), "valid range: one of 1 (paper), 2 (consistent), 3 (located)");
+        FAILS(fmi2SetInteger(c, &vf, 1, &bad_updates[k]), "valid range: in [0, 100]");
+    }
+    /* unknown references, wrong types */
+    const fmi2ValueReference unknown[] = {0, 22, 29, 41, 1000, 0xFFFFFFFFu};
+    fmi2Real r = 1.0;
+    fmi2Integer i = 1;
+    for (size_t k = 0; k < sizeof unknown / sizeof unknown[0]; k++) {
+        snprintf(part, sizeof part, "unknown value reference %u.", unknown[k]);
+        FAILS(fmi2SetReal(c, &unknown[k], 1, &r), part);
+        FAILS(fmi2SetInteger(c, &unknown[k], 1, &i), part);
+    }
+    const fmi2ValueReference vm = VR_m;
+    FAILS(fmi2SetInteger(c, &vm, 1, &i), "is of type Real, not Integer");
+    FAILS(fmi2SetBoolean(c, &vs, 1, &i), "is of type Integer, not Boolean");
+    /* still usable: valid values, then a run */
+    const fmi2ValueReference vr2[2] = {VR_m, VR_alpha};
+    const double ok2[2] = {2.0, -1.0 / 3.0};
+    EXPECT(start_run(c, 1e-3, 2, vr2, ok2) == fmi2OK);
+    EXPECT(fmi2DoStep(c, 0.0, 0.5, fmi2True) == fmi2OK);
+    /* the observation window is checked at initialisation */
+    EXPECT(fmi2Reset(c) == fmi2OK);
+    const fmi2ValueReference vw[2] = {VR_t_obs_start, VR_t_obs_stop};
+    const double w[2] = {2.0, 1.0};
+    EXPECT(fmi2SetupExperiment(c, 0, 0, 0.0, 0, 0) == fmi2OK);
+    EXPECT(fmi2SetReal(c, vw, 2, w) == fmi2OK);
+    EXPECT(fmi2EnterInitializationMode(c) == fmi2OK);
+    FAILS(fmi2ExitInitializationMode(c), "t_obs_stop must be >= t_obs_start");
+    fmi2FreeInstance(c);
+}
+
+static void outputs(fmi2Component c, double *out)
+{
+    fmi2GetReal(c, OUT_VR, N_OUT, out);
+}
+
+/* Run n steps of dt from t0, filling out[n][N_OUT]. */
+static fmi2Status run_steps(fmi2Component c, double t0, int n, double dt, double *out)
+{
+    for (int j = 0; j < n; j++) {
+        const fmi2Status st = fmi2DoStep(c, t0 + j * dt, dt, fmi2True);
+        if (st != fmi2OK) return st;
+        outputs(c, out + (size_t)j * N_OUT);
+    }
+    return fmi2OK;
+}
+
+static void start_observed(fmi2Component c)
+{
+    const fmi2ValueReference vr[2] = {VR_x0, VR_chi};
+    const double val[2] = {0.004, 0.5};
+    const fmi2ValueReference vo = VR_observe;
+    const fmi2Boolean on = fmi2True;
+    fmi2SetupExperiment(c, 0, 0, 0.0, 0, 0);
+    fmi2SetBoolean(c, &vo, 1, &on);
+    fmi2SetReal(c, vr, 2, val);
+    const fmi2ValueReference vh = VR_h;
+    const double h = 7e-4;
+    fmi2SetReal(c, &vh, 1, &h);
+    fmi2EnterInitializationMode(c);
+    fmi2ExitInitializationMode(c);
+}
+
+static void test_states(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    fmi2Component c = new_instance("states", &cb), d = new_instance("other", &cb);
+    static double a[300 * N_OUT], b[300 * N_OUT];
+    start_observed(c);
+    EXPECT(run_steps(c, 0.0, 37, 0.0123, a) == fmi2OK);
+    const double t1 = 37 * 0.0123;
+    fmi2FMUstate s = NULL;
+    EXPECT(fmi2GetFMUstate(c, &s) == fmi2OK && s != NULL);
+    EXPECT(run_steps(c, t1, 300, 0.01, a) == fmi2OK);
+    EXPECT(fmi2SetFMUstate(c, s) == fmi2OK);
+    EXPECT(run_steps(c, t1, 300, 0.01, b) == fmi2OK);
+    EXPECT(memcmp(a, b, sizeof a) == 0); /* bit-exact continuation */
+
+    /* serialise, deserialise into another instance that was only instantiated */
+    size_t n = 0;
+    EXPECT(fmi2SerializedFMUstateSize(c, s, &n) == fmi2OK && n > 24);
+    fmi2Byte *ser = (fmi2Byte *)malloc(n), *bad = (fmi2Byte *)malloc(n + 1);
+    EXPECT(fmi2SerializeFMUstate(c, s, ser, n) == fmi2OK);
+    FAILS(fmi2SerializeFMUstate(c, s, bad, n - 1), "too small");
+    fmi2FMUstate s2 = NULL;
+    EXPECT(fmi2DeSerializeFMUstate(d, ser, n, &s2) == fmi2OK && s2 != NULL);
+    EXPECT(fmi2SetFMUstate(d, s2) == fmi2OK);
+    memset(b, 0, sizeof b);
+    EXPECT(run_steps(d, t1, 300, 0.01, b) == fmi2OK);
+    EXPECT(memcmp(a, b, sizeof a) == 0);
+    EXPECT(fmi2SerializeFMUstate(d, s2, bad, n) == fmi2OK && memcmp(bad, ser, n) == 0);
+
+    /* every truncation, one extra byte, every single-byte corruption: rejected, s2 untouched */
+    int accepted = 0;
+    for (size_t k = 0; k < n; k++) accepted += fmi2DeSerializeFMUstate(d, ser, k, &s2) != fmi2Error;
+    EXPECT(fmi2DeSerializeFMUstate(d, ser, n + 1, &s2) == fmi2Error);
+    for (size_t k = 0; k < n; k++) {
+        for (int flip = 1; flip < 256; flip <<= 1) {
+            memcpy(bad, ser, n);
+            bad[k] = (fmi2Byte)(bad[k] ^ flip);
+            accepted += fmi2DeSerializeFMUstate(d, bad, n, &s2) != fmi2Error;
+        }
+    }
+    EXPECT(accepted == 0);
+    EXPECT(strstr(sink.last, "checksum") != NULL || strstr(sink.last, "not a serialised state") != NULL);
+    EXPECT(fmi2SetFMUstate(d, s2) == fmi2OK); /* the state is still the good one */
+    EXPECT(run_steps(d, t1, 300, 0.01, b) == fmi2OK && memcmp(a, b, sizeof a) == 0);
+
+    /* foreign pointers are refused, not freed */
+    unsigned char junk[1024];
+    memset(junk, 0x5a, sizeof junk);
+    FAILS(fmi2SetFMUstate(c, (fmi2FMUstate)junk), "not a state of this FMU");
+    fmi2FMUstate jp = (fmi2FMUstate)junk;
+    FAILS(fmi2FreeFMUstate(c, &jp), "not a state of this FMU");
+    FAILS(fmi2SerializeFMUstate(c, (fmi2FMUstate)junk, ser, n), "not a state of this FMU");
+
+    EXPECT(fmi2FreeFMUstate(c, &s) == fmi2OK && s == NULL);
+    EXPECT(fmi2FreeFMUstate(d, &s2) == fmi2OK && s2 == NULL);
+    free(ser);
+    free(bad);
+    fmi2FreeInstance(c);
+    fmi2FreeInstance(d);
+}
+
+static void test_overflow(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    fmi2Component c = new_instance("overflow", &cb);
+    const fmi2ValueReference vr[4] = {VR_P0, VR_N, VR_omega, VR_k};
+    const double val[4] = {1e307, 0.0, 0.0, 1e-300};
+    EXPECT(start_run(c, 1e-3, 4, vr, val) == fmi2OK);
+    FAILS(fmi2DoStep(c, 0.0, 1e6, fmi2True), "non-finite");
+    double out[N_OUT];
+    EXPECT(fmi2GetReal(c, OUT_VR, N_OUT, out) == fmi2OK);
+    FAILS(fmi2DoStep(c, 0.0, 0.1, fmi2True), "must not be called in error");
+    EXPECT(fmi2Reset(c) == fmi2OK);
+    EXPECT(start_run(c, 1e-3, 0, NULL, NULL) == fmi2OK);
+    EXPECT(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK);
+    EXPECT(fmi2GetReal(c, OUT_VR, N_OUT, out) == fmi2OK && isfinite(out[0]) && out[0] != 0.0);
+    fmi2FreeInstance(c);
+}
+
+static void test_cycles(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    const long before = mem_outstanding();
+    long ok = 0;
+    for (int k = 0; k < 10000; k++) {
+        fmi2Component c = new_instance("cycle", &cb);
+        if (!c) continue;
+        ok++;
+        if (k % 10 == 0) {
+            start_run(c, 1e-3, 0, NULL, NULL);
+            fmi2DoStep(c, 0.0, 0.02, fmi2True);
+            fmi2FMUstate s = NULL, s2 = NULL;
+            fmi2GetFMUstate(c, &s);
+            size_t n = 0;
+            fmi2SerializedFMUstateSize(c, s, &n);
+            fmi2Byte buf[2048];
+            if (n <= sizeof buf && fmi2SerializeFMUstate(c, s, buf, n) == fmi2OK) fmi2DeSerializeFMUstate(c, buf, n, &s2);
+            fmi2FreeFMUstate(c, &s);
+            fmi2FreeFMUstate(c, &s2);
+        }
+        fmi2FreeInstance(c);
+    }
+    EXPECT(ok == 10000);
+    EXPECT(mem_outstanding() == before);
+    printf("cycles: %ld allocations, %ld frees\n", g_mem.allocs, g_mem.frees);
+}
+
+int main(void)
+{
+    tally t = {0, 0}, *T = &t;
+    test_instantiate(T);
+    test_null_instance(T);
+    test_null_arrays(T);
+    test_call_order(T);
+    test_bad_values(T);
+    test_states(T);
+    test_overflow(T);
+    test_cycles(T);
+    EXPECT(mem_outstanding() == 0);
+    return tally_done(T, "test_fmi_api");
+}

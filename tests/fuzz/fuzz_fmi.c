@@ -1,0 +1,397 @@
+/* libFuzzer target over the FMI 2.0 entry points of the DryFrictionOscillator FMU.
+ *
+ * The input bytes are decoded into a sequence of FMI calls: instantiate / free, setup, enter and
+ * exit initialisation, set and get of every variable (and of unknown value references) with
+ * special values (NaN, inf, huge, tiny, negative) or raw bytes, doStep with the right or a wrong
+ * communication point and any step size, terminate, reset, FMU state get/set/free, serialise and
+ * deserialise (intact, truncated, a byte flipped, or a field forged with the checksum fixed up),
+ * debug logging, status queries. Calls out of order are part of the game.
+ *
+ * Besides ASan/UBSan, the target checks these oracles and aborts when one fails:
+ *   - an fmi2Error of a live instance comes with a logged message (while error logging is on);
+ *   - outputs read with fmi2OK are finite, mode is -1, 0 or +1, and mode 0 means v == 0;
+ *   - after an fmi2OK doStep the FMU's time (fmi2LastSuccessfulTime) is exactly tc + dt
+ *     (FUZZ_TIME_ORACLE, on by default; -DFUZZ_TIME_ORACLE=0 to explore past it).
+ * A doStep whose step holds more than FUZZ_MAX_STEPS internal steps of the parameter h is
+ * shortened to that many, so that long but legal runs do not read as hangs.
+ *
+ * Built by tests/fuzz/CMakeLists.txt (clang, -fsanitize=fuzzer) and, with tests/fuzz/replay_main.c,
+ * by tests/fmi_c/CMakeLists.txt as the ctest replay of the corpus and the regression inputs. */
+#include "fmi2Functions.h"
+#include "model_vars.h"
+
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef FUZZ_TIME_ORACLE
+#define FUZZ_TIME_ORACLE 1
+#endif
+#ifndef FUZZ_MAX_STEPS
+#define FUZZ_MAX_STEPS 20000.0
+#endif
+#define FUZZ_MAX_CALLS 400
+#define SER_CAP 4096
+#define SERIAL_HEADER 24 /* magic[8], version, size, checksum: the checksum is bytes 16..23 */
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+typedef struct {
+    const uint8_t *p;
+    size_t n, i;
+} reader;
+
+static unsigned u8(reader *r) { return r->i < r->n ? r->p[r->i++] : 0u; }
+
+static unsigned u16(reader *r)
+{
+    const unsigned a = u8(r);
+    return a | (u8(r) << 8);
+}
+
+static uint32_t u32(reader *r)
+{
+    const uint32_t a = u16(r);
+    return a | ((uint32_t)u16(r) << 16);
+}
+
+static double real(reader *r)
+{
+    static const double special[] = {0.0, -0.0, 1.0, -1.0, 0.5, 1e-3, 1e-300, -1e-300, 1e300, -1e300,
+                                     NAN, INFINITY, -INFINITY, DBL_MIN, DBL_MAX, 1e-12, 1e6, 1e15, 2.0, 100.0,
+                                     -1.0 / 3.0, -0.1, 0.7, 3.0, 0.4, 5.0, 1e-9, 4.9e-324};
+    const unsigned sel = u8(r);
+    const unsigned n_special = sizeof special / sizeof special[0];
+    if (sel < 2 * n_special) return special[sel % n_special];
+    if (sel < 224) return ((double)u16(r) / 65535.0 - 0.25) * 8.0; /* ordinary values in [-2, 6] */
+    uint64_t bits = (uint64_t)u32(r);
+    bits |= (uint64_t)u32(r) << 32;
+    double d;
+    memcpy(&d, &bits, sizeof d);
+    return d;
+}
+
+static int integer(reader *r)
+{
+    static const int special[] = {-1, 0, 1, 2, 3, 4, 100, 101, INT_MAX, INT_MIN};
+    const unsigned sel = u8(r);
+    if (sel < 200) return special[sel % 10];
+    return (int)u32(r);
+}
+
+static fmi2ValueReference any_vr(reader *r)
+{
+    const unsigned sel = u8(r);
+    if (sel < 240) return DFO_VARS[sel % DFO_NUM_VARS].vr;
+    return (fmi2ValueReference)u32(r);
+}
+
+typedef struct {
+    fmi2CallbackFunctions cb;
+    fmi2Component c;
+    fmi2FMUstate slot[2];
+    fmi2Byte ser[SER_CAP];
+    size_t ser_n;
+    long errors_logged;
+    int errors_silenced; /* error logging switched off by fmi2SetDebugLogging */
+    double t;            /* the host's view of the time */
+    int trace;           /* print every call (env FUZZ_TRACE set): for reading a regression input */
+} ctx;
+
+#define TRACE(X, ...) \
+    do { \
+        if ((X)->trace) fprintf(stderr, __VA_ARGS__); \
+    } while (0)
+
+static void oracle_fail(const char *what)
+{
+    fprintf(stderr, "fuzz_fmi oracle failed: %s\n", what);
+    abort();
+}
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String message, ...)
+{
+    (void)name;
+    (void)category;
+    ctx *X = (ctx *)env;
+    if (!message) oracle_fail("NULL log message");
+    if (status >= fmi2Error) X->errors_logged++;
+}
+
+/* An error of a live instance must be explained in the log. */
+static void after(ctx *X, fmi2Status st, long logged_before)
+{
+    if (st > fmi2Pending) oracle_fail("invalid status code");
+    TRACE(X, "  -> status %d\n", (int)st);
+    if (st == fmi2Error && X->c && !X->errors_silenced && X->errors_logged == logged_before)
+        oracle_fail("fmi2Error without a logged message");
+}
+
+static void free_all(ctx *X)
+{
+    if (!X->c) return;
+    for (int k = 0; k < 2; k++)
+        if (X->slot[k]) fmi2FreeFMUstate(X->c, &X->slot[k]);
+    X->slot[0] = X->slot[1] = NULL;
+    fmi2FreeInstance(X->c);
+    X->c = NULL;
+}
+
+static void check_outputs(ctx *X)
+{
+    static const fmi2ValueReference vr[] = {VR_x, VR_v, VR_a, VR_F_friction, VR_x_max, VR_x_min, VR_stick_fraction,
+                                            VR_E_friction};
+    double out[sizeof vr / sizeof vr[0]];
+    const size_t n = sizeof vr / sizeof vr[0];
+    if (fmi2GetReal(X->c, vr, n, out) == fmi2OK) {
+        for (size_t i = 0; i < n; i++)
+            if (!isfinite(out[i])) {
+                TRACE(X, "  output %u = %g\n", (unsigned)vr[i], out[i]);
+                oracle_fail("non-finite output with fmi2OK");
+            }
+        const fmi2ValueReference vm = VR_mode;
+        fmi2Integer mode = 0;
+        if (fmi2GetInteger(X->c, &vm, 1, &mode) == fmi2OK) {
+            if (mode < -1 || mode > 1) oracle_fail("mode outside -1, 0, +1");
+            if (mode == 0 && out[1] != 0.0) oracle_fail("mode 0 (stuck) with v != 0");
+        }
+    }
+}
+
+static uint64_t fnv1a(const fmi2Byte *p, size_t n)
+{
+    uint64_t h = 1469598103934665603ULL;
+    for (size_t i = 0; i < n; i++) {
+        h ^= (unsigned char)p[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+static void op(ctx *X, reader *r)
+{
+    const unsigned code = u8(r) % 20;
+    const long before = X->errors_logged;
+    fmi2Status st = fmi2OK;
+    switch (code) {
+    case 0: { /* (re-)instantiate */
+        TRACE(X, "fmi2FreeInstance + fmi2Instantiate\n");
+        free_all(X);
+        X->errors_silenced = 0;
+        X->c = fmi2Instantiate(u8(r) & 1 ? "fuzz" : "f", fmi2CoSimulation, MODEL_GUID, "", &X->cb, fmi2False,
+                               (fmi2Boolean)(u8(r) & 1));
+        if (!X->c) oracle_fail("fmi2Instantiate failed with valid arguments");
+        X->t = 0.0;
+        return;
+    }
+    case 1: {
+        const unsigned f = u8(r);
+        const double start = (f & 4) ? real(r) : 0.0, stop = (f & 2) ? real(r) : 0.0;
+        TRACE(X, "fmi2SetupExperiment(start %.17g, stopDefined %u, stop %.17g)\n", start, (f >> 1) & 1, stop);
+        st = fmi2SetupExperiment(X->c, (fmi2Boolean)(f & 1), 1e-6, start, (fmi2Boolean)((f >> 1) & 1), stop);
+        if (st == fmi2OK) X->t = start;
+        break;
+    }
+    case 2:
+        TRACE(X, "fmi2EnterInitializationMode\n");
+        st = fmi2EnterInitializationMode(X->c);
+        break;
+    case 3:
+        TRACE(X, "fmi2ExitInitializationMode\n");
+        st = fmi2ExitInitializationMode(X->c);
+        if (st == fmi2OK) check_outputs(X);
+        break;
+    case 4: {
+        fmi2ValueReference vr[3];
+        double v[3];
+        const size_t n = 1 + u8(r) % 3;
+        for (size_t i = 0; i < n; i++) {
+            vr[i] = any_vr(r);
+            v[i] = real(r);
+        }
+        for (size_t i = 0; i < n; i++) TRACE(X, "fmi2SetReal(vr %u = %.17g)\n", (unsigned)vr[i], v[i]);
+        st = fmi2SetReal(X->c, vr, n, v);
+        break;
+    }
+    case 5: {
+        const fmi2ValueReference vr = any_vr(r);
+        const fmi2Integer v = integer(r);
+        TRACE(X, "fmi2SetInteger(vr %u = %d)\n", (unsigned)vr, (int)v);
+        st = fmi2SetInteger(X->c, &vr, 1, &v);
+        break;
+    }
+    case 6: {
+        const fmi2ValueReference vr = any_vr(r);
+        const fmi2Boolean v = (fmi2Boolean)(u8(r) % 3);
+        TRACE(X, "fmi2SetBoolean(vr %u = %d)\n", (unsigned)vr, (int)v);
+        st = fmi2SetBoolean(X->c, &vr, 1, &v);
+        break;
+    }
+    case 7: { /* doStep */
+        const unsigned f = u8(r);
+        double tc = X->t, dt;
+        if (f & 1) tc = real(r);
+        if (f & 2) dt = real(r);
+        else dt = (double)(1 + u16(r)) * 1e-4;
+        const fmi2ValueReference vh = VR_h;
+        double h = 0.0;
+        if (X->c && isfinite(dt) && dt > 0.0 && fmi2GetReal(X->c, &vh, 1, &h) == fmi2OK && h > 0.0 &&
+            dt / h > FUZZ_MAX_STEPS)
+            dt = FUZZ_MAX_STEPS * h;
+        TRACE(X, "fmi2DoStep(%.17g, %.17g)\n", tc, dt);
+        st = fmi2DoStep(X->c, tc, dt, (fmi2Boolean)((f >> 2) & 1));
+        if (st == fmi2OK) {
+            double t = NAN;
+            if (fmi2GetRealStatus(X->c, fmi2LastSuccessfulTime, &t) != fmi2OK) oracle_fail("no last time");
+            if (FUZZ_TIME_ORACLE && t != tc + dt) oracle_fail("time after doStep is not tc + dt");
+            X->t = t;
+            check_outputs(X);
+        }
+        break;
+    }
+    case 8: {
+        fmi2ValueReference vr[DFO_NUM_VARS];
+        double v[DFO_NUM_VARS];
+        size_t n = 0;
+        for (int i = 0; i < DFO_NUM_VARS; i++)
+            if (DFO_VARS[i].type == DFO_REAL) vr[n++] = DFO_VARS[i].vr;
+        TRACE(X, "fmi2GetReal(all Real variables)\n");
+        st = fmi2GetReal(X->c, vr, n, v);
+        if (st == fmi2OK)
+            for (size_t i = 0; i < n; i++)
+                if (!isfinite(v[i]) && vr[i] != VR_t_obs_stop) oracle_fail("non-finite Real with fmi2OK");
+        break;
+    }
+    case 9: {
+        const fmi2ValueReference vr = any_vr(r);
+        fmi2Integer i = 0;
+        fmi2Boolean b = 0;
+        st = (u8(r) & 1) ? fmi2GetInteger(X->c, &vr, 1, &i) : fmi2GetBoolean(X->c, &vr, 1, &b);
+        break;
+    }
+    case 10:
+        TRACE(X, "fmi2Terminate\n");
+        st = fmi2Terminate(X->c);
+        break;
+    case 11:
+        TRACE(X, "fmi2Reset\n");
+        st = fmi2Reset(X->c);
+        if (st == fmi2OK) X->t = 0.0;
+        break;
+    case 12: {
+        const unsigned k = u8(r) & 1;
+        TRACE(X, "fmi2GetFMUstate(slot %u)\n", k);
+        st = fmi2GetFMUstate(X->c, &X->slot[k]);
+        break;
+    }
+    case 13: {
+        const unsigned k = u8(r) & 1;
+        TRACE(X, "fmi2SetFMUstate(slot %u)\n", k);
+        st = fmi2SetFMUstate(X->c, X->slot[k]);
+        double t = 0.0;
+        if (st == fmi2OK && fmi2GetRealStatus(X->c, fmi2LastSuccessfulTime, &t) == fmi2OK) X->t = t;
+        break;
+    }
+    case 14: {
+        const unsigned k = u8(r) & 1;
+        TRACE(X, "fmi2FreeFMUstate(slot %u)\n", k);
+        st = fmi2FreeFMUstate(X->c, &X->slot[k]);
+        break;
+    }
+    case 15: {
+        const unsigned k = u8(r) & 1;
+        const fmi2FMUstate s = X->slot[k];
+        TRACE(X, "fmi2SerializeFMUstate(slot %u)\n", k);
+        size_t n = 0;
+        st = fmi2SerializedFMUstateSize(X->c, s, &n);
+        if (st == fmi2OK && n <= SER_CAP) {
+            st = fmi2SerializeFMUstate(X->c, s, X->ser, n);
+            X->ser_n = st == fmi2OK ? n : 0;
+        }
+        break;
+    }
+    case 16: { /* deserialise, possibly damaged or forged */
+        fmi2Byte buf[SER_CAP];
+        size_t n = X->ser_n;
+        memcpy(buf, X->ser, n);
+        const unsigned how = u8(r) % 5;
+        if (how == 1) n = n ? u16(r) % n : 0;
+        if (how == 2 && n) {
+            const size_t at = u16(r) % n;
+            buf[at] = (fmi2Byte)(buf[at] ^ (1 + u8(r) % 255));
+        }
+        if ((how == 3 || how == 4) && n >= SERIAL_HEADER + 8) {
+            const size_t at = SERIAL_HEADER + 8 * (u16(r) % ((n - SERIAL_HEADER) / 8));
+            const double v = real(r);
+            memcpy(buf + at, &v, sizeof v);
+            TRACE(X, "  forged payload double at byte %lu = %.17g\n", (unsigned long)at, v);
+            if (how == 3) {
+                const uint64_t h = fnv1a(buf + SERIAL_HEADER, n - SERIAL_HEADER);
+                memcpy(buf + 16, &h, sizeof h);
+            }
+        }
+        const unsigned k = u8(r) & 1;
+        TRACE(X, "fmi2DeSerializeFMUstate(%lu bytes, damage %u, slot %u)\n", (unsigned long)n, how, k);
+        st = fmi2DeSerializeFMUstate(X->c, buf, n, &X->slot[k]);
+        break;
+    }
+    case 17: {
+        static const char *const names[] = {"logStatusError", "logStatusWarning", "logEvents", "logAll", "bogus"};
+        const unsigned f = u8(r);
+        const fmi2Boolean on = (fmi2Boolean)(f & 1);
+        const char *cats[2] = {names[(f >> 1) % 5], names[(f >> 4) % 5]};
+        const size_t nc = (f >> 7) ? 2 : (f & 2) ? 1 : 0;
+        TRACE(X, "fmi2SetDebugLogging(%d, %lu categories)\n", (int)on, (unsigned long)nc);
+        st = fmi2SetDebugLogging(X->c, on, nc, cats);
+        if (st == fmi2OK && !on) {
+            if (nc == 0) X->errors_silenced = 1;
+            for (size_t i = 0; i < nc; i++)
+                if (!strcmp(cats[i], "logStatusError")) X->errors_silenced = 1;
+        }
+        if (st == fmi2OK && on) {
+            if (nc == 0) X->errors_silenced = 0;
+            for (size_t i = 0; i < nc; i++)
+                if (!strcmp(cats[i], "logStatusError")) X->errors_silenced = 0;
+        }
+        break;
+    }
+    case 18: {
+        double t;
+        fmi2Status s2;
+        st = fmi2GetRealStatus(X->c, (fmi2StatusKind)(u8(r) % 5), &t);
+        after(X, st, before);
+        st = fmi2GetStatus(X->c, fmi2DoStepStatus, &s2);
+        break;
+    }
+    default: {
+        TRACE(X, "outputs, fmi2CancelStep\n");
+        check_outputs(X);
+        st = fmi2CancelStep(X->c);
+        break;
+    }
+    }
+    after(X, st, before);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    ctx X;
+    memset(&X, 0, sizeof X);
+    X.cb.logger = logger;
+    X.cb.allocateMemory = calloc;
+    X.cb.freeMemory = free;
+    X.cb.stepFinished = NULL;
+    X.cb.componentEnvironment = &X;
+    X.trace = getenv("FUZZ_TRACE") != NULL;
+    X.c = fmi2Instantiate("fuzz", fmi2CoSimulation, MODEL_GUID, "", &X.cb, fmi2False, fmi2False);
+    if (!X.c) oracle_fail("fmi2Instantiate failed with valid arguments");
+    reader r = {data, size, 0};
+    for (int k = 0; k < FUZZ_MAX_CALLS && r.i < r.n; k++) op(&X, &r);
+    free_all(&X);
+    return 0;
+}

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# Fuzz the FMI entry points with libFuzzer + ASan/UBSan for a bounded time.
+#
+#   tests/fuzz/run_fuzz.sh [seconds]        (default 60; env FUZZ_TIME_ORACLE=0 to explore past
+#                                            the time-exactness oracle, FUZZ_BUILD=<dir> for the build)
+#
+# Installs clang when missing (apt-get, quiet), builds tests/fuzz with -DDFO_FUZZ=ON, fuzzes from
+# tests/fuzz/corpus (new coverage goes to a scratch corpus, not into the repository) and copies
+# every crash / timeout / leak input into tests/fuzz/regressions/, where ctest replays it
+# (fuzz_regression_<name>). Exit status: 0 when nothing was found, 1 when inputs were kept.
+set -euo pipefail
+secs=${1:-60}
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+build=${FUZZ_BUILD:-/tmp/dfo-fuzz-build}
+oracle=${FUZZ_TIME_ORACLE:-1}
+python=${PYTHON:-}
+if [ -z "$python" ]; then   # the interpreter with fmpy (the FMI headers come from it)
+  if [ -x "$root/.venv/bin/python" ]; then python=$root/.venv/bin/python; else python=$(command -v python3); fi
+fi
+
+if ! command -v clang >/dev/null 2>&1; then
+  echo "run_fuzz: installing clang" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq >/dev/null
+  apt-get install -y -qq clang >/dev/null
+fi
+
+cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DDFO_FUZZ=ON -DFUZZ_TIME_ORACLE="$oracle" \
+      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPython3_EXECUTABLE="$python" >/dev/null
+cmake --build "$build" --target fuzz_fmi -j2 >/dev/null
+
+work=$(mktemp -d /tmp/dfo-fuzz.XXXXXX)
+mkdir -p "$work/corpus" "$work/artifacts"
+cp "$here"/corpus/* "$work/corpus/" 2>/dev/null || true
+echo "run_fuzz: fuzzing for ${secs}s (time oracle ${oracle}), scratch dir $work" >&2
+set +e
+# fork mode: keep fuzzing after a crash, so that one known bug does not hide the next
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+"$build/tests/fuzz/fuzz_fmi" "$work/corpus" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \
+  -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=512 -print_final_stats=1 \
+  -artifact_prefix="$work/artifacts/" >"$work/fuzz.log" 2>&1
+rc=$?
+set -e
+grep -E "^#[0-9]+: cov|INFO: exiting|DONE" "$work/fuzz.log" | tail -n 3 >&2 || true
+
+# One regression input per distinct failure: the signature is the first oracle / sanitizer /
+# timeout line of a replay of the input.
+signature() {
+  local out
+  out=$( (timeout 60 "$build/tests/fuzz/fuzz_fmi" "$1" -timeout=10 -runs=1 2>&1 || true) \
+    | grep -m1 -oE "oracle failed: .*|ERROR: [A-Za-z]+Sanitizer: [a-z-]+|runtime error: [^0-9]*|ALARM: working on the last Unit" || true)
+  echo "${out:-timeout or no failure}"
+}
+declare -A seen=()
+mkdir -p "$here/regressions"
+for f in "$here"/regressions/*; do
+  [ -f "$f" ] && seen["$(signature "$f")"]=1
+done
+found=0
+for f in "$work"/artifacts/*; do
+  [ -f "$f" ] || continue
+  sig=$(signature "$f")
+  if [ -n "${seen[$sig]:-}" ]; then continue; fi
+  seen["$sig"]=1
+  name=$(basename "$f")
+  cp "$f" "$here/regressions/$name.tmp" && mv "$here/regressions/$name.tmp" "$here/regressions/$name"
+  echo "run_fuzz: kept $name in tests/fuzz/regressions/ ($sig)" >&2
+  found=1
+done
+echo "run_fuzz: libFuzzer exit $rc, $(ls "$work/artifacts" | wc -l) failing inputs found, corpus $(ls "$work/corpus" | wc -l) inputs, log $work/fuzz.log" >&2
+exit $found

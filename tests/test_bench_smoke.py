@@ -1,0 +1,148 @@
+"""Smoke test of the work-precision study (issue 4): runs ``bench/work_precision.py --quick`` once
+into a temporary folder and checks what it measured against the exact solution. No timing
+assertions: times only have to be finite and positive.
+
+Needs the FMU and bench_stepper built (``cmake --build build``; ``DFO_FMU`` / ``DFO_BENCH_STEPPER``
+point elsewhere). Takes about a minute on 2 cores.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = ROOT / "bench" / "work_precision.py"
+CASES = ("stick_dominated", "reversal_resonance", "heavy_damped", "chi_above_1", "chi_near_0")
+FMU_METHODS = {"FMU located", "FMU consistent", "FMU paper"}
+PEER_METHODS = {"event RK45", "event DOP853", "event Radau", "tanh Radau", "tanh LSODA"}
+PNGS = ("error_vs_cpu.png", "error_vs_h.png", "cost_growth.png")
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("work_precision")
+    res = subprocess.run([sys.executable, str(SCRIPT), "--quick", "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, f"--quick study failed:\n{res.stderr[-3000:]}"
+    return out
+
+
+def test_located_is_second_order_across_stick_slip(study: Path) -> None:
+    orders = _rows(study / "orders.csv")
+    got = {(o["case"], o["scheme"], float(o["alpha"])): float(o["order"]) for o in orders}
+    assert 1.8 <= got[("stick_dominated", "located", -0.1)] <= 2.2
+    # and on every case and every alpha of the sweep
+    for (case, scheme, alpha), order in got.items():
+        if scheme == "located":
+            assert 1.8 <= order <= 2.2, (case, alpha, order)
+
+
+def test_paper_scheme_has_an_error_floor_at_chi_005(study: Path) -> None:
+    rows = [r for r in _rows(study / "work_precision.csv")
+            if r["case"] == "chi_near_0" and r["method"] == "FMU paper"]
+    assert rows
+    assert min(float(r["error_z"]) for r in rows) >= 1e-2
+    # while the located scheme on the same case keeps converging far below it
+    loc = [float(r["error_z"]) for r in _rows(study / "work_precision.csv")
+           if r["case"] == "chi_near_0" and r["method"] == "FMU located"]
+    assert min(loc) < 1e-3
+
+
+def test_csv_has_every_method_and_case(study: Path) -> None:
+    rows = _rows(study / "work_precision.csv")
+    for case in CASES:
+        methods = {r["method"] for r in rows if r["case"] == case}
+        assert FMU_METHODS | PEER_METHODS <= methods, (case, methods)
+        for r in rows:
+            if r["case"] == case:
+                assert math.isfinite(float(r["error_z"])), r
+                assert float(r["seconds_per_run"]) > 0, r
+    # the FMU sweep covers the three schemes and alphas at every h of the quick study
+    fmu = [r for r in rows if r["family"] == "fmu"]
+    assert {float(r["alpha"]) for r in fmu} == {0.0, -0.1, -1.0 / 3.0}
+    assert len({r["steps_per_period"] for r in fmu}) >= 4
+
+
+def test_event_driven_peer_matches_the_exact_solution(study: Path) -> None:
+    """The scipy switching model is itself checked against the exact solution: at tight tolerance
+    DOP853 must be accurate on every case, else its cost numbers would mean nothing."""
+    rows = _rows(study / "work_precision.csv")
+    for case in CASES:
+        errs = [float(r["error_z"]) for r in rows if r["case"] == case and r["method"] == "event DOP853"]
+        assert min(errs) < 1e-6, (case, errs)
+
+
+def test_c_benchmark_rows(study: Path) -> None:
+    rows = _rows(study / "stepper.csv")
+    steps = [r for r in rows if r["kind"] == "step"]
+    assert {(r["case"], r["scheme"]) for r in steps} == {
+        (c, s) for c in CASES for s in ("paper", "consistent", "located")}
+    for r in steps:
+        assert float(r["bare_ns_per_step"]) > 0 and float(r["fmu_ns_per_step"]) > 0
+        assert int(r["steps"]) == 10 * int(float(r["steps_per_period"]))
+    inst = next(r for r in rows if r["kind"] == "instance_bytes")
+    assert 0 < float(inst["value"]) < 1 << 20
+
+
+def test_pngs_and_report(study: Path) -> None:
+    for name in PNGS:
+        data = (study / name).read_bytes()
+        assert len(data) > 10_000 and data[:8] == b"\x89PNG\r\n\x1a\n", name
+    md = (study / "RESULTS.md").read_text()
+    assert "## What accuracy costs" in md
+    for case in CASES:
+        assert f"- **{case}**:" in md
+    goals = md.split("## Goals of issue 4")[1].split("\n## ")[0]
+    verdict_lines = [ln for ln in goals.splitlines() if ln.startswith("| ") and not ln.startswith("| goal")]
+    assert len(verdict_lines) == 4 + len(CASES)
+    assert all(("PASS" in ln) or ("MISS" in ln) or ("SHOWN" in ln) for ln in verdict_lines)
+    assert not list(study.glob("*.tmp")), "temporary files left behind"
+
+
+def test_memory_does_not_grow_over_long_runs(study: Path) -> None:
+    mem = {r["kind"]: float(r["value"]) for r in _rows(study / "memory.csv")}
+    runs = [mem[f"rss_after_long_run_{k}"] for k in (1, 2, 3)]
+    assert runs[-1] - runs[0] <= 1 << 20  # 10^6-step runs: no growth beyond page noise
+
+
+@pytest.mark.parametrize("args", [["--bogus"], ["--quick", "--fmu", "/nonexistent/x.fmu"],
+                                  ["--bench-stepper", "/nonexistent/bench_stepper"]])
+def test_bad_arguments_fail_fast(tmp_path: Path, args: list[str]) -> None:
+    out = tmp_path / "never"
+    res = subprocess.run([sys.executable, str(SCRIPT), "--out", str(out), *args],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "error" in lines[0], res.stderr
+    assert not out.exists()
+
+
+def test_report_can_be_rebuilt_from_the_csvs(study: Path, tmp_path: Path) -> None:
+    md = tmp_path / "again.md"
+    res = subprocess.run([sys.executable, str(SCRIPT), "--report-only", "--out", str(study), "--md", str(md)],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    text = md.read_text()
+    assert "## What accuracy costs" in text
+    links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+    assert len(links) == 3
+    for link in links:  # plot paths are relative to the markdown file
+        assert (md.parent / link).resolve() == (study / Path(link).name).resolve()
+
+
+def test_report_only_needs_a_study(tmp_path: Path) -> None:
+    res = subprocess.run([sys.executable, str(SCRIPT), "--report-only", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
