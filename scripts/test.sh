@@ -27,3 +27,6 @@ LD_PRELOAD="$ASAN_LIB $UBSAN_LIB" \
 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   .venv/bin/python -m pytest -q -m "not no_sanitizer"
+
+echo "== fuzzing the FMI entry points (libFuzzer + ASan/UBSan, 60 s; installs clang if missing)"
+PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" bash tests/fuzz/run_fuzz.sh 60
