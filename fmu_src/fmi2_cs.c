@@ -396,6 +396,11 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     const char *msg = dfo_check_params(&in->v.p);
     if (msg) return fail(in, "fmi2ExitInitializationMode: %s", msg);
     prepare(&in->v);
+    const dfo_state *s = &in->v.s;
+    if (!isfinite(s->A) || !isfinite(s->F) || !isfinite(dfo_acceleration(&in->v.M, &in->v.u, s)))
+        return fail(in, "fmi2ExitInitializationMode: the initial acceleration is not representable (x0 = %.17g, "
+                    "v0 = %.17g, m = %.17g): the parameters are out of the range of double precision.",
+                    in->v.p.x0, in->v.p.v0, in->v.p.m);
     in->v.phase = ST_STEP;
     log_msg(in, fmi2OK, LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
             in->v.s.t, in->v.s.X, in->v.s.V, in->v.s.mode, in->v.effects);

@@ -498,6 +498,8 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, do
         if (C.err != DFO_OK) return C.err;
         if (!isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) || !isfinite(s->F)) return DFO_ERR_NONFINITE;
     }
+    /* the acceleration output too must be representable */
+    if (!isfinite(dfo_acceleration(M, u, s))) return DFO_ERR_NONFINITE;
     return DFO_OK;
 }
 
