@@ -447,6 +447,9 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         } else {
             if (!v) v = computed(in, &tmp);
             value[i] = output_real(v, vr[i]);
+            if (!isfinite(value[i]))
+                return fail(in, "fmi2GetReal: variable %s (value reference %u) is not representable in double "
+                            "precision for these parameters (overflow).", var->name, vr[i]);
         }
     }
     return fmi2OK;
