@@ -17,6 +17,9 @@ from pathlib import Path
 
 import pytest
 
+# a benchmark smoke test: run once, against the Release build (not repeated under ASan)
+pytestmark = pytest.mark.no_sanitizer
+
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "bench" / "work_precision.py"
 CASES = ("stick_dominated", "reversal_resonance", "heavy_damped", "chi_above_1", "chi_near_0")
