@@ -1,0 +1,224 @@
+"""What the studies share: the run context, checks of the common config tables, non-dimensional
+trajectories through the FMU, and atomic output files (NetCDF datasets, PNG figures)."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import xarray as xr  # noqa: E402
+
+from ..fmu import SCHEMES, OscillatorFMU, Settings  # noqa: E402
+from ..params import Oscillator  # noqa: E402
+from ..sweep.datasets import atomic_path, write_netcdf  # noqa: E402
+from ..sweep.engine import Engine, EngineOptions, SweepSpec  # noqa: E402
+from ..sweep.table import nondim_table  # noqa: E402
+from .config import ConfigError, require  # noqa: E402,F401
+
+__all__ = [
+    "ConfigError",
+    "StudyContext",
+    "check_numerics",
+    "check_params",
+    "check_window",
+    "ensure",
+    "nondim_trajectory",
+    "oscillator",
+    "plt",
+    "sweep_settings",
+    "table",
+]
+
+# reference SI scales of every study (the results are non-dimensional and do not depend on them)
+M_REF, K_REF, P0_REF, MU_S_REF = 1.0, 100.0, 1.0, 0.4
+
+
+@dataclass
+class StudyContext:
+    """Everything a study needs to run and where to put its results."""
+
+    name: str
+    cfg: dict[str, Any]
+    quick: bool
+    out_dir: Path
+    engine_options: EngineOptions
+    messages: list[str] = field(default_factory=list)
+    _engine: Engine | None = None
+    _fmu: OscillatorFMU | None = None
+
+    @property
+    def chunk_dir(self) -> Path:
+        return self.out_dir / "chunks"
+
+    @property
+    def fmu_path(self) -> Path:
+        return Path(self.engine_options.fmu)
+
+    def engine(self) -> Engine:
+        if self._engine is None:
+            self._engine = Engine(self.engine_options)
+        return self._engine
+
+    def fmu(self) -> OscillatorFMU:
+        """An FMU instance in this process, for the trajectory studies."""
+        if self._fmu is None:
+            self._fmu = OscillatorFMU(self.fmu_path)
+        return self._fmu
+
+    def run_sweep(self, spec: SweepSpec) -> np.ndarray:
+        out = self.engine().run(spec, self.chunk_dir)
+        self.log(self.engine().stats[-1].line())
+        return out
+
+    def close(self) -> None:
+        if self._engine is not None:
+            self._engine.close()
+            self._engine = None
+        if self._fmu is not None:
+            self._fmu.close()
+            self._fmu = None
+
+    def log(self, msg: str) -> None:
+        self.messages.append(msg)
+        print(msg, flush=True)
+
+    # ---- outputs ----
+    def save_dataset(self, ds: xr.Dataset, filename: str) -> Path:
+        ds.attrs.setdefault("study", self.name)
+        ds.attrs.setdefault("quick", int(self.quick))
+        path = write_netcdf(ds, self.out_dir / filename)
+        self.log(f"wrote {path}")
+        return path
+
+    def save_figure(self, fig: Any, filename: str) -> Path:
+        path = self.out_dir / filename
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = atomic_path(path)
+        try:
+            fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
+            os.replace(tmp, path)
+        finally:
+            plt.close(fig)
+            if tmp.exists():
+                tmp.unlink()
+        self.log(f"wrote {path}")
+        return path
+
+
+# ---- checks -------------------------------------------------------------------------------------
+
+def _finite(v: float) -> bool:
+    return isinstance(v, (int, float)) and math.isfinite(v)
+
+
+def check_params(p: Mapping[str, Any], where: str = "params") -> None:
+    """Checks of a table of non-dimensional parameters (only the keys present)."""
+    for k, v in p.items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            require(_finite(v), f"{where}.{k} must be finite, not {v}")
+    if "lam" in p:
+        require(p["lam"] > 0, f"{where}.lam (frequency ratio) must be > 0, not {p['lam']}")
+    if "mu_s_sigma" in p:
+        require(p["mu_s_sigma"] >= 0, f"{where}.mu_s_sigma must be >= 0, not {p['mu_s_sigma']}")
+    if "chi" in p:
+        require(p["chi"] >= 0, f"{where}.chi must be >= 0, not {p['chi']}")
+    if "zeta" in p:
+        require(p["zeta"] >= 0, f"{where}.zeta must be >= 0, not {p['zeta']}")
+
+
+def check_numerics(n: Mapping[str, Any]) -> None:
+    require(n["steps_per_period"] >= 10,
+            f"numerics.steps_per_period must be >= 10, not {n['steps_per_period']}")
+    require(n["scheme"] in SCHEMES,
+            f"numerics.scheme must be one of {', '.join(SCHEMES)}, not {n['scheme']!r}")
+    require(-1.0 / 3.0 <= n["alpha"] <= 0.0, f"numerics.alpha must be in [-1/3, 0], not {n['alpha']}")
+    if "frictionUpdates" in n:
+        require(0 <= n["frictionUpdates"] <= 100,
+                f"numerics.frictionUpdates must be in [0, 100], not {n['frictionUpdates']}")
+    if "chunk_runs" in n:
+        require(n["chunk_runs"] >= 1, f"numerics.chunk_runs must be >= 1, not {n['chunk_runs']}")
+
+
+def check_window(periods: float, obs_periods: float, where: str) -> None:
+    require(periods > 0, f"{where}.periods must be > 0, not {periods}")
+    require(0 < obs_periods <= periods,
+            f"{where}.obs_periods must be in (0, periods = {periods}], not {obs_periods}")
+
+
+# ---- runs ---------------------------------------------------------------------------------------
+
+def oscillator(nd: Mapping[str, float]) -> Oscillator:
+    """The SI oscillator of a table of non-dimensional parameters (reference scales)."""
+    return Oscillator.from_nondimensional(
+        lam=nd["lam"], mu_s_sigma=nd["mu_s_sigma"], chi=nd["chi"], zeta=nd.get("zeta", 0.0),
+        z0=nd.get("z0", 0.0), dz0=nd.get("dz0", 0.0), phi=nd.get("phi", 0.0),
+        m=M_REF, k=K_REF, P0=P0_REF, mu_s=MU_S_REF)
+
+
+def sweep_settings(numerics: Mapping[str, Any]) -> dict[str, Any]:
+    return {"scheme": numerics["scheme"], "frictionUpdates": int(numerics.get("frictionUpdates", 1)),
+            "fastPaths": True}
+
+
+def table(values: Mapping[str, Any], periods: Any, obs_start: Any, obs_stop: Any,
+          numerics: Mapping[str, Any]) -> np.ndarray:
+    return nondim_table(values, periods, obs_start, obs_stop, numerics["steps_per_period"],
+                        alpha=numerics["alpha"], m=M_REF, k=K_REF, P0=P0_REF, mu_s=MU_S_REF)
+
+
+def nondim_trajectory(fmu: OscillatorFMU, nd: Mapping[str, float], t_start: float, t_stop: float,
+                      samples_per_period: int, numerics: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """z, z', z'' (method.md (2)), the mode and the excitation cos(lam tau + phi) at the
+    communication points ``t / T`` in [t_start, t_stop] (excitation periods); the FMU runs from
+    t = 0 (the points before ``t_start`` are stepped over in one doStep). When
+    ``samples_per_period`` divides ``steps_per_period`` the points are internal grid points."""
+    p = oscillator(nd)
+    T, w0 = p.period, p.w0
+    spp = int(numerics["steps_per_period"])
+    h = T / spp
+    if spp % samples_per_period == 0 and float(t_start * spp).is_integer() and float(t_stop * spp).is_integer():
+        # communication points on the FMU's internal grid t = n h (computed as the FMU does): the
+        # run takes exactly the internal steps of a single doStep, so a trajectory and a sweep's
+        # observables of the same parameters follow the same numbers
+        stride = spp // samples_per_period
+        idx = np.arange(int(t_start * spp), int(t_stop * spp) + 1, stride)
+        times = idx * h
+        cyc = idx / spp
+    else:
+        n = max(int(round((t_stop - t_start) * samples_per_period)), 1)
+        cyc = np.linspace(t_start, t_stop, n + 1)
+        times = cyc * T
+    if t_start > 0:
+        times = np.concatenate([[0.0], times])
+    st = Settings(h=h, alpha=numerics["alpha"], scheme=numerics["scheme"],
+                  frictionUpdates=int(numerics.get("frictionUpdates", 1)))
+    tr = fmu.trajectory(p, times, st, outputs=("x", "v", "a", "F_friction", "mode"))
+    sl = slice(1, None) if t_start > 0 else slice(None)
+    scale = p.k / p.P0
+    tau = times[sl] * w0
+    return {
+        "cycles": cyc,
+        "tau": tau,
+        "z": tr["x"][sl] * scale,
+        "dz": tr["v"][sl] * scale / w0,
+        "ddz": tr["a"][sl] * scale / (w0 * w0),
+        "f": tr["F_friction"][sl] / p.P0,
+        "mode": tr["mode"][sl].astype(np.int8),
+        "excitation": np.cos(nd["lam"] * tau + nd.get("phi", 0.0)),
+    }
+
+
+def ensure(cond: bool, message: str) -> None:
+    """A physics expectation of a study that its run did not meet: noted, not fatal."""
+    if not cond:
+        print(f"note: {message}", flush=True)
+
