@@ -1,4 +1,4 @@
-"""The five cases of the work-precision study (issue 4), in the non-dimensional form of method.md (2).
+"""The five cases of the work-precision study, in the non-dimensional form of method.md (2).
 
 Each case is built through ``Oscillator.from_nondimensional`` (m = 1 kg, k = 100 N/m, P0 = 1 N,
 mu_s = 0.4, so w0 = 10 rad/s, the static deflection P0/k = 1 cm) and starts from rest. The "why"

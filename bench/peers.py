@@ -1,4 +1,4 @@
-"""The methods a user would pick instead of the FMU, written with scipy (issue 4).
+"""The methods a user would pick instead of the FMU, written with scipy.
 
 1. ``event_driven``: the switching model. Every slip phase is one ``solve_ivp`` call with the
    kinetic friction force of its direction and a terminal event at ``x' = 0``; at the stop the block

@@ -1,5 +1,5 @@
 """The study's markdown report: the section "What accuracy costs" (cost table, plots, one sentence
-per case), the goals of issue 4 with measured numbers and PASS/MISS, and the supporting tables."""
+per case), the performance goals with measured numbers and PASS/MISS, and the supporting tables."""
 
 from __future__ import annotations
 
@@ -208,7 +208,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
     add("")
 
     # ------------------------------------------------------------------ goals
-    add("## Goals of issue 4, measured side by side in this run")
+    add("## Performance goals, measured side by side in this run")
     add("")
     add("| goal | measured | verdict |")
     add("|---|---|---|")
@@ -224,7 +224,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
     add(f"| the paper's scheme's error floor is shown where it has one | floors (order < 0.5 over h <= T/100; level = "
         f"geometric mean of the 3 finest errors): {fl} | {'SHOWN' if floors else 'MISS (no floor found)'} |")
     for c in cases:
-        # the issue's 1e-6, read two ways: in static deflections (z, strict) and literally as
+        # the goal of 1e-6, read two ways: in static deflections (z, strict) and literally as
         # |x - x_exact| in metres (here P0/k = 1 cm, so 1e-6 m is z = 1e-4)
         p = c.oscillator
         z_of_m = p.k / abs(p.P0)

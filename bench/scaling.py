@@ -1,4 +1,4 @@
-"""How the FMU's cost grows (issue 4): with the number of periods, with the steps per period, with
+"""How the FMU's cost grows: with the number of periods, with the steps per period, with
 the number of Dask workers; and what it costs in memory.
 
 Every function here returns plain rows (dicts) for the study's CSV; nothing is printed.

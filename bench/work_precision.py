@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Work-precision study of the DryFrictionOscillator FMU against the methods users would pick
-instead (issue 4).
+instead.
 
     python bench/work_precision.py [--quick] [--out results/work_precision] [--md PATH]
                                    [--fmu PATH] [--bench-stepper PATH]

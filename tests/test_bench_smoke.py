@@ -1,4 +1,4 @@
-"""Smoke test of the work-precision study (issue 4): runs ``bench/work_precision.py --quick`` once
+"""Smoke test of the work-precision study: runs ``bench/work_precision.py --quick`` once
 into a temporary folder and checks what it measured against the exact solution. No timing
 assertions: times only have to be finite and positive.
 
@@ -107,7 +107,7 @@ def test_pngs_and_report(study: Path) -> None:
     assert "## What accuracy costs" in md
     for case in CASES:
         assert f"- **{case}**:" in md
-    goals = md.split("## Goals of issue 4")[1].split("\n## ")[0]
+    goals = md.split("## Performance goals")[1].split("\n## ")[0]
     verdict_lines = [ln for ln in goals.splitlines() if ln.startswith("| ") and not ln.startswith("| goal")]
     assert len(verdict_lines) == 4 + len(CASES)
     assert all(("PASS" in ln) or ("MISS" in ln) or ("SHOWN" in ln) for ln in verdict_lines)

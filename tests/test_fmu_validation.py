@@ -1,4 +1,4 @@
-"""The FMU through fmpy against the exact piecewise solution, Den Hartog and Inman (issue: FMU)."""
+"""The FMU through fmpy against the exact piecewise solution, Den Hartog and Inman."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Scenes pay only for what they use (issue: simulate only the effects a scene calls for).
+"""Scenes pay only for what they use.
 
 Fast paths inside the FMU give the same numbers as the general path (fastPaths = false), the
 observables computed inside the FMU agree with the exact solution, and the 'effects' parameter
