@@ -18,6 +18,7 @@ import sys
 import tempfile
 import textwrap
 from collections.abc import Iterator
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from ctypes import byref, c_double, c_int, c_size_t, c_uint, c_void_p, cast
 from pathlib import Path
@@ -83,6 +84,9 @@ class Counting:
         return errs[-1] if errs else ""
 
 
+_LOAD_LOCK = threading.Lock()
+
+
 class Inst:
     """One FMU2Slave instance with counting callbacks; vr(name) by variable name."""
 
@@ -91,8 +95,11 @@ class Inst:
         self.md = md
         self.vars = {v.name: v for v in md.modelVariables}
         self.cb = Counting()
-        self.s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
-                           instanceName=name)
+        # fmpy's loader changes the process's working directory while it loads the library: not
+        # thread-safe, so loading is serialised; instantiating and stepping run in parallel
+        with _LOAD_LOCK:
+            self.s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                               instanceName=name)
         self.s.instantiate(callbacks=self.cb.struct, loggingOn=logging)
 
     def vr(self, name: str) -> int:
@@ -630,9 +637,13 @@ def _simulate(unzipped: tuple[str, object], k: int) -> np.ndarray:
 
 
 def test_32_instances_in_parallel_threads_match_serial(unzipped: tuple[str, object]) -> None:
+    import os
+
+    cwd = os.getcwd()
     serial = [_simulate(unzipped, k) for k in range(32)]
     with ThreadPoolExecutor(max_workers=32) as ex:
         parallel = list(ex.map(lambda k: _simulate(unzipped, k), range(32)))
+    assert os.getcwd() == cwd  # loading from threads leaves the working directory alone
     for k in range(32):
         assert np.array_equal(serial[k], parallel[k]), f"instance {k} differs"
     assert len({a.tobytes() for a in serial}) == 32

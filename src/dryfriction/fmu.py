@@ -12,6 +12,7 @@ import ctypes
 import os
 import shutil
 import tempfile
+import threading
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +43,9 @@ EFFECT_BITS = {
     16: "input N_ext",
     32: "observables",
 }
+
+
+_LOAD_LOCK = threading.Lock()
 
 
 class FMUError(RuntimeError):
@@ -88,12 +92,16 @@ class OscillatorFMU:
         self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self.slave = FMU2Slave(
-            guid=self.md.guid,
-            unzipDirectory=self._dir,
-            modelIdentifier=self.md.coSimulation.modelIdentifier,
-            instanceName="dfo",
-        )
+        # fmpy's loader changes the process's working directory while it loads the library, so
+        # loading is serialised (instances load from threads too); the instances themselves are
+        # independent
+        with _LOAD_LOCK:
+            self.slave = FMU2Slave(
+                guid=self.md.guid,
+                unzipDirectory=self._dir,
+                modelIdentifier=self.md.coSimulation.modelIdentifier,
+                instanceName="dfo",
+            )
         self.slave.instantiate(callbacks=self._callbacks, loggingOn=logging)
         self._lean_calls: _Lean | None = None
         self._get_plans: dict[tuple[str, ...], list[tuple[Any, Any, Any, list[str]]]] = {}
