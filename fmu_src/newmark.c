@@ -364,10 +364,9 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         if (s->mode == 0) {  /* stuck: X frozen, V = A = 0 */
             int dir = 0;
             const double tb = breakaway_time(C, s, ta, t_end, &dir);
-            if (tb == INFINITY) {
+            if (tb == INFINITY) {  /* stays stuck: F is set once, at the end of dfo_advance */
                 s->t = t_end;
-                s->F = -(dfo_excitation(M, t_end) + C->u - M->p.k * s->X);
-                after_phase(C, s, ta, 0, 0.0, s->F, 0);
+                after_phase(C, s, ta, 0, 0.0, 0.0, 0);
                 continue;
             }
             s->t = tb;
@@ -497,6 +496,12 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, do
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
         if (!isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) || !isfinite(s->F)) return DFO_ERR_NONFINITE;
+    }
+    /* while stuck (located, consistent) the friction holds the static force: evaluated here, at the
+     * communication point, rather than at every stuck step */
+    if (C.friction && s->mode == 0 && M->p.scheme != DFO_SCHEME_PAPER) {
+        const double S = dfo_excitation(M, s->t) + C.u - M->p.k * s->X;
+        s->F = -fmax(-C.Fb, fmin(C.Fb, S));
     }
     /* the acceleration output too must be representable */
     if (!isfinite(dfo_acceleration(M, u, s))) return DFO_ERR_NONFINITE;
