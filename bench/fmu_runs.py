@@ -57,48 +57,32 @@ class FmuConfig:
 
 
 class LeanRunner:
-    """The fmi2 calls of OscillatorFMU.start/step_to/get on the same instance, with the ctypes
-    arrays built once. Raises FMUError on a failed call."""
+    """The fmi2 calls of OscillatorFMU.start/step_to/get on the same instance, without the
+    driver's Python around them: the driver's own function table and value arrays (built once),
+    filled once per configuration. Raises FMUError on a failed call."""
 
     def __init__(self, fmu: OscillatorFMU) -> None:
         self.fmu = fmu
-        fns = fmu.slave._functions
-        self.comp = fmu.slave.component
-        self.reset = fns["fmi2Reset"]
-        self.setup = fns["fmi2SetupExperiment"]
-        self.set_real = fns["fmi2SetReal"]
-        self.set_int = fns["fmi2SetInteger"]
-        self.set_bool = fns["fmi2SetBoolean"]
-        self.enter = fns["fmi2EnterInitializationMode"]
-        self.exit = fns["fmi2ExitInitializationMode"]
-        self.do_step = fns["fmi2DoStep"]
-        self.get_real = fns["fmi2GetReal"]
-        rnames = PARAM_NAMES + ("h", "alpha", "t_obs_start", "t_obs_stop")
-        self.n_real = len(rnames)
-        self.rvr = (ctypes.c_uint * self.n_real)(*[fmu.vr(n) for n in rnames])
-        self.rval = (ctypes.c_double * self.n_real)()
-        self.ivr = (ctypes.c_uint * 2)(fmu.vr("scheme"), fmu.vr("frictionUpdates"))
-        self.ival = (ctypes.c_int * 2)()
-        self.bvr = (ctypes.c_uint * 2)(fmu.vr("observe"), fmu.vr("fastPaths"))
-        self.bval = (ctypes.c_int * 2)(0, 1)
+        self.L = fmu._lean()
+        self.get_real = fmu._raw("fmi2GetReal")
         self.xvr = (ctypes.c_uint * 1)(fmu.vr("x"))
         self.xval = (ctypes.c_double * 1)()
 
     def prepare(self, p: Oscillator, st: Settings) -> None:
         """Fill the value arrays (outside any timing)."""
-        vals = [getattr(p, n) for n in PARAM_NAMES] + [st.h, st.alpha, 0.0, 1e300]
-        for i, v in enumerate(vals):
-            self.rval[i] = float(v)
-        self.ival[0] = SCHEMES[st.scheme]
-        self.ival[1] = st.frictionUpdates
+        L = self.L
+        L.rval[:] = tuple(float(getattr(p, n)) for n in PARAM_NAMES) + (st.h, st.alpha, 0.0, 1e300)
+        L.ival[0], L.ival[1] = SCHEMES[st.scheme], st.frictionUpdates
+        L.bval[0], L.bval[1] = 0, 1
 
     def run(self, t_end: float) -> float:
         """One whole run with the prepared values: reset ... doStep(0, t_end), returns x(t_end)."""
-        c = self.comp
-        if (self.reset(c) or self.setup(c, 0, 0.0, 0.0, 0, 0.0)
-                or self.set_real(c, self.rvr, self.n_real, self.rval)
-                or self.set_int(c, self.ivr, 2, self.ival) or self.set_bool(c, self.bvr, 2, self.bval)
-                or self.enter(c) or self.exit(c) or self.do_step(c, 0.0, t_end, 1)
+        L = self.L
+        c = L.comp
+        if (L.reset(c) or L.setup(c, 0, 0.0, 0.0, 0, 0.0)
+                or L.set_real(c, L.rvr, len(L.rval), L.rval)
+                or L.set_int(c, L.ivr, 2, L.ival) or L.set_bool(c, L.bvr, 2, L.bval)
+                or L.enter(c) or L.exit(c) or L.do_step(c, 0.0, t_end, 1)
                 or self.get_real(c, self.xvr, 1, self.xval)):
             msgs = [m for s, _, m in self.fmu.messages if s >= 3]
             raise FMUError(msgs[-1] if msgs else "an fmi2 call failed")
