@@ -784,6 +784,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     const char *why = implausible(&v);
     if (why) return fail(in, "fmi2DeSerializeFMUstate: rejected, %s.", why);
     dfo_model_init(&v.M, &v.p); /* derived constants follow from the parameters, never trusted */
+    dfo_check_caches(&v.M, &v.s); /* and caches that do not follow from the state are dropped */
     fmi2FMUstate st = *FMUstate;
     if (st && ((saved_state *)st)->magic != STATE_MAGIC)
         return fail(in, "fmi2DeSerializeFMUstate: *FMUstate is not a state of this FMU.");

@@ -3,14 +3,24 @@
 
 #include <math.h>
 
+/* The 2 x 2 copy of the algorithm must really be compiled for n = 2 (unrolled loops). */
+#if defined(__GNUC__)
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define ALWAYS_INLINE inline
+#endif
+
 static double dmax(double a, double b) { return a > b ? a : b; }
-static double dabs(double a) { return a < 0.0 ? -a : a; }
+static double dabs(double a) { return fabs(a); }
+
+/* x / s, by the reciprocal inv = 1 / s where that is finite (s is not subnormal) */
+static ALWAYS_INLINE double scaled(double x, double s, double inv) { return isfinite(inv) ? x * inv : x / s; }
 
 /* Tableau columns: [0, n) w, [n, 2n) z, 2n z0, 2n + 1 right-hand side. Variable ids equal the
  * column index of the variable. */
 #define COLS(n) (2 * (n) + 2)
 
-static inline void pivot(double *T, const int n, int row, int col)
+static ALWAYS_INLINE void pivot(double *T, const int n, int row, int col)
 {
     const int nc = COLS(n);
     double *pr = T + row * nc;
@@ -31,7 +41,7 @@ static inline void pivot(double *T, const int n, int row, int col)
  * the row whose (rhs, B^-1 row) / d is lexicographically smallest. B^-1 sits in the w columns.
  * Rows whose basic variable is z0 win ties (so the artificial variable leaves as soon as it can).
  * Returns -1 when no row qualifies (a ray). */
-static inline int ratio_test(const double *T, const int n, int col, const int *basis)
+static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const int *basis)
 {
     const int nc = COLS(n);
     const int rhs = 2 * n + 1;
@@ -44,17 +54,18 @@ static inline int ratio_test(const double *T, const int n, int col, const int *b
         if (!(d > tol)) continue;
         if (best < 0) { best = i; continue; }
         const double db = T[best * nc + col];
+        const double dd = d * db;
         /* compare a = T[i][k] / d with b = T[best][k] / db for k = rhs, 0, 1, ..., n-1, cross-
          * multiplied (d, db > 0): a - b has the sign of T[i][k] db - T[best][k] d. Values closer
          * than 1e-12 of the column's scale are ties: rounding of earlier pivots must not break a
-         * tie of the exact problem. */
+         * tie of the exact problem. The comparison is scaled by colmax (no division). */
         int cmp = 0;
         for (int k = -1; k < n && cmp == 0; k++) {
             const int c = (k < 0) ? rhs : k;
             double cscale = 0.0;
             for (int r = 0; r < n; r++) cscale = dmax(cscale, dabs(T[r * nc + c]));
-            const double ad = T[i * nc + c] * db, bd = T[best * nc + c] * d;
-            const double eps = 1e-12 * (dmax(dabs(ad), dabs(bd)) + cscale * d * db / colmax);
+            const double ad = T[i * nc + c] * db * colmax, bd = T[best * nc + c] * d * colmax;
+            const double eps = 1e-12 * (dmax(dabs(ad), dabs(bd)) + cscale * dd);
             if (ad < bd - eps) cmp = -1;
             else if (ad > bd + eps) cmp = 1;
             if (k < 0 && cmp == 0) {
@@ -67,7 +78,7 @@ static inline int ratio_test(const double *T, const int n, int col, const int *b
     return best;
 }
 
-static inline lcp_status lemke(const int n, const double *M, const double *q, int max_pivots,
+static ALWAYS_INLINE lcp_status lemke(const int n, const double *M, const double *q, int max_pivots,
                                double *z, double *w, int *z_basic, int *pivots)
 {
     if (pivots) *pivots = 0;
@@ -92,16 +103,17 @@ static inline lcp_status lemke(const int n, const double *M, const double *q, in
 
     const int nc = COLS(n);
     const int rhs = 2 * n + 1, z0 = 2 * n;
+    const double iM = 1.0 / sM, iq = 1.0 / sq, zs = sq / sM;
     double T[LCP_MAX_N * COLS(LCP_MAX_N)];
     int basis[LCP_MAX_N];
     for (int i = 0; i < n; i++) {
         double *r = T + i * nc;
         for (int j = 0; j < n; j++) {
             r[j] = (i == j) ? 1.0 : 0.0;
-            r[n + j] = -M[i * n + j] / sM;
+            r[n + j] = -scaled(M[i * n + j], sM, iM);
         }
         r[z0] = -1.0;
-        r[rhs] = q[i] / sq;
+        r[rhs] = scaled(q[i], sq, iq);
         basis[i] = i;
     }
     /* z0 enters at the most negative q (ties broken lexicographically, see above) */
@@ -126,17 +138,243 @@ static inline lcp_status lemke(const int n, const double *M, const double *q, in
         const int v = basis[i];
         const double val = dmax(T[i * nc + rhs], 0.0);
         if (v < n) w[v] = val * sq;
-        else if (v < 2 * n) { z[v - n] = val * (sq / sM); z_basic[v - n] = 1; }
+        else if (v < 2 * n) { z[v - n] = val * zs; z_basic[v - n] = 1; }
     }
     return LCP_OK;
+}
+
+/* ---- n = 2 (the friction problem of one degree of freedom): the same algorithm, in revised form -
+ * The same pivots, ratio test and tolerances as the tableau above, but only the basis inverse B^-1
+ * (2 x 2) and the values of the basic variables are kept, in registers; the entering column is
+ * B^-1 times its original column. Its results equal the tableau's to rounding (tests/c/test_lcp.c
+ * compares the two on every problem it solves). Variable ids as above: w1 w2 z1 z2 z0 = 0..4. */
+
+typedef struct {
+    double B[2][2];   /* basis inverse */
+    double x[2];      /* values of the basic variables, B^-1 q' */
+    int basis[2];
+} rev2;
+
+static ALWAYS_INLINE void pivot_rev2(rev2 *R, int r, const double d[2])
+{
+    const int o = 1 - r;
+    const double inv = 1.0 / d[r];
+    R->B[r][0] *= inv;
+    R->B[r][1] *= inv;
+    R->x[r] *= inv;
+    const double f = d[o];
+    if (f == 0.0) return;
+    R->B[o][0] -= f * R->B[r][0];
+    R->B[o][1] -= f * R->B[r][1];
+    R->x[o] -= f * R->x[r];
+}
+
+/* The lexicographic minimum-ratio test of ratio_test() on the entering column d. */
+static ALWAYS_INLINE int ratio_rev2(const rev2 *R, const double d[2])
+{
+    const double d0 = d[0], d1 = d[1];
+    const double colmax = dmax(dmax(0.0, dabs(d0)), dabs(d1));
+    const double tol = 1e-13 * colmax;
+    const int c0 = d0 > tol, c1 = d1 > tol;
+    if (!c1) return c0 ? 0 : -1;
+    if (!c0) return 1;
+    const double dd = d1 * d0;
+    /* k = 0: right-hand side; k = 1, 2: the columns of B^-1 */
+    for (int k = 0; k < 3; k++) {
+        const double t0 = (k == 0) ? R->x[0] : R->B[0][k - 1];
+        const double t1 = (k == 0) ? R->x[1] : R->B[1][k - 1];
+        const double cscale = dmax(dmax(0.0, dabs(t0)), dabs(t1));
+        const double ad = t1 * d0 * colmax, bd = t0 * d1 * colmax;
+        const double eps = 1e-12 * (dmax(dabs(ad), dabs(bd)) + cscale * dd);
+        if (ad < bd - eps) return 1;
+        if (ad > bd + eps) return 0;
+        if (k == 0) {
+            if (R->basis[1] == 4) return 1;
+            if (R->basis[0] == 4) return 0;
+        }
+    }
+    return 0;
+}
+
+static lcp_status lemke2(const double *M, const double *q, int max_pivots, double *z, double *w, int *z_basic,
+                         int *pivots)
+{
+    if (pivots) *pivots = 0;
+    /* x - x is 0 for finite x and NaN for an infinity or a NaN */
+    if (!((q[0] - q[0]) + (q[1] - q[1]) + (M[0] - M[0]) + (M[1] - M[1]) + (M[2] - M[2]) + (M[3] - M[3]) == 0.0))
+        return LCP_BAD_INPUT;
+    const double sq = dmax(dmax(0.0, dabs(q[0])), dabs(q[1]));
+    double sM = dmax(dmax(dmax(dmax(0.0, dabs(M[0])), dabs(M[1])), dabs(M[2])), dabs(M[3]));
+    const int rmin = (q[1] <= q[0]) ? 1 : 0;
+    z[0] = z[1] = 0.0;
+    w[0] = q[0];
+    w[1] = q[1];
+    z_basic[0] = z_basic[1] = 0;
+    if (q[rmin] >= 0.0) return LCP_OK;
+    if (sM == 0.0) sM = 1.0;
+    const double iM = 1.0 / sM, iq = 1.0 / sq, zs = sq / sM;
+    /* original columns of [I | -M' | -e] */
+    double A[5][2] = {{1.0, 0.0}, {0.0, 1.0}, {0.0, 0.0}, {0.0, 0.0}, {-1.0, -1.0}};
+    rev2 R = {{{1.0, 0.0}, {0.0, 1.0}}, {0.0, 0.0}, {0, 1}};
+    if (isfinite(iM) && isfinite(iq)) {
+        A[2][0] = -(M[0] * iM);
+        A[2][1] = -(M[2] * iM);
+        A[3][0] = -(M[1] * iM);
+        A[3][1] = -(M[3] * iM);
+        R.x[0] = q[0] * iq;
+        R.x[1] = q[1] * iq;
+    } else {
+        A[2][0] = -scaled(M[0], sM, iM);
+        A[2][1] = -scaled(M[2], sM, iM);
+        A[3][0] = -scaled(M[1], sM, iM);
+        A[3][1] = -scaled(M[3], sM, iM);
+        R.x[0] = scaled(q[0], sq, iq);
+        R.x[1] = scaled(q[1], sq, iq);
+    }
+    int leaving = rmin;
+    pivot_rev2(&R, rmin, A[4]);
+    R.basis[rmin] = 4;
+    int count = 1;
+    for (;;) {
+        const int entering = (leaving < 2) ? leaving + 2 : leaving - 2;
+        if (count >= max_pivots) { if (pivots) *pivots = count; return LCP_MAX_PIVOTS; }
+        const double *a = A[entering];
+        const double d[2] = {R.B[0][0] * a[0] + R.B[0][1] * a[1], R.B[1][0] * a[0] + R.B[1][1] * a[1]};
+        const int row = ratio_rev2(&R, d);
+        if (row < 0) { if (pivots) *pivots = count; return LCP_RAY; }
+        leaving = R.basis[row];
+        pivot_rev2(&R, row, d);
+        R.basis[row] = entering;
+        count++;
+        if (leaving == 4) break;
+    }
+    if (pivots) *pivots = count;
+    w[0] = w[1] = 0.0;
+    for (int i = 0; i < 2; i++) {
+        const int v = R.basis[i];
+        const double val = dmax(R.x[i], 0.0);
+        if (v < 2) w[v] = val * sq;
+        else if (v < 4) { z[v - 2] = val * zs; z_basic[v - 2] = 1; }
+    }
+    return LCP_OK;
+}
+
+lcp_status lcp_lemke_general(int n, const double *M, const double *q, int max_pivots,
+                             double *z, double *w, int *z_basic, int *pivots)
+{
+    return lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
                      double *z, double *w, int *z_basic, int *pivots)
 {
     /* the friction problem of one degree of freedom is 2 x 2: a copy specialised for it */
-    if (n == 2) return lemke(2, M, q, max_pivots, z, w, z_basic, pivots);
+    if (n == 2) return lemke2(M, q, max_pivots, z, w, z_basic, pivots);
     return lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
+}
+
+/* ---- warm start -------------------------------------------------------------------------------- */
+
+/* The complementary basis named by guess (z_i basic where guess[i], else w_i), if it solves the
+ * problem: z_J = -M_JJ^-1 q_J >= 0 and w = M z + q >= 0 off J. Returns 1 and the solution, else 0. */
+static int try_basis(int n, const double *M, const double *q, const int *guess, double *z, double *w)
+{
+    int J[LCP_MAX_N], k = 0;
+    for (int i = 0; i < n; i++) {
+        z[i] = 0.0;
+        if (guess[i]) J[k++] = i;
+    }
+    if (k > 0) {
+        /* M_JJ z_J = -q_J by Gaussian elimination with partial pivoting */
+        double A[LCP_MAX_N][LCP_MAX_N + 1];
+        double scale = 0.0;
+        for (int a = 0; a < k; a++) {
+            for (int b = 0; b < k; b++) {
+                A[a][b] = M[J[a] * n + J[b]];
+                scale = dmax(scale, dabs(A[a][b]));
+            }
+            A[a][k] = -q[J[a]];
+        }
+        for (int c = 0; c < k; c++) {
+            int piv = c;
+            for (int r = c + 1; r < k; r++)
+                if (dabs(A[r][c]) > dabs(A[piv][c])) piv = r;
+            if (!(dabs(A[piv][c]) > 1e-13 * scale)) return 0; /* singular: let Lemke decide */
+            if (piv != c)
+                for (int b = c; b <= k; b++) { const double t = A[c][b]; A[c][b] = A[piv][b]; A[piv][b] = t; }
+            for (int r = c + 1; r < k; r++) {
+                const double f = A[r][c] / A[c][c];
+                for (int b = c; b <= k; b++) A[r][b] -= f * A[c][b];
+            }
+        }
+        for (int c = k - 1; c >= 0; c--) {
+            double v = A[c][k];
+            for (int b = c + 1; b < k; b++) v -= A[c][b] * z[J[b]];
+            v /= A[c][c];
+            if (!(v >= 0.0)) return 0;
+            z[J[c]] = v;
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        if (guess[i]) { w[i] = 0.0; continue; }
+        double v = q[i];
+        for (int j = 0; j < k; j++) v += M[i * n + J[j]] * z[J[j]];
+        if (!(v >= 0.0)) return 0;
+        w[i] = v;
+    }
+    return 1;
+}
+
+/* n = 2 by hand: the friction problem's common case is one z basic (sliding on). */
+static ALWAYS_INLINE int try_basis2(const double *M, const double *q, const int *guess, double *z, double *w)
+{
+    if (guess[0] && guess[1]) return try_basis(2, M, q, guess, z, w);
+    if (!guess[0] && !guess[1]) {
+        if (!(q[0] >= 0.0 && q[1] >= 0.0)) return 0;
+        z[0] = z[1] = 0.0;
+        w[0] = q[0];
+        w[1] = q[1];
+        return 1;
+    }
+    const int i = guess[0] ? 0 : 1, o = 1 - i;
+    const double mii = M[i * 2 + i];
+    /* M_ii must be a pivot by the same measure as above (|M_ii| > 1e-13 |M_ii|: non-zero) */
+    if (!(dabs(mii) > 0.0)) return 0;
+    const double zi = -q[i] / mii;
+    if (!(zi >= 0.0)) return 0;
+    const double wo = q[o] + M[o * 2 + i] * zi;
+    if (!(wo >= 0.0)) return 0;
+    z[i] = zi;
+    z[o] = 0.0;
+    w[i] = 0.0;
+    w[o] = wo;
+    return 1;
+}
+
+lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
+                          double *z, double *w, int *z_basic, int *pivots)
+{
+    if (guess && n >= 1 && n <= LCP_MAX_N) {
+        const int ok = (n == 2) ? try_basis2(M, q, guess, z, w) : try_basis(n, M, q, guess, z, w);
+        /* non-finite data fails the sign tests above, except where it is never read: check all */
+        if (ok) {
+            double fin = 0.0;
+            if (n == 2) {
+                fin = (q[0] - q[0]) + (q[1] - q[1]) + (M[0] - M[0]) + (M[1] - M[1]) + (M[2] - M[2]) + (M[3] - M[3]);
+            } else {
+                for (int i = 0; i < n; i++) {
+                    fin += q[i] - q[i];
+                    for (int j = 0; j < n; j++) fin += M[i * n + j] - M[i * n + j];
+                }
+            }
+            if (fin == 0.0) {
+                for (int i = 0; i < n; i++) z_basic[i] = guess[i] != 0;
+                if (pivots) *pivots = 0;
+                return LCP_OK;
+            }
+        }
+    }
+    return lcp_lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 const char *lcp_status_text(lcp_status s)

@@ -22,6 +22,18 @@ typedef enum {
 lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
                      double *z, double *w, int *z_basic, int *pivots);
 
+/* The same on the general tableau, also for n = 2 (for tests: lcp_lemke solves n = 2 in revised
+ * form, and the two must agree). */
+lcp_status lcp_lemke_general(int n, const double *M, const double *q, int max_pivots,
+                             double *z, double *w, int *z_basic, int *pivots);
+
+/* Warm start: guess (n flags, may be NULL) names a complementary basis, z_i basic where guess[i]
+ * and w_i basic elsewhere, e.g. the active set of the previous time step. When that basis solves the
+ * problem (its basic variables come out >= 0 from one solve of M_JJ z_J = -q_J), it is returned
+ * with 0 pivots; otherwise Lemke's algorithm runs from the start, as lcp_lemke. */
+lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
+                          double *z, double *w, int *z_basic, int *pivots);
+
 const char *lcp_status_text(lcp_status s);
 
 #endif

@@ -11,6 +11,17 @@
 #define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
 #define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
 #define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
+#define EXC_ANCHOR 64           /* grid points between exact evaluations of the excitation phase */
+
+/* The coefficients of a Bossak step that depend on its length h only (eq. 4). */
+typedef struct {
+    double h;
+    double c1;         /* 1 / (gamma h) */
+    double m_hat;      /* effective mass (1 - alpha) m c1 + k beta h / gamma (+ c) */
+    double inv_m_hat;  /* 1 / m_hat */
+    double kV, kA;     /* x_pred = X + kV V + kA A0 */
+    double kX;         /* X1 = x_pred + kX V1 */
+} step_coef;
 
 /* What is constant over one call of dfo_advance (inputs are held). */
 typedef struct {
@@ -19,7 +30,13 @@ typedef struct {
     double N;        /* normal force */
     double muk_N;    /* kinetic friction force magnitude */
     double Fb;       /* breakaway limit max(mu_s, mu_k) N */
+    step_coef full;  /* the coefficients of a step of the grid length h */
+    double g1;       /* (1 - gamma) / gamma */
+    double h_step;   /* length of the current step: h itself for a whole grid interval (the time
+                      * difference of two grid points differs from h by the rounding of t) */
     int friction;    /* friction acts (the LCP is needed) */
+    double t_grid;   /* end of the current step when it is a grid point (else NaN) */
+    double P_grid;   /* the excitation there, from the state's excitation cache */
     dfo_status err;  /* first error met */
     dfo_switch_fn on_switch;
     void *switch_ctx;
@@ -27,18 +44,62 @@ typedef struct {
 
 /* One Bossak step of length h from the current state, before the velocity is known (eq. 4). */
 typedef struct {
-    double h, c1, A0, m_hat, x_pred, p_hat;
+    const step_coef *k;  /* the step's coefficients: the context's for a grid step, else own */
+    step_coef own;
+    double A0, x_pred, p_hat;
 } trial;
 
 static int sign_of(double x) { return (x > 0.0) - (x < 0.0); }
 
 static int stuck(const step_ctx *C, const dfo_state *s) { return C->friction && s->mode == 0; }
 
+/* The excitation at t: from the grid cache at the end of the current step, else evaluated. */
+static double excitation(const step_ctx *C, double t)
+{
+    return (t == C->t_grid) ? C->P_grid : dfo_excitation(C->M, t);
+}
+
+/* Excitation at the grid point s->n from the cache of the state (see dfo_state). One rotation when
+ * the cache holds the previous point, else an exact evaluation at the anchor below n and the same
+ * rotations from there: the value depends on n only, never on the history of the cache. */
+static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *c_out, double *s_out)
+{
+    const double cd = M->rot_c, sd = M->rot_s;
+    double c, sn;
+    long long k;
+    if (s->exc_n >= 0 && s->exc_n == n - 1 && n % EXC_ANCHOR != 0) {
+        c = s->exc_c;
+        sn = s->exc_s;
+        k = n - 1;
+    } else {
+        k = n - n % EXC_ANCHOR;
+        const double th = M->p.omega * (s->t0 + (double)k * M->p.h) + M->p.phi;
+        c = cos(th);
+        sn = sin(th);
+    }
+    for (; k < n; k++) {
+        const double c1 = c * cd - sn * sd;
+        sn = sn * cd + c * sd;
+        c = c1;
+    }
+    *c_out = c;
+    *s_out = sn;
+}
+
+static double grid_excitation(const dfo_model *M, dfo_state *s)
+{
+    phase_at(M, s, s->n, &s->exc_c, &s->exc_s);
+    s->exc_n = s->n;
+    /* rotations keep c^2 + s^2 = 1 only to rounding: a cosine never exceeds 1 */
+    const double c = s->exc_c;
+    return M->p.P0 * (c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c);
+}
+
 /* Physical acceleration from the equation of motion in the current mode. */
 static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F)
 {
     const dfo_model *M = C->M;
-    double f = dfo_excitation(M, t) + C->u - M->p.k * s->X + F;
+    double f = excitation(C, t) + C->u - M->p.k * s->X + F;
     if (M->damped) f -= M->p.c * s->V;
     return f / M->p.m;
 }
@@ -54,38 +115,53 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
     return j / M->p.m;
 }
 
-static void predict(const step_ctx *C, const dfo_state *s, double h, trial *tr)
+static void coef_for(const dfo_model *M, double h, step_coef *cf)
+{
+    const double a = M->p.alpha, g = M->gamma, b = M->beta;
+    cf->h = h;
+    cf->c1 = 1.0 / (g * h);
+    cf->m_hat = (1.0 - a) * M->p.m * cf->c1 + M->p.k * b * h / g;
+    if (M->damped) cf->m_hat += M->p.c;
+    cf->inv_m_hat = 1.0 / cf->m_hat;
+    cf->kV = h * (1.0 - b / g);
+    cf->kA = h * h * (0.5 - b / g);
+    cf->kX = b * h / g;
+}
+
+/* The step [s->t, t1] of length h (t1 = s->t + h up to rounding: t1 names the grid point). */
+static void predict(const step_ctx *C, const dfo_state *s, double h, double t1, trial *tr)
 {
     const dfo_model *M = C->M;
-    const double a = M->p.alpha, g = M->gamma, b = M->beta, m = M->p.m, k = M->p.k;
+    const double a = M->p.alpha, m = M->p.m, k = M->p.k;
+    if (h == C->full.h) {
+        tr->k = &C->full;
+    } else {
+        coef_for(M, h, &tr->own);
+        tr->k = &tr->own;
+    }
     double A0 = s->A;
     /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). The
      * correction is a Taylor term that keeps second order where the steps resolve the fastest
      * time scale of the oscillator; on steps that do not (stiff), it would amplify: skipped. */
-    if (a != 0.0 && fabs(h - s->hA) > 1e-12 * h && M->rate_max * fmax(h, s->hA) <= 1.0)
+    if (a != 0.0 && h != s->hA && fabs(h - s->hA) > 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t) &&
+        M->rate_max * fmax(h, s->hA) <= 1.0)
         A0 += a * (h - s->hA) * jerk_of(C, s);
-    const double c1 = 1.0 / (g * h);
-    double m_hat = (1.0 - a) * m * c1 + k * b * h / g;
-    if (M->damped) m_hat += M->p.c;
-    const double x_pred = s->X + h * (1.0 - b / g) * s->V + h * h * (0.5 - b / g) * A0;
-    const double P1 = dfo_excitation(M, s->t + h) + C->u;
-    tr->h = h;
-    tr->c1 = c1;
+    const double c1 = tr->k->c1;
+    const double x_pred = s->X + tr->k->kV * s->V + tr->k->kA * A0;
+    const double P1 = excitation(C, t1) + C->u;
     tr->A0 = A0;
-    tr->m_hat = m_hat;
     tr->x_pred = x_pred;
-    tr->p_hat = P1 - a * m * A0 + (1.0 - a) * m * (s->V * c1 + (1.0 - g) / g * A0) - k * x_pred;
+    tr->p_hat = P1 - a * m * A0 + (1.0 - a) * m * (s->V * c1 + C->g1 * A0) - k * x_pred;
 }
 
 /* Complete the step with the end velocity V1 (X1 and A1 from Newmark's kinematics). */
 static void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
 {
-    const double g = C->M->gamma, b = C->M->beta;
-    s->X = tr->x_pred + b * tr->h / g * V1;
-    s->A = (V1 - s->V) * tr->c1 - (1.0 - g) / g * tr->A0;
+    s->X = tr->x_pred + tr->k->kX * V1;
+    s->A = (V1 - s->V) * tr->k->c1 - C->g1 * tr->A0;
     s->V = V1;
-    s->hA = tr->h;
-    s->t += tr->h;
+    s->hA = tr->k->h;
+    s->t += tr->k->h;
 }
 
 /* Friction at the end of the step: the LCP of method.md section 3 with limit muN. Lemke decides
@@ -93,9 +169,9 @@ static void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
  * the mode (+1, 0, -1). */
 static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
 {
-    const double mh = tr->m_hat, p = tr->p_hat;
+    const double mh = tr->k->m_hat, im = tr->k->inv_m_hat, p = tr->p_hat;
     if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
-        *V1 = p / mh;
+        *V1 = p * im;
         *F1 = 0.0;
         return sign_of(*V1);
     }
@@ -103,8 +179,11 @@ static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN
     const double q[2] = {muN - p, muN + p};
     double z[2], w[2];
     int zb[2];
+    /* warm start from the mode before the step: while the block keeps sliding (or sticking) that
+     * basis still solves the LCP and no pivot is needed; at a switch it does not, and Lemke decides */
+    const int guess[2] = {s->mode > 0, s->mode < 0};
     s->lcp_solves++;
-    const lcp_status st = lcp_lemke(2, Mx, q, LCP_MAX_PIVOT_COUNT, z, w, zb, NULL);
+    const lcp_status st = lcp_lemke_warm(2, Mx, q, guess, LCP_MAX_PIVOT_COUNT, z, w, zb, NULL);
     if (st != LCP_OK) {
         /* non-finite data means the state overflowed before the LCP */
         if (C->err == DFO_OK) C->err = (st == LCP_BAD_INPUT) ? DFO_ERR_NONFINITE : DFO_ERR_LCP;
@@ -113,8 +192,8 @@ static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN
         return 0;
     }
     /* 0.0 - x: a zero force is +0, as on the fast path */
-    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) / mh; *F1 = 0.0 - muN; return 1; }
-    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) / mh; *F1 = muN; return -1; }
+    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) * im; *F1 = 0.0 - muN; return 1; }
+    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) * im; *F1 = muN; return -1; }
     *V1 = 0.0;
     *F1 = 0.0 - p;
     return 0;
@@ -127,6 +206,7 @@ static void after_phase(const step_ctx *C, dfo_state *s, double ta, int mode_dur
                         int mode_before)
 {
     const dfo_model *M = C->M;
+    if (s->mode == 0 && mode_before != 0) s->stick_tb = NAN; /* a new stick phase */
     if (C->on_switch && s->mode != mode_before) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
     if (!M->p.observe) return;
     const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop, tb = s->t;
@@ -145,13 +225,14 @@ static void after_phase(const step_ctx *C, dfo_state *s, double ta, int mode_dur
 /* ---- the three variants --------------------------------------------------------------------- */
 
 /* Without friction every variant is plain Bossak-Newmark. */
-static void step_smooth(step_ctx *C, dfo_state *s, double h)
+static void step_smooth(step_ctx *C, dfo_state *s, double t_end)
 {
+    const double h = C->h_step;
     trial tr;
     double V1, F1;
     const double ta = s->t, X0 = s->X;
     const int m0 = s->mode;
-    predict(C, s, h, &tr);
+    predict(C, s, h, t_end, &tr);
     s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1);
     finish(C, s, &tr, V1);
     s->F = F1;
@@ -160,14 +241,15 @@ static void step_smooth(step_ctx *C, dfo_state *s, double h)
 
 /* The paper's literal scheme: LCP with the previous mode's coefficient, then frictionUpdates
  * re-solves with the coefficient of the result; A follows Bossak's recursion throughout. */
-static void step_paper(step_ctx *C, dfo_state *s, double h)
+static void step_paper(step_ctx *C, dfo_state *s, double t_end)
 {
+    const double h = C->h_step;
     const dfo_model *M = C->M;
     trial tr;
     double V1, F1;
     const double ta = s->t, X0 = s->X;
     const int m0 = s->mode;
-    predict(C, s, h, &tr);
+    predict(C, s, h, t_end, &tr);
     double mu = (s->mode == 0) ? M->mu_b : M->mu_k;
     int o = solve_friction(C, s, &tr, mu * C->N, &V1, &F1);
     for (int i = 0; i < M->p.frictionUpdates && M->update; i++) {
@@ -191,19 +273,20 @@ static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
     s->A = 0.0;
     s->hA = 0.0;
     s->mode = 0;
-    const double S = dfo_excitation(C->M, s->t) + C->u - C->M->p.k * s->X;
+    const double S = excitation(C, s->t) + C->u - C->M->p.k * s->X;
     s->F = -fmax(-C->Fb, fmin(C->Fb, S));
 }
 
 /* Consistent stick test (method.md section 4, variant 1). */
-static void step_consistent(step_ctx *C, dfo_state *s, double h)
+static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
 {
+    const double h = C->h_step;
     const dfo_model *M = C->M;
     trial tr;
     double V1, F1;
     const double ta = s->t, X0 = s->X;
     const int m0 = s->mode;
-    predict(C, s, h, &tr);
+    predict(C, s, h, t_end, &tr);
     if (s->mode == 0) {
         /* A = V = 0: p_hat is exactly the static force P1 - k X */
         int o = solve_friction(C, s, &tr, M->mu_b * C->N, &V1, &F1);
@@ -224,9 +307,9 @@ static void step_consistent(step_ctx *C, dfo_state *s, double h)
         } else {
             /* the block stops in this step: stick or reverse, judged by the static force at the
              * predicted rest position */
-            const double S = dfo_excitation(M, s->t + h) + C->u - M->p.k * tr.x_pred;
+            const double S = excitation(C, t_end) + C->u - M->p.k * tr.x_pred;
             const int s2 = sign_of(S);
-            const double V2 = (tr.p_hat - s2 * C->muk_N) / tr.m_hat;
+            const double V2 = (tr.p_hat - s2 * C->muk_N) * tr.k->inv_m_hat;
             if (fabs(S) <= C->Fb || s2 * V2 <= 0.0) {
                 stick_after(C, s, &tr);
             } else {
@@ -251,29 +334,39 @@ static double until_above(double th0, double L, double acosL)
 }
 
 /* While stuck at X, the static force is S(t) = P_amp cos(w t + P_phase) + C0 with C0 = u - k X.
- * Returns the first time in [ta, tb] where |S| exceeds Fb (dir: the side crossed), or INFINITY. Closed form, so a force
- * that crosses the limit and comes back inside one step is not missed. */
-static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+ * The first time >= ta where |S| exceeds Fb (dir: the side crossed), or INFINITY. Closed form, so
+ * a force that crosses the limit and comes back inside one step is not missed. */
+static double next_breakaway(const step_ctx *C, double C0, double ta, int *dir)
 {
     const dfo_model *M = C->M;
-    const double C0 = C->u - M->p.k * s->X, Fb = C->Fb, w = M->p.omega, A = M->P_amp;
-    if (w == 0.0 || A == 0.0) {
-        const double S = dfo_excitation(M, ta) + C0;
+    const double Fb = C->Fb, w = M->p.omega, A = M->P_amp;
+    if (w == 0.0 || A == 0.0) {  /* a constant force */
+        const double S = excitation(C, ta) + C0;
         *dir = sign_of(S);
         return (fabs(S) > Fb) ? ta : INFINITY;
     }
     const double Lhi = (Fb - C0) / A;   /* S >  Fb  <=>  cos(theta)      > Lhi */
     const double Llo = (Fb + C0) / A;   /* S < -Fb  <=>  cos(theta + pi) > Llo */
-    if (s->stick_C != C0 || s->stick_Fb != Fb) {
-        s->stick_C = C0;
-        s->stick_Fb = Fb;
-        s->acos_hi = (Lhi > -1.0 && Lhi < 1.0) ? acos(Lhi) : 0.0;
-        s->acos_lo = (Llo > -1.0 && Llo < 1.0) ? acos(Llo) : 0.0;
-    }
+    const double acos_hi = (Lhi > -1.0 && Lhi < 1.0) ? acos(Lhi) : 0.0;
+    const double acos_lo = (Llo > -1.0 && Llo < 1.0) ? acos(Llo) : 0.0;
     const double th = w * ta + M->P_phase;
-    const double up = until_above(th, Lhi, s->acos_hi), down = until_above(th + DFO_PI, Llo, s->acos_lo);
+    const double up = until_above(th, Lhi, acos_hi), down = until_above(th + DFO_PI, Llo, acos_lo);
     *dir = (up <= down) ? 1 : -1;
-    const double t = ta + fmin(up, down) / w;
+    return ta + fmin(up, down) / w;
+}
+
+/* The breakaway inside [ta, tb], or INFINITY. It is computed once per stick phase, at its first
+ * step, and again only when the inputs change the static force or the limit. */
+static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+{
+    const double C0 = C->u - C->M->p.k * s->X;
+    if (isnan(s->stick_tb) || s->stick_C != C0 || s->stick_Fb != C->Fb) {
+        s->stick_C = C0;
+        s->stick_Fb = C->Fb;
+        s->stick_tb = next_breakaway(C, C0, ta, &s->stick_dir);
+    }
+    *dir = s->stick_dir;
+    const double t = (s->stick_tb > ta) ? s->stick_tb : ta;
     return (t <= tb) ? t : INFINITY;
 }
 
@@ -291,7 +384,7 @@ static void start_slide(const step_ctx *C, dfo_state *s, int sd, double S)
 /* At rest after a stop: stick if the static force is inside the limit, else slide along it. */
 static void restart_from_rest(const step_ctx *C, dfo_state *s)
 {
-    const double S = dfo_excitation(C->M, s->t) + C->u - C->M->p.k * s->X;
+    const double S = excitation(C, s->t) + C->u - C->M->p.k * s->X;
     if (fabs(S) <= C->Fb) {
         s->V = s->A = s->hA = 0.0;
         s->mode = 0;
@@ -304,8 +397,8 @@ static void restart_from_rest(const step_ctx *C, dfo_state *s)
 /* s V1 at the end of a sliding Bossak step of length h (friction -s mu_k N). */
 static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
 {
-    predict(C, s, h, tr);
-    return s->mode * (tr->p_hat - s->mode * C->muk_N) / tr->m_hat;
+    predict(C, s, h, s->t + h, tr);
+    return s->mode * (tr->p_hat - s->mode * C->muk_N) * tr->k->inv_m_hat;
 }
 
 /* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method to a few ulps of t + h. */
@@ -370,14 +463,14 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 continue;
             }
             s->t = tb;
-            start_slide(C, s, dir, dfo_excitation(M, tb) + C->u - M->p.k * s->X);
+            start_slide(C, s, dir, excitation(C, tb) + C->u - M->p.k * s->X);
             after_phase(C, s, ta, 0, 0.0, s->F, 0);
             continue;
         }
         /* sliding in direction sd over the remainder r */
         const int sd = s->mode;
-        const double r = t_end - ta;
-        predict(C, s, r, &tr);
+        const double r = (phase == 0) ? C->h_step : t_end - ta;
+        predict(C, s, r, t_end, &tr);
         const int o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
         if (o == sd && sd * V1 > 0.0) {
             finish(C, s, &tr, V1);
@@ -387,7 +480,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             continue;
         }
         /* the block stops inside the remainder: find the sub-step that ends at V = 0 */
-        const double fhi = sd * (tr.p_hat - sd * C->muk_N) / tr.m_hat;
+        const double fhi = sd * (tr.p_hat - sd * C->muk_N) * tr.k->inv_m_hat;
         double lo = 0.0, flo = sd * s->V;
         if (!(flo > 0.0)) {  /* started from rest: find a point where it is still moving */
             lo = r;
@@ -397,7 +490,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 flo = slide_velocity(C, s, lo, &tr);
             }
             if (!(flo > 0.0)) {  /* no motion resolvable in double precision: stays at rest */
-                const double S = dfo_excitation(M, t_end) + C->u - M->p.k * s->X;
+                const double S = excitation(C, t_end) + C->u - M->p.k * s->X;
                 s->t = t_end;
                 s->V = s->A = s->hA = 0.0;
                 s->mode = 0;
@@ -407,7 +500,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             }
         }
         const double hs = (fhi == 0.0) ? r : stop_length(C, s, lo, flo, r, fhi);
-        predict(C, s, hs, &tr);
+        predict(C, s, hs, (hs >= r) ? t_end : s->t + hs, &tr);
         finish(C, s, &tr, 0.0);
         s->t = (hs >= r) ? t_end : fmax(ta + hs, nextafter(ta, INFINITY));
         const double dX = s->X - X0;
@@ -429,6 +522,10 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *u)
     C->Fb = M->mu_b * C->N;
     C->friction = C->Fb > 0.0;  /* Fb >= mu_k N */
     C->err = DFO_OK;
+    C->t_grid = NAN;
+    C->P_grid = 0.0;
+    C->g1 = (1.0 - M->gamma) / M->gamma;
+    coef_for(M, M->p.h, &C->full);
 }
 
 void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
@@ -440,7 +537,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
     s->t0 = s->t = t0;
     s->X = M->p.x0;
     s->V = M->p.v0;
-    s->stick_C = s->stick_Fb = NAN;
+    dfo_forget_caches(s);
     if (s->V == 0.0 && C.Fb > 0.0) {
         restart_from_rest(&C, s);
     } else {
@@ -455,20 +552,46 @@ void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
     }
 }
 
+void dfo_forget_caches(dfo_state *s)
+{
+    s->stick_C = s->stick_Fb = s->stick_tb = NAN;
+    s->stick_dir = 0;
+    s->exc_n = -1;
+    s->exc_c = s->exc_s = 0.0;
+}
+
+void dfo_check_caches(const dfo_model *M, dfo_state *s)
+{
+    int ok = 1;
+    if (s->exc_n >= 0) {
+        dfo_state fresh = *s;
+        fresh.exc_n = -1;
+        double c, sn;
+        phase_at(M, &fresh, s->exc_n, &c, &sn);
+        ok = ok && c == s->exc_c && sn == s->exc_s;
+    } else {
+        ok = ok && s->exc_n == -1;
+    }
+    /* the next breakaway is part of the state (it depends on when the stick phase began); only its
+     * direction can be checked */
+    ok = ok && s->stick_dir >= -1 && s->stick_dir <= 1;
+    if (!ok) dfo_forget_caches(s);
+}
+
 static void step_to(step_ctx *C, dfo_state *s, double t_end)
 {
-    const double h = t_end - s->t;
+    const double h = C->h_step;
     s->steps++;
-    if (!C->friction) { step_smooth(C, s, h); s->t = t_end; return; }
+    if (!C->friction) { step_smooth(C, s, t_end); s->t = t_end; return; }
     switch (C->M->p.scheme) {
-    case DFO_SCHEME_PAPER: step_paper(C, s, h); break;
-    case DFO_SCHEME_CONSISTENT: step_consistent(C, s, h); break;
+    case DFO_SCHEME_PAPER: step_paper(C, s, t_end); break;
+    case DFO_SCHEME_CONSISTENT: step_consistent(C, s, t_end); break;
     default:
         /* Locating a switch inside a step needs steps that resolve the oscillator's fastest time
          * scale; on a stiff step (several natural periods long) restarts from rest with the
          * physical acceleration would feed the unresolved mode: there the consistent stick test,
          * which is stable, takes the step. */
-        if (C->M->rate_max * h > STIFF_STEP) step_consistent(C, s, h);
+        if (C->M->rate_max * h > STIFF_STEP) step_consistent(C, s, t_end);
         else step_located(C, s, t_end);
         break;
     }
@@ -485,22 +608,30 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, do
     const double h = M->p.h;
     /* a grid point this close to the target is the target (rounding of the host's times) */
     const double snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
+    double g_prev = s->t0 + (double)s->n * h;  /* the grid point at or before s->t */
     while (s->t < t_target) {
         const double grid = s->t0 + (double)(s->n + 1) * h;
         double t_end = t_target;
+        C.t_grid = NAN;
+        const int from_grid = (s->t == g_prev);
         if (grid - t_target <= snap) {  /* the next grid point is reached in this call */
             if (t_target - grid > snap) t_end = grid;
             s->n++;
+            g_prev = grid;
+            const double P = grid_excitation(M, s);
+            if (t_end == grid) { C.t_grid = grid; C.P_grid = P; }
         }
         if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
+        C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
-        if (!isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) || !isfinite(s->F)) return DFO_ERR_NONFINITE;
+        /* x - x is 0 for finite x, NaN otherwise: one test for the four */
+        if (!((s->X - s->X) + (s->V - s->V) + (s->A - s->A) + (s->F - s->F) == 0.0)) return DFO_ERR_NONFINITE;
     }
     /* while stuck (located, consistent) the friction holds the static force: evaluated here, at the
      * communication point, rather than at every stuck step */
     if (C.friction && s->mode == 0 && M->p.scheme != DFO_SCHEME_PAPER) {
-        const double S = dfo_excitation(M, s->t) + C.u - M->p.k * s->X;
+        const double S = excitation(&C, s->t) + C.u - M->p.k * s->X;
         s->F = -fmax(-C.Fb, fmin(C.Fb, S));
     }
     /* the acceleration output too must be representable */

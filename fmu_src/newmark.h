@@ -32,14 +32,29 @@ typedef struct {
     double x_max, x_min, t_stuck, E_friction;
     long long transitions;
     int observed;  /* a sample has been taken */
-    /* stick-phase cache: arccos of the breakaway levels for the frozen position */
-    double stick_C, stick_Fb, acos_hi, acos_lo;
+    /* the stick phase's next breakaway: time and side, computed at its first step for the static
+     * force offset stick_C = u - k X and the limit stick_Fb (NaN: to be computed) */
+    double stick_C, stick_Fb, stick_tb;
+    int stick_dir;
+    /* excitation cache: cos and sin of the excitation phase omega (t0 + exc_n h) + phi at the grid
+     * point exc_n (-1: empty). A pure function of exc_n: exact at every multiple of DFO_EXC_ANCHOR,
+     * advanced by rotations by omega h in between. */
+    long long exc_n;
+    double exc_c, exc_s;
     /* counters */
     long long steps, lcp_solves;
 } dfo_state;
 
 /* Consistent start-up at t0 from x0, v0 (method.md section 4, "Start-up"). */
 void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s);
+
+/* Empty the caches of a state (they are rebuilt on demand, to the same bits): for a state that
+ * was not produced by this build, e.g. a deserialised one. */
+void dfo_forget_caches(dfo_state *s);
+
+/* Keep the caches of a state that was not produced by this instance (e.g. a deserialised one) only
+ * if they equal their recomputation; otherwise empty them. */
+void dfo_check_caches(const dfo_model *M, dfo_state *s);
 
 /* Called at every change of mode (stick/slip switch) with its time and position. */
 typedef void (*dfo_switch_fn)(void *ctx, double t, double x, int from_mode, int to_mode);

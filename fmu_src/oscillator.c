@@ -39,6 +39,8 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->P_amp = fabs(p->P0);
     M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
     M->rate_max = sqrt(p->k / p->m) + p->c / p->m + fabs(p->omega);
+    M->rot_c = cos(p->omega * p->h);
+    M->rot_s = sin(p->omega * p->h);
     M->fast = p->fastPaths != 0;
     M->damped = !M->fast || p->c != 0.0;
     M->update = !M->fast || M->mu_k != M->mu_b;

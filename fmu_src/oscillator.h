@@ -47,6 +47,7 @@ typedef struct {
     double mu_k, mu_b;       /* kinetic and breakaway coefficients, mu_b = max(mu_s, mu_k) */
     double P_amp, P_phase;   /* P0 cos(w t + phi) written as P_amp cos(w t + P_phase), P_amp >= 0 */
     double rate_max;         /* fastest rate of the model, sqrt(k/m) + c/m + |omega| (1/s) */
+    double rot_c, rot_s;     /* cos and sin of omega h: the excitation's phase advance per grid step */
     int fast;                /* fast paths enabled */
     int damped;              /* c != 0 (or fast paths off) */
     int update;              /* mu_k != mu_b (or fast paths off) */

@@ -16,8 +16,9 @@
 
 /* worst values seen, printed at the end (the numbers the report quotes) */
 typedef struct {
-    double friction_residual, friction_closed_form, general_residual, general_vs_enum;
+    double friction_residual, friction_closed_form, general_residual, general_vs_enum, revised_vs_tableau;
     int friction_pivots_max, general_pivots_max;
+    long revised_vs_tableau_cases, warm_cases, warm_zero_pivot;
     long friction_cases, friction_degenerate, pmatrix_cases, psd_cases, integer_cases;
 } stats;
 
@@ -153,6 +154,56 @@ static double norm_inf(int n, const double *v)
     return s;
 }
 
+/* lcp_lemke solves n = 2 in revised form (basis inverse in registers): it must take the tableau's
+ * path, pivot for pivot, and reach the same solution to rounding. */
+static void same_as_tableau(checks *T, stats *st, int n, const double *M, const double *q, int budget,
+                            lcp_status s, const double *z, const double *w, const int *zb, int piv)
+{
+    if (n != 2) return;
+    double z2[2], w2[2];
+    int zb2[2], piv2 = -1;
+    const lcp_status s2 = lcp_lemke_general(2, M, q, budget, z2, w2, zb2, &piv2);
+    st->revised_vs_tableau_cases++;
+    CHECK_INT(s2, s);
+    CHECK_INT(piv2, piv);
+    if (s != LCP_OK || s2 != LCP_OK) return;
+    const double scale = fmax(fmax(fabs(z2[0]), fabs(z2[1])), fmax(fabs(w2[0]), fabs(w2[1])));
+    for (int i = 0; i < 2; i++) {
+        CHECK_INT(zb2[i], zb[i]);
+        const double e = fmax(fabs(z[i] - z2[i]), fabs(w[i] - w2[i]));
+        CHECK_RANGE(0.0, 1e-12 * scale, e);
+        if (scale > 0.0) st->revised_vs_tableau = fmax(st->revised_vs_tableau, e / scale);
+    }
+}
+
+/* Warm starts from every complementary basis (2^n guesses): a solution of the LCP each time; for
+ * the friction problem the active pair the stepper reads (z_i basic and > 0) is the cold one's;
+ * with a unique solution (z_ref given) the same solution. */
+static void warm_starts(checks *T, stats *st, int n, const double *M, const double *q, const double *z_cold,
+                        const int *zb_cold, const double *z_ref, double tol, int friction)
+{
+    for (unsigned mask = 0; mask < (1u << n); mask++) {
+        int guess[LCP_MAX_N];
+        for (int i = 0; i < n; i++) guess[i] = (mask >> i) & 1u;
+        double z[LCP_MAX_N], w[LCP_MAX_N];
+        int zb[LCP_MAX_N], piv = -1;
+        const lcp_status s = lcp_lemke_warm(n, M, q, guess, BIG_BUDGET, z, w, zb, &piv);
+        st->warm_cases++;
+        if (piv == 0) st->warm_zero_pivot++;
+        if (!CHECK_INT(LCP_OK, s)) continue;
+        verify(T, n, M, q, z, w, tol);
+        for (int i = 0; i < n; i++) CHECK(zb[i] || z[i] == 0.0);
+        if (friction)
+            for (int i = 0; i < n; i++) CHECK_INT(zb_cold[i] && z_cold[i] > 0.0, zb[i] && z[i] > 0.0);
+        if (z_ref) {
+            const double zs = fmax(norm_inf(n, z_ref), 1e-300);
+            double e = 0.0;
+            for (int i = 0; i < n; i++) e = fmax(e, fabs(z[i] - z_ref[i]));
+            CHECK_RANGE(0.0, 1e-8, e / zs);
+        }
+    }
+}
+
 /* ---- 1. the friction LCP ---------------------------------------------------------------------- */
 
 /* Solve the friction LCP and check it against the closed form (method.md section 3). */
@@ -164,7 +215,9 @@ static void friction_case(checks *T, stats *st, double mh, double p, double muN)
     check_context(T, "friction LCP m_hat=%.17g p_hat=%.17g muN=%.17g", mh, p, muN);
     const lcp_status s = lcp_lemke(2, M, q, 16, z, w, zb, &piv);
     st->friction_cases++;
+    same_as_tableau(T, st, 2, M, q, 16, s, z, w, zb, piv);
     if (!CHECK_INT(LCP_OK, s)) return;
+    warm_starts(T, st, 2, M, q, z, zb, NULL, 1e-12, 1);
     CHECK_RANGE(0, 3, piv);
     if (piv > st->friction_pivots_max) st->friction_pivots_max = piv;
     st->friction_residual = fmax(st->friction_residual, verify(T, 2, M, q, z, w, 1e-12));
@@ -275,11 +328,13 @@ static int general_case(checks *T, stats *st, int n, const double *M, const doub
     double z[LCP_MAX_N], w[LCP_MAX_N];
     int zb[LCP_MAX_N], piv = -1;
     const lcp_status s = lcp_lemke(n, M, q, BIG_BUDGET, z, w, zb, &piv);
+    same_as_tableau(T, st, n, M, q, BIG_BUDGET, s, z, w, zb, piv);
     if (!CHECK_INT(LCP_OK, s)) {
         if (T->failures <= CHECK_MAX_REPORT) dump_problem(n, M, q, s, piv);
         return -1;
     }
     CHECK_RANGE(0, 100, piv);  /* terminates long before the budget */
+    if (n <= 4) warm_starts(T, st, n, M, q, z, zb, z_ref, tol, 0);
     if (piv > st->general_pivots_max) st->general_pivots_max = piv;
     const double res = verify(T, n, M, q, z, w, tol);
     st->general_residual = fmax(st->general_residual, res);
@@ -652,5 +707,11 @@ int main(void)
     printf("general n: %ld P-matrix, %ld PSD-singular and %ld degenerate integer cases, max pivots %d, max relative residual %.2e, "
            "max relative difference to enumeration %.2e\n",
            st.pmatrix_cases, st.psd_cases, st.integer_cases, st.general_pivots_max, st.general_residual, st.general_vs_enum);
+    printf("warm starts: %ld solves from every complementary basis (%ld accepted with 0 pivots), all "
+           "solutions, the friction problem's active pair as cold\n",
+           st.warm_cases, st.warm_zero_pivot);
+    printf("n = 2, revised form against the tableau: %ld cases, same status, pivots and basis, max relative "
+           "difference %.2e\n",
+           st.revised_vs_tableau_cases, st.revised_vs_tableau);
     return checks_done(T, "test_lcp");
 }
