@@ -275,6 +275,16 @@ lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
 
 /* ---- warm start -------------------------------------------------------------------------------- */
 
+/* Lemke from the start, kept out of line: the warm path stays a small leaf function. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static lcp_status cold_start(int n, const double *M, const double *q, int max_pivots, double *z, double *w,
+                             int *z_basic, int *pivots)
+{
+    return lcp_lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
+}
+
 /* The complementary basis named by guess (z_i basic where guess[i], else w_i), if it solves the
  * problem: z_J = -M_JJ^-1 q_J >= 0 and w = M z + q >= 0 off J. Returns 1 and the solution, else 0. */
 static int try_basis(int n, const double *M, const double *q, const int *guess, double *z, double *w)
@@ -325,56 +335,24 @@ static int try_basis(int n, const double *M, const double *q, const int *guess, 
     return 1;
 }
 
-/* n = 2 by hand: the friction problem's common case is one z basic (sliding on). */
-static ALWAYS_INLINE int try_basis2(const double *M, const double *q, const int *guess, double *z, double *w)
-{
-    if (guess[0] && guess[1]) return try_basis(2, M, q, guess, z, w);
-    if (!guess[0] && !guess[1]) {
-        if (!(q[0] >= 0.0 && q[1] >= 0.0)) return 0;
-        z[0] = z[1] = 0.0;
-        w[0] = q[0];
-        w[1] = q[1];
-        return 1;
-    }
-    const int i = guess[0] ? 0 : 1, o = 1 - i;
-    const double mii = M[i * 2 + i];
-    /* M_ii must be a pivot by the same measure as above (|M_ii| > 1e-13 |M_ii|: non-zero) */
-    if (!(dabs(mii) > 0.0)) return 0;
-    const double zi = -q[i] / mii;
-    if (!(zi >= 0.0)) return 0;
-    const double wo = q[o] + M[o * 2 + i] * zi;
-    if (!(wo >= 0.0)) return 0;
-    z[i] = zi;
-    z[o] = 0.0;
-    w[i] = 0.0;
-    w[o] = wo;
-    return 1;
-}
-
 lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
                           double *z, double *w, int *z_basic, int *pivots)
 {
-    if (guess && n >= 1 && n <= LCP_MAX_N) {
-        const int ok = (n == 2) ? try_basis2(M, q, guess, z, w) : try_basis(n, M, q, guess, z, w);
+    if (guess && n == 2 && !(guess[0] && guess[1])) return lcp_lemke_warm2(M, q, guess, max_pivots, z, w, z_basic, pivots);
+    if (guess && n >= 1 && n <= LCP_MAX_N && try_basis(n, M, q, guess, z, w)) {
         /* non-finite data fails the sign tests above, except where it is never read: check all */
-        if (ok) {
-            double fin = 0.0;
-            if (n == 2) {
-                fin = (q[0] - q[0]) + (q[1] - q[1]) + (M[0] - M[0]) + (M[1] - M[1]) + (M[2] - M[2]) + (M[3] - M[3]);
-            } else {
-                for (int i = 0; i < n; i++) {
-                    fin += q[i] - q[i];
-                    for (int j = 0; j < n; j++) fin += M[i * n + j] - M[i * n + j];
-                }
-            }
-            if (fin == 0.0) {
-                for (int i = 0; i < n; i++) z_basic[i] = guess[i] != 0;
-                if (pivots) *pivots = 0;
-                return LCP_OK;
-            }
+        double fin = 0.0;
+        for (int i = 0; i < n; i++) {
+            fin += q[i] - q[i];
+            for (int j = 0; j < n; j++) fin += M[i * n + j] - M[i * n + j];
+        }
+        if (fin == 0.0) {
+            for (int i = 0; i < n; i++) z_basic[i] = guess[i] != 0;
+            if (pivots) *pivots = 0;
+            return LCP_OK;
         }
     }
-    return lcp_lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
+    return cold_start(n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 const char *lcp_status_text(lcp_status s)

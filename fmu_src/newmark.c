@@ -11,7 +11,15 @@
 #define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
 #define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
 #define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
-#define EXC_ANCHOR 64           /* grid points between exact evaluations of the excitation phase */
+#define EXC_ANCHOR 64
+
+/* The few functions of every internal step are inlined into the stepping loop, so that the state
+ * stays in registers (a step costs some 100 ns; a call and its spills are a good part of that). */
+#if defined(__GNUC__)
+#define HOT_INLINE inline __attribute__((always_inline))
+#else
+#define HOT_INLINE inline
+#endif           /* grid points between exact evaluations of the excitation phase */
 
 /* The coefficients of a Bossak step that depend on its length h only (eq. 4). */
 typedef struct {
@@ -129,7 +137,7 @@ static void coef_for(const dfo_model *M, double h, step_coef *cf)
 }
 
 /* The step [s->t, t1] of length h (t1 = s->t + h up to rounding: t1 names the grid point). */
-static void predict(const step_ctx *C, const dfo_state *s, double h, double t1, trial *tr)
+static HOT_INLINE void predict(const step_ctx *C, const dfo_state *s, double h, double t1, trial *tr)
 {
     const dfo_model *M = C->M;
     const double a = M->p.alpha, m = M->p.m, k = M->p.k;
@@ -155,7 +163,7 @@ static void predict(const step_ctx *C, const dfo_state *s, double h, double t1, 
 }
 
 /* Complete the step with the end velocity V1 (X1 and A1 from Newmark's kinematics). */
-static void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
+static HOT_INLINE void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
 {
     s->X = tr->x_pred + tr->k->kX * V1;
     s->A = (V1 - s->V) * tr->k->c1 - C->g1 * tr->A0;
@@ -167,7 +175,7 @@ static void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
 /* Friction at the end of the step: the LCP of method.md section 3 with limit muN. Lemke decides
  * the active complementarity pair; the velocity then follows from that pair's equation. Returns
  * the mode (+1, 0, -1). */
-static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
+static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
 {
     const double mh = tr->k->m_hat, im = tr->k->inv_m_hat, p = tr->p_hat;
     if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
@@ -183,7 +191,7 @@ static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN
      * basis still solves the LCP and no pivot is needed; at a switch it does not, and Lemke decides */
     const int guess[2] = {s->mode > 0, s->mode < 0};
     s->lcp_solves++;
-    const lcp_status st = lcp_lemke_warm(2, Mx, q, guess, LCP_MAX_PIVOT_COUNT, z, w, zb, NULL);
+    const lcp_status st = lcp_lemke_warm2(Mx, q, guess, LCP_MAX_PIVOT_COUNT, z, w, zb, NULL);
     if (st != LCP_OK) {
         /* non-finite data means the state overflowed before the LCP */
         if (C->err == DFO_OK) C->err = (st == LCP_BAD_INPUT) ? DFO_ERR_NONFINITE : DFO_ERR_LCP;
@@ -202,7 +210,7 @@ static int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN
 /* ---- observables ---------------------------------------------------------------------------- */
 
 /* Book-keeping after each phase [ta, s->t] spent in mode_during: switch reports and observables. */
-static void after_phase(const step_ctx *C, dfo_state *s, double ta, int mode_during, double dX, double F,
+static HOT_INLINE void after_phase(const step_ctx *C, dfo_state *s, double ta, int mode_during, double dX, double F,
                         int mode_before)
 {
     const dfo_model *M = C->M;
