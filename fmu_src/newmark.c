@@ -606,8 +606,8 @@ static void step_to(step_ctx *C, dfo_state *s, double t_end)
     s->t = t_end;
 }
 
-dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
-                       dfo_switch_fn on_switch, void *switch_ctx)
+static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+                          dfo_switch_fn on_switch, void *switch_ctx)
 {
     step_ctx C;
     make_ctx(&C, M, u);
@@ -645,6 +645,17 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, do
     /* the acceleration output too must be representable */
     if (!isfinite(dfo_acceleration(M, u, s))) return DFO_ERR_NONFINITE;
     return DFO_OK;
+}
+
+dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+                       dfo_switch_fn on_switch, void *switch_ctx)
+{
+    /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
+     * across the steps; it is written back whatever the outcome (as if worked on in place) */
+    dfo_state w = *s;
+    const dfo_status st = advance(M, u, &w, t_target, on_switch, switch_ctx);
+    *s = w;
+    return st;
 }
 
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *u, const dfo_state *s)
