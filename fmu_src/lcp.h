@@ -7,6 +7,9 @@
 #ifndef DFO_LCP_H
 #define DFO_LCP_H
 
+#include <float.h>
+#include <math.h>
+
 #define LCP_MAX_N 8
 
 typedef enum {
@@ -34,43 +37,51 @@ lcp_status lcp_lemke_general(int n, const double *M, const double *q, int max_pi
 lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
                           double *z, double *w, int *z_basic, int *pivots);
 
+/* The basis {z_i, w_o} (o = 1 - i) of a 2 x 2 problem, if it solves it; i is a constant at each
+ * call below, so that everything stays in registers. */
+static inline int lcp_basis2_zw(const double *M, const double *q, int i, double *z, double *w, int *z_basic)
+{
+    const int o = 1 - i;
+    const double mii = M[3 * i];
+    if (mii == 0.0) return 0;
+    const double zi = -q[i] / mii, wo = q[o] + M[2 * o + i] * zi;
+    if (!(zi >= 0.0 && wo >= 0.0)) return 0;
+    z[i] = zi;
+    z[o] = 0.0;
+    w[i] = 0.0;
+    w[o] = wo;
+    z_basic[i] = 1;
+    z_basic[o] = 0;
+    return 1;
+}
+
 /* lcp_lemke_warm for n = 2 with at most one z in the guessed basis (the friction problem of one
  * degree of freedom: stuck, or sliding one way), inline: the stepper calls it at every step. */
 static inline lcp_status lcp_lemke_warm2(const double *M, const double *q, const int *guess, int max_pivots,
                                          double *z, double *w, int *z_basic, int *pivots)
 {
-    /* x - x is 0 for finite x and NaN otherwise: non-finite data goes to Lemke, which reports it */
-    const int finite = (q[0] - q[0]) + (q[1] - q[1]) + (M[0] - M[0]) + (M[1] - M[1]) + (M[2] - M[2]) +
-                       (M[3] - M[3]) == 0.0;
-    if (finite && !guess[0] && !guess[1]) {  /* w basic: z = 0 */
-        if (q[0] >= 0.0 && q[1] >= 0.0) {
+    if (guess[0] && guess[1]) return lcp_lemke_warm(2, M, q, guess, max_pivots, z, w, z_basic, pivots);
+    /* |x| <= DBL_MAX is false for infinities and NaN: non-finite data goes to Lemke, which reports
+     * it (the six tests are independent, not a chain) */
+    const int finite = (fabs(q[0]) <= DBL_MAX) & (fabs(q[1]) <= DBL_MAX) & (fabs(M[0]) <= DBL_MAX) &
+                       (fabs(M[1]) <= DBL_MAX) & (fabs(M[2]) <= DBL_MAX) & (fabs(M[3]) <= DBL_MAX);
+    int ok = 0;
+    if (finite) {
+        if (guess[0]) {
+            ok = lcp_basis2_zw(M, q, 0, z, w, z_basic);
+        } else if (guess[1]) {
+            ok = lcp_basis2_zw(M, q, 1, z, w, z_basic);
+        } else if (q[0] >= 0.0 && q[1] >= 0.0) { /* w basic: z = 0 */
             z[0] = z[1] = 0.0;
             w[0] = q[0];
             w[1] = q[1];
             z_basic[0] = z_basic[1] = 0;
-            if (pivots) *pivots = 0;
-            return LCP_OK;
+            ok = 1;
         }
-    } else if (finite && !(guess[0] && guess[1])) {  /* z_i and w_o basic */
-        const int i = guess[0] ? 0 : 1, o = 1 - i;
-        const double mii = M[3 * i];
-        if (mii != 0.0) {
-            const double zi = -q[i] / mii, wo = q[o] + M[2 * o + i] * zi;
-            if (zi >= 0.0 && wo >= 0.0) {
-                z[i] = zi;
-                z[o] = 0.0;
-                w[i] = 0.0;
-                w[o] = wo;
-                z_basic[i] = 1;
-                z_basic[o] = 0;
-                if (pivots) *pivots = 0;
-                return LCP_OK;
-            }
-        }
-    } else if (guess[0] && guess[1]) {
-        return lcp_lemke_warm(2, M, q, guess, max_pivots, z, w, z_basic, pivots);
     }
-    return lcp_lemke(2, M, q, max_pivots, z, w, z_basic, pivots);
+    if (!ok) return lcp_lemke(2, M, q, max_pivots, z, w, z_basic, pivots);
+    if (pivots) *pivots = 0;
+    return LCP_OK;
 }
 
 const char *lcp_status_text(lcp_status s);

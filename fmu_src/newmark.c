@@ -40,6 +40,7 @@ typedef struct {
     double Fb;       /* breakaway limit max(mu_s, mu_k) N */
     step_coef full;  /* the coefficients of a step of the grid length h */
     double g1;       /* (1 - gamma) / gamma */
+    double am, am1;  /* alpha m, (1 - alpha) m */
     double h_step;   /* length of the current step: h itself for a whole grid interval (the time
                       * difference of two grid points differs from h by the rounding of t) */
     int friction;    /* friction acts (the LCP is needed) */
@@ -140,7 +141,7 @@ static void coef_for(const dfo_model *M, double h, step_coef *cf)
 static HOT_INLINE void predict(const step_ctx *C, const dfo_state *s, double h, double t1, trial *tr)
 {
     const dfo_model *M = C->M;
-    const double a = M->p.alpha, m = M->p.m, k = M->p.k;
+    const double a = M->p.alpha, k = M->p.k;
     if (h == C->full.h) {
         tr->k = &C->full;
     } else {
@@ -159,7 +160,7 @@ static HOT_INLINE void predict(const step_ctx *C, const dfo_state *s, double h, 
     const double P1 = excitation(C, t1) + C->u;
     tr->A0 = A0;
     tr->x_pred = x_pred;
-    tr->p_hat = P1 - a * m * A0 + (1.0 - a) * m * (s->V * c1 + C->g1 * A0) - k * x_pred;
+    tr->p_hat = P1 - C->am * A0 + C->am1 * (s->V * c1 + C->g1 * A0) - k * x_pred;
 }
 
 /* Complete the step with the end velocity V1 (X1 and A1 from Newmark's kinematics). */
@@ -533,6 +534,8 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *u)
     C->t_grid = NAN;
     C->P_grid = 0.0;
     C->g1 = (1.0 - M->gamma) / M->gamma;
+    C->am = M->p.alpha * M->p.m;
+    C->am1 = (1.0 - M->p.alpha) * M->p.m;
     coef_for(M, M->p.h, &C->full);
 }
 
@@ -633,8 +636,9 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s,
         C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
-        /* x - x is 0 for finite x, NaN otherwise: one test for the four */
-        if (!((s->X - s->X) + (s->V - s->V) + (s->A - s->A) + (s->F - s->F) == 0.0)) return DFO_ERR_NONFINITE;
+        /* |x| <= DBL_MAX is false for infinities and NaN; four independent tests, one branch */
+        if (!((fabs(s->X) <= DBL_MAX) & (fabs(s->V) <= DBL_MAX) & (fabs(s->A) <= DBL_MAX) & (fabs(s->F) <= DBL_MAX)))
+            return DFO_ERR_NONFINITE;
     }
     /* while stuck (located, consistent) the friction holds the static force: evaluated here, at the
      * communication point, rather than at every stuck step */
