@@ -549,6 +549,8 @@ void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
     s->X = M->p.x0;
     s->V = M->p.v0;
     dfo_forget_caches(s);
+    s->stick_C = s->stick_Fb = s->stick_tb = NAN;
+    s->stick_dir = 0;
     if (s->V == 0.0 && C.Fb > 0.0) {
         restart_from_rest(&C, s);
     } else {
@@ -565,28 +567,27 @@ void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
 
 void dfo_forget_caches(dfo_state *s)
 {
-    s->stick_C = s->stick_Fb = s->stick_tb = NAN;
-    s->stick_dir = 0;
     s->exc_n = -1;
     s->exc_c = s->exc_s = 0.0;
 }
 
 void dfo_check_caches(const dfo_model *M, dfo_state *s)
 {
-    int ok = 1;
     if (s->exc_n >= 0) {
         dfo_state fresh = *s;
         fresh.exc_n = -1;
         double c, sn;
         phase_at(M, &fresh, s->exc_n, &c, &sn);
-        ok = ok && c == s->exc_c && sn == s->exc_s;
-    } else {
-        ok = ok && s->exc_n == -1;
+        if (!(c == s->exc_c && sn == s->exc_s)) dfo_forget_caches(s);
+    } else if (s->exc_n != -1) {
+        dfo_forget_caches(s);
     }
-    /* the next breakaway is part of the state (it depends on when the stick phase began); only its
-     * direction can be checked */
-    ok = ok && s->stick_dir >= -1 && s->stick_dir <= 1;
-    if (!ok) dfo_forget_caches(s);
+    /* the next breakaway is state, not cache (it depends on when the stick phase began): only a
+     * side that cannot be is caught, and then the breakaway is computed anew */
+    if (s->stick_dir < -1 || s->stick_dir > 1) {
+        s->stick_tb = NAN;
+        s->stick_dir = 0;
+    }
 }
 
 static void step_to(step_ctx *C, dfo_state *s, double t_end)

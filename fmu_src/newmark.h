@@ -48,12 +48,12 @@ typedef struct {
 /* Consistent start-up at t0 from x0, v0 (method.md section 4, "Start-up"). */
 void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s);
 
-/* Empty the caches of a state (they are rebuilt on demand, to the same bits): for a state that
- * was not produced by this build, e.g. a deserialised one. */
+/* Empty the excitation cache of a state (it is rebuilt on demand, to the same bits). */
 void dfo_forget_caches(dfo_state *s);
 
-/* Keep the caches of a state that was not produced by this instance (e.g. a deserialised one) only
- * if they equal their recomputation; otherwise empty them. */
+/* For a state that was not produced by this instance (e.g. a deserialised one): keep its excitation
+ * cache only if it equals its recomputation, else empty it; a breakaway side out of range makes the
+ * next breakaway be computed anew. */
 void dfo_check_caches(const dfo_model *M, dfo_state *s);
 
 /* Called at every change of mode (stick/slip switch) with its time and position. */

@@ -6,7 +6,9 @@
  * 3. energy balance of the located scheme with viscous damping;
  * 4. fast paths give the same numbers as the general path, bit for bit;
  * 5. second order of the located scheme by self-convergence, across chi;
- * 6. hard inputs (zero coefficients, tiny and huge steps) run and stay finite.
+ * 6. hard inputs (zero coefficients, tiny and huge steps) run and stay finite;
+ * 7. the caches of the state (excitation phase, next breakaway): emptied or forged mid-run, the run
+ *    continues bit for bit; the excitation from the cache stays within rounding of the cosine.
  *
  * Non-dimensional setting unless said otherwise: m = k = P0 = 1, so w0 = 1, lambda = omega,
  * sigma = N, z = x. */
@@ -485,6 +487,74 @@ static void test_hard_inputs(checks *T)
     T->context = NULL;
 }
 
+/* ---- 7. caches ------------------------------------------------------------------------------- */
+
+static int same_state(const dfo_state *a, const dfo_state *b)
+{
+    return a->t == b->t && a->X == b->X && a->V == b->V && a->A == b->A && a->F == b->F && a->mode == b->mode &&
+           a->n == b->n && a->transitions == b->transitions;
+}
+
+static void test_caches(checks *T)
+{
+    const int schemes[] = {1, 2, 3};
+    const double dts[] = {1.0, 0.37, 2.5}; /* communication step / h */
+    for (int si = 0; si < 3; si++)
+        for (int di = 0; di < 3; di++) {
+            dfo_params p = nondim(0.5, 0.6, 0.3, 0.0, schemes[si], 1000);
+            p.x0 = 1.3;
+            p.observe = 1;
+            check_context(T, "caches: scheme %d, dt = %g h", schemes[si], dts[di]);
+            sim A, B, F;
+            sim_start(&A, &p, 0.25);
+            const double dt = dts[di] * p.h;
+            long long mismatches = 0, forged_kept = 0;
+            for (int k = 1; k <= 6000; k++) {
+                const double t = 0.25 + k * dt;
+                if (!CHECK_INT(DFO_OK, sim_to(&A, t))) break;
+                if (k % 97 == 0) {
+                    /* B: a copy with its caches emptied; F: with them forged, then checked */
+                    B = A;
+                    dfo_forget_caches(&B.s);
+                    F = A;
+                    F.s.exc_c += 1e-3;
+                    dfo_check_caches(&F.M, &F.s);
+                    forged_kept += (F.s.exc_n != -1);
+                    for (int j = 1; j <= 50; j++) {
+                        const double tj = t + j * dt;
+                        sim_to(&A, tj);
+                        sim_to(&B, tj);
+                        sim_to(&F, tj);
+                        mismatches += !same_state(&A.s, &B.s) || !same_state(&A.s, &F.s);
+                    }
+                    k += 50;
+                }
+                /* the cache's cosine against the library's, at the grid point it holds */
+                if (A.s.exc_n > 0) {
+                    const double th = p.omega * (A.s.t0 + (double)A.s.exc_n * p.h) + p.phi;
+                    CHECK_RANGE(0.0, 5e-14, fabs(A.s.exc_c - cos(th)));
+                }
+            }
+            CHECK_INT(0, mismatches);
+            CHECK_INT(0, forged_kept);
+        }
+    /* a state whose caches are consistent keeps them */
+    dfo_params p = nondim(0.5, 0.6, 0.3, 0.0, 3, 1000);
+    sim S;
+    sim_start(&S, &p, 0.0);
+    CHECK_INT(DFO_OK, sim_to(&S, 123.4 * p.h));
+    const dfo_state before = S.s;
+    dfo_check_caches(&S.M, &S.s);
+    CHECK(memcmp(&before, &S.s, sizeof before) == 0);
+    /* a breakaway side that cannot be is reset, and the run goes on within the invariants */
+    S.s.stick_dir = 7;
+    dfo_check_caches(&S.M, &S.s);
+    CHECK_INT(0, S.s.stick_dir);
+    CHECK_INT(DFO_OK, sim_to(&S, 2000.0 * p.h));
+    CHECK(state_finite(&S) && S.s.mode >= -1 && S.s.mode <= 1);
+    T->context = NULL;
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}}, *T = &C;
@@ -494,5 +564,6 @@ int main(void)
     test_fast_paths(T);
     test_order(T);
     test_hard_inputs(T);
+    test_caches(T);
     return checks_done(T, "test_stepper");
 }
