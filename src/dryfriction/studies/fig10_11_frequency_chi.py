@@ -85,7 +85,7 @@ def run(ctx: StudyContext) -> dict[str, float]:
         ax.set_xlabel("frequency ratio lambda = omega / w0")
         ax.set_ylabel("mean amplitude (z_max - z_min) / 2")
         ax.grid(alpha=0.3, which="both")
-        ax.legend(loc="upper right", fontsize=8)  # not "best": it would test each scattered point
+        ax.legend(loc="upper left", fontsize=8)  # not "best": it would test each scattered point
         ax.set_title(f"Fig. {fig_name[3:5]}: mu_s sigma = {nd['mu_s_sigma']}, zeta = {nd['zeta']}; each lambda: "
                      f"{ds.z0.size} x {ds.dz0.size} initial conditions, after {cfg['ics']['periods']:g} T", fontsize=9)
         ctx.save_figure(fig, fig_name)
