@@ -610,6 +610,28 @@ static void step_to(step_ctx *C, dfo_state *s, double t_end)
     s->t = t_end;
 }
 
+/* A fast path of the located scheme: stuck on a grid point, with the stick phase's next breakaway
+ * known, the whole grid steps before it (and before the target, and outside the observation
+ * window) change nothing but the time, so they can be taken at once. Returns the last grid index
+ * they reach (s->n when there is none). fastPaths = false steps them one by one, to the same bits. */
+static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_target, double snap)
+{
+    const dfo_model *M = C->M;
+    const double h = M->p.h;
+    if (s->mode != 0 || !C->friction || !M->fast || M->p.scheme != DFO_SCHEME_LOCATED ||
+        M->rate_max * h > STIFF_STEP)
+        return s->n;
+    if (isnan(s->stick_tb) || s->stick_C != C->u - M->p.k * s->X || s->stick_Fb != C->Fb) return s->n;
+    double limit = fmin(s->stick_tb, t_target - snap);
+    if (M->p.observe && !(s->t > M->p.t_obs_stop)) limit = fmin(limit, M->p.t_obs_start);
+    if (!(limit > s->t)) return s->n;
+    /* the last m with t0 + m h < limit (the grid points as the stepping loop computes them) */
+    long long m = (long long)floor((limit - s->t0) / h);
+    while (m > s->n && !(s->t0 + (double)m * h < limit)) m--;
+    while (s->t0 + (double)(m + 1) * h < limit) m++;
+    return (m > s->n) ? m : s->n;
+}
+
 static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                           dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -622,6 +644,15 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s,
     const double snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
     double g_prev = s->t0 + (double)s->n * h;  /* the grid point at or before s->t */
     while (s->t < t_target) {
+        if (s->t == g_prev) {
+            const long long m = stuck_until(&C, s, t_target, snap);
+            if (m > s->n) {
+                s->steps += m - s->n;
+                s->n = m;
+                g_prev = s->t = s->t0 + (double)m * h;
+                continue;
+            }
+        }
         const double grid = s->t0 + (double)(s->n + 1) * h;
         double t_end = t_target;
         C.t_grid = NAN;

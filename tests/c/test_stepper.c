@@ -292,25 +292,36 @@ static void test_energy(checks *T)
 static void compare_fast(checks *T, const dfo_params *p, const char *what, long long *points,
                          long long *zero_sign)
 {
-    dfo_params pf = *p, pg = *p, po = *p;
+    dfo_params pf = *p, pg = *p, po = *p, pgo = *p;
     pf.fastPaths = 1;
     pg.fastPaths = 0;
     po.fastPaths = 1;  /* the observables' bookkeeping must not touch the trajectory either */
     po.observe = 1;
     pf.observe = pg.observe = 0;
-    sim F, G, O;
+    pgo.fastPaths = 0; /* and the observables are the general path's (stuck steps skipped or not) */
+    pgo.observe = 1;
+    po.t_obs_start = pgo.t_obs_start = 3.3 * period_of(p);
+    po.t_obs_stop = pgo.t_obs_stop = 7.7 * period_of(p);
+    sim F, G, O, GO;
     sim_start(&F, &pf, 0.0);
     sim_start(&G, &pg, 0.0);
     sim_start(&O, &po, 0.0);
+    sim_start(&GO, &pgo, 0.0);
     const double dt = period_of(p) / 37.3;  /* off the grid: shortened steps on both paths */
     check_context(T, "fast paths (%s): scheme %d, chi %g, c %g, mu_s %g, N %g, alpha %g", what, p->scheme, p->chi,
                   p->c, p->mu_s, p->N, p->alpha);
     for (int k = 0; k <= 373; k++) {
         if (k > 0) {
-            const dfo_status a = sim_to(&F, k * dt), b = sim_to(&G, k * dt), o = sim_to(&O, k * dt);
+            const dfo_status a = sim_to(&F, k * dt), b = sim_to(&G, k * dt), o = sim_to(&O, k * dt),
+                             go = sim_to(&GO, k * dt);
             CHECK_INT(DFO_OK, a);
-            if (!CHECK_INT(a, b) || !CHECK_INT(a, o)) break;
+            if (!CHECK_INT(a, b) || !CHECK_INT(a, o) || !CHECK_INT(a, go)) break;
         }
+        if (!(CHECK_SAME(G.s.t, F.s.t) & CHECK_INT(G.s.n, F.s.n) & CHECK_INT(G.s.steps, F.s.steps))) break;
+        if (!(CHECK_SAME(GO.s.x_max, O.s.x_max) & CHECK_SAME(GO.s.x_min, O.s.x_min) &
+              CHECK_SAME(GO.s.t_stuck, O.s.t_stuck) & CHECK_SAME(GO.s.E_friction, O.s.E_friction) &
+              CHECK_INT(GO.s.transitions, O.s.transitions) & CHECK_INT(GO.s.observed, O.s.observed)))
+            break;
         CHECK(memcmp(&O.s.X, &F.s.X, sizeof F.s.X) == 0 && memcmp(&O.s.V, &F.s.V, sizeof F.s.V) == 0 &&
               memcmp(&O.s.F, &F.s.F, sizeof F.s.F) == 0 && O.s.mode == F.s.mode);
         /* F bit for bit, except the sign of a zero force: without friction the general path returns
