@@ -3,7 +3,7 @@
 
 #include <math.h>
 
-/* The 2 x 2 copy of the algorithm must really be compiled for n = 2 (unrolled loops). */
+/* The small helpers of the pivoting loops are compiled into them. */
 #if defined(__GNUC__)
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 #else
@@ -78,8 +78,8 @@ static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const
     return best;
 }
 
-static ALWAYS_INLINE lcp_status lemke(const int n, const double *M, const double *q, int max_pivots,
-                               double *z, double *w, int *z_basic, int *pivots)
+static lcp_status lemke(const int n, const double *M, const double *q, int max_pivots,
+                       double *z, double *w, int *z_basic, int *pivots)
 {
     if (pivots) *pivots = 0;
     if (n < 1 || n > LCP_MAX_N) return LCP_BAD_INPUT;
@@ -275,16 +275,6 @@ lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
 
 /* ---- warm start -------------------------------------------------------------------------------- */
 
-/* Lemke from the start, kept out of line: the warm path stays a small leaf function. */
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-static lcp_status cold_start(int n, const double *M, const double *q, int max_pivots, double *z, double *w,
-                             int *z_basic, int *pivots)
-{
-    return lcp_lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
-}
-
 /* The complementary basis named by guess (z_i basic where guess[i], else w_i), if it solves the
  * problem: z_J = -M_JJ^-1 q_J >= 0 and w = M z + q >= 0 off J. Returns 1 and the solution, else 0. */
 static int try_basis(int n, const double *M, const double *q, const int *guess, double *z, double *w)
@@ -352,7 +342,7 @@ lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *gu
             return LCP_OK;
         }
     }
-    return cold_start(n, M, q, max_pivots, z, w, z_basic, pivots);
+    return lcp_lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 const char *lcp_status_text(lcp_status s)

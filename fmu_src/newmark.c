@@ -364,12 +364,19 @@ static double next_breakaway(const step_ctx *C, double C0, double ta, int *dir)
     return ta + fmin(up, down) / w;
 }
 
+/* The stick phase's next breakaway in the state holds for the current static force and limit. */
+static int breakaway_known(const step_ctx *C, const dfo_state *s)
+{
+    return !isnan(s->stick_tb) && s->stick_C == C->u - C->M->p.k * s->X && s->stick_Fb == C->Fb;
+}
+
 /* The breakaway inside [ta, tb], or INFINITY. It is computed once per stick phase, at its first
  * step, and again only when the inputs change the static force or the limit. */
+
 static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
-    const double C0 = C->u - C->M->p.k * s->X;
-    if (isnan(s->stick_tb) || s->stick_C != C0 || s->stick_Fb != C->Fb) {
+    if (!breakaway_known(C, s)) {
+        const double C0 = C->u - C->M->p.k * s->X;
         s->stick_C = C0;
         s->stick_Fb = C->Fb;
         s->stick_tb = next_breakaway(C, C0, ta, &s->stick_dir);
@@ -627,7 +634,7 @@ static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_tar
     if (s->mode != 0 || !C->friction || !M->fast || M->p.scheme != DFO_SCHEME_LOCATED ||
         M->rate_max * h > STIFF_STEP)
         return s->n;
-    if (isnan(s->stick_tb) || s->stick_C != C->u - M->p.k * s->X || s->stick_Fb != C->Fb) return s->n;
+    if (!breakaway_known(C, s)) return s->n;
     double limit = fmin(s->stick_tb, t_target - snap);
     if (M->p.observe && !(s->t > M->p.t_obs_stop)) limit = fmin(limit, M->p.t_obs_start);
     if (!(limit > s->t)) return s->n;
