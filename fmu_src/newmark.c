@@ -1,13 +1,13 @@
 /* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
 #include "newmark.h"
 
+#include "friction.h"
 #include "lcp.h"
 
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
 
-#define TWO_PI (2.0 * DFO_PI)
 #define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
 #define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
 #define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
@@ -34,10 +34,7 @@ typedef struct {
 /* What is constant over one call of dfo_advance (inputs are held). */
 typedef struct {
     const dfo_model *M;
-    double u;        /* external force */
-    double N;        /* normal force */
-    double muk_N;    /* kinetic friction force magnitude */
-    double Fb;       /* breakaway limit max(mu_s, mu_k) N */
+    dfo_loads L;     /* external and normal force, kinetic magnitude, breakaway limit */
     step_coef full;  /* the coefficients of a step of the grid length h */
     double g1;       /* (1 - gamma) / gamma */
     double am, am1;  /* alpha m, (1 - alpha) m */
@@ -57,8 +54,6 @@ typedef struct {
     step_coef own;
     double A0, x_pred, p_hat;
 } trial;
-
-static int sign_of(double x) { return (x > 0.0) - (x < 0.0); }
 
 static int stuck(const step_ctx *C, const dfo_state *s) { return C->friction && s->mode == 0; }
 
@@ -108,7 +103,7 @@ static double grid_excitation(const dfo_model *M, dfo_state *s)
 static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F)
 {
     const dfo_model *M = C->M;
-    double f = excitation(C, t) + C->u - M->p.k * s->X + F;
+    double f = excitation(C, t) + C->L.u - M->p.k * s->X + F;
     if (M->damped) f -= M->p.c * s->V;
     return f / M->p.m;
 }
@@ -118,7 +113,7 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
 {
     if (stuck(C, s)) return 0.0;
     const dfo_model *M = C->M;
-    const double F = -s->mode * C->muk_N;
+    const double F = -s->mode * C->L.muk_N;
     double j = dfo_excitation_rate(M, s->t) - M->p.k * s->V;
     if (M->damped) j -= M->p.c * accel_of(C, s, s->t, F);
     return j / M->p.m;
@@ -157,7 +152,7 @@ static HOT_INLINE void predict(const step_ctx *C, const dfo_state *s, double h, 
         A0 += a * (h - s->hA) * jerk_of(C, s);
     const double c1 = tr->k->c1;
     const double x_pred = s->X + tr->k->kV * s->V + tr->k->kA * A0;
-    const double P1 = excitation(C, t1) + C->u;
+    const double P1 = excitation(C, t1) + C->L.u;
     tr->A0 = A0;
     tr->x_pred = x_pred;
     tr->p_hat = P1 - C->am * A0 + C->am1 * (s->V * c1 + C->g1 * A0) - k * x_pred;
@@ -182,7 +177,7 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
     if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
         *V1 = p * im;
         *F1 = 0.0;
-        return sign_of(*V1);
+        return dfo_sign(*V1);
     }
     const double Mx[4] = {mh, -mh, -mh, mh};
     const double q[2] = {muN - p, muN + p};
@@ -260,12 +255,12 @@ static void step_paper(step_ctx *C, dfo_state *s, double t_end)
     const int m0 = s->mode;
     predict(C, s, h, t_end, &tr);
     double mu = (s->mode == 0) ? M->mu_b : M->mu_k;
-    int o = solve_friction(C, s, &tr, mu * C->N, &V1, &F1);
+    int o = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
     for (int i = 0; i < M->p.frictionUpdates && M->update; i++) {
         const double mu_new = (o == 0) ? M->mu_b : M->mu_k;
         if (mu_new == mu) break;
         mu = mu_new;
-        o = solve_friction(C, s, &tr, mu * C->N, &V1, &F1);
+        o = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
     }
     finish(C, s, &tr, V1);
     s->mode = o;
@@ -282,8 +277,8 @@ static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
     s->A = 0.0;
     s->hA = 0.0;
     s->mode = 0;
-    const double S = excitation(C, s->t) + C->u - C->M->p.k * s->X;
-    s->F = -fmax(-C->Fb, fmin(C->Fb, S));
+    const double S = dfo_static_force(C->M, &C->L, excitation(C, s->t), s->X);
+    s->F = dfo_stick_force(&C->L, S);
 }
 
 /* Consistent stick test (method.md section 4, variant 1). */
@@ -298,76 +293,43 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
     predict(C, s, h, t_end, &tr);
     if (s->mode == 0) {
         /* A = V = 0: p_hat is exactly the static force P1 - k X */
-        int o = solve_friction(C, s, &tr, M->mu_b * C->N, &V1, &F1);
+        int o = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1);
         if (o == 0) {
             stick_after(C, s, &tr);
         } else {
-            if (M->update) o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
+            if (M->update) o = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
             finish(C, s, &tr, V1);
             s->mode = o;
             s->F = F1;
         }
     } else {
         const int sdir = s->mode;
-        const int o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
+        const int o = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
         if (o == sdir) {
             finish(C, s, &tr, V1);
             s->F = F1;
         } else {
             /* the block stops in this step: stick or reverse, judged by the static force at the
              * predicted rest position */
-            const double S = excitation(C, t_end) + C->u - M->p.k * tr.x_pred;
-            const int s2 = sign_of(S);
-            const double V2 = (tr.p_hat - s2 * C->muk_N) * tr.k->inv_m_hat;
-            if (fabs(S) <= C->Fb || s2 * V2 <= 0.0) {
+            const double S = dfo_static_force(M, &C->L, excitation(C, t_end), tr.x_pred);
+            const int s2 = dfo_sign(S);
+            const double V2 = (tr.p_hat - s2 * C->L.muk_N) * tr.k->inv_m_hat;
+            if (fabs(S) <= C->L.Fb || s2 * V2 <= 0.0) {
                 stick_after(C, s, &tr);
             } else {
                 finish(C, s, &tr, V2);
                 s->mode = s2;
-                s->F = -s2 * C->muk_N;
+                s->F = -s2 * C->L.muk_N;
             }
         }
     }
     after_phase(C, s, ta, s->mode, s->X - X0, s->F, m0);
 }
 
-/* Earliest theta >= th0 with cos(theta) > L, as an offset from th0; acosL = acos(L). */
-static double until_above(double th0, double L, double acosL)
-{
-    if (L >= 1.0) return INFINITY;
-    if (L < -1.0) return 0.0;
-    double psi = fmod(th0, TWO_PI);
-    if (psi < 0.0) psi += TWO_PI;
-    if (psi < acosL || psi > TWO_PI - acosL) return 0.0;
-    return TWO_PI - acosL - psi;
-}
-
-/* While stuck at X, the static force is S(t) = P_amp cos(w t + P_phase) + C0 with C0 = u - k X.
- * The first time >= ta where |S| exceeds Fb (dir: the side crossed), or INFINITY. Closed form, so
- * a force that crosses the limit and comes back inside one step is not missed. */
-static double next_breakaway(const step_ctx *C, double C0, double ta, int *dir)
-{
-    const dfo_model *M = C->M;
-    const double Fb = C->Fb, w = M->p.omega, A = M->P_amp;
-    if (w == 0.0 || A == 0.0) {  /* a constant force */
-        const double S = excitation(C, ta) + C0;
-        *dir = sign_of(S);
-        return (fabs(S) > Fb) ? ta : INFINITY;
-    }
-    const double Lhi = (Fb - C0) / A;   /* S >  Fb  <=>  cos(theta)      > Lhi */
-    const double Llo = (Fb + C0) / A;   /* S < -Fb  <=>  cos(theta + pi) > Llo */
-    const double acos_hi = (Lhi > -1.0 && Lhi < 1.0) ? acos(Lhi) : 0.0;
-    const double acos_lo = (Llo > -1.0 && Llo < 1.0) ? acos(Llo) : 0.0;
-    const double th = w * ta + M->P_phase;
-    const double up = until_above(th, Lhi, acos_hi), down = until_above(th + DFO_PI, Llo, acos_lo);
-    *dir = (up <= down) ? 1 : -1;
-    return ta + fmin(up, down) / w;
-}
-
 /* The stick phase's next breakaway in the state holds for the current static force and limit. */
 static int breakaway_known(const step_ctx *C, const dfo_state *s)
 {
-    return !isnan(s->stick_tb) && s->stick_C == C->u - C->M->p.k * s->X && s->stick_Fb == C->Fb;
+    return !isnan(s->stick_tb) && s->stick_C == C->L.u - C->M->p.k * s->X && s->stick_Fb == C->L.Fb;
 }
 
 /* The breakaway inside [ta, tb], or INFINITY. It is computed once per stick phase, at its first
@@ -376,10 +338,10 @@ static int breakaway_known(const step_ctx *C, const dfo_state *s)
 static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
     if (!breakaway_known(C, s)) {
-        const double C0 = C->u - C->M->p.k * s->X;
+        const double C0 = C->L.u - C->M->p.k * s->X;
         s->stick_C = C0;
-        s->stick_Fb = C->Fb;
-        s->stick_tb = next_breakaway(C, C0, ta, &s->stick_dir);
+        s->stick_Fb = C->L.Fb;
+        s->stick_tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
     }
     *dir = s->stick_dir;
     const double t = (s->stick_tb > ta) ? s->stick_tb : ta;
@@ -393,20 +355,21 @@ static void start_slide(const step_ctx *C, dfo_state *s, int sd, double S)
     s->V = 0.0;
     s->hA = 0.0;
     s->mode = sd;
-    s->A = sd * fmax(fmax(sd * S, C->Fb) - C->muk_N, 0.0) / C->M->p.m;
-    s->F = -sd * C->muk_N;
+    s->A = dfo_breakaway_accel(C->M, &C->L, sd, S);
+    s->F = -sd * C->L.muk_N;
 }
 
 /* At rest after a stop: stick if the static force is inside the limit, else slide along it. */
 static void restart_from_rest(const step_ctx *C, dfo_state *s)
 {
-    const double S = excitation(C, s->t) + C->u - C->M->p.k * s->X;
-    if (fabs(S) <= C->Fb) {
+    const double S = dfo_static_force(C->M, &C->L, excitation(C, s->t), s->X);
+    const int mode = dfo_rest_mode(&C->L, S);
+    if (mode == 0) {
         s->V = s->A = s->hA = 0.0;
         s->mode = 0;
         s->F = -S;
     } else {
-        start_slide(C, s, sign_of(S), S);
+        start_slide(C, s, mode, S);
     }
 }
 
@@ -414,7 +377,7 @@ static void restart_from_rest(const step_ctx *C, dfo_state *s)
 static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
 {
     predict(C, s, h, s->t + h, tr);
-    return s->mode * (tr->p_hat - s->mode * C->muk_N) * tr->k->inv_m_hat;
+    return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->k->inv_m_hat;
 }
 
 /* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method to a few ulps of t + h. */
@@ -479,7 +442,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 continue;
             }
             s->t = tb;
-            start_slide(C, s, dir, excitation(C, tb) + C->u - M->p.k * s->X);
+            start_slide(C, s, dir, dfo_static_force(M, &C->L, excitation(C, tb), s->X));
             after_phase(C, s, ta, 0, 0.0, s->F, 0);
             continue;
         }
@@ -487,7 +450,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         const int sd = s->mode;
         const double r = (phase == 0) ? C->h_step : t_end - ta;
         predict(C, s, r, t_end, &tr);
-        const int o = solve_friction(C, s, &tr, C->muk_N, &V1, &F1);
+        const int o = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
         if (o == sd && sd * V1 > 0.0) {
             finish(C, s, &tr, V1);
             s->t = t_end;
@@ -496,7 +459,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             continue;
         }
         /* the block stops inside the remainder: find the sub-step that ends at V = 0 */
-        const double fhi = sd * (tr.p_hat - sd * C->muk_N) * tr.k->inv_m_hat;
+        const double fhi = sd * (tr.p_hat - sd * C->L.muk_N) * tr.k->inv_m_hat;
         double lo = 0.0, flo = sd * s->V;
         if (!(flo > 0.0)) {  /* started from rest: find a point where it is still moving */
             lo = r;
@@ -506,11 +469,11 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 flo = slide_velocity(C, s, lo, &tr);
             }
             if (!(flo > 0.0)) {  /* no motion resolvable in double precision: stays at rest */
-                const double S = excitation(C, t_end) + C->u - M->p.k * s->X;
+                const double S = dfo_static_force(M, &C->L, excitation(C, t_end), s->X);
                 s->t = t_end;
                 s->V = s->A = s->hA = 0.0;
                 s->mode = 0;
-                s->F = -fmax(-C->Fb, fmin(C->Fb, S));
+                s->F = dfo_stick_force(&C->L, S);
                 after_phase(C, s, ta, 0, 0.0, s->F, m0);
                 continue;
             }
@@ -521,7 +484,7 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         s->t = (hs >= r) ? t_end : fmax(ta + hs, nextafter(ta, INFINITY));
         const double dX = s->X - X0;
         restart_from_rest(C, s);
-        after_phase(C, s, ta, sd, dX, -sd * C->muk_N, m0);
+        after_phase(C, s, ta, sd, dX, -sd * C->L.muk_N, m0);
     }
 }
 
@@ -532,11 +495,8 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *u)
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->M = M;
-    C->u = dfo_external_force(M, u);
-    C->N = dfo_normal_force(M, u);
-    C->muk_N = M->mu_k * C->N;
-    C->Fb = M->mu_b * C->N;
-    C->friction = C->Fb > 0.0;  /* Fb >= mu_k N */
+    dfo_loads_init(&C->L, M, u);
+    C->friction = C->L.Fb > 0.0;  /* Fb >= mu_k N */
     C->err = DFO_OK;
     C->t_grid = NAN;
     C->P_grid = 0.0;
@@ -558,11 +518,11 @@ void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
     dfo_forget_caches(s);
     s->stick_C = s->stick_Fb = s->stick_tb = NAN;
     s->stick_dir = 0;
-    if (s->V == 0.0 && C.Fb > 0.0) {
+    if (s->V == 0.0 && C.L.Fb > 0.0) {
         restart_from_rest(&C, s);
     } else {
-        s->mode = sign_of(s->V);
-        s->F = -s->mode * C.muk_N;
+        s->mode = dfo_sign(s->V);
+        s->F = -s->mode * C.L.muk_N;
         s->A = accel_of(&C, s, t0, s->F);
     }
     s->hA = 0.0;
@@ -690,8 +650,8 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s,
     /* while stuck (located, consistent) the friction holds the static force: evaluated here, at the
      * communication point, rather than at every stuck step */
     if (C.friction && s->mode == 0 && M->p.scheme != DFO_SCHEME_PAPER) {
-        const double S = excitation(&C, s->t) + C.u - M->p.k * s->X;
-        s->F = -fmax(-C.Fb, fmin(C.Fb, S));
+        const double S = dfo_static_force(M, &C.L, excitation(&C, s->t), s->X);
+        s->F = dfo_stick_force(&C.L, S);
     }
     /* the acceleration output too must be representable */
     if (!isfinite(dfo_acceleration(M, u, s))) return DFO_ERR_NONFINITE;

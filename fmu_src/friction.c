@@ -1,0 +1,41 @@
+/* The friction rules shared by every scheme. See friction.h. */
+#include "friction.h"
+
+#define TWO_PI (2.0 * DFO_PI)
+
+void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in)
+{
+    L->u = dfo_external_force(M, in);
+    L->N = dfo_normal_force(M, in);
+    L->muk_N = M->mu_k * L->N;
+    L->Fb = M->mu_b * L->N;
+}
+
+/* Earliest theta >= th0 with cos(theta) > lim, as an offset from th0; acos_lim = acos(lim). */
+static double until_above(double th0, double lim, double acos_lim)
+{
+    if (lim >= 1.0) return INFINITY;
+    if (lim < -1.0) return 0.0;
+    double psi = fmod(th0, TWO_PI);
+    if (psi < 0.0) psi += TWO_PI;
+    if (psi < acos_lim || psi > TWO_PI - acos_lim) return 0.0;
+    return TWO_PI - acos_lim - psi;
+}
+
+double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, double ta, int *dir)
+{
+    const double Fb = L->Fb, w = M->p.omega, amp = M->P_amp;
+    if (w == 0.0 || amp == 0.0) { /* a constant force */
+        const double S = dfo_excitation(M, ta) + C0;
+        *dir = dfo_sign(S);
+        return (fabs(S) > Fb) ? ta : INFINITY;
+    }
+    const double lim_hi = (Fb - C0) / amp; /* S >  Fb  <=>  cos(theta)      > lim_hi */
+    const double lim_lo = (Fb + C0) / amp; /* S < -Fb  <=>  cos(theta + pi) > lim_lo */
+    const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? acos(lim_hi) : 0.0;
+    const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? acos(lim_lo) : 0.0;
+    const double th = w * ta + M->P_phase;
+    const double up = until_above(th, lim_hi, acos_hi), down = until_above(th + DFO_PI, lim_lo, acos_lo);
+    *dir = (up <= down) ? 1 : -1;
+    return ta + fmin(up, down) / w;
+}

@@ -1,0 +1,59 @@
+/* The friction rules every scheme shares (method.md sections 1, 3 and 4): the loads held over a
+ * communication step, the static force at rest, the rest rule (stick or slide), the force held
+ * while stuck, the consistent acceleration of a slide that starts from rest, and the next
+ * breakaway of a stick phase in closed form. The Bossak schemes (newmark.c) and the exact scheme
+ * use these and nothing else to decide stick and slip.
+ *
+ * Plain C, no FMI types. */
+#ifndef DFO_FRICTION_H
+#define DFO_FRICTION_H
+
+#include "oscillator.h"
+
+#include <math.h>
+
+/* What the inputs make of the forces; constant while the inputs are held. */
+typedef struct {
+    double u;      /* external force F_ext (0 when the input was never set) */
+    double N;      /* normal force max(N + N_ext, 0) */
+    double muk_N;  /* kinetic friction magnitude mu_k N */
+    double Fb;     /* breakaway limit max(mu_s, mu_k) N (>= muk_N) */
+} dfo_loads;
+
+void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
+
+static inline int dfo_sign(double x) { return (x > 0.0) - (x < 0.0); }
+
+/* The net applied force on a block at rest at X, excitation P: S = P + u - k X. */
+static inline double dfo_static_force(const dfo_model *M, const dfo_loads *L, double P, double X)
+{
+    return P + L->u - M->p.k * X;
+}
+
+/* The rest rule: a block at rest with static force S sticks (0) if |S| <= Fb, else it slides in
+ * the direction of S. */
+static inline int dfo_rest_mode(const dfo_loads *L, double S)
+{
+    return (fabs(S) <= L->Fb) ? 0 : dfo_sign(S);
+}
+
+/* The friction force that holds a stuck block: -S, clamped to the limit. */
+static inline double dfo_stick_force(const dfo_loads *L, double S)
+{
+    return -fmax(-L->Fb, fmin(L->Fb, S));
+}
+
+/* The consistent acceleration of a slide that starts from rest in direction sd with static force
+ * S. The net force is at least the breakaway limit (it may sit on it by rounding at a breakaway),
+ * so the acceleration is never against sd. */
+static inline double dfo_breakaway_accel(const dfo_model *M, const dfo_loads *L, int sd, double S)
+{
+    return sd * fmax(fmax(sd * S, L->Fb) - L->muk_N, 0.0) / M->p.m;
+}
+
+/* While stuck at X the static force is S(t) = P_amp cos(omega t + P_phase) + C0, C0 = u - k X.
+ * The first time >= ta at which |S| exceeds Fb, with the side crossed in *dir, or INFINITY.
+ * Closed form: a force that crosses the limit and comes back between two samples is not missed. */
+double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, double ta, int *dir);
+
+#endif
