@@ -7,7 +7,8 @@
 # Installs clang when missing (apt-get, quiet), builds tests/fuzz with -DDFO_FUZZ=ON, fuzzes from
 # tests/fuzz/corpus (new coverage goes to a scratch corpus, not into the repository) and copies
 # every crash / timeout / leak input into tests/fuzz/regressions/, where ctest replays it
-# (fuzz_regression_<name>). Exit status: 0 when nothing was found, 1 when inputs were kept.
+# (fuzz_regression_<name>). Exit status: 0 when nothing was found, 1 when inputs were kept, 2 when
+# clang could not be installed.
 set -euo pipefail
 secs=${1:-60}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -22,8 +23,16 @@ fi
 if ! command -v clang >/dev/null 2>&1; then
   echo "run_fuzz: installing clang" >&2
   export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq >/dev/null
-  apt-get install -y -qq clang >/dev/null
+  # wait for the dpkg lock (another install may hold it, e.g. on a CI runner starting up) rather
+  # than fail at once; on any failure, one clear line and a non-zero exit
+  apt_log=$(mktemp /tmp/dfo-fuzz-apt.XXXXXX)
+  if ! apt-get -o DPkg::Lock::Timeout=600 update -qq >"$apt_log" 2>&1 \
+     || ! apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends clang >>"$apt_log" 2>&1 \
+     || ! command -v clang >/dev/null 2>&1; then
+    echo "run_fuzz: could not install clang with apt-get (needs root and network; log: $apt_log)" >&2
+    exit 2
+  fi
+  rm -f "$apt_log"
 fi
 
 cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DDFO_FUZZ=ON -DFUZZ_TIME_ORACLE="$oracle" \
