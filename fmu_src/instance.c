@@ -221,10 +221,19 @@ static const dfo_values *computed(const dfo_instance *in, dfo_values *tmp)
     return tmp;
 }
 
+/* Whether the inputs (values and set flags) are those of the last step: walks the table. */
 static int same_inputs(const dfo_inputs *a, const dfo_inputs *b)
 {
-    return a->F_ext == b->F_ext && a->N_ext == b->N_ext && a->F_ext_set == b->F_ext_set &&
-           a->N_ext_set == b->N_ext_set;
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home != DFO_IN_INPUTS) continue;
+        const char *pa = (const char *)a, *pb = (const char *)b;
+        if (*(const int *)(pa + var->set_offset) != *(const int *)(pb + var->set_offset)) return 0;
+        if (var->type == DFO_REAL ? *(const double *)(pa + var->offset) != *(const double *)(pb + var->offset)
+                                  : *(const int *)(pa + var->offset) != *(const int *)(pb + var->offset))
+            return 0;
+    }
+    return 1;
 }
 
 /* The friction force at the current state for the current inputs. With the inputs of the last step
@@ -509,8 +518,10 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
                              dfo_status_text(st), failed.X, failed.V, t);
     }
     /* the host's time: the target (the stepper may stand on a grid point within its snap tolerance
-     * of it), or where an early return stopped */
-    v->time = (v->s.t < t_target && (flags & DFO_STEP_STOP_AT_SWITCH)) ? v->s.t : t_target;
+     * of it), or where an early return stopped short of it */
+    const double snap = fmax(1e-9 * v->p.h, 8.0 * DBL_EPSILON * fabs(t_target));
+    const int early = (flags & DFO_STEP_STOP_AT_SWITCH) && in->switched && v->s.t < t_target - snap;
+    v->time = early ? v->s.t : t_target;
     v->u_used = v->u;
     if (t_reached) *t_reached = v->time;
     return DFO_INST_OK;

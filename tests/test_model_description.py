@@ -313,6 +313,64 @@ def test_outputs_follow_inputs_as_declared(slave: Slave) -> None:
     assert found == declared
 
 
+def _initial_values(slave: Slave, values: dict[str, float | int | bool], names: list[str]) -> dict[str, float]:
+    slave.s.reset()
+    slave.s.setupExperiment(startTime=0.0)
+    for name, value in values.items():
+        kind = slave.vars[name].type
+        if kind == "Real":
+            slave.s.setReal([slave.vr(name)], [float(value)])
+        elif kind == "Boolean":
+            slave.s.setBoolean([slave.vr(name)], [bool(value)])
+        else:
+            slave.s.setInteger([slave.vr(name)], [int(value)])
+    slave.s.enterInitializationMode()
+    return slave.outputs(names)
+
+
+def _changed(kind: str, value: float | int | bool, name: str) -> float | int | bool:
+    if kind == "Boolean":
+        return not value
+    if name == "scheme":
+        return 1 if value != 1 else 3
+    if kind != "Real":
+        return int(value) + 1
+    if name == "alpha":
+        return value - 0.05
+    return value * 1.25 + 0.01
+
+
+@pytest.mark.parametrize("case", ["stuck", "sliding", "moving"])
+def test_initial_unknowns_depend_only_on_what_they_declare(slave: Slave, case: str) -> None:
+    """In initialisation mode, change one known (parameter or input) at a time and read every
+    initial unknown: whatever changes must be declared in <InitialUnknowns> (a declared dependency
+    may not show at a given point, an undeclared one is a lie)."""
+    base: dict[str, float | int | bool] = {
+        "x0": 0.004, "observe": True, "F_ext": 0.0, "N_ext": 0.0, "c": 0.0, "chi": 0.7,
+        **({"P0": 0.3} if case == "stuck" else {}), **({"v0": 0.2} if case == "moving" else {})}
+    declared = {u.variable.name: {d.name for d in u.dependencies} for u in slave.md.initialUnknowns}
+    names = sorted(declared)
+    knowns = [v for v in slave.md.modelVariables if v.causality in ("parameter", "input")]
+    full = {v.name: base.get(v.name, v.start if v.type != "Boolean" else v.start in ("true", True))
+            for v in knowns}
+    full = {n: (float(x) if slave.vars[n].type == "Real" else x) for n, x in full.items()}
+    full = {n: (int(x) if slave.vars[n].type in ("Integer", "Enumeration") else x) for n, x in full.items()}
+    ref = _initial_values(slave, full, names)
+    mode = ref["mode"]
+    assert (mode == 0) == (case == "stuck")
+    seen: dict[str, set[str]] = {n: set() for n in names}
+    for v in knowns:
+        if v.name == "t_obs_stop":
+            continue  # 1e300 * 1.25 overflows; t_obs_start covers the window
+        now = _initial_values(slave, {**full, v.name: _changed(v.type, full[v.name], v.name)}, names)
+        for n in names:
+            if now[n] != ref[n]:
+                seen[n].add(v.name)
+    for n in names:
+        assert seen[n] <= declared[n], f"{n} changes with undeclared {sorted(seen[n] - declared[n])}"
+    assert seen["x"] == {"x0"} and seen["effects"] >= {"c", "observe"}
+
+
 def test_friction_follows_the_sliding_law_at_once(slave: Slave) -> None:
     """Sliding: F = -mode mu_k (N + N_ext) for the N_ext just set, no step in between."""
     _perturbed(slave, ["x"], 1)
