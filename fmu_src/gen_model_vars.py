@@ -362,6 +362,9 @@ def main(argv: list[str]) -> int:
         print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
         return 1
     out = Path(argv[2])
+    if out.suffix not in EMITTERS:
+        print(f"gen_model_vars: no emitter for {out.name} (known: {', '.join(EMITTERS)})", file=sys.stderr)
+        return 2
     text = EMITTERS[out.suffix](model, Path(argv[1]).name)
     if not out.exists() or out.read_text() != text:
         out.write_text(text)

@@ -476,7 +476,8 @@ static dfo_status advance_to_switch(dfo_instance *in, double t_target)
     return DFO_OK;
 }
 
-dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags, double *t_reached)
+dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
+                                 double *t_reached)
 {
     dfo_values *v = &in->v;
     const double t = v->time;
@@ -514,8 +515,8 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
         v->s = before; /* the outputs stay those of the last good state */
         v->phase = DFO_PHASE_ERROR;
         return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The "
-                             "FMU keeps the state at t = %.17g; reset it or restore an earlier FMU state.", fn, t, failed.t,
-                             dfo_status_text(st), failed.X, failed.V, t);
+                             "FMU keeps the state at t = %.17g; reset it or restore an earlier FMU state.", fn, t,
+                             failed.t, dfo_status_text(st), failed.X, failed.V, t);
     }
     /* the host's time: the target (the stepper may stand on a grid point within its snap tolerance
      * of it), or where an early return stopped short of it */
@@ -614,7 +615,8 @@ static const char *implausible(const dfo_values *v)
         const dfo_var_info *var = &DFO_VARS[i];
         if (var->home == DFO_COMPUTED || var->type == DFO_BOOLEAN) continue;
         const double x = var->type == DFO_REAL ? *(const double *)cslot(v, var) : *(const int *)cslot(v, var);
-        if (invalid(var, x)) return var->type == DFO_REAL ? "a parameter is out of range" : "an integer parameter is out of range";
+        if (invalid(var, x))
+            return var->type == DFO_REAL ? "a parameter is out of range" : "an integer parameter is out of range";
     }
     if (v->phase != DFO_PHASE_INSTANTIATED && v->phase != DFO_PHASE_INIT && v->phase != DFO_PHASE_STEP &&
         v->phase != DFO_PHASE_TERMINATED && v->phase != DFO_PHASE_ERROR)
