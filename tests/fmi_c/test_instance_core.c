@@ -2,7 +2,8 @@
  * header, as a second glue (FMI 3.0) will drive it:
  *
  * 1. a host made of plain malloc/free and a logger: start values from the generated table,
- *    get/set, initialisation, the host's time after doStep exactly tc + dt;
+ *    get/set, initialisation, the host's time after doStep exactly tc + dt, also when the
+ *    stepper's own time stands a rounding away from it;
  * 2. the early-return hook (DFO_STEP_STOP_AT_SWITCH): doStep stops at the end of the internal step
  *    holding the first stick/slip switch, at the same switch (time and position, bit for bit) as
  *    an ordinary run reports, and the run continues from there to the requested end;
@@ -109,6 +110,14 @@ static void test_table_and_time(void)
         EXPECT(reached == t + dt && dfo_inst_time(&in) == t + dt);
         t += dt;
     }
+    /* the time contract with the stepper: after a good step its own time may be a grid point within
+     * a snap tolerance of the target; the host's time stays the target, and is what the next
+     * communication point is checked against and what is reported */
+    const double t_phys = in.v.s.t;
+    in.v.s.t = nextafter(t_phys, 0.0);
+    EXPECT(dfo_inst_time(&in) == t);
+    EXPECT(dfo_inst_do_step(&in, "doStep", t, 0.1, 0, &reached) == DFO_INST_OK && reached == t + 0.1);
+    EXPECT(dfo_inst_time(&in) == t + 0.1);
 }
 
 static void test_early_return(void)
