@@ -2,93 +2,370 @@
 
 Usage: python gen_model_vars.py modelDescription.xml model_vars.h
 
-The header gives the C side the GUID, the model identifier, a value reference VR_<name> and a
-start value START_<name> for every variable, and a table of names, types and causalities used
-for value-reference look-ups and error messages. Standard library only.
+Three stages, so that other views of the same model (an FMI 3.0 model description) can be added
+as further emitters without touching the parser:
+
+1. ``parse``: modelDescription.xml -> ``Model``, a neutral description (variables with name, value
+   reference, type, causality, variability, start, min, max, unit, description, an optional array
+   shape; enumeration types; log categories; the ``effects`` bits of the vendor annotation; the
+   declared output dependencies). Consistency is checked here (unique names and value references,
+   start values inside their ranges, effect bits distinct powers of two).
+2. ``Model`` is plain data (frozen dataclasses), independent of any FMI version.
+3. Emitters: ``emit_c_header`` writes the C view used by the instance core -- GUID, identifier,
+   ``VR_<name>``/``START_<name>`` macros, the effect bits, the enumeration values, the log
+   categories and ONE variable table (name, value reference, type, causality, variability, where
+   the value lives: ``offsetof`` into the parameter or input struct, whose field has the variable's
+   name, or an output id the core switches on; start, min, max, whether it must be a normal
+   number, the enumeration items and the valid range as text for error messages).
+
+Standard library only.
 """
 
 from __future__ import annotations
 
+import re
 import sys
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 
-TYPES = {"Real": "DFO_REAL", "Integer": "DFO_INTEGER", "Enumeration": "DFO_INTEGER", "Boolean": "DFO_BOOLEAN"}
-CAUSALITIES = {
-    "parameter": "DFO_PARAMETER",
-    "calculatedParameter": "DFO_CALCULATED",
-    "input": "DFO_INPUT",
-    "output": "DFO_OUTPUT",
-}
+DBL_MIN = sys.float_info.min  # the smallest positive normal double
+INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+
+# --------------------------------------------------------------------------------------- model
 
 
-def c_start(kind: str, start: str) -> str:
+@dataclass(frozen=True)
+class EnumItem:
+    name: str
+    value: int
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One variable, independent of the FMI version that declares it."""
+
+    name: str
+    vr: int
+    type: str  # "Real", "Integer", "Boolean", "Enumeration"
+    causality: str  # "parameter", "calculatedParameter", "input", "output"
+    variability: str  # "constant", "fixed", "tunable", "discrete", "continuous"
+    initial: str | None = None
+    start: float | int | bool | None = None
+    min: float | None = None
+    max: float | None = None
+    unit: str | None = None
+    description: str = ""
+    declared_type: str | None = None  # the enumeration type of an Enumeration
+    dimensions: tuple[int, ...] = ()  # array shape (FMI 3.0 arrays); () for a scalar, the only kind today
+    dependencies: tuple[str, ...] | None = None  # outputs: the knowns it depends on at once (None: all)
+
+    @property
+    def normal(self) -> bool:
+        """A positive lower bound equal to the smallest normal double: the value must be normal."""
+        return self.type == "Real" and self.min == DBL_MIN
+
+
+@dataclass(frozen=True)
+class Effect:
+    bit: int
+    name: str
+    description: str
+
+
+@dataclass(frozen=True)
+class Model:
+    name: str
+    guid: str
+    identifier: str
+    variables: tuple[Variable, ...]
+    enumerations: dict[str, tuple[EnumItem, ...]] = field(default_factory=dict)
+    log_categories: tuple[tuple[str, str], ...] = ()
+    effects_variable: str | None = None
+    effects: tuple[Effect, ...] = ()
+
+    def variable(self, name: str) -> Variable:
+        return next(v for v in self.variables if v.name == name)
+
+
+# --------------------------------------------------------------------------------------- parse
+
+
+class ModelError(Exception):
+    pass
+
+
+def _number(text: str | None, kind: str) -> float | int | bool | None:
+    if text is None:
+        return None
     if kind == "Boolean":
-        return "1" if start in ("true", "1") else "0"
+        if text not in ("true", "false", "1", "0"):
+            raise ModelError(f"invalid Boolean {text!r}")
+        return text in ("true", "1")
     if kind == "Real":
-        return repr(float(start))
-    return str(int(start))
+        return float(text)
+    return int(text)
 
 
-def generate(xml_path: Path) -> str:
+def parse(xml_path: Path) -> Model:
     root = ET.parse(xml_path).getroot()
     cs = root.find("CoSimulation")
     if cs is None:
-        raise SystemExit(f"{xml_path}: no CoSimulation element")
-    lines = [
-        "/* Generated from modelDescription.xml by fmu_src/gen_model_vars.py. Do not edit. */",
+        raise ModelError("no CoSimulation element")
+    enums: dict[str, tuple[EnumItem, ...]] = {}
+    for st in root.iterfind("TypeDefinitions/SimpleType"):
+        e = st.find("Enumeration")
+        if e is not None:
+            enums[st.get("name")] = tuple(
+                EnumItem(i.get("name"), int(i.get("value")), i.get("description", "")) for i in e.iterfind("Item"))
+    svs = list(root.find("ModelVariables"))
+    deps: dict[int, tuple[int, ...] | None] = {}
+    for u in root.iterfind("ModelStructure/Outputs/Unknown"):
+        d = u.get("dependencies")
+        deps[int(u.get("index"))] = None if d is None else tuple(int(i) for i in d.split())
+    variables = []
+    for index, sv in enumerate(svs, start=1):
+        kind_el = next(iter(sv))
+        kind = kind_el.tag
+        name = sv.get("name")
+        if kind not in ("Real", "Integer", "Boolean", "Enumeration"):
+            raise ModelError(f"variable {name}: unsupported type {kind}")
+        declared = kind_el.get("declaredType")
+        lo, hi = _number(kind_el.get("min"), kind), _number(kind_el.get("max"), kind)
+        if kind == "Enumeration":
+            if declared not in enums:
+                raise ModelError(f"variable {name}: unknown enumeration type {declared}")
+            values = [i.value for i in enums[declared]]
+            lo = min(values) if lo is None else lo
+            hi = max(values) if hi is None else hi
+        dep_names = None
+        if index in deps and deps[index] is not None:
+            dep_names = tuple(svs[i - 1].get("name") for i in deps[index])
+        variables.append(Variable(
+            name=name, vr=int(sv.get("valueReference")), type=kind, causality=sv.get("causality", "local"),
+            variability=sv.get("variability", "continuous"), initial=sv.get("initial"),
+            start=_number(kind_el.get("start"), kind), min=None if lo is None else float(lo),
+            max=None if hi is None else float(hi), unit=kind_el.get("unit"),
+            description=sv.get("description", ""), declared_type=declared, dependencies=dep_names))
+    effects_var, effects = None, []
+    eff_el = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
+    if eff_el is not None:
+        effects_var = eff_el.get("variable")
+        effects = [Effect(int(e.get("bit")), e.get("name"), e.get("description", "")) for e in eff_el.iterfind("Effect")]
+    model = Model(
+        name=root.get("modelName"), guid=root.get("guid"), identifier=cs.get("modelIdentifier"),
+        variables=tuple(variables), enumerations=enums,
+        log_categories=tuple((c.get("name"), c.get("description", "")) for c in root.iterfind("LogCategories/Category")),
+        effects_variable=effects_var, effects=tuple(effects))
+    check(model)
+    return model
+
+
+def _in_range(v: Variable, x: float) -> bool:
+    return (v.min is None or x >= v.min) and (v.max is None or x <= v.max)
+
+
+def check(model: Model) -> None:
+    names, vrs = set(), set()
+    for v in model.variables:
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", v.name):
+            raise ModelError(f"variable {v.name!r}: not a C identifier")
+        if v.name in names or v.vr in vrs:
+            raise ModelError(f"variable {v.name}: duplicate name or value reference {v.vr}")
+        names.add(v.name)
+        vrs.add(v.vr)
+        if v.dimensions:
+            raise ModelError(f"variable {v.name}: arrays are not supported by the C emitter yet")
+        if v.causality not in ("parameter", "calculatedParameter", "input", "output"):
+            raise ModelError(f"variable {v.name}: unsupported causality {v.causality}")
+        if v.start is not None and v.type != "Boolean" and not _in_range(v, float(v.start)):
+            raise ModelError(f"variable {v.name}: start {v.start} outside its range")
+        if v.type == "Enumeration" and v.start is not None:
+            if int(v.start) not in {i.value for i in model.enumerations[v.declared_type]}:
+                raise ModelError(f"variable {v.name}: start {v.start} is not an item of {v.declared_type}")
+        if v.min is not None and v.max is not None and v.min > v.max:
+            raise ModelError(f"variable {v.name}: min > max")
+    bits = [e.bit for e in model.effects]
+    if any(b <= 0 or b & (b - 1) for b in bits) or len(set(bits)) != len(bits):
+        raise ModelError("effect bits must be distinct powers of two")
+    if model.effects and model.effects_variable not in names:
+        raise ModelError(f"effects variable {model.effects_variable} is not a variable")
+    for v in model.variables:
+        for d in v.dependencies or ():
+            if model.variable(d).causality != "input":
+                raise ModelError(f"output {v.name}: dependency {d} is not an input")
+
+
+# --------------------------------------------------------------------------------- C emitter
+
+C_TYPES = {"Real": "DFO_REAL", "Integer": "DFO_INTEGER", "Enumeration": "DFO_INTEGER", "Boolean": "DFO_BOOLEAN"}
+C_CAUSALITIES = {"parameter": "DFO_PARAMETER", "calculatedParameter": "DFO_CALCULATED", "input": "DFO_INPUT",
+                 "output": "DFO_OUTPUT"}
+C_VARIABILITIES = {"constant": "DFO_CONSTANT", "fixed": "DFO_FIXED", "tunable": "DFO_TUNABLE",
+                   "discrete": "DFO_DISCRETE", "continuous": "DFO_CONTINUOUS"}
+PARAMS_STRUCT, INPUTS_STRUCT, STRUCTS_HEADER = "dfo_params", "dfo_inputs", "oscillator.h"
+
+
+def upper_snake(name: str) -> str:
+    return re.sub(r"([a-z0-9])([A-Z])", r"\1_\2", name).upper()
+
+
+def c_double(x: float) -> str:
+    s = repr(float(x))
+    return s if any(c in s for c in ".en") else s + ".0"
+
+
+def text_number(x: float) -> str:
+    """A bound as people read it: 0, 100, -1/3 (when the double is exactly that fraction's)."""
+    if x == int(x) and abs(x) < 1e15:
+        return str(int(x))
+    f = Fraction(x).limit_denominator(12)
+    if f.denominator > 1 and float(f) == x:
+        return f"{f.numerator}/{f.denominator}"
+    return repr(x)
+
+
+def range_text(model: Model, v: Variable) -> str:
+    if v.type == "Enumeration":
+        return "one of " + ", ".join(f"{i.value} ({i.name})" for i in model.enumerations[v.declared_type])
+    if v.type == "Boolean":
+        return "true or false"
+    if v.normal:
+        return f"> 0 (a normal number, >= {v.min!r})"
+    lo, hi = v.min, v.max
+    if lo is not None and hi is not None:
+        return f"in [{text_number(lo)}, {text_number(hi)}]"
+    if lo is not None:
+        return f">= {text_number(lo)}"
+    if hi is not None:
+        return f"<= {text_number(hi)}"
+    return "finite"
+
+
+def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
+    computed = [v for v in model.variables if v.causality in ("output", "calculatedParameter")]
+    L = [
+        f"/* Generated from {source} by fmu_src/gen_model_vars.py. Do not edit. */",
         "#ifndef DFO_MODEL_VARS_H",
         "#define DFO_MODEL_VARS_H",
         "",
-        f'#define MODEL_GUID "{root.get("guid")}"',
-        f'#define MODEL_IDENTIFIER "{cs.get("modelIdentifier")}"',
+        "#include <stddef.h>",
         "",
+        f'#include "{STRUCTS_HEADER}"',
+        "",
+        f'#define MODEL_GUID "{model.guid}"',
+        f'#define MODEL_IDENTIFIER "{model.identifier}"',
+        "",
+        "/* value references and start values */",
+    ]
+    for v in model.variables:
+        L.append(f"#define VR_{v.name} {v.vr}u")
+        if v.start is not None:
+            start = c_double(v.start) if v.type == "Real" else str(int(v.start))
+            L.append(f"#define START_{v.name} {start}")
+    L += ["", "/* enumeration items */"]
+    for tname, items in model.enumerations.items():
+        L.append("enum {")
+        L += [f"    DFO_MD_{upper_snake(tname)}_{upper_snake(i.name)} = {i.value}," for i in items]
+        L.append("};")
+        vals = ", ".join(str(i.value) for i in items)
+        L.append(f"static const int DFO_ITEMS_{tname}[{len(items)}] = {{{vals}}};")
+    if model.effects:
+        L += ["", f"/* bits of the calculated parameter {model.effects_variable} */", "enum {"]
+        L += [f"    DFO_MD_EFFECT_{upper_snake(e.name)} = {e.bit}, /* {e.description} */" for e in model.effects]
+        L += [f"    DFO_MD_EFFECTS_ALL = {sum(e.bit for e in model.effects)}", "};"]
+    L += ["", "/* log categories, in the order of <LogCategories> */", "enum {"]
+    L += [f"    DFO_{upper_snake(name)} = {k}," for k, (name, _) in enumerate(model.log_categories)]
+    L += [f"    DFO_NUM_LOG_CATEGORIES = {len(model.log_categories)}", "};",
+          "static const char *const DFO_LOG_CATEGORIES[DFO_NUM_LOG_CATEGORIES] = {"]
+    L += [f'    "{name}",' for name, _ in model.log_categories]
+    L += ["};", "", "/* outputs and calculated parameters: ids the instance core computes */", "enum {"]
+    L += [f"    DFO_OUT_{v.name}," for v in computed]
+    L += ["    DFO_NUM_OUTS", "};", ""]
+    L += [
         "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN } dfo_var_type;",
         "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT } dfo_var_causality;",
+        "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
+        f"/* where a value lives: a field of {PARAMS_STRUCT} or {INPUTS_STRUCT} (named as the variable; Real: double,",
+        " * Integer, Enumeration and Boolean: int), or computed by the core from its output id */",
+        "typedef enum { DFO_IN_PARAMS, DFO_IN_INPUTS, DFO_COMPUTED } dfo_var_home;",
+        "",
         "typedef struct {",
         "    unsigned int vr;",
         "    const char *name;",
         "    dfo_var_type type;",
         "    dfo_var_causality causality;",
+        "    dfo_var_variability variability;",
+        "    dfo_var_home home;",
+        "    size_t offset;      /* DFO_IN_PARAMS / DFO_IN_INPUTS: offset of the field */",
+        "    size_t set_offset;  /* DFO_IN_INPUTS: offset of the int <name>_set (the input has been set) */",
+        "    int id;             /* DFO_COMPUTED: DFO_OUT_<name> */",
+        "    int has_start;",
+        "    double start, min, max; /* absent bounds: the type's extremes */",
+        "    int normal;         /* must be a normal number (min is the smallest normal double) */",
+        "    int n_items;        /* Enumeration: the allowed values */",
+        "    const int *items;",
+        "    const char *range;  /* the valid range as text, for error messages */",
         "} dfo_var_info;",
         "",
+        "/* the struct fields have the types the table says (a compile error otherwise) */",
     ]
-    table = []
-    for sv in root.find("ModelVariables"):
-        name, vr, causality = sv.get("name"), int(sv.get("valueReference")), sv.get("causality")
-        kind_el = next(iter(sv))
-        kind = kind_el.tag
-        if kind not in TYPES or causality not in CAUSALITIES:
-            raise SystemExit(f"{xml_path}: variable {name}: unsupported type {kind} or causality {causality}")
-        lines.append(f"#define VR_{name} {vr}u")
-        if kind_el.get("start") is not None:
-            lines.append(f"#define START_{name} {c_start(kind, kind_el.get('start'))}")
-        table.append(f'    {{{vr}u, "{name}", {TYPES[kind]}, {CAUSALITIES[causality]}}},')
-    log_categories = [c.get("name") for c in root.find("LogCategories")]
-    lines += [
-        "",
-        f"#define DFO_NUM_VARS {len(table)}",
-        "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {",
-        *table,
-        "};",
-        "",
-        f"#define DFO_NUM_LOG_CATEGORIES {len(log_categories)}",
-        "static const char *const DFO_LOG_CATEGORIES[DFO_NUM_LOG_CATEGORIES] = {",
-        *[f'    "{c}",' for c in log_categories],
-        "};",
-        "",
-        "#endif",
-        "",
-    ]
-    return "\n".join(lines)
+    for v in model.variables:
+        if v.causality in ("parameter", "input"):
+            struct = PARAMS_STRUCT if v.causality == "parameter" else INPUTS_STRUCT
+            ctype = "double" if v.type == "Real" else "int"
+            L.append(f"typedef char dfo_field_check_{v.name}[sizeof((({struct} *)0)->{v.name}) == sizeof({ctype}) ? 1 : -1];")
+    L += ["", f"#define DFO_NUM_VARS {len(model.variables)}", "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {"]
+    for v in model.variables:
+        if v.type == "Real":
+            lo = c_double(v.min) if v.min is not None else "-1.7976931348623157e308"
+            hi = c_double(v.max) if v.max is not None else "1.7976931348623157e308"
+        elif v.type == "Boolean":
+            lo, hi = "0.0", "1.0"
+        else:
+            lo = c_double(v.min) if v.min is not None else c_double(INT_MIN)
+            hi = c_double(v.max) if v.max is not None else c_double(INT_MAX)
+        start = c_double(float(v.start)) if v.start is not None else "0.0"
+        if v.causality == "parameter":
+            home, off, set_off, ident = "DFO_IN_PARAMS", f"offsetof({PARAMS_STRUCT}, {v.name})", "0", "-1"
+        elif v.causality == "input":
+            home, off, ident = "DFO_IN_INPUTS", f"offsetof({INPUTS_STRUCT}, {v.name})", "-1"
+            set_off = f"offsetof({INPUTS_STRUCT}, {v.name}_set)"
+        else:
+            home, off, set_off, ident = "DFO_COMPUTED", "0", "0", f"DFO_OUT_{v.name}"
+        if v.type == "Enumeration":
+            items = model.enumerations[v.declared_type]
+            n_items, items_ptr = str(len(items)), f"DFO_ITEMS_{v.declared_type}"
+        else:
+            n_items, items_ptr = "0", "NULL"
+        rng = range_text(model, v).replace('"', '\\"')
+        L.append(
+            f'    {{{v.vr}u, "{v.name}", {C_TYPES[v.type]}, {C_CAUSALITIES[v.causality]}, '
+            f"{C_VARIABILITIES[v.variability]}, {home}, {off}, {set_off}, {ident}, {int(v.start is not None)}, "
+            f'{start}, {lo}, {hi}, {int(v.normal)}, {n_items}, {items_ptr}, "{rng}"}},')
+    L += ["};", "", "#endif", ""]
+    return "\n".join(L)
+
+
+EMITTERS = {".h": emit_c_header}
 
 
 def main(argv: list[str]) -> int:
     if len(argv) != 3:
         print("usage: gen_model_vars.py modelDescription.xml model_vars.h", file=sys.stderr)
         return 2
-    text = generate(Path(argv[1]))
+    try:
+        model = parse(Path(argv[1]))
+    except (ModelError, ET.ParseError, OSError, ValueError) as e:
+        print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
+        return 1
     out = Path(argv[2])
+    if out.suffix not in EMITTERS:
+        print(f"gen_model_vars: no emitter for {out.name} (known: {', '.join(EMITTERS)})", file=sys.stderr)
+        return 2
+    text = EMITTERS[out.suffix](model, Path(argv[1]).name)
     if not out.exists() or out.read_text() != text:
         out.write_text(text)
     return 0

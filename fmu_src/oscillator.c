@@ -1,26 +1,8 @@
-/* The dry-friction oscillator: parameters, ranges, forces. See oscillator.h. */
+/* The dry-friction oscillator: parameters, forces. See oscillator.h. */
 #include "oscillator.h"
 
-#include <float.h>
 #include <math.h>
-#include <string.h>
-
-const char *dfo_value_range(const char *name, double v)
-{
-    if (!isfinite(v)) return "finite";
-    /* m and h divide: they must be normal numbers, not subnormal */
-    if (!strcmp(name, "m")) return v >= DBL_MIN ? NULL : "> 0 (a normal number, >= 2.2250738585072014e-308)";
-    if (!strcmp(name, "h")) return v >= DBL_MIN ? NULL : "> 0 (a normal number, >= 2.2250738585072014e-308)";
-    if (!strcmp(name, "k") || !strcmp(name, "c") || !strcmp(name, "N") || !strcmp(name, "mu_s") ||
-        !strcmp(name, "chi") || !strcmp(name, "omega"))
-        return v >= 0.0 ? NULL : ">= 0";
-    if (!strcmp(name, "alpha")) return (v >= -1.0 / 3.0 && v <= 0.0) ? NULL : "in [-1/3, 0]";
-    if (!strcmp(name, "scheme"))
-        return (v == DFO_SCHEME_PAPER || v == DFO_SCHEME_CONSISTENT || v == DFO_SCHEME_LOCATED)
-                   ? NULL : "one of 1 (paper), 2 (consistent), 3 (located)";
-    if (!strcmp(name, "frictionUpdates")) return (v >= 0 && v <= 100) ? NULL : "in [0, 100]";
-    return NULL;
-}
+#include <stddef.h>
 
 const char *dfo_check_params(const dfo_params *p)
 {

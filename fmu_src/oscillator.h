@@ -1,5 +1,4 @@
-/* The dry-friction oscillator (method.md sections 1 and 7): parameters, their valid ranges, the
- * forces, the derived constants of the Bossak-Newmark scheme and the "effects" a run pays for.
+/* The dry-friction oscillator (method.md sections 1 and 7): parameters, the forces, the derived constants of the Bossak-Newmark scheme and the "effects" a run pays for.
  *
  *     m x'' + c x' + k x = P0 cos(omega t + phi) + F_ext + F,
  *     Coulomb friction F with mu_s (static), mu_k = chi mu_s (kinetic), normal force max(N + N_ext, 0),
@@ -13,7 +12,10 @@
 
 typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3 } dfo_scheme;
 
-/* Everything a user sets before a run; names as in modelDescription.xml. */
+/* Everything a user sets before a run. Each field is named as its variable in modelDescription.xml
+ * (Real: double; Integer, Enumeration, Boolean: int): the generated variable table reaches it by
+ * offsetof, and the valid ranges are the variables' min/max there. A new scalar parameter is one
+ * line of XML plus one field here. */
 typedef struct {
     double m, k, c, P0, omega, phi, N, mu_s, chi, x0, v0;
     double h, alpha;                 /* internal step (s), Bossak parameter */
@@ -24,7 +26,8 @@ typedef struct {
     int fastPaths;                   /* skip the physics a run does not need (same numbers) */
 } dfo_params;
 
-/* Co-simulation inputs, held constant over a communication step. An input never set is never read. */
+/* Co-simulation inputs, held constant over a communication step. An input never set is never read:
+ * each input X has a flag X_set, raised when a host sets it. */
 typedef struct {
     double F_ext, N_ext;
     int F_ext_set, N_ext_set;
@@ -52,10 +55,6 @@ typedef struct {
     int damped;              /* c != 0 (or fast paths off) */
     int update;              /* mu_k != mu_b (or fast paths off) */
 } dfo_model;
-
-/* NULL when value is valid for the named variable, otherwise the valid range as text
- * ("> 0", "in [-1/3, 0]", ...). Variables without a range only need to be finite. */
-const char *dfo_value_range(const char *name, double value);
 
 /* Checks that involve several parameters; NULL when consistent, else a sentence. */
 const char *dfo_check_params(const dfo_params *p);

@@ -9,7 +9,9 @@
  * 7. FMU state get/set round trip: bit-exact continuation;
  * 8. serialisation round trip; every truncation and every single-byte corruption rejected;
  * 9. overflow reported as an error (never NaN outputs), reset recovers;
- * 10. 10^4 instantiate/free cycles: allocations through the callbacks balance (ASan's leak
+ * 10. observables read while observe is false: 0 with fmi2Warning and one logged sentence per run;
+ * 11. direct feedthrough: a and F_friction follow an input set after a step, without a step;
+ * 12. 10^4 instantiate/free cycles: allocations through the callbacks balance (ASan's leak
  *     checker covers the rest in the sanitizer build).
  *
  * Each failed call must return fmi2Error or fmi2Discard with a logged sentence, and the instance
@@ -346,13 +348,151 @@ static void test_overflow(tally *T)
     EXPECT(start_run(c, 1e-3, 4, vr, val) == fmi2OK);
     FAILS(fmi2DoStep(c, 0.0, 1e6, fmi2True), "non-finite");
     double out[N_OUT];
-    EXPECT(fmi2GetReal(c, OUT_VR, N_OUT, out) == fmi2OK);
+    /* observe is off: the observables among the outputs read 0 with a warning */
+    EXPECT(fmi2GetReal(c, OUT_VR, N_OUT, out) == fmi2Warning);
     FAILS(fmi2DoStep(c, 0.0, 0.1, fmi2True), "must not be called in error");
     EXPECT(fmi2Reset(c) == fmi2OK);
     EXPECT(start_run(c, 1e-3, 0, NULL, NULL) == fmi2OK);
     EXPECT(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK);
-    EXPECT(fmi2GetReal(c, OUT_VR, N_OUT, out) == fmi2OK && isfinite(out[0]) && out[0] != 0.0);
+    EXPECT(fmi2GetReal(c, OUT_VR, N_OUT, out) == fmi2Warning && isfinite(out[0]) && out[0] != 0.0);
     fmi2FreeInstance(c);
+}
+
+/* A logger that counts warnings and keeps the last one with its category. */
+typedef struct {
+    int n_warnings;
+    char last[1024], category[64];
+} warn_sink;
+
+static void warn_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                        fmi2String message, ...)
+{
+    (void)name;
+    warn_sink *w = (warn_sink *)env;
+    if (status != fmi2Warning) return;
+    w->n_warnings++;
+    snprintf(w->last, sizeof w->last, "%s", message);
+    snprintf(w->category, sizeof w->category, "%s", category);
+}
+
+/* The observables read while observe is false: 0 with fmi2Warning (never a silent 0 with fmi2OK),
+ * one logged sentence per variable and run naming it and saying "set observe = true"; with
+ * observe = true the same run gives fmi2OK and the real values. */
+static void test_unobserved_outputs(tally *T)
+{
+    static const fmi2ValueReference obs_real[4] = {VR_x_max, VR_x_min, VR_stick_fraction, VR_E_friction};
+    static const char *const obs_name[4] = {"x_max", "x_min", "stick_fraction", "E_friction"};
+    const fmi2ValueReference vtr = VR_transitions, vo = VR_observe;
+    const fmi2ValueReference vw[4] = {VR_t_obs_start, VR_t_obs_stop, VR_x0, VR_chi};
+    const double w[4] = {1.0, 3.0, 0.004, 0.5};
+    for (int observe = 0; observe <= 1; observe++) {
+        warn_sink sink;
+        memset(&sink, 0, sizeof sink);
+        fmi2CallbackFunctions cb = callbacks_for(NULL);
+        cb.logger = warn_logger;
+        cb.componentEnvironment = &sink;
+        fmi2Component c = new_instance("unobserved", &cb);
+        const fmi2Boolean on = observe ? fmi2True : fmi2False;
+        EXPECT(fmi2SetBoolean(c, &vo, 1, &on) == fmi2OK);
+        EXPECT(start_run(c, 1e-3, 4, vw, w) == fmi2OK);
+        EXPECT(fmi2DoStep(c, 0.0, 4.0, fmi2True) == fmi2OK);
+        double x[4];
+        fmi2Integer tr = -1;
+        for (int k = 0; k < 4; k++) {
+            const int before = sink.n_warnings;
+            const fmi2Status st = fmi2GetReal(c, &obs_real[k], 1, &x[k]);
+            if (observe) {
+                EXPECT(st == fmi2OK && sink.n_warnings == before);
+            } else {
+                EXPECT(st == fmi2Warning && x[k] == 0.0 && sink.n_warnings == before + 1);
+                EXPECT(strstr(sink.last, obs_name[k]) != NULL && strstr(sink.last, "set observe = true") != NULL);
+                EXPECT(strcmp(sink.category, "logStatusWarning") == 0);
+                /* read again (a host sampling every step): the same warning status, no second message */
+                EXPECT(fmi2GetReal(c, &obs_real[k], 1, &x[k]) == fmi2Warning && sink.n_warnings == before + 1);
+            }
+        }
+        const fmi2Status st = fmi2GetInteger(c, &vtr, 1, &tr);
+        if (observe) {
+            /* the window [1, 3] of a stick-slip motion: extremes of both signs, stuck part of it */
+            EXPECT(st == fmi2OK && tr > 0 && x[0] > 0.0 && x[1] < 0.0 && x[2] > 0.0 && x[2] < 1.0 && x[3] > 0.0);
+        } else {
+            EXPECT(st == fmi2Warning && tr == 0 && strstr(sink.last, "transitions") != NULL);
+        }
+        /* the other outputs are not concerned */
+        const fmi2ValueReference vx = VR_x;
+        double xx;
+        EXPECT(fmi2GetReal(c, &vx, 1, &xx) == fmi2OK);
+        /* a new run (reset) warns again, once */
+        if (!observe) {
+            const int before = sink.n_warnings;
+            EXPECT(fmi2Reset(c) == fmi2OK && start_run(c, 1e-3, 4, vw, w) == fmi2OK);
+            EXPECT(fmi2GetReal(c, obs_real, 4, x) == fmi2Warning && sink.n_warnings == before + 4);
+            EXPECT(fmi2GetReal(c, obs_real, 4, x) == fmi2Warning && sink.n_warnings == before + 4);
+        }
+        fmi2FreeInstance(c);
+    }
+}
+
+/* Direct feedthrough (ModelStructure: a and F_friction depend on F_ext and N_ext, x, v and mode do
+ * not): an input set after a step changes a and F_friction at once, through the current mode's
+ * friction law, without a step; setting the inputs back gives the step's own values bit for bit. */
+static void test_feedthrough(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    const fmi2ValueReference out_vr[4] = {VR_x, VR_v, VR_a, VR_F_friction};
+    const fmi2ValueReference vm = VR_mode, vin[2] = {VR_F_ext, VR_N_ext};
+    const double k = 100.0, N = 1.0, mu_s = 0.4, chi = 0.5, P0 = 1.0, omega = 5.0;
+    for (int sliding = 0; sliding <= 1; sliding++) {
+        fmi2Component c = new_instance("feedthrough", &cb);
+        const fmi2ValueReference vp[6] = {VR_k, VR_N, VR_mu_s, VR_chi, VR_P0, VR_omega};
+        const double p[6] = {k, N, mu_s, chi, P0, omega};
+        EXPECT(start_run(c, 1e-3, 6, vp, p) == fmi2OK);
+        const double zero[2] = {0.0, 0.0};
+        EXPECT(fmi2SetReal(c, vin, 2, zero) == fmi2OK);
+        /* find a communication point in the wanted mode */
+        double t = 0.0, y[4], y2[4];
+        fmi2Integer mode = 0, mode2 = 0;
+        for (int j = 0; j < 4000; j++) {
+            EXPECT(fmi2DoStep(c, t, 0.00125, fmi2True) == fmi2OK);
+            t += 0.00125;
+            fmi2GetInteger(c, &vm, 1, &mode);
+            if ((mode != 0) == sliding && j > 40) break;
+        }
+        EXPECT((mode != 0) == sliding);
+        EXPECT(fmi2GetReal(c, out_vr, 4, y) == fmi2OK);
+        const double dF = 0.05, dN = 0.5;
+        /* F_ext */
+        EXPECT(fmi2SetReal(c, &vin[0], 1, &dF) == fmi2OK);
+        EXPECT(fmi2GetReal(c, out_vr, 4, y2) == fmi2OK && fmi2GetInteger(c, &vm, 1, &mode2) == fmi2OK);
+        EXPECT(y2[0] == y[0] && y2[1] == y[1] && mode2 == mode); /* x, v, mode: only through a step */
+        if (sliding) {
+            /* sliding: the friction stays -s mu_k N, the acceleration takes F_ext / m */
+            EXPECT(y2[3] == y[3]);
+            EXPECT(fabs(y2[2] - (y[2] + dF)) <= 1e-12 * (1.0 + fabs(y[2])));
+        } else {
+            /* stuck: the friction takes F_ext up (inside the limit), the acceleration stays 0 */
+            const double S = P0 * cos(omega * t) - k * y[0];
+            EXPECT(fabs(y2[3] - (-(S + dF))) <= 1e-12);
+            EXPECT(fabs(y2[3] - (y[3] - dF)) <= 1e-12 && y2[2] == 0.0 && y[2] == 0.0);
+        }
+        /* N_ext */
+        EXPECT(fmi2SetReal(c, vin, 2, zero) == fmi2OK);
+        EXPECT(fmi2SetReal(c, &vin[1], 1, &dN) == fmi2OK);
+        EXPECT(fmi2GetReal(c, out_vr, 4, y2) == fmi2OK);
+        EXPECT(y2[0] == y[0] && y2[1] == y[1]);
+        if (sliding) {
+            const double mu_k = chi * mu_s;
+            EXPECT(fabs(y2[3] - (-mode * mu_k * (N + dN))) <= 1e-15);
+            EXPECT(fabs(y2[2] - (y[2] - mode * mu_k * dN)) <= 1e-12 * (1.0 + fabs(y[2])));
+        } else {
+            EXPECT(y2[3] == y[3]); /* stuck inside the limit: the friction does not depend on N */
+        }
+        /* back to the step's inputs: the step's own values, bit for bit */
+        EXPECT(fmi2SetReal(c, vin, 2, zero) == fmi2OK);
+        EXPECT(fmi2GetReal(c, out_vr, 4, y2) == fmi2OK && memcmp(y, y2, sizeof y) == 0);
+        fmi2FreeInstance(c);
+    }
 }
 
 static void test_cycles(tally *T)
@@ -394,6 +534,8 @@ int main(void)
     test_bad_values(T);
     test_states(T);
     test_overflow(T);
+    test_unobserved_outputs(T);
+    test_feedthrough(T);
     test_cycles(T);
     EXPECT(mem_outstanding() == 0);
     return tally_done(T, "test_fmi_api");

@@ -7,7 +7,8 @@
 # Installs clang when missing (apt-get, quiet), builds tests/fuzz with -DDFO_FUZZ=ON, fuzzes from
 # tests/fuzz/corpus (new coverage goes to a scratch corpus, not into the repository) and copies
 # every crash / timeout / leak input into tests/fuzz/regressions/, where ctest replays it
-# (fuzz_regression_<name>). Exit status: 0 when nothing was found, 1 when inputs were kept.
+# (fuzz_regression_<name>). Exit status: 0 when nothing was found, 1 when inputs were kept, 2 when
+# clang with its fuzzer runtime could not be installed or the target did not build.
 set -euo pipefail
 secs=${1:-60}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -19,16 +20,41 @@ if [ -z "$python" ]; then   # the interpreter with fmpy (the FMI headers come fr
   if [ -x "$root/.venv/bin/python" ]; then python=$root/.venv/bin/python; else python=$(command -v python3); fi
 fi
 
-if ! command -v clang >/dev/null 2>&1; then
-  echo "run_fuzz: installing clang" >&2
+# clang with its libFuzzer and sanitizer runtimes: a one-line test build tells whether they work
+fuzzer_works() {
+  local d
+  d=$(mktemp -d /tmp/dfo-fuzz-probe.XXXXXX)
+  printf 'int LLVMFuzzerTestOneInput(const unsigned char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' >"$d/p.c"
+  clang -fsanitize=fuzzer,address,undefined "$d/p.c" -o "$d/p" >/dev/null 2>&1
+  local rc=$?
+  rm -rf "$d"
+  return $rc
+}
+if ! command -v clang >/dev/null 2>&1 || ! fuzzer_works; then
+  echo "run_fuzz: installing clang and its fuzzer runtime" >&2
   export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq >/dev/null
-  apt-get install -y -qq clang >/dev/null
+  # wait for the dpkg lock (another install may hold it, e.g. on a CI runner starting up) rather
+  # than fail at once; without recommends, the runtime package (libclang-rt-dev: libFuzzer, ASan,
+  # UBSan) is named explicitly where the distribution has it
+  apt_log=$(mktemp /tmp/dfo-fuzz-apt.XXXXXX)
+  apt_get() { apt-get -o DPkg::Lock::Timeout=600 "$@" >>"$apt_log" 2>&1; }
+  if apt_get update -qq; then
+    apt_get install -y -qq --no-install-recommends clang libclang-rt-dev \
+      || apt_get install -y -qq --no-install-recommends clang || true
+  fi
+  if ! command -v clang >/dev/null 2>&1 || ! fuzzer_works; then
+    echo "run_fuzz: could not install clang with a working libFuzzer (apt-get needs root and network; log: $apt_log)" >&2
+    exit 2
+  fi
+  rm -f "$apt_log"
 fi
 
 cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DDFO_FUZZ=ON -DFUZZ_TIME_ORACLE="$oracle" \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPython3_EXECUTABLE="$python" >/dev/null
-cmake --build "$build" --target fuzz_fmi -j2 >/dev/null
+if ! cmake --build "$build" --target fuzz_fmi -j2 >"$build/fuzz_build.log" 2>&1; then
+  echo "run_fuzz: building the fuzz target failed (log: $build/fuzz_build.log)" >&2
+  exit 2
+fi
 
 work=$(mktemp -d /tmp/dfo-fuzz.XXXXXX)
 mkdir -p "$work/corpus" "$work/artifacts"

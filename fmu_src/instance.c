@@ -1,0 +1,664 @@
+/* The instance core (see instance.h): everything an FMI glue needs, through the variable table
+ * generated from modelDescription.xml. No FMI types. */
+#include "instance.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+/* The model description is the source of truth for the effect bits and the scheme values the
+ * physics uses: a mismatch does not compile. */
+#define DFO_SAME(name, a, b) typedef char dfo_static_assert_##name[((int)(a) == (int)(b)) ? 1 : -1]
+DFO_SAME(effect_friction, DFO_MD_EFFECT_FRICTION, DFO_EFFECT_FRICTION);
+DFO_SAME(effect_update, DFO_MD_EFFECT_COEFFICIENT_UPDATE, DFO_EFFECT_COEFF_UPDATE);
+DFO_SAME(effect_damping, DFO_MD_EFFECT_DAMPING, DFO_EFFECT_DAMPING);
+DFO_SAME(effect_force, DFO_MD_EFFECT_FORCE_INPUT, DFO_EFFECT_FORCE_INPUT);
+DFO_SAME(effect_normal, DFO_MD_EFFECT_NORMAL_INPUT, DFO_EFFECT_NORMAL_INPUT);
+DFO_SAME(effect_observables, DFO_MD_EFFECT_OBSERVABLES, DFO_EFFECT_OBSERVABLES);
+DFO_SAME(scheme_paper, DFO_MD_SCHEME_PAPER, DFO_SCHEME_PAPER);
+DFO_SAME(scheme_consistent, DFO_MD_SCHEME_CONSISTENT, DFO_SCHEME_CONSISTENT);
+DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
+typedef char dfo_static_assert_warn_bits[DFO_NUM_OUTS <= 32 ? 1 : -1];
+
+#define MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take */
+#define STATE_MAGIC 0x444650534d555354ULL /* "DFPSMUST" */
+#define SERIAL_MAGIC "DFOSTATE"
+#define SERIAL_VERSION 2u
+
+typedef struct {
+    uint64_t magic;
+    dfo_values v;
+} saved_state;
+
+typedef struct {
+    char magic[8];
+    uint32_t version, size;
+    uint64_t checksum;
+} serial_header;
+
+/* ---- logging --------------------------------------------------------------------------------- */
+
+static void vlog(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, va_list ap)
+{
+    char buf[512];
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    for (char *c = buf; *c; c++)
+        if (*c == '%') *c = ' '; /* the message reaches printf-style loggers as a format */
+    in->host.log(in->host.ctx, status, DFO_LOG_CATEGORIES[category], buf);
+}
+
+void dfo_inst_log(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, ...)
+{
+    if (!in->host.log || !in->log_on[category]) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vlog(in, status, category, fmt, ap);
+    va_end(ap);
+}
+
+dfo_inst_status dfo_inst_fail(const dfo_instance *in, const char *fmt, ...)
+{
+    if (!in->host.log || !in->log_on[DFO_LOG_STATUS_ERROR]) return DFO_INST_ERROR;
+    va_list ap;
+    va_start(ap, fmt);
+    vlog(in, DFO_INST_ERROR, DFO_LOG_STATUS_ERROR, fmt, ap);
+    va_end(ap);
+    return DFO_INST_ERROR;
+}
+
+int dfo_inst_log_category(const char *name)
+{
+    if (!name) return -1;
+    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
+        if (!strcmp(name, DFO_LOG_CATEGORIES[j])) return j;
+    return -1;
+}
+
+void dfo_inst_set_logging(dfo_instance *in, int category, int on)
+{
+    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
+        if (category < 0 || category == j) in->log_on[j] = on ? 1 : 0;
+}
+
+const char *dfo_phase_name(dfo_phase p)
+{
+    switch (p) {
+    case DFO_PHASE_INSTANTIATED: return "instantiated";
+    case DFO_PHASE_INIT: return "initialization mode";
+    case DFO_PHASE_STEP: return "step mode";
+    case DFO_PHASE_TERMINATED: return "terminated";
+    case DFO_PHASE_ERROR: return "error";
+    }
+    return "unknown";
+}
+
+/* ---- the variable table ---------------------------------------------------------------------- */
+
+static const dfo_var_info *find_var(unsigned int vr)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++)
+        if (DFO_VARS[i].vr == vr) return &DFO_VARS[i];
+    return NULL;
+}
+
+static const char *type_name(dfo_var_type t)
+{
+    return t == DFO_REAL ? "Real" : t == DFO_INTEGER ? "Integer" : "Boolean";
+}
+
+/* Where a stored value lives in v (parameters and inputs only). */
+static void *slot(dfo_values *v, const dfo_var_info *var)
+{
+    char *base = (var->home == DFO_IN_PARAMS) ? (char *)&v->p : (char *)&v->u;
+    return base + var->offset;
+}
+
+static const void *cslot(const dfo_values *v, const dfo_var_info *var)
+{
+    return slot((dfo_values *)v, var);
+}
+
+/* NULL when the value is valid for the variable, else the valid range as text. */
+static const char *invalid(const dfo_var_info *var, double x)
+{
+    if (!isfinite(x)) return "finite";
+    if (var->n_items > 0) {
+        for (int k = 0; k < var->n_items; k++)
+            if (x == var->items[k]) return NULL;
+        return var->range;
+    }
+    return (x >= var->min && x <= var->max) ? NULL : var->range;
+}
+
+static void set_start_values(dfo_values *v)
+{
+    const dfo_values zero = {0};
+    *v = zero;
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home == DFO_COMPUTED || !var->has_start) continue;
+        if (var->type == DFO_REAL) *(double *)slot(v, var) = var->start;
+        else *(int *)slot(v, var) = (int)var->start;
+    }
+    v->phase = DFO_PHASE_INSTANTIATED;
+}
+
+static const dfo_var_info *lookup(const dfo_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
+{
+    const dfo_var_info *var = find_var(vr);
+    if (!var) {
+        dfo_inst_fail(in, "%s: unknown value reference %u.", fn, vr);
+        return NULL;
+    }
+    if (var->type != type) {
+        dfo_inst_fail(in, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
+                      type_name(var->type), type_name(type));
+        return NULL;
+    }
+    return var;
+}
+
+/* Whether a variable of this causality may be set in the current phase; logs the reason when not. */
+static int settable(const dfo_instance *in, const char *fn, const dfo_var_info *var)
+{
+    const dfo_phase ph = in->v.phase;
+    if (var->causality == DFO_PARAMETER && (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT))) return 1;
+    if (var->causality == DFO_INPUT && (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT | DFO_PHASE_STEP))) return 1;
+    if (var->causality == DFO_PARAMETER)
+        dfo_inst_fail(in, "%s: variable %s (value reference %u) is a fixed parameter and cannot be set in %s.", fn,
+                      var->name, var->vr, dfo_phase_name(ph));
+    else if (var->causality == DFO_INPUT)
+        dfo_inst_fail(in, "%s: input %s (value reference %u) cannot be set in %s.", fn, var->name, var->vr,
+                      dfo_phase_name(ph));
+    else
+        dfo_inst_fail(in, "%s: variable %s (value reference %u) is %s and cannot be set.", fn, var->name, var->vr,
+                      var->causality == DFO_OUTPUT ? "an output" : "a calculated parameter");
+    return 0;
+}
+
+static int check_value(const dfo_instance *in, const char *fn, const dfo_var_info *var, double x)
+{
+    const char *range = invalid(var, x);
+    if (!range) return 1;
+    dfo_inst_fail(in, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
+                  var->name, var->vr, range);
+    return 0;
+}
+
+/* ---- start, outputs -------------------------------------------------------------------------- */
+
+void dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on)
+{
+    memset(in, 0, sizeof *in);
+    in->host = *host;
+    in->name = name;
+    dfo_inst_set_logging(in, -1, logging_on);
+    in->log_on[DFO_LOG_STATUS_ERROR] = in->log_on[DFO_LOG_STATUS_WARNING] = 1; /* problems are always reported */
+    set_start_values(&in->v);
+}
+
+/* Derive the model from the parameters and start it (exit of initialisation, or outputs asked for
+ * during initialisation). */
+static void prepare(dfo_values *v)
+{
+    dfo_model_init(&v->M, &v->p);
+    dfo_start(&v->M, &v->u, v->start_time, &v->s);
+    v->effects = dfo_effects(&v->M, &v->u);
+    v->u_used = v->u;
+    v->time = v->start_time;
+}
+
+/* Values of computed variables need the started model; during initialisation it is derived from
+ * the current parameters on the fly. */
+static const dfo_values *computed(const dfo_instance *in, dfo_values *tmp)
+{
+    if (in->v.phase != DFO_PHASE_INIT) return &in->v;
+    *tmp = in->v;
+    prepare(tmp);
+    return tmp;
+}
+
+/* Whether the inputs (values and set flags) are those of the last step: walks the table. */
+static int same_inputs(const dfo_inputs *a, const dfo_inputs *b)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home != DFO_IN_INPUTS) continue;
+        const char *pa = (const char *)a, *pb = (const char *)b;
+        if (*(const int *)(pa + var->set_offset) != *(const int *)(pb + var->set_offset)) return 0;
+        if (var->type == DFO_REAL ? *(const double *)(pa + var->offset) != *(const double *)(pb + var->offset)
+                                  : *(const int *)(pa + var->offset) != *(const int *)(pb + var->offset))
+            return 0;
+    }
+    return 1;
+}
+
+/* The friction force at the current state for the current inputs. With the inputs of the last step
+ * it is the stepper's own; with inputs set since, the current mode's friction law with them:
+ * sliding -s mu_k N, stuck the force that holds the block, within the breakaway limit. */
+static double friction_now(const dfo_values *v)
+{
+    const dfo_state *s = &v->s;
+    if (same_inputs(&v->u, &v->u_used)) return s->F;
+    const dfo_model *M = &v->M;
+    const double N = dfo_normal_force(M, &v->u), Fb = M->mu_b * N;
+    if (!(Fb > 0.0)) return 0.0;
+    if (s->mode != 0) return -s->mode * (M->mu_k * N);
+    const double S = dfo_excitation(M, s->t) + dfo_external_force(M, &v->u) - M->p.k * s->X;
+    return -fmax(-Fb, fmin(Fb, S));
+}
+
+static double acceleration_now(const dfo_values *v)
+{
+    if (same_inputs(&v->u, &v->u_used)) return dfo_acceleration(&v->M, &v->u, &v->s);
+    dfo_state s = v->s;
+    s.F = friction_now(v);
+    return dfo_acceleration(&v->M, &v->u, &s);
+}
+
+static int needs_observe(int id)
+{
+    return id == DFO_OUT_x_max || id == DFO_OUT_x_min || id == DFO_OUT_stick_fraction ||
+           id == DFO_OUT_transitions || id == DFO_OUT_E_friction;
+}
+
+/* An observable read while observe is false reads 0: a warning, logged once per run and variable. */
+static dfo_inst_status unobserved(dfo_instance *in, const char *fn, const dfo_var_info *var)
+{
+    const unsigned bit = 1u << var->id;
+    if (!(in->warned & bit)) {
+        in->warned |= bit;
+        dfo_inst_log(in, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
+                     "%s: variable %s (value reference %u) is not computed while observe is false and reads 0; "
+                     "set observe = true (before initialisation) to compute it.", fn, var->name, var->vr);
+    }
+    return DFO_INST_WARNING;
+}
+
+static double output_real(const dfo_values *v, int id)
+{
+    const dfo_state *s = &v->s;
+    const int seen = v->p.observe && s->observed;
+    switch (id) {
+    case DFO_OUT_x: return s->X;
+    case DFO_OUT_v: return s->V;
+    case DFO_OUT_a: return acceleration_now(v);
+    case DFO_OUT_F_friction: return friction_now(v);
+    case DFO_OUT_x_max: return seen ? s->x_max : 0.0;
+    case DFO_OUT_x_min: return seen ? s->x_min : 0.0;
+    case DFO_OUT_stick_fraction: return v->p.observe ? dfo_stick_fraction(&v->M, s) : 0.0;
+    case DFO_OUT_E_friction: return v->p.observe ? s->E_friction : 0.0;
+    default: return 0.0;
+    }
+}
+
+static int output_int(const dfo_values *v, int id)
+{
+    switch (id) {
+    case DFO_OUT_mode: return v->s.mode;
+    case DFO_OUT_transitions: return v->p.observe ? (int)v->s.transitions : 0;
+    case DFO_OUT_effects: return v->effects;
+    default: return 0;
+    }
+}
+
+/* ---- life cycle ------------------------------------------------------------------------------ */
+
+dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
+                               double stop_time)
+{
+    if (!isfinite(start_time)) return dfo_inst_fail(in, "%s: startTime %g is not finite.", fn, start_time);
+    if (stop_defined && !(stop_time >= start_time))
+        return dfo_inst_fail(in, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
+                             start_time);
+    in->v.start_time = start_time;
+    in->v.stop_defined = stop_defined ? 1 : 0;
+    in->v.stop_time = stop_defined ? stop_time : 0.0;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_enter_init(dfo_instance *in)
+{
+    in->v.phase = DFO_PHASE_INIT;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
+{
+    dfo_values *v = &in->v;
+    const char *msg = dfo_check_params(&v->p);
+    if (msg) return dfo_inst_fail(in, "%s: %s", fn, msg);
+    prepare(v);
+    const dfo_state *s = &v->s;
+    if (!isfinite(s->A) || !isfinite(s->F) || !isfinite(dfo_acceleration(&v->M, &v->u, s)))
+        return dfo_inst_fail(in, "%s: the initial acceleration is not representable (x0 = %.17g, v0 = %.17g, m = "
+                             "%.17g): the parameters are out of the range of double precision.", fn, v->p.x0, v->p.v0,
+                             v->p.m);
+    v->phase = DFO_PHASE_STEP;
+    dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
+                 s->t, s->X, s->V, s->mode, v->effects);
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_terminate(dfo_instance *in)
+{
+    in->v.phase = DFO_PHASE_TERMINATED;
+    return DFO_INST_OK;
+}
+
+void dfo_inst_reset(dfo_instance *in)
+{
+    set_start_values(&in->v);
+    in->warned = 0;
+}
+
+/* ---- get / set ------------------------------------------------------------------------------- */
+
+dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[])
+{
+    dfo_inst_status status = DFO_INST_OK;
+    dfo_values tmp;
+    const dfo_values *v = NULL;
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
+        if (!var) return DFO_INST_ERROR;
+        if (var->home != DFO_COMPUTED) {
+            value[i] = *(const double *)cslot(&in->v, var);
+            continue;
+        }
+        if (!v) v = computed(in, &tmp);
+        value[i] = output_real(v, var->id);
+        if (!isfinite(value[i]))
+            return dfo_inst_fail(in, "%s: variable %s (value reference %u) is not representable in double precision "
+                                 "for these parameters (overflow).", fn, var->name, vr[i]);
+        if (!v->p.observe && needs_observe(var->id)) status = unobserved(in, fn, var);
+    }
+    return status;
+}
+
+dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    dfo_inst_status status = DFO_INST_OK;
+    dfo_values tmp;
+    const dfo_values *v = NULL;
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
+        if (!var) return DFO_INST_ERROR;
+        if (var->home != DFO_COMPUTED) {
+            value[i] = *(const int *)cslot(&in->v, var);
+            continue;
+        }
+        if (!v) v = computed(in, &tmp);
+        value[i] = output_int(v, var->id);
+        if (!v->p.observe && needs_observe(var->id)) status = unobserved(in, fn, var);
+    }
+    return status;
+}
+
+dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
+        if (!var) return DFO_INST_ERROR;
+        value[i] = *(const int *)cslot(&in->v, var) ? 1 : 0;
+    }
+    return DFO_INST_OK;
+}
+
+/* Store a checked value; setting an input raises its flag (an input never set is never read). */
+static void store(dfo_values *v, const dfo_var_info *var, double x)
+{
+    if (var->type == DFO_REAL) *(double *)slot(v, var) = x;
+    else *(int *)slot(v, var) = (int)x;
+    if (var->home == DFO_IN_INPUTS) *(int *)((char *)&v->u + var->set_offset) = 1;
+}
+
+dfo_inst_status dfo_inst_set_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[])
+{
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
+        if (!var || !settable(in, fn, var) || !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, find_var(vr[i]), value[i]);
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_set_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                 const int value[])
+{
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
+        if (!var || !settable(in, fn, var) || !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, find_var(vr[i]), value[i]);
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_set_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  const int value[])
+{
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
+        if (!var || !settable(in, fn, var)) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, find_var(vr[i]), value[i] ? 1.0 : 0.0);
+    return DFO_INST_OK;
+}
+
+/* ---- doStep ---------------------------------------------------------------------------------- */
+
+static void on_switch(void *ctx, double t, double x, int from, int to)
+{
+    dfo_instance *in = (dfo_instance *)ctx;
+    static const char *const names[3] = {"backward slip", "stick", "forward slip"};
+    in->switched = 1;
+    dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: %s -> %s at x = %.17g.", t, names[from + 1],
+                 names[to + 1], x);
+}
+
+/* Early return: one internal grid step per call of the stepper, until the first switch. Used only
+ * when asked for; the ordinary path is one call up to the target. */
+static dfo_status advance_to_switch(dfo_instance *in, double t_target)
+{
+    dfo_values *v = &in->v;
+    const double h = v->p.h, snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
+    in->switched = 0;
+    while (v->s.t < t_target) {
+        const double grid = v->s.t0 + (double)(v->s.n + 1) * h;
+        const double t_next = (grid < t_target - snap) ? grid : t_target;
+        const dfo_status st = dfo_advance(&v->M, &v->u, &v->s, t_next, on_switch, in);
+        if (st != DFO_OK || in->switched || t_next == t_target) return st;
+    }
+    return DFO_OK;
+}
+
+dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
+                                 double *t_reached)
+{
+    dfo_values *v = &in->v;
+    const double t = v->time;
+    if (!isfinite(tc))
+        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", fn,
+                             tc, t);
+    if (!isfinite(dt) || !(dt > 0.0))
+        return dfo_inst_fail(in, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
+                             tc);
+    const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * v->p.h;
+    if (fabs(tc - t) > tol)
+        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
+                             tc, t);
+    const double t_target = tc + dt;
+    if (!(t_target > t))
+        return dfo_inst_fail(in, "%s: communicationStepSize %.17g is below the time resolution at t = %.17g.", fn,
+                             dt, t);
+    if (v->stop_defined && t_target > v->stop_time + tol)
+        return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
+                             v->stop_time);
+    if ((t_target - t) / v->p.h > MAX_STEPS_PER_CALL)
+        return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
+                             "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
+                             MAX_STEPS_PER_CALL, v->p.h);
+    const dfo_state before = v->s;
+    dfo_status st;
+    if (flags & DFO_STEP_STOP_AT_SWITCH) {
+        st = advance_to_switch(in, t_target);
+    } else {
+        const int events = in->host.log && in->log_on[DFO_LOG_EVENTS];
+        st = dfo_advance(&v->M, &v->u, &v->s, t_target, events ? on_switch : NULL, in);
+    }
+    if (st != DFO_OK) {
+        const dfo_state failed = v->s;
+        v->s = before; /* the outputs stay those of the last good state */
+        v->phase = DFO_PHASE_ERROR;
+        return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The "
+                             "FMU keeps the state at t = %.17g; reset it or restore an earlier FMU state.", fn, t,
+                             failed.t, dfo_status_text(st), failed.X, failed.V, t);
+    }
+    /* the host's time: the target (the stepper may stand on a grid point within its snap tolerance
+     * of it), or where an early return stopped short of it */
+    const double snap = fmax(1e-9 * v->p.h, 8.0 * DBL_EPSILON * fabs(t_target));
+    const int early = (flags & DFO_STEP_STOP_AT_SWITCH) && in->switched && v->s.t < t_target - snap;
+    v->time = early ? v->s.t : t_target;
+    v->u_used = v->u;
+    if (t_reached) *t_reached = v->time;
+    return DFO_INST_OK;
+}
+
+double dfo_inst_time(const dfo_instance *in) { return in->v.time; }
+
+/* ---- FMU states ------------------------------------------------------------------------------ */
+
+static saved_state *as_state(const void *p)
+{
+    saved_state *st = (saved_state *)p;
+    return (st && st->magic == STATE_MAGIC) ? st : NULL;
+}
+
+static dfo_inst_status store_state(dfo_instance *in, const char *fn, void **state, const dfo_values *v)
+{
+    saved_state *st = (saved_state *)*state;
+    if (st && st->magic != STATE_MAGIC) return dfo_inst_fail(in, "%s: *FMUstate is not a state of this FMU.", fn);
+    if (!st) {
+        st = (saved_state *)in->host.alloc(in->host.ctx, 1, sizeof(saved_state));
+        if (!st) return dfo_inst_fail(in, "%s: out of memory.", fn);
+        st->magic = STATE_MAGIC;
+        *state = st;
+    }
+    st->v = *v;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_state(dfo_instance *in, const char *fn, void **state)
+{
+    return store_state(in, fn, state, &in->v);
+}
+
+dfo_inst_status dfo_inst_set_state(dfo_instance *in, const char *fn, const void *state)
+{
+    const saved_state *st = as_state(state);
+    if (!st) return dfo_inst_fail(in, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    in->v = st->v;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_free_state(dfo_instance *in, const char *fn, void **state)
+{
+    saved_state *st = (saved_state *)*state;
+    if (!st) return DFO_INST_OK;
+    if (st->magic != STATE_MAGIC) return dfo_inst_fail(in, "%s: *FMUstate is not a state of this FMU.", fn);
+    st->magic = 0;
+    in->host.free(in->host.ctx, st);
+    *state = NULL;
+    return DFO_INST_OK;
+}
+
+static uint64_t fnv1a(const unsigned char *p, size_t n)
+{
+    uint64_t h = 1469598103934665603ULL;
+    for (size_t i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+size_t dfo_inst_serialized_size(void) { return sizeof(serial_header) + sizeof(dfo_values); }
+
+dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void *state, unsigned char *buf,
+                                   size_t size)
+{
+    const saved_state *st = as_state(state);
+    if (!st) return dfo_inst_fail(in, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    if (size < dfo_inst_serialized_size())
+        return dfo_inst_fail(in, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
+                             (unsigned long)dfo_inst_serialized_size());
+    serial_header hdr;
+    memcpy(hdr.magic, SERIAL_MAGIC, 8);
+    hdr.version = SERIAL_VERSION;
+    hdr.size = (uint32_t)sizeof(dfo_values);
+    hdr.checksum = fnv1a((const unsigned char *)&st->v, sizeof(dfo_values));
+    memcpy(buf, &hdr, sizeof hdr);
+    memcpy(buf + sizeof hdr, &st->v, sizeof(dfo_values));
+    return DFO_INST_OK;
+}
+
+static int finite_inputs(const dfo_inputs *u) { return isfinite(u->F_ext) && isfinite(u->N_ext); }
+
+/* A deserialised state must describe a simulation this FMU could have reached. */
+static const char *implausible(const dfo_values *v)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home == DFO_COMPUTED || var->type == DFO_BOOLEAN) continue;
+        const double x = var->type == DFO_REAL ? *(const double *)cslot(v, var) : *(const int *)cslot(v, var);
+        if (invalid(var, x))
+            return var->type == DFO_REAL ? "a parameter is out of range" : "an integer parameter is out of range";
+    }
+    if (v->phase != DFO_PHASE_INSTANTIATED && v->phase != DFO_PHASE_INIT && v->phase != DFO_PHASE_STEP &&
+        v->phase != DFO_PHASE_TERMINATED && v->phase != DFO_PHASE_ERROR)
+        return "the life-cycle phase is invalid";
+    if (dfo_check_params(&v->p)) return "the observation window is empty";
+    if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used) || !isfinite(v->start_time) || !isfinite(v->stop_time) ||
+        !isfinite(v->time))
+        return "an input or the experiment's times are not finite";
+    if (v->effects < 0 || (v->effects & ~DFO_MD_EFFECTS_ALL)) return "the effects are invalid";
+    const dfo_state *s = &v->s;
+    if (!isfinite(s->t) || !isfinite(s->t0) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) ||
+        !isfinite(s->F) || !isfinite(s->hA) || s->n < 0)
+        return "the state is not finite";
+    if (s->mode < -1 || s->mode > 1) return "the mode is invalid";
+    /* the time lies on the internal grid's interval n: t0 + n h <= t < t0 + (n + 1) h */
+    const double h = v->p.h, slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
+    if (s->t < s->t0 || s->t0 + (double)s->n * h > s->t + slack || s->t0 + (double)(s->n + 1) * h < s->t - slack)
+        return "the time does not match the internal grid";
+    /* once started, the host's time is the stepper's within its snap tolerance */
+    if ((v->phase & (DFO_PHASE_STEP | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR)) &&
+        fabs(v->time - s->t) > fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(v->time)) + slack)
+        return "the host's time does not match the state's";
+    return NULL;
+}
+
+dfo_inst_status dfo_inst_deserialize(dfo_instance *in, const char *fn, const unsigned char *buf, size_t size,
+                                     void **state)
+{
+    serial_header hdr;
+    if (size != dfo_inst_serialized_size())
+        return dfo_inst_fail(in, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
+                             (unsigned long)dfo_inst_serialized_size());
+    memcpy(&hdr, buf, sizeof hdr);
+    if (memcmp(hdr.magic, SERIAL_MAGIC, 8) != 0 || hdr.version != SERIAL_VERSION || hdr.size != sizeof(dfo_values))
+        return dfo_inst_fail(in, "%s: not a serialised state of this FMU version.", fn);
+    dfo_values v;
+    memcpy(&v, buf + sizeof hdr, sizeof v);
+    if (fnv1a((const unsigned char *)&v, sizeof v) != hdr.checksum)
+        return dfo_inst_fail(in, "%s: checksum mismatch, the serialised state is corrupted.", fn);
+    const char *why = implausible(&v);
+    if (why) return dfo_inst_fail(in, "%s: rejected, %s.", fn, why);
+    dfo_model_init(&v.M, &v.p);   /* derived constants follow from the parameters, never trusted */
+    dfo_check_caches(&v.M, &v.s); /* and caches that do not follow from the state are dropped */
+    return store_state(in, fn, state, &v);
+}

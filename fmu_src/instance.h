@@ -1,0 +1,128 @@
+/* The instance core of the DryFrictionOscillator FMU, independent of any FMI version: life-cycle
+ * phase, start values, get/set through the variable table generated from modelDescription.xml
+ * (model_vars.h), initialisation, doStep, FMU states and their serialisation, logging.
+ *
+ * No FMI types here. An FMI glue (fmi2_cs.c today, an FMI 3.0 one later) checks its arguments and
+ * the phase in which each of its functions may be called, calls the core, and maps dfo_inst_status
+ * to its own status codes. The host's memory and logger reach the core through dfo_host.
+ *
+ * Time: the core keeps the host's time (start time, then the end of every successful doStep) apart
+ * from the physics state's own time; after a good step the stepper's time is the target or a grid
+ * point within a snap tolerance of it. The host's time is the one doStep checks the communication
+ * point against, the last successful time, and the one an FMU state is checked against. */
+#ifndef DFO_INSTANCE_H
+#define DFO_INSTANCE_H
+
+#include "model_vars.h"
+#include "newmark.h"
+#include "oscillator.h"
+
+#include <stddef.h>
+
+typedef enum { DFO_INST_OK = 0, DFO_INST_WARNING = 1, DFO_INST_ERROR = 3 } dfo_inst_status;
+
+/* Life-cycle phases, as bits so that a set of phases is a mask. */
+typedef enum {
+    DFO_PHASE_INSTANTIATED = 1 << 0,
+    DFO_PHASE_INIT = 1 << 1,       /* initialisation mode */
+    DFO_PHASE_STEP = 1 << 2,       /* stepping */
+    DFO_PHASE_TERMINATED = 1 << 3,
+    DFO_PHASE_ERROR = 1 << 4       /* a step failed: only reset or an FMU state recovers */
+} dfo_phase;
+#define DFO_PHASE_ANY 31
+
+/* What the host provides. alloc returns zeroed memory (calloc-like) or NULL; log may be NULL. */
+typedef struct {
+    void *ctx;
+    void *(*alloc)(void *ctx, size_t n, size_t size);
+    void (*free)(void *ctx, void *p);
+    void (*log)(void *ctx, dfo_inst_status status, const char *category, const char *message);
+} dfo_host;
+
+/* Everything that defines where a simulation is: plain values, no pointers, so that an FMU state is
+ * a copy and its serialisation the bytes. */
+typedef struct {
+    dfo_params p;
+    dfo_inputs u;
+    dfo_inputs u_used;        /* the inputs of the last step (or of initialisation) */
+    dfo_model M;
+    dfo_state s;
+    double time;              /* the host's time */
+    double start_time, stop_time;
+    int stop_defined;
+    int effects;
+    dfo_phase phase;
+} dfo_values;
+
+typedef struct {
+    dfo_values v;
+    dfo_host host;
+    const char *name;                      /* owned by the glue */
+    int log_on[DFO_NUM_LOG_CATEGORIES];
+    unsigned warned;                       /* outputs already warned about in this run (bit per id) */
+    int stop_at_switch, switched;          /* doStep option and its outcome (see dfo_inst_do_step) */
+} dfo_instance;
+
+/* Start values, phase instantiated; errors and warnings always logged, the other categories as
+ * logging_on says. */
+void dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on);
+
+/* ---- logging ---- */
+#if defined(__GNUC__)
+#define DFO_PRINTF(f, a) __attribute__((format(printf, f, a)))
+#else
+#define DFO_PRINTF(f, a)
+#endif
+void dfo_inst_log(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, ...) DFO_PRINTF(4, 5);
+/* Log an error sentence (category logStatusError) and return DFO_INST_ERROR. */
+dfo_inst_status dfo_inst_fail(const dfo_instance *in, const char *fmt, ...) DFO_PRINTF(2, 3);
+/* Index of a log category by name, -1 when unknown. */
+int dfo_inst_log_category(const char *name);
+/* category -1: all of them. */
+void dfo_inst_set_logging(dfo_instance *in, int category, int on);
+const char *dfo_phase_name(dfo_phase phase);
+
+/* ---- life cycle (the glue has checked the phase) ---- */
+dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
+                               double stop_time);
+dfo_inst_status dfo_inst_enter_init(dfo_instance *in);
+dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn);
+dfo_inst_status dfo_inst_terminate(dfo_instance *in);
+void dfo_inst_reset(dfo_instance *in);
+
+/* ---- variables. fn names the calling function in messages. Set: every value is checked (type,
+ * causality and phase permission, range) before any is stored, so a rejected call changes nothing.
+ * Get: DFO_INST_WARNING when an observable was read while observe is false (it reads 0). ---- */
+dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[]);
+dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[]);
+dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[]);
+dfo_inst_status dfo_inst_set_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[]);
+dfo_inst_status dfo_inst_set_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                 const int value[]);
+dfo_inst_status dfo_inst_set_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  const int value[]);
+
+/* ---- stepping ---- */
+enum {
+    /* Stop at the end of the internal step in which the first stick/slip switch happens (for an
+     * FMI 3.0 early return); *t_reached then tells where. Off: always end on tc + dt. */
+    DFO_STEP_STOP_AT_SWITCH = 1
+};
+dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
+                                 double *t_reached);
+/* The host's time: start time, then the end of the last successful step. */
+double dfo_inst_time(const dfo_instance *in);
+
+/* ---- FMU states: allocated through the host, tagged; serialised with magic, version, size and
+ * checksum, validated on load, derived constants rebuilt ---- */
+dfo_inst_status dfo_inst_get_state(dfo_instance *in, const char *fn, void **state);
+dfo_inst_status dfo_inst_set_state(dfo_instance *in, const char *fn, const void *state);
+dfo_inst_status dfo_inst_free_state(dfo_instance *in, const char *fn, void **state);
+size_t dfo_inst_serialized_size(void);
+dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void *state, unsigned char *buf,
+                                   size_t size);
+dfo_inst_status dfo_inst_deserialize(dfo_instance *in, const char *fn, const unsigned char *buf, size_t size,
+                                     void **state);
+
+#endif

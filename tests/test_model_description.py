@@ -1,0 +1,397 @@
+"""The model description is the FMU's single source of truth, and it tells the truth.
+
+- the valid ranges are FMI min/max attributes, and the binary enforces exactly them (the C table
+  is generated from the XML);
+- the effect bits are a machine-readable vendor annotation, and the `effects` value follows them;
+- the observables read while `observe` is false return fmi2Warning (value 0) with one logged
+  sentence per run naming the variable and "set observe = true", as their descriptions say;
+- `<ModelStructure>` declares which outputs follow the inputs at once (a, F_friction) and which only
+  through the state: setting an input and reading the outputs without a step agrees with it;
+- author, copyright, license (BSD-2-Clause, LICENSE shipped in the FMU), generationDateAndTime.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+from fmpy.fmi1 import calloc, free
+from ctypes import c_double, c_int, c_uint
+
+from dryfriction.fmu import default_fmu_path
+
+ROOT = Path(__file__).resolve().parents[1]
+XML = ROOT / "modelDescription.xml"
+fmi2OK, fmi2Warning = 0, 1
+OBSERVABLES = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
+DBL_MIN = sys.float_info.min
+
+
+class Logged:
+    """Callbacks that keep every log message (status, category, text)."""
+
+    def __init__(self) -> None:
+        self.messages: list[tuple[int, str, str]] = []
+        self.struct = fmi2CallbackFunctions()
+        self.struct.logger = fmi2CallbackLoggerTYPE(self._log)
+        self.struct.allocateMemory = fmi2CallbackAllocateMemoryTYPE(lambda n, size: calloc(n, size))
+        self.struct.freeMemory = fmi2CallbackFreeMemoryTYPE(lambda p: free(p))
+
+    def _log(self, env: object, name: bytes, status: int, category: bytes, message: bytes) -> None:
+        self.messages.append((status, category.decode(), message.decode(errors="replace")))
+
+    def warnings(self) -> list[tuple[str, str]]:
+        return [(c, m) for s, c, m in self.messages if s == fmi2Warning]
+
+
+@pytest.fixture(scope="module")
+def unzipped() -> Iterator[tuple[str, object]]:
+    path = default_fmu_path()
+    assert path.is_file(), f"FMU not found: {path} (build it, or set DFO_FMU)"
+    d = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="dfo-md-"))
+    yield d, read_model_description(str(path))
+    shutil.rmtree(d, ignore_errors=True)
+
+
+class Slave:
+    def __init__(self, unzipped: tuple[str, object]) -> None:
+        d, md = unzipped
+        self.md = md
+        self.vars = {v.name: v for v in md.modelVariables}
+        self.log = Logged()
+        self.s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                           instanceName="md")
+        self.s.instantiate(callbacks=self.log.struct)
+
+    def vr(self, name: str) -> int:
+        return self.vars[name].valueReference
+
+    def start(self, **values: float | int | bool) -> None:
+        s = self.s
+        s.setupExperiment(startTime=0.0)
+        for name, value in values.items():
+            kind = self.vars[name].type
+            if kind == "Real":
+                s.setReal([self.vr(name)], [float(value)])
+            elif kind == "Boolean":
+                s.setBoolean([self.vr(name)], [bool(value)])
+            else:
+                s.setInteger([self.vr(name)], [int(value)])
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+
+    def get_status(self, name: str) -> tuple[int, float]:
+        """(status, value) of one output through the raw C function: fmpy hides warnings."""
+        v = self.vars[name]
+        vr = (c_uint * 1)(v.valueReference)
+        if v.type == "Real":
+            out = (c_double * 1)()
+            st = self.s.dll.fmi2GetReal(self.s.component, vr, 1, out)
+        else:
+            out = (c_int * 1)()
+            st = self.s.dll.fmi2GetInteger(self.s.component, vr, 1, out)
+        return st, out[0]
+
+    def outputs(self, names: list[str]) -> dict[str, float]:
+        reals = [n for n in names if self.vars[n].type == "Real"]
+        ints = [n for n in names if self.vars[n].type != "Real"]
+        out = dict(zip(reals, self.s.getReal([self.vr(n) for n in reals])))
+        out.update(zip(ints, self.s.getInteger([self.vr(n) for n in ints])))
+        return out
+
+
+@pytest.fixture
+def slave(unzipped: tuple[str, object]) -> Iterator[Slave]:
+    sl = Slave(unzipped)
+    yield sl
+    sl.s.freeInstance()
+
+
+# ----------------------------------------------------------------------------- ranges
+
+
+def _ranged(md: object) -> list[tuple[str, str, float | None, float | None]]:
+    out = []
+    for v in md.modelVariables:
+        if v.causality in ("parameter", "input") and v.type in ("Real", "Integer") and (v.min or v.max):
+            out.append((v.name, v.type, None if v.min is None else float(v.min), None if v.max is None else float(v.max)))
+    return out
+
+
+def test_the_ranges_are_in_the_model_description() -> None:
+    md = read_model_description(str(XML))
+    by = {v.name: v for v in md.modelVariables}
+    assert float(by["m"].min) == DBL_MIN and float(by["h"].min) == DBL_MIN
+    for n in ("k", "c", "N", "mu_s", "chi", "omega"):
+        assert float(by[n].min) == 0.0 and by[n].max is None, n
+    assert float(by["alpha"].min) == -1.0 / 3.0 and float(by["alpha"].max) == 0.0
+    assert (int(by["frictionUpdates"].min), int(by["frictionUpdates"].max)) == (0, 100)
+    assert by["scheme"].type == "Enumeration" and by["scheme"].declaredType.name == "Scheme"
+    assert [(i.name, int(i.value)) for i in by["scheme"].declaredType.items] == [
+        ("paper", 1), ("consistent", 2), ("located", 3)]
+
+
+@pytest.mark.parametrize("side", ["min", "max"])
+def test_the_binary_enforces_exactly_the_declared_ranges(unzipped: tuple[str, object], side: str) -> None:
+    """Each declared bound is accepted and the next representable value beyond it is refused with
+    a sentence naming the variable, its value reference and the range: the C table is the XML's."""
+    sl = Slave(unzipped)
+    try:
+        checked = 0
+        for name, kind, lo, hi in _ranged(unzipped[1]):
+            bound = lo if side == "min" else hi
+            if bound is None:
+                continue
+            vr = sl.vr(name)
+            if kind == "Real":
+                beyond = math.nextafter(bound, -math.inf if side == "min" else math.inf)
+                sl.s.setReal([vr], [bound])
+                with pytest.raises(FMICallException):
+                    sl.s.setReal([vr], [beyond])
+            else:
+                beyond = int(bound) + (-1 if side == "min" else 1)
+                sl.s.setInteger([vr], [int(bound)])
+                with pytest.raises(FMICallException):
+                    sl.s.setInteger([vr], [beyond])
+            msg = [m for s, _, m in sl.log.messages if s >= 3][-1]
+            assert f"for variable {name} (value reference {vr}); valid range:" in msg, msg
+            checked += 1
+            sl.s.reset()
+        assert checked >= (9 if side == "min" else 2)
+        # subnormal m and h are below the normal minimum
+        for name in ("m", "h"):
+            with pytest.raises(FMICallException):
+                sl.s.setReal([sl.vr(name)], [DBL_MIN / 2])
+            assert "a normal number" in sl.log.messages[-1][2]
+    finally:
+        sl.s.freeInstance()
+
+
+def test_the_generator_refuses_an_inconsistent_description(tmp_path: Path) -> None:
+    """A start value outside its own range is caught at build time, with one line and status 1."""
+    bad = XML.read_text().replace('<Real min="0" unit="N/m" start="100"/>', '<Real min="0" unit="N/m" start="-1"/>')
+    assert bad != XML.read_text()
+    (tmp_path / "md.xml").write_text(bad)
+    r = subprocess.run([sys.executable, str(ROOT / "fmu_src" / "gen_model_vars.py"), str(tmp_path / "md.xml"),
+                        str(tmp_path / "model_vars.h")], capture_output=True, text=True)
+    assert r.returncode == 1 and "variable k" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    r = subprocess.run([sys.executable, str(ROOT / "fmu_src" / "gen_model_vars.py"), str(XML),
+                        str(tmp_path / "model_vars.h")], capture_output=True, text=True)
+    text = (tmp_path / "model_vars.h").read_text()
+    assert r.returncode == 0 and "offsetof(dfo_params, mu_s)" in text and "DFO_MD_EFFECT_FRICTION = 1" in text
+
+
+# ----------------------------------------------------------------------------- effects
+
+
+def test_effect_bits_are_a_vendor_annotation() -> None:
+    root = ET.parse(XML).getroot()
+    eff = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
+    assert eff is not None and eff.get("variable") == "effects"
+    assert [(int(e.get("bit")), e.get("name")) for e in eff.iterfind("Effect")] == [
+        (1, "friction"), (2, "coefficientUpdate"), (4, "damping"), (8, "forceInput"), (16, "normalInput"),
+        (32, "observables")]
+
+
+def test_effects_value_follows_the_annotation(slave: Slave) -> None:
+    bits = {e.get("name"): int(e.get("bit")) for e in ET.parse(XML).getroot().iterfind(".//Effect")}
+    slave.start(c=0.3, chi=0.7, observe=True)
+    slave.s.setReal([slave.vr("F_ext")], [0.1])
+    (effects,) = slave.s.getInteger([slave.vr("effects")])
+    assert effects == bits["friction"] | bits["coefficientUpdate"] | bits["damping"] | bits["observables"]
+    slave.s.reset()
+    slave.start(mu_s=0.0, chi=1.0)
+    (effects,) = slave.s.getInteger([slave.vr("effects")])
+    assert effects == 0
+
+
+# ----------------------------------------------------------------------------- observe
+
+
+def test_observable_descriptions_say_set_observe() -> None:
+    md = read_model_description(str(XML))
+    for v in md.modelVariables:
+        if v.name in OBSERVABLES:
+            assert "set observe = true" in v.description, v.name
+
+
+@pytest.mark.parametrize("observe", [False, True])
+def test_observables_without_observe_warn(slave: Slave, observe: bool) -> None:
+    """With the window set but observe false, the observables used to read 0 silently after
+    motion. Now: fmi2Warning and 0, one logStatusWarning sentence per variable and run naming it and
+    "set observe = true"; with observe true, fmi2OK and the real values."""
+    slave.start(x0=0.004, chi=0.5, t_obs_start=1.0, t_obs_stop=3.0, observe=observe)
+    slave.s.doStep(0.0, 4.0)
+    got = {}
+    for name in OBSERVABLES:
+        for _ in range(3):  # a host sampling every step: warned once
+            st, value = slave.get_status(name)
+            got[name] = (st, value)
+    warnings = slave.log.warnings()
+    if observe:
+        assert all(st == fmi2OK for st, _ in got.values()) and warnings == []
+        assert got["x_max"][1] > 0.0 > got["x_min"][1] and 0.0 < got["stick_fraction"][1] < 1.0
+        assert got["transitions"][1] > 0 and got["E_friction"][1] > 0.0
+    else:
+        assert all(st == fmi2Warning and value == 0 for st, value in got.values()), got
+        assert len(warnings) == len(OBSERVABLES)
+        for (category, msg), name in zip(warnings, OBSERVABLES):
+            assert category == "logStatusWarning" and f"variable {name} " in msg and "set observe = true" in msg
+        # fmpy's getReal passes a warning through (no exception): hosts still get the 0
+        assert slave.s.getReal([slave.vr("x_max")]) == [0.0]
+
+
+# ----------------------------------------------------------------------------- ModelStructure
+
+
+def _declared_dependencies(md: object) -> dict[str, set[str]]:
+    return {u.variable.name: {d.name for d in u.dependencies} for u in md.outputs}
+
+
+def test_every_output_declares_its_dependencies() -> None:
+    md = read_model_description(str(XML))
+    deps = {u.variable.name: u.dependencies for u in md.outputs}
+    assert set(deps) == {v.name for v in md.modelVariables if v.causality == "output"}
+    assert all(d is not None for d in deps.values())  # no "depends on everything"
+    assert {n for n, d in deps.items() if d} == {"a", "F_friction"}
+    assert all({x.causality for x in d} <= {"input"} for d in deps.values())
+    init = {u.variable.name: u.dependencies for u in md.initialUnknowns}
+    assert all(d is not None for d in init.values())
+    assert [x.name for x in init["x"]] == ["x0"] and [x.name for x in init["v"]] == ["v0"]
+
+
+def _perturbed(slave: Slave, names: list[str], mode_wanted: int) -> dict[str, set[str]]:
+    """Step to a communication point in the wanted mode (0 stuck, 1 sliding), then set each input in
+    turn and read every output without a step: the inputs each output responds to."""
+    slave.start(k=100.0, N=1.0, mu_s=0.4, chi=0.5, P0=1.0, omega=5.0, c=0.2, observe=True)
+    inputs = ["F_ext", "N_ext"]
+    slave.s.setReal([slave.vr(n) for n in inputs], [0.0, 0.0])
+    t = 0.0
+    for j in range(4000):
+        slave.s.doStep(t, 1.25e-3)
+        t += 1.25e-3
+        if j > 40 and (slave.s.getInteger([slave.vr("mode")])[0] != 0) == bool(mode_wanted):
+            break
+    assert (slave.s.getInteger([slave.vr("mode")])[0] != 0) == bool(mode_wanted)
+    base = slave.outputs(names)
+    responds: dict[str, set[str]] = {n: set() for n in names}
+    for inp in inputs:
+        slave.s.setReal([slave.vr(inp)], [0.05 if inp == "F_ext" else 0.5])
+        now = slave.outputs(names)
+        for n in names:
+            if now[n] != base[n]:
+                responds[n].add(inp)
+        slave.s.setReal([slave.vr(inp)], [0.0])
+        assert slave.outputs(names) == base  # back to the step's inputs: the step's values, exactly
+    return responds
+
+
+def test_outputs_follow_inputs_as_declared(slave: Slave) -> None:
+    """Stuck, F_ext moves the friction (it holds the new static force); sliding, N_ext moves it
+    (-s mu_k N) and F_ext moves the acceleration; x, v, mode and the observables never move without
+    a step. The union over both modes is exactly the declared dependencies."""
+    declared = _declared_dependencies(slave.md)
+    names = sorted(declared)
+    stuck = _perturbed(slave, names, 0)
+    slave.s.reset()
+    sliding = _perturbed(slave, names, 1)
+    assert stuck["F_friction"] == {"F_ext"} and sliding["F_friction"] == {"N_ext"}
+    assert sliding["a"] == {"F_ext", "N_ext"}
+    found = {n: stuck[n] | sliding[n] for n in names}
+    assert found == declared
+
+
+def _initial_values(slave: Slave, values: dict[str, float | int | bool], names: list[str]) -> dict[str, float]:
+    slave.s.reset()
+    slave.s.setupExperiment(startTime=0.0)
+    for name, value in values.items():
+        kind = slave.vars[name].type
+        if kind == "Real":
+            slave.s.setReal([slave.vr(name)], [float(value)])
+        elif kind == "Boolean":
+            slave.s.setBoolean([slave.vr(name)], [bool(value)])
+        else:
+            slave.s.setInteger([slave.vr(name)], [int(value)])
+    slave.s.enterInitializationMode()
+    return slave.outputs(names)
+
+
+def _changed(kind: str, value: float | int | bool, name: str) -> float | int | bool:
+    if kind == "Boolean":
+        return not value
+    if name == "scheme":
+        return 1 if value != 1 else 3
+    if kind != "Real":
+        return int(value) + 1
+    if name == "alpha":
+        return value - 0.05
+    return value * 1.25 + 0.01
+
+
+@pytest.mark.parametrize("case", ["stuck", "sliding", "moving"])
+def test_initial_unknowns_depend_only_on_what_they_declare(slave: Slave, case: str) -> None:
+    """In initialisation mode, change one known (parameter or input) at a time and read every
+    initial unknown: whatever changes must be declared in <InitialUnknowns> (a declared dependency
+    may not show at a given point, an undeclared one is a lie)."""
+    base: dict[str, float | int | bool] = {
+        "x0": 0.004, "observe": True, "F_ext": 0.0, "N_ext": 0.0, "c": 0.0, "chi": 0.7,
+        **({"P0": 0.3} if case == "stuck" else {}), **({"v0": 0.2} if case == "moving" else {})}
+    declared = {u.variable.name: {d.name for d in u.dependencies} for u in slave.md.initialUnknowns}
+    names = sorted(declared)
+    knowns = [v for v in slave.md.modelVariables if v.causality in ("parameter", "input")]
+    full = {v.name: base.get(v.name, v.start if v.type != "Boolean" else v.start in ("true", True))
+            for v in knowns}
+    full = {n: (float(x) if slave.vars[n].type == "Real" else x) for n, x in full.items()}
+    full = {n: (int(x) if slave.vars[n].type in ("Integer", "Enumeration") else x) for n, x in full.items()}
+    ref = _initial_values(slave, full, names)
+    mode = ref["mode"]
+    assert (mode == 0) == (case == "stuck")
+    seen: dict[str, set[str]] = {n: set() for n in names}
+    for v in knowns:
+        if v.name == "t_obs_stop":
+            continue  # 1e300 * 1.25 overflows; t_obs_start covers the window
+        now = _initial_values(slave, {**full, v.name: _changed(v.type, full[v.name], v.name)}, names)
+        for n in names:
+            if now[n] != ref[n]:
+                seen[n].add(v.name)
+    for n in names:
+        assert seen[n] <= declared[n], f"{n} changes with undeclared {sorted(seen[n] - declared[n])}"
+    assert seen["x"] == {"x0"} and seen["effects"] >= {"c", "observe"}
+
+
+def test_friction_follows_the_sliding_law_at_once(slave: Slave) -> None:
+    """Sliding: F = -mode mu_k (N + N_ext) for the N_ext just set, no step in between."""
+    _perturbed(slave, ["x"], 1)
+    mode = slave.s.getInteger([slave.vr("mode")])[0]
+    slave.s.setReal([slave.vr("N_ext")], [0.75])
+    (F,) = slave.s.getReal([slave.vr("F_friction")])
+    assert F == pytest.approx(-mode * 0.5 * 0.4 * (1.0 + 0.75), rel=1e-15)
+
+
+# ----------------------------------------------------------------------------- metadata
+
+
+def test_metadata_and_license(fmu_path: Path) -> None:
+    root = ET.parse(XML).getroot()
+    assert root.get("author") == "DryFrictionOscillator developers"
+    assert root.get("license") == "BSD-2-Clause; see LICENSE"
+    assert "2026" in root.get("copyright") and "DryFrictionOscillator developers" in root.get("copyright")
+    assert root.get("generationDateAndTime", "").endswith("Z")
+    license_text = (ROOT / "LICENSE").read_text()
+    assert "Copyright (c) 2026, DryFrictionOscillator developers" in license_text
+    assert "Redistribution and use in source and binary forms" in license_text
+    with zipfile.ZipFile(fmu_path) as z:
+        assert z.read("documentation/LICENSE").decode() == license_text
+        assert z.read("modelDescription.xml") == XML.read_bytes()
