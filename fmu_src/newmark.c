@@ -86,31 +86,32 @@ static double excitation(const step_ctx *C, double t)
     return (t == C->t_grid) ? C->P_grid : dfo_excitation(C->M, t);
 }
 
-/* Excitation at the grid point s->n from the cache of the state (see dfo_state). One rotation when
- * the cache holds the previous point, else an exact evaluation at the anchor below n and the same
- * rotations from there: the value depends on n only, never on the history of the cache. */
+/* Cosine and sine of the excitation phase at the grid point n, from the cache of the state (see
+ * dfo_state). One rotation when the cache holds the previous point, else an exact evaluation at
+ * the anchor below n and the same rotations from there: the value depends on n only, never on the
+ * history of the cache. */
 static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *cos_out, double *sin_out)
 {
     const double rot_c = M->rot_c, rot_s = M->rot_s;
-    double c, sn;
+    double cos_th, sin_th;
     long long i;
     if (s->exc_n >= 0 && s->exc_n == n - 1 && n % EXC_ANCHOR != 0) {
-        c = s->exc_c;
-        sn = s->exc_s;
+        cos_th = s->exc_c;
+        sin_th = s->exc_s;
         i = n - 1;
     } else {
         i = n - n % EXC_ANCHOR;
         const double th = M->p.omega * (s->t0 + (double)i * M->p.h) + M->p.phi;
-        c = cos(th);
-        sn = sin(th);
+        cos_th = cos(th);
+        sin_th = sin(th);
     }
     for (; i < n; i++) {
-        const double c_next = c * rot_c - sn * rot_s;
-        sn = sn * rot_c + c * rot_s;
-        c = c_next;
+        const double cos_next = cos_th * rot_c - sin_th * rot_s;
+        sin_th = sin_th * rot_c + cos_th * rot_s;
+        cos_th = cos_next;
     }
-    *cos_out = c;
-    *sin_out = sn;
+    *cos_out = cos_th;
+    *sin_out = sin_th;
 }
 
 static double grid_excitation(const dfo_model *M, dfo_state *s)
@@ -616,9 +617,9 @@ void dfo_check_caches(const dfo_model *M, dfo_state *s)
     if (s->exc_n >= 0) {
         dfo_state fresh = *s;
         fresh.exc_n = -1;
-        double c, sn;
-        phase_at(M, &fresh, s->exc_n, &c, &sn);
-        if (!(c == s->exc_c && sn == s->exc_s)) dfo_forget_caches(s);
+        double cos_th, sin_th;
+        phase_at(M, &fresh, s->exc_n, &cos_th, &sin_th);
+        if (!(cos_th == s->exc_c && sin_th == s->exc_s)) dfo_forget_caches(s);
     } else if (s->exc_n != -1) {
         dfo_forget_caches(s);
     }

@@ -63,20 +63,24 @@ typedef void (*dfo_switch_fn)(void *ctx, double t, double x, int from_mode, int 
 
 /* Snapping to the grid. A host that builds its communication points by adding dt repeatedly asks
  * for t = 0.020000000000000011 where it means the grid point 0.02, and after 10^5 additions of
- * dt = 0.01 (or 0.001) its clock is off by up to 8e-10 s (1.1e-10 s): up to ~1.2e4 eps |t|, far
- * more than a few ulps. Honoured literally, every such remainder would become an extra shortened
- * step and the results would depend on the host's rounding. So a requested time within
+ * dt = 0.01 (or 0.001) its clock is off by 7.6e-10 s (1.1e-10 s): 3.4e3 (5.1e3) eps |t|, far more
+ * than a few ulps. Honoured literally, every such remainder would become an extra shortened step
+ * and the results would depend on the host's rounding. So a requested time within
  *
  *     tol(t) = min(1e-5 h, max(1e-7 h, 2^16 eps |t|))
  *
- * of a grid point t0 + m h is that grid point. Why these bounds: 2^16 eps |t| covers the rounding
- * drift of a host that adds its step up to ~5e5 times (measured: 3.4e3 to 1.2e4 eps |t| after 10^5
- * additions of dt = 0.01, 0.001 or 0.0015); the floor 1e-7 h covers small |t| after a start at a
- * large t0; the cap 1e-5 h keeps the snap far below the scheme's own error: moving a point by
- * delta changes the state by about |v| delta, a relative 1e-5 (rate h), against the scheme's
- * global error of order (rate h)^2 / 12 (rate: the model's fastest rate) -- a hundredth of it or
- * less wherever the steps resolve the motion (rate h >= 1e-3). A requested time farther than tol
- * from every grid point is honoured exactly, with a shortened step. */
+ * of a grid point t0 + m h is that grid point. The bounds:
+ *  - 2^16 eps |t| covers the drift of a host that adds its step some 10^5 to 10^6 times (measured
+ *    after 10^5 additions: 3.4e3, 5.1e3, 8.5e3 and 1.2e4 eps |t| for dt = 0.01, 0.001, 0.1 and
+ *    0.0015); a clock that drifted farther is honoured as an off-grid time, with shortened steps;
+ *  - the floor 1e-7 h covers small |t|; no meaningful time lies that close to a grid point;
+ *  - the cap 1e-5 h bounds what a snap can change: a shift delta moves the state by about
+ *    |v| delta, at most a relative 1e-5 rate h (rate: the model's fastest rate, rate_max), against
+ *    the scheme's own error of order (rate h)^2 / 12: below a tenth of it wherever rate h >= 1e-3,
+ *    below 1 % on the default model (rate h = 0.015). And the shift only undoes the host's own
+ *    rounding: the point it means is the grid point.
+ * A requested time farther than tol from every grid point is honoured exactly, with a shortened
+ * step. */
 double dfo_snap_tolerance(const dfo_model *M, double t);
 
 /* The time dfo_advance ends on for t_target: the grid point t0 + m h (m >= s->n, at or after
