@@ -76,8 +76,6 @@ typedef struct {
     int mode0;
 } phase_start;
 
-static const scheme_rules *rules_of(const dfo_model *M);
-
 static int stuck(const step_ctx *C, const dfo_state *s) { return C->friction && s->mode == 0; }
 
 /* The excitation at t: from the grid cache at the end of the current step, else evaluated. */

@@ -269,6 +269,17 @@ static void test_offgrid(checks *T)
         CHECK_SAME(1e-7 * h, dfo_snap_tolerance(&S.M, 0.0));
         CHECK_SAME(0x1p16 * DBL_EPSILON * 100.0, dfo_snap_tolerance(&S.M, 100.0));
         CHECK_SAME(1e-5 * h, dfo_snap_tolerance(&S.M, 1e6));
+        /* the Compliance Checker's clock: 0.001 added 20 times is 0.020000000000000011, which is
+         * the grid point 20 h = 0.02 */
+        sim K;
+        sim_start(&K, &p);
+        double t_add = 0.0;
+        for (int i = 0; i < 20; i++) t_add += 0.001;
+        CHECK(t_add != 20.0 * h);
+        CHECK_SAME(20.0 * h, dfo_snap_target(&K.M, &K.s, t_add));
+        CHECK_INT(DFO_OK, sim_to(&K, t_add));
+        CHECK_SAME(20.0 * h, K.s.t);
+        CHECK_INT(20, K.s.steps);
         /* far beyond an exact grid count: never snapped */
         CHECK_SAME(1e300, dfo_snap_target(&S.M, &S.s, 1e300));
     }

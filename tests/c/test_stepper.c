@@ -1,7 +1,8 @@
 /* Unit tests of the Bossak-Newmark stepper with the friction LCP (fmu_src/newmark.h), driven
  * directly (no FMI): dfo_model_init, dfo_start, dfo_advance to successive communication points.
  *
- * 1. time: communication points land exactly, the grid counter n, no drift over 10^6 steps;
+ * 1. time: communication points land exactly (or on the grid point they snap to, newmark.h), the
+ *    grid counter n, no drift over 10^6 steps;
  * 2. friction invariants at every communication point (schemes 1, 2, 3);
  * 3. energy balance of the located scheme with viscous damping;
  * 4. fast paths give the same numbers as the general path, bit for bit;
