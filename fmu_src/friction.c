@@ -5,7 +5,7 @@
 
 void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in)
 {
-    L->u = dfo_external_force(M, in);
+    L->F_ext = dfo_external_force(M, in);
     L->N = dfo_normal_force(M, in);
     L->muk_N = M->mu_k * L->N;
     L->Fb = M->mu_b * L->N;
@@ -26,12 +26,12 @@ double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, dou
 {
     const double Fb = L->Fb, w = M->p.omega, amp = M->P_amp;
     if (w == 0.0 || amp == 0.0) { /* a constant force */
-        const double S = dfo_excitation(M, ta) + C0;
-        *dir = dfo_sign(S);
-        return (fabs(S) > Fb) ? ta : INFINITY;
+        const double F_static = dfo_excitation(M, ta) + C0;
+        *dir = dfo_sign(F_static);
+        return (fabs(F_static) > Fb) ? ta : INFINITY;
     }
-    const double lim_hi = (Fb - C0) / amp; /* S >  Fb  <=>  cos(theta)      > lim_hi */
-    const double lim_lo = (Fb + C0) / amp; /* S < -Fb  <=>  cos(theta + pi) > lim_lo */
+    const double lim_hi = (Fb - C0) / amp; /* F_static >  Fb  <=>  cos(theta)      > lim_hi */
+    const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
     const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? acos(lim_hi) : 0.0;
     const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? acos(lim_lo) : 0.0;
     const double th = w * ta + M->P_phase;

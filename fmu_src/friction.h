@@ -14,7 +14,7 @@
 
 /* What the inputs make of the forces; constant while the inputs are held. */
 typedef struct {
-    double u;      /* external force F_ext (0 when the input was never set) */
+    double F_ext;  /* external force (0 when the input was never set) */
     double N;      /* normal force max(N + N_ext, 0) */
     double muk_N;  /* kinetic friction magnitude mu_k N */
     double Fb;     /* breakaway limit max(mu_s, mu_k) N (>= muk_N) */
@@ -24,35 +24,37 @@ void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
 
 static inline int dfo_sign(double x) { return (x > 0.0) - (x < 0.0); }
 
-/* The net applied force on a block at rest at X, excitation P: S = P + u - k X. */
+/* The static force: the net applied force on a block at rest at X under the excitation P,
+ * F_static = P + F_ext - k X (the force the friction must hold to keep it there). */
 static inline double dfo_static_force(const dfo_model *M, const dfo_loads *L, double P, double X)
 {
-    return P + L->u - M->p.k * X;
+    return P + L->F_ext - M->p.k * X;
 }
 
-/* The rest rule: a block at rest with static force S sticks (0) if |S| <= Fb, else it slides in
- * the direction of S. */
-static inline int dfo_rest_mode(const dfo_loads *L, double S)
+/* The rest rule: a block at rest sticks (0) if |F_static| <= Fb, else it slides in the direction of
+ * F_static. */
+static inline int dfo_rest_mode(const dfo_loads *L, double F_static)
 {
-    return (fabs(S) <= L->Fb) ? 0 : dfo_sign(S);
+    return (fabs(F_static) <= L->Fb) ? 0 : dfo_sign(F_static);
 }
 
-/* The friction force that holds a stuck block: -S, clamped to the limit. */
-static inline double dfo_stick_force(const dfo_loads *L, double S)
+/* The friction force that holds a stuck block: -F_static, clamped to the limit. */
+static inline double dfo_stick_force(const dfo_loads *L, double F_static)
 {
-    return -fmax(-L->Fb, fmin(L->Fb, S));
+    return -fmax(-L->Fb, fmin(L->Fb, F_static));
 }
 
-/* The consistent acceleration of a slide that starts from rest in direction sd with static force
- * S. The net force is at least the breakaway limit (it may sit on it by rounding at a breakaway),
- * so the acceleration is never against sd. */
-static inline double dfo_breakaway_accel(const dfo_model *M, const dfo_loads *L, int sd, double S)
+/* The consistent acceleration of a slide that starts from rest in direction dir (+1 or -1) with
+ * static force F_static. The net force is at least the breakaway limit (it may sit on it by
+ * rounding at a breakaway), so the acceleration is never against dir. */
+static inline double dfo_breakaway_accel(const dfo_model *M, const dfo_loads *L, int dir, double F_static)
 {
-    return sd * fmax(fmax(sd * S, L->Fb) - L->muk_N, 0.0) / M->p.m;
+    return dir * fmax(fmax(dir * F_static, L->Fb) - L->muk_N, 0.0) / M->p.m;
 }
 
-/* While stuck at X the static force is S(t) = P_amp cos(omega t + P_phase) + C0, C0 = u - k X.
- * The first time >= ta at which |S| exceeds Fb, with the side crossed in *dir, or INFINITY.
+/* While stuck at X the static force is F_static(t) = P_amp cos(omega t + P_phase) + C0, with the
+ * constant part C0 = F_ext - k X. The first time >= ta at which |F_static| exceeds Fb, with the
+ * side crossed in *dir, or INFINITY.
  * Closed form: a force that crosses the limit and comes back between two samples is not missed. */
 double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, double ta, int *dir);
 

@@ -11,7 +11,10 @@
 #define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
 #define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
 #define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
-#define EXC_ANCHOR 64
+#define EXC_ANCHOR 64           /* grid points between exact evaluations of the excitation phase */
+#define SNAP_MAX_REL_H 1e-5     /* snap tolerance (newmark.h): at most 1e-5 h, */
+#define SNAP_MIN_REL_H 1e-7     /* at least 1e-7 h, */
+#define SNAP_EPS_T 0x1p16       /* else 2^16 eps |t| */
 
 /* The few functions of every internal step are inlined into the stepping loop, so that the state
  * stays in registers (a step costs some 100 ns; a call and its spills are a good part of that). */
@@ -19,7 +22,7 @@
 #define HOT_INLINE inline __attribute__((always_inline))
 #else
 #define HOT_INLINE inline
-#endif           /* grid points between exact evaluations of the excitation phase */
+#endif
 
 /* The coefficients of a Bossak step that depend on its length h only (eq. 4). */
 typedef struct {
@@ -27,13 +30,24 @@ typedef struct {
     double c1;         /* 1 / (gamma h) */
     double m_hat;      /* effective mass (1 - alpha) m c1 + k beta h / gamma (+ c) */
     double inv_m_hat;  /* 1 / m_hat */
-    double kV, kA;     /* x_pred = X + kV V + kA A0 */
-    double kX;         /* X1 = x_pred + kX V1 */
+    double pred_V, pred_A;  /* x_pred = X + pred_V V + pred_A A0 */
+    double corr_V;          /* X1 = x_pred + corr_V V1 */
 } step_coef;
+
+/* What sets a scheme apart besides its step (one row per scheme in SCHEMES, below the schemes). */
+typedef struct {
+    /* a stuck block is at rest: V = A = 0, acceleration 0, and the friction holds the static force
+     * (clamped to the limit), set once at the end of each dfo_advance rather than at every step */
+    int rests_when_stuck;
+    /* the stuck fast path: a stuck block's whole grid steps before its known next breakaway may be
+     * taken at once (stuck_until), to the bits of stepping them */
+    int skips_stuck_steps;
+} scheme_rules;
 
 /* What is constant over one call of dfo_advance (inputs are held). */
 typedef struct {
     const dfo_model *M;
+    const scheme_rules *rules;  /* the scheme's row of SCHEMES */
     dfo_loads L;     /* external and normal force, kinetic magnitude, breakaway limit */
     step_coef full;  /* the coefficients of a step of the grid length h */
     double g1;       /* (1 - gamma) / gamma */
@@ -41,6 +55,7 @@ typedef struct {
     double h_step;   /* length of the current step: h itself for a whole grid interval (the time
                       * difference of two grid points differs from h by the rounding of t) */
     int friction;    /* friction acts (the LCP is needed) */
+    int skip_stuck;  /* the stuck fast path applies (stuck_until) */
     double t_grid;   /* end of the current step when it is a grid point (else NaN) */
     double P_grid;   /* the excitation there, from the state's excitation cache */
     dfo_status err;  /* first error met */
@@ -50,10 +65,16 @@ typedef struct {
 
 /* One Bossak step of length h from the current state, before the velocity is known (eq. 4). */
 typedef struct {
-    const step_coef *k;  /* the step's coefficients: the context's for a grid step, else own */
+    const step_coef *co;  /* the step's coefficients: the context's for a grid step, else own */
     step_coef own;
     double A0, x_pred, p_hat;
 } trial;
+
+/* Where a phase of a step began: time, position and mode (for the observables and switch reports). */
+typedef struct {
+    double ta, X0;
+    int mode0;
+} phase_start;
 
 static int stuck(const step_ctx *C, const dfo_state *s) { return C->friction && s->mode == 0; }
 
@@ -63,31 +84,32 @@ static double excitation(const step_ctx *C, double t)
     return (t == C->t_grid) ? C->P_grid : dfo_excitation(C->M, t);
 }
 
-/* Excitation at the grid point s->n from the cache of the state (see dfo_state). One rotation when
- * the cache holds the previous point, else an exact evaluation at the anchor below n and the same
- * rotations from there: the value depends on n only, never on the history of the cache. */
-static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *c_out, double *s_out)
+/* Cosine and sine of the excitation phase at the grid point n, from the cache of the state (see
+ * dfo_state). One rotation when the cache holds the previous point, else an exact evaluation at
+ * the anchor below n and the same rotations from there: the value depends on n only, never on the
+ * history of the cache. */
+static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *cos_out, double *sin_out)
 {
-    const double cd = M->rot_c, sd = M->rot_s;
-    double c, sn;
-    long long k;
+    const double rot_c = M->rot_c, rot_s = M->rot_s;
+    double cos_th, sin_th;
+    long long i;
     if (s->exc_n >= 0 && s->exc_n == n - 1 && n % EXC_ANCHOR != 0) {
-        c = s->exc_c;
-        sn = s->exc_s;
-        k = n - 1;
+        cos_th = s->exc_c;
+        sin_th = s->exc_s;
+        i = n - 1;
     } else {
-        k = n - n % EXC_ANCHOR;
-        const double th = M->p.omega * (s->t0 + (double)k * M->p.h) + M->p.phi;
-        c = cos(th);
-        sn = sin(th);
+        i = n - n % EXC_ANCHOR;
+        const double th = M->p.omega * (s->t0 + (double)i * M->p.h) + M->p.phi;
+        cos_th = cos(th);
+        sin_th = sin(th);
     }
-    for (; k < n; k++) {
-        const double c1 = c * cd - sn * sd;
-        sn = sn * cd + c * sd;
-        c = c1;
+    for (; i < n; i++) {
+        const double cos_next = cos_th * rot_c - sin_th * rot_s;
+        sin_th = sin_th * rot_c + cos_th * rot_s;
+        cos_th = cos_next;
     }
-    *c_out = c;
-    *s_out = sn;
+    *cos_out = cos_th;
+    *sin_out = sin_th;
 }
 
 static double grid_excitation(const dfo_model *M, dfo_state *s)
@@ -103,7 +125,7 @@ static double grid_excitation(const dfo_model *M, dfo_state *s)
 static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F)
 {
     const dfo_model *M = C->M;
-    double f = excitation(C, t) + C->L.u - M->p.k * s->X + F;
+    double f = excitation(C, t) + C->L.F_ext - M->p.k * s->X + F;
     if (M->damped) f -= M->p.c * s->V;
     return f / M->p.m;
 }
@@ -127,21 +149,21 @@ static void coef_for(const dfo_model *M, double h, step_coef *cf)
     cf->m_hat = (1.0 - a) * M->p.m * cf->c1 + M->p.k * b * h / g;
     if (M->damped) cf->m_hat += M->p.c;
     cf->inv_m_hat = 1.0 / cf->m_hat;
-    cf->kV = h * (1.0 - b / g);
-    cf->kA = h * h * (0.5 - b / g);
-    cf->kX = b * h / g;
+    cf->pred_V = h * (1.0 - b / g);
+    cf->pred_A = h * h * (0.5 - b / g);
+    cf->corr_V = b * h / g;
 }
 
 /* The step [s->t, t1] of length h (t1 = s->t + h up to rounding: t1 names the grid point). */
 static HOT_INLINE void predict(const step_ctx *C, const dfo_state *s, double h, double t1, trial *tr)
 {
     const dfo_model *M = C->M;
-    const double a = M->p.alpha, k = M->p.k;
+    const double a = M->p.alpha;
     if (h == C->full.h) {
-        tr->k = &C->full;
+        tr->co = &C->full;
     } else {
         coef_for(M, h, &tr->own);
-        tr->k = &tr->own;
+        tr->co = &tr->own;
     }
     double A0 = s->A;
     /* Bossak's A belongs to the step length hA; re-base it on h (method.md section 8). The
@@ -150,22 +172,22 @@ static HOT_INLINE void predict(const step_ctx *C, const dfo_state *s, double h, 
     if (a != 0.0 && h != s->hA && fabs(h - s->hA) > 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t) &&
         M->rate_max * fmax(h, s->hA) <= 1.0)
         A0 += a * (h - s->hA) * jerk_of(C, s);
-    const double c1 = tr->k->c1;
-    const double x_pred = s->X + tr->k->kV * s->V + tr->k->kA * A0;
-    const double P1 = excitation(C, t1) + C->L.u;
+    const double c1 = tr->co->c1;
+    const double x_pred = s->X + tr->co->pred_V * s->V + tr->co->pred_A * A0;
+    const double P1 = excitation(C, t1) + C->L.F_ext;
     tr->A0 = A0;
     tr->x_pred = x_pred;
-    tr->p_hat = P1 - C->am * A0 + C->am1 * (s->V * c1 + C->g1 * A0) - k * x_pred;
+    tr->p_hat = P1 - C->am * A0 + C->am1 * (s->V * c1 + C->g1 * A0) - M->p.k * x_pred;
 }
 
 /* Complete the step with the end velocity V1 (X1 and A1 from Newmark's kinematics). */
 static HOT_INLINE void finish(const step_ctx *C, dfo_state *s, const trial *tr, double V1)
 {
-    s->X = tr->x_pred + tr->k->kX * V1;
-    s->A = (V1 - s->V) * tr->k->c1 - C->g1 * tr->A0;
+    s->X = tr->x_pred + tr->co->corr_V * V1;
+    s->A = (V1 - s->V) * tr->co->c1 - C->g1 * tr->A0;
     s->V = V1;
-    s->hA = tr->k->h;
-    s->t += tr->k->h;
+    s->hA = tr->co->h;
+    s->t += tr->co->h;
 }
 
 /* Friction at the end of the step: the LCP of method.md section 3 with limit muN. Lemke decides
@@ -173,7 +195,7 @@ static HOT_INLINE void finish(const step_ctx *C, dfo_state *s, const trial *tr, 
  * the mode (+1, 0, -1). */
 static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
 {
-    const double mh = tr->k->m_hat, im = tr->k->inv_m_hat, p = tr->p_hat;
+    const double mh = tr->co->m_hat, im = tr->co->inv_m_hat, p = tr->p_hat;
     if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
         *V1 = p * im;
         *F1 = 0.0;
@@ -203,13 +225,21 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
     return 0;
 }
 
-/* ---- observables ---------------------------------------------------------------------------- */
+/* ---- phases, stick and observables ----------------------------------------------------------- */
 
-/* Book-keeping after each phase [ta, s->t] spent in mode_during: switch reports and observables. */
-static HOT_INLINE void after_phase(const step_ctx *C, dfo_state *s, double ta, int mode_during, double dX, double F,
-                        int mode_before)
+static HOT_INLINE phase_start begin_phase(const dfo_state *s)
+{
+    const phase_start b = {s->t, s->X, s->mode};
+    return b;
+}
+
+/* Book-keeping after a phase [b->ta, s->t] spent in mode_during with friction force F: the stick
+ * phase's breakaway to be found anew, switch reports and observables. */
+static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
 {
     const dfo_model *M = C->M;
+    const double ta = b->ta, dX = s->X - b->X0;
+    const int mode_before = b->mode0;
     if (s->mode == 0 && mode_before != 0) s->stick_tb = NAN; /* a new stick phase */
     if (C->on_switch && s->mode != mode_before) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
     if (!M->p.observe) return;
@@ -226,119 +256,146 @@ static HOT_INLINE void after_phase(const step_ctx *C, dfo_state *s, double ta, i
     }
 }
 
-/* ---- the three variants --------------------------------------------------------------------- */
+/* The static force on the block at its current time and position. */
+static double static_force_now(const step_ctx *C, const dfo_state *s)
+{
+    return dfo_static_force(C->M, &C->L, excitation(C, s->t), s->X);
+}
+
+/* Enter (or stay in) stick where the block is: V = A = 0 (A is then a physical acceleration, hA
+ * = 0), mode 0, and the friction holds the static force F_static, clamped to the limit (it exceeds
+ * the limit only when the consistent scheme sticks a step whose velocity came out with the wrong
+ * sign, or when no motion is resolvable). */
+static void enter_stick(const step_ctx *C, dfo_state *s, double F_static)
+{
+    s->V = s->A = s->hA = 0.0;
+    s->mode = 0;
+    s->F = dfo_stick_force(&C->L, F_static);
+}
+
+/* Complete the step with the block at rest at its end, stuck there. */
+static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
+{
+    finish(C, s, tr, 0.0);
+    enter_stick(C, s, static_force_now(C, s));
+}
+
+/* Start sliding from rest at the current time in direction dir, with the consistent acceleration. */
+static void start_slide(const step_ctx *C, dfo_state *s, int dir, double F_static)
+{
+    s->V = 0.0;
+    s->hA = 0.0;
+    s->mode = dir;
+    s->A = dfo_breakaway_accel(C->M, &C->L, dir, F_static);
+    s->F = -dir * C->L.muk_N;
+}
+
+/* At rest after a stop (or at start-up): the rest rule decides between stick and slide. */
+static void restart_from_rest(const step_ctx *C, dfo_state *s)
+{
+    const double F_static = static_force_now(C, s);
+    const int mode = dfo_rest_mode(&C->L, F_static);
+    if (mode == 0) enter_stick(C, s, F_static);
+    else start_slide(C, s, mode, F_static);
+}
+
+/* Steps that resolve the oscillator's fastest time scale (a stiff step is several periods long). */
+static int resolves(const dfo_model *M, double h) { return M->rate_max * h <= STIFF_STEP; }
+
+/* ---- the steps of the schemes ---------------------------------------------------------------- */
 
 /* Without friction every variant is plain Bossak-Newmark. */
 static void step_smooth(step_ctx *C, dfo_state *s, double t_end)
 {
-    const double h = C->h_step;
     trial tr;
     double V1, F1;
-    const double ta = s->t, X0 = s->X;
-    const int m0 = s->mode;
-    predict(C, s, h, t_end, &tr);
+    const phase_start b = begin_phase(s);
+    predict(C, s, C->h_step, t_end, &tr);
     s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1);
     finish(C, s, &tr, V1);
     s->F = F1;
-    after_phase(C, s, ta, s->mode, s->X - X0, s->F, m0);
+    end_phase(C, s, &b, s->mode, s->F);
 }
 
 /* The paper's literal scheme: LCP with the previous mode's coefficient, then frictionUpdates
- * re-solves with the coefficient of the result; A follows Bossak's recursion throughout. */
+ * re-solves with the coefficient of the result; A follows Bossak's recursion throughout, also
+ * while stuck (the block is then not exactly at rest, and F is the LCP's). */
 static void step_paper(step_ctx *C, dfo_state *s, double t_end)
 {
-    const double h = C->h_step;
     const dfo_model *M = C->M;
     trial tr;
     double V1, F1;
-    const double ta = s->t, X0 = s->X;
-    const int m0 = s->mode;
-    predict(C, s, h, t_end, &tr);
+    const phase_start b = begin_phase(s);
+    predict(C, s, C->h_step, t_end, &tr);
     double mu = (s->mode == 0) ? M->mu_b : M->mu_k;
-    int o = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
+    int mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
     for (int i = 0; i < M->p.frictionUpdates && M->update; i++) {
-        const double mu_new = (o == 0) ? M->mu_b : M->mu_k;
+        const double mu_new = (mode == 0) ? M->mu_b : M->mu_k;
         if (mu_new == mu) break;
         mu = mu_new;
-        o = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
+        mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
     }
     finish(C, s, &tr, V1);
-    s->mode = o;
+    s->mode = mode;
     s->F = F1;
-    after_phase(C, s, ta, o, s->X - X0, F1, m0);
-}
-
-/* Stick at the end of the step: V = A = 0 (A is then a physical acceleration). The friction
- * holds the static force; when the consistent scheme sticks a step whose solved velocity came out
- * with the wrong sign, the static force may exceed the limit, and the friction is the limit. */
-static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
-{
-    finish(C, s, tr, 0.0);
-    s->A = 0.0;
-    s->hA = 0.0;
-    s->mode = 0;
-    const double S = dfo_static_force(C->M, &C->L, excitation(C, s->t), s->X);
-    s->F = dfo_stick_force(&C->L, S);
+    end_phase(C, s, &b, mode, F1);
 }
 
 /* Consistent stick test (method.md section 4, variant 1). */
 static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
 {
-    const double h = C->h_step;
     const dfo_model *M = C->M;
     trial tr;
     double V1, F1;
-    const double ta = s->t, X0 = s->X;
-    const int m0 = s->mode;
-    predict(C, s, h, t_end, &tr);
+    const phase_start b = begin_phase(s);
+    predict(C, s, C->h_step, t_end, &tr);
     if (s->mode == 0) {
         /* A = V = 0: p_hat is exactly the static force P1 - k X */
-        int o = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1);
-        if (o == 0) {
+        int mode = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1);
+        if (mode == 0) {
             stick_after(C, s, &tr);
         } else {
-            if (M->update) o = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+            if (M->update) mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
             finish(C, s, &tr, V1);
-            s->mode = o;
+            s->mode = mode;
             s->F = F1;
         }
     } else {
-        const int sdir = s->mode;
-        const int o = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
-        if (o == sdir) {
+        const int dir = s->mode;
+        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+        if (mode == dir) {
             finish(C, s, &tr, V1);
             s->F = F1;
         } else {
             /* the block stops in this step: stick or reverse, judged by the static force at the
              * predicted rest position */
-            const double S = dfo_static_force(M, &C->L, excitation(C, t_end), tr.x_pred);
-            const int s2 = dfo_sign(S);
-            const double V2 = (tr.p_hat - s2 * C->L.muk_N) * tr.k->inv_m_hat;
-            if (fabs(S) <= C->L.Fb || s2 * V2 <= 0.0) {
+            const double F_static = dfo_static_force(M, &C->L, excitation(C, t_end), tr.x_pred);
+            const int dir_new = dfo_sign(F_static);
+            const double V_new = (tr.p_hat - dir_new * C->L.muk_N) * tr.co->inv_m_hat;
+            if (fabs(F_static) <= C->L.Fb || dir_new * V_new <= 0.0) {
                 stick_after(C, s, &tr);
             } else {
-                finish(C, s, &tr, V2);
-                s->mode = s2;
-                s->F = -s2 * C->L.muk_N;
+                finish(C, s, &tr, V_new);
+                s->mode = dir_new;
+                s->F = -dir_new * C->L.muk_N;
             }
         }
     }
-    after_phase(C, s, ta, s->mode, s->X - X0, s->F, m0);
+    end_phase(C, s, &b, s->mode, s->F);
 }
 
 /* The stick phase's next breakaway in the state holds for the current static force and limit. */
 static int breakaway_known(const step_ctx *C, const dfo_state *s)
 {
-    return !isnan(s->stick_tb) && s->stick_C == C->L.u - C->M->p.k * s->X && s->stick_Fb == C->L.Fb;
+    return !isnan(s->stick_tb) && s->stick_C == C->L.F_ext - C->M->p.k * s->X && s->stick_Fb == C->L.Fb;
 }
 
 /* The breakaway inside [ta, tb], or INFINITY. It is computed once per stick phase, at its first
  * step, and again only when the inputs change the static force or the limit. */
-
 static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
     if (!breakaway_known(C, s)) {
-        const double C0 = C->L.u - C->M->p.k * s->X;
+        const double C0 = C->L.F_ext - C->M->p.k * s->X;
         s->stick_C = C0;
         s->stick_Fb = C->L.Fb;
         s->stick_tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
@@ -348,36 +405,11 @@ static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double 
     return (t <= tb) ? t : INFINITY;
 }
 
-/* Start sliding from rest at the current time in direction sd, with the consistent acceleration.
- * The net force is at least the breakaway limit (it may sit on it by rounding at a breakaway). */
-static void start_slide(const step_ctx *C, dfo_state *s, int sd, double S)
-{
-    s->V = 0.0;
-    s->hA = 0.0;
-    s->mode = sd;
-    s->A = dfo_breakaway_accel(C->M, &C->L, sd, S);
-    s->F = -sd * C->L.muk_N;
-}
-
-/* At rest after a stop: stick if the static force is inside the limit, else slide along it. */
-static void restart_from_rest(const step_ctx *C, dfo_state *s)
-{
-    const double S = dfo_static_force(C->M, &C->L, excitation(C, s->t), s->X);
-    const int mode = dfo_rest_mode(&C->L, S);
-    if (mode == 0) {
-        s->V = s->A = s->hA = 0.0;
-        s->mode = 0;
-        s->F = -S;
-    } else {
-        start_slide(C, s, mode, S);
-    }
-}
-
-/* s V1 at the end of a sliding Bossak step of length h (friction -s mu_k N). */
+/* dir V1 at the end of a sliding Bossak step of length h (friction -dir mu_k N, dir = s->mode). */
 static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
 {
     predict(C, s, h, s->t + h, tr);
-    return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->k->inv_m_hat;
+    return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->co->inv_m_hat;
 }
 
 /* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method to a few ulps of t + h. */
@@ -394,15 +426,15 @@ static double stop_length(const step_ctx *C, const dfo_state *s, double lo, doub
         if (fabs(m) <= tol) break;
         if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
             double p, q, r;
-            const double sfb = fb / fa;
+            const double ratio = fb / fa;
             if (a == c) {
-                p = 2.0 * m * sfb;
-                q = 1.0 - sfb;
+                p = 2.0 * m * ratio;
+                q = 1.0 - ratio;
             } else {
                 q = fa / fc;
                 r = fb / fc;
-                p = sfb * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
-                q = (q - 1.0) * (r - 1.0) * (sfb - 1.0);
+                p = ratio * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
+                q = (q - 1.0) * (r - 1.0) * (ratio - 1.0);
             }
             if (p > 0.0) q = -q; else p = -p;
             if (2.0 * p < fmin(3.0 * m * q - fabs(tol * q), fabs(e * q))) { e = d; d = p / q; }
@@ -423,7 +455,14 @@ static double stop_length(const step_ctx *C, const dfo_state *s, double lo, doub
 /* Located switches (method.md section 4, variant 2, the default). */
 static void step_located(step_ctx *C, dfo_state *s, double t_end)
 {
-    const dfo_model *M = C->M;
+    /* Locating a switch inside a step needs steps that resolve the oscillator's fastest time scale;
+     * on a stiff step (several natural periods long) restarts from rest with the physical
+     * acceleration would feed the unresolved mode: there the consistent stick test, which is
+     * stable, takes the step. */
+    if (!resolves(C->M, C->h_step)) {
+        step_consistent(C, s, t_end);
+        return;
+    }
     trial tr;
     double V1, F1;
     for (int phase = 0; s->t < t_end; phase++) {
@@ -431,36 +470,35 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             if (C->err == DFO_OK) C->err = DFO_ERR_NO_PROGRESS;
             return;
         }
-        const double ta = s->t, X0 = s->X;
-        const int m0 = s->mode;
+        const phase_start b = begin_phase(s);
         if (s->mode == 0) {  /* stuck: X frozen, V = A = 0 */
             int dir = 0;
-            const double tb = breakaway_time(C, s, ta, t_end, &dir);
+            const double tb = breakaway_time(C, s, b.ta, t_end, &dir);
             if (tb == INFINITY) {  /* stays stuck: F is set once, at the end of dfo_advance */
                 s->t = t_end;
-                after_phase(C, s, ta, 0, 0.0, 0.0, 0);
+                end_phase(C, s, &b, 0, 0.0);
                 continue;
             }
             s->t = tb;
-            start_slide(C, s, dir, dfo_static_force(M, &C->L, excitation(C, tb), s->X));
-            after_phase(C, s, ta, 0, 0.0, s->F, 0);
+            start_slide(C, s, dir, static_force_now(C, s));
+            end_phase(C, s, &b, 0, s->F);
             continue;
         }
-        /* sliding in direction sd over the remainder r */
-        const int sd = s->mode;
-        const double r = (phase == 0) ? C->h_step : t_end - ta;
+        /* sliding in direction dir over the remainder r */
+        const int dir = s->mode;
+        const double r = (phase == 0) ? C->h_step : t_end - b.ta;
         predict(C, s, r, t_end, &tr);
-        const int o = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
-        if (o == sd && sd * V1 > 0.0) {
+        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+        if (mode == dir && dir * V1 > 0.0) {
             finish(C, s, &tr, V1);
             s->t = t_end;
             s->F = F1;
-            after_phase(C, s, ta, sd, s->X - X0, F1, m0);
+            end_phase(C, s, &b, dir, F1);
             continue;
         }
         /* the block stops inside the remainder: find the sub-step that ends at V = 0 */
-        const double fhi = sd * (tr.p_hat - sd * C->L.muk_N) * tr.k->inv_m_hat;
-        double lo = 0.0, flo = sd * s->V;
+        const double fhi = dir * (tr.p_hat - dir * C->L.muk_N) * tr.co->inv_m_hat;
+        double lo = 0.0, flo = dir * s->V;
         if (!(flo > 0.0)) {  /* started from rest: find a point where it is still moving */
             lo = r;
             flo = 0.0;
@@ -469,34 +507,68 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 flo = slide_velocity(C, s, lo, &tr);
             }
             if (!(flo > 0.0)) {  /* no motion resolvable in double precision: stays at rest */
-                const double S = dfo_static_force(M, &C->L, excitation(C, t_end), s->X);
                 s->t = t_end;
-                s->V = s->A = s->hA = 0.0;
-                s->mode = 0;
-                s->F = dfo_stick_force(&C->L, S);
-                after_phase(C, s, ta, 0, 0.0, s->F, m0);
+                enter_stick(C, s, static_force_now(C, s));
+                end_phase(C, s, &b, 0, s->F);
                 continue;
             }
         }
         const double hs = (fhi == 0.0) ? r : stop_length(C, s, lo, flo, r, fhi);
         predict(C, s, hs, (hs >= r) ? t_end : s->t + hs, &tr);
         finish(C, s, &tr, 0.0);
-        s->t = (hs >= r) ? t_end : fmax(ta + hs, nextafter(ta, INFINITY));
-        const double dX = s->X - X0;
-        restart_from_rest(C, s);
-        after_phase(C, s, ta, sd, dX, -sd * C->L.muk_N, m0);
+        s->t = (hs >= r) ? t_end : fmax(b.ta + hs, nextafter(b.ta, INFINITY));
+        restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
+        end_phase(C, s, &b, dir, -dir * C->L.muk_N);
     }
+}
+
+/* ---- the schemes: their rules and their steps, in one place ---------------------------------- */
+
+/* Adding a scheme: its value in dfo_scheme, its row here, its case in step_to. */
+static const scheme_rules SCHEMES[] = {
+    [DFO_SCHEME_PAPER] = {.rests_when_stuck = 0, .skips_stuck_steps = 0},
+    [DFO_SCHEME_CONSISTENT] = {.rests_when_stuck = 1, .skips_stuck_steps = 0},
+    /* on stiff steps the consistent test takes over (step_located): same rest rule, and the fast
+     * path is off for a stiff grid (make_ctx) */
+    [DFO_SCHEME_LOCATED] = {.rests_when_stuck = 1, .skips_stuck_steps = 1},
+};
+
+static const scheme_rules *rules_of(const dfo_model *M)
+{
+    const int sc = M->p.scheme;
+    const int n = (int)(sizeof SCHEMES / sizeof SCHEMES[0]);
+    return (sc >= DFO_SCHEME_PAPER && sc < n) ? &SCHEMES[sc] : &SCHEMES[DFO_SCHEME_LOCATED];
+}
+
+/* One internal step [s->t, t_end] of length C->h_step. */
+static void step_to(step_ctx *C, dfo_state *s, double t_end)
+{
+    s->steps++;
+    if (!C->friction) {
+        step_smooth(C, s, t_end);
+    } else {
+        switch (C->M->p.scheme) {
+        case DFO_SCHEME_PAPER: step_paper(C, s, t_end); break;
+        case DFO_SCHEME_CONSISTENT: step_consistent(C, s, t_end); break;
+        default: step_located(C, s, t_end); break;
+        }
+    }
+    s->t = t_end;
 }
 
 /* ---- public API ----------------------------------------------------------------------------- */
 
-static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *u)
+static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *in)
 {
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->M = M;
-    dfo_loads_init(&C->L, M, u);
+    C->rules = rules_of(M);
+    dfo_loads_init(&C->L, M, in);
     C->friction = C->L.Fb > 0.0;  /* Fb >= mu_k N */
+    /* the stuck fast path steps whole grid steps of the scheme's own kind: off where a stiff grid
+     * hands the steps to the consistent test */
+    C->skip_stuck = C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h);
     C->err = DFO_OK;
     C->t_grid = NAN;
     C->P_grid = 0.0;
@@ -506,10 +578,10 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *u)
     coef_for(M, M->p.h, &C->full);
 }
 
-void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
+void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s)
 {
     step_ctx C;
-    make_ctx(&C, M, u);
+    make_ctx(&C, M, in);
     const dfo_state zero = {0};
     *s = zero;
     s->t0 = s->t = t0;
@@ -518,7 +590,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s)
     dfo_forget_caches(s);
     s->stick_C = s->stick_Fb = s->stick_tb = NAN;
     s->stick_dir = 0;
-    if (s->V == 0.0 && C.L.Fb > 0.0) {
+    if (s->V == 0.0 && C.friction) {
         restart_from_rest(&C, s);
     } else {
         s->mode = dfo_sign(s->V);
@@ -543,9 +615,9 @@ void dfo_check_caches(const dfo_model *M, dfo_state *s)
     if (s->exc_n >= 0) {
         dfo_state fresh = *s;
         fresh.exc_n = -1;
-        double c, sn;
-        phase_at(M, &fresh, s->exc_n, &c, &sn);
-        if (!(c == s->exc_c && sn == s->exc_s)) dfo_forget_caches(s);
+        double cos_th, sin_th;
+        phase_at(M, &fresh, s->exc_n, &cos_th, &sin_th);
+        if (!(cos_th == s->exc_c && sin_th == s->exc_s)) dfo_forget_caches(s);
     } else if (s->exc_n != -1) {
         dfo_forget_caches(s);
     }
@@ -557,24 +629,22 @@ void dfo_check_caches(const dfo_model *M, dfo_state *s)
     }
 }
 
-static void step_to(step_ctx *C, dfo_state *s, double t_end)
+double dfo_snap_tolerance(const dfo_model *M, double t)
 {
-    const double h = C->h_step;
-    s->steps++;
-    if (!C->friction) { step_smooth(C, s, t_end); s->t = t_end; return; }
-    switch (C->M->p.scheme) {
-    case DFO_SCHEME_PAPER: step_paper(C, s, t_end); break;
-    case DFO_SCHEME_CONSISTENT: step_consistent(C, s, t_end); break;
-    default:
-        /* Locating a switch inside a step needs steps that resolve the oscillator's fastest time
-         * scale; on a stiff step (several natural periods long) restarts from rest with the
-         * physical acceleration would feed the unresolved mode: there the consistent stick test,
-         * which is stable, takes the step. */
-        if (C->M->rate_max * h > STIFF_STEP) step_consistent(C, s, t_end);
-        else step_located(C, s, t_end);
-        break;
-    }
-    s->t = t_end;
+    const double h = M->p.h;
+    return fmin(SNAP_MAX_REL_H * h, fmax(SNAP_MIN_REL_H * h, SNAP_EPS_T * DBL_EPSILON * fabs(t)));
+}
+
+double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target)
+{
+    const double h = M->p.h;
+    const double r = (t_target - s->t0) / h;  /* t_target in grid steps from t0 */
+    if (!(r > -0.5 && r < 0x1p52)) return t_target;  /* before t0, beyond an exact count, or NaN */
+    const long long m = (long long)floor(r + 0.5);     /* the nearest grid point */
+    if (m < s->n) return t_target;
+    const double grid = s->t0 + (double)m * h;         /* as the stepping loop computes it */
+    if (grid >= s->t && fabs(t_target - grid) <= dfo_snap_tolerance(M, t_target)) return grid;
+    return t_target;
 }
 
 /* |x| <= DBL_MAX is false for infinities and NaN; four independent tests, one branch */
@@ -583,19 +653,17 @@ static HOT_INLINE int state_finite(const dfo_state *s)
     return (fabs(s->X) <= DBL_MAX) & (fabs(s->V) <= DBL_MAX) & (fabs(s->A) <= DBL_MAX) & (fabs(s->F) <= DBL_MAX);
 }
 
-/* A fast path of the located scheme: stuck on a grid point, with the stick phase's next breakaway
- * known, the whole grid steps before it (and before the target, and outside the observation
- * window) change nothing but the time, so they can be taken at once. Returns the last grid index
- * they reach (s->n when there is none). fastPaths = false steps them one by one, to the same bits. */
-static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_target, double snap)
+/* The stuck fast path (scheme_rules.skips_stuck_steps): stuck on a grid point, with the stick
+ * phase's next breakaway known, the whole grid steps before it (and before t_end, and outside the
+ * observation window) change nothing but the time, so they can be taken at once. Returns the last
+ * grid index they reach (s->n when there is none). fastPaths = false steps them one by one, to the
+ * same bits. */
+static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_end)
 {
     const dfo_model *M = C->M;
     const double h = M->p.h;
-    if (s->mode != 0 || !C->friction || !M->fast || M->p.scheme != DFO_SCHEME_LOCATED ||
-        M->rate_max * h > STIFF_STEP)
-        return s->n;
-    if (!breakaway_known(C, s)) return s->n;
-    double limit = fmin(s->stick_tb, t_target - snap);
+    if (s->mode != 0 || !C->skip_stuck || !breakaway_known(C, s)) return s->n;
+    double limit = fmin(s->stick_tb, t_end);
     if (M->p.observe && !(s->t > M->p.t_obs_stop)) limit = fmin(limit, M->p.t_obs_start);
     if (!(limit > s->t)) return s->n;
     /* the last m with t0 + m h < limit (the grid points as the stepping loop computes them) */
@@ -605,20 +673,20 @@ static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_tar
     return (m > s->n) ? m : s->n;
 }
 
-static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                           dfo_switch_fn on_switch, void *switch_ctx)
 {
     step_ctx C;
-    make_ctx(&C, M, u);
+    make_ctx(&C, M, in);
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
     const double h = M->p.h;
-    /* a grid point this close to the target is the target (rounding of the host's times) */
-    const double snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
+    /* from here on the call is exactly the one for the grid point t_target snapped to, if any */
+    const double t_end_call = dfo_snap_target(M, s, t_target);
     double g_prev = s->t0 + (double)s->n * h;  /* the grid point at or before s->t */
-    while (s->t < t_target) {
+    while (s->t < t_end_call) {
         if (s->t == g_prev) {
-            const long long m = stuck_until(&C, s, t_target, snap);
+            const long long m = stuck_until(&C, s, t_end_call);
             if (m > s->n) {
                 s->steps += m - s->n;
                 s->n = m;
@@ -627,15 +695,15 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s,
             }
         }
         const double grid = s->t0 + (double)(s->n + 1) * h;
-        double t_end = t_target;
+        double t_end = t_end_call;
         C.t_grid = NAN;
         const int from_grid = (s->t == g_prev);
-        if (grid - t_target <= snap) {  /* the next grid point is reached in this call */
-            if (t_target - grid > snap) t_end = grid;
+        if (grid <= t_end_call) {  /* the next grid point is reached in this call: the step ends there */
+            t_end = grid;
             s->n++;
             g_prev = grid;
-            const double P = grid_excitation(M, s);
-            if (t_end == grid) { C.t_grid = grid; C.P_grid = P; }
+            C.t_grid = grid;
+            C.P_grid = grid_excitation(M, s);
         }
         if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
         C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
@@ -647,33 +715,30 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s,
         if ((s->n & 15) == 0 && !state_finite(s)) return DFO_ERR_NONFINITE;
     }
     if (!state_finite(s)) return DFO_ERR_NONFINITE;
-    /* while stuck (located, consistent) the friction holds the static force: evaluated here, at the
+    /* a stuck block at rest: the friction holds the static force, evaluated here, at the
      * communication point, rather than at every stuck step */
-    if (C.friction && s->mode == 0 && M->p.scheme != DFO_SCHEME_PAPER) {
-        const double S = dfo_static_force(M, &C.L, excitation(&C, s->t), s->X);
-        s->F = dfo_stick_force(&C.L, S);
-    }
+    if (stuck(&C, s) && C.rules->rests_when_stuck) s->F = dfo_stick_force(&C.L, static_force_now(&C, s));
     /* the acceleration output too must be representable */
-    if (!isfinite(dfo_acceleration(M, u, s))) return DFO_ERR_NONFINITE;
+    if (!isfinite(dfo_acceleration(M, in, s))) return DFO_ERR_NONFINITE;
     return DFO_OK;
 }
 
-dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx)
 {
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;
-    const dfo_status st = advance(M, u, &w, t_target, on_switch, switch_ctx);
+    const dfo_status st = advance(M, in, &w, t_target, on_switch, switch_ctx);
     *s = w;
     return st;
 }
 
-double dfo_acceleration(const dfo_model *M, const dfo_inputs *u, const dfo_state *s)
+double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
 {
     step_ctx C;
-    make_ctx(&C, M, u);
-    if (stuck(&C, s) && M->p.scheme != DFO_SCHEME_PAPER) return 0.0;
+    make_ctx(&C, M, in);
+    if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
     return accel_of(&C, s, s->t, s->F);
 }
 

@@ -2,8 +2,10 @@
  *
  * Three variants (dfo_scheme): the paper's literal scheme, the consistent stick test (first order)
  * and the located scheme (default; every stick/slip switch placed inside its step, second order).
- * The internal grid is t0 + n h; dfo_advance ends exactly on any requested time with a shortened
- * step whose Bossak acceleration is corrected for the new length (method.md section 8).
+ * The internal grid is t0 + n h; dfo_advance ends exactly on any requested time off that grid with a
+ * shortened step whose Bossak acceleration is corrected for the new length (method.md section 8),
+ * and on the grid point itself when the requested time is a host's rounding of one (see "Snapping
+ * to the grid" below).
  *
  * Plain C, no FMI types. */
 #ifndef DFO_NEWMARK_H
@@ -32,8 +34,8 @@ typedef struct {
     double x_max, x_min, t_stuck, E_friction;
     long long transitions;
     int observed;  /* a sample has been taken */
-    /* the stick phase's next breakaway: time and side, computed at its first step for the static
-     * force offset stick_C = u - k X and the limit stick_Fb (NaN: to be computed) */
+    /* the stick phase's next breakaway: time and side, computed at its first step for the constant
+     * part of the static force stick_C = F_ext - k X and the limit stick_Fb (NaN: to be computed) */
     double stick_C, stick_Fb, stick_tb;
     int stick_dir;
     /* excitation cache: cos and sin of the excitation phase omega (t0 + exc_n h) + phi at the grid
@@ -46,7 +48,7 @@ typedef struct {
 } dfo_state;
 
 /* Consistent start-up at t0 from x0, v0 (method.md section 4, "Start-up"). */
-void dfo_start(const dfo_model *M, const dfo_inputs *u, double t0, dfo_state *s);
+void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s);
 
 /* Empty the excitation cache of a state (it is rebuilt on demand, to the same bits). */
 void dfo_forget_caches(dfo_state *s);
@@ -59,12 +61,44 @@ void dfo_check_caches(const dfo_model *M, dfo_state *s);
 /* Called at every change of mode (stick/slip switch) with its time and position. */
 typedef void (*dfo_switch_fn)(void *ctx, double t, double x, int from_mode, int to_mode);
 
-/* Advance to t_target > s->t, with the inputs held constant. on_switch may be NULL. */
-dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+/* Snapping to the grid. A host that builds its communication points by adding dt repeatedly asks
+ * for t = 0.020000000000000011 where it means the grid point 0.02, and after 10^5 additions of
+ * dt = 0.01 (or 0.001) its clock is off by 7.6e-10 s (1.1e-10 s): 3.4e3 (5.1e3) eps |t|, far more
+ * than a few ulps. Honoured literally, every such remainder would become an extra shortened step
+ * and the results would depend on the host's rounding. So a requested time within
+ *
+ *     tol(t) = min(1e-5 h, max(1e-7 h, 2^16 eps |t|))
+ *
+ * of a grid point t0 + m h is that grid point. The bounds:
+ *  - 2^16 eps |t| covers the drift of a host that adds its step some 10^5 to 10^6 times (measured
+ *    after 10^5 additions: 3.4e3, 5.1e3, 8.5e3 and 1.2e4 eps |t| for dt = 0.01, 0.001, 0.1 and
+ *    0.0015); a clock that drifted farther is honoured as an off-grid time, with shortened steps;
+ *  - the floor 1e-7 h covers small |t|; no meaningful time lies that close to a grid point;
+ *  - the cap 1e-5 h bounds what a snap can change: a shift delta moves the state by about
+ *    |v| delta, at most a relative 1e-5 rate h (rate: the model's fastest rate, rate_max), against
+ *    the scheme's own error of order (rate h)^2 / 12: below a tenth of it wherever rate h >= 1e-3,
+ *    below 1 % on the default model (rate h = 0.015). And the shift only undoes the host's own
+ *    rounding: the point it means is the grid point.
+ * A requested time farther than tol from every grid point is honoured exactly, with a shortened
+ * step. */
+double dfo_snap_tolerance(const dfo_model *M, double t);
+
+/* The time dfo_advance ends on for t_target: the grid point t0 + m h (m >= s->n, at or after
+ * s->t) that t_target snaps to, else t_target itself. */
+double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
+
+/* Advance to t_target > s->t, with the inputs held constant. on_switch may be NULL.
+ * Contract: on DFO_OK, s->t is exactly dfo_snap_target(M, s_before, t_target): t_target itself or
+ * the grid point it snapped to (the caller keeps and reports its own time). Everything after a
+ * snap is exactly as if the grid point had been requested (same steps, same excitation cache,
+ * same fast paths), so a host adding dt and a host computing n dt get bit-identical states. A
+ * t_target that snaps to s->t itself is a no-op. */
+dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx);
 
-/* Physical acceleration at the current state (0 while stuck for consistent and located). */
-double dfo_acceleration(const dfo_model *M, const dfo_inputs *u, const dfo_state *s);
+/* Physical acceleration at the current state (0 while stuck for the schemes whose stuck block is
+ * at rest: consistent and located). */
+double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
 
 /* Share of the observed time spent stuck (0 before the window opens). */
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s);
