@@ -241,14 +241,8 @@ static int same_inputs(const dfo_inputs *a, const dfo_inputs *b)
  * sliding -s mu_k N, stuck the force that holds the block, within the breakaway limit. */
 static double friction_now(const dfo_values *v)
 {
-    const dfo_state *s = &v->s;
-    if (same_inputs(&v->u, &v->u_used)) return s->F;
-    const dfo_model *M = &v->M;
-    const double N = dfo_normal_force(M, &v->u), Fb = M->mu_b * N;
-    if (!(Fb > 0.0)) return 0.0;
-    if (s->mode != 0) return -s->mode * (M->mu_k * N);
-    const double S = dfo_excitation(M, s->t) + dfo_external_force(M, &v->u) - M->p.k * s->X;
-    return -fmax(-Fb, fmin(Fb, S));
+    if (same_inputs(&v->u, &v->u_used)) return v->s.F;
+    return dfo_friction_force(&v->M, &v->u, &v->s);
 }
 
 static double acceleration_now(const dfo_values *v)

@@ -717,7 +717,7 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
     if (!state_finite(s)) return DFO_ERR_NONFINITE;
     /* a stuck block at rest: the friction holds the static force, evaluated here, at the
      * communication point, rather than at every stuck step */
-    if (stuck(&C, s) && C.rules->rests_when_stuck) s->F = dfo_stick_force(&C.L, static_force_now(&C, s));
+    if (stuck(&C, s) && C.rules->rests_when_stuck) s->F = dfo_friction_force(M, in, s);
     /* the acceleration output too must be representable */
     if (!isfinite(dfo_acceleration(M, in, s))) return DFO_ERR_NONFINITE;
     return DFO_OK;
@@ -732,6 +732,26 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
     const dfo_status st = advance(M, in, &w, t_target, on_switch, switch_ctx);
     *s = w;
     return st;
+}
+
+/* The excitation at the state's time as the stepper evaluates it: from the excitation cache when
+ * the state sits on the grid point the cache holds, else in closed form. */
+static double state_excitation(const dfo_model *M, const dfo_state *s)
+{
+    if (s->exc_n >= 0 && s->exc_n == s->n && s->t == s->t0 + (double)s->n * M->p.h) {
+        const double c = s->exc_c;
+        return M->p.P0 * (c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c);
+    }
+    return dfo_excitation(M, s->t);
+}
+
+double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
+{
+    dfo_loads L;
+    dfo_loads_init(&L, M, in);
+    if (!(L.Fb > 0.0)) return 0.0;
+    if (s->mode != 0) return -s->mode * L.muk_N;
+    return dfo_stick_force(&L, dfo_static_force(M, &L, state_excitation(M, s), s->X));
 }
 
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)

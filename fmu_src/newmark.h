@@ -96,6 +96,13 @@ double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
 dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx);
 
+/* The friction force at the current state with the inputs in, by the current mode's law: sliding
+ * -mode mu_k N; stuck, the force that holds the block (the static force, clamped to the breakaway
+ * limit), with the excitation evaluated as the stepper does. dfo_advance sets a stuck block's force
+ * with it at the end of each call (schemes whose stuck block rests); the FMU uses it for inputs set
+ * since the last step. */
+double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
+
 /* Physical acceleration at the current state (0 while stuck for the schemes whose stuck block is
  * at rest: consistent and located). */
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
