@@ -245,6 +245,11 @@ class OscillatorFMU:
             inst.check("fmi2ExitInitializationMode", s, n)
         self.time = t0
 
+    def do_step(self, t: float, dt: float) -> None:
+        """One fmi2DoStep from the communication point ``t`` (checked); :attr:`time` is then t + dt."""
+        self.fmi.do_step(t, dt)
+        self.time = t + dt
+
     def step_to(self, t: float) -> None:
         inst = self.fmi
         if s := inst.f.DoStep(inst.component, float(self.time), float(t - self.time), 1):
