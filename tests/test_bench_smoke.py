@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 # a benchmark smoke test: run once, against the Release build (not repeated under ASan)
-pytestmark = pytest.mark.no_sanitizer
+pytestmark = [pytest.mark.no_sanitizer, pytest.mark.slow]  # the --quick study takes about 45 s
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "bench" / "work_precision.py"

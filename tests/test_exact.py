@@ -197,6 +197,7 @@ def test_linear_resonance_is_a_limit() -> None:
 # --------------------------------------------------------------------------- (b) reference
 
 
+@pytest.mark.min_versions
 @pytest.mark.parametrize("name", list(REF_CASES))
 def test_exact_matches_event_driven_reference(name: str) -> None:
     p = REF_CASES[name]

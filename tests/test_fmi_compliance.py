@@ -20,10 +20,12 @@ from dryfriction.fmu import OBSERVABLE_OUTPUTS, FMUError, OscillatorFMU, Setting
 from dryfriction.params import Oscillator
 
 
+@pytest.mark.min_versions
 def test_fmpy_validate_finds_no_problem(fmu_path: Path) -> None:
     assert validate_fmu(str(fmu_path)) == []
 
 
+@pytest.mark.min_versions
 def test_fmutool_check_reports_compliant(fmu_path: Path) -> None:
     exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
     r = subprocess.run([exe, "-input", str(fmu_path), "-check"], capture_output=True, text=True, timeout=120)
@@ -64,6 +66,7 @@ def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
             assert float(value) == float(v.start), (v.name, value, v.start)
 
 
+@pytest.mark.min_versions
 def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU) -> None:
     """A second host (libcosim via libcosimpy) steps the FMU to the same x(t) as fmpy (1e-12)."""
     from libcosimpy.CosimEnums import CosimExecutionState  # noqa: F401  (import check)
@@ -88,6 +91,7 @@ def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU) 
     assert np.max(np.abs(np.array(xs) - ref)) <= 1e-12 * np.max(np.abs(ref))
 
 
+@pytest.mark.slow
 def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU, tmp_path: Path) -> None:
     """A host can rebuild the binary from sources/ (fmpy's CMake build) and gets the same numbers."""
     from fmpy import extract

@@ -510,6 +510,7 @@ def test_consistent_reversal_keeps_friction_within_limit(fmu: OscillatorFMU) -> 
 # --------------------------------------------------------------------------- energy
 
 
+@pytest.mark.min_versions
 @pytest.mark.parametrize("alpha", [0.0, -0.1, -1 / 3])
 def test_energy_balance_second_order(fmu: OscillatorFMU, alpha: float) -> None:
     """Energy balance with friction and viscous damping: the residual falls about 4x per halving
@@ -528,6 +529,8 @@ def test_energy_balance_second_order(fmu: OscillatorFMU, alpha: float) -> None:
 # --------------------------------------------------------------------------- properties
 
 
+@pytest.mark.min_versions
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(lam=st.floats(0.2, 3.0), ms=st.floats(0.0, 1.5), chi=st.floats(0.05, 3.0), zeta=st.floats(0.0, 1.5),
        z0=st.floats(-2.0, 2.0), dz0=st.floats(-2.0, 2.0), phi=st.floats(-math.pi, math.pi))

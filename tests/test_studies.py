@@ -51,6 +51,7 @@ def test_table_rows_equal_from_nondimensional() -> None:
     assert row[PARAM_COLUMNS.index("t_stop")] == 30 * p.period
 
 
+@pytest.mark.min_versions
 def test_batch_runner_equals_fmu_driver(fmu_path: Path, fmu: OscillatorFMU) -> None:
     """The lean runner gives the observables of OscillatorFMU.observables bit for bit, and a row
     the FMU rejects gives nan with status 1 without spoiling the next rows."""
@@ -204,6 +205,8 @@ def _same(a: xr.Dataset, b: xr.Dataset, names: tuple[str, ...] = DATA_VARS_8_9) 
         assert np.array_equal(a[c].values, b[c].values), c
 
 
+@pytest.mark.min_versions
+@pytest.mark.slow
 @pytest.mark.no_sanitizer
 @pytest.mark.parametrize("workers", [1, 2])
 def test_fig8_9_same_numbers_with_1_and_2_workers(workers: int, tmp_path: Path, fmu_path: Path,
@@ -213,6 +216,7 @@ def test_fig8_9_same_numbers_with_1_and_2_workers(workers: int, tmp_path: Path, 
     assert res["stats"][0].computed == res["stats"][0].chunks == 12
 
 
+@pytest.mark.slow
 @pytest.mark.no_sanitizer
 def test_killed_sweep_restarts_from_its_chunks(tmp_path: Path, fmu_path: Path, fig8_9_local: xr.Dataset) -> None:
     final = tmp_path / "fig8_9" / "fig8_9.nc"
@@ -299,6 +303,7 @@ def test_sigkilled_sweep_resumes(tmp_path: Path, fmu_path: Path, fig8_9_local: x
     (["fig3", "--fmu", "/nonexistent.fmu"], "FMU not found"),
     (["fig3", "--bogus"], "unrecognized arguments"),
 ])
+@pytest.mark.min_versions
 def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: str, tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
     assert main([*argv, "--out", str(tmp_path)]) == 2
@@ -320,6 +325,8 @@ def test_list_show_config_and_config_file(tmp_path: Path, capsys: pytest.Capture
     assert "periods = 20.0" in text and "num = 7" in text and "lam = 0.6" in text
 
 
+@pytest.mark.min_versions
+@pytest.mark.slow
 def test_studies_run_through_the_module_entry_point(tmp_path: Path, fmu_path: Path) -> None:
     import subprocess
     import sys
