@@ -30,6 +30,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dryfriction import model
 from dryfriction.argparsing import make_parser
 from dryfriction.atomic import atomic_path, atomic_write_text
 
@@ -218,7 +219,7 @@ def fmu_sweep(fmu, cfg: StudyConfig, cases, exacts, progress) -> list[dict]:
                 cache[key] = ex.evaluate(t)[0]
             return cache[key]
 
-        for scheme in ("located", "consistent", "paper"):
+        for scheme in reversed(list(model.default().schemes)):  # located, consistent, paper
             for alpha in cfg.alphas:
                 for spp in cfg.spp:
                     c = FmuConfig(scheme, alpha, spp)

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dryfriction import model
 from dryfriction.argparsing import make_parser
 from dryfriction.atomic import atomic_write_text
 from dryfriction.fmu import default_fmu_path
@@ -181,7 +182,7 @@ def main() -> int:
     total_steps = sp.n_runs * steps_per_run
     idx = np.unique(np.linspace(0, sp.n_runs - 1, min(a.sample, sp.n_runs)).round().astype(int))
     sample = sp.params[idx]
-    scheme = {"paper": 1, "consistent": 2, "located": 3}[num["scheme"]]
+    scheme = model.default().scheme_value(num["scheme"])
 
     work = Path(tempfile.mkdtemp(prefix="bench-sweep-"))
     try:
