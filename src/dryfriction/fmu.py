@@ -133,11 +133,11 @@ class OscillatorFMU:
         if plan is None:
             plan = self._get_plans[key] = self._plan_get(key)
         inst = self.fmi
-        c, out = inst.component, {}
+        c, out, mark = inst.component, {}, len(self.messages)
         for fname, fn, vrs, buf, group in plan:
             st = fn(c, vrs, len(group), buf)
             if st:
-                inst.check(fname, st)
+                inst.check(fname, st, mark)
             out.update(zip(group, buf))
         return {name: out[name] for name in key}
 
@@ -252,8 +252,9 @@ class OscillatorFMU:
 
     def step_to(self, t: float) -> None:
         inst = self.fmi
+        mark = len(self.messages)
         if s := inst.f.DoStep(inst.component, float(self.time), float(t - self.time), 1):
-            inst.check("fmi2DoStep", s)
+            inst.check("fmi2DoStep", s, mark)
         self.time = t
 
     def trajectory(
@@ -278,7 +279,7 @@ class OscillatorFMU:
         rows_i: list[list[int]] = []
         # the C functions with buffers built once: a sample costs one doStep and two gets
         inst = self.fmi
-        comp, check = inst.component, inst.check
+        comp, check, msgs = inst.component, inst.check, self.messages
         do_step, get_real, get_int = inst.f.DoStep, inst.f.GetReal, inst.f.GetInteger
         rv = (ctypes.c_uint * len(reals))(*[self.vr(outputs[i]) for i in reals])
         iv = (ctypes.c_uint * len(ints))(*[self.vr(outputs[i]) for i in ints])
@@ -287,17 +288,18 @@ class OscillatorFMU:
         nr, ni = len(reals), len(ints)
         tl = t.tolist()
         for j in range(t.size):
+            mark = len(msgs)
             if j:
                 if s := do_step(comp, tl[j - 1], tl[j] - tl[j - 1], 1):
                     self.time = tl[j - 1]
-                    check("fmi2DoStep", s)
+                    check("fmi2DoStep", s, mark)
             if nr:
                 if s := get_real(comp, rv, nr, rbuf):
-                    check("fmi2GetReal", s)
+                    check("fmi2GetReal", s, mark)
                 rows_r.append(rbuf[:])
             if ni:
                 if s := get_int(comp, iv, ni, ibuf):
-                    check("fmi2GetInteger", s)
+                    check("fmi2GetInteger", s, mark)
                 rows_i.append(ibuf[:])
         self.time = tl[-1]
         out = np.empty((t.size, len(outputs)))
