@@ -27,8 +27,12 @@ from .model import default_fmu_path
 from .params import Oscillator
 
 __all__ = ["FMUError", "OscillatorFMU", "Settings", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS",
-           "OBSERVABLE_OUTPUTS"]
+           "OBSERVABLE_OUTPUTS", "SCHEMES", "EFFECT_BITS"]
 
+#: scheme name -> enumeration value and effect bit -> name, both read from the model description
+#: (derived, not copies: ``model.default().schemes`` / ``.effects``)
+SCHEMES: dict[str, int] = dict(model.default().schemes)
+EFFECT_BITS: dict[int, str] = {e.bit: e.name for e in model.default().effects}
 TRAJECTORY_OUTPUTS = ("x", "v", "a", "F_friction", "mode")
 #: the in-FMU observables (computed with ``observe = true``; read with it off they are a warning)
 OBSERVABLE_OUTPUTS = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
