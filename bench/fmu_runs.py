@@ -3,7 +3,7 @@ exact solution, and the time of one run through a reused instance, two ways:
 
 - ``api``: what a user writes, ``OscillatorFMU.start(p, settings)``, ``step_to(t_end)``, ``get(['x'])``;
 - ``lean``: the same fmi2 calls on the same instance with the value-reference and value arrays
-  built once (raw ctypes functions of fmpy's FMU2Slave), to separate the FMU's cost from the
+  built once (the typed functions of dryfriction.fmi2), to separate the FMU's cost from the
   Python wrapper's.
 
 A timed run simulates the whole horizon in one ``doStep`` and reads ``x``: what a sweep point costs.
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dryfriction.fmu import SCHEMES, FMUError, OscillatorFMU, Settings
+from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 PARAM_NAMES = ("m", "k", "c", "P0", "omega", "phi", "N", "mu_s", "chi", "x0", "v0")
@@ -58,34 +58,43 @@ class FmuConfig:
 
 class LeanRunner:
     """The fmi2 calls of OscillatorFMU.start/step_to/get on the same instance, without the
-    driver's Python around them: the driver's own function table and value arrays (built once),
-    filled once per configuration. Raises FMUError on a failed call."""
+    driver's Python around them: the FMI layer's typed functions and value arrays built once,
+    filled once per configuration. Raises FMUError (through the layer's check) on a failed call."""
 
     def __init__(self, fmu: OscillatorFMU) -> None:
         self.fmu = fmu
-        self.L = fmu._lean()
-        self.get_real = fmu._raw("fmi2GetReal")
-        self.xvr = (ctypes.c_uint * 1)(fmu.vr("x"))
+        self.inst = fmu.fmi
+        md = fmu.md
+        self.reals = PARAM_NAMES + ("h", "alpha", "t_obs_start", "t_obs_stop")
+        self.rvr = (ctypes.c_uint * len(self.reals))(*[md.vr(n) for n in self.reals])
+        self.rval = (ctypes.c_double * len(self.reals))()
+        self.ivr = (ctypes.c_uint * 2)(md.vr("scheme"), md.vr("frictionUpdates"))
+        self.ival = (ctypes.c_int * 2)()
+        self.bvr = (ctypes.c_uint * 2)(md.vr("observe"), md.vr("fastPaths"))
+        self.bval = (ctypes.c_int * 2)()
+        self.xvr = (ctypes.c_uint * 1)(md.vr("x"))
         self.xval = (ctypes.c_double * 1)()
 
     def prepare(self, p: Oscillator, st: Settings) -> None:
         """Fill the value arrays (outside any timing)."""
-        L = self.L
-        L.rval[:] = tuple(float(getattr(p, n)) for n in PARAM_NAMES) + (st.h, st.alpha, 0.0, 1e300)
-        L.ival[0], L.ival[1] = SCHEMES[st.scheme], st.frictionUpdates
-        L.bval[0], L.bval[1] = 0, 1
+        self.rval[:] = tuple(float(getattr(p, n)) for n in PARAM_NAMES) + (st.h, st.alpha, 0.0, 1e300)
+        self.ival[0], self.ival[1] = self.fmu.md.scheme_value(st.scheme), st.frictionUpdates
+        self.bval[0], self.bval[1] = 0, 1
 
     def run(self, t_end: float) -> float:
         """One whole run with the prepared values: reset ... doStep(0, t_end), returns x(t_end)."""
-        L = self.L
-        c = L.comp
-        if (L.reset(c) or L.setup(c, 0, 0.0, 0.0, 0, 0.0)
-                or L.set_real(c, L.rvr, len(L.rval), L.rval)
-                or L.set_int(c, L.ivr, 2, L.ival) or L.set_bool(c, L.bvr, 2, L.bval)
-                or L.enter(c) or L.exit(c) or L.do_step(c, 0.0, t_end, 1)
-                or self.get_real(c, self.xvr, 1, self.xval)):
-            msgs = [m for s, _, m in self.fmu.messages if s >= 3]
-            raise FMUError(msgs[-1] if msgs else "an fmi2 call failed")
+        inst = self.inst
+        c, f = inst.component, inst.f
+        for name, s in (("fmi2Reset", f.Reset(c)), ("fmi2SetupExperiment", f.SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0)),
+                        ("fmi2SetReal", f.SetReal(c, self.rvr, len(self.rval), self.rval)),
+                        ("fmi2SetInteger", f.SetInteger(c, self.ivr, 2, self.ival)),
+                        ("fmi2SetBoolean", f.SetBoolean(c, self.bvr, 2, self.bval)),
+                        ("fmi2EnterInitializationMode", f.EnterInitializationMode(c)),
+                        ("fmi2ExitInitializationMode", f.ExitInitializationMode(c)),
+                        ("fmi2DoStep", f.DoStep(c, 0.0, t_end, 1)),
+                        ("fmi2GetReal", f.GetReal(c, self.xvr, 1, self.xval))):
+            if s:
+                inst.check(name, s)
         return self.xval[0]
 
 

@@ -3,7 +3,6 @@ fitted order, and how the cost grows."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -12,6 +11,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+from dryfriction.atomic import atomic_path  # noqa: E402
 
 SCHEME_COLORS = {"located": "tab:blue", "consistent": "tab:green", "paper": "tab:red"}
 ALPHA_STYLES = {-0.1: "-", 0.0: "--", -1.0 / 3.0: ":"}
@@ -25,10 +26,11 @@ def alpha_label(a: float) -> str:
 
 
 def save(fig: plt.Figure, path: Path) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)
-    os.replace(tmp, path)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+    finally:
+        plt.close(fig)
 
 
 def _grid(n: int) -> tuple[plt.Figure, list[plt.Axes]]:

@@ -6,12 +6,13 @@ from __future__ import annotations
 import math
 import os
 import platform
-import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+
+from dryfriction.atomic import atomic_write_text
 
 PEERS = ("event RK45", "event DOP853", "event Radau", "tanh Radau", "tanh LSODA")
 GOAL_ERROR = 1e-6
@@ -390,14 +391,4 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
         "its numbers are a smoke test, not the study." if cfg.quick else
         "- Run `python bench/work_precision.py --quick` for the short smoke-test variant (CI).")
     add("")
-    fd, tmp = tempfile.mkstemp(prefix=md.name + ".", suffix=".tmp", dir=md.parent)
-    try:
-        mask = os.umask(0)
-        os.umask(mask)
-        os.fchmod(fd, 0o666 & ~mask)
-        with os.fdopen(fd, "w") as f:
-            f.write("\n".join(L) + "\n")
-        os.replace(tmp, md)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write_text(md, "\n".join(L) + "\n")

@@ -161,12 +161,13 @@ def rss_bytes() -> int:
 def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps: int) -> list[dict]:
     """Bytes per FMU instance and RSS before/after long runs.
 
-    - per fmi2 instance: n_instances more FMU2Slave objects on the already unzipped FMU (the shared
-      library is loaded once): RSS delta and Python-heap (tracemalloc) delta, per instance;
+    - per fmi2 instance: n_instances more instances (dryfriction.fmi2.Instance) of the already
+      unzipped FMU (the shared library is loaded once): RSS delta and Python-heap (tracemalloc)
+      delta, per instance;
     - per OscillatorFMU (unzip + load a private copy + instantiate): RSS delta over a few;
     - a run of long_steps internal steps in one doStep, three times: RSS before and after each.
     """
-    from fmpy.fmi2 import FMU2Slave
+    from dryfriction.fmi2 import Instance
 
     rows: list[dict] = []
     gc.collect()
@@ -175,19 +176,16 @@ def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps:
     rss0 = rss_bytes()
     py0 = tracemalloc.get_traced_memory()[0]
     for i in range(n_instances):
-        s = FMU2Slave(guid=fmu.md.guid, unzipDirectory=fmu._dir,
-                      modelIdentifier=fmu.md.coSimulation.modelIdentifier, instanceName=f"mem{i}")
-        s.instantiate(callbacks=fmu._callbacks, loggingOn=False)
-        slaves.append(s)
+        slaves.append(Instance(fmu.unzip_dir, fmu.md.guid, fmu.md.model_identifier, f"mem{i}"))
     rss1 = rss_bytes()
     py1 = tracemalloc.get_traced_memory()[0]
     tracemalloc.stop()
     rows.append(dict(kind="rss_per_fmi2_instance", value=(rss1 - rss0) / n_instances, unit="bytes",
-                     note=f"RSS delta over {n_instances} FMU2Slave instances sharing one loaded library"))
+                     note=f"RSS delta over {n_instances} fmi2 instances sharing one loaded library"))
     rows.append(dict(kind="python_heap_per_fmi2_instance", value=(py1 - py0) / n_instances, unit="bytes",
-                     note="tracemalloc delta (Python objects of fmpy's wrapper, not the C instance)"))
+                     note="tracemalloc delta (Python objects of the FMI layer, not the C instance)"))
     for s in slaves:
-        s.freeInstance()
+        s.free()
     del slaves
     gc.collect()
 
@@ -221,5 +219,7 @@ def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps:
 
 
 def fmu_library_path(fmu: OscillatorFMU) -> Path:
-    """The shared library fmpy loaded (what bench_stepper should time too)."""
-    return Path(fmu._dir) / "binaries" / "linux64" / f"{fmu.md.coSimulation.modelIdentifier}.so"
+    """The shared library the FMI layer loaded (what bench_stepper should time too)."""
+    from dryfriction.fmi2 import library_path
+
+    return library_path(fmu.unzip_dir, fmu.md.model_identifier)

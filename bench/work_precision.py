@@ -26,22 +26,17 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dryfriction import model
+from dryfriction.argparsing import make_parser
+from dryfriction.atomic import atomic_path, atomic_write_text
+
 HERE = Path(__file__).resolve().parent
 if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
-
-
-class _Parser(argparse.ArgumentParser):
-    """Bad arguments: one readable line on stderr and exit code 2."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        sys.stderr.write(f"work_precision.py: error: {message} (see --help)\n")
-        raise SystemExit(2)
 
 
 def bad(message: str) -> None:
@@ -95,8 +90,8 @@ class StudyConfig:
 # ---------------------------------------------------------------------------- arguments, setup
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    ap = _Parser(prog="work_precision.py", description=__doc__.split("\n\n")[0],
-                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = make_parser("work_precision.py", __doc__.split("\n\n")[0], exit=True,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="the short smoke-test study (< ~2 min)")
     ap.add_argument("--out", default="results/work_precision", help="output folder (created)")
     ap.add_argument("--md", default=None, help="markdown report path (default: OUT/RESULTS.md)")
@@ -139,12 +134,6 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     return args
 
 
-def _umask_mode() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
 RESULT_FILES = ("cases.csv", "work_precision.csv", "orders.csv", "stepper.csv", "scaling.csv", "memory.csv",
                 "meta.json")
 
@@ -164,15 +153,7 @@ def read_csv(path: Path) -> list[dict]:
 
 
 def write_json(path: Path, data: dict) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        os.fchmod(fd, _umask_mode())
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write_text(path, json.dumps(data, indent=1))
 
 
 def render(args: argparse.Namespace, cfg: StudyConfig, meta: dict) -> None:
@@ -206,18 +187,11 @@ def write_csv(path: Path, rows: list[dict]) -> None:
         for k in r:
             if k not in cols:
                 cols.append(k)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        os.fchmod(fd, _umask_mode())
-        with os.fdopen(fd, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=cols, restval="")
-            w.writeheader()
-            for r in rows:
-                w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=cols, restval="")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
 
 
 # ---------------------------------------------------------------------------- the study
@@ -245,7 +219,7 @@ def fmu_sweep(fmu, cfg: StudyConfig, cases, exacts, progress) -> list[dict]:
                 cache[key] = ex.evaluate(t)[0]
             return cache[key]
 
-        for scheme in ("located", "consistent", "paper"):
+        for scheme in reversed(list(model.default().schemes)):  # located, consistent, paper
             for alpha in cfg.alphas:
                 for spp in cfg.spp:
                     c = FmuConfig(scheme, alpha, spp)

@@ -12,7 +12,6 @@ and without. Times are the minimum over --repeat runs. Writes a CSV and a markdo
 
 from __future__ import annotations
 
-import argparse
 import io
 import sys
 import time
@@ -24,7 +23,8 @@ import numpy as np
 from dryfriction import scenes
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-from dryfriction.report import atomic_write_bytes
+from dryfriction.argparsing import make_parser
+from dryfriction.atomic import atomic_write_bytes
 
 
 def best_pair(fa: Callable[[], object], fb: Callable[[], object], repeat: int,
@@ -128,7 +128,7 @@ def markdown(scene: list[dict[str, object]], effect: list[dict[str, object]]) ->
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = make_parser("bench_scenes.py", __doc__.splitlines()[0], exit=True)
     ap.add_argument("--quick", action="store_true", help="shorter runs (a smoke test)")
     ap.add_argument("--repeat", type=int, default=5, help="repetitions per measurement, the minimum is kept")
     ap.add_argument("--out", type=Path, default=Path("results/bench_scenes"))

@@ -29,7 +29,6 @@ The report goes to stdout and ``<out>/bench/bench_sweep.json``. Not a test: noth
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import shutil
@@ -41,6 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
+from dryfriction import model
+from dryfriction.argparsing import make_parser
+from dryfriction.atomic import atomic_write_text
 from dryfriction.fmu import default_fmu_path
 from dryfriction.studies import effective_config, run_study
 from dryfriction.studies.fig8_9_bifurcation import spec as fig8_9_spec
@@ -147,7 +149,7 @@ def fmu_ns_per_step(runner: BatchRunner, rows: np.ndarray, steps: float) -> tupl
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = make_parser("bench_sweep.py", __doc__.split("\n\n")[0], exit=True)
     ap.add_argument("--quick", action="store_true", help="the quick fig8_9 (CI-sized)")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default="results")
@@ -180,7 +182,7 @@ def main() -> int:
     total_steps = sp.n_runs * steps_per_run
     idx = np.unique(np.linspace(0, sp.n_runs - 1, min(a.sample, sp.n_runs)).round().astype(int))
     sample = sp.params[idx]
-    scheme = {"paper": 1, "consistent": 2, "located": 3}[num["scheme"]]
+    scheme = model.default().scheme_value(num["scheme"])
 
     work = Path(tempfile.mkdtemp(prefix="bench-sweep-"))
     try:
@@ -252,9 +254,7 @@ def main() -> int:
     }
     out = Path(a.out) / "bench"
     out.mkdir(parents=True, exist_ok=True)
-    tmp = out / ".bench_sweep.json.tmp"
-    tmp.write_text(json.dumps(report, indent=2) + "\n")
-    os.replace(tmp, out / "bench_sweep.json")
+    atomic_write_text(out / "bench_sweep.json", json.dumps(report, indent=2) + "\n")
     print(f"\nFig. 8/9 sweep: {sp.n_runs:,} runs, {total_steps:.3e} internal steps, {a.workers} workers")
     print(f"  wall {wall:.1f} s (sweep {st.wall:.1f} s, of which LocalCluster start {st.startup:.1f} s), "
           f"{sp.n_runs / wall:,.0f} runs/s")

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Set up everything on a fresh machine (Python 3.10+, pip, gcc, cmake): a virtual environment in
+# Set up everything on a fresh machine (Python 3.11+, pip, gcc, cmake): a virtual environment in
 # .venv with the package and its test tools, and the FMU built by CMake into build/.
 # Usage: bash scripts/setup.sh        (idempotent; later runs only rebuild what changed)
 set -euo pipefail

@@ -4,7 +4,6 @@ solution and the steady-state amplitude formulas (method.md section 5)."""
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -198,6 +197,7 @@ def test_linear_resonance_is_a_limit() -> None:
 # --------------------------------------------------------------------------- (b) reference
 
 
+@pytest.mark.min_versions
 @pytest.mark.parametrize("name", list(REF_CASES))
 def test_exact_matches_event_driven_reference(name: str) -> None:
     p = REF_CASES[name]
@@ -457,17 +457,14 @@ def test_steady_formula_domains() -> None:
     assert inman_amplitude(p, np.array([2.0, 3.0])).shape == (2,)
 
 
-# --------------------------------------------------------------------------- resonance, speed
+# --------------------------------------------------------------------------- resonance
 
 
 def test_resonance_many_periods_grows_linearly() -> None:
     """lambda = 1, zeta = 0, 4 mu_k N < pi P0: 1000 periods, amplitude grows by pi - 4 f per
     period (non-dimensional) with f = mu_k N / P0."""
     p = ND(1.0, 0.4, 0.7)
-    solve_exact(p, p.period)
-    t0 = time.perf_counter()
     sol = solve_exact(p, 1000 * p.period)
-    assert time.perf_counter() - t0 < 5.0
     peaks = np.array([abs(s.x0) for s in sol.segments[1:] if s.mode != 0]) * p.k / p.P0
     assert np.all(np.isfinite(peaks))
     f = p.mu_k * p.N / p.P0
@@ -477,14 +474,6 @@ def test_resonance_many_periods_grows_linearly() -> None:
     sol_d = solve_exact(ND(1.0 + 1e-12, 0.4, 0.7), 1000 * p.period)
     tt = np.linspace(0, sol.t_end, 2001)
     assert np.max(np.abs(sol.evaluate(tt)[0] - sol_d.evaluate(tt)[0])) <= 1e-6 * peaks[-1] * p.P0 / p.k
-
-
-def test_ten_periods_are_fast() -> None:
-    p = ND(0.5, 0.4, 0.7)
-    solve_exact(p, p.period)
-    t0 = time.perf_counter()
-    solve_exact(p, 10 * p.period)
-    assert time.perf_counter() - t0 < 0.1
 
 
 # --------------------------------------------------------------------------- (g) validation

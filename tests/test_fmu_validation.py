@@ -14,6 +14,7 @@ from dryfriction.validation import CASES, FIRST_CYCLE, convergence, first_cycle
 CONVERGENCE_CASES = ["stick-dominated", "reversal-only", "heavy-friction", "chi-small", "chi-large"]
 
 
+@pytest.mark.min_versions
 def test_first_cycle_matches_exact(fmu: OscillatorFMU) -> None:
     """The paper's first validation: forward slip, stick and backward slip over the first cycle."""
     p = FIRST_CYCLE
@@ -29,6 +30,7 @@ def test_first_cycle_matches_exact(fmu: OscillatorFMU) -> None:
     assert np.array_equal(fc.fmu["mode"][far], fc.exact["mode"][far])
 
 
+@pytest.mark.min_versions
 @pytest.mark.parametrize("case", CONVERGENCE_CASES)
 def test_located_is_second_order(fmu: OscillatorFMU, case: str) -> None:
     """Error falls 4x (+-15 %) per halving of h from T/400 to T/3200 over 10 periods."""

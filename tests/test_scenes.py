@@ -45,14 +45,14 @@ def effects_of(fmu: OscillatorFMU, p: Oscillator, **settings) -> set[str]:
 
 def test_effects_name_what_is_simulated(fmu: OscillatorFMU) -> None:
     base = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
-    assert effects_of(fmu, base) == {"friction LCP", "coefficient update"}
-    assert effects_of(fmu, base.with_(chi=1.0)) == {"friction LCP"}
+    assert effects_of(fmu, base) == {"friction", "coefficientUpdate"}
+    assert effects_of(fmu, base.with_(chi=1.0)) == {"friction"}
     assert effects_of(fmu, base.with_(N=0.0)) == set()
     assert effects_of(fmu, base.with_(mu_s=0.0)) == set()
-    assert effects_of(fmu, base.with_(c=0.5)) == {"friction LCP", "coefficient update", "damping"}
-    assert effects_of(fmu, base, observe=True) == {"friction LCP", "coefficient update", "observables"}
-    assert effects_of(fmu, base.with_(N=0.0), extra={"N_ext": 1.0}) == {"friction LCP", "coefficient update", "input N_ext"}
-    assert effects_of(fmu, base, extra={"F_ext": 0.0}) == {"friction LCP", "coefficient update", "input F_ext"}
+    assert effects_of(fmu, base.with_(c=0.5)) == {"friction", "coefficientUpdate", "damping"}
+    assert effects_of(fmu, base, observe=True) == {"friction", "coefficientUpdate", "observables"}
+    assert effects_of(fmu, base.with_(N=0.0), extra={"N_ext": 1.0}) == {"friction", "coefficientUpdate", "normalInput"}
+    assert effects_of(fmu, base, extra={"F_ext": 0.0}) == {"friction", "coefficientUpdate", "forceInput"}
 
 
 def test_observables_do_not_change_the_motion(fmu: OscillatorFMU) -> None:

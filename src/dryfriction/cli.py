@@ -8,25 +8,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from . import scenes
-from .fmu import FMUError
+from . import model, scenes
+from .argparsing import Parser, UsageError, make_parser
+from .fmu import FMUError, Settings
 from .params import Oscillator
-
-
-class UsageError(Exception):
-    pass
-
-
-class Parser(argparse.ArgumentParser):
-    """argparse with a one-line error instead of usage + message."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        raise UsageError(message)
 
 
 def finite(name: str, lo: float | None = None, lo_open: bool = False):
@@ -57,16 +46,29 @@ def positive_int(name: str):
     return conv
 
 
-def build_parser() -> Parser:
-    p = Parser(prog="dryfriction", description="Dry-friction oscillator FMU: validation, scenes and studies.")
-    p.add_argument("--fmu", type=Path, default=None, help="path of the FMU (default: build/DryFrictionOscillator.fmu)")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+def _global_options(suppress: bool) -> argparse.ArgumentParser:
+    """The options every subcommand accepts, before or after its name. On the subcommands the
+    default is SUPPRESS, so that a value given before the subcommand is kept."""
+    g = argparse.ArgumentParser(add_help=False)
+    default = argparse.SUPPRESS if suppress else None
+    g.add_argument("--fmu", type=Path, default=default,
+                   help="path of the FMU (default: $DFO_FMU or build/DryFrictionOscillator.fmu)")
+    return g
 
-    v = sub.add_parser("validate", help="FMU against the exact solution: errors, orders, results/validation.png")
+
+def build_parser() -> Parser:
+    p = make_parser("dryfriction", "Dry-friction oscillator FMU: validation, scenes and studies.",
+                    parents=[_global_options(False)])
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+    common = [_global_options(True)]
+
+    v = sub.add_parser("validate", parents=common,
+                       help="FMU against the exact solution: errors, orders, results/validation.png")
     v.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results)")
     v.add_argument("--quick", action="store_true", help="two cases, three step sizes")
 
-    r = sub.add_parser("run", help="run one scene and print its result as JSON")
+    schemes = list(model.default().schemes)
+    r = sub.add_parser("run", parents=common, help="run one scene and print its result as JSON")
     r.add_argument("--scene", choices=list(scenes.SCENES), default="validation")
     r.add_argument("--lam", type=finite("--lam", 0.0, True), default=0.5, help="frequency ratio omega/w0")
     r.add_argument("--mu-s-sigma", type=finite("--mu-s-sigma", 0.0), default=0.4, help="mu_s N / P0")
@@ -76,13 +78,16 @@ def build_parser() -> Parser:
     r.add_argument("--dz0", type=finite("--dz0"), default=0.0, help="initial dz/dtau")
     r.add_argument("--periods", type=finite("--periods", 0.0, True), default=30.0, help="excitation periods")
     r.add_argument("--steps-per-period", type=positive_int("--steps-per-period"), default=1000)
-    r.add_argument("--scheme", choices=["paper", "consistent", "located"], default="located")
+    r.add_argument("--scheme", choices=schemes, default=Settings().scheme)
     r.add_argument("--out", type=Path, default=None, help="CSV file for the trajectory scenes")
 
-    sub.add_parser("scenes", help="list the scenes")
+    sub.add_parser("scenes", parents=common, help="list the scenes")
 
-    s = sub.add_parser("study", help="the paper's studies (see 'dryfriction study --help')", add_help=False)
-    s.add_argument("args", nargs=argparse.REMAINDER)
+    s = sub.add_parser("study", parents=common, help="the paper's studies ('dryfriction study list')",
+                       description="Reproduce a study of the paper (see 'list').")
+    from .studies import add_arguments
+
+    add_arguments(s, fmu=False)
     return p
 
 
@@ -94,7 +99,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from .fmu import OscillatorFMU, Settings
+    from .fmu import OscillatorFMU
 
     p = Oscillator.from_nondimensional(lam=args.lam, mu_s_sigma=args.mu_s_sigma, chi=args.chi, zeta=args.zeta,
                                        z0=args.z0, dz0=args.dz0)
@@ -116,7 +121,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.out:
         import numpy as np
 
-        from .report import atomic_write_bytes
+        from .atomic import atomic_write_bytes
 
         keys = list(res)
         rows = np.column_stack([res[k] for k in keys])
@@ -134,28 +139,20 @@ def cmd_scenes(_: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_study(argv: Sequence[str]) -> int:
-    try:
-        from .studies import main as studies_main
-    except ImportError:
-        print("dryfriction: error: the studies are not installed in this version", file=sys.stderr)
-        return 2
-    return int(studies_main(list(argv)))
+def cmd_study(args: argparse.Namespace) -> int:
+    from .studies import run_args
+
+    return int(run_args(args, prog="dryfriction study"))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser()
     try:
-        if argv and argv[0] == "study":
-            return cmd_study(argv[1:])
-        if argv[:1] == ["--fmu"] and len(argv) > 2 and argv[2] == "study":
-            os.environ["DFO_FMU"] = argv[1]  # the studies' workers find the FMU through it
-            return cmd_study(argv[3:])
-        args = parser.parse_args(argv)
+        args = build_parser().parse_args(argv)
+        args.fmu = getattr(args, "fmu", None)
         if args.fmu is not None and not args.fmu.is_file():
             raise UsageError(f"--fmu: no such file: {args.fmu}")
-        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes}[args.command]
+        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes, "study": cmd_study}[args.command]
         return handler(args)
     except UsageError as e:
         print(f"dryfriction: error: {e}", file=sys.stderr)

@@ -11,22 +11,28 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
+from . import model
+
+#: start values of the model description's parameters (the defaults below)
+_START = model.default().parameter_starts()
+
 
 @dataclass(frozen=True)
 class Oscillator:
-    """One parameter set in SI units (defaults: lambda = 0.5, mu_s sigma = 0.4, chi = 0.7)."""
+    """One parameter set in SI units; the defaults are the model description's start values
+    (lambda = 0.5, mu_s sigma = 0.4, chi = 0.7)."""
 
-    m: float = 1.0
-    k: float = 100.0
-    c: float = 0.0
-    P0: float = 1.0
-    omega: float = 5.0
-    phi: float = 0.0
-    N: float = 1.0
-    mu_s: float = 0.4
-    chi: float = 0.7
-    x0: float = 0.0
-    v0: float = 0.0
+    m: float = _START["m"]
+    k: float = _START["k"]
+    c: float = _START["c"]
+    P0: float = _START["P0"]
+    omega: float = _START["omega"]
+    phi: float = _START["phi"]
+    N: float = _START["N"]
+    mu_s: float = _START["mu_s"]
+    chi: float = _START["chi"]
+    x0: float = _START["x0"]
+    v0: float = _START["v0"]
 
     # --- derived quantities (method.md section 1) ---
     @property
@@ -79,10 +85,10 @@ class Oscillator:
         z0: float = 0.0,
         dz0: float = 0.0,
         phi: float = 0.0,
-        m: float = 1.0,
-        k: float = 100.0,
-        P0: float = 1.0,
-        mu_s: float = 0.4,
+        m: float = _START["m"],
+        k: float = _START["k"],
+        P0: float = _START["P0"],
+        mu_s: float = _START["mu_s"],
     ) -> "Oscillator":
         """Physical parameters for the non-dimensional set of method.md (2).
 

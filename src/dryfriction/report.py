@@ -5,33 +5,15 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_write_bytes
 from .fmu import OscillatorFMU
 from .validation import CASES, Convergence, FirstCycle, convergence, first_cycle
 
-SCHEMES = ("located", "consistent", "paper")
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write a file so that a reader never sees it half-written."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def run_validation(fmu: OscillatorFMU, cases: Sequence[str], steps: Sequence[int],
@@ -40,7 +22,7 @@ def run_validation(fmu: OscillatorFMU, cases: Sequence[str], steps: Sequence[int
 
     fc = first_cycle(fmu, steps_per_period=1000)
     results: dict[tuple[str, str], Convergence] = {}
-    jobs = [(c, s) for c in cases for s in SCHEMES]
+    jobs = [(c, s) for c in cases for s in reversed(fmu.md.schemes)]
     for case, scheme in tqdm(jobs, desc="convergence", disable=not progress, unit="case"):
         results[case, scheme] = convergence(fmu, CASES[case][0], scheme, steps_per_period=steps)
     return fc, results

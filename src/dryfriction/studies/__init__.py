@@ -22,13 +22,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Any, NoReturn
+from typing import Any
 
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
+from ..argparsing import UsageError, make_parser
+from ..atomic import atomic_write_text
 from .config import ConfigError, build_config, config_dir, load_toml
 
-__all__ = ["STUDIES", "ALIASES", "main", "run_study", "resolve", "effective_config", "StudyOutcome"]
+__all__ = ["STUDIES", "ALIASES", "main", "run_args", "add_arguments", "run_study", "resolve", "effective_config",
+           "StudyOutcome", "dump_toml"]
 
 #: name -> module (NAME, TITLE, FIGURES, check(cfg), run(ctx) -> summary)
 STUDIES: dict[str, ModuleType] = {m.NAME: m for m in (
@@ -39,6 +42,7 @@ ALIASES = {"fig5": "fig5_6", "fig6": "fig5_6", "fig8": "fig8_9", "fig9": "fig8_9
            "fig11": "fig10_11", "fig12": "fig12_14", "fig13": "fig12_14", "fig14": "fig12_14"}
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 3
+
 
 
 def resolve(name: str) -> str:
@@ -106,7 +110,7 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
     opts = EngineOptions(fmu=fmu_path, workers=n_workers, scheduler=scheduler, progress=progress,
                          max_chunks=max_chunks)
     ctx = StudyContext(name=key, cfg=cfg, quick=quick, out_dir=out_dir, engine_options=opts)
-    _write_text(out_dir / "config.toml", dump_toml(cfg, header=f"effective configuration of study {key}"
+    atomic_write_text(out_dir / "config.toml", dump_toml(cfg, header=f"effective configuration of study {key}"
                                                           + (" (--quick)" if quick else "")))
     try:
         summary = STUDIES[key].run(ctx)
@@ -115,55 +119,24 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
         ctx.close()
     record = {"study": key, "quick": quick, "summary": summary,
               "sweeps": [s.__dict__ for s in stats]}
-    _write_text(out_dir / "summary.json", json.dumps(record, indent=2, default=float) + "\n")
+    atomic_write_text(out_dir / "summary.json", json.dumps(record, indent=2, default=float) + "\n")
     return StudyOutcome(key, out_dir, summary, stats, ctx.messages)
 
 
-def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, list):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
-    raise TypeError(type(v))
-
-
 def dump_toml(cfg: dict[str, Any], header: str = "") -> str:
-    """TOML text of a configuration (tables of scalars, lists and inline tables)."""
-    lines = [f"# {header}"] if header else []
-    top = {k: v for k, v in cfg.items() if not isinstance(v, dict)}
-    for k, v in top.items():
-        lines.append(f"{k} = {_toml_value(v)}")
-    for sect, tab in cfg.items():
-        if isinstance(tab, dict):
-            lines.append(f"\n[{sect}]")
-            for k, v in tab.items():
-                lines.append(f"{k} = {_toml_value(v)}")
-    return "\n".join(lines) + "\n"
+    """TOML text of a configuration (``tomli_w``), with a comment line on top."""
+    import tomli_w
+
+    text = tomli_w.dumps(cfg)
+    return (f"# {header}\n" if header else "") + text
 
 
 # ---- command line -----------------------------------------------------------------------------
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:  # one line, exit status 2
-        raise ConfigError(message)
-
-
-def _parser(prog: str) -> _Parser:
-    p = _Parser(prog=prog, description="Reproduce a study of the paper (see 'list').",
-                formatter_class=argparse.RawDescriptionHelpFormatter,
-                epilog="studies:\n" + "\n".join(f"  {n:9s} {m.TITLE}" for n, m in STUDIES.items()))
+def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.ArgumentParser:
+    """The study command's arguments (``fmu=False``: the caller's parser has a global ``--fmu``)."""
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = "studies:\n" + "\n".join(f"  {n:9s} {m.TITLE}" for n, m in STUDIES.items())
     p.add_argument("name", help="study name (fig2, fig3, ..., or list, all)")
     p.add_argument("--quick", action="store_true", help="small sizes (CI): the config's [quick] table")
     p.add_argument("--out", default="results", metavar="DIR", help="results root; files go to DIR/<study>/")
@@ -174,12 +147,17 @@ def _parser(prog: str) -> _Parser:
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config value, e.g. --set sweep.chi.num=20 (repeatable)")
     p.add_argument("--config", default=None, metavar="FILE", help="TOML file overriding the study's config")
-    p.add_argument("--fmu", default=None, metavar="PATH", help="the FMU (default: $DFO_FMU or build/)")
+    if fmu:
+        p.add_argument("--fmu", default=None, metavar="PATH", help="the FMU (default: $DFO_FMU or build/)")
     p.add_argument("--max-chunks", type=int, default=None, metavar="N",
                    help="stop after computing N new chunks (exit 3; run again to finish)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--show-config", action="store_true", help="print the effective config and exit")
     return p
+
+
+def _parser(prog: str) -> argparse.ArgumentParser:
+    return add_arguments(make_parser(prog, "Reproduce a study of the paper (see 'list')."))
 
 
 def _list() -> str:
@@ -192,18 +170,26 @@ def _list() -> str:
 
 def main(argv: Sequence[str] | None = None, prog: str = "dryfriction study") -> int:
     """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input, 3 stopped)."""
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    if args_list and args_list[0] in ("-h", "--help"):
+        _parser(prog).print_help()
+        return EXIT_OK
+    try:
+        args = _parser(prog).parse_args(args_list)
+    except UsageError as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return EXIT_USAGE
+    except SystemExit as e:  # --help anywhere
+        return int(e.code or 0)
+    return run_args(args, prog)
+
+
+def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
+    """Run the study command of parsed arguments (see :func:`add_arguments`)."""
     from ..fmu import FMUError
     from ..sweep.engine import SweepInterrupted
 
-    args_list = list(sys.argv[1:] if argv is None else argv)
     try:
-        if args_list and args_list[0] in ("-h", "--help"):
-            _parser(prog).print_help()
-            return EXIT_OK
-        try:
-            args = _parser(prog).parse_args(args_list)
-        except SystemExit as e:  # --help anywhere
-            return int(e.code or 0)
         if args.name == "list":
             print(_list())
             return EXIT_OK
@@ -216,13 +202,14 @@ def main(argv: Sequence[str] | None = None, prog: str = "dryfriction study") -> 
             for n, cfg in cfgs.items():
                 print(dump_toml(cfg, header=f"study {n}" + (" (--quick)" if args.quick else "")))
             return EXIT_OK
+        fmu = getattr(args, "fmu", None)
         for n in names:
             print(f"== study {n}: {STUDIES[n].TITLE}", flush=True)
             run_study(n, quick=args.quick, out=args.out, workers=args.workers, scheduler=args.scheduler,
-                      sets=args.sets, config_file=args.config, fmu=args.fmu, max_chunks=args.max_chunks,
+                      sets=args.sets, config_file=args.config, fmu=fmu, max_chunks=args.max_chunks,
                       progress=not args.no_progress)
         return EXIT_OK
-    except ConfigError as e:
+    except UsageError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return EXIT_USAGE
     except BrokenPipeError:  # output piped into head & co.

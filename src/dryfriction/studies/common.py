@@ -4,7 +4,6 @@ trajectories through the FMU, and atomic output files (NetCDF datasets, PNG figu
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,9 +16,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from ..fmu import SCHEMES, OscillatorFMU, Settings  # noqa: E402
+from .. import model  # noqa: E402
+from ..fmu import OscillatorFMU, Settings  # noqa: E402
 from ..params import Oscillator  # noqa: E402
-from ..sweep.datasets import atomic_path, write_netcdf  # noqa: E402
+from ..atomic import atomic_path  # noqa: E402
+from ..sweep.datasets import write_netcdf  # noqa: E402
 from ..sweep.engine import Engine, EngineOptions, SweepSpec  # noqa: E402
 from ..sweep.table import nondim_table  # noqa: E402
 from .config import ConfigError, require  # noqa: E402,F401
@@ -101,15 +102,11 @@ class StudyContext:
 
     def save_figure(self, fig: Any, filename: str) -> Path:
         path = self.out_dir / filename
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = atomic_path(path)
         try:
-            fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
-            os.replace(tmp, path)
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
         finally:
             plt.close(fig)
-            if tmp.exists():
-                tmp.unlink()
         self.log(f"wrote {path}")
         return path
 
@@ -136,16 +133,22 @@ def check_params(p: Mapping[str, Any], where: str = "params") -> None:
 
 
 def check_numerics(n: Mapping[str, Any]) -> None:
+    """The numerical settings, against the ranges of the model description's variables."""
+    md = model.default()
     require(n["steps_per_period"] >= 10,
             f"numerics.steps_per_period must be >= 10, not {n['steps_per_period']}")
-    require(n["scheme"] in SCHEMES,
-            f"numerics.scheme must be one of {', '.join(SCHEMES)}, not {n['scheme']!r}")
-    require(-1.0 / 3.0 <= n["alpha"] <= 0.0, f"numerics.alpha must be in [-1/3, 0], not {n['alpha']}")
-    if "frictionUpdates" in n:
-        require(0 <= n["frictionUpdates"] <= 100,
-                f"numerics.frictionUpdates must be in [0, 100], not {n['frictionUpdates']}")
+    for key in ("scheme", "alpha", "frictionUpdates"):
+        if key in n:
+            _check_var(md, key, n[key])
     if "chunk_runs" in n:
         require(n["chunk_runs"] >= 1, f"numerics.chunk_runs must be >= 1, not {n['chunk_runs']}")
+
+
+def _check_var(md: model.ModelDescription, name: str, value: Any) -> None:
+    try:
+        md.check(name, value, where=f"numerics.{name}")
+    except ValueError as e:
+        raise ConfigError(str(e)) from None
 
 
 def check_window(periods: float, obs_periods: float, where: str) -> None:

@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from ..argparsing import UsageError
+
 __all__ = [
     "ConfigError",
     "config_dir",
@@ -33,7 +35,7 @@ __all__ = [
 ]
 
 
-class ConfigError(ValueError):
+class ConfigError(UsageError):
     """An invalid argument or configuration value (reported as one line, exit status 2)."""
 
 

@@ -14,9 +14,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..atomic import atomic_path
 from .runner import OUTPUT_COLUMNS
 
-__all__ = ["observables_dataset", "write_netcdf", "read_netcdf", "atomic_path"]
+__all__ = ["observables_dataset", "write_netcdf", "read_netcdf"]
 
 _ATTRS = {
     "z_max": ("largest z = k x / P0 in the observation window", "1"),
@@ -66,11 +67,6 @@ def observables_dataset(
     return ds
 
 
-def atomic_path(path: Path) -> Path:
-    """A temporary name beside ``path`` (same directory, so the final rename is atomic)."""
-    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
-
-
 def _clean_attrs(attrs: Mapping[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, v in attrs.items():
@@ -93,13 +89,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
     ds.attrs = _clean_attrs(ds.attrs)
     for v in ds.variables.values():
         v.attrs = _clean_attrs(v.attrs)
-    tmp = atomic_path(path)
-    try:
+    with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
 import shutil
 import sys
 import time
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from ..atomic import atomic_path
 from .runner import OUTPUT_COLUMNS, PARAM_COLUMNS, run_batch_timed
 
 __all__ = ["SweepSpec", "EngineOptions", "SweepStats", "SweepInterrupted", "Engine"]
@@ -106,10 +106,8 @@ class SweepStats:
 
 
 def _atomic_save_npy(path: Path, arr: np.ndarray) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as f:
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.save(f, arr)
-    os.replace(tmp, path)
 
 
 def _load_chunk(path: Path, n_rows: int) -> np.ndarray | None:

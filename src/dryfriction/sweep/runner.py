@@ -2,10 +2,10 @@
 
 Every run goes through the FMU's own FMI 2.0 functions (fmi2Reset, fmi2SetupExperiment,
 fmi2SetReal/Integer/Boolean, fmi2Enter/ExitInitializationMode, one fmi2DoStep to the stop time,
-fmi2GetReal/Integer of the in-FMU observables). The functions are the ones fmpy loaded from the
-FMU's shared library (``FMU2Slave``), re-typed here to take raw addresses so that each run passes
-rows of pre-built numpy arrays instead of building ctypes arrays: about 10 microseconds of Python
-per run instead of about 100 (see ``scripts/bench_sweep.py``).
+fmi2GetReal/Integer of the in-FMU observables), called through the package's one FMI layer
+(:mod:`dryfriction.fmi2`, the instance of an :class:`~dryfriction.fmu.OscillatorFMU`): each run
+passes rows of pre-built numpy arrays by address instead of building ctypes arrays, about 10
+microseconds of Python per run (see ``bench/host_overhead.py``), and every status is checked.
 
 The observables are the FMU's (``observe = true`` with the window ``t_obs_start``..``t_obs_stop``):
 no trajectory is sampled, a run is one doStep.
@@ -14,7 +14,6 @@ no trajectory is sampled, a run is one doStep.
 from __future__ import annotations
 
 import atexit
-import ctypes
 import hashlib
 import os
 import tempfile
@@ -25,7 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from ..fmu import SCHEMES, FMUError, OscillatorFMU
+from .. import model
+from ..atomic import atomic_write_bytes
+from ..fmi2 import FMUError
+from ..fmu import OscillatorFMU
 
 __all__ = [
     "PARAM_COLUMNS",
@@ -37,19 +39,16 @@ __all__ = [
     "run_batch_timed",
 ]
 
-#: Per-run real inputs, in the order of the columns of a parameter table. ``t_stop`` is the
-#: communication point of the single doStep; the others are FMU variables.
-PARAM_COLUMNS: tuple[str, ...] = (
-    "m", "k", "c", "P0", "omega", "phi", "N", "mu_s", "chi", "x0", "v0",
-    "h", "alpha", "t_obs_start", "t_obs_stop", "t_stop",
-)
+#: Per-run real inputs, in the order of the columns of a parameter table: the Real parameters of
+#: the model description, in its order, then ``t_stop``, the communication point of the single
+#: doStep.
+PARAM_COLUMNS: tuple[str, ...] = tuple(
+    n for n, v in model.default().variables.items() if v.causality == "parameter" and v.type == "Real") + ("t_stop",)
 #: Real observables read after the run.
 REAL_OUTPUTS: tuple[str, ...] = ("x_max", "x_min", "stick_fraction", "E_friction")
 #: Columns of a result table: the real observables, then ``transitions`` and ``status``
 #: (0: ok, 1: the FMU reported an error; the observables are then nan).
 OUTPUT_COLUMNS: tuple[str, ...] = REAL_OUTPUTS + ("transitions", "status")
-
-_FMI_OK_OR_WARNING = 1  # fmi2OK = 0, fmi2Warning = 1
 
 
 class BatchRunner:
@@ -62,29 +61,8 @@ class BatchRunner:
     def __init__(self, fmu_path: str | os.PathLike[str], settings: Mapping[str, Any] | None = None) -> None:
         self.fmu = OscillatorFMU(fmu_path)
         self.path = self.fmu.path
-        slave = self.fmu.slave
-        self._c = slave.component
-        dll = slave.dll
-        vp, sz, dbl, i32 = ctypes.c_void_p, ctypes.c_size_t, ctypes.c_double, ctypes.c_int
-
-        def fn(name: str, *argtypes: Any) -> Any:
-            f = dll[name]  # a fresh function pointer: fmpy's own, typed copies stay untouched
-            f.argtypes = [vp, *argtypes]
-            f.restype = i32
-            return f
-
-        self._reset = fn("fmi2Reset")
-        self._setup = fn("fmi2SetupExperiment", i32, dbl, dbl, i32, dbl)
-        self._set_real = fn("fmi2SetReal", vp, sz, vp)
-        self._set_int = fn("fmi2SetInteger", vp, sz, vp)
-        self._set_bool = fn("fmi2SetBoolean", vp, sz, vp)
-        self._enter = fn("fmi2EnterInitializationMode")
-        self._exit = fn("fmi2ExitInitializationMode")
-        self._do_step = fn("fmi2DoStep", dbl, dbl, i32)
-        self._get_real = fn("fmi2GetReal", vp, sz, vp)
-        self._get_int = fn("fmi2GetInteger", vp, sz, vp)
-
-        vr = self.fmu.vr
+        self.md = self.fmu.md
+        vr = self.md.vr
         self._param_vr = np.array([vr(n) for n in PARAM_COLUMNS[:-1]], dtype=np.uint32)
         self._out_vr = np.array([vr(n) for n in REAL_OUTPUTS], dtype=np.uint32)
         self._trans_vr = np.array([vr("transitions")], dtype=np.uint32)
@@ -98,21 +76,15 @@ class BatchRunner:
 
     def configure(self, settings: Mapping[str, Any]) -> None:
         """The settings shared by all runs: scheme, frictionUpdates, fastPaths (observe is on)."""
-        scheme = settings.get("scheme", "located")
-        if isinstance(scheme, str):
-            if scheme not in SCHEMES:
-                raise ValueError(f"scheme must be one of {', '.join(SCHEMES)}, not {scheme!r}")
-            scheme = SCHEMES[scheme]
-        self._ints[:] = (int(scheme), int(settings.get("frictionUpdates", 1)))
-        self._bools[:] = (1, 1 if settings.get("fastPaths", True) else 0)
+        md = self.md
+        scheme = md.scheme_value(settings.get("scheme", md.var("scheme").start))
+        updates = settings.get("frictionUpdates", md.var("frictionUpdates").start)
+        md.check("frictionUpdates", updates)
+        self._ints[:] = (scheme, int(updates))
+        self._bools[:] = (1, 1 if settings.get("fastPaths", md.var("fastPaths").start) else 0)
 
     def close(self) -> None:
         self.fmu.close()
-
-    def _fail(self, n_messages: int, what: str) -> FMUError:
-        errors = [m for s, _, m in self.fmu.messages[n_messages:] if s >= 3]
-        del self.fmu.messages[n_messages:]
-        return FMUError(errors[-1] if errors else f"{what} failed")
 
     def run(self, params: np.ndarray, strict: bool = False) -> np.ndarray:
         """Run every row of ``params`` (columns :data:`PARAM_COLUMNS`); returns a float array with
@@ -123,11 +95,11 @@ class BatchRunner:
             raise ValueError(f"params must have shape (n, {len(PARAM_COLUMNS)})")
         n = P.shape[0]
         res = np.empty((n, len(OUTPUT_COLUMNS)))
-        c = self._c
-        reset, setup, set_real, set_int, set_bool = (self._reset, self._setup, self._set_real,
-                                                     self._set_int, self._set_bool)
-        enter, exit_, do_step, get_real, get_int = (self._enter, self._exit, self._do_step,
-                                                    self._get_real, self._get_int)
+        inst = self.fmu.fmi
+        c, f, check = inst.component, inst.f, inst.check
+        reset, setup, set_real, set_int, set_bool = f.Reset, f.SetupExperiment, f.SetReal, f.SetInteger, f.SetBoolean
+        enter, exit_, do_step, get_real, get_int = (f.EnterInitializationMode, f.ExitInitializationMode, f.DoStep,
+                                                    f.GetReal, f.GetInteger)
         npar = len(PARAM_COLUMNS) - 1
         vr_p = self._param_vr.ctypes.data
         vr_i, ints = self._int_vr.ctypes.data, self._ints.ctypes.data
@@ -141,26 +113,39 @@ class BatchRunner:
         for i in range(n):
             mark = len(msgs)
             row = base + i * stride
-            ok = (reset(c) <= _FMI_OK_OR_WARNING
-                  and setup(c, 0, 0.0, 0.0, 0, 0.0) <= _FMI_OK_OR_WARNING
-                  and set_real(c, vr_p, npar, row) <= _FMI_OK_OR_WARNING
-                  and set_int(c, vr_i, 2, ints) <= _FMI_OK_OR_WARNING
-                  and set_bool(c, vr_b, 2, bools) <= _FMI_OK_OR_WARNING
-                  and enter(c) <= _FMI_OK_OR_WARNING
-                  and exit_(c) <= _FMI_OK_OR_WARNING
-                  and do_step(c, 0.0, t_stops[i], 1) <= _FMI_OK_OR_WARNING
-                  and get_real(c, vr_o, nout, out) <= _FMI_OK_OR_WARNING
-                  and get_int(c, vr_t, 1, trans) <= _FMI_OK_OR_WARNING)
-            if ok:
-                res[i, :nout] = self._out
-                res[i, nout] = self._trans[0]
-                res[i, nout + 1] = 0.0
-            else:
-                err = self._fail(mark, f"run {i}")
+            # every status is looked at; a non-zero one goes to check(), which passes a warning
+            # and raises FMUError (function, status, the FMU's sentence) otherwise
+            try:
+                if s := reset(c):
+                    check("fmi2Reset", s, mark)
+                if s := setup(c, 0, 0.0, 0.0, 0, 0.0):
+                    check("fmi2SetupExperiment", s, mark)
+                if s := set_real(c, vr_p, npar, row):
+                    check("fmi2SetReal", s, mark)
+                if s := set_int(c, vr_i, 2, ints):
+                    check("fmi2SetInteger", s, mark)
+                if s := set_bool(c, vr_b, 2, bools):
+                    check("fmi2SetBoolean", s, mark)
+                if s := enter(c):
+                    check("fmi2EnterInitializationMode", s, mark)
+                if s := exit_(c):
+                    check("fmi2ExitInitializationMode", s, mark)
+                if s := do_step(c, 0.0, t_stops[i], 1):
+                    check("fmi2DoStep", s, mark)
+                if s := get_real(c, vr_o, nout, out):
+                    check("fmi2GetReal", s, mark)
+                if s := get_int(c, vr_t, 1, trans):
+                    check("fmi2GetInteger", s, mark)
+            except FMUError as err:
+                del msgs[mark:]
                 if strict:
-                    raise err
+                    raise FMUError(f"run {i}: {err.message}", err.function, err.status) from None
                 res[i, :nout + 1] = np.nan
                 res[i, nout + 1] = 1.0
+                continue
+            res[i, :nout] = self._out
+            res[i, nout] = self._trans[0]
+            res[i, nout + 1] = 0.0
             if len(msgs) > mark:  # warnings: keep the list from growing over a long sweep
                 del msgs[mark:]
         return res
@@ -179,9 +164,7 @@ def _materialise(fmu: str | bytes) -> str:
     digest = hashlib.sha256(fmu).hexdigest()[:16]
     path = Path(tempfile.gettempdir()) / f"dfo-sweep-{digest}.fmu"
     if not path.is_file():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_bytes(fmu)
-        os.replace(tmp, path)
+        atomic_write_bytes(path, fmu)
     return str(path)
 
 

@@ -11,7 +11,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .. import model
 from .runner import PARAM_COLUMNS
+
+#: the model description's start values: the default scales of a table
+_START = model.default().parameter_starts()
 
 __all__ = ["NONDIM_NAMES", "nondim_table", "to_nondim"]
 
@@ -27,11 +31,11 @@ def nondim_table(
     obs_start: float | np.ndarray,
     obs_stop: float | np.ndarray,
     steps_per_period: float | np.ndarray,
-    alpha: float = -0.1,
-    m: float = 1.0,
-    k: float = 100.0,
-    P0: float = 1.0,
-    mu_s: float = 0.4,
+    alpha: float = _START["alpha"],
+    m: float = _START["m"],
+    k: float = _START["k"],
+    P0: float = _START["P0"],
+    mu_s: float = _START["mu_s"],
 ) -> np.ndarray:
     """Rows of :data:`PARAM_COLUMNS` for broadcast arrays of the non-dimensional inputs.
 

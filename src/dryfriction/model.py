@@ -1,0 +1,246 @@
+"""The FMU's model description, read once: the Python side's single source of truth.
+
+Variables (name, value reference, type, causality, start, min, max, unit), the scheme names of the
+``Scheme`` enumeration and the effect bits of the vendor annotation
+(``<VendorAnnotations><Tool name="dryfriction"><Effects>``) come from ``modelDescription.xml``:
+the FMU's own (:func:`from_fmu`) or the repository's (:func:`repository`). Nothing in the package
+keeps a copy of them.
+
+:meth:`ModelDescription.check` validates a Python value against a variable's declared range with
+the sentence the FMU logs for the same value.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import zipfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+from xml.etree import ElementTree as ET
+
+__all__ = ["Variable", "Effect", "ModelDescription", "from_xml", "from_fmu", "repository", "default",
+           "default_fmu_path"]
+
+#: FMI type of the C call that reads/writes a variable of each declared type
+CALL_TYPE = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer", "Boolean": "Boolean"}
+
+
+@dataclass(frozen=True)
+class Variable:
+    name: str
+    vr: int
+    type: str                    # Real, Integer, Enumeration, Boolean
+    causality: str
+    variability: str
+    start: float | int | bool | None
+    min: float | int | None
+    max: float | int | None
+    unit: str | None
+    description: str
+    declared_type: str | None = None
+
+    @property
+    def call_type(self) -> str:
+        """Real, Integer or Boolean: the fmi2Get/Set function family of the variable."""
+        return CALL_TYPE[self.type]
+
+
+@dataclass(frozen=True)
+class Effect:
+    bit: int
+    name: str
+    description: str
+
+
+@dataclass(frozen=True)
+class ModelDescription:
+    guid: str
+    model_identifier: str
+    variables: dict[str, Variable]
+    schemes: dict[str, int]          # enumeration item name -> value, in declaration order
+    effects: tuple[Effect, ...]
+    effects_variable: str | None
+
+    # ---- lookups ----
+    def var(self, name: str) -> Variable:
+        try:
+            return self.variables[name]
+        except KeyError:
+            raise KeyError(f"the FMU has no variable {name!r}") from None
+
+    def vr(self, name: str) -> int:
+        return self.var(name).vr
+
+    def names(self, causality: str | None = None) -> tuple[str, ...]:
+        return tuple(n for n, v in self.variables.items() if causality is None or v.causality == causality)
+
+    def parameter_starts(self) -> dict[str, Any]:
+        """Declared start values of the parameters, by name."""
+        return {n: v.start for n, v in self.variables.items() if v.causality == "parameter"}
+
+    def scheme_value(self, scheme: str | int) -> int:
+        """The enumeration value of a scheme name (or a value, checked)."""
+        if isinstance(scheme, str):
+            if scheme not in self.schemes:
+                raise ValueError(f"scheme must be one of {', '.join(self.schemes)}, not {scheme!r}")
+            return self.schemes[scheme]
+        if int(scheme) not in self.schemes.values():
+            raise ValueError(f"scheme must be one of {', '.join(f'{v} ({k})' for k, v in self.schemes.items())}, "
+                             f"not {scheme!r}")
+        return int(scheme)
+
+    def effect_names(self, mask: int) -> list[str]:
+        return [e.name for e in self.effects if mask & e.bit]
+
+    # ---- validation ----
+    def valid_range(self, name: str) -> str:
+        v = self.var(name)
+        if v.type == "Enumeration":
+            return "one of " + ", ".join(f"{val} ({item})" for item, val in self.schemes.items())
+        if v.type == "Boolean":
+            return "true or false"
+        lo, hi = v.min, v.max
+        finite = v.type == "Real"
+        if lo is not None and hi is not None:
+            return f"in [{lo:g}, {hi:g}]"
+        if lo is not None:
+            if v.type == "Real" and lo > 0 and lo <= 2.2250738585072014e-308:
+                return "> 0"
+            return f">= {lo:g}"
+        if hi is not None:
+            return f"<= {hi:g}"
+        return "finite" if finite else "any"
+
+    def check(self, name: str, value: Any, where: str | None = None) -> None:
+        """Raise ValueError with one sentence if ``value`` is outside the declared range of the
+        variable ``name`` (finite for Reals, an item of the enumeration, within min/max)."""
+        v = self.var(name)
+        label = where or f"variable {name}"
+        bad = False
+        if v.type == "Boolean":
+            bad = not isinstance(value, (bool, int)) or (not isinstance(value, bool) and value not in (0, 1))
+        elif v.type == "Enumeration":
+            bad = (isinstance(value, str) and value not in self.schemes) or (
+                not isinstance(value, str) and (isinstance(value, bool) or not isinstance(value, int)
+                                                or value not in self.schemes.values()))
+        else:
+            try:
+                x = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"{label} must be a number, not {value!r}") from None
+            if v.type == "Integer" and (isinstance(value, bool) or x != int(x)):
+                raise ValueError(f"{label} must be a whole number, not {value!r}")
+            bad = not math.isfinite(x) or (v.min is not None and x < v.min) or (v.max is not None and x > v.max)
+        if bad:
+            if v.type == "Enumeration":
+                rng = "one of " + ", ".join(self.schemes)
+            elif v.type == "Real" and not math.isfinite(float(value)):
+                rng = "finite"
+            else:
+                rng = self.valid_range(name)
+            raise ValueError(f"invalid value {value!r} for {label}; valid range: {rng}")
+
+    def check_all(self, values: Mapping[str, Any]) -> None:
+        for name, value in values.items():
+            self.check(name, value)
+
+
+def _number(text: str | None, kind: str) -> float | int | bool | None:
+    if text is None:
+        return None
+    if kind == "Boolean":
+        return text.strip().lower() in ("true", "1")
+    if kind in ("Integer", "Enumeration"):
+        return int(text)
+    return float(text)
+
+
+def parse(xml: bytes | str) -> ModelDescription:
+    """A :class:`ModelDescription` of the text of a modelDescription.xml."""
+    root = ET.fromstring(xml)
+    cs = root.find("CoSimulation")
+    if cs is None:
+        raise ValueError("modelDescription.xml has no CoSimulation element")
+    enums: dict[str, dict[str, int]] = {}
+    for st in root.iterfind("TypeDefinitions/SimpleType"):
+        e = st.find("Enumeration")
+        if e is not None:
+            enums[st.get("name", "")] = {i.get("name", ""): int(i.get("value", "0")) for i in e.iterfind("Item")}
+    variables: dict[str, Variable] = {}
+    schemes: dict[str, int] = {}
+    for sv in root.iterfind("ModelVariables/ScalarVariable"):
+        el = next(iter(sv))
+        kind = el.tag
+        declared = el.get("declaredType")
+        if kind == "Enumeration" and declared in enums:
+            schemes = enums[declared] if sv.get("name") == "scheme" else schemes
+        lo, hi = _number(el.get("min"), kind), _number(el.get("max"), kind)
+        if kind == "Enumeration" and declared in enums:
+            vals = enums[declared].values()
+            lo, hi = (min(vals) if lo is None else lo), (max(vals) if hi is None else hi)
+        name = sv.get("name", "")
+        variables[name] = Variable(
+            name=name, vr=int(sv.get("valueReference", "0")), type=kind, causality=sv.get("causality", "local"),
+            variability=sv.get("variability", "continuous"), start=_number(el.get("start"), kind),
+            min=lo, max=hi, unit=el.get("unit"), description=sv.get("description", ""), declared_type=declared)
+    if not schemes and "Scheme" in enums:
+        schemes = enums["Scheme"]
+    effects: list[Effect] = []
+    effects_var = None
+    tool = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
+    if tool is not None:
+        effects_var = tool.get("variable")
+        effects = [Effect(int(e.get("bit", "0")), e.get("name", ""), e.get("description", ""))
+                   for e in tool.iterfind("Effect")]
+    return ModelDescription(guid=root.get("guid", ""), model_identifier=cs.get("modelIdentifier", ""),
+                            variables=variables, schemes=schemes, effects=tuple(effects),
+                            effects_variable=effects_var)
+
+
+def from_xml(path: str | os.PathLike[str]) -> ModelDescription:
+    return parse(Path(path).read_bytes())
+
+
+def from_fmu(path: str | os.PathLike[str]) -> ModelDescription:
+    """The model description inside an FMU archive."""
+    with zipfile.ZipFile(path) as z:
+        return parse(z.read("modelDescription.xml"))
+
+
+def repository_xml() -> Path:
+    return Path(__file__).resolve().parents[2] / "modelDescription.xml"
+
+
+@functools.lru_cache(maxsize=1)
+def repository() -> ModelDescription:
+    """The repository's modelDescription.xml (the one the FMU is generated from)."""
+    return from_xml(repository_xml())
+
+
+def default_fmu_path() -> Path:
+    """The FMU built by CMake (``DFO_FMU`` overrides)."""
+    env = os.environ.get("DFO_FMU")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[2] / "build" / "DryFrictionOscillator.fmu"
+
+
+@functools.lru_cache(maxsize=1)
+def default() -> ModelDescription:
+    """The repository's model description, or the built FMU's when the package is installed
+    without the repository."""
+    if repository_xml().is_file():
+        return repository()
+    fmu = default_fmu_path()
+    if not fmu.is_file():
+        raise FileNotFoundError(f"neither {repository_xml()} nor the FMU {fmu} is there to describe the model")
+    return _cached_fmu(str(fmu))
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_fmu(path: str) -> ModelDescription:
+    return from_fmu(path)
