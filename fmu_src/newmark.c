@@ -1,6 +1,7 @@
 /* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
 #include "newmark.h"
 
+#include "exact.h"
 #include "friction.h"
 #include "lcp.h"
 
@@ -661,6 +662,7 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s,
 dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx)
 {
+    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;

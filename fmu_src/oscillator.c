@@ -16,8 +16,9 @@ const char *dfo_value_range(const char *name, double v)
         return v >= 0.0 ? NULL : ">= 0";
     if (!strcmp(name, "alpha")) return (v >= -1.0 / 3.0 && v <= 0.0) ? NULL : "in [-1/3, 0]";
     if (!strcmp(name, "scheme"))
-        return (v == DFO_SCHEME_PAPER || v == DFO_SCHEME_CONSISTENT || v == DFO_SCHEME_LOCATED)
-                   ? NULL : "one of 1 (paper), 2 (consistent), 3 (located)";
+        return (v == DFO_SCHEME_PAPER || v == DFO_SCHEME_CONSISTENT || v == DFO_SCHEME_LOCATED ||
+                v == DFO_SCHEME_EXACT)
+                   ? NULL : "one of 1 (paper), 2 (consistent), 3 (located), 4 (exact)";
     if (!strcmp(name, "frictionUpdates")) return (v >= 0 && v <= 100) ? NULL : "in [0, 100]";
     return NULL;
 }
@@ -26,6 +27,8 @@ const char *dfo_check_params(const dfo_params *p)
 {
     if (p->t_obs_stop < p->t_obs_start)
         return "The observation window is empty: t_obs_stop must be >= t_obs_start.";
+    if (p->scheme == DFO_SCHEME_EXACT && !(p->k > 0.0))
+        return "The exact scheme needs a spring: k must be > 0 with scheme = 4 (exact).";
     return NULL;
 }
 

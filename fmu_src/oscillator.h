@@ -11,7 +11,8 @@
 
 #define DFO_PI 3.14159265358979323846
 
-typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3 } dfo_scheme;
+typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3,
+               DFO_SCHEME_EXACT = 4 } dfo_scheme;
 
 /* Everything a user sets before a run; names as in modelDescription.xml. */
 typedef struct {

@@ -32,7 +32,7 @@ from fmpy.fmi1 import calloc, free
 
 from .params import Oscillator
 
-SCHEMES = {"paper": 1, "consistent": 2, "located": 3}
+SCHEMES = {"paper": 1, "consistent": 2, "located": 3, "exact": 4}
 TRAJECTORY_OUTPUTS = ("x", "v", "a", "F_friction", "mode")
 OBSERVABLE_OUTPUTS = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
 EFFECT_BITS = {
