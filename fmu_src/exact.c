@@ -17,6 +17,8 @@
 #define MAX_START 200              /* steps of a slide from rest before it counts as not starting */
 #define MAX_STALL 64               /* events in a row at one instant before it is an error */
 #define MAX_POLISH 60              /* Newton / bisection steps of a bracketed stop */
+#define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
+#define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
 
 /* What is constant over one call. */
 typedef struct {
@@ -76,7 +78,7 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
 static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
-    const double th = fmod(C->M->p.omega * ta + C->M->P_phase, TWO_PI);
+    const double th = C->M->p.omega * ta + C->M->P_phase;
     P->s = s;
     P->ta = ta;
     P->xc = (C->L.u - s * C->L.muk_N) / C->k;
@@ -98,13 +100,14 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
         P->Qr = a * (P->c0 * C->Dr + P->s0 * C->Di) / C->D2;
         P->Qi = a * (P->s0 * C->Dr - P->c0 * C->Di) / C->D2;
         P->q1r = P->q1i = P->q2r = P->q2i = 0.0;
-        P->Qabs = hypot(P->Qr, P->Qi);
+        P->Qabs = sqrt(P->Qr * P->Qr + P->Qi * P->Qi);
         P->hy = y0 - P->Qr;        /* y_ss(0) = Re Q */
         P->hv = v0 + lam * P->Qi;  /* y_ss'(0) = Re(i lambda Q) */
     }
     const double hy = P->hy, hv = P->hv;
     if (z < 1.0) {
-        P->fA = hypot(hy, (hv + z * hy) / C->wd);
+        const double b = (hv + z * hy) / C->wd;
+        P->fA = sqrt(hy * hy + b * b);
         P->fB = 0.0;
     } else if (z == 1.0) {
         P->fA = fabs(hy);
@@ -184,8 +187,10 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
     v->y3 = -C->a * lam * sth - 2.0 * z * v->y2 - y1;
 }
 
-/* Bounds of |y'''| and |y''''| on [u, u + *span] (*span = INFINITY when they hold for all later u). */
-static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double *B3, double *B4, double *span)
+/* Bounds of |y'''| and |y''''| on [u, u + span]; *limited when they hold only there (the energy
+ * bound), not for every later u (the decomposition's, which only decay). */
+static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double span, double *B3, double *B4,
+                   int *limited)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
     double f3, f4;
@@ -195,20 +200,20 @@ static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double *
         f3 = v->e1 * (P->fA + P->fB * (v->u + 3.0));
         f4 = v->e1 * (P->fA + P->fB * (v->u + 4.0));
     } else {
-        const double r1 = fabs(C->r1), r2 = fabs(C->r2);
+        const double r1 = -C->r1, r2 = -C->r2;
         f3 = P->fA * r1 * r1 * r1 * v->e1 + P->fB * r2 * r2 * r2 * v->e2;
         f4 = P->fA * r1 * r1 * r1 * r1 * v->e1 + P->fB * r2 * r2 * r2 * r2 * v->e2;
     }
     const double l3 = lam * lam * lam;
     const double d3 = P->Qabs * l3 + f3, d4 = P->Qabs * l3 * lam + f4; /* INFINITY in the uniform form */
     /* energy: d/dtau (y^2 + y'^2)/2 = y' (a cos - 2 zeta y') <= a |y'|, so R grows at most by a */
-    const double R = hypot(v->y, v->y1) + a * ENERGY_SPAN;
+    const double R = sqrt(v->y * v->y + v->y1 * v->y1) + a * span;
     const double e2 = a + (1.0 + 2.0 * z) * R;
     const double e3 = a * lam + 2.0 * z * e2 + R;
     const double e4 = a * lam * lam + 2.0 * z * e3 + e2;
-    *span = (e3 < d3 || e4 < d4) ? ENERGY_SPAN : INFINITY;
-    *B3 = BOUND_SAFETY * fmin(d3, e3);
-    *B4 = BOUND_SAFETY * fmin(d4, e4);
+    *limited = (e3 < d3 || e4 < d4);
+    *B3 = BOUND_SAFETY * (e3 < d3 ? e3 : d3);
+    *B4 = BOUND_SAFETY * (e4 < d4 ? e4 : d4);
 }
 
 /* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 > 0). */
@@ -254,14 +259,67 @@ static void polish(const ex_ctx *C, const ex_phase *P, double lo, ex_val *vhi, e
     *out = v;
 }
 
+/* The state at tau = 0 from the phase's data (no transcendental function). */
+static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_val *v)
+{
+    const double z = C->zeta;
+    v->u = 0.0;
+    v->y = y0;
+    v->y1 = v0;
+    v->y2 = C->a * P->c0 - 2.0 * z * v0 - y0;
+    v->y3 = -C->a * C->lam * P->s0 - 2.0 * z * v->y2 - v0;
+    v->e1 = v->e2 = 1.0;
+}
+
+/* The certified step of a started slip (s y' > 0 on [u, u + d]) and the bound B4 of |y''''| that
+ * holds up to u + *span: the energy bound holds over a span only, widened while the step reaches it. */
+static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, double g0, double g1,
+                             double *B4, double *span)
+{
+    double S = ENERGY_SPAN, B3;
+    int lim;
+    bounds(C, P, v, S, &B3, B4, &lim);
+    double d = safe_step(g0, g1, B3);
+    *span = lim ? S : INFINITY;
+    while (lim && d >= S && S < 1e3) {
+        double B3w, B4w;
+        const double Sw = 4.0 * S;
+        bounds(C, P, v, Sw, &B3w, &B4w, &lim);
+        double dw = safe_step(g0, g1, B3w);
+        if (lim && dw > Sw) dw = Sw;
+        if (!(dw > S)) break;
+        d = dw;
+        S = Sw;
+        *B4 = B4w;
+        *span = lim ? S : INFINITY;
+    }
+    return (d > *span) ? *span : d;
+}
+
+/* A stop at u + d from the Taylor model at v, without evaluating there (its remainder is below
+ * rounding). */
+static void taylor_stop(const ex_ctx *C, const ex_val *v, double d, ex_val *out)
+{
+    /* y'''' from the derivative of the equation of motion, a cos(theta) = y'' + 2 zeta y' + y */
+    const double z = C->zeta, ac = v->y2 + 2.0 * z * v->y1 + v->y;
+    const double y4 = -C->lam * C->lam * ac - 2.0 * z * v->y3 - v->y2;
+    out->u = v->u + d;
+    out->y = v->y + d * (v->y1 + 0.5 * d * (v->y2 + d * v->y3 / 3.0));
+    out->y1 = 0.0;
+    out->y2 = v->y2 + d * (v->y3 + 0.5 * d * y4);
+    out->y3 = v->y3 + d * y4;
+    out->e1 = v->e1;
+    out->e2 = v->e2;
+}
+
 /* The first stop of the phase in (0, u_max]: SEARCH_STOP with the state there in *out, SEARCH_NONE
  * (then *out is the state at u_max), SEARCH_NULL (a slide from rest that never leaves the rounding
- * band: the block stays at rest at *out), SEARCH_FAIL (no progress). */
-static int find_stop(ex_ctx *C, const ex_phase *P, double u_max, ex_val *out)
+ * band: the block stays at rest at *out), SEARCH_FAIL (no progress). y0, v0: the data at tau = 0. */
+static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double u_max, ex_val *out)
 {
     const int s = P->s;
     ex_val v;
-    eval(C, P, 0.0, &v);
+    eval0(C, P, y0, v0, &v);
     int started = s * v.y1 > tol_of(C, P, &v), tries = 0;
     ex_val v_band = v; /* last point of a slide from rest still inside the rounding band */
     for (long it = 0; it < MAX_SEARCH; it++) {
@@ -281,38 +339,45 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double u_max, ex_val *out)
             *out = v;
             return SEARCH_STOP;
         }
-        double B3, B4, span, d;
-        bounds(C, P, &v, &B3, &B4, &span);
+        double B4, span = INFINITY, d;
         if (!started) {
-            d = 0.5 * start_step(fmax(g1, 0.0), g2, B4);
+            double B3;
+            int lim;
+            bounds(C, P, &v, ENERGY_SPAN, &B3, &B4, &lim);
+            d = START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, B4);
+            if (lim && d > ENERGY_SPAN) d = ENERGY_SPAN;
             if (!(d > 0.0)) {
                 *out = v_band;
                 return SEARCH_NULL;
             }
         } else {
-            d = safe_step(g0, g1, B3);
+            d = certified_step(C, P, &v, g0, g1, &B4, &span);
             if (g1 < 0.0) {
                 /* the quadratic Taylor model: its first root, or its minimum when it has none */
                 const double disc = g1 * g1 - 2.0 * g2 * g0;
                 double dt = -1.0;
+                int touch = 0;
                 if (disc >= 0.0) {
                     const double dq = 2.0 * g0 / (sqrt(disc) - g1);
-                    if (dq < 1.25 * d) dt = dq;  /* close: the model holds there */
+                    if (dq < TAYLOR_REACH * d) dt = dq;  /* close: the model holds there */
                 } else if (g2 > 0.0 && g0 - g1 * g1 / (2.0 * g2) <= tol) {
                     const double dm = -g1 / g2;  /* a tangential touch within rounding */
-                    if (dm < 4.0 * d) dt = dm;
+                    if (dm < 4.0 * d) { dt = dm; touch = 1; }
                 }
                 if (dt > 0.0 && u + dt <= u_max) {
+                    if (!touch && dt <= span && B4 * dt * dt * dt <= 6.0 * tol) {
+                        taylor_stop(C, &v, dt, out);
+                        return SEARCH_STOP;
+                    }
                     ex_val w;
                     eval(C, P, u + dt, &w);
                     const double gw = s * w.y1, tw = tol_of(C, P, &w);
                     if (fabs(gw) <= tw) { *out = w; return SEARCH_STOP; }
-                    if (gw < 0.0) { polish(C, P, u + fmin(d, dt), &w, out); return SEARCH_STOP; }
+                    if (gw < 0.0) { polish(C, P, u + (d < dt ? d : dt), &w, out); return SEARCH_STOP; }
                     if (s * w.y2 < 0.0 && dt >= d) { v = w; continue; } /* still falling: go on from there */
                 }
             }
         }
-        d = fmin(d, span);
         if (u + d >= u_max) {
             eval(C, P, u_max, out);
             /* the bound proves s y' > 0 up to u_max; at u_max it may sit on 0 by rounding */
@@ -427,7 +492,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         ex_val v;
         phase_init(C, &P, ta, s->X, s->V, sd);
         const double u_max = C->w0 * (t_target - ta);
-        const int r = find_stop(C, &P, u_max, &v);
+        const int r = find_stop(C, &P, s->X - P.xc, s->V / C->w0, u_max, &v);
         if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
         if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
         if (r == SEARCH_NONE) {
@@ -442,7 +507,9 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         s->t = ts;
         s->X = P.xc + v.y;
         s->V = 0.0;
-        int next = dfo_rest_mode(&C->L, static_force(C, ts, s->X));
+        /* the excitation at the stop from the phase's equation of motion: P = k a cos(theta) */
+        const double P_stop = C->k * (v.y2 + 2.0 * C->zeta * v.y1 + v.y);
+        int next = dfo_rest_mode(&C->L, dfo_static_force(C->M, &C->L, P_stop, s->X));
         if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at rest, */
             next = 0;                          /* and a breakaway right now is passed over */
             skip = 1;
