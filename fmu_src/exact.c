@@ -322,13 +322,14 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
     eval0(C, P, y0, v0, &v);
     int started = s * v.y1 > tol_of(C, P, &v), tries = 0;
     ex_val v_band = v; /* last point of a slide from rest still inside the rounding band */
+    const double u_ulp = 4.0 * DBL_EPSILON * fabs(P->ta) * C->w0; /* rounding of the start time, in tau */
     for (long it = 0; it < MAX_SEARCH; it++) {
         const double g0 = s * v.y1, g1 = s * v.y2, g2 = s * v.y3, tol = tol_of(C, P, &v);
         const double u = v.u;
         if (!started) {
             if (g0 > tol) {
                 started = 1;
-            } else if (g0 < -tol || ++tries > MAX_START) {
+            } else if (g0 < -(tol + fabs(g1) * u_ulp) || ++tries > MAX_START) {
                 *out = v_band;
                 return SEARCH_NULL;
             } else {
@@ -344,6 +345,12 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
             double B3;
             int lim;
             bounds(C, P, &v, ENERGY_SPAN, &B3, &B4, &lim);
+            /* from rest the slide needs s y'' >= 0 (a negative value within rounding counts as 0; the
+             * rounding includes that of the event's time, which moves y'' by y''' times it) */
+            if (g1 < -(tol + fabs(g2) * u_ulp)) {
+                *out = v_band;
+                return SEARCH_NULL;
+            }
             d = START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, B4);
             if (lim && d > ENERGY_SPAN) d = ENERGY_SPAN;
             if (!(d > 0.0)) {
