@@ -126,8 +126,8 @@ BAD_VALUES = [
     ("m", math.nan, "finite"),
     ("P0", math.inf, "finite"),
     ("x0", -math.inf, "finite"),
-    ("scheme", 4, "one of 1 (paper), 2 (consistent), 3 (located)"),
-    ("scheme", 0, "one of 1 (paper), 2 (consistent), 3 (located)"),
+    ("scheme", 5, "one of 1 (paper), 2 (consistent), 3 (located), 4 (exact)"),
+    ("scheme", 0, "one of 1 (paper), 2 (consistent), 3 (located), 4 (exact)"),
     ("frictionUpdates", -1, "in [0, 100]"),
     ("F_ext", math.nan, "finite"),
 ]

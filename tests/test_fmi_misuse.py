@@ -338,7 +338,7 @@ def test_bad_real_parameter(inst: Inst, name: str, value: float, valid: str) -> 
 
 
 @pytest.mark.parametrize("name,value,valid", [
-    ("scheme", 0, "1 (paper)"), ("scheme", 4, "3 (located)"), ("scheme", -1, "one of"),
+    ("scheme", 0, "1 (paper)"), ("scheme", 5, "4 (exact)"), ("scheme", -1, "one of"),
     ("frictionUpdates", -1, "[0, 100]"), ("frictionUpdates", 101, "[0, 100]"),
     ("frictionUpdates", 2**31 - 1, "[0, 100]"),
 ])
