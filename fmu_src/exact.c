@@ -47,7 +47,7 @@ typedef struct {
 
 /* y, y', y'', y''' at tau (derivatives in tau) and the decay factors of the free part there. */
 typedef struct {
-    double u, y, y1, y2, y3;
+    double u, y, y1, y2, y3, y4;
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
 } ex_val;
 
@@ -185,35 +185,41 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
     v->y1 = y1;
     v->y2 = C->a * cth - 2.0 * z * y1 - y;
     v->y3 = -C->a * lam * sth - 2.0 * z * v->y2 - y1;
+    v->y4 = -C->a * lam * lam * cth - 2.0 * z * v->y3 - v->y2;
 }
 
 /* Bounds of |y'''| and |y''''| on [u, u + span]; *limited when they hold only there (the energy
  * bound), not for every later u (the decomposition's, which only decay). */
 static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double span, double *B3, double *B4,
-                   int *limited)
+                   double *B5, int *limited)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
-    double f3, f4;
+    double f3, f4, f5;
     if (z < 1.0) {
-        f3 = f4 = P->fA * v->e1; /* |p| = 1 */
+        f3 = f4 = f5 = P->fA * v->e1; /* |p| = 1 */
     } else if (z == 1.0) {
         f3 = v->e1 * (P->fA + P->fB * (v->u + 3.0));
         f4 = v->e1 * (P->fA + P->fB * (v->u + 4.0));
+        f5 = v->e1 * (P->fA + P->fB * (v->u + 5.0));
     } else {
-        const double r1 = -C->r1, r2 = -C->r2;
-        f3 = P->fA * r1 * r1 * r1 * v->e1 + P->fB * r2 * r2 * r2 * v->e2;
-        f4 = P->fA * r1 * r1 * r1 * r1 * v->e1 + P->fB * r2 * r2 * r2 * r2 * v->e2;
+        const double r1 = -C->r1, r2 = -C->r2, a1 = P->fA * r1 * r1 * r1 * v->e1, a2 = P->fB * r2 * r2 * r2 * v->e2;
+        f3 = a1 + a2;
+        f4 = a1 * r1 + a2 * r2;
+        f5 = a1 * r1 * r1 + a2 * r2 * r2;
     }
     const double l3 = lam * lam * lam;
-    const double d3 = P->Qabs * l3 + f3, d4 = P->Qabs * l3 * lam + f4; /* INFINITY in the uniform form */
+    /* INFINITY in the uniform form */
+    const double d3 = P->Qabs * l3 + f3, d4 = P->Qabs * l3 * lam + f4, d5 = P->Qabs * l3 * lam * lam + f5;
     /* energy: d/dtau (y^2 + y'^2)/2 = y' (a cos - 2 zeta y') <= a |y'|, so R grows at most by a */
     const double R = sqrt(v->y * v->y + v->y1 * v->y1) + a * span;
     const double e2 = a + (1.0 + 2.0 * z) * R;
     const double e3 = a * lam + 2.0 * z * e2 + R;
     const double e4 = a * lam * lam + 2.0 * z * e3 + e2;
-    *limited = (e3 < d3 || e4 < d4);
+    const double e5 = a * lam * lam * lam + 2.0 * z * e4 + e3;
+    *limited = (e3 < d3 || e4 < d4 || e5 < d5);
     *B3 = BOUND_SAFETY * (e3 < d3 ? e3 : d3);
     *B4 = BOUND_SAFETY * (e4 < d4 ? e4 : d4);
+    *B5 = BOUND_SAFETY * (e5 < d5 ? e5 : d5);
 }
 
 /* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 > 0). */
@@ -268,48 +274,62 @@ static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_v
     v->y1 = v0;
     v->y2 = C->a * P->c0 - 2.0 * z * v0 - y0;
     v->y3 = -C->a * C->lam * P->s0 - 2.0 * z * v->y2 - v0;
+    v->y4 = -C->a * C->lam * C->lam * P->c0 - 2.0 * z * v->y3 - v->y2;
     v->e1 = v->e2 = 1.0;
 }
 
-/* The certified step of a started slip (s y' > 0 on [u, u + d]) and the bound B4 of |y''''| that
- * holds up to u + *span: the energy bound holds over a span only, widened while the step reaches it. */
-static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, double g0, double g1,
-                             double *B4, double *span)
+/* A certified step from v: s y' > 0 on [u, u + d] (started: the quadratic bound with B3; from rest:
+ * the cubic one with B4, a share of it), with the bounds B4, B5 that hold up to u + *span. The energy
+ * bound holds over a span only, which is widened while the step reaches it. */
+static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, int started, double g0, double g1,
+                             double g2, double *B4, double *B5, double *span)
 {
-    double S = ENERGY_SPAN, B3;
-    int lim;
-    bounds(C, P, v, S, &B3, B4, &lim);
-    double d = safe_step(g0, g1, B3);
-    *span = lim ? S : INFINITY;
-    while (lim && d >= S && S < 1e3) {
-        double B3w, B4w;
-        const double Sw = 4.0 * S;
-        bounds(C, P, v, Sw, &B3w, &B4w, &lim);
-        double dw = safe_step(g0, g1, B3w);
-        if (lim && dw > Sw) dw = Sw;
-        if (!(dw > S)) break;
-        d = dw;
-        S = Sw;
-        *B4 = B4w;
+    double S = ENERGY_SPAN, B3, d = 0.0;
+    int lim = 1;
+    for (int k = 0; k < 6 && lim; k++, S *= 4.0) {
+        double b3, b4, b5;
+        bounds(C, P, v, S, &b3, &b4, &b5, &lim);
+        double dk = started ? safe_step(g0, g1, b3) : START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, b4);
+        if (lim && dk > S) dk = S;
+        if (k > 0 && !(dk > d)) break;
+        d = dk;
+        B3 = b3;
+        *B4 = b4;
+        *B5 = b5;
         *span = lim ? S : INFINITY;
+        if (dk < S) break; /* the step does not reach the span: a wider one would not help */
     }
-    return (d > *span) ? *span : d;
+    (void)B3;
+    return d;
 }
 
 /* A stop at u + d from the Taylor model at v, without evaluating there (its remainder is below
  * rounding). */
-static void taylor_stop(const ex_ctx *C, const ex_val *v, double d, ex_val *out)
+static void taylor_stop(const ex_val *v, double d, ex_val *out)
 {
-    /* y'''' from the derivative of the equation of motion, a cos(theta) = y'' + 2 zeta y' + y */
-    const double z = C->zeta, ac = v->y2 + 2.0 * z * v->y1 + v->y;
-    const double y4 = -C->lam * C->lam * ac - 2.0 * z * v->y3 - v->y2;
     out->u = v->u + d;
-    out->y = v->y + d * (v->y1 + 0.5 * d * (v->y2 + d * v->y3 / 3.0));
+    out->y = v->y + d * (v->y1 + d * (0.5 * v->y2 + d * (v->y3 * (1.0 / 6.0) + d * v->y4 * (1.0 / 24.0))));
     out->y1 = 0.0;
-    out->y2 = v->y2 + d * (v->y3 + 0.5 * d * y4);
-    out->y3 = v->y3 + d * y4;
+    out->y2 = v->y2 + d * (v->y3 + 0.5 * d * v->y4);
+    out->y3 = v->y3 + d * v->y4;
+    out->y4 = v->y4;
     out->e1 = v->e1;
     out->e2 = v->e2;
+}
+
+/* The zero of s y' next to v on the cubic Taylor model (two Newton steps from -g/g'), 0 when the
+ * slope does not fall (not a simple downward zero). */
+static double near_root(const ex_val *v, int s)
+{
+    const double g0 = s * v->y1, g1 = s * v->y2, g2 = s * v->y3, g3 = s * v->y4;
+    if (!(g1 < 0.0)) return 0.0;
+    double d = -g0 / g1;
+    for (int i = 0; i < 2; i++) {
+        const double c = g0 + d * (g1 + d * (0.5 * g2 + d * g3 * (1.0 / 6.0))), cd = g1 + d * (g2 + 0.5 * d * g3);
+        if (!(cd < 0.0)) return 0.0;
+        d -= c / cd;
+    }
+    return d;
 }
 
 /* The first stop of the phase in (0, u_max]: SEARCH_STOP with the state there in *out, SEARCH_NONE
@@ -340,46 +360,55 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
             *out = v;
             return SEARCH_STOP;
         }
-        double B4, span = INFINITY, d;
+        double B4 = INFINITY, B5 = INFINITY, span = INFINITY, d;
         if (!started) {
-            double B3;
-            int lim;
-            bounds(C, P, &v, ENERGY_SPAN, &B3, &B4, &lim);
             /* from rest the slide needs s y'' >= 0 (a negative value within rounding counts as 0; the
              * rounding includes that of the event's time, which moves y'' by y''' times it) */
             if (g1 < -(tol + fabs(g2) * u_ulp)) {
                 *out = v_band;
                 return SEARCH_NULL;
             }
-            d = START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, B4);
-            if (lim && d > ENERGY_SPAN) d = ENERGY_SPAN;
+            d = certified_step(C, P, &v, 0, g0, g1, g2, &B4, &B5, &span);
             if (!(d > 0.0)) {
                 *out = v_band;
                 return SEARCH_NULL;
             }
         } else {
-            d = certified_step(C, P, &v, g0, g1, &B4, &span);
+            d = certified_step(C, P, &v, 1, g0, g1, g2, &B4, &B5, &span);
             if (g1 < 0.0) {
                 /* the quadratic Taylor model: its first root, or its minimum when it has none */
                 const double disc = g1 * g1 - 2.0 * g2 * g0;
                 double dt = -1.0;
                 int touch = 0;
                 if (disc >= 0.0) {
-                    const double dq = 2.0 * g0 / (sqrt(disc) - g1);
+                    double dq = 2.0 * g0 / (sqrt(disc) - g1);
+                    /* one Newton step on the cubic model (g''' = s y'''') */
+                    const double g3 = s * v.y4;
+                    const double c3 = g0 + dq * (g1 + dq * (0.5 * g2 + dq * g3 * (1.0 / 6.0)));
+                    const double c3d = g1 + dq * (g2 + 0.5 * dq * g3);
+                    if (c3d < 0.0 && fabs(c3 / c3d) < 0.5 * dq) dq -= c3 / c3d;
                     if (dq < TAYLOR_REACH * d) dt = dq;  /* close: the model holds there */
                 } else if (g2 > 0.0 && g0 - g1 * g1 / (2.0 * g2) <= tol) {
                     const double dm = -g1 / g2;  /* a tangential touch within rounding */
                     if (dm < 4.0 * d) { dt = dm; touch = 1; }
                 }
                 if (dt > 0.0 && u + dt <= u_max) {
-                    if (!touch && dt <= span && B4 * dt * dt * dt <= 6.0 * tol) {
-                        taylor_stop(C, &v, dt, out);
+                    /* the cubic model's remainder (and the Newton step's quadratic error) below rounding */
+                    if (!touch && dt <= span && B5 * dt * dt * dt * dt <= 12.0 * tol) {
+                        taylor_stop(&v, dt, out);
                         return SEARCH_STOP;
                     }
                     ex_val w;
                     eval(C, P, u + dt, &w);
                     const double gw = s * w.y1, tw = tol_of(C, P, &w);
                     if (fabs(gw) <= tw) { *out = w; return SEARCH_STOP; }
+                    /* close to a simple zero: finish on the cubic model at w (either side of it) */
+                    const double dw = near_root(&w, s);
+                    if (dw != 0.0 && w.u + dw > u && w.u + dw <= u_max && u + span >= w.u + fabs(dw) &&
+                        B5 * dw * dw * dw * dw <= 12.0 * tw) {
+                        taylor_stop(&w, dw, out);
+                        return SEARCH_STOP;
+                    }
                     if (gw < 0.0) { polish(C, P, u + (d < dt ? d : dt), &w, out); return SEARCH_STOP; }
                     if (s * w.y2 < 0.0 && dt >= d) { v = w; continue; } /* still falling: go on from there */
                 }
@@ -514,9 +543,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         s->t = ts;
         s->X = P.xc + v.y;
         s->V = 0.0;
-        /* the excitation at the stop from the phase's equation of motion: P = k a cos(theta) */
-        const double P_stop = C->k * (v.y2 + 2.0 * C->zeta * v.y1 + v.y);
-        int next = dfo_rest_mode(&C->L, dfo_static_force(C->M, &C->L, P_stop, s->X));
+        int next = dfo_rest_mode(&C->L, static_force(C, ts, s->X));
         if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at rest, */
             next = 0;                          /* and a breakaway right now is passed over */
             skip = 1;

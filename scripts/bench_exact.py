@@ -5,7 +5,8 @@
 A tiny C loop (compiled here against ``<build>/libdfo_physics.a``) times ``dfo_advance`` for whole
 runs: one call per run of 30 excitation periods from the case's initial state with the in-FMU
 observables on (extremes over the 30th period, as a sweep run does). Every run is timed for both
-schemes alternately, ``--reps`` times, and the minimum is kept. Cases: the five work-precision
+schemes alternately, ``--reps`` times, and the minimum is kept (CPU time of the thread,
+CLOCK_THREAD_CPUTIME_ID: on a shared machine less sensitive to the load than wall time). Cases: the five work-precision
 cases (bench/cases.py) from rest, and the Fig. 8/9 workload (lambda 0.5, mu_s sigma 0.6, zeta 0,
 chi in 0.02 ... 1.6, initial conditions in [-2, 2]^2): a stratified sample of its runs. Prints a
 markdown table: microseconds per run and per excitation period for each scheme, the ratio, and
@@ -38,7 +39,8 @@ LOOP_C = r"""
 #include <string.h>
 #include <time.h>
 
-static double now(void) { struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts); return ts.tv_sec + 1e-9 * ts.tv_nsec; }
+/* CPU time of this thread: what a run costs, less sensitive than wall time to the load of a shared machine */
+static double now(void) { struct timespec ts; clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts); return ts.tv_sec + 1e-9 * ts.tv_nsec; }
 
 /* one run: 30 periods in one call, observables over the last period; returns seconds */
 static double run(const dfo_params *p, double periods, long long *events, double *xmax)
