@@ -369,6 +369,10 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                 return SEARCH_NULL;
             }
             d = certified_step(C, P, &v, 0, g0, g1, g2, &B4, &B5, &span);
+            if (!(d > 0.0) && s * v.y4 > 0.0 && B5 > 0.0) { /* y'' = y''' = 0: the quartic lower bound */
+                d = START_FRACTION * 4.0 * s * v.y4 / B5;
+                if (d > span) d = span;
+            }
             if (!(d > 0.0)) {
                 *out = v_band;
                 return SEARCH_NULL;
@@ -506,6 +510,16 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             t_last = s->t;
         }
         const double ta = s->t, xa = s->X;
+        if (s->mode == 0 && !(C->L.Fb > 0.0)) {
+            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+            const double S = static_force(C, ta, s->X), dS = dfo_excitation_rate(C->M, ta);
+            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
+            const int dir = (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
+            s->mode = dir;
+            C->events++;
+            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            continue;
+        }
         if (s->mode == 0) {
             int dir = 0;
             const double tb = breakaway(C, s, ta, skip, &dir);
@@ -544,8 +558,11 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         s->X = P.xc + v.y;
         s->V = 0.0;
         int next = dfo_rest_mode(&C->L, static_force(C, ts, s->X));
-        if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at rest, */
-            next = 0;                          /* and a breakaway right now is passed over */
+        if (!(C->L.Fb > 0.0)) {
+            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
+            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
+            next = 0;                                 /* rest, and a breakaway right now is passed over */
             skip = 1;
         }
         if (next == 0) s->stick_tb = NAN; /* a new stick phase */
