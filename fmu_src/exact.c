@@ -26,6 +26,7 @@ typedef struct {
     dfo_loads L;
     double k, w0, zeta, lam, a;   /* a = |P0| / k */
     double wd, wh, r1, r2;        /* sqrt(1 - zeta^2); sqrt(zeta^2 - 1), roots -1/(zeta + wh), -(zeta + wh) */
+    double inv_wd, inv_D2;        /* 1 / wd (under-damped), 1 / |D|^2 */
     double Dr, Di, D2;            /* D = 1 - lambda^2 + 2 i zeta lambda, |D|^2 */
     int uniform;                  /* near resonance with little damping: the uniform form */
     dfo_switch_fn on_switch;
@@ -69,6 +70,8 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->Dr = (1.0 - C->lam) * (1.0 + C->lam);
     C->Di = 2.0 * z * C->lam;
     C->D2 = C->Dr * C->Dr + C->Di * C->Di;
+    C->inv_wd = (z < 1.0) ? 1.0 / C->wd : 0.0;
+    C->inv_D2 = 1.0 / C->D2;
     C->uniform = C->D2 < D_MIN * D_MIN; /* then zeta < D_MIN / 2 < 1 */
     C->on_switch = NULL;
     C->switch_ctx = NULL;
@@ -86,7 +89,7 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
     P->s0 = sin(th);
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
-        const double qr = a * P->s0 / (2.0 * C->wd), qi = -a * P->c0 / (2.0 * C->wd);
+        const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
         P->Qr = qr;
         P->Qi = qi;
         P->q1r = -z * qr - qi * C->wd;
@@ -97,8 +100,8 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
         P->hy = y0;
         P->hv = v0;
     } else {
-        P->Qr = a * (P->c0 * C->Dr + P->s0 * C->Di) / C->D2;
-        P->Qi = a * (P->s0 * C->Dr - P->c0 * C->Di) / C->D2;
+        P->Qr = a * (P->c0 * C->Dr + P->s0 * C->Di) * C->inv_D2;
+        P->Qi = a * (P->s0 * C->Dr - P->c0 * C->Di) * C->inv_D2;
         P->q1r = P->q1i = P->q2r = P->q2i = 0.0;
         P->Qabs = sqrt(P->Qr * P->Qr + P->Qi * P->Qi);
         P->hy = y0 - P->Qr;        /* y_ss(0) = Re Q */
@@ -106,7 +109,7 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
     }
     const double hy = P->hy, hv = P->hv;
     if (z < 1.0) {
-        const double b = (hv + z * hy) / C->wd;
+        const double b = (hv + z * hy) * C->inv_wd;
         P->fA = sqrt(hy * hy + b * b);
         P->fB = 0.0;
     } else if (z == 1.0) {
@@ -145,7 +148,7 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         const double wu = C->wd * u;
         const double cw = (C->wd == lam) ? cl : cos(wu), sw = (C->wd == lam) ? sl : sin(wu);
         E = e * cw;
-        F = e * sw / C->wd;
+        F = e * sw * C->inv_wd;
         v->e1 = e;
         v->e2 = 0.0;
     } else if (z == 1.0) {
