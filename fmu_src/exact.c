@@ -46,7 +46,7 @@ typedef struct {
     double fA, fB;             /* free part: |C| (under-damped), |A|, |B| (critical), |alpha|, |beta| (over) */
 } ex_phase;
 
-/* y, y', y'', y''' at tau (derivatives in tau) and the decay factors of the free part there. */
+/* y and its derivatives in tau up to the fourth at tau = u, and the free part's decay factors there. */
 typedef struct {
     double u, y, y1, y2, y3, y4;
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
@@ -283,26 +283,26 @@ static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_v
 
 /* A certified step from v: s y' > 0 on [u, u + d] (started: the quadratic bound with B3; from rest:
  * the cubic one with B4, a share of it), with the bounds B4, B5 that hold up to u + *span. The energy
- * bound holds over a span only, which is widened while the step reaches it. */
+ * bound holds over a span only; when the step reaches it, the span is widened once to that step (the
+ * best span S is the fixed point of S = step(bound(S)), which lies between the two). */
 static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, int started, double g0, double g1,
                              double g2, double *B4, double *B5, double *span)
 {
-    double S = ENERGY_SPAN, B3, d = 0.0;
-    int lim = 1;
-    for (int k = 0; k < 6 && lim; k++, S *= 4.0) {
+    double S = ENERGY_SPAN, d = 0.0;
+    for (int k = 0; k < 2; k++) {
         double b3, b4, b5;
+        int lim;
         bounds(C, P, v, S, &b3, &b4, &b5, &lim);
-        double dk = started ? safe_step(g0, g1, b3) : START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, b4);
-        if (lim && dk > S) dk = S;
-        if (k > 0 && !(dk > d)) break;
-        d = dk;
-        B3 = b3;
+        const double dk = started ? safe_step(g0, g1, b3) : START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, b4);
+        const double dc = (lim && dk > S) ? S : dk;
+        if (k > 0 && !(dc > d)) break;
+        d = dc;
         *B4 = b4;
         *B5 = b5;
         *span = lim ? S : INFINITY;
-        if (dk < S) break; /* the step does not reach the span: a wider one would not help */
+        if (!lim || !(dk > S)) break; /* not limited by the span */
+        S = dk;
     }
-    (void)B3;
     return d;
 }
 
