@@ -10,7 +10,8 @@
 
 #define TWO_PI (2.0 * DFO_PI)
 #define ROUND (64.0 * DBL_EPSILON) /* relative rounding level of the zero tests (as the reference) */
-#define D_MIN 0.25                 /* |1 - lambda^2 + 2 i zeta lambda| below which the uniform form is used */
+#define D_MIN 0.02                 /* |1 - lambda^2 + 2 i zeta lambda| below which the uniform form is used: above
+                                    * it the steady-state form loses at most a factor 1 / D_MIN to cancellation */
 #define ENERGY_SPAN 1.0            /* tau span over which the energy bound of the derivatives holds */
 #define BOUND_SAFETY (1.0 + 1e-9)  /* the bounds are computed in floating point */
 #define MAX_SEARCH 10000000L       /* evaluations one phase's search may take before it is an error */
