@@ -23,7 +23,7 @@ pytestmark = pytest.mark.no_sanitizer
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "bench" / "work_precision.py"
 CASES = ("stick_dominated", "reversal_resonance", "heavy_damped", "chi_above_1", "chi_near_0")
-FMU_METHODS = {"FMU located", "FMU consistent", "FMU paper"}
+FMU_METHODS = {"FMU located", "FMU consistent", "FMU paper", "FMU exact"}
 PEER_METHODS = {"event RK45", "event DOP853", "event Radau", "tanh Radau", "tanh LSODA"}
 PNGS = ("error_vs_cpu.png", "error_vs_h.png", "cost_growth.png")
 
@@ -76,6 +76,14 @@ def test_csv_has_every_method_and_case(study: Path) -> None:
     fmu = [r for r in rows if r["family"] == "fmu"]
     assert {float(r["alpha"]) for r in fmu} == {0.0, -0.1, -1.0 / 3.0}
     assert len({r["steps_per_period"] for r in fmu}) >= 4
+
+
+def test_exact_scheme_row_is_exact(study: Path) -> None:
+    """The FMU's exact scheme: one row per case, within 1e-10 static deflections of the reference."""
+    rows = [r for r in _rows(study / "work_precision.csv") if r["method"] == "FMU exact"]
+    assert sorted(r["case"] for r in rows) == sorted(CASES)
+    for r in rows:
+        assert float(r["error_z"]) < 1e-10, r
 
 
 def test_event_driven_peer_matches_the_exact_solution(study: Path) -> None:
