@@ -14,7 +14,7 @@ import numpy as np  # noqa: E402
 
 from dryfriction.atomic import atomic_path  # noqa: E402
 
-SCHEME_COLORS = {"located": "tab:blue", "consistent": "tab:green", "paper": "tab:red"}
+SCHEME_COLORS = {"located": "tab:blue", "consistent": "tab:green", "paper": "tab:red", "exact": "black"}
 ALPHA_STYLES = {-0.1: "-", 0.0: "--", -1.0 / 3.0: ":"}
 PEER_COLORS = {"event RK45": "tab:orange", "event DOP853": "tab:brown", "event Radau": "tab:purple",
                "tanh Radau": "tab:gray", "tanh LSODA": "tab:olive"}
@@ -53,8 +53,9 @@ def error_vs_cpu(rows: Sequence[dict], cases: Sequence[str], path: Path) -> None
             pts = sorted((r["us_per_period"], r["error_z"]) for r in fmu
                          if r["scheme"] == scheme and r["alpha"] == alpha)
             x, y = zip(*pts)
-            lab = f"FMU {scheme} (a={alpha_label(alpha)})"
-            (h,) = ax.loglog(x, y, ALPHA_STYLES.get(alpha, "-"), color=SCHEME_COLORS[scheme], marker=".",
+            lab = "FMU exact" if scheme == "exact" else f"FMU {scheme} (a={alpha_label(alpha)})"
+            (h,) = ax.loglog(x, y, ALPHA_STYLES.get(alpha, "-"), color=SCHEME_COLORS[scheme],
+                             marker="*" if scheme == "exact" else ".", ms=12 if scheme == "exact" else 6,
                              lw=1.8 if alpha == -0.1 else 1.0, label=lab)
             handles.setdefault(lab, h)
         for m in PEER_COLORS:
@@ -82,7 +83,7 @@ def error_vs_h(rows: Sequence[dict], orders: Sequence[dict], cases: Sequence[str
     fig, axes = _grid(len(cases))
     for ax, case in zip(axes, cases):
         fmu = [r for r in rows if r["case"] == case and r["family"] == "fmu"]
-        for (scheme, alpha) in sorted({(r["scheme"], r["alpha"]) for r in fmu}):
+        for (scheme, alpha) in sorted({(r["scheme"], r["alpha"]) for r in fmu if r["scheme"] != "exact"}):
             pts = sorted((1.0 / r["steps_per_period"], r["error_z"]) for r in fmu
                          if r["scheme"] == scheme and r["alpha"] == alpha and r["error_z"] > 0)
             if not pts:

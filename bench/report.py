@@ -71,7 +71,7 @@ def _best_fmu(rows: Sequence[dict], case: str, target: float) -> tuple[float | N
                and r["alpha"] == alpha]
         t = cost_at(_per_period(sel), target)
         if t is not None and (best[0] is None or t < best[0]):
-            best = (t, f"{scheme}, alpha={_alpha(alpha)}")
+            best = (t, "exact" if scheme == "exact" else f"{scheme}, alpha={_alpha(alpha)}")
     return best
 
 
@@ -272,7 +272,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
     for c in cases:
         bt, blab = _best_fmu(rows, c.name, GOAL_ERROR)
         pt, plab = _fastest_peer(rows, c.name, GOAL_ERROR)
-        if bt is None or pt is None or pt / bt >= 10:
+        if bt is None or pt is None or pt / bt >= 10 or blab == "exact":
             continue
         scheme, alpha = blab.split(", alpha=")
         sel = [r for r in rows if r["case"] == c.name and r["family"] == "fmu" and r["scheme"] == scheme

@@ -219,7 +219,8 @@ def fmu_sweep(fmu, cfg: StudyConfig, cases, exacts, progress) -> list[dict]:
                 cache[key] = ex.evaluate(t)[0]
             return cache[key]
 
-        for scheme in reversed(list(model.default().schemes)):  # located, consistent, paper
+        # the Bossak schemes swept over h and alpha: located, consistent, paper (exact: below)
+        for scheme in reversed([name for name in model.default().schemes if name != "exact"]):
             for alpha in cfg.alphas:
                 for spp in cfg.spp:
                     c = FmuConfig(scheme, alpha, spp)
@@ -236,6 +237,20 @@ def fmu_sweep(fmu, cfg: StudyConfig, cases, exacts, progress) -> list[dict]:
                         us_per_period=t_api / cfg.periods * 1e6, seconds_per_run_lean=t_lean, timing_reps=reps,
                         steps=cfg.periods * spp, nfev=0, events=0))
                     progress.update(1)
+        # the exact scheme: one configuration (h has no effect on it; alpha is not used)
+        c = FmuConfig("exact", -0.1, 1000)
+        st = c.settings(p)
+        err, n_samples = fmu_error(fmu, p, c, cfg.periods, cfg.samples_per_period, exact_x)
+        t_api, reps = best_time(lambda: api_run(fmu, p, st, t_end), cfg.fmu_budget, cfg.fmu_min_reps)
+        lean.prepare(p, st)
+        t_lean, _ = best_time(lambda: lean.run(t_end), cfg.fmu_budget, cfg.fmu_min_reps)
+        rows.append(dict(
+            case=case.name, family="fmu", method="FMU exact", scheme="exact", alpha=-0.1,
+            steps_per_period=1000, rtol=float("nan"), eps_rel=float("nan"), setting="closed form (h no effect)",
+            periods=cfg.periods, error_z=err, error_x_m=err * abs(p.P0) / p.k, error_samples=n_samples,
+            seconds_per_run=t_api, us_per_period=t_api / cfg.periods * 1e6, seconds_per_run_lean=t_lean,
+            timing_reps=reps, steps=0, nfev=0, events=0))
+        progress.update(1)
     return rows
 
 
@@ -280,6 +295,8 @@ def observed_orders(rows: list[dict], cfg: StudyConfig) -> list[dict]:
     out = []
     keys = sorted({(r["case"], r["scheme"], r["alpha"]) for r in rows if r["family"] == "fmu"})
     for case, scheme, alpha in keys:
+        if scheme == "exact":
+            continue  # no step: no order
         pts = sorted((r["steps_per_period"], r["error_z"]) for r in rows if r["family"] == "fmu"
                      and r["case"] == case and r["scheme"] == scheme and r["alpha"] == alpha)
         use = [(s, e) for s, e in pts if s >= cfg.order_min_spp and e > cfg.order_min_error]
@@ -387,7 +404,7 @@ def main(argv: list[str] | None = None) -> int:
         write_csv(out / "cases.csv", case_rows)
         phase("exact solutions")
 
-        n_fmu = len(CASES) * 3 * len(cfg.alphas) * len(cfg.spp)
+        n_fmu = len(CASES) * (3 * len(cfg.alphas) * len(cfg.spp) + 1)
         with tqdm(total=n_fmu, desc="FMU sweep", unit="run", file=sys.stderr) as bar:
             fmu_rows = fmu_sweep(fmu, cfg, CASES, exacts, bar)
         phase("FMU sweep")

@@ -1,6 +1,7 @@
 /* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
 #include "newmark.h"
 
+#include "exact.h"
 #include "friction.h"
 #include "lcp.h"
 
@@ -726,6 +727,9 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
 dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx)
 {
+    /* the exact scheme (exact.c) has no grid to snap to: it ends exactly on the host's time, where its
+     * closed form is exact (two hosts whose clocks differ by rounding get the motion at their times) */
+    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;

@@ -1,7 +1,9 @@
 /* Bossak-Newmark time stepping in velocity form with the friction LCP (method.md sections 2-4, 8).
  *
- * Three variants (dfo_scheme): the paper's literal scheme, the consistent stick test (first order)
- * and the located scheme (default; every stick/slip switch placed inside its step, second order).
+ * Three Bossak variants (dfo_scheme): the paper's literal scheme, the consistent stick test (first
+ * order) and the located scheme (default; every stick/slip switch placed inside its step, second
+ * order). dfo_advance also dispatches the fourth scheme, exact (exact.h: closed form between events,
+ * no Bossak step), so that every caller has one entry point.
  * The internal grid is t0 + n h; dfo_advance ends exactly on any requested time off that grid with a
  * shortened step whose Bossak acceleration is corrected for the new length (method.md section 8),
  * and on the grid point itself when the requested time is a host's rounding of one (see "Snapping

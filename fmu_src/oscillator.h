@@ -10,7 +10,8 @@
 
 #define DFO_PI 3.14159265358979323846
 
-typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3 } dfo_scheme;
+typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3,
+               DFO_SCHEME_EXACT = 4 } dfo_scheme;
 
 /* Everything a user sets before a run. Each field is named as its variable in modelDescription.xml
  * (Real: double; Integer, Enumeration, Boolean: int): the generated variable table reaches it by

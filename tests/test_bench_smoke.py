@@ -24,7 +24,7 @@ pytestmark = [pytest.mark.no_sanitizer, pytest.mark.slow]  # the --quick study t
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "bench" / "work_precision.py"
 CASES = ("stick_dominated", "reversal_resonance", "heavy_damped", "chi_above_1", "chi_near_0")
-FMU_METHODS = {"FMU located", "FMU consistent", "FMU paper"}
+FMU_METHODS = {"FMU located", "FMU consistent", "FMU paper", "FMU exact"}
 PEER_METHODS = {"event RK45", "event DOP853", "event Radau", "tanh Radau", "tanh LSODA"}
 PNGS = ("error_vs_cpu.png", "error_vs_h.png", "cost_growth.png")
 
@@ -47,7 +47,8 @@ def test_orders_are_the_slopes_of_the_measured_errors(study: Path) -> None:
     """orders.csv is the least-squares slope of log(error) against log(h) of work_precision.csv's
     FMU rows, for every case, scheme and alpha (the orders themselves, second for located, first
     or a floor for the others, are asserted once, in test_fmu_validation.py)."""
-    rows = [r for r in _rows(study / "work_precision.csv") if r["family"] == "fmu"]
+    # the exact scheme has no step, hence no order: it is not fitted
+    rows = [r for r in _rows(study / "work_precision.csv") if r["family"] == "fmu" and r["scheme"] != "exact"]
     orders = _rows(study / "orders.csv")
     assert {(o["case"], o["scheme"]) for o in orders} == {(r["case"], r["scheme"]) for r in rows}
     for o in orders:
@@ -74,6 +75,14 @@ def test_csv_has_every_method_and_case(study: Path) -> None:
     fmu = [r for r in rows if r["family"] == "fmu"]
     assert {float(r["alpha"]) for r in fmu} == {0.0, -0.1, -1.0 / 3.0}
     assert len({r["steps_per_period"] for r in fmu}) >= 4
+
+
+def test_exact_scheme_row_is_exact(study: Path) -> None:
+    """The FMU's exact scheme: one row per case, within 1e-10 static deflections of the reference."""
+    rows = [r for r in _rows(study / "work_precision.csv") if r["method"] == "FMU exact"]
+    assert sorted(r["case"] for r in rows) == sorted(CASES)
+    for r in rows:
+        assert float(r["error_z"]) < 1e-10, r
 
 
 def test_event_driven_peer_matches_the_exact_solution(study: Path) -> None:

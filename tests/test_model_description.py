@@ -140,7 +140,7 @@ def test_the_ranges_are_in_the_model_description() -> None:
     assert (int(by["frictionUpdates"].min), int(by["frictionUpdates"].max)) == (0, 100)
     assert by["scheme"].type == "Enumeration" and by["scheme"].declaredType.name == "Scheme"
     assert [(i.name, int(i.value)) for i in by["scheme"].declaredType.items] == [
-        ("paper", 1), ("consistent", 2), ("located", 3)]
+        ("paper", 1), ("consistent", 2), ("located", 3), ("exact", 4)]
 
 
 @pytest.mark.parametrize("side", ["min", "max"])

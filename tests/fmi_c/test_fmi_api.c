@@ -211,9 +211,9 @@ static void test_bad_values(tally *T)
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) FAILS(fmi2SetReal(c, &bad[k].vr, 1, &bad[k].value), bad[k].text);
     const fmi2ValueReference vs = VR_scheme, vf = VR_frictionUpdates;
-    const fmi2Integer bad_scheme[] = {0, 4, -1}, bad_updates[] = {-1, 101, 2147483647};
+    const fmi2Integer bad_scheme[] = {0, 5, -1}, bad_updates[] = {-1, 101, 2147483647};
     for (int k = 0; k < 3; k++) {
-        FAILS(fmi2SetInteger(c, &vs, 1, &bad_scheme[k]), "valid range: one of 1 (paper), 2 (consistent), 3 (located)");
+        FAILS(fmi2SetInteger(c, &vs, 1, &bad_scheme[k]), "valid range: one of 1 (paper), 2 (consistent), 3 (located), 4 (exact)");
         FAILS(fmi2SetInteger(c, &vf, 1, &bad_updates[k]), "valid range: in [0, 100]");
     }
     /* unknown references, wrong types */

@@ -1,0 +1,615 @@
+/* The exact scheme: closed-form phases, events found without stepping over a zero. See exact.h
+ * and method.md sections 5 and 10. */
+#include "exact.h"
+
+#include "friction.h"
+
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+
+#define TWO_PI (2.0 * DFO_PI)
+#define ROUND (64.0 * DBL_EPSILON) /* relative rounding level of the zero tests (as the reference) */
+#define D_MIN 0.02                 /* |1 - lambda^2 + 2 i zeta lambda| below which the uniform form is used: above
+                                    * it the steady-state form loses at most a factor 1 / D_MIN to cancellation */
+#define ENERGY_SPAN 1.0            /* tau span over which the energy bound of the derivatives holds */
+#define BOUND_SAFETY (1.0 + 1e-9)  /* the bounds are computed in floating point */
+#define MAX_SEARCH 10000000L       /* evaluations one phase's search may take before it is an error */
+#define MAX_START 200              /* steps of a slide from rest before it counts as not starting */
+#define MAX_STALL 64               /* events in a row at one instant before it is an error */
+#define MAX_POLISH 60              /* Newton / bisection steps of a bracketed stop */
+#define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
+#define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
+
+/* What is constant over one call. */
+typedef struct {
+    const dfo_model *M;
+    dfo_loads L;
+    double k, w0, zeta, lam, a;   /* a = |P0| / k */
+    double wd, wh, r1, r2;        /* sqrt(1 - zeta^2); sqrt(zeta^2 - 1), roots -1/(zeta + wh), -(zeta + wh) */
+    double inv_wd, inv_D2;        /* 1 / wd (under-damped), 1 / |D|^2 */
+    double Dr, Di, D2;            /* D = 1 - lambda^2 + 2 i zeta lambda, |D|^2 */
+    int uniform;                  /* near resonance with little damping: the uniform form */
+    dfo_switch_fn on_switch;
+    void *switch_ctx;
+    long long events;
+} ex_ctx;
+
+/* One slip phase from (ta, X, V) in direction s. */
+typedef struct {
+    int s;
+    double ta, xc;             /* start time; offset x_c = (F_ext - s mu_k N) / k */
+    double c0, s0;             /* cos, sin of the excitation phase at ta */
+    double hy, hv;             /* data of the free (homogeneous) part at tau = 0 */
+    double Qr, Qi;             /* steady form: Q = a e^{i theta_a} / D; uniform: q = a e^{i theta_a} / (2 i wd) */
+    double q1r, q1i, q2r, q2i; /* uniform form: q p1, q p2, p1,2 = -zeta +- i wd */
+    double Qabs;               /* steady form: |Q| */
+    double fA, fB;             /* free part: |C| (under-damped), |A|, |B| (critical), |alpha|, |beta| (over) */
+} ex_phase;
+
+/* y and its derivatives in tau up to the fourth at tau = u, and the free part's decay factors there. */
+typedef struct {
+    double u, y, y1, y2, y3, y4;
+    double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
+} ex_val;
+
+static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
+{
+    const dfo_params *p = &M->p;
+    C->M = M;
+    dfo_loads_init(&C->L, M, in);
+    C->k = p->k;
+    C->w0 = sqrt(p->k / p->m);
+    C->zeta = p->c / (2.0 * sqrt(p->k * p->m));
+    C->lam = p->omega / C->w0;
+    C->a = M->P_amp / p->k;
+    const double z = C->zeta;
+    C->wd = sqrt(fmax(0.0, (1.0 - z) * (1.0 + z)));
+    C->wh = sqrt(fmax(0.0, (z - 1.0) * (z + 1.0)));
+    C->r1 = (z > 1.0) ? -1.0 / (z + C->wh) : -z;
+    C->r2 = (z > 1.0) ? -(z + C->wh) : -z;
+    C->Dr = (1.0 - C->lam) * (1.0 + C->lam);
+    C->Di = 2.0 * z * C->lam;
+    C->D2 = C->Dr * C->Dr + C->Di * C->Di;
+    C->inv_wd = (z < 1.0) ? 1.0 / C->wd : 0.0;
+    C->inv_D2 = 1.0 / C->D2;
+    C->uniform = C->D2 < D_MIN * D_MIN; /* then zeta < D_MIN / 2 < 1 */
+    C->on_switch = NULL;
+    C->switch_ctx = NULL;
+    C->events = 0;
+}
+
+static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
+{
+    const double z = C->zeta, lam = C->lam, a = C->a;
+    const double th = C->M->p.omega * ta + C->M->P_phase;
+    P->s = s;
+    P->ta = ta;
+    P->xc = (C->L.F_ext - s * C->L.muk_N) / C->k;
+    P->c0 = cos(th);
+    P->s0 = sin(th);
+    const double y0 = X - P->xc, v0 = V / C->w0;
+    if (C->uniform) {
+        const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
+        P->Qr = qr;
+        P->Qi = qi;
+        P->q1r = -z * qr - qi * C->wd;
+        P->q1i = qr * C->wd - z * qi;
+        P->q2r = -z * qr + qi * C->wd;
+        P->q2i = -qr * C->wd - z * qi;
+        P->Qabs = INFINITY;
+        P->hy = y0;
+        P->hv = v0;
+    } else {
+        P->Qr = a * (P->c0 * C->Dr + P->s0 * C->Di) * C->inv_D2;
+        P->Qi = a * (P->s0 * C->Dr - P->c0 * C->Di) * C->inv_D2;
+        P->q1r = P->q1i = P->q2r = P->q2i = 0.0;
+        P->Qabs = sqrt(P->Qr * P->Qr + P->Qi * P->Qi);
+        P->hy = y0 - P->Qr;        /* y_ss(0) = Re Q */
+        P->hv = v0 + lam * P->Qi;  /* y_ss'(0) = Re(i lambda Q) */
+    }
+    const double hy = P->hy, hv = P->hv;
+    if (z < 1.0) {
+        const double b = (hv + z * hy) * C->inv_wd;
+        P->fA = sqrt(hy * hy + b * b);
+        P->fB = 0.0;
+    } else if (z == 1.0) {
+        P->fA = fabs(hy);
+        P->fB = fabs(hv + hy);
+    } else {
+        const double beta = (hv - C->r1 * hy) / (C->r2 - C->r1);
+        P->fA = fabs(hy - beta);
+        P->fB = fabs(beta);
+    }
+}
+
+/* phi1(x + i y) = (e^z - 1) / z without cancellation (x <= 0). */
+static void phi1(double x, double y, double *re, double *im)
+{
+    if (fabs(x) + fabs(y) < 1e-5) { /* 1 + z/2 + z^2/6 (+ z^3/24 < 1e-16) */
+        *re = 1.0 + 0.5 * x + (x * x - y * y) / 6.0;
+        *im = 0.5 * y + x * y / 3.0;
+        return;
+    }
+    const double sh = sin(0.5 * y);
+    const double er = expm1(x) * cos(y) - 2.0 * sh * sh, ei = exp(x) * sin(y);
+    const double d = x * x + y * y;
+    *re = (er * x + ei * y) / d;
+    *im = (ei * x - er * y) / d;
+}
+
+static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
+{
+    const double z = C->zeta, lam = C->lam;
+    const double cl = cos(lam * u), sl = sin(lam * u);
+    const double cth = P->c0 * cl - P->s0 * sl, sth = P->s0 * cl + P->c0 * sl;
+    double E, F;
+    if (z < 1.0) {
+        const double e = (z > 0.0) ? exp(-z * u) : 1.0;
+        const double wu = C->wd * u;
+        const double cw = (C->wd == lam) ? cl : cos(wu), sw = (C->wd == lam) ? sl : sin(wu);
+        E = e * cw;
+        F = e * sw * C->inv_wd;
+        v->e1 = e;
+        v->e2 = 0.0;
+    } else if (z == 1.0) {
+        const double e = exp(-u);
+        E = e;
+        F = u * e;
+        v->e1 = e;
+        v->e2 = 0.0;
+    } else {
+        const double e1 = exp(C->r1 * u), e2 = exp(C->r2 * u);
+        E = 0.5 * (e1 + e2);
+        F = -e1 * expm1(-2.0 * C->wh * u) / (2.0 * C->wh);
+        v->e1 = e1;
+        v->e2 = e2;
+    }
+    double y = P->hy * E + (P->hv + z * P->hy) * F;
+    double y1 = P->hv * E - (P->hy + z * P->hv) * F;
+    if (!C->uniform) {
+        y += P->Qr * cl - P->Qi * sl;
+        y1 -= lam * (P->Qr * sl + P->Qi * cl);
+    } else {
+        double p1r, p1i, p2r, p2i;
+        phi1(-z * u, (C->wd - lam) * u, &p1r, &p1i);
+        phi1(-z * u, -(C->wd + lam) * u, &p2r, &p2i);
+        const double eur = cl * u, eui = sl * u;
+        /* Re[q eu (P1 - P2)] */
+        const double dr = p1r - p2r, di = p1i - p2i;
+        const double qdr = P->Qr * dr - P->Qi * di, qdi = P->Qr * di + P->Qi * dr;
+        y += eur * qdr - eui * qdi;
+        /* Re[eu (q p1 P1 - q p2 P2)] */
+        const double wr = (P->q1r * p1r - P->q1i * p1i) - (P->q2r * p2r - P->q2i * p2i);
+        const double wi = (P->q1r * p1i + P->q1i * p1r) - (P->q2r * p2i + P->q2i * p2r);
+        y1 += eur * wr - eui * wi;
+    }
+    v->u = u;
+    v->y = y;
+    v->y1 = y1;
+    v->y2 = C->a * cth - 2.0 * z * y1 - y;
+    v->y3 = -C->a * lam * sth - 2.0 * z * v->y2 - y1;
+    v->y4 = -C->a * lam * lam * cth - 2.0 * z * v->y3 - v->y2;
+}
+
+/* Bounds of |y'''| and |y''''| on [u, u + span]; *limited when they hold only there (the energy
+ * bound), not for every later u (the decomposition's, which only decay). */
+static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double span, double *B3, double *B4,
+                   double *B5, int *limited)
+{
+    const double z = C->zeta, lam = C->lam, a = C->a;
+    double f3, f4, f5;
+    if (z < 1.0) {
+        f3 = f4 = f5 = P->fA * v->e1; /* |p| = 1 */
+    } else if (z == 1.0) {
+        f3 = v->e1 * (P->fA + P->fB * (v->u + 3.0));
+        f4 = v->e1 * (P->fA + P->fB * (v->u + 4.0));
+        f5 = v->e1 * (P->fA + P->fB * (v->u + 5.0));
+    } else {
+        const double r1 = -C->r1, r2 = -C->r2, a1 = P->fA * r1 * r1 * r1 * v->e1, a2 = P->fB * r2 * r2 * r2 * v->e2;
+        f3 = a1 + a2;
+        f4 = a1 * r1 + a2 * r2;
+        f5 = a1 * r1 * r1 + a2 * r2 * r2;
+    }
+    const double l3 = lam * lam * lam;
+    /* INFINITY in the uniform form */
+    const double d3 = P->Qabs * l3 + f3, d4 = P->Qabs * l3 * lam + f4, d5 = P->Qabs * l3 * lam * lam + f5;
+    /* energy: d/dtau (y^2 + y'^2)/2 = y' (a cos - 2 zeta y') <= a |y'|, so R grows at most by a */
+    const double R = sqrt(v->y * v->y + v->y1 * v->y1) + a * span;
+    const double e2 = a + (1.0 + 2.0 * z) * R;
+    const double e3 = a * lam + 2.0 * z * e2 + R;
+    const double e4 = a * lam * lam + 2.0 * z * e3 + e2;
+    const double e5 = a * lam * lam * lam + 2.0 * z * e4 + e3;
+    *limited = (e3 < d3 || e4 < d4 || e5 < d5);
+    *B3 = BOUND_SAFETY * (e3 < d3 ? e3 : d3);
+    *B4 = BOUND_SAFETY * (e4 < d4 ? e4 : d4);
+    *B5 = BOUND_SAFETY * (e5 < d5 ? e5 : d5);
+}
+
+/* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 > 0). */
+static double safe_step(double g0, double g1, double B)
+{
+    if (!(B > 0.0)) return (g1 >= 0.0) ? INFINITY : g0 / -g1;
+    const double r = sqrt(g1 * g1 + 2.0 * B * g0);
+    return (g1 >= 0.0) ? (g1 + r) / B : 2.0 * g0 / (r - g1);
+}
+
+/* From rest: largest d with g1 d + g2 d^2 / 2 - B d^3 / 6 >= 0 (g1 >= 0). */
+static double start_step(double g1, double g2, double B)
+{
+    if (!(B > 0.0)) return (g2 >= 0.0) ? INFINITY : (g1 > 0.0 ? 2.0 * g1 / -g2 : 0.0);
+    const double A = B / 6.0, b = 0.5 * g2, r = sqrt(b * b + 4.0 * A * g1);
+    return (b >= 0.0) ? (b + r) / (2.0 * A) : 2.0 * g1 / (r - b);
+}
+
+static double tol_of(const ex_ctx *C, const ex_phase *P, const ex_val *v)
+{
+    const double forced = C->uniform ? 0.0 : P->Qabs * (1.0 + C->lam);
+    return ROUND * (C->a + fabs(P->xc) + fabs(v->y) + fabs(v->y1) + forced + P->fA * v->e1);
+}
+
+enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2, SEARCH_FAIL = -1 };
+
+/* The first zero of g = s y' in the bracket [lo, hi] (g(lo) >= 0 certified, g(hi) < 0 evaluated in
+ * *vhi): Newton's method kept inside the bracket, bisection otherwise, until |g| <= tol. */
+static void polish(const ex_ctx *C, const ex_phase *P, double lo, ex_val *vhi, ex_val *out)
+{
+    const int s = P->s;
+    double hi = vhi->u;
+    ex_val v = *vhi;
+    for (int it = 0; it < MAX_POLISH; it++) {
+        const double g = s * v.y1, g1 = s * v.y2;
+        if (fabs(g) <= tol_of(C, P, &v)) break;
+        if (g > 0.0) lo = v.u; else hi = v.u;
+        double un = (g1 != 0.0) ? v.u - g / g1 : 0.5 * (lo + hi);
+        if (!(un > lo && un < hi)) un = 0.5 * (lo + hi);
+        if (un == lo || un == hi) break;
+        eval(C, P, un, &v);
+    }
+    *out = v;
+}
+
+/* The state at tau = 0 from the phase's data (no transcendental function). */
+static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_val *v)
+{
+    const double z = C->zeta;
+    v->u = 0.0;
+    v->y = y0;
+    v->y1 = v0;
+    v->y2 = C->a * P->c0 - 2.0 * z * v0 - y0;
+    v->y3 = -C->a * C->lam * P->s0 - 2.0 * z * v->y2 - v0;
+    v->y4 = -C->a * C->lam * C->lam * P->c0 - 2.0 * z * v->y3 - v->y2;
+    v->e1 = v->e2 = 1.0;
+}
+
+/* A certified step from v: s y' > 0 on [u, u + d] (started: the quadratic bound with B3; from rest:
+ * the cubic one with B4, a share of it), with the bounds B4, B5 that hold up to u + *span. The energy
+ * bound holds over a span only; when the step reaches it, the span is widened once to that step (the
+ * best span S is the fixed point of S = step(bound(S)), which lies between the two). */
+static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, int started, double g0, double g1,
+                             double g2, double *B4, double *B5, double *span)
+{
+    double S = ENERGY_SPAN, d = 0.0;
+    for (int k = 0; k < 2; k++) {
+        double b3, b4, b5;
+        int lim;
+        bounds(C, P, v, S, &b3, &b4, &b5, &lim);
+        const double dk = started ? safe_step(g0, g1, b3) : START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, b4);
+        const double dc = (lim && dk > S) ? S : dk;
+        if (k > 0 && !(dc > d)) break;
+        d = dc;
+        *B4 = b4;
+        *B5 = b5;
+        *span = lim ? S : INFINITY;
+        if (!lim || !(dk > S)) break; /* not limited by the span */
+        S = dk;
+    }
+    return d;
+}
+
+/* A stop at u + d from the Taylor model at v, without evaluating there (its remainder is below
+ * rounding). */
+static void taylor_stop(const ex_val *v, double d, ex_val *out)
+{
+    out->u = v->u + d;
+    out->y = v->y + d * (v->y1 + d * (0.5 * v->y2 + d * (v->y3 * (1.0 / 6.0) + d * v->y4 * (1.0 / 24.0))));
+    out->y1 = 0.0;
+    out->y2 = v->y2 + d * (v->y3 + 0.5 * d * v->y4);
+    out->y3 = v->y3 + d * v->y4;
+    out->y4 = v->y4;
+    out->e1 = v->e1;
+    out->e2 = v->e2;
+}
+
+/* The zero of s y' next to v on the cubic Taylor model (two Newton steps from -g/g'), 0 when the
+ * slope does not fall (not a simple downward zero). */
+static double near_root(const ex_val *v, int s)
+{
+    const double g0 = s * v->y1, g1 = s * v->y2, g2 = s * v->y3, g3 = s * v->y4;
+    if (!(g1 < 0.0)) return 0.0;
+    double d = -g0 / g1;
+    for (int i = 0; i < 2; i++) {
+        const double c = g0 + d * (g1 + d * (0.5 * g2 + d * g3 * (1.0 / 6.0))), cd = g1 + d * (g2 + 0.5 * d * g3);
+        if (!(cd < 0.0)) return 0.0;
+        d -= c / cd;
+    }
+    return d;
+}
+
+/* The first stop of the phase in (0, u_max]: SEARCH_STOP with the state there in *out, SEARCH_NONE
+ * (then *out is the state at u_max), SEARCH_NULL (a slide from rest that never leaves the rounding
+ * band: the block stays at rest at *out), SEARCH_FAIL (no progress). y0, v0: the data at tau = 0. */
+static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double u_max, ex_val *out)
+{
+    const int s = P->s;
+    ex_val v;
+    eval0(C, P, y0, v0, &v);
+    int started = s * v.y1 > tol_of(C, P, &v), tries = 0;
+    ex_val v_band = v; /* last point of a slide from rest still inside the rounding band */
+    const double u_ulp = 4.0 * DBL_EPSILON * fabs(P->ta) * C->w0; /* rounding of the start time, in tau */
+    for (long it = 0; it < MAX_SEARCH; it++) {
+        const double g0 = s * v.y1, g1 = s * v.y2, g2 = s * v.y3, tol = tol_of(C, P, &v);
+        const double u = v.u;
+        if (!started) {
+            if (g0 > tol) {
+                started = 1;
+            } else if (g0 < -(tol + fabs(g1) * u_ulp) || ++tries > MAX_START) {
+                *out = v_band;
+                return SEARCH_NULL;
+            } else {
+                v_band = v;
+            }
+        }
+        if (started && g0 <= tol) {
+            *out = v;
+            return SEARCH_STOP;
+        }
+        double B4 = INFINITY, B5 = INFINITY, span = INFINITY, d;
+        if (!started) {
+            /* from rest the slide needs s y'' >= 0 (a negative value within rounding counts as 0; the
+             * rounding includes that of the event's time, which moves y'' by y''' times it) */
+            if (g1 < -(tol + fabs(g2) * u_ulp)) {
+                *out = v_band;
+                return SEARCH_NULL;
+            }
+            d = certified_step(C, P, &v, 0, g0, g1, g2, &B4, &B5, &span);
+            if (!(d > 0.0) && s * v.y4 > 0.0 && B5 > 0.0) { /* y'' = y''' = 0: the quartic lower bound */
+                d = START_FRACTION * 4.0 * s * v.y4 / B5;
+                if (d > span) d = span;
+            }
+            if (!(d > 0.0)) {
+                *out = v_band;
+                return SEARCH_NULL;
+            }
+        } else {
+            d = certified_step(C, P, &v, 1, g0, g1, g2, &B4, &B5, &span);
+            if (g1 < 0.0) {
+                /* the quadratic Taylor model: its first root, or its minimum when it has none */
+                const double disc = g1 * g1 - 2.0 * g2 * g0;
+                double dt = -1.0;
+                int touch = 0;
+                if (disc >= 0.0) {
+                    double dq = 2.0 * g0 / (sqrt(disc) - g1);
+                    /* one Newton step on the cubic model (g''' = s y'''') */
+                    const double g3 = s * v.y4;
+                    const double c3 = g0 + dq * (g1 + dq * (0.5 * g2 + dq * g3 * (1.0 / 6.0)));
+                    const double c3d = g1 + dq * (g2 + 0.5 * dq * g3);
+                    if (c3d < 0.0 && fabs(c3 / c3d) < 0.5 * dq) dq -= c3 / c3d;
+                    if (dq < TAYLOR_REACH * d) dt = dq;  /* close: the model holds there */
+                } else if (g2 > 0.0 && g0 - g1 * g1 / (2.0 * g2) <= tol) {
+                    const double dm = -g1 / g2;  /* a tangential touch within rounding */
+                    if (dm < 4.0 * d) { dt = dm; touch = 1; }
+                }
+                if (dt > 0.0 && u + dt <= u_max) {
+                    /* the cubic model's remainder (and the Newton step's quadratic error) below rounding */
+                    if (!touch && dt <= span && B5 * dt * dt * dt * dt <= 12.0 * tol) {
+                        taylor_stop(&v, dt, out);
+                        return SEARCH_STOP;
+                    }
+                    ex_val w;
+                    eval(C, P, u + dt, &w);
+                    const double gw = s * w.y1, tw = tol_of(C, P, &w);
+                    if (fabs(gw) <= tw) { *out = w; return SEARCH_STOP; }
+                    /* close to a simple zero: finish on the cubic model at w (either side of it) */
+                    const double dw = near_root(&w, s);
+                    if (dw != 0.0 && w.u + dw > u && w.u + dw <= u_max && u + span >= w.u + fabs(dw) &&
+                        B5 * dw * dw * dw * dw <= 12.0 * tw) {
+                        taylor_stop(&w, dw, out);
+                        return SEARCH_STOP;
+                    }
+                    if (gw < 0.0) { polish(C, P, u + (d < dt ? d : dt), &w, out); return SEARCH_STOP; }
+                    if (s * w.y2 < 0.0 && dt >= d) { v = w; continue; } /* still falling: go on from there */
+                }
+            }
+        }
+        if (u + d >= u_max) {
+            eval(C, P, u_max, out);
+            /* the bound proves s y' > 0 up to u_max; at u_max it may sit on 0 by rounding */
+            return SEARCH_NONE;
+        }
+        if (!(d > 0.0) || !(u + d > u)) return SEARCH_FAIL;
+        eval(C, P, u + d, &v);
+        if (!isfinite(v.y) || !isfinite(v.y1)) return SEARCH_FAIL;
+    }
+    return SEARCH_FAIL;
+}
+
+/* ---- observables and switch reports ----------------------------------------------------------- */
+
+static void sample(dfo_state *s, double x)
+{
+    if (!s->observed) {
+        s->x_max = s->x_min = x;
+        s->observed = 1;
+    }
+    if (x > s->x_max) s->x_max = x;
+    if (x < s->x_min) s->x_min = x;
+}
+
+/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb, after which
+ * the mode is mode_after (an event at tb when event is set). */
+static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
+                        double xb, int mode_during, int mode_after, int event)
+{
+    const dfo_model *M = C->M;
+    if (event && mode_after != mode_during) {
+        if (C->on_switch) C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
+    }
+    if (!M->p.observe) return;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    if (tb < w0 || ta > w1) return;
+    if (mode_during == 0 || P == NULL) {
+        s->t_stuck += (mode_during == 0) ? fmax(fmin(tb, w1) - fmax(ta, w0), 0.0) : 0.0;
+        sample(s, xb);
+    } else {
+        ex_val v;
+        double x0 = xa, x1 = xb;
+        if (ta < w0) { eval(C, P, C->w0 * (w0 - ta), &v); x0 = P->xc + v.y; }
+        if (tb > w1) { eval(C, P, C->w0 * (w1 - ta), &v); x1 = P->xc + v.y; }
+        sample(s, x0);
+        sample(s, x1);
+        s->E_friction += C->L.muk_N * fabs(x1 - x0);
+    }
+    if (event && mode_after != mode_during && tb > w0 && tb <= w1) s->transitions++;
+}
+
+/* ---- the phases -------------------------------------------------------------------------------- */
+
+/* The next breakaway of the stick phase at X from ta (cached in the state per stick phase). With
+ * skip, a breakaway at ta itself (a limit touched, not crossed: the slide just tried did not start)
+ * is passed over: the search restarts a little later, further each time, until it finds a later one. */
+static double breakaway(const ex_ctx *C, dfo_state *s, double ta, int skip, int *dir)
+{
+    const double C0 = C->L.F_ext - C->k * s->X;
+    const int known = !isnan(s->stick_tb) && s->stick_C == C0 && s->stick_Fb == C->L.Fb;
+    if (!known || (skip && s->stick_tb <= ta)) {
+        s->stick_C = C0;
+        s->stick_Fb = C->L.Fb;
+        double tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
+        if (skip) {
+            double d = 4.0 * DBL_EPSILON * fmax(fabs(ta), 1.0 / (C->w0 + fabs(C->M->p.omega)));
+            for (int i = 0; i < 200 && tb <= ta + d && isfinite(tb); i++, d *= 2.0)
+                tb = dfo_next_breakaway(C->M, &C->L, C0, ta + d, &s->stick_dir);
+        }
+        s->stick_tb = tb;
+    }
+    *dir = s->stick_dir;
+    return (s->stick_tb > ta) ? s->stick_tb : ta;
+}
+
+static double static_force(const ex_ctx *C, double t, double X)
+{
+    return dfo_static_force(C->M, &C->L, dfo_excitation(C->M, t), X);
+}
+
+static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
+{
+    int skip = 0, stall = 0;
+    double t_last = s->t;
+    while (s->t < t_target) {
+        if (s->t == t_last) {
+            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
+        } else {
+            stall = 0;
+            t_last = s->t;
+        }
+        const double ta = s->t, xa = s->X;
+        if (s->mode == 0 && !(C->L.Fb > 0.0)) {
+            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+            const double S = static_force(C, ta, s->X), dS = dfo_excitation_rate(C->M, ta);
+            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
+            const int dir = (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
+            s->mode = dir;
+            C->events++;
+            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            continue;
+        }
+        if (s->mode == 0) {
+            int dir = 0;
+            const double tb = breakaway(C, s, ta, skip, &dir);
+            skip = 0;
+            if (tb >= t_target) {
+                s->t = t_target;
+                after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                break;
+            }
+            s->t = tb;
+            s->V = 0.0;
+            s->mode = dir;
+            C->events++;
+            after_phase(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+            continue;
+        }
+        /* a slip in direction sd from (ta, X, V) */
+        const int sd = s->mode;
+        ex_phase P;
+        ex_val v;
+        phase_init(C, &P, ta, s->X, s->V, sd);
+        const double u_max = C->w0 * (t_target - ta);
+        const int r = find_stop(C, &P, s->X - P.xc, s->V / C->w0, u_max, &v);
+        if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
+        if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
+        if (r == SEARCH_NONE) {
+            s->t = t_target;
+            s->X = P.xc + v.y;
+            s->V = C->w0 * v.y1;
+            after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
+            break;
+        }
+        double ts = ta + v.u / C->w0;
+        if (ts > t_target) ts = t_target;
+        s->t = ts;
+        s->X = P.xc + v.y;
+        s->V = 0.0;
+        int next = dfo_rest_mode(&C->L, static_force(C, ts, s->X));
+        if (!(C->L.Fb > 0.0)) {
+            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
+            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
+            next = 0;                                 /* rest, and a breakaway right now is passed over */
+            skip = 1;
+        }
+        if (next == 0) s->stick_tb = NAN; /* a new stick phase */
+        s->mode = next;
+        C->events++;
+        after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+    }
+    return DFO_OK;
+}
+
+/* The grid index of t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks). */
+static long long grid_index(const dfo_model *M, const dfo_state *s)
+{
+    const double h = M->p.h, q = floor((s->t - s->t0) / h);
+    if (!(q >= 0.0)) return 0;
+    if (q > 9e18) return s->n;
+    long long n = (long long)q;
+    while (n > 0 && s->t0 + (double)n * h > s->t) n--;
+    while (s->t0 + (double)(n + 1) * h <= s->t) n++;
+    return n;
+}
+
+dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+                             dfo_switch_fn on_switch, void *switch_ctx)
+{
+    ex_ctx C;
+    ctx_init(&C, M, u);
+    C.on_switch = on_switch;
+    C.switch_ctx = switch_ctx;
+    dfo_status st = advance(&C, s, t_target);
+    s->steps += C.events;
+    s->n = grid_index(M, s);
+    s->hA = 0.0;
+    if (st != DFO_OK) return st;
+    const double S = static_force(&C, s->t, s->X);
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(&C.L, S);
+    } else {
+        s->F = -s->mode * C.L.muk_N;
+        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}

@@ -1,0 +1,42 @@
+/* The exact scheme (scheme 4, method.md sections 5 and 10): the closed-form motion between events,
+ * the events (stops, reversals, breakaways, tangential touches) found without ever stepping over a
+ * zero of the velocity, the stick/slip decision at each event by the rules every scheme shares
+ * (friction.h). Exact to rounding: no time step.
+ *
+ * Between two events the block slides in one direction s (friction -s mu_k N) or sticks. A slip
+ * phase is, in tau = w0 (t - t_a) and y = x - x_c (x_c = (F_ext - s mu_k N) / k),
+ *
+ *     y'' + 2 zeta y' + y = a cos(theta_a + lambda tau),   a = |P0| / k,
+ *
+ * solved in closed form: the steady-state form plus the free motion (under-, critically and
+ * over-damped bases), or, near resonance with little damping, the uniform form of method.md
+ * section 5 in which lambda = 1, zeta = 0 is a limit. The phase ends where s y' reaches 0: the
+ * search steps only as far as an exact bound of |y'''| proves s y' positive (a cubic bound from
+ * rest, where a slide with chi >= 1 starts with zero acceleration), finishes on the quadratic
+ * Taylor model with Newton's correction, and takes a tangential touch at the minimum of s y' when
+ * that minimum is within rounding of 0. A stick phase ends at the closed-form breakaway
+ * (dfo_next_breakaway).
+ *
+ * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call), so
+ * the state (t, X, V, mode, the stick phase's breakaway) is all a continuation needs: FMU states and
+ * their serialisation continue bit for bit. On return A is the physical acceleration, hA = 0, F the
+ * friction force. Observables are exact: x is monotone in a slip phase, so the window's extremes
+ * are at its ends, the stops and the window's edges (evaluated in closed form); the stick time is a
+ * sum of intervals; E_friction adds mu_k N |dx| of each slip inside the window.
+ *
+ * The step h has no effect on the results. It keeps only its bookkeeping roles: the grid index n
+ * (t0 + n h <= t < t0 + (n + 1) h, checked when a state is loaded) and the FMU's bound on the work of
+ * one call (a communication step may span at most 1e9 h). The counter `steps` counts events.
+ *
+ * Needs k > 0 (dfo_check_params says so). Plain C, no FMI types. */
+#ifndef DFO_EXACT_H
+#define DFO_EXACT_H
+
+#include "newmark.h"
+#include "oscillator.h"
+
+/* Advance to t_target > s->t with the inputs held: the contract of dfo_advance. */
+dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+                             dfo_switch_fn on_switch, void *switch_ctx);
+
+#endif
