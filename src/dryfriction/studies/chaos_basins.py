@@ -1,0 +1,97 @@
+"""Basins of attraction on a grid of initial conditions, coloured by the attractor reached (see
+configs/chaos_basins.toml and docs/chaos.md)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..chaos.attractors import Catalogue
+from ..chaos.batch import concat, map_chunks, orbit_tails
+from .common import StudyContext, check_numerics, check_params, plt
+from .config import grid, require
+
+NAME = "chaos_basins"
+TITLE = "Basins of attraction where motions coexist (end of the chaotic range of Fig. 8/9; Fig. 11 zone)"
+FIGURES = ("chaos_basins_<case>.png",)
+
+
+def check(cfg: dict[str, Any]) -> None:
+    check_numerics(cfg["numerics"])
+    require(isinstance(cfg["cases"], list) and len(cfg["cases"]) >= 1, "cases must be a non-empty list")
+    for c in cfg["cases"]:
+        require(c in cfg and isinstance(cfg[c], dict), f"case {c!r} needs a table [{c}]")
+        t = cfg[c]
+        check_params({k: t[k] for k in ("lam", "mu_s_sigma", "chi", "zeta")}, c)
+        require(t["transient"] >= 0 and t["tail"] >= 4, f"{c}.transient must be >= 0 and {c}.tail >= 4")
+    g = cfg["grid"]
+    grid(g["z0"], "grid.z0")
+    grid(g["dz0"], "grid.dz0")
+    require(g["period_tol"] > 0 and g["match_tol"] > 0, "grid.period_tol and grid.match_tol must be > 0")
+
+
+def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, float]:
+    cfg = ctx.cfg
+    t, g, num = cfg[case], cfg["grid"], cfg["numerics"]
+    z0, dz0 = grid(g["z0"], "grid.z0"), grid(g["dz0"], "grid.dz0")
+    Z, D = np.meshgrid(z0, dz0, indexing="ij")
+    ics = np.column_stack([Z.ravel(), D.ravel()])
+    nd = {k: t[k] for k in ("lam", "mu_s_sigma", "zeta")}
+    n = int(num["chunk_runs"])
+    chunks = [(nd, num, float(t["chi"]), ics[i:i + n], int(t["transient"]), int(t["tail"]))
+              for i in range(0, ics.shape[0], n)]
+    o = ctx.engine_options
+    res, st = map_chunks(orbit_tails, o.fmu, chunks, o.workers, o.scheduler, o.progress, f"basins {case}")
+    tails = concat(res, "tails")
+    cat = Catalogue(tol=float(g["match_tol"]))
+    labels = np.array([cat.label(x, float(g["period_tol"])) for x in tails])
+    labels = cat.canonical()[labels]
+    shares = np.array([np.mean(labels == i) for i in range(len(cat.attractors))])
+    ctx.log(f"basins {case}: {ics.shape[0]:,} runs of {t['transient']} + {t['tail']} periods in {st.wall:.1f} s "
+            f"(cluster start {st.startup:.1f} s, task CPU {st.task_cpu:.1f} s); "
+            + "; ".join(f"{a.describe()}: {s:.4f}" for a, s in zip(cat.attractors, shares)))
+    ds = xr.Dataset(
+        {"attractor": (("z0", "dz0"), labels.reshape(Z.shape).astype(np.int16),
+                       {"long_name": "index of the attractor reached (-1: the run failed)"}),
+         "final_z": (("z0", "dz0"), tails[:, -1, 0].reshape(Z.shape), {"long_name": "last stroboscopic z"}),
+         "share": (("attractor_index",), shares, {"long_name": "share of the initial conditions"}),
+         "attractor_period": (("attractor_index",), np.array([a.period for a in cat.attractors]),
+                              {"long_name": "period of the attractor (0: non-periodic)"})},
+        coords={"z0": z0, "dz0": dz0, "attractor_index": np.arange(len(cat.attractors))},
+    )
+    ds.attrs.update({f"param_{k}": v for k, v in t.items()})
+    ds.attrs.update(case=case, scheme=num["scheme"], steps_per_period=num["steps_per_period"], alpha=num["alpha"],
+                    period_tol=g["period_tol"], match_tol=g["match_tol"], wall_s=st.wall,
+                    attractors="; ".join(a.describe() for a in cat.attractors))
+    return ds, cat, st.wall
+
+
+def run(ctx: StudyContext) -> dict[str, Any]:
+    cfg = ctx.cfg
+    num = cfg["numerics"]
+    summary: dict[str, Any] = {"scheme": num["scheme"], "steps_per_period": num["steps_per_period"]}
+    for case in cfg["cases"]:
+        ds, cat, wall = basin_map(ctx, case)
+        ctx.save_dataset(ds, f"chaos_basins_{case}.nc")
+        t = cfg[case]
+        fig, ax = plt.subplots(figsize=(6.4, 5.4))
+        lab = ds.attractor.values
+        k = len(cat.attractors)
+        cmap = plt.get_cmap("tab10", max(k, 2))
+        im = ax.pcolormesh(ds.z0.values, ds.dz0.values, lab.T, cmap=cmap, vmin=-0.5, vmax=max(k, 2) - 0.5,
+                           shading="nearest", rasterized=True)
+        cb = fig.colorbar(im, ax=ax, ticks=range(k))
+        cb.ax.set_yticklabels([f"{i}: {a.describe()[:28]} ({s:.1%})" for i, (a, s) in
+                               enumerate(zip(cat.attractors, ds.share.values))], fontsize=6)
+        ax.set_xlabel("z0")
+        ax.set_ylabel("z0'")
+        ax.set_title(f"Basins, {case}: lambda = {t['lam']}, mu_s sigma = {t['mu_s_sigma']}, chi = {t['chi']}, "
+                     f"zeta = {t['zeta']}\n{lab.size:,} initial conditions, {t['transient']} T transient; "
+                     f"scheme {num['scheme']}, h = T/{num['steps_per_period']}", fontsize=8)
+        ctx.save_figure(fig, f"chaos_basins_{case}.png")
+        summary[case] = {"runs": int(lab.size), "wall_s": wall,
+                         "attractors": [a.describe() for a in cat.attractors],
+                         "shares": [float(s) for s in ds.share.values]}
+    return summary
