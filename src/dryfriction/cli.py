@@ -81,6 +81,9 @@ def build_parser() -> Parser:
 
     sub.add_parser("scenes", help="list the scenes")
 
+    from .chaos.cli import add_lyapunov_parser
+    add_lyapunov_parser(sub)
+
     s = sub.add_parser("study", help="the paper's studies (see 'dryfriction study --help')", add_help=False)
     s.add_argument("args", nargs=argparse.REMAINDER)
     return p
@@ -155,7 +158,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
         if args.fmu is not None and not args.fmu.is_file():
             raise UsageError(f"--fmu: no such file: {args.fmu}")
-        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes}[args.command]
+        from .chaos.cli import lyapunov_main
+        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes, "lyapunov": lyapunov_main}[args.command]
         return handler(args)
     except UsageError as e:
         print(f"dryfriction: error: {e}", file=sys.stderr)

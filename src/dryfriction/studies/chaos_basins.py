@@ -52,8 +52,15 @@ def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, floa
     ctx.log(f"basins {case}: {ics.shape[0]:,} runs of {t['transient']} + {t['tail']} periods in {st.wall:.1f} s "
             f"(cluster start {st.startup:.1f} s, task CPU {st.task_cpu:.1f} s); "
             + "; ".join(f"{a.describe()}: {s:.4f}" for a, s in zip(cat.attractors, shares)))
+    pts = np.full((len(cat.attractors), cat.max_period, 2), np.nan)
+    for i, a in enumerate(cat.attractors):
+        if a.period:
+            pts[i, :a.period] = a.points
     ds = xr.Dataset(
-        {"attractor": (("z0", "dz0"), labels.reshape(Z.shape).astype(np.int16),
+        {"attractor_z": (("attractor_index", "point"), pts[..., 0],
+                         {"long_name": "stroboscopic z of the periodic attractor's points (nan-padded)"}),
+         "attractor_dz": (("attractor_index", "point"), pts[..., 1]),
+         "attractor": (("z0", "dz0"), labels.reshape(Z.shape).astype(np.int16),
                        {"long_name": "index of the attractor reached (-1: the run failed)"}),
          "final_z": (("z0", "dz0"), tails[:, -1, 0].reshape(Z.shape), {"long_name": "last stroboscopic z"}),
          "share": (("attractor_index",), shares, {"long_name": "share of the initial conditions"}),
