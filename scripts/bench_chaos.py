@@ -48,10 +48,7 @@ def scan_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
     spp = num["steps_per_period"]
     n_ic = len(s["z0"])
     per_run = (ly["transient"] + 2 * ly["periods"]) * spp     # transient once, then two trajectories
-    total = chis.size * n_ic * per_run
-    rf = cfg["refine"]
-    total += rf["num"] * n_ic * (ly["transient"] + 2 * rf["periods"]) * spp   # the refinement (upper bound)
-    total += (cfg["section"]["transient"] + cfg["section"]["points"]) * spp
+    total = chis.size * n_ic * per_run      # the scan itself (timed by the study: scan_wall_s)
     idx = np.unique(np.linspace(0, chis.size * n_ic - 1, min(sample, chis.size * n_ic)).round().astype(int))
     C = chis[idx // n_ic]
     Z = np.asarray(s["z0"], float)[idx % n_ic]
@@ -62,13 +59,14 @@ def scan_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
 
 
 def basin_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
-    g, num = cfg["grid"], cfg["numerics"]
-    z0, dz0 = grid(g["z0"], "grid.z0"), grid(g["dz0"], "grid.dz0")
-    n = z0.size * dz0.size
-    spp = num["steps_per_period"]
+    from dryfriction.studies.chaos_basins import case_grid
+
     rows, total = [], 0.0
     for case in cfg["cases"]:
         t = cfg[case]
+        z0, dz0, num = case_grid(cfg, case)
+        n = z0.size * dz0.size
+        spp = num["steps_per_period"]
         per = t["transient"] + t["tail"]
         total += n * per * spp
         idx = np.unique(np.linspace(0, n - 1, min(sample, n)).round().astype(int))
@@ -101,31 +99,41 @@ def main() -> int:
         print("bench_chaos: error: cannot build the bare stepper loop (needs cc and build/libdfo_physics.a)",
               file=sys.stderr)
         return 2
-    report = {}
+    out = Path(a.out) / "bench"
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "bench_chaos.json"
+    report = json.loads(path.read_text()) if a.only and path.is_file() else {}   # --only keeps the other entry
     for name, rows_of, sets in (("chaos_scan", scan_rows, []), ("chaos_basins", basin_rows, a.sets)):
         if a.only and not name.endswith(a.only):
             continue
         cfg = effective_config(name, quick=a.quick, sets=sets)
         rows, steps = rows_of(cfg, a.sample)
         scheme = SCHEMES[cfg["numerics"]["scheme"]]
-        before = bs.bare_ns_per_step(exe, rows, scheme, a.workers)[0]
+        before, cpu_before = bs.bare_ns_per_step(exe, rows, scheme, a.workers)
         t0 = time.perf_counter()
         res = run_study(name, quick=a.quick, out=a.out, workers=a.workers, fmu=fmu, sets=sets, progress=False)
         wall = time.perf_counter() - t0
-        after = bs.bare_ns_per_step(exe, rows, scheme, a.workers)[0]
+        after, cpu_after = bs.bare_ns_per_step(exe, rows, scheme, a.workers)
+        task_cpu = sum(v.get("task_cpu_s", 0.0) for v in res.summary.values() if isinstance(v, dict))
+        if name == "chaos_scan":     # the scan's own time (the study also refines, checks, draws)
+            study_wall, wall, task_cpu = wall, res.summary["scan_wall_s"], res.summary["scan_task_cpu_s"]
+        else:
+            study_wall = wall
         ns = min(before, after)
         limit = steps * ns * 1e-9 / a.workers
-        report[name] = {"wall_s": wall, "internal_steps": steps, "bare_ns_per_step_before": before,
+        key = name if name == "chaos_scan" else f"{name}:{','.join(cfg['cases'])}"
+        report[key] = {"wall_s": wall, "study_wall_s": study_wall, "internal_steps": steps, "bare_ns_per_step_before": before,
                         "bare_ns_per_step_after": after, "limit_s": limit, "ratio_to_limit": wall / limit,
                         "workers": a.workers, "scheme": cfg["numerics"]["scheme"],
                         "steps_per_period": cfg["numerics"].get("steps_per_period"), "summary": res.summary,
+                        "bare_cpu_ns_per_step": 0.5 * (cpu_before + cpu_after), "task_cpu_s": task_cpu or None,
+                        "cpu_ratio_tasks_to_bare": (task_cpu / (steps * 0.5 * (cpu_before + cpu_after) * 1e-9)
+                                                    if task_cpu else None),
                         "load_average": os.getloadavg()}
         print(f"{name}: wall {wall:.1f} s, {steps:.3e} internal steps, bare {before:.1f} / {after:.1f} ns/step "
               f"(before / after), limit {limit:.1f} s, ratio {wall / limit:.2f}", flush=True)
-    out = Path(a.out) / "bench"
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "bench_chaos.json").write_text(json.dumps(report, indent=2, default=float) + "\n")
-    print(f"report: {out / 'bench_chaos.json'}")
+    path.write_text(json.dumps(report, indent=2, default=float) + "\n")
+    print(f"report: {path}")
     return 0
 
 

@@ -136,7 +136,7 @@ def transient_rows(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, 
             else:
                 f.step_to(k * T)
                 strobe[k] = m._read()
-        p = period_of(strobe[-tail:], tol)
+        p = period_of(strobe[-tail:], tol, min(32, tail // 2))
         period[i] = p
         if p:
             orbit = strobe[-p:]

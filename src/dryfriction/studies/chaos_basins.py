@@ -26,16 +26,29 @@ def check(cfg: dict[str, Any]) -> None:
         t = cfg[c]
         check_params({k: t[k] for k in ("lam", "mu_s_sigma", "chi", "zeta")}, c)
         require(t["transient"] >= 0 and t["tail"] >= 4, f"{c}.transient must be >= 0 and {c}.tail >= 4")
+        require(t.get("grid_num", 2) >= 2 and t.get("steps_per_period", 10) >= 10,
+                f"{c}.grid_num must be >= 2 and {c}.steps_per_period >= 10")
     g = cfg["grid"]
     grid(g["z0"], "grid.z0")
     grid(g["dz0"], "grid.dz0")
     require(g["period_tol"] > 0 and g["match_tol"] > 0, "grid.period_tol and grid.match_tol must be > 0")
 
 
+def case_grid(cfg: dict[str, Any], case: str) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """The initial conditions' axes and the numerics of a case (its optional ``grid_num`` and
+    ``steps_per_period`` override the shared ones)."""
+    t, g = cfg[case], cfg["grid"]
+    n = t.get("grid_num")
+    z0 = grid({**g["z0"], **({"num": n} if n else {})}, "grid.z0")
+    dz0 = grid({**g["dz0"], **({"num": n} if n else {})}, "grid.dz0")
+    num = {**cfg["numerics"], "steps_per_period": int(t.get("steps_per_period", cfg["numerics"]["steps_per_period"]))}
+    return z0, dz0, num
+
+
 def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, float]:
     cfg = ctx.cfg
-    t, g, num = cfg[case], cfg["grid"], cfg["numerics"]
-    z0, dz0 = grid(g["z0"], "grid.z0"), grid(g["dz0"], "grid.dz0")
+    t, g = cfg[case], cfg["grid"]
+    z0, dz0, num = case_grid(cfg, case)
     Z, D = np.meshgrid(z0, dz0, indexing="ij")
     ics = np.column_stack([Z.ravel(), D.ravel()])
     nd = {k: t[k] for k in ("lam", "mu_s_sigma", "zeta")}
@@ -69,6 +82,7 @@ def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, floa
         coords={"z0": z0, "dz0": dz0, "attractor_index": np.arange(len(cat.attractors))},
     )
     ds.attrs.update({f"param_{k}": v for k, v in t.items()})
+    ds.attrs.update(task_cpu_s=st.task_cpu)
     ds.attrs.update(case=case, scheme=num["scheme"], steps_per_period=num["steps_per_period"], alpha=num["alpha"],
                     period_tol=g["period_tol"], match_tol=g["match_tol"], wall_s=st.wall,
                     attractors="; ".join(a.describe() for a in cat.attractors))
@@ -78,7 +92,7 @@ def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, floa
 def run(ctx: StudyContext) -> dict[str, Any]:
     cfg = ctx.cfg
     num = cfg["numerics"]
-    summary: dict[str, Any] = {"scheme": num["scheme"], "steps_per_period": num["steps_per_period"]}
+    summary: dict[str, Any] = {"scheme": num["scheme"]}
     for case in cfg["cases"]:
         ds, cat, wall = basin_map(ctx, case)
         ctx.save_dataset(ds, f"chaos_basins_{case}.nc")
@@ -98,7 +112,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
                      f"zeta = {t['zeta']}\n{lab.size:,} initial conditions, {t['transient']} T transient; "
                      f"scheme {num['scheme']}, h = T/{num['steps_per_period']}", fontsize=8)
         ctx.save_figure(fig, f"chaos_basins_{case}.png")
-        summary[case] = {"runs": int(lab.size), "wall_s": wall,
+        summary[case] = {"runs": int(lab.size), "wall_s": wall, "task_cpu_s": float(ds.attrs["task_cpu_s"]),
+                         "steps_per_period": int(ds.attrs["steps_per_period"]), "transient": int(t["transient"]),
                          "attractors": [a.describe() for a in cat.attractors],
                          "shares": [float(s) for s in ds.share.values]}
     return summary

@@ -11,6 +11,8 @@ import xarray as xr
 
 from ..chaos.attractors import Catalogue, period_of
 from ..chaos.batch import concat, lyapunov_rows, map_chunks, orbit_tails
+from ..chaos.lyapunov import benettin
+from ..chaos.maps import ExactMap, FMUMap, NDParams
 from .common import StudyContext, check_numerics, check_params, plt
 from .config import grid, require
 
@@ -33,6 +35,8 @@ def check(cfg: dict[str, Any]) -> None:
     require(0 < ly["d0"] < 1e-2, f"lyapunov.d0 must be in (0, 1e-2), not {ly['d0']}")
     require(2 <= ly["keep"] <= ly["periods"] // ly["renorm"], "lyapunov.keep must be in [2, periods / renorm]")
     require(cfg["refine"]["num"] >= 0 and cfg["refine"]["periods"] >= 20, "refine.num >= 0, refine.periods >= 20")
+    require(isinstance(cfg["check"]["chi"], list) and all(c > 0 for c in cfg["check"]["chi"])
+            and cfg["check"]["periods"] >= 20, "check.chi must be a list of chi > 0, check.periods >= 20")
     require(cfg["section"]["points"] >= 10 and cfg["section"]["chi"] > 0, "section.points >= 10, section.chi > 0")
 
 
@@ -49,24 +53,55 @@ def _scan(ctx: StudyContext, chis: np.ndarray, ics: np.ndarray, ly: dict[str, An
     out = {k: concat(res, k).reshape((len(chis), len(ics)) + concat(res, k).shape[1:])
            for k in ("lyapunov", "stderr", "half_difference", "collapses", "strobe")}
     out["wall"] = np.array(st.wall)
+    out["cpu"] = np.array(st.task_cpu)
     return out
 
 
+#: longest period looked for in the stroboscopic points (near the onset of chaos there are
+#: periodic windows of period 10 and 16)
+MAX_PERIOD = 32
+
+
 def classify(strobe: np.ndarray, lyap: np.ndarray, stderr: np.ndarray, tol: float) -> dict[str, np.ndarray]:
-    """Per chi: the period of each run (0 non-periodic), the number of distinct attractors the runs
-    reached, and whether chaos is established (some run with exponent > 3 standard errors above 0
-    and non-periodic points)."""
+    """Per chi: the period of each run (0: none up to min(32, kept points / 2)), the number of
+    distinct attractors the runs reached, and whether chaos is established for a run (exponent more
+    than 3 standard errors above 0 and no period)."""
     n_chi, n_ic = lyap.shape
     period = np.zeros((n_chi, n_ic), dtype=int)
     n_att = np.zeros(n_chi, dtype=int)
+    max_p = min(MAX_PERIOD, strobe.shape[2] // 2)
     for i in range(n_chi):
-        cat = Catalogue(tol=max(tol, 1e-9) * 100)
+        cat = Catalogue(tol=max(tol, 1e-9) * 100, max_period=max_p)
         for j in range(n_ic):
-            period[i, j] = period_of(strobe[i, j], tol)
+            period[i, j] = period_of(strobe[i, j], tol, max_p)
             cat.label(strobe[i, j], period_tol=tol)
         n_att[i] = len(cat.attractors)
     chaotic = (lyap - 3 * stderr > 0) & (period == 0)
     return {"period": period, "attractors": n_att, "chaotic": chaotic}
+
+
+def zero_crossing(chi: np.ndarray, lyap: np.ndarray) -> tuple[float, float]:
+    """Where the (mean) exponent crosses 0 as chi grows: a straight line fitted to the points up to
+    the first non-positive one and the next (at least 3 points), its root and the root's standard
+    error from the fit's residuals; nan if the exponent does not change sign."""
+    neg = np.nonzero(lyap <= 0)[0]
+    if neg.size == 0 or neg[0] == 0:
+        return float("nan"), float("nan")
+    n = min(max(neg[0] + 2, 3), chi.size)
+    x, y = chi[:n], lyap[:n]
+    A = np.column_stack([x, np.ones_like(x)])
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    a, b = coef
+    if a >= 0:
+        return float("nan"), float("nan")
+    res = y - A @ coef
+    s = float(np.sqrt(np.sum(res**2) / max(n - 2, 1)))
+    root = -b / a
+    # standard error of the root: the residual scatter over the slope, plus the slope's own error
+    xm = x.mean()
+    sxx = float(np.sum((x - xm) ** 2))
+    se = s / abs(a) * np.sqrt(1.0 / n + (root - xm) ** 2 / sxx) if sxx > 0 else float("nan")
+    return float(root), float(se)
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
@@ -81,7 +116,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     # ---- onset of chaos: refine between the largest chaotic chi and the next chi of the scan
     any_chaos = cls["chaotic"].any(axis=1)
     summary: dict[str, Any] = {"scheme": num["scheme"], "steps_per_period": num["steps_per_period"],
-                               "scan_wall_s": float(scan["wall"]), "runs": int(chis.size * len(ics)),
+                               "scan_wall_s": float(scan["wall"]), "scan_task_cpu_s": float(scan["cpu"]),
+                               "runs": int(chis.size * len(ics)),
                                "periods_per_run": int(ly["transient"] + ly["periods"])}
     ref = None
     if any_chaos.any() and not any_chaos.all():
@@ -98,6 +134,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             lo_c, hi_c = float(rchis[j]), float(rchis[min(j + 1, rchis.size - 1)])
             ref.update(rcls)
             ref["chi"] = rchis
+            root, sig = zero_crossing(rchis, ref["lyapunov"].mean(axis=1))
+            summary.update(chi_lyapunov_zero=root, chi_lyapunov_zero_uncertainty=sig)
         summary.update(chi_chaos_onset=0.5 * (lo_c + hi_c), chi_chaos_onset_uncertainty=0.5 * (hi_c - lo_c),
                        chi_last_chaotic=lo_c, chi_first_regular=hi_c)
     chaotic_chis = chis[any_chaos]
@@ -110,6 +148,21 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         coexisting_chis=[float(c) for c in chis[cls["attractors"] > 1]],
         periods_seen={f"{c:.4g}": sorted({int(p) for p in cls["period"][i]}) for i, c in enumerate(chis)},
     )
+
+    # ---- the exponent from the exact solution, an independent calculation
+    ck = cfg["check"]
+    exact_rows = []
+    f = ctx.fmu()
+    for chi in ck["chi"]:
+        ndc = NDParams.from_mapping(nd, chi=float(chi))
+        ex = benettin(ExactMap(ndc), 0.0, 0.0, periods=int(ck["periods"]), transient=int(ck["transient"]), d0=ly["d0"])
+        fm = benettin(FMUMap(f, ndc, int(num["steps_per_period"]), num["scheme"], num["alpha"]), 0.0, 0.0,
+                      periods=int(ck["periods"]), transient=int(ck["transient"]), d0=ly["d0"])
+        exact_rows.append((float(chi), ex.lyapunov_per_period, ex.stderr_per_period, fm.lyapunov_per_period,
+                           fm.stderr_per_period))
+        ctx.log(f"exponent at chi = {chi:g} from (0, 0), {ck['periods']} periods: exact {ex.lyapunov_per_period:+.4f} "
+                f"+- {ex.stderr_per_period:.4f}, FMU {fm.lyapunov_per_period:+.4f} +- {fm.stderr_per_period:.4f}")
+    summary["exact_check"] = [dict(zip(("chi", "exact", "exact_stderr", "fmu", "fmu_stderr"), r)) for r in exact_rows]
 
     # ---- Poincare section of one chaotic motion
     sc = cfg["section"]
@@ -130,7 +183,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             "collapses": (("chi", "ic"), scan["collapses"]),
             "strobe_z": (("chi", "ic", "k"), scan["strobe"][..., 0], {"long_name": "stroboscopic z at t = kT, last periods"}),
             "strobe_dz": (("chi", "ic", "k"), scan["strobe"][..., 1], {"long_name": "stroboscopic z' at t = kT"}),
-            "period": (("chi", "ic"), cls["period"], {"long_name": "period of the stroboscopic points (0: none up to 8)"}),
+            "period": (("chi", "ic"), cls["period"], {"long_name": "period of the stroboscopic points (0: none up to 32)"}),
             "attractors": (("chi",), cls["attractors"], {"long_name": "distinct attractors reached by the initial conditions"}),
             "chaotic": (("chi", "ic"), cls["chaotic"].astype(np.int8), {"long_name": "exponent > 3 stderr and non-periodic"}),
             "section_z": (("n",), section[:, 0]),
@@ -144,6 +197,12 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         ds["refine_lyapunov_per_period"] = (("chi_refine", "ic"), ref["lyapunov"])
         ds["refine_stderr_per_period"] = (("chi_refine", "ic"), ref["stderr"])
         ds["refine_period"] = (("chi_refine", "ic"), ref["period"])
+    er = np.array(exact_rows)
+    ds = ds.assign_coords(chi_check=er[:, 0])
+    ds["check_exact_lyapunov"] = (("chi_check",), er[:, 1], {"long_name": "exponent / period from dryfriction.exact, from (0, 0)"})
+    ds["check_exact_stderr"] = (("chi_check",), er[:, 2])
+    ds["check_fmu_lyapunov"] = (("chi_check",), er[:, 3], {"long_name": "exponent / period from the FMU, same start"})
+    ds["check_fmu_stderr"] = (("chi_check",), er[:, 4])
     ds.attrs.update({f"param_{k_}": v for k_, v in nd.items()})
     ds.attrs.update(scheme=num["scheme"], steps_per_period=num["steps_per_period"], alpha=num["alpha"],
                     lyapunov_method="Benettin two-trajectory, renormalised; fresh FMU start per interval",
@@ -167,6 +226,10 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     if "chi_chaos_onset" in summary:
         for a in (a1, a2):
             a.axvline(summary["chi_chaos_onset"], c="C3", lw=0.8, ls="--")
+    lo_y = float(np.nanmin(scan["lyapunov"]))
+    if lo_y < -1.0:
+        a2.set_ylim(-1.0, max(0.35, float(np.nanmax(scan["lyapunov"])) * 1.2))
+        a2.text(0.99, 0.03, f"clipped at -1 (min {lo_y:.1f})", transform=a2.transAxes, ha="right", fontsize=7)
     a2.set_ylabel("largest Lyapunov exponent / period")
     a2.set_xlabel("chi = mu_k / mu_s")
     a2.grid(alpha=0.3)

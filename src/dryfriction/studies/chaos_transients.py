@@ -62,7 +62,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
          "asymmetry_spread": (("chi", "checkpoint"), asym_spread, {"long_name": "(max - min) asymmetry over the ICs / median amplitude"}),
          "settled_share": (("chi", "checkpoint"), settled, {"long_name": "share of ICs on their periodic attractor by the checkpoint"}),
          "transient_periods": (("chi", "ic"), tlen, {"long_name": "transient length in periods (-1: no periodic attractor reached)"}),
-         "final_period": (("chi", "ic"), period, {"long_name": "period of the last stroboscopic points (0: none up to 8)"})},
+         "final_period": (("chi", "ic"), period, {"long_name": "period of the last stroboscopic points (0: none up to 32)"})},
         coords={"chi": chis, "ic": np.arange(ics.shape[0]), "checkpoint": cps,
                 "ic_z0": ("ic", ics[:, 0]), "ic_dz0": ("ic", ics[:, 1])},
     )
