@@ -76,6 +76,12 @@ def basin_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
     return np.vstack(rows), total
 
 
+def case_steps(cfg: dict, case: str) -> int:
+    from dryfriction.studies.chaos_basins import case_grid
+
+    return int(case_grid(cfg, case)[2]["steps_per_period"])
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
@@ -125,7 +131,8 @@ def main() -> int:
         report[key] = {"wall_s": wall, "study_wall_s": study_wall, "internal_steps": steps, "bare_ns_per_step_before": before,
                         "bare_ns_per_step_after": after, "limit_s": limit, "ratio_to_limit": wall / limit,
                         "workers": a.workers, "scheme": cfg["numerics"]["scheme"],
-                        "steps_per_period": cfg["numerics"].get("steps_per_period"), "summary": res.summary,
+                        "steps_per_period": ({c: case_steps(cfg, c) for c in cfg["cases"]} if "cases" in cfg
+                                             else cfg["numerics"]["steps_per_period"]), "summary": res.summary,
                         "bare_cpu_ns_per_step": 0.5 * (cpu_before + cpu_after), "task_cpu_s": task_cpu or None,
                         "cpu_ratio_tasks_to_bare": (task_cpu / (steps * 0.5 * (cpu_before + cpu_after) * 1e-9)
                                                     if task_cpu else None),
