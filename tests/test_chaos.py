@@ -98,7 +98,7 @@ def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: Osci
         counts = np.bincount(lab.ravel(), minlength=ds.share.size) / lab.size
         np.testing.assert_allclose(counts, ds.share.values)
         t = run_study.__globals__["effective_config"]("chaos_basins", quick=True)[case]
-        m = FMUMap(fmu, NDParams(t["lam"], t["mu_s_sigma"], t["chi"], t["zeta"]))
+        m = FMUMap(fmu, NDParams(t["lam"], t["mu_s_sigma"], t["chi"], t["zeta"]), int(ds.attrs["steps_per_period"]))
         for i, j in ((0, 0), (2, 7), (4, 4), (6, 1), (8, 8)):
             tail = m.orbit(float(ds.z0[i]), float(ds.dz0[j]), t["transient"], t["tail"])
             k = int(lab[i, j])

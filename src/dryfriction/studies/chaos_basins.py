@@ -89,6 +89,27 @@ def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, floa
     return ds, cat, st.wall
 
 
+def plot_basins(ds: xr.Dataset) -> Any:
+    """The basin map of a dataset written by this study (labels, shares and names from it)."""
+    a = ds.attrs
+    names = str(a["attractors"]).split("; ")
+    lab = ds.attractor.values
+    k = len(names)
+    fig, ax = plt.subplots(figsize=(6.4, 5.4))
+    cmap = plt.get_cmap("tab10", max(k, 2))
+    im = ax.pcolormesh(ds.z0.values, ds.dz0.values, lab.T, cmap=cmap, vmin=-0.5, vmax=max(k, 2) - 0.5,
+                       shading="nearest", rasterized=True)
+    cb = fig.colorbar(im, ax=ax, ticks=range(k))
+    cb.ax.set_yticklabels([f"{i}: {n[:28]} ({s:.2%})" for i, (n, s) in enumerate(zip(names, ds.share.values))],
+                          fontsize=6)
+    ax.set_xlabel("z0")
+    ax.set_ylabel("z0'")
+    ax.set_title(f"Basins, {a['case']}: lambda = {a['param_lam']}, mu_s sigma = {a['param_mu_s_sigma']}, "
+                 f"chi = {a['param_chi']}, zeta = {a['param_zeta']}\n{lab.size:,} initial conditions, "
+                 f"{a['param_transient']} T transient; scheme {a['scheme']}, h = T/{a['steps_per_period']}", fontsize=8)
+    return fig
+
+
 def run(ctx: StudyContext) -> dict[str, Any]:
     cfg = ctx.cfg
     num = cfg["numerics"]
@@ -97,20 +118,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         ds, cat, wall = basin_map(ctx, case)
         ctx.save_dataset(ds, f"chaos_basins_{case}.nc")
         t = cfg[case]
-        fig, ax = plt.subplots(figsize=(6.4, 5.4))
         lab = ds.attractor.values
-        k = len(cat.attractors)
-        cmap = plt.get_cmap("tab10", max(k, 2))
-        im = ax.pcolormesh(ds.z0.values, ds.dz0.values, lab.T, cmap=cmap, vmin=-0.5, vmax=max(k, 2) - 0.5,
-                           shading="nearest", rasterized=True)
-        cb = fig.colorbar(im, ax=ax, ticks=range(k))
-        cb.ax.set_yticklabels([f"{i}: {a.describe()[:28]} ({s:.1%})" for i, (a, s) in
-                               enumerate(zip(cat.attractors, ds.share.values))], fontsize=6)
-        ax.set_xlabel("z0")
-        ax.set_ylabel("z0'")
-        ax.set_title(f"Basins, {case}: lambda = {t['lam']}, mu_s sigma = {t['mu_s_sigma']}, chi = {t['chi']}, "
-                     f"zeta = {t['zeta']}\n{lab.size:,} initial conditions, {t['transient']} T transient; "
-                     f"scheme {num['scheme']}, h = T/{num['steps_per_period']}", fontsize=8)
+        fig = plot_basins(ds)
         ctx.save_figure(fig, f"chaos_basins_{case}.png")
         summary[case] = {"runs": int(lab.size), "wall_s": wall, "task_cpu_s": float(ds.attrs["task_cpu_s"]),
                          "steps_per_period": int(ds.attrs["steps_per_period"]), "transient": int(t["transient"]),
