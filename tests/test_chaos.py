@@ -147,3 +147,14 @@ def test_lyapunov_cli_json_and_errors(capsys: pytest.CaptureFixture[str]) -> Non
         assert cli_main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", *bad]) == 2
         err = capsys.readouterr().err.strip()
         assert err.startswith("dryfriction: error:") and "\n" not in err
+
+
+def test_basins_on_dask_equal_in_process(tmp_path: Path, fmu_path: Path) -> None:
+    """The Dask path (2 worker processes, FMU sent as bytes) gives the same labels as this process."""
+    sets = ['cases=["subharmonic"]', "subharmonic.grid_num=7", "subharmonic.transient=60", "numerics.chunk_runs=10"]
+    a = run_study("chaos_basins", quick=True, out=tmp_path / "a", fmu=fmu_path, workers=0, progress=False, sets=sets)
+    b = run_study("chaos_basins", quick=True, out=tmp_path / "b", fmu=fmu_path, workers=2, progress=False, sets=sets)
+    da = read_netcdf(a.out_dir / "chaos_basins_subharmonic.nc")
+    db = read_netcdf(b.out_dir / "chaos_basins_subharmonic.nc")
+    np.testing.assert_array_equal(da.attractor.values, db.attractor.values)
+    np.testing.assert_array_equal(da.final_z.values, db.final_z.values)          # bit for bit

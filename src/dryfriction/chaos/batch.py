@@ -10,7 +10,6 @@ from __future__ import annotations
 import atexit
 import hashlib
 import logging
-import math
 import os
 import sys
 import tempfile
@@ -27,7 +26,7 @@ from .attractors import period_of
 from .lyapunov import benettin
 from .maps import FMUMap, NDParams
 
-__all__ = ["fmu_for", "lyapunov_rows", "orbit_tails", "transient_rows", "map_chunks", "ChunkStats"]
+__all__ = ["fmu_for", "lyapunov_rows", "orbit_tails", "transient_rows", "map_chunks", "concat", "ChunkStats"]
 
 _FMUS: dict[str, OscillatorFMU] = {}
 
@@ -206,7 +205,3 @@ def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunk
 
 def concat(results: Iterable[Mapping[str, np.ndarray]], key: str) -> np.ndarray:
     return np.concatenate([r[key] for r in results], axis=0)
-
-
-def finite_or_nan(x: float) -> float:
-    return x if math.isfinite(x) else float("nan")
