@@ -118,23 +118,23 @@ def transient_rows(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, 
     tlen, period = np.full(ics.shape[0], -1.0), np.full(ics.shape[0], -1.0)
     c0 = time.process_time()
     for i, (z0, dz0) in enumerate(ics):
-        m._start(float(z0), float(dz0))
+        m.start(float(z0), float(dz0))
         strobe = np.empty((n_end + 1, 2))
-        strobe[0] = m._read()
+        strobe[0] = m.point()
         j = 0
         for k in range(1, n_end + 1):
             if j < len(cps) and k == cps[j]:
                 zs = np.empty(samples_per_period)
                 for s in range(1, samples_per_period + 1):
                     f.step_to((k - 1 + s / samples_per_period) * T)
-                    zs[s - 1] = f.get(("x",))["x"] / m._xs
+                    zs[s - 1] = f.get(("x",))["x"] / m.z_scale
                 k_amp[i, j], k_asym[i, j] = 0.5 * (zs.max() - zs.min()), 0.5 * (zs.max() + zs.min())
-                strobe[k] = m._read()
+                strobe[k] = m.point()
                 k_pt[i, j] = strobe[k]
                 j += 1
             else:
                 f.step_to(k * T)
-                strobe[k] = m._read()
+                strobe[k] = m.point()
         p = period_of(strobe[-tail:], tol, min(32, tail // 2))
         period[i] = p
         if p:

@@ -91,6 +91,6 @@ def benettin(m: StroboscopicMap, z0: float, dz0: float, periods: int = 500, tran
     h = n // 2
     half = float(per_interval[h:].mean() - per_interval[:h].mean()) if h else float("nan")
     running = np.cumsum(per_interval) / np.arange(1, n + 1)
-    T = getattr(m, "T")
+    T = m.T
     return LyapunovResult(lam, lam / T, stderr, half, n * renorm, transient, renorm, d0, collapses, T,
                           m.label, strobe, running)

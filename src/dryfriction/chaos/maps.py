@@ -76,6 +76,7 @@ class NDParams:
 class StroboscopicMap(Protocol):
     nd: NDParams
     label: str
+    T: float          # excitation period, s
 
     def advance(self, z: float, dz: float, periods: int = 1) -> Point: ...
 
@@ -97,28 +98,35 @@ class FMUMap:
         self.settings = Settings(h=self.T / self.steps_per_period, alpha=alpha, scheme=scheme)
         self.label = f"FMU scheme {scheme}, h = T/{self.steps_per_period}"
 
-    def _start(self, z: float, dz: float) -> None:
+    @property
+    def z_scale(self) -> float:
+        """x (m) per unit of z."""
+        return self._xs
+
+    def start(self, z: float, dz: float) -> None:
+        """Reset and initialise the FMU at (z, z') with phase phi (t = 0); step on with ``fmu.step_to``."""
         self.fmu.start(self._p.with_(x0=z * self._xs, v0=dz * self._vs), self.settings)
 
-    def _read(self) -> Point:
+    def point(self) -> Point:
+        """(z, z') of the FMU now."""
         g = self.fmu.get(("x", "v"))
         return g["x"] / self._xs, g["v"] / self._vs
 
     def advance(self, z: float, dz: float, periods: int = 1) -> Point:
         """(z, z') after ``periods`` periods from (z, z') at phase phi, from a fresh start."""
-        self._start(z, dz)
+        self.start(z, dz)
         self.fmu.step_to(periods * self.T)
-        return self._read()
+        return self.point()
 
     def orbit(self, z0: float, dz0: float, transient: int, n: int) -> np.ndarray:
         """Stroboscopic points k = transient .. transient + n - 1 of one continuous run, shape (n, 2)."""
-        self._start(z0, dz0)
+        self.start(z0, dz0)
         out = np.empty((n, 2))
         for j in range(n):
             k = transient + j
             if k > 0:
                 self.fmu.step_to(k * self.T)
-            out[j] = self._read()
+            out[j] = self.point()
         return out
 
 
