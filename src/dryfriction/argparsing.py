@@ -8,10 +8,12 @@ line (``prog: error: message``) and exit status 2, never a usage dump or a trace
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from collections.abc import Callable
 from typing import Any, NoReturn
 
-__all__ = ["UsageError", "Parser", "make_parser", "EXIT_USAGE"]
+__all__ = ["UsageError", "Parser", "make_parser", "number", "count", "EXIT_USAGE"]
 
 EXIT_USAGE = 2
 
@@ -38,3 +40,37 @@ class Parser(argparse.ArgumentParser):
 def make_parser(prog: str, description: str | None = None, *, exit: bool = False, **kwargs: Any) -> Parser:
     """A :class:`Parser`; ``exit=True`` for scripts that end on a bad argument."""
     return Parser(prog=prog, description=description, exit_on_usage_error=exit, **kwargs)
+
+
+def number(name: str, lo: float | None = None, lo_open: bool = False,
+           hi: float | None = None) -> Callable[[str], float]:
+    """An argparse type: a finite float, >= lo (> lo when lo_open) and < hi where given; the error
+    names the option and the valid range."""
+    def conv(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, not {text!r}") from None
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{name} must be finite, not {text}")
+        if lo is not None and (v <= lo if lo_open else v < lo):
+            raise argparse.ArgumentTypeError(f"{name} must be {'>' if lo_open else '>='} {lo:g}, not {text}")
+        if hi is not None and v >= hi:
+            raise argparse.ArgumentTypeError(f"{name} must be < {hi:g}, not {text}")
+        return v
+
+    return conv
+
+
+def count(name: str, lo: int = 1) -> Callable[[str], int]:
+    """An argparse type: a whole number >= lo."""
+    def conv(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a whole number, not {text!r}") from None
+        if v < lo:
+            raise argparse.ArgumentTypeError(f"{name} must be >= {lo}, not {text}")
+        return v
+
+    return conv

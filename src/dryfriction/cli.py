@@ -1,4 +1,4 @@
-"""Command line: ``dryfriction validate | run | scenes | study``.
+"""Command line: ``dryfriction validate | run | scenes | study | lyapunov``.
 
 Invalid arguments end with one readable line on stderr and exit status 2, before any work.
 """
@@ -13,37 +13,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from . import model, scenes
-from .argparsing import Parser, UsageError, make_parser
+from .argparsing import Parser, UsageError, count, make_parser, number
 from .fmu import FMUError, Settings
 from .params import Oscillator
-
-
-def finite(name: str, lo: float | None = None, lo_open: bool = False):
-    def conv(text: str) -> float:
-        try:
-            v = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be a number, not {text!r}") from None
-        if not math.isfinite(v):
-            raise argparse.ArgumentTypeError(f"{name} must be finite, not {text}")
-        if lo is not None and (v <= lo if lo_open else v < lo):
-            raise argparse.ArgumentTypeError(f"{name} must be {'>' if lo_open else '>='} {lo:g}, not {text}")
-        return v
-
-    return conv
-
-
-def positive_int(name: str):
-    def conv(text: str) -> int:
-        try:
-            v = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be a whole number, not {text!r}") from None
-        if v < 1:
-            raise argparse.ArgumentTypeError(f"{name} must be >= 1, not {text}")
-        return v
-
-    return conv
 
 
 def _global_options(suppress: bool) -> argparse.ArgumentParser:
@@ -70,18 +42,22 @@ def build_parser() -> Parser:
     schemes = list(model.default().schemes)
     r = sub.add_parser("run", parents=common, help="run one scene and print its result as JSON")
     r.add_argument("--scene", choices=list(scenes.SCENES), default="validation")
-    r.add_argument("--lam", type=finite("--lam", 0.0, True), default=0.5, help="frequency ratio omega/w0")
-    r.add_argument("--mu-s-sigma", type=finite("--mu-s-sigma", 0.0), default=0.4, help="mu_s N / P0")
-    r.add_argument("--chi", type=finite("--chi", 0.0), default=0.7, help="mu_k / mu_s")
-    r.add_argument("--zeta", type=finite("--zeta", 0.0), default=0.0, help="damping ratio")
-    r.add_argument("--z0", type=finite("--z0"), default=0.0, help="initial k x / P0")
-    r.add_argument("--dz0", type=finite("--dz0"), default=0.0, help="initial dz/dtau")
-    r.add_argument("--periods", type=finite("--periods", 0.0, True), default=30.0, help="excitation periods")
-    r.add_argument("--steps-per-period", type=positive_int("--steps-per-period"), default=1000)
+    r.add_argument("--lam", type=number("--lam", 0.0, True), default=0.5, help="frequency ratio omega/w0")
+    r.add_argument("--mu-s-sigma", type=number("--mu-s-sigma", 0.0), default=0.4, help="mu_s N / P0")
+    r.add_argument("--chi", type=number("--chi", 0.0), default=0.7, help="mu_k / mu_s")
+    r.add_argument("--zeta", type=number("--zeta", 0.0), default=0.0, help="damping ratio")
+    r.add_argument("--z0", type=number("--z0"), default=0.0, help="initial k x / P0")
+    r.add_argument("--dz0", type=number("--dz0"), default=0.0, help="initial dz/dtau")
+    r.add_argument("--periods", type=number("--periods", 0.0, True), default=30.0, help="excitation periods")
+    r.add_argument("--steps-per-period", type=count("--steps-per-period"), default=1000)
     r.add_argument("--scheme", choices=schemes, default=Settings().scheme)
     r.add_argument("--out", type=Path, default=None, help="CSV file for the trajectory scenes")
 
     sub.add_parser("scenes", parents=common, help="list the scenes")
+
+    from .chaos.cli import add_lyapunov_parser
+
+    add_lyapunov_parser(sub, parents=common)
 
     s = sub.add_parser("study", parents=common, help="the paper's studies ('dryfriction study list')",
                        description="Reproduce a study of the paper (see 'list').")
@@ -152,7 +128,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.fmu = getattr(args, "fmu", None)
         if args.fmu is not None and not args.fmu.is_file():
             raise UsageError(f"--fmu: no such file: {args.fmu}")
-        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes, "study": cmd_study}[args.command]
+        from .chaos.cli import lyapunov_main
+
+        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes, "study": cmd_study,
+                   "lyapunov": lyapunov_main}[args.command]
         return handler(args)
     except UsageError as e:
         print(f"dryfriction: error: {e}", file=sys.stderr)

@@ -38,6 +38,9 @@ STUDIES: dict[str, ModuleType] = {m.NAME: m for m in (
     fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
     fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)}
 
+from . import chaos_basins, chaos_scan, chaos_transients  # noqa: E402
+STUDIES.update({m.NAME: m for m in (chaos_scan, chaos_basins, chaos_transients)})
+
 ALIASES = {"fig5": "fig5_6", "fig6": "fig5_6", "fig8": "fig8_9", "fig9": "fig8_9", "fig10": "fig10_11",
            "fig11": "fig10_11", "fig12": "fig12_14", "fig13": "fig12_14", "fig14": "fig12_14"}
 

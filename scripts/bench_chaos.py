@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+"""Speed of the chaos studies against the stepper's limit (as scripts/bench_sweep.py measures it).
+
+    python scripts/bench_chaos.py [--quick] [--workers N] [--out DIR] [--only scan|basins] [--set key=value ...]
+
+Runs ``dryfriction study chaos_scan`` (80 chi x 4 initial conditions x 100 + 500 periods, two
+trajectories per period, plus the onset refinement) and ``dryfriction study chaos_basins``
+(401 x 401 initial conditions per case) and reports for each: wall time, internal steps, and the
+limit = internal steps x ns per step of the bare stepper (``dfo_advance`` of libdfo_physics.a in a
+tiny C loop, one process per worker, on a stratified sample of the study's own runs, timed before
+and after; the faster is the limit) / workers, and the ratio wall / limit. ``--set`` applies to
+the basins study (e.g. ``--set numerics.steps_per_period=500``). Not a test: nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from dryfriction.fmu import SCHEMES, default_fmu_path
+from dryfriction.studies import effective_config, run_study
+from dryfriction.studies.config import grid
+from dryfriction.sweep.table import nondim_table
+
+ROOT = Path(__file__).resolve().parent
+
+
+def _bench_sweep():
+    spec = importlib.util.spec_from_file_location("bench_sweep", ROOT / "bench_sweep.py")
+    mod = importlib.util.module_from_spec(spec)
+    assert spec.loader is not None
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def scan_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
+    """Sample rows (one trajectory of transient + periods) and the study's total internal steps."""
+    s, ly, num = cfg["scan"], cfg["lyapunov"], cfg["numerics"]
+    chis = grid(s["chi"], "scan.chi")
+    spp = num["steps_per_period"]
+    n_ic = len(s["z0"])
+    per_run = (ly["transient"] + 2 * ly["periods"]) * spp     # transient once, then two trajectories
+    total = chis.size * n_ic * per_run      # the scan itself (timed by the study: scan_wall_s)
+    idx = np.unique(np.linspace(0, chis.size * n_ic - 1, min(sample, chis.size * n_ic)).round().astype(int))
+    C = chis[idx // n_ic]
+    Z = np.asarray(s["z0"], float)[idx % n_ic]
+    D = np.asarray(s["dz0"], float)[idx % n_ic]
+    per = ly["transient"] + ly["periods"]
+    rows = nondim_table({**cfg["params"], "chi": C, "z0": Z, "dz0": D}, per, per - 1, per, spp, alpha=num["alpha"])
+    return rows, float(total)
+
+
+def basin_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
+    from dryfriction.studies.chaos_basins import case_grid
+
+    rows, total = [], 0.0
+    for case in cfg["cases"]:
+        t = cfg[case]
+        z0, dz0, num = case_grid(cfg, case)
+        n = z0.size * dz0.size
+        spp = num["steps_per_period"]
+        per = t["transient"] + t["tail"]
+        total += n * per * spp
+        idx = np.unique(np.linspace(0, n - 1, min(sample, n)).round().astype(int))
+        vals = {k: t[k] for k in ("lam", "mu_s_sigma", "chi", "zeta")}
+        rows.append(nondim_table({**vals, "z0": z0[idx // dz0.size], "dz0": dz0[idx % dz0.size]},
+                                 per, per - 1, per, spp, alpha=num["alpha"]))
+    return np.vstack(rows), total
+
+
+def case_steps(cfg: dict, case: str) -> int:
+    from dryfriction.studies.chaos_basins import case_grid
+
+    return int(case_grid(cfg, case)[2]["steps_per_period"])
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--out", default="results")
+    ap.add_argument("--only", choices=["scan", "basins"], default=None)
+    ap.add_argument("--sample", type=int, default=64, help="runs in the limit's sample (per study)")
+    ap.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE")
+    a = ap.parse_args()
+    if a.workers < 1:
+        print("bench_chaos: error: --workers must be >= 1", file=sys.stderr)
+        return 2
+    fmu = default_fmu_path()
+    if not fmu.is_file():
+        print(f"bench_chaos: error: FMU not found: {fmu}", file=sys.stderr)
+        return 2
+    bs = _bench_sweep()
+    work = Path(tempfile.mkdtemp(prefix="bench-chaos-"))
+    exe = bs.build_driver(fmu.parent, work)
+    if exe is None:
+        print("bench_chaos: error: cannot build the bare stepper loop (needs cc and build/libdfo_physics.a)",
+              file=sys.stderr)
+        return 2
+    out = Path(a.out) / "bench"
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "bench_chaos.json"
+    report = json.loads(path.read_text()) if a.only and path.is_file() else {}   # --only keeps the other entry
+    for name, rows_of, sets in (("chaos_scan", scan_rows, []), ("chaos_basins", basin_rows, a.sets)):
+        if a.only and not name.endswith(a.only):
+            continue
+        cfg = effective_config(name, quick=a.quick, sets=sets)
+        rows, steps = rows_of(cfg, a.sample)
+        scheme = SCHEMES[cfg["numerics"]["scheme"]]
+        before, cpu_before = bs.bare_ns_per_step(exe, rows, scheme, a.workers)
+        t0 = time.perf_counter()
+        res = run_study(name, quick=a.quick, out=a.out, workers=a.workers, fmu=fmu, sets=sets, progress=False)
+        wall = time.perf_counter() - t0
+        after, cpu_after = bs.bare_ns_per_step(exe, rows, scheme, a.workers)
+        task_cpu = sum(v.get("task_cpu_s", 0.0) for v in res.summary.values() if isinstance(v, dict))
+        if name == "chaos_scan":     # the scan's own time (the study also refines, checks, draws)
+            study_wall, wall, task_cpu = wall, res.summary["scan_wall_s"], res.summary["scan_task_cpu_s"]
+        else:
+            study_wall = wall
+        ns = min(before, after)
+        limit = steps * ns * 1e-9 / a.workers
+        key = name if name == "chaos_scan" else f"{name}:{','.join(cfg['cases'])}"
+        report[key] = {"wall_s": wall, "study_wall_s": study_wall, "internal_steps": steps, "bare_ns_per_step_before": before,
+                        "bare_ns_per_step_after": after, "limit_s": limit, "ratio_to_limit": wall / limit,
+                        "workers": a.workers, "scheme": cfg["numerics"]["scheme"],
+                        "steps_per_period": ({c: case_steps(cfg, c) for c in cfg["cases"]} if "cases" in cfg
+                                             else cfg["numerics"]["steps_per_period"]), "summary": res.summary,
+                        "bare_cpu_ns_per_step": 0.5 * (cpu_before + cpu_after), "task_cpu_s": task_cpu or None,
+                        "cpu_ratio_tasks_to_bare": (task_cpu / (steps * 0.5 * (cpu_before + cpu_after) * 1e-9)
+                                                    if task_cpu else None),
+                        "load_average": os.getloadavg()}
+        print(f"{name}: wall {wall:.1f} s, {steps:.3e} internal steps, bare {before:.1f} / {after:.1f} ns/step "
+              f"(before / after), limit {limit:.1f} s, ratio {wall / limit:.2f}", flush=True)
+    path.write_text(json.dumps(report, indent=2, default=float) + "\n")
+    print(f"report: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,207 @@
+"""Batches of chaos runs on Dask workers (or in this process): one FMU instance per process.
+
+The tasks take plain arrays and dicts and return arrays, so a chunk is one Dask task. The FMU is
+sent to the workers as bytes (written once per machine to a temp file named by its hash), exactly
+as the sweep engine does, so an external scheduler works too.
+"""
+
+from __future__ import annotations
+
+import atexit
+import hashlib
+import logging
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..fmu import OscillatorFMU
+from .attractors import period_of
+from .lyapunov import benettin
+from .maps import FMUMap, NDParams
+
+__all__ = ["fmu_for", "lyapunov_rows", "orbit_tails", "transient_rows", "map_chunks", "concat", "ChunkStats"]
+
+_FMUS: dict[str, OscillatorFMU] = {}
+
+
+def _materialise(fmu: str | bytes) -> str:
+    if isinstance(fmu, str):
+        return fmu
+    digest = hashlib.sha256(fmu).hexdigest()[:16]
+    path = Path(tempfile.gettempdir()) / f"dfo-chaos-{digest}.fmu"
+    if not path.is_file():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_bytes(fmu)
+        os.replace(tmp, path)
+    return str(path)
+
+
+@atexit.register
+def _close_all() -> None:
+    while _FMUS:
+        _, f = _FMUS.popitem()
+        try:
+            f.close()
+        except Exception:  # noqa: BLE001 - best effort at exit
+            pass
+
+
+def fmu_for(fmu: str | bytes) -> OscillatorFMU:
+    """This process's FMU instance for ``fmu`` (a path or the FMU's bytes), loaded on first use."""
+    key = fmu if isinstance(fmu, str) else hashlib.sha256(fmu).hexdigest()
+    f = _FMUS.get(key)
+    if f is None:
+        f = _FMUS[key] = OscillatorFMU(_materialise(fmu))
+    return f
+
+
+def _map(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, Any], chi: float) -> FMUMap:
+    return FMUMap(fmu_for(fmu), NDParams.from_mapping(nd, chi=chi), int(num["steps_per_period"]),
+                  str(num["scheme"]), float(num.get("alpha", -0.1)))
+
+
+# ---- tasks --------------------------------------------------------------------------------------
+
+def lyapunov_rows(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, Any], lyap: Mapping[str, Any],
+                  rows: np.ndarray, n_keep: int) -> dict[str, np.ndarray]:
+    """Rows (chi, z0, dz0): Benettin's exponent and the last ``n_keep`` stroboscopic points."""
+    n = rows.shape[0]
+    out = {"lyapunov": np.empty(n), "stderr": np.empty(n), "half_difference": np.empty(n),
+           "collapses": np.empty(n), "strobe": np.empty((n, n_keep, 2)), "cpu": np.zeros(1)}
+    c0 = time.process_time()
+    for i, (chi, z0, dz0) in enumerate(rows):
+        r = benettin(_map(fmu, nd, num, float(chi)), float(z0), float(dz0), periods=int(lyap["periods"]),
+                     transient=int(lyap["transient"]), d0=float(lyap["d0"]), renorm=int(lyap["renorm"]))
+        out["lyapunov"][i], out["stderr"][i] = r.lyapunov_per_period, r.stderr_per_period
+        out["half_difference"][i], out["collapses"][i] = r.half_difference, r.collapses
+        out["strobe"][i] = r.strobe[-n_keep:]
+    out["cpu"][0] = time.process_time() - c0
+    return out
+
+
+def orbit_tails(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, Any], chi: float,
+                ics: np.ndarray, transient: int, n_tail: int) -> dict[str, np.ndarray]:
+    """Initial conditions (z0, dz0): stroboscopic points transient .. transient + n_tail - 1 of a
+    continuous run from each (nan if the FMU failed)."""
+    m = _map(fmu, nd, num, chi)
+    out = np.full((ics.shape[0], n_tail, 2), np.nan)
+    c0 = time.process_time()
+    for i, (z0, dz0) in enumerate(ics):
+        try:
+            out[i] = m.orbit(float(z0), float(dz0), transient, n_tail)
+        except RuntimeError:
+            pass
+    return {"tails": out, "cpu": np.array([time.process_time() - c0])}
+
+
+def transient_rows(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, Any], chi: float,
+                   ics: np.ndarray, checkpoints: Sequence[int], tail: int, tol: float,
+                   samples_per_period: int = 100) -> dict[str, np.ndarray]:
+    """Initial conditions (z0, dz0), one continuous run each to max(checkpoints) periods: the mean
+    amplitude and asymmetry over the period ending at every checkpoint (z sampled at T/
+    ``samples_per_period``), the stroboscopic point there, and the transient length: the first
+    period from which every stroboscopic point lies within ``tol`` of the periodic orbit of the
+    last ``tail`` points (-1 if those are not periodic: no periodic attractor reached)."""
+    m = _map(fmu, nd, num, chi)
+    f, T = m.fmu, m.T
+    n_end = int(max(checkpoints))
+    cps = sorted(int(c) for c in checkpoints)
+    k_amp, k_asym = np.full((ics.shape[0], len(cps)), np.nan), np.full((ics.shape[0], len(cps)), np.nan)
+    k_pt = np.full((ics.shape[0], len(cps), 2), np.nan)
+    tlen, period = np.full(ics.shape[0], -1.0), np.full(ics.shape[0], -1.0)
+    c0 = time.process_time()
+    for i, (z0, dz0) in enumerate(ics):
+        m.start(float(z0), float(dz0))
+        strobe = np.empty((n_end + 1, 2))
+        strobe[0] = m.point()
+        j = 0
+        for k in range(1, n_end + 1):
+            if j < len(cps) and k == cps[j]:
+                zs = np.empty(samples_per_period)
+                for s in range(1, samples_per_period + 1):
+                    f.step_to((k - 1 + s / samples_per_period) * T)
+                    zs[s - 1] = f.get(("x",))["x"] / m.z_scale
+                k_amp[i, j], k_asym[i, j] = 0.5 * (zs.max() - zs.min()), 0.5 * (zs.max() + zs.min())
+                strobe[k] = m.point()
+                k_pt[i, j] = strobe[k]
+                j += 1
+            else:
+                f.step_to(k * T)
+                strobe[k] = m.point()
+        p = period_of(strobe[-tail:], tol, min(32, tail // 2))
+        period[i] = p
+        if p:
+            orbit = strobe[-p:]
+            d = np.max(np.abs(strobe[:, None, :] - orbit[None, :, :]), axis=2).min(axis=1)
+            off = np.nonzero(d > tol)[0]
+            tlen[i] = 0 if off.size == 0 else off[-1] + 1
+    return {"amplitude": k_amp, "asymmetry": k_asym, "point": k_pt, "transient": tlen, "period": period,
+            "cpu": np.array([time.process_time() - c0])}
+
+
+# ---- running chunks -----------------------------------------------------------------------------
+
+@dataclass
+class ChunkStats:
+    tasks: int
+    wall: float
+    startup: float
+    task_cpu: float
+
+
+def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunks: Sequence[tuple[Any, ...]],
+               workers: int = 0, scheduler: str | None = None, progress: bool = False,
+               desc: str = "chaos") -> tuple[list[dict[str, np.ndarray]], ChunkStats]:
+    """``func(fmu, *chunk)`` for every chunk, in order; on a LocalCluster of ``workers`` single-
+    threaded processes (or ``scheduler``), or in this process if ``workers == 0`` and no scheduler."""
+    t0 = time.perf_counter()
+    results: list[dict[str, np.ndarray] | None] = [None] * len(chunks)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(chunks), unit="chunk", desc=desc, file=sys.stderr, dynamic_ncols=True)
+    startup = 0.0
+    if workers == 0 and not scheduler:
+        for i, c in enumerate(chunks):
+            results[i] = func(str(fmu_path), *c)
+            if bar is not None:
+                bar.update(1)
+    else:
+        from distributed import Client, LocalCluster, as_completed
+
+        cluster = None
+        if scheduler:
+            client = Client(scheduler, timeout="20s")
+        else:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+            client = Client(cluster)
+        try:
+            fut_fmu = client.scatter(Path(fmu_path).read_bytes(), broadcast=True, hash=True)
+            startup = time.perf_counter() - t0
+            futures = {client.submit(func, fut_fmu, *c, pure=False): i for i, c in enumerate(chunks)}
+            for fut in as_completed(futures):
+                results[futures[fut]] = fut.result()
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    if bar is not None:
+        bar.close()
+    out = [r for r in results if r is not None]
+    cpu = float(sum(float(r["cpu"].sum()) for r in out if "cpu" in r))
+    return out, ChunkStats(len(chunks), time.perf_counter() - t0, startup, cpu)
+
+
+def concat(results: Iterable[Mapping[str, np.ndarray]], key: str) -> np.ndarray:
+    return np.concatenate([r[key] for r in results], axis=0)

@@ -1,0 +1,160 @@
+"""Is it chaos? Physics of the chaos tools (docs/chaos.md), on quick sizes.
+
+- a periodic motion (lambda 0.5, mu_s sigma 0.6, chi 1, the symmetric motion of Fig. 8/9) has a
+  negative exponent and a single stroboscopic point, the exact solution's;
+- the exponent converges under refinement of h and does not depend on d0 or on the
+  renormalisation interval;
+- the chaotic motion at chi = 0.1 has a positive exponent (~0.21 per period) that the exact
+  solution (dryfriction.exact), driven as an independent perturbed pair, reproduces;
+- basins on a quick grid: shares add to 1, and direct runs from sample points reach the attractor
+  the map gives them;
+- the CLI's JSON and its one-line errors.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dryfriction.chaos import Catalogue, ExactMap, FMUMap, NDParams, benettin, period_of
+from dryfriction.cli import main as cli_main
+from dryfriction.fmu import OscillatorFMU
+from dryfriction.studies import run_study
+from dryfriction.sweep import read_netcdf
+
+FIG89 = dict(lam=0.5, mu_s_sigma=0.6)
+CHAOTIC = NDParams(0.5, 0.6, 0.1)      # established by the chaos_scan study: exponent ~ +0.21 / period
+PERIODIC = NDParams(0.5, 0.6, 1.0)     # symmetric period-1 motion for every initial condition
+
+
+def test_periodic_motion_negative_exponent_single_point(fmu: OscillatorFMU) -> None:
+    r = benettin(FMUMap(fmu, PERIODIC), 0.7, -0.4, periods=200, transient=50)
+    assert r.lyapunov_per_period < -1.0                       # strongly attracting
+    assert r.lyapunov_per_period + 5 * r.stderr_per_period < 0
+    assert r.lyapunov_per_second == pytest.approx(r.lyapunov_per_period / r.period_s)
+    tail = r.strobe[-40:]
+    assert period_of(tail, 1e-9) == 1                          # a single stroboscopic point
+    # the exact solution shows the same motion periodic, with the same point (second order in h)
+    ex = ExactMap(PERIODIC).orbit(0.7, -0.4, 60, 4)
+    assert np.max(np.abs(ex - ex[0])) < 1e-9
+    assert np.max(np.abs(tail[-1] - ex[-1])) < 1e-4
+
+
+def test_exponent_converges_under_h(fmu: OscillatorFMU) -> None:
+    # periodic, asymmetric motion (chi 0.4): deterministic exponent, converges as h^2
+    lam = {n: benettin(FMUMap(fmu, NDParams(0.5, 0.6, 0.4), n), 0.0, 0.0, periods=100, transient=100)
+           .lyapunov_per_period for n in (1000, 2000, 4000)}
+    assert lam[1000] < -0.5
+    assert abs(lam[2000] - lam[4000]) < 1e-2 * abs(lam[4000])
+    assert abs(lam[2000] - lam[4000]) < 0.6 * abs(lam[1000] - lam[4000]) + 1e-6
+    # chaotic motion: trajectories part, but the exponent agrees within 0.02 per period (10 %)
+    chaos = [benettin(FMUMap(fmu, CHAOTIC, n), 0.0, 0.0, periods=1000, transient=100) for n in (1000, 2000, 4000)]
+    vals = np.array([c.lyapunov_per_period for c in chaos])
+    assert np.all(vals > 0.15)
+    assert vals.max() - vals.min() < 0.02
+
+
+def test_exponent_independent_of_d0_and_renormalisation(fmu: OscillatorFMU) -> None:
+    m = FMUMap(fmu, CHAOTIC)
+    by_d0 = [benettin(m, 0.0, 0.0, periods=600, transient=100, d0=d0).lyapunov_per_period
+             for d0 in (1e-6, 1e-8, 1e-10)]
+    assert max(by_d0) - min(by_d0) < 0.005
+    by_renorm = [benettin(m, 0.0, 0.0, periods=600, transient=100, renorm=k).lyapunov_per_period for k in (1, 2, 5)]
+    assert min(by_renorm) > 0.15
+    assert max(by_renorm) - min(by_renorm) < 0.02
+
+
+def test_chaotic_exponent_reproduced_by_exact_solution(fmu: OscillatorFMU) -> None:
+    fm = benettin(FMUMap(fmu, CHAOTIC, 2000), 0.0, 0.0, periods=1000, transient=100)
+    ex = benettin(ExactMap(CHAOTIC), 0.0, 0.0, periods=250, transient=50)
+    assert fm.lyapunov_per_period - 3 * fm.stderr_per_period > 0.1
+    assert ex.lyapunov_per_period - 3 * ex.stderr_per_period > 0.1      # chaos in the exact solution itself
+    assert period_of(ex.strobe[-64:], 1e-6) == 0
+    assert abs(fm.lyapunov_per_period - ex.lyapunov_per_period) < 0.03 + 2 * ex.stderr_per_period
+
+
+def test_catalogue_labels_mirror_orbits_and_chaos() -> None:
+    cat = Catalogue(tol=1e-4)
+    a = np.tile([[0.8, 0.1], [1.1, -0.2]], (8, 1))
+    b = np.tile([[1.1, -0.2], [0.8, 0.1]], (8, 1)) + 1e-6      # same orbit, other phase
+    c = np.tile([[1.84, 0.3], [1.85, 0.2]], (8, 1))
+    rng = np.random.default_rng(0)
+    assert [cat.label(x, 1e-5) for x in (a, b, c, rng.normal(size=(16, 2)))] == [0, 0, 1, 2]
+    assert [x.period for x in cat.attractors] == [2, 2, 0]
+
+
+def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: OscillatorFMU) -> None:
+    out = run_study("chaos_basins", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
+                    sets=['cases=["subharmonic", "end_of_chaos"]', "grid.z0.num=9", "grid.dz0.num=9"])
+    for case in ("subharmonic", "end_of_chaos"):
+        ds = read_netcdf(out.out_dir / f"chaos_basins_{case}.nc")
+        assert ds.attrs["scheme"] == "located"
+        assert float(ds.share.sum()) == pytest.approx(1.0, abs=1e-12)
+        assert ds.share.size == 2 and float(ds.share.min()) > 0.1          # two coexisting motions
+        lab = ds.attractor.values
+        counts = np.bincount(lab.ravel(), minlength=ds.share.size) / lab.size
+        np.testing.assert_allclose(counts, ds.share.values)
+        t = run_study.__globals__["effective_config"]("chaos_basins", quick=True)[case]
+        m = FMUMap(fmu, NDParams(t["lam"], t["mu_s_sigma"], t["chi"], t["zeta"]), int(ds.attrs["steps_per_period"]))
+        for i, j in ((0, 0), (2, 7), (4, 4), (6, 1), (8, 8)):
+            tail = m.orbit(float(ds.z0[i]), float(ds.dz0[j]), t["transient"], t["tail"])
+            k = int(lab[i, j])
+            p = int(ds.attractor_period[k])
+            assert period_of(tail, 1e-6) == p
+            pts = np.column_stack([ds.attractor_z[k, :p], ds.attractor_dz[k, :p]])
+            assert np.max(np.abs(tail[-p:, None, :] - pts[None]), axis=2).min(axis=1).max() < 1e-4
+
+
+def test_scan_quick_verdict(tmp_path: Path, fmu_path: Path) -> None:
+    out = run_study("chaos_scan", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
+    s = out.summary
+    assert s["scheme"] == "located"
+    assert 0.14 < s["chi_chaos_onset"] < 0.26 and s["chi_chaos_onset_uncertainty"] < 0.02
+    ds = read_netcdf(out.out_dir / "chaos_scan.nc")
+    chaotic = ((ds.lyapunov_per_period.values > 0) & (ds.period.values == 0)).all(axis=1)
+    lyap, period, chi = ds.lyapunov_per_period.values, ds.period.values, ds.chi.values
+    assert chaotic[chi < 0.15].all()
+    assert (lyap[chi > 0.25] < 0).all()
+    # periodic, except close to a bifurcation where the exponent nears 0 and 150 periods do not settle
+    assert (period[chi > 0.25][lyap[chi > 0.25] < -0.1] > 0).all()
+    assert ds.attrs["scheme"] == "located"
+
+
+def test_transients_quick(tmp_path: Path, fmu_path: Path) -> None:
+    out = run_study("chaos_transients", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
+    ds = read_netcdf(out.out_dir / "chaos_transients.nc")
+    settled = ds.settled_share.sel(checkpoint=300).values
+    chi = ds.chi.values
+    assert np.all(settled[chi < 0.15] == 0)            # chaotic: no initial condition settles
+    assert np.all(settled[chi > 0.25] == 1)            # the asymmetric pair: all settle
+    spread = ds.amplitude_spread.values
+    # where all settle, the spread over the ICs falls from the 30-period value to the attractors'
+    assert np.all(spread[chi > 0.25, -1] <= spread[chi > 0.25, 0] + 1e-9)
+
+
+def test_lyapunov_cli_json_and_errors(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli_main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", "--chi", "1.0", "--z0", "0.3",
+                     "--dz0", "-0.2", "--periods", "50", "--transient", "20", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["periods"] == 50 and d["scheme"] == "located" and d["stroboscopic_period"] == 1
+    assert d["lyapunov_per_period"] < -1.0
+    assert d["lyapunov_per_second"] == pytest.approx(d["lyapunov_per_period"] / d["period_s"])
+    for bad in (["--chi", "-1"], ["--chi", "0.5", "--d0", "0.5"], ["--chi", "0.5", "--scheme", "euler"],
+                ["--chi", "nan"], ["--chi", "0.5", "--periods", "40", "--renorm", "50"]):
+        assert cli_main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", *bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("dryfriction: error:") and "\n" not in err
+
+
+def test_basins_on_dask_equal_in_process(tmp_path: Path, fmu_path: Path) -> None:
+    """The Dask path (2 worker processes, FMU sent as bytes) gives the same labels as this process."""
+    sets = ['cases=["subharmonic"]', "subharmonic.grid_num=7", "subharmonic.transient=60", "numerics.chunk_runs=10"]
+    a = run_study("chaos_basins", quick=True, out=tmp_path / "a", fmu=fmu_path, workers=0, progress=False, sets=sets)
+    b = run_study("chaos_basins", quick=True, out=tmp_path / "b", fmu=fmu_path, workers=2, progress=False, sets=sets)
+    da = read_netcdf(a.out_dir / "chaos_basins_subharmonic.nc")
+    db = read_netcdf(b.out_dir / "chaos_basins_subharmonic.nc")
+    np.testing.assert_array_equal(da.attractor.values, db.attractor.values)
+    np.testing.assert_array_equal(da.final_z.values, db.final_z.values)          # bit for bit
