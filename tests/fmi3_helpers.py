@@ -4,6 +4,7 @@ description's Scheme enumeration, and parameter sets."""
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import tempfile
@@ -15,8 +16,9 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 ROOT = Path(__file__).resolve().parents[1]
-FMU2 = ROOT / "build" / "DryFrictionOscillator.fmu"
-FMU3 = ROOT / "build" / "fmi3" / "DryFrictionOscillator.fmu"
+# DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
+FMU2 = Path(os.environ.get("DFO_FMU") or ROOT / "build" / "DryFrictionOscillator.fmu")
+FMU3 = Path(os.environ.get("DFO_FMU3") or ROOT / "build" / "fmi3" / "DryFrictionOscillator.fmu")
 SWITCH_LOG = re.compile(r"t = ([-+0-9.eE]+): (backward slip|stick|forward slip) -> (backward slip|stick|forward slip)")
 MODE_OF = {"backward slip": -1, "stick": 0, "forward slip": 1}
 
