@@ -298,10 +298,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         default: {
             const int on = u8(r) & 1;
             st = fmi3SetDebugLogging(X.c, on, 0, NULL);
-            if (st == fmi3OK) X.silenced = 0; /* errors are logged whatever the categories */
+            if (st == fmi3OK) X.silenced = !on; /* all categories, logStatusError with them */
             break;
         }
         }
+        if (getenv("FUZZ_TRACE")) fprintf(stderr, "call %d: op %u -> status %d (t = %.17g)\n", call, op, (int)st, X.t);
         after(&X, st, before);
         if (X.c) check_outputs(&X);
     }
