@@ -2,7 +2,7 @@
  * phase, start values, get/set through the variable table generated from modelDescription.xml
  * (model_vars.h), initialisation, doStep, FMU states and their serialisation, logging.
  *
- * No FMI types here. An FMI glue (fmi2_cs.c today, an FMI 3.0 one later) checks its arguments and
+ * No FMI types here. An FMI glue (fmi2_cs.c, fmi3_cs.c) checks its arguments and
  * the phase in which each of its functions may be called, calls the core, and maps dfo_inst_status
  * to its own status codes. The host's memory and logger reach the core through dfo_host.
  *
