@@ -67,7 +67,7 @@ def test_plain_stepping_is_fmi2_bit_for_bit(run) -> None:
             assert same_bits(a, b), (option, dict(zip(OUTPUTS, zip(a, b))))
         if option == "intermediate":
             assert updates == sorted(updates)
-            assert all(0.0 < x < t for x in updates)
+            assert all(0.0 < x <= t for x in updates)  # a switch on the last point is reported there
     finally:
         ref.close()
         fmu.close()
