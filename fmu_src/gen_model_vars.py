@@ -1,6 +1,8 @@
 """Generate model_vars.h from modelDescription.xml, the single source of truth for the variables.
 
 Usage: python gen_model_vars.py modelDescription.xml model_vars.h
+       python gen_model_vars.py modelDescription.xml fmi3/modelDescription.xml --fmi3
+       python gen_model_vars.py modelDescription.xml fmi3/buildDescription.xml --fmi3-build
 
 Three stages, so that other views of the same model (an FMI 3.0 model description) can be added
 as further emitters without touching the parser:
@@ -18,6 +20,14 @@ as further emitters without touching the parser:
    name, or an output id the core switches on; start, min, max, whether it must be a normal
    number, the enumeration items and the valid range as text for error messages).
 
+4. ``emit_fmi3_model_description`` writes the FMI 3.0 model description of the same model: the same
+   names, value references, units, ranges, start values and descriptions in FMI 3.0 types (Float64,
+   Int32, Enumeration, Boolean), plus the independent variable ``time`` (value reference
+   ``TIME_VR``), the FMI 3.0 co-simulation capabilities, and the output dependencies by value
+   reference; ``emit_fmi3_build_description`` the sources' buildDescription.xml. What the neutral
+   model does not carry (units, default experiment, metadata, vendor annotations) is read from the
+   same source file.
+
 Standard library only.
 """
 
@@ -30,6 +40,8 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
+TIME_VR = 0  # the FMI 3.0 independent variable `time` (no variable of the source may use it)
+FMI3_GLUE, FMI2_GLUE = "fmi3_cs.c", "fmi2_cs.c"
 DBL_MIN = sys.float_info.min  # the smallest positive normal double
 INT_MIN, INT_MAX = -(2**31), 2**31 - 1
 
@@ -176,6 +188,8 @@ def check(model: Model) -> None:
             raise ModelError(f"variable {v.name}: duplicate name or value reference {v.vr}")
         names.add(v.name)
         vrs.add(v.vr)
+        if v.vr == TIME_VR or v.name == "time":
+            raise ModelError(f"variable {v.name}: name time and value reference {TIME_VR} are FMI 3.0's time")
         if v.dimensions:
             raise ModelError(f"variable {v.name}: arrays are not supported by the C emitter yet")
         if v.causality not in ("parameter", "calculatedParameter", "input", "output"):
@@ -257,6 +271,7 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
         "",
         f'#define MODEL_GUID "{model.guid}"',
         f'#define MODEL_IDENTIFIER "{model.identifier}"',
+        f"#define DFO_VR_TIME {TIME_VR}u /* FMI 3.0: the independent variable time */",
         "",
         "/* value references and start values */",
     ]
@@ -349,12 +364,146 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     return "\n".join(L)
 
 
-EMITTERS = {".h": emit_c_header}
+# ------------------------------------------------------------------------- FMI 3.0 emitters
+
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
+# FMI 2.0 co-simulation attributes kept under their FMI 3.0 names
+FMI3_CS_KEPT = {"canHandleVariableCommunicationStepSize": "canHandleVariableCommunicationStepSize",
+                "canBeInstantiatedOnlyOncePerProcess": "canBeInstantiatedOnlyOncePerProcess",
+                "canGetAndSetFMUstate": "canGetAndSetFMUState", "canSerializeFMUstate": "canSerializeFMUState",
+                "providesDirectionalDerivative": "providesDirectionalDerivatives"}
+# what the FMI 3.0 glue (fmi3_cs.c) adds: events, early return, intermediate update
+FMI3_CS_EVENTS = {"hasEventMode": "true", "mightReturnEarlyFromDoStep": "true",
+                  "canReturnEarlyAfterIntermediateUpdate": "true", "providesIntermediateUpdate": "true",
+                  "providesAdjointDerivatives": "false", "maxOutputDerivativeOrder": "0"}
+ROOT_ATTRIBUTES = ("modelName", "description", "version", "author", "copyright", "license", "generationTool",
+                   "generationDateAndTime", "variableNamingConvention")
+
+
+def _xml_number(x: float | int | bool, kind: str) -> str:
+    if kind == "Boolean":
+        return "true" if x else "false"
+    if kind in ("Integer", "Enumeration"):
+        return str(int(x))
+    return repr(float(x))
+
+
+def _attrs(pairs: list[tuple[str, str | None]]) -> str:
+    from xml.sax.saxutils import quoteattr
+    return "".join(f" {k}={quoteattr(v)}" for k, v in pairs if v is not None)
+
+
+def _source_files(root: ET.Element) -> list[str]:
+    files = [f.get("name") for f in root.iterfind("CoSimulation/SourceFiles/File")]
+    return [FMI3_GLUE if f == FMI2_GLUE else f for f in files]
+
+
+def emit_fmi3_model_description(model: Model, source: Path) -> str:
+    root = ET.parse(source).getroot()
+    cs = root.find("CoSimulation")
+    L = ['<?xml version="1.0" encoding="UTF-8"?>',
+         f"<!-- Generated from {source.name} by fmu_src/gen_model_vars.py. Do not edit. -->",
+         "<fmiModelDescription" + _attrs([("fmiVersion", "3.0")] + [(a, root.get(a)) for a in ROOT_ATTRIBUTES[:1]]
+                                         + [("instantiationToken", model.guid)]
+                                         + [(a, root.get(a)) for a in ROOT_ATTRIBUTES[1:]]) + ">",
+         "",
+         "  <CoSimulation" + _attrs([("modelIdentifier", model.identifier)]
+                                    + [(new, cs.get(old)) for old, new in FMI3_CS_KEPT.items()]
+                                    + list(FMI3_CS_EVENTS.items())) + "/>",
+         ""]
+    units = root.find("UnitDefinitions")
+    if units is not None:
+        L.append("  <UnitDefinitions>")
+        for u in units.iterfind("Unit"):
+            b = u.find("BaseUnit")
+            base = "" if b is None else "<BaseUnit" + _attrs(sorted(b.attrib.items())) + "/>"
+            L.append("    <Unit" + _attrs([("name", u.get("name"))]) + ">" + base + "</Unit>")
+        L += ["  </UnitDefinitions>", ""]
+    if model.enumerations:
+        L.append("  <TypeDefinitions>")
+        for st in root.iterfind("TypeDefinitions/SimpleType"):
+            name = st.get("name")
+            if name not in model.enumerations:
+                continue
+            L.append("    <EnumerationType" + _attrs([("name", name), ("description", st.get("description"))]) + ">")
+            for it in model.enumerations[name]:
+                L.append("      <Item" + _attrs([("name", it.name), ("value", str(it.value)),
+                                                  ("description", it.description or None)]) + "/>")
+            L.append("    </EnumerationType>")
+        L += ["  </TypeDefinitions>", ""]
+    if model.log_categories:
+        L.append("  <LogCategories>")
+        L += ["    <Category" + _attrs([("name", n), ("description", d or None)]) + "/>" for n, d in model.log_categories]
+        L += ["  </LogCategories>", ""]
+    de = root.find("DefaultExperiment")
+    if de is not None:
+        L += ["  <DefaultExperiment" + _attrs(list(de.attrib.items())) + "/>", ""]
+    L.append("  <ModelVariables>")
+    L.append("    <Float64" + _attrs([("name", "time"), ("valueReference", str(TIME_VR)), ("causality", "independent"),
+                                      ("variability", "continuous"), ("description", "simulation time"),
+                                      ("unit", "s")]) + "/>")
+    for v in model.variables:
+        kind = FMI3_TYPES[v.type]
+        pairs: list[tuple[str, str | None]] = [
+            ("name", v.name), ("valueReference", str(v.vr)), ("description", v.description or None),
+            ("causality", v.causality), ("variability", v.variability), ("initial", v.initial)]
+        if kind == "Enumeration":
+            pairs.append(("declaredType", v.declared_type))
+        if kind in ("Float64", "Int32"):
+            pairs.append(("unit", v.unit))
+            src = next(sv for sv in root.iterfind("ModelVariables/ScalarVariable") if sv.get("name") == v.name)
+            el = next(iter(src))
+            # the bounds as the source writes them (Int32 outputs without bounds stay without)
+            pairs += [("min", el.get("min")), ("max", el.get("max"))]
+        if v.start is not None:
+            pairs.append(("start", _xml_number(v.start, v.type)))
+        L.append(f"    <{kind}" + _attrs(pairs) + "/>")
+    L += ["  </ModelVariables>", "", "  <ModelStructure>"]
+    by_name = {v.name: v for v in model.variables}
+    for v in model.variables:
+        if v.causality == "output":
+            deps = None if v.dependencies is None else " ".join(str(by_name[d].vr) for d in v.dependencies)
+            L.append("    <Output" + _attrs([("valueReference", str(v.vr)), ("dependencies", deps)]) + "/>")
+    idx_to_vr = {i: v.vr for i, v in enumerate(model.variables, start=1)}
+    for u in root.iterfind("ModelStructure/InitialUnknowns/Unknown"):
+        d = u.get("dependencies")
+        deps = None if d is None else " ".join(str(idx_to_vr[int(i)]) for i in d.split())
+        L.append("    <InitialUnknown" + _attrs([("valueReference", str(idx_to_vr[int(u.get("index"))])),
+                                                 ("dependencies", deps)]) + "/>")
+    L += ["  </ModelStructure>", ""]
+    # FMI 2.0's VendorAnnotations/Tool are FMI 3.0's Annotations/Annotation (after the structure)
+    tools = root.findall("VendorAnnotations/Tool")
+    if tools:
+        L.append("  <Annotations>")
+        for tool in tools:
+            L.append("    <Annotation" + _attrs([("type", tool.get("name"))]) + ">")
+            for child in tool:
+                L.append("      " + ET.tostring(child, encoding="unicode").strip())
+            L.append("    </Annotation>")
+        L += ["  </Annotations>", ""]
+    L += ["</fmiModelDescription>", ""]
+    return "\n".join(L)
+
+
+def emit_fmi3_build_description(model: Model, source: Path) -> str:
+    root = ET.parse(source).getroot()
+    L = ['<?xml version="1.0" encoding="UTF-8"?>',
+         f"<!-- Generated from {source.name} by fmu_src/gen_model_vars.py. Do not edit. -->",
+         '<fmiBuildDescription fmiVersion="3.0">',
+         "  <BuildConfiguration" + _attrs([("modelIdentifier", model.identifier)]) + ">",
+         '    <SourceFileSet language="C99">']
+    L += ["      <SourceFile" + _attrs([("name", f)]) + "/>" for f in _source_files(root)]
+    L += ["    </SourceFileSet>", "  </BuildConfiguration>", "</fmiBuildDescription>", ""]
+    return "\n".join(L)
+
+
+EMITTERS = {"--header": lambda m, src: emit_c_header(m, src.name), "--fmi3": emit_fmi3_model_description,
+            "--fmi3-build": emit_fmi3_build_description}
 
 
 def main(argv: list[str]) -> int:
-    if len(argv) != 3:
-        print("usage: gen_model_vars.py modelDescription.xml model_vars.h", file=sys.stderr)
+    if len(argv) not in (3, 4) or (len(argv) == 4 and argv[3] not in EMITTERS):
+        print("usage: gen_model_vars.py modelDescription.xml OUT [--header|--fmi3|--fmi3-build]", file=sys.stderr)
         return 2
     try:
         model = parse(Path(argv[1]))
@@ -362,10 +511,12 @@ def main(argv: list[str]) -> int:
         print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
         return 1
     out = Path(argv[2])
-    if out.suffix not in EMITTERS:
-        print(f"gen_model_vars: no emitter for {out.name} (known: {', '.join(EMITTERS)})", file=sys.stderr)
+    kind = argv[3] if len(argv) == 4 else "--header"
+    if kind == "--header" and out.suffix != ".h":
+        print(f"gen_model_vars: no emitter for {out.name} (a C header .h, or give --fmi3 / --fmi3-build)",
+              file=sys.stderr)
         return 2
-    text = EMITTERS[out.suffix](model, Path(argv[1]).name)
+    text = EMITTERS[kind](model, Path(argv[1]))
     if not out.exists() or out.read_text() != text:
         out.write_text(text)
     return 0

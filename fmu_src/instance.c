@@ -26,7 +26,7 @@ typedef char dfo_static_assert_warn_bits[DFO_NUM_OUTS <= 32 ? 1 : -1];
 #define MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take */
 #define STATE_MAGIC 0x444650534d555354ULL /* "DFPSMUST" */
 #define SERIAL_MAGIC "DFOSTATE"
-#define SERIAL_VERSION 2u
+#define SERIAL_VERSION 3u
 
 typedef struct {
     uint64_t magic;
@@ -91,6 +91,7 @@ const char *dfo_phase_name(dfo_phase p)
     case DFO_PHASE_STEP: return "step mode";
     case DFO_PHASE_TERMINATED: return "terminated";
     case DFO_PHASE_ERROR: return "error";
+    case DFO_PHASE_EVENT: return "event mode";
     }
     return "unknown";
 }
@@ -166,7 +167,9 @@ static int settable(const dfo_instance *in, const char *fn, const dfo_var_info *
 {
     const dfo_phase ph = in->v.phase;
     if (var->causality == DFO_PARAMETER && (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT))) return 1;
-    if (var->causality == DFO_INPUT && (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT | DFO_PHASE_STEP))) return 1;
+    if (var->causality == DFO_INPUT &&
+        (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT | DFO_PHASE_STEP | DFO_PHASE_EVENT)))
+        return 1;
     if (var->causality == DFO_PARAMETER)
         dfo_inst_fail(in, "%s: variable %s (value reference %u) is a fixed parameter and cannot be set in %s.", fn,
                       var->name, var->vr, dfo_phase_name(ph));
@@ -253,6 +256,16 @@ static double acceleration_now(const dfo_values *v)
     return dfo_acceleration(&v->M, &v->u, &s);
 }
 
+/* A pending event's left limit: the state at the switch in the mode before it, with that mode's
+ * friction force (kinetic -from mu_k N; stuck, the static force clamped to the breakaway limit). */
+static dfo_state left_limit(const dfo_values *v)
+{
+    dfo_state s = v->s;
+    s.mode = v->event_from;
+    s.F = dfo_friction_force(&v->M, &v->u, &s);
+    return s;
+}
+
 static int needs_observe(int id)
 {
     return id == DFO_OUT_x_max || id == DFO_OUT_x_min || id == DFO_OUT_stick_fraction ||
@@ -276,6 +289,10 @@ static double output_real(const dfo_values *v, int id)
 {
     const dfo_state *s = &v->s;
     const int seen = v->p.observe && s->observed;
+    if (v->event_pending && (id == DFO_OUT_a || id == DFO_OUT_F_friction)) {
+        const dfo_state left = left_limit(v);
+        return id == DFO_OUT_a ? dfo_acceleration(&v->M, &v->u, &left) : left.F;
+    }
     switch (id) {
     case DFO_OUT_x: return s->X;
     case DFO_OUT_v: return s->V;
@@ -292,7 +309,7 @@ static double output_real(const dfo_values *v, int id)
 static int output_int(const dfo_values *v, int id)
 {
     switch (id) {
-    case DFO_OUT_mode: return v->s.mode;
+    case DFO_OUT_mode: return v->event_pending ? v->event_from : v->s.mode;
     case DFO_OUT_transitions: return v->p.observe ? (int)v->s.transitions : 0;
     case DFO_OUT_effects: return v->effects;
     default: return 0;
@@ -470,8 +487,8 @@ static dfo_status advance_to_switch(dfo_instance *in, double t_target)
     return DFO_OK;
 }
 
-dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
-                                 double *t_reached)
+/* The checks of a doStep's arguments, shared by both FMI versions; *t_target = tc + dt. */
+static dfo_inst_status check_step(dfo_instance *in, const char *fn, double tc, double dt, double *t_target_out)
 {
     dfo_values *v = &in->v;
     const double t = v->time;
@@ -496,6 +513,30 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
         return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
                              "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
                              MAX_STEPS_PER_CALL, v->p.h);
+    *t_target_out = t_target;
+    return DFO_INST_OK;
+}
+
+/* A failed step: the outputs stay those of the last good state, the instance is in error. */
+static dfo_inst_status step_failed(dfo_instance *in, const char *fn, const dfo_state *before, const dfo_state *failed,
+                                   dfo_status st)
+{
+    dfo_values *v = &in->v;
+    const double t = v->time;
+    v->s = *before;
+    v->phase = DFO_PHASE_ERROR;
+    return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The "
+                         "FMU keeps the state at t = %.17g; reset it or restore an earlier FMU state.", fn, t,
+                         failed->t, dfo_status_text(st), failed->X, failed->V, t);
+}
+
+dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
+                                 double *t_reached)
+{
+    dfo_values *v = &in->v;
+    double t_target = 0.0;
+    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    if (chk != DFO_INST_OK) return chk;
     const dfo_state before = v->s;
     dfo_status st;
     if (flags & DFO_STEP_STOP_AT_SWITCH) {
@@ -506,11 +547,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     }
     if (st != DFO_OK) {
         const dfo_state failed = v->s;
-        v->s = before; /* the outputs stay those of the last good state */
-        v->phase = DFO_PHASE_ERROR;
-        return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The "
-                             "FMU keeps the state at t = %.17g; reset it or restore an earlier FMU state.", fn, t,
-                             failed.t, dfo_status_text(st), failed.X, failed.V, t);
+        return step_failed(in, fn, &before, &failed, st);
     }
     /* the host's time: the target (the stepper may stand on a grid point within its snap tolerance
      * of it), or where an early return stopped short of it */
@@ -520,6 +557,140 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     v->u_used = v->u;
     if (t_reached) *t_reached = v->time;
     return DFO_INST_OK;
+}
+
+/* ---- FMI 3.0: stepping with events --------------------------------------------------------------
+ *
+ * A step with events is computed as the plain step (one dfo_advance to the target, the switches
+ * recorded), then each switch strictly inside it is landed on: the same stepping from the step's
+ * start, ended at the switch time (dfo_advance to ts: the steps up to the switch are the plain
+ * step's, the last one shortened to end at ts). A located stop is found by bisection in the
+ * shortened step again and may land a few ulps later: the target is nudged by ulps until the re-run
+ * holds the switch. Should that fail, the step ends on the internal grid point after the switch. */
+
+typedef struct {
+    double t_after;  /* record the first switch after this time */
+    int count;       /* switches seen */
+    int found, from, to, index;
+    double ts;
+} switch_rec;
+
+static void record_switch(void *ctx, double t, double x, int from, int to)
+{
+    switch_rec *r = (switch_rec *)ctx;
+    (void)x;
+    if (!r->found && t > r->t_after) {
+        r->found = 1;
+        r->ts = t;
+        r->from = from;
+        r->to = to;
+        r->index = r->count;
+    }
+    r->count++;
+}
+
+/* The state just after the switch r (index r->index of the step from start), into *out. */
+static int land(const dfo_values *v, const dfo_state *start, const switch_rec *r, double t_end, dfo_state *out)
+{
+    double t = r->ts, ulp = nextafter(r->ts, INFINITY) - r->ts;
+    for (int k = 0; k < 12 && t < t_end; k++, t = r->ts + ulp, ulp *= 2.0) {
+        switch_rec check = {-INFINITY, 0, 0, 0, 0, 0, 0.0};
+        dfo_state w = *start;
+        if (dfo_advance(&v->M, &v->u, &w, t, record_switch, &check) != DFO_OK) return 0;
+        if (check.count == r->index + 1 && w.mode == r->to && w.t < t_end) {
+            *out = w;
+            return 1;
+        }
+    }
+    /* fallback: the internal grid point after the switch */
+    const double h = v->p.h;
+    const double g = start->t0 + (floor((r->ts - start->t0) / h) + 1.0) * h;
+    if (!(g < t_end)) return 0;
+    dfo_state w = *start;
+    if (dfo_advance(&v->M, &v->u, &w, g, NULL, NULL) != DFO_OK || w.mode != r->to) return 0;
+    *out = w;
+    return 1;
+}
+
+dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double tc, double dt,
+                                        const dfo_event_opts *opt, dfo_step_result *res)
+{
+    dfo_values *v = &in->v;
+    res->early = res->event = 0;
+    v->event_pending = 0; /* an event not handled in event mode is handled by the next step */
+    if (!opt->early_return && !opt->intermediate) {
+        /* events are handled inside the step: the FMI 2.0 step, bit for bit */
+        const dfo_inst_status st = dfo_inst_do_step(in, fn, tc, dt, 0, NULL);
+        res->t_reached = v->time;
+        return st;
+    }
+    double t_target = 0.0;
+    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    if (chk != DFO_INST_OK) return chk;
+    const dfo_state start = v->s;
+    const double t_start = v->time;
+    const int events_logged = in->host.log && in->log_on[DFO_LOG_EVENTS];
+    double t_after = -INFINITY;
+    for (;;) {
+        switch_rec r = {t_after, 0, 0, 0, 0, 0, 0.0};
+        dfo_state w = start;
+        const dfo_status st = dfo_advance(&v->M, &v->u, &w, t_target, record_switch, &r);
+        if (st != DFO_OK) return step_failed(in, fn, &start, &w, st);
+        dfo_state at;
+        if (r.found && r.ts < w.t && land(v, &start, &r, w.t, &at)) {
+            /* a switch inside the step: the state at it is readable during the intermediate update */
+            int stop = opt->early_return && !opt->intermediate;
+            if (opt->intermediate) {
+                v->s = at;
+                v->time = at.t;
+                stop = opt->intermediate(opt->ctx, at.t, opt->early_return) && opt->early_return;
+            }
+            if (stop) {
+                v->s = at;
+                v->time = at.t;
+                v->u_used = v->u;
+                v->event_pending = opt->event_mode;
+                v->event_from = r.from;
+                res->early = 1;
+                res->event = opt->event_mode;
+                res->t_reached = at.t;
+                if (events_logged) on_switch(in, at.t, at.X, r.from, r.to);
+                return DFO_INST_OK;
+            }
+            v->s = start;
+            v->time = t_start;
+            t_after = r.ts;
+            continue;
+        }
+        /* no switch left inside: the plain step's end. A switch on the communication point itself
+         * (the paper and consistent schemes switch on grid points) is an event there. */
+        if (r.found && opt->event_mode) {
+            v->event_pending = 1;
+            v->event_from = r.from;
+            res->event = 1;
+        }
+        if (r.found && opt->intermediate) {
+            v->s = w;
+            v->time = t_target;
+            (void)opt->intermediate(opt->ctx, t_target, 0);
+        }
+        if (events_logged) {
+            dfo_state again = start;
+            (void)dfo_advance(&v->M, &v->u, &again, t_target, on_switch, in);
+        }
+        v->s = w;
+        v->time = t_target;
+        v->u_used = v->u;
+        res->t_reached = t_target;
+        return DFO_INST_OK;
+    }
+}
+
+int dfo_inst_update_events(dfo_instance *in)
+{
+    const int pending = in->v.event_pending;
+    in->v.event_pending = 0;
+    return pending;
 }
 
 double dfo_inst_time(const dfo_instance *in) { return in->v.time; }
@@ -613,8 +784,10 @@ static const char *implausible(const dfo_values *v)
             return var->type == DFO_REAL ? "a parameter is out of range" : "an integer parameter is out of range";
     }
     if (v->phase != DFO_PHASE_INSTANTIATED && v->phase != DFO_PHASE_INIT && v->phase != DFO_PHASE_STEP &&
-        v->phase != DFO_PHASE_TERMINATED && v->phase != DFO_PHASE_ERROR)
+        v->phase != DFO_PHASE_TERMINATED && v->phase != DFO_PHASE_ERROR && v->phase != DFO_PHASE_EVENT)
         return "the life-cycle phase is invalid";
+    if ((v->event_pending != 0 && v->event_pending != 1) || v->event_from < -1 || v->event_from > 1)
+        return "the pending event is invalid";
     if (dfo_check_params(&v->p)) return "the observation window is empty";
     if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used) || !isfinite(v->start_time) || !isfinite(v->stop_time) ||
         !isfinite(v->time))
@@ -630,7 +803,7 @@ static const char *implausible(const dfo_values *v)
     if (s->t < s->t0 || s->t0 + (double)s->n * h > s->t + slack || s->t0 + (double)(s->n + 1) * h < s->t - slack)
         return "the time does not match the internal grid";
     /* once started, the host's time is the stepper's within its snap tolerance */
-    if ((v->phase & (DFO_PHASE_STEP | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR)) &&
+    if ((v->phase & (DFO_PHASE_STEP | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR | DFO_PHASE_EVENT)) &&
         fabs(v->time - s->t) > fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(v->time)) + slack)
         return "the host's time does not match the state's";
     return NULL;

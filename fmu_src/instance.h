@@ -2,7 +2,7 @@
  * phase, start values, get/set through the variable table generated from modelDescription.xml
  * (model_vars.h), initialisation, doStep, FMU states and their serialisation, logging.
  *
- * No FMI types here. An FMI glue (fmi2_cs.c today, an FMI 3.0 one later) checks its arguments and
+ * No FMI types here. An FMI glue (fmi2_cs.c, fmi3_cs.c) checks its arguments and
  * the phase in which each of its functions may be called, calls the core, and maps dfo_inst_status
  * to its own status codes. The host's memory and logger reach the core through dfo_host.
  *
@@ -27,9 +27,10 @@ typedef enum {
     DFO_PHASE_INIT = 1 << 1,       /* initialisation mode */
     DFO_PHASE_STEP = 1 << 2,       /* stepping */
     DFO_PHASE_TERMINATED = 1 << 3,
-    DFO_PHASE_ERROR = 1 << 4       /* a step failed: only reset or an FMU state recovers */
+    DFO_PHASE_ERROR = 1 << 4,      /* a step failed: only reset or an FMU state recovers */
+    DFO_PHASE_EVENT = 1 << 5       /* FMI 3.0 event mode (never reached through FMI 2.0) */
 } dfo_phase;
-#define DFO_PHASE_ANY 31
+#define DFO_PHASE_ANY 63
 
 /* What the host provides. alloc returns zeroed memory (calloc-like) or NULL; log may be NULL. */
 typedef struct {
@@ -52,6 +53,10 @@ typedef struct {
     int stop_defined;
     int effects;
     dfo_phase phase;
+    /* FMI 3.0 events: a switch the host has not yet handled in event mode. While pending, the
+     * outputs are the left limits (mode event_from, its friction force and acceleration); the state
+     * s is already the right limit. */
+    int event_pending, event_from;
 } dfo_values;
 
 typedef struct {
@@ -111,6 +116,29 @@ enum {
 };
 dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
                                  double *t_reached);
+/* ---- FMI 3.0 stepping with events (see docs/fmi3.md for the semantics) ----
+ * early_return: end the step at the first stick/slip switch strictly inside it, the state then being
+ * the one just after the switch at the time the scheme places it. event_mode: a switch at which the
+ * step ends (early or on the communication point) stays pending: the outputs are its left limits
+ * until dfo_inst_update_events. intermediate (may be NULL): called at every switch inside the step
+ * with the state at the switch readable (dfo_inst_get_*), returns 1 to request an early return
+ * (honoured only with early_return). Without early_return, event_mode and intermediate the step is
+ * dfo_inst_do_step's, bit for bit. */
+typedef struct {
+    int early_return, event_mode;
+    int (*intermediate)(void *ctx, double t, int can_return_early);
+    void *ctx;
+} dfo_event_opts;
+typedef struct {
+    double t_reached;  /* the host's time after the step */
+    int early;         /* returned before tc + dt */
+    int event;         /* an event is pending (event_mode only) */
+} dfo_step_result;
+dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double tc, double dt,
+                                        const dfo_event_opts *opt, dfo_step_result *res);
+/* Handle a pending event: the outputs become the right limits. Returns whether one was pending. */
+int dfo_inst_update_events(dfo_instance *in);
+
 /* The host's time: start time, then the end of the last successful step. */
 double dfo_inst_time(const dfo_instance *in);
 

@@ -1,0 +1,775 @@
+/* FMI 3.0 co-simulation glue for the dry-friction oscillator: the fmi3 signatures, argument checks
+ * (value references, nValues), type mapping (Float64, Int32, Enumeration as Int64, Boolean), status
+ * mapping and ONE table of the phases in which each function may be called. Everything else (life
+ * cycle, get/set through the generated variable table, doStep with its events, FMU states, logging)
+ * is the FMI-independent instance core, instance.[ch], shared with fmi2_cs.c.
+ *
+ * Events (docs/fmi3.md): every change of mode is an event. earlyReturnAllowed: fmi3DoStep returns at
+ * the first switch inside the step. eventModeUsed (with early return): eventHandlingNeeded there,
+ * the outputs are the left limits until fmi3UpdateDiscreteStates, the right limits after it. Neither:
+ * the step of the FMI 2.0 FMU, bit for bit. The intermediate-update callback is called at every
+ * switch inside a step; its earlyReturnRequested ends the step there when early return is allowed.
+ *
+ * FMI 3.0 has no memory callbacks: the instance and its FMU states are allocated with calloc. */
+#include "fmi3Functions.h"
+#include "instance.h"
+
+#include <limits.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef char dfo_static_assert_int32[sizeof(int) == sizeof(fmi3Int32) ? 1 : -1];
+
+/* ---- instance: the core plus what FMI 3.0 gives at instantiation ------------------------------ */
+
+typedef struct {
+    dfo_instance core;
+    char *name;
+    fmi3InstanceEnvironment env;
+    fmi3LogMessageCallback logger;
+    fmi3IntermediateUpdateCallback update;
+    int early_return_allowed, event_mode_used;
+    int in_update; /* inside the intermediate-update callback: only getters may be called */
+} Instance;
+
+static void *host_alloc(void *ctx, size_t n, size_t size)
+{
+    (void)ctx;
+    return calloc(n, size);
+}
+
+static void host_free(void *ctx, void *p)
+{
+    (void)ctx;
+    free(p);
+}
+
+static void host_log(void *ctx, dfo_inst_status status, const char *category, const char *message)
+{
+    const Instance *in = (const Instance *)ctx;
+    const fmi3Status st = status == DFO_INST_OK ? fmi3OK : status == DFO_INST_WARNING ? fmi3Warning : fmi3Error;
+    in->logger(in->env, st, category, message);
+}
+
+static fmi3Status status_of(dfo_inst_status st)
+{
+    switch (st) {
+    case DFO_INST_OK: return fmi3OK;
+    case DFO_INST_WARNING: return fmi3Warning;
+    case DFO_INST_ERROR: return fmi3Error;
+    }
+    return fmi3Error;
+}
+
+/* ---- the state table: in which phases each function may be called ---------------------------- */
+
+#define P_INST DFO_PHASE_INSTANTIATED
+#define P_INIT DFO_PHASE_INIT
+#define P_STEP DFO_PHASE_STEP
+#define P_EVENT DFO_PHASE_EVENT
+#define P_TERM DFO_PHASE_TERMINATED
+#define P_ERR DFO_PHASE_ERROR
+#define P_ANY DFO_PHASE_ANY
+#define P_GET (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define P_SET (P_INST | P_INIT | P_STEP | P_EVENT)
+
+#define PHASES_fmi3SetDebugLogging P_ANY
+#define PHASES_fmi3EnterInitializationMode P_INST
+#define PHASES_fmi3ExitInitializationMode P_INIT
+#define PHASES_fmi3EnterEventMode P_STEP
+#define PHASES_fmi3EnterStepMode P_EVENT
+#define PHASES_fmi3UpdateDiscreteStates P_EVENT
+#define PHASES_fmi3Terminate (P_STEP | P_EVENT | P_ERR)
+#define PHASES_fmi3Reset P_ANY
+#define PHASES_fmi3GetFloat64 P_GET
+#define PHASES_fmi3GetInt32 P_GET
+#define PHASES_fmi3GetInt64 P_GET
+#define PHASES_fmi3GetBoolean P_GET
+#define PHASES_fmi3SetFloat64 P_SET
+#define PHASES_fmi3SetInt32 P_SET
+#define PHASES_fmi3SetInt64 P_SET
+#define PHASES_fmi3SetBoolean P_SET
+#define PHASES_fmi3DoStep P_STEP
+#define PHASES_fmi3GetFMUState P_GET
+#define PHASES_fmi3SetFMUState (P_INST | P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi3FreeFMUState P_ANY
+#define PHASES_fmi3SerializedFMUStateSize P_ANY
+#define PHASES_fmi3SerializeFMUState P_ANY
+#define PHASES_fmi3DeserializeFMUState P_ANY
+#define PHASES_fmi3Unsupported P_ANY /* functions of features this FMU does not have: always an error */
+
+/* Functions a host may call from inside the intermediate-update callback. */
+#define IN_UPDATE_OK(fn) (!strncmp(fn, "fmi3Get", 7) && strcmp(fn, "fmi3GetFMUState") != 0)
+
+/* The instance is usable (non-NULL) and in one of the allowed phases; logs the call (logAll). */
+static int allowed(Instance *in, const char *fn, int phases)
+{
+    if (!in) return 0;
+    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
+    if (in->in_update && !IN_UPDATE_OK(fn)) {
+        dfo_inst_fail(&in->core, "%s must not be called from the intermediate-update callback (only getters may).",
+                      fn);
+        return 0;
+    }
+    if (in->core.v.phase & phases) return 1;
+    dfo_inst_fail(&in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core.v.phase));
+    return 0;
+}
+
+#define BEGIN(fn)                                   \
+    Instance *in = (Instance *)instance;            \
+    if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
+#define FAIL(...) ((void)dfo_inst_fail(&in->core, __VA_ARGS__), fmi3Error)
+
+/* Scalars only: nValues must equal nValueReferences; arrays non-NULL when used. */
+static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference vr[], size_t nvr, const void *value,
+                        size_t nValues)
+{
+    if (nvr > 0 && (!vr || !value)) {
+        dfo_inst_fail(&in->core, "%s: the value reference or value array is NULL.", fn);
+        return 0;
+    }
+    if (nValues != nvr) {
+        dfo_inst_fail(&in->core, "%s: nValues = %lu but %lu value references given (all variables are scalars).", fn,
+                      (unsigned long)nValues, (unsigned long)nvr);
+        return 0;
+    }
+    return 1;
+}
+
+static const dfo_var_info *var_of(unsigned int vr)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++)
+        if (DFO_VARS[i].vr == vr) return &DFO_VARS[i];
+    return NULL;
+}
+
+/* FMI 3.0 separates Int32 from Enumeration (accessed as Int64): the core has one integer kind. */
+static int check_int_kind(Instance *in, const char *fn, const fmi3ValueReference vr[], size_t nvr, int enumeration)
+{
+    for (size_t i = 0; i < nvr; i++) {
+        const dfo_var_info *var = var_of(vr[i]);
+        if (!var || var->type != DFO_INTEGER) continue; /* the core names the error */
+        if ((var->n_items > 0) != enumeration) {
+            dfo_inst_fail(&in->core, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name,
+                          vr[i], var->n_items > 0 ? "Enumeration" : "Int32", enumeration ? "Enumeration" : "Int32");
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static double host_time(const Instance *in)
+{
+    const dfo_values *v = &in->core.v;
+    return (v->phase & (P_INST | P_INIT)) ? v->start_time : dfo_inst_time(&in->core);
+}
+
+/* ---- FMI functions --------------------------------------------------------------------------- */
+
+const char *fmi3GetVersion(void) { return fmi3Version; }
+
+static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiationToken, fmi3Boolean loggingOn,
+                                fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
+                                fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
+                                fmi3IntermediateUpdateCallback update)
+{
+    Instance tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.env = env;
+    tmp.logger = logger;
+    const dfo_host tmp_host = {&tmp, host_alloc, host_free, logger ? host_log : NULL};
+    dfo_inst_init(&tmp.core, &tmp_host, instanceName ? instanceName : "?", 0);
+    if (!instanceName || !*instanceName) {
+        dfo_inst_fail(&tmp.core, "fmi3InstantiateCoSimulation: the instance name must be a non-empty string.");
+        return NULL;
+    }
+    if (!instantiationToken || strcmp(instantiationToken, MODEL_GUID) != 0) {
+        dfo_inst_fail(&tmp.core, "fmi3InstantiateCoSimulation: instantiationToken %s does not match the FMU's %s.",
+                      instantiationToken ? instantiationToken : "(null)", MODEL_GUID);
+        return NULL;
+    }
+    Instance *in = (Instance *)calloc(1, sizeof(Instance));
+    if (!in) return NULL;
+    const size_t len = strlen(instanceName) + 1;
+    in->name = (char *)calloc(len, 1);
+    if (!in->name) {
+        free(in);
+        return NULL;
+    }
+    memcpy(in->name, instanceName, len);
+    in->env = env;
+    in->logger = logger;
+    in->update = update;
+    in->event_mode_used = eventModeUsed ? 1 : 0;
+    in->early_return_allowed = earlyReturnAllowed ? 1 : 0;
+    const dfo_host host = {in, host_alloc, host_free, logger ? host_log : NULL};
+    dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0);
+    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3InstantiateCoSimulation");
+    return in;
+}
+
+fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationToken,
+                                         fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
+                                         fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
+                                         const fmi3ValueReference requiredIntermediateVariables[],
+                                         size_t nRequiredIntermediateVariables,
+                                         fmi3InstanceEnvironment instanceEnvironment,
+                                         fmi3LogMessageCallback logMessage,
+                                         fmi3IntermediateUpdateCallback intermediateUpdate)
+{
+    (void)resourcePath;
+    (void)visible;
+    (void)requiredIntermediateVariables; /* every output may be read during an intermediate update */
+    (void)nRequiredIntermediateVariables;
+    return instantiate(instanceName, instantiationToken, loggingOn, eventModeUsed, earlyReturnAllowed,
+                       instanceEnvironment, logMessage, intermediateUpdate);
+}
+
+static void refuse_instance(fmi3String instanceName, fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
+                            const char *fn)
+{
+    if (logger) {
+        char msg[160];
+        strcpy(msg, fn);
+        strcat(msg, ": this FMU supports co-simulation only.");
+        (void)instanceName;
+        logger(env, fmi3Error, "logStatusError", msg);
+    }
+}
+
+fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
+                                          fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
+                                          fmi3InstanceEnvironment instanceEnvironment,
+                                          fmi3LogMessageCallback logMessage)
+{
+    (void)instantiationToken; (void)resourcePath; (void)visible; (void)loggingOn;
+    refuse_instance(instanceName, instanceEnvironment, logMessage, "fmi3InstantiateModelExchange");
+    return NULL;
+}
+
+fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
+                                               fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
+                                               fmi3InstanceEnvironment instanceEnvironment,
+                                               fmi3LogMessageCallback logMessage, fmi3ClockUpdateCallback clockUpdate,
+                                               fmi3LockPreemptionCallback lockPreemption,
+                                               fmi3UnlockPreemptionCallback unlockPreemption)
+{
+    (void)instantiationToken; (void)resourcePath; (void)visible; (void)loggingOn;
+    (void)clockUpdate; (void)lockPreemption; (void)unlockPreemption;
+    refuse_instance(instanceName, instanceEnvironment, logMessage, "fmi3InstantiateScheduledExecution");
+    return NULL;
+}
+
+void fmi3FreeInstance(fmi3Instance instance)
+{
+    Instance *in = (Instance *)instance;
+    if (!in) return;
+    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3FreeInstance");
+    free(in->name);
+    free(in);
+}
+
+fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
+                               const fmi3String categories[])
+{
+    BEGIN(fmi3SetDebugLogging);
+    if (nCategories > 0 && !categories) return FAIL("fmi3SetDebugLogging: categories is NULL.");
+    for (size_t i = 0; i < nCategories; i++)
+        if (dfo_inst_log_category(categories[i]) < 0)
+            return FAIL("fmi3SetDebugLogging: unknown log category %s.", categories[i] ? categories[i] : "(null)");
+    if (nCategories == 0) dfo_inst_set_logging(&in->core, -1, loggingOn);
+    for (size_t i = 0; i < nCategories; i++)
+        dfo_inst_set_logging(&in->core, dfo_inst_log_category(categories[i]), loggingOn);
+    return fmi3OK;
+}
+
+fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
+                                       fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
+{
+    BEGIN(fmi3EnterInitializationMode);
+    (void)toleranceDefined;
+    (void)tolerance;
+    const dfo_inst_status st =
+        dfo_inst_setup(&in->core, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime);
+    if (st != DFO_INST_OK) return status_of(st);
+    return status_of(dfo_inst_enter_init(&in->core));
+}
+
+fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
+{
+    BEGIN(fmi3ExitInitializationMode);
+    const dfo_inst_status st = dfo_inst_exit_init(&in->core, "fmi3ExitInitializationMode");
+    /* with event mode, a co-simulation FMU starts in event mode (nothing pending: the start is
+     * consistent) */
+    if (st != DFO_INST_ERROR && in->event_mode_used) in->core.v.phase = DFO_PHASE_EVENT;
+    return status_of(st);
+}
+
+fmi3Status fmi3EnterEventMode(fmi3Instance instance)
+{
+    BEGIN(fmi3EnterEventMode);
+    if (!in->event_mode_used)
+        return FAIL("fmi3EnterEventMode: the FMU was instantiated with eventModeUsed = false.");
+    in->core.v.phase = DFO_PHASE_EVENT;
+    return fmi3OK;
+}
+
+fmi3Status fmi3EnterStepMode(fmi3Instance instance)
+{
+    BEGIN(fmi3EnterStepMode);
+    dfo_inst_update_events(&in->core); /* an event not updated is handled by entering step mode */
+    in->core.v.phase = DFO_PHASE_STEP;
+    return fmi3OK;
+}
+
+/* The mode switches and the friction force and acceleration jump with it; x and v (the continuous
+ * states) are continuous across every switch, and no further iteration is needed. */
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
+                                    fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                    fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
+                                    fmi3Float64 *nextEventTime)
+{
+    BEGIN(fmi3UpdateDiscreteStates);
+    const int was_pending = dfo_inst_update_events(&in->core);
+    if (was_pending)
+        dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, mode %d.",
+                     dfo_inst_time(&in->core), in->core.v.s.mode);
+    if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
+    if (terminateSimulation) *terminateSimulation = fmi3False;
+    if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
+    if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = fmi3False;
+    if (nextEventTimeDefined) *nextEventTimeDefined = fmi3False;
+    if (nextEventTime) *nextEventTime = 0.0;
+    return fmi3OK;
+}
+
+fmi3Status fmi3Terminate(fmi3Instance instance)
+{
+    BEGIN(fmi3Terminate);
+    dfo_inst_update_events(&in->core);
+    return status_of(dfo_inst_terminate(&in->core));
+}
+
+fmi3Status fmi3Reset(fmi3Instance instance)
+{
+    BEGIN(fmi3Reset);
+    dfo_inst_reset(&in->core);
+    return fmi3OK;
+}
+
+/* ---- variables ------------------------------------------------------------------------------- */
+
+fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
+                          size_t nValues)
+{
+    BEGIN(fmi3GetFloat64);
+    if (!check_arrays(in, "fmi3GetFloat64", vr, nvr, values, nValues)) return fmi3Error;
+    dfo_inst_status worst = DFO_INST_OK;
+    for (size_t i = 0; i < nvr; i++) {
+        if (vr[i] == DFO_VR_TIME) {
+            values[i] = host_time(in);
+            continue;
+        }
+        const dfo_inst_status st = dfo_inst_get_real(&in->core, "fmi3GetFloat64", &vr[i], 1, &values[i]);
+        if (st == DFO_INST_ERROR) return fmi3Error;
+        if (st > worst) worst = st;
+    }
+    return status_of(worst);
+}
+
+fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                          const fmi3Float64 values[], size_t nValues)
+{
+    BEGIN(fmi3SetFloat64);
+    if (!check_arrays(in, "fmi3SetFloat64", vr, nvr, values, nValues)) return fmi3Error;
+    for (size_t i = 0; i < nvr; i++)
+        if (vr[i] == DFO_VR_TIME)
+            return FAIL("fmi3SetFloat64: variable time (value reference %u) is the independent variable and cannot "
+                        "be set.", vr[i]);
+    return status_of(dfo_inst_set_real(&in->core, "fmi3SetFloat64", vr, nvr, values));
+}
+
+fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[],
+                        size_t nValues)
+{
+    BEGIN(fmi3GetInt32);
+    if (!check_arrays(in, "fmi3GetInt32", vr, nvr, values, nValues)) return fmi3Error;
+    if (!check_int_kind(in, "fmi3GetInt32", vr, nvr, 0)) return fmi3Error;
+    return status_of(dfo_inst_get_int(&in->core, "fmi3GetInt32", vr, nvr, (int *)values));
+}
+
+fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[],
+                        size_t nValues)
+{
+    BEGIN(fmi3SetInt32);
+    if (!check_arrays(in, "fmi3SetInt32", vr, nvr, values, nValues)) return fmi3Error;
+    if (!check_int_kind(in, "fmi3SetInt32", vr, nvr, 0)) return fmi3Error;
+    return status_of(dfo_inst_set_int(&in->core, "fmi3SetInt32", vr, nvr, (const int *)values));
+}
+
+#define CHUNK 64 /* Int64 and Boolean values pass through the core's int in chunks */
+
+fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int64 values[],
+                        size_t nValues)
+{
+    BEGIN(fmi3GetInt64);
+    if (!check_arrays(in, "fmi3GetInt64", vr, nvr, values, nValues)) return fmi3Error;
+    if (!check_int_kind(in, "fmi3GetInt64", vr, nvr, 1)) return fmi3Error;
+    dfo_inst_status worst = DFO_INST_OK;
+    for (size_t i0 = 0; i0 < nvr; i0 += CHUNK) {
+        const size_t n = nvr - i0 < CHUNK ? nvr - i0 : CHUNK;
+        int buf[CHUNK];
+        const dfo_inst_status st = dfo_inst_get_int(&in->core, "fmi3GetInt64", vr + i0, n, buf);
+        if (st == DFO_INST_ERROR) return fmi3Error;
+        if (st > worst) worst = st;
+        for (size_t i = 0; i < n; i++) values[i0 + i] = buf[i];
+    }
+    return status_of(worst);
+}
+
+fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int64 values[],
+                        size_t nValues)
+{
+    BEGIN(fmi3SetInt64);
+    if (!check_arrays(in, "fmi3SetInt64", vr, nvr, values, nValues)) return fmi3Error;
+    if (!check_int_kind(in, "fmi3SetInt64", vr, nvr, 1)) return fmi3Error;
+    if (nvr > CHUNK) return FAIL("fmi3SetInt64: at most %d values per call.", CHUNK);
+    int buf[CHUNK];
+    for (size_t i = 0; i < nvr; i++) {
+        if (values[i] < INT_MIN || values[i] > INT_MAX) {
+            const dfo_var_info *var = var_of(vr[i]);
+            return FAIL("fmi3SetInt64: invalid value %lld for variable %s (value reference %u); valid range: %s.",
+                        (long long)values[i], var ? var->name : "?", vr[i], var ? var->range : "?");
+        }
+        buf[i] = (int)values[i];
+    }
+    return status_of(dfo_inst_set_int(&in->core, "fmi3SetInt64", vr, nvr, buf));
+}
+
+fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
+                          size_t nValues)
+{
+    BEGIN(fmi3GetBoolean);
+    if (!check_arrays(in, "fmi3GetBoolean", vr, nvr, values, nValues)) return fmi3Error;
+    for (size_t i0 = 0; i0 < nvr; i0 += CHUNK) {
+        const size_t n = nvr - i0 < CHUNK ? nvr - i0 : CHUNK;
+        int buf[CHUNK];
+        if (dfo_inst_get_bool(&in->core, "fmi3GetBoolean", vr + i0, n, buf) != DFO_INST_OK) return fmi3Error;
+        for (size_t i = 0; i < n; i++) values[i0 + i] = buf[i] ? fmi3True : fmi3False;
+    }
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                          const fmi3Boolean values[], size_t nValues)
+{
+    BEGIN(fmi3SetBoolean);
+    if (!check_arrays(in, "fmi3SetBoolean", vr, nvr, values, nValues)) return fmi3Error;
+    if (nvr > CHUNK) return FAIL("fmi3SetBoolean: at most %d values per call.", CHUNK);
+    int buf[CHUNK];
+    for (size_t i = 0; i < nvr; i++) buf[i] = values[i] ? 1 : 0;
+    return status_of(dfo_inst_set_bool(&in->core, "fmi3SetBoolean", vr, nvr, buf));
+}
+
+/* ---- co-simulation --------------------------------------------------------------------------- */
+
+/* The core's intermediate update: the host's callback, with the state at the switch readable. */
+static int intermediate(void *ctx, double t, int can_return_early)
+{
+    Instance *in = (Instance *)ctx;
+    fmi3Boolean requested = fmi3False;
+    fmi3Float64 requested_time = t;
+    in->in_update = 1;
+    in->update(in->env, t, fmi3False, fmi3True, fmi3True, can_return_early ? fmi3True : fmi3False, &requested,
+               &requested_time);
+    in->in_update = 0;
+    return requested ? 1 : 0;
+}
+
+fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
+                      fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                      fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
+                      fmi3Float64 *lastSuccessfulTime)
+{
+    BEGIN(fmi3DoStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!eventHandlingNeeded || !terminateSimulation || !earlyReturn || !lastSuccessfulTime)
+        return FAIL("fmi3DoStep: eventHandlingNeeded, terminateSimulation, earlyReturn and lastSuccessfulTime must "
+                    "not be NULL.");
+    const dfo_event_opts opt = {in->early_return_allowed, in->event_mode_used && in->early_return_allowed,
+                                in->update ? intermediate : NULL, in};
+    dfo_step_result res = {0.0, 0, 0};
+    const dfo_inst_status st = dfo_inst_do_step_events(&in->core, "fmi3DoStep", currentCommunicationPoint,
+                                                       communicationStepSize, &opt, &res);
+    *terminateSimulation = fmi3False;
+    *eventHandlingNeeded = (st != DFO_INST_ERROR && res.event) ? fmi3True : fmi3False;
+    *earlyReturn = (st != DFO_INST_ERROR && res.early) ? fmi3True : fmi3False;
+    *lastSuccessfulTime = dfo_inst_time(&in->core);
+    return status_of(st);
+}
+
+/* ---- FMU state ------------------------------------------------------------------------------- */
+
+fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
+{
+    BEGIN(fmi3GetFMUState);
+    if (!FMUState) return FAIL("fmi3GetFMUState: FMUState is NULL.");
+    return status_of(dfo_inst_get_state(&in->core, "fmi3GetFMUState", FMUState));
+}
+
+fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
+{
+    BEGIN(fmi3SetFMUState);
+    return status_of(dfo_inst_set_state(&in->core, "fmi3SetFMUState", FMUState));
+}
+
+fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
+{
+    BEGIN(fmi3FreeFMUState);
+    if (!FMUState) return FAIL("fmi3FreeFMUState: FMUState is NULL.");
+    return status_of(dfo_inst_free_state(&in->core, "fmi3FreeFMUState", FMUState));
+}
+
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
+{
+    BEGIN(fmi3SerializedFMUStateSize);
+    (void)FMUState;
+    if (!size) return FAIL("fmi3SerializedFMUStateSize: size is NULL.");
+    *size = dfo_inst_serialized_size();
+    return fmi3OK;
+}
+
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
+                                 size_t size)
+{
+    BEGIN(fmi3SerializeFMUState);
+    if (!FMUState) return FAIL("fmi3SerializeFMUState: FMUState is NULL or not a state of this FMU.");
+    if (!serializedState) return FAIL("fmi3SerializeFMUState: serializedState is NULL.");
+    return status_of(dfo_inst_serialize(&in->core, "fmi3SerializeFMUState", FMUState, serializedState, size));
+}
+
+fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
+                                   fmi3FMUState *FMUState)
+{
+    BEGIN(fmi3DeserializeFMUState);
+    if (!serializedState || !FMUState)
+        return FAIL("fmi3DeserializeFMUState: serializedState or FMUState is NULL.");
+    return status_of(dfo_inst_deserialize(&in->core, "fmi3DeserializeFMUState", serializedState, size, FMUState));
+}
+
+/* ---- what this FMU does not have: exported (hosts resolve every symbol), always an error ------- */
+
+static fmi3Status unsupported(fmi3Instance instance, const char *fn, const char *why)
+{
+    Instance *in = (Instance *)instance;
+    if (!allowed(in, fn, PHASES_fmi3Unsupported)) return fmi3Error;
+    return FAIL("%s: %s", fn, why);
+}
+
+#define NO_TYPE "the FMU has no variables of this type."
+#define CS_ONLY "this FMU is for co-simulation only."
+#define NO_CLOCKS "the FMU has no clocks."
+
+#define UNSUPPORTED_GETSET(name, ctype)                                                                       \
+    fmi3Status fmi3Get##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, ctype values[], \
+                             size_t nValues)                                                                  \
+    {                                                                                                         \
+        (void)vr; (void)values; (void)nValues;                                                                \
+        if (nvr == 0 && instance) return fmi3OK;                                                              \
+        return unsupported(instance, "fmi3Get" #name, NO_TYPE);                                               \
+    }                                                                                                         \
+    fmi3Status fmi3Set##name(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,                \
+                             const ctype values[], size_t nValues)                                            \
+    {                                                                                                         \
+        (void)vr; (void)values; (void)nValues;                                                                \
+        if (nvr == 0 && instance) return fmi3OK;                                                              \
+        return unsupported(instance, "fmi3Set" #name, NO_TYPE);                                               \
+    }
+
+UNSUPPORTED_GETSET(Float32, fmi3Float32)
+UNSUPPORTED_GETSET(Int8, fmi3Int8)
+UNSUPPORTED_GETSET(UInt8, fmi3UInt8)
+UNSUPPORTED_GETSET(Int16, fmi3Int16)
+UNSUPPORTED_GETSET(UInt16, fmi3UInt16)
+UNSUPPORTED_GETSET(UInt32, fmi3UInt32)
+UNSUPPORTED_GETSET(UInt64, fmi3UInt64)
+UNSUPPORTED_GETSET(String, fmi3String)
+
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
+                         fmi3Binary values[], size_t nValues)
+{
+    (void)vr; (void)nvr; (void)valueSizes; (void)values; (void)nValues;
+    return unsupported(instance, "fmi3GetBinary", NO_TYPE);
+}
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
+                         const fmi3Binary values[], size_t nValues)
+{
+    (void)vr; (void)nvr; (void)valueSizes; (void)values; (void)nValues;
+    return unsupported(instance, "fmi3SetBinary", NO_TYPE);
+}
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[])
+{
+    (void)vr; (void)nvr; (void)values;
+    return unsupported(instance, "fmi3GetClock", NO_CLOCKS);
+}
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[])
+{
+    (void)vr; (void)nvr; (void)values;
+    return unsupported(instance, "fmi3SetClock", NO_CLOCKS);
+}
+fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference,
+                                               size_t *nDependencies)
+{
+    (void)valueReference; (void)nDependencies;
+    return unsupported(instance, "fmi3GetNumberOfVariableDependencies",
+                       "dependencies are declared in the model description only.");
+}
+fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
+                                       size_t elementIndicesOfDependent[], fmi3ValueReference independents[],
+                                       size_t elementIndicesOfIndependents[], fmi3DependencyKind dependencyKinds[],
+                                       size_t nDependencies)
+{
+    (void)dependent; (void)elementIndicesOfDependent; (void)independents; (void)elementIndicesOfIndependents;
+    (void)dependencyKinds; (void)nDependencies;
+    return unsupported(instance, "fmi3GetVariableDependencies",
+                       "dependencies are declared in the model description only.");
+}
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
+                                        const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
+                                        size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed; (void)sensitivity;
+    (void)nSensitivity;
+    return unsupported(instance, "fmi3GetDirectionalDerivative", "directional derivatives are not provided.");
+}
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
+                                    const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
+                                    size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
+{
+    (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed; (void)sensitivity;
+    (void)nSensitivity;
+    return unsupported(instance, "fmi3GetAdjointDerivative", "adjoint derivatives are not provided.");
+}
+fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
+{
+    return unsupported(instance, "fmi3EnterConfigurationMode", "the FMU has no structural parameters.");
+}
+fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
+{
+    return unsupported(instance, "fmi3ExitConfigurationMode", "the FMU has no structural parameters.");
+}
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                  fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[])
+{
+    (void)vr; (void)nvr; (void)intervals; (void)qualifiers;
+    return unsupported(instance, "fmi3GetIntervalDecimal", NO_CLOCKS);
+}
+fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                   fmi3UInt64 counters[], fmi3UInt64 resolutions[],
+                                   fmi3IntervalQualifier qualifiers[])
+{
+    (void)vr; (void)nvr; (void)counters; (void)resolutions; (void)qualifiers;
+    return unsupported(instance, "fmi3GetIntervalFraction", NO_CLOCKS);
+}
+fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 shifts[])
+{
+    (void)vr; (void)nvr; (void)shifts;
+    return unsupported(instance, "fmi3GetShiftDecimal", NO_CLOCKS);
+}
+fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                fmi3UInt64 counters[], fmi3UInt64 resolutions[])
+{
+    (void)vr; (void)nvr; (void)counters; (void)resolutions;
+    return unsupported(instance, "fmi3GetShiftFraction", NO_CLOCKS);
+}
+fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                  const fmi3Float64 intervals[])
+{
+    (void)vr; (void)nvr; (void)intervals;
+    return unsupported(instance, "fmi3SetIntervalDecimal", NO_CLOCKS);
+}
+fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                   const fmi3UInt64 counters[], const fmi3UInt64 resolutions[])
+{
+    (void)vr; (void)nvr; (void)counters; (void)resolutions;
+    return unsupported(instance, "fmi3SetIntervalFraction", NO_CLOCKS);
+}
+fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                               const fmi3Float64 shifts[])
+{
+    (void)vr; (void)nvr; (void)shifts;
+    return unsupported(instance, "fmi3SetShiftDecimal", NO_CLOCKS);
+}
+fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                const fmi3UInt64 counters[], const fmi3UInt64 resolutions[])
+{
+    (void)vr; (void)nvr; (void)counters; (void)resolutions;
+    return unsupported(instance, "fmi3SetShiftFraction", NO_CLOCKS);
+}
+fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
+{
+    return unsupported(instance, "fmi3EvaluateDiscreteStates", CS_ONLY);
+}
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
+{
+    return unsupported(instance, "fmi3EnterContinuousTimeMode", CS_ONLY);
+}
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
+{
+    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
+    return unsupported(instance, "fmi3CompletedIntegratorStep", CS_ONLY);
+}
+fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
+{
+    (void)time;
+    return unsupported(instance, "fmi3SetTime", CS_ONLY);
+}
+fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
+{
+    (void)x; (void)nx;
+    return unsupported(instance, "fmi3SetContinuousStates", CS_ONLY);
+}
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t nx)
+{
+    (void)derivatives; (void)nx;
+    return unsupported(instance, "fmi3GetContinuousStateDerivatives", CS_ONLY);
+}
+fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t ni)
+{
+    (void)eventIndicators; (void)ni;
+    return unsupported(instance, "fmi3GetEventIndicators", CS_ONLY);
+}
+fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
+{
+    (void)x; (void)nx;
+    return unsupported(instance, "fmi3GetContinuousStates", CS_ONLY);
+}
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t nx)
+{
+    (void)nominals; (void)nx;
+    return unsupported(instance, "fmi3GetNominalsOfContinuousStates", CS_ONLY);
+}
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
+{
+    (void)n;
+    return unsupported(instance, "fmi3GetNumberOfEventIndicators", CS_ONLY);
+}
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
+{
+    (void)n;
+    return unsupported(instance, "fmi3GetNumberOfContinuousStates", CS_ONLY);
+}
+fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                    const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
+{
+    (void)vr; (void)nvr; (void)orders; (void)values; (void)nValues;
+    return unsupported(instance, "fmi3GetOutputDerivatives", "output derivatives are not provided.");
+}
+fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
+                                      fmi3Float64 activationTime)
+{
+    (void)clockReference; (void)activationTime;
+    return unsupported(instance, "fmi3ActivateModelPartition", "this FMU is not for scheduled execution.");
+}
