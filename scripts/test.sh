@@ -33,6 +33,7 @@ asan_pytest() {
   asan=$(gcc -print-file-name=libasan.so)
   ubsan=$(gcc -print-file-name=libubsan.so)
   DFO_FMU="$PWD/build-asan/DryFrictionOscillator.fmu" \
+  DFO_FMU3="$PWD/build-asan/fmi3/DryFrictionOscillator.fmu" \
   LD_PRELOAD="$asan $ubsan" \
   ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
