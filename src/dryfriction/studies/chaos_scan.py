@@ -12,7 +12,7 @@ import xarray as xr
 from ..chaos.attractors import Catalogue, period_of
 from ..chaos.batch import concat, lyapunov_rows, map_chunks, orbit_tails
 from ..chaos.lyapunov import benettin
-from ..chaos.maps import ExactMap, FMUMap, NDParams
+from ..chaos.maps import ExactMap, FMUMap, NDParams, scheme_label
 from .common import StudyContext, check_numerics, check_params, plt
 from .config import grid, require
 
@@ -211,7 +211,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.save_dataset(ds, DATASET)
 
     # ---- figures
-    h_lbl = f"scheme {num['scheme']}, h = T/{num['steps_per_period']}"
+    h_lbl = scheme_label(num["scheme"], num["steps_per_period"])
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     for j in range(len(ics)):
         xs = np.repeat(chis, ly["keep"])
