@@ -132,6 +132,10 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             rchaos = rcls["chaotic"].any(axis=1)
             j = int(np.nonzero(rchaos)[0].max()) if rchaos.any() else 0
             lo_c, hi_c = float(rchis[j]), float(rchis[min(j + 1, rchis.size - 1)])
+            if j == rchis.size - 1:
+                # the longer refinement runs establish chaos up to the bracket's top: the onset lies
+                # between it and the next chi of the scan
+                hi_c = float(chis[min(i_hi + 2, chis.size - 1)])
             ref.update(rcls)
             ref["chi"] = rchis
             root, sig = zero_crossing(rchis, ref["lyapunov"].mean(axis=1))
