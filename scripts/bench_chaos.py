@@ -1,15 +1,20 @@
 #!/usr/bin/env python3
 """Speed of the chaos studies against the stepper's limit (as scripts/bench_sweep.py measures it).
 
-    python scripts/bench_chaos.py [--quick] [--workers N] [--out DIR] [--only scan|basins] [--set key=value ...]
+    python scripts/bench_chaos.py [--quick] [--workers N] [--out DIR] [--only scan|basins] [--scheme S]
+                                  [--set key=value ...]
 
 Runs ``dryfriction study chaos_scan`` (80 chi x 4 initial conditions x 100 + 500 periods, two
 trajectories per period, plus the onset refinement) and ``dryfriction study chaos_basins``
-(401 x 401 initial conditions per case) and reports for each: wall time, internal steps, and the
-limit = internal steps x ns per step of the bare stepper (``dfo_advance`` of libdfo_physics.a in a
-tiny C loop, one process per worker, on a stratified sample of the study's own runs, timed before
-and after; the faster is the limit) / workers, and the ratio wall / limit. ``--set`` applies to
-the basins study (e.g. ``--set numerics.steps_per_period=500``). Not a test: nothing is asserted.
+(401 x 401 initial conditions per case) and reports for each: wall time, excitation periods
+integrated, and the limit = periods x seconds per period of the bare stepper (``dfo_advance`` of
+libdfo_physics.a in a tiny C loop, with the study's scheme, one process per worker, on a stratified
+sample of the study's own runs, timed before and after; the faster is the limit) / workers, and the
+ratio wall / limit. Per period, so that the same rule holds for the exact scheme (closed form
+between events, no internal steps to count) and the Bossak schemes (for those, periods x seconds
+per period = internal steps x seconds per step). ``--scheme`` sets the scheme of both studies
+(default: the configs', exact); ``--set`` applies to the basins study (e.g. ``--set
+cases=["end_of_chaos"]``). Not a test: nothing is asserted.
 """
 
 from __future__ import annotations
@@ -17,7 +22,9 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import math
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -41,13 +48,36 @@ def _bench_sweep():
     return mod
 
 
+def bare_per_period(exe: Path, rows: np.ndarray, scheme: int, procs: int = 1) -> tuple[float, float]:
+    """(wall s, CPU s) per excitation period of the bare loop over the rows (each row one run of
+    t_stop = its last column), run as ``procs`` processes at once on interleaved parts of the rows
+    (the contention the study's workers see)."""
+    parts = [np.ascontiguousarray(rows[i::procs]) for i in range(procs)]
+    running = [subprocess.Popen([str(exe), str(scheme)], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+               for _ in parts]
+    for p, part in zip(running, parts):
+        assert p.stdin is not None
+        p.stdin.write(part.tobytes())
+        p.stdin.close()
+    secs = cpu = 0.0
+    for p in running:
+        assert p.stdout is not None
+        out = p.stdout.read().decode().split()
+        if p.wait() != 0:
+            raise RuntimeError("the bare loop failed")
+        secs += float(out[0])
+        cpu += float(out[3])
+    periods = float(np.sum(rows[:, 15] * rows[:, 4] / (2.0 * math.pi)))     # t_stop omega / (2 pi)
+    return secs / periods, cpu / periods
+
+
 def scan_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
-    """Sample rows (one trajectory of transient + periods) and the study's total internal steps."""
+    """Sample rows (one trajectory of transient + periods) and the scan's total excitation periods."""
     s, ly, num = cfg["scan"], cfg["lyapunov"], cfg["numerics"]
     chis = grid(s["chi"], "scan.chi")
     spp = num["steps_per_period"]
     n_ic = len(s["z0"])
-    per_run = (ly["transient"] + 2 * ly["periods"]) * spp     # transient once, then two trajectories
+    per_run = ly["transient"] + 2 * ly["periods"]     # transient once, then two trajectories
     total = chis.size * n_ic * per_run      # the scan itself (timed by the study: scan_wall_s)
     idx = np.unique(np.linspace(0, chis.size * n_ic - 1, min(sample, chis.size * n_ic)).round().astype(int))
     C = chis[idx // n_ic]
@@ -68,7 +98,7 @@ def basin_rows(cfg: dict, sample: int) -> tuple[np.ndarray, float]:
         n = z0.size * dz0.size
         spp = num["steps_per_period"]
         per = t["transient"] + t["tail"]
-        total += n * per * spp
+        total += n * per
         idx = np.unique(np.linspace(0, n - 1, min(sample, n)).round().astype(int))
         vals = {k: t[k] for k in ("lam", "mu_s_sigma", "chi", "zeta")}
         rows.append(nondim_table({**vals, "z0": z0[idx // dz0.size], "dz0": dz0[idx % dz0.size]},
@@ -89,6 +119,7 @@ def main() -> int:
     ap.add_argument("--out", default="results")
     ap.add_argument("--only", choices=["scan", "basins"], default=None)
     ap.add_argument("--sample", type=int, default=64, help="runs in the limit's sample (per study)")
+    ap.add_argument("--scheme", choices=list(SCHEMES), default=None, help="scheme of both studies (default: the configs')")
     ap.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE")
     a = ap.parse_args()
     if a.workers < 1:
@@ -109,36 +140,39 @@ def main() -> int:
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bench_chaos.json"
     report = json.loads(path.read_text()) if a.only and path.is_file() else {}   # --only keeps the other entry
-    for name, rows_of, sets in (("chaos_scan", scan_rows, []), ("chaos_basins", basin_rows, a.sets)):
+    scheme_set = [f'numerics.scheme="{a.scheme}"'] if a.scheme else []
+    for name, rows_of, sets in (("chaos_scan", scan_rows, scheme_set), ("chaos_basins", basin_rows, scheme_set + a.sets)):
         if a.only and not name.endswith(a.only):
             continue
         cfg = effective_config(name, quick=a.quick, sets=sets)
-        rows, steps = rows_of(cfg, a.sample)
+        rows, periods = rows_of(cfg, a.sample)
         scheme = SCHEMES[cfg["numerics"]["scheme"]]
-        before, cpu_before = bs.bare_ns_per_step(exe, rows, scheme, a.workers)
+        before, cpu_before = bare_per_period(exe, rows, scheme, a.workers)
         t0 = time.perf_counter()
         res = run_study(name, quick=a.quick, out=a.out, workers=a.workers, fmu=fmu, sets=sets, progress=False)
         wall = time.perf_counter() - t0
-        after, cpu_after = bs.bare_ns_per_step(exe, rows, scheme, a.workers)
+        after, cpu_after = bare_per_period(exe, rows, scheme, a.workers)
         task_cpu = sum(v.get("task_cpu_s", 0.0) for v in res.summary.values() if isinstance(v, dict))
         if name == "chaos_scan":     # the scan's own time (the study also refines, checks, draws)
             study_wall, wall, task_cpu = wall, res.summary["scan_wall_s"], res.summary["scan_task_cpu_s"]
         else:
             study_wall = wall
-        ns = min(before, after)
-        limit = steps * ns * 1e-9 / a.workers
+        limit = periods * min(before, after) / a.workers
+        bare_cpu = 0.5 * (cpu_before + cpu_after)
         key = name if name == "chaos_scan" else f"{name}:{','.join(cfg['cases'])}"
-        report[key] = {"wall_s": wall, "study_wall_s": study_wall, "internal_steps": steps, "bare_ns_per_step_before": before,
-                        "bare_ns_per_step_after": after, "limit_s": limit, "ratio_to_limit": wall / limit,
+        report[key] = {"wall_s": wall, "study_wall_s": study_wall, "periods": periods,
+                        "bare_us_per_period_before": before * 1e6, "bare_us_per_period_after": after * 1e6,
+                        "limit_s": limit, "ratio_to_limit": wall / limit,
                         "workers": a.workers, "scheme": cfg["numerics"]["scheme"],
                         "steps_per_period": ({c: case_steps(cfg, c) for c in cfg["cases"]} if "cases" in cfg
                                              else cfg["numerics"]["steps_per_period"]), "summary": res.summary,
-                        "bare_cpu_ns_per_step": 0.5 * (cpu_before + cpu_after), "task_cpu_s": task_cpu or None,
-                        "cpu_ratio_tasks_to_bare": (task_cpu / (steps * 0.5 * (cpu_before + cpu_after) * 1e-9)
-                                                    if task_cpu else None),
+                        "bare_cpu_us_per_period": bare_cpu * 1e6, "task_cpu_s": task_cpu or None,
+                        "cpu_ratio_tasks_to_bare": task_cpu / (periods * bare_cpu) if task_cpu else None,
                         "load_average": os.getloadavg()}
-        print(f"{name}: wall {wall:.1f} s, {steps:.3e} internal steps, bare {before:.1f} / {after:.1f} ns/step "
-              f"(before / after), limit {limit:.1f} s, ratio {wall / limit:.2f}", flush=True)
+        cr = report[key]["cpu_ratio_tasks_to_bare"]
+        print(f"{name} ({cfg['numerics']['scheme']}): wall {wall:.1f} s, {periods:.3e} periods, bare "
+              f"{before * 1e6:.2f} / {after * 1e6:.2f} us/period (before / after), limit {limit:.1f} s, "
+              f"ratio {wall / limit:.2f}" + (f", CPU ratio {cr:.2f}" if cr else ""), flush=True)
     path.write_text(json.dumps(report, indent=2, default=float) + "\n")
     print(f"report: {path}")
     return 0

@@ -4,6 +4,9 @@
                          [--periods N] [--transient N] [--d0 D] [--renorm N]
                          [--steps-per-period N] [--scheme NAME | --exact] [--json]
 
+The FMU's ``exact`` scheme is the default (``--scheme located`` etc. select the Bossak schemes,
+``--exact`` the Python exact solution); the output names the scheme.
+
 The main parser only adds the subcommand (:func:`add_lyapunov_parser`) and calls
 :func:`lyapunov_main`; bad values end with one readable line and exit status 2 through the main
 parser's error handling.
@@ -21,7 +24,7 @@ from ..argparsing import count, number
 from ..fmu import SCHEMES
 from .attractors import period_of
 from .lyapunov import benettin
-from .maps import ExactMap, FMUMap, NDParams
+from .maps import DEFAULT_SCHEME, ExactMap, FMUMap, NDParams, step_free
 
 __all__ = ["add_lyapunov_parser", "lyapunov_main"]
 
@@ -43,10 +46,12 @@ def add_lyapunov_parser(sub: Any, parents: list[argparse.ArgumentParser] | None 
     p.add_argument("--d0", type=number("--d0", 0.0, True, 1e-2), default=1e-8, help="initial separation (1e-8)")
     p.add_argument("--renorm", type=count("--renorm", 1), default=1, help="periods between renormalisations (1)")
     p.add_argument("--steps-per-period", type=count("--steps-per-period", 10), default=1000,
-                   help="FMU internal steps per period, h = T / N (default 1000)")
-    p.add_argument("--scheme", choices=list(SCHEMES), default="located", help="FMU scheme (default located)")
+                   help="FMU internal steps per period, h = T / N (default 1000; no effect on the exact scheme)")
+    p.add_argument("--scheme", choices=list(SCHEMES), default=DEFAULT_SCHEME,
+                   help=f"FMU scheme (default {DEFAULT_SCHEME}: closed form between events)")
     p.add_argument("--exact", action="store_true",
-                   help="use the exact piecewise solution (dryfriction.exact) instead of the FMU")
+                   help="use the Python exact piecewise solution (dryfriction.exact, an independent reference) "
+                        "instead of the FMU")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     return p
 
@@ -89,8 +94,9 @@ def lyapunov_main(args: argparse.Namespace) -> int:
         "params": {"lam": nd.lam, "mu_s_sigma": nd.mu_s_sigma, "chi": nd.chi, "zeta": nd.zeta,
                    "z0": args.z0, "dz0": args.dz0},
         "method": r.method,
+        "map": "dryfriction.exact" if args.exact else "FMU",
         "scheme": "exact (dryfriction.exact)" if args.exact else args.scheme,
-        "steps_per_period": None if args.exact else args.steps_per_period,
+        "steps_per_period": None if args.exact or step_free(args.scheme) else args.steps_per_period,
     }
     if args.json:
         print(json.dumps(out))

@@ -6,8 +6,10 @@ excitation period. A map is started *afresh* at each call of :meth:`advance`: th
 initialised at (z, z') with the excitation phase phi (a whole number of periods later the phase is
 the same), so that two calls from nearby points differ only by their initial point and not by any
 history the integrator carries (Bossak acceleration, caches). This is what the two-trajectory
-Lyapunov method needs: a continuous FMU run and one restarted from its own state differ by about
-1e-11 after a period, more than the initial separations used.
+Lyapunov method needs: with the Bossak schemes a continuous FMU run and one restarted from its own
+state differ by about 1e-11 after a period, more than the initial separations used. The default
+scheme is the FMU's ``exact`` one (closed form between events, about 1e-13; h has no effect);
+``located`` and the first-order schemes stay selectable.
 
 :class:`FMUMap` drives the FMU through the package's public API (``OscillatorFMU.start``,
 ``step_to``, ``get``); :class:`ExactMap` stitches the closed-form phases of
@@ -27,7 +29,8 @@ from ..exact import solve_exact
 from ..fmu import SCHEMES, OscillatorFMU, Settings
 from ..params import Oscillator
 
-__all__ = ["Point", "StroboscopicMap", "FMUMap", "ExactMap", "NDParams", "check_scheme", "scheme_names"]
+__all__ = ["Point", "StroboscopicMap", "FMUMap", "ExactMap", "NDParams", "DEFAULT_SCHEME", "check_scheme",
+           "scheme_label", "scheme_names", "step_free"]
 
 # reference SI scales (the non-dimensional results do not depend on them)
 M_REF, K_REF, P0_REF, MU_S_REF = 1.0, 100.0, 1.0, 0.4
@@ -38,6 +41,21 @@ Point = tuple[float, float]
 def scheme_names() -> list[str]:
     """The FMU's integration schemes (from the driver: a new scheme appears here when it lands)."""
     return list(SCHEMES)
+
+
+#: the FMU scheme the chaos tools use unless told otherwise: the closed form between events (exact
+#: to about 1e-13, the step h has no effect on it)
+DEFAULT_SCHEME = "exact"
+
+
+def step_free(scheme: str) -> bool:
+    """True for the FMU's exact scheme, whose result does not depend on the step h."""
+    return scheme == "exact"
+
+
+def scheme_label(scheme: str, steps_per_period: int) -> str:
+    """How a result names its scheme: ``FMU scheme exact`` or ``FMU scheme located, h = T/1000``."""
+    return f"FMU scheme {scheme}" + ("" if step_free(scheme) else f", h = T/{int(steps_per_period)}")
 
 
 def check_scheme(scheme: str) -> str:
@@ -86,7 +104,7 @@ class StroboscopicMap(Protocol):
 class FMUMap:
     """The time-T map through one FMU instance (reset at every :meth:`advance`)."""
 
-    def __init__(self, fmu: OscillatorFMU, nd: NDParams, steps_per_period: int = 1000, scheme: str = "located",
+    def __init__(self, fmu: OscillatorFMU, nd: NDParams, steps_per_period: int = 1000, scheme: str = DEFAULT_SCHEME,
                  alpha: float = -0.1) -> None:
         self.fmu, self.nd = fmu, nd
         self.scheme = check_scheme(scheme)
@@ -96,7 +114,7 @@ class FMUMap:
         self.T = p.period
         self._xs, self._vs = p.P0 / p.k, p.P0 * p.w0 / p.k      # z = x / xs, z' = v / vs
         self.settings = Settings(h=self.T / self.steps_per_period, alpha=alpha, scheme=scheme)
-        self.label = f"FMU scheme {scheme}, h = T/{self.steps_per_period}"
+        self.label = scheme_label(scheme, self.steps_per_period)
 
     @property
     def z_scale(self) -> float:

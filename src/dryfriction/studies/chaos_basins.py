@@ -10,6 +10,7 @@ import xarray as xr
 
 from ..chaos.attractors import Catalogue
 from ..chaos.batch import concat, map_chunks, orbit_tails
+from ..chaos.maps import scheme_label
 from .common import StudyContext, check_numerics, check_params, plt
 from .config import grid, require
 
@@ -106,7 +107,7 @@ def plot_basins(ds: xr.Dataset) -> Any:
     ax.set_ylabel("z0'")
     ax.set_title(f"Basins, {a['case']}: lambda = {a['param_lam']}, mu_s sigma = {a['param_mu_s_sigma']}, "
                  f"chi = {a['param_chi']}, zeta = {a['param_zeta']}\n{lab.size:,} initial conditions, "
-                 f"{a['param_transient']} T transient; scheme {a['scheme']}, h = T/{a['steps_per_period']}", fontsize=8)
+                 f"{a['param_transient']} T transient; {scheme_label(str(a['scheme']), int(a['steps_per_period']))}", fontsize=8)
     return fig
 
 

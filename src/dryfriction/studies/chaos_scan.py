@@ -12,7 +12,7 @@ import xarray as xr
 from ..chaos.attractors import Catalogue, period_of
 from ..chaos.batch import concat, lyapunov_rows, map_chunks, orbit_tails
 from ..chaos.lyapunov import benettin
-from ..chaos.maps import ExactMap, FMUMap, NDParams
+from ..chaos.maps import ExactMap, FMUMap, NDParams, scheme_label
 from .common import StudyContext, check_numerics, check_params, plt
 from .config import grid, require
 
@@ -132,6 +132,10 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             rchaos = rcls["chaotic"].any(axis=1)
             j = int(np.nonzero(rchaos)[0].max()) if rchaos.any() else 0
             lo_c, hi_c = float(rchis[j]), float(rchis[min(j + 1, rchis.size - 1)])
+            if j == rchis.size - 1:
+                # the longer refinement runs establish chaos up to the bracket's top: the onset lies
+                # between it and the next chi of the scan
+                hi_c = float(chis[min(i_hi + 2, chis.size - 1)])
             ref.update(rcls)
             ref["chi"] = rchis
             root, sig = zero_crossing(rchis, ref["lyapunov"].mean(axis=1))
@@ -211,7 +215,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.save_dataset(ds, DATASET)
 
     # ---- figures
-    h_lbl = f"scheme {num['scheme']}, h = T/{num['steps_per_period']}"
+    h_lbl = scheme_label(num["scheme"], num["steps_per_period"])
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     for j in range(len(ics)):
         xs = np.repeat(chis, ly["keep"])

@@ -9,6 +9,7 @@ import numpy as np
 import xarray as xr
 
 from ..chaos.batch import concat, map_chunks, transient_rows
+from ..chaos.maps import scheme_label
 from .common import StudyContext, check_numerics, check_params, plt
 from .config import grid, require
 
@@ -71,7 +72,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
                     tol=s["tol"], tail=s["tail"], wall_s=st.wall)
     ctx.save_dataset(ds, DATASET)
 
-    h_lbl = f"scheme {num['scheme']}, h = T/{num['steps_per_period']}"
+    h_lbl = scheme_label(num["scheme"], num["steps_per_period"])
     fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(13, 4.2))
     for j, c in enumerate(cps):
         a1.semilogy(chis, np.maximum(spread[:, j], 1e-12), "o-", ms=3, label=f"after {c} T")
