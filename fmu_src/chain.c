@@ -1,0 +1,809 @@
+/* A chain of n blocks with dry friction. See chain.h and method.md section 9. */
+#include "chain.h"
+
+#include "bossak.h"
+#include "oscillator.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define EXC_ANCHOR 64           /* grid points between exact evaluations of the excitation phase */
+#define SNAP_REL_H 1e-7         /* a requested time this close (in h) to a grid point is that point */
+#define HALVINGS 60             /* search for a sub-step before the first switch */
+
+struct chain_model {
+    chain_alloc al;
+    size_t n;
+    double k_end, c_end, omega, h, alpha, gamma, beta, g1, rate_max;
+    int scheme, energy, damped;
+    /* per block (length n) */
+    double *m, *am, *am1, *Pc, *Ps, *N, *mu_k, *mu_b, *x0, *v0;
+    double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 */
+    double *dF, *eF;            /* M_hat of a whole grid step */
+    /* workspace */
+    double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
+    double *A0, *xp, *ph, *Vt, *Ft, *cp, *dp, *u, *mukN, *Fb, *S, *l, *box;
+    int *frozen, *st;
+    size_t *cand;
+    /* the current trial */
+    const double *cd, *ce;      /* its M_hat */
+    dfo_bossak_kin kin, kinF;   /* the trial's kinematics; a grid step's */
+    double cw1, sw1;            /* cos, sin of omega t at its end */
+    size_t ncand;
+    chain_status err;
+    int switched;
+};
+
+/* ---- parameters ------------------------------------------------------------------------------ */
+
+static const char *bad(char *buf, size_t len, const char *name, size_t i, double v, const char *range)
+{
+    snprintf(buf, len, "invalid value %g for %s[%zu] (valid: %s)", v, name, i + 1, range);
+    return buf;
+}
+
+const char *chain_check_params(const chain_params *p, char *buf, size_t len)
+{
+    if (p->n < 1) { snprintf(buf, len, "invalid value %zu for n (valid: >= 1)", p->n); return buf; }
+    for (size_t i = 0; i < p->n; i++) {
+        if (!(p->m[i] > 0.0 && isfinite(p->m[i]))) return bad(buf, len, "m", i, p->m[i], "> 0, finite");
+        if (!(p->k[i] >= 0.0 && isfinite(p->k[i]))) return bad(buf, len, "k", i, p->k[i], ">= 0, finite");
+        if (!(p->c[i] >= 0.0 && isfinite(p->c[i]))) return bad(buf, len, "c", i, p->c[i], ">= 0, finite");
+        if (!isfinite(p->P0[i])) return bad(buf, len, "P0", i, p->P0[i], "finite");
+        if (!isfinite(p->phi[i])) return bad(buf, len, "phi", i, p->phi[i], "finite");
+        if (!(p->N[i] >= 0.0 && isfinite(p->N[i]))) return bad(buf, len, "N", i, p->N[i], ">= 0, finite");
+        if (!(p->mu_s[i] >= 0.0 && isfinite(p->mu_s[i]))) return bad(buf, len, "mu_s", i, p->mu_s[i], ">= 0, finite");
+        if (!(p->chi[i] >= 0.0 && isfinite(p->chi[i]))) return bad(buf, len, "chi", i, p->chi[i], ">= 0, finite");
+        if (!isfinite(p->x0[i])) return bad(buf, len, "x0", i, p->x0[i], "finite");
+        if (!isfinite(p->v0[i])) return bad(buf, len, "v0", i, p->v0[i], "finite");
+    }
+    if (!(p->k_end >= 0.0 && isfinite(p->k_end))) { snprintf(buf, len, "invalid value %g for k_end (valid: >= 0)", p->k_end); return buf; }
+    if (!(p->c_end >= 0.0 && isfinite(p->c_end))) { snprintf(buf, len, "invalid value %g for c_end (valid: >= 0)", p->c_end); return buf; }
+    if (!(p->omega >= 0.0 && isfinite(p->omega))) { snprintf(buf, len, "invalid value %g for omega (valid: >= 0)", p->omega); return buf; }
+    if (!(p->h > 0.0 && isfinite(p->h))) { snprintf(buf, len, "invalid value %g for h (valid: > 0)", p->h); return buf; }
+    if (!(p->alpha >= -1.0 / 3.0 && p->alpha <= 0.0)) { snprintf(buf, len, "invalid value %g for alpha (valid: [-1/3, 0])", p->alpha); return buf; }
+    if (p->scheme < DFO_SCHEME_PAPER || p->scheme > DFO_SCHEME_LOCATED) {
+        snprintf(buf, len, "invalid value %d for scheme (valid: 1 paper, 2 consistent, 3 located)", p->scheme);
+        return buf;
+    }
+    return NULL;
+}
+
+static double *dalloc(const chain_alloc *al, size_t n) { return (double *)al->allocate(al->env, n, sizeof(double)); }
+
+chain_model *chain_create(const chain_params *p, const chain_alloc *al, const char **err)
+{
+    static const char *const oom = "out of memory";
+    char buf[160];
+    const char *msg = chain_check_params(p, buf, sizeof buf);
+    if (msg) { if (err) *err = "invalid parameters (chain_check_params names the first one)"; return NULL; }
+    chain_model *M = (chain_model *)al->allocate(al->env, 1, sizeof(chain_model));
+    if (!M) { if (err) *err = oom; return NULL; }
+    const size_t n = p->n;
+    M->al = *al;
+    M->n = n;
+    /* one block of doubles for all per-block arrays (31 of them, the last, box, 2n long), one for
+     * the ints, one for cand */
+    enum { NARR = 31 };
+    double *blk = dalloc(al, (NARR + 1) * n);
+    int *iblk = (int *)al->allocate(al->env, 2 * n, sizeof(int));
+    M->cand = (size_t *)al->allocate(al->env, n, sizeof(size_t));
+    if (!blk || !iblk || !M->cand) {
+        if (blk) al->release(al->env, blk);
+        if (iblk) al->release(al->env, iblk);
+        if (M->cand) al->release(al->env, M->cand);
+        al->release(al->env, M);
+        if (err) *err = oom;
+        return NULL;
+    }
+    double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->N, &M->mu_k, &M->mu_b, &M->x0, &M->v0,
+                          &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
+                          &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
+                          &M->box};
+    for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
+    M->frozen = iblk;
+    M->st = iblk + n;
+    M->k_end = p->k_end;
+    M->c_end = p->c_end;
+    M->omega = p->omega;
+    M->h = p->h;
+    M->alpha = p->alpha;
+    M->gamma = dfo_bossak_gamma(p->alpha);
+    M->beta = dfo_bossak_beta(p->alpha);
+    M->g1 = (1.0 - M->gamma) / M->gamma;
+    M->scheme = p->scheme;
+    M->energy = p->account_energy;
+    M->damped = p->c_end != 0.0;
+    double kmax = 0.0, cmax = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double kr = (i + 1 < n) ? p->k[i + 1] : p->k_end, cr = (i + 1 < n) ? p->c[i + 1] : p->c_end;
+        M->m[i] = p->m[i];
+        M->am[i] = p->alpha * p->m[i];
+        M->am1[i] = (1.0 - p->alpha) * p->m[i];
+        M->Pc[i] = p->P0[i] * cos(p->phi[i]);
+        M->Ps[i] = p->P0[i] * sin(p->phi[i]);
+        M->N[i] = p->N[i];
+        M->mu_k[i] = p->chi[i] * p->mu_s[i];
+        M->mu_b[i] = fmax(p->mu_s[i], M->mu_k[i]);
+        M->x0[i] = p->x0[i];
+        M->v0[i] = p->v0[i];
+        M->Kd[i] = p->k[i] + kr;
+        M->Cd[i] = p->c[i] + cr;
+        M->Ko[i] = (i + 1 < n) ? -kr : 0.0;
+        M->Co[i] = (i + 1 < n) ? -cr : 0.0;
+        if (p->c[i] != 0.0) M->damped = 1;
+        /* Gershgorin bounds of the largest eigenvalues of M^-1 K and M^-1 C */
+        const double kl = (i > 0) ? p->k[i] : 0.0, cl = (i > 0) ? p->c[i] : 0.0;
+        kmax = fmax(kmax, (M->Kd[i] + kl + ((i + 1 < n) ? kr : 0.0)) / p->m[i]);
+        cmax = fmax(cmax, (M->Cd[i] + cl + ((i + 1 < n) ? cr : 0.0)) / p->m[i]);
+    }
+    if (n == 1) { kmax = M->Kd[0] / M->m[0]; cmax = M->Cd[0] / M->m[0]; }
+    M->rate_max = sqrt(kmax) + cmax + fabs(p->omega);
+    dfo_bossak_kin_for(p->h, M->gamma, M->beta, &M->kinF);
+    M->kin = M->kinF;
+    const double c1 = M->kin.c1, bhg = M->beta * p->h / M->gamma;
+    for (size_t i = 0; i < n; i++) {
+        M->dF[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
+        M->eF[i] = M->Ko[i] * bhg + M->Co[i];
+    }
+    if (err) *err = NULL;
+    return M;
+}
+
+void chain_destroy(chain_model *M)
+{
+    if (!M) return;
+    const chain_alloc al = M->al;
+    al.release(al.env, M->m);
+    al.release(al.env, M->frozen);
+    al.release(al.env, M->cand);
+    al.release(al.env, M);
+}
+
+size_t chain_size(const chain_model *M) { return M->n; }
+
+int chain_state_init(const chain_model *M, chain_state *s)
+{
+    const size_t n = M->n;
+    memset(s, 0, sizeof *s);
+    s->n = n;
+    double *b = dalloc(&M->al, 4 * n);
+    int *mode = (int *)M->al.allocate(M->al.env, n, sizeof(int));
+    if (!b || !mode) {
+        if (b) M->al.release(M->al.env, b);
+        if (mode) M->al.release(M->al.env, mode);
+        return 0;
+    }
+    s->X = b;
+    s->V = b + n;
+    s->A = b + 2 * n;
+    s->F = b + 3 * n;
+    s->mode = mode;
+    s->exc_n = -1;
+    return 1;
+}
+
+void chain_state_free(const chain_model *M, chain_state *s)
+{
+    if (s->X) M->al.release(M->al.env, s->X);
+    if (s->mode) M->al.release(M->al.env, s->mode);
+    s->X = s->V = s->A = s->F = NULL;
+    s->mode = NULL;
+}
+
+void chain_state_copy(chain_state *dst, const chain_state *src)
+{
+    double *X = dst->X, *V = dst->V, *A = dst->A, *F = dst->F;
+    int *mode = dst->mode;
+    const size_t n = src->n;
+    *dst = *src;
+    dst->X = X; dst->V = V; dst->A = A; dst->F = F; dst->mode = mode;
+    memcpy(X, src->X, n * sizeof *X);
+    memcpy(V, src->V, n * sizeof *V);
+    memcpy(A, src->A, n * sizeof *A);
+    memcpy(F, src->F, n * sizeof *F);
+    memcpy(mode, src->mode, n * sizeof *mode);
+}
+
+/* ---- forces ---------------------------------------------------------------------------------- */
+
+static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
+
+static void loads_init(chain_model *M, const chain_inputs *in)
+{
+    for (size_t i = 0; i < M->n; i++) {
+        const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
+        M->u[i] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
+        M->mukN[i] = M->mu_k[i] * N;
+        M->Fb[i] = M->mu_b[i] * N;
+    }
+}
+
+/* cos and sin of omega t at the grid point g of the state (cached, see chain_state) */
+static void grid_phase(const chain_model *M, chain_state *s, long long g, double *cw, double *sw)
+{
+    const double rc = cos(M->omega * M->h), rs = sin(M->omega * M->h);
+    double c, sn;
+    long long i;
+    if (s->exc_n >= 0 && s->exc_n == g - 1 && g % EXC_ANCHOR != 0) {
+        c = s->exc_c; sn = s->exc_s; i = g - 1;
+    } else {
+        i = g - g % EXC_ANCHOR;
+        const double th = M->omega * (s->t0 + (double)i * M->h);
+        c = cos(th); sn = sin(th);
+    }
+    for (; i < g; i++) {
+        const double cn = c * rc - sn * rs;
+        sn = sn * rc + c * rs;
+        c = cn;
+    }
+    s->exc_n = g;
+    s->exc_c = c;
+    s->exc_s = sn;
+    *cw = c;
+    *sw = sn;
+}
+
+static void phase_of(const chain_model *M, const chain_state *s, double t, double *cw, double *sw)
+{
+    if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * M->h) { *cw = s->exc_c; *sw = s->exc_s; return; }
+    *cw = cos(M->omega * t);
+    *sw = sin(M->omega * t);
+}
+
+static double (P_at)(const chain_model *M, size_t i, double cw, double sw) { return M->Pc[i] * cw - M->Ps[i] * sw; }
+
+/* (K x)_i and (C v)_i */
+static double Kx(const chain_model *M, const double *x, size_t i)
+{
+    double f = M->Kd[i] * x[i];
+    if (i > 0) f += M->Ko[i - 1] * x[i - 1];
+    if (i + 1 < M->n) f += M->Ko[i] * x[i + 1];
+    return f;
+}
+static double Cv(const chain_model *M, const double *v, size_t i)
+{
+    if (!M->damped) return 0.0;
+    double f = M->Cd[i] * v[i];
+    if (i > 0) f += M->Co[i - 1] * v[i - 1];
+    if (i + 1 < M->n) f += M->Co[i] * v[i + 1];
+    return f;
+}
+
+/* Net applied force on every block at the state (excitation, inputs, springs, dampers), into S. */
+static void net_forces(chain_model *M, const chain_state *s, double *S)
+{
+    double cw, sw;
+    phase_of(M, s, s->t, &cw, &sw);
+    for (size_t i = 0; i < M->n; i++) S[i] = P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) - Cv(M, s->V, i);
+}
+
+static int has_friction(const chain_model *M, size_t i) { return M->Fb[i] > 0.0; }
+
+/* held at rest in the current step: stuck (schemes whose stuck blocks rest) */
+static int held(const chain_model *M, const chain_state *s, size_t i)
+{
+    return s->mode[i] == 0 && has_friction(M, i);
+}
+
+/* Physical accelerations at the state: stuck blocks 0, the others from the equation of motion. */
+static void physical_accel(chain_model *M, const chain_state *s, double *a)
+{
+    net_forces(M, s, M->S);
+    for (size_t i = 0; i < M->n; i++) {
+        if (held(M, s, i)) { a[i] = 0.0; continue; }
+        const double F = has_friction(M, i) ? -s->mode[i] * M->mukN[i] : 0.0;
+        a[i] = (M->S[i] + F) / M->m[i];
+    }
+}
+
+void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s, double *a)
+{
+    loads_init(M, in);
+    physical_accel(M, s, a);
+}
+
+double chain_energy(const chain_model *M, const chain_state *s)
+{
+    double E = 0.0;
+    for (size_t i = 0; i < M->n; i++) {
+        const double ext = s->X[i] - (i > 0 ? s->X[i - 1] : 0.0);
+        const double kl = M->Kd[i] + ((i + 1 < M->n) ? M->Ko[i] : -M->k_end);
+        E += 0.5 * M->m[i] * s->V[i] * s->V[i] + 0.5 * kl * ext * ext;
+    }
+    E += 0.5 * M->k_end * s->X[M->n - 1] * s->X[M->n - 1];
+    return E;
+}
+
+/* v^T C v */
+static double damping_power(const chain_model *M, const double *v)
+{
+    double D = 0.0;
+    for (size_t i = 0; i < M->n; i++) {
+        const double dv = v[i] - (i > 0 ? v[i - 1] : 0.0);
+        const double cl = M->Cd[i] + ((i + 1 < M->n) ? M->Co[i] : -M->c_end);
+        D += cl * dv * dv;
+    }
+    return D + M->c_end * v[M->n - 1] * v[M->n - 1];
+}
+
+/* ---- one trial step ------------------------------------------------------------------------- */
+
+/* The step of length hh from the state to t1 (cw1, sw1: the excitation phase at t1): M_hat,
+ * the re-based A0, the predicted position xp and p_hat (method.md sections 2, 8 and 9). */
+static void trial(chain_model *M, const chain_state *s, double hh, double cw1, double sw1)
+{
+    const size_t n = M->n;
+    if (hh == M->h) {
+        M->kin = M->kinF;
+        M->cd = M->dF;
+        M->ce = M->eF;
+    } else {
+        dfo_bossak_kin_for(hh, M->gamma, M->beta, &M->kin);
+        const double c1 = M->kin.c1, bhg = M->beta * hh / M->gamma;
+        for (size_t i = 0; i < n; i++) {
+            M->d[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
+            M->e[i] = M->Ko[i] * bhg + M->Co[i];
+        }
+        M->cd = M->d;
+        M->ce = M->e;
+    }
+    M->cw1 = cw1;
+    M->sw1 = sw1;
+    const double a = M->alpha;
+    /* Bossak's A belongs to the step length hA: re-based on hh with the jerk (section 8) */
+    const int rebase = a != 0.0 && hh != s->hA &&
+                       fabs(hh - s->hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
+                       M->rate_max * fmax(hh, s->hA) <= 1.0;
+    if (rebase) {
+        /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones */
+        double cw, sw;
+        phase_of(M, s, s->t, &cw, &sw);
+        physical_accel(M, s, M->A0);  /* physical accelerations, in A0 for now */
+        for (size_t i = 0; i < n; i++) {
+            double j = 0.0;
+            if (!held(M, s, i)) {
+                const double Pd = -M->omega * (M->Pc[i] * sw + M->Ps[i] * cw);
+                j = (Pd - Kx(M, s->V, i) - Cv(M, M->A0, i)) / M->m[i];
+            }
+            M->S[i] = j;
+        }
+        for (size_t i = 0; i < n; i++) M->A0[i] = s->A[i] + a * (hh - s->hA) * M->S[i];
+    } else {
+        memcpy(M->A0, s->A, n * sizeof(double));
+    }
+    const double c1 = M->kin.c1, pV = M->kin.pred_V, pA = M->kin.pred_A, g1 = M->g1;
+    const double *X = s->X, *V = s->V, *A0 = M->A0;
+    double *xp = M->xp, *ph = M->ph;
+    for (size_t i = 0; i < n; i++) xp[i] = X[i] + pV * V[i] + pA * A0[i];
+    for (size_t i = 0; i < n; i++) {
+        double kx = M->Kd[i] * xp[i];
+        if (i > 0) kx += M->Ko[i - 1] * xp[i - 1];
+        if (i + 1 < n) kx += M->Ko[i] * xp[i + 1];
+        ph[i] = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] + M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
+    }
+}
+
+/* Tridiagonal solve of M_hat V = p + F with rows in mode 0 (and l > 0) held at V = 0 and the
+ * others sliding with F = -mode l (l = 0: free, F = 0). Held rows get F = (M_hat V)_i - p_i. */
+static void solve_held(size_t n, const double *d, const double *e, const double *p, const double *l,
+                       const int *mode, double *V, double *F, double *cp, double *dp)
+{
+    double cprev = 0.0, dprev = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            cp[i] = 0.0;
+            dp[i] = 0.0;
+        } else {
+            const double lo = (i > 0) ? e[i - 1] : 0.0;
+            const double rhs = p[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            const double den = d[i] - lo * cprev;
+            const double inv = 1.0 / den;
+            cp[i] = e[i] * inv;
+            dp[i] = (rhs - lo * dprev) * inv;
+        }
+        cprev = cp[i];
+        dprev = dp[i];
+    }
+    double vn = 0.0;
+    for (size_t j = n; j-- > 0;) {
+        vn = dp[j] - cp[j] * vn;
+        V[j] = vn;
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            V[i] = 0.0;
+            double f = -p[i];
+            if (i > 0) f += e[i - 1] * V[i - 1];
+            if (i + 1 < n) f += e[i] * V[i + 1];
+            F[i] = f;
+        } else {
+            F[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+}
+
+int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
+                  double *V, double *F, double *work)
+{
+    double *cp = work, *dp = work + n;
+    const long max_it = 8 * (long)n + 32;
+    for (long it = 0; it < max_it; it++) {
+        solve_held(n, d, e, p, l, mode, V, F, cp, dp);
+        int flipped = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (!(l[i] > 0.0)) { mode[i] = sgn(V[i]); continue; }
+            int to = mode[i];
+            if (mode[i] != 0 && mode[i] * V[i] < 0.0) to = 0;
+            else if (mode[i] == 0 && F[i] > l[i]) to = -1;
+            else if (mode[i] == 0 && F[i] < -l[i]) to = 1;
+            if (to != mode[i] && (it < 3 || !flipped)) {
+                mode[i] = to;
+                flipped = 1;
+            }
+        }
+        if (!flipped) return (int)it;
+    }
+    return -1;
+}
+
+/* Accept the trial with end velocities V1 and friction forces F1 (constant over the step for the
+ * moving blocks with friction): X, V, A, F, the energy accounts, hA; not the time. */
+static void finish(chain_model *M, chain_state *s, const double *V1, const double *F1)
+{
+    const size_t n = M->n;
+    const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h;
+    if (M->energy) {
+        double cw0, sw0, W = 0.0, Wf = 0.0;
+        phase_of(M, s, s->t, &cw0, &sw0);
+        for (size_t i = 0; i < n; i++) {
+            const double X1 = M->xp[i] + cV * V1[i];
+            W += 0.5 * hh * ((P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] + (P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1[i]);
+            Wf += F1[i] * (X1 - s->X[i]);
+        }
+        s->W_applied += W;
+        s->W_friction += Wf;
+        s->D_damping += 0.5 * hh * (damping_power(M, s->V) + damping_power(M, V1));
+    }
+    for (size_t i = 0; i < n; i++) {
+        s->X[i] = M->xp[i] + cV * V1[i];
+        s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * M->A0[i];
+        s->V[i] = V1[i];
+        s->F[i] = F1[i];
+    }
+    s->hA = hh;
+}
+
+/* ---- the located scheme ---------------------------------------------------------------------- */
+
+static void solve_modes(chain_model *M, const chain_state *s)
+{
+    for (size_t i = 0; i < M->n; i++) M->l[i] = has_friction(M, i) ? M->mukN[i] : 0.0;
+    /* held rows use l only as a flag; frozen blocks are held */
+    solve_held(M->n, M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft, M->cp, M->dp);
+    (void)s;
+}
+
+/* How far candidate i is from its switch at the trial (> 0: not yet), in force units. */
+static double switch_margin(const chain_model *M, const chain_state *s, size_t i)
+{
+    if (M->st[i] != 0) return s->mode[i] * M->Vt[i] * M->cd[i];
+    return M->Fb[i] - fabs(M->Ft[i]);
+}
+
+typedef struct {
+    chain_model *M;
+    const chain_state *s;
+} margin_ctx;
+
+/* The smallest margin of the candidates after a trial step of length x. */
+static double min_margin(void *vctx, double x)
+{
+    margin_ctx *c = (margin_ctx *)vctx;
+    chain_model *M = c->M;
+    const chain_state *s = c->s;
+    trial(M, s, x, cos(M->omega * (s->t + x)), sin(M->omega * (s->t + x)));
+    solve_modes(M, s);
+    double g = INFINITY;
+    for (size_t k = 0; k < M->ncand; k++) g = fmin(g, switch_margin(M, s, M->cand[k]));
+    return g;
+}
+
+/* After a switch: the consistent restart of the new mode set (physical accelerations, hA = 0) and
+ * the friction forces of the stuck blocks. */
+static void restart(chain_model *M, chain_state *s)
+{
+    physical_accel(M, s, s->A);
+    for (size_t i = 0; i < M->n; i++) {
+        if (!has_friction(M, i)) continue;
+        if (s->mode[i] == 0) s->F[i] = -fmax(-M->Fb[i], fmin(M->Fb[i], M->S[i]));
+        else s->F[i] = -s->mode[i] * M->mukN[i];
+    }
+    s->hA = 0.0;
+}
+
+static void report(chain_model *M, chain_state *s, size_t i, int from, chain_switch_fn fn, void *ctx)
+{
+    s->switches++;
+    M->switched = 1;
+    if (fn) fn(ctx, s->t, i, s->X[i], from, s->mode[i]);
+}
+
+/* Switch the candidates whose margin is <= 0 at the state just reached (all of them when
+ * immediate: no sub-step before the switch could be resolved). A stopping block is set at rest
+ * and the rest rule of friction.h decides with its own net force; a stuck one breaks away in the
+ * direction of its net force. Then the consistent restart of the new mode set. */
+static void apply_switches(chain_model *M, chain_state *s, int immediate, chain_switch_fn fn, void *ctx)
+{
+    size_t nsw = 0;
+    for (size_t k = 0; k < M->ncand; k++) {
+        const size_t i = M->cand[k];
+        if (!immediate && switch_margin(M, s, i) > 0.0) continue;
+        M->cand[nsw++] = i;
+        if (s->mode[i] != 0) {
+            /* a slide from rest that cannot move in double precision: held to the step's end */
+            if (immediate && s->V[i] == 0.0) M->frozen[i] = 1;
+            s->V[i] = 0.0;
+        }
+    }
+    M->ncand = nsw;
+    net_forces(M, s, M->S);
+    for (size_t k = 0; k < nsw; k++) {
+        const size_t i = M->cand[k];
+        const int from = s->mode[i];
+        const double S = M->S[i];
+        if (M->frozen[i]) s->mode[i] = 0;
+        else if (from != 0) s->mode[i] = (fabs(S) <= M->Fb[i]) ? 0 : sgn(S);
+        else s->mode[i] = (sgn(S) != 0) ? sgn(S) : -sgn(M->Ft[i]);
+        if (s->mode[i] != from) report(M, s, i, from, fn, ctx);
+    }
+    restart(M, s);
+    /* the consistent acceleration of a slide from rest never points against it (friction.h) */
+    for (size_t k = 0; k < nsw; k++) {
+        const size_t i = M->cand[k];
+        const int dir = s->mode[i];
+        if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
+    }
+}
+
+static void step_located(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
+                         int stop_at_switch)
+{
+    const size_t n = M->n;
+    const long max_phases = 64 + 4 * (long)n;
+    for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
+    for (long phase = 0; s->t < t_end; phase++) {
+        if (phase >= max_phases) { M->err = CHAIN_ERR_NO_PROGRESS; return; }
+        const double r = (phase == 0) ? hh : t_end - s->t;
+        for (size_t i = 0; i < n; i++) M->st[i] = (held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
+        double cw1, sw1;
+        phase_of(M, s, t_end, &cw1, &sw1);
+        trial(M, s, r, cw1, sw1);
+        solve_modes(M, s);
+        s->solves++;
+        M->ncand = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (!has_friction(M, i) || M->frozen[i]) continue;
+            if (switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
+        }
+        if (M->ncand == 0) {  /* the warm basis solves the LCP: the whole remainder in these modes */
+            finish(M, s, M->Vt, M->Ft);
+            for (size_t i = 0; i < n; i++)
+                if (!has_friction(M, i)) s->mode[i] = sgn(s->V[i]);
+            s->t = t_end;
+            return;
+        }
+        if (phase == 0) s->pivot_steps++;
+        /* bracket the first switch: (lo, hi] with min_margin(lo) > 0 >= min_margin(hi) */
+        margin_ctx mc = {M, s};
+        double hi = r, ghi = INFINITY;
+        for (size_t k = 0; k < M->ncand; k++) ghi = fmin(ghi, switch_margin(M, s, M->cand[k]));
+        double lo = r, glo = ghi;
+        for (int it = 0; it < HALVINGS && !(glo > 0.0); it++) {
+            if (it > 0) { hi = lo; ghi = glo; }
+            lo *= 0.5;
+            glo = min_margin(&mc, lo);
+            s->solves++;
+        }
+        if (!(glo > 0.0)) {  /* nothing resolvable before the switch: it happens now */
+            apply_switches(M, s, 1, fn, ctx);
+            if (stop_at_switch && M->switched) return;
+            continue;
+        }
+        const double ta = s->t;
+        const double hs = dfo_brent(min_margin, &mc, ta, lo, glo, hi, ghi);
+        const double t1 = (hs >= r) ? t_end : ta + hs;
+        double c1w, s1w;
+        if (hs >= r) phase_of(M, s, t_end, &c1w, &s1w);
+        else { c1w = cos(M->omega * t1); s1w = sin(M->omega * t1); }
+        trial(M, s, hs, c1w, s1w);
+        solve_modes(M, s);
+        s->solves++;
+        finish(M, s, M->Vt, M->Ft);
+        s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
+        apply_switches(M, s, 0, fn, ctx);
+        if (stop_at_switch && M->switched) return;
+    }
+}
+
+/* ---- the paper and consistent schemes -------------------------------------------------------- */
+
+static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx)
+{
+    const size_t n = M->n;
+    const int consistent = (M->scheme == DFO_SCHEME_CONSISTENT);
+    double cw1, sw1;
+    phase_of(M, s, t_end, &cw1, &sw1);
+    trial(M, s, hh, cw1, sw1);
+    /* the LCP with the coefficient of each block's mode before the step, from that basis */
+    for (size_t i = 0; i < n; i++) {
+        M->st[i] = s->mode[i];
+        M->l[i] = !has_friction(M, i) ? 0.0 : (s->mode[i] == 0) ? M->Fb[i] : M->mukN[i];
+    }
+    int piv = chain_box_lcp(n, M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft, M->box);
+    s->solves++;
+    if (piv < 0) { M->err = CHAIN_ERR_LCP; return; }
+    int total = piv, update = 0;
+    if (!consistent) {
+        /* paper: one update of the coefficients from the result, and a second solve */
+        for (size_t i = 0; i < n; i++) {
+            if (!has_friction(M, i)) continue;
+            const double l1 = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+            if (l1 != M->l[i]) { M->l[i] = l1; update = 1; }
+        }
+        if (update) {
+            piv = chain_box_lcp(n, M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft, M->box);
+            s->solves++;
+            if (piv < 0) { M->err = CHAIN_ERR_LCP; return; }
+            total += piv;
+        }
+    } else {
+        /* consistent (method.md section 4): a stuck block that breaks loose slides with mu_k; a
+         * sliding block that fails to keep sliding sticks if the static force at its predicted
+         * rest position is within the breakaway limit, else slides the way of that force with mu_k
+         * (and sticks if its velocity then comes out the wrong way) */
+        for (size_t i = 0; i < n; i++) {
+            if (!has_friction(M, i)) continue;
+            const int from = s->mode[i];
+            if (from == 0 && M->st[i] != 0) { M->l[i] = M->mukN[i]; update = 1; }
+            if (from != 0 && M->st[i] != from) {
+                const double S = P_at(M, i, cw1, sw1) + M->u[i] - Kx(M, M->xp, i);
+                M->st[i] = (fabs(S) <= M->Fb[i]) ? 0 : sgn(S);
+                M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+                M->frozen[i] = 1; /* judged: no more pivots on it */
+                update = 1;
+            } else {
+                M->frozen[i] = 0;
+            }
+        }
+        for (int pass = 0; update && pass <= (int)n; pass++) {
+            solve_held(n, M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft, M->cp, M->dp);
+            s->solves++;
+            update = 0;
+            for (size_t i = 0; i < n; i++) {
+                if (!has_friction(M, i) || M->st[i] == 0 || M->st[i] * M->Vt[i] > 0.0) continue;
+                if (s->mode[i] == 0 && !M->frozen[i]) continue;
+                M->st[i] = 0;
+                M->l[i] = M->Fb[i];
+                update = 1;
+            }
+        }
+        for (size_t i = 0; i < n; i++) {
+            /* a stuck block's held force is the static force, clamped to the limit */
+            if (has_friction(M, i) && M->st[i] == 0) M->Ft[i] = fmax(-M->Fb[i], fmin(M->Fb[i], M->Ft[i]));
+            if (!has_friction(M, i)) M->st[i] = sgn(M->Vt[i]);
+        }
+        total += update;
+    }
+    if (total > 0) s->pivot_steps++;
+    finish(M, s, M->Vt, M->Ft);
+    s->t = t_end;
+    for (size_t i = 0; i < n; i++) {
+        const int from = s->mode[i];
+        s->mode[i] = M->st[i];
+        if (consistent && s->mode[i] == 0 && has_friction(M, i)) s->A[i] = 0.0;
+        if (has_friction(M, i) && s->mode[i] != from) report(M, s, i, from, fn, ctx);
+    }
+}
+
+/* ---- public stepping ------------------------------------------------------------------------- */
+
+void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state *s)
+{
+    const size_t n = M->n;
+    loads_init(M, in);
+    s->t0 = s->t = t0;
+    s->n_grid = 0;
+    s->hA = 0.0;
+    s->exc_n = -1;
+    s->exc_c = s->exc_s = 0.0;
+    s->W_applied = s->W_friction = s->D_damping = 0.0;
+    s->steps = s->pivot_steps = s->switches = s->solves = 0;
+    for (size_t i = 0; i < n; i++) {
+        s->X[i] = M->x0[i];
+        s->V[i] = M->v0[i];
+    }
+    net_forces(M, s, M->S);
+    for (size_t i = 0; i < n; i++) {
+        if (has_friction(M, i) && s->V[i] == 0.0) s->mode[i] = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : sgn(M->S[i]);
+        else s->mode[i] = sgn(s->V[i]);
+    }
+    restart(M, s);
+    for (size_t i = 0; i < n; i++) {
+        const int dir = s->mode[i];
+        if (!has_friction(M, i)) s->F[i] = 0.0;
+        else if (dir != 0 && s->V[i] == 0.0)
+            s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
+    }
+}
+
+chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
+                           int stop_at_switch, chain_switch_fn on_switch, void *ctx)
+{
+    const double h = M->h;
+    loads_init(M, in);
+    M->err = CHAIN_OK;
+    M->switched = 0;
+    /* a requested time within SNAP_REL_H h of a grid point is that grid point */
+    const double r = (t_target - s->t0) / h;
+    if (r > -0.5 && r < 0x1p52) {
+        const long long g = (long long)floor(r + 0.5);
+        const double tg = s->t0 + (double)g * h;
+        if (g >= s->n_grid && tg >= s->t && fabs(t_target - tg) <= SNAP_REL_H * h) t_target = tg;
+    }
+    while (s->t < t_target) {
+        const double g_prev = s->t0 + (double)s->n_grid * h;
+        const double grid = s->t0 + (double)(s->n_grid + 1) * h;
+        const int from_grid = (s->t == g_prev);
+        double t_end = t_target;
+        if (grid <= t_target) {
+            t_end = grid;
+            s->n_grid++;
+            double cw, sw;
+            grid_phase(M, s, s->n_grid, &cw, &sw);
+        }
+        if (!(t_end > s->t)) return CHAIN_ERR_RESOLUTION;
+        const double hh = (from_grid && t_end == grid) ? h : t_end - s->t;
+        s->steps++;
+        if (M->scheme == DFO_SCHEME_LOCATED) step_located(M, s, t_end, hh, on_switch, ctx, stop_at_switch);
+        else step_lcp(M, s, t_end, hh, on_switch, ctx);
+        if (M->err != CHAIN_OK) return M->err;
+        if (stop_at_switch && M->switched) {
+            /* the grid index stays that of the last grid point at or before the time reached */
+            if (s->t < t_end && t_end == grid) s->n_grid--;
+            return CHAIN_SWITCHED;
+        }
+    }
+    for (size_t i = 0; i < M->n; i++)
+        if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX))
+            return CHAIN_ERR_NONFINITE;
+    return CHAIN_OK;
+}
+
+void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_state *s, double h,
+                        double *d, double *e, double *p, double *l)
+{
+    loads_init(M, in);
+    trial(M, s, h, cos(M->omega * (s->t + h)), sin(M->omega * (s->t + h)));
+    for (size_t i = 0; i < M->n; i++) {
+        d[i] = M->cd[i];
+        if (i + 1 < M->n) e[i] = M->ce[i];
+        p[i] = M->ph[i];
+        l[i] = (s->mode[i] == 0) ? M->Fb[i] : M->mukN[i];
+    }
+}
+
+const char *chain_status_text(chain_status st)
+{
+    switch (st) {
+    case CHAIN_OK: return "ok";
+    case CHAIN_ERR_LCP: return "the chain's friction LCP could not be solved (pivot budget)";
+    case CHAIN_ERR_NO_PROGRESS: return "too many stick/slip switches inside one internal step";
+    case CHAIN_ERR_NONFINITE: return "the state became non-finite (overflow)";
+    case CHAIN_ERR_RESOLUTION: return "the internal step h is below the time resolution at this time";
+    case CHAIN_SWITCHED: return "stopped at a switch";
+    }
+    return "unknown status";
+}
