@@ -24,9 +24,12 @@ struct chain_model {
     double *dF, *eF;            /* M_hat of a whole grid step */
     /* workspace */
     double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
-    double *A0, *xp, *ph, *Vt, *Ft, *cp, *dp, *u, *mukN, *Fb, *S, *l, *box;
-    int *frozen, *st;
-    size_t *cand;
+    double *A0, *xp, *ph, *Vt, *Ft, *cp, *dp, *u, *mukN, *Fb, *S, *l;
+    double *sX, *sV, *sA, *sF, *shA;  /* blocks' states saved around a cluster (step_located) */
+    double *box;                /* 2n: the box LCP's work */
+    int *frozen, *st, *smode;
+    size_t *cand, *clu;         /* candidates (n), clusters (2n) */
+    size_t w;                   /* a cluster's half-width (step_located) */
     /* the current trial */
     const double *cd, *ce;      /* its M_hat */
     dfo_bossak_kin kin, kinF;   /* the trial's kinematics; a grid step's */
@@ -84,12 +87,12 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (31 of them, the last, box, 2n long), one for
-     * the ints, one for cand */
-    enum { NARR = 31 };
+    /* one block of doubles for all per-block arrays (36 of them, the last, box, 2n long), one for
+     * the ints, one for the candidates and clusters */
+    enum { NARR = 36 };
     double *blk = dalloc(al, (NARR + 1) * n);
-    int *iblk = (int *)al->allocate(al->env, 2 * n, sizeof(int));
-    M->cand = (size_t *)al->allocate(al->env, n, sizeof(size_t));
+    int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
+    M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
     if (!blk || !iblk || !M->cand) {
         if (blk) al->release(al->env, blk);
         if (iblk) al->release(al->env, iblk);
@@ -101,10 +104,12 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->N, &M->mu_k, &M->mu_b, &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
+    M->smode = iblk + 2 * n;
+    M->clu = M->cand + n;
     M->k_end = p->k_end;
     M->c_end = p->c_end;
     M->omega = p->omega;
@@ -148,6 +153,12 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->dF[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
         M->eF[i] = M->Ko[i] * bhg + M->Co[i];
     }
+    /* beyond w blocks the influence of a block inside one step (M_hat^-1 decays like rho^distance,
+     * rho the largest off-diagonal to diagonal ratio; shorter steps decay faster) is below 2^-56 */
+    double rho = 0.0;
+    for (size_t i = 0; i < n; i++) rho = fmax(rho, (fabs(i > 0 ? M->eF[i - 1] : 0.0) + fabs(M->eF[i])) / M->dF[i]);
+    M->w = (rho <= 0.0) ? 1 : (rho >= 0.5) ? n : (size_t)ceil(56.0 / -log2(rho));
+    if (M->w < 1) M->w = 1;
     if (err) *err = NULL;
     return M;
 }
@@ -169,7 +180,7 @@ int chain_state_init(const chain_model *M, chain_state *s)
     const size_t n = M->n;
     memset(s, 0, sizeof *s);
     s->n = n;
-    double *b = dalloc(&M->al, 4 * n);
+    double *b = dalloc(&M->al, 5 * n);
     int *mode = (int *)M->al.allocate(M->al.env, n, sizeof(int));
     if (!b || !mode) {
         if (b) M->al.release(M->al.env, b);
@@ -180,6 +191,7 @@ int chain_state_init(const chain_model *M, chain_state *s)
     s->V = b + n;
     s->A = b + 2 * n;
     s->F = b + 3 * n;
+    s->hA = b + 4 * n;
     s->mode = mode;
     s->exc_n = -1;
     return 1;
@@ -189,17 +201,18 @@ void chain_state_free(const chain_model *M, chain_state *s)
 {
     if (s->X) M->al.release(M->al.env, s->X);
     if (s->mode) M->al.release(M->al.env, s->mode);
-    s->X = s->V = s->A = s->F = NULL;
+    s->X = s->V = s->A = s->F = s->hA = NULL;
     s->mode = NULL;
 }
 
 void chain_state_copy(chain_state *dst, const chain_state *src)
 {
-    double *X = dst->X, *V = dst->V, *A = dst->A, *F = dst->F;
+    double *X = dst->X, *V = dst->V, *A = dst->A, *F = dst->F, *hA = dst->hA;
     int *mode = dst->mode;
     const size_t n = src->n;
     *dst = *src;
-    dst->X = X; dst->V = V; dst->A = A; dst->F = F; dst->mode = mode;
+    dst->X = X; dst->V = V; dst->A = A; dst->F = F; dst->hA = hA; dst->mode = mode;
+    memcpy(hA, src->hA, n * sizeof *hA);
     memcpy(X, src->X, n * sizeof *X);
     memcpy(V, src->V, n * sizeof *V);
     memcpy(A, src->A, n * sizeof *A);
@@ -272,12 +285,40 @@ static double Cv(const chain_model *M, const double *v, size_t i)
     return f;
 }
 
-/* Net applied force on every block at the state (excitation, inputs, springs, dampers), into S. */
-static void net_forces(chain_model *M, const chain_state *s, double *S)
+/* A span of blocks [a, b) stepped on its own: the whole chain, or a cluster around switching
+ * blocks (see step_located). A cluster's outside neighbours a - 1 and b are ghosts: their motion
+ * over the step, interpolated (cubic Hermite) between their states at its start and end, is
+ * written into the state arrays at the current time. */
+typedef struct {
+    size_t a, b;
+    int has[2];       /* ghost a - 1 (0), ghost b (1) present */
+    size_t idx[2];
+    double t_start, H;
+    double X0[2], V0[2], X1[2], V1[2];
+    double gV[2];     /* the ghosts' velocities at the end of the current trial (Dirichlet rows) */
+} span;
+
+static void ghost_at(const span *G, int k, double tau, double *x, double *v, double *acc)
+{
+    const double H = G->H, r = tau / H, dx = G->X1[k] - G->X0[k], v0 = G->V0[k], v1 = G->V1[k];
+    *x = G->X0[k] + v0 * H * (r * r * r - 2.0 * r * r + r) + dx * (3.0 * r * r - 2.0 * r * r * r) + v1 * H * (r * r * r - r * r);
+    *v = v0 * (3.0 * r * r - 4.0 * r + 1.0) + dx / H * (6.0 * r - 6.0 * r * r) + v1 * (3.0 * r * r - 2.0 * r);
+    *acc = (v0 * (6.0 * r - 4.0) + dx / H * (6.0 - 12.0 * r) + v1 * (6.0 * r - 2.0)) / H;
+}
+
+/* Write the ghosts' state at the current time into the state arrays. */
+static void set_ghosts(chain_state *s, const span *G)
+{
+    for (int k = 0; k < 2; k++)
+        if (G->has[k]) ghost_at(G, k, s->t - G->t_start, &s->X[G->idx[k]], &s->V[G->idx[k]], &s->A[G->idx[k]]);
+}
+
+/* Net applied force on the span's blocks at the state (excitation, inputs, springs, dampers). */
+static void net_forces(chain_model *M, const chain_state *s, const span *G, double *S)
 {
     double cw, sw;
     phase_of(M, s, s->t, &cw, &sw);
-    for (size_t i = 0; i < M->n; i++) S[i] = P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) - Cv(M, s->V, i);
+    for (size_t i = G->a; i < G->b; i++) S[i] = P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) - Cv(M, s->V, i);
 }
 
 static int has_friction(const chain_model *M, size_t i) { return M->Fb[i] > 0.0; }
@@ -289,20 +330,31 @@ static int held(const chain_model *M, const chain_state *s, size_t i)
 }
 
 /* Physical accelerations at the state: stuck blocks 0, the others from the equation of motion. */
-static void physical_accel(chain_model *M, const chain_state *s, double *a)
+static void physical_accel(chain_model *M, const chain_state *s, const span *G, double *a)
 {
-    net_forces(M, s, M->S);
-    for (size_t i = 0; i < M->n; i++) {
+    net_forces(M, s, G, M->S);
+    for (size_t i = G->a; i < G->b; i++) {
         if (held(M, s, i)) { a[i] = 0.0; continue; }
         const double F = has_friction(M, i) ? -s->mode[i] * M->mukN[i] : 0.0;
         a[i] = (M->S[i] + F) / M->m[i];
     }
 }
 
+static span whole(const chain_model *M, const chain_state *s)
+{
+    span G;
+    memset(&G, 0, sizeof G);
+    G.a = 0;
+    G.b = M->n;
+    G.t_start = s->t;
+    return G;
+}
+
 void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s, double *a)
 {
     loads_init(M, in);
-    physical_accel(M, s, a);
+    const span G = whole(M, s);
+    physical_accel(M, s, &G, a);
 }
 
 double chain_energy(const chain_model *M, const chain_state *s)
@@ -331,11 +383,12 @@ static double damping_power(const chain_model *M, const double *v)
 
 /* ---- one trial step ------------------------------------------------------------------------- */
 
-/* The step of length hh from the state to t1 (cw1, sw1: the excitation phase at t1): M_hat,
- * the re-based A0, the predicted position xp and p_hat (method.md sections 2, 8 and 9). */
-static void trial(chain_model *M, const chain_state *s, double hh, double cw1, double sw1)
+/* The step of length hh of the span's blocks from the state to t1 (cw1, sw1: the excitation phase
+ * at t1): M_hat, the re-based A0, the predicted position xp and p_hat (method.md sections 2, 8
+ * and 9); a ghost's xp and velocity at t1 from its interpolation. */
+static void trial(chain_model *M, const chain_state *s, span *G, double hh, double cw1, double sw1)
 {
-    const size_t n = M->n;
+    const size_t n = M->n, a0 = G->a, b0 = G->b;
     if (hh == M->h) {
         M->kin = M->kinF;
         M->cd = M->dF;
@@ -343,7 +396,8 @@ static void trial(chain_model *M, const chain_state *s, double hh, double cw1, d
     } else {
         dfo_bossak_kin_for(hh, M->gamma, M->beta, &M->kin);
         const double c1 = M->kin.c1, bhg = M->beta * hh / M->gamma;
-        for (size_t i = 0; i < n; i++) {
+        const size_t lo = a0 - (size_t)G->has[0], hi = b0 + (size_t)G->has[1];
+        for (size_t i = lo; i < hi; i++) {
             M->d[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
             M->e[i] = M->Ko[i] * bhg + M->Co[i];
         }
@@ -354,15 +408,22 @@ static void trial(chain_model *M, const chain_state *s, double hh, double cw1, d
     M->sw1 = sw1;
     const double a = M->alpha;
     /* Bossak's A belongs to the step length hA: re-based on hh with the jerk (section 8) */
-    const int rebase = a != 0.0 && hh != s->hA &&
-                       fabs(hh - s->hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
-                       M->rate_max * fmax(hh, s->hA) <= 1.0;
+    int rebase = 0;
+    if (a != 0.0) {
+        for (size_t i = a0; i < b0 && !rebase; i++) {
+            const double hA = s->hA[i];
+            rebase = hh != hA && fabs(hh - hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
+                     M->rate_max * fmax(hh, hA) <= 1.0;
+        }
+    }
     if (rebase) {
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones */
         double cw, sw;
         phase_of(M, s, s->t, &cw, &sw);
-        physical_accel(M, s, M->A0);  /* physical accelerations, in A0 for now */
-        for (size_t i = 0; i < n; i++) {
+        physical_accel(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
+        for (int k = 0; k < 2; k++)
+            if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
+        for (size_t i = a0; i < b0; i++) {
             double j = 0.0;
             if (!held(M, s, i)) {
                 const double Pd = -M->omega * (M->Pc[i] * sw + M->Ps[i] * cw);
@@ -370,15 +431,27 @@ static void trial(chain_model *M, const chain_state *s, double hh, double cw1, d
             }
             M->S[i] = j;
         }
-        for (size_t i = 0; i < n; i++) M->A0[i] = s->A[i] + a * (hh - s->hA) * M->S[i];
+        for (size_t i = a0; i < b0; i++) {
+            const double hA = s->hA[i];
+            const int ri = hh != hA && fabs(hh - hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
+                           M->rate_max * fmax(hh, hA) <= 1.0;
+            M->A0[i] = ri ? s->A[i] + a * (hh - hA) * M->S[i] : s->A[i];
+        }
     } else {
-        memcpy(M->A0, s->A, n * sizeof(double));
+        memcpy(M->A0 + a0, s->A + a0, (b0 - a0) * sizeof(double));
     }
     const double c1 = M->kin.c1, pV = M->kin.pred_V, pA = M->kin.pred_A, g1 = M->g1;
     const double *X = s->X, *V = s->V, *A0 = M->A0;
     double *xp = M->xp, *ph = M->ph;
-    for (size_t i = 0; i < n; i++) xp[i] = X[i] + pV * V[i] + pA * A0[i];
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = a0; i < b0; i++) xp[i] = X[i] + pV * V[i] + pA * A0[i];
+    for (int k = 0; k < 2; k++) {
+        if (!G->has[k]) continue;
+        double xg, vg, ag;
+        ghost_at(G, k, s->t - G->t_start + hh, &xg, &vg, &ag);
+        xp[G->idx[k]] = xg - M->kin.corr_V * vg;  /* so that xp + corr_V V1 is the ghost's x */
+        G->gV[k] = vg;
+    }
+    for (size_t i = a0; i < b0; i++) {
         double kx = M->Kd[i] * xp[i];
         if (i > 0) kx += M->Ko[i - 1] * xp[i - 1];
         if (i + 1 < n) kx += M->Ko[i] * xp[i + 1];
@@ -386,43 +459,54 @@ static void trial(chain_model *M, const chain_state *s, double hh, double cw1, d
     }
 }
 
-/* Tridiagonal solve of M_hat V = p + F with rows in mode 0 (and l > 0) held at V = 0 and the
- * others sliding with F = -mode l (l = 0: free, F = 0). Held rows get F = (M_hat V)_i - p_i. */
-static void solve_held(size_t n, const double *d, const double *e, const double *p, const double *l,
-                       const int *mode, double *V, double *F, double *cp, double *dp)
+/* Tridiagonal solve of M_hat V = p + F over [lo, hi) with rows in mode 0 (and l > 0) held at V = 0
+ * and the others sliding with F = -mode l (l = 0: free, F = 0); ghost rows (gl, gr: present) fixed
+ * at their velocities vl, vr. Held rows get F = (M_hat V)_i - p_i. */
+static void solve_rows(size_t lo, size_t hi, int gl, double vl, int gr, double vr, const double *d, const double *e,
+                       const double *p, const double *l, const int *mode, double *V, double *F, double *cp, double *dp)
 {
     double cprev = 0.0, dprev = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
+    for (size_t i = lo; i < hi; i++) {
+        if ((gl && i == lo) || (gr && i == hi - 1)) {
+            cp[i] = 0.0;
+            dp[i] = (gl && i == lo) ? vl : vr;
+        } else if (mode[i] == 0 && l[i] > 0.0) {
             cp[i] = 0.0;
             dp[i] = 0.0;
         } else {
-            const double lo = (i > 0) ? e[i - 1] : 0.0;
+            const double lo_e = (i > lo) ? e[i - 1] : 0.0;
             const double rhs = p[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            const double den = d[i] - lo * cprev;
+            const double den = d[i] - lo_e * cprev;
             const double inv = 1.0 / den;
             cp[i] = e[i] * inv;
-            dp[i] = (rhs - lo * dprev) * inv;
+            dp[i] = (rhs - lo_e * dprev) * inv;
         }
         cprev = cp[i];
         dprev = dp[i];
     }
     double vn = 0.0;
-    for (size_t j = n; j-- > 0;) {
+    for (size_t j = hi; j-- > lo;) {
         vn = dp[j] - cp[j] * vn;
         V[j] = vn;
     }
-    for (size_t i = 0; i < n; i++) {
+    const size_t a = lo + (size_t)gl, b = hi - (size_t)gr;
+    for (size_t i = a; i < b; i++) {
         if (mode[i] == 0 && l[i] > 0.0) {
             V[i] = 0.0;
             double f = -p[i];
-            if (i > 0) f += e[i - 1] * V[i - 1];
-            if (i + 1 < n) f += e[i] * V[i + 1];
+            if (i > lo) f += e[i - 1] * V[i - 1];
+            if (i + 1 < hi) f += e[i] * V[i + 1];
             F[i] = f;
         } else {
             F[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
         }
     }
+}
+
+static void solve_held(size_t n, const double *d, const double *e, const double *p, const double *l,
+                       const int *mode, double *V, double *F, double *cp, double *dp)
+{
+    solve_rows(0, n, 0, 0.0, 0, 0.0, d, e, p, l, mode, V, F, cp, dp);
 }
 
 int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
@@ -449,13 +533,14 @@ int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, c
     return -1;
 }
 
-/* Accept the trial with end velocities V1 and friction forces F1 (constant over the step for the
- * moving blocks with friction): X, V, A, F, the energy accounts, hA; not the time. */
-static void finish(chain_model *M, chain_state *s, const double *V1, const double *F1)
+/* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant
+ * over the step for the moving blocks with friction): X, V, A, F, hA, the energy accounts (whole
+ * chain only); not the time. */
+static void finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1)
 {
-    const size_t n = M->n;
     const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h;
-    if (M->energy) {
+    if (M->energy && G->a == 0 && G->b == M->n) {
+        const size_t n = M->n;
         double cw0, sw0, W = 0.0, Wf = 0.0;
         phase_of(M, s, s->t, &cw0, &sw0);
         for (size_t i = 0; i < n; i++) {
@@ -467,26 +552,27 @@ static void finish(chain_model *M, chain_state *s, const double *V1, const doubl
         s->W_friction += Wf;
         s->D_damping += 0.5 * hh * (damping_power(M, s->V) + damping_power(M, V1));
     }
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = G->a; i < G->b; i++) {
         s->X[i] = M->xp[i] + cV * V1[i];
         s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * M->A0[i];
         s->V[i] = V1[i];
         s->F[i] = F1[i];
+        s->hA[i] = hh;
     }
-    s->hA = hh;
 }
 
 /* ---- the located scheme ---------------------------------------------------------------------- */
 
-static void solve_modes(chain_model *M, const chain_state *s)
+static void solve_modes(chain_model *M, const span *G)
 {
-    for (size_t i = 0; i < M->n; i++) M->l[i] = has_friction(M, i) ? M->mukN[i] : 0.0;
+    const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+    for (size_t i = G->a; i < G->b; i++) M->l[i] = has_friction(M, i) ? M->mukN[i] : 0.0;
     /* held rows use l only as a flag; frozen blocks are held */
-    solve_held(M->n, M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft, M->cp, M->dp);
-    (void)s;
+    solve_rows(lo, hi, G->has[0], G->gV[0], G->has[1], G->gV[1], M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft,
+               M->cp, M->dp);
 }
 
-/* How far candidate i is from its switch at the trial (> 0: not yet), in force units. */
+/* How far block i is from its switch at the trial (> 0: not yet), in force units. */
 static double switch_margin(const chain_model *M, const chain_state *s, size_t i)
 {
     if (M->st[i] != 0) return s->mode[i] * M->Vt[i] * M->cd[i];
@@ -496,6 +582,7 @@ static double switch_margin(const chain_model *M, const chain_state *s, size_t i
 typedef struct {
     chain_model *M;
     const chain_state *s;
+    span *G;
 } margin_ctx;
 
 /* The smallest margin of the candidates after a trial step of length x. */
@@ -504,24 +591,24 @@ static double min_margin(void *vctx, double x)
     margin_ctx *c = (margin_ctx *)vctx;
     chain_model *M = c->M;
     const chain_state *s = c->s;
-    trial(M, s, x, cos(M->omega * (s->t + x)), sin(M->omega * (s->t + x)));
-    solve_modes(M, s);
+    trial(M, s, c->G, x, cos(M->omega * (s->t + x)), sin(M->omega * (s->t + x)));
+    solve_modes(M, c->G);
     double g = INFINITY;
     for (size_t k = 0; k < M->ncand; k++) g = fmin(g, switch_margin(M, s, M->cand[k]));
     return g;
 }
 
-/* After a switch: the consistent restart of the new mode set (physical accelerations, hA = 0) and
- * the friction forces of the stuck blocks. */
-static void restart(chain_model *M, chain_state *s)
+/* After a switch: the consistent restart of the span's new mode set (physical accelerations,
+ * hA = 0) and the friction forces of its stuck blocks. */
+static void restart(chain_model *M, chain_state *s, const span *G)
 {
-    physical_accel(M, s, s->A);
-    for (size_t i = 0; i < M->n; i++) {
+    physical_accel(M, s, G, s->A);
+    for (size_t i = G->a; i < G->b; i++) {
+        s->hA[i] = 0.0;
         if (!has_friction(M, i)) continue;
         if (s->mode[i] == 0) s->F[i] = -fmax(-M->Fb[i], fmin(M->Fb[i], M->S[i]));
         else s->F[i] = -s->mode[i] * M->mukN[i];
     }
-    s->hA = 0.0;
 }
 
 static void report(chain_model *M, chain_state *s, size_t i, int from, chain_switch_fn fn, void *ctx)
@@ -534,8 +621,8 @@ static void report(chain_model *M, chain_state *s, size_t i, int from, chain_swi
 /* Switch the candidates whose margin is <= 0 at the state just reached (all of them when
  * immediate: no sub-step before the switch could be resolved). A stopping block is set at rest
  * and the rest rule of friction.h decides with its own net force; a stuck one breaks away in the
- * direction of its net force. Then the consistent restart of the new mode set. */
-static void apply_switches(chain_model *M, chain_state *s, int immediate, chain_switch_fn fn, void *ctx)
+ * direction of its net force. Then the consistent restart of the span's new mode set. */
+static void apply_switches(chain_model *M, chain_state *s, const span *G, int immediate, chain_switch_fn fn, void *ctx)
 {
     size_t nsw = 0;
     for (size_t k = 0; k < M->ncand; k++) {
@@ -549,7 +636,7 @@ static void apply_switches(chain_model *M, chain_state *s, int immediate, chain_
         }
     }
     M->ncand = nsw;
-    net_forces(M, s, M->S);
+    net_forces(M, s, G, M->S);
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
         const int from = s->mode[i];
@@ -559,7 +646,7 @@ static void apply_switches(chain_model *M, chain_state *s, int immediate, chain_
         else s->mode[i] = (sgn(S) != 0) ? sgn(S) : -sgn(M->Ft[i]);
         if (s->mode[i] != from) report(M, s, i, from, fn, ctx);
     }
-    restart(M, s);
+    restart(M, s, G);
     /* the consistent acceleration of a slide from rest never points against it (friction.h) */
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
@@ -568,36 +655,36 @@ static void apply_switches(chain_model *M, chain_state *s, int immediate, chain_
     }
 }
 
-static void step_located(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
-                         int stop_at_switch)
+/* The located step of a span from s->t to t_end (first phase of length hh): phases in the current
+ * modes, each ended at the earliest switch of a block of the span (method.md section 9). */
+static void located_span(chain_model *M, chain_state *s, span *G, double t_end, double hh, chain_switch_fn fn,
+                         void *ctx, int stop_at_switch)
 {
-    const size_t n = M->n;
-    const long max_phases = 64 + 4 * (long)n;
-    for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
+    const long max_phases = 64 + 4 * (long)(G->b - G->a);
     for (long phase = 0; s->t < t_end; phase++) {
         if (phase >= max_phases) { M->err = CHAIN_ERR_NO_PROGRESS; return; }
+        set_ghosts(s, G);
         const double r = (phase == 0) ? hh : t_end - s->t;
-        for (size_t i = 0; i < n; i++) M->st[i] = (held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
+        for (size_t i = G->a; i < G->b; i++) M->st[i] = (held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
         double cw1, sw1;
         phase_of(M, s, t_end, &cw1, &sw1);
-        trial(M, s, r, cw1, sw1);
-        solve_modes(M, s);
+        trial(M, s, G, r, cw1, sw1);
+        solve_modes(M, G);
         s->solves++;
         M->ncand = 0;
-        for (size_t i = 0; i < n; i++) {
+        for (size_t i = G->a; i < G->b; i++) {
             if (!has_friction(M, i) || M->frozen[i]) continue;
             if (switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
         }
         if (M->ncand == 0) {  /* the warm basis solves the LCP: the whole remainder in these modes */
-            finish(M, s, M->Vt, M->Ft);
-            for (size_t i = 0; i < n; i++)
+            finish(M, s, G, M->Vt, M->Ft);
+            for (size_t i = G->a; i < G->b; i++)
                 if (!has_friction(M, i)) s->mode[i] = sgn(s->V[i]);
             s->t = t_end;
             return;
         }
-        if (phase == 0) s->pivot_steps++;
         /* bracket the first switch: (lo, hi] with min_margin(lo) > 0 >= min_margin(hi) */
-        margin_ctx mc = {M, s};
+        margin_ctx mc = {M, s, G};
         double hi = r, ghi = INFINITY;
         for (size_t k = 0; k < M->ncand; k++) ghi = fmin(ghi, switch_margin(M, s, M->cand[k]));
         double lo = r, glo = ghi;
@@ -608,7 +695,7 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
             s->solves++;
         }
         if (!(glo > 0.0)) {  /* nothing resolvable before the switch: it happens now */
-            apply_switches(M, s, 1, fn, ctx);
+            apply_switches(M, s, G, 1, fn, ctx);
             if (stop_at_switch && M->switched) return;
             continue;
         }
@@ -618,14 +705,110 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
         double c1w, s1w;
         if (hs >= r) phase_of(M, s, t_end, &c1w, &s1w);
         else { c1w = cos(M->omega * t1); s1w = sin(M->omega * t1); }
-        trial(M, s, hs, c1w, s1w);
-        solve_modes(M, s);
+        trial(M, s, G, hs, c1w, s1w);
+        solve_modes(M, G);
         s->solves++;
-        finish(M, s, M->Vt, M->Ft);
+        finish(M, s, G, M->Vt, M->Ft);
         s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
-        apply_switches(M, s, 0, fn, ctx);
+        set_ghosts(s, G);
+        apply_switches(M, s, G, 0, fn, ctx);
         if (stop_at_switch && M->switched) return;
     }
+}
+
+/* Save (dir 0) or restore (dir 1) the state of blocks [a, b). */
+static void save_blocks(chain_model *M, chain_state *s, size_t a, size_t b, int restore)
+{
+    for (size_t i = a; i < b; i++) {
+        if (!restore) {
+            M->sX[i] = s->X[i]; M->sV[i] = s->V[i]; M->sA[i] = s->A[i]; M->sF[i] = s->F[i]; M->shA[i] = s->hA[i];
+            M->smode[i] = s->mode[i];
+        } else {
+            s->X[i] = M->sX[i]; s->V[i] = M->sV[i]; s->A[i] = M->sA[i]; s->F[i] = M->sF[i]; s->hA[i] = M->shA[i];
+            s->mode[i] = M->smode[i];
+        }
+    }
+}
+
+/* One located step. The whole chain is solved in the current modes; when blocks must switch, a long
+ * chain (more than 2 w + 3 blocks, w the span beyond which a block's influence inside one step is
+ * below rounding: M_hat's inverse decays like rho^distance) takes the step in those modes outside
+ * clusters of w blocks either side of the switching ones, and each cluster takes it again on its
+ * own, switches placed inside, with its outside neighbours as interpolated ghosts. A short chain,
+ * stop_at_switch and the energy accounts take the located step on the whole chain. */
+static void step_located(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
+                         int stop_at_switch)
+{
+    const size_t n = M->n;
+    span G0 = whole(M, s);
+    for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
+    for (size_t i = 0; i < n; i++) M->st[i] = held(M, s, i) ? 0 : s->mode[i];
+    double cw1, sw1;
+    phase_of(M, s, t_end, &cw1, &sw1);
+    trial(M, s, &G0, hh, cw1, sw1);
+    solve_modes(M, &G0);
+    s->solves++;
+    M->ncand = 0;
+    for (size_t i = 0; i < n; i++)
+        if (has_friction(M, i) && switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
+    if (M->ncand == 0) {  /* the warm basis solves the LCP: O(n), no pivot */
+        finish(M, s, &G0, M->Vt, M->Ft);
+        for (size_t i = 0; i < n; i++)
+            if (!has_friction(M, i)) s->mode[i] = sgn(s->V[i]);
+        s->t = t_end;
+        return;
+    }
+    s->pivot_steps++;
+    const size_t w = M->w;
+    if (stop_at_switch || M->energy || n <= 2 * w + 3) {
+        located_span(M, s, &G0, t_end, hh, fn, ctx, stop_at_switch);
+        return;
+    }
+    /* clusters [a, b) around the candidates, at least 3 blocks apart (distinct ghosts) */
+    size_t nc = 0;
+    for (size_t k = 0; k < M->ncand; k++) {
+        const size_t c = M->cand[k], a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
+        if (nc > 0 && a <= M->clu[2 * nc - 1] + 2) M->clu[2 * nc - 1] = b;
+        else { M->clu[2 * nc] = a; M->clu[2 * nc + 1] = b; nc++; }
+    }
+    for (size_t j = 0; j < nc; j++) {
+        const size_t a = M->clu[2 * j], b = M->clu[2 * j + 1];
+        save_blocks(M, s, (a > 0) ? a - 1 : 0, (b < n) ? b + 1 : n, 0);
+    }
+    /* everything in the current modes first */
+    const double t_start = s->t;
+    finish(M, s, &G0, M->Vt, M->Ft);
+    for (size_t i = 0; i < n; i++)
+        if (!has_friction(M, i)) s->mode[i] = sgn(s->V[i]);
+    for (size_t j = 0; j < nc && M->err == CHAIN_OK; j++) {
+        span G;
+        memset(&G, 0, sizeof G);
+        G.a = M->clu[2 * j];
+        G.b = M->clu[2 * j + 1];
+        G.t_start = t_start;
+        G.H = t_end - t_start;
+        G.has[0] = G.a > 0;
+        G.has[1] = G.b < n;
+        G.idx[0] = G.a - (size_t)G.has[0];
+        G.idx[1] = G.b;
+        double A1[2] = {0.0, 0.0};
+        for (int k = 0; k < 2; k++) {
+            if (!G.has[k]) continue;
+            const size_t g = G.idx[k];
+            G.X0[k] = M->sX[g]; G.V0[k] = M->sV[g];
+            G.X1[k] = s->X[g]; G.V1[k] = s->V[g];
+            A1[k] = s->A[g];
+        }
+        save_blocks(M, s, G.a, G.b, 1);
+        s->t = t_start;
+        located_span(M, s, &G, t_end, hh, fn, ctx, 0);
+        for (int k = 0; k < 2; k++) {
+            if (!G.has[k]) continue;
+            const size_t g = G.idx[k];
+            s->X[g] = G.X1[k]; s->V[g] = G.V1[k]; s->A[g] = A1[k]; s->hA[g] = hh;
+        }
+    }
+    s->t = t_end;
 }
 
 /* ---- the paper and consistent schemes -------------------------------------------------------- */
@@ -636,7 +819,8 @@ static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, ch
     const int consistent = (M->scheme == DFO_SCHEME_CONSISTENT);
     double cw1, sw1;
     phase_of(M, s, t_end, &cw1, &sw1);
-    trial(M, s, hh, cw1, sw1);
+    span G0 = whole(M, s);
+    trial(M, s, &G0, hh, cw1, sw1);
     /* the LCP with the coefficient of each block's mode before the step, from that basis */
     for (size_t i = 0; i < n; i++) {
         M->st[i] = s->mode[i];
@@ -698,7 +882,7 @@ static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, ch
         total += update;
     }
     if (total > 0) s->pivot_steps++;
-    finish(M, s, M->Vt, M->Ft);
+    finish(M, s, &G0, M->Vt, M->Ft);
     s->t = t_end;
     for (size_t i = 0; i < n; i++) {
         const int from = s->mode[i];
@@ -716,7 +900,6 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
     loads_init(M, in);
     s->t0 = s->t = t0;
     s->n_grid = 0;
-    s->hA = 0.0;
     s->exc_n = -1;
     s->exc_c = s->exc_s = 0.0;
     s->W_applied = s->W_friction = s->D_damping = 0.0;
@@ -724,13 +907,15 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
     for (size_t i = 0; i < n; i++) {
         s->X[i] = M->x0[i];
         s->V[i] = M->v0[i];
+        s->hA[i] = 0.0;
     }
-    net_forces(M, s, M->S);
+    const span G = whole(M, s);
+    net_forces(M, s, &G, M->S);
     for (size_t i = 0; i < n; i++) {
         if (has_friction(M, i) && s->V[i] == 0.0) s->mode[i] = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : sgn(M->S[i]);
         else s->mode[i] = sgn(s->V[i]);
     }
-    restart(M, s);
+    restart(M, s, &G);
     for (size_t i = 0; i < n; i++) {
         const int dir = s->mode[i];
         if (!has_friction(M, i)) s->F[i] = 0.0;
@@ -786,7 +971,8 @@ void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_stat
                         double *d, double *e, double *p, double *l)
 {
     loads_init(M, in);
-    trial(M, s, h, cos(M->omega * (s->t + h)), sin(M->omega * (s->t + h)));
+    span G = whole(M, s);
+    trial(M, s, &G, h, cos(M->omega * (s->t + h)), sin(M->omega * (s->t + h)));
     for (size_t i = 0; i < M->n; i++) {
         d[i] = M->cd[i];
         if (i + 1 < M->n) e[i] = M->ce[i];

@@ -3,8 +3,11 @@
  *
  *   chain_driver n=N t_end=T h=H [dt=DT | random_dt=SEED] [alpha=A] [scheme=S] [omega=W]
  *                [k_end=K] [c_end=C] [m=v1,v2,...] [k=...] [c=...] [P0=...] [phi=...] [N=...]
- *                [mu_s=...] [chi=...] [x0=...] [v0=...] [F_ext=...] [N_ext=...]
+ *                [mu_s=...] [chi=...] [x0=...] [v0=...] [F_ext=...] [N_ext=...] [energy=0|1]
  *
+ * energy=1 (default) keeps the energy accounts, which makes the located scheme split the whole
+ * chain at every switch; energy=0 lets a long chain split only clusters around the switching
+ * blocks (chain.c, step_located), with the accounts left at 0.
  * A list with one value sets every block. Output: one row per communication point, columns t,
  * then x_i, v_i, F_i, mode_i for every block, then E (mechanical energy), W_applied, W_friction,
  * D_damping, steps, pivot_steps, switches. random_dt draws communication steps in [0.1 h, 3 h].
@@ -43,7 +46,7 @@ int main(int argc, char **argv)
     const char *given[12] = {0};
     size_t n = 2;
     double t_end = 1.0, h = 1e-3, dt = 0.0, alpha = -0.1, omega = 5.0, k_end = 0.0, c_end = 0.0;
-    int scheme = 3;
+    int scheme = 3, energy = 1;
     unsigned long long seed = 0;
     for (int a = 1; a < argc; a++) {
         char *eq = strchr(argv[a], '=');
@@ -64,6 +67,7 @@ int main(int argc, char **argv)
         else if (!strcmp(key, "k_end")) k_end = atof(val);
         else if (!strcmp(key, "c_end")) c_end = atof(val);
         else if (!strcmp(key, "scheme")) scheme = atoi(val);
+        else if (!strcmp(key, "energy")) energy = atoi(val);
         else { fprintf(stderr, "chain_driver: unknown argument %s\n", key); return 2; }
     }
     if (n < 1 || n > MAX_N) { fprintf(stderr, "chain_driver: invalid value %zu for n (valid: 1 ... %d)\n", n, MAX_N); return 2; }
@@ -72,7 +76,7 @@ int main(int argc, char **argv)
         if (!parse_list(given[j], arr[j], n)) { fprintf(stderr, "chain_driver: invalid list for %s\n", names[j]); return 2; }
     }
     const chain_params p = {n, arr[0], arr[1], arr[2], arr[3], arr[4], arr[5], arr[6], arr[7], arr[8], arr[9],
-                            k_end, c_end, omega, h, alpha, scheme, 1};
+                            k_end, c_end, omega, h, alpha, scheme, energy};
     char buf[200];
     const char *msg = chain_check_params(&p, buf, sizeof buf);
     if (msg) { fprintf(stderr, "chain_driver: %s\n", msg); return 2; }
