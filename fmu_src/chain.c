@@ -17,6 +17,7 @@ struct chain_model {
     chain_alloc al;
     size_t n;
     double k_end, c_end, omega, h, alpha, gamma, beta, g1, rate_max;
+    double rot_c, rot_s;        /* cos and sin of omega h: the excitation phase's advance per step */
     int scheme, energy, damped;
     /* per block (length n) */
     double *m, *am, *am1, *Pc, *Ps, *N, *mu_k, *mu_b, *x0, *v0;
@@ -32,6 +33,8 @@ struct chain_model {
     size_t w;                   /* a cluster's half-width (step_located) */
     /* the current trial */
     const double *cd, *ce;      /* its M_hat */
+    const double *A0p;          /* its re-based A0: A0, or the state's A when nothing is re-based */
+    int any_frozen;             /* frozen may hold a 1 */
     dfo_bossak_kin kin, kinF;   /* the trial's kinematics; a grid step's */
     double cw1, sw1;            /* cos, sin of omega t at its end */
     size_t ncand;
@@ -114,6 +117,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->c_end = p->c_end;
     M->omega = p->omega;
     M->h = p->h;
+    M->rot_c = cos(p->omega * p->h);
+    M->rot_s = sin(p->omega * p->h);
     M->alpha = p->alpha;
     M->gamma = dfo_bossak_gamma(p->alpha);
     M->beta = dfo_bossak_beta(p->alpha);
@@ -237,7 +242,7 @@ static void loads_init(chain_model *M, const chain_inputs *in)
 /* cos and sin of omega t at the grid point g of the state (cached, see chain_state) */
 static void grid_phase(const chain_model *M, chain_state *s, long long g, double *cw, double *sw)
 {
-    const double rc = cos(M->omega * M->h), rs = sin(M->omega * M->h);
+    const double rc = M->rot_c, rs = M->rot_s;
     double c, sn;
     long long i;
     if (s->exc_n >= 0 && s->exc_n == g - 1 && g % EXC_ANCHOR != 0) {
@@ -437,11 +442,12 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
                            M->rate_max * fmax(hh, hA) <= 1.0;
             M->A0[i] = ri ? s->A[i] + a * (hh - hA) * M->S[i] : s->A[i];
         }
+        M->A0p = M->A0;
     } else {
-        memcpy(M->A0 + a0, s->A + a0, (b0 - a0) * sizeof(double));
+        M->A0p = s->A;
     }
     const double c1 = M->kin.c1, pV = M->kin.pred_V, pA = M->kin.pred_A, g1 = M->g1;
-    const double *X = s->X, *V = s->V, *A0 = M->A0;
+    const double *X = s->X, *V = s->V, *A0 = M->A0p;
     double *xp = M->xp, *ph = M->ph;
     for (size_t i = a0; i < b0; i++) xp[i] = X[i] + pV * V[i] + pA * A0[i];
     for (int k = 0; k < 2; k++) {
@@ -554,7 +560,7 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
     }
     for (size_t i = G->a; i < G->b; i++) {
         s->X[i] = M->xp[i] + cV * V1[i];
-        s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * M->A0[i];
+        s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * M->A0p[i];
         s->V[i] = V1[i];
         s->F[i] = F1[i];
         s->hA[i] = hh;
@@ -566,8 +572,7 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
 static void solve_modes(chain_model *M, const span *G)
 {
     const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
-    for (size_t i = G->a; i < G->b; i++) M->l[i] = has_friction(M, i) ? M->mukN[i] : 0.0;
-    /* held rows use l only as a flag; frozen blocks are held */
+    /* l (set with st): Fb for held rows (a flag there), mu_k N for sliding ones, 0 without friction */
     solve_rows(lo, hi, G->has[0], G->gV[0], G->has[1], G->gV[1], M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft,
                M->cp, M->dp);
 }
@@ -631,7 +636,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         M->cand[nsw++] = i;
         if (s->mode[i] != 0) {
             /* a slide from rest that cannot move in double precision: held to the step's end */
-            if (immediate && s->V[i] == 0.0) M->frozen[i] = 1;
+            if (immediate && s->V[i] == 0.0) M->frozen[i] = M->any_frozen = 1;
             s->V[i] = 0.0;
         }
     }
@@ -665,7 +670,10 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         if (phase >= max_phases) { M->err = CHAIN_ERR_NO_PROGRESS; return; }
         set_ghosts(s, G);
         const double r = (phase == 0) ? hh : t_end - s->t;
-        for (size_t i = G->a; i < G->b; i++) M->st[i] = (held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
+        for (size_t i = G->a; i < G->b; i++) {
+            M->st[i] = (held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
+            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+        }
         double cw1, sw1;
         phase_of(M, s, t_end, &cw1, &sw1);
         trial(M, s, G, r, cw1, sw1);
@@ -741,8 +749,14 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
 {
     const size_t n = M->n;
     span G0 = whole(M, s);
-    for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
-    for (size_t i = 0; i < n; i++) M->st[i] = held(M, s, i) ? 0 : s->mode[i];
+    if (M->any_frozen) {
+        for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
+        M->any_frozen = 0;
+    }
+    for (size_t i = 0; i < n; i++) {
+        M->st[i] = held(M, s, i) ? 0 : s->mode[i];
+        M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+    }
     double cw1, sw1;
     phase_of(M, s, t_end, &cw1, &sw1);
     trial(M, s, &G0, hh, cw1, sw1);
@@ -856,7 +870,7 @@ static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, ch
                 const double S = P_at(M, i, cw1, sw1) + M->u[i] - Kx(M, M->xp, i);
                 M->st[i] = (fabs(S) <= M->Fb[i]) ? 0 : sgn(S);
                 M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
-                M->frozen[i] = 1; /* judged: no more pivots on it */
+                M->frozen[i] = M->any_frozen = 1; /* judged: no more pivots on it */
                 update = 1;
             } else {
                 M->frozen[i] = 0;

@@ -55,7 +55,7 @@ static void test_single(checks *T)
 {
     const double cases[][5] = {/* lambda, mu_s sigma, chi, zeta, x0 */
                                {0.5, 0.4, 0.7, 0.0, 0.0}, {0.8, 0.1, 0.7, 0.0, 0.0}, {0.5, 0.8, 0.6, 0.1, 0.0},
-                               {0.5, 0.4, 0.05, 0.0, 0.0}, {0.5, 0.2, 2.0, 0.0, 0.0}, {1.3, 0.3, 0.9, 0.05, 0.7}};
+                               {0.5, 0.4, 0.05, 0.0, 0.0}, {0.5, 0.4, 0.0, 0.0, 0.0}, {0.5, 0.2, 2.0, 0.0, 0.0}, {1.3, 0.3, 0.9, 0.05, 0.7}};
     double worst[4] = {0};
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
         for (int scheme = 1; scheme <= 3; scheme++) {
