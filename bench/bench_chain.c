@@ -1,10 +1,10 @@
 /* ns per block-step of the chain (chain.[ch]) on a stick-slip chain, for n = 1, 2, 8, 64, 512, 4096,
  * side by side with the oscillator's stepper (newmark.[ch]) on the same single block, in one run.
  *
- *   bench_chain [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--csv FILE]
+ *   bench_chain [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--N NORMAL] [--csv FILE]
  *
  * The chain: unit masses and springs, both ends on the wall (k_end = 1), every block forced
- * (P0 = 1, omega = 0.5, phase 0.1 per block), mu_s sigma = 0.4, chi = 0.7, scheme located,
+ * (P0 = 1, omega = 0.5, phase 0.1 per block), mu_s = 0.5, N = 1.6 (--N), chi = 0.7, scheme located,
  * alpha = -0.1, h = T / S (S = 1000). Timed: chain_advance over P periods (after one period of
  * settling, outside the clock); the minimum over the repetitions. Reported per n: ns per
  * block-step, ns per step, the share of steps whose warm basis was infeasible (a pivot or a located
@@ -44,14 +44,14 @@ static void stuck_count(void *ctx, double t, size_t block, double x, int from, i
     (void)ctx; (void)t; (void)block; (void)x; (void)from; (void)to;
 }
 
-static result bench_chain(size_t n, int reps, double periods, double spp)
+static result bench_chain(size_t n, int reps, double periods, double spp, double normal)
 {
     double *arr = (double *)calloc(10 * n, sizeof(double));
     double *m = arr, *k = arr + n, *c = arr + 2 * n, *P0 = arr + 3 * n, *phi = arr + 4 * n, *N = arr + 5 * n,
            *mu_s = arr + 6 * n, *chi = arr + 7 * n, *x0 = arr + 8 * n, *v0 = arr + 9 * n;
     for (size_t i = 0; i < n; i++) {
         m[i] = 1.0; k[i] = 1.0; c[i] = 0.0; P0[i] = 1.0; phi[i] = PHASE_STEP * (double)i;
-        N[i] = 0.8; mu_s[i] = 0.5; chi[i] = 0.7; x0[i] = 0.0; v0[i] = 0.0;
+        N[i] = normal; mu_s[i] = 0.5; chi[i] = 0.7; x0[i] = 0.0; v0[i] = 0.0;
     }
     const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
     const chain_params p = {n, m, k, c, P0, phi, N, mu_s, chi, x0, v0, (n == 1) ? 0.0 : 1.0, 0.0, OMEGA, h, -0.1, 3, 0};
@@ -97,11 +97,11 @@ static result bench_chain(size_t n, int reps, double periods, double spp)
     return r;
 }
 
-static double bench_oscillator(int reps, double periods, double spp, int fast)
+static double bench_oscillator(int reps, double periods, double spp, int fast, double normal)
 {
     dfo_params p;
     memset(&p, 0, sizeof p);
-    p.m = 1.0; p.k = 1.0; p.P0 = 1.0; p.omega = OMEGA; p.N = 0.8; p.mu_s = 0.5; p.chi = 0.7;
+    p.m = 1.0; p.k = 1.0; p.P0 = 1.0; p.omega = OMEGA; p.N = normal; p.mu_s = 0.5; p.chi = 0.7;
     const double T = 2.0 * DFO_PI / OMEGA;
     p.h = T / spp; p.alpha = -0.1; p.t_obs_stop = 1e300; p.scheme = 3; p.frictionUpdates = 1; p.fastPaths = fast;
     dfo_model M;
@@ -129,7 +129,7 @@ static double bench_oscillator(int reps, double periods, double spp, int fast)
 int main(int argc, char **argv)
 {
     int reps = 5;
-    double periods = 4.0, spp = 1000.0;
+    double periods = 4.0, spp = 1000.0, normal = 1.6;
     size_t ns[16] = {1, 2, 8, 64, 512, 4096};
     int nn = 6;
     const char *csv = NULL;
@@ -138,6 +138,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--periods") && a + 1 < argc) periods = atof(argv[++a]);
         else if (!strcmp(argv[a], "--steps-per-period") && a + 1 < argc) spp = atof(argv[++a]);
         else if (!strcmp(argv[a], "--csv") && a + 1 < argc) csv = argv[++a];
+        else if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
         else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
             nn = 0;
             for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ",")) ns[nn++] = (size_t)atol(tok);
@@ -153,12 +154,12 @@ int main(int argc, char **argv)
     FILE *out = csv ? fopen(csv, "w") : stdout;
     if (!out) { fprintf(stderr, "bench_chain: cannot write %s\n", csv); return 2; }
     fprintf(out, "model,n,ns_per_block_step,ns_per_step,pivot_step_share,switches_per_block_period,stuck_share\n");
-    const double osc_fast = bench_oscillator(reps, periods, spp, 1);
-    const double osc_gen = bench_oscillator(reps, periods, spp, 0);
+    const double osc_fast = bench_oscillator(reps, periods, spp, 1, normal);
+    const double osc_gen = bench_oscillator(reps, periods, spp, 0, normal);
     fprintf(out, "oscillator(fastPaths),1,%.2f,%.2f,,,\n", osc_fast, osc_fast);
     fprintf(out, "oscillator(general),1,%.2f,%.2f,,,\n", osc_gen, osc_gen);
     for (int j = 0; j < nn; j++) {
-        const result r = bench_chain(ns[j], reps, periods, spp);
+        const result r = bench_chain(ns[j], reps, periods, spp, normal);
         fprintf(out, "chain,%zu,%.2f,%.1f,%.4f,%.3f,%.3f\n", ns[j], r.ns_block_step, r.ns_step, r.pivot_share,
                 r.switches_per_block_period, r.stuck_share);
         fflush(out);

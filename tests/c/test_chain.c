@@ -10,7 +10,8 @@
  *    |F| <= limit; sliding: F = -/+ mu_k N), and the complementarity residual of the step's LCP;
  * 4. energy balance of the located scheme: residual O(h^2);
  * 5. stop_at_switch: stopping at every switch and going on gives the switches of the plain run,
- *    and a copied state continues bit for bit;
+ *    and a copied state continues bit for bit; the fused step (no switch) gives the general path's
+ *    bits;
  * 6. invalid parameters are named with their element. */
 #include "chain.h"
 #include "check.h"
@@ -426,6 +427,41 @@ static void test_stop_and_copy(checks *T)
     chain_destroy(C);
 }
 
+/* ---- 5b. the fused step of a step without switches gives the general path's bits ------------ */
+
+static void test_fast_path(checks *T)
+{
+    /* the energy accounts send every step through the general path (chain.c, step_fast); on a
+     * chain short enough to be split whole, the two runs must agree bit for bit */
+    chain_state st[2];
+    chain_model *C[2];
+    for (int k = 0; k < 2; k++) {
+        chain_setup cs;
+        setup_fill(&cs, 5, 0.7, 2.0 * DFO_PI / 0.7 / 400, 3);
+        for (size_t i = 0; i < 5; i++) { cs.N[i] = 0.2 + 0.15 * (double)i; cs.c[i] = 0.02; cs.P0[i] = (i % 2) ? 0.0 : 1.0; }
+        cs.N[2] = 0.0;  /* one block without friction */
+        cs.p.k_end = 1.0;
+        cs.p.account_energy = k;
+        C[k] = chain_create(&cs.p, &AL, NULL);
+        CHECK(C[k] != NULL && chain_state_init(C[k], &st[k]));
+        const chain_inputs in = {NULL, NULL};
+        chain_start(C[k], &in, 0.0, &st[k]);
+    }
+    const chain_inputs in = {NULL, NULL};
+    long long diffs = 0;
+    for (int j = 1; j <= 3000; j++) {
+        const double t = j * 0.037;
+        for (int k = 0; k < 2; k++) CHECK_INT(CHAIN_OK, chain_advance(C[k], &in, &st[k], t, 0, NULL, NULL));
+        for (size_t i = 0; i < 5; i++)
+            diffs += (st[0].X[i] != st[1].X[i]) + (st[0].V[i] != st[1].V[i]) + (st[0].A[i] != st[1].A[i]) +
+                     (st[0].F[i] != st[1].F[i]) + (st[0].mode[i] != st[1].mode[i]);
+    }
+    CHECK_INT(0, diffs);
+    CHECK(st[0].switches > 50);
+    printf("fused step = general path: %lld switches, %lld differing values over 3000 points\n", st[0].switches, diffs);
+    for (int k = 0; k < 2; k++) { chain_state_free(C[k], &st[k]); chain_destroy(C[k]); }
+}
+
 /* ---- 6. invalid parameters ------------------------------------------------------------------ */
 
 static void test_params(checks *T)
@@ -457,6 +493,7 @@ int main(void)
     test_invariants(T);
     test_energy(T);
     test_stop_and_copy(T);
+    test_fast_path(T);
     test_params(T);
     return checks_done(T, "test_chain");
 }
