@@ -2,6 +2,7 @@
 #include "chain.h"
 
 #include "bossak.h"
+#include "friction.h"
 #include "oscillator.h"
 
 #include <float.h>
@@ -20,7 +21,7 @@ struct chain_model {
     double rot_c, rot_s;        /* cos and sin of omega h: the excitation phase's advance per step */
     int scheme, energy, damped;
     /* per block (length n) */
-    double *m, *am, *am1, *Pc, *Ps, *N, *mu_k, *mu_b, *x0, *v0;
+    double *m, *am, *am1, *Pc, *Ps, *P0, *phi, *N, *mu_k, *mu_b, *x0, *v0;
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 */
     double *dF, *eF;            /* M_hat of a whole grid step */
     /* workspace */
@@ -92,7 +93,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->n = n;
     /* one block of doubles for all per-block arrays (36 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 36 };
+    enum { NARR = 38 };
     double *blk = dalloc(al, (NARR + 1) * n);
     int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
@@ -104,7 +105,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         if (err) *err = oom;
         return NULL;
     }
-    double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->N, &M->mu_k, &M->mu_b, &M->x0, &M->v0,
+    double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N, &M->mu_k, &M->mu_b, &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
                           &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->box};
@@ -134,6 +135,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->am1[i] = (1.0 - p->alpha) * p->m[i];
         M->Pc[i] = p->P0[i] * cos(p->phi[i]);
         M->Ps[i] = p->P0[i] * sin(p->phi[i]);
+        M->P0[i] = p->P0[i];
+        M->phi[i] = p->phi[i];
         M->N[i] = p->N[i];
         M->mu_k[i] = p->chi[i] * p->mu_s[i];
         M->mu_b[i] = fmax(p->mu_s[i], M->mu_k[i]);
@@ -1022,6 +1025,43 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
     }
 }
 
+/* The stuck fast path: with every block stuck (all of them with friction) on a grid point, nothing
+ * moves until the first breakaway, which each block's closed form gives (friction.h: its static
+ * force is its excitation plus a constant while every position is frozen). The whole grid steps
+ * that end before it (by a margin of 1e-6 h) and before t_end change nothing but the time and are
+ * taken at once; the step that ends on t_end is always stepped. Returns the last grid index they
+ * reach (s->n_grid when there is none). Same bits as stepping them (asserted by test_chain). */
+static long long stuck_until(chain_model *M, const chain_state *s, double t_end)
+{
+    const size_t n = M->n;
+    const double h = M->h;
+    if (M->scheme != DFO_SCHEME_LOCATED || M->energy || M->any_frozen || M->rate_max * h > 1.0) return s->n_grid;
+    for (size_t i = 0; i < n; i++)
+        if (s->mode[i] != 0 || !(M->Fb[i] > 0.0)) return s->n_grid;
+    double tb = t_end;
+    for (size_t i = 0; i < n && tb > s->t; i++) {
+        dfo_model bm;
+        memset(&bm, 0, sizeof bm);
+        bm.p.omega = M->omega;
+        bm.p.P0 = M->P0[i];
+        bm.p.phi = M->phi[i];
+        bm.P_amp = fabs(M->P0[i]);
+        bm.P_phase = M->phi[i] + (M->P0[i] < 0.0 ? DFO_PI : 0.0);
+        dfo_loads L;
+        L.F_ext = M->u[i];
+        L.N = 0.0;
+        L.muk_N = M->mukN[i];
+        L.Fb = M->Fb[i];
+        int dir = 0;
+        tb = fmin(tb, dfo_next_breakaway(&bm, &L, M->u[i] - Kx(M, s->X, i), s->t, &dir) - 1e-6 * h);
+    }
+    if (!(tb > s->t)) return s->n_grid;
+    long long m = (long long)floor((tb - s->t0) / h);
+    while (m > s->n_grid && !(s->t0 + (double)m * h < tb)) m--;
+    while (s->t0 + (double)(m + 1) * h < tb) m++;
+    return (m > s->n_grid) ? m : s->n_grid;
+}
+
 chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
                            int stop_at_switch, chain_switch_fn on_switch, void *ctx)
 {
@@ -1037,6 +1077,15 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
         if (g >= s->n_grid && tg >= s->t && fabs(t_target - tg) <= SNAP_REL_H * h) t_target = tg;
     }
     while (s->t < t_target) {
+        if (s->t == s->t0 + (double)s->n_grid * h) {
+            const long long m = stuck_until(M, s, t_target);
+            if (m > s->n_grid) {
+                s->steps += m - s->n_grid;
+                s->n_grid = m;
+                s->t = s->t0 + (double)m * h;
+                continue;
+            }
+        }
         const double g_prev = s->t0 + (double)s->n_grid * h;
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);

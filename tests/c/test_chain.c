@@ -431,35 +431,54 @@ static void test_stop_and_copy(checks *T)
 
 static void test_fast_path(checks *T)
 {
-    /* the energy accounts send every step through the general path (chain.c, step_fast); on a
-     * chain short enough to be split whole, the two runs must agree bit for bit */
-    chain_state st[2];
-    chain_model *C[2];
-    for (int k = 0; k < 2; k++) {
-        chain_setup cs;
-        setup_fill(&cs, 5, 0.7, 2.0 * DFO_PI / 0.7 / 400, 3);
-        for (size_t i = 0; i < 5; i++) { cs.N[i] = 0.2 + 0.15 * (double)i; cs.c[i] = 0.02; cs.P0[i] = (i % 2) ? 0.0 : 1.0; }
-        cs.N[2] = 0.0;  /* one block without friction */
-        cs.p.k_end = 1.0;
-        cs.p.account_energy = k;
-        C[k] = chain_create(&cs.p, &AL, NULL);
-        CHECK(C[k] != NULL && chain_state_init(C[k], &st[k]));
+    /* the energy accounts send every step through the general path (chain.c: step_fast and the
+     * stuck fast path stuck_until are off); on a chain short enough to be split whole, the two
+     * runs must agree bit for bit: one with a block without friction, one stick-dominated (every
+     * block stuck for long phases) */
+    for (int variant = 0; variant < 2; variant++) {
+        chain_state st[2];
+        chain_model *C[2];
+        for (int k = 0; k < 2; k++) {
+            chain_setup cs;
+            setup_fill(&cs, 5, 0.7, 2.0 * DFO_PI / 0.7 / 400, 3);
+            for (size_t i = 0; i < 5; i++) {
+                cs.N[i] = (variant == 0) ? 0.2 + 0.15 * (double)i : 1.9 + 0.1 * (double)i;
+                cs.c[i] = 0.02;
+                cs.P0[i] = (i % 2) ? 0.0 : 1.0;
+                cs.phi[i] = 0.4 * (double)i;
+            }
+            if (variant == 0) cs.N[2] = 0.0; /* one block without friction */
+            else cs.P0[1] = -0.8;
+            cs.p.k_end = 1.0;
+            cs.p.account_energy = k;
+            C[k] = chain_create(&cs.p, &AL, NULL);
+            CHECK(C[k] != NULL && chain_state_init(C[k], &st[k]));
+            const chain_inputs in = {NULL, NULL};
+            chain_start(C[k], &in, 0.0, &st[k]);
+        }
         const chain_inputs in = {NULL, NULL};
-        chain_start(C[k], &in, 0.0, &st[k]);
+        long long diffs = 0, all_stuck = 0;
+        for (int j = 1; j <= 3000; j++) {
+            const double t = j * 0.037;
+            for (int k = 0; k < 2; k++) CHECK_INT(CHAIN_OK, chain_advance(C[k], &in, &st[k], t, 0, NULL, NULL));
+            int stuck = 1;
+            for (size_t i = 0; i < 5; i++) {
+                diffs += (st[0].X[i] != st[1].X[i]) + (st[0].V[i] != st[1].V[i]) + (st[0].A[i] != st[1].A[i]) +
+                         (st[0].F[i] != st[1].F[i]) + (st[0].mode[i] != st[1].mode[i]);
+                stuck &= (st[0].mode[i] == 0);
+            }
+            all_stuck += stuck;
+        }
+        check_context(T, "fast paths, variant %d", variant);
+        CHECK_INT(0, diffs);
+        CHECK_INT(st[1].steps, st[0].steps);
+        CHECK(st[0].switches > 40);
+        if (variant == 1) CHECK(all_stuck > 300);
+        check_context(T, "%s", "");
+        printf("fast paths = general path (variant %d): %lld switches, %lld points all stuck, %lld differing values\n",
+               variant, st[0].switches, all_stuck, diffs);
+        for (int k = 0; k < 2; k++) { chain_state_free(C[k], &st[k]); chain_destroy(C[k]); }
     }
-    const chain_inputs in = {NULL, NULL};
-    long long diffs = 0;
-    for (int j = 1; j <= 3000; j++) {
-        const double t = j * 0.037;
-        for (int k = 0; k < 2; k++) CHECK_INT(CHAIN_OK, chain_advance(C[k], &in, &st[k], t, 0, NULL, NULL));
-        for (size_t i = 0; i < 5; i++)
-            diffs += (st[0].X[i] != st[1].X[i]) + (st[0].V[i] != st[1].V[i]) + (st[0].A[i] != st[1].A[i]) +
-                     (st[0].F[i] != st[1].F[i]) + (st[0].mode[i] != st[1].mode[i]);
-    }
-    CHECK_INT(0, diffs);
-    CHECK(st[0].switches > 50);
-    printf("fused step = general path: %lld switches, %lld differing values over 3000 points\n", st[0].switches, diffs);
-    for (int k = 0; k < 2; k++) { chain_state_free(C[k], &st[k]); chain_destroy(C[k]); }
 }
 
 /* ---- 6. invalid parameters ------------------------------------------------------------------ */
