@@ -28,6 +28,8 @@ struct chain_model {
     double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
     double *A0, *xp, *ph, *Vt, *Ft, *cp, *dp, *u, *mukN, *Fb, *S, *l;
     double *sX, *sV, *sA, *sF, *shA;  /* blocks' states saved around a cluster (step_located) */
+    double *J;                  /* jerks at the current state (trial's re-basing), when jerk_valid */
+    int jerk_valid;
     double *box;                /* 2n: the box LCP's work */
     int *frozen, *st, *smode;
     size_t *cand, *clu;         /* candidates (n), clusters (2n) */
@@ -93,7 +95,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->n = n;
     /* one block of doubles for all per-block arrays (36 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 38 };
+    enum { NARR = 39 };
     double *blk = dalloc(al, (NARR + 1) * n);
     int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
@@ -108,7 +110,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N, &M->mu_k, &M->mu_b, &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
@@ -161,11 +163,14 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->dF[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
         M->eF[i] = M->Ko[i] * bhg + M->Co[i];
     }
-    /* beyond w blocks the influence of a block inside one step (M_hat^-1 decays like rho^distance,
-     * rho the largest off-diagonal to diagonal ratio; shorter steps decay faster) is below 2^-56 */
+    /* beyond w blocks the influence of a block inside one step is below 2^-56: M_hat^-1 decays like
+     * q^distance with q = (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa
+     * <= (1 + rho) / (1 - rho) the condition number of the diagonally scaled M_hat by Gershgorin,
+     * rho the largest ratio of a row's off-diagonal sum to its diagonal (shorter steps: smaller) */
     double rho = 0.0;
     for (size_t i = 0; i < n; i++) rho = fmax(rho, (fabs(i > 0 ? M->eF[i - 1] : 0.0) + fabs(M->eF[i])) / M->dF[i]);
-    M->w = (rho <= 0.0) ? 1 : (rho >= 0.5) ? n : (size_t)ceil(56.0 / -log2(rho));
+    const double sk = sqrt((1.0 + rho) / (1.0 - fmin(rho, 0.5))), q = (sk - 1.0) / (sk + 1.0);
+    M->w = (rho <= 0.0) ? 1 : (rho >= 0.5) ? n : (size_t)ceil(56.0 / -log2(q));
     if (M->w < 1) M->w = 1;
     if (err) *err = NULL;
     return M;
@@ -315,8 +320,9 @@ static void ghost_at(const span *G, int k, double tau, double *x, double *v, dou
 }
 
 /* Write the ghosts' state at the current time into the state arrays. */
-static void set_ghosts(chain_state *s, const span *G)
+static void set_ghosts(chain_model *M, chain_state *s, const span *G)
 {
+    M->jerk_valid = 0;
     for (int k = 0; k < 2; k++)
         if (G->has[k]) ghost_at(G, k, s->t - G->t_start, &s->X[G->idx[k]], &s->V[G->idx[k]], &s->A[G->idx[k]]);
 }
@@ -424,8 +430,9 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
                      M->rate_max * fmax(hh, hA) <= 1.0;
         }
     }
-    if (rebase) {
-        /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones */
+    if (rebase && !M->jerk_valid) {
+        /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
+         * function of the state only, kept for the further trials from it (root finding) */
         double cw, sw;
         phase_of(M, s, s->t, &cw, &sw);
         physical_accel(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
@@ -437,13 +444,16 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
                 const double Pd = -M->omega * (M->Pc[i] * sw + M->Ps[i] * cw);
                 j = (Pd - Kx(M, s->V, i) - Cv(M, M->A0, i)) / M->m[i];
             }
-            M->S[i] = j;
+            M->J[i] = j;
         }
+        M->jerk_valid = 1;
+    }
+    if (rebase) {
         for (size_t i = a0; i < b0; i++) {
             const double hA = s->hA[i];
             const int ri = hh != hA && fabs(hh - hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
                            M->rate_max * fmax(hh, hA) <= 1.0;
-            M->A0[i] = ri ? s->A[i] + a * (hh - hA) * M->S[i] : s->A[i];
+            M->A0[i] = ri ? s->A[i] + a * (hh - hA) * M->J[i] : s->A[i];
         }
         M->A0p = M->A0;
     } else {
@@ -547,6 +557,7 @@ int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, c
  * chain only); not the time. */
 static void finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1)
 {
+    M->jerk_valid = 0;
     const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h;
     if (M->energy && G->a == 0 && G->b == M->n) {
         const size_t n = M->n;
@@ -610,6 +621,7 @@ static double min_margin(void *vctx, double x)
  * hA = 0) and the friction forces of its stuck blocks. */
 static void restart(chain_model *M, chain_state *s, const span *G)
 {
+    M->jerk_valid = 0;
     physical_accel(M, s, G, s->A);
     for (size_t i = G->a; i < G->b; i++) {
         s->hA[i] = 0.0;
@@ -671,7 +683,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
     const long max_phases = 64 + 4 * (long)(G->b - G->a);
     for (long phase = 0; s->t < t_end; phase++) {
         if (phase >= max_phases) { M->err = CHAIN_ERR_NO_PROGRESS; return; }
-        set_ghosts(s, G);
+        set_ghosts(M, s, G);
         const double r = (phase == 0) ? hh : t_end - s->t;
         for (size_t i = G->a; i < G->b; i++) {
             M->st[i] = (held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
@@ -721,7 +733,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         s->solves++;
         finish(M, s, G, M->Vt, M->Ft);
         s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
-        set_ghosts(s, G);
+        set_ghosts(M, s, G);
         apply_switches(M, s, G, 0, fn, ctx);
         if (stop_at_switch && M->switched) return;
     }
@@ -730,6 +742,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
 /* Save (dir 0) or restore (dir 1) the state of blocks [a, b). */
 static void save_blocks(chain_model *M, chain_state *s, size_t a, size_t b, int restore)
 {
+    M->jerk_valid = 0;
     for (size_t i = a; i < b; i++) {
         if (!restore) {
             M->sX[i] = s->X[i]; M->sV[i] = s->V[i]; M->sA[i] = s->A[i]; M->sF[i] = s->F[i]; M->shA[i] = s->hA[i];
@@ -821,6 +834,7 @@ static int step_fast(chain_model *M, chain_state *s, double t_end, double cw1, d
     }
     s->solves++;
     s->t = t_end;
+    M->jerk_valid = 0;
     return 1;
 }
 
@@ -1069,6 +1083,7 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
     loads_init(M, in);
     M->err = CHAIN_OK;
     M->switched = 0;
+    M->jerk_valid = 0;
     /* a requested time within SNAP_REL_H h of a grid point is that grid point */
     const double r = (t_target - s->t0) / h;
     if (r > -0.5 && r < 0x1p52) {
@@ -1082,6 +1097,7 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
             if (m > s->n_grid) {
                 s->steps += m - s->n_grid;
                 s->n_grid = m;
+                M->jerk_valid = 0;
                 s->t = s->t0 + (double)m * h;
                 continue;
             }
@@ -1118,6 +1134,7 @@ void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_stat
                         double *d, double *e, double *p, double *l)
 {
     loads_init(M, in);
+    M->jerk_valid = 0;
     span G = whole(M, s);
     trial(M, s, &G, h, cos(M->omega * (s->t + h)), sin(M->omega * (s->t + h)));
     for (size_t i = 0; i < M->n; i++) {

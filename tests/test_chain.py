@@ -132,3 +132,29 @@ def test_driver_rejects_bad_input() -> None:
     r = subprocess.run([str(DRIVER), "n=3", "m=1,-1,1"], capture_output=True, text=True)
     assert r.returncode == 2
     assert "invalid value -1 for m[2]" in r.stderr and r.stderr.count("\n") == 1
+
+
+def test_long_chain_clusters_second_order() -> None:
+    """16 blocks: a switch re-steps only a cluster of w blocks either side (energy=0); the error
+    against the reference falls 4x per halving of h, as on the whole-chain split (energy=1), and
+    the two errors agree within 10 %."""
+    n = 16
+    i = np.arange(n)
+    ch = Chain.make(n, omega=0.7, k_end=1.0, P0=np.where(i % 3 == 0, 1.0, 0.0), phi=0.3 * i,
+                    N=0.5 + 0.3 * np.sin(i), chi=0.7)
+    T = ch.period
+    ref = solve_chain(ch, 5 * T)
+    assert len(ref.events) > 100
+    errs = {}
+    for energy in (0, 1):
+        e = []
+        for ppp in (400, 800, 1600):
+            out = subprocess.run([str(DRIVER), *ch.driver_args(), f"t_end={5 * T!r}", f"h={T / ppp!r}",
+                                  f"dt={T / 100!r}", f"energy={energy}"], capture_output=True, text=True, check=True)
+            a = np.loadtxt(out.stdout.splitlines(), delimiter=",")
+            x = a[:, 1:1 + 4 * n].reshape(-1, n, 4)[:, :, 0]
+            e.append(np.max(np.abs(x - ref.evaluate(a[:, 0])["x"])))
+        errs[energy] = np.array(e)
+        ratios = errs[energy][:-1] / errs[energy][1:]
+        assert np.all((ratios > 3.6) & (ratios < 4.4)), (energy, errs[energy], ratios)
+    assert np.all(np.abs(errs[0] / errs[1] - 1.0) < 0.1), errs
