@@ -13,6 +13,7 @@
 #define EXC_ANCHOR 64           /* grid points between exact evaluations of the excitation phase */
 #define SNAP_REL_H 1e-7         /* a requested time this close (in h) to a grid point is that point */
 #define HALVINGS 60             /* search for a sub-step before the first switch */
+#define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
 
 struct chain_model {
     chain_alloc al;
@@ -528,28 +529,62 @@ static void solve_held(size_t n, const double *d, const double *e, const double 
     solve_rows(0, n, 0, 0.0, 0, 0.0, d, e, p, l, mode, V, F, cp, dp);
 }
 
-int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
-                  double *V, double *F, double *work)
+/* Principal pivoting from the modes: all infeasible rows flipped for three rounds, then the least
+ * index only (Murty's rule). Returns the pivots, or -1 when the budget ran out. */
+static long pivoting(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
+                     double *V, double *F, double *work, long max_it, double tol)
 {
     double *cp = work, *dp = work + n;
-    const long max_it = 8 * (long)n + 32;
     for (long it = 0; it < max_it; it++) {
         solve_held(n, d, e, p, l, mode, V, F, cp, dp);
+        double vs = 0.0, fs = 0.0;
+        if (tol > 0.0)
+            for (size_t i = 0; i < n; i++) { vs = fmax(vs, fabs(V[i])); fs = fmax(fs, fabs(p[i]) + l[i]); }
         int flipped = 0;
         for (size_t i = 0; i < n; i++) {
             if (!(l[i] > 0.0)) { mode[i] = sgn(V[i]); continue; }
             int to = mode[i];
-            if (mode[i] != 0 && mode[i] * V[i] < 0.0) to = 0;
-            else if (mode[i] == 0 && F[i] > l[i]) to = -1;
-            else if (mode[i] == 0 && F[i] < -l[i]) to = 1;
+            if (mode[i] != 0 && mode[i] * V[i] < -tol * vs) to = 0;
+            else if (mode[i] == 0 && F[i] > l[i] + tol * fs) to = -1;
+            else if (mode[i] == 0 && F[i] < -l[i] - tol * fs) to = 1;
             if (to != mode[i] && (it < 3 || !flipped)) {
                 mode[i] = to;
                 flipped = 1;
             }
         }
-        if (!flipped) return (int)it;
+        if (!flipped) return it;
     }
     return -1;
+}
+
+int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
+                  double *V, double *F, double *work)
+{
+    const long budget = 8 * (long)n + 32;
+    long piv = pivoting(n, d, e, p, l, mode, V, F, work, budget, 0.0);
+    if (piv >= 0) return (int)piv;
+    /* Stiff steps (M_hat far from diagonal dominance) can make the pivoting wander: projected
+     * Gauss-Seidel (coordinate descent on the strictly convex problem min V'M V / 2 - p'V +
+     * sum l |V|, convergent for M_hat positive definite) finds the modes, the pivoting polishes. */
+    for (size_t i = 0; i < n; i++) V[i] = 0.0;
+    for (long sweep = 0; sweep < 1000000; sweep++) {
+        double dv = 0.0, vs = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            double r = p[i];
+            if (i > 0) r -= e[i - 1] * V[i - 1];
+            if (i + 1 < n) r -= e[i] * V[i + 1];
+            const double v = (r > l[i]) ? (r - l[i]) / d[i] : (r < -l[i]) ? (r + l[i]) / d[i] : 0.0;
+            dv = fmax(dv, fabs(v - V[i]));
+            vs = fmax(vs, fabs(v));
+            V[i] = v;
+        }
+        if (dv <= 1e-15 * vs) break;
+    }
+    for (size_t i = 0; i < n; i++) mode[i] = sgn(V[i]);
+    /* the polish accepts infeasibilities of rounding size (1e-10 of the problem's scale): on an
+     * ill-conditioned M_hat they would make the exact rule cycle */
+    piv = pivoting(n, d, e, p, l, mode, V, F, work, budget, 1e-10);
+    return (piv >= 0) ? (int)(piv + budget) : -1;
 }
 
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant
@@ -754,6 +789,9 @@ static void save_blocks(chain_model *M, chain_state *s, size_t a, size_t b, int 
     }
 }
 
+static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
+                     int consistent);
+
 /* The located step of a grid step in which no block switches, in three fused sweeps: the same
  * arithmetic, in the same order, as trial + solve_modes + finish (so the same bits), without their
  * separate passes. Returns 0, with the state untouched, when a block must switch, A must be
@@ -848,6 +886,13 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
                          int stop_at_switch)
 {
     const size_t n = M->n;
+    /* a stiff step (several periods of the fastest mode) cannot place a switch: restarts with the
+     * physical acceleration would feed the unresolved mode; the consistent test, which is stable,
+     * takes it (as in the oscillator) */
+    if (M->rate_max * hh > STIFF_STEP) {
+        step_lcp(M, s, t_end, hh, fn, ctx, 1);
+        return;
+    }
     double cw1, sw1;
     phase_of(M, s, t_end, &cw1, &sw1);
     if (hh == M->h && step_fast(M, s, t_end, cw1, sw1)) return;
@@ -928,10 +973,10 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
 
 /* ---- the paper and consistent schemes -------------------------------------------------------- */
 
-static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx)
+static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
+                     int consistent)
 {
     const size_t n = M->n;
-    const int consistent = (M->scheme == DFO_SCHEME_CONSISTENT);
     double cw1, sw1;
     phase_of(M, s, t_end, &cw1, &sw1);
     span G0 = whole(M, s);
@@ -1116,7 +1161,7 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
         const double hh = (from_grid && t_end == grid) ? h : t_end - s->t;
         s->steps++;
         if (M->scheme == DFO_SCHEME_LOCATED) step_located(M, s, t_end, hh, on_switch, ctx, stop_at_switch);
-        else step_lcp(M, s, t_end, hh, on_switch, ctx);
+        else step_lcp(M, s, t_end, hh, on_switch, ctx, M->scheme == DFO_SCHEME_CONSISTENT);
         if (M->err != CHAIN_OK) return M->err;
         if (stop_at_switch && M->switched) {
             /* the grid index stays that of the last grid point at or before the time reached */

@@ -104,7 +104,12 @@ int main(int argc, char **argv)
         }
         if (t > t_end) t = t_end;
         const chain_status st = chain_advance(M, &in, &s, t, 0, NULL, NULL);
-        if (st != CHAIN_OK) { fprintf(stderr, "chain_driver: %s at t = %g\n", chain_status_text(st), s.t); return 1; }
+        if (st != CHAIN_OK) {
+            fprintf(stderr, "chain_driver: %s at t = %g\n", chain_status_text(st), s.t);
+            chain_state_free(M, &s);
+            chain_destroy(M);
+            return 1;
+        }
     }
     chain_state_free(M, &s);
     chain_destroy(M);

@@ -11,7 +11,8 @@
  * 4. energy balance of the located scheme: residual O(h^2);
  * 5. stop_at_switch: stopping at every switch and going on gives the switches of the plain run,
  *    and a copied state continues bit for bit; the fused step (no switch) gives the general path's
- *    bits;
+ *    bits; hard inputs (stiff steps on long chains, stiff and light blocks, chi = 0, tiny h,
+ *    no friction, inputs) run and stay bounded;
  * 6. invalid parameters are named with their element. */
 #include "chain.h"
 #include "check.h"
@@ -481,6 +482,47 @@ static void test_fast_path(checks *T)
     }
 }
 
+/* ---- 5c. hard inputs: stiff steps, stiff and light blocks, zero coefficients, inputs -------- */
+
+static void test_hard(checks *T)
+{
+    const struct { size_t n; double h, N, chi, mratio; int scheme; } cases[] = {
+        {3, 20.0, 0.8, 0.7, 1.0, 3},   {64, 30.0, 1.6, 0.7, 1.0, 3}, {64, 30.0, 1.6, 0.7, 1.0, 1},
+        {300, 5.0, 0.6, 0.7, 1.0, 2},  {3, 0.01, 0.8, 0.7, 1e6, 3},  {8, 0.01, 0.8, 0.0, 1.0, 3},
+        {8, 1e-5, 0.8, 1.0, 1.0, 3},   {40, 0.01, 0.0, 0.7, 1.0, 3},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        static double arr[10][300];
+        const size_t n = cases[c].n;
+        for (size_t i = 0; i < n; i++) {
+            arr[0][i] = (i == 0) ? 1.0 / cases[c].mratio : (i == n - 1) ? cases[c].mratio : 1.0;
+            arr[1][i] = (i == 0) ? cases[c].mratio : 1.0;
+            arr[2][i] = 0.01; arr[3][i] = 1.0; arr[4][i] = 0.3 * (double)i; arr[5][i] = cases[c].N;
+            arr[6][i] = 0.5; arr[7][i] = cases[c].chi; arr[8][i] = 0.0; arr[9][i] = 0.0;
+        }
+        const chain_params p = {n, arr[0], arr[1], arr[2], arr[3], arr[4], arr[5], arr[6], arr[7], arr[8], arr[9],
+                                1.0, 0.0, 0.5, cases[c].h, -0.1, cases[c].scheme, 0};
+        chain_model *C = chain_create(&p, &AL, NULL);
+        chain_state s;
+        CHECK(C != NULL && chain_state_init(C, &s));
+        double Fext[300], Next[300];
+        for (size_t i = 0; i < n; i++) { Fext[i] = 0.05 * (double)(i % 3); Next[i] = -0.3 * (double)(i % 2); }
+        const chain_inputs in = {Fext, Next};
+        chain_start(C, &in, 0.0, &s);
+        check_context(T, "hard case %zu", c);
+        const double t_end = (cases[c].h < 1e-3) ? 0.5 : 200.0 * (cases[c].h > 1.0 ? cases[c].h : 1.0);
+        chain_status st = CHAIN_OK;
+        for (int j = 1; j <= 50 && st == CHAIN_OK; j++) st = chain_advance(C, &in, &s, j * t_end / 50, 0, NULL, NULL);
+        CHECK_INT(CHAIN_OK, st);
+        double xmax = 0.0;
+        for (size_t i = 0; i < n; i++) xmax = fmax(xmax, fabs(s.X[i]));
+        CHECK_RANGE(0.0, 1e3, xmax);
+        chain_state_free(C, &s);
+        chain_destroy(C);
+    }
+    check_context(T, "%s", "");
+}
+
 /* ---- 6. invalid parameters ------------------------------------------------------------------ */
 
 static void test_params(checks *T)
@@ -513,6 +555,7 @@ int main(void)
     test_energy(T);
     test_stop_and_copy(T);
     test_fast_path(T);
+    test_hard(T);
     test_params(T);
     return checks_done(T, "test_chain");
 }
