@@ -137,7 +137,8 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
         else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
             nn = 0;
-            for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ",")) ns[nn++] = (size_t)atol(tok);
+            for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ","))
+                ns[nn++] = (size_t)atol(tok);
         } else {
             fprintf(stderr, "bench_chain: unknown or incomplete argument %s\n", argv[a]);
             return 2;

@@ -54,6 +54,12 @@ static const char *bad(char *buf, size_t len, const char *name, size_t i, double
     return buf;
 }
 
+static const char *bad_scalar(char *buf, size_t len, const char *name, double v, const char *range)
+{
+    snprintf(buf, len, "invalid value %g for %s (valid: %s)", v, name, range);
+    return buf;
+}
+
 const char *chain_check_params(const chain_params *p, char *buf, size_t len)
 {
     if (p->n < 1) { snprintf(buf, len, "invalid value %zu for n (valid: >= 1)", p->n); return buf; }
@@ -69,11 +75,11 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len)
         if (!isfinite(p->x0[i])) return bad(buf, len, "x0", i, p->x0[i], "finite");
         if (!isfinite(p->v0[i])) return bad(buf, len, "v0", i, p->v0[i], "finite");
     }
-    if (!(p->k_end >= 0.0 && isfinite(p->k_end))) { snprintf(buf, len, "invalid value %g for k_end (valid: >= 0)", p->k_end); return buf; }
-    if (!(p->c_end >= 0.0 && isfinite(p->c_end))) { snprintf(buf, len, "invalid value %g for c_end (valid: >= 0)", p->c_end); return buf; }
-    if (!(p->omega >= 0.0 && isfinite(p->omega))) { snprintf(buf, len, "invalid value %g for omega (valid: >= 0)", p->omega); return buf; }
-    if (!(p->h > 0.0 && isfinite(p->h))) { snprintf(buf, len, "invalid value %g for h (valid: > 0)", p->h); return buf; }
-    if (!(p->alpha >= -1.0 / 3.0 && p->alpha <= 0.0)) { snprintf(buf, len, "invalid value %g for alpha (valid: [-1/3, 0])", p->alpha); return buf; }
+    if (!(p->k_end >= 0.0 && isfinite(p->k_end))) return bad_scalar(buf, len, "k_end", p->k_end, ">= 0, finite");
+    if (!(p->c_end >= 0.0 && isfinite(p->c_end))) return bad_scalar(buf, len, "c_end", p->c_end, ">= 0, finite");
+    if (!(p->omega >= 0.0 && isfinite(p->omega))) return bad_scalar(buf, len, "omega", p->omega, ">= 0, finite");
+    if (!(p->h > 0.0 && isfinite(p->h))) return bad_scalar(buf, len, "h", p->h, "> 0, finite");
+    if (!(p->alpha >= -1.0 / 3.0 && p->alpha <= 0.0)) return bad_scalar(buf, len, "alpha", p->alpha, "[-1/3, 0]");
     if (p->scheme < DFO_SCHEME_PAPER || p->scheme > DFO_SCHEME_LOCATED) {
         snprintf(buf, len, "invalid value %d for scheme (valid: 1 paper, 2 consistent, 3 located)", p->scheme);
         return buf;
@@ -108,7 +114,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         if (err) *err = oom;
         return NULL;
     }
-    double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N, &M->mu_k, &M->mu_b, &M->x0, &M->v0,
+    double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N, &M->mu_k, &M->mu_b,
+                          &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
                           &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->box};
@@ -315,7 +322,8 @@ typedef struct {
 static void ghost_at(const span *G, int k, double tau, double *x, double *v, double *acc)
 {
     const double H = G->H, r = tau / H, dx = G->X1[k] - G->X0[k], v0 = G->V0[k], v1 = G->V1[k];
-    *x = G->X0[k] + v0 * H * (r * r * r - 2.0 * r * r + r) + dx * (3.0 * r * r - 2.0 * r * r * r) + v1 * H * (r * r * r - r * r);
+    *x = G->X0[k] + v0 * H * (r * r * r - 2.0 * r * r + r) + dx * (3.0 * r * r - 2.0 * r * r * r) +
+         v1 * H * (r * r * r - r * r);
     *v = v0 * (3.0 * r * r - 4.0 * r + 1.0) + dx / H * (6.0 * r - 6.0 * r * r) + v1 * (3.0 * r * r - 2.0 * r);
     *acc = (v0 * (6.0 * r - 4.0) + dx / H * (6.0 - 12.0 * r) + v1 * (6.0 * r - 2.0)) / H;
 }
@@ -475,7 +483,8 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
         double kx = M->Kd[i] * xp[i];
         if (i > 0) kx += M->Ko[i - 1] * xp[i - 1];
         if (i + 1 < n) kx += M->Ko[i] * xp[i + 1];
-        ph[i] = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] + M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
+        ph[i] = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
+                M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
     }
 }
 
@@ -600,7 +609,8 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
         phase_of(M, s, s->t, &cw0, &sw0);
         for (size_t i = 0; i < n; i++) {
             const double X1 = M->xp[i] + cV * V1[i];
-            W += 0.5 * hh * ((P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] + (P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1[i]);
+            W += 0.5 * hh * ((P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] +
+                             (P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1[i]);
             Wf += F1[i] * (X1 - s->X[i]);
         }
         s->W_applied += W;
@@ -821,7 +831,8 @@ static int step_fast(chain_model *M, chain_state *s, double t_end, double cw1, d
         double kx = Kd[i] * xp[i];
         if (i > 0) kx += Ko[i - 1] * xp[i - 1];
         if (i + 1 < n) kx += Ko[i] * xp[i + 1];
-        ph[i] = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A[i] + M->am1[i] * (V[i] * c1 + g1 * A[i]) - kx;
+        ph[i] = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A[i] +
+                M->am1[i] * (V[i] * c1 + g1 * A[i]) - kx;
         const int hold = (mode[i] == 0 && Fb[i] > 0.0);
         st[i] = hold ? 0 : mode[i];
         l[i] = (st[i] == 0) ? Fb[i] : mukN[i];

@@ -1,5 +1,6 @@
-"""Chains used by the chain tests (tests/test_chain*.py): the coupled validation cases of docs/chain.md,
-the C driver (tests/c/chain_driver) as a function, and the error of a run against the reference."""
+"""Chains used by the chain tests (tests/test_chain*.py): the coupled validation cases of
+docs/chain.md, the C driver (tests/c/chain_driver) as a function, and the error of a run against
+the reference."""
 
 from __future__ import annotations
 
@@ -24,8 +25,8 @@ CASES: dict[str, Chain] = {
     # friction on the middle block only
     "friction-on-one": Chain.make(3, omega=0.8, N=[0.0, 0.6, 0.0], chi=0.6),
     # chi < 1 and chi > 1 side by side
-    "chi-mixed": Chain.make(3, omega=0.6, N=[0.5, 0.4, 0.3], chi=[0.3, 1.5, 0.8], P0=[1.0, 0.0, 0.5],
-                            phi=[0.0, 0.0, 1.0]),
+    "chi-mixed": Chain.make(3, omega=0.6, N=[0.5, 0.4, 0.3], chi=[0.3, 1.5, 0.8],
+                            P0=[1.0, 0.0, 0.5], phi=[0.0, 0.0, 1.0]),
     # damping, a wall spring at the right end, non-zero initial velocities
     "damped-walled": Chain.make(3, omega=0.7, k_end=1.5, c_end=0.1, c=[0.05, 0.1, 0.02],
                                 N=[0.4, 0.6, 0.5], v0=[0.3, -0.2, 0.1], x0=[0.1, 0.0, -0.1]),
@@ -48,9 +49,10 @@ def run_driver(ch: Chain, t_end: float, h: float, dt: Optional[float] = None, sc
     n = ch.n
     blk = a[:, 1:1 + 4 * n].reshape(-1, n, 4)
     tail = a[:, 1 + 4 * n:]
-    return {"t": a[:, 0], "x": blk[:, :, 0], "v": blk[:, :, 1], "F": blk[:, :, 2], "mode": blk[:, :, 3].astype(int),
-            "E": tail[:, 0], "W_applied": tail[:, 1], "W_friction": tail[:, 2], "D_damping": tail[:, 3],
-            "steps": tail[:, 4], "pivot_steps": tail[:, 5], "switches": tail[:, 6]}
+    return {"t": a[:, 0], "x": blk[:, :, 0], "v": blk[:, :, 1], "F": blk[:, :, 2],
+            "mode": blk[:, :, 3].astype(int), "E": tail[:, 0], "W_applied": tail[:, 1],
+            "W_friction": tail[:, 2], "D_damping": tail[:, 3], "steps": tail[:, 4],
+            "pivot_steps": tail[:, 5], "switches": tail[:, 6]}
 
 
 def error(run: dict[str, np.ndarray], ref: ChainSolution) -> float:
@@ -59,7 +61,8 @@ def error(run: dict[str, np.ndarray], ref: ChainSolution) -> float:
     return float(np.max(np.abs(run["x"] - r["x"])))
 
 
-def convergence(ch: Chain, per_period: tuple[int, ...] = (400, 800, 1600, 3200), random_dt: Optional[int] = None,
+def convergence(ch: Chain, per_period: tuple[int, ...] = (400, 800, 1600, 3200),
+                random_dt: Optional[int] = None,
                 ref: Optional[ChainSolution] = None) -> tuple[np.ndarray, np.ndarray]:
     """Errors of the located scheme at h = T / per_period over PERIODS periods, and their ratios."""
     T = ch.period

@@ -106,7 +106,8 @@ class Chain:
 
     def driver_args(self) -> list[str]:
         """Arguments of tests/c/chain_driver for these parameters."""
-        args = [f"n={self.n}", f"omega={self.omega!r}", f"k_end={self.k_end!r}", f"c_end={self.c_end!r}"]
+        args = [f"n={self.n}", f"omega={self.omega!r}", f"k_end={self.k_end!r}",
+                f"c_end={self.c_end!r}"]
         for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0"):
             args.append(f"{name}=" + ",".join(repr(float(v)) for v in getattr(self, name)))
         if self.F_ext is not None:
@@ -166,7 +167,8 @@ class ChainSolution:
     def energy(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Mechanical energy (kinetic + springs) of states x, v (rows)."""
         K, _ = self.chain.matrices()
-        return 0.5 * np.einsum("ij,j,ij->i", v, self.chain.m, v) + 0.5 * np.einsum("ij,jk,ik->i", x, K, x)
+        kinetic = 0.5 * np.einsum("ij,j,ij->i", v, self.chain.m, v)
+        return kinetic + 0.5 * np.einsum("ij,jk,ik->i", x, K, x)
 
 
 def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-14,
@@ -232,7 +234,8 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
         free = ~stuck
         Ff = np.where(fric, -modes * mukN, 0.0)
 
-        def rhs(tt: float, y: np.ndarray, free: np.ndarray = free, Ff: np.ndarray = Ff) -> np.ndarray:
+        def rhs(tt: float, y: np.ndarray, free: np.ndarray = free,
+                Ff: np.ndarray = Ff) -> np.ndarray:
             xx, vv = y[:n], y[n:2 * n]
             P = applied(tt)
             a = np.where(free, (P - K @ xx - C @ vv + Ff) / m, 0.0)
@@ -262,8 +265,8 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
         y0 = np.concatenate([x, v, acc])
         # the event functions of stuck blocks move with the forcing even when nothing else does:
         # steps no longer than a fraction of the shortest time scale, so no crossing hides in a step
-        r = solve_ivp(rhs, (t, t_end), y0, method="DOP853", rtol=rtol, atol=atol, events=events or None,
-                      dense_output=True, max_step=max_step)
+        r = solve_ivp(rhs, (t, t_end), y0, method="DOP853", rtol=rtol, atol=atol,
+                      events=events or None, dense_output=True, max_step=max_step)
         if r.status < 0:
             raise RuntimeError(f"reference integration failed at t = {t}: {r.message}")
         t1 = float(r.t[-1])
@@ -289,6 +292,7 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
                 sol.events.append((t1, i, int(modes[i]), new))
                 modes[i] = new
         settle(t1, x, v, modes)
-        grace = set(grazing) if len(sol.events) == n_events and t1 <= t + 1e-12 * (1.0 + abs(t)) else set()
+        stalled = len(sol.events) == n_events and t1 <= t + 1e-12 * (1.0 + abs(t))
+        grace = set(grazing) if stalled else set()
         t = t1
     raise RuntimeError(f"more than {max_events} events before t = {t_end}")

@@ -70,10 +70,16 @@ int main(int argc, char **argv)
         else if (!strcmp(key, "energy")) energy = atoi(val);
         else { fprintf(stderr, "chain_driver: unknown argument %s\n", key); return 2; }
     }
-    if (n < 1 || n > MAX_N) { fprintf(stderr, "chain_driver: invalid value %zu for n (valid: 1 ... %d)\n", n, MAX_N); return 2; }
+    if (n < 1 || n > MAX_N) {
+        fprintf(stderr, "chain_driver: invalid value %zu for n (valid: 1 ... %d)\n", n, MAX_N);
+        return 2;
+    }
     for (int j = 0; j < 12; j++) {
         if (!given[j]) { for (size_t i = 0; i < n; i++) arr[j][i] = defaults[j]; continue; }
-        if (!parse_list(given[j], arr[j], n)) { fprintf(stderr, "chain_driver: invalid list for %s\n", names[j]); return 2; }
+        if (!parse_list(given[j], arr[j], n)) {
+            fprintf(stderr, "chain_driver: invalid list for %s\n", names[j]);
+            return 2;
+        }
     }
     const chain_params p = {n, arr[0], arr[1], arr[2], arr[3], arr[4], arr[5], arr[6], arr[7], arr[8], arr[9],
                             k_end, c_end, omega, h, alpha, scheme, energy};

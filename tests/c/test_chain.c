@@ -57,7 +57,8 @@ static void test_single(checks *T)
 {
     const double cases[][5] = {/* lambda, mu_s sigma, chi, zeta, x0 */
                                {0.5, 0.4, 0.7, 0.0, 0.0}, {0.8, 0.1, 0.7, 0.0, 0.0}, {0.5, 0.8, 0.6, 0.1, 0.0},
-                               {0.5, 0.4, 0.05, 0.0, 0.0}, {0.5, 0.4, 0.0, 0.0, 0.0}, {0.5, 0.2, 2.0, 0.0, 0.0}, {1.3, 0.3, 0.9, 0.05, 0.7}};
+                               {0.5, 0.4, 0.05, 0.0, 0.0}, {0.5, 0.4, 0.0, 0.0, 0.0}, {0.5, 0.2, 2.0, 0.0, 0.0},
+                               {1.3, 0.3, 0.9, 0.05, 0.7}};
     double worst[4] = {0};
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
         for (int scheme = 1; scheme <= 3; scheme++) {
@@ -119,7 +120,11 @@ static int dense_solve(int k, double *A, double *b)
         for (int r = c + 1; r < k; r++) if (fabs(A[r * k + c]) > fabs(A[piv * k + c])) piv = r;
         if (fabs(A[piv * k + c]) < 1e-12) return 0;
         if (piv != c) {
-            for (int j = 0; j < k; j++) { const double t = A[c * k + j]; A[c * k + j] = A[piv * k + j]; A[piv * k + j] = t; }
+            for (int j = 0; j < k; j++) {
+                const double t = A[c * k + j];
+                A[c * k + j] = A[piv * k + j];
+                A[piv * k + j] = t;
+            }
             const double t = b[c]; b[c] = b[piv]; b[piv] = t;
         }
         for (int r = c + 1; r < k; r++) {
@@ -183,7 +188,8 @@ static void test_lcp_enumeration(checks *T)
         int mode[6];
         const int kind = trial % 5; /* 0 random, 1 ties, 2 l = 0 on some, 3 stuck between sliding, 4 small h */
         for (int i = 0; i < n; i++) {
-            const double m = rng_decades(&r, -1, 1), k = rng_decades(&r, -1, 2), h = (kind == 4) ? 1e-6 : rng_decades(&r, -3, -1);
+            const double m = rng_decades(&r, -1, 1), k = rng_decades(&r, -1, 2);
+            const double h = (kind == 4) ? 1e-6 : rng_decades(&r, -3, -1);
             d[i] = 1.1 * m / (0.6 * h) + k * 0.3 * h;
             e[i] = (i + 1 < n) ? -rng_range(&r, 0.0, 0.45) * d[i] : 0.0;
             l[i] = rng_range(&r, 0.0, 2.0);
@@ -240,7 +246,8 @@ static void test_lcp_enumeration(checks *T)
             if (i + 1 < n) res += e[i] * V[i + 1];
             worst_res = fmax(worst_res, fabs(res) / (fabs(p[i]) + l[i] + 1e-300));
         }
-        for (int i = 0; i < 2 * n; i++) worst_res = fmax(worst_res, fabs(z[i] * w[i]) / (1.0 + fabs(q[i]) * fabs(q[i])));
+        for (int i = 0; i < 2 * n; i++)
+            worst_res = fmax(worst_res, fabs(z[i] * w[i]) / (1.0 + fabs(q[i]) * fabs(q[i])));
         problems++;
     }
     check_context(T, "%s", "");
@@ -281,7 +288,8 @@ static void test_invariants(checks *T)
                 check_context(T, "invariants scheme %d variant %d t = %g", scheme, variant, t);
                 CHECK_INT(CHAIN_OK, chain_advance(C, &in, &s, t, 0, NULL, NULL));
                 for (size_t i = 0; i < n; i++) {
-                    const double mukN = cs.mu_s[i] * cs.chi[i] * cs.N[i], Fb = fmax(cs.mu_s[i], cs.mu_s[i] * cs.chi[i]) * cs.N[i];
+                    const double mukN = cs.mu_s[i] * cs.chi[i] * cs.N[i];
+                    const double Fb = fmax(cs.mu_s[i], cs.mu_s[i] * cs.chi[i]) * cs.N[i];
                     if (s.mode[i] == 0) {
                         if (scheme != 1) CHECK_SAME(0.0, s.V[i]);
                         CHECK(fabs(s.F[i]) <= Fb * (1.0 + 1e-12));
@@ -303,7 +311,10 @@ static void test_invariants(checks *T)
                 for (size_t i = 0; i < n; i++) {
                     for (size_t jj = 0; jj < n; jj++) {
                         const double v = (i == jj) ? d[i] : (jj == i + 1) ? e[i] : (i == jj + 1) ? e[jj] : 0.0;
-                        Mq[i * 10 + jj] = v; Mq[i * 10 + n + jj] = -v; Mq[(n + i) * 10 + jj] = -v; Mq[(n + i) * 10 + n + jj] = v;
+                        Mq[i * 10 + jj] = v;
+                        Mq[i * 10 + n + jj] = -v;
+                        Mq[(n + i) * 10 + jj] = -v;
+                        Mq[(n + i) * 10 + n + jj] = v;
                     }
                     q[i] = l[i] - p[i];
                     q[n + i] = l[i] + p[i];
@@ -364,7 +375,8 @@ static void test_energy(checks *T)
 {
     double r[4];
     for (int j = 0; j < 4; j++) r[j] = energy_residual(400 << j);
-    printf("energy balance (located, damped, 4 blocks, 5 periods): largest residual at T/400 ... T/3200: %.2e %.2e %.2e %.2e\n",
+    printf("energy balance (located, damped, 4 blocks, 5 periods): largest residual at T/400 ... T/3200: "
+           "%.2e %.2e %.2e %.2e\n",
            r[0], r[1], r[2], r[3]);
     for (int j = 0; j < 3; j++) CHECK_RANGE(3.0, 5.5, r[j] / r[j + 1]);
     CHECK_RANGE(0.0, 2e-3, r[0]);
@@ -421,7 +433,11 @@ static void test_stop_and_copy(checks *T)
     chain_state_copy(&c, &a);
     chain_advance(C, &in, &a, t_end, 0, NULL, NULL);
     chain_advance(C, &in, &c, t_end, 0, NULL, NULL);
-    for (size_t i = 0; i < 6; i++) { CHECK_SAME(a.X[i], c.X[i]); CHECK_SAME(a.V[i], c.V[i]); CHECK_INT(a.mode[i], c.mode[i]); }
+    for (size_t i = 0; i < 6; i++) {
+        CHECK_SAME(a.X[i], c.X[i]);
+        CHECK_SAME(a.V[i], c.V[i]);
+        CHECK_INT(a.mode[i], c.mode[i]);
+    }
     chain_state_free(C, &a);
     chain_state_free(C, &b);
     chain_state_free(C, &c);
