@@ -168,7 +168,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->kin = M->kinF;
     const double c1 = M->kin.c1, bhg = M->beta * p->h / M->gamma;
     for (size_t i = 0; i < n; i++) {
-        M->dF[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
+        /* (k b) h / g, associated as the oscillator's m_hat (n = 1 gives its bits there) */
+        M->dF[i] = M->am1[i] * c1 + M->Kd[i] * M->beta * p->h / M->gamma + M->Cd[i];
         M->eF[i] = M->Ko[i] * bhg + M->Co[i];
     }
     /* beyond w blocks the influence of a block inside one step is below 2^-56: M_hat^-1 decays like
@@ -255,6 +256,10 @@ static void loads_init(chain_model *M, const chain_inputs *in)
     }
 }
 
+/* rotations keep c^2 + s^2 = 1 only to rounding: a cosine or sine never exceeds 1 (as the
+ * oscillator's excitation) */
+static double clamp1(double x) { return x > 1.0 ? 1.0 : x < -1.0 ? -1.0 : x; }
+
 /* cos and sin of omega t at the grid point g of the state (cached, see chain_state) */
 static void grid_phase(const chain_model *M, chain_state *s, long long g, double *cw, double *sw)
 {
@@ -276,13 +281,17 @@ static void grid_phase(const chain_model *M, chain_state *s, long long g, double
     s->exc_n = g;
     s->exc_c = c;
     s->exc_s = sn;
-    *cw = c;
-    *sw = sn;
+    *cw = clamp1(c);
+    *sw = clamp1(sn);
 }
 
 static void phase_of(const chain_model *M, const chain_state *s, double t, double *cw, double *sw)
 {
-    if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * M->h) { *cw = s->exc_c; *sw = s->exc_s; return; }
+    if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * M->h) {
+        *cw = clamp1(s->exc_c);
+        *sw = clamp1(s->exc_s);
+        return;
+    }
     *cw = cos(M->omega * t);
     *sw = sin(M->omega * t);
 }
@@ -421,7 +430,7 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
         const double c1 = M->kin.c1, bhg = M->beta * hh / M->gamma;
         const size_t lo = a0 - (size_t)G->has[0], hi = b0 + (size_t)G->has[1];
         for (size_t i = lo; i < hi; i++) {
-            M->d[i] = M->am1[i] * c1 + M->Kd[i] * bhg + M->Cd[i];
+            M->d[i] = M->am1[i] * c1 + M->Kd[i] * M->beta * hh / M->gamma + M->Cd[i];
             M->e[i] = M->Ko[i] * bhg + M->Co[i];
         }
         M->cd = M->d;
