@@ -202,7 +202,7 @@ int chain_state_init(const chain_model *M, chain_state *s)
     const size_t n = M->n;
     memset(s, 0, sizeof *s);
     s->n = n;
-    double *b = dalloc(&M->al, 5 * n);
+    double *b = dalloc(&M->al, 6 * n);
     int *mode = (int *)M->al.allocate(M->al.env, n, sizeof(int));
     if (!b || !mode) {
         if (b) M->al.release(M->al.env, b);
@@ -214,6 +214,7 @@ int chain_state_init(const chain_model *M, chain_state *s)
     s->A = b + 2 * n;
     s->F = b + 3 * n;
     s->hA = b + 4 * n;
+    s->t_stick = b + 5 * n;
     s->mode = mode;
     s->exc_n = -1;
     return 1;
@@ -223,18 +224,19 @@ void chain_state_free(const chain_model *M, chain_state *s)
 {
     if (s->X) M->al.release(M->al.env, s->X);
     if (s->mode) M->al.release(M->al.env, s->mode);
-    s->X = s->V = s->A = s->F = s->hA = NULL;
+    s->X = s->V = s->A = s->F = s->hA = s->t_stick = NULL;
     s->mode = NULL;
 }
 
 void chain_state_copy(chain_state *dst, const chain_state *src)
 {
-    double *X = dst->X, *V = dst->V, *A = dst->A, *F = dst->F, *hA = dst->hA;
+    double *X = dst->X, *V = dst->V, *A = dst->A, *F = dst->F, *hA = dst->hA, *ts = dst->t_stick;
     int *mode = dst->mode;
     const size_t n = src->n;
     *dst = *src;
-    dst->X = X; dst->V = V; dst->A = A; dst->F = F; dst->hA = hA; dst->mode = mode;
+    dst->X = X; dst->V = V; dst->A = A; dst->F = F; dst->hA = hA; dst->t_stick = ts; dst->mode = mode;
     memcpy(hA, src->hA, n * sizeof *hA);
+    memcpy(ts, src->t_stick, n * sizeof *ts);
     memcpy(X, src->X, n * sizeof *X);
     memcpy(V, src->V, n * sizeof *V);
     memcpy(A, src->A, n * sizeof *A);
@@ -365,10 +367,13 @@ static int held(const chain_model *M, const chain_state *s, size_t i)
 static void physical_accel(chain_model *M, const chain_state *s, const span *G, double *a)
 {
     net_forces(M, s, G, M->S);
+    double cw, sw;
+    phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = G->a; i < G->b; i++) {
         if (held(M, s, i)) { a[i] = 0.0; continue; }
         const double F = has_friction(M, i) ? -s->mode[i] * M->mukN[i] : 0.0;
-        a[i] = (M->S[i] + F) / M->m[i];
+        /* summed as the oscillator's accel_of */
+        a[i] = (P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) + F - Cv(M, s->V, i)) / M->m[i];
     }
 }
 
@@ -451,15 +456,15 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
     if (rebase && !M->jerk_valid) {
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
          * function of the state only, kept for the further trials from it (root finding) */
-        double cw, sw;
-        phase_of(M, s, s->t, &cw, &sw);
+        /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
+        const double cw = cos(M->omega * s->t), sw = sin(M->omega * s->t);
         physical_accel(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
         for (int k = 0; k < 2; k++)
             if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
         for (size_t i = a0; i < b0; i++) {
             double j = 0.0;
             if (!held(M, s, i)) {
-                const double Pd = -M->omega * (M->Pc[i] * sw + M->Ps[i] * cw);
+                const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
                 j = (Pd - Kx(M, s->V, i) - Cv(M, M->A0, i)) / M->m[i];
             }
             M->J[i] = j;
@@ -516,7 +521,7 @@ static void solve_rows(size_t lo, size_t hi, int gl, double vl, int gr, double v
             const double rhs = p[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
             const double den = d[i] - lo_e * cprev;
             const double inv = 1.0 / den;
-            cp[i] = e[i] * inv;
+            cp[i] = (i + 1 < hi) ? e[i] * inv : 0.0;  /* e has hi - 1 entries */
             dp[i] = (rhs - lo_e * dprev) * inv;
         }
         cprev = cp[i];
@@ -645,10 +650,11 @@ static void solve_modes(chain_model *M, const span *G)
                M->cp, M->dp);
 }
 
-/* How far block i is from its switch at the trial (> 0: not yet), in force units. */
+/* How far block i is from its switch at the trial (> 0: not yet): s V for a sliding block (as the
+ * oscillator's stop), F_b - |F| for a stuck one. */
 static double switch_margin(const chain_model *M, const chain_state *s, size_t i)
 {
-    if (M->st[i] != 0) return s->mode[i] * M->Vt[i] * M->cd[i];
+    if (M->st[i] != 0) return s->mode[i] * M->Vt[i];
     return M->Fb[i] - fabs(M->Ft[i]);
 }
 
@@ -664,7 +670,9 @@ static double min_margin(void *vctx, double x)
     margin_ctx *c = (margin_ctx *)vctx;
     chain_model *M = c->M;
     const chain_state *s = c->s;
-    trial(M, s, c->G, x, cos(M->omega * (s->t + x)), sin(M->omega * (s->t + x)));
+    double cw, sw;
+    phase_of(M, s, s->t + x, &cw, &sw);
+    trial(M, s, c->G, x, cw, sw);
     solve_modes(M, c->G);
     double g = INFINITY;
     for (size_t k = 0; k < M->ncand; k++) g = fmin(g, switch_margin(M, s, M->cand[k]));
@@ -718,6 +726,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         if (M->frozen[i]) s->mode[i] = 0;
         else if (from != 0) s->mode[i] = (fabs(S) <= M->Fb[i]) ? 0 : sgn(S);
         else s->mode[i] = (sgn(S) != 0) ? sgn(S) : -sgn(M->Ft[i]);
+        if (s->mode[i] == 0 && from != 0) s->t_stick[i] = s->t;
         if (s->mode[i] != from) report(M, s, i, from, fn, ctx);
     }
     restart(M, s, G);
@@ -727,6 +736,32 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         const int dir = s->mode[i];
         if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
     }
+}
+
+/* Block i stuck with X frozen and every neighbour at rest: its static force is its excitation
+ * plus a constant, and its next breakaway after the stick phase's start is known in closed form
+ * (friction.h, as the oscillator's); INFINITY when it does not apply. */
+static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, int *dir)
+{
+    for (int side = -1; side <= 1; side += 2) {
+        if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
+        const size_t j = (side < 0) ? i - 1 : i + 1;
+        const int inside = j >= G->a && j < G->b;
+        if (!(held(M, s, j) || (inside && M->frozen[j]))) return INFINITY;
+    }
+    dfo_model bm;
+    memset(&bm, 0, sizeof bm);
+    bm.p.omega = M->omega;
+    bm.p.P0 = M->P0[i];
+    bm.p.phi = M->phi[i];
+    bm.P_amp = fabs(M->P0[i]);
+    bm.P_phase = M->phi[i] + (M->P0[i] < 0.0 ? DFO_PI : 0.0);
+    dfo_loads L;
+    L.F_ext = M->u[i];
+    L.N = 0.0;
+    L.muk_N = M->mukN[i];
+    L.Fb = M->Fb[i];
+    return dfo_next_breakaway(&bm, &L, M->u[i] - Kx(M, s->X, i), s->t_stick[i], dir);
 }
 
 /* The located step of a span from s->t to t_end (first phase of length hh): phases in the current
@@ -760,16 +795,54 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
             s->t = t_end;
             return;
         }
+        /* breakaways among resting neighbours only: at their closed-form time */
+        double tb = INFINITY;
+        for (size_t k = 0; k < M->ncand; k++) {
+            const size_t i = M->cand[k];
+            int dir = 0;
+            const double t = (M->st[i] == 0) ? closed_breakaway(M, s, G, i, &dir) : -INFINITY;
+            M->S[i] = t;
+            tb = fmin(tb, t);
+        }
+        if (tb >= s->t && tb <= t_end) {
+            const double ta = s->t, hs = tb - ta;
+            if (hs > 0.0) {
+                double c1w, s1w;
+                phase_of(M, s, tb, &c1w, &s1w);
+                trial(M, s, G, (tb == t_end) ? r : hs, c1w, s1w);
+                solve_modes(M, G);
+                s->solves++;
+                finish(M, s, G, M->Vt, M->Ft);
+            }
+            s->t = tb;
+            size_t nsw = 0;
+            for (size_t k = 0; k < M->ncand; k++)
+                if (M->S[M->cand[k]] == tb) M->cand[nsw++] = M->cand[k];
+            M->ncand = nsw;
+            set_ghosts(M, s, G);
+            apply_switches(M, s, G, 1, fn, ctx);
+            if (stop_at_switch && M->switched) return;
+            continue;
+        }
         /* bracket the first switch: (lo, hi] with min_margin(lo) > 0 >= min_margin(hi) */
         margin_ctx mc = {M, s, G};
         double hi = r, ghi = INFINITY;
         for (size_t k = 0; k < M->ncand; k++) ghi = fmin(ghi, switch_margin(M, s, M->cand[k]));
-        double lo = r, glo = ghi;
-        for (int it = 0; it < HALVINGS && !(glo > 0.0); it++) {
-            if (it > 0) { hi = lo; ghi = glo; }
-            lo *= 0.5;
-            glo = min_margin(&mc, lo);
-            s->solves++;
+        /* from the state itself when every candidate is a block still moving its way (as the
+         * oscillator's stop), else by halving the step */
+        double lo = 0.0, glo = INFINITY;
+        for (size_t k = 0; k < M->ncand; k++) {
+            const size_t i = M->cand[k];
+            glo = (M->st[i] != 0) ? fmin(glo, s->mode[i] * s->V[i]) : -INFINITY;
+        }
+        if (!(glo > 0.0)) {
+            lo = r;
+            glo = -INFINITY;
+            for (int it = 0; it < HALVINGS && !(glo > 0.0); it++) {
+                lo *= 0.5;
+                glo = min_margin(&mc, lo);
+                s->solves++;
+            }
         }
         if (!(glo > 0.0)) {  /* nothing resolvable before the switch: it happens now */
             apply_switches(M, s, G, 1, fn, ctx);
@@ -785,6 +858,10 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         trial(M, s, G, hs, c1w, s1w);
         solve_modes(M, G);
         s->solves++;
+        for (size_t k = 0; k < M->ncand; k++) {  /* a stopping block ends the sub-step at rest */
+            const size_t i = M->cand[k];
+            if (M->st[i] != 0 && switch_margin(M, s, i) <= 0.0) M->Vt[i] = 0.0;
+        }
         finish(M, s, G, M->Vt, M->Ft);
         s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
         set_ghosts(M, s, G);
@@ -1067,6 +1144,7 @@ static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, ch
     for (size_t i = 0; i < n; i++) {
         const int from = s->mode[i];
         s->mode[i] = M->st[i];
+        if (s->mode[i] == 0 && from != 0) s->t_stick[i] = s->t;
         if (consistent && s->mode[i] == 0 && has_friction(M, i)) s->A[i] = 0.0;
         if (has_friction(M, i) && s->mode[i] != from) report(M, s, i, from, fn, ctx);
     }
@@ -1088,6 +1166,7 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
         s->X[i] = M->x0[i];
         s->V[i] = M->v0[i];
         s->hA[i] = 0.0;
+        s->t_stick[i] = t0;
     }
     const span G = whole(M, s);
     net_forces(M, s, &G, M->S);
@@ -1132,7 +1211,7 @@ static long long stuck_until(chain_model *M, const chain_state *s, double t_end)
         L.muk_N = M->mukN[i];
         L.Fb = M->Fb[i];
         int dir = 0;
-        tb = fmin(tb, dfo_next_breakaway(&bm, &L, M->u[i] - Kx(M, s->X, i), s->t, &dir) - 1e-6 * h);
+        tb = fmin(tb, dfo_next_breakaway(&bm, &L, M->u[i] - Kx(M, s->X, i), s->t_stick[i], &dir) - 1e-6 * h);
     }
     if (!(tb > s->t)) return s->n_grid;
     long long m = (long long)floor((tb - s->t0) / h);

@@ -61,7 +61,7 @@ typedef enum {
 
 typedef struct chain_model chain_model;
 
-/* The state: plain fields plus six arrays of length n. Copy with chain_state_copy; serialise as
+/* The state: plain fields plus seven arrays of length n. Copy with chain_state_copy; serialise as
  * the struct's scalar fields followed by the arrays. */
 typedef struct {
     size_t n;
@@ -69,6 +69,7 @@ typedef struct {
     long long n_grid;   /* the last grid point reached is t0 + n_grid h */
     double *X, *V, *A, *F;
     double *hA;         /* per block: step length that produced A (0: A is the physical acceleration) */
+    double *t_stick;    /* per block: when its current stick phase began */
     int *mode;          /* -1 backward slip, 0 stuck, +1 forward slip (sign of V without friction) */
     /* energy accounts since the start (J): work of the applied forces (excitation + F_ext) and of
      * friction, dissipation in the dampers (trapezoidal rule per (sub)step, friction exact) */
