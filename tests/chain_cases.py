@@ -5,6 +5,7 @@ the reference."""
 from __future__ import annotations
 
 import io
+import os
 import subprocess
 from pathlib import Path
 from typing import Optional
@@ -14,7 +15,8 @@ import numpy as np
 from dryfriction.chain_reference import Chain, ChainSolution, solve_chain
 
 ROOT = Path(__file__).resolve().parents[1]
-DRIVER = ROOT / "build" / "tests" / "c" / "chain_driver"
+# the C driver of the chain: DFO_CHAIN_DRIVER, else the one of the default build
+DRIVER = Path(os.environ.get("DFO_CHAIN_DRIVER", ROOT / "build" / "tests" / "c" / "chain_driver"))
 PERIODS = 10
 
 # the coupled cases: lambda-like omega against unit masses and springs (natural frequencies of a
