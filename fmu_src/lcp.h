@@ -10,7 +10,7 @@
 #include <float.h>
 #include <math.h>
 
-#define LCP_MAX_N 8
+#define LCP_MAX_N 12  /* the 2n problem of a chain of up to 6 blocks */
 
 typedef enum {
     LCP_OK = 0,          /* solution found */

@@ -1,6 +1,7 @@
 /* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
 #include "newmark.h"
 
+#include "bossak.h"
 #include "exact.h"
 #include "friction.h"
 #include "lcp.h"
@@ -145,14 +146,16 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
 static void coef_for(const dfo_model *M, double h, step_coef *cf)
 {
     const double a = M->p.alpha, g = M->gamma, b = M->beta;
-    cf->h = h;
-    cf->c1 = 1.0 / (g * h);
+    dfo_bossak_kin kin;
+    dfo_bossak_kin_for(h, g, b, &kin);
+    cf->h = kin.h;
+    cf->c1 = kin.c1;
     cf->m_hat = (1.0 - a) * M->p.m * cf->c1 + M->p.k * b * h / g;
     if (M->damped) cf->m_hat += M->p.c;
     cf->inv_m_hat = 1.0 / cf->m_hat;
-    cf->pred_V = h * (1.0 - b / g);
-    cf->pred_A = h * h * (0.5 - b / g);
-    cf->corr_V = b * h / g;
+    cf->pred_V = kin.pred_V;
+    cf->pred_A = kin.pred_A;
+    cf->corr_V = kin.corr_V;
 }
 
 /* The step [s->t, t1] of length h (t1 = s->t + h up to rounding: t1 names the grid point). */
@@ -413,44 +416,24 @@ static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, tr
     return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->co->inv_m_hat;
 }
 
-/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method to a few ulps of t + h. */
+/* dir V1 of a sliding step of length h, as a root function for dfo_brent. */
+typedef struct {
+    const step_ctx *C;
+    const dfo_state *s;
+} slide_root;
+
+static double slide_root_fn(void *ctx, double h)
+{
+    const slide_root *r = (const slide_root *)ctx;
+    trial tr;
+    return slide_velocity(r->C, r->s, h, &tr);
+}
+
+/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method (bossak.h) to a few ulps of t + h. */
 static double stop_length(const step_ctx *C, const dfo_state *s, double lo, double flo, double hi, double fhi)
 {
-    trial tr;
-    double a = lo, b = hi, fa = flo, fb = fhi, c = a, fc = fa, d = b - a, e = d;
-    for (int it = 0; it < 200; it++) {
-        if (fb == 0.0) return b;
-        if ((fb > 0.0) == (fc > 0.0)) { c = a; fc = fa; d = e = b - a; }
-        if (fabs(fc) < fabs(fb)) { a = b; b = c; c = a; fa = fb; fb = fc; fc = fa; }
-        const double tol = 4.0 * DBL_EPSILON * (fabs(s->t) + fabs(b)) + DBL_MIN;
-        const double m = 0.5 * (c - b);
-        if (fabs(m) <= tol) break;
-        if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
-            double p, q, r;
-            const double ratio = fb / fa;
-            if (a == c) {
-                p = 2.0 * m * ratio;
-                q = 1.0 - ratio;
-            } else {
-                q = fa / fc;
-                r = fb / fc;
-                p = ratio * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
-                q = (q - 1.0) * (r - 1.0) * (ratio - 1.0);
-            }
-            if (p > 0.0) q = -q; else p = -p;
-            if (2.0 * p < fmin(3.0 * m * q - fabs(tol * q), fabs(e * q))) { e = d; d = p / q; }
-            else { d = m; e = m; }
-        } else {
-            d = m;
-            e = m;
-        }
-        a = b;
-        fa = fb;
-        b += (fabs(d) > tol) ? d : (m > 0.0 ? tol : -tol);
-        fb = slide_velocity(C, s, b, &tr);
-    }
-    /* return the bracket end on the stopped side: the block is at rest there */
-    return (fb <= 0.0) ? b : c;
+    slide_root r = {C, s};
+    return dfo_brent(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
 }
 
 /* Located switches (method.md section 4, variant 2, the default). */

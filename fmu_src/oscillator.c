@@ -1,6 +1,8 @@
 /* The dry-friction oscillator: parameters, forces. See oscillator.h. */
 #include "oscillator.h"
 
+#include "bossak.h"
+
 #include <math.h>
 #include <stddef.h>
 
@@ -16,8 +18,8 @@ const char *dfo_check_params(const dfo_params *p)
 void dfo_model_init(dfo_model *M, const dfo_params *p)
 {
     M->p = *p;
-    M->gamma = 0.5 - p->alpha;
-    M->beta = 0.25 * (1.0 - p->alpha) * (1.0 - p->alpha);
+    M->gamma = dfo_bossak_gamma(p->alpha);
+    M->beta = dfo_bossak_beta(p->alpha);
     M->mu_k = p->chi * p->mu_s;
     M->mu_b = fmax(p->mu_s, M->mu_k);
     M->P_amp = fabs(p->P0);

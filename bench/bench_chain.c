@@ -1,0 +1,166 @@
+/* ns per block-step of the chain (chain.[ch]) on a stick-slip chain, for n = 1, 2, 8, 64, 512, 4096,
+ * side by side with the oscillator's stepper (newmark.[ch]) on the same single block, in one run.
+ *
+ *   bench_chain [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--N NORMAL] [--csv FILE]
+ *
+ * The chain: unit masses and springs, both ends on the wall (k_end = 1), every block forced
+ * (P0 = 1, omega = 0.5, phase 0.1 per block), mu_s = 0.5, N = 1.6 (--N), chi = 0.7, scheme located,
+ * alpha = -0.1, h = T / S (S = 1000). Timed: chain_advance over P periods (after one period of
+ * settling, outside the clock) in one call, as dfo_advance for the oscillator; the minimum over
+ * the repetitions. Reported per n: ns per
+ * block-step, ns per step, the share of steps whose warm basis was infeasible (a pivot or a located
+ * switch), switches per block and period, and the share of time stuck. For n = 1 the oscillator's
+ * dfo_advance on the same block (fastPaths on and off). CSV on stdout, or to --csv FILE. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "chain.h"
+#include "newmark.h"
+#include "oscillator.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void *std_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
+static void std_free(void *env, void *obj) { (void)env; free(obj); }
+
+#define OMEGA 0.5
+#define PHASE_STEP 0.1
+
+typedef struct {
+    double ns_block_step, ns_step, pivot_share, switches_per_block_period, stuck_share;
+} result;
+
+static result bench_chain(size_t n, int reps, double periods, double spp, double normal)
+{
+    double *arr = (double *)calloc(10 * n, sizeof(double));
+    double *m = arr, *k = arr + n, *c = arr + 2 * n, *P0 = arr + 3 * n, *phi = arr + 4 * n, *N = arr + 5 * n,
+           *mu_s = arr + 6 * n, *chi = arr + 7 * n, *x0 = arr + 8 * n, *v0 = arr + 9 * n;
+    for (size_t i = 0; i < n; i++) {
+        m[i] = 1.0; k[i] = 1.0; c[i] = 0.0; P0[i] = 1.0; phi[i] = PHASE_STEP * (double)i;
+        N[i] = normal; mu_s[i] = 0.5; chi[i] = 0.7; x0[i] = 0.0; v0[i] = 0.0;
+    }
+    const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
+    const chain_params p = {n, m, k, c, P0, phi, N, mu_s, chi, x0, v0, (n == 1) ? 0.0 : 1.0, 0.0, OMEGA, h, -0.1, 3, 0};
+    const chain_alloc al = {std_alloc, std_free, NULL};
+    chain_model *M = chain_create(&p, &al, NULL);
+    chain_state s;
+    chain_state_init(M, &s);
+    const chain_inputs in = {NULL, NULL};
+    result r;
+    memset(&r, 0, sizeof r);
+    double best = INFINITY;
+    for (int rep = 0; rep < reps; rep++) {
+        chain_start(M, &in, 0.0, &s);
+        chain_advance(M, &in, &s, T, 0, NULL, NULL);
+        const long long steps0 = s.steps, piv0 = s.pivot_steps, sw0 = s.switches;
+        const long long nsteps = (long long)(periods * spp + 0.5);
+        const double t0 = now();
+        if (chain_advance(M, &in, &s, T + (double)nsteps * h, 0, NULL, NULL) != CHAIN_OK) {
+            fprintf(stderr, "bench_chain: n = %zu failed at t = %g\n", n, s.t);
+            exit(1);
+        }
+        const double el = now() - t0;
+        const double steps = (double)(s.steps - steps0);
+        if (el < best) {
+            best = el;
+            r.ns_step = 1e9 * el / steps;
+            r.ns_block_step = r.ns_step / (double)n;
+            r.pivot_share = (double)(s.pivot_steps - piv0) / steps;
+            r.switches_per_block_period = (double)(s.switches - sw0) / (double)n / periods;
+        }
+    }
+    /* the share of time stuck, sampled every 10th grid point of one more run (not timed) */
+    long long stuck = 0, samples = 0;
+    chain_start(M, &in, 0.0, &s);
+    chain_advance(M, &in, &s, T, 0, NULL, NULL);
+    const long long nsteps = (long long)(periods * spp + 0.5);
+    for (long long j = 10; j <= nsteps; j += 10) {
+        chain_advance(M, &in, &s, T + (double)j * h, 0, NULL, NULL);
+        for (size_t i = 0; i < n; i++) stuck += (s.mode[i] == 0);
+        samples += (long long)n;
+    }
+    r.stuck_share = (double)stuck / (double)samples;
+    chain_state_free(M, &s);
+    chain_destroy(M);
+    free(arr);
+    return r;
+}
+
+static double bench_oscillator(int reps, double periods, double spp, int fast, double normal)
+{
+    dfo_params p;
+    memset(&p, 0, sizeof p);
+    p.m = 1.0; p.k = 1.0; p.P0 = 1.0; p.omega = OMEGA; p.N = normal; p.mu_s = 0.5; p.chi = 0.7;
+    const double T = 2.0 * DFO_PI / OMEGA;
+    p.h = T / spp; p.alpha = -0.1; p.t_obs_stop = 1e300; p.scheme = 3; p.frictionUpdates = 1; p.fastPaths = fast;
+    dfo_model M;
+    dfo_model_init(&M, &p);
+    dfo_inputs u;
+    memset(&u, 0, sizeof u);
+    double best = INFINITY, per = 0.0;
+    for (int rep = 0; rep < reps; rep++) {
+        dfo_state s;
+        dfo_start(&M, &u, 0.0, &s);
+        dfo_advance(&M, &u, &s, T, NULL, NULL);
+        const long long steps0 = s.steps;
+        const long long nsteps = (long long)(periods * spp + 0.5);
+        const double t0 = now();
+        dfo_advance(&M, &u, &s, T + (double)nsteps * p.h, NULL, NULL);
+        const double el = now() - t0;
+        if (el < best) { best = el; per = 1e9 * el / (double)(s.steps - steps0); }
+    }
+    return per;
+}
+
+int main(int argc, char **argv)
+{
+    int reps = 5;
+    double periods = 4.0, spp = 1000.0, normal = 1.6;
+    size_t ns[16] = {1, 2, 8, 64, 512, 4096};
+    int nn = 6;
+    const char *csv = NULL;
+    for (int a = 1; a < argc; a++) {
+        if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--periods") && a + 1 < argc) periods = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--steps-per-period") && a + 1 < argc) spp = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--csv") && a + 1 < argc) csv = argv[++a];
+        else if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
+            nn = 0;
+            for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ","))
+                ns[nn++] = (size_t)atol(tok);
+        } else {
+            fprintf(stderr, "bench_chain: unknown or incomplete argument %s\n", argv[a]);
+            return 2;
+        }
+    }
+    if (reps < 1 || !(periods > 0.0) || !(spp >= 10.0)) {
+        fprintf(stderr, "bench_chain: --reps >= 1, --periods > 0, --steps-per-period >= 10\n");
+        return 2;
+    }
+    FILE *out = csv ? fopen(csv, "w") : stdout;
+    if (!out) { fprintf(stderr, "bench_chain: cannot write %s\n", csv); return 2; }
+    fprintf(out, "model,n,ns_per_block_step,ns_per_step,pivot_step_share,switches_per_block_period,stuck_share\n");
+    const double osc_fast = bench_oscillator(reps, periods, spp, 1, normal);
+    const double osc_gen = bench_oscillator(reps, periods, spp, 0, normal);
+    fprintf(out, "oscillator(fastPaths),1,%.2f,%.2f,,,\n", osc_fast, osc_fast);
+    fprintf(out, "oscillator(general),1,%.2f,%.2f,,,\n", osc_gen, osc_gen);
+    for (int j = 0; j < nn; j++) {
+        const result r = bench_chain(ns[j], reps, periods, spp, normal);
+        fprintf(out, "chain,%zu,%.2f,%.1f,%.4f,%.3f,%.3f\n", ns[j], r.ns_block_step, r.ns_step, r.pivot_share,
+                r.switches_per_block_period, r.stuck_share);
+        fflush(out);
+    }
+    if (csv) fclose(out);
+    return 0;
+}

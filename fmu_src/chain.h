@@ -1,0 +1,136 @@
+/* A chain of n blocks with dry friction (method.md section 9), integrated by the Bossak-Newmark
+ * scheme of the oscillator with the friction posed as the 2n LCP of the chain.
+ *
+ *     wall -k[0],c[0]- m[0] -k[1],c[1]- m[1] - ... - m[n-1] -k_end,c_end- wall
+ *     M x'' + C x' + K x = P(t) + F_ext + F,     P_i = P0_i cos(omega t + phi_i),
+ *     F_i Coulomb on block i: |F_i| <= max(mu_s_i, mu_k_i) N_i stuck, -/+ mu_k_i N_i sliding,
+ *     mu_k_i = chi_i mu_s_i, N_i = max(N_i + N_ext_i, 0).
+ *
+ * k[i], c[i] is the spring and damper on the left of block i (k[0], c[0] tie block 0 to the left
+ * wall); k_end = c_end = 0 is a free right end. Springs are relaxed at x = 0.
+ *
+ * One step: M_hat V1 = p_hat + F1 with M_hat = (1 - a) M / (g h) + C + (b h / g) K (tridiagonal,
+ * symmetric positive definite). The 2n LCP (z = (u+, u-), w = (mu N + F, mu N - F)) is solved from
+ * the basis named by the blocks' modes (stuck blocks held at V = 0, sliding ones with their kinetic
+ * force): a tridiagonal solve, O(n). When that basis is infeasible, the schemes differ:
+ *   located (default): each infeasible block's switch is placed inside the step (a sliding block's
+ *     V_i = 0, a stuck block's held force reaching its limit; a bracketed root of the step length),
+ *     the earliest is taken, the step is split there, the switching block's new mode decided by the
+ *     rest rule of friction.h with its own net force, and the chain restarts with the consistent
+ *     accelerations of the new mode set;
+ *   paper: principal pivoting on the box form of the LCP (limits mu_b N stuck, mu_k N sliding),
+ *     then one coefficient update and a second solve; Bossak's A throughout;
+ *   consistent: paper, with stuck blocks at rest (V = A = 0).
+ *
+ * Memory: O(n), every array through the caller's allocate/free callbacks. The state is plain data
+ * plus arrays (chain_state_copy). Plain C, no FMI types. */
+#ifndef DFO_CHAIN_H
+#define DFO_CHAIN_H
+
+#include <stddef.h>
+
+/* Allocation callbacks (zero-filled memory, as FMI's calloc); env is passed through. */
+typedef struct {
+    void *(*allocate)(void *env, size_t nobj, size_t size);
+    void (*release)(void *env, void *obj);
+    void *env;
+} chain_alloc;
+
+/* Everything set before a run. Arrays of length n (owned by the caller; chain_create copies them). */
+typedef struct {
+    size_t n;
+    const double *m, *k, *c, *P0, *phi, *N, *mu_s, *chi, *x0, *v0;
+    double k_end, c_end, omega, h, alpha;
+    int scheme;  /* dfo_scheme: 1 paper, 2 consistent, 3 located */
+    int account_energy;  /* keep the energy accounts of chain_state (costs O(n) per step) */
+} chain_params;
+
+/* Inputs held over a communication step: arrays of length n, or NULL when never set. */
+typedef struct {
+    const double *F_ext, *N_ext;
+} chain_inputs;
+
+typedef enum {
+    CHAIN_OK = 0,
+    CHAIN_ERR_LCP = 1,          /* the 2n LCP could not be solved */
+    CHAIN_ERR_NO_PROGRESS = 2,  /* too many switches inside one internal step */
+    CHAIN_ERR_NONFINITE = 3,    /* the state overflowed */
+    CHAIN_ERR_RESOLUTION = 4,   /* a step would not advance time */
+    CHAIN_SWITCHED = 5          /* stopped at the first switch (stop_at_switch): s->t is its time */
+} chain_status;
+
+typedef struct chain_model chain_model;
+
+/* The state: plain fields plus seven arrays of length n. Copy with chain_state_copy; serialise as
+ * the struct's scalar fields followed by the arrays. */
+typedef struct {
+    size_t n;
+    double t0, t;       /* start time; current time */
+    long long n_grid;   /* the last grid point reached is t0 + n_grid h */
+    double *X, *V, *A, *F;
+    double *hA;         /* per block: step length that produced A (0: A is the physical acceleration) */
+    double *t_stick;    /* per block: when its current stick phase began */
+    int *mode;          /* -1 backward slip, 0 stuck, +1 forward slip (sign of V without friction) */
+    /* energy accounts since the start (J): work of the applied forces (excitation + F_ext) and of
+     * friction, dissipation in the dampers (trapezoidal rule per (sub)step, friction exact) */
+    double W_applied, W_friction, D_damping;
+    /* counters: internal steps, steps whose warm basis was infeasible (a pivot or a located
+     * switch), switches, tridiagonal solves */
+    long long steps, pivot_steps, switches, solves;
+    /* excitation cache: cos and sin of omega (t0 + exc_n h) at the grid point exc_n (-1: empty), a
+     * pure function of exc_n (exact every 64 points, rotations in between; as the oscillator) */
+    long long exc_n;
+    double exc_c, exc_s;
+} chain_state;
+
+/* Check the parameters; NULL when valid, else a sentence naming the element, e.g.
+ * "invalid value -1 for m[3] (valid: > 0)" (1-based indices, as the FMU's names), written to buf. */
+const char *chain_check_params(const chain_params *p, char *buf, size_t len);
+
+/* Create the model (copies the parameters, allocates the O(n) workspace); NULL on a failed
+ * allocation or invalid parameters (then *err, if not NULL, points to the reason). */
+chain_model *chain_create(const chain_params *p, const chain_alloc *al, const char **err);
+void chain_destroy(chain_model *M);
+size_t chain_size(const chain_model *M);
+
+/* State arrays through the model's callbacks; 0 on failure. */
+int chain_state_init(const chain_model *M, chain_state *s);
+void chain_state_free(const chain_model *M, chain_state *s);
+/* dst (initialised for the same n) := src, arrays included. */
+void chain_state_copy(chain_state *dst, const chain_state *src);
+
+/* Consistent start-up at t0 from x0, v0: a block at rest with its net force inside its breakaway
+ * limit starts stuck. */
+void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state *s);
+
+/* Called at every change of a block's mode, with its time, index and position. */
+typedef void (*chain_switch_fn)(void *ctx, double t, size_t block, double x, int from_mode, int to_mode);
+
+/* Advance to t_target with the inputs held. With stop_at_switch, return CHAIN_SWITCHED at the first
+ * switch (located scheme: at its time; other schemes: at the end of the internal step holding it),
+ * the state complete there; the next call goes on from there. */
+chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
+                           int stop_at_switch, chain_switch_fn on_switch, void *ctx);
+
+/* Physical accelerations (0 for stuck blocks) into a (n values). */
+void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s, double *a);
+
+/* Mechanical energy: kinetic + springs (J). */
+double chain_energy(const chain_model *M, const chain_state *s);
+
+/* The box form of the chain's 2n LCP for a step of length h from state s (stuck blocks' limit
+ * mu_b N, sliding ones' mu_k N), for tests: fills the tridiagonal M_hat (diag d[n], off-diagonal
+ * e[n-1]), p_hat p[n] and the limits l[n]. */
+void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_state *s, double h,
+                        double *d, double *e, double *p, double *l);
+
+/* Solve the box LCP  d/e V = p + F, V_i > 0 => F_i = -l_i, V_i < 0 => F_i = l_i, |F_i| <= l_i
+ * (the 2n LCP of method.md section 9 in V and F) by principal pivoting from the modes in mode[]
+ * (in: guess, out: solution, 0 where V_i = 0). work: 2n doubles. Returns the number of pivots, or
+ * -1 when the pivot budget ran out. l_i = 0 blocks are free (mode = sign V). */
+int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
+                  double *V, double *F, double *work);
+
+const char *chain_status_text(chain_status st);
+
+#endif
