@@ -113,6 +113,7 @@ def test_event_mode_limits_against_exact(exact) -> None:
     assert seen == {"reversal", "stop", "breakaway"}
 
 
+@pytest.mark.min_versions
 def test_simulate_fmu_early_return_records_the_switches() -> None:
     ref = fmi2_switches({}, T_END, DT)
     out = simulate_fmu(str(FMU3), stop_time=T_END, output_interval=DT, early_return_allowed=True,
@@ -125,6 +126,7 @@ def test_simulate_fmu_early_return_records_the_switches() -> None:
     assert len(t) == math.ceil(T_END / DT) + 1 + len(t_ref)  # the grid, the stop time, one sample per switch
 
 
+@pytest.mark.min_versions
 def test_simulate_fmu_event_mode_records_left_and_right_limits() -> None:
     ref = fmi2_switches({}, T_END, DT)
     out = simulate_fmu(str(FMU3), stop_time=T_END, output_interval=DT, early_return_allowed=True,

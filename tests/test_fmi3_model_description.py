@@ -32,6 +32,7 @@ def md3():
     return read_model_description(str(FMU3))
 
 
+@pytest.mark.min_versions
 def test_fmpy_validate_finds_no_problem() -> None:
     assert validate_fmu(str(FMU3)) == []
 
