@@ -128,7 +128,7 @@ def parse(xml_path: Path) -> Model:
         d = u.get("dependencies")
         deps[int(u.get("index"))] = None if d is None else tuple(int(i) for i in d.split())
     zero = {z.get("variable"): z.get("zero", "") for z in
-            root.iterfind("VendorAnnotations/Tool[@name='dryfriction']/ZeroOrNormal")}
+            root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
     variables = []
     for index, sv in enumerate(svs, start=1):
         kind_el = next(iter(sv))

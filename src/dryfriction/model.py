@@ -177,7 +177,7 @@ def parse(xml: bytes | str) -> ModelDescription:
     variables: dict[str, Variable] = {}
     schemes: dict[str, int] = {}
     zero = {z.get("variable", ""): z.get("zero", "") for z in
-            root.iterfind("VendorAnnotations/Tool[@name='dryfriction']/ZeroOrNormal")}
+            root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
     for sv in root.iterfind("ModelVariables/ScalarVariable"):
         el = next(iter(sv))
         kind = el.tag
