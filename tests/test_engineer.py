@@ -298,3 +298,19 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
         main(["--version"])
     assert e.value.code == 0
     assert capsys.readouterr().out.strip() == f"dryfriction {dryfriction.__version__}"
+
+
+def test_one_version_everywhere() -> None:
+    """The package, pyproject.toml, the model description and CITATION.cff name the same version,
+    and CHANGELOG.md has its section."""
+    import tomllib
+
+    import dryfriction
+    from dryfriction.model import repository_xml
+
+    root = repository_xml().parent
+    v = dryfriction.__version__
+    assert tomllib.loads((root / "pyproject.toml").read_text())["project"]["version"] == v
+    assert f'version="{v}"' in repository_xml().read_text()
+    assert f"version: {v}" in (root / "CITATION.cff").read_text()
+    assert f"## {v} " in (root / "CHANGELOG.md").read_text()
