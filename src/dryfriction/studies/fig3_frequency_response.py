@@ -79,7 +79,7 @@ def run(ctx: StudyContext) -> dict[str, float]:
             label="Den Hartog (exact, non-stop)")
     ax.plot(lam, ds.amplitude, "o", ms=3.5, color="C0", label="FMU, from rest")
     ax.set_yscale("log")
-    ax.set_ylabel("steady-state amplitude (z_max - z_min) / 2")
+    ax.set_ylabel("steady-state amplitude (z_max - z_min) / 2\n(z = k x / P0, static deflections)")
     ax.set_title(f"Fig. 3: mu_s sigma = {nd['mu_s_sigma']}, chi = {nd['chi']}, zeta = {nd['zeta']}; "
                  f"last {s['obs_periods']:g} of {s['periods']:g} periods", fontsize=9)
     ax.grid(alpha=0.3, which="both")
