@@ -314,3 +314,20 @@ def test_one_version_everywhere() -> None:
     assert f'version="{v}"' in repository_xml().read_text()
     assert f"version: {v}" in (root / "CITATION.cff").read_text()
     assert f"## {v} " in (root / "CHANGELOG.md").read_text()
+
+
+def test_fig3_sweep_without_an_excluded_band() -> None:
+    """sweep.exclude = [] is accepted (nothing left out), no more [5, 6] to say "none"."""
+    import tomllib
+
+    from dryfriction.model import repository_xml
+    from dryfriction.studies import fig3_frequency_response as fig3
+
+    cfg = tomllib.loads((repository_xml().parent / "configs" / "fig3.toml").read_text())
+    full = fig3.lambdas({**cfg, "sweep": {**cfg["sweep"], "exclude": [0.0, 0.0]}})
+    cfg["sweep"]["exclude"] = []
+    fig3.check(cfg)
+    assert fig3.lambdas(cfg).size == full.size
+    cfg["sweep"]["exclude"] = [1.0]
+    with pytest.raises(Exception, match=r"\[low, high\] or \[\]"):
+        fig3.check(cfg)

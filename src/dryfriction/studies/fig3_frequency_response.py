@@ -27,6 +27,8 @@ DATASET = "fig3.nc"
 def lambdas(cfg: dict[str, Any]) -> np.ndarray:
     s = cfg["sweep"]
     lam = grid(s["lam"], "sweep.lam")
+    if not s["exclude"]:            # [] : nothing left out
+        return lam
     lo, hi = s["exclude"]
     return lam[~((lam > lo) & (lam < hi))]
 
@@ -37,7 +39,7 @@ def check(cfg: dict[str, Any]) -> None:
     s = cfg["sweep"]
     check_window(s["periods"], s["obs_periods"], "sweep")
     require(s["lam"]["start"] > 0 and s["lam"]["stop"] > 0, "sweep.lam must stay > 0")
-    require(len(s["exclude"]) == 2, f"sweep.exclude must be [low, high], not {s['exclude']}")
+    require(len(s["exclude"]) in (0, 2), f"sweep.exclude must be [low, high] or [], not {s['exclude']}")
     require(lambdas(cfg).size >= 1, "no frequency ratio left outside sweep.exclude")
 
 
