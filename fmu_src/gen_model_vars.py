@@ -73,11 +73,13 @@ class Variable:
     declared_type: str | None = None  # the enumeration type of an Enumeration
     dimensions: tuple[int, ...] = ()  # array shape (FMI 3.0 arrays); () for a scalar, the only kind today
     dependencies: tuple[str, ...] | None = None  # outputs: the knowns it depends on at once (None: all)
+    zero: str | None = None  # min 0 and a ZeroOrNormal annotation: what 0 means; other values are normal
 
     @property
     def normal(self) -> bool:
-        """A positive lower bound equal to the smallest normal double: the value must be normal."""
-        return self.type == "Real" and self.min == DBL_MIN
+        """A positive lower bound equal to the smallest normal double, or 0 with a meaning
+        (``<ZeroOrNormal>``): a value other than 0 must be a normal number."""
+        return self.type == "Real" and (self.min == DBL_MIN or (self.zero is not None and self.min == 0))
 
 
 @dataclass(frozen=True)
@@ -137,6 +139,8 @@ def parse(xml_path: Path) -> Model:
     for u in root.iterfind("ModelStructure/Outputs/Unknown"):
         d = u.get("dependencies")
         deps[int(u.get("index"))] = None if d is None else tuple(int(i) for i in d.split())
+    zero = {z.get("variable"): z.get("zero", "") for z in
+            root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
     variables = []
     for index, sv in enumerate(svs, start=1):
         kind_el = next(iter(sv))
@@ -160,7 +164,8 @@ def parse(xml_path: Path) -> Model:
             variability=sv.get("variability", "continuous"), initial=sv.get("initial"),
             start=_number(kind_el.get("start"), kind), min=None if lo is None else float(lo),
             max=None if hi is None else float(hi), unit=kind_el.get("unit"),
-            description=sv.get("description", ""), declared_type=declared, dependencies=dep_names))
+            description=sv.get("description", ""), declared_type=declared, dependencies=dep_names,
+            zero=zero.get(name)))
     effects_var, effects = None, []
     eff_el = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
     if eff_el is not None:
@@ -246,6 +251,8 @@ def range_text(model: Model, v: Variable) -> str:
         return "one of " + ", ".join(f"{i.value} ({i.name})" for i in model.enumerations[v.declared_type])
     if v.type == "Boolean":
         return "true or false"
+    if v.normal and v.zero is not None:
+        return f"0 ({v.zero}) or > 0 (a normal number, >= {DBL_MIN!r})"
     if v.normal:
         return f"> 0 (a normal number, >= {v.min!r})"
     lo, hi = v.min, v.max

@@ -131,6 +131,7 @@ static const char *invalid(const dfo_var_info *var, double x)
             if (x == var->items[k]) return NULL;
         return var->range;
     }
+    if (var->normal && x != 0.0 && fabs(x) < DBL_MIN) return var->range; /* 0 or a normal number */
     return (x >= var->min && x <= var->max) ? NULL : var->range;
 }
 
@@ -302,6 +303,7 @@ static double output_real(const dfo_values *v, int id)
     case DFO_OUT_x_min: return seen ? s->x_min : 0.0;
     case DFO_OUT_stick_fraction: return v->p.observe ? dfo_stick_fraction(&v->M, s) : 0.0;
     case DFO_OUT_E_friction: return v->p.observe ? s->E_friction : 0.0;
+    case DFO_OUT_h_used: return v->M.p.h;
     default: return 0.0;
     }
 }
@@ -349,9 +351,19 @@ dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
                              "%.17g): the parameters are out of the range of double precision.", fn, v->p.x0, v->p.v0,
                              v->p.m);
     v->phase = DFO_PHASE_STEP;
+    dfo_inst_status status = DFO_INST_OK;
+    const double T_min = dfo_shortest_period(&v->p);
+    if (v->p.h > 0.0 && v->p.scheme != DFO_SCHEME_EXACT && v->p.h * DFO_MIN_STEPS_PER_PERIOD > T_min) {
+        status = DFO_INST_WARNING;
+        dfo_inst_log(in, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
+                     "%s: h = %.6g s takes only %.3g internal steps per %.6g s, the shortest period of the dynamics "
+                     "(natural 2 pi sqrt(m/k), excitation 2 pi/omega, damping 2 pi m/c): the results do not resolve "
+                     "it. Choose h <= %.6g s (1/%g of it), or h = 0 to let the FMU derive it.", fn, v->p.h,
+                     T_min / v->p.h, T_min, T_min / DFO_STEPS_PER_PERIOD, DFO_STEPS_PER_PERIOD);
+    }
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
                  s->t, s->X, s->V, s->mode, v->effects);
-    return DFO_INST_OK;
+    return status;
 }
 
 dfo_inst_status dfo_inst_terminate(dfo_instance *in)
@@ -476,7 +488,7 @@ static void on_switch(void *ctx, double t, double x, int from, int to)
 static dfo_status advance_to_switch(dfo_instance *in, double t_target)
 {
     dfo_values *v = &in->v;
-    const double h = v->p.h, snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
+    const double h = v->M.p.h, snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
     in->switched = 0;
     while (v->s.t < t_target) {
         const double grid = v->s.t0 + (double)(v->s.n + 1) * h;
@@ -498,7 +510,7 @@ static dfo_inst_status check_step(dfo_instance *in, const char *fn, double tc, d
     if (!isfinite(dt) || !(dt > 0.0))
         return dfo_inst_fail(in, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
                              tc);
-    const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * v->p.h;
+    const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * v->M.p.h;
     if (fabs(tc - t) > tol)
         return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
                              tc, t);
@@ -509,10 +521,10 @@ static dfo_inst_status check_step(dfo_instance *in, const char *fn, double tc, d
     if (v->stop_defined && t_target > v->stop_time + tol)
         return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
                              v->stop_time);
-    if ((t_target - t) / v->p.h > MAX_STEPS_PER_CALL)
+    if ((t_target - t) / v->M.p.h > MAX_STEPS_PER_CALL)
         return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
                              "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
-                             MAX_STEPS_PER_CALL, v->p.h);
+                             MAX_STEPS_PER_CALL, v->M.p.h);
     *t_target_out = t_target;
     return DFO_INST_OK;
 }
@@ -551,7 +563,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     }
     /* the host's time: the target (the stepper may stand on a grid point within its snap tolerance
      * of it), or where an early return stopped short of it */
-    const double snap = fmax(1e-9 * v->p.h, 8.0 * DBL_EPSILON * fabs(t_target));
+    const double snap = fmax(1e-9 * v->M.p.h, 8.0 * DBL_EPSILON * fabs(t_target));
     const int early = (flags & DFO_STEP_STOP_AT_SWITCH) && in->switched && v->s.t < t_target - snap;
     v->time = early ? v->s.t : t_target;
     v->u_used = v->u;
@@ -603,7 +615,7 @@ static int land(const dfo_values *v, const dfo_state *start, const switch_rec *r
         }
     }
     /* fallback: the internal grid point after the switch */
-    const double h = v->p.h;
+    const double h = v->M.p.h;
     const double g = start->t0 + (floor((r->ts - start->t0) / h) + 1.0) * h;
     if (!(g < t_end)) return 0;
     dfo_state w = *start;
@@ -799,7 +811,7 @@ static const char *implausible(const dfo_values *v)
         return "the state is not finite";
     if (s->mode < -1 || s->mode > 1) return "the mode is invalid";
     /* the time lies on the internal grid's interval n: t0 + n h <= t < t0 + (n + 1) h */
-    const double h = v->p.h, slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
+    const double h = dfo_step_size(&v->p), slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
     if (s->t < s->t0 || s->t0 + (double)s->n * h > s->t + slack || s->t0 + (double)(s->n + 1) * h < s->t - slack)
         return "the time does not match the internal grid";
     /* once started, the host's time is the stepper's within its snap tolerance */

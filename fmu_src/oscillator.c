@@ -3,8 +3,23 @@
 
 #include "bossak.h"
 
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
+
+double dfo_shortest_period(const dfo_params *p)
+{
+    const double rate = fmax(fmax(sqrt(p->k / p->m), fabs(p->omega)), p->c / p->m);
+    return rate > 0.0 ? 2.0 * DFO_PI / rate : INFINITY;
+}
+
+double dfo_step_size(const dfo_params *p)
+{
+    if (p->h > 0.0) return p->h;
+    const double T = dfo_shortest_period(p);
+    const double h = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
+    return (h >= DBL_MIN && isfinite(h)) ? h : DBL_MIN;
+}
 
 const char *dfo_check_params(const dfo_params *p)
 {
@@ -18,6 +33,7 @@ const char *dfo_check_params(const dfo_params *p)
 void dfo_model_init(dfo_model *M, const dfo_params *p)
 {
     M->p = *p;
+    M->p.h = dfo_step_size(p);
     M->gamma = dfo_bossak_gamma(p->alpha);
     M->beta = dfo_bossak_beta(p->alpha);
     M->mu_k = p->chi * p->mu_s;
@@ -25,8 +41,8 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->P_amp = fabs(p->P0);
     M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
     M->rate_max = sqrt(p->k / p->m) + p->c / p->m + fabs(p->omega);
-    M->rot_c = cos(p->omega * p->h);
-    M->rot_s = sin(p->omega * p->h);
+    M->rot_c = cos(p->omega * M->p.h);
+    M->rot_s = sin(p->omega * M->p.h);
     M->fast = p->fastPaths != 0;
     M->damped = !M->fast || p->c != 0.0;
     M->update = !M->fast || M->mu_k != M->mu_b;

@@ -19,7 +19,7 @@ typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCAT
  * line of XML plus one field here. */
 typedef struct {
     double m, k, c, P0, omega, phi, N, mu_s, chi, x0, v0;
-    double h, alpha;                 /* internal step (s), Bossak parameter */
+    double h, alpha;                 /* internal step (s; 0: derived, see dfo_step_size), Bossak parameter */
     double t_obs_start, t_obs_stop;  /* observation window (s) */
     int scheme;                      /* dfo_scheme */
     int frictionUpdates;             /* coefficient updates per step (scheme paper) */
@@ -46,7 +46,7 @@ enum {
 
 /* Parameters plus the constants derived from them once, at initialisation. */
 typedef struct {
-    dfo_params p;
+    dfo_params p;            /* the parameters, with p.h the step used (dfo_step_size) */
     double gamma, beta;      /* Newmark coefficients: gamma = 1/2 - alpha, beta = (1 - alpha)^2 / 4 */
     double mu_k, mu_b;       /* kinetic and breakaway coefficients, mu_b = max(mu_s, mu_k) */
     double P_amp, P_phase;   /* P0 cos(w t + phi) written as P_amp cos(w t + P_phase), P_amp >= 0 */
@@ -60,7 +60,22 @@ typedef struct {
 /* Checks that involve several parameters; NULL when consistent, else a sentence. */
 const char *dfo_check_params(const dfo_params *p);
 
-/* Derive the constants. The parameters must have passed the checks above. */
+/* The default step: h = 0 means "derived from the dynamics". The shortest time scale of the model is
+ * the shortest of the natural period 2 pi sqrt(m/k), the excitation period 2 pi/|omega| and the
+ * damping time 2 pi m/c (the rate c/m taken like an angular frequency); the derived step is 1/1000
+ * of it, so a default run resolves every period at least as finely as a run at T/1000. Without any
+ * of them (k = omega = c = 0) the motion between events has constant acceleration, which every
+ * scheme integrates exactly, and the step is DFO_STEP_FALLBACK. */
+#define DFO_STEPS_PER_PERIOD 1000.0
+#define DFO_STEP_FALLBACK 1e-3
+/* Fewer internal steps than this per shortest period: a user-set h does not resolve the dynamics. */
+#define DFO_MIN_STEPS_PER_PERIOD 20.0
+/* The shortest period (s) of the model as above; +inf when it has none. */
+double dfo_shortest_period(const dfo_params *p);
+/* The internal step a run uses: p->h when > 0, else derived (always a normal number > 0). */
+double dfo_step_size(const dfo_params *p);
+
+/* Derive the constants (M->p.h is the step used). The parameters must have passed the checks above. */
 void dfo_model_init(dfo_model *M, const dfo_params *p);
 
 /* Excitation P0 cos(omega t + phi) and its time derivative. */

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# All tests, from a fresh clone: set up, C unit tests (ctest), the pytest suite through the FMU,
+# All tests, from a fresh clone: set up, C unit tests (ctest), the pytest suite through the FMU, the
+# examples (examples/*.py at full size),
 # the lowest declared dependency versions (scripts/check_min_versions.sh), then the C tests and
 # the pytest suite again with the FMU built with AddressSanitizer and UBSan, and the fuzzer.
 # Prints the duration of every stage at the end (also when a stage fails).
@@ -46,6 +47,16 @@ fuzz() {  # libFuzzer + ASan/UBSan, 60 s; installs clang if missing
 stage "setup" bash scripts/setup.sh
 stage "ctest" ctest --test-dir build --output-on-failure -j2
 stage "pytest" .venv/bin/python -m pytest -q
+examples() {  # every example at its own size, in a scratch folder
+  local d f
+  d=$(mktemp -d)
+  for f in examples/*.py; do
+    echo "-- $f"
+    (cd "$d" && "$OLDPWD/.venv/bin/python" "$OLDPWD/$f") || return 1
+  done
+  rm -rf "$d"
+}
+stage "examples" examples
 stage "min-versions" bash scripts/check_min_versions.sh
 stage "ASan/UBSan build" asan_build
 stage "ASan ctest" ctest --test-dir build-asan --output-on-failure -j2

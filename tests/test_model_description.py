@@ -133,7 +133,8 @@ def _ranged(md: object) -> list[tuple[str, str, float | None, float | None]]:
 def test_the_ranges_are_in_the_model_description() -> None:
     md = read_model_description(str(XML))
     by = {v.name: v for v in md.modelVariables}
-    assert float(by["m"].min) == DBL_MIN and float(by["h"].min) == DBL_MIN
+    assert float(by["m"].min) == DBL_MIN and float(by["h"].min) == 0.0   # h: 0 (derived) or a normal number
+    assert float(by["h"].start) == 0.0 and by["h_used"].causality == "calculatedParameter"
     for n in ("k", "c", "N", "mu_s", "chi", "omega"):
         assert float(by[n].min) == 0.0 and by[n].max is None, n
     assert float(by["alpha"].min) == -1.0 / 3.0 and float(by["alpha"].max) == 0.0

@@ -3,4 +3,4 @@
 from .params import Oscillator
 
 __all__ = ["Oscillator"]
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -1,4 +1,4 @@
-"""Command line: ``dryfriction validate | run | scenes | study | lyapunov``.
+"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov``.
 
 Invalid arguments end with one readable line on stderr and exit status 2, before any work.
 """
@@ -8,11 +8,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
-from . import model, scenes
+from . import __version__, model, scenes
 from .argparsing import Parser, UsageError, count, make_parser, number
 from .fmu import FMUError, Settings
 from .params import Oscillator
@@ -31,6 +33,7 @@ def _global_options(suppress: bool) -> argparse.ArgumentParser:
 def build_parser() -> Parser:
     p = make_parser("dryfriction", "Dry-friction oscillator FMU: validation, scenes and studies.",
                     parents=[_global_options(False)])
+    p.add_argument("--version", action="version", version=f"dryfriction {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     common = [_global_options(True)]
 
@@ -42,16 +45,47 @@ def build_parser() -> Parser:
     schemes = list(model.default().schemes)
     r = sub.add_parser("run", parents=common, help="run one scene and print its result as JSON")
     r.add_argument("--scene", choices=list(scenes.SCENES), default="validation")
-    r.add_argument("--lam", type=number("--lam", 0.0, True), default=0.5, help="frequency ratio omega/w0")
-    r.add_argument("--mu-s-sigma", type=number("--mu-s-sigma", 0.0), default=0.4, help="mu_s N / P0")
-    r.add_argument("--chi", type=number("--chi", 0.0), default=0.7, help="mu_k / mu_s")
-    r.add_argument("--zeta", type=number("--zeta", 0.0), default=0.0, help="damping ratio")
-    r.add_argument("--z0", type=number("--z0"), default=0.0, help="initial k x / P0")
-    r.add_argument("--dz0", type=number("--dz0"), default=0.0, help="initial dz/dtau")
+    nd = r.add_argument_group("non-dimensional form (the paper's; the default: lam 0.5, mu_s sigma 0.4, chi 0.7)")
+    nd.add_argument("--lam", type=number("--lam", 0.0, True), default=None, help="frequency ratio omega/w0")
+    nd.add_argument("--mu-s-sigma", type=number("--mu-s-sigma", 0.0), default=None, help="mu_s N / P0")
+    nd.add_argument("--chi", type=number("--chi", 0.0), default=None, help="mu_k / mu_s")
+    nd.add_argument("--z0", type=number("--z0"), default=None, help="initial k x / P0")
+    nd.add_argument("--dz0", type=number("--dz0"), default=None, help="initial dz/dtau")
+    r.add_argument("--zeta", type=number("--zeta", 0.0), default=None, help="damping ratio (both forms)")
+    _physical_options(r.add_argument_group("physical units (SI; any of these selects them)"), required=False)
     r.add_argument("--periods", type=number("--periods", 0.0, True), default=30.0, help="excitation periods")
-    r.add_argument("--steps-per-period", type=count("--steps-per-period"), default=1000)
+    r.add_argument("--steps-per-period", type=count("--steps-per-period"), default=1000,
+                   help="internal steps per excitation period (default 1000)")
+    r.add_argument("--h", type=number("--h", 0.0), default=None,
+                   help="internal step, s (0: derived by the FMU from the dynamics; overrides --steps-per-period)")
     r.add_argument("--scheme", choices=schemes, default=Settings().scheme)
     r.add_argument("--out", type=Path, default=None, help="CSV file for the trajectory scenes")
+
+    from .response import MAX_PERIODS, MIN_PERIODS, TOL
+
+    q = sub.add_parser("response", parents=common,
+                       help="steady-state frequency response of an oscillator in physical units (m, Hz)",
+                       description="Steady-state amplitude (half peak-to-peak of x, m), offset, stick share and "
+                                   "convergence at each frequency; CSV/NetCDF and a PNG with Den Hartog's and Inman's "
+                                   "amplitudes where they apply.")
+    _physical_options(q, required=True, frequency=False)
+    q.add_argument("--f-start", type=number("--f-start", 0.0, True), required=True, help="first frequency, Hz")
+    q.add_argument("--f-stop", type=number("--f-stop", 0.0, True), required=True, help="last frequency, Hz")
+    q.add_argument("--num", type=count("--num"), default=41, help="number of frequencies (default 41)")
+    q.add_argument("--tol", type=number("--tol", 0.0, True), default=TOL,
+                   help=f"successive windows agree within this relative tolerance (default {TOL:g})")
+    q.add_argument("--min-periods", type=count("--min-periods", 2), default=MIN_PERIODS,
+                   help=f"first run length in excitation periods (default {MIN_PERIODS})")
+    q.add_argument("--max-periods", type=count("--max-periods", 2), default=MAX_PERIODS,
+                   help=f"period limit; beyond it converged = false (default {MAX_PERIODS})")
+    q.add_argument("--scheme", choices=schemes, default=None, help="default: exact (k > 0), else located")
+    q.add_argument("--out", type=Path, default=Path("results/response"), help="output folder (default results/response)")
+    q.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
+    q.add_argument("--no-plot", action="store_true", help="no PNG")
+    q.add_argument("--json", action="store_true", help="print the table as one JSON object on stdout")
+    q.add_argument("--workers", type=count("--workers", 0), default=None,
+                   help="Dask worker processes (default: 0, or all cores above 200 frequencies)")
+    q.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     sub.add_parser("scenes", parents=common, help="list the scenes")
 
@@ -67,6 +101,55 @@ def build_parser() -> Parser:
     return p
 
 
+PHYSICAL = ("m", "k", "c", "P0", "f", "omega", "N", "mu_s", "mu_k", "x0", "v0")
+
+
+def _physical_options(g: Any, required: bool, frequency: bool = True) -> None:
+    """--m --k (--c | --zeta) --P0 (--f | --omega) --N --mu-s --mu-k --x0 --v0 (SI units)."""
+    req = " (required)" if required else ""
+    g.add_argument("--m", type=number("--m", 0.0, True), required=required, help=f"mass, kg{req}")
+    g.add_argument("--k", type=number("--k", 0.0), required=required, help=f"stiffness, N/m{req}")
+    g.add_argument("--c", type=number("--c", 0.0), default=None, help="viscous damping, N s/m (or --zeta)")
+    if required:
+        g.add_argument("--zeta", type=number("--zeta", 0.0), default=None,
+                       help="damping ratio c / (2 sqrt(k m)) (or --c; default 0)")
+    g.add_argument("--P0", type=number("--P0"), required=required, help=f"excitation amplitude, N{req}")
+    if frequency:
+        g.add_argument("--f", type=number("--f", 0.0), default=None, help="excitation frequency, Hz (or --omega)")
+        g.add_argument("--omega", type=number("--omega", 0.0), default=None, help="excitation frequency, rad/s")
+    g.add_argument("--N", type=number("--N", 0.0), required=required, help=f"normal force, N{req}")
+    g.add_argument("--mu-s", type=number("--mu-s", 0.0), required=required, help=f"static friction coefficient{req}")
+    g.add_argument("--mu-k", type=number("--mu-k", 0.0), default=None,
+                   help="kinetic friction coefficient (default: mu_s)")
+    g.add_argument("--x0", type=number("--x0"), default=0.0, help="initial position, m (default 0)")
+    g.add_argument("--v0", type=number("--v0"), default=0.0, help="initial velocity, m/s (default 0)")
+
+
+def _physical(args: argparse.Namespace, omega: float | None = None) -> Oscillator:
+    if args.c is not None and args.zeta is not None:
+        raise UsageError("give the damping as --c or --zeta, not both")
+    f = getattr(args, "f", None)
+    om = getattr(args, "omega", None) if omega is None else omega
+    if f is not None and om is not None:
+        raise UsageError("give the excitation frequency as --f (Hz) or --omega (rad/s), not both")
+    if f is None and om is None:
+        raise UsageError("the excitation frequency is missing: --f HZ or --omega RAD_PER_S")
+    missing = [o for o, v in (("--m", args.m), ("--k", args.k), ("--P0", args.P0), ("--N", args.N),
+                              ("--mu-s", args.mu_s)) if v is None]
+    if missing:
+        raise UsageError(f"physical units need {', '.join(missing)} too")
+    try:
+        return Oscillator.physical(m=args.m, k=args.k, c=args.c, zeta=args.zeta, P0=args.P0, f=f, omega=om,
+                                   N=args.N, mu_s=args.mu_s, mu_k=args.mu_k, x0=args.x0, v0=args.v0)
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+
+
+#: units of the numbers ``dryfriction run`` prints
+RUN_UNITS = {"amplitude": "m", "asymmetry": "m", "x_max": "m", "x_min": "m", "stick_fraction": "1",
+             "stick_percent": "%", "transitions": "1", "E_friction": "J", "x_final": "m", "samples": "1"}
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
     from .report import validate
 
@@ -77,9 +160,21 @@ def cmd_validate(args: argparse.Namespace) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     from .fmu import OscillatorFMU
 
-    p = Oscillator.from_nondimensional(lam=args.lam, mu_s_sigma=args.mu_s_sigma, chi=args.chi, zeta=args.zeta,
-                                       z0=args.z0, dz0=args.dz0)
-    st = Settings(h=p.period / args.steps_per_period, scheme=args.scheme)
+    physical = any(getattr(args, n) not in (None, 0.0) for n in PHYSICAL if n not in ("x0", "v0")) or \
+        args.x0 != 0.0 or args.v0 != 0.0
+    nondim = {n: getattr(args, n) for n in ("lam", "mu_s_sigma", "chi", "z0", "dz0") if getattr(args, n) is not None}
+    if physical:
+        if nondim:
+            raise UsageError(f"give physical units or the non-dimensional form, not both (--{next(iter(nondim)).replace('_', '-')})")
+        p = _physical(args)
+        if not p.omega > 0:
+            raise UsageError("dryfriction run needs an excitation frequency > 0 (its length is in excitation periods)")
+    else:
+        p = Oscillator.from_nondimensional(lam=nondim.get("lam", 0.5), mu_s_sigma=nondim.get("mu_s_sigma", 0.4),
+                                           chi=nondim.get("chi", 0.7), zeta=args.zeta or 0.0,
+                                           z0=nondim.get("z0", 0.0), dz0=nondim.get("dz0", 0.0))
+    h = args.h if args.h is not None else p.period / args.steps_per_period
+    st = Settings(h=h, scheme=args.scheme)
     with OscillatorFMU(args.fmu) as fmu:
         if args.scene == "validation":
             res = scenes.run_validation(fmu, p, args.periods, settings=st)
@@ -91,8 +186,12 @@ def cmd_run(args: argparse.Namespace) -> int:
             res = scenes.run_coupled(fmu, p, args.periods * p.period, p.period / 100,
                                      lambda t, y: {"N_ext": 0.5 * p.N if y["v"] > 0 else 0.0}, settings=st)
         effects = fmu.effects()
+        h_used = float(fmu.get(["h_used"])["h_used"])
+    head = {"scene": args.scene, "effects": effects, "parameters": p.describe(),
+            "h_used": {"value": h_used, "unit": "s"}}
     if "t" not in res:  # observables: a few numbers
-        print(json.dumps({"scene": args.scene, "effects": effects, **{k: float(v) for k, v in res.items()}}, indent=2))
+        print(json.dumps({**head, **{k: float(v) for k, v in res.items()},
+                          "units": {k: RUN_UNITS.get(k, "") for k in res}}, indent=2))
         return 0
     if args.out:
         import numpy as np
@@ -104,8 +203,71 @@ def cmd_run(args: argparse.Namespace) -> int:
         header = ",".join(keys)
         lines = [header] + [",".join(f"{x:.17g}" for x in row) for row in rows]
         atomic_write_bytes(args.out, ("\n".join(lines) + "\n").encode())
-    print(json.dumps({"scene": args.scene, "effects": effects, "samples": int(len(res["t"])),
-                      "x_final": float(res["x"][-1]), "out": str(args.out) if args.out else None}, indent=2))
+    print(json.dumps({**head, "samples": int(len(res["t"])), "x_final": float(res["x"][-1]),
+                      "out": str(args.out) if args.out else None,
+                      "units": {"x_final": "m", "csv columns": "t s, x m, v m/s, a m/s2, F_friction N, mode 1"}},
+                     indent=2))
+    return 0
+
+
+def cmd_response(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .response import frequency_response, plot_response
+
+    if args.f_stop < args.f_start:
+        raise UsageError(f"--f-stop {args.f_stop:g} must be >= --f-start {args.f_start:g}")
+    if args.min_periods > args.max_periods:
+        raise UsageError(f"--min-periods {args.min_periods} must be <= --max-periods {args.max_periods}")
+    p = _physical(args, omega=2.0 * math.pi * args.f_start)
+    if args.scheme == "exact" and p.k == 0:
+        raise UsageError("--scheme exact needs a spring: --k must be > 0")
+    f = np.linspace(args.f_start, args.f_stop, args.num) if args.num > 1 else np.array([args.f_start])
+    workers = args.workers if args.workers is not None else (0 if args.num <= 200 else (os.cpu_count() or 1))
+    progress = not args.no_progress and sys.stderr.isatty()
+    ds = frequency_response(p, f, tol=args.tol, min_periods=args.min_periods, max_periods=args.max_periods,
+                            scheme=args.scheme, workers=workers, progress=progress, fmu_path=args.fmu)
+    out: Path = args.out
+    files = []
+    if args.format in ("csv", "both"):
+        from .atomic import atomic_write_text
+
+        cols = ["f_hz", "amplitude_m", "offset_m", "stick_fraction", "converged", "periods", "den_hartog_m", "inman_m"]
+        lines = [",".join(cols)]
+        for i in range(f.size):
+            row = [float(ds["f_hz"].values[i])] + [ds[c].values[i] for c in cols[1:]]
+            lines.append(",".join(str(bool(v)).lower() if isinstance(v, (bool, np.bool_)) else f"{float(v):.10g}"
+                                  for v in row))
+        files.append(atomic_write_text(out / "response.csv", "\n".join(lines) + "\n"))
+    if args.format in ("netcdf", "both"):
+        from .sweep.datasets import write_netcdf
+
+        files.append(write_netcdf(ds, out / "response.nc"))
+    if not args.no_plot:
+        files.append(plot_response(ds, out / "response.png"))
+    conv = ds["converged"].values
+    note = ds.attrs["never_converges"]
+    if args.json:
+        def arr(name: str) -> list[Any]:
+            return [None if not np.isfinite(v) else float(v) for v in ds[name].values]
+
+        print(json.dumps({"f_hz": arr("f_hz"), "amplitude_m": arr("amplitude_m"), "offset_m": arr("offset_m"),
+                          "stick_fraction": arr("stick_fraction"), "converged": [bool(c) for c in conv],
+                          "periods": arr("periods"), "den_hartog_m": arr("den_hartog_m"), "inman_m": arr("inman_m"),
+                          "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
+                                    "den_hartog_m": "m", "inman_m": "m"},
+                          "tol": args.tol, "natural_frequency_hz": p.f_n_hz, "note": note,
+                          "files": [str(x) for x in files]}))
+        return 0
+    print(f"{'f (Hz)':>10} {'amplitude (m)':>14} {'offset (m)':>12} {'stuck (%)':>9} {'converged':>9} {'periods':>7}")
+    for i in range(f.size):
+        print(f"{f[i]:10.4g} {ds['amplitude_m'].values[i]:14.6g} {ds['offset_m'].values[i]:12.3g} "
+              f"{100 * ds['stick_fraction'].values[i]:9.1f} {str(bool(conv[i])):>9} {int(ds['periods'].values[i]):7d}")
+    print(f"natural frequency {p.f_n_hz:.6g} Hz; {int(conv.sum())} of {conv.size} converged (tol {args.tol:g})")
+    if note:
+        print(note)
+    for x in files:
+        print(f"wrote {x}")
     return 0
 
 
@@ -130,8 +292,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError(f"--fmu: no such file: {args.fmu}")
         from .chaos.cli import lyapunov_main
 
-        handler = {"validate": cmd_validate, "run": cmd_run, "scenes": cmd_scenes, "study": cmd_study,
-                   "lyapunov": lyapunov_main}[args.command]
+        handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
+                   "study": cmd_study, "lyapunov": lyapunov_main}[args.command]
         return handler(args)
     except UsageError as e:
         print(f"dryfriction: error: {e}", file=sys.stderr)

@@ -52,7 +52,7 @@ def _scheme_start() -> str:
 class Settings:
     """Numerical and scene settings of one run (FMU variable names; defaults: the model's starts)."""
 
-    h: float | None = None            # internal step, s (None: period / 1000)
+    h: float | None = None            # internal step, s (None: period / 1000; 0: the FMU derives it)
     alpha: float = field(default_factory=lambda: float(_start("alpha")))
     scheme: str = field(default_factory=_scheme_start)
     frictionUpdates: int = field(default_factory=lambda: int(_start("frictionUpdates")))
@@ -225,7 +225,7 @@ class OscillatorFMU:
         scheme = self._schemes.get(st.scheme)
         if scheme is None:
             raise FMUError(f"scheme must be one of {', '.join(self._schemes)}, not {st.scheme!r}")
-        h = st.h if st.h is not None else p.period / 1000.0
+        h = st.h if st.h is not None else (p.period / 1000.0 if p.omega > 0 else 0.0)
         self._rval[:] = self._osc_values(p) + (h, st.alpha, st.t_obs_start, st.t_obs_stop)
         self._ival[0], self._ival[1] = scheme, st.frictionUpdates
         self._bval[0], self._bval[1] = int(bool(st.observe)), int(bool(st.fastPaths))

@@ -42,6 +42,7 @@ class Variable:
     unit: str | None
     description: str
     declared_type: str | None = None
+    zero: str | None = None          # what 0 means when the range is "0 or a normal number" (h)
 
     @property
     def call_type(self) -> str:
@@ -105,6 +106,8 @@ class ModelDescription:
             return "true or false"
         lo, hi = v.min, v.max
         finite = v.type == "Real"
+        if v.zero is not None and lo == 0:
+            return f"0 ({v.zero}) or > 0 (a normal number)"
         if lo is not None and hi is not None:
             return f"in [{lo:g}, {hi:g}]"
         if lo is not None:
@@ -135,6 +138,7 @@ class ModelDescription:
             if v.type == "Integer" and (isinstance(value, bool) or x != int(x)):
                 raise ValueError(f"{label} must be a whole number, not {value!r}")
             bad = not math.isfinite(x) or (v.min is not None and x < v.min) or (v.max is not None and x > v.max)
+            bad = bad or (v.zero is not None and x != 0 and abs(x) < 2.2250738585072014e-308)
         if bad:
             if v.type == "Enumeration":
                 rng = "one of " + ", ".join(self.schemes)
@@ -172,6 +176,8 @@ def parse(xml: bytes | str) -> ModelDescription:
             enums[st.get("name", "")] = {i.get("name", ""): int(i.get("value", "0")) for i in e.iterfind("Item")}
     variables: dict[str, Variable] = {}
     schemes: dict[str, int] = {}
+    zero = {z.get("variable", ""): z.get("zero", "") for z in
+            root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
     for sv in root.iterfind("ModelVariables/ScalarVariable"):
         el = next(iter(sv))
         kind = el.tag
@@ -186,7 +192,8 @@ def parse(xml: bytes | str) -> ModelDescription:
         variables[name] = Variable(
             name=name, vr=int(sv.get("valueReference", "0")), type=kind, causality=sv.get("causality", "local"),
             variability=sv.get("variability", "continuous"), start=_number(el.get("start"), kind),
-            min=lo, max=hi, unit=el.get("unit"), description=sv.get("description", ""), declared_type=declared)
+            min=lo, max=hi, unit=el.get("unit"), description=sv.get("description", ""), declared_type=declared,
+            zero=zero.get(name))
     if not schemes and "Scheme" in enums:
         schemes = enums["Scheme"]
     effects: list[Effect] = []

@@ -241,7 +241,7 @@ static void op(ctx *X, reader *r)
         if (f & 1) tc = real(r);
         if (f & 2) dt = real(r);
         else dt = (double)(1 + u16(r)) * 1e-4;
-        const fmi2ValueReference vh = VR_h;
+        const fmi2ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         double h = 0.0;
         if (X->c && isfinite(dt) && dt > 0.0 && fmi2GetReal(X->c, &vh, 1, &h) == fmi2OK && h > 0.0 &&
             dt / h > FUZZ_MAX_STEPS)

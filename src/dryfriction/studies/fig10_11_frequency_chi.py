@@ -75,7 +75,7 @@ def run(ctx: StudyContext) -> dict[str, float]:
         fig, ax = plt.subplots(figsize=(8, 5))
         for i, chi in enumerate(ds.chi.values):
             amp = ds.amplitude.isel(chi=i).values.reshape(lam.size, n_ic)
-            ax.scatter(np.repeat(lam, n_ic), amp.reshape(-1), s=2.5, color=f"C{i}", alpha=0.25, lw=0,
+            ax.scatter(np.repeat(lam, n_ic), amp.reshape(-1), s=2.5 if n_ic > 100 else 9.0, color=f"C{i}", alpha=0.25, lw=0,
                        rasterized=True)
             ax.plot(lam, np.median(amp, axis=1), color=f"C{i}", lw=0.9, label=f"chi = {chi:g} (median)")
             spread = ds.amplitude_spread.isel(chi=i).values
@@ -83,10 +83,10 @@ def run(ctx: StudyContext) -> dict[str, float]:
         if lam.min() < 1 < lam.max():
             ax.set_yscale("log")
         ax.set_xlabel("frequency ratio lambda = omega / w0")
-        ax.set_ylabel("mean amplitude (z_max - z_min) / 2")
+        ax.set_ylabel("mean amplitude (z_max - z_min) / 2  (z = k x / P0, static deflections)")
         ax.grid(alpha=0.3, which="both")
         ax.legend(loc="upper left", fontsize=8)  # not "best": it would test each scattered point
-        ax.set_title(f"Fig. {fig_name[3:5]}: mu_s sigma = {nd['mu_s_sigma']}, zeta = {nd['zeta']}; each lambda: "
+        ax.set_title(f"Fig. {fig_name[3:5]}: mu_s sigma = mu_s N/P0 = {nd['mu_s_sigma']}, zeta = {nd['zeta']}; each lambda: "
                      f"{ds.z0.size} x {ds.dz0.size} initial conditions, after {cfg['ics']['periods']:g} T", fontsize=9)
         ctx.save_figure(fig, fig_name)
     ctx.log("fig10_11: largest relative amplitude spread over the initial conditions: "

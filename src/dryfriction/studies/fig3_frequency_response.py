@@ -27,6 +27,8 @@ DATASET = "fig3.nc"
 def lambdas(cfg: dict[str, Any]) -> np.ndarray:
     s = cfg["sweep"]
     lam = grid(s["lam"], "sweep.lam")
+    if not s["exclude"]:            # [] : nothing left out
+        return lam
     lo, hi = s["exclude"]
     return lam[~((lam > lo) & (lam < hi))]
 
@@ -37,7 +39,7 @@ def check(cfg: dict[str, Any]) -> None:
     s = cfg["sweep"]
     check_window(s["periods"], s["obs_periods"], "sweep")
     require(s["lam"]["start"] > 0 and s["lam"]["stop"] > 0, "sweep.lam must stay > 0")
-    require(len(s["exclude"]) == 2, f"sweep.exclude must be [low, high], not {s['exclude']}")
+    require(len(s["exclude"]) in (0, 2), f"sweep.exclude must be [low, high] or [], not {s['exclude']}")
     require(lambdas(cfg).size >= 1, "no frequency ratio left outside sweep.exclude")
 
 
@@ -79,7 +81,7 @@ def run(ctx: StudyContext) -> dict[str, float]:
             label="Den Hartog (exact, non-stop)")
     ax.plot(lam, ds.amplitude, "o", ms=3.5, color="C0", label="FMU, from rest")
     ax.set_yscale("log")
-    ax.set_ylabel("steady-state amplitude (z_max - z_min) / 2")
+    ax.set_ylabel("steady-state amplitude (z_max - z_min) / 2\n(z = k x / P0, static deflections)")
     ax.set_title(f"Fig. 3: mu_s sigma = {nd['mu_s_sigma']}, chi = {nd['chi']}, zeta = {nd['zeta']}; "
                  f"last {s['obs_periods']:g} of {s['periods']:g} periods", fontsize=9)
     ax.grid(alpha=0.3, which="both")

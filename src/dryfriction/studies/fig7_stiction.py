@@ -62,7 +62,7 @@ def run(ctx: StudyContext) -> dict[str, float]:
     ax.set_ylabel(f"stiction time in cycle {cyc}, % of T")
     ax.set_ylim(-2, 102)
     ax.grid(alpha=0.3)
-    ax.legend(title="mu_s sigma", fontsize=7, ncol=2)
+    ax.legend(title="mu_s sigma = mu_s N / P0", fontsize=7, ncol=2)
     ax.set_title(f"Fig. 7: chi = {nd['chi']}, zeta = {nd['zeta']}, from rest, h = T/{num['steps_per_period']}",
                  fontsize=9)
     ctx.save_figure(fig, FIGURES[0])

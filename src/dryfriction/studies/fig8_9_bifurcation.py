@@ -1,17 +1,20 @@
 """Fig. 8 and 9: mean amplitude and asymmetry after 30 periods against chi = mu_k / mu_s, over a
-grid of initial conditions: the bifurcation from symmetric periodic to asymmetric to chaotic motion.
+grid of initial conditions: the bifurcation from symmetric periodic to asymmetric motion, and the
+band below chi ~ 0.25 (chaos below chi = 0.194, transient chaos and period-2 motions above; docs/chaos.md).
 
 For every chi, every initial condition (z0, z0') of the grid is run for ``sweep.periods`` periods;
 the FMU takes z_max and z_min over the last ``sweep.obs_periods`` period(s). Mean amplitude
 (z_max - z_min) / 2 and asymmetry (z_max + z_min) / 2 (method.md section 6). Where the motion is
 periodic and symmetric, all initial conditions give one amplitude and zero asymmetry; past the
-bifurcation the asymmetry splits into a mirror pair; where the motion is chaotic both spread over
-a band.
+bifurcation the asymmetry splits into a mirror pair; where the 30-period snapshots differ (chaos,
+transient chaos, coexisting higher-period motions) both spread over a band.
 """
 
 from __future__ import annotations
 
 from typing import Any
+
+Z = "z = k x / P0, in static deflections"
 
 import numpy as np
 import xarray as xr
@@ -105,20 +108,23 @@ def run(ctx: StudyContext) -> dict[str, float]:
     lo, hi = symmetric_range(chi, cls.symmetric_periodic.values)
     n_ic = ax["z0"].size * ax["dz0"].size
     xs = np.repeat(chi, n_ic)
-    for fig_name, var, label in ((FIGURES[0], "amplitude", "mean amplitude (z_max - z_min) / 2"),
-                                 (FIGURES[1], "asymmetry", "asymmetry (z_max + z_min) / 2")):
+    for fig_name, var, label in ((FIGURES[0], "amplitude", f"mean amplitude (z_max - z_min) / 2  ({Z})"),
+                                 (FIGURES[1], "asymmetry", f"asymmetry (z_max + z_min) / 2  ({Z})")):
         fig, axp = plt.subplots(figsize=(8, 5))
-        axp.scatter(xs, ds[var].values.reshape(-1), s=0.6, c="k", alpha=0.35, lw=0, rasterized=True)
+        # markers that stay visible at quick sizes (few points) and do not blot the full study
+        size = 0.6 if xs.size > 20000 else 6.0
+        axp.scatter(xs, ds[var].values.reshape(-1), s=size, c="k", alpha=0.35 if xs.size > 20000 else 0.6, lw=0,
+                    rasterized=True, label="one initial condition (z0, z0') after the run")
         if np.isfinite(lo):
             axp.axvspan(lo, hi, color="C2", alpha=0.08, lw=0,
                         label=f"symmetric periodic (1e-3): {lo:.3g} <= chi <= {hi:.3g}")
             axp.axvline(lo, color="C3", lw=0.8, ls="--")
             # a fixed place: "best" would test every one of the (up to 269k) points, some 6 s per figure
-            axp.legend(loc="upper right", fontsize=8)
+        axp.legend(loc="upper right", fontsize=8, markerscale=3)
         axp.set_xlabel("chi = mu_k / mu_s")
         axp.set_ylabel(label)
         axp.grid(alpha=0.3)
-        axp.set_title(f"Fig. {fig_name[3]}: lambda = {nd['lam']}, mu_s sigma = {nd['mu_s_sigma']}, "
+        axp.set_title(f"Fig. {fig_name[3]}: lambda = omega/w0 = {nd['lam']}, mu_s sigma = mu_s N/P0 = {nd['mu_s_sigma']}, "
                       f"zeta = {nd['zeta']}; "
                       f"{ax['z0'].size} x {ax['dz0'].size} initial conditions x {chi.size} chi = {sp.n_runs:,} runs; "
                       f"after {s['periods']:g} T", fontsize=8.5)

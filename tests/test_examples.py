@@ -1,0 +1,35 @@
+"""The examples in examples/ run (quick sizes) and check themselves (each exits non-zero when its
+own check fails)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.mark.parametrize("name, args", [
+    ("frequency_sweep.py", ["--num", "3"]),
+    ("cosimulation.py", ["--periods", "20"]),
+    ("rollback.py", []),
+])
+def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path) -> None:
+    if name == "frequency_sweep.py":
+        args = [*args, "--out", str(tmp_path)]
+    env = {**os.environ, "DFO_FMU": str(fmu_path), "MPLBACKEND": "Agg"}
+    r = subprocess.run([sys.executable, str(EXAMPLES / name), *args], capture_output=True, text=True, timeout=300,
+                       env=env, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    if name == "frequency_sweep.py":
+        assert "converged" in r.stdout and (tmp_path / "sweep.png").stat().st_size > 0
+    if name == "rollback.py":
+        assert "bit-identical: True" in r.stdout
+
+
+def test_examples_are_all_tested() -> None:
+    assert sorted(p.name for p in EXAMPLES.glob("*.py")) == ["cosimulation.py", "frequency_sweep.py", "rollback.py"]
