@@ -738,17 +738,10 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
     }
 }
 
-/* Block i stuck with X frozen and every neighbour at rest: its static force is its excitation
- * plus a constant, and its next breakaway after the stick phase's start is known in closed form
- * (friction.h, as the oscillator's); INFINITY when it does not apply. */
-static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, int *dir)
+/* The next breakaway of block i, stuck at X with its neighbours where they are, by the oscillator's
+ * closed form (friction.h): its excitation as a single block's, its static offset u - (K x)_i. */
+static double block_breakaway(const chain_model *M, const chain_state *s, size_t i, int *dir)
 {
-    for (int side = -1; side <= 1; side += 2) {
-        if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
-        const size_t j = (side < 0) ? i - 1 : i + 1;
-        const int inside = j >= G->a && j < G->b;
-        if (!(held(M, s, j) || (inside && M->frozen[j]))) return INFINITY;
-    }
     dfo_model bm;
     memset(&bm, 0, sizeof bm);
     bm.p.omega = M->omega;
@@ -762,6 +755,20 @@ static double closed_breakaway(const chain_model *M, const chain_state *s, const
     L.muk_N = M->mukN[i];
     L.Fb = M->Fb[i];
     return dfo_next_breakaway(&bm, &L, M->u[i] - Kx(M, s->X, i), s->t_stick[i], dir);
+}
+
+/* Block i stuck with X frozen and every neighbour at rest: its static force is its excitation
+ * plus a constant, and its next breakaway after the stick phase's start is known in closed form
+ * (friction.h, as the oscillator's); INFINITY when it does not apply. */
+static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, int *dir)
+{
+    for (int side = -1; side <= 1; side += 2) {
+        if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
+        const size_t j = (side < 0) ? i - 1 : i + 1;
+        const int inside = j >= G->a && j < G->b;
+        if (!(held(M, s, j) || (inside && M->frozen[j]))) return INFINITY;
+    }
+    return block_breakaway(M, s, i, dir);
 }
 
 /* The located step of a span from s->t to t_end (first phase of length hh): phases in the current
@@ -1198,20 +1205,8 @@ static long long stuck_until(chain_model *M, const chain_state *s, double t_end)
         if (s->mode[i] != 0 || !(M->Fb[i] > 0.0)) return s->n_grid;
     double tb = t_end;
     for (size_t i = 0; i < n && tb > s->t; i++) {
-        dfo_model bm;
-        memset(&bm, 0, sizeof bm);
-        bm.p.omega = M->omega;
-        bm.p.P0 = M->P0[i];
-        bm.p.phi = M->phi[i];
-        bm.P_amp = fabs(M->P0[i]);
-        bm.P_phase = M->phi[i] + (M->P0[i] < 0.0 ? DFO_PI : 0.0);
-        dfo_loads L;
-        L.F_ext = M->u[i];
-        L.N = 0.0;
-        L.muk_N = M->mukN[i];
-        L.Fb = M->Fb[i];
         int dir = 0;
-        tb = fmin(tb, dfo_next_breakaway(&bm, &L, M->u[i] - Kx(M, s->X, i), s->t_stick[i], &dir) - 1e-6 * h);
+        tb = fmin(tb, block_breakaway(M, s, i, &dir) - 1e-6 * h);
     }
     if (!(tb > s->t)) return s->n_grid;
     long long m = (long long)floor((tb - s->t0) / h);

@@ -24,7 +24,6 @@ import importlib.util
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -52,21 +51,7 @@ def bare_per_period(exe: Path, rows: np.ndarray, scheme: int, procs: int = 1) ->
     """(wall s, CPU s) per excitation period of the bare loop over the rows (each row one run of
     t_stop = its last column), run as ``procs`` processes at once on interleaved parts of the rows
     (the contention the study's workers see)."""
-    parts = [np.ascontiguousarray(rows[i::procs]) for i in range(procs)]
-    running = [subprocess.Popen([str(exe), str(scheme)], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
-               for _ in parts]
-    for p, part in zip(running, parts):
-        assert p.stdin is not None
-        p.stdin.write(part.tobytes())
-        p.stdin.close()
-    secs = cpu = 0.0
-    for p in running:
-        assert p.stdout is not None
-        out = p.stdout.read().decode().split()
-        if p.wait() != 0:
-            raise RuntimeError("the bare loop failed")
-        secs += float(out[0])
-        cpu += float(out[3])
+    secs, _, cpu = _bench_sweep().run_bare(exe, rows, scheme, procs)
     periods = float(np.sum(rows[:, 15] * rows[:, 4] / (2.0 * math.pi)))     # t_stop omega / (2 pi)
     return secs / periods, cpu / periods
 

@@ -115,10 +115,9 @@ def build_driver(build_dir: Path, workdir: Path) -> Path | None:
     return exe
 
 
-def bare_ns_per_step(exe: Path, rows: np.ndarray, scheme: int, procs: int = 1) -> tuple[float, float]:
-    """(wall ns per internal step, CPU ns per internal step) of the bare loop over the rows, run as
-    ``procs`` processes at once on interleaved parts of the rows (the contention the sweep's
-    workers see)."""
+def run_bare(exe: Path, rows: np.ndarray, scheme: int, procs: int = 1) -> tuple[float, float, float]:
+    """(wall s, internal steps, CPU s) of the bare loop over the rows, run as ``procs`` processes at
+    once on interleaved parts of the rows (the contention the sweep's workers see)."""
     parts = [np.ascontiguousarray(rows[i::procs]) for i in range(procs)]
     running = []
     for part in parts:
@@ -137,6 +136,12 @@ def bare_ns_per_step(exe: Path, rows: np.ndarray, scheme: int, procs: int = 1) -
         secs += float(out[0])
         steps += int(out[1])
         cpu += float(out[3])
+    return secs, steps, cpu
+
+
+def bare_ns_per_step(exe: Path, rows: np.ndarray, scheme: int, procs: int = 1) -> tuple[float, float]:
+    """(wall ns per internal step, CPU ns per internal step) of the bare loop over the rows."""
+    secs, steps, cpu = run_bare(exe, rows, scheme, procs)
     return secs / steps * 1e9, cpu / steps * 1e9
 
 
