@@ -20,7 +20,6 @@
 #include "newmark.h"
 #include "oscillator.h"
 
-#include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -28,6 +27,64 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+/* The FMU's library and the clock: dlopen and clock_gettime on POSIX, LoadLibrary and
+ * QueryPerformanceCounter on Windows (which has neither dlfcn.h nor clock_gettime). */
+#ifdef _WIN32
+#include <windows.h>
+static void *lib_open(const char *path) { return (void *)LoadLibraryA(path); }
+static void *lib_sym(void *handle, const char *name)
+{
+    FARPROC f = GetProcAddress((HMODULE)handle, name);
+    void *p;
+    memcpy(&p, &f, sizeof p);
+    return p;
+}
+static void lib_close(void *handle) { FreeLibrary((HMODULE)handle); }
+static const char *lib_error(void) { return "LoadLibrary failed"; }
+/* no open_memstream either: a temporary file read back at the end */
+static FILE *mem_open(char **buf, size_t *len)
+{
+    *buf = NULL;
+    *len = 0;
+    return tmpfile();
+}
+static int mem_close(FILE *f, char **buf, size_t *len)
+{
+    long n;
+    if (fflush(f) != 0 || fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) return -1;
+    *buf = (char *)malloc((size_t)n + 1);
+    if (!*buf || fread(*buf, 1, (size_t)n, f) != (size_t)n) return -1;
+    *len = (size_t)n;
+    return fclose(f);
+}
+static double now_ns(void)
+{
+    LARGE_INTEGER f, c;
+    QueryPerformanceFrequency(&f);
+    QueryPerformanceCounter(&c);
+    return 1e9 * ((double)c.QuadPart / (double)f.QuadPart);
+}
+#else
+#include <dlfcn.h>
+static void *lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void *lib_sym(void *handle, const char *name) { return dlsym(handle, name); }
+static void lib_close(void *handle) { dlclose(handle); }
+static const char *lib_error(void) { return dlerror(); }
+static FILE *mem_open(char **buf, size_t *len) { return open_memstream(buf, len); }
+static int mem_close(FILE *f, char **buf, size_t *len)
+{
+    (void)buf;
+    (void)len;
+    return fclose(f); /* sets *buf and *len */
+}
+static double now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
+}
+#endif
 
 #ifndef DFO_FMU_LIB_DEFAULT
 #define DFO_FMU_LIB_DEFAULT "DryFrictionOscillator.so"
@@ -101,13 +158,6 @@ static void die(const char *fmt, ...)
     va_end(ap);
     fputc('\n', stderr);
     exit(2);
-}
-
-static double now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
 }
 
 /* ---- arguments ------------------------------------------------------------------------------- */
@@ -238,7 +288,7 @@ static void parse_args(options *o, int argc, char **argv)
 
 static void *sym(void *handle, const char *name, const char *path)
 {
-    void *p = dlsym(handle, name);
+    void *p = lib_sym(handle, name);
     if (!p) die("%s does not export %s", path, name);
     return p;
 }
@@ -253,8 +303,8 @@ static void *sym(void *handle, const char *name, const char *path)
 
 static void load_fmu(fmu_api *api, const char *path)
 {
-    api->handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!api->handle) die("cannot load the FMU library %s: %s", path, dlerror());
+    api->handle = lib_open(path);
+    if (!api->handle) die("cannot load the FMU library %s: %s", path, lib_error());
     LOAD(api, instantiate, "fmi2Instantiate");
     LOAD(api, freeInstance, "fmi2FreeInstance");
     LOAD(api, setupExperiment, "fmi2SetupExperiment");
@@ -417,7 +467,7 @@ int main(int argc, char **argv)
     size_t buf_len = 0;
     FILE *out = stdout;
     if (o.csv) {
-        out = open_memstream(&buf, &buf_len);
+        out = mem_open(&buf, &buf_len);
         if (!out) die("cannot allocate the output buffer");
     }
     fprintf(out, "kind,case,scheme,alpha,steps_per_period,periods,steps,bare_ns_per_step,fmu_ns_per_step,"
@@ -445,10 +495,10 @@ int main(int argc, char **argv)
     }
     api.freeInstance(comp);
     if (o.csv) {
-        if (fclose(out) != 0) die("cannot finish the output buffer");
+        if (mem_close(out, &buf, &buf_len) != 0) die("cannot finish the output buffer");
         write_atomically(o.csv, buf, buf_len);
         free(buf);
     }
-    dlclose(api.handle);
+    lib_close(api.handle);
     return 0;
 }
