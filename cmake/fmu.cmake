@@ -167,7 +167,7 @@ function(dfo_cross_builds)
               -DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE} -DDFO_BINARIES_ONLY=ON -DDFO_CROSS=OFF
               -DDFO_TESTS=OFF -DDFO_LIBM=${DFO_LIBM} -DFMI2_HEADERS_DIR=${FMI2_HEADERS_DIR}
               -DPython3_EXECUTABLE=${Python3_EXECUTABLE} --log-level=WARNING
-      COMMAND ${CMAKE_COMMAND} --build ${dir} --parallel ${ncpu}
+      COMMAND ${CMAKE_COMMAND} -E env --unset=MAKEFLAGS --unset=MAKELEVEL ${CMAKE_COMMAND} --build ${dir} --parallel ${ncpu}
       BYPRODUCTS ${byproducts}
       COMMENT "Cross-building ${t} in ${dir}"
       VERBATIM)

@@ -34,10 +34,18 @@ static double uniform(uint64_t *s, double a, double b)
     return a + (b - a) * ((double)(rng_next(s) >> 11) * 0x1p-53);
 }
 
-static double loguniform(uint64_t *s, double a, double b) /* 0 < a < b, sign random */
+/* log-uniform in [a, b] (0 < a < b), random sign; exact operations only (frexp, ldexp), so that
+ * every platform draws the same arguments */
+static double loguniform(uint64_t *s, double a, double b)
 {
-    const double x = exp(uniform(s, log(a), log(b)));
-    return (rng_next(s) & 1) ? -x : x;
+    int ea, eb;
+    frexp(a, &ea);
+    frexp(b, &eb);
+    for (;;) {
+        const int e = ea + (int)(rng_next(s) % (uint64_t)(eb - ea + 1));
+        const double x = ldexp(1.0 + (double)(rng_next(s) >> 12) * 0x1p-52, e - 1);
+        if (x >= a && x <= b) return (rng_next(s) & 1) ? -x : x;
+    }
 }
 
 static int64_t ordered(double x) /* doubles in order as integers, ulps apart = difference */
