@@ -1,7 +1,7 @@
 /* Deterministic elementary functions (see dmath.h). Every constant is written in hexadecimal
  * (exact); the polynomial coefficients are the Taylor coefficients rounded to the nearest double,
  * with enough terms that the truncation stays below 0.01 ulp on the reduced ranges:
- *   sin, cos  |r| <= pi/4 (+ a few ulps),  terms to r^21 / r^22
+ *   sin, cos  |r| <= pi/4 (+ a few ulps),  terms to r^17 / r^18
  *   exp       |r| <= ln2/2,                terms to r^14
  *   asin      |s| <= 1/2,                  terms to s^53  (acos through asin)
  * Double-double steps (TwoSum, Dekker's product by Veltkamp splitting) keep the reduced argument
@@ -94,13 +94,11 @@ static const uint32_t TWO_OVER_PI[40] = {
 /* sin r = r + r^3 (S3 + S5 r^2 + ...), S(2i+1) = (-1)^i / (2i+1)! */
 static const double S3 = -0x1.5555555555555p-3, S5 = 0x1.1111111111111p-7, S7 = -0x1.a01a01a01a01ap-13,
                     S9 = 0x1.71de3a556c734p-19, S11 = -0x1.ae64567f544e4p-26, S13 = 0x1.6124613a86d09p-33,
-                    S15 = -0x1.ae7f3e733b81fp-41, S17 = 0x1.952c77030ad4ap-49, S19 = -0x1.2f49b46814157p-57,
-                    S21 = 0x1.71b8ef6dcf572p-66;
+                    S15 = -0x1.ae7f3e733b81fp-41, S17 = 0x1.952c77030ad4ap-49;
 /* cos r = 1 - r^2/2 + r^4 (C4 + C6 r^2 + ...), C(2i) = (-1)^i / (2i)! */
 static const double C4 = 0x1.5555555555555p-5, C6 = -0x1.6c16c16c16c17p-10, C8 = 0x1.a01a01a01a01ap-16,
                     C10 = -0x1.27e4fb7789f5cp-22, C12 = 0x1.1eed8eff8d898p-29, C14 = -0x1.93974a8c07c9dp-37,
-                    C16 = 0x1.ae7f3e733b81fp-45, C18 = -0x1.6827863b97d97p-53, C20 = 0x1.e542ba4020225p-62,
-                    C22 = -0x1.0ce396db7f853p-70;
+                    C16 = 0x1.ae7f3e733b81fp-45, C18 = -0x1.6827863b97d97p-53;
 /* exp r - 1 - r = r^2 (E2 + E3 r + ...), Ek = 1/k! */
 static const double E2 = 0x1p-1, E3 = 0x1.5555555555555p-3, E4 = 0x1.5555555555555p-5,
                     E5 = 0x1.1111111111111p-7, E6 = 0x1.6c16c16c16c17p-10, E7 = 0x1.a01a01a01a01ap-13,
@@ -123,8 +121,8 @@ static const double ASIN_A[26] = {
 static double ksin(double x, double y)
 {
     const double z = x * x;
-    const double p = S3 + z * (S5 + z * (S7 + z * (S9 + z * (S11 + z * (S13 + z * (S15 + z * (S17 +
-                     z * (S19 + z * S21))))))));
+    const double z2 = z * z, z4 = z2 * z2; /* Estrin: three independent chains */
+    const double p = (S3 + z * S5) + z2 * (S7 + z * S9) + z4 * ((S11 + z * S13) + z2 * (S15 + z * S17));
     return x + (x * z * p + y * (1.0 - 0.5 * z));
 }
 
@@ -132,10 +130,10 @@ static double ksin(double x, double y)
 static double kcos(double x, double y)
 {
     const double z = x * x, zl = two_prod_err(x, x, z);
-    const double q = C4 + z * (C6 + z * (C8 + z * (C10 + z * (C12 + z * (C14 + z * (C16 + z * (C18 +
-                     z * (C20 + z * C22))))))));
+    const double z2 = z * z, z4 = z2 * z2;
+    const double q = (C4 + z * C6) + z2 * (C8 + z * C10) + z4 * ((C12 + z * C14) + z2 * (C16 + z * C18));
     const double hz = 0.5 * z, w = 1.0 - hz;
-    return w + (((1.0 - w) - hz) + (z * z * q - x * y - 0.5 * zl));
+    return w + (((1.0 - w) - hz) + (z2 * q - x * y - 0.5 * zl));
 }
 
 /* bits pos ... pos+63 of the little-endian 32-bit limbs p[0..n-1] */

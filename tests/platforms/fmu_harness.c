@@ -121,24 +121,31 @@ static void put_state(FILE *f, int set, const unsigned char *b, size_t n)
     fprintf(f, "\n");
 }
 
-/* the state of set `set` from a STATES file; returns its length (0: not found) */
-static size_t read_state(FILE *f, int set, unsigned char *b, size_t max)
+/* every set's serialised state from a STATES file, read once */
+typedef struct {
+    unsigned char *bytes[NSETS];
+    size_t size[NSETS];
+} state_table;
+
+static void read_states(FILE *f, state_table *tab, size_t max)
 {
     static char line[1 << 16];
-    rewind(f);
+    memset(tab, 0, sizeof *tab);
     while (fgets(line, sizeof line, f)) {
         int s, off = 0;
-        if (sscanf(line, "state %d %n", &s, &off) != 1 || s != set) continue;
+        if (sscanf(line, "state %d %n", &s, &off) != 1 || s < 0 || s >= NSETS || tab->bytes[s]) continue;
+        unsigned char *b = (unsigned char *)malloc(max);
         size_t n = 0;
+        if (!b) return;
         for (const char *c = line + off; isxdigit((unsigned char)c[0]) && isxdigit((unsigned char)c[1]) && n < max;
              c += 2) {
             unsigned v;
-            if (sscanf(c, "%2x", &v) != 1) return 0;
+            if (sscanf(c, "%2x", &v) != 1) break;
             b[n++] = (unsigned char)v;
         }
-        return n;
+        tab->bytes[s] = b;
+        tab->size[s] = n;
     }
-    return 0;
 }
 
 #define REAL_OUTS {VR_x, VR_v, VR_a, VR_F_friction, VR_x_max, VR_x_min, VR_stick_fraction, VR_E_friction}
@@ -209,9 +216,10 @@ static int load2(void *lib, fmi2_api *a)
 
 static const fmi2CallbackFunctions CB2 = {logger2, calloc, free, NULL, NULL};
 
-static int run2(const fmi2_api *a, int set, FILE *states, int resume)
+static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab)
 {
     const pset p = make_set(set);
+    const int resume = tab != NULL;
     fmi2Component c = a->instantiate("harness", fmi2CoSimulation, MODEL_GUID, "", &CB2, fmi2False, fmi2False);
     if (!c) {
         printf("err %d 0 instantiate\n", set);
@@ -219,10 +227,9 @@ static int run2(const fmi2_api *a, int set, FILE *states, int resume)
     }
     int k0 = 1, fails = 0;
     if (resume) {
-        unsigned char buf[MAX_STATE];
-        const size_t n = read_state(states, set, buf, sizeof buf);
+        const size_t n = tab->size[set];
         fmi2FMUstate st = NULL;
-        if (n == 0 || a->deserialize(c, (const fmi2Byte *)buf, n, &st) != fmi2OK || a->set_state(c, st) != fmi2OK) {
+        if (n == 0 || a->deserialize(c, (const fmi2Byte *)tab->bytes[set], n, &st) != fmi2OK || a->set_state(c, st) != fmi2OK) {
             printf("err %d %d resume\n", set, HALF);
             a->free_instance(c);
             return 1;
@@ -326,9 +333,10 @@ static int load3(void *lib, fmi3_api *a)
     return 0;
 }
 
-static int run3(const fmi3_api *a, int set, FILE *states, int resume)
+static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab)
 {
     const pset p = make_set(set);
+    const int resume = tab != NULL;
     fmi3Instance c = a->instantiate("harness", MODEL_GUID, NULL, fmi3False, fmi3False, fmi3False, fmi3False, NULL,
                                     0, NULL, logger3, NULL);
     if (!c) {
@@ -337,10 +345,9 @@ static int run3(const fmi3_api *a, int set, FILE *states, int resume)
     }
     int k0 = 1, fails = 0;
     if (resume) {
-        unsigned char buf[MAX_STATE];
-        const size_t n = read_state(states, set, buf, sizeof buf);
+        const size_t n = tab->size[set];
         fmi3FMUState st = NULL;
-        if (n == 0 || a->deserialize(c, (const fmi3Byte *)buf, n, &st) != fmi3OK || a->set_state(c, st) != fmi3OK) {
+        if (n == 0 || a->deserialize(c, (const fmi3Byte *)tab->bytes[set], n, &st) != fmi3OK || a->set_state(c, st) != fmi3OK) {
             printf("err %d %d resume\n", set, HALF);
             a->free_instance(c);
             return 1;
@@ -419,9 +426,13 @@ int main(int argc, char **argv)
     fmi2_api a2;
     fmi3_api a3;
     if (fmi3 ? load3(lib, &a3) : load2(lib, &a2)) return 2;
+    static state_table tab;
+    if (resume) read_states(states, &tab, MAX_STATE);
     int fails = 0;
-    for (int set = 0; set < NSETS; set++) fails += fmi3 ? run3(&a3, set, states, resume) : run2(&a2, set, states, resume);
+    for (int set = 0; set < NSETS; set++)
+        fails += fmi3 ? run3(&a3, set, states, resume ? &tab : NULL) : run2(&a2, set, states, resume ? &tab : NULL);
     fclose(states);
+    for (int set = 0; set < NSETS; set++) free(tab.bytes[set]);
     fprintf(stderr, "fmu_harness: %d sets, %d failed calls\n", NSETS, fails);
     return 0; /* failed calls are part of the compared output */
 }
