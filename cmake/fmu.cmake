@@ -51,11 +51,13 @@ function(dfo_shared_suffix tuple out)
   endif()
 endfunction()
 
-# The cross targets to build: DFO_CROSS OFF none; AUTO those whose C compiler is installed; ON all
-# (an error naming the missing compiler otherwise). Not in a cross sub-build. Sets DFO_CROSS_ENABLED.
+# The cross targets to build: DFO_CROSS OFF none; AUTO those whose C compiler is installed (none in
+# sanitizer and fuzzer builds); ON all (an error naming the missing compiler otherwise). Not in a cross sub-build. Sets DFO_CROSS_ENABLED.
 macro(dfo_cross_detect)
 set(DFO_CROSS_ENABLED "")
-if(NOT DFO_BINARIES_ONLY AND NOT DFO_CROSS STREQUAL "OFF" AND NOT CMAKE_CROSSCOMPILING)
+if(DFO_CROSS STREQUAL "AUTO" AND (DFO_SANITIZE OR DFO_FUZZ))
+  message(STATUS "Cross targets: none (AUTO skips them in sanitizer and fuzzer builds)")
+elseif(NOT DFO_BINARIES_ONLY AND NOT DFO_CROSS STREQUAL "OFF" AND NOT CMAKE_CROSSCOMPILING)
   set(_dfo_cc_x86_64-windows x86_64-w64-mingw32-gcc-win32 x86_64-w64-mingw32-gcc)
   set(_dfo_cc_aarch64-linux aarch64-linux-gnu-gcc)
   foreach(t ${DFO_CROSS_TARGETS})
