@@ -2,7 +2,8 @@
 # The same numbers on every platform: build the FMUs with their Windows x86-64 and Linux aarch64
 # binaries (cmake -DDFO_CROSS=ON), then run tests/platforms/fmu_harness on every binary of every
 # FMU natively (Linux x86-64), under wine (Windows) and under qemu-aarch64 (Linux aarch64), and
-#   1. compare the outputs and serialised states of the 300 parameter sets bit for bit,
+#   1. compare the outputs and serialised states of the 300 parameter sets bit for bit (the FMUs:
+#      FMUS below, one line each),
 #   2. resume every set on every platform from the states serialised on every other platform and
 #      compare with the original run,
 #   3. compare the FMU's elementary functions (test_dmath --dump) bit for bit,
@@ -50,9 +51,24 @@ echo "build (native + cross): $((SECONDS - t0)) s"
 W=$BUILD/cross_check
 rm -rf "$W"
 mkdir -p "$W"
-# the binaries as shipped: unzip the FMUs
-unzip -q -o "$BUILD/DryFrictionOscillator.fmu" -d "$W/fmu2"
-unzip -q -o "$BUILD/fmi3/DryFrictionOscillator.fmu" -d "$W/fmu3"
+# The FMUs checked, one line each: "<name> <fmi2|fmi3> <.fmu below the build directory> <harness>"
+# (the harness: a program of tests/platforms that drives that model through its FMI version).
+FMUS=(
+  "fmi2 fmi2 DryFrictionOscillator.fmu fmu_harness"
+  "fmi3 fmi3 fmi3/DryFrictionOscillator.fmu fmu_harness"
+)
+declare -A FMI_OF FILE_OF HARNESS_NAME_OF ID_OF
+KEYS=()
+for line in "${FMUS[@]}"; do
+  read -r key fmi file harness <<<"$line"
+  KEYS+=("$key")
+  FMI_OF[$key]=$fmi
+  FILE_OF[$key]=$BUILD/$file
+  HARNESS_NAME_OF[$key]=$harness
+  # the binaries as shipped: unzip the FMU
+  unzip -q -o "$BUILD/$file" -d "$W/$key"
+  ID_OF[$key]=$(grep -o 'modelIdentifier="[^"]*"' "$W/$key/modelDescription.xml" | head -1 | cut -d'"' -f2)
+done
 
 # run PLATFORM PROGRAM ARGS...: the program natively, under wine or under qemu
 run_on() {
@@ -64,38 +80,36 @@ run_on() {
     aarch64-linux) "$QEMU" -L "$AARCH64_SYSROOT" "$@" ;;
   esac
 }
-harness_of() {
+# program PLATFORM NAME: a program of tests/platforms built for PLATFORM
+program() {
   case $1 in
-    x86_64-linux) echo "$BUILD/tests/platforms/fmu_harness" ;;
-    x86_64-windows) echo "$BUILD/cross/x86_64-windows/tests/platforms/fmu_harness.exe" ;;
-    aarch64-linux) echo "$BUILD/cross/aarch64-linux/tests/platforms/fmu_harness" ;;
+    x86_64-linux) echo "$BUILD/tests/platforms/$2" ;;
+    x86_64-windows) echo "$BUILD/cross/x86_64-windows/tests/platforms/$2.exe" ;;
+    *) echo "$BUILD/cross/$1/tests/platforms/$2" ;;
   esac
 }
-dmath_of() { echo "$(dirname "$(harness_of "$1")")/test_dmath$([ "$1" = x86_64-windows ] && echo .exe)"; }
-# the library of FMU (fmi2|fmi3) for a platform: the FMU's own binary; FMI 2.0 has no aarch64
-# folder, there the sub-build's library is checked as well (not shipped)
+harness_of() { program "$2" "${HARNESS_NAME_OF[$1]}"; } # harness_of KEY PLATFORM
+# lib_of KEY PLATFORM: the FMU's binary for PLATFORM as shipped (empty: the FMU has no folder for
+# it, as FMI 2.0 for aarch64)
 lib_of() {
-  local fmi=$1 plat=$2
-  if [ "$fmi" = fmi3 ]; then
-    echo "$W/fmu3/binaries/$plat/DryFrictionOscillator$([ "$plat" = x86_64-windows ] && echo .dll || echo .so)"
-  else
-    case $plat in
-      x86_64-linux) echo "$W/fmu2/binaries/linux64/DryFrictionOscillator.so" ;;
-      x86_64-windows) echo "$W/fmu2/binaries/win64/DryFrictionOscillator.dll" ;;
-      aarch64-linux) echo "$BUILD/cross/aarch64-linux/DryFrictionOscillator.so" ;;
-    esac
+  local key=$1 plat=$2 folder=$2 sfx=.so
+  [ "$plat" = x86_64-windows ] && sfx=.dll
+  if [ "${FMI_OF[$key]}" = fmi2 ]; then
+    case $plat in x86_64-linux) folder=linux64 ;; x86_64-windows) folder=win64 ;; *) return 0 ;; esac
   fi
+  echo "$W/$key/binaries/$folder/${ID_OF[$key]}$sfx"
 }
 PLATS=(x86_64-linux x86_64-windows aarch64-linux)
 
 # ---- 1. outputs and states ------------------------------------------------------------------------
 t0=$SECONDS
-for fmi in fmi2 fmi3; do
+for fmi in "${KEYS[@]}"; do
   for p in "${PLATS[@]}"; do
     lib=$(lib_of $fmi "$p")
+    [ -n "$lib" ] || continue
     [ -f "$lib" ] || { fail "$fmi $p: no binary $lib"; continue; }
     ts=$SECONDS
-    run_on "$p" "$(harness_of "$p")" $fmi "$lib" run "$W/states_${fmi}_$p.txt" >"$W/run_${fmi}_$p.txt" 2>"$W/run_${fmi}_$p.err" </dev/null ||
+    run_on "$p" "$(harness_of $fmi "$p")" "${FMI_OF[$fmi]}" "$lib" run "$W/states_${fmi}_$p.txt" >"$W/run_${fmi}_$p.txt" 2>"$W/run_${fmi}_$p.err" </dev/null ||
       fail "$fmi $p: fmu_harness failed ($(tail -1 "$W/run_${fmi}_$p.err"))"
     tr -d '\r' <"$W/run_${fmi}_$p.txt" >"$W/run.tmp" && mv "$W/run.tmp" "$W/run_${fmi}_$p.txt"
     echo "  $fmi $p: $(grep -c '^out' "$W/run_${fmi}_$p.txt") outputs, $(grep -c '^state' "$W/run_${fmi}_$p.txt") states, $(grep -c '^err' "$W/run_${fmi}_$p.txt" || true) failed calls ($((SECONDS - ts)) s)"
@@ -129,7 +143,7 @@ print(f"{len(diff)} {len(sets)} {worst:.3g} {st}")
 EOF
 }
 
-for fmi in fmi2 fmi3; do
+for fmi in "${KEYS[@]}"; do
   ref=$W/run_${fmi}_x86_64-linux.txt
   for p in x86_64-windows aarch64-linux; do
     other=$W/run_${fmi}_$p.txt
@@ -142,15 +156,16 @@ done
 
 # ---- 2. states across platforms ---------------------------------------------------------------
 t0=$SECONDS
-for fmi in fmi2 fmi3; do
+for fmi in "${KEYS[@]}"; do
   for from in "${PLATS[@]}"; do
     states=$W/states_${fmi}_$from.txt
     [ -s "$states" ] || continue
     grep -E '^out [0-9]+ (9|1[0-6]) ' "$W/run_${fmi}_$from.txt" >"$W/second_${fmi}_$from.txt" || true
     for to in "${PLATS[@]}"; do
+      [ -n "$(lib_of $fmi "$to")" ] || continue
       out=$W/resume_${fmi}_${from}_on_$to.txt
       # (into a file: wine writes to a pipe ten times slower)
-      run_on "$to" "$(harness_of "$to")" $fmi "$(lib_of $fmi "$to")" resume "$states" >"$out.raw" 2>/dev/null </dev/null || true
+      run_on "$to" "$(harness_of $fmi "$to")" "${FMI_OF[$fmi]}" "$(lib_of $fmi "$to")" resume "$states" >"$out.raw" 2>/dev/null </dev/null || true
       tr -d '\r' <"$out.raw" >"$out"
       nerr=$(grep -c '^err' "$out" || true)
       if cmp -s "$out" "$W/second_${fmi}_$from.txt"; then
@@ -167,7 +182,7 @@ echo "resumes: $((SECONDS - t0)) s"
 
 # ---- 3. the elementary functions ----------------------------------------------------------------
 for p in "${PLATS[@]}"; do
-  run_on "$p" "$(dmath_of "$p")" --dump >"$W/dmath_$p.raw" </dev/null || fail "test_dmath --dump failed on $p"
+  run_on "$p" "$(program "$p" test_dmath)" --dump >"$W/dmath_$p.raw" </dev/null || fail "test_dmath --dump failed on $p"
   tr -d '\r' <"$W/dmath_$p.raw" >"$W/dmath_$p.txt"
 done
 for p in x86_64-windows aarch64-linux; do
@@ -181,12 +196,12 @@ for p in x86_64-windows aarch64-linux; do
 done
 
 # ---- 4. the binaries ------------------------------------------------------------------------------
-for fmi in fmi2 fmi3; do
+for fmi in "${KEYS[@]}"; do
   dll=$(lib_of $fmi x86_64-windows)
   imports=$(x86_64-w64-mingw32-objdump -p "$dll" | awk '/DLL Name:/ {print $3}' | sort -u | tr '\n' ' ')
   exports=$(x86_64-w64-mingw32-objdump -p "$dll" | awk '/\[Ordinal\/Name Pointer\] Table/ {f=1; next} f && /^[ \t]*\[/ {print $NF} f && /^$/ {f=0}')
   nexp=$(echo "$exports" | grep -c . || true)
-  bad=$(echo "$exports" | grep -v "^${fmi}" || true)
+  bad=$(echo "$exports" | grep -v "^${FMI_OF[$fmi]}" || true)
   echo "  $fmi DLL: imports $imports; exports $nexp functions$([ -n "$bad" ] && echo ", also: $bad")"
   [ -z "$bad" ] || fail "$fmi DLL exports more than the FMI functions: $bad"
   for d in $imports; do
@@ -194,6 +209,7 @@ for fmi in fmi2 fmi3; do
   done
   for p in x86_64-linux aarch64-linux; do
     so=$(lib_of $fmi "$p")
+    [ -n "$so" ] || continue
     needed=$(objdump -p "$so" | awk '/NEEDED/ {print $2}' | tr '\n' ' ')
     glibc=$(objdump -T "$so" | grep -o 'GLIBC_[0-9.]*' | sort -uV | tail -1)
     echo "  $fmi $p: needs $needed(newest symbol version $glibc)"
@@ -204,7 +220,8 @@ for fmi in fmi2 fmi3; do
 done
 
 # ---- 5. the FMUs ----------------------------------------------------------------------------------
-for f in "$BUILD/DryFrictionOscillator.fmu" "$BUILD/fmi3/DryFrictionOscillator.fmu"; do
+for key in "${KEYS[@]}"; do
+  f=${FILE_OF[$key]}
   name=${f#"$BUILD"/}
   "$ROOT/.venv/bin/fmpy" validate "$f" >"$W/validate.txt" 2>&1 || fail "fmpy validate $name: $(grep -v '^$' "$W/validate.txt" | tail -1)"
   check=$("$ROOT/.venv/bin/fmutool" -input "$f" -check 2>&1) || fail "fmutool -check $name failed"
