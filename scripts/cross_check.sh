@@ -6,7 +6,8 @@
 #      FMUS below, one line each),
 #   2. resume every set on every platform from the states serialised on every other platform and
 #      compare with the original run,
-#   3. compare the FMU's elementary functions (test_dmath --dump) bit for bit,
+#   3. compare the FMU's elementary functions (test_dmath --dump) bit for bit, and run the
+#      physics' C tests (tests/c) on every platform (their printed numbers identical too),
 #   4. check the binaries: the DLL exports only fmi2*/fmi3* and imports only system DLLs (no
 #      libgcc, no libwinpthread); the Linux binaries need only glibc (the oldest version printed),
 #   5. fmpy validate and fmutool -check on the multi-platform FMUs.
@@ -194,6 +195,24 @@ for p in x86_64-windows aarch64-linux; do
     fail "dmath: $p differs from x86_64-linux"
   fi
 done
+
+# ---- 3b. the physics' C tests (tests/c) on every platform -------------------------------------------
+t0=$SECONDS
+for t in test_lcp test_stepper test_host_clock test_exact; do
+  for p in "${PLATS[@]}"; do
+    if run_on "$p" "$(program "$p" "$t" | sed 's|/tests/platforms/|/tests/c/|')" >"$W/$t.$p.raw" 2>&1 </dev/null; then
+      tr -d '\r' <"$W/$t.$p.raw" >"$W/$t.$p.txt"
+    else
+      fail "$t fails on $p: $(tail -1 "$W/$t.$p.raw")"
+    fi
+  done
+  same=yes
+  for p in x86_64-windows aarch64-linux; do cmp -s "$W/$t.x86_64-linux.txt" "$W/$t.$p.txt" || same=no; done
+  echo "  $t: passes on ${PLATS[*]}; printed numbers identical on all: $same"
+  # test_exact draws its cases and references with the platform's libm: only passing is compared
+  [ "$same" = yes ] || [ "$t" = test_exact ] || fail "$t prints different numbers on the platforms"
+done
+echo "C tests: $((SECONDS - t0)) s"
 
 # ---- 4. the binaries ------------------------------------------------------------------------------
 for fmi in "${KEYS[@]}"; do
