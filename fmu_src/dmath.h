@@ -3,7 +3,7 @@
  * on every platform and compiler (with -ffp-contract=off, no -ffast-math, no x87). The platforms'
  * libm differ (mingw's sin of a large argument, Microsoft's acos, ...); the FMU's numbers must not.
  *
- * Accuracy, measured against glibc by tests/c/test_dmath.c: sin, cos at most 1 ulp from glibc for
+ * Accuracy, measured against glibc by tests/platforms/test_dmath.c: sin, cos at most 1 ulp from glibc for
  * every finite argument (exact argument reduction: Cody-Waite with pi/2 in four parts below 2^20,
  * Payne-Hanek with 1280 bits of 2/pi above); exp, expm1, acos at most 1 ulp. Special values follow
  * C99 Annex F (NaN in, NaN out; sin(inf) NaN; exp(-inf) 0; acos outside [-1, 1] NaN); the
