@@ -21,14 +21,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "bench_clock.h"
+
+static double now(void) { return 1e-9 * bench_now_ns(); }
 
 static void *std_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
 static void std_free(void *env, void *obj) { (void)env; free(obj); }

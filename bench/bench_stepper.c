@@ -20,7 +20,6 @@
 #include "newmark.h"
 #include "oscillator.h"
 
-#include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -28,6 +27,53 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+#include "bench_clock.h"
+
+/* The FMU's library: dlopen on POSIX, LoadLibrary on Windows (which has no dlfcn.h); the clock:
+ * bench_clock.h. */
+#ifdef _WIN32
+#include <windows.h>
+static void *lib_open(const char *path) { return (void *)LoadLibraryA(path); }
+static void *lib_sym(void *handle, const char *name)
+{
+    FARPROC f = GetProcAddress((HMODULE)handle, name);
+    void *p;
+    memcpy(&p, &f, sizeof p);
+    return p;
+}
+static void lib_close(void *handle) { FreeLibrary((HMODULE)handle); }
+static const char *lib_error(void) { return "LoadLibrary failed"; }
+/* no open_memstream either: a temporary file read back at the end */
+static FILE *mem_open(char **buf, size_t *len)
+{
+    *buf = NULL;
+    *len = 0;
+    return tmpfile();
+}
+static int mem_close(FILE *f, char **buf, size_t *len)
+{
+    long n;
+    if (fflush(f) != 0 || fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) return -1;
+    *buf = (char *)malloc((size_t)n + 1);
+    if (!*buf || fread(*buf, 1, (size_t)n, f) != (size_t)n) return -1;
+    *len = (size_t)n;
+    return fclose(f);
+}
+#else
+#include <dlfcn.h>
+static void *lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void *lib_sym(void *handle, const char *name) { return dlsym(handle, name); }
+static void lib_close(void *handle) { dlclose(handle); }
+static const char *lib_error(void) { return dlerror(); }
+static FILE *mem_open(char **buf, size_t *len) { return open_memstream(buf, len); }
+static int mem_close(FILE *f, char **buf, size_t *len)
+{
+    (void)buf;
+    (void)len;
+    return fclose(f); /* sets *buf and *len */
+}
+#endif
 
 #ifndef DFO_FMU_LIB_DEFAULT
 #define DFO_FMU_LIB_DEFAULT "DryFrictionOscillator.so"
@@ -101,13 +147,6 @@ static void die(const char *fmt, ...)
     va_end(ap);
     fputc('\n', stderr);
     exit(2);
-}
-
-static double now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
 }
 
 /* ---- arguments ------------------------------------------------------------------------------- */
@@ -238,7 +277,7 @@ static void parse_args(options *o, int argc, char **argv)
 
 static void *sym(void *handle, const char *name, const char *path)
 {
-    void *p = dlsym(handle, name);
+    void *p = lib_sym(handle, name);
     if (!p) die("%s does not export %s", path, name);
     return p;
 }
@@ -253,8 +292,8 @@ static void *sym(void *handle, const char *name, const char *path)
 
 static void load_fmu(fmu_api *api, const char *path)
 {
-    api->handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!api->handle) die("cannot load the FMU library %s: %s", path, dlerror());
+    api->handle = lib_open(path);
+    if (!api->handle) die("cannot load the FMU library %s: %s", path, lib_error());
     LOAD(api, instantiate, "fmi2Instantiate");
     LOAD(api, freeInstance, "fmi2FreeInstance");
     LOAD(api, setupExperiment, "fmi2SetupExperiment");
@@ -338,17 +377,17 @@ static step_timing time_stepping(const options *o, const fmu_api *api, fmi2Compo
     for (int rep = 0; rep < o->reps; rep++) {
         dfo_state s;
         dfo_start(&M, &u, 0.0, &s);
-        double t0 = now_ns();
+        double t0 = bench_now_ns();
         const dfo_status st = dfo_advance(&M, &u, &s, t_end, NULL, NULL);
-        double t1 = now_ns();
+        double t1 = bench_now_ns();
         if (st != DFO_OK) die("dfo_advance failed: %s", dfo_status_text(st));
         if (t1 - t0 < r.bare_ns) r.bare_ns = t1 - t0;
         r.steps = s.steps;
 
         fmu_setup(api, comp, p);
-        t0 = now_ns();
+        t0 = bench_now_ns();
         check(api->doStep(comp, 0.0, t_end, fmi2True), "fmi2DoStep");
-        t1 = now_ns();
+        t1 = bench_now_ns();
         if (t1 - t0 < r.fmu_ns) r.fmu_ns = t1 - t0;
     }
     return r;
@@ -364,11 +403,11 @@ static double time_short_run(const options *o, const fmu_api *api, fmi2Component
     fmi2Real x;
     double best = INFINITY;
     for (int rep = 0; rep < 20 * o->reps; rep++) {
-        const double t0 = now_ns();
+        const double t0 = bench_now_ns();
         fmu_setup(api, comp, p);
         if (with_step) check(api->doStep(comp, 0.0, T, fmi2True), "fmi2DoStep");
         check(api->getReal(comp, xvr, 1, &x), "fmi2GetReal");
-        const double t1 = now_ns();
+        const double t1 = bench_now_ns();
         if (t1 - t0 < best) best = t1 - t0;
     }
     return best;
@@ -417,7 +456,7 @@ int main(int argc, char **argv)
     size_t buf_len = 0;
     FILE *out = stdout;
     if (o.csv) {
-        out = open_memstream(&buf, &buf_len);
+        out = mem_open(&buf, &buf_len);
         if (!out) die("cannot allocate the output buffer");
     }
     fprintf(out, "kind,case,scheme,alpha,steps_per_period,periods,steps,bare_ns_per_step,fmu_ns_per_step,"
@@ -445,10 +484,10 @@ int main(int argc, char **argv)
     }
     api.freeInstance(comp);
     if (o.csv) {
-        if (fclose(out) != 0) die("cannot finish the output buffer");
+        if (mem_close(out, &buf, &buf_len) != 0) die("cannot finish the output buffer");
         write_atomically(o.csv, buf, buf_len);
         free(buf);
     }
-    dlclose(api.handle);
+    lib_close(api.handle);
     return 0;
 }

@@ -2,6 +2,7 @@
 #include "chain.h"
 
 #include "bossak.h"
+#include "dmath.h"
 #include "friction.h"
 #include "oscillator.h"
 
@@ -128,8 +129,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->c_end = p->c_end;
     M->omega = p->omega;
     M->h = p->h;
-    M->rot_c = cos(p->omega * p->h);
-    M->rot_s = sin(p->omega * p->h);
+    M->rot_c = dfo_cos(p->omega * p->h);
+    M->rot_s = dfo_sin(p->omega * p->h);
     M->alpha = p->alpha;
     M->gamma = dfo_bossak_gamma(p->alpha);
     M->beta = dfo_bossak_beta(p->alpha);
@@ -143,8 +144,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->m[i] = p->m[i];
         M->am[i] = p->alpha * p->m[i];
         M->am1[i] = (1.0 - p->alpha) * p->m[i];
-        M->Pc[i] = p->P0[i] * cos(p->phi[i]);
-        M->Ps[i] = p->P0[i] * sin(p->phi[i]);
+        M->Pc[i] = p->P0[i] * dfo_cos(p->phi[i]);
+        M->Ps[i] = p->P0[i] * dfo_sin(p->phi[i]);
         M->P0[i] = p->P0[i];
         M->phi[i] = p->phi[i];
         M->N[i] = p->N[i];
@@ -273,7 +274,7 @@ static void grid_phase(const chain_model *M, chain_state *s, long long g, double
     } else {
         i = g - g % EXC_ANCHOR;
         const double th = M->omega * (s->t0 + (double)i * M->h);
-        c = cos(th); sn = sin(th);
+        c = dfo_cos(th); sn = dfo_sin(th);
     }
     for (; i < g; i++) {
         const double cn = c * rc - sn * rs;
@@ -294,8 +295,8 @@ static void phase_of(const chain_model *M, const chain_state *s, double t, doubl
         *sw = clamp1(s->exc_s);
         return;
     }
-    *cw = cos(M->omega * t);
-    *sw = sin(M->omega * t);
+    *cw = dfo_cos(M->omega * t);
+    *sw = dfo_sin(M->omega * t);
 }
 
 static double (P_at)(const chain_model *M, size_t i, double cw, double sw) { return M->Pc[i] * cw - M->Ps[i] * sw; }
@@ -457,7 +458,7 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
-        const double cw = cos(M->omega * s->t), sw = sin(M->omega * s->t);
+        const double cw = dfo_cos(M->omega * s->t), sw = dfo_sin(M->omega * s->t);
         physical_accel(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
         for (int k = 0; k < 2; k++)
             if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
@@ -861,7 +862,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         const double t1 = (hs >= r) ? t_end : ta + hs;
         double c1w, s1w;
         if (hs >= r) phase_of(M, s, t_end, &c1w, &s1w);
-        else { c1w = cos(M->omega * t1); s1w = sin(M->omega * t1); }
+        else { c1w = dfo_cos(M->omega * t1); s1w = dfo_sin(M->omega * t1); }
         trial(M, s, G, hs, c1w, s1w);
         solve_modes(M, G);
         s->solves++;
@@ -1275,7 +1276,7 @@ void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_stat
     loads_init(M, in);
     M->jerk_valid = 0;
     span G = whole(M, s);
-    trial(M, s, &G, h, cos(M->omega * (s->t + h)), sin(M->omega * (s->t + h)));
+    trial(M, s, &G, h, dfo_cos(M->omega * (s->t + h)), dfo_sin(M->omega * (s->t + h)));
     for (size_t i = 0; i < M->n; i++) {
         d[i] = M->cd[i];
         if (i + 1 < M->n) e[i] = M->ce[i];

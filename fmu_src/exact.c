@@ -1,6 +1,7 @@
 /* The exact scheme: closed-form phases, events found without stepping over a zero. See exact.h
  * and method.md sections 5 and 10. */
 #include "exact.h"
+#include "dmath.h"
 
 #include "friction.h"
 
@@ -86,8 +87,8 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
     P->s = s;
     P->ta = ta;
     P->xc = (C->L.F_ext - s * C->L.muk_N) / C->k;
-    P->c0 = cos(th);
-    P->s0 = sin(th);
+    P->c0 = dfo_cos(th);
+    P->s0 = dfo_sin(th);
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
@@ -131,8 +132,8 @@ static void phi1(double x, double y, double *re, double *im)
         *im = 0.5 * y + x * y / 3.0;
         return;
     }
-    const double sh = sin(0.5 * y);
-    const double er = expm1(x) * cos(y) - 2.0 * sh * sh, ei = exp(x) * sin(y);
+    const double sh = dfo_sin(0.5 * y);
+    const double er = dfo_expm1(x) * dfo_cos(y) - 2.0 * sh * sh, ei = dfo_exp(x) * dfo_sin(y);
     const double d = x * x + y * y;
     *re = (er * x + ei * y) / d;
     *im = (ei * x - er * y) / d;
@@ -141,27 +142,27 @@ static void phi1(double x, double y, double *re, double *im)
 static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
 {
     const double z = C->zeta, lam = C->lam;
-    const double cl = cos(lam * u), sl = sin(lam * u);
+    const double cl = dfo_cos(lam * u), sl = dfo_sin(lam * u);
     const double cth = P->c0 * cl - P->s0 * sl, sth = P->s0 * cl + P->c0 * sl;
     double E, F;
     if (z < 1.0) {
-        const double e = (z > 0.0) ? exp(-z * u) : 1.0;
+        const double e = (z > 0.0) ? dfo_exp(-z * u) : 1.0;
         const double wu = C->wd * u;
-        const double cw = (C->wd == lam) ? cl : cos(wu), sw = (C->wd == lam) ? sl : sin(wu);
+        const double cw = (C->wd == lam) ? cl : dfo_cos(wu), sw = (C->wd == lam) ? sl : dfo_sin(wu);
         E = e * cw;
         F = e * sw * C->inv_wd;
         v->e1 = e;
         v->e2 = 0.0;
     } else if (z == 1.0) {
-        const double e = exp(-u);
+        const double e = dfo_exp(-u);
         E = e;
         F = u * e;
         v->e1 = e;
         v->e2 = 0.0;
     } else {
-        const double e1 = exp(C->r1 * u), e2 = exp(C->r2 * u);
+        const double e1 = dfo_exp(C->r1 * u), e2 = dfo_exp(C->r2 * u);
         E = 0.5 * (e1 + e2);
-        F = -e1 * expm1(-2.0 * C->wh * u) / (2.0 * C->wh);
+        F = -e1 * dfo_expm1(-2.0 * C->wh * u) / (2.0 * C->wh);
         v->e1 = e1;
         v->e2 = e2;
     }

@@ -1,5 +1,6 @@
 /* The friction rules shared by every scheme. See friction.h. */
 #include "friction.h"
+#include "dmath.h"
 
 #define TWO_PI (2.0 * DFO_PI)
 
@@ -32,8 +33,8 @@ double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, dou
     }
     const double lim_hi = (Fb - C0) / amp; /* F_static >  Fb  <=>  cos(theta)      > lim_hi */
     const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
-    const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? acos(lim_hi) : 0.0;
-    const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? acos(lim_lo) : 0.0;
+    const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
+    const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
     const double th = w * ta + M->P_phase;
     const double up = until_above(th, lim_hi, acos_hi), down = until_above(th + DFO_PI, lim_lo, acos_lo);
     *dir = (up <= down) ? 1 : -1;

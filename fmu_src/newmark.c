@@ -1,5 +1,6 @@
 /* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
 #include "newmark.h"
+#include "dmath.h"
 
 #include "bossak.h"
 #include "exact.h"
@@ -102,8 +103,8 @@ static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double
     } else {
         i = n - n % EXC_ANCHOR;
         const double th = M->p.omega * (s->t0 + (double)i * M->p.h) + M->p.phi;
-        cos_th = cos(th);
-        sin_th = sin(th);
+        cos_th = dfo_cos(th);
+        sin_th = dfo_sin(th);
     }
     for (; i < n; i++) {
         const double cos_next = cos_th * rot_c - sin_th * rot_s;

@@ -1,5 +1,6 @@
 /* The dry-friction oscillator: parameters, forces. See oscillator.h. */
 #include "oscillator.h"
+#include "dmath.h"
 
 #include "bossak.h"
 
@@ -41,8 +42,8 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->P_amp = fabs(p->P0);
     M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
     M->rate_max = sqrt(p->k / p->m) + p->c / p->m + fabs(p->omega);
-    M->rot_c = cos(p->omega * M->p.h);
-    M->rot_s = sin(p->omega * M->p.h);
+    M->rot_c = dfo_cos(p->omega * M->p.h);
+    M->rot_s = dfo_sin(p->omega * M->p.h);
     M->fast = p->fastPaths != 0;
     M->damped = !M->fast || p->c != 0.0;
     M->update = !M->fast || M->mu_k != M->mu_b;
@@ -50,12 +51,12 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
 
 double dfo_excitation(const dfo_model *M, double t)
 {
-    return M->p.P0 * cos(M->p.omega * t + M->p.phi);
+    return M->p.P0 * dfo_cos(M->p.omega * t + M->p.phi);
 }
 
 double dfo_excitation_rate(const dfo_model *M, double t)
 {
-    return -M->p.P0 * M->p.omega * sin(M->p.omega * t + M->p.phi);
+    return -M->p.P0 * M->p.omega * dfo_sin(M->p.omega * t + M->p.phi);
 }
 
 double dfo_normal_force(const dfo_model *M, const dfo_inputs *u)

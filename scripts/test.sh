@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # All tests, from a fresh clone: set up, C unit tests (ctest), the pytest suite through the FMU, the
-# examples (examples/*.py at full size),
-# the lowest declared dependency versions (scripts/check_min_versions.sh), then the C tests and
-# the pytest suite again with the FMU built with AddressSanitizer and UBSan, and the fuzzer.
+# examples (examples/*.py at full size), the lowest declared dependency versions
+# (scripts/check_min_versions.sh), the cross-platform check (Windows x86-64 under wine, Linux aarch64
+# under qemu: scripts/cross_check.sh), then the C tests and the pytest suite again with the FMU built
+# with AddressSanitizer and UBSan, and the fuzzer.
 # Prints the duration of every stage at the end (also when a stage fails).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -44,6 +45,28 @@ fuzz() {  # libFuzzer + ASan/UBSan, 60 s; installs clang if missing
   PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" bash tests/fuzz/run_fuzz.sh 60
 }
 
+# The cross toolchains and emulators (Debian packages), installed when missing: the win32 thread
+# model of mingw-w64 (no libwinpthread), the aarch64 cross gcc with its C library, qemu-user,
+# 64-bit wine only (no i386 multiarch).
+CROSS_PACKAGES=(gcc-mingw-w64-x86-64-win32 gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user wine64)
+cross_install() {
+  command -v x86_64-w64-mingw32-gcc-win32 >/dev/null && command -v aarch64-linux-gnu-gcc >/dev/null &&
+    [ -e /usr/aarch64-linux-gnu/lib/libc.so.6 ] && command -v qemu-aarch64 >/dev/null &&
+    { command -v wine64 >/dev/null || command -v wine >/dev/null || [ -x /usr/lib/wine/wine64 ]; } && return 0
+  local sudo="" log=${TMPDIR:-/tmp}/dfo-apt-$$.log
+  [ "$(id -u)" = 0 ] || sudo="sudo -n"
+  local apt=(env DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=600)
+  if ! { "${apt[@]}" install -y -q --no-install-recommends "${CROSS_PACKAGES[@]}" ||
+         { "${apt[@]}" update -q && "${apt[@]}" install -y -q --no-install-recommends "${CROSS_PACKAGES[@]}"; }; } >"$log" 2>&1; then
+    echo "cross-platform: apt-get install ${CROSS_PACKAGES[*]} failed: $(tail -1 "$log") (full log: $log)"
+    return 1
+  fi
+}
+cross_platform() {
+  cross_install
+  bash scripts/cross_check.sh
+}
+
 stage "setup" bash scripts/setup.sh
 stage "ctest" ctest --test-dir build --output-on-failure -j2
 stage "pytest" .venv/bin/python -m pytest -q
@@ -58,6 +81,7 @@ examples() {  # every example at its own size, in a scratch folder
 }
 stage "examples" examples
 stage "min-versions" bash scripts/check_min_versions.sh
+stage "cross-platform" cross_platform
 stage "ASan/UBSan build" asan_build
 stage "ASan ctest" ctest --test-dir build-asan --output-on-failure -j2
 stage "ASan pytest" asan_pytest
