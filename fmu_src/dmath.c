@@ -1,9 +1,13 @@
 /* Deterministic elementary functions (see dmath.h). Every constant is written in hexadecimal
- * (exact); the polynomial coefficients are the Taylor coefficients rounded to the nearest double,
- * with enough terms that the truncation stays below 0.01 ulp on the reduced ranges:
- *   sin, cos  |r| <= pi/4 (+ a few ulps),  terms to r^17 / r^18
- *   exp       |r| <= ln2/2,                terms to r^14
- *   asin      |s| <= 1/2,                  terms to s^53  (acos through asin)
+ * (exact). The polynomials:
+ *   sin, cos  |r| <= pi/4 (+ a little): the minimax polynomials of degree 13 and 14 of fdlibm
+ *             (Sun Microsystems, 1993: |sin r / r - p(r^2)| < 2^-58, |cos r - q(r^2)| < 2^-58),
+ *             evaluated in two independent chains (Estrin's split)
+ *   exp       |r| <= ln2/256 (+ a little) after x = (k + j/128) ln2 + r: 2^(j/128) from a table of
+ *             128 doubles with their relative tails, and the Taylor terms of e^r to r^5
+ *             (truncation below 2^-60, 0.005 ulp)
+ *   expm1     |r| <= ln2/2: Taylor terms to r^14
+ *   asin      |s| <= 1/2: Taylor terms to s^53 (acos through asin)
  * Double-double steps (TwoSum, Dekker's product by Veltkamp splitting) keep the reduced argument
  * and the leading terms exact where it matters. No fused multiply-add is used or allowed. */
 #include "dmath.h"
@@ -42,14 +46,6 @@ static double scale(double y, int k)
 #define ABS_BITS(u) ((u) & 0x7fffffffffffffffULL)
 #define EXP_ALL_ONES 0x7ff0000000000000ULL /* inf / NaN when ABS_BITS >= this */
 
-/* s + e = a + b exactly (Knuth's TwoSum) */
-static void two_sum(double a, double b, double *s, double *e)
-{
-    const double t = a + b, bb = t - a;
-    *s = t;
-    *e = (a - (t - bb)) + (b - bb);
-}
-
 /* s + e = a + b exactly, |a| >= |b| or a == 0 */
 static void fast_two_sum(double a, double b, double *s, double *e)
 {
@@ -79,6 +75,12 @@ static const double INV_PIO2 = 0x1.45f306dc9c883p-1;
  * n P3 are exact for |n| < 2^20 */
 static const double P1 = 0x1.921fb544p+0, P2 = 0x1.0b4611a6p-34, P3 = 0x1.3198a2ep-69,
                     P4 = 0x1.b839a252049c1p-104;
+/* the rounded tails: P1T = P2 + P3 + P4, P2T = P3 + P4 (to the nearest double) */
+static const double P1T = 0x1.0b4611a626331p-34, P2T = 0x1.3198a2e037073p-69;
+/* round to the nearest integer by adding and subtracting 1.5 2^52 (IEEE round-to-nearest doubles,
+ * no extended precision, no fused operations: the same on every platform); the integer is then in
+ * the low bits of the sum */
+static const double SHIFT = 0x1.8p52;
 /* ln 2 = LN2_HI + LN2_LO, LN2_HI with 32 significant bits (k LN2_HI exact for |k| < 2^21) */
 static const double LN2_HI = 0x1.62e42feep-1, LN2_LO = 0x1.a39ef35793c76p-33;
 static const double INV_LN2 = 0x1.71547652b82fep+0;
@@ -91,14 +93,12 @@ static const uint32_t TWO_OVER_PI[40] = {
     0xEF2F118B, 0x5A0A6D1F, 0x6D367ECF, 0x27CB09B7, 0x4F463F66, 0x9E5FEA2D, 0x7527BAC7, 0xEBE5F17B,
     0x3D0739F7, 0x8A5292EA, 0x6BFB5FB1, 0x1F8D5D08, 0x56033046, 0xFC7B6BAB, 0xF0CFBC20, 0x9AF4361D};
 
-/* sin r = r + r^3 (S3 + S5 r^2 + ...), S(2i+1) = (-1)^i / (2i+1)! */
-static const double S3 = -0x1.5555555555555p-3, S5 = 0x1.1111111111111p-7, S7 = -0x1.a01a01a01a01ap-13,
-                    S9 = 0x1.71de3a556c734p-19, S11 = -0x1.ae64567f544e4p-26, S13 = 0x1.6124613a86d09p-33,
-                    S15 = -0x1.ae7f3e733b81fp-41, S17 = 0x1.952c77030ad4ap-49;
-/* cos r = 1 - r^2/2 + r^4 (C4 + C6 r^2 + ...), C(2i) = (-1)^i / (2i)! */
-static const double C4 = 0x1.5555555555555p-5, C6 = -0x1.6c16c16c16c17p-10, C8 = 0x1.a01a01a01a01ap-16,
-                    C10 = -0x1.27e4fb7789f5cp-22, C12 = 0x1.1eed8eff8d898p-29, C14 = -0x1.93974a8c07c9dp-37,
-                    C16 = 0x1.ae7f3e733b81fp-45, C18 = -0x1.6827863b97d97p-53;
+/* sin r = r + r^3 (S1 + r^2 S2 + ... + r^10 S6) (fdlibm's k_sin.c) */
+static const double S1 = -0x1.5555555555549p-3, S2 = 0x1.111111110f8a6p-7, S3 = -0x1.a01a019c161d5p-13,
+                    S4 = 0x1.71de357b1fe7dp-19, S5 = -0x1.ae5e68a2b9cebp-26, S6 = 0x1.5d93a5acfd57cp-33;
+/* cos r = 1 - r^2/2 + r^4 (C1 + r^2 C2 + ... + r^10 C6) (fdlibm's k_cos.c) */
+static const double C1 = 0x1.555555555554cp-5, C2 = -0x1.6c16c16c15177p-10, C3 = 0x1.a01a019cb1590p-16,
+                    C4 = -0x1.27e4f809c52adp-22, C5 = 0x1.1ee9ebdb4b1c4p-29, C6 = -0x1.8fae9be8838d4p-37;
 /* exp r - 1 - r = r^2 (E2 + E3 r + ...), Ek = 1/k! */
 static const double E2 = 0x1p-1, E3 = 0x1.5555555555555p-3, E4 = 0x1.5555555555555p-5,
                     E5 = 0x1.1111111111111p-7, E6 = 0x1.6c16c16c16c17p-10, E7 = 0x1.a01a01a01a01ap-13,
@@ -120,20 +120,18 @@ static const double ASIN_A[26] = {
 /* sin(x + y), |x| <= pi/4 + a little, |y| <= ulp(x) */
 static double ksin(double x, double y)
 {
-    const double z = x * x;
-    const double z2 = z * z, z4 = z2 * z2; /* Estrin: three independent chains */
-    const double p = (S3 + z * S5) + z2 * (S7 + z * S9) + z4 * ((S11 + z * S13) + z2 * (S15 + z * S17));
-    return x + (x * z * p + y * (1.0 - 0.5 * z));
+    const double z = x * x, w = z * z, v = z * x;
+    const double r = (S2 + z * (S3 + z * S4)) + z * w * (S5 + z * S6);
+    return x - ((z * (0.5 * y - v * r) - y) - v * S1);
 }
 
-/* cos(x + y), same range; x^2 and 1 - x^2/2 carried exactly */
+/* cos(x + y), same range; 1 - x^2/2 split as w + its rounding error */
 static double kcos(double x, double y)
 {
-    const double z = x * x, zl = two_prod_err(x, x, z);
-    const double z2 = z * z, z4 = z2 * z2;
-    const double q = (C4 + z * C6) + z2 * (C8 + z * C10) + z4 * ((C12 + z * C14) + z2 * (C16 + z * C18));
-    const double hz = 0.5 * z, w = 1.0 - hz;
-    return w + (((1.0 - w) - hz) + (z2 * q - x * y - 0.5 * zl));
+    const double z = x * x, w = z * z;
+    const double r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
+    const double hz = 0.5 * z, u = 1.0 - hz;
+    return u + (((1.0 - u) - hz) + (z * r - x * y));
 }
 
 /* bits pos ... pos+63 of the little-endian 32-bit limbs p[0..n-1] */
@@ -215,17 +213,34 @@ static int reduce(double x, double *hi, double *lo)
         *lo = 0.0;
         return 0;
     }
-    if (ax < 0x1p20) { /* Cody-Waite, pi/2 in four parts */
-        const double t = x * INV_PIO2;
-        const double fn = (double)(long long)(t < 0.0 ? t - 0.5 : t + 0.5);
-        const double r1 = x - fn * P1; /* exact */
-        double s1, e1, s2, e2, h, l;
-        two_sum(r1, -(fn * P2), &s1, &e1);
-        two_sum(s1, -(fn * P3), &s2, &e2);
-        fast_two_sum(s2, (e1 + e2) - fn * P4, &h, &l);
-        *hi = h;
-        *lo = l;
-        return (int)((unsigned long long)(long long)fn & 3u);
+    if (ax < 0x1p20) {
+        /* Cody-Waite (fdlibm's e_rem_pio2.c): x - n P1 exactly, then n times the tail of pi/2 to
+         * 85 bits; where that cancels (x close to a multiple of pi/2) a second and a third step
+         * with P2, P3 carry it to 118 and 151 bits */
+        const double t = x * INV_PIO2 + SHIFT;
+        const int n = (int)(bits_of(t) & 0xffffffffULL);
+        const double fn = t - SHIFT;
+        const int ex = (int)(bits_of(x) >> 52 & 0x7ff);
+        double r = x - fn * P1; /* exact: fn P1 has at most 53 bits and lies within a factor 2 of x */
+        double w = fn * P1T;
+        double y = r - w;
+        if (ex - (int)(bits_of(y) >> 52 & 0x7ff) > 16) {
+            double u = r;
+            w = fn * P2;
+            r = u - w;
+            w = fn * P2T - ((u - r) - w);
+            y = r - w;
+            if (ex - (int)(bits_of(y) >> 52 & 0x7ff) > 49) {
+                u = r;
+                w = fn * P3;
+                r = u - w;
+                w = fn * P4 - ((u - r) - w);
+                y = r - w;
+            }
+        }
+        *hi = y;
+        *lo = (r - y) - w;
+        return n & 3;
     }
     double h, l;
     int q = reduce_large(ax, &h, &l);
@@ -267,6 +282,29 @@ double dfo_cos(double x)
     }
 }
 
+void dfo_sincos(double x, double *s, double *c)
+{
+    const uint64_t a = ABS_BITS(bits_of(x));
+    if (a >= EXP_ALL_ONES) {
+        *s = *c = x - x;
+        return;
+    }
+    if (a < 0x3e40000000000000ULL) { /* |x| < 2^-27: the same as dfo_sin, dfo_cos */
+        *s = x;
+        *c = 1.0;
+        return;
+    }
+    double hi, lo;
+    const int q = reduce(x, &hi, &lo);
+    const double sr = ksin(hi, lo), cr = kcos(hi, lo);
+    switch (q) {
+    case 0: *s = sr; *c = cr; return;
+    case 1: *s = cr; *c = -sr; return;
+    case 2: *s = -sr; *c = -cr; return;
+    default: *s = -cr; *c = sr; return;
+    }
+}
+
 /* ---- exp and expm1 -------------------------------------------------------------------------- */
 
 static double expm1_poly(double r) /* exp(r) - 1 - r, |r| <= ln2/2 */
@@ -289,6 +327,82 @@ static double reduce_exp(double x, int *k)
 
 static const double EXP_MAX = 0x1.62e42fefa39efp+9; /* ln(DBL_MAX) rounded down: 709.78... */
 
+/* exp: x = (k + j/128) ln2 + r. EXP_TAB[2j] is the tail t_j and EXP_TAB[2j+1] the bits of s_j minus
+ * j 2^45, where s_j is 2^(j/128) rounded to the nearest double and 2^(j/128) = s_j (1 + t_j) to
+ * about 2^-105 (computed in 80-digit decimal arithmetic); adding (k 128 + j) 2^45 to the second word
+ * gives the bits of 2^k s_j. */
+#define EXP_N 128
+static const double INV_LN2_N = 0x1.71547652b82fep+7;                           /* 128 / ln2 */
+static const double LN2_N_HI = 0x1.62e42fefp-8, LN2_N_LO = 0x1.473de6af278edp-41; /* ln2 / 128 */
+static const double X2 = 0x1p-1, X3 = 0x1.5555555555555p-3, X4 = 0x1.5555555555555p-5,
+                    X5 = 0x1.1111111111111p-7; /* 1/k! */
+static const uint64_t EXP_TAB[2 * EXP_N] = {
+    0x0000000000000000ULL, 0x3ff0000000000000ULL, 0x3c9b3b4f1a88bf6eULL, 0x3feff63da9fb3335ULL,
+    0xbc7160139cd8dc5dULL, 0x3fefec9a3e778061ULL, 0xbc905e7a108766d1ULL, 0x3fefe315e86e7f85ULL,
+    0x3c8cd2523567f613ULL, 0x3fefd9b0d3158574ULL, 0xbc8bce8023f98efaULL, 0x3fefd06b29ddf6deULL,
+    0x3c60f74e61e6c861ULL, 0x3fefc74518759bc8ULL, 0x3c90a3e45b33d399ULL, 0x3fefbe3ecac6f383ULL,
+    0x3c979aa65d837b6dULL, 0x3fefb5586cf9890fULL, 0x3c8eb51a92fdeffcULL, 0x3fefac922b7247f7ULL,
+    0x3c3ebe3d702f9cd1ULL, 0x3fefa3ec32d3d1a2ULL, 0xbc6a033489906e0bULL, 0x3fef9b66affed31bULL,
+    0xbc9556522a2fbd0eULL, 0x3fef9301d0125b51ULL, 0xbc5080ef8c4eea55ULL, 0x3fef8abdc06c31ccULL,
+    0xbc91c923b9d5f416ULL, 0x3fef829aaea92de0ULL, 0x3c80d3e3e95c55afULL, 0x3fef7a98c8a58e51ULL,
+    0xbc801b15eaa59348ULL, 0x3fef72b83c7d517bULL, 0xbc8f1ff055de323dULL, 0x3fef6af9388c8deaULL,
+    0x3c8b898c3f1353bfULL, 0x3fef635beb6fcb75ULL, 0xbc96d99c7611eb26ULL, 0x3fef5be084045cd4ULL,
+    0x3c9aecf73e3a2f60ULL, 0x3fef54873168b9aaULL, 0xbc8fe782cb86389dULL, 0x3fef4d5022fcd91dULL,
+    0x3c8a6f4144a6c38dULL, 0x3fef463b88628cd6ULL, 0x3c807a05b0e4047dULL, 0x3fef3f49917ddc96ULL,
+    0x3c968efde3a8a894ULL, 0x3fef387a6e756238ULL, 0x3c875e18f274487dULL, 0x3fef31ce4fb2a63fULL,
+    0x3c80472b981fe7f2ULL, 0x3fef2b4565e27cddULL, 0xbc96b87b3f71085eULL, 0x3fef24dfe1f56381ULL,
+    0x3c82f7e16d09ab31ULL, 0x3fef1e9df51fdee1ULL, 0xbc3d219b1a6fbffaULL, 0x3fef187fd0dad990ULL,
+    0x3c8b3782720c0ab4ULL, 0x3fef1285a6e4030bULL, 0x3c6e149289cecb8fULL, 0x3fef0cafa93e2f56ULL,
+    0x3c834d754db0abb6ULL, 0x3fef06fe0a31b715ULL, 0x3c864201e2ac744cULL, 0x3fef0170fc4cd831ULL,
+    0x3c8fdd395dd3f84aULL, 0x3feefc08b26416ffULL, 0xbc86a3803b8e5b04ULL, 0x3feef6c55f929ff1ULL,
+    0xbc924aedcc4b5068ULL, 0x3feef1a7373aa9cbULL, 0xbc9907f81b512d8eULL, 0x3feeecae6d05d866ULL,
+    0xbc71d1e83e9436d2ULL, 0x3feee7db34e59ff7ULL, 0xbc991919b3ce1b15ULL, 0x3feee32dc313a8e5ULL,
+    0x3c859f48a72a4c6dULL, 0x3feedea64c123422ULL, 0xbc9312607a28698aULL, 0x3feeda4504ac801cULL,
+    0xbc58a78f4817895bULL, 0x3feed60a21f72e2aULL, 0xbc7c2c9b67499a1bULL, 0x3feed1f5d950a897ULL,
+    0x3c4363ed60c2ac11ULL, 0x3feece086061892dULL, 0x3c9666093b0664efULL, 0x3feeca41ed1d0057ULL,
+    0x3c6ecce1daa10379ULL, 0x3feec6a2b5c13cd0ULL, 0x3c93ff8e3f0f1230ULL, 0x3feec32af0d7d3deULL,
+    0x3c7690cebb7aafb0ULL, 0x3feebfdad5362a27ULL, 0x3c931dbdeb54e077ULL, 0x3feebcb299fddd0dULL,
+    0xbc8f94340071a38eULL, 0x3feeb9b2769d2ca7ULL, 0xbc87deccdc93a349ULL, 0x3feeb6daa2cf6642ULL,
+    0xbc78dec6bd0f385fULL, 0x3feeb42b569d4f82ULL, 0xbc861246ec7b5cf6ULL, 0x3feeb1a4ca5d920fULL,
+    0x3c93350518fdd78eULL, 0x3feeaf4736b527daULL, 0x3c7b98b72f8a9b05ULL, 0x3feead12d497c7fdULL,
+    0x3c9063e1e21c5409ULL, 0x3feeab07dd485429ULL, 0x3c34c7855019c6eaULL, 0x3feea9268a5946b7ULL,
+    0x3c9432e62b64c035ULL, 0x3feea76f15ad2148ULL, 0xbc8ce44a6199769fULL, 0x3feea5e1b976dc09ULL,
+    0xbc8c33c53bef4da8ULL, 0x3feea47eb03a5585ULL, 0xbc845378892be9aeULL, 0x3feea34634ccc320ULL,
+    0xbc93cedd78565858ULL, 0x3feea23882552225ULL, 0x3c5710aa807e1964ULL, 0x3feea155d44ca973ULL,
+    0xbc93b3efbf5e2228ULL, 0x3feea09e667f3bcdULL, 0xbc6a12ad8734b982ULL, 0x3feea012750bdabfULL,
+    0xbc6367efb86da9eeULL, 0x3fee9fb23c651a2fULL, 0xbc80dc3d54e08851ULL, 0x3fee9f7df9519484ULL,
+    0xbc781f647e5a3ecfULL, 0x3fee9f75e8ec5f74ULL, 0xbc86ee4ac08b7db0ULL, 0x3fee9f9a48a58174ULL,
+    0xbc8619321e55e68aULL, 0x3fee9feb564267c9ULL, 0x3c909ccb5e09d4d3ULL, 0x3feea0694fde5d3fULL,
+    0xbc7b32dcb94da51dULL, 0x3feea11473eb0187ULL, 0x3c94ecfd5467c06bULL, 0x3feea1ed0130c132ULL,
+    0x3c65ebe1abd66c55ULL, 0x3feea2f336cf4e62ULL, 0xbc88a1c52fb3cf42ULL, 0x3feea427543e1a12ULL,
+    0xbc9369b6f13b3734ULL, 0x3feea589994cce13ULL, 0xbc805e843a19ff1eULL, 0x3feea71a4623c7adULL,
+    0xbc94d450d872576eULL, 0x3feea8d99b4492edULL, 0x3c90ad675b0e8a00ULL, 0x3feeaac7d98a6699ULL,
+    0x3c8db72fc1f0eab4ULL, 0x3feeace5422aa0dbULL, 0xbc65b6609cc5e7ffULL, 0x3feeaf3216b5448cULL,
+    0x3c7bf68359f35f44ULL, 0x3feeb1ae99157736ULL, 0xbc93091fa71e3d83ULL, 0x3feeb45b0b91ffc6ULL,
+    0xbc5da9b88b6c1e29ULL, 0x3feeb737b0cdc5e5ULL, 0xbc6c23f97c90b959ULL, 0x3feeba44cbc8520fULL,
+    0xbc92434322f4f9aaULL, 0x3feebd829fde4e50ULL, 0xbc85ca6cd7668e4bULL, 0x3feec0f170ca07baULL,
+    0x3c71affc2b91ce27ULL, 0x3feec49182a3f090ULL, 0x3c6dd235e10a73bbULL, 0x3feec86319e32323ULL,
+    0xbc87c50422622263ULL, 0x3feecc667b5de565ULL, 0x3c8b1c86e3e231d5ULL, 0x3feed09bec4a2d33ULL,
+    0xbc91bbd1d3bcbb15ULL, 0x3feed503b23e255dULL, 0x3c90cc319cee31d2ULL, 0x3feed99e1330b358ULL,
+    0x3c8469846e735ab3ULL, 0x3feede6b5579fdbfULL, 0xbc82dfcd978e9db4ULL, 0x3feee36bbfd3f37aULL,
+    0x3c8c1a7792cb3387ULL, 0x3feee89f995ad3adULL, 0xbc907b8f4ad1d9faULL, 0x3feeee07298db666ULL,
+    0xbc55c3d956dcaebaULL, 0x3feef3a2b84f15fbULL, 0xbc90a40e3da6f640ULL, 0x3feef9728de5593aULL,
+    0xbc68d6f438ad9334ULL, 0x3feeff76f2fb5e47ULL, 0xbc91eee26b588a35ULL, 0x3fef05b030a1064aULL,
+    0x3c74ffd70a5fddcdULL, 0x3fef0c1e904bc1d2ULL, 0xbc91bdfbfa9298acULL, 0x3fef12c25bd71e09ULL,
+    0x3c736eae30af0cb3ULL, 0x3fef199bdd85529cULL, 0x3c8ee3325c9ffd94ULL, 0x3fef20ab5fffd07aULL,
+    0x3c84e08fd10959acULL, 0x3fef27f12e57d14bULL, 0x3c63cdaf384e1a67ULL, 0x3fef2f6d9406e7b5ULL,
+    0x3c676b2c6c921968ULL, 0x3fef3720dcef9069ULL, 0xbc808a1883ccb5d2ULL, 0x3fef3f0b555dc3faULL,
+    0xbc8fad5d3ffffa6fULL, 0x3fef472d4a07897cULL, 0xbc900dae3875a949ULL, 0x3fef4f87080d89f2ULL,
+    0x3c74a385a63d07a7ULL, 0x3fef5818dcfba487ULL, 0xbc82919e2040220fULL, 0x3fef60e316c98398ULL,
+    0x3c8e5a50d5c192acULL, 0x3fef69e603db3285ULL, 0x3c843a59ac016b4bULL, 0x3fef7321f301b460ULL,
+    0xbc82d52107b43e1fULL, 0x3fef7c97337b9b5fULL, 0xbc892ab93b470dc9ULL, 0x3fef864614f5a129ULL,
+    0x3c74b604603a88d3ULL, 0x3fef902ee78b3ff6ULL, 0x3c83c5ec519d7271ULL, 0x3fef9a51fbc74c83ULL,
+    0xbc8ff7128fd391f0ULL, 0x3fefa4afa2a490daULL, 0xbc8dae98e223747dULL, 0x3fefaf482d8e67f1ULL,
+    0x3c8ec3bc41aa2008ULL, 0x3fefba1bee615a27ULL, 0x3c842b94c3a9eb32ULL, 0x3fefc52b376bba97ULL,
+    0x3c8a64a931d185eeULL, 0x3fefd0765b6e4540ULL, 0xbc8e37bae43be3edULL, 0x3fefdbfdad9cbe14ULL,
+    0x3c77893b4d91cd9dULL, 0x3fefe7c1819e90d8ULL, 0x3c5305c14160cc89ULL, 0x3feff3c22b8f71f1ULL,
+};
+
 double dfo_exp(double x)
 {
     if (x != x) return x + x;
@@ -296,9 +410,35 @@ double dfo_exp(double x)
     if (x < -746.0) return 0.0;
     const uint64_t a = ABS_BITS(bits_of(x));
     if (a < 0x3c90000000000000ULL) return 1.0 + x; /* |x| < 2^-54 */
-    int k;
-    const double em1 = reduce_exp(x, &k);
-    return scale(1.0 + em1, k);
+    const double t = x * INV_LN2_N + SHIFT;
+    const uint64_t ki = bits_of(t); /* k 128 + j in the low bits (two's complement) */
+    const double kd = t - SHIFT;
+    /* kd LN2_N_HI is exact (|kd| < 2^18) and x - kd LN2_N_HI too (Sterbenz, or kd = 0) */
+    const double r = (x - kd * LN2_N_HI) - kd * LN2_N_LO;
+    const unsigned j = (unsigned)(ki % EXP_N);
+    const double tail = of_bits(EXP_TAB[2 * j]);
+    const double r2 = r * r;
+    const double p = tail + r + r2 * (X2 + r * X3) + r2 * r2 * (X4 + r * X5); /* e^r (1 + t_j) - 1 */
+    const uint64_t top = ki << 45; /* (k 128 + j) 2^45 mod 2^64: k in the exponent field */
+    if (a < 0x4086200000000000ULL) { /* |x| < 708: 2^k s_j is a normal double */
+        const double sc = of_bits(EXP_TAB[2 * j + 1] + top);
+        return sc + sc * p;
+    }
+    if (x > 0.0) { /* 2^k s_j may overflow: scale by 2^-1009 first */
+        const double sc = of_bits(EXP_TAB[2 * j + 1] + top - (1009ULL << 52));
+        return 0x1p1009 * (sc + sc * p);
+    }
+    /* result near or in the subnormal range: form y = 2^(k+1022) s_j e^r, then round y 2^-1022
+     * once (y - 1 + 1 rounds at the subnormal quantum when y < 1) */
+    const double sc = of_bits(EXP_TAB[2 * j + 1] + top + (1022ULL << 52));
+    double y = sc + sc * p;
+    if (y < 1.0) {
+        const double lo0 = sc - y + sc * p;
+        const double h = 1.0 + y;
+        const double lo = ((1.0 - h) + y) + lo0;
+        y = (h + lo) - 1.0;
+    }
+    return 0x1p-1022 * y;
 }
 
 double dfo_expm1(double x)
