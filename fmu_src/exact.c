@@ -87,8 +87,7 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
     P->s = s;
     P->ta = ta;
     P->xc = (C->L.F_ext - s * C->L.muk_N) / C->k;
-    P->c0 = dfo_cos(th);
-    P->s0 = dfo_sin(th);
+    dfo_sincos(th, &P->s0, &P->c0);
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
@@ -142,13 +141,15 @@ static void phi1(double x, double y, double *re, double *im)
 static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
 {
     const double z = C->zeta, lam = C->lam;
-    const double cl = dfo_cos(lam * u), sl = dfo_sin(lam * u);
+    double cl, sl;
+    dfo_sincos(lam * u, &sl, &cl);
     const double cth = P->c0 * cl - P->s0 * sl, sth = P->s0 * cl + P->c0 * sl;
     double E, F;
     if (z < 1.0) {
         const double e = (z > 0.0) ? dfo_exp(-z * u) : 1.0;
         const double wu = C->wd * u;
-        const double cw = (C->wd == lam) ? cl : dfo_cos(wu), sw = (C->wd == lam) ? sl : dfo_sin(wu);
+        double cw = cl, sw = sl;
+        if (C->wd != lam) dfo_sincos(wu, &sw, &cw);
         E = e * cw;
         F = e * sw * C->inv_wd;
         v->e1 = e;

@@ -103,8 +103,7 @@ static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double
     } else {
         i = n - n % EXC_ANCHOR;
         const double th = M->p.omega * (s->t0 + (double)i * M->p.h) + M->p.phi;
-        cos_th = dfo_cos(th);
-        sin_th = dfo_sin(th);
+        dfo_sincos(th, &sin_th, &cos_th);
     }
     for (; i < n; i++) {
         const double cos_next = cos_th * rot_c - sin_th * rot_s;

@@ -5,7 +5,8 @@
  *                       arguments next to multiples of pi/2, the whole range of exp, the ends of
  *                       acos), prints the largest difference in ulps and the share of identical
  *                       results per range, and fails if any difference exceeds MAX_ULPS or a special
- *                       value or one of the hard arguments' correctly rounded results is wrong.
+ *                       value or one of the hard arguments' correctly rounded results is wrong, or
+ *                       if dfo_sincos differs from dfo_sin, dfo_cos by a single bit.
  *   test_dmath --dump   prints the bits of every result on a fixed set of arguments (no libm): the
  *                       cross-platform check compares these dumps between Linux x86-64, Windows
  *                       (wine) and Linux aarch64 (qemu) bit for bit. */
@@ -100,6 +101,8 @@ static const range RANGES[] = {
     {2, UNIFORM, -50.0, 5.0, "-50 .. 5 (damping factors)"},
     {2, UNIFORM, -745.0, 709.7, "whole range"},
     {2, LOG, 1e-20, 1.0, "|x| <= 1"},
+    {2, UNIFORM, -745.2, -708.0, "-745.2 .. -708 (subnormal results)"},
+    {2, UNIFORM, 708.0, 709.78, "708 .. 709.78 (next to overflow)"},
     {3, UNIFORM, -0.35, 0.35, "|x| <= ln2/2"},
     {3, LOG, 1e-20, 1e-3, "tiny"},
     {3, UNIFORM, -40.0, 40.0, "-40 .. 40"},
@@ -144,6 +147,14 @@ static int check_specials(void)
     } while (0)
     EXPECT(isnan(dfo_sin(inf)) && isnan(dfo_sin(-inf)) && isnan(dfo_sin(nan_)));
     EXPECT(isnan(dfo_cos(inf)) && isnan(dfo_cos(nan_)));
+    double sv = 0.0, cv = 0.0;
+    dfo_sincos(-inf, &sv, &cv);
+    EXPECT(isnan(sv) && isnan(cv));
+    dfo_sincos(-0.0, &sv, &cv);
+    EXPECT(sv == 0.0 && signbit(sv) && cv == 1.0);
+    dfo_sincos(1e-300, &sv, &cv);
+    EXPECT(sv == 1e-300 && cv == 1.0);
+    EXPECT(dfo_exp(-745.1) == 0x1p-1074 && dfo_exp(-709.0) == 0x0.8bfe55de02338p-1022);
     EXPECT(dfo_sin(0.0) == 0.0 && !signbit(dfo_sin(0.0)) && signbit(dfo_sin(-0.0)));
     EXPECT(dfo_cos(0.0) == 1.0 && dfo_cos(-0.0) == 1.0);
     EXPECT(dfo_exp(0.0) == 1.0 && dfo_exp(-inf) == 0.0 && dfo_exp(inf) == inf && isnan(dfo_exp(nan_)));
@@ -176,10 +187,16 @@ static int compare(void)
         const func *f = &FUNCS[r->f];
         double worst = 0.0, worst_x = 0.0;
         long same = 0;
+        long sincos_differs = 0;
         for (int n = 0; n < N_PER_RANGE; n++) {
             const double x = sample(&seed, r);
             const double a = f->mine(x), b = f->ref(x), u = ulps(a, b);
             same += (bits(a) == bits(b));
+            if (r->f <= 1) { /* dfo_sincos: bit for bit dfo_sin and dfo_cos */
+                double sv, cv;
+                dfo_sincos(x, &sv, &cv);
+                sincos_differs += (bits(sv) != bits(dfo_sin(x))) || (bits(cv) != bits(dfo_cos(x)));
+            }
             if (u > worst) {
                 worst = u;
                 worst_x = x;
@@ -187,6 +204,10 @@ static int compare(void)
         }
         printf("%-6s %-44s %10.0f %9.4f%%%s\n", f->name, r->what, worst, 100.0 * same / N_PER_RANGE,
                worst > MAX_ULPS ? "  FAIL" : "");
+        if (sincos_differs) {
+            printf("       dfo_sincos differs from dfo_sin, dfo_cos on %ld arguments  FAIL\n", sincos_differs);
+            failed++;
+        }
         if (worst > MAX_ULPS) {
             printf("       worst at x = %a: %a vs libm %a\n", worst_x, f->mine(worst_x), f->ref(worst_x));
             failed++;
