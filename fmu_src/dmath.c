@@ -125,13 +125,21 @@ static double ksin(double x, double y)
     return x - ((z * (0.5 * y - v * r) - y) - v * S1);
 }
 
-/* cos(x + y), same range; 1 - x^2/2 split as w + its rounding error */
+/* the rounding error of x * x: x * x - fl(x * x), exactly (Dekker, one Veltkamp split) */
+static double two_sqr_err(double x, double z)
+{
+    const double t = 134217729.0 * x; /* 2^27 + 1 */
+    const double xh = t - (t - x), xl = x - xh;
+    return ((xh * xh - z) + 2.0 * xh * xl) + xl * xl;
+}
+
+/* cos(x + y), same range; x^2 carried exactly (z + zl) and 1 - z/2 as u + its rounding error */
 static double kcos(double x, double y)
 {
-    const double z = x * x, w = z * z;
+    const double z = x * x, w = z * z, zl = two_sqr_err(x, z);
     const double r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
     const double hz = 0.5 * z, u = 1.0 - hz;
-    return u + (((1.0 - u) - hz) + (z * r - x * y));
+    return u + (((1.0 - u) - hz) + (z * r - x * y - 0.5 * zl));
 }
 
 /* bits pos ... pos+63 of the little-endian 32-bit limbs p[0..n-1] */
