@@ -1,8 +1,7 @@
 /* Deterministic elementary functions (see dmath.h). Every constant is written in hexadecimal
  * (exact). The polynomials:
- *   sin, cos  |r| <= pi/4 (+ a little): the minimax polynomials of degree 13 and 14 of fdlibm
- *             (Sun Microsystems, 1993: |sin r / r - p(r^2)| < 2^-58, |cos r - q(r^2)| < 2^-58),
- *             evaluated in two independent chains (Estrin's split)
+ *   sin, cos  |r| <= pi/4 (+ a little): Taylor terms to r^17 / r^18 (truncation below 0.01 ulp),
+ *             evaluated in three independent chains (Estrin's split)
  *   exp       |r| <= ln2/256 (+ a little) after x = (k + j/128) ln2 + r: 2^(j/128) from a table of
  *             128 doubles with their relative tails, and the Taylor terms of e^r to r^5
  *             (truncation below 2^-60, 0.005 ulp)
@@ -93,12 +92,14 @@ static const uint32_t TWO_OVER_PI[40] = {
     0xEF2F118B, 0x5A0A6D1F, 0x6D367ECF, 0x27CB09B7, 0x4F463F66, 0x9E5FEA2D, 0x7527BAC7, 0xEBE5F17B,
     0x3D0739F7, 0x8A5292EA, 0x6BFB5FB1, 0x1F8D5D08, 0x56033046, 0xFC7B6BAB, 0xF0CFBC20, 0x9AF4361D};
 
-/* sin r = r + r^3 (S1 + r^2 S2 + ... + r^10 S6) (fdlibm's k_sin.c) */
-static const double S1 = -0x1.5555555555549p-3, S2 = 0x1.111111110f8a6p-7, S3 = -0x1.a01a019c161d5p-13,
-                    S4 = 0x1.71de357b1fe7dp-19, S5 = -0x1.ae5e68a2b9cebp-26, S6 = 0x1.5d93a5acfd57cp-33;
-/* cos r = 1 - r^2/2 + r^4 (C1 + r^2 C2 + ... + r^10 C6) (fdlibm's k_cos.c) */
-static const double C1 = 0x1.555555555554cp-5, C2 = -0x1.6c16c16c15177p-10, C3 = 0x1.a01a019cb1590p-16,
-                    C4 = -0x1.27e4f809c52adp-22, C5 = 0x1.1ee9ebdb4b1c4p-29, C6 = -0x1.8fae9be8838d4p-37;
+/* sin r = r + r^3 (S3 + S5 r^2 + ...), S(2i+1) = (-1)^i / (2i+1)! */
+static const double S3 = -0x1.5555555555555p-3, S5 = 0x1.1111111111111p-7, S7 = -0x1.a01a01a01a01ap-13,
+                    S9 = 0x1.71de3a556c734p-19, S11 = -0x1.ae64567f544e4p-26, S13 = 0x1.6124613a86d09p-33,
+                    S15 = -0x1.ae7f3e733b81fp-41, S17 = 0x1.952c77030ad4ap-49;
+/* cos r = 1 - r^2/2 + r^4 (C4 + C6 r^2 + ...), C(2i) = (-1)^i / (2i)! */
+static const double C4 = 0x1.5555555555555p-5, C6 = -0x1.6c16c16c16c17p-10, C8 = 0x1.a01a01a01a01ap-16,
+                    C10 = -0x1.27e4fb7789f5cp-22, C12 = 0x1.1eed8eff8d898p-29, C14 = -0x1.93974a8c07c9dp-37,
+                    C16 = 0x1.ae7f3e733b81fp-45, C18 = -0x1.6827863b97d97p-53;
 /* exp r - 1 - r = r^2 (E2 + E3 r + ...), Ek = 1/k! */
 static const double E2 = 0x1p-1, E3 = 0x1.5555555555555p-3, E4 = 0x1.5555555555555p-5,
                     E5 = 0x1.1111111111111p-7, E6 = 0x1.6c16c16c16c17p-10, E7 = 0x1.a01a01a01a01ap-13,
@@ -117,14 +118,6 @@ static const double ASIN_A[26] = {
 
 /* ---- sin and cos ---------------------------------------------------------------------------- */
 
-/* sin(x + y), |x| <= pi/4 + a little, |y| <= ulp(x) */
-static double ksin(double x, double y)
-{
-    const double z = x * x, w = z * z, v = z * x;
-    const double r = (S2 + z * (S3 + z * S4)) + z * w * (S5 + z * S6);
-    return x - ((z * (0.5 * y - v * r) - y) - v * S1);
-}
-
 /* the rounding error of x * x: x * x - fl(x * x), exactly (Dekker, one Veltkamp split) */
 static double two_sqr_err(double x, double z)
 {
@@ -133,13 +126,23 @@ static double two_sqr_err(double x, double z)
     return ((xh * xh - z) + 2.0 * xh * xl) + xl * xl;
 }
 
-/* cos(x + y), same range; x^2 carried exactly (z + zl) and 1 - z/2 as u + its rounding error */
+/* sin(x + y), |x| <= pi/4 + a little, |y| <= ulp(x) */
+static double ksin(double x, double y)
+{
+    const double z = x * x;
+    const double z2 = z * z, z4 = z2 * z2; /* Estrin: three independent chains */
+    const double p = (S3 + z * S5) + z2 * (S7 + z * S9) + z4 * ((S11 + z * S13) + z2 * (S15 + z * S17));
+    return x + (x * z * p + y * (1.0 - 0.5 * z));
+}
+
+/* cos(x + y), same range; x^2 and 1 - x^2/2 carried exactly */
 static double kcos(double x, double y)
 {
-    const double z = x * x, w = z * z, zl = two_sqr_err(x, z);
-    const double r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
-    const double hz = 0.5 * z, u = 1.0 - hz;
-    return u + (((1.0 - u) - hz) + (z * r - x * y - 0.5 * zl));
+    const double z = x * x, zl = two_sqr_err(x, z);
+    const double z2 = z * z, z4 = z2 * z2;
+    const double q = (C4 + z * C6) + z2 * (C8 + z * C10) + z4 * ((C12 + z * C14) + z2 * (C16 + z * C18));
+    const double hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z2 * q - x * y - 0.5 * zl));
 }
 
 /* bits pos ... pos+63 of the little-endian 32-bit limbs p[0..n-1] */
