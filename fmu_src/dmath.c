@@ -17,6 +17,12 @@
 #include <stdint.h>
 #include <string.h>
 
+#if defined(__GNUC__)
+#define DFO_NOINLINE __attribute__((noinline))
+#else
+#define DFO_NOINLINE
+#endif
+
 static uint64_t bits_of(double x)
 {
     uint64_t u;
@@ -127,7 +133,7 @@ static double two_sqr_err(double x, double z)
 }
 
 /* sin(x + y), |x| <= pi/4 + a little, |y| <= ulp(x) */
-static double ksin(double x, double y)
+static inline double ksin(double x, double y)
 {
     const double z = x * x;
     const double z2 = z * z, z4 = z2 * z2; /* Estrin: three independent chains */
@@ -136,7 +142,7 @@ static double ksin(double x, double y)
 }
 
 /* cos(x + y), same range; x^2 and 1 - x^2/2 carried exactly */
-static double kcos(double x, double y)
+static inline double kcos(double x, double y)
 {
     const double z = x * x, zl = two_sqr_err(x, z);
     const double z2 = z * z, z4 = z2 * z2;
@@ -215,8 +221,23 @@ static int reduce_large(double ax, double *hi, double *lo)
     return q;
 }
 
+/* reduce_large for a signed x (|x| >= 2^20), kept out of line: the common range stays small */
+static DFO_NOINLINE int reduce_huge(double x, double ax, double *hi, double *lo)
+{
+    double h, l;
+    int q = reduce_large(ax, &h, &l);
+    if (x < 0.0) {
+        h = -h;
+        l = -l;
+        q = (4 - q) & 3;
+    }
+    *hi = h;
+    *lo = l;
+    return q;
+}
+
 /* x = n pi/2 + hi + lo, |hi + lo| <= pi/4 (+ a little); returns n mod 4. x finite. */
-static int reduce(double x, double *hi, double *lo)
+static inline int reduce(double x, double *hi, double *lo)
 {
     const double ax = x < 0.0 ? -x : x;
     if (ax <= PIO4) {
@@ -253,16 +274,7 @@ static int reduce(double x, double *hi, double *lo)
         *lo = (r - y) - w;
         return n & 3;
     }
-    double h, l;
-    int q = reduce_large(ax, &h, &l);
-    if (x < 0.0) {
-        h = -h;
-        l = -l;
-        q = (4 - q) & 3;
-    }
-    *hi = h;
-    *lo = l;
-    return q;
+    return reduce_huge(x, ax, hi, lo);
 }
 
 double dfo_sin(double x)
