@@ -483,9 +483,17 @@ double dfo_expm1(double x)
 
 static double asin_poly(double z) /* (asin s - s) / s^3 as a polynomial in z = s^2, s^2 <= 1/4 */
 {
-    double p = ASIN_A[25];
-    for (int i = 24; i >= 0; i--) p = ASIN_A[i] + z * p;
-    return p;
+    /* Estrin's scheme: 13 pairs A[2i] + z A[2i+1], combined with z^2, z^4, z^8, z^16 */
+    const double *A = ASIN_A;
+    const double z2 = z * z, z4 = z2 * z2, z8 = z4 * z4, z16 = z8 * z8;
+    const double p0 = A[0] + z * A[1], p1 = A[2] + z * A[3], p2 = A[4] + z * A[5], p3 = A[6] + z * A[7],
+                 p4 = A[8] + z * A[9], p5 = A[10] + z * A[11], p6 = A[12] + z * A[13],
+                 p7 = A[14] + z * A[15], p8 = A[16] + z * A[17], p9 = A[18] + z * A[19],
+                 p10 = A[20] + z * A[21], p11 = A[22] + z * A[23], p12 = A[24] + z * A[25];
+    const double q0 = p0 + z2 * p1, q1 = p2 + z2 * p3, q2 = p4 + z2 * p5, q3 = p6 + z2 * p7,
+                 q4 = p8 + z2 * p9, q5 = p10 + z2 * p11;
+    const double r0 = q0 + z4 * q1, r1 = q2 + z4 * q3, r2 = q4 + z4 * q5;
+    return (r0 + z8 * r1) + z16 * (r2 + z8 * p12);
 }
 
 /* asin(sqrt(w)) for 0 <= w <= 1/4, the square root's rounding carried as a correction */
