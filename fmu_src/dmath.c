@@ -250,7 +250,7 @@ static inline int reduce(double x, double *hi, double *lo)
          * 85 bits; where that cancels (x close to a multiple of pi/2) a second and a third step
          * with P2, P3 carry it to 118 and 151 bits */
         const double t = x * INV_PIO2 + SHIFT;
-        const int n = (int)(bits_of(t) & 0xffffffffULL);
+        const int n = (int)(bits_of(t) & 3u); /* fn mod 4 (two's complement in the low bits) */
         const double fn = t - SHIFT;
         const int ex = (int)(bits_of(x) >> 52 & 0x7ff);
         double r = x - fn * P1; /* exact: fn P1 has at most 53 bits and lies within a factor 2 of x */
@@ -272,7 +272,7 @@ static inline int reduce(double x, double *hi, double *lo)
         }
         *hi = y;
         *lo = (r - y) - w;
-        return n & 3;
+        return n;
     }
     return reduce_huge(x, ax, hi, lo);
 }
