@@ -36,7 +36,8 @@ def table(results: dict[tuple[str, str], Convergence]) -> str:
     lines.append("-" * len(head))
     for (case, scheme), c in results.items():
         errs = " ".join(f"{e:9.2e}" for e in c.errors)
-        orders = " ".join(f"{o:5.2f}" for o in c.orders)
+        # the exact scheme has no step: its error is rounding whatever h, it has no order
+        orders = "(no step)" if scheme == "exact" else " ".join(f"{o:5.2f}" for o in c.orders)
         lines.append(f"{case:16s} {scheme:11s} {errs}   {orders}")
     return "\n".join(lines)
 
@@ -72,12 +73,13 @@ def plot(path: Path, fc: FirstCycle, results: dict[tuple[str, str], Convergence]
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=8)
     ax = axes[1, 1]
-    styles = {"located": "-o", "consistent": "--s", "paper": ":^"}
+    # one marker per scheme of the model description (exact: no step, its error is rounding)
+    styles = {"located": "-o", "consistent": "--s", "paper": ":^", "exact": "-.*"}
     for (case, scheme), c in results.items():
         if case not in ("stick-dominated", "chi-small"):
             continue
         color = "C0" if case == "stick-dominated" else "C3"
-        ax.loglog(c.steps_per_period, c.errors, styles[scheme], color=color, ms=4,
+        ax.loglog(c.steps_per_period, c.errors, styles.get(scheme, "-x"), color=color, ms=4,
                   label=f"{case}, {scheme}")
     n = np.array(next(iter(results.values())).steps_per_period, dtype=float)
     ax.loglog(n, 3e-4 * (n / n[0]) ** -2, "k-", lw=0.8, alpha=0.5, label="slope 2")
