@@ -6,6 +6,7 @@
 
 #include "fmi2Functions.h"
 #include "model_vars.h"
+#include "../tally.h"
 
 #include <pthread.h>
 #include <stdarg.h>
@@ -13,27 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct {
-    long checks, failures;
-} tally;
-
-static inline int expect_(tally *T, int ok, const char *file, int line, const char *what)
-{
-    T->checks++;
-    if (!ok) {
-        T->failures++;
-        if (T->failures <= 50) fprintf(stderr, "%s:%d: FAILED: %s\n", file, line, what);
-    }
-    return ok;
-}
-#define EXPECT(cond) expect_(T, (cond) ? 1 : 0, __FILE__, __LINE__, #cond)
-
-static inline int tally_done(const tally *T, const char *name)
-{
-    printf("%s: %ld checks, %ld failed\n", name, T->checks, T->failures);
-    printf("%ld passed, %ld failed\n", T->checks - T->failures, T->failures);
-    return T->failures ? 1 : 0;
-}
 
 /* ---- memory callbacks that count ---- */
 

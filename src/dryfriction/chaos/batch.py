@@ -7,12 +7,8 @@ as the sweep engine does, so an external scheduler works too.
 
 from __future__ import annotations
 
-import atexit
-import hashlib
 import logging
-import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -22,44 +18,19 @@ from typing import Any
 import numpy as np
 
 from ..fmu import OscillatorFMU
+from ..sweep.runner import PerProcess
 from .attractors import period_of
 from .lyapunov import benettin
 from .maps import FMUMap, NDParams
 
 __all__ = ["fmu_for", "lyapunov_rows", "orbit_tails", "transient_rows", "map_chunks", "concat", "ChunkStats"]
 
-_FMUS: dict[str, OscillatorFMU] = {}
-
-
-def _materialise(fmu: str | bytes) -> str:
-    if isinstance(fmu, str):
-        return fmu
-    digest = hashlib.sha256(fmu).hexdigest()[:16]
-    path = Path(tempfile.gettempdir()) / f"dfo-chaos-{digest}.fmu"
-    if not path.is_file():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_bytes(fmu)
-        os.replace(tmp, path)
-    return str(path)
-
-
-@atexit.register
-def _close_all() -> None:
-    while _FMUS:
-        _, f = _FMUS.popitem()
-        try:
-            f.close()
-        except Exception:  # noqa: BLE001 - best effort at exit
-            pass
+_FMUS: PerProcess[OscillatorFMU] = PerProcess(OscillatorFMU)
 
 
 def fmu_for(fmu: str | bytes) -> OscillatorFMU:
     """This process's FMU instance for ``fmu`` (a path or the FMU's bytes), loaded on first use."""
-    key = fmu if isinstance(fmu, str) else hashlib.sha256(fmu).hexdigest()
-    f = _FMUS.get(key)
-    if f is None:
-        f = _FMUS[key] = OscillatorFMU(_materialise(fmu))
-    return f
+    return _FMUS.get(fmu)
 
 
 def _map(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, Any], chi: float) -> FMUMap:

@@ -18,9 +18,9 @@ import hashlib
 import os
 import tempfile
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
@@ -153,9 +153,6 @@ class BatchRunner:
 
 # ---- one runner per process (Dask workers) ---------------------------------------------------
 
-_RUNNERS: dict[str, BatchRunner] = {}
-
-
 def _materialise(fmu: str | bytes) -> str:
     """A local path of the FMU: the path itself, or the bytes written once to a temp file named
     by their hash (for workers on other machines)."""
@@ -168,24 +165,41 @@ def _materialise(fmu: str | bytes) -> str:
     return str(path)
 
 
-@atexit.register
-def _close_runners() -> None:
-    """Free the instances and remove their unzipped FMUs when the process ends."""
-    while _RUNNERS:
-        _, r = _RUNNERS.popitem()
-        try:
-            r.close()
-        except Exception:  # noqa: BLE001 - best effort at exit
-            pass
+T = TypeVar("T")
+
+
+class PerProcess(Generic[T]):
+    """One object per FMU in this process (a Dask worker), made on first use from the FMU's local
+    path (``fmu`` given as a path or as the FMU's bytes), closed when the process ends."""
+
+    def __init__(self, factory: Callable[[str], T]) -> None:
+        self._factory = factory
+        self._items: dict[str, T] = {}
+        atexit.register(self.close_all)
+
+    def get(self, fmu: str | bytes) -> T:
+        key = fmu if isinstance(fmu, str) else hashlib.sha256(fmu).hexdigest()
+        item = self._items.get(key)
+        if item is None:
+            item = self._items[key] = self._factory(_materialise(fmu))
+        return item
+
+    def close_all(self) -> None:
+        """Free the instances and remove their unzipped FMUs (best effort: at exit)."""
+        while self._items:
+            _, item = self._items.popitem()
+            try:
+                item.close()  # type: ignore[attr-defined]
+            except Exception:  # noqa: BLE001 - best effort at exit
+                pass
+
+
+_RUNNERS: PerProcess[BatchRunner] = PerProcess(BatchRunner)
 
 
 def runner_for(fmu: str | bytes) -> BatchRunner:
     """The process-wide runner of this FMU (loaded and instantiated on first use)."""
-    key = fmu if isinstance(fmu, str) else hashlib.sha256(fmu).hexdigest()
-    r = _RUNNERS.get(key)
-    if r is None:
-        r = _RUNNERS[key] = BatchRunner(_materialise(fmu))
-    return r
+    return _RUNNERS.get(fmu)
 
 
 def run_batch(fmu: str | bytes, settings: Mapping[str, Any], params: np.ndarray) -> np.ndarray:
