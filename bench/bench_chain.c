@@ -7,7 +7,8 @@
  * (P0 = 1, omega = 0.5, phase 0.1 per block), mu_s = 0.5, N = 1.6 (--N), chi = 0.7, scheme located,
  * alpha = -0.1, h = T / S (S = 1000). Timed: chain_advance over P periods (after one period of
  * settling, outside the clock) in one call, as dfo_advance for the oscillator; the minimum over
- * the repetitions. Reported per n: ns per
+ * the repetitions, every model timed once per repetition in turn (so that a change of the
+ * machine's load reaches all of them alike). Reported per n: ns per
  * block-step, ns per step, the share of steps whose warm basis was infeasible (a pivot or a located
  * switch), switches per block and period, and the share of time stuck. For n = 1 the oscillator's
  * dfo_advance on the same block (fastPaths on and off). CSV on stdout, or to --csv FILE. */
@@ -36,9 +37,23 @@ typedef struct {
     double ns_block_step, ns_step, pivot_share, switches_per_block_period, stuck_share;
 } result;
 
-static result bench_chain(size_t n, int reps, double periods, double spp, double normal)
+/* One chain of the run: its model and state, and its best repetition so far. */
+typedef struct {
+    size_t n;
+    double *arr;
+    chain_model *M;
+    chain_state s;
+    double best;
+    result r;
+} chain_case;
+
+static void chain_case_make(chain_case *cc, size_t n, double spp, double normal)
 {
+    memset(cc, 0, sizeof *cc);
+    cc->n = n;
+    cc->best = INFINITY;
     double *arr = (double *)calloc(10 * n, sizeof(double));
+    if (!arr) { fprintf(stderr, "bench_chain: out of memory for n = %zu\n", n); exit(1); }
     double *m = arr, *k = arr + n, *c = arr + 2 * n, *P0 = arr + 3 * n, *phi = arr + 4 * n, *N = arr + 5 * n,
            *mu_s = arr + 6 * n, *chi = arr + 7 * n, *x0 = arr + 8 * n, *v0 = arr + 9 * n;
     for (size_t i = 0; i < n; i++) {
@@ -48,74 +63,90 @@ static result bench_chain(size_t n, int reps, double periods, double spp, double
     const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
     const chain_params p = {n, m, k, c, P0, phi, N, mu_s, chi, x0, v0, (n == 1) ? 0.0 : 1.0, 0.0, OMEGA, h, -0.1, 3, 0};
     const chain_alloc al = {std_alloc, std_free, NULL};
-    chain_model *M = chain_create(&p, &al, NULL);
-    chain_state s;
-    chain_state_init(M, &s);
-    const chain_inputs in = {NULL, NULL};
-    result r;
-    memset(&r, 0, sizeof r);
-    double best = INFINITY;
-    for (int rep = 0; rep < reps; rep++) {
-        chain_start(M, &in, 0.0, &s);
-        chain_advance(M, &in, &s, T, 0, NULL, NULL);
-        const long long steps0 = s.steps, piv0 = s.pivot_steps, sw0 = s.switches;
-        const long long nsteps = (long long)(periods * spp + 0.5);
-        const double t0 = now();
-        if (chain_advance(M, &in, &s, T + (double)nsteps * h, 0, NULL, NULL) != CHAIN_OK) {
-            fprintf(stderr, "bench_chain: n = %zu failed at t = %g\n", n, s.t);
-            exit(1);
-        }
-        const double el = now() - t0;
-        const double steps = (double)(s.steps - steps0);
-        if (el < best) {
-            best = el;
-            r.ns_step = 1e9 * el / steps;
-            r.ns_block_step = r.ns_step / (double)n;
-            r.pivot_share = (double)(s.pivot_steps - piv0) / steps;
-            r.switches_per_block_period = (double)(s.switches - sw0) / (double)n / periods;
-        }
-    }
-    /* the share of time stuck, sampled every 10th grid point of one more run (not timed) */
-    long long stuck = 0, samples = 0;
-    chain_start(M, &in, 0.0, &s);
-    chain_advance(M, &in, &s, T, 0, NULL, NULL);
-    const long long nsteps = (long long)(periods * spp + 0.5);
-    for (long long j = 10; j <= nsteps; j += 10) {
-        chain_advance(M, &in, &s, T + (double)j * h, 0, NULL, NULL);
-        for (size_t i = 0; i < n; i++) stuck += (s.mode[i] == 0);
-        samples += (long long)n;
-    }
-    r.stuck_share = (double)stuck / (double)samples;
-    chain_state_free(M, &s);
-    chain_destroy(M);
-    free(arr);
-    return r;
+    cc->arr = arr;
+    cc->M = chain_create(&p, &al, NULL);
+    if (!cc->M || !chain_state_init(cc->M, &cc->s)) { fprintf(stderr, "bench_chain: cannot make n = %zu\n", n); exit(1); }
 }
 
-static double bench_oscillator(int reps, double periods, double spp, int fast, double normal)
+/* One timed repetition: start, one period of settling (not timed), then P periods in one call. */
+static void chain_case_rep(chain_case *cc, double periods, double spp)
+{
+    const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
+    const chain_inputs in = {NULL, NULL};
+    chain_state *s = &cc->s;
+    chain_start(cc->M, &in, 0.0, s);
+    chain_advance(cc->M, &in, s, T, 0, NULL, NULL);
+    const long long steps0 = s->steps, piv0 = s->pivot_steps, sw0 = s->switches;
+    const long long nsteps = (long long)(periods * spp + 0.5);
+    const double t0 = now();
+    if (chain_advance(cc->M, &in, s, T + (double)nsteps * h, 0, NULL, NULL) != CHAIN_OK) {
+        fprintf(stderr, "bench_chain: n = %zu failed at t = %g\n", cc->n, s->t);
+        exit(1);
+    }
+    const double el = now() - t0;
+    const double steps = (double)(s->steps - steps0);
+    if (el < cc->best) {
+        cc->best = el;
+        cc->r.ns_step = 1e9 * el / steps;
+        cc->r.ns_block_step = cc->r.ns_step / (double)cc->n;
+        cc->r.pivot_share = (double)(s->pivot_steps - piv0) / steps;
+        cc->r.switches_per_block_period = (double)(s->switches - sw0) / (double)cc->n / periods;
+    }
+}
+
+/* The share of time stuck, sampled every 10th grid point of one more run (not timed); frees. */
+static void chain_case_finish(chain_case *cc, double periods, double spp)
+{
+    const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
+    const chain_inputs in = {NULL, NULL};
+    chain_state *s = &cc->s;
+    long long stuck = 0, samples = 0;
+    chain_start(cc->M, &in, 0.0, s);
+    chain_advance(cc->M, &in, s, T, 0, NULL, NULL);
+    const long long nsteps = (long long)(periods * spp + 0.5);
+    for (long long j = 10; j <= nsteps; j += 10) {
+        chain_advance(cc->M, &in, s, T + (double)j * h, 0, NULL, NULL);
+        for (size_t i = 0; i < cc->n; i++) stuck += (s->mode[i] == 0);
+        samples += (long long)cc->n;
+    }
+    cc->r.stuck_share = (samples > 0) ? (double)stuck / (double)samples : 0.0;
+    chain_state_free(cc->M, s);
+    chain_destroy(cc->M);
+    free(cc->arr);
+}
+
+/* The oscillator's stepper on the same block: one timed repetition, as chain_case_rep. */
+typedef struct {
+    dfo_model M;
+    double best, per;
+} osc_case;
+
+static void osc_case_make(osc_case *oc, double spp, int fast, double normal)
 {
     dfo_params p;
     memset(&p, 0, sizeof p);
     p.m = 1.0; p.k = 1.0; p.P0 = 1.0; p.omega = OMEGA; p.N = normal; p.mu_s = 0.5; p.chi = 0.7;
     const double T = 2.0 * DFO_PI / OMEGA;
     p.h = T / spp; p.alpha = -0.1; p.t_obs_stop = 1e300; p.scheme = 3; p.frictionUpdates = 1; p.fastPaths = fast;
-    dfo_model M;
-    dfo_model_init(&M, &p);
+    dfo_model_init(&oc->M, &p);
+    oc->best = INFINITY;
+    oc->per = 0.0;
+}
+
+static void osc_case_rep(osc_case *oc, double periods, double spp)
+{
+    const double T = 2.0 * DFO_PI / OMEGA;
     dfo_inputs u;
     memset(&u, 0, sizeof u);
-    double best = INFINITY, per = 0.0;
-    for (int rep = 0; rep < reps; rep++) {
-        dfo_state s;
-        dfo_start(&M, &u, 0.0, &s);
-        dfo_advance(&M, &u, &s, T, NULL, NULL);
-        const long long steps0 = s.steps;
-        const long long nsteps = (long long)(periods * spp + 0.5);
-        const double t0 = now();
-        dfo_advance(&M, &u, &s, T + (double)nsteps * p.h, NULL, NULL);
-        const double el = now() - t0;
-        if (el < best) { best = el; per = 1e9 * el / (double)(s.steps - steps0); }
-    }
-    return per;
+    dfo_state s;
+    dfo_start(&oc->M, &u, 0.0, &s);
+    dfo_advance(&oc->M, &u, &s, T, NULL, NULL);
+    const long long steps0 = s.steps;
+    const long long nsteps = (long long)(periods * spp + 0.5);
+    const double t0 = now();
+    dfo_advance(&oc->M, &u, &s, T + (double)nsteps * oc->M.p.h, NULL, NULL);
+    const double el = now() - t0;
+    if (el < oc->best) { oc->best = el; oc->per = 1e9 * el / (double)(s.steps - steps0); }
 }
 
 int main(int argc, char **argv)
@@ -146,16 +177,25 @@ int main(int argc, char **argv)
     }
     FILE *out = csv ? fopen(csv, "w") : stdout;
     if (!out) { fprintf(stderr, "bench_chain: cannot write %s\n", csv); return 2; }
+    /* every model is timed once per repetition, in turn, so that a change of the machine's load
+     * reaches all of them alike; each keeps its best repetition */
+    osc_case osc[2];
+    osc_case_make(&osc[0], spp, 1, normal);
+    osc_case_make(&osc[1], spp, 0, normal);
+    chain_case cases[16];
+    for (int j = 0; j < nn; j++) chain_case_make(&cases[j], ns[j], spp, normal);
+    for (int rep = 0; rep < reps; rep++) {
+        for (int k = 0; k < 2; k++) osc_case_rep(&osc[k], periods, spp);
+        for (int j = 0; j < nn; j++) chain_case_rep(&cases[j], periods, spp);
+    }
     fprintf(out, "model,n,ns_per_block_step,ns_per_step,pivot_step_share,switches_per_block_period,stuck_share\n");
-    const double osc_fast = bench_oscillator(reps, periods, spp, 1, normal);
-    const double osc_gen = bench_oscillator(reps, periods, spp, 0, normal);
-    fprintf(out, "oscillator(fastPaths),1,%.2f,%.2f,,,\n", osc_fast, osc_fast);
-    fprintf(out, "oscillator(general),1,%.2f,%.2f,,,\n", osc_gen, osc_gen);
+    fprintf(out, "oscillator(fastPaths),1,%.2f,%.2f,,,\n", osc[0].per, osc[0].per);
+    fprintf(out, "oscillator(general),1,%.2f,%.2f,,,\n", osc[1].per, osc[1].per);
     for (int j = 0; j < nn; j++) {
-        const result r = bench_chain(ns[j], reps, periods, spp, normal);
+        chain_case_finish(&cases[j], periods, spp);
+        const result r = cases[j].r;
         fprintf(out, "chain,%zu,%.2f,%.1f,%.4f,%.3f,%.3f\n", ns[j], r.ns_block_step, r.ns_step, r.pivot_share,
                 r.switches_per_block_period, r.stuck_share);
-        fflush(out);
     }
     if (csv) fclose(out);
     return 0;

@@ -16,16 +16,31 @@
 #define HALVINGS 60             /* search for a sub-step before the first switch */
 #define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
 
+/* The fast path of a grid step is inlined into the stepping loop (as the oscillator's step). */
+#if defined(__GNUC__)
+#define HOT_INLINE inline __attribute__((always_inline))
+#define COLD_CALL __attribute__((noinline))
+#else
+#define HOT_INLINE inline
+#define COLD_CALL
+#endif
+
 struct chain_model {
     chain_alloc al;
     size_t n;
     double k_end, c_end, omega, h, alpha, gamma, beta, g1, rate_max;
     double rot_c, rot_s;        /* cos and sin of omega h: the excitation phase's advance per step */
     int scheme, energy, damped;
+    int stuck_ok;               /* the stuck fast path may apply (stuck_until): located, no energy
+                                 * accounts, a grid step resolving the motion, friction on every block */
     /* per block (length n) */
     double *m, *am, *am1, *Pc, *Ps, *P0, *phi, *N, *mu_k, *mu_b, *x0, *v0;
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 */
     double *dF, *eF;            /* M_hat of a whole grid step */
+    /* its factorisation with the held rows replaced by V_i = 0 (Thomas: cp and 1 / den per row),
+     * for the held pattern of fhold (per row 0: none yet, 1 free, 2 held); see step_fast */
+    double *fcp, *finv;
+    int *fhold;
     /* workspace */
     double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
     double *A0, *xp, *ph, *Vt, *Ft, *cp, *dp, *u, *mukN, *Fb, *S, *l;
@@ -101,11 +116,11 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (36 of them, the last, box, 2n long), one for
+    /* one block of doubles for all per-block arrays (41 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 39 };
+    enum { NARR = 41 };
     double *blk = dalloc(al, (NARR + 1) * n);
-    int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
+    int *iblk = (int *)al->allocate(al->env, 4 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
     if (!blk || !iblk || !M->cand) {
         if (blk) al->release(al->env, blk);
@@ -119,11 +134,12 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
                           &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->fcp, &M->finv, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
     M->smode = iblk + 2 * n;
+    M->fhold = iblk + 3 * n;
     M->clu = M->cand + n;
     M->k_end = p->k_end;
     M->c_end = p->c_end;
@@ -251,12 +267,15 @@ static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
 
 static void loads_init(chain_model *M, const chain_inputs *in)
 {
+    int all_friction = 1;
     for (size_t i = 0; i < M->n; i++) {
         const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
         M->u[i] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
         M->mukN[i] = M->mu_k[i] * N;
         M->Fb[i] = M->mu_b[i] * N;
+        all_friction &= (M->Fb[i] > 0.0);
     }
+    M->stuck_ok = M->scheme == DFO_SCHEME_LOCATED && !M->energy && M->rate_max * M->h <= 1.0 && all_friction;
 }
 
 /* rotations keep c^2 + s^2 = 1 only to rounding: a cosine or sine never exceeds 1 (as the
@@ -896,89 +915,205 @@ static void save_blocks(chain_model *M, chain_state *s, size_t a, size_t b, int 
 static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
                      int consistent);
 
-/* The located step of a grid step in which no block switches, in three fused sweeps: the same
- * arithmetic, in the same order, as trial + solve_modes + finish (so the same bits), without their
- * separate passes. Returns 0, with the state untouched, when a block must switch, A must be
- * re-based, or the energy accounts are kept: then the general path takes the step. */
-static int step_fast(chain_model *M, chain_state *s, double t_end, double cw1, double sw1)
+/* What a grid step of the fast path reads, constant over one chain_advance call: taken out of the
+ * model once per call, so that the stepping loop keeps it in registers or on its own stack. */
+typedef struct {
+    size_t n;
+    double h, alpha, rate_max, c1, pV, pA, cV, g1;
+    const double *d, *e, *Kd, *Ko, *Fb, *mukN, *u, *Pc, *Ps, *am, *am1;
+    double *xp, *ph, *cp, *inv, *dp, *Vt, *Ft, *l;
+    int *st, *fh;
+} fast_ctx;
+
+static void fast_ctx_init(const chain_model *M, fast_ctx *F)
 {
-    const size_t n = M->n;
-    const double hh = M->h;
-    if (M->energy || M->any_frozen) return 0;
-    const double a = M->alpha;
-    const double c1 = M->kinF.c1, pV = M->kinF.pred_V, pA = M->kinF.pred_A, cV = M->kinF.corr_V, g1 = M->g1;
-    const double *restrict X = s->X, *restrict V = s->V, *restrict A = s->A, *restrict hA = s->hA;
-    const double *restrict d = M->dF, *restrict e = M->eF, *restrict Kd = M->Kd, *restrict Ko = M->Ko;
-    const double *restrict Fb = M->Fb, *restrict mukN = M->mukN;
-    double *restrict xp = M->xp, *restrict ph = M->ph, *restrict cp = M->cp, *restrict dp = M->dp;
-    double *restrict Vt = M->Vt, *restrict Ft = M->Ft, *restrict l = M->l;
-    int *restrict st = M->st;
-    const int *restrict mode = s->mode;
-    /* forward: xp one block ahead, p_hat, the modes' rows, elimination */
-    double cprev = 0.0, dprev = 0.0;
+    F->n = M->n;
+    F->h = M->h;
+    F->alpha = M->alpha;
+    F->rate_max = M->rate_max;
+    F->c1 = M->kinF.c1;
+    F->pV = M->kinF.pred_V;
+    F->pA = M->kinF.pred_A;
+    F->cV = M->kinF.corr_V;
+    F->g1 = M->g1;
+    F->d = M->dF; F->e = M->eF; F->Kd = M->Kd; F->Ko = M->Ko; F->Fb = M->Fb; F->mukN = M->mukN; F->u = M->u;
+    F->Pc = M->Pc; F->Ps = M->Ps; F->am = M->am; F->am1 = M->am1;
+    F->xp = M->xp; F->ph = M->ph; F->cp = M->fcp; F->inv = M->finv; F->dp = M->dp; F->Vt = M->Vt; F->Ft = M->Ft;
+    F->l = M->l; F->st = M->st; F->fh = M->fhold;
+}
+
+/* The located step of a whole grid step in the current modes, in fused sweeps: the same arithmetic,
+ * in the same order, as trial + solve_modes + finish (so the same bits), without their separate
+ * passes, and with the factorisation of M_hat for the step's held rows kept from the last step
+ * (fcp, finv, fhold: a row is refactored, by solve_rows' operations, when its own hold changed or
+ * when it is free and the row above was refactored; a held row starts the elimination afresh).
+ * Returns 1 when the warm basis solves the LCP: the step is taken (not the time). Returns 0, with
+ * nothing done, when A must be re-based. Returns -1 when a block must switch: the state is
+ * untouched and the model holds the trial and its solve in the current modes as trial +
+ * solve_modes leave them (xp, ph, st, l, Vt, Ft, kin, cd, ce, A0p, cw1, sw1), for step_located to
+ * go on from. Only for the located scheme on a resolving grid, without energy accounts and with
+ * no block frozen. */
+static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *s, double cw1, double sw1)
+{
+    const size_t n = C->n;
+    const double hh = C->h, a = C->alpha;
+    const double c1 = C->c1, pV = C->pV, pA = C->pA, cV = C->cV, g1 = C->g1;
+    double *restrict X = s->X, *restrict V = s->V, *restrict A = s->A, *restrict hA = s->hA, *restrict F = s->F;
+    const double *restrict d = C->d, *restrict e = C->e, *restrict Kd = C->Kd, *restrict Ko = C->Ko;
+    const double *restrict Fb = C->Fb, *restrict mukN = C->mukN, *restrict u = C->u;
+    const double *restrict Pc = C->Pc, *restrict Ps = C->Ps, *restrict am = C->am, *restrict am1 = C->am1;
+    double *restrict xp = C->xp, *restrict ph = C->ph, *restrict cp = C->cp, *restrict inv = C->inv;
+    double *restrict dp = C->dp, *restrict Vt = C->Vt, *restrict Ft = C->Ft, *restrict l = C->l;
+    int *restrict st = C->st, *restrict fh = C->fh, *restrict mode = s->mode;
+    /* forward: xp one block ahead, p_hat, the modes' rows, elimination with the kept factors */
+    double cprev = 0.0, dprev = 0.0, xl = 0.0, xc = X[0] + pV * V[0] + pA * A[0];
+    int refac = 0;
     for (size_t i = 0; i < n; i++) {
-        if (a != 0.0 && hh != hA[i] && fabs(hh - hA[i]) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
-            M->rate_max * fmax(hh, hA[i]) <= 1.0)
-            return 0;
-        if (i == 0) xp[0] = X[0] + pV * V[0] + pA * A[0];
-        if (i + 1 < n) xp[i + 1] = X[i + 1] + pV * V[i + 1] + pA * A[i + 1];
-        double kx = Kd[i] * xp[i];
-        if (i > 0) kx += Ko[i - 1] * xp[i - 1];
-        if (i + 1 < n) kx += Ko[i] * xp[i + 1];
-        ph[i] = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A[i] +
-                M->am1[i] * (V[i] * c1 + g1 * A[i]) - kx;
+        if (hh != hA[i]) {  /* (rare: after a switch) trial's test whether A is re-based */
+            if (a != 0.0 && fabs(hh - hA[i]) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
+                C->rate_max * (hA[i] > hh ? hA[i] : hh) <= 1.0) {  /* fmax(hh, hA), hh > 0 */
+                if (refac) fh[i] = 0;  /* row i's kept factor no longer follows the row above */
+                return 0;
+            }
+        }
+        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A[i + 1] : 0.0;
+        xp[i] = xc;
+        double kx = Kd[i] * xc;
+        if (i > 0) kx += Ko[i - 1] * xl;
+        if (i + 1 < n) kx += Ko[i] * xr;
+        const double p = Pc[i] * cw1 - Ps[i] * sw1 + u[i] - am[i] * A[i] + am1[i] * (V[i] * c1 + g1 * A[i]) - kx;
+        ph[i] = p;
+        xl = xc;
+        xc = xr;
         const int hold = (mode[i] == 0 && Fb[i] > 0.0);
-        st[i] = hold ? 0 : mode[i];
-        l[i] = (st[i] == 0) ? Fb[i] : mukN[i];
-        if (st[i] == 0 && l[i] > 0.0) {
-            cp[i] = 0.0;
-            dp[i] = 0.0;
+        if (fh[i] != 1 + hold || (refac && !hold)) {
+            fh[i] = 1 + hold;
+            if (hold) {
+                cp[i] = 0.0;
+            } else {
+                const double den = (i > 0) ? d[i] - e[i - 1] * cprev : d[i] - 0.0 * cprev;
+                inv[i] = 1.0 / den;
+                cp[i] = e[i] * inv[i];
+            }
+            refac = 1;
         } else {
-            const double lo_e = (i > 0) ? e[i - 1] : 0.0;
-            const double rhs = ph[i] - ((l[i] > 0.0) ? st[i] * l[i] : 0.0);
-            const double den = d[i] - lo_e * cprev;
-            const double inv = 1.0 / den;
-            cp[i] = e[i] * inv;
-            dp[i] = (rhs - lo_e * dprev) * inv;
+            refac = 0;
         }
+        /* solve_rows' (rhs - lo_e dprev) / den, rhs = p + the sliding force; on the first row
+         * lo_e dprev is +0, and x - +0 is x */
+        double dpi = 0.0;
+        if (!hold) {
+            const double li = (mode[i] == 0) ? Fb[i] : mukN[i];
+            double r = p - ((li > 0.0) ? mode[i] * li : 0.0);
+            if (i > 0) r -= e[i - 1] * dprev;
+            dpi = r * inv[i];
+        }
+        dp[i] = dpi;
         cprev = cp[i];
-        dprev = dp[i];
+        dprev = dpi;
     }
-    /* back substitution, and the test of the sliding blocks */
-    double vn = 0.0;
+    /* back substitution, with the test of every block: a sliding one keeps its direction (its
+     * switch_margin is positive), a held one's force (F = (M_hat V)_i - p_i, taken when the row
+     * below is known) stays within its limit. A held row's V is +0 (dp = cp = 0), and the last
+     * row's V is its dp (cp there is +0, and x - +0 is x). */
+    int ok = 1;
+    const double v_last = dprev;
+    double vn = v_last, v1 = 0.0, v2 = 0.0;  /* V of rows j, j + 1, j + 2 */
     for (size_t j = n; j-- > 0;) {
-        vn = dp[j] - cp[j] * vn;
+        if (j + 1 < n) vn = (mode[j] == 0 && Fb[j] > 0.0) ? 0.0 : dp[j] - cp[j] * vn;
         Vt[j] = vn;
-    }
-    /* held rows' forces, and the test of every block */
-    for (size_t i = 0; i < n; i++) {
-        if (st[i] == 0 && l[i] > 0.0) {
-            Vt[i] = 0.0;
-            double f = -ph[i];
-            if (i > 0) f += e[i - 1] * Vt[i - 1];
-            if (i + 1 < n) f += e[i] * Vt[i + 1];
-            Ft[i] = f;
-            if (!(Fb[i] - fabs(f) > 0.0)) return 0;
-        } else {
-            Ft[i] = (l[i] > 0.0) ? 0.0 - st[i] * l[i] : 0.0;
-            if (Fb[i] > 0.0 && !(mode[i] * Vt[i] * d[i] > 0.0)) return 0;
+        const size_t i = j + 1;  /* the row below in the sweep, complete now */
+        if (i < n) {
+            if (mode[i] == 0 && Fb[i] > 0.0) {
+                double f = -ph[i] + e[i - 1] * vn;
+                if (i + 1 < n) f += e[i] * v2;
+                Ft[i] = f;
+                ok &= (Fb[i] - fabs(f) > 0.0);
+            } else {
+                Ft[i] = (mode[i] == 0) ? 0.0 : 0.0 - mode[i] * mukN[i];
+                ok &= !(Fb[i] > 0.0) | (mode[i] * v1 > 0.0);
+            }
         }
+        v2 = v1;
+        v1 = vn;
     }
-    /* accept */
-    double *restrict Xw = s->X, *restrict Vw = s->V, *restrict Aw = s->A, *restrict Fw = s->F, *restrict hAw = s->hA;
-    for (size_t i = 0; i < n; i++) {
-        const double V1 = Vt[i];
-        Xw[i] = xp[i] + cV * V1;
-        Aw[i] = (V1 - Vw[i]) * c1 - g1 * Aw[i];
-        Vw[i] = V1;
-        Fw[i] = Ft[i];
-        hAw[i] = hh;
-        if (!(Fb[i] > 0.0)) s->mode[i] = sgn(V1);
+    if (mode[0] == 0 && Fb[0] > 0.0) {  /* the first row */
+        double f = -ph[0];
+        if (n > 1) f += e[0] * v2;
+        Ft[0] = f;
+        ok &= (Fb[0] - fabs(f) > 0.0);
+    } else {
+        Ft[0] = (mode[0] == 0) ? 0.0 : 0.0 - mode[0] * mukN[0];
+        ok &= !(Fb[0] > 0.0) | (mode[0] * vn > 0.0);
     }
     s->solves++;
-    s->t = t_end;
+    if (!ok) {
+        /* as trial + solve_modes leave the model for a grid step of the whole chain */
+        for (size_t i = 0; i < n; i++) {
+            st[i] = (mode[i] == 0 && Fb[i] > 0.0) ? 0 : mode[i];
+            l[i] = (st[i] == 0) ? Fb[i] : mukN[i];
+        }
+        M->kin = M->kinF;
+        M->cd = M->dF;
+        M->ce = M->eF;
+        M->cw1 = cw1;
+        M->sw1 = sw1;
+        M->A0p = s->A;
+        return -1;
+    }
+    /* accept (the last row's V1 from its register: a held row's is +0 there too) */
+    for (size_t i = 0; i < n; i++) {
+        const double V1 = (i + 1 < n) ? Vt[i] : v_last;
+        X[i] = xp[i] + cV * V1;
+        A[i] = (V1 - V[i]) * c1 - g1 * A[i];
+        V[i] = V1;
+        F[i] = Ft[i];
+        hA[i] = hh;
+        if (!(Fb[i] > 0.0)) mode[i] = sgn(V1);
+    }
     M->jerk_valid = 0;
     return 1;
+}
+
+/* A run of whole grid steps through step_fast, after one that it took: from the grid point s->t
+ * (grid index n_grid, the excitation cache there), step after step, as chain_advance's loop takes
+ * them, while the next grid point is at or before t_target, is not an anchor of the excitation
+ * cache (chain_advance evaluates those) and is later than s->t, and while the stuck fast path
+ * cannot apply (block 0 not stuck, or stuck_ok off). Returns 1 when it stopped before a step,
+ * which it leaves to chain_advance; else the step it set up (n_grid, the cache, s->steps, *t_end
+ * and the excitation phase at it, a whole grid step from s->t) that step_fast did not take, with
+ * step_fast's result (0, -1) for step_located. No calls: the loop keeps its data in registers. */
+static HOT_INLINE int fast_run(chain_model *M, const fast_ctx *C, chain_state *s, double t_target, double *g_prev,
+                               double *t_end, double *cw1, double *sw1)
+{
+    const double h = C->h, t0 = s->t0, rc = M->rot_c, rs = M->rot_s;
+    const int stuck_ok = M->stuck_ok;
+    if (M->any_frozen) return 1;
+    for (;;) {
+        const long long g = s->n_grid + 1;
+        if ((stuck_ok && s->mode[0] == 0) || g % EXC_ANCHOR == 0 || s->exc_n != g - 1) return 1;
+        const double grid = t0 + (double)g * h;
+        if (!(grid <= t_target) || !(grid > s->t)) return 1;
+        /* chain_advance's step: grid_phase with its cache at g - 1 (one rotation) */
+        s->n_grid = g;
+        *g_prev = grid;
+        const double c = s->exc_c, sn = s->exc_s;
+        const double cn = c * rc - sn * rs, sw = sn * rc + c * rs;
+        s->exc_n = g;
+        s->exc_c = cn;
+        s->exc_s = sw;
+        const double cw = clamp1(cn), swc = clamp1(sw);
+        s->steps++;
+        const int fast = step_fast(M, C, s, cw, swc);
+        if (fast > 0) {
+            s->t = grid;
+            continue;
+        }
+        *t_end = grid;
+        *cw1 = cw;
+        *sw1 = swc;
+        return fast;
+    }
 }
 
 /* One located step. The whole chain is solved in the current modes; when blocks must switch, a long
@@ -986,9 +1121,10 @@ static int step_fast(chain_model *M, chain_state *s, double t_end, double cw1, d
  * below rounding: M_hat's inverse decays like rho^distance) takes the step in those modes outside
  * clusters of w blocks either side of the switching ones, and each cluster takes it again on its
  * own, switches placed inside, with its outside neighbours as interpolated ghosts. A short chain,
- * stop_at_switch and the energy accounts take the located step on the whole chain. */
-static void step_located(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
-                         int stop_at_switch)
+ * stop_at_switch and the energy accounts take the located step on the whole chain. fast: step_fast's
+ * result for this step (-1: it has solved the step in the current modes), or 0. */
+static COLD_CALL void step_located(chain_model *M, chain_state *s, double t_end, double hh, double cw1, double sw1, int fast,
+                         chain_switch_fn fn, void *ctx, int stop_at_switch)
 {
     const size_t n = M->n;
     /* a stiff step (several periods of the fastest mode) cannot place a switch: restarts with the
@@ -998,21 +1134,20 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
         step_lcp(M, s, t_end, hh, fn, ctx, 1);
         return;
     }
-    double cw1, sw1;
-    phase_of(M, s, t_end, &cw1, &sw1);
-    if (hh == M->h && step_fast(M, s, t_end, cw1, sw1)) return;
     span G0 = whole(M, s);
-    if (M->any_frozen) {
-        for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
-        M->any_frozen = 0;
+    if (fast == 0) {  /* else step_fast has solved the trial in the current modes */
+        if (M->any_frozen) {
+            for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
+            M->any_frozen = 0;
+        }
+        for (size_t i = 0; i < n; i++) {
+            M->st[i] = held(M, s, i) ? 0 : s->mode[i];
+            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+        }
+        trial(M, s, &G0, hh, cw1, sw1);
+        solve_modes(M, &G0);
+        s->solves++;
     }
-    for (size_t i = 0; i < n; i++) {
-        M->st[i] = held(M, s, i) ? 0 : s->mode[i];
-        M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
-    }
-    trial(M, s, &G0, hh, cw1, sw1);
-    solve_modes(M, &G0);
-    s->solves++;
     M->ncand = 0;
     for (size_t i = 0; i < n; i++)
         if (has_friction(M, i) && switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
@@ -1078,8 +1213,8 @@ static void step_located(chain_model *M, chain_state *s, double t_end, double hh
 
 /* ---- the paper and consistent schemes -------------------------------------------------------- */
 
-static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
-                     int consistent)
+static COLD_CALL void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
+                               int consistent)
 {
     const size_t n = M->n;
     double cw1, sw1;
@@ -1197,13 +1332,13 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
  * that end before it (by a margin of 1e-6 h) and before t_end change nothing but the time and are
  * taken at once; the step that ends on t_end is always stepped. Returns the last grid index they
  * reach (s->n_grid when there is none). Same bits as stepping them (asserted by test_chain). */
-static long long stuck_until(chain_model *M, const chain_state *s, double t_end)
+static COLD_CALL long long stuck_until(chain_model *M, const chain_state *s, double t_end)
 {
     const size_t n = M->n;
     const double h = M->h;
-    if (M->scheme != DFO_SCHEME_LOCATED || M->energy || M->any_frozen || M->rate_max * h > 1.0) return s->n_grid;
+    if (!M->stuck_ok || M->any_frozen) return s->n_grid;
     for (size_t i = 0; i < n; i++)
-        if (s->mode[i] != 0 || !(M->Fb[i] > 0.0)) return s->n_grid;
+        if (s->mode[i] != 0) return s->n_grid;
     double tb = t_end;
     for (size_t i = 0; i < n && tb > s->t; i++) {
         int dir = 0;
@@ -1231,37 +1366,58 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
         const double tg = s->t0 + (double)g * h;
         if (g >= s->n_grid && tg >= s->t && fabs(t_target - tg) <= SNAP_REL_H * h) t_target = tg;
     }
+    /* whole grid steps of the located scheme try the fast path first (step_fast) */
+    const int fast_grid = M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy;
+    fast_ctx F;
+    fast_ctx_init(M, &F);
+    double g_prev = s->t0 + (double)s->n_grid * h;  /* the grid point n_grid */
     while (s->t < t_target) {
-        if (s->t == s->t0 + (double)s->n_grid * h) {
+        /* (stuck_until's first tests, inline) */
+        if (M->stuck_ok && s->mode[0] == 0 && s->t == g_prev) {
             const long long m = stuck_until(M, s, t_target);
             if (m > s->n_grid) {
                 s->steps += m - s->n_grid;
                 s->n_grid = m;
                 M->jerk_valid = 0;
-                s->t = s->t0 + (double)m * h;
+                g_prev = s->t = s->t0 + (double)m * h;
                 continue;
             }
         }
-        const double g_prev = s->t0 + (double)s->n_grid * h;
-        const double grid = s->t0 + (double)(s->n_grid + 1) * h;
+        double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);
-        double t_end = t_target;
+        double t_end = t_target, cw1, sw1;
         if (grid <= t_target) {
             t_end = grid;
             s->n_grid++;
-            double cw, sw;
-            grid_phase(M, s, s->n_grid, &cw, &sw);
+            g_prev = grid;
+            grid_phase(M, s, s->n_grid, &cw1, &sw1);
+        } else {
+            phase_of(M, s, t_end, &cw1, &sw1);
         }
         if (!(t_end > s->t)) return CHAIN_ERR_RESOLUTION;
-        const double hh = (from_grid && t_end == grid) ? h : t_end - s->t;
+        double hh = h;
+        if (!(from_grid && t_end == grid)) hh = t_end - s->t;
         s->steps++;
-        if (M->scheme == DFO_SCHEME_LOCATED) step_located(M, s, t_end, hh, on_switch, ctx, stop_at_switch);
-        else step_lcp(M, s, t_end, hh, on_switch, ctx, M->scheme == DFO_SCHEME_CONSISTENT);
+        if (M->scheme == DFO_SCHEME_LOCATED) {
+            int fast = 0;
+            if (fast_grid && hh == h && !M->any_frozen) {
+                fast = step_fast(M, &F, s, cw1, sw1);
+                if (fast > 0) {
+                    s->t = t_end;
+                    fast = fast_run(M, &F, s, t_target, &g_prev, &t_end, &cw1, &sw1);
+                    if (fast > 0) continue;
+                    grid = t_end;  /* a whole grid step, set up by fast_run: hh is h */
+                }
+            }
+            step_located(M, s, t_end, hh, cw1, sw1, fast, on_switch, ctx, stop_at_switch);
+        } else {
+            step_lcp(M, s, t_end, hh, on_switch, ctx, M->scheme == DFO_SCHEME_CONSISTENT);
+        }
         if (M->err != CHAIN_OK) return M->err;
         if (stop_at_switch && M->switched) {
             /* the grid index stays that of the last grid point at or before the time reached */
             if (s->t < t_end && t_end == grid) s->n_grid--;
-            return CHAIN_SWITCHED;
+            return CHAIN_SWITCHED;  /* (g_prev is not used again) */
         }
     }
     for (size_t i = 0; i < M->n; i++)
