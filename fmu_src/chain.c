@@ -384,9 +384,8 @@ static int held(const chain_model *M, const chain_state *s, size_t i)
 }
 
 /* Physical accelerations at the state: stuck blocks 0, the others from the equation of motion. */
-static void physical_accel(chain_model *M, const chain_state *s, const span *G, double *a)
+static void accelerations(chain_model *M, const chain_state *s, const span *G, double *a)
 {
-    net_forces(M, s, G, M->S);
     double cw, sw;
     phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = G->a; i < G->b; i++) {
@@ -395,6 +394,13 @@ static void physical_accel(chain_model *M, const chain_state *s, const span *G, 
         /* summed as the oscillator's accel_of */
         a[i] = (P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) + F - Cv(M, s->V, i)) / M->m[i];
     }
+}
+
+/* The same, and the net applied forces into M->S. */
+static void physical_accel(chain_model *M, const chain_state *s, const span *G, double *a)
+{
+    net_forces(M, s, G, M->S);
+    accelerations(M, s, G, a);
 }
 
 static span whole(const chain_model *M, const chain_state *s)
@@ -478,7 +484,7 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
         const double cw = dfo_cos(M->omega * s->t), sw = dfo_sin(M->omega * s->t);
-        physical_accel(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
+        accelerations(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
         for (int k = 0; k < 2; k++)
             if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
         for (size_t i = a0; i < b0; i++) {
@@ -662,8 +668,67 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
 
 /* ---- the located scheme ---------------------------------------------------------------------- */
 
+/* solve_rows on the whole chain with a whole grid step's M_hat (dF, eF), by its factorisation kept
+ * for the held pattern (fcp, finv, fhold; see step_fast): the same operations, so the same bits. */
+static void solve_kept(chain_model *M)
+{
+    const size_t n = M->n;
+    const double *restrict d = M->dF, *restrict e = M->eF, *restrict p = M->ph, *restrict l = M->l;
+    const int *restrict mode = M->st;
+    double *restrict cp = M->fcp, *restrict inv = M->finv, *restrict dp = M->dp, *restrict V = M->Vt;
+    double *restrict F = M->Ft;
+    int *restrict fh = M->fhold;
+    double cprev = 0.0, dprev = 0.0;
+    int refac = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int hold = (mode[i] == 0 && l[i] > 0.0);
+        if (fh[i] != 1 + hold || (refac && !hold)) {
+            fh[i] = 1 + hold;
+            if (hold) {
+                cp[i] = 0.0;
+            } else {
+                const double den = (i > 0) ? d[i] - e[i - 1] * cprev : d[i] - 0.0 * cprev;
+                inv[i] = 1.0 / den;
+                cp[i] = e[i] * inv[i];  /* +0 on the last row (e[n - 1] = +0), as solve_rows' 0.0 */
+            }
+            refac = 1;
+        } else {
+            refac = 0;
+        }
+        double dpi = 0.0;
+        if (!hold) {
+            const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+            const double rhs = p[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            dpi = (rhs - lo_e * dprev) * inv[i];
+        }
+        dp[i] = dpi;
+        cprev = cp[i];
+        dprev = dpi;
+    }
+    double vn = 0.0;
+    for (size_t j = n; j-- > 0;) {
+        vn = dp[j] - cp[j] * vn;
+        V[j] = vn;
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            V[i] = 0.0;
+            double f = -p[i];
+            if (i > 0) f += e[i - 1] * V[i - 1];
+            if (i + 1 < n) f += e[i] * V[i + 1];
+            F[i] = f;
+        } else {
+            F[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+}
+
 static void solve_modes(chain_model *M, const span *G)
 {
+    if (M->cd == M->dF && G->a == 0 && G->b == M->n && !G->has[0] && !G->has[1]) {
+        solve_kept(M);
+        return;
+    }
     const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
     /* l (set with st): Fb for held rows (a flag there), mu_k N for sliding ones, 0 without friction */
     solve_rows(lo, hi, G->has[0], G->gV[0], G->has[1], G->gV[1], M->cd, M->ce, M->ph, M->l, M->st, M->Vt, M->Ft,
@@ -948,17 +1013,20 @@ static void fast_ctx_init(const chain_model *M, fast_ctx *F)
  * (fcp, finv, fhold: a row is refactored, by solve_rows' operations, when its own hold changed or
  * when it is free and the row above was refactored; a held row starts the elimination afresh).
  * Returns 1 when the warm basis solves the LCP: the step is taken (not the time). Returns 0, with
- * nothing done, when A must be re-based. Returns -1 when a block must switch: the state is
+ * nothing done, when A must be re-based (then rebase_whole makes A0 and step_fast goes on with
+ * rebased set: trial's A0p). Returns -1 when a block must switch: the state is
  * untouched and the model holds the trial and its solve in the current modes as trial +
  * solve_modes leave them (xp, ph, st, l, Vt, Ft, kin, cd, ce, A0p, cw1, sw1), for step_located to
  * go on from. Only for the located scheme on a resolving grid, without energy accounts and with
  * no block frozen. */
-static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *s, double cw1, double sw1)
+static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *s, double cw1, double sw1,
+                                const double *A0, int rebased)
 {
     const size_t n = C->n;
-    const double hh = C->h, a = C->alpha;
+    const double hh = C->h, a = rebased ? 0.0 : C->alpha;  /* (a = 0: no test for a re-basing) */
     const double c1 = C->c1, pV = C->pV, pA = C->pA, cV = C->cV, g1 = C->g1;
-    double *restrict X = s->X, *restrict V = s->V, *restrict A = s->A, *restrict hA = s->hA, *restrict F = s->F;
+    /* A0: the state's A, or (rebased) A re-based on h by rebase_whole; A is not restrict, A0 may be it */
+    double *restrict X = s->X, *restrict V = s->V, *A = s->A, *restrict hA = s->hA, *restrict F = s->F;
     const double *restrict d = C->d, *restrict e = C->e, *restrict Kd = C->Kd, *restrict Ko = C->Ko;
     const double *restrict Fb = C->Fb, *restrict mukN = C->mukN, *restrict u = C->u;
     const double *restrict Pc = C->Pc, *restrict Ps = C->Ps, *restrict am = C->am, *restrict am1 = C->am1;
@@ -966,7 +1034,7 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
     double *restrict dp = C->dp, *restrict Vt = C->Vt, *restrict Ft = C->Ft, *restrict l = C->l;
     int *restrict st = C->st, *restrict fh = C->fh, *restrict mode = s->mode;
     /* forward: xp one block ahead, p_hat, the modes' rows, elimination with the kept factors */
-    double cprev = 0.0, dprev = 0.0, xl = 0.0, xc = X[0] + pV * V[0] + pA * A[0];
+    double cprev = 0.0, dprev = 0.0, xl = 0.0, xc = X[0] + pV * V[0] + pA * A0[0];
     int refac = 0;
     for (size_t i = 0; i < n; i++) {
         if (hh != hA[i]) {  /* (rare: after a switch) trial's test whether A is re-based */
@@ -976,12 +1044,12 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
                 return 0;
             }
         }
-        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A[i + 1] : 0.0;
+        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
         xp[i] = xc;
         double kx = Kd[i] * xc;
         if (i > 0) kx += Ko[i - 1] * xl;
         if (i + 1 < n) kx += Ko[i] * xr;
-        const double p = Pc[i] * cw1 - Ps[i] * sw1 + u[i] - am[i] * A[i] + am1[i] * (V[i] * c1 + g1 * A[i]) - kx;
+        const double p = Pc[i] * cw1 - Ps[i] * sw1 + u[i] - am[i] * A0[i] + am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
         ph[i] = p;
         xl = xc;
         xc = xr;
@@ -1058,14 +1126,14 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
         M->ce = M->eF;
         M->cw1 = cw1;
         M->sw1 = sw1;
-        M->A0p = s->A;
+        M->A0p = A0;
         return -1;
     }
     /* accept (the last row's V1 from its register: a held row's is +0 there too) */
     for (size_t i = 0; i < n; i++) {
         const double V1 = (i + 1 < n) ? Vt[i] : v_last;
         X[i] = xp[i] + cV * V1;
-        A[i] = (V1 - V[i]) * c1 - g1 * A[i];
+        A[i] = (V1 - V[i]) * c1 - g1 * A0[i];
         V[i] = V1;
         F[i] = Ft[i];
         hA[i] = hh;
@@ -1073,6 +1141,56 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
     }
     M->jerk_valid = 0;
     return 1;
+}
+
+/* trial's re-basing of A for a whole grid step of the chain (method.md section 8), into M->A0 for
+ * every block: the same values, each block's jerk taken on its own when it is re-based (trial
+ * takes every block's, from the physical accelerations of all; a jerk needs its neighbours' only
+ * with dampers). The jerks are not kept (jerk_valid stays 0). */
+static void rebase_whole(chain_model *M, const chain_state *s, double hh)
+{
+    const size_t n = M->n;
+    const double a = M->alpha, tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    int have = 0;
+    M->jerk_valid = 0;
+    double cw = 0.0, sw = 0.0, pcw = 0.0, psw = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double hA = s->hA[i];
+        const int ri = a != 0.0 && hh != hA && fabs(hh - hA) > tol && M->rate_max * fmax(hh, hA) <= 1.0;
+        if (!ri) {
+            M->A0[i] = s->A[i];
+            continue;
+        }
+        if (!have) {
+            /* the excitation's rate at s->t, and its phase as physical_accel reads it */
+            cw = dfo_cos(M->omega * s->t);
+            sw = dfo_sin(M->omega * s->t);
+            phase_of(M, s, s->t, &pcw, &psw);
+            have = 1;
+        }
+        double j = 0.0;
+        if (!held(M, s, i)) {
+            const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
+            double cv = 0.0;
+            if (M->damped) {
+                /* (C a)_i with the physical accelerations of i and its neighbours (accelerations) */
+                double acc[3];
+                for (int k = 0; k < 3; k++) {
+                    acc[k] = 0.0;
+                    if ((k == 0 && i == 0) || (k == 2 && i + 1 >= n)) continue;
+                    const size_t b = i + (size_t)k - 1;
+                    if (held(M, s, b)) continue;
+                    const double F = has_friction(M, b) ? -s->mode[b] * M->mukN[b] : 0.0;
+                    acc[k] = (P_at(M, b, pcw, psw) + M->u[b] - Kx(M, s->X, b) + F - Cv(M, s->V, b)) / M->m[b];
+                }
+                cv = M->Cd[i] * acc[1];
+                if (i > 0) cv += M->Co[i - 1] * acc[0];
+                if (i + 1 < n) cv += M->Co[i] * acc[2];
+            }
+            j = (Pd - Kx(M, s->V, i) - cv) / M->m[i];
+        }
+        M->A0[i] = s->A[i] + a * (hh - hA) * j;
+    }
 }
 
 /* A run of whole grid steps through step_fast, after one that it took: from the grid point s->t
@@ -1104,7 +1222,7 @@ static HOT_INLINE int fast_run(chain_model *M, const fast_ctx *C, chain_state *s
         s->exc_s = sw;
         const double cw = clamp1(cn), swc = clamp1(sw);
         s->steps++;
-        const int fast = step_fast(M, C, s, cw, swc);
+        const int fast = step_fast(M, C, s, cw, swc, s->A, 0);
         if (fast > 0) {
             s->t = grid;
             continue;
@@ -1401,7 +1519,11 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
         if (M->scheme == DFO_SCHEME_LOCATED) {
             int fast = 0;
             if (fast_grid && hh == h && !M->any_frozen) {
-                fast = step_fast(M, &F, s, cw1, sw1);
+                fast = step_fast(M, &F, s, cw1, sw1, s->A, 0);
+                if (fast == 0) {  /* A must be re-based first (after a switch) */
+                    rebase_whole(M, s, h);
+                    fast = step_fast(M, &F, s, cw1, sw1, M->A0, 1);
+                }
                 if (fast > 0) {
                     s->t = t_end;
                     fast = fast_run(M, &F, s, t_target, &g_prev, &t_end, &cw1, &sw1);
