@@ -65,7 +65,10 @@ static void chain_case_make(chain_case *cc, size_t n, double spp, double normal)
     const chain_alloc al = {std_alloc, std_free, NULL};
     cc->arr = arr;
     cc->M = chain_create(&p, &al, NULL);
-    if (!cc->M || !chain_state_init(cc->M, &cc->s)) { fprintf(stderr, "bench_chain: cannot make n = %zu\n", n); exit(1); }
+    if (!cc->M || !chain_state_init(cc->M, &cc->s)) {
+        fprintf(stderr, "bench_chain: cannot make n = %zu\n", n);
+        exit(1);
+    }
 }
 
 /* One timed repetition: start, one period of settling (not timed), then P periods in one call. */

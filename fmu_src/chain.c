@@ -25,6 +25,16 @@
 #define COLD_CALL
 #endif
 
+/* A block's data for the fused grid step (step_fast, solve_kept), together in memory: copies of its
+ * constants (d, e: M_hat of a whole grid step) and of its loads (loads_init), and the factorisation
+ * of that M_hat with the held rows replaced by V_i = 0 (Thomas: cp and 1 / den), kept for the held
+ * pattern of fh (0: none yet, 1 free, 2 held); see step_fast. */
+typedef struct {
+    double Pc, Ps, u, am, am1, Kd, Ko, d, e, Fb, mukN;
+    double cp, inv;
+    int fh, pad;
+} fast_row;
+
 struct chain_model {
     chain_alloc al;
     size_t n;
@@ -37,10 +47,7 @@ struct chain_model {
     double *m, *am, *am1, *Pc, *Ps, *P0, *phi, *N, *mu_k, *mu_b, *x0, *v0;
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 */
     double *dF, *eF;            /* M_hat of a whole grid step */
-    /* its factorisation with the held rows replaced by V_i = 0 (Thomas: cp and 1 / den per row),
-     * for the held pattern of fhold (per row 0: none yet, 1 free, 2 held); see step_fast */
-    double *fcp, *finv;
-    int *fhold;
+    fast_row *rows;             /* per block, for the fused grid step */
     /* workspace */
     double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
     double *A0, *xp, *ph, *Vt, *Ft, *cp, *dp, *u, *mukN, *Fb, *S, *l;
@@ -116,16 +123,18 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (41 of them, the last, box, 2n long), one for
+    /* one block of doubles for all per-block arrays (39 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 41 };
+    enum { NARR = 39 };
     double *blk = dalloc(al, (NARR + 1) * n);
-    int *iblk = (int *)al->allocate(al->env, 4 * n, sizeof(int));
+    int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
-    if (!blk || !iblk || !M->cand) {
+    M->rows = (fast_row *)al->allocate(al->env, n, sizeof(fast_row));
+    if (!blk || !iblk || !M->cand || !M->rows) {
         if (blk) al->release(al->env, blk);
         if (iblk) al->release(al->env, iblk);
         if (M->cand) al->release(al->env, M->cand);
+        if (M->rows) al->release(al->env, M->rows);
         al->release(al->env, M);
         if (err) *err = oom;
         return NULL;
@@ -134,12 +143,11 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
                           &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->ph, &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->fcp, &M->finv, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
     M->smode = iblk + 2 * n;
-    M->fhold = iblk + 3 * n;
     M->clu = M->cand + n;
     M->k_end = p->k_end;
     M->c_end = p->c_end;
@@ -189,6 +197,13 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->dF[i] = M->am1[i] * c1 + M->Kd[i] * M->beta * p->h / M->gamma + M->Cd[i];
         M->eF[i] = M->Ko[i] * bhg + M->Co[i];
     }
+    for (size_t i = 0; i < n; i++) {
+        fast_row *R = &M->rows[i];
+        R->Pc = M->Pc[i]; R->Ps = M->Ps[i]; R->am = M->am[i]; R->am1 = M->am1[i];
+        R->Kd = M->Kd[i]; R->Ko = M->Ko[i]; R->d = M->dF[i]; R->e = M->eF[i];
+        R->u = R->Fb = R->mukN = 0.0;  /* (loads_init) */
+        R->fh = 0;
+    }
     /* beyond w blocks the influence of a block inside one step is below 2^-56: M_hat^-1 decays like
      * q^distance with q = (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa
      * <= (1 + rho) / (1 - rho) the condition number of the diagonally scaled M_hat by Gershgorin,
@@ -209,6 +224,7 @@ void chain_destroy(chain_model *M)
     al.release(al.env, M->m);
     al.release(al.env, M->frozen);
     al.release(al.env, M->cand);
+    al.release(al.env, M->rows);
     al.release(al.env, M);
 }
 
@@ -273,6 +289,9 @@ static void loads_init(chain_model *M, const chain_inputs *in)
         M->u[i] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
         M->mukN[i] = M->mu_k[i] * N;
         M->Fb[i] = M->mu_b[i] * N;
+        M->rows[i].u = M->u[i];
+        M->rows[i].mukN = M->mukN[i];
+        M->rows[i].Fb = M->Fb[i];
         all_friction &= (M->Fb[i] > 0.0);
     }
     M->stuck_ok = M->scheme == DFO_SCHEME_LOCATED && !M->energy && M->rate_max * M->h <= 1.0 && all_friction;
@@ -673,23 +692,22 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
 static void solve_kept(chain_model *M)
 {
     const size_t n = M->n;
-    const double *restrict d = M->dF, *restrict e = M->eF, *restrict p = M->ph, *restrict l = M->l;
+    const double *restrict p = M->ph, *restrict l = M->l;
     const int *restrict mode = M->st;
-    double *restrict cp = M->fcp, *restrict inv = M->finv, *restrict dp = M->dp, *restrict V = M->Vt;
-    double *restrict F = M->Ft;
-    int *restrict fh = M->fhold;
+    fast_row *restrict R = M->rows;
+    double *restrict dp = M->dp, *restrict V = M->Vt, *restrict F = M->Ft;
     double cprev = 0.0, dprev = 0.0;
     int refac = 0;
     for (size_t i = 0; i < n; i++) {
         const int hold = (mode[i] == 0 && l[i] > 0.0);
-        if (fh[i] != 1 + hold || (refac && !hold)) {
-            fh[i] = 1 + hold;
+        if (R[i].fh != 1 + hold || (refac && !hold)) {
+            R[i].fh = 1 + hold;
             if (hold) {
-                cp[i] = 0.0;
+                R[i].cp = 0.0;
             } else {
-                const double den = (i > 0) ? d[i] - e[i - 1] * cprev : d[i] - 0.0 * cprev;
-                inv[i] = 1.0 / den;
-                cp[i] = e[i] * inv[i];  /* +0 on the last row (e[n - 1] = +0), as solve_rows' 0.0 */
+                const double den = (i > 0) ? R[i].d - R[i - 1].e * cprev : R[i].d - 0.0 * cprev;
+                R[i].inv = 1.0 / den;
+                R[i].cp = R[i].e * R[i].inv;  /* +0 on the last row (e[n - 1] = +0), as solve_rows' 0.0 */
             }
             refac = 1;
         } else {
@@ -697,25 +715,25 @@ static void solve_kept(chain_model *M)
         }
         double dpi = 0.0;
         if (!hold) {
-            const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+            const double lo_e = (i > 0) ? R[i - 1].e : 0.0;
             const double rhs = p[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            dpi = (rhs - lo_e * dprev) * inv[i];
+            dpi = (rhs - lo_e * dprev) * R[i].inv;
         }
         dp[i] = dpi;
-        cprev = cp[i];
+        cprev = R[i].cp;
         dprev = dpi;
     }
     double vn = 0.0;
     for (size_t j = n; j-- > 0;) {
-        vn = dp[j] - cp[j] * vn;
+        vn = dp[j] - R[j].cp * vn;
         V[j] = vn;
     }
     for (size_t i = 0; i < n; i++) {
         if (mode[i] == 0 && l[i] > 0.0) {
             V[i] = 0.0;
             double f = -p[i];
-            if (i > 0) f += e[i - 1] * V[i - 1];
-            if (i + 1 < n) f += e[i] * V[i + 1];
+            if (i > 0) f += R[i - 1].e * V[i - 1];
+            if (i + 1 < n) f += R[i].e * V[i + 1];
             F[i] = f;
         } else {
             F[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
@@ -985,9 +1003,9 @@ static void step_lcp(chain_model *M, chain_state *s, double t_end, double hh, ch
 typedef struct {
     size_t n;
     double h, alpha, rate_max, c1, pV, pA, cV, g1;
-    const double *d, *e, *Kd, *Ko, *Fb, *mukN, *u, *Pc, *Ps, *am, *am1;
-    double *xp, *ph, *cp, *inv, *dp, *Vt, *Ft, *l;
-    int *st, *fh;
+    fast_row *rows;
+    double *xp, *ph, *dp, *Vt, *Ft, *l;
+    int *st;
 } fast_ctx;
 
 static void fast_ctx_init(const chain_model *M, fast_ctx *F)
@@ -1001,16 +1019,15 @@ static void fast_ctx_init(const chain_model *M, fast_ctx *F)
     F->pA = M->kinF.pred_A;
     F->cV = M->kinF.corr_V;
     F->g1 = M->g1;
-    F->d = M->dF; F->e = M->eF; F->Kd = M->Kd; F->Ko = M->Ko; F->Fb = M->Fb; F->mukN = M->mukN; F->u = M->u;
-    F->Pc = M->Pc; F->Ps = M->Ps; F->am = M->am; F->am1 = M->am1;
-    F->xp = M->xp; F->ph = M->ph; F->cp = M->fcp; F->inv = M->finv; F->dp = M->dp; F->Vt = M->Vt; F->Ft = M->Ft;
-    F->l = M->l; F->st = M->st; F->fh = M->fhold;
+    F->rows = M->rows;
+    F->xp = M->xp; F->ph = M->ph; F->dp = M->dp; F->Vt = M->Vt; F->Ft = M->Ft;
+    F->l = M->l; F->st = M->st;
 }
 
 /* The located step of a whole grid step in the current modes, in fused sweeps: the same arithmetic,
  * in the same order, as trial + solve_modes + finish (so the same bits), without their separate
  * passes, and with the factorisation of M_hat for the step's held rows kept from the last step
- * (fcp, finv, fhold: a row is refactored, by solve_rows' operations, when its own hold changed or
+ * (rows: a row is refactored, by solve_rows' operations, when its own hold changed or
  * when it is free and the row above was refactored; a held row starts the elimination afresh).
  * Returns 1 when the warm basis solves the LCP: the step is taken (not the time). Returns 0, with
  * nothing done, when A must be re-based (then rebase_whole makes A0 and step_fast goes on with
@@ -1027,12 +1044,10 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
     const double c1 = C->c1, pV = C->pV, pA = C->pA, cV = C->cV, g1 = C->g1;
     /* A0: the state's A, or (rebased) A re-based on h by rebase_whole; A is not restrict, A0 may be it */
     double *restrict X = s->X, *restrict V = s->V, *A = s->A, *restrict hA = s->hA, *restrict F = s->F;
-    const double *restrict d = C->d, *restrict e = C->e, *restrict Kd = C->Kd, *restrict Ko = C->Ko;
-    const double *restrict Fb = C->Fb, *restrict mukN = C->mukN, *restrict u = C->u;
-    const double *restrict Pc = C->Pc, *restrict Ps = C->Ps, *restrict am = C->am, *restrict am1 = C->am1;
-    double *restrict xp = C->xp, *restrict ph = C->ph, *restrict cp = C->cp, *restrict inv = C->inv;
-    double *restrict dp = C->dp, *restrict Vt = C->Vt, *restrict Ft = C->Ft, *restrict l = C->l;
-    int *restrict st = C->st, *restrict fh = C->fh, *restrict mode = s->mode;
+    fast_row *restrict R = C->rows;
+    double *restrict xp = C->xp, *restrict ph = C->ph, *restrict dp = C->dp, *restrict Vt = C->Vt;
+    double *restrict Ft = C->Ft, *restrict l = C->l;
+    int *restrict st = C->st, *restrict mode = s->mode;
     /* forward: xp one block ahead, p_hat, the modes' rows, elimination with the kept factors */
     double cprev = 0.0, dprev = 0.0, xl = 0.0, xc = X[0] + pV * V[0] + pA * A0[0];
     int refac = 0;
@@ -1040,28 +1055,29 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
         if (hh != hA[i]) {  /* (rare: after a switch) trial's test whether A is re-based */
             if (a != 0.0 && fabs(hh - hA[i]) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
                 C->rate_max * (hA[i] > hh ? hA[i] : hh) <= 1.0) {  /* fmax(hh, hA), hh > 0 */
-                if (refac) fh[i] = 0;  /* row i's kept factor no longer follows the row above */
+                if (refac) R[i].fh = 0;  /* row i's kept factor no longer follows the row above */
                 return 0;
             }
         }
         const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
         xp[i] = xc;
-        double kx = Kd[i] * xc;
-        if (i > 0) kx += Ko[i - 1] * xl;
-        if (i + 1 < n) kx += Ko[i] * xr;
-        const double p = Pc[i] * cw1 - Ps[i] * sw1 + u[i] - am[i] * A0[i] + am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
+        double kx = R[i].Kd * xc;
+        if (i > 0) kx += R[i - 1].Ko * xl;
+        if (i + 1 < n) kx += R[i].Ko * xr;
+        const double p =
+            R[i].Pc * cw1 - R[i].Ps * sw1 + R[i].u - R[i].am * A0[i] + R[i].am1 * (V[i] * c1 + g1 * A0[i]) - kx;
         ph[i] = p;
         xl = xc;
         xc = xr;
-        const int hold = (mode[i] == 0 && Fb[i] > 0.0);
-        if (fh[i] != 1 + hold || (refac && !hold)) {
-            fh[i] = 1 + hold;
+        const int hold = (mode[i] == 0 && R[i].Fb > 0.0);
+        if (R[i].fh != 1 + hold || (refac && !hold)) {
+            R[i].fh = 1 + hold;
             if (hold) {
-                cp[i] = 0.0;
+                R[i].cp = 0.0;
             } else {
-                const double den = (i > 0) ? d[i] - e[i - 1] * cprev : d[i] - 0.0 * cprev;
-                inv[i] = 1.0 / den;
-                cp[i] = e[i] * inv[i];
+                const double den = (i > 0) ? R[i].d - R[i - 1].e * cprev : R[i].d - 0.0 * cprev;
+                R[i].inv = 1.0 / den;
+                R[i].cp = R[i].e * R[i].inv;
             }
             refac = 1;
         } else {
@@ -1071,13 +1087,13 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
          * lo_e dprev is +0, and x - +0 is x */
         double dpi = 0.0;
         if (!hold) {
-            const double li = (mode[i] == 0) ? Fb[i] : mukN[i];
+            const double li = (mode[i] == 0) ? R[i].Fb : R[i].mukN;
             double r = p - ((li > 0.0) ? mode[i] * li : 0.0);
-            if (i > 0) r -= e[i - 1] * dprev;
-            dpi = r * inv[i];
+            if (i > 0) r -= R[i - 1].e * dprev;
+            dpi = r * R[i].inv;
         }
         dp[i] = dpi;
-        cprev = cp[i];
+        cprev = R[i].cp;
         dprev = dpi;
     }
     /* back substitution, with the test of every block: a sliding one keeps its direction (its
@@ -1088,38 +1104,38 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
     const double v_last = dprev;
     double vn = v_last, v1 = 0.0, v2 = 0.0;  /* V of rows j, j + 1, j + 2 */
     for (size_t j = n; j-- > 0;) {
-        if (j + 1 < n) vn = (mode[j] == 0 && Fb[j] > 0.0) ? 0.0 : dp[j] - cp[j] * vn;
+        if (j + 1 < n) vn = (mode[j] == 0 && R[j].Fb > 0.0) ? 0.0 : dp[j] - R[j].cp * vn;
         Vt[j] = vn;
         const size_t i = j + 1;  /* the row below in the sweep, complete now */
         if (i < n) {
-            if (mode[i] == 0 && Fb[i] > 0.0) {
-                double f = -ph[i] + e[i - 1] * vn;
-                if (i + 1 < n) f += e[i] * v2;
+            if (mode[i] == 0 && R[i].Fb > 0.0) {
+                double f = -ph[i] + R[i - 1].e * vn;
+                if (i + 1 < n) f += R[i].e * v2;
                 Ft[i] = f;
-                ok &= (Fb[i] - fabs(f) > 0.0);
+                ok &= (R[i].Fb - fabs(f) > 0.0);
             } else {
-                Ft[i] = (mode[i] == 0) ? 0.0 : 0.0 - mode[i] * mukN[i];
-                ok &= !(Fb[i] > 0.0) | (mode[i] * v1 > 0.0);
+                Ft[i] = (mode[i] == 0) ? 0.0 : 0.0 - mode[i] * R[i].mukN;
+                ok &= !(R[i].Fb > 0.0) | (mode[i] * v1 > 0.0);
             }
         }
         v2 = v1;
         v1 = vn;
     }
-    if (mode[0] == 0 && Fb[0] > 0.0) {  /* the first row */
+    if (mode[0] == 0 && R[0].Fb > 0.0) {  /* the first row */
         double f = -ph[0];
-        if (n > 1) f += e[0] * v2;
+        if (n > 1) f += R[0].e * v2;
         Ft[0] = f;
-        ok &= (Fb[0] - fabs(f) > 0.0);
+        ok &= (R[0].Fb - fabs(f) > 0.0);
     } else {
-        Ft[0] = (mode[0] == 0) ? 0.0 : 0.0 - mode[0] * mukN[0];
-        ok &= !(Fb[0] > 0.0) | (mode[0] * vn > 0.0);
+        Ft[0] = (mode[0] == 0) ? 0.0 : 0.0 - mode[0] * R[0].mukN;
+        ok &= !(R[0].Fb > 0.0) | (mode[0] * vn > 0.0);
     }
     s->solves++;
     if (!ok) {
         /* as trial + solve_modes leave the model for a grid step of the whole chain */
         for (size_t i = 0; i < n; i++) {
-            st[i] = (mode[i] == 0 && Fb[i] > 0.0) ? 0 : mode[i];
-            l[i] = (st[i] == 0) ? Fb[i] : mukN[i];
+            st[i] = (mode[i] == 0 && R[i].Fb > 0.0) ? 0 : mode[i];
+            l[i] = (st[i] == 0) ? R[i].Fb : R[i].mukN;
         }
         M->kin = M->kinF;
         M->cd = M->dF;
@@ -1137,7 +1153,7 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
         V[i] = V1;
         F[i] = Ft[i];
         hA[i] = hh;
-        if (!(Fb[i] > 0.0)) mode[i] = sgn(V1);
+        if (!(R[i].Fb > 0.0)) mode[i] = sgn(V1);
     }
     M->jerk_valid = 0;
     return 1;
@@ -1241,8 +1257,8 @@ static HOT_INLINE int fast_run(chain_model *M, const fast_ctx *C, chain_state *s
  * own, switches placed inside, with its outside neighbours as interpolated ghosts. A short chain,
  * stop_at_switch and the energy accounts take the located step on the whole chain. fast: step_fast's
  * result for this step (-1: it has solved the step in the current modes), or 0. */
-static COLD_CALL void step_located(chain_model *M, chain_state *s, double t_end, double hh, double cw1, double sw1, int fast,
-                         chain_switch_fn fn, void *ctx, int stop_at_switch)
+static COLD_CALL void step_located(chain_model *M, chain_state *s, double t_end, double hh, double cw1, double sw1,
+                                   int fast, chain_switch_fn fn, void *ctx, int stop_at_switch)
 {
     const size_t n = M->n;
     /* a stiff step (several periods of the fastest mode) cannot place a switch: restarts with the
