@@ -1,14 +1,15 @@
 /* ns per block-step of the chain (chain.[ch]) on a stick-slip chain, for n = 1, 2, 8, 64, 512, 4096,
  * side by side with the oscillator's stepper (newmark.[ch]) on the same single block, in one run.
  *
- *   bench_chain [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--N NORMAL] [--csv FILE]
+ *   bench_chain [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--N NORMAL] [--wall]
+ *               [--csv FILE]
  *
  * The chain: unit masses and springs, both ends on the wall (k_end = 1), every block forced
  * (P0 = 1, omega = 0.5, phase 0.1 per block), mu_s = 0.5, N = 1.6 (--N), chi = 0.7, scheme located,
  * alpha = -0.1, h = T / S (S = 1000). Timed: chain_advance over P periods (after one period of
  * settling, outside the clock) in one call, as dfo_advance for the oscillator; the minimum over
  * the repetitions, every model timed once per repetition in turn (so that a change of the
- * machine's load reaches all of them alike). Reported per n: ns per
+ * machine's load reaches all of them alike), by the thread's CPU time (see now). Reported per n: ns per
  * block-step, ns per step, the share of steps whose warm basis was infeasible (a pivot or a located
  * switch), switches per block and period, and the share of time stuck. For n = 1 the oscillator's
  * dfo_advance on the same block (fastPaths on and off). CSV on stdout, or to --csv FILE. */
@@ -25,7 +26,19 @@
 
 #include "bench_clock.h"
 
-static double now(void) { return 1e-9 * bench_now_ns(); }
+/* The clock of the timings (s): the thread's CPU time where POSIX has it (time the thread spends
+ * descheduled on a shared machine is not the code's), else the monotonic wall clock; --wall
+ * takes the wall clock everywhere. */
+static double now(int wall)
+{
+#if defined(CLOCK_THREAD_CPUTIME_ID) && !defined(_WIN32)
+    struct timespec ts;
+    if (!wall && clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) == 0) return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+#else
+    (void)wall;
+#endif
+    return 1e-9 * bench_now_ns();
+}
 
 static void *std_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
 static void std_free(void *env, void *obj) { (void)env; free(obj); }
@@ -72,7 +85,7 @@ static void chain_case_make(chain_case *cc, size_t n, double spp, double normal)
 }
 
 /* One timed repetition: start, one period of settling (not timed), then P periods in one call. */
-static void chain_case_rep(chain_case *cc, double periods, double spp)
+static void chain_case_rep(chain_case *cc, double periods, double spp, int wall)
 {
     const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
     const chain_inputs in = {NULL, NULL};
@@ -81,12 +94,12 @@ static void chain_case_rep(chain_case *cc, double periods, double spp)
     chain_advance(cc->M, &in, s, T, 0, NULL, NULL);
     const long long steps0 = s->steps, piv0 = s->pivot_steps, sw0 = s->switches;
     const long long nsteps = (long long)(periods * spp + 0.5);
-    const double t0 = now();
+    const double t0 = now(wall);
     if (chain_advance(cc->M, &in, s, T + (double)nsteps * h, 0, NULL, NULL) != CHAIN_OK) {
         fprintf(stderr, "bench_chain: n = %zu failed at t = %g\n", cc->n, s->t);
         exit(1);
     }
-    const double el = now() - t0;
+    const double el = now(wall) - t0;
     const double steps = (double)(s->steps - steps0);
     if (el < cc->best) {
         cc->best = el;
@@ -136,7 +149,7 @@ static void osc_case_make(osc_case *oc, double spp, int fast, double normal)
     oc->per = 0.0;
 }
 
-static void osc_case_rep(osc_case *oc, double periods, double spp)
+static void osc_case_rep(osc_case *oc, double periods, double spp, int wall)
 {
     const double T = 2.0 * DFO_PI / OMEGA;
     dfo_inputs u;
@@ -146,15 +159,15 @@ static void osc_case_rep(osc_case *oc, double periods, double spp)
     dfo_advance(&oc->M, &u, &s, T, NULL, NULL);
     const long long steps0 = s.steps;
     const long long nsteps = (long long)(periods * spp + 0.5);
-    const double t0 = now();
+    const double t0 = now(wall);
     dfo_advance(&oc->M, &u, &s, T + (double)nsteps * oc->M.p.h, NULL, NULL);
-    const double el = now() - t0;
+    const double el = now(wall) - t0;
     if (el < oc->best) { oc->best = el; oc->per = 1e9 * el / (double)(s.steps - steps0); }
 }
 
 int main(int argc, char **argv)
 {
-    int reps = 5;
+    int reps = 5, wall = 0;
     double periods = 4.0, spp = 1000.0, normal = 1.6;
     size_t ns[16] = {1, 2, 8, 64, 512, 4096};
     int nn = 6;
@@ -165,6 +178,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--steps-per-period") && a + 1 < argc) spp = atof(argv[++a]);
         else if (!strcmp(argv[a], "--csv") && a + 1 < argc) csv = argv[++a];
         else if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--wall")) wall = 1;
         else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
             nn = 0;
             for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ","))
@@ -188,8 +202,8 @@ int main(int argc, char **argv)
     chain_case cases[16];
     for (int j = 0; j < nn; j++) chain_case_make(&cases[j], ns[j], spp, normal);
     for (int rep = 0; rep < reps; rep++) {
-        for (int k = 0; k < 2; k++) osc_case_rep(&osc[k], periods, spp);
-        for (int j = 0; j < nn; j++) chain_case_rep(&cases[j], periods, spp);
+        for (int k = 0; k < 2; k++) osc_case_rep(&osc[k], periods, spp, wall);
+        for (int j = 0; j < nn; j++) chain_case_rep(&cases[j], periods, spp, wall);
     }
     fprintf(out, "model,n,ns_per_block_step,ns_per_step,pivot_step_share,switches_per_block_period,stuck_share\n");
     fprintf(out, "oscillator(fastPaths),1,%.2f,%.2f,,,\n", osc[0].per, osc[0].per);
