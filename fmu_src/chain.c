@@ -688,7 +688,7 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
 /* ---- the located scheme ---------------------------------------------------------------------- */
 
 /* solve_rows on the whole chain with a whole grid step's M_hat (dF, eF), by its factorisation kept
- * for the held pattern (fcp, finv, fhold; see step_fast): the same operations, so the same bits. */
+ * for the held pattern (M->rows; see step_fast): the same operations, so the same bits. */
 static void solve_kept(chain_model *M)
 {
     const size_t n = M->n;
