@@ -102,8 +102,9 @@ def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
                     P0=np.where(np.arange(n) % 2 == 0, 1.0, 0.3), phi=0.2 * np.arange(n),
                     x0=np.linspace(0.1, -0.1, n), v0=0.2)
     T = ch.period
-    run = fmu_run(ch, 5 * T, T / 400, T / 100, fmu3_path)
-    drv = run_driver(ch, 5 * T, T / 400, dt=T / 100)
+    dt = T / 100
+    run = fmu_run(ch, 500 * dt, T / 400, dt, fmu3_path)  # the driver's points k dt
+    drv = run_driver(ch, 500 * dt, T / 400, dt=dt)
     assert run.x.shape == (501, n) and np.array_equal(run.t, drv["t"])
     assert (run.mode == 0).any() and (run.mode != 0).any()
     for k, d in (("x", "x"), ("v", "v"), ("F_friction", "F"), ("mode", "mode")):

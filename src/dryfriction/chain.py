@@ -219,40 +219,42 @@ class _Chain:
         self.time = float(t)
 
     def run(self, t_end: float, dt: float, params: Mapping[str, Any] | None = None, inputs: Inputs | None = None,
-            start_time: float = 0.0, t_from: float | None = None) -> ChainRun:
-        """Start afresh (:meth:`start` with ``params``), then step to ``t_end`` on the grid ``start_time + k dt`` (the last step shortened), reading the
-        outputs at every point from ``t_from`` on (default: all). ``inputs``: values of F_ext /
-        N_ext held from the start, or a function ``(t, outputs) -> values`` called before each step
-        with the outputs at t."""
-        if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be a finite number > 0, not {dt!r}")
+            start_time: float = 0.0) -> ChainRun:
+        """Start afresh (:meth:`start` with ``params``), then :meth:`record` to ``t_end``."""
         if not (np.isfinite(t_end) and t_end > start_time):
             raise ValueError(f"t_end must be finite and after the start time {start_time!r}, not {t_end!r}")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite number > 0, not {dt!r}")
         self.start(params, start_time)
+        return self.record(t_end, dt, inputs)
+
+    def record(self, t_end: float, dt: float, inputs: Inputs | None = None) -> ChainRun:
+        """Step from the current time t0 to ``t_end`` on the grid ``t0 + k dt`` (the last step
+        shortened), reading the outputs at t0 and every point. ``inputs``: values of F_ext / N_ext
+        held from t0, or a function ``(t, outputs) -> values`` called before each step with the
+        outputs at t."""
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite number > 0, not {dt!r}")
         t0 = self.time
+        if not (np.isfinite(t_end) and t_end > t0):
+            raise ValueError(f"t_end must be finite and after the current time {t0!r}, not {t_end!r}")
         k_end = int(np.ceil((t_end - t0) / dt - 1e-9))
         times = np.minimum(t0 + np.arange(k_end + 1) * dt, t_end)
-        keep = times >= (t_from if t_from is not None else -np.inf)
-        nt = int(keep.sum())
-        reals = np.empty((nt, 4, self.n))
-        modes = np.empty((nt, self.n), dtype=np.int8)
-        j = 0
-        fixed = None if inputs is None or callable(inputs) else inputs
-        if fixed is not None:
-            self.set_inputs(fixed)
-        for i, t in enumerate(times):
-            if i > 0:
-                if callable(inputs):
-                    self.set_inputs(inputs(self.time, self.outputs()))
-                self._do_step(self.time, t - self.time)
-                self.time = float(t)
-            if keep[i]:
-                r, mode = self._read()
-                reals[j], modes[j] = r, mode
-                j += 1
-        return ChainRun(times[keep], reals[:, 0], reals[:, 1], reals[:, 2], reals[:, 3], modes,
-                        {k: (v.tolist() if isinstance(v, np.ndarray) and v.size > 1 else
-                             (float(v[0]) if isinstance(v, np.ndarray) else v)) for k, v in self.params.items()})
+        times[-1] = t_end
+        reals = np.empty((times.size, 4, self.n))
+        modes = np.empty((times.size, self.n), dtype=np.int8)
+        if inputs is not None and not callable(inputs):
+            self.set_inputs(inputs)
+        reals[0], modes[0] = self._read()
+        for i in range(1, times.size):
+            if callable(inputs):
+                self.set_inputs(inputs(self.time, self.outputs()))
+            self._do_step(self.time, times[i] - self.time)
+            self.time = float(times[i])
+            reals[i], modes[i] = self._read()
+        params = {k: (v.tolist() if isinstance(v, np.ndarray) and v.size > 1 else
+                      (float(v[0]) if isinstance(v, np.ndarray) else v)) for k, v in self.params.items()}
+        return ChainRun(times, reals[:, 0], reals[:, 1], reals[:, 2], reals[:, 3], modes, params)
 
     def __enter__(self) -> "_Chain":
         return self
