@@ -113,13 +113,14 @@ def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
 
 @pytest.fixture(scope="module")
 def refs() -> dict:
-    return {name: solve_chain(CASES[name], PERIODS * CASES[name].period)
-            for name in ("stick-dominated", "friction-on-one")}
+    return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}
 
 
 # docs/chain.md, "Validation of the C chain": located, T/400 ... T/3200
 DOC_ERRORS = {"stick-dominated": (2.27e-4, 5.66e-5, 1.41e-5, 3.54e-6),
-              "friction-on-one": (2.74e-3, 6.86e-4, 1.71e-4, 4.29e-5)}
+              "friction-on-one": (2.74e-3, 6.86e-4, 1.71e-4, 4.29e-5),
+              "chi-mixed": (7.20e-3, 1.81e-3, 4.54e-4, 1.14e-4),
+              "damped-walled": (1.60e-4, 3.99e-5, 9.98e-6, 2.50e-6)}
 
 
 @pytest.mark.parametrize("case", list(DOC_ERRORS))
@@ -136,6 +137,26 @@ def test_located_error_against_the_reference(case: str, refs: dict, fmu3_path: P
     np.testing.assert_allclose(e, DOC_ERRORS[case], rtol=6e-3)
     ratios = e[:-1] / e[1:]
     assert np.all((ratios > 3.6) & (ratios < 4.4)), ratios
+
+
+def test_located_second_order_with_random_communication_steps(refs: dict, fmu3_path: Path) -> None:
+    """Communication steps drawn in [0.1 h, 3 h] through fmi3DoStep: still 4x per halving."""
+    ch = CASES["chi-mixed"]
+    T = ch.period
+    rng = np.random.default_rng(7)
+    errs = []
+    with ChainFMU(ch.n, fmu_path=fmu3_path) as f:
+        for ppp in (400, 800, 1600):
+            h = T / ppp
+            f.start(chain_params(ch, h))
+            ts, xs = [0.0], [f.outputs()["x"]]
+            while f.time < PERIODS * T:
+                f.step_to(min(f.time + h * rng.uniform(0.1, 3.0), PERIODS * T))
+                ts.append(f.time)
+                xs.append(f.outputs()["x"])
+            errs.append(float(np.max(np.abs(np.array(xs) - refs["chi-mixed"].evaluate(ts)["x"]))))
+    ratios = np.array(errs[:-1]) / np.array(errs[1:])
+    assert np.all((ratios > 3.4) & (ratios < 4.6)), (errs, ratios)
 
 
 def test_energy_balance_from_the_outputs(fmu3_path: Path) -> None:
