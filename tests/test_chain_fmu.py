@@ -60,20 +60,28 @@ ONE_BLOCK = [dict(m=1.0, k=1.0, c=0.0, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0
 @pytest.mark.parametrize("case", range(len(ONE_BLOCK)))
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
 def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, fmu3_path: Path, fmu: OscillatorFMU) -> None:
-    """One block of the FMI 3.0 chain gives the oscillator FMU's t, x, v, F_friction and mode bit
-    for bit at every communication point (phi = 0; docs/chain.md says why a phase rounds apart)."""
+    """One block of the FMI 3.0 chain gives the oscillator FMU's x, v and mode bit for bit at every
+    communication point (phi = 0; docs/chain.md says why a phase rounds apart), in every scheme;
+    located (the default) also F_friction bit for bit and a to 1e-14 (the chain sums the equation
+    of motion in another order). paper: the chain reports a = 0 for a stuck block where the
+    oscillator reports Bossak's creeping A; consistent: after a stop inside a step the chain's
+    F_friction is not the oscillator's (both within the limit; see docs/chain.md)."""
     b = ONE_BLOCK[case]
     p = Oscillator(phi=0.0, **b)
     T = p.period
     h, dt = T / 500, T / 50
     with ChainFMU(1, fmu_path=fmu3_path) as f:
-        run = f.run(6 * T, dt, {**{k: v for k, v in b.items() if k != "omega"}, "omega": b["omega"],
-                                "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme})
+        run = f.run(6 * T, dt, {**b, "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme})
     ref = fmu.trajectory(p, run.t, Settings(h=h, alpha=-0.1, scheme=scheme))
     assert (run.mode == 0).any() and (run.mode != 0).any()
-    for k in ("x", "v", "F_friction", "mode"):
+    for k in ("x", "v", "mode"):
         assert np.array_equal(getattr(run, k)[:, 0], ref[k]), (k, np.max(np.abs(getattr(run, k)[:, 0] - ref[k])))
-    assert np.max(np.abs(run.a[:, 0] - ref["a"])) <= 1e-14 * max(1.0, np.max(np.abs(ref["a"])))
+    stuck = run.mode[:, 0] == 0
+    Fb = max(b["mu_s"], b["chi"] * b["mu_s"]) * b["N"]
+    assert np.all(np.abs(run.F_friction[stuck, 0]) <= Fb * (1 + 1e-12))
+    if scheme == "located":
+        assert np.array_equal(run.F_friction[:, 0], ref["F_friction"])
+        assert np.max(np.abs(run.a[:, 0] - ref["a"])) <= 1e-14 * max(1.0, np.max(np.abs(ref["a"])))
 
 
 # ---- FMI 2.0 == FMI 3.0 ---------------------------------------------------------------------------
@@ -98,7 +106,7 @@ def test_fmi2_and_fmi3_chains_give_the_same_bits(fmu2_path: Path, fmu3_path: Pat
 def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
     """fmpy's FMU3Slave with n set in Configuration Mode: the C chain's numbers (chain_driver), bit
     for bit, for n = 1, 3, 8."""
-    ch = Chain.make(n, omega=0.7, k_end=1.5, c_end=0.1, c=0.05, N=np.linspace(0.4, 0.7, n),
+    ch = Chain.make(n, omega=0.7, k_end=1.5, c_end=0.1, c=0.05, N=np.linspace(0.8, 1.2, n),
                     P0=np.where(np.arange(n) % 2 == 0, 1.0, 0.3), phi=0.2 * np.arange(n),
                     x0=np.linspace(0.1, -0.1, n), v0=0.2)
     T = ch.period
@@ -206,13 +214,18 @@ def test_fmutool_check_reports_compliant(fmu2_path: Path) -> None:
 def test_structured_names_and_dimensions(fmu2_path: Path, fmu3_path: Path) -> None:
     """FMI 2.0: m[1] ... x[n] for every array; FMI 3.0: each array one variable of dimension n
     (the structural parameter n, UInt64, start 2, min 1, max >= 4096)."""
+    import zipfile
+    from xml.etree import ElementTree as ET
+
     from fmpy import read_model_description
 
     md3 = read_model_description(str(fmu3_path))
     v3 = {v.name: v for v in md3.modelVariables}
     n = v3["n"]
     assert n.type == "UInt64" and n.causality == "structuralParameter" and int(n.start) == 2
-    assert int(n.min) == 1 and int(n.max) >= 4096
+    xml = ET.fromstring(zipfile.ZipFile(fmu3_path).read("modelDescription.xml"))
+    n_el = xml.find("ModelVariables/UInt64[@name='n']")
+    assert n_el is not None and int(n_el.get("min")) == 1 and int(n_el.get("max")) >= 4096
     for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "F_ext", "N_ext", "x", "v", "a",
                  "F_friction", "mode"):
         dims = v3[name].dimensions
@@ -278,7 +291,6 @@ def test_wrong_array_length(fmu3_path: Path) -> None:
     with ChainFMU(3, fmu_path=fmu3_path) as f:
         with pytest.raises(ValueError, match=r"m needs 3 values \(one per block, n = 3\)"):
             f.run(1.0, 0.1, {"m": [1.0, 2.0]})
-        f.start()
-        f._begin(0.0)
-        with pytest.raises(ChainError, match=r"\bm\b"):
+        f._begin(0.0)  # Configuration Mode (n = 3), then Initialization Mode
+        with pytest.raises(ChainError, match=r"nValues = 2 but the 1 value references given hold 3 values"):
             f.set_raw("m", [1.0, 2.0])

@@ -286,8 +286,7 @@ class ChainFMU(_Chain):
         nvar = self.vars.get("n")
         if nvar is None or nvar.causality != "structuralParameter":
             raise ChainError(f"{path} has no structural parameter n: not the FMI 3.0 chain")
-        self.n_min = int(nvar.min) if nvar.min is not None else 1
-        self.n_max = int(nvar.max) if nvar.max is not None else 2**63
+        self.n_min, self.n_max = _n_range(path)
         self.n = self._check_n(n)
         self.schemes = _schemes(self.md, "scheme")
         self.messages: list[tuple[int, str]] = []
@@ -490,6 +489,18 @@ class ChainFMU2(_Chain):
         self.inst.free()
         self.inst = None
         shutil.rmtree(self._dir, ignore_errors=True)
+
+
+def _n_range(path: Path) -> tuple[int, int]:
+    """min and max of the structural parameter n (read from the XML: fmpy leaves them out)."""
+    import zipfile
+    from xml.etree import ElementTree as ET
+
+    root = ET.fromstring(zipfile.ZipFile(path).read("modelDescription.xml"))
+    el = root.find("ModelVariables/UInt64[@name='n']")
+    lo = el.get("min") if el is not None else None
+    hi = el.get("max") if el is not None else None
+    return int(lo or 1), int(hi or 2**63)
 
 
 def _schemes(md: Any, var: str) -> dict[str, int]:
