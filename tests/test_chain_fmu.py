@@ -294,3 +294,78 @@ def test_wrong_array_length(fmu3_path: Path) -> None:
         f._begin(0.0)  # Configuration Mode (n = 3), then Initialization Mode
         with pytest.raises(ChainError, match=r"nValues = 2 but the 1 value references given hold 3 values"):
             f.set_raw("m", [1.0, 2.0])
+
+
+# ---- the command and the README ------------------------------------------------------------------
+
+def test_chain_command_writes_the_run(tmp_path: Path, fmu3_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """dryfriction chain: the CSV and the NetCDF hold the driver's numbers for the same values."""
+    from dryfriction.cli import main
+    from dryfriction.sweep.datasets import read_netcdf
+
+    out = tmp_path / "out"
+    argv = ["chain", "--n", "3", "--t-end", "12", "--dt", "0.25", "--set", "mu_s=0.5", "--set", "P0=1,0,0",
+            "--set", "k=1", "--set", "omega=0.5", "--set", "h=0.01", "--set", "scheme=located", "--out", str(out),
+            "--fmu", str(fmu3_path)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "chain of 3 blocks (FMI 3), 49 points" in text and "share of time stuck per block" in text
+    with ChainFMU(3, fmu_path=fmu3_path) as f:
+        ref = f.run(12.0, 0.25, {"mu_s": 0.5, "P0": [1, 0, 0], "k": 1.0, "omega": 0.5, "h": 0.01})
+    csv = np.loadtxt(out / "chain.csv", delimiter=",", skiprows=1)
+    header = (out / "chain.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["t", "x[1]", "x[2]", "x[3]"] and header[-1] == "mode[3]"
+    assert np.array_equal(csv[:, 0], ref.t) and np.array_equal(csv[:, 1:4], ref.x)
+    assert np.array_equal(csv[:, -3:], ref.mode)
+    ds = read_netcdf(out / "chain.nc")
+    assert np.array_equal(ds.F_friction.values, ref.F_friction) and ds.attrs["param_omega"] == 0.5
+    assert (out / "chain.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("argv, words, status", [
+    (["--n", "3", "--set", "m=1,1,-1"], "invalid value -1 for m[3]", 1),
+    (["--n", "3", "--set", "m=1,2"], "m needs 3 values (one per block, n = 3)", 2),
+    (["--n", "5000"], "invalid value 5000 for n", 1),
+    (["--set", "mass=1"], "the chain has no parameter 'mass'", 2),
+    (["--set", "scheme=exact"], "scheme must be one of paper, consistent, located, not 'exact'", 2),
+])
+def test_chain_command_bad_values(argv: list[str], words: str, status: int, tmp_path: Path, fmu3_path: Path,
+                                  capsys: pytest.CaptureFixture[str]) -> None:
+    from dryfriction.cli import main
+
+    assert main(["chain", *argv, "--out", str(tmp_path / "out"), "--fmu", str(fmu3_path)]) == status
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_fmi2_command_needs_the_built_n(tmp_path: Path, fmu2_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from dryfriction.cli import main
+
+    with ChainFMU2(fmu_path=fmu2_path) as f2:
+        n = f2.n
+    assert main(["chain", "--fmi", "2", "--n", str(n + 1), "--fmu", str(fmu2_path), "--out", str(tmp_path)]) == 2
+    assert f"this FMI 2.0 chain has n = {n} blocks" in capsys.readouterr().err
+    assert main(["chain", "--fmi", "2", "--t-end", "1", "--fmu", str(fmu2_path), "--out", str(tmp_path),
+                 "--format", "csv", "--no-plot"]) == 0
+    assert (tmp_path / "chain.csv").is_file() and not (tmp_path / "chain.png").exists()
+
+
+def test_the_readmes_five_lines() -> None:
+    """The README's chain example runs as printed and prints what its comment says."""
+    import contextlib
+    import io
+    import re
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = re.search(r"```python\n(from dryfriction.chain import ChainFMU\n.*?)```", readme, re.S)
+    assert block is not None
+    code = block.group(1)
+    assert len(code.strip().splitlines()) == 5
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        exec(compile(code, "README.md", "exec"), {})
+    shown = re.search(r"print\(run.stick_share\(\).round\(2\)\).*# (\[[0-9. ]+\])", readme)
+    assert shown is not None
+    printed = [float(x) for x in buf.getvalue().strip(" []\n").split()]
+    assert printed == [float(x) for x in shown.group(1).strip("[]").split()]
