@@ -269,8 +269,10 @@ def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(fmu2_path: Path) -> N
 @pytest.mark.parametrize("n", [0, 5000])
 def test_n_outside_its_range_is_the_fmus_error(n: int, fmu3_path: Path) -> None:
     with ChainFMU(n, fmu_path=fmu3_path) as f:
-        with pytest.raises(ChainError, match=rf"invalid value {n} for n"):
+        with pytest.raises(ChainError, match=rf"invalid value {n} for n .*valid range: in \[1, 4096\]"):
             f.run(1.0, 0.1)
+        f.set_n(4)  # the instance recovers: reset, Configuration Mode again
+        assert f.run(1.0, 0.1).x.shape == (11, 4)
 
 
 def test_bad_array_values_name_the_element(fmu3_path: Path, fmu2_path: Path) -> None:

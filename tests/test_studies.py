@@ -9,6 +9,9 @@
   conditions, between it and the chaotic band periodic but asymmetric, below it spread over a band;
 - fig12_14: four stick phases per cycle in the sub-harmonic zone, two above; nearby initial
   conditions part;
+- chain2: the frictionless first block never sticks, the unforced one sticks more, a row is a
+  direct run of the chain FMU; chain_waves: slip fronts travel outward block after block, below
+  the chain's sound speed;
 - the sweep engine: the same numbers bit for bit with 0 (no Dask), 1 and 2 workers; a killed
   sweep restarts from its chunks without recomputing them; bad input fails before any work.
 
