@@ -201,12 +201,14 @@ def test_fmpy_validate_and_fmu_info(which: str, fmu2_path: Path, fmu3_path: Path
     assert ("2.0" if which == "fmi2" else "3.0") in info
 
 
-def test_fmutool_check_reports_compliant(fmu2_path: Path) -> None:
+@pytest.mark.parametrize("which", ["fmi2", "fmi3"])
+def test_fmutool_check_reports_compliant(which: str, fmu2_path: Path, fmu3_path: Path) -> None:
     exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
-    r = subprocess.run([exe, "-input", str(fmu2_path), "-check"], capture_output=True, text=True, timeout=120)
+    path = fmu2_path if which == "fmi2" else fmu3_path
+    r = subprocess.run([exe, "-input", str(path), "-check"], capture_output=True, text=True, timeout=120)
     out = r.stdout + r.stderr
     assert r.returncode == 0, out
-    assert "compliant with FMI-2.0" in out, out
+    assert f"compliant with FMI-{2 if which == 'fmi2' else 3}.0" in out, out
     assert "No semantic error" in out, out
     assert "ERROR" not in out, out
 
