@@ -119,6 +119,26 @@ def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
         assert np.array_equal(getattr(run, k), drv[d]), k
 
 
+def test_held_inputs_equal_the_c_driver(fmu3_path: Path) -> None:
+    """F_ext held from the start (set in Initialization Mode) gives the C chain's numbers with the
+    same F_ext, bit for bit. Set by a function before every step (the first after initialisation:
+    the start's Bossak acceleration is the one without it) the motion differs by the scheme's
+    O(h^2) start error only; a feedback input changes the motion."""
+    F = [0.2, -0.1, 0.3]
+    ch = Chain.make(3, omega=0.6, N=[0.6, 0.8, 0.7], chi=0.8, F_ext=F)
+    T = ch.period
+    dt = T / 50
+    drv = run_driver(ch, 200 * dt, T / 400, dt=dt)
+    with ChainFMU(3, fmu_path=fmu3_path) as f:
+        held = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs={"F_ext": F})
+        func = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": F})
+        fb = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": -0.5 * y["v"]})
+    assert (held.mode == 0).any() and (held.mode != 0).any()
+    assert np.array_equal(held.x, drv["x"]) and np.array_equal(held.mode, drv["mode"])
+    assert np.max(np.abs(func.x - held.x)) < 2e-3
+    assert np.max(np.abs(fb.x - held.x)) > 1e-2
+
+
 @pytest.fixture(scope="module")
 def refs() -> dict:
     return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}

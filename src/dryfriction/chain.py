@@ -189,12 +189,19 @@ class _Chain:
                 self._set_reals(name, value)
         return dict(todo)
 
-    def start(self, params: Mapping[str, Any] | None = None, start_time: float = 0.0) -> None:
+    def start(self, params: Mapping[str, Any] | None = None, start_time: float = 0.0,
+              inputs: Mapping[str, Any] | None = None) -> None:
         """A fresh run from ``start_time``: the instance's parameters (given when it was made)
-        updated with ``params``; the others at their start values."""
+        updated with ``params``, the others at their start values; ``inputs`` (F_ext, N_ext) set
+        in Initialization Mode, so that the start state (its modes and accelerations) sees them."""
         merged = {**self.defaults, **(params or {})}
+        if inputs is not None and set(inputs) - set(INPUTS):
+            raise ValueError(f"the chain's inputs are {', '.join(INPUTS)}, not "
+                             f"{', '.join(sorted(set(inputs) - set(INPUTS)))}")
         self._begin(start_time)
         self.params = self._apply(merged)
+        if inputs:
+            self._apply(inputs)
         self._end_init()
         self.time = float(start_time)
 
@@ -220,13 +227,16 @@ class _Chain:
 
     def run(self, t_end: float, dt: float, params: Mapping[str, Any] | None = None, inputs: Inputs | None = None,
             start_time: float = 0.0) -> ChainRun:
-        """Start afresh (:meth:`start` with ``params``), then :meth:`record` to ``t_end``."""
+        """Start afresh (:meth:`start` with ``params``), then :meth:`record` to ``t_end``. Inputs
+        given as values are set in Initialization Mode and held; a function is called before every
+        step (the first one after initialisation, with the outputs at the start)."""
         if not (np.isfinite(t_end) and t_end > start_time):
             raise ValueError(f"t_end must be finite and after the start time {start_time!r}, not {t_end!r}")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a finite number > 0, not {dt!r}")
-        self.start(params, start_time)
-        return self.record(t_end, dt, inputs)
+        held = None if inputs is None or callable(inputs) else inputs
+        self.start(params, start_time, held)
+        return self.record(t_end, dt, inputs if callable(inputs) else None)
 
     def record(self, t_end: float, dt: float, inputs: Inputs | None = None) -> ChainRun:
         """Step from the current time t0 to ``t_end`` on the grid ``t0 + k dt`` (the last step
