@@ -135,9 +135,18 @@ class _Chain:
     def _set_scheme(self, value: int) -> None:
         raise NotImplementedError
 
+    _mode_dtype: type = np.int32
+
+    def _read_into(self, reals: int, modes: int) -> None:
+        """x, v, a, F_friction (4n doubles) to address ``reals``, mode (n of _mode_dtype) to ``modes``."""
+        raise NotImplementedError
+
     def _read(self) -> tuple[np.ndarray, np.ndarray]:
         """x, v, a, F_friction as a [4, n] array, and mode [n]."""
-        raise NotImplementedError
+        r = np.empty((4, self.n))
+        m = np.empty(self.n, dtype=self._mode_dtype)
+        self._read_into(r.ctypes.data, m.ctypes.data)
+        return r, m.astype(np.int8)
 
     def _do_step(self, t: float, dt: float) -> None:
         raise NotImplementedError
@@ -251,17 +260,21 @@ class _Chain:
         k_end = int(np.ceil((t_end - t0) / dt - 1e-9))
         times = np.minimum(t0 + np.arange(k_end + 1) * dt, t_end)
         times[-1] = t_end
-        reals = np.empty((times.size, 4, self.n))
-        modes = np.empty((times.size, self.n), dtype=np.int8)
+        n = self.n
+        reals = np.empty((times.size, 4, n))
+        modes = np.empty((times.size, n), dtype=self._mode_dtype)
+        # the FMU writes each point's values straight into its rows (addresses, no ctypes objects)
+        base_r, base_m, row_r, row_m = reals.ctypes.data, modes.ctypes.data, reals.strides[0], modes.strides[0]
         if inputs is not None and not callable(inputs):
             self.set_inputs(inputs)
-        reals[0], modes[0] = self._read()
+        self._read_into(base_r, base_m)
         for i in range(1, times.size):
             if callable(inputs):
                 self.set_inputs(inputs(self.time, self.outputs()))
             self._do_step(self.time, times[i] - self.time)
             self.time = float(times[i])
-            reals[i], modes[i] = self._read()
+            self._read_into(base_r + i * row_r, base_m + i * row_m)
+        modes = modes.astype(np.int8)
         params = {k: (v.tolist() if isinstance(v, np.ndarray) and v.size > 1 else
                       (float(v[0]) if isinstance(v, np.ndarray) else v)) for k, v in self.params.items()}
         return ChainRun(times, reals[:, 0], reals[:, 1], reals[:, 2], reals[:, 3], modes, params)
@@ -304,11 +317,13 @@ class ChainFMU(_Chain):
         self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="chain")
         self.slave.instantiate(loggingOn=False, logMessage=self._log)
+        self._hot = _Hot3(self._dir, self.md.coSimulation.modelIdentifier)
         self._fresh = True
         self._state = "instantiated"
         self._real_vrs = (ctypes.c_uint32 * 4)(*[self.vars[k].valueReference for k in _REAL_OUTPUTS])
         mvar = self.vars["mode"]
         self._mode_int32 = mvar.type == "Int32"
+        self._mode_dtype = np.int32 if self._mode_int32 else np.int64
         self._mode_vr = (ctypes.c_uint32 * 1)(mvar.valueReference)
         self.time = 0.0
         self.params: dict[str, Any] = {}
@@ -325,6 +340,7 @@ class ChainFMU(_Chain):
 
     def _log(self, env: Any, status: int, category: bytes, message: bytes) -> None:
         self.messages.append((int(status), (message or b"").decode(errors="replace")))
+        del self.messages[:-100]
 
     def _call(self, what: str, fn: Callable[..., Any], *args: Any) -> Any:
         from fmpy.fmi1 import FMICallException
@@ -366,23 +382,25 @@ class ChainFMU(_Chain):
         """fmi3SetFloat64 of ``name`` with exactly these values (no length check here: the FMU's)."""
         self._set_reals(name, np.asarray(values, dtype=float))
 
-    def _read(self) -> tuple[np.ndarray, np.ndarray]:
-        s, n = self.slave, self.n
-        r = np.empty((4, n))
-        self._call("reading the outputs", s.fmi3GetFloat64, s.component, self._real_vrs, 4,
-                   r.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), 4 * n)
-        if self._mode_int32:
-            m = np.empty(n, dtype=np.int32)
-            self._call("reading mode", s.fmi3GetInt32, s.component, self._mode_vr, 1,
-                       m.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)), n)
-        else:
-            m = np.empty(n, dtype=np.int64)
-            self._call("reading mode", s.fmi3GetInt64, s.component, self._mode_vr, 1,
-                       m.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)), n)
-        return r, m.astype(np.int8)
+    def _read_into(self, reals: int, modes: int) -> None:
+        n, hot, comp = self.n, self._hot, self.slave.component
+        st = hot.get_float64(comp, self._real_vrs, 4, reals, 4 * n)
+        if st > 1:
+            self._failed("fmi3GetFloat64", st)
+        st = (hot.get_int32 if self._mode_int32 else hot.get_int64)(comp, self._mode_vr, 1, modes, n)
+        if st > 1:
+            self._failed("getting mode", st)
 
     def _do_step(self, t: float, dt: float) -> None:
-        self._call("fmi3DoStep", self.slave.doStep, t, dt)
+        hot = self._hot
+        st = hot.do_step(self.slave.component, t, dt, True, hot.event, hot.terminate, hot.early, hot.last)
+        if st > 1:
+            self._failed("fmi3DoStep", st)
+
+    def _failed(self, what: str, status: int) -> None:
+        said = [m for s, m in self.messages if s >= 2]
+        self.messages.clear()  # a later failure reports its own sentence, not this one
+        raise ChainError(said[-1] if said else f"{what} returned status {status}")
 
     def get(self, name: str) -> np.ndarray | float:
         """Any Float64 variable by name (an array of n for the arrays)."""
@@ -401,6 +419,29 @@ class ChainFMU(_Chain):
         self.slave.freeInstance()
         self.slave = None
         shutil.rmtree(self._dir, ignore_errors=True)
+
+
+class _Hot3:
+    """The three calls of the stepping loop, typed once on the FMU's library (the one fmpy loaded:
+    the same handle), called with numpy buffers and reused out-arguments; fmpy's wrappers build
+    ctypes objects at every call (about 25 us per communication point against 5)."""
+
+    def __init__(self, unzip_dir: str, model_identifier: str) -> None:
+        from ctypes import POINTER, byref, c_bool, c_double, c_int, c_size_t, c_uint32, c_void_p
+
+        from fmpy import platform_tuple, sharedLibraryExtension
+
+        lib = ctypes.CDLL(str(Path(unzip_dir, "binaries", platform_tuple, model_identifier + sharedLibraryExtension)))
+        self.do_step = lib.fmi3DoStep
+        self.do_step.restype = c_int
+        self.do_step.argtypes = [c_void_p, c_double, c_double, c_bool, POINTER(c_bool), POINTER(c_bool),
+                                 POINTER(c_bool), POINTER(c_double)]
+        self.get_float64, self.get_int32, self.get_int64 = lib.fmi3GetFloat64, lib.fmi3GetInt32, lib.fmi3GetInt64
+        for f in (self.get_float64, self.get_int32, self.get_int64):
+            f.restype = c_int
+            f.argtypes = [c_void_p, POINTER(c_uint32), c_size_t, c_void_p, c_size_t]
+        self._out = (c_bool(), c_bool(), c_bool(), c_double())
+        self.event, self.terminate, self.early, self.last = (byref(x) for x in self._out)
 
 
 # ---- FMI 2.0 ------------------------------------------------------------------------------------
@@ -472,18 +513,14 @@ class ChainFMU2(_Chain):
     def _set_scheme(self, value: int) -> None:
         self._call(self.inst.set, "Integer", [self.md.vr("scheme")], [value])
 
-    def _read(self) -> tuple[np.ndarray, np.ndarray]:
-        n = self.n
-        r = np.empty((4, n))
-        m = np.empty(n, dtype=np.int32)
+    def _read_into(self, reals: int, modes: int) -> None:
         inst = self.inst
-        st = inst.f.GetReal(inst.component, self._real_vrs, 4 * n, r.ctypes.data)
+        st = inst.f.GetReal(inst.component, self._real_vrs, 4 * self.n, reals)
         if st:
             self._call(inst.check, "fmi2GetReal", st)
-        st = inst.f.GetInteger(inst.component, self._mode_vrs, n, m.ctypes.data)
+        st = inst.f.GetInteger(inst.component, self._mode_vrs, self.n, modes)
         if st:
             self._call(inst.check, "fmi2GetInteger", st)
-        return r, m.astype(np.int8)
 
     def _do_step(self, t: float, dt: float) -> None:
         self._call(self.inst.do_step, t, dt)
