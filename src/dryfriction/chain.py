@@ -207,6 +207,7 @@ class _Chain:
         if inputs is not None and set(inputs) - set(INPUTS):
             raise ValueError(f"the chain's inputs are {', '.join(INPUTS)}, not "
                              f"{', '.join(sorted(set(inputs) - set(INPUTS)))}")
+        self.check(merged)  # every value checked before the FMU is touched
         self._begin(start_time)
         self.params = self._apply(merged)
         if inputs:
@@ -257,7 +258,7 @@ class _Chain:
         t0 = self.time
         if not (np.isfinite(t_end) and t_end > t0):
             raise ValueError(f"t_end must be finite and after the current time {t0!r}, not {t_end!r}")
-        k_end = int(np.ceil((t_end - t0) / dt - 1e-9))
+        k_end = max(1, int(np.ceil((t_end - t0) / dt - 1e-9)))
         times = np.minimum(t0 + np.arange(k_end + 1) * dt, t_end)
         times[-1] = t_end
         n = self.n
