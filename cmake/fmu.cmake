@@ -82,13 +82,17 @@ endmacro()
 
 # dfo_fmu(<target> FMI <2|3> ID <modelIdentifier> DIR <dir of the .fmu> [LIB_DIR <dir>]
 #         LIB_SOURCES <c files> LIBS <libraries> MODEL_DESCRIPTION <xml>
-#         SOURCES <files for sources/> DEPENDS <targets>)
+#         SOURCES <files for sources/> DEPENDS <targets> [GEN_DIR <dir of its model_vars.h>]
+#         [DEFINES <compile definitions>])
 # The shared library <target> (file <ID>.so/.dll, only the FMI functions exported, no runtime
 # DLL beyond the system's) and, unless DFO_BINARIES_ONLY, <DIR>/<ID>.fmu holding the binaries of
 # the native platform and of every enabled cross target (FMI 2.0: only those FMI 2.0 names).
 function(dfo_fmu target)
-  cmake_parse_arguments(F "" "FMI;ID;DIR;LIB_DIR;MODEL_DESCRIPTION"
-                        "LIB_SOURCES;LIBS;SOURCES;DEPENDS" ${ARGN})
+  cmake_parse_arguments(F "" "FMI;ID;DIR;LIB_DIR;MODEL_DESCRIPTION;GEN_DIR"
+                        "LIB_SOURCES;LIBS;SOURCES;DEPENDS;DEFINES" ${ARGN})
+  if(NOT F_GEN_DIR)
+    set(F_GEN_DIR ${GEN_DIR})
+  endif()
   if(NOT F_LIB_DIR)
     set(F_LIB_DIR ${F_DIR}/lib)
   endif()
@@ -96,7 +100,10 @@ function(dfo_fmu target)
   if(F_DEPENDS)
     add_dependencies(${target} ${F_DEPENDS})
   endif()
-  target_include_directories(${target} PRIVATE ${GEN_DIR} ${FMI2_HEADERS_DIR})
+  target_include_directories(${target} PRIVATE ${F_GEN_DIR} ${FMI2_HEADERS_DIR})
+  if(F_DEFINES)
+    target_compile_definitions(${target} PRIVATE ${F_DEFINES})
+  endif()
   target_link_libraries(${target} PRIVATE ${F_LIBS})
   set_target_properties(${target} PROPERTIES PREFIX "" OUTPUT_NAME ${F_ID} C_VISIBILITY_PRESET hidden
                         LIBRARY_OUTPUT_DIRECTORY ${F_LIB_DIR} RUNTIME_OUTPUT_DIRECTORY ${F_LIB_DIR})
@@ -168,6 +175,7 @@ function(dfo_cross_builds)
               -DCMAKE_TOOLCHAIN_FILE=${CMAKE_SOURCE_DIR}/cmake/toolchains/${t}.cmake
               -DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE} -DDFO_BINARIES_ONLY=ON -DDFO_CROSS=OFF
               -DDFO_TESTS=OFF -DDFO_LIBM=${DFO_LIBM} -DFMI2_HEADERS_DIR=${FMI2_HEADERS_DIR}
+              -DDFO_CHAIN_N=${DFO_CHAIN_N}
               -DPython3_EXECUTABLE=${Python3_EXECUTABLE} --log-level=WARNING
       COMMAND ${CMAKE_COMMAND} -E env --unset=MAKEFLAGS --unset=MAKELEVEL ${CMAKE_COMMAND} --build ${dir} --parallel ${ncpu}
       BYPRODUCTS ${byproducts}

@@ -1591,3 +1591,35 @@ const char *chain_status_text(chain_status st)
     }
     return "unknown status";
 }
+
+/* ---- state storage without a model (FMU states of the chain FMU) ---------------------------- */
+
+int chain_state_alloc(const chain_alloc *al, size_t n, chain_state *s)
+{
+    memset(s, 0, sizeof *s);
+    s->n = n;
+    double *b = dalloc(al, 6 * n);
+    int *mode = (int *)al->allocate(al->env, n, sizeof(int));
+    if (!b || !mode) {
+        if (b) al->release(al->env, b);
+        if (mode) al->release(al->env, mode);
+        return 0;
+    }
+    s->X = b;
+    s->V = b + n;
+    s->A = b + 2 * n;
+    s->F = b + 3 * n;
+    s->hA = b + 4 * n;
+    s->t_stick = b + 5 * n;
+    s->mode = mode;
+    s->exc_n = -1;
+    return 1;
+}
+
+void chain_state_release(const chain_alloc *al, chain_state *s)
+{
+    if (s->X) al->release(al->env, s->X);
+    if (s->mode) al->release(al->env, s->mode);
+    s->X = s->V = s->A = s->F = s->hA = s->t_stick = NULL;
+    s->mode = NULL;
+}

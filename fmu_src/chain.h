@@ -133,4 +133,9 @@ int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, c
 
 const char *chain_status_text(chain_status st);
 
+/* State arrays for n blocks through al without a model (the same layout as chain_state_init; an FMU
+ * state of the chain FMU); 0 on failure. Release with chain_state_release and the same al. */
+int chain_state_alloc(const chain_alloc *al, size_t n, chain_state *s);
+void chain_state_release(const chain_alloc *al, chain_state *s);
+
 #endif

@@ -122,7 +122,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     tmp.cb = *functions;
     tmp.name = (char *)(instanceName ? instanceName : "?");
     const dfo_host tmp_host = {&tmp, host_alloc, host_free, functions->logger ? host_log : NULL};
-    dfo_inst_init(&tmp.core, &tmp_host, tmp.name, 0);
+    (void)dfo_inst_init(&tmp.core, &tmp_host, tmp.name, 0);
+    dfo_inst_free(&tmp.core); /* only its logging is used */
     if (!instanceName || !*instanceName) {
         dfo_inst_fail(&tmp.core, "fmi2Instantiate: the instance name must be a non-empty string.");
         return NULL;
@@ -148,7 +149,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     memcpy(in->name, instanceName, len);
     in->cb = *functions;
     const dfo_host host = {in, host_alloc, host_free, functions->logger ? host_log : NULL};
-    dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0);
+    if (dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0) != DFO_INST_OK) {
+        dfo_inst_free(&in->core);
+        functions->freeMemory(in->name);
+        functions->freeMemory(in);
+        return NULL;
+    }
     dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2Instantiate");
     return in;
 }
@@ -158,6 +164,7 @@ void fmi2FreeInstance(fmi2Component c)
     Instance *in = (Instance *)c;
     if (!in) return;
     dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2FreeInstance");
+    dfo_inst_free(&in->core);
     fmi2CallbackFreeMemory freeMemory = in->cb.freeMemory;
     freeMemory(in->name);
     freeMemory(in);
@@ -344,9 +351,9 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
     BEGIN(fmi2SerializedFMUstateSize);
-    (void)FMUstate;
     if (!size) return FAIL("fmi2SerializedFMUstateSize: size is NULL.");
-    *size = dfo_inst_serialized_size();
+    *size = dfo_inst_state_size(&in->core, FMUstate);
+    if (*size == 0) return FAIL("fmi2SerializedFMUstateSize: FMUstate is NULL or not a state of this FMU.");
     return fmi2OK;
 }
 

@@ -70,8 +70,9 @@ static fmi3Status status_of(dfo_inst_status st)
 #define P_TERM DFO_PHASE_TERMINATED
 #define P_ERR DFO_PHASE_ERROR
 #define P_ANY DFO_PHASE_ANY
-#define P_GET (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
-#define P_SET (P_INST | P_INIT | P_STEP | P_EVENT)
+#define P_CONFIG DFO_PHASE_CONFIG
+#define P_GET (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR | P_CONFIG)
+#define P_SET (P_INST | P_INIT | P_STEP | P_EVENT | P_CONFIG)
 
 #define PHASES_fmi3SetDebugLogging P_ANY
 #define PHASES_fmi3EnterInitializationMode P_INST
@@ -96,6 +97,10 @@ static fmi3Status status_of(dfo_inst_status st)
 #define PHASES_fmi3SerializedFMUStateSize P_ANY
 #define PHASES_fmi3SerializeFMUState P_ANY
 #define PHASES_fmi3DeserializeFMUState P_ANY
+#define PHASES_fmi3GetUInt64 (P_GET | P_INST) /* the structural parameters */
+#define PHASES_fmi3SetUInt64 P_SET
+#define PHASES_fmi3EnterConfigurationMode P_INST
+#define PHASES_fmi3ExitConfigurationMode P_CONFIG
 #define PHASES_fmi3Unsupported P_ANY /* functions of features this FMU does not have: always an error */
 
 /* Functions a host may call from inside the intermediate-update callback. */
@@ -121,7 +126,8 @@ static int allowed(Instance *in, const char *fn, int phases)
     if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
 #define FAIL(...) ((void)dfo_inst_fail(&in->core, __VA_ARGS__), fmi3Error)
 
-/* Scalars only: nValues must equal nValueReferences; arrays non-NULL when used. */
+/* nValues must be the number of values the variables hold (one per scalar, n per array of the
+ * structural parameter n); arrays non-NULL when used. */
 static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference vr[], size_t nvr, const void *value,
                         size_t nValues)
 {
@@ -129,9 +135,15 @@ static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference v
         dfo_inst_fail(&in->core, "%s: the value reference or value array is NULL.", fn);
         return 0;
     }
-    if (nValues != nvr) {
+    const size_t expected = nvr > 0 ? dfo_inst_n_values(&in->core, vr, nvr) : 0;
+    if (nValues != expected) {
+#if defined(DFO_MODEL_INDEXED)
+        dfo_inst_fail(&in->core, "%s: nValues = %lu but the %lu value references given hold %lu values (an array "
+                      "holds n values).", fn, (unsigned long)nValues, (unsigned long)nvr, (unsigned long)expected);
+#else
         dfo_inst_fail(&in->core, "%s: nValues = %lu but %lu value references given (all variables are scalars).", fn,
                       (unsigned long)nValues, (unsigned long)nvr);
+#endif
         return 0;
     }
     return 1;
@@ -179,7 +191,8 @@ static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiatio
     tmp.env = env;
     tmp.logger = logger;
     const dfo_host tmp_host = {&tmp, host_alloc, host_free, logger ? host_log : NULL};
-    dfo_inst_init(&tmp.core, &tmp_host, instanceName ? instanceName : "?", 0);
+    (void)dfo_inst_init(&tmp.core, &tmp_host, instanceName ? instanceName : "?", 0);
+    dfo_inst_free(&tmp.core); /* only its logging is used */
     if (!instanceName || !*instanceName) {
         dfo_inst_fail(&tmp.core, "fmi3InstantiateCoSimulation: the instance name must be a non-empty string.");
         return NULL;
@@ -204,7 +217,12 @@ static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiatio
     in->event_mode_used = eventModeUsed ? 1 : 0;
     in->early_return_allowed = earlyReturnAllowed ? 1 : 0;
     const dfo_host host = {in, host_alloc, host_free, logger ? host_log : NULL};
-    dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0);
+    if (dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0) != DFO_INST_OK) {
+        dfo_inst_free(&in->core);
+        free(in->name);
+        free(in);
+        return NULL;
+    }
     dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3InstantiateCoSimulation");
     return in;
 }
@@ -266,6 +284,7 @@ void fmi3FreeInstance(fmi3Instance instance)
     Instance *in = (Instance *)instance;
     if (!in) return;
     dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3FreeInstance");
+    dfo_inst_free(&in->core);
     free(in->name);
     free(in);
 }
@@ -332,9 +351,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 {
     BEGIN(fmi3UpdateDiscreteStates);
     const int was_pending = dfo_inst_update_events(&in->core);
-    if (was_pending)
-        dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, mode %d.",
-                     dfo_inst_time(&in->core), in->core.v.s.mode);
+    if (was_pending) dfo_inst_log_event_handled(&in->core);
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
@@ -366,14 +383,15 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     BEGIN(fmi3GetFloat64);
     if (!check_arrays(in, "fmi3GetFloat64", vr, nvr, values, nValues)) return fmi3Error;
     dfo_inst_status worst = DFO_INST_OK;
-    for (size_t i = 0; i < nvr; i++) {
+    for (size_t i = 0, k = 0; i < nvr; i++) {
         if (vr[i] == DFO_VR_TIME) {
-            values[i] = host_time(in);
+            values[k++] = host_time(in);
             continue;
         }
-        const dfo_inst_status st = dfo_inst_get_real(&in->core, "fmi3GetFloat64", &vr[i], 1, &values[i]);
+        const dfo_inst_status st = dfo_inst_get_real(&in->core, "fmi3GetFloat64", &vr[i], 1, &values[k]);
         if (st == DFO_INST_ERROR) return fmi3Error;
         if (st > worst) worst = st;
+        k += dfo_inst_n_values(&in->core, &vr[i], 1);
     }
     return status_of(worst);
 }
@@ -534,9 +552,9 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
 {
     BEGIN(fmi3SerializedFMUStateSize);
-    (void)FMUState;
     if (!size) return FAIL("fmi3SerializedFMUStateSize: size is NULL.");
-    *size = dfo_inst_serialized_size();
+    *size = dfo_inst_state_size(&in->core, FMUState);
+    if (*size == 0) return FAIL("fmi3SerializedFMUStateSize: FMUState is NULL or not a state of this FMU.");
     return fmi3OK;
 }
 
@@ -593,7 +611,33 @@ UNSUPPORTED_GETSET(UInt8, fmi3UInt8)
 UNSUPPORTED_GETSET(Int16, fmi3Int16)
 UNSUPPORTED_GETSET(UInt16, fmi3UInt16)
 UNSUPPORTED_GETSET(UInt32, fmi3UInt32)
+#if defined(DFO_MODEL_INDEXED)
+fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3UInt64 values[],
+                         size_t nValues)
+{
+    BEGIN(fmi3GetUInt64);
+    if (!check_arrays(in, "fmi3GetUInt64", vr, nvr, values, nValues)) return fmi3Error;
+    if (nvr > CHUNK) return FAIL("fmi3GetUInt64: at most %d values per call.", CHUNK);
+    unsigned long long buf[CHUNK];
+    const dfo_inst_status st = dfo_inst_get_uint64(&in->core, "fmi3GetUInt64", vr, nvr, buf);
+    if (st == DFO_INST_ERROR) return fmi3Error;
+    for (size_t i = 0; i < nvr; i++) values[i] = (fmi3UInt64)buf[i];
+    return status_of(st);
+}
+
+fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                         const fmi3UInt64 values[], size_t nValues)
+{
+    BEGIN(fmi3SetUInt64);
+    if (!check_arrays(in, "fmi3SetUInt64", vr, nvr, values, nValues)) return fmi3Error;
+    if (nvr > CHUNK) return FAIL("fmi3SetUInt64: at most %d values per call.", CHUNK);
+    unsigned long long buf[CHUNK];
+    for (size_t i = 0; i < nvr; i++) buf[i] = (unsigned long long)values[i];
+    return status_of(dfo_inst_set_uint64(&in->core, "fmi3SetUInt64", vr, nvr, buf));
+}
+#else
 UNSUPPORTED_GETSET(UInt64, fmi3UInt64)
+#endif
 UNSUPPORTED_GETSET(String, fmi3String)
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
@@ -651,6 +695,18 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     (void)nSensitivity;
     return unsupported(instance, "fmi3GetAdjointDerivative", "adjoint derivatives are not provided.");
 }
+#if defined(DFO_MODEL_INDEXED)
+fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
+{
+    BEGIN(fmi3EnterConfigurationMode);
+    return status_of(dfo_inst_enter_config(&in->core, "fmi3EnterConfigurationMode"));
+}
+fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
+{
+    BEGIN(fmi3ExitConfigurationMode);
+    return status_of(dfo_inst_exit_config(&in->core, "fmi3ExitConfigurationMode"));
+}
+#else
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
 {
     return unsupported(instance, "fmi3EnterConfigurationMode", "the FMU has no structural parameters.");
@@ -659,6 +715,7 @@ fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
 {
     return unsupported(instance, "fmi3ExitConfigurationMode", "the FMU has no structural parameters.");
 }
+#endif
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                   fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[])
 {

@@ -72,6 +72,7 @@ class Variable:
     description: str = ""
     declared_type: str | None = None  # the enumeration type of an Enumeration
     dimensions: tuple[int, ...] = ()  # array shape (FMI 3.0 arrays); () for a scalar, the only kind today
+    dimension: str | None = None  # an array whose size is this structural parameter (the chain's n)
     dependencies: tuple[str, ...] | None = None  # outputs: the knowns it depends on at once (None: all)
     zero: str | None = None  # min 0 and a ZeroOrNormal annotation: what 0 means; other values are normal
 
@@ -120,7 +121,7 @@ def _number(text: str | None, kind: str) -> float | int | bool | None:
         return text in ("true", "1")
     if kind == "Real":
         return float(text)
-    return int(text)
+    return int(text)  # Integer, Enumeration, UInt64
 
 
 def parse(xml_path: Path) -> Model:
@@ -146,7 +147,7 @@ def parse(xml_path: Path) -> Model:
         kind_el = next(iter(sv))
         kind = kind_el.tag
         name = sv.get("name")
-        if kind not in ("Real", "Integer", "Boolean", "Enumeration"):
+        if kind not in ("Real", "Integer", "Boolean", "Enumeration", "UInt64"):
             raise ModelError(f"variable {name}: unsupported type {kind}")
         declared = kind_el.get("declaredType")
         lo, hi = _number(kind_el.get("min"), kind), _number(kind_el.get("max"), kind)
@@ -165,7 +166,7 @@ def parse(xml_path: Path) -> Model:
             start=_number(kind_el.get("start"), kind), min=None if lo is None else float(lo),
             max=None if hi is None else float(hi), unit=kind_el.get("unit"),
             description=sv.get("description", ""), declared_type=declared, dependencies=dep_names,
-            zero=zero.get(name)))
+            zero=zero.get(name), dimension=sv.get("dimension")))
     effects_var, effects = None, []
     eff_el = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
     if eff_el is not None:
@@ -197,7 +198,12 @@ def check(model: Model) -> None:
             raise ModelError(f"variable {v.name}: name time and value reference {TIME_VR} are FMI 3.0's time")
         if v.dimensions:
             raise ModelError(f"variable {v.name}: arrays are not supported by the C emitter yet")
-        if v.causality not in ("parameter", "calculatedParameter", "input", "output"):
+        if v.dimension is not None and v.dimension not in {s.name for s in model.variables
+                                                           if s.causality == "structuralParameter"}:
+            raise ModelError(f"variable {v.name}: dimension {v.dimension} is not a structural parameter")
+        if v.causality == "structuralParameter" and (v.type != "UInt64" or v.dimension is not None):
+            raise ModelError(f"variable {v.name}: a structural parameter is a scalar UInt64")
+        if v.causality not in ("parameter", "calculatedParameter", "input", "output", "structuralParameter"):
             raise ModelError(f"variable {v.name}: unsupported causality {v.causality}")
         if v.start is not None and v.type != "Boolean" and not _in_range(v, float(v.start)):
             raise ModelError(f"variable {v.name}: start {v.start} outside its range")
@@ -266,6 +272,8 @@ def range_text(model: Model, v: Variable) -> str:
 
 
 def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
+    if any(v.causality == "structuralParameter" for v in model.variables):
+        return emit_c_header_indexed(model, source)
     computed = [v for v in model.variables if v.causality in ("output", "calculatedParameter")]
     L = [
         f"/* Generated from {source} by fmu_src/gen_model_vars.py. Do not edit. */",
@@ -371,9 +379,133 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     return "\n".join(L)
 
 
+ARRAY_VR_STRIDE = 100000  # array j: value reference j * stride (FMI 3.0), element i: j * stride + i (FMI 2.0)
+
+
+def _bounds(v: Variable) -> tuple[str, str]:
+    if v.type == "Real":
+        return (c_double(v.min) if v.min is not None else "-1.7976931348623157e308",
+                c_double(v.max) if v.max is not None else "1.7976931348623157e308")
+    if v.type == "Boolean":
+        return "0.0", "1.0"
+    if v.type == "UInt64":
+        return c_double(v.min if v.min is not None else 0), c_double(v.max if v.max is not None else 2.0**53)
+    return (c_double(v.min) if v.min is not None else c_double(INT_MIN),
+            c_double(v.max) if v.max is not None else c_double(INT_MAX))
+
+
+def emit_c_header_indexed(model: Model, source: str) -> str:
+    """The C view of a model with structural parameters and arrays over them (the chain): values live
+    in slots (scalar parameters, array parameters, array inputs), outputs are computed by id; the
+    instance core (chain_instance.c) sizes the arrays by the structural parameter."""
+    for v in model.variables:
+        if v.dimension is not None and v.vr % ARRAY_VR_STRIDE:
+            raise ModelError(f"array {v.name}: value reference {v.vr} is not a multiple of {ARRAY_VR_STRIDE}")
+        if v.dimension is None and v.vr >= ARRAY_VR_STRIDE:
+            raise ModelError(f"scalar {v.name}: value reference {v.vr} is in the arrays' range")
+        if v.causality == "input" and v.dimension is None:
+            raise ModelError(f"input {v.name}: scalar inputs are not supported in an indexed model")
+    groups = {
+        "DFO_SP": [v for v in model.variables if v.causality == "parameter" and v.dimension is None],
+        "DFO_AP": [v for v in model.variables if v.causality == "parameter" and v.dimension is not None],
+        "DFO_AI": [v for v in model.variables if v.causality == "input"],
+        "DFO_OUT": [v for v in model.variables if v.causality in ("output", "calculatedParameter")],
+        "DFO_STRUCT": [v for v in model.variables if v.causality == "structuralParameter"],
+    }
+    L = [
+        f"/* Generated from {source} by fmu_src/gen_model_vars.py. Do not edit. */",
+        "#ifndef DFO_MODEL_VARS_H",
+        "#define DFO_MODEL_VARS_H",
+        "",
+        "#include <stddef.h>",
+        "",
+        "#define DFO_MODEL_INDEXED 1 /* arrays sized by structural parameters */",
+        f'#define MODEL_GUID "{model.guid}"',
+        f'#define MODEL_IDENTIFIER "{model.identifier}"',
+        f"#define DFO_VR_TIME {TIME_VR}u /* FMI 3.0: the independent variable time */",
+        f"#define DFO_ARRAY_VR_STRIDE {ARRAY_VR_STRIDE}u /* array j: j * stride; its element i (1-based): j * stride + i */",
+        "",
+        "/* value references and start values */",
+    ]
+    for v in model.variables:
+        L.append(f"#define VR_{v.name} {v.vr}u")
+        if v.start is not None:
+            start = c_double(v.start) if v.type == "Real" else str(int(v.start))
+            L.append(f"#define START_{v.name} {start}")
+        if v.type in ("Real", "Integer", "UInt64") and v.causality == "structuralParameter":
+            L.append(f"#define MAX_{v.name} {int(v.max)}")
+    L += ["", "/* enumeration items */"]
+    for tname, items in model.enumerations.items():
+        L.append("enum {")
+        L += [f"    DFO_MD_{upper_snake(tname)}_{upper_snake(i.name)} = {i.value}," for i in items]
+        L.append("};")
+        vals = ", ".join(str(i.value) for i in items)
+        L.append(f"static const int DFO_ITEMS_{tname}[{len(items)}] = {{{vals}}};")
+    L += ["", "/* log categories, in the order of <LogCategories> */", "enum {"]
+    L += [f"    DFO_{upper_snake(name)} = {k}," for k, (name, _) in enumerate(model.log_categories)]
+    L += [f"    DFO_NUM_LOG_CATEGORIES = {len(model.log_categories)}", "};",
+          "static const char *const DFO_LOG_CATEGORIES[DFO_NUM_LOG_CATEGORIES] = {"]
+    L += [f'    "{name}",' for name, _ in model.log_categories]
+    L += ["};", "", "/* slots: scalar parameters (SP), array parameters (AP), array inputs (AI), computed (OUT),",
+          " * structural parameters (STRUCT) */"]
+    for prefix, vs in groups.items():
+        L.append("enum {")
+        L += [f"    {prefix}_{v.name}," for v in vs]
+        L += [f"    {prefix.replace('DFO_', 'DFO_NUM_')}", "};"]
+    L += [
+        "",
+        "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN, DFO_UINT64 } dfo_var_type;",
+        "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT, DFO_STRUCTURAL } dfo_var_causality;",
+        "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
+        "/* where a value lives: the slot of its group (DFO_SP_, DFO_AP_, DFO_AI_, DFO_OUT_, DFO_STRUCT_) */",
+        "typedef enum { DFO_IN_PARAMS, DFO_IN_ARRAYS, DFO_IN_INPUTS, DFO_COMPUTED, DFO_IN_STRUCT } dfo_var_home;",
+        "",
+        "typedef struct {",
+        "    unsigned int vr;",
+        "    const char *name;",
+        "    dfo_var_type type;",
+        "    dfo_var_causality causality;",
+        "    dfo_var_variability variability;",
+        "    dfo_var_home home;",
+        "    int array;          /* an array of n values (n: the structural parameter) */",
+        "    int slot;           /* index in its group */",
+        "    int has_start;",
+        "    double start, min, max; /* absent bounds: the type's extremes; an array's start is every element's */",
+        "    int normal;         /* must be a normal number (min is the smallest normal double) */",
+        "    int n_items;        /* Enumeration: the allowed values */",
+        "    const int *items;",
+        "    const char *range;  /* the valid range as text, for error messages */",
+        "} dfo_var_info;",
+        "",
+        f"#define DFO_NUM_VARS {len(model.variables)}",
+        "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {",
+    ]
+    homes = {"DFO_SP": "DFO_IN_PARAMS", "DFO_AP": "DFO_IN_ARRAYS", "DFO_AI": "DFO_IN_INPUTS", "DFO_OUT": "DFO_COMPUTED",
+             "DFO_STRUCT": "DFO_IN_STRUCT"}
+    causalities = dict(C_CAUSALITIES, structuralParameter="DFO_STRUCTURAL")
+    types = dict(C_TYPES, UInt64="DFO_UINT64")
+    for v in model.variables:
+        prefix = next(p for p, vs in groups.items() if v in vs)
+        lo, hi = _bounds(v)
+        start = c_double(float(v.start)) if v.start is not None else "0.0"
+        if v.type == "Enumeration":
+            items = model.enumerations[v.declared_type]
+            n_items, items_ptr = str(len(items)), f"DFO_ITEMS_{v.declared_type}"
+        else:
+            n_items, items_ptr = "0", "NULL"
+        rng = range_text(model, v).replace('"', '\\"')
+        L.append(
+            f'    {{{v.vr}u, "{v.name}", {types[v.type]}, {causalities[v.causality]}, '
+            f"{C_VARIABILITIES[v.variability]}, {homes[prefix]}, {int(v.dimension is not None)}, {prefix}_{v.name}, "
+            f'{int(v.start is not None)}, {start}, {lo}, {hi}, {int(v.normal)}, {n_items}, {items_ptr}, "{rng}"}},')
+    L += ["};", "", "#endif", ""]
+    return "\n".join(L)
+
+
 # ------------------------------------------------------------------------- FMI 3.0 emitters
 
-FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean",
+              "UInt64": "UInt64"}
 # FMI 2.0 co-simulation attributes kept under their FMI 3.0 names
 FMI3_CS_KEPT = {"canHandleVariableCommunicationStepSize": "canHandleVariableCommunicationStepSize",
                 "canBeInstantiatedOnlyOncePerProcess": "canBeInstantiatedOnlyOncePerProcess",
@@ -390,7 +522,7 @@ ROOT_ATTRIBUTES = ("modelName", "description", "version", "author", "copyright",
 def _xml_number(x: float | int | bool, kind: str) -> str:
     if kind == "Boolean":
         return "true" if x else "false"
-    if kind in ("Integer", "Enumeration"):
+    if kind in ("Integer", "Enumeration", "UInt64"):
         return str(int(x))
     return repr(float(x))
 
@@ -456,12 +588,22 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
             ("causality", v.causality), ("variability", v.variability), ("initial", v.initial)]
         if kind == "Enumeration":
             pairs.append(("declaredType", v.declared_type))
-        if kind in ("Float64", "Int32"):
-            pairs.append(("unit", v.unit))
+        if kind in ("Float64", "Int32", "UInt64"):
+            if kind != "UInt64":
+                pairs.append(("unit", v.unit))
             src = next(sv for sv in root.iterfind("ModelVariables/ScalarVariable") if sv.get("name") == v.name)
             el = next(iter(src))
             # the bounds as the source writes them (Int32 outputs without bounds stay without)
             pairs += [("min", el.get("min")), ("max", el.get("max"))]
+        if v.dimension is not None:
+            size = int(model.variable(v.dimension).start)
+            if v.start is not None:  # one start value per element of the structural parameter's start
+                pairs.append(("start", " ".join([_xml_number(v.start, v.type)] * size)))
+            dim_vr = model.variable(v.dimension).vr
+            L.append(f"    <{kind}" + _attrs(pairs) + ">")
+            L.append("      <Dimension" + _attrs([("valueReference", str(dim_vr))]) + "/>")
+            L.append(f"    </{kind}>")
+            continue
         if v.start is not None:
             pairs.append(("start", _xml_number(v.start, v.type)))
         L.append(f"    <{kind}" + _attrs(pairs) + "/>")
@@ -504,13 +646,74 @@ def emit_fmi3_build_description(model: Model, source: Path) -> str:
     return "\n".join(L)
 
 
+def emit_fmi2_model_description(model: Model, source: Path, size: int) -> str:
+    """The FMI 2.0 model description of an indexed model for a build whose structural parameters
+    are all `size`: every array element a ScalarVariable named `name[i]` (value reference
+    array's + i), the structural parameters left out (fixed by the build), an array output's
+    dependency on an array input meaning the same element."""
+    root = ET.parse(source).getroot()
+    structural = {v.name for v in model.variables if v.causality == "structuralParameter"}
+    for v in model.variables:
+        if v.name in structural and not (v.min <= size <= v.max):
+            raise ModelError(f"{v.name} = {size} outside [{text_number(v.min)}, {text_number(v.max)}]")
+    if size >= ARRAY_VR_STRIDE:
+        raise ModelError(f"an array size of {size} does not fit the value references")
+    head = ET.tostring(root, encoding="unicode").split("<ModelVariables>")[0]
+    head = re.sub(r"\s*<!--.*?-->", "", head, flags=re.S)  # the source's own comments
+    L = ['<?xml version="1.0" encoding="UTF-8"?>',
+         f"<!-- Generated from {source.name} by fmu_src/gen_model_vars.py for n = {size}. Do not edit. -->",
+         head.rstrip().replace("\n", "\n", 1), "", "  <ModelVariables>"]
+    index: dict[tuple[str, int], int] = {}
+    srcs = {sv.get("name"): sv for sv in root.iterfind("ModelVariables/ScalarVariable")}
+    k = 0
+    for v in model.variables:
+        if v.name in structural:
+            continue
+        sv = srcs[v.name]
+        el = next(iter(sv))
+        for i in (range(1, size + 1) if v.dimension else (0,)):
+            k += 1
+            name, vr = (f"{v.name}[{i}]", v.vr + i) if v.dimension else (v.name, v.vr)
+            index[(v.name, i)] = k
+            attrs = [(a, sv.get(a)) for a in ("causality", "variability", "initial")]
+            desc = sv.get("description") + (f" (block {i})" if v.dimension else "")
+            L.append("    <ScalarVariable" + _attrs([("name", name), ("valueReference", str(vr))] + attrs
+                                                    + [("description", desc)]) + ">"
+                     + f"<{el.tag}" + _attrs(list(el.attrib.items())) + "/></ScalarVariable>")
+    L += ["  </ModelVariables>", "", "  <ModelStructure>", "    <Outputs>"]
+    outputs = [v for v in model.variables if v.causality == "output"]
+    for v in outputs:
+        for i in (range(1, size + 1) if v.dimension else (0,)):
+            deps = None
+            if v.dependencies is not None:
+                deps = " ".join(str(index[(d, i if model.variable(d).dimension else 0)]) for d in v.dependencies)
+            L.append("      <Unknown" + _attrs([("index", str(index[(v.name, i)])), ("dependencies", deps)]) + "/>")
+    L += ["    </Outputs>", "    <InitialUnknowns>"]
+    for v in outputs + [v for v in model.variables if v.causality == "calculatedParameter"]:
+        for i in (range(1, size + 1) if v.dimension else (0,)):
+            L.append("      <Unknown" + _attrs([("index", str(index[(v.name, i)]))]) + "/>")
+    L += ["    </InitialUnknowns>", "  </ModelStructure>", "", "</fmiModelDescription>", ""]
+    return "\n".join(L)
+
+
 EMITTERS = {"--header": lambda m, src: emit_c_header(m, src.name), "--fmi3": emit_fmi3_model_description,
             "--fmi3-build": emit_fmi3_build_description}
 
 
 def main(argv: list[str]) -> int:
+    if len(argv) == 5 and argv[3] == "--fmi2":  # an indexed model's FMI 2.0 description for a size
+        try:
+            text = emit_fmi2_model_description(parse(Path(argv[1])), Path(argv[1]), int(argv[4]))
+        except (ModelError, ET.ParseError, OSError, ValueError) as e:
+            print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
+            return 1
+        out = Path(argv[2])
+        if not out.exists() or out.read_text() != text:
+            out.write_text(text)
+        return 0
     if len(argv) not in (3, 4) or (len(argv) == 4 and argv[3] not in EMITTERS):
-        print("usage: gen_model_vars.py modelDescription.xml OUT [--header|--fmi3|--fmi3-build]", file=sys.stderr)
+        print("usage: gen_model_vars.py modelDescription.xml OUT [--header|--fmi3|--fmi3-build|--fmi2 SIZE]",
+              file=sys.stderr)
         return 2
     try:
         model = parse(Path(argv[1]))

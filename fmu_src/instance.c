@@ -92,6 +92,7 @@ const char *dfo_phase_name(dfo_phase p)
     case DFO_PHASE_TERMINATED: return "terminated";
     case DFO_PHASE_ERROR: return "error";
     case DFO_PHASE_EVENT: return "event mode";
+    case DFO_PHASE_CONFIG: return "configuration mode";
     }
     return "unknown";
 }
@@ -194,7 +195,7 @@ static int check_value(const dfo_instance *in, const char *fn, const dfo_var_inf
 
 /* ---- start, outputs -------------------------------------------------------------------------- */
 
-void dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on)
+dfo_inst_status dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on)
 {
     memset(in, 0, sizeof *in);
     in->host = *host;
@@ -202,6 +203,29 @@ void dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int
     dfo_inst_set_logging(in, -1, logging_on);
     in->log_on[DFO_LOG_STATUS_ERROR] = in->log_on[DFO_LOG_STATUS_WARNING] = 1; /* problems are always reported */
     set_start_values(&in->v);
+    return DFO_INST_OK;
+}
+
+void dfo_inst_free(dfo_instance *in) { (void)in; }
+
+size_t dfo_inst_n_values(const dfo_instance *in, const unsigned int vr[], size_t nvr)
+{
+    (void)in;
+    (void)vr;
+    return nvr; /* scalars only */
+}
+
+void dfo_inst_log_event_handled(const dfo_instance *in)
+{
+    dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, mode %d.", dfo_inst_time(in),
+                 in->v.s.mode);
+}
+
+size_t dfo_inst_state_size(const dfo_instance *in, const void *state)
+{
+    (void)in;
+    (void)state;
+    return dfo_inst_serialized_size();
 }
 
 /* Derive the model from the parameters and start it (exit of initialisation, or outputs asked for

@@ -14,8 +14,6 @@
 #define DFO_INSTANCE_H
 
 #include "model_vars.h"
-#include "newmark.h"
-#include "oscillator.h"
 
 #include <stddef.h>
 
@@ -28,9 +26,10 @@ typedef enum {
     DFO_PHASE_STEP = 1 << 2,       /* stepping */
     DFO_PHASE_TERMINATED = 1 << 3,
     DFO_PHASE_ERROR = 1 << 4,      /* a step failed: only reset or an FMU state recovers */
-    DFO_PHASE_EVENT = 1 << 5       /* FMI 3.0 event mode (never reached through FMI 2.0) */
+    DFO_PHASE_EVENT = 1 << 5,      /* FMI 3.0 event mode (never reached through FMI 2.0) */
+    DFO_PHASE_CONFIG = 1 << 6      /* FMI 3.0 configuration mode (models with structural parameters) */
 } dfo_phase;
-#define DFO_PHASE_ANY 63
+#define DFO_PHASE_ANY 127
 
 /* What the host provides. alloc returns zeroed memory (calloc-like) or NULL; log may be NULL. */
 typedef struct {
@@ -39,6 +38,13 @@ typedef struct {
     void (*free)(void *ctx, void *p);
     void (*log)(void *ctx, dfo_inst_status status, const char *category, const char *message);
 } dfo_host;
+
+#if defined(DFO_MODEL_INDEXED)
+/* A model with arrays sized by a structural parameter (the chain): its values (chain_instance.h). */
+#include "chain_instance.h"
+#else
+#include "newmark.h"
+#include "oscillator.h"
 
 /* Everything that defines where a simulation is: plain values, no pointers, so that an FMU state is
  * a copy and its serialisation the bytes. */
@@ -58,6 +64,7 @@ typedef struct {
      * s is already the right limit. */
     int event_pending, event_from;
 } dfo_values;
+#endif
 
 typedef struct {
     dfo_values v;
@@ -69,8 +76,30 @@ typedef struct {
 } dfo_instance;
 
 /* Start values, phase instantiated; errors and warnings always logged, the other categories as
- * logging_on says. */
-void dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on);
+ * logging_on says. DFO_INST_ERROR (logged) when memory for the start values could not be had; then
+ * dfo_inst_free is still to be called. */
+dfo_inst_status dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on);
+/* Release what the instance holds (not the instance itself). */
+void dfo_inst_free(dfo_instance *in);
+
+/* ---- what an FMI glue asks of every model ---- */
+/* The number of values the variables vr[] hold (1 per scalar, n per array; 1 for an unknown
+ * reference, which the get/set call then names). */
+size_t dfo_inst_n_values(const dfo_instance *in, const unsigned int vr[], size_t nvr);
+/* Log (logEvents) that a pending event was handled. */
+void dfo_inst_log_event_handled(const dfo_instance *in);
+/* The serialised size of an FMU state (0 when state is not one of this FMU's). */
+size_t dfo_inst_state_size(const dfo_instance *in, const void *state);
+#if defined(DFO_MODEL_INDEXED)
+/* Configuration mode (FMI 3.0): structural parameters may be set; leaving it sizes the arrays. */
+dfo_inst_status dfo_inst_enter_config(dfo_instance *in, const char *fn);
+dfo_inst_status dfo_inst_exit_config(dfo_instance *in, const char *fn);
+/* Structural parameters (UInt64). */
+dfo_inst_status dfo_inst_get_uint64(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                    unsigned long long value[]);
+dfo_inst_status dfo_inst_set_uint64(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                    const unsigned long long value[]);
+#endif
 
 /* ---- logging ---- */
 #if defined(__GNUC__)

@@ -9,6 +9,9 @@
   conditions, between it and the chaotic band periodic but asymmetric, below it spread over a band;
 - fig12_14: four stick phases per cycle in the sub-harmonic zone, two above; nearby initial
   conditions part;
+- chain2: the frictionless first block never sticks, the unforced one sticks more, a row is a
+  direct run of the chain FMU; chain_waves: slip fronts travel outward block after block, below
+  the chain's sound speed;
 - the sweep engine: the same numbers bit for bit with 0 (no Dask), 1 and 2 workers; a killed
   sweep restarts from its chunks without recomputing them; bad input fails before any work.
 
@@ -341,3 +344,86 @@ def test_studies_run_through_the_module_entry_point(tmp_path: Path, fmu_path: Pa
 
 
 
+
+
+# ---------------------------------------------------------------------------- the chain's studies
+
+
+@pytest.fixture(scope="module")
+def chain_fmu3() -> Path:
+    from dryfriction.chain import default_chain_fmu3
+
+    path = default_chain_fmu3()
+    if not path.is_file():
+        pytest.fail(f"FMI 3.0 chain FMU not built: {path} (cmake --build build)")
+    return path
+
+
+def test_chain2_quick(tmp_path: Path, chain_fmu3: Path) -> None:
+    """Two blocks, the first forced: the frictionless first block of the 'second' configuration
+    never sticks; a row of the dataset is a direct run of the chain; the far block sticks more."""
+    from dryfriction.chain import ChainFMU
+    from dryfriction.studies.chain2 import chain_params
+
+    out, res = run("chain2", tmp_path, chain_fmu3)
+    ds = read_netcdf(out / "chain2.nc")
+    assert ds.amplitude.dims == ("config", "lam", "x0_1", "x0_2", "block")
+    assert ds.amplitude.shape == (2, 12, 2, 2, 2) and ds.stick_share.shape == ds.amplitude.shape
+    assert int(ds.attrs["failed_runs"]) == 0 and not bool(np.isnan(ds.amplitude).any())
+    s = ds.stick_share
+    assert float(s.min()) >= 0.0 and float(s.max()) <= 1.0
+    assert float(s.sel(config="second", block=1).max()) == 0.0          # no friction: never stuck
+    assert float(s.sel(config="both", block=1).max()) > 0.2             # with friction it sticks
+    for c in ("both", "second"):                                        # the unforced block sticks more
+        assert float(s.sel(config=c, block=2).mean()) > float(s.sel(config=c, block=1).mean())
+    # plumbing: one row again through the driver, the same numbers
+    cfg, lam = res["summary"], float(ds.lam.values[4])
+    ch = {k[len("chain_"):]: ds.attrs[k] for k in ds.attrs if k.startswith("chain_")}
+    num = {"steps_per_period": ds.attrs["steps_per_period"], "alpha": ds.attrs["alpha"], "scheme": ds.attrs["scheme"]}
+    p = chain_params(ch, "both", lam, (-2.0, 2.0), num)
+    T = 2 * np.pi / p["omega"]
+    with ChainFMU(2, fmu_path=chain_fmu3) as f:
+        f.start(p)
+        f.step_to((ds.attrs["periods"] - ds.attrs["obs_periods"]) * T)
+        r = f.record(ds.attrs["periods"] * T, T / ds.attrs["samples_per_period"])
+    sel = dict(config="both", lam=lam, x0_1=-2.0, x0_2=2.0)
+    assert np.array_equal(ds.amplitude.sel(**sel).values, r.amplitude())
+    assert np.array_equal(ds.stick_share.sel(**sel).values, r.stick_share())
+    assert cfg["runs"] == 96 and (out / "chain2.png").stat().st_size > 10_000
+
+
+def test_chain_waves_quick(tmp_path: Path, chain_fmu3: Path) -> None:
+    """Slip fronts leave the forced block and travel along the chain: the first slip times grow
+    with the block index, no faster than the chain's sound speed sqrt(k/m) (1 block/s), a larger
+    force reaches farther, and the far blocks stick more than the forced one."""
+    out, res = run("chain_waves", tmp_path, chain_fmu3)
+    ds = read_netcdf(out / "chain_waves.nc")
+    n = ds.block.size
+    assert n == 64 and ds.mode.dims == ("P0", "time", "block") and ds.P0.size == 2
+    assert ds.mode.shape[1] == 2 * 200 + 1
+    main_mode = ds.mode.sel(P0=1.0).values
+    assert set(np.unique(main_mode)) == {-1, 0, 1}
+    for p in ds.P0.values:
+        first = ds.first_slip_time.sel(P0=p).values
+        reached = first[np.isfinite(first)]
+        assert reached.size >= 3 and np.all(np.diff(reached) >= 0)     # the front moves outward
+        assert np.all(np.isfinite(first[:reached.size]))               # ... block after block
+        assert 0.05 < float(ds.front_speed.sel(P0=p)) <= 1.05
+    assert int(ds.blocks_reached.sel(P0=1.0)) >= int(ds.blocks_reached.sel(P0=0.5))
+    st = ds.stick_share.sel(P0=1.0).values
+    assert st[0] < 0.5 and st[-1] > st[0]
+    assert res["summary"]["n"] == 64 and (out / "chain_waves.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["chain2", "--set", "chain.configs=[\"all\"]"], "chain.configs must be a non-empty list of both, second"),
+    (["chain2", "--set", "window.obs_periods=100"], "window.obs_periods must be in"),
+    (["chain_waves", "--set", "chain.n=1"], "chain.n must be in [2, 4096]"),
+    (["chain_waves", "--set", "numerics.h=0"], "numerics.h must be > 0"),
+])
+def test_chain_studies_bad_input_is_one_line(argv: list[str], words: str, tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not any(tmp_path.iterdir())

@@ -1,4 +1,4 @@
-"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov``.
+"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov | chain``.
 
 Invalid arguments end with one readable line on stderr and exit status 2, before any work.
 """
@@ -92,6 +92,10 @@ def build_parser() -> Parser:
     from .chaos.cli import add_lyapunov_parser
 
     add_lyapunov_parser(sub, parents=common)
+
+    from .chain_cli import add_chain_parser
+
+    add_chain_parser(sub, parents=common)
 
     s = sub.add_parser("study", parents=common, help="the paper's studies ('dryfriction study list')",
                        description="Reproduce a study of the paper (see 'list').")
@@ -290,10 +294,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.fmu = getattr(args, "fmu", None)
         if args.fmu is not None and not args.fmu.is_file():
             raise UsageError(f"--fmu: no such file: {args.fmu}")
+        from .chain_cli import chain_main
         from .chaos.cli import lyapunov_main
 
         handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
-                   "study": cmd_study, "lyapunov": lyapunov_main}[args.command]
+                   "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main}[args.command]
         return handler(args)
     except UsageError as e:
         print(f"dryfriction: error: {e}", file=sys.stderr)

@@ -41,6 +41,9 @@ STUDIES: dict[str, ModuleType] = {m.NAME: m for m in (
 from . import chaos_basins, chaos_scan, chaos_transients  # noqa: E402
 STUDIES.update({m.NAME: m for m in (chaos_scan, chaos_basins, chaos_transients)})
 
+from . import chain2, chain_waves  # noqa: E402
+STUDIES.update({m.NAME: m for m in (chain2, chain_waves)})
+
 ALIASES = {"fig5": "fig5_6", "fig6": "fig5_6", "fig8": "fig8_9", "fig9": "fig8_9", "fig10": "fig10_11",
            "fig11": "fig10_11", "fig12": "fig12_14", "fig13": "fig12_14", "fig14": "fig12_14"}
 
@@ -94,7 +97,8 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
 
     key = resolve(name)
     cfg = effective_config(key, quick=quick, config_file=config_file, sets=sets)
-    fmu_path = Path(fmu) if fmu is not None else _default_fmu()
+    # a study of another model (the chain) names its own FMU: module.default_fmu()
+    fmu_path = Path(fmu) if fmu is not None else getattr(STUDIES[key], "default_fmu", _default_fmu)()
     if not fmu_path.is_file():
         raise ConfigError(f"FMU not found: {fmu_path} (build it with cmake, or give --fmu PATH / set DFO_FMU)")
     n_workers = (os.cpu_count() or 1) if workers is None else workers
