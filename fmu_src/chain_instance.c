@@ -461,6 +461,7 @@ static dfo_inst_status resize(dfo_instance *in, const char *fn, size_t n)
                              (unsigned long)in->v.n);
     free_model(&in->v);
     free_arrays(in, &in->v);
+    w.M = NULL;
     in->v = w;
     return DFO_INST_OK;
 }
