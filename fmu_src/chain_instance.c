@@ -1,6 +1,7 @@
 /* The instance core of the DryFrictionChain FMUs (instance.h's API for the indexed model of
- * fmu_src/chain/modelDescription.xml): the same life cycle, phases, logging, doStep checks, events
- * and FMU state framing as the oscillator's core, over values that are arrays of n blocks (n the
+ * fmu_src/chain/modelDescription.xml): the oscillator's life cycle, phases, events and FMU state
+ * framing (logging, range checks, doStep checks and the checksum are instance_common.c's, shared
+ * with it), over values that are arrays of n blocks (n the
  * structural parameter, set in FMI 3.0's configuration mode, fixed by the build in FMI 2.0 where
  * DFO_CHAIN_FIXED_N is defined). The physics is chain.[ch]. No FMI types.
  *
@@ -11,6 +12,7 @@
  * Memory: every array through the host's allocator, O(n): parameters (10 n), inputs (2 x 2 n),
  * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
 #include "instance.h"
+#include "instance_common.h"
 
 #include <float.h>
 #include <math.h>
@@ -23,7 +25,6 @@
 typedef char dfo_static_assert_schemes[(DFO_MD_SCHEME_PAPER == 1 && DFO_MD_SCHEME_CONSISTENT == 2 &&
                                         DFO_MD_SCHEME_LOCATED == 3) ? 1 : -1];
 
-#define MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take */
 #define STATE_MAGIC 0x444643484d555354ULL /* FMU state tag */
 #define SERIAL_MAGIC "DFCSTATE"
 #define SERIAL_VERSION 1u
@@ -35,64 +36,6 @@ typedef char dfo_static_assert_fixed_n[(DFO_CHAIN_FIXED_N >= 1 && DFO_CHAIN_FIXE
 #else
 #define N_START ((size_t)START_n)
 #endif
-
-/* ---- logging --------------------------------------------------------------------------------- */
-
-static void vlog(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, va_list ap)
-{
-    char buf[512];
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    for (char *c = buf; *c; c++)
-        if (*c == '%') *c = ' '; /* the message reaches printf-style loggers as a format */
-    in->host.log(in->host.ctx, status, DFO_LOG_CATEGORIES[category], buf);
-}
-
-void dfo_inst_log(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, ...)
-{
-    if (!in->host.log || !in->log_on[category]) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(in, status, category, fmt, ap);
-    va_end(ap);
-}
-
-dfo_inst_status dfo_inst_fail(const dfo_instance *in, const char *fmt, ...)
-{
-    if (!in->host.log || !in->log_on[DFO_LOG_STATUS_ERROR]) return DFO_INST_ERROR;
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(in, DFO_INST_ERROR, DFO_LOG_STATUS_ERROR, fmt, ap);
-    va_end(ap);
-    return DFO_INST_ERROR;
-}
-
-int dfo_inst_log_category(const char *name)
-{
-    if (!name) return -1;
-    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (!strcmp(name, DFO_LOG_CATEGORIES[j])) return j;
-    return -1;
-}
-
-void dfo_inst_set_logging(dfo_instance *in, int category, int on)
-{
-    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (category < 0 || category == j) in->log_on[j] = on ? 1 : 0;
-}
-
-const char *dfo_phase_name(dfo_phase p)
-{
-    switch (p) {
-    case DFO_PHASE_INSTANTIATED: return "instantiated";
-    case DFO_PHASE_INIT: return "initialization mode";
-    case DFO_PHASE_STEP: return "step mode";
-    case DFO_PHASE_TERMINATED: return "terminated";
-    case DFO_PHASE_ERROR: return "error";
-    case DFO_PHASE_EVENT: return "event mode";
-    case DFO_PHASE_CONFIG: return "configuration mode";
-    }
-    return "unknown";
-}
 
 /* ---- memory ---------------------------------------------------------------------------------- */
 
@@ -247,22 +190,9 @@ static int lookup(const dfo_instance *in, const char *fn, unsigned int vr, dfo_v
     return 1;
 }
 
-/* NULL when the value is valid for the variable, else the valid range as text. */
-static const char *invalid(const dfo_var_info *var, double x)
-{
-    if (!isfinite(x)) return "finite";
-    if (var->n_items > 0) {
-        for (int k = 0; k < var->n_items; k++)
-            if (x == var->items[k]) return NULL;
-        return var->range;
-    }
-    if (var->normal && x != 0.0 && fabs(x) < DBL_MIN) return var->range;
-    return (x >= var->min && x <= var->max) ? NULL : var->range;
-}
-
 static int check_value(const dfo_instance *in, const char *fn, const ref *r, unsigned int vr, double x)
 {
-    const char *range = invalid(r->var, x);
+    const char *range = dfo_inst_invalid(r->var, x);
     if (!range) return 1;
     const int exact = r->var->home == DFO_IN_PARAMS && r->var->slot == DFO_SP_scheme && x == 4.0;
     dfo_inst_fail(in, "%s: invalid value %.17g for %s (value reference %u); valid range: %s%s.", fn, x, r->name, vr,
@@ -728,35 +658,6 @@ static void on_switch(void *ctx, double t, size_t block, double x, int from, int
                      (unsigned long)block + 1, names[from + 1], names[to + 1], x);
 }
 
-static dfo_inst_status check_step(dfo_instance *in, const char *fn, double tc, double dt, double *t_target_out)
-{
-    dfo_values *v = &in->v;
-    const double t = v->time, h = v->sp[DFO_SP_h];
-    if (!isfinite(tc))
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", fn,
-                             tc, t);
-    if (!isfinite(dt) || !(dt > 0.0))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
-                             tc);
-    const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * h;
-    if (fabs(tc - t) > tol)
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
-                             tc, t);
-    const double t_target = tc + dt;
-    if (!(t_target > t))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g is below the time resolution at t = %.17g.", fn,
-                             dt, t);
-    if (v->stop_defined && t_target > v->stop_time + tol)
-        return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
-                             v->stop_time);
-    if ((t_target - t) / h > MAX_STEPS_PER_CALL)
-        return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
-                             "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
-                             MAX_STEPS_PER_CALL, h);
-    *t_target_out = t_target;
-    return DFO_INST_OK;
-}
-
 static dfo_inst_status step_failed(dfo_instance *in, const char *fn, chain_status st)
 {
     dfo_values *v = &in->v;
@@ -780,7 +681,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
 {
     dfo_values *v = &in->v;
     double t_target = 0.0;
-    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
     const chain_inputs ci = inputs_of(v, 0);
@@ -813,7 +714,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
         return st;
     }
     double t_target = 0.0;
-    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
     const double t_start = v->time;
@@ -1139,16 +1040,6 @@ static void read_body(cursor *c, dfo_values *v)
     for (size_t i = 0; i < n; i++) s->mode[i] = get_i32(c);
 }
 
-static uint64_t fnv1a(const unsigned char *p, size_t n)
-{
-    uint64_t h = 1469598103934665603ULL;
-    for (size_t i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-
 dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void *state, unsigned char *buf,
                                    size_t size)
 {
@@ -1165,7 +1056,7 @@ dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void 
     h.p += 8;
     put_u32(&h, SERIAL_VERSION);
     put_u32(&h, (uint32_t)body);
-    put_u64(&h, fnv1a(buf + HEADER_BYTES, body));
+    put_u64(&h, dfo_inst_checksum(buf + HEADER_BYTES, body));
     return DFO_INST_OK;
 }
 
@@ -1179,7 +1070,7 @@ static const char *implausible(const dfo_values *v)
         const size_t c = var->array ? n : 1;
         for (size_t i = 0; i < c; i++) {
             dfo_values *w = (dfo_values *)v;
-            if (invalid(var, *stored(w, var, i))) return "a parameter or input is out of range";
+            if (dfo_inst_invalid(var, *stored(w, var, i))) return "a parameter or input is out of range";
             if (var->home == DFO_IN_INPUTS && !isfinite(v->ua_used[(size_t)var->slot * n + i]))
                 return "an input is not finite";
         }
@@ -1234,7 +1125,7 @@ dfo_inst_status dfo_inst_deserialize(dfo_instance *in, const char *fn, const uns
     if (n < 1 || n > MAX_n || (size_t)body != body_size((size_t)n) || size != HEADER_BYTES + (size_t)body)
         return dfo_inst_fail(in, "%s: %lu bytes given, not the size of a state of this FMU.", fn,
                              (unsigned long)size);
-    if (fnv1a(buf + HEADER_BYTES, body) != checksum)
+    if (dfo_inst_checksum(buf + HEADER_BYTES, body) != checksum)
         return dfo_inst_fail(in, "%s: checksum mismatch, the serialised state is corrupted.", fn);
     dfo_values v;
     memset(&v, 0, sizeof v);
