@@ -167,7 +167,7 @@ static int has(const env *E, const char *what) { return strstr(E->last, what) !=
 
 /* ---- the test chains -------------------------------------------------------------------------- */
 
-#define NMAX 16
+#define NMAX (DFO_CHAIN_N > 16 ? DFO_CHAIN_N : 16) /* blocks of the test chains and of the FMI 2.0 build */
 typedef struct {
     size_t n;
     double m[NMAX], k[NMAX], c[NMAX], P0[NMAX], phi[NMAX], N[NMAX], mu_s[NMAX], chi[NMAX], x0[NMAX], v0[NMAX];
