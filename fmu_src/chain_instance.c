@@ -262,6 +262,7 @@ static void set_start_values(dfo_values *v)
     v->phase = DFO_PHASE_INSTANTIATED;
     v->event_pending = v->event_from = 0;
     v->event_block = 0;
+    v->acc_valid = 0;
 }
 
 /* ---- the chain's parameters, inputs, model ---------------------------------------------------- */
@@ -321,6 +322,7 @@ static const char *prepare(dfo_instance *in, char *buf, size_t len)
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     v->time = v->start_time;
+    v->acc_valid = 0;
     return NULL;
 }
 
@@ -392,6 +394,7 @@ static dfo_inst_status resize(dfo_instance *in, const char *fn, size_t n)
     free_model(&in->v);
     free_arrays(in, &in->v);
     w.M = NULL;
+    w.acc_valid = 0;
     in->v = w;
     return DFO_INST_OK;
 }
@@ -469,9 +472,11 @@ static dfo_inst_status get_outputs(dfo_instance *in, const char *fn, const ref *
     const size_t n = v->n, i0 = r->elem < 0 ? 0 : (size_t)r->elem, i1 = r->elem < 0 ? n : i0 + 1;
     const int id = r->var->slot;
     const int need_a = id == DFO_OUT_a || (v->event_pending && id == DFO_OUT_F_friction);
-    if (need_a) {
+    const int temporary = !started(v);
+    if (need_a && (temporary || !v->acc_valid)) {
         const chain_inputs ci = inputs_of(v, 0);
         chain_accelerations(v->M, &ci, &v->s, v->scratch);
+        v->acc_valid = !temporary;
     }
     double F_left = 0.0, a_left = 0.0;
     if (v->event_pending && need_a) left_limit(v, v->scratch, &F_left, &a_left);
@@ -566,6 +571,7 @@ static dfo_inst_status set_values(dfo_instance *in, const char *fn, const unsign
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) *stored(&in->v, r.var, i0 + i) = value[k + i];
         if (r.var->home == DFO_IN_INPUTS) in->v.u_set[r.var->slot] = 1;
+        in->v.acc_valid = 0;
         k += c;
     }
     return DFO_INST_OK;
@@ -663,6 +669,7 @@ static dfo_inst_status step_failed(dfo_instance *in, const char *fn, chain_statu
     dfo_values *v = &in->v;
     const double t_failed = v->s.t;
     chain_state_copy(&v->s, &v->s0);
+    v->acc_valid = 0;
     v->phase = DFO_PHASE_ERROR;
     return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s. The FMU keeps the state at "
                          "t = %.17g; reset it or restore an earlier FMU state.", fn, v->time, t_failed,
@@ -672,6 +679,7 @@ static dfo_inst_status step_failed(dfo_instance *in, const char *fn, chain_statu
 static void step_done(dfo_values *v, double t)
 {
     v->time = t;
+    v->acc_valid = 0;
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
 }
@@ -738,6 +746,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
         int stop = opt->early_return && !opt->intermediate;
         if (opt->intermediate) {
             v->time = v->s.t;
+            v->acc_valid = 0;
             stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return) && opt->early_return;
         }
         if (stop) {
@@ -856,6 +865,7 @@ dfo_inst_status dfo_inst_set_state(dfo_instance *in, const char *fn, const void 
     free_model(&in->v);
     copy_values(&in->v, &st->v);
     in->v.M = NULL;
+    in->v.acc_valid = 0;
     if (in->v.phase & (DFO_PHASE_STEP | DFO_PHASE_EVENT | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR)) {
         /* the model follows from the parameters (the state is kept: it is the saved one) */
         const chain_params p = params_of(&in->v);

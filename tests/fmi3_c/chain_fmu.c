@@ -316,9 +316,18 @@ static void test_rules(tally *T, const api3 *A)
     EXPECT(A->enter_cfg(in) == fmi3Error);
     double x[5];
     EXPECT(A->getF(in, &vx, 1, x, 5) == fmi3OK && x[0] == 0.0); /* outputs during initialisation */
+    const fmi3ValueReference vN = VR_N, va = VR_a, vf = VR_F_ext;
+    const double no_friction[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    EXPECT(A->setF(in, &vN, 1, no_friction, 5) == fmi3OK);
     EXPECT(A->exit_init(in) == fmi3OK);
     EXPECT(step3(A, in, 0.0, 0.5));
     EXPECT(A->getF(in, &vx, 1, x, 5) == fmi3OK && isfinite(x[4]));
+    /* a follows an input at once (no stale value): F_ext = 1 on block 1 adds 1/m = 1 to its a only */
+    double a0[5], a1[5];
+    const double push[5] = {1.0, 0.0, 0.0, 0.0, 0.0};
+    EXPECT(A->getF(in, &va, 1, a0, 5) == fmi3OK && A->setF(in, &vf, 1, push, 5) == fmi3OK &&
+           A->getF(in, &va, 1, a1, 5) == fmi3OK);
+    EXPECT(fabs(a1[0] - a0[0] - 1.0) < 1e-12 && !memcmp(a0 + 1, a1 + 1, 4 * sizeof(double)));
     EXPECT(A->setF(in, &vm, 1, m, 5) == fmi3Error && has(&E, "fixed parameter"));
     EXPECT(A->term(in) == fmi3OK);
     A->free_(in);
