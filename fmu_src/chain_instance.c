@@ -347,25 +347,6 @@ void dfo_inst_free(dfo_instance *in)
     free_arrays(in, &in->v);
 }
 
-dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
-                               double stop_time)
-{
-    if (!isfinite(start_time)) return dfo_inst_fail(in, "%s: startTime %g is not finite.", fn, start_time);
-    if (stop_defined && !(stop_time >= start_time))
-        return dfo_inst_fail(in, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
-                             start_time);
-    in->v.start_time = start_time;
-    in->v.stop_defined = stop_defined ? 1 : 0;
-    in->v.stop_time = stop_defined ? stop_time : 0.0;
-    return DFO_INST_OK;
-}
-
-dfo_inst_status dfo_inst_enter_init(dfo_instance *in)
-{
-    in->v.phase = DFO_PHASE_INIT;
-    return DFO_INST_OK;
-}
-
 dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
 {
     char buf[200];
@@ -374,12 +355,6 @@ dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
     in->v.phase = DFO_PHASE_STEP;
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: %lu blocks.", in->v.s.t,
                  (unsigned long)in->v.n);
-    return DFO_INST_OK;
-}
-
-dfo_inst_status dfo_inst_terminate(dfo_instance *in)
-{
-    in->v.phase = DFO_PHASE_TERMINATED;
     return DFO_INST_OK;
 }
 
@@ -772,21 +747,12 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
     return DFO_INST_OK;
 }
 
-int dfo_inst_update_events(dfo_instance *in)
-{
-    const int pending = in->v.event_pending;
-    in->v.event_pending = 0;
-    return pending;
-}
-
 void dfo_inst_log_event_handled(const dfo_instance *in)
 {
     const dfo_values *v = &in->v;
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, block %lu in mode %d.", v->time,
                  (unsigned long)v->event_block + 1, v->s.mode ? v->s.mode[v->event_block] : 0);
 }
-
-double dfo_inst_time(const dfo_instance *in) { return in->v.time; }
 
 /* ---- FMU states: a tagged copy of the values (arrays included, the model excepted: it follows
  * from the parameters and is rebuilt on restore) ---- */

@@ -120,3 +120,38 @@ uint64_t dfo_inst_checksum(const unsigned char *p, size_t n)
     return h;
 }
 
+/* ---- the life cycle's model-independent steps (the values' common fields) --------------------- */
+
+dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
+                               double stop_time)
+{
+    if (!isfinite(start_time)) return dfo_inst_fail(in, "%s: startTime %g is not finite.", fn, start_time);
+    if (stop_defined && !(stop_time >= start_time))
+        return dfo_inst_fail(in, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
+                             start_time);
+    in->v.start_time = start_time;
+    in->v.stop_defined = stop_defined ? 1 : 0;
+    in->v.stop_time = stop_defined ? stop_time : 0.0;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_enter_init(dfo_instance *in)
+{
+    in->v.phase = DFO_PHASE_INIT;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_terminate(dfo_instance *in)
+{
+    in->v.phase = DFO_PHASE_TERMINATED;
+    return DFO_INST_OK;
+}
+
+int dfo_inst_update_events(dfo_instance *in)
+{
+    const int pending = in->v.event_pending;
+    in->v.event_pending = 0;
+    return pending;
+}
+
+double dfo_inst_time(const dfo_instance *in) { return in->v.time; }

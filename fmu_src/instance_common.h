@@ -1,6 +1,9 @@
 /* What every instance core shares, written once (instance_common.c, compiled with each model's
  * generated variable table): logging and phase names (instance.h's dfo_inst_log, dfo_inst_fail,
- * dfo_inst_log_category, dfo_inst_set_logging, dfo_phase_name), the range check of a value
+ * dfo_inst_log_category, dfo_inst_set_logging, dfo_phase_name), the life cycle's steps that touch
+ * only the fields every model's values have (dfo_inst_setup, dfo_inst_enter_init,
+ * dfo_inst_terminate, dfo_inst_update_events, dfo_inst_time: start, stop and host time, phase,
+ * pending event), the range check of a value
  * against its variable, the checks of a doStep's arguments, and the checksum of a serialised FMU
  * state. The model's core (instance.c: the oscillator, chain_instance.c: the chain) keeps its
  * values, outputs, stepping and state layout. No FMI types. */
