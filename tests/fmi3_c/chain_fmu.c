@@ -547,6 +547,7 @@ static void test_states(tally *T, const api3 *A)
 }
 
 /* ---- 5. events -------------------------------------------------------------------------------- */
+/* (the left limit of a switching block: its mode before the switch with that mode's friction law) */
 
 #define MAXSW 4096
 typedef struct {
@@ -668,10 +669,22 @@ static void test_events(tally *T, const api3 *A)
                  A->upd(ev_in, &need, &stop, &nom, &val, &def, &next) == fmi3OK && read3(A, ev_in, n, &right) &&
                  A->esm(ev_in) == fmi3OK;
             if (ok && j < S.count && S.t[j] == last) {
+                /* the friction law of each side's mode: sliding -s mu_k N exactly, stuck at rest within
+                 * the breakaway limit; the other blocks unchanged */
                 const size_t b = S.block[j];
+                const double mukN = C.chi[b] * C.mu_s[b] * C.N[b], Fb = fmax(C.mu_s[b], C.chi[b] * C.mu_s[b]) * C.N[b];
+                const int law_left = S.from[j] ? left.F[b] == -S.from[j] * mukN
+                                                : (left.a[b] == 0.0 && fabs(left.F[b]) <= Fb * (1.0 + 1e-12));
+                const int law_right = S.to[j] ? right.F[b] == -S.to[j] * mukN
+                                               : (right.a[b] == 0.0 && fabs(right.F[b]) <= Fb * (1.0 + 1e-12));
+                int others = 1;
+                for (size_t i = 0; i < n; i++)
+                    if (i != b)
+                        others &= left.mode[i] == right.mode[i] && !memcmp(&left.F[i], &right.F[i], 8) &&
+                                  !memcmp(&left.a[i], &right.a[i], 8);
                 limits_ok += left.mode[b] == S.from[j] && right.mode[b] == S.to[j] &&
                              !memcmp(left.x, right.x, n * sizeof(double)) &&
-                             !memcmp(left.v, right.v, n * sizeof(double));
+                             !memcmp(left.v, right.v, n * sizeof(double)) && law_left && law_right && others;
             }
         }
     }
