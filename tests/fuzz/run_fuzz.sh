@@ -14,14 +14,15 @@
 # clang with its fuzzer runtime could not be installed or the target did not build.
 set -euo pipefail
 secs=${1:-60}
-# the target: fuzz_fmi (FMI 2.0, default), fuzz_fmi3 (FMI 3.0) or fuzz_chain3 (the chain's FMI 3.0),
-# each with its corpus and regressions folder
+# the target: fuzz_fmi (FMI 2.0, default), fuzz_fmi3 (FMI 3.0), fuzz_chain3 or fuzz_chain2 (the
+# chain's FMI 3.0 and 2.0), each with its corpus and regressions folder
 target=${FUZZ_TARGET:-fuzz_fmi}
 case $target in
   fuzz_fmi) corpus=corpus; regressions=regressions ;;
   fuzz_fmi3) corpus=corpus3; regressions=regressions3 ;;
   fuzz_chain3) corpus=corpus_chain3; regressions=regressions_chain3 ;;
-  *) echo "run_fuzz: unknown FUZZ_TARGET $target (fuzz_fmi, fuzz_fmi3, fuzz_chain3)" >&2; exit 2 ;;
+  fuzz_chain2) corpus=corpus_chain2; regressions=regressions_chain2 ;; # no seeds: starts empty
+  *) echo "run_fuzz: unknown FUZZ_TARGET $target (fuzz_fmi, fuzz_fmi3, fuzz_chain3, fuzz_chain2)" >&2; exit 2 ;;
 esac
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
