@@ -1,6 +1,7 @@
 /* The instance core of the DryFrictionChain FMUs (instance.h's API for the indexed model of
- * fmu_src/chain/modelDescription.xml): the same life cycle, phases, logging, doStep checks, events
- * and FMU state framing as the oscillator's core, over values that are arrays of n blocks (n the
+ * fmu_src/chain/modelDescription.xml): the oscillator's life cycle, phases, events and FMU state
+ * framing (logging, range checks, doStep checks and the checksum are instance_common.c's, shared
+ * with it), over values that are arrays of n blocks (n the
  * structural parameter, set in FMI 3.0's configuration mode, fixed by the build in FMI 2.0 where
  * DFO_CHAIN_FIXED_N is defined). The physics is chain.[ch]. No FMI types.
  *
@@ -11,6 +12,7 @@
  * Memory: every array through the host's allocator, O(n): parameters (10 n), inputs (2 x 2 n),
  * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
 #include "instance.h"
+#include "instance_common.h"
 
 #include <float.h>
 #include <math.h>
@@ -23,7 +25,6 @@
 typedef char dfo_static_assert_schemes[(DFO_MD_SCHEME_PAPER == 1 && DFO_MD_SCHEME_CONSISTENT == 2 &&
                                         DFO_MD_SCHEME_LOCATED == 3) ? 1 : -1];
 
-#define MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take */
 #define STATE_MAGIC 0x444643484d555354ULL /* FMU state tag */
 #define SERIAL_MAGIC "DFCSTATE"
 #define SERIAL_VERSION 1u
@@ -35,64 +36,6 @@ typedef char dfo_static_assert_fixed_n[(DFO_CHAIN_FIXED_N >= 1 && DFO_CHAIN_FIXE
 #else
 #define N_START ((size_t)START_n)
 #endif
-
-/* ---- logging --------------------------------------------------------------------------------- */
-
-static void vlog(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, va_list ap)
-{
-    char buf[512];
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    for (char *c = buf; *c; c++)
-        if (*c == '%') *c = ' '; /* the message reaches printf-style loggers as a format */
-    in->host.log(in->host.ctx, status, DFO_LOG_CATEGORIES[category], buf);
-}
-
-void dfo_inst_log(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, ...)
-{
-    if (!in->host.log || !in->log_on[category]) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(in, status, category, fmt, ap);
-    va_end(ap);
-}
-
-dfo_inst_status dfo_inst_fail(const dfo_instance *in, const char *fmt, ...)
-{
-    if (!in->host.log || !in->log_on[DFO_LOG_STATUS_ERROR]) return DFO_INST_ERROR;
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(in, DFO_INST_ERROR, DFO_LOG_STATUS_ERROR, fmt, ap);
-    va_end(ap);
-    return DFO_INST_ERROR;
-}
-
-int dfo_inst_log_category(const char *name)
-{
-    if (!name) return -1;
-    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (!strcmp(name, DFO_LOG_CATEGORIES[j])) return j;
-    return -1;
-}
-
-void dfo_inst_set_logging(dfo_instance *in, int category, int on)
-{
-    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (category < 0 || category == j) in->log_on[j] = on ? 1 : 0;
-}
-
-const char *dfo_phase_name(dfo_phase p)
-{
-    switch (p) {
-    case DFO_PHASE_INSTANTIATED: return "instantiated";
-    case DFO_PHASE_INIT: return "initialization mode";
-    case DFO_PHASE_STEP: return "step mode";
-    case DFO_PHASE_TERMINATED: return "terminated";
-    case DFO_PHASE_ERROR: return "error";
-    case DFO_PHASE_EVENT: return "event mode";
-    case DFO_PHASE_CONFIG: return "configuration mode";
-    }
-    return "unknown";
-}
 
 /* ---- memory ---------------------------------------------------------------------------------- */
 
@@ -247,22 +190,9 @@ static int lookup(const dfo_instance *in, const char *fn, unsigned int vr, dfo_v
     return 1;
 }
 
-/* NULL when the value is valid for the variable, else the valid range as text. */
-static const char *invalid(const dfo_var_info *var, double x)
-{
-    if (!isfinite(x)) return "finite";
-    if (var->n_items > 0) {
-        for (int k = 0; k < var->n_items; k++)
-            if (x == var->items[k]) return NULL;
-        return var->range;
-    }
-    if (var->normal && x != 0.0 && fabs(x) < DBL_MIN) return var->range;
-    return (x >= var->min && x <= var->max) ? NULL : var->range;
-}
-
 static int check_value(const dfo_instance *in, const char *fn, const ref *r, unsigned int vr, double x)
 {
-    const char *range = invalid(r->var, x);
+    const char *range = dfo_inst_invalid(r->var, x);
     if (!range) return 1;
     const int exact = r->var->home == DFO_IN_PARAMS && r->var->slot == DFO_SP_scheme && x == 4.0;
     dfo_inst_fail(in, "%s: invalid value %.17g for %s (value reference %u); valid range: %s%s.", fn, x, r->name, vr,
@@ -332,6 +262,7 @@ static void set_start_values(dfo_values *v)
     v->phase = DFO_PHASE_INSTANTIATED;
     v->event_pending = v->event_from = 0;
     v->event_block = 0;
+    v->acc_valid = 0;
 }
 
 /* ---- the chain's parameters, inputs, model ---------------------------------------------------- */
@@ -391,6 +322,7 @@ static const char *prepare(dfo_instance *in, char *buf, size_t len)
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     v->time = v->start_time;
+    v->acc_valid = 0;
     return NULL;
 }
 
@@ -415,25 +347,6 @@ void dfo_inst_free(dfo_instance *in)
     free_arrays(in, &in->v);
 }
 
-dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
-                               double stop_time)
-{
-    if (!isfinite(start_time)) return dfo_inst_fail(in, "%s: startTime %g is not finite.", fn, start_time);
-    if (stop_defined && !(stop_time >= start_time))
-        return dfo_inst_fail(in, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
-                             start_time);
-    in->v.start_time = start_time;
-    in->v.stop_defined = stop_defined ? 1 : 0;
-    in->v.stop_time = stop_defined ? stop_time : 0.0;
-    return DFO_INST_OK;
-}
-
-dfo_inst_status dfo_inst_enter_init(dfo_instance *in)
-{
-    in->v.phase = DFO_PHASE_INIT;
-    return DFO_INST_OK;
-}
-
 dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
 {
     char buf[200];
@@ -442,12 +355,6 @@ dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
     in->v.phase = DFO_PHASE_STEP;
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: %lu blocks.", in->v.s.t,
                  (unsigned long)in->v.n);
-    return DFO_INST_OK;
-}
-
-dfo_inst_status dfo_inst_terminate(dfo_instance *in)
-{
-    in->v.phase = DFO_PHASE_TERMINATED;
     return DFO_INST_OK;
 }
 
@@ -461,6 +368,8 @@ static dfo_inst_status resize(dfo_instance *in, const char *fn, size_t n)
                              (unsigned long)in->v.n);
     free_model(&in->v);
     free_arrays(in, &in->v);
+    w.M = NULL;
+    w.acc_valid = 0;
     in->v = w;
     return DFO_INST_OK;
 }
@@ -538,9 +447,11 @@ static dfo_inst_status get_outputs(dfo_instance *in, const char *fn, const ref *
     const size_t n = v->n, i0 = r->elem < 0 ? 0 : (size_t)r->elem, i1 = r->elem < 0 ? n : i0 + 1;
     const int id = r->var->slot;
     const int need_a = id == DFO_OUT_a || (v->event_pending && id == DFO_OUT_F_friction);
-    if (need_a) {
+    const int temporary = !started(v);
+    if (need_a && (temporary || !v->acc_valid)) {
         const chain_inputs ci = inputs_of(v, 0);
         chain_accelerations(v->M, &ci, &v->s, v->scratch);
+        v->acc_valid = !temporary;
     }
     double F_left = 0.0, a_left = 0.0;
     if (v->event_pending && need_a) left_limit(v, v->scratch, &F_left, &a_left);
@@ -635,6 +546,7 @@ static dfo_inst_status set_values(dfo_instance *in, const char *fn, const unsign
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) *stored(&in->v, r.var, i0 + i) = value[k + i];
         if (r.var->home == DFO_IN_INPUTS) in->v.u_set[r.var->slot] = 1;
+        in->v.acc_valid = 0;
         k += c;
     }
     return DFO_INST_OK;
@@ -727,40 +639,12 @@ static void on_switch(void *ctx, double t, size_t block, double x, int from, int
                      (unsigned long)block + 1, names[from + 1], names[to + 1], x);
 }
 
-static dfo_inst_status check_step(dfo_instance *in, const char *fn, double tc, double dt, double *t_target_out)
-{
-    dfo_values *v = &in->v;
-    const double t = v->time, h = v->sp[DFO_SP_h];
-    if (!isfinite(tc))
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", fn,
-                             tc, t);
-    if (!isfinite(dt) || !(dt > 0.0))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
-                             tc);
-    const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * h;
-    if (fabs(tc - t) > tol)
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
-                             tc, t);
-    const double t_target = tc + dt;
-    if (!(t_target > t))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g is below the time resolution at t = %.17g.", fn,
-                             dt, t);
-    if (v->stop_defined && t_target > v->stop_time + tol)
-        return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
-                             v->stop_time);
-    if ((t_target - t) / h > MAX_STEPS_PER_CALL)
-        return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
-                             "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
-                             MAX_STEPS_PER_CALL, h);
-    *t_target_out = t_target;
-    return DFO_INST_OK;
-}
-
 static dfo_inst_status step_failed(dfo_instance *in, const char *fn, chain_status st)
 {
     dfo_values *v = &in->v;
     const double t_failed = v->s.t;
     chain_state_copy(&v->s, &v->s0);
+    v->acc_valid = 0;
     v->phase = DFO_PHASE_ERROR;
     return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s. The FMU keeps the state at "
                          "t = %.17g; reset it or restore an earlier FMU state.", fn, v->time, t_failed,
@@ -770,6 +654,7 @@ static dfo_inst_status step_failed(dfo_instance *in, const char *fn, chain_statu
 static void step_done(dfo_values *v, double t)
 {
     v->time = t;
+    v->acc_valid = 0;
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
 }
@@ -779,7 +664,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
 {
     dfo_values *v = &in->v;
     double t_target = 0.0;
-    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
     const chain_inputs ci = inputs_of(v, 0);
@@ -812,7 +697,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
         return st;
     }
     double t_target = 0.0;
-    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
     const double t_start = v->time;
@@ -836,6 +721,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
         int stop = opt->early_return && !opt->intermediate;
         if (opt->intermediate) {
             v->time = v->s.t;
+            v->acc_valid = 0;
             stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return) && opt->early_return;
         }
         if (stop) {
@@ -861,21 +747,12 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
     return DFO_INST_OK;
 }
 
-int dfo_inst_update_events(dfo_instance *in)
-{
-    const int pending = in->v.event_pending;
-    in->v.event_pending = 0;
-    return pending;
-}
-
 void dfo_inst_log_event_handled(const dfo_instance *in)
 {
     const dfo_values *v = &in->v;
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, block %lu in mode %d.", v->time,
                  (unsigned long)v->event_block + 1, v->s.mode ? v->s.mode[v->event_block] : 0);
 }
-
-double dfo_inst_time(const dfo_instance *in) { return in->v.time; }
 
 /* ---- FMU states: a tagged copy of the values (arrays included, the model excepted: it follows
  * from the parameters and is rebuilt on restore) ---- */
@@ -954,6 +831,7 @@ dfo_inst_status dfo_inst_set_state(dfo_instance *in, const char *fn, const void 
     free_model(&in->v);
     copy_values(&in->v, &st->v);
     in->v.M = NULL;
+    in->v.acc_valid = 0;
     if (in->v.phase & (DFO_PHASE_STEP | DFO_PHASE_EVENT | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR)) {
         /* the model follows from the parameters (the state is kept: it is the saved one) */
         const chain_params p = params_of(&in->v);
@@ -1138,16 +1016,6 @@ static void read_body(cursor *c, dfo_values *v)
     for (size_t i = 0; i < n; i++) s->mode[i] = get_i32(c);
 }
 
-static uint64_t fnv1a(const unsigned char *p, size_t n)
-{
-    uint64_t h = 1469598103934665603ULL;
-    for (size_t i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-
 dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void *state, unsigned char *buf,
                                    size_t size)
 {
@@ -1164,7 +1032,7 @@ dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void 
     h.p += 8;
     put_u32(&h, SERIAL_VERSION);
     put_u32(&h, (uint32_t)body);
-    put_u64(&h, fnv1a(buf + HEADER_BYTES, body));
+    put_u64(&h, dfo_inst_checksum(buf + HEADER_BYTES, body));
     return DFO_INST_OK;
 }
 
@@ -1178,7 +1046,7 @@ static const char *implausible(const dfo_values *v)
         const size_t c = var->array ? n : 1;
         for (size_t i = 0; i < c; i++) {
             dfo_values *w = (dfo_values *)v;
-            if (invalid(var, *stored(w, var, i))) return "a parameter or input is out of range";
+            if (dfo_inst_invalid(var, *stored(w, var, i))) return "a parameter or input is out of range";
             if (var->home == DFO_IN_INPUTS && !isfinite(v->ua_used[(size_t)var->slot * n + i]))
                 return "an input is not finite";
         }
@@ -1233,7 +1101,7 @@ dfo_inst_status dfo_inst_deserialize(dfo_instance *in, const char *fn, const uns
     if (n < 1 || n > MAX_n || (size_t)body != body_size((size_t)n) || size != HEADER_BYTES + (size_t)body)
         return dfo_inst_fail(in, "%s: %lu bytes given, not the size of a state of this FMU.", fn,
                              (unsigned long)size);
-    if (fnv1a(buf + HEADER_BYTES, body) != checksum)
+    if (dfo_inst_checksum(buf + HEADER_BYTES, body) != checksum)
         return dfo_inst_fail(in, "%s: checksum mismatch, the serialised state is corrupted.", fn);
     dfo_values v;
     memset(&v, 0, sizeof v);

@@ -21,7 +21,8 @@ typedef struct {
     chain_model *M;             /* built at the end of initialisation (NULL before) */
     chain_state s;              /* the state (arrays of n, allocated with the instance) */
     chain_state s0;             /* the state at the start of a step (restored when it fails) */
-    double *scratch;            /* n doubles: accelerations */
+    double *scratch;            /* n doubles: the accelerations of the state and inputs */
+    int acc_valid;              /* scratch holds them (cleared by every change of state or inputs) */
     double time;                /* the host's time */
     double start_time, stop_time;
     int stop_defined;

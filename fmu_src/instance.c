@@ -1,6 +1,7 @@
 /* The instance core (see instance.h): everything an FMI glue needs, through the variable table
  * generated from modelDescription.xml. No FMI types. */
 #include "instance.h"
+#include "instance_common.h"
 
 #include <float.h>
 #include <math.h>
@@ -23,7 +24,6 @@ DFO_SAME(scheme_consistent, DFO_MD_SCHEME_CONSISTENT, DFO_SCHEME_CONSISTENT);
 DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
 typedef char dfo_static_assert_warn_bits[DFO_NUM_OUTS <= 32 ? 1 : -1];
 
-#define MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take */
 #define STATE_MAGIC 0x444650534d555354ULL /* "DFPSMUST" */
 #define SERIAL_MAGIC "DFOSTATE"
 #define SERIAL_VERSION 3u
@@ -38,64 +38,6 @@ typedef struct {
     uint32_t version, size;
     uint64_t checksum;
 } serial_header;
-
-/* ---- logging --------------------------------------------------------------------------------- */
-
-static void vlog(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, va_list ap)
-{
-    char buf[512];
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    for (char *c = buf; *c; c++)
-        if (*c == '%') *c = ' '; /* the message reaches printf-style loggers as a format */
-    in->host.log(in->host.ctx, status, DFO_LOG_CATEGORIES[category], buf);
-}
-
-void dfo_inst_log(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, ...)
-{
-    if (!in->host.log || !in->log_on[category]) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(in, status, category, fmt, ap);
-    va_end(ap);
-}
-
-dfo_inst_status dfo_inst_fail(const dfo_instance *in, const char *fmt, ...)
-{
-    if (!in->host.log || !in->log_on[DFO_LOG_STATUS_ERROR]) return DFO_INST_ERROR;
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(in, DFO_INST_ERROR, DFO_LOG_STATUS_ERROR, fmt, ap);
-    va_end(ap);
-    return DFO_INST_ERROR;
-}
-
-int dfo_inst_log_category(const char *name)
-{
-    if (!name) return -1;
-    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (!strcmp(name, DFO_LOG_CATEGORIES[j])) return j;
-    return -1;
-}
-
-void dfo_inst_set_logging(dfo_instance *in, int category, int on)
-{
-    for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (category < 0 || category == j) in->log_on[j] = on ? 1 : 0;
-}
-
-const char *dfo_phase_name(dfo_phase p)
-{
-    switch (p) {
-    case DFO_PHASE_INSTANTIATED: return "instantiated";
-    case DFO_PHASE_INIT: return "initialization mode";
-    case DFO_PHASE_STEP: return "step mode";
-    case DFO_PHASE_TERMINATED: return "terminated";
-    case DFO_PHASE_ERROR: return "error";
-    case DFO_PHASE_EVENT: return "event mode";
-    case DFO_PHASE_CONFIG: return "configuration mode";
-    }
-    return "unknown";
-}
 
 /* ---- the variable table ---------------------------------------------------------------------- */
 
@@ -121,19 +63,6 @@ static void *slot(dfo_values *v, const dfo_var_info *var)
 static const void *cslot(const dfo_values *v, const dfo_var_info *var)
 {
     return slot((dfo_values *)v, var);
-}
-
-/* NULL when the value is valid for the variable, else the valid range as text. */
-static const char *invalid(const dfo_var_info *var, double x)
-{
-    if (!isfinite(x)) return "finite";
-    if (var->n_items > 0) {
-        for (int k = 0; k < var->n_items; k++)
-            if (x == var->items[k]) return NULL;
-        return var->range;
-    }
-    if (var->normal && x != 0.0 && fabs(x) < DBL_MIN) return var->range; /* 0 or a normal number */
-    return (x >= var->min && x <= var->max) ? NULL : var->range;
 }
 
 static void set_start_values(dfo_values *v)
@@ -186,7 +115,7 @@ static int settable(const dfo_instance *in, const char *fn, const dfo_var_info *
 
 static int check_value(const dfo_instance *in, const char *fn, const dfo_var_info *var, double x)
 {
-    const char *range = invalid(var, x);
+    const char *range = dfo_inst_invalid(var, x);
     if (!range) return 1;
     dfo_inst_fail(in, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
                   var->name, var->vr, range);
@@ -344,25 +273,6 @@ static int output_int(const dfo_values *v, int id)
 
 /* ---- life cycle ------------------------------------------------------------------------------ */
 
-dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
-                               double stop_time)
-{
-    if (!isfinite(start_time)) return dfo_inst_fail(in, "%s: startTime %g is not finite.", fn, start_time);
-    if (stop_defined && !(stop_time >= start_time))
-        return dfo_inst_fail(in, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
-                             start_time);
-    in->v.start_time = start_time;
-    in->v.stop_defined = stop_defined ? 1 : 0;
-    in->v.stop_time = stop_defined ? stop_time : 0.0;
-    return DFO_INST_OK;
-}
-
-dfo_inst_status dfo_inst_enter_init(dfo_instance *in)
-{
-    in->v.phase = DFO_PHASE_INIT;
-    return DFO_INST_OK;
-}
-
 dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
 {
     dfo_values *v = &in->v;
@@ -388,12 +298,6 @@ dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
                  s->t, s->X, s->V, s->mode, v->effects);
     return status;
-}
-
-dfo_inst_status dfo_inst_terminate(dfo_instance *in)
-{
-    in->v.phase = DFO_PHASE_TERMINATED;
-    return DFO_INST_OK;
 }
 
 void dfo_inst_reset(dfo_instance *in)
@@ -523,36 +427,6 @@ static dfo_status advance_to_switch(dfo_instance *in, double t_target)
     return DFO_OK;
 }
 
-/* The checks of a doStep's arguments, shared by both FMI versions; *t_target = tc + dt. */
-static dfo_inst_status check_step(dfo_instance *in, const char *fn, double tc, double dt, double *t_target_out)
-{
-    dfo_values *v = &in->v;
-    const double t = v->time;
-    if (!isfinite(tc))
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", fn,
-                             tc, t);
-    if (!isfinite(dt) || !(dt > 0.0))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
-                             tc);
-    const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * v->M.p.h;
-    if (fabs(tc - t) > tol)
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
-                             tc, t);
-    const double t_target = tc + dt;
-    if (!(t_target > t))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g is below the time resolution at t = %.17g.", fn,
-                             dt, t);
-    if (v->stop_defined && t_target > v->stop_time + tol)
-        return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
-                             v->stop_time);
-    if ((t_target - t) / v->M.p.h > MAX_STEPS_PER_CALL)
-        return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
-                             "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
-                             MAX_STEPS_PER_CALL, v->M.p.h);
-    *t_target_out = t_target;
-    return DFO_INST_OK;
-}
-
 /* A failed step: the outputs stay those of the last good state, the instance is in error. */
 static dfo_inst_status step_failed(dfo_instance *in, const char *fn, const dfo_state *before, const dfo_state *failed,
                                    dfo_status st)
@@ -571,7 +445,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
 {
     dfo_values *v = &in->v;
     double t_target = 0.0;
-    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     const dfo_state before = v->s;
     dfo_status st;
@@ -661,7 +535,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
         return st;
     }
     double t_target = 0.0;
-    const dfo_inst_status chk = check_step(in, fn, tc, dt, &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     const dfo_state start = v->s;
     const double t_start = v->time;
@@ -722,15 +596,6 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
     }
 }
 
-int dfo_inst_update_events(dfo_instance *in)
-{
-    const int pending = in->v.event_pending;
-    in->v.event_pending = 0;
-    return pending;
-}
-
-double dfo_inst_time(const dfo_instance *in) { return in->v.time; }
-
 /* ---- FMU states ------------------------------------------------------------------------------ */
 
 static saved_state *as_state(const void *p)
@@ -777,16 +642,6 @@ dfo_inst_status dfo_inst_free_state(dfo_instance *in, const char *fn, void **sta
     return DFO_INST_OK;
 }
 
-static uint64_t fnv1a(const unsigned char *p, size_t n)
-{
-    uint64_t h = 1469598103934665603ULL;
-    for (size_t i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-
 size_t dfo_inst_serialized_size(void) { return sizeof(serial_header) + sizeof(dfo_values); }
 
 dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void *state, unsigned char *buf,
@@ -801,7 +656,7 @@ dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void 
     memcpy(hdr.magic, SERIAL_MAGIC, 8);
     hdr.version = SERIAL_VERSION;
     hdr.size = (uint32_t)sizeof(dfo_values);
-    hdr.checksum = fnv1a((const unsigned char *)&st->v, sizeof(dfo_values));
+    hdr.checksum = dfo_inst_checksum((const unsigned char *)&st->v, sizeof(dfo_values));
     memcpy(buf, &hdr, sizeof hdr);
     memcpy(buf + sizeof hdr, &st->v, sizeof(dfo_values));
     return DFO_INST_OK;
@@ -816,7 +671,7 @@ static const char *implausible(const dfo_values *v)
         const dfo_var_info *var = &DFO_VARS[i];
         if (var->home == DFO_COMPUTED || var->type == DFO_BOOLEAN) continue;
         const double x = var->type == DFO_REAL ? *(const double *)cslot(v, var) : *(const int *)cslot(v, var);
-        if (invalid(var, x))
+        if (dfo_inst_invalid(var, x))
             return var->type == DFO_REAL ? "a parameter is out of range" : "an integer parameter is out of range";
     }
     if (v->phase != DFO_PHASE_INSTANTIATED && v->phase != DFO_PHASE_INIT && v->phase != DFO_PHASE_STEP &&
@@ -857,7 +712,7 @@ dfo_inst_status dfo_inst_deserialize(dfo_instance *in, const char *fn, const uns
         return dfo_inst_fail(in, "%s: not a serialised state of this FMU version.", fn);
     dfo_values v;
     memcpy(&v, buf + sizeof hdr, sizeof v);
-    if (fnv1a((const unsigned char *)&v, sizeof v) != hdr.checksum)
+    if (dfo_inst_checksum((const unsigned char *)&v, sizeof v) != hdr.checksum)
         return dfo_inst_fail(in, "%s: checksum mismatch, the serialised state is corrupted.", fn);
     const char *why = implausible(&v);
     if (why) return dfo_inst_fail(in, "%s: rejected, %s.", fn, why);

@@ -3,7 +3,8 @@
 # binaries (cmake -DDFO_CROSS=ON), then run tests/platforms/fmu_harness on every binary of every
 # FMU natively (Linux x86-64), under wine (Windows) and under qemu-aarch64 (Linux aarch64), and
 #   1. compare the outputs and serialised states of the 300 parameter sets bit for bit (the FMUs:
-#      FMUS below, one line each),
+#      FMUS below, one line each: the oscillator's with fmu_harness, the chain's with
+#      chain_harness, n = 1 ... 6 blocks, the three schemes),
 #   2. resume every set on every platform from the states serialised on every other platform and
 #      compare with the original run,
 #   3. compare the FMU's elementary functions (test_dmath --dump) bit for bit, and run the
@@ -57,6 +58,8 @@ mkdir -p "$W"
 FMUS=(
   "fmi2 fmi2 DryFrictionOscillator.fmu fmu_harness"
   "fmi3 fmi3 fmi3/DryFrictionOscillator.fmu fmu_harness"
+  "chain2 fmi2 DryFrictionChain.fmu chain_harness"
+  "chain3 fmi3 fmi3/DryFrictionChain.fmu chain_harness"
 )
 declare -A FMI_OF FILE_OF HARNESS_NAME_OF ID_OF
 KEYS=()

@@ -41,8 +41,9 @@ asan_pytest() {
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     .venv/bin/python -m pytest -q -m "not no_sanitizer"
 }
-fuzz() {  # libFuzzer + ASan/UBSan, 60 s; installs clang if missing
+fuzz() {  # libFuzzer + ASan/UBSan: the oscillator's FMI 2.0 entry points 60 s, the chain's FMI 3.0 30 s; installs clang if missing
   PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" bash tests/fuzz/run_fuzz.sh 60
+  PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh 30
 }
 
 # The cross toolchains and emulators (Debian packages), installed when missing: the win32 thread

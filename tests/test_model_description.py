@@ -194,6 +194,43 @@ def test_the_generator_refuses_an_inconsistent_description(tmp_path: Path) -> No
     assert r.returncode == 0 and "offsetof(dfo_params, mu_s)" in text and "DFO_MD_EFFECT_FRICTION = 1" in text
 
 
+def _gen(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, str(ROOT / "fmu_src" / "gen_model_vars.py"), *args], capture_output=True,
+                          text=True)
+
+
+def test_the_chain_source_expands_to_both_fmi_versions(tmp_path: Path) -> None:
+    """The chain's one source (arrays of the structural parameter n): FMI 2.0 for a build's n with
+    structured names and per-element value references and dependencies, FMI 3.0 with <Dimension>."""
+    src = ROOT / "fmu_src" / "chain" / "modelDescription.xml"
+    assert _gen(str(src), str(tmp_path / "md2.xml"), "--fmi2", "3").returncode == 0
+    root2 = ET.parse(tmp_path / "md2.xml").getroot()
+    assert root2.get("fmiVersion") == "2.0" and root2.get("variableNamingConvention") == "structured"
+    svs = root2.findall("ModelVariables/ScalarVariable")
+    vr = {sv.get("name"): int(sv.get("valueReference")) for sv in svs}
+    assert "n" not in vr and "m[3]" in vr and "m[4]" not in vr and "m[0]" not in vr
+    assert vr["m[2]"] == 100002 and vr["mode[3]"] == 1700003 and vr["scheme"] == 7
+    assert len(set(vr.values())) == len(vr)
+    index = {sv.get("name"): k for k, sv in enumerate(svs, start=1)}
+    deps = {int(u.get("index")): u.get("dependencies") for u in root2.iterfind("ModelStructure/Outputs/Unknown")}
+    assert len(deps) == 5 * 3
+    assert deps[index["a[2]"]] == f"{index['F_ext[2]']} {index['N_ext[2]']}" and deps[index["x[2]"]] == ""
+    assert _gen(str(src), str(tmp_path / "md3.xml"), "--fmi3").returncode == 0
+    root3 = ET.parse(tmp_path / "md3.xml").getroot()
+    n = root3.find("ModelVariables/UInt64[@name='n']")
+    assert n.get("causality") == "structuralParameter" and n.get("start") == "2" and n.get("max") == "4096"
+    m = root3.find("ModelVariables/Float64[@name='m']")
+    assert m.find("Dimension").get("valueReference") == n.get("valueReference") and len(m.get("start").split()) == 2
+    assert root3.find("ModelVariables/Int32[@name='mode']/Dimension") is not None
+    for size in ("0", "4097"):
+        r = _gen(str(src), str(tmp_path / "bad.xml"), "--fmi2", size)
+        assert r.returncode == 1 and f"n = {size}" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    bad = src.read_text().replace('dimension="n" causality="parameter"', 'dimension="k_end" causality="parameter"', 1)
+    (tmp_path / "bad_src.xml").write_text(bad)
+    r = _gen(str(tmp_path / "bad_src.xml"), str(tmp_path / "vars.h"))
+    assert r.returncode == 1 and "dimension k_end is not a structural parameter" in r.stderr
+
+
 # ----------------------------------------------------------------------------- effects
 
 

@@ -55,15 +55,55 @@ SEEDS = {
     + step(1000) + bytes([STATUS, 2, OUTS]),
 }
 
+# fuzz_chain3.c (u8 % 22): the chain's FMI 3.0 sessions, written to tests/fuzz/corpus_chain3/
+C_INST, C_FREE, C_CFG, C_SETN, C_EXITCFG, C_ENTER, C_EXIT = 0, 1, 2, 3, 5, 6, 7
+C_ARR, C_SCAL, C_GET, C_STEP, C_EVENT, C_TERM, C_GETS, C_SETS, C_SER, C_DESER = 8, 10, 11, 12, 15, 16, 17, 18, 19, 20
+N_INDEX = {1: 0, 2: 1, 3: 2, 5: 3, 8: 4, 13: 5, 0: 8, 4097: 9, 64: 10, 4096: 11}  # any_n's table
+
+
+def c_config(n: int) -> bytes:  # configuration mode, n, leave
+    return bytes([C_CFG, C_SETN, 0, N_INDEX[n], 255, C_EXITCFG])
+
+
+def c_start(flags: int, n: int) -> bytes:
+    return bytes([C_INST, flags]) + c_config(n) + bytes([C_ENTER, 0, 0, 0, C_EXIT])
+
+
+def c_step(fine: bool = False) -> bytes:  # dt 0.1 (0.01), at the FMU's time
+    return bytes([C_STEP, 24 if fine else 23, 0])
+
+
+def c_array(slot: int, n: int, code: int = 100, wrong: bool = False) -> bytes:
+    """Array slot 1..12 (m ... N_ext): n values (wrong: 4) of one value, real()'s selector code
+    (< 52: a special value; 52 ... 235: from the next two bytes)."""
+    count = bytes([3, 4]) if wrong else bytes([255])
+    value = bytes([code]) + (bytes([0x40, 0x80]) if 52 <= code < 236 else b"")
+    return bytes([C_ARR, 0, slot - 1]) + count + value + bytes(4 if wrong else n)
+
+
+CHAIN3_SEEDS = {
+    "plain": c_start(0, 3) + c_step() * 20 + bytes([C_GET, 0, 0, 0]),
+    "early_event": c_start(0b011, 5) + bytes([C_EVENT, 2]) + (c_step() + bytes([C_EVENT, 0, C_EVENT, 1, C_EVENT, 2])) * 15,
+    "update": c_start(0b01110, 2) + c_step() * 30,
+    "states": c_start(0, 8) + c_step() * 5 + bytes([C_GETS, 0, C_SER, 0, C_DESER, 0, 1, C_SETS, 1]) + c_step() * 5
+    + bytes([C_DESER, 2, 10, 0, 7, 0, C_DESER, 1, 4, 0, 0, C_SETS, 0]),
+    "arrays": bytes([C_INST, 0]) + c_config(13) + c_array(1, 13) + c_array(6, 13, wrong=True) + c_array(1, 13, code=2)
+    + bytes([C_ENTER, 0, 0, 0, C_EXIT]) + c_array(11, 13) + c_step(True) * 10,
+    "sizes": bytes([C_INST, 0]) + c_config(0) + c_config(4097) + c_config(1) + bytes([C_ENTER, 0, 0, 0, C_EXIT])
+    + c_step() * 3 + bytes([C_GETS, 0, C_TERM, 0, C_CFG]) + c_config(2) + bytes([C_SETS, 0]) + c_step(),
+}
+
 
 def main() -> None:
-    out = Path(__file__).resolve().parent / "corpus"
-    out.mkdir(exist_ok=True)
-    for name, data in SEEDS.items():
-        tmp = out / f".{name}.tmp"
-        tmp.write_bytes(data)
-        tmp.replace(out / f"seed_{name}")
-    print(f"wrote {len(SEEDS)} seeds to {out}")
+    here = Path(__file__).resolve().parent
+    for folder, seeds in (("corpus", SEEDS), ("corpus_chain3", CHAIN3_SEEDS)):
+        out = here / folder
+        out.mkdir(exist_ok=True)
+        for name, data in seeds.items():
+            tmp = out / f".{name}.tmp"
+            tmp.write_bytes(data)
+            tmp.replace(out / f"seed_{name}")
+        print(f"wrote {len(seeds)} seeds to {out}")
 
 
 if __name__ == "__main__":

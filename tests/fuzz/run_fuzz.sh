@@ -2,7 +2,10 @@
 # Fuzz the FMI entry points with libFuzzer + ASan/UBSan for a bounded time.
 #
 #   tests/fuzz/run_fuzz.sh [seconds]        (default 60; env FUZZ_TIME_ORACLE=0 to explore past
-#                                            the time-exactness oracle, FUZZ_BUILD=<dir> for the build)
+#                                            the time-exactness oracle, FUZZ_BUILD=<dir> for the build,
+#                                            FUZZ_TARGET=fuzz_fmi3 or fuzz_chain3 for the FMI 3.0
+#                                            oscillator or chain: corpus3 / corpus_chain3, and
+#                                            regressions3 / regressions_chain3 for the kept inputs)
 #
 # Installs clang when missing (apt-get, quiet), builds tests/fuzz with -DDFO_FUZZ=ON, fuzzes from
 # tests/fuzz/corpus (new coverage goes to a scratch corpus, not into the repository) and copies
@@ -11,6 +14,16 @@
 # clang with its fuzzer runtime could not be installed or the target did not build.
 set -euo pipefail
 secs=${1:-60}
+# the target: fuzz_fmi (FMI 2.0, default), fuzz_fmi3 (FMI 3.0), fuzz_chain3 or fuzz_chain2 (the
+# chain's FMI 3.0 and 2.0), each with its corpus and regressions folder
+target=${FUZZ_TARGET:-fuzz_fmi}
+case $target in
+  fuzz_fmi) corpus=corpus; regressions=regressions ;;
+  fuzz_fmi3) corpus=corpus3; regressions=regressions3 ;;
+  fuzz_chain3) corpus=corpus_chain3; regressions=regressions_chain3 ;;
+  fuzz_chain2) corpus=corpus_chain2; regressions=regressions_chain2 ;; # no seeds: starts empty
+  *) echo "run_fuzz: unknown FUZZ_TARGET $target (fuzz_fmi, fuzz_fmi3, fuzz_chain3, fuzz_chain2)" >&2; exit 2 ;;
+esac
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 build=${FUZZ_BUILD:-/tmp/dfo-fuzz-build}
@@ -51,19 +64,19 @@ fi
 
 cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DDFO_FUZZ=ON -DFUZZ_TIME_ORACLE="$oracle" \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPython3_EXECUTABLE="$python" >/dev/null
-if ! cmake --build "$build" --target fuzz_fmi -j2 >"$build/fuzz_build.log" 2>&1; then
+if ! cmake --build "$build" --target "$target" -j2 >"$build/fuzz_build.log" 2>&1; then
   echo "run_fuzz: building the fuzz target failed (log: $build/fuzz_build.log)" >&2
   exit 2
 fi
 
 work=$(mktemp -d /tmp/dfo-fuzz.XXXXXX)
 mkdir -p "$work/corpus" "$work/artifacts"
-cp "$here"/corpus/* "$work/corpus/" 2>/dev/null || true
-echo "run_fuzz: fuzzing for ${secs}s (time oracle ${oracle}), scratch dir $work" >&2
+cp "$here/$corpus"/* "$work/corpus/" 2>/dev/null || true
+echo "run_fuzz: fuzzing $target for ${secs}s (time oracle ${oracle}), scratch dir $work" >&2
 set +e
 # fork mode: keep fuzzing after a crash, so that one known bug does not hide the next
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-"$build/tests/fuzz/fuzz_fmi" "$work/corpus" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \
+"$build/tests/fuzz/$target" "$work/corpus" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \
   -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=512 -print_final_stats=1 \
   -artifact_prefix="$work/artifacts/" >"$work/fuzz.log" 2>&1
 rc=$?
@@ -74,13 +87,13 @@ grep -E "^#[0-9]+: cov|INFO: exiting|DONE" "$work/fuzz.log" | tail -n 3 >&2 || t
 # timeout line of a replay of the input.
 signature() {
   local out
-  out=$( (timeout 60 "$build/tests/fuzz/fuzz_fmi" "$1" -timeout=10 -runs=1 2>&1 || true) \
+  out=$( (timeout 60 "$build/tests/fuzz/$target" "$1" -timeout=10 -runs=1 2>&1 || true) \
     | grep -m1 -oE "oracle failed: .*|ERROR: [A-Za-z]+Sanitizer: [a-z-]+|runtime error: [^0-9]*|ALARM: working on the last Unit" || true)
   echo "${out:-timeout or no failure}"
 }
 declare -A seen=()
-mkdir -p "$here/regressions"
-for f in "$here"/regressions/*; do
+mkdir -p "$here/$regressions"
+for f in "$here/$regressions"/*; do
   [ -f "$f" ] && seen["$(signature "$f")"]=1
 done
 found=0
@@ -90,8 +103,8 @@ for f in "$work"/artifacts/*; do
   if [ -n "${seen[$sig]:-}" ]; then continue; fi
   seen["$sig"]=1
   name=$(basename "$f")
-  cp "$f" "$here/regressions/$name.tmp" && mv "$here/regressions/$name.tmp" "$here/regressions/$name"
-  echo "run_fuzz: kept $name in tests/fuzz/regressions/ ($sig)" >&2
+  cp "$f" "$here/$regressions/$name.tmp" && mv "$here/$regressions/$name.tmp" "$here/$regressions/$name"
+  echo "run_fuzz: kept $name in tests/fuzz/$regressions/ ($sig)" >&2
   found=1
 done
 echo "run_fuzz: libFuzzer exit $rc, $(ls "$work/artifacts" | wc -l) failing inputs found, corpus $(ls "$work/corpus" | wc -l) inputs, log $work/fuzz.log" >&2
