@@ -211,8 +211,13 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     double rho = 0.0;
     for (size_t i = 0; i < n; i++) rho = fmax(rho, (fabs(i > 0 ? M->eF[i - 1] : 0.0) + fabs(M->eF[i])) / M->dF[i]);
     const double sk = sqrt((1.0 + rho) / (1.0 - fmin(rho, 0.5))), q = (sk - 1.0) / (sk + 1.0);
-    M->w = (rho <= 0.0) ? 1 : (rho >= 0.5) ? n : (size_t)ceil(56.0 / -log2(q));
-    if (M->w < 1) M->w = 1;
+    /* the smallest w with q^w <= 2^-56, by products (no libm log2: the same bits everywhere and
+     * no newer glibc symbol); q <= 0.27 here, so at most 30 products */
+    size_t w = 1;
+    if (rho >= 0.5) w = n;
+    else if (rho > 0.0)
+        for (double qw = q; qw > 0x1p-56; qw *= q) w++;
+    M->w = w;
     if (err) *err = NULL;
     return M;
 }

@@ -15,6 +15,7 @@
 #include "instance.h"
 
 #include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -126,8 +127,11 @@ static int allowed(Instance *in, const char *fn, int phases)
     if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
 #define FAIL(...) ((void)dfo_inst_fail(&in->core, __VA_ARGS__), fmi3Error)
 
+static const dfo_var_info *var_of(unsigned int vr);
+
 /* nValues must be the number of values the variables hold (one per scalar, n per array of the
- * structural parameter n); arrays non-NULL when used. */
+ * structural parameter n); arrays non-NULL when used. The refusal names every variable given and
+ * how many values it holds. */
 static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference vr[], size_t nvr, const void *value,
                         size_t nValues)
 {
@@ -136,17 +140,23 @@ static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference v
         return 0;
     }
     const size_t expected = nvr > 0 ? dfo_inst_n_values(&in->core, vr, nvr) : 0;
-    if (nValues != expected) {
-#if defined(DFO_MODEL_INDEXED)
-        dfo_inst_fail(&in->core, "%s: nValues = %lu but the %lu value references given hold %lu values (an array "
-                      "holds n values).", fn, (unsigned long)nValues, (unsigned long)nvr, (unsigned long)expected);
-#else
-        dfo_inst_fail(&in->core, "%s: nValues = %lu but %lu value references given (all variables are scalars).", fn,
-                      (unsigned long)nValues, (unsigned long)nvr);
-#endif
-        return 0;
+    if (nValues == expected) return 1;
+    char list[256] = "";
+    size_t used = 0;
+    for (size_t i = 0; i < nvr && used + 1 < sizeof list; i++) {
+        const dfo_var_info *var = var_of(vr[i]);
+        const size_t k = dfo_inst_n_values(&in->core, &vr[i], 1);
+        const int w = var ? snprintf(list + used, sizeof list - used, "%s%s (%lu)", i ? ", " : "", var->name,
+                                     (unsigned long)k)
+                          : snprintf(list + used, sizeof list - used, "%svalue reference %u", i ? ", " : "",
+                                     (unsigned)vr[i]);
+        if (w < 0) break;
+        used += (size_t)w;
     }
-    return 1;
+    if (used + 1 >= sizeof list) memcpy(list + sizeof list - 5, "...", 4);
+    dfo_inst_fail(&in->core, "%s: nValues = %lu, but the variables given hold %lu values: %s.", fn,
+                  (unsigned long)nValues, (unsigned long)expected, list);
+    return 0;
 }
 
 static const dfo_var_info *var_of(unsigned int vr)

@@ -316,7 +316,7 @@ def test_wrong_array_length(fmu3_path: Path) -> None:
         with pytest.raises(ValueError, match=r"m needs 3 values \(one per block, n = 3\)"):
             f.run(1.0, 0.1, {"m": [1.0, 2.0]})
         f._begin(0.0)  # Configuration Mode (n = 3), then Initialization Mode
-        with pytest.raises(ChainError, match=r"nValues = 2 but the 1 value references given hold 3 values"):
+        with pytest.raises(ChainError, match=r"nValues = 2, but the variables given hold 3 values: m \(3\)"):
             f.set_raw("m", [1.0, 2.0])
 
 

@@ -305,7 +305,7 @@ static void test_rules(tally *T, const api3 *A)
     EXPECT(A->enter_init(in, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK);
     double m[8] = {0};
     EXPECT(A->getF(in, &vm, 1, m, 5) == fmi3OK && m[0] == START_m && m[4] == START_m);
-    EXPECT(A->getF(in, &vm, 1, m, 2) == fmi3Error && has(&E, "nValues = 2") && has(&E, "5 values"));
+    EXPECT(A->getF(in, &vm, 1, m, 2) == fmi3Error && has(&E, "nValues = 2") && has(&E, "hold 5 values: m (5)"));
     const double bad[5] = {2.0, 2.0, -1.0, 2.0, 2.0};
     EXPECT(A->setF(in, &vm, 1, bad, 5) == fmi3Error && has(&E, "invalid value -1 for m[3]"));
     EXPECT(A->getF(in, &vm, 1, m, 5) == fmi3OK && m[0] == START_m); /* nothing stored */
