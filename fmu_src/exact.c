@@ -21,6 +21,7 @@
 #define MAX_POLISH 60              /* Newton / bisection steps of a bracketed stop */
 #define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
 #define QUINTIC_STEPS 1            /* Newton steps from the cubic guess to the quintic model's root */
+#define SMALL_ANGLE 0.0625         /* |(wd - lambda) tau| below which wd tau's sin, cos rotate lambda tau's */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
 
 /* What is constant over one call. */
@@ -36,6 +37,7 @@ typedef struct {
     double yk[7][4];              /* y^(k) = yk[k] . (y, y', cos theta, sin theta), from the equation of motion */
     double ea[8], eb[8];          /* the energy bound of |y^(k)|: ea[k] + eb[k] R */
     double lk[8];                 /* lambda^k */
+    double wd_lam;                /* wd - lambda */
     dfo_switch_fn on_switch;
     void *switch_ctx;
     long long events;
@@ -80,6 +82,7 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->inv_wd = (z < 1.0) ? 1.0 / C->wd : 0.0;
     C->inv_D2 = 1.0 / C->D2;
     C->uniform = C->D2 < D_MIN * D_MIN; /* then zeta < D_MIN / 2 < 1 */
+    C->wd_lam = C->wd - C->lam;
     C->wmul = 0;
     for (int n = 1; n <= 4 && z < 1.0; n++)
         if (C->wd == n * C->lam) C->wmul = n;
@@ -163,6 +166,15 @@ static void phi1(double x, double y, double *re, double *im)
     *im = (ei * x - er * y) / d;
 }
 
+/* sin and cos of |x| <= SMALL_ANGLE by their Taylor polynomials (the remainders x^11 / 11! and
+ * x^12 / 12! are below 2^-60 |x| and 2^-70 there). */
+static void small_sincos(double x, double *s, double *c)
+{
+    const double z = x * x;
+    *s = x + x * z * (-1.0 / 6.0 + z * (1.0 / 120.0 + z * (-1.0 / 5040.0 + z * (1.0 / 362880.0))));
+    *c = 1.0 + z * (-0.5 + z * (1.0 / 24.0 + z * (-1.0 / 720.0 + z * (1.0 / 40320.0 + z * (-1.0 / 3628800.0)))));
+}
+
 /* y, y' and the higher derivatives from the equation of motion, each directly (no chain). */
 static void derivatives(const ex_ctx *C, double y, double y1, double cth, double sth, ex_val *v)
 {
@@ -188,7 +200,15 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         const double wu = C->wd * u;
         double cw = cl, sw = sl;
         if (C->wmul == 0) {
-            dfo_sincos(wu, &sw, &cw);
+            const double dl = C->wd_lam * u; /* wd tau = lambda tau + dl */
+            if (fabs(dl) <= SMALL_ANGLE) {
+                double sd, cd;
+                small_sincos(dl, &sd, &cd);
+                cw = cl * cd - sl * sd;
+                sw = sl * cd + cl * sd;
+            } else {
+                dfo_sincos(wu, &sw, &cw);
+            }
         } else if (C->wmul > 1) { /* the angle's multiple: (cl + i sl)^wmul */
             if (C->wmul == 3) {
                 const double c2 = (cl - sl) * (cl + sl), s2 = 2.0 * sl * cl;
