@@ -58,6 +58,7 @@ typedef struct {
 /* y and its derivatives in tau up to the sixth at tau = u, and the free part's decay factors there. */
 typedef struct {
     double u, y, y1, y2, y3, y4, y5, y6;
+    double cth, sth; /* cos, sin of the excitation phase theta there */
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
 } ex_val;
 
@@ -261,6 +262,8 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         y1 += eur * wr - eui * wi;
     }
     v->u = u;
+    v->cth = cth;
+    v->sth = sth;
     derivatives(C, y, y1, cth, sth, v);
 }
 
@@ -329,6 +332,8 @@ enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2, SEARCH_FAIL = -1 };
 static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_val *v)
 {
     v->u = 0.0;
+    v->cth = P->c0;
+    v->sth = P->s0;
     derivatives(C, y0, v0, P->c0, P->s0, v);
     v->e1 = v->e2 = 1.0;
 }
@@ -362,8 +367,13 @@ static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v
 
 /* A stop at u + d from the Taylor model at v (degree 6 in y), without evaluating there (its
  * remainder is below rounding). */
-static void taylor_stop(const ex_val *v, double d, ex_val *out)
+static void taylor_stop(const ex_ctx *C, const ex_val *v, double d, ex_val *out)
 {
+    const double ld = C->lam * d; /* the excitation phase moves by lambda d */
+    double sd, cd;
+    if (fabs(ld) <= SMALL_ANGLE) small_sincos(ld, &sd, &cd); else dfo_sincos(ld, &sd, &cd);
+    out->cth = v->cth * cd - v->sth * sd;
+    out->sth = v->sth * cd + v->cth * sd;
     const double k3 = 1.0 / 6.0, k4 = 1.0 / 24.0, k5 = 1.0 / 120.0, k6 = 1.0 / 720.0;
     out->u = v->u + d;
     out->y = v->y + d * (v->y1 + d * (0.5 * v->y2 + d * (k3 * v->y3 + d * (k4 * v->y4 + d * (k5 * v->y5 +
@@ -427,7 +437,7 @@ static void polish(const ex_ctx *C, const ex_phase *P, double lo, const ex_val *
             double dn = near_root(&v, s, root_guess(&v, s), tol, 4);
             const double dn3 = dn * dn * dn;
             if (dn != 0.0 && v.u + dn > lo && v.u + dn < hi && v.u + fabs(dn) <= u_lim && B7 * dn3 * dn3 <= 360.0 * tol) {
-                taylor_stop(&v, dn, out);
+                taylor_stop(C, &v, dn, out);
                 return;
             }
             if (dn == 0.0) dn = -g / g1;
@@ -516,7 +526,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                     if (!touch && dt <= span7 && B7 * dt3 * dt3 <= 360.0 * tol) {
                         const double dr = near_root(&v, s, dt, tol, 4), dr3 = dr * dr * dr;
                         if (dr > 0.0 && dr <= span7 && u + dr <= u_max && B7 * dr3 * dr3 <= 360.0 * tol) {
-                            taylor_stop(&v, dr, out);
+                            taylor_stop(C, &v, dr, out);
                             return SEARCH_STOP;
                         }
                     }
@@ -530,7 +540,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                     const double dw3 = dw * dw * dw;
                     if (dw != 0.0 && w.u + dw > u && w.u + dw <= u_max && u + span7 >= w.u + fabs(dw) &&
                         B7 * dw3 * dw3 <= 360.0 * tw) {
-                        taylor_stop(&w, dw, out);
+                        taylor_stop(C, &w, dw, out);
                         return SEARCH_STOP;
                     }
                     if (gw < 0.0) {
@@ -680,7 +690,10 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         s->t = ts;
         s->X = P.xc + v.y;
         s->V = 0.0;
-        int next = dfo_rest_mode(&C->L, static_force(C, ts, s->X));
+        /* the static force at a stop from the excitation phase there (known from the search) */
+        const double Fs = (r == SEARCH_STOP && ts < t_target) ? dfo_static_force(C->M, &C->L, C->M->P_amp * v.cth, s->X)
+                                                              : static_force(C, ts, s->X);
+        int next = dfo_rest_mode(&C->L, Fs);
         if (!(C->L.Fb > 0.0)) {
             /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
             if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
