@@ -22,6 +22,7 @@
 #define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
 #define QUINTIC_STEPS 1            /* Newton steps from the cubic guess to the quintic model's root */
 #define SMALL_ANGLE 0.0625         /* |(wd - lambda) tau| below which wd tau's sin, cos rotate lambda tau's */
+#define PHASOR_MAX 0.25           /* |p - i lambda| below which the phasor bound is tried (near resonance) */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
 
 /* What is constant over one call. */
@@ -38,6 +39,9 @@ typedef struct {
     double ea[8], eb[8];          /* the energy bound of |y^(k)|: ea[k] + eb[k] R */
     double lk[8];                 /* lambda^k */
     double wd_lam;                /* wd - lambda */
+    int phasor;                   /* the phasor bound (under-damped, steady form) */
+    double p3r, p3i, p4r, p4i;    /* p^3, p^4, p = -zeta + i wd */
+    double w_abs;                 /* |p - i lambda| */
     dfo_switch_fn on_switch;
     void *switch_ctx;
     long long events;
@@ -53,12 +57,14 @@ typedef struct {
     double q1r, q1i, q2r, q2i; /* uniform form: q p1, q p2, p1,2 = -zeta +- i wd */
     double Qabs;               /* steady form: |Q| */
     double fA, fB;             /* free part: |C| (under-damped), |A|, |B| (critical), |alpha|, |beta| (over) */
+    double Cr, Ci;             /* under-damped: the free part is Re[C e^{p tau}], C = hy - i b */
 } ex_phase;
 
 /* y and its derivatives in tau up to the sixth at tau = u, and the free part's decay factors there. */
 typedef struct {
     double u, y, y1, y2, y3, y4, y5, y6;
     double cth, sth; /* cos, sin of the excitation phase theta there */
+    double Fr, Fi, Gr, Gi; /* phasor bound: the forced part Q e^{i lambda tau}, the free part C e^{p tau} */
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
 } ex_val;
 
@@ -84,6 +90,15 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->inv_D2 = 1.0 / C->D2;
     C->uniform = C->D2 < D_MIN * D_MIN; /* then zeta < D_MIN / 2 < 1 */
     C->wd_lam = C->wd - C->lam;
+    {
+        const double pr = -z, pi = C->wd, p2r = pr * pr - pi * pi, p2i = 2.0 * pr * pi;
+        C->p3r = p2r * pr - p2i * pi;
+        C->p3i = p2r * pi + p2i * pr;
+        C->p4r = p2r * p2r - p2i * p2i;
+        C->p4i = 2.0 * p2r * p2i;
+        C->w_abs = sqrt(z * z + C->wd_lam * C->wd_lam);
+    }
+    C->phasor = z < 1.0 && !C->uniform && C->w_abs < PHASOR_MAX;
     C->wmul = 0;
     for (int n = 1; n <= 4 && z < 1.0; n++)
         if (C->wd == n * C->lam) C->wmul = n;
@@ -109,14 +124,19 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->events = 0;
 }
 
-static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
+/* cs: cos, sin of the excitation phase at ta when known (carried over a reversal), else NULL. */
+static void phase_start(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s, const double *cs)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
-    const double th = C->M->p.omega * ta + C->M->P_phase;
     P->s = s;
     P->ta = ta;
     P->xc = (C->L.F_ext - s * C->L.muk_N) / C->k;
-    dfo_sincos(th, &P->s0, &P->c0);
+    if (cs) {
+        P->c0 = cs[0];
+        P->s0 = cs[1];
+    } else {
+        dfo_sincos(C->M->p.omega * ta + C->M->P_phase, &P->s0, &P->c0);
+    }
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
@@ -142,6 +162,8 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
         const double b = (hv + z * hy) * C->inv_wd;
         P->fA = sqrt(hy * hy + b * b);
         P->fB = 0.0;
+        P->Cr = hy;
+        P->Ci = -b;
     } else if (z == 1.0) {
         P->fA = fabs(hy);
         P->fB = fabs(hv + hy);
@@ -150,6 +172,11 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
         P->fA = fabs(hy - beta);
         P->fB = fabs(beta);
     }
+}
+
+static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
+{
+    phase_start(C, P, ta, X, V, s, NULL);
 }
 
 /* phi1(x + i y) = (e^z - 1) / z without cancellation (x <= 0). */
@@ -227,6 +254,12 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         }
         E = e * cw;
         F = e * sw * C->inv_wd;
+        if (C->phasor) {
+            v->Fr = P->Qr * cl - P->Qi * sl;
+            v->Fi = P->Qr * sl + P->Qi * cl;
+            v->Gr = e * (P->Cr * cw - P->Ci * sw);
+            v->Gi = e * (P->Cr * sw + P->Ci * cw);
+        }
         v->e1 = e;
         v->e2 = 0.0;
     } else if (z == 1.0) {
@@ -267,13 +300,25 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
     derivatives(C, y, y1, cth, sth, v);
 }
 
-/* Bounds of |y'''|, |y''''|, |y^(5)| on [u, u + span]; *limited when they hold only there (the
- * energy bound), not for every later u (the decomposition's, which only decay). *B7 bounds |y^(7)|,
- * on [u, u + span] only when *limited7. */
-static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double span, double *B3, double *B4,
-                   double *B5, double *B7, int *limited, int *limited7)
+/* What the bounds of the derivatives at v need, computed once per step: the decomposition's
+ * (forced amplitude plus the free part's envelope, valid for every later u), R = |(y, y')| for the
+ * energy bound, the phasor bound's magnitudes and its drift rate. */
+typedef struct {
+    double d3, d4, d5, d7; /* decomposition (INFINITY in the uniform form) */
+    double R0;             /* sqrt(y^2 + y'^2) at v */
+    double h3, h4, drift;  /* phasor: |(i lambda)^k F + p^k G| (+ rounding), |G| |p - i lambda| (INFINITY: none) */
+} ex_bnd;
+
+/* An upper bound of |x + i y| within 8 % without a square root: max + (sqrt 2 - 1) min. */
+static double cabs_bound(double x, double y)
 {
-    const double z = C->zeta, a = C->a;
+    const double ax = fabs(x), ay = fabs(y);
+    return (ax > ay) ? ax + 0.41421357 * ay : ay + 0.41421357 * ax;
+}
+
+static void bounds_base(const ex_ctx *C, const ex_phase *P, const ex_val *v, ex_bnd *b)
+{
+    const double z = C->zeta;
     double f3, f4, f5, f7;
     if (z < 1.0) {
         f3 = f4 = f5 = f7 = P->fA * v->e1; /* |p| = 1 */
@@ -289,19 +334,48 @@ static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double s
         f5 = a1 * r1 * r1 + a2 * r2 * r2;
         f7 = a1 * (r1 * r1) * (r1 * r1) + a2 * (r2 * r2) * (r2 * r2);
     }
-    /* INFINITY in the uniform form */
-    const double d3 = P->Qabs * C->lk[3] + f3, d4 = P->Qabs * C->lk[4] + f4, d5 = P->Qabs * C->lk[5] + f5;
-    const double d7 = P->Qabs * C->lk[7] + f7;
+    b->d3 = P->Qabs * C->lk[3] + f3;
+    b->d4 = P->Qabs * C->lk[4] + f4;
+    b->d5 = P->Qabs * C->lk[5] + f5;
+    b->d7 = P->Qabs * C->lk[7] + f7;
+    b->R0 = sqrt(v->y * v->y + v->y1 * v->y1);
+    b->h3 = b->h4 = b->drift = INFINITY;
+    if (C->phasor) {
+        /* y^(k)(u + s) = Re[((i lambda)^k F + p^k G e^{(p - i lambda) s}) e^{i lambda s}] with |p| = 1 and
+         * |e^{w s} - 1| <= |w| s (Re w <= 0): |y^(k)| <= |(i lambda)^k F + p^k G| + |G| |p - i lambda| s */
+        const double l3 = C->lk[3], l4 = C->lk[4], g = P->fA * v->e1, round = 1e-12 * (P->Qabs * l4 + g);
+        const double t3r = l3 * v->Fi + C->p3r * v->Gr - C->p3i * v->Gi;
+        const double t3i = -l3 * v->Fr + C->p3r * v->Gi + C->p3i * v->Gr;
+        const double t4r = l4 * v->Fr + C->p4r * v->Gr - C->p4i * v->Gi;
+        const double t4i = l4 * v->Fi + C->p4r * v->Gi + C->p4i * v->Gr;
+        b->h3 = cabs_bound(t3r, t3i) + round;
+        b->h4 = cabs_bound(t4r, t4i) + round;
+        b->drift = g * C->w_abs;
+    }
+}
+
+/* Bounds of |y'''|, |y''''|, |y^(5)| on [u, u + span]; *limited when they hold only there (the
+ * energy or the phasor bound), not for every later u (the decomposition's, which only decay).
+ * *B7 bounds |y^(7)|, on [u, u + span] only when *limited7. */
+static void bounds(const ex_ctx *C, const ex_bnd *b, double span, double *B3, double *B4, double *B5, double *B7,
+                   int *limited, int *limited7)
+{
     /* energy: d/dtau (y^2 + y'^2)/2 = y' (a cos - 2 zeta y') <= a |y'|, so R grows at most by a */
-    const double R = sqrt(v->y * v->y + v->y1 * v->y1) + a * span;
+    const double R = b->R0 + C->a * span;
     const double e3 = C->ea[3] + C->eb[3] * R, e4 = C->ea[4] + C->eb[4] * R, e5 = C->ea[5] + C->eb[5] * R;
     const double e7 = C->ea[7] + C->eb[7] * R;
-    *limited = (e3 < d3 || e4 < d4 || e5 < d5);
-    *limited7 = e7 < d7;
-    *B3 = BOUND_SAFETY * (e3 < d3 ? e3 : d3);
-    *B4 = BOUND_SAFETY * (e4 < d4 ? e4 : d4);
-    *B5 = BOUND_SAFETY * (e5 < d5 ? e5 : d5);
-    *B7 = BOUND_SAFETY * (e7 < d7 ? e7 : d7);
+    double b3 = (e3 < b->d3 ? e3 : b->d3), b4 = (e4 < b->d4 ? e4 : b->d4);
+    *limited = (e3 < b->d3 || e4 < b->d4 || e5 < b->d5);
+    if (C->phasor) {
+        const double h3 = b->h3 + b->drift * span, h4 = b->h4 + b->drift * span;
+        if (h3 < b3) { b3 = h3; *limited = 1; }
+        if (h4 < b4) { b4 = h4; *limited = 1; }
+    }
+    *limited7 = e7 < b->d7;
+    *B3 = BOUND_SAFETY * b3;
+    *B4 = BOUND_SAFETY * b4;
+    *B5 = BOUND_SAFETY * (e5 < b->d5 ? e5 : b->d5);
+    *B7 = BOUND_SAFETY * (e7 < b->d7 ? e7 : b->d7);
 }
 
 /* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 > 0). */
@@ -316,7 +390,7 @@ static double safe_step(double g0, double g1, double B)
 static double start_step(double g1, double g2, double B)
 {
     if (!(B > 0.0)) return (g2 >= 0.0) ? INFINITY : (g1 > 0.0 ? 2.0 * g1 / -g2 : 0.0);
-    const double A = B / 6.0, b = 0.5 * g2, r = sqrt(b * b + 4.0 * A * g1);
+    const double A = B * (1.0 / 6.0), b = 0.5 * g2, r = sqrt(b * b + 4.0 * A * g1);
     return (b >= 0.0) ? (b + r) / (2.0 * A) : 2.0 * g1 / (r - b);
 }
 
@@ -332,6 +406,10 @@ enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2, SEARCH_FAIL = -1 };
 static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_val *v)
 {
     v->u = 0.0;
+    v->Fr = P->Qr;
+    v->Fi = P->Qi;
+    v->Gr = P->Cr;
+    v->Gi = P->Ci;
     v->cth = P->c0;
     v->sth = P->s0;
     derivatives(C, y0, v0, P->c0, P->s0, v);
@@ -346,10 +424,12 @@ static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v
                              double g2, double *B4, double *B5, double *span, double *B7, double *span7)
 {
     double S = ENERGY_SPAN, d = 0.0;
+    ex_bnd base;
+    bounds_base(C, P, v, &base);
     for (int k = 0; k < 2; k++) {
         double b3, b4, b5, b7;
         int lim, lim7;
-        bounds(C, P, v, S, &b3, &b4, &b5, &b7, &lim, &lim7);
+        bounds(C, &base, S, &b3, &b4, &b5, &b7, &lim, &lim7);
         const double dk = started ? safe_step(g0, g1, b3) : START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, b4);
         const double dc = (lim && dk > S) ? S : dk;
         if (k > 0 && !(dc > d)) break;
@@ -633,8 +713,8 @@ static double static_force(const ex_ctx *C, double t, double X)
 
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
 {
-    int skip = 0, stall = 0;
-    double t_last = s->t;
+    int skip = 0, stall = 0, carried = 0;
+    double t_last = s->t, cs[2] = {1.0, 0.0}; /* the excitation phase at s->t when carried */
     while (s->t < t_target) {
         if (s->t == t_last) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
@@ -673,7 +753,8 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         const int sd = s->mode;
         ex_phase P;
         ex_val v;
-        phase_init(C, &P, ta, s->X, s->V, sd);
+        if (carried) phase_start(C, &P, ta, s->X, s->V, sd, cs); else phase_init(C, &P, ta, s->X, s->V, sd);
+        carried = 0;
         const double u_max = C->w0 * (t_target - ta);
         const int r = find_stop(C, &P, s->X - P.xc, s->V / C->w0, u_max, &v);
         if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
@@ -702,6 +783,11 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             skip = 1;
         }
         if (next == 0) s->stick_tb = NAN; /* a new stick phase */
+        if (next == -sd && r == SEARCH_STOP && ts < t_target) { /* a reversal: the next slide starts here */
+            carried = 1;
+            cs[0] = v.cth;
+            cs[1] = v.sth;
+        }
         s->mode = next;
         C->events++;
         after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
