@@ -23,6 +23,7 @@
 #define QUINTIC_STEPS 1            /* Newton steps from the cubic guess to the quintic model's root */
 #define SMALL_ANGLE 0.0625         /* |(wd - lambda) tau| below which wd tau's sin, cos rotate lambda tau's */
 #define PHASOR_MAX 0.25           /* |p - i lambda| below which the phasor bound is tried (near resonance) */
+#define SPAN_GROWTH 1.25           /* the next step's first span over the last step */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
 
 /* What is constant over one call. */
@@ -45,6 +46,7 @@ typedef struct {
     dfo_switch_fn on_switch;
     void *switch_ctx;
     long long events;
+    double first_span;            /* the span the bounds of a phase's first step are first tried over */
 } ex_ctx;
 
 /* One slip phase from (ta, X, V) in direction s. */
@@ -122,6 +124,7 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->events = 0;
+    C->first_span = ENERGY_SPAN;
 }
 
 /* cs: cos, sin of the excitation phase at ta when known (carried over a reversal), else NULL. */
@@ -421,9 +424,9 @@ static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_v
  * bound holds over a span only; when the step reaches it, the span is widened once to that step (the
  * best span S is the fixed point of S = step(bound(S)), which lies between the two). */
 static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, int started, double g0, double g1,
-                             double g2, double *B4, double *B5, double *span, double *B7, double *span7)
+                             double g2, double S, double *B4, double *B5, double *span, double *B7, double *span7)
 {
-    double S = ENERGY_SPAN, d = 0.0;
+    double d = 0.0;
     ex_bnd base;
     bounds_base(C, P, v, &base);
     for (int k = 0; k < 2; k++) {
@@ -542,6 +545,8 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
     eval0(C, P, y0, v0, &v);
     int started = s * v.y1 > tol_of(C, P, &v), tries = 0;
     ex_val v_band = v; /* last point of a slide from rest still inside the rounding band */
+    double S0 = C->first_span; /* the span the bounds are first tried over: a little more than the last step */
+    int first = 1;
     const double u_ulp = 4.0 * DBL_EPSILON * fabs(P->ta) * C->w0; /* rounding of the start time, in tau */
     for (long it = 0; it < MAX_SEARCH; it++) {
         const double g0 = s * v.y1, g1 = s * v.y2, g2 = s * v.y3, tol = tol_of(C, P, &v);
@@ -568,7 +573,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                 *out = v_band;
                 return SEARCH_NULL;
             }
-            d = certified_step(C, P, &v, 0, g0, g1, g2, &B4, &B5, &span, &B7, &span7);
+            d = certified_step(C, P, &v, 0, g0, g1, g2, S0, &B4, &B5, &span, &B7, &span7);
             if (!(d > 0.0) && s * v.y4 > 0.0 && B5 > 0.0) { /* y'' = y''' = 0: the quartic lower bound */
                 d = START_FRACTION * 4.0 * s * v.y4 / B5;
                 if (d > span) d = span;
@@ -578,7 +583,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                 return SEARCH_NULL;
             }
         } else {
-            d = certified_step(C, P, &v, 1, g0, g1, g2, &B4, &B5, &span, &B7, &span7);
+            d = certified_step(C, P, &v, 1, g0, g1, g2, S0, &B4, &B5, &span, &B7, &span7);
             if (g1 < 0.0) {
                 /* the quadratic Taylor model: its first root, or its minimum when it has none */
                 const double disc = g1 * g1 - 2.0 * g2 * g0;
@@ -637,6 +642,9 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
             return SEARCH_NONE;
         }
         if (!(d > 0.0) || !(u + d > u)) return SEARCH_FAIL;
+        S0 = (d * SPAN_GROWTH > ENERGY_SPAN) ? d * SPAN_GROWTH : ENERGY_SPAN;
+        if (first) C->first_span = S0; /* the next phase's first step is likely alike */
+        first = 0;
         eval(C, P, u + d, &v);
         if (!isfinite(v.y) || !isfinite(v.y1)) return SEARCH_FAIL;
     }
