@@ -207,7 +207,7 @@ static void small_sincos(double x, double *s, double *c)
 }
 
 /* y, y' and the higher derivatives from the equation of motion, each directly (no chain). */
-static void derivatives(const ex_ctx *C, double y, double y1, double cth, double sth, ex_val *v)
+static inline void derivatives(const ex_ctx *C, double y, double y1, double cth, double sth, ex_val *v)
 {
     const double(*k)[4] = C->yk;
     v->y = y;
