@@ -22,7 +22,7 @@
 #define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
 #define QUINTIC_STEPS 1            /* Newton steps from the cubic guess to the quintic model's root */
 #define SMALL_ANGLE 0.0625         /* |(wd - lambda) tau| below which wd tau's sin, cos rotate lambda tau's */
-#define PHASOR_MAX 0.25           /* |p - i lambda| below which the phasor bound is tried (near resonance) */
+#define PHASOR_MAX 0.25            /* |p - i lambda| below which the phasor bound is tried (near resonance) */
 #define SPAN_GROWTH 1.25           /* the next step's first span over the last step */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
 
