@@ -20,6 +20,10 @@
 #define MAX_STALL 64               /* events in a row at one instant before it is an error */
 #define MAX_POLISH 60              /* Newton / bisection steps of a bracketed stop */
 #define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
+#define QUINTIC_STEPS 1            /* Newton steps from the cubic guess to the quintic model's root */
+#define SMALL_ANGLE 0.0625         /* |(wd - lambda) tau| below which wd tau's sin, cos rotate lambda tau's */
+#define PHASOR_MAX 0.25            /* |p - i lambda| below which the phasor bound is tried (near resonance) */
+#define SPAN_GROWTH 1.25           /* the next step's first span over the last step */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
 
 /* What is constant over one call. */
@@ -31,9 +35,18 @@ typedef struct {
     double inv_wd, inv_D2;        /* 1 / wd (under-damped), 1 / |D|^2 */
     double Dr, Di, D2;            /* D = 1 - lambda^2 + 2 i zeta lambda, |D|^2 */
     int uniform;                  /* near resonance with little damping: the uniform form */
+    int wmul;                     /* wd = wmul lambda (1 ... 4; 0: otherwise): wd tau from lambda tau's sin, cos */
+    double yk[7][4];              /* y^(k) = yk[k] . (y, y', cos theta, sin theta), from the equation of motion */
+    double ea[8], eb[8];          /* the energy bound of |y^(k)|: ea[k] + eb[k] R */
+    double lk[8];                 /* lambda^k */
+    double wd_lam;                /* wd - lambda */
+    int phasor;                   /* the phasor bound (under-damped, steady form) */
+    double p3r, p3i, p4r, p4i;    /* p^3, p^4, p = -zeta + i wd */
+    double w_abs;                 /* |p - i lambda| */
     dfo_switch_fn on_switch;
     void *switch_ctx;
     long long events;
+    double first_span;            /* the span the bounds of a phase's first step are first tried over */
 } ex_ctx;
 
 /* One slip phase from (ta, X, V) in direction s. */
@@ -46,11 +59,14 @@ typedef struct {
     double q1r, q1i, q2r, q2i; /* uniform form: q p1, q p2, p1,2 = -zeta +- i wd */
     double Qabs;               /* steady form: |Q| */
     double fA, fB;             /* free part: |C| (under-damped), |A|, |B| (critical), |alpha|, |beta| (over) */
+    double Cr, Ci;             /* under-damped: the free part is Re[C e^{p tau}], C = hy - i b */
 } ex_phase;
 
-/* y and its derivatives in tau up to the fourth at tau = u, and the free part's decay factors there. */
+/* y and its derivatives in tau up to the sixth at tau = u, and the free part's decay factors there. */
 typedef struct {
-    double u, y, y1, y2, y3, y4;
+    double u, y, y1, y2, y3, y4, y5, y6;
+    double cth, sth; /* cos, sin of the excitation phase theta there */
+    double Fr, Fi, Gr, Gi; /* phasor bound: the forced part Q e^{i lambda tau}, the free part C e^{p tau} */
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
 } ex_val;
 
@@ -75,19 +91,55 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->inv_wd = (z < 1.0) ? 1.0 / C->wd : 0.0;
     C->inv_D2 = 1.0 / C->D2;
     C->uniform = C->D2 < D_MIN * D_MIN; /* then zeta < D_MIN / 2 < 1 */
+    C->wd_lam = C->wd - C->lam;
+    {
+        const double pr = -z, pi = C->wd, p2r = pr * pr - pi * pi, p2i = 2.0 * pr * pi;
+        C->p3r = p2r * pr - p2i * pi;
+        C->p3i = p2r * pi + p2i * pr;
+        C->p4r = p2r * p2r - p2i * p2i;
+        C->p4i = 2.0 * p2r * p2i;
+        C->w_abs = sqrt(z * z + C->wd_lam * C->wd_lam);
+    }
+    C->phasor = z < 1.0 && !C->uniform && C->w_abs < PHASOR_MAX;
+    C->wmul = 0;
+    for (int n = 1; n <= 4 && z < 1.0; n++)
+        if (C->wd == n * C->lam) C->wmul = n;
+    /* y'' = a cos theta - 2 zeta y' - y and its derivatives: y^(k+2) = a cos^(k) theta - 2 zeta y^(k+1) - y^(k) */
+    double lk = 1.0;
+    for (int k = 0; k < 8; k++, lk *= C->lam) C->lk[k] = lk;
+    for (int j = 0; j < 4; j++) C->yk[0][j] = C->yk[1][j] = 0.0;
+    C->yk[0][0] = C->yk[1][1] = 1.0;
+    for (int k = 0; k + 2 < 7; k++) {
+        const double f = C->a * C->lk[k]; /* a d^k/dtau^k cos theta = f (cos, -sin, -cos, sin) theta */
+        for (int j = 0; j < 4; j++) C->yk[k + 2][j] = -2.0 * z * C->yk[k + 1][j] - C->yk[k][j];
+        C->yk[k + 2][2 + (k & 1)] += ((k & 3) == 0 || (k & 3) == 3) ? f : -f;
+    }
+    /* energy: |y| and |y'| at most R, |y^(k+2)| <= a lambda^k + 2 zeta e_(k+1) + e_k */
+    C->ea[0] = C->ea[1] = 0.0;
+    C->eb[0] = C->eb[1] = 1.0;
+    for (int k = 0; k + 2 < 8; k++) {
+        C->ea[k + 2] = C->a * C->lk[k] + 2.0 * z * C->ea[k + 1] + C->ea[k];
+        C->eb[k + 2] = 2.0 * z * C->eb[k + 1] + C->eb[k];
+    }
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->events = 0;
+    C->first_span = ENERGY_SPAN;
 }
 
-static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
+/* cs: cos, sin of the excitation phase at ta when known (carried over a reversal), else NULL. */
+static void phase_start(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s, const double *cs)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
-    const double th = C->M->p.omega * ta + C->M->P_phase;
     P->s = s;
     P->ta = ta;
     P->xc = (C->L.F_ext - s * C->L.muk_N) / C->k;
-    dfo_sincos(th, &P->s0, &P->c0);
+    if (cs) {
+        P->c0 = cs[0];
+        P->s0 = cs[1];
+    } else {
+        dfo_sincos(C->M->p.omega * ta + C->M->P_phase, &P->s0, &P->c0);
+    }
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
@@ -113,6 +165,8 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
         const double b = (hv + z * hy) * C->inv_wd;
         P->fA = sqrt(hy * hy + b * b);
         P->fB = 0.0;
+        P->Cr = hy;
+        P->Ci = -b;
     } else if (z == 1.0) {
         P->fA = fabs(hy);
         P->fB = fabs(hv + hy);
@@ -121,6 +175,11 @@ static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double
         P->fA = fabs(hy - beta);
         P->fB = fabs(beta);
     }
+}
+
+static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
+{
+    phase_start(C, P, ta, X, V, s, NULL);
 }
 
 /* phi1(x + i y) = (e^z - 1) / z without cancellation (x <= 0). */
@@ -138,6 +197,28 @@ static void phi1(double x, double y, double *re, double *im)
     *im = (ei * x - er * y) / d;
 }
 
+/* sin and cos of |x| <= SMALL_ANGLE by their Taylor polynomials (the remainders x^11 / 11! and
+ * x^12 / 12! are below 2^-60 |x| and 2^-70 there). */
+static void small_sincos(double x, double *s, double *c)
+{
+    const double z = x * x;
+    *s = x + x * z * (-1.0 / 6.0 + z * (1.0 / 120.0 + z * (-1.0 / 5040.0 + z * (1.0 / 362880.0))));
+    *c = 1.0 + z * (-0.5 + z * (1.0 / 24.0 + z * (-1.0 / 720.0 + z * (1.0 / 40320.0 + z * (-1.0 / 3628800.0)))));
+}
+
+/* y, y' and the higher derivatives from the equation of motion, each directly (no chain). */
+static inline void derivatives(const ex_ctx *C, double y, double y1, double cth, double sth, ex_val *v)
+{
+    const double(*k)[4] = C->yk;
+    v->y = y;
+    v->y1 = y1;
+    v->y2 = C->a * cth - 2.0 * C->zeta * y1 - y;
+    v->y3 = (k[3][0] * y + k[3][1] * y1) + (k[3][2] * cth + k[3][3] * sth);
+    v->y4 = (k[4][0] * y + k[4][1] * y1) + (k[4][2] * cth + k[4][3] * sth);
+    v->y5 = (k[5][0] * y + k[5][1] * y1) + (k[5][2] * cth + k[5][3] * sth);
+    v->y6 = (k[6][0] * y + k[6][1] * y1) + (k[6][2] * cth + k[6][3] * sth);
+}
+
 static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
 {
     const double z = C->zeta, lam = C->lam;
@@ -149,9 +230,39 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         const double e = (z > 0.0) ? dfo_exp(-z * u) : 1.0;
         const double wu = C->wd * u;
         double cw = cl, sw = sl;
-        if (C->wd != lam) dfo_sincos(wu, &sw, &cw);
+        if (C->wmul == 0) {
+            const double dl = C->wd_lam * u; /* wd tau = lambda tau + dl */
+            if (fabs(dl) <= SMALL_ANGLE) {
+                double sd, cd;
+                small_sincos(dl, &sd, &cd);
+                cw = cl * cd - sl * sd;
+                sw = sl * cd + cl * sd;
+            } else {
+                dfo_sincos(wu, &sw, &cw);
+            }
+        } else if (C->wmul > 1) { /* the angle's multiple: (cl + i sl)^wmul */
+            if (C->wmul == 3) {
+                const double c2 = (cl - sl) * (cl + sl), s2 = 2.0 * sl * cl;
+                cw = c2 * cl - s2 * sl;
+                sw = s2 * cl + c2 * sl;
+            } else {
+                cw = (cl - sl) * (cl + sl);
+                sw = 2.0 * sl * cl;
+                if (C->wmul == 4) {
+                    const double c2 = cw;
+                    cw = (c2 - sw) * (c2 + sw);
+                    sw = 2.0 * sw * c2;
+                }
+            }
+        }
         E = e * cw;
         F = e * sw * C->inv_wd;
+        if (C->phasor) {
+            v->Fr = P->Qr * cl - P->Qi * sl;
+            v->Fi = P->Qr * sl + P->Qi * cl;
+            v->Gr = e * (P->Cr * cw - P->Ci * sw);
+            v->Gi = e * (P->Cr * sw + P->Ci * cw);
+        }
         v->e1 = e;
         v->e2 = 0.0;
     } else if (z == 1.0) {
@@ -187,45 +298,87 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         y1 += eur * wr - eui * wi;
     }
     v->u = u;
-    v->y = y;
-    v->y1 = y1;
-    v->y2 = C->a * cth - 2.0 * z * y1 - y;
-    v->y3 = -C->a * lam * sth - 2.0 * z * v->y2 - y1;
-    v->y4 = -C->a * lam * lam * cth - 2.0 * z * v->y3 - v->y2;
+    v->cth = cth;
+    v->sth = sth;
+    derivatives(C, y, y1, cth, sth, v);
 }
 
-/* Bounds of |y'''| and |y''''| on [u, u + span]; *limited when they hold only there (the energy
- * bound), not for every later u (the decomposition's, which only decay). */
-static void bounds(const ex_ctx *C, const ex_phase *P, const ex_val *v, double span, double *B3, double *B4,
-                   double *B5, int *limited)
+/* What the bounds of the derivatives at v need, computed once per step: the decomposition's
+ * (forced amplitude plus the free part's envelope, valid for every later u), R = |(y, y')| for the
+ * energy bound, the phasor bound's magnitudes and its drift rate. */
+typedef struct {
+    double d3, d4, d5, d7; /* decomposition (INFINITY in the uniform form) */
+    double R0;             /* sqrt(y^2 + y'^2) at v */
+    double h3, h4, drift;  /* phasor: |(i lambda)^k F + p^k G| (+ rounding), |G| |p - i lambda| (INFINITY: none) */
+} ex_bnd;
+
+/* An upper bound of |x + i y| within 8 % without a square root: max + (sqrt 2 - 1) min. */
+static double cabs_bound(double x, double y)
 {
-    const double z = C->zeta, lam = C->lam, a = C->a;
-    double f3, f4, f5;
+    const double ax = fabs(x), ay = fabs(y);
+    return (ax > ay) ? ax + 0.41421357 * ay : ay + 0.41421357 * ax;
+}
+
+static void bounds_base(const ex_ctx *C, const ex_phase *P, const ex_val *v, ex_bnd *b)
+{
+    const double z = C->zeta;
+    double f3, f4, f5, f7;
     if (z < 1.0) {
-        f3 = f4 = f5 = P->fA * v->e1; /* |p| = 1 */
+        f3 = f4 = f5 = f7 = P->fA * v->e1; /* |p| = 1 */
     } else if (z == 1.0) {
         f3 = v->e1 * (P->fA + P->fB * (v->u + 3.0));
         f4 = v->e1 * (P->fA + P->fB * (v->u + 4.0));
         f5 = v->e1 * (P->fA + P->fB * (v->u + 5.0));
+        f7 = v->e1 * (P->fA + P->fB * (v->u + 7.0));
     } else {
         const double r1 = -C->r1, r2 = -C->r2, a1 = P->fA * r1 * r1 * r1 * v->e1, a2 = P->fB * r2 * r2 * r2 * v->e2;
         f3 = a1 + a2;
         f4 = a1 * r1 + a2 * r2;
         f5 = a1 * r1 * r1 + a2 * r2 * r2;
+        f7 = a1 * (r1 * r1) * (r1 * r1) + a2 * (r2 * r2) * (r2 * r2);
     }
-    const double l3 = lam * lam * lam;
-    /* INFINITY in the uniform form */
-    const double d3 = P->Qabs * l3 + f3, d4 = P->Qabs * l3 * lam + f4, d5 = P->Qabs * l3 * lam * lam + f5;
+    b->d3 = P->Qabs * C->lk[3] + f3;
+    b->d4 = P->Qabs * C->lk[4] + f4;
+    b->d5 = P->Qabs * C->lk[5] + f5;
+    b->d7 = P->Qabs * C->lk[7] + f7;
+    b->R0 = sqrt(v->y * v->y + v->y1 * v->y1);
+    b->h3 = b->h4 = b->drift = INFINITY;
+    if (C->phasor) {
+        /* y^(k)(u + s) = Re[((i lambda)^k F + p^k G e^{(p - i lambda) s}) e^{i lambda s}] with |p| = 1 and
+         * |e^{w s} - 1| <= |w| s (Re w <= 0): |y^(k)| <= |(i lambda)^k F + p^k G| + |G| |p - i lambda| s */
+        const double l3 = C->lk[3], l4 = C->lk[4], g = P->fA * v->e1, round = 1e-12 * (P->Qabs * l4 + g);
+        const double t3r = l3 * v->Fi + C->p3r * v->Gr - C->p3i * v->Gi;
+        const double t3i = -l3 * v->Fr + C->p3r * v->Gi + C->p3i * v->Gr;
+        const double t4r = l4 * v->Fr + C->p4r * v->Gr - C->p4i * v->Gi;
+        const double t4i = l4 * v->Fi + C->p4r * v->Gi + C->p4i * v->Gr;
+        b->h3 = cabs_bound(t3r, t3i) + round;
+        b->h4 = cabs_bound(t4r, t4i) + round;
+        b->drift = g * C->w_abs;
+    }
+}
+
+/* Bounds of |y'''|, |y''''|, |y^(5)| on [u, u + span]; *limited when they hold only there (the
+ * energy or the phasor bound), not for every later u (the decomposition's, which only decay).
+ * *B7 bounds |y^(7)|, on [u, u + span] only when *limited7. */
+static void bounds(const ex_ctx *C, const ex_bnd *b, double span, double *B3, double *B4, double *B5, double *B7,
+                   int *limited, int *limited7)
+{
     /* energy: d/dtau (y^2 + y'^2)/2 = y' (a cos - 2 zeta y') <= a |y'|, so R grows at most by a */
-    const double R = sqrt(v->y * v->y + v->y1 * v->y1) + a * span;
-    const double e2 = a + (1.0 + 2.0 * z) * R;
-    const double e3 = a * lam + 2.0 * z * e2 + R;
-    const double e4 = a * lam * lam + 2.0 * z * e3 + e2;
-    const double e5 = a * lam * lam * lam + 2.0 * z * e4 + e3;
-    *limited = (e3 < d3 || e4 < d4 || e5 < d5);
-    *B3 = BOUND_SAFETY * (e3 < d3 ? e3 : d3);
-    *B4 = BOUND_SAFETY * (e4 < d4 ? e4 : d4);
-    *B5 = BOUND_SAFETY * (e5 < d5 ? e5 : d5);
+    const double R = b->R0 + C->a * span;
+    const double e3 = C->ea[3] + C->eb[3] * R, e4 = C->ea[4] + C->eb[4] * R, e5 = C->ea[5] + C->eb[5] * R;
+    const double e7 = C->ea[7] + C->eb[7] * R;
+    double b3 = (e3 < b->d3 ? e3 : b->d3), b4 = (e4 < b->d4 ? e4 : b->d4);
+    *limited = (e3 < b->d3 || e4 < b->d4 || e5 < b->d5);
+    if (C->phasor) {
+        const double h3 = b->h3 + b->drift * span, h4 = b->h4 + b->drift * span;
+        if (h3 < b3) { b3 = h3; *limited = 1; }
+        if (h4 < b4) { b4 = h4; *limited = 1; }
+    }
+    *limited7 = e7 < b->d7;
+    *B3 = BOUND_SAFETY * b3;
+    *B4 = BOUND_SAFETY * b4;
+    *B5 = BOUND_SAFETY * (e5 < b->d5 ? e5 : b->d5);
+    *B7 = BOUND_SAFETY * (e7 < b->d7 ? e7 : b->d7);
 }
 
 /* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 > 0). */
@@ -240,7 +393,7 @@ static double safe_step(double g0, double g1, double B)
 static double start_step(double g1, double g2, double B)
 {
     if (!(B > 0.0)) return (g2 >= 0.0) ? INFINITY : (g1 > 0.0 ? 2.0 * g1 / -g2 : 0.0);
-    const double A = B / 6.0, b = 0.5 * g2, r = sqrt(b * b + 4.0 * A * g1);
+    const double A = B * (1.0 / 6.0), b = 0.5 * g2, r = sqrt(b * b + 4.0 * A * g1);
     return (b >= 0.0) ? (b + r) / (2.0 * A) : 2.0 * g1 / (r - b);
 }
 
@@ -252,35 +405,17 @@ static double tol_of(const ex_ctx *C, const ex_phase *P, const ex_val *v)
 
 enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2, SEARCH_FAIL = -1 };
 
-/* The first zero of g = s y' in the bracket [lo, hi] (g(lo) >= 0 certified, g(hi) < 0 evaluated in
- * *vhi): Newton's method kept inside the bracket, bisection otherwise, until |g| <= tol. */
-static void polish(const ex_ctx *C, const ex_phase *P, double lo, ex_val *vhi, ex_val *out)
-{
-    const int s = P->s;
-    double hi = vhi->u;
-    ex_val v = *vhi;
-    for (int it = 0; it < MAX_POLISH; it++) {
-        const double g = s * v.y1, g1 = s * v.y2;
-        if (fabs(g) <= tol_of(C, P, &v)) break;
-        if (g > 0.0) lo = v.u; else hi = v.u;
-        double un = (g1 != 0.0) ? v.u - g / g1 : 0.5 * (lo + hi);
-        if (!(un > lo && un < hi)) un = 0.5 * (lo + hi);
-        if (un == lo || un == hi) break;
-        eval(C, P, un, &v);
-    }
-    *out = v;
-}
-
 /* The state at tau = 0 from the phase's data (no transcendental function). */
 static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_val *v)
 {
-    const double z = C->zeta;
     v->u = 0.0;
-    v->y = y0;
-    v->y1 = v0;
-    v->y2 = C->a * P->c0 - 2.0 * z * v0 - y0;
-    v->y3 = -C->a * C->lam * P->s0 - 2.0 * z * v->y2 - v0;
-    v->y4 = -C->a * C->lam * C->lam * P->c0 - 2.0 * z * v->y3 - v->y2;
+    v->Fr = P->Qr;
+    v->Fi = P->Qi;
+    v->Gr = P->Cr;
+    v->Gi = P->Ci;
+    v->cth = P->c0;
+    v->sth = P->s0;
+    derivatives(C, y0, v0, P->c0, P->s0, v);
     v->e1 = v->e2 = 1.0;
 }
 
@@ -289,13 +424,15 @@ static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_v
  * bound holds over a span only; when the step reaches it, the span is widened once to that step (the
  * best span S is the fixed point of S = step(bound(S)), which lies between the two). */
 static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v, int started, double g0, double g1,
-                             double g2, double *B4, double *B5, double *span)
+                             double g2, double S, double *B4, double *B5, double *span, double *B7, double *span7)
 {
-    double S = ENERGY_SPAN, d = 0.0;
+    double d = 0.0;
+    ex_bnd base;
+    bounds_base(C, P, v, &base);
     for (int k = 0; k < 2; k++) {
-        double b3, b4, b5;
-        int lim;
-        bounds(C, P, v, S, &b3, &b4, &b5, &lim);
+        double b3, b4, b5, b7;
+        int lim, lim7;
+        bounds(C, &base, S, &b3, &b4, &b5, &b7, &lim, &lim7);
         const double dk = started ? safe_step(g0, g1, b3) : START_FRACTION * start_step(g1 > 0.0 ? g1 : 0.0, g2, b4);
         const double dc = (lim && dk > S) ? S : dk;
         if (k > 0 && !(dc > d)) break;
@@ -303,39 +440,99 @@ static double certified_step(const ex_ctx *C, const ex_phase *P, const ex_val *v
         *B4 = b4;
         *B5 = b5;
         *span = lim ? S : INFINITY;
+        *B7 = b7;
+        *span7 = lim7 ? S : INFINITY;
         if (!lim || !(dk > S)) break; /* not limited by the span */
         S = dk;
     }
     return d;
 }
 
-/* A stop at u + d from the Taylor model at v, without evaluating there (its remainder is below
- * rounding). */
-static void taylor_stop(const ex_val *v, double d, ex_val *out)
+/* A stop at u + d from the Taylor model at v (degree 6 in y), without evaluating there (its
+ * remainder is below rounding). */
+static void taylor_stop(const ex_ctx *C, const ex_val *v, double d, ex_val *out)
 {
+    const double ld = C->lam * d; /* the excitation phase moves by lambda d */
+    double sd, cd;
+    if (fabs(ld) <= SMALL_ANGLE) small_sincos(ld, &sd, &cd); else dfo_sincos(ld, &sd, &cd);
+    out->cth = v->cth * cd - v->sth * sd;
+    out->sth = v->sth * cd + v->cth * sd;
+    const double k3 = 1.0 / 6.0, k4 = 1.0 / 24.0, k5 = 1.0 / 120.0, k6 = 1.0 / 720.0;
     out->u = v->u + d;
-    out->y = v->y + d * (v->y1 + d * (0.5 * v->y2 + d * (v->y3 * (1.0 / 6.0) + d * v->y4 * (1.0 / 24.0))));
+    out->y = v->y + d * (v->y1 + d * (0.5 * v->y2 + d * (k3 * v->y3 + d * (k4 * v->y4 + d * (k5 * v->y5 +
+                                                                                             d * k6 * v->y6)))));
     out->y1 = 0.0;
-    out->y2 = v->y2 + d * (v->y3 + 0.5 * d * v->y4);
-    out->y3 = v->y3 + d * v->y4;
-    out->y4 = v->y4;
+    out->y2 = v->y2 + d * (v->y3 + d * (0.5 * v->y4 + d * (k3 * v->y5 + d * k4 * v->y6)));
+    out->y3 = v->y3 + d * (v->y4 + d * (0.5 * v->y5 + d * k3 * v->y6));
+    out->y4 = v->y4 + d * (v->y5 + 0.5 * d * v->y6);
+    out->y5 = v->y5 + d * v->y6;
+    out->y6 = v->y6;
     out->e1 = v->e1;
     out->e2 = v->e2;
 }
 
-/* The zero of s y' next to v on the cubic Taylor model (two Newton steps from -g/g'), 0 when the
- * slope does not fall (not a simple downward zero). */
-static double near_root(const ex_val *v, int s)
+/* A first guess at the zero of s y' next to v (s y'' < 0 there): the series reversion of the cubic
+ * Taylor model, t - p2 t^2 + (2 p2^2 - p3) t^3 with t = -g / g', p2 = g'' / (2 g'), p3 = g''' / (6 g'). */
+static double root_guess(const ex_val *v, int s)
 {
-    const double g0 = s * v->y1, g1 = s * v->y2, g2 = s * v->y3, g3 = s * v->y4;
-    if (!(g1 < 0.0)) return 0.0;
-    double d = -g0 / g1;
-    for (int i = 0; i < 2; i++) {
-        const double c = g0 + d * (g1 + d * (0.5 * g2 + d * g3 * (1.0 / 6.0))), cd = g1 + d * (g2 + 0.5 * d * g3);
+    const double r = 1.0 / (s * v->y2), t = -s * v->y1 * r;
+    const double p2 = 0.5 * s * v->y3 * r, p3 = (1.0 / 6.0) * s * v->y4 * r;
+    return t * (1.0 + t * (-p2 + t * (2.0 * p2 * p2 - p3)));
+}
+
+/* The zero of s y' next to v on its quintic Taylor model: Newton's method from d, at most `steps`
+ * steps, until the model's value after the step, (model'' / 2) step^2 by Newton's quadratic
+ * convergence, is within tol / 16 (tol = 0: all the steps). 0 when the slope does not fall there (not
+ * a simple downward zero) or, with tol > 0, the steps do not settle. */
+static double near_root(const ex_val *v, int s, double d, double tol, int steps)
+{
+    const double g0 = s * v->y1, g1 = s * v->y2, g2 = 0.5 * s * v->y3, g3 = (1.0 / 6.0) * s * v->y4;
+    const double g4 = (1.0 / 24.0) * s * v->y5, g5 = (1.0 / 120.0) * s * v->y6;
+    const double h2 = 2.0 * g2, h3 = 3.0 * g3, h4 = 4.0 * g4, h5 = 5.0 * g5;
+    const double k3 = 6.0 * g3, k4 = 12.0 * g4, k5 = 20.0 * g5;
+    for (int i = 0; i < steps; i++) {
+        const double c = g0 + d * (g1 + d * (g2 + d * (g3 + d * (g4 + d * g5))));
+        const double cd = g1 + d * (h2 + d * (h3 + d * (h4 + d * h5)));
+        const double cdd = h2 + d * (k3 + d * (k4 + d * k5));
         if (!(cd < 0.0)) return 0.0;
-        d -= c / cd;
+        const double e = c / cd;
+        d -= e;
+        if (fabs(cdd) * e * e <= 0.125 * tol) return d;
     }
-    return d;
+    return (tol > 0.0) ? 0.0 : d;
+}
+
+/* The first zero of g = s y' in the bracket [lo, hi] (g(lo) >= 0 certified, g(hi) < 0 evaluated in
+ * *vhi): Newton's method on the quintic Taylor model kept inside the bracket, bisection otherwise,
+ * until |g| <= tol or the model's root is within rounding (B7 bounds |y^(7)| up to u_lim). */
+static void polish(const ex_ctx *C, const ex_phase *P, double lo, const ex_val *vhi, double B7, double u_lim,
+                   ex_val *out)
+{
+    const int s = P->s;
+    double hi = vhi->u;
+    ex_val v = *vhi;
+    for (int it = 0; it < MAX_POLISH; it++) {
+        const double g = s * v.y1, g1 = s * v.y2, tol = tol_of(C, P, &v);
+        if (fabs(g) <= tol) break;
+        if (g > 0.0) lo = v.u; else hi = v.u;
+        double un = 0.5 * (lo + hi);
+        if (g1 < 0.0) {
+            double dn = near_root(&v, s, root_guess(&v, s), tol, 4);
+            const double dn3 = dn * dn * dn;
+            if (dn != 0.0 && v.u + dn > lo && v.u + dn < hi && v.u + fabs(dn) <= u_lim && B7 * dn3 * dn3 <= 360.0 * tol) {
+                taylor_stop(C, &v, dn, out);
+                return;
+            }
+            if (dn == 0.0) dn = -g / g1;
+            un = v.u + dn;
+        } else if (g1 != 0.0) {
+            un = v.u - g / g1;
+        }
+        if (!(un > lo && un < hi)) un = 0.5 * (lo + hi);
+        if (un == lo || un == hi) break;
+        eval(C, P, un, &v);
+    }
+    *out = v;
 }
 
 /* The first stop of the phase in (0, u_max]: SEARCH_STOP with the state there in *out, SEARCH_NONE
@@ -348,6 +545,8 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
     eval0(C, P, y0, v0, &v);
     int started = s * v.y1 > tol_of(C, P, &v), tries = 0;
     ex_val v_band = v; /* last point of a slide from rest still inside the rounding band */
+    double S0 = C->first_span; /* the span the bounds are first tried over: a little more than the last step */
+    int first = 1;
     const double u_ulp = 4.0 * DBL_EPSILON * fabs(P->ta) * C->w0; /* rounding of the start time, in tau */
     for (long it = 0; it < MAX_SEARCH; it++) {
         const double g0 = s * v.y1, g1 = s * v.y2, g2 = s * v.y3, tol = tol_of(C, P, &v);
@@ -366,7 +565,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
             *out = v;
             return SEARCH_STOP;
         }
-        double B4 = INFINITY, B5 = INFINITY, span = INFINITY, d;
+        double B4 = INFINITY, B5 = INFINITY, span = INFINITY, B7 = INFINITY, span7 = INFINITY, d;
         if (!started) {
             /* from rest the slide needs s y'' >= 0 (a negative value within rounding counts as 0; the
              * rounding includes that of the event's time, which moves y'' by y''' times it) */
@@ -374,7 +573,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                 *out = v_band;
                 return SEARCH_NULL;
             }
-            d = certified_step(C, P, &v, 0, g0, g1, g2, &B4, &B5, &span);
+            d = certified_step(C, P, &v, 0, g0, g1, g2, S0, &B4, &B5, &span, &B7, &span7);
             if (!(d > 0.0) && s * v.y4 > 0.0 && B5 > 0.0) { /* y'' = y''' = 0: the quartic lower bound */
                 d = START_FRACTION * 4.0 * s * v.y4 / B5;
                 if (d > span) d = span;
@@ -384,7 +583,7 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                 return SEARCH_NULL;
             }
         } else {
-            d = certified_step(C, P, &v, 1, g0, g1, g2, &B4, &B5, &span);
+            d = certified_step(C, P, &v, 1, g0, g1, g2, S0, &B4, &B5, &span, &B7, &span7);
             if (g1 < 0.0) {
                 /* the quadratic Taylor model: its first root, or its minimum when it has none */
                 const double disc = g1 * g1 - 2.0 * g2 * g0;
@@ -397,29 +596,42 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
                     const double c3 = g0 + dq * (g1 + dq * (0.5 * g2 + dq * g3 * (1.0 / 6.0)));
                     const double c3d = g1 + dq * (g2 + 0.5 * dq * g3);
                     if (c3d < 0.0 && fabs(c3 / c3d) < 0.5 * dq) dq -= c3 / c3d;
-                    if (dq < TAYLOR_REACH * d) dt = dq;  /* close: the model holds there */
+                    if (dq < TAYLOR_REACH * d) { /* close: the model holds there */
+                        /* on to the quintic model's root (its error is what the guess misses by) */
+                        const double d5 = near_root(&v, s, dq, 0.0, QUINTIC_STEPS);
+                        dt = (d5 > 0.0 && fabs(d5 - dq) < 0.5 * dq) ? d5 : dq;
+                    }
                 } else if (g2 > 0.0 && g0 - g1 * g1 / (2.0 * g2) <= tol) {
                     const double dm = -g1 / g2;  /* a tangential touch within rounding */
                     if (dm < 4.0 * d) { dt = dm; touch = 1; }
                 }
                 if (dt > 0.0 && u + dt <= u_max) {
-                    /* the cubic model's remainder (and the Newton step's quadratic error) below rounding */
-                    if (!touch && dt <= span && B5 * dt * dt * dt * dt <= 12.0 * tol) {
-                        taylor_stop(&v, dt, out);
-                        return SEARCH_STOP;
+                    /* the quintic model's remainder below rounding: its root is the stop */
+                    const double dt3 = dt * dt * dt;
+                    if (!touch && dt <= span7 && B7 * dt3 * dt3 <= 360.0 * tol) {
+                        const double dr = near_root(&v, s, dt, tol, 4), dr3 = dr * dr * dr;
+                        if (dr > 0.0 && dr <= span7 && u + dr <= u_max && B7 * dr3 * dr3 <= 360.0 * tol) {
+                            taylor_stop(C, &v, dr, out);
+                            return SEARCH_STOP;
+                        }
                     }
                     ex_val w;
                     eval(C, P, u + dt, &w);
                     const double gw = s * w.y1, tw = tol_of(C, P, &w);
                     if (fabs(gw) <= tw) { *out = w; return SEARCH_STOP; }
-                    /* close to a simple zero: finish on the cubic model at w (either side of it) */
-                    const double dw = near_root(&w, s);
-                    if (dw != 0.0 && w.u + dw > u && w.u + dw <= u_max && u + span >= w.u + fabs(dw) &&
-                        B5 * dw * dw * dw * dw <= 12.0 * tw) {
-                        taylor_stop(&w, dw, out);
+                    /* close to a simple zero: finish on the quintic model at w (either side of it), whose
+                     * remainder B7 dw^6 / 720 is below rounding */
+                    const double dw = (s * w.y2 < 0.0) ? near_root(&w, s, root_guess(&w, s), tw, 4) : 0.0;
+                    const double dw3 = dw * dw * dw;
+                    if (dw != 0.0 && w.u + dw > u && w.u + dw <= u_max && u + span7 >= w.u + fabs(dw) &&
+                        B7 * dw3 * dw3 <= 360.0 * tw) {
+                        taylor_stop(C, &w, dw, out);
                         return SEARCH_STOP;
                     }
-                    if (gw < 0.0) { polish(C, P, u + (d < dt ? d : dt), &w, out); return SEARCH_STOP; }
+                    if (gw < 0.0) {
+                        polish(C, P, u + (d < dt ? d : dt), &w, B7, u + span7, out);
+                        return SEARCH_STOP;
+                    }
                     if (s * w.y2 < 0.0 && dt >= d) { v = w; continue; } /* still falling: go on from there */
                 }
             }
@@ -430,6 +642,9 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
             return SEARCH_NONE;
         }
         if (!(d > 0.0) || !(u + d > u)) return SEARCH_FAIL;
+        S0 = (d * SPAN_GROWTH > ENERGY_SPAN) ? d * SPAN_GROWTH : ENERGY_SPAN;
+        if (first) C->first_span = S0; /* the next phase's first step is likely alike */
+        first = 0;
         eval(C, P, u + d, &v);
         if (!isfinite(v.y) || !isfinite(v.y1)) return SEARCH_FAIL;
     }
@@ -506,8 +721,8 @@ static double static_force(const ex_ctx *C, double t, double X)
 
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
 {
-    int skip = 0, stall = 0;
-    double t_last = s->t;
+    int skip = 0, stall = 0, carried = 0;
+    double t_last = s->t, cs[2] = {1.0, 0.0}; /* the excitation phase at s->t when carried */
     while (s->t < t_target) {
         if (s->t == t_last) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
@@ -546,7 +761,8 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         const int sd = s->mode;
         ex_phase P;
         ex_val v;
-        phase_init(C, &P, ta, s->X, s->V, sd);
+        if (carried) phase_start(C, &P, ta, s->X, s->V, sd, cs); else phase_init(C, &P, ta, s->X, s->V, sd);
+        carried = 0;
         const double u_max = C->w0 * (t_target - ta);
         const int r = find_stop(C, &P, s->X - P.xc, s->V / C->w0, u_max, &v);
         if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
@@ -563,7 +779,10 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         s->t = ts;
         s->X = P.xc + v.y;
         s->V = 0.0;
-        int next = dfo_rest_mode(&C->L, static_force(C, ts, s->X));
+        /* the static force at a stop from the excitation phase there (known from the search) */
+        const double Fs = (r == SEARCH_STOP && ts < t_target) ? dfo_static_force(C->M, &C->L, C->M->P_amp * v.cth, s->X)
+                                                              : static_force(C, ts, s->X);
+        int next = dfo_rest_mode(&C->L, Fs);
         if (!(C->L.Fb > 0.0)) {
             /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
             if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
@@ -572,6 +791,11 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             skip = 1;
         }
         if (next == 0) s->stick_tb = NAN; /* a new stick phase */
+        if (next == -sd && r == SEARCH_STOP && ts < t_target) { /* a reversal: the next slide starts here */
+            carried = 1;
+            cs[0] = v.cth;
+            cs[1] = v.sth;
+        }
         s->mode = next;
         C->events++;
         after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);

@@ -11,11 +11,15 @@
  * solved in closed form: the steady-state form plus the free motion (under-, critically and
  * over-damped bases), or, near resonance with little damping, the uniform form of method.md
  * section 5 in which lambda = 1, zeta = 0 is a limit. The phase ends where s y' reaches 0: the
- * search steps only as far as an exact bound of |y'''| proves s y' positive (a cubic bound from
- * rest, where a slide with chi >= 1 starts with zero acceleration), finishes on the quadratic
- * Taylor model with Newton's correction, and takes a tangential touch at the minimum of s y' when
- * that minimum is within rounding of 0. A stick phase ends at the closed-form breakaway
- * (dfo_next_breakaway).
+ * search steps only as far as an exact bound of |y'''| proves s y' positive (the least of the
+ * forced amplitude plus the free part's envelope, the energy bound and, near resonance, the bound
+ * of the two parts' phasor sum; a cubic bound from rest, where a slide with chi >= 1 starts with
+ * zero acceleration), guesses the stop on the Taylor model (the derivatives up to the sixth come
+ * from the equation of motion), evaluates there and finishes on the quintic Taylor model of that
+ * point when its remainder, bounded by |y^(7)|, is below rounding (Newton's method on it inside the
+ * bracket otherwise), and takes a tangential touch at the minimum of s y' when that minimum is
+ * within rounding of 0. About two evaluations per stop. A stick phase ends at the closed-form
+ * breakaway (dfo_next_breakaway).
  *
  * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call), so
  * the state (t, X, V, mode, the stick phase's breakaway) is all a continuation needs: FMU states and
