@@ -4,6 +4,7 @@ description's Scheme enumeration, and parameter sets."""
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import shutil
@@ -13,7 +14,9 @@ from pathlib import Path
 
 import numpy as np
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy import calloc, free
 
 ROOT = Path(__file__).resolve().parents[1]
 # DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
@@ -47,7 +50,15 @@ class FMI2Run:
         self.switches: list[tuple[float, int, int]] = []
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="ref")
-        self.slave.instantiate(loggingOn=log_events, callbacks=None)
+        # Own callbacks, never fmpy's defaults: those go through fmpy's one process-wide logger proxy,
+        # which simulate_fmu(logger=...) repoints to a callback freed when it returns (a later
+        # message from this FMU would then jump to freed memory).
+        self.messages: list[str] = []
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self.slave.instantiate(loggingOn=log_events, callbacks=self._callbacks)
         if log_events:
             self.slave.setDebugLogging(True, ["logEvents"])
         self.slave.setupExperiment(startTime=0.0)
@@ -61,6 +72,13 @@ class FMI2Run:
             else:
                 self.slave.setBoolean([v.valueReference], [bool(value)])
         self.slave.exitInitializationMode()
+
+    def _log(self, env, name, status, category, message) -> None:  # noqa: ANN001 - a ctypes callback
+        text = message.decode(errors="replace")
+        self.messages.append(text)
+        g = SWITCH_LOG.search(text)
+        if g:
+            self.switches.append((float(g.group(1)), MODE_OF[g.group(2)], MODE_OF[g.group(3)]))
 
     def get(self, names: Sequence[str]) -> list[float]:
         out = []
@@ -82,21 +100,17 @@ class FMI2Run:
 
 def fmi2_switches(params: Mapping[str, float | int | bool], t_stop: float, dt: float) -> list[tuple[float, int, int]]:
     """The switches (time, mode before, mode after) the FMI 2.0 FMU's event log reports over a run
-    on the grid k dt."""
-    messages: list[str] = []
-    from fmpy import simulate_fmu
-
-    def logger(env, name, status, category, message):  # noqa: ANN001 - fmpy's ctypes callback
-        messages.append(message.decode())
-
-    simulate_fmu(str(FMU2), start_values=dict(params), stop_time=t_stop, output_interval=dt, debug_logging=True,
-                 logger=logger, output=["x"])
-    out = []
-    for m in messages:
-        g = SWITCH_LOG.search(m)
-        if g:
-            out.append((float(g.group(1)), MODE_OF[g.group(2)], MODE_OF[g.group(3)]))
-    return out
+    on the grid k dt (the communication points fmpy's simulate_fmu would use)."""
+    run = FMI2Run(params, log_events=True)
+    try:
+        t, k = 0.0, 0
+        while not (t > t_stop or math.isclose(t, t_stop)):
+            t_next = min((k + 1) * dt, t_stop)
+            run.slave.doStep(t, t_next - t)
+            t, k = t_next, k + 1
+        return list(run.switches)
+    finally:
+        run.close()
 
 
 def kinds(switches: Sequence[tuple[int, int]]) -> list[str]:
