@@ -1490,6 +1490,28 @@ static COLD_CALL long long stuck_until(chain_model *M, const chain_state *s, dou
     return (m > s->n_grid) ? m : s->n_grid;
 }
 
+/* Block i's external force and kinetic friction magnitude under the inputs in. */
+static void block_loads(const chain_model *M, const chain_inputs *in, size_t i, double *u, double *mukN)
+{
+    const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
+    *u = (in && in->F_ext) ? in->F_ext[i] : 0.0;
+    *mukN = M->mu_k[i] * N;
+}
+
+void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s)
+{
+    for (size_t i = 0; i < M->n; i++) {
+        if (s->mode[i] == 0) continue;
+        double u0, f0, u1, f1;
+        block_loads(M, old_in, i, &u0, &f0);
+        block_loads(M, new_in, i, &u1, &f1);
+        const double dF = (u1 - u0) - s->mode[i] * (f1 - f0);
+        if (dF == 0.0) continue;
+        s->A[i] += dF / M->m[i];
+        s->F[i] = -s->mode[i] * f1;
+    }
+}
+
 chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
                            int stop_at_switch, chain_switch_fn on_switch, void *ctx)
 {

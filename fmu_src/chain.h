@@ -112,6 +112,13 @@ typedef void (*chain_switch_fn)(void *ctx, double t, size_t block, double x, int
 chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
                            int stop_at_switch, chain_switch_fn on_switch, void *ctx);
 
+/* Inputs changed at the communication point s->t (from old_in to new_in, held over the next call):
+ * each sliding block's A takes the jump of its physical acceleration, (dF_ext_i - mode_i
+ * d(mu_k N)_i) / m_i, and its F the new kinetic force, so that the step from s starts on the right
+ * limit (else every input change costs a first-order error); stuck blocks are decided by the next
+ * step. As the oscillator's dfo_new_inputs. */
+void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s);
+
 /* Physical accelerations (0 for stuck blocks) into a (n values). */
 void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s, double *a);
 

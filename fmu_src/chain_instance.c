@@ -651,6 +651,17 @@ static dfo_inst_status step_failed(dfo_instance *in, const char *fn, chain_statu
                          chain_status_text(st), v->time);
 }
 
+/* Inputs set since the last step: the state takes their jump at the step's start (chain_new_inputs). */
+static void take_inputs(dfo_values *v)
+{
+    if (!memcmp(v->u_set, v->u_set_used, sizeof v->u_set) &&
+        !memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double)))
+        return;
+    const chain_inputs old_in = inputs_of(v, 1), new_in = inputs_of(v, 0);
+    chain_new_inputs(v->M, &old_in, &new_in, &v->s);
+    v->acc_valid = 0;
+}
+
 static void step_done(dfo_values *v, double t)
 {
     v->time = t;
@@ -667,6 +678,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
+    take_inputs(v);
     const chain_inputs ci = inputs_of(v, 0);
     switch_rec rec = {in, in->host.log && in->log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
@@ -689,17 +701,11 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
                                         const dfo_event_opts *opt, dfo_step_result *res)
 {
     dfo_values *v = &in->v;
-    res->early = res->event = 0;
-    v->event_pending = 0; /* an event not handled in event mode is handled by the next step */
-    if (!opt->early_return && !opt->intermediate) {
-        const dfo_inst_status st = dfo_inst_do_step(in, fn, tc, dt, 0, NULL);
-        res->t_reached = v->time;
-        return st;
-    }
+    dfo_inst_status done;
     double t_target = 0.0;
-    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
-    if (chk != DFO_INST_OK) return chk;
+    if (dfo_inst_events_begin(in, fn, tc, dt, v->sp[DFO_SP_h], opt, res, &done, &t_target)) return done;
     chain_state_copy(&v->s0, &v->s);
+    take_inputs(v);
     const double t_start = v->time;
     const chain_inputs ci = inputs_of(v, 0);
     const double snap = fmax(1e-9 * v->sp[DFO_SP_h], 8.0 * DBL_EPSILON * fabs(t_target));

@@ -448,6 +448,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     const dfo_state before = v->s;
+    if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
     dfo_status st;
     if (flags & DFO_STEP_STOP_AT_SWITCH) {
         st = advance_to_switch(in, t_target);
@@ -526,17 +527,13 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
                                         const dfo_event_opts *opt, dfo_step_result *res)
 {
     dfo_values *v = &in->v;
-    res->early = res->event = 0;
-    v->event_pending = 0; /* an event not handled in event mode is handled by the next step */
-    if (!opt->early_return && !opt->intermediate) {
-        /* events are handled inside the step: the FMI 2.0 step, bit for bit */
-        const dfo_inst_status st = dfo_inst_do_step(in, fn, tc, dt, 0, NULL);
-        res->t_reached = v->time;
-        return st;
-    }
+    dfo_inst_status done;
     double t_target = 0.0;
-    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
-    if (chk != DFO_INST_OK) return chk;
+    if (dfo_inst_events_begin(in, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
+    if (!same_inputs(&v->u, &v->u_used)) {
+        dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
+        v->u_used = v->u; /* (the state now belongs to them) */
+    }
     const dfo_state start = v->s;
     const double t_start = v->time;
     const int events_logged = in->host.log && in->log_on[DFO_LOG_EVENTS];

@@ -110,6 +110,20 @@ dfo_inst_status dfo_inst_check_step(const dfo_instance *in, const char *fn, doub
     return DFO_INST_OK;
 }
 
+int dfo_inst_events_begin(dfo_instance *in, const char *fn, double tc, double dt, double h, const dfo_event_opts *opt,
+                          dfo_step_result *res, dfo_inst_status *st, double *t_target)
+{
+    res->early = res->event = 0;
+    in->v.event_pending = 0; /* an event not handled in event mode is handled by the next step */
+    if (!opt->early_return && !opt->intermediate) {
+        *st = dfo_inst_do_step(in, fn, tc, dt, 0, NULL);
+        res->t_reached = in->v.time;
+        return 1;
+    }
+    *st = dfo_inst_check_step(in, fn, tc, dt, h, t_target);
+    return *st != DFO_INST_OK;
+}
+
 uint64_t dfo_inst_checksum(const unsigned char *p, size_t n)
 {
     uint64_t h = 1469598103934665603ULL;

@@ -25,6 +25,13 @@ const char *dfo_inst_invalid(const dfo_var_info *var, double x);
 dfo_inst_status dfo_inst_check_step(const dfo_instance *in, const char *fn, double tc, double dt, double h,
                                     double *t_target);
 
+/* The start of dfo_inst_do_step_events in every core: a pending event is handled by this step;
+ * without early return and intermediate update the events are handled inside the step, which is
+ * then dfo_inst_do_step's, bit for bit. Returns 1 when the step is done (its status in *st), else 0
+ * with its arguments checked and *t_target set. */
+int dfo_inst_events_begin(dfo_instance *in, const char *fn, double tc, double dt, double h, const dfo_event_opts *opt,
+                          dfo_step_result *res, dfo_inst_status *st, double *t_target);
+
 /* FNV-1a over n bytes: the checksum of a serialised FMU state. */
 uint64_t dfo_inst_checksum(const unsigned char *p, size_t n);
 

@@ -741,6 +741,18 @@ double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_st
     return dfo_stick_force(&L, dfo_static_force(M, &L, state_excitation(M, s), s->X));
 }
 
+void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
+{
+    if (M->p.scheme == DFO_SCHEME_EXACT || s->mode == 0) return;
+    dfo_loads a, b;
+    dfo_loads_init(&a, M, old_in);
+    dfo_loads_init(&b, M, new_in);
+    const double dF = (b.F_ext - a.F_ext) - s->mode * (b.muk_N - a.muk_N);
+    if (dF == 0.0) return;
+    s->A += dF / M->p.m;
+    s->F = -s->mode * b.muk_N;
+}
+
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
 {
     step_ctx C;

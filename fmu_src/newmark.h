@@ -105,6 +105,13 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
  * since the last step. */
 double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
 
+/* Inputs changed at the communication point s->t (from old_in to new_in, held over the next step):
+ * the acceleration jumps there. A sliding block's A takes the jump of the physical acceleration,
+ * (dF_ext - mode d(mu_k N)) / m, and its F the new kinetic force, so that the Bossak step from s
+ * starts on the right limit (without it, every input change costs a first-order error); a stuck
+ * block's next step decides afresh. The exact scheme starts a new phase anyway: no change. */
+void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s);
+
 /* Physical acceleration at the current state (0 while stuck for the schemes whose stuck block is
  * at rest: consistent and located). */
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);

@@ -36,6 +36,8 @@ asan_pytest() {
   ubsan=$(gcc -print-file-name=libubsan.so)
   DFO_FMU="$PWD/build-asan/DryFrictionOscillator.fmu" \
   DFO_FMU3="$PWD/build-asan/fmi3/DryFrictionOscillator.fmu" \
+  DFO_CHAIN_FMU="$PWD/build-asan/DryFrictionChain.fmu" \
+  DFO_CHAIN_FMU3="$PWD/build-asan/fmi3/DryFrictionChain.fmu" \
   LD_PRELOAD="$asan $ubsan" \
   ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
