@@ -442,6 +442,14 @@ void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_sta
     loads_init(M, in);
     const span G = whole(M, s);
     physical_accel(M, s, &G, a);
+    if (M->scheme != DFO_SCHEME_PAPER) return;
+    /* the paper's stuck block is not at rest: it creeps with the force of its LCP (Bossak's A
+     * throughout), as the oscillator reports it */
+    double cw, sw;
+    phase_of(M, s, s->t, &cw, &sw);
+    for (size_t i = 0; i < M->n; i++)
+        if (held(M, s, i))
+            a[i] = (P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) + s->F[i] - Cv(M, s->V, i)) / M->m[i];
 }
 
 double chain_energy(const chain_model *M, const chain_state *s)
@@ -1512,6 +1520,21 @@ void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const ch
     }
 }
 
+/* The consistent scheme: a stuck block at rest holds its static force, clamped to the limit,
+ * evaluated where a call ends (as the oscillator's dfo_advance); the LCP's force of the step in
+ * which it stopped would still carry the deceleration. */
+static void rest_forces(chain_model *M, chain_state *s)
+{
+    if (M->scheme != DFO_SCHEME_CONSISTENT) return;
+    double cw, sw;
+    phase_of(M, s, s->t, &cw, &sw);
+    for (size_t i = 0; i < M->n; i++) {
+        if (!held(M, s, i)) continue;
+        const double S = P_at(M, i, cw, sw) + M->u[i] - Kx(M, s->X, i) - Cv(M, s->V, i);
+        s->F[i] = -fmax(-M->Fb[i], fmin(M->Fb[i], S));
+    }
+}
+
 chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
                            int stop_at_switch, chain_switch_fn on_switch, void *ctx)
 {
@@ -1582,9 +1605,11 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
         if (stop_at_switch && M->switched) {
             /* the grid index stays that of the last grid point at or before the time reached */
             if (s->t < t_end && t_end == grid) s->n_grid--;
+            rest_forces(M, s);
             return CHAIN_SWITCHED;  /* (g_prev is not used again) */
         }
     }
+    rest_forces(M, s);
     for (size_t i = 0; i < M->n; i++)
         if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX))
             return CHAIN_ERR_NONFINITE;
