@@ -235,36 +235,9 @@ void chain_destroy(chain_model *M)
 
 size_t chain_size(const chain_model *M) { return M->n; }
 
-int chain_state_init(const chain_model *M, chain_state *s)
-{
-    const size_t n = M->n;
-    memset(s, 0, sizeof *s);
-    s->n = n;
-    double *b = dalloc(&M->al, 6 * n);
-    int *mode = (int *)M->al.allocate(M->al.env, n, sizeof(int));
-    if (!b || !mode) {
-        if (b) M->al.release(M->al.env, b);
-        if (mode) M->al.release(M->al.env, mode);
-        return 0;
-    }
-    s->X = b;
-    s->V = b + n;
-    s->A = b + 2 * n;
-    s->F = b + 3 * n;
-    s->hA = b + 4 * n;
-    s->t_stick = b + 5 * n;
-    s->mode = mode;
-    s->exc_n = -1;
-    return 1;
-}
+int chain_state_init(const chain_model *M, chain_state *s) { return chain_state_alloc(&M->al, M->n, s); }
 
-void chain_state_free(const chain_model *M, chain_state *s)
-{
-    if (s->X) M->al.release(M->al.env, s->X);
-    if (s->mode) M->al.release(M->al.env, s->mode);
-    s->X = s->V = s->A = s->F = s->hA = s->t_stick = NULL;
-    s->mode = NULL;
-}
+void chain_state_free(const chain_model *M, chain_state *s) { chain_state_release(&M->al, s); }
 
 void chain_state_copy(chain_state *dst, const chain_state *src)
 {
