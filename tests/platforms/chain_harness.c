@@ -152,17 +152,11 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
     const cset p = make_set(set);
     if (p.n != DFO_CHAIN_N) return 0; /* the FMI 2.0 FMU's n is fixed */
     const int resume = tab != NULL;
-    fmi2Component c = a->instantiate("harness", fmi2CoSimulation, MODEL_GUID, "", &CB2, fmi2False, fmi2False);
-    if (!c) {
-        printf("err %d 0 instantiate\n", set);
-        return 1;
-    }
-    int k0 = 1, fails = 0;
-    if (resume) {
-        if (!resume2(a, c, set, tab)) return 1;
-        k0 = HALF + 1;
-    } else if (a->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK || !set_params2(a, c, &p) ||
-               a->enter_init(c) != fmi2OK || a->exit_init(c) != fmi2OK) {
+    int k0, fails = 0;
+    fmi2Component c = start2(a, set, tab, &k0);
+    if (!c) return 1;
+    if (!resume && (a->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK || !set_params2(a, c, &p) ||
+                    a->enter_init(c) != fmi2OK || a->exit_init(c) != fmi2OK)) {
         printf("err %d 0 initialisation\n", set);
         a->free_instance(c);
         return 1;
@@ -177,7 +171,7 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
             break;
         }
         put_point(set, k, t1, p.n, r, mode);
-        if (!resume && k == HALF) fails += save2(a, c, set, k, states);
+        if (!resume && k == HALF) fails += save_state(states, set, k, serialise2(a, c));
     }
     a->free_instance(c);
     return fails;
@@ -207,17 +201,11 @@ static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab
 {
     const cset p = make_set(set);
     const int resume = tab != NULL;
-    fmi3Instance c = instantiate3(a);
-    if (!c) {
-        printf("err %d 0 instantiate\n", set);
-        return 1;
-    }
-    int k0 = 1, fails = 0;
-    if (resume) { /* the instance has the default n: the state brings its own */
-        if (!resume3(a, c, set, tab)) return 1;
-        k0 = HALF + 1;
-    } else if (!set_params3(a, c, &p) || a->enter_init(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) != fmi3OK ||
-               a->exit_init(c) != fmi3OK) {
+    int k0, fails = 0;
+    fmi3Instance c = start3(a, set, tab, &k0); /* resumed: the default n, the state brings its own */
+    if (!c) return 1;
+    if (!resume && (!set_params3(a, c, &p) || a->enter_init(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) != fmi3OK ||
+                    a->exit_init(c) != fmi3OK)) {
         printf("err %d 0 initialisation\n", set);
         a->free_instance(c);
         return 1;
@@ -238,7 +226,7 @@ static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab
         int mi[NMAXB];
         for (size_t b = 0; b < p.n; b++) mi[b] = mode[b];
         put_point(set, k, t1, p.n, r, mi);
-        if (!resume && k == HALF) fails += save3(a, c, set, k, states);
+        if (!resume && k == HALF) fails += save_state(states, set, k, serialise3(a, c));
     }
     a->free_instance(c);
     return fails;

@@ -80,16 +80,10 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
 {
     const pset p = make_set(set);
     const int resume = tab != NULL;
-    fmi2Component c = a->instantiate("harness", fmi2CoSimulation, MODEL_GUID, "", &CB2, fmi2False, fmi2False);
-    if (!c) {
-        printf("err %d 0 instantiate\n", set);
-        return 1;
-    }
-    int k0 = 1, fails = 0;
-    if (resume) {
-        if (!resume2(a, c, set, tab)) return 1;
-        k0 = HALF + 1;
-    } else {
+    int k0, fails = 0;
+    fmi2Component c = start2(a, set, tab, &k0);
+    if (!c) return 1;
+    if (!resume) {
         const fmi2ValueReference vr[] = {VR_m, VR_k, VR_c, VR_P0, VR_omega, VR_phi, VR_N, VR_mu_s, VR_chi,
                                          VR_x0, VR_v0, VR_h, VR_alpha};
         const fmi2Real rv[] = {p.m, p.k, p.c, p.P0, p.omega, p.phi, p.N, p.mu_s, p.chi, p.x0, p.v0, p.h, p.alpha};
@@ -116,7 +110,7 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
             break;
         }
         put_point(set, k, t1, r, n);
-        if (!resume && k == HALF) fails += save2(a, c, set, k, states);
+        if (!resume && k == HALF) fails += save_state(states, set, k, serialise2(a, c));
     }
     a->free_instance(c);
     return fails;
@@ -128,16 +122,10 @@ static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab
 {
     const pset p = make_set(set);
     const int resume = tab != NULL;
-    fmi3Instance c = instantiate3(a);
-    if (!c) {
-        printf("err %d 0 instantiate\n", set);
-        return 1;
-    }
-    int k0 = 1, fails = 0;
-    if (resume) {
-        if (!resume3(a, c, set, tab)) return 1;
-        k0 = HALF + 1;
-    } else {
+    int k0, fails = 0;
+    fmi3Instance c = start3(a, set, tab, &k0);
+    if (!c) return 1;
+    if (!resume) {
         const fmi3ValueReference vr[] = {VR_m, VR_k, VR_c, VR_P0, VR_omega, VR_phi, VR_N, VR_mu_s, VR_chi,
                                          VR_x0, VR_v0, VR_h, VR_alpha};
         const fmi3Float64 rv[] = {p.m, p.k, p.c, p.P0, p.omega, p.phi, p.N, p.mu_s, p.chi, p.x0, p.v0, p.h, p.alpha};
@@ -169,7 +157,7 @@ static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab
         }
         const int ni[2] = {n[0], n[1]};
         put_point(set, k, t1, r, ni);
-        if (!resume && k == HALF) fails += save3(a, c, set, k, states);
+        if (!resume && k == HALF) fails += save_state(states, set, k, serialise3(a, c));
     }
     a->free_instance(c);
     return fails;

@@ -1,7 +1,8 @@
 /* What the cross-platform harnesses (fmu_harness.c for the oscillator, chain_harness.c for the
  * chain) share: loading the FMU's shared library (dlopen / LoadLibrary) and its FMI 2.0 or 3.0
  * functions, the host callbacks, the random parameter draws, printing reals as %.17g and bits,
- * reading and writing serialised FMU states, resuming from one, and the command line.
+ * reading and writing serialised FMU states, starting an instance (new or resumed), and the command
+ * line.
  *
  * Include once, after fmi2Functions.h, fmi3Functions.h and the model's model_vars.h, with
  * HARNESS_NAME (the program's name, for messages) and MAX_STATE (the largest serialised state, in
@@ -215,80 +216,96 @@ static void logger3(fmi3InstanceEnvironment env, fmi3Status st, fmi3String cat, 
     if (st >= fmi3Error) fprintf(stderr, "fmu: %s\n", msg);
 }
 
-static fmi3Instance instantiate3(const fmi3_api *a)
-{
-    return a->instantiate("harness", MODEL_GUID, NULL, fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
-                          logger3, NULL);
-}
+/* ---- an instance of a set, and its state at point HALF ---------------------------------------------- */
 
-/* ---- FMU states: resume a set from the table, print the state at point HALF ---------------------- */
-
-/* The state of the set from tab into c; 0 (with an "err" line, the instance freed) on failure. */
-static int resume2(const fmi2_api *a, fmi2Component c, int set, const state_table *tab)
+/* A new instance for the set, in a resumed run (tab given) in the set's state from tab; NULL (with an
+ * "err" line) on failure. *k0: the first point to run. */
+static fmi2Component start2(const fmi2_api *a, int set, const state_table *tab, int *k0)
 {
+    *k0 = tab ? HALF + 1 : 1;
+    fmi2Component c = a->instantiate("harness", fmi2CoSimulation, MODEL_GUID, "", &CB2, fmi2False, fmi2False);
+    if (!c) {
+        printf("err %d 0 instantiate\n", set);
+        return NULL;
+    }
+    if (!tab) return c;
     const size_t n = tab->size[set];
     fmi2FMUstate st = NULL;
     if (n == 0 || a->deserialize(c, (const fmi2Byte *)tab->bytes[set], n, &st) != fmi2OK ||
         a->set_state(c, st) != fmi2OK) {
         printf("err %d %d resume\n", set, HALF);
         a->free_instance(c);
-        return 0;
+        return NULL;
     }
     a->free_state(c, &st);
-    return 1;
+    return c;
 }
 
-static int resume3(const fmi3_api *a, fmi3Instance c, int set, const state_table *tab)
+static fmi3Instance start3(const fmi3_api *a, int set, const state_table *tab, int *k0)
 {
+    *k0 = tab ? HALF + 1 : 1;
+    fmi3Instance c = a->instantiate("harness", MODEL_GUID, NULL, fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0,
+                                    NULL, logger3, NULL);
+    if (!c) {
+        printf("err %d 0 instantiate\n", set);
+        return NULL;
+    }
+    if (!tab) return c;
     const size_t n = tab->size[set];
     fmi3FMUState st = NULL;
     if (n == 0 || a->deserialize(c, (const fmi3Byte *)tab->bytes[set], n, &st) != fmi3OK ||
         a->set_state(c, st) != fmi3OK) {
         printf("err %d %d resume\n", set, HALF);
         a->free_instance(c);
-        return 0;
+        return NULL;
     }
     a->free_state(c, &st);
-    return 1;
+    return c;
 }
 
-/* The serialised state at point k to states and stdout; the number of failed calls (0 or 1). */
-static int save2(const fmi2_api *a, fmi2Component c, int set, int k, FILE *states)
+/* a serialised state: n bytes at b (malloc'ed), or b NULL when a call failed */
+typedef struct {
+    unsigned char *b;
+    size_t n;
+} state_bytes;
+
+static state_bytes serialise2(const fmi2_api *a, fmi2Component c)
 {
     fmi2FMUstate st = NULL;
-    size_t size = 0;
-    unsigned char *buf = NULL;
-    int fails = 0;
-    if (a->get_state(c, &st) != fmi2OK || a->state_size(c, st, &size) != fmi2OK || size > MAX_STATE ||
-        !(buf = (unsigned char *)malloc(size)) || a->serialize(c, st, (fmi2Byte *)buf, size) != fmi2OK) {
-        printf("err %d %d serialise\n", set, k);
-        fails++;
-    } else {
-        put_state(states, set, buf, size);
-        put_state(stdout, set, buf, size);
+    state_bytes s = {NULL, 0};
+    if (a->get_state(c, &st) != fmi2OK || a->state_size(c, st, &s.n) != fmi2OK || s.n > MAX_STATE ||
+        !(s.b = (unsigned char *)malloc(s.n)) || a->serialize(c, st, (fmi2Byte *)s.b, s.n) != fmi2OK) {
+        free(s.b);
+        s.b = NULL;
     }
-    free(buf);
     a->free_state(c, &st);
-    return fails;
+    return s;
 }
 
-static int save3(const fmi3_api *a, fmi3Instance c, int set, int k, FILE *states)
+static state_bytes serialise3(const fmi3_api *a, fmi3Instance c)
 {
     fmi3FMUState st = NULL;
-    size_t size = 0;
-    unsigned char *buf = NULL;
-    int fails = 0;
-    if (a->get_state(c, &st) != fmi3OK || a->state_size(c, st, &size) != fmi3OK || size > MAX_STATE ||
-        !(buf = (unsigned char *)malloc(size)) || a->serialize(c, st, (fmi3Byte *)buf, size) != fmi3OK) {
-        printf("err %d %d serialise\n", set, k);
-        fails++;
-    } else {
-        put_state(states, set, buf, size);
-        put_state(stdout, set, buf, size);
+    state_bytes s = {NULL, 0};
+    if (a->get_state(c, &st) != fmi3OK || a->state_size(c, st, &s.n) != fmi3OK || s.n > MAX_STATE ||
+        !(s.b = (unsigned char *)malloc(s.n)) || a->serialize(c, st, (fmi3Byte *)s.b, s.n) != fmi3OK) {
+        free(s.b);
+        s.b = NULL;
     }
-    free(buf);
     a->free_state(c, &st);
-    return fails;
+    return s;
+}
+
+/* The state serialised at point k to states and stdout (freed); the number of failed calls (0 or 1). */
+static int save_state(FILE *states, int set, int k, state_bytes s)
+{
+    if (!s.b) {
+        printf("err %d %d serialise\n", set, k);
+        return 1;
+    }
+    put_state(states, set, s.b, s.n);
+    put_state(stdout, set, s.b, s.n);
+    free(s.b);
+    return 0;
 }
 
 /* ---- the command line ------------------------------------------------------------------------- */
