@@ -134,49 +134,39 @@ static const fuzz_target TARGET = {FUZZ_MAX_CALLS, 18, call, check_outputs};
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) { return fuzz_drive(&TARGET, data, size); }
 
 #if defined(CHAIN_FUZZ_RANDOM_MAIN)
-/* Pseudo-random inputs through the decoder (any compiler, no libFuzzer), each after a plausible
- * start (instantiate, setup, initialise) so that most reach stepping. */
-int main(int argc, char **argv)
+/* Pseudo-random input k (any compiler, no libFuzzer), after a plausible start (instantiate, setup,
+ * initialise) so that most reach stepping. */
+static size_t random_input(long k, uint64_t *s, uint8_t *buf)
 {
-    const long count = argc > 1 ? atol(argv[1]) : 300;
-    uint64_t s = 0x2545F4914F6CDD1DULL;
-    static uint8_t buf[1024];
-    for (long k = 0; k < count; k++) {
-        size_t n = 0;
-        const uint8_t start[] = {0, (uint8_t)(k & 1), 2, 0, 0, 0, 3, 4};
-        memcpy(buf, start, sizeof start);
-        n = (k % 4) ? sizeof start : 2;
-        const size_t len = 64 + (size_t)(k % 8) * 96;
-        while (n + 16 < len) {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            const unsigned pick = (unsigned)(s >> 40) % 8;
-            if (pick < 3) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
-                buf[n++] = 9;
-                buf[n++] = (pick & 1) ? 23 : 24;
-                buf[n++] = 0;
-            } else if (pick == 3) { /* an input element */
-                const uint8_t set[] = {5,
-                                       0, (uint8_t)(17 + (s & 1)), (uint8_t)(s >> 8), /* F_ext[i] or N_ext[i] */
-                                       0, 1,                                          /* k_end (not sent) */
-                                       100, (uint8_t)(s >> 16), (uint8_t)(s >> 24),   /* its value */
-                                       0,                                             /* k_end's */
-                                       0};                                            /* one value */
-                memcpy(buf + n, set, sizeof set);
-                n += sizeof set;
-            } else if (pick == 4) { /* FMU states */
-                buf[n++] = (uint8_t)(13 + (s >> 8) % 4);
-                buf[n++] = (uint8_t)(s >> 16);
-                buf[n++] = (uint8_t)(s >> 24);
-                buf[n++] = (uint8_t)(s >> 32);
-            } else {
-                for (int b = 0; b < 4; b++) buf[n++] = (uint8_t)(s >> (8 * b + 3));
-            }
+    size_t n = 0;
+    const uint8_t start[] = {0, (uint8_t)(k & 1), 2, 0, 0, 0, 3, 4};
+    memcpy(buf, start, sizeof start);
+    n = (k % 4) ? sizeof start : 2;
+    const size_t len = 64 + (size_t)(k % 8) * 96;
+    while (n + 16 < len) {
+        const uint64_t x = xorshift64(s);
+        const unsigned pick = (unsigned)(x >> 40) % 8;
+        if (pick < 3) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
+            buf[n++] = 9;
+            buf[n++] = (pick & 1) ? 23 : 24;
+            buf[n++] = 0;
+        } else if (pick == 3) { /* an input element */
+            const uint8_t set[] = {5,
+                                   0, (uint8_t)(17 + (x & 1)), (uint8_t)(x >> 8), /* F_ext[i] or N_ext[i] */
+                                   0, 1,                                          /* k_end (not sent) */
+                                   100, (uint8_t)(x >> 16), (uint8_t)(x >> 24),   /* its value */
+                                   0,                                             /* k_end's */
+                                   0};                                            /* one value */
+            memcpy(buf + n, set, sizeof set);
+            n += sizeof set;
+        } else if (pick == 4) { /* FMU states */
+            n = put_state_op(buf, n, 13, x);
+        } else {
+            n = put_any(buf, n, x);
         }
-        LLVMFuzzerTestOneInput(buf, n);
     }
-    printf("fuzz_chain2: %ld pseudo-random inputs, no oracle failed\n", count);
-    return 0;
+    return n;
 }
+
+int main(int argc, char **argv) { return fuzz_random_main(argc, argv, 300, 0x2545F4914F6CDD1DULL, random_input); }
 #endif

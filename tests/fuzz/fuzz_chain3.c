@@ -163,70 +163,60 @@ static const fuzz_target TARGET = {FUZZ_MAX_CALLS, 22, call, check_outputs, NULL
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) { return fuzz_drive(&TARGET, data, size); }
 
 #if defined(CHAIN_FUZZ_RANDOM_MAIN)
-/* Pseudo-random inputs through the decoder (any compiler, no libFuzzer): a sanity sweep that runs in
- * every ctest. Inputs start with a plausible session prefix so that most of them reach stepping. */
-int main(int argc, char **argv)
+/* Pseudo-random input k (any compiler, no libFuzzer): a sanity sweep that runs in every ctest.
+ * Inputs start with a plausible session prefix so that most of them reach stepping. */
+static size_t random_input(long k, uint64_t *s, uint8_t *buf)
 {
-    const long count = argc > 1 ? atol(argv[1]) : 400;
-    uint64_t s = 0x9e3779b97f4a7c15ULL;
-    static uint8_t buf[1024];
-    for (long k = 0; k < count; k++) {
-        size_t n = 0;
-        /* instantiate (event mode and early return as k says), configure n (1, 2, 3, 5, 8, 13) */
+    size_t n = 0;
+    /* instantiate (event mode and early return as k says), configure n (1, 2, 3, 5, 8, 13) */
+    buf[n++] = 0;
+    buf[n++] = (uint8_t)(k & 0x1f);
+    buf[n++] = 2;
+    buf[n++] = 3;
+    buf[n++] = 0;
+    buf[n++] = (uint8_t)(k % 6);
+    buf[n++] = 255; /* nValues 1 */
+    buf[n++] = 5;
+    if (k % 3) { /* initialise at t = 0 */
+        buf[n++] = 6;
         buf[n++] = 0;
-        buf[n++] = (uint8_t)(k & 0x1f);
-        buf[n++] = 2;
-        buf[n++] = 3;
         buf[n++] = 0;
-        buf[n++] = (uint8_t)(k % 6);
-        buf[n++] = 255; /* nValues 1 */
-        buf[n++] = 5;
-        if (k % 3) { /* initialise at t = 0 */
-            buf[n++] = 6;
-            buf[n++] = 0;
-            buf[n++] = 0;
-            buf[n++] = 0;
-            buf[n++] = 7;
-            if (k & 1) { /* event mode used: into step mode */
-                buf[n++] = 15;
-                buf[n++] = 2;
-            }
+        buf[n++] = 0;
+        buf[n++] = 7;
+        if (k & 1) { /* event mode used: into step mode */
+            buf[n++] = 15;
+            buf[n++] = 2;
         }
-        static const size_t ns[6] = {1, 2, 3, 5, 8, 13};
-        const size_t blocks_k = ns[k % 6], len = 64 + (size_t)(k % 8) * 96;
-        while (n + 24 < len) {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            const unsigned pick = (unsigned)(s >> 40) % 9;
-            if (pick < 4) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
-                buf[n++] = 12;
-                buf[n++] = (pick & 1) ? 23 : 24;
-                buf[n++] = 0;
-            } else if (pick == 4 && n + blocks_k + 8 < sizeof buf) { /* an input array of n values */
-                buf[n++] = 8;
-                buf[n++] = 0;
-                buf[n++] = (uint8_t)(10 + (s & 1)); /* F_ext, N_ext */
-                buf[n++] = 255;
-                buf[n++] = 100; /* a value from the next two bytes */
-                buf[n++] = (uint8_t)(s >> 8);
-                buf[n++] = (uint8_t)(s >> 16);
-                for (size_t i = 0; i < blocks_k; i++) buf[n++] = 0;
-            } else if (pick == 5) { /* event mode */
-                buf[n++] = 15;
-                buf[n++] = (uint8_t)(s >> 8);
-            } else if (pick == 6) { /* FMU states */
-                buf[n++] = (uint8_t)(17 + (s >> 8) % 4);
-                buf[n++] = (uint8_t)(s >> 16);
-                buf[n++] = (uint8_t)(s >> 24);
-                buf[n++] = (uint8_t)(s >> 32);
-            } else { /* anything */
-                for (int b = 0; b < 4; b++) buf[n++] = (uint8_t)(s >> (8 * b + 3));
-            }
-        }
-        LLVMFuzzerTestOneInput(buf, n);
     }
-    printf("fuzz_chain3: %ld pseudo-random inputs, no oracle failed\n", count);
-    return 0;
+    static const size_t ns[6] = {1, 2, 3, 5, 8, 13};
+    const size_t blocks_k = ns[k % 6], len = 64 + (size_t)(k % 8) * 96;
+    while (n + 24 < len) {
+        const uint64_t x = xorshift64(s);
+        const unsigned pick = (unsigned)(x >> 40) % 9;
+        if (pick < 4) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
+            buf[n++] = 12;
+            buf[n++] = (pick & 1) ? 23 : 24;
+            buf[n++] = 0;
+        } else if (pick == 4 && n + blocks_k + 8 < FUZZ_RANDOM_LEN) { /* an input array of n values */
+            buf[n++] = 8;
+            buf[n++] = 0;
+            buf[n++] = (uint8_t)(10 + (x & 1)); /* F_ext, N_ext */
+            buf[n++] = 255;
+            buf[n++] = 100; /* a value from the next two bytes */
+            buf[n++] = (uint8_t)(x >> 8);
+            buf[n++] = (uint8_t)(x >> 16);
+            for (size_t i = 0; i < blocks_k; i++) buf[n++] = 0;
+        } else if (pick == 5) { /* event mode */
+            buf[n++] = 15;
+            buf[n++] = (uint8_t)(x >> 8);
+        } else if (pick == 6) { /* FMU states */
+            n = put_state_op(buf, n, 17, x);
+        } else {
+            n = put_any(buf, n, x);
+        }
+    }
+    return n;
 }
+
+int main(int argc, char **argv) { return fuzz_random_main(argc, argv, 400, 0x9e3779b97f4a7c15ULL, random_input); }
 #endif

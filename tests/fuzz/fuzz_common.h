@@ -339,6 +339,53 @@ static inline fmi2Status set_logging(ctx *X, reader *r)
 }
 #endif
 
+/* ---- pseudo-random inputs (ctest: any compiler, no libFuzzer) ----------------------------------------- */
+
+#define FUZZ_RANDOM_LEN 1024 /* bytes of a pseudo-random input at most */
+
+static inline uint64_t xorshift64(uint64_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return *s;
+}
+
+/* An FMU-state operation: opcode first + (x >> 8) % 4 (get, set, serialise, deserialise), then
+ * three bytes of x. Returns the new length. */
+static inline size_t put_state_op(uint8_t *buf, size_t n, unsigned first, uint64_t x)
+{
+    buf[n++] = (uint8_t)(first + (x >> 8) % 4);
+    buf[n++] = (uint8_t)(x >> 16);
+    buf[n++] = (uint8_t)(x >> 24);
+    buf[n++] = (uint8_t)(x >> 32);
+    return n;
+}
+
+/* Four bytes of x: anything. Returns the new length. */
+static inline size_t put_any(uint8_t *buf, size_t n, uint64_t x)
+{
+    for (int b = 0; b < 4; b++) buf[n++] = (uint8_t)(x >> (8 * b + 3));
+    return n;
+}
+
+/* Runs count (argv[1], else default_count) pseudo-random inputs through LLVMFuzzerTestOneInput:
+ * input k from make(k, s, buf) (its length; buf holds FUZZ_RANDOM_LEN bytes), s a xorshift state
+ * started at seed. */
+static inline int fuzz_random_main(int argc, char **argv, long default_count, uint64_t seed,
+                                   size_t (*make)(long k, uint64_t *s, uint8_t *buf))
+{
+    const long count = argc > 1 ? atol(argv[1]) : default_count;
+    uint64_t s = seed;
+    static uint8_t buf[FUZZ_RANDOM_LEN];
+    for (long k = 0; k < count; k++) {
+        const size_t n = make(k, &s, buf);
+        LLVMFuzzerTestOneInput(buf, n);
+    }
+    printf(FUZZ_NAME ": %ld pseudo-random inputs, no oracle failed\n", count);
+    return 0;
+}
+
 /* ---- the driver --------------------------------------------------------------------------------- */
 
 /* Runs the operations the input holds through T from no instance; env FUZZ_TRACE set: one line a call. */
