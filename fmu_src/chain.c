@@ -235,36 +235,9 @@ void chain_destroy(chain_model *M)
 
 size_t chain_size(const chain_model *M) { return M->n; }
 
-int chain_state_init(const chain_model *M, chain_state *s)
-{
-    const size_t n = M->n;
-    memset(s, 0, sizeof *s);
-    s->n = n;
-    double *b = dalloc(&M->al, 6 * n);
-    int *mode = (int *)M->al.allocate(M->al.env, n, sizeof(int));
-    if (!b || !mode) {
-        if (b) M->al.release(M->al.env, b);
-        if (mode) M->al.release(M->al.env, mode);
-        return 0;
-    }
-    s->X = b;
-    s->V = b + n;
-    s->A = b + 2 * n;
-    s->F = b + 3 * n;
-    s->hA = b + 4 * n;
-    s->t_stick = b + 5 * n;
-    s->mode = mode;
-    s->exc_n = -1;
-    return 1;
-}
+int chain_state_init(const chain_model *M, chain_state *s) { return chain_state_alloc(&M->al, M->n, s); }
 
-void chain_state_free(const chain_model *M, chain_state *s)
-{
-    if (s->X) M->al.release(M->al.env, s->X);
-    if (s->mode) M->al.release(M->al.env, s->mode);
-    s->X = s->V = s->A = s->F = s->hA = s->t_stick = NULL;
-    s->mode = NULL;
-}
+void chain_state_free(const chain_model *M, chain_state *s) { chain_state_release(&M->al, s); }
 
 void chain_state_copy(chain_state *dst, const chain_state *src)
 {
@@ -700,6 +673,24 @@ static void finish(chain_model *M, chain_state *s, const span *G, const double *
 
 /* ---- the located scheme ---------------------------------------------------------------------- */
 
+/* Row i of the kept factorisation, refreshed when its held state differs from the one it was made
+ * for (fh) or a free row follows a refreshed one (refac); cprev: row i - 1's cp. A held row has
+ * cp = 0; a free one inv = 1 / den, cp = e inv (+0 on the last row, e[n - 1] = +0, as solve_rows'
+ * 0.0). Returns whether the row was refreshed (the next row's refac). */
+static HOT_INLINE int refactor_row(fast_row *R, size_t i, int hold, double cprev, int refac)
+{
+    if (R[i].fh == 1 + hold && !(refac && !hold)) return 0;
+    R[i].fh = 1 + hold;
+    if (hold) {
+        R[i].cp = 0.0;
+    } else {
+        const double den = (i > 0) ? R[i].d - R[i - 1].e * cprev : R[i].d - 0.0 * cprev;
+        R[i].inv = 1.0 / den;
+        R[i].cp = R[i].e * R[i].inv;
+    }
+    return 1;
+}
+
 /* solve_rows on the whole chain with a whole grid step's M_hat (dF, eF), by its factorisation kept
  * for the held pattern (M->rows; see step_fast): the same operations, so the same bits. */
 static void solve_kept(chain_model *M)
@@ -713,19 +704,7 @@ static void solve_kept(chain_model *M)
     int refac = 0;
     for (size_t i = 0; i < n; i++) {
         const int hold = (mode[i] == 0 && l[i] > 0.0);
-        if (R[i].fh != 1 + hold || (refac && !hold)) {
-            R[i].fh = 1 + hold;
-            if (hold) {
-                R[i].cp = 0.0;
-            } else {
-                const double den = (i > 0) ? R[i].d - R[i - 1].e * cprev : R[i].d - 0.0 * cprev;
-                R[i].inv = 1.0 / den;
-                R[i].cp = R[i].e * R[i].inv;  /* +0 on the last row (e[n - 1] = +0), as solve_rows' 0.0 */
-            }
-            refac = 1;
-        } else {
-            refac = 0;
-        }
+        refac = refactor_row(R, i, hold, cprev, refac);
         double dpi = 0.0;
         if (!hold) {
             const double lo_e = (i > 0) ? R[i - 1].e : 0.0;
@@ -1083,19 +1062,7 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
         xl = xc;
         xc = xr;
         const int hold = (mode[i] == 0 && R[i].Fb > 0.0);
-        if (R[i].fh != 1 + hold || (refac && !hold)) {
-            R[i].fh = 1 + hold;
-            if (hold) {
-                R[i].cp = 0.0;
-            } else {
-                const double den = (i > 0) ? R[i].d - R[i - 1].e * cprev : R[i].d - 0.0 * cprev;
-                R[i].inv = 1.0 / den;
-                R[i].cp = R[i].e * R[i].inv;
-            }
-            refac = 1;
-        } else {
-            refac = 0;
-        }
+        refac = refactor_row(R, i, hold, cprev, refac);
         /* solve_rows' (rhs - lo_e dprev) / den, rhs = p + the sliding force; on the first row
          * lo_e dprev is +0, and x - +0 is x */
         double dpi = 0.0;

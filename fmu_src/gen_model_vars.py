@@ -271,10 +271,8 @@ def range_text(model: Model, v: Variable) -> str:
     return "finite"
 
 
-def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
-    if any(v.causality == "structuralParameter" for v in model.variables):
-        return emit_c_header_indexed(model, source)
-    computed = [v for v in model.variables if v.causality in ("output", "calculatedParameter")]
+def _c_header_head(model: Model, source: str, before_guid: list[str], after_time: list[str]) -> list[str]:
+    """The opening of model_vars.h: guard, identity, and the value references and start values."""
     L = [
         f"/* Generated from {source} by fmu_src/gen_model_vars.py. Do not edit. */",
         "#ifndef DFO_MODEL_VARS_H",
@@ -282,11 +280,11 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
         "",
         "#include <stddef.h>",
         "",
-        f'#include "{STRUCTS_HEADER}"',
-        "",
+        *before_guid,
         f'#define MODEL_GUID "{model.guid}"',
         f'#define MODEL_IDENTIFIER "{model.identifier}"',
         f"#define DFO_VR_TIME {TIME_VR}u /* FMI 3.0: the independent variable time */",
+        *after_time,
         "",
         "/* value references and start values */",
     ]
@@ -295,33 +293,34 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
         if v.start is not None:
             start = c_double(v.start) if v.type == "Real" else str(int(v.start))
             L.append(f"#define START_{v.name} {start}")
-    L += ["", "/* enumeration items */"]
+        if v.type in ("Real", "Integer", "UInt64") and v.causality == "structuralParameter":
+            L.append(f"#define MAX_{v.name} {int(v.max)}")
+    return L
+
+
+def _c_enumerations(model: Model) -> list[str]:
+    L = ["", "/* enumeration items */"]
     for tname, items in model.enumerations.items():
         L.append("enum {")
         L += [f"    DFO_MD_{upper_snake(tname)}_{upper_snake(i.name)} = {i.value}," for i in items]
         L.append("};")
         vals = ", ".join(str(i.value) for i in items)
         L.append(f"static const int DFO_ITEMS_{tname}[{len(items)}] = {{{vals}}};")
-    if model.effects:
-        L += ["", f"/* bits of the calculated parameter {model.effects_variable} */", "enum {"]
-        L += [f"    DFO_MD_EFFECT_{upper_snake(e.name)} = {e.bit}, /* {e.description} */" for e in model.effects]
-        L += [f"    DFO_MD_EFFECTS_ALL = {sum(e.bit for e in model.effects)}", "};"]
-    L += ["", "/* log categories, in the order of <LogCategories> */", "enum {"]
+    return L
+
+
+def _c_log_categories(model: Model) -> list[str]:
+    L = ["", "/* log categories, in the order of <LogCategories> */", "enum {"]
     L += [f"    DFO_{upper_snake(name)} = {k}," for k, (name, _) in enumerate(model.log_categories)]
     L += [f"    DFO_NUM_LOG_CATEGORIES = {len(model.log_categories)}", "};",
           "static const char *const DFO_LOG_CATEGORIES[DFO_NUM_LOG_CATEGORIES] = {"]
     L += [f'    "{name}",' for name, _ in model.log_categories]
-    L += ["};", "", "/* outputs and calculated parameters: ids the instance core computes */", "enum {"]
-    L += [f"    DFO_OUT_{v.name}," for v in computed]
-    L += ["    DFO_NUM_OUTS", "};", ""]
-    L += [
-        "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN } dfo_var_type;",
-        "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT } dfo_var_causality;",
-        "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
-        f"/* where a value lives: a field of {PARAMS_STRUCT} or {INPUTS_STRUCT} (named as the variable; Real: double,",
-        " * Integer, Enumeration and Boolean: int), or computed by the core from its output id */",
-        "typedef enum { DFO_IN_PARAMS, DFO_IN_INPUTS, DFO_COMPUTED } dfo_var_home;",
-        "",
+    return L
+
+
+def _c_var_info_struct(where: list[str], start_comment: str) -> list[str]:
+    """typedef dfo_var_info: the fields every model has, with `where` (how the value is found) between."""
+    return [
         "typedef struct {",
         "    unsigned int vr;",
         "    const char *name;",
@@ -329,57 +328,29 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
         "    dfo_var_causality causality;",
         "    dfo_var_variability variability;",
         "    dfo_var_home home;",
-        "    size_t offset;      /* DFO_IN_PARAMS / DFO_IN_INPUTS: offset of the field */",
-        "    size_t set_offset;  /* DFO_IN_INPUTS: offset of the int <name>_set (the input has been set) */",
-        "    int id;             /* DFO_COMPUTED: DFO_OUT_<name> */",
+        *where,
         "    int has_start;",
-        "    double start, min, max; /* absent bounds: the type's extremes */",
+        f"    double start, min, max; /* {start_comment} */",
         "    int normal;         /* must be a normal number (min is the smallest normal double) */",
         "    int n_items;        /* Enumeration: the allowed values */",
         "    const int *items;",
         "    const char *range;  /* the valid range as text, for error messages */",
         "} dfo_var_info;",
-        "",
-        "/* the struct fields have the types the table says (a compile error otherwise) */",
     ]
-    for v in model.variables:
-        if v.causality in ("parameter", "input"):
-            struct = PARAMS_STRUCT if v.causality == "parameter" else INPUTS_STRUCT
-            ctype = "double" if v.type == "Real" else "int"
-            L.append(f"typedef char dfo_field_check_{v.name}[sizeof((({struct} *)0)->{v.name}) == sizeof({ctype}) ? 1 : -1];")
-    L += ["", f"#define DFO_NUM_VARS {len(model.variables)}", "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {"]
-    for v in model.variables:
-        if v.type == "Real":
-            lo = c_double(v.min) if v.min is not None else "-1.7976931348623157e308"
-            hi = c_double(v.max) if v.max is not None else "1.7976931348623157e308"
-        elif v.type == "Boolean":
-            lo, hi = "0.0", "1.0"
-        else:
-            lo = c_double(v.min) if v.min is not None else c_double(INT_MIN)
-            hi = c_double(v.max) if v.max is not None else c_double(INT_MAX)
-        start = c_double(float(v.start)) if v.start is not None else "0.0"
-        if v.causality == "parameter":
-            home, off, set_off, ident = "DFO_IN_PARAMS", f"offsetof({PARAMS_STRUCT}, {v.name})", "0", "-1"
-        elif v.causality == "input":
-            home, off, ident = "DFO_IN_INPUTS", f"offsetof({INPUTS_STRUCT}, {v.name})", "-1"
-            set_off = f"offsetof({INPUTS_STRUCT}, {v.name}_set)"
-        else:
-            home, off, set_off, ident = "DFO_COMPUTED", "0", "0", f"DFO_OUT_{v.name}"
-        if v.type == "Enumeration":
-            items = model.enumerations[v.declared_type]
-            n_items, items_ptr = str(len(items)), f"DFO_ITEMS_{v.declared_type}"
-        else:
-            n_items, items_ptr = "0", "NULL"
-        rng = range_text(model, v).replace('"', '\\"')
-        L.append(
-            f'    {{{v.vr}u, "{v.name}", {C_TYPES[v.type]}, {C_CAUSALITIES[v.causality]}, '
-            f"{C_VARIABILITIES[v.variability]}, {home}, {off}, {set_off}, {ident}, {int(v.start is not None)}, "
-            f'{start}, {lo}, {hi}, {int(v.normal)}, {n_items}, {items_ptr}, "{rng}"}},')
-    L += ["};", "", "#endif", ""]
-    return "\n".join(L)
 
 
-ARRAY_VR_STRIDE = 100000  # array j: value reference j * stride (FMI 3.0), element i: j * stride + i (FMI 2.0)
+def _c_var_row(model: Model, v: Variable, c_type: str, c_causality: str, where: str) -> str:
+    """One row of DFO_VARS; `where` holds the fields between home (included) and has_start."""
+    lo, hi = _bounds(v)
+    start = c_double(float(v.start)) if v.start is not None else "0.0"
+    if v.type == "Enumeration":
+        items = model.enumerations[v.declared_type]
+        n_items, items_ptr = str(len(items)), f"DFO_ITEMS_{v.declared_type}"
+    else:
+        n_items, items_ptr = "0", "NULL"
+    rng = range_text(model, v).replace('"', '\\"')
+    return (f'    {{{v.vr}u, "{v.name}", {c_type}, {c_causality}, {C_VARIABILITIES[v.variability]}, {where}, '
+            f'{int(v.start is not None)}, {start}, {lo}, {hi}, {int(v.normal)}, {n_items}, {items_ptr}, "{rng}"}},')
 
 
 def _bounds(v: Variable) -> tuple[str, str]:
@@ -392,6 +363,58 @@ def _bounds(v: Variable) -> tuple[str, str]:
         return c_double(v.min if v.min is not None else 0), c_double(v.max if v.max is not None else 2.0**53)
     return (c_double(v.min) if v.min is not None else c_double(INT_MIN),
             c_double(v.max) if v.max is not None else c_double(INT_MAX))
+
+
+def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
+    if any(v.causality == "structuralParameter" for v in model.variables):
+        return emit_c_header_indexed(model, source)
+    computed = [v for v in model.variables if v.causality in ("output", "calculatedParameter")]
+    L = _c_header_head(model, source, [f'#include "{STRUCTS_HEADER}"', ""], [])
+    L += _c_enumerations(model)
+    if model.effects:
+        L += ["", f"/* bits of the calculated parameter {model.effects_variable} */", "enum {"]
+        L += [f"    DFO_MD_EFFECT_{upper_snake(e.name)} = {e.bit}, /* {e.description} */" for e in model.effects]
+        L += [f"    DFO_MD_EFFECTS_ALL = {sum(e.bit for e in model.effects)}", "};"]
+    L += _c_log_categories(model)
+    L += ["};", "", "/* outputs and calculated parameters: ids the instance core computes */", "enum {"]
+    L += [f"    DFO_OUT_{v.name}," for v in computed]
+    L += ["    DFO_NUM_OUTS", "};", ""]
+    L += [
+        "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN } dfo_var_type;",
+        "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT } dfo_var_causality;",
+        "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
+        f"/* where a value lives: a field of {PARAMS_STRUCT} or {INPUTS_STRUCT} (named as the variable; Real: double,",
+        " * Integer, Enumeration and Boolean: int), or computed by the core from its output id */",
+        "typedef enum { DFO_IN_PARAMS, DFO_IN_INPUTS, DFO_COMPUTED } dfo_var_home;",
+        "",
+        *_c_var_info_struct([
+            "    size_t offset;      /* DFO_IN_PARAMS / DFO_IN_INPUTS: offset of the field */",
+            "    size_t set_offset;  /* DFO_IN_INPUTS: offset of the int <name>_set (the input has been set) */",
+            "    int id;             /* DFO_COMPUTED: DFO_OUT_<name> */",
+        ], "absent bounds: the type's extremes"),
+        "",
+        "/* the struct fields have the types the table says (a compile error otherwise) */",
+    ]
+    for v in model.variables:
+        if v.causality in ("parameter", "input"):
+            struct = PARAMS_STRUCT if v.causality == "parameter" else INPUTS_STRUCT
+            ctype = "double" if v.type == "Real" else "int"
+            L.append(f"typedef char dfo_field_check_{v.name}[sizeof((({struct} *)0)->{v.name}) == sizeof({ctype}) ? 1 : -1];")
+    L += ["", f"#define DFO_NUM_VARS {len(model.variables)}", "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {"]
+    for v in model.variables:
+        if v.causality == "parameter":
+            home, off, set_off, ident = "DFO_IN_PARAMS", f"offsetof({PARAMS_STRUCT}, {v.name})", "0", "-1"
+        elif v.causality == "input":
+            home, off, ident = "DFO_IN_INPUTS", f"offsetof({INPUTS_STRUCT}, {v.name})", "-1"
+            set_off = f"offsetof({INPUTS_STRUCT}, {v.name}_set)"
+        else:
+            home, off, set_off, ident = "DFO_COMPUTED", "0", "0", f"DFO_OUT_{v.name}"
+        L.append(_c_var_row(model, v, C_TYPES[v.type], C_CAUSALITIES[v.causality], f"{home}, {off}, {set_off}, {ident}"))
+    L += ["};", "", "#endif", ""]
+    return "\n".join(L)
+
+
+ARRAY_VR_STRIDE = 100000  # array j: value reference j * stride (FMI 3.0), element i: j * stride + i (FMI 2.0)
 
 
 def emit_c_header_indexed(model: Model, source: str) -> str:
@@ -412,40 +435,10 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         "DFO_OUT": [v for v in model.variables if v.causality in ("output", "calculatedParameter")],
         "DFO_STRUCT": [v for v in model.variables if v.causality == "structuralParameter"],
     }
-    L = [
-        f"/* Generated from {source} by fmu_src/gen_model_vars.py. Do not edit. */",
-        "#ifndef DFO_MODEL_VARS_H",
-        "#define DFO_MODEL_VARS_H",
-        "",
-        "#include <stddef.h>",
-        "",
-        "#define DFO_MODEL_INDEXED 1 /* arrays sized by structural parameters */",
-        f'#define MODEL_GUID "{model.guid}"',
-        f'#define MODEL_IDENTIFIER "{model.identifier}"',
-        f"#define DFO_VR_TIME {TIME_VR}u /* FMI 3.0: the independent variable time */",
-        f"#define DFO_ARRAY_VR_STRIDE {ARRAY_VR_STRIDE}u /* array j: j * stride; its element i (1-based): j * stride + i */",
-        "",
-        "/* value references and start values */",
-    ]
-    for v in model.variables:
-        L.append(f"#define VR_{v.name} {v.vr}u")
-        if v.start is not None:
-            start = c_double(v.start) if v.type == "Real" else str(int(v.start))
-            L.append(f"#define START_{v.name} {start}")
-        if v.type in ("Real", "Integer", "UInt64") and v.causality == "structuralParameter":
-            L.append(f"#define MAX_{v.name} {int(v.max)}")
-    L += ["", "/* enumeration items */"]
-    for tname, items in model.enumerations.items():
-        L.append("enum {")
-        L += [f"    DFO_MD_{upper_snake(tname)}_{upper_snake(i.name)} = {i.value}," for i in items]
-        L.append("};")
-        vals = ", ".join(str(i.value) for i in items)
-        L.append(f"static const int DFO_ITEMS_{tname}[{len(items)}] = {{{vals}}};")
-    L += ["", "/* log categories, in the order of <LogCategories> */", "enum {"]
-    L += [f"    DFO_{upper_snake(name)} = {k}," for k, (name, _) in enumerate(model.log_categories)]
-    L += [f"    DFO_NUM_LOG_CATEGORIES = {len(model.log_categories)}", "};",
-          "static const char *const DFO_LOG_CATEGORIES[DFO_NUM_LOG_CATEGORIES] = {"]
-    L += [f'    "{name}",' for name, _ in model.log_categories]
+    L = _c_header_head(model, source, ["#define DFO_MODEL_INDEXED 1 /* arrays sized by structural parameters */"],
+                       [f"#define DFO_ARRAY_VR_STRIDE {ARRAY_VR_STRIDE}u /* array j: j * stride; its element i (1-based): j * stride + i */"])
+    L += _c_enumerations(model)
+    L += _c_log_categories(model)
     L += ["};", "", "/* slots: scalar parameters (SP), array parameters (AP), array inputs (AI), computed (OUT),",
           " * structural parameters (STRUCT) */"]
     for prefix, vs in groups.items():
@@ -460,22 +453,10 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         "/* where a value lives: the slot of its group (DFO_SP_, DFO_AP_, DFO_AI_, DFO_OUT_, DFO_STRUCT_) */",
         "typedef enum { DFO_IN_PARAMS, DFO_IN_ARRAYS, DFO_IN_INPUTS, DFO_COMPUTED, DFO_IN_STRUCT } dfo_var_home;",
         "",
-        "typedef struct {",
-        "    unsigned int vr;",
-        "    const char *name;",
-        "    dfo_var_type type;",
-        "    dfo_var_causality causality;",
-        "    dfo_var_variability variability;",
-        "    dfo_var_home home;",
-        "    int array;          /* an array of n values (n: the structural parameter) */",
-        "    int slot;           /* index in its group */",
-        "    int has_start;",
-        "    double start, min, max; /* absent bounds: the type's extremes; an array's start is every element's */",
-        "    int normal;         /* must be a normal number (min is the smallest normal double) */",
-        "    int n_items;        /* Enumeration: the allowed values */",
-        "    const int *items;",
-        "    const char *range;  /* the valid range as text, for error messages */",
-        "} dfo_var_info;",
+        *_c_var_info_struct([
+            "    int array;          /* an array of n values (n: the structural parameter) */",
+            "    int slot;           /* index in its group */",
+        ], "absent bounds: the type's extremes; an array's start is every element's"),
         "",
         f"#define DFO_NUM_VARS {len(model.variables)}",
         "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {",
@@ -486,18 +467,8 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
     types = dict(C_TYPES, UInt64="DFO_UINT64")
     for v in model.variables:
         prefix = next(p for p, vs in groups.items() if v in vs)
-        lo, hi = _bounds(v)
-        start = c_double(float(v.start)) if v.start is not None else "0.0"
-        if v.type == "Enumeration":
-            items = model.enumerations[v.declared_type]
-            n_items, items_ptr = str(len(items)), f"DFO_ITEMS_{v.declared_type}"
-        else:
-            n_items, items_ptr = "0", "NULL"
-        rng = range_text(model, v).replace('"', '\\"')
-        L.append(
-            f'    {{{v.vr}u, "{v.name}", {types[v.type]}, {causalities[v.causality]}, '
-            f"{C_VARIABILITIES[v.variability]}, {homes[prefix]}, {int(v.dimension is not None)}, {prefix}_{v.name}, "
-            f'{int(v.start is not None)}, {start}, {lo}, {hi}, {int(v.normal)}, {n_items}, {items_ptr}, "{rng}"}},')
+        L.append(_c_var_row(model, v, types[v.type], causalities[v.causality],
+                            f"{homes[prefix]}, {int(v.dimension is not None)}, {prefix}_{v.name}"))
     L += ["};", "", "#endif", ""]
     return "\n".join(L)
 

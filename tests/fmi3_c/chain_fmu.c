@@ -41,46 +41,34 @@ enum { OSC_m = 1, OSC_k = 2, OSC_c = 3, OSC_omega = 5, OSC_N = 7, OSC_mu_s = 8, 
         memcpy(&(api)->field, &p_, sizeof p_);                     \
     } while (0)
 
+/* The functions each API loads: (FMI version, field, function name without fmiN); the field has the
+ * function's type, fmiN<name>TYPE, and is loaded from the symbol fmiN<name>. */
+#define API3(X)                                                                                              \
+    X(3, inst, InstantiateCoSimulation) X(3, free_, FreeInstance) X(3, enter_cfg, EnterConfigurationMode)    \
+    X(3, exit_cfg, ExitConfigurationMode) X(3, enter_init, EnterInitializationMode)                          \
+    X(3, exit_init, ExitInitializationMode) X(3, setF, SetFloat64) X(3, getF, GetFloat64)                    \
+    X(3, setU, SetUInt64) X(3, getU, GetUInt64) X(3, getI, GetInt32) X(3, setE, SetInt64)                    \
+    X(3, step, DoStep) X(3, term, Terminate) X(3, gst, GetFMUState) X(3, sst, SetFMUState)                   \
+    X(3, fst, FreeFMUState) X(3, ssize, SerializedFMUStateSize) X(3, ser, SerializeFMUState)                 \
+    X(3, deser, DeserializeFMUState) X(3, eem, EnterEventMode) X(3, upd, UpdateDiscreteStates)               \
+    X(3, esm, EnterStepMode)
+#define API2(X)                                                                                              \
+    X(2, inst, Instantiate) X(2, free_, FreeInstance) X(2, setup, SetupExperiment)                           \
+    X(2, enter_init, EnterInitializationMode) X(2, exit_init, ExitInitializationMode)                        \
+    X(2, setR, SetReal) X(2, getR, GetReal) X(2, getI, GetInteger) X(2, step, DoStep)
+#define API_FIELD(v, field, name) fmi##v##name##TYPE *field;
+#define API_LOAD(v, field, name) LOAD(a, field, "fmi" #v #name);
+
 typedef struct {
     const char *path;
     void *lib;
-    fmi3InstantiateCoSimulationTYPE *inst;
-    fmi3FreeInstanceTYPE *free_;
-    fmi3EnterConfigurationModeTYPE *enter_cfg;
-    fmi3ExitConfigurationModeTYPE *exit_cfg;
-    fmi3EnterInitializationModeTYPE *enter_init;
-    fmi3ExitInitializationModeTYPE *exit_init;
-    fmi3SetFloat64TYPE *setF;
-    fmi3GetFloat64TYPE *getF;
-    fmi3SetUInt64TYPE *setU;
-    fmi3GetUInt64TYPE *getU;
-    fmi3GetInt32TYPE *getI;
-    fmi3SetInt64TYPE *setE;
-    fmi3DoStepTYPE *step;
-    fmi3TerminateTYPE *term;
-    fmi3GetFMUStateTYPE *gst;
-    fmi3SetFMUStateTYPE *sst;
-    fmi3FreeFMUStateTYPE *fst;
-    fmi3SerializedFMUStateSizeTYPE *ssize;
-    fmi3SerializeFMUStateTYPE *ser;
-    fmi3DeserializeFMUStateTYPE *deser;
-    fmi3EnterEventModeTYPE *eem;
-    fmi3UpdateDiscreteStatesTYPE *upd;
-    fmi3EnterStepModeTYPE *esm;
+    API3(API_FIELD)
 } api3;
 
 typedef struct {
     const char *path;
     void *lib;
-    fmi2InstantiateTYPE *inst;
-    fmi2FreeInstanceTYPE *free_;
-    fmi2SetupExperimentTYPE *setup;
-    fmi2EnterInitializationModeTYPE *enter_init;
-    fmi2ExitInitializationModeTYPE *exit_init;
-    fmi2SetRealTYPE *setR;
-    fmi2GetRealTYPE *getR;
-    fmi2GetIntegerTYPE *getI;
-    fmi2DoStepTYPE *step;
+    API2(API_FIELD)
 } api2;
 
 static void open_lib(const char *path, void **lib)
@@ -96,44 +84,14 @@ static void load3(api3 *a, const char *path)
 {
     a->path = path;
     open_lib(path, &a->lib);
-    LOAD(a, inst, "fmi3InstantiateCoSimulation");
-    LOAD(a, free_, "fmi3FreeInstance");
-    LOAD(a, enter_cfg, "fmi3EnterConfigurationMode");
-    LOAD(a, exit_cfg, "fmi3ExitConfigurationMode");
-    LOAD(a, enter_init, "fmi3EnterInitializationMode");
-    LOAD(a, exit_init, "fmi3ExitInitializationMode");
-    LOAD(a, setF, "fmi3SetFloat64");
-    LOAD(a, getF, "fmi3GetFloat64");
-    LOAD(a, setU, "fmi3SetUInt64");
-    LOAD(a, getU, "fmi3GetUInt64");
-    LOAD(a, getI, "fmi3GetInt32");
-    LOAD(a, setE, "fmi3SetInt64");
-    LOAD(a, step, "fmi3DoStep");
-    LOAD(a, term, "fmi3Terminate");
-    LOAD(a, gst, "fmi3GetFMUState");
-    LOAD(a, sst, "fmi3SetFMUState");
-    LOAD(a, fst, "fmi3FreeFMUState");
-    LOAD(a, ssize, "fmi3SerializedFMUStateSize");
-    LOAD(a, ser, "fmi3SerializeFMUState");
-    LOAD(a, deser, "fmi3DeserializeFMUState");
-    LOAD(a, eem, "fmi3EnterEventMode");
-    LOAD(a, upd, "fmi3UpdateDiscreteStates");
-    LOAD(a, esm, "fmi3EnterStepMode");
+    API3(API_LOAD)
 }
 
 static void load2(api2 *a, const char *path)
 {
     a->path = path;
     open_lib(path, &a->lib);
-    LOAD(a, inst, "fmi2Instantiate");
-    LOAD(a, free_, "fmi2FreeInstance");
-    LOAD(a, setup, "fmi2SetupExperiment");
-    LOAD(a, enter_init, "fmi2EnterInitializationMode");
-    LOAD(a, exit_init, "fmi2ExitInitializationMode");
-    LOAD(a, setR, "fmi2SetReal");
-    LOAD(a, getR, "fmi2GetReal");
-    LOAD(a, getI, "fmi2GetInteger");
-    LOAD(a, step, "fmi2DoStep");
+    API2(API_LOAD)
 }
 
 /* ---- a host: the last message, the errors ---------------------------------------------------- */

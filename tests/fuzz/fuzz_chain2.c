@@ -16,51 +16,12 @@
 #include "fmi2Functions.h"
 #include "model_vars.h"
 
-#include <float.h>
-#include <math.h>
-#include <stdarg.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
+#define FUZZ_NAME "fuzz_chain2"
+#define FUZZ_FMI 2
 #define FUZZ_MAX_CALLS 300
 #define FUZZ_MAX_WORK 2e5 /* internal steps x blocks per doStep */
 #define SER_CAP 65536
-
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-typedef struct {
-    const uint8_t *p;
-    size_t n, i;
-} reader;
-
-static unsigned u8(reader *r) { return r->i < r->n ? r->p[r->i++] : 0u; }
-static unsigned u16(reader *r)
-{
-    const unsigned a = u8(r);
-    return a | (u8(r) << 8);
-}
-static uint32_t u32(reader *r)
-{
-    const uint32_t a = u16(r);
-    return a | ((uint32_t)u16(r) << 16);
-}
-
-static double real(reader *r)
-{
-    static const double special[] = {0.0, -0.0, 1.0, -1.0, 0.5, 1e-3, 1e-300, 1e300, -1e300, NAN, INFINITY,
-                                     -INFINITY, DBL_MIN, DBL_MAX, 1e-12, 1e6, 2.0, 100.0, -0.1, 0.7, 3.0, 0.4, 5.0,
-                                     0.1, 0.01, 4.9e-324};
-    const unsigned n_special = sizeof special / sizeof special[0];
-    const unsigned sel = u8(r);
-    if (sel < 2 * n_special) return special[sel % n_special];
-    if (sel < 236) return ((double)u16(r) / 65535.0 - 0.25) * 8.0;
-    uint64_t bits = (uint64_t)u32(r) | ((uint64_t)u32(r) << 32);
-    double d;
-    memcpy(&d, &bits, sizeof d);
-    return d;
-}
+#include "fuzz_common.h"
 
 /* An element of an array (i = 0 ... n + 1), an array's own reference, a scalar, or anything. */
 static fmi2ValueReference any_vr(reader *r)
@@ -70,47 +31,6 @@ static fmi2ValueReference any_vr(reader *r)
     if (sel < 200 && var->array) return var->vr + (u8(r) % (DFO_CHAIN_N + 2));
     if (sel < 240) return var->vr;
     return (fmi2ValueReference)u32(r);
-}
-
-typedef struct {
-    fmi2Component c;
-    fmi2FMUstate slot[2];
-    fmi2Byte ser[SER_CAP];
-    size_t ser_n;
-    long errors_logged;
-    int silenced;
-    double t;
-} ctx;
-
-static void oracle_fail(const char *what)
-{
-    fprintf(stderr, "fuzz_chain2 oracle failed: %s\n", what);
-    abort();
-}
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...)
-{
-    ctx *X = (ctx *)env;
-    (void)name;
-    if (!message || !category) oracle_fail("NULL log message or category");
-    if (status >= fmi2Error) X->errors_logged++;
-}
-
-static void after(ctx *X, fmi2Status st, long before)
-{
-    if (st > fmi2Pending) oracle_fail("invalid status code");
-    if (st == fmi2Error && X->c && !X->silenced && X->errors_logged == before)
-        oracle_fail("fmi2Error without a logged message");
-}
-
-static void free_all(ctx *X)
-{
-    if (!X->c) return;
-    for (int k = 0; k < 2; k++)
-        if (X->slot[k]) fmi2FreeFMUstate(X->c, &X->slot[k]);
-    fmi2FreeInstance(X->c);
-    X->c = NULL;
 }
 
 static void check_outputs(ctx *X)
@@ -129,165 +49,124 @@ static void check_outputs(ctx *X)
     }
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+static fmi2Status call(ctx *X, reader *r, unsigned op)
 {
-    reader R = {data, size, 0}, *r = &R;
-    ctx X;
-    memset(&X, 0, sizeof X);
-    const fmi2CallbackFunctions cb = {logger, calloc, free, NULL, &X};
-    for (int call = 0; call < FUZZ_MAX_CALLS && r->i < r->n; call++) {
-        const unsigned op = u8(r) % 18;
-        if (!X.c && op != 0) continue;
-        const long before = X.errors_logged;
-        fmi2Status st = fmi2OK;
-        switch (op) {
-        case 0: {
-            free_all(&X);
-            const unsigned f = u8(r);
-            X.silenced = 0;
-            X.t = 0.0;
-            X.c = fmi2Instantiate((f & 64) ? "" : "fuzz", (f & 32) ? fmi2ModelExchange : fmi2CoSimulation,
-                                  (f & 128) ? "{wrong}" : MODEL_GUID, NULL, &cb, fmi2False, f & 1);
-            break;
-        }
-        case 1: free_all(&X); break;
-        case 2: {
-            const double t0 = (u8(r) & 1) ? real(r) : 0.0;
-            st = fmi2SetupExperiment(X.c, fmi2False, 0.0, t0, u8(r) & 1, real(r));
-            if (st == fmi2OK) X.t = t0;
-            break;
-        }
-        case 3: st = fmi2EnterInitializationMode(X.c); break;
-        case 4: st = fmi2ExitInitializationMode(X.c); break;
-        case 5: case 6: { /* set reals: one or two */
-            fmi2ValueReference vr[2] = {any_vr(r), any_vr(r)};
-            const fmi2Real v[2] = {real(r), real(r)};
-            st = fmi2SetReal(X.c, vr, 1 + (u8(r) & 1), v);
-            break;
-        }
-        case 7: {
-            const fmi2ValueReference vr = (u8(r) < 220) ? VR_scheme : any_vr(r);
-            const fmi2Integer v = (fmi2Integer)(u8(r) % 7) - 1;
-            st = fmi2SetInteger(X.c, &vr, 1, &v);
-            break;
-        }
-        case 8: {
-            const fmi2ValueReference vr = any_vr(r);
-            fmi2Real d;
-            fmi2Integer i;
-            fmi2Boolean b;
-            switch (u8(r) % 3) {
-            case 0: st = fmi2GetReal(X.c, &vr, 1, &d); break;
-            case 1: st = fmi2GetInteger(X.c, &vr, 1, &i); break;
-            default: st = fmi2GetBoolean(X.c, &vr, 1, &b); break;
-            }
-            break;
-        }
-        case 9: case 10: case 11: {
-            double dt = real(r);
-            const double tc = (u8(r) < 230) ? X.t : real(r);
-            const fmi2ValueReference vh = VR_h;
-            fmi2Real h = 0.0;
-            if (fmi2GetReal(X.c, &vh, 1, &h) == fmi2OK && h > 0.0 && isfinite(dt) &&
-                dt > FUZZ_MAX_WORK / DFO_CHAIN_N * h)
-                dt = FUZZ_MAX_WORK / DFO_CHAIN_N * h;
-            st = fmi2DoStep(X.c, tc, dt, fmi2True);
-            if (st == fmi2OK) {
-                fmi2Real last = NAN;
-                if (fmi2GetRealStatus(X.c, fmi2LastSuccessfulTime, &last) == fmi2OK && last != tc + dt)
-                    oracle_fail("lastSuccessfulTime is not tc + dt");
-                X.t = tc + dt;
-            }
-            break;
-        }
-        case 12: st = (u8(r) & 1) ? fmi2Terminate(X.c) : fmi2Reset(X.c); break;
-        case 13: st = fmi2GetFMUstate(X.c, &X.slot[u8(r) & 1]); break;
-        case 14: {
-            st = fmi2SetFMUstate(X.c, X.slot[u8(r) & 1]);
-            if (st == fmi2OK) {
-                fmi2Real t;
-                if (fmi2GetRealStatus(X.c, fmi2LastSuccessfulTime, &t) == fmi2OK) X.t = t;
-            }
-            break;
-        }
-        case 15: {
-            const int k = u8(r) & 1;
-            size_t n = 0;
-            if (X.slot[k] && fmi2SerializedFMUstateSize(X.c, X.slot[k], &n) == fmi2OK && n <= SER_CAP &&
-                fmi2SerializeFMUstate(X.c, X.slot[k], X.ser, n) == fmi2OK)
-                X.ser_n = n;
-            break;
-        }
-        case 16: {
-            if (!X.ser_n) break;
-            static fmi2Byte buf[SER_CAP];
-            memcpy(buf, X.ser, X.ser_n);
-            size_t n = X.ser_n;
-            const unsigned how = u8(r) % 3;
-            if (how == 1) n = u16(r) % n;
-            if (how == 2) buf[u16(r) % n] ^= (fmi2Byte)(1u << (u8(r) % 8));
-            st = fmi2DeSerializeFMUstate(X.c, buf, n, &X.slot[u8(r) & 1]);
-            break;
-        }
-        default: {
-            const int on = u8(r) & 1;
-            st = fmi2SetDebugLogging(X.c, on, 0, NULL);
-            if (st == fmi2OK) X.silenced = !on;
-            break;
-        }
-        }
-        if (getenv("FUZZ_TRACE")) fprintf(stderr, "call %d: op %u -> status %d (t = %.17g)\n", call, op, (int)st, X.t);
-        after(&X, st, before);
-        if (X.c) check_outputs(&X);
+    fmi2Status st = fmi2OK;
+    switch (op) {
+    case 0: {
+        free_all(X);
+        const unsigned f = u8(r);
+        X->silenced = 0;
+        X->t = 0.0;
+        X->c = fmi2Instantiate((f & 64) ? "" : "fuzz", (f & 32) ? fmi2ModelExchange : fmi2CoSimulation,
+                               (f & 128) ? "{wrong}" : MODEL_GUID, NULL, &X->cb, fmi2False, f & 1);
+        break;
     }
-    free_all(&X);
-    return 0;
+    case 1: free_all(X); break;
+    case 2: {
+        const double t0 = (u8(r) & 1) ? real(r) : 0.0;
+        st = fmi2SetupExperiment(X->c, fmi2False, 0.0, t0, u8(r) & 1, real(r));
+        if (st == fmi2OK) X->t = t0;
+        break;
+    }
+    case 3: st = fmi2EnterInitializationMode(X->c); break;
+    case 4: st = fmi2ExitInitializationMode(X->c); break;
+    case 5: case 6: { /* set reals: one or two */
+        fmi2ValueReference vr[2] = {any_vr(r), any_vr(r)};
+        const fmi2Real v[2] = {real(r), real(r)};
+        st = fmi2SetReal(X->c, vr, 1 + (u8(r) & 1), v);
+        break;
+    }
+    case 7: {
+        const fmi2ValueReference vr = (u8(r) < 220) ? VR_scheme : any_vr(r);
+        const fmi2Integer v = (fmi2Integer)(u8(r) % 7) - 1;
+        st = fmi2SetInteger(X->c, &vr, 1, &v);
+        break;
+    }
+    case 8: {
+        const fmi2ValueReference vr = any_vr(r);
+        fmi2Real d;
+        fmi2Integer i;
+        fmi2Boolean b;
+        switch (u8(r) % 3) {
+        case 0: st = fmi2GetReal(X->c, &vr, 1, &d); break;
+        case 1: st = fmi2GetInteger(X->c, &vr, 1, &i); break;
+        default: st = fmi2GetBoolean(X->c, &vr, 1, &b); break;
+        }
+        break;
+    }
+    case 9: case 10: case 11: {
+        double dt = real(r);
+        const double tc = (u8(r) < 230) ? X->t : real(r);
+        const fmi2ValueReference vh = VR_h;
+        fmi2Real h = 0.0;
+        if (fmi2GetReal(X->c, &vh, 1, &h) == fmi2OK && h > 0.0 && isfinite(dt) &&
+            dt > FUZZ_MAX_WORK / DFO_CHAIN_N * h)
+            dt = FUZZ_MAX_WORK / DFO_CHAIN_N * h;
+        st = fmi2DoStep(X->c, tc, dt, fmi2True);
+        if (st == fmi2OK) {
+            fmi2Real last = NAN;
+            if (fmi2GetRealStatus(X->c, fmi2LastSuccessfulTime, &last) == fmi2OK && last != tc + dt)
+                oracle_fail("lastSuccessfulTime is not tc + dt");
+            X->t = tc + dt;
+        }
+        break;
+    }
+    case 12: st = (u8(r) & 1) ? fmi2Terminate(X->c) : fmi2Reset(X->c); break;
+    case 13: st = fmi2GetFMUstate(X->c, &X->slot[u8(r) & 1]); break;
+    case 14: {
+        st = fmi2SetFMUstate(X->c, X->slot[u8(r) & 1]);
+        if (st == fmi2OK) {
+            fmi2Real t;
+            if (fmi2GetRealStatus(X->c, fmi2LastSuccessfulTime, &t) == fmi2OK) X->t = t;
+        }
+        break;
+    }
+    case 15: return serialize(X, r);
+    case 16: return deserialize(X, r);
+    default: return set_logging(X, r);
+    }
+    return st;
 }
 
+static const fuzz_target TARGET = {FUZZ_MAX_CALLS, 18, call, check_outputs};
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) { return fuzz_drive(&TARGET, data, size); }
+
 #if defined(CHAIN_FUZZ_RANDOM_MAIN)
-/* Pseudo-random inputs through the decoder (any compiler, no libFuzzer), each after a plausible
- * start (instantiate, setup, initialise) so that most reach stepping. */
-int main(int argc, char **argv)
+/* Pseudo-random input k (any compiler, no libFuzzer), after a plausible start (instantiate, setup,
+ * initialise) so that most reach stepping. */
+static size_t random_input(long k, uint64_t *s, uint8_t *buf)
 {
-    const long count = argc > 1 ? atol(argv[1]) : 300;
-    uint64_t s = 0x2545F4914F6CDD1DULL;
-    static uint8_t buf[1024];
-    for (long k = 0; k < count; k++) {
-        size_t n = 0;
-        const uint8_t start[] = {0, (uint8_t)(k & 1), 2, 0, 0, 0, 3, 4};
-        memcpy(buf, start, sizeof start);
-        n = (k % 4) ? sizeof start : 2;
-        const size_t len = 64 + (size_t)(k % 8) * 96;
-        while (n + 16 < len) {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            const unsigned pick = (unsigned)(s >> 40) % 8;
-            if (pick < 3) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
-                buf[n++] = 9;
-                buf[n++] = (pick & 1) ? 23 : 24;
-                buf[n++] = 0;
-            } else if (pick == 3) { /* an input element */
-                const uint8_t set[] = {5,
-                                       0, (uint8_t)(17 + (s & 1)), (uint8_t)(s >> 8), /* F_ext[i] or N_ext[i] */
-                                       0, 1,                                          /* k_end (not sent) */
-                                       100, (uint8_t)(s >> 16), (uint8_t)(s >> 24),   /* its value */
-                                       0,                                             /* k_end's */
-                                       0};                                            /* one value */
-                memcpy(buf + n, set, sizeof set);
-                n += sizeof set;
-            } else if (pick == 4) { /* FMU states */
-                buf[n++] = (uint8_t)(13 + (s >> 8) % 4);
-                buf[n++] = (uint8_t)(s >> 16);
-                buf[n++] = (uint8_t)(s >> 24);
-                buf[n++] = (uint8_t)(s >> 32);
-            } else {
-                for (int b = 0; b < 4; b++) buf[n++] = (uint8_t)(s >> (8 * b + 3));
-            }
+    size_t n = 0;
+    const uint8_t start[] = {0, (uint8_t)(k & 1), 2, 0, 0, 0, 3, 4};
+    memcpy(buf, start, sizeof start);
+    n = (k % 4) ? sizeof start : 2;
+    const size_t len = 64 + (size_t)(k % 8) * 96;
+    while (n + 16 < len) {
+        const uint64_t x = xorshift64(s);
+        const unsigned pick = (unsigned)(x >> 40) % 8;
+        if (pick < 3) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
+            buf[n++] = 9;
+            buf[n++] = (pick & 1) ? 23 : 24;
+            buf[n++] = 0;
+        } else if (pick == 3) { /* an input element */
+            const uint8_t set[] = {5,
+                                   0, (uint8_t)(17 + (x & 1)), (uint8_t)(x >> 8), /* F_ext[i] or N_ext[i] */
+                                   0, 1,                                          /* k_end (not sent) */
+                                   100, (uint8_t)(x >> 16), (uint8_t)(x >> 24),   /* its value */
+                                   0,                                             /* k_end's */
+                                   0};                                            /* one value */
+            memcpy(buf + n, set, sizeof set);
+            n += sizeof set;
+        } else if (pick == 4) { /* FMU states */
+            n = put_state_op(buf, n, 13, x);
+        } else {
+            n = put_any(buf, n, x);
         }
-        LLVMFuzzerTestOneInput(buf, n);
     }
-    printf("fuzz_chain2: %ld pseudo-random inputs, no oracle failed\n", count);
-    return 0;
+    return n;
 }
+
+int main(int argc, char **argv) { return fuzz_random_main(argc, argv, 300, 0x2545F4914F6CDD1DULL, random_input); }
 #endif

@@ -19,51 +19,13 @@
 #include "fmi3Functions.h"
 #include "model_vars.h"
 
-#include <float.h>
-#include <math.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
+#define FUZZ_NAME "fuzz_chain3"
+#define FUZZ_FMI 3
 #define FUZZ_MAX_CALLS 300
 #define FUZZ_MAX_WORK 2e5 /* internal steps x blocks per doStep */
 #define SER_CAP 16384
 #define NBUF 64
-
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-typedef struct {
-    const uint8_t *p;
-    size_t n, i;
-} reader;
-
-static unsigned u8(reader *r) { return r->i < r->n ? r->p[r->i++] : 0u; }
-static unsigned u16(reader *r)
-{
-    const unsigned a = u8(r);
-    return a | (u8(r) << 8);
-}
-static uint32_t u32(reader *r)
-{
-    const uint32_t a = u16(r);
-    return a | ((uint32_t)u16(r) << 16);
-}
-
-static double real(reader *r)
-{
-    static const double special[] = {0.0, -0.0, 1.0, -1.0, 0.5, 1e-3, 1e-300, 1e300, -1e300, NAN, INFINITY,
-                                     -INFINITY, DBL_MIN, DBL_MAX, 1e-12, 1e6, 2.0, 100.0, -0.1, 0.7, 3.0, 0.4, 5.0,
-                                     0.1, 0.01, 4.9e-324};
-    const unsigned n_special = sizeof special / sizeof special[0];
-    const unsigned sel = u8(r);
-    if (sel < 2 * n_special) return special[sel % n_special];
-    if (sel < 236) return ((double)u16(r) / 65535.0 - 0.25) * 8.0;
-    uint64_t bits = (uint64_t)u32(r) | ((uint64_t)u32(r) << 32);
-    double d;
-    memcpy(&d, &bits, sizeof d);
-    return d;
-}
+#include "fuzz_common.h"
 
 static fmi3ValueReference any_vr(reader *r)
 {
@@ -74,29 +36,6 @@ static fmi3ValueReference any_vr(reader *r)
     return (fmi3ValueReference)u32(r);
 }
 
-typedef struct {
-    fmi3Instance c;
-    fmi3FMUState slot[2];
-    fmi3Byte ser[SER_CAP];
-    size_t ser_n;
-    long errors_logged;
-    int silenced, early_allowed, event_mode, request_every, updates;
-    double t;
-} ctx;
-
-static void oracle_fail(const char *what)
-{
-    fprintf(stderr, "fuzz_chain3 oracle failed: %s\n", what);
-    abort();
-}
-
-static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message)
-{
-    ctx *X = (ctx *)env;
-    if (!message || !category) oracle_fail("NULL log message or category");
-    if (status >= fmi3Error) X->errors_logged++;
-}
-
 static size_t blocks(const ctx *X)
 {
     const fmi3ValueReference vn = VR_n;
@@ -104,39 +43,6 @@ static size_t blocks(const ctx *X)
     if (fmi3GetUInt64(X->c, &vn, 1, &n, 1) != fmi3OK) return 0;
     if (n < 1 || n > MAX_n) oracle_fail("n outside [1, 4096]");
     return (size_t)n;
-}
-
-static void on_update(fmi3InstanceEnvironment env, fmi3Float64 t, fmi3Boolean set_req, fmi3Boolean get_ok,
-                      fmi3Boolean finished, fmi3Boolean can_return, fmi3Boolean *req, fmi3Float64 *req_t)
-{
-    ctx *X = (ctx *)env;
-    (void)set_req; (void)finished; (void)can_return;
-    if (!isfinite(t)) oracle_fail("intermediate update at a non-finite time");
-    X->updates++;
-    if (get_ok && X->c) {
-        fmi3Boolean ev, term, early;
-        fmi3Float64 last;
-        if (X->updates % 3 == 0 && fmi3DoStep(X->c, t, 0.1, fmi3False, &ev, &term, &early, &last) != fmi3Error)
-            oracle_fail("doStep from inside the intermediate update was accepted");
-    }
-    *req = (X->request_every && X->updates % X->request_every == 0) ? fmi3True : fmi3False;
-    *req_t = t;
-}
-
-static void after(ctx *X, fmi3Status st, long before)
-{
-    if (st > fmi3Fatal) oracle_fail("invalid status code");
-    if (st == fmi3Error && X->c && !X->silenced && X->errors_logged == before)
-        oracle_fail("fmi3Error without a logged message");
-}
-
-static void free_all(ctx *X)
-{
-    if (!X->c) return;
-    for (int k = 0; k < 2; k++)
-        if (X->slot[k]) fmi3FreeFMUState(X->c, &X->slot[k]);
-    fmi3FreeInstance(X->c);
-    X->c = NULL;
 }
 
 static void check_outputs(ctx *X)
@@ -163,236 +69,154 @@ static fmi3UInt64 any_n(reader *r)
     return (fmi3UInt64)u32(r) << (u8(r) % 33);
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+static fmi3Status call(ctx *X, reader *r, unsigned op)
 {
-    reader R = {data, size, 0}, *r = &R;
-    ctx X;
-    memset(&X, 0, sizeof X);
-    for (int call = 0; call < FUZZ_MAX_CALLS && r->i < r->n; call++) {
-        const unsigned op = u8(r) % 22;
-        if (!X.c && op != 0) continue;
-        const long before = X.errors_logged;
-        fmi3Status st = fmi3OK;
-        switch (op) {
-        case 0: { /* instantiate */
-            free_all(&X);
-            const unsigned f = u8(r);
-            X.event_mode = f & 1;
-            X.early_allowed = (f >> 1) & 1;
-            X.request_every = (f >> 3) & 3;
-            X.silenced = 0;
-            X.t = 0.0;
-            X.c = fmi3InstantiateCoSimulation((f & 64) ? "" : "fuzz", (f & 128) ? "{wrong}" : MODEL_GUID, NULL,
-                                              fmi3False, (f >> 5) & 1, X.event_mode, X.early_allowed, NULL, 0, &X,
-                                              logger, (f & 4) ? on_update : NULL);
-            break;
-        }
-        case 1: free_all(&X); break;
-        case 2: st = fmi3EnterConfigurationMode(X.c); break;
-        case 3: case 4: { /* n: valid, out of range, a wrong nValues */
-            const fmi3ValueReference vr = (u8(r) < 240) ? VR_n : any_vr(r);
-            const fmi3UInt64 n = any_n(r);
-            st = fmi3SetUInt64(X.c, &vr, 1, &n, (u8(r) < 16) ? 2 : 1);
-            break;
-        }
-        case 5: st = fmi3ExitConfigurationMode(X.c); break;
-        case 6: {
-            const double t0 = (u8(r) & 1) ? real(r) : 0.0;
-            st = fmi3EnterInitializationMode(X.c, fmi3False, 0.0, t0, u8(r) & 1, real(r));
-            if (st == fmi3OK) X.t = t0;
-            break;
-        }
-        case 7: st = fmi3ExitInitializationMode(X.c); break;
-        case 8: case 9: { /* an array (or any variable) with n values, sometimes a wrong count */
-            const fmi3ValueReference vr = (u8(r) < 200) ? (fmi3ValueReference)(DFO_ARRAY_VR_STRIDE * (1 + u8(r) % 12))
-                                                        : any_vr(r);
-            const size_t n = blocks(&X);
-            size_t nv = n;
-            if (u8(r) < 24) nv = u8(r) % 6;
-            if (nv > NBUF) break;
-            fmi3Float64 v[NBUF];
-            const double base = real(r);
-            for (size_t i = 0; i < nv; i++) v[i] = (u8(r) < 230) ? base : real(r);
-            st = fmi3SetFloat64(X.c, &vr, 1, v, nv);
-            break;
-        }
-        case 10: { /* scalars and the scheme */
-            if (u8(r) & 1) {
-                const fmi3ValueReference vr = 2 + u8(r) % 4; /* k_end, c_end, omega, h */
-                const fmi3Float64 v = real(r);
-                st = fmi3SetFloat64(X.c, &vr, 1, &v, 1);
-            } else {
-                const fmi3ValueReference vr = (u8(r) < 230) ? VR_scheme : any_vr(r);
-                const fmi3Int64 v = (fmi3Int64)(u8(r) % 7) - 1;
-                st = fmi3SetInt64(X.c, &vr, 1, &v, 1);
-            }
-            break;
-        }
-        case 11: { /* get of any kind, any nValues */
-            const fmi3ValueReference vr = any_vr(r);
-            const size_t nv = u8(r) % 4;
-            fmi3Float64 d[4];
-            fmi3Int32 i[4];
-            fmi3Int64 l[4];
-            fmi3UInt64 u[4];
-            switch (u8(r) % 4) {
-            case 0: st = fmi3GetFloat64(X.c, &vr, 1, d, nv); break;
-            case 1: st = fmi3GetInt32(X.c, &vr, 1, i, nv); break;
-            case 2: st = fmi3GetInt64(X.c, &vr, 1, l, nv); break;
-            default: st = fmi3GetUInt64(X.c, &vr, 1, u, nv); break;
-            }
-            break;
-        }
-        case 12: case 13: case 14: { /* doStep */
-            double dt = real(r);
-            const double tc = (u8(r) < 230) ? X.t : real(r);
-            const fmi3ValueReference vh = VR_h;
-            fmi3Float64 h = 0.0;
-            const size_t n = blocks(&X);
-            if (fmi3GetFloat64(X.c, &vh, 1, &h, 1) == fmi3OK && h > 0.0 && n > 0 && isfinite(dt) &&
-                dt > FUZZ_MAX_WORK / (double)n * h)
-                dt = FUZZ_MAX_WORK / (double)n * h;
-            fmi3Boolean ev = 7, term = 7, early = 7;
-            fmi3Float64 last = NAN;
-            st = fmi3DoStep(X.c, tc, dt, fmi3False, &ev, &term, &early, &last);
-            if (st == fmi3OK) {
-                if (early && !X.early_allowed) oracle_fail("early return not allowed");
-                if (ev && !(X.event_mode && X.early_allowed)) oracle_fail("event handling without event mode");
-                if (!(last > tc - 1e-9 * fabs(tc) - 1e-300) || last > tc + dt) oracle_fail("lastSuccessfulTime outside the step");
-                if (!early && last != tc + dt) oracle_fail("lastSuccessfulTime is not tc + dt");
-                X.t = last;
-            }
-            break;
-        }
-        case 15: {
-            switch (u8(r) % 3) {
-            case 0: st = fmi3EnterEventMode(X.c); break;
-            case 1: {
-                fmi3Boolean a, b, c, d, e;
-                fmi3Float64 t;
-                st = fmi3UpdateDiscreteStates(X.c, &a, &b, &c, &d, &e, &t);
-                if (st == fmi3OK && (a || b || c || d || e)) oracle_fail("fmi3UpdateDiscreteStates reported a flag");
-                break;
-            }
-            default: st = fmi3EnterStepMode(X.c); break;
-            }
-            break;
-        }
-        case 16: st = (u8(r) & 1) ? fmi3Terminate(X.c) : fmi3Reset(X.c); break;
-        case 17: {
-            const int k = u8(r) & 1;
-            st = fmi3GetFMUState(X.c, &X.slot[k]);
-            break;
-        }
-        case 18: {
-            const int k = u8(r) & 1;
-            st = fmi3SetFMUState(X.c, X.slot[k]);
-            if (st == fmi3OK) {
-                const fmi3ValueReference vt = DFO_VR_TIME;
-                fmi3GetFloat64(X.c, &vt, 1, &X.t, 1);
-            }
-            break;
-        }
-        case 19: {
-            const int k = u8(r) & 1;
-            size_t n = 0;
-            if (X.slot[k] && fmi3SerializedFMUStateSize(X.c, X.slot[k], &n) == fmi3OK && n <= SER_CAP &&
-                fmi3SerializeFMUState(X.c, X.slot[k], X.ser, n) == fmi3OK)
-                X.ser_n = n;
-            break;
-        }
-        case 20: {
-            if (!X.ser_n) break;
-            static fmi3Byte buf[SER_CAP];
-            memcpy(buf, X.ser, X.ser_n);
-            size_t n = X.ser_n;
-            const unsigned how = u8(r) % 3;
-            if (how == 1) n = u16(r) % n;
-            if (how == 2) buf[u16(r) % n] ^= (fmi3Byte)(1u << (u8(r) % 8));
-            const int k = u8(r) & 1;
-            st = fmi3DeserializeFMUState(X.c, buf, n, &X.slot[k]);
-            break;
-        }
-        default: {
-            const int on = u8(r) & 1;
-            st = fmi3SetDebugLogging(X.c, on, 0, NULL);
-            if (st == fmi3OK) X.silenced = !on;
-            break;
-        }
-        }
-        if (getenv("FUZZ_TRACE")) fprintf(stderr, "call %d: op %u -> status %d (t = %.17g)\n", call, op, (int)st, X.t);
-        after(&X, st, before);
-        if (X.c) check_outputs(&X);
+    fmi3Status st = fmi3OK;
+    switch (op) {
+    case 0: return instantiate(X, r);
+    case 1: free_all(X); break;
+    case 2: st = fmi3EnterConfigurationMode(X->c); break;
+    case 3: case 4: { /* n: valid, out of range, a wrong nValues */
+        const fmi3ValueReference vr = (u8(r) < 240) ? VR_n : any_vr(r);
+        const fmi3UInt64 n = any_n(r);
+        st = fmi3SetUInt64(X->c, &vr, 1, &n, (u8(r) < 16) ? 2 : 1);
+        break;
     }
-    free_all(&X);
-    return 0;
+    case 5: st = fmi3ExitConfigurationMode(X->c); break;
+    case 6: return enter_initialization(X, r);
+    case 7: st = fmi3ExitInitializationMode(X->c); break;
+    case 8: case 9: { /* an array (or any variable) with n values, sometimes a wrong count */
+        const fmi3ValueReference vr = (u8(r) < 200) ? (fmi3ValueReference)(DFO_ARRAY_VR_STRIDE * (1 + u8(r) % 12))
+                                                    : any_vr(r);
+        const size_t n = blocks(X);
+        size_t nv = n;
+        if (u8(r) < 24) nv = u8(r) % 6;
+        if (nv > NBUF) break;
+        fmi3Float64 v[NBUF];
+        const double base = real(r);
+        for (size_t i = 0; i < nv; i++) v[i] = (u8(r) < 230) ? base : real(r);
+        st = fmi3SetFloat64(X->c, &vr, 1, v, nv);
+        break;
+    }
+    case 10: { /* scalars and the scheme */
+        if (u8(r) & 1) {
+            const fmi3ValueReference vr = 2 + u8(r) % 4; /* k_end, c_end, omega, h */
+            const fmi3Float64 v = real(r);
+            st = fmi3SetFloat64(X->c, &vr, 1, &v, 1);
+        } else {
+            const fmi3ValueReference vr = (u8(r) < 230) ? VR_scheme : any_vr(r);
+            const fmi3Int64 v = (fmi3Int64)(u8(r) % 7) - 1;
+            st = fmi3SetInt64(X->c, &vr, 1, &v, 1);
+        }
+        break;
+    }
+    case 11: { /* get of any kind, any nValues */
+        const fmi3ValueReference vr = any_vr(r);
+        const size_t nv = u8(r) % 4;
+        fmi3Float64 d[4];
+        fmi3Int32 i[4];
+        fmi3Int64 l[4];
+        fmi3UInt64 u[4];
+        switch (u8(r) % 4) {
+        case 0: st = fmi3GetFloat64(X->c, &vr, 1, d, nv); break;
+        case 1: st = fmi3GetInt32(X->c, &vr, 1, i, nv); break;
+        case 2: st = fmi3GetInt64(X->c, &vr, 1, l, nv); break;
+        default: st = fmi3GetUInt64(X->c, &vr, 1, u, nv); break;
+        }
+        break;
+    }
+    case 12: case 13: case 14: { /* doStep */
+        double dt = real(r);
+        const double tc = (u8(r) < 230) ? X->t : real(r);
+        const fmi3ValueReference vh = VR_h;
+        fmi3Float64 h = 0.0;
+        const size_t n = blocks(X);
+        if (fmi3GetFloat64(X->c, &vh, 1, &h, 1) == fmi3OK && h > 0.0 && n > 0 && isfinite(dt) &&
+            dt > FUZZ_MAX_WORK / (double)n * h)
+            dt = FUZZ_MAX_WORK / (double)n * h;
+        fmi3Boolean ev = 7, term = 7, early = 7;
+        fmi3Float64 last = NAN;
+        st = fmi3DoStep(X->c, tc, dt, fmi3False, &ev, &term, &early, &last);
+        if (st == fmi3OK) check_step(X, tc, dt, ev, early, last);
+        break;
+    }
+    case 15: {
+        switch (u8(r) % 3) {
+        case 0: st = fmi3EnterEventMode(X->c); break;
+        case 1: st = update_discrete_states(X); break;
+        default: st = fmi3EnterStepMode(X->c); break;
+        }
+        break;
+    }
+    case 16: st = (u8(r) & 1) ? fmi3Terminate(X->c) : fmi3Reset(X->c); break;
+    case 17: return get_state(X, r);
+    case 18: return set_state(X, r);
+    case 19: return serialize(X, r);
+    case 20: return deserialize(X, r);
+    default: return set_logging(X, r);
+    }
+    return st;
 }
 
+static const fuzz_target TARGET = {FUZZ_MAX_CALLS, 22, call, check_outputs, NULL};
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) { return fuzz_drive(&TARGET, data, size); }
+
 #if defined(CHAIN_FUZZ_RANDOM_MAIN)
-/* Pseudo-random inputs through the decoder (any compiler, no libFuzzer): a sanity sweep that runs in
- * every ctest. Inputs start with a plausible session prefix so that most of them reach stepping. */
-int main(int argc, char **argv)
+/* Pseudo-random input k (any compiler, no libFuzzer): a sanity sweep that runs in every ctest.
+ * Inputs start with a plausible session prefix so that most of them reach stepping. */
+static size_t random_input(long k, uint64_t *s, uint8_t *buf)
 {
-    const long count = argc > 1 ? atol(argv[1]) : 400;
-    uint64_t s = 0x9e3779b97f4a7c15ULL;
-    static uint8_t buf[1024];
-    for (long k = 0; k < count; k++) {
-        size_t n = 0;
-        /* instantiate (event mode and early return as k says), configure n (1, 2, 3, 5, 8, 13) */
+    size_t n = 0;
+    /* instantiate (event mode and early return as k says), configure n (1, 2, 3, 5, 8, 13) */
+    buf[n++] = 0;
+    buf[n++] = (uint8_t)(k & 0x1f);
+    buf[n++] = 2;
+    buf[n++] = 3;
+    buf[n++] = 0;
+    buf[n++] = (uint8_t)(k % 6);
+    buf[n++] = 255; /* nValues 1 */
+    buf[n++] = 5;
+    if (k % 3) { /* initialise at t = 0 */
+        buf[n++] = 6;
         buf[n++] = 0;
-        buf[n++] = (uint8_t)(k & 0x1f);
-        buf[n++] = 2;
-        buf[n++] = 3;
         buf[n++] = 0;
-        buf[n++] = (uint8_t)(k % 6);
-        buf[n++] = 255; /* nValues 1 */
-        buf[n++] = 5;
-        if (k % 3) { /* initialise at t = 0 */
-            buf[n++] = 6;
-            buf[n++] = 0;
-            buf[n++] = 0;
-            buf[n++] = 0;
-            buf[n++] = 7;
-            if (k & 1) { /* event mode used: into step mode */
-                buf[n++] = 15;
-                buf[n++] = 2;
-            }
+        buf[n++] = 0;
+        buf[n++] = 7;
+        if (k & 1) { /* event mode used: into step mode */
+            buf[n++] = 15;
+            buf[n++] = 2;
         }
-        static const size_t ns[6] = {1, 2, 3, 5, 8, 13};
-        const size_t blocks_k = ns[k % 6], len = 64 + (size_t)(k % 8) * 96;
-        while (n + 24 < len) {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            const unsigned pick = (unsigned)(s >> 40) % 9;
-            if (pick < 4) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
-                buf[n++] = 12;
-                buf[n++] = (pick & 1) ? 23 : 24;
-                buf[n++] = 0;
-            } else if (pick == 4 && n + blocks_k + 8 < sizeof buf) { /* an input array of n values */
-                buf[n++] = 8;
-                buf[n++] = 0;
-                buf[n++] = (uint8_t)(10 + (s & 1)); /* F_ext, N_ext */
-                buf[n++] = 255;
-                buf[n++] = 100; /* a value from the next two bytes */
-                buf[n++] = (uint8_t)(s >> 8);
-                buf[n++] = (uint8_t)(s >> 16);
-                for (size_t i = 0; i < blocks_k; i++) buf[n++] = 0;
-            } else if (pick == 5) { /* event mode */
-                buf[n++] = 15;
-                buf[n++] = (uint8_t)(s >> 8);
-            } else if (pick == 6) { /* FMU states */
-                buf[n++] = (uint8_t)(17 + (s >> 8) % 4);
-                buf[n++] = (uint8_t)(s >> 16);
-                buf[n++] = (uint8_t)(s >> 24);
-                buf[n++] = (uint8_t)(s >> 32);
-            } else { /* anything */
-                for (int b = 0; b < 4; b++) buf[n++] = (uint8_t)(s >> (8 * b + 3));
-            }
-        }
-        LLVMFuzzerTestOneInput(buf, n);
     }
-    printf("fuzz_chain3: %ld pseudo-random inputs, no oracle failed\n", count);
-    return 0;
+    static const size_t ns[6] = {1, 2, 3, 5, 8, 13};
+    const size_t blocks_k = ns[k % 6], len = 64 + (size_t)(k % 8) * 96;
+    while (n + 24 < len) {
+        const uint64_t x = xorshift64(s);
+        const unsigned pick = (unsigned)(x >> 40) % 9;
+        if (pick < 4) { /* doStep at the FMU's time, dt 0.1 or 0.01 */
+            buf[n++] = 12;
+            buf[n++] = (pick & 1) ? 23 : 24;
+            buf[n++] = 0;
+        } else if (pick == 4 && n + blocks_k + 8 < FUZZ_RANDOM_LEN) { /* an input array of n values */
+            buf[n++] = 8;
+            buf[n++] = 0;
+            buf[n++] = (uint8_t)(10 + (x & 1)); /* F_ext, N_ext */
+            buf[n++] = 255;
+            buf[n++] = 100; /* a value from the next two bytes */
+            buf[n++] = (uint8_t)(x >> 8);
+            buf[n++] = (uint8_t)(x >> 16);
+            for (size_t i = 0; i < blocks_k; i++) buf[n++] = 0;
+        } else if (pick == 5) { /* event mode */
+            buf[n++] = 15;
+            buf[n++] = (uint8_t)(x >> 8);
+        } else if (pick == 6) { /* FMU states */
+            n = put_state_op(buf, n, 17, x);
+        } else {
+            n = put_any(buf, n, x);
+        }
+    }
+    return n;
 }
+
+int main(int argc, char **argv) { return fuzz_random_main(argc, argv, 400, 0x9e3779b97f4a7c15ULL, random_input); }
 #endif

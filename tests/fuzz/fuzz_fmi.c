@@ -22,14 +22,8 @@
 #include "fmi2Functions.h"
 #include "model_vars.h"
 
-#include <float.h>
-#include <limits.h>
-#include <math.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
+#define FUZZ_NAME "fuzz_fmi"
+#define FUZZ_FMI 2
 #ifndef FUZZ_TIME_ORACLE
 #define FUZZ_TIME_ORACLE 1
 #endif
@@ -39,42 +33,17 @@
 #define FUZZ_MAX_CALLS 400
 #define SER_CAP 4096
 #define SERIAL_HEADER 24 /* magic[8], version, size, checksum: the checksum is bytes 16..23 */
+#include "fuzz_common.h"
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+#include <limits.h>
 
-typedef struct {
-    const uint8_t *p;
-    size_t n, i;
-} reader;
-
-static unsigned u8(reader *r) { return r->i < r->n ? r->p[r->i++] : 0u; }
-
-static unsigned u16(reader *r)
-{
-    const unsigned a = u8(r);
-    return a | (u8(r) << 8);
-}
-
-static uint32_t u32(reader *r)
-{
-    const uint32_t a = u16(r);
-    return a | ((uint32_t)u16(r) << 16);
-}
-
-static double real(reader *r)
+/* this target's reals: its own special values, fewer ordinary ones */
+static double any_real(reader *r)
 {
     static const double special[] = {0.0, -0.0, 1.0, -1.0, 0.5, 1e-3, 1e-300, -1e-300, 1e300, -1e300,
                                      NAN, INFINITY, -INFINITY, DBL_MIN, DBL_MAX, 1e-12, 1e6, 1e15, 2.0, 100.0,
                                      -1.0 / 3.0, -0.1, 0.7, 3.0, 0.4, 5.0, 1e-9, 4.9e-324};
-    const unsigned sel = u8(r);
-    const unsigned n_special = sizeof special / sizeof special[0];
-    if (sel < 2 * n_special) return special[sel % n_special];
-    if (sel < 224) return ((double)u16(r) / 65535.0 - 0.25) * 8.0; /* ordinary values in [-2, 6] */
-    uint64_t bits = (uint64_t)u32(r);
-    bits |= (uint64_t)u32(r) << 32;
-    double d;
-    memcpy(&d, &bits, sizeof d);
-    return d;
+    return real_from(r, special, sizeof special / sizeof special[0], 224);
 }
 
 static int integer(reader *r)
@@ -92,57 +61,10 @@ static fmi2ValueReference any_vr(reader *r)
     return (fmi2ValueReference)u32(r);
 }
 
-typedef struct {
-    fmi2CallbackFunctions cb;
-    fmi2Component c;
-    fmi2FMUstate slot[2];
-    fmi2Byte ser[SER_CAP];
-    size_t ser_n;
-    long errors_logged;
-    int errors_silenced; /* error logging switched off by fmi2SetDebugLogging */
-    double t;            /* the host's view of the time */
-    int trace;           /* print every call (env FUZZ_TRACE set): for reading a regression input */
-} ctx;
-
 #define TRACE(X, ...) \
     do { \
         if ((X)->trace) fprintf(stderr, __VA_ARGS__); \
     } while (0)
-
-static void oracle_fail(const char *what)
-{
-    fprintf(stderr, "fuzz_fmi oracle failed: %s\n", what);
-    abort();
-}
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...)
-{
-    (void)name;
-    (void)category;
-    ctx *X = (ctx *)env;
-    if (!message) oracle_fail("NULL log message");
-    if (status >= fmi2Error) X->errors_logged++;
-}
-
-/* An error of a live instance must be explained in the log. */
-static void after(ctx *X, fmi2Status st, long logged_before)
-{
-    if (st > fmi2Pending) oracle_fail("invalid status code");
-    TRACE(X, "  -> status %d\n", (int)st);
-    if (st == fmi2Error && X->c && !X->errors_silenced && X->errors_logged == logged_before)
-        oracle_fail("fmi2Error without a logged message");
-}
-
-static void free_all(ctx *X)
-{
-    if (!X->c) return;
-    for (int k = 0; k < 2; k++)
-        if (X->slot[k]) fmi2FreeFMUstate(X->c, &X->slot[k]);
-    X->slot[0] = X->slot[1] = NULL;
-    fmi2FreeInstance(X->c);
-    X->c = NULL;
-}
 
 static void check_outputs(ctx *X)
 {
@@ -184,7 +106,7 @@ static void op(ctx *X, reader *r)
     case 0: { /* (re-)instantiate */
         TRACE(X, "fmi2FreeInstance + fmi2Instantiate\n");
         free_all(X);
-        X->errors_silenced = 0;
+        X->silenced = 0;
         X->c = fmi2Instantiate(u8(r) & 1 ? "fuzz" : "f", fmi2CoSimulation, MODEL_GUID, "", &X->cb, fmi2False,
                                (fmi2Boolean)(u8(r) & 1));
         if (!X->c) oracle_fail("fmi2Instantiate failed with valid arguments");
@@ -193,7 +115,7 @@ static void op(ctx *X, reader *r)
     }
     case 1: {
         const unsigned f = u8(r);
-        const double start = (f & 4) ? real(r) : 0.0, stop = (f & 2) ? real(r) : 0.0;
+        const double start = (f & 4) ? any_real(r) : 0.0, stop = (f & 2) ? any_real(r) : 0.0;
         TRACE(X, "fmi2SetupExperiment(start %.17g, stopDefined %u, stop %.17g)\n", start, (f >> 1) & 1, stop);
         st = fmi2SetupExperiment(X->c, (fmi2Boolean)(f & 1), 1e-6, start, (fmi2Boolean)((f >> 1) & 1), stop);
         if (st == fmi2OK) X->t = start;
@@ -214,7 +136,7 @@ static void op(ctx *X, reader *r)
         const size_t n = 1 + u8(r) % 3;
         for (size_t i = 0; i < n; i++) {
             vr[i] = any_vr(r);
-            v[i] = real(r);
+            v[i] = any_real(r);
         }
         for (size_t i = 0; i < n; i++) TRACE(X, "fmi2SetReal(vr %u = %.17g)\n", (unsigned)vr[i], v[i]);
         st = fmi2SetReal(X->c, vr, n, v);
@@ -238,8 +160,8 @@ static void op(ctx *X, reader *r)
     case 7: { /* doStep */
         const unsigned f = u8(r);
         double tc = X->t, dt;
-        if (f & 1) tc = real(r);
-        if (f & 2) dt = real(r);
+        if (f & 1) tc = any_real(r);
+        if (f & 2) dt = any_real(r);
         else dt = (double)(1 + u16(r)) * 1e-4;
         const fmi2ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         double h = 0.0;
@@ -330,7 +252,7 @@ static void op(ctx *X, reader *r)
         }
         if ((how == 3 || how == 4) && n >= SERIAL_HEADER + 8) {
             const size_t at = SERIAL_HEADER + 8 * (u16(r) % ((n - SERIAL_HEADER) / 8));
-            const double v = real(r);
+            const double v = any_real(r);
             memcpy(buf + at, &v, sizeof v);
             TRACE(X, "  forged payload double at byte %lu = %.17g\n", (unsigned long)at, v);
             if (how == 3) {
@@ -352,14 +274,14 @@ static void op(ctx *X, reader *r)
         TRACE(X, "fmi2SetDebugLogging(%d, %lu categories)\n", (int)on, (unsigned long)nc);
         st = fmi2SetDebugLogging(X->c, on, nc, cats);
         if (st == fmi2OK && !on) {
-            if (nc == 0) X->errors_silenced = 1;
+            if (nc == 0) X->silenced = 1;
             for (size_t i = 0; i < nc; i++)
-                if (!strcmp(cats[i], "logStatusError")) X->errors_silenced = 1;
+                if (!strcmp(cats[i], "logStatusError")) X->silenced = 1;
         }
         if (st == fmi2OK && on) {
-            if (nc == 0) X->errors_silenced = 0;
+            if (nc == 0) X->silenced = 0;
             for (size_t i = 0; i < nc; i++)
-                if (!strcmp(cats[i], "logStatusError")) X->errors_silenced = 0;
+                if (!strcmp(cats[i], "logStatusError")) X->silenced = 0;
         }
         break;
     }
@@ -383,13 +305,8 @@ static void op(ctx *X, reader *r)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    ctx X;
-    memset(&X, 0, sizeof X);
-    X.cb.logger = logger;
-    X.cb.allocateMemory = calloc;
-    X.cb.freeMemory = free;
-    X.cb.stepFinished = NULL;
-    X.cb.componentEnvironment = &X;
+    static ctx X; /* SER_CAP bytes: not on the stack */
+    ctx_init(&X);
     X.trace = getenv("FUZZ_TRACE") != NULL;
     X.c = fmi2Instantiate("fuzz", fmi2CoSimulation, MODEL_GUID, "", &X.cb, fmi2False, fmi2False);
     if (!X.c) oracle_fail("fmi2Instantiate failed with valid arguments");

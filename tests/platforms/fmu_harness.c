@@ -19,33 +19,9 @@
 #include "fmi3Functions.h"
 #include "model_vars.h"
 
-#include <ctype.h>
-#include <inttypes.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#ifdef _WIN32
-#include <windows.h>
-static void *open_lib(const char *path) { return (void *)LoadLibraryA(path); }
-static void *sym(void *lib, const char *name)
-{
-    FARPROC f = GetProcAddress((HMODULE)lib, name);
-    void *p;
-    memcpy(&p, &f, sizeof p);
-    return p;
-}
-#else
-#include <dlfcn.h>
-static void *open_lib(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
-static void *sym(void *lib, const char *name) { return dlsym(lib, name); }
-#endif
-
-#define NSETS 300
-#define NPTS 16
-#define HALF (NPTS / 2)
-#define PI 3.14159265358979323846
+#define HARNESS_NAME "fmu_harness"
+#define MAX_STATE 4096
+#include "harness_common.h"
 
 /* ---- the parameter sets ------------------------------------------------------------------- */
 
@@ -53,16 +29,6 @@ typedef struct {
     double m, k, c, P0, omega, phi, N, mu_s, chi, x0, v0, h, alpha, dt;
     int scheme, friction_updates;
 } pset;
-
-static uint64_t rng(uint64_t *s) /* splitmix64 */
-{
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-}
-
-static double unif(uint64_t *s, double a, double b) { return a + (b - a) * ((double)(rng(s) >> 11) * 0x1p-53); }
 
 /* Set i: every scheme in turn, the rest drawn over the model's ranges (stick-dominated to free
  * sliding, light to over-critical damping, 25 to 2000 steps per excitation period). Only +, -, *,
@@ -93,15 +59,6 @@ static pset make_set(int i)
 
 /* ---- printing ------------------------------------------------------------------------------ */
 
-static uint64_t bits(double x)
-{
-    uint64_t u;
-    memcpy(&u, &x, sizeof u);
-    return u;
-}
-
-static void put_real(double x) { printf(" %.17g:%016" PRIx64, x, bits(x)); }
-
 static void put_point(int set, int k, double t, const double r[8], const int n[2])
 {
     printf("out %d %d", set, k);
@@ -114,129 +71,19 @@ static void put_point(int set, int k, double t, const double r[8], const int n[2
     printf("\n");
 }
 
-static void put_state(FILE *f, int set, const unsigned char *b, size_t n)
-{
-    fprintf(f, "state %d ", set);
-    for (size_t j = 0; j < n; j++) fprintf(f, "%02x", b[j]);
-    fprintf(f, "\n");
-}
-
-/* every set's serialised state from a STATES file, read once */
-typedef struct {
-    unsigned char *bytes[NSETS];
-    size_t size[NSETS];
-} state_table;
-
-static void read_states(FILE *f, state_table *tab, size_t max)
-{
-    static char line[1 << 16];
-    memset(tab, 0, sizeof *tab);
-    while (fgets(line, sizeof line, f)) {
-        int s, off = 0;
-        if (sscanf(line, "state %d %n", &s, &off) != 1 || s < 0 || s >= NSETS || tab->bytes[s]) continue;
-        unsigned char *b = (unsigned char *)malloc(max);
-        size_t n = 0;
-        if (!b) return;
-        for (const char *c = line + off; isxdigit((unsigned char)c[0]) && isxdigit((unsigned char)c[1]) && n < max;
-             c += 2) {
-            unsigned v;
-            if (sscanf(c, "%2x", &v) != 1) break;
-            b[n++] = (unsigned char)v;
-        }
-        tab->bytes[s] = b;
-        tab->size[s] = n;
-    }
-}
-
 #define REAL_OUTS {VR_x, VR_v, VR_a, VR_F_friction, VR_x_max, VR_x_min, VR_stick_fraction, VR_E_friction}
 #define INT_OUTS {VR_mode, VR_transitions}
-#define MAX_STATE 4096
 
 /* ---- FMI 2.0 ------------------------------------------------------------------------------- */
-
-typedef struct {
-    fmi2InstantiateTYPE *instantiate;
-    fmi2FreeInstanceTYPE *free_instance;
-    fmi2SetupExperimentTYPE *setup;
-    fmi2EnterInitializationModeTYPE *enter_init;
-    fmi2ExitInitializationModeTYPE *exit_init;
-    fmi2SetRealTYPE *set_real;
-    fmi2SetIntegerTYPE *set_integer;
-    fmi2SetBooleanTYPE *set_boolean;
-    fmi2GetRealTYPE *get_real;
-    fmi2GetIntegerTYPE *get_integer;
-    fmi2DoStepTYPE *do_step;
-    fmi2GetFMUstateTYPE *get_state;
-    fmi2SetFMUstateTYPE *set_state;
-    fmi2FreeFMUstateTYPE *free_state;
-    fmi2SerializedFMUstateSizeTYPE *state_size;
-    fmi2SerializeFMUstateTYPE *serialize;
-    fmi2DeSerializeFMUstateTYPE *deserialize;
-} fmi2_api;
-
-static void logger2(fmi2ComponentEnvironment env, fmi2String name, fmi2Status st, fmi2String cat, fmi2String msg, ...)
-{
-    (void)env;
-    (void)name;
-    (void)cat;
-    if (st >= fmi2Error) fprintf(stderr, "fmu: %s\n", msg);
-}
-
-#define LOAD(api, field, name)                                                                       \
-    do {                                                                                             \
-        void *p_ = sym(lib, name);                                                                   \
-        if (!p_) {                                                                                   \
-            fprintf(stderr, "fmu_harness: %s not exported\n", name);                                 \
-            return 1;                                                                                \
-        }                                                                                            \
-        memcpy(&(api)->field, &p_, sizeof p_);                                                       \
-    } while (0)
-
-static int load2(void *lib, fmi2_api *a)
-{
-    LOAD(a, instantiate, "fmi2Instantiate");
-    LOAD(a, free_instance, "fmi2FreeInstance");
-    LOAD(a, setup, "fmi2SetupExperiment");
-    LOAD(a, enter_init, "fmi2EnterInitializationMode");
-    LOAD(a, exit_init, "fmi2ExitInitializationMode");
-    LOAD(a, set_real, "fmi2SetReal");
-    LOAD(a, set_integer, "fmi2SetInteger");
-    LOAD(a, set_boolean, "fmi2SetBoolean");
-    LOAD(a, get_real, "fmi2GetReal");
-    LOAD(a, get_integer, "fmi2GetInteger");
-    LOAD(a, do_step, "fmi2DoStep");
-    LOAD(a, get_state, "fmi2GetFMUstate");
-    LOAD(a, set_state, "fmi2SetFMUstate");
-    LOAD(a, free_state, "fmi2FreeFMUstate");
-    LOAD(a, state_size, "fmi2SerializedFMUstateSize");
-    LOAD(a, serialize, "fmi2SerializeFMUstate");
-    LOAD(a, deserialize, "fmi2DeSerializeFMUstate");
-    return 0;
-}
-
-static const fmi2CallbackFunctions CB2 = {logger2, calloc, free, NULL, NULL};
 
 static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab)
 {
     const pset p = make_set(set);
     const int resume = tab != NULL;
-    fmi2Component c = a->instantiate("harness", fmi2CoSimulation, MODEL_GUID, "", &CB2, fmi2False, fmi2False);
-    if (!c) {
-        printf("err %d 0 instantiate\n", set);
-        return 1;
-    }
-    int k0 = 1, fails = 0;
-    if (resume) {
-        const size_t n = tab->size[set];
-        fmi2FMUstate st = NULL;
-        if (n == 0 || a->deserialize(c, (const fmi2Byte *)tab->bytes[set], n, &st) != fmi2OK || a->set_state(c, st) != fmi2OK) {
-            printf("err %d %d resume\n", set, HALF);
-            a->free_instance(c);
-            return 1;
-        }
-        a->free_state(c, &st);
-        k0 = HALF + 1;
-    } else {
+    int k0, fails = 0;
+    fmi2Component c = start2(a, set, tab, &k0);
+    if (!c) return 1;
+    if (!resume) {
         const fmi2ValueReference vr[] = {VR_m, VR_k, VR_c, VR_P0, VR_omega, VR_phi, VR_N, VR_mu_s, VR_chi,
                                          VR_x0, VR_v0, VR_h, VR_alpha};
         const fmi2Real rv[] = {p.m, p.k, p.c, p.P0, p.omega, p.phi, p.N, p.mu_s, p.chi, p.x0, p.v0, p.h, p.alpha};
@@ -263,20 +110,7 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
             break;
         }
         put_point(set, k, t1, r, n);
-        if (!resume && k == HALF) {
-            fmi2FMUstate st = NULL;
-            size_t size = 0;
-            unsigned char buf[MAX_STATE];
-            if (a->get_state(c, &st) != fmi2OK || a->state_size(c, st, &size) != fmi2OK || size > sizeof buf ||
-                a->serialize(c, st, (fmi2Byte *)buf, size) != fmi2OK) {
-                printf("err %d %d serialise\n", set, k);
-                fails++;
-            } else {
-                put_state(states, set, buf, size);
-                put_state(stdout, set, buf, size);
-            }
-            a->free_state(c, &st);
-        }
+        if (!resume && k == HALF) fails += save_state(states, set, k, serialise2(a, c));
     }
     a->free_instance(c);
     return fails;
@@ -284,77 +118,14 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
 
 /* ---- FMI 3.0 ------------------------------------------------------------------------------- */
 
-typedef struct {
-    fmi3InstantiateCoSimulationTYPE *instantiate;
-    fmi3FreeInstanceTYPE *free_instance;
-    fmi3EnterInitializationModeTYPE *enter_init;
-    fmi3ExitInitializationModeTYPE *exit_init;
-    fmi3SetFloat64TYPE *set_float64;
-    fmi3SetInt32TYPE *set_int32;
-    fmi3SetInt64TYPE *set_int64;
-    fmi3SetBooleanTYPE *set_boolean;
-    fmi3GetFloat64TYPE *get_float64;
-    fmi3GetInt32TYPE *get_int32;
-    fmi3DoStepTYPE *do_step;
-    fmi3GetFMUStateTYPE *get_state;
-    fmi3SetFMUStateTYPE *set_state;
-    fmi3FreeFMUStateTYPE *free_state;
-    fmi3SerializedFMUStateSizeTYPE *state_size;
-    fmi3SerializeFMUStateTYPE *serialize;
-    fmi3DeserializeFMUStateTYPE *deserialize;
-} fmi3_api;
-
-static void logger3(fmi3InstanceEnvironment env, fmi3Status st, fmi3String cat, fmi3String msg)
-{
-    (void)env;
-    (void)cat;
-    if (st >= fmi3Error) fprintf(stderr, "fmu: %s\n", msg);
-}
-
-static int load3(void *lib, fmi3_api *a)
-{
-    LOAD(a, instantiate, "fmi3InstantiateCoSimulation");
-    LOAD(a, free_instance, "fmi3FreeInstance");
-    LOAD(a, enter_init, "fmi3EnterInitializationMode");
-    LOAD(a, exit_init, "fmi3ExitInitializationMode");
-    LOAD(a, set_float64, "fmi3SetFloat64");
-    LOAD(a, set_int32, "fmi3SetInt32");
-    LOAD(a, set_int64, "fmi3SetInt64");
-    LOAD(a, set_boolean, "fmi3SetBoolean");
-    LOAD(a, get_float64, "fmi3GetFloat64");
-    LOAD(a, get_int32, "fmi3GetInt32");
-    LOAD(a, do_step, "fmi3DoStep");
-    LOAD(a, get_state, "fmi3GetFMUState");
-    LOAD(a, set_state, "fmi3SetFMUState");
-    LOAD(a, free_state, "fmi3FreeFMUState");
-    LOAD(a, state_size, "fmi3SerializedFMUStateSize");
-    LOAD(a, serialize, "fmi3SerializeFMUState");
-    LOAD(a, deserialize, "fmi3DeserializeFMUState");
-    return 0;
-}
-
 static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab)
 {
     const pset p = make_set(set);
     const int resume = tab != NULL;
-    fmi3Instance c = a->instantiate("harness", MODEL_GUID, NULL, fmi3False, fmi3False, fmi3False, fmi3False, NULL,
-                                    0, NULL, logger3, NULL);
-    if (!c) {
-        printf("err %d 0 instantiate\n", set);
-        return 1;
-    }
-    int k0 = 1, fails = 0;
-    if (resume) {
-        const size_t n = tab->size[set];
-        fmi3FMUState st = NULL;
-        if (n == 0 || a->deserialize(c, (const fmi3Byte *)tab->bytes[set], n, &st) != fmi3OK || a->set_state(c, st) != fmi3OK) {
-            printf("err %d %d resume\n", set, HALF);
-            a->free_instance(c);
-            return 1;
-        }
-        a->free_state(c, &st);
-        k0 = HALF + 1;
-    } else {
+    int k0, fails = 0;
+    fmi3Instance c = start3(a, set, tab, &k0);
+    if (!c) return 1;
+    if (!resume) {
         const fmi3ValueReference vr[] = {VR_m, VR_k, VR_c, VR_P0, VR_omega, VR_phi, VR_N, VR_mu_s, VR_chi,
                                          VR_x0, VR_v0, VR_h, VR_alpha};
         const fmi3Float64 rv[] = {p.m, p.k, p.c, p.P0, p.omega, p.phi, p.N, p.mu_s, p.chi, p.x0, p.v0, p.h, p.alpha};
@@ -386,53 +157,10 @@ static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab
         }
         const int ni[2] = {n[0], n[1]};
         put_point(set, k, t1, r, ni);
-        if (!resume && k == HALF) {
-            fmi3FMUState st = NULL;
-            size_t size = 0;
-            unsigned char buf[MAX_STATE];
-            if (a->get_state(c, &st) != fmi3OK || a->state_size(c, st, &size) != fmi3OK || size > sizeof buf ||
-                a->serialize(c, st, (fmi3Byte *)buf, size) != fmi3OK) {
-                printf("err %d %d serialise\n", set, k);
-                fails++;
-            } else {
-                put_state(states, set, buf, size);
-                put_state(stdout, set, buf, size);
-            }
-            a->free_state(c, &st);
-        }
+        if (!resume && k == HALF) fails += save_state(states, set, k, serialise3(a, c));
     }
     a->free_instance(c);
     return fails;
 }
 
-int main(int argc, char **argv)
-{
-    if (argc != 5 || (strcmp(argv[1], "fmi2") && strcmp(argv[1], "fmi3")) ||
-        (strcmp(argv[3], "run") && strcmp(argv[3], "resume"))) {
-        fprintf(stderr, "usage: fmu_harness fmi2|fmi3 LIBRARY run|resume STATES\n");
-        return 2;
-    }
-    const int fmi3 = !strcmp(argv[1], "fmi3"), resume = !strcmp(argv[3], "resume");
-    void *lib = open_lib(argv[2]);
-    if (!lib) {
-        fprintf(stderr, "fmu_harness: cannot load %s\n", argv[2]);
-        return 2;
-    }
-    FILE *states = fopen(argv[4], resume ? "rb" : "wb"); /* the same bytes on every platform */
-    if (!states) {
-        fprintf(stderr, "fmu_harness: cannot open %s\n", argv[4]);
-        return 2;
-    }
-    fmi2_api a2;
-    fmi3_api a3;
-    if (fmi3 ? load3(lib, &a3) : load2(lib, &a2)) return 2;
-    static state_table tab;
-    if (resume) read_states(states, &tab, MAX_STATE);
-    int fails = 0;
-    for (int set = 0; set < NSETS; set++)
-        fails += fmi3 ? run3(&a3, set, states, resume ? &tab : NULL) : run2(&a2, set, states, resume ? &tab : NULL);
-    fclose(states);
-    for (int set = 0; set < NSETS; set++) free(tab.bytes[set]);
-    fprintf(stderr, "fmu_harness: %d sets, %d failed calls\n", NSETS, fails);
-    return 0; /* failed calls are part of the compared output */
-}
+int main(int argc, char **argv) { return harness_main(argc, argv, run2, run3, NULL); }
