@@ -17,26 +17,10 @@ import numpy as np
 import pytest
 from chain_cases import CASES, PERIODS, run_driver
 
-from dryfriction.chain import ChainError, ChainFMU, ChainFMU2, ChainRun, default_chain_fmu, default_chain_fmu3
+from dryfriction.chain import ChainError, ChainFMU, ChainFMU2, ChainRun
 from dryfriction.chain_reference import Chain, solve_chain
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-
-
-@pytest.fixture(scope="module")
-def fmu3_path() -> Path:
-    path = default_chain_fmu3()
-    if not path.is_file():
-        pytest.fail(f"FMI 3.0 chain FMU not built: {path} (cmake --build build)")
-    return path
-
-
-@pytest.fixture(scope="module")
-def fmu2_path() -> Path:
-    path = default_chain_fmu()
-    if not path.is_file():
-        pytest.fail(f"FMI 2.0 chain FMU not built: {path} (cmake --build build)")
-    return path
 
 
 def chain_params(ch: Chain, h: float, scheme: str = "located", alpha: float = -0.1) -> dict:
@@ -45,8 +29,8 @@ def chain_params(ch: Chain, h: float, scheme: str = "located", alpha: float = -0
     return {**p, "omega": ch.omega, "k_end": ch.k_end, "c_end": ch.c_end, "h": h, "alpha": alpha, "scheme": scheme}
 
 
-def fmu_run(ch: Chain, t_end: float, h: float, dt: float, fmu3_path: Path, **kw) -> ChainRun:
-    with ChainFMU(ch.n, fmu_path=fmu3_path) as f:
+def fmu_run(ch: Chain, t_end: float, h: float, dt: float, chain_fmu3: Path, **kw) -> ChainRun:
+    with ChainFMU(ch.n, fmu_path=chain_fmu3) as f:
         return f.run(t_end, dt, chain_params(ch, h, **kw))
 
 
@@ -59,7 +43,7 @@ ONE_BLOCK = [dict(m=1.0, k=1.0, c=0.0, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0
 
 @pytest.mark.parametrize("case", range(len(ONE_BLOCK)))
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
-def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, fmu3_path: Path, fmu: OscillatorFMU) -> None:
+def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, chain_fmu3: Path, fmu: OscillatorFMU) -> None:
     """One block of the FMI 3.0 chain gives the oscillator FMU's x, v, mode and F_friction bit for
     bit at every communication point (phi = 0; docs/chain.md says why a phase rounds apart), in
     every scheme, and a to 1e-14 (the chain sums the equation of motion in another order)."""
@@ -67,7 +51,7 @@ def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, fmu3_path:
     p = Oscillator(phi=0.0, **b)
     T = p.period
     h, dt = T / 500, T / 50
-    with ChainFMU(1, fmu_path=fmu3_path) as f:
+    with ChainFMU(1, fmu_path=chain_fmu3) as f:
         run = f.run(6 * T, dt, {**b, "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme})
     ref = fmu.trajectory(p, run.t, Settings(h=h, alpha=-0.1, scheme=scheme))
     assert (run.mode == 0).any() and (run.mode != 0).any()
@@ -82,14 +66,14 @@ def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, fmu3_path:
 
 # ---- FMI 2.0 == FMI 3.0 ---------------------------------------------------------------------------
 
-def test_fmi2_and_fmi3_chains_give_the_same_bits(fmu2_path: Path, fmu3_path: Path) -> None:
-    with ChainFMU2(fmu_path=fmu2_path) as f2:
+def test_fmi2_and_fmi3_chains_give_the_same_bits(chain_fmu2: Path, chain_fmu3: Path) -> None:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
         n = f2.n
         ch = Chain.make(n, omega=0.6, k_end=0.5, c=0.05, N=np.linspace(0.3, 0.6, n), chi=0.8,
                         P0=np.linspace(1.0, 0.4, n), phi=np.linspace(0.0, 1.0, n), v0=0.1)
         T = ch.period
         a = f2.run(8 * T, T / 70, chain_params(ch, T / 600))
-    b = fmu_run(ch, 8 * T, T / 600, T / 70, fmu3_path)
+    b = fmu_run(ch, 8 * T, T / 600, T / 70, chain_fmu3)
     assert (a.mode == 0).any() and (a.mode != 0).any()
     assert np.array_equal(a.t, b.t)
     for k in ("x", "v", "a", "F_friction", "mode"):
@@ -99,7 +83,7 @@ def test_fmi2_and_fmi3_chains_give_the_same_bits(fmu2_path: Path, fmu3_path: Pat
 # ---- the FMU against the C chain and the reference ----------------------------------------------
 
 @pytest.mark.parametrize("n", [1, 3, 8])
-def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
+def test_fmi3_chain_equals_the_c_driver(n: int, chain_fmu3: Path) -> None:
     """fmpy's FMU3Slave with n set in Configuration Mode: the C chain's numbers (chain_driver), bit
     for bit, for n = 1, 3, 8."""
     ch = Chain.make(n, omega=0.7, k_end=1.5, c_end=0.1, c=0.05, N=np.linspace(0.8, 1.2, n),
@@ -107,7 +91,7 @@ def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
                     x0=np.linspace(0.1, -0.1, n), v0=0.2)
     T = ch.period
     dt = T / 100
-    run = fmu_run(ch, 500 * dt, T / 400, dt, fmu3_path)  # the driver's points k dt
+    run = fmu_run(ch, 500 * dt, T / 400, dt, chain_fmu3)  # the driver's points k dt
     drv = run_driver(ch, 500 * dt, T / 400, dt=dt)
     assert run.x.shape == (501, n) and np.array_equal(run.t, drv["t"])
     assert (run.mode == 0).any() and (run.mode != 0).any()
@@ -115,7 +99,7 @@ def test_fmi3_chain_equals_the_c_driver(n: int, fmu3_path: Path) -> None:
         assert np.array_equal(getattr(run, k), drv[d]), k
 
 
-def test_held_inputs_equal_the_c_driver(fmu3_path: Path) -> None:
+def test_held_inputs_equal_the_c_driver(chain_fmu3: Path) -> None:
     """F_ext held from the start (set in Initialization Mode) gives the C chain's numbers with the
     same F_ext, bit for bit; set by a function before every step (the first after initialisation),
     the same bits too (the input's jump enters the state: chain_new_inputs); a feedback input
@@ -125,7 +109,7 @@ def test_held_inputs_equal_the_c_driver(fmu3_path: Path) -> None:
     T = ch.period
     dt = T / 50
     drv = run_driver(ch, 200 * dt, T / 400, dt=dt)
-    with ChainFMU(3, fmu_path=fmu3_path) as f:
+    with ChainFMU(3, fmu_path=chain_fmu3) as f:
         held = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs={"F_ext": F})
         func = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": F})
         fb = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": -0.5 * y["v"]})
@@ -148,14 +132,14 @@ DOC_ERRORS = {"stick-dominated": (2.27e-4, 5.66e-5, 1.41e-5, 3.54e-6),
 
 
 @pytest.mark.parametrize("case", list(DOC_ERRORS))
-def test_located_error_against_the_reference(case: str, refs: dict, fmu3_path: Path) -> None:
+def test_located_error_against_the_reference(case: str, refs: dict, chain_fmu3: Path) -> None:
     """Through the FMU, max |x - x_ref| over 10 periods is the error docs/chain.md reports (3
     digits) and falls 4x per halving of h."""
     ch, ref = CASES[case], refs[case]
     T = ch.period
     errs = []
     for ppp in (400, 800, 1600, 3200):
-        run = fmu_run(ch, PERIODS * T, T / ppp, T / 100, fmu3_path)
+        run = fmu_run(ch, PERIODS * T, T / ppp, T / 100, chain_fmu3)
         errs.append(float(np.max(np.abs(run.x - ref.evaluate(run.t)["x"]))))
     e = np.array(errs)
     np.testing.assert_allclose(e, DOC_ERRORS[case], rtol=6e-3)
@@ -163,13 +147,13 @@ def test_located_error_against_the_reference(case: str, refs: dict, fmu3_path: P
     assert np.all((ratios > 3.6) & (ratios < 4.4)), ratios
 
 
-def test_located_second_order_with_random_communication_steps(refs: dict, fmu3_path: Path) -> None:
+def test_located_second_order_with_random_communication_steps(refs: dict, chain_fmu3: Path) -> None:
     """Communication steps drawn in [0.1 h, 3 h] through fmi3DoStep: still 4x per halving."""
     ch = CASES["chi-mixed"]
     T = ch.period
     rng = np.random.default_rng(7)
     errs = []
-    with ChainFMU(ch.n, fmu_path=fmu3_path) as f:
+    with ChainFMU(ch.n, fmu_path=chain_fmu3) as f:
         for ppp in (400, 800, 1600):
             h = T / ppp
             f.start(chain_params(ch, h))
@@ -183,7 +167,7 @@ def test_located_second_order_with_random_communication_steps(refs: dict, fmu3_p
     assert np.all((ratios > 3.4) & (ratios < 4.6)), (errs, ratios)
 
 
-def test_energy_balance_from_the_outputs(fmu3_path: Path) -> None:
+def test_energy_balance_from_the_outputs(chain_fmu3: Path) -> None:
     """E - E0 = W_applied + W_friction - D_damping with the works integrated (trapezoid) from the
     outputs at every internal step: the residual is O(h^2)."""
     ch = CASES["damped-walled"]
@@ -192,7 +176,7 @@ def test_energy_balance_from_the_outputs(fmu3_path: Path) -> None:
     res = []
     for ppp in (200, 400, 800):
         h = T / ppp
-        r = fmu_run(ch, 3 * T, h, h, fmu3_path)
+        r = fmu_run(ch, 3 * T, h, h, chain_fmu3)
         P = np.cos(ch.omega * r.t[:, None] + ch.phi[None, :]) * ch.P0[None, :]
         E = 0.5 * np.einsum("ij,j,ij->i", r.v, ch.m, r.v) + 0.5 * np.einsum("ij,jk,ik->i", r.x, K, r.x)
         power = np.einsum("ij,ij->i", P + r.F_friction, r.v) - np.einsum("ij,jk,ik->i", r.v, C, r.v)
@@ -206,11 +190,11 @@ def test_energy_balance_from_the_outputs(fmu3_path: Path) -> None:
 # ---- FMI checks ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("which", ["fmi2", "fmi3"])
-def test_fmpy_validate_and_fmu_info(which: str, fmu2_path: Path, fmu3_path: Path) -> None:
+def test_fmpy_validate_and_fmu_info(which: str, chain_fmu2: Path, chain_fmu3: Path) -> None:
     from fmpy.util import fmu_info
     from fmpy.validation import validate_fmu
 
-    path = fmu2_path if which == "fmi2" else fmu3_path
+    path = chain_fmu2 if which == "fmi2" else chain_fmu3
     assert validate_fmu(str(path)) == []
     info = fmu_info(str(path))
     assert "DryFrictionChain" in info and "Co-Simulation" in info
@@ -218,9 +202,9 @@ def test_fmpy_validate_and_fmu_info(which: str, fmu2_path: Path, fmu3_path: Path
 
 
 @pytest.mark.parametrize("which", ["fmi2", "fmi3"])
-def test_fmutool_check_reports_compliant(which: str, fmu2_path: Path, fmu3_path: Path) -> None:
+def test_fmutool_check_reports_compliant(which: str, chain_fmu2: Path, chain_fmu3: Path) -> None:
     exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
-    path = fmu2_path if which == "fmi2" else fmu3_path
+    path = chain_fmu2 if which == "fmi2" else chain_fmu3
     r = subprocess.run([exe, "-input", str(path), "-check"], capture_output=True, text=True, timeout=120)
     out = r.stdout + r.stderr
     assert r.returncode == 0, out
@@ -229,7 +213,7 @@ def test_fmutool_check_reports_compliant(which: str, fmu2_path: Path, fmu3_path:
     assert "ERROR" not in out, out
 
 
-def test_structured_names_and_dimensions(fmu2_path: Path, fmu3_path: Path) -> None:
+def test_structured_names_and_dimensions(chain_fmu2: Path, chain_fmu3: Path) -> None:
     """FMI 2.0: m[1] ... x[n] for every array; FMI 3.0: each array one variable of dimension n
     (the structural parameter n, UInt64, start 2, min 1, max >= 4096)."""
     import zipfile
@@ -237,11 +221,11 @@ def test_structured_names_and_dimensions(fmu2_path: Path, fmu3_path: Path) -> No
 
     from fmpy import read_model_description
 
-    md3 = read_model_description(str(fmu3_path))
+    md3 = read_model_description(str(chain_fmu3))
     v3 = {v.name: v for v in md3.modelVariables}
     n = v3["n"]
     assert n.type == "UInt64" and n.causality == "structuralParameter" and int(n.start) == 2
-    xml = ET.fromstring(zipfile.ZipFile(fmu3_path).read("modelDescription.xml"))
+    xml = ET.fromstring(zipfile.ZipFile(chain_fmu3).read("modelDescription.xml"))
     n_el = xml.find("ModelVariables/UInt64[@name='n']")
     assert n_el is not None and int(n_el.get("min")) == 1 and int(n_el.get("max")) >= 4096
     for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "F_ext", "N_ext", "x", "v", "a",
@@ -250,14 +234,14 @@ def test_structured_names_and_dimensions(fmu2_path: Path, fmu3_path: Path) -> No
         assert len(dims) == 1 and dims[0].valueReference == n.valueReference, name
     for name in ("k_end", "c_end", "omega", "h", "alpha", "scheme"):
         assert not v3[name].dimensions, name
-    with ChainFMU2(fmu_path=fmu2_path) as f2:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
         names = set(f2.md.variables)
         for name in ("m", "x0", "F_ext", "x", "mode"):
             assert {f"{name}[{i}]" for i in range(1, f2.n + 1)} <= names, name
             assert f"{name}[{f2.n + 1}]" not in names
 
 
-def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(fmu2_path: Path) -> None:
+def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(chain_fmu2: Path) -> None:
     """A second host (libcosim via libcosimpy) gives x[i](t) of our FMI 2.0 driver, bit for bit."""
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -267,10 +251,10 @@ def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(fmu2_path: Path) -> N
     log_output_level(CosimLogLevel.ERROR)
     dt, steps = 0.01, 300
     ex = CosimExecution.from_step_size(step_size=int(round(dt * 1e9)))
-    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(fmu2_path), instance_name="chain"))
+    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(chain_fmu2), instance_name="chain"))
     obs = CosimObserver.create_last_value()
     ex.add_observer(observer=obs)
-    with ChainFMU2(fmu_path=fmu2_path) as f2:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
         vrs = [f2.md.vr(f"x[{i}]") for i in range(1, f2.n + 1)]
         xs = []
         for _ in range(steps):
@@ -285,30 +269,30 @@ def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(fmu2_path: Path) -> N
 # ---- bad input ------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("n", [0, 5000])
-def test_n_outside_its_range_is_the_fmus_error(n: int, fmu3_path: Path) -> None:
-    with ChainFMU(n, fmu_path=fmu3_path) as f:
+def test_n_outside_its_range_is_the_fmus_error(n: int, chain_fmu3: Path) -> None:
+    with ChainFMU(n, fmu_path=chain_fmu3) as f:
         with pytest.raises(ChainError, match=rf"invalid value {n} for n .*valid range: in \[1, 4096\]"):
             f.run(1.0, 0.1)
         f.set_n(4)  # the instance recovers: reset, Configuration Mode again
         assert f.run(1.0, 0.1).x.shape == (11, 4)
 
 
-def test_bad_array_values_name_the_element(fmu3_path: Path, fmu2_path: Path) -> None:
+def test_bad_array_values_name_the_element(chain_fmu3: Path, chain_fmu2: Path) -> None:
     m = [1.0, 1.0, -1.0]
-    with ChainFMU(3, fmu_path=fmu3_path) as f:
+    with ChainFMU(3, fmu_path=chain_fmu3) as f:
         with pytest.raises(ChainError, match=r"invalid value -1 for m\[3\]"):
             f.run(1.0, 0.1, {"m": m})
         # the instance stays usable
         assert f.run(1.0, 0.1, {"m": 1.0}).x.shape == (11, 3)
-    with ChainFMU2(fmu_path=fmu2_path) as f2:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
         bad = [1.0] * (f2.n - 1) + [-1.0]
         with pytest.raises(ChainError, match=rf"invalid value -1 for m\[{f2.n}\]"):
             f2.run(1.0, 0.1, {"m": bad})
 
 
-def test_wrong_array_length(fmu3_path: Path) -> None:
+def test_wrong_array_length(chain_fmu3: Path) -> None:
     """The driver names the parameter and n; the FMU itself refuses a wrong nValues."""
-    with ChainFMU(3, fmu_path=fmu3_path) as f:
+    with ChainFMU(3, fmu_path=chain_fmu3) as f:
         with pytest.raises(ValueError, match=r"m needs 3 values \(one per block, n = 3\)"):
             f.run(1.0, 0.1, {"m": [1.0, 2.0]})
         f._begin(0.0)  # Configuration Mode (n = 3), then Initialization Mode
@@ -318,7 +302,7 @@ def test_wrong_array_length(fmu3_path: Path) -> None:
 
 # ---- the command and the README ------------------------------------------------------------------
 
-def test_chain_command_writes_the_run(tmp_path: Path, fmu3_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_chain_command_writes_the_run(tmp_path: Path, chain_fmu3: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """dryfriction chain: the CSV and the NetCDF hold the driver's numbers for the same values."""
     from dryfriction.cli import main
     from dryfriction.sweep.datasets import read_netcdf
@@ -326,11 +310,11 @@ def test_chain_command_writes_the_run(tmp_path: Path, fmu3_path: Path, capsys: p
     out = tmp_path / "out"
     argv = ["chain", "--n", "3", "--t-end", "12", "--dt", "0.25", "--set", "mu_s=0.5", "--set", "P0=1,0,0",
             "--set", "k=1", "--set", "omega=0.5", "--set", "h=0.01", "--set", "scheme=located", "--out", str(out),
-            "--fmu", str(fmu3_path)]
+            "--fmu", str(chain_fmu3)]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "chain of 3 blocks (FMI 3), 49 points" in text and "share of time stuck per block" in text
-    with ChainFMU(3, fmu_path=fmu3_path) as f:
+    with ChainFMU(3, fmu_path=chain_fmu3) as f:
         ref = f.run(12.0, 0.25, {"mu_s": 0.5, "P0": [1, 0, 0], "k": 1.0, "omega": 0.5, "h": 0.01})
     csv = np.loadtxt(out / "chain.csv", delimiter=",", skiprows=1)
     header = (out / "chain.csv").read_text().splitlines()[0].split(",")
@@ -349,24 +333,24 @@ def test_chain_command_writes_the_run(tmp_path: Path, fmu3_path: Path, capsys: p
     (["--set", "mass=1"], "the chain has no parameter 'mass'", 2),
     (["--set", "scheme=exact"], "scheme must be one of paper, consistent, located, not 'exact'", 2),
 ])
-def test_chain_command_bad_values(argv: list[str], words: str, status: int, tmp_path: Path, fmu3_path: Path,
+def test_chain_command_bad_values(argv: list[str], words: str, status: int, tmp_path: Path, chain_fmu3: Path,
                                   capsys: pytest.CaptureFixture[str]) -> None:
     from dryfriction.cli import main
 
-    assert main(["chain", *argv, "--out", str(tmp_path / "out"), "--fmu", str(fmu3_path)]) == status
+    assert main(["chain", *argv, "--out", str(tmp_path / "out"), "--fmu", str(chain_fmu3)]) == status
     err = capsys.readouterr().err
     assert words in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
 
 
-def test_fmi2_command_needs_the_built_n(tmp_path: Path, fmu2_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_fmi2_command_needs_the_built_n(tmp_path: Path, chain_fmu2: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from dryfriction.cli import main
 
-    with ChainFMU2(fmu_path=fmu2_path) as f2:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
         n = f2.n
-    assert main(["chain", "--fmi", "2", "--n", str(n + 1), "--fmu", str(fmu2_path), "--out", str(tmp_path)]) == 2
+    assert main(["chain", "--fmi", "2", "--n", str(n + 1), "--fmu", str(chain_fmu2), "--out", str(tmp_path)]) == 2
     assert f"this FMI 2.0 chain has n = {n} blocks" in capsys.readouterr().err
-    assert main(["chain", "--fmi", "2", "--t-end", "1", "--fmu", str(fmu2_path), "--out", str(tmp_path),
+    assert main(["chain", "--fmi", "2", "--t-end", "1", "--fmu", str(chain_fmu2), "--out", str(tmp_path),
                  "--format", "csv", "--no-plot"]) == 0
     assert (tmp_path / "chain.csv").is_file() and not (tmp_path / "chain.png").exists()
 

@@ -226,6 +226,18 @@ def _event_driven(p: Oscillator, t_grid: np.ndarray, F_ext: np.ndarray, N_ext: n
     return np.array(out)
 
 
+def held_run(f: OscillatorFMU, p: Oscillator, settings: Settings, t: np.ndarray, F_ext: np.ndarray,
+             N_ext: np.ndarray) -> np.ndarray:
+    """x at t (t[0] the start) with F_ext[i], N_ext[i] set before the step to t[i + 1]."""
+    f.start(p, settings)
+    x = [float(f.get(["x"])["x"])]
+    for i in range(t.size - 1):
+        f.set({"F_ext": float(F_ext[i]), "N_ext": float(N_ext[i])})
+        f.step_to(float(t[i + 1]))
+        x.append(float(f.get(["x"])["x"]))
+    return np.array(x)
+
+
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_inputs_held_over_communication_steps(fmu: OscillatorFMU, seed: int) -> None:
     rng = np.random.default_rng(seed)
@@ -234,13 +246,7 @@ def test_inputs_held_over_communication_steps(fmu: OscillatorFMU, seed: int) -> 
     t = np.concatenate([[0.0], np.sort(rng.uniform(0.0, 5.0 * T, 60)), [5.0 * T]])
     F_ext = rng.uniform(-0.5, 0.5, t.size) * p.P0
     N_ext = rng.uniform(-0.5, 1.0, t.size) * p.N
-    f = fmu
-    f.start(p, EXACT)
-    x = [float(f.get(["x"])["x"])]
-    for i in range(t.size - 1):
-        f.set({"F_ext": float(F_ext[i]), "N_ext": float(N_ext[i])})
-        f.step_to(float(t[i + 1]))
-        x.append(float(f.get(["x"])["x"]))
+    x = held_run(fmu, p, EXACT, t, F_ext, N_ext)
     x_ref = _event_driven(p, t, F_ext, N_ext)
     size = max(float(np.abs(x_ref).max()), p.P0 / p.k)
     err = float(np.abs(np.array(x) - x_ref).max()) / size

@@ -13,25 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 from test_chain_fmu import chain_params
-from test_exact_scheme import ND, _event_driven
+from test_exact_scheme import ND, _event_driven, held_run
 
-from dryfriction.chain import ChainFMU, default_chain_fmu3
+from dryfriction.chain import ChainFMU
 from dryfriction.chain_reference import Chain
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 DIVS = (400, 800, 1600, 3200)
-
-
-def _held_run(f: OscillatorFMU, p: Oscillator, settings: Settings, t: np.ndarray, F_ext: np.ndarray,
-              N_ext: np.ndarray) -> np.ndarray:
-    f.start(p, settings)
-    x = [float(f.get(["x"])["x"])]
-    for i in range(t.size - 1):
-        f.set({"F_ext": float(F_ext[i]), "N_ext": float(N_ext[i])})
-        f.step_to(float(t[i + 1]))
-        x.append(float(f.get(["x"])["x"]))
-    return np.array(x)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -44,23 +33,15 @@ def test_located_stays_second_order_with_held_inputs(fmu: OscillatorFMU, seed: i
     N_ext = rng.uniform(-0.5, 1.0, t.size) * p.N
     ref = _event_driven(p, t, F_ext, N_ext)
     size = float(np.abs(ref).max())
-    errs = [float(np.abs(_held_run(fmu, p, Settings(scheme="located", h=T / d), t, F_ext, N_ext) - ref).max()) / size
+    errs = [float(np.abs(held_run(fmu, p, Settings(scheme="located", h=T / d), t, F_ext, N_ext) - ref).max()) / size
             for d in DIVS]
     assert errs[0] <= 3e-4, errs
     ratios = [a / b for a, b in zip(errs, errs[1:])]
     assert all(3.5 <= r <= 4.6 for r in ratios), (errs, ratios)
 
 
-@pytest.fixture(scope="module")
-def fmu3_path() -> Path:
-    path = default_chain_fmu3()
-    if not path.is_file():
-        pytest.fail(f"FMI 3.0 chain FMU not built: {path} (cmake --build build)")
-    return path
-
-
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
-def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU, fmu3_path: Path, scheme: str) -> None:
+def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU, chain_fmu3: Path, scheme: str) -> None:
     """x and v of one block with inputs changed before every step: the oscillator's bits."""
     b = dict(m=1.0, k=1.0, c=0.1, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0.7, x0=0.0, v0=0.0)
     p = Oscillator(phi=0.0, **b)
@@ -75,7 +56,7 @@ def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU, fmu3_p
         k = int(round(time / dt))
         return {"F_ext": [float(F[k])], "N_ext": [float(Nx[k])]}
 
-    with ChainFMU(1, fmu_path=fmu3_path) as f:
+    with ChainFMU(1, fmu_path=chain_fmu3) as f:
         run = f.run(t[-1], dt, {**b, "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme}, inputs=inputs)
     fmu.start(p, Settings(h=h, alpha=-0.1, scheme=scheme))
     x, v = [float(fmu.get(["x"])["x"])], [float(fmu.get(["v"])["v"])]
@@ -90,7 +71,7 @@ def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU, fmu3_p
     assert np.array_equal(run.x[:, 0], np.array(x)) and np.array_equal(run.v[:, 0], np.array(v))
 
 
-def test_chain_with_changing_inputs_converges_at_second_order(fmu3_path: Path) -> None:
+def test_chain_with_changing_inputs_converges_at_second_order(chain_fmu3: Path) -> None:
     """Three coupled blocks, every input changed at every communication point: errors against the
     same run at h = T/6400 fall 4x per halving of h."""
     ch = Chain.make(3, omega=0.6, k_end=0.5, c=0.05, N=[0.6, 0.8, 0.7], chi=[0.8, 1.2, 0.6],
@@ -105,7 +86,7 @@ def test_chain_with_changing_inputs_converges_at_second_order(fmu3_path: Path) -
                 "N_ext": [0.2 * np.cos(1.1 * k), 0.15 * np.sin(0.7 * k), -0.1 * np.cos(1.9 * k)]}
 
     def run(div: int) -> np.ndarray:
-        with ChainFMU(3, fmu_path=fmu3_path) as f:
+        with ChainFMU(3, fmu_path=chain_fmu3) as f:
             r = f.run(steps * dt, dt, chain_params(ch, T / div), inputs=inputs)
         assert (r.mode == 0).any() and (r.mode != 0).any()
         return r.x
