@@ -39,6 +39,7 @@ struct chain_model {
     chain_alloc al;
     size_t n;
     double k_end, c_end, omega, h, alpha, gamma, beta, g1, rate_max;
+    double T_min;               /* the shortest period of the dynamics (chain_shortest_period) */
     double rot_c, rot_s;        /* cos and sin of omega h: the excitation phase's advance per step */
     int scheme, energy, damped;
     int stuck_ok;               /* the stuck fast path may apply (stuck_until): located, no energy
@@ -189,6 +190,10 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     }
     if (n == 1) { kmax = M->Kd[0] / M->m[0]; cmax = M->Cd[0] / M->m[0]; }
     M->rate_max = sqrt(kmax) + cmax + fabs(p->omega);
+    {
+        const double fastest = fmax(fmax(sqrt(kmax), cmax), fabs(p->omega));
+        M->T_min = fastest > 0.0 ? 2.0 * DFO_PI / fastest : INFINITY;
+    }
     dfo_bossak_kin_for(p->h, M->gamma, M->beta, &M->kinF);
     M->kin = M->kinF;
     const double c1 = M->kin.c1, bhg = M->beta * p->h / M->gamma;
@@ -221,6 +226,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     if (err) *err = NULL;
     return M;
 }
+
+double chain_shortest_period(const chain_model *M) { return M->T_min; }
 
 void chain_destroy(chain_model *M)
 {

@@ -91,6 +91,10 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len);
  * allocation or invalid parameters (then *err, if not NULL, points to the reason). */
 chain_model *chain_create(const chain_params *p, const chain_alloc *al, const char **err);
 void chain_destroy(chain_model *M);
+/* The shortest period (s) of the dynamics, as the oscillator's dfo_shortest_period: the shortest
+ * of 2 pi / sqrt(max eig M^-1 K), 2 pi / |omega| and 2 pi / max eig M^-1 C, the eigenvalues bounded
+ * by Gershgorin (so it errs short); +inf when there is none. */
+double chain_shortest_period(const chain_model *M);
 size_t chain_size(const chain_model *M);
 
 /* State arrays through the model's callbacks; 0 on failure. */

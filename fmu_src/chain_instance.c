@@ -13,6 +13,7 @@
  * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
 #include "instance.h"
 #include "instance_common.h"
+#include "oscillator.h" /* DFO_STEPS_PER_PERIOD, DFO_MIN_STEPS_PER_PERIOD */
 
 #include <float.h>
 #include <math.h>
@@ -353,9 +354,19 @@ dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
     const char *msg = prepare(in, buf, sizeof buf);
     if (msg) return dfo_inst_fail(in, "%s: %s.", fn, msg);
     in->v.phase = DFO_PHASE_STEP;
+    dfo_inst_status status = DFO_INST_OK;
+    const double h = in->v.sp[DFO_SP_h], T_min = chain_shortest_period(in->v.M);
+    if (h * DFO_MIN_STEPS_PER_PERIOD > T_min) {
+        status = DFO_INST_WARNING;
+        dfo_inst_log(in, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
+                     "%s: h = %.6g s takes only %.3g internal steps per %.6g s, the shortest period of the chain's "
+                     "dynamics (its fastest natural frequency, bounded from the springs and masses, the excitation "
+                     "period 2 pi/omega, the damping rate): the results do not resolve it. Choose h <= %.6g s (1/%g "
+                     "of it).", fn, h, T_min / h, T_min, T_min / DFO_STEPS_PER_PERIOD, DFO_STEPS_PER_PERIOD);
+    }
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: %lu blocks.", in->v.s.t,
                  (unsigned long)in->v.n);
-    return DFO_INST_OK;
+    return status;
 }
 
 /* Size the arrays for n blocks (start values); DFO_INST_ERROR when out of memory (nothing changed). */

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from chain_cases import CASES, PERIODS, run_driver
 
-from dryfriction.chain import ChainError, ChainFMU, ChainFMU2, ChainRun
+from dryfriction.chain import ChainError, ChainFMU, ChainFMU2, ChainRun, ChainWarning
 from dryfriction.chain_reference import Chain, solve_chain
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
@@ -373,3 +373,31 @@ def test_the_readmes_five_lines() -> None:
     assert shown is not None
     printed = [float(x) for x in buf.getvalue().strip(" []\n").split()]
     assert printed == [float(x) for x in shown.group(1).strip("[]").split()]
+
+
+@pytest.mark.parametrize("which", ["fmi3", "fmi2"])
+def test_a_step_that_does_not_resolve_the_dynamics_is_a_warning(which: str, chain_fmu2: Path, chain_fmu3: Path) -> None:
+    """Stiff springs (k = 1e5 on unit masses: periods down to about 10 ms) with h = 1 ms:
+    fewer than 20 steps per shortest period, the FMU's warning names h and the step to choose; the
+    run still runs. k = 1e3 resolves it: no warning."""
+    import warnings
+
+    def run(k: float) -> tuple[list[str], int]:
+        params = {"k": k, "h": 1e-3}
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            if which == "fmi3":
+                with ChainFMU(3, fmu_path=chain_fmu3) as f:
+                    r = f.run(0.05, 0.01, params)
+            else:
+                with ChainFMU2(fmu_path=chain_fmu2) as f:
+                    r = f.run(0.05, 0.01, params)
+        assert np.all(np.isfinite(r.x))
+        return [str(w.message) for w in caught if issubclass(w.category, ChainWarning)], r.x.shape[1]
+
+    said, n = run(1e5)
+    # Gershgorin's bound of max eig M^-1 K with a free right end: 4k for n >= 3, 3k for n = 2
+    T_min = 2 * np.pi / np.sqrt((4.0 if n >= 3 else 3.0) * 1e5)
+    assert len(said) == 1 and "h = 0.001 s takes only" in said[0], said
+    assert f"Choose h <= {T_min / 1000:.6g} s" in said[0], (said, T_min)
+    assert run(1e3)[0] == []

@@ -22,6 +22,7 @@ import os
 import re
 import shutil
 import tempfile
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -78,6 +79,15 @@ def expand(name: str, value: Any, n: int) -> np.ndarray:
     if bad.size:
         raise ValueError(f"invalid value {a[bad[0]]} for {name}[{bad[0] + 1}]; valid range: finite")
     return a
+
+
+class ChainWarning(UserWarning):
+    """A warning the FMU logged (e.g. an internal step h that does not resolve the dynamics)."""
+
+
+def _warn(messages: Sequence[str]) -> None:
+    for m in messages:
+        warnings.warn(m, ChainWarning, stacklevel=4)
 
 
 @dataclass
@@ -368,7 +378,9 @@ class ChainFMU(_Chain):
         self._call("fmi3EnterInitializationMode", s.enterInitializationMode, None, float(start_time), None)
 
     def _end_init(self) -> None:
+        mark = len(self.messages)
         self._call("fmi3ExitInitializationMode", self.slave.exitInitializationMode)
+        _warn([m for st, m in self.messages[mark:] if st == 1])
 
     def _set_reals(self, name: str, values: np.ndarray) -> None:
         self._call(f"setting {name}", self.slave.setFloat64, [self.vars[name].valueReference],
@@ -505,7 +517,9 @@ class ChainFMU2(_Chain):
         self._call(self.inst.enter_initialization_mode)
 
     def _end_init(self) -> None:
+        mark = len(self.inst.messages)
         self._call(self.inst.exit_initialization_mode)
+        _warn([m for st, _, m in self.inst.messages[mark:] if st == 1])
 
     def _set_reals(self, name: str, values: np.ndarray) -> None:
         vrs = self._vrs[name] if name in self._vrs else [self.md.vr(name)]
