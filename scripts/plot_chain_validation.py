@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The chain FMU (FMI 3.0, through dryfriction.chain) against the event-driven reference on the
 four coupled cases of docs/chain.md (tests/chain_cases.py): max |x - x_ref| over 10 periods at
-h = T/400 ... T/3200 for the three schemes, printed as a table and drawn as a log-log figure.
+h = T/400 ... T/3200 for the three schemes, printed as a table, written as CSV (next to the figure)
+and drawn as a log-log figure. Part of the main job (scripts/main.sh: results/chain_validation.*).
 
     python scripts/plot_chain_validation.py [--out docs/img/chain/validation.png] [--fmu PATH]
 """
@@ -77,10 +78,15 @@ def main() -> int:
     axes[0].set_ylabel("max |x - x_ref| over 10 periods")
     axes[0].legend(fontsize=7)
     fig.suptitle("Chain FMU (FMI 3.0, n = 3) against the event-driven reference: four coupled cases", fontsize=9, y=1.03)
+    with atomic_path(args.out.with_suffix(".csv")) as tmp:
+        rows = ["case,scheme,steps_per_period,max_abs_error_x"]
+        rows += [f"{name},{scheme},{q_},{float(x)!r}" for name, by in errs.items() for scheme, e in by.items()
+                 for q_, x in zip(PER_PERIOD, e)]
+        Path(tmp).write_text("\n".join(rows) + "\n")
     with atomic_path(args.out) as tmp:
         fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
-    print(f"wrote {args.out}")
+    print(f"wrote {args.out} and {args.out.with_suffix('.csv')}")
     return 0
 
 
