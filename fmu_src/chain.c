@@ -113,6 +113,21 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len)
 
 static double *dalloc(const chain_alloc *al, size_t n) { return (double *)al->allocate(al->env, n, sizeof(double)); }
 
+/* Gershgorin bounds of the largest eigenvalues of M^-1 K and M^-1 C: each row's diagonal plus its
+ * off-diagonals, over its mass (one block: its own). */
+static void gershgorin(const chain_params *p, double *kmax, double *cmax)
+{
+    const size_t n = p->n;
+    *kmax = *cmax = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double kr = (i + 1 < n) ? p->k[i + 1] : p->k_end, cr = (i + 1 < n) ? p->c[i + 1] : p->c_end;
+        const double kl = (i > 0) ? p->k[i] : 0.0, cl = (i > 0) ? p->c[i] : 0.0;
+        const double kd = p->k[i] + kr, cd = p->c[i] + cr;
+        *kmax = fmax(*kmax, (n == 1 ? kd : kd + kl + ((i + 1 < n) ? kr : 0.0)) / p->m[i]);
+        *cmax = fmax(*cmax, (n == 1 ? cd : cd + cl + ((i + 1 < n) ? cr : 0.0)) / p->m[i]);
+    }
+}
+
 chain_model *chain_create(const chain_params *p, const chain_alloc *al, const char **err)
 {
     static const char *const oom = "out of memory";
@@ -183,17 +198,10 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->Ko[i] = (i + 1 < n) ? -kr : 0.0;
         M->Co[i] = (i + 1 < n) ? -cr : 0.0;
         if (p->c[i] != 0.0) M->damped = 1;
-        /* Gershgorin bounds of the largest eigenvalues of M^-1 K and M^-1 C */
-        const double kl = (i > 0) ? p->k[i] : 0.0, cl = (i > 0) ? p->c[i] : 0.0;
-        kmax = fmax(kmax, (M->Kd[i] + kl + ((i + 1 < n) ? kr : 0.0)) / p->m[i]);
-        cmax = fmax(cmax, (M->Cd[i] + cl + ((i + 1 < n) ? cr : 0.0)) / p->m[i]);
     }
-    if (n == 1) { kmax = M->Kd[0] / M->m[0]; cmax = M->Cd[0] / M->m[0]; }
+    gershgorin(p, &kmax, &cmax);
     M->rate_max = sqrt(kmax) + cmax + fabs(p->omega);
-    {
-        const double fastest = fmax(fmax(sqrt(kmax), cmax), fabs(p->omega));
-        M->T_min = fastest > 0.0 ? 2.0 * DFO_PI / fastest : INFINITY;
-    }
+    M->T_min = chain_shortest_period_of(p);
     dfo_bossak_kin_for(p->h, M->gamma, M->beta, &M->kinF);
     M->kin = M->kinF;
     const double c1 = M->kin.c1, bhg = M->beta * p->h / M->gamma;
@@ -228,6 +236,24 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
 }
 
 double chain_shortest_period(const chain_model *M) { return M->T_min; }
+
+double chain_step(const chain_model *M) { return M->h; }
+
+double chain_shortest_period_of(const chain_params *p)
+{
+    double kmax, cmax;
+    gershgorin(p, &kmax, &cmax);
+    const double fastest = fmax(fmax(sqrt(kmax), cmax), fabs(p->omega));
+    return fastest > 0.0 ? 2.0 * DFO_PI / fastest : INFINITY;
+}
+
+double chain_step_size(const chain_params *p)
+{
+    if (p->h > 0.0) return p->h;
+    const double T = chain_shortest_period_of(p);
+    const double h = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
+    return (h >= DBL_MIN && isfinite(h)) ? h : DBL_MIN;
+}
 
 void chain_destroy(chain_model *M)
 {

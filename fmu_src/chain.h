@@ -95,6 +95,13 @@ void chain_destroy(chain_model *M);
  * of 2 pi / sqrt(max eig M^-1 K), 2 pi / |omega| and 2 pi / max eig M^-1 C, the eigenvalues bounded
  * by Gershgorin (so it errs short); +inf when there is none. */
 double chain_shortest_period(const chain_model *M);
+/* The same from the parameters (before a model exists). */
+double chain_shortest_period_of(const chain_params *p);
+/* The internal step a run uses: p->h when > 0, else derived from the dynamics as the oscillator's
+ * (1/DFO_STEPS_PER_PERIOD of the shortest period; DFO_STEP_FALLBACK without one). */
+double chain_step_size(const chain_params *p);
+/* The model's internal step. */
+double chain_step(const chain_model *M);
 size_t chain_size(const chain_model *M);
 
 /* State arrays through the model's callbacks; 0 on failure. */

@@ -292,7 +292,16 @@ static chain_params params_of(const dfo_values *v)
     p.alpha = v->sp[DFO_SP_alpha];
     p.scheme = (int)v->sp[DFO_SP_scheme];
     p.account_energy = 0;
+    p.h = chain_step_size(&p); /* h = 0: derived from the dynamics */
     return p;
+}
+
+/* The internal step of the run (h_used). */
+static double step_h(const dfo_values *v)
+{
+    if (v->M) return chain_step(v->M);
+    const chain_params p = params_of(v);
+    return p.h;
 }
 
 /* The inputs now (used: those of the last step); an input never set is NULL (never read). */
@@ -356,13 +365,14 @@ dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
     in->v.phase = DFO_PHASE_STEP;
     dfo_inst_status status = DFO_INST_OK;
     const double h = in->v.sp[DFO_SP_h], T_min = chain_shortest_period(in->v.M);
-    if (h * DFO_MIN_STEPS_PER_PERIOD > T_min) {
+    if (h > 0.0 && h * DFO_MIN_STEPS_PER_PERIOD > T_min) {
         status = DFO_INST_WARNING;
         dfo_inst_log(in, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
                      "%s: h = %.6g s takes only %.3g internal steps per %.6g s, the shortest period of the chain's "
                      "dynamics (its fastest natural frequency, bounded from the springs and masses, the excitation "
                      "period 2 pi/omega, the damping rate): the results do not resolve it. Choose h <= %.6g s (1/%g "
-                     "of it).", fn, h, T_min / h, T_min, T_min / DFO_STEPS_PER_PERIOD, DFO_STEPS_PER_PERIOD);
+                     "of it), or h = 0 to let the FMU derive it.", fn, h, T_min / h, T_min, T_min / DFO_STEPS_PER_PERIOD,
+                     DFO_STEPS_PER_PERIOD);
     }
     dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: %lu blocks.", in->v.s.t,
                  (unsigned long)in->v.n);
@@ -457,6 +467,11 @@ static dfo_inst_status get_outputs(dfo_instance *in, const char *fn, const ref *
     (void)vr;
     const size_t n = v->n, i0 = r->elem < 0 ? 0 : (size_t)r->elem, i1 = r->elem < 0 ? n : i0 + 1;
     const int id = r->var->slot;
+    if (id == DFO_OUT_h_used) {
+        *out = chain_step(v->M);
+        if (!started(v)) free_model(v);
+        return DFO_INST_OK;
+    }
     const int need_a = id == DFO_OUT_a || (v->event_pending && id == DFO_OUT_F_friction);
     const int temporary = !started(v);
     if (need_a && (temporary || !v->acc_valid)) {
@@ -686,7 +701,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
 {
     dfo_values *v = &in->v;
     double t_target = 0.0;
-    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->sp[DFO_SP_h], &t_target);
+    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, step_h(v), &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
     take_inputs(v);
@@ -695,7 +710,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
     const chain_status st = chain_advance(v->M, &ci, &v->s, t_target, stop, on_switch, &rec);
     if (st != CHAIN_OK && st != CHAIN_SWITCHED) return step_failed(in, fn, st);
-    const double snap = fmax(1e-9 * v->sp[DFO_SP_h], 8.0 * DBL_EPSILON * fabs(t_target));
+    const double snap = fmax(1e-9 * step_h(v), 8.0 * DBL_EPSILON * fabs(t_target));
     in->switched = rec.count > 0;
     step_done(v, (st == CHAIN_SWITCHED && v->s.t < t_target - snap) ? v->s.t : t_target);
     if (t_reached) *t_reached = v->time;
@@ -714,12 +729,12 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
     dfo_values *v = &in->v;
     dfo_inst_status done;
     double t_target = 0.0;
-    if (dfo_inst_events_begin(in, fn, tc, dt, v->sp[DFO_SP_h], opt, res, &done, &t_target)) return done;
+    if (dfo_inst_events_begin(in, fn, tc, dt, step_h(v), opt, res, &done, &t_target)) return done;
     chain_state_copy(&v->s0, &v->s);
     take_inputs(v);
     const double t_start = v->time;
     const chain_inputs ci = inputs_of(v, 0);
-    const double snap = fmax(1e-9 * v->sp[DFO_SP_h], 8.0 * DBL_EPSILON * fabs(t_target));
+    const double snap = fmax(1e-9 * step_h(v), 8.0 * DBL_EPSILON * fabs(t_target));
     switch_rec rec = {in, in->host.log && in->log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     int at_end = 0;
     for (;;) {
@@ -1093,7 +1108,7 @@ static const char *implausible(const dfo_values *v)
         if (s->mode[i] < -1 || s->mode[i] > 1) return "a mode is invalid";
     }
     if (ph & (DFO_PHASE_STEP | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR | DFO_PHASE_EVENT)) {
-        const double h = v->sp[DFO_SP_h], slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
+        const double h = step_h(v), slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
         if (s->t < s->t0 || s->t0 + (double)s->n_grid * h > s->t + slack ||
             s->t0 + (double)(s->n_grid + 1) * h < s->t - slack)
             return "the time does not match the internal grid";

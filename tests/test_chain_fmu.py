@@ -401,3 +401,25 @@ def test_a_step_that_does_not_resolve_the_dynamics_is_a_warning(which: str, chai
     assert len(said) == 1 and "h = 0.001 s takes only" in said[0], said
     assert f"Choose h <= {T_min / 1000:.6g} s" in said[0], (said, T_min)
     assert run(1e3)[0] == []
+
+
+def test_h_zero_derives_the_step_from_the_dynamics(chain_fmu2: Path, chain_fmu3: Path) -> None:
+    """h = 0 (the start value): h_used is 1/1000 of the chain's shortest period (Gershgorin's bound
+    of its fastest natural frequency; here the springs: 2 pi / sqrt(4 k / m) for n = 3 with a free
+    end, 2 pi / sqrt(3 k / m) for n = 2), the same in both FMUs for the same n, and the run is the
+    run with that h set explicitly, bit for bit."""
+    params = {"k": 50.0, "m": 2.0, "omega": 1.5, "mu_s": 0.3, "chi": 0.7, "N": 1.0, "P0": 1.0}
+    with ChainFMU(3, fmu_path=chain_fmu3) as f:
+        derived = f.run(3.0, 0.05, {**params, "h": 0.0})
+        h3 = float(f.get("h_used"))
+        explicit = f.run(3.0, 0.05, {**params, "h": h3})
+        assert float(f.get("h_used")) == h3
+    assert h3 == pytest.approx(2 * np.pi / np.sqrt(4 * 50.0 / 2.0) / 1000, rel=1e-15)
+    assert (derived.mode == 0).any() and (derived.mode != 0).any()
+    for k in ("x", "v", "a", "F_friction", "mode"):
+        assert np.array_equal(getattr(derived, k), getattr(explicit, k)), k
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
+        f2.run(0.1, 0.05, {**params, "h": 0.0})
+        n2, h2 = f2.n, float(f2.get("h_used"))
+    g = 4.0 if n2 >= 3 else 3.0
+    assert h2 == pytest.approx(2 * np.pi / np.sqrt(g * 50.0 / 2.0) / 1000, rel=1e-15)
