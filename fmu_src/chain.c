@@ -249,10 +249,7 @@ double chain_shortest_period_of(const chain_params *p)
 
 double chain_step_size(const chain_params *p)
 {
-    if (p->h > 0.0) return p->h;
-    const double T = chain_shortest_period_of(p);
-    const double h = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
-    return (h >= DBL_MIN && isfinite(h)) ? h : DBL_MIN;
+    return p->h > 0.0 ? p->h : dfo_step_rule(0.0, chain_shortest_period_of(p));
 }
 
 void chain_destroy(chain_model *M)

@@ -16,10 +16,7 @@ double dfo_shortest_period(const dfo_params *p)
 
 double dfo_step_size(const dfo_params *p)
 {
-    if (p->h > 0.0) return p->h;
-    const double T = dfo_shortest_period(p);
-    const double h = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
-    return (h >= DBL_MIN && isfinite(h)) ? h : DBL_MIN;
+    return p->h > 0.0 ? p->h : dfo_step_rule(0.0, dfo_shortest_period(p));
 }
 
 const char *dfo_check_params(const dfo_params *p)

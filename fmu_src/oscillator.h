@@ -8,6 +8,9 @@
 #ifndef DFO_OSCILLATOR_H
 #define DFO_OSCILLATOR_H
 
+#include <float.h>
+#include <math.h>
+
 #define DFO_PI 3.14159265358979323846
 
 typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3,
@@ -74,6 +77,14 @@ const char *dfo_check_params(const dfo_params *p);
 double dfo_shortest_period(const dfo_params *p);
 /* The internal step a run uses: p->h when > 0, else derived (always a normal number > 0). */
 double dfo_step_size(const dfo_params *p);
+/* The rule of it for any model: h when > 0, else 1/DFO_STEPS_PER_PERIOD of the shortest period T
+ * (+inf: none, DFO_STEP_FALLBACK), always a normal number > 0. (Also the chain's.) */
+static inline double dfo_step_rule(double h, double T)
+{
+    if (h > 0.0) return h;
+    const double d = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
+    return (d >= DBL_MIN && isfinite(d)) ? d : DBL_MIN;
+}
 
 /* Derive the constants (M->p.h is the step used). The parameters must have passed the checks above. */
 void dfo_model_init(dfo_model *M, const dfo_params *p);
