@@ -98,7 +98,7 @@ static fmi2Status call(ctx *X, reader *r, unsigned op)
     case 9: case 10: case 11: {
         double dt = real(r);
         const double tc = (u8(r) < 230) ? X->t : real(r);
-        const fmi2ValueReference vh = VR_h;
+        const fmi2ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         fmi2Real h = 0.0;
         if (fmi2GetReal(X->c, &vh, 1, &h) == fmi2OK && h > 0.0 && isfinite(dt) &&
             dt > FUZZ_MAX_WORK / DFO_CHAIN_N * h)

@@ -128,7 +128,7 @@ static fmi3Status call(ctx *X, reader *r, unsigned op)
     case 12: case 13: case 14: { /* doStep */
         double dt = real(r);
         const double tc = (u8(r) < 230) ? X->t : real(r);
-        const fmi3ValueReference vh = VR_h;
+        const fmi3ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         fmi3Float64 h = 0.0;
         const size_t n = blocks(X);
         if (fmi3GetFloat64(X->c, &vh, 1, &h, 1) == fmi3OK && h > 0.0 && n > 0 && isfinite(dt) &&

@@ -107,7 +107,7 @@ static fmi3Status call(ctx *X, reader *r, unsigned op)
     case 11: case 12: case 13: { /* doStep */
         double dt = real(r);
         const double tc = (u8(r) < 230) ? X->t : real(r);
-        const fmi3ValueReference vh = VR_h;
+        const fmi3ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         fmi3Float64 h = 0.0;
         if (fmi3GetFloat64(X->c, &vh, 1, &h, 1) == fmi3OK && h > 0.0 && isfinite(dt) && dt > FUZZ_MAX_STEPS * h)
             dt = FUZZ_MAX_STEPS * h;
