@@ -128,6 +128,13 @@ static void gershgorin(const chain_params *p, double *kmax, double *cmax)
     }
 }
 
+/* 2 pi over the fastest of sqrt(kmax), cmax (a rate taken as an angular frequency) and |omega|. */
+static double shortest_period(double kmax, double cmax, double omega)
+{
+    const double fastest = fmax(fmax(sqrt(kmax), cmax), fabs(omega));
+    return fastest > 0.0 ? 2.0 * DFO_PI / fastest : INFINITY;
+}
+
 chain_model *chain_create(const chain_params *p, const chain_alloc *al, const char **err)
 {
     static const char *const oom = "out of memory";
@@ -201,7 +208,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     }
     gershgorin(p, &kmax, &cmax);
     M->rate_max = sqrt(kmax) + cmax + fabs(p->omega);
-    M->T_min = chain_shortest_period_of(p);
+    M->T_min = shortest_period(kmax, cmax, p->omega);
     dfo_bossak_kin_for(p->h, M->gamma, M->beta, &M->kinF);
     M->kin = M->kinF;
     const double c1 = M->kin.c1, bhg = M->beta * p->h / M->gamma;
@@ -243,8 +250,7 @@ double chain_shortest_period_of(const chain_params *p)
 {
     double kmax, cmax;
     gershgorin(p, &kmax, &cmax);
-    const double fastest = fmax(fmax(sqrt(kmax), cmax), fabs(p->omega));
-    return fastest > 0.0 ? 2.0 * DFO_PI / fastest : INFINITY;
+    return shortest_period(kmax, cmax, p->omega);
 }
 
 double chain_step_size(const chain_params *p)

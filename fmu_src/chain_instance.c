@@ -503,40 +503,39 @@ static dfo_inst_status get_outputs(dfo_instance *in, const char *fn, const ref *
 
 /* ---- get / set ------------------------------------------------------------------------------- */
 
-dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[])
+/* Real (dout) or integer (iout) values: stored ones, or computed outputs, n values per array. */
+static dfo_inst_status get_values(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  dfo_var_type type, double *dout, int *iout)
 {
     size_t k = 0;
     for (size_t j = 0; j < n; j++) {
         ref r;
-        if (!lookup(in, fn, vr[j], DFO_REAL, &r)) return DFO_INST_ERROR;
+        if (!lookup(in, fn, vr[j], type, &r)) return DFO_INST_ERROR;
         const size_t c = count(in, &r);
         if (r.var->home == DFO_COMPUTED) {
-            if (get_outputs(in, fn, &r, vr[j], value + k, NULL) != DFO_INST_OK) return DFO_INST_ERROR;
+            if (get_outputs(in, fn, &r, vr[j], dout ? dout + k : NULL, iout ? iout + k : NULL) != DFO_INST_OK)
+                return DFO_INST_ERROR;
         } else {
             const size_t i0 = r.elem < 0 ? 0 : (size_t)r.elem;
-            for (size_t i = 0; i < c; i++) value[k + i] = *stored(&in->v, r.var, i0 + i);
+            for (size_t i = 0; i < c; i++) {
+                const double x = *stored(&in->v, r.var, i0 + i);
+                if (dout) dout[k + i] = x;
+                else iout[k + i] = (int)x;
+            }
         }
         k += c;
     }
     return DFO_INST_OK;
 }
 
+dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[])
+{
+    return get_values(in, fn, vr, n, DFO_REAL, value, NULL);
+}
+
 dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
 {
-    size_t k = 0;
-    for (size_t j = 0; j < n; j++) {
-        ref r;
-        if (!lookup(in, fn, vr[j], DFO_INTEGER, &r)) return DFO_INST_ERROR;
-        const size_t c = count(in, &r);
-        if (r.var->home == DFO_COMPUTED) {
-            if (get_outputs(in, fn, &r, vr[j], NULL, value + k) != DFO_INST_OK) return DFO_INST_ERROR;
-        } else {
-            const size_t i0 = r.elem < 0 ? 0 : (size_t)r.elem;
-            for (size_t i = 0; i < c; i++) value[k + i] = (int)*stored(&in->v, r.var, i0 + i);
-        }
-        k += c;
-    }
-    return DFO_INST_OK;
+    return get_values(in, fn, vr, n, DFO_INTEGER, NULL, value);
 }
 
 dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
