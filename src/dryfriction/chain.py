@@ -22,13 +22,14 @@ import os
 import re
 import shutil
 import tempfile
-import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .diagnostics import DryFrictionWarning, emit
 
 __all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainError", "ChainRun", "ChainFMU",
            "ChainFMU2", "default_chain_fmu", "default_chain_fmu3", "expand", "open_chain"]
@@ -81,13 +82,9 @@ def expand(name: str, value: Any, n: int) -> np.ndarray:
     return a
 
 
-class ChainWarning(UserWarning):
-    """A warning the FMU logged (e.g. an internal step h that does not resolve the dynamics)."""
-
-
-def _warn(messages: Sequence[str]) -> None:
-    for m in messages:
-        warnings.warn(m, ChainWarning, stacklevel=4)
+#: the warnings the chain FMUs log (e.g. an internal step h that does not resolve the dynamics): the
+#: package's one category, :class:`dryfriction.diagnostics.DryFrictionWarning`
+ChainWarning = DryFrictionWarning
 
 
 @dataclass
@@ -324,6 +321,7 @@ class ChainFMU(_Chain):
         self.n = self._check_n(n)
         self.schemes = _schemes(self.md, "scheme")
         self.messages: list[tuple[int, str]] = []
+        self._warnings: list[str] = []
         self._dir = extract(str(path), tempfile.mkdtemp(prefix="dfo_chain3_"))
         self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="chain")
@@ -350,18 +348,29 @@ class ChainFMU(_Chain):
         return int(n)
 
     def _log(self, env: Any, status: int, category: bytes, message: bytes) -> None:
-        self.messages.append((int(status), (message or b"").decode(errors="replace")))
+        text = (message or b"").decode(errors="replace")
+        self.messages.append((int(status), text))
         del self.messages[:-100]
+        if status == 1:  # fmi3Warning: emitted when the call returns
+            self._warnings.append(text)
+
+    def _flush(self) -> None:
+        if self._warnings:
+            pending, self._warnings = self._warnings, []
+            emit(pending, stacklevel=5)
 
     def _call(self, what: str, fn: Callable[..., Any], *args: Any) -> Any:
         from fmpy.fmi1 import FMICallException
 
         mark = len(self.messages)
         try:
-            return fn(*args)
+            out = fn(*args)
         except FMICallException as e:
             said = [m for s, m in self.messages[mark:] if s >= 2] or [m for _, m in self.messages[mark:]]
+            self._flush()
             raise ChainError(said[-1] if said else f"{what} failed ({e})") from None
+        self._flush()
+        return out
 
     def set_n(self, n: int) -> None:
         """A new number of blocks for the next :meth:`start` (Configuration Mode then)."""
@@ -378,9 +387,7 @@ class ChainFMU(_Chain):
         self._call("fmi3EnterInitializationMode", s.enterInitializationMode, None, float(start_time), None)
 
     def _end_init(self) -> None:
-        mark = len(self.messages)
         self._call("fmi3ExitInitializationMode", self.slave.exitInitializationMode)
-        _warn([m for st, m in self.messages[mark:] if st == 1])
 
     def _set_reals(self, name: str, values: np.ndarray) -> None:
         self._call(f"setting {name}", self.slave.setFloat64, [self.vars[name].valueReference],
@@ -398,19 +405,23 @@ class ChainFMU(_Chain):
     def _read_into(self, reals: int, modes: int) -> None:
         n, hot, comp = self.n, self._hot, self.slave.component
         st = hot.get_float64(comp, self._real_vrs, 4, reals, 4 * n)
-        if st > 1:
+        if st:
             self._failed("fmi3GetFloat64", st)
         st = (hot.get_int32 if self._mode_int32 else hot.get_int64)(comp, self._mode_vr, 1, modes, n)
-        if st > 1:
+        if st:
             self._failed("getting mode", st)
 
     def _do_step(self, t: float, dt: float) -> None:
         hot = self._hot
         st = hot.do_step(self.slave.component, t, dt, True, hot.event, hot.terminate, hot.early, hot.last)
-        if st > 1:
+        if st:
             self._failed("fmi3DoStep", st)
 
     def _failed(self, what: str, status: int) -> None:
+        """A non-OK status of a hot call: a warning is emitted, anything else is a ChainError."""
+        self._flush()
+        if status == 1:
+            return
         said = [m for s, m in self.messages if s >= 2]
         self.messages.clear()  # a later failure reports its own sentence, not this one
         raise ChainError(said[-1] if said else f"{what} returned status {status}")
@@ -517,9 +528,7 @@ class ChainFMU2(_Chain):
         self._call(self.inst.enter_initialization_mode)
 
     def _end_init(self) -> None:
-        mark = len(self.inst.messages)
-        self._call(self.inst.exit_initialization_mode)
-        _warn([m for st, _, m in self.inst.messages[mark:] if st == 1])
+        self._call(self.inst.exit_initialization_mode)  # its warnings: emitted by the fmi2 layer
 
     def _set_reals(self, name: str, values: np.ndarray) -> None:
         vrs = self._vrs[name] if name in self._vrs else [self.md.vr(name)]

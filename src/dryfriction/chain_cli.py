@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from .argparsing import UsageError, count, number
+from .argparsing import EXIT_USAGE, UsageError, count, number
 
 __all__ = ["add_chain_parser", "chain_main", "parse_sets", "write_csv", "plot_run"]
 
@@ -122,8 +122,8 @@ def chain_main(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise UsageError(str(e)) from None
     except ChainError as e:
-        print(f"dryfriction chain: FMU error: {e}", file=sys.stderr)
-        return 1
+        print(f"dryfriction chain: error: {e}", file=sys.stderr)
+        return EXIT_USAGE
     out: Path = args.out
     files = []
     if args.format in ("csv", "both"):

@@ -1,6 +1,9 @@
 """Command line: ``dryfriction validate | run | response | scenes | study | lyapunov | chain``.
 
-Invalid arguments end with one readable line on stderr and exit status 2, before any work.
+Invalid arguments, an unusable FMU and an error the FMU reports end with one readable line on
+stderr (``dryfriction: error: ...``) and exit status 2, before any work where they can be found
+before it. Every warning an FMU logs is one line on stderr (``dryfriction: warning: ...``);
+``--strict`` makes it an error.
 """
 
 from __future__ import annotations
@@ -10,12 +13,15 @@ import json
 import math
 import os
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from . import __version__, model, scenes
-from .argparsing import Parser, UsageError, count, make_parser, number
+from .argparsing import EXIT_USAGE, Parser, UsageError, count, make_parser, number
+from .diagnostics import DryFrictionWarning
 from .fmu import FMUError, Settings
 from .params import Oscillator
 
@@ -26,7 +32,9 @@ def _global_options(suppress: bool) -> argparse.ArgumentParser:
     g = argparse.ArgumentParser(add_help=False)
     default = argparse.SUPPRESS if suppress else None
     g.add_argument("--fmu", type=Path, default=default,
-                   help="path of the FMU (default: $DFO_FMU or build/DryFrictionOscillator.fmu)")
+                   help="path of the FMU (default: $DFO_FMU, else the installed package's FMU)")
+    g.add_argument("--strict", action="store_true", default=default,
+                   help="a warning of the FMU (e.g. a step too coarse for the dynamics) is an error: exit 2")
     return g
 
 
@@ -79,7 +87,8 @@ def build_parser() -> Parser:
     q.add_argument("--max-periods", type=count("--max-periods", 2), default=MAX_PERIODS,
                    help=f"period limit; beyond it converged = false (default {MAX_PERIODS})")
     q.add_argument("--scheme", choices=schemes, default=None, help="default: exact (k > 0), else located")
-    q.add_argument("--out", type=Path, default=Path("results/response"), help="output folder (default results/response)")
+    q.add_argument("--out", type=Path, default=None,
+                   help="output folder (default results/response; with --json: no files unless --out is given)")
     q.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
     q.add_argument("--no-plot", action="store_true", help="no PNG")
     q.add_argument("--json", action="store_true", help="print the table as one JSON object on stdout")
@@ -151,7 +160,9 @@ def _physical(args: argparse.Namespace, omega: float | None = None) -> Oscillato
 
 #: units of the numbers ``dryfriction run`` prints
 RUN_UNITS = {"amplitude": "m", "asymmetry": "m", "x_max": "m", "x_min": "m", "stick_fraction": "1",
-             "stick_percent": "%", "transitions": "1", "E_friction": "J", "x_final": "m", "samples": "1"}
+             "stick_percent": "%", "transitions": "1", "E_friction": "J", "x_final": "m", "samples": "1",
+             "window_start_period": "excitation periods", "window_periods": "excitation periods",
+             "run_periods": "excitation periods"}
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
@@ -191,8 +202,10 @@ def cmd_run(args: argparse.Namespace) -> int:
                                      lambda t, y: {"N_ext": 0.5 * p.N if y["v"] > 0 else 0.0}, settings=st)
         effects = fmu.effects()
         h_used = float(fmu.get(["h_used"])["h_used"])
-    head = {"scene": args.scene, "effects": effects, "parameters": p.describe(),
-            "h_used": {"value": h_used, "unit": "s"}}
+    head: dict[str, Any] = {"scene": args.scene, "scheme": args.scheme, "effects": effects,
+                            "parameters": p.describe(), "h_used": {"value": h_used, "unit": "s"}}
+    if args.scene == "sweep":
+        head["measured"] = scenes.sweep_window_text(p, args.periods)
     if "t" not in res:  # observables: a few numbers
         print(json.dumps({**head, **{k: float(v) for k, v in res.items()},
                           "units": {k: RUN_UNITS.get(k, "") for k in res}}, indent=2))
@@ -217,7 +230,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_response(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .response import frequency_response, plot_response
+    from .response import frequency_response
 
     if args.f_stop < args.f_start:
         raise UsageError(f"--f-stop {args.f_stop:g} must be >= --f-start {args.f_start:g}")
@@ -231,24 +244,9 @@ def cmd_response(args: argparse.Namespace) -> int:
     progress = not args.no_progress and sys.stderr.isatty()
     ds = frequency_response(p, f, tol=args.tol, min_periods=args.min_periods, max_periods=args.max_periods,
                             scheme=args.scheme, workers=workers, progress=progress, fmu_path=args.fmu)
-    out: Path = args.out
     files = []
-    if args.format in ("csv", "both"):
-        from .atomic import atomic_write_text
-
-        cols = ["f_hz", "amplitude_m", "offset_m", "stick_fraction", "converged", "periods", "den_hartog_m", "inman_m"]
-        lines = [",".join(cols)]
-        for i in range(f.size):
-            row = [float(ds["f_hz"].values[i])] + [ds[c].values[i] for c in cols[1:]]
-            lines.append(",".join(str(bool(v)).lower() if isinstance(v, (bool, np.bool_)) else f"{float(v):.10g}"
-                                  for v in row))
-        files.append(atomic_write_text(out / "response.csv", "\n".join(lines) + "\n"))
-    if args.format in ("netcdf", "both"):
-        from .sweep.datasets import write_netcdf
-
-        files.append(write_netcdf(ds, out / "response.nc"))
-    if not args.no_plot:
-        files.append(plot_response(ds, out / "response.png"))
+    if args.out is not None or not args.json:  # --json alone writes only to stdout
+        files = _write_response(ds, args.out or Path("results/response"), args.format, not args.no_plot)
     conv = ds["converged"].values
     note = ds.attrs["never_converges"]
     if args.json:
@@ -258,21 +256,59 @@ def cmd_response(args: argparse.Namespace) -> int:
         print(json.dumps({"f_hz": arr("f_hz"), "amplitude_m": arr("amplitude_m"), "offset_m": arr("offset_m"),
                           "stick_fraction": arr("stick_fraction"), "converged": [bool(c) for c in conv],
                           "periods": arr("periods"), "den_hartog_m": arr("den_hartog_m"), "inman_m": arr("inman_m"),
+                          "reason": [str(r) or None for r in ds["reason"].values], "scheme": ds.attrs["scheme"],
                           "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
                                     "den_hartog_m": "m", "inman_m": "m"},
                           "tol": args.tol, "natural_frequency_hz": p.f_n_hz, "note": note,
                           "files": [str(x) for x in files]}))
         return 0
     print(f"{'f (Hz)':>10} {'amplitude (m)':>14} {'offset (m)':>12} {'stuck (%)':>9} {'converged':>9} {'periods':>7}")
+    reasons = ds["reason"].values
     for i in range(f.size):
+        if reasons[i]:
+            print(f"{f[i]:10.4g} not computed: {reasons[i]}")
+            continue
         print(f"{f[i]:10.4g} {ds['amplitude_m'].values[i]:14.6g} {ds['offset_m'].values[i]:12.3g} "
               f"{100 * ds['stick_fraction'].values[i]:9.1f} {str(bool(conv[i])):>9} {int(ds['periods'].values[i]):7d}")
-    print(f"natural frequency {p.f_n_hz:.6g} Hz; {int(conv.sum())} of {conv.size} converged (tol {args.tol:g})")
+    failed = int(sum(bool(r) for r in reasons))
+    print(f"natural frequency {p.f_n_hz:.6g} Hz; {int(conv.sum())} of {conv.size} converged (tol {args.tol:g})"
+          + (f"; {failed} not computed" if failed else "") + f"; scheme {ds.attrs['scheme']}")
     if note:
         print(note)
     for x in files:
         print(f"wrote {x}")
     return 0
+
+
+def _write_response(ds: Any, out: Path, fmt: str, plot: bool) -> list[Path]:
+    """The response table as CSV and/or NetCDF and its PNG in ``out``; the paths written."""
+    import csv
+    import io
+
+    import numpy as np
+
+    from .response import plot_response
+
+    files = []
+    if fmt in ("csv", "both"):
+        from .atomic import atomic_write_text
+
+        cols = ["f_hz", "amplitude_m", "offset_m", "stick_fraction", "converged", "periods", "den_hartog_m", "inman_m"]
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(cols + ["reason"])
+        for i in range(ds.sizes["f_hz"]):
+            row = [float(ds["f_hz"].values[i])] + [ds[c].values[i] for c in cols[1:]]
+            w.writerow([str(bool(v)).lower() if isinstance(v, (bool, np.bool_)) else f"{float(v):.10g}" for v in row]
+                       + [str(ds["reason"].values[i])])
+        files.append(atomic_write_text(out / "response.csv", buf.getvalue()))
+    if fmt in ("netcdf", "both"):
+        from .sweep.datasets import write_netcdf
+
+        files.append(write_netcdf(ds, out / "response.nc"))
+    if plot:
+        files.append(plot_response(ds, out / "response.png"))
+    return files
 
 
 def cmd_scenes(_: argparse.Namespace) -> int:
@@ -287,6 +323,25 @@ def cmd_study(args: argparse.Namespace) -> int:
     return int(run_args(args, prog="dryfriction study"))
 
 
+@contextmanager
+def fmu_warnings_on_stderr(prog: str, strict: bool) -> Iterator[None]:
+    """While the block runs, an FMU warning (:class:`DryFrictionWarning`) is one line on stderr,
+    ``<prog>: warning: <the FMU's sentence>`` (each sentence once); ``strict``: raised instead."""
+    with warnings.catch_warnings():
+        shown = warnings.showwarning
+
+        def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                 file: Any = None, line: str | None = None) -> None:
+            if issubclass(category, DryFrictionWarning):
+                print(f"{prog}: warning: {message}", file=sys.stderr, flush=True)
+            else:
+                shown(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = show
+        warnings.simplefilter("error" if strict else "default", DryFrictionWarning)
+        yield
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
@@ -299,16 +354,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
                    "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main}[args.command]
-        return handler(args)
-    except UsageError as e:
+        with fmu_warnings_on_stderr("dryfriction", bool(getattr(args, "strict", False))):
+            return handler(args)
+    except (UsageError, FileNotFoundError, FMUError) as e:
         print(f"dryfriction: error: {e}", file=sys.stderr)
-        return 2
-    except FileNotFoundError as e:
-        print(f"dryfriction: error: {e}", file=sys.stderr)
-        return 2
-    except FMUError as e:
-        print(f"dryfriction: FMU error: {e}", file=sys.stderr)
-        return 1
+        return EXIT_USAGE
+    except DryFrictionWarning as e:
+        print(f"dryfriction: error: {e} (an FMU warning, an error under --strict)", file=sys.stderr)
+        return EXIT_USAGE
     except KeyboardInterrupt:
         print("dryfriction: interrupted", file=sys.stderr)
         return 130

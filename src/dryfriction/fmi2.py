@@ -4,7 +4,9 @@ The FMU's shared library is loaded with plain ctypes from the folder fmpy's publ
 unzipped it to; every function is typed here once, with array arguments as ``void *`` so that a
 caller may pass ctypes arrays or raw addresses of numpy arrays (``arr.ctypes.data``). Every status
 is checked: ``fmi2OK`` and ``fmi2Warning`` pass, anything else raises :class:`FMUError` naming the
-function, the status and the FMU's last logged sentence.
+function, the status and the FMU's last logged sentence. Every sentence the FMU logs with the
+status ``fmi2Warning`` becomes a :class:`dryfriction.diagnostics.DryFrictionWarning` when the call
+that logged it is checked.
 
 Hot loops call the typed functions directly (:attr:`Instance.f`) and hand a non-zero status to
 :meth:`Instance.check`, which returns on a warning and raises otherwise; everything else uses the
@@ -21,6 +23,8 @@ from ctypes import (CFUNCTYPE, POINTER, Structure, byref, c_char_p, c_double, c_
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
+
+from .diagnostics import emit
 
 __all__ = [
     "OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING", "STATUS_NAMES", "LAST_SUCCESSFUL_TIME",
@@ -144,6 +148,7 @@ class Instance:
         #: the typed C functions, by their short name (``f.DoStep``): status returned, not checked
         self.f = SimpleNamespace(**{k[4:]: v for k, v in fns.items()})
         self.messages: list[tuple[int, str, str]] = []
+        self._warnings: list[str] = []  # logged with fmi2Warning, not yet emitted
         self._cb = CallbackFunctions()
         self._cb.logger = LoggerT(self._log)  # kept alive as long as the instance
         self._cb.allocateMemory = _CALLOC
@@ -164,8 +169,16 @@ class Instance:
 
     # ---- status -----------------------------------------------------------------------------------
     def _log(self, env: Any, name: bytes, status: int, category: bytes, message: bytes) -> None:
-        self.messages.append((status, (category or b"").decode(errors="replace"),
-                              (message or b"").decode(errors="replace")))
+        text = (message or b"").decode(errors="replace")
+        self.messages.append((status, (category or b"").decode(errors="replace"), text))
+        if status == WARNING:
+            self._warnings.append(text)
+
+    def flush_warnings(self) -> None:
+        """Emit the warnings logged since the last flush as :class:`DryFrictionWarning`."""
+        if self._warnings:
+            pending, self._warnings = self._warnings, []
+            emit(pending, stacklevel=4)
 
     def _last_message(self, since: int) -> str:
         msgs = self.messages[since:]
@@ -177,7 +190,9 @@ class Instance:
 
     def check(self, function: str, status: int, since: int = 0) -> int:
         """Return ``status`` if it is fmi2OK or fmi2Warning, else raise :class:`FMUError` with the
-        last sentence the FMU logged (after message index ``since``)."""
+        last sentence the FMU logged (after message index ``since``). The warnings logged so far
+        are emitted first (:meth:`flush_warnings`)."""
+        self.flush_warnings()
         if status == OK or status == WARNING:
             return status
         msg = self._last_message(since) or "no message logged"

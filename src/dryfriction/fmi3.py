@@ -23,6 +23,9 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Slave
 
+from .diagnostics import emit
+from .fmi2 import FMUError
+
 Intermediate = Callable[[float, bool], bool]  # (time, canReturnEarly) -> earlyReturnRequested
 
 
@@ -84,18 +87,48 @@ class FMI3Oscillator:
         self.early_return, self.event_mode = early_return, event_mode
         self._user_cb = intermediate
         self.updates: list[float] = []  # times of the intermediate updates
+        #: (status, message) of every sentence the FMU logged
+        self.messages: list[tuple[int, str]] = []
+        self._warnings: list[str] = []
         self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=self._dir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="dfo")
-        self.slave.instantiate(eventModeUsed=event_mode, earlyReturnAllowed=early_return,
+        self.slave.instantiate(eventModeUsed=event_mode, earlyReturnAllowed=early_return, logMessage=self._log,
                                intermediateUpdate=self._on_update if intermediate else None)
         self.time = start_time
-        self.slave.enterInitializationMode(startTime=start_time)
+        self._call("fmi3EnterInitializationMode", self.slave.enterInitializationMode, startTime=start_time)
         for name, value in (params or {}).items():
             self._set(name, value)
-        self.slave.exitInitializationMode()
+        self._call("fmi3ExitInitializationMode", self.slave.exitInitializationMode)
         if event_mode:  # a co-simulation FMU with event mode starts in event mode
-            self.slave.updateDiscreteStates()
-            self.slave.enterStepMode()
+            self._call("fmi3UpdateDiscreteStates", self.slave.updateDiscreteStates)
+            self._call("fmi3EnterStepMode", self.slave.enterStepMode)
+
+    def _log(self, env: Any, status: int, category: bytes, message: bytes) -> None:
+        text = (message or b"").decode(errors="replace")
+        self.messages.append((int(status), text))
+        del self.messages[:-100]
+        if status == 1:  # fmi3Warning
+            self._warnings.append(text)
+
+    def _call(self, what: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+        """An fmpy call: the warnings it logged emitted as DryFrictionWarning, an error status as
+        :class:`FMUError` with the FMU's sentence."""
+        from fmpy.fmi1 import FMICallException
+
+        mark = len(self.messages)
+        try:
+            out = fn(*args, **kwargs)
+        except FMICallException as e:
+            said = [m for st, m in self.messages[mark:] if st >= 2]
+            self._flush()
+            raise FMUError(said[-1] if said else str(e), what, getattr(e, "status", 3)) from None
+        self._flush()
+        return out
+
+    def _flush(self) -> None:
+        if self._warnings:
+            pending, self._warnings = self._warnings, []
+            emit(pending, stacklevel=4)
 
     # fmpy's ctypes callback: (env, time, setRequested, getAllowed, stepFinished, canReturnEarly,
     # *earlyReturnRequested, *earlyReturnTime)
@@ -111,13 +144,13 @@ class FMI3Oscillator:
         v = self._vars[name]
         vr = [v.valueReference]
         if v.type == "Float64":
-            self.slave.setFloat64(vr, [float(value)])
+            self._call(f"setting {name}", self.slave.setFloat64, vr, [float(value)])
         elif v.type == "Int32":
-            self.slave.setInt32(vr, [int(value)])
+            self._call(f"setting {name}", self.slave.setInt32, vr, [int(value)])
         elif v.type == "Enumeration":
-            self.slave.setInt64(vr, [int(value)])
+            self._call(f"setting {name}", self.slave.setInt64, vr, [int(value)])
         elif v.type == "Boolean":
-            self.slave.setBoolean(vr, [bool(value)])
+            self._call(f"setting {name}", self.slave.setBoolean, vr, [bool(value)])
         else:
             raise ValueError(f"variable {name}: type {v.type} not handled")
 
@@ -126,14 +159,9 @@ class FMI3Oscillator:
         for n in names:
             v = self._vars[n]
             vr = [v.valueReference]
-            if v.type == "Float64":
-                out[n] = self.slave.getFloat64(vr)[0]
-            elif v.type == "Int32":
-                out[n] = self.slave.getInt32(vr)[0]
-            elif v.type == "Enumeration":
-                out[n] = self.slave.getInt64(vr)[0]
-            else:
-                out[n] = self.slave.getBoolean(vr)[0]
+            getter = {"Float64": self.slave.getFloat64, "Int32": self.slave.getInt32,
+                      "Enumeration": self.slave.getInt64}.get(v.type, self.slave.getBoolean)
+            out[n] = self._call(f"getting {n}", getter, vr)[0]
         return out
 
     def set_inputs(self, values: Mapping[str, float]) -> None:
@@ -142,19 +170,19 @@ class FMI3Oscillator:
 
     def do_step(self, dt: float) -> tuple[bool, bool]:
         """One fmi3DoStep from the FMU's time; returns (eventHandlingNeeded, earlyReturn)."""
-        event, terminate, early, t_last = self.slave.doStep(self.time, dt)
+        event, terminate, early, t_last = self._call("fmi3DoStep", self.slave.doStep, self.time, dt)
         self.time = t_last  # tc + dt, or the switch it returned early at
         return bool(event), bool(early)
 
     def handle_event(self, mode_before: int) -> Switch:
         """Event mode at the current time: the left limits, fmi3UpdateDiscreteStates, the right limits."""
         left = self.get(["mode", "F_friction", "a"])
-        self.slave.enterEventMode()
-        need, terminate, _, _, _, _ = self.slave.updateDiscreteStates()
+        self._call("fmi3EnterEventMode", self.slave.enterEventMode)
+        need, terminate, _, _, _, _ = self._call("fmi3UpdateDiscreteStates", self.slave.updateDiscreteStates)
         if need or terminate:
             raise RuntimeError("fmi3UpdateDiscreteStates asked for another iteration or to terminate")
         right = self.get(["mode", "F_friction", "a"])
-        self.slave.enterStepMode()
+        self._call("fmi3EnterStepMode", self.slave.enterStepMode)
         return Switch(self.time, int(left["mode"]), int(right["mode"]), left["F_friction"], right["F_friction"],
                       left["a"], right["a"])
 

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .fmu import OscillatorFMU, Settings
+from .fmu import FMUError, OscillatorFMU, Settings
 from .params import Oscillator
 
 __all__ = ["SteadyState", "steady_state", "frequency_response", "plot_response", "TOL", "TOL_STICK",
@@ -110,15 +110,21 @@ def _chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray, opts: 
 
     inst = fmu_for(fmu)
     t0 = time.process_time()
-    rows = []
+    rows, reasons = [], []
     for f in f_hz:
         p = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f)})
         st = Settings(h=opts["h"], scheme=opts["scheme"]) if opts["scheme"] else default_settings(p)
-        s = steady_state(inst, p, tol=opts["tol"], min_periods=opts["min_periods"], max_periods=opts["max_periods"],
-                         settings=st)
+        try:
+            s = steady_state(inst, p, tol=opts["tol"], min_periods=opts["min_periods"],
+                             max_periods=opts["max_periods"], settings=st)
+        except FMUError as e:  # this frequency is not computed: its row says why, the sweep goes on
+            rows.append((math.nan, math.nan, math.nan, 0.0, math.nan, math.nan))
+            reasons.append(e.message)
+            continue
         rows.append((s.amplitude, s.offset, s.stick_fraction, float(s.converged), s.periods, s.change))
+        reasons.append("")
     out = np.array(rows, dtype=float).reshape(len(f_hz), 6)
-    return {"rows": out, "cpu": np.array([time.process_time() - t0])}
+    return {"rows": out, "reason": np.array(reasons, dtype=object), "cpu": np.array([time.process_time() - t0])}
 
 
 def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol: float = TOL,
@@ -127,7 +133,9 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
                        fmu_path: str | os.PathLike[str] | None = None) -> Any:
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
     (dimension ``f_hz``; variables amplitude_m, offset_m, stick_fraction, converged, periods,
-    change, den_hartog_m, inman_m; attributes: the oscillator and the settings, with units).
+    change, reason, den_hartog_m, inman_m; attributes: the oscillator and the settings, with units).
+    A frequency the FMU cannot compute gets NaN values, ``converged`` False and the FMU's
+    sentence in ``reason``; the other frequencies go on.
 
     ``scheme`` None: exact when k > 0, else located with the derived step. ``workers`` > 0 runs
     the frequencies on a Dask LocalCluster of that many processes (for long sweeps)."""
@@ -149,6 +157,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
     chunks = [(base, f[i:i + per_chunk], opts) for i in range(0, f.size, per_chunk)]
     results, _ = map_chunks(_chunk, path, chunks, workers=workers, progress=progress, desc="response")
     rows = np.concatenate([r["rows"] for r in results], axis=0)
+    reason = np.concatenate([r["reason"] for r in results]).astype(str)
     lam = 2.0 * math.pi * f / p.w0 if p.k > 0 else np.full(f.shape, np.inf)
     applies = p.k > 0 and p.c == 0 and p.P0 != 0
     dh = np.asarray(den_hartog_amplitude(p, lam), dtype=float) if applies else np.full(f.shape, np.nan)
@@ -162,6 +171,8 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
                           {"long_name": f"successive windows agree within {tol:g} (relative)"}),
             "periods": ("f_hz", rows[:, 4], {"units": "1", "long_name": "excitation periods run"}),
             "change": ("f_hz", rows[:, 5], {"units": "1", "long_name": "relative amplitude change, last two windows"}),
+            "reason": ("f_hz", reason, {"long_name": "why the point was not computed (the FMU's sentence; "
+                                                     "empty where it was)"}),
             "den_hartog_m": ("f_hz", dh, {"units": "m", "long_name": "Den Hartog (zeta = 0, non-stop), exact"}),
             "inman_m": ("f_hz", inm, {"units": "m", "long_name": "Inman (equivalent viscous damping), approximate"}),
         },

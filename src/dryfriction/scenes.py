@@ -63,11 +63,24 @@ def run_validation(fmu: OscillatorFMU, p: Oscillator, periods: float, samples_pe
 def run_sweep_point(fmu: OscillatorFMU, p: Oscillator, transient_periods: float = 30.0,
                     window_periods: float = 1.0, settings: Settings | None = None) -> dict[str, float]:
     """Scene 'sweep': amplitude (x_max - x_min)/2 and asymmetry (x_max + x_min)/2 after the
-    transient, computed inside the FMU over [transient, transient + window] periods."""
+    transient, computed inside the FMU over [transient, transient + window] periods of one run
+    from the initial state (the paper's Fig. 8/9 measure: the window of a transient, not a steady
+    state; :func:`dryfriction.response.steady_state` finds that). The result says which window
+    it measured: ``window_start_period``, ``window_periods``, ``run_periods``."""
     T = p.period
     o = fmu.observables(p, (transient_periods + window_periods) * T, transient_periods * T,
                         settings=SCENES["sweep"].settings(settings))
-    return {"amplitude": (o["x_max"] - o["x_min"]) / 2, "asymmetry": (o["x_max"] + o["x_min"]) / 2, **o}
+    return {"amplitude": (o["x_max"] - o["x_min"]) / 2, "asymmetry": (o["x_max"] + o["x_min"]) / 2, **o,
+            "window_start_period": float(transient_periods), "window_periods": float(window_periods),
+            "run_periods": float(transient_periods + window_periods)}
+
+
+def sweep_window_text(p: Oscillator, transient_periods: float, window_periods: float = 1.0) -> str:
+    """What the sweep scene measured, in one sentence (printed with its numbers)."""
+    a, b = transient_periods, transient_periods + window_periods
+    return (f"x over excitation periods {a:g} to {b:g} (t = {a * p.period:.6g} ... {b * p.period:.6g} s) of one run "
+            f"from x0 = {p.x0:g} m, v0 = {p.v0:g} m/s: a transient's window (the paper's Fig. 8/9 measure), "
+            "not a steady state; for the steady amplitude use 'dryfriction response'")
 
 
 def run_stiction(fmu: OscillatorFMU, p: Oscillator, period_index: int = 30,

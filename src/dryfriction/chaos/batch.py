@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..diagnostics import emit_new, recorded
 from ..fmu import OscillatorFMU
 from ..sweep.runner import PerProcess
 from .attractors import period_of
@@ -131,7 +132,8 @@ def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunk
                workers: int = 0, scheduler: str | None = None, progress: bool = False,
                desc: str = "chaos") -> tuple[list[dict[str, np.ndarray]], ChunkStats]:
     """``func(fmu, *chunk)`` for every chunk, in order; on a LocalCluster of ``workers`` single-
-    threaded processes (or ``scheduler``), or in this process if ``workers == 0`` and no scheduler."""
+    threaded processes (or ``scheduler``), or in this process if ``workers == 0`` and no scheduler.
+    The FMU warnings raised on a worker are recorded there and emitted again here, once each."""
     t0 = time.perf_counter()
     results: list[dict[str, np.ndarray] | None] = [None] * len(chunks)
     bar = None
@@ -158,9 +160,11 @@ def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunk
         try:
             fut_fmu = client.scatter(Path(fmu_path).read_bytes(), broadcast=True, hash=True)
             startup = time.perf_counter() - t0
-            futures = {client.submit(func, fut_fmu, *c, pure=False): i for i, c in enumerate(chunks)}
+            futures = {client.submit(recorded, func, fut_fmu, *c, pure=False): i for i, c in enumerate(chunks)}
+            seen: set[str] = set()
             for fut in as_completed(futures):
-                results[futures[fut]] = fut.result()
+                results[futures[fut]], msgs = fut.result()
+                emit_new(msgs, seen)  # the worker's FMU warnings, once each
                 if bar is not None:
                     bar.update(1)
         finally:

@@ -176,7 +176,7 @@ def _list() -> str:
 
 
 def main(argv: Sequence[str] | None = None, prog: str = "dryfriction study") -> int:
-    """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input, 3 stopped)."""
+    """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input or an error the FMU reports, 3 stopped)."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] in ("-h", "--help"):
         _parser(prog).print_help()
@@ -225,7 +225,10 @@ def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
     except SweepInterrupted as e:
         print(f"{prog}: {e}", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except (FMUError, RuntimeError, OSError) as e:
+    except FMUError as e:  # an error the FMU reports: one line, as a bad argument
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return EXIT_USAGE
+    except (RuntimeError, OSError) as e:
         print(f"{prog}: failed: {e}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt:

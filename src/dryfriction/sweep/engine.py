@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..atomic import atomic_path
+from ..diagnostics import emit_new, recorded
 from .runner import OUTPUT_COLUMNS, PARAM_COLUMNS, run_batch_timed
 
 __all__ = ["SweepSpec", "EngineOptions", "SweepStats", "SweepInterrupted", "Engine"]
@@ -191,11 +192,14 @@ class Engine:
         settings = dict(spec.settings)
         futures = {}
         for i in todo:
-            fut = client.submit(run_batch_timed, self._fmu_future, settings, spec.chunk(i), pure=False)
+            fut = client.submit(recorded, run_batch_timed, self._fmu_future, settings, spec.chunk(i), pure=False)
             futures[fut] = i
+        seen: set[str] = set()
         try:
             for fut in as_completed(futures):
-                yield futures[fut], fut.result()
+                result, msgs = fut.result()
+                emit_new(msgs, seen)  # the worker's FMU warnings, once each
+                yield futures[fut], result
         finally:
             for fut in futures:
                 fut.cancel()
