@@ -323,23 +323,39 @@ def cmd_study(args: argparse.Namespace) -> int:
     return int(run_args(args, prog="dryfriction study"))
 
 
+#: distinct FMU warnings printed in full by one command; the rest are counted in one line at its end
+MAX_WARNING_LINES = 5
+
+
 @contextmanager
 def fmu_warnings_on_stderr(prog: str, strict: bool) -> Iterator[None]:
     """While the block runs, an FMU warning (:class:`DryFrictionWarning`) is one line on stderr,
-    ``<prog>: warning: <the FMU's sentence>`` (each sentence once); ``strict``: raised instead."""
+    ``<prog>: warning: <the FMU's sentence>`` (each sentence once; past :data:`MAX_WARNING_LINES`
+    of them, one line at the end counts the others); ``strict``: raised instead."""
+    more = 0
     with warnings.catch_warnings():
         shown = warnings.showwarning
+        printed = 0
 
         def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
                  file: Any = None, line: str | None = None) -> None:
-            if issubclass(category, DryFrictionWarning):
+            nonlocal printed, more
+            if not issubclass(category, DryFrictionWarning):
+                shown(message, category, filename, lineno, file, line)
+            elif printed < MAX_WARNING_LINES:
+                printed += 1
                 print(f"{prog}: warning: {message}", file=sys.stderr, flush=True)
             else:
-                shown(message, category, filename, lineno, file, line)
+                more += 1
 
         warnings.showwarning = show
         warnings.simplefilter("error" if strict else "default", DryFrictionWarning)
-        yield
+        try:
+            yield
+        finally:
+            if more:
+                print(f"{prog}: warning: {more} more FMU warning{'s' if more > 1 else ''} like these "
+                      "(--strict stops at the first)", file=sys.stderr, flush=True)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
