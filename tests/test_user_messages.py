@@ -184,3 +184,16 @@ def test_console_script_warning_is_one_stderr_line(tmp_path: Path) -> None:
                        env=env, timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stderr.count("\n") == 1 and r.stderr.startswith("dryfriction: warning: "), r.stderr
+
+
+def test_the_readmes_error_line_is_the_one_printed(capsys: pytest.CaptureFixture[str]) -> None:
+    import re
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    quoted = re.findall(r"`(dryfriction: error: [^`]+)`", readme)
+    assert quoted, "the README quotes an error line"
+    for line in quoted:
+        m = re.fullmatch(r"dryfriction: error: --m must be > 0, not (\S+)", line)
+        assert m, f"a quoted error line without a command here to check it: {line}"
+        assert main(["run", "--m", m.group(1), "--k", "1", "--P0", "1", "--f", "1", "--N", "1", "--mu-s", "0.1"]) == 2
+        assert capsys.readouterr().err.strip() == line

@@ -31,6 +31,10 @@ class Parser(argparse.ArgumentParser):
         self.exit_on_usage_error = exit_on_usage_error
 
     def error(self, message: str) -> NoReturn:
+        # argparse's "argument --m: --m must be > 0, not -1": the option is named once
+        head, sep, rest = message.partition(": ")
+        if sep and head.startswith("argument ") and rest.startswith(head[len("argument "):].split("/")[0] + " "):
+            message = rest
         if self.exit_on_usage_error:
             sys.stderr.write(f"{self.prog}: error: {message}\n")
             raise SystemExit(EXIT_USAGE)
