@@ -327,9 +327,9 @@ def test_chain_command_writes_the_run(tmp_path: Path, chain_fmu3: Path, capsys: 
 
 
 @pytest.mark.parametrize("argv, words, status", [
-    (["--n", "3", "--set", "m=1,1,-1"], "invalid value -1 for m[3]", 1),
+    (["--n", "3", "--set", "m=1,1,-1"], "invalid value -1 for m[3]", 2),
     (["--n", "3", "--set", "m=1,2"], "m needs 3 values (one per block, n = 3)", 2),
-    (["--n", "5000"], "invalid value 5000 for n", 1),
+    (["--n", "5000"], "invalid value 5000 for n", 2),
     (["--set", "mass=1"], "the chain has no parameter 'mass'", 2),
     (["--set", "scheme=exact"], "scheme must be one of paper, consistent, located, not 'exact'", 2),
 ])

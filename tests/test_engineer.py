@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dryfriction import DryFrictionWarning
+
 from dryfriction import Oscillator
 from dryfriction.cli import main
 from dryfriction.exact import solve_exact
@@ -66,7 +68,8 @@ def test_the_old_fixed_step_on_a_stiff_oscillator_warns_and_says_what_to_choose(
     w0 = math.sqrt(1e6 / 0.01)
     p = Oscillator(m=0.01, k=1e6, c=0.0, P0=1.0, omega=0.9 * w0, N=0.0, mu_s=0.0, chi=1.0)
     mark = len(fmu.messages)
-    bad = _amplitude(fmu, p, 1e-3, "located")
+    with pytest.warns(DryFrictionWarning, match=r"Choose h <= 6\.28319e-07 s"):  # it reaches the user
+        bad = _amplitude(fmu, p, 1e-3, "located")
     warnings = [m for s, c, m in fmu.messages[mark:] if c == "logStatusWarning"]
     assert len(warnings) == 1 and "Choose h <= 6.28319e-07 s" in warnings[0], warnings
     exact = _amplitude(fmu, p, 0.0, "exact")
