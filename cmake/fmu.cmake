@@ -160,6 +160,11 @@ function(dfo_fmu target)
     COMMENT "Zipping ${fmu_file} (${platforms})"
     VERBATIM)
   add_custom_target(${target}_pack ALL DEPENDS ${fmu_file})
+  if(DFO_PYTHON_PACKAGE)
+    # the package data: <package>/fmus/ mirrors the build tree (fmi3/ for the FMI 3.0 FMUs)
+    file(RELATIVE_PATH fmu_rel ${CMAKE_BINARY_DIR} ${F_DIR})
+    install(FILES ${fmu_file} DESTINATION ${DFO_PACKAGE_DIR}/fmus/${fmu_rel})
+  endif()
 endfunction()
 
 # One custom target per enabled cross target: configure and build the sub-build
