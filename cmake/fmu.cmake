@@ -106,7 +106,8 @@ function(dfo_fmu target)
   endif()
   target_link_libraries(${target} PRIVATE ${F_LIBS})
   set_target_properties(${target} PROPERTIES PREFIX "" OUTPUT_NAME ${F_ID} C_VISIBILITY_PRESET hidden
-                        LIBRARY_OUTPUT_DIRECTORY ${F_LIB_DIR} RUNTIME_OUTPUT_DIRECTORY ${F_LIB_DIR})
+                        LIBRARY_OUTPUT_DIRECTORY ${F_LIB_DIR} RUNTIME_OUTPUT_DIRECTORY ${F_LIB_DIR}
+                        ARCHIVE_OUTPUT_DIRECTORY ${F_LIB_DIR})  # MinGW import libraries: one per folder (Ninja)
   target_link_options(${target} PRIVATE -static-libgcc -Wl,--no-undefined)
   if(WIN32)
     # no import library, no lib prefix; only the dllexport'ed FMI functions are exported
