@@ -106,7 +106,8 @@ function(dfo_fmu target)
   endif()
   target_link_libraries(${target} PRIVATE ${F_LIBS})
   set_target_properties(${target} PROPERTIES PREFIX "" OUTPUT_NAME ${F_ID} C_VISIBILITY_PRESET hidden
-                        LIBRARY_OUTPUT_DIRECTORY ${F_LIB_DIR} RUNTIME_OUTPUT_DIRECTORY ${F_LIB_DIR})
+                        LIBRARY_OUTPUT_DIRECTORY ${F_LIB_DIR} RUNTIME_OUTPUT_DIRECTORY ${F_LIB_DIR}
+                        ARCHIVE_OUTPUT_DIRECTORY ${F_LIB_DIR})  # MinGW import libraries: one per folder (Ninja)
   target_link_options(${target} PRIVATE -static-libgcc -Wl,--no-undefined)
   if(WIN32)
     # no import library, no lib prefix; only the dllexport'ed FMI functions are exported
@@ -160,6 +161,11 @@ function(dfo_fmu target)
     COMMENT "Zipping ${fmu_file} (${platforms})"
     VERBATIM)
   add_custom_target(${target}_pack ALL DEPENDS ${fmu_file})
+  if(DFO_PYTHON_PACKAGE)
+    # the package data: <package>/fmus/ mirrors the build tree (fmi3/ for the FMI 3.0 FMUs)
+    file(RELATIVE_PATH fmu_rel ${CMAKE_BINARY_DIR} ${F_DIR})
+    install(FILES ${fmu_file} DESTINATION ${DFO_PACKAGE_DIR}/fmus/${fmu_rel})
+  endif()
 endfunction()
 
 # One custom target per enabled cross target: configure and build the sub-build

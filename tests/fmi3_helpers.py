@@ -5,7 +5,6 @@ description's Scheme enumeration, and parameter sets."""
 from __future__ import annotations
 
 import math
-import os
 import re
 import shutil
 import tempfile
@@ -18,10 +17,13 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 from fmpy import calloc, free
 
+from dryfriction.fmi3 import default_fmi3_path
+from dryfriction.model import default_fmu_path
+
 ROOT = Path(__file__).resolve().parents[1]
-# DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
-FMU2 = Path(os.environ.get("DFO_FMU") or ROOT / "build" / "DryFrictionOscillator.fmu")
-FMU3 = Path(os.environ.get("DFO_FMU3") or ROOT / "build" / "fmi3" / "DryFrictionOscillator.fmu")
+# the FMUs dryfriction.locate finds: DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
+FMU2 = default_fmu_path()
+FMU3 = default_fmi3_path()
 SWITCH_LOG = re.compile(r"t = ([-+0-9.eE]+): (backward slip|stick|forward slip) -> (backward slip|stick|forward slip)")
 MODE_OF = {"backward slip": -1, "stick": 0, "forward slip": 1}
 

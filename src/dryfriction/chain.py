@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from . import locate
 from .diagnostics import DryFrictionWarning, emit
 
 __all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainError", "ChainRun", "ChainFMU",
@@ -48,20 +49,16 @@ class ChainError(RuntimeError):
     """The chain FMU refused a call; the message is the FMU's logged sentence (or the call)."""
 
 
-def _root() -> Path:
-    return Path(__file__).resolve().parents[2]
-
-
 def default_chain_fmu3() -> Path:
-    """The FMI 3.0 chain built by CMake (``DFO_CHAIN_FMU3`` overrides)."""
-    env = os.environ.get("DFO_CHAIN_FMU3")
-    return Path(env) if env else _root() / "build" / "fmi3" / "DryFrictionChain.fmu"
+    """The FMI 3.0 chain: ``$DFO_CHAIN_FMU3``, else the installed package's, else the build tree's
+    (:func:`dryfriction.locate.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
+    return locate.fmu_path(locate.CHAIN3)
 
 
 def default_chain_fmu() -> Path:
-    """The FMI 2.0 chain built by CMake (``DFO_CHAIN_FMU`` overrides)."""
-    env = os.environ.get("DFO_CHAIN_FMU")
-    return Path(env) if env else _root() / "build" / "DryFrictionChain.fmu"
+    """The FMI 2.0 chain: ``$DFO_CHAIN_FMU``, else the installed package's, else the build tree's
+    (:func:`dryfriction.locate.fmu_path`)."""
+    return locate.fmu_path(locate.CHAIN)
 
 
 def expand(name: str, value: Any, n: int) -> np.ndarray:
@@ -308,9 +305,7 @@ class ChainFMU(_Chain):
         from fmpy import extract, read_model_description
         from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback  # noqa: F401
 
-        path = Path(fmu_path) if fmu_path is not None else default_chain_fmu3()
-        if not path.is_file():
-            raise FileNotFoundError(f"FMI 3.0 chain FMU not found: {path} (cmake --build build)")
+        path = locate.fmu_path(locate.CHAIN3, fmu_path)
         self.path = path
         self.md = read_model_description(str(path))
         self.vars = {v.name: v for v in self.md.modelVariables}
@@ -483,9 +478,7 @@ class ChainFMU2(_Chain):
 
         from . import fmi2, model
 
-        path = Path(fmu_path) if fmu_path is not None else default_chain_fmu()
-        if not path.is_file():
-            raise FileNotFoundError(f"FMI 2.0 chain FMU not found: {path} (cmake --build build)")
+        path = locate.fmu_path(locate.CHAIN, fmu_path)
         self.path = path
         self.md = model.from_fmu(path)
         self.index: dict[str, list[int]] = {}

@@ -23,6 +23,7 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Slave
 
+from . import locate
 from .diagnostics import emit
 from .fmi2 import FMUError
 
@@ -30,11 +31,9 @@ Intermediate = Callable[[float, bool], bool]  # (time, canReturnEarly) -> earlyR
 
 
 def default_fmi3_path() -> Path:
-    """The FMI 3.0 FMU built by CMake (``DFO_FMU3`` overrides)."""
-    env = os.environ.get("DFO_FMU3")
-    if env:
-        return Path(env)
-    return Path(__file__).resolve().parents[2] / "build" / "fmi3" / "DryFrictionOscillator.fmu"
+    """The FMI 3.0 oscillator FMU: ``$DFO_FMU3``, else the installed package's, else the build
+    tree's (:func:`dryfriction.locate.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
+    return locate.fmu_path(locate.OSCILLATOR3)
 
 
 @dataclass(frozen=True)
@@ -78,9 +77,7 @@ class FMI3Oscillator:
     def __init__(self, params: Mapping[str, float | int | bool] | None = None, *, early_return: bool = False,
                  event_mode: bool = False, intermediate: Intermediate | None = None,
                  fmu_path: str | os.PathLike[str] | None = None, start_time: float = 0.0) -> None:
-        path = Path(fmu_path) if fmu_path is not None else default_fmi3_path()
-        if not path.is_file():
-            raise FileNotFoundError(f"FMI 3.0 FMU not built: {path} (cmake --build build)")
+        path = locate.fmu_path(locate.OSCILLATOR3, fmu_path)
         self.md = read_model_description(str(path))
         self._vars = {v.name: v for v in self.md.modelVariables}
         self._dir = extract(str(path), tempfile.mkdtemp(prefix="dfo_fmi3_"))

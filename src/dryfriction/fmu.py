@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from . import fmi2, model
+from . import fmi2, locate, model
 from .fmi2 import FMUError, State
 from .model import default_fmu_path
 from .params import Oscillator
@@ -30,9 +30,9 @@ __all__ = ["FMUError", "OscillatorFMU", "Settings", "State", "default_fmu_path",
            "OBSERVABLE_OUTPUTS", "SCHEMES", "EFFECT_BITS"]
 
 #: scheme name -> enumeration value and effect bit -> name, both read from the model description
-#: (derived, not copies: ``model.default().schemes`` / ``.effects``)
-SCHEMES: dict[str, int] = dict(model.default().schemes)
-EFFECT_BITS: dict[int, str] = {e.bit: e.name for e in model.default().effects}
+#: on first use (derived, not copies: ``model.default().schemes`` / ``.effects``)
+SCHEMES: Mapping[str, int] = model.LazyMapping(lambda: model.default().schemes)
+EFFECT_BITS: Mapping[int, str] = model.LazyMapping(lambda: {e.bit: e.name for e in model.default().effects})
 TRAJECTORY_OUTPUTS = ("x", "v", "a", "F_friction", "mode")
 #: the in-FMU observables (computed with ``observe = true``; read with it off they are a warning)
 OBSERVABLE_OUTPUTS = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
@@ -73,9 +73,9 @@ class OscillatorFMU:
     def __init__(self, fmu_path: str | os.PathLike[str] | None = None, logging: bool = False) -> None:
         from fmpy import extract
 
-        path = Path(fmu_path) if fmu_path is not None else default_fmu_path()
-        if not path.is_file():
-            raise FileNotFoundError(f"FMU not found: {path} (build it with: cmake -S . -B build && cmake --build build)")
+        # the FMI 2.0 oscillator FMU: fmu_path, else $DFO_FMU, the package's, the build tree's;
+        # checked (locate.FMUFileError if it is not that FMU)
+        path = locate.fmu_path(locate.OSCILLATOR, fmu_path)
         self.path = path
         #: the FMU's own model description (:class:`dryfriction.model.ModelDescription`)
         self.md = model.from_fmu(path)

@@ -4,7 +4,7 @@ Variables (name, value reference, type, causality, start, min, max, unit), the s
 ``Scheme`` enumeration and the effect bits of the vendor annotation
 (``<VendorAnnotations><Tool name="dryfriction"><Effects>``) come from ``modelDescription.xml``:
 the FMU's own (:func:`from_fmu`) or the repository's (:func:`repository`). Nothing in the package
-keeps a copy of them.
+keeps a copy of them, and nothing reads them at import time (:func:`default` reads on first use).
 
 :meth:`ModelDescription.check` validates a Python value against a variable's declared range with
 the sentence the FMU logs for the same value.
@@ -16,14 +16,14 @@ import functools
 import math
 import os
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
 __all__ = ["Variable", "Effect", "ModelDescription", "from_xml", "from_fmu", "repository", "default",
-           "default_fmu_path"]
+           "default_fmu_path", "LazyMapping", "LazySequence"]
 
 #: FMI type of the C call that reads/writes a variable of each declared type
 CALL_TYPE = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer", "Boolean": "Boolean"}
@@ -219,7 +219,11 @@ def from_fmu(path: str | os.PathLike[str]) -> ModelDescription:
 
 
 def repository_xml() -> Path:
-    return Path(__file__).resolve().parents[2] / "modelDescription.xml"
+    """The source checkout's modelDescription.xml (not there in an installed wheel)."""
+    from . import locate
+
+    root = locate.source_root()
+    return (root if root is not None else locate.package_dir().parents[1]) / "modelDescription.xml"
 
 
 @functools.lru_cache(maxsize=1)
@@ -229,25 +233,85 @@ def repository() -> ModelDescription:
 
 
 def default_fmu_path() -> Path:
-    """The FMU built by CMake (``DFO_FMU`` overrides)."""
-    env = os.environ.get("DFO_FMU")
-    if env:
-        return Path(env)
-    return Path(__file__).resolve().parents[2] / "build" / "DryFrictionOscillator.fmu"
+    """The FMI 2.0 oscillator FMU: ``$DFO_FMU``, else the installed package's, else the build tree's
+    (:func:`dryfriction.locate.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
+    from . import locate
+
+    return locate.fmu_path(locate.OSCILLATOR)
 
 
 @functools.lru_cache(maxsize=1)
 def default() -> ModelDescription:
-    """The repository's model description, or the built FMU's when the package is installed
-    without the repository."""
+    """The model description, read on first use (never at import): the source checkout's
+    modelDescription.xml, else the one inside the FMU :func:`default_fmu_path` finds (the installed
+    package's): the same file, copied into the FMU by the build."""
     if repository_xml().is_file():
         return repository()
-    fmu = default_fmu_path()
-    if not fmu.is_file():
-        raise FileNotFoundError(f"neither {repository_xml()} nor the FMU {fmu} is there to describe the model")
-    return _cached_fmu(str(fmu))
+    return _cached_fmu(str(default_fmu_path()))
 
 
 @functools.lru_cache(maxsize=8)
 def _cached_fmu(path: str) -> ModelDescription:
     return from_fmu(path)
+
+
+class LazyMapping(Mapping[Any, Any]):
+    """A read-only mapping computed on first use (module-level tables derived from the model
+    description without reading it at import time)."""
+
+    def __init__(self, make: Callable[[], Mapping[Any, Any]]) -> None:
+        self._make = make
+        self._data: dict[Any, Any] | None = None
+
+    def _get(self) -> dict[Any, Any]:
+        if self._data is None:
+            self._data = dict(self._make())
+        return self._data
+
+    def __getitem__(self, key: Any) -> Any:
+        return self._get()[key]
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __repr__(self) -> str:
+        return repr(self._get()) if self._data is not None else f"{type(self).__name__}(<not read yet>)"
+
+
+class LazySequence(Sequence[Any]):
+    """A read-only sequence computed on first use (a tuple once read; compares equal to it)."""
+
+    def __init__(self, make: Callable[[], Iterable[Any]]) -> None:
+        self._make = make
+        self._data: tuple[Any, ...] | None = None
+
+    def _get(self) -> tuple[Any, ...]:
+        if self._data is None:
+            self._data = tuple(self._make())
+        return self._data
+
+    def __getitem__(self, index: Any) -> Any:
+        return self._get()[index]
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self._get())
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, LazySequence):
+            other = other._get()
+        return self._get() == other
+
+    def __hash__(self) -> int:
+        return hash(self._get())
+
+    def __add__(self, other: Any) -> tuple[Any, ...]:
+        return self._get() + tuple(other)
+
+    def __repr__(self) -> str:
+        return repr(self._get()) if self._data is not None else f"{type(self).__name__}(<not read yet>)"

@@ -16,19 +16,21 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import asdict, dataclass, fields, replace
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from . import model
 
 __all__ = ["Oscillator", "UNITS"]
 
-#: unit of every field and derived quantity (the model description's, plus the derived ones)
-UNITS: dict[str, str] = {
+#: unit of every field and derived quantity (the model description's, plus the derived ones; read
+#: on first use)
+UNITS: Mapping[str, str] = model.LazyMapping(lambda: {
     **{n: (v.unit or "") for n, v in model.default().variables.items() if v.unit},
     "mu_k": "1", "zeta": "1", "f_hz": "Hz", "f_n_hz": "Hz", "w0": "rad/s", "lam": "1", "period": "s",
     "breakaway": "N", "sigma": "1",
-}
+})
 
 
 def _real(field: str, value: Any, where: str = "Oscillator") -> float:
@@ -47,8 +49,15 @@ def _at_least(field: str, value: Any, lo: float, where: str, open_: bool = False
         raise ValueError(f"{where}: invalid value {x!r} for {field}; valid range: {'>' if open_ else '>='} {lo:g}")
     return x
 
-#: start values of the model description's parameters (the defaults below)
-_START = model.default().parameter_starts()
+def _start(name: str) -> float:
+    """The start value of a parameter in the model description (the defaults below, read when
+    first needed, never at import)."""
+    return float(model.default().var(name).start)  # type: ignore[arg-type]
+
+
+def _default(name: str) -> Any:
+    """A dataclass field whose default is the model description's start value of ``name``."""
+    return field(default_factory=lambda: _start(name))
 
 
 @dataclass(frozen=True)
@@ -56,17 +65,17 @@ class Oscillator:
     """One parameter set in SI units; the defaults are the model description's start values
     (lambda = 0.5, mu_s sigma = 0.4, chi = 0.7)."""
 
-    m: float = _START["m"]
-    k: float = _START["k"]
-    c: float = _START["c"]
-    P0: float = _START["P0"]
-    omega: float = _START["omega"]
-    phi: float = _START["phi"]
-    N: float = _START["N"]
-    mu_s: float = _START["mu_s"]
-    chi: float = _START["chi"]
-    x0: float = _START["x0"]
-    v0: float = _START["v0"]
+    m: float = _default("m")
+    k: float = _default("k")
+    c: float = _default("c")
+    P0: float = _default("P0")
+    omega: float = _default("omega")
+    phi: float = _default("phi")
+    N: float = _default("N")
+    mu_s: float = _default("mu_s")
+    chi: float = _default("chi")
+    x0: float = _default("x0")
+    v0: float = _default("v0")
 
     def __post_init__(self) -> None:
         """Check every field against the model description's range (errors name the field)."""
@@ -207,16 +216,21 @@ class Oscillator:
         z0: float = 0.0,
         dz0: float = 0.0,
         phi: float = 0.0,
-        m: float = _START["m"],
-        k: float = _START["k"],
-        P0: float = _START["P0"],
-        mu_s: float = _START["mu_s"],
+        m: float | None = None,
+        k: float | None = None,
+        P0: float | None = None,
+        mu_s: float | None = None,
     ) -> "Oscillator":
         """Physical parameters for the non-dimensional set of method.md (2).
 
         z = k x / P0 and z' = dz/dtau with tau = w0 t, so x0 = z0 P0 / k and
-        v0 = dz0 P0 w0 / k.  mu_s_sigma = mu_s N / P0 fixes N.
+        v0 = dz0 P0 w0 / k.  mu_s_sigma = mu_s N / P0 fixes N. m, k, P0 and mu_s default to the
+        model description's start values.
         """
+        m = _start("m") if m is None else m
+        k = _start("k") if k is None else k
+        P0 = _start("P0") if P0 is None else P0
+        mu_s = _start("mu_s") if mu_s is None else mu_s
         w0 = math.sqrt(k / m)
         return cls(
             m=m,

@@ -26,6 +26,7 @@ from typing import Any
 
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
+from .. import locate
 from ..argparsing import UsageError, make_parser
 from ..atomic import atomic_write_text
 from .config import ConfigError, build_config, config_dir, load_toml
@@ -80,12 +81,6 @@ class StudyOutcome:
     messages: list[str]
 
 
-def _default_fmu() -> Path:
-    from ..fmu import default_fmu_path
-
-    return default_fmu_path()
-
-
 def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "results", workers: int | None = None,
               scheduler: str | None = None, sets: Sequence[str] = (), config_file: str | os.PathLike[str] | None = None,
               fmu: str | os.PathLike[str] | None = None, max_chunks: int | None = None,
@@ -97,10 +92,9 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
 
     key = resolve(name)
     cfg = effective_config(key, quick=quick, config_file=config_file, sets=sets)
-    # a study of another model (the chain) names its own FMU: module.default_fmu()
-    fmu_path = Path(fmu) if fmu is not None else getattr(STUDIES[key], "default_fmu", _default_fmu)()
-    if not fmu_path.is_file():
-        raise ConfigError(f"FMU not found: {fmu_path} (build it with cmake, or give --fmu PATH / set DFO_FMU)")
+    # the FMU (checked: locate.FMUFileError, a UsageError); a study of another model (the chain)
+    # names its kind: module.FMU_KIND
+    fmu_path = locate.fmu_path(getattr(STUDIES[key], "FMU_KIND", locate.OSCILLATOR), fmu)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     if n_workers < 0:
         raise ConfigError(f"--workers must be >= 0, not {n_workers}")
@@ -155,7 +149,8 @@ def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.Argu
                    help="override a config value, e.g. --set sweep.chi.num=20 (repeatable)")
     p.add_argument("--config", default=None, metavar="FILE", help="TOML file overriding the study's config")
     if fmu:
-        p.add_argument("--fmu", default=None, metavar="PATH", help="the FMU (default: $DFO_FMU or build/)")
+        p.add_argument("--fmu", default=None, metavar="PATH",
+                       help="the FMU (default: $DFO_FMU, else the installed package's, else build/)")
     p.add_argument("--max-chunks", type=int, default=None, metavar="N",
                    help="stop after computing N new chunks (exit 3; run again to finish)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .. import locate
 from ..chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import StudyContext, plt
@@ -23,6 +24,10 @@ TITLE = "Stick-slip fronts along a chain of 256 blocks, the first forced: space-
 FIGURES = ("chain_waves.png",)
 
 _CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
+
+
+#: the FMU this study runs (dryfriction.locate): the FMI 3.0 chain
+FMU_KIND = locate.CHAIN3
 
 
 def default_fmu() -> Path:

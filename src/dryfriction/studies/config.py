@@ -40,11 +40,11 @@ class ConfigError(UsageError):
 
 
 def config_dir() -> Path:
-    """Where the study configs live: ``$DFO_CONFIGS`` or ``configs/`` of the repository."""
-    env = os.environ.get("DFO_CONFIGS")
-    if env:
-        return Path(env)
-    return Path(__file__).resolve().parents[3] / "configs"
+    """Where the study configs live: ``$DFO_CONFIGS``, else the installed package's
+    (``dryfriction/configs``), else ``configs/`` of the repository (:func:`dryfriction.locate.configs_dir`)."""
+    from ..locate import configs_dir
+
+    return configs_dir()
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:

@@ -18,7 +18,7 @@ import hashlib
 import os
 import tempfile
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
@@ -42,8 +42,8 @@ __all__ = [
 #: Per-run real inputs, in the order of the columns of a parameter table: the Real parameters of
 #: the model description, in its order, then ``t_stop``, the communication point of the single
 #: doStep.
-PARAM_COLUMNS: tuple[str, ...] = tuple(
-    n for n, v in model.default().variables.items() if v.causality == "parameter" and v.type == "Real") + ("t_stop",)
+PARAM_COLUMNS: Sequence[str] = model.LazySequence(lambda: tuple(
+    n for n, v in model.default().variables.items() if v.causality == "parameter" and v.type == "Real") + ("t_stop",))
 #: Real observables read after the run.
 REAL_OUTPUTS: tuple[str, ...] = ("x_max", "x_min", "stick_fraction", "E_friction")
 #: Columns of a result table: the real observables, then ``transitions`` and ``status``

@@ -14,8 +14,12 @@ import numpy as np
 from .. import model
 from .runner import PARAM_COLUMNS
 
-#: the model description's start values: the default scales of a table
-_START = model.default().parameter_starts()
+
+def _start(name: str) -> float:
+    """The model description's start value of a parameter: the default scales of a table (read on
+    first use)."""
+    return float(model.default().var(name).start)  # type: ignore[arg-type]
+
 
 __all__ = ["NONDIM_NAMES", "nondim_table", "to_nondim"]
 
@@ -31,18 +35,24 @@ def nondim_table(
     obs_start: float | np.ndarray,
     obs_stop: float | np.ndarray,
     steps_per_period: float | np.ndarray,
-    alpha: float = _START["alpha"],
-    m: float = _START["m"],
-    k: float = _START["k"],
-    P0: float = _START["P0"],
-    mu_s: float = _START["mu_s"],
+    alpha: float | None = None,
+    m: float | None = None,
+    k: float | None = None,
+    P0: float | None = None,
+    mu_s: float | None = None,
 ) -> np.ndarray:
     """Rows of :data:`PARAM_COLUMNS` for broadcast arrays of the non-dimensional inputs.
 
     ``periods``, ``obs_start`` and ``obs_stop`` are in excitation periods T = 2 pi / omega (the run
     ends at ``periods`` T, the observables are taken over [obs_start T, obs_stop T]); the internal
-    step is h = T / steps_per_period.
+    step is h = T / steps_per_period. ``alpha``, ``m``, ``k``, ``P0``, ``mu_s``: the model
+    description's start values unless given.
     """
+    alpha = _start("alpha") if alpha is None else alpha
+    m = _start("m") if m is None else m
+    k = _start("k") if k is None else k
+    P0 = _start("P0") if P0 is None else P0
+    mu_s = _start("mu_s") if mu_s is None else mu_s
     unknown = set(values) - set(NONDIM_NAMES)
     if unknown:
         raise KeyError(f"unknown non-dimensional parameter(s): {', '.join(sorted(unknown))}")

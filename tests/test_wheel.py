@@ -1,0 +1,152 @@
+"""The package outside its repository: the wheel built from this checkout (scikit-build-core runs
+the CMake build) carries the four FMUs, and installed into a fresh virtual environment in a
+temporary folder, with no repository around it and no DFO_* variable set, its commands and the
+README's "Five lines of Python" work and print real numbers.
+
+Slow (a CMake build of the FMUs and an install of the dependencies): ``-m "not slow"`` skips it.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from dryfriction import locate
+
+ROOT = Path(__file__).resolve().parents[1]
+KINDS = {f"dryfriction/fmus/{k.relpath}": k for k in locate.KINDS}
+#: the binaries folder of this platform in an FMI 2.0 and an FMI 3.0 FMU (the tests run on x86-64 Linux)
+NATIVE = {"2.0": "binaries/linux64", "3.0": "binaries/x86_64-linux"}
+
+pytestmark = [pytest.mark.slow,
+              pytest.mark.no_sanitizer]  # builds and runs a separate, non-instrumented package
+
+
+def _clean_env() -> dict[str, str]:
+    """The environment without anything that points back into the repository."""
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith("DFO_") and k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONHOME")}
+    env["MPLBACKEND"] = "Agg"
+    return env
+
+
+def _run(cmd: list[str], cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+    r = subprocess.run(cmd, cwd=cwd, env=_clean_env(), capture_output=True, text=True, timeout=timeout)
+    assert r.returncode == 0, f"{' '.join(cmd)} exited {r.returncode}:\n{r.stdout[-2000:]}\n{r.stderr[-4000:]}"
+    assert "Traceback" not in r.stderr, r.stderr
+    return r
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("wheelhouse")
+    _run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--quiet", "--wheel-dir", str(out)],
+         cwd=out, timeout=900)
+    wheels = list(out.glob("dryfriction-*.whl"))
+    assert len(wheels) == 1, wheels
+    return wheels[0]
+
+
+@pytest.fixture(scope="module")
+def venv(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A fresh virtual environment outside the repository with the wheel (and its dependencies
+    from the index) installed; returns its bin/ folder."""
+    env_dir = tmp_path_factory.mktemp("fresh") / "venv"
+    assert ROOT not in env_dir.parents
+    _run([sys.executable, "-m", "venv", str(env_dir)], cwd=env_dir.parent)
+    bin_dir = env_dir / "bin"
+    _run([str(bin_dir / "python"), "-m", "pip", "install", "--quiet", str(wheel)], cwd=env_dir.parent, timeout=900)
+    return bin_dir
+
+
+@pytest.fixture()
+def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    d = tmp_path_factory.mktemp("work")
+    assert not (d / "pyproject.toml").exists() and ROOT not in d.parents
+    return d
+
+
+def test_the_wheel_carries_the_four_fmus(wheel: Path, tmp_path: Path) -> None:
+    """Each FMU in the wheel is the right model and FMI version, with this platform's binary."""
+    assert re.fullmatch(r"dryfriction-[0-9.]+-py3-none-[a-z0-9_]+\.whl", wheel.name), wheel.name
+    with zipfile.ZipFile(wheel) as z:
+        names = set(z.namelist())
+        assert set(KINDS) <= names, sorted(n for n in names if n.endswith(".fmu"))
+        assert {f"dryfriction/configs/{p.name}" for p in (ROOT / "configs").glob("*.toml")} <= names
+        assert "dryfriction/locate.py" in names and not any("__pycache__" in n for n in names)
+        for name, kind in KINDS.items():
+            data = z.read(name)
+            path = tmp_path / Path(name).name
+            path.write_bytes(data)
+            assert locate.check_fmu(path, kind) == path  # the model identifier and FMI version
+            inner = zipfile.ZipFile(io.BytesIO(data)).namelist()
+            assert f"{NATIVE[kind.fmi_version]}/{kind.model_identifier}.so" in inner, (name, inner)
+            assert any(n.startswith("sources/") and n.endswith(".c") for n in inner), name
+
+
+def test_version_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    r = _run([str(venv / "dryfriction"), "--version"], cwd=workdir)
+    assert r.stdout.strip() == f"dryfriction {version}"
+
+
+def test_the_fmus_come_from_the_package_data(venv: Path, workdir: Path) -> None:
+    code = ("from dryfriction import locate\n"
+            "print(locate.source_root())\n"
+            "for k in locate.KINDS: print(locate.fmu_path(k))\n")
+    lines = _run([str(venv / "python"), "-c", code], cwd=workdir).stdout.split()
+    assert lines[0] == "None"  # no repository around the installed package
+    site = venv.parent / "lib"
+    for line, kind in zip(lines[1:], locate.KINDS, strict=True):
+        path = Path(line)
+        assert site in path.parents and path.as_posix().endswith(f"dryfriction/fmus/{kind.relpath}"), line
+
+
+def test_response_json_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
+    """One frequency of the README's oscillator: its amplitude at 10 Hz, 0.2356 m, converged."""
+    r = _run([str(venv / "dryfriction"), "response", "--m", "0.5", "--k", "2000", "--zeta", "0.003", "--P0", "10",
+              "--N", "20", "--mu-s", "0.3", "--mu-k", "0.2", "--f-start", "10", "--f-stop", "10", "--num", "1",
+              "--json", "--no-plot", "--format", "csv", "--out", str(workdir / "out")], cwd=workdir)
+    data = json.loads(r.stdout)
+    (a,) = data["amplitude_m"]
+    assert math.isfinite(a) and a > 0 and round(a, 4) == 0.2356, a
+    assert data["converged"] == [True] and data["f_hz"] == [10.0]
+    assert 0.0 <= data["stick_fraction"][0] < 1.0
+
+
+def test_study_list_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
+    r = _run([str(venv / "dryfriction"), "study", "list"], cwd=workdir)
+    for name in ("fig2", "fig8_9", "chaos_scan", "chain2", "chain_waves"):
+        assert re.search(rf"^{name}\s", r.stdout, re.M), (name, r.stdout)
+
+
+def _readme_snippet() -> str:
+    """The python block under the README's "Five lines of Python" heading, as printed there."""
+    text = (ROOT / "README.md").read_text()
+    section = text.split("\n## Five lines of Python\n", 1)[1]
+    m = re.search(r"```python\n(.*?)```", section, re.S)
+    assert m, "README: no python block under 'Five lines of Python'"
+    return m.group(1)
+
+
+def test_the_readmes_five_lines_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
+    """The snippet prints the table its comment promises: 10 Hz, 0.2356 m, converged."""
+    code = _readme_snippet()
+    assert len(code.strip().splitlines()) == 5
+    out = _run([str(venv / "python"), "-c", code], cwd=workdir).stdout
+    rows = {float(m.group(1)): (float(m.group(2)), float(m.group(3)), m.group(4))
+            for m in re.finditer(r"^\s*([0-9.]+)\s+([0-9.eE+-]+)\s+([0-9.eE+-]+)\s+(True|False)\s*$", out, re.M)}
+    assert sorted(rows) == [5.0, 7.5, 10.0, 12.5, 15.0], out
+    amplitude, stuck, converged = rows[10.0]
+    assert round(amplitude, 4) == 0.2356 and converged == "True", out
+    assert all(math.isfinite(a) and a > 0 and 0.0 <= s <= 1.0 for a, s, _ in rows.values()), out
