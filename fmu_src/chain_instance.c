@@ -13,6 +13,7 @@
  *
  * Memory: every array through the host's allocator, O(n): parameters (10 n), inputs (2 x 2 n),
  * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_config.h" /* DFO_CHAIN_FIXED_N in an FMI 2.0 build */
 #include "instance.h"
 #include "instance_common.h"

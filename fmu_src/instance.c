@@ -1,5 +1,6 @@
 /* The instance core (see instance.h): everything an FMI glue needs, through the variable table
  * generated from modelDescription.xml. No FMI types. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "instance.h"
 #include "instance_common.h"
 
