@@ -721,7 +721,8 @@ def main(argv: list[str]) -> int:
             out.write_text(text)
         return 0
     if len(argv) not in (3, 4) or (len(argv) == 4 and argv[3] not in EMITTERS):
-        print("usage: gen_model_vars.py modelDescription.xml OUT [--header|--fmi3|--fmi3-build|--fmi2 SIZE|--config [SIZE]]",
+        print("usage: gen_model_vars.py modelDescription.xml OUT "
+              "[--header|--fmi3|--fmi3-build|--fmi2 SIZE|--config [SIZE]]",
               file=sys.stderr)
         return 2
     try:

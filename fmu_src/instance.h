@@ -76,8 +76,8 @@ typedef struct {
 } dfo_instance;
 
 /* Start values, phase instantiated; errors, warnings and notes of values not computed always logged,
- * the other categories as logging_on says. DFO_INST_ERROR (logged) when memory for the start values could not be had; then
- * dfo_inst_free is still to be called. */
+ * the other categories as logging_on says. DFO_INST_ERROR (logged) when memory for the start values
+ * could not be had; then dfo_inst_free is still to be called. */
 dfo_inst_status dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on);
 /* Release what the instance holds (not the instance itself). */
 void dfo_inst_free(dfo_instance *in);

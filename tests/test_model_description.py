@@ -232,6 +232,23 @@ def test_the_chain_source_expands_to_both_fmi_versions(tmp_path: Path) -> None:
     assert r.returncode == 1 and "dimension k_end is not a structural parameter" in r.stderr
 
 
+
+def test_the_chain_build_configuration_header(tmp_path: Path) -> None:
+    """chain_config.h, generated into each chain FMU's sources/: the FMI 2.0 build's n (checked
+    against n's range), none for FMI 3.0 (n set in Configuration Mode); the oscillator has no
+    structural parameter to configure."""
+    src = ROOT / "fmu_src" / "chain" / "modelDescription.xml"
+    assert _gen(str(src), str(tmp_path / "c2.h"), "--config", "3").returncode == 0
+    text2 = (tmp_path / "c2.h").read_text()
+    assert "#define DFO_CHAIN_FIXED_N 3 " in text2 and "#ifndef DFO_CHAIN_CONFIG_H" in text2
+    assert _gen(str(src), str(tmp_path / "c3.h"), "--config").returncode == 0
+    assert "#define DFO_CHAIN_FIXED_N" not in (tmp_path / "c3.h").read_text()
+    for size in ("0", "4097"):
+        r = _gen(str(src), str(tmp_path / "bad.h"), "--config", size)
+        assert r.returncode == 1 and f"n = {size}" in r.stderr and not (tmp_path / "bad.h").exists()
+    r = _gen(str(XML), str(tmp_path / "osc.h"), "--config", "2")
+    assert r.returncode == 1 and "structural parameters" in r.stderr
+
 # ----------------------------------------------------------------------------- effects
 
 

@@ -410,7 +410,8 @@ static void test_not_computed_outputs(tally *T)
         /* at t = 0, before the window [1, 3]: x_max and x_min have no sample */
         EXPECT(fmi2GetReal(c, obs_real, 4, x) == fmi2OK && isnan(x[0]) && isnan(x[1]));
         EXPECT(sink.n_notes == 1 && sink.status == fmi2OK && strcmp(sink.category, "logNotComputed") == 0);
-        EXPECT(strstr(sink.last, "x_max") != NULL && strstr(sink.last, observe ? "not taken a sample" : "observe = true"));
+        EXPECT(strstr(sink.last, "x_max") != NULL);
+        EXPECT(strstr(sink.last, observe ? "not taken a sample" : "observe = true") != NULL);
         if (observe) EXPECT(x[2] == 0.0 && x[3] == 0.0); /* nothing stuck or dissipated in the window yet */
         else EXPECT(isnan(x[2]) && isnan(x[3]));
         EXPECT(fmi2DoStep(c, 0.0, 4.0, fmi2True) == fmi2OK);
