@@ -5,7 +5,7 @@
  *
  *   bench_stepper [--fmu-lib PATH] [--reps N] [--periods P] [--steps-per-period N[,N...]]
  *                 [--schemes paper,consistent,located] [--alpha A]
- *                 [--case NAME,lambda,mu_s_sigma,chi,zeta]... [--csv FILE]
+ *                 [--case NAME,lambda,mu_s_sigma,chi,zeta]... [--observe 0|1] [--csv FILE]
  *
  * Every timing is the minimum over --reps repetitions (bare and FMU alternate, so both see the
  * same machine load). Only the stepping is timed: dfo_advance for the bare loop, one fmi2DoStep
@@ -94,6 +94,7 @@ typedef struct {
     int reps;
     double periods;
     double alpha;
+    int observe; /* the in-FMU observables on (bare loop and FMU alike); default off */
     int n_spp;
     double spp[MAX_SPP];
     int schemes[3];
@@ -245,7 +246,7 @@ static void parse_args(options *o, int argc, char **argv)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             printf("usage: bench_stepper [--fmu-lib PATH] [--reps N] [--periods P] [--steps-per-period N[,N...]]\n"
                    "                     [--schemes paper,consistent,located] [--alpha A]\n"
-                   "                     [--case NAME,lambda,mu_s_sigma,chi,zeta]... [--csv FILE]\n");
+                   "                     [--case NAME,lambda,mu_s_sigma,chi,zeta]... [--observe 0|1] [--csv FILE]\n");
             exit(0);
         }
         if (i + 1 >= argc) die("option %s needs a value (see --help)", a);
@@ -262,6 +263,9 @@ static void parse_args(options *o, int argc, char **argv)
         } else if (!strcmp(a, "--alpha")) {
             o->alpha = parse_double("--alpha", v);
             if (!(o->alpha >= -1.0 / 3.0 && o->alpha <= 0.0)) die("--alpha must be in [-1/3, 0], not '%s'", v);
+        } else if (!strcmp(a, "--observe")) {
+            if (strcmp(v, "0") && strcmp(v, "1")) die("--observe takes 0 or 1, not '%s'", v);
+            o->observe = v[0] == '1';
         } else if (!strcmp(a, "--steps-per-period")) parse_spp(o, v);
         else if (!strcmp(a, "--schemes")) parse_schemes(o, v);
         else if (!strcmp(a, "--case")) parse_case(o, v);
@@ -316,7 +320,7 @@ static void check(fmi2Status st, const char *what)
 
 /* Physical parameters of a case, as dryfriction.params.Oscillator.from_nondimensional does it
  * (m = 1, k = 100, P0 = 1, mu_s = 0.4, start from rest). */
-static dfo_params case_params(const bench_case *c, int scheme, double alpha, double steps_per_period)
+static dfo_params case_params(const bench_case *c, int scheme, double alpha, double steps_per_period, int observe)
 {
     dfo_params p;
     memset(&p, 0, sizeof p);
@@ -337,7 +341,7 @@ static dfo_params case_params(const bench_case *c, int scheme, double alpha, dou
     p.t_obs_stop = 1e300;
     p.scheme = scheme;
     p.frictionUpdates = 1;
-    p.observe = 0;
+    p.observe = observe;
     p.fastPaths = 1;
     return p;
 }
@@ -464,7 +468,7 @@ int main(int argc, char **argv)
     fprintf(out, "instance_bytes,,,,,,,,,,%zu,bytes\n", instance_bytes);
 
     /* the whole short run of the first case with the located scheme (compare with the host's) */
-    const dfo_params p_run = case_params(&o.cases[0], DFO_SCHEME_LOCATED, o.alpha, 50.0);
+    const dfo_params p_run = case_params(&o.cases[0], DFO_SCHEME_LOCATED, o.alpha, 50.0, o.observe);
     fprintf(out, "fmi2_setup,%s,located,%.17g,50,0,0,,,,%.1f,ns\n", o.cases[0].name, o.alpha,
             time_short_run(&o, &api, comp, &p_run, 0));
     fprintf(out, "fmi2_run,%s,located,%.17g,50,1,50,,,,%.1f,ns\n", o.cases[0].name, o.alpha,
@@ -473,7 +477,7 @@ int main(int argc, char **argv)
     for (int ci = 0; ci < o.n_cases; ci++) {
         for (int si = 0; si < o.n_schemes; si++) {
             for (int k = 0; k < o.n_spp; k++) {
-                const dfo_params p = case_params(&o.cases[ci], o.schemes[si], o.alpha, o.spp[k]);
+                const dfo_params p = case_params(&o.cases[ci], o.schemes[si], o.alpha, o.spp[k], o.observe);
                 const step_timing r = time_stepping(&o, &api, comp, &p);
                 const double bare = r.bare_ns / (double)r.steps, fmu = r.fmu_ns / (double)r.steps;
                 fprintf(out, "step,%s,%s,%.17g,%.17g,%.17g,%lld,%.3f,%.3f,%.4f,,\n", o.cases[ci].name,

@@ -83,13 +83,13 @@ endmacro()
 # dfo_fmu(<target> FMI <2|3> ID <modelIdentifier> DIR <dir of the .fmu> [LIB_DIR <dir>]
 #         LIB_SOURCES <c files> LIBS <libraries> MODEL_DESCRIPTION <xml>
 #         SOURCES <files for sources/> DEPENDS <targets> [GEN_DIR <dir of its model_vars.h>]
-#         [DEFINES <compile definitions>])
+#         [DEFINES <compile definitions>] [INCLUDE_DIRS <dirs>])
 # The shared library <target> (file <ID>.so/.dll, only the FMI functions exported, no runtime
 # DLL beyond the system's) and, unless DFO_BINARIES_ONLY, <DIR>/<ID>.fmu holding the binaries of
 # the native platform and of every enabled cross target (FMI 2.0: only those FMI 2.0 names).
 function(dfo_fmu target)
   cmake_parse_arguments(F "" "FMI;ID;DIR;LIB_DIR;MODEL_DESCRIPTION;GEN_DIR"
-                        "LIB_SOURCES;LIBS;SOURCES;DEPENDS;DEFINES" ${ARGN})
+                        "LIB_SOURCES;LIBS;SOURCES;DEPENDS;DEFINES;INCLUDE_DIRS" ${ARGN})
   if(NOT F_GEN_DIR)
     set(F_GEN_DIR ${GEN_DIR})
   endif()
@@ -100,7 +100,7 @@ function(dfo_fmu target)
   if(F_DEPENDS)
     add_dependencies(${target} ${F_DEPENDS})
   endif()
-  target_include_directories(${target} PRIVATE ${F_GEN_DIR} ${FMI2_HEADERS_DIR})
+  target_include_directories(${target} PRIVATE ${F_GEN_DIR} ${F_INCLUDE_DIRS} ${FMI2_HEADERS_DIR})
   if(F_DEFINES)
     target_compile_definitions(${target} PRIVATE ${F_DEFINES})
   endif()

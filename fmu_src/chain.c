@@ -1,4 +1,5 @@
 /* A chain of n blocks with dry friction. See chain.h and method.md section 9. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain.h"
 
 #include "bossak.h"

@@ -3,7 +3,9 @@
  * framing (logging, range checks, doStep checks and the checksum are instance_common.c's, shared
  * with it), over values that are arrays of n blocks (n the
  * structural parameter, set in FMI 3.0's configuration mode, fixed by the build in FMI 2.0 where
- * DFO_CHAIN_FIXED_N is defined). The physics is chain.[ch]. No FMI types.
+ * DFO_CHAIN_FIXED_N is defined: by chain_config.h, the build's configuration generated from the
+ * model description into the FMU's sources/, so that a plain compile of the listed sources builds
+ * the right FMU). The physics is chain.[ch]. No FMI types.
  *
  * Variables: the generated table (model_vars.h) gives each variable its group and slot. FMI 3.0
  * reaches an array through its own value reference (n values); FMI 2.0 reaches element i (1-based)
@@ -11,6 +13,8 @@
  *
  * Memory: every array through the host's allocator, O(n): parameters (10 n), inputs (2 x 2 n),
  * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "chain_config.h" /* DFO_CHAIN_FIXED_N in an FMI 2.0 build */
 #include "instance.h"
 #include "instance_common.h"
 #include "oscillator.h" /* DFO_STEPS_PER_PERIOD, DFO_MIN_STEPS_PER_PERIOD */

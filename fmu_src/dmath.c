@@ -9,6 +9,7 @@
  *   asin      |s| <= 1/2: Taylor terms to s^53 (acos through asin)
  * Double-double steps (TwoSum, Dekker's product by Veltkamp splitting) keep the reduced argument
  * and the leading terms exact where it matters. No fused multiply-add is used or allowed. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "dmath.h"
 
 #ifndef DFO_USE_LIBM

@@ -1,5 +1,6 @@
 /* The exact scheme: closed-form phases, events found without stepping over a zero. See exact.h
  * and method.md sections 5 and 10. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact.h"
 #include "dmath.h"
 

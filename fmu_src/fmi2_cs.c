@@ -2,6 +2,7 @@
  * status mapping and ONE table of the phases in which each function may be called. Everything
  * else (life cycle, get/set through the generated variable table, doStep, FMU states, logging) is
  * the FMI-independent instance core, instance.[ch]. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi2Functions.h"
 #include "instance.h"
 

@@ -11,6 +11,7 @@
  * switch inside a step; its earlyReturnRequested ends the step there when early return is allowed.
  *
  * FMI 3.0 has no memory callbacks: the instance and its FMU states are allocated with calloc. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi3Functions.h"
 #include "instance.h"
 

@@ -1,4 +1,5 @@
 /* The friction rules shared by every scheme. See friction.h. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "friction.h"
 #include "dmath.h"
 

@@ -3,6 +3,9 @@
 Usage: python gen_model_vars.py modelDescription.xml model_vars.h
        python gen_model_vars.py modelDescription.xml fmi3/modelDescription.xml --fmi3
        python gen_model_vars.py modelDescription.xml fmi3/buildDescription.xml --fmi3-build
+       python gen_model_vars.py chain/modelDescription.xml fmi2/modelDescription.xml --fmi2 SIZE
+       python gen_model_vars.py chain/modelDescription.xml fmi2/chain_config.h --config SIZE
+       python gen_model_vars.py chain/modelDescription.xml fmi3/chain_config.h --config
 
 Three stages, so that other views of the same model (an FMI 3.0 model description) can be added
 as further emitters without touching the parser:
@@ -667,6 +670,31 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int) -> str:
     return "\n".join(L)
 
 
+def emit_build_config(model: Model, source: Path, size: int | None) -> str:
+    """The build configuration header of an indexed model (``chain_config.h``), shipped in an FMU's
+    sources/ so that a plain compile of its listed files builds that FMU: with a size (an FMI 2.0
+    build, whose structural parameters are fixed) ``DFO_<MODEL>_FIXED_<NAME> size`` for each of
+    them; without, none (FMI 3.0: set in Configuration Mode)."""
+    structural = [v for v in model.variables if v.causality == "structuralParameter"]
+    if not structural:
+        raise ModelError("a build configuration is for a model with structural parameters")
+    prefix = "DFO_" + upper_snake(model.identifier.replace("DryFriction", "")) + "_FIXED_"
+    guard = "DFO_" + upper_snake(model.identifier.replace("DryFriction", "")) + "_CONFIG_H"
+    L = [f"/* Generated from {source.name} by fmu_src/gen_model_vars.py"
+         + (f" for an FMI 2.0 build with {', '.join(v.name for v in structural)} = {size}" if size is not None
+            else " for an FMI 3.0 build (structural parameters set in Configuration Mode)") + ". Do not edit. */",
+         f"#ifndef {guard}", f"#define {guard}", ""]
+    for v in structural:
+        if size is None:
+            L.append(f"/* {v.name}: a structural parameter, start {int(v.start)} (no {prefix}{upper_snake(v.name)}) */")
+            continue
+        if not (v.min <= size <= v.max):
+            raise ModelError(f"{v.name} = {size} outside [{text_number(v.min)}, {text_number(v.max)}]")
+        L.append(f"#define {prefix}{upper_snake(v.name)} {size} /* {v.name}, fixed by this build */")
+    L += ["", "#endif", ""]
+    return "\n".join(L)
+
+
 EMITTERS = {"--header": lambda m, src: emit_c_header(m, src.name), "--fmi3": emit_fmi3_model_description,
             "--fmi3-build": emit_fmi3_build_description}
 
@@ -682,8 +710,19 @@ def main(argv: list[str]) -> int:
         if not out.exists() or out.read_text() != text:
             out.write_text(text)
         return 0
+    if len(argv) in (4, 5) and argv[3] == "--config":  # an indexed model's build configuration header
+        try:
+            text = emit_build_config(parse(Path(argv[1])), Path(argv[1]), int(argv[4]) if len(argv) == 5 else None)
+        except (ModelError, ET.ParseError, OSError, ValueError) as e:
+            print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
+            return 1
+        out = Path(argv[2])
+        if not out.exists() or out.read_text() != text:
+            out.write_text(text)
+        return 0
     if len(argv) not in (3, 4) or (len(argv) == 4 and argv[3] not in EMITTERS):
-        print("usage: gen_model_vars.py modelDescription.xml OUT [--header|--fmi3|--fmi3-build|--fmi2 SIZE]",
+        print("usage: gen_model_vars.py modelDescription.xml OUT "
+              "[--header|--fmi3|--fmi3-build|--fmi2 SIZE|--config [SIZE]]",
               file=sys.stderr)
         return 2
     try:

@@ -1,5 +1,6 @@
 /* The instance core (see instance.h): everything an FMI glue needs, through the variable table
  * generated from modelDescription.xml. No FMI types. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "instance.h"
 #include "instance_common.h"
 
@@ -130,7 +131,8 @@ dfo_inst_status dfo_inst_init(dfo_instance *in, const dfo_host *host, const char
     in->host = *host;
     in->name = name;
     dfo_inst_set_logging(in, -1, logging_on);
-    in->log_on[DFO_LOG_STATUS_ERROR] = in->log_on[DFO_LOG_STATUS_WARNING] = 1; /* problems are always reported */
+    /* problems, and values read that the run has not computed, are always reported */
+    in->log_on[DFO_LOG_STATUS_ERROR] = in->log_on[DFO_LOG_STATUS_WARNING] = in->log_on[DFO_LOG_NOT_COMPUTED] = 1;
     set_start_values(&in->v);
     return DFO_INST_OK;
 }
@@ -226,23 +228,38 @@ static int needs_observe(int id)
            id == DFO_OUT_transitions || id == DFO_OUT_E_friction;
 }
 
-/* An observable read while observe is false reads 0: a warning, logged once per run and variable. */
-static dfo_inst_status unobserved(dfo_instance *in, const char *fn, const dfo_var_info *var)
+/* A value this run has not computed: an observable while observe is false (every one of them), or
+ * x_max / x_min before the observation window has taken its first sample. */
+static int not_computed(const dfo_values *v, int id)
 {
-    const unsigned bit = 1u << var->id;
-    if (!(in->warned & bit)) {
-        in->warned |= bit;
-        dfo_inst_log(in, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
-                     "%s: variable %s (value reference %u) is not computed while observe is false and reads 0; "
-                     "set observe = true (before initialisation) to compute it.", fn, var->name, var->vr);
-    }
-    return DFO_INST_WARNING;
+    if (!needs_observe(id)) return 0;
+    if (!v->p.observe) return 1;
+    return (id == DFO_OUT_x_max || id == DFO_OUT_x_min) && !v->s.observed;
+}
+
+/* What a value not computed reads: NaN (Real), DFO_NOT_COMPUTED_INT (Integer, transitions). Status
+ * OK; one sentence per run, logged under logNotComputed, says why. */
+#define DFO_NOT_COMPUTED_INT (-1)
+static void note_not_computed(dfo_instance *in, const char *fn, const dfo_var_info *var)
+{
+    if (in->warned) return;
+    in->warned = 1u;
+    if (!in->v.p.observe)
+        dfo_inst_log(in, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) is not computed while observe is false: the "
+                     "observables x_max, x_min, stick_fraction, E_friction read NaN and transitions reads -1 in "
+                     "this run; set observe = true (before initialisation) to compute them.", fn, var->name,
+                     var->vr);
+    else
+        dfo_inst_log(in, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) reads NaN: the observation window [%.17g, %.17g] has "
+                     "not taken a sample yet (t = %.17g).", fn, var->name, var->vr, in->v.p.t_obs_start,
+                     in->v.p.t_obs_stop, in->v.s.t);
 }
 
 static double output_real(const dfo_values *v, int id)
 {
     const dfo_state *s = &v->s;
-    const int seen = v->p.observe && s->observed;
     if (v->event_pending && (id == DFO_OUT_a || id == DFO_OUT_F_friction)) {
         const dfo_state left = left_limit(v);
         return id == DFO_OUT_a ? dfo_acceleration(&v->M, &v->u, &left) : left.F;
@@ -252,10 +269,10 @@ static double output_real(const dfo_values *v, int id)
     case DFO_OUT_v: return s->V;
     case DFO_OUT_a: return acceleration_now(v);
     case DFO_OUT_F_friction: return friction_now(v);
-    case DFO_OUT_x_max: return seen ? s->x_max : 0.0;
-    case DFO_OUT_x_min: return seen ? s->x_min : 0.0;
-    case DFO_OUT_stick_fraction: return v->p.observe ? dfo_stick_fraction(&v->M, s) : 0.0;
-    case DFO_OUT_E_friction: return v->p.observe ? s->E_friction : 0.0;
+    case DFO_OUT_x_max: return s->x_max;
+    case DFO_OUT_x_min: return s->x_min;
+    case DFO_OUT_stick_fraction: return dfo_stick_fraction(&v->M, s);
+    case DFO_OUT_E_friction: return s->E_friction;
     case DFO_OUT_h_used: return v->M.p.h;
     default: return 0.0;
     }
@@ -265,7 +282,7 @@ static int output_int(const dfo_values *v, int id)
 {
     switch (id) {
     case DFO_OUT_mode: return v->event_pending ? v->event_from : v->s.mode;
-    case DFO_OUT_transitions: return v->p.observe ? (int)v->s.transitions : 0;
+    case DFO_OUT_transitions: return (int)v->s.transitions;
     case DFO_OUT_effects: return v->effects;
     default: return 0;
     }
@@ -310,7 +327,6 @@ void dfo_inst_reset(dfo_instance *in)
 
 dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[])
 {
-    dfo_inst_status status = DFO_INST_OK;
     dfo_values tmp;
     const dfo_values *v = NULL;
     for (size_t i = 0; i < n; i++) {
@@ -321,18 +337,21 @@ dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsign
             continue;
         }
         if (!v) v = computed(in, &tmp);
+        if (not_computed(v, var->id)) {
+            value[i] = NAN;
+            note_not_computed(in, fn, var);
+            continue;
+        }
         value[i] = output_real(v, var->id);
         if (!isfinite(value[i]))
             return dfo_inst_fail(in, "%s: variable %s (value reference %u) is not representable in double precision "
                                  "for these parameters (overflow).", fn, var->name, vr[i]);
-        if (!v->p.observe && needs_observe(var->id)) status = unobserved(in, fn, var);
     }
-    return status;
+    return DFO_INST_OK;
 }
 
 dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
 {
-    dfo_inst_status status = DFO_INST_OK;
     dfo_values tmp;
     const dfo_values *v = NULL;
     for (size_t i = 0; i < n; i++) {
@@ -343,10 +362,14 @@ dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigne
             continue;
         }
         if (!v) v = computed(in, &tmp);
+        if (not_computed(v, var->id)) {
+            value[i] = DFO_NOT_COMPUTED_INT;
+            note_not_computed(in, fn, var);
+            continue;
+        }
         value[i] = output_int(v, var->id);
-        if (!v->p.observe && needs_observe(var->id)) status = unobserved(in, fn, var);
     }
-    return status;
+    return DFO_INST_OK;
 }
 
 dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])

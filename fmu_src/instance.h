@@ -71,13 +71,13 @@ typedef struct {
     dfo_host host;
     const char *name;                      /* owned by the glue */
     int log_on[DFO_NUM_LOG_CATEGORIES];
-    unsigned warned;                       /* outputs already warned about in this run (bit per id) */
+    unsigned warned;                       /* a value not computed has been noted in this run */
     int stop_at_switch, switched;          /* doStep option and its outcome (see dfo_inst_do_step) */
 } dfo_instance;
 
-/* Start values, phase instantiated; errors and warnings always logged, the other categories as
- * logging_on says. DFO_INST_ERROR (logged) when memory for the start values could not be had; then
- * dfo_inst_free is still to be called. */
+/* Start values, phase instantiated; errors, warnings and notes of values not computed always logged,
+ * the other categories as logging_on says. DFO_INST_ERROR (logged) when memory for the start values
+ * could not be had; then dfo_inst_free is still to be called. */
 dfo_inst_status dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on);
 /* Release what the instance holds (not the instance itself). */
 void dfo_inst_free(dfo_instance *in);
@@ -126,7 +126,9 @@ void dfo_inst_reset(dfo_instance *in);
 
 /* ---- variables. fn names the calling function in messages. Set: every value is checked (type,
  * causality and phase permission, range) before any is stored, so a rejected call changes nothing.
- * Get: DFO_INST_WARNING when an observable was read while observe is false (it reads 0). ---- */
+ * Get: a value the run has not computed (an observable while observe is false; x_max, x_min before
+ * the observation window's first sample) reads NaN, an Integer -1, with DFO_INST_OK and one sentence
+ * per run under logNotComputed. ---- */
 dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[]);
 dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[]);
 dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[]);

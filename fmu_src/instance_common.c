@@ -1,5 +1,6 @@
 /* What every instance core shares (see instance_common.h), compiled with the model's generated
  * variable table. No FMI types. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "instance_common.h"
 
 #include <float.h>

@@ -1,4 +1,5 @@
 /* Lemke's algorithm, lexicographic variant. See lcp.h. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "lcp.h"
 
 #include <math.h>

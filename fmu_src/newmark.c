@@ -1,4 +1,5 @@
 /* Bossak-Newmark velocity-form stepper with the friction LCP. See newmark.h and method.md. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "newmark.h"
 #include "dmath.h"
 

@@ -1,4 +1,5 @@
 /* The dry-friction oscillator: parameters, forces. See oscillator.h. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "oscillator.h"
 #include "dmath.h"
 

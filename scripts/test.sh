@@ -69,9 +69,21 @@ cross_platform() {
   cross_install
   bash scripts/cross_check.sh
 }
+# fmusim (../shared/tools or $FMUSIM, run by tests/test_hosts.py) needs libxml2 and zlib at runtime:
+# installed when it is there and they are missing (the test says so plainly if they stay missing).
+host_libs() {
+  local sim=${FMUSIM:-../shared/tools/fmusim/fmusim} sudo=""
+  [ -x "$sim" ] && ldd "$sim" 2>/dev/null | grep -q "not found" || return 0
+  [ "$(id -u)" = 0 ] || sudo="sudo -n"
+  local apt=(env DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=600)
+  { "${apt[@]}" install -y -q --no-install-recommends libxml2 zlib1g ||
+    { "${apt[@]}" update -q && "${apt[@]}" install -y -q --no-install-recommends libxml2 zlib1g; }; } >/dev/null 2>&1 ||
+    echo "host-libs: apt-get install libxml2 zlib1g failed: tests/test_hosts.py will skip fmusim"
+}
 
 stage "setup" bash scripts/setup.sh
 stage "ctest" ctest --test-dir build --output-on-failure -j2
+stage "host-libs" host_libs
 stage "pytest" .venv/bin/python -m pytest -q
 examples() {  # every example at its own size, in a scratch folder
   local d f

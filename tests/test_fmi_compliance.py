@@ -16,7 +16,7 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from dryfriction import fmi2
-from dryfriction.fmu import OBSERVABLE_OUTPUTS, FMUError, OscillatorFMU, Settings
+from dryfriction.fmu import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 
@@ -51,17 +51,16 @@ def test_archive_layout(fmu_path: Path) -> None:
 
 def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
     """Every variable of modelDescription.xml reads back through its value reference with the
-    declared start value, and unique value references per type. (The observables, read here with
-    observe off, may come with fmi2Warning: the driver accepts it.)"""
-    fmu.start(Oscillator(), Settings(h=0.0, alpha=-0.1))  # h (0: derived), alpha at their start values
+    declared start value, and unique value references per type (observe at its start, true: every
+    output computed and finite)."""
+    fmu.start(Oscillator(), Settings(h=0.0, alpha=-0.1, observe=True))  # h, alpha, observe at their starts
     seen: set[tuple[str, int]] = set()
     for v in fmu.md.variables.values():
         key = (v.call_type, v.vr)
         assert key not in seen, f"duplicate value reference {key}"
         seen.add(key)
         value = fmu.get([v.name])[v.name]
-        if v.name not in OBSERVABLE_OUTPUTS:
-            assert np.isfinite(float(value)), v.name
+        assert np.isfinite(float(value)), v.name
         if v.causality == "parameter":
             assert float(value) == float(v.start), (v.name, value, v.start)
 

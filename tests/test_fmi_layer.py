@@ -52,11 +52,14 @@ def test_a_failed_step_raises_with_the_fmus_sentence(fmu: OscillatorFMU) -> None
 
 
 def test_observables_read_without_observe_are_not_an_error(fmu: OscillatorFMU) -> None:
-    """The FMU answers a read of the observables with observe off by fmi2Warning (or fmi2OK):
-    the driver accepts it; the driver itself never asks (trajectory refuses the request)."""
+    """The FMU answers a read of the observables with observe off (the driver's default) by fmi2OK
+    and NaN (transitions -1), not a number that looks like a result; the driver itself never asks
+    (trajectory refuses the request)."""
     fmu.start(Oscillator(), Settings(h=1e-3))
     fmu.step_to(0.1)
-    fmu.get(list(OBSERVABLE_OUTPUTS))
+    got = fmu.get(list(OBSERVABLE_OUTPUTS))
+    assert got["transitions"] == -1
+    assert all(math.isnan(v) for k, v in got.items() if k != "transitions"), got
     with pytest.raises(ValueError, match="observe=True"):
         fmu.trajectory(Oscillator(), [0.0, 0.1], Settings(h=1e-3), outputs=("x", "x_max"))
     r = fmu.trajectory(Oscillator(), [0.0, 0.1], Settings(h=1e-3, observe=True), outputs=("x", "x_max"))
@@ -171,10 +174,12 @@ def test_model_module_reads_what_the_xml_declares() -> None:
     bits = root.findall("VendorAnnotations/Tool[@name='dryfriction']/Effects/Effect")
     assert [(e.bit, e.name) for e in md.effects] == [(int(b.get("bit")), b.get("name")) for b in bits]
     assert md.effects_variable == "effects"
-    # the package's defaults are the declared starts (h: None, period / 1000, by design)
+    # the package's defaults are the declared starts (h: None, period / 1000, by design; observe:
+    # off unless a run reads the observables, by design, the FMU's own start being true)
     p, st = Oscillator(), Settings()
+    assert md.parameter_starts()["observe"] is True and st.observe is False
     for name, start in md.parameter_starts().items():
-        if name == "h":
+        if name in ("h", "observe"):
             continue
         value = getattr(p, name) if hasattr(p, name) else getattr(st, name)
         if name == "scheme":

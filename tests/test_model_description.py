@@ -3,8 +3,9 @@
 - the valid ranges are FMI min/max attributes, and the binary enforces exactly them (the C table
   is generated from the XML);
 - the effect bits are a machine-readable vendor annotation, and the `effects` value follows them;
-- the observables read while `observe` is false return fmi2Warning (value 0) with one logged
-  sentence per run naming the variable and "set observe = true", as their descriptions say;
+- a value the run has not computed (the observables while `observe` is false; x_max, x_min before
+  the window's first sample) reads NaN (transitions -1) with fmi2OK and one logNotComputed sentence
+  per run saying "set observe = true", as their descriptions say; `observe` is on by default;
 - `<ModelStructure>` declares which outputs follow the inputs at once (a, F_friction) and which only
   through the state: setting an input and reading the outputs without a step agrees with it;
 - author, copyright, license (BSD-2-Clause, LICENSE shipped in the FMU), generationDateAndTime.
@@ -231,6 +232,23 @@ def test_the_chain_source_expands_to_both_fmi_versions(tmp_path: Path) -> None:
     assert r.returncode == 1 and "dimension k_end is not a structural parameter" in r.stderr
 
 
+
+def test_the_chain_build_configuration_header(tmp_path: Path) -> None:
+    """chain_config.h, generated into each chain FMU's sources/: the FMI 2.0 build's n (checked
+    against n's range), none for FMI 3.0 (n set in Configuration Mode); the oscillator has no
+    structural parameter to configure."""
+    src = ROOT / "fmu_src" / "chain" / "modelDescription.xml"
+    assert _gen(str(src), str(tmp_path / "c2.h"), "--config", "3").returncode == 0
+    text2 = (tmp_path / "c2.h").read_text()
+    assert "#define DFO_CHAIN_FIXED_N 3 " in text2 and "#ifndef DFO_CHAIN_CONFIG_H" in text2
+    assert _gen(str(src), str(tmp_path / "c3.h"), "--config").returncode == 0
+    assert "#define DFO_CHAIN_FIXED_N" not in (tmp_path / "c3.h").read_text()
+    for size in ("0", "4097"):
+        r = _gen(str(src), str(tmp_path / "bad.h"), "--config", size)
+        assert r.returncode == 1 and f"n = {size}" in r.stderr and not (tmp_path / "bad.h").exists()
+    r = _gen(str(XML), str(tmp_path / "osc.h"), "--config", "2")
+    assert r.returncode == 1 and "structural parameters" in r.stderr
+
 # ----------------------------------------------------------------------------- effects
 
 
@@ -250,7 +268,7 @@ def test_effects_value_follows_the_annotation(slave: Slave) -> None:
     (effects,) = slave.s.getInteger([slave.vr("effects")])
     assert effects == bits["friction"] | bits["coefficientUpdate"] | bits["damping"] | bits["observables"]
     slave.s.reset()
-    slave.start(mu_s=0.0, chi=1.0)
+    slave.start(mu_s=0.0, chi=1.0, observe=False)
     (effects,) = slave.s.getInteger([slave.vr("effects")])
     assert effects == 0
 
@@ -265,30 +283,49 @@ def test_observable_descriptions_say_set_observe() -> None:
             assert "set observe = true" in v.description, v.name
 
 
+def test_observe_is_on_by_default() -> None:
+    md = read_model_description(str(XML))
+    assert next(v for v in md.modelVariables if v.name == "observe").start in ("true", True)
+
+
 @pytest.mark.parametrize("observe", [False, True])
-def test_observables_without_observe_warn(slave: Slave, observe: bool) -> None:
-    """With the window set but observe false, the observables used to read 0 silently after
-    motion. Now: fmi2Warning and 0, one logStatusWarning sentence per variable and run naming it and
-    "set observe = true"; with observe true, fmi2OK and the real values."""
+def test_observables_not_computed_read_nan_with_ok(slave: Slave, observe: bool) -> None:
+    """With the window set but observe false, the observables are not results: NaN (transitions
+    -1) with fmi2OK, one logNotComputed sentence per run (status OK) saying "set observe = true";
+    never a warning status. With observe true, fmi2OK and the real values."""
     slave.start(x0=0.004, chi=0.5, t_obs_start=1.0, t_obs_stop=3.0, observe=observe)
     slave.s.doStep(0.0, 4.0)
     got = {}
     for name in OBSERVABLES:
-        for _ in range(3):  # a host sampling every step: warned once
+        for _ in range(3):  # a host sampling every step: noted once
             st, value = slave.get_status(name)
             got[name] = (st, value)
-    warnings = slave.log.warnings()
+    notes = [(s, m) for s, c, m in slave.log.messages if c == "logNotComputed"]
+    assert all(st == fmi2OK for st, _ in got.values()) and slave.log.warnings() == []
     if observe:
-        assert all(st == fmi2OK for st, _ in got.values()) and warnings == []
+        assert notes == []
         assert got["x_max"][1] > 0.0 > got["x_min"][1] and 0.0 < got["stick_fraction"][1] < 1.0
         assert got["transitions"][1] > 0 and got["E_friction"][1] > 0.0
     else:
-        assert all(st == fmi2Warning and value == 0 for st, value in got.values()), got
-        assert len(warnings) == len(OBSERVABLES)
-        for (category, msg), name in zip(warnings, OBSERVABLES):
-            assert category == "logStatusWarning" and f"variable {name} " in msg and "set observe = true" in msg
-        # fmpy's getReal passes a warning through (no exception): hosts still get the 0
-        assert slave.s.getReal([slave.vr("x_max")]) == [0.0]
+        assert all(math.isnan(got[n][1]) for n in OBSERVABLES if n != "transitions"), got
+        assert got["transitions"][1] == -1
+        assert len(notes) == 1 and notes[0][0] == fmi2OK
+        assert "variable x_max " in notes[0][1] and "set observe = true" in notes[0][1]
+
+
+def test_extremes_before_the_window_read_nan(slave: Slave) -> None:
+    """observe on, the window not yet open: x_max and x_min have no sample and read NaN (OK, one
+    note); the accumulated observables are 0 (nothing observed yet), then real values."""
+    slave.start(x0=0.004, chi=0.5, t_obs_start=1.0, t_obs_stop=3.0, observe=True)
+    before = {n: slave.get_status(n) for n in OBSERVABLES}
+    assert all(st == fmi2OK for st, _ in before.values())
+    assert math.isnan(before["x_max"][1]) and math.isnan(before["x_min"][1])
+    assert before["stick_fraction"][1] == 0.0 and before["transitions"][1] == 0 and before["E_friction"][1] == 0.0
+    notes = [m for s, c, m in slave.log.messages if c == "logNotComputed"]
+    assert len(notes) == 1 and "not taken a sample" in notes[0]
+    slave.s.doStep(0.0, 1.5)
+    st, x_max = slave.get_status("x_max")
+    assert st == fmi2OK and math.isfinite(x_max)
 
 
 # ----------------------------------------------------------------------------- ModelStructure

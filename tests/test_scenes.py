@@ -64,8 +64,9 @@ def test_observables_do_not_change_the_motion(fmu: OscillatorFMU) -> None:
         assert np.array_equal(on[k], off[k])
     fmu.start(p, Settings(observe=False))
     fmu.step_to(3 * p.period)
-    assert fmu.get(["x_max", "x_min", "stick_fraction", "transitions", "E_friction"]) == {
-        "x_max": 0.0, "x_min": 0.0, "stick_fraction": 0.0, "transitions": 0, "E_friction": 0.0}
+    got = fmu.get(["x_max", "x_min", "stick_fraction", "transitions", "E_friction"])
+    assert got.pop("transitions") == -1  # not computed: NaN and -1, never a number that looks like a result
+    assert all(np.isnan(v) for v in got.values()), got
 
 
 @pytest.mark.parametrize("chi", [0.3, 0.7, 2.0])

@@ -34,7 +34,8 @@ __all__ = ["FMUError", "OscillatorFMU", "Settings", "State", "default_fmu_path",
 SCHEMES: Mapping[str, int] = model.LazyMapping(lambda: model.default().schemes)
 EFFECT_BITS: Mapping[int, str] = model.LazyMapping(lambda: {e.bit: e.name for e in model.default().effects})
 TRAJECTORY_OUTPUTS = ("x", "v", "a", "F_friction", "mode")
-#: the in-FMU observables (computed with ``observe = true``; read with it off they are a warning)
+#: the in-FMU observables (computed with ``observe = true``; read with it off the FMU gives NaN, -1 for
+#: ``transitions``, and this driver refuses to ask for them)
 OBSERVABLE_OUTPUTS = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
 
 
@@ -50,13 +51,15 @@ def _scheme_start() -> str:
 
 @dataclass
 class Settings:
-    """Numerical and scene settings of one run (FMU variable names; defaults: the model's starts)."""
+    """Numerical and scene settings of one run (FMU variable names; defaults: the model's starts, except
+    ``observe``: off unless a run reads the observables, so that runs which do not pay nothing for them
+    per step; :meth:`OscillatorFMU.observables` and the scenes that read them turn it on)."""
 
     h: float | None = None            # internal step, s (None: period / 1000; 0: the FMU derives it)
     alpha: float = field(default_factory=lambda: float(_start("alpha")))
     scheme: str = field(default_factory=_scheme_start)
     frictionUpdates: int = field(default_factory=lambda: int(_start("frictionUpdates")))
-    observe: bool = field(default_factory=lambda: bool(_start("observe")))
+    observe: bool = False             # the FMU's start is true (every read computed, for any host)
     t_obs_start: float = field(default_factory=lambda: float(_start("t_obs_start")))
     t_obs_stop: float = field(default_factory=lambda: float(_start("t_obs_stop")))
     fastPaths: bool = field(default_factory=lambda: bool(_start("fastPaths")))

@@ -1,0 +1,194 @@
+"""Every FMU rebuilds from its own sources/, the way a host does, to the shipped binary's numbers.
+
+For each of the four FMUs, on an unzipped copy without its binaries:
+
+- the source list (FMI 2.0 ``<SourceFiles>``, FMI 3.0 ``sources/buildDescription.xml``) names
+  exactly the ``.c`` files of ``sources/`` (so ``sources/*.c`` is the list), and the FMI 2.0 chain's
+  ``n`` is in its generated ``sources/chain_config.h``;
+- ``fmpy compile`` (the README's command: ``fmpy.build.build_platform_binary``, fmpy's CMake
+  project over the listed sources with its own flags, here with all warnings as errors) gives a
+  binary whose outputs are the shipped one's bit for bit, on several parameter sets of every scheme
+  (the FMI 3.0 FMUs also with early return and event mode);
+- so does the README's ``cc`` line, run as the README writes it;
+- and a host compiling with fused multiply-add contraction on (``-O2 -mfma -ffp-contract=fast``,
+  where the CPU has FMA): ``sources/dfo_fp.h`` keeps the numbers.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+
+from dryfriction.chain import default_chain_fmu, default_chain_fmu3
+from dryfriction.fmi3 import default_fmi3_path
+from dryfriction.fmu import default_fmu_path
+
+# builds with compilers (not run under the sanitizer's LD_PRELOAD), about a minute in all
+pytestmark = [pytest.mark.no_sanitizer, pytest.mark.slow]
+
+ROOT = Path(__file__).resolve().parents[1]
+FMUS = {
+    "fmi2-oscillator": default_fmu_path,
+    "fmi2-chain": default_chain_fmu,
+    "fmi3-oscillator": default_fmi3_path,
+    "fmi3-chain": default_chain_fmu3,
+}
+# parameter sets (every scheme of the model), run by fmpy.simulate_fmu over the default experiment
+RUNS = {
+    "oscillator": [{}, {"scheme": 1, "c": 0.3, "chi": 0.5}, {"scheme": 2, "omega": 8.0, "x0": 0.01},
+                   {"scheme": 4, "c": 0.2, "phi": 0.7, "v0": -0.1}, {"observe": False, "chi": 1.2, "h": 1e-3}],
+    "chain": [{}, {"scheme": 1, "k_end": 50.0, "c_end": 0.1}, {"scheme": 2, "omega": 8.0, "h": 1e-3}],
+}
+
+
+def _platform_dir(fmi_version: str) -> str:
+    import fmpy
+
+    return fmpy.platform if fmi_version == "2.0" else fmpy.platform_tuple
+
+
+def _has_fma() -> bool:
+    try:
+        return re.search(r"^flags\s*:.*\bfma\b", Path("/proc/cpuinfo").read_text(), flags=re.M) is not None
+    except OSError:
+        return False
+
+
+def _readme_cc() -> list[str]:
+    """The README's compiler call (its rebuild listing), as words."""
+    text = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```sh\n(.*?)```", text, flags=re.S)
+    lines = [ln for b in blocks for ln in b.replace("\\\n", " ").splitlines()
+             if ln.startswith("cc ") and "sources/*.c" in ln]
+    assert len(lines) == 1, f"the README should list one cc line over sources/*.c, found {lines}"
+    return shlex.split(lines[0].split("#")[0])
+
+
+@pytest.fixture(scope="module")
+def shipped(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Each FMU unzipped once (its shipped binaries)."""
+    out = {}
+    for key, where in FMUS.items():
+        path = where()
+        if not path.is_file():
+            pytest.fail(f"FMU not built: {path} (cmake --build build)")
+        out[key] = Path(extract(str(path), unzipdir=str(tmp_path_factory.mktemp(key))))
+    return out
+
+
+def _bare_copy(src: Path, dst: Path) -> Path:
+    shutil.copytree(src, dst)
+    shutil.rmtree(dst / "binaries")
+    return dst
+
+
+def _listed_sources(unzipped: Path) -> list[str]:
+    md = read_model_description(str(unzipped))
+    if md.fmiVersion == "2.0":
+        root = ET.parse(unzipped / "modelDescription.xml").getroot()
+        return [f.get("name") for f in root.iterfind("CoSimulation/SourceFiles/File")]
+    root = ET.parse(unzipped / "sources" / "buildDescription.xml").getroot()
+    return [f.get("name") for f in root.iterfind("BuildConfiguration/SourceFileSet/SourceFile")]
+
+
+@pytest.mark.parametrize("key", list(FMUS))
+def test_the_source_list_is_exactly_the_sources(shipped: dict[str, Path], key: str) -> None:
+    d = shipped[key]
+    listed = _listed_sources(d)
+    assert len(listed) == len(set(listed))
+    assert sorted(listed) == sorted(p.name for p in (d / "sources").glob("*.c")), key
+    if key == "fmi2-chain":
+        md = read_model_description(str(d))
+        n = sum(1 for v in md.modelVariables if re.fullmatch(r"x\[\d+\]", v.name))
+        cfg = (d / "sources" / "chain_config.h").read_text()
+        assert re.search(rf"#define DFO_CHAIN_FIXED_N {n}\b", cfg), cfg
+    elif key == "fmi3-chain":
+        assert "#define DFO_CHAIN_FIXED_N" not in (d / "sources" / "chain_config.h").read_text()
+
+
+def _outputs(unzipped: Path) -> list[str]:
+    md = read_model_description(str(unzipped))
+    return [v.name for v in md.modelVariables if v.causality == "output"]
+
+
+def _same_bits(a: np.ndarray, b: np.ndarray, what: str) -> None:
+    assert a.dtype.names == b.dtype.names and a.shape == b.shape, what
+    for n in a.dtype.names:
+        x, y = np.ascontiguousarray(a[n], dtype=float), np.ascontiguousarray(b[n], dtype=float)
+        assert np.array_equal(x.view(np.int64), y.view(np.int64)), (
+            f"{what}: {n} differs from the shipped binary's by up to {np.nanmax(np.abs(x - y)):.3g}")
+
+
+def _compare(shipped_dir: Path, rebuilt: Path, key: str, how: str) -> None:
+    model = "chain" if "chain" in key else "oscillator"
+    names = _outputs(shipped_dir)
+    options = [{}]
+    if key.startswith("fmi3"):
+        options.append({"early_return_allowed": True, "use_event_mode": True})
+    for start in RUNS[model]:
+        for opt in options:
+            ref = simulate_fmu(str(shipped_dir), start_values=dict(start), output=names, output_interval=0.01, **opt)
+            new = simulate_fmu(str(rebuilt), start_values=dict(start), output=names, output_interval=0.01, **opt)
+            _same_bits(ref, new, f"{key} rebuilt by {how}, {start} {opt}")
+
+
+@pytest.mark.parametrize("key", list(FMUS))
+def test_fmpy_compile_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, tmp_path: Path) -> None:
+    """The README's `fmpy compile X.fmu` (fmpy's command line, here with all warnings as errors) on
+    the FMU without its binaries."""
+    from fmpy.util import create_zip_archive
+
+    env = dict(os.environ)
+    if shutil.which("cmake") is None:  # the venv's cmake (a test dependency) beside its python
+        env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    if shutil.which("cmake", path=env.get("PATH")) is None:
+        pytest.skip("did not run: no cmake for fmpy's build")
+    bare = _bare_copy(shipped[key], tmp_path / "bare")
+    fmu = tmp_path / "rebuilt.fmu"
+    create_zip_archive(fmu, bare)
+    r = subprocess.run([sys.executable, "-m", "fmpy.cli", "compile", "--all-warnings", "--warning-as-error", str(fmu)],
+                       capture_output=True, text=True, env=env, timeout=900)
+    assert r.returncode == 0, f"fmpy compile failed: {(r.stdout + r.stderr)[-3000:]}"
+    d = Path(extract(str(fmu), unzipdir=str(tmp_path / "rebuilt")))
+    md = read_model_description(str(d))
+    lib = d / "binaries" / _platform_dir(md.fmiVersion)
+    assert lib.is_dir() and any(lib.iterdir()), f"fmpy compile built nothing into {lib}"
+    _compare(shipped[key], d, key, "fmpy compile")
+
+
+@pytest.mark.parametrize("variant", ["readme", "fma"])
+@pytest.mark.parametrize("key", list(FMUS))
+def test_the_readme_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, variant: str,
+                                                      tmp_path: Path) -> None:
+    if shutil.which("cc") is None:
+        pytest.skip("did not run: no cc")
+    if variant == "fma" and not _has_fma():
+        pytest.skip("did not run: this CPU has no FMA instructions")
+    d = _bare_copy(shipped[key], tmp_path / "fmu")
+    md = read_model_description(str(d))
+    words = _readme_cc()
+    i = words.index("-o")
+    out = Path("binaries") / _platform_dir(md.fmiVersion) / f"{md.coSimulation.modelIdentifier}.so"
+    words[i + 1] = str(out)
+    if variant == "fma":  # a host's own flags: contraction on, FMA instructions available
+        words = [w for w in words if w != "-ffp-contract=off"] + ["-mfma", "-ffp-contract=fast"]
+    (d / out.parent).mkdir(parents=True)
+    cmd = " ".join(shlex.quote(w) if w != "sources/*.c" else w for w in words)  # the shell expands the glob
+    r = subprocess.run(cmd, shell=True, cwd=d, capture_output=True, text=True)
+    assert r.returncode == 0, f"{cmd}: {r.stderr[-2000:]}"
+    assert r.stderr == "", r.stderr[-2000:]  # no warning either
+    if variant == "fma":
+        dis = subprocess.run(["objdump", "-d", str(d / out)], capture_output=True, text=True)
+        if dis.returncode == 0:
+            assert "vfmadd" not in dis.stdout and "vfmsub" not in dis.stdout, "fused multiply-adds in the binary"
+    _compare(shipped[key], d, key, f"the README's cc line ({variant})")
