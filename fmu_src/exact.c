@@ -26,6 +26,8 @@
 #define PHASOR_MAX 0.25            /* |p - i lambda| below which the phasor bound is tried (near resonance) */
 #define SPAN_GROWTH 1.25           /* the next step's first span over the last step */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
+#define CARRY_MAX 16               /* reversals in a row that carry the excitation phase (each adds a rounding of
+                                    * lambda tau to it) before it is computed from the absolute time again */
 #define NEAR_CRIT 0.5              /* wd or wh below which the free part is bounded without 1 / wd, 1 / wh */
 #define SPAN_TURNS 64.0            /* turns of the excitation or the free vibration after which a long slip
                                     * phase restarts (its local phase lambda tau stays small: exact to rounding) */
@@ -160,7 +162,7 @@ static void ctx_scale(ex_ctx *C, int e)
     }
 }
 
-static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
+static void ctx_init_scaled(ex_ctx *C, const dfo_model *M, const dfo_inputs *in, int e)
 {
     const dfo_params *p = &M->p;
     C->M = M;
@@ -218,7 +220,7 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     /* y'' = a cos theta - 2 zeta y' - y and its derivatives: y^(k+2) = a cos^(k) theta - 2 zeta y^(k+1) - y^(k) */
     double lk = 1.0;
     for (int k = 0; k < 8; k++, lk *= C->lam) C->lk[k] = lk;
-    ctx_scale(C, 0);
+    ctx_scale(C, e);
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->events = 0;
@@ -230,8 +232,11 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
 static inline dd theta_at(const ex_ctx *C, dd t)
 {
     const double p = C->omega * t.hi;
-    const dd w = dd_of(p, dfo_two_prod_err(C->omega, t.hi, p) + C->omega * t.lo);
-    return dd_add(w, C->ph);
+    dd th; /* (not renormalised: dfo_rem_pio2 takes any small tail) */
+    double e;
+    dfo_two_sum(p, C->ph.hi, &th.hi, &e);
+    th.lo = e + ((dfo_two_prod_err(C->omega, t.hi, p) + C->omega * t.lo) + C->ph.lo);
+    return th;
 }
 
 /* cos, sin of the excitation phase at t */
@@ -249,14 +254,20 @@ static double static_force(const ex_ctx *C, dd t, double Xs)
     return C->fP * c + C->fF - C->k * Xs;
 }
 
-/* X, V in the scaled units; ta the start time. */
-static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V, int s)
+/* X, V in the scaled units; ta the start time; cs: cos, sin of the excitation phase at ta when known
+ * (carried over a reversal), else NULL: from the absolute time. */
+static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V, int s, const double *cs)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
     P->s = s;
     P->ta = ta.hi;
     P->xc = (C->Ls_.F_ext - s * C->Ls_.muk_N) / C->k;
-    phase_at(C, ta, &P->c0, &P->s0);
+    if (cs) {
+        P->c0 = cs[0];
+        P->s0 = cs[1];
+    } else {
+        phase_at(C, ta, &P->c0, &P->s0);
+    }
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
@@ -304,7 +315,7 @@ static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V,
 
 static inline void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
 {
-    phase_start(C, P, dd_of(ta, 0.0), X, V, s);
+    phase_start(C, P, dd_of(ta, 0.0), X, V, s, NULL);
 }
 
 /* phi1(x + i y) = (e^z - 1) / z without cancellation (x <= 0). */
@@ -886,36 +897,36 @@ static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double
 
 /* ---- the phases -------------------------------------------------------------------------------- */
 
-/* The excitation phase at t reduced to psi in [0, 2 pi) (a double-double). */
-static dd turn_of(const ex_ctx *C, dd t)
+/* The excitation phase at t reduced to psi in [0, 2 pi) (to a few ulps of 2 pi: the reduction is of
+ * the double-double phase, so its error does not grow with t). */
+static double turn_of(const ex_ctx *C, dd t)
 {
     const dd th = theta_at(C, t);
     double rh, rl;
     const int q = dfo_rem_pio2(th.hi, th.lo, &rh, &rl);
-    dd psi = dd_add(dd_of(rh, rl), dd_of(q * PIO2_HI, q * PIO2_LO));
-    if (psi.hi < 0.0) psi = dd_add(psi, dd_of(TWOPI_HI, TWOPI_LO));
-    return psi;
+    const double psi = q * PIO2_HI + (rh + (q * PIO2_LO + rl));
+    return (psi < 0.0) ? psi + TWO_PI : psi;
 }
 
-/* Earliest phase >= psi (in [0, 2 pi)) with cos > lim, as an offset from psi; acos_lim = acos(lim).
- * INFINITY: never. */
-static dd until_above(dd psi, double lim, double acos_lim)
+/* Earliest phase >= psi (in [0, 2 pi)) with cos > lim, as an offset from psi; acos_lim = acos(lim)
+ * (friction.c's rule). */
+static double until_above(double psi, double lim, double acos_lim)
 {
-    const dd zero = {0.0, 0.0}, never = {INFINITY, 0.0};
-    if (lim >= 1.0) return never;
-    if (lim < -1.0) return zero;
-    const dd top = dd_add(dd_of(TWOPI_HI, TWOPI_LO), dd_of(-acos_lim, 0.0)); /* 2 pi - acos(lim) */
-    if (dd_lt(psi, dd_of(acos_lim, 0.0)) || dd_lt(top, psi)) return zero;
-    return dd_add(top, dd_of(-psi.hi, -psi.lo));
+    if (lim >= 1.0) return INFINITY;
+    if (lim < -1.0) return 0.0;
+    if (psi < acos_lim || psi > TWO_PI - acos_lim) return 0.0;
+    return (TWOPI_HI - acos_lim - psi) + TWOPI_LO;
 }
 
 /* While stuck at Xs the static force is |P0| cos theta(t) + C0 (C0 = F_ext - k X, over Ls): the first
  * time >= ta at which its magnitude exceeds the breakaway limit, with the side in *dir (friction.h's
- * dfo_next_breakaway in closed form, here on the double-double phase: the crossing's phase is
- * +-acos(limit) + 2 pi K whatever ta the search starts from, so a run cut into other communication
- * steps finds the same time). {INFINITY, 0}: none. */
-static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir)
+ * dfo_next_breakaway in closed form, on the phase reduced from the double-double time: its error
+ * is a few ulps of 2 pi whatever t, so a run cut into other communication steps finds the same time
+ * to rounding). {INFINITY, 0}: none. cs[0], cs[1]: cos and sin of the excitation phase there when it
+ * is a crossing later than ta (cos theta = the limit: known without evaluating), else cs[0] = NaN. */
+static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs)
 {
+    cs[0] = NAN;
     const double Fb = C->Ls_.Fb, C0 = C->fF - C->k * Xs, amp = C->fP, w = C->omega;
     if (w == 0.0 || amp == 0.0) { /* a constant force */
         const double F = static_force(C, ta, Xs);
@@ -928,37 +939,51 @@ static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir)
     const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
     const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
     const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
-    const dd psi = turn_of(C, ta);
-    dd psi2 = dd_add(psi, dd_of(PI_HI, PI_LO));
-    if (!dd_lt(psi2, dd_of(TWOPI_HI, TWOPI_LO))) psi2 = dd_add(psi2, dd_of(-TWOPI_HI, -TWOPI_LO));
-    const dd up = until_above(psi, lim_hi, acos_hi), down = until_above(psi2, lim_lo, acos_lo);
-    *dir = dd_lt(down, up) ? -1 : 1;
-    const dd off = dd_lt(down, up) ? down : up;
-    if (!isfinite(off.hi)) return off;
-    return dd_add_quot(ta, off.hi, off.lo, w);
+    const double psi = turn_of(C, ta);
+    double psi2 = psi + DFO_PI;
+    if (psi2 >= TWO_PI) psi2 -= TWO_PI;
+    const double up = until_above(psi, lim_hi, acos_hi), down = until_above(psi2, lim_lo, acos_lo);
+    *dir = (up <= down) ? 1 : -1;
+    const double off = fmin(up, down);
+    if (!isfinite(off)) {
+        const dd never = {INFINITY, 0.0};
+        return never;
+    }
+    if (off > 0.0) { /* cos theta rises through lim_hi (sin < 0), or cos(theta + pi) through lim_lo */
+        const double l = (*dir > 0) ? lim_hi : lim_lo, sn = sqrt((1.0 - l) * (1.0 + l));
+        cs[0] = (*dir > 0) ? l : -l;
+        cs[1] = (*dir > 0) ? -sn : sn;
+    }
+    return dd_add_quot(ta, off, 0.0, w);
 }
 
 /* The next breakaway of the stick phase at Xs from ta (kept in *tb for the stick phase: valid while
  * tb->hi is not NaN). With skip, a breakaway at ta itself (a limit touched, not crossed: the slide
  * just tried did not start) is passed over: the search restarts a little later, further each time,
  * until it finds a later one. */
-static dd breakaway(const ex_ctx *C, double Xs, dd ta, int skip, dd *tb, int *dir)
+static dd breakaway(const ex_ctx *C, double Xs, dd ta, int skip, dd *tb, int *dir, double *cs)
 {
     if (isnan(tb->hi) || (skip && !dd_lt(ta, *tb))) {
-        dd b = next_breakaway(C, Xs, ta, dir);
+        dd b = next_breakaway(C, Xs, ta, dir, cs);
         if (skip) {
             double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
             for (int i = 0; i < 200 && !dd_lt(dd_add(ta, dd_of(d, 0.0)), b) && isfinite(b.hi); i++, d *= 2.0)
-                b = next_breakaway(C, Xs, dd_add(ta, dd_of(d, 0.0)), dir);
+                b = next_breakaway(C, Xs, dd_add(ta, dd_of(d, 0.0)), dir, cs);
         }
         *tb = b;
     }
-    return dd_lt(ta, *tb) ? *tb : ta;
+    if (!dd_lt(ta, *tb)) {
+        cs[0] = NAN; /* at ta itself: the phase from the time */
+        return ta;
+    }
+    return *tb;
 }
 
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
 {
-    int skip = 0, stall = 0, stick_dir = 0;
+    int skip = 0, stall = 0, stick_dir = 0, carried = 0;
+    double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
+    double stick_cs[2] = {NAN, 0.0}; /* the phase at the stick phase's breakaway (NaN: from the time) */
     const double Ls = C->Ls, w0 = C->w0;
     const dd target = {t_target, 0.0};
     dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
@@ -986,7 +1011,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         if (s->mode == 0) {
             int dir = 0;
             if (isnan(stick_tb.hi)) stick_dir = 0;
-            const dd tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir);
+            const dd tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir, stick_cs);
             dir = stick_dir;
             skip = 0;
             if (!dd_lt(tb, target)) {
@@ -1000,6 +1025,11 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             Vs = 0.0;
             s->V = 0.0;
             s->mode = dir;
+            if (!isnan(stick_cs[0])) { /* the slide starts with the crossing's phase */
+                carried = 1;
+                cs[0] = stick_cs[0];
+                cs[1] = stick_cs[1];
+            }
             C->events++;
             after_phase(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
             continue;
@@ -1008,7 +1038,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         const int sd = s->mode;
         ex_phase P;
         ex_val v;
-        phase_start(C, &P, t, Xs, Vs, sd);
+        phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
         const double u_max = w0 * ((t_target - t.hi) - t.lo);
         const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
         const double u_end = cut ? C->u_span : u_max;
@@ -1022,6 +1052,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             s->V = Vs * Ls;
             if (cut) {
                 const dd tc = dd_add_quot(t, u_end, 0.0, w0);
+                carried = 0;
                 s->t = tc.hi;
                 after_phase(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
                 t = tc;
@@ -1052,6 +1083,15 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             skip = 1;
         }
         if (next == 0) stick_tb.hi = NAN; /* a new stick phase */
+        if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
+            /* a reversal: the next slide starts here, with the phase the search reached (exact for the
+             * stop's time as a double-double, to the rounding of lambda tau) */
+            carried++;
+            cs[0] = v.cth;
+            cs[1] = v.sth;
+        } else {
+            carried = 0;
+        }
         s->mode = next;
         C->events++;
         after_phase(C, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
@@ -1073,22 +1113,27 @@ static long long grid_index(const dfo_model *M, const dfo_state *s)
     return n;
 }
 
+static inline void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in) { ctx_init_scaled(C, M, in, 0); }
+
 /* The length scale's exponent for this call: of the largest length of the motion (|P0|, |F_ext|, the
  * breakaway limit over k; |X|; |V| / w0), from the exponents alone (no quotient can overflow),
  * bounded to +-SCALE_MAX. */
-static int scale_exponent(const ex_ctx *C, const dfo_state *s)
+static int scale_exponent(const dfo_model *M, const dfo_inputs *u, const dfo_state *s)
 {
     int e = INT_MIN;
-    const int ek = dfo_ilogb(C->k);
-    const double forces[3] = {C->M->P_amp, C->L.F_ext, C->L.Fb};
+    dfo_loads L;
+    dfo_loads_init(&L, M, u);
+    const int ek = dfo_ilogb(M->p.k);
+    const double w0 = sqrt(M->p.k / M->p.m);
+    const double forces[3] = {M->P_amp, L.F_ext, L.Fb};
     for (int i = 0; i < 3; i++)
         if (forces[i] != 0.0 && isfinite(forces[i])) {
             const int f = dfo_ilogb(forces[i]) - ek;
             if (f > e) e = f;
         }
     if (s->X != 0.0 && isfinite(s->X) && dfo_ilogb(s->X) > e) e = dfo_ilogb(s->X);
-    if (s->V != 0.0 && isfinite(s->V) && C->w0 > 0.0 && isfinite(C->w0)) {
-        const int f = dfo_ilogb(s->V) - dfo_ilogb(C->w0);
+    if (s->V != 0.0 && isfinite(s->V) && w0 > 0.0 && isfinite(w0)) {
+        const int f = dfo_ilogb(s->V) - dfo_ilogb(w0);
         if (f > e) e = f;
     }
     if (e == INT_MIN) return 0;
@@ -1099,8 +1144,7 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
     ex_ctx C;
-    ctx_init(&C, M, u);
-    ctx_scale(&C, scale_exponent(&C, s));
+    ctx_init_scaled(&C, M, u, scale_exponent(M, u, s));
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
     /* lengths the scaled phase cannot hold: the motion leaves the double range */
