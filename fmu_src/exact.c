@@ -1050,6 +1050,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             Vs = w0 * v.y1;
             s->X = Xs * Ls;
             s->V = Vs * Ls;
+            if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
             if (cut) {
                 const dd tc = dd_add_quot(t, u_end, 0.0, w0);
                 carried = 0;
@@ -1072,6 +1073,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         Vs = 0.0;
         s->X = Xs * Ls;
         s->V = 0.0;
+        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
         /* the static force at a stop from the excitation phase there (known from the search) */
         const double Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * Xs : static_force(C, ts, Xs);
         int next = dfo_rest_mode(&C->Ls_, Fs);
