@@ -131,6 +131,18 @@ typedef struct {
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
 } ex_val;
 
+/* The excitation's phase at t = 0: phi mod 2 pi exactly (a large phi keeps its phase), then + pi for
+ * a negative amplitude. */
+static dd phase0(const dfo_params *p)
+{
+    double rh, rl;
+    const int q = dfo_rem_pio2(p->phi, 0.0, &rh, &rl);
+    const double n = (q == 3) ? -1.0 : (double)q; /* n pi/2 + r, n in -1 ... 2: |phase| <= 5 pi / 4 */
+    dd ph = dd_add(dd_of(rh, rl), dd_of(n * PIO2_HI, n * PIO2_LO));
+    if (p->P0 < 0.0) ph = dd_add(ph, dd_of(-PI_HI, -PI_LO));
+    return ph;
+}
+
 /* The length scale: the loads over Ls, and what depends on them. */
 static void ctx_scale(ex_ctx *C, int e)
 {
@@ -172,14 +184,7 @@ static void ctx_init_scaled(ex_ctx *C, const dfo_model *M, const dfo_inputs *in,
     C->zeta = p->c / (2.0 * sqrt(p->k * p->m));
     C->lam = p->omega / C->w0;
     C->omega = p->omega;
-    {
-        /* phi mod 2 pi exactly (a large phi keeps its phase), then + pi for a negative amplitude */
-        double rh, rl;
-        const int q = dfo_rem_pio2(p->phi, 0.0, &rh, &rl);
-        const double n = (q == 3) ? -1.0 : (double)q; /* n pi/2 + r, n in -1 ... 2: |phase| <= 5 pi / 4 */
-        C->ph = dd_add(dd_of(rh, rl), dd_of(n * PIO2_HI, n * PIO2_LO));
-        if (p->P0 < 0.0) C->ph = dd_add(C->ph, dd_of(-PI_HI, -PI_LO));
-    }
+    C->ph = phase0(p);
     const double z = C->zeta;
     C->wd = sqrt(fmax(0.0, (1.0 - z) * (1.0 + z)));
     C->wh = sqrt(fmax(0.0, (z - 1.0) * (z + 1.0)));
@@ -1116,6 +1121,17 @@ static long long grid_index(const dfo_model *M, const dfo_state *s)
 }
 
 static inline void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in) { ctx_init_scaled(C, M, in, 0); }
+
+double dfo_exact_excitation(const dfo_model *M, double t)
+{
+    ex_ctx C; /* only what theta_at reads */
+    C.omega = M->p.omega;
+    C.ph = phase0(&M->p);
+    const dd tt = {t, 0.0};
+    double c, sn;
+    phase_at(&C, tt, &c, &sn);
+    return M->P_amp * c;
+}
 
 /* The length scale's exponent for this call: of the largest length of the motion (|P0|, |F_ext|, the
  * breakaway limit over k; |X|; |V| / w0), from the exponents alone (no quotient can overflow),
