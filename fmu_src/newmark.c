@@ -566,6 +566,10 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
 {
     step_ctx C;
     make_ctx(&C, M, in);
+    if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t0, phi) */
+        C.t_grid = t0;
+        C.P_grid = dfo_exact_excitation(M, t0);
+    }
     const dfo_state zero = {0};
     *s = zero;
     s->t0 = s->t = t0;
