@@ -1085,6 +1085,19 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         if (!(C->Ls_.Fb > 0.0)) {
             /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
             if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+            if (r == SEARCH_STOP && !at_end) {
+                /* the motion is the same in either direction: the next phase starts from the motion's
+                 * own state there (its velocity within rounding of 0, not set to 0: undamped, a
+                 * velocity error would never decay, and one made at every reversal would add up) */
+                ex_val w;
+                eval(C, &P, v.u, &w);
+                Xs = P.xc + w.y;
+                Vs = w0 * w.y1;
+                s->X = Xs * Ls;
+                s->V = Vs * Ls;
+                v.cth = w.cth;
+                v.sth = w.sth;
+            }
         } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
             next = 0;                                 /* rest, and a breakaway right now is passed over */
             skip = 1;

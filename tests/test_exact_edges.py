@@ -88,6 +88,7 @@ def test_one_dostep_over_1e6_periods_equals_one_per_period(fmu: OscillatorFMU) -
     (0.5, 0.2, 2.0, 0.0, 20_000),    # chi = 2: breakaways with zero acceleration
     (3.0, 0.2, 0.5, 0.1, 20_000),    # above resonance, reversals (was 2.5e-11 apart after 1e5 periods)
     (0.8, 0.1, 0.7, 0.02, 20_000),   # reversals, light damping
+    (1.3, 0.0, 1.0, 0.0, 20_000),    # neither friction nor damping: nothing decays (was 1.8e-10 after 5e4)
 ])
 def test_event_rich_runs_do_not_depend_on_the_communication_steps(fmu: OscillatorFMU, lam: float, mss: float,
                                                                    chi: float, zeta: float, periods: int) -> None:
