@@ -42,6 +42,8 @@ struct chain_model {
     double k_end, c_end, omega, h, alpha, gamma, beta, g1, rate_max;
     double T_min;               /* the shortest period of the dynamics (chain_shortest_period) */
     double rot_c, rot_s;        /* cos and sin of omega h: the excitation phase's advance per step */
+    double phi0;                /* the phase every block shares (then Pc = P0, Ps = 0: each block's excitation
+                                 * is P0 cos(omega t + phi0), evaluated as the oscillator's), else 0 */
     int scheme, energy, damped;
     int stuck_ok;               /* the stuck fast path may apply (stuck_until): located, no energy
                                  * accounts, a grid step resolving the motion, friction on every block */
@@ -179,6 +181,9 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->h = p->h;
     M->rot_c = dfo_cos(p->omega * p->h);
     M->rot_s = dfo_sin(p->omega * p->h);
+    M->phi0 = p->phi[0];
+    for (size_t i = 1; i < n; i++)
+        if (p->phi[i] != p->phi[0]) M->phi0 = 0.0;
     M->alpha = p->alpha;
     M->gamma = dfo_bossak_gamma(p->alpha);
     M->beta = dfo_bossak_beta(p->alpha);
@@ -192,8 +197,8 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->m[i] = p->m[i];
         M->am[i] = p->alpha * p->m[i];
         M->am1[i] = (1.0 - p->alpha) * p->m[i];
-        M->Pc[i] = p->P0[i] * dfo_cos(p->phi[i]);
-        M->Ps[i] = p->P0[i] * dfo_sin(p->phi[i]);
+        M->Pc[i] = p->P0[i] * dfo_cos(p->phi[i] - M->phi0);
+        M->Ps[i] = (M->phi0 == p->phi[i]) ? 0.0 : p->P0[i] * dfo_sin(p->phi[i]);
         M->P0[i] = p->P0[i];
         M->phi[i] = p->phi[i];
         M->N[i] = p->N[i];
@@ -326,7 +331,7 @@ static void grid_phase(const chain_model *M, chain_state *s, long long g, double
         c = s->exc_c; sn = s->exc_s; i = g - 1;
     } else {
         i = g - g % EXC_ANCHOR;
-        const double th = M->omega * (s->t0 + (double)i * M->h);
+        const double th = M->omega * (s->t0 + (double)i * M->h) + M->phi0;
         c = dfo_cos(th); sn = dfo_sin(th);
     }
     for (; i < g; i++) {
@@ -348,8 +353,8 @@ static void phase_of(const chain_model *M, const chain_state *s, double t, doubl
         *sw = clamp1(s->exc_s);
         return;
     }
-    *cw = dfo_cos(M->omega * t);
-    *sw = dfo_sin(M->omega * t);
+    *cw = dfo_cos(M->omega * t + M->phi0);
+    *sw = dfo_sin(M->omega * t + M->phi0);
 }
 
 static double (P_at)(const chain_model *M, size_t i, double cw, double sw) { return M->Pc[i] * cw - M->Ps[i] * sw; }
@@ -447,9 +452,14 @@ static span whole(const chain_model *M, const chain_state *s)
     return G;
 }
 
-void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s, double *a)
+void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s0, double *a)
 {
     loads_init(M, in);
+    /* the excitation in closed form at s->t, as the oscillator's output a (dfo_acceleration): the
+     * state's grid cache would round otherwise where omega t + phi does (a large phi) */
+    chain_state copy = *s0;
+    copy.exc_n = -1;
+    const chain_state *s = &copy;
     const span G = whole(M, s);
     physical_accel(M, s, &G, a);
     if (M->scheme != DFO_SCHEME_PAPER) return;
@@ -525,7 +535,7 @@ static void trial(chain_model *M, const chain_state *s, span *G, double hh, doub
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
-        const double cw = dfo_cos(M->omega * s->t), sw = dfo_sin(M->omega * s->t);
+        const double cw = dfo_cos(M->omega * s->t + M->phi0), sw = dfo_sin(M->omega * s->t + M->phi0);
         accelerations(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
         for (int k = 0; k < 2; k++)
             if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
@@ -993,7 +1003,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         const double t1 = (hs >= r) ? t_end : ta + hs;
         double c1w, s1w;
         if (hs >= r) phase_of(M, s, t_end, &c1w, &s1w);
-        else { c1w = dfo_cos(M->omega * t1); s1w = dfo_sin(M->omega * t1); }
+        else { c1w = dfo_cos(M->omega * t1 + M->phi0); s1w = dfo_sin(M->omega * t1 + M->phi0); }
         trial(M, s, G, hs, c1w, s1w);
         solve_modes(M, G);
         s->solves++;
@@ -1196,8 +1206,8 @@ static void rebase_whole(chain_model *M, const chain_state *s, double hh)
         }
         if (!have) {
             /* the excitation's rate at s->t, and its phase as physical_accel reads it */
-            cw = dfo_cos(M->omega * s->t);
-            sw = dfo_sin(M->omega * s->t);
+            cw = dfo_cos(M->omega * s->t + M->phi0);
+            sw = dfo_sin(M->omega * s->t + M->phi0);
             phase_of(M, s, s->t, &pcw, &psw);
             have = 1;
         }
@@ -1626,7 +1636,7 @@ void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_stat
     loads_init(M, in);
     M->jerk_valid = 0;
     span G = whole(M, s);
-    trial(M, s, &G, h, dfo_cos(M->omega * (s->t + h)), dfo_sin(M->omega * (s->t + h)));
+    trial(M, s, &G, h, dfo_cos(M->omega * (s->t + h) + M->phi0), dfo_sin(M->omega * (s->t + h) + M->phi0));
     for (size_t i = 0; i < M->n; i++) {
         d[i] = M->cd[i];
         if (i + 1 < M->n) e[i] = M->ce[i];

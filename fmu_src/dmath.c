@@ -329,6 +329,32 @@ void dfo_sincos(double x, double *s, double *c)
     }
 }
 
+int dfo_rem_pio2(double hi, double lo, double *r_hi, double *r_lo)
+{
+    double h, l;
+    const int q = reduce(hi, &h, &l);
+    const double t = l + lo; /* |l| <= ulp(h), |lo| <= ulp(hi): t is tiny against 1 */
+    dfo_two_sum(h, t, r_hi, r_lo);
+    return q;
+}
+
+void dfo_sincos_dd(double hi, double lo, double *s, double *c)
+{
+    if (ABS_BITS(bits_of(hi)) >= EXP_ALL_ONES) {
+        *s = *c = hi - hi;
+        return;
+    }
+    double rh, rl;
+    const int q = dfo_rem_pio2(hi, lo, &rh, &rl);
+    const double sr = ksin(rh, rl), cr = kcos(rh, rl);
+    switch (q) {
+    case 0: *s = sr; *c = cr; return;
+    case 1: *s = cr; *c = -sr; return;
+    case 2: *s = -sr; *c = -cr; return;
+    default: *s = -cr; *c = sr; return;
+    }
+}
+
 /* ---- exp and expm1 -------------------------------------------------------------------------- */
 
 static double expm1_poly(double r) /* exp(r) - 1 - r, |r| <= ln2/2 */

@@ -8,6 +8,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <limits.h>
 #include <stddef.h>
 
 #define TWO_PI (2.0 * DFO_PI)
@@ -26,12 +27,70 @@
 #define PHASOR_MAX 0.25            /* |p - i lambda| below which the phasor bound is tried (near resonance) */
 #define SPAN_GROWTH 1.25           /* the next step's first span over the last step */
 #define TAYLOR_REACH 2.0           /* the Taylor root is tried when within this multiple of the certified step */
+#define CARRY_MAX 16               /* reversals in a row that carry the excitation phase (each adds a rounding of
+                                    * lambda tau to it) before it is computed from the absolute time again */
+#define NEAR_CRIT 0.5              /* wd or wh below which the free part is bounded without 1 / wd, 1 / wh */
+#define SPAN_TURNS 64.0            /* turns of the excitation or the free vibration after which a long slip
+                                    * phase restarts (its local phase lambda tau stays small: exact to rounding) */
+#define SCALE_MAX 1000             /* |log2| of the length scale at most (a power of 2 that is a normal double) */
+#define SCALED_MAX 0x1p400         /* a scaled length beyond this: the motion leaves the double range */
 
-/* What is constant over one call. */
+/* Double-double constants: pi/2, pi, 2 pi (hi + lo to 107 bits). */
+static const double PIO2_HI = 0x1.921fb54442d18p+0, PIO2_LO = 0x1.1a62633145c07p-54;
+static const double PI_HI = 0x1.921fb54442d18p+1, PI_LO = 0x1.1a62633145c07p-53;
+static const double TWOPI_HI = 0x1.921fb54442d18p+2, TWOPI_LO = 0x1.1a62633145c07p-52;
+
+/* A time or an angle as a double-double hi + lo (|lo| <= ulp(hi) / 2). Inside a call the events'
+ * times are kept so: a time rounded to a double at every event would shift the motion against the
+ * excitation by an ulp of t each time (omega ulp(t) relative, growing with t), and the same run cut
+ * into other communication steps would round elsewhere. A call starts and ends on the host's
+ * times, which are doubles. */
+typedef struct {
+    double hi, lo;
+} dd;
+
+static inline dd dd_of(double hi, double lo)
+{
+    dd r;
+    dfo_two_sum(hi, lo, &r.hi, &r.lo);
+    return r;
+}
+
+static inline dd dd_add(dd a, dd b)
+{
+    dd r;
+    double e;
+    dfo_two_sum(a.hi, b.hi, &r.hi, &e);
+    e += a.lo + b.lo;
+    dfo_fast_two_sum(r.hi, e, &r.hi, &r.lo);
+    return r;
+}
+
+/* a + d / w (a time plus a span of tau or of phase over its rate) */
+static inline dd dd_add_quot(dd a, double d, double d_lo, double w)
+{
+    const double q = d / w, p = q * w;
+    const double q_lo = (((d - p) - dfo_two_prod_err(q, w, p)) + d_lo) / w;
+    return dd_add(a, dd_of(q, q_lo));
+}
+
+static inline int dd_lt(dd a, dd b) { return a.hi < b.hi || (a.hi == b.hi && a.lo < b.lo); }
+
+/* What is constant over one call. Lengths are in units of the length scale Ls (a power of 2, so the
+ * scaling is exact): the motion's squares never overflow or underflow, whatever its size. */
 typedef struct {
     const dfo_model *M;
-    dfo_loads L;
-    double k, w0, zeta, lam, a;   /* a = |P0| / k */
+    dfo_loads L;                  /* the loads (physical) */
+    dfo_loads Ls_;                /* the loads over Ls: the friction rules' forces in the scaled units */
+    double Ls, iLs;               /* the length scale and its inverse */
+    double fP, fF;                /* |P0| / Ls, F_ext / Ls */
+    double omega;                 /* excitation angular frequency */
+    dd ph;                        /* the excitation phase at t = 0 (phi, + pi when P0 < 0), reduced mod 2 pi */
+    double k, w0, zeta, lam, a;   /* a = |P0| / (k Ls) */
+    int near_crit;                /* wd or wh below NEAR_CRIT: the free part's bounds without 1 / wd, 1 / wh */
+    int modal;                    /* over-damped away from critical: the derivatives from the two modes */
+    double r1k[8], r2k[8];        /* r1^k, r2^k (modal) */
+    double u_span;                /* tau after which a slip phase restarts (SPAN_TURNS turns) */
     double wd, wh, r1, r2;        /* sqrt(1 - zeta^2); sqrt(zeta^2 - 1), roots -1/(zeta + wh), -(zeta + wh) */
     double inv_wd, inv_D2;        /* 1 / wd (under-damped), 1 / |D|^2 */
     double Dr, Di, D2;            /* D = 1 - lambda^2 + 2 i zeta lambda, |D|^2 */
@@ -61,6 +120,8 @@ typedef struct {
     double Qabs;               /* steady form: |Q| */
     double fA, fB;             /* free part: |C| (under-damped), |A|, |B| (critical), |alpha|, |beta| (over) */
     double Cr, Ci;             /* under-damped: the free part is Re[C e^{p tau}], C = hy - i b */
+    double gy, gb;             /* near critical: |hy|, |hv + zeta hy| (the free part's bounds without 1 / wd, 1 / wh) */
+    double al, be;             /* modal: the free part is al e^{r1 tau} + be e^{r2 tau} */
 } ex_phase;
 
 /* y and its derivatives in tau up to the sixth at tau = u, and the free part's decay factors there. */
@@ -71,7 +132,50 @@ typedef struct {
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
 } ex_val;
 
-static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
+/* The excitation's phase at t = 0: phi mod 2 pi exactly (a large phi keeps its phase), then + pi for
+ * a negative amplitude. */
+static dd phase0(const dfo_params *p)
+{
+    double rh, rl;
+    const int q = dfo_rem_pio2(p->phi, 0.0, &rh, &rl);
+    const double n = (q == 3) ? -1.0 : (double)q; /* n pi/2 + r, n in -1 ... 2: |phase| <= 5 pi / 4 */
+    dd ph = dd_add(dd_of(rh, rl), dd_of(n * PIO2_HI, n * PIO2_LO));
+    if (p->P0 < 0.0) ph = dd_add(ph, dd_of(-PI_HI, -PI_LO));
+    return ph;
+}
+
+/* The length scale: the loads over Ls, and what depends on them. */
+static void ctx_scale(ex_ctx *C, int e)
+{
+    C->Ls = dfo_pow2(e);
+    C->iLs = dfo_pow2(-e);
+    C->Ls_ = C->L;
+    C->Ls_.F_ext *= C->iLs;
+    C->Ls_.N *= C->iLs;
+    C->Ls_.muk_N *= C->iLs;
+    C->Ls_.Fb *= C->iLs;
+    C->fP = C->M->P_amp * C->iLs;
+    C->fF = C->Ls_.F_ext;
+    C->a = C->fP / C->k;
+    const double z = C->zeta;
+    /* y'' = a cos theta - 2 zeta y' - y and its derivatives: y^(k+2) = a cos^(k) theta - 2 zeta y^(k+1) - y^(k) */
+    for (int j = 0; j < 4; j++) C->yk[0][j] = C->yk[1][j] = 0.0;
+    C->yk[0][0] = C->yk[1][1] = 1.0;
+    for (int k = 0; k + 2 < 7; k++) {
+        const double f = C->a * C->lk[k]; /* a d^k/dtau^k cos theta = f (cos, -sin, -cos, sin) theta */
+        for (int j = 0; j < 4; j++) C->yk[k + 2][j] = -2.0 * z * C->yk[k + 1][j] - C->yk[k][j];
+        C->yk[k + 2][2 + (k & 1)] += ((k & 3) == 0 || (k & 3) == 3) ? f : -f;
+    }
+    /* energy: |y| and |y'| at most R, |y^(k+2)| <= a lambda^k + 2 zeta e_(k+1) + e_k */
+    C->ea[0] = C->ea[1] = 0.0;
+    C->eb[0] = C->eb[1] = 1.0;
+    for (int k = 0; k + 2 < 8; k++) {
+        C->ea[k + 2] = C->a * C->lk[k] + 2.0 * z * C->ea[k + 1] + C->ea[k];
+        C->eb[k + 2] = 2.0 * z * C->eb[k + 1] + C->eb[k];
+    }
+}
+
+static void ctx_init_scaled(ex_ctx *C, const dfo_model *M, const dfo_inputs *in, int e)
 {
     const dfo_params *p = &M->p;
     C->M = M;
@@ -80,12 +184,26 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->w0 = sqrt(p->k / p->m);
     C->zeta = p->c / (2.0 * sqrt(p->k * p->m));
     C->lam = p->omega / C->w0;
-    C->a = M->P_amp / p->k;
+    C->omega = p->omega;
+    C->ph = phase0(p);
     const double z = C->zeta;
     C->wd = sqrt(fmax(0.0, (1.0 - z) * (1.0 + z)));
     C->wh = sqrt(fmax(0.0, (z - 1.0) * (z + 1.0)));
     C->r1 = (z > 1.0) ? -1.0 / (z + C->wh) : -z;
     C->r2 = (z > 1.0) ? -(z + C->wh) : -z;
+    C->near_crit = (z < 1.0) ? C->wd < NEAR_CRIT : C->wh < NEAR_CRIT;
+    C->modal = z > 1.0 && !C->near_crit;
+    {
+        double q1 = 1.0, q2 = 1.0;
+        for (int k = 0; k < 8; k++, q1 *= C->r1, q2 *= C->r2) {
+            C->r1k[k] = q1;
+            C->r2k[k] = q2;
+        }
+    }
+    {
+        const double rate = C->lam + ((z < 1.0) ? C->wd : 0.0);
+        C->u_span = (rate > 0.0) ? SPAN_TURNS * TWO_PI / rate : INFINITY;
+    }
     C->Dr = (1.0 - C->lam) * (1.0 + C->lam);
     C->Di = 2.0 * z * C->lam;
     C->D2 = C->Dr * C->Dr + C->Di * C->Di;
@@ -108,38 +226,53 @@ static void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in)
     /* y'' = a cos theta - 2 zeta y' - y and its derivatives: y^(k+2) = a cos^(k) theta - 2 zeta y^(k+1) - y^(k) */
     double lk = 1.0;
     for (int k = 0; k < 8; k++, lk *= C->lam) C->lk[k] = lk;
-    for (int j = 0; j < 4; j++) C->yk[0][j] = C->yk[1][j] = 0.0;
-    C->yk[0][0] = C->yk[1][1] = 1.0;
-    for (int k = 0; k + 2 < 7; k++) {
-        const double f = C->a * C->lk[k]; /* a d^k/dtau^k cos theta = f (cos, -sin, -cos, sin) theta */
-        for (int j = 0; j < 4; j++) C->yk[k + 2][j] = -2.0 * z * C->yk[k + 1][j] - C->yk[k][j];
-        C->yk[k + 2][2 + (k & 1)] += ((k & 3) == 0 || (k & 3) == 3) ? f : -f;
-    }
-    /* energy: |y| and |y'| at most R, |y^(k+2)| <= a lambda^k + 2 zeta e_(k+1) + e_k */
-    C->ea[0] = C->ea[1] = 0.0;
-    C->eb[0] = C->eb[1] = 1.0;
-    for (int k = 0; k + 2 < 8; k++) {
-        C->ea[k + 2] = C->a * C->lk[k] + 2.0 * z * C->ea[k + 1] + C->ea[k];
-        C->eb[k + 2] = 2.0 * z * C->eb[k + 1] + C->eb[k];
-    }
+    ctx_scale(C, e);
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->events = 0;
     C->first_span = ENERGY_SPAN;
 }
 
-/* cs: cos, sin of the excitation phase at ta when known (carried over a reversal), else NULL. */
-static void phase_start(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s, const double *cs)
+/* The excitation phase omega t + phase at the time t (a double-double): exact to rounding for any t
+ * and phi (the product omega t and the sum carried as double-doubles). */
+static inline dd theta_at(const ex_ctx *C, dd t)
+{
+    const double p = C->omega * t.hi;
+    dd th; /* (not renormalised: dfo_rem_pio2 takes any small tail) */
+    double e;
+    dfo_two_sum(p, C->ph.hi, &th.hi, &e);
+    th.lo = e + ((dfo_two_prod_err(C->omega, t.hi, p) + C->omega * t.lo) + C->ph.lo);
+    return th;
+}
+
+/* cos, sin of the excitation phase at t */
+static inline void phase_at(const ex_ctx *C, dd t, double *c, double *s)
+{
+    const dd th = theta_at(C, t);
+    dfo_sincos_dd(th.hi, th.lo, s, c);
+}
+
+/* The static force (over Ls) at rest at Xs at t: |P0| cos theta + F_ext - k X. */
+static double static_force(const ex_ctx *C, dd t, double Xs)
+{
+    double c, sn;
+    phase_at(C, t, &c, &sn);
+    return C->fP * c + C->fF - C->k * Xs;
+}
+
+/* X, V in the scaled units; ta the start time; cs: cos, sin of the excitation phase at ta when known
+ * (carried over a reversal), else NULL: from the absolute time. */
+static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V, int s, const double *cs)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
     P->s = s;
-    P->ta = ta;
-    P->xc = (C->L.F_ext - s * C->L.muk_N) / C->k;
+    P->ta = ta.hi;
+    P->xc = (C->Ls_.F_ext - s * C->Ls_.muk_N) / C->k;
     if (cs) {
         P->c0 = cs[0];
         P->s0 = cs[1];
     } else {
-        dfo_sincos(C->M->p.omega * ta + C->M->P_phase, &P->s0, &P->c0);
+        phase_at(C, ta, &P->c0, &P->s0);
     }
     const double y0 = X - P->xc, v0 = V / C->w0;
     if (C->uniform) {
@@ -162,6 +295,9 @@ static void phase_start(const ex_ctx *C, ex_phase *P, double ta, double X, doubl
         P->hv = v0 + lam * P->Qi;  /* y_ss'(0) = Re(i lambda Q) */
     }
     const double hy = P->hy, hv = P->hv;
+    P->gy = fabs(hy);
+    P->gb = fabs(hv + z * hy);
+    P->al = P->be = 0.0;
     if (z < 1.0) {
         const double b = (hv + z * hy) * C->inv_wd;
         P->fA = sqrt(hy * hy + b * b);
@@ -171,16 +307,21 @@ static void phase_start(const ex_ctx *C, ex_phase *P, double ta, double X, doubl
     } else if (z == 1.0) {
         P->fA = fabs(hy);
         P->fB = fabs(hv + hy);
+    } else if (C->near_crit) { /* the modes' amplitudes grow like 1 / wh: bounded through gy, gb instead */
+        P->fA = fabs(hy);
+        P->fB = P->gb;
     } else {
         const double beta = (hv - C->r1 * hy) / (C->r2 - C->r1);
+        P->al = hy - beta;
+        P->be = beta;
         P->fA = fabs(hy - beta);
         P->fB = fabs(beta);
     }
 }
 
-static void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
+static inline void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
 {
-    phase_start(C, P, ta, X, V, s, NULL);
+    phase_start(C, P, dd_of(ta, 0.0), X, V, s, NULL);
 }
 
 /* phi1(x + i y) = (e^z - 1) / z without cancellation (x <= 0). */
@@ -220,12 +361,41 @@ static inline void derivatives(const ex_ctx *C, double y, double y1, double cth,
     v->y6 = (k[6][0] * y + k[6][1] * y1) + (k[6][2] * cth + k[6][3] * sth);
 }
 
+/* Over-damped away from critical: y and its derivatives from the two modes and the forced part
+ * (F = Re, Fi = Im of Q e^{i lambda tau}), each term to its own rounding. The equation of motion's
+ * recurrence would lose (2 zeta)^k to cancellation: with zeta = 1000 its y''' ... y^(6) are rounding
+ * noise, and a slow creep towards equilibrium would look like a stop. */
+static inline void derivatives_modal(const ex_ctx *C, const ex_phase *P, double Fr, double Fi, double e1, double e2,
+                                     ex_val *v)
+{
+    const double *l = C->lk, *q1 = C->r1k, *q2 = C->r2k;
+    const double A = P->al * e1, B = P->be * e2;
+    v->y = Fr + (A + B);
+    v->y1 = -l[1] * Fi + (q1[1] * A + q2[1] * B);
+    v->y2 = -l[2] * Fr + (q1[2] * A + q2[2] * B);
+    v->y3 = l[3] * Fi + (q1[3] * A + q2[3] * B);
+    v->y4 = l[4] * Fr + (q1[4] * A + q2[4] * B);
+    v->y5 = -l[5] * Fi + (q1[5] * A + q2[5] * B);
+    v->y6 = -l[6] * Fr + (q1[6] * A + q2[6] * B);
+    v->Fr = v->Fi = v->Gr = v->Gi = 0.0; /* (the phasor bound is under-damped only) */
+}
+
 static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
 {
     const double z = C->zeta, lam = C->lam;
     double cl, sl;
     dfo_sincos(lam * u, &sl, &cl);
     const double cth = P->c0 * cl - P->s0 * sl, sth = P->s0 * cl + P->c0 * sl;
+    if (C->modal) {
+        const double e1 = dfo_exp(C->r1 * u), e2 = dfo_exp(C->r2 * u);
+        derivatives_modal(C, P, P->Qr * cl - P->Qi * sl, P->Qr * sl + P->Qi * cl, e1, e2, v);
+        v->u = u;
+        v->cth = cth;
+        v->sth = sth;
+        v->e1 = e1;
+        v->e2 = e2;
+        return;
+    }
     double E, F;
     if (z < 1.0) {
         const double e = (z > 0.0) ? dfo_exp(-z * u) : 1.0;
@@ -233,7 +403,7 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         double cw = cl, sw = sl;
         if (C->wmul == 0) {
             const double dl = C->wd_lam * u; /* wd tau = lambda tau + dl */
-            if (fabs(dl) <= SMALL_ANGLE) {
+            if (fabs(dl) <= SMALL_ANGLE && !C->near_crit) { /* (near critical wd tau << lambda tau would cancel) */
                 double sd, cd;
                 small_sincos(dl, &sd, &cd);
                 cw = cl * cd - sl * sd;
@@ -326,6 +496,24 @@ static void bounds_base(const ex_ctx *C, const ex_phase *P, const ex_val *v, ex_
     double f3, f4, f5, f7;
     if (z < 1.0) {
         f3 = f4 = f5 = f7 = P->fA * v->e1; /* |p| = 1 */
+        if (C->near_crit) {
+            /* |C| grows like 1 / wd; also y_h^(k) = e^{-zeta u} (hy cos phi + (b'/wd) sin phi), phi = k arg p +
+             * wd u, with |sin phi| <= wd u + k atan(wd / zeta): |y_h^(k)| <= e^{-zeta u} (|hy| + |b'| (u + k / zeta)),
+             * falling in u for k >= 1 (so it holds for every later u) */
+            const double g = P->gy, gb = P->gb, u = v->u, iz = 1.0 / z, e = v->e1;
+            f3 = fmin(f3, e * (g + gb * (u + 3.0 * iz)));
+            f4 = fmin(f4, e * (g + gb * (u + 4.0 * iz)));
+            f5 = fmin(f5, e * (g + gb * (u + 5.0 * iz)));
+            f7 = fmin(f7, e * (g + gb * (u + 7.0 * iz)));
+        }
+    } else if (C->near_crit && z > 1.0) {
+        /* y_h = hy E + b' F, E = (e^{r1 u} + e^{r2 u}) / 2, F = (e^{r1 u} - e^{r2 u}) / (r1 - r2): |E^(k)| <= q^k e^{r1 u}
+         * and (mean value) |F^(k)| <= (k q^(k-1) + u q^k) e^{r1 u}, q = |r2|, falling in u for k >= q / |r1| (< 3 here) */
+        const double q = -C->r2, e = v->e1, g = P->gy, gb = P->gb, u = v->u, q2 = q * q, q3 = q2 * q;
+        f3 = e * (g * q3 + gb * q2 * (3.0 + u * q));
+        f4 = e * (g * q3 * q + gb * q3 * (4.0 + u * q));
+        f5 = e * (g * q3 * q2 + gb * q3 * q * (5.0 + u * q));
+        f7 = e * (g * q3 * q3 * q + gb * q3 * q3 * (7.0 + u * q));
     } else if (z == 1.0) {
         f3 = v->e1 * (P->fA + P->fB * (v->u + 3.0));
         f4 = v->e1 * (P->fA + P->fB * (v->u + 4.0));
@@ -400,8 +588,20 @@ static double start_step(double g1, double g2, double B)
 
 static double tol_of(const ex_ctx *C, const ex_phase *P, const ex_val *v)
 {
+    if (C->modal) {
+        /* each term of y' to its rounding; the position's rounding (of the phase's data) moves y' by |r1|
+         * times it only: a creep towards equilibrium is followed until it is within a few ulps of it */
+        const double pos = C->a + fabs(P->xc) + fabs(v->y) + P->Qabs;
+        return -C->r1 * (4.0 * DBL_EPSILON) * pos +
+               ROUND * (fabs(v->y1) + C->lam * P->Qabs + fabs(P->al * C->r1) * v->e1 + fabs(P->be * C->r2) * v->e2);
+    }
     const double forced = C->uniform ? 0.0 : P->Qabs * (1.0 + C->lam);
-    return ROUND * (C->a + fabs(P->xc) + fabs(v->y) + fabs(v->y1) + forced + P->fA * v->e1);
+    double free = P->fA * v->e1;
+    if (C->near_crit) { /* without the 1 / wd, 1 / wh of the modes' amplitudes */
+        const double g = v->e1 * (P->gy + fabs(P->hv) + P->gb * (v->u + 1.0));
+        if (C->zeta >= 1.0 || g < free) free = g;
+    }
+    return ROUND * (C->a + fabs(P->xc) + fabs(v->y) + fabs(v->y1) + forced + free);
 }
 
 enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2, SEARCH_FAIL = -1 };
@@ -409,6 +609,16 @@ enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2, SEARCH_FAIL = -1 };
 /* The state at tau = 0 from the phase's data (no transcendental function). */
 static void eval0(const ex_ctx *C, const ex_phase *P, double y0, double v0, ex_val *v)
 {
+    if (C->modal) {
+        derivatives_modal(C, P, P->Qr, P->Qi, 1.0, 1.0, v);
+        v->y = y0;
+        v->y1 = v0;
+        v->u = 0.0;
+        v->cth = P->c0;
+        v->sth = P->s0;
+        v->e1 = v->e2 = 1.0;
+        return;
+    }
     v->u = 0.0;
     v->Fr = P->Qr;
     v->Fi = P->Qi;
@@ -664,8 +874,8 @@ static void sample(dfo_state *s, double x)
     if (x < s->x_min) s->x_min = x;
 }
 
-/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb, after which
- * the mode is mode_after (an event at tb when event is set). */
+/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical),
+ * after which the mode is mode_after (an event at tb when event is set). */
 static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
                         double xb, int mode_during, int mode_after, int event)
 {
@@ -682,8 +892,8 @@ static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double
     } else {
         ex_val v;
         double x0 = xa, x1 = xb;
-        if (ta < w0) { eval(C, P, C->w0 * (w0 - ta), &v); x0 = P->xc + v.y; }
-        if (tb > w1) { eval(C, P, C->w0 * (w1 - ta), &v); x1 = P->xc + v.y; }
+        if (ta < w0) { eval(C, P, C->w0 * (w0 - ta), &v); x0 = (P->xc + v.y) * C->Ls; }
+        if (tb > w1) { eval(C, P, C->w0 * (w1 - ta), &v); x1 = (P->xc + v.y) * C->Ls; }
         sample(s, x0);
         sample(s, x1);
         s->E_friction += C->L.muk_N * fabs(x1 - x0);
@@ -693,49 +903,111 @@ static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double
 
 /* ---- the phases -------------------------------------------------------------------------------- */
 
-/* The next breakaway of the stick phase at X from ta (cached in the state per stick phase). With
- * skip, a breakaway at ta itself (a limit touched, not crossed: the slide just tried did not start)
- * is passed over: the search restarts a little later, further each time, until it finds a later one. */
-static double breakaway(const ex_ctx *C, dfo_state *s, double ta, int skip, int *dir)
+/* The excitation phase at t reduced to psi in [0, 2 pi) (to a few ulps of 2 pi: the reduction is of
+ * the double-double phase, so its error does not grow with t). */
+static double turn_of(const ex_ctx *C, dd t)
 {
-    const double C0 = C->L.F_ext - C->k * s->X;
-    const int known = !isnan(s->stick_tb) && s->stick_C == C0 && s->stick_Fb == C->L.Fb;
-    if (!known || (skip && s->stick_tb <= ta)) {
-        s->stick_C = C0;
-        s->stick_Fb = C->L.Fb;
-        double tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
-        if (skip) {
-            double d = 4.0 * DBL_EPSILON * fmax(fabs(ta), 1.0 / (C->w0 + fabs(C->M->p.omega)));
-            for (int i = 0; i < 200 && tb <= ta + d && isfinite(tb); i++, d *= 2.0)
-                tb = dfo_next_breakaway(C->M, &C->L, C0, ta + d, &s->stick_dir);
-        }
-        s->stick_tb = tb;
-    }
-    *dir = s->stick_dir;
-    return (s->stick_tb > ta) ? s->stick_tb : ta;
+    const dd th = theta_at(C, t);
+    double rh, rl;
+    const int q = dfo_rem_pio2(th.hi, th.lo, &rh, &rl);
+    const double psi = q * PIO2_HI + (rh + (q * PIO2_LO + rl));
+    return (psi < 0.0) ? psi + TWO_PI : psi;
 }
 
-static double static_force(const ex_ctx *C, double t, double X)
+/* Earliest phase >= psi (in [0, 2 pi)) with cos > lim, as an offset from psi; acos_lim = acos(lim)
+ * (friction.c's rule). */
+static double until_above(double psi, double lim, double acos_lim)
 {
-    return dfo_static_force(C->M, &C->L, dfo_excitation(C->M, t), X);
+    if (lim >= 1.0) return INFINITY;
+    if (lim < -1.0) return 0.0;
+    if (psi < acos_lim || psi > TWO_PI - acos_lim) return 0.0;
+    return (TWOPI_HI - acos_lim - psi) + TWOPI_LO;
+}
+
+/* While stuck at Xs the static force is |P0| cos theta(t) + C0 (C0 = F_ext - k X, over Ls): the first
+ * time >= ta at which its magnitude exceeds the breakaway limit, with the side in *dir (friction.h's
+ * dfo_next_breakaway in closed form, on the phase reduced from the double-double time: its error
+ * is a few ulps of 2 pi whatever t, so a run cut into other communication steps finds the same time
+ * to rounding). {INFINITY, 0}: none. cs[0], cs[1]: cos and sin of the excitation phase there when it
+ * is a crossing later than ta (cos theta = the limit: known without evaluating), else cs[0] = NaN. */
+static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs)
+{
+    cs[0] = NAN;
+    const double Fb = C->Ls_.Fb, C0 = C->fF - C->k * Xs, amp = C->fP, w = C->omega;
+    if (w == 0.0 || amp == 0.0) { /* a constant force */
+        const double F = static_force(C, ta, Xs);
+        *dir = dfo_sign(F);
+        if (fabs(F) > Fb) return ta;
+        const dd never = {INFINITY, 0.0};
+        return never;
+    }
+    const double lim_hi = (Fb - C0) / amp; /* F_static >  Fb  <=>  cos(theta)      > lim_hi */
+    const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
+    const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
+    const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
+    const double psi = turn_of(C, ta);
+    double psi2 = psi + DFO_PI;
+    if (psi2 >= TWO_PI) psi2 -= TWO_PI;
+    const double up = until_above(psi, lim_hi, acos_hi), down = until_above(psi2, lim_lo, acos_lo);
+    *dir = (up <= down) ? 1 : -1;
+    const double off = fmin(up, down);
+    if (!isfinite(off)) {
+        const dd never = {INFINITY, 0.0};
+        return never;
+    }
+    if (off > 0.0) { /* cos theta rises through lim_hi (sin < 0), or cos(theta + pi) through lim_lo */
+        const double l = (*dir > 0) ? lim_hi : lim_lo, sn = sqrt((1.0 - l) * (1.0 + l));
+        cs[0] = (*dir > 0) ? l : -l;
+        cs[1] = (*dir > 0) ? -sn : sn;
+    }
+    return dd_add_quot(ta, off, 0.0, w);
+}
+
+/* The next breakaway of the stick phase at Xs from ta (kept in *tb for the stick phase: valid while
+ * tb->hi is not NaN). With skip, a breakaway at ta itself (a limit touched, not crossed: the slide
+ * just tried did not start) is passed over: the search restarts a little later, further each time,
+ * until it finds a later one. */
+static dd breakaway(const ex_ctx *C, double Xs, dd ta, int skip, dd *tb, int *dir, double *cs)
+{
+    if (isnan(tb->hi) || (skip && !dd_lt(ta, *tb))) {
+        dd b = next_breakaway(C, Xs, ta, dir, cs);
+        if (skip) {
+            double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
+            for (int i = 0; i < 200 && !dd_lt(dd_add(ta, dd_of(d, 0.0)), b) && isfinite(b.hi); i++, d *= 2.0)
+                b = next_breakaway(C, Xs, dd_add(ta, dd_of(d, 0.0)), dir, cs);
+        }
+        *tb = b;
+    }
+    if (!dd_lt(ta, *tb)) {
+        cs[0] = NAN; /* at ta itself: the phase from the time */
+        return ta;
+    }
+    return *tb;
 }
 
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
 {
-    int skip = 0, stall = 0, carried = 0;
-    double t_last = s->t, cs[2] = {1.0, 0.0}; /* the excitation phase at s->t when carried */
-    while (s->t < t_target) {
-        if (s->t == t_last) {
+    int skip = 0, stall = 0, stick_dir = 0, carried = 0;
+    double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
+    double stick_cs[2] = {NAN, 0.0}; /* the phase at the stick phase's breakaway (NaN: from the time) */
+    const double Ls = C->Ls, w0 = C->w0;
+    const dd target = {t_target, 0.0};
+    dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
+    double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
+    while (dd_lt(t, target)) {
+        if (t.hi == t_last.hi && t.lo == t_last.lo) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
         } else {
             stall = 0;
-            t_last = s->t;
+            t_last = t;
         }
-        const double ta = s->t, xa = s->X;
-        if (s->mode == 0 && !(C->L.Fb > 0.0)) {
+        const double ta = t.hi, xa = s->X;
+        if (s->mode == 0 && !(C->Ls_.Fb > 0.0)) {
             /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
-            const double S = static_force(C, ta, s->X), dS = dfo_excitation_rate(C->M, ta);
-            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
+            double c, sn;
+            phase_at(C, t, &c, &sn);
+            const double S = C->fP * c + C->fF - C->k * Xs, dS = -C->fP * C->omega * sn;
+            const double d2S = -C->omega * C->omega * (C->fP * c);
             const int dir = (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
             s->mode = dir;
             C->events++;
@@ -744,63 +1016,109 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         }
         if (s->mode == 0) {
             int dir = 0;
-            const double tb = breakaway(C, s, ta, skip, &dir);
+            if (isnan(stick_tb.hi)) stick_dir = 0;
+            const dd tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir, stick_cs);
+            dir = stick_dir;
             skip = 0;
-            if (tb >= t_target) {
+            if (!dd_lt(tb, target)) {
                 s->t = t_target;
+                t = target;
                 after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
                 break;
             }
-            s->t = tb;
+            t = tb;
+            s->t = tb.hi;
+            Vs = 0.0;
             s->V = 0.0;
             s->mode = dir;
+            if (!isnan(stick_cs[0])) { /* the slide starts with the crossing's phase */
+                carried = 1;
+                cs[0] = stick_cs[0];
+                cs[1] = stick_cs[1];
+            }
             C->events++;
-            after_phase(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+            after_phase(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
             continue;
         }
-        /* a slip in direction sd from (ta, X, V) */
+        /* a slip in direction sd from (t, X, V) */
         const int sd = s->mode;
         ex_phase P;
         ex_val v;
-        if (carried) phase_start(C, &P, ta, s->X, s->V, sd, cs); else phase_init(C, &P, ta, s->X, s->V, sd);
-        carried = 0;
-        const double u_max = C->w0 * (t_target - ta);
-        const int r = find_stop(C, &P, s->X - P.xc, s->V / C->w0, u_max, &v);
+        phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
+        const double u_max = w0 * ((t_target - t.hi) - t.lo);
+        const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
+        const double u_end = cut ? C->u_span : u_max;
+        const int r = find_stop(C, &P, Xs - P.xc, Vs / w0, u_end, &v);
         if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
         if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
         if (r == SEARCH_NONE) {
+            Xs = P.xc + v.y;
+            Vs = w0 * v.y1;
+            s->X = Xs * Ls;
+            s->V = Vs * Ls;
+            if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+            if (cut) {
+                const dd tc = dd_add_quot(t, u_end, 0.0, w0);
+                carried = 0;
+                s->t = tc.hi;
+                after_phase(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
+                t = tc;
+                continue;
+            }
             s->t = t_target;
-            s->X = P.xc + v.y;
-            s->V = C->w0 * v.y1;
+            t = target;
             after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
             break;
         }
-        double ts = ta + v.u / C->w0;
-        if (ts > t_target) ts = t_target;
-        s->t = ts;
-        s->X = P.xc + v.y;
+        dd ts = dd_add_quot(t, v.u, 0.0, w0);
+        if (dd_lt(target, ts)) ts = target;
+        const int at_end = !dd_lt(ts, target);
+        t = ts;
+        s->t = ts.hi;
+        Xs = P.xc + v.y;
+        Vs = 0.0;
+        s->X = Xs * Ls;
         s->V = 0.0;
+        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
         /* the static force at a stop from the excitation phase there (known from the search) */
-        const double Fs = (r == SEARCH_STOP && ts < t_target) ? dfo_static_force(C->M, &C->L, C->M->P_amp * v.cth, s->X)
-                                                              : static_force(C, ts, s->X);
-        int next = dfo_rest_mode(&C->L, Fs);
-        if (!(C->L.Fb > 0.0)) {
+        const double Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * Xs : static_force(C, ts, Xs);
+        int next = dfo_rest_mode(&C->Ls_, Fs);
+        if (!(C->Ls_.Fb > 0.0)) {
             /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
             if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+            if (r == SEARCH_STOP && !at_end) {
+                /* the motion is the same in either direction: the next phase starts from the motion's
+                 * own state there (its velocity within rounding of 0, not set to 0: undamped, a
+                 * velocity error would never decay, and one made at every reversal would add up) */
+                ex_val w;
+                eval(C, &P, v.u, &w);
+                Xs = P.xc + w.y;
+                Vs = w0 * w.y1;
+                s->X = Xs * Ls;
+                s->V = Vs * Ls;
+                v.cth = w.cth;
+                v.sth = w.sth;
+            }
         } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
             next = 0;                                 /* rest, and a breakaway right now is passed over */
             skip = 1;
         }
-        if (next == 0) s->stick_tb = NAN; /* a new stick phase */
-        if (next == -sd && r == SEARCH_STOP && ts < t_target) { /* a reversal: the next slide starts here */
-            carried = 1;
+        if (next == 0) stick_tb.hi = NAN; /* a new stick phase */
+        if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
+            /* a reversal: the next slide starts here, with the phase the search reached (exact for the
+             * stop's time as a double-double, to the rounding of lambda tau) */
+            carried++;
             cs[0] = v.cth;
             cs[1] = v.sth;
+        } else {
+            carried = 0;
         }
         s->mode = next;
         C->events++;
-        after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+        after_phase(C, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
     }
+    s->X = Xs * Ls;
+    s->V = Vs * Ls;
     return DFO_OK;
 }
 
@@ -816,26 +1134,72 @@ static long long grid_index(const dfo_model *M, const dfo_state *s)
     return n;
 }
 
+static inline void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in) { ctx_init_scaled(C, M, in, 0); }
+
+double dfo_exact_excitation(const dfo_model *M, double t)
+{
+    ex_ctx C; /* only what theta_at reads */
+    C.omega = M->p.omega;
+    C.ph = phase0(&M->p);
+    const dd tt = {t, 0.0};
+    double c, sn;
+    phase_at(&C, tt, &c, &sn);
+    return M->P_amp * c;
+}
+
+/* The length scale's exponent for this call: of the largest length of the motion (|P0|, |F_ext|, the
+ * breakaway limit over k; |X|; |V| / w0), from the exponents alone (no quotient can overflow),
+ * bounded to +-SCALE_MAX. */
+static int scale_exponent(const dfo_model *M, const dfo_inputs *u, const dfo_state *s)
+{
+    int e = INT_MIN;
+    dfo_loads L;
+    dfo_loads_init(&L, M, u);
+    const int ek = dfo_ilogb(M->p.k);
+    const double w0 = sqrt(M->p.k / M->p.m);
+    const double forces[3] = {M->P_amp, L.F_ext, L.Fb};
+    for (int i = 0; i < 3; i++)
+        if (forces[i] != 0.0 && isfinite(forces[i])) {
+            const int f = dfo_ilogb(forces[i]) - ek;
+            if (f > e) e = f;
+        }
+    if (s->X != 0.0 && isfinite(s->X) && dfo_ilogb(s->X) > e) e = dfo_ilogb(s->X);
+    if (s->V != 0.0 && isfinite(s->V) && w0 > 0.0 && isfinite(w0)) {
+        const int f = dfo_ilogb(s->V) - dfo_ilogb(w0);
+        if (f > e) e = f;
+    }
+    if (e == INT_MIN) return 0;
+    return (e > SCALE_MAX) ? SCALE_MAX : (e < -SCALE_MAX) ? -SCALE_MAX : e;
+}
+
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
     ex_ctx C;
-    ctx_init(&C, M, u);
+    ctx_init_scaled(&C, M, u, scale_exponent(M, u, s));
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
+    /* lengths the scaled phase cannot hold: the motion leaves the double range */
+    const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
+    if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
+        s->hA = 0.0;
+        return DFO_ERR_NONFINITE;
+    }
     dfo_status st = advance(&C, s, t_target);
     s->steps += C.events;
     s->n = grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
-    const double S = static_force(&C, s->t, s->X);
+    const dd te = {s->t, 0.0};
+    const double Xs = s->X * C.iLs, Vs = s->V * C.iLs, S = static_force(&C, te, Xs);
     if (s->mode == 0) {
         s->V = 0.0;
         s->A = 0.0;
-        s->F = dfo_stick_force(&C.L, S);
+        s->F = dfo_stick_force(&C.Ls_, S) * C.Ls;
     } else {
-        s->F = -s->mode * C.L.muk_N;
-        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
+        const double F = -s->mode * C.Ls_.muk_N;
+        s->F = F * C.Ls;
+        s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
     }
     if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
     return DFO_OK;

@@ -22,8 +22,22 @@
  * breakaway (dfo_next_breakaway).
  *
  * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call), so
- * the state (t, X, V, mode, the stick phase's breakaway) is all a continuation needs: FMU states and
- * their serialisation continue bit for bit. On return A is the physical acceleration, hA = 0, F the
+ * the state (t, X, V, mode) is all a continuation needs: FMU states and their serialisation continue
+ * bit for bit (a stick phase's breakaway is found anew at each call, to the same time).
+ *
+ * Exact at the edges (issue 20):
+ *  - time: inside a call the events' times are double-doubles (a call starts and ends on the host's
+ *    times, doubles), and the excitation phase omega t + phi at a phase start is computed from that
+ *    absolute time (phi reduced mod 2 pi exactly, omega t carried as a double-double; carried over at
+ *    most CARRY_MAX reversals in a row): one call over 1e6 periods equals one call per period to
+ *    rounding, whatever phi. A slip phase longer than SPAN_TURNS turns restarts (not an event);
+ *  - size: lengths are over a power-of-2 scale chosen at each call (exact), so that no square of the
+ *    motion over- or underflows; a motion that leaves the double range is DFO_ERR_NONFINITE (never OK
+ *    with a wrong number);
+ *  - damping: near critical damping (wd or wh < 1/2) the free part is bounded without the modes'
+ *    1 / wd, 1 / wh; over-damped away from it the derivatives come from the two modes (the equation
+ *    of motion's recurrence would lose (2 zeta)^k), so a slow creep is followed to within a few ulps
+ *    of its equilibrium. On return A is the physical acceleration, hA = 0, F the
  * friction force. Observables are exact: x is monotone in a slip phase, so the window's extremes
  * are at its ends, the stops and the window's edges (evaluated in closed form); the stick time is a
  * sum of intervals; E_friction adds mu_k N |dx| of each slip inside the window.
@@ -42,5 +56,10 @@
 /* Advance to t_target > s->t with the inputs held: the contract of dfo_advance. */
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);
+
+/* The excitation P0 cos(omega t + phi) as the exact scheme evaluates it: phi reduced mod 2 pi
+ * exactly and omega t + phi carried as a double-double, so exact to rounding for any t and phi
+ * (newmark.c's outputs a and F_friction of the exact scheme use it). */
+double dfo_exact_excitation(const dfo_model *M, double t);
 
 #endif

@@ -567,6 +567,10 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
 {
     step_ctx C;
     make_ctx(&C, M, in);
+    if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t0, phi) */
+        C.t_grid = t0;
+        C.P_grid = dfo_exact_excitation(M, t0);
+    }
     const dfo_state zero = {0};
     *s = zero;
     s->t0 = s->t = t0;
@@ -726,6 +730,7 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
  * the state sits on the grid point the cache holds, else in closed form. */
 static double state_excitation(const dfo_model *M, const dfo_state *s)
 {
+    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_excitation(M, s->t); /* its phase, exact for any t, phi */
     if (s->exc_n >= 0 && s->exc_n == s->n && s->t == s->t0 + (double)s->n * M->p.h) {
         const double c = s->exc_c;
         return M->p.P0 * (c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c);
@@ -759,6 +764,10 @@ double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_stat
     step_ctx C;
     make_ctx(&C, M, in);
     if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
+    if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t, phi) */
+        C.t_grid = s->t;
+        C.P_grid = dfo_exact_excitation(M, s->t);
+    }
     return accel_of(&C, s, s->t, s->F);
 }
 
