@@ -2,6 +2,7 @@
  * and method.md sections 5 and 10. */
 #include "exact.h"
 #include "dmath.h"
+#include "exact_free.h"
 
 #include "friction.h"
 
@@ -724,6 +725,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
     int skip = 0, stall = 0, carried = 0;
     double t_last = s->t, cs[2] = {1.0, 0.0}; /* the excitation phase at s->t when carried */
     while (s->t < t_target) {
+        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
         if (s->t == t_last) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
         } else {
@@ -818,6 +820,7 @@ static long long grid_index(const dfo_model *M, const dfo_state *s)
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
+    if (M->p.k == 0.0) return dfo_exact_free_advance(M, u, s, t_target, on_switch, switch_ctx); /* no spring */
     ex_ctx C;
     ctx_init(&C, M, u);
     C.on_switch = on_switch;
