@@ -176,7 +176,7 @@ static void eval(const fr_ctx *C, const fr_phase *P, double tau, fr_val *out)
     out->a = q - C->b * v;
     out->cth = cth;
     out->sth = sth;
-    out->vmag = vmag;
+    out->vmag = vmag + C->R_H; /* (the harmonic part's amplitude: the scale of a carried velocity) */
 }
 
 /* The state at tau = 0 (no evaluation). */
@@ -188,7 +188,7 @@ static void eval0(const fr_ctx *C, const fr_phase *P, fr_val *out)
     out->cth = P->c0;
     out->sth = P->s0;
     out->a = P->f0 + C->A * P->c0 - C->b * P->va;
-    out->vmag = fabs(P->va);
+    out->vmag = fabs(P->va) + C->R_H;
 }
 
 /* ---- the zeros of q = A cos(theta) + f0 --------------------------------------------------------- */
@@ -201,6 +201,7 @@ typedef struct {
     int up[2];
     long long j;     /* the next zero */
     double w;
+    int min_at_start; /* a zero within rounding of the start is a minimum of e^{b tau} s v */
 } fr_zeros;
 
 /* The angle of (c, s) in (-pi, pi], from the better conditioned of acos(c) and acos(s). */
@@ -227,6 +228,7 @@ static void zeros_init(const fr_ctx *C, const fr_phase *P, fr_zeros *Z)
     Z->n = 0;
     Z->j = 0;
     Z->w = C->w;
+    Z->min_at_start = 0;
     if (!(C->A > 0.0)) return;
     const double r = -P->f0 / C->A;
     if (!(r > -1.0 && r < 1.0)) return; /* q does not change sign */
@@ -247,6 +249,10 @@ static void zeros_init(const fr_ctx *C, const fr_phase *P, fr_zeros *Z)
     Z->up[1] = u1;
     /* the zeros within the rounding of the start's phase are the start's */
     while (Z->j < 2 && Z->d[Z->j] <= P->ang_eps) Z->j++;
+    /* s q rises through 0 there (up: q falls through 0) */
+    for (int i = 0; i < 2; i++)
+        if (Z->d[i] <= P->ang_eps || Z->d[i] >= TWO_PI - P->ang_eps)
+            if ((Z->up[i] && P->s < 0) || (!Z->up[i] && P->s > 0)) Z->min_at_start = 1;
 }
 
 static double zero_at(const fr_zeros *Z, long long j)
@@ -265,27 +271,41 @@ static int sign_before(const fr_zeros *Z, long long j, int s, double f0)
 
 enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2 };
 
-/* The single zero of g = s v in [lo, hi] with g(lo) > 0 >= g(hi) (e^{b tau} v monotone there):
- * Newton's method kept inside the bracket, bisection when it leaves it or does not halve it. */
+/* The single zero of g = s v in [lo, hi] with g(lo) > 0 >= g(hi) (e^{b tau} v monotone there): a
+ * secant step from the ends (both are extrema of e^{b tau} v, where Newton's method has no slope),
+ * then Newton's method kept inside the bracket, bisection when it leaves it or does not halve |g|;
+ * done when |g| is at rounding or the step is below the resolution of t. */
 static void polish(const fr_ctx *C, const fr_phase *P, const fr_val *vlo, const fr_val *vhi, fr_val *out)
 {
     const int s = P->s;
-    fr_val lo = *vlo, hi = *vhi, cur = (s * vlo->v < -s * vhi->v) ? *vlo : *vhi;
-    double w1 = INFINITY, w2 = INFINITY; /* the bracket's widths one and two steps ago */
+    fr_val lo = *vlo, hi = *vhi, cur;
+    double g_prev = INFINITY; /* |g| before the last Newton step */
+    {
+        const double glo = s * lo.v, ghi = s * hi.v;
+        double t = lo.tau + (hi.tau - lo.tau) * (glo / (glo - ghi));
+        if (!(t > lo.tau && t < hi.tau)) t = 0.5 * (lo.tau + hi.tau);
+        eval(C, P, t, &cur);
+    }
     for (int it = 0; it < MAX_POLISH; it++) {
-        const double width = hi.tau - lo.tau;
-        if (width <= 4.0 * DBL_EPSILON * (fabs(P->ta) + hi.tau)) break; /* at the resolution of t */
-        const double g = s * cur.v, g1 = s * cur.a;
+        /* a quarter of the resolution of t = ta + tau: the stop time is then the double nearest to it */
+        const double g = s * cur.v, g1 = s * cur.a, res = 0.25 * DBL_EPSILON * (fabs(P->ta) + cur.tau);
+        if (fabs(g) <= POLISH_TOL * cur.vmag) break;
+        if (g > 0.0) lo = cur; else hi = cur;
+        if (hi.tau - lo.tau <= 2.0 * res) break; /* the bracket is at the resolution of t */
         double t = (g1 < 0.0) ? cur.tau - g / g1 : NAN;
-        if (!(t > lo.tau && t < hi.tau) || width > 0.5 * w2) t = 0.5 * (lo.tau + hi.tau);
-        w2 = w1;
-        w1 = width;
-        if (!(t > lo.tau && t < hi.tau)) break;
-        fr_val v;
-        eval(C, P, t, &v);
-        cur = v;
-        if (fabs(s * v.v) <= POLISH_TOL * v.vmag) break;
-        if (s * v.v > 0.0) lo = v; else hi = v;
+        if (t > lo.tau && t < hi.tau && fabs(g) <= 0.5 * g_prev) {
+            if (fabs(t - cur.tau) <= res) { /* Newton's step is below the resolution of t: take it */
+                cur.x += cur.v * (t - cur.tau) * 0.5;
+                cur.tau = t;
+                cur.v = 0.0;
+                break;
+            }
+            g_prev = fabs(g);
+        } else {
+            t = 0.5 * (lo.tau + hi.tau);
+            g_prev = INFINITY;
+        }
+        eval(C, P, t, &cur);
     }
     /* the evaluated point nearest to the stop */
     const fr_val *best = &cur;
@@ -328,6 +348,10 @@ static int find_stop(const fr_ctx *C, const fr_phase *P, double U, fr_val *out)
             out->v = 0.0;
             return SEARCH_NULL;
         }
+    } else if (Z.min_at_start && s * P->va <= ROUND * lo.vmag) {
+        /* a touch at the start (a communication point on it): s v at its minimum, within rounding */
+        *out = lo;
+        return SEARCH_STOP;
     }
     for (;;) {
         double hi_tau = (Z.n > 0) ? zero_at(&Z, Z.j) : INFINITY;

@@ -445,7 +445,8 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
 {
     dfo_values *v = &in->v;
     double t_target = 0.0;
-    in->work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT; /* no 1e9 h bound: it counts its events */
+    /* the exact scheme counts its events (no 1e9 h bound), unless it walks the grid to a switch */
+    in->work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
     const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     const dfo_state before = v->s;
