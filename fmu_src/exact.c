@@ -3,6 +3,7 @@
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact.h"
 #include "dmath.h"
+#include "exact_free.h"
 
 #include "friction.h"
 
@@ -995,6 +996,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
     dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
     double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
     while (dd_lt(t, target)) {
+        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
         if (t.hi == t_last.hi && t.lo == t_last.lo) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
         } else {
@@ -1175,6 +1177,7 @@ static int scale_exponent(const dfo_model *M, const dfo_inputs *u, const dfo_sta
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
+    if (M->p.k == 0.0) return dfo_exact_free_advance(M, u, s, t_target, on_switch, switch_ctx); /* no spring */
     ex_ctx C;
     ctx_init_scaled(&C, M, u, scale_exponent(M, u, s));
     C.on_switch = on_switch;

@@ -43,10 +43,10 @@
  * sum of intervals; E_friction adds mu_k N |dx| of each slip inside the window.
  *
  * The step h has no effect on the results. It keeps only its bookkeeping roles: the grid index n
- * (t0 + n h <= t < t0 + (n + 1) h, checked when a state is loaded) and the FMU's bound on the work of
- * one call (a communication step may span at most 1e9 h). The counter `steps` counts events.
+ * (t0 + n h <= t < t0 + (n + 1) h, checked when a state is loaded). The work of one call is bounded by
+ * its events (DFO_EXACT_MAX_EVENTS, newmark.h), not by h. The counter `steps` counts events.
  *
- * Needs k > 0 (dfo_check_params says so). Plain C, no FMI types. */
+ * k = 0 (a free mass on a rough support) is handed to exact_free.c. Plain C, no FMI types. */
 #ifndef DFO_EXACT_H
 #define DFO_EXACT_H
 

@@ -468,6 +468,8 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
 {
     dfo_values *v = &in->v;
     double t_target = 0.0;
+    /* the exact scheme counts its events (no 1e9 h bound), unless it walks the grid to a switch */
+    in->work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
     const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     const dfo_state before = v->s;
@@ -552,6 +554,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
     dfo_values *v = &in->v;
     dfo_inst_status done;
     double t_target = 0.0;
+    in->work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
     if (dfo_inst_events_begin(in, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!same_inputs(&v->u, &v->u_used)) {
         dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);

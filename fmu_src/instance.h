@@ -73,6 +73,9 @@ typedef struct {
     int log_on[DFO_NUM_LOG_CATEGORIES];
     unsigned warned;                       /* a value not computed has been noted in this run */
     int stop_at_switch, switched;          /* doStep option and its outcome (see dfo_inst_do_step) */
+    int work_by_events;                    /* a doStep's work is bounded by the model's events (the exact
+                                            * scheme: DFO_EXACT_MAX_EVENTS), not by DFO_MAX_STEPS_PER_CALL
+                                            * steps of h (dfo_inst_check_step) */
 } dfo_instance;
 
 /* Start values, phase instantiated; errors, warnings and notes of values not computed always logged,

@@ -103,7 +103,7 @@ dfo_inst_status dfo_inst_check_step(const dfo_instance *in, const char *fn, doub
     if (v->stop_defined && t_target > v->stop_time + tol)
         return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
                              v->stop_time);
-    if ((t_target - t) / h > DFO_MAX_STEPS_PER_CALL)
+    if (!in->work_by_events && (t_target - t) / h > DFO_MAX_STEPS_PER_CALL)
         return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
                              "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
                              DFO_MAX_STEPS_PER_CALL, h);

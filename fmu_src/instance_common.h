@@ -15,13 +15,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define DFO_MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take */
+#define DFO_MAX_STEPS_PER_CALL 1e9 /* internal steps one doStep may take (unless in->work_by_events) */
 
 /* NULL when x is a valid value of var, else the valid range as text. */
 const char *dfo_inst_invalid(const dfo_var_info *var, double x);
 
 /* The checks of a doStep's arguments against the host's time (in->v.time) and stop time, with the
- * internal step h; *t_target = tc + dt. */
+ * internal step h (and at most DFO_MAX_STEPS_PER_CALL steps of it, unless in->work_by_events);
+ * *t_target = tc + dt. */
 dfo_inst_status dfo_inst_check_step(const dfo_instance *in, const char *fn, double tc, double dt, double h,
                                     double *t_target);
 

@@ -785,6 +785,9 @@ const char *dfo_status_text(dfo_status st)
     case DFO_ERR_NO_PROGRESS: return "too many stick/slip switches inside one internal step";
     case DFO_ERR_NONFINITE: return "the state became non-finite (overflow)";
     case DFO_ERR_RESOLUTION: return "the internal step h is below the time resolution at this time";
+    case DFO_ERR_EVENTS:
+        return "the communication step needs more than 1e8 events (stops, reversals, breakaways) of the exact "
+               "scheme, its work bound; use shorter communication steps";
     }
     return "unknown status";
 }

@@ -20,8 +20,19 @@ typedef enum {
     DFO_ERR_LCP = 1,          /* Lemke reported failure */
     DFO_ERR_NO_PROGRESS = 2,  /* too many switches inside one internal step */
     DFO_ERR_NONFINITE = 3,    /* the state overflowed */
-    DFO_ERR_RESOLUTION = 4    /* a step would not advance time (h below the resolution of t) */
+    DFO_ERR_RESOLUTION = 4,   /* a step would not advance time (h below the resolution of t) */
+    DFO_ERR_EVENTS = 5        /* the exact scheme: more than DFO_EXACT_MAX_EVENTS events in one call */
 } dfo_status;
+
+/* The exact scheme's work bound: the events (stops, reversals, breakaways, touches) one call of
+ * dfo_advance may take, i.e. one communication step. It takes no step h, so its work is counted in
+ * events, not in 1e9 h as the Bossak schemes' (DFO_MAX_STEPS_PER_CALL): 1e8 events are 25 million
+ * periods of a block that sticks and slips twice per period, or 50 million of a frictionless one,
+ * some 10 to 60 s of one core (0.1-0.6 us per event); a communication step that needs more is
+ * refused with DFO_ERR_EVENTS, never an endless loop. (Defined before the include to try it smaller.) */
+#ifndef DFO_EXACT_MAX_EVENTS
+#define DFO_EXACT_MAX_EVENTS 100000000LL
+#endif
 
 typedef struct {
     /* time: the last internal grid point reached is t0 + n h; t is the current time */

@@ -24,8 +24,6 @@ const char *dfo_check_params(const dfo_params *p)
 {
     if (p->t_obs_stop < p->t_obs_start)
         return "The observation window is empty: t_obs_stop must be >= t_obs_start.";
-    if (p->scheme == DFO_SCHEME_EXACT && !(p->k > 0.0))
-        return "The exact scheme needs a spring: k must be > 0 with scheme = 4 (exact).";
     return NULL;
 }
 

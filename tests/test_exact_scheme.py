@@ -318,9 +318,10 @@ def test_switch_log_and_bad_input(fmu: OscillatorFMU) -> None:
     for e, seg0, seg1 in zip(ev, ref.segments, ref.segments[1:]):
         assert (e[1], e[2]) == (seg0.mode, seg1.mode)
         assert abs(e[0] - seg1.t0) <= EVENT_RTOL * p.period
-    bad = Oscillator(**{**p.as_dict(), "k": 0.0})
-    with pytest.raises(FMUError, match="k must be > 0"):
-        fmu.start(bad, EXACT)
+    fmu.start(Oscillator(**{**p.as_dict(), "k": 0.0}), EXACT)   # k = 0: tests/test_exact_free.py
+    bad = Settings(scheme="exact", t_obs_start=1.0, t_obs_stop=0.5)
+    with pytest.raises(FMUError, match="observation window is empty"):
+        fmu.start(p, bad)
 
 
 @pytest.mark.parametrize("kw", [

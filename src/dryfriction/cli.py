@@ -237,8 +237,6 @@ def cmd_response(args: argparse.Namespace) -> int:
     if args.min_periods > args.max_periods:
         raise UsageError(f"--min-periods {args.min_periods} must be <= --max-periods {args.max_periods}")
     p = _physical(args, omega=2.0 * math.pi * args.f_start)
-    if args.scheme == "exact" and p.k == 0:
-        raise UsageError("--scheme exact needs a spring: --k must be > 0")
     f = np.linspace(args.f_start, args.f_stop, args.num) if args.num > 1 else np.array([args.f_start])
     workers = args.workers if args.workers is not None else (0 if args.num <= 200 else (os.cpu_count() or 1))
     progress = not args.no_progress and sys.stderr.isatty()

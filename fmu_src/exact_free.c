@@ -1,0 +1,594 @@
+/* The exact scheme without a spring (k = 0): closed-form phases, events bracketed between the zeros
+ * of the applied force. See exact_free.h. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "exact_free.h"
+#include "dmath.h"
+
+#include "friction.h"
+
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+
+#define TWO_PI (2.0 * DFO_PI)
+#define HALF_PI (0.5 * DFO_PI)
+#define ROUND (64.0 * DBL_EPSILON) /* relative rounding level of the touch test (as exact.c) */
+#define POLISH_TOL (4.0 * DBL_EPSILON) /* relative level at which a bracketed stop is taken */
+#define MAX_POLISH 200                 /* Newton / bisection steps of a bracketed stop */
+#define MAX_STALL 64                   /* events in a row at one instant before it is an error */
+#define SERIES_MAX 1.0                 /* |p tau| up to which E1, E2 are summed as Taylor series */
+#define SERIES_TERMS 22                /* terms of those series (the remainder is below 2^-60 there) */
+#define SKIP_MARGIN 1e-9               /* relative margin of the lower bound that skips intervals */
+
+/* What is constant over one call. */
+typedef struct {
+    const dfo_model *M;
+    dfo_loads L;
+    double b;            /* c / m */
+    double w;            /* omega (0: the excitation is a constant force) */
+    double A;            /* |P0| / m when omega > 0, else 0 */
+    double f_const;      /* the constant force per mass besides friction: (F_ext + P0 cos phi (omega = 0)) / m */
+    double inv_p2;       /* 1 / (b^2 + omega^2) */
+    double R_H;          /* A / |b + i omega|: the amplitude of the harmonic part of v */
+    dfo_switch_fn on_switch;
+    void *switch_ctx;
+    long long events;
+} fr_ctx;
+
+/* One slip phase from (ta, xa, va) in direction s. */
+typedef struct {
+    int s;
+    double ta, xa, va;
+    double f0;       /* constant acceleration: f_const - s mu_k N / m */
+    double c0, s0;   /* cos, sin of the excitation phase at ta */
+    double ang_eps;  /* the rounding of that phase (rad) */
+} fr_phase;
+
+/* The motion at tau. */
+typedef struct {
+    double tau, x, v, a;
+    double cth, sth; /* cos, sin of the excitation phase there */
+    double vmag;     /* the size of the terms summed into v (its rounding scale) */
+} fr_val;
+
+/* ---- closed form ------------------------------------------------------------------------------ */
+
+static void ctx_init(fr_ctx *C, const dfo_model *M, const dfo_inputs *in)
+{
+    const dfo_params *p = &M->p;
+    C->M = M;
+    dfo_loads_init(&C->L, M, in);
+    C->b = p->c / p->m;
+    const int harmonic = p->omega > 0.0 && M->P_amp > 0.0;
+    C->w = harmonic ? p->omega : 0.0;
+    C->A = harmonic ? M->P_amp / p->m : 0.0;
+    C->f_const = (C->L.F_ext + (harmonic ? 0.0 : dfo_excitation(M, 0.0))) / p->m;
+    const double p2 = C->b * C->b + C->w * C->w;
+    C->inv_p2 = harmonic ? 1.0 / p2 : 0.0;
+    C->R_H = harmonic ? C->A / sqrt(p2) : 0.0;
+    C->on_switch = NULL;
+    C->switch_ctx = NULL;
+    C->events = 0;
+}
+
+static void phase_init(const fr_ctx *C, fr_phase *P, double ta, double X, double V, int s)
+{
+    const dfo_model *M = C->M;
+    P->s = s;
+    P->ta = ta;
+    P->xa = X;
+    P->va = V;
+    P->f0 = C->f_const - s * C->L.muk_N / M->p.m;
+    P->c0 = 1.0;
+    P->s0 = 0.0;
+    P->ang_eps = 0.0;
+    if (C->A > 0.0) {
+        const double th = M->p.omega * ta + M->P_phase; /* from the absolute time at every phase start */
+        dfo_sincos(th, &P->s0, &P->c0);
+        P->ang_eps = 8.0 * DBL_EPSILON * (fabs(th) + TWO_PI);
+    }
+}
+
+/* phi1(mu) = (e^mu - 1) / mu and phi2(mu) = (e^mu - 1 - mu) / mu^2 for mu <= 0, from em1 = expm1(mu). */
+static double phi1_real(double mu, double em1) { return (mu == 0.0) ? 1.0 : em1 / mu; }
+
+static double phi2_real(double mu, double em1)
+{
+    if (fabs(mu) <= 1.0) { /* sum mu^n / (n + 2)!, n <= 17 (remainder below 1 / 20!) */
+        double t = 0.5, sum = 0.0;
+        for (int n = 0; n <= 17; n++) {
+            sum += t;
+            t *= mu / (double)(n + 3);
+        }
+        return sum;
+    }
+    return (em1 - mu) / (mu * mu);
+}
+
+/* E1 = (e^nu - e^mu) / (nu - mu) and E2 = (phi1(nu) - phi1(mu)) / (nu - mu) for mu = -b tau <= 0,
+ * nu = i y, y = omega tau, with cw + i sw = e^{i y}, e = e^mu, em1 = expm1(mu). */
+static void divided(double mu, double y, double cw, double sw, double e, double em1, double *E1r, double *E1i,
+                    double *E2r, double *E2i)
+{
+    if (mu * mu + y * y <= SERIES_MAX * SERIES_MAX) {
+        /* E1 = sum h_n / (n + 1)!, E2 = sum h_n / (n + 2)!, h_n = sum_j mu^j nu^(n - j) = nu h_(n-1) + mu^n */
+        double hr = 1.0, hi = 0.0, mun = 1.0, f1 = 1.0, f2 = 0.5;
+        double s1r = 0.0, s1i = 0.0, s2r = 0.0, s2i = 0.0;
+        for (int n = 0; n < SERIES_TERMS; n++) {
+            s1r += hr * f1;
+            s1i += hi * f1;
+            s2r += hr * f2;
+            s2i += hi * f2;
+            mun *= mu;
+            const double nr = -y * hi + mun, ni = y * hr; /* nu h + mu^(n+1) */
+            hr = nr;
+            hi = ni;
+            f1 /= (double)(n + 2);
+            f2 /= (double)(n + 3);
+        }
+        *E1r = s1r;
+        *E1i = s1i;
+        *E2r = s2r;
+        *E2i = s2i;
+        return;
+    }
+    /* |nu - mu| > 1: E1 = e^nu phi1(mu - nu); phi1(z), z = mu - i y, without cancellation:
+     * e^z - 1 = (expm1(mu) cos y - (1 - cos y)) - i e^mu sin y, 1 - cos y = sin^2 y / (1 + cos y) */
+    const double omc = (cw > 0.0) ? sw * sw / (1.0 + cw) : 1.0 - cw;
+    const double er = em1 * cw - omc, ei = -e * sw;
+    const double d = mu * mu + y * y;
+    const double pr = (er * mu - ei * y) / d, pi = (ei * mu + er * y) / d; /* (er + i ei) / (mu - i y) */
+    *E1r = cw * pr - sw * pi;
+    *E1i = cw * pi + sw * pr;
+    /* E2 = (phi1(i y) - phi1(mu)) / (i y - mu), phi1(i y) = sin y / y + i (1 - cos y) / y */
+    const double ar = (y != 0.0 ? sw / y : 1.0) - phi1_real(mu, em1), ai = (y != 0.0 ? omc / y : 0.0);
+    /* divided by (-mu + i y) */
+    *E2r = (ar * -mu + ai * y) / d;
+    *E2i = (ai * -mu - ar * y) / d;
+}
+
+static void eval(const fr_ctx *C, const fr_phase *P, double tau, fr_val *out)
+{
+    const double mu = -C->b * tau;
+    const double e = (mu != 0.0) ? dfo_exp(mu) : 1.0, em1 = (mu != 0.0) ? dfo_expm1(mu) : 0.0;
+    const double p1 = phi1_real(mu, em1), p2 = phi2_real(mu, em1);
+    const double t1 = P->va * e, t2 = P->f0 * tau * p1;
+    double v = t1 + t2;
+    double x = P->xa + (P->va * tau * p1 + P->f0 * tau * tau * p2);
+    double vmag = fabs(t1) + fabs(t2);
+    double cth = 1.0, sth = 0.0, q = P->f0;
+    if (C->A > 0.0) {
+        const double y = C->w * tau;
+        double sw, cw;
+        dfo_sincos(y, &sw, &cw);
+        cth = P->c0 * cw - P->s0 * sw;
+        sth = P->s0 * cw + P->c0 * sw;
+        double E1r, E1i, E2r, E2i;
+        divided(mu, y, cw, sw, e, em1, &E1r, &E1i, &E2r, &E2i);
+        const double th = C->A * tau * (P->c0 * E1r - P->s0 * E1i);
+        v += th;
+        x += C->A * tau * tau * (P->c0 * E2r - P->s0 * E2i);
+        vmag += C->A * tau * (fabs(E1r) + fabs(E1i));
+        q += C->A * cth;
+    }
+    out->tau = tau;
+    out->x = x;
+    out->v = v;
+    out->a = q - C->b * v;
+    out->cth = cth;
+    out->sth = sth;
+    out->vmag = vmag + C->R_H; /* (the harmonic part's amplitude: the scale of a carried velocity) */
+}
+
+/* The state at tau = 0 (no evaluation). */
+static void eval0(const fr_ctx *C, const fr_phase *P, fr_val *out)
+{
+    out->tau = 0.0;
+    out->x = P->xa;
+    out->v = P->va;
+    out->cth = P->c0;
+    out->sth = P->s0;
+    out->a = P->f0 + C->A * P->c0 - C->b * P->va;
+    out->vmag = fabs(P->va) + C->R_H;
+}
+
+/* ---- the zeros of q = A cos(theta) + f0 --------------------------------------------------------- */
+
+/* The zeros after tau = 0 in increasing order: zero j at (d[j % 2] + 2 pi (j / 2)) / omega; before a
+ * zero of kind up[.] = 1 (theta = alpha, cos falling through -f0 / A) q > 0, after it q < 0. */
+typedef struct {
+    int n;           /* 0: q keeps the sign of f0 (or is 0); 2: two zeros per period */
+    double d[2];     /* offsets of the phase, in [0, 2 pi) */
+    int up[2];
+    long long j;     /* the next zero */
+    double w;
+    int min_at_start; /* a zero within rounding of the start is a minimum of e^{b tau} s v */
+} fr_zeros;
+
+/* The angle of (c, s) in (-pi, pi], from the better conditioned of acos(c) and acos(s). */
+static double angle_of(double c, double s)
+{
+    if (fabs(c) <= fabs(s)) {
+        const double a = dfo_acos(fmax(-1.0, fmin(1.0, c)));
+        return (s >= 0.0) ? a : -a;
+    }
+    const double as = HALF_PI - dfo_acos(fmax(-1.0, fmin(1.0, s))); /* asin(s), |s| < 0.71 */
+    if (c > 0.0) return as;
+    return (s >= 0.0) ? DFO_PI - as : -DFO_PI - as;
+}
+
+static double wrap(double d)
+{
+    while (d < 0.0) d += TWO_PI;
+    while (d >= TWO_PI) d -= TWO_PI;
+    return d;
+}
+
+static void zeros_init(const fr_ctx *C, const fr_phase *P, fr_zeros *Z)
+{
+    Z->n = 0;
+    Z->j = 0;
+    Z->w = C->w;
+    Z->min_at_start = 0;
+    if (!(C->A > 0.0)) return;
+    const double r = -P->f0 / C->A;
+    if (!(r > -1.0 && r < 1.0)) return; /* q does not change sign */
+    const double alpha = dfo_acos(r), th = angle_of(P->c0, P->s0);
+    double d0 = wrap(alpha - th), d1 = wrap(-alpha - th);
+    int u0 = 1, u1 = 0;
+    if (d1 < d0) {
+        const double t = d0;
+        d0 = d1;
+        d1 = t;
+        u0 = 0;
+        u1 = 1;
+    }
+    Z->n = 2;
+    Z->d[0] = d0;
+    Z->d[1] = d1;
+    Z->up[0] = u0;
+    Z->up[1] = u1;
+    /* the zeros within the rounding of the start's phase are the start's */
+    while (Z->j < 2 && Z->d[Z->j] <= P->ang_eps) Z->j++;
+    /* s q rises through 0 there (up: q falls through 0) */
+    for (int i = 0; i < 2; i++)
+        if (Z->d[i] <= P->ang_eps || Z->d[i] >= TWO_PI - P->ang_eps)
+            if ((Z->up[i] && P->s < 0) || (!Z->up[i] && P->s > 0)) Z->min_at_start = 1;
+}
+
+static double zero_at(const fr_zeros *Z, long long j)
+{
+    return (Z->d[j & 1] + TWO_PI * (double)(j >> 1)) / Z->w;
+}
+
+/* The sign of s q on the interval that ends at zero j (before it). */
+static int sign_before(const fr_zeros *Z, long long j, int s, double f0)
+{
+    if (Z->n == 0) return s * dfo_sign(f0);
+    return Z->up[j & 1] ? s : -s;
+}
+
+/* ---- the search for the first stop -------------------------------------------------------------- */
+
+enum { SEARCH_NONE = 0, SEARCH_STOP = 1, SEARCH_NULL = 2 };
+
+/* The single zero of g = s v in [lo, hi] with g(lo) > 0 >= g(hi) (e^{b tau} v monotone there): a
+ * secant step from the ends (both are extrema of e^{b tau} v, where Newton's method has no slope),
+ * then Newton's method kept inside the bracket, bisection when it leaves it or does not halve |g|;
+ * done when |g| is at rounding or the step is below the resolution of t. */
+static void polish(const fr_ctx *C, const fr_phase *P, const fr_val *vlo, const fr_val *vhi, fr_val *out)
+{
+    const int s = P->s;
+    fr_val lo = *vlo, hi = *vhi, cur;
+    double g_prev = INFINITY; /* |g| before the last Newton step */
+    {
+        const double glo = s * lo.v, ghi = s * hi.v;
+        double t = lo.tau + (hi.tau - lo.tau) * (glo / (glo - ghi));
+        if (!(t > lo.tau && t < hi.tau)) t = 0.5 * (lo.tau + hi.tau);
+        eval(C, P, t, &cur);
+    }
+    for (int it = 0; it < MAX_POLISH; it++) {
+        /* a quarter of the resolution of t = ta + tau: the stop time is then the double nearest to it */
+        const double g = s * cur.v, g1 = s * cur.a, res = 0.25 * DBL_EPSILON * (fabs(P->ta) + cur.tau);
+        if (fabs(g) <= POLISH_TOL * cur.vmag) break;
+        if (g > 0.0) lo = cur; else hi = cur;
+        if (hi.tau - lo.tau <= 2.0 * res) break; /* the bracket is at the resolution of t */
+        double t = (g1 < 0.0) ? cur.tau - g / g1 : NAN;
+        if (t > lo.tau && t < hi.tau && fabs(g) <= 0.5 * g_prev) {
+            if (fabs(t - cur.tau) <= res) { /* Newton's step is below the resolution of t: take it */
+                cur.x += cur.v * (t - cur.tau) * 0.5;
+                cur.tau = t;
+                cur.v = 0.0;
+                break;
+            }
+            g_prev = fabs(g);
+        } else {
+            t = 0.5 * (lo.tau + hi.tau);
+            g_prev = INFINITY;
+        }
+        eval(C, P, t, &cur);
+    }
+    /* the evaluated point nearest to the stop */
+    const fr_val *best = &cur;
+    if (fabs(lo.v) < fabs(best->v)) best = &lo;
+    if (fabs(hi.v) < fabs(best->v)) best = &hi;
+    *out = *best;
+}
+
+/* A lower bound of s v after the point v: its monotone part less the harmonic amplitude,
+ *   L(d) = s f0 d phi1(-b d) + (s v - s H) e^{-b d} - R_H,   H = Re[A e^{i theta} / (b + i omega)],
+ * whose derivative has one sign. Returns the tau up to which s v > 0 is proven (INFINITY: forever;
+ * v.tau: nothing proven). L is convex when it falls: one Newton step from 0 stays below its root. */
+static double proven_positive(const fr_ctx *C, const fr_phase *P, const fr_val *v)
+{
+    const int s = P->s;
+    const double H = C->A * (C->b * v->cth + C->w * v->sth) * C->inv_p2;
+    const double sE = s * (v->v - H), L0 = sE - C->R_H;
+    const double margin = SKIP_MARGIN * (fabs(sE) + C->R_H + v->vmag) + ROUND * v->vmag;
+    if (!(L0 > margin)) return v->tau;
+    const double L1 = s * P->f0 - C->b * sE; /* the sign of L' */
+    if (L1 >= 0.0) return INFINITY;
+    if (C->b > 0.0 && s * P->f0 - C->b * C->R_H > SKIP_MARGIN * fabs(s * P->f0)) return INFINITY; /* L(inf) > 0 */
+    return v->tau + (L0 - margin) / -L1 * (1.0 - SKIP_MARGIN);
+}
+
+/* The first stop of the phase in (0, U]: SEARCH_STOP with the state there in *out, SEARCH_NONE (then
+ * *out is the state at U) or SEARCH_NULL (a slide from rest that cannot start: *out is the start). */
+static int find_stop(const fr_ctx *C, const fr_phase *P, double U, fr_val *out)
+{
+    const int s = P->s;
+    fr_zeros Z;
+    zeros_init(C, P, &Z);
+    fr_val lo;
+    eval0(C, P, &lo);
+    int skip_ok = 1;
+    if (!(s * P->va > 0.0)) {
+        /* from rest: the slide starts only if e^{b tau} s v grows on the first interval */
+        if (s * P->va < 0.0 || sign_before(&Z, Z.j, s, P->f0) <= 0) {
+            *out = lo;
+            out->v = 0.0;
+            return SEARCH_NULL;
+        }
+    } else if (Z.min_at_start && s * P->va <= ROUND * lo.vmag) {
+        /* a touch at the start (a communication point on it): s v at its minimum, within rounding */
+        *out = lo;
+        return SEARCH_STOP;
+    }
+    for (;;) {
+        double hi_tau = (Z.n > 0) ? zero_at(&Z, Z.j) : INFINITY;
+        const int dir = sign_before(&Z, Z.j, s, P->f0);
+        if (skip_ok && s * lo.v > 0.0) {
+            /* skip what the lower bound proves positive, when that passes the interval's end (should
+             * rounding defeat the bound, the walk below goes on without it) */
+            const double until = proven_positive(C, P, &lo);
+            if (until >= U) {
+                eval(C, P, U, out);
+                if (s * out->v > 0.0) return SEARCH_NONE;
+                skip_ok = 0;
+            } else if (until > hi_tau) {
+                fr_val t;
+                eval(C, P, until, &t);
+                if (s * t.v > 0.0) {
+                    lo = t;
+                    while (Z.n > 0 && zero_at(&Z, Z.j) <= until) Z.j++;
+                    continue;
+                }
+                skip_ok = 0;
+            }
+        }
+        const int end = !(hi_tau < U);
+        if (end) hi_tau = U;
+        fr_val hi;
+        eval(C, P, hi_tau, &hi);
+        if (!isfinite(hi.x) || !isfinite(hi.v)) {
+            *out = hi;
+            return SEARCH_NONE;
+        }
+        const double g_hi = s * hi.v;
+        if (dir <= 0) {
+            if (g_hi <= 0.0) {
+                if (!(s * lo.v > 0.0)) { /* at rest already (rounding) */
+                    *out = lo;
+                    return SEARCH_STOP;
+                }
+                polish(C, P, &lo, &hi, out);
+                return SEARCH_STOP;
+            }
+            if (!end && g_hi <= ROUND * hi.vmag) { /* a touch at the minimum of e^{b tau} s v */
+                *out = hi;
+                return SEARCH_STOP;
+            }
+        }
+        if (end) {
+            *out = hi;
+            if (g_hi > 0.0) return SEARCH_NONE;
+            return SEARCH_STOP; /* rising, yet not above 0 at U (rounding): at rest there */
+        }
+        lo = hi;
+        Z.j++;
+    }
+}
+
+/* ---- observables and switch reports (as exact.c) ------------------------------------------------ */
+
+static void sample(dfo_state *s, double x)
+{
+    if (!s->observed) {
+        s->x_max = s->x_min = x;
+        s->observed = 1;
+    }
+    if (x > s->x_max) s->x_max = x;
+    if (x < s->x_min) s->x_min = x;
+}
+
+/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb, after which
+ * the mode is mode_after (an event at tb when event is set). */
+static void after_phase(const fr_ctx *C, dfo_state *s, const fr_phase *P, double ta, double tb, double xa,
+                        double xb, int mode_during, int mode_after, int event)
+{
+    const dfo_model *M = C->M;
+    if (event && mode_after != mode_during) {
+        if (C->on_switch) C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
+    }
+    if (!M->p.observe) return;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    if (tb < w0 || ta > w1) return;
+    if (mode_during == 0 || P == NULL) {
+        s->t_stuck += (mode_during == 0) ? fmax(fmin(tb, w1) - fmax(ta, w0), 0.0) : 0.0;
+        sample(s, xb);
+    } else {
+        fr_val v;
+        double x0 = xa, x1 = xb;
+        if (ta < w0) { eval(C, P, w0 - ta, &v); x0 = v.x; }
+        if (tb > w1) { eval(C, P, w1 - ta, &v); x1 = v.x; }
+        sample(s, x0);
+        sample(s, x1);
+        s->E_friction += C->L.muk_N * fabs(x1 - x0);
+    }
+    if (event && mode_after != mode_during && tb > w0 && tb <= w1) s->transitions++;
+}
+
+/* ---- the phases (the event loop of exact.c) ----------------------------------------------------- */
+
+/* The next breakaway of the stick phase from ta (cached in the state per stick phase). With skip, a
+ * breakaway at ta itself (a slide just tried did not start) is passed over: the search restarts a
+ * little later, further each time, until it finds a later one. */
+static double breakaway(const fr_ctx *C, dfo_state *s, double ta, int skip, int *dir)
+{
+    const double C0 = C->L.F_ext - C->M->p.k * s->X;
+    const int known = !isnan(s->stick_tb) && s->stick_C == C0 && s->stick_Fb == C->L.Fb;
+    if (!known || (skip && s->stick_tb <= ta)) {
+        s->stick_C = C0;
+        s->stick_Fb = C->L.Fb;
+        double tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
+        if (skip) {
+            const double rate = C->b + fabs(C->M->p.omega);
+            double d = 4.0 * DBL_EPSILON * fmax(fabs(ta), rate > 0.0 ? 1.0 / rate : 1.0);
+            for (int i = 0; i < 200 && tb <= ta + d && isfinite(tb); i++, d *= 2.0)
+                tb = dfo_next_breakaway(C->M, &C->L, C0, ta + d, &s->stick_dir);
+        }
+        s->stick_tb = tb;
+    }
+    *dir = s->stick_dir;
+    return (s->stick_tb > ta) ? s->stick_tb : ta;
+}
+
+static double static_force(const fr_ctx *C, double t, double X)
+{
+    return dfo_static_force(C->M, &C->L, dfo_excitation(C->M, t), X);
+}
+
+static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
+{
+    int skip = 0, stall = 0;
+    double t_last = s->t;
+    while (s->t < t_target) {
+        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
+        if (s->t == t_last) {
+            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
+        } else {
+            stall = 0;
+            t_last = s->t;
+        }
+        const double ta = s->t, xa = s->X;
+        if (s->mode == 0 && !(C->L.Fb > 0.0)) {
+            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+            const double S = static_force(C, ta, s->X), dS = dfo_excitation_rate(C->M, ta);
+            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
+            const int dir = (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
+            s->mode = dir;
+            C->events++;
+            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            continue;
+        }
+        if (s->mode == 0) {
+            int dir = 0;
+            const double tb = breakaway(C, s, ta, skip, &dir);
+            skip = 0;
+            if (tb >= t_target) {
+                s->t = t_target;
+                after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                break;
+            }
+            s->t = tb;
+            s->V = 0.0;
+            s->mode = dir;
+            C->events++;
+            after_phase(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+            continue;
+        }
+        /* a slip in direction sd from (ta, X, V) */
+        const int sd = s->mode;
+        fr_phase P;
+        fr_val v;
+        phase_init(C, &P, ta, s->X, s->V, sd);
+        const int r = find_stop(C, &P, t_target - ta, &v);
+        if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
+        if (r == SEARCH_NONE) {
+            s->t = t_target;
+            s->X = v.x;
+            s->V = v.v;
+            after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
+            break;
+        }
+        double ts = ta + v.tau;
+        if (ts > t_target) ts = t_target;
+        s->t = ts;
+        s->X = v.x;
+        s->V = 0.0;
+        /* the static force at a stop from the excitation phase there (known from the search) */
+        const double Fs = (r == SEARCH_STOP && ts < t_target && C->A > 0.0)
+                              ? dfo_static_force(C->M, &C->L, C->M->P_amp * v.cth, s->X)
+                              : static_force(C, ts, s->X);
+        int next = dfo_rest_mode(&C->L, Fs);
+        if (!(C->L.Fb > 0.0)) {
+            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
+            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
+            next = 0;                                 /* rest, and a breakaway right now is passed over */
+            skip = 1;
+        }
+        if (next == 0) s->stick_tb = NAN; /* a new stick phase */
+        s->mode = next;
+        C->events++;
+        after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+    }
+    return DFO_OK;
+}
+
+/* The grid index of t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks). */
+static long long grid_index(const dfo_model *M, const dfo_state *s)
+{
+    const double h = M->p.h, q = floor((s->t - s->t0) / h);
+    if (!(q >= 0.0)) return 0;
+    if (q > 9e18) return s->n;
+    long long n = (long long)q;
+    while (n > 0 && s->t0 + (double)n * h > s->t) n--;
+    while (s->t0 + (double)(n + 1) * h <= s->t) n++;
+    return n;
+}
+
+dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
+                                  dfo_switch_fn on_switch, void *switch_ctx)
+{
+    fr_ctx C;
+    ctx_init(&C, M, u);
+    C.on_switch = on_switch;
+    C.switch_ctx = switch_ctx;
+    dfo_status st = advance(&C, s, t_target);
+    s->steps += C.events;
+    s->n = grid_index(M, s);
+    s->hA = 0.0;
+    if (st != DFO_OK) return st;
+    const double S = static_force(&C, s->t, s->X);
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(&C.L, S);
+    } else {
+        s->F = -s->mode * C.L.muk_N;
+        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}
