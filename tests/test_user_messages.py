@@ -197,3 +197,21 @@ def test_the_readmes_error_line_is_the_one_printed(capsys: pytest.CaptureFixture
         assert m, f"a quoted error line without a command here to check it: {line}"
         assert main(["run", "--m", m.group(1), "--k", "1", "--P0", "1", "--f", "1", "--N", "1", "--mu-s", "0.1"]) == 2
         assert capsys.readouterr().err.strip() == line
+
+
+@pytest.mark.parametrize("command", [["study", "list"], ["scenes"], ["run", "--scene", "sweep"]])
+def test_an_unusable_fmu_option_is_refused_before_any_work(command: list[str], tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    import zipfile
+
+    bogus = tmp_path / "notes.fmu"
+    bogus.write_text("not an archive")
+    empty = tmp_path / "empty.fmu"
+    with zipfile.ZipFile(empty, "w") as z:
+        z.writestr("readme.txt", "no model description")
+    for path, words in ((bogus, "is not an FMU (not a zip archive)"), (empty, "no modelDescription.xml")):
+        assert main(["--fmu", str(path), *command]) == 2
+        cap = capsys.readouterr()
+        lines = cap.err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("dryfriction: error: ") and words in lines[0], cap.err
+        assert cap.out == ""

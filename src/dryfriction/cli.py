@@ -32,7 +32,7 @@ def _global_options(suppress: bool) -> argparse.ArgumentParser:
     g = argparse.ArgumentParser(add_help=False)
     default = argparse.SUPPRESS if suppress else None
     g.add_argument("--fmu", type=Path, default=default,
-                   help="path of the FMU (default: $DFO_FMU, else the installed package's FMU)")
+                   help="path of the FMU (default: $DFO_FMU, else the installed package's, else build/)")
     g.add_argument("--strict", action="store_true", default=default,
                    help="a warning of the FMU (e.g. a step too coarse for the dynamics) is an error: exit 2")
     return g
@@ -356,13 +356,33 @@ def fmu_warnings_on_stderr(prog: str, strict: bool) -> Iterator[None]:
                       "(--strict stops at the first)", file=sys.stderr, flush=True)
 
 
+def _check_fmu_option(path: Path, command: str) -> None:
+    """An unusable ``--fmu`` is refused before any work (locate.FMUFileError, one line): the
+    oscillator's FMI 2.0 FMU for its commands, any of the package's FMUs for a study (each study
+    checks its own kind), the chain command checks its own."""
+    from . import locate
+
+    if not path.is_file():
+        raise UsageError(f"--fmu: no such file: {path}")
+    if command == "chain":
+        return
+    if command == "study":
+        for kind in locate.KINDS:
+            try:
+                locate.check_fmu(path, kind)
+                return
+            except locate.FMUFileError:
+                pass
+    locate.check_fmu(path, locate.OSCILLATOR)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = build_parser().parse_args(argv)
         args.fmu = getattr(args, "fmu", None)
-        if args.fmu is not None and not args.fmu.is_file():
-            raise UsageError(f"--fmu: no such file: {args.fmu}")
+        if args.fmu is not None:
+            _check_fmu_option(args.fmu, args.command)
         from .chain_cli import chain_main
         from .chaos.cli import lyapunov_main
 
