@@ -875,31 +875,46 @@ static void sample(dfo_state *s, double x)
     if (x < s->x_min) s->x_min = x;
 }
 
+void dfo_exact_after_phase(const dfo_model *M, double muk_N, dfo_switch_fn on_switch, void *switch_ctx,
+                           dfo_state *s, dfo_phase_x_fn x_at, const void *ctx, const void *phase, double ta,
+                           double tb, double xa, double xb, int mode_during, int mode_after, int event)
+{
+    if (event && mode_after != mode_during) {
+        if (on_switch) on_switch(switch_ctx, tb, xb, mode_during, mode_after);
+    }
+    if (!M->p.observe) return;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    if (tb < w0 || ta > w1) return;
+    if (mode_during == 0 || phase == NULL) {
+        s->t_stuck += (mode_during == 0) ? fmax(fmin(tb, w1) - fmax(ta, w0), 0.0) : 0.0;
+        sample(s, xb);
+    } else {
+        const double x0 = (ta < w0) ? x_at(ctx, phase, w0 - ta) : xa;
+        const double x1 = (tb > w1) ? x_at(ctx, phase, w1 - ta) : xb;
+        sample(s, x0);
+        sample(s, x1);
+        s->E_friction += muk_N * fabs(x1 - x0);
+    }
+    if (event && mode_after != mode_during && tb > w0 && tb <= w1) s->transitions++;
+}
+
+/* x of a slip phase (physical) at time t from its start */
+static double phase_x(const void *ctx, const void *phase, double t)
+{
+    const ex_ctx *C = (const ex_ctx *)ctx;
+    const ex_phase *P = (const ex_phase *)phase;
+    ex_val v;
+    eval(C, P, C->w0 * t, &v);
+    return (P->xc + v.y) * C->Ls;
+}
+
 /* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical),
  * after which the mode is mode_after (an event at tb when event is set). */
 static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
                         double xb, int mode_during, int mode_after, int event)
 {
-    const dfo_model *M = C->M;
-    if (event && mode_after != mode_during) {
-        if (C->on_switch) C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
-    }
-    if (!M->p.observe) return;
-    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
-    if (tb < w0 || ta > w1) return;
-    if (mode_during == 0 || P == NULL) {
-        s->t_stuck += (mode_during == 0) ? fmax(fmin(tb, w1) - fmax(ta, w0), 0.0) : 0.0;
-        sample(s, xb);
-    } else {
-        ex_val v;
-        double x0 = xa, x1 = xb;
-        if (ta < w0) { eval(C, P, C->w0 * (w0 - ta), &v); x0 = (P->xc + v.y) * C->Ls; }
-        if (tb > w1) { eval(C, P, C->w0 * (w1 - ta), &v); x1 = (P->xc + v.y) * C->Ls; }
-        sample(s, x0);
-        sample(s, x1);
-        s->E_friction += C->L.muk_N * fabs(x1 - x0);
-    }
-    if (event && mode_after != mode_during && tb > w0 && tb <= w1) s->transitions++;
+    dfo_exact_after_phase(C->M, C->L.muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+                          mode_during, mode_after, event);
 }
 
 /* ---- the phases -------------------------------------------------------------------------------- */

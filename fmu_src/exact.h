@@ -62,4 +62,16 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
  * (newmark.c's outputs a and F_friction of the exact scheme use it). */
 double dfo_exact_excitation(const dfo_model *M, double t);
 
+/* x of a slip phase at time t (from its start) by the phase's own closed form (ctx, phase: the
+ * caller's); used at the observation window's edges. */
+typedef double (*dfo_phase_x_fn)(const void *ctx, const void *phase, double t);
+
+/* The bookkeeping after a phase [ta, tb] spent in mode_during from xa to xb, after which the mode is
+ * mode_after (an event at tb when event is set), shared by exact.c and exact_free.c: the switch
+ * report, and (observe) the window's extremes, stick time, friction work mu_k N |dx| and
+ * transitions. phase NULL: a stick phase (x frozen). */
+void dfo_exact_after_phase(const dfo_model *M, double muk_N, dfo_switch_fn on_switch, void *switch_ctx,
+                           dfo_state *s, dfo_phase_x_fn x_at, const void *ctx, const void *phase, double ta,
+                           double tb, double xa, double xb, int mode_during, int mode_after, int event);
+
 #endif

@@ -2,6 +2,7 @@
  * of the applied force. See exact_free.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact_free.h"
+#include "exact.h"
 #include "dmath.h"
 
 #include "friction.h"
@@ -411,14 +412,12 @@ static int find_stop(const fr_ctx *C, const fr_phase *P, double U, fr_val *out)
 
 /* ---- observables and switch reports (as exact.c) ------------------------------------------------ */
 
-static void sample(dfo_state *s, double x)
+/* x of a slip phase at time t from its start */
+static double phase_x(const void *ctx, const void *phase, double t)
 {
-    if (!s->observed) {
-        s->x_max = s->x_min = x;
-        s->observed = 1;
-    }
-    if (x > s->x_max) s->x_max = x;
-    if (x < s->x_min) s->x_min = x;
+    fr_val v;
+    eval((const fr_ctx *)ctx, (const fr_phase *)phase, t, &v);
+    return v.x;
 }
 
 /* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb, after which
@@ -426,26 +425,8 @@ static void sample(dfo_state *s, double x)
 static void after_phase(const fr_ctx *C, dfo_state *s, const fr_phase *P, double ta, double tb, double xa,
                         double xb, int mode_during, int mode_after, int event)
 {
-    const dfo_model *M = C->M;
-    if (event && mode_after != mode_during) {
-        if (C->on_switch) C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
-    }
-    if (!M->p.observe) return;
-    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
-    if (tb < w0 || ta > w1) return;
-    if (mode_during == 0 || P == NULL) {
-        s->t_stuck += (mode_during == 0) ? fmax(fmin(tb, w1) - fmax(ta, w0), 0.0) : 0.0;
-        sample(s, xb);
-    } else {
-        fr_val v;
-        double x0 = xa, x1 = xb;
-        if (ta < w0) { eval(C, P, w0 - ta, &v); x0 = v.x; }
-        if (tb > w1) { eval(C, P, w1 - ta, &v); x1 = v.x; }
-        sample(s, x0);
-        sample(s, x1);
-        s->E_friction += C->L.muk_N * fabs(x1 - x0);
-    }
-    if (event && mode_after != mode_during && tb > w0 && tb <= w1) s->transitions++;
+    dfo_exact_after_phase(C->M, C->L.muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+                          mode_during, mode_after, event);
 }
 
 /* ---- the phases (the event loop of exact.c) ----------------------------------------------------- */
