@@ -700,19 +700,14 @@ EMITTERS = {"--header": lambda m, src: emit_c_header(m, src.name), "--fmi3": emi
 
 
 def main(argv: list[str]) -> int:
+    sized = None
     if len(argv) == 5 and argv[3] == "--fmi2":  # an indexed model's FMI 2.0 description for a size
+        sized = lambda md: emit_fmi2_model_description(md, Path(argv[1]), int(argv[4]))  # noqa: E731
+    elif len(argv) in (4, 5) and argv[3] == "--config":  # an indexed model's build configuration header
+        sized = lambda md: emit_build_config(md, Path(argv[1]), int(argv[4]) if len(argv) == 5 else None)  # noqa: E731
+    if sized is not None:
         try:
-            text = emit_fmi2_model_description(parse(Path(argv[1])), Path(argv[1]), int(argv[4]))
-        except (ModelError, ET.ParseError, OSError, ValueError) as e:
-            print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
-            return 1
-        out = Path(argv[2])
-        if not out.exists() or out.read_text() != text:
-            out.write_text(text)
-        return 0
-    if len(argv) in (4, 5) and argv[3] == "--config":  # an indexed model's build configuration header
-        try:
-            text = emit_build_config(parse(Path(argv[1])), Path(argv[1]), int(argv[4]) if len(argv) == 5 else None)
+            text = sized(parse(Path(argv[1])))
         except (ModelError, ET.ParseError, OSError, ValueError) as e:
             print(f"gen_model_vars: {argv[1]}: {e}", file=sys.stderr)
             return 1
