@@ -215,3 +215,17 @@ def test_an_unusable_fmu_option_is_refused_before_any_work(command: list[str], t
         lines = cap.err.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("dryfriction: error: ") and words in lines[0], cap.err
         assert cap.out == ""
+
+
+def test_a_free_mass_responds_by_the_exact_scheme(fmu_path: Path) -> None:
+    """k = 0: the response's default is the exact scheme (closed form), equal to the located scheme
+    at a fine step within its error (second order: 1e-6 relative at T/4000)."""
+    from dryfriction.response import frequency_response
+
+    p = Oscillator.physical(m=1, k=0, c=0.5, P0=1, f=1, N=0.5, mu_s=0.3, mu_k=0.2)
+    ex = frequency_response(p, [0.5, 2.0], min_periods=8, max_periods=64, fmu_path=fmu_path)
+    assert ex.attrs["scheme"] == "exact" and np.all(ex["converged"].values)
+    lo = frequency_response(p, [0.5, 2.0], scheme="located", h=1 / 2.0 / 4000, min_periods=8, max_periods=64,
+                            fmu_path=fmu_path)
+    np.testing.assert_allclose(ex["amplitude_m"].values, lo["amplitude_m"].values, rtol=1e-5)
+    assert np.all(ex["amplitude_m"].values > 0)

@@ -86,7 +86,7 @@ def build_parser() -> Parser:
                    help=f"first run length in excitation periods (default {MIN_PERIODS})")
     q.add_argument("--max-periods", type=count("--max-periods", 2), default=MAX_PERIODS,
                    help=f"period limit; beyond it converged = false (default {MAX_PERIODS})")
-    q.add_argument("--scheme", choices=schemes, default=None, help="default: exact (k > 0), else located")
+    q.add_argument("--scheme", choices=schemes, default=None, help="default: exact (closed form, also for k = 0)")
     q.add_argument("--out", type=Path, default=None,
                    help="output folder (default results/response; with --json: no files unless --out is given)")
     q.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")

@@ -63,9 +63,9 @@ class SteadyState:
 
 
 def default_settings(p: Oscillator) -> Settings:
-    """The exact scheme (closed form, h has no effect) when there is a spring, else the located
-    scheme with the FMU's own step (h = 0: derived from the dynamics)."""
-    return Settings(h=0.0, scheme="exact" if p.k > 0 else "located")
+    """The exact scheme (closed form, h has no effect), with a spring or without (k = 0: a free
+    mass on a rough support, exact_free.c)."""
+    return Settings(h=0.0, scheme="exact")
 
 
 def steady_state(fmu: OscillatorFMU, p: Oscillator, *, tol: float = TOL, tol_stick: float = TOL_STICK,
@@ -137,7 +137,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
     A frequency the FMU cannot compute gets NaN values, ``converged`` False and the FMU's
     sentence in ``reason``; the other frequencies go on.
 
-    ``scheme`` None: exact when k > 0, else located with the derived step. ``workers`` > 0 runs
+    ``scheme`` None: exact (also at k = 0). ``workers`` > 0 runs
     the frequencies on a Dask LocalCluster of that many processes (for long sweeps)."""
     import xarray as xr
 
@@ -178,7 +178,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
         attrs={**{f"param_{k}": v for k, v in p.as_dict().items() if k != "omega"},
                "param_mu_k": p.mu_k, "param_zeta": p.zeta, "natural_frequency_hz": p.f_n_hz,
                "units": "SI: m, kg, N, s, Hz", "tol": tol, "tol_stick": TOL_STICK, "min_periods": min_periods,
-               "max_periods": max_periods, "scheme": scheme or ("exact" if p.k > 0 else "located"),
+               "max_periods": max_periods, "scheme": scheme or "exact",
                "never_converges": never_converges_note(p)},
     )
     return ds
