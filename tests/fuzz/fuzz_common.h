@@ -412,4 +412,14 @@ static inline int fuzz_drive(const fuzz_target *T, const uint8_t *data, size_t s
     return 0;
 }
 
+#ifdef VR_x_max
+/* The oscillator's rule for a value not computed (observe false, or a window not yet sampled): its
+ * observables read NaN with OK (transitions -1). Any other non-finite value read with OK is a bug. */
+static int fuzz_finite_or_not_computed(unsigned vr, double v)
+{
+    if (isfinite(v)) return 1;
+    return isnan(v) && (vr == VR_x_max || vr == VR_x_min || vr == VR_stick_fraction || vr == VR_E_friction);
+}
+#endif
+
 #endif
