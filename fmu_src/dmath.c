@@ -60,17 +60,6 @@ static void fast_two_sum(double a, double b, double *s, double *e)
     *e = b - (t - a);
 }
 
-/* the rounding error of a * b: a * b - fl(a * b), exactly (Dekker, Veltkamp's split) */
-static double two_prod_err(double a, double b, double p)
-{
-    const double split = 134217729.0; /* 2^27 + 1 */
-    double t = split * a;
-    const double ah = t - (t - a), al = a - ah;
-    t = split * b;
-    const double bh = t - (t - b), bl = b - bh;
-    return ((ah * bh - p) + ah * bl + al * bh) + al * bl;
-}
-
 /* ---- constants ------------------------------------------------------------------------------ */
 
 static const double PIO4 = 0x1.921fb54442d18p-1;
@@ -214,7 +203,7 @@ static int reduce_large(double ax, double *hi, double *lo)
     const double da = (double)a * pow2(-53 - lz), db = (double)b * pow2(-106 - lz);
     /* (da + db) (PIO2_HI + PIO2_LO) in double-double */
     const double ph = da * PIO2_HI;
-    const double pl = two_prod_err(da, PIO2_HI, ph) + (da * PIO2_LO + db * PIO2_HI);
+    const double pl = dfo_two_prod_err(da, PIO2_HI, ph) + (da * PIO2_LO + db * PIO2_HI);
     double rh, rl;
     fast_two_sum(ph, pl, &rh, &rl);
     *hi = neg ? -rh : rh;
@@ -529,7 +518,7 @@ static double asin_sqrt(double w)
     if (w == 0.0) return 0.0;
     const double s = sqrt(w);
     const double ss = s * s;
-    const double c = ((w - ss) - two_prod_err(s, s, ss)) / (s + s);
+    const double c = ((w - ss) - dfo_two_prod_err(s, s, ss)) / (s + s);
     return s + (c + s * w * asin_poly(w));
 }
 

@@ -1139,8 +1139,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
     return DFO_OK;
 }
 
-/* The grid index of t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks). */
-static long long grid_index(const dfo_model *M, const dfo_state *s)
+long long dfo_exact_grid_index(const dfo_model *M, const dfo_state *s)
 {
     const double h = M->p.h, q = floor((s->t - s->t0) / h);
     if (!(q >= 0.0)) return 0;
@@ -1205,7 +1204,7 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
     }
     dfo_status st = advance(&C, s, t_target);
     s->steps += C.events;
-    s->n = grid_index(M, s);
+    s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
     const dd te = {s->t, 0.0};

@@ -62,6 +62,10 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
  * (newmark.c's outputs a and F_friction of the exact scheme use it). */
 double dfo_exact_excitation(const dfo_model *M, double t);
 
+/* The grid index of s->t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks when a
+ * state is loaded), shared by exact.c and exact_free.c. */
+long long dfo_exact_grid_index(const dfo_model *M, const dfo_state *s);
+
 /* x of a slip phase at time t (from its start) by the phase's own closed form (ctx, phase: the
  * caller's); used at the observation window's edges. */
 typedef double (*dfo_phase_x_fn)(const void *ctx, const void *phase, double t);

@@ -537,18 +537,6 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
     return DFO_OK;
 }
 
-/* The grid index of t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks). */
-static long long grid_index(const dfo_model *M, const dfo_state *s)
-{
-    const double h = M->p.h, q = floor((s->t - s->t0) / h);
-    if (!(q >= 0.0)) return 0;
-    if (q > 9e18) return s->n;
-    long long n = (long long)q;
-    while (n > 0 && s->t0 + (double)n * h > s->t) n--;
-    while (s->t0 + (double)(n + 1) * h <= s->t) n++;
-    return n;
-}
-
 dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                                   dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -558,7 +546,7 @@ dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_s
     C.switch_ctx = switch_ctx;
     dfo_status st = advance(&C, s, t_target);
     s->steps += C.events;
-    s->n = grid_index(M, s);
+    s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
     const double S = static_force(&C, s->t, s->X);
