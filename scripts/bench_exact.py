@@ -96,7 +96,7 @@ def build_loop(build_dir: Path, work: Path) -> Path:
         sys.exit(f"bench_exact: needs a C compiler and {lib} (cmake --build {build_dir})")
     src, exe = work / "loop.c", work / "loop"
     src.write_text(LOOP_C)
-    r = subprocess.run([cc, "-O2", "-std=c99", f"-I{ROOT / 'fmu_src'}", str(src), str(lib), "-lm", "-o", str(exe)],
+    r = subprocess.run([cc, "-O2", "-std=c99", *(f"-I{d}" for d in sorted((ROOT / 'fmu_src').glob('*/')) + sorted((ROOT / 'fmu_src' / 'models').glob('*/'))), str(src), str(lib), "-lm", "-o", str(exe)],
                        capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"bench_exact: compiling the loop failed: {r.stderr.strip().splitlines()[-1]}")

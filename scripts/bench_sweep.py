@@ -106,7 +106,7 @@ def build_driver(build_dir: Path, workdir: Path) -> Path | None:
     src = workdir / "bare_loop.c"
     exe = workdir / "bare_loop"
     src.write_text(C_DRIVER)
-    r = subprocess.run([cc, "-O2", "-std=c99", "-D_POSIX_C_SOURCE=199309L", f"-I{ROOT / 'fmu_src'}", str(src),
+    r = subprocess.run([cc, "-O2", "-std=c99", "-D_POSIX_C_SOURCE=199309L", *(f"-I{d}" for d in sorted((ROOT / 'fmu_src').glob('*/')) + sorted((ROOT / 'fmu_src' / 'models').glob('*/'))), str(src),
                         str(lib), "-lm", "-o", str(exe)], capture_output=True, text=True)
     if r.returncode != 0:
         print(f"note: could not build the bare loop ({r.stderr.strip().splitlines()[-1:]}); using the FMU proxy",

@@ -203,7 +203,7 @@ def _gen(*args: str) -> subprocess.CompletedProcess[str]:
 def test_the_chain_source_expands_to_both_fmi_versions(tmp_path: Path) -> None:
     """The chain's one source (arrays of the structural parameter n): FMI 2.0 for a build's n with
     structured names and per-element value references and dependencies, FMI 3.0 with <Dimension>."""
-    src = ROOT / "fmu_src" / "chain" / "modelDescription.xml"
+    src = ROOT / "fmu_src" / "models" / "chain" / "modelDescription.xml"
     assert _gen(str(src), str(tmp_path / "md2.xml"), "--fmi2", "3").returncode == 0
     root2 = ET.parse(tmp_path / "md2.xml").getroot()
     assert root2.get("fmiVersion") == "2.0" and root2.get("variableNamingConvention") == "structured"
@@ -237,7 +237,7 @@ def test_the_chain_build_configuration_header(tmp_path: Path) -> None:
     """chain_config.h, generated into each chain FMU's sources/: the FMI 2.0 build's n (checked
     against n's range), none for FMI 3.0 (n set in Configuration Mode); the oscillator has no
     structural parameter to configure."""
-    src = ROOT / "fmu_src" / "chain" / "modelDescription.xml"
+    src = ROOT / "fmu_src" / "models" / "chain" / "modelDescription.xml"
     assert _gen(str(src), str(tmp_path / "c2.h"), "--config", "3").returncode == 0
     text2 = (tmp_path / "c2.h").read_text()
     assert "#define DFO_CHAIN_FIXED_N 3 " in text2 and "#ifndef DFO_CHAIN_CONFIG_H" in text2
