@@ -121,7 +121,78 @@ def _machine() -> str:
     return f"{cpu}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}"
 
 
-def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_rows, scal, mem, meta) -> None:
+SICONOS_METHODS = ("Siconos theta=0.5", "Siconos theta=1")
+
+
+def _sic_cost(sic: Sequence[dict], case: str, methods: Sequence[str], target: float) -> float | None:
+    """CPU seconds per period for the cheapest of methods (siconos.csv rows) to reach target."""
+    vals = [cost_at([(r["error_z"], r["us_per_period"] * 1e-6) for r in sic if r["case"] == case
+                     and r["method"] == m], target) for m in methods]
+    vals = [v for v in vals if v is not None]
+    return min(vals) if vals else None
+
+
+def _siconos_cell(sic: Sequence[dict] | None, case: str, chi: float, target: float) -> str:
+    if not sic:
+        return "not run"
+    note = next((r["note"] for r in sic if r["case"] == case and r["method"] == "Siconos"), "")
+    if note:
+        return note
+    s = _sic_cost(sic, case, SICONOS_METHODS, target)
+    f = _sic_cost(sic, case, ("FMU located", "FMU exact"), target)
+    if s is None:
+        return f"n/a at chi = {chi:g}; at chi = 1 not reached (FMU {_fmt_us(f)})"
+    if f is None:
+        return f"n/a at chi = {chi:g}; at chi = 1 {_fmt_us(s)} (FMU not reached)"
+    return f"n/a at chi = {chi:g}; at chi = 1 {_fmt_us(s)} (FMU {_fmt_us(f)}: {s / f:.3g}x)"
+
+
+def _siconos_section(add, sic: Sequence[dict] | None, cases, targets: Sequence[float]) -> None:
+    add("### Siconos, on the same cases at chi = 1")
+    add("")
+    if not sic:
+        add("Not run (`--no-siconos`, or a study folder from before Siconos was a peer).")
+        add("")
+        return
+    missing = [r for r in sic if r["method"] == "Siconos"]
+    if missing:
+        add(f"Not measured: {missing[0]['note']}.")
+        add("")
+        return
+    add("Siconos (Debian's python3-siconos under the system Python, `bench/siconos_study.py`): Moreau-Jean "
+        "time stepping (`EulerMoreauOSI(theta)`) with the friction as a relay (`RelayNSL`, solved by Lemke), "
+        "the harmonic force as the system's b(t) in a C plugin, h = 1e-2, 5e-3, ... until its error reaches "
+        "1e-6 or its time budget. Its relay law has one friction coefficient, so the study's cases, whose "
+        "static and kinetic coefficients differ (chi != 1), are outside it: they are run at chi = 1 "
+        "(mu_k = mu_s), by Siconos and by the FMU (located, alpha = -0.1, over h; exact), and the columns "
+        "below compare those runs only. Cost = process CPU time of the stepping loop on both sides "
+        "(Siconos's C++ `run()`, the FMU's one doStep), per period, microseconds; the full side-by-side "
+        "benchmark is `bench/siconos_peer.py`.")
+    add("")
+    add("| case (at chi = 1) | E | Siconos theta = 0.5 | Siconos theta = 1 | FMU located | FMU exact | "
+        "Siconos / FMU's best |")
+    add("|---|---|---|---|---|---|---|")
+    for c in cases:
+        for E in targets:
+            cells = [_sic_cost(sic, c.name, (m,), E) for m in SICONOS_METHODS + ("FMU located", "FMU exact")]
+            s = _sic_cost(sic, c.name, SICONOS_METHODS, E)
+            f = _sic_cost(sic, c.name, ("FMU located", "FMU exact"), E)
+            ratio = f"{s / f:.3g}x" if s is not None and f is not None else "n/a"
+            add(f"| {c.name} | {E:.0e} | " + " | ".join(_fmt_us(v) for v in cells) + f" | {ratio} |")
+    add("")
+    finest = []
+    for c in cases:
+        for m in SICONOS_METHODS:
+            sel = [r for r in sic if r["case"] == c.name and r["method"] == m]
+            if sel:
+                best = min(sel, key=lambda r: r["error_z"])
+                finest.append(f"{c.name} {m.split()[1]}: {best['error_z']:.2g} at h = {best['h']:.3g}")
+    add("Smallest Siconos error per case: " + "; ".join(finest) + ".")
+    add("")
+
+
+def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_rows, scal, mem, meta,
+                 siconos: Sequence[dict] | None = None) -> None:
     rel = os.path.relpath(out, md.parent)
 
     def img(name: str) -> str:
@@ -164,9 +235,10 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
     add("### Microseconds per excitation period to reach an error E")
     add("")
     head = "| case | E | FMU located (alpha=-0.1) | FMU, best scheme/alpha | " + " | ".join(PEERS) + \
-        " | speed-up of the best FMU over the fastest peer |"
+        " | speed-up of the best FMU over the fastest peer | Siconos (relay law: chi = 1 only) |"
     add(head)
-    add("|" + "---|" * (4 + len(PEERS) + 1))
+    add("|" + "---|" * (4 + len(PEERS) + 2))
+    chis = {r["case"]: r["chi"] for r in case_rows}
     for c in cases:
         for E in cfg.targets:
             loc = cost_at(_per_period([r for r in rows if r["case"] == c.name and r["family"] == "fmu"
@@ -182,7 +254,8 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
             else:
                 sp = "FMU does not reach E"
             best_cell = f"{_fmt_us(bt)} ({blab})" if bt is not None else "not reached"
-            add(f"| {c.name} | {E:.0e} | {_fmt_us(loc)} | {best_cell} | " + " | ".join(cells) + f" | {sp} |")
+            add(f"| {c.name} | {E:.0e} | {_fmt_us(loc)} | {best_cell} | " + " | ".join(cells) + f" | {sp} | "
+                f"{_siconos_cell(siconos, c.name, chis.get(c.name, float('nan')), E)} |")
     add("")
     add(f"![error vs CPU time per case]({img('error_vs_cpu.png')})")
     add("")
@@ -207,6 +280,8 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
         add(f"- **{c.name}**: to reach error {E:.0e} on this case costs {_fmt_us(loc)} microseconds per period "
             f"(FMU, located scheme, alpha = -0.1, h about {h}, through fmpy){peer}.")
     add("")
+
+    _siconos_section(add, siconos, cases, cfg.targets)
 
     # ------------------------------------------------------------------ goals
     add("## Performance goals, measured side by side in this run")

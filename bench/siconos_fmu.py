@@ -35,10 +35,10 @@ def best_cpu(setup: Callable[[], object], timed: Callable[[], object], budget_s:
 class FmuSide:
     """The oscillator FMU (FMI 2.0) and the chain FMU (FMI 3.0), loaded once."""
 
-    def __init__(self, budget_s: float) -> None:
+    def __init__(self, budget_s: float, fmu_path: str | None = None) -> None:
         from dryfriction.fmu import OscillatorFMU
 
-        self.osc = OscillatorFMU()
+        self.osc = OscillatorFMU(fmu_path)
         self.chains: dict[int, object] = {}
         self.budget = budget_s
 
