@@ -47,9 +47,12 @@ def markdown(results: Sequence[dict], notes: Sequence[str], m: dict, targets: Se
     add = L.append
     add("## Siconos side by side" + (" (quick: a smoke test, not the study)" if m["quick"] else ""))
     add("")
-    add(f"Measured by `bench/siconos_peer.py{' --quick' if m['quick'] else ''}` on {m['date']} in {m['seconds']:.0f} s: "
-        f"Siconos {m['siconos_module']} (Debian python3-siconos {m['siconos_deb']}, system Python "
-        f"{m['system_python']}), the FMU through fmpy {m['fmpy']} (Python {m['venv_python']}); {m['machine']}, "
+    cmd = "bench/siconos_peer.py" + (" --quick" if m["quick"] else "")
+    add(f"Measured by `{cmd}` on {m['date']} in {m['seconds']:.0f} s: "
+        f"Siconos from Debian's python3-siconos {m['siconos_deb']} (its module calls itself "
+        f"{m['siconos_module']}; "
+        f"system Python {m['system_python']}), the FMU through fmpy {m['fmpy']} (Python {m['venv_python']}); "
+        f"{m['machine']}, "
         f"load average {m['load']:.2f} at the end. CPU time = process CPU time of the stepping loop alone on both "
         "sides (Siconos: `TimeStepping.run()`, its C++ loop, on a freshly built model; the FMU: the one "
         "`doStep` over the run after reset and initialisation), the minimum over repetitions. Siconos: "

@@ -10,8 +10,10 @@ Siconos cannot be had, one row per case saying why (no number is made up).
 from __future__ import annotations
 
 import math
+import time
 from typing import TextIO
 
+from report import _machine
 from siconos_peer import THETAS, PeerConfig, fmu_sweep, siconos_sweep
 
 
@@ -25,7 +27,8 @@ def study_config(quick: bool) -> PeerConfig:
 
 def _row(case_name: str, method: str, chi: float, h: float | None, steps: int, cpu: float, err: float,
          periods: int, note: str = "") -> dict:
-    return dict(case=case_name, chi_study=chi, chi_run=1.0, method=method,
+    return dict(case=case_name, chi_study=chi, chi_run=1.0, method=method, measured=time.strftime("%Y-%m-%d %H:%M"),
+                machine=_machine(),
                 h=float("nan") if h is None else h, steps=steps, cpu_s=cpu, error_z=err,
                 us_per_period=cpu / periods * 1e6 if math.isfinite(cpu) else float("nan"), note=note)
 

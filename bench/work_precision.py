@@ -467,6 +467,9 @@ def main(argv: list[str] | None = None) -> int:
                     + f" --out {args.out}" + (f" --md {args.md}" if args.md != args.out / "RESULTS.md" else ""))
         meta["seconds"] = time.perf_counter() - t_start
         meta["date"] = time.strftime("%Y-%m-%d %H:%M")
+        from report import _machine
+
+        meta["machine"] = _machine()
         write_json(out / "meta.json", meta)
         render(args, cfg, meta)
         phase("plots and report")
