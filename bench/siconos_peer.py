@@ -191,6 +191,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     cfg = PeerConfig.make(args.quick, args.budget)
     log = sys.stderr
+    from dryfriction.chain import default_chain_fmu3
+    from dryfriction.fmu import default_fmu_path
+
+    try:  # both FMUs before anything runs
+        default_fmu_path()
+        default_chain_fmu3()
+    except Exception as e:  # noqa: BLE001 - FMUFileError and the like: one line, exit 2
+        sys.stderr.write(f"siconos_peer.py: error: {e} (build them: bash scripts/setup.sh)\n")
+        return 2
     from siconos_side import SiconosUnavailable, SiconosWorker, ensure_siconos
 
     try:
