@@ -41,7 +41,7 @@ def _ratio(x: float | None) -> str:
 
 
 def markdown(results: Sequence[dict], notes: Sequence[str], m: dict, targets: Sequence[float]) -> str:
-    from siconos_peer import cost_at
+    from report import cost_at
 
     L: list[str] = []
     add = L.append

@@ -32,7 +32,8 @@ import sys
 import time
 
 
-def build(job: dict, plugin: str):
+def build(job: dict, plugin: str) -> tuple[object, object]:
+    """The TimeStepping simulation of the job, initialised, and its dynamical system."""
     import numpy as np
     import siconos.kernel as sk
     import siconos.numerics as sn
