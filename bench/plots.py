@@ -19,6 +19,9 @@ ALPHA_STYLES = {-0.1: "-", 0.0: "--", -1.0 / 3.0: ":"}
 PEER_COLORS = {"event RK45": "tab:orange", "event DOP853": "tab:brown", "event Radau": "tab:purple",
                "tanh Radau": "tab:gray", "tanh LSODA": "tab:olive"}
 PEER_MARKERS = {"event RK45": "s", "event DOP853": "D", "event Radau": "^", "tanh Radau": "v", "tanh LSODA": "x"}
+# Siconos runs the cases at chi = 1 only (its relay law has one coefficient): drawn with the FMU at chi = 1
+SICONOS_STYLES = {"Siconos theta=0.5": ("tab:cyan", "o", "-"), "Siconos theta=1": ("tab:pink", "o", "-"),
+                  "FMU located": ("tab:blue", "o", "--")}
 
 
 def alpha_label(a: float) -> str:
@@ -40,8 +43,10 @@ def _grid(n: int) -> tuple[plt.Figure, list[plt.Axes]]:
     return fig, list(np.ravel(axes))
 
 
-def error_vs_cpu(rows: Sequence[dict], cases: Sequence[str], path: Path) -> None:
-    """log-log error vs seconds per period, one line per method, one panel per case."""
+def error_vs_cpu(rows: Sequence[dict], cases: Sequence[str], path: Path,
+                 siconos: Sequence[dict] | None = None) -> None:
+    """log-log error vs seconds per period, one line per method, one panel per case; Siconos (rows
+    of siconos.csv, the same case at chi = 1) with the FMU's located scheme at chi = 1, thin lines."""
     fig, axes = _grid(len(cases))
     handles: dict[str, object] = {}
     for ax, case in zip(axes, cases):
@@ -65,6 +70,15 @@ def error_vs_cpu(rows: Sequence[dict], cases: Sequence[str], path: Path) -> None
             x, y = zip(*pts)
             (h,) = ax.loglog(x, y, "-", color=PEER_COLORS[m], marker=PEER_MARKERS[m], ms=5, lw=1.2, label=m)
             handles.setdefault(m, h)
+        for m, (color, marker, ls) in SICONOS_STYLES.items():
+            pts = sorted((r["us_per_period"], r["error_z"]) for r in (siconos or []) if r["case"] == case
+                         and r["method"] == m and np.isfinite(r["error_z"]) and r["error_z"] > 0)
+            if not pts:
+                continue
+            x, y = zip(*pts)
+            lab = f"{m} (case at chi = 1)"
+            (h,) = ax.loglog(x, y, ls, color=color, marker=marker, ms=4, mfc="none", lw=0.9, label=lab)
+            handles.setdefault(lab, h)
         ax.axhline(1e-6, color="k", lw=0.6, ls=":")
         ax.set_title(case)
         ax.set_xlabel("CPU time per excitation period (us)")
@@ -72,8 +86,9 @@ def error_vs_cpu(rows: Sequence[dict], cases: Sequence[str], path: Path) -> None
         ax.grid(True, which="major", alpha=0.3)
     for ax in axes[len(cases):]:
         ax.axis("off")
-    axes[len(cases)].legend(list(handles.values()), list(handles.keys()), loc="center", fontsize=9)
-    fig.suptitle("What accuracy costs: error vs CPU time (FMU through fmpy, reused instance; scipy peers)")
+    axes[len(cases)].legend(list(handles.values()), list(handles.keys()), loc="center", fontsize=8)
+    fig.suptitle("What accuracy costs: error vs CPU time (FMU through fmpy, reused instance; scipy peers; "
+                 "Siconos and the FMU at chi = 1, process CPU time)")
     fig.tight_layout()
     save(fig, path)
 

@@ -3,19 +3,23 @@
 instead.
 
     python bench/work_precision.py [--quick] [--out results/work_precision] [--md PATH]
-                                   [--fmu PATH] [--bench-stepper PATH]
+                                   [--fmu PATH] [--bench-stepper PATH] [--no-siconos]
 
 Five cases (bench/cases.py), error = max |z - z_exact| over the run (z = k x / P0, the position in
 static deflections) against dryfriction.exact.solve_exact. The FMU: scheme paper / consistent /
 located, h = T/50 ... T/102400, alpha in {0, -0.1, -1/3}, timed through one reused OscillatorFMU
 (min of several runs, time.perf_counter). Peers (bench/peers.py): event-driven solve_ivp (RK45,
-DOP853, Radau) and a tanh-smoothed law (Radau, LSODA). Also: the bare C stepper vs the FMU's
-library (bench_stepper), cost growth (periods, steps, Dask workers) and memory.
+DOP853, Radau) and a tanh-smoothed law (Radau, LSODA). Siconos (bench/siconos_study.py:
+Moreau-Jean with the relay solved by Lemke, theta 0.5 and 1) on the same cases at chi = 1, the only
+friction law it has (mu_s = mu_k), against the FMU at chi = 1 (process CPU time on both sides).
+Also: the bare C stepper vs the FMU's library (bench_stepper), cost growth (periods, steps, Dask
+workers) and memory.
 
 Outputs in --out: work_precision.csv (one row per method/case/setting), orders.csv, stepper.csv,
-scaling.csv, memory.csv, cases.csv, error_vs_cpu.png, error_vs_h.png, cost_growth.png and the
-markdown report (RESULTS.md, or --md). --quick: fewer steps, tolerances and widths, shorter
-timing budgets (under ~2 minutes on 2 cores); every code path still runs.
+scaling.csv, memory.csv, cases.csv, siconos.csv (unless --no-siconos), error_vs_cpu.png,
+error_vs_h.png, cost_growth.png and the markdown report (RESULTS.md, or --md). --quick: fewer
+steps, tolerances and widths, shorter timing budgets (under ~2 minutes on 2 cores); every code path
+still runs.
 """
 
 from __future__ import annotations
@@ -99,6 +103,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--bench-stepper", default=None,
                     help="bench_stepper executable (default: $DFO_BENCH_STEPPER or <fmu folder>/bench/bench_stepper)")
     ap.add_argument("--no-dask", action="store_true", help="skip the Dask throughput measurement")
+    ap.add_argument("--no-siconos", action="store_true",
+                    help="skip Siconos (the cases at chi = 1; installs python3-siconos when missing)")
     ap.add_argument("--report-only", action="store_true",
                     help="rebuild the plots and the markdown report from the CSVs and meta.json already in --out")
     args = ap.parse_args(argv)
@@ -173,11 +179,13 @@ def render(args: argparse.Namespace, cfg: StudyConfig, meta: dict) -> None:
     ref = CASES[0].name
     bare = next((r["bare_ns_per_step"] for r in c_rows if r["kind"] == "step" and r["case"] == ref
                  and r["scheme"] == "located" and r["steps_per_period"] == 1000), None)
-    plots.error_vs_cpu(rows, names, out / "error_vs_cpu.png")
+    sic_path = out / "siconos.csv"
+    sic = read_csv(sic_path) if sic_path.is_file() else None
+    plots.error_vs_cpu(rows, names, out / "error_vs_cpu.png", sic)
     plots.error_vs_h([r for r in rows if r["family"] == "fmu"], t["orders.csv"], names, out / "error_vs_h.png")
     plots.cost_growth(scal, out / "cost_growth.png", bare)
     write_report(args.md, out, cfg, CASES, t["cases.csv"], rows, t["orders.csv"], c_rows, scal, t["memory.csv"],
-                 meta)
+                 meta, sic)
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
@@ -412,6 +420,14 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr) as bar:
             peer_rows = peer_sweep(cfg, CASES, exacts, bar)
         phase("scipy peers")
+        if not args.no_siconos:
+            import siconos_study
+
+            sys.stderr.write("Siconos on the cases at chi = 1 ...\n")
+            write_csv(out / "siconos.csv", siconos_study.study_rows(cfg.quick, cfg.periods, sys.stderr, str(args.fmu)))
+            phase("Siconos")
+        elif (out / "siconos.csv").exists():
+            (out / "siconos.csv").unlink()  # not a stale one from an earlier run
         rows = fmu_rows + peer_rows
         write_csv(out / "work_precision.csv", rows)
         orders = observed_orders(rows, cfg)
@@ -447,9 +463,13 @@ def main(argv: list[str] | None = None) -> int:
         meta = dict(phases=phases, quick=cfg.quick, periods=cfg.periods, load_start=load_start,
                     load_end=os.getloadavg(), fmu=str(args.fmu),
                     cmd="python bench/work_precision.py" + (" --quick" if cfg.quick else "")
+                    + (" --no-siconos" if args.no_siconos else "")
                     + f" --out {args.out}" + (f" --md {args.md}" if args.md != args.out / "RESULTS.md" else ""))
         meta["seconds"] = time.perf_counter() - t_start
         meta["date"] = time.strftime("%Y-%m-%d %H:%M")
+        from report import _machine
+
+        meta["machine"] = _machine()
         write_json(out / "meta.json", meta)
         render(args, cfg, meta)
         phase("plots and report")

@@ -95,6 +95,7 @@ examples() {  # every example at its own size, in a scratch folder
   rm -rf "$d"
 }
 stage "examples" examples
+stage "siconos-peer" .venv/bin/python bench/siconos_peer.py --quick  # installs python3-siconos when missing
 stage "min-versions" bash scripts/check_min_versions.sh
 stage "cross-platform" cross_platform
 stage "ASan/UBSan build" asan_build
