@@ -147,6 +147,19 @@ class Instance(BaseInstance):
     def do_step(self, t: float, dt: float, no_set_prior_state: bool = True) -> int:
         return self.call("DoStep", float(t), float(dt), int(no_set_prior_state))
 
+    def step_function(self) -> Callable[[float, float], int]:
+        """The fast path of the stepping loop: ``step(t, dt)`` calls fmi2DoStep and returns its
+        status, checked (a warning passes)."""
+        fn, comp, msgs, check = self.f.DoStep, self.component, self.messages, self.check
+
+        def step(t: float, dt: float) -> int:
+            mark = len(msgs)
+            if s := fn(comp, t, dt, 1):
+                check("fmi2DoStep", s, mark)
+            return s
+
+        return step
+
     def terminate(self) -> None:
         self.call("Terminate")
 
