@@ -220,15 +220,15 @@ class OscillatorFMU2(Driver):
         """One fmi2DoStep of length ``dt`` from the current communication point :attr:`time`
         (checked); :attr:`time` is then time + dt.
 
-        Compatibility: the former signature ``do_step(t, dt)`` is still accepted when ``t`` is the
-        current time (ValueError otherwise: an FMI 2.0 step starts where the last one ended)."""
+        Compatibility: the former signature ``do_step(t, dt)`` is still accepted, ``t`` being the
+        current communication point as the host counts it (``k dt`` rather than the sum of the
+        steps; the FMU checks that it is its own time, to its grid's tolerance, and refuses it
+        otherwise); :attr:`time` is then t + dt."""
+        t = self.time
         if legacy:
             t, dt = dt, legacy[0]
-            if t != self.time:
-                raise ValueError(f"do_step(t, dt): t = {t!r} is not the current time {self.time!r} "
-                                 "(do_step(dt) steps from the current time)")
-        self.fmi.do_step(self.time, dt)
-        self.time = self.time + dt
+        self.fmi.do_step(t, dt)
+        self.time = t + dt
 
     def step_to(self, t: float) -> None:
         inst = self.fmi

@@ -26,7 +26,7 @@ import numpy as np
 
 from .. import model
 from ..atomic import atomic_write_bytes
-from ..fmi2 import FMUError
+from ..errors import FMUError
 from ..fmu import OscillatorFMU
 
 __all__ = [
