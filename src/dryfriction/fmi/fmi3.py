@@ -215,16 +215,24 @@ class Instance(BaseInstance):
         """The fast path of the stepping loop: ``step(t, dt)`` calls fmi3DoStep with reused
         out-arguments and returns its status, checked (a warning passes); the out-arguments are
         read with :meth:`last_step`."""
-        fn, comp, refs, msgs, check = self.f.DoStep, self.component, self._step_refs, self.messages, self.check
+        fn, comp, msgs, check = self.f.DoStep, self.component, self.messages, self.check
+        ev, term, early, last = self._step_refs
         raise_update_error = self._raise_update_error
 
-        def step(t: float, dt: float) -> int:
-            mark = len(msgs)
-            s = fn(comp, t, dt, True, *refs)
-            raise_update_error()
-            if s:
-                check("fmi3DoStep", s, mark)
-            return s
+        if self._user_update is None:
+            def step(t: float, dt: float) -> int:
+                mark = len(msgs)
+                if s := fn(comp, t, dt, True, ev, term, early, last):
+                    check("fmi3DoStep", s, mark)
+                return s
+        else:
+            def step(t: float, dt: float) -> int:
+                mark = len(msgs)
+                s = fn(comp, t, dt, True, ev, term, early, last)
+                raise_update_error()
+                if s:
+                    check("fmi3DoStep", s, mark)
+                return s
 
         return step
 
