@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import shutil
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,7 +32,7 @@ __all__ = ["OscillatorFMU3", "FMI3Oscillator", "Run", "Switch", "Intermediate", 
 Intermediate = Callable[[float, bool], bool]  # (time, canReturnEarly) -> earlyReturnRequested
 
 
-def default_fmi3_path() -> os.PathLike[str]:
+def default_fmi3_path() -> Path:
     """The FMI 3.0 oscillator FMU: ``$DFO_FMU3``, else the installed package's, else the build
     tree's (:func:`dryfriction.paths.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
     return paths.fmu_path(paths.OSCILLATOR3)

@@ -10,10 +10,8 @@ from ctypes import c_void_p
 from types import SimpleNamespace
 from typing import Any
 
-import numpy as np
-
 from ..diagnostics import emit
-from ..errors import FMUCallError, FMUError
+from ..errors import FMUCallError
 
 __all__ = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "BaseInstance", "State", "load_library"]
 
@@ -177,13 +175,3 @@ class BaseInstance:
     def _free_states(self) -> None:
         for st in list(self._states):
             st.free()
-
-
-def as_buffer(values: Any, dtype: Any) -> np.ndarray:
-    """A contiguous numpy array of ``dtype`` holding ``values`` (a copy only when needed)."""
-    return np.ascontiguousarray(values, dtype=dtype)
-
-
-def require(condition: bool, message: str) -> None:
-    if not condition:
-        raise FMUError(message)

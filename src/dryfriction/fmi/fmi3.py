@@ -19,7 +19,6 @@ sentence; warnings become :class:`~dryfriction.diagnostics.DryFrictionWarning`).
 
 from __future__ import annotations
 
-import ctypes
 import os
 from collections.abc import Callable, Sequence
 from ctypes import (CFUNCTYPE, POINTER, byref, c_bool, c_char_p, c_double, c_int, c_int32, c_int64, c_size_t,
