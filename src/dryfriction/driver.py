@@ -11,6 +11,7 @@ Every driver steps with ``do_step(dt)`` from its current :attr:`Driver.time` and
 
 from __future__ import annotations
 
+import ctypes
 import os
 import shutil
 from collections.abc import Mapping, Sequence
@@ -161,10 +162,50 @@ class Driver:
 
     def get(self, names: str | Sequence[str]) -> Any:
         """One variable's value (``get("h_used")``; an array's as a numpy array), or a dict of
-        several (``get(["x", "mode"])``)."""
+        several (``get(["x", "mode"])``: one typed call per type, its arrays built once per list
+        of names and array size)."""
         if isinstance(names, str):
             return self._get_one(names)
-        return {n: self._get_one(n) for n in names}
+        key = (tuple(names), self._size_token())
+        plans: dict[Any, Any] | None = getattr(self, "_get_plans3", None)
+        if plans is None:
+            plans = self._get_plans3 = {}
+        plan = plans.get(key)
+        if plan is None:
+            plan = plans[key] = self._plan(key[0])
+        inst = self.inst
+        c, mark, out = inst.component, len(inst.messages), {}
+        fmi3_call = isinstance(inst, fmi3.Instance)
+        for fname, fn, vrs, nvr, buf, nval, group in plan:
+            st = fn(c, vrs, nvr, buf, nval) if fmi3_call else fn(c, vrs, nvr, buf)
+            if st:
+                inst.check(fname, st, mark)
+            k = 0
+            for name, size, array in group:
+                out[name] = np.array(buf[k:k + size]) if array else buf[k]
+                k += size
+        return {name: out[name] for name in key[0]}
+
+    def _size_token(self) -> int:
+        """What the sizes of the arrays depend on (the chain's n)."""
+        return int(getattr(self, "n", 0))
+
+    def _plan(self, names: tuple[str, ...]) -> list[tuple[Any, ...]]:
+        groups: dict[str, list[tuple[str, list[int], int, bool]]] = {}
+        for name in names:
+            kind, vrs, n = self._refs(name)
+            var = self.md.variables.get(name)
+            groups.setdefault(kind, []).append((name, vrs, n, var is None or var.dimension is not None))
+        plan = []
+        inst = self.inst
+        for kind, group in groups.items():
+            vrs = [vr for _, v, _, _ in group for vr in v]
+            nval = sum(n for _, _, n, _ in group)
+            vr_arr = (ctypes.c_uint32 * len(vrs))(*vrs)
+            buf = (inst.ctypes_of[kind] * nval)()
+            plan.append((f"{inst.prefix}Get{kind}", getattr(inst.f, f"Get{kind}"), vr_arr, len(vrs), buf, nval,
+                         [(name, n, array) for name, _, n, array in group]))
+        return plan
 
     def _get_one(self, name: str) -> Any:
         kind, vrs, n = self._refs(name)

@@ -72,6 +72,8 @@ class OscillatorFMU3(Driver):
             self.close()
             raise
         self._slave: _FmpyStyleSlave | None = None
+        self._step = self.inst.step_function()  # the fast path: fmi3DoStep with reused out-arguments
+        self._step_out = self.inst._step_out
 
     def _on_update(self, info: fmi3.IntermediateUpdate) -> bool:
         self.updates.append(info.time)
@@ -93,9 +95,10 @@ class OscillatorFMU3(Driver):
 
     def do_step(self, dt: float) -> tuple[bool, bool]:
         """One fmi3DoStep from the FMU's time; returns (eventHandlingNeeded, earlyReturn)."""
-        r = self.inst.do_step(self.time, dt)
-        self.time = r.last_successful_time  # tc + dt, or the switch it returned early at
-        return r.event_handling_needed, r.early_return
+        self._step(self.time, dt)
+        event, _, early, last = self._step_out
+        self.time = last.value  # tc + dt, or the switch it returned early at
+        return event.value, early.value
 
     def handle_event(self, mode_before: int) -> Switch:
         """Event mode at the current time: the left limits, fmi3UpdateDiscreteStates, the right limits."""
