@@ -109,19 +109,20 @@ def plot_run(run: Any, path: Path) -> Path:
 
 
 def chain_main(args: argparse.Namespace) -> int:
-    from .chain import ChainError, ChainFMU, ChainFMU2
+    from .chain import ChainFMU2, ChainFMU3
+    from .errors import FMUCallError
 
     params = parse_sets(args.sets)
     try:
         if args.fmi == 3:
-            fmu: Any = ChainFMU(2 if args.n is None else args.n, params, fmu_path=args.fmu)
+            fmu: Any = ChainFMU3(2 if args.n is None else args.n, params, fmu_path=args.fmu)
         else:
             fmu = ChainFMU2(params, fmu_path=args.fmu, n=args.n)
         with fmu:
             run = fmu.run(args.t_end, args.dt)
     except ValueError as e:
         raise UsageError(str(e)) from None
-    except ChainError as e:
+    except FMUCallError as e:
         print(f"dryfriction chain: error: {e}", file=sys.stderr)
         return EXIT_USAGE
     out: Path = args.out

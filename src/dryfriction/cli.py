@@ -22,7 +22,8 @@ from typing import Any
 from . import __version__, model, scenes
 from .argparsing import EXIT_USAGE, Parser, UsageError, count, make_parser, number
 from .diagnostics import DryFrictionWarning
-from .fmu import FMUError, Settings
+from .errors import FMUError
+from .fmu import Settings
 from .params import Oscillator
 
 
@@ -357,23 +358,23 @@ def fmu_warnings_on_stderr(prog: str, strict: bool) -> Iterator[None]:
 
 
 def _check_fmu_option(path: Path, command: str) -> None:
-    """An unusable ``--fmu`` is refused before any work (locate.FMUFileError, one line): the
+    """An unusable ``--fmu`` is refused before any work (paths.FMUFileError, one line): the
     oscillator's FMI 2.0 FMU for its commands, any of the package's FMUs for a study (each study
     checks its own kind), the chain command checks its own."""
-    from . import locate
+    from . import paths
 
     if not path.is_file():
         raise UsageError(f"--fmu: no such file: {path}")
     if command == "chain":
         return
     if command == "study":
-        for kind in locate.KINDS:
+        for kind in paths.KINDS:
             try:
-                locate.check_fmu(path, kind)
+                paths.check_fmu(path, kind)
                 return
-            except locate.FMUFileError:
+            except paths.FMUFileError:
                 pass
-    locate.check_fmu(path, locate.OSCILLATOR)
+    paths.check_fmu(path, paths.OSCILLATOR)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,7 +1,7 @@
 """How the FMUs' warnings reach the user: one warning category, :class:`DryFrictionWarning`.
 
-Every FMI layer of the package (:mod:`dryfriction.fmi2`, :mod:`dryfriction.fmi3`,
-:mod:`dryfriction.chain`) collects the sentences an FMU logs with a warning status and hands
+The package's FMI layer (:mod:`dryfriction.fmi.fmi2`, :mod:`dryfriction.fmi.fmi3`, under every
+driver) collects the sentences an FMU logs with a warning status and hands
 them to :func:`emit` right after the call returns, as Python warnings of this one category with
 the FMU's own sentence. A Python program filters them as usual::
 

@@ -1,10 +1,12 @@
-"""A fast driver for the DryFrictionOscillator FMU.
+"""A fast driver for the FMI 2.0 DryFrictionOscillator FMU: :class:`OscillatorFMU2` (the name
+:class:`OscillatorFMU` is the same class); the FMI 3.0 one is :class:`~dryfriction.fmu3.OscillatorFMU3`
+(importable from here too).
 
-The FMU is unzipped (fmpy's ``extract``) and instantiated once through :mod:`dryfriction.fmi2`;
-every run then costs only reset, setup, the parameter values and the steps. Every FMI status is
-checked: an error is raised as :class:`FMUError` naming the function, the status and the FMU's own
-logged sentence. Names, value references, scheme names, effect bits and defaults come from the
-model description (:mod:`dryfriction.model`).
+The FMU is unzipped and instantiated once through :mod:`dryfriction.fmi.fmi2`; every run then
+costs only reset, setup, the parameter values and the steps. Every FMI status is checked: an error
+is raised as :class:`~dryfriction.errors.FMUCallError` naming the function, the status and the
+FMU's own logged sentence. Names, value references, scheme names, effect bits and defaults come
+from the model description (:mod:`dryfriction.model`).
 """
 
 from __future__ import annotations
@@ -12,22 +14,24 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
-import tempfile
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from operator import attrgetter
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from . import fmi2, locate, model
-from .fmi2 import FMUError, State
+from . import model, paths
+from .driver import Driver, Run, Switch, grid
+from .errors import FMUCallError, FMUError
+from .fmi import fmi2
+from .fmi._base import State
 from .model import default_fmu_path
 from .params import Oscillator
 
-__all__ = ["FMUError", "OscillatorFMU", "Settings", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS",
-           "OBSERVABLE_OUTPUTS", "SCHEMES", "EFFECT_BITS"]
+__all__ = ["FMUError", "FMUCallError", "OscillatorFMU", "OscillatorFMU2", "OscillatorFMU3", "Run", "Switch",
+           "Settings", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS", "OBSERVABLE_OUTPUTS", "SCHEMES",
+           "EFFECT_BITS"]
 
 #: scheme name -> enumeration value and effect bit -> name, both read from the model description
 #: on first use (derived, not copies: ``model.default().schemes`` / ``.effects``)
@@ -70,48 +74,30 @@ _OSC_FIELDS = tuple(f.name for f in fields(Oscillator))
 _SETTINGS_REALS = ("h", "alpha", "t_obs_start", "t_obs_stop")
 
 
-class OscillatorFMU:
-    """One loaded, instantiated FMU, reused across runs (not thread-safe: one per thread/worker)."""
+class OscillatorFMU2(Driver):
+    """One loaded, instantiated FMI 2.0 oscillator FMU, reused across runs (not thread-safe: one
+    per thread/worker). :meth:`start` sets an :class:`Oscillator` and :class:`Settings`, then
+    :meth:`do_step` / :meth:`step_to` / :meth:`run` step and :meth:`get` reads."""
+
+    KIND = paths.OSCILLATOR
 
     def __init__(self, fmu_path: str | os.PathLike[str] | None = None, logging: bool = False) -> None:
-        from fmpy import extract
-
         # the FMI 2.0 oscillator FMU: fmu_path, else $DFO_FMU, the package's, the build tree's;
-        # checked (locate.FMUFileError if it is not that FMU)
-        path = locate.fmu_path(locate.OSCILLATOR, fmu_path)
-        self.path = path
-        #: the FMU's own model description (:class:`dryfriction.model.ModelDescription`)
-        self.md = model.from_fmu(path)
-        self.unzip_dir = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="dfo-fmu-"))
+        # checked (paths.FMUFileError if it is not that FMU)
+        self._open(fmu_path, "dfo-fmu-")
         try:
-            self.fmi = fmi2.Instance(self.unzip_dir, self.md.guid, self.md.model_identifier, "dfo", logging)
+            self.inst = fmi2.Instance(self.unzip_dir, self.md.guid, self.md.model_identifier, "dfo", logging)
         except BaseException:
             shutil.rmtree(self.unzip_dir, ignore_errors=True)
             raise
+        #: the FMI layer's instance (:class:`dryfriction.fmi.fmi2.Instance`)
+        self.fmi = self.inst
         self.vars = self.md.variables
-        self.messages = self.fmi.messages
-        self.time = 0.0
         self._get_plans: dict[tuple[str, ...], list[tuple[str, Any, Any, Any, list[str]]]] = {}
         self._prepare_start()
-        self._closed = False
 
-    # ---- plumbing ----
-    def vr(self, name: str) -> int:
-        return self.md.vr(name)
-
-    def close(self) -> None:
-        if not self._closed:
-            self._closed = True
-            try:
-                self.fmi.free()
-            finally:
-                shutil.rmtree(self.unzip_dir, ignore_errors=True)
-
-    def __enter__(self) -> "OscillatorFMU":
+    def __enter__(self) -> "OscillatorFMU2":
         return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
     # ---- values ----
     def set(self, values: Mapping[str, Any]) -> None:
@@ -133,14 +119,17 @@ class OscillatorFMU:
             if vrs:
                 self.fmi.set(kind, vrs, vals)
 
-    def get(self, names: Sequence[str]) -> dict[str, float]:
-        """Read variables by name: one FMI call per type, with the arrays cached per name list."""
+    def get(self, names: str | Sequence[str]) -> Any:
+        """Read variables by name: one FMI call per type, with the arrays cached per name list (a
+        single name: its value)."""
+        if isinstance(names, str):
+            return self.get((names,))[names]
         key = tuple(names)
         plan = self._get_plans.get(key)
         if plan is None:
             plan = self._get_plans[key] = self._plan_get(key)
         inst = self.fmi
-        c, out, mark = inst.component, {}, len(self.messages)
+        c, out, mark = inst.component, {}, len(inst.messages)
         for fname, fn, vrs, buf, group in plan:
             st = fn(c, vrs, len(group), buf)
             if st:
@@ -163,32 +152,6 @@ class OscillatorFMU:
                 plan.append((f"fmi2Get{kind}", getattr(self.fmi.f, f"Get{kind}"), vrs, (ctype[kind] * len(group))(),
                              group))
         return plan
-
-    # ---- FMU states ----
-    def get_state(self) -> State:
-        """The FMU's current state (free it with ``state.free()`` or ``with``)."""
-        return self.fmi.get_state()
-
-    def set_state(self, state: State) -> None:
-        """Go back to a state of this instance; :attr:`time` follows it."""
-        self.fmi.set_state(state)
-        self.time = self.fmi.last_successful_time()
-
-    def serialize_state(self, state: State | None = None) -> bytes:
-        """The bytes of a state (default: the current one)."""
-        if state is not None:
-            return self.fmi.serialize_state(state)
-        with self.fmi.get_state() as st:
-            return self.fmi.serialize_state(st)
-
-    def deserialize_state(self, data: bytes) -> State:
-        """A state of this instance from serialised bytes (validated by the FMU)."""
-        return self.fmi.deserialize_state(data)
-
-    def restore(self, data: bytes) -> None:
-        """Deserialise ``data`` and make it the current state."""
-        with self.fmi.deserialize_state(data) as st:
-            self.set_state(st)
 
     def last_successful_time(self) -> float:
         return self.fmi.last_successful_time()
@@ -233,7 +196,7 @@ class OscillatorFMU:
         self._ival[0], self._ival[1] = scheme, st.frictionUpdates
         self._bval[0], self._bval[1] = int(bool(st.observe)), int(bool(st.fastPaths))
         inst = self.fmi
-        f, c, n = inst.f, inst.component, len(self.messages)
+        f, c, n = inst.f, inst.component, len(inst.messages)
         if s := f.Reset(c):
             inst.check("fmi2Reset", s, n)
         if s := f.SetupExperiment(c, 0, 0.0, float(t0), 0, 0.0):
@@ -252,17 +215,37 @@ class OscillatorFMU:
             inst.check("fmi2ExitInitializationMode", s, n)
         self.time = t0
 
-    def do_step(self, t: float, dt: float) -> None:
-        """One fmi2DoStep from the communication point ``t`` (checked); :attr:`time` is then t + dt."""
+    def do_step(self, dt: float, *legacy: float) -> None:
+        """One fmi2DoStep of length ``dt`` from the current communication point :attr:`time`
+        (checked); :attr:`time` is then time + dt.
+
+        Compatibility: the former signature ``do_step(t, dt)`` is still accepted, ``t`` being the
+        current communication point as the host counts it (``k dt`` rather than the sum of the
+        steps; the FMU checks that it is its own time, to its grid's tolerance, and refuses it
+        otherwise); :attr:`time` is then t + dt."""
+        t = self.time
+        if legacy:
+            t, dt = dt, legacy[0]
         self.fmi.do_step(t, dt)
         self.time = t + dt
 
     def step_to(self, t: float) -> None:
         inst = self.fmi
-        mark = len(self.messages)
+        mark = len(inst.messages)
         if s := inst.f.DoStep(inst.component, float(self.time), float(t - self.time), 1):
             inst.check("fmi2DoStep", s, mark)
         self.time = t
+
+    def run(self, t_stop: float, dt: float, outputs: Sequence[str] = ("x", "v", "mode"), *,
+            p: Oscillator | None = None, settings: Settings | None = None) -> Run:
+        """Step from the current time t0 (after :meth:`start` with ``p`` and ``settings`` when
+        ``p`` is given) to ``t_stop`` on the grid ``t0 + k dt`` (the last step shortened), sampling
+        ``outputs`` at t0 and every point: a :class:`~dryfriction.driver.Run` (FMI 2.0 has no early
+        return: no switches)."""
+        if p is not None:
+            self.start(p, settings)
+        times = grid(self.time, t_stop, dt)
+        return Run(times, self._sample(times, outputs))
 
     def trajectory(
         self,
@@ -280,13 +263,20 @@ class OscillatorFMU:
             raise ValueError(f"the observables {', '.join(sorted(set(outputs) & set(OBSERVABLE_OUTPUTS)))} "
                              "need Settings(observe=True)")
         self.start(p, st, float(t[0]))
+        res: dict[str, np.ndarray] = {"t": t}
+        res.update(self._sample(t, outputs))
+        return res
+
+    def _sample(self, t: np.ndarray, outputs: Sequence[str]) -> dict[str, np.ndarray]:
+        """Step through the points ``t`` (the first is the current time) reading ``outputs`` at
+        each; :attr:`time` is then t[-1]."""
         reals = [i for i, n in enumerate(outputs) if self.md.var(n).type == "Real"]
         ints = [i for i, n in enumerate(outputs) if self.md.var(n).type != "Real"]
         rows_r: list[list[float]] = []
         rows_i: list[list[int]] = []
         # the C functions with buffers built once: a sample costs one doStep and two gets
         inst = self.fmi
-        comp, check, msgs = inst.component, inst.check, self.messages
+        comp, check, msgs = inst.component, inst.check, inst.messages
         do_step, get_real, get_int = inst.f.DoStep, inst.f.GetReal, inst.f.GetInteger
         rv = (ctypes.c_uint * len(reals))(*[self.vr(outputs[i]) for i in reals])
         iv = (ctypes.c_uint * len(ints))(*[self.vr(outputs[i]) for i in ints])
@@ -314,10 +304,7 @@ class OscillatorFMU:
             out[:, reals] = np.array(rows_r)
         if ni:
             out[:, ints] = np.array(rows_i)
-        res = {"t": t}
-        for i, n in enumerate(outputs):
-            res[n] = out[:, i]
-        return res
+        return {n: out[:, i] for i, n in enumerate(outputs)}
 
     def observables(self, p: Oscillator, t_stop: float, t_obs_start: float, t_obs_stop: float | None = None,
                     settings: Settings | None = None) -> dict[str, float]:
@@ -333,3 +320,16 @@ class OscillatorFMU:
         """Names of the effects the current run simulates (the model's vendor annotation)."""
         name = self.md.effects_variable or "effects"
         return self.md.effect_names(int(self.get([name])[name]))
+
+
+#: the former name of :class:`OscillatorFMU2` (the same class)
+OscillatorFMU = OscillatorFMU2
+
+
+def __getattr__(name: str) -> Any:
+    # the FMI 3.0 driver, importable from here too, without importing it with this module
+    if name in ("OscillatorFMU3", "FMI3Oscillator"):
+        from . import fmu3
+
+        return getattr(fmu3, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

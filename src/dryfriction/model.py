@@ -1,10 +1,17 @@
-"""The FMU's model description, read once: the Python side's single source of truth.
+"""The FMUs' model descriptions, read once: the Python side's single source of truth.
 
-Variables (name, value reference, type, causality, start, min, max, unit), the scheme names of the
-``Scheme`` enumeration and the effect bits of the vendor annotation
-(``<VendorAnnotations><Tool name="dryfriction"><Effects>``) come from ``modelDescription.xml``:
-the FMU's own (:func:`from_fmu`) or the repository's (:func:`repository`). Nothing in the package
-keeps a copy of them, and nothing reads them at import time (:func:`default` reads on first use).
+One reader for every description of the package, both models and both FMI versions: the
+oscillator's and the chain's FMI 2.0 descriptions (the chain's with structured names ``m[1]`` ...
+``m[n]``), their FMI 3.0 descriptions (typed elements ``<Float64>``, arrays with ``<Dimension>``
+bound to the structural parameter ``n``, ``<Annotations>``) and the chain's source description
+(``dimension="n"``). Variables (name, value reference, type, causality, start, min, max, unit, the
+structural parameter that sizes an array), the scheme names of the ``Scheme`` enumeration and the
+effect bits of the vendor annotation (``<Tool name="dryfriction"><Effects>``, FMI 3.0:
+``<Annotation type="dryfriction">``; parsed by :func:`parse_effects`, the one parser of that table)
+come from ``modelDescription.xml``: the FMU's own (:func:`from_fmu`) or the repository's
+(:func:`repository`). Nothing in the package keeps a copy of them, and nothing reads them at
+import time (:func:`default` reads on first use). This module imports nothing of the package at
+import time, so that a build script can load it by its path.
 
 :meth:`ModelDescription.check` validates a Python value against a variable's declared range with
 the sentence the FMU logs for the same value.
@@ -15,6 +22,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import re
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -22,11 +30,19 @@ from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
-__all__ = ["Variable", "Effect", "ModelDescription", "from_xml", "from_fmu", "repository", "default",
-           "default_fmu_path", "LazyMapping", "LazySequence"]
+__all__ = ["Variable", "Effect", "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu", "repository",
+           "default", "default_fmu_path", "LazyMapping", "LazySequence"]
 
-#: FMI type of the C call that reads/writes a variable of each declared type
-CALL_TYPE = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer", "Boolean": "Boolean"}
+#: FMI 2.0: the C call family that reads/writes a variable of each declared type
+CALL_TYPE = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer", "Boolean": "Boolean", "UInt64": "UInt64"}
+#: FMI 3.0: the same (an enumeration is read and written as Int64)
+CALL_TYPE3 = {"Float64": "Float64", "Float32": "Float32", "Int32": "Int32", "Int64": "Int64", "UInt64": "UInt64",
+              "Int8": "Int8", "UInt8": "UInt8", "Int16": "Int16", "UInt16": "UInt16", "UInt32": "UInt32",
+              "Enumeration": "Int64", "Boolean": "Boolean"}
+#: the declared types holding real numbers and whole numbers (both FMI versions)
+REAL_TYPES = ("Real", "Float64", "Float32")
+INTEGER_TYPES = ("Integer", "Int32", "Int64", "UInt64", "Int8", "UInt8", "Int16", "UInt16", "UInt32")
+_INDEXED = re.compile(r"^(\w+)\[(\d+)\]$")
 
 
 @dataclass(frozen=True)
@@ -43,11 +59,20 @@ class Variable:
     description: str
     declared_type: str | None = None
     zero: str | None = None          # what 0 means when the range is "0 or a normal number" (h)
+    #: an array: the structural parameter that sizes it (FMI 3.0 ``<Dimension>``, the source's
+    #: ``dimension="n"``); None for a scalar (an FMI 2.0 element ``m[1]`` is a scalar)
+    dimension: str | None = None
+    fmi_version: str = "2.0"
 
     @property
     def call_type(self) -> str:
-        """Real, Integer or Boolean: the fmi2Get/Set function family of the variable."""
-        return CALL_TYPE[self.type]
+        """The fmi2Get/Set (Real, Integer, Boolean) or fmi3Get/Set (Float64, Int32, Int64 for an
+        enumeration, UInt64, Boolean) function family of the variable."""
+        return (CALL_TYPE3 if self.fmi_version.startswith("3") else CALL_TYPE)[self.type]
+
+    @property
+    def is_real(self) -> bool:
+        return self.type in REAL_TYPES
 
 
 @dataclass(frozen=True)
@@ -65,6 +90,7 @@ class ModelDescription:
     schemes: dict[str, int]          # enumeration item name -> value, in declaration order
     effects: tuple[Effect, ...]
     effects_variable: str | None
+    fmi_version: str = "2.0"
 
     # ---- lookups ----
     def var(self, name: str) -> Variable:
@@ -78,6 +104,24 @@ class ModelDescription:
 
     def names(self, causality: str | None = None) -> tuple[str, ...]:
         return tuple(n for n, v in self.variables.items() if causality is None or v.causality == causality)
+
+    def structural_parameters(self) -> tuple[str, ...]:
+        """The structural parameters (the chain's ``n``)."""
+        return self.names("structuralParameter")
+
+    def arrays(self) -> dict[str, tuple[str, ...]]:
+        """Array name -> its element names: an FMI 3.0 (or source) array is one variable (its own
+        name, sized by :attr:`Variable.dimension`), an FMI 2.0 array the structured names
+        ``m[1]`` ... ``m[n]`` in index order."""
+        out: dict[str, list[tuple[int, str]]] = {}
+        for name, v in self.variables.items():
+            if v.dimension is not None:
+                out[name] = [(0, name)]
+                continue
+            m = _INDEXED.match(name)
+            if m:
+                out.setdefault(m.group(1), []).append((int(m.group(2)), name))
+        return {k: tuple(n for _, n in sorted(v)) for k, v in out.items()}
 
     def parameter_starts(self) -> dict[str, Any]:
         """Declared start values of the parameters, by name."""
@@ -105,13 +149,13 @@ class ModelDescription:
         if v.type == "Boolean":
             return "true or false"
         lo, hi = v.min, v.max
-        finite = v.type == "Real"
+        finite = v.is_real
         if v.zero is not None and lo == 0:
             return f"0 ({v.zero}) or > 0 (a normal number)"
         if lo is not None and hi is not None:
             return f"in [{lo:g}, {hi:g}]"
         if lo is not None:
-            if v.type == "Real" and lo > 0 and lo <= 2.2250738585072014e-308:
+            if v.is_real and lo > 0 and lo <= 2.2250738585072014e-308:
                 return "> 0"
             return f">= {lo:g}"
         if hi is not None:
@@ -135,14 +179,14 @@ class ModelDescription:
                 x = float(value)
             except (TypeError, ValueError):
                 raise ValueError(f"{label} must be a number, not {value!r}") from None
-            if v.type == "Integer" and (isinstance(value, bool) or x != int(x)):
+            if v.type in INTEGER_TYPES and (isinstance(value, bool) or x != int(x)):
                 raise ValueError(f"{label} must be a whole number, not {value!r}")
             bad = not math.isfinite(x) or (v.min is not None and x < v.min) or (v.max is not None and x > v.max)
             bad = bad or (v.zero is not None and x != 0 and abs(x) < 2.2250738585072014e-308)
         if bad:
             if v.type == "Enumeration":
                 rng = "one of " + ", ".join(self.schemes)
-            elif v.type == "Real" and not math.isfinite(float(value)):
+            elif v.is_real and not math.isfinite(float(value)):
                 rng = "finite"
             else:
                 rng = self.valid_range(name)
@@ -153,59 +197,104 @@ class ModelDescription:
             self.check(name, value)
 
 
-def _number(text: str | None, kind: str) -> float | int | bool | None:
+def _number(text: str | None, kind: str) -> Any:
     if text is None:
         return None
     if kind == "Boolean":
         return text.strip().lower() in ("true", "1")
-    if kind in ("Integer", "Enumeration"):
+    if kind in INTEGER_TYPES or kind == "Enumeration":
         return int(text)
     return float(text)
 
 
+def _start(text: str | None, kind: str, array: bool) -> Any:
+    """A start value; an array's (FMI 3.0: space-separated) as a tuple when it holds several."""
+    if text is None or not array:
+        return _number(text, kind)
+    parts = text.split()
+    return _number(parts[0], kind) if len(parts) == 1 else tuple(_number(p, kind) for p in parts)
+
+
+def _annotation(root: ET.Element, tool: str) -> ET.Element | None:
+    """The vendor annotation of ``tool``: FMI 2.0 ``<VendorAnnotations><Tool name=...>``, FMI 3.0
+    ``<Annotations><Annotation type=...>``."""
+    el = root.find(f"VendorAnnotations/Tool[@name='{tool}']")
+    return el if el is not None else root.find(f"Annotations/Annotation[@type='{tool}']")
+
+
+def parse_effects(root: ET.Element) -> tuple[str | None, tuple[Effect, ...]]:
+    """The effect table of a parsed model description (either FMI version): the variable holding
+    the bitmask and the effects, in declaration order; (None, ()) without one."""
+    tool = _annotation(root, "dryfriction")
+    table = tool.find("Effects") if tool is not None else None
+    if table is None:
+        return None, ()
+    return table.get("variable"), tuple(Effect(int(e.get("bit", "0")), e.get("name", ""), e.get("description", ""))
+                                        for e in table.iterfind("Effect"))
+
+
+def _enumerations(root: ET.Element) -> dict[str, dict[str, int]]:
+    enums: dict[str, dict[str, int]] = {}
+    for st in root.iterfind("TypeDefinitions/SimpleType"):  # FMI 2.0
+        e = st.find("Enumeration")
+        if e is not None:
+            enums[st.get("name", "")] = {i.get("name", ""): int(i.get("value", "0")) for i in e.iterfind("Item")}
+    for et in root.iterfind("TypeDefinitions/EnumerationType"):  # FMI 3.0
+        enums[et.get("name", "")] = {i.get("name", ""): int(i.get("value", "0")) for i in et.iterfind("Item")}
+    return enums
+
+
 def parse(xml: bytes | str) -> ModelDescription:
-    """A :class:`ModelDescription` of the text of a modelDescription.xml."""
+    """A :class:`ModelDescription` of the text of a modelDescription.xml (FMI 2.0 or 3.0)."""
     root = ET.fromstring(xml)
     cs = root.find("CoSimulation")
     if cs is None:
         raise ValueError("modelDescription.xml has no CoSimulation element")
-    enums: dict[str, dict[str, int]] = {}
-    for st in root.iterfind("TypeDefinitions/SimpleType"):
-        e = st.find("Enumeration")
-        if e is not None:
-            enums[st.get("name", "")] = {i.get("name", ""): int(i.get("value", "0")) for i in e.iterfind("Item")}
+    version = root.get("fmiVersion", "2.0")
+    fmi3 = version.startswith("3")
+    enums = _enumerations(root)
+    ranges = _annotation(root, "dryfriction.ranges")
+    zero = {z.get("variable", ""): z.get("zero", "") for z in
+            (ranges.iterfind("Ranges/ZeroOrNormal") if ranges is not None else ())}
+    # (variable element, type element, dimension name) of every variable
+    items: list[tuple[ET.Element, ET.Element, str | None]] = []
+    if fmi3:
+        els = list(root.iterfind("ModelVariables/*"))
+        by_vr = {el.get("valueReference", ""): el.get("name", "") for el in els}
+        for el in els:
+            dim = el.find("Dimension")
+            dname = None
+            if dim is not None:
+                dname = by_vr.get(dim.get("valueReference", ""), dim.get("start"))
+            items.append((el, el, dname))
+    else:
+        for sv in root.iterfind("ModelVariables/ScalarVariable"):
+            items.append((sv, next(iter(sv)), sv.get("dimension")))
     variables: dict[str, Variable] = {}
     schemes: dict[str, int] = {}
-    zero = {z.get("variable", ""): z.get("zero", "") for z in
-            root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
-    for sv in root.iterfind("ModelVariables/ScalarVariable"):
-        el = next(iter(sv))
+    for var_el, el, dname in items:
         kind = el.tag
         declared = el.get("declaredType")
-        if kind == "Enumeration" and declared in enums:
-            schemes = enums[declared] if sv.get("name") == "scheme" else schemes
+        name = var_el.get("name", "")
+        if kind == "Enumeration" and declared in enums and name == "scheme":
+            schemes = enums[declared]
         lo, hi = _number(el.get("min"), kind), _number(el.get("max"), kind)
         if kind == "Enumeration" and declared in enums:
             vals = enums[declared].values()
             lo, hi = (min(vals) if lo is None else lo), (max(vals) if hi is None else hi)
-        name = sv.get("name", "")
         variables[name] = Variable(
-            name=name, vr=int(sv.get("valueReference", "0")), type=kind, causality=sv.get("causality", "local"),
-            variability=sv.get("variability", "continuous"), start=_number(el.get("start"), kind),
-            min=lo, max=hi, unit=el.get("unit"), description=sv.get("description", ""), declared_type=declared,
-            zero=zero.get(name))
+            name=name, vr=int(var_el.get("valueReference", "0")), type=kind,
+            causality=var_el.get("causality", "local"), variability=var_el.get("variability", "continuous"),
+            start=_start(el.get("start"), kind, dname is not None), min=lo, max=hi, unit=el.get("unit"),
+            description=var_el.get("description", ""), declared_type=declared, zero=zero.get(name),
+            dimension=dname, fmi_version=version)
     if not schemes and "Scheme" in enums:
         schemes = enums["Scheme"]
-    effects: list[Effect] = []
-    effects_var = None
-    tool = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
-    if tool is not None:
-        effects_var = tool.get("variable")
-        effects = [Effect(int(e.get("bit", "0")), e.get("name", ""), e.get("description", ""))
-                   for e in tool.iterfind("Effect")]
-    return ModelDescription(guid=root.get("guid", ""), model_identifier=cs.get("modelIdentifier", ""),
-                            variables=variables, schemes=schemes, effects=tuple(effects),
-                            effects_variable=effects_var)
+    effects_var, effects = parse_effects(root)
+    token = root.get("instantiationToken") if fmi3 else root.get("guid")
+    return ModelDescription(guid=token or "", model_identifier=cs.get("modelIdentifier", ""),
+                            variables=variables, schemes=schemes, effects=effects,
+                            effects_variable=effects_var, fmi_version=version)
 
 
 def from_xml(path: str | os.PathLike[str]) -> ModelDescription:
@@ -220,10 +309,10 @@ def from_fmu(path: str | os.PathLike[str]) -> ModelDescription:
 
 def repository_xml() -> Path:
     """The source checkout's modelDescription.xml (not there in an installed wheel)."""
-    from . import locate
+    from . import paths
 
-    root = locate.source_root()
-    return (root if root is not None else locate.package_dir().parents[1]) / "modelDescription.xml"
+    root = paths.source_root()
+    return (root if root is not None else paths.package_dir().parents[1]) / "modelDescription.xml"
 
 
 @functools.lru_cache(maxsize=1)
@@ -234,10 +323,10 @@ def repository() -> ModelDescription:
 
 def default_fmu_path() -> Path:
     """The FMI 2.0 oscillator FMU: ``$DFO_FMU``, else the installed package's, else the build tree's
-    (:func:`dryfriction.locate.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
-    from . import locate
+    (:func:`dryfriction.paths.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
+    from . import paths
 
-    return locate.fmu_path(locate.OSCILLATOR)
+    return paths.fmu_path(paths.OSCILLATOR)
 
 
 @functools.lru_cache(maxsize=1)

@@ -142,13 +142,13 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
     import xarray as xr
 
     from .chaos.batch import map_chunks
-    from . import locate
+    from . import paths
     from .steady import den_hartog_amplitude, inman_amplitude
 
     f = np.asarray(f_hz, dtype=float)
     if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise ValueError("the frequencies must be a non-empty list of finite values > 0 Hz")
-    path = locate.fmu_path(locate.OSCILLATOR, fmu_path)
+    path = paths.fmu_path(paths.OSCILLATOR, fmu_path)
     base = {k: v for k, v in p.as_dict().items() if k != "omega"}
     opts = {"tol": tol, "min_periods": min_periods, "max_periods": max_periods, "scheme": scheme, "h": h}
     per_chunk = max(1, min(16, math.ceil(f.size / max(1, 4 * workers)))) if workers else max(1, min(8, f.size))

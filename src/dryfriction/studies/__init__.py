@@ -26,7 +26,7 @@ from typing import Any
 
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
-from .. import locate
+from .. import paths
 from ..argparsing import UsageError, make_parser
 from ..atomic import atomic_write_text
 from .config import ConfigError, build_config, config_dir, load_toml
@@ -92,9 +92,9 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
 
     key = resolve(name)
     cfg = effective_config(key, quick=quick, config_file=config_file, sets=sets)
-    # the FMU (checked: locate.FMUFileError, a UsageError); a study of another model (the chain)
+    # the FMU (checked: paths.FMUFileError, a UsageError); a study of another model (the chain)
     # names its kind: module.FMU_KIND
-    fmu_path = locate.fmu_path(getattr(STUDIES[key], "FMU_KIND", locate.OSCILLATOR), fmu)
+    fmu_path = paths.fmu_path(getattr(STUDIES[key], "FMU_KIND", paths.OSCILLATOR), fmu)
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     if n_workers < 0:
         raise ConfigError(f"--workers must be >= 0, not {n_workers}")

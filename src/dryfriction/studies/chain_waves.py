@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .. import locate
+from .. import paths
 from ..chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import StudyContext, plt
@@ -26,8 +26,8 @@ FIGURES = ("chain_waves.png",)
 _CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
 
 
-#: the FMU this study runs (dryfriction.locate): the FMI 3.0 chain
-FMU_KIND = locate.CHAIN3
+#: the FMU this study runs (dryfriction.paths): the FMI 3.0 chain
+FMU_KIND = paths.CHAIN3
 
 
 def default_fmu() -> Path:

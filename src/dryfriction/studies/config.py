@@ -41,8 +41,8 @@ class ConfigError(UsageError):
 
 def config_dir() -> Path:
     """Where the study configs live: ``$DFO_CONFIGS``, else the installed package's
-    (``dryfriction/configs``), else ``configs/`` of the repository (:func:`dryfriction.locate.configs_dir`)."""
-    from ..locate import configs_dir
+    (``dryfriction/configs``), else ``configs/`` of the repository (:func:`dryfriction.paths.configs_dir`)."""
+    from ..paths import configs_dir
 
     return configs_dir()
 
