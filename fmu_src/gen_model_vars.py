@@ -461,7 +461,7 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         "DFO_OUT": [v for v in model.variables if v.causality in ("output", "calculatedParameter")],
         "DFO_STRUCT": [v for v in model.variables if v.causality == "structuralParameter"],
     }
-    L = _c_header_head(model, source, ["#define DFO_MODEL_INDEXED 1 /* arrays sized by structural parameters */"],
+    L = _c_header_head(model, source, [],
                        [f"#define DFO_ARRAY_VR_STRIDE {ARRAY_VR_STRIDE}u /* array j: j * stride; its element i (1-based): j * stride + i */"])
     L += _c_enumerations(model)
     L += _c_log_categories(model)
