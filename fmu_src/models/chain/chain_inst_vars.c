@@ -246,8 +246,6 @@ static dfo_inst_status set_values(chain_instance *in, const char *fn, const unsi
     return DFO_INST_OK;
 }
 
-#define SET_CHUNK 64
-
 dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                   const double value[])
 {
