@@ -17,6 +17,51 @@ uint64_t dfo_state_checksum(const unsigned char *p, size_t n)
     return h;
 }
 
+void *dfo_state_block(const dfo_lifecycle *lc, const char *fn, const void *state, uint64_t tag)
+{
+    uint64_t t = 0;
+    if (state) memcpy(&t, state, sizeof t);
+    if (state && t == tag) return (void *)state;
+    dfo_inst_fail(lc, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    return NULL;
+}
+
+dfo_inst_status dfo_state_take(const dfo_lifecycle *lc, const char *fn, void **state, uint64_t tag, size_t size,
+                               int *fresh)
+{
+    *fresh = 0;
+    if (*state) {
+        uint64_t t = 0;
+        memcpy(&t, *state, sizeof t);
+        return t == tag ? DFO_INST_OK : dfo_inst_fail(lc, "%s: *FMUstate is not a state of this FMU.", fn);
+    }
+    void *block = lc->host.alloc(lc->host.ctx, 1, size);
+    if (!block) return dfo_inst_fail(lc, "%s: out of memory.", fn);
+    memcpy(block, &tag, sizeof tag);
+    *state = block;
+    *fresh = 1;
+    return DFO_INST_OK;
+}
+
+int dfo_state_droppable(const dfo_lifecycle *lc, const char *fn, void *const *state, uint64_t tag)
+{
+    if (!*state) return 1;
+    uint64_t t = 0;
+    memcpy(&t, *state, sizeof t);
+    if (t == tag) return 1;
+    dfo_inst_fail(lc, "%s: *FMUstate is not a state of this FMU.", fn);
+    return 0;
+}
+
+void dfo_state_drop(const dfo_lifecycle *lc, void **state)
+{
+    if (!*state) return;
+    const uint64_t none = 0;
+    memcpy(*state, &none, sizeof none); /* a freed state is never taken for one */
+    lc->host.free(lc->host.ctx, *state);
+    *state = NULL;
+}
+
 static uint64_t model_hash(const char *guid) { return dfo_state_checksum((const unsigned char *)guid, strlen(guid)); }
 
 void dfo_state_seal(unsigned char *buf, size_t body, const char *guid)

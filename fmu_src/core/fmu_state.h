@@ -24,6 +24,21 @@
 #define DFO_STATE_HEADER_BYTES 32u
 #define DFO_STATE_RUN_BYTES 40u /* a dfo_run: time, start, stop (f64), stop_defined, phase, event (i32 x 4) */
 
+/* ---- FMU states in memory: blocks from the host that start with the model's tag (a uint64_t) ---- */
+
+/* The block when state is one tagged so, else NULL (logged, fn naming the caller). */
+void *dfo_state_block(const dfo_lifecycle *lc, const char *fn, const void *state, uint64_t tag);
+/* *state made a block of size bytes tagged so: kept when it is one (*fresh 0), a new zeroed one when
+ * *state is NULL (*fresh 1); DFO_INST_ERROR (logged) when it is another's or memory is short. */
+dfo_inst_status dfo_state_take(const dfo_lifecycle *lc, const char *fn, void **state, uint64_t tag, size_t size,
+                               int *fresh);
+/* Whether *state is NULL or one of tag's (logged when neither); dfo_state_drop then frees the block
+ * (the model has released what it holds) and sets *state to NULL. */
+int dfo_state_droppable(const dfo_lifecycle *lc, const char *fn, void *const *state, uint64_t tag);
+void dfo_state_drop(const dfo_lifecycle *lc, void **state);
+
+/* ---- serialised FMU states ---- */
+
 /* FNV-1a over n bytes. */
 uint64_t dfo_state_checksum(const unsigned char *p, size_t n);
 

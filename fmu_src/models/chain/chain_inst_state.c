@@ -45,32 +45,26 @@ static void copy_values(chain_values *dst, const chain_values *src)
     chain_state_copy(&dst->s, &src->s);
 }
 
-static void free_saved(chain_instance *in, saved_state *st)
+/* Release a saved state and its arrays; *state NULL. */
+static void free_saved(chain_instance *in, void **state)
 {
-    st->magic = 0;
-    chain_inst_free_arrays(in, &st->v);
-    in->lc.host.free(in->lc.host.ctx, st);
+    chain_inst_free_arrays(in, &((saved_state *)*state)->v);
+    dfo_state_drop(&in->lc, state);
 }
 
 /* *state := a copy of the run and v (a state of another n is replaced). */
 static dfo_inst_status store_state(chain_instance *in, const char *fn, void **state, const dfo_run *run,
                                    const chain_values *v)
 {
+    const saved_state *old = as_state(*state);
+    if (old && old->v.n != v->n) free_saved(in, state);
+    int fresh;
+    if (dfo_state_take(&in->lc, fn, state, STATE_MAGIC, sizeof(saved_state), &fresh) != DFO_INST_OK)
+        return DFO_INST_ERROR;
     saved_state *st = (saved_state *)*state;
-    if (st && st->magic != STATE_MAGIC) return dfo_inst_fail(&in->lc, "%s: *FMUstate is not a state of this FMU.", fn);
-    if (st && st->v.n != v->n) {
-        free_saved(in, st);
-        *state = st = NULL;
-    }
-    if (!st) {
-        st = (saved_state *)in->lc.host.alloc(in->lc.host.ctx, 1, sizeof(saved_state));
-        if (!st) return dfo_inst_fail(&in->lc, "%s: out of memory.", fn);
-        if (!chain_inst_alloc_arrays(in, &st->v, v->n)) {
-            in->lc.host.free(in->lc.host.ctx, st);
-            return dfo_inst_fail(&in->lc, "%s: out of memory for a state of %lu blocks.", fn, (unsigned long)v->n);
-        }
-        st->magic = STATE_MAGIC;
-        *state = st;
+    if (fresh && !chain_inst_alloc_arrays(in, &st->v, v->n)) {
+        dfo_state_drop(&in->lc, state);
+        return dfo_inst_fail(&in->lc, "%s: out of memory for a state of %lu blocks.", fn, (unsigned long)v->n);
     }
     st->run = *run;
     copy_values(&st->v, v);
@@ -87,8 +81,8 @@ dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **sta
 dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void *state)
 {
     chain_instance *in = chn(lc);
-    const saved_state *st = as_state(state);
-    if (!st) return dfo_inst_fail(&in->lc, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
     if (chain_inst_resize(in, fn, st->v.n) != DFO_INST_OK) return DFO_INST_ERROR;
     chain_inst_free_model(&in->v);
     in->lc.run = st->run;
@@ -112,11 +106,8 @@ dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void
 dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)
 {
     chain_instance *in = chn(lc);
-    saved_state *st = (saved_state *)*state;
-    if (!st) return DFO_INST_OK;
-    if (st->magic != STATE_MAGIC) return dfo_inst_fail(&in->lc, "%s: *FMUstate is not a state of this FMU.", fn);
-    free_saved(in, st);
-    *state = NULL;
+    if (!dfo_state_droppable(lc, fn, state, STATE_MAGIC)) return DFO_INST_ERROR;
+    if (*state) free_saved(in, state);
     return DFO_INST_OK;
 }
 
@@ -217,8 +208,8 @@ static void read_body(dfo_cursor *c, dfo_run *run, chain_values *v)
 dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf,
                                    size_t size)
 {
-    const saved_state *st = as_state(state);
-    if (!st) return dfo_inst_fail(lc, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
     const size_t body = body_size(st->v.n);
     if (size < DFO_STATE_HEADER_BYTES + body)
         return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,

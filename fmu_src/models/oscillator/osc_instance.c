@@ -637,14 +637,10 @@ static saved_state *as_state(const void *p)
 static dfo_inst_status store_state(osc_instance *in, const char *fn, void **state, const dfo_run *run,
                                    const osc_values *v)
 {
+    int fresh;
+    if (dfo_state_take(&in->lc, fn, state, STATE_MAGIC, sizeof(saved_state), &fresh) != DFO_INST_OK)
+        return DFO_INST_ERROR;
     saved_state *st = (saved_state *)*state;
-    if (st && st->magic != STATE_MAGIC) return dfo_inst_fail(&in->lc, "%s: *FMUstate is not a state of this FMU.", fn);
-    if (!st) {
-        st = (saved_state *)in->lc.host.alloc(in->lc.host.ctx, 1, sizeof(saved_state));
-        if (!st) return dfo_inst_fail(&in->lc, "%s: out of memory.", fn);
-        st->magic = STATE_MAGIC;
-        *state = st;
-    }
     st->run = *run;
     st->v = *v;
     return DFO_INST_OK;
@@ -659,8 +655,8 @@ dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **sta
 dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void *state)
 {
     osc_instance *in = osc(lc);
-    const saved_state *st = as_state(state);
-    if (!st) return dfo_inst_fail(lc, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
     in->lc.run = st->run;
     in->v = st->v;
     return DFO_INST_OK;
@@ -668,12 +664,8 @@ dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void
 
 dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)
 {
-    saved_state *st = (saved_state *)*state;
-    if (!st) return DFO_INST_OK;
-    if (st->magic != STATE_MAGIC) return dfo_inst_fail(lc, "%s: *FMUstate is not a state of this FMU.", fn);
-    st->magic = 0;
-    lc->host.free(lc->host.ctx, st);
-    *state = NULL;
+    if (!dfo_state_droppable(lc, fn, state, STATE_MAGIC)) return DFO_INST_ERROR;
+    dfo_state_drop(lc, state);
     return DFO_INST_OK;
 }
 
@@ -689,8 +681,8 @@ size_t dfo_inst_state_size(const dfo_lifecycle *lc, const void *state)
 dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf,
                                    size_t size)
 {
-    const saved_state *st = as_state(state);
-    if (!st) return dfo_inst_fail(lc, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
     if (size < DFO_STATE_HEADER_BYTES + BODY_BYTES)
         return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
                              (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
