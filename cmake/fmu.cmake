@@ -82,7 +82,7 @@ endmacro()
 
 # dfo_fmu(<target> FMI <2|3> ID <modelIdentifier> DIR <dir of the .fmu> [LIB_DIR <dir>]
 #         LIB_SOURCES <c files> LIBS <libraries> MODEL_DESCRIPTION <xml>
-#         SOURCES <files for sources/> DEPENDS <targets> [GEN_DIR <dir of its model_vars.h>]
+#         SOURCES <files for sources/> DEPENDS <targets> GEN_DIR <dir of its model_vars.h>
 #         [DEFINES <compile definitions>] [INCLUDE_DIRS <dirs>])
 # The shared library <target> (file <ID>.so/.dll, only the FMI functions exported, no runtime
 # DLL beyond the system's) and, unless DFO_BINARIES_ONLY, <DIR>/<ID>.fmu holding the binaries of
@@ -91,7 +91,7 @@ function(dfo_fmu target)
   cmake_parse_arguments(F "" "FMI;ID;DIR;LIB_DIR;MODEL_DESCRIPTION;GEN_DIR"
                         "LIB_SOURCES;LIBS;SOURCES;DEPENDS;DEFINES;INCLUDE_DIRS" ${ARGN})
   if(NOT F_GEN_DIR)
-    set(F_GEN_DIR ${GEN_DIR})
+    message(FATAL_ERROR "dfo_fmu(${target}): GEN_DIR (the folder of its model_vars.h) is required")
   endif()
   if(NOT F_LIB_DIR)
     set(F_LIB_DIR ${F_DIR}/lib)
@@ -172,6 +172,10 @@ endfunction()
 # <build>/cross/<tuple> with its toolchain (DFO_BINARIES_ONLY), before the FMUs are zipped.
 function(dfo_cross_builds)
   cmake_host_system_information(RESULT ncpu QUERY NUMBER_OF_LOGICAL_CORES)
+  set(settings "")
+  foreach(var ${DFO_MODEL_SETTINGS}) # the models' own cache settings (MODEL_SETTINGS of model.cmake)
+    list(APPEND settings -D${var}=${${var}})
+  endforeach()
   foreach(t ${DFO_CROSS_ENABLED})
     get_property(byproducts GLOBAL PROPERTY DFO_CROSS_BYPRODUCTS_${t})
     get_property(users GLOBAL PROPERTY DFO_CROSS_USERS_${t})
@@ -181,7 +185,7 @@ function(dfo_cross_builds)
               -DCMAKE_TOOLCHAIN_FILE=${CMAKE_SOURCE_DIR}/cmake/toolchains/${t}.cmake
               -DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE} -DDFO_BINARIES_ONLY=ON -DDFO_CROSS=OFF
               -DDFO_TESTS=OFF -DDFO_LIBM=${DFO_LIBM} -DFMI2_HEADERS_DIR=${FMI2_HEADERS_DIR}
-              -DDFO_CHAIN_N=${DFO_CHAIN_N}
+              ${settings}
               -DPython3_EXECUTABLE=${Python3_EXECUTABLE} --log-level=WARNING
       COMMAND ${CMAKE_COMMAND} -E env --unset=MAKEFLAGS --unset=MAKELEVEL ${CMAKE_COMMAND} --build ${dir} --parallel ${ncpu}
       BYPRODUCTS ${byproducts}

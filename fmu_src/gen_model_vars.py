@@ -1,11 +1,21 @@
 """Generate model_vars.h from modelDescription.xml, the single source of truth for the variables.
 
-Usage: python gen_model_vars.py modelDescription.xml model_vars.h
-       python gen_model_vars.py modelDescription.xml fmi3/modelDescription.xml --fmi3
-       python gen_model_vars.py modelDescription.xml fmi3/buildDescription.xml --fmi3-build
-       python gen_model_vars.py chain/modelDescription.xml fmi2/modelDescription.xml --fmi2 SIZE
-       python gen_model_vars.py chain/modelDescription.xml fmi2/chain_config.h --config SIZE
-       python gen_model_vars.py chain/modelDescription.xml fmi3/chain_config.h --config
+Usage: python gen_model_vars.py SOURCE.xml OUT [--header|--fmi3|--fmi3-build|--fmi2 SIZE|--config [SIZE]]
+
+SOURCE.xml is a model's description (FMI 2.0 syntax; the oscillator's is the top-level
+modelDescription.xml, every other model's fmu_src/models/<name>/modelDescription.xml). OUT is:
+
+  model_vars.h                --header (the default): the C view of the variables
+  fmi3/modelDescription.xml   --fmi3: the FMI 3.0 model description
+  fmi3/buildDescription.xml   --fmi3-build: the FMI 3.0 sources' build description
+  fmi2/modelDescription.xml   --fmi2 SIZE: a model with structural parameters, for an FMI 2.0 build
+                              whose structural parameters are all SIZE (arrays as name[i])
+  <model>_config.h            --config [SIZE]: a model with structural parameters: its build
+                              configuration (with SIZE: an FMI 2.0 build's; without: FMI 3.0's)
+
+The C structs a model's parameters and inputs live in (reached by offsetof) are named by the source
+itself, in the vendor annotation <Tool name="dryfriction.c"><Structs header=... parameters=...
+inputs=.../></Tool>; a model with structural parameters keeps its values in slots and needs none.
 
 Three stages, so that other views of the same model (an FMI 3.0 model description) can be added
 as further emitters without touching the parser:
@@ -103,6 +113,7 @@ class Model:
     log_categories: tuple[tuple[str, str], ...] = ()
     effects_variable: str | None = None
     effects: tuple[Effect, ...] = ()
+    structs: dict[str, str] = field(default_factory=dict)  # the C structs: header, parameters, inputs
 
     def variable(self, name: str) -> Variable:
         return next(v for v in self.variables if v.name == name)
@@ -175,11 +186,13 @@ def parse(xml_path: Path) -> Model:
     if eff_el is not None:
         effects_var = eff_el.get("variable")
         effects = [Effect(int(e.get("bit")), e.get("name"), e.get("description", "")) for e in eff_el.iterfind("Effect")]
+    structs_el = root.find("VendorAnnotations/Tool[@name='dryfriction.c']/Structs")
+    structs = {} if structs_el is None else {k: structs_el.get(k, "") for k in ("header", "parameters", "inputs")}
     model = Model(
         name=root.get("modelName"), guid=root.get("guid"), identifier=cs.get("modelIdentifier"),
         variables=tuple(variables), enumerations=enums,
         log_categories=tuple((c.get("name"), c.get("description", "")) for c in root.iterfind("LogCategories/Category")),
-        effects_variable=effects_var, effects=tuple(effects))
+        effects_variable=effects_var, effects=tuple(effects), structs=structs)
     check(model)
     return model
 
@@ -228,12 +241,18 @@ def check(model: Model) -> None:
 
 # --------------------------------------------------------------------------------- C emitter
 
-C_TYPES = {"Real": "DFO_REAL", "Integer": "DFO_INTEGER", "Enumeration": "DFO_INTEGER", "Boolean": "DFO_BOOLEAN"}
+C_TYPES = {"Real": "DFO_REAL", "Integer": "DFO_INTEGER", "Enumeration": "DFO_INTEGER", "Boolean": "DFO_BOOLEAN",
+           "UInt64": "DFO_UINT64"}
 C_CAUSALITIES = {"parameter": "DFO_PARAMETER", "calculatedParameter": "DFO_CALCULATED", "input": "DFO_INPUT",
-                 "output": "DFO_OUTPUT"}
+                 "output": "DFO_OUTPUT", "structuralParameter": "DFO_STRUCTURAL"}
+# the kinds every model's table has (one enum for all models: the shared core switches on them)
+C_KIND_ENUMS = [
+    "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN, DFO_UINT64 } dfo_var_type;",
+    "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT, DFO_STRUCTURAL } dfo_var_causality;",
+    "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
+]
 C_VARIABILITIES = {"constant": "DFO_CONSTANT", "fixed": "DFO_FIXED", "tunable": "DFO_TUNABLE",
                    "discrete": "DFO_DISCRETE", "continuous": "DFO_CONTINUOUS"}
-PARAMS_STRUCT, INPUTS_STRUCT, STRUCTS_HEADER = "dfo_params", "dfo_inputs", "oscillator.h"
 
 
 def upper_snake(name: str) -> str:
@@ -372,7 +391,13 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     if any(v.causality == "structuralParameter" for v in model.variables):
         return emit_c_header_indexed(model, source)
     computed = [v for v in model.variables if v.causality in ("output", "calculatedParameter")]
-    L = _c_header_head(model, source, [f'#include "{STRUCTS_HEADER}"', ""], [])
+    stored = [v for v in model.variables if v.causality in ("parameter", "input")]
+    if stored and not all(model.structs.get(k) for k in ("header", "parameters", "inputs")):
+        raise ModelError("parameters and inputs live in C structs: name them in <Tool name=\"dryfriction.c\">"
+                         "<Structs header=... parameters=... inputs=.../>")
+    header = model.structs.get("header", "")
+    params_struct, inputs_struct = model.structs.get("parameters", ""), model.structs.get("inputs", "")
+    L = _c_header_head(model, source, [f'#include "{header}"', ""] if header else [], [])
     L += _c_enumerations(model)
     if model.effects:
         L += ["", f"/* bits of the calculated parameter {model.effects_variable} */", "enum {"]
@@ -383,10 +408,8 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     L += [f"    DFO_OUT_{v.name}," for v in computed]
     L += ["    DFO_NUM_OUTS", "};", ""]
     L += [
-        "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN } dfo_var_type;",
-        "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT } dfo_var_causality;",
-        "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
-        f"/* where a value lives: a field of {PARAMS_STRUCT} or {INPUTS_STRUCT} (named as the variable; Real: double,",
+        *C_KIND_ENUMS,
+        f"/* where a value lives: a field of {params_struct} or {inputs_struct} (named as the variable; Real: double,",
         " * Integer, Enumeration and Boolean: int), or computed by the core from its output id */",
         "typedef enum { DFO_IN_PARAMS, DFO_IN_INPUTS, DFO_COMPUTED } dfo_var_home;",
         "",
@@ -400,16 +423,16 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     ]
     for v in model.variables:
         if v.causality in ("parameter", "input"):
-            struct = PARAMS_STRUCT if v.causality == "parameter" else INPUTS_STRUCT
+            struct = params_struct if v.causality == "parameter" else inputs_struct
             ctype = "double" if v.type == "Real" else "int"
             L.append(f"typedef char dfo_field_check_{v.name}[sizeof((({struct} *)0)->{v.name}) == sizeof({ctype}) ? 1 : -1];")
     L += ["", f"#define DFO_NUM_VARS {len(model.variables)}", "static const dfo_var_info DFO_VARS[DFO_NUM_VARS] = {"]
     for v in model.variables:
         if v.causality == "parameter":
-            home, off, set_off, ident = "DFO_IN_PARAMS", f"offsetof({PARAMS_STRUCT}, {v.name})", "0", "-1"
+            home, off, set_off, ident = "DFO_IN_PARAMS", f"offsetof({params_struct}, {v.name})", "0", "-1"
         elif v.causality == "input":
-            home, off, ident = "DFO_IN_INPUTS", f"offsetof({INPUTS_STRUCT}, {v.name})", "-1"
-            set_off = f"offsetof({INPUTS_STRUCT}, {v.name}_set)"
+            home, off, ident = "DFO_IN_INPUTS", f"offsetof({inputs_struct}, {v.name})", "-1"
+            set_off = f"offsetof({inputs_struct}, {v.name}_set)"
         else:
             home, off, set_off, ident = "DFO_COMPUTED", "0", "0", f"DFO_OUT_{v.name}"
         L.append(_c_var_row(model, v, C_TYPES[v.type], C_CAUSALITIES[v.causality], f"{home}, {off}, {set_off}, {ident}"))
@@ -438,7 +461,7 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         "DFO_OUT": [v for v in model.variables if v.causality in ("output", "calculatedParameter")],
         "DFO_STRUCT": [v for v in model.variables if v.causality == "structuralParameter"],
     }
-    L = _c_header_head(model, source, ["#define DFO_MODEL_INDEXED 1 /* arrays sized by structural parameters */"],
+    L = _c_header_head(model, source, [],
                        [f"#define DFO_ARRAY_VR_STRIDE {ARRAY_VR_STRIDE}u /* array j: j * stride; its element i (1-based): j * stride + i */"])
     L += _c_enumerations(model)
     L += _c_log_categories(model)
@@ -450,9 +473,7 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         L += [f"    {prefix.replace('DFO_', 'DFO_NUM_')}", "};"]
     L += [
         "",
-        "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN, DFO_UINT64 } dfo_var_type;",
-        "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT, DFO_STRUCTURAL } dfo_var_causality;",
-        "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
+        *C_KIND_ENUMS,
         "/* where a value lives: the slot of its group (DFO_SP_, DFO_AP_, DFO_AI_, DFO_OUT_, DFO_STRUCT_) */",
         "typedef enum { DFO_IN_PARAMS, DFO_IN_ARRAYS, DFO_IN_INPUTS, DFO_COMPUTED, DFO_IN_STRUCT } dfo_var_home;",
         "",
@@ -466,8 +487,7 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
     ]
     homes = {"DFO_SP": "DFO_IN_PARAMS", "DFO_AP": "DFO_IN_ARRAYS", "DFO_AI": "DFO_IN_INPUTS", "DFO_OUT": "DFO_COMPUTED",
              "DFO_STRUCT": "DFO_IN_STRUCT"}
-    causalities = dict(C_CAUSALITIES, structuralParameter="DFO_STRUCTURAL")
-    types = dict(C_TYPES, UInt64="DFO_UINT64")
+    causalities, types = C_CAUSALITIES, C_TYPES
     for v in model.variables:
         prefix = next(p for p, vs in groups.items() if v in vs)
         L.append(_c_var_row(model, v, types[v.type], causalities[v.causality],
@@ -716,7 +736,7 @@ def main(argv: list[str]) -> int:
             out.write_text(text)
         return 0
     if len(argv) not in (3, 4) or (len(argv) == 4 and argv[3] not in EMITTERS):
-        print("usage: gen_model_vars.py modelDescription.xml OUT "
+        print("usage: gen_model_vars.py SOURCE.xml OUT "
               "[--header|--fmi3|--fmi3-build|--fmi2 SIZE|--config [SIZE]]",
               file=sys.stderr)
         return 2

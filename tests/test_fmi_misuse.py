@@ -348,7 +348,7 @@ def _forge(data: bytes, offset: int, value: bytes) -> bytes:
     return bytes(b)
 
 
-HEADER = 24  # magic[8], version, size (uint32), checksum (uint64)
+HEADER = 32  # magic[8], version, size (uint32), checksum (uint64), model hash (uint64): core/fmu_state.h
 
 
 @pytest.mark.parametrize("field,index,value", [("m", 0, -1.0), ("k", 1, math.nan), ("h", 11, 0.0),

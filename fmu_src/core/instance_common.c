@@ -1,5 +1,5 @@
-/* What every instance core shares (see instance_common.h), compiled with the model's generated
- * variable table. No FMI types. */
+/* The life cycle every model shares (instance.h) and the helpers of the instance cores
+ * (instance_common.h), compiled with the model's generated variable table. No FMI types. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "instance_common.h"
 
@@ -9,32 +9,34 @@
 #include <stdio.h>
 #include <string.h>
 
+typedef char dfo_static_assert_log_categories[DFO_NUM_LOG_CATEGORIES <= DFO_MAX_LOG_CATEGORIES ? 1 : -1];
+
 /* ---- logging --------------------------------------------------------------------------------- */
 
-static void vlog(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, va_list ap)
+static void vlog(const dfo_lifecycle *lc, dfo_inst_status status, int category, const char *fmt, va_list ap)
 {
     char buf[512];
     vsnprintf(buf, sizeof buf, fmt, ap);
     for (char *c = buf; *c; c++)
         if (*c == '%') *c = ' '; /* the message reaches printf-style loggers as a format */
-    in->host.log(in->host.ctx, status, DFO_LOG_CATEGORIES[category], buf);
+    lc->host.log(lc->host.ctx, status, DFO_LOG_CATEGORIES[category], buf);
 }
 
-void dfo_inst_log(const dfo_instance *in, dfo_inst_status status, int category, const char *fmt, ...)
+void dfo_inst_log(const dfo_lifecycle *lc, dfo_inst_status status, int category, const char *fmt, ...)
 {
-    if (!in->host.log || !in->log_on[category]) return;
+    if (!lc->host.log || !lc->log_on[category]) return;
     va_list ap;
     va_start(ap, fmt);
-    vlog(in, status, category, fmt, ap);
+    vlog(lc, status, category, fmt, ap);
     va_end(ap);
 }
 
-dfo_inst_status dfo_inst_fail(const dfo_instance *in, const char *fmt, ...)
+dfo_inst_status dfo_inst_fail(const dfo_lifecycle *lc, const char *fmt, ...)
 {
-    if (!in->host.log || !in->log_on[DFO_LOG_STATUS_ERROR]) return DFO_INST_ERROR;
+    if (!lc->host.log || !lc->log_on[DFO_LOG_STATUS_ERROR]) return DFO_INST_ERROR;
     va_list ap;
     va_start(ap, fmt);
-    vlog(in, DFO_INST_ERROR, DFO_LOG_STATUS_ERROR, fmt, ap);
+    vlog(lc, DFO_INST_ERROR, DFO_LOG_STATUS_ERROR, fmt, ap);
     va_end(ap);
     return DFO_INST_ERROR;
 }
@@ -47,10 +49,10 @@ int dfo_inst_log_category(const char *name)
     return -1;
 }
 
-void dfo_inst_set_logging(dfo_instance *in, int category, int on)
+void dfo_inst_set_logging(dfo_lifecycle *lc, int category, int on)
 {
     for (int j = 0; j < DFO_NUM_LOG_CATEGORIES; j++)
-        if (category < 0 || category == j) in->log_on[j] = on ? 1 : 0;
+        if (category < 0 || category == j) lc->log_on[j] = on ? 1 : 0;
 }
 
 const char *dfo_phase_name(dfo_phase p)
@@ -67,7 +69,30 @@ const char *dfo_phase_name(dfo_phase p)
     return "unknown";
 }
 
-/* ---- values, doStep arguments, checksums ------------------------------------------------------ */
+void dfo_lifecycle_init(dfo_lifecycle *lc, const dfo_host *host, const char *name, int logging_on)
+{
+    memset(lc, 0, sizeof *lc);
+    lc->host = *host;
+    lc->name = name;
+    lc->run.phase = DFO_PHASE_INSTANTIATED;
+    dfo_inst_set_logging(lc, -1, logging_on);
+    /* problems are always reported */
+    lc->log_on[DFO_LOG_STATUS_ERROR] = lc->log_on[DFO_LOG_STATUS_WARNING] = 1;
+}
+
+/* ---- the variable table ---------------------------------------------------------------------- */
+
+const dfo_var_info *dfo_find_var(unsigned int vr)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++)
+        if (DFO_VARS[i].vr == vr) return &DFO_VARS[i];
+    return NULL;
+}
+
+const char *dfo_type_name(dfo_var_type t)
+{
+    return t == DFO_REAL ? "Real" : t == DFO_INTEGER ? "Integer" : t == DFO_UINT64 ? "UInt64" : "Boolean";
+}
 
 const char *dfo_inst_invalid(const dfo_var_info *var, double x)
 {
@@ -81,92 +106,138 @@ const char *dfo_inst_invalid(const dfo_var_info *var, double x)
     return (x >= var->min && x <= var->max) ? NULL : var->range;
 }
 
-dfo_inst_status dfo_inst_check_step(const dfo_instance *in, const char *fn, double tc, double dt, double h,
+int dfo_inst_settable(const dfo_lifecycle *lc, const char *fn, const dfo_var_info *var, const char *name,
+                      unsigned int vr)
+{
+    const dfo_phase ph = lc->run.phase;
+    if (var->causality == DFO_STRUCTURAL) {
+        if (ph == DFO_PHASE_CONFIG) return 1;
+        dfo_inst_fail(lc, "%s: %s (value reference %u) is a structural parameter: set it in configuration mode "
+                      "(fmi3EnterConfigurationMode), not in %s.", fn, name, vr, dfo_phase_name(ph));
+        return 0;
+    }
+    if (var->causality == DFO_PARAMETER && (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT))) return 1;
+    if (var->causality == DFO_INPUT &&
+        (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT | DFO_PHASE_STEP | DFO_PHASE_EVENT)))
+        return 1;
+    if (var->causality == DFO_PARAMETER)
+        dfo_inst_fail(lc, "%s: variable %s (value reference %u) is a fixed parameter and cannot be set in %s.", fn,
+                      name, vr, dfo_phase_name(ph));
+    else if (var->causality == DFO_INPUT)
+        dfo_inst_fail(lc, "%s: input %s (value reference %u) cannot be set in %s.", fn, name, vr,
+                      dfo_phase_name(ph));
+    else
+        dfo_inst_fail(lc, "%s: variable %s (value reference %u) is %s and cannot be set.", fn, name, vr,
+                      var->causality == DFO_OUTPUT ? "an output" : "a calculated parameter");
+    return 0;
+}
+
+/* ---- doStep arguments ------------------------------------------------------------------------ */
+
+dfo_inst_status dfo_inst_check_step(const dfo_lifecycle *lc, const char *fn, double tc, double dt, double h,
                                     double *t_target_out)
 {
-    const dfo_values *v = &in->v;
-    const double t = v->time;
+    const dfo_run *r = &lc->run;
+    const double t = r->time;
     if (!isfinite(tc))
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", fn,
+        return dfo_inst_fail(lc, "%s: currentCommunicationPoint %.17g must be finite (the FMU's time is %.17g).", fn,
                              tc, t);
     if (!isfinite(dt) || !(dt > 0.0))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
+        return dfo_inst_fail(lc, "%s: communicationStepSize %.17g must be finite and > 0 (at t = %.17g).", fn, dt,
                              tc);
     const double tol = 1e3 * DBL_EPSILON * fmax(1.0, fabs(t)) + 1e-9 * h;
     if (fabs(tc - t) > tol)
-        return dfo_inst_fail(in, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
+        return dfo_inst_fail(lc, "%s: currentCommunicationPoint %.17g does not equal the FMU's time %.17g.", fn,
                              tc, t);
     const double t_target = tc + dt;
     if (!(t_target > t))
-        return dfo_inst_fail(in, "%s: communicationStepSize %.17g is below the time resolution at t = %.17g.", fn,
+        return dfo_inst_fail(lc, "%s: communicationStepSize %.17g is below the time resolution at t = %.17g.", fn,
                              dt, t);
-    if (v->stop_defined && t_target > v->stop_time + tol)
-        return dfo_inst_fail(in, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
-                             v->stop_time);
-    if (!in->work_by_events && (t_target - t) / h > DFO_MAX_STEPS_PER_CALL)
-        return dfo_inst_fail(in, "%s: a communication step of %.17g s would take more than %.0e internal "
+    if (r->stop_defined && t_target > r->stop_time + tol)
+        return dfo_inst_fail(lc, "%s: the step would end at %.17g, after the stop time %.17g.", fn, t_target,
+                             r->stop_time);
+    if (!lc->work_by_events && (t_target - t) / h > DFO_MAX_STEPS_PER_CALL)
+        return dfo_inst_fail(lc, "%s: a communication step of %.17g s would take more than %.0e internal "
                              "steps of h = %.17g s; use a larger h or shorter communication steps.", fn, dt,
                              DFO_MAX_STEPS_PER_CALL, h);
     *t_target_out = t_target;
     return DFO_INST_OK;
 }
 
-int dfo_inst_events_begin(dfo_instance *in, const char *fn, double tc, double dt, double h, const dfo_event_opts *opt,
-                          dfo_step_result *res, dfo_inst_status *st, double *t_target)
+int dfo_inst_events_begin(dfo_lifecycle *lc, const char *fn, double tc, double dt, double h,
+                          const dfo_event_opts *opt, dfo_step_result *res, dfo_inst_status *st, double *t_target)
 {
     res->early = res->event = 0;
-    in->v.event_pending = 0; /* an event not handled in event mode is handled by the next step */
+    lc->run.event_pending = 0; /* an event not handled in event mode is handled by the next step */
     if (!opt->early_return && !opt->intermediate) {
-        *st = dfo_inst_do_step(in, fn, tc, dt, 0, NULL);
-        res->t_reached = in->v.time;
+        *st = dfo_inst_do_step(lc, fn, tc, dt, 0, NULL);
+        res->t_reached = lc->run.time;
         return 1;
     }
-    *st = dfo_inst_check_step(in, fn, tc, dt, h, t_target);
+    *st = dfo_inst_check_step(lc, fn, tc, dt, h, t_target);
     return *st != DFO_INST_OK;
 }
 
-uint64_t dfo_inst_checksum(const unsigned char *p, size_t n)
+/* ---- deserialised runs ----------------------------------------------------------------------- */
+
+const char *dfo_run_implausible(const dfo_run *r, int config)
 {
-    uint64_t h = 1469598103934665603ULL;
-    for (size_t i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= 1099511628211ULL;
-    }
-    return h;
+    const int ph = (int)r->phase;
+    if (ph != DFO_PHASE_INSTANTIATED && ph != DFO_PHASE_INIT && ph != DFO_PHASE_STEP && ph != DFO_PHASE_TERMINATED &&
+        ph != DFO_PHASE_ERROR && ph != DFO_PHASE_EVENT && !(config && ph == DFO_PHASE_CONFIG))
+        return "the life-cycle phase is invalid";
+    if ((r->event_pending != 0 && r->event_pending != 1) || r->event_from < -1 || r->event_from > 1)
+        return "the pending event is invalid";
+    if (r->stop_defined != 0 && r->stop_defined != 1) return "the stop time flag is invalid";
+    if (!isfinite(r->start_time) || !isfinite(r->stop_time) || !isfinite(r->time))
+        return "the experiment's times are not finite";
+    return NULL;
 }
 
-/* ---- the life cycle's model-independent steps (the values' common fields) --------------------- */
+const char *dfo_grid_implausible(const dfo_run *r, double t0, long long n_grid, double h, double t)
+{
+    /* the time lies on the internal grid's interval n: t0 + n h <= t < t0 + (n + 1) h */
+    const double slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(t);
+    if (t < t0 || t0 + (double)n_grid * h > t + slack || t0 + (double)(n_grid + 1) * h < t - slack)
+        return "the time does not match the internal grid";
+    /* once started, the host's time is the stepper's within its snap tolerance */
+    if ((r->phase & DFO_PHASES_STARTED) && fabs(r->time - t) > dfo_snap(h, r->time) + slack)
+        return "the host's time does not match the state's";
+    return NULL;
+}
 
-dfo_inst_status dfo_inst_setup(dfo_instance *in, const char *fn, double start_time, int stop_defined,
+/* ---- the life cycle's model-independent steps ------------------------------------------------- */
+
+dfo_inst_status dfo_inst_setup(dfo_lifecycle *lc, const char *fn, double start_time, int stop_defined,
                                double stop_time)
 {
-    if (!isfinite(start_time)) return dfo_inst_fail(in, "%s: startTime %g is not finite.", fn, start_time);
+    if (!isfinite(start_time)) return dfo_inst_fail(lc, "%s: startTime %g is not finite.", fn, start_time);
     if (stop_defined && !(stop_time >= start_time))
-        return dfo_inst_fail(in, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
+        return dfo_inst_fail(lc, "%s: stopTime %.17g must be finite and >= startTime %.17g.", fn, stop_time,
                              start_time);
-    in->v.start_time = start_time;
-    in->v.stop_defined = stop_defined ? 1 : 0;
-    in->v.stop_time = stop_defined ? stop_time : 0.0;
+    lc->run.start_time = start_time;
+    lc->run.stop_defined = stop_defined ? 1 : 0;
+    lc->run.stop_time = stop_defined ? stop_time : 0.0;
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_enter_init(dfo_instance *in)
+dfo_inst_status dfo_inst_enter_init(dfo_lifecycle *lc)
 {
-    in->v.phase = DFO_PHASE_INIT;
+    lc->run.phase = DFO_PHASE_INIT;
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_terminate(dfo_instance *in)
+dfo_inst_status dfo_inst_terminate(dfo_lifecycle *lc)
 {
-    in->v.phase = DFO_PHASE_TERMINATED;
+    lc->run.phase = DFO_PHASE_TERMINATED;
     return DFO_INST_OK;
 }
 
-int dfo_inst_update_events(dfo_instance *in)
+int dfo_inst_update_events(dfo_lifecycle *lc)
 {
-    const int pending = in->v.event_pending;
-    in->v.event_pending = 0;
+    const int pending = lc->run.event_pending;
+    lc->run.event_pending = 0;
     return pending;
 }
 
-double dfo_inst_time(const dfo_instance *in) { return in->v.time; }
+double dfo_inst_time(const dfo_lifecycle *lc) { return lc->run.time; }

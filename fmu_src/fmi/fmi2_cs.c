@@ -1,17 +1,21 @@
-/* FMI 2.0 co-simulation glue for the dry-friction oscillator: the fmi2 signatures, argument checks,
+/* FMI 2.0 co-simulation glue, the same for every model: the fmi2 signatures, argument checks,
  * status mapping and ONE table of the phases in which each function may be called. Everything
  * else (life cycle, get/set through the generated variable table, doStep, FMU states, logging) is
- * the FMI-independent instance core, instance.[ch]. */
+ * the model's FMI-independent instance core behind core/instance.h (the oscillator's
+ * models/oscillator/osc_instance.c, the chain's models/chain/chain_instance.c), of which this file
+ * sees only the life cycle (dfo_lifecycle) and the model API. The model's generated model_vars.h
+ * gives its GUID and log categories. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi2Functions.h"
 #include "instance.h"
+#include "model_vars.h" /* MODEL_GUID, the log categories */
 
 #include <string.h>
 
-/* ---- instance: the core plus what FMI 2.0 gives at instantiation ------------------------------ */
+/* ---- instance: the model's core plus what FMI 2.0 gives at instantiation ---------------------- */
 
 typedef struct {
-    dfo_instance core;
+    dfo_lifecycle *core;         /* the model's instance (its life cycle first) */
     fmi2CallbackFunctions cb;
     char *name;
 } Instance;
@@ -85,21 +89,21 @@ static fmi2Status status_of(dfo_inst_status st)
 static int allowed(Instance *in, const char *fn, int phases)
 {
     if (!in) return 0;
-    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
-    if (in->core.v.phase & phases) return 1;
-    dfo_inst_fail(&in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core.v.phase));
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
+    if (in->core->run.phase & phases) return 1;
+    dfo_inst_fail(in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core->run.phase));
     return 0;
 }
 
 #define BEGIN(fn)                                   \
     Instance *in = (Instance *)c;                   \
     if (!allowed(in, #fn, PHASES_##fn)) return fmi2Error
-#define FAIL(...) ((void)dfo_inst_fail(&in->core, __VA_ARGS__), fmi2Error)
+#define FAIL(...) ((void)dfo_inst_fail(in->core, __VA_ARGS__), fmi2Error)
 
 static int check_arrays(Instance *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *value)
 {
     if (nvr > 0 && (!vr || !value)) {
-        dfo_inst_fail(&in->core, "%s: the value reference or value array is NULL.", fn);
+        dfo_inst_fail(in->core, "%s: the value reference or value array is NULL.", fn);
         return 0;
     }
     return 1;
@@ -123,19 +127,19 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     tmp.cb = *functions;
     tmp.name = (char *)(instanceName ? instanceName : "?");
     const dfo_host tmp_host = {&tmp, host_alloc, host_free, functions->logger ? host_log : NULL};
-    (void)dfo_inst_init(&tmp.core, &tmp_host, tmp.name, 0);
-    dfo_inst_free(&tmp.core); /* only its logging is used */
+    dfo_lifecycle tmp_lc; /* only its logging is used */
+    dfo_lifecycle_init(&tmp_lc, &tmp_host, tmp.name, 0);
     if (!instanceName || !*instanceName) {
-        dfo_inst_fail(&tmp.core, "fmi2Instantiate: the instance name must be a non-empty string.");
+        dfo_inst_fail(&tmp_lc, "fmi2Instantiate: the instance name must be a non-empty string.");
         return NULL;
     }
     if (fmuType != fmi2CoSimulation) {
-        dfo_inst_fail(&tmp.core, "fmi2Instantiate: this FMU supports co-simulation only (fmuType %d requested).",
+        dfo_inst_fail(&tmp_lc, "fmi2Instantiate: this FMU supports co-simulation only (fmuType %d requested).",
                       (int)fmuType);
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, MODEL_GUID) != 0) {
-        dfo_inst_fail(&tmp.core, "fmi2Instantiate: GUID %s does not match the FMU's GUID %s.",
+        dfo_inst_fail(&tmp_lc, "fmi2Instantiate: GUID %s does not match the FMU's GUID %s.",
                       fmuGUID ? fmuGUID : "(null)", MODEL_GUID);
         return NULL;
     }
@@ -150,13 +154,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     memcpy(in->name, instanceName, len);
     in->cb = *functions;
     const dfo_host host = {in, host_alloc, host_free, functions->logger ? host_log : NULL};
-    if (dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0) != DFO_INST_OK) {
-        dfo_inst_free(&in->core);
+    in->core = dfo_inst_new(&host, in->name, loggingOn ? 1 : 0);
+    if (!in->core) {
         functions->freeMemory(in->name);
         functions->freeMemory(in);
         return NULL;
     }
-    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2Instantiate");
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2Instantiate");
     return in;
 }
 
@@ -164,8 +168,8 @@ void fmi2FreeInstance(fmi2Component c)
 {
     Instance *in = (Instance *)c;
     if (!in) return;
-    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2FreeInstance");
-    dfo_inst_free(&in->core);
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2FreeInstance");
+    dfo_inst_delete(in->core);
     fmi2CallbackFreeMemory freeMemory = in->cb.freeMemory;
     freeMemory(in->name);
     freeMemory(in);
@@ -179,9 +183,9 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     for (size_t i = 0; i < nCategories; i++)
         if (dfo_inst_log_category(categories[i]) < 0)
             return FAIL("fmi2SetDebugLogging: unknown log category %s.", categories[i] ? categories[i] : "(null)");
-    if (nCategories == 0) dfo_inst_set_logging(&in->core, -1, loggingOn);
+    if (nCategories == 0) dfo_inst_set_logging(in->core, -1, loggingOn);
     for (size_t i = 0; i < nCategories; i++)
-        dfo_inst_set_logging(&in->core, dfo_inst_log_category(categories[i]), loggingOn);
+        dfo_inst_set_logging(in->core, dfo_inst_log_category(categories[i]), loggingOn);
     return fmi2OK;
 }
 
@@ -191,31 +195,31 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     BEGIN(fmi2SetupExperiment);
     (void)toleranceDefined;
     (void)tolerance;
-    return status_of(dfo_inst_setup(&in->core, "fmi2SetupExperiment", startTime, stopTimeDefined, stopTime));
+    return status_of(dfo_inst_setup(in->core, "fmi2SetupExperiment", startTime, stopTimeDefined, stopTime));
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
     BEGIN(fmi2EnterInitializationMode);
-    return status_of(dfo_inst_enter_init(&in->core));
+    return status_of(dfo_inst_enter_init(in->core));
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     BEGIN(fmi2ExitInitializationMode);
-    return status_of(dfo_inst_exit_init(&in->core, "fmi2ExitInitializationMode"));
+    return status_of(dfo_inst_exit_init(in->core, "fmi2ExitInitializationMode"));
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)
 {
     BEGIN(fmi2Terminate);
-    return status_of(dfo_inst_terminate(&in->core));
+    return status_of(dfo_inst_terminate(in->core));
 }
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
     BEGIN(fmi2Reset);
-    dfo_inst_reset(&in->core);
+    dfo_inst_reset(in->core);
     return fmi2OK;
 }
 
@@ -226,7 +230,7 @@ fmi2Status fmi2Reset(fmi2Component c)
     {                                                                                                   \
         BEGIN(fn);                                                                                      \
         if (!check_arrays(in, #fn, vr, nvr, value)) return fmi2Error;                                  \
-        return status_of(core_fn(&in->core, #fn, vr, nvr, value));                                      \
+        return status_of(core_fn(in->core, #fn, vr, nvr, value));                                      \
     }
 
 GET_SET(fmi2GetReal, dfo_inst_get_real, fmi2Real)
@@ -260,7 +264,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     BEGIN(fmi2DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
     /* FMI 2.0 has no early return: always up to the communication point */
-    return status_of(dfo_inst_do_step(&in->core, "fmi2DoStep", currentCommunicationPoint, communicationStepSize, 0,
+    return status_of(dfo_inst_do_step(in->core, "fmi2DoStep", currentCommunicationPoint, communicationStepSize, 0,
                                       NULL));
 }
 
@@ -300,7 +304,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 {
     BEGIN(fmi2GetRealStatus);
     if (s == fmi2LastSuccessfulTime && value) {
-        *value = dfo_inst_time(&in->core);
+        *value = dfo_inst_time(in->core);
         return fmi2OK;
     }
     NO_STATUS(fmi2GetRealStatus);
@@ -333,27 +337,27 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     BEGIN(fmi2GetFMUstate);
     if (!FMUstate) return FAIL("fmi2GetFMUstate: FMUstate is NULL.");
-    return status_of(dfo_inst_get_state(&in->core, "fmi2GetFMUstate", FMUstate));
+    return status_of(dfo_inst_get_state(in->core, "fmi2GetFMUstate", FMUstate));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     BEGIN(fmi2SetFMUstate);
-    return status_of(dfo_inst_set_state(&in->core, "fmi2SetFMUstate", FMUstate));
+    return status_of(dfo_inst_set_state(in->core, "fmi2SetFMUstate", FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     BEGIN(fmi2FreeFMUstate);
     if (!FMUstate) return FAIL("fmi2FreeFMUstate: FMUstate is NULL.");
-    return status_of(dfo_inst_free_state(&in->core, "fmi2FreeFMUstate", FMUstate));
+    return status_of(dfo_inst_free_state(in->core, "fmi2FreeFMUstate", FMUstate));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
     BEGIN(fmi2SerializedFMUstateSize);
     if (!size) return FAIL("fmi2SerializedFMUstateSize: size is NULL.");
-    *size = dfo_inst_state_size(&in->core, FMUstate);
+    *size = dfo_inst_state_size(in->core, FMUstate);
     if (*size == 0) return FAIL("fmi2SerializedFMUstateSize: FMUstate is NULL or not a state of this FMU.");
     return fmi2OK;
 }
@@ -363,7 +367,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     BEGIN(fmi2SerializeFMUstate);
     if (!FMUstate) return FAIL("fmi2SerializeFMUstate: FMUstate is NULL or not a state of this FMU.");
     if (!serializedState) return FAIL("fmi2SerializeFMUstate: serializedState is NULL.");
-    return status_of(dfo_inst_serialize(&in->core, "fmi2SerializeFMUstate", FMUstate,
+    return status_of(dfo_inst_serialize(in->core, "fmi2SerializeFMUstate", FMUstate,
                                         (unsigned char *)serializedState, size));
 }
 
@@ -372,7 +376,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 {
     BEGIN(fmi2DeSerializeFMUstate);
     if (!serializedState || !FMUstate) return FAIL("fmi2DeSerializeFMUstate: serializedState or FMUstate is NULL.");
-    return status_of(dfo_inst_deserialize(&in->core, "fmi2DeSerializeFMUstate",
+    return status_of(dfo_inst_deserialize(in->core, "fmi2DeSerializeFMUstate",
                                           (const unsigned char *)serializedState, size, FMUstate));
 }
 

@@ -1,10 +1,14 @@
-/* FMI 3.0 co-simulation glue for the dry-friction oscillator: the fmi3 signatures, argument checks
- * (value references, nValues), type mapping (Float64, Int32, Enumeration as Int64, Boolean), status
- * mapping and ONE table of the phases in which each function may be called. Everything else (life
- * cycle, get/set through the generated variable table, doStep with its events, FMU states, logging)
- * is the FMI-independent instance core, instance.[ch], shared with fmi2_cs.c.
+/* FMI 3.0 co-simulation glue, the same for every model: the fmi3 signatures, argument checks
+ * (value references, nValues), type mapping (Float64, Int32, Enumeration as Int64, Boolean, UInt64
+ * for structural parameters), status mapping and ONE table of the phases in which each function may
+ * be called. Everything else (life cycle, get/set through the generated variable table, doStep with
+ * its events, configuration mode, FMU states, logging) is the model's FMI-independent instance core
+ * behind core/instance.h (the oscillator's osc_instance.c, the chain's chain_instance.c), of which
+ * this file sees only the life cycle (dfo_lifecycle) and the model API; shared with fmi2_cs.c.
+ * Structural parameters and configuration mode: only for a model that reports them
+ * (dfo_inst_has_structural), an error otherwise.
  *
- * Events (docs/fmi3.md): every change of mode is an event. earlyReturnAllowed: fmi3DoStep returns at
+ * Events (docs/fmi3.md): every stick/slip switch (of any block) is an event. earlyReturnAllowed: fmi3DoStep returns at
  * the first switch inside the step. eventModeUsed (with early return): eventHandlingNeeded there,
  * the outputs are the left limits until fmi3UpdateDiscreteStates, the right limits after it. Neither:
  * the step of the FMI 2.0 FMU, bit for bit. The intermediate-update callback is called at every
@@ -13,7 +17,7 @@
  * FMI 3.0 has no memory callbacks: the instance and its FMU states are allocated with calloc. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi3Functions.h"
-#include "instance.h"
+#include "instance_common.h" /* the model API, its variable table (dfo_find_var) */
 
 #include <limits.h>
 #include <stdio.h>
@@ -22,10 +26,10 @@
 
 typedef char dfo_static_assert_int32[sizeof(int) == sizeof(fmi3Int32) ? 1 : -1];
 
-/* ---- instance: the core plus what FMI 3.0 gives at instantiation ------------------------------ */
+/* ---- instance: the model's core plus what FMI 3.0 gives at instantiation ---------------------- */
 
 typedef struct {
-    dfo_instance core;
+    dfo_lifecycle *core;         /* the model's instance (its life cycle first) */
     char *name;
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback logger;
@@ -112,23 +116,22 @@ static fmi3Status status_of(dfo_inst_status st)
 static int allowed(Instance *in, const char *fn, int phases)
 {
     if (!in) return 0;
-    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
     if (in->in_update && !IN_UPDATE_OK(fn)) {
-        dfo_inst_fail(&in->core, "%s must not be called from the intermediate-update callback (only getters may).",
+        dfo_inst_fail(in->core, "%s must not be called from the intermediate-update callback (only getters may).",
                       fn);
         return 0;
     }
-    if (in->core.v.phase & phases) return 1;
-    dfo_inst_fail(&in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core.v.phase));
+    if (in->core->run.phase & phases) return 1;
+    dfo_inst_fail(in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core->run.phase));
     return 0;
 }
 
 #define BEGIN(fn)                                   \
     Instance *in = (Instance *)instance;            \
     if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
-#define FAIL(...) ((void)dfo_inst_fail(&in->core, __VA_ARGS__), fmi3Error)
+#define FAIL(...) ((void)dfo_inst_fail(in->core, __VA_ARGS__), fmi3Error)
 
-static const dfo_var_info *var_of(unsigned int vr);
 
 /* nValues must be the number of values the variables hold (one per scalar, n per array of the
  * structural parameter n); arrays non-NULL when used. The refusal names every variable given and
@@ -137,16 +140,16 @@ static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference v
                         size_t nValues)
 {
     if (nvr > 0 && (!vr || !value)) {
-        dfo_inst_fail(&in->core, "%s: the value reference or value array is NULL.", fn);
+        dfo_inst_fail(in->core, "%s: the value reference or value array is NULL.", fn);
         return 0;
     }
-    const size_t expected = nvr > 0 ? dfo_inst_n_values(&in->core, vr, nvr) : 0;
+    const size_t expected = nvr > 0 ? dfo_inst_n_values(in->core, vr, nvr) : 0;
     if (nValues == expected) return 1;
     char list[256] = "";
     size_t used = 0;
     for (size_t i = 0; i < nvr && used + 1 < sizeof list; i++) {
-        const dfo_var_info *var = var_of(vr[i]);
-        const size_t k = dfo_inst_n_values(&in->core, &vr[i], 1);
+        const dfo_var_info *var = dfo_find_var(vr[i]);
+        const size_t k = dfo_inst_n_values(in->core, &vr[i], 1);
         const int w = var ? snprintf(list + used, sizeof list - used, "%s%s (%lu)", i ? ", " : "", var->name,
                                      (unsigned long)k)
                           : snprintf(list + used, sizeof list - used, "%svalue reference %u", i ? ", " : "",
@@ -155,26 +158,20 @@ static int check_arrays(Instance *in, const char *fn, const fmi3ValueReference v
         used += (size_t)w;
     }
     if (used + 1 >= sizeof list) memcpy(list + sizeof list - 5, "...", 4);
-    dfo_inst_fail(&in->core, "%s: nValues = %lu, but the variables given hold %lu values: %s.", fn,
+    dfo_inst_fail(in->core, "%s: nValues = %lu, but the variables given hold %lu values: %s.", fn,
                   (unsigned long)nValues, (unsigned long)expected, list);
     return 0;
 }
 
-static const dfo_var_info *var_of(unsigned int vr)
-{
-    for (int i = 0; i < DFO_NUM_VARS; i++)
-        if (DFO_VARS[i].vr == vr) return &DFO_VARS[i];
-    return NULL;
-}
 
 /* FMI 3.0 separates Int32 from Enumeration (accessed as Int64): the core has one integer kind. */
 static int check_int_kind(Instance *in, const char *fn, const fmi3ValueReference vr[], size_t nvr, int enumeration)
 {
     for (size_t i = 0; i < nvr; i++) {
-        const dfo_var_info *var = var_of(vr[i]);
+        const dfo_var_info *var = dfo_find_var(vr[i]);
         if (!var || var->type != DFO_INTEGER) continue; /* the core names the error */
         if ((var->n_items > 0) != enumeration) {
-            dfo_inst_fail(&in->core, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name,
+            dfo_inst_fail(in->core, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name,
                           vr[i], var->n_items > 0 ? "Enumeration" : "Int32", enumeration ? "Enumeration" : "Int32");
             return 0;
         }
@@ -184,8 +181,8 @@ static int check_int_kind(Instance *in, const char *fn, const fmi3ValueReference
 
 static double host_time(const Instance *in)
 {
-    const dfo_values *v = &in->core.v;
-    return (v->phase & (P_INST | P_INIT)) ? v->start_time : dfo_inst_time(&in->core);
+    const dfo_run *r = &in->core->run;
+    return (r->phase & (P_INST | P_INIT)) ? r->start_time : dfo_inst_time(in->core);
 }
 
 /* ---- FMI functions --------------------------------------------------------------------------- */
@@ -202,14 +199,14 @@ static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiatio
     tmp.env = env;
     tmp.logger = logger;
     const dfo_host tmp_host = {&tmp, host_alloc, host_free, logger ? host_log : NULL};
-    (void)dfo_inst_init(&tmp.core, &tmp_host, instanceName ? instanceName : "?", 0);
-    dfo_inst_free(&tmp.core); /* only its logging is used */
+    dfo_lifecycle tmp_lc; /* only its logging is used */
+    dfo_lifecycle_init(&tmp_lc, &tmp_host, instanceName ? instanceName : "?", 0);
     if (!instanceName || !*instanceName) {
-        dfo_inst_fail(&tmp.core, "fmi3InstantiateCoSimulation: the instance name must be a non-empty string.");
+        dfo_inst_fail(&tmp_lc, "fmi3InstantiateCoSimulation: the instance name must be a non-empty string.");
         return NULL;
     }
     if (!instantiationToken || strcmp(instantiationToken, MODEL_GUID) != 0) {
-        dfo_inst_fail(&tmp.core, "fmi3InstantiateCoSimulation: instantiationToken %s does not match the FMU's %s.",
+        dfo_inst_fail(&tmp_lc, "fmi3InstantiateCoSimulation: instantiationToken %s does not match the FMU's %s.",
                       instantiationToken ? instantiationToken : "(null)", MODEL_GUID);
         return NULL;
     }
@@ -228,13 +225,13 @@ static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiatio
     in->event_mode_used = eventModeUsed ? 1 : 0;
     in->early_return_allowed = earlyReturnAllowed ? 1 : 0;
     const dfo_host host = {in, host_alloc, host_free, logger ? host_log : NULL};
-    if (dfo_inst_init(&in->core, &host, in->name, loggingOn ? 1 : 0) != DFO_INST_OK) {
-        dfo_inst_free(&in->core);
+    in->core = dfo_inst_new(&host, in->name, loggingOn ? 1 : 0);
+    if (!in->core) {
         free(in->name);
         free(in);
         return NULL;
     }
-    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3InstantiateCoSimulation");
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3InstantiateCoSimulation");
     return in;
 }
 
@@ -294,8 +291,8 @@ void fmi3FreeInstance(fmi3Instance instance)
 {
     Instance *in = (Instance *)instance;
     if (!in) return;
-    dfo_inst_log(&in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3FreeInstance");
-    dfo_inst_free(&in->core);
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3FreeInstance");
+    dfo_inst_delete(in->core);
     free(in->name);
     free(in);
 }
@@ -308,9 +305,9 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
     for (size_t i = 0; i < nCategories; i++)
         if (dfo_inst_log_category(categories[i]) < 0)
             return FAIL("fmi3SetDebugLogging: unknown log category %s.", categories[i] ? categories[i] : "(null)");
-    if (nCategories == 0) dfo_inst_set_logging(&in->core, -1, loggingOn);
+    if (nCategories == 0) dfo_inst_set_logging(in->core, -1, loggingOn);
     for (size_t i = 0; i < nCategories; i++)
-        dfo_inst_set_logging(&in->core, dfo_inst_log_category(categories[i]), loggingOn);
+        dfo_inst_set_logging(in->core, dfo_inst_log_category(categories[i]), loggingOn);
     return fmi3OK;
 }
 
@@ -321,18 +318,18 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     (void)toleranceDefined;
     (void)tolerance;
     const dfo_inst_status st =
-        dfo_inst_setup(&in->core, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime);
+        dfo_inst_setup(in->core, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime);
     if (st != DFO_INST_OK) return status_of(st);
-    return status_of(dfo_inst_enter_init(&in->core));
+    return status_of(dfo_inst_enter_init(in->core));
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     BEGIN(fmi3ExitInitializationMode);
-    const dfo_inst_status st = dfo_inst_exit_init(&in->core, "fmi3ExitInitializationMode");
+    const dfo_inst_status st = dfo_inst_exit_init(in->core, "fmi3ExitInitializationMode");
     /* with event mode, a co-simulation FMU starts in event mode (nothing pending: the start is
      * consistent) */
-    if (st != DFO_INST_ERROR && in->event_mode_used) in->core.v.phase = DFO_PHASE_EVENT;
+    if (st != DFO_INST_ERROR && in->event_mode_used) in->core->run.phase = DFO_PHASE_EVENT;
     return status_of(st);
 }
 
@@ -341,15 +338,15 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance)
     BEGIN(fmi3EnterEventMode);
     if (!in->event_mode_used)
         return FAIL("fmi3EnterEventMode: the FMU was instantiated with eventModeUsed = false.");
-    in->core.v.phase = DFO_PHASE_EVENT;
+    in->core->run.phase = DFO_PHASE_EVENT;
     return fmi3OK;
 }
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 {
     BEGIN(fmi3EnterStepMode);
-    dfo_inst_update_events(&in->core); /* an event not updated is handled by entering step mode */
-    in->core.v.phase = DFO_PHASE_STEP;
+    dfo_inst_update_events(in->core); /* an event not updated is handled by entering step mode */
+    in->core->run.phase = DFO_PHASE_STEP;
     return fmi3OK;
 }
 
@@ -361,8 +358,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Float64 *nextEventTime)
 {
     BEGIN(fmi3UpdateDiscreteStates);
-    const int was_pending = dfo_inst_update_events(&in->core);
-    if (was_pending) dfo_inst_log_event_handled(&in->core);
+    const int was_pending = dfo_inst_update_events(in->core);
+    if (was_pending) dfo_inst_log_event_handled(in->core);
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
@@ -375,14 +372,14 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 fmi3Status fmi3Terminate(fmi3Instance instance)
 {
     BEGIN(fmi3Terminate);
-    dfo_inst_update_events(&in->core);
-    return status_of(dfo_inst_terminate(&in->core));
+    dfo_inst_update_events(in->core);
+    return status_of(dfo_inst_terminate(in->core));
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance)
 {
     BEGIN(fmi3Reset);
-    dfo_inst_reset(&in->core);
+    dfo_inst_reset(in->core);
     return fmi3OK;
 }
 
@@ -399,10 +396,10 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
             values[k++] = host_time(in);
             continue;
         }
-        const dfo_inst_status st = dfo_inst_get_real(&in->core, "fmi3GetFloat64", &vr[i], 1, &values[k]);
+        const dfo_inst_status st = dfo_inst_get_real(in->core, "fmi3GetFloat64", &vr[i], 1, &values[k]);
         if (st == DFO_INST_ERROR) return fmi3Error;
         if (st > worst) worst = st;
-        k += dfo_inst_n_values(&in->core, &vr[i], 1);
+        k += dfo_inst_n_values(in->core, &vr[i], 1);
     }
     return status_of(worst);
 }
@@ -416,7 +413,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         if (vr[i] == DFO_VR_TIME)
             return FAIL("fmi3SetFloat64: variable time (value reference %u) is the independent variable and cannot "
                         "be set.", vr[i]);
-    return status_of(dfo_inst_set_real(&in->core, "fmi3SetFloat64", vr, nvr, values));
+    return status_of(dfo_inst_set_real(in->core, "fmi3SetFloat64", vr, nvr, values));
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[],
@@ -425,7 +422,7 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], si
     BEGIN(fmi3GetInt32);
     if (!check_arrays(in, "fmi3GetInt32", vr, nvr, values, nValues)) return fmi3Error;
     if (!check_int_kind(in, "fmi3GetInt32", vr, nvr, 0)) return fmi3Error;
-    return status_of(dfo_inst_get_int(&in->core, "fmi3GetInt32", vr, nvr, (int *)values));
+    return status_of(dfo_inst_get_int(in->core, "fmi3GetInt32", vr, nvr, (int *)values));
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[],
@@ -434,7 +431,7 @@ fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], si
     BEGIN(fmi3SetInt32);
     if (!check_arrays(in, "fmi3SetInt32", vr, nvr, values, nValues)) return fmi3Error;
     if (!check_int_kind(in, "fmi3SetInt32", vr, nvr, 0)) return fmi3Error;
-    return status_of(dfo_inst_set_int(&in->core, "fmi3SetInt32", vr, nvr, (const int *)values));
+    return status_of(dfo_inst_set_int(in->core, "fmi3SetInt32", vr, nvr, (const int *)values));
 }
 
 #define CHUNK 64 /* Int64 and Boolean values pass through the core's int in chunks */
@@ -449,7 +446,7 @@ fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference vr[], si
     for (size_t i0 = 0; i0 < nvr; i0 += CHUNK) {
         const size_t n = nvr - i0 < CHUNK ? nvr - i0 : CHUNK;
         int buf[CHUNK];
-        const dfo_inst_status st = dfo_inst_get_int(&in->core, "fmi3GetInt64", vr + i0, n, buf);
+        const dfo_inst_status st = dfo_inst_get_int(in->core, "fmi3GetInt64", vr + i0, n, buf);
         if (st == DFO_INST_ERROR) return fmi3Error;
         if (st > worst) worst = st;
         for (size_t i = 0; i < n; i++) values[i0 + i] = buf[i];
@@ -467,13 +464,13 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference vr[], si
     int buf[CHUNK];
     for (size_t i = 0; i < nvr; i++) {
         if (values[i] < INT_MIN || values[i] > INT_MAX) {
-            const dfo_var_info *var = var_of(vr[i]);
+            const dfo_var_info *var = dfo_find_var(vr[i]);
             return FAIL("fmi3SetInt64: invalid value %lld for variable %s (value reference %u); valid range: %s.",
                         (long long)values[i], var ? var->name : "?", vr[i], var ? var->range : "?");
         }
         buf[i] = (int)values[i];
     }
-    return status_of(dfo_inst_set_int(&in->core, "fmi3SetInt64", vr, nvr, buf));
+    return status_of(dfo_inst_set_int(in->core, "fmi3SetInt64", vr, nvr, buf));
 }
 
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
@@ -484,7 +481,7 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     for (size_t i0 = 0; i0 < nvr; i0 += CHUNK) {
         const size_t n = nvr - i0 < CHUNK ? nvr - i0 : CHUNK;
         int buf[CHUNK];
-        if (dfo_inst_get_bool(&in->core, "fmi3GetBoolean", vr + i0, n, buf) != DFO_INST_OK) return fmi3Error;
+        if (dfo_inst_get_bool(in->core, "fmi3GetBoolean", vr + i0, n, buf) != DFO_INST_OK) return fmi3Error;
         for (size_t i = 0; i < n; i++) values[i0 + i] = buf[i] ? fmi3True : fmi3False;
     }
     return fmi3OK;
@@ -498,7 +495,7 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     if (nvr > CHUNK) return FAIL("fmi3SetBoolean: at most %d values per call.", CHUNK);
     int buf[CHUNK];
     for (size_t i = 0; i < nvr; i++) buf[i] = values[i] ? 1 : 0;
-    return status_of(dfo_inst_set_bool(&in->core, "fmi3SetBoolean", vr, nvr, buf));
+    return status_of(dfo_inst_set_bool(in->core, "fmi3SetBoolean", vr, nvr, buf));
 }
 
 /* ---- co-simulation --------------------------------------------------------------------------- */
@@ -529,12 +526,12 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     const dfo_event_opts opt = {in->early_return_allowed, in->event_mode_used && in->early_return_allowed,
                                 in->update ? intermediate : NULL, in};
     dfo_step_result res = {0.0, 0, 0};
-    const dfo_inst_status st = dfo_inst_do_step_events(&in->core, "fmi3DoStep", currentCommunicationPoint,
+    const dfo_inst_status st = dfo_inst_do_step_events(in->core, "fmi3DoStep", currentCommunicationPoint,
                                                        communicationStepSize, &opt, &res);
     *terminateSimulation = fmi3False;
     *eventHandlingNeeded = (st != DFO_INST_ERROR && res.event) ? fmi3True : fmi3False;
     *earlyReturn = (st != DFO_INST_ERROR && res.early) ? fmi3True : fmi3False;
-    *lastSuccessfulTime = dfo_inst_time(&in->core);
+    *lastSuccessfulTime = dfo_inst_time(in->core);
     return status_of(st);
 }
 
@@ -544,27 +541,27 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
     BEGIN(fmi3GetFMUState);
     if (!FMUState) return FAIL("fmi3GetFMUState: FMUState is NULL.");
-    return status_of(dfo_inst_get_state(&in->core, "fmi3GetFMUState", FMUState));
+    return status_of(dfo_inst_get_state(in->core, "fmi3GetFMUState", FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
     BEGIN(fmi3SetFMUState);
-    return status_of(dfo_inst_set_state(&in->core, "fmi3SetFMUState", FMUState));
+    return status_of(dfo_inst_set_state(in->core, "fmi3SetFMUState", FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
     BEGIN(fmi3FreeFMUState);
     if (!FMUState) return FAIL("fmi3FreeFMUState: FMUState is NULL.");
-    return status_of(dfo_inst_free_state(&in->core, "fmi3FreeFMUState", FMUState));
+    return status_of(dfo_inst_free_state(in->core, "fmi3FreeFMUState", FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
 {
     BEGIN(fmi3SerializedFMUStateSize);
     if (!size) return FAIL("fmi3SerializedFMUStateSize: size is NULL.");
-    *size = dfo_inst_state_size(&in->core, FMUState);
+    *size = dfo_inst_state_size(in->core, FMUState);
     if (*size == 0) return FAIL("fmi3SerializedFMUStateSize: FMUState is NULL or not a state of this FMU.");
     return fmi3OK;
 }
@@ -575,7 +572,7 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, f
     BEGIN(fmi3SerializeFMUState);
     if (!FMUState) return FAIL("fmi3SerializeFMUState: FMUState is NULL or not a state of this FMU.");
     if (!serializedState) return FAIL("fmi3SerializeFMUState: serializedState is NULL.");
-    return status_of(dfo_inst_serialize(&in->core, "fmi3SerializeFMUState", FMUState, serializedState, size));
+    return status_of(dfo_inst_serialize(in->core, "fmi3SerializeFMUState", FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
@@ -584,7 +581,7 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte seriali
     BEGIN(fmi3DeserializeFMUState);
     if (!serializedState || !FMUState)
         return FAIL("fmi3DeserializeFMUState: serializedState or FMUState is NULL.");
-    return status_of(dfo_inst_deserialize(&in->core, "fmi3DeserializeFMUState", serializedState, size, FMUState));
+    return status_of(dfo_inst_deserialize(in->core, "fmi3DeserializeFMUState", serializedState, size, FMUState));
 }
 
 /* ---- what this FMU does not have: exported (hosts resolve every symbol), always an error ------- */
@@ -622,15 +619,15 @@ UNSUPPORTED_GETSET(UInt8, fmi3UInt8)
 UNSUPPORTED_GETSET(Int16, fmi3Int16)
 UNSUPPORTED_GETSET(UInt16, fmi3UInt16)
 UNSUPPORTED_GETSET(UInt32, fmi3UInt32)
-#if defined(DFO_MODEL_INDEXED)
 fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3UInt64 values[],
                          size_t nValues)
 {
+    if (!dfo_inst_has_structural()) return nvr == 0 && instance ? fmi3OK : unsupported(instance, "fmi3GetUInt64", NO_TYPE);
     BEGIN(fmi3GetUInt64);
     if (!check_arrays(in, "fmi3GetUInt64", vr, nvr, values, nValues)) return fmi3Error;
     if (nvr > CHUNK) return FAIL("fmi3GetUInt64: at most %d values per call.", CHUNK);
     unsigned long long buf[CHUNK];
-    const dfo_inst_status st = dfo_inst_get_uint64(&in->core, "fmi3GetUInt64", vr, nvr, buf);
+    const dfo_inst_status st = dfo_inst_get_uint64(in->core, "fmi3GetUInt64", vr, nvr, buf);
     if (st == DFO_INST_ERROR) return fmi3Error;
     for (size_t i = 0; i < nvr; i++) values[i] = (fmi3UInt64)buf[i];
     return status_of(st);
@@ -639,16 +636,14 @@ fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
 fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          const fmi3UInt64 values[], size_t nValues)
 {
+    if (!dfo_inst_has_structural()) return nvr == 0 && instance ? fmi3OK : unsupported(instance, "fmi3SetUInt64", NO_TYPE);
     BEGIN(fmi3SetUInt64);
     if (!check_arrays(in, "fmi3SetUInt64", vr, nvr, values, nValues)) return fmi3Error;
     if (nvr > CHUNK) return FAIL("fmi3SetUInt64: at most %d values per call.", CHUNK);
     unsigned long long buf[CHUNK];
     for (size_t i = 0; i < nvr; i++) buf[i] = (unsigned long long)values[i];
-    return status_of(dfo_inst_set_uint64(&in->core, "fmi3SetUInt64", vr, nvr, buf));
+    return status_of(dfo_inst_set_uint64(in->core, "fmi3SetUInt64", vr, nvr, buf));
 }
-#else
-UNSUPPORTED_GETSET(UInt64, fmi3UInt64)
-#endif
 UNSUPPORTED_GETSET(String, fmi3String)
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
@@ -706,27 +701,19 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     (void)nSensitivity;
     return unsupported(instance, "fmi3GetAdjointDerivative", "adjoint derivatives are not provided.");
 }
-#if defined(DFO_MODEL_INDEXED)
+#define NO_STRUCTURAL "the FMU has no structural parameters."
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
 {
+    if (!dfo_inst_has_structural()) return unsupported(instance, "fmi3EnterConfigurationMode", NO_STRUCTURAL);
     BEGIN(fmi3EnterConfigurationMode);
-    return status_of(dfo_inst_enter_config(&in->core, "fmi3EnterConfigurationMode"));
+    return status_of(dfo_inst_enter_config(in->core, "fmi3EnterConfigurationMode"));
 }
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
 {
+    if (!dfo_inst_has_structural()) return unsupported(instance, "fmi3ExitConfigurationMode", NO_STRUCTURAL);
     BEGIN(fmi3ExitConfigurationMode);
-    return status_of(dfo_inst_exit_config(&in->core, "fmi3ExitConfigurationMode"));
+    return status_of(dfo_inst_exit_config(in->core, "fmi3ExitConfigurationMode"));
 }
-#else
-fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
-{
-    return unsupported(instance, "fmi3EnterConfigurationMode", "the FMU has no structural parameters.");
-}
-fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
-{
-    return unsupported(instance, "fmi3ExitConfigurationMode", "the FMU has no structural parameters.");
-}
-#endif
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                   fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[])
 {

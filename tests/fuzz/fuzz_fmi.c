@@ -32,7 +32,7 @@
 #endif
 #define FUZZ_MAX_CALLS 400
 #define SER_CAP 4096
-#define SERIAL_HEADER 24 /* magic[8], version, size, checksum: the checksum is bytes 16..23 */
+#define SERIAL_HEADER 32 /* magic[8], version, size, checksum (bytes 16..23, of the bytes from 24 on), model hash */
 #include "fuzz_common.h"
 
 #include <limits.h>
@@ -256,7 +256,7 @@ static void op(ctx *X, reader *r)
             memcpy(buf + at, &v, sizeof v);
             TRACE(X, "  forged payload double at byte %lu = %.17g\n", (unsigned long)at, v);
             if (how == 3) {
-                const uint64_t h = fnv1a(buf + SERIAL_HEADER, n - SERIAL_HEADER);
+                const uint64_t h = fnv1a(buf + 24, n - 24);
                 memcpy(buf + 16, &h, sizeof h);
             }
         }

@@ -1,14 +1,34 @@
-/* The values of a DryFrictionChain instance (included by instance.h when the model is indexed):
- * the structural parameter n, the scalar parameters, the per-block parameter and input arrays (n
- * values each, through the host's allocator), the chain model built from them at the end of
- * initialisation, and its state. An FMU state copies all of it (chain_instance.c). No FMI types. */
+/* The instance of the DryFrictionChain FMUs and the private interface of its core, split by
+ * concern (the model API of core/instance.h):
+ *   chain_instance.c    memory, start values, the chain model built from the values, life cycle and
+ *                       configuration mode
+ *   chain_inst_vars.c   variable access: value references (FMI 3.0 arrays, FMI 2.0 elements),
+ *                       get/set, outputs, the structural parameter n
+ *   chain_inst_step.c   doStep, with and without FMI 3.0 events
+ *   chain_inst_state.c  FMU-state copies and their serialisation (core/fmu_state.h's format)
+ *
+ * The values: the structural parameter n, the scalar parameters, the per-block parameter and input
+ * arrays (n values each, through the host's allocator), the chain model built from them at the end
+ * of initialisation, and its state. An FMU state copies all of it and the run. No FMI types.
+ *
+ * n is set in FMI 3.0's configuration mode, fixed by the build in FMI 2.0 where DFO_CHAIN_FIXED_N is
+ * defined: by chain_config.h, the build's configuration generated from the model description into
+ * the FMU's sources/, so that a plain compile of the listed sources builds the right FMU. */
 #ifndef DFO_CHAIN_INSTANCE_H
 #define DFO_CHAIN_INSTANCE_H
 
 #include "chain.h"
+#include "chain_config.h" /* DFO_CHAIN_FIXED_N in an FMI 2.0 build */
+#include "instance_common.h"
 #include "model_vars.h"
 
 #include <stddef.h>
+
+#if defined(DFO_CHAIN_FIXED_N)
+#define CHAIN_N_START ((size_t)(DFO_CHAIN_FIXED_N))
+#else
+#define CHAIN_N_START ((size_t)START_n)
+#endif
 
 typedef struct {
     size_t n;                   /* blocks: the arrays' size */
@@ -23,14 +43,36 @@ typedef struct {
     chain_state s0;             /* the state at the start of a step (restored when it fails) */
     double *scratch;            /* n doubles: the accelerations of the state and inputs */
     int acc_valid;              /* scratch holds them (cleared by every change of state or inputs) */
-    double time;                /* the host's time */
-    double start_time, stop_time;
-    int stop_defined;
-    int phase;                  /* dfo_phase */
-    /* FMI 3.0 events: a switch the host has not yet handled in event mode. While pending, the
-     * switching block's outputs are the left limits (mode event_from); the state is the right limit. */
-    int event_pending, event_from;
-    size_t event_block;
-} dfo_values;
+    size_t event_block;         /* the block of a pending event (the run's event_pending, event_from) */
+} chain_values;
+
+typedef struct {
+    dfo_lifecycle lc;           /* first: the glues see the instance as its life cycle */
+    chain_values v;
+} chain_instance;
+
+static inline chain_instance *chn(dfo_lifecycle *lc) { return (chain_instance *)lc; }
+static inline const chain_instance *cchn(const dfo_lifecycle *lc) { return (const chain_instance *)lc; }
+
+/* ---- chain_instance.c ---- */
+chain_alloc chain_inst_allocator(chain_instance *in);
+/* Arrays for n blocks into v (v's own pointers untouched on failure: 0 returned). */
+int chain_inst_alloc_arrays(chain_instance *in, chain_values *v, size_t n);
+/* The arrays of v (not the model). */
+void chain_inst_free_arrays(chain_instance *in, chain_values *v);
+void chain_inst_free_model(chain_values *v);
+/* Size the arrays for n blocks (start values); DFO_INST_ERROR when out of memory (nothing changed). */
+dfo_inst_status chain_inst_resize(chain_instance *in, const char *fn, size_t n);
+/* Where a stored value of element i lives. */
+double *chain_inst_stored(chain_values *v, const dfo_var_info *var, size_t i);
+chain_params chain_inst_params_of(const chain_values *v);
+/* The internal step of the run (h_used). */
+double chain_inst_step_h(const chain_values *v);
+/* The inputs now (used: those of the last step); an input never set is NULL (never read). */
+chain_inputs chain_inst_inputs_of(const chain_values *v, int used);
+/* Build the model from the parameters and start the state at the start time (NULL on success, else why). */
+const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len);
+/* The model is built and the run started. */
+int chain_inst_started(const chain_instance *in);
 
 #endif

@@ -1,8 +1,11 @@
-/* The instance core (see instance.h): everything an FMI glue needs, through the variable table
- * generated from modelDescription.xml. No FMI types. */
+/* The instance core of the DryFrictionOscillator FMUs (the model API of core/instance.h over
+ * osc_instance.h): start values, get/set through the variable table generated from
+ * modelDescription.xml (model_vars.h), initialisation, doStep with and without events, FMU states
+ * and their serialisation (core/fmu_state.h's format). No FMI types. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
-#include "instance.h"
+#include "fmu_state.h"
 #include "instance_common.h"
+#include "osc_instance.h"
 
 #include <float.h>
 #include <math.h>
@@ -26,157 +29,150 @@ DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
 typedef char dfo_static_assert_warn_bits[DFO_NUM_OUTS <= 32 ? 1 : -1];
 
 #define STATE_MAGIC 0x444650534d555354ULL /* "DFPSMUST" */
-#define SERIAL_MAGIC "DFOSTATE"
-#define SERIAL_VERSION 3u
 
+/* An FMU state in memory: a tagged copy of the run and the values. */
 typedef struct {
     uint64_t magic;
-    dfo_values v;
+    dfo_run run;
+    osc_values v;
 } saved_state;
 
-typedef struct {
-    char magic[8];
-    uint32_t version, size;
-    uint64_t checksum;
-} serial_header;
+static osc_instance *osc(dfo_lifecycle *lc) { return (osc_instance *)lc; }
+static const osc_instance *cosc(const dfo_lifecycle *lc) { return (const osc_instance *)lc; }
 
 /* ---- the variable table ---------------------------------------------------------------------- */
 
-static const dfo_var_info *find_var(unsigned int vr)
-{
-    for (int i = 0; i < DFO_NUM_VARS; i++)
-        if (DFO_VARS[i].vr == vr) return &DFO_VARS[i];
-    return NULL;
-}
-
-static const char *type_name(dfo_var_type t)
-{
-    return t == DFO_REAL ? "Real" : t == DFO_INTEGER ? "Integer" : "Boolean";
-}
-
 /* Where a stored value lives in v (parameters and inputs only). */
-static void *slot(dfo_values *v, const dfo_var_info *var)
+static void *slot(osc_values *v, const dfo_var_info *var)
 {
     char *base = (var->home == DFO_IN_PARAMS) ? (char *)&v->p : (char *)&v->u;
     return base + var->offset;
 }
 
-static const void *cslot(const dfo_values *v, const dfo_var_info *var)
+static const void *cslot(const osc_values *v, const dfo_var_info *var)
 {
-    return slot((dfo_values *)v, var);
+    return slot((osc_values *)v, var);
 }
 
-static void set_start_values(dfo_values *v)
+/* Start values, and the run at its start (phase instantiated). */
+static void set_start_values(osc_instance *in)
 {
-    const dfo_values zero = {0};
+    osc_values *v = &in->v;
+    const osc_values zero = {0};
+    const dfo_run run0 = {0};
     *v = zero;
+    in->lc.run = run0;
     for (int i = 0; i < DFO_NUM_VARS; i++) {
         const dfo_var_info *var = &DFO_VARS[i];
         if (var->home == DFO_COMPUTED || !var->has_start) continue;
         if (var->type == DFO_REAL) *(double *)slot(v, var) = var->start;
         else *(int *)slot(v, var) = (int)var->start;
     }
-    v->phase = DFO_PHASE_INSTANTIATED;
+    in->lc.run.phase = DFO_PHASE_INSTANTIATED;
 }
 
-static const dfo_var_info *lookup(const dfo_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
+static const dfo_var_info *lookup(const osc_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
 {
-    const dfo_var_info *var = find_var(vr);
+    const dfo_var_info *var = dfo_find_var(vr);
     if (!var) {
-        dfo_inst_fail(in, "%s: unknown value reference %u.", fn, vr);
+        dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
         return NULL;
     }
     if (var->type != type) {
-        dfo_inst_fail(in, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
-                      type_name(var->type), type_name(type));
+        dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
+                      dfo_type_name(var->type), dfo_type_name(type));
         return NULL;
     }
     return var;
 }
 
-/* Whether a variable of this causality may be set in the current phase; logs the reason when not. */
-static int settable(const dfo_instance *in, const char *fn, const dfo_var_info *var)
+static int settable(const osc_instance *in, const char *fn, const dfo_var_info *var)
 {
-    const dfo_phase ph = in->v.phase;
-    if (var->causality == DFO_PARAMETER && (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT))) return 1;
-    if (var->causality == DFO_INPUT &&
-        (ph & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT | DFO_PHASE_STEP | DFO_PHASE_EVENT)))
-        return 1;
-    if (var->causality == DFO_PARAMETER)
-        dfo_inst_fail(in, "%s: variable %s (value reference %u) is a fixed parameter and cannot be set in %s.", fn,
-                      var->name, var->vr, dfo_phase_name(ph));
-    else if (var->causality == DFO_INPUT)
-        dfo_inst_fail(in, "%s: input %s (value reference %u) cannot be set in %s.", fn, var->name, var->vr,
-                      dfo_phase_name(ph));
-    else
-        dfo_inst_fail(in, "%s: variable %s (value reference %u) is %s and cannot be set.", fn, var->name, var->vr,
-                      var->causality == DFO_OUTPUT ? "an output" : "a calculated parameter");
-    return 0;
+    return dfo_inst_settable(&in->lc, fn, var, var->name, var->vr);
 }
 
-static int check_value(const dfo_instance *in, const char *fn, const dfo_var_info *var, double x)
+static int check_value(const osc_instance *in, const char *fn, const dfo_var_info *var, double x)
 {
     const char *range = dfo_inst_invalid(var, x);
     if (!range) return 1;
-    dfo_inst_fail(in, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
+    dfo_inst_fail(&in->lc, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
                   var->name, var->vr, range);
     return 0;
 }
 
 /* ---- start, outputs -------------------------------------------------------------------------- */
 
-dfo_inst_status dfo_inst_init(dfo_instance *in, const dfo_host *host, const char *name, int logging_on)
+dfo_lifecycle *dfo_inst_new(const dfo_host *host, const char *name, int logging_on)
 {
-    memset(in, 0, sizeof *in);
-    in->host = *host;
-    in->name = name;
-    dfo_inst_set_logging(in, -1, logging_on);
-    /* problems, and values read that the run has not computed, are always reported */
-    in->log_on[DFO_LOG_STATUS_ERROR] = in->log_on[DFO_LOG_STATUS_WARNING] = in->log_on[DFO_LOG_NOT_COMPUTED] = 1;
-    set_start_values(&in->v);
-    return DFO_INST_OK;
+    osc_instance *in = (osc_instance *)host->alloc(host->ctx, 1, sizeof(osc_instance));
+    if (!in) {
+        dfo_lifecycle tmp;
+        dfo_lifecycle_init(&tmp, host, name, 0);
+        dfo_inst_fail(&tmp, "instantiate: out of memory.");
+        return NULL;
+    }
+    dfo_lifecycle_init(&in->lc, host, name, logging_on);
+    /* values read that the run has not computed are always reported */
+    in->lc.log_on[DFO_LOG_NOT_COMPUTED] = 1;
+    set_start_values(in);
+    return &in->lc;
 }
 
-void dfo_inst_free(dfo_instance *in) { (void)in; }
-
-size_t dfo_inst_n_values(const dfo_instance *in, const unsigned int vr[], size_t nvr)
+void dfo_inst_delete(dfo_lifecycle *lc)
 {
-    (void)in;
+    if (lc) lc->host.free(lc->host.ctx, lc);
+}
+
+size_t dfo_inst_n_values(const dfo_lifecycle *lc, const unsigned int vr[], size_t nvr)
+{
+    (void)lc;
     (void)vr;
     return nvr; /* scalars only */
 }
 
-void dfo_inst_log_event_handled(const dfo_instance *in)
+void dfo_inst_log_event_handled(const dfo_lifecycle *lc)
 {
-    dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, mode %d.", dfo_inst_time(in),
-                 in->v.s.mode);
+    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, mode %d.", dfo_inst_time(lc),
+                 cosc(lc)->v.s.mode);
 }
 
-size_t dfo_inst_state_size(const dfo_instance *in, const void *state)
+/* ---- no structural parameters ------------------------------------------------------------------ */
+
+#define NO_STRUCTURAL(lc, fn) dfo_inst_fail(lc, "%s: the FMU has no structural parameters.", fn)
+
+int dfo_inst_has_structural(void) { return 0; }
+dfo_inst_status dfo_inst_enter_config(dfo_lifecycle *lc, const char *fn) { return NO_STRUCTURAL(lc, fn); }
+dfo_inst_status dfo_inst_exit_config(dfo_lifecycle *lc, const char *fn) { return NO_STRUCTURAL(lc, fn); }
+dfo_inst_status dfo_inst_get_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                    unsigned long long value[])
 {
-    (void)in;
-    (void)state;
-    return dfo_inst_serialized_size();
+    (void)vr; (void)n; (void)value;
+    return NO_STRUCTURAL(lc, fn);
+}
+dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                    const unsigned long long value[])
+{
+    (void)vr; (void)n; (void)value;
+    return NO_STRUCTURAL(lc, fn);
 }
 
 /* Derive the model from the parameters and start it (exit of initialisation, or outputs asked for
  * during initialisation). */
-static void prepare(dfo_values *v)
+static void prepare(osc_values *v, double start_time)
 {
     dfo_model_init(&v->M, &v->p);
-    dfo_start(&v->M, &v->u, v->start_time, &v->s);
+    dfo_start(&v->M, &v->u, start_time, &v->s);
     v->effects = dfo_effects(&v->M, &v->u);
     v->u_used = v->u;
-    v->time = v->start_time;
 }
 
 /* Values of computed variables need the started model; during initialisation it is derived from
  * the current parameters on the fly. */
-static const dfo_values *computed(const dfo_instance *in, dfo_values *tmp)
+static const osc_values *computed(const osc_instance *in, osc_values *tmp)
 {
-    if (in->v.phase != DFO_PHASE_INIT) return &in->v;
+    if (in->lc.run.phase != DFO_PHASE_INIT) return &in->v;
     *tmp = in->v;
-    prepare(tmp);
+    prepare(tmp, in->lc.run.start_time);
     return tmp;
 }
 
@@ -198,13 +194,13 @@ static int same_inputs(const dfo_inputs *a, const dfo_inputs *b)
 /* The friction force at the current state for the current inputs. With the inputs of the last step
  * it is the stepper's own; with inputs set since, the current mode's friction law with them:
  * sliding -s mu_k N, stuck the force that holds the block, within the breakaway limit. */
-static double friction_now(const dfo_values *v)
+static double friction_now(const osc_values *v)
 {
     if (same_inputs(&v->u, &v->u_used)) return v->s.F;
     return dfo_friction_force(&v->M, &v->u, &v->s);
 }
 
-static double acceleration_now(const dfo_values *v)
+static double acceleration_now(const osc_values *v)
 {
     if (same_inputs(&v->u, &v->u_used)) return dfo_acceleration(&v->M, &v->u, &v->s);
     dfo_state s = v->s;
@@ -214,10 +210,10 @@ static double acceleration_now(const dfo_values *v)
 
 /* A pending event's left limit: the state at the switch in the mode before it, with that mode's
  * friction force (kinetic -from mu_k N; stuck, the static force clamped to the breakaway limit). */
-static dfo_state left_limit(const dfo_values *v)
+static dfo_state left_limit(const osc_values *v, int event_from)
 {
     dfo_state s = v->s;
-    s.mode = v->event_from;
+    s.mode = event_from;
     s.F = dfo_friction_force(&v->M, &v->u, &s);
     return s;
 }
@@ -230,7 +226,7 @@ static int needs_observe(int id)
 
 /* A value this run has not computed: an observable while observe is false (every one of them), or
  * x_max / x_min before the observation window has taken its first sample. */
-static int not_computed(const dfo_values *v, int id)
+static int not_computed(const osc_values *v, int id)
 {
     if (!needs_observe(id)) return 0;
     if (!v->p.observe) return 1;
@@ -240,28 +236,28 @@ static int not_computed(const dfo_values *v, int id)
 /* What a value not computed reads: NaN (Real), DFO_NOT_COMPUTED_INT (Integer, transitions). Status
  * OK; one sentence per run, logged under logNotComputed, says why. */
 #define DFO_NOT_COMPUTED_INT (-1)
-static void note_not_computed(dfo_instance *in, const char *fn, const dfo_var_info *var)
+static void note_not_computed(osc_instance *in, const char *fn, const dfo_var_info *var)
 {
-    if (in->warned) return;
-    in->warned = 1u;
+    if (in->lc.warned) return;
+    in->lc.warned = 1u;
     if (!in->v.p.observe)
-        dfo_inst_log(in, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
                      "%s: variable %s (value reference %u) is not computed while observe is false: the "
                      "observables x_max, x_min, stick_fraction, E_friction read NaN and transitions reads -1 in "
                      "this run; set observe = true (before initialisation) to compute them.", fn, var->name,
                      var->vr);
     else
-        dfo_inst_log(in, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
                      "%s: variable %s (value reference %u) reads NaN: the observation window [%.17g, %.17g] has "
                      "not taken a sample yet (t = %.17g).", fn, var->name, var->vr, in->v.p.t_obs_start,
                      in->v.p.t_obs_stop, in->v.s.t);
 }
 
-static double output_real(const dfo_values *v, int id)
+static double output_real(const osc_values *v, const dfo_run *r, int id)
 {
     const dfo_state *s = &v->s;
-    if (v->event_pending && (id == DFO_OUT_a || id == DFO_OUT_F_friction)) {
-        const dfo_state left = left_limit(v);
+    if (r->event_pending && (id == DFO_OUT_a || id == DFO_OUT_F_friction)) {
+        const dfo_state left = left_limit(v, r->event_from);
         return id == DFO_OUT_a ? dfo_acceleration(&v->M, &v->u, &left) : left.F;
     }
     switch (id) {
@@ -278,10 +274,10 @@ static double output_real(const dfo_values *v, int id)
     }
 }
 
-static int output_int(const dfo_values *v, int id)
+static int output_int(const osc_values *v, const dfo_run *r, int id)
 {
     switch (id) {
-    case DFO_OUT_mode: return v->event_pending ? v->event_from : v->s.mode;
+    case DFO_OUT_mode: return r->event_pending ? r->event_from : v->s.mode;
     case DFO_OUT_transitions: return (int)v->s.transitions;
     case DFO_OUT_effects: return v->effects;
     default: return 0;
@@ -290,45 +286,49 @@ static int output_int(const dfo_values *v, int id)
 
 /* ---- life cycle ------------------------------------------------------------------------------ */
 
-dfo_inst_status dfo_inst_exit_init(dfo_instance *in, const char *fn)
+dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
-    dfo_values *v = &in->v;
+    osc_instance *in = osc(lc);
+    osc_values *v = &in->v;
     const char *msg = dfo_check_params(&v->p);
-    if (msg) return dfo_inst_fail(in, "%s: %s", fn, msg);
-    prepare(v);
+    if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
+    prepare(v, in->lc.run.start_time);
+    in->lc.run.time = in->lc.run.start_time;
     const dfo_state *s = &v->s;
     if (!isfinite(s->A) || !isfinite(s->F) || !isfinite(dfo_acceleration(&v->M, &v->u, s)))
-        return dfo_inst_fail(in, "%s: the initial acceleration is not representable (x0 = %.17g, v0 = %.17g, m = "
+        return dfo_inst_fail(&in->lc, "%s: the initial acceleration is not representable (x0 = %.17g, v0 = %.17g, m = "
                              "%.17g): the parameters are out of the range of double precision.", fn, v->p.x0, v->p.v0,
                              v->p.m);
-    v->phase = DFO_PHASE_STEP;
+    in->lc.run.phase = DFO_PHASE_STEP;
     dfo_inst_status status = DFO_INST_OK;
     const double T_min = dfo_shortest_period(&v->p);
     if (v->p.h > 0.0 && v->p.scheme != DFO_SCHEME_EXACT && v->p.h * DFO_MIN_STEPS_PER_PERIOD > T_min) {
         status = DFO_INST_WARNING;
-        dfo_inst_log(in, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
+        dfo_inst_log(&in->lc, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
                      "%s: h = %.6g s takes only %.3g internal steps per %.6g s, the shortest period of the dynamics "
                      "(natural 2 pi sqrt(m/k), excitation 2 pi/omega, damping 2 pi m/c): the results do not resolve "
                      "it. Choose h <= %.6g s (1/%g of it), or h = 0 to let the FMU derive it.", fn, v->p.h,
                      T_min / v->p.h, T_min, T_min / DFO_STEPS_PER_PERIOD, DFO_STEPS_PER_PERIOD);
     }
-    dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
+    dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
                  s->t, s->X, s->V, s->mode, v->effects);
     return status;
 }
 
-void dfo_inst_reset(dfo_instance *in)
+void dfo_inst_reset(dfo_lifecycle *lc)
 {
-    set_start_values(&in->v);
-    in->warned = 0;
+    osc_instance *in = osc(lc);
+    set_start_values(in);
+    in->lc.warned = 0;
 }
 
 /* ---- get / set ------------------------------------------------------------------------------- */
 
-dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, double value[])
+dfo_inst_status dfo_inst_get_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, double value[])
 {
-    dfo_values tmp;
-    const dfo_values *v = NULL;
+    osc_instance *in = osc(lc);
+    osc_values tmp;
+    const osc_values *v = NULL;
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
         if (!var) return DFO_INST_ERROR;
@@ -342,18 +342,19 @@ dfo_inst_status dfo_inst_get_real(dfo_instance *in, const char *fn, const unsign
             note_not_computed(in, fn, var);
             continue;
         }
-        value[i] = output_real(v, var->id);
+        value[i] = output_real(v, &in->lc.run, var->id);
         if (!isfinite(value[i]))
-            return dfo_inst_fail(in, "%s: variable %s (value reference %u) is not representable in double precision "
+            return dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is not representable in double precision "
                                  "for these parameters (overflow).", fn, var->name, vr[i]);
     }
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
+dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
 {
-    dfo_values tmp;
-    const dfo_values *v = NULL;
+    osc_instance *in = osc(lc);
+    osc_values tmp;
+    const osc_values *v = NULL;
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
         if (!var) return DFO_INST_ERROR;
@@ -367,13 +368,14 @@ dfo_inst_status dfo_inst_get_int(dfo_instance *in, const char *fn, const unsigne
             note_not_computed(in, fn, var);
             continue;
         }
-        value[i] = output_int(v, var->id);
+        value[i] = output_int(v, &in->lc.run, var->id);
     }
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n, int value[])
+dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
 {
+    osc_instance *in = osc(lc);
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
         if (!var) return DFO_INST_ERROR;
@@ -383,43 +385,46 @@ dfo_inst_status dfo_inst_get_bool(dfo_instance *in, const char *fn, const unsign
 }
 
 /* Store a checked value; setting an input raises its flag (an input never set is never read). */
-static void store(dfo_values *v, const dfo_var_info *var, double x)
+static void store(osc_values *v, const dfo_var_info *var, double x)
 {
     if (var->type == DFO_REAL) *(double *)slot(v, var) = x;
     else *(int *)slot(v, var) = (int)x;
     if (var->home == DFO_IN_INPUTS) *(int *)((char *)&v->u + var->set_offset) = 1;
 }
 
-dfo_inst_status dfo_inst_set_real(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                   const double value[])
 {
+    osc_instance *in = osc(lc);
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
         if (!var || !settable(in, fn, var) || !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
     }
-    for (size_t i = 0; i < n; i++) store(&in->v, find_var(vr[i]), value[i]);
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i]);
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_set_int(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                  const int value[])
 {
+    osc_instance *in = osc(lc);
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
         if (!var || !settable(in, fn, var) || !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
     }
-    for (size_t i = 0; i < n; i++) store(&in->v, find_var(vr[i]), value[i]);
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i]);
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_set_bool(dfo_instance *in, const char *fn, const unsigned int vr[], size_t n,
+dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                   const int value[])
 {
+    osc_instance *in = osc(lc);
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
         if (!var || !settable(in, fn, var)) return DFO_INST_ERROR;
     }
-    for (size_t i = 0; i < n; i++) store(&in->v, find_var(vr[i]), value[i] ? 1.0 : 0.0);
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i] ? 1.0 : 0.0);
     return DFO_INST_OK;
 }
 
@@ -427,50 +432,51 @@ dfo_inst_status dfo_inst_set_bool(dfo_instance *in, const char *fn, const unsign
 
 static void on_switch(void *ctx, double t, double x, int from, int to)
 {
-    dfo_instance *in = (dfo_instance *)ctx;
+    osc_instance *in = (osc_instance *)ctx;
     static const char *const names[3] = {"backward slip", "stick", "forward slip"};
-    in->switched = 1;
-    dfo_inst_log(in, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: %s -> %s at x = %.17g.", t, names[from + 1],
+    in->lc.switched = 1;
+    dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: %s -> %s at x = %.17g.", t, names[from + 1],
                  names[to + 1], x);
 }
 
 /* Early return: one internal grid step per call of the stepper, until the first switch. Used only
  * when asked for; the ordinary path is one call up to the target. */
-static dfo_status advance_to_switch(dfo_instance *in, double t_target)
+static dfo_status advance_to_switch(osc_instance *in, double t_target)
 {
-    dfo_values *v = &in->v;
-    const double h = v->M.p.h, snap = fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t_target));
-    in->switched = 0;
+    osc_values *v = &in->v;
+    const double h = v->M.p.h, snap = dfo_snap(h, t_target);
+    in->lc.switched = 0;
     while (v->s.t < t_target) {
         const double grid = v->s.t0 + (double)(v->s.n + 1) * h;
         const double t_next = (grid < t_target - snap) ? grid : t_target;
         const dfo_status st = dfo_advance(&v->M, &v->u, &v->s, t_next, on_switch, in);
-        if (st != DFO_OK || in->switched || t_next == t_target) return st;
+        if (st != DFO_OK || in->lc.switched || t_next == t_target) return st;
     }
     return DFO_OK;
 }
 
 /* A failed step: the outputs stay those of the last good state, the instance is in error. */
-static dfo_inst_status step_failed(dfo_instance *in, const char *fn, const dfo_state *before, const dfo_state *failed,
+static dfo_inst_status step_failed(osc_instance *in, const char *fn, const dfo_state *before, const dfo_state *failed,
                                    dfo_status st)
 {
-    dfo_values *v = &in->v;
-    const double t = v->time;
+    osc_values *v = &in->v;
+    const double t = in->lc.run.time;
     v->s = *before;
-    v->phase = DFO_PHASE_ERROR;
-    return dfo_inst_fail(in, "%s: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The "
+    in->lc.run.phase = DFO_PHASE_ERROR;
+    return dfo_inst_fail(&in->lc, "%s: step from t = %.17g failed at t = %.17g: %s (x = %.17g, v = %.17g). The "
                          "FMU keeps the state at t = %.17g; reset it or restore an earlier FMU state.", fn, t,
                          failed->t, dfo_status_text(st), failed->X, failed->V, t);
 }
 
-dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, double dt, unsigned int flags,
+dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, double dt, unsigned int flags,
                                  double *t_reached)
 {
-    dfo_values *v = &in->v;
+    osc_instance *in = osc(lc);
+    osc_values *v = &in->v;
     double t_target = 0.0;
     /* the exact scheme counts its events (no 1e9 h bound), unless it walks the grid to a switch */
-    in->work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
-    const dfo_inst_status chk = dfo_inst_check_step(in, fn, tc, dt, v->M.p.h, &t_target);
+    in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
+    const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     const dfo_state before = v->s;
     if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
@@ -478,7 +484,7 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     if (flags & DFO_STEP_STOP_AT_SWITCH) {
         st = advance_to_switch(in, t_target);
     } else {
-        const int events = in->host.log && in->log_on[DFO_LOG_EVENTS];
+        const int events = in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS];
         st = dfo_advance(&v->M, &v->u, &v->s, t_target, events ? on_switch : NULL, in);
     }
     if (st != DFO_OK) {
@@ -487,11 +493,11 @@ dfo_inst_status dfo_inst_do_step(dfo_instance *in, const char *fn, double tc, do
     }
     /* the host's time: the target (the stepper may stand on a grid point within its snap tolerance
      * of it), or where an early return stopped short of it */
-    const double snap = fmax(1e-9 * v->M.p.h, 8.0 * DBL_EPSILON * fabs(t_target));
-    const int early = (flags & DFO_STEP_STOP_AT_SWITCH) && in->switched && v->s.t < t_target - snap;
-    v->time = early ? v->s.t : t_target;
+    const double snap = dfo_snap(v->M.p.h, t_target);
+    const int early = (flags & DFO_STEP_STOP_AT_SWITCH) && in->lc.switched && v->s.t < t_target - snap;
+    in->lc.run.time = early ? v->s.t : t_target;
     v->u_used = v->u;
-    if (t_reached) *t_reached = v->time;
+    if (t_reached) *t_reached = in->lc.run.time;
     return DFO_INST_OK;
 }
 
@@ -526,7 +532,7 @@ static void record_switch(void *ctx, double t, double x, int from, int to)
 }
 
 /* The state just after the switch r (index r->index of the step from start), into *out. */
-static int land(const dfo_values *v, const dfo_state *start, const switch_rec *r, double t_end, dfo_state *out)
+static int land(const osc_values *v, const dfo_state *start, const switch_rec *r, double t_end, dfo_state *out)
 {
     double t = r->ts, ulp = nextafter(r->ts, INFINITY) - r->ts;
     for (int k = 0; k < 12 && t < t_end; k++, t = r->ts + ulp, ulp *= 2.0) {
@@ -548,21 +554,22 @@ static int land(const dfo_values *v, const dfo_state *start, const switch_rec *r
     return 1;
 }
 
-dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double tc, double dt,
+dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
                                         const dfo_event_opts *opt, dfo_step_result *res)
 {
-    dfo_values *v = &in->v;
+    osc_instance *in = osc(lc);
+    osc_values *v = &in->v;
     dfo_inst_status done;
     double t_target = 0.0;
-    in->work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
-    if (dfo_inst_events_begin(in, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
+    in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
+    if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!same_inputs(&v->u, &v->u_used)) {
         dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
         v->u_used = v->u; /* (the state now belongs to them) */
     }
     const dfo_state start = v->s;
-    const double t_start = v->time;
-    const int events_logged = in->host.log && in->log_on[DFO_LOG_EVENTS];
+    const double t_start = in->lc.run.time;
+    const int events_logged = in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS];
     double t_after = -INFINITY;
     for (;;) {
         switch_rec r = {t_after, 0, 0, 0, 0, 0, 0.0};
@@ -575,15 +582,15 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
             int stop = opt->early_return && !opt->intermediate;
             if (opt->intermediate) {
                 v->s = at;
-                v->time = at.t;
+                in->lc.run.time = at.t;
                 stop = opt->intermediate(opt->ctx, at.t, opt->early_return) && opt->early_return;
             }
             if (stop) {
                 v->s = at;
-                v->time = at.t;
+                in->lc.run.time = at.t;
                 v->u_used = v->u;
-                v->event_pending = opt->event_mode;
-                v->event_from = r.from;
+                in->lc.run.event_pending = opt->event_mode;
+                in->lc.run.event_from = r.from;
                 res->early = 1;
                 res->event = opt->event_mode;
                 res->t_reached = at.t;
@@ -591,20 +598,20 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
                 return DFO_INST_OK;
             }
             v->s = start;
-            v->time = t_start;
+            in->lc.run.time = t_start;
             t_after = r.ts;
             continue;
         }
         /* no switch left inside: the plain step's end. A switch on the communication point itself
          * (the paper and consistent schemes switch on grid points) is an event there. */
         if (r.found && opt->event_mode) {
-            v->event_pending = 1;
-            v->event_from = r.from;
+            in->lc.run.event_pending = 1;
+            in->lc.run.event_from = r.from;
             res->event = 1;
         }
         if (r.found && opt->intermediate) {
             v->s = w;
-            v->time = t_target;
+            in->lc.run.time = t_target;
             (void)opt->intermediate(opt->ctx, t_target, 0);
         }
         if (events_logged) {
@@ -612,7 +619,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_instance *in, const char *fn, double
             (void)dfo_advance(&v->M, &v->u, &again, t_target, on_switch, in);
         }
         v->s = w;
-        v->time = t_target;
+        in->lc.run.time = t_target;
         v->u_used = v->u;
         res->t_reached = t_target;
         return DFO_INST_OK;
@@ -627,68 +634,69 @@ static saved_state *as_state(const void *p)
     return (st && st->magic == STATE_MAGIC) ? st : NULL;
 }
 
-static dfo_inst_status store_state(dfo_instance *in, const char *fn, void **state, const dfo_values *v)
+static dfo_inst_status store_state(osc_instance *in, const char *fn, void **state, const dfo_run *run,
+                                   const osc_values *v)
 {
+    int fresh;
+    if (dfo_state_take(&in->lc, fn, state, STATE_MAGIC, sizeof(saved_state), &fresh) != DFO_INST_OK)
+        return DFO_INST_ERROR;
     saved_state *st = (saved_state *)*state;
-    if (st && st->magic != STATE_MAGIC) return dfo_inst_fail(in, "%s: *FMUstate is not a state of this FMU.", fn);
-    if (!st) {
-        st = (saved_state *)in->host.alloc(in->host.ctx, 1, sizeof(saved_state));
-        if (!st) return dfo_inst_fail(in, "%s: out of memory.", fn);
-        st->magic = STATE_MAGIC;
-        *state = st;
-    }
+    st->run = *run;
     st->v = *v;
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_get_state(dfo_instance *in, const char *fn, void **state)
+dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **state)
 {
-    return store_state(in, fn, state, &in->v);
+    osc_instance *in = osc(lc);
+    return store_state(in, fn, state, &in->lc.run, &in->v);
 }
 
-dfo_inst_status dfo_inst_set_state(dfo_instance *in, const char *fn, const void *state)
+dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void *state)
 {
-    const saved_state *st = as_state(state);
-    if (!st) return dfo_inst_fail(in, "%s: FMUstate is NULL or not a state of this FMU.", fn);
+    osc_instance *in = osc(lc);
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
+    in->lc.run = st->run;
     in->v = st->v;
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_free_state(dfo_instance *in, const char *fn, void **state)
+dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)
 {
-    saved_state *st = (saved_state *)*state;
-    if (!st) return DFO_INST_OK;
-    if (st->magic != STATE_MAGIC) return dfo_inst_fail(in, "%s: *FMUstate is not a state of this FMU.", fn);
-    st->magic = 0;
-    in->host.free(in->host.ctx, st);
-    *state = NULL;
+    if (!dfo_state_droppable(lc, fn, state, STATE_MAGIC)) return DFO_INST_ERROR;
+    dfo_state_drop(lc, state);
     return DFO_INST_OK;
 }
 
-size_t dfo_inst_serialized_size(void) { return sizeof(serial_header) + sizeof(dfo_values); }
+/* The serialised body (core/fmu_state.h's format): the values' bytes, then the run. */
+#define BODY_BYTES (sizeof(osc_values) + DFO_STATE_RUN_BYTES)
 
-dfo_inst_status dfo_inst_serialize(dfo_instance *in, const char *fn, const void *state, unsigned char *buf,
+size_t dfo_inst_state_size(const dfo_lifecycle *lc, const void *state)
+{
+    (void)lc;
+    return as_state(state) ? DFO_STATE_HEADER_BYTES + BODY_BYTES : 0;
+}
+
+dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf,
                                    size_t size)
 {
-    const saved_state *st = as_state(state);
-    if (!st) return dfo_inst_fail(in, "%s: FMUstate is NULL or not a state of this FMU.", fn);
-    if (size < dfo_inst_serialized_size())
-        return dfo_inst_fail(in, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
-                             (unsigned long)dfo_inst_serialized_size());
-    serial_header hdr;
-    memcpy(hdr.magic, SERIAL_MAGIC, 8);
-    hdr.version = SERIAL_VERSION;
-    hdr.size = (uint32_t)sizeof(dfo_values);
-    hdr.checksum = dfo_inst_checksum((const unsigned char *)&st->v, sizeof(dfo_values));
-    memcpy(buf, &hdr, sizeof hdr);
-    memcpy(buf + sizeof hdr, &st->v, sizeof(dfo_values));
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
+    if (size < DFO_STATE_HEADER_BYTES + BODY_BYTES)
+        return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
+                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
+    dfo_cursor c = {buf + DFO_STATE_HEADER_BYTES, NULL};
+    dfo_put_bytes(&c, &st->v, sizeof st->v);
+    dfo_put_run(&c, &st->run);
+    dfo_state_seal(buf, BODY_BYTES, MODEL_GUID);
     return DFO_INST_OK;
 }
 
 static int finite_inputs(const dfo_inputs *u) { return isfinite(u->F_ext) && isfinite(u->N_ext); }
 
 /* A deserialised state must describe a simulation this FMU could have reached. */
-static const char *implausible(const dfo_values *v)
+static const char *implausible(const dfo_run *r, const osc_values *v)
 {
     for (int i = 0; i < DFO_NUM_VARS; i++) {
         const dfo_var_info *var = &DFO_VARS[i];
@@ -697,49 +705,35 @@ static const char *implausible(const dfo_values *v)
         if (dfo_inst_invalid(var, x))
             return var->type == DFO_REAL ? "a parameter is out of range" : "an integer parameter is out of range";
     }
-    if (v->phase != DFO_PHASE_INSTANTIATED && v->phase != DFO_PHASE_INIT && v->phase != DFO_PHASE_STEP &&
-        v->phase != DFO_PHASE_TERMINATED && v->phase != DFO_PHASE_ERROR && v->phase != DFO_PHASE_EVENT)
-        return "the life-cycle phase is invalid";
-    if ((v->event_pending != 0 && v->event_pending != 1) || v->event_from < -1 || v->event_from > 1)
-        return "the pending event is invalid";
+    const char *why = dfo_run_implausible(r, 0);
+    if (why) return why;
     if (dfo_check_params(&v->p)) return "the observation window is empty";
-    if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used) || !isfinite(v->start_time) || !isfinite(v->stop_time) ||
-        !isfinite(v->time))
-        return "an input or the experiment's times are not finite";
+    if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used)) return "an input is not finite";
     if (v->effects < 0 || (v->effects & ~DFO_MD_EFFECTS_ALL)) return "the effects are invalid";
     const dfo_state *s = &v->s;
     if (!isfinite(s->t) || !isfinite(s->t0) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) ||
         !isfinite(s->F) || !isfinite(s->hA) || s->n < 0)
         return "the state is not finite";
     if (s->mode < -1 || s->mode > 1) return "the mode is invalid";
-    /* the time lies on the internal grid's interval n: t0 + n h <= t < t0 + (n + 1) h */
-    const double h = dfo_step_size(&v->p), slack = 1e-6 * h + 8.0 * DBL_EPSILON * fabs(s->t);
-    if (s->t < s->t0 || s->t0 + (double)s->n * h > s->t + slack || s->t0 + (double)(s->n + 1) * h < s->t - slack)
-        return "the time does not match the internal grid";
-    /* once started, the host's time is the stepper's within its snap tolerance */
-    if ((v->phase & (DFO_PHASE_STEP | DFO_PHASE_TERMINATED | DFO_PHASE_ERROR | DFO_PHASE_EVENT)) &&
-        fabs(v->time - s->t) > fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(v->time)) + slack)
-        return "the host's time does not match the state's";
-    return NULL;
+    return dfo_grid_implausible(r, s->t0, (long long)s->n, dfo_step_size(&v->p), s->t);
 }
 
-dfo_inst_status dfo_inst_deserialize(dfo_instance *in, const char *fn, const unsigned char *buf, size_t size,
+dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const unsigned char *buf, size_t size,
                                      void **state)
 {
-    serial_header hdr;
-    if (size != dfo_inst_serialized_size())
-        return dfo_inst_fail(in, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
-                             (unsigned long)dfo_inst_serialized_size());
-    memcpy(&hdr, buf, sizeof hdr);
-    if (memcmp(hdr.magic, SERIAL_MAGIC, 8) != 0 || hdr.version != SERIAL_VERSION || hdr.size != sizeof(dfo_values))
-        return dfo_inst_fail(in, "%s: not a serialised state of this FMU version.", fn);
-    dfo_values v;
-    memcpy(&v, buf + sizeof hdr, sizeof v);
-    if (dfo_inst_checksum((const unsigned char *)&v, sizeof v) != hdr.checksum)
-        return dfo_inst_fail(in, "%s: checksum mismatch, the serialised state is corrupted.", fn);
-    const char *why = implausible(&v);
-    if (why) return dfo_inst_fail(in, "%s: rejected, %s.", fn, why);
+    size_t body = 0;
+    if (dfo_state_open(lc, fn, buf, size, MODEL_GUID, &body) != DFO_INST_OK) return DFO_INST_ERROR;
+    if (body != BODY_BYTES)
+        return dfo_inst_fail(lc, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
+                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
+    osc_values v;
+    dfo_run run;
+    dfo_cursor c = {NULL, buf + DFO_STATE_HEADER_BYTES};
+    dfo_get_bytes(&c, &v, sizeof v);
+    dfo_get_run(&c, &run);
+    const char *why = implausible(&run, &v);
+    if (why) return dfo_inst_fail(lc, "%s: rejected, %s.", fn, why);
     dfo_model_init(&v.M, &v.p);   /* derived constants follow from the parameters, never trusted */
     dfo_check_caches(&v.M, &v.s); /* and caches that do not follow from the state are dropped */
-    return store_state(in, fn, state, &v);
+    return store_state(osc(lc), fn, state, &run, &v);
 }

@@ -1,0 +1,17 @@
+# The DryFrictionOscillator (one block, dry friction, harmonic excitation): read by cmake/models.cmake
+# (dfo_add_model), which builds its FMUs for every FMI version of MODEL_FMI. Paths are under fmu_src/.
+set(MODEL_ID DryFrictionOscillator)
+# its description stays at the top of the repository (the project's card puts it there)
+set(MODEL_DESCRIPTION ${CMAKE_SOURCE_DIR}/modelDescription.xml)
+set(MODEL_FMI 2 3)
+# the physics: plain C, no FMI types (the numerics it uses included)
+set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
+    numerics/friction.c numerics/friction.h numerics/bossak.h
+    models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/newmark.c
+    models/oscillator/newmark.h models/oscillator/exact.c models/oscillator/exact.h
+    models/oscillator/exact_free.c models/oscillator/exact_free.h)
+# the instance core (core/instance.h's model API)
+set(MODEL_CORE models/oscillator/osc_instance.c models/oscillator/osc_instance.h)
+# FMI 2.0: the description as written (no structural parameters), no build configuration header
+set(MODEL_FMI2_SIZE "")
+set(MODEL_CONFIG_HEADER "")
