@@ -216,8 +216,10 @@ static void test_lcp_enumeration(checks *T)
         check_context(T, "LCP trial %d, n = %d, kind %d", trial, n, kind);
         CHECK(found >= 1);
         CHECK_RANGE(0.0, 1e-9, spread);
-        const int piv = chain_box_lcp((size_t)n, d, e, p, l, mode, V, F, work);
-        CHECK(piv >= 0);
+        double qb[6]; /* the box LCP's q = -p (lcp.h: w = M_hat V + q = F) */
+        for (int i = 0; i < n; i++) qb[i] = -p[i];
+        int piv = -1;
+        CHECK_INT(LCP_OK, lcp_box((size_t)n, d, e, qb, l, mode, V, F, work, &piv));
         if (piv > worst_piv) worst_piv = piv;
         double z[12], w[12];
         int zb[12], lp = 0;
@@ -299,9 +301,10 @@ static void test_invariants(checks *T)
                 /* the LCP of the next step: the box solver's answer is complementary and agrees with
                  * dense Lemke on the 2n problem */
                 e[n - 1] = NAN; /* not part of the problem: must not be read */
-                chain_step_problem(C, &in, &s, cs.p.h, d, e, p, l);
-                for (size_t i = 0; i < n; i++) mode[i] = s.mode[i];
-                CHECK(chain_box_lcp(n, d, e, p, l, mode, V, F, work) >= 0);
+                double qb[NMAX];
+                chain_step_problem(C, &in, &s, cs.p.h, d, e, qb, l);
+                for (size_t i = 0; i < n; i++) { mode[i] = s.mode[i]; p[i] = -qb[i]; }
+                CHECK_INT(LCP_OK, lcp_box(n, d, e, qb, l, mode, V, F, work, NULL));
                 double Mq[100], q[10], z[10], w[10];
                 int zb[10];
                 memset(Mq, 0, sizeof Mq);

@@ -35,8 +35,7 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->beta = dfo_bossak_beta(p->alpha);
     M->mu_k = p->chi * p->mu_s;
     M->mu_b = fmax(p->mu_s, M->mu_k);
-    M->P_amp = fabs(p->P0);
-    M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
+    dfo_harmonic_init(&M->exc, p->P0, p->omega, p->phi);
     M->rate_max = sqrt(p->k / p->m) + p->c / p->m + fabs(p->omega);
     M->rot_c = dfo_cos(p->omega * M->p.h);
     M->rot_s = dfo_sin(p->omega * M->p.h);
@@ -45,10 +44,7 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->update = !M->fast || M->mu_k != M->mu_b;
 }
 
-double dfo_excitation(const dfo_model *M, double t)
-{
-    return M->p.P0 * dfo_cos(M->p.omega * t + M->p.phi);
-}
+double dfo_excitation(const dfo_model *M, double t) { return dfo_harmonic_at(&M->exc, t); }
 
 double dfo_excitation_rate(const dfo_model *M, double t)
 {
@@ -65,6 +61,11 @@ double dfo_external_force(const dfo_model *M, const dfo_inputs *u)
 {
     (void)M;
     return u->F_ext_set ? u->F_ext : 0.0;
+}
+
+void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in)
+{
+    dfo_loads_set(L, dfo_external_force(M, in), dfo_normal_force(M, in), M->mu_k, M->mu_b);
 }
 
 int dfo_effects(const dfo_model *M, const dfo_inputs *u)
