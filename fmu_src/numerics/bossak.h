@@ -32,6 +32,20 @@ static inline double dfo_step_rule(double h, double T)
     return (d >= DBL_MIN && isfinite(d)) ? d : DBL_MIN;
 }
 
+/* The snap of a requested time to the time grid t0 + m h of a run that has reached the grid index
+ * n_done and the time t: the nearest grid point m >= n_done, when it is at or after t and within
+ * tol of t_target, else t_target itself (also before t0, beyond an exact count, or NaN). The grid
+ * point as the stepping loops compute it, t0 + (double)m h. */
+static inline double dfo_grid_snap(double t0, double h, long long n_done, double t, double t_target, double tol)
+{
+    const double r = (t_target - t0) / h; /* t_target in grid steps from t0 */
+    if (!(r > -0.5 && r < 0x1p52)) return t_target;
+    const long long m = (long long)floor(r + 0.5); /* the nearest grid point */
+    if (m < n_done) return t_target;
+    const double grid = t0 + (double)m * h;
+    return (grid >= t && fabs(t_target - grid) <= tol) ? grid : t_target;
+}
+
 /* Newmark's coefficients for the Bossak parameter alpha in [-1/3, 0]: second order, stable. */
 static inline double dfo_bossak_gamma(double alpha) { return 0.5 - alpha; }
 static inline double dfo_bossak_beta(double alpha) { return 0.25 * (1.0 - alpha) * (1.0 - alpha); }

@@ -1,4 +1,4 @@
-/* Unit tests of the chain of n blocks (fmu_src/chain.h), driven directly (no FMI).
+/* Unit tests of the chain of n blocks (fmu_src/models/chain/chain.h), driven directly (no FMI).
  *
  * 1. n = 1 against the oscillator (newmark.h): same parameters, same communication points (every
  *    T/100, and at random), three schemes, seven cases: the same t, x, v and mode, bit for bit;
@@ -448,7 +448,7 @@ static void test_stop_and_copy(checks *T)
 
 static void test_fast_path(checks *T)
 {
-    /* the energy accounts send every step through the general path (chain.c: step_fast and the
+    /* the energy accounts send every step through the general path (chain_advance.c: step_fast and the
      * stuck fast path stuck_until are off); on a chain short enough to be split whole, the two
      * runs must agree bit for bit: one with a block without friction, one stick-dominated (every
      * block stuck for long phases) */

@@ -1,4 +1,4 @@
-/* Unit tests of the exact scheme (fmu_src/exact.[ch]), driven directly (no FMI). The file includes
+/* Unit tests of the exact scheme (fmu_src/models/oscillator/exact.[ch]), driven directly (no FMI). The file includes
  * exact.c to reach its closed-form phase (phase_init, eval) for the checks that need the motion
  * inside a phase.
  *

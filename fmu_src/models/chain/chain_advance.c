@@ -47,13 +47,13 @@ static void fast_ctx_init(const chain_model *M, fast_ctx *F)
 /* The located step of a whole grid step in the current modes, in fused sweeps: the same arithmetic,
  * in the same order, as trial + solve_modes + finish (so the same bits), without their separate
  * passes, and with the factorisation of M_hat for the step's held rows kept from the last step
- * (rows: a row is refactored, by solve_rows' operations, when its own hold changed or
+ * (rows: a row is refactored, by lcp_box_basis' operations, when its own hold changed or
  * when it is free and the row above was refactored; a held row starts the elimination afresh).
  * Returns 1 when the warm basis solves the LCP: the step is taken (not the time). Returns 0, with
  * nothing done, when A must be re-based (then rebase_whole makes A0 and step_fast goes on with
  * rebased set: trial's A0p). Returns -1 when a block must switch: the state is
  * untouched and the model holds the trial and its solve in the current modes as trial +
- * solve_modes leave them (xp, q, st, l, Vt, Ft, kin, cd, ce, A0p, cw1, sw1), for step_located to
+ * solve_modes leave them (xp, q, st, l, Vt, Ft, kin, cd, ce, A0p, cw1, sw1), for chain_step_located to
  * go on from. Only for the located scheme on a resolving grid, without energy accounts and with
  * no block frozen. */
 static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *s, double cw1, double sw1,
@@ -91,7 +91,7 @@ static HOT_INLINE int step_fast(chain_model *M, const fast_ctx *C, chain_state *
         xc = xr;
         const int hold = (mode[i] == 0 && R[i].Fb > 0.0);
         refac = chain_refactor_row(R, i, hold, cprev, refac);
-        /* solve_rows' (rhs - lo_e dprev) / den, rhs = p + the sliding force; on the first row
+        /* lcp_box_basis' (rhs - lo_e dprev) / den, rhs = -q - the sliding force; on the first row
          * lo_e dprev is +0, and x - +0 is x */
         double dpi = 0.0;
         if (!hold) {
@@ -186,7 +186,7 @@ static void rebase_whole(chain_model *M, const chain_state *s, double hh)
             continue;
         }
         if (!have) {
-            /* the excitation's rate at s->t, and its phase as physical_accel reads it */
+            /* the excitation's rate at s->t, and its phase as chain_physical_accel reads it */
             cw = dfo_cos(M->omega * s->t + M->phi0);
             sw = dfo_sin(M->omega * s->t + M->phi0);
             chain_phase_of(M, s, s->t, &pcw, &psw);
@@ -224,7 +224,7 @@ static void rebase_whole(chain_model *M, const chain_state *s, double hh)
  * cannot apply (block 0 not stuck, or stuck_ok off). Returns 1 when it stopped before a step,
  * which it leaves to chain_advance; else the step it set up (n_grid, the cache, s->steps, *t_end
  * and the excitation phase at it, a whole grid step from s->t) that step_fast did not take, with
- * step_fast's result (0, -1) for step_located. No calls: the loop keeps its data in registers. */
+ * step_fast's result (0, -1) for chain_step_located. No calls: the loop keeps its data in registers. */
 static HOT_INLINE int fast_run(chain_model *M, const fast_ctx *C, chain_state *s, double t_target, double *g_prev,
                                double *t_end, double *cw1, double *sw1)
 {
@@ -338,12 +338,7 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
     M->switched = 0;
     M->jerk_valid = 0;
     /* a requested time within SNAP_REL_H h of a grid point is that grid point */
-    const double r = (t_target - s->t0) / h;
-    if (r > -0.5 && r < 0x1p52) {
-        const long long g = (long long)floor(r + 0.5);
-        const double tg = s->t0 + (double)g * h;
-        if (g >= s->n_grid && tg >= s->t && fabs(t_target - tg) <= SNAP_REL_H * h) t_target = tg;
-    }
+    t_target = dfo_grid_snap(s->t0, h, s->n_grid, s->t, t_target, SNAP_REL_H * h);
     /* whole grid steps of the located scheme try the fast path first (step_fast) */
     const int fast_grid = M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy;
     fast_ctx F;

@@ -8,9 +8,9 @@
  *                    step (trial: M_hat, the re-based A0, p_hat) and its acceptance (finish), the
  *                    consistent restart after a switch, input changes, the closed-form breakaway
  *   chain_located.c  the located scheme: the basis solve (kept factorisation or lcp_box_basis), the
- *                    switch margins, root finding, switches, spans and clusters (step_located)
+ *                    switch margins, root finding, switches, spans and clusters (chain_step_located)
  *   chain_paper.c    the paper and consistent schemes: the box LCP (numerics/lcp.h) and the
- *                    coefficient update (step_lcp)
+ *                    coefficient update (chain_step_lcp)
  *   chain_advance.c  chain_start and chain_advance: the grid, the fast path of whole grid steps
  *                    (step_fast, fast_run: inlined into the loop), the stuck fast path
  *
@@ -99,7 +99,7 @@ struct chain_model {
     double *cp, *dp;            /* Thomas workspace of the basis solves */
     double *S;                  /* net applied forces (chain_net_forces), or a candidate's breakaway time */
     double *l;                  /* the trial's friction limits: Fb held, mukN sliding (set with st) */
-    double *sX, *sV, *sA, *sF, *shA;  /* blocks' states saved around a cluster (step_located) */
+    double *sX, *sV, *sA, *sF, *shA;  /* blocks' states saved around a cluster (chain_step_located) */
     double *J;                  /* jerks at the current state (trial's re-basing), when jerk_valid */
     int jerk_valid;             /* J holds the jerks of the current state */
     double *box;                /* 2n: lcp_box's work */
@@ -123,7 +123,7 @@ struct chain_model {
 };
 
 /* A span of blocks [a, b) stepped on its own: the whole chain, or a cluster around switching
- * blocks (see step_located). A cluster's outside neighbours a - 1 and b are ghosts: their motion
+ * blocks (see chain_step_located). A cluster's outside neighbours a - 1 and b are ghosts: their motion
  * over the step, interpolated (cubic Hermite) between their states at its start and end, is
  * written into the state arrays at the current time. */
 typedef struct {

@@ -159,7 +159,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         fast_row *R = &M->rows[i];
         R->Pc = M->Pc[i]; R->Ps = M->Ps[i]; R->am = M->am[i]; R->am1 = M->am1[i];
         R->Kd = M->Kd[i]; R->Ko = M->Ko[i]; R->d = M->dF[i]; R->e = M->eF[i];
-        R->u = R->Fb = R->mukN = 0.0;  /* (loads_init) */
+        R->u = R->Fb = R->mukN = 0.0;  /* (chain_loads_init) */
         R->fh = 0;
     }
     /* beyond w blocks the influence of a block inside one step is below 2^-56: M_hat^-1 decays like

@@ -155,7 +155,7 @@ static void ctx_scale(ex_ctx *C, int e)
     C->Ls_.N *= C->iLs;
     C->Ls_.muk_N *= C->iLs;
     C->Ls_.Fb *= C->iLs;
-    C->fP = C->M->exc.amp * C->iLs;
+    C->fP = C->M->P_amp * C->iLs;
     C->fF = C->Ls_.F_ext;
     C->a = C->fP / C->k;
     const double z = C->zeta;
@@ -1160,7 +1160,7 @@ double dfo_exact_excitation(const dfo_model *M, double t)
     const dd tt = {t, 0.0};
     double c, sn;
     phase_at(&C, tt, &c, &sn);
-    return M->exc.amp * c;
+    return M->P_amp * c;
 }
 
 /* The length scale's exponent for this call: of the largest length of the motion (|P0|, |F_ext|, the
@@ -1173,7 +1173,7 @@ static int scale_exponent(const dfo_model *M, const dfo_inputs *u, const dfo_sta
     dfo_loads_init(&L, M, u);
     const int ek = dfo_ilogb(M->p.k);
     const double w0 = sqrt(M->p.k / M->p.m);
-    const double forces[3] = {M->exc.amp, L.F_ext, L.Fb};
+    const double forces[3] = {M->P_amp, L.F_ext, L.Fb};
     for (int i = 0; i < 3; i++)
         if (forces[i] != 0.0 && isfinite(forces[i])) {
             const int f = dfo_ilogb(forces[i]) - ek;

@@ -60,9 +60,9 @@ static void ctx_init(fr_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->M = M;
     dfo_loads_init(&C->L, M, in);
     C->b = p->c / p->m;
-    const int harmonic = p->omega > 0.0 && M->exc.amp > 0.0;
+    const int harmonic = p->omega > 0.0 && M->P_amp > 0.0;
     C->w = harmonic ? p->omega : 0.0;
-    C->A = harmonic ? M->exc.amp / p->m : 0.0;
+    C->A = harmonic ? M->P_amp / p->m : 0.0;
     C->f_const = (C->L.F_ext + (harmonic ? 0.0 : dfo_excitation(M, 0.0))) / p->m;
     const double p2 = C->b * C->b + C->w * C->w;
     C->inv_p2 = harmonic ? 1.0 / p2 : 0.0;
@@ -84,7 +84,7 @@ static void phase_init(const fr_ctx *C, fr_phase *P, double ta, double X, double
     P->s0 = 0.0;
     P->ang_eps = 0.0;
     if (C->A > 0.0) {
-        const double th = M->p.omega * ta + M->exc.phase; /* from the absolute time at every phase start */
+        const double th = M->p.omega * ta + M->P_phase; /* from the absolute time at every phase start */
         dfo_sincos(th, &P->s0, &P->c0);
         P->ang_eps = 8.0 * DBL_EPSILON * (fabs(th) + TWO_PI);
     }
@@ -441,12 +441,13 @@ static double breakaway(const fr_ctx *C, dfo_state *s, double ta, int skip, int 
     if (!known || (skip && s->stick_tb <= ta)) {
         s->stick_C = C0;
         s->stick_Fb = C->L.Fb;
-        double tb = dfo_next_breakaway(&C->M->exc, &C->L, C0, ta, &s->stick_dir);
+        const dfo_harmonic P = dfo_model_excitation(C->M);
+        double tb = dfo_next_breakaway(&P, &C->L, C0, ta, &s->stick_dir);
         if (skip) {
             const double rate = C->b + fabs(C->M->p.omega);
             double d = 4.0 * DBL_EPSILON * fmax(fabs(ta), rate > 0.0 ? 1.0 / rate : 1.0);
             for (int i = 0; i < 200 && tb <= ta + d && isfinite(tb); i++, d *= 2.0)
-                tb = dfo_next_breakaway(&C->M->exc, &C->L, C0, ta + d, &s->stick_dir);
+                tb = dfo_next_breakaway(&P, &C->L, C0, ta + d, &s->stick_dir);
         }
         s->stick_tb = tb;
     }
@@ -519,7 +520,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
         s->V = 0.0;
         /* the static force at a stop from the excitation phase there (known from the search) */
         const double Fs = (r == SEARCH_STOP && ts < t_target && C->A > 0.0)
-                              ? dfo_static_force(C->M->p.k, &C->L, C->M->exc.amp * v.cth, s->X)
+                              ? dfo_static_force(C->M->p.k, &C->L, C->M->P_amp * v.cth, s->X)
                               : static_force(C, ts, s->X);
         int next = dfo_rest_mode(&C->L, Fs);
         if (!(C->L.Fb > 0.0)) {

@@ -381,7 +381,8 @@ static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double 
         const double C0 = C->L.F_ext - C->M->p.k * s->X;
         s->stick_C = C0;
         s->stick_Fb = C->L.Fb;
-        s->stick_tb = dfo_next_breakaway(&C->M->exc, &C->L, C0, ta, &s->stick_dir);
+        const dfo_harmonic P = dfo_model_excitation(C->M);
+        s->stick_tb = dfo_next_breakaway(&P, &C->L, C0, ta, &s->stick_dir);
     }
     *dir = s->stick_dir;
     const double t = (s->stick_tb > ta) ? s->stick_tb : ta;
@@ -604,14 +605,7 @@ double dfo_snap_tolerance(const dfo_model *M, double t)
 
 double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target)
 {
-    const double h = M->p.h;
-    const double r = (t_target - s->t0) / h;  /* t_target in grid steps from t0 */
-    if (!(r > -0.5 && r < 0x1p52)) return t_target;  /* before t0, beyond an exact count, or NaN */
-    const long long m = (long long)floor(r + 0.5);     /* the nearest grid point */
-    if (m < s->n) return t_target;
-    const double grid = s->t0 + (double)m * h;         /* as the stepping loop computes it */
-    if (grid >= s->t && fabs(t_target - grid) <= dfo_snap_tolerance(M, t_target)) return grid;
-    return t_target;
+    return dfo_grid_snap(s->t0, M->p.h, s->n, s->t, t_target, dfo_snap_tolerance(M, t_target));
 }
 
 /* |x| <= DBL_MAX is false for infinities and NaN; four independent tests, one branch */

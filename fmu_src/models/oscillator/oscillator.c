@@ -35,7 +35,8 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->beta = dfo_bossak_beta(p->alpha);
     M->mu_k = p->chi * p->mu_s;
     M->mu_b = fmax(p->mu_s, M->mu_k);
-    dfo_harmonic_init(&M->exc, p->P0, p->omega, p->phi);
+    M->P_amp = fabs(p->P0);
+    M->P_phase = p->phi + (p->P0 < 0.0 ? DFO_PI : 0.0);
     M->rate_max = sqrt(p->k / p->m) + p->c / p->m + fabs(p->omega);
     M->rot_c = dfo_cos(p->omega * M->p.h);
     M->rot_s = dfo_sin(p->omega * M->p.h);
@@ -44,7 +45,10 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->update = !M->fast || M->mu_k != M->mu_b;
 }
 
-double dfo_excitation(const dfo_model *M, double t) { return dfo_harmonic_at(&M->exc, t); }
+double dfo_excitation(const dfo_model *M, double t)
+{
+    return M->p.P0 * dfo_cos(M->p.omega * t + M->p.phi);
+}
 
 double dfo_excitation_rate(const dfo_model *M, double t)
 {

@@ -51,7 +51,7 @@ typedef struct {
     dfo_params p;            /* the parameters, with p.h the step used (dfo_step_size) */
     double gamma, beta;      /* Newmark coefficients: gamma = 1/2 - alpha, beta = (1 - alpha)^2 / 4 */
     double mu_k, mu_b;       /* kinetic and breakaway coefficients, mu_b = max(mu_s, mu_k) */
-    dfo_harmonic exc;        /* the excitation P0 cos(omega t + phi), also as exc.amp cos(omega t + exc.phase) */
+    double P_amp, P_phase;   /* P0 cos(w t + phi) written as P_amp cos(w t + P_phase), P_amp >= 0 */
     double rate_max;         /* fastest rate of the model, sqrt(k/m) + c/m + |omega| (1/s) */
     double rot_c, rot_s;     /* cos and sin of omega h: the excitation's phase advance per grid step */
     int fast;                /* fast paths enabled */
@@ -81,6 +81,14 @@ double dfo_excitation_rate(const dfo_model *M, double t);
 double dfo_normal_force(const dfo_model *M, const dfo_inputs *u);
 /* External force: F_ext when it has been set, else 0. */
 double dfo_external_force(const dfo_model *M, const dfo_inputs *u);
+
+/* The excitation as the friction rules read it (friction.h: its P_amp, P_phase as amp, phase). */
+static inline dfo_harmonic dfo_model_excitation(const dfo_model *M)
+{
+    dfo_harmonic H;
+    dfo_harmonic_init(&H, M->p.P0, M->p.omega, M->p.phi);
+    return H;
+}
 
 /* The loads of the friction rules (friction.h) under these inputs. */
 void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
