@@ -89,7 +89,7 @@ static double excitation(const step_ctx *C, double t)
 
 /* Cosine and sine of the excitation phase at the grid point n, from the cache of the state (see
  * dfo_state; excitation.h's dfo_grid_phase): the value depends on n only. */
-static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *cos_out, double *sin_out)
+static HOT_INLINE void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *cos_out, double *sin_out)
 {
     dfo_grid_phase(M->p.omega, M->p.phi, s->t0, M->p.h, M->rot_c, M->rot_s, s->exc_n, s->exc_c, s->exc_s, n, cos_out,
                    sin_out);
