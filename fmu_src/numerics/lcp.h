@@ -13,7 +13,8 @@
  *               forces F, q = -p_hat, l the friction limits), O(n) per pivot.
  * A basis is named by flags: Lemke's z_basic[i] (z_i basic), the box's mode[i] (0: z_i = 0 held,
  * w_i inside its box; +1 / -1: z_i free with w_i = -l_i / +l_i, i.e. the sign z_i has).
- * Both return an lcp_status and the pivots done through *pivots (NULL: not wanted). Neither
+ * Both return an lcp_status and the pivots done through *pivots (NULL: not wanted); sizes are int
+ * for Lemke (n <= LCP_MAX_N), size_t for the box (any n, O(n) memory). Neither
  * allocates: Lemke's workspace is on its own stack, the box's is the caller's.
  * Plain C, no FMI types. */
 #ifndef DFO_LCP_H
@@ -23,7 +24,7 @@
 #include <math.h>
 #include <stddef.h>
 
-#define LCP_MAX_N 12  /* the 2n problem of a chain of up to 6 blocks */
+#define LCP_MAX_N 12  /* Lemke's largest n (the tests pose the dense 2n form of a chain of up to 6 blocks) */
 
 typedef enum {
     LCP_OK = 0,          /* solution found */

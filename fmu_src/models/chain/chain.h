@@ -78,7 +78,8 @@ typedef struct {
      * switch), switches, tridiagonal solves */
     long long steps, pivot_steps, switches, solves;
     /* excitation cache: cos and sin of omega (t0 + exc_n h) at the grid point exc_n (-1: empty), a
-     * pure function of exc_n (exact every 64 points, rotations in between; as the oscillator) */
+     * pure function of exc_n (exact every DFO_EXC_ANCHOR = 64 points, rotations in between: excitation.h,
+     * as the oscillator) */
     long long exc_n;
     double exc_c, exc_s;
 } chain_state;
