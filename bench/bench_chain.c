@@ -1,4 +1,4 @@
-/* ns per block-step of the chain (chain.[ch]) on a stick-slip chain, for n = 1, 2, 8, 64, 512, 4096,
+/* ns per block-step of the chain (fmu_src/models/chain/chain.h) on a stick-slip chain, for n = 1, 2, 8, 64, 512, 4096,
  * side by side with the oscillator's stepper (newmark.[ch]) on the same single block, in one run.
  *
  *   bench_chain [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--N NORMAL] [--wall]

@@ -1,6 +1,7 @@
-/* The mathematics the oscillator (newmark.c) and the chain (chain.c) share: Bossak-Newmark's
- * coefficients and the kinematics of one step in velocity form (method.md section 2), and the
- * bracketed root finder that places a switch inside a step (Brent's method).
+/* The mathematics the oscillator (models/oscillator/newmark.c) and the chain (models/chain/) share:
+ * the schemes' names, the rule of the default step, Bossak-Newmark's coefficients and the
+ * kinematics of one step in velocity form (method.md section 2), and the bracketed root finder
+ * that places a switch inside a step (Brent's method).
  *
  * Plain C, no FMI types. */
 #ifndef DFO_BOSSAK_H
@@ -8,6 +9,42 @@
 
 #include <float.h>
 #include <math.h>
+
+/* The schemes of both models (the FMUs' "scheme" enumeration; the chain has no exact scheme). */
+typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3,
+               DFO_SCHEME_EXACT = 4 } dfo_scheme;
+
+/* The default step: h = 0 means "derived from the dynamics": 1/1000 of the shortest period of the
+ * model (each model says which periods it has: oscillator.h, chain.h), so a default run resolves
+ * every period at least as finely as a run at T/1000. Without any (no spring, excitation or
+ * damper) the motion between events has constant acceleration, which every scheme integrates
+ * exactly, and the step is DFO_STEP_FALLBACK. */
+#define DFO_STEPS_PER_PERIOD 1000.0
+#define DFO_STEP_FALLBACK 1e-3
+/* Fewer internal steps than this per shortest period: a user-set h does not resolve the dynamics. */
+#define DFO_MIN_STEPS_PER_PERIOD 20.0
+/* The rule of it for any model: h when > 0, else 1/DFO_STEPS_PER_PERIOD of the shortest period T
+ * (+inf: none, DFO_STEP_FALLBACK), always a normal number > 0. */
+static inline double dfo_step_rule(double h, double T)
+{
+    if (h > 0.0) return h;
+    const double d = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
+    return (d >= DBL_MIN && isfinite(d)) ? d : DBL_MIN;
+}
+
+/* The snap of a requested time to the time grid t0 + m h of a run that has reached the grid index
+ * n_done and the time t: the nearest grid point m >= n_done, when it is at or after t and within
+ * tol of t_target, else t_target itself (also before t0, beyond an exact count, or NaN). The grid
+ * point as the stepping loops compute it, t0 + (double)m h. */
+static inline double dfo_grid_snap(double t0, double h, long long n_done, double t, double t_target, double tol)
+{
+    const double r = (t_target - t0) / h; /* t_target in grid steps from t0 */
+    if (!(r > -0.5 && r < 0x1p52)) return t_target;
+    const long long m = (long long)floor(r + 0.5); /* the nearest grid point */
+    if (m < n_done) return t_target;
+    const double grid = t0 + (double)m * h;
+    return (grid >= t && fabs(t_target - grid) <= tol) ? grid : t_target;
+}
 
 /* Newmark's coefficients for the Bossak parameter alpha in [-1/3, 0]: second order, stable. */
 static inline double dfo_bossak_gamma(double alpha) { return 0.5 - alpha; }

@@ -5,14 +5,6 @@
 
 #define TWO_PI (2.0 * DFO_PI)
 
-void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in)
-{
-    L->F_ext = dfo_external_force(M, in);
-    L->N = dfo_normal_force(M, in);
-    L->muk_N = M->mu_k * L->N;
-    L->Fb = M->mu_b * L->N;
-}
-
 /* Earliest theta >= th0 with cos(theta) > lim, as an offset from th0; acos_lim = acos(lim). */
 static double until_above(double th0, double lim, double acos_lim)
 {
@@ -24,11 +16,11 @@ static double until_above(double th0, double lim, double acos_lim)
     return TWO_PI - acos_lim - psi;
 }
 
-double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, double ta, int *dir)
+double dfo_next_breakaway(const dfo_harmonic *P, const dfo_loads *L, double C0, double ta, int *dir)
 {
-    const double Fb = L->Fb, w = M->p.omega, amp = M->P_amp;
+    const double Fb = L->Fb, w = P->omega, amp = P->amp;
     if (w == 0.0 || amp == 0.0) { /* a constant force */
-        const double F_static = dfo_excitation(M, ta) + C0;
+        const double F_static = dfo_harmonic_at(P, ta) + C0;
         *dir = dfo_sign(F_static);
         return (fabs(F_static) > Fb) ? ta : INFINITY;
     }
@@ -36,7 +28,7 @@ double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, dou
     const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
     const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
     const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
-    const double th = w * ta + M->P_phase;
+    const double th = w * ta + P->phase;
     const double up = until_above(th, lim_hi, acos_hi), down = until_above(th + DFO_PI, lim_lo, acos_lo);
     *dir = (up <= down) ? 1 : -1;
     return ta + fmin(up, down) / w;

@@ -1,14 +1,16 @@
-/* The friction rules every scheme shares (method.md sections 1, 3 and 4): the loads held over a
- * communication step, the static force at rest, the rest rule (stick or slide), the force held
- * while stuck, the consistent acceleration of a slide that starts from rest, and the next
- * breakaway of a stick phase in closed form. The Bossak schemes (newmark.c) and the exact scheme
- * use these and nothing else to decide stick and slip.
+/* The friction rules every scheme of both models shares (method.md sections 1, 3, 4 and 9): the
+ * loads held over a communication step, the static force at rest, the rest rule (stick or slide),
+ * the force held while stuck, the consistent acceleration of a slide that starts from rest, and the
+ * next breakaway of a stick phase in closed form. The oscillator's schemes (newmark.c, exact.c,
+ * exact_free.c) and the chain (one block at a time) use these and nothing else to decide stick
+ * and slip.
  *
- * Plain C, no FMI types. */
+ * Model-free: plain numbers (a block's mass, stiffness, loads, excitation), no model struct. Plain
+ * C, no FMI types. */
 #ifndef DFO_FRICTION_H
 #define DFO_FRICTION_H
 
-#include "oscillator.h"
+#include "excitation.h"
 
 #include <math.h>
 
@@ -20,15 +22,23 @@ typedef struct {
     double Fb;     /* breakaway limit max(mu_s, mu_k) N (>= muk_N) */
 } dfo_loads;
 
-void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
+/* The loads of a block with external force F_ext, normal force N (already max(N + N_ext, 0)),
+ * kinetic coefficient mu_k and breakaway coefficient mu_b = max(mu_s, mu_k). */
+static inline void dfo_loads_set(dfo_loads *L, double F_ext, double N, double mu_k, double mu_b)
+{
+    L->F_ext = F_ext;
+    L->N = N;
+    L->muk_N = mu_k * N;
+    L->Fb = mu_b * N;
+}
 
 static inline int dfo_sign(double x) { return (x > 0.0) - (x < 0.0); }
 
-/* The static force: the net applied force on a block at rest at X under the excitation P,
- * F_static = P + F_ext - k X (the force the friction must hold to keep it there). */
-static inline double dfo_static_force(const dfo_model *M, const dfo_loads *L, double P, double X)
+/* The static force: the net applied force on a block of stiffness k at rest at X under the
+ * excitation P, F_static = P + F_ext - k X (the force the friction must hold to keep it there). */
+static inline double dfo_static_force(double k, const dfo_loads *L, double P, double X)
 {
-    return P + L->F_ext - M->p.k * X;
+    return P + L->F_ext - k * X;
 }
 
 /* The rest rule: a block at rest sticks (0) if |F_static| <= Fb, else it slides in the direction of
@@ -44,18 +54,18 @@ static inline double dfo_stick_force(const dfo_loads *L, double F_static)
     return -fmax(-L->Fb, fmin(L->Fb, F_static));
 }
 
-/* The consistent acceleration of a slide that starts from rest in direction dir (+1 or -1) with
- * static force F_static. The net force is at least the breakaway limit (it may sit on it by
- * rounding at a breakaway), so the acceleration is never against dir. */
-static inline double dfo_breakaway_accel(const dfo_model *M, const dfo_loads *L, int dir, double F_static)
+/* The consistent acceleration of a slide of a block of mass m that starts from rest in direction
+ * dir (+1 or -1) with static force F_static. The net force is at least the breakaway limit (it may
+ * sit on it by rounding at a breakaway), so the acceleration is never against dir. */
+static inline double dfo_breakaway_accel(double m, const dfo_loads *L, int dir, double F_static)
 {
-    return dir * fmax(fmax(dir * F_static, L->Fb) - L->muk_N, 0.0) / M->p.m;
+    return dir * fmax(fmax(dir * F_static, L->Fb) - L->muk_N, 0.0) / m;
 }
 
-/* While stuck at X the static force is F_static(t) = P_amp cos(omega t + P_phase) + C0, with the
- * constant part C0 = F_ext - k X. The first time >= ta at which |F_static| exceeds Fb, with the
- * side crossed in *dir, or INFINITY.
+/* While stuck at X under the excitation P the static force is F_static(t) = P->amp cos(P->omega t
+ * + P->phase) + C0, with the constant part C0 = F_ext - k X (a chain's block: F_ext - (K x)_i).
+ * The first time >= ta at which |F_static| exceeds Fb, with the side crossed in *dir, or INFINITY.
  * Closed form: a force that crosses the limit and comes back between two samples is not missed. */
-double dfo_next_breakaway(const dfo_model *M, const dfo_loads *L, double C0, double ta, int *dir);
+double dfo_next_breakaway(const dfo_harmonic *P, const dfo_loads *L, double C0, double ta, int *dir);
 
 #endif

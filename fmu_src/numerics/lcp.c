@@ -1,4 +1,4 @@
-/* Lemke's algorithm, lexicographic variant. See lcp.h. */
+/* Lemke's algorithm (lexicographic variant) and the box LCP of a tridiagonal M. See lcp.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "lcp.h"
 
@@ -355,4 +355,115 @@ const char *lcp_status_text(lcp_status s)
     case LCP_BAD_INPUT: return "invalid problem (size or non-finite entries)";
     }
     return "unknown status";
+}
+
+/* ---- the box LCP of a tridiagonal M (see lcp.h) ------------------------------------------------- */
+
+static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
+
+void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                   const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                   double *cp, double *dp)
+{
+    /* forward elimination (Thomas) over the rows that are not fixed or held; a fixed or held row
+     * has cp = 0 and dp its value, so it starts the elimination afresh */
+    double cprev = 0.0, dprev = 0.0;
+    for (size_t i = lo; i < hi; i++) {
+        if ((fix_lo && i == lo) || (fix_hi && i == hi - 1)) {
+            cp[i] = 0.0;
+            dp[i] = (fix_lo && i == lo) ? z_lo : z_hi;
+        } else if (mode[i] == 0 && l[i] > 0.0) {
+            cp[i] = 0.0;
+            dp[i] = 0.0;
+        } else {
+            const double lo_e = (i > lo) ? e[i - 1] : 0.0;
+            /* M z = -q + w with w = -mode l: the right-hand side -q - mode l */
+            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            const double den = d[i] - lo_e * cprev;
+            const double inv = 1.0 / den;
+            cp[i] = (i + 1 < hi) ? e[i] * inv : 0.0;  /* e has hi - 1 entries */
+            dp[i] = (rhs - lo_e * dprev) * inv;
+        }
+        cprev = cp[i];
+        dprev = dp[i];
+    }
+    double zn = 0.0;
+    for (size_t j = hi; j-- > lo;) {
+        zn = dp[j] - cp[j] * zn;
+        z[j] = zn;
+    }
+    const size_t a = lo + (size_t)fix_lo, b = hi - (size_t)fix_hi;
+    for (size_t i = a; i < b; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            z[i] = 0.0;
+            double f = q[i];
+            if (i > lo) f += e[i - 1] * z[i - 1];
+            if (i + 1 < hi) f += e[i] * z[i + 1];
+            w[i] = f;
+        } else {
+            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+}
+
+/* Principal pivoting from the modes: all infeasible rows flipped for three rounds, then the least
+ * index only (Murty's rule); infeasibilities up to tol of the problem's scale accepted. Returns the
+ * pivots, or -1 when max_it ran out. */
+static long box_pivoting(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
+                         double *z, double *w, double *work, long max_it, double tol)
+{
+    double *cp = work, *dp = work + n;
+    for (long it = 0; it < max_it; it++) {
+        lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, q, l, mode, z, w, cp, dp);
+        double zs = 0.0, ws = 0.0;
+        if (tol > 0.0)
+            for (size_t i = 0; i < n; i++) { zs = fmax(zs, fabs(z[i])); ws = fmax(ws, fabs(q[i]) + l[i]); }
+        int flipped = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (!(l[i] > 0.0)) { mode[i] = sgn(z[i]); continue; }
+            int to = mode[i];
+            if (mode[i] != 0 && mode[i] * z[i] < -tol * zs) to = 0;
+            else if (mode[i] == 0 && w[i] > l[i] + tol * ws) to = -1;
+            else if (mode[i] == 0 && w[i] < -l[i] - tol * ws) to = 1;
+            if (to != mode[i] && (it < 3 || !flipped)) {
+                mode[i] = to;
+                flipped = 1;
+            }
+        }
+        if (!flipped) return it;
+    }
+    return -1;
+}
+
+lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
+                   double *z, double *w, double *work, int *pivots)
+{
+    const long budget = 8 * (long)n + 32;
+    long piv = box_pivoting(n, d, e, q, l, mode, z, w, work, budget, 0.0);
+    if (piv < 0) {
+        /* Stiff problems (M far from diagonal dominance) can make the pivoting wander: projected
+         * Gauss-Seidel (coordinate descent on the strictly convex min z'M z / 2 + q'z + sum l |z|,
+         * convergent for M positive definite) finds the modes, the pivoting polishes. */
+        for (size_t i = 0; i < n; i++) z[i] = 0.0;
+        for (long sweep = 0; sweep < 1000000; sweep++) {
+            double dz = 0.0, zs = 0.0;
+            for (size_t i = 0; i < n; i++) {
+                double r = -q[i];
+                if (i > 0) r -= e[i - 1] * z[i - 1];
+                if (i + 1 < n) r -= e[i] * z[i + 1];
+                const double v = (r > l[i]) ? (r - l[i]) / d[i] : (r < -l[i]) ? (r + l[i]) / d[i] : 0.0;
+                dz = fmax(dz, fabs(v - z[i]));
+                zs = fmax(zs, fabs(v));
+                z[i] = v;
+            }
+            if (dz <= 1e-15 * zs) break;
+        }
+        for (size_t i = 0; i < n; i++) mode[i] = sgn(z[i]);
+        /* the polish accepts infeasibilities of rounding size (1e-10 of the problem's scale): on an
+         * ill-conditioned M they would make the exact rule cycle */
+        piv = box_pivoting(n, d, e, q, l, mode, z, w, work, budget, 1e-10);
+        if (piv >= 0) piv += budget;
+    }
+    if (pivots) *pivots = (piv >= 0) ? (int)piv : 0;
+    return (piv >= 0) ? LCP_OK : LCP_MAX_PIVOTS;
 }

@@ -1,22 +1,37 @@
-/* Lemke's complementary pivoting algorithm for a small dense linear complementarity problem.
+/* Linear complementarity problems of the friction, in one convention for both solvers:
  *
- * Finds z >= 0 with w = M z + q >= 0 and z . w = 0 (method.md section 3), for any n <= LCP_MAX_N.
- * Lexicographic minimum-ratio test (no cycling on degenerate problems), covering vector e = 1,
- * pivot count bounded by the caller. No allocation: the workspace lives on the caller's stack.
+ *     w = M z + q,
+ *
+ * with the conditions that make it a problem of each kind:
+ *   lcp_lemke*  (standard LCP, a small dense M, method.md section 3): z >= 0, w >= 0, z . w = 0,
+ *               by Lemke's complementary pivoting (lexicographic minimum-ratio test, no cycling on
+ *               degenerate problems, covering vector e = 1, for any n <= LCP_MAX_N);
+ *   lcp_box*    (box LCP, a symmetric positive definite tridiagonal M, method.md section 9): z free,
+ *               |w_i| <= l_i, z_i > 0 => w_i = -l_i, z_i < 0 => w_i = +l_i (l_i = 0: w_i = 0),
+ *               the optimality condition of min z'M z / 2 + q'z + sum l_i |z_i|; by principal
+ *               pivoting on the modes (the chain's friction: z the end velocities V, w the friction
+ *               forces F, q = -p_hat, l the friction limits), O(n) per pivot.
+ * A basis is named by flags: Lemke's z_basic[i] (z_i basic), the box's mode[i] (0: z_i = 0 held,
+ * w_i inside its box; +1 / -1: z_i free with w_i = -l_i / +l_i, i.e. the sign z_i has).
+ * Both return an lcp_status and the pivots done through *pivots (NULL: not wanted); sizes are int
+ * for Lemke (n <= LCP_MAX_N), size_t for the box (any n, O(n) memory). Neither
+ * allocates: Lemke's workspace is on its own stack, the box's is the caller's.
  * Plain C, no FMI types. */
 #ifndef DFO_LCP_H
 #define DFO_LCP_H
 
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 
-#define LCP_MAX_N 12  /* the 2n problem of a chain of up to 6 blocks */
+#define LCP_MAX_N 12  /* Lemke's largest n (the tests pose the dense 2n form of a chain of up to 6 blocks) */
 
 typedef enum {
     LCP_OK = 0,          /* solution found */
-    LCP_RAY = 1,         /* secondary ray: no solution found (infeasible for this M) */
+    LCP_RAY = 1,         /* secondary ray: no solution found (infeasible for this M; Lemke only) */
     LCP_MAX_PIVOTS = 2,  /* pivot budget used up */
-    LCP_BAD_INPUT = 3    /* n out of range or a non-finite entry */
+    LCP_BAD_INPUT = 3    /* n out of range or a non-finite entry (Lemke only: the box solver does
+                          * not test its data, non-finite entries come out in z and w) */
 } lcp_status;
 
 /* M: n x n, row-major. q: n. On LCP_OK, z and w (n each) hold the solution and basic[i] is
@@ -83,6 +98,29 @@ static inline lcp_status lcp_lemke_warm2(const double *M, const double *q, const
     if (pivots) *pivots = 0;
     return LCP_OK;
 }
+
+/* ---- the box LCP of a tridiagonal M ------------------------------------------------------------ *
+ * M is given by its diagonal d[n] and off-diagonal e[n - 1] (e[i] couples rows i and i + 1; M
+ * symmetric positive definite, so the problem has one solution z). */
+
+/* The basis solve of rows [lo, hi): rows with mode 0 and l > 0 held at z_i = 0, the others with
+ * w_i = -mode_i l_i (l_i = 0: w_i = 0, z_i free); the first row (fix_lo) and the last row (fix_hi)
+ * may be fixed at the given values z_lo, z_hi instead (Dirichlet rows: the neighbours of a cluster
+ * solved on its own; their w is not set). Held rows get w_i = (M z + q)_i. cp, dp: hi entries of
+ * workspace (the Thomas algorithm's). One solve, no test of the box: O(hi - lo). */
+void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                   const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                   double *cp, double *dp);
+
+/* Solve the box LCP by principal pivoting from the basis in mode[] (in: a guess, e.g. the modes of
+ * the previous step; out: the solution's, 0 where z_i = 0): every infeasible row flipped for three
+ * rounds, then the one of least index (Murty's rule), at most 8 n + 32 pivots; when that budget
+ * runs out (a stiff M far from diagonal dominance), projected Gauss-Seidel (convergent for M
+ * positive definite) finds the modes and the pivoting polishes them, accepting infeasibilities of
+ * 1e-10 of the problem's scale (its pivots are counted from 8 n + 32 on). work: 2n doubles.
+ * LCP_OK, or LCP_MAX_PIVOTS when the polish did not settle either. */
+lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
+                   double *z, double *w, double *work, int *pivots);
 
 const char *lcp_status_text(lcp_status s);
 

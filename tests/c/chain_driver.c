@@ -1,4 +1,4 @@
-/* Command-line driver of the chain's physics (chain.[ch]) for the Python tests: runs one chain and
+/* Command-line driver of the chain's physics (fmu_src/models/chain/chain.h) for the Python tests: runs one chain
  * prints its trajectory as CSV on stdout.
  *
  *   chain_driver n=N t_end=T h=H [dt=DT | random_dt=SEED] [alpha=A] [scheme=S] [omega=W]
@@ -7,7 +7,7 @@
  *
  * energy=1 (default) keeps the energy accounts, which makes the located scheme split the whole
  * chain at every switch; energy=0 lets a long chain split only clusters around the switching
- * blocks (chain.c, step_located), with the accounts left at 0.
+ * blocks (chain_located.c, chain_step_located), with the accounts left at 0.
  * A list with one value sets every block. Output: one row per communication point, columns t,
  * then x_i, v_i, F_i, mode_i for every block, then E (mechanical energy), W_applied, W_friction,
  * D_damping, steps, pivot_steps, switches. random_dt draws communication steps in [0.1 h, 3 h].

@@ -1,4 +1,4 @@
-/* Unit tests of the chain of n blocks (fmu_src/chain.h), driven directly (no FMI).
+/* Unit tests of the chain of n blocks (fmu_src/models/chain/chain.h), driven directly (no FMI).
  *
  * 1. n = 1 against the oscillator (newmark.h): same parameters, same communication points (every
  *    T/100, and at random), three schemes, seven cases: the same t, x, v and mode, bit for bit;
@@ -216,8 +216,10 @@ static void test_lcp_enumeration(checks *T)
         check_context(T, "LCP trial %d, n = %d, kind %d", trial, n, kind);
         CHECK(found >= 1);
         CHECK_RANGE(0.0, 1e-9, spread);
-        const int piv = chain_box_lcp((size_t)n, d, e, p, l, mode, V, F, work);
-        CHECK(piv >= 0);
+        double qb[6]; /* the box LCP's q = -p (lcp.h: w = M_hat V + q = F) */
+        for (int i = 0; i < n; i++) qb[i] = -p[i];
+        int piv = -1;
+        CHECK_INT(LCP_OK, lcp_box((size_t)n, d, e, qb, l, mode, V, F, work, &piv));
         if (piv > worst_piv) worst_piv = piv;
         double z[12], w[12];
         int zb[12], lp = 0;
@@ -299,9 +301,10 @@ static void test_invariants(checks *T)
                 /* the LCP of the next step: the box solver's answer is complementary and agrees with
                  * dense Lemke on the 2n problem */
                 e[n - 1] = NAN; /* not part of the problem: must not be read */
-                chain_step_problem(C, &in, &s, cs.p.h, d, e, p, l);
-                for (size_t i = 0; i < n; i++) mode[i] = s.mode[i];
-                CHECK(chain_box_lcp(n, d, e, p, l, mode, V, F, work) >= 0);
+                double qb[NMAX];
+                chain_step_problem(C, &in, &s, cs.p.h, d, e, qb, l);
+                for (size_t i = 0; i < n; i++) { mode[i] = s.mode[i]; p[i] = -qb[i]; }
+                CHECK_INT(LCP_OK, lcp_box(n, d, e, qb, l, mode, V, F, work, NULL));
                 double Mq[100], q[10], z[10], w[10];
                 int zb[10];
                 memset(Mq, 0, sizeof Mq);
@@ -445,7 +448,7 @@ static void test_stop_and_copy(checks *T)
 
 static void test_fast_path(checks *T)
 {
-    /* the energy accounts send every step through the general path (chain.c: step_fast and the
+    /* the energy accounts send every step through the general path (chain_advance.c: step_fast and the
      * stuck fast path stuck_until are off); on a chain short enough to be split whole, the two
      * runs must agree bit for bit: one with a block without friction, one stick-dominated (every
      * block stuck for long phases) */

@@ -1,4 +1,4 @@
-/* Unit tests of the exact scheme (fmu_src/exact.[ch]), driven directly (no FMI). The file includes
+/* Unit tests of the exact scheme (fmu_src/models/oscillator/exact.[ch]), driven directly (no FMI). The file includes
  * exact.c to reach its closed-form phase (phase_init, eval) for the checks that need the motion
  * inside a phase.
  *
@@ -239,13 +239,13 @@ static void run_and_check_phases(checks *T, dfo_params p, double periods, phase_
             /* while stuck the static force stays inside the limit (sampled) */
             for (int i = 1; i < 16; i++) {
                 const double t = ta + (tb - ta) * i / 16.0;
-                const double S_ = dfo_static_force(&S.M, &C.L, dfo_excitation(&S.M, t), xa);
+                const double S_ = dfo_static_force(S.M.p.k, &C.L, dfo_excitation(&S.M, t), xa);
                 st->worst_rule = fmax(st->worst_rule, (fabs(S_) - Fb) / scale);
             }
         }
         if (last) break;
         /* the rule at the event */
-        const double Sv = dfo_static_force(&S.M, &C.L, dfo_excitation(&S.M, tb), xb);
+        const double Sv = dfo_static_force(S.M.p.k, &C.L, dfo_excitation(&S.M, tb), xb);
         const int to = L.to[e];
         if (mode != 0 && to == 0) st->worst_rule = fmax(st->worst_rule, (fabs(Sv) - Fb) / scale);
         if (to != 0 && mode == 0) st->worst_rule = fmax(st->worst_rule, (Fb - to * Sv) / scale);

@@ -1,4 +1,4 @@
-/* Unit tests of the exact scheme without a spring (fmu_src/exact_free.[ch]) and of the exact
+/* Unit tests of the exact scheme without a spring (fmu_src/models/oscillator/exact_free.[ch]) and of the exact
  * schemes' work bound, driven directly (no FMI). The file includes exact_free.c (to reach its closed
  * form) with a small event budget, DFO_EXACT_MAX_EVENTS = 20000, so that a runaway communication
  * step is reached in milliseconds; tests/c/test_exact_budget.c does the same for exact.c (k > 0).

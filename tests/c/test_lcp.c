@@ -1,10 +1,15 @@
-/* Unit tests of Lemke's algorithm (fmu_src/lcp.h).
+/* Unit tests of the LCP solvers of fmu_src/numerics/lcp.h: Lemke's algorithm and the box LCP.
  *
  * 1. The friction LCP of method.md section 3 (M = m_hat [[1,-1],[-1,1]], q = (muN - p, muN + p))
  *    against its closed form, over many decades and on the degenerate cases.
  * 2. General n: P-matrices (unique solution, compared with a brute-force enumeration of the 2^n
  *    complementary bases), positive semi-definite singular M with a feasible q, infeasible
- *    problems (ray), the pivot budget, and invalid input. */
+ *    problems (ray), the pivot budget, and invalid input.
+ * 3. The box LCP of a tridiagonal M (lcp_box, lcp_box_basis): against a brute-force enumeration of
+ *    the 3^n modes for n <= 6, each mode set solved densely (Gaussian elimination, not the Thomas
+ *    solve under test), with the box conditions verified on every answer (|w| <= l, z > 0 => w = -l,
+ *    z < 0 => w = l, w = M z + q); well-conditioned, tied, frictionless and stiff problems; the
+ *    basis solve with fixed end rows against the dense solve. */
 #include "check.h"
 #include "lcp.h"
 
@@ -687,6 +692,206 @@ static void regression_scale(checks *T)
     T->context = NULL;
 }
 
+
+/* ---- 3. the box LCP of a tridiagonal M --------------------------------------------------------- */
+
+/* The dense solve of the mode set s[] (s[i] in -1, 0, 1; rows with l = 0: free, w = 0) for the box
+ * problem (d, e, q, l); fix[i] (may be NULL): row i fixed at z = zf[i]. z and w = M z + q out. */
+static int box_dense(int n, const double *d, const double *e, const double *q, const double *l, const int *s,
+                     const int *fix, const double *zf, double *z, double *w)
+{
+    double A[LCP_MAX_N * LCP_MAX_N] = {0}, b[LCP_MAX_N];
+    for (int i = 0; i < n; i++) {
+        if ((fix && fix[i]) || (s[i] == 0 && l[i] > 0.0)) {
+            A[i * n + i] = 1.0;
+            b[i] = (fix && fix[i]) ? zf[i] : 0.0;
+            continue;
+        }
+        A[i * n + i] = d[i];
+        if (i > 0) A[i * n + i - 1] = e[i - 1];
+        if (i + 1 < n) A[i * n + i + 1] = e[i];
+        b[i] = -q[i] - ((l[i] > 0.0) ? s[i] * l[i] : 0.0);
+    }
+    if (gauss(n, A, b, z) == 0.0) return 0;
+    for (int i = 0; i < n; i++) {
+        w[i] = q[i] + d[i] * z[i];
+        if (i > 0) w[i] += e[i - 1] * z[i - 1];
+        if (i + 1 < n) w[i] += e[i] * z[i + 1];
+    }
+    return 1;
+}
+
+/* The solution by enumeration of the 3^n mode sets: the one z of every feasible set (M positive
+ * definite: unique); returns the number of feasible sets, *spread their largest disagreement. */
+static int box_enumerate(int n, const double *d, const double *e, const double *q, const double *l, double *z_out,
+                         double *spread)
+{
+    int s[LCP_MAX_N], found = 0;
+    double sc = 0.0;
+    for (int i = 0; i < n; i++) sc = fmax(sc, (fabs(q[i]) + l[i]) / d[i]);
+    *spread = 0.0;
+    int total = 1;
+    for (int i = 0; i < n; i++) total *= 3;
+    for (int code = 0; code < total; code++) {
+        int c = code, skip = 0;
+        for (int i = 0; i < n; i++) {
+            s[i] = c % 3 - 1;
+            c /= 3;
+            if (!(l[i] > 0.0) && s[i] != 0) skip = 1; /* a frictionless row is free: one of its 3 */
+        }
+        if (skip) continue;
+        double z[LCP_MAX_N], w[LCP_MAX_N];
+        if (!box_dense(n, d, e, q, l, s, NULL, NULL, z, w)) continue;
+        int ok = 1;
+        for (int i = 0; i < n && ok; i++) {
+            if (!(l[i] > 0.0)) continue;
+            const double tol = 1e-12 * (fabs(q[i]) + l[i] + d[i] * sc);
+            if (s[i] == 0) ok = fabs(w[i]) <= l[i] + tol;
+            else ok = s[i] * z[i] >= -1e-12 * sc;
+        }
+        if (!ok) continue;
+        if (found == 0)
+            for (int i = 0; i < n; i++) z_out[i] = z[i];
+        else
+            for (int i = 0; i < n; i++) *spread = fmax(*spread, fabs(z[i] - z_out[i]) / (sc + 1e-300));
+        found++;
+    }
+    return found;
+}
+
+/* The box conditions on an answer of lcp_box: w = M z + q (to rounding), |w| <= l, the sides
+ * exact (z > 0: w = -l, z < 0: w = l), held rows at z = 0 exactly, modes the signs of z. Returns
+ * the relative residual of w = M z + q. */
+static double box_verify(checks *T, int n, const double *d, const double *e, const double *q, const double *l,
+                         const int *mode, const double *z, const double *w, double tol, double sign_tol)
+{
+    double res = 0.0, zs = 0.0;
+    for (int i = 0; i < n; i++) zs = fmax(zs, fabs(z[i]));
+    for (int i = 0; i < n; i++) {
+        double r = q[i] + d[i] * z[i], a = fabs(q[i]) + fabs(d[i] * z[i]);
+        if (i > 0) { r += e[i - 1] * z[i - 1]; a += fabs(e[i - 1] * z[i - 1]); }
+        if (i + 1 < n) { r += e[i] * z[i + 1]; a += fabs(e[i] * z[i + 1]); }
+        res = fmax(res, fabs(w[i] - r) / (a + l[i] + 1e-300));
+        CHECK(isfinite(z[i]) && isfinite(w[i]));
+        CHECK(fabs(w[i]) <= l[i] * (1.0 + 1e-12) + tol * (fabs(q[i]) + l[i]));
+        if (l[i] > 0.0) {
+            /* the side: held at z = 0 exactly, or w at the limit against the motion (its sign
+             * exact where the pivoting's rule is exact, sign_tol of the scale after the fallback) */
+            if (mode[i] == 0) CHECK_SAME(0.0, z[i]);
+            else CHECK_SAME(-mode[i] * l[i], w[i]);
+            CHECK(mode[i] * z[i] >= -sign_tol * zs);
+            if (sign_tol == 0.0 && z[i] > 0.0) CHECK_SAME(-l[i], w[i]);
+            if (sign_tol == 0.0 && z[i] < 0.0) CHECK_SAME(l[i], w[i]);
+        } else {
+            CHECK_SAME(0.0, w[i]);
+            CHECK_INT((z[i] > 0.0) - (z[i] < 0.0), mode[i]);
+        }
+    }
+    CHECK_RANGE(0.0, tol, res);
+    return res;
+}
+
+static void test_box(checks *T)
+{
+    rng r = {0x9E3779B97F4A7C15ull};
+    long cases = 0, fallback = 0, multi = 0;
+    int max_piv = 0;
+    double worst_enum = 0.0, worst_res = 0.0;
+    for (int trial = 0; trial < 4000; trial++) {
+        const int n = 1 + trial % 6;
+        const int kind = (trial / 6) % 5; /* 0 random, 1 ties on the limits, 2 frictionless rows, 3 stiff, 4 tiny l */
+        double d[6], e[6], q[6], l[6], z[6], w[6], work[12], z_enum[6], spread;
+        int mode[6];
+        for (int i = 0; i < n; i++) {
+            l[i] = rng_range(&r, 0.0, 2.0);
+            q[i] = rng_range(&r, -3.0, 3.0);
+            mode[i] = rng_int(&r, 3) - 1;
+        }
+        if (kind == 3) { /* masses on stiff springs: M = a + K, K = k tridiag(-1, 2, -1), far from diagonal dominance */
+            const double k = rng_decades(&r, 3, 7);
+            for (int i = 0; i < n; i++) d[i] = rng_decades(&r, -1, 1) + 2.0 * k;
+            for (int i = 0; i + 1 < n; i++) e[i] = -k;
+        } else {
+            for (int i = 0; i < n; i++) d[i] = rng_decades(&r, -1, 2);
+            for (int i = 0; i + 1 < n; i++) e[i] = -rng_range(&r, 0.0, 0.45) * fmin(d[i], d[i + 1]);
+        }
+        if (n > 0) e[n - 1] = NAN; /* not part of the problem: must not be read */
+        if (kind == 1) for (int i = 0; i < n; i += 2) q[i] = (i % 4 ? -1.0 : 1.0) * l[i];
+        if (kind == 2) for (int i = 0; i < n; i += 2) l[i] = 0.0;
+        if (kind == 4) for (int i = 0; i < n; i++) l[i] *= 1e-9;
+        const int found = box_enumerate(n, d, e, q, l, z_enum, &spread);
+        check_context(T, "box LCP trial %d, n = %d, kind %d", trial, n, kind);
+        CHECK(found >= 1);
+        CHECK_RANGE(0.0, 1e-9, spread);
+        if (found > 1) multi++;
+        int piv = -1;
+        CHECK_INT(LCP_OK, lcp_box((size_t)n, d, e, q, l, mode, z, w, work, &piv));
+        CHECK(piv >= 0);
+        if (piv >= 8 * n + 32) fallback++;
+
+        if (piv > max_piv) max_piv = piv;
+        const int fell_back = piv >= 8 * n + 32; /* (the polish accepts 1e-10 of the scale) */
+        worst_res = fmax(worst_res, box_verify(T, n, d, e, q, l, mode, z, w, (kind == 3) ? 1e-9 : 1e-12,
+                                               fell_back ? 1e-9 : 0.0));
+        double sc = 1e-300;
+        for (int i = 0; i < n; i++) sc = fmax(sc, fabs(z_enum[i]) + (fabs(q[i]) + l[i]) / d[i]);
+        for (int i = 0; i < n; i++) {
+            worst_enum = fmax(worst_enum, fabs(z[i] - z_enum[i]) / sc);
+            CHECK_NEAR(z_enum[i], z[i], 1e-9 * sc);
+        }
+        /* from the solution's own modes: no pivot, the same answer */
+        int mode2[6];
+        double z2[6], w2[6];
+        for (int i = 0; i < n; i++) mode2[i] = mode[i];
+        int piv2 = -1;
+        CHECK_INT(LCP_OK, lcp_box((size_t)n, d, e, q, l, mode2, z2, w2, work, &piv2));
+        if (kind != 3) CHECK_INT(0, piv2);
+        for (int i = 0; i < n; i++) CHECK_NEAR(z[i], z2[i], 1e-9 * sc);
+        cases++;
+    }
+    /* the basis solve with fixed end rows (a cluster with its ghosts) against the dense solve */
+    double worst_basis = 0.0;
+    for (int trial = 0; trial < 2000; trial++) {
+        const int n = 3 + trial % 4;
+        double d[6], e[6], q[6], l[6], z[6], w[6], zr[6], wr[6], zf[6] = {0}, cp[6], dp[6];
+        int mode[6], fix[6] = {0};
+        for (int i = 0; i < n; i++) {
+            d[i] = rng_decades(&r, -1, 2);
+            l[i] = (rng_int(&r, 4) == 0) ? 0.0 : rng_range(&r, 0.0, 2.0);
+            q[i] = rng_range(&r, -3.0, 3.0);
+            mode[i] = rng_int(&r, 3) - 1;
+            w[i] = NAN;
+        }
+        for (int i = 0; i + 1 < n; i++) e[i] = -rng_range(&r, 0.0, 0.45) * fmin(d[i], d[i + 1]);
+        const int fl = rng_int(&r, 2), fr = rng_int(&r, 2);
+        fix[0] = fl;
+        fix[n - 1] = fr;
+        zf[0] = rng_range(&r, -1.0, 1.0);
+        zf[n - 1] = rng_range(&r, -1.0, 1.0);
+        check_context(T, "box basis trial %d, n = %d, fixed %d %d", trial, n, fl, fr);
+        lcp_box_basis(0, (size_t)n, fl, zf[0], fr, zf[n - 1], d, e, q, l, mode, z, w, cp, dp);
+        CHECK(box_dense(n, d, e, q, l, mode, fix, zf, zr, wr));
+        double sc = 1e-300;
+        for (int i = 0; i < n; i++) sc = fmax(sc, fabs(zr[i]) + (fabs(q[i]) + l[i]) / d[i]);
+        for (int i = 0; i < n; i++) {
+            worst_basis = fmax(worst_basis, fabs(z[i] - zr[i]) / sc);
+            CHECK_NEAR(zr[i], z[i], 1e-12 * sc);
+            if (fix[i]) { CHECK_SAME(zf[i], z[i]); CHECK(isnan(w[i])); continue; } /* fixed rows' w not set */
+            if (mode[i] == 0 && l[i] > 0.0) {
+                CHECK_SAME(0.0, z[i]);
+                CHECK_NEAR(wr[i], w[i], 1e-12 * (fabs(q[i]) + d[i] * sc));
+            } else {
+                CHECK_SAME((l[i] > 0.0) ? -mode[i] * l[i] : 0.0, w[i]);
+            }
+        }
+    }
+    check_context(T, "%s", "");
+    printf("box LCP: %ld problems n = 1..6 (random, ties, l = 0, stiff, tiny l) against the 3^n enumeration "
+           "(%ld with several feasible mode sets): largest |z - z_enum| %.2e (relative), residual %.2e, "
+           "pivots <= %d, %ld through the Gauss-Seidel fallback; basis solve with fixed rows vs dense %.2e\n",
+           cases, multi, worst_enum, worst_res, max_piv, fallback, worst_basis);
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}}, *T = &C;
@@ -700,6 +905,7 @@ int main(void)
     regression_tie_tolerance(T);
     regression_subnormal_pivot(T);
     regression_scale(T);
+    test_box(T);
     printf("friction LCP: %ld cases (%ld degenerate/extreme), max pivots %d, max relative residual %.2e, "
            "max error vs closed form %.2e (on the velocity scale (|p|+muN)/m_hat)\n",
            st.friction_cases, st.friction_degenerate, st.friction_pivots_max, st.friction_residual,

@@ -1,4 +1,4 @@
-/* Unit tests of the Bossak-Newmark stepper with the friction LCP (fmu_src/newmark.h), driven
+/* Unit tests of the Bossak-Newmark stepper with the friction LCP (fmu_src/models/oscillator/newmark.h), driven
  * directly (no FMI): dfo_model_init, dfo_start, dfo_advance to successive communication points.
  *
  * 1. time: communication points land exactly (or on the grid point they snap to, newmark.h), the

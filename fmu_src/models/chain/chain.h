@@ -78,7 +78,8 @@ typedef struct {
      * switch), switches, tridiagonal solves */
     long long steps, pivot_steps, switches, solves;
     /* excitation cache: cos and sin of omega (t0 + exc_n h) at the grid point exc_n (-1: empty), a
-     * pure function of exc_n (exact every 64 points, rotations in between; as the oscillator) */
+     * pure function of exc_n (exact every DFO_EXC_ANCHOR = 64 points, rotations in between: excitation.h,
+     * as the oscillator) */
     long long exc_n;
     double exc_c, exc_s;
 } chain_state;
@@ -138,16 +139,10 @@ double chain_energy(const chain_model *M, const chain_state *s);
 
 /* The box form of the chain's 2n LCP for a step of length h from state s (stuck blocks' limit
  * mu_b N, sliding ones' mu_k N), for tests: fills the tridiagonal M_hat (diag d[n], off-diagonal
- * e[n-1]), p_hat p[n] and the limits l[n]. */
+ * e[n-1]), q[n] = -p_hat and the limits l[n], the problem lcp_box (numerics/lcp.h) solves:
+ * F = M_hat V + q, V_i > 0 => F_i = -l_i, V_i < 0 => F_i = l_i, |F_i| <= l_i. */
 void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_state *s, double h,
-                        double *d, double *e, double *p, double *l);
-
-/* Solve the box LCP  d/e V = p + F, V_i > 0 => F_i = -l_i, V_i < 0 => F_i = l_i, |F_i| <= l_i
- * (the 2n LCP of method.md section 9 in V and F) by principal pivoting from the modes in mode[]
- * (in: guess, out: solution, 0 where V_i = 0). work: 2n doubles. Returns the number of pivots, or
- * -1 when the pivot budget ran out. l_i = 0 blocks are free (mode = sign V). */
-int chain_box_lcp(size_t n, const double *d, const double *e, const double *p, const double *l, int *mode,
-                  double *V, double *F, double *work);
+                        double *d, double *e, double *q, double *l);
 
 const char *chain_status_text(chain_status st);
 

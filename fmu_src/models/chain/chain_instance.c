@@ -7,7 +7,7 @@
  * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_instance.h"
-#include "oscillator.h" /* DFO_STEPS_PER_PERIOD, DFO_MIN_STEPS_PER_PERIOD */
+#include "bossak.h" /* DFO_STEPS_PER_PERIOD, DFO_MIN_STEPS_PER_PERIOD */
 
 #include <math.h>
 #include <string.h>

@@ -441,12 +441,13 @@ static double breakaway(const fr_ctx *C, dfo_state *s, double ta, int skip, int 
     if (!known || (skip && s->stick_tb <= ta)) {
         s->stick_C = C0;
         s->stick_Fb = C->L.Fb;
-        double tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
+        const dfo_harmonic P = dfo_model_excitation(C->M);
+        double tb = dfo_next_breakaway(&P, &C->L, C0, ta, &s->stick_dir);
         if (skip) {
             const double rate = C->b + fabs(C->M->p.omega);
             double d = 4.0 * DBL_EPSILON * fmax(fabs(ta), rate > 0.0 ? 1.0 / rate : 1.0);
             for (int i = 0; i < 200 && tb <= ta + d && isfinite(tb); i++, d *= 2.0)
-                tb = dfo_next_breakaway(C->M, &C->L, C0, ta + d, &s->stick_dir);
+                tb = dfo_next_breakaway(&P, &C->L, C0, ta + d, &s->stick_dir);
         }
         s->stick_tb = tb;
     }
@@ -456,7 +457,7 @@ static double breakaway(const fr_ctx *C, dfo_state *s, double ta, int skip, int 
 
 static double static_force(const fr_ctx *C, double t, double X)
 {
-    return dfo_static_force(C->M, &C->L, dfo_excitation(C->M, t), X);
+    return dfo_static_force(C->M->p.k, &C->L, dfo_excitation(C->M, t), X);
 }
 
 static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
@@ -519,7 +520,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
         s->V = 0.0;
         /* the static force at a stop from the excitation phase there (known from the search) */
         const double Fs = (r == SEARCH_STOP && ts < t_target && C->A > 0.0)
-                              ? dfo_static_force(C->M, &C->L, C->M->P_amp * v.cth, s->X)
+                              ? dfo_static_force(C->M->p.k, &C->L, C->M->P_amp * v.cth, s->X)
                               : static_force(C, ts, s->X);
         int next = dfo_rest_mode(&C->L, Fs);
         if (!(C->L.Fb > 0.0)) {

@@ -15,7 +15,6 @@
 #define MAX_PHASES_PER_STEP 64  /* switches one internal step may hold before it is an error */
 #define LCP_MAX_PIVOT_COUNT 16  /* a 2 x 2 problem needs at most 3 pivots */
 #define STIFF_STEP 10.0         /* rate_max h above which a step does not resolve the motion */
-#define EXC_ANCHOR 64           /* grid points between exact evaluations of the excitation phase */
 #define SNAP_MAX_REL_H 1e-5     /* snap tolerance (newmark.h): at most 1e-5 h, */
 #define SNAP_MIN_REL_H 1e-7     /* at least 1e-7 h, */
 #define SNAP_EPS_T 0x1p16       /* else 2^16 eps |t| */
@@ -89,39 +88,18 @@ static double excitation(const step_ctx *C, double t)
 }
 
 /* Cosine and sine of the excitation phase at the grid point n, from the cache of the state (see
- * dfo_state). One rotation when the cache holds the previous point, else an exact evaluation at
- * the anchor below n and the same rotations from there: the value depends on n only, never on the
- * history of the cache. */
-static void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *cos_out, double *sin_out)
+ * dfo_state; excitation.h's dfo_grid_phase): the value depends on n only. */
+static HOT_INLINE void phase_at(const dfo_model *M, const dfo_state *s, long long n, double *cos_out, double *sin_out)
 {
-    const double rot_c = M->rot_c, rot_s = M->rot_s;
-    double cos_th, sin_th;
-    long long i;
-    if (s->exc_n >= 0 && s->exc_n == n - 1 && n % EXC_ANCHOR != 0) {
-        cos_th = s->exc_c;
-        sin_th = s->exc_s;
-        i = n - 1;
-    } else {
-        i = n - n % EXC_ANCHOR;
-        const double th = M->p.omega * (s->t0 + (double)i * M->p.h) + M->p.phi;
-        dfo_sincos(th, &sin_th, &cos_th);
-    }
-    for (; i < n; i++) {
-        const double cos_next = cos_th * rot_c - sin_th * rot_s;
-        sin_th = sin_th * rot_c + cos_th * rot_s;
-        cos_th = cos_next;
-    }
-    *cos_out = cos_th;
-    *sin_out = sin_th;
+    dfo_grid_phase(M->p.omega, M->p.phi, s->t0, M->p.h, M->rot_c, M->rot_s, s->exc_n, s->exc_c, s->exc_s, n, cos_out,
+                   sin_out);
 }
 
 static double grid_excitation(const dfo_model *M, dfo_state *s)
 {
     phase_at(M, s, s->n, &s->exc_c, &s->exc_s);
     s->exc_n = s->n;
-    /* rotations keep c^2 + s^2 = 1 only to rounding: a cosine never exceeds 1 */
-    const double c = s->exc_c;
-    return M->p.P0 * (c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c);
+    return M->p.P0 * dfo_clamp1(s->exc_c);
 }
 
 /* Physical acceleration from the equation of motion in the current mode. */
@@ -264,7 +242,7 @@ static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_st
 /* The static force on the block at its current time and position. */
 static double static_force_now(const step_ctx *C, const dfo_state *s)
 {
-    return dfo_static_force(C->M, &C->L, excitation(C, s->t), s->X);
+    return dfo_static_force(C->M->p.k, &C->L, excitation(C, s->t), s->X);
 }
 
 /* Enter (or stay in) stick where the block is: V = A = 0 (A is then a physical acceleration, hA
@@ -291,7 +269,7 @@ static void start_slide(const step_ctx *C, dfo_state *s, int dir, double F_stati
     s->V = 0.0;
     s->hA = 0.0;
     s->mode = dir;
-    s->A = dfo_breakaway_accel(C->M, &C->L, dir, F_static);
+    s->A = dfo_breakaway_accel(C->M->p.m, &C->L, dir, F_static);
     s->F = -dir * C->L.muk_N;
 }
 
@@ -374,7 +352,7 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
         } else {
             /* the block stops in this step: stick or reverse, judged by the static force at the
              * predicted rest position */
-            const double F_static = dfo_static_force(M, &C->L, excitation(C, t_end), tr.x_pred);
+            const double F_static = dfo_static_force(M->p.k, &C->L, excitation(C, t_end), tr.x_pred);
             const int dir_new = dfo_sign(F_static);
             const double V_new = (tr.p_hat - dir_new * C->L.muk_N) * tr.co->inv_m_hat;
             if (fabs(F_static) <= C->L.Fb || dir_new * V_new <= 0.0) {
@@ -403,7 +381,8 @@ static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double 
         const double C0 = C->L.F_ext - C->M->p.k * s->X;
         s->stick_C = C0;
         s->stick_Fb = C->L.Fb;
-        s->stick_tb = dfo_next_breakaway(C->M, &C->L, C0, ta, &s->stick_dir);
+        const dfo_harmonic P = dfo_model_excitation(C->M);
+        s->stick_tb = dfo_next_breakaway(&P, &C->L, C0, ta, &s->stick_dir);
     }
     *dir = s->stick_dir;
     const double t = (s->stick_tb > ta) ? s->stick_tb : ta;
@@ -626,14 +605,7 @@ double dfo_snap_tolerance(const dfo_model *M, double t)
 
 double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target)
 {
-    const double h = M->p.h;
-    const double r = (t_target - s->t0) / h;  /* t_target in grid steps from t0 */
-    if (!(r > -0.5 && r < 0x1p52)) return t_target;  /* before t0, beyond an exact count, or NaN */
-    const long long m = (long long)floor(r + 0.5);     /* the nearest grid point */
-    if (m < s->n) return t_target;
-    const double grid = s->t0 + (double)m * h;         /* as the stepping loop computes it */
-    if (grid >= s->t && fabs(t_target - grid) <= dfo_snap_tolerance(M, t_target)) return grid;
-    return t_target;
+    return dfo_grid_snap(s->t0, M->p.h, s->n, s->t, t_target, dfo_snap_tolerance(M, t_target));
 }
 
 /* |x| <= DBL_MAX is false for infinities and NaN; four independent tests, one branch */
@@ -731,10 +703,7 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
 static double state_excitation(const dfo_model *M, const dfo_state *s)
 {
     if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_excitation(M, s->t); /* its phase, exact for any t, phi */
-    if (s->exc_n >= 0 && s->exc_n == s->n && s->t == s->t0 + (double)s->n * M->p.h) {
-        const double c = s->exc_c;
-        return M->p.P0 * (c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c);
-    }
+    if (s->exc_n >= 0 && s->exc_n == s->n && s->t == s->t0 + (double)s->n * M->p.h) return M->p.P0 * dfo_clamp1(s->exc_c);
     return dfo_excitation(M, s->t);
 }
 
@@ -744,7 +713,7 @@ double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_st
     dfo_loads_init(&L, M, in);
     if (!(L.Fb > 0.0)) return 0.0;
     if (s->mode != 0) return -s->mode * L.muk_N;
-    return dfo_stick_force(&L, dfo_static_force(M, &L, state_excitation(M, s), s->X));
+    return dfo_stick_force(&L, dfo_static_force(M->p.k, &L, state_excitation(M, s), s->X));
 }
 
 void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)

@@ -67,6 +67,11 @@ double dfo_external_force(const dfo_model *M, const dfo_inputs *u)
     return u->F_ext_set ? u->F_ext : 0.0;
 }
 
+void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in)
+{
+    dfo_loads_set(L, dfo_external_force(M, in), dfo_normal_force(M, in), M->mu_k, M->mu_b);
+}
+
 int dfo_effects(const dfo_model *M, const dfo_inputs *u)
 {
     int e = 0;

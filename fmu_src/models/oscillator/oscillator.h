@@ -8,13 +8,12 @@
 #ifndef DFO_OSCILLATOR_H
 #define DFO_OSCILLATOR_H
 
+#include "bossak.h"
+#include "excitation.h"
+#include "friction.h"
+
 #include <float.h>
 #include <math.h>
-
-#define DFO_PI 3.14159265358979323846
-
-typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3,
-               DFO_SCHEME_EXACT = 4 } dfo_scheme;
 
 /* Everything a user sets before a run. Each field is named as its variable in modelDescription.xml
  * (Real: double; Integer, Enumeration, Boolean: int): the generated variable table reaches it by
@@ -63,29 +62,14 @@ typedef struct {
 /* Checks that involve several parameters; NULL when consistent, else a sentence. */
 const char *dfo_check_params(const dfo_params *p);
 
-/* The default step: h = 0 means "derived from the dynamics". The shortest time scale of the model is
- * the shortest of the natural period 2 pi sqrt(m/k), the excitation period 2 pi/|omega| and the
- * damping time 2 pi m/c (the rate c/m taken like an angular frequency); the derived step is 1/1000
- * of it, so a default run resolves every period at least as finely as a run at T/1000. Without any
- * of them (k = omega = c = 0) the motion between events has constant acceleration, which every
- * scheme integrates exactly, and the step is DFO_STEP_FALLBACK. */
-#define DFO_STEPS_PER_PERIOD 1000.0
-#define DFO_STEP_FALLBACK 1e-3
-/* Fewer internal steps than this per shortest period: a user-set h does not resolve the dynamics. */
-#define DFO_MIN_STEPS_PER_PERIOD 20.0
+/* The default step: h = 0 means "derived from the dynamics" (bossak.h's dfo_step_rule): the
+ * shortest time scale of the model is the shortest of the natural period 2 pi sqrt(m/k), the
+ * excitation period 2 pi/|omega| and the damping time 2 pi m/c (the rate c/m taken like an angular
+ * frequency). */
 /* The shortest period (s) of the model as above; +inf when it has none. */
 double dfo_shortest_period(const dfo_params *p);
 /* The internal step a run uses: p->h when > 0, else derived (always a normal number > 0). */
 double dfo_step_size(const dfo_params *p);
-/* The rule of it for any model: h when > 0, else 1/DFO_STEPS_PER_PERIOD of the shortest period T
- * (+inf: none, DFO_STEP_FALLBACK), always a normal number > 0. (Also the chain's.) */
-static inline double dfo_step_rule(double h, double T)
-{
-    if (h > 0.0) return h;
-    const double d = isfinite(T) ? T / DFO_STEPS_PER_PERIOD : DFO_STEP_FALLBACK;
-    return (d >= DBL_MIN && isfinite(d)) ? d : DBL_MIN;
-}
-
 /* Derive the constants (M->p.h is the step used). The parameters must have passed the checks above. */
 void dfo_model_init(dfo_model *M, const dfo_params *p);
 
@@ -97,6 +81,17 @@ double dfo_excitation_rate(const dfo_model *M, double t);
 double dfo_normal_force(const dfo_model *M, const dfo_inputs *u);
 /* External force: F_ext when it has been set, else 0. */
 double dfo_external_force(const dfo_model *M, const dfo_inputs *u);
+
+/* The excitation as the friction rules read it (friction.h: its P_amp, P_phase as amp, phase). */
+static inline dfo_harmonic dfo_model_excitation(const dfo_model *M)
+{
+    dfo_harmonic H;
+    dfo_harmonic_init(&H, M->p.P0, M->p.omega, M->p.phi);
+    return H;
+}
+
+/* The loads of the friction rules (friction.h) under these inputs. */
+void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
 
 /* The effects bitmask for these parameters and inputs. */
 int dfo_effects(const dfo_model *M, const dfo_inputs *u);
