@@ -9,22 +9,13 @@
  *    an ordinary run reports, and the run continues from there to the requested end;
  * 3. FMU states through the core: copy, serialise, deserialise, continue bit for bit. */
 #include "instance.h"
+#include "../check.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static long checks, failures;
-#define EXPECT(cond)                                                              \
-    do {                                                                          \
-        checks++;                                                                 \
-        if (!(cond)) {                                                            \
-            failures++;                                                           \
-            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond);    \
-        }                                                                         \
-    } while (0)
 
 typedef struct {
     int n_events, n_errors;
@@ -61,7 +52,7 @@ static void h_log(void *ctx, dfo_inst_status status, const char *category, const
     }
 }
 
-static void start(dfo_instance *in, host_log *L)
+static void start(checks *T, dfo_instance *in, host_log *L)
 {
     const dfo_host host = {L, h_alloc, h_free, h_log};
     memset(L, 0, sizeof *L);
@@ -75,7 +66,7 @@ static void start(dfo_instance *in, host_log *L)
     EXPECT(dfo_inst_exit_init(in, "exit") == DFO_INST_OK);
 }
 
-static void test_table_and_time(void)
+static void test_table_and_time(checks *T)
 {
     dfo_instance in;
     host_log L;
@@ -102,7 +93,7 @@ static void test_table_and_time(void)
     const double bad = -1.0;
     EXPECT(dfo_inst_set_real(&in, "set", &vm, 1, &bad) == DFO_INST_ERROR);
     EXPECT(strstr(L.last, "invalid value -1 for variable m (value reference 1); valid range: > 0") != NULL);
-    start(&in, &L);
+    start(T, &in, &L);
     double t = 0.0, reached = -1.0;
     for (int k = 0; k < 50; k++) {
         const double dt = 0.0123 + 1e-4 * k;
@@ -120,12 +111,12 @@ static void test_table_and_time(void)
     EXPECT(dfo_inst_time(&in) == t + 0.1);
 }
 
-static void test_early_return(void)
+static void test_early_return(checks *T)
 {
     dfo_instance a, b;
     host_log La, Lb;
-    start(&a, &La);
-    start(&b, &Lb);
+    start(T, &a, &La);
+    start(T, &b, &Lb);
     /* ordinary: one step to 5 s, every switch reported */
     EXPECT(dfo_inst_do_step(&a, "doStep", 0.0, 5.0, 0, NULL) == DFO_INST_OK);
     EXPECT(La.n_events > 2);
@@ -145,11 +136,11 @@ static void test_early_return(void)
     EXPECT(fabs(b.v.s.X - a.v.s.X) <= 1e-12 * (fabs(a.v.s.X) + 1e-3));
 }
 
-static void test_states(void)
+static void test_states(checks *T)
 {
     dfo_instance a;
     host_log L;
-    start(&a, &L);
+    start(T, &a, &L);
     EXPECT(dfo_inst_do_step(&a, "doStep", 0.0, 1.0, 0, NULL) == DFO_INST_OK);
     void *st = NULL, *st2 = NULL;
     EXPECT(dfo_inst_get_state(&a, "get", &st) == DFO_INST_OK && st != NULL);
@@ -182,9 +173,9 @@ static void test_states(void)
 
 int main(void)
 {
-    test_table_and_time();
-    test_early_return();
-    test_states();
-    printf("test_instance_core: %ld checks, %ld failed\n", checks, failures);
-    return failures ? 1 : 0;
+    checks t = {0, 0, NULL, {0}}, *T = &t;
+    test_table_and_time(T);
+    test_early_return(T);
+    test_states(T);
+    return checks_done(T, "test_instance_core");
 }
