@@ -1,17 +1,18 @@
-"""The command line (``dryfriction``) and the declared requirements of the package."""
+"""The command line's options and small commands: the global options (--fmu, --strict) before or
+after the subcommand, --fmu for every subcommand, the console script, --version, and `lyapunov`
+(its JSON; its one-line errors)."""
 
 from __future__ import annotations
 
 import json
-import re
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import pytest
 
 from dryfriction.cli import main
+
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -43,19 +44,6 @@ def test_run_uses_the_given_fmu_after_the_subcommand(fmu_path: Path, capsys: pyt
     assert res["x_max"] > res["x_min"] and "friction" in res["effects"]
 
 
-@pytest.mark.parametrize("argv, words", [
-    (["--fmu", "/nonexistent.fmu", "study", "list"], "--fmu: no such file"),
-    (["study", "fig99"], "unknown study"),
-    (["study", "fig3", "--set", "numerics.alpha=0.5"], "numerics.alpha"),
-    (["run", "--scheme", "fast"], "invalid choice"),
-    (["bogus"], "invalid choice"),
-])
-def test_bad_arguments_are_one_line_and_exit_2(argv: list[str], words: str, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert words in err and len(err.strip().splitlines()) == 1, err
-
-
 @pytest.mark.min_versions
 def test_console_script_study_list(fmu_path: Path) -> None:
     exe = Path(sys.executable).with_name("dryfriction")
@@ -67,27 +55,30 @@ def test_console_script_study_list(fmu_path: Path) -> None:
 # --------------------------------------------------------------------------- declared requirements
 
 
-def _lower_bound(spec: str) -> tuple[int, ...]:
-    m = re.search(r">=\s*([0-9.]+)", spec)
-    assert m, spec
-    return tuple(int(x) for x in m.group(1).split("."))
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    import dryfriction
+
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out.strip() == f"dryfriction {dryfriction.__version__}"
 
 
-def _sources() -> str:
-    files = [*ROOT.joinpath("src").rglob("*.py"), *ROOT.joinpath("tests").glob("*.py"),
-             *ROOT.joinpath("bench").glob("*.py"), *ROOT.joinpath("scripts").glob("*.py")]
-    return "\n".join(f.read_text() for f in files if f.name != Path(__file__).name)
-
-
-def test_declared_minimums_cover_what_the_code_uses() -> None:
-    """requires-python and the numpy minimum allow nothing the code cannot run on: tomllib needs
-    Python 3.11, np.trapezoid NumPy 2.0 (the full check: scripts/check_min_versions.sh)."""
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    text = _sources()
-    if re.search(r"^\s*(import tomllib|from tomllib)", text, re.M):
-        assert _lower_bound(project["requires-python"]) >= (3, 11)
-    numpy = next(d for d in project["dependencies"] if re.match(r"numpy\b", d))
-    if "np.trapezoid(" in text:
-        assert _lower_bound(numpy) >= (2, 0)
-    deps = {re.match(r"[A-Za-z0-9_.-]+", d).group(0).lower() for d in project["dependencies"]}
-    assert "tomli-w" in deps  # the config writer
+def test_lyapunov_cli_json_and_errors(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", "--chi", "1.0", "--z0", "0.3",
+                     "--dz0", "-0.2", "--periods", "50", "--transient", "20", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["periods"] == 50 and d["scheme"] == "exact" and d["stroboscopic_period"] == 1
+    assert d["map"] == "FMU" and d["steps_per_period"] is None             # h has no effect on exact
+    assert d["lyapunov_per_period"] < -1.0
+    assert d["lyapunov_per_second"] == pytest.approx(d["lyapunov_per_period"] / d["period_s"])
+    assert main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", "--chi", "1.0", "--z0", "0.3",
+                     "--dz0", "-0.2", "--periods", "50", "--transient", "20", "--scheme", "located", "--json"]) == 0
+    dl = json.loads(capsys.readouterr().out)
+    assert dl["scheme"] == "located" and dl["steps_per_period"] == 1000
+    assert dl["lyapunov_per_period"] == pytest.approx(d["lyapunov_per_period"], abs=1e-3)
+    for bad in (["--chi", "-1"], ["--chi", "0.5", "--d0", "0.5"], ["--chi", "0.5", "--scheme", "euler"],
+                ["--chi", "nan"], ["--chi", "0.5", "--periods", "40", "--renorm", "50"]):
+        assert main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", *bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("dryfriction: error:") and "\n" not in err

@@ -1,149 +1,40 @@
-"""Misuse of the FMI 2.0 API, through fmpy's FMU2Slave (and its raw ctypes functions where fmpy
-hides the call): every case returns fmi2Error (or fmi2Discard) with a logged sentence that names the
-variable / value / range, and the process and the instance keep working.
+"""The FMI 2.0 oscillator and the rules of the standard. Static: fmpy's validation and the FMU
+Manipulation Toolbox find it compliant, the archive's layout, only fmi2 functions exported, a wrong
+GUID refused, the log categories honoured. Misuse, through fmpy's FMU2Slave (and its raw ctypes
+functions where fmpy hides the call): every case returns fmi2Error (or fmi2Discard) with a logged
+sentence that names the variable / value / range, and the process and the instance keep working;
+steps that must not hang.
 
-Also: forged serialised states (checksum-valid, impossible contents) and steps that must not hang.
 Checked once, in the C API tests (tests/fmi_c) and not again here: every invalid parameter value,
-NULL instances and arrays, instantiate rejections, overflow, FMU-state round trips, truncated or corrupted serialised states, foreign state pointers, 32
-instances in parallel threads, 10^4 instantiate/free cycles. The package's own driver
-(OscillatorFMU: errors, states, threads) is tested in test_fmi_layer.py.
+NULL instances and arrays, instantiate rejections, overflow, 32 instances in parallel threads, 10^4
+instantiate/free cycles. FMU states (forged serialised states among them): test_fmu_state.py. The
+package's own driver (OscillatorFMU): test_fmi_layer.py.
 """
 
 from __future__ import annotations
 
-import ctypes
 import math
 import shutil
-import struct
 import subprocess
 import sys
-import tempfile
 import textwrap
-from collections.abc import Iterator
-import threading
-from ctypes import byref, c_int, c_size_t, c_void_p
+import zipfile
+from ctypes import c_int, c_void_p
 from pathlib import Path
 
-import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi1 import FMICallException, calloc, free
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-    fmi2FMUstate,
-)
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
 
-from dryfriction.fmu import default_fmu_path
+from dryfriction import fmi2
+from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.params import Oscillator
 
-fmi2OK, fmi2Warning, fmi2Discard, fmi2Error = 0, 1, 2, 3
-fmi2LastSuccessfulTime = 2
+from fmi2_helpers import Inst, fmi2Error, fmi2LastSuccessfulTime
 
 
 # --------------------------------------------------------------------------- plumbing
-
-
-@pytest.fixture(scope="module")
-def unzipped() -> Iterator[tuple[str, object]]:
-    path = default_fmu_path()
-    assert path.is_file(), f"FMU not found: {path} (build it, or set DFO_FMU)"
-    md = read_model_description(str(path))
-    d = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="dfo-misuse-"))
-    yield d, md
-    shutil.rmtree(d, ignore_errors=True)
-
-
-class Counting:
-    """fmi2CallbackFunctions with a logger that keeps the messages and allocate/free counters."""
-
-    def __init__(self) -> None:
-        self.messages: list[tuple[int, str, str]] = []
-        self.allocs = 0
-        self.frees = 0
-        self.struct = fmi2CallbackFunctions()
-        self.struct.logger = fmi2CallbackLoggerTYPE(self._log)
-        self.struct.allocateMemory = fmi2CallbackAllocateMemoryTYPE(self._alloc)
-        self.struct.freeMemory = fmi2CallbackFreeMemoryTYPE(self._free)
-
-    def _log(self, env: object, name: bytes, status: int, category: bytes, message: bytes) -> None:
-        self.messages.append((status, category.decode(), message.decode(errors="replace")))
-
-    def _alloc(self, n: int, size: int) -> int:
-        self.allocs += 1
-        return calloc(n, size)
-
-    def _free(self, ptr: object) -> None:
-        if ptr:
-            self.frees += 1
-        free(ptr)
-
-    def last_error(self) -> str:
-        errs = [m for s, _, m in self.messages if s >= fmi2Error]
-        return errs[-1] if errs else ""
-
-
-_LOAD_LOCK = threading.Lock()
-
-
-class Inst:
-    """One FMU2Slave instance with counting callbacks; vr(name) by variable name."""
-
-    def __init__(self, unzipped: tuple[str, object], name: str = "misuse", logging: bool = False) -> None:
-        d, md = unzipped
-        self.md = md
-        self.vars = {v.name: v for v in md.modelVariables}
-        self.cb = Counting()
-        # fmpy's loader changes the process's working directory while it loads the library: not
-        # thread-safe, so loading is serialised; instantiating and stepping run in parallel
-        with _LOAD_LOCK:
-            self.s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
-                               instanceName=name)
-        self.s.instantiate(callbacks=self.cb.struct, loggingOn=logging)
-
-    def vr(self, name: str) -> int:
-        return self.vars[name].valueReference
-
-    def init(self, h: float = 1e-3, **reals: float) -> None:
-        s = self.s
-        s.setupExperiment(startTime=0.0)
-        s.setReal([self.vr("h")], [h])
-        if reals:
-            s.setReal([self.vr(n) for n in reals], list(reals.values()))
-        s.enterInitializationMode()
-        s.exitInitializationMode()
-
-    def expect_error(self, fn: object, *args: object, contains: tuple[str, ...] = ()) -> str:
-        """fn(*args) must fail (fmi2Error/Discard) and log a sentence containing every string."""
-        n = len(self.cb.messages)
-        with pytest.raises(FMICallException) as ei:
-            fn(*args)
-        assert ei.value.status in (fmi2Discard, fmi2Error)
-        msgs = [m for s, _, m in self.cb.messages[n:] if s >= fmi2Discard]
-        assert msgs, f"{getattr(fn, '__name__', fn)} failed without a logged sentence"
-        msg = msgs[-1]
-        for part in contains:
-            assert part in msg, f"{part!r} not in {msg!r}"
-        assert msg.endswith("."), f"not a sentence: {msg!r}"
-        return msg
-
-    def raw(self, fname: str, *args: object) -> int:
-        """Call an fmi2 function of the library directly (no fmpy status check)."""
-        f = getattr(self.s.dll, fname)
-        return f(*args)
-
-    def free(self) -> None:
-        self.s.freeInstance()
-
-
-@pytest.fixture
-def inst(unzipped: tuple[str, object]) -> Iterator[Inst]:
-    i = Inst(unzipped)
-    yield i
-    i.free()
-    assert i.cb.allocs == i.cb.frees, f"{i.cb.allocs} allocations, {i.cb.frees} frees"
 
 
 def still_usable(i: Inst) -> None:
@@ -299,109 +190,6 @@ def test_subnormal_mass_is_refused_or_finite(inst: Inst) -> None:
 # --------------------------------------------------------------------------- FMU states
 
 
-def _run_outputs(i: Inst, t0: float, n: int, dt: float) -> np.ndarray:
-    vrs = [i.vr(v) for v in ("x", "v", "a", "F_friction", "E_friction", "stick_fraction")]
-    out = []
-    for j in range(n):
-        i.s.doStep(t0 + j * dt, dt)
-        out.append(i.s.getReal(vrs) + i.s.getInteger([i.vr("mode"), i.vr("transitions")]))
-    return np.array(out)
-
-
-def _setup_observed(i: Inst) -> None:
-    s = i.s
-    s.setupExperiment(startTime=0.0)
-    s.setReal([i.vr("h"), i.vr("x0")], [7e-4, 0.004])
-    s.setBoolean([i.vr("observe")], [True])
-    s.enterInitializationMode()
-    s.exitInitializationMode()
-
-
-def _serialised(i: Inst) -> bytes:
-    _setup_observed(i)
-    _run_outputs(i, 0.0, 10, 0.01)
-    st_ = i.s.getFMUstate()
-    data = i.s.serializeFMUstate(st_)
-    i.s.freeFMUstate(st_)
-    return data
-
-
-def _deserialise_raw(i: Inst, data: bytes) -> tuple[int, c_void_p]:
-    state = fmi2FMUstate()
-    buf = ctypes.create_string_buffer(data, len(data))
-    rc = i.raw("fmi2DeSerializeFMUstate", i.s.component, buf, c_size_t(len(data)), byref(state))
-    return rc, state
-
-
-def _fnv1a(b: bytes) -> int:
-    h = 1469598103934665603
-    for x in b:
-        h = ((h ^ x) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-    return h
-
-
-def _forge(data: bytes, offset: int, value: bytes) -> bytes:
-    """Replace bytes at offset (of the serialised buffer) and fix the checksum (header bytes 16..24)."""
-    b = bytearray(data)
-    b[offset:offset + len(value)] = value
-    b[16:24] = struct.pack("<Q", _fnv1a(bytes(b[24:])))
-    return bytes(b)
-
-
-HEADER = 24  # magic[8], version, size (uint32), checksum (uint64)
-
-
-@pytest.mark.parametrize("field,index,value", [("m", 0, -1.0), ("k", 1, math.nan), ("h", 11, 0.0),
-                                                ("alpha", 12, 0.5)])
-def test_forged_state_with_bad_parameter_rejected(inst: Inst, field: str, index: int, value: float) -> None:
-    """A state with a valid checksum but an impossible parameter (the parameters are the first
-    doubles of the payload) is rejected with a sentence."""
-    data = _serialised(inst)
-    assert struct.unpack_from("<d", data, HEADER + 11 * 8)[0] == 7e-4  # layout check: h
-    rc, st_ = _deserialise_raw(inst, _forge(data, HEADER + 8 * index, struct.pack("<d", value)))
-    assert rc == fmi2Error and not st_
-    assert "rejected" in inst.cb.last_error()
-
-
-FORGED_DERIVED_H = textwrap.dedent("""
-    import struct, sys
-    sys.path.insert(0, {testdir!r})
-    import test_fmi_misuse as t
-    from fmpy import extract, read_model_description
-    import tempfile
-    path = str(t.default_fmu_path())
-    md = read_model_description(path)
-    d = extract(path, unzipdir=tempfile.mkdtemp())
-    i = t.Inst((d, md))
-    data = t._serialised(i)
-    hb = struct.pack("<d", 7e-4)
-    first = data.find(hb)
-    second = data.find(hb, first + 1)   # the model's copy of the parameters holds h again
-    assert first == t.HEADER + 88 and second > first, (first, second)
-    rc, st = t._deserialise_raw(i, t._forge(data, second, struct.pack("<d", {value!r})))
-    if rc == 0:
-        i.s.setFMUstate(st)
-        try:
-            i.s.doStep(0.1, 0.1)
-        except Exception:
-            pass
-    print("returned", rc)
-""")
-
-
-@pytest.mark.parametrize("value", [0.0, -1.0])
-def test_forged_state_with_inconsistent_derived_step_does_not_hang(value: float) -> None:
-    """A checksum-valid state whose derived model copy holds h = 0 (or < 0) while the parameter
-    h is valid: deserialisation must reject it or doStep must return; it must not hang (run in a
-    child process with a 10 s limit)."""
-    code = FORGED_DERIVED_H.format(testdir=str(Path(__file__).parent), value=value)
-    try:
-        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=10)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"fmi2DoStep hung after fmi2DeSerializeFMUstate accepted a state with the derived h = {value}")
-    assert r.returncode == 0 and "returned" in r.stdout, r.stderr
-
-
 def test_tiny_internal_step_does_not_hang() -> None:
     """h = 1e-300 is inside the declared range (> 0); a doStep of 1 ms must then come back (with
     an error naming h, or done), not spin for 10^297 internal steps (child process, 10 s limit)."""
@@ -423,3 +211,70 @@ def test_tiny_internal_step_does_not_hang() -> None:
     except subprocess.TimeoutExpired:
         pytest.fail("fmi2DoStep(0, 1e-3) with h = 1e-300 did not return within 10 s")
     assert "returned" in r.stdout, r.stderr
+
+
+@pytest.mark.min_versions
+def test_fmpy_validate_finds_no_problem(fmu_path: Path) -> None:
+    assert validate_fmu(str(fmu_path)) == []
+
+
+@pytest.mark.min_versions
+def test_fmutool_check_reports_compliant(fmu_path: Path) -> None:
+    exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
+    r = subprocess.run([exe, "-input", str(fmu_path), "-check"], capture_output=True, text=True, timeout=120)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0, out
+    assert "compliant with FMI-2.0" in out, out
+    assert "No semantic error" in out, out
+    assert "ERROR" not in out, out
+
+
+def test_archive_layout(fmu_path: Path) -> None:
+    names = set(zipfile.ZipFile(fmu_path).namelist())
+    assert "modelDescription.xml" in names
+    assert "binaries/linux64/DryFrictionOscillator.so" in names
+    md = read_model_description(str(fmu_path))
+    sources = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
+    assert sources
+    for src in sources:
+        assert f"sources/{src}" in names
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert md.coSimulation.canHandleVariableCommunicationStepSize
+
+
+def test_only_fmi2_functions_are_exported(fmu_path: Path, tmp_path: Path) -> None:
+    with zipfile.ZipFile(fmu_path) as z:
+        so = tmp_path / "dfo.so"
+        so.write_bytes(z.read("binaries/linux64/DryFrictionOscillator.so"))
+    out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
+    symbols = {line.split()[-1] for line in out.splitlines() if line.split()[1:2] == ["T"]}
+    assert symbols, out
+    assert all(s.startswith("fmi2") for s in symbols), sorted(s for s in symbols if not s.startswith("fmi2"))
+    for required in ("fmi2Instantiate", "fmi2DoStep", "fmi2GetFMUstate", "fmi2DeSerializeFMUstate",
+                     "fmi2SetTime", "fmi2GetDerivatives", "fmi2Reset"):
+        assert required in symbols
+
+
+def test_wrong_guid_is_refused(fmu: OscillatorFMU) -> None:
+    with pytest.raises(FMUError, match="does not match the FMU's GUID") as err:
+        fmi2.Instance(fmu.unzip_dir, "{00000000-0000-0000-0000-000000000000}", fmu.md.model_identifier, "wrong-guid")
+    assert err.value.function == "fmi2Instantiate"
+
+
+def test_log_categories_are_honoured(fmu_path: Path) -> None:
+    """logEvents reports every stick/slip switch when on, nothing when off."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
+    for on in (True, False):
+        with OscillatorFMU(fmu_path, logging=on) as f:
+            f.trajectory(p, [0.0, 2 * p.period], Settings(h=p.period / 1000))
+            events = [m for s, c, m in f.messages if c == "logEvents" and "->" in m]
+            calls = [m for s, c, m in f.messages if c == "logAll"]
+            if on:
+                assert len(events) >= 4 and any("stick -> " in m for m in events), events
+                assert "fmi2DoStep" in calls
+            else:
+                assert events == [] and calls == []
+    with OscillatorFMU(fmu_path) as f:
+        with pytest.raises(FMUError, match="fmi2SetDebugLogging returned fmi2Error"):
+            f.set_debug_logging(True, ["noSuchCategory"])
+        assert any("unknown log category noSuchCategory" in m for s, c, m in f.messages)

@@ -1,7 +1,8 @@
-"""The FMI 3.0 FMU's model description says what the FMI 2.0 one says (both generated from the one
-modelDescription.xml), plus the independent variable time and the FMI 3.0 capabilities; fmpy and
-fmu-manipulation-toolbox find it valid; the archive holds binaries/x86_64-linux and buildable
-sources."""
+"""The FMI 3.0 oscillator and the rules of the standard: fmpy and fmu-manipulation-toolbox find it
+valid, its capabilities, the archive (binaries/x86_64-linux, buildable sources), every fmi3 function
+exported, fmi3UpdateDiscreteStates' report and phase rules, fmi3EnterEventMode only with event mode.
+(Its model description against the FMI 2.0 one: test_model_description.py; events:
+test_fmi3_events.py; the C hosts: tests/fmi3_c.)"""
 
 from __future__ import annotations
 
@@ -13,23 +14,12 @@ from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from fmi3_helpers import FMU2, FMU3
+from dryfriction.fmi3 import FMI3Oscillator
 
-TYPES_2_TO_3 = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
-
-
-@pytest.fixture(scope="module")
-def md2():
-    return read_model_description(str(FMU2))
-
-
-@pytest.fixture(scope="module")
-def md3():
-    if not FMU3.is_file():
-        pytest.fail(f"FMI 3.0 FMU not built: {FMU3}")
-    return read_model_description(str(FMU3))
+from fmi3_helpers import DT, FMU3
 
 
 @pytest.mark.min_versions
@@ -45,50 +35,6 @@ def test_fmutool_check_reports_compliant() -> None:
     assert "compliant with FMI-3.0" in out, out
     assert "No semantic error" in out, out
     assert "ERROR" not in out, out
-
-
-def test_same_variables_as_fmi2(md2, md3) -> None:
-    v3 = {v.name: v for v in md3.modelVariables}
-    assert set(v3) == {v.name for v in md2.modelVariables} | {"time"}
-    for a in md2.modelVariables:
-        b = v3[a.name]
-        assert b.type == TYPES_2_TO_3[a.type], a.name
-        for attr in ("valueReference", "causality", "variability", "initial", "description", "unit",
-                     "declaredType"):
-            da, db = getattr(a, attr), getattr(b, attr)
-            if attr == "declaredType":
-                da, db = da and da.name, db and db.name
-            assert da == db, (a.name, attr, da, db)
-        for attr in ("min", "max", "start"):
-            da, db = getattr(a, attr), getattr(b, attr)
-            if da is None or db is None:
-                assert da == db, (a.name, attr, da, db)
-            elif a.type == "Boolean":
-                assert str(da).lower() == str(db).lower(), (a.name, attr)
-            else:
-                assert float(da) == float(db), (a.name, attr, da, db)
-
-
-def test_independent_time_variable(md3) -> None:
-    time = [v for v in md3.modelVariables if v.causality == "independent"]
-    assert len(time) == 1
-    assert (time[0].name, time[0].valueReference, time[0].type, time[0].unit) == ("time", 0, "Float64", "s")
-
-
-def test_enumeration_and_units_carried_over(md2, md3) -> None:
-    t2 = {t.name: [(i.name, i.value) for i in t.items] for t in md2.typeDefinitions}
-    t3 = {t.name: [(i.name, i.value) for i in t.items] for t in md3.typeDefinitions}
-    assert t2 == t3
-    assert [u.name for u in md2.unitDefinitions] == [u.name for u in md3.unitDefinitions]
-    assert md3.defaultExperiment.stopTime == md2.defaultExperiment.stopTime
-    assert md3.guid == md2.guid  # the instantiation token is the FMI 2.0 GUID
-
-
-def test_output_dependencies_by_value_reference(md2, md3) -> None:
-    def deps(md):
-        return {u.variable.name: sorted(d.name for d in (u.dependencies or [])) for u in md.outputs}
-    assert deps(md2) == deps(md3)
-    assert {u.variable.name for u in md2.initialUnknowns} == {u.variable.name for u in md3.initialUnknowns}
 
 
 def test_capabilities(md3) -> None:
@@ -123,3 +69,46 @@ def test_every_fmi3_function_exported() -> None:
     assert wanted, "no function types found in fmi3FunctionTypes.h"
     assert wanted - exported == set()
     assert exported - wanted == set(), "only fmi3 functions are visible"
+
+
+def test_update_discrete_states_report_and_phase_rules() -> None:
+    fmu = FMI3Oscillator({}, early_return=True, event_mode=True)
+    try:
+        s = fmu.slave
+        # a switch: eventHandlingNeeded with earlyReturn
+        while True:
+            event, early = fmu.do_step(DT)
+            if event:
+                break
+        assert early
+        left = fmu.get(["mode", "F_friction", "a", "x", "v"])
+        s.enterEventMode()
+        state = s.getFMUState()
+        assert s.updateDiscreteStates() == (False, False, False, False, False, 0.0)
+        right = fmu.get(["mode", "F_friction", "a", "x", "v"])
+        assert left["mode"] != right["mode"]
+        assert (left["x"], left["v"]) == (right["x"], right["v"])  # continuous across the switch
+        # a second update has nothing left to do
+        assert s.updateDiscreteStates()[0] is False
+        assert fmu.get(["mode"])["mode"] == right["mode"]
+        # the state taken in event mode holds the pending event (left limits), also serialised
+        blob = s.serializeFMUState(state)
+        s.setFMUState(s.deserializeFMUState(blob))
+        assert fmu.get(["mode", "F_friction", "a", "x", "v"]) == left
+        with pytest.raises(FMICallException):
+            s.doStep(fmu.time, DT)  # not in event mode
+        s.updateDiscreteStates()
+        s.enterStepMode()
+        fmu.do_step(DT)
+        s.freeFMUState(state)
+    finally:
+        fmu.close()
+
+
+def test_enter_event_mode_needs_event_mode_used() -> None:
+    fmu = FMI3Oscillator({}, early_return=True)
+    try:
+        with pytest.raises(FMICallException):
+            fmu.slave.enterEventMode()
+    finally:
+        fmu.close()
