@@ -245,7 +245,7 @@ def test_wrong_array_length(chain_fmu3: Path) -> None:
             f.set_raw("m", [1.0, 2.0])
 
 
-# ---- the command and the README ------------------------------------------------------------------
+# ---- the README ----------------------------------------------------------------------------------
 
 def test_the_readmes_five_lines() -> None:
     """The README's chain example runs as printed and prints what its comment says."""

@@ -128,6 +128,7 @@ def test_catalogue_labels_mirror_orbits_and_chaos() -> None:
     assert [x.period for x in cat.attractors] == [2, 2, 0]
 
 
+@pytest.mark.slow
 def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: OscillatorFMU) -> None:
     out = run_study("chaos_basins", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
                     sets=['cases=["subharmonic", "end_of_chaos"]', "grid.z0.num=9", "grid.dz0.num=9"])
@@ -151,6 +152,7 @@ def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: Osci
             assert np.max(np.abs(tail[-p:, None, :] - pts[None]), axis=2).min(axis=1).max() < 1e-4
 
 
+@pytest.mark.slow
 def test_scan_quick_verdict(tmp_path: Path, fmu_path: Path) -> None:
     out = run_study("chaos_scan", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
     s = out.summary
@@ -166,6 +168,7 @@ def test_scan_quick_verdict(tmp_path: Path, fmu_path: Path) -> None:
     assert ds.attrs["scheme"] == "exact"
 
 
+@pytest.mark.slow
 def test_transients_quick(tmp_path: Path, fmu_path: Path) -> None:
     out = run_study("chaos_transients", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
     ds = read_netcdf(out.out_dir / "chaos_transients.nc")
@@ -178,6 +181,7 @@ def test_transients_quick(tmp_path: Path, fmu_path: Path) -> None:
     assert np.all(spread[chi > 0.25, -1] <= spread[chi > 0.25, 0] + 1e-9)
 
 
+@pytest.mark.slow
 def test_basins_on_dask_equal_in_process(tmp_path: Path, fmu_path: Path) -> None:
     """The Dask path (2 worker processes, FMU sent as bytes) gives the same labels as this process."""
     sets = ['cases=["subharmonic"]', "subharmonic.grid_num=7", "subharmonic.transient=60", "numerics.chunk_runs=10"]

@@ -82,6 +82,7 @@ def test_cli_an_error_the_fmu_reports_is_one_line_and_exit_2(capsys: pytest.Capt
     assert cap.out == ""
 
 
+@pytest.mark.slow
 def test_console_script_warning_is_one_stderr_line(tmp_path: Path) -> None:
     exe = Path(sys.executable).with_name("dryfriction")
     env = {**os.environ, "PYTHONWARNINGS": ""}

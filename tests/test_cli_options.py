@@ -44,6 +44,7 @@ def test_run_uses_the_given_fmu_after_the_subcommand(fmu_path: Path, capsys: pyt
     assert res["x_max"] > res["x_min"] and "friction" in res["effects"]
 
 
+@pytest.mark.slow
 @pytest.mark.min_versions
 def test_console_script_study_list(fmu_path: Path) -> None:
     exe = Path(sys.executable).with_name("dryfriction")
@@ -52,7 +53,7 @@ def test_console_script_study_list(fmu_path: Path) -> None:
     assert "fig8_9" in r.stdout
 
 
-# --------------------------------------------------------------------------- declared requirements
+# ---------------------------------------------------------------------------------- small commands
 
 
 def test_version(capsys: pytest.CaptureFixture[str]) -> None:

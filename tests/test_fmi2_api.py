@@ -187,7 +187,7 @@ def test_subnormal_mass_is_refused_or_finite(inst: Inst) -> None:
     assert all(math.isfinite(v) for v in out), f"outputs {out}"
 
 
-# --------------------------------------------------------------------------- FMU states
+# ------------------------------------------------------------------------ steps that must not hang
 
 
 def test_tiny_internal_step_does_not_hang() -> None:
@@ -212,6 +212,8 @@ def test_tiny_internal_step_does_not_hang() -> None:
         pytest.fail("fmi2DoStep(0, 1e-3) with h = 1e-300 did not return within 10 s")
     assert "returned" in r.stdout, r.stderr
 
+
+# --------------------------------------- static checks, the archive, exports, GUID, log categories
 
 @pytest.mark.min_versions
 def test_fmpy_validate_finds_no_problem(fmu_path: Path) -> None:

@@ -71,6 +71,8 @@ def test_every_fmi3_function_exported() -> None:
     assert exported - wanted == set(), "only fmi3 functions are visible"
 
 
+# ------------------------------------------------------ phases: update discrete states, event mode
+
 def test_update_discrete_states_report_and_phase_rules() -> None:
     fmu = FMI3Oscillator({}, early_return=True, event_mode=True)
     try:

@@ -107,7 +107,7 @@ def test_driver_instances_in_threads_match_serial_runs(fmu_path: Path) -> None:
     assert len({a.tobytes() for a in serial}) == 8
 
 
-# --------------------------------------------------------------------------- the model description
+# ---------------------------------------------------------------- the FMU's error, as an exception
 
 
 def test_an_fmu_error_names_the_function_the_status_and_the_sentence(fmu: OscillatorFMU) -> None:

@@ -35,6 +35,9 @@ from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 
 
+# external programs (fmusim, the Compliance Checker, libcosim) run every FMU: the quick loop leaves them out
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 TOOLS = ROOT.parent / "shared" / "tools"
 TOL = 1e-12
@@ -263,6 +266,8 @@ def test_compliance_checker_finds_nothing(tmp_path: Path, key: str) -> None:
     assert t[0] == t0 and math.isclose(t[-1], stop, rel_tol=1e-12), (t[0], t[-1], stop)
     _assert_same_x((t, x), _fmpy_x(fmu, h, stop), t0, h, stop, f"checker {key}")
 
+
+# ---------------------------------------------------------------------------------------- libcosim
 
 @pytest.mark.min_versions
 def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU) -> None:

@@ -101,6 +101,8 @@ def test_chain_with_changing_inputs_converges_at_second_order(chain_fmu3: Path) 
     assert all(3.3 <= r <= 5.0 for r in ratios), (errs, ratios)
 
 
+# ------------------------------------------------ what the inputs are, and the chain's held inputs
+
 def test_inputs_are_the_forces_they_name(fmu: OscillatorFMU) -> None:
     """F_ext = F0 shifts the equilibrium by F0/k; N_ext adds to N (same numbers as N + N_ext)."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7, zeta=0.05)

@@ -472,6 +472,8 @@ def test_metadata_and_license(fmu_path: Path) -> None:
         assert z.read("modelDescription.xml") == XML.read_bytes()
 
 
+# ------------------------------------- the FMU's own description, and what dryfriction.model reads
+
 def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
     """Every variable of modelDescription.xml reads back through its value reference with the
     declared start value, and unique value references per type (observe at its start, true: every
@@ -488,13 +490,10 @@ def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
             assert float(value) == float(v.start), (v.name, value, v.start)
 
 
-REPO_XML = Path(__file__).resolve().parents[1] / "modelDescription.xml"
-
-
 @pytest.mark.min_versions
 def test_model_module_reads_what_the_xml_declares() -> None:
-    md = model.from_xml(REPO_XML)
-    root = ET.parse(REPO_XML).getroot()
+    md = model.from_xml(XML)
+    root = ET.parse(XML).getroot()
     svs = root.findall("ModelVariables/ScalarVariable")
     assert list(md.variables) == [sv.get("name") for sv in svs]
     for sv in svs:
@@ -524,7 +523,7 @@ def test_model_module_reads_what_the_xml_declares() -> None:
 
 
 def test_fmus_own_description_equals_the_repositorys(fmu: OscillatorFMU) -> None:
-    assert fmu.md == model.from_xml(REPO_XML)
+    assert fmu.md == model.from_xml(XML)
 
 
 def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU) -> None:
@@ -533,6 +532,8 @@ def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU) -> None:
     assert fmu.effects() == [e.name for e in fmu.md.effects if mask & e.bit]
     assert set(fmu.effects()) == {"friction", "damping", "observables"}
 
+
+# ------------------------------------------ the FMI 3.0 description says what the FMI 2.0 one says
 
 @pytest.fixture(scope="module")
 def md2():

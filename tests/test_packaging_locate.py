@@ -154,6 +154,7 @@ def test_the_configs_come_from_the_package_data_else_the_repository(monkeypatch:
 
 # --------------------------------------------------------------------------- nothing read at import
 
+@pytest.mark.slow
 def test_importing_every_module_reads_no_model_description_fmu_or_config() -> None:
     """Every module of the package is imported with recorders on: an audit hook on every file
     opened (no modelDescription.xml, no .fmu, no study config) and on the calls that would find

@@ -203,6 +203,8 @@ def test_the_readme_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], 
     _compare(shipped[key], d, key, f"the README's cc line ({variant})")
 
 
+# ------------------------ the oscillator's source FMU, rebuilt by fmpy (also under the sanitizers)
+
 @pytest.mark.slow
 def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU, tmp_path: Path) -> None:
     """A host can rebuild the binary from sources/ (fmpy's CMake build) and gets the same numbers."""

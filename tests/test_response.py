@@ -83,7 +83,7 @@ def test_frequency_response_dataset(fmu_path: Path) -> None:
     assert float(ds["amplitude_m"].sel(f_hz=10.0)) == pytest.approx(0.23557, rel=1e-4)
 
 
-# ------------------------------------------------------------------------------- command line
+# ------------------------------------------------------------------ sweeps that go on, a free mass
 
 
 def test_one_point_that_cannot_be_computed_does_not_end_the_sweep(fmu_path: Path, tmp_path: Path,

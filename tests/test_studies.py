@@ -157,6 +157,7 @@ def fig8_9_local(tmp_path_factory: pytest.TempPathFactory, fmu_path: Path) -> xr
     return read_netcdf(d / "fig8_9.nc")
 
 
+@pytest.mark.slow
 def test_fig8_9_bifurcation(fig8_9_local: xr.Dataset) -> None:
     ds = fig8_9_local
     assert int(ds.status.max()) == 0
@@ -187,6 +188,7 @@ def test_fig8_9_bifurcation(fig8_9_local: xr.Dataset) -> None:
     assert float(spread.sel(chi=chi[lo][0])) > float(spread.sel(chi=chi[lo][-1]))
 
 
+@pytest.mark.slow
 def test_fig12_14_subharmonic_zone(tmp_path: Path, fmu_path: Path) -> None:
     out, _ = run("fig12_14", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig12_14.nc")
@@ -266,6 +268,7 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+@pytest.mark.slow
 def test_sigkilled_sweep_resumes(tmp_path: Path, fmu_path: Path, fig8_9_local: xr.Dataset) -> None:
     """A sweep process killed with SIGKILL mid-way (after its third chunk, on every machine): the
     chunks it finished are reused as they are, the rest is computed, and the numbers are those of

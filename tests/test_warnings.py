@@ -74,6 +74,3 @@ def test_warnings_on_dask_workers_reach_the_client(fmu_path: Path) -> None:
     assert said and all("internal steps per" in m for m in said)
     assert len(said) == len(set(said))  # each sentence once
     assert np.all(np.isfinite(ds["amplitude_m"].values))
-
-
-# ---- the command line -----------------------------------------------------------------------------
