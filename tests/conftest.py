@@ -1,6 +1,7 @@
 """Shared fixtures: one FMU instance per test session, reused (reset) by every test; the paths of the
 four FMUs; the oscillator's FMI 2.0 FMU unzipped and one fmpy instance of it (fmi2_helpers.Inst);
-the references of the coupled chain cases."""
+fmpy's reading of both oscillators' model descriptions; the references of the coupled chain cases.
+Nothing here looks for an FMU before a fixture asks for one."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from fmpy import extract, read_model_description
 
 from dryfriction.chain import default_chain_fmu, default_chain_fmu3
 from dryfriction.chain_reference import solve_chain
+from dryfriction.fmi3 import default_fmi3_path
 from dryfriction.fmu import OscillatorFMU, default_fmu_path
 from dryfriction.locate import FMUFileError
 
@@ -79,3 +81,15 @@ def inst(unzipped: tuple[str, object]) -> Iterator[Inst]:
 def refs() -> dict:
     """The event-driven references of the coupled chain cases (chain_cases.CASES) over PERIODS periods."""
     return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}
+
+
+@pytest.fixture(scope="module")
+def md2(fmu_path: Path) -> object:
+    """fmpy's reading of the FMI 2.0 oscillator's model description."""
+    return read_model_description(str(fmu_path))
+
+
+@pytest.fixture(scope="module")
+def md3() -> object:
+    """fmpy's reading of the FMI 3.0 oscillator's model description."""
+    return read_model_description(str(_located(default_fmi3_path)))

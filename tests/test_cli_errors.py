@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from dryfriction.cli import main
+from dryfriction.studies import main as studies_main
 
 from helpers import _not_zip, _zip_without_md
 
@@ -160,7 +161,7 @@ def test_the_cli_reports_an_unusable_fmu_in_one_line(make, words: str, command: 
 @pytest.mark.min_versions
 def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: str, tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
-    assert main([*argv, "--out", str(tmp_path)]) == 2
+    assert studies_main([*argv, "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert words in err
     assert len(err.strip().splitlines()) == 1
@@ -175,7 +176,7 @@ def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: st
 ])
 def test_chain_studies_bad_input_is_one_line(argv: list[str], words: str, tmp_path: Path,
                                             capsys: pytest.CaptureFixture[str]) -> None:
-    assert main([*argv, "--out", str(tmp_path)]) == 2
+    assert studies_main([*argv, "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert words in err and len(err.strip().splitlines()) == 1
     assert not any(tmp_path.iterdir())

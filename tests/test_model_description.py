@@ -39,8 +39,6 @@ from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import PARAM_COLUMNS
 
-from fmi3_helpers import FMU2, FMU3
-
 
 ROOT = Path(__file__).resolve().parents[1]
 XML = ROOT / "modelDescription.xml"
@@ -534,18 +532,6 @@ def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU) -> None:
 
 
 # ------------------------------------------ the FMI 3.0 description says what the FMI 2.0 one says
-
-@pytest.fixture(scope="module")
-def md2():
-    return read_model_description(str(FMU2))
-
-
-@pytest.fixture(scope="module")
-def md3():
-    if not FMU3.is_file():
-        pytest.fail(f"FMI 3.0 FMU not built: {FMU3}")
-    return read_model_description(str(FMU3))
-
 
 def test_same_variables_as_fmi2(md2, md3) -> None:
     v3 = {v.name: v for v in md3.modelVariables}
