@@ -121,6 +121,7 @@ def test_fig3_dataset_is_the_fmus_steady_state_and_the_references(tmp_path: Path
     assert res["summary"]["max_rel_dev_den_hartog_above"] == pytest.approx(np.nanmax(dev))
 
 
+@pytest.mark.slow
 def test_fig5_resonant_growth_follows_averaging(tmp_path: Path, fmu_path: Path) -> None:
     out, _ = run("fig5_6", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig5_6.nc")
@@ -135,6 +136,7 @@ def test_fig5_resonant_growth_follows_averaging(tmp_path: Path, fmu_path: Path) 
     assert np.any(np.diff(env) < -0.1) and np.any(np.diff(env) > 0.1)
 
 
+@pytest.mark.slow
 def test_fig7_stiction_longer_below_resonance_and_grows_with_friction(tmp_path: Path, fmu_path: Path) -> None:
     out, _ = run("fig7", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig7.nc")
