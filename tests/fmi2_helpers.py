@@ -1,5 +1,5 @@
 """The oscillator's FMI 2.0 FMU driven through fmpy's FMU2Slave with counting callbacks (the FMI 2.0
-API tests, the FMU-state tests, the model description's tests), and the serialised FMU state taken
+API tests and the FMU-state tests), and the serialised FMU state taken
 apart: its header, its checksum (FNV-1a over the payload), a forged buffer with a fixed checksum."""
 
 from __future__ import annotations
@@ -16,10 +16,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
                        fmi2CallbackLoggerTYPE, fmi2FMUstate)
 
-
 fmi2OK, fmi2Warning, fmi2Discard, fmi2Error = 0, 1, 2, 3
-
-
 fmi2LastSuccessfulTime = 2
 
 
