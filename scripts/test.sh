@@ -5,9 +5,22 @@
 # under qemu: scripts/cross_check.sh), then the C tests and the pytest suite again with the FMU built
 # with AddressSanitizer and UBSan, and the fuzzer.
 # Prints the duration of every stage at the end (also when a stage fails).
+#
+# bash scripts/test.sh --quick: the quick loop (under 3 minutes on 2 cores once set up). Setup only
+# when needed (no .venv, no build/, or pyproject.toml newer than the installed package), else an
+# incremental build; then ctest and the fast pytest subset (-m "not slow": without the wheel, the
+# rebuilds, the external hosts, the examples, the long studies). tests/README.md lists what it leaves
+# out.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export MPLBACKEND=Agg
+
+QUICK=0
+case "${1-}" in
+  "") ;;
+  --quick) QUICK=1 ;;
+  *) echo "usage: bash scripts/test.sh [--quick]" >&2; exit 2 ;;
+esac
 
 DURATIONS=()
 stage() {  # stage NAME COMMAND...: run, time, remember
@@ -80,6 +93,29 @@ host_libs() {
     { "${apt[@]}" update -q && "${apt[@]}" install -y -q --no-install-recommends libxml2 zlib1g; }; } >/dev/null 2>&1 ||
     echo "host-libs: apt-get install libxml2 zlib1g failed: tests/test_hosts.py will skip fmusim"
 }
+
+# The quick loop: is the setup current? (.venv with the package installed after the last change of
+# pyproject.toml, and a configured build/); then the build brings itself up to date.
+setup_current() {
+  local info
+  [ -x .venv/bin/python ] && [ -f build/CMakeCache.txt ] || return 1
+  info=$(ls -d .venv/lib/python3*/site-packages/dryfriction-*.dist-info 2>/dev/null | head -1)
+  [ -n "$info" ] && [ ! pyproject.toml -nt "$info" ]
+}
+quick_setup() {
+  if setup_current; then
+    echo "setup current (.venv, build/): incremental build only"
+    cmake --build build -j2 >/dev/null
+  else
+    bash scripts/setup.sh
+  fi
+}
+if [ "$QUICK" = 1 ]; then
+  stage "setup (quick)" quick_setup
+  stage "ctest" ctest --test-dir build --output-on-failure -j2
+  stage "pytest not slow" .venv/bin/python -m pytest -q -m "not slow"
+  exit 0
+fi
 
 stage "setup" bash scripts/setup.sh
 stage "ctest" ctest --test-dir build --output-on-failure -j2

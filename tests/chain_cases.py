@@ -14,6 +14,7 @@ import numpy as np
 
 from dryfriction.chain_reference import Chain, ChainSolution, solve_chain
 
+
 ROOT = Path(__file__).resolve().parents[1]
 # the C driver of the chain: DFO_CHAIN_DRIVER, else the one of the default build
 DRIVER = Path(os.environ.get("DFO_CHAIN_DRIVER", ROOT / "build" / "tests" / "c" / "chain_driver"))
@@ -75,3 +76,9 @@ def convergence(ch: Chain, per_period: tuple[int, ...] = (400, 800, 1600, 3200),
         errs.append(error(run, ref))
     e = np.array(errs)
     return e, e[:-1] / e[1:]
+
+
+def chain_params(ch: Chain, h: float, scheme: str = "located", alpha: float = -0.1) -> dict:
+    """The FMU's parameters of a reference chain."""
+    p = {k: getattr(ch, k) for k in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
+    return {**p, "omega": ch.omega, "k_end": ch.k_end, "c_end": ch.c_end, "h": h, "alpha": alpha, "scheme": scheme}

@@ -1,15 +1,27 @@
-"""Shared fixtures: one FMU instance per test session, reused (reset) by every test."""
+"""Shared fixtures: one FMU instance per test session, reused (reset) by every test; the paths of the
+four FMUs; the oscillator's FMI 2.0 FMU unzipped and one fmpy instance of it (fmi2_helpers.Inst);
+fmpy's reading of both oscillators' model descriptions; the references of the coupled chain cases.
+Nothing here looks for an FMU before a fixture asks for one."""
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from fmpy import extract, read_model_description
 
 from dryfriction.chain import default_chain_fmu, default_chain_fmu3
+from dryfriction.chain_reference import solve_chain
+from dryfriction.fmi3 import default_fmi3_path
 from dryfriction.fmu import OscillatorFMU, default_fmu_path
 from dryfriction.locate import FMUFileError
+
+from chain_cases import CASES, PERIODS
+from fmi2_helpers import Inst
+
 
 # Every FMU comes from dryfriction.locate: DFO_FMU, DFO_FMU3, DFO_CHAIN_FMU, DFO_CHAIN_FMU3 select
 # other builds (the ASan/UBSan one), else the installed package's, else build/.
@@ -43,3 +55,41 @@ def chain_fmu3() -> Path:
 def chain_fmu2() -> Path:
     """The FMI 2.0 chain FMU (DFO_CHAIN_FMU selects another build)."""
     return _located(default_chain_fmu)
+
+
+@pytest.fixture(scope="module")
+def unzipped() -> Iterator[tuple[str, object]]:
+    """The oscillator's FMI 2.0 FMU unzipped, and its model description (fmpy's)."""
+    path = default_fmu_path()
+    assert path.is_file(), f"FMU not found: {path} (build it, or set DFO_FMU)"
+    md = read_model_description(str(path))
+    d = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="dfo-fmi2-"))
+    yield d, md
+    shutil.rmtree(d, ignore_errors=True)
+
+
+@pytest.fixture
+def inst(unzipped: tuple[str, object]) -> Iterator[Inst]:
+    """One FMU2Slave instance with counting callbacks; every allocation freed at the end."""
+    i = Inst(unzipped)
+    yield i
+    i.free()
+    assert i.cb.allocs == i.cb.frees, f"{i.cb.allocs} allocations, {i.cb.frees} frees"
+
+
+@pytest.fixture(scope="session")
+def refs() -> dict:
+    """The event-driven references of the coupled chain cases (chain_cases.CASES) over PERIODS periods."""
+    return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}
+
+
+@pytest.fixture(scope="module")
+def md2(fmu_path: Path) -> object:
+    """fmpy's reading of the FMI 2.0 oscillator's model description."""
+    return read_model_description(str(fmu_path))
+
+
+@pytest.fixture(scope="module")
+def md3() -> object:
+    """fmpy's reading of the FMI 3.0 oscillator's model description."""
+    return read_model_description(str(_located(default_fmi3_path)))

@@ -12,13 +12,13 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy import calloc, free
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE)
 
 from dryfriction.fmi3 import default_fmi3_path
 from dryfriction.model import default_fmu_path
+
 
 ROOT = Path(__file__).resolve().parents[1]
 # the FMUs dryfriction.locate finds: DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
@@ -26,6 +26,7 @@ FMU2 = default_fmu_path()
 FMU3 = default_fmi3_path()
 SWITCH_LOG = re.compile(r"t = ([-+0-9.eE]+): (backward slip|stick|forward slip) -> (backward slip|stick|forward slip)")
 MODE_OF = {"backward slip": -1, "stick": 0, "forward slip": 1}
+DT = 0.1  # the coarse master's communication step (the FMI 3.0 event and API tests)
 
 
 def schemes() -> list[int]:

@@ -46,7 +46,7 @@ def study(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_orders_are_the_slopes_of_the_measured_errors(study: Path) -> None:
     """orders.csv is the least-squares slope of log(error) against log(h) of work_precision.csv's
     FMU rows, for every case, scheme and alpha (the orders themselves, second for located, first
-    or a floor for the others, are asserted once, in test_fmu_validation.py)."""
+    or a floor for the others, are asserted once, in test_schemes.py)."""
     # the exact scheme has no step, hence no order: it is not fitted
     rows = [r for r in _rows(study / "work_precision.csv") if r["family"] == "fmu" and r["scheme"] != "exact"]
     orders = _rows(study / "orders.csv")

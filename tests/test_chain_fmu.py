@@ -3,8 +3,8 @@
 numbers: the oscillator FMU (n = 1), each other (n = 2), the C chain's own driver
 (tests/c/chain_driver: the same physics, so the same bits), the event-driven reference
 (dryfriction.chain_reference: the errors and orders of docs/chain.md), the energy balance from the
-outputs, fmpy's and the FMU Manipulation Toolbox's checks, a second host (libcosim) and the FMU's
-errors for bad input."""
+outputs, fmpy's and the FMU Manipulation Toolbox's checks and the FMU's errors for bad input.
+(Elsewhere: the command, test_cli_chain.py; libcosim, test_hosts.py; held inputs, test_inputs.py.)"""
 
 from __future__ import annotations
 
@@ -15,18 +15,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from chain_cases import CASES, PERIODS, run_driver
 
 from dryfriction.chain import ChainError, ChainFMU, ChainFMU2, ChainRun, ChainWarning
-from dryfriction.chain_reference import Chain, solve_chain
+from dryfriction.chain_reference import Chain
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
-
-def chain_params(ch: Chain, h: float, scheme: str = "located", alpha: float = -0.1) -> dict:
-    """The FMU's parameters of a reference chain."""
-    p = {k: getattr(ch, k) for k in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
-    return {**p, "omega": ch.omega, "k_end": ch.k_end, "c_end": ch.c_end, "h": h, "alpha": alpha, "scheme": scheme}
+from chain_cases import CASES, PERIODS, chain_params, run_driver
 
 
 def fmu_run(ch: Chain, t_end: float, h: float, dt: float, chain_fmu3: Path, **kw) -> ChainRun:
@@ -97,31 +92,6 @@ def test_fmi3_chain_equals_the_c_driver(n: int, chain_fmu3: Path) -> None:
     assert (run.mode == 0).any() and (run.mode != 0).any()
     for k, d in (("x", "x"), ("v", "v"), ("F_friction", "F"), ("mode", "mode")):
         assert np.array_equal(getattr(run, k), drv[d]), k
-
-
-def test_held_inputs_equal_the_c_driver(chain_fmu3: Path) -> None:
-    """F_ext held from the start (set in Initialization Mode) gives the C chain's numbers with the
-    same F_ext, bit for bit; set by a function before every step (the first after initialisation),
-    the same bits too (the input's jump enters the state: chain_new_inputs); a feedback input
-    changes the motion."""
-    F = [0.2, -0.1, 0.3]
-    ch = Chain.make(3, omega=0.6, N=[0.6, 0.8, 0.7], chi=0.8, F_ext=F)
-    T = ch.period
-    dt = T / 50
-    drv = run_driver(ch, 200 * dt, T / 400, dt=dt)
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
-        held = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs={"F_ext": F})
-        func = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": F})
-        fb = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": -0.5 * y["v"]})
-    assert (held.mode == 0).any() and (held.mode != 0).any()
-    assert np.array_equal(held.x, drv["x"]) and np.array_equal(held.mode, drv["mode"])
-    assert np.array_equal(func.x, held.x)
-    assert np.max(np.abs(fb.x - held.x)) > 1e-2
-
-
-@pytest.fixture(scope="module")
-def refs() -> dict:
-    return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}
 
 
 # docs/chain.md, "Validation of the C chain": located, T/400 ... T/3200
@@ -241,31 +211,6 @@ def test_structured_names_and_dimensions(chain_fmu2: Path, chain_fmu3: Path) -> 
             assert f"{name}[{f2.n + 1}]" not in names
 
 
-def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(chain_fmu2: Path) -> None:
-    """A second host (libcosim via libcosimpy) gives x[i](t) of our FMI 2.0 driver, bit for bit."""
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
-
-    log_output_level(CosimLogLevel.ERROR)
-    dt, steps = 0.01, 300
-    ex = CosimExecution.from_step_size(step_size=int(round(dt * 1e9)))
-    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(chain_fmu2), instance_name="chain"))
-    obs = CosimObserver.create_last_value()
-    ex.add_observer(observer=obs)
-    with ChainFMU2(fmu_path=chain_fmu2) as f2:
-        vrs = [f2.md.vr(f"x[{i}]") for i in range(1, f2.n + 1)]
-        xs = []
-        for _ in range(steps):
-            assert ex.step()
-            xs.append(obs.last_real_values(slave_index=idx, variable_references=vrs))
-        ref = f2.run(steps * dt, dt)  # the FMU's start values, as libcosim uses them
-    xs = np.array(xs)
-    assert np.max(np.abs(ref.x[1:])) > 1e-4  # it moves
-    assert np.max(np.abs(xs - ref.x[1:])) <= 1e-12 * np.max(np.abs(ref.x))
-
-
 # ---- bad input ------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("n", [0, 5000])
@@ -300,60 +245,7 @@ def test_wrong_array_length(chain_fmu3: Path) -> None:
             f.set_raw("m", [1.0, 2.0])
 
 
-# ---- the command and the README ------------------------------------------------------------------
-
-def test_chain_command_writes_the_run(tmp_path: Path, chain_fmu3: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """dryfriction chain: the CSV and the NetCDF hold the driver's numbers for the same values."""
-    from dryfriction.cli import main
-    from dryfriction.sweep.datasets import read_netcdf
-
-    out = tmp_path / "out"
-    argv = ["chain", "--n", "3", "--t-end", "12", "--dt", "0.25", "--set", "mu_s=0.5", "--set", "P0=1,0,0",
-            "--set", "k=1", "--set", "omega=0.5", "--set", "h=0.01", "--set", "scheme=located", "--out", str(out),
-            "--fmu", str(chain_fmu3)]
-    assert main(argv) == 0
-    text = capsys.readouterr().out
-    assert "chain of 3 blocks (FMI 3), 49 points" in text and "share of time stuck per block" in text
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
-        ref = f.run(12.0, 0.25, {"mu_s": 0.5, "P0": [1, 0, 0], "k": 1.0, "omega": 0.5, "h": 0.01})
-    csv = np.loadtxt(out / "chain.csv", delimiter=",", skiprows=1)
-    header = (out / "chain.csv").read_text().splitlines()[0].split(",")
-    assert header[:4] == ["t", "x[1]", "x[2]", "x[3]"] and header[-1] == "mode[3]"
-    assert np.array_equal(csv[:, 0], ref.t) and np.array_equal(csv[:, 1:4], ref.x)
-    assert np.array_equal(csv[:, -3:], ref.mode)
-    ds = read_netcdf(out / "chain.nc")
-    assert np.array_equal(ds.F_friction.values, ref.F_friction) and ds.attrs["param_omega"] == 0.5
-    assert (out / "chain.png").stat().st_size > 10_000
-
-
-@pytest.mark.parametrize("argv, words, status", [
-    (["--n", "3", "--set", "m=1,1,-1"], "invalid value -1 for m[3]", 2),
-    (["--n", "3", "--set", "m=1,2"], "m needs 3 values (one per block, n = 3)", 2),
-    (["--n", "5000"], "invalid value 5000 for n", 2),
-    (["--set", "mass=1"], "the chain has no parameter 'mass'", 2),
-    (["--set", "scheme=exact"], "scheme must be one of paper, consistent, located, not 'exact'", 2),
-])
-def test_chain_command_bad_values(argv: list[str], words: str, status: int, tmp_path: Path, chain_fmu3: Path,
-                                  capsys: pytest.CaptureFixture[str]) -> None:
-    from dryfriction.cli import main
-
-    assert main(["chain", *argv, "--out", str(tmp_path / "out"), "--fmu", str(chain_fmu3)]) == status
-    err = capsys.readouterr().err
-    assert words in err and len(err.strip().splitlines()) == 1
-    assert not (tmp_path / "out").exists()
-
-
-def test_fmi2_command_needs_the_built_n(tmp_path: Path, chain_fmu2: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from dryfriction.cli import main
-
-    with ChainFMU2(fmu_path=chain_fmu2) as f2:
-        n = f2.n
-    assert main(["chain", "--fmi", "2", "--n", str(n + 1), "--fmu", str(chain_fmu2), "--out", str(tmp_path)]) == 2
-    assert f"this FMI 2.0 chain has n = {n} blocks" in capsys.readouterr().err
-    assert main(["chain", "--fmi", "2", "--t-end", "1", "--fmu", str(chain_fmu2), "--out", str(tmp_path),
-                 "--format", "csv", "--no-plot"]) == 0
-    assert (tmp_path / "chain.csv").is_file() and not (tmp_path / "chain.png").exists()
-
+# ---- the README ----------------------------------------------------------------------------------
 
 def test_the_readmes_five_lines() -> None:
     """The README's chain example runs as printed and prints what its comment says."""

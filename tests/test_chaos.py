@@ -18,17 +18,16 @@ The FMU's `exact` scheme is the chaos tools' default; `located` (Bossak) stays s
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from dryfriction.chaos import Catalogue, ExactMap, FMUMap, NDParams, benettin, period_of
-from dryfriction.cli import main as cli_main
 from dryfriction.fmu import OscillatorFMU
 from dryfriction.studies import run_study
 from dryfriction.sweep import read_netcdf
+
 
 FIG89 = dict(lam=0.5, mu_s_sigma=0.6)
 CHAOTIC = NDParams(0.5, 0.6, 0.1)      # established by the chaos_scan study: exponent ~ +0.21 / period
@@ -129,6 +128,7 @@ def test_catalogue_labels_mirror_orbits_and_chaos() -> None:
     assert [x.period for x in cat.attractors] == [2, 2, 0]
 
 
+@pytest.mark.slow
 def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: OscillatorFMU) -> None:
     out = run_study("chaos_basins", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
                     sets=['cases=["subharmonic", "end_of_chaos"]', "grid.z0.num=9", "grid.dz0.num=9"])
@@ -152,6 +152,7 @@ def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: Osci
             assert np.max(np.abs(tail[-p:, None, :] - pts[None]), axis=2).min(axis=1).max() < 1e-4
 
 
+@pytest.mark.slow
 def test_scan_quick_verdict(tmp_path: Path, fmu_path: Path) -> None:
     out = run_study("chaos_scan", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
     s = out.summary
@@ -167,6 +168,7 @@ def test_scan_quick_verdict(tmp_path: Path, fmu_path: Path) -> None:
     assert ds.attrs["scheme"] == "exact"
 
 
+@pytest.mark.slow
 def test_transients_quick(tmp_path: Path, fmu_path: Path) -> None:
     out = run_study("chaos_transients", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
     ds = read_netcdf(out.out_dir / "chaos_transients.nc")
@@ -179,26 +181,7 @@ def test_transients_quick(tmp_path: Path, fmu_path: Path) -> None:
     assert np.all(spread[chi > 0.25, -1] <= spread[chi > 0.25, 0] + 1e-9)
 
 
-def test_lyapunov_cli_json_and_errors(capsys: pytest.CaptureFixture[str]) -> None:
-    assert cli_main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", "--chi", "1.0", "--z0", "0.3",
-                     "--dz0", "-0.2", "--periods", "50", "--transient", "20", "--json"]) == 0
-    d = json.loads(capsys.readouterr().out)
-    assert d["periods"] == 50 and d["scheme"] == "exact" and d["stroboscopic_period"] == 1
-    assert d["map"] == "FMU" and d["steps_per_period"] is None             # h has no effect on exact
-    assert d["lyapunov_per_period"] < -1.0
-    assert d["lyapunov_per_second"] == pytest.approx(d["lyapunov_per_period"] / d["period_s"])
-    assert cli_main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", "--chi", "1.0", "--z0", "0.3",
-                     "--dz0", "-0.2", "--periods", "50", "--transient", "20", "--scheme", "located", "--json"]) == 0
-    dl = json.loads(capsys.readouterr().out)
-    assert dl["scheme"] == "located" and dl["steps_per_period"] == 1000
-    assert dl["lyapunov_per_period"] == pytest.approx(d["lyapunov_per_period"], abs=1e-3)
-    for bad in (["--chi", "-1"], ["--chi", "0.5", "--d0", "0.5"], ["--chi", "0.5", "--scheme", "euler"],
-                ["--chi", "nan"], ["--chi", "0.5", "--periods", "40", "--renorm", "50"]):
-        assert cli_main(["lyapunov", "--lam", "0.5", "--mu-s-sigma", "0.6", *bad]) == 2
-        err = capsys.readouterr().err.strip()
-        assert err.startswith("dryfriction: error:") and "\n" not in err
-
-
+@pytest.mark.slow
 def test_basins_on_dask_equal_in_process(tmp_path: Path, fmu_path: Path) -> None:
     """The Dask path (2 worker processes, FMU sent as bytes) gives the same labels as this process."""
     sets = ['cases=["subharmonic"]', "subharmonic.grid_num=7", "subharmonic.transient=60", "numerics.chunk_runs=10"]

@@ -82,6 +82,7 @@ def test_one_dostep_over_1e6_periods_equals_one_per_period(fmu: OscillatorFMU) -
     assert abs(a["v"] - b["v"]) <= 1e-12 * size * p.omega
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("lam, mss, chi, zeta, periods", [
     (0.5, 0.4, 0.7, 0.0, 20_000),    # stick-dominated: two stops, two breakaways a period
     (0.5, 0.8, 0.6, 0.1, 20_000),    # heavy friction, damped

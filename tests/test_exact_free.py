@@ -78,7 +78,9 @@ def _errors(tr: dict, ref, t: np.ndarray) -> tuple[float, float, np.ndarray]:
     return ex, ev, np.array(mr)
 
 
-@pytest.mark.parametrize("name", list(CASES))
+# the heavily damped case takes about 9 s (a long slide sampled per damping time): slow
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "c>0 heavy damping" else n
+                                  for n in CASES])
 def test_against_the_40_digit_reference(fmu: OscillatorFMU, name: str) -> None:
     p, F = CASES[name]
     T = p.period
@@ -186,6 +188,7 @@ def test_a_long_slide_costs_a_few_evaluations(fmu: OscillatorFMU) -> None:
     assert dt < 0.05, dt
 
 
+@pytest.mark.slow
 def test_observables(fmu: OscillatorFMU) -> None:
     p, F = CASES["c=0 F_ext drift with sticks"]
     T = p.period

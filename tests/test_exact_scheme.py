@@ -1,8 +1,8 @@
 """The exact scheme (scheme 4) through the FMU: against the exact piecewise solution
 ``dryfriction.exact`` (positions and the sequence of events), against an event-driven scipy
-integration written here where the reference has no counterpart (chi = 0, inputs held over
-communication steps), and the FMU's features (observables, FMU states, event log, h without effect,
-bad input)."""
+integration (helpers.event_driven) where the reference has no counterpart (chi = 0, inputs held
+over communication steps), and the FMU's features (observables, FMU states, event log, h without
+effect, bad input)."""
 
 from __future__ import annotations
 
@@ -12,15 +12,15 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from dryfriction.exact import ExactSolution, solve_exact
 from dryfriction.fmu import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from dryfriction.validation import CASES
+
+from helpers import event_driven, held_run
+
 
 ND = Oscillator.from_nondimensional
 EXACT = Settings(scheme="exact")
@@ -150,92 +150,7 @@ def test_tangential_touch_and_start_on_the_limit(fmu: OscillatorFMU) -> None:
             assert err <= RTOL and n >= 10
 
 
-# ---------------------------------------------------------------- event-driven scipy reference
-
-
-def _event_driven(p: Oscillator, t_grid: np.ndarray, F_ext: np.ndarray, N_ext: np.ndarray) -> np.ndarray:
-    """x at t_grid by DOP853 (rtol 1e-12) on each phase, stopped at every stop and breakaway; the
-    inputs F_ext[i], N_ext[i] are held over [t_grid[i], t_grid[i+1]]."""
-    m, k, c = p.m, p.k, p.c
-
-    def P(t: float) -> float:
-        return p.P0 * math.cos(p.omega * t + p.phi)
-
-    x, v = p.x0, p.v0
-    out = [x]
-    mode = int(np.sign(v))
-    for i in range(len(t_grid) - 1):
-        t, t1 = float(t_grid[i]), float(t_grid[i + 1])
-        u, N = float(F_ext[i]), max(p.N + float(N_ext[i]), 0.0)
-        muk, Fb = p.chi * p.mu_s * N, max(p.mu_s, p.chi * p.mu_s) * N
-        if mode == 0 and v == 0.0 and abs(P(t) + u - k * x) > Fb:
-            mode = int(np.sign(P(t) + u - k * x))
-        if mode == 0 and v != 0.0:
-            mode = int(np.sign(v))
-        for _ in range(1000):
-            if t >= t1:
-                break
-            if mode == 0:
-                def g(s: float) -> float:
-                    return abs(P(s) + u - k * x) - Fb
-                ts = np.linspace(t, t1, 401)
-                gs = np.array([g(s) for s in ts])
-                idx = np.nonzero(gs[1:] > 0.0)[0]
-                if idx.size == 0:
-                    t = t1
-                    break
-                j = int(idx[0]) + 1
-                tb = brentq(g, ts[j - 1], ts[j], xtol=1e-15) if gs[j - 1] <= 0.0 else ts[j - 1]
-                t, v = tb, 0.0
-                mode = int(np.sign(P(t) + u - k * x))
-                continue
-            s = mode
-
-            def rhs(tt: float, y: np.ndarray, s: int = s) -> list[float]:
-                return [y[1], (P(tt) + u - k * y[0] - c * y[1] - s * muk) / m]
-
-            def stop(tt: float, y: np.ndarray, s: int = s) -> float:
-                return s * y[1]
-            stop.terminal, stop.direction = True, -1
-            # a slide from rest counts from a little later (v = 0 at its start)
-            sol = solve_ivp(rhs, (t, t1), [x, v], method="DOP853", rtol=1e-12, atol=1e-15,
-                            events=stop if s * v > 0.0 else None, dense_output=True)
-            if s * v == 0.0:   # started from rest: find the first stop after the velocity has grown
-                tt = np.linspace(t, t1, 2001)
-                vv = s * sol.sol(tt)[1]
-                pos = np.nonzero(vv > 1e-9 * max(1.0, np.abs(vv).max()))[0]
-                neg = np.nonzero(vv <= 0.0)[0]
-                neg = neg[neg > (pos[0] if pos.size else len(tt))]
-                if neg.size:
-                    j = int(neg[0])
-                    te = brentq(lambda q: s * sol.sol(q)[1], tt[j - 1], tt[j], xtol=1e-15)
-                    x, t, v = float(sol.sol(te)[0]), te, 0.0
-                else:
-                    x, v, t = float(sol.y[0, -1]), float(sol.y[1, -1]), t1
-                    break
-            elif sol.status == 1:
-                x, t, v = float(sol.y_events[0][0][0]), float(sol.t_events[0][0]), 0.0
-            else:
-                x, v, t = float(sol.y[0, -1]), float(sol.y[1, -1]), t1
-                break
-            S = P(t) + u - k * x
-            mode = 0 if abs(S) <= Fb else int(np.sign(S))
-        out.append(x)
-        if v == 0.0 and mode != 0 and abs(P(t1) + u - k * x) <= Fb:
-            pass
-    return np.array(out)
-
-
-def held_run(f: OscillatorFMU, p: Oscillator, settings: Settings, t: np.ndarray, F_ext: np.ndarray,
-             N_ext: np.ndarray) -> np.ndarray:
-    """x at t (t[0] the start) with F_ext[i], N_ext[i] set before the step to t[i + 1]."""
-    f.start(p, settings)
-    x = [float(f.get(["x"])["x"])]
-    for i in range(t.size - 1):
-        f.set({"F_ext": float(F_ext[i]), "N_ext": float(N_ext[i])})
-        f.step_to(float(t[i + 1]))
-        x.append(float(f.get(["x"])["x"]))
-    return np.array(x)
+# ---------------------------------------------------- inputs held, against the event-driven reference
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -247,7 +162,7 @@ def test_inputs_held_over_communication_steps(fmu: OscillatorFMU, seed: int) -> 
     F_ext = rng.uniform(-0.5, 0.5, t.size) * p.P0
     N_ext = rng.uniform(-0.5, 1.0, t.size) * p.N
     x = held_run(fmu, p, EXACT, t, F_ext, N_ext)
-    x_ref = _event_driven(p, t, F_ext, N_ext)
+    x_ref = event_driven(p, t, F_ext, N_ext)
     size = max(float(np.abs(x_ref).max()), p.P0 / p.k)
     err = float(np.abs(np.array(x) - x_ref).max()) / size
     assert err <= 1e-8, err

@@ -37,6 +37,7 @@ def _dataset(path: Path, scheme: str, shift: np.ndarray) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_compare_fig8_9_counts_runs_per_chi(tmp_path: Path) -> None:
     shift = np.zeros((2, 3, 3))
     shift[0, 0, :] = 0.05   # 3 runs differ by > 0.01, not by > 0.1

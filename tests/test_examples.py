@@ -13,6 +13,7 @@ import pytest
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, args", [
     ("frequency_sweep.py", ["--num", "3"]),
     ("cosimulation.py", ["--periods", "20"]),

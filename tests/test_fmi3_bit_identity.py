@@ -46,7 +46,7 @@ def same_bits(a: list[float], b: list[float]) -> bool:
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 # random steps may be coarse for the drawn dynamics: the FMU's warning is expected there (its
-# delivery is tested in test_user_messages.py), the property is what this test checks
+# delivery is tested in test_warnings.py), the property is what this test checks
 @pytest.mark.filterwarnings("ignore::dryfriction.diagnostics.DryFrictionWarning")
 @given(runs())
 def test_plain_stepping_is_fmi2_bit_for_bit(run) -> None:

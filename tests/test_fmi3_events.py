@@ -1,8 +1,8 @@
 """FMI 3.0 events: early return lands on every stick/slip switch; the switch times against the
 exact solution (located scheme: second order, measured below); event mode's left and right limits
 against the exact solution; fmpy's simulate_fmu with early_return_allowed / use_event_mode records
-samples at the switches; fmi3UpdateDiscreteStates, the intermediate update and FMU states in event
-mode."""
+samples at the switches; the intermediate update's early-return request. (fmi3UpdateDiscreteStates'
+rules and FMU states in event mode: test_fmi3_api.py.)"""
 
 from __future__ import annotations
 
@@ -11,17 +11,17 @@ import math
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
-from fmpy.fmi1 import FMICallException
 
 from dryfriction.exact import solve_exact
 from dryfriction.fmi3 import FMI3Oscillator
 from dryfriction.params import Oscillator
-from fmi3_helpers import FMU2, FMU3, fmi2_switches, kinds, scheme_names, schemes
+
+from fmi3_helpers import DT, FMU2, FMU3, fmi2_switches, kinds, scheme_names, schemes
+
 
 P = Oscillator()  # stick-slip with reversals, stops and breakaways
 T = 2 * math.pi / P.omega
 T_END = 4 * T
-DT = 0.1  # the coarse master's communication step
 
 
 @pytest.fixture(scope="module")
@@ -153,49 +153,6 @@ def test_event_mode_without_early_return_is_plain_stepping() -> None:
     o2 = simulate_fmu(str(FMU2), stop_time=T_END, output_interval=DT, output=["x", "mode"])
     np.testing.assert_array_equal(o3["x"], o2["x"])
     np.testing.assert_array_equal(o3["mode"], o2["mode"])
-
-
-def test_update_discrete_states_report_and_phase_rules() -> None:
-    fmu = FMI3Oscillator({}, early_return=True, event_mode=True)
-    try:
-        s = fmu.slave
-        # a switch: eventHandlingNeeded with earlyReturn
-        while True:
-            event, early = fmu.do_step(DT)
-            if event:
-                break
-        assert early
-        left = fmu.get(["mode", "F_friction", "a", "x", "v"])
-        s.enterEventMode()
-        state = s.getFMUState()
-        assert s.updateDiscreteStates() == (False, False, False, False, False, 0.0)
-        right = fmu.get(["mode", "F_friction", "a", "x", "v"])
-        assert left["mode"] != right["mode"]
-        assert (left["x"], left["v"]) == (right["x"], right["v"])  # continuous across the switch
-        # a second update has nothing left to do
-        assert s.updateDiscreteStates()[0] is False
-        assert fmu.get(["mode"])["mode"] == right["mode"]
-        # the state taken in event mode holds the pending event (left limits), also serialised
-        blob = s.serializeFMUState(state)
-        s.setFMUState(s.deserializeFMUState(blob))
-        assert fmu.get(["mode", "F_friction", "a", "x", "v"]) == left
-        with pytest.raises(FMICallException):
-            s.doStep(fmu.time, DT)  # not in event mode
-        s.updateDiscreteStates()
-        s.enterStepMode()
-        fmu.do_step(DT)
-        s.freeFMUState(state)
-    finally:
-        fmu.close()
-
-
-def test_enter_event_mode_needs_event_mode_used() -> None:
-    fmu = FMI3Oscillator({}, early_return=True)
-    try:
-        with pytest.raises(FMICallException):
-            fmu.slave.enterEventMode()
-    finally:
-        fmu.close()
 
 
 def test_intermediate_update_early_return_request_honoured() -> None:

@@ -1,23 +1,22 @@
-"""The package's one FMI layer (dryfriction.fmi2) and the model description it is driven by
-(dryfriction.model): statuses, errors, FMU states through OscillatorFMU, instances in threads,
-and the names, ranges, schemes and effect bits read from modelDescription.xml."""
+"""The package's FMI 2.0 layer (dryfriction.fmi2) through OscillatorFMU: statuses, errors (an
+FMUError names the function, the status and the FMU's sentence), observables read without observe,
+the batch runner's strict error, instances in threads. (FMU states: test_fmu_state.py; what
+dryfriction.model reads from the XML: test_model_description.py; the Python range checks:
+test_params.py.)"""
 
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from dryfriction import fmi2, model
-from dryfriction.fmu import OBSERVABLE_OUTPUTS, FMUError, OscillatorFMU, Settings
+from dryfriction import fmi2
+from dryfriction.fmu import FMUError, OBSERVABLE_OUTPUTS, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-from dryfriction.sweep.runner import PARAM_COLUMNS, BatchRunner
-
-REPO_XML = Path(__file__).resolve().parents[1] / "modelDescription.xml"
+from dryfriction.sweep.runner import BatchRunner, PARAM_COLUMNS
 
 
 # --------------------------------------------------------------------------- statuses, errors
@@ -86,51 +85,6 @@ def test_batch_runner_strict_error_names_the_run_and_the_call(fmu_path: Path) ->
 # --------------------------------------------------------------------------- FMU states
 
 
-def test_state_round_trip_through_the_driver_is_bit_exact(fmu: OscillatorFMU) -> None:
-    p = Oscillator(x0=0.004, chi=0.5)
-    st = Settings(h=7e-4, observe=True)
-    t = 37 * 0.0123 + np.arange(201) * 0.01
-    fmu.start(p, st)
-    fmu.step_to(t[0])
-    with fmu.get_state() as state:
-        outs = ("x", "v", "a", "F_friction", "mode", "E_friction", "stick_fraction", "transitions")
-
-        def run() -> np.ndarray:
-            rows = []
-            for k in range(1, t.size):
-                fmu.step_to(t[k])
-                rows.append(list(fmu.get(outs).values()))
-            return np.array(rows)
-
-        a = run()
-        fmu.set_state(state)
-        assert fmu.time == t[0]  # the driver's time follows the state
-        b = run()
-        assert np.array_equal(a, b)
-        data = fmu.serialize_state(state)
-    assert state.freed
-    # into another instance that was only instantiated: the state carries the whole setup
-    with OscillatorFMU(fmu.path) as other:
-        other.restore(data)
-        assert other.time == t[0]
-        assert other.serialize_state() == data
-        other.step_to(t[1])
-        assert np.array_equal(list(other.get(outs).values()), a[0])
-    with pytest.raises(FMUError) as err:
-        fmu.deserialize_state(data[:-1])
-    assert err.value.function == "fmi2DeSerializeFMUstate"
-    with pytest.raises(ValueError, match="freed"):
-        fmu.set_state(state)
-
-
-def test_states_left_open_are_freed_with_the_instance(fmu_path: Path) -> None:
-    f = OscillatorFMU(fmu_path)
-    f.start(Oscillator(), Settings(h=1e-3))
-    states = [f.get_state() for _ in range(3)]
-    f.close()
-    assert all(s.freed for s in states)
-
-
 # --------------------------------------------------------------------------- threads
 
 
@@ -153,65 +107,24 @@ def test_driver_instances_in_threads_match_serial_runs(fmu_path: Path) -> None:
     assert len({a.tobytes() for a in serial}) == 8
 
 
-# --------------------------------------------------------------------------- the model description
+# ---------------------------------------------------------------- the FMU's error, as an exception
 
 
-@pytest.mark.min_versions
-def test_model_module_reads_what_the_xml_declares() -> None:
-    md = model.from_xml(REPO_XML)
-    root = ET.parse(REPO_XML).getroot()
-    svs = root.findall("ModelVariables/ScalarVariable")
-    assert list(md.variables) == [sv.get("name") for sv in svs]
-    for sv in svs:
-        v = md.var(sv.get("name"))
-        assert v.vr == int(sv.get("valueReference")) and v.causality == sv.get("causality")
-        el = next(iter(sv))
-        assert v.type == el.tag and v.unit == el.get("unit")
-        if el.get("min") is not None:
-            assert v.min == float(el.get("min"))
-    items = root.findall("TypeDefinitions/SimpleType[@name='Scheme']/Enumeration/Item")
-    assert md.schemes == {i.get("name"): int(i.get("value")) for i in items}
-    bits = root.findall("VendorAnnotations/Tool[@name='dryfriction']/Effects/Effect")
-    assert [(e.bit, e.name) for e in md.effects] == [(int(b.get("bit")), b.get("name")) for b in bits]
-    assert md.effects_variable == "effects"
-    # the package's defaults are the declared starts (h: None, period / 1000, by design; observe:
-    # off unless a run reads the observables, by design, the FMU's own start being true)
-    p, st = Oscillator(), Settings()
-    assert md.parameter_starts()["observe"] is True and st.observe is False
-    for name, start in md.parameter_starts().items():
-        if name in ("h", "observe"):
-            continue
-        value = getattr(p, name) if hasattr(p, name) else getattr(st, name)
-        if name == "scheme":
-            value = md.schemes[value]
-        assert value == start, name
-    assert PARAM_COLUMNS[:-1] == tuple(n for n in md.names("parameter") if md.var(n).type == "Real")
-
-
-def test_fmus_own_description_equals_the_repositorys(fmu: OscillatorFMU) -> None:
-    assert fmu.md == model.from_xml(REPO_XML)
-
-
-@pytest.mark.parametrize("name,value,valid", [
-    ("m", 0.0, "> 0"), ("k", -1.0, ">= 0"), ("alpha", 0.1, "in [-0.333333, 0]"), ("alpha", -0.34, "in [-0.3"),
-    ("h", math.nan, "finite"), ("P0", math.inf, "finite"), ("frictionUpdates", 101, "in [0, 100]"),
-    ("scheme", "fast", "one of paper, consistent, located, exact"), ("scheme", 5, "one of paper"),
-])
-def test_python_values_are_checked_against_the_declared_range(name: str, value: object, valid: str) -> None:
-    md = model.default()
-    with pytest.raises(ValueError, match=f"invalid value .* for variable {name}; valid range: ") as err:
-        md.check(name, value)
-    assert valid in str(err.value), str(err.value)
-
-
-@pytest.mark.parametrize("name,value", [("m", 1e-300), ("alpha", -1 / 3), ("alpha", 0.0), ("frictionUpdates", 0),
-                                        ("scheme", "paper"), ("scheme", 3), ("observe", True), ("x0", -5.0)])
-def test_valid_python_values_pass(name: str, value: object) -> None:
-    model.default().check(name, value)
-
-
-def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU) -> None:
-    fmu.start(Oscillator(c=0.5, chi=1.0), Settings(h=1e-3, observe=True))
-    mask = int(fmu.get(["effects"])["effects"])
-    assert fmu.effects() == [e.name for e in fmu.md.effects if mask & e.bit]
-    assert set(fmu.effects()) == {"friction", "damping", "observables"}
+def test_an_fmu_error_names_the_function_the_status_and_the_sentence(fmu: OscillatorFMU) -> None:
+    """The driver's error: the FMI function, its status and the FMU's logged sentence (the bad
+    values themselves are the C API test's: tests/fmi_c/test_fmi_api.c, test_bad_values)."""
+    fmu.reset()
+    with pytest.raises(FMUError) as err:
+        fmu.set({"m": 0.0})
+    e = err.value
+    assert (e.function, e.status) == ("fmi2SetReal", fmi2.ERROR)
+    assert "variable m " in e.message and "valid range: > 0" in e.message, e.message
+    assert str(e).startswith("fmi2SetReal returned fmi2Error: "), str(e)
+    # the instance stays usable: a valid run after the rejected value
+    r = fmu.trajectory(Oscillator(), [0.0, 0.5], Settings(h=1e-3))
+    assert np.all(np.isfinite(r["x"])) and r["x"][-1] != 0.0
+    # an error found at initialisation names that call
+    with pytest.raises(FMUError, match="t_obs_stop must be >= t_obs_start") as err:
+        fmu.start(Oscillator(), Settings(observe=True, t_obs_start=2.0, t_obs_stop=1.0))
+    assert err.value.function == "fmi2ExitInitializationMode"
+    fmu.reset()

@@ -538,7 +538,7 @@ def test_energy_balance_second_order(fmu: OscillatorFMU, alpha: float) -> None:
 
 
 # random steps may be coarse for the drawn dynamics: the FMU's warning is expected there (its
-# delivery is tested in test_user_messages.py), the property is what this test checks
+# delivery is tested in test_warnings.py), the property is what this test checks
 @pytest.mark.filterwarnings("ignore::dryfriction.diagnostics.DryFrictionWarning")
 @pytest.mark.min_versions
 @pytest.mark.slow

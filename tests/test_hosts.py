@@ -6,7 +6,9 @@ the FMI 3.0 chain also with n = 3 (and array start values of that size); the FMU
 (modelica-tools/FMUComplianceChecker, FMI 1/2 only) runs the two FMI 2.0 FMUs. Each must reach the
 default stop time, exit 0 and report no warning or error (fmusim: every logged message of status OK,
 nothing on stderr; the checker: its summary counts 0 of each, for the FMU and for itself), and its x
-must equal fmpy's on the same settings within 1e-12 at every output point.
+must equal fmpy's on the same settings within 1e-12 at every output point. A second co-simulation
+library, libcosim (libcosimpy), steps the FMI 2.0 oscillator and chain to the package's / fmpy's
+trajectories.
 
 The tools come from ``FMUSIM`` / ``FMUCHECK`` (paths of the executables), else from
 ``../shared/tools/`` beside the repository (see its README). When neither is there a test is
@@ -27,9 +29,14 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from dryfriction.chain import ChainFMU, default_chain_fmu, default_chain_fmu3
+from dryfriction.chain import ChainFMU, ChainFMU2, default_chain_fmu, default_chain_fmu3
 from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import default_fmu_path
+from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.params import Oscillator
+
+
+# external programs (fmusim, the Compliance Checker, libcosim) run every FMU: the quick loop leaves them out
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOLS = ROOT.parent / "shared" / "tools"
@@ -258,3 +265,55 @@ def test_compliance_checker_finds_nothing(tmp_path: Path, key: str) -> None:
     t, x = _read_csv(out)
     assert t[0] == t0 and math.isclose(t[-1], stop, rel_tol=1e-12), (t[0], t[-1], stop)
     _assert_same_x((t, x), _fmpy_x(fmu, h, stop), t0, h, stop, f"checker {key}")
+
+
+# ---------------------------------------------------------------------------------------- libcosim
+
+@pytest.mark.min_versions
+def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU) -> None:
+    """A second host (libcosim via libcosimpy) steps the FMU to the same x(t) as fmpy (1e-12)."""
+    from libcosimpy.CosimEnums import CosimExecutionState  # noqa: F401  (import check)
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.ERROR)
+    dt, n = 0.01, 300
+    ex = CosimExecution.from_step_size(step_size=int(round(dt * 1e9)))
+    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(fmu_path), instance_name="dfo"))
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(observer=obs)
+    vr_x = fmu.vr("x")
+    xs = []
+    for _ in range(n):
+        assert ex.step()
+        xs.append(obs.last_real_values(slave_index=idx, variable_references=[vr_x])[0])
+    p = Oscillator()
+    ref = fmu.trajectory(p, np.arange(n + 1) * dt, Settings(h=0.0), outputs=("x",))["x"][1:]  # the FMU's default h
+    assert np.max(np.abs(np.array(xs) - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+def test_libcosim_steps_the_fmi2_chain_to_fmpys_trajectory(chain_fmu2: Path) -> None:
+    """A second host (libcosim via libcosimpy) gives x[i](t) of our FMI 2.0 driver, bit for bit."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.ERROR)
+    dt, steps = 0.01, 300
+    ex = CosimExecution.from_step_size(step_size=int(round(dt * 1e9)))
+    idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(chain_fmu2), instance_name="chain"))
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(observer=obs)
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
+        vrs = [f2.md.vr(f"x[{i}]") for i in range(1, f2.n + 1)]
+        xs = []
+        for _ in range(steps):
+            assert ex.step()
+            xs.append(obs.last_real_values(slave_index=idx, variable_references=vrs))
+        ref = f2.run(steps * dt, dt)  # the FMU's start values, as libcosim uses them
+    xs = np.array(xs)
+    assert np.max(np.abs(ref.x[1:])) > 1e-4  # it moves
+    assert np.max(np.abs(xs - ref.x[1:])) <= 1e-12 * np.max(np.abs(ref.x))

@@ -12,14 +12,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_chain_fmu import chain_params
-from test_exact_scheme import ND, _event_driven, held_run
 
 from dryfriction.chain import ChainFMU
 from dryfriction.chain_reference import Chain
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
+from chain_cases import chain_params, run_driver
+from helpers import OUT, event_driven, held_run
+
+
+ND = Oscillator.from_nondimensional
 DIVS = (400, 800, 1600, 3200)
 
 
@@ -31,7 +34,7 @@ def test_located_stays_second_order_with_held_inputs(fmu: OscillatorFMU, seed: i
     t = np.concatenate([[0.0], np.sort(rng.uniform(0.0, 5.0 * T, 30)), [5.0 * T]])
     F_ext = rng.uniform(-0.5, 0.5, t.size) * p.P0
     N_ext = rng.uniform(-0.5, 1.0, t.size) * p.N
-    ref = _event_driven(p, t, F_ext, N_ext)
+    ref = event_driven(p, t, F_ext, N_ext)
     size = float(np.abs(ref).max())
     errs = [float(np.abs(held_run(fmu, p, Settings(scheme="located", h=T / d), t, F_ext, N_ext) - ref).max()) / size
             for d in DIVS]
@@ -96,3 +99,43 @@ def test_chain_with_changing_inputs_converges_at_second_order(chain_fmu3: Path) 
     errs = [float(np.abs(run(d) - ref).max()) / size for d in (200, 400, 800)]
     ratios = [a / b for a, b in zip(errs, errs[1:])]
     assert all(3.3 <= r <= 5.0 for r in ratios), (errs, ratios)
+
+
+# ------------------------------------------------ what the inputs are, and the chain's held inputs
+
+def test_inputs_are_the_forces_they_name(fmu: OscillatorFMU) -> None:
+    """F_ext = F0 shifts the equilibrium by F0/k; N_ext adds to N (same numbers as N + N_ext)."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7, zeta=0.05)
+    t = np.linspace(0, 5 * p.period, 201)
+    F0 = 0.3
+    shifted = fmu.trajectory(p.with_(x0=F0 / p.k), t, Settings(extra={"F_ext": F0}), ("x",))["x"]
+    plain = fmu.trajectory(p, t, Settings(), ("x",))["x"]
+    assert np.max(np.abs(shifted - F0 / p.k - plain)) < 1e-12
+    more = fmu.trajectory(p, t, Settings(extra={"N_ext": 0.25}), OUT)
+    same = fmu.trajectory(p.with_(N=p.N + 0.25), t, Settings(), OUT)
+    for k in OUT:
+        assert np.array_equal(more[k], same[k]), k
+    # a negative total normal force lifts the block: max(N + N_ext, 0) = 0, no friction
+    lifted = fmu.trajectory(p, t, Settings(extra={"N_ext": -2.0 * p.N}), OUT)
+    free = fmu.trajectory(p.with_(N=0.0), t, Settings(), OUT)
+    assert np.array_equal(lifted["x"], free["x"])
+
+
+def test_held_inputs_equal_the_c_driver(chain_fmu3: Path) -> None:
+    """F_ext held from the start (set in Initialization Mode) gives the C chain's numbers with the
+    same F_ext, bit for bit; set by a function before every step (the first after initialisation),
+    the same bits too (the input's jump enters the state: chain_new_inputs); a feedback input
+    changes the motion."""
+    F = [0.2, -0.1, 0.3]
+    ch = Chain.make(3, omega=0.6, N=[0.6, 0.8, 0.7], chi=0.8, F_ext=F)
+    T = ch.period
+    dt = T / 50
+    drv = run_driver(ch, 200 * dt, T / 400, dt=dt)
+    with ChainFMU(3, fmu_path=chain_fmu3) as f:
+        held = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs={"F_ext": F})
+        func = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": F})
+        fb = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": -0.5 * y["v"]})
+    assert (held.mode == 0).any() and (held.mode != 0).any()
+    assert np.array_equal(held.x, drv["x"]) and np.array_equal(held.mode, drv["mode"])
+    assert np.array_equal(func.x, held.x)
+    assert np.max(np.abs(fb.x - held.x)) > 1e-2

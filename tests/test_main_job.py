@@ -8,6 +8,7 @@ import csv
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from dryfriction import model
 from dryfriction.cli import main
@@ -27,6 +28,7 @@ def test_validate_writes_results_for_every_scheme(tmp_path: Path, fmu_path: Path
         assert max(exact) < 1e-10, (case, exact)
 
 
+@pytest.mark.slow
 def test_chain_validation_of_the_main_job(tmp_path: Path, chain_fmu3: Path) -> None:
     """scripts/plot_chain_validation.py (the main job's second part): the chain FMU's located scheme
     at second order on the four coupled cases, in the CSV next to the PNG."""

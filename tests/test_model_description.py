@@ -8,36 +8,44 @@
   per run saying "set observe = true", as their descriptions say; `observe` is on by default;
 - `<ModelStructure>` declares which outputs follow the inputs at once (a, F_friction) and which only
   through the state: setting an input and reading the outputs without a step agrees with it;
-- author, copyright, license (BSD-2-Clause, LICENSE shipped in the FMU), generationDateAndTime.
+- author, copyright, license (BSD-2-Clause, LICENSE shipped in the FMU), generationDateAndTime;
+- the FMU's own description equals the repository's and drives the FMU (dryfriction.model reads what
+  the XML declares: names, ranges, schemes, effect bits);
+- the FMI 3.0 description says what the FMI 2.0 one says (both generated from the one
+  modelDescription.xml), plus the independent variable time, with the same enumeration, units and
+  output dependencies.
 """
 
 from __future__ import annotations
 
 import math
-import shutil
 import subprocess
 import sys
-import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from collections.abc import Iterator
+from ctypes import c_double, c_int, c_uint
 from pathlib import Path
 
+import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
-from fmpy.fmi1 import calloc, free
-from ctypes import c_double, c_int, c_uint
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException, calloc, free
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                       fmi2CallbackLoggerTYPE)
 
-from dryfriction.fmu import default_fmu_path
+from dryfriction import model
+from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.params import Oscillator
+from dryfriction.sweep.runner import PARAM_COLUMNS
+
 
 ROOT = Path(__file__).resolve().parents[1]
 XML = ROOT / "modelDescription.xml"
 fmi2OK, fmi2Warning = 0, 1
 OBSERVABLES = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
 DBL_MIN = sys.float_info.min
+TYPES_2_TO_3 = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
 
 
 class Logged:
@@ -55,15 +63,6 @@ class Logged:
 
     def warnings(self) -> list[tuple[str, str]]:
         return [(c, m) for s, c, m in self.messages if s == fmi2Warning]
-
-
-@pytest.fixture(scope="module")
-def unzipped() -> Iterator[tuple[str, object]]:
-    path = default_fmu_path()
-    assert path.is_file(), f"FMU not found: {path} (build it, or set DFO_FMU)"
-    d = extract(str(path), unzipdir=tempfile.mkdtemp(prefix="dfo-md-"))
-    yield d, read_model_description(str(path))
-    shutil.rmtree(d, ignore_errors=True)
 
 
 class Slave:
@@ -230,7 +229,6 @@ def test_the_chain_source_expands_to_both_fmi_versions(tmp_path: Path) -> None:
     (tmp_path / "bad_src.xml").write_text(bad)
     r = _gen(str(tmp_path / "bad_src.xml"), str(tmp_path / "vars.h"))
     assert r.returncode == 1 and "dimension k_end is not a structural parameter" in r.stderr
-
 
 
 def test_the_chain_build_configuration_header(tmp_path: Path) -> None:
@@ -470,3 +468,110 @@ def test_metadata_and_license(fmu_path: Path) -> None:
     with zipfile.ZipFile(fmu_path) as z:
         assert z.read("documentation/LICENSE").decode() == license_text
         assert z.read("modelDescription.xml") == XML.read_bytes()
+
+
+# ------------------------------------- the FMU's own description, and what dryfriction.model reads
+
+def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
+    """Every variable of modelDescription.xml reads back through its value reference with the
+    declared start value, and unique value references per type (observe at its start, true: every
+    output computed and finite)."""
+    fmu.start(Oscillator(), Settings(h=0.0, alpha=-0.1, observe=True))  # h, alpha, observe at their starts
+    seen: set[tuple[str, int]] = set()
+    for v in fmu.md.variables.values():
+        key = (v.call_type, v.vr)
+        assert key not in seen, f"duplicate value reference {key}"
+        seen.add(key)
+        value = fmu.get([v.name])[v.name]
+        assert np.isfinite(float(value)), v.name
+        if v.causality == "parameter":
+            assert float(value) == float(v.start), (v.name, value, v.start)
+
+
+@pytest.mark.min_versions
+def test_model_module_reads_what_the_xml_declares() -> None:
+    md = model.from_xml(XML)
+    root = ET.parse(XML).getroot()
+    svs = root.findall("ModelVariables/ScalarVariable")
+    assert list(md.variables) == [sv.get("name") for sv in svs]
+    for sv in svs:
+        v = md.var(sv.get("name"))
+        assert v.vr == int(sv.get("valueReference")) and v.causality == sv.get("causality")
+        el = next(iter(sv))
+        assert v.type == el.tag and v.unit == el.get("unit")
+        if el.get("min") is not None:
+            assert v.min == float(el.get("min"))
+    items = root.findall("TypeDefinitions/SimpleType[@name='Scheme']/Enumeration/Item")
+    assert md.schemes == {i.get("name"): int(i.get("value")) for i in items}
+    bits = root.findall("VendorAnnotations/Tool[@name='dryfriction']/Effects/Effect")
+    assert [(e.bit, e.name) for e in md.effects] == [(int(b.get("bit")), b.get("name")) for b in bits]
+    assert md.effects_variable == "effects"
+    # the package's defaults are the declared starts (h: None, period / 1000, by design; observe:
+    # off unless a run reads the observables, by design, the FMU's own start being true)
+    p, st = Oscillator(), Settings()
+    assert md.parameter_starts()["observe"] is True and st.observe is False
+    for name, start in md.parameter_starts().items():
+        if name in ("h", "observe"):
+            continue
+        value = getattr(p, name) if hasattr(p, name) else getattr(st, name)
+        if name == "scheme":
+            value = md.schemes[value]
+        assert value == start, name
+    assert PARAM_COLUMNS[:-1] == tuple(n for n in md.names("parameter") if md.var(n).type == "Real")
+
+
+def test_fmus_own_description_equals_the_repositorys(fmu: OscillatorFMU) -> None:
+    assert fmu.md == model.from_xml(XML)
+
+
+def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU) -> None:
+    fmu.start(Oscillator(c=0.5, chi=1.0), Settings(h=1e-3, observe=True))
+    mask = int(fmu.get(["effects"])["effects"])
+    assert fmu.effects() == [e.name for e in fmu.md.effects if mask & e.bit]
+    assert set(fmu.effects()) == {"friction", "damping", "observables"}
+
+
+# ------------------------------------------ the FMI 3.0 description says what the FMI 2.0 one says
+
+def test_same_variables_as_fmi2(md2, md3) -> None:
+    v3 = {v.name: v for v in md3.modelVariables}
+    assert set(v3) == {v.name for v in md2.modelVariables} | {"time"}
+    for a in md2.modelVariables:
+        b = v3[a.name]
+        assert b.type == TYPES_2_TO_3[a.type], a.name
+        for attr in ("valueReference", "causality", "variability", "initial", "description", "unit",
+                     "declaredType"):
+            da, db = getattr(a, attr), getattr(b, attr)
+            if attr == "declaredType":
+                da, db = da and da.name, db and db.name
+            assert da == db, (a.name, attr, da, db)
+        for attr in ("min", "max", "start"):
+            da, db = getattr(a, attr), getattr(b, attr)
+            if da is None or db is None:
+                assert da == db, (a.name, attr, da, db)
+            elif a.type == "Boolean":
+                assert str(da).lower() == str(db).lower(), (a.name, attr)
+            else:
+                assert float(da) == float(db), (a.name, attr, da, db)
+
+
+def test_independent_time_variable(md3) -> None:
+    time = [v for v in md3.modelVariables if v.causality == "independent"]
+    assert len(time) == 1
+    assert (time[0].name, time[0].valueReference, time[0].type, time[0].unit) == ("time", 0, "Float64", "s")
+
+
+def test_enumeration_and_units_carried_over(md2, md3) -> None:
+    t2 = {t.name: [(i.name, i.value) for i in t.items] for t in md2.typeDefinitions}
+    t3 = {t.name: [(i.name, i.value) for i in t.items] for t in md3.typeDefinitions}
+    assert t2 == t3
+    assert [u.name for u in md2.unitDefinitions] == [u.name for u in md3.unitDefinitions]
+    assert md3.defaultExperiment.stopTime == md2.defaultExperiment.stopTime
+    assert md3.guid == md2.guid  # the instantiation token is the FMI 2.0 GUID
+
+
+def test_output_dependencies_by_value_reference(md2, md3) -> None:
+    def deps(md):
+        return {u.variable.name: sorted(d.name for d in (u.dependencies or [])) for u in md.outputs}
+    assert deps(md2) == deps(md3)
+    assert {u.variable.name for u in md2.initialUnknowns} == {u.variable.name for u in md3.initialUnknowns}

@@ -2,7 +2,7 @@
 
 Fast paths inside the FMU give the same numbers as the general path (fastPaths = false), the
 observables computed inside the FMU agree with the exact solution, and the 'effects' parameter
-says what a run simulates."""
+says what a run simulates. (The inputs F_ext, N_ext: test_inputs.py.)"""
 
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ from dryfriction.exact import solve_exact
 from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
-OUT = ("x", "v", "a", "F_friction", "mode")
+from helpers import OUT
+
 
 FAST_PATH_CASES = {
     "no friction (mu_s = 0)": Oscillator.from_nondimensional(lam=0.7, mu_s_sigma=0.4, chi=0.7, zeta=0.05).with_(mu_s=0.0),
@@ -88,24 +89,6 @@ def test_observables_match_the_exact_solution(fmu: OscillatorFMU, chi: float) ->
     assert o["transitions"] == len(sw)
     slip = np.sum(np.abs(np.diff(x)) * (mode[1:] != 0))
     assert abs(o["E_friction"] - p.mu_k * p.N * slip) < 1e-4 * p.mu_k * p.N * slip
-
-
-def test_inputs_are_the_forces_they_name(fmu: OscillatorFMU) -> None:
-    """F_ext = F0 shifts the equilibrium by F0/k; N_ext adds to N (same numbers as N + N_ext)."""
-    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7, zeta=0.05)
-    t = np.linspace(0, 5 * p.period, 201)
-    F0 = 0.3
-    shifted = fmu.trajectory(p.with_(x0=F0 / p.k), t, Settings(extra={"F_ext": F0}), ("x",))["x"]
-    plain = fmu.trajectory(p, t, Settings(), ("x",))["x"]
-    assert np.max(np.abs(shifted - F0 / p.k - plain)) < 1e-12
-    more = fmu.trajectory(p, t, Settings(extra={"N_ext": 0.25}), OUT)
-    same = fmu.trajectory(p.with_(N=p.N + 0.25), t, Settings(), OUT)
-    for k in OUT:
-        assert np.array_equal(more[k], same[k]), k
-    # a negative total normal force lifts the block: max(N + N_ext, 0) = 0, no friction
-    lifted = fmu.trajectory(p, t, Settings(extra={"N_ext": -2.0 * p.N}), OUT)
-    free = fmu.trajectory(p.with_(N=0.0), t, Settings(), OUT)
-    assert np.array_equal(lifted["x"], free["x"])
 
 
 def test_sweep_and_stiction_scenes(fmu: OscillatorFMU) -> None:

@@ -2,7 +2,7 @@
 
 - fig2: the FMU follows the exact stick-slip solution over the first cycle;
 - fig3: the dataset holds the FMU's steady amplitudes and the Den Hartog / Inman formulas (the
-  FMU against them: test_fmu_validation.py);
+  FMU against them: test_schemes.py);
 - fig5_6: the resonant growth per period is pi - 4 mu_k N / P0 (averaging);
 - fig7: stiction is longer below resonance than above and grows with friction;
 - fig8_9: above the bifurcation the motion is symmetric and independent of the initial
@@ -21,7 +21,6 @@ The physics tests run sweeps in this process (``workers=0``); the Dask tests sta
 from __future__ import annotations
 
 import math
-
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +31,7 @@ from dryfriction.fmu import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from dryfriction.studies import main, run_study
 from dryfriction.sweep import BatchRunner, PARAM_COLUMNS, SweepInterrupted, nondim_table, read_netcdf
+
 
 DATA_VARS_8_9 = ("z_max", "z_min", "amplitude", "asymmetry", "stick_fraction", "transitions", "status")
 
@@ -98,7 +98,7 @@ def test_fig3_dataset_is_the_fmus_steady_state_and_the_references(tmp_path: Path
                                                                    fmu: OscillatorFMU) -> None:
     """The study's plumbing: each amplitude is the one OscillatorFMU.observables gives for the
     same run, and the reference columns are steady.py's formulas. (The FMU against Den Hartog and
-    Inman themselves: test_fmu_validation.py.)"""
+    Inman themselves: test_schemes.py.)"""
     from dryfriction.steady import den_hartog_amplitude, inman_amplitude
 
     out, res = run("fig3", tmp_path, fmu_path)
@@ -121,6 +121,7 @@ def test_fig3_dataset_is_the_fmus_steady_state_and_the_references(tmp_path: Path
     assert res["summary"]["max_rel_dev_den_hartog_above"] == pytest.approx(np.nanmax(dev))
 
 
+@pytest.mark.slow
 def test_fig5_resonant_growth_follows_averaging(tmp_path: Path, fmu_path: Path) -> None:
     out, _ = run("fig5_6", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig5_6.nc")
@@ -135,6 +136,7 @@ def test_fig5_resonant_growth_follows_averaging(tmp_path: Path, fmu_path: Path) 
     assert np.any(np.diff(env) < -0.1) and np.any(np.diff(env) > 0.1)
 
 
+@pytest.mark.slow
 def test_fig7_stiction_longer_below_resonance_and_grows_with_friction(tmp_path: Path, fmu_path: Path) -> None:
     out, _ = run("fig7", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig7.nc")
@@ -157,6 +159,7 @@ def fig8_9_local(tmp_path_factory: pytest.TempPathFactory, fmu_path: Path) -> xr
     return read_netcdf(d / "fig8_9.nc")
 
 
+@pytest.mark.slow
 def test_fig8_9_bifurcation(fig8_9_local: xr.Dataset) -> None:
     ds = fig8_9_local
     assert int(ds.status.max()) == 0
@@ -187,6 +190,7 @@ def test_fig8_9_bifurcation(fig8_9_local: xr.Dataset) -> None:
     assert float(spread.sel(chi=chi[lo][0])) > float(spread.sel(chi=chi[lo][-1]))
 
 
+@pytest.mark.slow
 def test_fig12_14_subharmonic_zone(tmp_path: Path, fmu_path: Path) -> None:
     out, _ = run("fig12_14", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig12_14.nc")
@@ -266,6 +270,7 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+@pytest.mark.slow
 def test_sigkilled_sweep_resumes(tmp_path: Path, fmu_path: Path, fig8_9_local: xr.Dataset) -> None:
     """A sweep process killed with SIGKILL mid-way (after its third chunk, on every machine): the
     chunks it finished are reused as they are, the rest is computed, and the numbers are those of
@@ -289,31 +294,6 @@ def test_sigkilled_sweep_resumes(tmp_path: Path, fmu_path: Path, fig8_9_local: x
 
 
 # ---------------------------------------------------------------------------- command line
-
-
-@pytest.mark.parametrize("argv, words", [
-    (["fig99"], "unknown study"),
-    (["fig8_9", "--set", "sweep.chi.num=abc"], "sweep.chi.num must be an integer"),
-    (["fig8_9", "--set", "sweep.nope=1"], "unknown key 'sweep.nope'"),
-    (["fig8_9", "--set", "sweep.chi.num=0"], "sweep.chi.num must be >= 1"),
-    (["fig8_9", "--set", "numerics.scheme=fast"], "invalid value 'fast' for numerics.scheme; valid range: one of"),
-    (["fig8_9", "--set", "params.lam=-1"], "params.lam"),
-    (["fig8_9", "--set", "sweep.obs_periods=40"], "sweep.obs_periods must be in"),
-    (["fig7", "--set", "numerics.alpha=0.5"], "for numerics.alpha; valid range: in [-0.333333, 0]"),
-    (["fig3", "--workers", "-1"], "--workers must be >= 0"),
-    (["fig3", "--workers", "two"], "invalid int value"),
-    (["fig3", "--config", "/nonexistent.toml"], "config file not found"),
-    (["fig3", "--fmu", "/nonexistent.fmu"], "FMU not found"),
-    (["fig3", "--bogus"], "unrecognized arguments"),
-])
-@pytest.mark.min_versions
-def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: str, tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture[str]) -> None:
-    assert main([*argv, "--out", str(tmp_path)]) == 2
-    err = capsys.readouterr().err
-    assert words in err
-    assert len(err.strip().splitlines()) == 1
-    assert not any(tmp_path.iterdir())  # no work started, nothing written
 
 
 def test_list_show_config_and_config_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -341,9 +321,6 @@ def test_studies_run_through_the_module_entry_point(tmp_path: Path, fmu_path: Pa
     stuck = dict(zip(ds.case.values, ds.stuck_share.values))
     assert stuck["below"] > 0.3 and stuck["above"] == 0.0
     assert (tmp_path / "fig4" / "fig4.png").stat().st_size > 10_000
-
-
-
 
 
 # ---------------------------------------------------------------------------- the chain's studies
@@ -415,15 +392,18 @@ def test_chain_waves_quick(tmp_path: Path, chain_fmu3: Path) -> None:
     assert res["summary"]["n"] == 64 and (out / "chain_waves.png").stat().st_size > 10_000
 
 
-@pytest.mark.parametrize("argv, words", [
-    (["chain2", "--set", "chain.configs=[\"all\"]"], "chain.configs must be a non-empty list of both, second"),
-    (["chain2", "--set", "window.obs_periods=100"], "window.obs_periods must be in"),
-    (["chain_waves", "--set", "chain.n=1"], "chain.n must be in [2, 4096]"),
-    (["chain_waves", "--set", "numerics.h=0"], "numerics.h must be > 0"),
-])
-def test_chain_studies_bad_input_is_one_line(argv: list[str], words: str, tmp_path: Path,
-                                            capsys: pytest.CaptureFixture[str]) -> None:
-    assert main([*argv, "--out", str(tmp_path)]) == 2
-    err = capsys.readouterr().err
-    assert words in err and len(err.strip().splitlines()) == 1
-    assert not any(tmp_path.iterdir())
+def test_fig3_sweep_without_an_excluded_band() -> None:
+    """sweep.exclude = [] is accepted (nothing left out), no more [5, 6] to say "none"."""
+    import tomllib
+
+    from dryfriction.model import repository_xml
+    from dryfriction.studies import fig3_frequency_response as fig3
+
+    cfg = tomllib.loads((repository_xml().parent / "configs" / "fig3.toml").read_text())
+    full = fig3.lambdas({**cfg, "sweep": {**cfg["sweep"], "exclude": [0.0, 0.0]}})
+    cfg["sweep"]["exclude"] = []
+    fig3.check(cfg)
+    assert fig3.lambdas(cfg).size == full.size
+    cfg["sweep"]["exclude"] = [1.0]
+    with pytest.raises(Exception, match=r"\[low, high\] or \[\]"):
+        fig3.check(cfg)

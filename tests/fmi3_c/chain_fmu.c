@@ -17,7 +17,7 @@
 #include "fmi3FunctionTypes.h"
 #include "model_vars.h" /* the chain's */
 #include "chain.h"
-#include "../tally.h"
+#include "../check.h"
 
 #include <dlfcn.h>
 #include <math.h>
@@ -694,7 +694,7 @@ static void test_threads(tally *T, const api3 *A)
 
 int main(void)
 {
-    tally t = {0, 0}, *T = &t;
+    tally t = {0, 0, NULL, {0}}, *T = &t;
     setvbuf(stdout, NULL, _IONBF, 0);
     static api3 chain3, osc3;
     static api2 chain2;

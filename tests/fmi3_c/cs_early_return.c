@@ -57,7 +57,7 @@ static void run_scheme(tally *T, int scheme)
 
 int main(void)
 {
-    tally tt = {0, 0}, *T = &tt;
+    tally tt = {0, 0, NULL, {0}}, *T = &tt;
     int schemes[16];
     const int ns = host_schemes(schemes, 16);
     EXPECT(ns >= 3);

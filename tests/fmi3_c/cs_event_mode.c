@@ -7,7 +7,7 @@
 
 int main(void)
 {
-    tally tt = {0, 0}, *T = &tt;
+    tally tt = {0, 0, NULL, {0}}, *T = &tt;
     const double h = HOST_T / 1000.0, mu_s = START_mu_s, muk_N = START_chi * START_mu_s * START_N;
     const double Fb = (mu_s > START_chi * mu_s ? mu_s : START_chi * mu_s) * START_N;
     host_env ref, E;

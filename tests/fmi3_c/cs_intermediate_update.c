@@ -34,7 +34,7 @@ static void on_update(fmi3InstanceEnvironment env, fmi3Float64 time, fmi3Boolean
 
 int main(void)
 {
-    tally tt = {0, 0}, *T = &tt;
+    tally tt = {0, 0, NULL, {0}}, *T = &tt;
     const double h = HOST_T / 1000.0;
     host_env ref;
     EXPECT(reference_switches(3, h, &ref));

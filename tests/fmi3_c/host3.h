@@ -6,7 +6,7 @@
 
 #include "fmi3Functions.h"
 #include "model_vars.h"
-#include "../tally.h"
+#include "../check.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,12 +1,13 @@
 /* Helpers for the C tests of the FMI API: counting memory callbacks, a logger that keeps the last
- * message, a tally of checks. Test code only: the counters are process-wide (the FMI memory
- * callbacks get no environment pointer), guarded by a mutex so that threads may share them. */
+ * message, the checks of tests/check.h (tally, EXPECT). Test code only: the counters are process-wide
+ * (the FMI memory callbacks get no environment pointer), guarded by a mutex so that threads may
+ * share them. */
 #ifndef DFO_FMI_HARNESS_H
 #define DFO_FMI_HARNESS_H
 
 #include "fmi2Functions.h"
 #include "model_vars.h"
-#include "../tally.h"
+#include "../check.h"
 
 #include <pthread.h>
 #include <stdarg.h>

@@ -536,7 +536,7 @@ static void test_cycles(tally *T)
 
 int main(void)
 {
-    tally t = {0, 0}, *T = &t;
+    tally t = {0, 0, NULL, {0}}, *T = &t;
     test_instantiate(T);
     test_null_instance(T);
     test_null_arrays(T);

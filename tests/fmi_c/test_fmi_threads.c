@@ -49,7 +49,7 @@ static void *simulate(void *arg)
 
 int main(void)
 {
-    tally t = {0, 0}, *T = &t;
+    tally t = {0, 0, NULL, {0}}, *T = &t;
     static job serial[N_THREADS], parallel[N_THREADS];
     for (int k = 0; k < N_THREADS; k++) {
         memset(&serial[k], 0, sizeof serial[k]);

@@ -12,22 +12,13 @@
 #include "fmu_state.h"
 #include "instance_common.h"
 #include "osc_instance.h"
+#include "../check.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static long checks, failures;
-#define EXPECT(cond)                                                              \
-    do {                                                                          \
-        checks++;                                                                 \
-        if (!(cond)) {                                                            \
-            failures++;                                                           \
-            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond);    \
-        }                                                                         \
-    } while (0)
 
 typedef struct {
     int n_events, n_errors;
@@ -66,7 +57,7 @@ static void h_log(void *ctx, dfo_inst_status status, const char *category, const
 
 #define OSC(lc) ((osc_instance *)(lc))
 
-static dfo_lifecycle *start(host_log *L)
+static dfo_lifecycle *start(checks *T, host_log *L)
 {
     const dfo_host host = {L, h_alloc, h_free, h_log};
     memset(L, 0, sizeof *L);
@@ -81,7 +72,7 @@ static dfo_lifecycle *start(host_log *L)
     return in;
 }
 
-static void test_table_and_time(void)
+static void test_table_and_time(checks *T)
 {
     host_log L;
     const dfo_host host = {&L, h_alloc, h_free, h_log};
@@ -108,7 +99,7 @@ static void test_table_and_time(void)
     EXPECT(dfo_inst_set_real(in, "set", &vm, 1, &bad) == DFO_INST_ERROR);
     EXPECT(strstr(L.last, "invalid value -1 for variable m (value reference 1); valid range: > 0") != NULL);
     dfo_inst_delete(in);
-    in = start(&L);
+    in = start(T, &L);
     double t = 0.0, reached = -1.0;
     for (int k = 0; k < 50; k++) {
         const double dt = 0.0123 + 1e-4 * k;
@@ -127,10 +118,10 @@ static void test_table_and_time(void)
     dfo_inst_delete(in);
 }
 
-static void test_early_return(void)
+static void test_early_return(checks *T)
 {
     host_log La, Lb;
-    dfo_lifecycle *a = start(&La), *b = start(&Lb);
+    dfo_lifecycle *a = start(T, &La), *b = start(T, &Lb);
     /* ordinary: one step to 5 s, every switch reported */
     EXPECT(dfo_inst_do_step(a, "doStep", 0.0, 5.0, 0, NULL) == DFO_INST_OK);
     EXPECT(La.n_events > 2);
@@ -152,10 +143,10 @@ static void test_early_return(void)
     dfo_inst_delete(b);
 }
 
-static void test_states(void)
+static void test_states(checks *T)
 {
     host_log L;
-    dfo_lifecycle *a = start(&L);
+    dfo_lifecycle *a = start(T, &L);
     EXPECT(dfo_inst_do_step(a, "doStep", 0.0, 1.0, 0, NULL) == DFO_INST_OK);
     void *st = NULL, *st2 = NULL;
     EXPECT(dfo_inst_get_state(a, "get", &st) == DFO_INST_OK && st != NULL);
@@ -194,9 +185,9 @@ static void test_states(void)
 
 int main(void)
 {
-    test_table_and_time();
-    test_early_return();
-    test_states();
-    printf("test_instance_core: %ld checks, %ld failed\n", checks, failures);
-    return failures ? 1 : 0;
+    checks t = {0, 0, NULL, {0}}, *T = &t;
+    test_table_and_time(T);
+    test_early_return(T);
+    test_states(T);
+    return checks_done(T, "test_instance_core");
 }

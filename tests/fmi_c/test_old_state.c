@@ -7,6 +7,7 @@
  * Usage: test_old_state FIXTURE.hex VERSION_FOUND (linked against one FMI 2.0 FMU). */
 #include "fmi2Functions.h"
 #include "model_vars.h"
+#include "../check.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,8 +41,7 @@ int main(int argc, char **argv)
     }
     static unsigned char old[1 << 16];
     const size_t n = read_hex(argv[1], old, sizeof old);
-    int failures = 0;
-#define EXPECT(c) ((c) ? (void)0 : (void)(failures++, fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #c)))
+    checks t = {0, 0, NULL, {0}}, *T = &t;
     EXPECT(n > 24);
     const fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c = fmi2Instantiate("old", fmi2CoSimulation, MODEL_GUID, "", &cb, fmi2False, fmi2False);
@@ -70,6 +70,5 @@ int main(int argc, char **argv)
     fmi2FreeFMUstate(c, &s2);
     free(buf);
     fmi2FreeInstance(c);
-    printf("test_old_state %s: %s\n", argv[1], failures ? "FAILED" : "ok");
-    return failures ? 1 : 0;
+    return checks_done(T, "test_old_state");
 }

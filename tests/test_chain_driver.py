@@ -1,10 +1,8 @@
 """The chain driver's own logic, without an FMU: array parameters (a scalar for every block, n
-values, one sentence otherwise), the command's argument parsing and its one-line errors, the
-trajectory's derived numbers and the wave study's front measures."""
+values, one sentence otherwise), the command's argument parsing, the trajectory's derived numbers
+and the wave study's front measures. (The command's one-line errors: test_cli_errors.py.)"""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +10,6 @@ import pytest
 from dryfriction.argparsing import UsageError
 from dryfriction.chain import ChainRun, expand
 from dryfriction.chain_cli import parse_sets
-from dryfriction.cli import main
 from dryfriction.studies.chain_waves import first_slip, front_speed
 
 
@@ -37,21 +34,6 @@ def test_parse_sets() -> None:
         parse_sets(["mu_s"])
     with pytest.raises(UsageError, match="--set N: 'heavy' is not a number"):
         parse_sets(["N=heavy"])
-
-
-@pytest.mark.parametrize("argv, words", [
-    (["chain", "--n", "0"], "--n must be >= 1, not 0"),
-    (["chain", "--dt", "-1"], "--dt must be > 0, not -1"),
-    (["chain", "--fmi", "4"], "invalid choice: 4"),
-    (["chain", "--set", "N=heavy"], "--set N: 'heavy' is not a number"),
-    (["chain", "--fmu", "/nonexistent.fmu"], "--fmu: no such file"),
-])
-def test_chain_command_bad_input_is_one_line(argv: list[str], words: str, tmp_path: Path,
-                                             capsys: pytest.CaptureFixture[str]) -> None:
-    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
-    err = capsys.readouterr().err
-    assert words in err and len(err.strip().splitlines()) == 1
-    assert not (tmp_path / "out").exists()
 
 
 def test_chain_run_derived_numbers() -> None:

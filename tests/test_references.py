@@ -463,6 +463,7 @@ def test_steady_formula_domains() -> None:
 # --------------------------------------------------------------------------- resonance
 
 
+@pytest.mark.slow
 def test_resonance_many_periods_grows_linearly() -> None:
     """lambda = 1, zeta = 0, 4 mu_k N < pi P0: 1000 periods, amplitude grows by pi - 4 f per
     period (non-dimensional) with f = mu_k N / P0."""

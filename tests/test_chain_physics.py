@@ -8,11 +8,13 @@ import subprocess
 
 import numpy as np
 import pytest
-from chain_cases import CASES, DRIVER, PERIODS, convergence, run_driver
 
 from dryfriction.chain_reference import Chain, solve_chain
 from dryfriction.exact import solve_exact
 from dryfriction.params import Oscillator
+
+from chain_cases import CASES, DRIVER, PERIODS, convergence, run_driver
+
 
 # two decoupled blocks (coupling spring and damper 0), each on its own wall spring: block 1 on
 # k[0], block 2 on k_end; chi < 1 and chi > 1, the second damped
@@ -25,11 +27,6 @@ DECOUPLED = Chain.make(2, omega=OMEGA, k=[1.0, 0.0], k_end=2.0, c=[0.0, 0.0], c_
 
 def _exact(i: int, t_end: float):
     return solve_exact(Oscillator(m=1.0, omega=OMEGA, mu_s=0.5, **BLOCKS[i]), t_end)
-
-
-@pytest.fixture(scope="module")
-def refs() -> dict:
-    return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}
 
 
 # ---- the reference ------------------------------------------------------------------------------

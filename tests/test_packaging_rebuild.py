@@ -23,6 +23,7 @@ import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -31,10 +32,12 @@ from fmpy import extract, read_model_description, simulate_fmu
 
 from dryfriction.chain import default_chain_fmu, default_chain_fmu3
 from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import default_fmu_path
+from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.params import Oscillator
 
-# builds with compilers (not run under the sanitizer's LD_PRELOAD), about a minute in all
-pytestmark = [pytest.mark.no_sanitizer, pytest.mark.slow]
+
+# the rebuilds of the four FMUs from their sources/ build with compilers (not run under the
+# sanitizer's LD_PRELOAD), about a minute in all: each is marked no_sanitizer and slow
 
 ROOT = Path(__file__).resolve().parents[1]
 FMUS = {
@@ -101,6 +104,8 @@ def _listed_sources(unzipped: Path) -> list[str]:
     return [f.get("name") for f in root.iterfind("BuildConfiguration/SourceFileSet/SourceFile")]
 
 
+@pytest.mark.no_sanitizer
+@pytest.mark.slow
 @pytest.mark.parametrize("key", list(FMUS))
 def test_the_source_list_is_exactly_the_sources(shipped: dict[str, Path], key: str) -> None:
     d = shipped[key]
@@ -142,6 +147,8 @@ def _compare(shipped_dir: Path, rebuilt: Path, key: str, how: str) -> None:
             _same_bits(ref, new, f"{key} rebuilt by {how}, {start} {opt}")
 
 
+@pytest.mark.no_sanitizer
+@pytest.mark.slow
 @pytest.mark.parametrize("key", list(FMUS))
 def test_fmpy_compile_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, tmp_path: Path) -> None:
     """The README's `fmpy compile X.fmu` (fmpy's command line, here with all warnings as errors) on
@@ -166,6 +173,8 @@ def test_fmpy_compile_rebuilds_the_same_numbers(shipped: dict[str, Path], key: s
     _compare(shipped[key], d, key, "fmpy compile")
 
 
+@pytest.mark.no_sanitizer
+@pytest.mark.slow
 @pytest.mark.parametrize("variant", ["readme", "fma"])
 @pytest.mark.parametrize("key", list(FMUS))
 def test_the_readme_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, variant: str,
@@ -192,3 +201,28 @@ def test_the_readme_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], 
         if dis.returncode == 0:
             assert "vfmadd" not in dis.stdout and "vfmsub" not in dis.stdout, "fused multiply-adds in the binary"
     _compare(shipped[key], d, key, f"the README's cc line ({variant})")
+
+
+# ------------------------ the oscillator's source FMU, rebuilt by fmpy (also under the sanitizers)
+
+@pytest.mark.slow
+def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU, tmp_path: Path) -> None:
+    """A host can rebuild the binary from sources/ (fmpy's CMake build) and gets the same numbers."""
+    from fmpy import extract
+    from fmpy.build import build_platform_binary
+
+    unzip = Path(extract(str(fmu_path), unzipdir=str(tmp_path / "fmu")))
+    shutil.rmtree(unzip / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(unzip, build_dir=tmp_path / "build")
+    rebuilt = tmp_path / "rebuilt.fmu"
+    with zipfile.ZipFile(rebuilt, "w") as z:
+        for f in unzip.rglob("*"):
+            z.write(f, f.relative_to(unzip).as_posix())
+    p = Oscillator()
+    t = np.linspace(0, 4 * p.period, 81)
+    with OscillatorFMU(rebuilt) as other:
+        a = other.trajectory(p, t, Settings(h=p.period / 500))
+    b = fmu.trajectory(p, t, Settings(h=p.period / 500))
+    for k in ("x", "v", "F_friction", "mode"):
+        assert np.allclose(a[k], b[k], rtol=1e-12, atol=1e-15), k

@@ -7,19 +7,20 @@ import json
 import shutil
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import pytest
 
 from dryfriction import locate, model
 from dryfriction.chain import ChainFMU, ChainFMU2
-from dryfriction.cli import main
 from dryfriction.fmi3 import FMI3Oscillator, default_fmi3_path
 from dryfriction.fmu import OscillatorFMU
 from dryfriction.locate import FMUFileError
 from dryfriction.response import frequency_response
 from dryfriction.studies import run_study
+
+from helpers import _bad_xml, _not_zip, _zip_without_md
+
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -34,26 +35,6 @@ def fmus(fmu_path: Path, chain_fmu2: Path, chain_fmu3: Path) -> dict[locate.Kind
 def no_env(monkeypatch: pytest.MonkeyPatch) -> None:
     for kind in locate.KINDS:
         monkeypatch.delenv(kind.env, raising=False)
-
-
-def _not_zip(tmp_path: Path) -> Path:
-    p = tmp_path / "README.md"
-    p.write_text("# not an FMU\n")
-    return p
-
-
-def _zip_without_md(tmp_path: Path) -> Path:
-    p = tmp_path / "empty.fmu"
-    with zipfile.ZipFile(p, "w") as z:
-        z.writestr("binaries/readme.txt", "no model description")
-    return p
-
-
-def _bad_xml(tmp_path: Path) -> Path:
-    p = tmp_path / "badxml.fmu"
-    with zipfile.ZipFile(p, "w") as z:
-        z.writestr("modelDescription.xml", "<fmiModelDescription fmiVersion='2.0'")
-    return p
 
 
 # ------------------------------------------------------------------ one exception, one sentence each
@@ -107,25 +88,6 @@ def test_the_environment_variable_is_named_in_the_sentence(no_env: None, tmp_pat
     with pytest.raises(FMUFileError) as err:
         OscillatorFMU()
     assert str(err.value) == f"DFO_FMU={tmp_path / 'README.md'} is not an FMU (not a zip archive)"
-
-
-@pytest.mark.parametrize("make, words", [
-    (_not_zip, "is not an FMU (not a zip archive)"),
-    (_zip_without_md, "is not an FMU (no modelDescription.xml in the archive)"),
-])
-@pytest.mark.parametrize("command", [["run", "--scene", "sweep", "--periods", "3"],
-                                     ["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3",
-                                      "--f-start", "1", "--f-stop", "1", "--num", "1", "--json"],
-                                     ["chain", "--t-end", "1"]])
-def test_the_cli_reports_an_unusable_fmu_in_one_line(make, words: str, command: list[str], tmp_path: Path,
-                                                     capsys: pytest.CaptureFixture[str],
-                                                     monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.chdir(tmp_path)
-    path = make(tmp_path)
-    assert main(["--fmu", str(path), *command]) == 2
-    err = capsys.readouterr().err
-    assert f"{path} {words}" in err and len(err.strip().splitlines()) == 1, err
-    assert "Traceback" not in err
 
 
 # ------------------------------------------------------------------------------------------ the order
@@ -192,6 +154,7 @@ def test_the_configs_come_from_the_package_data_else_the_repository(monkeypatch:
 
 # --------------------------------------------------------------------------- nothing read at import
 
+@pytest.mark.slow
 def test_importing_every_module_reads_no_model_description_fmu_or_config() -> None:
     """Every module of the package is imported with recorders on: an audit hook on every file
     opened (no modelDescription.xml, no .fmu, no study config) and on the calls that would find

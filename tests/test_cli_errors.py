@@ -1,0 +1,214 @@
+"""What the command line says when something is wrong: every error is one line and exit status 2
+(bad arguments of every subcommand, an unusable --fmu, an error the FMU reports), every warning
+the FMU logs is one stderr line, --strict makes it an error, and the README's quoted error line
+is the one printed."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from dryfriction.cli import main
+from dryfriction.studies import main as studies_main
+
+from helpers import _not_zip, _zip_without_md
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--fmu", "/nonexistent.fmu", "study", "list"], "--fmu: no such file"),
+    (["study", "fig99"], "unknown study"),
+    (["study", "fig3", "--set", "numerics.alpha=0.5"], "numerics.alpha"),
+    (["run", "--scheme", "fast"], "invalid choice"),
+    (["bogus"], "invalid choice"),
+])
+def test_bad_arguments_are_one_line_and_exit_2(argv: list[str], words: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["run", "--m", "-1", "--k", "1"], "--m must be > 0"),
+    (["run", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3", "--f", "1", "--lam", "0.5"],
+     "not both"),
+    (["run", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3"], "frequency is missing"),
+    (["run", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0", "--mu-k", "0.2", "--f", "1"],
+     "mu_k with mu_s = 0"),
+    (["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3", "--f-start", "5",
+      "--f-stop", "1"], "--f-stop 1 must be >= --f-start 5"),
+    (["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3", "--f-start", "0",
+      "--f-stop", "1"], "--f-start must be > 0"),
+    (["response", "--m", "1", "--k", "100", "--N", "1", "--mu-s", "0.3", "--f-start", "1", "--f-stop", "2"],
+     "--P0"),
+    (["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3", "--zeta", "0.1", "--c", "1",
+      "--f-start", "1", "--f-stop", "2"], "--c or --zeta, not both"),
+])
+def test_bad_physical_arguments_are_one_line(argv: list[str], words: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1, err
+
+
+SWEEP = ["run", "--scene", "sweep", "--periods", "3"]
+
+
+def test_cli_prints_the_fmus_warning_as_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(SWEEP + ["--steps-per-period", "2"]) == 0
+    cap = capsys.readouterr()
+    lines = cap.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("dryfriction: warning: fmi2ExitInitializationMode: h = "), cap.err
+    assert "Choose h <=" in lines[0]
+    assert json.loads(cap.out)["amplitude"] > 0  # the result is still printed
+
+
+def test_cli_strict_makes_the_warning_an_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(SWEEP + ["--steps-per-period", "2", "--strict"]) == 2
+    cap = capsys.readouterr()
+    lines = cap.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("dryfriction: error: ") and "internal steps per" in lines[0]
+    assert cap.out == ""
+
+
+def test_cli_an_error_the_fmu_reports_is_one_line_and_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
+    # 31 periods of 1.26 s in steps of 1e-12 s: beyond the FMU's work bound for a Bossak scheme
+    assert main(SWEEP + ["--h", "1e-12"]) == 2
+    cap = capsys.readouterr()
+    lines = cap.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("dryfriction: error: ") and "internal steps of h" in lines[0]
+    assert cap.out == ""
+
+
+@pytest.mark.slow
+def test_console_script_warning_is_one_stderr_line(tmp_path: Path) -> None:
+    exe = Path(sys.executable).with_name("dryfriction")
+    env = {**os.environ, "PYTHONWARNINGS": ""}
+    r = subprocess.run([str(exe), *SWEEP, "--steps-per-period", "2"], capture_output=True, text=True, cwd=tmp_path,
+                       env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("dryfriction: warning: "), r.stderr
+
+
+def test_the_readmes_error_line_is_the_one_printed(capsys: pytest.CaptureFixture[str]) -> None:
+    import re
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    quoted = re.findall(r"`(dryfriction: error: [^`]+)`", readme)
+    assert quoted, "the README quotes an error line"
+    for line in quoted:
+        m = re.fullmatch(r"dryfriction: error: --m must be > 0, not (\S+)", line)
+        assert m, f"a quoted error line without a command here to check it: {line}"
+        assert main(["run", "--m", m.group(1), "--k", "1", "--P0", "1", "--f", "1", "--N", "1", "--mu-s", "0.1"]) == 2
+        assert capsys.readouterr().err.strip() == line
+
+
+@pytest.mark.parametrize("command", [["study", "list"], ["scenes"], ["run", "--scene", "sweep"]])
+def test_an_unusable_fmu_option_is_refused_before_any_work(command: list[str], tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    import zipfile
+
+    bogus = tmp_path / "notes.fmu"
+    bogus.write_text("not an archive")
+    empty = tmp_path / "empty.fmu"
+    with zipfile.ZipFile(empty, "w") as z:
+        z.writestr("readme.txt", "no model description")
+    for path, words in ((bogus, "is not an FMU (not a zip archive)"), (empty, "no modelDescription.xml")):
+        assert main(["--fmu", str(path), *command]) == 2
+        cap = capsys.readouterr()
+        lines = cap.err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("dryfriction: error: ") and words in lines[0], cap.err
+        assert cap.out == ""
+
+
+@pytest.mark.parametrize("make, words", [
+    (_not_zip, "is not an FMU (not a zip archive)"),
+    (_zip_without_md, "is not an FMU (no modelDescription.xml in the archive)"),
+])
+@pytest.mark.parametrize("command", [["run", "--scene", "sweep", "--periods", "3"],
+                                     ["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "1", "--mu-s", "0.3",
+                                      "--f-start", "1", "--f-stop", "1", "--num", "1", "--json"],
+                                     ["chain", "--t-end", "1"]])
+def test_the_cli_reports_an_unusable_fmu_in_one_line(make, words: str, command: list[str], tmp_path: Path,
+                                                     capsys: pytest.CaptureFixture[str],
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    path = make(tmp_path)
+    assert main(["--fmu", str(path), *command]) == 2
+    err = capsys.readouterr().err
+    assert f"{path} {words}" in err and len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["fig99"], "unknown study"),
+    (["fig8_9", "--set", "sweep.chi.num=abc"], "sweep.chi.num must be an integer"),
+    (["fig8_9", "--set", "sweep.nope=1"], "unknown key 'sweep.nope'"),
+    (["fig8_9", "--set", "sweep.chi.num=0"], "sweep.chi.num must be >= 1"),
+    (["fig8_9", "--set", "numerics.scheme=fast"], "invalid value 'fast' for numerics.scheme; valid range: one of"),
+    (["fig8_9", "--set", "params.lam=-1"], "params.lam"),
+    (["fig8_9", "--set", "sweep.obs_periods=40"], "sweep.obs_periods must be in"),
+    (["fig7", "--set", "numerics.alpha=0.5"], "for numerics.alpha; valid range: in [-0.333333, 0]"),
+    (["fig3", "--workers", "-1"], "--workers must be >= 0"),
+    (["fig3", "--workers", "two"], "invalid int value"),
+    (["fig3", "--config", "/nonexistent.toml"], "config file not found"),
+    (["fig3", "--fmu", "/nonexistent.fmu"], "FMU not found"),
+    (["fig3", "--bogus"], "unrecognized arguments"),
+])
+@pytest.mark.min_versions
+def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: str, tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    assert studies_main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert words in err
+    assert len(err.strip().splitlines()) == 1
+    assert not any(tmp_path.iterdir())  # no work started, nothing written
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["chain2", "--set", "chain.configs=[\"all\"]"], "chain.configs must be a non-empty list of both, second"),
+    (["chain2", "--set", "window.obs_periods=100"], "window.obs_periods must be in"),
+    (["chain_waves", "--set", "chain.n=1"], "chain.n must be in [2, 4096]"),
+    (["chain_waves", "--set", "numerics.h=0"], "numerics.h must be > 0"),
+])
+def test_chain_studies_bad_input_is_one_line(argv: list[str], words: str, tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    assert studies_main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv, words, status", [
+    (["--n", "3", "--set", "m=1,1,-1"], "invalid value -1 for m[3]", 2),
+    (["--n", "3", "--set", "m=1,2"], "m needs 3 values (one per block, n = 3)", 2),
+    (["--n", "5000"], "invalid value 5000 for n", 2),
+    (["--set", "mass=1"], "the chain has no parameter 'mass'", 2),
+    (["--set", "scheme=exact"], "scheme must be one of paper, consistent, located, not 'exact'", 2),
+])
+def test_chain_command_bad_values(argv: list[str], words: str, status: int, tmp_path: Path, chain_fmu3: Path,
+                                  capsys: pytest.CaptureFixture[str]) -> None:
+    from dryfriction.cli import main
+
+    assert main(["chain", *argv, "--out", str(tmp_path / "out"), "--fmu", str(chain_fmu3)]) == status
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["chain", "--n", "0"], "--n must be >= 1, not 0"),
+    (["chain", "--dt", "-1"], "--dt must be > 0, not -1"),
+    (["chain", "--fmi", "4"], "invalid choice: 4"),
+    (["chain", "--set", "N=heavy"], "--set N: 'heavy' is not a number"),
+    (["chain", "--fmu", "/nonexistent.fmu"], "--fmu: no such file"),
+])
+def test_chain_command_bad_input_is_one_line(argv: list[str], words: str, tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
