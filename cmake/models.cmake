@@ -18,6 +18,8 @@
 # What every FMU holds besides its model: the life cycle and the FMU-state format (core/), the glue.
 set(DFO_CORE_FILES core/instance.h core/instance_common.c core/instance_common.h core/fmu_state.c core/fmu_state.h)
 set(DFO_GEN_SCRIPT ${CMAKE_SOURCE_DIR}/fmu_src/gen_model_vars.py)
+# the generator loads the package's model-description reader (one parser of the effect table)
+set(DFO_GEN_READER ${CMAKE_SOURCE_DIR}/src/dryfriction/model.py)
 
 # Read models/<name>/model.cmake into DFO_<name>_<field>.
 macro(dfo_read_model name)
@@ -73,7 +75,7 @@ function(dfo_add_model name)
     OUTPUT ${outputs}
     ${cmds}
     COMMAND ${CMAKE_COMMAND} -E touch ${outputs}
-    DEPENDS ${md} ${DFO_GEN_SCRIPT}
+    DEPENDS ${md} ${DFO_GEN_SCRIPT} ${DFO_GEN_READER}
     COMMENT "Generating ${id}'s model_vars.h and descriptions from ${md}")
   add_custom_target(${name}_generated DEPENDS ${outputs})
 

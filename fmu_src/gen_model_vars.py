@@ -41,17 +41,20 @@ as further emitters without touching the parser:
    model does not carry (units, default experiment, metadata, vendor annotations) is read from the
    same source file.
 
-Standard library only.
+Standard library only, and the package's model-description reader (src/dryfriction/model.py,
+loaded by its path) for the effect table, so that one piece of code parses it.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import sys
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
+from typing import Any
 
 TIME_VR = 0  # the FMI 3.0 independent variable `time` (no variable of the source may use it)
 FMI3_GLUE, FMI2_GLUE = "fmi3_cs.c", "fmi2_cs.c"
@@ -96,11 +99,22 @@ class Variable:
         return self.type == "Real" and (self.min == DBL_MIN or (self.zero is not None and self.min == 0))
 
 
-@dataclass(frozen=True)
-class Effect:
-    bit: int
-    name: str
-    description: str
+def _load_reader() -> Any:
+    """The package's model-description reader (src/dryfriction/model.py, which imports nothing of
+    the package), loaded by its path: the effect table is parsed by one piece of code, for the C
+    view here and for the Python side at run time."""
+    path = Path(__file__).resolve().parents[1] / "src" / "dryfriction" / "model.py"
+    spec = importlib.util.spec_from_file_location("_dryfriction_model_reader", path)
+    if spec is None or spec.loader is None:
+        raise SystemExit(f"gen_model_vars: cannot load the model-description reader {path}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses resolve their module by name
+    spec.loader.exec_module(module)
+    return module
+
+
+_READER = _load_reader()
+Effect = _READER.Effect
 
 
 @dataclass(frozen=True)
@@ -181,11 +195,7 @@ def parse(xml_path: Path) -> Model:
             max=None if hi is None else float(hi), unit=kind_el.get("unit"),
             description=sv.get("description", ""), declared_type=declared, dependencies=dep_names,
             zero=zero.get(name), dimension=sv.get("dimension")))
-    effects_var, effects = None, []
-    eff_el = root.find("VendorAnnotations/Tool[@name='dryfriction']/Effects")
-    if eff_el is not None:
-        effects_var = eff_el.get("variable")
-        effects = [Effect(int(e.get("bit")), e.get("name"), e.get("description", "")) for e in eff_el.iterfind("Effect")]
+    effects_var, effects = _READER.parse_effects(root)
     structs_el = root.find("VendorAnnotations/Tool[@name='dryfriction.c']/Structs")
     structs = {} if structs_el is None else {k: structs_el.get(k, "") for k in ("header", "parameters", "inputs")}
     model = Model(
