@@ -75,6 +75,9 @@ typedef struct {
 /* host, name, phase instantiated, the experiment's times 0; every log category as logging_on says,
  * errors and warnings always on. Enough to log through (the glues' messages before an instance). */
 void dfo_lifecycle_init(dfo_lifecycle *lc, const dfo_host *host, const char *name, int logging_on);
+/* A model's instance of size bytes (its dfo_lifecycle the first member) from the host's allocator,
+ * zeroed, its life cycle started (dfo_lifecycle_init); NULL, logged, when out of memory. */
+dfo_lifecycle *dfo_lifecycle_new(const dfo_host *host, size_t size, const char *name, int logging_on);
 
 #if defined(__GNUC__)
 #define DFO_PRINTF(f, a) __attribute__((format(printf, f, a)))

@@ -80,6 +80,19 @@ void dfo_lifecycle_init(dfo_lifecycle *lc, const dfo_host *host, const char *nam
     lc->log_on[DFO_LOG_STATUS_ERROR] = lc->log_on[DFO_LOG_STATUS_WARNING] = 1;
 }
 
+dfo_lifecycle *dfo_lifecycle_new(const dfo_host *host, size_t size, const char *name, int logging_on)
+{
+    dfo_lifecycle *lc = (dfo_lifecycle *)host->alloc(host->ctx, 1, size);
+    if (!lc) {
+        dfo_lifecycle tmp;
+        dfo_lifecycle_init(&tmp, host, name, 0);
+        dfo_inst_fail(&tmp, "instantiate: out of memory.");
+        return NULL;
+    }
+    dfo_lifecycle_init(lc, host, name, logging_on);
+    return lc;
+}
+
 /* ---- the variable table ---------------------------------------------------------------------- */
 
 const dfo_var_info *dfo_find_var(unsigned int vr)

@@ -206,14 +206,8 @@ int chain_inst_started(const chain_instance *in)
 
 dfo_lifecycle *dfo_inst_new(const dfo_host *host, const char *name, int logging_on)
 {
-    chain_instance *in = (chain_instance *)host->alloc(host->ctx, 1, sizeof(chain_instance));
-    if (!in) {
-        dfo_lifecycle tmp;
-        dfo_lifecycle_init(&tmp, host, name, 0);
-        dfo_inst_fail(&tmp, "instantiate: out of memory.");
-        return NULL;
-    }
-    dfo_lifecycle_init(&in->lc, host, name, logging_on);
+    chain_instance *in = (chain_instance *)dfo_lifecycle_new(host, sizeof(chain_instance), name, logging_on);
+    if (!in) return NULL;
     if (!chain_inst_alloc_arrays(in, &in->v, CHAIN_N_START)) {
         dfo_inst_fail(&in->lc, "instantiate: out of memory for n = %lu blocks.", (unsigned long)CHAIN_N_START);
         host->free(host->ctx, in);

@@ -104,14 +104,8 @@ static int check_value(const osc_instance *in, const char *fn, const dfo_var_inf
 
 dfo_lifecycle *dfo_inst_new(const dfo_host *host, const char *name, int logging_on)
 {
-    osc_instance *in = (osc_instance *)host->alloc(host->ctx, 1, sizeof(osc_instance));
-    if (!in) {
-        dfo_lifecycle tmp;
-        dfo_lifecycle_init(&tmp, host, name, 0);
-        dfo_inst_fail(&tmp, "instantiate: out of memory.");
-        return NULL;
-    }
-    dfo_lifecycle_init(&in->lc, host, name, logging_on);
+    osc_instance *in = (osc_instance *)dfo_lifecycle_new(host, sizeof(osc_instance), name, logging_on);
+    if (!in) return NULL;
     /* values read that the run has not computed are always reported */
     in->lc.log_on[DFO_LOG_NOT_COMPUTED] = 1;
     set_start_values(in);

@@ -4,9 +4,11 @@ fast path of bulk get/set (see :mod:`dryfriction.fmi`)."""
 from __future__ import annotations
 
 import ctypes
+import os
 import threading
 from collections.abc import Callable, Sequence
 from ctypes import c_void_p
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
@@ -175,3 +177,10 @@ class BaseInstance:
     def _free_states(self) -> None:
         for st in list(self._states):
             st.free()
+
+
+def binary_path(unzip_dir: str | os.PathLike[str], folder: str, model_identifier: str) -> Path:
+    """The shared library of this platform inside an unzipped FMU: binaries/<folder>/<id><ext>."""
+    from fmpy import sharedLibraryExtension
+
+    return Path(unzip_dir) / "binaries" / folder / f"{model_identifier}{sharedLibraryExtension}"

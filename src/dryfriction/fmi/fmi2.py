@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FMUCallError, FMUError, FMUFileError, status_name as _status_name
-from ._base import BaseInstance, State, load_library
+from ._base import BaseInstance, State, binary_path, load_library
 
 __all__ = [
     "OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING", "STATUS_NAMES", "LAST_SUCCESSFUL_TIME",
@@ -93,9 +93,9 @@ DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 def library_path(unzip_dir: str | os.PathLike[str], model_identifier: str) -> Path:
     """The shared library of this platform inside an unzipped FMU (fmpy's platform names)."""
-    from fmpy import platform, sharedLibraryExtension
+    from fmpy import platform
 
-    return Path(unzip_dir) / "binaries" / platform / f"{model_identifier}{sharedLibraryExtension}"
+    return binary_path(unzip_dir, platform, model_identifier)
 
 
 class Instance(BaseInstance):

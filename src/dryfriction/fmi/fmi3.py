@@ -29,7 +29,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import FMUCallError, FMUError, FMUFileError, status_name as _status_name
-from ._base import BaseInstance, State, load_library
+from ._base import BaseInstance, State, binary_path, load_library
 
 __all__ = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "STATUS_NAMES", "FMUError", "FMUCallError", "Instance",
            "State", "StepResult", "DiscreteStates", "IntermediateUpdate", "library_path", "status_name", "DTYPES"]
@@ -112,9 +112,9 @@ class IntermediateUpdate(NamedTuple):
 
 def library_path(unzip_dir: str | os.PathLike[str], model_identifier: str) -> Path:
     """The shared library of this platform inside an unzipped FMU (FMI 3.0's platform tuples)."""
-    from fmpy import platform_tuple, sharedLibraryExtension
+    from fmpy import platform_tuple
 
-    return Path(unzip_dir) / "binaries" / platform_tuple / f"{model_identifier}{sharedLibraryExtension}"
+    return binary_path(unzip_dir, platform_tuple, model_identifier)
 
 
 class Instance(BaseInstance):
