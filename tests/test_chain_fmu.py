@@ -254,7 +254,7 @@ def test_the_readmes_five_lines() -> None:
     import re
 
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    block = re.search(r"```python\n(from dryfriction.chain import ChainFMU\n.*?)```", readme, re.S)
+    block = re.search(r"```python\n(from dryfriction.chain import ChainFMU3?\n.*?)```", readme, re.S)
     assert block is not None
     code = block.group(1)
     assert len(code.strip().splitlines()) == 5
