@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from dryfriction import DryFrictionWarning
@@ -549,6 +549,12 @@ def test_random_parameters(fmu: OscillatorFMU, lam: float, ms: float, chi: float
                            dz0: float, phi: float) -> None:
     """Random valid parameters: outputs finite, invariants at every step, and the consistent
     (first-order) scheme converges to the located one as h shrinks (over two periods)."""
+    # A breakaway tie: starting at rest, the static force's peak 1 + |z0| (in P0) equals the breakaway
+    # limit mu_s sigma to rounding. Whether the block breaks away then depends on the last bit, and a
+    # grid scheme decides it only once its grid hits the peak: the limit h -> 0 is not continuous in
+    # the data there (found by Hypothesis: lam 1, mu_s sigma 1, z0 2.2e-16, zeta 0, both schemes
+    # valid, 1.34 apart at T/4000, 1.7e-4 at T/16000). The property holds off the tie.
+    assume(not (dz0 == 0.0 and abs(1.0 + abs(z0) - ms) <= 1e-9))
     p = ND(lam, ms, chi, zeta=zeta, z0=z0, dz0=dz0, phi=phi)
     T = p.period
     scale = p.P0 / p.k
