@@ -241,7 +241,9 @@ static int sens_computed(const dfo_params *p) { return p->sensitivity && p->sche
  * unless it is computed. */
 static int not_computed(const osc_values *v, int id)
 {
-    if (is_sensitivity(id)) return !sens_computed(&v->p);
+    if (is_sensitivity(id))
+        return !sens_computed(&v->p) || !(isfinite(v->s.J[0]) && isfinite(v->s.J[1]) && isfinite(v->s.J[2]) &&
+                                          isfinite(v->s.J[3]));
     if (!needs_observe(id)) return 0;
     if (!v->p.observe) return 1;
     return (id == DFO_OUT_x_max || id == DFO_OUT_x_min) && !v->s.observed;
@@ -263,7 +265,13 @@ static void note_not_computed(osc_instance *in, const char *fn, const dfo_var_in
     if (is_sensitivity(var->id)) {
         if (in->lc.warned & WARNED_SENSITIVITY) return;
         in->lc.warned |= WARNED_SENSITIVITY;
-        if (!in->v.p.sensitivity)
+        if (sens_computed(&in->v.p))
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) reads NaN: the Jacobian dx_dx0, dx_dv0, dv_dx0, "
+                         "dv_dv0 overflowed or met a tangential event since t_ref (a breakaway with a stationary "
+                         "force, a stop with zero deceleration), where the map is not differentiable; it is the "
+                         "identity again after a state restore.", fn, var->name, var->vr);
+        else if (!in->v.p.sensitivity)
             dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
                          "%s: variable %s (value reference %u) is not computed while sensitivity is false: the "
                          "Jacobian dx_dx0, dx_dv0, dv_dx0, dv_dv0 reads NaN in this run; set sensitivity = true "
