@@ -278,3 +278,32 @@ def test_not_computed_while_off(unzipped: tuple[str, object]) -> None:
         finally:
             i.free()
     assert np.array_equal(out[False], out[True])
+
+
+# ---- FMI 3.0 ----------------------------------------------------------------------------------------
+
+def test_fmi3_gives_the_same_jacobian_and_restores_to_identity(unzipped: tuple[str, object]) -> None:
+    """The FMI 3.0 FMU (same description, same core) gives the FMI 2.0 Jacobian bit for bit, also
+    with events landed on (early return at every switch); fmi3SetFMUState resets it to the identity."""
+    from dryfriction.fmi3 import OscillatorFMU3
+
+    p = STICK_SLIP[0][1]
+    T = 2.0 * math.pi / p["omega"]
+    _, J2, _ = run(unzipped, p, 3.3 * T)
+    with OscillatorFMU3(params={**p, "scheme": EXACT, "sensitivity": True}) as fmu:
+        fmu.do_step(3.3 * T)
+        J3 = np.array([fmu.get(list(JAC))[n] for n in JAC]).reshape(2, 2)
+        state = fmu.slave.getFMUState()
+        fmu.do_step(T)
+        fmu.slave.setFMUState(state)
+        assert np.array_equal(np.array([fmu.get(list(JAC))[n] for n in JAC]), [1.0, 0.0, 0.0, 1.0])
+        fmu.slave.freeFMUState(state)
+    assert np.array_equal(J3, J2)
+    with OscillatorFMU3(params={**p, "scheme": EXACT, "sensitivity": True}, early_return=True) as fmu:
+        returns = 0
+        while fmu.time < 3.3 * T:
+            _, early = fmu.do_step(3.3 * T - fmu.time)
+            returns += early
+        J3e = np.array([fmu.get(list(JAC))[n] for n in JAC]).reshape(2, 2)
+    assert returns > 3
+    assert rel(J3e, J2) < 1e-9
