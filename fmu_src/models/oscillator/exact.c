@@ -1005,34 +1005,36 @@ static dd breakaway(const ex_ctx *C, double Xs, dd ta, int skip, dd *tb, int *di
 
 void dfo_sens_slide(const dfo_model *M, double dt, double J[4])
 {
+    /* the FMU's own elementary functions (dmath.h): the same bits on every platform */
     const double m = M->p.m, k = M->p.k, c = M->p.c;
     double p11, p12, p21, p22;
     if (!(dt > 0.0)) return;
     if (k == 0.0) { /* x'' = -b x' + forcing: Phi = [[1, dt phi1(-b dt)], [0, e^{-b dt}]] */
         const double z = -(c / m) * dt;
         p11 = 1.0;
-        p12 = (z == 0.0) ? dt : dt * (expm1(z) / z);
+        p12 = (z == 0.0) ? dt : dt * (dfo_expm1(z) / z);
         p21 = 0.0;
-        p22 = exp(z);
+        p22 = dfo_exp(z);
     } else {
         const double w0 = sqrt(k / m), zeta = c / (2.0 * sqrt(k * m)), tau = w0 * dt;
         double e, cs, sq; /* Phi in tau: e (cs + zeta sq), e sq / w0; -w0 e sq, e (cs - zeta sq) */
         if (zeta < 1.0) {
             const double wd = sqrt((1.0 - zeta) * (1.0 + zeta));
-            e = exp(-zeta * tau);
-            cs = cos(wd * tau);
-            sq = sin(wd * tau) / wd; /* sin(wd tau) / wd */
+            double sn;
+            e = dfo_exp(-zeta * tau);
+            dfo_sincos(wd * tau, &sn, &cs);
+            sq = sn / wd; /* sin(wd tau) / wd */
         } else if (zeta == 1.0) {
-            e = exp(-tau);
+            e = dfo_exp(-tau);
             cs = 1.0;
             sq = tau;
         } else { /* over-damped: e^{-zeta tau} cosh, sinh / wh from the two modes r2 < r1 < 0 */
             const double wh = sqrt((zeta - 1.0) * (zeta + 1.0)), r1 = -1.0 / (zeta + wh), r2 = -(zeta + wh);
-            const double e1 = exp(r1 * tau), e2 = exp(r2 * tau);
+            const double e1 = dfo_exp(r1 * tau), e2 = dfo_exp(r2 * tau);
             e = 1.0;
             cs = 0.5 * (e1 + e2); /* e^{-zeta tau} cosh(wh tau) */
             /* e^{-zeta tau} sinh(wh tau) / wh, without the cancellation of e1 - e2 near critical damping */
-            sq = (2.0 * wh * tau < 1.0) ? e2 * expm1(2.0 * wh * tau) / (2.0 * wh) : (e1 - e2) / (2.0 * wh);
+            sq = (2.0 * wh * tau < 1.0) ? e2 * dfo_expm1(2.0 * wh * tau) / (2.0 * wh) : (e1 - e2) / (2.0 * wh);
         }
         p11 = e * (cs + zeta * sq);
         p12 = e * sq / w0;
