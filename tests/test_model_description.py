@@ -256,7 +256,7 @@ def test_effect_bits_are_a_vendor_annotation() -> None:
     assert eff is not None and eff.get("variable") == "effects"
     assert [(int(e.get("bit")), e.get("name")) for e in eff.iterfind("Effect")] == [
         (1, "friction"), (2, "coefficientUpdate"), (4, "damping"), (8, "forceInput"), (16, "normalInput"),
-        (32, "observables")]
+        (32, "observables"), (64, "sensitivity")]
 
 
 def test_effects_value_follows_the_annotation(slave: Slave) -> None:
@@ -345,6 +345,11 @@ def test_every_output_declares_its_dependencies() -> None:
     assert [x.name for x in init["x"]] == ["x0"] and [x.name for x in init["v"]] == ["v0"]
 
 
+def _same(a: object, b: object) -> bool:
+    """Equal, or both NaN (a value not computed, such as the sensitivity while it is off)."""
+    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b))
+
+
 def _perturbed(slave: Slave, names: list[str], mode_wanted: int) -> dict[str, set[str]]:
     """Step to a communication point in the wanted mode (0 stuck, 1 sliding), then set each input in
     turn and read every output without a step: the inputs each output responds to."""
@@ -364,10 +369,11 @@ def _perturbed(slave: Slave, names: list[str], mode_wanted: int) -> dict[str, se
         slave.s.setReal([slave.vr(inp)], [0.05 if inp == "F_ext" else 0.5])
         now = slave.outputs(names)
         for n in names:
-            if now[n] != base[n]:
+            if not _same(now[n], base[n]):
                 responds[n].add(inp)
         slave.s.setReal([slave.vr(inp)], [0.0])
-        assert slave.outputs(names) == base  # back to the step's inputs: the step's values, exactly
+        back = slave.outputs(names)  # back to the step's inputs: the step's values, exactly
+        assert all(_same(back[n], base[n]) for n in names)
     return responds
 
 
@@ -437,7 +443,7 @@ def test_initial_unknowns_depend_only_on_what_they_declare(slave: Slave, case: s
             continue  # 1e300 * 1.25 overflows; t_obs_start covers the window
         now = _initial_values(slave, {**full, v.name: _changed(v.type, full[v.name], v.name)}, names)
         for n in names:
-            if now[n] != ref[n]:
+            if not _same(now[n], ref[n]):
                 seen[n].add(v.name)
     for n in names:
         assert seen[n] <= declared[n], f"{n} changes with undeclared {sorted(seen[n] - declared[n])}"
@@ -483,6 +489,9 @@ def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
         assert key not in seen, f"duplicate value reference {key}"
         seen.add(key)
         value = fmu.get([v.name])[v.name]
+        if v.name in ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0"):  # not computed: sensitivity is off by default
+            assert np.isnan(float(value)), v.name
+            continue
         assert np.isfinite(float(value)), v.name
         if v.causality == "parameter":
             assert float(value) == float(v.start), (v.name, value, v.start)
@@ -511,7 +520,7 @@ def test_model_module_reads_what_the_xml_declares() -> None:
     p, st = Oscillator(), Settings()
     assert md.parameter_starts()["observe"] is True and st.observe is False
     for name, start in md.parameter_starts().items():
-        if name in ("h", "observe"):
+        if name in ("h", "observe", "sensitivity"):  # sensitivity: not in Settings yet (issue 22's orbits)
             continue
         value = getattr(p, name) if hasattr(p, name) else getattr(st, name)
         if name == "scheme":

@@ -418,7 +418,8 @@ static inline int fuzz_drive(const fuzz_target *T, const uint8_t *data, size_t s
 static int fuzz_finite_or_not_computed(unsigned vr, double v)
 {
     if (isfinite(v)) return 1;
-    return isnan(v) && (vr == VR_x_max || vr == VR_x_min || vr == VR_stick_fraction || vr == VR_E_friction);
+    return isnan(v) && (vr == VR_x_max || vr == VR_x_min || vr == VR_stick_fraction || vr == VR_E_friction ||
+                        vr == VR_dx_dx0 || vr == VR_dx_dv0 || vr == VR_dv_dx0 || vr == VR_dv_dv0);
 }
 #endif
 

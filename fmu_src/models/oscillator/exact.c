@@ -1001,6 +1001,70 @@ static dd breakaway(const ex_ctx *C, double Xs, dd ta, int skip, dd *tb, int *di
     return *tb;
 }
 
+/* ---- the sensitivity (exact.h) ------------------------------------------------------------------ */
+
+void dfo_sens_slide(const dfo_model *M, double dt, double J[4])
+{
+    /* the FMU's own elementary functions (dmath.h): the same bits on every platform */
+    const double m = M->p.m, k = M->p.k, c = M->p.c;
+    double p11, p12, p21, p22;
+    if (!(dt > 0.0)) return;
+    if (k == 0.0) { /* x'' = -b x' + forcing: Phi = [[1, dt phi1(-b dt)], [0, e^{-b dt}]] */
+        const double z = -(c / m) * dt;
+        p11 = 1.0;
+        p12 = (z == 0.0) ? dt : dt * (dfo_expm1(z) / z);
+        p21 = 0.0;
+        p22 = dfo_exp(z);
+    } else {
+        const double w0 = sqrt(k / m), zeta = c / (2.0 * sqrt(k * m)), tau = w0 * dt;
+        double e, cs, sq; /* Phi in tau: e (cs + zeta sq), e sq / w0; -w0 e sq, e (cs - zeta sq) */
+        if (zeta < 1.0) {
+            const double wd = sqrt((1.0 - zeta) * (1.0 + zeta));
+            double sn;
+            e = dfo_exp(-zeta * tau);
+            dfo_sincos(wd * tau, &sn, &cs);
+            sq = sn / wd; /* sin(wd tau) / wd */
+        } else if (zeta == 1.0) {
+            e = dfo_exp(-tau);
+            cs = 1.0;
+            sq = tau;
+        } else { /* over-damped: e^{-zeta tau} cosh, sinh / wh from the two modes r2 < r1 < 0 */
+            const double wh = sqrt((zeta - 1.0) * (zeta + 1.0)), r1 = -1.0 / (zeta + wh), r2 = -(zeta + wh);
+            const double e1 = dfo_exp(r1 * tau), e2 = dfo_exp(r2 * tau);
+            e = 1.0;
+            cs = 0.5 * (e1 + e2); /* e^{-zeta tau} cosh(wh tau) */
+            /* e^{-zeta tau} sinh(wh tau) / wh, without the cancellation of e1 - e2 near critical damping */
+            sq = (2.0 * wh * tau < 1.0) ? e2 * dfo_expm1(2.0 * wh * tau) / (2.0 * wh) : (e1 - e2) / (2.0 * wh);
+        }
+        p11 = e * (cs + zeta * sq);
+        p12 = e * sq / w0;
+        p21 = -w0 * e * sq;
+        p22 = e * (cs - zeta * sq);
+    }
+    const double a = J[0], b = J[1], cc = J[2], d = J[3];
+    J[0] = p11 * a + p12 * cc;
+    J[1] = p11 * b + p12 * d;
+    J[2] = p21 * a + p22 * cc;
+    J[3] = p21 * b + p22 * d;
+}
+
+void dfo_sens_stick(double J[4]) { J[2] = J[3] = 0.0; }
+
+void dfo_sens_reversal(double J[4], double ratio)
+{
+    J[2] *= ratio;
+    J[3] *= ratio;
+}
+
+void dfo_sens_breakaway(double J[4], double coef)
+{
+    J[2] = coef * J[0];
+    J[3] = coef * J[1];
+}
+
+/* The duration b - a of two double-double times, to rounding of the difference. */
+static inline double dd_span(dd a, dd b) { return (b.hi - a.hi) + (b.lo - a.lo); }
+
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
 {
     int skip = 0, stall = 0, stick_dir = 0, carried = 0;
@@ -1010,6 +1074,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
     const dd target = {t_target, 0.0};
     dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
     double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
+    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
     while (dd_lt(t, target)) {
         if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
         if (t.hi == t_last.hi && t.lo == t_last.lo) {
@@ -1037,6 +1102,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             const dd tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir, stick_cs);
             dir = stick_dir;
             skip = 0;
+            if (sens) dfo_sens_stick(s->J);
             if (!dd_lt(tb, target)) {
                 s->t = t_target;
                 t = target;
@@ -1052,7 +1118,12 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
                 carried = 1;
                 cs[0] = stick_cs[0];
                 cs[1] = stick_cs[1];
-            }
+                if (sens) { /* dt_b = k dx / P'(t_b); the slide starts with a+ = dir (F_b - mu_k N) / m */
+                    const double dP = -C->fP * C->omega * stick_cs[1];
+                    const double a_plus = dir * (C->Ls_.Fb - C->Ls_.muk_N) / C->M->p.m;
+                    dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / dP : 0.0);
+                }
+            } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
             C->events++;
             after_phase(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
             continue;
@@ -1076,12 +1147,14 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
             if (cut) {
                 const dd tc = dd_add_quot(t, u_end, 0.0, w0);
+                if (sens) dfo_sens_slide(C->M, dd_span(t, tc), s->J);
                 carried = 0;
                 s->t = tc.hi;
                 after_phase(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
                 t = tc;
                 continue;
             }
+            if (sens) dfo_sens_slide(C->M, dd_span(t, target), s->J);
             s->t = t_target;
             t = target;
             after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
@@ -1090,6 +1163,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         dd ts = dd_add_quot(t, v.u, 0.0, w0);
         if (dd_lt(target, ts)) ts = target;
         const int at_end = !dd_lt(ts, target);
+        if (sens) dfo_sens_slide(C->M, dd_span(t, ts), s->J);
         t = ts;
         s->t = ts.hi;
         Xs = P.xc + v.y;
@@ -1121,6 +1195,14 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             skip = 1;
         }
         if (next == 0) stick_tb.hi = NAN; /* a new stick phase */
+        if (sens) {
+            /* the saltation at the stop: stick (rank one), or a reversal (a- = (F_s - sd mu_k N) / m before,
+             * a+ = (F_s + sd mu_k N) / m after); a touch that slides on, or a reversal without friction
+             * (a+ = a-), leaves J as it is */
+            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
+            else if (next == -sd && C->Ls_.muk_N > 0.0)
+                dfo_sens_reversal(s->J, (Fs + sd * C->Ls_.muk_N) / (Fs - sd * C->Ls_.muk_N));
+        }
         if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
             /* a reversal: the next slide starts here, with the phase the search reached (exact for the
              * stop's time as a double-double, to the rounding of lambda tau) */

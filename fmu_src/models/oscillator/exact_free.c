@@ -464,6 +464,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
 {
     int skip = 0, stall = 0;
     double t_last = s->t;
+    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
     while (s->t < t_target) {
         if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
         if (s->t == t_last) {
@@ -487,6 +488,9 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
             int dir = 0;
             const double tb = breakaway(C, s, ta, skip, &dir);
             skip = 0;
+            /* stuck: x frozen, v held at 0; without a spring the breakaway time does not depend on x,
+             * so the v row stays 0 across it */
+            if (sens) dfo_sens_stick(s->J);
             if (tb >= t_target) {
                 s->t = t_target;
                 after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
@@ -507,6 +511,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
         const int r = find_stop(C, &P, t_target - ta, &v);
         if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
         if (r == SEARCH_NONE) {
+            if (sens) dfo_sens_slide(C->M, t_target - ta, s->J);
             s->t = t_target;
             s->X = v.x;
             s->V = v.v;
@@ -515,6 +520,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
         }
         double ts = ta + v.tau;
         if (ts > t_target) ts = t_target;
+        if (sens) dfo_sens_slide(C->M, ts - ta, s->J);
         s->t = ts;
         s->X = v.x;
         s->V = 0.0;
@@ -531,6 +537,11 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
             skip = 1;
         }
         if (next == 0) s->stick_tb = NAN; /* a new stick phase */
+        if (sens) { /* the saltation at the stop (as exact.c) */
+            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
+            else if (next == -sd && C->L.muk_N > 0.0)
+                dfo_sens_reversal(s->J, (Fs + sd * C->L.muk_N) / (Fs - sd * C->L.muk_N));
+        }
         s->mode = next;
         C->events++;
         after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);

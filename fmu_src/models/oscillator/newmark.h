@@ -58,6 +58,9 @@ typedef struct {
     double exc_c, exc_s;
     /* counters */
     long long steps, lcp_solves;
+    /* the Jacobian d(X, V) / d(X, V)(t_ref), row-major (dX/dX0, dX/dV0, dV/dX0, dV/dV0), t_ref the end of
+     * initialisation or the last state restore: propagated by the exact scheme when sensitivity is on */
+    double J[4];
 } dfo_state;
 
 /* Consistent start-up at t0 from x0, v0 (method.md section 4, "Start-up"). */

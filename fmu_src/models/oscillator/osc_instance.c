@@ -23,6 +23,7 @@ DFO_SAME(effect_damping, DFO_MD_EFFECT_DAMPING, DFO_EFFECT_DAMPING);
 DFO_SAME(effect_force, DFO_MD_EFFECT_FORCE_INPUT, DFO_EFFECT_FORCE_INPUT);
 DFO_SAME(effect_normal, DFO_MD_EFFECT_NORMAL_INPUT, DFO_EFFECT_NORMAL_INPUT);
 DFO_SAME(effect_observables, DFO_MD_EFFECT_OBSERVABLES, DFO_EFFECT_OBSERVABLES);
+DFO_SAME(effect_sensitivity, DFO_MD_EFFECT_SENSITIVITY, DFO_EFFECT_SENSITIVITY);
 DFO_SAME(scheme_paper, DFO_MD_SCHEME_PAPER, DFO_SCHEME_PAPER);
 DFO_SAME(scheme_consistent, DFO_MD_SCHEME_CONSISTENT, DFO_SCHEME_CONSISTENT);
 DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
@@ -150,12 +151,21 @@ dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const uns
     return NO_STRUCTURAL(lc, fn);
 }
 
+/* The sensitivity's reference: the Jacobian is the identity at the end of initialisation and at
+ * every state restore. */
+static void sens_reset(dfo_state *s)
+{
+    s->J[0] = s->J[3] = 1.0;
+    s->J[1] = s->J[2] = 0.0;
+}
+
 /* Derive the model from the parameters and start it (exit of initialisation, or outputs asked for
  * during initialisation). */
 static void prepare(osc_values *v, double start_time)
 {
     dfo_model_init(&v->M, &v->p);
     dfo_start(&v->M, &v->u, start_time, &v->s);
+    sens_reset(&v->s);
     v->effects = dfo_effects(&v->M, &v->u);
     v->u_used = v->u;
 }
@@ -218,10 +228,22 @@ static int needs_observe(int id)
            id == DFO_OUT_transitions || id == DFO_OUT_E_friction;
 }
 
-/* A value this run has not computed: an observable while observe is false (every one of them), or
- * x_max / x_min before the observation window has taken its first sample. */
+static int is_sensitivity(int id)
+{
+    return id == DFO_OUT_dx_dx0 || id == DFO_OUT_dx_dv0 || id == DFO_OUT_dv_dx0 || id == DFO_OUT_dv_dv0;
+}
+
+/* The sensitivity is computed: asked for, and by the exact scheme (the only one that propagates it). */
+static int sens_computed(const dfo_params *p) { return p->sensitivity && p->scheme == DFO_SCHEME_EXACT; }
+
+/* A value this run has not computed: an observable while observe is false (every one of them),
+ * x_max / x_min before the observation window has taken its first sample, or the sensitivity
+ * unless it is computed. */
 static int not_computed(const osc_values *v, int id)
 {
+    if (is_sensitivity(id))
+        return !sens_computed(&v->p) || !(isfinite(v->s.J[0]) && isfinite(v->s.J[1]) && isfinite(v->s.J[2]) &&
+                                          isfinite(v->s.J[3]));
     if (!needs_observe(id)) return 0;
     if (!v->p.observe) return 1;
     return (id == DFO_OUT_x_max || id == DFO_OUT_x_min) && !v->s.observed;
@@ -230,10 +252,39 @@ static int not_computed(const osc_values *v, int id)
 /* What a value not computed reads: NaN (Real), DFO_NOT_COMPUTED_INT (Integer, transitions). Status
  * OK; one sentence per run, logged under logNotComputed, says why. */
 #define DFO_NOT_COMPUTED_INT (-1)
+#define WARNED_OBSERVE 1u     /* lc.warned: the observables' sentence was logged */
+#define WARNED_SENSITIVITY 2u /* the sensitivity's */
+static const char *scheme_name(int scheme)
+{
+    static const char *const names[5] = {"?", "paper", "consistent", "located", "exact"};
+    return (scheme >= 1 && scheme <= 4) ? names[scheme] : "?";
+}
+
 static void note_not_computed(osc_instance *in, const char *fn, const dfo_var_info *var)
 {
-    if (in->lc.warned) return;
-    in->lc.warned = 1u;
+    if (is_sensitivity(var->id)) {
+        if (in->lc.warned & WARNED_SENSITIVITY) return;
+        in->lc.warned |= WARNED_SENSITIVITY;
+        if (sens_computed(&in->v.p))
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) reads NaN: the Jacobian dx_dx0, dx_dv0, dv_dx0, "
+                         "dv_dv0 overflowed or met a tangential event since t_ref (a breakaway with a stationary "
+                         "force, a stop with zero deceleration), where the map is not differentiable; it is the "
+                         "identity again after a state restore.", fn, var->name, var->vr);
+        else if (!in->v.p.sensitivity)
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) is not computed while sensitivity is false: the "
+                         "Jacobian dx_dx0, dx_dv0, dv_dx0, dv_dv0 reads NaN in this run; set sensitivity = true "
+                         "(before initialisation, with scheme exact) to compute it.", fn, var->name, var->vr);
+        else
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) is not computed with scheme %s: the Jacobian "
+                         "dx_dx0, dx_dv0, dv_dx0, dv_dv0 reads NaN in this run; only scheme exact computes it.",
+                         fn, var->name, var->vr, scheme_name(in->v.p.scheme));
+        return;
+    }
+    if (in->lc.warned & WARNED_OBSERVE) return;
+    in->lc.warned |= WARNED_OBSERVE;
     if (!in->v.p.observe)
         dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
                      "%s: variable %s (value reference %u) is not computed while observe is false: the "
@@ -264,6 +315,10 @@ static double output_real(const osc_values *v, const dfo_run *r, int id)
     case DFO_OUT_stick_fraction: return dfo_stick_fraction(&v->M, s);
     case DFO_OUT_E_friction: return s->E_friction;
     case DFO_OUT_h_used: return v->M.p.h;
+    case DFO_OUT_dx_dx0: return s->J[0];
+    case DFO_OUT_dx_dv0: return s->J[1];
+    case DFO_OUT_dv_dx0: return s->J[2];
+    case DFO_OUT_dv_dv0: return s->J[3];
     default: return 0.0;
     }
 }
@@ -303,6 +358,13 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
                      "(natural 2 pi sqrt(m/k), excitation 2 pi/omega, damping 2 pi m/c): the results do not resolve "
                      "it. Choose h <= %.6g s (1/%g of it), or h = 0 to let the FMU derive it.", fn, v->p.h,
                      T_min / v->p.h, T_min, T_min / DFO_STEPS_PER_PERIOD, DFO_STEPS_PER_PERIOD);
+    }
+    if (v->p.sensitivity && v->p.scheme != DFO_SCHEME_EXACT) {
+        status = DFO_INST_WARNING;
+        dfo_inst_log(&in->lc, DFO_INST_WARNING, DFO_LOG_STATUS_WARNING,
+                     "%s: sensitivity = true is ignored with scheme %s: only scheme exact propagates the Jacobian; "
+                     "dx_dx0, dx_dv0, dv_dx0, dv_dv0 read NaN in this run. Choose scheme exact to compute them.",
+                     fn, scheme_name(v->p.scheme));
     }
     dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: x = %.17g, v = %.17g, mode %d, effects %d.",
                  s->t, s->X, s->V, s->mode, v->effects);
@@ -653,6 +715,7 @@ dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void
     if (!st) return DFO_INST_ERROR;
     in->lc.run = st->run;
     in->v = st->v;
+    sens_reset(&in->v.s); /* the sensitivity is of the state restored */
     return DFO_INST_OK;
 }
 

@@ -81,5 +81,6 @@ int dfo_effects(const dfo_model *M, const dfo_inputs *u)
     if (u->F_ext_set) e |= DFO_EFFECT_FORCE_INPUT;
     if (u->N_ext_set) e |= DFO_EFFECT_NORMAL_INPUT;
     if (M->p.observe) e |= DFO_EFFECT_OBSERVABLES;
+    if (M->p.sensitivity && M->p.scheme == DFO_SCHEME_EXACT) e |= DFO_EFFECT_SENSITIVITY;
     return e;
 }

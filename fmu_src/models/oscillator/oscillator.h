@@ -27,6 +27,7 @@ typedef struct {
     int frictionUpdates;             /* coefficient updates per step (scheme paper) */
     int observe;                     /* compute the in-FMU observables */
     int fastPaths;                   /* skip the physics a run does not need (same numbers) */
+    int sensitivity;                 /* propagate the Jacobian of the state (exact scheme only) */
 } dfo_params;
 
 /* Co-simulation inputs, held constant over a communication step. An input never set is never read:
@@ -43,7 +44,8 @@ enum {
     DFO_EFFECT_DAMPING = 4,       /* viscous damping (c > 0) */
     DFO_EFFECT_FORCE_INPUT = 8,   /* input F_ext read */
     DFO_EFFECT_NORMAL_INPUT = 16, /* input N_ext read */
-    DFO_EFFECT_OBSERVABLES = 32   /* in-FMU observables computed */
+    DFO_EFFECT_OBSERVABLES = 32,  /* in-FMU observables computed */
+    DFO_EFFECT_SENSITIVITY = 64   /* Jacobian of the state propagated (exact scheme) */
 };
 
 /* Parameters plus the constants derived from them once, at initialisation. */
