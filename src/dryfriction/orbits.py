@@ -1,0 +1,418 @@
+"""Periodic orbits of the excited oscillator by Newton shooting on the exact stroboscopic map
+(issue 22, item 1; docs/orbits.md).
+
+The map P^K: (x, v) at the section time t_s -> (x, v) at t_s + K T, T = 2 pi / omega, is the FMU's
+scheme ``exact`` run in one ``doStep`` through :class:`~dryfriction.fmu.OscillatorFMU2`; its 2 x 2
+Jacobian is the FMU's own (``sensitivity = true``: the linear flow of each slide and the saltation
+matrix of each event), never a finite difference. Newton: solve (J - I) dz = -r, r = P^K(z) - z, with
+a backtracking line search on the scaled residual; converged when the residual is at most ``tol``
+(default 1e-12) relative: ``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` with S = diag(x_s, x_s w), the
+static deflection x_s = |P0| / k and w = w0 (without a spring: x_s = |P0| / (m omega^2), the
+amplitude of the free mass under the excitation, and w = omega).
+
+Section rule: the map is not differentiable in v inside a stick phase, so the section t_s is taken in
+the middle of the longest slide of the guess's cycle (re-chosen if the converged orbit moved a stick
+phase onto it); the state at t = 0 mod K T is then read from a run of the converged orbit. An orbit
+that never slides (stuck for good) is an orbit too: one of a line of stuck states; its Jacobian is
+the FMU's over K T, rank one, multipliers exactly 1 (along the line of stuck states: neutral) and 0.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .fmu import OscillatorFMU2, Settings
+from .params import Oscillator
+
+__all__ = ["Orbit", "find_orbits", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
+
+JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
+#: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
+STABILITY_MARGIN = 1e-9
+#: samples per excitation period of the cycle runs (section choice, events, stick share of the cycle)
+SAMPLES = 512
+#: scaled distance under which two converged states are the same orbit
+SAME = 1e-7
+
+
+@dataclass
+class Orbit:
+    """One periodic orbit of K excitation periods (``period``), its state at t = 0 mod K T."""
+
+    period: int
+    x0: float                        # m, at t = 0 mod K T
+    v0: float                        # m/s
+    z0: float                        # k x0 / P0 (static deflections; NaN without a spring)
+    zdot0: float                     # dz/dtau, tau = w0 t: k v0 / (P0 w0) (NaN without a spring)
+    multipliers: np.ndarray          # eigenvalues of the K-period Jacobian (complex, |mu| descending)
+    stable: bool                     # every |mu| < 1 - STABILITY_MARGIN
+    residual: float                  # the scaled Newton residual at the section (see the module's doc)
+    amplitude: float                 # (x_max - x_min) / 2 over the cycle, m (the FMU's observables)
+    offset: float                    # (x_max + x_min) / 2, m
+    stick_fraction: float            # share of the cycle stuck (the FMU's observable)
+    events: dict[str, int]           # per cycle: stops, breakaways, reversals, transitions (FMU's count)
+    converged: bool
+    reason: str = ""                 # why not converged ("" when converged)
+    section: float = 0.0             # the section time t_s in [0, K T) the Newton solve used, s
+    jacobian: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))  # at the section
+    section_state: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))  # (x, v) at the section
+    iterations: int = 0
+    stuck: bool = False              # never slides (stuck for good)
+
+    @property
+    def mu_max(self) -> float:
+        return float(np.max(np.abs(self.multipliers)))
+
+
+def scales(p: Oscillator) -> tuple[float, float]:
+    """(x_s, w): the position and rate scales of the residual (module doc)."""
+    P0 = abs(p.P0)
+    if p.k > 0:
+        return P0 / p.k, p.w0
+    return P0 / (p.m * p.omega ** 2), p.omega
+
+
+class _Map:
+    """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation)."""
+
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int) -> None:
+        self.fmu, self.p, self.K = fmu, p, K
+        self.T = p.period
+        self.xs, self.w = scales(p)
+        self.settings = Settings(scheme="exact", extra={"sensitivity": True})
+        self.evaluations = 0
+
+    def scaled(self, z: np.ndarray) -> np.ndarray:
+        return np.array([z[0] / self.xs, z[1] / (self.xs * self.w)])
+
+    def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
+        """(P^K(z), its Jacobian, the mode at the end) for the state z at the section time t_s."""
+        f = self.fmu
+        f.start(self.p.with_(x0=float(z[0]), v0=float(z[1])), self.settings, t0=t_s)
+        f.step_to(t_s + self.K * self.T)
+        out = f.get(("x", "v", "mode") + JACOBIAN)
+        self.evaluations += 1
+        J = np.array([out[n] for n in JACOBIAN], dtype=float).reshape(2, 2)
+        return np.array([out["x"], out["v"]]), J, int(out["mode"])
+
+    def cycle(self, z: np.ndarray, t_s: float, periods: int | None = None) -> dict[str, np.ndarray | float]:
+        """A sampled run of ``periods`` (default K) periods from z at t_s, with the FMU's observables
+        over it; the grid holds every multiple of T in (t_s, t_s + periods T]."""
+        n = self.K if periods is None else periods
+        T = self.T
+        t_end = t_s + n * T
+        grid = np.linspace(t_s, t_end, n * SAMPLES + 1)
+        marks = T * np.arange(math.floor(t_s / T) + 1, math.floor(t_end / T + 1e-12) + 1)
+        grid = np.unique(np.concatenate([grid, marks]))
+        grid = grid[np.concatenate([[True], np.diff(grid) > 1e-12 * max(T, t_end)])]
+        st = Settings(scheme="exact", observe=True, t_obs_start=t_s, t_obs_stop=t_end)
+        res = self.fmu.trajectory(self.p.with_(x0=float(z[0]), v0=float(z[1])), grid, st, ("x", "v", "mode"))
+        obs = self.fmu.get(("x_max", "x_min", "stick_fraction", "transitions"))
+        res.update({k: float(v) for k, v in obs.items()})
+        res["marks"] = marks
+        return res
+
+
+def stroboscopic_map(oscillator: Oscillator, z: Sequence[float], t_s: float = 0.0, period: int = 1,
+                     fmu: OscillatorFMU2 | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """(P^K(z), its exact Jacobian, the mode at the end) of the state z = (x, v) at the section time t_s."""
+    own = fmu is None
+    f = OscillatorFMU2() if own else fmu
+    try:
+        return _Map(f, oscillator, period)(np.asarray(z, dtype=float), t_s)
+    finally:
+        if own:
+            f.close()
+
+
+def _events(mode: np.ndarray) -> dict[str, int]:
+    """Stops, breakaways and reversals in the sampled modes of a cycle (a phase shorter than a sample
+    may be missed; ``transitions`` is the FMU's own count of mode changes)."""
+    m = mode.astype(int)
+    prev, nxt = m[:-1], m[1:]
+    stops = int(np.sum((prev != 0) & (nxt == 0)))
+    breaks = int(np.sum((prev == 0) & (nxt != 0)))
+    revs = int(np.sum((prev != 0) & (nxt != 0) & (prev != nxt)))
+    return {"stops": stops, "breakaways": breaks, "reversals": revs}
+
+
+def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float) -> float | None:
+    """The middle of the longest run of sliding samples of a cycle (cyclic), as a time in
+    [t_from, t_from + span); None if it never slides."""
+    slide = mode != 0
+    if not slide.any():
+        return None
+    if slide.all():
+        return None if False else float("nan")
+    n = slide.size - 1            # the last sample is the first one again (one cycle)
+    s = slide[:n]
+    k0 = int(np.argmin(s))        # start the scan at a stuck sample
+    best, best_len, run_start, run = 0, 0, 0, 0
+    for j in range(1, n + 1):
+        i = (k0 + j) % n
+        if s[i]:
+            if run == 0:
+                run_start = j
+            run += 1
+            if run > best_len:
+                best_len, best = run, run_start
+        else:
+            run = 0
+    mid = (k0 + best + (best_len - 1) / 2.0) % n
+    lo = int(math.floor(mid))
+    frac = mid - lo
+    ts = t[lo] + frac * (t[lo + 1] - t[lo]) if lo + 1 < t.size else t[lo]
+    return float(t_from + ((ts - t_from) % span))
+
+
+class _Solver:
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int) -> None:
+        self.map = _Map(fmu, p, K)
+        self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
+        self.KT = K * p.period
+
+    def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
+        m = self.map
+        return float(np.max(np.abs(m.scaled(Pz - z))) / max(1.0, float(np.max(np.abs(m.scaled(z))))))
+
+    def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
+        """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking."""
+        Pz, J, md = self.map(z, t_s)
+        r = self.residual(z, Pz)
+        it = 0
+        while r > self.tol:
+            if it >= self.max_iter:
+                return z, J, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
+            A = J - np.eye(2)
+            if not np.all(np.isfinite(A)):
+                return z, J, r, it, "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md
+            try:
+                dz = np.linalg.solve(A, -(Pz - z))
+            except np.linalg.LinAlgError:
+                return z, J, r, it, "J - I is singular (a multiplier 1: a fold or a family of orbits)", md
+            lam, accepted = 1.0, False
+            for _ in range(30):
+                zn = z + lam * dz
+                Pn, Jn, mn = self.map(zn, t_s)
+                rn = self.residual(zn, Pn)
+                if rn < (1.0 - 1e-4 * lam) * r or rn <= self.tol:
+                    accepted = True
+                    break
+                lam *= 0.5
+            it += 1
+            if not accepted:
+                return z, J, r, it, f"the line search found no decrease (residual {r:.3g})", md
+            z, Pz, J, r, md = zn, Pn, Jn, rn, mn
+        return z, J, r, it, "", md
+
+
+def _check(p: Oscillator, K: int) -> None:
+    if not (isinstance(K, int) and K >= 1):
+        raise ValueError(f"period must be an integer >= 1 (excitation periods), not {K!r}")
+    if not (p.omega > 0 and p.P0 != 0):
+        raise NotImplementedError(
+            "find_orbits needs an excitation (omega > 0, P0 != 0): the orbits of the autonomous system (no "
+            "excitation, the period an unknown) need the moving belt of issue 23 and are not there yet")
+
+
+def _auto_guesses(p: Oscillator, transients: int, spread: Sequence[tuple[float, float]]) -> list[np.ndarray]:
+    xs, w = scales(p)
+    # the frictionless harmonic amplitude sets the spread of the initial conditions
+    X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
+    X = X if math.isfinite(X) and X > 0 else xs
+    return [np.array([a * X, b * X * w]) for a, b in spread]
+
+
+DEFAULT_SPREAD = ((0.0, 0.0), (1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.3, -0.7), (2.0, 0.0))
+
+
+def find_orbits(oscillator: Oscillator, period: int = 1,
+                guesses: Iterable[Sequence[float]] | None = None, *,
+                fmu: OscillatorFMU2 | None = None,
+                transients: int = 60,
+                spread: Sequence[tuple[float, float]] = DEFAULT_SPREAD,
+                symmetry: bool = True,
+                tol: float = 1e-12,
+                max_iter: int = 40,
+                keep_failed: bool = False) -> list[Orbit]:
+    """Every distinct periodic orbit of ``period`` (K) excitation periods found by Newton shooting on
+    the exact stroboscopic map (module doc), from:
+
+    - the end states of transients of ``transients`` K-periods from the initial conditions ``spread``
+      (x0, v0 in units of the frictionless harmonic amplitude X and X w) at t = 0 (the attractors),
+    - ``guesses``: states (x0, v0) at t = 0 mod K T, in m and m/s,
+    - with ``symmetry``: the image of each orbit found, (x, v)(t) -> -(x, v)(t + T/2) (the system is
+      symmetric under the excitation's half-period shift).
+
+    Orbits are distinct when their cycles differ (a cycle shifted by whole periods is the same orbit);
+    a K-orbit whose minimal period is a divisor j of K is reported once, with ``period = j`` and the
+    multipliers of P^j. Orbits that did not converge are dropped unless ``keep_failed`` (then listed
+    with ``converged = False`` and the reason). Stable orbits first, then by amplitude.
+
+    ``fmu``: an :class:`OscillatorFMU2` to use (else one is loaded and closed). Every
+    DryFrictionWarning the FMU emits reaches the caller."""
+    p = oscillator
+    _check(p, period)
+    own = fmu is None
+    f = OscillatorFMU2() if own else fmu
+    try:
+        return _find(f, p, period, guesses, transients, spread, symmetry, tol, max_iter, keep_failed)
+    finally:
+        if own:
+            f.close()
+
+
+def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[float]] | None,
+          transients: int, spread: Sequence[tuple[float, float]], symmetry: bool, tol: float, max_iter: int,
+          keep_failed: bool) -> list[Orbit]:
+    sol = _Solver(f, p, K, tol, max_iter)
+    T, KT = p.period, K * p.period
+    # (state, time) guesses: the attractors at t = transients K T, the given ones at t = 0
+    todo: list[tuple[np.ndarray, float, bool]] = []
+    st = Settings(scheme="exact")
+    for z in _auto_guesses(p, transients, spread):
+        f.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
+        f.step_to(transients * KT)
+        y = f.get(("x", "v"))
+        todo.append((np.array([y["x"], y["v"]]), 0.0, False))
+    for g in guesses or ():
+        todo.append((np.asarray(g, dtype=float), 0.0, True))
+    found: list[Orbit] = []
+    cycles: list[np.ndarray] = []        # scaled states of each found orbit at the K marks
+    failed: list[Orbit] = []
+    while todo:
+        z, t_g, given = todo.pop(0)
+        orbit, marks, halfway = _solve(sol, z, t_g)
+        if orbit is None:
+            continue
+        if not orbit.converged:
+            if keep_failed and given:
+                failed.append(orbit)
+            continue
+        sm = np.array([sol.map.scaled(m) for m in marks])
+        if any(_same(sm, c) for c in cycles):
+            continue
+        # minimal period: the state comes back after j < K periods (j divides K)
+        j = next((j for j in range(1, K) if K % j == 0 and
+                  np.max(np.abs(sm[j - 1] - sm[-1])) <= SAME * max(1.0, np.max(np.abs(sm[-1])))), K)
+        cycles.append(sm)
+        if j < K:
+            sub = _Solver(f, p, j, tol, max_iter)
+            o2, _, _ = _solve(sub, np.array([orbit.x0, orbit.v0]), 0.0)
+            if o2 is not None and o2.converged:
+                found.append(o2)
+            continue
+        found.append(orbit)
+        if symmetry and halfway is not None:
+            todo.insert(0, (-halfway[0], halfway[1], False))
+    found.sort(key=lambda o: (not o.stable, -o.amplitude))
+    return found + failed
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the cycles with the scaled states a, b at the K period marks are one orbit (b is a
+    at some shift of whole periods)."""
+    if a.shape != b.shape:
+        return False
+    tol = SAME * max(1.0, float(np.max(np.abs(a))))
+    return any(np.max(np.abs(np.roll(a, s, axis=0) - b)) <= tol for s in range(a.shape[0]))
+
+
+def _solve(sol: _Solver, z: np.ndarray, t_g: float) -> tuple[Orbit | None, list[np.ndarray],
+                                                              tuple[np.ndarray, float] | None]:
+    """Solve from the guess z at time t_g: (the orbit, its states at the K period marks, the state and
+    time half a period after the section, for the symmetry image)."""
+    p, K, KT, T = sol.p, sol.K, sol.KT, sol.p.period
+    m = sol.map
+    t_s = t_g
+    reason = ""
+    for attempt in range(4):
+        cyc = m.cycle(z, t_s)
+        t_new = _slide_section(cyc["t"], cyc["mode"], 0.0, KT)
+        if t_new is None:           # never slides over the cycle: a stuck orbit (or stuck for now)
+            Pz, J, md = m(z, t_s)
+            r = sol.residual(z, Pz)
+            if r <= sol.tol:
+                return _stuck_orbit(sol, z, t_s, J, r), [z] * K, None
+            reason = f"the guess sticks over a whole cycle but is not periodic (residual {r:.3g})"
+            z, t_s = Pz, t_s      # go on from where it is
+            continue
+        if not math.isnan(t_new) and abs(t_new - (t_s % KT)) > 1e-12 * KT:
+            # move the guess to the new section along its own run
+            i = int(np.argmin(np.abs(((cyc["t"] - t_s) % KT) - ((t_new - t_s) % KT))))
+            z, t_s = np.array([cyc["x"][i], cyc["v"][i]]), float(cyc["t"][i] % KT)
+        elif math.isnan(t_new):
+            t_s = t_s % KT
+        zc, J, r, it, reason, md = sol.newton(z, t_s)
+        if reason:
+            return _failed(sol, zc, t_s, J, r, it, reason), [], None
+        if md == 0:                 # a stick phase came onto the section: choose it again
+            z = zc
+            reason = "the converged orbit is stuck at every section tried"
+            continue
+        return _finish(sol, zc, t_s, J, r, it)
+    return _failed(sol, z, t_s, np.full((2, 2), np.nan), math.nan, 0, reason), [], None
+
+
+def _multipliers(J: np.ndarray, sticks: bool) -> np.ndarray:
+    """Eigenvalues of J, |mu| descending. With a stick phase on the cycle J has rank one (the FMU sets
+    its v row to 0 there): its multipliers are then exactly trace(J) and 0."""
+    if sticks:
+        return np.array([complex(np.trace(J)), 0j])
+    mu = np.linalg.eigvals(J).astype(complex)
+    return mu[np.argsort(-np.abs(mu))]
+
+
+def _nondim(p: Oscillator, x: float, v: float) -> tuple[float, float]:
+    if p.k > 0:
+        return p.k * x / p.P0, p.k * v / (p.P0 * p.w0)
+    return math.nan, math.nan
+
+
+def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
+            it: int) -> tuple[Orbit, list[np.ndarray], tuple[np.ndarray, float] | None]:
+    p, K, KT, T = sol.p, sol.K, sol.KT, sol.p.period
+    cyc = sol.map.cycle(z, t_s)
+    t = cyc["t"]
+    marks = [np.array([cyc["x"][i], cyc["v"][i]]) for i in (int(np.argmin(np.abs(t - tm))) for tm in cyc["marks"])]
+    # the state at t = 0 mod K T: the last mark (K T lies in (t_s, t_s + K T])
+    x0, v0 = float(marks[-1][0]), float(marks[-1][1])
+    events = _events(cyc["mode"])
+    events["transitions"] = int(cyc["transitions"])
+    mu = _multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)
+    z0, zd0 = _nondim(p, x0, v0)
+    xmax, xmin = float(cyc["x_max"]), float(cyc["x_min"])
+    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
+                  stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+                  amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0,
+                  stick_fraction=float(cyc["stick_fraction"]), events=events, converged=True, section=t_s,
+                  jacobian=J, section_state=np.array(z, dtype=float), iterations=it)
+    ih = int(np.argmin(np.abs(t - (t_s + T / 2.0))))
+    halfway = (np.array([cyc["x"][ih], cyc["v"][ih]]), float(t[ih] - T / 2.0))
+    # the image starts at t_s (time t[ih] - T/2 = t_s up to the grid): -(x, v)(t_s + T/2)
+    return orbit, marks, (halfway[0], t_s)
+
+
+def _stuck_orbit(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float) -> Orbit:
+    p, K = sol.p, sol.K
+    mu = _multipliers(J, True)
+    x0 = float(z[0])
+    z0, zd0 = _nondim(p, x0, 0.0)
+    return Orbit(period=1, x0=x0, v0=0.0, z0=z0, zdot0=zd0, multipliers=mu, stable=False, residual=r,
+                 amplitude=0.0, offset=x0, stick_fraction=1.0,
+                 events={"stops": 0, "breakaways": 0, "reversals": 0, "transitions": 0}, converged=True,
+                 section=t_s, jacobian=J, section_state=np.array([x0, 0.0]), stuck=True)
+
+
+def _failed(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float, it: int, reason: str) -> Orbit:
+    p = sol.p
+    z0, zd0 = _nondim(p, float(z[0]), float(z[1]))
+    mu = np.linalg.eigvals(J).astype(complex) if np.all(np.isfinite(J)) else np.full(2, np.nan, dtype=complex)
+    return Orbit(period=sol.K, x0=float(z[0]), v0=float(z[1]), z0=z0, zdot0=zd0, multipliers=mu, stable=False,
+                 residual=r, amplitude=math.nan, offset=math.nan, stick_fraction=math.nan, events={},
+                 converged=False, reason=reason, section=t_s, jacobian=J, iterations=it)
