@@ -38,6 +38,9 @@ STABILITY_MARGIN = 1e-9
 SAMPLES = 512
 #: scaled distance under which two converged states are the same orbit
 SAME = 1e-7
+#: Newton's iterates must stay within BOUND times the frictionless harmonic amplitude (plus the
+#: static deflection), else the solve is reported as diverged
+BOUND = 1e3
 
 
 @dataclass
@@ -175,6 +178,12 @@ class _Solver:
         self.map = _Map(fmu, p, K)
         self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
         self.KT = K * p.period
+        # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
+        # generous multiple of it bounds Newton's iterates; none without damping at resonance)
+        X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega) if (p.k, p.c) != (p.m * p.omega ** 2, 0.0) \
+            else math.inf
+        xs, w = scales(p)
+        self.bound = BOUND * (1.0 + X / xs) if math.isfinite(X) else math.inf
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         m = self.map
@@ -208,6 +217,9 @@ class _Solver:
             if not accepted:
                 return z, J, r, it, f"the line search found no decrease (residual {r:.3g})", md
             z, Pz, J, r, md = zn, Pn, Jn, rn, mn
+            if float(np.max(np.abs(self.map.scaled(z)))) > self.bound:
+                return z, J, r, it, (f"Newton diverged: the state left the bound of {BOUND:g} times the "
+                                     "frictionless amplitude"), md
         return z, J, r, it, "", md
 
 
@@ -276,10 +288,12 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
     todo: list[tuple[np.ndarray, float, bool]] = []
     st = Settings(scheme="exact")
     for z in _auto_guesses(p, transients, spread):
-        f.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
-        f.step_to(transients * KT)
-        y = f.get(("x", "v"))
-        todo.append((np.array([y["x"], y["v"]]), 0.0, False))
+        if transients > 0:
+            f.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
+            f.step_to(transients * KT)
+            y = f.get(("x", "v"))
+            z = np.array([y["x"], y["v"]])
+        todo.append((z, 0.0, False))
     for g in guesses or ():
         todo.append((np.asarray(g, dtype=float), 0.0, True))
     found: list[Orbit] = []
@@ -380,8 +394,9 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
     cyc = sol.map.cycle(z, t_s)
     t = cyc["t"]
     marks = [np.array([cyc["x"][i], cyc["v"][i]]) for i in (int(np.argmin(np.abs(t - tm))) for tm in cyc["marks"])]
-    # the state at t = 0 mod K T: the last mark (K T lies in (t_s, t_s + K T])
-    x0, v0 = float(marks[-1][0]), float(marks[-1][1])
+    # the state at t = 0 mod K T: at the multiple of K T in (t_s, t_s + K T]
+    i0 = int(np.argmin(np.abs(t - KT * math.floor((t_s + KT) / KT + 1e-12))))
+    x0, v0 = float(cyc["x"][i0]), float(cyc["v"][i0])
     events = _events(cyc["mode"])
     events["transitions"] = int(cyc["transitions"])
     mu = _multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)

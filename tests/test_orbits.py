@@ -1,0 +1,224 @@
+"""Periodic orbits by Newton shooting on the exact stroboscopic map (dryfriction.orbits): against the
+closed-form harmonic response and exp(A T) without friction, the light-damping case the transient
+method gets wrong, and stick-slip orbits checked by separate FMU runs (a run of K periods returns to
+the orbit, central finite differences of the map give its multipliers, a nearby transient converges
+to a stable one), coexisting orbits, a period-doubled one, a stuck-for-good one."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from dryfriction import Oscillator
+from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.orbits import Orbit, find_orbits, scales, stroboscopic_map
+
+EXACT = Settings(scheme="exact")
+
+
+def expm_reference(p: Oscillator, t: float) -> np.ndarray:
+    """exp(A t), A = [[0, 1], [-k/m, -c/m]], by scipy's expm over short spans and exact powers (as
+    tests/test_sensitivity.py does)."""
+    A = np.array([[0.0, 1.0], [-p.k / p.m, -p.c / p.m]])
+    n = max(1, math.ceil(t * (math.sqrt(p.k / p.m) + p.c / p.m)))
+    return np.linalg.matrix_power(expm(A * (t / n)), n)
+
+
+def harmonic(p: Oscillator) -> tuple[float, float, float]:
+    """(X, x(0), v(0)) of the closed-form steady response x = X cos(w t + phi - theta)."""
+    w = p.omega
+    X = p.P0 / math.hypot(p.k - p.m * w * w, p.c * w)
+    theta = math.atan2(p.c * w, p.k - p.m * w * w)
+    return X, X * math.cos(p.phi - theta), -X * w * math.sin(p.phi - theta)
+
+
+def end_state(fmu: OscillatorFMU, p: Oscillator, x: float, v: float, t0: float, t1: float) -> np.ndarray:
+    """(x, v) at t1 of a separate FMU run (scheme exact) from (x, v) at t0."""
+    fmu.start(p.with_(x0=x, v0=v), EXACT, t0=t0)
+    fmu.step_to(t1)
+    y = fmu.get(("x", "v"))
+    return np.array([y["x"], y["v"]])
+
+
+def scaled_gap(p: Oscillator, a: np.ndarray, b: np.ndarray) -> float:
+    xs, w = scales(p)
+    d = np.abs(a - b) / np.array([xs, xs * w])
+    return float(d.max() / max(1.0, float((np.abs(b) / np.array([xs, xs * w])).max())))
+
+
+# ---- no friction: the closed form and exp(A T) ----------------------------------------------------
+
+@pytest.mark.parametrize("p", [
+    Oscillator(m=1.3, k=2.0, c=0.1, N=0.0, P0=1.0, omega=1.1, phi=0.3, mu_s=0.5, chi=1.0),
+    Oscillator(m=1.0, k=1.0, c=0.5, N=0.0, P0=2.0, omega=3.0, phi=-1.0, mu_s=0.5, chi=1.0),
+    Oscillator(m=0.5, k=2000.0, c=0.3, N=0.0, P0=10.0, omega=2 * math.pi * 13, phi=0.0, mu_s=0.3, chi=0.7),
+], ids=["below", "above", "stiff"])
+def test_no_friction_is_the_harmonic_response(fmu: OscillatorFMU, p: Oscillator) -> None:
+    orbits = find_orbits(p, fmu=fmu)
+    assert len(orbits) == 1
+    o = orbits[0]
+    X, x0, v0 = harmonic(p)
+    assert o.converged and o.period == 1 and o.stable and not o.stuck
+    assert abs(o.x0 - x0) <= 1e-12 * X and abs(o.v0 - v0) <= 1e-12 * X * p.omega, (o.x0, x0, o.v0, v0)
+    assert abs(o.amplitude - X) <= 1e-12 * X and abs(o.offset) <= 1e-12 * X
+    assert o.z0 == pytest.approx(p.k * o.x0 / p.P0, rel=1e-15)
+    assert o.zdot0 == pytest.approx(p.k * o.v0 / (p.P0 * p.w0), rel=1e-15)
+    ref = np.linalg.eigvals(expm_reference(p, p.period))
+    mu = np.sort_complex(o.multipliers)
+    assert np.max(np.abs(mu - np.sort_complex(ref))) <= 1e-12, (mu, ref)
+    assert o.stick_fraction == 0.0 and o.events["stops"] == 0 and o.events["reversals"] == 2
+
+
+def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU) -> None:
+    """The case of issue 22: the transient method reports 2.883 (a slowly decaying free vibration);
+    the orbit is the closed form's 1.449."""
+    p = Oscillator.physical(m=1, k=1, zeta=1e-5, P0=1, omega=1.3, N=0, mu_s=0.0)
+    (o,) = find_orbits(p, fmu=fmu)
+    X, _, _ = harmonic(p)
+    assert round(o.amplitude, 3) == 1.449
+    assert abs(o.amplitude - X) <= 1e-9
+    assert o.stable and 1.0 - o.mu_max == pytest.approx(1.0 - math.exp(-p.c / (2 * p.m) * p.period), rel=1e-6)
+
+
+# ---- stick-slip -----------------------------------------------------------------------------------
+
+def nd(lam: float, mss: float, chi: float, zeta: float = 0.0) -> Oscillator:
+    return Oscillator.from_nondimensional(lam=lam, mu_s_sigma=mss, chi=chi, zeta=zeta)
+
+
+STICK_SLIP = [
+    # (name, oscillator, K, the number of stops per cycle of the orbits expected)
+    ("two stops chi 0.7", nd(0.5, 0.6, 0.7), 1, 2),
+    ("two stops chi 1", nd(0.5, 0.6, 1.0), 1, 2),
+    ("asymmetric chi 0.4", nd(0.5, 0.6, 0.4), 1, 1),
+    ("four stops lam 0.15", nd(0.15, 0.6, 0.7), 1, 4),
+    ("damped, reversals only", nd(0.8, 0.3, 0.7, zeta=0.05), 1, 0),
+    ("damped, stops", nd(0.6, 0.5, 0.6, zeta=0.02), 1, None),
+    ("period two chi 0.22", nd(0.5, 0.6, 0.22), 2, 2),
+    ("phase 0.7, lam 0.15", Oscillator.from_nondimensional(lam=0.15, mu_s_sigma=0.6, chi=0.7, phi=0.7), 1, None),
+]
+
+
+def fd_multipliers(fmu: OscillatorFMU, p: Oscillator, o: Orbit, eps: float) -> np.ndarray:
+    """Eigenvalues of a central finite-difference Jacobian of the map P^K at the orbit's section."""
+    xs, w = scales(p)
+    z = o.section_state
+    J = np.zeros((2, 2))
+    for col, h in enumerate((eps * xs, eps * xs * w)):
+        d = np.zeros(2)
+        d[col] = h
+        plus = stroboscopic_map(p, z + d, o.section, o.period, fmu=fmu)[0]
+        minus = stroboscopic_map(p, z - d, o.section, o.period, fmu=fmu)[0]
+        J[:, col] = (plus - minus) / (2 * h)
+    return np.linalg.eigvals(J)
+
+
+@pytest.mark.parametrize("name, p, K, stops", STICK_SLIP, ids=[c[0] for c in STICK_SLIP])
+def test_stick_slip_orbits(fmu: OscillatorFMU, name: str, p: Oscillator, K: int, stops: int | None) -> None:
+    orbits = find_orbits(p, period=K, fmu=fmu)
+    found = [o for o in orbits if o.period == K]
+    assert found, f"{name}: no orbit of period {K}"
+    KT = K * p.period
+    for o in orbits:
+        assert o.converged and o.residual <= 1e-12, (name, o.residual, o.reason)
+        T = o.period * p.period
+        # a separate run of K periods from the state at t = 0 returns to it
+        back = end_state(fmu, p, o.x0, o.v0, 0.0, T)
+        assert scaled_gap(p, back, np.array([o.x0, o.v0])) <= 1e-12, (name, back, o.x0, o.v0)
+        # the section is in a slide, on the orbit
+        fmu.start(p.with_(x0=o.x0, v0=o.v0), EXACT)
+        fmu.step_to(o.section if o.section > 0 else T)
+        assert fmu.get("mode") != 0
+        at_section = np.array([fmu.get("x"), fmu.get("v")])
+        assert scaled_gap(p, at_section, o.section_state) <= 1e-11
+        # multipliers: a central finite-difference Jacobian of the map
+        mu1 = fd_multipliers(fmu, p, o, 1e-6)
+        mu2 = fd_multipliers(fmu, p, o, 2e-6)
+        mu = np.sort_complex(o.multipliers)
+        assert np.max(np.abs(np.sort_complex(mu1) - np.sort_complex(mu2))) < 1e-6, (name, "the map is not smooth")
+        assert np.max(np.abs(np.sort_complex(mu1) - mu)) < 1e-6, (name, mu, mu1)
+        if o.stick_fraction > 0:
+            assert 0.0 in o.multipliers    # rank one over a stick phase
+        if stops is not None and o.period == K:
+            assert o.events["stops"] == stops and o.events["breakaways"] == stops, (name, o.events)
+        assert o.events["transitions"] == o.events["stops"] + o.events["breakaways"] + o.events["reversals"]
+        assert 0.0 <= o.stick_fraction < 1.0 and o.amplitude > 0
+        # a stable orbit attracts: a transient from a nearby state converges to it
+        if o.stable:
+            xs, w = scales(p)
+            z = end_state(fmu, p, o.x0 + 1e-3 * xs, o.v0 - 1e-3 * xs * w, 0.0, 300 * T)
+            assert scaled_gap(p, z, np.array([o.x0, o.v0])) <= 1e-9, (name, z, o.x0, o.v0)
+    assert KT > 0
+
+
+def test_coexisting_orbits(fmu: OscillatorFMU) -> None:
+    """lambda 0.5, mu_s sigma 0.6, chi 0.4 (Fig. 8/9, below the symmetry breaking near 0.55): a mirror
+    pair of stable asymmetric orbits (the transients find one, the symmetry image the other), and the
+    unstable symmetric orbit they branched from, found from a guess (the chi = 0.6 orbit)."""
+    sym = find_orbits(nd(0.5, 0.6, 0.6), fmu=fmu)
+    assert len(sym) == 1 and sym[0].stable and abs(sym[0].offset) < 1e-12 * sym[0].amplitude
+    p = nd(0.5, 0.6, 0.4)
+    auto = find_orbits(p, fmu=fmu, symmetry=False)
+    pair = find_orbits(p, fmu=fmu)
+    assert len(pair) == 2 and all(o.stable for o in pair)
+    assert len(auto) >= 1
+    assert pair[0].offset == pytest.approx(-pair[1].offset, rel=1e-9) and abs(pair[0].offset) > 0.2 * pair[0].amplitude
+    assert pair[0].amplitude == pytest.approx(pair[1].amplitude, rel=1e-12)
+    assert pair[0].multipliers[0] == pytest.approx(pair[1].multipliers[0], rel=1e-9)
+    three = find_orbits(p, fmu=fmu, guesses=[(sym[0].x0, sym[0].v0)])
+    assert len(three) == 3
+    unstable = [o for o in three if not o.stable]
+    assert len(unstable) == 1 and unstable[0].mu_max > 1.5 and abs(unstable[0].offset) < 1e-12 * unstable[0].amplitude
+
+
+def test_newton_from_cold_starts(fmu: OscillatorFMU) -> None:
+    """Without transients (Newton from the raw initial conditions, line search on): lambda 0.15, chi 0.7
+    (Fig. 11's low-frequency zone) gives the two coexisting symmetric motions, their amplitudes a factor
+    about 1.7 apart (four and two stops per cycle); chi 0.4 the stable mirror pair and the unstable
+    symmetric orbit; a guess Newton cannot use is reported, not converged, with its reason."""
+    p = Oscillator.from_nondimensional(lam=0.15, mu_s_sigma=0.6, chi=0.7, phi=0.7)
+    cold = find_orbits(p, fmu=fmu, transients=0, symmetry=False)
+    assert len(cold) == 2 and all(o.stable and o.iterations > 0 for o in cold)
+    assert cold[0].amplitude / cold[1].amplitude == pytest.approx(1.66, abs=0.02)
+    assert sorted(o.events["stops"] for o in cold) == [2, 4]
+    q = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4, phi=0.7)
+    three = find_orbits(q, fmu=fmu, transients=0, symmetry=False)
+    assert [o.stable for o in three] == [True, True, False]
+    xs, w = scales(q)
+    (bad,) = find_orbits(q, fmu=fmu, transients=0, spread=(), guesses=[(1e6 * xs, 0.3e6 * xs * w)], keep_failed=True)
+    assert not bad.converged and bad.reason
+
+
+def test_period_doubling(fmu: OscillatorFMU) -> None:
+    """Near chi = 0.2365 (Fig. 8/9's band): just above the period doubling the K = 1 orbit has a
+    multiplier just above -1 (stable), just below it just below -1 (unstable), next to a stable mirror
+    pair of period-2 orbits; the period-1 orbit asked for as K = 2 is reported with its minimal period."""
+    above = find_orbits(nd(0.5, 0.6, 0.24), fmu=fmu)
+    assert above and all(o.period == 1 and -1.0 < o.multipliers[0].real < -0.98 for o in above)
+    below = find_orbits(nd(0.5, 0.6, 0.2365), period=2, fmu=fmu, guesses=[(above[0].x0, above[0].v0)])
+    ones = [o for o in below if o.period == 1]
+    twos = [o for o in below if o.period == 2]
+    assert ones and all(o.multipliers[0].real < -1.0 and not o.stable for o in ones)
+    assert len(twos) == 2 and all(o.stable for o in twos)
+
+
+def test_stuck_for_good(fmu: OscillatorFMU) -> None:
+    """mu_s sigma > 1: the block never slides; a valid orbit, one of a line of stuck states: the
+    Jacobian has an x row (1, 0) and a v row 0, multipliers exactly 1 (neutral, along the line) and 0."""
+    p = nd(0.5, 1.5, 0.7)
+    orbits = find_orbits(p, fmu=fmu)
+    assert orbits
+    for o in orbits:
+        assert o.stuck and o.converged and o.residual == 0.0 and o.v0 == 0.0 and o.stick_fraction == 1.0
+        assert list(o.multipliers) == [1.0, 0.0] and not o.stable
+        assert np.array_equal(o.jacobian, [[1.0, 0.0], [0.0, 0.0]])
+
+
+def test_autonomous_is_not_there_yet() -> None:
+    with pytest.raises(NotImplementedError, match="issue 23"):
+        find_orbits(Oscillator(omega=0.0))
+    with pytest.raises(ValueError, match="period"):
+        find_orbits(nd(0.5, 0.6, 0.7), period=0)
