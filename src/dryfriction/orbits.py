@@ -20,7 +20,6 @@ the FMU's over K T, rank one, multipliers exactly 1 (along the line of stuck sta
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -150,8 +149,8 @@ def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float) 
     slide = mode != 0
     if not slide.any():
         return None
-    if slide.all():
-        return None if False else float("nan")
+    if slide.all():               # slides all the time: any section will do (NaN: keep it)
+        return float("nan")
     n = slide.size - 1            # the last sample is the first one again (one cycle)
     s = slide[:n]
     k0 = int(np.argmin(s))        # start the scan at a stuck sample
@@ -232,7 +231,7 @@ def _check(p: Oscillator, K: int) -> None:
             "excitation, the period an unknown) need the moving belt of issue 23 and are not there yet")
 
 
-def _auto_guesses(p: Oscillator, transients: int, spread: Sequence[tuple[float, float]]) -> list[np.ndarray]:
+def _auto_guesses(p: Oscillator, spread: Sequence[tuple[float, float]]) -> list[np.ndarray]:
     xs, w = scales(p)
     # the frictionless harmonic amplitude sets the spread of the initial conditions
     X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
@@ -283,11 +282,11 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
           transients: int, spread: Sequence[tuple[float, float]], symmetry: bool, tol: float, max_iter: int,
           keep_failed: bool) -> list[Orbit]:
     sol = _Solver(f, p, K, tol, max_iter)
-    T, KT = p.period, K * p.period
+    KT = K * p.period
     # (state, time) guesses: the attractors at t = transients K T, the given ones at t = 0
     todo: list[tuple[np.ndarray, float, bool]] = []
     st = Settings(scheme="exact")
-    for z in _auto_guesses(p, transients, spread):
+    for z in _auto_guesses(p, spread):
         if transients > 0:
             f.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
             f.step_to(transients * KT)
@@ -341,7 +340,7 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float) -> tuple[Orbit | None, list[
                                                               tuple[np.ndarray, float] | None]:
     """Solve from the guess z at time t_g: (the orbit, its states at the K period marks, the state and
     time half a period after the section, for the symmetry image)."""
-    p, K, KT, T = sol.p, sol.K, sol.KT, sol.p.period
+    K, KT = sol.K, sol.KT
     m = sol.map
     t_s = t_g
     reason = ""
@@ -414,7 +413,7 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
 
 
 def _stuck_orbit(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float) -> Orbit:
-    p, K = sol.p, sol.K
+    p = sol.p
     mu = _multipliers(J, True)
     x0 = float(z[0])
     z0, zd0 = _nondim(p, x0, 0.0)
