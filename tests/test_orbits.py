@@ -87,6 +87,19 @@ def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU) -> None:
     assert o.stable and 1.0 - o.mu_max == pytest.approx(1.0 - math.exp(-p.c / (2 * p.m) * p.period), rel=1e-6)
 
 
+@pytest.mark.parametrize("lam, mss", [(1.7, 0.2), (2.5, 0.3), (0.8, 0.1), (1.3, 0.3)])
+def test_undamped_non_stop_is_den_hartog(fmu: OscillatorFMU, lam: float, mss: float) -> None:
+    """zeta = 0, mu_s = mu_k, no stops: Den Hartog's exact steady amplitude (dryfriction.steady)."""
+    from dryfriction.steady import den_hartog_amplitude
+
+    p = Oscillator.from_nondimensional(lam=lam, mu_s_sigma=mss, chi=1.0)
+    (o,) = find_orbits(p, fmu=fmu)
+    A = den_hartog_amplitude(p)
+    assert o.stick_fraction == 0.0 and o.events["stops"] == 0 and o.events["reversals"] == 2
+    assert abs(o.amplitude - A) <= 1e-10 * A, (o.amplitude, A)
+    assert abs(o.offset) <= 1e-12 * A
+
+
 # ---- stick-slip -----------------------------------------------------------------------------------
 
 def nd(lam: float, mss: float, chi: float, zeta: float = 0.0) -> Oscillator:
