@@ -33,6 +33,12 @@ static inline void dfo_loads_set(dfo_loads *L, double F_ext, double N, double mu
 }
 
 static inline int dfo_sign(double x) { return (x > 0.0) - (x < 0.0); }
+/* Without friction a block at rest never sticks: the direction it moves off in, from the static force
+ * S, or where S is 0 its rate dS, or where that is 0 too its second derivative d2S (+1 when all vanish). */
+static inline int dfo_free_start_dir(double S, double dS, double d2S)
+{
+    return (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
+}
 
 /* The static force: the net applied force on a block of stiffness k at rest at X under the
  * excitation P, F_static = P + F_ext - k X (the force the friction must hold to keep it there). */

@@ -1090,7 +1090,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             phase_at(C, t, &c, &sn);
             const double S = C->fP * c + C->fF - C->k * Xs, dS = -C->fP * C->omega * sn;
             const double d2S = -C->omega * C->omega * (C->fP * c);
-            const int dir = (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
+            const int dir = dfo_free_start_dir(S, dS, d2S);
             s->mode = dir;
             C->events++;
             after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);

@@ -478,7 +478,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
             /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
             const double S = static_force(C, ta, s->X), dS = dfo_excitation_rate(C->M, ta);
             const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
-            const int dir = (S != 0.0) ? dfo_sign(S) : (dS != 0.0) ? dfo_sign(dS) : (d2S < 0.0 ? -1 : 1);
+            const int dir = dfo_free_start_dir(S, dS, d2S);
             s->mode = dir;
             C->events++;
             after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
