@@ -165,8 +165,13 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
  * dfo_inst_do_step's, bit for bit. */
 typedef struct {
     int early_return, event_mode;
-    int (*intermediate)(void *ctx, double t, int can_return_early);
+    int (*intermediate)(void *ctx, double t, int can_return_early, int set_requested);
     void *ctx;
+    /* input_points: the host may set inputs during the step (FMI 3.0 intermediate update of inputs):
+     * the core also calls intermediate(ctx, t, can_return_early, 1) where it reads the inputs inside
+     * the step (the end of every internal step of the Bossak schemes); the inputs set there hold from
+     * t on. At switches the call has set_requested 0. */
+    int input_points;
 } dfo_event_opts;
 typedef struct {
     double t_reached;  /* the host's time after the step */
@@ -175,6 +180,32 @@ typedef struct {
 } dfo_step_result;
 dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
                                         const dfo_event_opts *opt, dfo_step_result *res);
+
+/* Coupling at second order (FMI 2.0 canInterpolateInputs, maxOutputDerivativeOrder,
+ * providesDirectionalDerivative; FMI 3.0 output, directional and adjoint derivatives).
+ * dfo_inst_max_input_order: the highest order of input derivatives the model takes (0: none);
+ * dfo_inst_max_output_order: the highest order of output derivatives it gives (0: none). */
+int dfo_inst_max_input_order(void);
+int dfo_inst_max_output_order(void);
+/* The order[i]-th time derivative (1 .. max input order) of the real input vr[i] at the host's
+ * current time: over the next doStep only the input varies as its Taylor polynomial from the
+ * current time (after it the derivatives are 0 again: the input is held). Every value is checked
+ * (a real input, the order in range, finite) before any is stored: a rejected call changes nothing. */
+dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
+                                               const int order[], const double value[]);
+/* The order[i]-th time derivative (1 .. max output order) of the output vr[i] at the host's current
+ * time, value[] holding dfo_inst_n_values(vr) values (an array variable's values in order). Where a
+ * derivative does not exist (at a stick/slip switch) the call fails with a sentence naming it. */
+dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
+                                                size_t nvr, const int order[], double value[]);
+/* Directional derivatives of the unknowns (outputs) with respect to the knowns (inputs) at the
+ * current point: sensitivity = J seed, J = d unknown / d known (the direct feed-through, by mode);
+ * seed has dfo_inst_n_values(known) values, sensitivity dfo_inst_n_values(unknown). Adjoint:
+ * sensitivity = J^T seed, seed over the unknowns, sensitivity over the knowns. */
+dfo_inst_status dfo_inst_directional(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                     const unsigned int known[], size_t nk, const double seed[], double sensitivity[]);
+dfo_inst_status dfo_inst_adjoint(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                 const unsigned int known[], size_t nk, const double seed[], double sensitivity[]);
 
 /* FMU states: allocated through the host, tagged; serialised in the one format of core/fmu_state.h
  * (header with magic, format version, model hash, size and checksum, then the model's fields),

@@ -501,8 +501,9 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 /* ---- co-simulation --------------------------------------------------------------------------- */
 
 /* The core's intermediate update: the host's callback, with the state at the switch readable. */
-static int intermediate(void *ctx, double t, int can_return_early)
+static int intermediate(void *ctx, double t, int can_return_early, int set_requested)
 {
+    (void)set_requested;
     Instance *in = (Instance *)ctx;
     fmi3Boolean requested = fmi3False;
     fmi3Float64 requested_time = t;
@@ -524,7 +525,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return FAIL("fmi3DoStep: eventHandlingNeeded, terminateSimulation, earlyReturn and lastSuccessfulTime must "
                     "not be NULL.");
     const dfo_event_opts opt = {in->early_return_allowed, in->event_mode_used && in->early_return_allowed,
-                                in->update ? intermediate : NULL, in};
+                                in->update ? intermediate : NULL, in, 0};
     dfo_step_result res = {0.0, 0, 0};
     const dfo_inst_status st = dfo_inst_do_step_events(in->core, "fmi3DoStep", currentCommunicationPoint,
                                                        communicationStepSize, &opt, &res);

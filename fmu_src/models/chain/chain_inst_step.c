@@ -123,7 +123,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         if (opt->intermediate) {
             in->lc.run.time = v->s.t;
             v->acc_valid = 0;
-            stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return) && opt->early_return;
+            stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 0) && opt->early_return;
         }
         if (stop) {
             step_done(in, v->s.t);
@@ -143,7 +143,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         res->event = 1;
     }
     step_done(in, t_target);
-    if (at_end && opt->intermediate) (void)opt->intermediate(opt->ctx, t_target, 0);
+    if (at_end && opt->intermediate) (void)opt->intermediate(opt->ctx, t_target, 0, 0);
     res->t_reached = t_target;
     return DFO_INST_OK;
 }

@@ -639,7 +639,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
             if (opt->intermediate) {
                 v->s = at;
                 in->lc.run.time = at.t;
-                stop = opt->intermediate(opt->ctx, at.t, opt->early_return) && opt->early_return;
+                stop = opt->intermediate(opt->ctx, at.t, opt->early_return, 0) && opt->early_return;
             }
             if (stop) {
                 v->s = at;
@@ -668,7 +668,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         if (r.found && opt->intermediate) {
             v->s = w;
             in->lc.run.time = t_target;
-            (void)opt->intermediate(opt->ctx, t_target, 0);
+            (void)opt->intermediate(opt->ctx, t_target, 0, 0);
         }
         if (events_logged) {
             dfo_state again = start;
@@ -793,4 +793,37 @@ dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const un
     dfo_model_init(&v.M, &v.p);   /* derived constants follow from the parameters, never trusted */
     dfo_check_caches(&v.M, &v.s); /* and caches that do not follow from the state are dropped */
     return store_state(osc(lc), fn, state, &run, &v);
+}
+
+/* ---- coupling at second order (core/instance.h) ---- */
+
+int dfo_inst_max_input_order(void) { return 0; }
+int dfo_inst_max_output_order(void) { return 0; }
+
+dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
+                                               const int order[], const double value[])
+{
+    (void)vr; (void)nvr; (void)order; (void)value;
+    return dfo_inst_fail(lc, "%s: input derivatives are not supported (canInterpolateInputs=false).", fn);
+}
+
+dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
+                                                size_t nvr, const int order[], double value[])
+{
+    (void)vr; (void)nvr; (void)order; (void)value;
+    return dfo_inst_fail(lc, "%s: output derivatives are not supported (maxOutputDerivativeOrder=0).", fn);
+}
+
+dfo_inst_status dfo_inst_directional(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                     const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
+{
+    (void)unknown; (void)nu; (void)known; (void)nk; (void)seed; (void)sensitivity;
+    return dfo_inst_fail(lc, "%s: directional derivatives are not provided.", fn);
+}
+
+dfo_inst_status dfo_inst_adjoint(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                 const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
+{
+    (void)unknown; (void)nu; (void)known; (void)nk; (void)seed; (void)sensitivity;
+    return dfo_inst_fail(lc, "%s: adjoint derivatives are not provided.", fn);
 }
