@@ -78,7 +78,7 @@ def test_bad_arguments_are_one_clear_error(fmu: OscillatorFMU) -> None:
 
 def test_no_friction_through_resonance_is_the_closed_form(fmu: OscillatorFMU) -> None:
     p = Oscillator(m=1.0, k=1.0, c=0.1, N=0.0, P0=1.0, omega=0.5, phi=0.0, mu_s=0.5, chi=1.0)
-    c = continue_orbits(p, "omega", 0.5, 1.6, ds=0.05, fmu=fmu)
+    c = continue_orbits(p, "omega", 0.5, 1.6, ds=0.05, ds_max=0.2, fmu=fmu)
     ds = c.dataset
     assert [b.stopped.startswith("reached the end of the range at omega = 1.6") for b in c.branches] == [True]
     assert c.bifurcations == []
@@ -88,7 +88,7 @@ def test_no_friction_through_resonance_is_the_closed_form(fmu: OscillatorFMU) ->
     X = p.P0 / np.hypot(p.k - p.m * w ** 2, p.c * w)
     err = np.abs(ds.amplitude_m.values - X) / X
     assert err.max() <= 1e-10, err.max()          # seen 3.5e-12
-    assert np.abs(ds.offset_m.values).max() <= 1e-12 * X.max()
+    assert np.abs(ds.offset_m.values).max() <= 1e-10 * X.max()
     # the multipliers: |mu| = exp(-c T / (2 m)) for the underdamped oscillator
     assert np.abs(ds.mu_max.values - np.exp(-p.c / (2 * p.m) * 2 * np.pi / w)).max() <= 1e-12
     assert ds.point.size >= 20 and X.max() > 9.9    # through the peak (X = 10.01 at w = 0.9975)
@@ -140,7 +140,7 @@ def test_fold_in_frequency_located_and_reproducible(fmu: OscillatorFMU) -> None:
 @pytest.fixture(scope="module")
 def band(fmu: OscillatorFMU) -> Continuation:
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.8)
-    return continue_orbits(p, "chi", 0.8, 0.22, ds=0.02, ds_max=0.05, fmu=fmu)
+    return continue_orbits(p, "chi", 0.8, 0.22, ds=0.02, ds_max=0.2, fmu=fmu)
 
 
 def test_fig8_9_symmetry_breaking_against_the_sweep(band: Continuation, fmu: OscillatorFMU) -> None:

@@ -294,7 +294,7 @@ class _Failure(Exception):
 def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: float, *, period: int = 1,
                     orbit: Orbit | Sequence[Orbit] | None = None,
                     guesses: Iterable[Sequence[float]] | None = None,
-                    ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 0.1, max_points: int = 400,
+                    ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 0.2, max_points: int = 400,
                     tol: float = 1e-11, ptol: float = 1e-10, max_turn: float = 0.3, fd_step: float = 1e-6,
                     max_iter: int = 8, switch: bool = True, max_branches: int = 8, symmetric: bool = True,
                     detect: Sequence[str] = BIFURCATION_TYPES,
@@ -579,7 +579,14 @@ class _Run:
                 self.record(b, m, None, float(pt.e.u[2] + self.ds_min * pt.t[2]), False, last)
                 return
             try:
-                e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds)
+                try:
+                    e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds)
+                except _Failure:
+                    if ds > 1e-2 * self.ds0:
+                        raise
+                    # a short step that does not converge fast: next to a corner of the branch, where
+                    # dG/dq straddles it (see correct)
+                    e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds, max_iter=LOCATE_ITERATIONS)
                 t = e.tangent()
                 if t @ pt.t < 0:
                     t = -t
