@@ -329,6 +329,7 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
     if bad:
         raise ValueError(f"unknown bifurcation type(s) {bad}; valid: {', '.join(BIFURCATION_TYPES)}")
     p0 = set_parameter(oscillator, param, start)
+    set_parameter(oscillator, param, stop)            # both ends valid (the error names the field)
     own = fmu is None
     f = OscillatorFMU2() if own else fmu
     try:

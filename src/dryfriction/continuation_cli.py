@@ -182,18 +182,19 @@ def branches_json(c: Any) -> list[dict[str, Any]]:
 
 def write_csv(c: Any, path: Path) -> None:
     ds = c.dataset
+    v = {n: ds[n].values for n in ds.data_vars}
     cols = ["branch", "period", "kind", "param", "converged", "stable", "x0", "v0", "amplitude_m", "offset_m",
             "stick_fraction", "transitions", "mu_max", "mu1_re", "mu1_im", "mu2_re", "mu2_im", "residual", "reason"]
     lines = [",".join(cols)]
     for i in range(ds.point.size):
-        row = [int(ds.branch[i]), int(ds.period[i]), str(ds.kind[i]), repr(float(ds.param[i])),
-               int(bool(ds.converged[i])), int(bool(ds.stable[i]))]
-        row += [repr(float(ds[n][i])) for n in ("x0", "v0", "amplitude_m", "offset_m", "stick_fraction")]
-        row += [int(ds.transitions[i]), repr(float(ds.mu_max[i]))]
+        row = [str(int(v["branch"][i])), str(int(v["period"][i])), str(v["kind"][i]), repr(float(v["param"][i])),
+               str(int(bool(v["converged"][i]))), str(int(bool(v["stable"][i])))]
+        row += [repr(float(v[n][i])) for n in ("x0", "v0", "amplitude_m", "offset_m", "stick_fraction")]
+        row += [str(int(v["transitions"][i])), repr(float(v["mu_max"][i]))]
         for j in range(2):
-            row += [repr(float(ds.multiplier_re[i, j])), repr(float(ds.multiplier_im[i, j]))]
-        row += [repr(float(ds.residual[i])), '"' + str(ds.reason[i]).replace('"', "'") + '"']
-        lines.append(",".join(str(v) for v in row))
+            row += [repr(float(v["multiplier_re"][i, j])), repr(float(v["multiplier_im"][i, j]))]
+        row += [repr(float(v["residual"][i])), '"' + str(v["reason"][i]).replace('"', "'") + '"']
+        lines.append(",".join(row))
     path.write_text("\n".join(lines) + "\n")
 
 
