@@ -445,15 +445,14 @@ class _Run:
             "mu": mu, "stable": bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)),
             "section": t_s, "cycle": cyc,
         }
-        info.update(self.tests(m, e, sticks))
+        info.update(self.tests(m, e))
         info["signature"] = (info["transitions"], info["stick_fraction"] > 0.0)
         return info
 
-    def tests(self, m: _BranchMap, e: _Eval, sticks: bool | None = None) -> dict[str, float]:
+    def tests(self, m: _BranchMap, e: _Eval) -> dict[str, float]:
+        """The test functions at a converged point (module doc) and dq/ds."""
         J = e.J
         JP = m.full_jacobian(J)
-        if sticks is None:
-            sticks = bool(abs(np.linalg.det(J)) < 1e-300) or False
         out = {"fold": float(np.linalg.det(J - np.eye(2))), "period_doubling": float(np.linalg.det(JP + np.eye(2))),
                "tq": float(e.tangent()[2])}
         out["symmetry_breaking"] = float(np.linalg.det(J + np.eye(2))) if m.kind == "symmetric" else math.nan
