@@ -67,7 +67,7 @@ def test_bad_arguments_are_one_clear_error(fmu: OscillatorFMU) -> None:
     with pytest.raises(ValueError, match="unknown continuation parameter"):
         continue_orbits(p, "colour", 0.5, 0.6, fmu=fmu)
     with pytest.raises(ValueError, match="ds_min <= ds <= ds_max"):
-        continue_orbits(p, "chi", 0.5, 0.6, ds=1.0, fmu=fmu)
+        continue_orbits(p, "chi", 0.5, 0.6, ds=2.0, fmu=fmu)
     with pytest.raises(ValueError, match="period must be an integer >= 1"):
         continue_orbits(p, "chi", 0.5, 0.6, period=0, fmu=fmu)
     with pytest.raises(ValueError, match="unknown bifurcation type"):
@@ -262,3 +262,22 @@ def test_grazing_where_den_hartog_stops_holding(fmu: OscillatorFMU) -> None:
     (o,) = find_orbits(pg, fmu=fmu)
     assert o.stick_fraction == 0.0
     assert abs(pg.k * o.amplitude * r * r - pg.mu_s * pg.N) <= 1e-7 * pg.P0
+
+
+def test_down_to_the_edge_of_the_valid_range(fmu: OscillatorFMU) -> None:
+    """The README's block at 10 Hz continued in N from 20 N down to 0 (the edge of N's valid range):
+    the branch ends exactly at N = 0 on the closed-form harmonic response, and starts on find_orbits'
+    orbit (0.2356 m, the transient method's number)."""
+    block = Oscillator.physical(m=0.5, k=2000, zeta=0.003, P0=10, f=10, N=20, mu_s=0.3, mu_k=0.2)
+    c = continue_orbits(block, "N", 20.0, 0.0, fmu=fmu)
+    (b,) = c.branches
+    assert b.stopped == "reached the end of the range at N = 0"
+    ds = c.dataset
+    assert bool(ds.converged.all()) and float(ds.param[-1]) == 0.0
+    (o,) = find_orbits(block, fmu=fmu)
+    assert float(ds.amplitude_m[0]) == pytest.approx(o.amplitude, rel=1e-10)
+    assert o.amplitude == pytest.approx(0.2356, abs=5e-5)
+    w = block.omega
+    X = block.P0 / math.hypot(block.k - block.m * w * w, block.c * w)
+    assert abs(float(ds.amplitude_m[-1]) - X) <= 1e-10 * X, (float(ds.amplitude_m[-1]), X)
+    assert float(ds.stick_fraction[0]) == 0.0 and np.all(np.diff(ds.amplitude_m.values) > 0)

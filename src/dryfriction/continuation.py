@@ -294,7 +294,7 @@ class _Failure(Exception):
 def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: float, *, period: int = 1,
                     orbit: Orbit | Sequence[Orbit] | None = None,
                     guesses: Iterable[Sequence[float]] | None = None,
-                    ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 0.2, max_points: int = 400,
+                    ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 1.0, max_points: int = 400,
                     tol: float = 1e-11, ptol: float = 1e-10, max_turn: float = 0.3, fd_step: float = 1e-6,
                     max_iter: int = 8, switch: bool = True, max_branches: int = 8, symmetric: bool = True,
                     detect: Sequence[str] = BIFURCATION_TYPES,
@@ -578,9 +578,20 @@ class _Run:
                              f"{self.param(pt):.10g}: {last}")
                 self.record(b, m, None, float(pt.e.u[2] + self.ds_min * pt.t[2]), False, last)
                 return
+            u_pred = pt.e.u + ds * pt.t
+            if not self.in_range(float(u_pred[2])):
+                # the step would leave the range: solve at its end, at a fixed parameter (a
+                # parameter's valid range may end there, e.g. N = 0)
+                end = self.end_point(m, pt, u_pred)
+                s_end = float(pt.t @ (end.e.u - pt.e.u)) if end is not None else 0.0
+                if end is not None and s_end > 0:
+                    self.locate_all(b, m, pt, end, s_end)
+                    b.stopped = f"reached the end of the range at {self.name} = {self.param(end):.10g}"
+                    self.record(b, m, end, float(end.e.u[2]), True)
+                    return
             try:
                 try:
-                    e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds)
+                    e, it = self.correct(m, u_pred, pt.t, pt.e.u, ds)
                 except _Failure:
                     if ds > 1e-2 * self.ds0:
                         raise
@@ -621,15 +632,17 @@ class _Run:
             if it <= 3:
                 ds = min(self.ds_max, 1.5 * ds)
 
-    def end_point(self, m: _BranchMap, a: _Point, c: _Point) -> _Point | None:
-        """The orbit at the end of the range (start or stop) between a (inside) and c (outside), or None."""
-        qa, qc = float(a.e.u[2]), float(c.e.u[2])
+    def end_point(self, m: _BranchMap, a: _Point, c: _Point | np.ndarray) -> _Point | None:
+        """The orbit at the end of the range (start or stop) between a (inside) and c (a point or a
+        predicted u outside), or None."""
+        uc = c if isinstance(c, np.ndarray) else c.e.u
+        qa, qc = float(a.e.u[2]), float(uc[2])
         v = self.start + qc * self.p_s
         q_end = (self.stop if abs(v - self.stop) < abs(v - self.start) else self.start) - self.start
         q_end /= self.p_s
         if qc == qa:
             return None
-        u = a.e.u + (q_end - qa) / (qc - qa) * (c.e.u - a.e.u)
+        u = a.e.u + (q_end - qa) / (qc - qa) * (uc - a.e.u)
         u[2] = q_end
         try:
             e, _ = self.correct(m, u, None, None, 0.0)
@@ -694,15 +707,21 @@ class _Run:
         for kind in tests:
             self.locate(b, m, a, c, ds, kind)
         if "grazing" in self.detect and ia["signature"] != ic["signature"]:
-            self.locate(b, m, a, c, ds, "grazing")
+            # at fixed parameter values, unless the step holds a fold too; if a corrector fails
+            # there, again along the step's arclength
+            natural = not _flip(ia["tq"], ic["tq"]) and abs(c.e.u[2] - a.e.u[2]) > 1e-3 * ds
+            self.locate(b, m, a, c, ds, "grazing", natural)
+            if natural and self.bifs[-1].note.startswith("located only to the bracket"):
+                self.bifs.pop()
+                self.locate(b, m, a, c, ds, "grazing", False)
 
-    def locate(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float, kind: str) -> None:
+    def locate(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float, kind: str,
+               natural: bool = False) -> None:
         key = kind
         if kind == "fold" and not _flip(a.info["fold"], c.info["fold"]):
             key = "tq"              # dp/ds changes sign, det(J - I) does not: a non-smooth fold
         cache: dict[float, tuple[_Eval, Any]] = {}
 
-        natural = kind == "grazing" and abs(c.e.u[2] - a.e.u[2]) > 1e-3 * ds
         def at(s: float) -> tuple[_Eval, Any]:
             if s not in cache:
                 if natural:

@@ -49,7 +49,7 @@ def _oscillator_options(c: argparse.ArgumentParser) -> None:
 def _common(c: argparse.ArgumentParser, default_out: str) -> None:
     c.add_argument("--period", type=count("--period", 1), default=1, help="orbits of K excitation periods (default 1)")
     c.add_argument("--ds", type=number("--ds", 0.0, True), default=0.02, help="first arclength step (default 0.02)")
-    c.add_argument("--ds-max", type=number("--ds-max", 0.0, True), default=0.2, help="largest step (default 0.2)")
+    c.add_argument("--ds-max", type=number("--ds-max", 0.0, True), default=1.0, help="largest step (default 1)")
     c.add_argument("--max-points", type=count("--max-points", 2), default=400, help="points per branch (default 400)")
     c.add_argument("--max-branches", type=count("--max-branches", 1), default=8,
                    help="branches in all, the switched ones included (default 8)")
@@ -262,7 +262,8 @@ def _describe(p: Any, name: str, start: float) -> str:
             raise ValueError
     except ValueError:
         vals = {"m": p.m, "k": p.k, "c": p.c, "P0": p.P0, "omega": p.omega, "N": p.N, "mu_s": p.mu_s, "chi": p.chi}
-    fixed = ", ".join(f"{k} {v:.4g}" for k, v in vals.items() if k != name)
+    defines = {"f": "omega", "lam": "omega", "zeta": "c", "mu_k": "chi", "mu_s_sigma": "N", "sigma": "N"}
+    fixed = ", ".join(f"{k} {v:.4g}" for k, v in vals.items() if k not in (name, defines.get(name)))
     return f"continuation in {name}; {fixed}"
 
 
