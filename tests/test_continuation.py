@@ -219,6 +219,11 @@ def test_every_point_is_converged_or_says_why(band: Continuation) -> None:
                  "multiplier_im", "stable", "branch", "period"):
         assert name in ds
     assert ds.residual.max() <= 1e-11
+    # the located orbits are points of their branches, marked with their type
+    marked = ds.where(ds.bifurcation != "", drop=True)
+    assert sorted(str(v) for v in marked.bifurcation.values) == sorted(b.type for b in band.bifurcations)
+    pd = marked.where(marked.bifurcation == "period_doubling", drop=True)
+    assert np.all(np.abs(pd.multiplier_re.values[:, 0] + 1.0) <= 1e-6) and not bool(pd.stable.any())
 
 
 def test_a_branch_that_ends_early_says_why(fmu: OscillatorFMU) -> None:

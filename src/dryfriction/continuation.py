@@ -143,12 +143,14 @@ class Bifurcation:
     children: list[int] = field(default_factory=list)   # branches started here (doubled, asymmetric)
     events: tuple[tuple[int, bool], tuple[int, bool]] | None = None   # grazing: (transitions, sticks) before/after
     half_multipliers: np.ndarray | None = None           # of H on a symmetric branch
+    amplitude_m: float = math.nan                         # of the located orbit, m
+    offset_m: float = math.nan
 
     def as_dict(self) -> dict[str, Any]:
         return {"type": self.type, "param": self.param, "period": self.period, "x0": self.x0, "v0": self.v0,
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
                 "branch": self.branch, "bracket": list(self.bracket), "test": self.test, "note": self.note,
-                "children": list(self.children)}
+                "children": list(self.children), "amplitude_m": self.amplitude_m, "offset_m": self.offset_m}
 
 
 @dataclass
@@ -370,6 +372,7 @@ class _Run:
         self.branches: list[Branch] = []
         self.rows: list[dict[str, Any]] = []
         self.bifs: list[Bifurcation] = []
+        self.pending: list[tuple[float, _Point, str]] = []   # located orbits of one step, to record
         self.counter = [0]         # runs of a map (each one FMU doStep over its span)
         self.evaluations = 0       # other runs (cycles, event counts)
 
@@ -472,9 +475,9 @@ class _Run:
         return int(o["transitions"]), float(o["stick_fraction"]) > 0.0
 
     def record(self, b: Branch, m: _BranchMap, pt: _Point | None, q: float, converged: bool,
-               reason: str = "") -> None:
+               reason: str = "", bifurcation: str = "") -> None:
         row: dict[str, Any] = {"branch": b.id, "period": m.K, "kind": m.kind, "param": self.start + q * self.p_s,
-                               "converged": converged, "reason": reason}
+                               "converged": converged, "reason": reason, "bifurcation": bifurcation}
         if pt is not None:
             i = pt.info
             row.update(x0=i["x0"], v0=i["v0"], amplitude_m=i["amplitude"], offset_m=i["offset"],
@@ -675,6 +678,8 @@ class _Run:
         t_new = _slide_section(t, mode, t_s, KT)
         if t_new is None or math.isnan(t_new):
             return m, pt
+        if abs(pt.t[2]) < 1e-3:         # near a fold the orientation is not safe to carry over: keep it
+            return m, pt
         i = int(np.argmin(np.abs(t - t_new)))
         t_i = float(t[i])
         z = np.array([cyc["x"][i], cyc["v"][i]])
@@ -689,12 +694,18 @@ class _Run:
         tn = e.tangent()
         if tn[2] * pt.t[2] < 0:
             tn = -tn
-        if abs(pt.t[2]) < 1e-3:         # near a fold the orientation is not safe to carry over: keep it
-            return m, pt
         return m2, _Point(e, tn, pt.s, self.describe(m2, e))
 
     # -- bifurcations between two points --
     def locate_all(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float) -> None:
+        """Locate every bifurcation between a and c; their orbits join the branch's points, in order."""
+        self.pending = []
+        self._locate_all(b, m, a, c, ds)
+        for s, pt, typ in sorted(self.pending, key=lambda x: x[0]):
+            pt.s = s
+            self.record(b, m, pt, float(pt.e.u[2]), True, bifurcation=typ)
+
+    def _locate_all(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float) -> None:
         ia, ic = a.info, c.info
         tests: list[str] = []
         if "fold" in self.detect and (_flip(ia["fold"], ic["fold"]) or _flip(ia["tq"], ic["tq"])):
@@ -713,6 +724,7 @@ class _Run:
             self.locate(b, m, a, c, ds, "grazing", natural)
             if natural and self.bifs[-1].note.startswith("located only to the bracket"):
                 self.bifs.pop()
+                self.pending.pop()
                 self.locate(b, m, a, c, ds, "grazing", False)
 
     def locate(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float, kind: str,
@@ -814,8 +826,10 @@ class _Run:
                           v0=info["v0"], multipliers=mu, branch=b.id, bracket=(float(bracket[0]), float(bracket[1])),
                           test=test, note=note,
                           events=(sig0, sig1) if kind == "grazing" else None,
-                          half_multipliers=np.linalg.eigvals(e.J) if m.kind == "symmetric" else None)
+                          half_multipliers=np.linalg.eigvals(e.J) if m.kind == "symmetric" else None,
+                          amplitude_m=info["amplitude"], offset_m=info["offset"])
         self.bifs.append(bif)
+        self.pending.append((a.s + float(np.linalg.norm(e.u - a.e.u)), _Point(e, a.t, 0.0, info), typ))
         if self.switch and kind in ("period_doubling", "symmetry_breaking") and "non-smooth" not in note:
             self.spawn(b, m, e, bif, kind)
 
@@ -873,6 +887,7 @@ class _Run:
                 "stable": ("point", col("stable", False).astype(bool)),
                 "converged": ("point", col("converged", False).astype(bool)),
                 "reason": ("point", col("reason", "").astype(str)),
+                "bifurcation": ("point", col("bifurcation", "").astype(str)),
                 "branch": ("point", col("branch", -1).astype(np.int64)),
                 "period": ("point", col("period", 0).astype(np.int64)),
                 "kind": ("point", col("kind", "").astype(str)),

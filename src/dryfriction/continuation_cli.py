@@ -219,12 +219,7 @@ def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
                         label=(f"branch {b.id} (K = {b.period}{', symmetric' if b.kind == 'symmetric' else ''})"
                                if (ls == "-" and var == "amplitude_m" and label) else None))
     for f in c.bifurcations:
-        s = ds.where(ds.branch == f.branch, drop=True)
-        if s.point.size == 0:
-            continue
-        i = int(np.argmin(np.abs(s.param.values - f.param)))
-        for ax, var in zip(axes, ("amplitude_m", "offset_m")):
-            y = float(s[var].values[i]) * scale
+        for ax, y in zip(axes, (f.amplitude_m * scale, f.offset_m * scale)):
             ax.plot([f.param], [y], MARKERS[f.type], color="k", ms=6, mfc="none")
             ax.annotate(f"{LABELS[f.type]} {f.param:.5g}", (f.param, y), textcoords="offset points", xytext=(4, 4),
                         fontsize=7)
