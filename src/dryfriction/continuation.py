@@ -453,11 +453,10 @@ class _Run:
         return info
 
     def tests(self, m: _BranchMap, e: _Eval) -> dict[str, float]:
-        """The test functions at a converged point (module doc) and dq/ds."""
+        """The test functions at a converged point (module doc)."""
         J = e.J
         JP = m.full_jacobian(J)
-        out = {"fold": float(np.linalg.det(J - np.eye(2))), "period_doubling": float(np.linalg.det(JP + np.eye(2))),
-               "tq": float(e.tangent()[2])}
+        out = {"fold": float(np.linalg.det(J - np.eye(2))), "period_doubling": float(np.linalg.det(JP + np.eye(2)))}
         out["symmetry_breaking"] = float(np.linalg.det(J + np.eye(2))) if m.kind == "symmetric" else math.nan
         return out
 
@@ -708,8 +707,10 @@ class _Run:
     def _locate_all(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float) -> None:
         ia, ic = a.info, c.info
         tests: list[str] = []
-        if "fold" in self.detect and (_flip(ia["fold"], ic["fold"]) or _flip(ia["tq"], ic["tq"])):
+        if "fold" in self.detect and _flip(ia["fold"], ic["fold"]):
             tests.append("fold")
+        elif "fold" in self.detect and _flip(float(a.t[2]), float(c.t[2])):
+            self.corner_fold(b, m, a, c)
         if "period_doubling" in self.detect and _flip(ia["period_doubling"], ic["period_doubling"]):
             tests.append("period_doubling")
         if "symmetry_breaking" in self.detect and m.kind == "symmetric" and \
@@ -720,7 +721,7 @@ class _Run:
         if "grazing" in self.detect and ia["signature"] != ic["signature"]:
             # at fixed parameter values, unless the step holds a fold too; if a corrector fails
             # there, again along the step's arclength
-            natural = not _flip(ia["tq"], ic["tq"]) and abs(c.e.u[2] - a.e.u[2]) > 1e-3 * ds
+            natural = not _flip(float(a.t[2]), float(c.t[2])) and abs(c.e.u[2] - a.e.u[2]) > 1e-3 * ds
             self.locate(b, m, a, c, ds, "grazing", natural)
             if natural and self.bifs[-1].note.startswith("located only to the bracket"):
                 self.bifs.pop()
@@ -730,8 +731,6 @@ class _Run:
     def locate(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float, kind: str,
                natural: bool = False) -> None:
         key = kind
-        if kind == "fold" and not _flip(a.info["fold"], c.info["fold"]):
-            key = "tq"              # dp/ds changes sign, det(J - I) does not: a non-smooth fold
         cache: dict[float, tuple[_Eval, Any]] = {}
 
         def at(s: float) -> tuple[_Eval, Any]:
@@ -815,12 +814,10 @@ class _Run:
             target = {"fold": 1.0, "period_doubling": -1.0, "symmetry_breaking": -1.0}[kind]
             mus = np.linalg.eigvals(m.full_jacobian(e.J) if kind == "period_doubling" else e.J)
             gap = float(np.min(np.abs(mus - target)))
-            if key == "tq":
-                note = (note + "; " if note else "") + "dp/ds changes sign but no multiplier crosses +1 (a non-smooth fold)"
-            elif gap > 1e-4:
+            if gap > 1e-4:
                 note = (note + "; " if note else "") + (f"non-smooth: the multiplier jumps across {target:+g} "
                                                        f"(nearest {gap:.2g} away; an event changes there)")
-            if kind == "fold" and not _flip(a.info["tq"], c.info["tq"]):
+            if kind == "fold" and not _flip(float(a.t[2]), float(c.t[2])):
                 note = (note + "; " if note else "") + "dp/ds keeps its sign: a branch point, not a fold"
         bif = Bifurcation(type=typ, param=self.start + float(e.u[2]) * self.p_s, period=m.K, x0=info["x0"],
                           v0=info["v0"], multipliers=mu, branch=b.id, bracket=(float(bracket[0]), float(bracket[1])),
@@ -832,6 +829,21 @@ class _Run:
         self.pending.append((a.s + float(np.linalg.norm(e.u - a.e.u)), _Point(e, a.t, 0.0, info), typ))
         if self.switch and kind in ("period_doubling", "symmetry_breaking") and "non-smooth" not in note:
             self.spawn(b, m, e, bif, kind)
+
+    def corner_fold(self, b: Branch, m: _BranchMap, a: _Point, c: _Point) -> None:
+        """dp/ds changes sign between a and c but no multiplier crosses +1: the branch turns at a
+        corner (a non-smooth fold). Reported at the point of the two with the extreme parameter, not
+        located (the tangent's orientation at trial points past a corner is not known)."""
+        pa, pc = self.param(a), self.param(c)
+        # q (and p: p_s > 0) grew at a when a.t[2] > 0: the extreme is then the larger parameter
+        pt = a if (a.t[2] > 0) == (pa >= pc) else c
+        i = pt.info
+        self.bifs.append(Bifurcation(
+            type="fold", param=self.param(pt), period=m.K, x0=i["x0"], v0=i["v0"], multipliers=i["mu"],
+            branch=b.id, bracket=(min(pa, pc), max(pa, pc)), test=float(i["fold"]),
+            note=("non-smooth: dp/ds changes sign but no multiplier crosses +1 (a corner); not located, "
+                  "the extreme of the two branch points around it"),
+            amplitude_m=i["amplitude"], offset_m=i["offset"]))
 
     def spawn(self, b: Branch, m: _BranchMap, e: _Eval, bif: Bifurcation, kind: str) -> None:
         p = e.p
