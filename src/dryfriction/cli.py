@@ -106,6 +106,9 @@ def build_parser() -> Parser:
     from .chain_cli import add_chain_parser
 
     add_chain_parser(sub, parents=common)
+    from .continuation_cli import add_continuation_parsers
+
+    add_continuation_parsers(sub, parents=common)
 
     s = sub.add_parser("study", parents=common, help="the paper's studies ('dryfriction study list')",
                        description="Reproduce a study of the paper (see 'list').")
@@ -386,9 +389,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             _check_fmu_option(args.fmu, args.command)
         from .chain_cli import chain_main
         from .chaos.cli import lyapunov_main
+        from .continuation_cli import continuation_main
 
         handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
-                   "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main}[args.command]
+                   "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main,
+                   "continuation": continuation_main, "bifurcation": continuation_main}[args.command]
         with fmu_warnings_on_stderr("dryfriction", bool(getattr(args, "strict", False))):
             return handler(args)
     except (UsageError, FileNotFoundError, FMUError) as e:
