@@ -1704,7 +1704,7 @@ void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, d
 
 const char *dfo_exact_poly_unsupported(const dfo_model *M)
 {
-    if (M->p.k == 0.0) return dfo_exact_free_poly_unsupported(M);
+    (void)M; /* every model: k > 0 here, k = 0 in exact_free.c */
     return NULL;
 }
 
@@ -1737,7 +1737,22 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx)
 {
     if (!dfo_input_poly_active(q)) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
-    if (M->p.k == 0.0) return dfo_exact_free_advance_poly(M, u, q, s, t_target, on_switch, switch_ctx);
+    const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
+    double z[2];
+    const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);
+    if (M->p.k == 0.0) { /* no spring: exact_free.c, piece by piece */
+        const double qF[3] = {dfo_external_force(M, u), q->F[0], q->F[1]};
+        dfo_status st = DFO_OK;
+        for (int i = 0; i <= nz && st == DFO_OK; i++) {
+            const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
+            if (!(b > s->t)) continue;
+            const double mid = 0.5 * (a + b) - q->t0;
+            const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
+            const double qN[3] = {pos ? n0 : 0.0, pos ? n1 : 0.0, pos ? n2 : 0.0};
+            st = dfo_exact_free_advance_poly(M, u, q->t0, qF, qN, s, b, on_switch, switch_ctx);
+        }
+        return st;
+    }
     /* the length scale of the loads at both ends and at the middle */
     dfo_inputs u1, u2;
     dfo_input_poly_at(u, q, t_target, &u1);
@@ -1754,15 +1769,12 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     C.qF[0] = dfo_external_force(M, u);
     C.qF[1] = q->F[0];
     C.qF[2] = q->F[1];
-    const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
     const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
     if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
         s->hA = 0.0;
         return DFO_ERR_NONFINITE;
     }
     /* the pieces between the zeros of N + N_ext(t) */
-    double z[2];
-    const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);
     dfo_status st = DFO_OK;
     for (int i = 0; i <= nz && st == DFO_OK; i++) {
         const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
