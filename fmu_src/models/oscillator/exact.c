@@ -1598,7 +1598,7 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
                 dfo_loads L;
                 poly_loads(C, tb, &L, NULL, NULL);
                 const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
-                dfo_sens_breakaway(s->J, (a_plus != 0.0 && D != 0.0) ? -a_plus * C->k / D : 0.0);
+                dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0); /* (D = 0: tangential, J not finite) */
             }
             C->events++;
             after_phase_poly(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
