@@ -4,8 +4,9 @@ tests/c/test_exact_poly (run mode), against the independent 40-digit reference o
 tests/poly_reference.py (mpmath closed form with the polynomial particular solution, sampled event
 search): ramp and quadratic F_ext and N_ext, stick-slip with several breakaways and stops, chi < 1,
 = 1, > 1, a normal force that vanishes (and returns), undamped, critically and over-damped and
-near-resonant blocks, k = 0 with c = 0 and c > 0, one polynomial cut into other communication steps. Asserted: x and v at every communication point, the
-events (count, kinds, times), and the observables (extremes, stick time, friction work)."""
+near-resonant blocks, k = 0 with c = 0 and c > 0, one polynomial cut into other communication steps.
+Asserted: x and v at every communication point, the events (count, kinds, times), and the
+observables (extremes, stick time, friction work)."""
 
 from __future__ import annotations
 

@@ -225,8 +225,8 @@ static void test_against_differences(checks *T)
                 CHECK_INT(s.steps, o.steps);
             }
     CHECK(runs >= 10);
-    printf("Jacobian with polynomial inputs against central differences: %d runs, worst %.2e of the largest entry (+ 1e-3)\n",
-           runs, worst);
+    printf("Jacobian with polynomial inputs against central differences: %d runs, "
+           "worst %.2e of the largest entry (+ 1e-3)\n", runs, worst);
 }
 
 static void test_other_steps(checks *T)

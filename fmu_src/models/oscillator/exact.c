@@ -1504,7 +1504,8 @@ static void trig_moments(double l, double D, double *S1, double *S2, double *T1,
  * the polynomial N(u) = n0 + n1 u + n2 u^2 / 2: with x = xc + Y, Y = y + q(u) (q the particular solution's
  * xp1 u + xp2 u^2 / 2, y the harmonic part), int N dY = [N Y] - int N' Y, int N' q a polynomial's integral
  * and int y, int u y from the equation of motion y = a cos(theta) - y'' - 2 zeta y':
- *   int y = a int cos(theta) - [y' + 2 zeta y],   int u y = a int u cos(theta) - [u y'] + [y] - 2 zeta [u y] + 2 zeta int y. */
+ *   int y = a int cos(theta) - [y' + 2 zeta y],
+ *   int u y = a int u cos(theta) - [u y'] + [y] - 2 zeta [u y] + 2 zeta int y. */
 static double poly_work(const ex_ctx *C, const ex_phase *P, double u0, double u1)
 {
     if (!(u1 > u0)) return 0.0;
@@ -1598,7 +1599,8 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
                 dfo_loads L;
                 poly_loads(C, tb, &L, NULL, NULL);
                 const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
-                dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0); /* (D = 0: tangential, J not finite) */
+                /* (D = 0: a tangential breakaway, the Jacobian not finite, as with held inputs) */
+                dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0);
             }
             C->events++;
             after_phase_poly(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);

@@ -217,7 +217,9 @@ static void eval(const fr_ctx *C, const fr_phase *P, double tau, fr_val *out)
         vmag += C->A * tau * (fabs(E1r) + fabs(E1i));
         q += C->A * cth;
     }
-    if (P->poly) { /* the response to f1 tau + f2 tau^2 / 2 from rest: int e^{-b (tau - r)} r^j / j! dr = tau^(j+1) phi_(j+1) */
+    if (P->poly) {
+        /* the response to f1 tau + f2 tau^2 / 2 from rest:
+         * int_0^tau e^{-b (tau - r)} r^j / j! dr = tau^(j+1) phi_(j+1)(-b tau) */
         double p3, p4;
         phi34_real(mu, p2, &p3, &p4);
         const double t2 = tau * tau, u1 = P->f1 * t2 * p2, u2 = P->f2 * t2 * tau * p3;
