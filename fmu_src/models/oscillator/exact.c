@@ -1462,7 +1462,6 @@ static dd poly_breakaway(const ex_ctx *C, double Xs, dd ta, dd tend, int skip, i
             b = poly_breakaway_from(C, Xs, t1, tend, dir, at_start, dS, dFb);
             if (dd_lt(t1, b)) break;
         }
-        *at_start = 1; /* (passed over a touch: no crossing to differentiate) */
     }
     return b;
 }
