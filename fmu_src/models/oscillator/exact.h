@@ -21,7 +21,8 @@
  * within rounding of 0. About two evaluations per stop. A stick phase ends at the closed-form
  * breakaway (dfo_next_breakaway).
  *
- * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call), so
+ * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call, or vary
+ * as the polynomials of their derivatives: dfo_exact_advance_poly below, docs/schemes.md), so
  * the state (t, X, V, mode) is all a continuation needs: FMU states and their serialisation continue
  * bit for bit (a stick phase's breakaway is found anew at each call, to the same time).
  *
@@ -57,6 +58,41 @@
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);
 
+/* Inputs that vary over one call as polynomials (FMI input derivatives, which hold for one
+ * communication step): from the time t0 (the communication point),
+ *
+ *     F_ext(t) = F_ext + F[0] (t - t0) + F[1] (t - t0)^2 / 2,   N_ext(t) likewise with N[0], N[1],
+ *
+ * F_ext, N_ext the values of dfo_inputs at t0 (dfo_external_force, and N_ext as dfo_normal_force reads
+ * it); F[0], N[0] the first derivatives, F[1], N[1] the second (0: that order not given). The
+ * derivatives are used whether or not the value itself was set (an input never set is 0 at t0). The
+ * normal force is max(N + N_ext(t), 0). */
+typedef struct {
+    double t0;
+    double F[2], N[2];
+} dfo_input_poly;
+
+/* 1 when a derivative of q is nonzero (then dfo_exact_advance_poly takes its polynomial path), else 0
+ * (q NULL included). */
+int dfo_input_poly_active(const dfo_input_poly *q);
+
+/* The inputs at time t: out->F_ext = F_ext(t), out->N_ext = N_ext(t) (q's polynomials; the set flags
+ * copied from u, and raised where q has a nonzero derivative of that input). q NULL: *out = *u. */
+void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, dfo_inputs *out);
+
+/* NULL when dfo_exact_advance_poly can follow polynomial inputs on this model, else a sentence saying
+ * why not (for the FMU's error message when a host sets an input derivative). Every model can
+ * (k > 0 and k = 0): NULL. */
+const char *dfo_exact_poly_unsupported(const dfo_model *M);
+
+/* Advance to t_target > s->t with the inputs varying as q's polynomials (q->t0 <= s->t): the contract
+ * of dfo_exact_advance otherwise (on return A, F are those at t_target with the inputs there). When
+ * no derivative is nonzero (dfo_input_poly_active(q) == 0) it is dfo_exact_advance itself, bit for bit.
+ * A non-finite derivative or t0 is DFO_ERR_NONFINITE with the state untouched (the caller should refuse
+ * it first, naming the variable). */
+dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                  double t_target, dfo_switch_fn on_switch, void *switch_ctx);
+
 /* The excitation P0 cos(omega t + phi) as the exact scheme evaluates it: phi reduced mod 2 pi
  * exactly and omega t + phi carried as a double-double, so exact to rounding for any t and phi
  * (newmark.c's outputs a and F_friction of the exact scheme use it). */
@@ -86,7 +122,9 @@ void dfo_exact_after_phase(const dfo_model *M, double muk_N, dfo_switch_fn on_sw
  *  - dfo_sens_reversal: the v row times a+ / a- (a slide that reverses at v = 0: the saltation
  *    [[1, 0], [0, a+/a-]]);
  *  - dfo_sens_breakaway: the v row becomes coef times the x row (a breakaway at t_b from a stick
- *    phase, whose v row is 0: dz = dz_b - f(t_b+) dt_b with dt_b = k dx / P'(t_b), coef = -a+ k / P'). */
+ *    phase, whose v row is 0: dz = dz_b - f(t_b+) dt_b with dt_b = k dx / P'(t_b), coef = -a+ k / P';
+ *    with polynomial inputs dt_b = k dx / D, D = P' + F_ext' - s max(mu_s, mu_k) N' at t_b, s the side:
+ *    the rate of the force's excess h = s (P + F_ext - k x) - max(mu_s, mu_k) N over the limit). */
 void dfo_sens_slide(const dfo_model *M, double dt, double J[4]);
 void dfo_sens_stick(double J[4]);
 void dfo_sens_reversal(double J[4], double ratio);

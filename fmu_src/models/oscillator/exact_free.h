@@ -34,10 +34,16 @@
  * vanish, so a phase costs a few evaluations whatever its length. A stick phase ends at the
  * closed-form breakaway (dfo_next_breakaway: with k = 0 the static force does not depend on x).
  *
+ * Inputs that vary as polynomials over a call (dfo_exact_advance_poly, exact.h) add the response to
+ * the force's ramp and curvature, f1 tau^2 phi2(-b tau) + f2 tau^3 phi3(-b tau) in v, and make q a
+ * polynomial plus a sinusoid: its zeros, and the breakaways, are then found by steps that a bound of
+ * the second derivative proves free of a zero (docs/schemes.md).
+ *
  * Plain C, no FMI types. */
 #ifndef DFO_EXACT_FREE_H
 #define DFO_EXACT_FREE_H
 
+#include "exact.h"
 #include "newmark.h"
 #include "oscillator.h"
 
@@ -45,5 +51,13 @@
  * dfo_exact_advance (exact.h). */
 dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                                   dfo_switch_fn on_switch, void *switch_ctx);
+
+/* dfo_exact_advance_poly (exact.h) for a model with k = 0, over one piece of the call on which the
+ * normal force is a polynomial: from the time q_t0, F_ext(t) = qF[0] + qF[1] q + qF[2] q^2 / 2 and
+ * N(t) = qN[0] + qN[1] q + qN[2] q^2 / 2 (q = t - q_t0; N + N_ext(t), > 0 inside the piece, or all 0
+ * where it is <= 0); u the inputs at q_t0. On return A, F are those at t_target with these loads. */
+dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, double q_t0, const double qF[3],
+                                       const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
+                                       void *switch_ctx);
 
 #endif
