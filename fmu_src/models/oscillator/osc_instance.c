@@ -662,8 +662,9 @@ static int events_stretch(osc_instance *in, const char *fn, double t_end, int la
             return 1;
         }
         dfo_state at;
-        const int inside = r.found && ((r.ts < w.t && land(v, &start, &r, w.t, &at)) ||
-                                       (!last && r.ts == w.t && (at = w, 1)));
+        /* in a stretch that is one internal step, a switch not landed on inside it is on its end
+         * (the paper and consistent schemes switch on grid points, reported to rounding) */
+        const int inside = r.found && ((r.ts < w.t && land(v, &start, &r, w.t, &at)) || (!last && (at = w, 1)));
         if (inside) {
             /* a switch inside the step: the state at it is readable during the intermediate update */
             int stop = opt->early_return && !opt->intermediate;
@@ -693,7 +694,6 @@ static int events_stretch(osc_instance *in, const char *fn, double t_end, int la
             r.found = 0; /* the switch on the end of this stretch has been reported */
         }
         const int end_switch = inside || (r.found && last);
-        if (!last) r.found = 0; /* (a switch that could not be landed on inside the step: not an event) */
         /* no switch left inside: the stretch's end. A switch on the communication point itself
          * (the paper and consistent schemes switch on grid points) is an event there. */
         if (r.found && opt->event_mode) {
