@@ -336,12 +336,16 @@ static int output_int(const osc_values *v, const dfo_run *r, int id)
 
 /* ---- life cycle ------------------------------------------------------------------------------ */
 
+static dfo_inst_status ramp_refused(osc_instance *in, const char *fn);
+
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     osc_instance *in = osc(lc);
     osc_values *v = &in->v;
     const char *msg = dfo_check_params(&v->p);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
+    if (v->u.ramp && v->p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
+    v->u.t_d = in->lc.run.start_time; /* input derivatives set before: of the start */
     prepare(v, in->lc.run.start_time);
     in->lc.run.time = in->lc.run.start_time;
     const dfo_state *s = &v->s;
