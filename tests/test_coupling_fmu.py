@@ -491,3 +491,28 @@ def test_fmi3_inputs_at_input_points(unzipped: tuple[str, object], unzipped3: tu
         diffs.append(float(np.abs(np.array(rows)[:, 0] - ref[:, 0]).max()))
     ratios = [a / b for a, b in zip(diffs, diffs[1:])]
     assert all(1.6 < r < 4.5 for r in ratios), (diffs, ratios)
+
+
+def test_model_structure_declares_what_the_directional_derivatives_return(unzipped: tuple[str, object]) -> None:
+    """Every real output's nonzero directional derivatives, in every mode, are with respect to inputs
+    <ModelStructure> declares it depends on (a, F_friction: F_ext and N_ext; x, v and the rest: none),
+    and each declared dependency is nonzero in some mode."""
+    _, md = unzipped
+    declared = {u.variable.name: {v.name for v in (u.dependencies or [])} for u in md.outputs}
+    real_outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+    seen: dict[str, set[str]] = {v.name: set() for v in real_outputs}
+    for mode in (0, 1, -1):
+        i = state_in_mode(unzipped, mode)
+        try:
+            outs, ins = [v.valueReference for v in real_outputs], [i.vr("F_ext"), i.vr("N_ext")]
+            for k, name in enumerate(("F_ext", "N_ext")):
+                J = i.s.getDirectionalDerivative(outs, ins, [1.0 if j == k else 0.0 for j in range(2)])
+                for v, dj in zip(real_outputs, J):
+                    if dj != 0.0:
+                        seen[v.name].add(name)
+        finally:
+            i.free()
+    for name, deps in seen.items():
+        assert deps <= declared[name], (name, deps, declared[name])
+    assert seen["a"] == declared["a"] == {"F_ext", "N_ext"}
+    assert seen["F_friction"] == declared["F_friction"] == {"F_ext", "N_ext"}
