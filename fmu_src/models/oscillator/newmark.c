@@ -460,10 +460,41 @@ static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double 
 }
 
 /* dir V1 at the end of a sliding Bossak step of length h (friction -dir mu_k N, dir = s->mode). */
+static COLD double ramp_slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr);
+
 static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
 {
+    if (C->ramp) return ramp_slide_velocity(C, s, h, tr);
     predict(C, s, h, s->t + h, tr);
     return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->co->inv_m_hat;
+}
+
+/* With varying inputs a trial sub-step of length h takes the loads at its own end, t + h. */
+static COLD double ramp_slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
+{
+    step_ctx D = *C;
+    dfo_loads_ramp(&D.L, D.M, D.ramp, s->t + h);
+    D.friction = D.L.Fb > 0.0;
+    predict(&D, s, h, s->t + h, tr);
+    if (tr->co == &D.full) { /* the coefficients outlive D */
+        tr->own = D.full;
+        tr->co = &tr->own;
+    }
+    return s->mode * (tr->p_hat - s->mode * D.L.muk_N) * tr->co->inv_m_hat;
+}
+
+/* At a switch inside a step with varying inputs: the rest rule and a slide's start acceleration
+ * take the loads at the switch time (then those of the step's end again, for its remainder). */
+static COLD void ramp_restart(step_ctx *C, dfo_state *s, int breakaway_dir)
+{
+    const dfo_loads L_end = C->L;
+    const int friction_end = C->friction;
+    dfo_loads_ramp(&C->L, C->M, C->ramp, s->t);
+    C->friction = C->L.Fb > 0.0;
+    if (breakaway_dir) start_slide(C, s, breakaway_dir, static_force_now(C, s));
+    else restart_from_rest(C, s);
+    C->L = L_end;
+    C->friction = friction_end;
 }
 
 /* dir V1 of a sliding step of length h, as a root function for dfo_brent. */
@@ -514,7 +545,8 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 continue;
             }
             s->t = tb;
-            start_slide(C, s, dir, static_force_now(C, s));
+            if (C->ramp) ramp_restart(C, s, dir);
+            else start_slide(C, s, dir, static_force_now(C, s));
             end_phase(C, s, &b, 0, s->F);
             continue;
         }
@@ -551,7 +583,8 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         predict(C, s, hs, (hs >= r) ? t_end : s->t + hs, &tr);
         finish(C, s, &tr, 0.0);
         s->t = (hs >= r) ? t_end : fmax(b.ta + hs, nextafter(b.ta, INFINITY));
-        restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
+        if (C->ramp) ramp_restart(C, s, 0);
+        else restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
         end_phase(C, s, &b, dir, -dir * C->L.muk_N);
     }
 }

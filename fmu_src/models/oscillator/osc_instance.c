@@ -897,7 +897,8 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
     if (why) return why;
     if (dfo_check_params(&v->p)) return "the observation window is empty";
     if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used)) return "an input is not finite";
-    if (v->u_used.ramp || (v->u.ramp != 0 && v->u.ramp != 1)) return "the input derivatives are invalid";
+    if ((v->u.ramp != 0 && v->u.ramp != 1) || (v->u_used.ramp != 0 && v->u_used.ramp != 1))
+        return "the input derivatives are invalid";
     if (isnan(v->t_switch)) return "the time of the last switch is not a number";
     if (v->effects < 0 || (v->effects & ~DFO_MD_EFFECTS_ALL)) return "the effects are invalid";
     const dfo_state *s = &v->s;
