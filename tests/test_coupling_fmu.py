@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 import shutil
 import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -22,6 +24,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Slave
 
 from dryfriction.fmi3 import default_fmi3_path
+from dryfriction.fmu import default_fmu_path
 
 from fmi2_helpers import Inst
 from poly_reference import PolyReference
@@ -554,3 +557,24 @@ def test_model_structure_declares_what_the_directional_derivatives_return(unzipp
         assert deps <= declared[name], (name, deps, declared[name])
     assert seen["a"] == declared["a"] == {"F_ext", "N_ext"}
     assert seen["F_friction"] == declared["F_friction"] == {"F_ext", "N_ext"}
+
+
+def test_capabilities_declared_in_both_descriptions() -> None:
+    """The FMI 2.0 description (the source) and the FMI 3.0 one generated from it declare the coupling
+    capabilities; FMI 3.0's intermediateUpdate="true" is on the continuous real inputs F_ext and N_ext
+    only. (Read from the archives: fmpy does not read every FMI 3.0 attribute.)"""
+    def root(path: object) -> ET.Element:
+        with zipfile.ZipFile(str(path)) as z:
+            return ET.fromstring(z.read("modelDescription.xml"))
+    cs2 = root(default_fmu_path()).find("CoSimulation")
+    assert cs2 is not None
+    assert (cs2.get("canInterpolateInputs"), cs2.get("maxOutputDerivativeOrder"),
+            cs2.get("providesDirectionalDerivative")) == ("true", "2", "true")
+    r3 = root(default_fmi3_path())
+    cs3 = r3.find("CoSimulation")
+    assert cs3 is not None
+    assert (cs3.get("maxOutputDerivativeOrder"), cs3.get("providesDirectionalDerivatives"),
+            cs3.get("providesAdjointDerivatives"), cs3.get("providesIntermediateUpdate")) == \
+        ("2", "true", "true", "true")
+    marked = {v.get("name") for v in r3.find("ModelVariables") if v.get("intermediateUpdate") == "true"}
+    assert marked == {"F_ext", "N_ext"}
