@@ -340,15 +340,19 @@ class PolyReference:
             ms.append(int(mp.sign(vv)) if seg.free else seg.mode)
         return xs, vs, ms
 
-    def friction_work(self):
-        """mu_k int N(t) |v| dt over the run."""
+    def friction_work(self, t0=None, t1=None):
+        """mu_k int N(t) |v| dt over the run, or over the window [t0, t1]."""
         W = mp.mpf(0)
         for seg in self.segments:
             if seg.mode == 0 or seg.free:
                 continue
+            a = seg.t0 if t0 is None else max(seg.t0, mp.mpf(t0))
+            b = seg.t1 if t1 is None else min(seg.t1, mp.mpf(t1))
+            if not b > a:
+                continue
             _, vf, _ = self._funcs(seg)
-            n = max(1, int((seg.t1 - seg.t0) / (self.cell * CELLS / 4)) + 1)  # quarter periods
-            pts = [seg.t0 + (seg.t1 - seg.t0) * i / n for i in range(n + 1)]
+            n = max(1, int((b - a) / (self.cell * CELLS / 4)) + 1)  # quarter periods
+            pts = [a + (b - a) * i / n for i in range(n + 1)]
             W += self.mu_k * mp.quad(lambda t: self.N(t) * abs(vf(t)), pts)
         return W
 

@@ -55,8 +55,10 @@ CASES = {
 }
 
 
-def run_driver(params: dict, F, Nx, t_end: float, steps: int) -> dict:
+def run_driver(params: dict, F, Nx, t_end: float, steps: int, window=None) -> dict:
     args = [str(DRIVER), "run", f"t_end={t_end!r}", f"steps={steps}"]
+    if window:
+        args += [f"obs_start={window[0]!r}", f"obs_stop={window[1]!r}"]
     args += [f"{k}={v!r}" for k, v in params.items()]
     args += [f"F0={F[0]!r}", f"F1={F[1]!r}", f"F2={F[2]!r}", f"Next0={Nx[0]!r}", f"N1={Nx[1]!r}", f"N2={Nx[2]!r}"]
     out = subprocess.run(args, capture_output=True, text=True, check=True).stdout.splitlines()
@@ -132,3 +134,15 @@ def test_one_polynomial_any_steps():
         assert abs(x - last[0][0]) < 1e-13 and abs(v - last[0][1]) < 1e-13
     kinds = [[(a, b) for _, a, b in r["switches"]] for r in runs]
     assert all(k == kinds[0] for k in kinds)
+
+
+@pytest.mark.parametrize("name", ["quadratic F_ext and N_ext", "no spring, c = 0, quadratic F_ext and N_ext"])
+def test_friction_work_in_a_window(name, solved):
+    """The observation window's edges cut slides (both edges fall inside one, in both cases): the
+    work of the parts inside (exactly by parts at k > 0, by quadrature at k = 0) against the
+    reference's integral over the window."""
+    kw, F, Nx, t_end, steps = CASES[name]
+    window = (10.3, 47.9)
+    run = run_driver({**BASE, **kw}, F, Nx, t_end, steps, window)
+    W = float(solved(name).friction_work(*window))
+    assert abs(run["obs"][3] - W) < W_TOL * W, (run["obs"][3], W)

@@ -8,7 +8,9 @@
  * 3. the same motion, bit for bit, with the sensitivity on and off;
  * 4. one input polynomial over the run, cut into other communication steps (the host re-expanding it
  *    at each point): the same motion to rounding;
- * 5. every model supported (dfo_exact_poly_unsupported: NULL for k > 0 and k = 0).
+ * 5. dfo_input_poly_at (the inputs at a time); non-finite derivatives an error with the state
+ *    untouched; every model supported (dfo_exact_poly_unsupported: NULL
+ *    for k > 0 and k = 0).
  *
  * With arguments, a driver for tests/test_exact_poly.py (against tests/poly_reference.py):
  *
@@ -258,6 +260,48 @@ static void test_other_steps(checks *T)
     printf("one polynomial cut into 1 ... 333 communication steps: worst |dx|, |dv| %.2e\n", worst);
 }
 
+static void test_inputs_at(checks *T)
+{
+    dfo_inputs u, o;
+    memset(&u, 0, sizeof u);
+    u.F_ext = 0.5;
+    u.F_ext_set = 1; /* N_ext never set: 0 at t0, its derivatives still count */
+    const dfo_input_poly q = {2.0, {0.25, -1.0}, {0.0, 4.0}};
+    dfo_input_poly_at(&u, &q, 3.0, &o); /* d = 1 */
+    CHECK_SAME(0.5 + 0.25 - 0.5, o.F_ext);
+    CHECK_SAME(2.0, o.N_ext);
+    CHECK_INT(1, o.N_ext_set);
+    const dfo_input_poly f = {2.0, {0.25, 0.0}, {0.0, 0.0}};
+    dfo_input_poly_at(&u, &f, 3.0, &o);
+    CHECK_INT(0, o.N_ext_set); /* no derivative of N_ext: as given */
+    dfo_input_poly_at(&u, NULL, 3.0, &o);
+    CHECK(memcmp(&u, &o, sizeof u) == 0);
+}
+
+static void test_non_finite(checks *T)
+{
+    dfo_params p = base_params();
+    const double ks[] = {1.0, 0.0};
+    for (int i = 0; i < 2; i++) {
+        p.k = ks[i];
+        dfo_model M;
+        dfo_model_init(&M, &p);
+        dfo_inputs in;
+        memset(&in, 0, sizeof in);
+        dfo_state s, s0;
+        dfo_start(&M, &in, 0.0, &s);
+        s0 = s;
+        for (int j = 0; j < 4; j++) {
+            dfo_input_poly q = {0.0, {0.0, 0.0}, {0.0, 0.0}};
+            double *f[4] = {&q.F[0], &q.F[1], &q.N[0], &q.N[1]};
+            *f[j] = (j & 1) ? INFINITY : NAN;
+            check_context(T, "k = %g, derivative %d", p.k, j);
+            CHECK_INT(DFO_ERR_NONFINITE, dfo_exact_advance_poly(&M, &in, &q, &s, 1.0, NULL, NULL));
+            CHECK(memcmp(&s, &s0, sizeof s) == 0);
+        }
+    }
+}
+
 static void test_supported(checks *T)
 {
     const double ks[] = {1.0, 0.0};
@@ -334,6 +378,8 @@ int main(int argc, char **argv)
     test_zero_derivatives(T);
     test_against_differences(T);
     test_other_steps(T);
+    test_inputs_at(T);
+    test_non_finite(T);
     test_supported(T);
     return checks_done(T, "test_exact_poly");
 }

@@ -1462,7 +1462,6 @@ static dd poly_breakaway(const ex_ctx *C, double Xs, dd ta, dd tend, int skip, i
             b = poly_breakaway_from(C, Xs, t1, tend, dir, at_start, dS, dFb);
             if (dd_lt(t1, b)) break;
         }
-        *at_start = 1; /* (passed over a touch: no crossing to differentiate) */
     }
     return b;
 }
@@ -1739,6 +1738,9 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx)
 {
     if (!dfo_input_poly_active(q)) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
+    /* (the FMU refuses non-finite derivatives with a sentence; here they would be a wrong motion) */
+    if (!(isfinite(q->t0) && isfinite(q->F[0]) && isfinite(q->F[1]) && isfinite(q->N[0]) && isfinite(q->N[1])))
+        return DFO_ERR_NONFINITE;
     const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
     double z[2];
     const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);

@@ -87,7 +87,9 @@ const char *dfo_exact_poly_unsupported(const dfo_model *M);
 
 /* Advance to t_target > s->t with the inputs varying as q's polynomials (q->t0 <= s->t): the contract
  * of dfo_exact_advance otherwise (on return A, F are those at t_target with the inputs there). When
- * no derivative is nonzero (dfo_input_poly_active(q) == 0) it is dfo_exact_advance itself, bit for bit. */
+ * no derivative is nonzero (dfo_input_poly_active(q) == 0) it is dfo_exact_advance itself, bit for bit.
+ * A non-finite derivative or t0 is DFO_ERR_NONFINITE with the state untouched (the caller should refuse
+ * it first, naming the variable). */
 dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx);
 

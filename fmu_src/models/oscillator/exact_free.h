@@ -34,6 +34,11 @@
  * vanish, so a phase costs a few evaluations whatever its length. A stick phase ends at the
  * closed-form breakaway (dfo_next_breakaway: with k = 0 the static force does not depend on x).
  *
+ * Inputs that vary as polynomials over a call (dfo_exact_advance_poly, exact.h) add the response to
+ * the force's ramp and curvature, f1 tau^2 phi2(-b tau) + f2 tau^3 phi3(-b tau) in v, and make q a
+ * polynomial plus a sinusoid: its zeros, and the breakaways, are then found by steps that a bound of
+ * the second derivative proves free of a zero (docs/schemes.md).
+ *
  * Plain C, no FMI types. */
 #ifndef DFO_EXACT_FREE_H
 #define DFO_EXACT_FREE_H
