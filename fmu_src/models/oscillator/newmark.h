@@ -43,6 +43,8 @@ typedef struct {
     double X, V, A, hA;
     double F;      /* friction force at t */
     int mode;      /* -1 backward slip, 0 stuck, +1 forward slip */
+    double t_switch; /* the time of the last stick/slip switch of the Bossak schemes (-inf: none), as
+                      * reported (a switch on a step's end: its t + h, to rounding) */
     /* in-FMU observables over [t_obs_start, t_obs_stop] (only updated when observe is on) */
     double x_max, x_min, t_stuck, E_friction;
     long long transitions;
@@ -103,7 +105,11 @@ double dfo_snap_tolerance(const dfo_model *M, double t);
  * s->t) that t_target snaps to, else t_target itself. */
 double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
 
-/* Advance to t_target > s->t, with the inputs held constant. on_switch may be NULL.
+/* Advance to t_target > s->t, with the inputs held constant, or with in->ramp varying as their
+ * polynomials: every internal step (and sub-step of the located scheme) then takes the loads at its
+ * end, and a stick phase's breakaway is the root of the varying static force (second order). The
+ * exact scheme follows the polynomials in closed form (exact.h's dfo_exact_advance_poly, where
+ * dfo_exact_poly_unsupported says it can: the caller checks). on_switch may be NULL.
  * Contract: on DFO_OK, s->t is exactly dfo_snap_target(M, s_before, t_target): t_target itself or
  * the grid point it snapped to (the caller keeps and reports its own time). Everything after a
  * snap is exactly as if the grid point had been requested (same steps, same excitation cache,
@@ -129,6 +135,10 @@ void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inpu
 /* Physical acceleration at the current state (0 while stuck for the schemes whose stuck block is
  * at rest: consistent and located). */
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
+
+/* The time derivative of the physical acceleration at the current state (0 while stuck, as
+ * dfo_acceleration), from the time derivative of the equation of motion with the inputs' rates. */
+double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
 
 /* Share of the observed time spent stuck (0 before the window opens). */
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s);
