@@ -130,6 +130,10 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     const double snap = dfo_snap(h, t_target);
     /* input points: every internal step ends on one (its grid point), where the host may set inputs */
     const int points = opt->input_points && opt->intermediate;
+    if (points) { /* the inputs of the step's start are the used ones (a failed step ends in the error phase) */
+        memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
+        memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
+    }
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     int at_end = 0;
     for (;;) {
@@ -168,6 +172,17 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
                 in->lc.run.time = v->s.t;
                 v->acc_valid = 0;
                 stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 0) && opt->early_return;
+            }
+            /* a switch at the end of an internal step (the paper and consistent schemes): an input
+             * point too */
+            if (!stop && points && v->s.t == t_call && t_call != t_target) {
+                stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
+                if (!stop) {
+                    point_inputs(v);
+                    ci = chain_inst_inputs_of(v, 0);
+                    ramp = chain_inst_ramp_of(v);
+                    ramp.t_ref = t_ref;
+                }
             }
         }
         if (stop) {
