@@ -123,3 +123,134 @@ def test_zero_derivatives_are_the_held_run_bit_for_bit(scheme: int) -> None:
     zero = run(T / 50, T / 1000, 2, scheme=scheme, F_lin=(0.0, 0.0))
     assert held.tobytes() == zero.tobytes()
     assert np.any(held[:, 3:5] == 0.0)  # the run sticks
+
+
+# ---- through the FMI 2.0 FMUs (fmpy) ------------------------------------------------------------
+
+class Slave:
+    """An FMI 2.0 FMU through fmpy's FMU2Slave, its variables by name, its error sentences kept."""
+
+    def __init__(self, path: Path, name: str) -> None:
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+        from fmpy import calloc, free
+        from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+        self.dir = extract(str(path))
+        self.md = read_model_description(self.dir)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.messages: list[str] = []
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(lambda env, n, status, cat, msg: self.messages.append(msg.decode()))
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self.cb = cb
+        self.s = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
+                           modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.s.instantiate(callbacks=cb, loggingOn=False)
+
+    def start(self, reals: dict[str, float], scheme: int = 3) -> None:
+        self.s.setupExperiment(startTime=0.0)
+        self.s.setReal([self.vr[k] for k in reals], list(reals.values()))
+        self.s.setInteger([self.vr["scheme"]], [scheme])
+        self.s.enterInitializationMode()
+        self.s.exitInitializationMode()
+
+    def get(self, *names: str) -> list[float]:
+        return self.s.getReal([self.vr[n] for n in names])
+
+    def close(self) -> None:
+        import shutil
+        self.s.terminate()
+        self.s.freeInstance()
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def chain_reals(ch: Chain, h: float) -> dict[str, float]:
+    r = {"omega": ch.omega, "k_end": ch.k_end, "c_end": ch.c_end, "h": h, "alpha": -0.1}
+    for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0"):
+        for i, x in enumerate(getattr(ch, name)):
+            r[f"{name}[{i + 1}]"] = float(x)
+    return r
+
+
+@pytest.fixture()
+def chain2(chain_fmu2: Path):
+    s = Slave(chain_fmu2, "coupling")
+    yield s
+    s.close()
+
+
+def test_fmi2_input_derivatives_are_the_cores(chain2: Slave) -> None:
+    """fmi2SetRealInputDerivatives of every F_ext[i] (orders 1 and 2) before every doStep: the FMU's
+    trajectory is the core's (the driver) bit for bit, and the inputs end on their polynomials."""
+    H, h, A, W = T / 50, T / 1000, np.array([0.3, 0.5]), 1.1
+    chain2.start(chain_reals(CHAIN, h))
+    F = [chain2.vr[f"F_ext[{i}]"] for i in (1, 2)]
+    rows = []
+    n = 100
+    for s in range(n + 1):
+        t = s * H
+        rows.append([t, *chain2.get("x[1]", "x[2]", "v[1]", "v[2]")])
+        if s == n:
+            break
+        chain2.s.setReal(F, list(A * np.sin(W * t)))
+        chain2.s.setRealInputDerivatives(F, [1, 1], list(A * W * np.cos(W * t)))
+        chain2.s.setRealInputDerivatives(F, [2, 2], list(-A * W * W * np.sin(W * t)))
+        chain2.s.doStep(t, H)
+    end = chain2.get("F_ext[1]", "F_ext[2]")
+    core = run(H, h, 2, F_amp=A, F_omega=W, t_end=n * H)
+    assert np.array_equal(np.array(rows)[:, 1:], core[:, 1:])
+    t0 = (n - 1) * H  # the last step's polynomial at its end
+    expect = A * np.sin(W * t0) + (A * W * np.cos(W * t0) + 0.5 * (-A * W * W * np.sin(W * t0)) * H) * H
+    assert np.max(np.abs(np.array(end) - expect)) < 1e-15
+
+
+@pytest.mark.parametrize("v0, N, modes", [((0.5, -0.3), (0.5, 0.4), (1, -1)), ((0.5, 0.0), (0.5, 5.0), (1, 0)),
+                                           ((0.0, 0.0), (5.0, 5.0), (0, 0))])
+@pytest.mark.parametrize("scheme", [1, 2, 3])
+def test_fmi2_directional_derivatives_against_differences(chain2: Slave, v0, N, modes, scheme: int) -> None:
+    """fmi2GetDirectionalDerivative of a and F_friction (and x, v: 0) with respect to F_ext and
+    N_ext against central differences of the outputs (1e-7), with both blocks sliding, one stuck,
+    both stuck, in every scheme."""
+    ch = Chain.make(2, omega=1.3, m=[1.0, 1.5], k=[4.0, 2.0], c=[0.05, 0.02], P0=[1.0, 0.6], phi=[0.0, 0.7],
+                    N=list(N), mu_s=[0.5, 0.4], chi=[0.7, 0.8], v0=list(v0), k_end=0.5)
+    chain2.start(chain_reals(ch, 1e-3), scheme)
+    chain2.s.doStep(0.0, 0.01)
+    assert tuple(chain2.s.getInteger([chain2.vr["mode[1]"], chain2.vr["mode[2]"]])) == modes
+    outs = [f"{o}[{i}]" for o in ("x", "v", "a", "F_friction") for i in (1, 2)]
+    ins = [f"{u}[{j}]" for u in ("F_ext", "N_ext") for j in (1, 2)]
+    U, K = [chain2.vr[o] for o in outs], [chain2.vr[u] for u in ins]
+    chain2.s.setReal([chain2.vr["F_ext[1]"]], [0.2])  # an input set since the step (its feed-through)
+    worst = 0.0
+    for c, name in enumerate(ins):
+        seed = [0.0] * 4
+        seed[c] = 1.0
+        J = np.array(chain2.s.getDirectionalDerivative(U, K, seed))
+        u0 = chain2.get(name)[0]
+        d = 1e-6
+        chain2.s.setReal([chain2.vr[name]], [u0 + d])
+        yp = np.array(chain2.get(*outs))
+        chain2.s.setReal([chain2.vr[name]], [u0 - d])
+        ym = np.array(chain2.get(*outs))
+        chain2.s.setReal([chain2.vr[name]], [u0])
+        worst = max(worst, float(np.max(np.abs((yp - ym) / (2 * d) - J))))
+        assert np.all(J[:4] == 0.0)
+    assert worst < 1e-7
+
+
+def test_fmi2_output_derivatives_and_errors(chain2: Slave) -> None:
+    """fmi2GetRealOutputDerivatives: x' = v, x'' = v' = a; an order beyond 2, a derivative of a,
+    and v' at a switch are errors whose sentences name the variable."""
+    from fmpy.fmi1 import FMICallException
+    chain2.start(chain_reals(CHAIN, T / 1000))
+    chain2.s.doStep(0.0, 0.5)
+    x1, v1, a1 = chain2.vr["x[1]"], chain2.vr["v[1]"], chain2.vr["a[1]"]
+    d = chain2.s.getRealOutputDerivatives([x1, x1, v1], [1, 2, 1])
+    assert d == [chain2.get("v[1]")[0], chain2.get("a[1]")[0], chain2.get("a[1]")[0]]
+    for call, args, words in [(chain2.s.getRealOutputDerivatives, ([v1], [3]), "order 3 of the derivative of v[1]"),
+                              (chain2.s.getRealOutputDerivatives, ([a1], [1]), "a[1] (value reference"),
+                              (chain2.s.setRealInputDerivatives, ([x1], [1], [1.0]), "x[1] (value reference")]:
+        n = len(chain2.messages)
+        with pytest.raises(FMICallException):
+            call(*args)
+        assert any(words in m for m in chain2.messages[n:]), chain2.messages[n:]

@@ -548,8 +548,7 @@ static int run_driver(int argc, char **argv)
             if (order >= 1) (void)dfo_inst_set_input_derivatives(in, "sid", &r, 1, &o1, &d1);
             if (order >= 2) (void)dfo_inst_set_input_derivatives(in, "sid", &r, 1, &o2, &d2);
         }
-        if (dfo_inst_do_step(in, "doStep", dfo_inst_time(in), (double)(s + 1) * H - dfo_inst_time(in), 0, NULL) !=
-            DFO_INST_OK) {
+        if (dfo_inst_do_step(in, "doStep", t, H, 0, NULL) != DFO_INST_OK) {
             fprintf(stderr, "step failed: %s\n", L.last);
             return 1;
         }

@@ -378,6 +378,9 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
         double hh = h;
         if (!(from_grid && t_end == grid)) hh = t_end - s->t;
         s->steps++;
+        /* ramped inputs: the loads of this internal step are those at its end, where Bossak reads
+         * them (also in its switches' sub-steps and restarts, as the oscillator's) */
+        chain_loads_at(M, t_end);
         if (M->scheme == DFO_SCHEME_LOCATED) {
             int fast = 0;
             if (fast_grid && hh == h && !M->any_frozen) {

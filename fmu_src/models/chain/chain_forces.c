@@ -163,6 +163,7 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
     }
     M->cw1 = cw1;
     M->sw1 = sw1;
+    M->t_trial = s->t + hh;
     const double a = M->alpha;
     /* Bossak's A belongs to the step length hA: re-based on hh with the jerk (section 8) */
     int rebase = 0;
@@ -178,7 +179,6 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
         const double cw = dfo_cos(M->omega * s->t + M->phi0), sw = dfo_sin(M->omega * s->t + M->phi0);
-        chain_loads_at(M, s->t);  /* ramped inputs: the loads at the state's time */
         chain_mode_accels(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
         for (int k = 0; k < 2; k++)
             if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
@@ -186,8 +186,10 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
             double j = 0.0;
             if (!chain_held(M, s, i)) {
                 const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
-                j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
-                if (M->ramped) j += chain_ramp_rate(M, s, i) / M->m[i];
+                /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
+                 * internal step's, as the oscillator's jerk) */
+                if (M->ramped) j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i)) / M->m[i];
+                else j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
             }
             M->J[i] = j;
         }
@@ -203,10 +205,6 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         M->A0p = M->A0;
     } else {
         M->A0p = s->A;
-    }
-    if (M->ramped) {  /* the loads at the trial's end, and the limits of the trial's modes */
-        chain_loads_ramp(M, s->t + hh);
-        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
     }
     const double c1 = M->kin.c1, pV = M->kin.pred_V, pA = M->kin.pred_A, g1 = M->g1;
     const double *X = s->X, *V = s->V, *A0 = M->A0p;

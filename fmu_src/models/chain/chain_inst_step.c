@@ -81,7 +81,8 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     chain_state_copy(&v->s0, &v->s);
     take_inputs(v);
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
-    const chain_ramp ramp = chain_inst_ramp_of(v);
+    chain_ramp ramp = chain_inst_ramp_of(v);
+    ramp.t_ref = in->lc.run.time; /* the polynomials are in the host's time (as the oscillator's) */
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
     const chain_status st = chain_advance_ramped(v->M, &ci, &ramp, &v->s, t_target, stop, on_switch, &rec);
@@ -126,6 +127,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     const double t_start = in->lc.run.time;
     chain_inputs ci = chain_inst_inputs_of(v, 0);
     chain_ramp ramp = chain_inst_ramp_of(v);
+    ramp.t_ref = t_start;
     const double t_ref = ramp.t_ref, h = chain_inst_step_h(v);
     const double snap = dfo_snap(h, t_target);
     /* input points: every internal step ends on one (its grid point), where the host may set inputs */

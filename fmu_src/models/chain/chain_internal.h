@@ -123,6 +123,7 @@ struct chain_model {
     int ramped;
     chain_inputs rin;
     chain_ramp ramp;
+    double t_trial;             /* the current trial's end (ramped inputs: the switch margins' time) */
     chain_status err;           /* first error of the current chain_advance */
     int switched;               /* a block switched in the current chain_advance */
 };

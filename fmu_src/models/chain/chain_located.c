@@ -66,6 +66,15 @@ static void solve_modes(chain_model *M, const span *G)
 static double switch_margin(const chain_model *M, const chain_state *s, size_t i)
 {
     if (M->st[i] != 0) return s->mode[i] * M->Vt[i];
+    if (M->ramped) {
+        /* ramped inputs: the held force and the limit with the inputs at the trial's end (the
+         * trial's loads are the internal step's), so that a breakaway is placed to second order */
+        double u, Ne, rate;
+        chain_ramp_value(&M->rin, &M->ramp, 0, i, M->t_trial, &u, &rate);
+        chain_ramp_value(&M->rin, &M->ramp, 1, i, M->t_trial, &Ne, &rate);
+        const double Fb = M->mu_b[i] * fmax(M->N[i] + Ne, 0.0);
+        return Fb - fabs(M->Ft[i] - (u - M->u[i]));
+    }
     return M->Fb[i] - fabs(M->Ft[i]);
 }
 
@@ -108,7 +117,6 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         }
     }
     M->ncand = nsw;
-    chain_loads_at(M, s->t);  /* ramped inputs: the loads at the switch */
     chain_net_forces(M, s, G, M->S);
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
@@ -132,16 +140,82 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
 /* Block i stuck with X frozen and every neighbour at rest: its static force is its excitation
  * plus a constant, and its next breakaway after the stick phase's start is known in closed form
  * (friction.h, as the oscillator's); INFINITY when it does not apply. */
-static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, int *dir)
+/* Ramped inputs: side times block i's static force beyond its limit at t, with the inputs at t
+ * (> 0: broken away). */
+typedef struct {
+    const chain_model *M;
+    const chain_state *s;
+    size_t i;
+    int side;
+} ramp_gap_ctx;
+
+static double ramp_gap(const chain_model *M, const chain_state *s, size_t i, double t, int side)
 {
-    if (M->ramped) return INFINITY;  /* the closed form holds for held inputs */
+    double u, Ne, rate, cw, sw;
+    chain_ramp_value(&M->rin, &M->ramp, 0, i, t, &u, &rate);
+    chain_ramp_value(&M->rin, &M->ramp, 1, i, t, &Ne, &rate);
+    const double Fb = M->mu_b[i] * fmax(M->N[i] + Ne, 0.0);
+    chain_phase_of(M, s, t, &cw, &sw);
+    return side * (chain_P_at(M, i, cw, sw) + u - chain_Kx(M, s->X, i)) - Fb;
+}
+
+static double ramp_gap_fn(void *vctx, double x)
+{
+    const ramp_gap_ctx *g = (const ramp_gap_ctx *)vctx;
+    return -ramp_gap(g->M, g->s, g->i, g->s->t + x, g->side);
+}
+
+/* The breakaway of block i inside [s->t, tb] with the inputs varying (as the oscillator's): the side
+ * broken through at tb, or at the closed form's breakaway for the loads of the internal step; its
+ * time the root of the gap with the loads varying (Brent), so that it is placed to second order. */
+static double ramp_breakaway(const chain_model *M, const chain_state *s, size_t i, double tb, int *dir)
+{
+    const double ta = s->t;
+    int side = 0;
+    double hi = tb, ghi = 0.0;
+    for (int sd = -1; sd <= 1; sd += 2) {
+        const double g = ramp_gap(M, s, i, tb, sd);
+        if (g > 0.0) { side = sd; ghi = g; }
+    }
+    if (side == 0) {
+        dfo_harmonic P;
+        dfo_harmonic_init(&P, M->P0[i], M->omega, M->phi[i]);
+        const dfo_loads L = {M->u[i], 0.0, M->mukN[i], M->Fb[i]};  /* (N is not read) */
+        int d = 0;
+        const double t1 = dfo_next_breakaway(&P, &L, M->u[i] - chain_Kx(M, s->X, i), ta, &d);
+        if (t1 <= tb && d != 0) {
+            const double g = ramp_gap(M, s, i, t1, d);
+            if (g > 0.0) { side = d; hi = t1; ghi = g; }
+        }
+    }
+    if (side == 0) return INFINITY;
+    *dir = side;
+    const double g0 = ramp_gap(M, s, i, ta, side);
+    if (g0 >= 0.0) return ta;
+    ramp_gap_ctx g = {M, s, i, side};
+    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+}
+
+static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, double t_end,
+                               int *dir)
+{
     for (int side = -1; side <= 1; side += 2) {
         if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
         const size_t j = (side < 0) ? i - 1 : i + 1;
         const int inside = j >= G->a && j < G->b;
         if (!(chain_held(M, s, j) || (inside && M->frozen[j]))) return INFINITY;
     }
+    if (M->ramped) return ramp_breakaway(M, s, i, t_end, dir);  /* the closed form holds for held inputs */
     return chain_block_breakaway(M, s, i, dir);
+}
+
+/* Ramped inputs: a stuck block whose static force crosses its limit inside the step, also where it
+ * is back inside at the step's end (the oscillator's breakaway test), is a candidate. */
+static int ramp_breaks(const chain_model *M, const chain_state *s, const span *G, size_t i, double t_end)
+{
+    if (!M->ramped || M->st[i] != 0) return 0;
+    int dir = 0;
+    return closed_breakaway(M, s, G, i, t_end, &dir) <= t_end;
 }
 
 /* The located step of a span from s->t to t_end (first phase of length hh): phases in the current
@@ -166,7 +240,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         M->ncand = 0;
         for (size_t i = G->a; i < G->b; i++) {
             if (!chain_has_friction(M, i) || M->frozen[i]) continue;
-            if (switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
+            if (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, G, i, t_end)) M->cand[M->ncand++] = i;
         }
         if (M->ncand == 0) {  /* the warm basis solves the LCP: the whole remainder in these modes */
             chain_finish(M, s, G, M->Vt, M->Ft);
@@ -180,7 +254,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         for (size_t k = 0; k < M->ncand; k++) {
             const size_t i = M->cand[k];
             int dir = 0;
-            const double t = (M->st[i] == 0) ? closed_breakaway(M, s, G, i, &dir) : -INFINITY;
+            const double t = (M->st[i] == 0) ? closed_breakaway(M, s, G, i, t_end, &dir) : -INFINITY;
             M->S[i] = t;
             tb = fmin(tb, t);
         }
@@ -299,7 +373,8 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
     }
     M->ncand = 0;
     for (size_t i = 0; i < n; i++)
-        if (chain_has_friction(M, i) && switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
+        if (chain_has_friction(M, i) && (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, &G0, i, t_end)))
+            M->cand[M->ncand++] = i;
     if (M->ncand == 0) {  /* the warm basis solves the LCP: O(n), no pivot */
         chain_finish(M, s, &G0, M->Vt, M->Ft);
         for (size_t i = 0; i < n; i++)
