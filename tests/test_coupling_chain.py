@@ -254,3 +254,50 @@ def test_fmi2_output_derivatives_and_errors(chain2: Slave) -> None:
         with pytest.raises(FMICallException):
             call(*args)
         assert any(words in m for m in chain2.messages[n:]), chain2.messages[n:]
+
+
+# ---- n = 1 is the oscillator, with input derivatives --------------------------------------------
+
+DRIVER_N1 = Path(os.environ.get("DFO_CHAIN_DERIV_N1", ROOT / "build" / "tests" / "c" / "chain_deriv_n1"))
+ONE_BLOCK = [dict(m=1.0, k=1.0, c=0.0, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0.7, x0=0.0, v0=0.0),
+             dict(m=2.0, k=3.0, c=0.2, P0=1.5, omega=1.1, N=0.6, mu_s=0.4, chi=1.4, x0=0.3, v0=-0.2),
+             dict(m=1.0, k=1.0, c=0.0, P0=0.3, omega=0.5, N=0.05, mu_s=0.5, chi=0.7, x0=0.0, v0=2.0)]
+
+
+@pytest.mark.parametrize("case", range(len(ONE_BLOCK)))
+@pytest.mark.parametrize("scheme", [1, 2, 3])
+def test_n1_with_input_derivatives_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: int, fmu_path: Path) -> None:
+    """One block of the chain's core (the FMI 3.0 build's, n = 1) with F_ext(t) = b t + q t^2 / 2
+    and its two derivatives given at every communication point gives the oscillator FMU's x and v
+    (fmi2SetRealInputDerivatives) bit for bit, in every scheme, through stick-slip."""
+    if not DRIVER_N1.is_file():
+        raise FileNotFoundError(f"chain_deriv_n1 not built: {DRIVER_N1} (cmake --build build)")
+    p = ONE_BLOCK[case]
+    T1 = 2.0 * np.pi / p["omega"]
+    h, H, steps, b, q = T1 / 500, T1 / 50, 300, 0.05, -0.01
+    args = [str(DRIVER_N1), "run", f"scheme={scheme}", f"h={h!r}", f"H={H!r}", f"t_end={steps * H!r}", "order=2",
+            f"F_lin={b!r}", f"F_quad={q!r}", f"omega={p['omega']!r}", "k_end=0.0"]
+    args += [f"{k}={p[k]!r}" for k in ("m", "k", "c", "P0", "N", "mu_s", "chi", "x0", "v0")] + ["phi=0.0"]
+    out = subprocess.run(args, check=True, capture_output=True, text=True).stdout
+    chain = np.loadtxt(io.StringIO(out), delimiter=",", ndmin=2)
+    osc = Slave(fmu_path, "oscillator")
+    try:
+        osc.start({**{k: p[k] for k in ("m", "k", "c", "P0", "omega", "N", "mu_s", "chi", "x0", "v0")},
+                   "phi": 0.0, "h": h, "alpha": -0.1}, scheme)
+        F = [osc.vr["F_ext"]]
+        rows, modes = [], set()
+        for s in range(steps + 1):
+            t = s * H
+            rows.append(osc.get("x", "v"))
+            modes.add(osc.s.getInteger([osc.vr["mode"]])[0])
+            if s == steps:
+                break
+            osc.s.setReal(F, [b * t + 0.5 * q * t * t])
+            osc.s.setRealInputDerivatives(F, [1], [b + q * t])
+            osc.s.setRealInputDerivatives(F, [2], [q])
+            osc.s.doStep(t, H)
+    finally:
+        osc.close()
+    ref = np.array(rows)
+    assert len(modes) >= 2  # a switch in the run
+    assert np.array_equal(chain[:, 1:], ref), np.max(np.abs(chain[:, 1:] - ref))

@@ -18,7 +18,8 @@
  *                    each) omega=.. k_end=..]
  * runs the chain with F_ext_i(t) = F_amp_i sin(F_omega t) + F_lin_i t + F_quad_i t^2 / 2 given at every
  * communication point with its derivatives up to order K (0: held) and prints "t,x1,x2,v1,v2" per
- * point. */
+ * point. Built for the FMI 3.0 core (chain_deriv_n1: n = 1 set in configuration mode) it is that
+ * driver only, with one block, printing "t,x1,v1". */
 #include "chain_instance.h"
 #include "fmu_state.h"
 #include "instance.h"
@@ -29,7 +30,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(DFO_CHAIN_FIXED_N)
 #define N_BLOCKS 2
+/* FMI 2.0 element i (0-based) of an array */
+static unsigned int el(unsigned int vr, size_t i) { return vr + (unsigned int)i + 1u; }
+#else
+/* the FMI 3.0 build's core at n = 1 (the driver only): an array is its one value */
+#define N_BLOCKS 1
+static unsigned int el(unsigned int vr, size_t i)
+{
+    (void)i;
+    return vr;
+}
+#endif
 
 typedef struct {
     char last[1024];
@@ -58,8 +71,6 @@ static void h_log(void *ctx, dfo_inst_status status, const char *category, const
     }
 }
 
-static unsigned int el(unsigned int vr, size_t i) { return vr + (unsigned int)i + 1u; }
-
 typedef struct {
     double m[2], k[2], c[2], P0[2], phi[2], N[2], mu_s[2], chi[2], x0[2], v0[2];
     double omega, h, k_end;
@@ -80,6 +91,13 @@ static dfo_lifecycle *start(checks *T, host_log *L, const params *p)
     dfo_lifecycle *in = dfo_inst_new(&host, "deriv", 0);
     CHECK(in != NULL);
     if (!in) return NULL;
+#if !defined(DFO_CHAIN_FIXED_N)
+    const unsigned int vn = VR_n;
+    const unsigned long long one = 1;
+    CHECK(dfo_inst_enter_config(in, "config") == DFO_INST_OK);
+    CHECK(dfo_inst_set_uint64(in, "set", &vn, 1, &one) == DFO_INST_OK);
+    CHECK(dfo_inst_exit_config(in, "config") == DFO_INST_OK);
+#endif
     CHECK(dfo_inst_setup(in, "setup", 0.0, 0, 0.0) == DFO_INST_OK);
     const struct {
         unsigned int vr;
@@ -115,6 +133,7 @@ static void set1(dfo_lifecycle *in, unsigned int vr, size_t i, double x)
     (void)dfo_inst_set_real(in, "set", &r, 1, &x);
 }
 
+#if defined(DFO_CHAIN_FIXED_N) /* the checks (the FMI 2.0 build's n = 2) */
 static int mode_of(dfo_lifecycle *in, size_t i)
 {
     const unsigned int r = el(VR_mode, i);
@@ -486,6 +505,8 @@ static void test_errors(checks *T)
     dfo_inst_delete(in);
 }
 
+#endif /* DFO_CHAIN_FIXED_N */
+
 /* ---- the driver of tests/test_coupling_chain.py ---- */
 
 static int parse2(const char *s, double out[2])
@@ -536,8 +557,10 @@ static int run_driver(int argc, char **argv)
     const long steps = lround(t_end / H);
     for (long s = 0; s <= steps; s++) {
         const double t = (double)s * H;
-        printf("%.17g,%.17g,%.17g,%.17g,%.17g\n", dfo_inst_time(in), get1(in, VR_x, 0), get1(in, VR_x, 1),
-               get1(in, VR_v, 0), get1(in, VR_v, 1));
+        printf("%.17g", dfo_inst_time(in));
+        for (size_t i = 0; i < N_BLOCKS; i++) printf(",%.17g", get1(in, VR_x, i));
+        for (size_t i = 0; i < N_BLOCKS; i++) printf(",%.17g", get1(in, VR_v, i));
+        printf("\n");
         if (s == steps) break;
         for (size_t i = 0; i < N_BLOCKS; i++) {
             const double w = F_omega, A = F_amp[i], b = F_lin[i], q = F_quad[i];
@@ -560,6 +583,11 @@ static int run_driver(int argc, char **argv)
 int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "run")) return run_driver(argc, argv);
+#if !defined(DFO_CHAIN_FIXED_N)
+    fprintf(stderr, "this build (n = 1) is the driver only: chain_deriv_n1 run ...\n");
+    return 2;
+#endif
+#if defined(DFO_CHAIN_FIXED_N)
     checks C = {0, 0, NULL, {0}};
     checks *T = &C;
     test_zero_derivatives(T);
@@ -569,4 +597,5 @@ int main(int argc, char **argv)
     test_input_points(T);
     test_errors(T);
     return checks_done(T, "test_chain_deriv");
+#endif
 }

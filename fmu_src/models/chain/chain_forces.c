@@ -302,11 +302,24 @@ static void block_loads(const chain_model *M, const chain_inputs *in, size_t i, 
 
 void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s)
 {
+    chain_new_inputs_ramped(M, old_in, new_in, NULL, s);
+}
+
+void chain_new_inputs_ramped(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in,
+                             const chain_ramp *ramp, chain_state *s)
+{
     for (size_t i = 0; i < M->n; i++) {
         if (s->mode[i] == 0) continue;
         double u0, f0, u1, f1;
         block_loads(M, old_in, i, &u0, &f0);
-        block_loads(M, new_in, i, &u1, &f1);
+        if (ramp) { /* the new inputs' polynomials at the state's time (as the oscillator's dfo_new_inputs) */
+            double Ne, rate;
+            chain_ramp_value(new_in, ramp, 0, i, s->t, &u1, &rate);
+            chain_ramp_value(new_in, ramp, 1, i, s->t, &Ne, &rate);
+            f1 = M->mu_k[i] * fmax(M->N[i] + Ne, 0.0);
+        } else {
+            block_loads(M, new_in, i, &u1, &f1);
+        }
         const double dF = (u1 - u0) - s->mode[i] * (f1 - f0);
         if (dF == 0.0) continue;
         s->A[i] += dF / M->m[i];

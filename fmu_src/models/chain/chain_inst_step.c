@@ -43,14 +43,15 @@ static dfo_inst_status step_failed(chain_instance *in, const char *fn, chain_sta
                          chain_status_text(st), in->lc.run.time);
 }
 
-/* Inputs set since the last step: the state takes their jump at the step's start (chain_new_inputs). */
-static void take_inputs(chain_values *v)
+/* Inputs set since the last step: the state takes their jump at the step's start (chain_new_inputs;
+ * with derivatives, ramp, the new inputs at the state's time). */
+static void take_inputs(chain_values *v, const chain_ramp *ramp)
 {
     if (!memcmp(v->u_set, v->u_set_used, sizeof v->u_set) &&
         !memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double)))
         return;
     const chain_inputs old_in = chain_inst_inputs_of(v, 1), new_in = chain_inst_inputs_of(v, 0);
-    chain_new_inputs(v->M, &old_in, &new_in, &v->s);
+    chain_new_inputs_ramped(v->M, &old_in, &new_in, (ramp && ramp->dF_ext[0]) ? ramp : NULL, &v->s);
     v->acc_valid = 0;
 }
 
@@ -79,10 +80,10 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, chain_inst_step_h(v), &t_target);
     if (chk != DFO_INST_OK) return chk;
     chain_state_copy(&v->s0, &v->s);
-    take_inputs(v);
-    const chain_inputs ci = chain_inst_inputs_of(v, 0);
     chain_ramp ramp = chain_inst_ramp_of(v);
     ramp.t_ref = in->lc.run.time; /* the polynomials are in the host's time (as the oscillator's) */
+    take_inputs(v, &ramp);
+    const chain_inputs ci = chain_inst_inputs_of(v, 0);
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
     const chain_status st = chain_advance_ramped(v->M, &ci, &ramp, &v->s, t_target, stop, on_switch, &rec);
@@ -107,7 +108,7 @@ static void point_inputs(chain_values *v)
     const int changed = memcmp(v->u_set, v->u_set_used, sizeof v->u_set) ||
                         memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     if (!changed) return;
-    take_inputs(v);
+    take_inputs(v, NULL);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     memset(v->ud, 0, 2 * (size_t)DFO_NUM_AI * v->n * sizeof(double));
@@ -123,11 +124,11 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     double t_target = 0.0;
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, chain_inst_step_h(v), opt, res, &done, &t_target)) return done;
     chain_state_copy(&v->s0, &v->s);
-    take_inputs(v);
     const double t_start = in->lc.run.time;
-    chain_inputs ci = chain_inst_inputs_of(v, 0);
     chain_ramp ramp = chain_inst_ramp_of(v);
     ramp.t_ref = t_start;
+    take_inputs(v, &ramp);
+    chain_inputs ci = chain_inst_inputs_of(v, 0);
     const double t_ref = ramp.t_ref, h = chain_inst_step_h(v);
     const double snap = dfo_snap(h, t_target);
     /* input points: every internal step ends on one (its grid point), where the host may set inputs */
