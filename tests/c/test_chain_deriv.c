@@ -14,10 +14,11 @@
  *
  * With arguments it is the driver of tests/test_coupling_chain.py instead:
  *   test_chain_deriv run scheme=S h=H_INT H=H_COMM t_end=T order=K F_amp=a1,a2 F_omega=W F_lin=b1,b2
- *                    F_quad=q1,q2 [m=.. k=.. c=.. P0=.. phi=.. N=.. mu_s=.. chi=.. x0=.. v0=.. (2 values
+ *                    F_quad=q1,q2 [N_lin=.. N_quad=.. m=.. k=.. c=.. P0=.. phi=.. N=.. mu_s=.. chi=.. x0=.. v0=.. (2 values
  *                    each) omega=.. k_end=..]
  * runs the chain with F_ext_i(t) = F_amp_i sin(F_omega t) + F_lin_i t + F_quad_i t^2 / 2 given at every
- * communication point with its derivatives up to order K (0: held) and prints "t,x1,x2,v1,v2" per
+ * communication point with its derivatives up to order K (0: held), N_ext_i(t) = N_lin_i t +
+ * N_quad_i t^2 / 2 likewise where given, and prints "t,x1,x2,v1,v2" per
  * point. Built for the FMI 3.0 core (chain_deriv_n1: n = 1 set in configuration mode) it is that
  * driver only, with one block, printing "t,x1,v1". */
 #include "chain_instance.h"
@@ -524,6 +525,7 @@ static int run_driver(int argc, char **argv)
     checks *T = &C;
     params p = base_params(3);
     double H = 0.01, t_end = 1.0, F_amp[2] = {0, 0}, F_omega = 1.0, F_lin[2] = {0, 0}, F_quad[2] = {0, 0};
+    double N_lin[2] = {0, 0}, N_quad[2] = {0, 0};
     int order = 0;
     for (int a = 2; a < argc; a++) {
         char key[32];
@@ -545,6 +547,8 @@ static int run_driver(int argc, char **argv)
         else if (!strcmp(key, "F_amp")) memcpy(F_amp, two, sizeof two);
         else if (!strcmp(key, "F_lin")) memcpy(F_lin, two, sizeof two);
         else if (!strcmp(key, "F_quad")) memcpy(F_quad, two, sizeof two);
+        else if (!strcmp(key, "N_lin")) memcpy(N_lin, two, sizeof two);
+        else if (!strcmp(key, "N_quad")) memcpy(N_quad, two, sizeof two);
 #define ARR(name) else if (!strcmp(key, #name)) memcpy(p.name, two, sizeof two);
         ARR(m) ARR(k) ARR(c) ARR(P0) ARR(phi) ARR(N) ARR(mu_s) ARR(chi) ARR(x0) ARR(v0)
 #undef ARR
@@ -570,6 +574,13 @@ static int run_driver(int argc, char **argv)
             const int o1 = 1, o2 = 2;
             if (order >= 1) (void)dfo_inst_set_input_derivatives(in, "sid", &r, 1, &o1, &d1);
             if (order >= 2) (void)dfo_inst_set_input_derivatives(in, "sid", &r, 1, &o2, &d2);
+            if (N_lin[i] != 0.0 || N_quad[i] != 0.0) {
+                const unsigned int rn = el(VR_N_ext, i);
+                const double bn = N_lin[i], qn = N_quad[i], n1 = bn + qn * t;
+                set1(in, VR_N_ext, i, bn * t + 0.5 * qn * t * t);
+                if (order >= 1) (void)dfo_inst_set_input_derivatives(in, "sid", &rn, 1, &o1, &n1);
+                if (order >= 2) (void)dfo_inst_set_input_derivatives(in, "sid", &rn, 1, &o2, &qn);
+            }
         }
         if (dfo_inst_do_step(in, "doStep", t, H, 0, NULL) != DFO_INST_OK) {
             fprintf(stderr, "step failed: %s\n", L.last);
