@@ -320,3 +320,54 @@ def test_n1_with_input_derivatives_is_the_oscillator_fmu_bit_for_bit(case: int, 
     ref = np.array(rows)
     assert len(modes) >= 2  # a switch in the run
     assert np.array_equal(chain[:, 1:], ref), np.max(np.abs(chain[:, 1:] - ref))
+
+
+def test_fmi3_derivatives_are_the_fmi2_ones(chain_fmu2: Path, chain_fmu3: Path) -> None:
+    """FMI 3.0 (arrays, n = 2): fmi3GetDirectionalDerivative, fmi3GetAdjointDerivative (its
+    transpose) and fmi3GetOutputDerivatives at a point give the FMI 2.0 FMU's values there, bit for
+    bit (one block sliding, one stuck)."""
+    import ctypes
+    import shutil
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave, fmi3Float64, fmi3Int32, fmi3ValueReference
+    ch = Chain.make(2, omega=1.3, m=[1.0, 1.5], k=[4.0, 2.0], c=[0.05, 0.02], P0=[1.0, 0.6], phi=[0.0, 0.7],
+                    N=[0.5, 5.0], mu_s=[0.5, 0.4], chi=[0.7, 0.8], v0=[0.5, 0.0], k_end=0.5)
+    f2 = Slave(chain_fmu2, "fmi2")
+    d = extract(str(chain_fmu3))
+    try:
+        f2.start(chain_reals(ch, 1e-3), 3)
+        f2.s.doStep(0.0, 0.2)
+        f2.s.setReal([f2.vr["F_ext[1]"], f2.vr["N_ext[2]"]], [0.1, -0.2])
+        md = read_model_description(d)
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        s3 = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                       instanceName="fmi3")
+        s3.instantiate()
+        s3.enterInitializationMode()
+        for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0"):
+            s3.setFloat64([vr[name]], [float(x) for x in getattr(ch, name)])
+        s3.setFloat64([vr[k] for k in ("omega", "k_end", "c_end", "h", "alpha")], [ch.omega, ch.k_end, ch.c_end, 1e-3, -0.1])
+        s3.exitInitializationMode()
+        s3.doStep(0.0, 0.2)
+        s3.setFloat64([vr["F_ext"], vr["N_ext"]], [0.1, 0.0, 0.0, -0.2])
+        U3, K3 = [vr["x"], vr["v"], vr["a"], vr["F_friction"]], [vr["F_ext"], vr["N_ext"]]
+        outs = [f"{o}[{i}]" for o in ("x", "v", "a", "F_friction") for i in (1, 2)]
+        ins = [f"{u}[{j}]" for u in ("F_ext", "N_ext") for j in (1, 2)]
+        J2 = np.array([f2.s.getDirectionalDerivative([f2.vr[o] for o in outs], [f2.vr[u] for u in ins],
+                                                     list(np.eye(4)[c])) for c in range(4)]).T
+        J3 = np.array([s3.getDirectionalDerivative(U3, K3, list(np.eye(4)[c]), 8) for c in range(4)]).T
+        A3 = np.array([s3.getAdjointDerivative(U3, K3, list(np.eye(8)[r]), 4) for r in range(8)])
+        assert np.array_equal(J2, J3) and np.array_equal(A3, J3)
+        assert J3[4, 0] == 1.0 and J3[5, 1] == 0.0 and J3[7, 1] == -1.0  # a_1 = 1/m_1; stuck a_2 = 0, F_2 = -F_ext_2
+        vals = (fmi3Float64 * 8)()
+        s3.fmi3GetOutputDerivatives(s3.component, (fmi3ValueReference * 4)(vr["x"], vr["x"], vr["v"], vr["v"]), 4,
+                                    (fmi3Int32 * 4)(1, 2, 1, 2), vals, 8)
+        o2 = f2.s.getRealOutputDerivatives([f2.vr[n] for n in ("x[1]", "x[2]", "x[1]", "x[2]", "v[1]", "v[2]",
+                                                               "v[1]", "v[2]")], [1, 1, 2, 2, 1, 1, 2, 2])
+        assert list(vals) == o2
+        assert o2[5] == 0.0 and o2[7] == 0.0  # the stuck block
+        s3.terminate()
+        s3.freeInstance()
+    finally:
+        f2.close()
+        shutil.rmtree(d, ignore_errors=True)
