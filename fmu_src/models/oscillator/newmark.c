@@ -23,8 +23,10 @@
  * stays in registers (a step costs some 100 ns; a call and its spills are a good part of that). */
 #if defined(__GNUC__)
 #define HOT_INLINE inline __attribute__((always_inline))
+#define COLD __attribute__((noinline, cold))
 #else
 #define HOT_INLINE inline
+#define COLD
 #endif
 
 /* The coefficients of a Bossak step that depend on its length h only (eq. 4). */
@@ -113,6 +115,15 @@ static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F
     return f / M->p.m;
 }
 
+/* The rate of the net applied force from varying inputs, dF_ext/dt - mode mu_k dN/dt (out of the
+ * stepping loop's code: held inputs never call it). */
+static COLD double ramp_force_rate(const step_ctx *C, const dfo_state *s)
+{
+    double dF, dN;
+    dfo_input_rates(C->M, C->ramp, s->t, &dF, &dN);
+    return dF - s->mode * C->M->mu_k * dN;
+}
+
 /* x''' from the time derivative of the equation of motion (0 while stuck), with the inputs' rates. */
 static double jerk_of(const step_ctx *C, const dfo_state *s)
 {
@@ -121,11 +132,7 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
     const double F = -s->mode * C->L.muk_N;
     double j = dfo_excitation_rate(M, s->t) - M->p.k * s->V;
     if (M->damped) j -= M->p.c * accel_of(C, s, s->t, F);
-    if (C->ramp) {
-        double dF, dN;
-        dfo_input_rates(M, C->ramp, s->t, &dF, &dN);
-        j += dF - s->mode * M->mu_k * dN;
-    }
+    if (C->ramp) j += ramp_force_rate(C, s);
     return j / M->p.m;
 }
 
@@ -231,7 +238,10 @@ static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_st
     const double ta = b->ta, dX = s->X - b->X0;
     const int mode_before = b->mode0;
     if (s->mode == 0 && mode_before != 0) s->stick_tb = NAN; /* a new stick phase */
-    if (C->on_switch && s->mode != mode_before) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
+    if (s->mode != mode_before) {
+        s->t_switch = s->t;
+        if (C->on_switch) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
+    }
     if (!M->p.observe) return;
     const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop, tb = s->t;
     if (tb < w0 || ta > w1) return;
@@ -403,7 +413,7 @@ static double ramp_gap_fn(void *ctx, double h)
 /* The breakaway inside [ta, tb] with the inputs varying (C->ramp): the side is the one broken
  * through at tb, or at the closed form's breakaway for the loads at tb; the time the root of the
  * gap with the loads varying (Brent, to a few ulps), so that it is placed to second order. */
-static double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+static COLD double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
     const dfo_model *M = C->M;
     int side = 0;
@@ -450,10 +460,41 @@ static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double 
 }
 
 /* dir V1 at the end of a sliding Bossak step of length h (friction -dir mu_k N, dir = s->mode). */
+static COLD double ramp_slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr);
+
 static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
 {
+    if (C->ramp) return ramp_slide_velocity(C, s, h, tr);
     predict(C, s, h, s->t + h, tr);
     return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->co->inv_m_hat;
+}
+
+/* With varying inputs a trial sub-step of length h takes the loads at its own end, t + h. */
+static COLD double ramp_slide_velocity(const step_ctx *C, const dfo_state *s, double h, trial *tr)
+{
+    step_ctx D = *C;
+    dfo_loads_ramp(&D.L, D.M, D.ramp, s->t + h);
+    D.friction = D.L.Fb > 0.0;
+    predict(&D, s, h, s->t + h, tr);
+    if (tr->co == &D.full) { /* the coefficients outlive D */
+        tr->own = D.full;
+        tr->co = &tr->own;
+    }
+    return s->mode * (tr->p_hat - s->mode * D.L.muk_N) * tr->co->inv_m_hat;
+}
+
+/* At a switch inside a step with varying inputs: the rest rule and a slide's start acceleration
+ * take the loads at the switch time (then those of the step's end again, for its remainder). */
+static COLD void ramp_restart(step_ctx *C, dfo_state *s, int breakaway_dir)
+{
+    const dfo_loads L_end = C->L;
+    const int friction_end = C->friction;
+    dfo_loads_ramp(&C->L, C->M, C->ramp, s->t);
+    C->friction = C->L.Fb > 0.0;
+    if (breakaway_dir) start_slide(C, s, breakaway_dir, static_force_now(C, s));
+    else restart_from_rest(C, s);
+    C->L = L_end;
+    C->friction = friction_end;
 }
 
 /* dir V1 of a sliding step of length h, as a root function for dfo_brent. */
@@ -504,7 +545,8 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
                 continue;
             }
             s->t = tb;
-            start_slide(C, s, dir, static_force_now(C, s));
+            if (C->ramp) ramp_restart(C, s, dir);
+            else start_slide(C, s, dir, static_force_now(C, s));
             end_phase(C, s, &b, 0, s->F);
             continue;
         }
@@ -541,7 +583,8 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         predict(C, s, hs, (hs >= r) ? t_end : s->t + hs, &tr);
         finish(C, s, &tr, 0.0);
         s->t = (hs >= r) ? t_end : fmax(b.ta + hs, nextafter(b.ta, INFINITY));
-        restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
+        if (C->ramp) ramp_restart(C, s, 0);
+        else restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
         end_phase(C, s, &b, dir, -dir * C->L.muk_N);
     }
 }
@@ -619,6 +662,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
     dfo_forget_caches(s);
     s->stick_C = s->stick_Fb = s->stick_tb = NAN;
     s->stick_dir = 0;
+    s->t_switch = -INFINITY;
     if (s->V == 0.0 && C.friction) {
         restart_from_rest(&C, s);
     } else {
@@ -695,6 +739,12 @@ static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_end
     return (m > s->n) ? m : s->n;
 }
 
+static COLD void ramp_loads(step_ctx *C, double t_end)
+{
+    dfo_loads_ramp(&C->L, C->M, C->ramp, t_end);
+    C->friction = C->L.Fb > 0.0;
+}
+
 static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                           dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -729,10 +779,7 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
         }
         if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
         C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
-        if (C.ramp) { /* varying inputs: the loads of this step are those at its end (where Bossak reads them) */
-            dfo_loads_at(&C.L, M, C.ramp, t_end);
-            C.friction = C.L.Fb > 0.0;
-        }
+        if (C.ramp) ramp_loads(&C, t_end); /* varying inputs: the loads at the step's end, where Bossak reads them */
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
         /* An overflow is caught within 16 grid steps and at the end of the call (the friction LCP
@@ -754,7 +801,15 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
 {
     /* the exact scheme (exact.c) has no grid to snap to: it ends exactly on the host's time, where its
      * closed form is exact (two hosts whose clocks differ by rounding get the motion at their times) */
-    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
+    if (M->p.scheme == DFO_SCHEME_EXACT) {
+        if (!in->ramp) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
+        /* varying inputs: its closed form with the input polynomials (the values at t_d held apart) */
+        dfo_inputs held = *in;
+        const dfo_input_poly q = {in->t_d, {in->F_ext_d[0], in->F_ext_d[1]}, {in->N_ext_d[0], in->N_ext_d[1]}};
+        held.F_ext_d[0] = held.F_ext_d[1] = held.N_ext_d[0] = held.N_ext_d[1] = 0.0;
+        held.ramp = 0;
+        return dfo_exact_advance_poly(M, &held, &q, s, t_target, on_switch, switch_ctx);
+    }
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;
