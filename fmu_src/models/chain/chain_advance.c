@@ -380,7 +380,10 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
         s->steps++;
         /* ramped inputs: the loads of this internal step are those at its end, where Bossak reads
          * them (also in its switches' sub-steps and restarts, as the oscillator's) */
-        chain_loads_at(M, t_end);
+        if (M->ramped) {
+            M->t_step = M->t_load = t_end;
+            chain_loads_ramp(M, t_end);
+        }
         if (M->scheme == DFO_SCHEME_LOCATED) {
             int fast = 0;
             if (fast_grid && hh == h && !M->any_frozen) {

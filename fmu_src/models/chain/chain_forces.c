@@ -43,6 +43,7 @@ void chain_loads_ramped(chain_model *M, const chain_inputs *in, const chain_ramp
     M->rin = in ? *in : none;
     M->ramp = *ramp;
     M->stuck_ok = 0;
+    M->t_step = M->t_load = ramp->t_ref;
     chain_loads_ramp(M, ramp->t_ref);
 }
 
@@ -164,6 +165,14 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
     M->cw1 = cw1;
     M->sw1 = sw1;
     M->t_trial = s->t + hh;
+    if (M->ramped) {
+        /* ramped inputs: the loads at t_load (the internal step's end, or a sub-step's of a switch
+         * search), the limits of the trial's modes with them, and the jerk from them (as the
+         * oscillator's trial sub-steps) */
+        chain_loads_ramp(M, M->t_load);
+        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+        M->jerk_valid = 0;
+    }
     const double a = M->alpha;
     /* Bossak's A belongs to the step length hA: re-based on hh with the jerk (section 8) */
     int rebase = 0;

@@ -8,9 +8,9 @@
  * outputs compute them (chain_inst_vars.c):
  *   sliding block (or one without friction):  a = (P + u - K x + F - C v) / m, F = -s mu_k N:
  *     da/dF_ext = 1/m, da/dN_ext = -s mu_k / m, dF/dN_ext = -s mu_k (0 where N + N_ext <= 0);
- *   stuck block (held at rest): a = 0 (the paper scheme's creeping a: da/dF_ext = 1/m), its held
- *     force takes the change of its external force: dF/dF_ext = -1 inside the breakaway limit; on
- *     the limit dF/dN_ext = +-mu_b.
+ *   stuck block (held at rest): a = 0, its held force takes the change of its external force:
+ *     dF/dF_ext = -1 inside the breakaway limit; on the limit dF/dN_ext = +-mu_b (the paper scheme's
+ *     stuck block creeps, a = (S + F) / m: 0 inside the limit, on it 1/m and +-mu_b / m).
  *   x, v: 0. */
 #include "dfo_fp.h"
 
@@ -79,8 +79,7 @@ static dfo_inst_status need_started(chain_instance *in, const char *fn, const ch
 static void accelerations(chain_values *v)
 {
     if (v->acc_valid) return;
-    const chain_inputs ci = chain_inst_inputs_of(v, 0);
-    chain_accelerations(v->M, &ci, &v->s, v->scratch);
+    chain_inst_accelerations(v);
     v->acc_valid = 1;
 }
 
@@ -176,18 +175,24 @@ static double jac(const chain_values *v, int id, int slot, size_t i)
     const int live = N + Ne > 0.0; /* the normal force follows N_ext */
     const int mode = v->s.mode[i];
     const int F_ext = slot == DFO_AI_F_ext;
-    if (id == DFO_OUT_a) {
-        const int held = mode == 0 && mu_b * N1 > 0.0;
-        if (held) return (v->M->scheme == DFO_SCHEME_PAPER && F_ext) ? 1.0 / m : 0.0;
+    if (id == DFO_OUT_a && !(mode == 0 && mu_b * N1 > 0.0)) { /* moving, or no friction */
         if (F_ext) return 1.0 / m;
         return (mu_b * N1 > 0.0 && live) ? -mode * mu_k / m : 0.0;
     }
-    if (mode != 0) return (!F_ext && live) ? -mode * mu_k : 0.0;
-    if (!(mu_b * N0 > 0.0)) return 0.0; /* not held: no friction */
-    const double u1 = now.F_ext ? now.F_ext[i] : 0.0, u0 = used.F_ext ? used.F_ext[i] : 0.0;
-    const double Fs = v->s.F[i] - (u1 - u0);
-    if (fabs(Fs) < mu_b * N1) return F_ext ? -1.0 : 0.0;
-    return (!F_ext && live) ? (Fs > 0.0 ? mu_b : -mu_b) : 0.0;
+    /* F_friction (chain_inst_friction_out) */
+    double dF = 0.0;
+    if (mode != 0) {
+        dF = (!F_ext && live) ? -mode * mu_k : 0.0;
+    } else if (mu_b * N0 > 0.0) { /* held: its force takes the change of F_ext, up to the limit */
+        const double u1 = now.F_ext ? now.F_ext[i] : 0.0, u0 = used.F_ext ? used.F_ext[i] : 0.0;
+        const double Fs = v->s.F[i] - (u1 - u0);
+        if (fabs(Fs) < mu_b * N1) dF = F_ext ? -1.0 : 0.0;
+        else dF = (!F_ext && live) ? (Fs > 0.0 ? mu_b : -mu_b) : 0.0;
+    }
+    if (id == DFO_OUT_F_friction) return dF;
+    /* a of a held block: 0 at rest; the paper's creeps, (S + F) / m */
+    if (v->M->scheme != DFO_SCHEME_PAPER) return 0.0;
+    return ((F_ext ? 1.0 : 0.0) + dF) / m;
 }
 
 typedef struct {

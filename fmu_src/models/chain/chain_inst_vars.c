@@ -124,6 +124,21 @@ double chain_inst_friction_out(const chain_values *v, size_t i)
     return fmin(fmax(F - (u1 - u0), -Fb), Fb); /* held: takes the change of its external force */
 }
 
+void chain_inst_accelerations(chain_values *v)
+{
+    const chain_inputs ci = chain_inst_inputs_of(v, 0);
+    chain_accelerations(v->M, &ci, &v->s, v->scratch);
+    if ((int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER) return;
+    /* the paper's stuck block creeps with the force that holds it: with inputs set since the step,
+     * the held force that takes their change (the same bits when they are unchanged) */
+    const size_t n = v->n;
+    for (size_t i = 0; i < n; i++) {
+        if (v->s.mode[i] != 0) continue;
+        const double F = chain_inst_friction_out(v, i);
+        if (F != v->s.F[i]) v->scratch[i] += (F - v->s.F[i]) / v->pa[(size_t)DFO_AP_m * n + i];
+    }
+}
+
 /* A pending event's left limit of the switching block b: its mode before the switch, the friction
  * of that mode (kinetic -from mu_k N; stuck, the static force clamped to the breakaway limit), the
  * acceleration with that force. The other blocks are continuous at the switch. */
@@ -167,8 +182,7 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const cha
     const int need_a = id == DFO_OUT_a || (in->lc.run.event_pending && id == DFO_OUT_F_friction);
     const int temporary = !chain_inst_started(in);
     if (need_a && (temporary || !v->acc_valid)) {
-        const chain_inputs ci = chain_inst_inputs_of(v, 0);
-        chain_accelerations(v->M, &ci, &v->s, v->scratch);
+        chain_inst_accelerations(v);
         v->acc_valid = !temporary;
     }
     const dfo_run *run = &in->lc.run;

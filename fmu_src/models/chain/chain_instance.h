@@ -103,5 +103,8 @@ size_t chain_inst_count(const chain_instance *in, const chain_ref *r);
  * inputs set since the last step: a sliding block's kinetic force, a stuck block's held force taking
  * the change of its external force, clamped to its breakaway limit). */
 double chain_inst_friction_out(const chain_values *v, size_t i);
+/* The output a of every block into v->scratch (chain_accelerations; the paper scheme's stuck blocks
+ * with the held force of chain_inst_friction_out). */
+void chain_inst_accelerations(chain_values *v);
 
 #endif

@@ -124,6 +124,9 @@ struct chain_model {
     chain_inputs rin;
     chain_ramp ramp;
     double t_trial;             /* the current trial's end (ramped inputs: the switch margins' time) */
+    double t_step;              /* ramped inputs: the current internal step's end (its loads') */
+    double t_load;              /* ramped inputs: the time of the next trial's loads (t_step, or a
+                                 * switch search's sub-step end) */
     chain_status err;           /* first error of the current chain_advance */
     int switched;               /* a block switched in the current chain_advance */
 };

@@ -92,7 +92,9 @@ static double min_margin(void *vctx, double x)
     const chain_state *s = c->s;
     double cw, sw;
     chain_phase_of(M, s, s->t + x, &cw, &sw);
+    M->t_load = s->t + x; /* ramped inputs: a sub-step takes the loads at its own end */
     chain_trial(M, s, c->G, x, cw, sw);
+    M->t_load = M->t_step;
     solve_modes(M, c->G);
     double g = INFINITY;
     for (size_t k = 0; k < M->ncand; k++) g = fmin(g, switch_margin(M, s, M->cand[k]));
@@ -117,6 +119,9 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         }
     }
     M->ncand = nsw;
+    /* ramped inputs: the rest rule and the restart with the loads at the switch (as the oscillator's),
+     * those of the internal step's end again for its remainder */
+    if (M->ramped) chain_loads_ramp(M, s->t);
     chain_net_forces(M, s, G, M->S);
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
@@ -135,6 +140,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         const int dir = s->mode[i];
         if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
     }
+    if (M->ramped) chain_loads_ramp(M, M->t_step);
 }
 
 /* Block i stuck with X frozen and every neighbour at rest: its static force is its excitation
@@ -263,7 +269,9 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
             if (hs > 0.0) {
                 double c1w, s1w;
                 chain_phase_of(M, s, tb, &c1w, &s1w);
+                M->t_load = (tb == t_end) ? M->t_step : tb;
                 chain_trial(M, s, G, (tb == t_end) ? r : hs, c1w, s1w);
+                M->t_load = M->t_step;
                 solve_modes(M, G);
                 s->solves++;
                 chain_finish(M, s, G, M->Vt, M->Ft);
@@ -309,12 +317,31 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         double c1w, s1w;
         if (hs >= r) chain_phase_of(M, s, t_end, &c1w, &s1w);
         else { c1w = dfo_cos(M->omega * t1 + M->phi0); s1w = dfo_sin(M->omega * t1 + M->phi0); }
-        chain_trial(M, s, G, hs, c1w, s1w);
-        solve_modes(M, G);
-        s->solves++;
-        for (size_t k = 0; k < M->ncand; k++) {  /* a stopping block ends the sub-step at rest */
-            const size_t i = M->cand[k];
-            if (M->st[i] != 0 && switch_margin(M, s, i) <= 0.0) M->Vt[i] = 0.0;
+        if (M->ramped && hs < r) {
+            /* ramped inputs: which blocks switch, from the sub-step with the loads at its own end
+             * (the root's); the sub-step itself with the internal step's loads, as the oscillator's */
+            M->t_load = t1;
+            chain_trial(M, s, G, hs, c1w, s1w);
+            solve_modes(M, G);
+            s->solves++;
+            size_t nsw = 0;
+            for (size_t k = 0; k < M->ncand; k++)
+                if (switch_margin(M, s, M->cand[k]) <= 0.0) M->cand[nsw++] = M->cand[k];
+            M->ncand = nsw;
+            M->t_load = M->t_step;
+            chain_trial(M, s, G, hs, c1w, s1w);
+            solve_modes(M, G);
+            s->solves++;
+            for (size_t k = 0; k < M->ncand; k++)
+                if (M->st[M->cand[k]] != 0) M->Vt[M->cand[k]] = 0.0;
+        } else {
+            chain_trial(M, s, G, hs, c1w, s1w);
+            solve_modes(M, G);
+            s->solves++;
+            for (size_t k = 0; k < M->ncand; k++) {  /* a stopping block ends the sub-step at rest */
+                const size_t i = M->cand[k];
+                if (M->st[i] != 0 && switch_margin(M, s, i) <= 0.0) M->Vt[i] = 0.0;
+            }
         }
         chain_finish(M, s, G, M->Vt, M->Ft);
         s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
