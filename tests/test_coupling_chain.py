@@ -105,7 +105,7 @@ def test_input_derivatives_converge_in_the_communication_step(ref_harmonic: Chai
 def test_located_scheme_is_second_order_in_h_with_ramped_inputs() -> None:
     """A quadratic input, exact with its two derivatives at every communication point (H = T/20):
     the located scheme, switches placed with the inputs at each trial's end, converges at second
-    order in the internal step h (measured 1.4e-3, 3.6e-4, 9.1e-5, 2.3e-5 at h = T/250 ... T/2000;
+    order in the internal step h (measured 1.4e-3, 3.5e-4, 8.8e-5, 2.2e-5 at h = T/250 ... T/2000;
     held inputs stay at 0.11, the first-order error of the hold; the paper and consistent schemes,
     first order at a switch, 6.0e-4 at T/2000)."""
     lin, quad = np.array([0.05, -0.04]), np.array([-0.01, 0.012])
