@@ -371,3 +371,101 @@ def test_fmi3_derivatives_are_the_fmi2_ones(chain_fmu2: Path, chain_fmu3: Path) 
     finally:
         f2.close()
         shutil.rmtree(d, ignore_errors=True)
+
+
+def test_fmi2_model_structure_declares_the_directional_derivatives(chain_fmu2: Path) -> None:
+    """Every nonzero directional derivative, over the three mode sets and the schemes, is of an
+    output element on an input element <ModelStructure> declares (a[i], F_friction[i]: F_ext[i] and
+    N_ext[i]; x, v: none), and each declared dependency is nonzero in some mode."""
+    seen: dict[str, set[str]] = {}
+    declared: dict[str, set[str]] = {}
+    for v0, N in [((0.5, -0.3), (0.5, 0.4)), ((0.5, 0.0), (0.5, 5.0)), ((0.0, 0.0), (5.0, 5.0))]:
+        for scheme in (1, 3):
+            f = Slave(chain_fmu2, "structure")
+            try:
+                declared = {u.variable.name: {d.name for d in (u.dependencies or [])} for u in f.md.outputs}
+                ch = Chain.make(2, omega=1.3, m=[1.0, 1.5], k=[4.0, 2.0], P0=[1.0, 0.6], N=list(N), mu_s=[0.5, 0.4],
+                                chi=[0.7, 0.8], v0=list(v0))
+                f.start(chain_reals(ch, 1e-3), scheme)
+                f.s.doStep(0.0, 0.01)
+                outs = [v.name for v in f.md.modelVariables if v.causality == "output" and v.type == "Real"]
+                ins = [f"{u}[{j}]" for u in ("F_ext", "N_ext") for j in (1, 2)]
+                for name in ins:
+                    J = f.s.getDirectionalDerivative([f.vr[o] for o in outs], [f.vr[name]], [1.0])
+                    for o, dj in zip(outs, J):
+                        if dj != 0.0:
+                            seen.setdefault(o, set()).add(name)
+            finally:
+                f.close()
+    for o, deps in seen.items():
+        assert deps <= declared[o], (o, deps, declared[o])
+    for i in (1, 2):
+        assert seen[f"a[{i}]"] == declared[f"a[{i}]"] == {f"F_ext[{i}]", f"N_ext[{i}]"}
+        assert seen[f"F_friction[{i}]"] == declared[f"F_friction[{i}]"] == {f"F_ext[{i}]", f"N_ext[{i}]"}
+
+
+def test_fmi3_inputs_at_input_points_are_steps_of_h(chain_fmu2: Path, chain_fmu3: Path) -> None:
+    """An FMI 3.0 host that sets F_ext at every input point (each internal step's end,
+    intermediateVariableSetRequested) gives the bits of the FMI 2.0 chain stepped by h with the same
+    input set before every step; a host that sets nothing there gives a plain step's bits."""
+    import shutil
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+    h, H, n_macro = T / 1000, T / 50, 40
+    A = np.array([0.3, 0.5])
+
+    def force(t: float) -> list[float]:
+        return [float(A[0] * np.sin(1.1 * t)), float(A[1] * np.sin(1.1 * t))]
+
+    d = extract(str(chain_fmu3))
+    md = read_model_description(d)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    results = {}
+    for setting in (True, False):
+        box: dict[str, FMU3Slave] = {}
+        points = [0]
+
+        def update(env, t, set_requested, get_allowed, finished, can_return, early, early_time):
+            if set_requested:
+                points[0] += 1
+                if setting:
+                    box["s"].setFloat64([vr["F_ext"]], force(t))
+            early[0] = False
+            early_time[0] = t
+
+        s3 = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                       instanceName="points")
+        s3.instantiate(intermediateUpdate=update)
+        box["s"] = s3
+        s3.enterInitializationMode(startTime=0.0)
+        for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0"):
+            s3.setFloat64([vr[name]], [float(x) for x in getattr(CHAIN, name)])
+        s3.setFloat64([vr["omega"], vr["h"], vr["alpha"]], [CHAIN.omega, h, -0.1])
+        s3.exitInitializationMode()
+        rows = []
+        for j in range(n_macro):
+            s3.setFloat64([vr["F_ext"]], force(j * H))
+            s3.doStep(j * H, H)
+            rows.append(s3.getFloat64([vr["x"], vr["v"]], 4))
+        s3.terminate()
+        s3.freeInstance()
+        assert points[0] == n_macro * 19  # the internal steps' ends before each communication point
+        results[setting] = np.array(rows)
+    shutil.rmtree(d, ignore_errors=True)
+    f2 = Slave(chain_fmu2, "steps")
+    try:
+        f2.start(chain_reals(CHAIN, h))
+        F = [f2.vr["F_ext[1]"], f2.vr["F_ext[2]"]]
+        fine, held = [], []
+        t = 0.0
+        for j in range(n_macro):
+            for g in range(20):
+                f2.s.setReal(F, force(j * H if g == 0 else float(j * 20 + g) * h))  # (the grid point's time)
+                t_next = (j + 1) * H if g == 19 else t + h
+                f2.s.doStep(j * H if g == 0 else t, t_next - (j * H if g == 0 else t))
+                t = t_next
+            fine.append(f2.get("x[1]", "x[2]", "v[1]", "v[2]"))
+    finally:
+        f2.close()
+    assert results[True].tobytes() != results[False].tobytes()
+    assert np.array_equal(results[True], np.array(fine)), np.max(np.abs(results[True] - np.array(fine)))
