@@ -374,17 +374,20 @@ static void test_output_derivatives(checks *T)
 /* 5. intermediate input points */
 typedef struct {
     dfo_lifecycle *in;
-    int calls, set;
+    int calls, set, stop_at; /* stop_at > 0: set F_ext = 0.25 at that call and ask for an early return */
     double last_t;
 } point_ctx;
 
 static int at_point(void *ctx, double t, int can_return_early, int set_requested)
 {
     point_ctx *P = (point_ctx *)ctx;
-    (void)can_return_early;
     if (!set_requested) return 0;
     P->calls++;
     P->last_t = t;
+    if (P->stop_at > 0 && P->calls == P->stop_at && can_return_early) {
+        for (size_t i = 0; i < N_BLOCKS; i++) set1(P->in, VR_F_ext, i, 0.25);
+        return 1;
+    }
     if (P->set)
         for (size_t i = 0; i < N_BLOCKS; i++) set1(P->in, VR_F_ext, i, force(i, t));
     return 0;
@@ -397,7 +400,7 @@ static void test_input_points(checks *T)
         host_log L = {{0}, 0};
         const params p = base_params(scheme);
         dfo_lifecycle *a = start(T, &L, &p), *b = start(T, &L, &p), *c = start(T, &L, &p);
-        point_ctx P = {b, 0, 0, 0.0};
+        point_ctx P = {b, 0, 0, 0, 0.0};
         dfo_event_opts opt;
         memset(&opt, 0, sizeof opt);
         opt.intermediate = at_point;
@@ -441,6 +444,33 @@ static void test_input_points(checks *T)
                 ok &= same_bits(get1(a, VR_x, i), get1(c, VR_x, i)) && same_bits(get1(a, VR_v, i), get1(c, VR_v, i));
         }
         CHECK(ok);
+        /* an early return asked at the 10th point, inputs set there: they hold from there on */
+        dfo_inst_delete(a);
+        dfo_inst_delete(b);
+        a = start(T, &L, &p);
+        b = start(T, &L, &p);
+        point_ctx Q = {b, 0, 0, 10, 0.0};
+        opt.ctx = &Q;
+        opt.early_return = 1;
+        dfo_step_result res;
+        memset(&res, 0, sizeof res);
+        CHECK(dfo_inst_do_step_events(b, "doStep", 0.0, H, &opt, &res) == DFO_INST_OK);
+        CHECK(res.early == 1 && res.event == 0);
+        const double tp = res.t_reached;
+        CHECK_SAME(chn(b)->v.s.t, tp);
+        opt.intermediate = NULL;
+        opt.input_points = 0;
+        opt.early_return = 0;
+        memset(&res, 0, sizeof res);
+        CHECK(dfo_inst_do_step_events(b, "doStep", tp, H - tp, &opt, &res) == DFO_INST_OK);
+        CHECK(dfo_inst_do_step(a, "doStep", 0.0, tp, 0, NULL) == DFO_INST_OK);
+        for (size_t i = 0; i < N_BLOCKS; i++) set1(a, VR_F_ext, i, 0.25);
+        CHECK(dfo_inst_do_step(a, "doStep", tp, H - tp, 0, NULL) == DFO_INST_OK);
+        CHECK(same_outputs(a, b));
+        CHECK_SAME(0.25, get1(b, VR_F_ext, 0));
+        opt.intermediate = at_point;
+        opt.input_points = 1;
+        opt.ctx = &P;
         dfo_inst_delete(a);
         dfo_inst_delete(b);
         dfo_inst_delete(c);

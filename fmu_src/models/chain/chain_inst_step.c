@@ -157,8 +157,8 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
             in->lc.run.time = v->s.t;
             v->acc_valid = 0;
             stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
+            point_inputs(v); /* (also before an early return there: the inputs hold from t on) */
             if (!stop) {
-                point_inputs(v);
                 ci = chain_inst_inputs_of(v, 0);
                 ramp = chain_inst_ramp_of(v);
                 ramp.t_ref = t_ref;
@@ -180,8 +180,8 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
              * point too */
             if (!stop && points && v->s.t == t_call && t_call != t_target) {
                 stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
+                point_inputs(v);
                 if (!stop) {
-                    point_inputs(v);
                     ci = chain_inst_inputs_of(v, 0);
                     ramp = chain_inst_ramp_of(v);
                     ramp.t_ref = t_ref;
