@@ -105,7 +105,7 @@ def test_input_derivatives_converge_in_the_communication_step(ref_harmonic: Chai
 def test_located_scheme_is_second_order_in_h_with_ramped_inputs() -> None:
     """A quadratic input, exact with its two derivatives at every communication point (H = T/20):
     the located scheme, switches placed with the inputs at each trial's end, converges at second
-    order in the internal step h (measured 1.4e-3, 3.5e-4, 8.8e-5, 2.2e-5 at h = T/250 ... T/2000;
+    order in the internal step h (measured 1.3e-3, 3.5e-4, 8.7e-5, 2.2e-5 at h = T/250 ... T/2000;
     held inputs stay at 0.11, the first-order error of the hold; the paper and consistent schemes,
     first order at a switch, 6.0e-4 at T/2000)."""
     lin, quad = np.array([0.05, -0.04]), np.array([-0.01, 0.012])
@@ -123,7 +123,7 @@ def test_normal_force_derivatives_second_order_in_h() -> None:
     """N_ext(t) quadratic (both blocks, the normal forces 1.2 ... 0.36), exact with its two
     derivatives at every communication point (H = T/20): the located scheme, limits and kinetic
     forces following the normal force, converges at second order in h against the reference with
-    the same normal force (measured 6.9e-4, 1.8e-4, 4.4e-5, 1.1e-5 at h = T/250 ... T/2000; held,
+    the same normal force (measured 6.8e-4, 1.8e-4, 4.5e-5, 1.1e-5 at h = T/250 ... T/2000; held,
     1.3e-2)."""
     nl, nq = np.array([-0.06, 0.05]), np.array([0.004, -0.006])
     ref = solve_chain(CHAIN, T_END, N_ext_t=lambda t: nl * t + 0.5 * nq * t * t)

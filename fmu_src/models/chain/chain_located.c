@@ -328,10 +328,14 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
             for (size_t k = 0; k < M->ncand; k++)
                 if (switch_margin(M, s, M->cand[k]) <= 0.0) M->cand[nsw++] = M->cand[k];
             M->ncand = nsw;
+            /* the velocities and forces of that sub-step (S and box hold them: free until the
+             * switches), the predicted positions and re-based accelerations of the one with the
+             * internal step's loads (for one block: the oscillator's sub-step, bit for bit) */
+            const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+            for (size_t i = lo; i < hi; i++) { M->S[i] = M->Vt[i]; M->box[i] = M->Ft[i]; }
             M->t_load = M->t_step;
             chain_trial(M, s, G, hs, c1w, s1w);
-            solve_modes(M, G);
-            s->solves++;
+            for (size_t i = lo; i < hi; i++) { M->Vt[i] = M->S[i]; M->Ft[i] = M->box[i]; }
             for (size_t k = 0; k < M->ncand; k++)
                 if (M->st[M->cand[k]] != 0) M->Vt[M->cand[k]] = 0.0;
         } else {
