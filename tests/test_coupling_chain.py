@@ -326,7 +326,6 @@ def test_fmi3_derivatives_are_the_fmi2_ones(chain_fmu2: Path, chain_fmu3: Path) 
     """FMI 3.0 (arrays, n = 2): fmi3GetDirectionalDerivative, fmi3GetAdjointDerivative (its
     transpose) and fmi3GetOutputDerivatives at a point give the FMI 2.0 FMU's values there, bit for
     bit (one block sliding, one stuck)."""
-    import ctypes
     import shutil
     from fmpy import extract, read_model_description
     from fmpy.fmi3 import FMU3Slave, fmi3Float64, fmi3Int32, fmi3ValueReference
@@ -346,7 +345,8 @@ def test_fmi3_derivatives_are_the_fmi2_ones(chain_fmu2: Path, chain_fmu3: Path) 
         s3.enterInitializationMode()
         for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0"):
             s3.setFloat64([vr[name]], [float(x) for x in getattr(ch, name)])
-        s3.setFloat64([vr[k] for k in ("omega", "k_end", "c_end", "h", "alpha")], [ch.omega, ch.k_end, ch.c_end, 1e-3, -0.1])
+        s3.setFloat64([vr[k] for k in ("omega", "k_end", "c_end", "h", "alpha")],
+                      [ch.omega, ch.k_end, ch.c_end, 1e-3, -0.1])
         s3.exitInitializationMode()
         s3.doStep(0.0, 0.2)
         s3.setFloat64([vr["F_ext"], vr["N_ext"]], [0.1, 0.0, 0.0, -0.2])

@@ -197,7 +197,8 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                 const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
                 /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
                  * internal step's, as the oscillator's jerk) */
-                if (M->ramped) j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i)) / M->m[i];
+                if (M->ramped)
+                    j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i)) / M->m[i];
                 else j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
             }
             M->J[i] = j;

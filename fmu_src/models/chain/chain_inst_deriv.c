@@ -230,7 +230,8 @@ static int resolve_list(chain_instance *in, const char *fn, const unsigned int v
 
 /* sens = J seed (adjoint 0) or J^T seed (1); J over the unknowns' and knowns' values. */
 static dfo_inst_status directional(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
-                                   const unsigned int known[], size_t nk, const double seed[], double sens[], int adjoint)
+                                   const unsigned int known[], size_t nk, const double seed[], double sens[],
+                                   int adjoint)
 {
     chain_instance *in = chn(lc);
     chain_values *v = &in->v;

@@ -3,8 +3,9 @@
  * built from the values, the life cycle and configuration mode (the other parts: chain_instance.h).
  * The physics is chain.[ch]. No FMI types.
  *
- * Memory: every array through the host's allocator, O(n): parameters (10 n), inputs (2 x 2 n),
- * the state and the step's start state (7 n each), one scratch array, the chain model's workspace. */
+ * Memory: every array through the host's allocator, O(n): parameters (10 n), inputs (2 x 2 n), their
+ * derivatives (2 x 2 n), the state and the step's start state (7 n each), one scratch array, the chain
+ * model's workspace. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_instance.h"
 #include "bossak.h" /* DFO_STEPS_PER_PERIOD, DFO_MIN_STEPS_PER_PERIOD */
