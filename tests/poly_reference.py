@@ -353,13 +353,22 @@ class PolyReference:
         return W
 
     def extremes(self):
-        """x_max, x_min over the run (x is monotone in a slide with friction: its ends)."""
+        """x_max, x_min over the run (x is monotone in a slide with friction: its ends; without friction also
+        its turning points)."""
         xs = []
         for seg in self.segments:
             xs.append(seg.x0)
             if seg.mode != 0:
-                xf, _, _ = self._funcs(seg)
+                xf, vf, _ = self._funcs(seg)
                 xs.append(xf(seg.t1))
+                if seg.free:  # without friction x turns where v changes sign: on the grid, refined
+                    t, v0 = seg.t0, vf(seg.t0)
+                    while t < seg.t1:
+                        t1 = min(t + self.cell, seg.t1)
+                        v1 = vf(t1)
+                        if (v0 > 0) != (v1 > 0) and v0 != 0:
+                            xs.append(xf(_illinois(vf, t, t1, v0, v1, mp.mpf(10) ** -36)))
+                        t, v0 = t1, v1
         return max(xs), min(xs)
 
     def stuck_time(self):

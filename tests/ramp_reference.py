@@ -38,7 +38,7 @@ def ramp_reference(p: dict[str, float], F_ext: Signal, N_ext: Signal, t_out: np.
         return P(t) + F_ext(t) - k * x
 
     t_end = float(t_out[-1])
-    pieces: list[tuple[float, float, object]] = []  # (ta, tb, x(t), v(t) as a callable)
+    pieces: list[tuple[float, float, Callable[[float], tuple[float, float]]]] = []  # ta, tb, t -> (x, v)
     t, x, v = 0.0, p["x0"], p["v0"]
     mode = int(np.sign(v))
     if mode == 0:

@@ -72,5 +72,36 @@ int main(void)
     EXPECT(fmi3Terminate(in) == fmi3OK);
     EXPECT(fmi3GetOutputDerivatives(in, &vx, 1, &one, out, 1) == fmi3OK && out[0] == get_real(in, VR_v));
     fmi3FreeInstance(in);
+
+    /* event mode: at a pending switch the derivatives through a do not exist (their sentence names
+     * the variable, the order and the time); x' = v does; after the event is handled a' exists again
+     * only once the step has left the switch */
+    memset(&E, 0, sizeof E);
+    in = host_instantiate(&E, 1, 1, 0, NULL);
+    EXPECT(in && host_start(in, 3, HOST_T / 400) == fmi3OK);
+    EXPECT(fmi3UpdateDiscreteStates(in, NULL, NULL, NULL, NULL, NULL, NULL) == fmi3OK);
+    EXPECT(fmi3EnterStepMode(in) == fmi3OK);
+    int pending_seen = 0;
+    t = 0.0;
+    for (int k = 0; k < 200 && !pending_seen; k++) {
+        EXPECT(fmi3DoStep(in, t, HOST_DT, fmi3False, &ev, &term, &early, &last) == fmi3OK);
+        t = last;
+        if (!ev) continue;
+        pending_seen = 1;
+        const fmi3ValueReference vrs[2] = {VR_x, VR_v};
+        const fmi3Int32 ord[2] = {2, 1};
+        EXPECT(fmi3GetOutputDerivatives(in, vrs, 2, ord, out, 2) == fmi3Error && has(&E, "does not exist at t =") &&
+               has(&E, "order-2 derivative of x"));
+        EXPECT(fmi3GetOutputDerivatives(in, &vx, 1, &one, out, 1) == fmi3OK && out[0] == get_real(in, VR_v));
+        EXPECT(fmi3EnterEventMode(in) == fmi3OK);
+        EXPECT(fmi3UpdateDiscreteStates(in, NULL, NULL, NULL, NULL, NULL, NULL) == fmi3OK);
+        EXPECT(fmi3EnterStepMode(in) == fmi3OK);
+        EXPECT(fmi3DoStep(in, t, HOST_DT / 3, fmi3False, &ev, &term, &early, &last) == fmi3OK);
+        t = last;
+        if (!ev && !early)
+            EXPECT(fmi3GetOutputDerivatives(in, &vv, 1, &one, out, 1) == fmi3OK && out[0] == get_real(in, VR_a));
+    }
+    EXPECT(pending_seen);
+    fmi3FreeInstance(in);
     return tally_done(T, "cs_coupling");
 }

@@ -1504,7 +1504,8 @@ static void trig_moments(double l, double D, double *S1, double *S2, double *T1,
  * the polynomial N(u) = n0 + n1 u + n2 u^2 / 2: with x = xc + Y, Y = y + q(u) (q the particular solution's
  * xp1 u + xp2 u^2 / 2, y the harmonic part), int N dY = [N Y] - int N' Y, int N' q a polynomial's integral
  * and int y, int u y from the equation of motion y = a cos(theta) - y'' - 2 zeta y':
- *   int y = a int cos(theta) - [y' + 2 zeta y],   int u y = a int u cos(theta) - [u y'] + [y] - 2 zeta [u y] + 2 zeta int y. */
+ *   int y = a int cos(theta) - [y' + 2 zeta y],
+ *   int u y = a int u cos(theta) - [u y'] + [y] - 2 zeta [u y] + 2 zeta int y. */
 static double poly_work(const ex_ctx *C, const ex_phase *P, double u0, double u1)
 {
     if (!(u1 > u0)) return 0.0;
@@ -1598,7 +1599,8 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
                 dfo_loads L;
                 poly_loads(C, tb, &L, NULL, NULL);
                 const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
-                dfo_sens_breakaway(s->J, (a_plus != 0.0 && D != 0.0) ? -a_plus * C->k / D : 0.0);
+                /* (D = 0: a tangential breakaway, the Jacobian not finite, as with held inputs) */
+                dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0);
             }
             C->events++;
             after_phase_poly(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
@@ -1704,7 +1706,7 @@ void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, d
 
 const char *dfo_exact_poly_unsupported(const dfo_model *M)
 {
-    if (M->p.k == 0.0) return dfo_exact_free_poly_unsupported(M);
+    (void)M; /* every model: k > 0 here, k = 0 in exact_free.c */
     return NULL;
 }
 
@@ -1737,7 +1739,22 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx)
 {
     if (!dfo_input_poly_active(q)) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
-    if (M->p.k == 0.0) return dfo_exact_free_advance_poly(M, u, q, s, t_target, on_switch, switch_ctx);
+    const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
+    double z[2];
+    const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);
+    if (M->p.k == 0.0) { /* no spring: exact_free.c, piece by piece */
+        const double qF[3] = {dfo_external_force(M, u), q->F[0], q->F[1]};
+        dfo_status st = DFO_OK;
+        for (int i = 0; i <= nz && st == DFO_OK; i++) {
+            const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
+            if (!(b > s->t)) continue;
+            const double mid = 0.5 * (a + b) - q->t0;
+            const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
+            const double qN[3] = {pos ? n0 : 0.0, pos ? n1 : 0.0, pos ? n2 : 0.0};
+            st = dfo_exact_free_advance_poly(M, u, q->t0, qF, qN, s, b, on_switch, switch_ctx);
+        }
+        return st;
+    }
     /* the length scale of the loads at both ends and at the middle */
     dfo_inputs u1, u2;
     dfo_input_poly_at(u, q, t_target, &u1);
@@ -1754,15 +1771,12 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     C.qF[0] = dfo_external_force(M, u);
     C.qF[1] = q->F[0];
     C.qF[2] = q->F[1];
-    const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
     const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
     if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
         s->hA = 0.0;
         return DFO_ERR_NONFINITE;
     }
     /* the pieces between the zeros of N + N_ext(t) */
-    double z[2];
-    const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);
     dfo_status st = DFO_OK;
     for (int i = 0; i <= nz && st == DFO_OK; i++) {
         const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];

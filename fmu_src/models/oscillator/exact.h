@@ -21,7 +21,8 @@
  * within rounding of 0. About two evaluations per stop. A stick phase ends at the closed-form
  * breakaway (dfo_next_breakaway).
  *
- * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call), so
+ * Every call restarts a phase at its start time (the inputs F_ext, N_ext are held over the call, or vary
+ * as the polynomials of their derivatives: dfo_exact_advance_poly below, docs/schemes.md), so
  * the state (t, X, V, mode) is all a continuation needs: FMU states and their serialisation continue
  * bit for bit (a stick phase's breakaway is found anew at each call, to the same time).
  *
@@ -80,7 +81,8 @@ int dfo_input_poly_active(const dfo_input_poly *q);
 void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, dfo_inputs *out);
 
 /* NULL when dfo_exact_advance_poly can follow polynomial inputs on this model, else a sentence saying
- * why not (for the FMU's error message when a host sets an input derivative). */
+ * why not (for the FMU's error message when a host sets an input derivative). Every model can
+ * (k > 0 and k = 0): NULL. */
 const char *dfo_exact_poly_unsupported(const dfo_model *M);
 
 /* Advance to t_target > s->t with the inputs varying as q's polynomials (q->t0 <= s->t): the contract
@@ -118,7 +120,9 @@ void dfo_exact_after_phase(const dfo_model *M, double muk_N, dfo_switch_fn on_sw
  *  - dfo_sens_reversal: the v row times a+ / a- (a slide that reverses at v = 0: the saltation
  *    [[1, 0], [0, a+/a-]]);
  *  - dfo_sens_breakaway: the v row becomes coef times the x row (a breakaway at t_b from a stick
- *    phase, whose v row is 0: dz = dz_b - f(t_b+) dt_b with dt_b = k dx / P'(t_b), coef = -a+ k / P'). */
+ *    phase, whose v row is 0: dz = dz_b - f(t_b+) dt_b with dt_b = k dx / P'(t_b), coef = -a+ k / P';
+ *    with polynomial inputs dt_b = k dx / D, D = P' + F_ext' - s max(mu_s, mu_k) N' at t_b, s the side:
+ *    the rate of the force's excess h = s (P + F_ext - k x) - max(mu_s, mu_k) N over the limit). */
 void dfo_sens_slide(const dfo_model *M, double dt, double J[4]);
 void dfo_sens_stick(double J[4]);
 void dfo_sens_reversal(double J[4], double ratio);

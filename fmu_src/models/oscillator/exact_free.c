@@ -34,6 +34,11 @@ typedef struct {
     dfo_switch_fn on_switch;
     void *switch_ctx;
     long long events;
+    /* polynomial inputs (dfo_exact_free_advance_poly; poly = 0 otherwise): physical, in q = t - q_t0,
+     * F_ext(t) = qF[0] + qF[1] q + qF[2] q^2 / 2, N(t) = qN[0] + qN[1] q + qN[2] q^2 / 2 on a piece where
+     * N + N_ext(t) > 0 (all 0 on a piece where it is <= 0) */
+    int poly;
+    double q_t0, qF[3], qN[3];
 } fr_ctx;
 
 /* One slip phase from (ta, xa, va) in direction s. */
@@ -43,6 +48,10 @@ typedef struct {
     double f0;       /* constant acceleration: f_const - s mu_k N / m */
     double c0, s0;   /* cos, sin of the excitation phase at ta */
     double ang_eps;  /* the rounding of that phase (rad) */
+    /* polynomial inputs: the force per mass is f0 + f1 tau + f2 tau^2 / 2 (+ the excitation), the normal
+     * force n0 + n1 tau + n2 tau^2 / 2 (physical) */
+    int poly;
+    double f1, f2, n0, n1, n2;
 } fr_phase;
 
 /* The motion at tau. */
@@ -70,6 +79,7 @@ static void ctx_init(fr_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->on_switch = NULL;
     C->switch_ctx = NULL;
     C->events = 0;
+    C->poly = 0;
 }
 
 static void phase_init(const fr_ctx *C, fr_phase *P, double ta, double X, double V, int s)
@@ -83,6 +93,21 @@ static void phase_init(const fr_ctx *C, fr_phase *P, double ta, double X, double
     P->c0 = 1.0;
     P->s0 = 0.0;
     P->ang_eps = 0.0;
+    P->poly = 0;
+    P->f1 = P->f2 = P->n0 = P->n1 = P->n2 = 0.0;
+    if (C->poly) {
+        /* the polynomial force F_ext(t) - s mu_k N(t) over m at ta and its derivatives (f_const holds
+         * F_ext at the call's start: replaced by F_ext(ta)) */
+        const double q = ta - C->q_t0, mk = M->mu_k;
+        const double F0 = C->qF[0] + q * (C->qF[1] + 0.5 * q * C->qF[2]), F1 = C->qF[1] + q * C->qF[2];
+        P->n0 = C->qN[0] + q * (C->qN[1] + 0.5 * q * C->qN[2]);
+        P->n1 = C->qN[1] + q * C->qN[2];
+        P->n2 = C->qN[2];
+        P->poly = 1;
+        P->f0 = C->f_const + (F0 - C->L.F_ext - s * mk * P->n0) / M->p.m;
+        P->f1 = (F1 - s * mk * P->n1) / M->p.m;
+        P->f2 = (C->qF[2] - s * mk * P->n2) / M->p.m;
+    }
     if (C->A > 0.0) {
         const double th = M->p.omega * ta + M->P_phase; /* from the absolute time at every phase start */
         dfo_sincos(th, &P->s0, &P->c0);
@@ -104,6 +129,26 @@ static double phi2_real(double mu, double em1)
         return sum;
     }
     return (em1 - mu) / (mu * mu);
+}
+
+/* phi3(mu), phi4(mu) (phi_k(z) = sum z^n / (n + k)!) for mu <= 0 from phi2(mu): their series for
+ * |mu| <= 1, else phi_{k+1} = (phi_k - 1/k!) / mu. */
+static void phi34_real(double mu, double p2, double *p3, double *p4)
+{
+    if (fabs(mu) <= 1.0) {
+        double t3 = 1.0 / 6.0, t4 = 1.0 / 24.0, s3 = 0.0, s4 = 0.0;
+        for (int n = 0; n <= 17; n++) {
+            s3 += t3;
+            s4 += t4;
+            t3 *= mu / (double)(n + 4);
+            t4 *= mu / (double)(n + 5);
+        }
+        *p3 = s3;
+        *p4 = s4;
+        return;
+    }
+    *p3 = (p2 - 0.5) / mu;
+    *p4 = (*p3 - 1.0 / 6.0) / mu;
 }
 
 /* E1 = (e^nu - e^mu) / (nu - mu) and E2 = (phi1(nu) - phi1(mu)) / (nu - mu) for mu = -b tau <= 0,
@@ -171,6 +216,17 @@ static void eval(const fr_ctx *C, const fr_phase *P, double tau, fr_val *out)
         x += C->A * tau * tau * (P->c0 * E2r - P->s0 * E2i);
         vmag += C->A * tau * (fabs(E1r) + fabs(E1i));
         q += C->A * cth;
+    }
+    if (P->poly) {
+        /* the response to f1 tau + f2 tau^2 / 2 from rest:
+         * int_0^tau e^{-b (tau - r)} r^j / j! dr = tau^(j+1) phi_(j+1)(-b tau) */
+        double p3, p4;
+        phi34_real(mu, p2, &p3, &p4);
+        const double t2 = tau * tau, u1 = P->f1 * t2 * p2, u2 = P->f2 * t2 * tau * p3;
+        v += u1 + u2;
+        x += tau * (P->f1 * t2 * p3 + P->f2 * t2 * tau * p4);
+        vmag += fabs(u1) + fabs(u2);
+        q += tau * (P->f1 + 0.5 * tau * P->f2);
     }
     out->tau = tau;
     out->x = x;
@@ -574,15 +630,357 @@ dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_s
     return DFO_OK;
 }
 
-const char *dfo_exact_free_poly_unsupported(const dfo_model *M)
+/* ---- polynomial inputs (dfo_exact_free_advance_poly) ---------------------------------------------- */
+/* A slide is the closed form above plus the response to the force's ramp and curvature (eval). Its
+ * stop: e^{b tau} s v still has the derivative e^{b tau} s q, now with q = A cos(theta) + f0 + f1 tau +
+ * f2 tau^2 / 2, whose zeros are no longer known in closed form: they are found by stepping only as far
+ * as |q''| <= A omega^2 + |f2| proves q of one sign (converging on the zero from its side like Newton's
+ * method), and between two of them s v has at most one zero, bracketed and polished as above. A stick
+ * phase ends where |P(t) + F_ext(t)| reaches max(mu_s, mu_k) N(t), found the same way. */
+
+#define POLY_RES (4.0 * DBL_EPSILON) /* relative resolution of the searches' steps */
+
+/* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 >= 0): how far a function with these value and slope
+ * and |second derivative| <= B provably stays positive (as exact.c's). */
+static double safe_step(double g0, double g1, double B)
 {
-    (void)M;
-    return "the exact scheme does not follow input derivatives without a spring (k = 0) yet";
+    if (!(B > 0.0)) return (g1 >= 0.0) ? INFINITY : g0 / -g1;
+    const double r = sqrt(g1 * g1 + 2.0 * B * g0);
+    return (g1 >= 0.0) ? (g1 + r) / B : 2.0 * g0 / (r - g1);
 }
 
-dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
-                                       double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+/* q = A cos(theta) + f0 + f1 tau + f2 tau^2 / 2 at tau and its derivatives */
+static void q_at(const fr_ctx *C, const fr_phase *P, double tau, double *q, double *q1, double *q2)
 {
-    (void)M; (void)u; (void)q; (void)s; (void)t_target; (void)on_switch; (void)switch_ctx;
-    return DFO_ERR_NO_PROGRESS;
+    double cth = 1.0, sth = 0.0;
+    if (C->A > 0.0) {
+        double sw, cw;
+        dfo_sincos(C->w * tau, &sw, &cw);
+        cth = P->c0 * cw - P->s0 * sw;
+        sth = P->s0 * cw + P->c0 * sw;
+    }
+    *q = C->A * cth + P->f0 + tau * (P->f1 + 0.5 * tau * P->f2);
+    *q1 = -C->A * C->w * sth + P->f1 + tau * P->f2;
+    *q2 = -C->A * C->w * C->w * cth + P->f2;
+}
+
+/* The first tau > tau0 at which sg q (> 0 just after tau0) reaches 0, or U when it stays positive up to U. */
+static double q_zero(const fr_ctx *C, const fr_phase *P, double tau0, double U, int sg)
+{
+    const double B = (1.0 + 1e-9) * (C->A * C->w * C->w + fabs(P->f2));
+    double tau = tau0;
+    for (int first = 1;; first = 0) {
+        double q, q1, q2;
+        q_at(C, P, tau, &q, &q1, &q2);
+        const double g = sg * q, g1 = sg * q1;
+        const double tol = POLY_RES * (C->A + fabs(P->f0) + fabs(tau * P->f1) + fabs(0.5 * tau * tau * P->f2));
+        if (!first && g <= tol) return tau;
+        const double res = POLY_RES * (fabs(P->ta) + tau) + DBL_MIN;
+        double d = safe_step(fmax(g, 0.0), g1, B);
+        if (!(d > res)) {
+            if (!first) return tau; /* on the zero, to the resolution of t */
+            d = res;
+        }
+        if (!(tau + d < U)) return U;
+        tau += d;
+    }
+}
+
+/* The sign of s q just after tau (from q, or its first nonzero derivative there). */
+static int q_sign_after(const fr_ctx *C, const fr_phase *P, double tau)
+{
+    double q, q1, q2;
+    q_at(C, P, tau, &q, &q1, &q2);
+    const int s = P->s;
+    const double tol = POLY_RES * (C->A + fabs(P->f0) + fabs(tau * P->f1) + fabs(0.5 * tau * tau * P->f2));
+    if (fabs(q) > tol) return s * dfo_sign(q);
+    return (q1 != 0.0) ? s * dfo_sign(q1) : s * dfo_sign(q2);
+}
+
+/* find_stop with polynomial inputs (the same results: SEARCH_STOP, SEARCH_NONE, SEARCH_NULL). */
+static int find_stop_poly(const fr_ctx *C, const fr_phase *P, double U, fr_val *out)
+{
+    const int s = P->s;
+    fr_val lo;
+    eval0(C, P, &lo);
+    int sg = q_sign_after(C, P, 0.0); /* the sign of s q on the current interval */
+    if (!(s * P->va > 0.0)) {
+        if (s * P->va < 0.0 || sg <= 0) { /* from rest: the slide starts only if e^{b tau} s v grows */
+            *out = lo;
+            out->v = 0.0;
+            return SEARCH_NULL;
+        }
+    } else if (s * P->va <= ROUND * lo.vmag && sg > 0) {
+        double q, q1, q2;
+        q_at(C, P, 0.0, &q, &q1, &q2);
+        if (fabs(q) <= ROUND * (C->A + fabs(P->f0))) { /* a touch at the start: s v at its minimum */
+            *out = lo;
+            return SEARCH_STOP;
+        }
+    }
+    double tau = 0.0;
+    for (;;) {
+        const double z = q_zero(C, P, tau, U, s * sg);
+        const int end = !(z < U);
+        fr_val hi;
+        eval(C, P, end ? U : z, &hi);
+        if (!isfinite(hi.x) || !isfinite(hi.v)) {
+            *out = hi;
+            return SEARCH_NONE;
+        }
+        const double g_hi = s * hi.v;
+        if (sg <= 0) {
+            if (g_hi <= 0.0) {
+                if (!(s * lo.v > 0.0)) {
+                    *out = lo;
+                    return SEARCH_STOP;
+                }
+                polish(C, P, &lo, &hi, out);
+                return SEARCH_STOP;
+            }
+            if (!end && g_hi <= ROUND * hi.vmag) {
+                *out = hi;
+                return SEARCH_STOP;
+            }
+        }
+        if (end) {
+            *out = hi;
+            return (g_hi > 0.0) ? SEARCH_NONE : SEARCH_STOP;
+        }
+        lo = hi;
+        tau = z;
+        sg = -sg;
+    }
+}
+
+/* The loads at t (polynomial inputs), and the rates of F_ext and of the limit F_b in *dF, *dFb. */
+static void poly_loads(const fr_ctx *C, double t, dfo_loads *L, double *dF, double *dFb)
+{
+    const double q = t - C->q_t0;
+    const double F = C->qF[0] + q * (C->qF[1] + 0.5 * q * C->qF[2]);
+    const double N = C->qN[0] + q * (C->qN[1] + 0.5 * q * C->qN[2]);
+    dfo_loads_set(L, F, fmax(N, 0.0), C->M->mu_k, C->M->mu_b);
+    if (dF) *dF = C->qF[1] + q * C->qF[2];
+    if (dFb) *dFb = C->M->mu_b * (C->qN[1] + q * C->qN[2]);
+}
+
+/* The first time in [ta, tend) at which the stick phase breaks away (|S| > F_b, or within rounding of
+ * it and not receding; S = P(t) + F_ext(t): no spring), its side in *dir; tend when none. */
+static double poly_breakaway_from(const fr_ctx *C, double ta, double tend, int *dir)
+{
+    const dfo_model *M = C->M;
+    const double w = M->p.omega;
+    const double B = (1.0 + 1e-9) * (M->P_amp * w * w + fabs(C->qF[2]) + M->mu_b * fabs(C->qN[2]));
+    double t = ta;
+    for (;;) {
+        dfo_loads L;
+        double dF, dFb;
+        poly_loads(C, t, &L, &dF, &dFb);
+        const double S = dfo_excitation(M, t) + L.F_ext, S1 = dfo_excitation_rate(M, t) + dF;
+        const double gp = L.Fb - S, gm = L.Fb + S, gp1 = dFb - S1, gm1 = dFb + S1;
+        const double tol = POLY_RES * (M->P_amp + fabs(L.F_ext) + L.Fb);
+        if (gp < 0.0 || gm < 0.0) {
+            *dir = (gp < 0.0) ? 1 : -1;
+            return t;
+        }
+        if ((gp <= tol && gp1 <= 0.0) || (gm <= tol && gm1 <= 0.0)) {
+            *dir = (gp <= gm) ? 1 : -1;
+            return t;
+        }
+        const double d = fmin(safe_step(gp, gp1, B), safe_step(gm, gm1, B));
+        if (!(t + d < tend)) return tend;
+        if (!(t + d > t)) {
+            *dir = (gp <= gm) ? 1 : -1;
+            return t;
+        }
+        t += d;
+    }
+}
+
+/* The next breakaway from ta; with skip, one at ta itself (a slide just tried did not start) is passed over. */
+static double poly_breakaway(const fr_ctx *C, double ta, double tend, int skip, int *dir)
+{
+    double b = poly_breakaway_from(C, ta, tend, dir);
+    if (skip && !(b > ta)) {
+        const double rate = C->b + fabs(C->M->p.omega);
+        double d = 4.0 * DBL_EPSILON * fmax(fabs(ta), rate > 0.0 ? 1.0 / rate : 1.0);
+        for (int i = 0; i < 200; i++, d *= 2.0) {
+            if (!(ta + d < tend)) return tend;
+            b = poly_breakaway_from(C, ta + d, tend, dir);
+            if (b > ta + d) break;
+        }
+    }
+    return b;
+}
+
+/* The friction work mu_k int N |v| dt of the slip phase P over tau in [t0, t1] with a varying normal
+ * force: Gauss-Legendre quadrature (8 nodes) on pieces of at most an eighth of the excitation period and
+ * of the damping time 1 / b (of s v N, smooth there: the error is below rounding, as for a polynomial of
+ * degree 15). */
+static double poly_work(const fr_ctx *C, const fr_phase *P, double t0, double t1)
+{
+    static const double X[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+    static const double Wg[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+    if (!(t1 > t0)) return 0.0;
+    double len = INFINITY;
+    if (C->w > 0.0) len = 0.25 * DFO_PI / C->w;
+    if (C->b > 0.0 && 0.125 / C->b < len) len = 0.125 / C->b;
+    const double span = t1 - t0;
+    double n = isfinite(len) ? ceil(span / len) : 1.0;
+    if (n < 1.0) n = 1.0;
+    if (n > 1e6) n = 1e6;
+    const double h = span / n;
+    double sum = 0.0;
+    for (double i = 0.0; i < n; i += 1.0) {
+        const double mid = t0 + (i + 0.5) * h, r = 0.5 * h;
+        double part = 0.0;
+        for (int j = 0; j < 4; j++)
+            for (int side = -1; side <= 1; side += 2) {
+                const double tau = mid + side * r * X[j];
+                fr_val v;
+                eval(C, P, tau, &v);
+                part += Wg[j] * fmax(P->n0 + tau * (P->n1 + 0.5 * tau * P->n2), 0.0) * fabs(v.v);
+            }
+        sum += part * r;
+    }
+    return C->M->mu_k * sum;
+}
+
+static void after_phase_poly(const fr_ctx *C, dfo_state *s, const fr_phase *P, double ta, double tb, double xa,
+                             double xb, int mode_during, int mode_after, int event)
+{
+    const int varying = P != NULL && (P->n1 != 0.0 || P->n2 != 0.0);
+    const double muk_N = (P != NULL) ? C->M->mu_k * fmax(P->n0, 0.0) : 0.0;
+    dfo_exact_after_phase(C->M, varying ? 0.0 : muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+                          mode_during, mode_after, event);
+    if (varying && C->M->p.observe && mode_during != 0) {
+        const double w0 = C->M->p.t_obs_start, w1 = C->M->p.t_obs_stop;
+        const double a = fmax(ta, w0), b = fmin(tb, w1);
+        if (b > a) s->E_friction += poly_work(C, P, a - ta, b - ta);
+    }
+}
+
+/* advance() with polynomial inputs over one piece (C->qN > 0 inside it, or all 0). */
+static dfo_status advance_poly(fr_ctx *C, dfo_state *s, double t_target)
+{
+    int skip = 0, stall = 0;
+    double t_last = s->t;
+    const int sens = C->M->p.sensitivity;
+    const int fric = C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0);
+    while (s->t < t_target) {
+        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
+        if (s->t == t_last) {
+            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
+        } else {
+            stall = 0;
+            t_last = s->t;
+        }
+        const double ta = s->t, xa = s->X;
+        if (s->mode == 0 && !fric) {
+            dfo_loads L;
+            double dF;
+            poly_loads(C, ta, &L, &dF, NULL);
+            const double S = dfo_excitation(C->M, ta) + L.F_ext, dS = dfo_excitation_rate(C->M, ta) + dF;
+            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta) + C->qF[2];
+            const int dir = dfo_free_start_dir(S, dS, d2S);
+            s->mode = dir;
+            C->events++;
+            after_phase_poly(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            continue;
+        }
+        if (s->mode == 0) {
+            int dir = 0;
+            const double tb = poly_breakaway(C, ta, t_target, skip, &dir);
+            skip = 0;
+            if (sens) dfo_sens_stick(s->J); /* (no spring: the breakaway time does not depend on x) */
+            if (!(tb < t_target)) {
+                s->t = t_target;
+                after_phase_poly(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                break;
+            }
+            s->t = tb;
+            s->V = 0.0;
+            s->mode = dir;
+            C->events++;
+            after_phase_poly(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+            continue;
+        }
+        const int sd = s->mode;
+        fr_phase P;
+        fr_val v;
+        phase_init(C, &P, ta, s->X, s->V, sd);
+        const int r = find_stop_poly(C, &P, t_target - ta, &v);
+        if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
+        if (r == SEARCH_NONE) {
+            if (sens) dfo_sens_slide(C->M, t_target - ta, s->J);
+            s->t = t_target;
+            s->X = v.x;
+            s->V = v.v;
+            after_phase_poly(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
+            break;
+        }
+        double ts = ta + v.tau;
+        if (ts > t_target) ts = t_target;
+        if (sens) dfo_sens_slide(C->M, ts - ta, s->J);
+        s->t = ts;
+        s->X = v.x;
+        s->V = 0.0;
+        dfo_loads L;
+        poly_loads(C, ts, &L, NULL, NULL);
+        const double P_ts = (r == SEARCH_STOP && ts < t_target && C->A > 0.0) ? C->M->P_amp * v.cth
+                                                                                : dfo_excitation(C->M, ts);
+        const double Fs = P_ts + L.F_ext;
+        int next = dfo_rest_mode(&L, Fs);
+        if (!fric) {
+            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+        } else if (r == SEARCH_NULL && next != -sd) {
+            next = 0;
+            skip = 1;
+        }
+        if (sens) {
+            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
+            else if (next == -sd && L.muk_N > 0.0)
+                dfo_sens_reversal(s->J, (Fs + sd * L.muk_N) / (Fs - sd * L.muk_N));
+        }
+        s->mode = next;
+        C->events++;
+        after_phase_poly(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+    }
+    return DFO_OK;
+}
+
+dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, double q_t0, const double qF[3],
+                                       const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
+                                       void *switch_ctx)
+{
+    fr_ctx C;
+    ctx_init(&C, M, u);
+    C.on_switch = on_switch;
+    C.switch_ctx = switch_ctx;
+    C.poly = 1;
+    C.q_t0 = q_t0;
+    for (int i = 0; i < 3; i++) {
+        C.qF[i] = qF[i];
+        C.qN[i] = qN[i];
+    }
+    s->stick_tb = NAN; /* (the stick phase's cache is of held inputs) */
+    dfo_status st = advance_poly(&C, s, t_target);
+    s->steps += C.events;
+    s->n = dfo_exact_grid_index(M, s);
+    s->hA = 0.0;
+    s->stick_tb = NAN;
+    if (st != DFO_OK) return st;
+    dfo_loads L;
+    poly_loads(&C, s->t, &L, NULL, NULL);
+    const double S = dfo_excitation(M, s->t) + L.F_ext;
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(&L, S);
+    } else {
+        s->F = -s->mode * L.muk_N;
+        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
 }

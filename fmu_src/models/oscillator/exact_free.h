@@ -47,10 +47,12 @@
 dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                                   dfo_switch_fn on_switch, void *switch_ctx);
 
-/* dfo_exact_advance_poly (exact.h) for a model with k = 0, and the sentence of
- * dfo_exact_poly_unsupported for it (NULL: supported). */
-dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
-                                       double t_target, dfo_switch_fn on_switch, void *switch_ctx);
-const char *dfo_exact_free_poly_unsupported(const dfo_model *M);
+/* dfo_exact_advance_poly (exact.h) for a model with k = 0, over one piece of the call on which the
+ * normal force is a polynomial: from the time q_t0, F_ext(t) = qF[0] + qF[1] q + qF[2] q^2 / 2 and
+ * N(t) = qN[0] + qN[1] q + qN[2] q^2 / 2 (q = t - q_t0; N + N_ext(t), > 0 inside the piece, or all 0
+ * where it is <= 0); u the inputs at q_t0. On return A, F are those at t_target with these loads. */
+dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, double q_t0, const double qF[3],
+                                       const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
+                                       void *switch_ctx);
 
 #endif

@@ -932,11 +932,11 @@ dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const un
 /* ---- coupling at second order (core/instance.h) ----------------------------------------------
  *
  * Input derivatives: F_ext and N_ext, orders 1 and 2, for the next step (the Bossak schemes take the
- * input polynomial at every internal step, the exact scheme in closed form; not yet with k = 0). Output
- * derivatives: x (order 1 v, order 2 a) and v (order 1 a, order 2 da/dt), none at a switch on the
- * current time (left and right limits differ). Directional and adjoint derivatives: of the outputs
- * with respect to F_ext, N_ext at the current point, the direct feed-through of a and F_friction by
- * mode (x, v and the rest: 0). */
+ * input polynomial at every internal step, the exact scheme in closed form where it can:
+ * dfo_exact_poly_unsupported). Output derivatives: x (order 1 v, order 2 a) and v (order 1 a, order
+ * 2 da/dt), none at a switch on the current time (left and right limits differ). Directional and
+ * adjoint derivatives: of the outputs with respect to F_ext, N_ext at the current point, the direct
+ * feed-through of a and F_friction by mode (x, v and the rest: 0). */
 
 #define MAX_INPUT_ORDER 2
 
