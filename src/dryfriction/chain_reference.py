@@ -172,20 +172,38 @@ class ChainSolution:
 
 
 def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-14,
-                max_events: int = 100000, steps_per_period: float = 32.0) -> ChainSolution:
+                max_events: int = 100000, steps_per_period: float = 32.0,
+                F_ext_t: Optional[Callable[[float], np.ndarray]] = None,
+                N_ext_t: Optional[Callable[[float], np.ndarray]] = None) -> ChainSolution:
     """The event-driven reference on [0, t_end] (see the module docstring). The ODE steps are at
-    most 1/steps_per_period of the shortest time scale (natural or forcing period)."""
+    most 1/steps_per_period of the shortest time scale (natural or forcing period). F_ext_t, when
+    given, is a smooth time-varying external force (n values at time t) added to ch.F_ext: a
+    polynomial or harmonic input of a coupled run; it enters the stuck blocks' breakaway events
+    as the excitation does. N_ext_t likewise adds a time-varying normal force (the normal force
+    max(N + N_ext_t(t), 0), its limits following it in the motion and in the events); which
+    blocks have friction is decided at t = 0."""
     if not (np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be finite and > 0, got {t_end}")
     n = ch.n
     K, C = ch.matrices()
-    m, Fb, mukN = ch.m, ch.Fb, ch.mu_k * ch.N
+    m, Fb0, mukN0 = ch.m, ch.Fb, ch.mu_k * ch.N
+    mu_b = np.maximum(ch.mu_s, ch.mu_k)
+
+    def limits(t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Breakaway limits and kinetic magnitudes at t."""
+        if N_ext_t is None:
+            return Fb0, mukN0
+        N = np.maximum(ch.N + np.asarray(N_ext_t(t), dtype=float), 0.0)
+        return mu_b * N, ch.mu_k * N
+
+    Fb, mukN = limits(0.0)
     u = np.zeros(n) if ch.F_ext is None else ch.F_ext
     fric = Fb > 0
     Pc, Ps = ch.P0 * np.cos(ch.phi), ch.P0 * np.sin(ch.phi)
 
     def applied(t: float) -> np.ndarray:
-        return Pc * np.cos(ch.omega * t) - Ps * np.sin(ch.omega * t) + u
+        P = Pc * np.cos(ch.omega * t) - Ps * np.sin(ch.omega * t) + u
+        return P if F_ext_t is None else P + np.asarray(F_ext_t(t), dtype=float)
 
     def net(t: float, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         return applied(t) - K @ x - C @ v
@@ -203,6 +221,7 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
 
     def settle(t: float, x: np.ndarray, v: np.ndarray, modes: np.ndarray) -> None:
         """Make the mode set consistent at t: stops and breakaways due now (one block at a time)."""
+        Fb, mukN = limits(t)
         for _ in range(4 * n + 4):
             S = net(t, x, v)
             changed = False
@@ -233,10 +252,13 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
         stuck = fric & (modes == 0)
         free = ~stuck
         Ff = np.where(fric, -modes * mukN, 0.0)
+        fmodes = np.where(fric, -modes, 0).astype(float)
 
         def rhs(tt: float, y: np.ndarray, free: np.ndarray = free,
-                Ff: np.ndarray = Ff) -> np.ndarray:
+                Ff: np.ndarray = Ff, fmodes: np.ndarray = fmodes) -> np.ndarray:
             xx, vv = y[:n], y[n:2 * n]
+            if N_ext_t is not None:
+                Ff = fmodes * limits(tt)[1]
             P = applied(tt)
             a = np.where(free, (P - K @ xx - C @ vv + Ff) / m, 0.0)
             vd = np.where(free, vv, 0.0)
@@ -258,7 +280,7 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
             else:
                 for side in (1.0, -1.0):
                     ev = (lambda tt, y, i=i, side=side:
-                          Fb[i] - side * (applied(tt)[i] - K[i] @ y[:n] - C[i] @ y[n:2 * n]))
+                          limits(tt)[0][i] - side * (applied(tt)[i] - K[i] @ y[:n] - C[i] @ y[n:2 * n]))
                     ev.terminal, ev.direction = True, -1  # type: ignore[attr-defined]
                     events.append(ev)
                     owners.append(int(i))
@@ -277,6 +299,7 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
         if r.status == 0 or t1 >= t_end:
             return sol
         fired = [j for j, te in enumerate(r.t_events) if te.size and te[-1] == t1]
+        Fb, mukN = limits(t1)
         n_events = len(sol.events)
         grazing = [owners[j] for j in fired if modes[owners[j]] != 0]
         for j in fired:

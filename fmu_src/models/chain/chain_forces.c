@@ -7,8 +7,49 @@
 
 #include <string.h>
 
+void chain_ramp_value(const chain_inputs *in, const chain_ramp *ramp, int k, size_t i, double t, double *value,
+                      double *rate)
+{
+    const double *u = in ? (k ? in->N_ext : in->F_ext) : NULL;
+    const double *const *d = ramp ? (k ? ramp->dN_ext : ramp->dF_ext) : NULL;
+    const double u1 = (d && d[0]) ? d[0][i] : 0.0, u2 = (d && d[1]) ? d[1][i] : 0.0;
+    const double tau = ramp ? t - ramp->t_ref : 0.0;
+    *value = (u ? u[i] : 0.0) + tau * (u1 + 0.5 * tau * u2);
+    *rate = u1 + tau * u2;
+}
+
+void chain_loads_ramp(chain_model *M, double t)
+{
+    for (size_t i = 0; i < M->n; i++) {
+        double u, Ne, r;
+        chain_ramp_value(&M->rin, &M->ramp, 0, i, t, &u, &r);
+        chain_ramp_value(&M->rin, &M->ramp, 1, i, t, &Ne, &r);
+        const double N = fmax(M->N[i] + Ne, 0.0);
+        M->u[i] = u;
+        M->mukN[i] = M->mu_k[i] * N;
+        M->Fb[i] = M->mu_b[i] * N;
+        M->rows[i].u = M->u[i];
+        M->rows[i].mukN = M->mukN[i];
+        M->rows[i].Fb = M->Fb[i];
+    }
+}
+
+void chain_loads_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp)
+{
+    chain_loads_init(M, in);
+    if (!ramp || !(ramp->dF_ext[0] || ramp->dF_ext[1] || ramp->dN_ext[0] || ramp->dN_ext[1])) return;
+    const chain_inputs none = {NULL, NULL};
+    M->ramped = 1;
+    M->rin = in ? *in : none;
+    M->ramp = *ramp;
+    M->stuck_ok = 0;
+    M->t_step = M->t_load = ramp->t_ref;
+    chain_loads_ramp(M, ramp->t_ref);
+}
+
 void chain_loads_init(chain_model *M, const chain_inputs *in)
 {
+    M->ramped = 0;
     int all_friction = 1;
     for (size_t i = 0; i < M->n; i++) {
         const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
@@ -123,6 +164,15 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
     }
     M->cw1 = cw1;
     M->sw1 = sw1;
+    M->t_trial = s->t + hh;
+    if (M->ramped) {
+        /* ramped inputs: the loads at t_load (the internal step's end, or a sub-step's of a switch
+         * search), the limits of the trial's modes with them, and the jerk from them (as the
+         * oscillator's trial sub-steps) */
+        chain_loads_ramp(M, M->t_load);
+        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+        M->jerk_valid = 0;
+    }
     const double a = M->alpha;
     /* Bossak's A belongs to the step length hA: re-based on hh with the jerk (section 8) */
     int rebase = 0;
@@ -145,7 +195,11 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
             double j = 0.0;
             if (!chain_held(M, s, i)) {
                 const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
-                j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
+                /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
+                 * internal step's, as the oscillator's jerk) */
+                if (M->ramped)
+                    j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i)) / M->m[i];
+                else j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
             }
             M->J[i] = j;
         }
@@ -181,6 +235,17 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         q[i] = -(M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
                  M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx);
     }
+}
+
+/* Ramped inputs: the rate of block i's applied force from its inputs at the state's time,
+ * u'(t) - mode mu_k N_ext'(t) (the normal force's rate only while N + N_ext > 0). */
+double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i)
+{
+    double u, du, Ne, dNe;
+    chain_ramp_value(&M->rin, &M->ramp, 0, i, s->t, &u, &du);
+    chain_ramp_value(&M->rin, &M->ramp, 1, i, s->t, &Ne, &dNe);
+    const double dN = (M->N[i] + Ne > 0.0) ? dNe : 0.0;
+    return du - (chain_has_friction(M, i) ? s->mode[i] * M->mu_k[i] * dN : 0.0);
 }
 
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant
@@ -247,11 +312,24 @@ static void block_loads(const chain_model *M, const chain_inputs *in, size_t i, 
 
 void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s)
 {
+    chain_new_inputs_ramped(M, old_in, new_in, NULL, s);
+}
+
+void chain_new_inputs_ramped(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in,
+                             const chain_ramp *ramp, chain_state *s)
+{
     for (size_t i = 0; i < M->n; i++) {
         if (s->mode[i] == 0) continue;
         double u0, f0, u1, f1;
         block_loads(M, old_in, i, &u0, &f0);
-        block_loads(M, new_in, i, &u1, &f1);
+        if (ramp) { /* the new inputs' polynomials at the state's time (as the oscillator's dfo_new_inputs) */
+            double Ne, rate;
+            chain_ramp_value(new_in, ramp, 0, i, s->t, &u1, &rate);
+            chain_ramp_value(new_in, ramp, 1, i, s->t, &Ne, &rate);
+            f1 = M->mu_k[i] * fmax(M->N[i] + Ne, 0.0);
+        } else {
+            block_loads(M, new_in, i, &u1, &f1);
+        }
         const double dF = (u1 - u0) - s->mode[i] * (f1 - f0);
         if (dF == 0.0) continue;
         s->A[i] += dF / M->m[i];

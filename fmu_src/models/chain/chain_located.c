@@ -66,6 +66,15 @@ static void solve_modes(chain_model *M, const span *G)
 static double switch_margin(const chain_model *M, const chain_state *s, size_t i)
 {
     if (M->st[i] != 0) return s->mode[i] * M->Vt[i];
+    if (M->ramped) {
+        /* ramped inputs: the held force and the limit with the inputs at the trial's end (the
+         * trial's loads are the internal step's), so that a breakaway is placed to second order */
+        double u, Ne, rate;
+        chain_ramp_value(&M->rin, &M->ramp, 0, i, M->t_trial, &u, &rate);
+        chain_ramp_value(&M->rin, &M->ramp, 1, i, M->t_trial, &Ne, &rate);
+        const double Fb = M->mu_b[i] * fmax(M->N[i] + Ne, 0.0);
+        return Fb - fabs(M->Ft[i] - (u - M->u[i]));
+    }
     return M->Fb[i] - fabs(M->Ft[i]);
 }
 
@@ -83,7 +92,9 @@ static double min_margin(void *vctx, double x)
     const chain_state *s = c->s;
     double cw, sw;
     chain_phase_of(M, s, s->t + x, &cw, &sw);
+    M->t_load = s->t + x; /* ramped inputs: a sub-step takes the loads at its own end */
     chain_trial(M, s, c->G, x, cw, sw);
+    M->t_load = M->t_step;
     solve_modes(M, c->G);
     double g = INFINITY;
     for (size_t k = 0; k < M->ncand; k++) g = fmin(g, switch_margin(M, s, M->cand[k]));
@@ -99,7 +110,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
     size_t nsw = 0;
     for (size_t k = 0; k < M->ncand; k++) {
         const size_t i = M->cand[k];
-        if (!immediate && switch_margin(M, s, i) > 0.0) continue;
+        if (!immediate && switch_margin(M, s, i) > 0.0) continue;  /* (at the trial's loads) */
         M->cand[nsw++] = i;
         if (s->mode[i] != 0) {
             /* a slide from rest that cannot move in double precision: held to the step's end */
@@ -108,6 +119,9 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         }
     }
     M->ncand = nsw;
+    /* ramped inputs: the rest rule and the restart with the loads at the switch (as the oscillator's),
+     * those of the internal step's end again for its remainder */
+    if (M->ramped) chain_loads_ramp(M, s->t);
     chain_net_forces(M, s, G, M->S);
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
@@ -126,12 +140,70 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         const int dir = s->mode[i];
         if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
     }
+    if (M->ramped) chain_loads_ramp(M, M->t_step);
 }
 
 /* Block i stuck with X frozen and every neighbour at rest: its static force is its excitation
  * plus a constant, and its next breakaway after the stick phase's start is known in closed form
  * (friction.h, as the oscillator's); INFINITY when it does not apply. */
-static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, int *dir)
+/* Ramped inputs: side times block i's static force beyond its limit at t, with the inputs at t
+ * (> 0: broken away). */
+typedef struct {
+    const chain_model *M;
+    const chain_state *s;
+    size_t i;
+    int side;
+} ramp_gap_ctx;
+
+static double ramp_gap(const chain_model *M, const chain_state *s, size_t i, double t, int side)
+{
+    double u, Ne, rate, cw, sw;
+    chain_ramp_value(&M->rin, &M->ramp, 0, i, t, &u, &rate);
+    chain_ramp_value(&M->rin, &M->ramp, 1, i, t, &Ne, &rate);
+    const double Fb = M->mu_b[i] * fmax(M->N[i] + Ne, 0.0);
+    chain_phase_of(M, s, t, &cw, &sw);
+    return side * (chain_P_at(M, i, cw, sw) + u - chain_Kx(M, s->X, i)) - Fb;
+}
+
+static double ramp_gap_fn(void *vctx, double x)
+{
+    const ramp_gap_ctx *g = (const ramp_gap_ctx *)vctx;
+    return -ramp_gap(g->M, g->s, g->i, g->s->t + x, g->side);
+}
+
+/* The breakaway of block i inside [s->t, tb] with the inputs varying (as the oscillator's): the side
+ * broken through at tb, or at the closed form's breakaway for the loads of the internal step; its
+ * time the root of the gap with the loads varying (Brent), so that it is placed to second order. */
+static double ramp_breakaway(const chain_model *M, const chain_state *s, size_t i, double tb, int *dir)
+{
+    const double ta = s->t;
+    int side = 0;
+    double hi = tb, ghi = 0.0;
+    for (int sd = -1; sd <= 1; sd += 2) {
+        const double g = ramp_gap(M, s, i, tb, sd);
+        if (g > 0.0) { side = sd; ghi = g; }
+    }
+    if (side == 0) {
+        dfo_harmonic P;
+        dfo_harmonic_init(&P, M->P0[i], M->omega, M->phi[i]);
+        const dfo_loads L = {M->u[i], 0.0, M->mukN[i], M->Fb[i]};  /* (N is not read) */
+        int d = 0;
+        const double t1 = dfo_next_breakaway(&P, &L, M->u[i] - chain_Kx(M, s->X, i), ta, &d);
+        if (t1 <= tb && d != 0) {
+            const double g = ramp_gap(M, s, i, t1, d);
+            if (g > 0.0) { side = d; hi = t1; ghi = g; }
+        }
+    }
+    if (side == 0) return INFINITY;
+    *dir = side;
+    const double g0 = ramp_gap(M, s, i, ta, side);
+    if (g0 >= 0.0) return ta;
+    ramp_gap_ctx g = {M, s, i, side};
+    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+}
+
+static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, double t_end,
+                               int *dir)
 {
     for (int side = -1; side <= 1; side += 2) {
         if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
@@ -139,7 +211,17 @@ static double closed_breakaway(const chain_model *M, const chain_state *s, const
         const int inside = j >= G->a && j < G->b;
         if (!(chain_held(M, s, j) || (inside && M->frozen[j]))) return INFINITY;
     }
+    if (M->ramped) return ramp_breakaway(M, s, i, t_end, dir);  /* the closed form holds for held inputs */
     return chain_block_breakaway(M, s, i, dir);
+}
+
+/* Ramped inputs: a stuck block whose static force crosses its limit inside the step, also where it
+ * is back inside at the step's end (the oscillator's breakaway test), is a candidate. */
+static int ramp_breaks(const chain_model *M, const chain_state *s, const span *G, size_t i, double t_end)
+{
+    if (!M->ramped || M->st[i] != 0) return 0;
+    int dir = 0;
+    return closed_breakaway(M, s, G, i, t_end, &dir) <= t_end;
 }
 
 /* The located step of a span from s->t to t_end (first phase of length hh): phases in the current
@@ -164,7 +246,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         M->ncand = 0;
         for (size_t i = G->a; i < G->b; i++) {
             if (!chain_has_friction(M, i) || M->frozen[i]) continue;
-            if (switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
+            if (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, G, i, t_end)) M->cand[M->ncand++] = i;
         }
         if (M->ncand == 0) {  /* the warm basis solves the LCP: the whole remainder in these modes */
             chain_finish(M, s, G, M->Vt, M->Ft);
@@ -178,7 +260,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         for (size_t k = 0; k < M->ncand; k++) {
             const size_t i = M->cand[k];
             int dir = 0;
-            const double t = (M->st[i] == 0) ? closed_breakaway(M, s, G, i, &dir) : -INFINITY;
+            const double t = (M->st[i] == 0) ? closed_breakaway(M, s, G, i, t_end, &dir) : -INFINITY;
             M->S[i] = t;
             tb = fmin(tb, t);
         }
@@ -187,7 +269,9 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
             if (hs > 0.0) {
                 double c1w, s1w;
                 chain_phase_of(M, s, tb, &c1w, &s1w);
+                M->t_load = (tb == t_end) ? M->t_step : tb;
                 chain_trial(M, s, G, (tb == t_end) ? r : hs, c1w, s1w);
+                M->t_load = M->t_step;
                 solve_modes(M, G);
                 s->solves++;
                 chain_finish(M, s, G, M->Vt, M->Ft);
@@ -233,12 +317,35 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         double c1w, s1w;
         if (hs >= r) chain_phase_of(M, s, t_end, &c1w, &s1w);
         else { c1w = dfo_cos(M->omega * t1 + M->phi0); s1w = dfo_sin(M->omega * t1 + M->phi0); }
-        chain_trial(M, s, G, hs, c1w, s1w);
-        solve_modes(M, G);
-        s->solves++;
-        for (size_t k = 0; k < M->ncand; k++) {  /* a stopping block ends the sub-step at rest */
-            const size_t i = M->cand[k];
-            if (M->st[i] != 0 && switch_margin(M, s, i) <= 0.0) M->Vt[i] = 0.0;
+        if (M->ramped && hs < r) {
+            /* ramped inputs: which blocks switch, from the sub-step with the loads at its own end
+             * (the root's); the sub-step itself with the internal step's loads, as the oscillator's */
+            M->t_load = t1;
+            chain_trial(M, s, G, hs, c1w, s1w);
+            solve_modes(M, G);
+            s->solves++;
+            size_t nsw = 0;
+            for (size_t k = 0; k < M->ncand; k++)
+                if (switch_margin(M, s, M->cand[k]) <= 0.0) M->cand[nsw++] = M->cand[k];
+            M->ncand = nsw;
+            /* the velocities and forces of that sub-step (S and box hold them: free until the
+             * switches), the predicted positions and re-based accelerations of the one with the
+             * internal step's loads (for one block: the oscillator's sub-step, bit for bit) */
+            const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+            for (size_t i = lo; i < hi; i++) { M->S[i] = M->Vt[i]; M->box[i] = M->Ft[i]; }
+            M->t_load = M->t_step;
+            chain_trial(M, s, G, hs, c1w, s1w);
+            for (size_t i = lo; i < hi; i++) { M->Vt[i] = M->S[i]; M->Ft[i] = M->box[i]; }
+            for (size_t k = 0; k < M->ncand; k++)
+                if (M->st[M->cand[k]] != 0) M->Vt[M->cand[k]] = 0.0;
+        } else {
+            chain_trial(M, s, G, hs, c1w, s1w);
+            solve_modes(M, G);
+            s->solves++;
+            for (size_t k = 0; k < M->ncand; k++) {  /* a stopping block ends the sub-step at rest */
+                const size_t i = M->cand[k];
+                if (M->st[i] != 0 && switch_margin(M, s, i) <= 0.0) M->Vt[i] = 0.0;
+            }
         }
         chain_finish(M, s, G, M->Vt, M->Ft);
         s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
@@ -297,7 +404,8 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
     }
     M->ncand = 0;
     for (size_t i = 0; i < n; i++)
-        if (chain_has_friction(M, i) && switch_margin(M, s, i) <= 0.0) M->cand[M->ncand++] = i;
+        if (chain_has_friction(M, i) && (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, &G0, i, t_end)))
+            M->cand[M->ncand++] = i;
     if (M->ncand == 0) {  /* the warm basis solves the LCP: O(n), no pivot */
         chain_finish(M, s, &G0, M->Vt, M->Ft);
         for (size_t i = 0; i < n; i++)
