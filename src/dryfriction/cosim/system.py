@@ -18,7 +18,7 @@ each from the newest outputs (Gauss-Seidel). The inputs over the step:
 - ``derivatives``: the polynomial itself, sent as input derivatives (FMI 2.0
   fmi2SetRealInputDerivatives; FMI 3.0: the polynomial's value set at every intermediate update).
 
-``correction=True`` (Jacobi) adds the interface-Jacobian correction: after a first pass the
+``correction=True`` (Jacobi, held inputs) adds the interface-Jacobian correction: after a first pass the
 master solves ``(I - G S) du = G y(t+H) - u(t+H)`` with ``S = d y(t+H) / d u`` (from extra FMU
 steps, ``jacobian="steps"``, or the FMU's directional derivatives of its outputs and their
 derivative outputs, ``jacobian="directional"``), goes back to the saved FMU states and steps again
@@ -126,6 +126,10 @@ class _Plan:
             raise ValueError(f"max_halvings must be an integer in 0 .. 30, not {max_halvings!r}")
         if correction and method != "jacobi":
             raise ValueError("the interface-Jacobian correction couples every unit at once: method='jacobi'")
+        if correction and inputs != "hold":
+            # measured: extrapolating the force of a stiff coupling from its outputs' derivatives
+            # amplifies the fast mode the correction is there to damp (docs/coupling.md)
+            raise ValueError("the interface-Jacobian correction is linearly implicit on held inputs: inputs='hold'")
         if not sys.units:
             raise ValueError("the system has no units")
         if not sys.elements:
