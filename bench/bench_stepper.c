@@ -373,7 +373,7 @@ typedef struct {
 
 static step_timing time_stepping(const options *o, const fmu_api *api, fmi2Component comp, const dfo_params *p)
 {
-    const dfo_inputs u = {0.0, 0.0, 0, 0};
+    const dfo_inputs u = {0};
     const double t_end = o->periods * 2.0 * DFO_PI / p->omega;
     dfo_model M;
     dfo_model_init(&M, p);

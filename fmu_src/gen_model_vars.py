@@ -128,6 +128,17 @@ class Model:
     effects_variable: str | None = None
     effects: tuple[Effect, ...] = ()
     structs: dict[str, str] = field(default_factory=dict)  # the C structs: header, parameters, inputs
+    # coupling capabilities of the co-simulation FMU (CoSimulation's attributes): input derivatives
+    # (canInterpolateInputs; FMI 3.0: its continuous real inputs are intermediateUpdate="true"), the
+    # highest output derivative order, directional (FMI 3.0: and adjoint) derivatives
+    can_interpolate_inputs: bool = False
+    max_output_derivative_order: int = 0
+    provides_directional_derivative: bool = False
+
+    def intermediate_input(self, v: Variable) -> bool:
+        """An input a host may set during an FMI 3.0 intermediate update."""
+        return (self.can_interpolate_inputs and v.causality == "input" and v.type == "Real"
+                and v.variability == "continuous")
 
     def variable(self, name: str) -> Variable:
         return next(v for v in self.variables if v.name == name)
@@ -200,6 +211,9 @@ def parse(xml_path: Path) -> Model:
     structs = {} if structs_el is None else {k: structs_el.get(k, "") for k in ("header", "parameters", "inputs")}
     model = Model(
         name=root.get("modelName"), guid=root.get("guid"), identifier=cs.get("modelIdentifier"),
+        can_interpolate_inputs=cs.get("canInterpolateInputs", "false") == "true",
+        max_output_derivative_order=int(cs.get("maxOutputDerivativeOrder", "0")),
+        provides_directional_derivative=cs.get("providesDirectionalDerivative", "false") == "true",
         variables=tuple(variables), enumerations=enums,
         log_categories=tuple((c.get("name"), c.get("description", "")) for c in root.iterfind("LogCategories/Category")),
         effects_variable=effects_var, effects=tuple(effects), structs=structs)
@@ -316,6 +330,10 @@ def _c_header_head(model: Model, source: str, before_guid: list[str], after_time
         f'#define MODEL_GUID "{model.guid}"',
         f'#define MODEL_IDENTIFIER "{model.identifier}"',
         f"#define DFO_VR_TIME {TIME_VR}u /* FMI 3.0: the independent variable time */",
+        "/* coupling capabilities (the description's CoSimulation attributes) */",
+        f"#define DFO_CAN_INTERPOLATE_INPUTS {int(model.can_interpolate_inputs)}",
+        f"#define DFO_MAX_OUTPUT_DERIVATIVE_ORDER {model.max_output_derivative_order}",
+        f"#define DFO_PROVIDES_DIRECTIONAL_DERIVATIVE {int(model.provides_directional_derivative)}",
         *after_time,
         "",
         "/* value references and start values */",
@@ -517,8 +535,7 @@ FMI3_CS_KEPT = {"canHandleVariableCommunicationStepSize": "canHandleVariableComm
                 "providesDirectionalDerivative": "providesDirectionalDerivatives"}
 # what the FMI 3.0 glue (fmi3_cs.c) adds: events, early return, intermediate update
 FMI3_CS_EVENTS = {"hasEventMode": "true", "mightReturnEarlyFromDoStep": "true",
-                  "canReturnEarlyAfterIntermediateUpdate": "true", "providesIntermediateUpdate": "true",
-                  "providesAdjointDerivatives": "false", "maxOutputDerivativeOrder": "0"}
+                  "canReturnEarlyAfterIntermediateUpdate": "true", "providesIntermediateUpdate": "true"}
 ROOT_ATTRIBUTES = ("modelName", "description", "version", "author", "copyright", "license", "generationTool",
                    "generationDateAndTime", "variableNamingConvention")
 
@@ -552,7 +569,10 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
          "",
          "  <CoSimulation" + _attrs([("modelIdentifier", model.identifier)]
                                     + [(new, cs.get(old)) for old, new in FMI3_CS_KEPT.items()]
-                                    + list(FMI3_CS_EVENTS.items())) + "/>",
+                                    + [("providesAdjointDerivatives",
+                                        "true" if model.provides_directional_derivative else "false")]
+                                    + list(FMI3_CS_EVENTS.items())
+                                    + [("maxOutputDerivativeOrder", str(model.max_output_derivative_order))]) + "/>",
          ""]
     units = root.find("UnitDefinitions")
     if units is not None:
@@ -590,6 +610,8 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
         pairs: list[tuple[str, str | None]] = [
             ("name", v.name), ("valueReference", str(v.vr)), ("description", v.description or None),
             ("causality", v.causality), ("variability", v.variability), ("initial", v.initial)]
+        if model.intermediate_input(v):
+            pairs.append(("intermediateUpdate", "true"))
         if kind == "Enumeration":
             pairs.append(("declaredType", v.declared_type))
         if kind in ("Float64", "Int32", "UInt64"):

@@ -18,6 +18,13 @@
 
 /* The variable of a value reference (NULL when none). */
 const dfo_var_info *dfo_find_var(unsigned int vr);
+/* An input a host may set during an FMI 3.0 intermediate update (declared intermediateUpdate="true":
+ * the continuous real inputs of a model that can interpolate its inputs). */
+static inline int dfo_intermediate_input(const dfo_var_info *var)
+{
+    return DFO_CAN_INTERPOLATE_INPUTS && var->causality == DFO_INPUT && var->type == DFO_REAL &&
+           var->variability == DFO_CONTINUOUS;
+}
 /* "Real", "Integer", "Boolean", "UInt64". */
 const char *dfo_type_name(dfo_var_type t);
 

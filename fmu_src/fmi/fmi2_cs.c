@@ -69,8 +69,8 @@ static fmi2Status status_of(dfo_inst_status st)
 #define PHASES_fmi2SetString (P_INST | P_INIT | P_STEP)
 #define PHASES_fmi2DoStep P_STEP
 #define PHASES_fmi2CancelStep P_STEP
-#define PHASES_fmi2SetRealInputDerivatives P_ANY
-#define PHASES_fmi2GetRealOutputDerivatives P_ANY
+#define PHASES_fmi2SetRealInputDerivatives (P_INST | P_INIT | P_STEP)
+#define PHASES_fmi2GetRealOutputDerivatives (P_STEP | P_TERM | P_ERR)
 #define PHASES_fmi2GetStatus P_ANY
 #define PHASES_fmi2GetRealStatus P_ANY
 #define PHASES_fmi2GetIntegerStatus P_ANY
@@ -82,7 +82,7 @@ static fmi2Status status_of(dfo_inst_status st)
 #define PHASES_fmi2SerializedFMUstateSize P_ANY
 #define PHASES_fmi2SerializeFMUstate P_ANY
 #define PHASES_fmi2DeSerializeFMUstate P_ANY
-#define PHASES_fmi2GetDirectionalDerivative P_ANY
+#define PHASES_fmi2GetDirectionalDerivative (P_INIT | P_STEP | P_TERM | P_ERR)
 #define PHASES_fmi2ModelExchange P_ANY /* the model-exchange functions: always an error, see not_me */
 
 /* The instance is usable (non-NULL) and in one of the allowed phases; logs the call (logAll). */
@@ -274,20 +274,31 @@ fmi2Status fmi2CancelStep(fmi2Component c)
     return FAIL("fmi2CancelStep: steps are synchronous and cannot be cancelled.");
 }
 
+/* The orders and values of input and output derivatives: one per value reference. */
+static int check_derivative_arrays(Instance *in, const char *fn, const fmi2ValueReference vr[], size_t nvr,
+                                   const fmi2Integer order[], const void *value)
+{
+    if (nvr > 0 && (!vr || !order || !value)) {
+        dfo_inst_fail(in->core, "%s: the value reference, order or value array is NULL.", fn);
+        return 0;
+    }
+    return 1;
+}
+
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
     BEGIN(fmi2SetRealInputDerivatives);
-    (void)vr; (void)nvr; (void)order; (void)value;
-    return FAIL("fmi2SetRealInputDerivatives: input derivatives are not supported (canInterpolateInputs=false).");
+    if (!check_derivative_arrays(in, "fmi2SetRealInputDerivatives", vr, nvr, order, value)) return fmi2Error;
+    return status_of(dfo_inst_set_input_derivatives(in->core, "fmi2SetRealInputDerivatives", vr, nvr, order, value));
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[])
 {
     BEGIN(fmi2GetRealOutputDerivatives);
-    (void)vr; (void)nvr; (void)order; (void)value;
-    return FAIL("fmi2GetRealOutputDerivatives: output derivatives are not supported (maxOutputDerivativeOrder=0).");
+    if (!check_derivative_arrays(in, "fmi2GetRealOutputDerivatives", vr, nvr, order, value)) return fmi2Error;
+    return status_of(dfo_inst_get_output_derivatives(in->core, "fmi2GetRealOutputDerivatives", vr, nvr, order, value));
 }
 
 #define NO_STATUS(fn)                                                                             \
@@ -385,8 +396,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[])
 {
     BEGIN(fmi2GetDirectionalDerivative);
-    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
-    return FAIL("fmi2GetDirectionalDerivative: directional derivatives are not provided.");
+    if ((nUnknown > 0 && (!vUnknown_ref || !dvUnknown)) || (nKnown > 0 && (!vKnown_ref || !dvKnown)))
+        return FAIL("fmi2GetDirectionalDerivative: the value reference, dvKnown or dvUnknown array is NULL.");
+    return status_of(dfo_inst_directional(in->core, "fmi2GetDirectionalDerivative", vUnknown_ref, nUnknown, vKnown_ref,
+                                          nKnown, dvKnown, dvUnknown));
 }
 
 /* ---- model-exchange functions: exported (hosts resolve every symbol), always an error --------- */

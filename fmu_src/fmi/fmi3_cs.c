@@ -35,7 +35,9 @@ typedef struct {
     fmi3LogMessageCallback logger;
     fmi3IntermediateUpdateCallback update;
     int early_return_allowed, event_mode_used;
-    int in_update; /* inside the intermediate-update callback: only getters may be called */
+    int in_update; /* inside the intermediate-update callback: only getters may be called, */
+    int set_requested; /* and, where the step reads its inputs, fmi3SetFloat64 of the inputs declared
+                        * intermediateUpdate="true" */
 } Instance;
 
 static void *host_alloc(void *ctx, size_t n, size_t size)
@@ -107,17 +109,23 @@ static fmi3Status status_of(dfo_inst_status st)
 #define PHASES_fmi3SetUInt64 P_SET
 #define PHASES_fmi3EnterConfigurationMode P_INST
 #define PHASES_fmi3ExitConfigurationMode P_CONFIG
+#define PHASES_fmi3GetOutputDerivatives (P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi3GetDirectionalDerivative (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi3GetAdjointDerivative (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
 #define PHASES_fmi3Unsupported P_ANY /* functions of features this FMU does not have: always an error */
 
-/* Functions a host may call from inside the intermediate-update callback. */
-#define IN_UPDATE_OK(fn) (!strncmp(fn, "fmi3Get", 7) && strcmp(fn, "fmi3GetFMUState") != 0)
+/* Functions a host may call from inside the intermediate-update callback (fmi3SetFloat64 of the
+ * inputs declared intermediateUpdate="true" too, where the step asks for them: see fmi3SetFloat64). */
+#define IN_UPDATE_OK(in, fn)                                                                                     \
+    ((!strncmp(fn, "fmi3Get", 7) && strcmp(fn, "fmi3GetFMUState") != 0) ||                                     \
+     ((in)->set_requested && !strcmp(fn, "fmi3SetFloat64")))
 
 /* The instance is usable (non-NULL) and in one of the allowed phases; logs the call (logAll). */
 static int allowed(Instance *in, const char *fn, int phases)
 {
     if (!in) return 0;
     dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
-    if (in->in_update && !IN_UPDATE_OK(fn)) {
+    if (in->in_update && !IN_UPDATE_OK(in, fn)) {
         dfo_inst_fail(in->core, "%s must not be called from the intermediate-update callback (only getters may).",
                       fn);
         return 0;
@@ -413,6 +421,14 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         if (vr[i] == DFO_VR_TIME)
             return FAIL("fmi3SetFloat64: variable time (value reference %u) is the independent variable and cannot "
                         "be set.", vr[i]);
+    if (in->in_update)
+        for (size_t i = 0; i < nvr; i++) {
+            const dfo_var_info *var = dfo_find_var(vr[i]);
+            if (!var || !dfo_intermediate_input(var))
+                return FAIL("fmi3SetFloat64 must not be called from the intermediate-update callback (only getters "
+                            "may) for %s (value reference %u): only the inputs declared intermediateUpdate=\"true\" "
+                            "may be set there.", var ? var->name : "an unknown variable", vr[i]);
+        }
     return status_of(dfo_inst_set_real(in->core, "fmi3SetFloat64", vr, nvr, values));
 }
 
@@ -501,16 +517,19 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 /* ---- co-simulation --------------------------------------------------------------------------- */
 
 /* The core's intermediate update: the host's callback, with the state at the switch readable. */
+/* With set_requested (an end of an internal step, where the step reads its inputs) the host may set
+ * the inputs declared intermediateUpdate="true"; they hold from t on. */
 static int intermediate(void *ctx, double t, int can_return_early, int set_requested)
 {
-    (void)set_requested;
     Instance *in = (Instance *)ctx;
     fmi3Boolean requested = fmi3False;
     fmi3Float64 requested_time = t;
     in->in_update = 1;
-    in->update(in->env, t, fmi3False, fmi3True, fmi3True, can_return_early ? fmi3True : fmi3False, &requested,
-               &requested_time);
+    in->set_requested = set_requested ? 1 : 0;
+    in->update(in->env, t, set_requested ? fmi3True : fmi3False, fmi3True, fmi3True,
+               can_return_early ? fmi3True : fmi3False, &requested, &requested_time);
     in->in_update = 0;
+    in->set_requested = 0;
     return requested ? 1 : 0;
 }
 
@@ -525,7 +544,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return FAIL("fmi3DoStep: eventHandlingNeeded, terminateSimulation, earlyReturn and lastSuccessfulTime must "
                     "not be NULL.");
     const dfo_event_opts opt = {in->early_return_allowed, in->event_mode_used && in->early_return_allowed,
-                                in->update ? intermediate : NULL, in, 0};
+                                in->update ? intermediate : NULL, in, in->update && DFO_CAN_INTERPOLATE_INPUTS};
     dfo_step_result res = {0.0, 0, 0};
     const dfo_inst_status st = dfo_inst_do_step_events(in->core, "fmi3DoStep", currentCommunicationPoint,
                                                        communicationStepSize, &opt, &res);
@@ -686,21 +705,50 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
     return unsupported(instance, "fmi3GetVariableDependencies",
                        "dependencies are declared in the model description only.");
 }
+/* Directional (adjoint: transposed) derivatives: seed over the knowns (unknowns), sensitivity over
+ * the unknowns (knowns), each as many values as its variables hold. */
+static int check_derivative_sizes(Instance *in, const char *fn, const fmi3ValueReference unknowns[], size_t nUnknowns,
+                                  const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
+                                  size_t nSeed, const fmi3Float64 sensitivity[], size_t nSensitivity, int adjoint)
+{
+    if ((nUnknowns > 0 && !unknowns) || (nKnowns > 0 && !knowns) || (nSeed > 0 && !seed) ||
+        (nSensitivity > 0 && !sensitivity)) {
+        dfo_inst_fail(in->core, "%s: the unknowns, knowns, seed or sensitivity array is NULL.", fn);
+        return 0;
+    }
+    const size_t nu = nUnknowns > 0 ? dfo_inst_n_values(in->core, unknowns, nUnknowns) : 0;
+    const size_t nk = nKnowns > 0 ? dfo_inst_n_values(in->core, knowns, nKnowns) : 0;
+    const size_t want_seed = adjoint ? nu : nk, want_sens = adjoint ? nk : nu;
+    if (nSeed != want_seed || nSensitivity != want_sens) {
+        dfo_inst_fail(in->core, "%s: nSeed = %lu and nSensitivity = %lu, but the %s hold %lu values and the %s "
+                      "%lu.", fn, (unsigned long)nSeed, (unsigned long)nSensitivity, adjoint ? "unknowns" : "knowns",
+                      (unsigned long)want_seed, adjoint ? "knowns" : "unknowns", (unsigned long)want_sens);
+        return 0;
+    }
+    return 1;
+}
+
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                         const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
                                         size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
 {
-    (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed; (void)sensitivity;
-    (void)nSensitivity;
-    return unsupported(instance, "fmi3GetDirectionalDerivative", "directional derivatives are not provided.");
+    BEGIN(fmi3GetDirectionalDerivative);
+    if (!check_derivative_sizes(in, "fmi3GetDirectionalDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                                sensitivity, nSensitivity, 0))
+        return fmi3Error;
+    return status_of(dfo_inst_directional(in->core, "fmi3GetDirectionalDerivative", unknowns, nUnknowns, knowns,
+                                          nKnowns, seed, sensitivity));
 }
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                     const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
                                     size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity)
 {
-    (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed; (void)sensitivity;
-    (void)nSensitivity;
-    return unsupported(instance, "fmi3GetAdjointDerivative", "adjoint derivatives are not provided.");
+    BEGIN(fmi3GetAdjointDerivative);
+    if (!check_derivative_sizes(in, "fmi3GetAdjointDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                                sensitivity, nSensitivity, 1))
+        return fmi3Error;
+    return status_of(dfo_inst_adjoint(in->core, "fmi3GetAdjointDerivative", unknowns, nUnknowns, knowns, nKnowns,
+                                      seed, sensitivity));
 }
 #define NO_STRUCTURAL "the FMU has no structural parameters."
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
@@ -820,8 +868,11 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                     const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
 {
-    (void)vr; (void)nvr; (void)orders; (void)values; (void)nValues;
-    return unsupported(instance, "fmi3GetOutputDerivatives", "output derivatives are not provided.");
+    BEGIN(fmi3GetOutputDerivatives);
+    if (nvr > 0 && !orders) return FAIL("fmi3GetOutputDerivatives: the orders array is NULL.");
+    if (!check_arrays(in, "fmi3GetOutputDerivatives", vr, nvr, values, nValues)) return fmi3Error;
+    return status_of(dfo_inst_get_output_derivatives(in->core, "fmi3GetOutputDerivatives", vr, nvr,
+                                                     (const int *)orders, values));
 }
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
                                       fmi3Float64 activationTime)

@@ -76,6 +76,8 @@ class OscillatorFMU3(Driver):
         self._step_out = self.inst._step_out
 
     def _on_update(self, info: fmi3.IntermediateUpdate) -> bool:
+        if info.set_requested:  # an input point (an internal step's end), not a switch: no input set here
+            return False
         self.updates.append(info.time)
         assert self._user_cb is not None
         return bool(self._user_cb(info.time, info.can_return_early))

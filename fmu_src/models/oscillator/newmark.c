@@ -47,10 +47,12 @@ typedef struct {
     int skips_stuck_steps;
 } scheme_rules;
 
-/* What is constant over one call of dfo_advance (inputs are held). */
+/* What is constant over one call of dfo_advance (inputs are held; with input derivatives, ramp,
+ * the loads are those at the end of the current step, set before each step). */
 typedef struct {
     const dfo_model *M;
     const scheme_rules *rules;  /* the scheme's row of SCHEMES */
+    const dfo_inputs *ramp;     /* the inputs when they vary over the call (their derivatives), else NULL */
     dfo_loads L;     /* external and normal force, kinetic magnitude, breakaway limit */
     step_coef full;  /* the coefficients of a step of the grid length h */
     double g1;       /* (1 - gamma) / gamma */
@@ -111,7 +113,7 @@ static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F
     return f / M->p.m;
 }
 
-/* x''' from the time derivative of the equation of motion (0 while stuck). */
+/* x''' from the time derivative of the equation of motion (0 while stuck), with the inputs' rates. */
 static double jerk_of(const step_ctx *C, const dfo_state *s)
 {
     if (stuck(C, s)) return 0.0;
@@ -119,6 +121,11 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
     const double F = -s->mode * C->L.muk_N;
     double j = dfo_excitation_rate(M, s->t) - M->p.k * s->V;
     if (M->damped) j -= M->p.c * accel_of(C, s, s->t, F);
+    if (C->ramp) {
+        double dF, dN;
+        dfo_input_rates(M, C->ramp, s->t, &dF, &dN);
+        j += dF - s->mode * M->mu_k * dN;
+    }
     return j / M->p.m;
 }
 
@@ -373,10 +380,63 @@ static int breakaway_known(const step_ctx *C, const dfo_state *s)
     return !isnan(s->stick_tb) && s->stick_C == C->L.F_ext - C->M->p.k * s->X && s->stick_Fb == C->L.Fb;
 }
 
+/* With varying inputs: side times the static force beyond the limit at t (> 0: broken away). */
+typedef struct {
+    const step_ctx *C;
+    const dfo_state *s;
+    int side;
+} ramp_gap_ctx;
+
+static double ramp_gap(const step_ctx *C, const dfo_state *s, double t, int side)
+{
+    dfo_loads L;
+    dfo_loads_at(&L, C->M, C->ramp, t);
+    return side * dfo_static_force(C->M->p.k, &L, excitation(C, t), s->X) - L.Fb;
+}
+
+static double ramp_gap_fn(void *ctx, double h)
+{
+    const ramp_gap_ctx *g = (const ramp_gap_ctx *)ctx;
+    return -ramp_gap(g->C, g->s, g->s->t + h, g->side);
+}
+
+/* The breakaway inside [ta, tb] with the inputs varying (C->ramp): the side is the one broken
+ * through at tb, or at the closed form's breakaway for the loads at tb; the time the root of the
+ * gap with the loads varying (Brent, to a few ulps), so that it is placed to second order. */
+static double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+{
+    const dfo_model *M = C->M;
+    int side = 0;
+    double hi = tb, ghi = 0.0;
+    for (int sd = -1; sd <= 1; sd += 2) {
+        const double g = ramp_gap(C, s, tb, sd);
+        if (g > 0.0) { side = sd; ghi = g; }
+    }
+    if (side == 0) {
+        const dfo_harmonic P = dfo_model_excitation(M);
+        int d = 0;
+        const double t1 = dfo_next_breakaway(&P, &C->L, C->L.F_ext - M->p.k * s->X, ta, &d);
+        if (t1 <= tb && d != 0) {
+            const double g = ramp_gap(C, s, t1, d);
+            if (g > 0.0) { side = d; hi = t1; ghi = g; }
+        }
+    }
+    s->stick_tb = NAN; /* nothing cached: the loads change every step */
+    if (side == 0) return INFINITY;
+    *dir = side;
+    const double g0 = ramp_gap(C, s, ta, side);
+    if (g0 >= 0.0) return ta;
+    dfo_state at = *s;
+    at.t = ta;
+    ramp_gap_ctx g = {C, &at, side};
+    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+}
+
 /* The breakaway inside [ta, tb], or INFINITY. It is computed once per stick phase, at its first
  * step, and again only when the inputs change the static force or the limit. */
 static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
+    if (C->ramp) return ramp_breakaway(C, s, ta, tb, dir);
     if (!breakaway_known(C, s)) {
         const double C0 = C->L.F_ext - C->M->p.k * s->X;
         s->stick_C = C0;
@@ -528,11 +588,12 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->switch_ctx = NULL;
     C->M = M;
     C->rules = rules_of(M);
+    C->ramp = in->ramp ? in : NULL;
     dfo_loads_init(&C->L, M, in);
     C->friction = C->L.Fb > 0.0;  /* Fb >= mu_k N */
     /* the stuck fast path steps whole grid steps of the scheme's own kind: off where a stiff grid
-     * hands the steps to the consistent test */
-    C->skip_stuck = C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h);
+     * hands the steps to the consistent test, and while the inputs vary */
+    C->skip_stuck = C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h) && !C->ramp;
     C->err = DFO_OK;
     C->t_grid = NAN;
     C->P_grid = 0.0;
@@ -668,6 +729,10 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
         }
         if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
         C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
+        if (C.ramp) { /* varying inputs: the loads of this step are those at its end (where Bossak reads them) */
+            dfo_loads_at(&C.L, M, C.ramp, t_end);
+            C.friction = C.L.Fb > 0.0;
+        }
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
         /* An overflow is caught within 16 grid steps and at the end of the call (the friction LCP
@@ -710,7 +775,7 @@ static double state_excitation(const dfo_model *M, const dfo_state *s)
 double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
 {
     dfo_loads L;
-    dfo_loads_init(&L, M, in);
+    dfo_loads_at(&L, M, in, s->t);
     if (!(L.Fb > 0.0)) return 0.0;
     if (s->mode != 0) return -s->mode * L.muk_N;
     return dfo_stick_force(&L, dfo_static_force(M->p.k, &L, state_excitation(M, s), s->X));
@@ -720,8 +785,8 @@ void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inpu
 {
     if (M->p.scheme == DFO_SCHEME_EXACT || s->mode == 0) return;
     dfo_loads a, b;
-    dfo_loads_init(&a, M, old_in);
-    dfo_loads_init(&b, M, new_in);
+    dfo_loads_at(&a, M, old_in, s->t);
+    dfo_loads_at(&b, M, new_in, s->t);
     const double dF = (b.F_ext - a.F_ext) - s->mode * (b.muk_N - a.muk_N);
     if (dF == 0.0) return;
     s->A += dF / M->p.m;
@@ -732,12 +797,38 @@ double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_stat
 {
     step_ctx C;
     make_ctx(&C, M, in);
+    if (C.ramp) {
+        dfo_loads_at(&C.L, M, in, s->t);
+        C.friction = C.L.Fb > 0.0;
+    }
     if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t, phi) */
         C.t_grid = s->t;
         C.P_grid = dfo_exact_excitation(M, s->t);
     }
     return accel_of(&C, s, s->t, s->F);
+}
+
+double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
+{
+    step_ctx C;
+    make_ctx(&C, M, in);
+    dfo_loads_at(&C.L, M, in, s->t);
+    C.friction = C.L.Fb > 0.0;
+    if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
+    if (M->p.scheme == DFO_SCHEME_EXACT) {
+        C.t_grid = s->t;
+        C.P_grid = dfo_exact_excitation(M, s->t);
+    }
+    /* the rate of the acceleration in the current mode (jerk_of, with the state's own friction force) */
+    const dfo_model *Mm = C.M;
+    double j = dfo_excitation_rate(Mm, s->t) - Mm->p.k * s->V;
+    if (Mm->damped || Mm->p.c != 0.0) j -= Mm->p.c * accel_of(&C, s, s->t, s->F);
+    double dF, dN;
+    dfo_input_rates(Mm, in, s->t, &dF, &dN);
+    j += dF;
+    if (C.friction) j -= s->mode * Mm->mu_k * dN;
+    return j / Mm->p.m;
 }
 
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)

@@ -103,7 +103,10 @@ double dfo_snap_tolerance(const dfo_model *M, double t);
  * s->t) that t_target snaps to, else t_target itself. */
 double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
 
-/* Advance to t_target > s->t, with the inputs held constant. on_switch may be NULL.
+/* Advance to t_target > s->t, with the inputs held constant, or with in->ramp varying as their
+ * polynomials: every internal step (and sub-step of the located scheme) then takes the loads at its
+ * end, and a stick phase's breakaway is the root of the varying static force (second order). The
+ * exact scheme does not take a ramp (the caller refuses it). on_switch may be NULL.
  * Contract: on DFO_OK, s->t is exactly dfo_snap_target(M, s_before, t_target): t_target itself or
  * the grid point it snapped to (the caller keeps and reports its own time). Everything after a
  * snap is exactly as if the grid point had been requested (same steps, same excitation cache,
@@ -129,6 +132,10 @@ void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inpu
 /* Physical acceleration at the current state (0 while stuck for the schemes whose stuck block is
  * at rest: consistent and located). */
 double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
+
+/* The time derivative of the physical acceleration at the current state (0 while stuck, as
+ * dfo_acceleration), from the time derivative of the equation of motion with the inputs' rates. */
+double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
 
 /* Share of the observed time spent stuck (0 before the window opens). */
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s);

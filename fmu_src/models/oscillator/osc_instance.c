@@ -168,6 +168,7 @@ static void prepare(osc_values *v, double start_time)
     sens_reset(&v->s);
     v->effects = dfo_effects(&v->M, &v->u);
     v->u_used = v->u;
+    v->t_switch = -INFINITY;
 }
 
 /* Values of computed variables need the started model; during initialisation it is derived from
@@ -491,6 +492,7 @@ static void on_switch(void *ctx, double t, double x, int from, int to)
     osc_instance *in = (osc_instance *)ctx;
     static const char *const names[3] = {"backward slip", "stick", "forward slip"};
     in->lc.switched = 1;
+    in->v.t_switch = t;
     dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: %s -> %s at x = %.17g.", t, names[from + 1],
                  names[to + 1], x);
 }
@@ -509,6 +511,31 @@ static dfo_status advance_to_switch(osc_instance *in, double t_target)
         if (st != DFO_OK || in->lc.switched || t_next == t_target) return st;
     }
     return DFO_OK;
+}
+
+/* After a step with input derivatives the inputs hold the values their polynomials reached at its
+ * end (the state's time); the derivatives are spent (the next step holds the inputs unless the
+ * host sets derivatives again). */
+static void end_ramp(osc_values *v)
+{
+    if (!v->u.ramp) return;
+    dfo_inputs w;
+    dfo_inputs_at(&v->u, v->s.t, &w);
+    v->u = w;
+}
+
+/* The exact scheme does not take input derivatives (its closed form is of held inputs). */
+static const char *ramped_inputs(const dfo_inputs *u)
+{
+    const int F = u->F_ext_d[0] != 0.0 || u->F_ext_d[1] != 0.0, N = u->N_ext_d[0] != 0.0 || u->N_ext_d[1] != 0.0;
+    return F && N ? "F_ext and N_ext" : F ? "F_ext" : "N_ext";
+}
+
+static dfo_inst_status ramp_refused(osc_instance *in, const char *fn)
+{
+    return dfo_inst_fail(&in->lc, "%s: input derivatives of %s are not supported with scheme exact (its closed "
+                         "form holds the inputs over the step): set them to 0, or choose scheme paper, consistent or "
+                         "located.", fn, ramped_inputs(&in->v.u));
 }
 
 /* A failed step: the outputs stay those of the last good state, the instance is in error. */
@@ -534,14 +561,15 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
+    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
     const dfo_state before = v->s;
     if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
     dfo_status st;
     if (flags & DFO_STEP_STOP_AT_SWITCH) {
         st = advance_to_switch(in, t_target);
     } else {
-        const int events = in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS];
-        st = dfo_advance(&v->M, &v->u, &v->s, t_target, events ? on_switch : NULL, in);
+        /* the switches are noted (their time: output derivatives do not exist at one), and logged */
+        st = dfo_advance(&v->M, &v->u, &v->s, t_target, on_switch, in);
     }
     if (st != DFO_OK) {
         const dfo_state failed = v->s;
@@ -552,6 +580,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     const double snap = dfo_snap(v->M.p.h, t_target);
     const int early = (flags & DFO_STEP_STOP_AT_SWITCH) && in->lc.switched && v->s.t < t_target - snap;
     in->lc.run.time = early ? v->s.t : t_target;
+    end_ramp(v);
     v->u_used = v->u;
     if (t_reached) *t_reached = in->lc.run.time;
     return DFO_INST_OK;
@@ -610,30 +639,33 @@ static int land(const osc_values *v, const dfo_state *start, const switch_rec *r
     return 1;
 }
 
-dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
-                                        const dfo_event_opts *opt, dfo_step_result *res)
+/* One stretch of a step with events, from the current state (the host's time) to t_end: the whole
+ * step, or (input points) one internal step of it, `last` when t_end is the step's target. Returns
+ * 1 when the step is over (ended early at a switch, reached its target, or failed: *st, res), 0
+ * when a stretch that is not the last reached t_end. A switch on the end of a stretch that is not
+ * the last is one inside the step. */
+static int events_stretch(osc_instance *in, const char *fn, double t_end, int last, const dfo_event_opts *opt,
+                          dfo_step_result *res, dfo_inst_status *st_out)
 {
-    osc_instance *in = osc(lc);
     osc_values *v = &in->v;
-    dfo_inst_status done;
-    double t_target = 0.0;
-    in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
-    if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
-    if (!same_inputs(&v->u, &v->u_used)) {
-        dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
-        v->u_used = v->u; /* (the state now belongs to them) */
-    }
     const dfo_state start = v->s;
     const double t_start = in->lc.run.time;
     const int events_logged = in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS];
     double t_after = -INFINITY;
+    *st_out = DFO_INST_OK;
     for (;;) {
         switch_rec r = {t_after, 0, 0, 0, 0, 0, 0.0};
         dfo_state w = start;
-        const dfo_status st = dfo_advance(&v->M, &v->u, &w, t_target, record_switch, &r);
-        if (st != DFO_OK) return step_failed(in, fn, &start, &w, st);
+        const dfo_status st = dfo_advance(&v->M, &v->u, &w, t_end, record_switch, &r);
+        if (st != DFO_OK) {
+            *st_out = step_failed(in, fn, &start, &w, st);
+            return 1;
+        }
         dfo_state at;
-        if (r.found && r.ts < w.t && land(v, &start, &r, w.t, &at)) {
+        /* in a stretch that is one internal step, a switch not landed on inside it is on its end
+         * (the paper and consistent schemes switch on grid points, reported to rounding) */
+        const int inside = r.found && ((r.ts < w.t && land(v, &start, &r, w.t, &at)) || (!last && (at = w, 1)));
+        if (inside) {
             /* a switch inside the step: the state at it is readable during the intermediate update */
             int stop = opt->early_return && !opt->intermediate;
             if (opt->intermediate) {
@@ -644,6 +676,8 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
             if (stop) {
                 v->s = at;
                 in->lc.run.time = at.t;
+                v->t_switch = at.t;
+                end_ramp(v);
                 v->u_used = v->u;
                 in->lc.run.event_pending = opt->event_mode;
                 in->lc.run.event_from = r.from;
@@ -651,14 +685,16 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
                 res->event = opt->event_mode;
                 res->t_reached = at.t;
                 if (events_logged) on_switch(in, at.t, at.X, r.from, r.to);
-                return DFO_INST_OK;
+                return 1;
             }
             v->s = start;
             in->lc.run.time = t_start;
             t_after = r.ts;
-            continue;
+            if (at.t < w.t) continue;
+            r.found = 0; /* the switch on the end of this stretch has been reported */
         }
-        /* no switch left inside: the plain step's end. A switch on the communication point itself
+        const int end_switch = inside || (r.found && last);
+        /* no switch left inside: the stretch's end. A switch on the communication point itself
          * (the paper and consistent schemes switch on grid points) is an event there. */
         if (r.found && opt->event_mode) {
             in->lc.run.event_pending = 1;
@@ -667,18 +703,90 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         }
         if (r.found && opt->intermediate) {
             v->s = w;
-            in->lc.run.time = t_target;
-            (void)opt->intermediate(opt->ctx, t_target, 0, 0);
+            in->lc.run.time = t_end;
+            (void)opt->intermediate(opt->ctx, t_end, 0, 0);
         }
         if (events_logged) {
             dfo_state again = start;
-            (void)dfo_advance(&v->M, &v->u, &again, t_target, on_switch, in);
+            (void)dfo_advance(&v->M, &v->u, &again, t_end, on_switch, in);
         }
         v->s = w;
-        in->lc.run.time = t_target;
+        in->lc.run.time = t_end;
+        if (end_switch && (r.found || at.t == w.t)) v->t_switch = w.t;
+        if (!last) return 0;
+        end_ramp(v);
         v->u_used = v->u;
-        res->t_reached = t_target;
-        return DFO_INST_OK;
+        res->t_reached = t_end;
+        return 1;
+    }
+}
+
+/* An input point (FMI 3.0 intermediate update of inputs) at the current state, inside a step of
+ * the Bossak schemes: the host may set the inputs declared intermediateUpdate="true", which then
+ * hold from here on (an input set here loses its derivatives; the others keep their polynomials).
+ * Returns whether the host asked for an early return (honoured with early return allowed). */
+static int input_point(osc_instance *in, const dfo_event_opts *opt)
+{
+    osc_values *v = &in->v;
+    const double t = v->s.t;
+    if (v->u.ramp) { /* the polynomials re-anchored at t: their values there, the derivatives' at t */
+        const double tau = t - v->u.t_d;
+        dfo_inputs w;
+        dfo_inputs_at(&v->u, t, &w);
+        w.F_ext_d[0] = v->u.F_ext_d[0] + v->u.F_ext_d[1] * tau;
+        w.N_ext_d[0] = v->u.N_ext_d[0] + v->u.N_ext_d[1] * tau;
+        w.F_ext_d[1] = v->u.F_ext_d[1];
+        w.N_ext_d[1] = v->u.N_ext_d[1];
+        w.t_d = t;
+        w.ramp = 1;
+        v->u = v->u_used = w;
+    }
+    const dfo_inputs before = v->u;
+    in->lc.run.time = t;
+    const int stop = opt->intermediate(opt->ctx, t, opt->early_return, 1) && opt->early_return;
+    if (v->u.ramp) {
+        if (v->u.F_ext != before.F_ext) v->u.F_ext_d[0] = v->u.F_ext_d[1] = 0.0;
+        if (v->u.N_ext != before.N_ext) v->u.N_ext_d[0] = v->u.N_ext_d[1] = 0.0;
+        v->u.ramp = v->u.F_ext_d[0] != 0.0 || v->u.F_ext_d[1] != 0.0 || v->u.N_ext_d[0] != 0.0 ||
+                    v->u.N_ext_d[1] != 0.0;
+    }
+    if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
+    v->u_used = v->u;
+    return stop;
+}
+
+dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
+                                        const dfo_event_opts *opt, dfo_step_result *res)
+{
+    osc_instance *in = osc(lc);
+    osc_values *v = &in->v;
+    dfo_inst_status done;
+    double t_target = 0.0;
+    in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
+    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
+    if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
+    if (!same_inputs(&v->u, &v->u_used)) {
+        dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
+        v->u_used = v->u; /* (the state now belongs to them) */
+    }
+    /* input points: the end of every internal step before the target (the exact scheme has none) */
+    const int points = opt->input_points && opt->intermediate && v->M.p.scheme != DFO_SCHEME_EXACT;
+    const double h = v->M.p.h, snap = dfo_snap(h, t_target);
+    for (;;) {
+        double t_end = t_target;
+        if (points) {
+            const double grid = v->s.t0 + (double)(v->s.n + 1) * h;
+            if (grid < t_target - snap) t_end = grid;
+        }
+        dfo_inst_status st;
+        if (events_stretch(in, fn, t_end, t_end == t_target, opt, res, &st)) return st;
+        if (input_point(in, opt)) {
+            end_ramp(v);
+            v->u_used = v->u;
+            res->early = 1;
+            res->t_reached = in->lc.run.time;
+            return DFO_INST_OK;
+        }
     }
 }
 
@@ -750,7 +858,11 @@ dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void
     return DFO_INST_OK;
 }
 
-static int finite_inputs(const dfo_inputs *u) { return isfinite(u->F_ext) && isfinite(u->N_ext); }
+static int finite_inputs(const dfo_inputs *u)
+{
+    return isfinite(u->F_ext) && isfinite(u->N_ext) && isfinite(u->F_ext_d[0]) && isfinite(u->F_ext_d[1]) &&
+           isfinite(u->N_ext_d[0]) && isfinite(u->N_ext_d[1]) && isfinite(u->t_d);
+}
 
 /* A deserialised state must describe a simulation this FMU could have reached. */
 static const char *implausible(const dfo_run *r, const osc_values *v)
@@ -766,6 +878,8 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
     if (why) return why;
     if (dfo_check_params(&v->p)) return "the observation window is empty";
     if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used)) return "an input is not finite";
+    if (v->u_used.ramp || (v->u.ramp != 0 && v->u.ramp != 1)) return "the input derivatives are invalid";
+    if (isnan(v->t_switch)) return "the time of the last switch is not a number";
     if (v->effects < 0 || (v->effects & ~DFO_MD_EFFECTS_ALL)) return "the effects are invalid";
     const dfo_state *s = &v->s;
     if (!isfinite(s->t) || !isfinite(s->t0) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) ||
@@ -795,35 +909,193 @@ dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const un
     return store_state(osc(lc), fn, state, &run, &v);
 }
 
-/* ---- coupling at second order (core/instance.h) ---- */
+/* ---- coupling at second order (core/instance.h) ----------------------------------------------
+ *
+ * Input derivatives: F_ext and N_ext, orders 1 and 2, for the next step (the Bossak schemes take the
+ * input polynomial at every internal step; the exact scheme refuses nonzero ones). Output
+ * derivatives: x (order 1 v, order 2 a) and v (order 1 a, order 2 da/dt), none at a switch on the
+ * current time (left and right limits differ). Directional and adjoint derivatives: of the outputs
+ * with respect to F_ext, N_ext at the current point, the direct feed-through of a and F_friction by
+ * mode (x, v and the rest: 0). */
 
-int dfo_inst_max_input_order(void) { return 0; }
-int dfo_inst_max_output_order(void) { return 0; }
+#define MAX_INPUT_ORDER 2
+
+int dfo_inst_max_input_order(void) { return DFO_CAN_INTERPOLATE_INPUTS ? MAX_INPUT_ORDER : 0; }
+int dfo_inst_max_output_order(void) { return DFO_MAX_OUTPUT_DERIVATIVE_ORDER; }
+
+/* The derivative slots of a real input (NULL for any other variable). */
+static double *input_derivatives(osc_values *v, const dfo_var_info *var)
+{
+    if (var->vr == VR_F_ext) return v->u.F_ext_d;
+    if (var->vr == VR_N_ext) return v->u.N_ext_d;
+    return NULL;
+}
 
 dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
                                                const int order[], const double value[])
 {
-    (void)vr; (void)nvr; (void)order; (void)value;
-    return dfo_inst_fail(lc, "%s: input derivatives are not supported (canInterpolateInputs=false).", fn);
+    osc_instance *in = osc(lc);
+    osc_values *v = &in->v;
+    const int max_order = dfo_inst_max_input_order();
+    for (size_t i = 0; i < nvr; i++) {
+        const dfo_var_info *var = dfo_find_var(vr[i]);
+        if (!var) return dfo_inst_fail(lc, "%s: unknown value reference %u.", fn, vr[i]);
+        if (var->causality != DFO_INPUT || var->type != DFO_REAL || !input_derivatives(v, var))
+            return dfo_inst_fail(lc, "%s: variable %s (value reference %u) is not a real input: only the inputs "
+                                 "F_ext and N_ext take derivatives.", fn, var->name, vr[i]);
+        if (order[i] < 1 || order[i] > max_order)
+            return dfo_inst_fail(lc, "%s: invalid order %d of the derivative of %s (value reference %u); valid range: "
+                                 "1 to %d.", fn, order[i], var->name, vr[i], max_order);
+        if (!isfinite(value[i]))
+            return dfo_inst_fail(lc, "%s: invalid value %.17g of the order-%d derivative of %s (value reference %u); "
+                                 "valid range: finite.", fn, value[i], order[i], var->name, vr[i]);
+        if (value[i] != 0.0 && v->p.scheme == DFO_SCHEME_EXACT)
+            return dfo_inst_fail(lc, "%s: input derivatives of %s (value reference %u) are not supported with scheme "
+                                 "exact (its closed form holds the inputs over the step): set them to 0, or choose "
+                                 "scheme paper, consistent or located.", fn, var->name, vr[i]);
+    }
+    const double t_now = (lc->run.phase & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT)) ? lc->run.start_time
+                                                                                      : dfo_inst_time(lc);
+    if (v->u.ramp && v->u.t_d != t_now) { /* derivatives of an earlier point (not stepped): forgotten */
+        v->u.F_ext_d[0] = v->u.F_ext_d[1] = v->u.N_ext_d[0] = v->u.N_ext_d[1] = 0.0;
+        v->u.ramp = 0;
+    }
+    for (size_t i = 0; i < nvr; i++) {
+        const dfo_var_info *var = dfo_find_var(vr[i]);
+        input_derivatives(v, var)[order[i] - 1] = value[i];
+        /* a nonzero derivative connects the input (its value is then read, 0 until set) */
+        if (value[i] != 0.0) *(int *)((char *)&v->u + var->set_offset) = 1;
+    }
+    v->u.t_d = t_now;
+    v->u.ramp = v->u.F_ext_d[0] != 0.0 || v->u.F_ext_d[1] != 0.0 || v->u.N_ext_d[0] != 0.0 || v->u.N_ext_d[1] != 0.0;
+    return DFO_INST_OK;
+}
+
+/* The step ended on a switch (left and right limits of the acceleration differ at the current time). */
+static int at_switch(const osc_instance *in)
+{
+    return in->lc.run.event_pending || in->v.t_switch == in->v.s.t;
 }
 
 dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
                                                 size_t nvr, const int order[], double value[])
 {
-    (void)vr; (void)nvr; (void)order; (void)value;
-    return dfo_inst_fail(lc, "%s: output derivatives are not supported (maxOutputDerivativeOrder=0).", fn);
+    osc_instance *in = osc(lc);
+    const osc_values *v = &in->v;
+    const int max_order = dfo_inst_max_output_order();
+    for (size_t i = 0; i < nvr; i++) {
+        const dfo_var_info *var = dfo_find_var(vr[i]);
+        if (!var) return dfo_inst_fail(lc, "%s: unknown value reference %u.", fn, vr[i]);
+        if (var->home != DFO_COMPUTED || (var->id != DFO_OUT_x && var->id != DFO_OUT_v))
+            return dfo_inst_fail(lc, "%s: no output derivative for %s (value reference %u): only the outputs x and v "
+                                 "have time derivatives.", fn, var->name, vr[i]);
+        if (order[i] < 1 || order[i] > max_order)
+            return dfo_inst_fail(lc, "%s: invalid order %d of the derivative of %s (value reference %u); valid range: "
+                                 "1 to %d.", fn, order[i], var->name, vr[i], max_order);
+        const int k = order[i] + (var->id == DFO_OUT_v); /* the order of the derivative of x */
+        if (k == 1) {
+            value[i] = v->s.V;
+            continue;
+        }
+        if (at_switch(in))
+            return dfo_inst_fail(lc, "%s: the order-%d derivative of %s (value reference %u) does not exist at t = "
+                                 "%.17g: the step ended on a stick/slip switch, where the acceleration jumps (its left "
+                                 "and right limits differ).", fn, order[i], var->name, vr[i], v->s.t);
+        if (k == 2) {
+            value[i] = acceleration_now(v);
+        } else {
+            dfo_state s = v->s;
+            s.F = friction_now(v);
+            value[i] = dfo_jerk(&v->M, &v->u, &s);
+        }
+        if (!isfinite(value[i]))
+            return dfo_inst_fail(lc, "%s: the order-%d derivative of %s (value reference %u) is not representable in "
+                                 "double precision (overflow).", fn, order[i], var->name, vr[i]);
+    }
+    return DFO_INST_OK;
+}
+
+/* d output / d input at the current point (the direct feed-through; a pending event's left limit,
+ * mode event_from). out: the output's id, input: the input's value reference. */
+static double feed_through(const osc_values *v, const dfo_run *r, int out, unsigned int input)
+{
+    if (out != DFO_OUT_a && out != DFO_OUT_F_friction) return 0.0;
+    const dfo_model *M = &v->M;
+    dfo_inputs u;
+    dfo_inputs_at(&v->u, v->s.t, &u);
+    dfo_loads L;
+    dfo_loads_init(&L, M, &u);
+    const double N_sum = M->p.N + u.N_ext;
+    dfo_state s = r->event_pending ? left_limit(v, r->event_from) : v->s;
+    double dF = 0.0, dFr = 0.0; /* d friction / d F_ext, d friction / d N_ext */
+    int rests = 0;
+    if (L.Fb > 0.0 && s.mode == 0) {
+        /* stuck: the friction holds the static force, or sits on the limit beyond it */
+        const double S = -dfo_friction_force(M, &u, &s); /* the static force, clamped to the limit */
+        if (fabs(S) < L.Fb) dF = -1.0;
+        else dFr = N_sum > 0.0 ? -dfo_sign(S) * M->mu_b : 0.0;
+        rests = M->p.scheme != DFO_SCHEME_PAPER;
+    } else if (s.mode != 0 && (L.Fb > 0.0 || N_sum > 0.0)) {
+        dFr = N_sum > 0.0 ? -s.mode * M->mu_k : 0.0;
+    }
+    const int force = input == VR_F_ext;
+    if (out == DFO_OUT_F_friction) return force ? dF : dFr;
+    if (rests) return 0.0;
+    return ((force ? 1.0 : 0.0) + (force ? dF : dFr)) / M->p.m;
+}
+
+/* The knowns (inputs) and unknowns (real outputs) of a directional derivative, checked. */
+static int check_partials(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                          const unsigned int known[], size_t nk)
+{
+    for (size_t i = 0; i < nu; i++) {
+        const dfo_var_info *var = dfo_find_var(unknown[i]);
+        if (!var || var->causality != DFO_OUTPUT || var->type != DFO_REAL) {
+            dfo_inst_fail(lc, "%s: unknown %s (value reference %u) is not a real output: directional derivatives are "
+                          "of the outputs x, v, a, F_friction and the other real outputs.", fn,
+                          var ? var->name : "?", unknown[i]);
+            return 0;
+        }
+    }
+    for (size_t j = 0; j < nk; j++) {
+        const dfo_var_info *var = dfo_find_var(known[j]);
+        if (!var || var->causality != DFO_INPUT || var->type != DFO_REAL) {
+            dfo_inst_fail(lc, "%s: known %s (value reference %u) is not an input: directional derivatives are with "
+                          "respect to the inputs F_ext and N_ext.", fn, var ? var->name : "?", known[j]);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static dfo_inst_status partials(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                const unsigned int known[], size_t nk, const double seed[], double sensitivity[],
+                                int adjoint)
+{
+    if (!check_partials(lc, fn, unknown, nu, known, nk)) return DFO_INST_ERROR;
+    osc_instance *in = osc(lc);
+    osc_values tmp;
+    const osc_values *v = computed(in, &tmp);
+    const size_t n_out = adjoint ? nk : nu;
+    for (size_t o = 0; o < n_out; o++) sensitivity[o] = 0.0;
+    for (size_t i = 0; i < nu; i++)
+        for (size_t j = 0; j < nk; j++) {
+            const double J = feed_through(v, &lc->run, dfo_find_var(unknown[i])->id, known[j]);
+            if (J == 0.0) continue;
+            if (adjoint) sensitivity[j] += J * seed[i];
+            else sensitivity[i] += J * seed[j];
+        }
+    return DFO_INST_OK;
 }
 
 dfo_inst_status dfo_inst_directional(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
                                      const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
 {
-    (void)unknown; (void)nu; (void)known; (void)nk; (void)seed; (void)sensitivity;
-    return dfo_inst_fail(lc, "%s: directional derivatives are not provided.", fn);
+    return partials(lc, fn, unknown, nu, known, nk, seed, sensitivity, 0);
 }
 
 dfo_inst_status dfo_inst_adjoint(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
                                  const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
 {
-    (void)unknown; (void)nu; (void)known; (void)nk; (void)seed; (void)sensitivity;
-    return dfo_inst_fail(lc, "%s: adjoint derivatives are not provided.", fn);
+    return partials(lc, fn, unknown, nu, known, nk, seed, sensitivity, 1);
 }

@@ -16,6 +16,7 @@ typedef struct {
     dfo_inputs u_used;        /* the inputs of the last step (or of initialisation) */
     dfo_model M;
     dfo_state s;
+    double t_switch;          /* the time of the last stick/slip switch a step met (-inf: none) */
     int effects;
 } osc_values;
 

@@ -72,6 +72,39 @@ void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in)
     dfo_loads_set(L, dfo_external_force(M, in), dfo_normal_force(M, in), M->mu_k, M->mu_b);
 }
 
+void dfo_inputs_at(const dfo_inputs *u, double t, dfo_inputs *out)
+{
+    *out = *u;
+    if (!u->ramp) return;
+    const double tau = t - u->t_d;
+    out->F_ext = u->F_ext + (u->F_ext_d[0] + 0.5 * u->F_ext_d[1] * tau) * tau;
+    out->N_ext = u->N_ext + (u->N_ext_d[0] + 0.5 * u->N_ext_d[1] * tau) * tau;
+    out->F_ext_d[0] = out->F_ext_d[1] = out->N_ext_d[0] = out->N_ext_d[1] = 0.0;
+    out->ramp = 0;
+}
+
+void dfo_loads_at(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t)
+{
+    if (!u->ramp) {
+        dfo_loads_init(L, M, u);
+        return;
+    }
+    dfo_inputs w;
+    dfo_inputs_at(u, t, &w);
+    dfo_loads_init(L, M, &w);
+}
+
+void dfo_input_rates(const dfo_model *M, const dfo_inputs *u, double t, double *dF_ext, double *dN)
+{
+    *dF_ext = *dN = 0.0;
+    if (!u->ramp) return;
+    const double tau = t - u->t_d;
+    if (u->F_ext_set) *dF_ext = u->F_ext_d[0] + u->F_ext_d[1] * tau;
+    dfo_inputs w;
+    dfo_inputs_at(u, t, &w);
+    if (u->N_ext_set && M->p.N + w.N_ext > 0.0) *dN = u->N_ext_d[0] + u->N_ext_d[1] * tau;
+}
+
 int dfo_effects(const dfo_model *M, const dfo_inputs *u)
 {
     int e = 0;

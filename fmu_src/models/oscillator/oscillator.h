@@ -31,10 +31,17 @@ typedef struct {
 } dfo_params;
 
 /* Co-simulation inputs, held constant over a communication step. An input never set is never read:
- * each input X has a flag X_set, raised when a host sets it. */
+ * each input X has a flag X_set, raised when a host sets it (or a nonzero derivative of it).
+ * Input derivatives (FMI 2.0 SetRealInputDerivatives), for the next step only: X_d[0], X_d[1] are
+ * the first and second time derivatives of X at t_d, the input over the step being its Taylor
+ * polynomial X + X_d[0] (t - t_d) + X_d[1] (t - t_d)^2 / 2. ramp: one of them is nonzero; without
+ * it no derivative is read (and every number is that of held inputs). */
 typedef struct {
     double F_ext, N_ext;
+    double F_ext_d[2], N_ext_d[2];
+    double t_d;
     int F_ext_set, N_ext_set;
+    int ramp;
 } dfo_inputs;
 
 /* Bits of the "effects" calculated parameter: what a run simulates. */
@@ -92,8 +99,16 @@ static inline dfo_harmonic dfo_model_excitation(const dfo_model *M)
     return H;
 }
 
-/* The loads of the friction rules (friction.h) under these inputs. */
+/* The loads of the friction rules (friction.h) under these inputs (their values, derivatives not read). */
 void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
+
+/* The inputs at time t: with a ramp its polynomials' values there (out has no ramp), else *u. */
+void dfo_inputs_at(const dfo_inputs *u, double t, dfo_inputs *out);
+/* The loads at time t (dfo_loads_init of dfo_inputs_at). */
+void dfo_loads_at(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t);
+/* The time derivatives at t of the external force and of the normal force used (0 where that is
+ * max(N + N_ext, 0) = 0, and without a ramp). */
+void dfo_input_rates(const dfo_model *M, const dfo_inputs *u, double t, double *dF_ext, double *dN);
 
 /* The effects bitmask for these parameters and inputs. */
 int dfo_effects(const dfo_model *M, const dfo_inputs *u);
