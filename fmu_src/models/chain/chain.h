@@ -50,6 +50,14 @@ typedef struct {
     const double *F_ext, *N_ext;
 } chain_inputs;
 
+/* Input derivatives over one chain_advance_ramped call: input u of block i then varies as
+ * u(t) = u + u1 (t - t_ref) + u2 (t - t_ref)^2 / 2, u1 = dF_ext[0][i] (dN_ext[0] for N_ext),
+ * u2 = dF_ext[1][i]; a NULL array is 0. */
+typedef struct {
+    const double *dF_ext[2], *dN_ext[2];
+    double t_ref;
+} chain_ramp;
+
 typedef enum {
     CHAIN_OK = 0,
     CHAIN_ERR_LCP = 1,          /* the 2n LCP could not be solved */
@@ -123,6 +131,14 @@ typedef void (*chain_switch_fn)(void *ctx, double t, size_t block, double x, int
  * the state complete there; the next call goes on from there. */
 chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
                            int stop_at_switch, chain_switch_fn on_switch, void *ctx);
+/* The same with the inputs varying as the polynomials of ramp (NULL, or every array NULL: held, the
+ * bits of chain_advance). Each internal step (and, in the located scheme, each trial of a switch's
+ * location) takes the inputs at its end; the fast paths do not apply. */
+chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, chain_state *s,
+                                  double t_target, int stop_at_switch, chain_switch_fn on_switch, void *ctx);
+/* Input k (0 F_ext, 1 N_ext) of block i at time t under the ramp (NULL: held), and its rate. */
+void chain_ramp_value(const chain_inputs *in, const chain_ramp *ramp, int k, size_t i, double t, double *value,
+                      double *rate);
 
 /* Inputs changed at the communication point s->t (from old_in to new_in, held over the next call):
  * each sliding block's A takes the jump of its physical acceleration, (dF_ext_i - mode_i

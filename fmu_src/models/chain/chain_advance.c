@@ -332,15 +332,22 @@ static void rest_forces(chain_model *M, chain_state *s)
 chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *s, double t_target,
                            int stop_at_switch, chain_switch_fn on_switch, void *ctx)
 {
+    return chain_advance_ramped(M, in, NULL, s, t_target, stop_at_switch, on_switch, ctx);
+}
+
+chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, chain_state *s,
+                                  double t_target, int stop_at_switch, chain_switch_fn on_switch, void *ctx)
+{
     const double h = M->h;
-    chain_loads_init(M, in);
+    chain_loads_ramped(M, in, ramp);
     M->err = CHAIN_OK;
     M->switched = 0;
     M->jerk_valid = 0;
     /* a requested time within SNAP_REL_H h of a grid point is that grid point */
     t_target = dfo_grid_snap(s->t0, h, s->n_grid, s->t, t_target, SNAP_REL_H * h);
     /* whole grid steps of the located scheme try the fast path first (step_fast) */
-    const int fast_grid = M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy;
+    const int fast_grid =
+        M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy && !M->ramped;
     fast_ctx F;
     fast_ctx_init(M, &F);
     double g_prev = s->t0 + (double)s->n_grid * h;  /* the grid point n_grid */
@@ -394,10 +401,12 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
         if (stop_at_switch && M->switched) {
             /* the grid index stays that of the last grid point at or before the time reached */
             if (s->t < t_end && t_end == grid) s->n_grid--;
+            chain_loads_at(M, s->t);
             rest_forces(M, s);
             return CHAIN_SWITCHED;  /* (g_prev is not used again) */
         }
     }
+    chain_loads_at(M, s->t);
     rest_forces(M, s);
     for (size_t i = 0; i < M->n; i++)
         if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX))

@@ -7,8 +7,48 @@
 
 #include <string.h>
 
+void chain_ramp_value(const chain_inputs *in, const chain_ramp *ramp, int k, size_t i, double t, double *value,
+                      double *rate)
+{
+    const double *u = in ? (k ? in->N_ext : in->F_ext) : NULL;
+    const double *const *d = ramp ? (k ? ramp->dN_ext : ramp->dF_ext) : NULL;
+    const double u1 = (d && d[0]) ? d[0][i] : 0.0, u2 = (d && d[1]) ? d[1][i] : 0.0;
+    const double tau = ramp ? t - ramp->t_ref : 0.0;
+    *value = (u ? u[i] : 0.0) + tau * (u1 + 0.5 * tau * u2);
+    *rate = u1 + tau * u2;
+}
+
+void chain_loads_ramp(chain_model *M, double t)
+{
+    for (size_t i = 0; i < M->n; i++) {
+        double u, Ne, r;
+        chain_ramp_value(&M->rin, &M->ramp, 0, i, t, &u, &r);
+        chain_ramp_value(&M->rin, &M->ramp, 1, i, t, &Ne, &r);
+        const double N = fmax(M->N[i] + Ne, 0.0);
+        M->u[i] = u;
+        M->mukN[i] = M->mu_k[i] * N;
+        M->Fb[i] = M->mu_b[i] * N;
+        M->rows[i].u = M->u[i];
+        M->rows[i].mukN = M->mukN[i];
+        M->rows[i].Fb = M->Fb[i];
+    }
+}
+
+void chain_loads_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp)
+{
+    chain_loads_init(M, in);
+    if (!ramp || !(ramp->dF_ext[0] || ramp->dF_ext[1] || ramp->dN_ext[0] || ramp->dN_ext[1])) return;
+    const chain_inputs none = {NULL, NULL};
+    M->ramped = 1;
+    M->rin = in ? *in : none;
+    M->ramp = *ramp;
+    M->stuck_ok = 0;
+    chain_loads_ramp(M, ramp->t_ref);
+}
+
 void chain_loads_init(chain_model *M, const chain_inputs *in)
 {
+    M->ramped = 0;
     int all_friction = 1;
     for (size_t i = 0; i < M->n; i++) {
         const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
@@ -138,6 +178,7 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
         const double cw = dfo_cos(M->omega * s->t + M->phi0), sw = dfo_sin(M->omega * s->t + M->phi0);
+        chain_loads_at(M, s->t);  /* ramped inputs: the loads at the state's time */
         chain_mode_accels(M, s, G, M->A0);  /* physical accelerations, in A0 for now */
         for (int k = 0; k < 2; k++)
             if (G->has[k]) M->A0[G->idx[k]] = s->A[G->idx[k]];
@@ -146,6 +187,7 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
             if (!chain_held(M, s, i)) {
                 const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
                 j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
+                if (M->ramped) j += chain_ramp_rate(M, s, i) / M->m[i];
             }
             M->J[i] = j;
         }
@@ -161,6 +203,10 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         M->A0p = M->A0;
     } else {
         M->A0p = s->A;
+    }
+    if (M->ramped) {  /* the loads at the trial's end, and the limits of the trial's modes */
+        chain_loads_ramp(M, s->t + hh);
+        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
     }
     const double c1 = M->kin.c1, pV = M->kin.pred_V, pA = M->kin.pred_A, g1 = M->g1;
     const double *X = s->X, *V = s->V, *A0 = M->A0p;
@@ -181,6 +227,17 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         q[i] = -(M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
                  M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx);
     }
+}
+
+/* Ramped inputs: the rate of block i's applied force from its inputs at the state's time,
+ * u'(t) - mode mu_k N_ext'(t) (the normal force's rate only while N + N_ext > 0). */
+double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i)
+{
+    double u, du, Ne, dNe;
+    chain_ramp_value(&M->rin, &M->ramp, 0, i, s->t, &u, &du);
+    chain_ramp_value(&M->rin, &M->ramp, 1, i, s->t, &Ne, &dNe);
+    const double dN = (M->N[i] + Ne > 0.0) ? dNe : 0.0;
+    return du - (chain_has_friction(M, i) ? s->mode[i] * M->mu_k[i] * dN : 0.0);
 }
 
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant

@@ -35,6 +35,7 @@ static void copy_values(chain_values *dst, const chain_values *src)
     dst->ua = keep.ua;
     dst->ua_used = keep.ua_used;
     dst->scratch = keep.scratch;
+    dst->ud = keep.ud;
     dst->s = keep.s;
     dst->s0 = keep.s0;
     dst->M = keep.M;
@@ -42,6 +43,7 @@ static void copy_values(chain_values *dst, const chain_values *src)
     memcpy(dst->pa, src->pa, (size_t)DFO_NUM_AP * n * sizeof(double));
     memcpy(dst->ua, src->ua, (size_t)DFO_NUM_AI * n * sizeof(double));
     memcpy(dst->ua_used, src->ua_used, (size_t)DFO_NUM_AI * n * sizeof(double));
+    memcpy(dst->ud, src->ud, 2 * (size_t)DFO_NUM_AI * n * sizeof(double));
     chain_state_copy(&dst->s, &src->s);
 }
 
@@ -113,14 +115,16 @@ dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **st
 
 /* ---- serialisation (core/fmu_state.h's format): fixed-size little-endian fields, the same bytes on
  * every platform: n, n_config, the scalar parameters, the input flags, the pending event's block,
- * the arrays, the state, then the run ---- */
+ * the arrays, the input derivatives and the last switch, the state, then the run. The chain's
+ * fields of format version 4 (a body without the input derivatives) are refused by their size. ---- */
 
 static size_t body_size(size_t n)
 {
     const size_t doubles = DFO_NUM_SP + (size_t)DFO_NUM_AP * n + 2 * (size_t)DFO_NUM_AI * n /* params, inputs */
+                           + 2 * (size_t)DFO_NUM_AI * n + 1                                  /* derivatives, sw_t */
                            + 7 + 6 * n;                                                      /* state */
-    const size_t int64s = 3 + 6; /* n, n_config, event_block; the state's counters */
-    const size_t int32s = 2 * (size_t)DFO_NUM_AI + n;
+    const size_t int64s = 3 + 1 + 6; /* n, n_config, event_block; sw_block; the state's counters */
+    const size_t int32s = 2 * (size_t)DFO_NUM_AI + 1 + n; /* the input flags, ud_set, the modes */
     return 8 * doubles + 8 * int64s + 4 * int32s + DFO_STATE_RUN_BYTES;
 }
 
@@ -143,6 +147,10 @@ static void write_body(dfo_cursor *c, const dfo_run *run, const chain_values *v)
     dfo_put_f64s(c, v->pa, (size_t)DFO_NUM_AP * n);
     dfo_put_f64s(c, v->ua, (size_t)DFO_NUM_AI * n);
     dfo_put_f64s(c, v->ua_used, (size_t)DFO_NUM_AI * n);
+    dfo_put_f64s(c, v->ud, 2 * (size_t)DFO_NUM_AI * n);
+    dfo_put_i32(c, v->ud_set);
+    dfo_put_f64(c, v->sw_t);
+    dfo_put_u64(c, (uint64_t)v->sw_block);
     const chain_state *s = &v->s;
     dfo_put_f64(c, s->t0);
     dfo_put_f64(c, s->t);
@@ -180,6 +188,10 @@ static void read_body(dfo_cursor *c, dfo_run *run, chain_values *v)
     dfo_get_f64s(c, v->pa, (size_t)DFO_NUM_AP * n);
     dfo_get_f64s(c, v->ua, (size_t)DFO_NUM_AI * n);
     dfo_get_f64s(c, v->ua_used, (size_t)DFO_NUM_AI * n);
+    dfo_get_f64s(c, v->ud, 2 * (size_t)DFO_NUM_AI * n);
+    v->ud_set = dfo_get_i32(c);
+    v->sw_t = dfo_get_f64(c);
+    v->sw_block = (long long)dfo_get_u64(c);
     chain_state *s = &v->s;
     s->n = n;
     s->t0 = dfo_get_f64(c);
@@ -239,6 +251,10 @@ static const char *implausible(const dfo_run *run, const chain_values *v)
     const char *why = dfo_run_implausible(run, 1);
     if (why) return why;
     if (v->event_block >= n) return "the pending event is invalid";
+    for (size_t i = 0; i < 2 * (size_t)DFO_NUM_AI * n; i++)
+        if (!isfinite(v->ud[i])) return "an input derivative is not finite";
+    if ((v->ud_set != 0 && v->ud_set != 1) || !isfinite(v->sw_t) || v->sw_block < -1 || v->sw_block >= (long long)n)
+        return "the input derivatives' flag or the last switch is invalid";
     for (int j = 0; j < DFO_NUM_AI; j++)
         if ((v->u_set[j] != 0 && v->u_set[j] != 1) || (v->u_set_used[j] != 0 && v->u_set_used[j] != 1))
             return "an input flag is invalid";

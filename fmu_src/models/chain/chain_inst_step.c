@@ -54,11 +54,18 @@ static void take_inputs(chain_values *v)
     v->acc_valid = 0;
 }
 
-static void step_done(chain_instance *in, double t)
+/* The step from t_ref ends at the host's time t: the inputs with derivatives take their values at
+ * the state's time, and those of the step are the ones used. */
+static void step_done(chain_instance *in, double t, double t_ref, const switch_rec *rec)
 {
     chain_values *v = &in->v;
     in->lc.run.time = t;
     v->acc_valid = 0;
+    if (rec->count > 0) {
+        v->sw_t = rec->t;
+        v->sw_block = (long long)rec->block;
+    }
+    chain_inst_ramp_done(v, t_ref);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
 }
@@ -74,13 +81,14 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     chain_state_copy(&v->s0, &v->s);
     take_inputs(v);
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
+    const chain_ramp ramp = chain_inst_ramp_of(v);
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
-    const chain_status st = chain_advance(v->M, &ci, &v->s, t_target, stop, on_switch, &rec);
+    const chain_status st = chain_advance_ramped(v->M, &ci, &ramp, &v->s, t_target, stop, on_switch, &rec);
     if (st != CHAIN_OK && st != CHAIN_SWITCHED) return step_failed(in, fn, st);
     const double snap = dfo_snap(chain_inst_step_h(v), t_target);
     in->lc.switched = rec.count > 0;
-    step_done(in, (st == CHAIN_SWITCHED && v->s.t < t_target - snap) ? v->s.t : t_target);
+    step_done(in, (st == CHAIN_SWITCHED && v->s.t < t_target - snap) ? v->s.t : t_target, ramp.t_ref, &rec);
     if (t_reached) *t_reached = in->lc.run.time;
     return DFO_INST_OK;
 }
@@ -91,6 +99,20 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
  * state complete there, and goes on from it bit for bit as one call would. A switch strictly inside
  * the step is offered to the intermediate update and ends the step early when asked (or always with
  * early return and no callback); one on the communication point is an event there. */
+/* An input point inside the step (opt->input_points): the inputs the host set there hold from the
+ * state's time on (their jump taken as at a step's start); derivatives, if any, end there. */
+static void point_inputs(chain_values *v)
+{
+    const int changed = memcmp(v->u_set, v->u_set_used, sizeof v->u_set) ||
+                        memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double));
+    if (!changed) return;
+    take_inputs(v);
+    memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
+    memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
+    memset(v->ud, 0, 2 * (size_t)DFO_NUM_AI * v->n * sizeof(double));
+    v->ud_set = 0;
+}
+
 dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
                                         const dfo_event_opts *opt, dfo_step_result *res)
 {
@@ -102,36 +124,75 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     chain_state_copy(&v->s0, &v->s);
     take_inputs(v);
     const double t_start = in->lc.run.time;
-    const chain_inputs ci = chain_inst_inputs_of(v, 0);
-    const double snap = dfo_snap(chain_inst_step_h(v), t_target);
+    chain_inputs ci = chain_inst_inputs_of(v, 0);
+    chain_ramp ramp = chain_inst_ramp_of(v);
+    const double t_ref = ramp.t_ref, h = chain_inst_step_h(v);
+    const double snap = dfo_snap(h, t_target);
+    /* input points: every internal step ends on one (its grid point), where the host may set inputs */
+    const int points = opt->input_points && opt->intermediate;
+    if (points) { /* the inputs of the step's start are the used ones (a failed step ends in the error phase) */
+        memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
+        memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
+    }
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     int at_end = 0;
     for (;;) {
         const int before = rec.count;
-        const chain_status st = chain_advance(v->M, &ci, &v->s, t_target, 1, on_switch, &rec);
+        double t_call = t_target;
+        if (points) {
+            const double g = v->s.t0 + (double)(v->s.n_grid + 1) * h;
+            if (g < t_target - snap) t_call = g;
+        }
+        const chain_status st = chain_advance_ramped(v->M, &ci, &ramp, &v->s, t_call, 1, on_switch, &rec);
         if (st != CHAIN_OK && st != CHAIN_SWITCHED) {
             in->lc.run.time = t_start;
             return step_failed(in, fn, st);
         }
-        if (st == CHAIN_OK) break;
-        if (!(v->s.t < t_target - snap)) { /* a switch on the communication point */
-            at_end = rec.count > before;
-            if (v->s.t < t_target) continue;
-            break;
-        }
-        int stop = opt->early_return && !opt->intermediate;
-        if (opt->intermediate) {
+        if (st == CHAIN_OK && t_call == t_target) break;
+        int stop = 0;
+        if (st == CHAIN_OK) { /* an input point */
             in->lc.run.time = v->s.t;
             v->acc_valid = 0;
-            stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 0) && opt->early_return;
+            stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
+            if (!stop) {
+                point_inputs(v);
+                ci = chain_inst_inputs_of(v, 0);
+                ramp = chain_inst_ramp_of(v);
+                ramp.t_ref = t_ref;
+                continue;
+            }
+        } else {
+            if (!(v->s.t < t_target - snap)) { /* a switch on the communication point */
+                at_end = rec.count > before;
+                if (v->s.t < t_target) continue;
+                break;
+            }
+            stop = opt->early_return && !opt->intermediate;
+            if (opt->intermediate) {
+                in->lc.run.time = v->s.t;
+                v->acc_valid = 0;
+                stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 0) && opt->early_return;
+            }
+            /* a switch at the end of an internal step (the paper and consistent schemes): an input
+             * point too */
+            if (!stop && points && v->s.t == t_call && t_call != t_target) {
+                stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
+                if (!stop) {
+                    point_inputs(v);
+                    ci = chain_inst_inputs_of(v, 0);
+                    ramp = chain_inst_ramp_of(v);
+                    ramp.t_ref = t_ref;
+                }
+            }
         }
         if (stop) {
-            step_done(in, v->s.t);
-            in->lc.run.event_pending = opt->event_mode;
+            const int switched = st == CHAIN_SWITCHED;
+            step_done(in, v->s.t, t_ref, &rec);
+            in->lc.run.event_pending = switched && opt->event_mode;
             in->lc.run.event_from = rec.from;
-            v->event_block = rec.block;
+            if (switched) v->event_block = rec.block;
             res->early = 1;
-            res->event = opt->event_mode;
+            res->event = switched && opt->event_mode;
             res->t_reached = in->lc.run.time;
             return DFO_INST_OK;
         }
@@ -142,7 +203,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         v->event_block = rec.block;
         res->event = 1;
     }
-    step_done(in, t_target);
+    step_done(in, t_target, t_ref, &rec);
     if (at_end && opt->intermediate) (void)opt->intermediate(opt->ctx, t_target, 0, 0);
     res->t_reached = t_target;
     return DFO_INST_OK;

@@ -12,14 +12,7 @@
 
 /* ---- the variable table ---------------------------------------------------------------------- */
 
-/* A value reference resolved: the variable and, for an FMI 2.0 element, its index (0-based). */
-typedef struct {
-    const dfo_var_info *var;
-    long elem; /* -1: the whole variable (a scalar, or every element of an array) */
-    char name[48];
-} ref;
-
-static int resolve(const chain_instance *in, unsigned int vr, ref *r)
+static int resolve(const chain_instance *in, unsigned int vr, chain_ref *r)
 {
     const dfo_var_info *var = dfo_find_var(vr);
 #if defined(DFO_CHAIN_FIXED_N)
@@ -50,23 +43,32 @@ static int resolve(const chain_instance *in, unsigned int vr, ref *r)
 }
 
 /* Values a resolved variable holds. */
-static size_t count(const chain_instance *in, const ref *r)
+static size_t count(const chain_instance *in, const chain_ref *r)
 {
     return (r->var->array && r->elem < 0) ? in->v.n : 1;
 }
+
+int chain_inst_lookup_any(const chain_instance *in, const char *fn, unsigned int vr, chain_ref *r)
+{
+    if (resolve(in, vr, r)) return 1;
+    dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
+    return 0;
+}
+
+size_t chain_inst_count(const chain_instance *in, const chain_ref *r) { return count(in, r); }
 
 size_t dfo_inst_n_values(const dfo_lifecycle *lc, const unsigned int vr[], size_t nvr)
 {
     const chain_instance *in = cchn(lc);
     size_t total = 0;
     for (size_t i = 0; i < nvr; i++) {
-        ref r;
+        chain_ref r;
         total += resolve(in, vr[i], &r) ? count(in, &r) : 1;
     }
     return total;
 }
 
-static int lookup(const chain_instance *in, const char *fn, unsigned int vr, dfo_var_type type, ref *r)
+static int lookup(const chain_instance *in, const char *fn, unsigned int vr, dfo_var_type type, chain_ref *r)
 {
     if (!resolve(in, vr, r)) {
         dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
@@ -80,7 +82,7 @@ static int lookup(const chain_instance *in, const char *fn, unsigned int vr, dfo
     return 1;
 }
 
-static int check_value(const chain_instance *in, const char *fn, const ref *r, unsigned int vr, double x)
+static int check_value(const chain_instance *in, const char *fn, const chain_ref *r, unsigned int vr, double x)
 {
     const char *range = dfo_inst_invalid(r->var, x);
     if (!range) return 1;
@@ -90,12 +92,37 @@ static int check_value(const chain_instance *in, const char *fn, const ref *r, u
     return 0;
 }
 
-static int settable(const chain_instance *in, const char *fn, const ref *r, unsigned int vr)
+static int settable(const chain_instance *in, const char *fn, const chain_ref *r, unsigned int vr)
 {
     return dfo_inst_settable(&in->lc, fn, r->var, r->name, vr);
 }
 
 /* ---- outputs --------------------------------------------------------------------------------- */
+
+/* Block i's external force and normal force under the inputs now (used: those of the last step). */
+static void block_inputs(const chain_values *v, int used, size_t i, double *u, double *N)
+{
+    const chain_inputs ci = chain_inst_inputs_of(v, used);
+    *u = ci.F_ext ? ci.F_ext[i] : 0.0;
+    *N = fmax(v->pa[(size_t)DFO_AP_N * v->n + i] + (ci.N_ext ? ci.N_ext[i] : 0.0), 0.0);
+}
+
+double chain_inst_friction_out(const chain_values *v, size_t i)
+{
+    const double F = v->s.F[i];
+    double u0, N0, u1, N1;
+    block_inputs(v, 1, i, &u0, &N0);
+    block_inputs(v, 0, i, &u1, &N1);
+    if (u1 == u0 && N1 == N0) return F;
+    const size_t n = v->n;
+    const double mu_s = v->pa[(size_t)DFO_AP_mu_s * n + i], mu_k = v->pa[(size_t)DFO_AP_chi * n + i] * mu_s;
+    const int mode = v->s.mode[i];
+    if (mode != 0) return 0.0 - mode * (mu_k * N1); /* the kinetic force of the new normal force */
+    const double mu_b = fmax(mu_s, mu_k);
+    if (!(mu_b * N0 > 0.0)) return F; /* not held: no friction before */
+    const double Fb = mu_b * N1;
+    return fmin(fmax(F - (u1 - u0), -Fb), Fb); /* held: takes the change of its external force */
+}
 
 /* A pending event's left limit of the switching block b: its mode before the switch, the friction
  * of that mode (kinetic -from mu_k N; stuck, the static force clamped to the breakaway limit), the
@@ -108,7 +135,7 @@ static void left_limit(const chain_values *v, int event_from, const double *a_ri
     const double m = pa[(size_t)DFO_AP_m * n + b];
     const double mu_s = pa[(size_t)DFO_AP_mu_s * n + b], mu_k = pa[(size_t)DFO_AP_chi * n + b] * mu_s;
     const double N = fmax(pa[(size_t)DFO_AP_N * n + b] + (ci.N_ext ? ci.N_ext[b] : 0.0), 0.0);
-    const double F_right = v->s.F[b];
+    const double F_right = chain_inst_friction_out(v, b);
     const double S = m * a_right[b] - F_right; /* the net applied force (continuous) */
     if (event_from != 0) {
         *F = -(double)event_from * mu_k * N;
@@ -120,7 +147,7 @@ static void left_limit(const chain_values *v, int event_from, const double *a_ri
     }
 }
 
-static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const ref *r, unsigned int vr, double *out,
+static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const chain_ref *r, unsigned int vr, double *out,
                                    int *iout)
 {
     chain_values *v = &in->v;
@@ -154,7 +181,7 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const ref
         case DFO_OUT_x: x = v->s.X[i]; break;
         case DFO_OUT_v: x = v->s.V[i]; break;
         case DFO_OUT_a: x = left ? a_left : v->scratch[i]; break;
-        case DFO_OUT_F_friction: x = left ? F_left : v->s.F[i]; break;
+        case DFO_OUT_F_friction: x = left ? F_left : chain_inst_friction_out(v, i); break;
         case DFO_OUT_mode: iout[i - i0] = left ? run->event_from : v->s.mode[i]; continue;
         default: break;
         }
@@ -175,7 +202,7 @@ static dfo_inst_status get_values(chain_instance *in, const char *fn, const unsi
 {
     size_t k = 0;
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], type, &r)) return DFO_INST_ERROR;
         const size_t c = count(in, &r);
         if (r.var->home == DFO_COMPUTED) {
@@ -210,7 +237,7 @@ dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsig
 {
     chain_instance *in = chn(lc);
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], DFO_BOOLEAN, &r)) return DFO_INST_ERROR;
         value[j] = *chain_inst_stored(&in->v, r.var, 0) != 0.0;
     }
@@ -224,7 +251,7 @@ static dfo_inst_status set_values(chain_instance *in, const char *fn, const unsi
 {
     size_t k = 0;
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], type, &r) || !settable(in, fn, &r, vr[j])) return DFO_INST_ERROR;
         const size_t c = count(in, &r);
         for (size_t i = 0; i < c; i++) {
@@ -235,7 +262,7 @@ static dfo_inst_status set_values(chain_instance *in, const char *fn, const unsi
     }
     k = 0;
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         (void)resolve(in, vr[j], &r);
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) *chain_inst_stored(&in->v, r.var, i0 + i) = value[k + i];
@@ -259,12 +286,12 @@ dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsign
 {
     chain_instance *in = chn(lc);
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], DFO_INTEGER, &r) || !settable(in, fn, &r, vr[j])) return DFO_INST_ERROR;
         if (!check_value(in, fn, &r, vr[j], value[j])) return DFO_INST_ERROR;
     }
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         (void)resolve(in, vr[j], &r);
         *chain_inst_stored(&in->v, r.var, r.elem < 0 ? 0 : (size_t)r.elem) = value[j];
     }
@@ -277,7 +304,7 @@ dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsig
     chain_instance *in = chn(lc);
     (void)value;
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], DFO_BOOLEAN, &r)) return DFO_INST_ERROR;
     }
     return DFO_INST_OK; /* the model has no Boolean variables: lookup has failed on any */
@@ -288,7 +315,7 @@ dfo_inst_status dfo_inst_get_uint64(dfo_lifecycle *lc, const char *fn, const uns
 {
     chain_instance *in = chn(lc);
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], DFO_UINT64, &r)) return DFO_INST_ERROR;
         value[j] = (unsigned long long)(in->lc.run.phase == DFO_PHASE_CONFIG ? in->v.n_config : in->v.n);
     }
@@ -300,7 +327,7 @@ dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const uns
 {
     chain_instance *in = chn(lc);
     for (size_t j = 0; j < n; j++) {
-        ref r;
+        chain_ref r;
         if (!lookup(in, fn, vr[j], DFO_UINT64, &r) || !settable(in, fn, &r, vr[j])) return DFO_INST_ERROR;
         if (value[j] < (unsigned long long)r.var->min || value[j] > (unsigned long long)r.var->max) {
             dfo_inst_fail(&in->lc, "%s: invalid value %llu for %s (value reference %u); valid range: %s.", fn, value[j],

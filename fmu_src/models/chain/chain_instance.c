@@ -59,9 +59,10 @@ void chain_inst_free_arrays(chain_instance *in, chain_values *v)
     release(in, v->ua);
     release(in, v->ua_used);
     release(in, v->scratch);
+    release(in, v->ud);
     chain_state_release(&al, &v->s);
     chain_state_release(&al, &v->s0);
-    v->pa = v->ua = v->ua_used = v->scratch = NULL;
+    v->pa = v->ua = v->ua_used = v->scratch = v->ud = NULL;
 }
 
 int chain_inst_alloc_arrays(chain_instance *in, chain_values *v, size_t n)
@@ -73,9 +74,10 @@ int chain_inst_alloc_arrays(chain_instance *in, chain_values *v, size_t n)
     w.ua = dalloc(in, (size_t)DFO_NUM_AI * n);
     w.ua_used = dalloc(in, (size_t)DFO_NUM_AI * n);
     w.scratch = dalloc(in, n);
+    w.ud = dalloc(in, 2 * (size_t)DFO_NUM_AI * n);
     const int s_ok = chain_state_alloc(&al, n, &w.s);
     const int s0_ok = chain_state_alloc(&al, n, &w.s0);
-    if (!w.pa || !w.ua || !w.ua_used || !w.scratch || !s_ok || !s0_ok) {
+    if (!w.pa || !w.ua || !w.ua_used || !w.scratch || !w.ud || !s_ok || !s0_ok) {
         chain_inst_free_arrays(in, &w);
         return 0;
     }
@@ -83,6 +85,8 @@ int chain_inst_alloc_arrays(chain_instance *in, chain_values *v, size_t n)
     v->ua = w.ua;
     v->ua_used = w.ua_used;
     v->scratch = w.scratch;
+    v->ud = w.ud;
+    v->ud_set = 0;
     v->s = w.s;
     v->s0 = w.s0;
     v->n = n;
@@ -111,6 +115,10 @@ static void array_starts(chain_values *v)
     }
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     for (int j = 0; j < DFO_NUM_AI; j++) v->u_set[j] = v->u_set_used[j] = 0;
+    memset(v->ud, 0, 2 * (size_t)DFO_NUM_AI * v->n * sizeof(double));
+    v->ud_set = 0;
+    v->sw_t = 0.0;
+    v->sw_block = -1;
 }
 
 /* Start values, and the run at its start (phase instantiated). */
@@ -175,6 +183,39 @@ chain_inputs chain_inst_inputs_of(const chain_values *v, int used)
     ci.F_ext = set[DFO_AI_F_ext] ? u + (size_t)DFO_AI_F_ext * v->n : NULL;
     ci.N_ext = set[DFO_AI_N_ext] ? u + (size_t)DFO_AI_N_ext * v->n : NULL;
     return ci;
+}
+
+chain_ramp chain_inst_ramp_of(const chain_values *v)
+{
+    chain_ramp r;
+    memset(&r, 0, sizeof r);
+    r.t_ref = v->s.t;
+    if (!v->ud_set) return r;
+    const size_t n = v->n;
+    for (int k = 0; k < 2; k++) {
+        r.dF_ext[k] = v->ud + ((size_t)k * DFO_NUM_AI + DFO_AI_F_ext) * n;
+        r.dN_ext[k] = v->ud + ((size_t)k * DFO_NUM_AI + DFO_AI_N_ext) * n;
+    }
+    return r;
+}
+
+void chain_inst_ramp_done(chain_values *v, double t_ref)
+{
+    if (!v->ud_set) return;
+    const chain_inputs ci = chain_inst_inputs_of(v, 0);
+    chain_ramp r = chain_inst_ramp_of(v);
+    r.t_ref = t_ref;
+    const size_t n = v->n;
+    double *F = v->ua + (size_t)DFO_AI_F_ext * n, *N = v->ua + (size_t)DFO_AI_N_ext * n;
+    for (size_t i = 0; i < n; i++) {
+        double u, Ne, rate;
+        chain_ramp_value(&ci, &r, 0, i, v->s.t, &u, &rate);
+        chain_ramp_value(&ci, &r, 1, i, v->s.t, &Ne, &rate);
+        F[i] = u;
+        N[i] = Ne;
+    }
+    memset(v->ud, 0, 2 * (size_t)DFO_NUM_AI * n * sizeof(double));
+    v->ud_set = 0;
 }
 
 const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)

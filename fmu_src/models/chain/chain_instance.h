@@ -38,6 +38,13 @@ typedef struct {
     double *ua, *ua_used;       /* array inputs now and of the last step: ua[slot * n + i] */
     int u_set[DFO_NUM_AI];      /* the input has been set (an input never set is never read) */
     int u_set_used[DFO_NUM_AI];
+    /* input derivatives for the next step only (core/instance.h): order k = 1, 2 of input slot j,
+     * element i at ud[((k - 1) DFO_NUM_AI + j) n + i]; ud_set: some of them has been set (else all 0) */
+    double *ud;
+    int ud_set;
+    /* the last stick/slip switch of the run: its time and block (-1: none), for output derivatives */
+    double sw_t;
+    long long sw_block;
     chain_model *M;             /* built at the end of initialisation (NULL before) */
     chain_state s;              /* the state (arrays of n, allocated with the instance) */
     chain_state s0;             /* the state at the start of a step (restored when it fails) */
@@ -70,9 +77,30 @@ chain_params chain_inst_params_of(const chain_values *v);
 double chain_inst_step_h(const chain_values *v);
 /* The inputs now (used: those of the last step); an input never set is NULL (never read). */
 chain_inputs chain_inst_inputs_of(const chain_values *v, int used);
+/* The input derivatives of the next step (NULL arrays when none is set; t_ref: the state's time). */
+chain_ramp chain_inst_ramp_of(const chain_values *v);
+/* After a step with input derivatives from t_ref: the inputs take their polynomials' values at the
+ * state's time, the derivatives are 0 again. */
+void chain_inst_ramp_done(chain_values *v, double t_ref);
 /* Build the model from the parameters and start the state at the start time (NULL on success, else why). */
 const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len);
 /* The model is built and the run started. */
 int chain_inst_started(const chain_instance *in);
+
+/* ---- chain_inst_vars.c ---- */
+/* A value reference resolved: the variable and, for an FMI 2.0 element, its index (0-based). */
+typedef struct {
+    const dfo_var_info *var;
+    long elem; /* -1: the whole variable (a scalar, or every element of an array) */
+    char name[48];
+} chain_ref;
+/* Resolve vr (0, with an error logged naming fn, when unknown). */
+int chain_inst_lookup_any(const chain_instance *in, const char *fn, unsigned int vr, chain_ref *r);
+/* Values a resolved variable holds (n for a whole array). */
+size_t chain_inst_count(const chain_instance *in, const chain_ref *r);
+/* The output F_friction of block i under the current inputs (the state's force, or its response to
+ * inputs set since the last step: a sliding block's kinetic force, a stuck block's held force taking
+ * the change of its external force, clamped to its breakaway limit). */
+double chain_inst_friction_out(const chain_values *v, size_t i);
 
 #endif

@@ -118,6 +118,11 @@ struct chain_model {
     dfo_bossak_kin kin, kinF;   /* the trial's kinematics; a grid step's */
     double cw1, sw1;            /* cos, sin of omega t + phi0 at its end */
     size_t ncand;               /* number of candidates in cand */
+    /* inputs with derivatives (chain_inputs): ramped says the loads follow the time (chain_loads_at),
+     * rin is a copy of the inputs (their arrays the caller's, read during chain_advance only) */
+    int ramped;
+    chain_inputs rin;
+    chain_ramp ramp;
     chain_status err;           /* first error of the current chain_advance */
     int switched;               /* a block switched in the current chain_advance */
 };
@@ -222,8 +227,19 @@ static HOT_INLINE int chain_refactor_row(fast_row *R, size_t i, int hold, double
 }
 
 /* ---- chain_forces.c ---- */
-/* The loads of the inputs into u, mukN, Fb (and the rows' copies); stuck_ok. */
+/* The loads of the inputs into u, mukN, Fb (and the rows' copies); stuck_ok; ramped off. */
 void chain_loads_init(chain_model *M, const chain_inputs *in);
+/* Ramped inputs (chain_advance_ramped): ramped on when ramp has a derivative, the loads at
+ * ramp->t_ref, stuck_ok off. */
+void chain_loads_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp);
+/* Ramped inputs: the loads at time t (u(t), mu_k N(t), mu_b N(t)). */
+COLD_CALL void chain_loads_ramp(chain_model *M, double t);
+/* The loads at time t: a no-op unless the inputs are ramped. */
+static inline void chain_loads_at(chain_model *M, double t)
+{
+    if (M->ramped) chain_loads_ramp(M, t);
+}
+
 /* Write the ghosts' state at the current time into the state arrays. */
 void chain_set_ghosts(chain_model *M, chain_state *s, const span *G);
 /* Net applied force on the span's blocks at the state (excitation, inputs, springs, dampers). */
@@ -245,6 +261,9 @@ void chain_restart(chain_model *M, chain_state *s, const span *G);
 /* The next breakaway of block i, stuck at X with its neighbours where they are (friction.h's
  * closed form; its excitation as a single block's, its static offset u - (K x)_i). */
 double chain_block_breakaway(const chain_model *M, const chain_state *s, size_t i, int *dir);
+
+/* Ramped inputs: the rate of block i's applied force from its inputs at the state's time. */
+double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i);
 
 /* ---- chain_located.c ---- */
 /* One located step from s->t to t_end (length hh, phase cw1, sw1 at its end); fast: step_fast's

@@ -99,7 +99,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
     size_t nsw = 0;
     for (size_t k = 0; k < M->ncand; k++) {
         const size_t i = M->cand[k];
-        if (!immediate && switch_margin(M, s, i) > 0.0) continue;
+        if (!immediate && switch_margin(M, s, i) > 0.0) continue;  /* (at the trial's loads) */
         M->cand[nsw++] = i;
         if (s->mode[i] != 0) {
             /* a slide from rest that cannot move in double precision: held to the step's end */
@@ -108,6 +108,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         }
     }
     M->ncand = nsw;
+    chain_loads_at(M, s->t);  /* ramped inputs: the loads at the switch */
     chain_net_forces(M, s, G, M->S);
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
@@ -133,6 +134,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
  * (friction.h, as the oscillator's); INFINITY when it does not apply. */
 static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, int *dir)
 {
+    if (M->ramped) return INFINITY;  /* the closed form holds for held inputs */
     for (int side = -1; side <= 1; side += 2) {
         if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
         const size_t j = (side < 0) ? i - 1 : i + 1;
