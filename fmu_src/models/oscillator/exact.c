@@ -108,6 +108,11 @@ typedef struct {
     void *switch_ctx;
     long long events;
     double first_span;            /* the span the bounds of a phase's first step are first tried over */
+    /* polynomial inputs (dfo_exact_advance_poly; poly = 0 otherwise): physical, in s = t - q_t0,
+     * F_ext(t) = qF[0] + qF[1] s + qF[2] s^2 / 2 and N(t) = qN[0] + qN[1] s + qN[2] s^2 / 2 (N + N_ext(t) on a
+     * piece where it is > 0, all 0 on a piece where it is <= 0: the normal force max(N + N_ext(t), 0)) */
+    int poly;
+    double q_t0, qF[3], qN[3];
 } ex_ctx;
 
 /* One slip phase from (ta, X, V) in direction s. */
@@ -123,6 +128,10 @@ typedef struct {
     double Cr, Ci;             /* under-damped: the free part is Re[C e^{p tau}], C = hy - i b */
     double gy, gb;             /* near critical: |hy|, |hv + zeta hy| (the free part's bounds without 1 / wd, 1 / wh) */
     double al, be;             /* modal: the free part is al e^{r1 tau} + be e^{r2 tau} */
+    /* polynomial inputs (poly): x = xc + y + xp1 u + xp2 u^2 / 2 (xc + xp1 u + xp2 u^2 / 2 the polynomial
+     * particular solution, y the harmonic motion above), and the normal force n0 + n1 u + n2 u^2 / 2 */
+    int poly;
+    double xp1, xp2, n0, n1, n2;
 } ex_phase;
 
 /* y and its derivatives in tau up to the sixth at tau = u, and the free part's decay factors there. */
@@ -131,6 +140,7 @@ typedef struct {
     double cth, sth; /* cos, sin of the excitation phase theta there */
     double Fr, Fi, Gr, Gi; /* phasor bound: the forced part Q e^{i lambda tau}, the free part C e^{p tau} */
     double e1, e2; /* exp(-zeta u) (e2 unused), or exp(r1 u), exp(r2 u) (over-damped) */
+    double hy, hy1; /* polynomial inputs: y, y' of the harmonic part alone (y, y1 ... y6 are the motion's) */
 } ex_val;
 
 /* The excitation's phase at t = 0: phi mod 2 pi exactly (a large phi keeps its phase), then + pi for
@@ -232,6 +242,7 @@ static void ctx_init_scaled(ex_ctx *C, const dfo_model *M, const dfo_inputs *in,
     C->switch_ctx = NULL;
     C->events = 0;
     C->first_span = ENERGY_SPAN;
+    C->poly = 0;
 }
 
 /* The excitation phase omega t + phase at the time t (a double-double): exact to rounding for any t
@@ -261,6 +272,39 @@ static double static_force(const ex_ctx *C, dd t, double Xs)
     return C->fP * c + C->fF - C->k * Xs;
 }
 
+/* The polynomial inputs' force F_ext(t) - s mu_k N(t) over Ls at ta and its two derivatives (in t);
+ * the normal force N(t) (physical) likewise. */
+static void poly_force(const ex_ctx *C, dd ta, int s, double g[3], double n[3])
+{
+    const double q = (ta.hi - C->q_t0) + ta.lo, muk = C->M->mu_k;
+    n[0] = C->qN[0] + q * (C->qN[1] + 0.5 * q * C->qN[2]);
+    n[1] = C->qN[1] + q * C->qN[2];
+    n[2] = C->qN[2];
+    const double f0 = C->qF[0] + q * (C->qF[1] + 0.5 * q * C->qF[2]), f1 = C->qF[1] + q * C->qF[2];
+    g[0] = (f0 - s * muk * n[0]) * C->iLs;
+    g[1] = (f1 - s * muk * n[1]) * C->iLs;
+    g[2] = (C->qF[2] - s * muk * n[2]) * C->iLs;
+}
+
+/* The polynomial particular solution of a slip phase from ta in direction s (polynomial inputs):
+ * m x'' + c x' + k x = g0 + g1 q + g2 q^2 / 2 (q = t - ta) is solved by x = p0 + p1 q + p2 q^2 / 2 with
+ * k p2 = g2, k p1 + c p2 = g1, k p0 + c p1 + m p2 = g0; in tau = w0 q: xc = p0, xp1 = p1 / w0, xp2 = p2 / w0^2.
+ * The rest of the motion, y = x - x_p, solves the phase's equation y'' + 2 zeta y' + y = a cos(theta). */
+static void poly_particular(const ex_ctx *C, ex_phase *P, dd ta, int s)
+{
+    double g[3], n[3];
+    poly_force(C, ta, s, g, n);
+    const double m = C->M->p.m, c = C->M->p.c, k = C->k, w0 = C->w0;
+    const double p2 = g[2] / k, p1 = (g[1] - c * p2) / k, p0 = (g[0] - c * p1 - m * p2) / k;
+    P->poly = 1;
+    P->xc = p0;
+    P->xp1 = p1 / w0;
+    P->xp2 = p2 / (w0 * w0);
+    P->n0 = n[0];
+    P->n1 = n[1] / w0;
+    P->n2 = n[2] / (w0 * w0);
+}
+
 /* X, V in the scaled units; ta the start time; cs: cos, sin of the excitation phase at ta when known
  * (carried over a reversal), else NULL: from the absolute time. */
 static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V, int s, const double *cs)
@@ -268,14 +312,16 @@ static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V,
     const double z = C->zeta, lam = C->lam, a = C->a;
     P->s = s;
     P->ta = ta.hi;
+    P->poly = 0;
     P->xc = (C->Ls_.F_ext - s * C->Ls_.muk_N) / C->k;
+    if (C->poly) poly_particular(C, P, ta, s);
     if (cs) {
         P->c0 = cs[0];
         P->s0 = cs[1];
     } else {
         phase_at(C, ta, &P->c0, &P->s0);
     }
-    const double y0 = X - P->xc, v0 = V / C->w0;
+    const double y0 = X - P->xc, v0 = V / C->w0 - (P->poly ? P->xp1 : 0.0); /* (the harmonic part's data) */
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
         P->Qr = qr;
@@ -381,6 +427,17 @@ static inline void derivatives_modal(const ex_ctx *C, const ex_phase *P, double 
     v->Fr = v->Fi = v->Gr = v->Gi = 0.0; /* (the phasor bound is under-damped only) */
 }
 
+/* Polynomial inputs: the particular solution's part added to the harmonic motion's y, y', y'' at u
+ * (its third and higher derivatives are 0), the harmonic part kept in hy, hy1. */
+static inline void poly_add(const ex_phase *P, double u, ex_val *v)
+{
+    v->hy = v->y;
+    v->hy1 = v->y1;
+    v->y += u * (P->xp1 + 0.5 * u * P->xp2);
+    v->y1 += P->xp1 + u * P->xp2;
+    v->y2 += P->xp2;
+}
+
 static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
 {
     const double z = C->zeta, lam = C->lam;
@@ -395,6 +452,7 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
         v->sth = sth;
         v->e1 = e1;
         v->e2 = e2;
+        if (P->poly) poly_add(P, u, v);
         return;
     }
     double E, F;
@@ -473,6 +531,7 @@ static void eval(const ex_ctx *C, const ex_phase *P, double u, ex_val *v)
     v->cth = cth;
     v->sth = sth;
     derivatives(C, y, y1, cth, sth, v);
+    if (P->poly) poly_add(P, u, v);
 }
 
 /* What the bounds of the derivatives at v need, computed once per step: the decomposition's
@@ -531,7 +590,10 @@ static void bounds_base(const ex_ctx *C, const ex_phase *P, const ex_val *v, ex_
     b->d4 = P->Qabs * C->lk[4] + f4;
     b->d5 = P->Qabs * C->lk[5] + f5;
     b->d7 = P->Qabs * C->lk[7] + f7;
-    b->R0 = sqrt(v->y * v->y + v->y1 * v->y1);
+    if (P->poly) /* the energy bound is of the harmonic part */
+        b->R0 = sqrt(v->hy * v->hy + v->hy1 * v->hy1);
+    else
+        b->R0 = sqrt(v->y * v->y + v->y1 * v->y1);
     b->h3 = b->h4 = b->drift = INFINITY;
     if (C->phasor) {
         /* y^(k)(u + s) = Re[((i lambda)^k F + p^k G e^{(p - i lambda) s}) e^{i lambda s}] with |p| = 1 and
@@ -592,7 +654,8 @@ static double tol_of(const ex_ctx *C, const ex_phase *P, const ex_val *v)
     if (C->modal) {
         /* each term of y' to its rounding; the position's rounding (of the phase's data) moves y' by |r1|
          * times it only: a creep towards equilibrium is followed until it is within a few ulps of it */
-        const double pos = C->a + fabs(P->xc) + fabs(v->y) + P->Qabs;
+        const double pos = C->a + fabs(P->xc) + fabs(v->y) + P->Qabs +
+                           (P->poly ? fabs(v->hy) + fabs(P->xp1) + fabs(P->xp2) * (1.0 + v->u) : 0.0);
         return -C->r1 * (4.0 * DBL_EPSILON) * pos +
                ROUND * (fabs(v->y1) + C->lam * P->Qabs + fabs(P->al * C->r1) * v->e1 + fabs(P->be * C->r2) * v->e2);
     }
@@ -602,6 +665,9 @@ static double tol_of(const ex_ctx *C, const ex_phase *P, const ex_val *v)
         const double g = v->e1 * (P->gy + fabs(P->hv) + P->gb * (v->u + 1.0));
         if (C->zeta >= 1.0 || g < free) free = g;
     }
+    if (P->poly) /* the polynomial part's terms */
+        return ROUND * (C->a + fabs(P->xc) + fabs(v->y) + fabs(v->y1) + forced + free + fabs(v->hy) + fabs(v->hy1) +
+                        fabs(P->xp1) + fabs(P->xp2) * (1.0 + v->u));
     return ROUND * (C->a + fabs(P->xc) + fabs(v->y) + fabs(v->y1) + forced + free);
 }
 
@@ -754,7 +820,13 @@ static int find_stop(ex_ctx *C, const ex_phase *P, double y0, double v0, double 
 {
     const int s = P->s;
     ex_val v;
-    eval0(C, P, y0, v0, &v);
+    if (P->poly) { /* the harmonic part's data to eval0, then the polynomial part's (v0 exact: at rest, 0) */
+        eval0(C, P, y0, v0 - P->xp1, &v);
+        poly_add(P, 0.0, &v);
+        v.y1 = v0;
+    } else {
+        eval0(C, P, y0, v0, &v);
+    }
     int started = s * v.y1 > tol_of(C, P, &v), tries = 0;
     ex_val v_band = v; /* last point of a slide from rest still inside the rounding band */
     double S0 = C->first_span; /* the span the bounds are first tried over: a little more than the last step */
@@ -1297,6 +1369,432 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
         s->F = dfo_stick_force(&C.Ls_, S) * C.Ls;
     } else {
         const double F = -s->mode * C.Ls_.muk_N;
+        s->F = F * C.Ls;
+        s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}
+
+/* ---- polynomial inputs (dfo_exact_advance_poly) ------------------------------------------------- */
+/* The inputs vary over the call as polynomials of degree <= 2 (exact.h). A slip phase is the phase of
+ * advance() plus the polynomial particular solution (poly_particular): the same closed form, bounds
+ * (the polynomial's third derivative is 0, so the bounds of y''' ... y^(7) are the harmonic part's) and
+ * search for the first zero of s x'. A stick phase ends where |S(t)| = |P(t) + F_ext(t) - k X| reaches
+ * the limit F_b(t) = max(mu_s, mu_k) N(t): no closed form now, so the search steps, from each point,
+ * only as far as g = F_b -+ S provably stays positive (|g''| <= B = |P0| omega^2 + |F_ext''| +
+ * max(mu_s, mu_k) |N''| everywhere), which converges on the crossing from below like Newton's method
+ * and never steps over it. The normal force max(N + N_ext(t), 0) is a polynomial on each piece between
+ * the zeros of N + N_ext(t) (or 0): the call is cut there (not an event). */
+
+/* The loads (over Ls) at t, with the rates of F_ext and F_b (over Ls, per s) in *dF, *dFb. */
+static void poly_loads(const ex_ctx *C, dd t, dfo_loads *L, double *dF, double *dFb)
+{
+    const double q = (t.hi - C->q_t0) + t.lo, iLs = C->iLs;
+    const double F = C->qF[0] + q * (C->qF[1] + 0.5 * q * C->qF[2]);
+    const double N = C->qN[0] + q * (C->qN[1] + 0.5 * q * C->qN[2]);
+    dfo_loads_set(L, F * iLs, fmax(N, 0.0) * iLs, C->M->mu_k, C->M->mu_b);
+    if (dF) *dF = (C->qF[1] + q * C->qF[2]) * iLs;
+    if (dFb) *dFb = C->M->mu_b * (C->qN[1] + q * C->qN[2]) * iLs;
+}
+
+/* The static force (over Ls) at rest at Xs at t with the loads there, and its rate (per s) in *dS. */
+static double poly_static_force(const ex_ctx *C, dd t, double Xs, dfo_loads *L, double *dS, double *dFb)
+{
+    double c, sn, dF;
+    phase_at(C, t, &c, &sn);
+    poly_loads(C, t, L, &dF, dFb);
+    if (dS) *dS = -C->fP * C->omega * sn + dF;
+    return C->fP * c + L->F_ext - C->k * Xs;
+}
+
+/* The first time in [ta, tend) at which the stick phase at Xs breaks away (|S| > F_b, or within
+ * rounding of it and not receding), with the side in *dir, the rates of S and F_b there in *dS, *dFb and
+ * *at_start = 1 when it is ta itself with the force beyond the limit (no crossing); tend when none. */
+static dd poly_breakaway_from(const ex_ctx *C, double Xs, dd ta, dd tend, int *dir, int *at_start, double *dS,
+                              double *dFb)
+{
+    const double iLs = C->iLs, mub = C->M->mu_b;
+    const double B = BOUND_SAFETY * (C->fP * C->omega * C->omega + (fabs(C->qF[2]) + mub * fabs(C->qN[2])) * iLs);
+    dd t = ta;
+    *at_start = 0;
+    for (long it = 0; it < MAX_SEARCH; it++) {
+        dfo_loads L;
+        double S1, Fb1;
+        const double S = poly_static_force(C, t, Xs, &L, &S1, &Fb1);
+        const double gp = L.Fb - S, gm = L.Fb + S, gp1 = Fb1 - S1, gm1 = Fb1 + S1;
+        const double tol = 4.0 * DBL_EPSILON * (C->fP + fabs(L.F_ext) + fabs(C->k * Xs) + L.Fb);
+        *dS = S1;
+        *dFb = Fb1;
+        if (gp < 0.0 || gm < 0.0) { /* beyond the limit */
+            *dir = (gp < 0.0) ? 1 : -1;
+            *at_start = (it == 0);
+            return t;
+        }
+        if ((gp <= tol && gp1 <= 0.0) || (gm <= tol && gm1 <= 0.0)) { /* on it, to rounding, and rising */
+            *dir = (gp <= gm) ? 1 : -1;
+            return t;
+        }
+        const double d = fmin(safe_step(gp, gp1, B), safe_step(gm, gm1, B));
+        const dd tn = dd_add(t, dd_of(d, 0.0));
+        if (!dd_lt(tn, tend)) return tend;
+        if (!dd_lt(t, tn)) { /* no progress: on the limit to the resolution of t */
+            *dir = (gp <= gm) ? 1 : -1;
+            return t;
+        }
+        t = tn;
+    }
+    *dir = 0;
+    return ta; /* (not reached: the steps converge on the crossing) */
+}
+
+/* The next breakaway from ta; with skip, one at ta itself (a slide just tried did not start) is passed
+ * over: the search restarts a little later, further each time, until it finds a later one. */
+static dd poly_breakaway(const ex_ctx *C, double Xs, dd ta, dd tend, int skip, int *dir, int *at_start, double *dS,
+                         double *dFb)
+{
+    dd b = poly_breakaway_from(C, Xs, ta, tend, dir, at_start, dS, dFb);
+    if (skip && !dd_lt(ta, b)) {
+        double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
+        for (int i = 0; i < 200; i++, d *= 2.0) {
+            const dd t1 = dd_add(ta, dd_of(d, 0.0));
+            if (!dd_lt(t1, tend)) return tend;
+            b = poly_breakaway_from(C, Xs, t1, tend, dir, at_start, dS, dFb);
+            if (dd_lt(t1, b)) break;
+        }
+        *at_start = 1; /* (passed over a touch: no crossing to differentiate) */
+    }
+    return b;
+}
+
+/* int_0^D cos(l w) dw, int_0^D sin(l w) dw, int_0^D w cos(l w) dw, int_0^D w sin(l w) dw, without the
+ * cancellation of the closed forms at small l D (their series there). */
+static void trig_moments(double l, double D, double *S1, double *S2, double *T1, double *T2)
+{
+    const double z = l * D;
+    if (fabs(z) < 0.5) { /* 14 terms: the remainder is below z^28 / 28! */
+        double p = 1.0, s1 = 0.0, s2 = 0.0, t1 = 0.0, t2 = 0.0; /* p = z^j / j! */
+        for (int j = 0; j < 28; j++) {
+            const double sg = ((j >> 1) & 1) ? -1.0 : 1.0;
+            if ((j & 1) == 0) {
+                s1 += sg * p / (j + 1);
+                t1 += sg * p / (j + 2);
+            } else {
+                s2 += sg * p / (j + 1);
+                t2 += sg * p / (j + 2);
+            }
+            p *= z / (j + 1);
+        }
+        *S1 = D * s1;
+        *S2 = D * s2;
+        *T1 = D * D * t1;
+        *T2 = D * D * t2;
+        return;
+    }
+    double sn, cs;
+    dfo_sincos(z, &sn, &cs);
+    const double h = dfo_sin(0.5 * z);
+    *S1 = sn / l;
+    *S2 = 2.0 * h * h / l; /* (1 - cos z) / l */
+    *T1 = D * sn / l - *S2 / l;
+    *T2 = -D * cs / l + sn / (l * l);
+}
+
+/* The friction work mu_k int N(t) |dx| (physical) of the slip phase P over tau in [u0, u1], exactly for
+ * the polynomial N(u) = n0 + n1 u + n2 u^2 / 2: with x = xc + Y, Y = y + q(u) (q the particular solution's
+ * xp1 u + xp2 u^2 / 2, y the harmonic part), int N dY = [N Y] - int N' Y, int N' q a polynomial's integral
+ * and int y, int u y from the equation of motion y = a cos(theta) - y'' - 2 zeta y':
+ *   int y = a int cos(theta) - [y' + 2 zeta y],   int u y = a int u cos(theta) - [u y'] + [y] - 2 zeta [u y] + 2 zeta int y. */
+static double poly_work(const ex_ctx *C, const ex_phase *P, double u0, double u1)
+{
+    if (!(u1 > u0)) return 0.0;
+    ex_val a0, a1;
+    eval(C, P, u0, &a0);
+    eval(C, P, u1, &a1);
+    const double z = C->zeta, D = u1 - u0;
+    double S1, S2, T1, T2;
+    trig_moments(C->lam, D, &S1, &S2, &T1, &T2);
+    const double C0 = a0.cth * S1 - a0.sth * S2, C1 = u0 * C0 + (a0.cth * T1 - a0.sth * T2);
+    const double I0 = C->a * C0 - ((a1.hy1 + 2.0 * z * a1.hy) - (a0.hy1 + 2.0 * z * a0.hy));
+    const double I1 = C->a * C1 - (u1 * a1.hy1 - u0 * a0.hy1) + (a1.hy - a0.hy) - 2.0 * z * (u1 * a1.hy - u0 * a0.hy) +
+                      2.0 * z * I0;
+    /* int (n1 + n2 u)(xp1 u + xp2 u^2 / 2) du */
+    const double e2 = 0.5 * (u1 - u0) * (u1 + u0), e3 = (u1 * u1 * u1 - u0 * u0 * u0) / 3.0;
+    const double e4 = 0.25 * (u1 * u1 - u0 * u0) * (u1 * u1 + u0 * u0);
+    const double Iq = P->n1 * P->xp1 * e2 + (0.5 * P->n1 * P->xp2 + P->n2 * P->xp1) * e3 + 0.5 * P->n2 * P->xp2 * e4;
+    const double N0 = P->n0 + u0 * (P->n1 + 0.5 * u0 * P->n2), N1 = P->n0 + u1 * (P->n1 + 0.5 * u1 * P->n2);
+    const double W = (N1 * a1.y - N0 * a0.y) - (P->n1 * I0 + P->n2 * I1 + Iq);
+    return C->M->mu_k * P->s * W * C->Ls;
+}
+
+/* after_phase with polynomial inputs: a slide's friction work from the varying normal force. */
+static void after_phase_poly(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
+                             double xb, int mode_during, int mode_after, int event)
+{
+    const int varying = P != NULL && (P->n1 != 0.0 || P->n2 != 0.0);
+    const double muk_N = (P != NULL) ? C->M->mu_k * fmax(P->n0, 0.0) : 0.0;
+    dfo_exact_after_phase(C->M, varying ? 0.0 : muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+                          mode_during, mode_after, event);
+    if (varying && C->M->p.observe && mode_during != 0) {
+        const double w0 = C->M->p.t_obs_start, w1 = C->M->p.t_obs_stop;
+        const double a = fmax(ta, w0), b = fmin(tb, w1);
+        if (b > a) s->E_friction += poly_work(C, P, C->w0 * (a - ta), C->w0 * (b - ta));
+    }
+}
+
+/* advance() with polynomial inputs over one piece (C->qN a polynomial > 0 inside it, or 0), to t_target. */
+static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
+{
+    int skip = 0, stall = 0, carried = 0;
+    double cs[2] = {1.0, 0.0};
+    const double Ls = C->Ls, w0 = C->w0;
+    const dd target = {t_target, 0.0};
+    dd t = {s->t, 0.0}, t_last = t;
+    double Xs = s->X * C->iLs, Vs = s->V * C->iLs;
+    const int sens = C->M->p.sensitivity;
+    const int fric = C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0);
+    while (dd_lt(t, target)) {
+        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
+        if (t.hi == t_last.hi && t.lo == t_last.lo) {
+            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
+        } else {
+            stall = 0;
+            t_last = t;
+        }
+        const double ta = t.hi, xa = s->X;
+        if (s->mode == 0 && !fric) { /* no friction: the block moves along the force (or its rate) */
+            dfo_loads L;
+            double dS, c, sn;
+            const double S = poly_static_force(C, t, Xs, &L, &dS, NULL);
+            phase_at(C, t, &c, &sn);
+            const double d2S = -C->omega * C->omega * (C->fP * c) + C->qF[2] * C->iLs;
+            const int dir = dfo_free_start_dir(S, dS, d2S);
+            s->mode = dir;
+            C->events++;
+            after_phase_poly(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            continue;
+        }
+        if (s->mode == 0) {
+            int dir = 0, at_start = 0;
+            double dS = 0.0, dFb = 0.0;
+            const dd tb = poly_breakaway(C, Xs, t, target, skip, &dir, &at_start, &dS, &dFb);
+            skip = 0;
+            if (sens) dfo_sens_stick(s->J);
+            if (!dd_lt(tb, target)) {
+                s->t = t_target;
+                t = target;
+                after_phase_poly(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                break;
+            }
+            t = tb;
+            s->t = tb.hi;
+            Vs = 0.0;
+            s->V = 0.0;
+            s->mode = dir;
+            carried = 0;
+            if (sens && !at_start) {
+                /* h = dir S(t) - F_b(t) = 0 at t_b: dt_b = k dx / D, D = S' - dir F_b' (S' = P' + F_ext'), and the
+                 * slide starts with a+ = dir (F_b - mu_k N) / m: the v row becomes -a+ k / D times the x row */
+                dfo_loads L;
+                poly_loads(C, tb, &L, NULL, NULL);
+                const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
+                dfo_sens_breakaway(s->J, (a_plus != 0.0 && D != 0.0) ? -a_plus * C->k / D : 0.0);
+            }
+            C->events++;
+            after_phase_poly(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
+            continue;
+        }
+        const int sd = s->mode;
+        ex_phase P;
+        ex_val v;
+        phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
+        const double u_max = w0 * ((t_target - t.hi) - t.lo);
+        const int cut = u_max > C->u_span;
+        const double u_end = cut ? C->u_span : u_max;
+        const int r = find_stop(C, &P, Xs - P.xc, Vs / w0, u_end, &v);
+        if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
+        if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
+        if (r == SEARCH_NONE) {
+            Xs = P.xc + v.y;
+            Vs = w0 * v.y1;
+            s->X = Xs * Ls;
+            s->V = Vs * Ls;
+            if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+            const dd tc = cut ? dd_add_quot(t, u_end, 0.0, w0) : target;
+            if (sens) dfo_sens_slide(C->M, dd_span(t, tc), s->J);
+            carried = 0;
+            s->t = tc.hi;
+            after_phase_poly(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
+            t = tc;
+            if (cut) continue;
+            break;
+        }
+        dd ts = dd_add_quot(t, v.u, 0.0, w0);
+        if (dd_lt(target, ts)) ts = target;
+        const int at_end = !dd_lt(ts, target);
+        if (sens) dfo_sens_slide(C->M, dd_span(t, ts), s->J);
+        t = ts;
+        s->t = ts.hi;
+        Xs = P.xc + v.y;
+        Vs = 0.0;
+        s->X = Xs * Ls;
+        s->V = 0.0;
+        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+        dfo_loads L;
+        double Fs = poly_static_force(C, ts, Xs, &L, NULL, NULL);
+        if (r == SEARCH_STOP && !at_end) Fs = C->fP * v.cth + L.F_ext - C->k * Xs; /* the phase the search reached */
+        int next = dfo_rest_mode(&L, Fs);
+        if (!fric) {
+            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
+            if (r == SEARCH_STOP && !at_end) {
+                ex_val w;
+                eval(C, &P, v.u, &w);
+                Xs = P.xc + w.y;
+                Vs = w0 * w.y1;
+                s->X = Xs * Ls;
+                s->V = Vs * Ls;
+                v.cth = w.cth;
+                v.sth = w.sth;
+            }
+        } else if (r == SEARCH_NULL && next != -sd) {
+            next = 0;
+            skip = 1;
+        }
+        if (sens) { /* the saltation at the stop, with the kinetic force at ts */
+            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
+            else if (next == -sd && L.muk_N > 0.0)
+                dfo_sens_reversal(s->J, (Fs + sd * L.muk_N) / (Fs - sd * L.muk_N));
+        }
+        if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
+            carried++;
+            cs[0] = v.cth;
+            cs[1] = v.sth;
+        } else {
+            carried = 0;
+        }
+        s->mode = next;
+        C->events++;
+        after_phase_poly(C, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
+    }
+    s->X = Xs * Ls;
+    s->V = Vs * Ls;
+    return DFO_OK;
+}
+
+int dfo_input_poly_active(const dfo_input_poly *q)
+{
+    return q != NULL && (q->F[0] != 0.0 || q->F[1] != 0.0 || q->N[0] != 0.0 || q->N[1] != 0.0);
+}
+
+void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, dfo_inputs *out)
+{
+    *out = *u;
+    if (q == NULL) return;
+    const double d = t - q->t0;
+    const double F0 = u->F_ext_set ? u->F_ext : 0.0, N0 = u->N_ext_set ? u->N_ext : 0.0;
+    if (q->F[0] != 0.0 || q->F[1] != 0.0) {
+        out->F_ext = F0 + d * (q->F[0] + 0.5 * d * q->F[1]);
+        out->F_ext_set = 1;
+    }
+    if (q->N[0] != 0.0 || q->N[1] != 0.0) {
+        out->N_ext = N0 + d * (q->N[0] + 0.5 * d * q->N[1]);
+        out->N_ext_set = 1;
+    }
+}
+
+const char *dfo_exact_poly_unsupported(const dfo_model *M)
+{
+    if (M->p.k == 0.0) return dfo_exact_free_poly_unsupported(M);
+    return NULL;
+}
+
+/* The zeros of n0 + n1 q + n2 q^2 / 2 in (lo, hi), increasing, in r (at most 2); their count. */
+static int poly_zeros(double n0, double n1, double n2, double lo, double hi, double r[2])
+{
+    double z[2];
+    int nz = 0, k = 0;
+    if (n2 == 0.0) {
+        if (n1 != 0.0) z[nz++] = -n0 / n1;
+    } else {
+        const double a = 0.5 * n2, disc = n1 * n1 - 4.0 * a * n0;
+        if (disc > 0.0) {
+            const double qq = -0.5 * (n1 + ((n1 >= 0.0) ? 1.0 : -1.0) * sqrt(disc));
+            z[nz++] = qq / a;
+            if (qq != 0.0) z[nz++] = n0 / qq;
+        }
+    }
+    if (nz == 2 && z[1] < z[0]) {
+        const double w = z[0];
+        z[0] = z[1];
+        z[1] = w;
+    }
+    for (int i = 0; i < nz; i++)
+        if (z[i] > lo && z[i] < hi && (k == 0 || z[i] > r[k - 1])) r[k++] = z[i];
+    return k;
+}
+
+dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                  double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+{
+    if (!dfo_input_poly_active(q)) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
+    if (M->p.k == 0.0) return dfo_exact_free_advance_poly(M, u, q, s, t_target, on_switch, switch_ctx);
+    /* the length scale of the loads at both ends and at the middle */
+    dfo_inputs u1, u2;
+    dfo_input_poly_at(u, q, t_target, &u1);
+    dfo_input_poly_at(u, q, 0.5 * (s->t + t_target), &u2);
+    int e = scale_exponent(M, u, s);
+    e = (scale_exponent(M, &u1, s) > e) ? scale_exponent(M, &u1, s) : e;
+    e = (scale_exponent(M, &u2, s) > e) ? scale_exponent(M, &u2, s) : e;
+    ex_ctx C;
+    ctx_init_scaled(&C, M, u, e);
+    C.on_switch = on_switch;
+    C.switch_ctx = switch_ctx;
+    C.poly = 1;
+    C.q_t0 = q->t0;
+    C.qF[0] = dfo_external_force(M, u);
+    C.qF[1] = q->F[0];
+    C.qF[2] = q->F[1];
+    const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
+    const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
+    if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
+        s->hA = 0.0;
+        return DFO_ERR_NONFINITE;
+    }
+    /* the pieces between the zeros of N + N_ext(t) */
+    double z[2];
+    const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);
+    dfo_status st = DFO_OK;
+    for (int i = 0; i <= nz && st == DFO_OK; i++) {
+        const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
+        if (!(b > s->t)) continue;
+        const double mid = 0.5 * (a + b) - q->t0;
+        const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
+        C.qN[0] = pos ? n0 : 0.0;
+        C.qN[1] = pos ? n1 : 0.0;
+        C.qN[2] = pos ? n2 : 0.0;
+        st = advance_poly(&C, s, b);
+    }
+    s->steps += C.events;
+    s->n = dfo_exact_grid_index(M, s);
+    s->hA = 0.0;
+    if (st != DFO_OK) return st;
+    {
+        /* the loads at the end: the piece there */
+        const double mid = t_target - q->t0;
+        const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
+        C.qN[0] = pos ? n0 : 0.0;
+        C.qN[1] = pos ? n1 : 0.0;
+        C.qN[2] = pos ? n2 : 0.0;
+    }
+    const dd te = {s->t, 0.0};
+    dfo_loads L;
+    const double Xs = s->X * C.iLs, Vs = s->V * C.iLs, S = poly_static_force(&C, te, Xs, &L, NULL, NULL);
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(&L, S) * C.Ls;
+    } else {
+        const double F = -s->mode * L.muk_N;
         s->F = F * C.Ls;
         s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
     }

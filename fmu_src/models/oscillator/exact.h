@@ -57,6 +57,38 @@
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);
 
+/* Inputs that vary over one call as polynomials (FMI input derivatives, which hold for one
+ * communication step): from the time t0 (the communication point),
+ *
+ *     F_ext(t) = F_ext + F[0] (t - t0) + F[1] (t - t0)^2 / 2,   N_ext(t) likewise with N[0], N[1],
+ *
+ * F_ext, N_ext the values of dfo_inputs at t0 (dfo_external_force, and N_ext as dfo_normal_force reads
+ * it); F[0], N[0] the first derivatives, F[1], N[1] the second (0: that order not given). The
+ * derivatives are used whether or not the value itself was set (an input never set is 0 at t0). The
+ * normal force is max(N + N_ext(t), 0). */
+typedef struct {
+    double t0;
+    double F[2], N[2];
+} dfo_input_poly;
+
+/* 1 when a derivative of q is nonzero (then dfo_exact_advance_poly takes its polynomial path), else 0
+ * (q NULL included). */
+int dfo_input_poly_active(const dfo_input_poly *q);
+
+/* The inputs at time t: out->F_ext = F_ext(t), out->N_ext = N_ext(t) (q's polynomials; the set flags
+ * copied from u, and raised where q has a nonzero derivative of that input). q NULL: *out = *u. */
+void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, dfo_inputs *out);
+
+/* NULL when dfo_exact_advance_poly can follow polynomial inputs on this model, else a sentence saying
+ * why not (for the FMU's error message when a host sets an input derivative). */
+const char *dfo_exact_poly_unsupported(const dfo_model *M);
+
+/* Advance to t_target > s->t with the inputs varying as q's polynomials (q->t0 <= s->t): the contract
+ * of dfo_exact_advance otherwise (on return A, F are those at t_target with the inputs there). When
+ * no derivative is nonzero (dfo_input_poly_active(q) == 0) it is dfo_exact_advance itself, bit for bit. */
+dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                  double t_target, dfo_switch_fn on_switch, void *switch_ctx);
+
 /* The excitation P0 cos(omega t + phi) as the exact scheme evaluates it: phi reduced mod 2 pi
  * exactly and omega t + phi carried as a double-double, so exact to rounding for any t and phi
  * (newmark.c's outputs a and F_friction of the exact scheme use it). */

@@ -573,3 +573,16 @@ dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_s
     if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
     return DFO_OK;
 }
+
+const char *dfo_exact_free_poly_unsupported(const dfo_model *M)
+{
+    (void)M;
+    return "the exact scheme does not follow input derivatives without a spring (k = 0) yet";
+}
+
+dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                       double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+{
+    (void)M; (void)u; (void)q; (void)s; (void)t_target; (void)on_switch; (void)switch_ctx;
+    return DFO_ERR_NO_PROGRESS;
+}

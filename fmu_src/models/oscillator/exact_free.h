@@ -38,6 +38,7 @@
 #ifndef DFO_EXACT_FREE_H
 #define DFO_EXACT_FREE_H
 
+#include "exact.h"
 #include "newmark.h"
 #include "oscillator.h"
 
@@ -45,5 +46,11 @@
  * dfo_exact_advance (exact.h). */
 dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                                   dfo_switch_fn on_switch, void *switch_ctx);
+
+/* dfo_exact_advance_poly (exact.h) for a model with k = 0, and the sentence of
+ * dfo_exact_poly_unsupported for it (NULL: supported). */
+dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                       double t_target, dfo_switch_fn on_switch, void *switch_ctx);
+const char *dfo_exact_free_poly_unsupported(const dfo_model *M);
 
 #endif
