@@ -13,8 +13,8 @@ each from the newest outputs (Gauss-Seidel). The inputs over the step:
 
 - ``hold``: the value at the start, held (zero-order hold; first order in H),
 - ``extrapolate``: held at the mean over the step of the Taylor polynomial of u from the outputs'
-  time derivatives (the FMU's output derivatives, or outputs that are derivatives: x' = v,
-  x'' = a; second order in H with held inputs),
+  time derivatives (outputs that are derivatives: x' = v, x'' = a, v' = a; or the FMU's output
+  derivatives; second order in H with held inputs),
 - ``derivatives``: the polynomial itself, sent as input derivatives (FMI 2.0
   fmi2SetRealInputDerivatives; FMI 3.0: the polynomial's value set at every intermediate update).
 
@@ -191,7 +191,9 @@ class _Plan:
             for k in range(self.order):
                 if source != "fmu" and k < len(alias):
                     per_order[k].append((int(col), unit.vr(alias[k]), False))
-                elif source != "outputs" and k < fmu_order:
+                elif (source == "fmu" or (source == "auto" and not alias)) and k < fmu_order:
+                    # auto: the FMU's own only for outputs with no derivative output (v'' would
+                    # fail at a step ending on a switch, where a jumps)
                     per_order[k].append((int(col), vr, True))
                 elif k == 0:
                     why = (f"{unit.name} declares maxOutputDerivativeOrder={fmu_order}" if source != "outputs"
@@ -260,7 +262,8 @@ class _Plan:
         """FMI 3.0: the FMU holds an input set at an intermediate update until its next input
         point (the package's FMUs: the ends of their internal steps, a uniform grid), so each value
         set is the polynomial's at the middle of the interval to the next point; the grid is
-        learnt from the points seen (the first step, before two points were seen, holds u(t))."""
+        learnt from the points seen: its spacing is the smallest gap between two (before two were
+        seen, u(t) at the start and the value at the point itself)."""
         grid = self._grid  # unit -> [last point, spacing]
 
         def poly(tt: float) -> np.ndarray:
@@ -272,12 +275,12 @@ class _Plan:
         if step > 0:
             nxt = min(t_end, last + step * math.floor((t - last) / step + 1.0 + 1e-9))
         unit.set(vrs, poly(0.5 * (t + nxt)) if step > 0 else a0)
-        prev = [math.nan]
 
         def inputs(tt: float) -> tuple[list[int], np.ndarray]:
-            gap = tt - prev[0]
-            step = gap if gap > 0 else grid.get(unit.name, (0.0, 0.0))[1]
-            prev[0] = tt
+            last, step = grid.get(unit.name, (math.nan, 0.0))
+            gap = tt - last  # a multiple of the spacing (NaN at the first point, < 0 after a rollback)
+            if gap > 1e-12 * max(1.0, abs(tt)):
+                step = gap if step == 0.0 else min(step, gap)
             grid[unit.name] = (tt, step)
             return vrs, poly(0.5 * (tt + min(tt + step, t_end)) if step > 0 else tt)
 
