@@ -238,15 +238,16 @@ def _needs(cap_ok: bool, what: str) -> None:
 
 
 @pytest.mark.parametrize("input_order, expected", [(1, [0.0193, 0.004912, 0.001118, 0.0002026]),
-                                                   (2, [0.0192, 0.005024, 0.001377, 0.000451])])
+                                                   (2, [0.006719, 0.001607, 0.0004724, 0.000226])])
 def test_input_derivatives_are_second_order(blocks: Any, reference: ChainSolution, input_order: int,
                                             expected: list[float]) -> None:
-    """The force's slope (and curvature) sent with fmi2SetRealInputDerivatives: four times closer
-    than held inputs at the extrapolated mean."""
+    """The force's slope (and curvature, from x'' = a) sent with fmi2SetRealInputDerivatives: four
+    (ten) times closer than held inputs at the extrapolated mean; with the curvature the error
+    meets a floor near 2e-4 at T/400 (the FMU's internal step is fixed at T/1000)."""
     _needs(blocks[0].inst.capabilities.can_interpolate_inputs, 'canInterpolateInputs="true"')
     e = errors(blocks, reference, inputs="derivatives", input_order=input_order)
     np.testing.assert_allclose(e, expected, rtol=1e-2)
-    assert np.all(orders(e) > 1.6), orders(e)
+    assert np.all(orders(e)[:2] > 1.7), orders(e)
 
 
 def test_input_derivatives_in_the_exact_scheme(blocks: Any, reference: ChainSolution) -> None:
