@@ -42,28 +42,36 @@ class SpringDamper:
     """A spring ``k`` and damper ``c`` between blocks ``a`` and ``b`` (instance names), computed by
     the master: ``F = k (x_b - x_a) + c (v_b - v_a)`` on ``a`` and ``-F`` on ``b``, through each
     block's ``force`` input (default ``F_ext``); ``x`` and ``v`` name the blocks' position and
-    velocity outputs."""
+    velocity outputs. Each name is one for both blocks or a pair (``x=("x[2]", "x")``: a chain's
+    last block and an oscillator)."""
 
     a: str
     b: str
     k: float
     c: float = 0.0
-    x: str = "x"
-    v: str = "v"
-    force: str = "F_ext"
+    x: str | tuple[str, str] = "x"
+    v: str | tuple[str, str] = "v"
+    force: str | tuple[str, str] = "F_ext"
 
     def terms(self) -> list[tuple[str, str, float]]:
         for name, val in (("k", self.k), ("c", self.c)):
             if not (math.isfinite(val) and val >= 0):
                 raise ValueError(f"SpringDamper({self.a}, {self.b}): {name} must be a finite number >= 0, not {val!r}")
         a, b = self.a, self.b
+        (xa, xb), (va, vb), (fa, fb) = (_pair(n) for n in (self.x, self.v, self.force))
         out = []
-        for sign, unit in ((1.0, a), (-1.0, b)):
-            target = f"{unit}.{self.force}"
-            out += [(target, f"{b}.{self.x}", sign * self.k), (target, f"{a}.{self.x}", -sign * self.k)]
+        for sign, target in ((1.0, f"{a}.{fa}"), (-1.0, f"{b}.{fb}")):
+            out += [(target, f"{b}.{xb}", sign * self.k), (target, f"{a}.{xa}", -sign * self.k)]
             if self.c:
-                out += [(target, f"{b}.{self.v}", sign * self.c), (target, f"{a}.{self.v}", -sign * self.c)]
+                out += [(target, f"{b}.{vb}", sign * self.c), (target, f"{a}.{va}", -sign * self.c)]
         return out
+
+
+def _pair(name: str | tuple[str, str]) -> tuple[str, str]:
+    if isinstance(name, str):
+        return name, name
+    a, b = name
+    return str(a), str(b)
 
 
 def coupling_matrix(elements: list[Connection | SpringDamper]) -> tuple[list[str], list[str], np.ndarray]:
