@@ -534,6 +534,66 @@ static void test_cycles(tally *T)
     printf("cycles: %ld allocations, %ld frees\n", g_mem.allocs, g_mem.frees);
 }
 
+/* The coupling functions: NULL arrays, the phases they may be called in, and a rejected call that
+ * changes nothing; a ramp input set by its derivative reaches the state (x differs from the held
+ * input's) and is spent after one step. */
+static void test_coupling(tally *T)
+{
+    log_sink sink = {{0}, 0, 0};
+    fmi2CallbackFunctions cb = callbacks_for(&sink);
+    fmi2Component c = new_instance("coupling", &cb);
+    const fmi2ValueReference vF = VR_F_ext, vN = VR_N_ext, vx = VR_x, va = VR_a, vv = VR_v;
+    const fmi2Integer one = 1, two = 2, three = 3;
+    fmi2Real r = 0.5, out = 0.0;
+    /* phases: input derivatives before initialisation (for the first step), none of the others */
+    EXPECT(fmi2SetRealInputDerivatives(c, &vF, 1, &one, &r) == fmi2OK);
+    FAILS(fmi2GetRealOutputDerivatives(c, &vx, 1, &one, &out), "must not be called in instantiated");
+    FAILS(fmi2GetDirectionalDerivative(c, &va, 1, &vF, 1, &r, &out), "must not be called in instantiated");
+    fmi2Reset(c);
+    EXPECT(start_run(c, 1e-3, 0, NULL, NULL) == fmi2OK);
+    /* NULL arrays */
+    FAILS(fmi2SetRealInputDerivatives(c, NULL, 1, &one, &r), "NULL");
+    FAILS(fmi2SetRealInputDerivatives(c, &vF, 1, NULL, &r), "NULL");
+    FAILS(fmi2SetRealInputDerivatives(c, &vF, 1, &one, NULL), "NULL");
+    FAILS(fmi2GetRealOutputDerivatives(c, &vx, 1, &one, NULL), "NULL");
+    FAILS(fmi2GetRealOutputDerivatives(c, &vx, 1, NULL, &out), "NULL");
+    FAILS(fmi2GetDirectionalDerivative(c, NULL, 1, &vF, 1, &r, &out), "NULL");
+    FAILS(fmi2GetDirectionalDerivative(c, &va, 1, &vF, 1, NULL, &out), "NULL");
+    FAILS(fmi2GetDirectionalDerivative(c, &va, 1, &vF, 1, &r, NULL), "NULL");
+    EXPECT(fmi2SetRealInputDerivatives(c, NULL, 0, NULL, NULL) == fmi2OK);
+    EXPECT(fmi2GetRealOutputDerivatives(c, NULL, 0, NULL, NULL) == fmi2OK);
+    EXPECT(fmi2GetDirectionalDerivative(c, NULL, 0, NULL, 0, NULL, NULL) == fmi2OK);
+    /* orders out of range, a rejected call changes nothing */
+    FAILS(fmi2SetRealInputDerivatives(c, &vF, 1, &three, &r), "valid range: 1 to 2");
+    FAILS(fmi2GetRealOutputDerivatives(c, &vv, 1, &three, &out), "valid range: 1 to 2");
+    const fmi2ValueReference both[2] = {VR_F_ext, VR_m};
+    const fmi2Integer orders[2] = {1, 1};
+    const fmi2Real values[2] = {5.0, 1.0};
+    FAILS(fmi2SetRealInputDerivatives(c, both, 2, orders, values), "not a real input");
+    EXPECT(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK);
+    fmi2Real x_held = 0.0;
+    EXPECT(fmi2GetReal(c, &vx, 1, &x_held) == fmi2OK);
+    /* a ramp: F_ext' = 5 over the next step, then spent (F_ext holds its end value 0.5) */
+    fmi2Component d = new_instance("coupling-ramp", &cb);
+    EXPECT(start_run(d, 1e-3, 0, NULL, NULL) == fmi2OK);
+    const fmi2Real slope = 5.0, second = 0.0;
+    EXPECT(fmi2DoStep(d, 0.0, 0.1, fmi2True) == fmi2OK);
+    EXPECT(fmi2SetRealInputDerivatives(d, &vF, 1, &one, &slope) == fmi2OK);
+    EXPECT(fmi2SetRealInputDerivatives(d, &vN, 1, &two, &second) == fmi2OK);
+    EXPECT(fmi2DoStep(d, 0.1, 0.1, fmi2True) == fmi2OK);
+    fmi2Real F_end = 0.0;
+    EXPECT(fmi2GetReal(d, &vF, 1, &F_end) == fmi2OK && fabs(F_end - 0.5) < 1e-15);
+    EXPECT(fmi2GetReal(d, &vx, 1, &out) == fmi2OK && out != x_held);
+    fmi2Real J[2] = {0.0, 0.0};
+    const fmi2ValueReference unk[2] = {VR_a, VR_x};
+    EXPECT(fmi2GetDirectionalDerivative(d, unk, 2, &vF, 1, &slope, J) == fmi2OK && J[1] == 0.0);
+    EXPECT(fmi2Terminate(d) == fmi2OK);
+    EXPECT(fmi2GetRealOutputDerivatives(d, &vx, 1, &one, &out) == fmi2OK);
+    FAILS(fmi2SetRealInputDerivatives(d, &vF, 1, &one, &slope), "must not be called in terminated");
+    fmi2FreeInstance(d);
+    fmi2FreeInstance(c);
+}
+
 int main(void)
 {
     tally t = {0, 0, NULL, {0}}, *T = &t;
@@ -547,6 +607,7 @@ int main(void)
     test_not_computed_outputs(T);
     test_feedthrough(T);
     test_cycles(T);
+    test_coupling(T);
     EXPECT(mem_outstanding() == 0);
     return tally_done(T, "test_fmi_api");
 }

@@ -12,6 +12,7 @@
  *   - outputs read with fmi2OK or fmi2Warning (an observable read while observe is false) are
  *     finite, mode is -1, 0 or +1, and mode 0 means v == 0;
  *   - outputs read right after an input is set (direct feedthrough of a and F_friction) are finite;
+ *   - output and directional derivatives read with fmi2OK are finite, x and v have no feed-through;
  *   - after an fmi2OK doStep the FMU's time (fmi2LastSuccessfulTime) is exactly tc + dt
  *     (FUZZ_TIME_ORACLE, on by default; -DFUZZ_TIME_ORACLE=0 to explore past it).
  * A doStep whose step holds more than FUZZ_MAX_STEPS internal steps of the parameter h is
@@ -85,6 +86,35 @@ static void check_outputs(ctx *X)
             if (mode == 0 && out[1] != 0.0) oracle_fail("mode 0 (stuck) with v != 0");
         }
     }
+}
+
+/* The coupling functions at the current point (no input bytes read: the corpus keeps its meaning):
+ * output derivatives of x and v, directional derivatives of x, v, a, F_friction with respect to
+ * F_ext and N_ext (finite with fmi2OK; x and v none), and a slope of F_ext (the current x) for the
+ * next step. Each call's status passes the status oracle. */
+static void check_coupling(ctx *X, long before)
+{
+    const fmi2ValueReference ov[4] = {VR_x, VR_x, VR_v, VR_v}, unk[4] = {VR_x, VR_v, VR_a, VR_F_friction};
+    const fmi2ValueReference kn[2] = {VR_F_ext, VR_N_ext};
+    const fmi2Integer orders[4] = {1, 2, 1, 2};
+    double d[4], J[4];
+    fmi2Status st = fmi2GetRealOutputDerivatives(X->c, ov, 4, orders, d);
+    if (st == fmi2OK)
+        for (int i = 0; i < 4; i++)
+            if (!isfinite(d[i])) oracle_fail("non-finite output derivative with fmi2OK");
+    after(X, st, before);
+    const double seed[2] = {1.0, -0.5};
+    st = fmi2GetDirectionalDerivative(X->c, unk, 4, kn, 2, seed, J);
+    if (st == fmi2OK) {
+        if (J[0] != 0.0 || J[1] != 0.0) oracle_fail("x or v with a direct feed-through");
+        if (!isfinite(J[2]) || !isfinite(J[3])) oracle_fail("non-finite directional derivative with fmi2OK");
+    }
+    after(X, st, X->errors_logged);
+    const fmi2ValueReference vx = VR_x;
+    const fmi2Integer one = 1;
+    double x = 0.0;
+    if (fmi2GetReal(X->c, &vx, 1, &x) == fmi2OK && isfinite(x))
+        after(X, fmi2SetRealInputDerivatives(X->c, &kn[0], 1, &one, &x), X->errors_logged);
 }
 
 static uint64_t fnv1a(const fmi2Byte *p, size_t n)
@@ -294,8 +324,9 @@ static void op(ctx *X, reader *r)
         break;
     }
     default: {
-        TRACE(X, "outputs, fmi2CancelStep\n");
+        TRACE(X, "outputs, coupling, fmi2CancelStep\n");
         check_outputs(X);
+        check_coupling(X, before);
         st = fmi2CancelStep(X->c);
         break;
     }

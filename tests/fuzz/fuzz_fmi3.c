@@ -10,7 +10,9 @@
  * features the FMU lacks. Calls out of order are part of the game.
  *
  * Oracles (abort when one fails): an fmi3Error of a live instance comes with a logged message;
- * outputs read with fmi3OK/fmi3Warning are finite and mode is -1, 0 or +1; after an fmi3OK doStep
+ * outputs read with fmi3OK/fmi3Warning are finite and mode is -1, 0 or +1; output and directional
+ * derivatives read with fmi3OK are finite, x and v have no feed-through, the adjoint is the
+ * transposed directional derivative; a parameter set in the intermediate update is refused; after an fmi3OK doStep
  * the last successful time lies in (tc, tc + dt], is tc + dt unless earlyReturn, and earlyReturn and
  * eventHandlingNeeded only come when allowed (earlyReturnAllowed; eventModeUsed with it).
  *
@@ -34,12 +36,15 @@ static fmi3ValueReference any_vr(reader *r)
     return (fmi3ValueReference)u32(r);
 }
 
-/* read in the intermediate update: x is finite */
+/* read in the intermediate update: x is finite; a parameter cannot be set there (an input declared
+ * intermediateUpdate="true" only where the update asks for inputs: F_ext set to its own value) */
 static void update_get(ctx *X)
 {
-    const fmi3ValueReference vr = VR_x;
-    fmi3Float64 x;
+    const fmi3ValueReference vr = VR_x, vm = VR_m, vf = VR_F_ext;
+    fmi3Float64 x, f, m = 1.0;
     if (fmi3GetFloat64(X->c, &vr, 1, &x, 1) == fmi3OK && !isfinite(x)) oracle_fail("x not finite in update");
+    if (fmi3SetFloat64(X->c, &vm, 1, &m, 1) != fmi3Error) oracle_fail("a parameter was set in the update");
+    if (fmi3GetFloat64(X->c, &vf, 1, &f, 1) == fmi3OK) (void)fmi3SetFloat64(X->c, &vf, 1, &f, 1);
 }
 
 static void check_outputs(ctx *X)
@@ -54,6 +59,20 @@ static void check_outputs(ctx *X)
     const fmi3ValueReference vm = VR_mode;
     fmi3Int32 m;
     if (fmi3GetInt32(X->c, &vm, 1, &m, 1) == fmi3OK && (m < -1 || m > 1)) oracle_fail("mode out of range");
+    /* the coupling functions: finite with OK, x and v without feed-through, the adjoint transposed */
+    const fmi3ValueReference ov[4] = {VR_x, VR_x, VR_v, VR_v}, unk[4] = {VR_x, VR_v, VR_a, VR_F_friction};
+    const fmi3ValueReference kn[2] = {VR_F_ext, VR_N_ext};
+    const fmi3Int32 orders[4] = {1, 2, 1, 2};
+    fmi3Float64 d[4], J[4], A[2];
+    if (fmi3GetOutputDerivatives(X->c, ov, 4, orders, d, 4) == fmi3OK)
+        for (int i = 0; i < 4; i++)
+            if (!isfinite(d[i])) oracle_fail("an output derivative read with OK is not finite");
+    const fmi3Float64 seed[2] = {1.0, 0.0}, seed_a[4] = {0.0, 0.0, 1.0, 0.0};
+    if (fmi3GetDirectionalDerivative(X->c, unk, 4, kn, 2, seed, 2, J, 4) == fmi3OK) {
+        if (J[0] != 0.0 || J[1] != 0.0) oracle_fail("x or v with a direct feed-through");
+        if (fmi3GetAdjointDerivative(X->c, unk, 4, kn, 2, seed_a, 4, A, 2) == fmi3OK && A[0] != J[2])
+            oracle_fail("the adjoint is not the transposed directional derivative");
+    }
 }
 
 static fmi3Status call(ctx *X, reader *r, unsigned op)

@@ -23,8 +23,10 @@
  * stays in registers (a step costs some 100 ns; a call and its spills are a good part of that). */
 #if defined(__GNUC__)
 #define HOT_INLINE inline __attribute__((always_inline))
+#define COLD __attribute__((noinline, cold))
 #else
 #define HOT_INLINE inline
+#define COLD
 #endif
 
 /* The coefficients of a Bossak step that depend on its length h only (eq. 4). */
@@ -113,6 +115,15 @@ static double accel_of(const step_ctx *C, const dfo_state *s, double t, double F
     return f / M->p.m;
 }
 
+/* The rate of the net applied force from varying inputs, dF_ext/dt - mode mu_k dN/dt (out of the
+ * stepping loop's code: held inputs never call it). */
+static COLD double ramp_force_rate(const step_ctx *C, const dfo_state *s)
+{
+    double dF, dN;
+    dfo_input_rates(C->M, C->ramp, s->t, &dF, &dN);
+    return dF - s->mode * C->M->mu_k * dN;
+}
+
 /* x''' from the time derivative of the equation of motion (0 while stuck), with the inputs' rates. */
 static double jerk_of(const step_ctx *C, const dfo_state *s)
 {
@@ -121,11 +132,7 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
     const double F = -s->mode * C->L.muk_N;
     double j = dfo_excitation_rate(M, s->t) - M->p.k * s->V;
     if (M->damped) j -= M->p.c * accel_of(C, s, s->t, F);
-    if (C->ramp) {
-        double dF, dN;
-        dfo_input_rates(M, C->ramp, s->t, &dF, &dN);
-        j += dF - s->mode * M->mu_k * dN;
-    }
+    if (C->ramp) j += ramp_force_rate(C, s);
     return j / M->p.m;
 }
 
@@ -231,7 +238,10 @@ static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_st
     const double ta = b->ta, dX = s->X - b->X0;
     const int mode_before = b->mode0;
     if (s->mode == 0 && mode_before != 0) s->stick_tb = NAN; /* a new stick phase */
-    if (C->on_switch && s->mode != mode_before) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
+    if (s->mode != mode_before) {
+        s->t_switch = s->t;
+        if (C->on_switch) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
+    }
     if (!M->p.observe) return;
     const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop, tb = s->t;
     if (tb < w0 || ta > w1) return;
@@ -403,7 +413,7 @@ static double ramp_gap_fn(void *ctx, double h)
 /* The breakaway inside [ta, tb] with the inputs varying (C->ramp): the side is the one broken
  * through at tb, or at the closed form's breakaway for the loads at tb; the time the root of the
  * gap with the loads varying (Brent, to a few ulps), so that it is placed to second order. */
-static double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+static COLD double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
     const dfo_model *M = C->M;
     int side = 0;
@@ -619,6 +629,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
     dfo_forget_caches(s);
     s->stick_C = s->stick_Fb = s->stick_tb = NAN;
     s->stick_dir = 0;
+    s->t_switch = -INFINITY;
     if (s->V == 0.0 && C.friction) {
         restart_from_rest(&C, s);
     } else {
@@ -695,6 +706,12 @@ static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_end
     return (m > s->n) ? m : s->n;
 }
 
+static COLD void ramp_loads(step_ctx *C, double t_end)
+{
+    dfo_loads_ramp(&C->L, C->M, C->ramp, t_end);
+    C->friction = C->L.Fb > 0.0;
+}
+
 static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                           dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -729,10 +746,7 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
         }
         if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
         C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
-        if (C.ramp) { /* varying inputs: the loads of this step are those at its end (where Bossak reads them) */
-            dfo_loads_at(&C.L, M, C.ramp, t_end);
-            C.friction = C.L.Fb > 0.0;
-        }
+        if (C.ramp) ramp_loads(&C, t_end); /* varying inputs: the loads at the step's end, where Bossak reads them */
         step_to(&C, s, t_end);
         if (C.err != DFO_OK) return C.err;
         /* An overflow is caught within 16 grid steps and at the end of the call (the friction LCP

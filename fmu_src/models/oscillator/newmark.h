@@ -43,6 +43,8 @@ typedef struct {
     double X, V, A, hA;
     double F;      /* friction force at t */
     int mode;      /* -1 backward slip, 0 stuck, +1 forward slip */
+    double t_switch; /* the time of the last stick/slip switch of the Bossak schemes (-inf: none), as
+                      * reported (a switch on a step's end: its t + h, to rounding) */
     /* in-FMU observables over [t_obs_start, t_obs_stop] (only updated when observe is on) */
     double x_max, x_min, t_stuck, E_friction;
     long long transitions;

@@ -336,12 +336,16 @@ static int output_int(const osc_values *v, const dfo_run *r, int id)
 
 /* ---- life cycle ------------------------------------------------------------------------------ */
 
+static dfo_inst_status ramp_refused(osc_instance *in, const char *fn);
+
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     osc_instance *in = osc(lc);
     osc_values *v = &in->v;
     const char *msg = dfo_check_params(&v->p);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
+    if (v->u.ramp && v->p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
+    v->u.t_d = in->lc.run.start_time; /* input derivatives set before: of the start */
     prepare(v, in->lc.run.start_time);
     in->lc.run.time = in->lc.run.start_time;
     const dfo_state *s = &v->s;
@@ -568,8 +572,10 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     if (flags & DFO_STEP_STOP_AT_SWITCH) {
         st = advance_to_switch(in, t_target);
     } else {
-        /* the switches are noted (their time: output derivatives do not exist at one), and logged */
-        st = dfo_advance(&v->M, &v->u, &v->s, t_target, on_switch, in);
+        /* the switches are logged; their times (output derivatives do not exist at one) the Bossak
+         * schemes keep in the state, the exact scheme's are noted by on_switch */
+        const int events = (in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS]) || v->M.p.scheme == DFO_SCHEME_EXACT;
+        st = dfo_advance(&v->M, &v->u, &v->s, t_target, events ? on_switch : NULL, in);
     }
     if (st != DFO_OK) {
         const dfo_state failed = v->s;
@@ -883,7 +889,7 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
     if (v->effects < 0 || (v->effects & ~DFO_MD_EFFECTS_ALL)) return "the effects are invalid";
     const dfo_state *s = &v->s;
     if (!isfinite(s->t) || !isfinite(s->t0) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) ||
-        !isfinite(s->F) || !isfinite(s->hA) || s->n < 0)
+        !isfinite(s->F) || !isfinite(s->hA) || s->n < 0 || isnan(s->t_switch))
         return "the state is not finite";
     if (s->mode < -1 || s->mode > 1) return "the mode is invalid";
     return dfo_grid_implausible(r, s->t0, (long long)s->n, dfo_step_size(&v->p), s->t);
@@ -974,7 +980,11 @@ dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn
 /* The step ended on a switch (left and right limits of the acceleration differ at the current time). */
 static int at_switch(const osc_instance *in)
 {
-    return in->lc.run.event_pending || in->v.t_switch == in->v.s.t;
+    const osc_values *v = &in->v;
+    /* a Bossak scheme's switch on a step's end is reported at its t + h (to rounding): within the
+     * snap tolerance of the end */
+    return in->lc.run.event_pending || v->t_switch == v->s.t ||
+           (v->M.p.scheme != DFO_SCHEME_EXACT && fabs(v->s.t_switch - v->s.t) <= dfo_snap(v->M.p.h, v->s.t));
 }
 
 dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],

@@ -83,12 +83,8 @@ void dfo_inputs_at(const dfo_inputs *u, double t, dfo_inputs *out)
     out->ramp = 0;
 }
 
-void dfo_loads_at(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t)
+void dfo_loads_ramp(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t)
 {
-    if (!u->ramp) {
-        dfo_loads_init(L, M, u);
-        return;
-    }
     dfo_inputs w;
     dfo_inputs_at(u, t, &w);
     dfo_loads_init(L, M, &w);

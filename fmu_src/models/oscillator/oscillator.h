@@ -104,8 +104,13 @@ void dfo_loads_init(dfo_loads *L, const dfo_model *M, const dfo_inputs *in);
 
 /* The inputs at time t: with a ramp its polynomials' values there (out has no ramp), else *u. */
 void dfo_inputs_at(const dfo_inputs *u, double t, dfo_inputs *out);
-/* The loads at time t (dfo_loads_init of dfo_inputs_at). */
-void dfo_loads_at(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t);
+/* The loads at time t (dfo_loads_init of dfo_inputs_at; without a ramp dfo_loads_init itself). */
+void dfo_loads_ramp(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t);
+static inline void dfo_loads_at(dfo_loads *L, const dfo_model *M, const dfo_inputs *u, double t)
+{
+    if (u->ramp) dfo_loads_ramp(L, M, u, t);
+    else dfo_loads_init(L, M, u);
+}
 /* The time derivatives at t of the external force and of the normal force used (0 where that is
  * max(N + N_ext, 0) = 0, and without a ramp). */
 void dfo_input_rates(const dfo_model *M, const dfo_inputs *u, double t, double *dF_ext, double *dN);
