@@ -172,9 +172,13 @@ class ChainSolution:
 
 
 def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-14,
-                max_events: int = 100000, steps_per_period: float = 32.0) -> ChainSolution:
+                max_events: int = 100000, steps_per_period: float = 32.0,
+                F_ext_t: Optional[Callable[[float], np.ndarray]] = None) -> ChainSolution:
     """The event-driven reference on [0, t_end] (see the module docstring). The ODE steps are at
-    most 1/steps_per_period of the shortest time scale (natural or forcing period)."""
+    most 1/steps_per_period of the shortest time scale (natural or forcing period). F_ext_t, when
+    given, is a smooth time-varying external force (n values at time t) added to ch.F_ext: a
+    polynomial or harmonic input of a coupled run; it enters the stuck blocks' breakaway events
+    as the excitation does."""
     if not (np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be finite and > 0, got {t_end}")
     n = ch.n
@@ -185,7 +189,8 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
     Pc, Ps = ch.P0 * np.cos(ch.phi), ch.P0 * np.sin(ch.phi)
 
     def applied(t: float) -> np.ndarray:
-        return Pc * np.cos(ch.omega * t) - Ps * np.sin(ch.omega * t) + u
+        P = Pc * np.cos(ch.omega * t) - Ps * np.sin(ch.omega * t) + u
+        return P if F_ext_t is None else P + np.asarray(F_ext_t(t), dtype=float)
 
     def net(t: float, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         return applied(t) - K @ x - C @ v

@@ -13,10 +13,12 @@
  * 6. the error sentences (order, variable, causality, a derivative at a switch, non-finite values).
  *
  * With arguments it is the driver of tests/test_coupling_chain.py instead:
- *   test_chain_deriv run scheme=S h=H_INT H=H_COMM t_end=T order=K F_amp=a1,a2 F_omega=W
- *                    [m=.. k=.. c=.. P0=.. phi=.. N=.. mu_s=.. chi=.. x0=.. v0=.. (2 values each) omega=..]
- * runs the chain with F_ext_i(t) = F_amp_i sin(F_omega t) given at every communication point with its
- * derivatives up to order K (0: held) and prints "t,x1,x2,v1,v2" per point. */
+ *   test_chain_deriv run scheme=S h=H_INT H=H_COMM t_end=T order=K F_amp=a1,a2 F_omega=W F_lin=b1,b2
+ *                    F_quad=q1,q2 [m=.. k=.. c=.. P0=.. phi=.. N=.. mu_s=.. chi=.. x0=.. v0=.. (2 values
+ *                    each) omega=.. k_end=..]
+ * runs the chain with F_ext_i(t) = F_amp_i sin(F_omega t) + F_lin_i t + F_quad_i t^2 / 2 given at every
+ * communication point with its derivatives up to order K (0: held) and prints "t,x1,x2,v1,v2" per
+ * point. */
 #include "chain_instance.h"
 #include "fmu_state.h"
 #include "instance.h"
@@ -500,7 +502,7 @@ static int run_driver(int argc, char **argv)
     checks C = {0, 0, NULL, {0}};
     checks *T = &C;
     params p = base_params(3);
-    double H = 0.01, t_end = 1.0, F_amp[2] = {0, 0}, F_omega = 1.0;
+    double H = 0.01, t_end = 1.0, F_amp[2] = {0, 0}, F_omega = 1.0, F_lin[2] = {0, 0}, F_quad[2] = {0, 0};
     int order = 0;
     for (int a = 2; a < argc; a++) {
         char key[32];
@@ -520,6 +522,8 @@ static int run_driver(int argc, char **argv)
         else if (!strcmp(key, "k_end")) p.k_end = two[0];
         else if (!strcmp(key, "F_omega")) F_omega = two[0];
         else if (!strcmp(key, "F_amp")) memcpy(F_amp, two, sizeof two);
+        else if (!strcmp(key, "F_lin")) memcpy(F_lin, two, sizeof two);
+        else if (!strcmp(key, "F_quad")) memcpy(F_quad, two, sizeof two);
 #define ARR(name) else if (!strcmp(key, #name)) memcpy(p.name, two, sizeof two);
         ARR(m) ARR(k) ARR(c) ARR(P0) ARR(phi) ARR(N) ARR(mu_s) ARR(chi) ARR(x0) ARR(v0)
 #undef ARR
@@ -536,10 +540,10 @@ static int run_driver(int argc, char **argv)
                get1(in, VR_v, 0), get1(in, VR_v, 1));
         if (s == steps) break;
         for (size_t i = 0; i < N_BLOCKS; i++) {
-            const double w = F_omega, A = F_amp[i];
-            set1(in, VR_F_ext, i, A * sin(w * t));
+            const double w = F_omega, A = F_amp[i], b = F_lin[i], q = F_quad[i];
+            set1(in, VR_F_ext, i, A * sin(w * t) + b * t + 0.5 * q * t * t);
             const unsigned int r = el(VR_F_ext, i);
-            const double d1 = A * w * cos(w * t), d2 = -A * w * w * sin(w * t);
+            const double d1 = A * w * cos(w * t) + b + q * t, d2 = -A * w * w * sin(w * t) + q;
             const int o1 = 1, o2 = 2;
             if (order >= 1) (void)dfo_inst_set_input_derivatives(in, "sid", &r, 1, &o1, &d1);
             if (order >= 2) (void)dfo_inst_set_input_derivatives(in, "sid", &r, 1, &o2, &d2);
