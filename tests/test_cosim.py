@@ -192,9 +192,11 @@ def test_three_oscillators_are_the_three_block_chain_at_second_order(fmu_path: P
     assert np.all(orders(np.array(e)) > 1.7), orders(np.array(e))
 
 
+@pytest.mark.slow
 def test_a_chain_fmu_and_an_oscillator_are_the_three_block_chain(chain_fmu2: Path, fmu_path: Path) -> None:
     """The FMI 2.0 chain (n = 2: blocks 1, 2) and an oscillator (block 3 with the far wall's spring)
-    joined at x[2] and x: the damped, walled case of docs/chain.md, first order with held inputs."""
+    joined at x[2] and x: the damped, walled case of docs/chain.md, first order with held inputs,
+    second order with input derivatives (both FMUs take them)."""
     from chain_cases import CASES
 
     from dryfriction.chain import ChainFMU2
@@ -207,21 +209,30 @@ def test_a_chain_fmu_and_an_oscillator_are_the_three_block_chain(chain_fmu2: Pat
                     mu_s=ch.mu_s[2], chi=ch.chi[2], x0=ch.x0[2], v0=ch.v0[2])
     element = SpringDamper("c", "b3", k=ch.k[2], c=ch.c[2], x=("x[2]", "x"), v=("v[2]", "v"),
                            force=("F_ext[2]", "F_ext"))
-    e = []
     with ChainFMU2(fmu_path=chain_fmu2) as c, OscillatorFMU2(fmu_path) as o:
         assert c.n == 2
-        for div in DIVISIONS:
-            c.start({**sub, "omega": ch.omega, "k_end": 0.0, "c_end": 0.0})
-            o.start(b3, Settings(h=0.0))
-            s = System()
-            s.add("c", c)
-            s.add("b3", o)
-            s.couple(element)
-            res = s.run(PERIODS * period, period / div, record=["c.x[1]"])
-            x = np.column_stack([res["c.x[1]"], res["c.x[2]"], res["b3.x"]])
-            e.append(float(np.max(np.abs(x - ref.evaluate(res.t)["x"]))))
-    np.testing.assert_allclose(e, [0.09704, 0.04705, 0.02306, 0.01147], rtol=1e-2)
-    assert np.all((orders(np.array(e)) > 1.0) & (orders(np.array(e)) < 1.1))
+
+        def errs(**kw: Any) -> np.ndarray:
+            e = []
+            for div in DIVISIONS:
+                c.start({**sub, "omega": ch.omega, "k_end": 0.0, "c_end": 0.0})
+                o.start(b3, Settings(h=0.0))
+                s = System()
+                s.add("c", c)
+                s.add("b3", o)
+                s.couple(element)
+                res = s.run(PERIODS * period, period / div, record=["c.x[1]"], **kw)
+                x = np.column_stack([res["c.x[1]"], res["c.x[2]"], res["b3.x"]])
+                e.append(float(np.max(np.abs(x - ref.evaluate(res.t)["x"]))))
+            return np.array(e)
+
+        e = errs()
+        np.testing.assert_allclose(e, [0.09704, 0.04705, 0.02306, 0.01147], rtol=1e-2)
+        assert np.all((orders(e) > 1.0) & (orders(e) < 1.1))
+        _needs(c.inst.capabilities.can_interpolate_inputs, 'canInterpolateInputs="true" (the chain)')
+        e = errs(inputs="derivatives")  # the chain's F_ext[2] and the oscillator's F_ext as ramps
+        np.testing.assert_allclose(e, [0.002997, 0.0007829, 0.0001963, 4.786e-05], rtol=1e-2)
+        assert np.all(orders(e) > 1.9), orders(e)
 
 
 # ------------------------------------------------------------------------------- stiff coupling
