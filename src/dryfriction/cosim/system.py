@@ -174,6 +174,12 @@ class _Plan:
                 if unit.name in self.u_out:
                     self.dsrc[unit.name] = self._derivative_sources(unit, source)
         self._check_inputs_mode()
+        if correction or tol is not None:
+            for unit in self.units:
+                if not unit.capabilities.can_get_and_set_state:
+                    what = "the correction" if correction else "rollback (tol)"
+                    raise FMUError(f"{what} goes back to saved FMU states: {unit.name} does not declare "
+                                   "canGetAndSetFMUstate=\"true\"")
         self.y = np.zeros(len(out_ports))
         self.d = np.zeros((2, len(out_ports)))   # first and second time derivatives
         self.ty = np.zeros(len(out_ports))       # the time each column was read at
