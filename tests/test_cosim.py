@@ -431,6 +431,26 @@ def test_directional_derivatives_of_the_layer(blocks: Any) -> None:
     assert J[0, 0] == 0.5 and J[1].tolist() == [0.0, 0.0]
 
 
+def test_fmi3_layer_output_directional_and_adjoint_derivatives(fmu3_path: Path) -> None:
+    """fmi3GetOutputDerivatives gives v and a for x, fmi3GetDirectionalDerivative d a / d F_ext =
+    1/m while sliding, fmi3GetAdjointDerivative its transpose (the seed over the unknowns)."""
+    from dryfriction.fmu3 import OscillatorFMU3
+
+    p = Oscillator(m=2.0, k=1.0, P0=3.0, omega=0.6, N=0.1, mu_s=0.5, chi=0.7)
+    with OscillatorFMU3(params=dataclasses.asdict(p), fmu_path=fmu3_path) as f:
+        cap = f.inst.capabilities
+        _needs(cap.directional_derivatives and cap.adjoint_derivatives and cap.max_output_derivative_order >= 2,
+               "providesDirectionalDerivatives, providesAdjointDerivatives, maxOutputDerivativeOrder 2")
+        f.do_step(1.0)
+        assert f.get("mode") != 0
+        x, v, a, F, N = (f.vr(n) for n in ("x", "v", "a", "F_ext", "N_ext"))
+        assert f.inst.get_output_derivatives([x, x], [1, 2]).tolist() == [f.get("v"), f.get("a")]
+        J = f.inst.jacobian([a, x, v], [F, N])
+        assert J[0, 0] == 0.5 and J[1:].tolist() == [[0.0, 0.0], [0.0, 0.0]]
+        seed = np.array([1.0, 2.0, 3.0])
+        np.testing.assert_array_equal(f.inst.get_adjoint_derivative([a, x, v], [F, N], seed), J.T @ seed)
+
+
 def test_directional_jacobian_is_stable_on_the_stiff_coupling(blocks: Any, chain_fmu3: Path) -> None:
     """S from the directional derivatives at the step's start (dt^2/2 d a/dF for x, dt d a/dF for
     v: the free-mass step, blind to a stuck block's breakaway) is cheaper (4 FMU steps per macro
