@@ -488,6 +488,8 @@ def test_coupling_matrix_and_port_checks(blocks: Any) -> None:
 
 def test_result_as_a_dataset(blocks: Any) -> None:
     res = split(blocks).run(T, T / 20)
+    with_bar = split(blocks).run(T, T / 20, progress=True)
+    assert with_bar["b2.x"].tolist() == res["b2.x"].tolist()
     ds = res.to_dataset()
     assert ds.sizes["time"] == 21 and ds["b1.x"].values.tolist() == res["b1.x"].tolist()
     assert np.isnan(res.inputs["b1.F_ext"][-1]) and ds.attrs["steps"] == 20
