@@ -5,7 +5,8 @@ adjoint derivatives of the outputs with respect to the inputs, and FMI 3.0 input
 intermediate update's input points.
 
 References: an event-driven scipy solution with the inputs varying in time (tests/ramp_reference.py),
-differences of the FMU's own trajectory, finite differences of its outputs."""
+the 40-digit one of polynomial inputs (tests/poly_reference.py) for the exact scheme, differences of
+the FMU's own trajectory, finite differences of its outputs."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from fmpy.fmi3 import FMU3Slave
 from dryfriction.fmi3 import default_fmi3_path
 
 from fmi2_helpers import Inst
+from poly_reference import PolyReference
 from ramp_reference import ramp_reference
 
 # a stick-slip case (a reversal, a stick phase and its breakaway in two periods)
@@ -244,14 +246,35 @@ def test_input_derivative_errors(inst: Inst) -> None:
     assert s.getReal([vr("F_ext")])[0] == 0.0
 
 
-def test_exact_scheme_refuses_nonzero_input_derivatives(unzipped: tuple[str, object]) -> None:
-    """The exact scheme's closed form holds the inputs: a nonzero derivative is refused naming the
-    variable and the scheme (0 is accepted, and changes nothing)."""
-    i = start(unzipped, 0.0, "exact")
+def test_exact_scheme_follows_the_ramps(unzipped: tuple[str, object]) -> None:
+    """The exact scheme through the FMU: the ramps as input derivatives at every communication point
+    (the polynomial F_ext = 0.1 + 0.15 t, N_ext = 0.2 - 0.1 t over the whole run) give x and v within
+    1e-12 (relative to their scale) of the independent 40-digit reference (tests/poly_reference.py),
+    at H = T/20 and T/7 (measured 2.4e-15 and 3.2e-15 at T/20, 2.0e-16 and 6.4e-16 at T/7); held, they
+    are 1e-4 off."""
+    ref = PolyReference(**{k: P[k] for k in ("m", "k", "c", "P0", "omega", "N", "mu_s", "chi", "x0", "v0")},
+                        phi=0.0, F=(0.1, DF, 0.0), Next=(0.2, DN, 0.0))
+    ref.solve(T_END)
+    for H in (T / 20, T / 7):
+        n = int(round(T_END / H))
+        xr, vr, _ = ref.evaluate([H * (j + 1) for j in range(n)])
+        run = ramp_run(unzipped, H, 0.0, True, "exact", t_end=n * H)
+        ex = np.abs(run[:, 0] - xr).max() / np.abs(xr).max()
+        ev = np.abs(run[:, 1] - vr).max() / np.abs(vr).max()
+        assert ex < 1e-12 and ev < 1e-12, (H, ex, ev)
+    held = ramp_run(unzipped, T / 20, 0.0, False, "exact")
+    xr, _, _ = ref.evaluate([T / 20 * (j + 1) for j in range(len(held))])
+    assert np.abs(held[:, 0] - xr).max() > 1e-5
+
+
+def test_exact_scheme_without_spring_refuses_input_derivatives(unzipped: tuple[str, object]) -> None:
+    """k = 0: the exact scheme does not follow input derivatives yet: a nonzero one is refused naming
+    the variable and the scheme (0 is accepted, and changes nothing)."""
+    i = start(unzipped, 0.0, "exact", k=0.0)
     try:
         i.s.setRealInputDerivatives([i.vr("F_ext")], [1], [0.0])
         i.expect_error(i.s.setRealInputDerivatives, [i.vr("N_ext")], [1], [1.0],
-                       contains=("N_ext", "scheme exact", "paper, consistent or located"))
+                       contains=("N_ext", "scheme exact", "k = 0", "paper, consistent or located"))
         i.s.doStep(0.0, 0.1)
     finally:
         i.free()

@@ -768,7 +768,15 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
 {
     /* the exact scheme (exact.c) has no grid to snap to: it ends exactly on the host's time, where its
      * closed form is exact (two hosts whose clocks differ by rounding get the motion at their times) */
-    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
+    if (M->p.scheme == DFO_SCHEME_EXACT) {
+        if (!in->ramp) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
+        /* varying inputs: its closed form with the input polynomials (the values at t_d held apart) */
+        dfo_inputs held = *in;
+        const dfo_input_poly q = {in->t_d, {in->F_ext_d[0], in->F_ext_d[1]}, {in->N_ext_d[0], in->N_ext_d[1]}};
+        held.F_ext_d[0] = held.F_ext_d[1] = held.N_ext_d[0] = held.N_ext_d[1] = 0.0;
+        held.ramp = 0;
+        return dfo_exact_advance_poly(M, &held, &q, s, t_target, on_switch, switch_ctx);
+    }
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;

@@ -108,7 +108,8 @@ double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
 /* Advance to t_target > s->t, with the inputs held constant, or with in->ramp varying as their
  * polynomials: every internal step (and sub-step of the located scheme) then takes the loads at its
  * end, and a stick phase's breakaway is the root of the varying static force (second order). The
- * exact scheme does not take a ramp (the caller refuses it). on_switch may be NULL.
+ * exact scheme follows the polynomials in closed form (exact.h's dfo_exact_advance_poly; not with
+ * k = 0 yet: dfo_exact_poly_unsupported, which the caller checks). on_switch may be NULL.
  * Contract: on DFO_OK, s->t is exactly dfo_snap_target(M, s_before, t_target): t_target itself or
  * the grid point it snapped to (the caller keeps and reports its own time). Everything after a
  * snap is exactly as if the grid point had been requested (same steps, same excitation cache,

@@ -5,6 +5,7 @@
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmu_state.h"
 #include "instance_common.h"
+#include "exact.h"
 #include "osc_instance.h"
 
 #include <float.h>
@@ -337,6 +338,7 @@ static int output_int(const osc_values *v, const dfo_run *r, int id)
 /* ---- life cycle ------------------------------------------------------------------------------ */
 
 static dfo_inst_status ramp_refused(osc_instance *in, const char *fn);
+static const char *ramp_unsupported(const dfo_params *p);
 
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
@@ -344,7 +346,7 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     osc_values *v = &in->v;
     const char *msg = dfo_check_params(&v->p);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
-    if (v->u.ramp && v->p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
+    if (v->u.ramp && ramp_unsupported(&v->p)) return ramp_refused(in, fn);
     v->u.t_d = in->lc.run.start_time; /* input derivatives set before: of the start */
     prepare(v, in->lc.run.start_time);
     in->lc.run.time = in->lc.run.start_time;
@@ -528,18 +530,29 @@ static void end_ramp(osc_values *v)
     v->u = w;
 }
 
-/* The exact scheme does not take input derivatives (its closed form is of held inputs). */
+/* Why the exact scheme cannot follow input derivatives on these parameters (NULL: it can, and the
+ * Bossak schemes always can). */
+static const char *ramp_unsupported(const dfo_params *p)
+{
+    if (p->scheme != DFO_SCHEME_EXACT) return NULL;
+    dfo_model M;
+    dfo_model_init(&M, p);
+    return dfo_exact_poly_unsupported(&M);
+}
+
 static const char *ramped_inputs(const dfo_inputs *u)
 {
     const int F = u->F_ext_d[0] != 0.0 || u->F_ext_d[1] != 0.0, N = u->N_ext_d[0] != 0.0 || u->N_ext_d[1] != 0.0;
     return F && N ? "F_ext and N_ext" : F ? "F_ext" : "N_ext";
 }
 
+/* Input derivatives set that the scheme cannot follow (checked again at every step: the parameters
+ * may have changed since they were set): an error naming the inputs and the scheme. */
 static dfo_inst_status ramp_refused(osc_instance *in, const char *fn)
 {
-    return dfo_inst_fail(&in->lc, "%s: input derivatives of %s are not supported with scheme exact (its closed "
-                         "form holds the inputs over the step): set them to 0, or choose scheme paper, consistent or "
-                         "located.", fn, ramped_inputs(&in->v.u));
+    return dfo_inst_fail(&in->lc, "%s: input derivatives of %s are not supported with scheme exact here: %s; set "
+                         "them to 0, or choose scheme paper, consistent or located.", fn, ramped_inputs(&in->v.u),
+                         ramp_unsupported(&in->v.p));
 }
 
 /* A failed step: the outputs stay those of the last good state, the instance is in error. */
@@ -565,7 +578,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
-    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
+    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && ramp_unsupported(&v->M.p)) return ramp_refused(in, fn);
     const dfo_state before = v->s;
     if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
     dfo_status st;
@@ -769,7 +782,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     dfo_inst_status done;
     double t_target = 0.0;
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
-    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT) return ramp_refused(in, fn);
+    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && ramp_unsupported(&v->M.p)) return ramp_refused(in, fn);
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!same_inputs(&v->u, &v->u_used)) {
         dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
@@ -918,7 +931,7 @@ dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const un
 /* ---- coupling at second order (core/instance.h) ----------------------------------------------
  *
  * Input derivatives: F_ext and N_ext, orders 1 and 2, for the next step (the Bossak schemes take the
- * input polynomial at every internal step; the exact scheme refuses nonzero ones). Output
+ * input polynomial at every internal step, the exact scheme in closed form; not yet with k = 0). Output
  * derivatives: x (order 1 v, order 2 a) and v (order 1 a, order 2 da/dt), none at a switch on the
  * current time (left and right limits differ). Directional and adjoint derivatives: of the outputs
  * with respect to F_ext, N_ext at the current point, the direct feed-through of a and F_friction by
@@ -955,10 +968,11 @@ dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn
         if (!isfinite(value[i]))
             return dfo_inst_fail(lc, "%s: invalid value %.17g of the order-%d derivative of %s (value reference %u); "
                                  "valid range: finite.", fn, value[i], order[i], var->name, vr[i]);
-        if (value[i] != 0.0 && v->p.scheme == DFO_SCHEME_EXACT)
+        const char *why = value[i] != 0.0 ? ramp_unsupported(&v->p) : NULL;
+        if (why)
             return dfo_inst_fail(lc, "%s: input derivatives of %s (value reference %u) are not supported with scheme "
-                                 "exact (its closed form holds the inputs over the step): set them to 0, or choose "
-                                 "scheme paper, consistent or located.", fn, var->name, vr[i]);
+                                 "exact here: %s; set them to 0, or choose scheme paper, consistent or located.", fn,
+                                 var->name, vr[i], why);
     }
     const double t_now = (lc->run.phase & (DFO_PHASE_INSTANTIATED | DFO_PHASE_INIT)) ? lc->run.start_time
                                                                                       : dfo_inst_time(lc);
