@@ -18,6 +18,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
     ("frequency_sweep.py", ["--num", "3"]),
     ("cosimulation.py", ["--periods", "20"]),
     ("rollback.py", []),
+    ("split_chain.py", ["--periods", "4"]),
 ])
 def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path) -> None:
     if name == "frequency_sweep.py":
@@ -30,7 +31,10 @@ def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path
         assert "converged" in r.stdout and (tmp_path / "sweep.png").stat().st_size > 0
     if name == "rollback.py":
         assert "bit-identical: True" in r.stdout
+    if name == "split_chain.py":
+        assert "inputs hold" in r.stdout and "inputs extrapolate" in r.stdout
 
 
 def test_examples_are_all_tested() -> None:
-    assert sorted(p.name for p in EXAMPLES.glob("*.py")) == ["cosimulation.py", "frequency_sweep.py", "rollback.py"]
+    assert sorted(p.name for p in EXAMPLES.glob("*.py")) == ["cosimulation.py", "frequency_sweep.py", "rollback.py",
+                                                                 "split_chain.py"]

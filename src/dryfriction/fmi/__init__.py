@@ -10,7 +10,9 @@ once, every status checked (OK and Warning pass, anything else is an
 with a warning status emitted as :class:`~dryfriction.diagnostics.DryFrictionWarning`, FMU states
 that free themselves with their instance, and the fast path of hot loops (:meth:`bulk_get` /
 :meth:`bulk_set`: one typed call into preallocated numpy buffers, the status checked only when it
-is not OK). fmpy is not used to call the FMU; it only unzips archives and names the platform's
+is not OK), and the coupling calls (input, output, directional and adjoint derivatives,
+inputs set during an FMI 3.0 step, the capabilities the model description declares; used by
+:mod:`dryfriction.cosim`). fmpy is not used to call the FMU; it only unzips archives and names the platform's
 binary folder.
 """
 

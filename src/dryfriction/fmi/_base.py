@@ -8,6 +8,7 @@ import os
 import threading
 from collections.abc import Callable, Sequence
 from ctypes import c_void_p
+from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -15,7 +16,8 @@ from typing import Any
 from ..diagnostics import emit
 from ..errors import FMUCallError
 
-__all__ = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "BaseInstance", "State", "load_library"]
+__all__ = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "BaseInstance", "Capabilities", "State", "load_library",
+           "read_capabilities"]
 
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
 
@@ -33,6 +35,49 @@ def load_library(path: str, signatures: dict[str, tuple[Any, tuple[Any, ...]]]) 
         fn.restype, fn.argtypes = restype, (c_void_p, *argtypes)
         fns[fname[4:]] = fn
     return dll, SimpleNamespace(**fns)
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What an FMU's ``<CoSimulation>`` element declares about coupling (both FMI versions):
+    FMI 2.0 ``canInterpolateInputs``, ``maxOutputDerivativeOrder``, ``providesDirectionalDerivative``;
+    FMI 3.0 ``maxOutputDerivativeOrder``, ``providesDirectionalDerivatives``,
+    ``providesAdjointDerivatives``, ``providesIntermediateUpdate``, and the value references of
+    the variables declared ``intermediateUpdate="true"``. Missing attributes take the standard's
+    defaults (false, 0)."""
+
+    fmi_version: int = 2
+    can_interpolate_inputs: bool = False
+    max_output_derivative_order: int = 0
+    directional_derivatives: bool = False
+    adjoint_derivatives: bool = False
+    can_get_and_set_state: bool = False
+    intermediate_update: bool = False
+    #: value references of the variables a host may set or get during an intermediate update
+    intermediate_vrs: tuple[int, ...] = ()
+
+
+def read_capabilities(unzip_dir: str | os.PathLike[str]) -> Capabilities:
+    """The coupling capabilities of the FMU unzipped to ``unzip_dir`` (its modelDescription.xml)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(Path(unzip_dir) / "modelDescription.xml").getroot()
+    cs = root.find("CoSimulation")
+    a = cs.attrib if cs is not None else {}
+
+    def flag(name: str) -> bool:
+        return a.get(name, "false").strip().lower() == "true"
+
+    version = 3 if root.attrib.get("fmiVersion", "2").startswith("3") else 2
+    order = int(a.get("maxOutputDerivativeOrder", "0"))
+    if version == 2:
+        return Capabilities(2, flag("canInterpolateInputs"), order, flag("providesDirectionalDerivative"), False,
+                            flag("canGetAndSetFMUstate"))
+    mv = root.find("ModelVariables")
+    vrs = tuple(int(v.attrib["valueReference"]) for v in (mv if mv is not None else [])
+                if v.attrib.get("intermediateUpdate", "false") == "true")
+    return Capabilities(3, False, order, flag("providesDirectionalDerivatives"), flag("providesAdjointDerivatives"),
+                        flag("canGetAndSetFMUState"), flag("providesIntermediateUpdate"), vrs)
 
 
 class State:
@@ -77,6 +122,15 @@ class BaseInstance:
         self._warnings: list[str] = []  # logged with a warning status, not yet emitted
         self._states: list[State] = []
         self.component = 0
+        self._unzip_dir = ""
+        self._capabilities: Capabilities | None = None
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """What the FMU's model description declares about coupling (read once)."""
+        if self._capabilities is None:
+            self._capabilities = read_capabilities(self._unzip_dir)
+        return self._capabilities
 
     # ---- log and status ---------------------------------------------------------------------------
     def _logged(self, status: int, category: bytes | None, message: bytes | None) -> None:

@@ -26,11 +26,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import FMUCallError, FMUError, FMUFileError, status_name as _status_name
-from ._base import BaseInstance, State, binary_path, load_library
+from ._base import BaseInstance, Capabilities, State, binary_path, load_library
 
 __all__ = [
     "OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING", "STATUS_NAMES", "LAST_SUCCESSFUL_TIME",
-    "FMUError", "FMUCallError", "Instance", "State", "library_path", "status_name",
+    "FMUError", "FMUCallError", "Instance", "State", "Capabilities", "library_path", "status_name",
 ]
 
 # ---- fmi2Status -----------------------------------------------------------------------------------
@@ -85,6 +85,9 @@ _SIGNATURES: dict[str, tuple[Any, tuple[Any, ...]]] = {
     "fmi2SerializedFMUstateSize": (_I, (_VP, _VP)),
     "fmi2SerializeFMUstate": (_I, (_VP, _VP, _SZ)),
     "fmi2DeSerializeFMUstate": (_I, (_VP, _SZ, _VP)),
+    "fmi2SetRealInputDerivatives": (_I, (_VP, _SZ, _VP, _VP)),
+    "fmi2GetRealOutputDerivatives": (_I, (_VP, _SZ, _VP, _VP)),
+    "fmi2GetDirectionalDerivative": (_I, (_VP, _SZ, _VP, _SZ, _VP, _VP)),
 }
 _CTYPE = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
 #: numpy dtype of the values of each get/set family (fmi2Boolean is an int)
@@ -128,6 +131,7 @@ class Instance(BaseInstance):
             raise FMUCallError(self._last_message(0) or "fmi2Instantiate returned NULL", "fmi2Instantiate", ERROR)
         #: the fmi2Component (an address)
         self.component = comp
+        self._unzip_dir = str(unzip_dir)
 
     def _log(self, env: Any, name: bytes, status: int, category: bytes, message: bytes) -> None:
         self._logged(status, category, message)
@@ -196,6 +200,50 @@ class Instance(BaseInstance):
             raise ValueError(f"{n} value references but {len(values)} values")
         conv = float if kind == "Real" else int
         self.call(f"Set{kind}", (c_uint * n)(*vrs), n, (_CTYPE[kind] * n)(*[conv(v) for v in values]))
+
+    # ---- coupling at second order (canInterpolateInputs, maxOutputDerivativeOrder,
+    #      providesDirectionalDerivative) ------------------------------------------------------------
+    def set_real_input_derivatives(self, vrs: Sequence[int], orders: Sequence[int] | int,
+                                   values: Sequence[float]) -> None:
+        """fmi2SetRealInputDerivatives: the ``orders[i]``-th time derivative of the real input
+        ``vrs[i]`` at the current communication point (held for the next fmi2DoStep only, as the
+        standard says). The FMU checks the order against what it takes; a host that asks an FMU
+        declaring ``canInterpolateInputs="false"`` gets its refusal as :class:`FMUCallError`."""
+        n = len(vrs)
+        order = [int(orders)] * n if isinstance(orders, int) else [int(o) for o in orders]
+        if len(order) != n or len(values) != n:
+            raise ValueError(f"{n} value references need {n} orders and {n} values, not {len(order)} and "
+                             f"{len(values)}")
+        self.call("SetRealInputDerivatives", (c_uint * n)(*vrs), n, (c_int * n)(*order),
+                  (c_double * n)(*[float(v) for v in values]))
+
+    def get_real_output_derivatives(self, vrs: Sequence[int], orders: Sequence[int] | int) -> np.ndarray:
+        """fmi2GetRealOutputDerivatives: the ``orders[i]``-th time derivative of the real output
+        ``vrs[i]`` at the current communication point (an error where it does not exist)."""
+        n = len(vrs)
+        order = [int(orders)] * n if isinstance(orders, int) else [int(o) for o in orders]
+        if len(order) != n:
+            raise ValueError(f"{n} value references need {n} orders, not {len(order)}")
+        out = np.empty(n)
+        self.call("GetRealOutputDerivatives", (c_uint * n)(*vrs), n, (c_int * n)(*order), out.ctypes.data)
+        return out
+
+    def get_directional_derivative(self, unknowns: Sequence[int], knowns: Sequence[int],
+                                   seed: Sequence[float]) -> np.ndarray:
+        """fmi2GetDirectionalDerivative: ``J seed`` with ``J = d unknowns / d knowns`` at the current point."""
+        nu, nk = len(unknowns), len(knowns)
+        if len(seed) != nk:
+            raise ValueError(f"{nk} knowns need a seed of {nk} values, not {len(seed)}")
+        out = np.empty(nu)
+        self.call("GetDirectionalDerivative", (c_uint * nu)(*unknowns), nu, (c_uint * nk)(*knowns), nk,
+                  (c_double * nk)(*[float(v) for v in seed]), out.ctypes.data)
+        return out
+
+    def jacobian(self, unknowns: Sequence[int], knowns: Sequence[int]) -> np.ndarray:
+        """The matrix ``d unknowns / d knowns`` [nu, nk], one directional derivative per known."""
+        nk = len(knowns)
+        cols = [self.get_directional_derivative(unknowns, knowns, np.eye(nk)[j]) for j in range(nk)]
+        return np.column_stack(cols) if cols else np.empty((len(unknowns), 0))
 
     def _bulk(self, what: str, kind: str, vrs: Sequence[int], n_values: int | None) -> Callable[[int], None]:
         if n_values is not None and n_values != len(vrs):

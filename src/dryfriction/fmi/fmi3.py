@@ -29,10 +29,11 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import FMUCallError, FMUError, FMUFileError, status_name as _status_name
-from ._base import BaseInstance, State, binary_path, load_library
+from ._base import BaseInstance, Capabilities, State, binary_path, load_library
 
 __all__ = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "STATUS_NAMES", "FMUError", "FMUCallError", "Instance",
-           "State", "StepResult", "DiscreteStates", "IntermediateUpdate", "library_path", "status_name", "DTYPES"]
+           "State", "StepResult", "DiscreteStates", "IntermediateUpdate", "IntermediateInputs", "Capabilities",
+           "library_path", "status_name", "DTYPES"]
 
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
 STATUS_NAMES = ("fmi3OK", "fmi3Warning", "fmi3Discard", "fmi3Error", "fmi3Fatal")
@@ -72,6 +73,9 @@ _SIGNATURES: dict[str, tuple[Any, tuple[Any, ...]]] = {
     "fmi3SerializedFMUStateSize": (_I, (_VP, _VP)),
     "fmi3SerializeFMUState": (_I, (_VP, _VP, _SZ)),
     "fmi3DeserializeFMUState": (_I, (_VP, _SZ, _VP)),
+    "fmi3GetOutputDerivatives": (_I, (_VP, _SZ, _VP, _VP, _SZ)),
+    "fmi3GetDirectionalDerivative": (_I, (_VP, _SZ, _VP, _SZ, _VP, _SZ, _VP, _SZ)),
+    "fmi3GetAdjointDerivative": (_I, (_VP, _SZ, _VP, _SZ, _VP, _SZ, _VP, _SZ)),
 }
 _CTYPE = {"Float64": c_double, "Int32": c_int32, "Int64": c_int64, "UInt64": c_uint64, "Boolean": c_bool}
 #: numpy dtype of the values of each get/set family (fmi3Boolean is C's bool: one byte)
@@ -108,6 +112,10 @@ class IntermediateUpdate(NamedTuple):
     get_allowed: bool
     step_finished: bool
     can_return_early: bool
+
+
+#: what a master sets at an intermediate update: ``f(time) -> (value references, Float64 values)``
+IntermediateInputs = Callable[[float], tuple[Sequence[int], Sequence[float]]]
 
 
 def library_path(unzip_dir: str | os.PathLike[str], model_identifier: str) -> Path:
@@ -155,6 +163,8 @@ class Instance(BaseInstance):
                                "fmi3InstantiateCoSimulation", ERROR)
         #: the fmi3Instance (an address)
         self.component = comp
+        self._unzip_dir = str(unzip_dir)
+        self._inputs_during_step: IntermediateInputs | None = None
         self._step_out = (c_bool(), c_bool(), c_bool(), c_double())
         self._step_refs = tuple(byref(x) for x in self._step_out)
 
@@ -165,6 +175,8 @@ class Instance(BaseInstance):
                    can_return: bool, early_requested: Any, early_time: Any) -> None:
         assert self._user_update is not None
         try:
+            if set_requested and self._inputs_during_step is not None:
+                self._set_intermediate(float(t))
             want = bool(self._user_update(IntermediateUpdate(t, bool(set_requested), bool(get_allowed),
                                                              bool(step_finished), bool(can_return))))
         except BaseException as e:  # noqa: BLE001 - raised again when the step returns
@@ -172,6 +184,68 @@ class Instance(BaseInstance):
             want = bool(can_return)
         early_requested[0] = want
         early_time[0] = t
+
+    def _set_intermediate(self, t: float) -> None:
+        assert self._inputs_during_step is not None
+        vrs, values = self._inputs_during_step(t)
+        n = len(vrs)
+        if n:
+            self.call("SetFloat64", (c_uint32 * n)(*vrs), n, (c_double * n)(*[float(v) for v in values]), n)
+
+    def set_intermediate_inputs(self, inputs: IntermediateInputs | None) -> None:
+        """Let a master set inputs during a step: at every intermediate update at which the FMU
+        requests them (``intermediateVariableSetRequested``), ``inputs(t)`` gives the value
+        references and Float64 values to set (variables declared ``intermediateUpdate="true"``;
+        the FMU checks that), before the instance's own callback runs. ``None`` stops it. Needs an
+        instance made with an ``intermediate_update`` callback (the C callback is fixed at
+        instantiation); an exception raised in ``inputs`` is raised again when the step returns."""
+        if inputs is not None and self._user_update is None:
+            raise FMUError("inputs during a step need an instance made with an intermediate_update callback "
+                           "(fmi3InstantiateCoSimulation takes the callback once)")
+        self._inputs_during_step = inputs
+
+    # ---- output, directional and adjoint derivatives ------------------------------------------------
+    def get_output_derivatives(self, vrs: Sequence[int], orders: Sequence[int] | int,
+                               n_values: int | None = None) -> np.ndarray:
+        """fmi3GetOutputDerivatives: the ``orders[i]``-th time derivative of the Float64 output
+        ``vrs[i]`` at the current time (``n_values`` in all: arrays); an error where it does not exist."""
+        nvr = len(vrs)
+        order = [int(orders)] * nvr if isinstance(orders, int) else [int(o) for o in orders]
+        if len(order) != nvr:
+            raise ValueError(f"{nvr} value references need {nvr} orders, not {len(order)}")
+        n = nvr if n_values is None else int(n_values)
+        out = np.empty(n)
+        self.call("GetOutputDerivatives", (c_uint32 * nvr)(*vrs), nvr, (c_int32 * nvr)(*order), out.ctypes.data, n)
+        return out
+
+    def _derivative(self, fn: str, unknowns: Sequence[int], knowns: Sequence[int], seed: Sequence[float],
+                    n_out: int) -> np.ndarray:
+        nu, nk, ns = len(unknowns), len(knowns), len(seed)
+        out = np.empty(int(n_out))
+        self.call(fn, (c_uint32 * nu)(*unknowns), nu, (c_uint32 * nk)(*knowns), nk,
+                  (c_double * ns)(*[float(v) for v in seed]), ns, out.ctypes.data, out.size)
+        return out
+
+    def get_directional_derivative(self, unknowns: Sequence[int], knowns: Sequence[int], seed: Sequence[float],
+                                   n_unknown_values: int | None = None) -> np.ndarray:
+        """fmi3GetDirectionalDerivative: ``J seed``, ``J = d unknowns / d knowns`` (seed: one
+        value per element of the knowns; the result one per element of the unknowns, default one
+        per reference)."""
+        return self._derivative("GetDirectionalDerivative", unknowns, knowns, seed,
+                                len(unknowns) if n_unknown_values is None else n_unknown_values)
+
+    def get_adjoint_derivative(self, unknowns: Sequence[int], knowns: Sequence[int], seed: Sequence[float],
+                               n_known_values: int | None = None) -> np.ndarray:
+        """fmi3GetAdjointDerivative: ``J^T seed`` (seed over the unknowns, the result over the knowns)."""
+        return self._derivative("GetAdjointDerivative", unknowns, knowns, seed,
+                                len(knowns) if n_known_values is None else n_known_values)
+
+    def jacobian(self, unknowns: Sequence[int], knowns: Sequence[int]) -> np.ndarray:
+        """The matrix ``d unknowns / d knowns`` [nu, nk] of scalar variables, one directional
+        derivative per known."""
+        nk = len(knowns)
+        cols = [self.get_directional_derivative(unknowns, knowns, np.eye(nk)[j]) for j in range(nk)]
+        return np.column_stack(cols) if cols else np.empty((len(unknowns), 0))
 
     # ---- life cycle -------------------------------------------------------------------------------
     def enter_configuration_mode(self) -> None:
