@@ -33,3 +33,32 @@ double dfo_next_breakaway(const dfo_harmonic *P, const dfo_loads *L, double C0, 
     *dir = (up <= down) ? 1 : -1;
     return ta + fmin(up, down) / w;
 }
+
+/* (u / v_s)^delta for u >= 0: exact products for delta 1 and 2 (the same bits everywhere). */
+static double stribeck_power(const dfo_friction_law *F, double u)
+{
+    const double r = u / F->v_s;
+    if (F->delta == 1.0) return r;
+    if (F->delta == 2.0) return r * r;
+    if (r == 0.0) return 0.0;
+    return dfo_pow_pos(r, F->delta);
+}
+
+double dfo_friction_mu(const dfo_friction_law *F, double u)
+{
+    if (F->law != DFO_LAW_STRIBECK) return F->mu_k;
+    return F->mu_k + (F->mu_s - F->mu_k) * dfo_exp(-stribeck_power(F, u));
+}
+
+double dfo_friction_dmu(const dfo_friction_law *F, double u)
+{
+    if (F->law != DFO_LAW_STRIBECK) return 0.0;
+    const double r = u / F->v_s;
+    /* d/du (r^delta) = delta r^(delta - 1) / v_s */
+    double dp;
+    if (F->delta == 1.0) dp = 1.0 / F->v_s;
+    else if (F->delta == 2.0) dp = 2.0 * r / F->v_s;
+    else if (r == 0.0) dp = F->delta > 1.0 ? 0.0 : INFINITY;
+    else dp = F->delta * dfo_pow_pos(r, F->delta - 1.0) / F->v_s;
+    return -(F->mu_s - F->mu_k) * dp * dfo_exp(-stribeck_power(F, u));
+}

@@ -74,4 +74,17 @@ static inline double dfo_breakaway_accel(double m, const dfo_loads *L, int dir, 
  * Closed form: a force that crosses the limit and comes back between two samples is not missed. */
 double dfo_next_breakaway(const dfo_harmonic *P, const dfo_loads *L, double C0, double ta, int *dir);
 
+/* The friction law of a sliding block: its coefficient at the speed u >= 0 relative to the surface.
+ *   DFO_LAW_COULOMB  (1): mu(u) = mu_k
+ *   DFO_LAW_STRIBECK (2): mu(u) = mu_k + (mu_s - mu_k) exp(-(u / v_s)^delta),  v_s > 0, delta > 0
+ * (the enumeration friction_law of both models' descriptions). mu(0) = mu_s for Stribeck. */
+enum { DFO_LAW_COULOMB = 1, DFO_LAW_STRIBECK = 2 };
+typedef struct {
+    int law;
+    double mu_s, mu_k, v_s, delta;
+} dfo_friction_law;
+/* mu(u), and its derivative d mu / du (u > 0; at u = 0 the right derivative, -INFINITY for delta < 1). */
+double dfo_friction_mu(const dfo_friction_law *F, double u);
+double dfo_friction_dmu(const dfo_friction_law *F, double u);
+
 #endif
