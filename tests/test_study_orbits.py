@@ -58,22 +58,31 @@ def _rows(d: Path) -> tuple[list[dict], dict]:
 
 # ---- Fig. 8/9 ------------------------------------------------------------------------------------
 
+def _symmetric(a: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Per row (one chi): one amplitude and zero asymmetry over the runs, 1e-3 of the median amplitude."""
+    med = np.median(a, axis=1)
+    return ((a.max(1) - a.min(1)) / med < 1e-3) & (np.abs(s).max(1) / med < 1e-3)
+
+
 def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> None:
     bifs, doc = _rows(band)
-    sc = read_netcdf(band / "fig8_9.nc")
-    chi = sc.chi.values
-    step = float(np.diff(chi).max())
-    # the scatter's own bracket, recomputed here: symmetric periodic = one amplitude and zero
-    # asymmetry over all initial conditions (1e-3 of the median amplitude)
-    a = sc.amplitude.values.reshape(chi.size, -1)
-    s = sc.asymmetry.values.reshape(chi.size, -1)
-    med = np.median(a, axis=1)
-    sym = ((a.max(1) - a.min(1)) / med < 1e-3) & (np.abs(s).max(1) / med < 1e-3)
-    i = int(np.argmax(sym))                              # lowest chi of the symmetric range (quick: 0.6)
-    assert sym[i:].all() and not sym[i - 1]
+    # the long runs' bracket, recomputed here: the lowest chi of the symmetric range and the value
+    # below it, one step of the scatter's grid apart
+    lr = read_netcdf(band / "long_runs.nc")
+    chi = lr.chi.values
+    sym = _symmetric(lr.amplitude.values, lr.asymmetry.values)
+    i = int(np.argmax(sym))                              # quick: 0.6
+    assert i > 0 and sym[i:].all() and not sym[i - 1]
     lo, hi = chi[i - 1], chi[i]
     assert doc["brute_force"]["symmetry_breaking"] == [pytest.approx(lo, abs=1e-15), pytest.approx(hi, abs=1e-15)]
-    assert hi - lo == pytest.approx(step, rel=1e-12)
+    sc = read_netcdf(band / "fig8_9.nc")
+    assert hi - lo == pytest.approx(float(np.diff(sc.chi.values).max()), rel=1e-12)
+    # below the bracket the long runs end on the mirror pair (asymmetry of both signs)
+    s_lo = lr.asymmetry.values[i - 1]
+    assert s_lo.max() > 0.1 and s_lo.min() < -0.1
+    # the 30-period snapshot's bracket is written beside it (no lower than the long runs')
+    snap = doc["snapshot_symmetry_breaking"]
+    assert snap[1] >= hi
 
     (sb,) = [b for b in bifs if b["type"] == "symmetry_breaking"]
     assert lo < sb["param_value"] < hi and sb["within_brute_force"] is True
@@ -168,3 +177,20 @@ def test_fig10_11_bifurcations_written(freq: Path) -> None:
                                             if b["type"] == "fold" and b["figure"] == "fig11"})
     for name in ("fig10_orbits.png", "fig11_orbits.png"):
         assert (freq / name).stat().st_size > 10_000
+
+
+def test_branches_do_not_jump(band: Path, freq: Path) -> None:
+    """Consecutive points of a branch are at most a few steps apart (the arclength step is at most
+    ds_max = 0.1 or 0.2 in static deflections): a corrector that lands on another orbit (as the
+    solve at the end of a range once did, from the two-stop motion at chi = 0.5 onto the four-stop
+    one at lambda = 0.05, 0.44 apart) would show here."""
+    for path, bound in ((band / "branches.nc", 0.6), (freq / "fig10_branches.nc", 0.3), (freq / "fig11_branches.nc", 0.3)):
+        br = xr.load_dataset(path)
+        seg = br.segment.values if "segment" in br else np.zeros(br.point.size)
+        bid, ok, amp = br.branch.values, br.converged.values.astype(bool), br.amplitude_z.values
+        worst = 0.0
+        for key in set(zip(seg, bid)):
+            idx = np.where((seg == key[0]) & (bid == key[1]) & ok)[0]
+            if idx.size > 1:
+                worst = max(worst, float(np.abs(np.diff(amp[idx])).max()))
+        assert 0 < worst <= bound, (path.name, worst)

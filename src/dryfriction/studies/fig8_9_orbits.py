@@ -4,10 +4,14 @@ and any fold located by the continuation (dryfriction.continuation) and set agai
 numbers.
 
 The scatter is the fig8_9 study's own sweep (its config, its chunks when it has run). The
-brute-force bracket of the symmetry breaking is read from that scatter: the lowest chi of its
-symmetric periodic range and the grid value below it (the sweep's resolution). The period doubling
-cannot be seen in 30-period snapshots; its bracket is ``brute_force.period_doubling``, the long
-runs of docs/chaos.md (from (0, 0), 20,000 periods: period 2 at chi = 0.236, period 1 at 0.237).
+brute-force bracket of the symmetry breaking is that of long runs at the scatter's values of chi
+(``brute_force.long_periods`` periods from five initial conditions of the scatter's grid: its
+corners and centre; the lowest chi of the symmetric range and the grid value below it, the sweep's
+resolution): next to the pitchfork the asymmetry decays slowly (a multiplier near 1), so the
+30-period snapshot still shows it at chi = 0.56 and 0.58 (its own bracket, [0.58, 0.60] at full
+size, is written too). The period doubling cannot be seen in 30-period snapshots either; its
+bracket is ``brute_force.period_doubling``, the long runs of docs/chaos.md (from (0, 0), 20,000
+periods: period 2 at chi = 0.236, period 1 at 0.237).
 """
 
 from __future__ import annotations
@@ -18,11 +22,11 @@ from typing import Any
 import numpy as np
 
 from ..continuation_cli import plot_branches
-from ..sweep import observables_dataset
+from ..sweep import SweepSpec, observables_dataset
 from . import fig8_9_bifurcation as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations
-from .common import StudyContext, plt
+from .common import StudyContext, plt, sweep_settings, table
 from .config import require
 
 NAME = "fig8_9_orbits"
@@ -40,6 +44,8 @@ def check(cfg: dict[str, Any]) -> None:
     require(c["start"] > 0 and c["stop"] > 0, "continuation.start and continuation.stop (chi) must be > 0")
     pd = cfg["brute_force"]["period_doubling"]
     require(len(pd) == 2 and pd[0] <= pd[1], f"brute_force.period_doubling must be [lo, hi], lo <= hi, not {pd}")
+    require(cfg["brute_force"]["long_periods"] >= 2, "brute_force.long_periods must be >= 2, "
+                                                     f"not {cfg['brute_force']['long_periods']}")
 
 
 def sb_bracket(chi: np.ndarray, sym: np.ndarray) -> tuple[float, float]:
@@ -51,6 +57,29 @@ def sb_bracket(chi: np.ndarray, sym: np.ndarray) -> tuple[float, float]:
     i = int(np.argmin(np.abs(chi - lo)))
     below = chi[chi < lo]
     return (float(below.max()) if below.size else math.nan), float(chi[i])
+
+
+def long_runs(ctx: StudyContext, chi: np.ndarray, ax: dict[str, np.ndarray]) -> Any:
+    """The scatter's attractors after ``brute_force.long_periods`` periods from five initial
+    conditions (the corners and the centre of the scatter's grid), at the values ``chi``."""
+    cfg = ctx.cfg
+    nd, num, n = cfg["params"], cfg["numerics"], float(cfg["brute_force"]["long_periods"])
+    z, d = ax["z0"], ax["dz0"]
+    ics = [(z[0], d[0]), (z[0], d[-1]), (z[-1], d[0]), (z[-1], d[-1]), (0.5 * (z[0] + z[-1]), 0.5 * (d[0] + d[-1]))]
+    C = np.repeat(chi, len(ics))
+    Z = np.tile([a for a, _ in ics], chi.size)
+    D = np.tile([b for _, b in ics], chi.size)
+    P = table({**nd, "chi": C, "z0": Z, "dz0": D}, n, n - 1.0, n, num)
+    out = ctx.run_sweep(SweepSpec("fig8_9_long", P, sweep_settings(num), num["chunk_runs"]))
+    return observables_dataset(out, {"chi": chi, "ic": np.arange(len(ics))})
+
+
+def symmetric_after(ds: Any, tol: float = 1e-3) -> np.ndarray:
+    """Per chi: every run on one symmetric motion (amplitude spread and |asymmetry| below ``tol`` of
+    the median amplitude), as fig8_9's classification."""
+    a, s = ds.amplitude.values, ds.asymmetry.values
+    med = np.median(a, axis=1)
+    return ((a.max(1) - a.min(1)) / med < tol) & (np.abs(s).max(1) / med < tol)
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
@@ -68,16 +97,30 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.save_dataset(sc, DATASETS[0])
 
     chi = ax["chi"]
-    brute = {"symmetry_breaking": sb_bracket(chi, cls.symmetric_periodic.values),
-             "period_doubling": tuple(float(v) for v in cfg["brute_force"]["period_doubling"])}
+    lo_c, hi_c = min(c["start"], c["stop"]), max(c["start"], c["stop"])
+    chi_long = chi[(chi >= lo_c) & (chi <= hi_c)]
+    snapshot = sb_bracket(chi, cls.symmetric_periodic.values)
+    brute: dict[str, tuple[float, float]] = {
+        "symmetry_breaking": (math.nan, math.nan),
+        "period_doubling": tuple(float(v) for v in cfg["brute_force"]["period_doubling"])}  # type: ignore[dict-item]
+    if chi_long.size:
+        lr = long_runs(ctx, chi_long, ax)
+        lr["symmetric_periodic"] = ("chi", symmetric_after(lr).astype(np.int8))
+        lr.attrs.update(periods=float(cfg["brute_force"]["long_periods"]))
+        ctx.save_dataset(lr, "long_runs.nc")
+        brute["symmetry_breaking"] = sb_bracket(chi_long, lr.symmetric_periodic.values.astype(bool))
     cont = continue_nd(ctx, {**nd}, "chi", c["start"], c["stop"], c)
     ds = collect([({}, cont)])
     ds.attrs.update({f"param_{k}": v for k, v in nd.items() if k != "chi"})
     ctx.save_dataset(ds, DATASETS[1])
     rows = bifurcation_rows(cont, {}, brute)
     extra = {"brute_force": {k: list(v) for k, v in brute.items()},
-             "brute_force_source": {"symmetry_breaking": f"fig8_9 scatter, {chi.size} values of chi "
-                                                         f"from {chi[0]:g} to {chi[-1]:g}",
+             "snapshot_symmetry_breaking": list(snapshot),
+             "brute_force_source": {"symmetry_breaking": f"{cfg['brute_force']['long_periods']:g}-period runs from 5 "
+                                                         f"initial conditions at the scatter's {chi_long.size} values "
+                                                         f"of chi in [{lo_c:g}, {hi_c:g}]",
+                                    "snapshot_symmetry_breaking": f"fig8_9 scatter after {s['periods']:g} periods, "
+                                                                  f"{chi.size} values of chi",
                                     "period_doubling": "brute_force.period_doubling (docs/chaos.md)"},
              "branches": [b.as_dict() for b in cont.branches], "evaluations": cont.evaluations}
     write_bifurcations(ctx, rows, "bifurcations", extra)
@@ -110,7 +153,10 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     fig.tight_layout()
     ctx.save_figure(fig, FIGURES[0])
 
-    summary: dict[str, Any] = {"runs": float(sp.n_runs), "branch_points": int(ds.point.size) if ds else 0,
+    ctx.log(f"fig8_9_orbits: symmetry breaking bracketed by the {s['periods']:g}-period snapshot: "
+            f"[{snapshot[0]:.4g}, {snapshot[1]:.4g}]; by the {cfg['brute_force']['long_periods']:g}-period runs: "
+            f"[{brute['symmetry_breaking'][0]:.4g}, {brute['symmetry_breaking'][1]:.4g}]")
+    summary: dict[str, Any] = {"runs": float(sp.n_runs), "snapshot_symmetry_breaking": list(snapshot), "branch_points": int(ds.point.size) if ds else 0,
                                "evaluations": cont.evaluations}
     for kind in ("symmetry_breaking", "period_doubling"):
         found = [r["param_value"] for r in rows if r["type"] == kind]
