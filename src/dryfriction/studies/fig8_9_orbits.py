@@ -143,14 +143,21 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     axes[0].set_ylabel("mean amplitude (z_max - z_min) / 2")
     axes[1].set_ylabel("asymmetry (z_max + z_min) / 2")
     axes[1].set_xlabel("chi = mu_k / mu_s")
-    axes[0].legend(fontsize=6.5, loc="upper right", markerscale=2)
+    # the continuation's range, and the scatter's chaotic band below it
+    x0, x1 = max(float(chi.min()), lo_c - 0.2) - 0.01, min(float(chi.max()), hi_c + 0.1) + 0.01
+    axes[1].set_xlim(x0, x1)
+    seen = sc.amplitude.values[(chi >= x0) & (chi <= x1)]
+    if seen.size and np.isfinite(seen).any():
+        a0, a1 = float(np.nanmin(seen)), float(np.nanmax(seen))
+        axes[0].set_ylim(a0 - 0.05 * (a1 - a0), a1 + 0.05 * (a1 - a0))
+    fig.legend(*axes[0].get_legend_handles_labels(), fontsize=6.5, loc="lower center", ncol=3, markerscale=2)
     for a in axes:
         a.grid(alpha=0.3)
     axes[0].set_title(f"Fig. 8/9 band: lambda = {nd['lam']}, mu_s sigma = {nd['mu_s_sigma']}, zeta = {nd['zeta']} "
                       f"(z = k x / P0); branches of periodic orbits, chi {c['start']:g} -> {c['stop']:g}\n"
                       "solid: stable, dashed: unstable; F fold, PD period doubling, SB symmetry breaking, "
                       "G grazing", fontsize=8)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.08, 1.0, 1.0))
     ctx.save_figure(fig, FIGURES[0])
 
     ctx.log(f"fig8_9_orbits: symmetry breaking bracketed by the {s['periods']:g}-period snapshot: "
