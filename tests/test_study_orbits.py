@@ -194,3 +194,32 @@ def test_branches_do_not_jump(band: Path, freq: Path) -> None:
             if idx.size > 1:
                 worst = max(worst, float(np.abs(np.diff(amp[idx])).max()))
         assert 0 < worst <= bound, (path.name, worst)
+
+
+@pytest.mark.parametrize("name, sets, message", [
+    ("fig8_9_orbits", ["continuation.ds=-1"], "need 0 < ds <= ds_max"),
+    ("fig8_9_orbits", ["continuation.stop=0.8"], "must differ"),
+    ("fig8_9_orbits", ["brute_force.period_doubling=[0.3,0.2]"], "brute_force.period_doubling must be"),
+    ("fig8_9_orbits", ["brute_force.long_periods=1"], "long_periods must be >= 2"),
+    ("fig8_9_orbits", ["sweep.chi.num=0"], "sweep.chi.num must be >= 1"),   # the base study's check
+    ("fig10_11_orbits", ["continuation.resonance_gap=[1.1,1.2]"], "must hold lambda = 1"),
+    ("fig10_11_orbits", ["continuation.seeds=[-0.1]"], r"continuation.seeds\[0\] must be > 0"),
+    ("fig10_11_orbits", ["continuation.colour=1"], "unknown key 'continuation.colour'"),
+])
+def test_bad_config_is_one_clear_error(name: str, sets: list[str], message: str) -> None:
+    from dryfriction.studies import effective_config
+    from dryfriction.studies.config import ConfigError
+
+    with pytest.raises(ConfigError, match=message):
+        effective_config(name, quick=True, sets=sets)
+
+
+def test_the_base_config_is_read_once() -> None:
+    """The orbit studies' scatter values are their base studies' (one file each), [quick] included."""
+    from dryfriction.studies import effective_config
+
+    for name, base in (("fig8_9_orbits", "fig8_9"), ("fig10_11_orbits", "fig10_11")):
+        for quick in (False, True):
+            cfg, ref = effective_config(name, quick=quick), effective_config(base, quick=quick)
+            assert {k: v for k, v in cfg.items() if k in ref} == ref
+            assert "continuation" in cfg and "continuation" not in ref
