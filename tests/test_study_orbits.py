@@ -10,7 +10,8 @@ independent references.
   Den Hartog's exact non-stop amplitude; at the seeds (the ends of each lambda range) every
   attractor of the scatter is one of the stable orbits the continuation started from.
 
-The location of the bifurcations themselves (reproducibility, find_orbits either side, separate
+The tests that run the studies (about 4 s and 8 s, once per module) are marked slow; the checks of
+the configuration are not. The location of the bifurcations themselves (reproducibility, find_orbits either side, separate
 runs of the located orbits) is asserted in test_continuation.py; here the study's output is.
 """
 
@@ -64,6 +65,7 @@ def _symmetric(a: np.ndarray, s: np.ndarray) -> np.ndarray:
     return ((a.max(1) - a.min(1)) / med < 1e-3) & (np.abs(s).max(1) / med < 1e-3)
 
 
+@pytest.mark.slow
 def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> None:
     bifs, doc = _rows(band)
     # the long runs' bracket, recomputed here: the lowest chi of the symmetric range and the value
@@ -108,6 +110,7 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     assert (band / "fig8_9_orbits.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_fig8_9_stable_branches_are_the_scatters_attractors(band: Path) -> None:
     """At chi = 0.7 (one symmetric orbit) and 0.4 (the mirror pair) of the quick scatter every
     initial condition ends, after 30 periods of scheme located at h = T/1000, on a stable orbit of
@@ -135,6 +138,7 @@ def test_fig8_9_stable_branches_are_the_scatters_attractors(band: Path) -> None:
 
 # ---- Fig. 10/11 ----------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_fig10_non_stop_branches_are_den_hartog(freq: Path) -> None:
     br = xr.load_dataset(freq / "fig10_branches.nc")
     pts = br.where((br.chi == 1.0) & (br.stick_fraction == 0) & br.converged, drop=True)
@@ -150,6 +154,7 @@ def test_fig10_non_stop_branches_are_den_hartog(freq: Path) -> None:
     assert float(near.where(near.param > 1, drop=True).amplitude_z.max()) > 15
 
 
+@pytest.mark.slow
 def test_fig10_11_scatter_at_the_seeds_is_on_stable_orbits(freq: Path) -> None:
     for part in ("fig10", "fig11"):
         sc = read_netcdf(freq / f"{part}.nc")
@@ -164,6 +169,7 @@ def test_fig10_11_scatter_at_the_seeds_is_on_stable_orbits(freq: Path) -> None:
                     assert np.min(np.abs(amps - a)) <= 2e-3 * a, (part, chi, lam, a, amps)
 
 
+@pytest.mark.slow
 def test_fig10_11_bifurcations_written(freq: Path) -> None:
     bifs, doc = _rows(freq)
     folds = sorted({round(b["param_value"], 8) for b in bifs if b["type"] == "fold" and b["note"] == ""
@@ -179,6 +185,7 @@ def test_fig10_11_bifurcations_written(freq: Path) -> None:
         assert (freq / name).stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_branches_do_not_jump(band: Path, freq: Path) -> None:
     """Consecutive points of a branch are at most a few steps apart (the arclength step is at most
     ds_max = 0.1 or 0.2 in static deflections): a corrector that lands on another orbit (as the
