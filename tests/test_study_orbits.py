@@ -1,11 +1,11 @@
 """The orbit studies on quick sizes (fig8_9_orbits, fig10_11_orbits): what they write, against
 independent references.
 
-- fig8_9_orbits: the located symmetry breaking lies in the bracket the study's own brute-force
-  scatter gives (the grid value below its symmetric periodic range and that range's lowest chi: the
-  sweep's resolution), the two period doublings in the long brute-force runs' bracket [0.236,
-  0.237] (docs/chaos.md); the csv, json and summary say the same; the stable branches meet the
-  scatter's attractors (scheme located, 30 periods) at the chi where the scatter is periodic.
+- fig8_9_orbits: the located symmetry breaking and period doublings lie in the brackets of the
+  study's own brute-force runs at the sweep's chi (recomputed here from long_runs.nc and
+  doubling_runs.nc: one grid step wide, the sweep's resolution), the period doublings also in the
+  finer bracket [0.236, 0.237] of docs/chaos.md; the csv, json and summary say the same; the stable
+  branches meet the scatter's attractors (scheme located, 30 periods) where the scatter is periodic.
 - fig10_11_orbits: where the orbit never sticks (chi = 1, above the last grazing) the branches are
   Den Hartog's exact non-stop amplitude; at the seeds (the ends of each lambda range) every
   attractor of the scatter is one of the stable orbits the continuation started from.
@@ -91,10 +91,22 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     assert abs(sb["param_value"] - 0.55395) <= 1e-4      # between the full sweep's 0.54 and 0.56 too
     assert abs(sb["mu1_re"] - 1.0) <= 1e-6 and abs(sb["offset_z"]) <= 1e-9
 
+    # the period doubling's bracket, recomputed from the 2000-period runs: below it the extremes
+    # of the last two periods differ (period 2, or longer), above it they agree
+    dr = read_netcdf(band / "doubling_runs.nc")
+    split = dr.split.values.max(axis=1)
+    k = int(np.where(split > 1e-2)[0][-1])
+    assert np.all(split[k + 1:] < 1e-6) and k + 1 < split.size
+    pd_lo, pd_hi = dr.chi.values[k], dr.chi.values[k + 1]
+    assert doc["brute_force"]["period_doubling"] == [pytest.approx(pd_lo, abs=1e-15), pytest.approx(pd_hi, abs=1e-15)]
+    assert pd_hi - pd_lo == pytest.approx(float(np.diff(sc.chi.values).max()), rel=1e-12)
+    assert doc["reference_period_doubling"] == [0.236, 0.237]
+
     pd = [b for b in bifs if b["type"] == "period_doubling"]
     assert len(pd) == 2                                  # one on each mirror branch
     for b in pd:
-        assert 0.236 <= b["param_value"] <= 0.237 and b["within_brute_force"] is True
+        assert pd_lo < b["param_value"] < pd_hi and b["within_brute_force"] is True
+        assert 0.236 <= b["param_value"] <= 0.237 and b["within_reference"] is True   # docs/chaos.md
         assert abs(b["mu1_re"] + 1.0) <= 1e-6 and b["period"] == 1
     assert pd[0]["offset_z"] == pytest.approx(-pd[1]["offset_z"], rel=1e-8)
     assert abs(pd[0]["param_value"] - pd[1]["param_value"]) <= 1e-8
@@ -106,6 +118,7 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     summary = json.loads((band / "summary.json").read_text())["summary"]
     assert summary["symmetry_breaking_within_brute_force"] is True
     assert summary["period_doubling_within_brute_force"] is True
+    assert summary["period_doubling_within_reference"] is True
     assert summary["chi_period_doubling"] == [b["param_value"] for b in pd]
     assert (band / "fig8_9_orbits.png").stat().st_size > 10_000
 
@@ -206,8 +219,10 @@ def test_branches_do_not_jump(band: Path, freq: Path) -> None:
 @pytest.mark.parametrize("name, sets, message", [
     ("fig8_9_orbits", ["continuation.ds=-1"], "need 0 < ds <= ds_max"),
     ("fig8_9_orbits", ["continuation.stop=0.8"], "must differ"),
-    ("fig8_9_orbits", ["brute_force.period_doubling=[0.3,0.2]"], "brute_force.period_doubling must be"),
+    ("fig8_9_orbits", ["brute_force.reference_period_doubling=[0.3,0.2]"], "reference_period_doubling must be"),
     ("fig8_9_orbits", ["brute_force.long_periods=1"], "long_periods must be >= 2"),
+    ("fig8_9_orbits", ["brute_force.doubling_periods=0"], "doubling_periods must be >= 2"),
+    ("fig8_9_orbits", ["brute_force.doubling_steps=0"], "doubling_steps must be >= 1"),
     ("fig8_9_orbits", ["sweep.chi.num=0"], "sweep.chi.num must be >= 1"),   # the base study's check
     ("fig10_11_orbits", ["continuation.resonance_gap=[1.1,1.2]"], "must hold lambda = 1"),
     ("fig10_11_orbits", ["continuation.seeds=[-0.1]"], r"continuation.seeds\[0\] must be > 0"),

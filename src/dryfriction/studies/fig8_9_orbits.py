@@ -4,14 +4,21 @@ and any fold located by the continuation (dryfriction.continuation) and set agai
 numbers.
 
 The scatter is the fig8_9 study's own sweep (its config, its chunks when it has run). The
-brute-force bracket of the symmetry breaking is that of long runs at the scatter's values of chi
-(``brute_force.long_periods`` periods from five initial conditions of the scatter's grid: its
-corners and centre; the lowest chi of the symmetric range and the grid value below it, the sweep's
-resolution): next to the pitchfork the asymmetry decays slowly (a multiplier near 1), so the
-30-period snapshot still shows it at chi = 0.56 and 0.58 (its own bracket, [0.58, 0.60] at full
-size, is written too). The period doubling cannot be seen in 30-period snapshots either; its
-bracket is ``brute_force.period_doubling``, the long runs of docs/chaos.md (from (0, 0), 20,000
-periods: period 2 at chi = 0.236, period 1 at 0.237).
+brute-force brackets, at the sweep's resolution (one step of its chi grid), come from longer runs at
+the scatter's values of chi, since 30-period snapshots resolve neither point:
+
+- symmetry breaking: ``brute_force.long_periods`` periods from five initial conditions of the
+  scatter's grid (its corners and centre), at every chi of the continuation's range; the lowest chi
+  of their symmetric range and the grid value below it. Next to the pitchfork the asymmetry decays
+  slowly (a multiplier near 1): the 30-period snapshot still shows it at chi = 0.56 and 0.58 (its
+  own bracket, [0.58, 0.60] at full size, is written beside).
+- period doubling: ``brute_force.doubling_periods`` periods from two corners of the grid, at the
+  grid values within ``brute_force.doubling_steps`` steps of the located point; period 1 where the
+  extremes over the last two periods agree (1e-6 of the amplitude); the bracket is the highest
+  value that is not of period 1 and the one above it (next to the doubling the flip multiplier is
+  near -1: at chi = 0.24, -0.989, whose wobble decays by 1e-10 in 2000 periods). The finer
+  ``brute_force.reference_period_doubling`` (docs/chaos.md: from (0, 0), 20,000 periods, period 2
+  at chi = 0.236, period 1 at 0.237) is written and checked beside it.
 """
 
 from __future__ import annotations
@@ -42,10 +49,13 @@ def check(cfg: dict[str, Any]) -> None:
     check_continuation(c)
     require(c["start"] != c["stop"], "continuation.start and continuation.stop must differ")
     require(c["start"] > 0 and c["stop"] > 0, "continuation.start and continuation.stop (chi) must be > 0")
-    pd = cfg["brute_force"]["period_doubling"]
-    require(len(pd) == 2 and pd[0] <= pd[1], f"brute_force.period_doubling must be [lo, hi], lo <= hi, not {pd}")
-    require(cfg["brute_force"]["long_periods"] >= 2, "brute_force.long_periods must be >= 2, "
-                                                     f"not {cfg['brute_force']['long_periods']}")
+    bf = cfg["brute_force"]
+    pd = bf["reference_period_doubling"]
+    require(len(pd) == 2 and pd[0] <= pd[1],
+            f"brute_force.reference_period_doubling must be [lo, hi], lo <= hi, not {pd}")
+    for key in ("long_periods", "doubling_periods"):
+        require(bf[key] >= 2, f"brute_force.{key} must be >= 2, not {bf[key]}")
+    require(bf["doubling_steps"] >= 1, f"brute_force.doubling_steps must be >= 1, not {bf['doubling_steps']}")
 
 
 def sb_bracket(chi: np.ndarray, sym: np.ndarray) -> tuple[float, float]:
@@ -74,6 +84,42 @@ def long_runs(ctx: StudyContext, chi: np.ndarray, ax: dict[str, np.ndarray]) -> 
     return observables_dataset(out, {"chi": chi, "ic": np.arange(len(ics))})
 
 
+def doubling_runs(ctx: StudyContext, chi: np.ndarray, ax: dict[str, np.ndarray]) -> Any:
+    """Runs of ``brute_force.doubling_periods`` periods from two corners of the scatter's grid at
+    the values ``chi``, observed over each of the last two periods: ``period_1`` per chi where every
+    run's extremes agree over the two (1e-6 of its amplitude)."""
+    cfg = ctx.cfg
+    nd, num, n = cfg["params"], cfg["numerics"], float(cfg["brute_force"]["doubling_periods"])
+    z, d = ax["z0"], ax["dz0"]
+    C = np.repeat(chi, 2)
+    Z = np.tile([z[0], z[-1]], chi.size)
+    D = np.tile([d[0], d[-1]], chi.size)
+    vals = {**nd, "chi": C, "z0": Z, "dz0": D}
+    win = []
+    for k in (2.0, 1.0):
+        P = table(vals, n, n - k, n - k + 1.0, num)
+        out = ctx.run_sweep(SweepSpec(f"fig8_9_doubling_{int(k)}", P, sweep_settings(num), num["chunk_runs"]))
+        win.append(observables_dataset(out, {"chi": chi, "ic": np.arange(2)}))
+    a, b = win
+    gap = np.maximum(abs(a.z_max - b.z_max), abs(a.z_min - b.z_min)) / b.amplitude
+    ds = b.copy()
+    ds["split"] = gap
+    ds.split.attrs["long_name"] = "max |change of z_max, z_min| from the last period but one to the last / amplitude"
+    ds["period_1"] = (gap.max("ic") <= 1e-6).astype(np.int8)
+    ds.attrs.update(periods=n)
+    return ds
+
+
+def pd_bracket(chi: np.ndarray, period_1: np.ndarray) -> tuple[float, float]:
+    """(the highest chi not of period 1, the grid value above it), all above of period 1; NaN if
+    there is no such pair."""
+    bad = np.where(~period_1)[0]
+    if bad.size == 0 or bad[-1] == chi.size - 1:
+        return math.nan, math.nan
+    i = int(bad[-1])
+    return float(chi[i]), float(chi[i + 1])
+
+
 def symmetric_after(ds: Any, tol: float = 1e-3) -> np.ndarray:
     """Per chi: every run on one symmetric motion (amplitude spread and |asymmetry| below ``tol`` of
     the median amplitude), as fig8_9's classification."""
@@ -100,9 +146,9 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     lo_c, hi_c = min(c["start"], c["stop"]), max(c["start"], c["stop"])
     chi_long = chi[(chi >= lo_c) & (chi <= hi_c)]
     snapshot = sb_bracket(chi, cls.symmetric_periodic.values)
-    brute: dict[str, tuple[float, float]] = {
-        "symmetry_breaking": (math.nan, math.nan),
-        "period_doubling": tuple(float(v) for v in cfg["brute_force"]["period_doubling"])}  # type: ignore[dict-item]
+    brute: dict[str, tuple[float, float]] = {"symmetry_breaking": (math.nan, math.nan),
+                                             "period_doubling": (math.nan, math.nan)}
+    ref_lo, ref_hi = (float(v) for v in cfg["brute_force"]["reference_period_doubling"])
     if chi_long.size:
         lr = long_runs(ctx, chi_long, ax)
         lr["symmetric_periodic"] = ("chi", symmetric_after(lr).astype(np.int8))
@@ -110,10 +156,23 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         ctx.save_dataset(lr, "long_runs.nc")
         brute["symmetry_breaking"] = sb_bracket(chi_long, lr.symmetric_periodic.values.astype(bool))
     cont = continue_nd(ctx, {**nd}, "chi", c["start"], c["stop"], c)
+    pds = [b.param for b in cont.bifurcations if b.type == "period_doubling"]
+    if pds and chi_long.size > 1:
+        step = float(np.diff(chi).max())
+        reach = (cfg["brute_force"]["doubling_steps"] + 0.5) * step
+        near = chi_long[(chi_long >= min(pds) - reach) & (chi_long <= max(pds) + reach)]
+        if near.size > 1:
+            dr = doubling_runs(ctx, near, ax)
+            ctx.save_dataset(dr, "doubling_runs.nc")
+            brute["period_doubling"] = pd_bracket(near, dr.period_1.values.astype(bool))
     ds = collect([({}, cont)])
     ds.attrs.update({f"param_{k}": v for k, v in nd.items() if k != "chi"})
     ctx.save_dataset(ds, DATASETS[1])
     rows = bifurcation_rows(cont, {}, brute)
+    for r in rows:
+        pd_row = r["type"] == "period_doubling"
+        r["reference_lo"], r["reference_hi"] = (ref_lo, ref_hi) if pd_row else (math.nan, math.nan)
+        r["within_reference"] = bool(ref_lo <= r["param_value"] <= ref_hi) if pd_row else ""
     extra = {"brute_force": {k: list(v) for k, v in brute.items()},
              "snapshot_symmetry_breaking": list(snapshot),
              "brute_force_source": {"symmetry_breaking": f"{cfg['brute_force']['long_periods']:g}-period runs from 5 "
@@ -121,7 +180,12 @@ def run(ctx: StudyContext) -> dict[str, Any]:
                                                          f"of chi in [{lo_c:g}, {hi_c:g}]",
                                     "snapshot_symmetry_breaking": f"fig8_9 scatter after {s['periods']:g} periods, "
                                                                   f"{chi.size} values of chi",
-                                    "period_doubling": "brute_force.period_doubling (docs/chaos.md)"},
+                                    "period_doubling": f"{cfg['brute_force']['doubling_periods']:g}-period runs "
+                                                       "from 2 initial conditions at the scatter's chi next to the "
+                                                       "located point",
+                                    "reference_period_doubling": "brute_force.reference_period_doubling "
+                                                                 "(docs/chaos.md: 20,000 periods)"},
+             "reference_period_doubling": [ref_lo, ref_hi],
              "branches": [b.as_dict() for b in cont.branches], "evaluations": cont.evaluations}
     write_bifurcations(ctx, rows, "bifurcations", extra)
 
@@ -171,9 +235,15 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         summary[f"chi_{kind}"] = found
         summary[f"brute_force_{kind}"] = [lo, hi]
         summary[f"{kind}_within_brute_force"] = bool(found) and all(lo <= v <= hi for v in found)
+    summary["reference_period_doubling"] = [ref_lo, ref_hi]
+    summary["period_doubling_within_reference"] = bool(summary["chi_period_doubling"]) and all(
+        ref_lo <= v <= ref_hi for v in summary["chi_period_doubling"])
     for r in rows:
         bf = (f"; brute force [{r['brute_force_lo']:.4g}, {r['brute_force_hi']:.4g}]: "
               f"{'within' if r['within_brute_force'] else 'OUTSIDE'}") if r["within_brute_force"] != "" else ""
+        if r["within_reference"] != "":
+            bf += (f"; reference [{r['reference_lo']:.4g}, {r['reference_hi']:.4g}]: "
+                   f"{'within' if r['within_reference'] else 'OUTSIDE'}")
         ctx.log(f"fig8_9_orbits: {r['type']} at chi = {r['param_value']:.10f} (branch {r['branch']}, period "
                 f"{r['period']}, amplitude z {r['amplitude_z']:.5f}, asymmetry {r['offset_z']:+.5f}){bf}")
     for b in cont.branches:
