@@ -11,8 +11,9 @@ independent references.
   attractor of the scatter is one of the stable orbits the continuation started from.
 
 The tests that run the studies (about 4 s and 8 s, once per module) are marked slow; the checks of
-the configuration are not. The location of the bifurcations themselves (reproducibility, find_orbits either side, separate
-runs of the located orbits) is asserted in test_continuation.py; here the study's output is.
+the configuration are not. The location of the bifurcations themselves (reproducibility,
+find_orbits either side, separate runs of the located orbits) is asserted in test_continuation.py;
+here the study's output is.
 """
 
 from __future__ import annotations
@@ -142,7 +143,8 @@ def test_fig8_9_stable_branches_are_the_scatters_attractors(band: Path) -> None:
             if pts.point.size < 2 or not (x.min() < chi < x.max()):
                 continue
             o = np.argsort(x)
-            orbits.append((np.interp(chi, x[o], pts.amplitude_z.values[o]), np.interp(chi, x[o], pts.offset_z.values[o])))
+            orbits.append((np.interp(chi, x[o], pts.amplitude_z.values[o]),
+                           np.interp(chi, x[o], pts.offset_z.values[o])))
         assert len(orbits) == (1 if chi > 0.6 else 2), orbits
         for ai, si in zip(a, s):
             gap = min(max(abs(ai - oa), abs(si - os_)) for oa, os_ in orbits)
@@ -204,7 +206,8 @@ def test_branches_do_not_jump(band: Path, freq: Path) -> None:
     ds_max = 0.1 or 0.2 in static deflections): a corrector that lands on another orbit (as the
     solve at the end of a range once did, from the two-stop motion at chi = 0.5 onto the four-stop
     one at lambda = 0.05, 0.44 apart) would show here."""
-    for path, bound in ((band / "branches.nc", 0.6), (freq / "fig10_branches.nc", 0.3), (freq / "fig11_branches.nc", 0.3)):
+    for path, bound in ((band / "branches.nc", 0.6), (freq / "fig10_branches.nc", 0.3),
+                        (freq / "fig11_branches.nc", 0.3)):
         br = xr.load_dataset(path)
         seg = br.segment.values if "segment" in br else np.zeros(br.point.size)
         bid, ok, amp = br.branch.values, br.converged.values.astype(bool), br.amplitude_z.values

@@ -86,7 +86,8 @@ def bifurcation_rows(c: Continuation, labels: dict[str, float],
                      "branch": int(b.branch), "amplitude_z": float(b.amplitude_m) * Z_SCALE,
                      "offset_z": float(b.offset_m) * Z_SCALE,
                      "mu1_re": mu[0].real, "mu1_im": mu[0].imag, "mu2_re": mu[1].real, "mu2_im": mu[1].imag,
-                     "brute_force_lo": float(lo), "brute_force_hi": float(hi), "within_brute_force": within, "note": b.note})
+                     "brute_force_lo": float(lo), "brute_force_hi": float(hi), "within_brute_force": within,
+                     "note": b.note})
     return rows
 
 

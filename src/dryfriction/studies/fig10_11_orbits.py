@@ -78,7 +78,8 @@ def _draw(ax: Any, runs: list[tuple[dict[str, float], Continuation]], colors: di
             y = f.amplitude_m * Z_SCALE
             ax.plot([f.param], [y], m, color="k", ms=5 if lab else 3.5, mfc="none", mew=0.8)
             if lab and not f.note:          # the located smooth ones (a note: non-smooth, or not located)
-                ax.annotate(f"{lab} {f.param:.4g}", (f.param, y), textcoords="offset points", xytext=(3, 3), fontsize=6.5)
+                ax.annotate(f"{lab} {f.param:.4g}", (f.param, y), textcoords="offset points", xytext=(3, 3),
+                            fontsize=6.5)
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
@@ -127,7 +128,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         ax.legend(loc="upper left", fontsize=7)
         ax.set_title(f"Fig. {fig_name[3:5]} as branches of periodic orbits: mu_s sigma = {nd['mu_s_sigma']}, "
                      f"zeta = {nd['zeta']}; dots: {sc.z0.size} x {sc.dz0.size} initial conditions after "
-                     f"{cfg['ics']['periods']:g} T\nF fold, SB symmetry breaking, PD period doubling (labelled where located), ^ grazing", fontsize=8)
+                     f"{cfg['ics']['periods']:g} T\nF fold, SB symmetry breaking, PD period doubling (labelled where "
+                     "located), ^ grazing", fontsize=8)
         ctx.save_figure(fig, fig_name)
 
         summary[f"{part}_branch_points"] = int(ds.point.size) if ds else 0
@@ -140,7 +142,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     for r in all_rows:
         if r["type"] != "grazing":
             ctx.log(f"fig10_11_orbits: {r['figure']}, chi = {r['chi']:g}: {r['type']} at lambda = "
-                    f"{r['param_value']:.10f} (amplitude z {r['amplitude_z']:.5f}){'; ' + r['note'] if r['note'] else ''}")
+                    f"{r['param_value']:.10f} (amplitude z {r['amplitude_z']:.5f})"
+                    + (f"; {r['note']}" if r["note"] else ""))
     n_g = sum(r["type"] == "grazing" for r in all_rows)
     ctx.log(f"fig10_11_orbits: {len(all_rows)} bifurcations located ({n_g} grazings); "
             + ", ".join(f"{k} {v}" for k, v in summary.items() if k.endswith("points")))

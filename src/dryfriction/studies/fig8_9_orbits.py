@@ -227,7 +227,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.log(f"fig8_9_orbits: symmetry breaking bracketed by the {s['periods']:g}-period snapshot: "
             f"[{snapshot[0]:.4g}, {snapshot[1]:.4g}]; by the {cfg['brute_force']['long_periods']:g}-period runs: "
             f"[{brute['symmetry_breaking'][0]:.4g}, {brute['symmetry_breaking'][1]:.4g}]")
-    summary: dict[str, Any] = {"runs": float(sp.n_runs), "snapshot_symmetry_breaking": list(snapshot), "branch_points": int(ds.point.size) if ds else 0,
+    summary: dict[str, Any] = {"runs": float(sp.n_runs), "snapshot_symmetry_breaking": list(snapshot),
+                               "branch_points": int(ds.point.size) if ds else 0,
                                "evaluations": cont.evaluations}
     for kind in ("symmetry_breaking", "period_doubling"):
         found = [r["param_value"] for r in rows if r["type"] == kind]
