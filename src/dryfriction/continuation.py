@@ -653,6 +653,11 @@ class _Run:
         t = e.tangent()
         if t @ a.t < 0:
             t = -t
+        # Newton at the fixed end may land on another branch: refused as a step of the walk would be
+        # (too far, or the tangent turned too much); the walk then steps on towards the end
+        if float(np.linalg.norm(e.u - a.e.u)) > KINK_REACH * float(np.linalg.norm(uc - a.e.u)) or \
+                math.acos(max(-1.0, min(1.0, float(t @ a.t)))) > self.max_turn:
+            return None
         return _Point(e, t, a.s + float(np.linalg.norm(e.u - a.e.u)), self.describe(m, e))
 
     def param(self, pt: _Point) -> float:

@@ -45,6 +45,9 @@ STUDIES.update({m.NAME: m for m in (chaos_scan, chaos_basins, chaos_transients)}
 from . import chain2, chain_waves  # noqa: E402
 STUDIES.update({m.NAME: m for m in (chain2, chain_waves)})
 
+from . import fig8_9_orbits, fig10_11_orbits  # noqa: E402
+STUDIES.update({m.NAME: m for m in (fig8_9_orbits, fig10_11_orbits)})
+
 ALIASES = {"fig5": "fig5_6", "fig6": "fig5_6", "fig8": "fig8_9", "fig9": "fig8_9", "fig10": "fig10_11",
            "fig11": "fig10_11", "fig12": "fig12_14", "fig13": "fig12_14", "fig14": "fig12_14"}
 
@@ -63,12 +66,33 @@ def resolve(name: str) -> str:
 def effective_config(name: str, quick: bool = False, config_file: str | os.PathLike[str] | None = None,
                      sets: Sequence[str] = ()) -> dict[str, Any]:
     """The checked configuration of a study (ConfigError if invalid)."""
-    default = load_toml(config_dir() / f"{name}.toml")
+    default = _default_config(name)
     cfg = build_config(default, quick=quick, config_file=config_file, sets=sets)
     try:
         STUDIES[name].check(cfg)
     except KeyError as e:
         raise ConfigError(f"configs/{name}.toml lacks the key {e.args[0]!r}") from None
+    return cfg
+
+
+def _default_config(name: str) -> dict[str, Any]:
+    """``configs/<name>.toml``; a study with ``BASE_CONFIG`` (it draws over another study's sweep)
+    gets that study's file with its own tables added on top (their ``[quick]`` tables merged too),
+    so the values of the shared sweep are written once."""
+    own = load_toml(config_dir() / f"{name}.toml")
+    base = getattr(STUDIES[name], "BASE_CONFIG", None)
+    if base is None:
+        return own
+    cfg = load_toml(config_dir() / f"{base}.toml")
+
+    def update(into: dict[str, Any], new: dict[str, Any]) -> None:
+        for k, v in new.items():
+            if isinstance(v, dict) and isinstance(into.get(k), dict):
+                update(into[k], v)
+            else:
+                into[k] = v
+
+    update(cfg, own)
     return cfg
 
 
