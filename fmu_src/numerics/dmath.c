@@ -14,6 +14,7 @@
 
 #ifndef DFO_USE_LIBM
 
+#include <float.h>
 #include <math.h> /* sqrt only: correctly rounded by IEEE 754 on every platform */
 #include <stdint.h>
 #include <string.h>
@@ -560,5 +561,6 @@ static double log_pos(double x)
 double dfo_pow_pos(double x, double y)
 {
     if (x == 1.0 || y == 0.0) return 1.0;
+    if (!(x > 0.0 && x <= DBL_MAX) || y != y) return NAN; /* outside the domain: never a loop */
     return dfo_exp(y * log_pos(x));
 }

@@ -101,8 +101,9 @@ double dfo_cos(double x);
 double dfo_exp(double x);
 double dfo_expm1(double x);
 double dfo_acos(double x);
-/* x^y for x > 0 finite and y finite, the same bits on every platform (no libm). */
-double dfo_pow_pos(double x, double y);
+/* x^y for x > 0 finite and y finite, the same bits on every platform (no libm): exp(y log x) with
+ * log x to about an ulp, so within 8 + 3 |y ln x| ulp of libm (tests/platforms/test_dmath.c). */
+double dfo_pow_pos(double x, double y); /* NaN for x <= 0 or not finite */
 void dfo_sincos(double x, double *s, double *c);
 /* The argument reduction of a double-double hi + lo (|lo| <= ulp(hi), hi finite): hi + lo =
  * n pi/2 + r_hi + r_lo with |r_hi| <= pi/4 + |lo| (+ a little), |r_lo| <= ulp(r_hi); returns n mod 4.

@@ -213,6 +213,27 @@ static int compare(void)
             failed++;
         }
     }
+    /* dfo_pow_pos (the Stribeck law's (u / v_s)^delta): within 8 + 3 |y ln x| ulp of libm, the error
+     * of exp at an exponent rounded to a double */
+    {
+        double worst = 0.0, wx = 0.0, wy = 0.0;
+        for (int n = 0; n < N_PER_RANGE; n++) {
+            const double x = fabs(loguniform(&seed, 1e-6, 1e6)), y = uniform(&seed, 0.2, 4.0);
+            const double u = ulps(dfo_pow_pos(x, y), pow(x, y)) / (8.0 + 3.0 * fabs(y * log(x)));
+            if (u > worst) { worst = u; wx = x; wy = y; }
+        }
+        printf("pow    x in [1e-6, 1e6], y in [0.2, 4]: worst %.3f of the bound 8 + 3 |y ln x| ulp%s\n", worst,
+               worst > 1.0 ? "  FAIL" : "");
+        if (worst > 1.0) {
+            printf("       worst at x = %a, y = %a\n", wx, wy);
+            failed++;
+        }
+        if (dfo_pow_pos(1.0, 3.0) != 1.0 || dfo_pow_pos(7.0, 0.0) != 1.0 || dfo_pow_pos(2.0, 1.0) != 2.0 ||
+            !isnan(dfo_pow_pos(-2.0, 0.5)) || !isnan(dfo_pow_pos(INFINITY, 0.5)) || !isnan(dfo_pow_pos(0.0, 0.5))) {
+            printf("       dfo_pow_pos: 1^y, x^0 or 2^1 not exact  FAIL\n");
+            failed++;
+        }
+    }
     printf("test_dmath: %zu ranges x %d arguments, bound %d ulp, %d failed\n",
            sizeof RANGES / sizeof RANGES[0], N_PER_RANGE, MAX_ULPS, failed);
     return failed ? 1 : 0;
@@ -227,6 +248,10 @@ static int dump(void)
             const double x = sample(&seed, r);
             printf("%s %016" PRIx64 " %016" PRIx64 "\n", FUNCS[r->f].name, bits(x), bits(FUNCS[r->f].mine(x)));
         }
+    }
+    for (int n = 0; n < 2000; n++) {
+        const double x = fabs(loguniform(&seed, 1e-6, 1e6)), y = uniform(&seed, 0.2, 4.0);
+        printf("pow %016" PRIx64 " %016" PRIx64 " %016" PRIx64 "\n", bits(x), bits(y), bits(dfo_pow_pos(x, y)));
     }
     return 0;
 }
