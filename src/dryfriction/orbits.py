@@ -82,8 +82,8 @@ def scales(p: Oscillator) -> tuple[float, float]:
 class _Map:
     """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation)."""
 
-    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int) -> None:
-        self.fmu, self.p, self.K = fmu, p, K
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, samples: int = SAMPLES) -> None:
+        self.fmu, self.p, self.K, self.samples = fmu, p, K, samples
         self.T = p.period
         self.xs, self.w = scales(p)
         self.settings = Settings(scheme="exact", extra={"sensitivity": True})
@@ -108,7 +108,7 @@ class _Map:
         n = self.K if periods is None else periods
         T = self.T
         t_end = t_s + n * T
-        grid = np.linspace(t_s, t_end, n * SAMPLES + 1)
+        grid = np.linspace(t_s, t_end, n * self.samples + 1)
         marks = T * np.arange(math.floor(t_s / T) + 1, math.floor(t_end / T + 1e-12) + 1)
         grid = np.unique(np.concatenate([grid, marks]))
         grid = grid[np.concatenate([[True], np.diff(grid) > 1e-12 * max(T, t_end)])]
@@ -173,8 +173,9 @@ def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float) 
 
 
 class _Solver:
-    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int) -> None:
-        self.map = _Map(fmu, p, K)
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int,
+                 samples: int = SAMPLES) -> None:
+        self.map = _Map(fmu, p, K, samples)
         self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
         self.KT = K * p.period
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
@@ -250,7 +251,8 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
                 symmetry: bool = True,
                 tol: float = 1e-12,
                 max_iter: int = 40,
-                keep_failed: bool = False) -> list[Orbit]:
+                keep_failed: bool = False,
+                samples: int = SAMPLES) -> list[Orbit]:
     """Every distinct periodic orbit of ``period`` (K) excitation periods found by Newton shooting on
     the exact stroboscopic map (module doc), from:
 
@@ -265,6 +267,9 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     multipliers of P^j. Orbits that did not converge are dropped unless ``keep_failed`` (then listed
     with ``converged = False`` and the reason). Stable orbits first, then by amplitude.
 
+    ``samples``: samples per period of the cycle runs (the section choice and the sampled ``events``;
+    fewer is faster, the amplitude, offset and stick share are the FMU's observables whatever it is).
+
     ``fmu``: an :class:`OscillatorFMU2` to use (else one is loaded and closed). Every
     DryFrictionWarning the FMU emits reaches the caller."""
     p = oscillator
@@ -272,7 +277,7 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     own = fmu is None
     f = OscillatorFMU2() if own else fmu
     try:
-        return _find(f, p, period, guesses, transients, spread, symmetry, tol, max_iter, keep_failed)
+        return _find(f, p, period, guesses, transients, spread, symmetry, tol, max_iter, keep_failed, samples)
     finally:
         if own:
             f.close()
@@ -280,8 +285,8 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
 
 def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[float]] | None,
           transients: int, spread: Sequence[tuple[float, float]], symmetry: bool, tol: float, max_iter: int,
-          keep_failed: bool) -> list[Orbit]:
-    sol = _Solver(f, p, K, tol, max_iter)
+          keep_failed: bool, samples: int = SAMPLES) -> list[Orbit]:
+    sol = _Solver(f, p, K, tol, max_iter, samples)
     KT = K * p.period
     # (state, time) guesses: the attractors at t = transients K T, the given ones at t = 0
     todo: list[tuple[np.ndarray, float, bool]] = []
@@ -315,7 +320,7 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
                   np.max(np.abs(sm[j - 1] - sm[-1])) <= SAME * max(1.0, np.max(np.abs(sm[-1])))), K)
         cycles.append(sm)
         if j < K:
-            sub = _Solver(f, p, j, tol, max_iter)
+            sub = _Solver(f, p, j, tol, max_iter, samples)
             o2, _, _ = _solve(sub, np.array([orbit.x0, orbit.v0]), 0.0)
             if o2 is not None and o2.converged:
                 found.append(o2)
