@@ -179,11 +179,13 @@ class _Solver:
         self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
         self.KT = K * p.period
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
-        # generous multiple of it bounds Newton's iterates; none without damping at resonance)
+        # generous multiple of it bounds Newton's iterates; without damping at resonance BOUND^2 x_s)
         X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega) if (p.k, p.c) != (p.m * p.omega ** 2, 0.0) \
             else math.inf
         xs, w = scales(p)
-        self.bound = BOUND * (1.0 + X / xs) if math.isfinite(X) else math.inf
+        # undamped at resonance X is infinite: a million static deflections (else Newton "converges"
+        # on the unbounded growth, relative to a huge state)
+        self.bound = BOUND * (1.0 + X / xs) if math.isfinite(X) else BOUND * BOUND
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         m = self.map
@@ -235,7 +237,8 @@ def _check(p: Oscillator, K: int) -> None:
 def _auto_guesses(p: Oscillator, spread: Sequence[tuple[float, float]]) -> list[np.ndarray]:
     xs, w = scales(p)
     # the frictionless harmonic amplitude sets the spread of the initial conditions
-    X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
+    den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)   # 0: undamped at resonance
+    X = abs(p.P0) / den if den > 0 else math.inf
     X = X if math.isfinite(X) and X > 0 else xs
     return [np.array([a * X, b * X * w]) for a, b in spread]
 

@@ -65,7 +65,8 @@ MAX_PERIODS = 8192
 SAFETY = 2.0
 #: the initial deviation from the steady state is taken as at most |x0, v0 / omega| + SPAN (A + |o|)
 SPAN = 3.0
-#: differences of windows at this share of the amplitude are round-off (the error is then that)
+#: differences of windows at this share of the amplitude are round-off (the error is then that; the
+#: flow's estimate never reads below it)
 ROUNDOFF = 1e-13
 
 
@@ -175,7 +176,7 @@ def steady_state(fmu: OscillatorFMU, p: Oscillator, *, tol: float = TOL, tol_sti
             if J_prev is not None and np.all(np.isfinite(J_prev)):
                 # the flow's own decay: the deviation left at the window's start (the previous run's end)
                 dev = start + SPAN * (amp + abs(off))
-                error = SAFETY * _flow_error(p, J_prev, dev) / scale
+                error = SAFETY * _flow_error(p, J_prev, dev) / scale + ROUNDOFF
             elif len(hist) >= 3:
                 a0, o0, _ = hist[-3]
                 floor = ROUNDOFF * max(abs(amp), abs(off), 1e-300)
