@@ -224,7 +224,7 @@ def _chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray, opts: 
 
 #: the orbit method's cold search (transients from several initial conditions) every this many
 #: frequencies, besides the first and wherever the warm start finds no stable orbit
-COLD_EVERY = 40
+COLD_EVERY = 100
 #: samples per period of the orbit method's cycle runs (section choice; amplitudes, offsets and stick
 #: shares are the FMU's observables, exact whatever this is)
 ORBIT_SAMPLES = 32
@@ -234,52 +234,120 @@ ORBIT_COLUMNS = ("period", "stable", "mu_max", "amplitude_m", "offset_m", "stick
 METHODS = ("orbit", "transient")
 
 
-def _orbit_rows(inst: OscillatorFMU, p: Oscillator, warm: list[tuple[float, float]], cold: bool,
-                opts: Mapping[str, Any]) -> list[Any]:
-    from .orbits import DEFAULT_SPREAD, find_orbits
+class _Branch:
+    """One orbit of the previous frequencies (f, period T) with up to two before it on the same
+    branch: a polynomial predictor (quadratic through three points, else linear) of its section
+    state and phase at the next frequency."""
 
-    kw = {"period": opts["period"], "fmu": inst, "samples": ORBIT_SAMPLES}
-    if cold:
-        return find_orbits(p, guesses=warm, transients=opts["transients"], **kw)
-    found = find_orbits(p, guesses=warm, transients=0, spread=(), symmetry=False, **kw)
-    if any(o.stable for o in found):
-        return found
-    return find_orbits(p, guesses=warm, transients=opts["transients"], spread=DEFAULT_SPREAD, **kw)
+    def __init__(self, orbit: Any, f: float, T: float, before: "_Branch | None" = None) -> None:
+        self.orbit, self.f, self.T = orbit, f, T
+        hist = [] if before is None else [before, *before.history[:1]]
+        self.history = [b for b in hist if b.f != f]
+        self.point = (orbit.section_state[0], orbit.section_state[1], orbit.section / T)
+
+    def guess(self, f: float) -> tuple[np.ndarray, float]:
+        """(state, section phase in periods) predicted at the frequency f."""
+        pts = [self, *self.history]
+        if any(abs(b.point[2] - self.point[2]) > 0.25 for b in pts[1:]):
+            pts = pts[:1]                       # the section was chosen again: no extrapolation
+        fs = [b.f for b in pts]
+        # Lagrange weights of the points at f
+        wts = []
+        for i, fi in enumerate(fs):
+            w = 1.0
+            for j, fj in enumerate(fs):
+                if j != i:
+                    w *= (f - fj) / (fi - fj)
+            wts.append(w)
+        x, v, ph = (sum(w * b.point[c] for w, b in zip(wts, pts)) for c in range(3))
+        return np.array([x, v]), ph
+
+
+def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
+    """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart)."""
+    from .orbits import SAME, scales
+
+    xs, w = scales(p)
+    out: list[Any] = []
+    seen: list[np.ndarray] = []
+    for o in orbits:
+        a = np.array([o.x0 / xs, o.v0 / (xs * w)])
+        if o.period == 1 and any(np.max(np.abs(a - q)) <= SAME * max(1.0, float(np.max(np.abs(a)))) for q in seen):
+            continue
+        seen.append(a)
+        out.append(o)
+    return out
+
+
+def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
+               opts: Mapping[str, Any]) -> list[_Branch]:
+    """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
+    :func:`dryfriction.orbits.follow_orbit`); where a branch is lost (or K > 1), find_orbits from the
+    previous orbits; ``cold`` or when none is stable, from transients too."""
+    from .orbits import find_orbits
+
+    K, T = opts["period"], p.period
+    follow = opts["follower"]
+    if not cold and K == 1:
+        followed: list[_Branch] = []
+        for b in branches:
+            o = None
+            if not b.orbit.stuck:
+                z, ph = b.guess(f)
+                o = follow(p, z, ph * T)
+            if o is None:
+                break
+            followed.append(_Branch(o, f, T, b))
+        else:
+            if any(b.orbit.stable for b in followed):
+                keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
+                return [b for b in followed if id(b.orbit) in keep]
+    guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
+    kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
+    orbits = [] if cold else find_orbits(p, transients=0, spread=(), symmetry=False, **kw)
+    if cold or not any(o.stable for o in orbits):
+        orbits = find_orbits(p, transients=opts["transients"], **kw)
+    return [_Branch(o, f, T) for o in _distinct(orbits, p)]
 
 
 def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
                  opts: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """One Dask task (or the in-process sweep): every orbit at the frequencies f_hz in turn, the
-    orbits of one frequency the guesses of the next."""
+    orbits of one frequency followed to the next."""
     import time
 
     from .chaos.batch import fmu_for
 
+    from .orbits import OrbitFollower
+
     inst = fmu_for(fmu)
+    opts = {**opts, "follower": OrbitFollower(inst)}
     t0 = time.process_time()
     table: list[list[tuple[float, ...]]] = []
     reasons: list[str] = []
-    warm: list[tuple[float, float]] = []
+    branches: list[_Branch] = []
     for i, f in enumerate(f_hz):
         p = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f)})
         try:
-            orbits = _orbit_rows(inst, p, warm, not warm or i % COLD_EVERY == 0, opts)
+            branches = _orbits_at(inst, p, float(f), branches, not branches or i % opts["cold_every"] == 0, opts)
         except FMUError as e:   # this frequency is not computed: its row says why, the sweep goes on
             table.append([])
             reasons.append(e.message)
-            warm = []
+            branches = []
             continue
-        rows, stuck = [], False
-        for o in orbits:
+        rows, kept, stuck = [], [], False
+        for b in branches:
+            o = b.orbit
             if o.stuck:        # a line of stuck states: reported once
                 if stuck:
                     continue
                 stuck = True
+            kept.append(b)
             rows.append((float(o.period), float(o.stable), o.mu_max, o.amplitude, o.offset, o.stick_fraction,
                          o.x0, o.v0, o.residual))
+        branches = kept
         table.append(rows)
         reasons.append("")
-        warm = [(r[6], r[7]) for r in rows]
     width = max([len(r) for r in table] + [1])
     out = np.full((len(f_hz), width, len(ORBIT_COLUMNS)), np.nan)
     for i, rows in enumerate(table):
@@ -291,7 +359,7 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
 def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, method: str | None = None,
                        tol: float = TOL, min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
                        scheme: str | None = None, h: float = 0.0, period: int = 1, transients: int = 60,
-                       workers: int = 0, progress: bool = False,
+                       cold_every: int = COLD_EVERY, workers: int = 0, progress: bool = False,
                        fmu_path: str | os.PathLike[str] | None = None) -> Any:
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
     (dimension ``f_hz``; attributes: the oscillator and the settings, with units).
@@ -299,7 +367,8 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     ``method`` ``"orbit"`` (the default, unless a Bossak ``scheme`` is asked for: the orbits need the
     exact scheme's Jacobian): every periodic orbit of ``period`` excitation periods found
     (:func:`dryfriction.orbits.find_orbits`; the previous frequency's orbits are the next one's
-    guesses, ``transients`` the length of the cold searches' transients), along a second dimension
+    guesses, ``transients`` the length of the cold searches' transients, ``cold_every`` their
+    spacing in frequencies besides the first one and where no stable orbit is found), along a second dimension
     ``orbit`` padded with NaN: period, stable, mu_max, amplitude_m, offset_m, stick_fraction, x0_m,
     v0_m_per_s, residual; ``n_orbits`` and ``converged`` (at least one stable orbit) per frequency.
 
@@ -332,7 +401,9 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     path = paths.fmu_path(paths.OSCILLATOR, fmu_path)
     base = {k: v for k, v in p.as_dict().items() if k != "omega"}
     if method == "orbit":
-        opts: dict[str, Any] = {"period": period, "transients": transients}
+        if not (isinstance(cold_every, int) and cold_every >= 1):
+            raise ValueError(f"cold_every must be an integer >= 1 (frequencies), not {cold_every!r}")
+        opts: dict[str, Any] = {"period": period, "transients": transients, "cold_every": cold_every}
         per_chunk = math.ceil(f.size / max(1, 2 * workers)) if workers else f.size
         task: Any = _orbit_chunk
     else:
@@ -385,7 +456,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
             },
             coords={**coords, "orbit": ("orbit", np.arange(width), {"long_name": "orbit index (stable first, "
                                                                                   "then by amplitude)"})},
-            attrs={**attrs, "period": period, "transients": transients, "cold_every": COLD_EVERY},
+            attrs={**attrs, "period": period, "transients": transients, "cold_every": cold_every},
         )
         return ds
     rows = np.concatenate([r["rows"] for r in results], axis=0)
