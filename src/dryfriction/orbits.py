@@ -20,7 +20,6 @@ the FMU's over K T, rank one, multipliers exactly 1 (along the line of stuck sta
 from __future__ import annotations
 
 import cmath
-import copy
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -100,9 +99,8 @@ class _Map:
         x, v = float(z[0]), float(z[1])
         if not (math.isfinite(x) and math.isfinite(v)):
             return self.p.with_(x0=x, v0=v)        # the check names the non-finite value
-        q = copy.copy(self.p)
-        object.__setattr__(q, "x0", x)
-        object.__setattr__(q, "v0", v)
+        q = object.__new__(type(self.p))
+        q.__dict__.update(self.p.__dict__, x0=x, v0=v)
         return q
 
     def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:

@@ -5,9 +5,12 @@ Two methods (``frequency_response(..., method=...)``, ``dryfriction response --m
 ``orbit`` (the default with the exact scheme): the steady states are the periodic orbits of
 :func:`dryfriction.orbits.find_orbits` (Newton shooting on the exact stroboscopic map, the Floquet
 multipliers from the FMU's own Jacobian): every orbit found at each frequency, stable or not, along
-a dimension ``orbit`` (padded NaN); the orbits of the previous frequency are the guesses of the next
-(a warm start; a cold search from transients at the first frequency, wherever the warm start finds
-no stable orbit, and every :data:`COLD_EVERY` frequencies).
+a dimension ``orbit`` (padded NaN). Each orbit of one frequency is followed to the next (Newton from
+a polynomial prediction of its state at its section, :class:`dryfriction.orbits.OrbitFollower`, no
+sampled cycle runs); :func:`~dryfriction.orbits.find_orbits` from transients at the first frequency
+and wherever the followed orbits include no stable one (a bifurcation of the branch followed);
+every :data:`COLD_EVERY` frequencies the transients of that search are followed too (a branch born
+away from the ones followed).
 
 ``transient``: :func:`steady_state` runs the FMU from the initial conditions for n = ``min_periods``,
 2 n, 4 n, ... excitation periods (one ``doStep`` each, the in-FMU observables over the last half of
@@ -282,13 +285,15 @@ def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
 def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
                opts: Mapping[str, Any]) -> list[_Branch]:
     """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
-    :func:`dryfriction.orbits.follow_orbit`); where a branch is lost (or K > 1), find_orbits from the
-    previous orbits; ``cold`` or when none is stable, from transients too."""
+    :class:`dryfriction.orbits.OrbitFollower`), and with ``cold`` transients from the spread of
+    initial conditions followed too (:func:`_transient_check`); where a branch is lost (or K > 1),
+    find_orbits from the previous orbits; without branches or when none is stable, find_orbits from
+    transients too."""
     from .orbits import find_orbits
 
     K, T = opts["period"], p.period
     follow = opts["follower"]
-    if not cold and K == 1:
+    if K == 1 and branches:
         followed: list[_Branch] = []
         for b in branches:
             o = None
@@ -300,14 +305,53 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
             followed.append(_Branch(o, f, T, b))
         else:
             if any(b.orbit.stable for b in followed):
+                if cold:
+                    followed = _transient_check(inst, p, f, followed, opts)
                 keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
                 return [b for b in followed if id(b.orbit) in keep]
     guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
     kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
-    orbits = [] if cold else find_orbits(p, transients=0, spread=(), symmetry=False, **kw)
-    if cold or not any(o.stable for o in orbits):
+    orbits = find_orbits(p, transients=0, spread=(), symmetry=False, **kw) if branches else []
+    if not branches or not any(o.stable for o in orbits):
         orbits = find_orbits(p, transients=opts["transients"], **kw)
     return [_Branch(o, f, T) for o in _distinct(orbits, p)]
+
+
+def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_Branch],
+                     opts: Mapping[str, Any]) -> list[_Branch]:
+    """The cold search of a sweep's later frequencies, cheap: the end states of find_orbits'
+    transients (its spread of initial conditions), each followed by Newton from t = 0 (as a
+    section), find_orbits for one that cannot be; a new orbit's mirror image (the state -z half a
+    period later) followed too."""
+    from .orbits import _auto_guesses, DEFAULT_SPREAD, SAME, find_orbits, scales
+
+    follow, T = opts["follower"], p.period
+    xs, w = scales(p)
+    out = list(found)
+
+    def known(x: float, v: float) -> bool:
+        a = (x / xs, v / (xs * w))
+        tol = SAME * max(1.0, abs(a[0]), abs(a[1]))
+        return any(abs(a[0] - b.orbit.x0 / xs) <= tol and abs(a[1] - b.orbit.v0 / (xs * w)) <= tol for b in out)
+
+    st = default_settings(p)
+    for z in _auto_guesses(p, DEFAULT_SPREAD):
+        inst.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
+        inst.step_to(opts["transients"] * T)
+        y = inst.get(("x", "v"))
+        o = follow(p, (y["x"], y["v"]), 0.0)
+        if o is None:
+            new = [q for q in find_orbits(p, guesses=[(y["x"], y["v"])], transients=0, spread=(), fmu=inst,
+                                          samples=ORBIT_SAMPLES) if not known(q.x0, q.v0)]
+            out.extend(_Branch(q, f, T) for q in new)
+            continue
+        if known(o.x0, o.v0):
+            continue
+        out.append(_Branch(o, f, T))
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is not None and not known(image.x0, image.v0):
+            out.append(_Branch(image, f, T))
+    return out
 
 
 def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
@@ -326,8 +370,12 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
     table: list[list[tuple[float, ...]]] = []
     reasons: list[str] = []
     branches: list[_Branch] = []
+    checked = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f_hz[0])})
     for i, f in enumerate(f_hz):
-        p = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f)})
+        # the oscillator at f: the checked one with omega replaced (f is checked finite and > 0 by
+        # frequency_response; a new check per point would cost a fifth of the sweep)
+        p = object.__new__(Oscillator)
+        p.__dict__.update(checked.__dict__, omega=2.0 * math.pi * float(f))
         try:
             branches = _orbits_at(inst, p, float(f), branches, not branches or i % opts["cold_every"] == 0, opts)
         except FMUError as e:   # this frequency is not computed: its row says why, the sweep goes on
