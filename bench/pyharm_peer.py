@@ -23,12 +23,14 @@ instance loaded once).
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import json
 import logging
 import math
 import subprocess
 import sys
+import tempfile
 import time
 import warnings
 from typing import Any
@@ -104,6 +106,12 @@ def timed(fn: Any, repeats: int) -> tuple[float, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # pyHarm writes its kernel state (.pyHarm/context.json) into the working folder: a temporary one
+    with tempfile.TemporaryDirectory(prefix="pyharm_peer_") as tmp, contextlib.chdir(tmp):
+        return _main(argv)
+
+
+def _main(argv: list[str] | None) -> int:
     ap = make_parser("pyharm_peer.py", __doc__.splitlines()[0], exit=True)
     ap.add_argument("--harmonics", default="5,10,20", help="pyHarm's numbers of harmonics (default 5,10,20)")
     ap.add_argument("--nti", type=count("--nti", 8), default=1024,
