@@ -275,3 +275,16 @@ def test_a_free_mass_responds_by_the_exact_scheme(fmu_path: Path) -> None:
                             fmu_path=fmu_path)
     np.testing.assert_allclose(ex["amplitude_m"].values, lo["amplitude_m"].values, rtol=1e-5)
     assert np.all(ex["amplitude_m"].values > 0)
+
+
+def test_a_free_mass_by_the_orbit_method(fmu_path: Path) -> None:
+    """k = 0: every orbit is one of a family shifted in x (a multiplier exactly 1): reported once per
+    frequency, stable false (neutral), converged (its other multiplier inside the unit circle), its
+    amplitude the transient method's within its tolerance (seen 1.3e-6)."""
+    p = Oscillator.physical(m=1, k=0, c=0.5, P0=1, f=1, N=0.5, mu_s=0.3, mu_k=0.2)
+    f = [0.5, 1.0, 2.0]
+    ds = frequency_response(p, f, fmu_path=fmu_path)
+    assert list(ds["n_orbits"].values) == [1, 1, 1] and bool(ds["converged"].all())
+    assert np.all(ds["stable"].values[:, 0] == 0.0) and np.all(ds["mu_max"].values[:, 0] == 1.0)
+    tr = frequency_response(p, f, method="transient", min_periods=8, max_periods=256, fmu_path=fmu_path)
+    np.testing.assert_allclose(ds["amplitude_m"].values[:, 0], tr["amplitude_m"].values, rtol=1e-3)

@@ -266,15 +266,30 @@ class _Branch:
         return np.array([x, v]), ph
 
 
+def _attracting(o: Any, p: Oscillator) -> bool:
+    """A steady state: a stable orbit; without a spring (every orbit one of a family shifted in x,
+    a multiplier exactly 1, ``stable`` false) one whose other multiplier is inside the unit circle."""
+    from .orbits import STABILITY_MARGIN
+
+    if o.stable:
+        return True
+    if p.k > 0 or o.stuck:
+        return False
+    mu = sorted(abs(complex(m)) for m in o.multipliers)
+    return len(mu) == 2 and mu[0] < 1.0 - STABILITY_MARGIN
+
+
 def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
-    """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart)."""
+    """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart);
+    without a spring the members of a family shifted in x are one (x0 - offset and v0 compared)."""
     from .orbits import SAME, scales
 
     xs, w = scales(p)
     out: list[Any] = []
     seen: list[np.ndarray] = []
     for o in orbits:
-        a = np.array([o.x0 / xs, o.v0 / (xs * w)])
+        x = o.x0 - o.offset if p.k == 0 and math.isfinite(o.offset) else o.x0
+        a = np.array([x / xs, o.v0 / (xs * w)])
         if o.period == 1 and any(np.max(np.abs(a - q)) <= SAME * max(1.0, float(np.max(np.abs(a)))) for q in seen):
             continue
         seen.append(a)
@@ -304,7 +319,7 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
                 break
             followed.append(_Branch(o, f, T, b))
         else:
-            if any(b.orbit.stable for b in followed):
+            if any(_attracting(b.orbit, p) for b in followed):
                 if cold:
                     followed = _transient_check(inst, p, f, followed, opts)
                 keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
@@ -312,7 +327,7 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
     guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
     kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
     orbits = find_orbits(p, transients=0, spread=(), symmetry=False, **kw) if branches else []
-    if not branches or not any(o.stable for o in orbits):
+    if not branches or not any(_attracting(o, p) for o in orbits):
         orbits = find_orbits(p, transients=opts["transients"], **kw)
     return [_Branch(o, f, T) for o in _distinct(orbits, p)]
 
@@ -392,12 +407,12 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
                 stuck = True
             kept.append(b)
             rows.append((float(o.period), float(o.stable), o.mu_max, o.amplitude, o.offset, o.stick_fraction,
-                         o.x0, o.v0, o.residual))
+                         o.x0, o.v0, o.residual, float(_attracting(o, p))))
         branches = kept
         table.append(rows)
         reasons.append("")
     width = max([len(r) for r in table] + [1])
-    out = np.full((len(f_hz), width, len(ORBIT_COLUMNS)), np.nan)
+    out = np.full((len(f_hz), width, len(ORBIT_COLUMNS) + 1), np.nan)
     for i, rows in enumerate(table):
         if rows:
             out[i, :len(rows)] = np.array(rows, dtype=float)
@@ -480,7 +495,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
         width = max(r["orbits"].shape[1] for r in results)
         tab = np.concatenate([np.pad(r["orbits"], ((0, 0), (0, width - r["orbits"].shape[1]), (0, 0)),
                                      constant_values=np.nan) for r in results], axis=0)
-        col = {n: tab[:, :, i] for i, n in enumerate(ORBIT_COLUMNS)}
+        col = {n: tab[:, :, i] for i, n in enumerate(ORBIT_COLUMNS + ("attracting",))}
         n_orbits = np.sum(np.isfinite(col["amplitude_m"]), axis=1)
         stable = col["stable"]
         dims = ("f_hz", "orbit")
@@ -498,8 +513,9 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                 "v0_m_per_s": (dims, col["v0_m_per_s"], {"units": "m/s", "long_name": "v at t = 0 mod K T"}),
                 "residual": (dims, col["residual"], {"units": "1", "long_name": "scaled Newton residual"}),
                 "n_orbits": ("f_hz", n_orbits, {"units": "1", "long_name": "orbits found"}),
-                "converged": ("f_hz", np.any(stable == 1.0, axis=1),
-                              {"long_name": "a stable orbit was found (a steady state)"}),
+                "converged": ("f_hz", np.any(col["attracting"] == 1.0, axis=1),
+                              {"long_name": "a stable orbit was found (a steady state; without a spring: "
+                                            "one attracting but for its neutral shift in x)"}),
                 **common,
             },
             coords={**coords, "orbit": ("orbit", np.arange(width), {"long_name": "orbit index (stable first, "
