@@ -304,3 +304,13 @@ def test_the_fmi3_fmu_gives_the_same_orbit(fmu: OscillatorFMU) -> None:
             z = z + np.linalg.solve(J - np.eye(2), -(Pz - z))
         assert scaled_gap(p, z, o.section_state) <= 1e-12, (z, o.section_state)
         assert np.max(np.abs(J - o.jacobian)) <= 1e-12 * max(1.0, float(np.max(np.abs(o.jacobian))))
+
+
+def test_no_orbit_at_an_undamped_resonance(fmu: OscillatorFMU) -> None:
+    """zeta = 0 at lambda = 1 (omega = w0 up to rounding) with 4 mu_k N < pi P0: the amplitude grows
+    without bound and there is no orbit (formerly six spurious ones at 1e13 to 1e15 m: Newton
+    'converged' relative to a huge state); for K = 1 and 2."""
+    p = nd(1.0, 0.6, 0.4)
+    for K in (1, 2):
+        assert find_orbits(p, period=K, fmu=fmu) == []
+    assert find_orbits(Oscillator.physical(m=1.0, k=100.0, P0=1.0, N=1.0, mu_s=0.3, omega=10.0), fmu=fmu) == []

@@ -288,3 +288,38 @@ def test_a_free_mass_by_the_orbit_method(fmu_path: Path) -> None:
     assert np.all(ds["stable"].values[:, 0] == 0.0) and np.all(ds["mu_max"].values[:, 0] == 1.0)
     tr = frequency_response(p, f, method="transient", min_periods=8, max_periods=256, fmu_path=fmu_path)
     np.testing.assert_allclose(ds["amplitude_m"].values[:, 0], tr["amplitude_m"].values, rtol=1e-3)
+
+
+@pytest.mark.parametrize("name", ["undamped chi 0.4", "heavy friction"])
+def test_orbit_method_agrees_with_long_transients(fmu_path: Path, name: str) -> None:
+    """A cross-check on cases the issue does not list: 31 frequencies from 0.2 to 2 times the natural
+    one; wherever the transient method converges at tol 1e-6, its amplitude and offset are those of
+    one of the stable orbits within 1e-8 (seen 7e-11, 1.2e-9). Undamped, mu_s sigma 0.6, chi 0.4:
+    at lambda 0.44 the attractor is a period-2 orbit (no stable period-1 one: found by the 2 K
+    search), at lambda = 1 exactly there is no orbit at all (4 mu_k N < pi P0: growth without
+    bound), and the transient method does not converge there either."""
+    if name == "heavy friction":
+        p = Oscillator.physical(m=1, k=1, zeta=0.05, P0=1, omega=1, N=1.2, mu_s=0.5, mu_k=0.4)
+    else:
+        p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4)
+    f = np.linspace(0.2, 2.0, 31) * p.f_n_hz
+    f[np.argmin(np.abs(f - 0.44 * p.f_n_hz))] = 0.44 * p.f_n_hz
+    f[np.argmin(np.abs(f - p.f_n_hz))] = p.f_n_hz
+    ds = frequency_response(p, f, fmu_path=fmu_path)
+    tr = frequency_response(p, f, method="transient", tol=1e-6, fmu_path=fmu_path)
+    for i in range(f.size):
+        st = ds["stable"].values[i] == 1.0
+        if tr["converged"].values[i]:
+            a, o = ds["amplitude_m"].values[i][st], ds["offset_m"].values[i][st]
+            assert a.size, (name, f[i])
+            d = np.abs(a - tr["amplitude_m"].values[i]) / a + np.abs(o - tr["offset_m"].values[i]) / a
+            assert d.min() <= 1e-8, (name, f[i], a, tr["amplitude_m"].values[i])
+    if name != "heavy friction":
+        i44 = int(np.argmin(np.abs(f - 0.44 * p.f_n_hz)))
+        assert 2.0 in ds["period"].values[i44][ds["stable"].values[i44] == 1.0]
+        i1 = int(np.argmin(np.abs(f - p.f_n_hz)))
+        assert f[i1] == pytest.approx(p.f_n_hz, rel=1e-12)
+        assert int(ds["n_orbits"].values[i1]) == 0 and not tr["converged"].values[i1]
+        assert int(ds["converged"].sum()) == f.size - 1
+    else:
+        assert bool(ds["converged"].all())

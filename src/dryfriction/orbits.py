@@ -41,6 +41,8 @@ SAME = 1e-7
 #: Newton's iterates must stay within BOUND times the frictionless harmonic amplitude (plus the
 #: static deflection), else the solve is reported as diverged
 BOUND = 1e3
+#: the frictionless amplification k X / P0 the bound assumes at most (zeta >= 5e-7 at resonance)
+MAX_AMPLIFICATION = 1e6
 
 
 @dataclass
@@ -190,13 +192,13 @@ class _Solver:
         self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
         self.KT = K * p.period
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
-        # generous multiple of it bounds Newton's iterates; without damping at resonance BOUND^2 x_s)
-        X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega) if (p.k, p.c) != (p.m * p.omega ** 2, 0.0) \
-            else math.inf
+        # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
+        # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
+        # MAX_AMPLIFICATION (else Newton "converges" on the unbounded growth, relative to a huge state)
         xs, w = scales(p)
-        # undamped at resonance X is infinite: a million static deflections (else Newton "converges"
-        # on the unbounded growth, relative to a huge state)
-        self.bound = BOUND * (1.0 + X / xs) if math.isfinite(X) else BOUND * BOUND
+        den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
+        X = abs(p.P0) / den if den > 0 else math.inf
+        self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         # plain floats: two components (numpy's per-call cost is larger than the arithmetic)
@@ -210,6 +212,9 @@ class _Solver:
         Pz, J, md = self.map(z, t_s)
         r = self.residual(z, Pz)
         it = 0
+        if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
+            return z, J, r, it, (f"the guess is beyond the bound of {BOUND:g} times the frictionless "
+                                 "amplitude"), md
         while r > self.tol:
             if it >= self.max_iter:
                 return z, J, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md

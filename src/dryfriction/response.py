@@ -8,7 +8,8 @@ multipliers from the FMU's own Jacobian): every orbit found at each frequency, s
 a dimension ``orbit`` (padded NaN). Each orbit of one frequency is followed to the next (Newton from
 a polynomial prediction of its state at its section, :class:`dryfriction.orbits.OrbitFollower`, no
 sampled cycle runs); :func:`~dryfriction.orbits.find_orbits` from transients at the first frequency
-and wherever the followed orbits include no stable one (a bifurcation of the branch followed);
+and wherever the followed orbits include no stable one (a bifurcation of the branch followed; with
+no stable orbit of K periods, of 2 K too: a period doubling);
 every :data:`COLD_EVERY` frequencies the transients of that search are followed too (a branch born
 away from the ones followed).
 
@@ -312,13 +313,14 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
         followed: list[_Branch] = []
         for b in branches:
             o = None
-            if not b.orbit.stuck:
+            if not b.orbit.stuck and b.orbit.period == 1:
                 z, ph = b.guess(f)
                 o = follow(p, z, ph * T)
             if o is None:
                 break
             followed.append(_Branch(o, f, T, b))
         else:
+            _mirrors(p, f, followed, follow)
             if any(_attracting(b.orbit, p) for b in followed):
                 if cold:
                     followed = _transient_check(inst, p, f, followed, opts)
@@ -326,10 +328,33 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
                 return [b for b in followed if id(b.orbit) in keep]
     guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
     kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
-    orbits = find_orbits(p, transients=0, spread=(), symmetry=False, **kw) if branches else []
+    orbits = find_orbits(p, transients=0, spread=(), **kw) if branches else []
     if not branches or not any(_attracting(o, p) for o in orbits):
         orbits = find_orbits(p, transients=opts["transients"], **kw)
+    if not any(_attracting(o, p) for o in orbits):
+        # no stable orbit of K periods: the attractor may have doubled its period (reported with
+        # its minimal period, the unstable K-orbits kept)
+        kw["period"] = 2 * K
+        more = find_orbits(p, transients=opts["transients"], **kw)
+        orbits = orbits + [o for o in more if o.period != K]
     return [_Branch(o, f, T) for o in _distinct(orbits, p)]
+
+
+def _mirrors(p: Oscillator, f: float, followed: list[_Branch], follow: Any) -> None:
+    """Add the mirror image (x, v)(t) -> -(x, v)(t + T/2) of each asymmetric orbit followed whose
+    image is not among them (a symmetric orbit followed through a symmetry-breaking pitchfork comes
+    out as one of the pair)."""
+    T = p.period
+    for b in list(followed):
+        o = b.orbit
+        if o.period != 1 or not abs(o.offset) > 1e-9 * o.amplitude:
+            continue
+        tol = 1e-7 * o.amplitude
+        if any(abs(q.orbit.offset + o.offset) <= tol and abs(q.orbit.amplitude - o.amplitude) <= tol for q in followed):
+            continue
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is not None:
+            followed.append(_Branch(image, f, T))
 
 
 def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_Branch],
