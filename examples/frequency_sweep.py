@@ -1,6 +1,7 @@
 """A frequency sweep in physical units: the steady-state amplitude (m) of a 0.5 kg block on a
 2000 N/m spring with 0.3 % damping, pushed by 10 N at 5-15 Hz, pressed on its support by 20 N
-(mu_s = 0.3, mu_k = 0.2). Every point runs until successive windows agree (converged) or says so.
+(mu_s = 0.3, mu_k = 0.2). Every point is the periodic orbits there (solved by Newton shooting on the
+exact map, with their stability), not a transient waited for.
 
     python examples/frequency_sweep.py [--num 21] [--out results/example_sweep]
 """
@@ -25,9 +26,13 @@ def main() -> None:
     block = Oscillator.physical(m=0.5, k=2000.0, zeta=0.003, P0=10.0, f=10.0, N=20.0, mu_s=0.3, mu_k=0.2)
     print(f"natural frequency {block.f_n_hz:.4f} Hz, breakaway force {block.breakaway:.1f} N")
     ds = frequency_response(block, np.linspace(5.0, 15.0, args.num))
-    for f, a, s, c in zip(ds["f_hz"].values, ds["amplitude_m"].values, ds["stick_fraction"].values,
-                          ds["converged"].values):
-        print(f"{f:6.2f} Hz  amplitude {1000 * a:8.3f} mm  stuck {100 * s:5.1f} %  {'converged' if c else 'NOT converged'}")
+    for i, f in enumerate(ds["f_hz"].values):
+        if not ds["converged"].values[i]:
+            print(f"{f:6.2f} Hz  no stable orbit (not converged)")
+        for j in range(int(ds["n_orbits"].values[i])):
+            a, s = ds["amplitude_m"].values[i, j], ds["stick_fraction"].values[i, j]
+            kind = "stable (converged)" if ds["stable"].values[i, j] == 1 else "unstable"
+            print(f"{f:6.2f} Hz  amplitude {1000 * a:8.3f} mm  stuck {100 * s:5.1f} %  {kind}")
     png = plot_response(ds, args.out / "sweep.png")
     print(f"wrote {png}")
 

@@ -9,6 +9,7 @@ point elsewhere). Takes about a minute on 2 cores.
 from __future__ import annotations
 
 import csv
+import json
 import math
 import re
 import subprocess
@@ -156,3 +157,21 @@ def test_report_only_needs_a_study(tmp_path: Path) -> None:
     res = subprocess.run([sys.executable, str(SCRIPT), "--report-only", "--out", str(tmp_path)],
                          capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_orbit_response_benchmark_smoke() -> None:
+    """bench/orbit_response.py at 5 frequencies, once: every point has its stable orbit (residual at
+    most 1e-12; without friction the closed form within 1e-12), and every transient tolerance
+    bounds the transient's measured amplitude error. No timing asserted (times only positive)."""
+    res = subprocess.run([sys.executable, str(ROOT / "bench" / "orbit_response.py"), "--num", "5", "--repeats", "1",
+                          "--json"], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = json.loads(res.stdout)
+    assert [r["case"] for r in out["responses"]] == ["engineer 5-15 Hz", "zeta 0.01, N 0.1", "zeta 0.01, N 0"]
+    for r in out["responses"]:
+        assert r["frequencies_with_a_stable_orbit"] == 5 and r["max_residual"] <= 1e-12 and r["seconds"] > 0
+    for row in out["transient"]:
+        if row["orbit_error"] is not None:
+            assert row["orbit_error"] <= 1e-12
+        for t in row["tols"]:
+            assert t["converged"] == 5 and t["max_error"] <= t["tol"] + 1e-11 and t["seconds"] > 0

@@ -1,4 +1,4 @@
-"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov | chain``.
+"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov | chain | orbit``.
 
 Invalid arguments, an unusable FMU and an error the FMU reports end with one readable line on
 stderr (``dryfriction: error: ...``) and exit status 2, before any work where they can be found
@@ -81,8 +81,13 @@ def build_parser() -> Parser:
     q.add_argument("--f-start", type=number("--f-start", 0.0, True), required=True, help="first frequency, Hz")
     q.add_argument("--f-stop", type=number("--f-stop", 0.0, True), required=True, help="last frequency, Hz")
     q.add_argument("--num", type=count("--num"), default=41, help="number of frequencies (default 41)")
+    q.add_argument("--method", choices=("orbit", "transient"), default=None,
+                   help="orbit (default with the exact scheme): every periodic orbit with its stability; transient: "
+                        "run until the estimated error is within --tol (the default with a Bossak --scheme)")
+    q.add_argument("--period", type=count("--period"), default=1,
+                   help="orbit method: excitation periods K of the orbits (default 1)")
     q.add_argument("--tol", type=number("--tol", 0.0, True), default=TOL,
-                   help=f"successive windows agree within this relative tolerance (default {TOL:g})")
+                   help=f"transient method: the estimated relative error of the amplitude (default {TOL:g})")
     q.add_argument("--min-periods", type=count("--min-periods", 2), default=MIN_PERIODS,
                    help=f"first run length in excitation periods (default {MIN_PERIODS})")
     q.add_argument("--max-periods", type=count("--max-periods", 2), default=MAX_PERIODS,
@@ -109,6 +114,9 @@ def build_parser() -> Parser:
     from .continuation_cli import add_continuation_parsers
 
     add_continuation_parsers(sub, parents=common)
+    from .orbit_cli import add_orbit_parser
+
+    add_orbit_parser(sub, parents=common)
 
     s = sub.add_parser("study", parents=common, help="the paper's studies ('dryfriction study list')",
                        description="Reproduce a study of the paper (see 'list').")
@@ -244,8 +252,16 @@ def cmd_response(args: argparse.Namespace) -> int:
     f = np.linspace(args.f_start, args.f_stop, args.num) if args.num > 1 else np.array([args.f_start])
     workers = args.workers if args.workers is not None else (0 if args.num <= 200 else (os.cpu_count() or 1))
     progress = not args.no_progress and sys.stderr.isatty()
-    ds = frequency_response(p, f, tol=args.tol, min_periods=args.min_periods, max_periods=args.max_periods,
-                            scheme=args.scheme, workers=workers, progress=progress, fmu_path=args.fmu)
+    method = args.method or ("orbit" if args.scheme in (None, "exact") else "transient")
+    if method == "orbit" and args.scheme not in (None, "exact"):
+        raise UsageError(f"--method orbit needs the exact scheme, not --scheme {args.scheme} (or --method transient)")
+    ds = frequency_response(p, f, method=method, tol=args.tol, min_periods=args.min_periods,
+                            max_periods=args.max_periods, scheme=args.scheme, period=args.period, workers=workers,
+                            progress=progress, fmu_path=args.fmu)
+    if method == "orbit":
+        from .orbit_cli import print_orbit_response
+
+        return print_orbit_response(ds, args, p, f)
     files = []
     if args.out is not None or not args.json:  # --json alone writes only to stdout
         files = _write_response(ds, args.out or Path("results/response"), args.format, not args.no_plot)
@@ -390,9 +406,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from .chain_cli import chain_main
         from .chaos.cli import lyapunov_main
         from .continuation_cli import continuation_main
+        from .orbit_cli import orbit_main
 
         handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
-                   "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main,
+                   "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main, "orbit": orbit_main,
                    "continuation": continuation_main, "bifurcation": continuation_main}[args.command]
         with fmu_warnings_on_stderr("dryfriction", bool(getattr(args, "strict", False))):
             return handler(args)

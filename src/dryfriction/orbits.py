@@ -19,6 +19,7 @@ the FMU's over K T, rank one, multipliers exactly 1 (along the line of stuck sta
 
 from __future__ import annotations
 
+import cmath
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -28,7 +29,7 @@ import numpy as np
 from .fmu import OscillatorFMU2, Settings
 from .params import Oscillator
 
-__all__ = ["Orbit", "find_orbits", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
+__all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
 
 JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
@@ -40,6 +41,8 @@ SAME = 1e-7
 #: Newton's iterates must stay within BOUND times the frictionless harmonic amplitude (plus the
 #: static deflection), else the solve is reported as diverged
 BOUND = 1e3
+#: the frictionless amplification k X / P0 the bound assumes at most (zeta >= 5e-7 at resonance)
+MAX_AMPLIFICATION = 1e6
 
 
 @dataclass
@@ -82,8 +85,8 @@ def scales(p: Oscillator) -> tuple[float, float]:
 class _Map:
     """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation)."""
 
-    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int) -> None:
-        self.fmu, self.p, self.K = fmu, p, K
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, samples: int = SAMPLES) -> None:
+        self.fmu, self.p, self.K, self.samples = fmu, p, K, samples
         self.T = p.period
         self.xs, self.w = scales(p)
         self.settings = Settings(scheme="exact", extra={"sensitivity": True})
@@ -92,10 +95,20 @@ class _Map:
     def scaled(self, z: np.ndarray) -> np.ndarray:
         return np.array([z[0] / self.xs, z[1] / (self.xs * self.w)])
 
+    def at(self, z: np.ndarray) -> Oscillator:
+        """The oscillator started from z: a copy of the checked one with x0, v0 replaced (any finite
+        state is valid: no new check, which costs more than the FMU's run of a period)."""
+        x, v = float(z[0]), float(z[1])
+        if not (math.isfinite(x) and math.isfinite(v)):
+            return self.p.with_(x0=x, v0=v)        # the check names the non-finite value
+        q = object.__new__(type(self.p))
+        q.__dict__.update(self.p.__dict__, x0=x, v0=v)
+        return q
+
     def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
         """(P^K(z), its Jacobian, the mode at the end) for the state z at the section time t_s."""
         f = self.fmu
-        f.start(self.p.with_(x0=float(z[0]), v0=float(z[1])), self.settings, t0=t_s)
+        f.start(self.at(z), self.settings, t0=t_s)
         f.step_to(t_s + self.K * self.T)
         out = f.get(("x", "v", "mode") + JACOBIAN)
         self.evaluations += 1
@@ -108,12 +121,12 @@ class _Map:
         n = self.K if periods is None else periods
         T = self.T
         t_end = t_s + n * T
-        grid = np.linspace(t_s, t_end, n * SAMPLES + 1)
+        grid = np.linspace(t_s, t_end, n * self.samples + 1)
         marks = T * np.arange(math.floor(t_s / T) + 1, math.floor(t_end / T + 1e-12) + 1)
         grid = np.unique(np.concatenate([grid, marks]))
         grid = grid[np.concatenate([[True], np.diff(grid) > 1e-12 * max(T, t_end)])]
         st = Settings(scheme="exact", observe=True, t_obs_start=t_s, t_obs_stop=t_end)
-        res = self.fmu.trajectory(self.p.with_(x0=float(z[0]), v0=float(z[1])), grid, st, ("x", "v", "mode"))
+        res = self.fmu.trajectory(self.at(z), grid, st, ("x", "v", "mode"))
         obs = self.fmu.get(("x_max", "x_min", "stick_fraction", "transitions"))
         res.update({k: float(v) for k, v in obs.items()})
         res["marks"] = marks
@@ -173,36 +186,46 @@ def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float) 
 
 
 class _Solver:
-    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int) -> None:
-        self.map = _Map(fmu, p, K)
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int,
+                 samples: int = SAMPLES, map_: "_Map | None" = None) -> None:
+        self.map = _Map(fmu, p, K, samples) if map_ is None else map_
         self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
         self.KT = K * p.period
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
-        # generous multiple of it bounds Newton's iterates; none without damping at resonance)
-        X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega) if (p.k, p.c) != (p.m * p.omega ** 2, 0.0) \
-            else math.inf
+        # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
+        # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
+        # MAX_AMPLIFICATION (else Newton "converges" on the unbounded growth, relative to a huge state)
         xs, w = scales(p)
-        self.bound = BOUND * (1.0 + X / xs) if math.isfinite(X) else math.inf
+        den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
+        X = abs(p.P0) / den if den > 0 else math.inf
+        self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
-        m = self.map
-        return float(np.max(np.abs(m.scaled(Pz - z))) / max(1.0, float(np.max(np.abs(m.scaled(z))))))
+        # plain floats: two components (numpy's per-call cost is larger than the arithmetic)
+        xs, xw = self.map.xs, self.map.xs * self.map.w
+        z0, z1 = float(z[0]), float(z[1])
+        r = max(abs(float(Pz[0]) - z0) / xs, abs(float(Pz[1]) - z1) / xw)
+        return r / max(1.0, abs(z0) / xs, abs(z1) / xw)
 
     def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
         """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking."""
         Pz, J, md = self.map(z, t_s)
         r = self.residual(z, Pz)
         it = 0
+        if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
+            return z, J, r, it, (f"the guess is beyond the bound of {BOUND:g} times the frictionless "
+                                 "amplitude"), md
         while r > self.tol:
             if it >= self.max_iter:
                 return z, J, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
-            A = J - np.eye(2)
-            if not np.all(np.isfinite(A)):
+            a, b, c, d = float(J[0, 0]) - 1.0, float(J[0, 1]), float(J[1, 0]), float(J[1, 1]) - 1.0
+            if not all(math.isfinite(e) for e in (a, b, c, d)):
                 return z, J, r, it, "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md
-            try:
-                dz = np.linalg.solve(A, -(Pz - z))
-            except np.linalg.LinAlgError:
+            det = a * d - b * c
+            if det == 0.0 or not math.isfinite(det):
                 return z, J, r, it, "J - I is singular (a multiplier 1: a fold or a family of orbits)", md
+            r0, r1 = float(z[0]) - float(Pz[0]), float(z[1]) - float(Pz[1])     # (J - I) dz = -(P(z) - z)
+            dz = np.array([(d * r0 - b * r1) / det, (a * r1 - c * r0) / det])
             lam, accepted = 1.0, False
             for _ in range(30):
                 zn = z + lam * dz
@@ -216,7 +239,7 @@ class _Solver:
             if not accepted:
                 return z, J, r, it, f"the line search found no decrease (residual {r:.3g})", md
             z, Pz, J, r, md = zn, Pn, Jn, rn, mn
-            if float(np.max(np.abs(self.map.scaled(z)))) > self.bound:
+            if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
                 return z, J, r, it, (f"Newton diverged: the state left the bound of {BOUND:g} times the "
                                      "frictionless amplitude"), md
         return z, J, r, it, "", md
@@ -234,7 +257,8 @@ def _check(p: Oscillator, K: int) -> None:
 def _auto_guesses(p: Oscillator, spread: Sequence[tuple[float, float]]) -> list[np.ndarray]:
     xs, w = scales(p)
     # the frictionless harmonic amplitude sets the spread of the initial conditions
-    X = abs(p.P0) / math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
+    den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)   # 0: undamped at resonance
+    X = abs(p.P0) / den if den > 0 else math.inf
     X = X if math.isfinite(X) and X > 0 else xs
     return [np.array([a * X, b * X * w]) for a, b in spread]
 
@@ -250,7 +274,8 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
                 symmetry: bool = True,
                 tol: float = 1e-12,
                 max_iter: int = 40,
-                keep_failed: bool = False) -> list[Orbit]:
+                keep_failed: bool = False,
+                samples: int = SAMPLES) -> list[Orbit]:
     """Every distinct periodic orbit of ``period`` (K) excitation periods found by Newton shooting on
     the exact stroboscopic map (module doc), from:
 
@@ -265,6 +290,9 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     multipliers of P^j. Orbits that did not converge are dropped unless ``keep_failed`` (then listed
     with ``converged = False`` and the reason). Stable orbits first, then by amplitude.
 
+    ``samples``: samples per period of the cycle runs (the section choice and the sampled ``events``;
+    fewer is faster, the amplitude, offset and stick share are the FMU's observables whatever it is).
+
     ``fmu``: an :class:`OscillatorFMU2` to use (else one is loaded and closed). Every
     DryFrictionWarning the FMU emits reaches the caller."""
     p = oscillator
@@ -272,7 +300,7 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     own = fmu is None
     f = OscillatorFMU2() if own else fmu
     try:
-        return _find(f, p, period, guesses, transients, spread, symmetry, tol, max_iter, keep_failed)
+        return _find(f, p, period, guesses, transients, spread, symmetry, tol, max_iter, keep_failed, samples)
     finally:
         if own:
             f.close()
@@ -280,8 +308,8 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
 
 def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[float]] | None,
           transients: int, spread: Sequence[tuple[float, float]], symmetry: bool, tol: float, max_iter: int,
-          keep_failed: bool) -> list[Orbit]:
-    sol = _Solver(f, p, K, tol, max_iter)
+          keep_failed: bool, samples: int = SAMPLES) -> list[Orbit]:
+    sol = _Solver(f, p, K, tol, max_iter, samples)
     KT = K * p.period
     # (state, time) guesses: the attractors at t = transients K T, the given ones at t = 0
     todo: list[tuple[np.ndarray, float, bool]] = []
@@ -315,7 +343,7 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
                   np.max(np.abs(sm[j - 1] - sm[-1])) <= SAME * max(1.0, np.max(np.abs(sm[-1])))), K)
         cycles.append(sm)
         if j < K:
-            sub = _Solver(f, p, j, tol, max_iter)
+            sub = _Solver(f, p, j, tol, max_iter, samples)
             o2, _, _ = _solve(sub, np.array([orbit.x0, orbit.v0]), 0.0)
             if o2 is not None and o2.converged:
                 found.append(o2)
@@ -430,3 +458,94 @@ def _failed(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float, it
     return Orbit(period=sol.K, x0=float(z[0]), v0=float(z[1]), z0=z0, zdot0=zd0, multipliers=mu, stable=False,
                  residual=r, amplitude=math.nan, offset=math.nan, stick_fraction=math.nan, events={},
                  converged=False, reason=reason, section=t_s, jacobian=J, iterations=it)
+
+
+# ---- following an orbit to a nearby parameter (the frequency response's warm start) ---------------
+
+class _ObservingMap(_Map):
+    """P^K with the FMU's observables of the same run and the state at the period mark inside it: the
+    last evaluation is the orbit's cycle once Newton has converged (no separate cycle run). One per
+    FMU instance, moved to each new oscillator by :meth:`retarget` (no new Settings per point)."""
+
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int) -> None:
+        super().__init__(fmu, p, K)
+        self.settings = Settings(scheme="exact", observe=True, extra={"sensitivity": True})
+        self.last: dict[str, float] = {}
+        self.names = ("x", "v", "mode", "x_max", "x_min", "stick_fraction", "transitions") + JACOBIAN
+
+    def retarget(self, p: Oscillator) -> None:
+        self.p, self.T = p, p.period
+        self.xs, self.w = scales(p)
+
+    def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
+        f, KT = self.fmu, self.K * self.T
+        t_end = t_s + KT
+        mark = KT * math.floor(t_end / KT + 1e-12)          # the multiple of K T in (t_s, t_s + K T]
+        st = self.settings
+        st.t_obs_start, st.t_obs_stop = t_s, t_end
+        f.start(self.at(z), st, t0=t_s)
+        if mark < t_end - 1e-12 * KT:
+            f.step_to(mark)
+            y0 = f.get(("x", "v"))
+        else:
+            y0 = None
+        f.step_to(t_end)
+        out = f.get(self.names)
+        self.evaluations += 1
+        self.last = out
+        out["x0"], out["v0"] = (out["x"], out["v"]) if y0 is None else (y0["x"], y0["v"])
+        J = np.array([[out["dx_dx0"], out["dx_dv0"]], [out["dv_dx0"], out["dv_dv0"]]])
+        return np.array([out["x"], out["v"]]), J, int(out["mode"])
+
+
+class OrbitFollower:
+    """:func:`follow_orbit` through one FMU instance, point after point (a sweep): one map and one
+    Settings for all of them."""
+
+    def __init__(self, fmu: OscillatorFMU2, tol: float = 1e-12, max_iter: int = 40) -> None:
+        self.fmu, self.tol, self.max_iter = fmu, tol, max_iter
+        self.map: _ObservingMap | None = None
+
+    def __call__(self, oscillator: Oscillator, state: Sequence[float], section: float) -> Orbit | None:
+        p = oscillator
+        _check(p, 1)
+        if self.map is None:
+            self.map = _ObservingMap(self.fmu, p, 1)
+        m = self.map
+        m.retarget(p)
+        sol = _Solver(self.fmu, p, 1, self.tol, self.max_iter, map_=m)
+        t_s = float(section) % p.period
+        z, J, r, it, reason, md = sol.newton(np.asarray(state, dtype=float), t_s)
+        if reason or md == 0:
+            return None
+        y = m.last
+        stick = float(y["stick_fraction"])
+        if stick > 0.0:
+            mu = np.array([complex(J[0, 0] + J[1, 1]), 0j])
+        else:
+            tr, det = float(J[0, 0] + J[1, 1]), float(J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0])
+            root = cmath.sqrt(complex(tr * tr / 4.0 - det))
+            mu = np.array([tr / 2.0 + root, tr / 2.0 - root])
+            mu = mu[np.argsort(-np.abs(mu))]
+        x0, v0 = float(y["x0"]), float(y["v0"])
+        z0, zd0 = _nondim(p, x0, v0)
+        xmax, xmin = float(y["x_max"]), float(y["x_min"])
+        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
+                     stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+                     amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
+                     events={"transitions": int(y["transitions"])}, converged=True, section=t_s, jacobian=J,
+                     section_state=np.array(z, dtype=float), iterations=it)
+
+
+def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,
+                 tol: float = 1e-12, max_iter: int = 40) -> Orbit | None:
+    """The period-1 orbit of ``oscillator`` near the state (x, v) at the section time ``section`` (a
+    nearby orbit's section state at the same phase of the excitation, e.g. the previous frequency's
+    of a sweep): Newton shooting as :func:`find_orbits`, without its cycle runs (the converged
+    evaluation's own observables give the amplitude, offset and stick share, its stop at t = T the
+    state x0, v0). None when Newton does not converge or the converged orbit is stuck at the section
+    (then :func:`find_orbits` chooses a section). ``events`` holds only the FMU's count of mode
+    changes (``transitions``; stops, breakaways and reversals need find_orbits' sampled cycle). The
+    multipliers: with a stick phase exactly trace(J) and 0, else the roots of the characteristic
+    polynomial of J. For a sweep, :class:`OrbitFollower` does the same with less set-up per point."""
+    return OrbitFollower(fmu, tol, max_iter)(oscillator, state, section)

@@ -1,20 +1,42 @@
 """Steady states that are steady, and the frequency response of an oscillator in physical units.
 
-:func:`steady_state` runs the FMU from the initial conditions for n = ``min_periods``,
+Two methods (``frequency_response(..., method=...)``, ``dryfriction response --method``):
+
+``orbit`` (the default with the exact scheme): the steady states are the periodic orbits of
+:func:`dryfriction.orbits.find_orbits` (Newton shooting on the exact stroboscopic map, the Floquet
+multipliers from the FMU's own Jacobian): every orbit found at each frequency, stable or not, along
+a dimension ``orbit`` (padded NaN). Each orbit of one frequency is followed to the next (Newton from
+a polynomial prediction of its state at its section, :class:`dryfriction.orbits.OrbitFollower`, no
+sampled cycle runs); :func:`~dryfriction.orbits.find_orbits` from transients at the first frequency
+and wherever the followed orbits include no stable one (a bifurcation of the branch followed; with
+no stable orbit of K periods, of 2 K too: a period doubling);
+every :data:`COLD_EVERY` frequencies the transients of that search are followed too (a branch born
+away from the ones followed).
+
+``transient``: :func:`steady_state` runs the FMU from the initial conditions for n = ``min_periods``,
 2 n, 4 n, ... excitation periods (one ``doStep`` each, the in-FMU observables over the last half of
 the run, so that successive runs observe successive, adjacent windows [n/2, n] T and [n, 2n] T).
-It stops when two successive windows agree:
+It stops when the error left in the last window, estimated from the last three windows, is within
+the tolerance:
 
-    |A_j - A_{j-1}| <= tol A_j,   |o_j - o_{j-1}| <= tol A_j,   |s_j - s_{j-1}| <= tol_stick
+    e_A <= tol A_j,   e_o <= tol A_j,   |s_j - s_{j-1}| <= tol_stick
 
 (A the amplitude, half the peak-to-peak of x over the window, m; o the offset, the window's
-mid-range, m; s the share of the window spent stuck), and reports ``converged = False`` with the
-last window's values when ``max_periods`` is reached first. A window covers many periods, so
-period-n motions and slow beats are compared as wholes. An undamped oscillator excited at its
-resonance with 4 mu_k N < pi P0 never converges (the amplitude grows by (pi P0 - 4 mu_k N) / k
-per period): it is reported so, never as a steady amplitude.
+mid-range, m; s the share of the window spent stuck). The estimate fits the decay of a transient to
+the last three windows: a window's amplitude is taken as A_inf + B u^(2^j) (a free vibration
+decaying geometrically in time, each window starting at twice the time of the one before), so that
+with the differences d_j = A_j - A_{j-1} and q = d_j / d_{j-1} = u (u + 1) the error left is
+e = |d_j| u^2 / (1 - u^2), times the safety factor :data:`SAFETY`. A change that does not shrink
+(|q| >= 2: u >= 1, e.g. a free vibration that decays slowly against the run) is never converged,
+however small it is. Without friction (mu_k N = 0) the decay rate is known, zeta w0, and the larger
+of the two estimates is used. ``tol`` thus bounds the estimated error of the amplitude, not the
+change between two windows. ``converged = False`` is reported with the last window's values when
+``max_periods`` is reached first. A window covers many periods, so period-n motions and slow beats
+are compared as wholes. An undamped oscillator excited at its resonance with 4 mu_k N < pi P0 never
+converges (the amplitude grows by (pi P0 - 4 mu_k N) / k per period): it is reported so, never as
+a steady amplitude.
 
-:func:`frequency_response` does this for a list of frequencies in Hz (in this process, or on Dask
+:func:`frequency_response` does either for a list of frequencies in Hz (in this process, or on Dask
 workers for long sweeps) and returns an xarray Dataset with units; :func:`plot_response` draws it
 with Den Hartog's and Inman's amplitudes where they apply and the stick share below.
 """
@@ -34,7 +56,7 @@ from .fmu import FMUError, OscillatorFMU, Settings
 from .params import Oscillator
 
 __all__ = ["SteadyState", "steady_state", "frequency_response", "plot_response", "TOL", "TOL_STICK",
-           "MIN_PERIODS", "MAX_PERIODS", "default_settings"]
+           "MIN_PERIODS", "MAX_PERIODS", "METHODS", "default_settings", "remaining_error"]
 
 #: relative agreement of successive windows (amplitude and offset, relative to the amplitude)
 TOL = 1e-3
@@ -43,6 +65,13 @@ TOL_STICK = 0.01
 #: first run length and the period limit (excitation periods)
 MIN_PERIODS = 32
 MAX_PERIODS = 8192
+#: the estimated error left in a window is this multiple of the fitted geometric decay's
+SAFETY = 2.0
+#: the initial deviation from the steady state is taken as at most |x0, v0 / omega| + SPAN (A + |o|)
+SPAN = 3.0
+#: differences of windows at this share of the amplitude are round-off (the error is then that; the
+#: flow's estimate never reads below it)
+ROUNDOFF = 1e-13
 
 
 @dataclass(frozen=True)
@@ -54,9 +83,10 @@ class SteadyState:
     x_max: float            # m
     x_min: float            # m
     stick_fraction: float   # share of the last window spent stuck
-    converged: bool         # the last two windows agree within tol
+    converged: bool         # the estimated error of the last window is within tol
     periods: float          # excitation periods run (the last run)
     change: float           # relative change of the amplitude between the last two windows
+    error: float = math.nan  # estimated error left in the last window, relative to its amplitude
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -68,10 +98,53 @@ def default_settings(p: Oscillator) -> Settings:
     return Settings(h=0.0, scheme="exact")
 
 
+def remaining_error(d_prev: float, d_last: float, floor: float = 0.0) -> float:
+    """The error left in the last of three windows whose amplitudes differ by d_prev, then d_last
+    (module doc: A_j = A_inf + B u^(2^j), e = |d_last| u^2 / (1 - u^2), u (u + 1) = |q|); inf when
+    the differences do not shrink; |d_last| when it is at the round-off ``floor``."""
+    a, b = abs(d_prev), abs(d_last)
+    if b <= floor:
+        return b
+    if a == 0.0:
+        return math.inf
+    q = b / a
+    if q >= 2.0:
+        return math.inf
+    u = 0.5 * (math.sqrt(1.0 + 4.0 * q) - 1.0)
+    return b * u * u / (1.0 - u * u)
+
+
+def _viscous_error(p: Oscillator, d_last: float, n: float) -> float:
+    """Without friction: the error left after the last window from the known decay rate zeta w0 of
+    the free vibration (window start at n T / 2, the one before at n T / 4)."""
+    sigma = p.c / (2.0 * p.m)
+    t = 0.25 * n * p.period
+    if sigma * t <= 0.0:
+        return math.inf if d_last != 0.0 else 0.0
+    u2 = math.exp(-sigma * t)          # B u^4 / B u^2: the decay from one window start to the next
+    return abs(d_last) * u2 / (1.0 - u2)
+
+
+JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
+
+
+def _flow_error(p: Oscillator, J: np.ndarray, dev: float) -> float:
+    """The deviation from the steady state left after the flow whose Jacobian (since the start) is
+    J, from an initial deviation ``dev`` (in m; velocities scaled by the excitation's omega): the
+    2-norm of the scaled J times dev. Without a spring the position is neutral (the steady states are
+    a family shifted in x, the amplitude the same): the velocity's row only."""
+    w = p.omega
+    Js = np.array([[J[0, 0], J[0, 1] * w], [J[1, 0] / w, J[1, 1]]])
+    if p.k == 0:
+        Js = Js[1:]
+    return float(np.linalg.norm(Js, 2)) * dev
+
+
 def steady_state(fmu: OscillatorFMU, p: Oscillator, *, tol: float = TOL, tol_stick: float = TOL_STICK,
                  min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
                  settings: Settings | None = None) -> SteadyState:
-    """Run until successive windows agree (see the module docstring); needs omega > 0."""
+    """Run until the estimated error of the last window is within tol (see the module docstring);
+    needs omega > 0."""
     if not p.omega > 0:
         raise ValueError(f"a steady state needs an excitation: omega must be > 0, not {p.omega!r}")
     if not (tol > 0 and tol_stick > 0):
@@ -79,24 +152,50 @@ def steady_state(fmu: OscillatorFMU, p: Oscillator, *, tol: float = TOL, tol_sti
     if not (2 <= min_periods <= max_periods):
         raise ValueError(f"need 2 <= min_periods <= max_periods, not {min_periods}, {max_periods}")
     st = settings or default_settings(p)
+    flow = st.scheme == "exact"
+    if flow:
+        st = replace(st, extra={**st.extra, "sensitivity": True})
     T = p.period
-    prev: tuple[float, float, float] | None = None
+    frictionless = p.N * p.mu_k == 0.0
+    start = math.hypot(p.x0, p.v0 / p.omega)
+    hist: list[tuple[float, float, float]] = []
+    J_prev: np.ndarray | None = None
     n = float(min_periods)
     while True:
         o = fmu.observables(p, n * T, 0.5 * n * T, settings=st)
         amp, off = 0.5 * (o["x_max"] - o["x_min"]), 0.5 * (o["x_max"] + o["x_min"])
         stick = float(o["stick_fraction"])
-        change = math.inf
+        hist.append((amp, off, stick))
+        J = None
+        if flow:
+            y = fmu.get(JACOBIAN)
+            J = np.array([y[k] for k in JACOBIAN], dtype=float).reshape(2, 2)
+        change = error = math.inf
         converged = False
-        if prev is not None:
-            scale = max(amp, 1e-300)
-            change = abs(amp - prev[0]) / scale
-            converged = (change <= tol and abs(off - prev[1]) <= tol * scale and abs(stick - prev[2]) <= tol_stick)
-        if amp == 0.0 and prev is not None and prev[0] == 0.0:
-            converged, change = True, 0.0      # stuck for good: nothing moves
+        scale = max(amp, 1e-300)
+        if len(hist) >= 2:
+            a1, o1, s1 = hist[-2]
+            change = abs(amp - a1) / scale
+            agree = change <= tol and (abs(off - o1) <= tol * scale) and abs(stick - s1) <= tol_stick
+            if J_prev is not None and np.all(np.isfinite(J_prev)):
+                # the flow's own decay: the deviation left at the window's start (the previous run's end)
+                dev = start + SPAN * (amp + abs(off))
+                error = SAFETY * _flow_error(p, J_prev, dev) / scale + ROUNDOFF
+            elif len(hist) >= 3:
+                a0, o0, _ = hist[-3]
+                floor = ROUNDOFF * max(abs(amp), abs(off), 1e-300)
+                e_amp = remaining_error(a1 - a0, amp - a1, floor)
+                e_off = remaining_error(o1 - o0, off - o1, floor) if p.k > 0 else 0.0
+                if frictionless:
+                    e_amp = max(e_amp, _viscous_error(p, amp - a1, n))
+                    e_off = max(e_off, _viscous_error(p, off - o1, n)) if p.k > 0 else 0.0
+                error = SAFETY * max(e_amp, e_off) / scale
+            converged = agree and error <= tol
+        if amp == 0.0 and len(hist) >= 2 and hist[-2][0] == 0.0:
+            converged, change, error = True, 0.0, 0.0      # stuck for good: nothing moves
         if converged or 2 * n > max_periods:
-            return SteadyState(amp, off, float(o["x_max"]), float(o["x_min"]), stick, converged, n, change)
-        prev = (amp, off, stick)
+            return SteadyState(amp, off, float(o["x_max"]), float(o["x_min"]), stick, converged, n, change, error)
+        J_prev = J
         n *= 2
 
 
@@ -118,24 +217,254 @@ def _chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray, opts: 
             s = steady_state(inst, p, tol=opts["tol"], min_periods=opts["min_periods"],
                              max_periods=opts["max_periods"], settings=st)
         except FMUError as e:  # this frequency is not computed: its row says why, the sweep goes on
-            rows.append((math.nan, math.nan, math.nan, 0.0, math.nan, math.nan))
+            rows.append((math.nan, math.nan, math.nan, 0.0, math.nan, math.nan, math.nan))
             reasons.append(e.message)
             continue
-        rows.append((s.amplitude, s.offset, s.stick_fraction, float(s.converged), s.periods, s.change))
+        rows.append((s.amplitude, s.offset, s.stick_fraction, float(s.converged), s.periods, s.change, s.error))
         reasons.append("")
-    out = np.array(rows, dtype=float).reshape(len(f_hz), 6)
+    out = np.array(rows, dtype=float).reshape(len(f_hz), 7)
     return {"rows": out, "reason": np.array(reasons, dtype=object), "cpu": np.array([time.process_time() - t0])}
 
 
-def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol: float = TOL,
-                       min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS, scheme: str | None = None,
-                       h: float = 0.0, workers: int = 0, progress: bool = False,
+#: the orbit method's cold search (transients from several initial conditions) every this many
+#: frequencies, besides the first and wherever the warm start finds no stable orbit
+COLD_EVERY = 100
+#: samples per period of the orbit method's cycle runs (section choice; amplitudes, offsets and stick
+#: shares are the FMU's observables, exact whatever this is)
+ORBIT_SAMPLES = 32
+#: columns of the orbit method's table per (frequency, orbit)
+ORBIT_COLUMNS = ("period", "stable", "mu_max", "amplitude_m", "offset_m", "stick_fraction", "x0_m", "v0_m_per_s",
+                 "residual")
+METHODS = ("orbit", "transient")
+
+
+class _Branch:
+    """One orbit of the previous frequencies (f, period T) with up to two before it on the same
+    branch: a polynomial predictor (quadratic through three points, else linear) of its section
+    state and phase at the next frequency."""
+
+    def __init__(self, orbit: Any, f: float, T: float, before: "_Branch | None" = None) -> None:
+        self.orbit, self.f, self.T = orbit, f, T
+        hist = [] if before is None else [before, *before.history[:1]]
+        self.history = [b for b in hist if b.f != f]
+        self.point = (orbit.section_state[0], orbit.section_state[1], orbit.section / T)
+
+    def guess(self, f: float) -> tuple[np.ndarray, float]:
+        """(state, section phase in periods) predicted at the frequency f."""
+        pts = [self, *self.history]
+        if any(abs(b.point[2] - self.point[2]) > 0.25 for b in pts[1:]):
+            pts = pts[:1]                       # the section was chosen again: no extrapolation
+        fs = [b.f for b in pts]
+        # Lagrange weights of the points at f
+        wts = []
+        for i, fi in enumerate(fs):
+            w = 1.0
+            for j, fj in enumerate(fs):
+                if j != i:
+                    w *= (f - fj) / (fi - fj)
+            wts.append(w)
+        x, v, ph = (sum(w * b.point[c] for w, b in zip(wts, pts)) for c in range(3))
+        return np.array([x, v]), ph
+
+
+def _attracting(o: Any, p: Oscillator) -> bool:
+    """A steady state: a stable orbit; without a spring (every orbit one of a family shifted in x,
+    a multiplier exactly 1, ``stable`` false) one whose other multiplier is inside the unit circle."""
+    from .orbits import STABILITY_MARGIN
+
+    if o.stable:
+        return True
+    if p.k > 0 or o.stuck:
+        return False
+    mu = sorted(abs(complex(m)) for m in o.multipliers)
+    return len(mu) == 2 and mu[0] < 1.0 - STABILITY_MARGIN
+
+
+def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
+    """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart);
+    without a spring the members of a family shifted in x are one (x0 - offset and v0 compared)."""
+    from .orbits import SAME, scales
+
+    xs, w = scales(p)
+    out: list[Any] = []
+    seen: list[np.ndarray] = []
+    for o in orbits:
+        x = o.x0 - o.offset if p.k == 0 and math.isfinite(o.offset) else o.x0
+        a = np.array([x / xs, o.v0 / (xs * w)])
+        if o.period == 1 and any(np.max(np.abs(a - q)) <= SAME * max(1.0, float(np.max(np.abs(a)))) for q in seen):
+            continue
+        seen.append(a)
+        out.append(o)
+    return out
+
+
+def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
+               opts: Mapping[str, Any]) -> list[_Branch]:
+    """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
+    :class:`dryfriction.orbits.OrbitFollower`), and with ``cold`` transients from the spread of
+    initial conditions followed too (:func:`_transient_check`); where a branch is lost (or K > 1),
+    find_orbits from the previous orbits; without branches or when none is stable, find_orbits from
+    transients too."""
+    from .orbits import find_orbits
+
+    K, T = opts["period"], p.period
+    follow = opts["follower"]
+    if K == 1 and branches:
+        followed: list[_Branch] = []
+        for b in branches:
+            o = None
+            if not b.orbit.stuck and b.orbit.period == 1:
+                z, ph = b.guess(f)
+                o = follow(p, z, ph * T)
+            if o is None:
+                break
+            followed.append(_Branch(o, f, T, b))
+        else:
+            _mirrors(p, f, followed, follow)
+            if any(_attracting(b.orbit, p) for b in followed):
+                if cold:
+                    followed = _transient_check(inst, p, f, followed, opts)
+                keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
+                return [b for b in followed if id(b.orbit) in keep]
+    guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
+    kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
+    orbits = find_orbits(p, transients=0, spread=(), **kw) if branches else []
+    if not branches or not any(_attracting(o, p) for o in orbits):
+        orbits = find_orbits(p, transients=opts["transients"], **kw)
+    if not any(_attracting(o, p) for o in orbits):
+        # no stable orbit of K periods: the attractor may have doubled its period (reported with
+        # its minimal period, the unstable K-orbits kept)
+        kw["period"] = 2 * K
+        more = find_orbits(p, transients=opts["transients"], **kw)
+        orbits = orbits + [o for o in more if o.period != K]
+    return [_Branch(o, f, T) for o in _distinct(orbits, p)]
+
+
+def _mirrors(p: Oscillator, f: float, followed: list[_Branch], follow: Any) -> None:
+    """Add the mirror image (x, v)(t) -> -(x, v)(t + T/2) of each asymmetric orbit followed whose
+    image is not among them (a symmetric orbit followed through a symmetry-breaking pitchfork comes
+    out as one of the pair)."""
+    T = p.period
+    for b in list(followed):
+        o = b.orbit
+        if o.period != 1 or not abs(o.offset) > 1e-9 * o.amplitude:
+            continue
+        tol = 1e-7 * o.amplitude
+        if any(abs(q.orbit.offset + o.offset) <= tol and abs(q.orbit.amplitude - o.amplitude) <= tol for q in followed):
+            continue
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is not None:
+            followed.append(_Branch(image, f, T))
+
+
+def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_Branch],
+                     opts: Mapping[str, Any]) -> list[_Branch]:
+    """The cold search of a sweep's later frequencies, cheap: the end states of find_orbits'
+    transients (its spread of initial conditions), each followed by Newton from t = 0 (as a
+    section), find_orbits for one that cannot be; a new orbit's mirror image (the state -z half a
+    period later) followed too."""
+    from .orbits import _auto_guesses, DEFAULT_SPREAD, SAME, find_orbits, scales
+
+    follow, T = opts["follower"], p.period
+    xs, w = scales(p)
+    out = list(found)
+
+    def known(x: float, v: float) -> bool:
+        a = (x / xs, v / (xs * w))
+        tol = SAME * max(1.0, abs(a[0]), abs(a[1]))
+        return any(abs(a[0] - b.orbit.x0 / xs) <= tol and abs(a[1] - b.orbit.v0 / (xs * w)) <= tol for b in out)
+
+    st = default_settings(p)
+    for z in _auto_guesses(p, DEFAULT_SPREAD):
+        inst.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
+        inst.step_to(opts["transients"] * T)
+        y = inst.get(("x", "v"))
+        o = follow(p, (y["x"], y["v"]), 0.0)
+        if o is None:
+            new = [q for q in find_orbits(p, guesses=[(y["x"], y["v"])], transients=0, spread=(), fmu=inst,
+                                          samples=ORBIT_SAMPLES) if not known(q.x0, q.v0)]
+            out.extend(_Branch(q, f, T) for q in new)
+            continue
+        if known(o.x0, o.v0):
+            continue
+        out.append(_Branch(o, f, T))
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is not None and not known(image.x0, image.v0):
+            out.append(_Branch(image, f, T))
+    return out
+
+
+def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
+                 opts: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """One Dask task (or the in-process sweep): every orbit at the frequencies f_hz in turn, the
+    orbits of one frequency followed to the next."""
+    import time
+
+    from .chaos.batch import fmu_for
+
+    from .orbits import OrbitFollower
+
+    inst = fmu_for(fmu)
+    opts = {**opts, "follower": OrbitFollower(inst)}
+    t0 = time.process_time()
+    table: list[list[tuple[float, ...]]] = []
+    reasons: list[str] = []
+    branches: list[_Branch] = []
+    checked = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f_hz[0])})
+    for i, f in enumerate(f_hz):
+        # the oscillator at f: the checked one with omega replaced (f is checked finite and > 0 by
+        # frequency_response; a new check per point would cost a fifth of the sweep)
+        p = object.__new__(Oscillator)
+        p.__dict__.update(checked.__dict__, omega=2.0 * math.pi * float(f))
+        try:
+            branches = _orbits_at(inst, p, float(f), branches, not branches or i % opts["cold_every"] == 0, opts)
+        except FMUError as e:   # this frequency is not computed: its row says why, the sweep goes on
+            table.append([])
+            reasons.append(e.message)
+            branches = []
+            continue
+        rows, kept, stuck = [], [], False
+        for b in branches:
+            o = b.orbit
+            if o.stuck:        # a line of stuck states: reported once
+                if stuck:
+                    continue
+                stuck = True
+            kept.append(b)
+            rows.append((float(o.period), float(o.stable), o.mu_max, o.amplitude, o.offset, o.stick_fraction,
+                         o.x0, o.v0, o.residual, float(_attracting(o, p))))
+        branches = kept
+        table.append(rows)
+        reasons.append("")
+    width = max([len(r) for r in table] + [1])
+    out = np.full((len(f_hz), width, len(ORBIT_COLUMNS) + 1), np.nan)
+    for i, rows in enumerate(table):
+        if rows:
+            out[i, :len(rows)] = np.array(rows, dtype=float)
+    return {"orbits": out, "reason": np.array(reasons, dtype=object), "cpu": np.array([time.process_time() - t0])}
+
+
+def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, method: str | None = None,
+                       tol: float = TOL, min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
+                       scheme: str | None = None, h: float = 0.0, period: int = 1, transients: int = 60,
+                       cold_every: int = COLD_EVERY, workers: int = 0, progress: bool = False,
                        fmu_path: str | os.PathLike[str] | None = None) -> Any:
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
-    (dimension ``f_hz``; variables amplitude_m, offset_m, stick_fraction, converged, periods,
-    change, reason, den_hartog_m, inman_m; attributes: the oscillator and the settings, with units).
-    A frequency the FMU cannot compute gets NaN values, ``converged`` False and the FMU's
-    sentence in ``reason``; the other frequencies go on.
+    (dimension ``f_hz``; attributes: the oscillator and the settings, with units).
+
+    ``method`` ``"orbit"`` (the default, unless a Bossak ``scheme`` is asked for: the orbits need the
+    exact scheme's Jacobian): every periodic orbit of ``period`` excitation periods found
+    (:func:`dryfriction.orbits.find_orbits`; the previous frequency's orbits are the next one's
+    guesses, ``transients`` the length of the cold searches' transients, ``cold_every`` their
+    spacing in frequencies besides the first one and where no stable orbit is found), along a second dimension
+    ``orbit`` padded with NaN: period, stable, mu_max, amplitude_m, offset_m, stick_fraction, x0_m,
+    v0_m_per_s, residual; ``n_orbits`` and ``converged`` (at least one stable orbit) per frequency.
+
+    ``method`` ``"transient"``: :func:`steady_state` (variables amplitude_m, offset_m, stick_fraction,
+    converged, periods, change, error).
+
+    Both: reason, den_hartog_m, inman_m. A frequency the FMU cannot compute gets NaN values,
+    ``converged`` False and the FMU's sentence in ``reason``; the other frequencies go on.
 
     ``scheme`` None: exact (also at k = 0). ``workers`` > 0 runs
     the frequencies on a Dask LocalCluster of that many processes (for long sweeps)."""
@@ -148,38 +477,93 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, tol
     f = np.asarray(f_hz, dtype=float)
     if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise ValueError("the frequencies must be a non-empty list of finite values > 0 Hz")
+    if method is None:
+        method = "orbit" if scheme in (None, "exact") else "transient"
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, not {method!r}")
+    if method == "orbit" and scheme not in (None, "exact"):
+        raise ValueError(f"the orbit method needs the exact scheme (its Jacobian), not scheme {scheme!r}: "
+                         "use method='transient' for the Bossak schemes")
+    if not (isinstance(period, int) and period >= 1):
+        raise ValueError(f"period must be an integer >= 1 (excitation periods), not {period!r}")
     path = paths.fmu_path(paths.OSCILLATOR, fmu_path)
     base = {k: v for k, v in p.as_dict().items() if k != "omega"}
-    opts = {"tol": tol, "min_periods": min_periods, "max_periods": max_periods, "scheme": scheme, "h": h}
-    per_chunk = max(1, min(16, math.ceil(f.size / max(1, 4 * workers)))) if workers else max(1, min(8, f.size))
+    if method == "orbit":
+        if not (isinstance(cold_every, int) and cold_every >= 1):
+            raise ValueError(f"cold_every must be an integer >= 1 (frequencies), not {cold_every!r}")
+        opts: dict[str, Any] = {"period": period, "transients": transients, "cold_every": cold_every}
+        per_chunk = math.ceil(f.size / max(1, 2 * workers)) if workers else f.size
+        task: Any = _orbit_chunk
+    else:
+        opts = {"tol": tol, "min_periods": min_periods, "max_periods": max_periods, "scheme": scheme, "h": h}
+        per_chunk = max(1, min(16, math.ceil(f.size / max(1, 4 * workers)))) if workers else max(1, min(8, f.size))
+        task = _chunk
     chunks = [(base, f[i:i + per_chunk], opts) for i in range(0, f.size, per_chunk)]
-    results, _ = map_chunks(_chunk, path, chunks, workers=workers, progress=progress, desc="response")
-    rows = np.concatenate([r["rows"] for r in results], axis=0)
+    results, _ = map_chunks(task, path, chunks, workers=workers, progress=progress, desc="response")
     reason = np.concatenate([r["reason"] for r in results]).astype(str)
     lam = 2.0 * math.pi * f / p.w0 if p.k > 0 else np.full(f.shape, np.inf)
     applies = p.k > 0 and p.c == 0 and p.P0 != 0
     dh = np.asarray(den_hartog_amplitude(p, lam), dtype=float) if applies else np.full(f.shape, np.nan)
     inm = np.asarray(inman_amplitude(p, lam), dtype=float) if applies else np.full(f.shape, np.nan)
+    common = {
+        "reason": ("f_hz", reason, {"long_name": "why the point was not computed (the FMU's sentence; "
+                                                 "empty where it was)"}),
+        "den_hartog_m": ("f_hz", dh, {"units": "m", "long_name": "Den Hartog (zeta = 0, non-stop), exact"}),
+        "inman_m": ("f_hz", inm, {"units": "m", "long_name": "Inman (equivalent viscous damping), approximate"}),
+    }
+    attrs = {**{f"param_{k}": v for k, v in p.as_dict().items() if k != "omega"},
+             "param_mu_k": p.mu_k, "param_zeta": p.zeta, "natural_frequency_hz": p.f_n_hz,
+             "units": "SI: m, kg, N, s, Hz", "method": method, "scheme": scheme or "exact",
+             "never_converges": never_converges_note(p)}
+    coords = {"f_hz": ("f_hz", f, {"units": "Hz", "long_name": "excitation frequency"})}
+    if method == "orbit":
+        width = max(r["orbits"].shape[1] for r in results)
+        tab = np.concatenate([np.pad(r["orbits"], ((0, 0), (0, width - r["orbits"].shape[1]), (0, 0)),
+                                     constant_values=np.nan) for r in results], axis=0)
+        col = {n: tab[:, :, i] for i, n in enumerate(ORBIT_COLUMNS + ("attracting",))}
+        n_orbits = np.sum(np.isfinite(col["amplitude_m"]), axis=1)
+        stable = col["stable"]
+        dims = ("f_hz", "orbit")
+        ds = xr.Dataset(
+            {
+                "period": (dims, col["period"], {"units": "excitation periods", "long_name": "period K of the orbit"}),
+                "stable": (dims, stable, {"long_name": "1: stable (every |multiplier| < 1), 0: unstable, NaN: "
+                                                       "no orbit"}),
+                "mu_max": (dims, col["mu_max"], {"units": "1", "long_name": "largest |Floquet multiplier|"}),
+                "amplitude_m": (dims, col["amplitude_m"], {"units": "m",
+                                                           "long_name": "amplitude, half peak-to-peak of x over the orbit"}),
+                "offset_m": (dims, col["offset_m"], {"units": "m", "long_name": "offset, (x_max + x_min) / 2"}),
+                "stick_fraction": (dims, col["stick_fraction"], {"units": "1", "long_name": "share of the orbit stuck"}),
+                "x0_m": (dims, col["x0_m"], {"units": "m", "long_name": "x at t = 0 mod K T"}),
+                "v0_m_per_s": (dims, col["v0_m_per_s"], {"units": "m/s", "long_name": "v at t = 0 mod K T"}),
+                "residual": (dims, col["residual"], {"units": "1", "long_name": "scaled Newton residual"}),
+                "n_orbits": ("f_hz", n_orbits, {"units": "1", "long_name": "orbits found"}),
+                "converged": ("f_hz", np.any(col["attracting"] == 1.0, axis=1),
+                              {"long_name": "a stable orbit was found (a steady state; without a spring: "
+                                            "one attracting but for its neutral shift in x)"}),
+                **common,
+            },
+            coords={**coords, "orbit": ("orbit", np.arange(width), {"long_name": "orbit index (stable first, "
+                                                                                  "then by amplitude)"})},
+            attrs={**attrs, "period": period, "transients": transients, "cold_every": cold_every},
+        )
+        return ds
+    rows = np.concatenate([r["rows"] for r in results], axis=0)
     ds = xr.Dataset(
         {
             "amplitude_m": ("f_hz", rows[:, 0], {"units": "m", "long_name": "amplitude, half peak-to-peak of x"}),
             "offset_m": ("f_hz", rows[:, 1], {"units": "m", "long_name": "offset, (x_max + x_min) / 2"}),
             "stick_fraction": ("f_hz", rows[:, 2], {"units": "1", "long_name": "share of the window stuck"}),
             "converged": ("f_hz", rows[:, 3].astype(bool),
-                          {"long_name": f"successive windows agree within {tol:g} (relative)"}),
+                          {"long_name": f"estimated error of the last window within {tol:g} (relative)"}),
             "periods": ("f_hz", rows[:, 4], {"units": "1", "long_name": "excitation periods run"}),
             "change": ("f_hz", rows[:, 5], {"units": "1", "long_name": "relative amplitude change, last two windows"}),
-            "reason": ("f_hz", reason, {"long_name": "why the point was not computed (the FMU's sentence; "
-                                                     "empty where it was)"}),
-            "den_hartog_m": ("f_hz", dh, {"units": "m", "long_name": "Den Hartog (zeta = 0, non-stop), exact"}),
-            "inman_m": ("f_hz", inm, {"units": "m", "long_name": "Inman (equivalent viscous damping), approximate"}),
+            "error": ("f_hz", rows[:, 6], {"units": "1", "long_name": "estimated relative error left in the last "
+                                                                      "window"}),
+            **common,
         },
-        coords={"f_hz": ("f_hz", f, {"units": "Hz", "long_name": "excitation frequency"})},
-        attrs={**{f"param_{k}": v for k, v in p.as_dict().items() if k != "omega"},
-               "param_mu_k": p.mu_k, "param_zeta": p.zeta, "natural_frequency_hz": p.f_n_hz,
-               "units": "SI: m, kg, N, s, Hz", "tol": tol, "tol_stick": TOL_STICK, "min_periods": min_periods,
-               "max_periods": max_periods, "scheme": scheme or "exact",
-               "never_converges": never_converges_note(p)},
+        coords=coords,
+        attrs={**attrs, "tol": tol, "tol_stick": TOL_STICK, "min_periods": min_periods, "max_periods": max_periods},
     )
     return ds
 
@@ -195,7 +579,8 @@ def never_converges_note(p: Oscillator) -> str:
 
 def plot_response(ds: Any, path: str | os.PathLike[str]) -> Path:
     """PNG: amplitude (m) vs f (Hz) with Den Hartog's and Inman's curves where they apply, and the
-    stick share below; unconverged points drawn hollow and labelled."""
+    stick share below; the orbit method: every orbit, stable ones filled on solid lines, unstable
+    ones hollow on dashed lines; the transient method: unconverged points drawn hollow and labelled."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -206,12 +591,25 @@ def plot_response(ds: Any, path: str | os.PathLike[str]) -> Path:
     f = ds["f_hz"].values
     amp = ds["amplitude_m"].values
     conv = ds["converged"].values.astype(bool)
+    orbit = ds.attrs.get("method") == "orbit"
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
-    ax.plot(f, amp, "-", color="0.6", lw=1, zorder=1)
-    ax.plot(f[conv], amp[conv], "o", ms=5, color="C0", label="FMU steady state (converged)", zorder=3)
-    if (~conv).any():
-        ax.plot(f[~conv], amp[~conv], "o", ms=6, mfc="none", mec="C3", mew=1.5,
-                label="not converged (last window)", zorder=3)
+    if orbit:   # every orbit: stable filled on solid lines, unstable hollow on dashed ones
+        st = ds["stable"].values
+        for j in range(amp.shape[1]):
+            a = amp[:, j]
+            ax.plot(f, np.where(st[:, j] == 1.0, a, np.nan), "-", color="C0", lw=1, zorder=1)
+            ax.plot(f, np.where(st[:, j] == 0.0, a, np.nan), "--", color="C3", lw=1, zorder=1)
+        ff = np.broadcast_to(f[:, None], amp.shape)
+        ax.plot(ff[st == 1.0], amp[st == 1.0], "o", ms=4, color="C0", label="stable orbit", zorder=3)
+        if (st == 0.0).any():
+            ax.plot(ff[st == 0.0], amp[st == 0.0], "o", ms=5, mfc="none", mec="C3", mew=1.2,
+                    label="unstable orbit", zorder=3)
+    else:
+        ax.plot(f, amp, "-", color="0.6", lw=1, zorder=1)
+        ax.plot(f[conv], amp[conv], "o", ms=5, color="C0", label="FMU steady state (converged)", zorder=3)
+        if (~conv).any():
+            ax.plot(f[~conv], amp[~conv], "o", ms=6, mfc="none", mec="C3", mew=1.5,
+                    label="not converged (last window)", zorder=3)
     if np.isfinite(ds["den_hartog_m"].values).any():
         ax.plot(f, ds["den_hartog_m"].values, "--", color="k", lw=1.3, label="Den Hartog (exact, non-stop, zeta = 0)")
     if np.isfinite(ds["inman_m"].values).any():
@@ -228,7 +626,12 @@ def plot_response(ds: Any, path: str | os.PathLike[str]) -> Path:
                  f"mu_s = {ds.attrs['param_mu_s']:g}, mu_k = {ds.attrs['param_mu_k']:.3g}", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
-    bx.plot(f, 100 * ds["stick_fraction"].values, "s-", ms=4, color="C1", label="stuck share of the window")
+    if orbit:
+        sf = np.where(ds["stable"].values == 1.0, ds["stick_fraction"].values, np.nan)
+        for j in range(sf.shape[1]):
+            bx.plot(f, 100 * sf[:, j], "s-", ms=3, color="C1", label="stuck share of the stable orbits" if j == 0 else None)
+    else:
+        bx.plot(f, 100 * ds["stick_fraction"].values, "s-", ms=4, color="C1", label="stuck share of the window")
     bx.set_ylabel("stuck, % of time")
     bx.set_xlabel("excitation frequency f, Hz")
     bx.set_ylim(-5, 105)
