@@ -118,10 +118,12 @@ def test_response_json_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
               "--N", "20", "--mu-s", "0.3", "--mu-k", "0.2", "--f-start", "10", "--f-stop", "10", "--num", "1",
               "--json", "--no-plot", "--format", "csv", "--out", str(workdir / "out")], cwd=workdir)
     data = json.loads(r.stdout)
-    (a,) = data["amplitude_m"]
+    assert data["method"] == "orbit" and data["converged"] == [True] and data["f_hz"] == [10.0]
+    (orbits,) = data["orbits"]
+    (o,) = [o for o in orbits if o["stable"]]
+    a = o["amplitude_m"]
     assert math.isfinite(a) and a > 0 and round(a, 4) == 0.2356, a
-    assert data["converged"] == [True] and data["f_hz"] == [10.0]
-    assert 0.0 <= data["stick_fraction"][0] < 1.0
+    assert 0.0 <= o["stick_fraction"] < 1.0 and o["residual"] <= 1e-12 and o["mu_max"] < 1.0
 
 
 def test_study_list_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
@@ -140,13 +142,16 @@ def _readme_snippet() -> str:
 
 
 def test_the_readmes_five_lines_in_a_fresh_venv(venv: Path, workdir: Path) -> None:
-    """The snippet prints the table its comment promises: 10 Hz, 0.2356 m, converged."""
+    """The snippet prints the table its comment promises: every orbit per frequency; at 10 Hz one,
+    0.2356 m, stable."""
     code = _readme_snippet()
     assert len(code.strip().splitlines()) == 5
     out = _run([str(venv / "python"), "-c", code], cwd=workdir).stdout
-    rows = {float(m.group(1)): (float(m.group(2)), float(m.group(3)), m.group(4))
-            for m in re.finditer(r"^\s*([0-9.]+)\s+([0-9.eE+-]+)\s+([0-9.eE+-]+)\s+(True|False)\s*$", out, re.M)}
-    assert sorted(rows) == [5.0, 7.5, 10.0, 12.5, 15.0], out
-    amplitude, stuck, converged = rows[10.0]
-    assert round(amplitude, 4) == 0.2356 and converged == "True", out
-    assert all(math.isfinite(a) and a > 0 and 0.0 <= s <= 1.0 for a, s, _ in rows.values()), out
+    num = r"([0-9.eE+-]+)"
+    rows = [(float(m.group(1)), int(m.group(2)), float(m.group(3)), float(m.group(4)), float(m.group(5)),
+             float(m.group(6)))
+            for m in re.finditer(rf"^\s*([0-9.]+)\s+(\d+)\s+{num}\s+{num}\s+{num}\s+{num}\s*$", out, re.M)]
+    assert sorted({r[0] for r in rows}) == [5.0, 7.5, 10.0, 12.5, 15.0], out
+    at10 = [r for r in rows if r[0] == 10.0]
+    assert len(at10) == 1 and round(at10[0][2], 4) == 0.2356 and at10[0][3] == 1.0 and at10[0][4] < 1.0, out
+    assert all(math.isfinite(r[2]) and r[2] > 0 and 0.0 <= r[5] <= 1.0 for r in rows), out
