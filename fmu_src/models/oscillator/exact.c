@@ -1180,6 +1180,35 @@ static int scale_exponent(const dfo_model *M, const dfo_inputs *u, const dfo_sta
     return (e > SCALE_MAX) ? SCALE_MAX : (e < -SCALE_MAX) ? -SCALE_MAX : e;
 }
 
+/* 1 (with hA = 0) when the scaled phase cannot hold the call's lengths: the motion leaves the double range. */
+static int out_of_range(const ex_ctx *C, dfo_state *s)
+{
+    const double big = fmax(fmax(C->a, fabs(C->fF / C->k)), fmax(C->Ls_.Fb / C->k, fabs(s->X * C->iLs)));
+    if (!(big <= SCALED_MAX) || !(fabs(s->V * C->iLs) / C->w0 <= SCALED_MAX)) {
+        s->hA = 0.0;
+        return 1;
+    }
+    return 0;
+}
+
+/* The end of a call: A and F at s->t from the loads L there (over Ls) and the static force S (over Ls). */
+static dfo_status end_state(const ex_ctx *C, dfo_state *s, const dfo_loads *L, double S)
+{
+    const dfo_params *p = &C->M->p;
+    const double Vs = s->V * C->iLs;
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(L, S) * C->Ls;
+    } else {
+        const double F = -s->mode * L->muk_N;
+        s->F = F * C->Ls;
+        s->A = ((S - p->c * Vs + F) / p->m) * C->Ls;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}
+
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -1188,30 +1217,14 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
     ctx_init_scaled(&C, M, u, scale_exponent(M, u, s));
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
-    /* lengths the scaled phase cannot hold: the motion leaves the double range */
-    const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
-    if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
-        s->hA = 0.0;
-        return DFO_ERR_NONFINITE;
-    }
+    if (out_of_range(&C, s)) return DFO_ERR_NONFINITE; /* the motion leaves the double range */
     dfo_status st = advance(&C, s, t_target);
     s->steps += C.events;
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
     const dd te = {s->t, 0.0};
-    const double Xs = s->X * C.iLs, Vs = s->V * C.iLs, S = static_force(&C, te, Xs);
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&C.Ls_, S) * C.Ls;
-    } else {
-        const double F = -s->mode * C.Ls_.muk_N;
-        s->F = F * C.Ls;
-        s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    return end_state(&C, s, &C.Ls_, static_force(&C, te, s->X * C.iLs));
 }
 
 /* ---- polynomial inputs (dfo_exact_advance_poly) ------------------------------------------------- */
@@ -1696,11 +1709,7 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     C.qF[0] = dfo_external_force(M, u);
     C.qF[1] = q->F[0];
     C.qF[2] = q->F[1];
-    const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
-    if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
-        s->hA = 0.0;
-        return DFO_ERR_NONFINITE;
-    }
+    if (out_of_range(&C, s)) return DFO_ERR_NONFINITE;
     /* the pieces between the zeros of N + N_ext(t) */
     dfo_status st = DFO_OK;
     for (int i = 0; i <= nz && st == DFO_OK; i++) {
@@ -1716,16 +1725,6 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     piece_normal(n0, n1, n2, t_target - q->t0, C.qN); /* the loads at the end: the piece there */
     const dd te = {s->t, 0.0};
     dfo_loads L;
-    const double Xs = s->X * C.iLs, Vs = s->V * C.iLs, S = poly_static_force(&C, te, Xs, &L, NULL, NULL);
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&L, S) * C.Ls;
-    } else {
-        const double F = -s->mode * L.muk_N;
-        s->F = F * C.Ls;
-        s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    const double S = poly_static_force(&C, te, s->X * C.iLs, &L, NULL, NULL);
+    return end_state(&C, s, &L, S);
 }

@@ -510,6 +510,21 @@ static double static_force(const fr_ctx *C, double t, double X)
 /* The phases from s to t_target (the loop, below the polynomial inputs' helpers). */
 static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target);
 
+/* The end of a call: A and F at s->t from the loads L there and the static force S. */
+static dfo_status end_state(const dfo_model *M, dfo_state *s, const dfo_loads *L, double S)
+{
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(L, S);
+    } else {
+        s->F = -s->mode * L->muk_N;
+        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}
+
 dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                                   dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -522,17 +537,7 @@ dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_s
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
-    const double S = static_force(&C, s->t, s->X);
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&C.L, S);
-    } else {
-        s->F = -s->mode * C.L.muk_N;
-        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    return end_state(M, s, &C.L, static_force(&C, s->t, s->X));
 }
 
 /* ---- polynomial inputs (dfo_exact_free_advance_poly) ---------------------------------------------- */
@@ -912,15 +917,5 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
     if (st != DFO_OK) return st;
     dfo_loads L;
     poly_loads(&C, s->t, &L, NULL, NULL);
-    const double S = dfo_excitation(M, s->t) + L.F_ext;
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&L, S);
-    } else {
-        s->F = -s->mode * L.muk_N;
-        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    return end_state(M, s, &L, dfo_excitation(M, s->t) + L.F_ext);
 }
