@@ -1128,7 +1128,7 @@ void dfo_sens_breakaway(double J[4], double coef)
 /* The duration b - a of two double-double times, to rounding of the difference. */
 static inline double dd_span(dd a, dd b) { return (b.hi - a.hi) + (b.lo - a.lo); }
 
-/* The phases from s to t_target (the loop of advance(), below the polynomial inputs' helpers). */
+/* The phases from s to t_target with the inputs held (the loop below the polynomial inputs' helpers). */
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target);
 
 long long dfo_exact_grid_index(const dfo_model *M, const dfo_state *s)
@@ -1401,13 +1401,21 @@ static double phase_work(const void *ctx, const void *phase, double t0, double t
     return poly_work(C, (const ex_phase *)phase, C->w0 * t0, C->w0 * t1);
 }
 
+/* The event loop is compiled once for each kind of inputs (poly a constant in each): the loop of held
+ * inputs carries none of the polynomial inputs' code. */
+#if defined(__GNUC__)
+#define LOOP_INLINE inline __attribute__((always_inline))
+#else
+#define LOOP_INLINE inline
+#endif
+
 /* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical), after
- * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (C->poly), a
+ * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (poly), a
  * slide's friction work from its normal force (varying or not). */
-static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa, double xb,
-                        int mode_during, int mode_after, int event)
+static LOOP_INLINE void after_phase(const ex_ctx *C, int poly, dfo_state *s, const ex_phase *P, double ta, double tb,
+                                    double xa, double xb, int mode_during, int mode_after, int event)
 {
-    if (C->poly) {
+    if (poly) {
         const double n[3] = {P ? P->n0 : 0.0, P ? P->n1 : 0.0, P ? P->n2 : 0.0};
         dfo_exact_after_phase_poly(C->M, C->on_switch, C->switch_ctx, s, phase_x, phase_work, C, P, P ? n : NULL, ta,
                                    tb, xa, xb, mode_during, mode_after, event);
@@ -1417,12 +1425,11 @@ static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double
     }
 }
 
-/* The phases from s to t_target, with the inputs held or (C->poly) varying as polynomials over one piece
+/* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
  * (C->qN a polynomial > 0 inside it, or 0): one loop, the two kinds of inputs differing only in the
  * stick phase's breakaway, the loads at a stop and the phases' bookkeeping. */
-static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
+static LOOP_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double t_target, const int poly)
 {
-    const int poly = C->poly;
     int skip = 0, stall = 0, stick_dir = 0, carried = 0;
     double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
     double stick_cs[2] = {NAN, 0.0}; /* held: the phase at the stick phase's breakaway (NaN: from the time) */
@@ -1459,7 +1466,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             const int dir = dfo_free_start_dir(S, dS, d2S);
             s->mode = dir;
             C->events++;
-            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
             continue;
         }
         if (s->mode == 0) {
@@ -1478,7 +1485,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             if (!dd_lt(tb, target)) {
                 s->t = t_target;
                 t = target;
-                after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
                 break;
             }
             t = tb;
@@ -1509,7 +1516,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
                 }
             } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
             C->events++;
-            after_phase(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
             continue;
         }
         /* a slip in direction sd from (t, X, V) */
@@ -1533,7 +1540,7 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
             if (sens) dfo_sens_slide(C->M, dd_span(t, tc), s->J);
             carried = 0;
             s->t = tc.hi;
-            after_phase(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
+            after_phase(C, poly, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
             t = tc;
             if (cut) continue;
             break;
@@ -1602,12 +1609,16 @@ static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
         }
         s->mode = next;
         C->events++;
-        after_phase(C, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
+        after_phase(C, poly, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
     }
     s->X = Xs * Ls;
     s->V = Vs * Ls;
     return DFO_OK;
 }
+
+static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 0); }
+
+static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 1); }
 
 int dfo_input_poly_active(const dfo_input_poly *q)
 {
@@ -1716,7 +1727,7 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
         const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
         if (!(b > s->t)) continue;
         piece_normal(n0, n1, n2, 0.5 * (a + b) - q->t0, C.qN);
-        st = advance(&C, s, b);
+        st = advance_poly(&C, s, b);
     }
     s->steps += C.events;
     s->n = dfo_exact_grid_index(M, s);

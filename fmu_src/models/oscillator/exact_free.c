@@ -507,7 +507,7 @@ static double static_force(const fr_ctx *C, double t, double X)
     return dfo_static_force(C->M->p.k, &C->L, dfo_excitation(C->M, t), X);
 }
 
-/* The phases from s to t_target (the loop, below the polynomial inputs' helpers). */
+/* The phases from s to t_target with the inputs held (the loop below the polynomial inputs' helpers). */
 static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target);
 
 /* The end of a call: A and F at s->t from the loads L there and the static force S. */
@@ -762,13 +762,21 @@ static double phase_work(const void *ctx, const void *phase, double t0, double t
     return poly_work((const fr_ctx *)ctx, (const fr_phase *)phase, t0, t1);
 }
 
+/* The event loop is compiled once for each kind of inputs (poly a constant in each): the loop of held
+ * inputs carries none of the polynomial inputs' code. */
+#if defined(__GNUC__)
+#define LOOP_INLINE inline __attribute__((always_inline))
+#else
+#define LOOP_INLINE inline
+#endif
+
 /* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical), after
- * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (C->poly), a
+ * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (poly), a
  * slide's friction work from its normal force (varying or not). */
-static void after_phase(const fr_ctx *C, dfo_state *s, const fr_phase *P, double ta, double tb, double xa, double xb,
-                        int mode_during, int mode_after, int event)
+static LOOP_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s, const fr_phase *P, double ta, double tb,
+                                    double xa, double xb, int mode_during, int mode_after, int event)
 {
-    if (C->poly) {
+    if (poly) {
         const double n[3] = {P ? P->n0 : 0.0, P ? P->n1 : 0.0, P ? P->n2 : 0.0};
         dfo_exact_after_phase_poly(C->M, C->on_switch, C->switch_ctx, s, phase_x, phase_work, C, P, P ? n : NULL, ta,
                                    tb, xa, xb, mode_during, mode_after, event);
@@ -778,12 +786,11 @@ static void after_phase(const fr_ctx *C, dfo_state *s, const fr_phase *P, double
     }
 }
 
-/* The phases from s to t_target, with the inputs held or (C->poly) varying as polynomials over one piece
+/* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
  * (C->qN > 0 inside it, or all 0): one loop, the two kinds of inputs differing only in the breakaway,
  * the stop's search, the loads at a stop and the phases' bookkeeping. */
-static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
+static LOOP_INLINE dfo_status advance_loop(fr_ctx *C, dfo_state *s, double t_target, const int poly)
 {
-    const int poly = C->poly;
     int skip = 0, stall = 0;
     double t_last = s->t;
     const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
@@ -816,7 +823,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
             const int dir = dfo_free_start_dir(S, dS, d2S);
             s->mode = dir;
             C->events++;
-            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
             continue;
         }
         if (s->mode == 0) {
@@ -829,14 +836,14 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
             if (sens) dfo_sens_stick(s->J);
             if (!(tb < t_target)) {
                 s->t = t_target;
-                after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
                 break;
             }
             s->t = tb;
             s->V = 0.0;
             s->mode = dir;
             C->events++;
-            after_phase(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, tb, xa, xa, 0, dir, 1);
             continue;
         }
         /* a slip in direction sd from (ta, X, V) */
@@ -851,7 +858,7 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
             s->t = t_target;
             s->X = v.x;
             s->V = v.v;
-            after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
+            after_phase(C, poly, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
             break;
         }
         double ts = ta + v.tau;
@@ -889,10 +896,14 @@ static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
         }
         s->mode = next;
         C->events++;
-        after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+        after_phase(C, poly, s, &P, ta, ts, xa, s->X, sd, next, 1);
     }
     return DFO_OK;
 }
+
+static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 0); }
+
+static dfo_status advance_poly(fr_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 1); }
 
 dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, double q_t0, const double qF[3],
                                        const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
@@ -909,7 +920,7 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
         C.qN[i] = qN[i];
     }
     s->stick_tb = NAN; /* (the stick phase's cache is of held inputs) */
-    dfo_status st = advance(&C, s, t_target);
+    dfo_status st = advance_poly(&C, s, t_target);
     s->steps += C.events;
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
