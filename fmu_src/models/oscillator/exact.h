@@ -54,6 +54,15 @@
 #include "newmark.h"
 #include "oscillator.h"
 
+/* For exact.c and exact_free.c: the event loop is compiled once for each kind of inputs (held,
+ * polynomial: a constant in each), so that the loop of held inputs carries none of the polynomial
+ * inputs' code. */
+#if defined(__GNUC__)
+#define DFO_EXACT_INLINE inline __attribute__((always_inline))
+#else
+#define DFO_EXACT_INLINE inline
+#endif
+
 /* Advance to t_target > s->t with the inputs held: the contract of dfo_advance. */
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);

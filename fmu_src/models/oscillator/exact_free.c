@@ -762,19 +762,9 @@ static double phase_work(const void *ctx, const void *phase, double t0, double t
     return poly_work((const fr_ctx *)ctx, (const fr_phase *)phase, t0, t1);
 }
 
-/* The event loop is compiled once for each kind of inputs (poly a constant in each): the loop of held
- * inputs carries none of the polynomial inputs' code. */
-#if defined(__GNUC__)
-#define LOOP_INLINE inline __attribute__((always_inline))
-#else
-#define LOOP_INLINE inline
-#endif
-
-/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical), after
- * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (poly), a
- * slide's friction work from its normal force (varying or not). */
-static LOOP_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s, const fr_phase *P, double ta, double tb,
-                                    double xa, double xb, int mode_during, int mode_after, int event)
+/* The bookkeeping of a phase (as exact.c's after_phase; poly: with polynomial inputs). */
+static DFO_EXACT_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s, const fr_phase *P, double ta,
+                                         double tb, double xa, double xb, int mode_during, int mode_after, int event)
 {
     if (poly) {
         const double n[3] = {P ? P->n0 : 0.0, P ? P->n1 : 0.0, P ? P->n2 : 0.0};
@@ -789,7 +779,7 @@ static LOOP_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s, con
 /* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
  * (C->qN > 0 inside it, or all 0): one loop, the two kinds of inputs differing only in the breakaway,
  * the stop's search, the loads at a stop and the phases' bookkeeping. */
-static LOOP_INLINE dfo_status advance_loop(fr_ctx *C, dfo_state *s, double t_target, const int poly)
+static DFO_EXACT_INLINE dfo_status advance_loop(fr_ctx *C, dfo_state *s, double t_target, const int poly)
 {
     int skip = 0, stall = 0;
     double t_last = s->t;
