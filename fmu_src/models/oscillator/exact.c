@@ -980,15 +980,6 @@ static double phase_x(const void *ctx, const void *phase, double t)
     return (P->xc + v.y) * C->Ls;
 }
 
-/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical),
- * after which the mode is mode_after (an event at tb when event is set). */
-static void after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
-                        double xb, int mode_during, int mode_after, int event)
-{
-    dfo_exact_after_phase(C->M, C->L.muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
-                          mode_during, mode_after, event);
-}
-
 /* ---- the phases -------------------------------------------------------------------------------- */
 
 /* The excitation phase at t reduced to psi in [0, 2 pi) (to a few ulps of 2 pi: the reduction is of
@@ -1137,161 +1128,8 @@ void dfo_sens_breakaway(double J[4], double coef)
 /* The duration b - a of two double-double times, to rounding of the difference. */
 static inline double dd_span(dd a, dd b) { return (b.hi - a.hi) + (b.lo - a.lo); }
 
-static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target)
-{
-    int skip = 0, stall = 0, stick_dir = 0, carried = 0;
-    double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
-    double stick_cs[2] = {NAN, 0.0}; /* the phase at the stick phase's breakaway (NaN: from the time) */
-    const double Ls = C->Ls, w0 = C->w0;
-    const dd target = {t_target, 0.0};
-    dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
-    double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
-    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
-    while (dd_lt(t, target)) {
-        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
-        if (t.hi == t_last.hi && t.lo == t_last.lo) {
-            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
-        } else {
-            stall = 0;
-            t_last = t;
-        }
-        const double ta = t.hi, xa = s->X;
-        if (s->mode == 0 && !(C->Ls_.Fb > 0.0)) {
-            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
-            double c, sn;
-            phase_at(C, t, &c, &sn);
-            const double S = C->fP * c + C->fF - C->k * Xs, dS = -C->fP * C->omega * sn;
-            const double d2S = -C->omega * C->omega * (C->fP * c);
-            const int dir = dfo_free_start_dir(S, dS, d2S);
-            s->mode = dir;
-            C->events++;
-            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
-            continue;
-        }
-        if (s->mode == 0) {
-            int dir = 0;
-            if (isnan(stick_tb.hi)) stick_dir = 0;
-            const dd tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir, stick_cs);
-            dir = stick_dir;
-            skip = 0;
-            if (sens) dfo_sens_stick(s->J);
-            if (!dd_lt(tb, target)) {
-                s->t = t_target;
-                t = target;
-                after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
-                break;
-            }
-            t = tb;
-            s->t = tb.hi;
-            Vs = 0.0;
-            s->V = 0.0;
-            s->mode = dir;
-            if (!isnan(stick_cs[0])) { /* the slide starts with the crossing's phase */
-                carried = 1;
-                cs[0] = stick_cs[0];
-                cs[1] = stick_cs[1];
-                if (sens) { /* dt_b = k dx / P'(t_b); the slide starts with a+ = dir (F_b - mu_k N) / m */
-                    const double dP = -C->fP * C->omega * stick_cs[1];
-                    const double a_plus = dir * (C->Ls_.Fb - C->Ls_.muk_N) / C->M->p.m;
-                    dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / dP : 0.0);
-                }
-            } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
-            C->events++;
-            after_phase(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
-            continue;
-        }
-        /* a slip in direction sd from (t, X, V) */
-        const int sd = s->mode;
-        ex_phase P;
-        ex_val v;
-        phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
-        const double u_max = w0 * ((t_target - t.hi) - t.lo);
-        const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
-        const double u_end = cut ? C->u_span : u_max;
-        const int r = find_stop(C, &P, Xs - P.xc, Vs / w0, u_end, &v);
-        if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
-        if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
-        if (r == SEARCH_NONE) {
-            Xs = P.xc + v.y;
-            Vs = w0 * v.y1;
-            s->X = Xs * Ls;
-            s->V = Vs * Ls;
-            if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-            if (cut) {
-                const dd tc = dd_add_quot(t, u_end, 0.0, w0);
-                if (sens) dfo_sens_slide(C->M, dd_span(t, tc), s->J);
-                carried = 0;
-                s->t = tc.hi;
-                after_phase(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
-                t = tc;
-                continue;
-            }
-            if (sens) dfo_sens_slide(C->M, dd_span(t, target), s->J);
-            s->t = t_target;
-            t = target;
-            after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
-            break;
-        }
-        dd ts = dd_add_quot(t, v.u, 0.0, w0);
-        if (dd_lt(target, ts)) ts = target;
-        const int at_end = !dd_lt(ts, target);
-        if (sens) dfo_sens_slide(C->M, dd_span(t, ts), s->J);
-        t = ts;
-        s->t = ts.hi;
-        Xs = P.xc + v.y;
-        Vs = 0.0;
-        s->X = Xs * Ls;
-        s->V = 0.0;
-        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
-        /* the static force at a stop from the excitation phase there (known from the search) */
-        const double Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * Xs : static_force(C, ts, Xs);
-        int next = dfo_rest_mode(&C->Ls_, Fs);
-        if (!(C->Ls_.Fb > 0.0)) {
-            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
-            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
-            if (r == SEARCH_STOP && !at_end) {
-                /* the motion is the same in either direction: the next phase starts from the motion's
-                 * own state there (its velocity within rounding of 0, not set to 0: undamped, a
-                 * velocity error would never decay, and one made at every reversal would add up) */
-                ex_val w;
-                eval(C, &P, v.u, &w);
-                Xs = P.xc + w.y;
-                Vs = w0 * w.y1;
-                s->X = Xs * Ls;
-                s->V = Vs * Ls;
-                v.cth = w.cth;
-                v.sth = w.sth;
-            }
-        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
-            next = 0;                                 /* rest, and a breakaway right now is passed over */
-            skip = 1;
-        }
-        if (next == 0) stick_tb.hi = NAN; /* a new stick phase */
-        if (sens) {
-            /* the saltation at the stop: stick (rank one), or a reversal (a- = (F_s - sd mu_k N) / m before,
-             * a+ = (F_s + sd mu_k N) / m after); a touch that slides on, or a reversal without friction
-             * (a+ = a-), leaves J as it is */
-            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
-            else if (next == -sd && C->Ls_.muk_N > 0.0)
-                dfo_sens_reversal(s->J, (Fs + sd * C->Ls_.muk_N) / (Fs - sd * C->Ls_.muk_N));
-        }
-        if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
-            /* a reversal: the next slide starts here, with the phase the search reached (exact for the
-             * stop's time as a double-double, to the rounding of lambda tau) */
-            carried++;
-            cs[0] = v.cth;
-            cs[1] = v.sth;
-        } else {
-            carried = 0;
-        }
-        s->mode = next;
-        C->events++;
-        after_phase(C, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
-    }
-    s->X = Xs * Ls;
-    s->V = Vs * Ls;
-    return DFO_OK;
-}
+/* The phases from s to t_target with the inputs held (the loop below the polynomial inputs' helpers). */
+static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target);
 
 long long dfo_exact_grid_index(const dfo_model *M, const dfo_state *s)
 {
@@ -1342,6 +1180,35 @@ static int scale_exponent(const dfo_model *M, const dfo_inputs *u, const dfo_sta
     return (e > SCALE_MAX) ? SCALE_MAX : (e < -SCALE_MAX) ? -SCALE_MAX : e;
 }
 
+/* 1 (with hA = 0) when the scaled phase cannot hold the call's lengths: the motion leaves the double range. */
+static int out_of_range(const ex_ctx *C, dfo_state *s)
+{
+    const double big = fmax(fmax(C->a, fabs(C->fF / C->k)), fmax(C->Ls_.Fb / C->k, fabs(s->X * C->iLs)));
+    if (!(big <= SCALED_MAX) || !(fabs(s->V * C->iLs) / C->w0 <= SCALED_MAX)) {
+        s->hA = 0.0;
+        return 1;
+    }
+    return 0;
+}
+
+/* The end of a call: A and F at s->t from the loads L there (over Ls) and the static force S (over Ls). */
+static dfo_status end_state(const ex_ctx *C, dfo_state *s, const dfo_loads *L, double S)
+{
+    const dfo_params *p = &C->M->p;
+    const double Vs = s->V * C->iLs;
+    if (s->mode == 0) {
+        s->V = 0.0;
+        s->A = 0.0;
+        s->F = dfo_stick_force(L, S) * C->Ls;
+    } else {
+        const double F = -s->mode * L->muk_N;
+        s->F = F * C->Ls;
+        s->A = ((S - p->c * Vs + F) / p->m) * C->Ls;
+    }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}
+
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -1350,30 +1217,14 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
     ctx_init_scaled(&C, M, u, scale_exponent(M, u, s));
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
-    /* lengths the scaled phase cannot hold: the motion leaves the double range */
-    const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
-    if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
-        s->hA = 0.0;
-        return DFO_ERR_NONFINITE;
-    }
+    if (out_of_range(&C, s)) return DFO_ERR_NONFINITE; /* the motion leaves the double range */
     dfo_status st = advance(&C, s, t_target);
     s->steps += C.events;
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
     const dd te = {s->t, 0.0};
-    const double Xs = s->X * C.iLs, Vs = s->V * C.iLs, S = static_force(&C, te, Xs);
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&C.Ls_, S) * C.Ls;
-    } else {
-        const double F = -s->mode * C.Ls_.muk_N;
-        s->F = F * C.Ls;
-        s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    return end_state(&C, s, &C.Ls_, static_force(&C, te, s->X * C.iLs));
 }
 
 /* ---- polynomial inputs (dfo_exact_advance_poly) ------------------------------------------------- */
@@ -1527,34 +1378,62 @@ static double poly_work(const ex_ctx *C, const ex_phase *P, double u0, double u1
     return C->M->mu_k * P->s * W * C->Ls;
 }
 
-/* after_phase with polynomial inputs: a slide's friction work from the varying normal force. */
-static void after_phase_poly(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
-                             double xb, int mode_during, int mode_after, int event)
+void dfo_exact_after_phase_poly(const dfo_model *M, dfo_switch_fn on_switch, void *switch_ctx, dfo_state *s,
+                                dfo_phase_x_fn x_at, dfo_phase_work_fn work, const void *ctx, const void *phase,
+                                const double *n, double ta, double tb, double xa, double xb, int mode_during,
+                                int mode_after, int event)
 {
-    const int varying = P != NULL && (P->n1 != 0.0 || P->n2 != 0.0);
-    const double muk_N = (P != NULL) ? C->M->mu_k * fmax(P->n0, 0.0) : 0.0;
-    dfo_exact_after_phase(C->M, varying ? 0.0 : muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+    const int varying = n != NULL && (n[1] != 0.0 || n[2] != 0.0);
+    const double muk_N = (n != NULL) ? M->mu_k * fmax(n[0], 0.0) : 0.0;
+    dfo_exact_after_phase(M, varying ? 0.0 : muk_N, on_switch, switch_ctx, s, x_at, ctx, phase, ta, tb, xa, xb,
                           mode_during, mode_after, event);
-    if (varying && C->M->p.observe && mode_during != 0) {
-        const double w0 = C->M->p.t_obs_start, w1 = C->M->p.t_obs_stop;
+    if (varying && M->p.observe && mode_during != 0) {
+        const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
         const double a = fmax(ta, w0), b = fmin(tb, w1);
-        if (b > a) s->E_friction += poly_work(C, P, C->w0 * (a - ta), C->w0 * (b - ta));
+        if (b > a) s->E_friction += work(ctx, phase, a - ta, b - ta);
     }
 }
 
-/* advance() with polynomial inputs over one piece (C->qN a polynomial > 0 inside it, or 0), to t_target. */
-static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
+/* poly_work over times from the phase's start (dfo_phase_work_fn) */
+static double phase_work(const void *ctx, const void *phase, double t0, double t1)
 {
-    int skip = 0, stall = 0, carried = 0;
-    double cs[2] = {1.0, 0.0};
+    const ex_ctx *C = (const ex_ctx *)ctx;
+    return poly_work(C, (const ex_phase *)phase, C->w0 * t0, C->w0 * t1);
+}
+
+/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical), after
+ * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (poly), a
+ * slide's friction work from its normal force (varying or not). */
+static DFO_EXACT_INLINE void after_phase(const ex_ctx *C, int poly, dfo_state *s, const ex_phase *P, double ta,
+                                         double tb, double xa, double xb, int mode_during, int mode_after, int event)
+{
+    if (poly) {
+        const double n[3] = {P ? P->n0 : 0.0, P ? P->n1 : 0.0, P ? P->n2 : 0.0};
+        dfo_exact_after_phase_poly(C->M, C->on_switch, C->switch_ctx, s, phase_x, phase_work, C, P, P ? n : NULL, ta,
+                                   tb, xa, xb, mode_during, mode_after, event);
+    } else {
+        dfo_exact_after_phase(C->M, C->L.muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+                              mode_during, mode_after, event);
+    }
+}
+
+/* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
+ * (C->qN a polynomial > 0 inside it, or 0): one loop, the two kinds of inputs differing only in the
+ * stick phase's breakaway, the loads at a stop and the phases' bookkeeping. */
+static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double t_target, const int poly)
+{
+    int skip = 0, stall = 0, stick_dir = 0, carried = 0;
+    double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
+    double stick_cs[2] = {NAN, 0.0}; /* held: the phase at the stick phase's breakaway (NaN: from the time) */
     const double Ls = C->Ls, w0 = C->w0;
     const dd target = {t_target, 0.0};
-    dd t = {s->t, 0.0}, t_last = t;
-    double Xs = s->X * C->iLs, Vs = s->V * C->iLs;
-    const int sens = C->M->p.sensitivity;
-    const int fric = C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0);
+    dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
+    double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
+    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
+    const int fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0))
+                          : C->Ls_.Fb > 0.0;
     while (dd_lt(t, target)) {
-        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
+        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
         if (t.hi == t_last.hi && t.lo == t_last.lo) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
         } else {
@@ -1562,28 +1441,43 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
             t_last = t;
         }
         const double ta = t.hi, xa = s->X;
-        if (s->mode == 0 && !fric) { /* no friction: the block moves along the force (or its rate) */
-            dfo_loads L;
-            double dS, c, sn;
-            const double S = poly_static_force(C, t, Xs, &L, &dS, NULL);
-            phase_at(C, t, &c, &sn);
-            const double d2S = -C->omega * C->omega * (C->fP * c) + C->qF[2] * C->iLs;
+        if (s->mode == 0 && !fric) {
+            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+            double c, sn, S, dS, d2S;
+            if (poly) {
+                dfo_loads L;
+                S = poly_static_force(C, t, Xs, &L, &dS, NULL);
+                phase_at(C, t, &c, &sn);
+                d2S = -C->omega * C->omega * (C->fP * c) + C->qF[2] * C->iLs;
+            } else {
+                phase_at(C, t, &c, &sn);
+                S = C->fP * c + C->fF - C->k * Xs;
+                dS = -C->fP * C->omega * sn;
+                d2S = -C->omega * C->omega * (C->fP * c);
+            }
             const int dir = dfo_free_start_dir(S, dS, d2S);
             s->mode = dir;
             C->events++;
-            after_phase_poly(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
             continue;
         }
         if (s->mode == 0) {
             int dir = 0, at_start = 0;
             double dS = 0.0, dFb = 0.0;
-            const dd tb = poly_breakaway(C, Xs, t, target, skip, &dir, &at_start, &dS, &dFb);
+            dd tb;
+            if (poly) {
+                tb = poly_breakaway(C, Xs, t, target, skip, &dir, &at_start, &dS, &dFb);
+            } else {
+                if (isnan(stick_tb.hi)) stick_dir = 0;
+                tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir, stick_cs);
+                dir = stick_dir;
+            }
             skip = 0;
             if (sens) dfo_sens_stick(s->J);
             if (!dd_lt(tb, target)) {
                 s->t = t_target;
                 t = target;
-                after_phase_poly(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
                 break;
             }
             t = tb;
@@ -1591,26 +1485,39 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
             Vs = 0.0;
             s->V = 0.0;
             s->mode = dir;
-            carried = 0;
-            if (sens && !at_start) {
-                /* h = dir S(t) - F_b(t) = 0 at t_b: dt_b = k dx / D, D = S' - dir F_b' (S' = P' + F_ext'), and the
-                 * slide starts with a+ = dir (F_b - mu_k N) / m: the v row becomes -a+ k / D times the x row */
-                dfo_loads L;
-                poly_loads(C, tb, &L, NULL, NULL);
-                const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
-                /* (D = 0: a tangential breakaway, the Jacobian not finite, as with held inputs) */
-                dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0);
-            }
+            if (poly) {
+                carried = 0;
+                if (sens && !at_start) {
+                    /* h = dir S(t) - F_b(t) = 0 at t_b: dt_b = k dx / D, D = S' - dir F_b' (S' = P' + F_ext'), and
+                     * the slide starts with a+ = dir (F_b - mu_k N) / m: the v row becomes -a+ k / D times the x
+                     * row */
+                    dfo_loads L;
+                    poly_loads(C, tb, &L, NULL, NULL);
+                    const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
+                    /* (D = 0: a tangential breakaway, the Jacobian not finite, as with held inputs) */
+                    dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0);
+                }
+            } else if (!isnan(stick_cs[0])) { /* the slide starts with the crossing's phase */
+                carried = 1;
+                cs[0] = stick_cs[0];
+                cs[1] = stick_cs[1];
+                if (sens) { /* dt_b = k dx / P'(t_b); the slide starts with a+ = dir (F_b - mu_k N) / m */
+                    const double dP = -C->fP * C->omega * stick_cs[1];
+                    const double a_plus = dir * (C->Ls_.Fb - C->Ls_.muk_N) / C->M->p.m;
+                    dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / dP : 0.0);
+                }
+            } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
             C->events++;
-            after_phase_poly(C, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
             continue;
         }
+        /* a slip in direction sd from (t, X, V) */
         const int sd = s->mode;
         ex_phase P;
         ex_val v;
         phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
         const double u_max = w0 * ((t_target - t.hi) - t.lo);
-        const int cut = u_max > C->u_span;
+        const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
         const double u_end = cut ? C->u_span : u_max;
         const int r = find_stop(C, &P, Xs - P.xc, Vs / w0, u_end, &v);
         if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
@@ -1625,7 +1532,7 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
             if (sens) dfo_sens_slide(C->M, dd_span(t, tc), s->J);
             carried = 0;
             s->t = tc.hi;
-            after_phase_poly(C, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
+            after_phase(C, poly, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
             t = tc;
             if (cut) continue;
             break;
@@ -1640,14 +1547,27 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
         Vs = 0.0;
         s->X = Xs * Ls;
         s->V = 0.0;
-        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-        dfo_loads L;
-        double Fs = poly_static_force(C, ts, Xs, &L, NULL, NULL);
-        if (r == SEARCH_STOP && !at_end) Fs = C->fP * v.cth + L.F_ext - C->k * Xs; /* the phase the search reached */
-        int next = dfo_rest_mode(&L, Fs);
+        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
+        /* the static force at a stop from the excitation phase there (known from the search), and the
+         * loads there */
+        dfo_loads Lp;
+        const dfo_loads *L = &C->Ls_;
+        double Fs;
+        if (poly) {
+            Fs = poly_static_force(C, ts, Xs, &Lp, NULL, NULL);
+            if (r == SEARCH_STOP && !at_end) Fs = C->fP * v.cth + Lp.F_ext - C->k * Xs;
+            L = &Lp;
+        } else {
+            Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * Xs : static_force(C, ts, Xs);
+        }
+        int next = dfo_rest_mode(L, Fs);
         if (!fric) {
+            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
             if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
             if (r == SEARCH_STOP && !at_end) {
+                /* the motion is the same in either direction: the next phase starts from the motion's
+                 * own state there (its velocity within rounding of 0, not set to 0: undamped, a
+                 * velocity error would never decay, and one made at every reversal would add up) */
                 ex_val w;
                 eval(C, &P, v.u, &w);
                 Xs = P.xc + w.y;
@@ -1657,16 +1577,22 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
                 v.cth = w.cth;
                 v.sth = w.sth;
             }
-        } else if (r == SEARCH_NULL && next != -sd) {
-            next = 0;
+        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
+            next = 0;                                 /* rest, and a breakaway right now is passed over */
             skip = 1;
         }
-        if (sens) { /* the saltation at the stop, with the kinetic force at ts */
+        if (next == 0) stick_tb.hi = NAN; /* a new stick phase */
+        if (sens) {
+            /* the saltation at the stop: stick (rank one), or a reversal (a- = (F_s - sd mu_k N) / m before,
+             * a+ = (F_s + sd mu_k N) / m after, the kinetic force at ts); a touch that slides on, or a
+             * reversal without friction (a+ = a-), leaves J as it is */
             if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
-            else if (next == -sd && L.muk_N > 0.0)
-                dfo_sens_reversal(s->J, (Fs + sd * L.muk_N) / (Fs - sd * L.muk_N));
+            else if (next == -sd && L->muk_N > 0.0)
+                dfo_sens_reversal(s->J, (Fs + sd * L->muk_N) / (Fs - sd * L->muk_N));
         }
         if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
+            /* a reversal: the next slide starts here, with the phase the search reached (exact for the
+             * stop's time as a double-double, to the rounding of lambda tau) */
             carried++;
             cs[0] = v.cth;
             cs[1] = v.sth;
@@ -1675,12 +1601,16 @@ static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target)
         }
         s->mode = next;
         C->events++;
-        after_phase_poly(C, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
+        after_phase(C, poly, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
     }
     s->X = Xs * Ls;
     s->V = Vs * Ls;
     return DFO_OK;
 }
+
+static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 0); }
+
+static dfo_status advance_poly(ex_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 1); }
 
 int dfo_input_poly_active(const dfo_input_poly *q)
 {
@@ -1734,6 +1664,16 @@ static int poly_zeros(double n0, double n1, double n2, double lo, double hi, dou
     return k;
 }
 
+/* The normal force n0 + n1 q + n2 q^2 / 2 on the piece (between its zeros) that holds q: itself where it is
+ * > 0 at q, else all 0. */
+static void piece_normal(double n0, double n1, double n2, double q, double qN[3])
+{
+    const int pos = n0 + q * (n1 + 0.5 * q * n2) > 0.0;
+    qN[0] = pos ? n0 : 0.0;
+    qN[1] = pos ? n1 : 0.0;
+    qN[2] = pos ? n2 : 0.0;
+}
+
 dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx)
 {
@@ -1750,9 +1690,8 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
         for (int i = 0; i <= nz && st == DFO_OK; i++) {
             const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
             if (!(b > s->t)) continue;
-            const double mid = 0.5 * (a + b) - q->t0;
-            const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
-            const double qN[3] = {pos ? n0 : 0.0, pos ? n1 : 0.0, pos ? n2 : 0.0};
+            double qN[3];
+            piece_normal(n0, n1, n2, 0.5 * (a + b) - q->t0, qN);
             st = dfo_exact_free_advance_poly(M, u, q->t0, qF, qN, s, b, on_switch, switch_ctx);
         }
         return st;
@@ -1773,47 +1712,22 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     C.qF[0] = dfo_external_force(M, u);
     C.qF[1] = q->F[0];
     C.qF[2] = q->F[1];
-    const double big = fmax(fmax(C.a, fabs(C.fF / C.k)), fmax(C.Ls_.Fb / C.k, fabs(s->X * C.iLs)));
-    if (!(big <= SCALED_MAX) || !(fabs(s->V * C.iLs) / C.w0 <= SCALED_MAX)) {
-        s->hA = 0.0;
-        return DFO_ERR_NONFINITE;
-    }
+    if (out_of_range(&C, s)) return DFO_ERR_NONFINITE;
     /* the pieces between the zeros of N + N_ext(t) */
     dfo_status st = DFO_OK;
     for (int i = 0; i <= nz && st == DFO_OK; i++) {
         const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
         if (!(b > s->t)) continue;
-        const double mid = 0.5 * (a + b) - q->t0;
-        const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
-        C.qN[0] = pos ? n0 : 0.0;
-        C.qN[1] = pos ? n1 : 0.0;
-        C.qN[2] = pos ? n2 : 0.0;
+        piece_normal(n0, n1, n2, 0.5 * (a + b) - q->t0, C.qN);
         st = advance_poly(&C, s, b);
     }
     s->steps += C.events;
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
-    {
-        /* the loads at the end: the piece there */
-        const double mid = t_target - q->t0;
-        const int pos = n0 + mid * (n1 + 0.5 * mid * n2) > 0.0;
-        C.qN[0] = pos ? n0 : 0.0;
-        C.qN[1] = pos ? n1 : 0.0;
-        C.qN[2] = pos ? n2 : 0.0;
-    }
+    piece_normal(n0, n1, n2, t_target - q->t0, C.qN); /* the loads at the end: the piece there */
     const dd te = {s->t, 0.0};
     dfo_loads L;
-    const double Xs = s->X * C.iLs, Vs = s->V * C.iLs, S = poly_static_force(&C, te, Xs, &L, NULL, NULL);
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&L, S) * C.Ls;
-    } else {
-        const double F = -s->mode * L.muk_N;
-        s->F = F * C.Ls;
-        s->A = ((S - M->p.c * Vs + F) / M->p.m) * C.Ls;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    const double S = poly_static_force(&C, te, s->X * C.iLs, &L, NULL, NULL);
+    return end_state(&C, s, &L, S);
 }

@@ -54,6 +54,15 @@
 #include "newmark.h"
 #include "oscillator.h"
 
+/* For exact.c and exact_free.c: the event loop is compiled once for each kind of inputs (held,
+ * polynomial: a constant in each), so that the loop of held inputs carries none of the polynomial
+ * inputs' code. */
+#if defined(__GNUC__)
+#define DFO_EXACT_INLINE inline __attribute__((always_inline))
+#else
+#define DFO_EXACT_INLINE inline
+#endif
+
 /* Advance to t_target > s->t with the inputs held: the contract of dfo_advance. */
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);
@@ -113,6 +122,18 @@ typedef double (*dfo_phase_x_fn)(const void *ctx, const void *phase, double t);
 void dfo_exact_after_phase(const dfo_model *M, double muk_N, dfo_switch_fn on_switch, void *switch_ctx,
                            dfo_state *s, dfo_phase_x_fn x_at, const void *ctx, const void *phase, double ta,
                            double tb, double xa, double xb, int mode_during, int mode_after, int event);
+
+/* The friction work mu_k int N |dx| (physical) of a slip phase over [t0, t1] (times from its start) with
+ * a varying normal force (ctx, phase: the caller's). */
+typedef double (*dfo_phase_work_fn)(const void *ctx, const void *phase, double t0, double t1);
+
+/* dfo_exact_after_phase with polynomial inputs, shared by exact.c and exact_free.c: n the slide's normal
+ * force n[0] + n[1] u + n[2] u^2 / 2 (physical; NULL: a stick phase). A constant one is the held inputs'
+ * mu_k N |dx|; a varying one adds work(ctx, phase, ...) over the part of the phase inside the window. */
+void dfo_exact_after_phase_poly(const dfo_model *M, dfo_switch_fn on_switch, void *switch_ctx, dfo_state *s,
+                                dfo_phase_x_fn x_at, dfo_phase_work_fn work, const void *ctx, const void *phase,
+                                const double *n, double ta, double tb, double xa, double xb, int mode_during,
+                                int mode_after, int event);
 
 /* The sensitivity (parameter sensitivity, exact scheme only): the Jacobian J = d(X, V) / d(X, V)(t_ref)
  * in s->J, row-major, propagated in closed form (method.md section 11). Each function updates J:

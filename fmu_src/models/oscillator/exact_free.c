@@ -476,15 +476,6 @@ static double phase_x(const void *ctx, const void *phase, double t)
     return v.x;
 }
 
-/* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb, after which
- * the mode is mode_after (an event at tb when event is set). */
-static void after_phase(const fr_ctx *C, dfo_state *s, const fr_phase *P, double ta, double tb, double xa,
-                        double xb, int mode_during, int mode_after, int event)
-{
-    dfo_exact_after_phase(C->M, C->L.muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
-                          mode_during, mode_after, event);
-}
-
 /* ---- the phases (the event loop of exact.c) ----------------------------------------------------- */
 
 /* The next breakaway of the stick phase from ta (cached in the state per stick phase). With skip, a
@@ -516,92 +507,21 @@ static double static_force(const fr_ctx *C, double t, double X)
     return dfo_static_force(C->M->p.k, &C->L, dfo_excitation(C->M, t), X);
 }
 
-static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target)
+/* The phases from s to t_target with the inputs held (the loop below the polynomial inputs' helpers). */
+static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target);
+
+/* The end of a call: A and F at s->t from the loads L there and the static force S. */
+static dfo_status end_state(const dfo_model *M, dfo_state *s, const dfo_loads *L, double S)
 {
-    int skip = 0, stall = 0;
-    double t_last = s->t;
-    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
-    while (s->t < t_target) {
-        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
-        if (s->t == t_last) {
-            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
-        } else {
-            stall = 0;
-            t_last = s->t;
-        }
-        const double ta = s->t, xa = s->X;
-        if (s->mode == 0 && !(C->L.Fb > 0.0)) {
-            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
-            const double S = static_force(C, ta, s->X), dS = dfo_excitation_rate(C->M, ta);
-            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
-            const int dir = dfo_free_start_dir(S, dS, d2S);
-            s->mode = dir;
-            C->events++;
-            after_phase(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
-            continue;
-        }
-        if (s->mode == 0) {
-            int dir = 0;
-            const double tb = breakaway(C, s, ta, skip, &dir);
-            skip = 0;
-            /* stuck: x frozen, v held at 0; without a spring the breakaway time does not depend on x,
-             * so the v row stays 0 across it */
-            if (sens) dfo_sens_stick(s->J);
-            if (tb >= t_target) {
-                s->t = t_target;
-                after_phase(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
-                break;
-            }
-            s->t = tb;
-            s->V = 0.0;
-            s->mode = dir;
-            C->events++;
-            after_phase(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
-            continue;
-        }
-        /* a slip in direction sd from (ta, X, V) */
-        const int sd = s->mode;
-        fr_phase P;
-        fr_val v;
-        phase_init(C, &P, ta, s->X, s->V, sd);
-        const int r = find_stop(C, &P, t_target - ta, &v);
-        if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
-        if (r == SEARCH_NONE) {
-            if (sens) dfo_sens_slide(C->M, t_target - ta, s->J);
-            s->t = t_target;
-            s->X = v.x;
-            s->V = v.v;
-            after_phase(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
-            break;
-        }
-        double ts = ta + v.tau;
-        if (ts > t_target) ts = t_target;
-        if (sens) dfo_sens_slide(C->M, ts - ta, s->J);
-        s->t = ts;
-        s->X = v.x;
+    if (s->mode == 0) {
         s->V = 0.0;
-        /* the static force at a stop from the excitation phase there (known from the search) */
-        const double Fs = (r == SEARCH_STOP && ts < t_target && C->A > 0.0)
-                              ? dfo_static_force(C->M->p.k, &C->L, C->M->P_amp * v.cth, s->X)
-                              : static_force(C, ts, s->X);
-        int next = dfo_rest_mode(&C->L, Fs);
-        if (!(C->L.Fb > 0.0)) {
-            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
-            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
-        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
-            next = 0;                                 /* rest, and a breakaway right now is passed over */
-            skip = 1;
-        }
-        if (next == 0) s->stick_tb = NAN; /* a new stick phase */
-        if (sens) { /* the saltation at the stop (as exact.c) */
-            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
-            else if (next == -sd && C->L.muk_N > 0.0)
-                dfo_sens_reversal(s->J, (Fs + sd * C->L.muk_N) / (Fs - sd * C->L.muk_N));
-        }
-        s->mode = next;
-        C->events++;
-        after_phase(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+        s->A = 0.0;
+        s->F = dfo_stick_force(L, S);
+    } else {
+        s->F = -s->mode * L->muk_N;
+        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
     }
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
     return DFO_OK;
 }
 
@@ -617,17 +537,7 @@ dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_s
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
-    const double S = static_force(&C, s->t, s->X);
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&C.L, S);
-    } else {
-        s->F = -s->mode * C.L.muk_N;
-        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    return end_state(M, s, &C.L, static_force(&C, s->t, s->X));
 }
 
 /* ---- polynomial inputs (dfo_exact_free_advance_poly) ---------------------------------------------- */
@@ -846,27 +756,36 @@ static double poly_work(const fr_ctx *C, const fr_phase *P, double t0, double t1
     return C->M->mu_k * sum;
 }
 
-static void after_phase_poly(const fr_ctx *C, dfo_state *s, const fr_phase *P, double ta, double tb, double xa,
-                             double xb, int mode_during, int mode_after, int event)
+/* poly_work as a dfo_phase_work_fn */
+static double phase_work(const void *ctx, const void *phase, double t0, double t1)
 {
-    const int varying = P != NULL && (P->n1 != 0.0 || P->n2 != 0.0);
-    const double muk_N = (P != NULL) ? C->M->mu_k * fmax(P->n0, 0.0) : 0.0;
-    dfo_exact_after_phase(C->M, varying ? 0.0 : muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
-                          mode_during, mode_after, event);
-    if (varying && C->M->p.observe && mode_during != 0) {
-        const double w0 = C->M->p.t_obs_start, w1 = C->M->p.t_obs_stop;
-        const double a = fmax(ta, w0), b = fmin(tb, w1);
-        if (b > a) s->E_friction += poly_work(C, P, a - ta, b - ta);
+    return poly_work((const fr_ctx *)ctx, (const fr_phase *)phase, t0, t1);
+}
+
+/* The bookkeeping of a phase (as exact.c's after_phase; poly: with polynomial inputs). */
+static DFO_EXACT_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s, const fr_phase *P, double ta,
+                                         double tb, double xa, double xb, int mode_during, int mode_after, int event)
+{
+    if (poly) {
+        const double n[3] = {P ? P->n0 : 0.0, P ? P->n1 : 0.0, P ? P->n2 : 0.0};
+        dfo_exact_after_phase_poly(C->M, C->on_switch, C->switch_ctx, s, phase_x, phase_work, C, P, P ? n : NULL, ta,
+                                   tb, xa, xb, mode_during, mode_after, event);
+    } else {
+        dfo_exact_after_phase(C->M, C->L.muk_N, C->on_switch, C->switch_ctx, s, phase_x, C, P, ta, tb, xa, xb,
+                              mode_during, mode_after, event);
     }
 }
 
-/* advance() with polynomial inputs over one piece (C->qN > 0 inside it, or all 0). */
-static dfo_status advance_poly(fr_ctx *C, dfo_state *s, double t_target)
+/* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
+ * (C->qN > 0 inside it, or all 0): one loop, the two kinds of inputs differing only in the breakaway,
+ * the stop's search, the loads at a stop and the phases' bookkeeping. */
+static DFO_EXACT_INLINE dfo_status advance_loop(fr_ctx *C, dfo_state *s, double t_target, const int poly)
 {
     int skip = 0, stall = 0;
     double t_last = s->t;
-    const int sens = C->M->p.sensitivity;
-    const int fric = C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0);
+    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
+    const int fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0))
+                          : C->L.Fb > 0.0;
     while (s->t < t_target) {
         if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
         if (s->t == t_last) {
@@ -877,46 +796,59 @@ static dfo_status advance_poly(fr_ctx *C, dfo_state *s, double t_target)
         }
         const double ta = s->t, xa = s->X;
         if (s->mode == 0 && !fric) {
-            dfo_loads L;
-            double dF;
-            poly_loads(C, ta, &L, &dF, NULL);
-            const double S = dfo_excitation(C->M, ta) + L.F_ext, dS = dfo_excitation_rate(C->M, ta) + dF;
-            const double d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta) + C->qF[2];
+            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+            double S, dS, d2S;
+            if (poly) {
+                dfo_loads L;
+                double dF;
+                poly_loads(C, ta, &L, &dF, NULL);
+                S = dfo_excitation(C->M, ta) + L.F_ext;
+                dS = dfo_excitation_rate(C->M, ta) + dF;
+                d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta) + C->qF[2];
+            } else {
+                S = static_force(C, ta, s->X);
+                dS = dfo_excitation_rate(C->M, ta);
+                d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
+            }
             const int dir = dfo_free_start_dir(S, dS, d2S);
             s->mode = dir;
             C->events++;
-            after_phase_poly(C, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
             continue;
         }
         if (s->mode == 0) {
             int dir = 0;
-            const double tb = poly_breakaway(C, ta, t_target, skip, &dir);
+            /* (held: never NaN) */
+            const double tb = poly ? poly_breakaway(C, ta, t_target, skip, &dir) : breakaway(C, s, ta, skip, &dir);
             skip = 0;
-            if (sens) dfo_sens_stick(s->J); /* (no spring: the breakaway time does not depend on x) */
+            /* stuck: x frozen, v held at 0; without a spring the breakaway time does not depend on x,
+             * so the v row stays 0 across it */
+            if (sens) dfo_sens_stick(s->J);
             if (!(tb < t_target)) {
                 s->t = t_target;
-                after_phase_poly(C, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
                 break;
             }
             s->t = tb;
             s->V = 0.0;
             s->mode = dir;
             C->events++;
-            after_phase_poly(C, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, tb, xa, xa, 0, dir, 1);
             continue;
         }
+        /* a slip in direction sd from (ta, X, V) */
         const int sd = s->mode;
         fr_phase P;
         fr_val v;
         phase_init(C, &P, ta, s->X, s->V, sd);
-        const int r = find_stop_poly(C, &P, t_target - ta, &v);
+        const int r = poly ? find_stop_poly(C, &P, t_target - ta, &v) : find_stop(C, &P, t_target - ta, &v);
         if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
         if (r == SEARCH_NONE) {
             if (sens) dfo_sens_slide(C->M, t_target - ta, s->J);
             s->t = t_target;
             s->X = v.x;
             s->V = v.v;
-            after_phase_poly(C, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
+            after_phase(C, poly, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
             break;
         }
         double ts = ta + v.tau;
@@ -925,29 +857,43 @@ static dfo_status advance_poly(fr_ctx *C, dfo_state *s, double t_target)
         s->t = ts;
         s->X = v.x;
         s->V = 0.0;
-        dfo_loads L;
-        poly_loads(C, ts, &L, NULL, NULL);
-        const double P_ts = (r == SEARCH_STOP && ts < t_target && C->A > 0.0) ? C->M->P_amp * v.cth
-                                                                                : dfo_excitation(C->M, ts);
-        const double Fs = P_ts + L.F_ext;
-        int next = dfo_rest_mode(&L, Fs);
+        /* the static force at a stop from the excitation phase there (known from the search), and the
+         * loads there */
+        const int known = r == SEARCH_STOP && ts < t_target && C->A > 0.0;
+        dfo_loads Lp;
+        const dfo_loads *L = &C->L;
+        double Fs;
+        if (poly) {
+            poly_loads(C, ts, &Lp, NULL, NULL);
+            Fs = (known ? C->M->P_amp * v.cth : dfo_excitation(C->M, ts)) + Lp.F_ext;
+            L = &Lp;
+        } else {
+            Fs = known ? dfo_static_force(C->M->p.k, &C->L, C->M->P_amp * v.cth, s->X) : static_force(C, ts, s->X);
+        }
+        int next = dfo_rest_mode(L, Fs);
         if (!fric) {
+            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
             if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
-        } else if (r == SEARCH_NULL && next != -sd) {
-            next = 0;
+        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
+            next = 0;                                 /* rest, and a breakaway right now is passed over */
             skip = 1;
         }
-        if (sens) {
+        if (next == 0) s->stick_tb = NAN; /* a new stick phase (polynomial inputs: NaN throughout) */
+        if (sens) { /* the saltation at the stop (as exact.c) */
             if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
-            else if (next == -sd && L.muk_N > 0.0)
-                dfo_sens_reversal(s->J, (Fs + sd * L.muk_N) / (Fs - sd * L.muk_N));
+            else if (next == -sd && L->muk_N > 0.0)
+                dfo_sens_reversal(s->J, (Fs + sd * L->muk_N) / (Fs - sd * L->muk_N));
         }
         s->mode = next;
         C->events++;
-        after_phase_poly(C, s, &P, ta, ts, xa, s->X, sd, next, 1);
+        after_phase(C, poly, s, &P, ta, ts, xa, s->X, sd, next, 1);
     }
     return DFO_OK;
 }
+
+static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 0); }
+
+static dfo_status advance_poly(fr_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 1); }
 
 dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, double q_t0, const double qF[3],
                                        const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
@@ -972,15 +918,5 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
     if (st != DFO_OK) return st;
     dfo_loads L;
     poly_loads(&C, s->t, &L, NULL, NULL);
-    const double S = dfo_excitation(M, s->t) + L.F_ext;
-    if (s->mode == 0) {
-        s->V = 0.0;
-        s->A = 0.0;
-        s->F = dfo_stick_force(&L, S);
-    } else {
-        s->F = -s->mode * L.muk_N;
-        s->A = (S - M->p.c * s->V + s->F) / M->p.m;
-    }
-    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-    return DFO_OK;
+    return end_state(M, s, &L, dfo_excitation(M, s->t) + L.F_ext);
 }
