@@ -25,6 +25,10 @@ DFO_SAME(effect_force, DFO_MD_EFFECT_FORCE_INPUT, DFO_EFFECT_FORCE_INPUT);
 DFO_SAME(effect_normal, DFO_MD_EFFECT_NORMAL_INPUT, DFO_EFFECT_NORMAL_INPUT);
 DFO_SAME(effect_observables, DFO_MD_EFFECT_OBSERVABLES, DFO_EFFECT_OBSERVABLES);
 DFO_SAME(effect_sensitivity, DFO_MD_EFFECT_SENSITIVITY, DFO_EFFECT_SENSITIVITY);
+DFO_SAME(effect_belt, DFO_MD_EFFECT_BELT, DFO_EFFECT_BELT);
+DFO_SAME(effect_stribeck, DFO_MD_EFFECT_STRIBECK, DFO_EFFECT_STRIBECK);
+DFO_SAME(law_coulomb, DFO_MD_FRICTION_LAW_COULOMB, DFO_LAW_COULOMB);
+DFO_SAME(law_stribeck, DFO_MD_FRICTION_LAW_STRIBECK, DFO_LAW_STRIBECK);
 DFO_SAME(scheme_paper, DFO_MD_SCHEME_PAPER, DFO_SCHEME_PAPER);
 DFO_SAME(scheme_consistent, DFO_MD_SCHEME_CONSISTENT, DFO_SCHEME_CONSISTENT);
 DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
@@ -879,7 +883,7 @@ dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void
 
 static int finite_inputs(const dfo_inputs *u)
 {
-    return isfinite(u->F_ext) && isfinite(u->N_ext) && isfinite(u->F_ext_d[0]) && isfinite(u->F_ext_d[1]) &&
+    return isfinite(u->F_ext) && isfinite(u->N_ext) && isfinite(u->v_belt) && isfinite(u->F_ext_d[0]) && isfinite(u->F_ext_d[1]) &&
            isfinite(u->N_ext_d[0]) && isfinite(u->N_ext_d[1]) && isfinite(u->t_d);
 }
 
@@ -895,7 +899,7 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
     }
     const char *why = dfo_run_implausible(r, 0);
     if (why) return why;
-    if (dfo_check_params(&v->p)) return "the observation window is empty";
+    if (dfo_check_params(&v->p)) return dfo_check_params(&v->p);
     if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used)) return "an input is not finite";
     if ((v->u.ramp != 0 && v->u.ramp != 1) || (v->u_used.ramp != 0 && v->u_used.ramp != 1))
         return "the input derivatives are invalid";
