@@ -18,6 +18,7 @@
 #define SNAP_MAX_REL_H 1e-5     /* snap tolerance (newmark.h): at most 1e-5 h, */
 #define SNAP_MIN_REL_H 1e-7     /* at least 1e-7 h, */
 #define SNAP_EPS_T 0x1p16       /* else 2^16 eps |t| */
+#define BELT_TINY_REL_H 1e-6    /* on a belt, a slide's sub-step below 1e-6 h is taken by Taylor's expansion */
 
 /* The few functions of every internal step are inlined into the stepping loop, so that the state
  * stays in registers (a step costs some 100 ns; a call and its spills are a good part of that). */
@@ -660,6 +661,16 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         const int dir = s->mode;
         const double r = (phase == 0) ? C->h_step : t_end - b.ta;
         const double F0 = s->F;
+        if (C->belt && s->hA == 0.0 && r <= BELT_TINY_REL_H * C->full.h) {
+            /* a sliver of a step after a switch (a breakaway a few ulps before a grid point): on a belt
+             * V = vb + u is not small, and Bossak's A = (V1 - V) / (gamma r) would be its rounding
+             * over r; Taylor's expansion with the physical acceleration is exact to O(r^2) instead */
+            s->X += (s->V + 0.5 * s->A * r) * r;
+            s->V += s->A * r;
+            s->t = t_end;
+            end_phase(C, s, &b, dir, s->F);
+            continue;
+        }
         predict(C, s, r, t_end, &tr);
         /* the LCP with the smallest kinetic magnitude decides: where it stops the block, every law does */
         const double muN_lcp = C->M->stribeck ? C->L.N * fmin(C->M->law.mu_s, C->M->law.mu_k) : C->L.muk_N;
