@@ -1048,7 +1048,8 @@ double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_stat
         dfo_loads_at(&C.L, M, in, s->t);
         C.friction = C.L.Fb > 0.0;
     }
-    if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
+    /* (a stuck block whose belt changed since the last step slides: dfo_friction_force) */
+    if (stuck(&C, s) && C.rules->rests_when_stuck && !(C.belt && s->V != C.vb)) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t, phi) */
         C.t_grid = s->t;
         C.P_grid = dfo_exact_excitation(M, s->t);
