@@ -66,6 +66,7 @@ typedef struct {
     int skip_stuck;  /* the stuck fast path applies (stuck_until) */
     int belt;        /* v_belt set: the friction acts on V - vb, a stuck block moves with the belt */
     double vb;       /* the belt's velocity (0 when never set) */
+    int general;     /* belt or Stribeck: the schemes' copies with their code (else the plain ones) */
     double t_grid;   /* end of the current step when it is a grid point (else NaN) */
     double P_grid;   /* the excitation there, from the state's excitation cache */
     dfo_status err;  /* first error met */
@@ -212,16 +213,19 @@ static HOT_INLINE void finish(const step_ctx *C, dfo_state *s, const trial *tr, 
 /* Friction at the end of the step: the LCP of method.md section 3 with limit muN. Lemke decides
  * the active complementarity pair; the velocity then follows from that pair's equation. Returns
  * the mode (+1, 0, -1). */
-static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
+static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1,
+                                     const int general)
 {
+    const int belt = general && C->belt;
+    const double vb = general ? C->vb : 0.0;
     const double mh = tr->co->m_hat, im = tr->co->inv_m_hat;
     if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
         *V1 = tr->p_hat * im;
         *F1 = 0.0;
-        return dfo_sign(*V1 - C->vb);
+        return dfo_sign(*V1 - vb);
     }
     /* the LCP on the velocity relative to the belt, V1 - vb: m_hat (V1 - vb) = p_hat - m_hat vb + F1 */
-    const double p = C->belt ? tr->p_hat - mh * C->vb : tr->p_hat;
+    const double p = belt ? tr->p_hat - mh * vb : tr->p_hat;
     const double Mx[4] = {mh, -mh, -mh, mh};
     const double q[2] = {muN - p, muN + p};
     double z[2], w[2];
@@ -239,9 +243,9 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
         return 0;
     }
     /* 0.0 - x: a zero force is +0, as on the fast path */
-    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) * im; *F1 = 0.0 - muN; if (C->belt) *V1 += C->vb; return 1; }
-    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) * im; *F1 = muN; if (C->belt) *V1 += C->vb; return -1; }
-    *V1 = C->vb;
+    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) * im; *F1 = 0.0 - muN; if (belt) *V1 += vb; return 1; }
+    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) * im; *F1 = muN; if (belt) *V1 += vb; return -1; }
+    *V1 = vb;
     *F1 = 0.0 - p;
     return 0;
 }
@@ -284,7 +288,8 @@ static HOT_INLINE phase_start begin_phase(const dfo_state *s)
 
 /* Book-keeping after a phase [b->ta, s->t] spent in mode_during with friction force F: the stick
  * phase's breakaway to be found anew, switch reports and observables. */
-static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
+static HOT_INLINE void end_phase_on(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F,
+                                    const int belt)
 {
     const dfo_model *M = C->M;
     const double ta = b->ta, dX = s->X - b->X0;
@@ -304,9 +309,14 @@ static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_st
     if (s->X < s->x_min) s->x_min = s->X;
     if (tb > w0) {
         /* the energy dissipated: the friction's work on the relative motion */
-        s->E_friction -= F * (C->belt ? dX - C->vb * (tb - ta) : dX);
+        s->E_friction -= F * (belt ? dX - C->vb * (tb - ta) : dX);
         if (s->mode != mode_before) s->transitions++;
     }
+}
+
+static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
+{
+    end_phase_on(C, s, b, mode_during, F, C->belt);
 }
 
 /* The static force on the block at its current time and position. */
@@ -368,7 +378,7 @@ static void step_smooth(step_ctx *C, dfo_state *s, double t_end)
     double V1, F1;
     const phase_start b = begin_phase(s);
     predict(C, s, C->h_step, t_end, &tr);
-    s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1);
+    s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1, 1);
     finish(C, s, &tr, V1);
     s->F = F1;
     end_phase(C, s, &b, s->mode, s->F);
@@ -377,7 +387,7 @@ static void step_smooth(step_ctx *C, dfo_state *s, double t_end)
 /* The paper's literal scheme: LCP with the previous mode's coefficient, then frictionUpdates
  * re-solves with the coefficient of the result; A follows Bossak's recursion throughout, also
  * while stuck (the block is then not exactly at rest, and F is the LCP's). */
-static void step_paper(step_ctx *C, dfo_state *s, double t_end)
+static HOT_INLINE void step_paper(step_ctx *C, dfo_state *s, double t_end, const int general)
 {
     const dfo_model *M = C->M;
     trial tr;
@@ -385,12 +395,12 @@ static void step_paper(step_ctx *C, dfo_state *s, double t_end)
     const phase_start b = begin_phase(s);
     predict(C, s, C->h_step, t_end, &tr);
     double mu = (s->mode == 0) ? M->mu_b : M->mu_k;
-    int mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
+    int mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1, general);
     for (int i = 0; i < M->p.frictionUpdates && M->update; i++) {
         const double mu_new = (mode == 0) ? M->mu_b : M->mu_k;
         if (mu_new == mu) break;
         mu = mu_new;
-        mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
+        mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1, general);
     }
     finish(C, s, &tr, V1);
     s->mode = mode;
@@ -399,7 +409,7 @@ static void step_paper(step_ctx *C, dfo_state *s, double t_end)
 }
 
 /* Consistent stick test (method.md section 4, variant 1). */
-static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
+static HOT_INLINE void step_consistent(step_ctx *C, dfo_state *s, double t_end, const int general)
 {
     const dfo_model *M = C->M;
     trial tr;
@@ -408,18 +418,18 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
     predict(C, s, C->h_step, t_end, &tr);
     if (s->mode == 0) {
         /* A = V = 0: p_hat is exactly the static force P1 - k X */
-        int mode = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1);
+        int mode = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1, general);
         if (mode == 0) {
             stick_after(C, s, &tr);
         } else {
-            if (M->update) mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+            if (M->update) mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1, general);
             finish(C, s, &tr, V1);
             s->mode = mode;
             s->F = F1;
         }
     } else {
         const int dir = s->mode;
-        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1, general);
         if (mode == dir) {
             finish(C, s, &tr, V1);
             s->F = F1;
@@ -427,12 +437,12 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
             /* the block stops in this step: stick or reverse, judged by the static force at the
              * predicted rest position */
             double F_static = dfo_static_force(M->p.k, &C->L, excitation(C, t_end), tr.x_pred);
-            if (C->belt) /* the rest position riding on the belt, and the damper's pull c vb */
+            if (general && C->belt) /* the rest position riding on the belt, and the damper's pull c vb */
                 F_static = dfo_static_force(M->p.k, &C->L, excitation(C, t_end), tr.x_pred + tr.co->corr_V * C->vb) -
                            M->p.c * C->vb;
             const int dir_new = dfo_sign(F_static);
             const double V_new = (tr.p_hat - dir_new * C->L.muk_N) * tr.co->inv_m_hat;
-            if (fabs(F_static) <= C->L.Fb || dir_new * (V_new - C->vb) <= 0.0) {
+            if (fabs(F_static) <= C->L.Fb || dir_new * (general ? V_new - C->vb : V_new) <= 0.0) {
                 stick_after(C, s, &tr);
             } else {
                 finish(C, s, &tr, V_new);
@@ -442,6 +452,13 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
         }
     }
     end_phase(C, s, &b, s->mode, s->F);
+}
+
+/* The consistent step, each copy (with and without the belt's code) out of line. */
+static void consistent_step(step_ctx *C, dfo_state *s, double t_end)
+{
+    if (C->belt) step_consistent(C, s, t_end, 1);
+    else step_consistent(C, s, t_end, 0);
 }
 
 /* The stick phase's next breakaway in the state holds for the current static force and limit. */
@@ -548,8 +565,7 @@ static COLD double belt_breakaway(const step_ctx *C, dfo_state *s, double ta, do
  * step, and again only when the inputs change the static force or the limit. */
 static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
-    if (C->belt) return belt_breakaway(C, s, ta, tb, dir);
-    if (C->ramp) return ramp_breakaway(C, s, ta, tb, dir);
+    if (C->ramp) return ramp_breakaway(C, s, ta, tb, dir); /* (on a belt: belt_breakaway) */
     if (!breakaway_known(C, s)) {
         const double C0 = C->L.F_ext - C->M->p.k * s->X;
         s->stick_C = C0;
@@ -622,15 +638,19 @@ static double stop_length(const step_ctx *C, const dfo_state *s, double lo, doub
     return dfo_brent(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
 }
 
-/* Located switches (method.md section 4, variant 2, the default). */
-static void step_located(step_ctx *C, dfo_state *s, double t_end)
+/* The located scheme's step. general: the belt and the Stribeck law may act; 0 for the plain
+ * Coulomb block on a fixed support, whose copy of this loop then carries none of their code (the
+ * step cost unchanged). */
+static HOT_INLINE void located(step_ctx *C, dfo_state *s, double t_end, const int general)
 {
+    const int belt = general && C->belt, strib = general && C->M->stribeck;
+    const double vb = general ? C->vb : 0.0;
     /* Locating a switch inside a step needs steps that resolve the oscillator's fastest time scale;
      * on a stiff step (several natural periods long) restarts from rest with the physical
      * acceleration would feed the unresolved mode: there the consistent stick test, which is
      * stable, takes the step. */
     if (!resolves(C->M, C->h_step)) {
-        step_consistent(C, s, t_end);
+        consistent_step(C, s, t_end);
         return;
     }
     trial tr;
@@ -643,58 +663,58 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
         const phase_start b = begin_phase(s);
         if (s->mode == 0) {  /* stuck: X frozen, V = A = 0 (on a belt: X = Xa + vb (t - ta), V = vb) */
             int dir = 0;
-            const double tb = breakaway_time(C, s, b.ta, t_end, &dir);
+            const double tb = belt ? belt_breakaway(C, s, b.ta, t_end, &dir) : breakaway_time(C, s, b.ta, t_end, &dir);
             if (tb == INFINITY) {  /* stays stuck: F is set once, at the end of dfo_advance */
                 s->t = t_end;
-                if (C->belt) s->X = b.X0 + C->vb * (t_end - b.ta);
-                end_phase(C, s, &b, 0, 0.0);
+                if (belt) s->X = b.X0 + vb * (t_end - b.ta);
+                end_phase_on(C, s, &b, 0, 0.0, belt);
                 continue;
             }
             s->t = tb;
-            if (C->belt) s->X = b.X0 + C->vb * (tb - b.ta);
+            if (belt) s->X = b.X0 + vb * (tb - b.ta);
             if (C->ramp) ramp_restart(C, s, dir);
             else start_slide(C, s, dir, static_force_now(C, s));
-            end_phase(C, s, &b, 0, s->F);
+            end_phase_on(C, s, &b, 0, s->F, belt);
             continue;
         }
         /* sliding in direction dir over the remainder r */
         const int dir = s->mode;
         const double r = (phase == 0) ? C->h_step : t_end - b.ta;
         const double F0 = s->F;
-        if (C->belt && s->hA == 0.0 && r <= BELT_TINY_REL_H * C->full.h) {
+        if (belt && s->hA == 0.0 && r <= BELT_TINY_REL_H * C->full.h) {
             /* a sliver of a step after a switch (a breakaway a few ulps before a grid point): on a belt
              * V = vb + u is not small, and Bossak's A = (V1 - V) / (gamma r) would be its rounding
              * over r; Taylor's expansion with the physical acceleration is exact to O(r^2) instead */
             s->X += (s->V + 0.5 * s->A * r) * r;
             s->V += s->A * r;
             s->t = t_end;
-            end_phase(C, s, &b, dir, s->F);
+            end_phase_on(C, s, &b, dir, s->F, belt);
             continue;
         }
         predict(C, s, r, t_end, &tr);
         /* the LCP with the smallest kinetic magnitude decides: where it stops the block, every law does */
-        const double muN_lcp = C->M->stribeck ? C->L.N * fmin(C->M->law.mu_s, C->M->law.mu_k) : C->L.muk_N;
-        int mode = solve_friction(C, s, &tr, muN_lcp, &V1, &F1);
-        if (C->M->stribeck && mode == dir) { /* the speed-dependent friction at the step's end */
+        const double muN_lcp = strib ? C->L.N * fmin(C->M->law.mu_s, C->M->law.mu_k) : C->L.muk_N;
+        int mode = solve_friction(C, s, &tr, muN_lcp, &V1, &F1, general);
+        if (strib && mode == dir) { /* the speed-dependent friction at the step's end */
             const double u = slide_value(C, &C->L, &tr, dir);
             if (u > 0.0) {
-                V1 = C->vb + dir * u;
+                V1 = vb + dir * u;
                 F1 = -dir * C->L.N * dfo_friction_mu(&C->M->law, u);
             } else {
                 mode = 0;
             }
         }
-        if (mode == dir && dir * (V1 - C->vb) > 0.0) {
+        if (mode == dir && dir * (V1 - vb) > 0.0) {
             finish(C, s, &tr, V1);
             s->t = t_end;
             s->F = F1;
-            end_phase(C, s, &b, dir, C->M->stribeck ? 0.5 * (F0 + F1) : F1);
+            end_phase_on(C, s, &b, dir, strib ? 0.5 * (F0 + F1) : F1, belt);
             continue;
         }
         /* the block stops inside the remainder: find the sub-step that ends at V = vb */
-        const double fhi = (C->belt || C->M->stribeck) ? slide_value(C, &C->L, &tr, dir)
+        const double fhi = (belt || strib) ? slide_value(C, &C->L, &tr, dir)
                                                         : dir * (tr.p_hat - dir * C->L.muk_N) * tr.co->inv_m_hat;
-        double lo = 0.0, flo = dir * (s->V - C->vb);
+        double lo = 0.0, flo = dir * (s->V - vb);
         if (!(flo > 0.0)) {  /* started from rest: find a point where it is still moving */
             lo = r;
             flo = 0.0;
@@ -705,19 +725,26 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             if (!(flo > 0.0)) {  /* no motion resolvable in double precision: stays at rest */
                 s->t = t_end;
                 enter_stick(C, s, static_force_now(C, s));
-                end_phase(C, s, &b, 0, s->F);
+                end_phase_on(C, s, &b, 0, s->F, belt);
                 continue;
             }
         }
         const double hs = (fhi == 0.0) ? r : stop_length(C, s, lo, flo, r, fhi);
         predict(C, s, hs, (hs >= r) ? t_end : s->t + hs, &tr);
-        finish(C, s, &tr, C->vb);
+        finish(C, s, &tr, vb);
         s->t = (hs >= r) ? t_end : fmax(b.ta + hs, nextafter(b.ta, INFINITY));
         if (C->ramp) ramp_restart(C, s, 0);
         else restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
         const double F_stop = -dir * start_loads(C, &C->L).muk_N;
-        end_phase(C, s, &b, dir, C->M->stribeck ? 0.5 * (F0 + F_stop) : F_stop);
+        end_phase_on(C, s, &b, dir, strib ? 0.5 * (F0 + F_stop) : F_stop, belt);
     }
+}
+
+/* Located switches (method.md section 4, variant 2, the default). */
+static HOT_INLINE void step_located(step_ctx *C, dfo_state *s, double t_end)
+{
+    if (C->general) located(C, s, t_end, 1);
+    else located(C, s, t_end, 0);
 }
 
 /* ---- the schemes: their rules and their steps, in one place ---------------------------------- */
@@ -746,8 +773,12 @@ static void step_to(step_ctx *C, dfo_state *s, double t_end)
         step_smooth(C, s, t_end);
     } else {
         switch (C->M->p.scheme) {
-        case DFO_SCHEME_PAPER: step_paper(C, s, t_end); break;
-        case DFO_SCHEME_CONSISTENT: step_consistent(C, s, t_end); break;
+        /* each with its copy for the belt and the Stribeck law, and one without their code */
+        case DFO_SCHEME_PAPER:
+            if (C->belt) step_paper(C, s, t_end, 1);
+            else step_paper(C, s, t_end, 0);
+            break;
+        case DFO_SCHEME_CONSISTENT: consistent_step(C, s, t_end); break;
         default: step_located(C, s, t_end); break;
         }
     }
@@ -769,6 +800,7 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *in)
      * hands the steps to the consistent test, and while the inputs vary */
     C->belt = dfo_belt_on(in);
     C->vb = dfo_belt_speed(in);
+    C->general = C->belt || M->stribeck;
     C->skip_stuck =
         C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h) && !C->ramp && !C->belt;
     C->err = DFO_OK;
