@@ -58,11 +58,12 @@ def errors(params: dict, ref: Belt, v_belt: float, changes, h: float) -> tuple[f
     return float(np.max(np.abs(x - b.x))), float(np.max(np.abs(v - b.v)))
 
 
-# measured (h = 2e-3, 1e-3): coulomb 7.3e-7, 1.8e-7 (x), stribeck 8.5e-7, 2.1e-7; ratios 4.00
+# measured max |x - x_ref| (h = 2e-3, 1e-3): 7.32e-7, 1.83e-7; 8.50e-7, 2.13e-7; 1.63e-6, 4.12e-7;
+# 3.68e-7, 9.20e-8 (ratios 4.00, 4.00, 3.96, 4.00; v alike)
 CASES = {
     "coulomb, belt changed twice": (BASE, REF, 0.3, CHANGES),
     "stribeck, belt changed twice": (dict(BASE, **STRIBECK), REF.with_(law="stribeck", v_s=0.1), 0.3, CHANGES),
-    "stribeck, delta 2, chi > 1 free": (dict(BASE, chi=0.4, delta=2.0, friction_law=2, v_s=0.05, c=0.2, P0=0.5),
+    "stribeck, delta 2, damped, belt reversed": (dict(BASE, chi=0.4, delta=2.0, friction_law=2, v_s=0.05, c=0.2, P0=0.5),
                                         REF.with_(mu_k=0.2, law="stribeck", v_s=0.05, delta=2.0, c=0.2, P0=0.5),
                                         -0.25, [(15.0, 0.4)]),
     "coulomb, chi > 1": (dict(BASE, chi=1.2), REF.with_(mu_k=0.6), 0.15, [(12.0, 0.0)]),
@@ -125,16 +126,17 @@ def test_stribeck_hopf_belt_speed() -> None:
         t, x, v, o = run(params, vb, 200.0, 1.0)
         amp[vb] = (o["x_max"] - o["x_min"]) / 2, o["stick_fraction"]
     below, above = amp[0.8 * v_star], amp[1.2 * v_star]
-    assert below[1] > 0.05 and below[0] > 0.1, amp   # self-excited stick-slip
+    # measured: 0.8 v*: amplitude 0.338, stick share 0.236; 1.2 v*: amplitude 3.2e-4 (from 0.01), no stick
+    assert below[1] > 0.1 and below[0] > 0.2, amp   # self-excited stick-slip
     assert above[1] == 0.0 and above[0] < 1e-3, amp   # the perturbation of 0.01 decays
 
 
 @pytest.mark.parametrize("scheme", [1, 2])
 def test_paper_and_consistent_on_a_belt(scheme: int) -> None:
-    """First-order schemes on a belt (coulomb): within 1e-2 of the reference at h = 1e-3."""
+    """First-order schemes on a belt (coulomb), h = 1e-3: measured 9.69e-5 (paper), 9.70e-5 (consistent)."""
     t, x, v, _ = run(dict(BASE, scheme=scheme, h=1e-3), 0.3, 30.0, 0.1, CHANGES)
     b = simulate(REF, t, v_belt=0.3, changes=CHANGES)
-    assert np.max(np.abs(x - b.x)) < 1e-2
+    assert np.max(np.abs(x - b.x)) < 3e-4
 
 
 def test_effects_and_no_belt_unchanged() -> None:
