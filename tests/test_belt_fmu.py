@@ -226,3 +226,33 @@ def test_fmu_state_round_trip_with_belt() -> None:
         assert np.array_equal(np.asarray(r.get(OUT), float).view(np.int64), np.asarray(first, float).view(np.int64))
     finally:
         r.close()
+
+
+def test_directional_derivative_with_respect_to_v_belt() -> None:
+    """Sliding with Stribeck: dF_friction / dv_belt = N mu'(|v - v_belt|), da = that / m, against a
+    central difference of the outputs (read without a step); coulomb sliding: 0."""
+    for extra, nonzero in ((STRIBECK, True), ({}, False)):
+        r = FMI2Run(dict(BASE, h=1e-3, v_belt=0.3, **extra))
+        try:
+            t = 0.0
+            while r.get(["mode"])[0] == 0 or t < 1.0:  # into a slide
+                r.slave.doStep(t, 0.05)
+                t += 0.05
+            vr = {n: r.vars[n].valueReference for n in ("a", "F_friction", "v_belt")}
+            mode, vel = r.get(["mode", "v"])
+            assert mode != 0
+            J = r.slave.getDirectionalDerivative([vr["a"], vr["F_friction"]], [vr["v_belt"]], [1.0])
+            eps, fd = 1e-6, []
+            for d in (eps, -eps):
+                r.slave.setReal([vr["v_belt"]], [0.3 + d])
+                fd.append(np.array(r.get(["a", "F_friction"])))
+            r.slave.setReal([vr["v_belt"]], [0.3])
+            num = (fd[0] - fd[1]) / (2 * eps)
+            if nonzero:
+                mu1 = REF.with_(law="stribeck", v_s=0.1).dmu(abs(vel - 0.3))
+                assert J[1] == pytest.approx(mu1, rel=1e-12) and J[0] == pytest.approx(mu1, rel=1e-12)
+                assert np.allclose(J, num, rtol=1e-6, atol=0), (J, num)
+            else:
+                assert list(J) == [0.0, 0.0] and np.all(num == 0.0)
+        finally:
+            r.close()

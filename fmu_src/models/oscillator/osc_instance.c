@@ -1087,6 +1087,18 @@ static double feed_through(const osc_values *v, const dfo_run *r, int out, unsig
         const double mu = M->stribeck ? dfo_friction_mu(&M->law, fabs(s.V - dfo_belt_speed(&u))) : M->mu_k;
         dFr = N_sum > 0.0 ? -s.mode * mu : 0.0;
     }
+    if (input == VR_v_belt) {
+        /* stuck within the limit: the friction holds f = P + F_ext - c v_belt - k x (dF = c); sliding
+         * with Stribeck: F = -s N mu(|v - v_belt|), dF = N mu'(u); coulomb sliding: 0 */
+        double dB = 0.0;
+        if (L.Fb > 0.0 && s.mode == 0) {
+            if (fabs(dfo_friction_force(M, &u, &s)) < L.Fb && s.V == dfo_belt_speed(&u)) dB = M->p.c;
+        } else if (s.mode != 0 && M->stribeck && L.N > 0.0) {
+            dB = L.N * dfo_friction_dmu(&M->law, fabs(s.V - dfo_belt_speed(&u)));
+        }
+        if (out == DFO_OUT_F_friction) return dB;
+        return rests ? 0.0 : dB / M->p.m;
+    }
     const int force = input == VR_F_ext;
     if (out == DFO_OUT_F_friction) return force ? dF : dFr;
     if (rests) return 0.0;
@@ -1110,7 +1122,7 @@ static int check_partials(dfo_lifecycle *lc, const char *fn, const unsigned int 
         const dfo_var_info *var = dfo_find_var(known[j]);
         if (!var || var->causality != DFO_INPUT || var->type != DFO_REAL) {
             dfo_inst_fail(lc, "%s: known %s (value reference %u) is not an input: directional derivatives are with "
-                          "respect to the inputs F_ext and N_ext.", fn, var ? var->name : "?", known[j]);
+                          "respect to the inputs F_ext, N_ext and v_belt.", fn, var ? var->name : "?", known[j]);
             return 0;
         }
     }
