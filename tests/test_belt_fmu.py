@@ -173,6 +173,7 @@ def failure_messages(params: dict) -> list[str]:
     (dict(friction_law=2, scheme=4), ("scheme exact supports friction_law = coulomb only",)),
     (dict(friction_law=2, scheme=1), ("friction_law = stribeck needs scheme located",)),
     (dict(friction_law=3), ("friction_law",)),
+    (dict(friction_law=2, delta=0.5), ("supports delta >= 1 only",)),
     (dict(v_belt=0.1, scheme=4), ("scheme exact supports v_belt = 0 only",)),
 ])
 def test_bad_values_rejected_with_a_sentence(params: dict, words: tuple[str, ...]) -> None:

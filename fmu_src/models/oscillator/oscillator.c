@@ -24,6 +24,9 @@ const char *dfo_check_params(const dfo_params *p)
 {
     if (p->t_obs_stop < p->t_obs_start)
         return "The observation window is empty: t_obs_stop must be >= t_obs_start.";
+    if (p->friction_law == DFO_LAW_STRIBECK && p->delta < 1.0)
+        return "friction_law = stribeck supports delta >= 1 only here (below 1 the friction's slope is infinite at "
+               "zero relative speed, which the located scheme's step does not resolve): choose delta >= 1.";
     if (p->friction_law == DFO_LAW_STRIBECK && p->scheme != DFO_SCHEME_LOCATED)
         return p->scheme == DFO_SCHEME_EXACT
                    ? "scheme exact supports friction_law = coulomb only (its closed form needs a constant kinetic "
