@@ -2,6 +2,7 @@
  * scheme of the oscillator with the friction posed as the 2n LCP of the chain.
  *
  *     wall -k[0],c[0]- m[0] -k[1],c[1]- m[1] - ... - m[n-1] -k_end,c_end- wall
+ *     (and each block i tied to the ground by k_site[i], c_site[i], 0 unless set)
  *     M x'' + C x' + K x = P(t) + F_ext + F,     P_i = P0_i cos(omega t + phi_i),
  *     F_i Coulomb on block i: |F_i| <= max(mu_s_i, mu_k_i) N_i stuck, -/+ mu_k_i N_i sliding,
  *     mu_k_i = chi_i mu_s_i, N_i = max(N_i + N_ext_i, 0).
@@ -43,6 +44,9 @@ typedef struct {
     double k_end, c_end, omega, h, alpha;
     int scheme;  /* dfo_scheme: 1 paper, 2 consistent, 3 located */
     int account_energy;  /* keep the energy accounts of chain_state (costs O(n) per step) */
+    /* springs and dampers from each block to the ground frame (NULL: none; the Burridge-Knopoff
+     * model's site springs), added to K's and C's diagonals */
+    const double *k_site, *c_site;
 } chain_params;
 
 /* Inputs held over a communication step: arrays of length n, or NULL when never set. */

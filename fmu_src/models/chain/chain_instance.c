@@ -158,6 +158,8 @@ chain_params chain_inst_params_of(const chain_values *v)
     p.chi = pa + (size_t)DFO_AP_chi * n;
     p.x0 = pa + (size_t)DFO_AP_x0 * n;
     p.v0 = pa + (size_t)DFO_AP_v0 * n;
+    p.k_site = pa + (size_t)DFO_AP_k_site * n;
+    p.c_site = pa + (size_t)DFO_AP_c_site * n;
     p.k_end = v->sp[DFO_SP_k_end];
     p.c_end = v->sp[DFO_SP_c_end];
     p.omega = v->sp[DFO_SP_omega];
