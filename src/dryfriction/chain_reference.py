@@ -1,6 +1,7 @@
 """Event-driven reference solution of the chain of n blocks with dry friction (method.md section 9).
 
     wall -k[0],c[0]- m[0] -k[1],c[1]- m[1] - ... - m[n-1] -k_end,c_end- wall
+    (each block i also tied to the ground by the site spring k_site[i] and damper c_site[i])
     M x'' + C x' + K x = P(t) + F_ext + F,   P_i = P0_i cos(omega t + phi_i),
     F_i = -s_i mu_k_i N_i sliding in direction s_i,  |F_i| <= max(mu_s_i, mu_k_i) N_i stuck.
 
@@ -41,6 +42,8 @@ class Chain:
     k_end: float = 0.0
     c_end: float = 0.0
     F_ext: Optional[np.ndarray] = None
+    k_site: Optional[np.ndarray] = None  # springs from each block to the ground (None: none)
+    c_site: Optional[np.ndarray] = None  # dampers from each block to the ground (None: none)
 
     @classmethod
     def make(cls, n: int, omega: float = 1.0, k_end: float = 0.0, c_end: float = 0.0,
@@ -50,7 +53,7 @@ class Chain:
         chi = 0.7, x0 = v0 = 0."""
         defaults = {"m": 1.0, "k": 1.0, "c": 0.0, "P0": None, "phi": 0.0, "N": 0.8, "mu_s": 0.5,
                     "chi": 0.7, "x0": 0.0, "v0": 0.0}
-        unknown = set(arrays) - set(defaults) - {"F_ext"}
+        unknown = set(arrays) - set(defaults) - {"F_ext", "k_site", "c_site"}
         if unknown:
             raise ValueError(f"unknown chain parameters {sorted(unknown)}")
         vals: dict[str, Any] = {}
@@ -65,7 +68,10 @@ class Chain:
         F_ext = arrays.get("F_ext")
         if F_ext is not None:
             F_ext = np.broadcast_to(np.asarray(F_ext, dtype=float), (n,)).copy()
-        ch = cls(omega=float(omega), k_end=float(k_end), c_end=float(c_end), F_ext=F_ext, **vals)
+        site = {name: None if arrays.get(name) is None
+                else np.broadcast_to(np.asarray(arrays[name], dtype=float), (n,)).copy()
+                for name in ("k_site", "c_site")}
+        ch = cls(omega=float(omega), k_end=float(k_end), c_end=float(c_end), F_ext=F_ext, **vals, **site)
         ch.validate()
         return ch
 
@@ -97,12 +103,25 @@ class Chain:
             if bad.size:
                 i = int(bad[0])
                 raise ValueError(f"invalid value {getattr(self, name)[i]} for {name}[{i + 1}]")
+        for name in ("k_site", "c_site"):
+            a = getattr(self, name)
+            if a is None:
+                continue
+            bad = np.flatnonzero(~(np.isfinite(a) & (a >= 0)))
+            if a.shape != (self.n,) or bad.size:
+                raise ValueError(f"{name} must hold {self.n} finite values >= 0")
         if not (self.omega >= 0 and self.k_end >= 0 and self.c_end >= 0):
             raise ValueError("omega, k_end and c_end must be >= 0")
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray]:
-        """The tridiagonal stiffness and damping matrices K, C (dense, n x n)."""
-        return _tridiag(self.k, self.k_end), _tridiag(self.c, self.c_end)
+        """The tridiagonal stiffness and damping matrices K, C (dense, n x n), the site springs and
+        dampers on their diagonals."""
+        K, C = _tridiag(self.k, self.k_end), _tridiag(self.c, self.c_end)
+        if self.k_site is not None:
+            K += np.diag(self.k_site)
+        if self.c_site is not None:
+            C += np.diag(self.c_site)
+        return K, C
 
     def driver_args(self) -> list[str]:
         """Arguments of tests/c/chain_driver for these parameters."""
@@ -112,7 +131,19 @@ class Chain:
             args.append(f"{name}=" + ",".join(repr(float(v)) for v in getattr(self, name)))
         if self.F_ext is not None:
             args.append("F_ext=" + ",".join(repr(float(v)) for v in self.F_ext))
+        if self.k_site is not None or self.c_site is not None:
+            raise ValueError("tests/c/chain_driver has no site springs or dampers: run the FMU")
         return args
+
+    def fmu_params(self) -> dict[str, Any]:
+        """The chain FMU's parameters for these values (dryfriction.chain; F_ext is an input)."""
+        p: dict[str, Any] = {name: getattr(self, name).tolist()
+                             for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
+        p.update(omega=self.omega, k_end=self.k_end, c_end=self.c_end)
+        for name in ("k_site", "c_site"):
+            if getattr(self, name) is not None:
+                p[name] = getattr(self, name).tolist()
+        return p
 
 
 def _tridiag(s: np.ndarray, s_end: float) -> np.ndarray:
