@@ -2,7 +2,10 @@
 the Burridge-Knopoff model's springs): the FMU's located scheme against the event-driven
 reference (dryfriction.chain_reference with the site terms on K's and C's diagonals), the
 reference's own energy balance, a site spring equal to a wall spring bit for bit, the step rule's
-bound, the errors, FMI 3.0 = FMI 2.0. Numbers in docs/chain.md ("Site springs and dampers")."""
+bound, the errors, FMI 3.0 = FMI 2.0. And the chain's reference with belts under the blocks and
+the Stribeck law: n = 1 against belt_reference, the closed-form limit cycle, the energy balance of
+a Burridge-Knopoff chain. Numbers in docs/chain.md ("Site springs and dampers; belts in the
+reference")."""
 
 from __future__ import annotations
 
@@ -112,3 +115,76 @@ def test_fmi3_equals_fmi2_with_site_terms(chain_fmu2: Path) -> None:
         r3 = f3.run(t_stop=15.0, dt=0.05, params=p)
     assert np.array_equal(r2.x, r3.x) and np.array_equal(r2.v, r3.v) and np.array_equal(r2.mode, r3.mode)
     assert np.count_nonzero(np.diff(r3.mode, axis=0)) > 4
+
+
+# ---- the reference with belts and the Stribeck law ----------------------------------------------
+
+def _one_block(law: str, vb: float, **kw):
+    """The same block as a chain of one (chain_reference) and as belt_reference's Belt."""
+    from dryfriction.belt_reference import Belt
+
+    p = dict(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=0.5, chi=0.6, P0=0.3, omega=0.7, phi=0.2, x0=0.1, v0=0.0)
+    p.update(kw)
+    extra = dict(v_s=0.3, delta=1.0) if law == "stribeck" else {}
+    ch = Chain.make(1, omega=p["omega"], k=p["k"], c=p["c"], m=p["m"], N=p["N"], mu_s=p["mu_s"], chi=p["chi"],
+                    P0=p["P0"], phi=p["phi"], x0=p["x0"], v0=p["v0"], v_belt=vb, law=law, **extra)
+    b = Belt(m=p["m"], k=p["k"], c=p["c"], N=p["N"], mu_s=p["mu_s"], mu_k=p["chi"] * p["mu_s"], P0=p["P0"],
+             omega=p["omega"], phi=p["phi"], x0=p["x0"], v0=p["v0"], law=law, **extra)
+    return ch, b
+
+
+@pytest.mark.parametrize("law", ["coulomb", "stribeck"])
+def test_reference_one_block_equals_belt_reference(law: str) -> None:
+    """n = 1 with a belt (0.4 m/s, changed to -0.2 m/s at t = 9 and to 0.25 at 17): the chain's
+    reference is belt_reference's (an independent state machine: closed-form stick phases,
+    bisected breakaways) within 1e-10 (measured 2.0e-12 in x, 2.3e-12 in v), with stick-slip on
+    every belt."""
+    from dryfriction.belt_reference import simulate
+
+    ch, b = _one_block(law, 0.4)
+    changes = [(9.0, -0.2), (17.0, 0.25)]
+    t = np.linspace(0.0, 25.0, 2501)
+    r = solve_chain(ch, t[-1], belt_changes=[(tc, [vb]) for tc, vb in changes]).evaluate(t)
+    br = simulate(b, t, v_belt=0.4, changes=changes)
+    assert np.max(np.abs(r["x"][:, 0] - br.x)) < 1e-10
+    assert np.max(np.abs(r["v"][:, 0] - br.v)) < 1e-10
+    vb = np.where(t < 9.0, 0.4, np.where(t < 17.0, -0.2, 0.25))
+    stuck = r["mode"][:, 0] == 0
+    assert np.max(np.abs(r["v"][stuck, 0] - vb[stuck])) < 1e-12  # stuck: on the belt
+    for a, b_ in ((0.0, 9.0), (9.0, 17.0), (17.0, 25.0)):
+        seg = r["mode"][(t > a) & (t < b_), 0]
+        assert (seg == 0).any() and (seg != 0).any(), (a, b_)
+
+
+def test_reference_closed_form_limit_cycle() -> None:
+    """The undamped, unforced Coulomb block on a belt at 0.3 m/s from rest at the catch point
+    (2 F_k - F_s) / k moving with the belt: period, stick and slip times of the closed form within
+    1e-11 over five cycles (measured 4.8e-13), the extremes within 1e-6 (sampled on a grid)."""
+    from dryfriction.belt_reference import limit_cycle
+
+    lc = limit_cycle(1.0, 2.0, 1.0, 0.5, 0.3, 0.3)
+    ch = Chain.make(1, omega=0.0, k=2.0, c=0.0, N=1.0, mu_s=0.5, chi=0.6, P0=0.0, x0=lc.x_stick_start,
+                    v0=0.3, v_belt=0.3)
+    sol = solve_chain(ch, 5 * lc.period + 0.1)
+    brk = [e[0] for e in sol.events if e[2] == 0]
+    stop = [e[0] for e in sol.events if e[3] == 0]
+    assert len(brk) == 5 and len(stop) >= 5
+    assert np.allclose(np.diff(brk), lc.period, rtol=0, atol=1e-11)
+    assert brk[0] == pytest.approx(lc.t_stick, abs=1e-11)
+    assert stop[0] - brk[0] == pytest.approx(lc.t_slip, abs=1e-11)
+    x = sol.evaluate(np.linspace(0.0, 5 * lc.period, 20001))["x"][:, 0]
+    assert x.max() == pytest.approx(lc.x_max, abs=1e-6) and x.min() == pytest.approx(lc.x_min, abs=1e-6)
+
+
+def test_reference_belt_chain_energy_balance() -> None:
+    """A Burridge-Knopoff chain (n = 6, site springs, every belt at -0.2 m/s, Stribeck velocity
+    weakening; the plate frame): E(t) - E(0) = W_applied + W_friction - D_damping within 1e-9,
+    the friction's work including that on the blocks the belts carry, with slip events."""
+    ch = Chain.make(6, omega=0.0, k=[0.0] + [2.0] * 5, c=0.02, P0=0.0, k_site=0.5, N=1.0, mu_s=0.6, chi=0.5,
+                    x0=np.linspace(-0.3, 0.2, 6), v_belt=-0.2, law="stribeck", v_s=0.1, delta=1.0)
+    sol = solve_chain(ch, 40.0)
+    r = sol.evaluate(np.linspace(0.0, 40.0, 2001))
+    E = sol.energy(r["x"], r["v"])
+    res = E - E[0] - r["W_applied"] - r["W_friction"] + r["D_damping"]
+    assert np.max(np.abs(res)) < 1e-9 * max(1.0, np.max(np.abs(r["W_friction"])))
+    assert len([e for e in sol.events if e[2] == 0]) > 10  # breakaways: slip events
