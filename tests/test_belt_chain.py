@@ -99,11 +99,22 @@ def test_step_rule_counts_site_springs() -> None:
     assert h0 == pytest.approx(2 * np.pi / np.sqrt(4.0) / 1000, rel=1e-14)
 
 
-@pytest.mark.parametrize("name,value", [("k_site", -1.0), ("c_site", -0.5), ("k_site", np.inf)])
-def test_bad_site_values_rejected(name: str, value: float) -> None:
+@pytest.mark.parametrize("name,value,valid", [("k_site", -1.0, ">= 0"), ("c_site", -0.5, ">= 0"),
+                                              ("k_site", np.inf, "finite"), ("c_site", np.nan, "finite")])
+def test_bad_site_values_rejected_by_the_fmu(name: str, value: float, valid: str) -> None:
+    """The FMU's sentence names the element and the valid range (set raw: past the Python checks)."""
     with ChainFMU3(n=3) as fmu:
-        with pytest.raises((FMUCallError, ValueError), match=rf"{name}(\[2\])?.*valid"):
-            fmu.start(params={name: [0.0, value, 0.0]})
+        fmu._begin(0.0)
+        with pytest.raises(FMUCallError, match=rf"invalid value {value:g} for {name}\[2\].*valid range: {valid}"):
+            fmu.set_raw(name, [0.0, value, 0.0])
+
+
+def test_bad_site_values_rejected_by_the_driver() -> None:
+    with ChainFMU3(n=3) as fmu:
+        with pytest.raises(ValueError, match=r"invalid value inf for c_site\[2\]; valid range: finite"):
+            fmu.start(params={"c_site": [0.0, np.inf, 0.0]})
+        with pytest.raises(ValueError, match=r"k_site needs 3 values"):
+            fmu.start(params={"k_site": [1.0, 2.0]})
 
 
 def test_fmi3_equals_fmi2_with_site_terms(chain_fmu2: Path) -> None:
