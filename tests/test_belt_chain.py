@@ -9,6 +9,7 @@ reference")."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -199,3 +200,115 @@ def test_reference_belt_chain_energy_balance() -> None:
     res = E - E[0] - r["W_applied"] - r["W_friction"] + r["D_damping"]
     assert np.max(np.abs(res)) < 1e-9 * max(1.0, np.max(np.abs(r["W_friction"])))
     assert len([e for e in sol.events if e[2] == 0]) > 10  # breakaways: slip events
+
+
+# ---- belts through the FMUs (coulomb) -----------------------------------------------------------
+
+BELT = Chain.make(3, omega=0.6, k=[1.0, 0.8, 1.2], c=[0.0, 0.05, 0.0], k_end=0.5, k_site=[0.7, 0.0, 1.5],
+                  N=[0.5, 0.4, 0.6], chi=[0.7, 0.6, 0.6], P0=[0.6, 0.0, 0.3], phi=[0.0, 0.0, 0.8])
+VB0, VB1 = [0.3, -0.2, 0.1], [-0.1, 0.25, 0.0]
+
+
+def _belt_run(fmu, ch: Chain, h: float, t: np.ndarray, vb0, changes: dict[int, list[float]]) -> dict:
+    """Step on the grid t, the belts vb0 from the start and changes[k] set at t[k]."""
+    fmu.start(params={**ch.fmu_params(), "h": h}, inputs={"v_belt": vb0})
+    out = {k: [v] for k, v in fmu.outputs().items()}
+    for k in range(1, t.size):
+        if k - 1 in changes:
+            fmu.set_inputs({"v_belt": changes[k - 1]})
+        fmu.step_to(float(t[k]))
+        for name, v in fmu.outputs().items():
+            out[name].append(v)
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def test_located_second_order_with_belts() -> None:
+    """Belts 0.3, -0.2, 0.1 m/s under three coupled blocks on site springs, changed to -0.1, 0.25,
+    0 at the communication point 3T: max |x - x_ref| over 6 periods falls 4x (3.6 ... 4.4) per
+    halving of h from T/400 to T/3200 (measured 4.09e-4, 1.03e-4, 2.58e-5, 6.46e-6); stuck
+    blocks ride their belts exactly."""
+    T = BELT.period
+    t = np.linspace(0.0, 6 * T, 241)
+    ref = solve_chain(replace(BELT, v_belt=np.array(VB0)), t[-1], belt_changes=[(3 * T, VB1)])
+    assert len(ref.events) > 30
+    xr = ref.evaluate(t)["x"]
+    e = []
+    with ChainFMU3(n=3) as fmu:
+        for s in (400, 800, 1600, 3200):
+            r = _belt_run(fmu, BELT, T / s, t, VB0, {120: VB1})
+            e.append(np.max(np.abs(r["x"] - xr)))
+    e = np.array(e)
+    ratios = e[:-1] / e[1:]
+    assert np.all((ratios > 3.6) & (ratios < 4.4)), (e, ratios)
+    assert e[-1] < 1e-5, e
+    vb = np.where(np.arange(t.size)[:, None] <= 120, VB0, VB1)
+    stuck = r["mode"] == 0
+    assert stuck.any() and np.array_equal(r["v"][stuck], vb[stuck])
+
+
+def test_one_block_belt_against_belt_reference() -> None:
+    """n = 1, a belt at 0.4 m/s changed to -0.2 at t = 9 (a communication point): the located
+    scheme against belt_reference, second order (3.6 ... 4.4 per halving from h = 0.01)."""
+    from dryfriction.belt_reference import Belt, simulate
+
+    ch = Chain.make(1, omega=0.7, k=1.0, c=0.05, N=1.0, mu_s=0.5, chi=0.6, P0=0.3, phi=0.2, x0=0.1)
+    b = Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=0.5, mu_k=0.3, P0=0.3, omega=0.7, phi=0.2, x0=0.1)
+    t = np.linspace(0.0, 18.0, 361)
+    br = simulate(b, t, v_belt=0.4, changes=[(9.0, -0.2)])
+    assert len(br.events) >= 4  # stops, breakaways (one by the belt change while stuck)
+    with ChainFMU3(n=1) as fmu:
+        e = np.array([np.max(np.abs(_belt_run(fmu, ch, h, t, [0.4], {180: [-0.2]})["x"][:, 0] - br.x))
+                      for h in (0.01, 0.005, 0.0025)])
+    ratios = e[:-1] / e[1:]
+    assert np.all((ratios > 3.6) & (ratios < 4.4)), (e, ratios)
+
+
+def test_belts_at_rest_are_the_fixed_support_bits() -> None:
+    """v_belt set to 0 on every block: the run of a never-set v_belt, bit for bit."""
+    p = {**SITE.fmu_params(), "h": SITE.period / 500}
+    with ChainFMU3(n=3) as fmu:
+        a = fmu.run(t_stop=30.0, dt=0.1, params=p)
+        b = fmu.run(t_stop=30.0, dt=0.1, params=p, inputs={"v_belt": [0.0, 0.0, 0.0]})
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.v, b.v) and np.array_equal(a.F_friction, b.F_friction)
+
+
+def test_burridge_knopoff_chain_slips() -> None:
+    """n = 64 (unit masses, couplings 2, site springs 0.5, N = 1, mu_s 0.6, mu_k 0.3, every belt at
+    -0.2 m/s: the chain in its driver plate's frame, from a random start): slip events throughout,
+    stuck blocks exactly on their belts, held forces within their limits, and the chain against
+    the event-driven reference over 20 s within 1e-4 at h = 1e-3."""
+    rng = np.random.default_rng(7)
+    n = 64
+    ch = Chain.make(n, omega=0.0, k=[0.0] + [2.0] * (n - 1), c=0.0, c_site=0.01, P0=0.0, k_site=0.5, N=1.0,
+                    mu_s=0.6, chi=0.5, x0=rng.uniform(-0.6, 0.6, n))
+    t = np.linspace(0.0, 20.0, 201)
+    with ChainFMU3(n=n) as fmu:
+        r = _belt_run(fmu, ch, 1e-3, t, [-0.2] * n, {})
+    stuck = r["mode"] == 0
+    assert np.all(r["v"][stuck] == -0.2)
+    assert np.all(np.abs(r["F_friction"][stuck]) <= 0.6 + 1e-12)
+    slips = np.count_nonzero((r["mode"][1:] != 0) & (r["mode"][:-1] == 0))
+    assert slips > 50, slips
+    ref = solve_chain(replace(ch, v_belt=np.full(n, -0.2)), t[-1])
+    assert np.max(np.abs(r["x"] - ref.evaluate(t)["x"])) < 1e-4
+
+
+def test_bad_belt_values_rejected() -> None:
+    with ChainFMU3(n=3) as fmu:
+        fmu.start(params={"N": 0.5})
+        with pytest.raises(FMUCallError, match=r"invalid value inf for v_belt\[2\].*valid range: finite"):
+            fmu.set_raw("v_belt", [0.0, np.inf, 0.0])
+
+
+def test_fmi3_equals_fmi2_with_belts(chain_fmu2: Path) -> None:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
+        n = f2.n
+        ch = Chain.make(n, omega=0.6, k_site=0.4, N=0.5, P0=1.0)
+        t = np.linspace(0.0, 15.0, 301)
+        vb0, vb1 = np.linspace(-0.2, 0.3, n).tolist(), np.linspace(0.1, -0.1, n).tolist()
+        r2 = _belt_run(f2, ch, 0.0, t, vb0, {150: vb1})
+    with ChainFMU3(n=n) as f3:
+        r3 = _belt_run(f3, ch, 0.0, t, vb0, {150: vb1})
+    for k in ("x", "v", "a", "F_friction", "mode"):
+        assert np.array_equal(r2[k], r3[k]), k
+    assert np.count_nonzero(np.diff(r3["mode"], axis=0)) > 4

@@ -43,7 +43,7 @@ __all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainError", "
 #: per-block parameters (arrays of n), inputs and outputs, and the chain's scalars (docs/chain.md)
 ARRAY_PARAMS = ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "k_site", "c_site")
 SCALAR_PARAMS = ("k_end", "c_end", "omega", "h", "alpha", "scheme")
-INPUTS = ("F_ext", "N_ext")
+INPUTS = ("F_ext", "N_ext", "v_belt")
 OUTPUTS = ("x", "v", "a", "F_friction", "mode")
 _REAL_OUTPUTS = ("x", "v", "a", "F_friction")
 

@@ -188,6 +188,17 @@ chain_inputs chain_inst_inputs_of(const chain_values *v, int used)
     return ci;
 }
 
+const double *chain_inst_belt_of(const chain_values *v, int used)
+{
+    const double *u = used ? v->ua_used : v->ua;
+    const int *set = used ? v->u_set_used : v->u_set;
+    if (!set[DFO_AI_v_belt]) return NULL;
+    const double *vb = u + (size_t)DFO_AI_v_belt * v->n;
+    for (size_t i = 0; i < v->n; i++)
+        if (vb[i] != 0.0) return vb;
+    return NULL; /* belts at rest: the fixed support's path and bits */
+}
+
 chain_ramp chain_inst_ramp_of(const chain_values *v)
 {
     chain_ramp r;
@@ -233,7 +244,7 @@ const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)
     v->M = chain_create(&p, &al, &err);
     if (!v->M) return err ? err : "out of memory";
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
-    chain_start(v->M, &ci, in->lc.run.start_time, &v->s);
+    chain_start_belt(v->M, &ci, chain_inst_belt_of(v, 0), in->lc.run.start_time, &v->s);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     in->lc.run.time = in->lc.run.start_time;

@@ -86,9 +86,9 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (41 of them, the last, box, 2n long), one for
+    /* one block of doubles for all per-block arrays (43 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 41 };
+    enum { NARR = 43 };
     double *blk = dalloc(al, (NARR + 1) * n);
     int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
@@ -106,7 +106,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
                           &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->q,  &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs, &M->bF, &M->bD, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
