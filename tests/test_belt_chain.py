@@ -1,11 +1,11 @@
-"""The chain's site springs and dampers k_site[i], c_site[i] (each block tied to the ground frame;
-the Burridge-Knopoff model's springs): the FMU's located scheme against the event-driven
-reference (dryfriction.chain_reference with the site terms on K's and C's diagonals), the
-reference's own energy balance, a site spring equal to a wall spring bit for bit, the step rule's
-bound, the errors, FMI 3.0 = FMI 2.0. And the chain's reference with belts under the blocks and
-the Stribeck law: n = 1 against belt_reference, the closed-form limit cycle, the energy balance of
-a Burridge-Knopoff chain. Numbers in docs/chain.md ("Site springs and dampers; belts in the
-reference")."""
+"""The chain's belts (input v_belt[i]) and site springs and dampers (k_site[i], c_site[i]: each
+block tied to the ground frame, the Burridge-Knopoff model's springs) through the FMUs: the
+located scheme second order against the event-driven reference (dryfriction.chain_reference) and,
+at n = 1, belt_reference, with belts changed at a communication point; a Burridge-Knopoff chain of
+64; bits (a site spring = a wall spring, belts at 0 = none); the step rule; the errors; FMI 3.0 =
+FMI 2.0. And the reference itself with belts and the Stribeck law: n = 1 against belt_reference,
+the closed-form limit cycle, energy balances. Numbers in docs/chain.md ("Site springs and
+dampers; belts")."""
 
 from __future__ import annotations
 
