@@ -312,3 +312,32 @@ def test_fmi3_equals_fmi2_with_belts(chain_fmu2: Path) -> None:
     for k in ("x", "v", "a", "F_friction", "mode"):
         assert np.array_equal(r2[k], r3[k]), k
     assert np.count_nonzero(np.diff(r3["mode"], axis=0)) > 4
+
+
+def test_consistent_scheme_with_belts_converges() -> None:
+    """The consistent scheme (first order) on the belt case: 3.8e-3, 2.2e-3, 4.8e-4 at T/400, T/800,
+    T/1600 (asserted: the last below a quarter of the first, and below 1e-3)."""
+    T = BELT.period
+    t = np.linspace(0.0, 6 * T, 241)
+    xr = solve_chain(replace(BELT, v_belt=np.array(VB0)), t[-1], belt_changes=[(3 * T, VB1)]).evaluate(t)["x"]
+    with ChainFMU3(n=3, params={"scheme": "consistent"}) as fmu:
+        e = [np.max(np.abs(_belt_run(fmu, BELT, T / s, t, VB0, {120: VB1})["x"] - xr)) for s in (400, 800, 1600)]
+    assert e[2] < e[0] / 4 and e[2] < 1e-3, e
+
+
+def test_paper_scheme_refuses_a_belt() -> None:
+    with ChainFMU3(n=3, params={"scheme": "paper"}) as fmu:
+        with pytest.raises(FMUCallError, match="v_belt is set but the paper scheme has no moving belt"):
+            fmu.run(t_stop=1.0, dt=0.1, inputs={"v_belt": [0.1, 0.0, 0.0]})
+        fmu.start()
+        fmu.set_inputs({"v_belt": [0.0, 0.2, 0.0]})
+        with pytest.raises(FMUCallError, match="fmi3DoStep: v_belt is set but the paper scheme"):
+            fmu.step_to(0.1)
+
+
+def test_belt_derivatives_refused(chain_fmu2: Path) -> None:
+    with ChainFMU2(fmu_path=chain_fmu2) as f2:
+        f2.start()
+        vr = f2._vrs["v_belt"][0]
+        with pytest.raises(FMUCallError, match=r"v_belt \(value reference \d+\) takes no derivatives"):
+            f2.inst.set_real_input_derivatives([vr], 1, [0.1])

@@ -57,6 +57,17 @@ static void take_inputs(chain_values *v, const chain_ramp *ramp, chain_switch_fn
     v->acc_valid = 0;
 }
 
+/* A moving belt under the paper scheme: refused (its stuck blocks creep with Bossak's acceleration,
+ * which the belt's moving frame does not carry over); 1 when refused. */
+static int belt_refused(chain_instance *in, const char *fn)
+{
+    chain_values *v = &in->v;
+    if (!chain_inst_belt_of(v, 0) || (int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER) return 0;
+    (void)dfo_inst_fail(&in->lc, "%s: v_belt is set but the paper scheme has no moving belt (its stuck blocks creep "
+                        "with Bossak's acceleration); use scheme consistent or located.", fn);
+    return 1;
+}
+
 /* The step from t_ref ends at the host's time t: the inputs with derivatives take their values at
  * the state's time, and those of the step are the ones used. */
 static void step_done(chain_instance *in, double t, double t_ref, const switch_rec *rec)
@@ -81,6 +92,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     double t_target = 0.0;
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, chain_inst_step_h(v), &t_target);
     if (chk != DFO_INST_OK) return chk;
+    if (belt_refused(in, fn)) return DFO_INST_ERROR;
     chain_state_copy(&v->s0, &v->s);
     chain_ramp ramp = chain_inst_ramp_of(v);
     ramp.t_ref = in->lc.run.time; /* the polynomials are in the host's time (as the oscillator's) */
@@ -126,6 +138,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     dfo_inst_status done;
     double t_target = 0.0;
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, chain_inst_step_h(v), opt, res, &done, &t_target)) return done;
+    if (belt_refused(in, fn)) return DFO_INST_ERROR;
     chain_state_copy(&v->s0, &v->s);
     const double t_start = in->lc.run.time;
     chain_ramp ramp = chain_inst_ramp_of(v);

@@ -238,6 +238,9 @@ const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)
     const chain_params p = chain_inst_params_of(v);
     const char *msg = chain_check_params(&p, buf, len);
     if (msg) return msg;
+    if (chain_inst_belt_of(v, 0) && p.scheme == DFO_SCHEME_PAPER)
+        return "v_belt is set but the paper scheme has no moving belt (its stuck blocks creep with Bossak's "
+               "acceleration); use scheme consistent or located";
     chain_inst_free_model(v);
     const chain_alloc al = chain_inst_allocator(in);
     const char *err = NULL;
