@@ -45,7 +45,8 @@ def main(argv: list[str] | None = None) -> int:
 
         api_us = best_us(api, args.reps)
     runner = BatchRunner(args.fmu or str(default_fmu_path()))
-    row = dict(p.as_dict(), h=st.h, alpha=st.alpha, t_obs_start=0.0, t_obs_stop=p.period, t_stop=p.period)
+    row = dict(p.as_dict(), h=st.h, alpha=st.alpha, t_obs_start=0.0, t_obs_stop=p.period, t_stop=p.period,
+               v_s=st.v_s, delta=st.delta)
     table = np.array([[row[c] for c in PARAM_COLUMNS]] * 100)
     batch_us = best_us(lambda: runner.run(table), max(args.reps // 100, 5)) / 100
     runner.close()

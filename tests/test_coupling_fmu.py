@@ -545,7 +545,7 @@ def test_model_structure_declares_what_the_directional_derivatives_return(unzipp
     for mode in (0, 1, -1):
         i = state_in_mode(unzipped, mode)
         try:
-            outs, ins = [v.valueReference for v in real_outputs], [i.vr("F_ext"), i.vr("N_ext")]
+            outs, ins = [v.valueReference for v in real_outputs], [i.vr("F_ext"), i.vr("N_ext")]  # (not v_belt)
             for k, name in enumerate(("F_ext", "N_ext")):
                 J = i.s.getDirectionalDerivative(outs, ins, [1.0 if j == k else 0.0 for j in range(2)])
                 for v, dj in zip(real_outputs, J):
@@ -555,14 +555,16 @@ def test_model_structure_declares_what_the_directional_derivatives_return(unzipp
             i.free()
     for name, deps in seen.items():
         assert deps <= declared[name], (name, deps, declared[name])
-    assert seen["a"] == declared["a"] == {"F_ext", "N_ext"}
-    assert seen["F_friction"] == declared["F_friction"] == {"F_ext", "N_ext"}
+    # v_belt (not a known here; its derivatives, c stuck, N mu' sliding with Stribeck, are checked in
+    # test_belt_fmu.py)
+    assert seen["a"] == declared["a"] - {"v_belt"} == {"F_ext", "N_ext"}
+    assert seen["F_friction"] == declared["F_friction"] - {"v_belt"} == {"F_ext", "N_ext"}
 
 
 def test_capabilities_declared_in_both_descriptions() -> None:
     """The FMI 2.0 description (the source) and the FMI 3.0 one generated from it declare the coupling
-    capabilities; FMI 3.0's intermediateUpdate="true" is on the continuous real inputs F_ext and N_ext
-    only. (Read from the archives: fmpy does not read every FMI 3.0 attribute.)"""
+    capabilities; FMI 3.0's intermediateUpdate="true" is on the continuous real inputs F_ext, N_ext
+    and v_belt only. (Read from the archives: fmpy does not read every FMI 3.0 attribute.)"""
     def root(path: object) -> ET.Element:
         with zipfile.ZipFile(str(path)) as z:
             return ET.fromstring(z.read("modelDescription.xml"))
@@ -577,4 +579,4 @@ def test_capabilities_declared_in_both_descriptions() -> None:
             cs3.get("providesAdjointDerivatives"), cs3.get("providesIntermediateUpdate")) == \
         ("2", "true", "true", "true")
     marked = {v.get("name") for v in r3.find("ModelVariables") if v.get("intermediateUpdate") == "true"}
-    assert marked == {"F_ext", "N_ext"}
+    assert marked == {"F_ext", "N_ext", "v_belt"}

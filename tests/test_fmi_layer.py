@@ -67,7 +67,7 @@ def test_observables_read_without_observe_are_not_an_error(fmu: OscillatorFMU) -
 
 def test_batch_runner_strict_error_names_the_run_and_the_call(fmu_path: Path) -> None:
     p = Oscillator()
-    row = dict(p.as_dict(), h=1e-3, alpha=-0.1, t_obs_start=0.0, t_obs_stop=1.0, t_stop=1.0)
+    row = dict(p.as_dict(), h=1e-3, alpha=-0.1, t_obs_start=0.0, t_obs_stop=1.0, t_stop=1.0, v_s=0.01, delta=1.0)
     table = np.array([[row[c] for c in PARAM_COLUMNS]] * 2)
     table[1, PARAM_COLUMNS.index("alpha")] = 0.5
     r = BatchRunner(str(fmu_path))

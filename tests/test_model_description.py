@@ -256,7 +256,7 @@ def test_effect_bits_are_a_vendor_annotation() -> None:
     assert eff is not None and eff.get("variable") == "effects"
     assert [(int(e.get("bit")), e.get("name")) for e in eff.iterfind("Effect")] == [
         (1, "friction"), (2, "coefficientUpdate"), (4, "damping"), (8, "forceInput"), (16, "normalInput"),
-        (32, "observables"), (64, "sensitivity")]
+        (32, "observables"), (64, "sensitivity"), (128, "belt"), (256, "stribeck")]
 
 
 def test_effects_value_follows_the_annotation(slave: Slave) -> None:
@@ -354,8 +354,8 @@ def _perturbed(slave: Slave, names: list[str], mode_wanted: int) -> dict[str, se
     """Step to a communication point in the wanted mode (0 stuck, 1 sliding), then set each input in
     turn and read every output without a step: the inputs each output responds to."""
     slave.start(k=100.0, N=1.0, mu_s=0.4, chi=0.5, P0=1.0, omega=5.0, c=0.2, observe=True)
-    inputs = ["F_ext", "N_ext"]
-    slave.s.setReal([slave.vr(n) for n in inputs], [0.0, 0.0])
+    inputs = ["F_ext", "N_ext", "v_belt"]
+    slave.s.setReal([slave.vr(n) for n in inputs], [0.0, 0.0, 0.0])
     t = 0.0
     for j in range(4000):
         slave.s.doStep(t, 1.25e-3)
@@ -366,7 +366,7 @@ def _perturbed(slave: Slave, names: list[str], mode_wanted: int) -> dict[str, se
     base = slave.outputs(names)
     responds: dict[str, set[str]] = {n: set() for n in names}
     for inp in inputs:
-        slave.s.setReal([slave.vr(inp)], [0.05 if inp == "F_ext" else 0.5])
+        slave.s.setReal([slave.vr(inp)], [0.5 if inp == "N_ext" else 0.05])
         now = slave.outputs(names)
         for n in names:
             if not _same(now[n], base[n]):
@@ -386,7 +386,8 @@ def test_outputs_follow_inputs_as_declared(slave: Slave) -> None:
     stuck = _perturbed(slave, names, 0)
     slave.s.reset()
     sliding = _perturbed(slave, names, 1)
-    assert stuck["F_friction"] == {"F_ext"} and sliding["F_friction"] == {"N_ext"}
+    # a belt set moving under a stuck block makes it slide: its friction and acceleration follow v_belt
+    assert stuck["F_friction"] == {"F_ext", "v_belt"} and sliding["F_friction"] == {"N_ext"}
     assert sliding["a"] == {"F_ext", "N_ext"}
     found = {n: stuck[n] | sliding[n] for n in names}
     assert found == declared

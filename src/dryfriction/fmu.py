@@ -67,11 +67,15 @@ class Settings:
     t_obs_start: float = field(default_factory=lambda: float(_start("t_obs_start")))
     t_obs_stop: float = field(default_factory=lambda: float(_start("t_obs_stop")))
     fastPaths: bool = field(default_factory=lambda: bool(_start("fastPaths")))
+    # the sliding friction law (docs/belt.md): 1 coulomb, 2 stribeck with v_s (m/s) and delta
+    friction_law: int = field(default_factory=lambda: int(_start("friction_law")))
+    v_s: float = field(default_factory=lambda: float(_start("v_s")))
+    delta: float = field(default_factory=lambda: float(_start("delta")))
     extra: dict[str, Any] = field(default_factory=dict)
 
 
 _OSC_FIELDS = tuple(f.name for f in fields(Oscillator))
-_SETTINGS_REALS = ("h", "alpha", "t_obs_start", "t_obs_stop")
+_SETTINGS_REALS = ("h", "alpha", "t_obs_start", "t_obs_stop", "v_s", "delta")
 
 
 class OscillatorFMU2(Driver):
@@ -176,8 +180,8 @@ class OscillatorFMU2(Driver):
         self._osc_values = attrgetter(*_OSC_FIELDS)
         self._rvr = (ctypes.c_uint * len(reals))(*[md.vr(n) for n in reals])
         self._rval = (ctypes.c_double * len(reals))()
-        self._ivr = (ctypes.c_uint * 2)(md.vr("scheme"), md.vr("frictionUpdates"))
-        self._ival = (ctypes.c_int * 2)()
+        self._ivr = (ctypes.c_uint * 3)(md.vr("scheme"), md.vr("frictionUpdates"), md.vr("friction_law"))
+        self._ival = (ctypes.c_int * 3)()
         self._bvr = (ctypes.c_uint * 2)(md.vr("observe"), md.vr("fastPaths"))
         self._bval = (ctypes.c_int * 2)()
         self._schemes = md.schemes
@@ -192,8 +196,8 @@ class OscillatorFMU2(Driver):
         if scheme is None:
             raise FMUError(f"scheme must be one of {', '.join(self._schemes)}, not {st.scheme!r}")
         h = st.h if st.h is not None else (p.period / 1000.0 if p.omega > 0 else 0.0)
-        self._rval[:] = self._osc_values(p) + (h, st.alpha, st.t_obs_start, st.t_obs_stop)
-        self._ival[0], self._ival[1] = scheme, st.frictionUpdates
+        self._rval[:] = self._osc_values(p) + (h, st.alpha, st.t_obs_start, st.t_obs_stop, st.v_s, st.delta)
+        self._ival[0], self._ival[1], self._ival[2] = scheme, st.frictionUpdates, st.friction_law
         self._bval[0], self._bval[1] = int(bool(st.observe)), int(bool(st.fastPaths))
         inst = self.fmi
         f, c, n = inst.f, inst.component, len(inst.messages)
@@ -203,7 +207,7 @@ class OscillatorFMU2(Driver):
             inst.check("fmi2SetupExperiment", s, n)
         if s := f.SetReal(c, self._rvr, len(self._rval), self._rval):
             inst.check("fmi2SetReal", s, n)
-        if s := f.SetInteger(c, self._ivr, 2, self._ival):
+        if s := f.SetInteger(c, self._ivr, 3, self._ival):
             inst.check("fmi2SetInteger", s, n)
         if s := f.SetBoolean(c, self._bvr, 2, self._bval):
             inst.check("fmi2SetBoolean", s, n)

@@ -18,6 +18,7 @@
 #define SNAP_MAX_REL_H 1e-5     /* snap tolerance (newmark.h): at most 1e-5 h, */
 #define SNAP_MIN_REL_H 1e-7     /* at least 1e-7 h, */
 #define SNAP_EPS_T 0x1p16       /* else 2^16 eps |t| */
+#define BELT_TINY_REL_H 1e-6    /* on a belt, a slide's sub-step below 1e-6 h is taken by Taylor's expansion */
 
 /* The few functions of every internal step are inlined into the stepping loop, so that the state
  * stays in registers (a step costs some 100 ns; a call and its spills are a good part of that). */
@@ -63,6 +64,9 @@ typedef struct {
                       * difference of two grid points differs from h by the rounding of t) */
     int friction;    /* friction acts (the LCP is needed) */
     int skip_stuck;  /* the stuck fast path applies (stuck_until) */
+    int belt;        /* v_belt set: the friction acts on V - vb, a stuck block moves with the belt */
+    double vb;       /* the belt's velocity (0 when never set) */
+    int general;     /* belt or Stribeck: the schemes' copies with their code (else the plain ones) */
     double t_grid;   /* end of the current step when it is a grid point (else NaN) */
     double P_grid;   /* the excitation there, from the state's excitation cache */
     dfo_status err;  /* first error met */
@@ -84,6 +88,23 @@ typedef struct {
 } phase_start;
 
 static int stuck(const step_ctx *C, const dfo_state *s) { return C->friction && s->mode == 0; }
+
+/* The kinetic friction magnitude of a block sliding at velocity V: mu_k N (coulomb), or N mu(|V -
+ * vb|) (stribeck, friction.h's law). */
+static double slide_magnitude(const step_ctx *C, const dfo_loads *L, double V)
+{
+    if (!C->M->stribeck) return L->muk_N;
+    return L->N * dfo_friction_mu(&C->M->law, fabs(V - C->vb));
+}
+
+/* The loads as the rest rule and a slide's start read them: with Stribeck the kinetic magnitude is
+ * that at the relative speed 0, mu_s N. */
+static dfo_loads start_loads(const step_ctx *C, const dfo_loads *L)
+{
+    dfo_loads S = *L;
+    if (C->M->stribeck) S.muk_N = L->N * dfo_friction_mu(&C->M->law, 0.0);
+    return S;
+}
 
 /* The excitation at t: from the grid cache at the end of the current step, else evaluated. */
 static double excitation(const step_ctx *C, double t)
@@ -129,10 +150,12 @@ static double jerk_of(const step_ctx *C, const dfo_state *s)
 {
     if (stuck(C, s)) return 0.0;
     const dfo_model *M = C->M;
-    const double F = -s->mode * C->L.muk_N;
+    const double F = -s->mode * slide_magnitude(C, &C->L, s->V);
     double j = dfo_excitation_rate(M, s->t) - M->p.k * s->V;
     if (M->damped) j -= M->p.c * accel_of(C, s, s->t, F);
     if (C->ramp) j += ramp_force_rate(C, s);
+    if (M->stribeck) /* d F / dt = -N mu'(u) a, u = |V - vb| */
+        j -= C->L.N * dfo_friction_dmu(&M->law, fabs(s->V - C->vb)) * accel_of(C, s, s->t, F);
     return j / M->p.m;
 }
 
@@ -190,14 +213,19 @@ static HOT_INLINE void finish(const step_ctx *C, dfo_state *s, const trial *tr, 
 /* Friction at the end of the step: the LCP of method.md section 3 with limit muN. Lemke decides
  * the active complementarity pair; the velocity then follows from that pair's equation. Returns
  * the mode (+1, 0, -1). */
-static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1)
+static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr, double muN, double *V1, double *F1,
+                                     const int general)
 {
-    const double mh = tr->co->m_hat, im = tr->co->inv_m_hat, p = tr->p_hat;
+    const int belt = general && C->belt;
+    const double vb = general ? C->vb : 0.0;
+    const double mh = tr->co->m_hat, im = tr->co->inv_m_hat;
     if (C->M->fast && muN == 0.0) {  /* no friction: V1 = p_hat / m_hat */
-        *V1 = p * im;
+        *V1 = tr->p_hat * im;
         *F1 = 0.0;
-        return dfo_sign(*V1);
+        return dfo_sign(*V1 - vb);
     }
+    /* the LCP on the velocity relative to the belt, V1 - vb: m_hat (V1 - vb) = p_hat - m_hat vb + F1 */
+    const double p = belt ? tr->p_hat - mh * vb : tr->p_hat;
     const double Mx[4] = {mh, -mh, -mh, mh};
     const double q[2] = {muN - p, muN + p};
     double z[2], w[2];
@@ -215,11 +243,39 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
         return 0;
     }
     /* 0.0 - x: a zero force is +0, as on the fast path */
-    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) * im; *F1 = 0.0 - muN; return 1; }
-    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) * im; *F1 = muN; return -1; }
-    *V1 = 0.0;
+    if (zb[0] && z[0] > 0.0) { *V1 = (p - muN) * im; *F1 = 0.0 - muN; if (belt) *V1 += vb; return 1; }
+    if (zb[1] && z[1] > 0.0) { *V1 = (p + muN) * im; *F1 = muN; if (belt) *V1 += vb; return -1; }
+    *V1 = vb;
     *F1 = 0.0 - p;
     return 0;
+}
+
+/* A sliding step in direction dir (dir (V1 - vb) > 0) with the friction law: the relative speed u =
+ * dir (V1 - vb) at its end, the root of m_hat u = q - N mu(u), q = dir (p_hat - m_hat vb) (coulomb:
+ * closed form). Where no root u > 0 exists (q <= N mu(0)) it returns (q - N mu(0)) / m_hat <= 0, so
+ * that the value is continuous in the step length and its sign tells a stop (dfo_brent's root).
+ * Newton's iteration from the coulomb root (mu_k) converges monotonically (mu is convex for mu_s >
+ * mu_k, concave otherwise) while m_hat > N |mu'|, i.e. on steps that resolve the friction's fall. */
+static double slide_value(const step_ctx *C, const dfo_loads *L, const trial *tr, int dir)
+{
+    const double im = tr->co->inv_m_hat, mh = tr->co->m_hat;
+    const double q = dir * (C->belt ? tr->p_hat - mh * C->vb : tr->p_hat);
+    if (!C->M->stribeck) return (q - L->muk_N) * im;
+    const dfo_friction_law *F = &C->M->law;
+    const double N = L->N;
+    const double g0 = q - N * dfo_friction_mu(F, 0.0);
+    if (!(g0 > 0.0)) return g0 * im;
+    double u = fmax((q - N * fmin(F->mu_s, F->mu_k)) * im, DBL_MIN);
+    for (int i = 0; i < 60; i++) {
+        const double g = mh * u - q + N * dfo_friction_mu(F, u);
+        const double dg = mh + N * dfo_friction_dmu(F, u);
+        double u1 = (dg > 0.0) ? u - g / dg : 0.5 * u;
+        if (!(u1 > 0.0)) u1 = 0.5 * u;
+        const int done = fabs(u1 - u) <= 4.0 * DBL_EPSILON * u;
+        u = u1;
+        if (done) break;
+    }
+    return u;
 }
 
 /* ---- phases, stick and observables ----------------------------------------------------------- */
@@ -232,7 +288,8 @@ static HOT_INLINE phase_start begin_phase(const dfo_state *s)
 
 /* Book-keeping after a phase [b->ta, s->t] spent in mode_during with friction force F: the stick
  * phase's breakaway to be found anew, switch reports and observables. */
-static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
+static HOT_INLINE void end_phase_on(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F,
+                                    const int belt)
 {
     const dfo_model *M = C->M;
     const double ta = b->ta, dX = s->X - b->X0;
@@ -251,15 +308,23 @@ static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_st
     if (s->X > s->x_max) s->x_max = s->X;
     if (s->X < s->x_min) s->x_min = s->X;
     if (tb > w0) {
-        s->E_friction -= F * dX;
+        /* the energy dissipated: the friction's work on the relative motion */
+        s->E_friction -= F * (belt ? dX - C->vb * (tb - ta) : dX);
         if (s->mode != mode_before) s->transitions++;
     }
+}
+
+static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
+{
+    end_phase_on(C, s, b, mode_during, F, C->belt);
 }
 
 /* The static force on the block at its current time and position. */
 static double static_force_now(const step_ctx *C, const dfo_state *s)
 {
-    return dfo_static_force(C->M->p.k, &C->L, excitation(C, s->t), s->X);
+    const double S = dfo_static_force(C->M->p.k, &C->L, excitation(C, s->t), s->X);
+    /* riding on the belt the damper pulls with c vb */
+    return (C->belt && C->M->p.c != 0.0) ? S - C->M->p.c * C->vb : S;
 }
 
 /* Enter (or stay in) stick where the block is: V = A = 0 (A is then a physical acceleration, hA
@@ -268,7 +333,8 @@ static double static_force_now(const step_ctx *C, const dfo_state *s)
  * sign, or when no motion is resolvable). */
 static void enter_stick(const step_ctx *C, dfo_state *s, double F_static)
 {
-    s->V = s->A = s->hA = 0.0;
+    s->A = s->hA = 0.0;
+    s->V = C->vb;
     s->mode = 0;
     s->F = dfo_stick_force(&C->L, F_static);
 }
@@ -276,25 +342,26 @@ static void enter_stick(const step_ctx *C, dfo_state *s, double F_static)
 /* Complete the step with the block at rest at its end, stuck there. */
 static void stick_after(const step_ctx *C, dfo_state *s, const trial *tr)
 {
-    finish(C, s, tr, 0.0);
+    finish(C, s, tr, C->vb);
     enter_stick(C, s, static_force_now(C, s));
 }
 
 /* Start sliding from rest at the current time in direction dir, with the consistent acceleration. */
 static void start_slide(const step_ctx *C, dfo_state *s, int dir, double F_static)
 {
-    s->V = 0.0;
+    const dfo_loads L = start_loads(C, &C->L);
+    s->V = C->vb;
     s->hA = 0.0;
     s->mode = dir;
-    s->A = dfo_breakaway_accel(C->M->p.m, &C->L, dir, F_static);
-    s->F = -dir * C->L.muk_N;
+    s->A = dfo_breakaway_accel(C->M->p.m, &L, dir, F_static);
+    s->F = -dir * L.muk_N;
 }
 
 /* At rest after a stop (or at start-up): the rest rule decides between stick and slide. */
 static void restart_from_rest(const step_ctx *C, dfo_state *s)
 {
     const double F_static = static_force_now(C, s);
-    const int mode = dfo_rest_mode(&C->L, F_static);
+    const int mode = dfo_rest_mode(&C->L, F_static);  /* Fb = max(mu_s, mu_k) N: either law */
     if (mode == 0) enter_stick(C, s, F_static);
     else start_slide(C, s, mode, F_static);
 }
@@ -311,7 +378,7 @@ static void step_smooth(step_ctx *C, dfo_state *s, double t_end)
     double V1, F1;
     const phase_start b = begin_phase(s);
     predict(C, s, C->h_step, t_end, &tr);
-    s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1);
+    s->mode = solve_friction(C, s, &tr, 0.0, &V1, &F1, 1);
     finish(C, s, &tr, V1);
     s->F = F1;
     end_phase(C, s, &b, s->mode, s->F);
@@ -320,7 +387,7 @@ static void step_smooth(step_ctx *C, dfo_state *s, double t_end)
 /* The paper's literal scheme: LCP with the previous mode's coefficient, then frictionUpdates
  * re-solves with the coefficient of the result; A follows Bossak's recursion throughout, also
  * while stuck (the block is then not exactly at rest, and F is the LCP's). */
-static void step_paper(step_ctx *C, dfo_state *s, double t_end)
+static HOT_INLINE void step_paper(step_ctx *C, dfo_state *s, double t_end, const int general)
 {
     const dfo_model *M = C->M;
     trial tr;
@@ -328,12 +395,12 @@ static void step_paper(step_ctx *C, dfo_state *s, double t_end)
     const phase_start b = begin_phase(s);
     predict(C, s, C->h_step, t_end, &tr);
     double mu = (s->mode == 0) ? M->mu_b : M->mu_k;
-    int mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
+    int mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1, general);
     for (int i = 0; i < M->p.frictionUpdates && M->update; i++) {
         const double mu_new = (mode == 0) ? M->mu_b : M->mu_k;
         if (mu_new == mu) break;
         mu = mu_new;
-        mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1);
+        mode = solve_friction(C, s, &tr, mu * C->L.N, &V1, &F1, general);
     }
     finish(C, s, &tr, V1);
     s->mode = mode;
@@ -342,7 +409,7 @@ static void step_paper(step_ctx *C, dfo_state *s, double t_end)
 }
 
 /* Consistent stick test (method.md section 4, variant 1). */
-static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
+static HOT_INLINE void step_consistent(step_ctx *C, dfo_state *s, double t_end, const int general)
 {
     const dfo_model *M = C->M;
     trial tr;
@@ -351,28 +418,31 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
     predict(C, s, C->h_step, t_end, &tr);
     if (s->mode == 0) {
         /* A = V = 0: p_hat is exactly the static force P1 - k X */
-        int mode = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1);
+        int mode = solve_friction(C, s, &tr, M->mu_b * C->L.N, &V1, &F1, general);
         if (mode == 0) {
             stick_after(C, s, &tr);
         } else {
-            if (M->update) mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+            if (M->update) mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1, general);
             finish(C, s, &tr, V1);
             s->mode = mode;
             s->F = F1;
         }
     } else {
         const int dir = s->mode;
-        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
+        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1, general);
         if (mode == dir) {
             finish(C, s, &tr, V1);
             s->F = F1;
         } else {
             /* the block stops in this step: stick or reverse, judged by the static force at the
              * predicted rest position */
-            const double F_static = dfo_static_force(M->p.k, &C->L, excitation(C, t_end), tr.x_pred);
+            double F_static = dfo_static_force(M->p.k, &C->L, excitation(C, t_end), tr.x_pred);
+            if (general && C->belt) /* the rest position riding on the belt, and the damper's pull c vb */
+                F_static = dfo_static_force(M->p.k, &C->L, excitation(C, t_end), tr.x_pred + tr.co->corr_V * C->vb) -
+                           M->p.c * C->vb;
             const int dir_new = dfo_sign(F_static);
             const double V_new = (tr.p_hat - dir_new * C->L.muk_N) * tr.co->inv_m_hat;
-            if (fabs(F_static) <= C->L.Fb || dir_new * V_new <= 0.0) {
+            if (fabs(F_static) <= C->L.Fb || dir_new * (general ? V_new - C->vb : V_new) <= 0.0) {
                 stick_after(C, s, &tr);
             } else {
                 finish(C, s, &tr, V_new);
@@ -382,6 +452,13 @@ static void step_consistent(step_ctx *C, dfo_state *s, double t_end)
         }
     }
     end_phase(C, s, &b, s->mode, s->F);
+}
+
+/* The consistent step, each copy (with and without the belt's code) out of line. */
+static void consistent_step(step_ctx *C, dfo_state *s, double t_end)
+{
+    if (C->belt) step_consistent(C, s, t_end, 1);
+    else step_consistent(C, s, t_end, 0);
 }
 
 /* The stick phase's next breakaway in the state holds for the current static force and limit. */
@@ -442,11 +519,53 @@ static COLD double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, do
     return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
+/* Riding on the belt from (ta, Xa): side times the static force beyond the limit at t (> 0: broken
+ * away), the block at Xa + vb (t - ta), the loads those at t. */
+typedef struct {
+    const step_ctx *C;
+    double ta, Xa;
+    int side;
+} belt_gap_ctx;
+
+static double belt_gap(const belt_gap_ctx *g, double t)
+{
+    const step_ctx *C = g->C;
+    dfo_loads L = C->L;
+    if (C->ramp) dfo_loads_at(&L, C->M, C->ramp, t);
+    const double X = g->Xa + C->vb * (t - g->ta);
+    return g->side * (dfo_static_force(C->M->p.k, &L, excitation(C, t), X) - C->M->p.c * C->vb) - L.Fb;
+}
+
+static double belt_gap_fn(void *ctx, double h)
+{
+    const belt_gap_ctx *g = (const belt_gap_ctx *)ctx;
+    return -belt_gap(g, g->ta + h);
+}
+
+/* The breakaway inside [ta, tb] of a block riding on the belt (its static force drifts with its
+ * position): the side broken through at tb, the time the root of the gap (Brent, to a few ulps), so
+ * that it is placed to second order. A force that crosses the limit and comes back inside one step
+ * (a tangency, of order h^2 beyond it) is not seen. */
+static COLD double belt_breakaway(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
+{
+    s->stick_tb = NAN; /* nothing cached: the static force drifts */
+    for (int sd = -1; sd <= 1; sd += 2) {
+        belt_gap_ctx g = {C, ta, s->X, sd};
+        const double ghi = belt_gap(&g, tb);
+        if (!(ghi > 0.0)) continue;
+        *dir = sd;
+        const double g0 = belt_gap(&g, ta);
+        if (g0 >= 0.0) return ta;
+        return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
+    }
+    return INFINITY;
+}
+
 /* The breakaway inside [ta, tb], or INFINITY. It is computed once per stick phase, at its first
  * step, and again only when the inputs change the static force or the limit. */
 static double breakaway_time(const step_ctx *C, dfo_state *s, double ta, double tb, int *dir)
 {
-    if (C->ramp) return ramp_breakaway(C, s, ta, tb, dir);
+    if (C->ramp) return ramp_breakaway(C, s, ta, tb, dir); /* (on a belt: belt_breakaway) */
     if (!breakaway_known(C, s)) {
         const double C0 = C->L.F_ext - C->M->p.k * s->X;
         s->stick_C = C0;
@@ -466,6 +585,7 @@ static double slide_velocity(const step_ctx *C, const dfo_state *s, double h, tr
 {
     if (C->ramp) return ramp_slide_velocity(C, s, h, tr);
     predict(C, s, h, s->t + h, tr);
+    if (C->belt || C->M->stribeck) return slide_value(C, &C->L, tr, s->mode);
     return s->mode * (tr->p_hat - s->mode * C->L.muk_N) * tr->co->inv_m_hat;
 }
 
@@ -480,6 +600,7 @@ static COLD double ramp_slide_velocity(const step_ctx *C, const dfo_state *s, do
         tr->own = D.full;
         tr->co = &tr->own;
     }
+    if (C->belt || C->M->stribeck) return slide_value(&D, &D.L, tr, s->mode);
     return s->mode * (tr->p_hat - s->mode * D.L.muk_N) * tr->co->inv_m_hat;
 }
 
@@ -517,15 +638,19 @@ static double stop_length(const step_ctx *C, const dfo_state *s, double lo, doub
     return dfo_brent(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
 }
 
-/* Located switches (method.md section 4, variant 2, the default). */
-static void step_located(step_ctx *C, dfo_state *s, double t_end)
+/* The located scheme's step. general: the belt and the Stribeck law may act; 0 for the plain
+ * Coulomb block on a fixed support, whose copy of this loop then carries none of their code (the
+ * step cost unchanged). */
+static HOT_INLINE void located(step_ctx *C, dfo_state *s, double t_end, const int general)
 {
+    const int belt = general && C->belt, strib = general && C->M->stribeck;
+    const double vb = general ? C->vb : 0.0;
     /* Locating a switch inside a step needs steps that resolve the oscillator's fastest time scale;
      * on a stiff step (several natural periods long) restarts from rest with the physical
      * acceleration would feed the unresolved mode: there the consistent stick test, which is
      * stable, takes the step. */
     if (!resolves(C->M, C->h_step)) {
-        step_consistent(C, s, t_end);
+        consistent_step(C, s, t_end);
         return;
     }
     trial tr;
@@ -536,35 +661,60 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             return;
         }
         const phase_start b = begin_phase(s);
-        if (s->mode == 0) {  /* stuck: X frozen, V = A = 0 */
+        if (s->mode == 0) {  /* stuck: X frozen, V = A = 0 (on a belt: X = Xa + vb (t - ta), V = vb) */
             int dir = 0;
-            const double tb = breakaway_time(C, s, b.ta, t_end, &dir);
+            const double tb = belt ? belt_breakaway(C, s, b.ta, t_end, &dir) : breakaway_time(C, s, b.ta, t_end, &dir);
             if (tb == INFINITY) {  /* stays stuck: F is set once, at the end of dfo_advance */
                 s->t = t_end;
-                end_phase(C, s, &b, 0, 0.0);
+                if (belt) s->X = b.X0 + vb * (t_end - b.ta);
+                end_phase_on(C, s, &b, 0, 0.0, belt);
                 continue;
             }
             s->t = tb;
+            if (belt) s->X = b.X0 + vb * (tb - b.ta);
             if (C->ramp) ramp_restart(C, s, dir);
             else start_slide(C, s, dir, static_force_now(C, s));
-            end_phase(C, s, &b, 0, s->F);
+            end_phase_on(C, s, &b, 0, s->F, belt);
             continue;
         }
         /* sliding in direction dir over the remainder r */
         const int dir = s->mode;
         const double r = (phase == 0) ? C->h_step : t_end - b.ta;
+        const double F0 = s->F;
+        if (belt && s->hA == 0.0 && r <= BELT_TINY_REL_H * C->full.h) {
+            /* a sliver of a step after a switch (a breakaway a few ulps before a grid point): on a belt
+             * V = vb + u is not small, and Bossak's A = (V1 - V) / (gamma r) would be its rounding
+             * over r; Taylor's expansion with the physical acceleration is exact to O(r^2) instead */
+            s->X += (s->V + 0.5 * s->A * r) * r;
+            s->V += s->A * r;
+            s->t = t_end;
+            end_phase_on(C, s, &b, dir, s->F, belt);
+            continue;
+        }
         predict(C, s, r, t_end, &tr);
-        const int mode = solve_friction(C, s, &tr, C->L.muk_N, &V1, &F1);
-        if (mode == dir && dir * V1 > 0.0) {
+        /* the LCP with the smallest kinetic magnitude decides: where it stops the block, every law does */
+        const double muN_lcp = strib ? C->L.N * fmin(C->M->law.mu_s, C->M->law.mu_k) : C->L.muk_N;
+        int mode = solve_friction(C, s, &tr, muN_lcp, &V1, &F1, general);
+        if (strib && mode == dir) { /* the speed-dependent friction at the step's end */
+            const double u = slide_value(C, &C->L, &tr, dir);
+            if (u > 0.0) {
+                V1 = vb + dir * u;
+                F1 = -dir * C->L.N * dfo_friction_mu(&C->M->law, u);
+            } else {
+                mode = 0;
+            }
+        }
+        if (mode == dir && dir * (V1 - vb) > 0.0) {
             finish(C, s, &tr, V1);
             s->t = t_end;
             s->F = F1;
-            end_phase(C, s, &b, dir, F1);
+            end_phase_on(C, s, &b, dir, strib ? 0.5 * (F0 + F1) : F1, belt);
             continue;
         }
-        /* the block stops inside the remainder: find the sub-step that ends at V = 0 */
-        const double fhi = dir * (tr.p_hat - dir * C->L.muk_N) * tr.co->inv_m_hat;
-        double lo = 0.0, flo = dir * s->V;
+        /* the block stops inside the remainder: find the sub-step that ends at V = vb */
+        const double fhi = (belt || strib) ? slide_value(C, &C->L, &tr, dir)
+                                                        : dir * (tr.p_hat - dir * C->L.muk_N) * tr.co->inv_m_hat;
+        double lo = 0.0, flo = dir * (s->V - vb);
         if (!(flo > 0.0)) {  /* started from rest: find a point where it is still moving */
             lo = r;
             flo = 0.0;
@@ -575,18 +725,26 @@ static void step_located(step_ctx *C, dfo_state *s, double t_end)
             if (!(flo > 0.0)) {  /* no motion resolvable in double precision: stays at rest */
                 s->t = t_end;
                 enter_stick(C, s, static_force_now(C, s));
-                end_phase(C, s, &b, 0, s->F);
+                end_phase_on(C, s, &b, 0, s->F, belt);
                 continue;
             }
         }
         const double hs = (fhi == 0.0) ? r : stop_length(C, s, lo, flo, r, fhi);
         predict(C, s, hs, (hs >= r) ? t_end : s->t + hs, &tr);
-        finish(C, s, &tr, 0.0);
+        finish(C, s, &tr, vb);
         s->t = (hs >= r) ? t_end : fmax(b.ta + hs, nextafter(b.ta, INFINITY));
         if (C->ramp) ramp_restart(C, s, 0);
         else restart_from_rest(C, s);  /* X stays: the phase's dX is the slide's */
-        end_phase(C, s, &b, dir, -dir * C->L.muk_N);
+        const double F_stop = -dir * start_loads(C, &C->L).muk_N;
+        end_phase_on(C, s, &b, dir, strib ? 0.5 * (F0 + F_stop) : F_stop, belt);
     }
+}
+
+/* Located switches (method.md section 4, variant 2, the default). */
+static HOT_INLINE void step_located(step_ctx *C, dfo_state *s, double t_end)
+{
+    if (C->general) located(C, s, t_end, 1);
+    else located(C, s, t_end, 0);
 }
 
 /* ---- the schemes: their rules and their steps, in one place ---------------------------------- */
@@ -615,8 +773,12 @@ static void step_to(step_ctx *C, dfo_state *s, double t_end)
         step_smooth(C, s, t_end);
     } else {
         switch (C->M->p.scheme) {
-        case DFO_SCHEME_PAPER: step_paper(C, s, t_end); break;
-        case DFO_SCHEME_CONSISTENT: step_consistent(C, s, t_end); break;
+        /* each with its copy for the belt and the Stribeck law, and one without their code */
+        case DFO_SCHEME_PAPER:
+            if (C->belt) step_paper(C, s, t_end, 1);
+            else step_paper(C, s, t_end, 0);
+            break;
+        case DFO_SCHEME_CONSISTENT: consistent_step(C, s, t_end); break;
         default: step_located(C, s, t_end); break;
         }
     }
@@ -636,7 +798,11 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->friction = C->L.Fb > 0.0;  /* Fb >= mu_k N */
     /* the stuck fast path steps whole grid steps of the scheme's own kind: off where a stiff grid
      * hands the steps to the consistent test, and while the inputs vary */
-    C->skip_stuck = C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h) && !C->ramp;
+    C->belt = dfo_belt_on(in);
+    C->vb = dfo_belt_speed(in);
+    C->general = C->belt || M->stribeck;
+    C->skip_stuck =
+        C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h) && !C->ramp && !C->belt;
     C->err = DFO_OK;
     C->t_grid = NAN;
     C->P_grid = 0.0;
@@ -663,11 +829,11 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
     s->stick_C = s->stick_Fb = s->stick_tb = NAN;
     s->stick_dir = 0;
     s->t_switch = -INFINITY;
-    if (s->V == 0.0 && C.friction) {
+    if (s->V == C.vb && C.friction) {
         restart_from_rest(&C, s);
     } else {
-        s->mode = dfo_sign(s->V);
-        s->F = -s->mode * C.L.muk_N;
+        s->mode = dfo_sign(s->V - C.vb);
+        s->F = -s->mode * slide_magnitude(&C, &C.L, s->V);
         s->A = accel_of(&C, s, t0, s->F);
     }
     s->hA = 0.0;
@@ -832,13 +998,71 @@ double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_st
     dfo_loads L;
     dfo_loads_at(&L, M, in, s->t);
     if (!(L.Fb > 0.0)) return 0.0;
-    if (s->mode != 0) return -s->mode * L.muk_N;
-    return dfo_stick_force(&L, dfo_static_force(M->p.k, &L, state_excitation(M, s), s->X));
+    if (!dfo_belt_on(in) && !M->stribeck) {
+        if (s->mode != 0) return -s->mode * L.muk_N;
+        return dfo_stick_force(&L, dfo_static_force(M->p.k, &L, state_excitation(M, s), s->X));
+    }
+    step_ctx C;
+    make_ctx(&C, M, in);
+    /* a stuck block whose belt changed since the last step slides (dfo_new_inputs) */
+    const int mode = (s->mode == 0 && s->V != C.vb) ? dfo_sign(s->V - C.vb) : s->mode;
+    if (mode != 0) return -mode * slide_magnitude(&C, &L, s->V);
+    return dfo_stick_force(&L, dfo_static_force(M->p.k, &L, state_excitation(M, s), s->X) - M->p.c * C.vb);
+}
+
+/* The belt changed at the communication point s->t: the block keeps its velocity, so its mode is
+ * that of the new relative velocity; a slide (new, or reversed relative to the belt) starts with
+ * the physical acceleration (hA = 0), and a block that now moves with the belt is at rest on it,
+ * where the rest rule decides. A change of mode is a switch (reported, observed). */
+static void new_belt(const dfo_model *M, const dfo_inputs *in, dfo_state *s)
+{
+    step_ctx C;
+    make_ctx(&C, M, in);
+    if (C.ramp) {
+        dfo_loads_at(&C.L, M, in, s->t);
+        C.friction = C.L.Fb > 0.0;
+    }
+    C.t_grid = s->t;
+    C.P_grid = state_excitation(M, s);
+    const phase_start b = begin_phase(s);
+    if (!C.friction) return;
+    if (s->V == C.vb) {
+        if (s->mode == 0) return; /* riding on it already */
+        restart_from_rest(&C, s);
+    } else {
+        s->mode = dfo_sign(s->V - C.vb);
+        s->F = -s->mode * slide_magnitude(&C, &C.L, s->V);
+        s->hA = 0.0;
+        s->A = accel_of(&C, s, s->t, s->F);
+    }
+    s->stick_tb = NAN;
+    if (s->mode != b.mode0) {
+        s->t_switch = s->t;
+        if (M->p.observe && s->t > M->p.t_obs_start && s->t <= M->p.t_obs_stop) s->transitions++;
+    }
 }
 
 void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
 {
-    if (M->p.scheme == DFO_SCHEME_EXACT || s->mode == 0) return;
+    if (M->p.scheme == DFO_SCHEME_EXACT) return;
+    if (dfo_belt_speed(old_in) != dfo_belt_speed(new_in) || (old_in->v_belt_set != new_in->v_belt_set && s->V != 0.0)) {
+        new_belt(M, new_in, s);
+        return;
+    }
+    if (s->mode == 0) return;
+    if (M->stribeck || dfo_belt_on(new_in)) { /* the kinetic force with the new loads (their rates aside) */
+        step_ctx C;
+        make_ctx(&C, M, new_in);
+        dfo_loads_at(&C.L, M, new_in, s->t);
+        dfo_loads a;
+        dfo_loads_at(&a, M, old_in, s->t);
+        const double Fb = -s->mode * slide_magnitude(&C, &C.L, s->V);
+        const double dF = (C.L.F_ext - a.F_ext) + (Fb - s->F);
+        if (dF == 0.0) return;
+        s->A += dF / M->p.m;
+        s->F = Fb;
+        return;
+    }
     dfo_loads a, b;
     dfo_loads_at(&a, M, old_in, s->t);
     dfo_loads_at(&b, M, new_in, s->t);
@@ -856,7 +1080,8 @@ double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_stat
         dfo_loads_at(&C.L, M, in, s->t);
         C.friction = C.L.Fb > 0.0;
     }
-    if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
+    /* (a stuck block whose belt changed since the last step slides: dfo_friction_force) */
+    if (stuck(&C, s) && C.rules->rests_when_stuck && !(C.belt && s->V != C.vb)) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t, phi) */
         C.t_grid = s->t;
         C.P_grid = dfo_exact_excitation(M, s->t);

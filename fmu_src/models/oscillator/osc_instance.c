@@ -25,6 +25,10 @@ DFO_SAME(effect_force, DFO_MD_EFFECT_FORCE_INPUT, DFO_EFFECT_FORCE_INPUT);
 DFO_SAME(effect_normal, DFO_MD_EFFECT_NORMAL_INPUT, DFO_EFFECT_NORMAL_INPUT);
 DFO_SAME(effect_observables, DFO_MD_EFFECT_OBSERVABLES, DFO_EFFECT_OBSERVABLES);
 DFO_SAME(effect_sensitivity, DFO_MD_EFFECT_SENSITIVITY, DFO_EFFECT_SENSITIVITY);
+DFO_SAME(effect_belt, DFO_MD_EFFECT_BELT, DFO_EFFECT_BELT);
+DFO_SAME(effect_stribeck, DFO_MD_EFFECT_STRIBECK, DFO_EFFECT_STRIBECK);
+DFO_SAME(law_coulomb, DFO_MD_FRICTION_LAW_COULOMB, DFO_LAW_COULOMB);
+DFO_SAME(law_stribeck, DFO_MD_FRICTION_LAW_STRIBECK, DFO_LAW_STRIBECK);
 DFO_SAME(scheme_paper, DFO_MD_SCHEME_PAPER, DFO_SCHEME_PAPER);
 DFO_SAME(scheme_consistent, DFO_MD_SCHEME_CONSISTENT, DFO_SCHEME_CONSISTENT);
 DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
@@ -340,6 +344,18 @@ static int output_int(const osc_values *v, const dfo_run *r, int id)
 static dfo_inst_status ramp_refused(osc_instance *in, const char *fn);
 static const char *ramp_unsupported(const dfo_params *p);
 
+/* The exact scheme follows a block on a fixed support only: a moving belt is refused, by name. */
+static int belt_unsupported(const osc_values *v)
+{
+    return v->p.scheme == DFO_SCHEME_EXACT && dfo_belt_speed(&v->u) != 0.0;
+}
+
+static dfo_inst_status belt_refused(osc_instance *in, const char *fn)
+{
+    return dfo_inst_fail(&in->lc, "%s: scheme exact supports v_belt = 0 only (a support at rest; v_belt = %.17g): "
+                         "choose scheme located (or paper, consistent) for a moving belt.", fn, in->v.u.v_belt);
+}
+
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     osc_instance *in = osc(lc);
@@ -347,6 +363,7 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     const char *msg = dfo_check_params(&v->p);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
     if (v->u.ramp && ramp_unsupported(&v->p)) return ramp_refused(in, fn);
+    if (belt_unsupported(v)) return belt_refused(in, fn);
     v->u.t_d = in->lc.run.start_time; /* input derivatives set before: of the start */
     prepare(v, in->lc.run.start_time);
     in->lc.run.time = in->lc.run.start_time;
@@ -579,6 +596,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && ramp_unsupported(&v->M.p)) return ramp_refused(in, fn);
+    if (belt_unsupported(v)) return belt_refused(in, fn);
     const dfo_state before = v->s;
     if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
     dfo_status st;
@@ -783,6 +801,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     double t_target = 0.0;
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
     if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && ramp_unsupported(&v->M.p)) return ramp_refused(in, fn);
+    if (belt_unsupported(v)) return belt_refused(in, fn);
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!same_inputs(&v->u, &v->u_used)) {
         dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
@@ -879,7 +898,7 @@ dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void
 
 static int finite_inputs(const dfo_inputs *u)
 {
-    return isfinite(u->F_ext) && isfinite(u->N_ext) && isfinite(u->F_ext_d[0]) && isfinite(u->F_ext_d[1]) &&
+    return isfinite(u->F_ext) && isfinite(u->N_ext) && isfinite(u->v_belt) && isfinite(u->F_ext_d[0]) && isfinite(u->F_ext_d[1]) &&
            isfinite(u->N_ext_d[0]) && isfinite(u->N_ext_d[1]) && isfinite(u->t_d);
 }
 
@@ -895,7 +914,7 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
     }
     const char *why = dfo_run_implausible(r, 0);
     if (why) return why;
-    if (dfo_check_params(&v->p)) return "the observation window is empty";
+    if (dfo_check_params(&v->p)) return dfo_check_params(&v->p);
     if (!finite_inputs(&v->u) || !finite_inputs(&v->u_used)) return "an input is not finite";
     if ((v->u.ramp != 0 && v->u.ramp != 1) || (v->u_used.ramp != 0 && v->u_used.ramp != 1))
         return "the input derivatives are invalid";
@@ -960,6 +979,10 @@ dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn
     for (size_t i = 0; i < nvr; i++) {
         const dfo_var_info *var = dfo_find_var(vr[i]);
         if (!var) return dfo_inst_fail(lc, "%s: unknown value reference %u.", fn, vr[i]);
+        if (var->vr == VR_v_belt)
+            return dfo_inst_fail(lc, "%s: input derivatives of v_belt (value reference %u) are not supported: the belt's "
+                                 "velocity is held over a communication step; set v_belt at the communication points "
+                                 "(only the inputs F_ext and N_ext take derivatives).", fn, vr[i]);
         if (var->causality != DFO_INPUT || var->type != DFO_REAL || !input_derivatives(v, var))
             return dfo_inst_fail(lc, "%s: variable %s (value reference %u) is not a real input: only the inputs "
                                  "F_ext and N_ext take derivatives.", fn, var->name, vr[i]);
@@ -1061,7 +1084,20 @@ static double feed_through(const osc_values *v, const dfo_run *r, int out, unsig
         else dFr = N_sum > 0.0 ? -dfo_sign(S) * M->mu_b : 0.0;
         rests = M->p.scheme != DFO_SCHEME_PAPER;
     } else if (s.mode != 0 && (L.Fb > 0.0 || N_sum > 0.0)) {
-        dFr = N_sum > 0.0 ? -s.mode * M->mu_k : 0.0;
+        const double mu = M->stribeck ? dfo_friction_mu(&M->law, fabs(s.V - dfo_belt_speed(&u))) : M->mu_k;
+        dFr = N_sum > 0.0 ? -s.mode * mu : 0.0;
+    }
+    if (input == VR_v_belt) {
+        /* stuck within the limit: the friction holds f = P + F_ext - c v_belt - k x (dF = c); sliding
+         * with Stribeck: F = -s N mu(|v - v_belt|), dF = N mu'(u); coulomb sliding: 0 */
+        double dB = 0.0;
+        if (L.Fb > 0.0 && s.mode == 0) {
+            if (fabs(dfo_friction_force(M, &u, &s)) < L.Fb && s.V == dfo_belt_speed(&u)) dB = M->p.c;
+        } else if (s.mode != 0 && M->stribeck && L.N > 0.0) {
+            dB = L.N * dfo_friction_dmu(&M->law, fabs(s.V - dfo_belt_speed(&u)));
+        }
+        if (out == DFO_OUT_F_friction) return dB;
+        return rests ? 0.0 : dB / M->p.m;
     }
     const int force = input == VR_F_ext;
     if (out == DFO_OUT_F_friction) return force ? dF : dFr;
@@ -1086,7 +1122,7 @@ static int check_partials(dfo_lifecycle *lc, const char *fn, const unsigned int 
         const dfo_var_info *var = dfo_find_var(known[j]);
         if (!var || var->causality != DFO_INPUT || var->type != DFO_REAL) {
             dfo_inst_fail(lc, "%s: known %s (value reference %u) is not an input: directional derivatives are with "
-                          "respect to the inputs F_ext and N_ext.", fn, var ? var->name : "?", known[j]);
+                          "respect to the inputs F_ext, N_ext and v_belt.", fn, var ? var->name : "?", known[j]);
             return 0;
         }
     }

@@ -24,6 +24,12 @@ const char *dfo_check_params(const dfo_params *p)
 {
     if (p->t_obs_stop < p->t_obs_start)
         return "The observation window is empty: t_obs_stop must be >= t_obs_start.";
+    if (p->friction_law == DFO_LAW_STRIBECK && p->scheme != DFO_SCHEME_LOCATED)
+        return p->scheme == DFO_SCHEME_EXACT
+                   ? "scheme exact supports friction_law = coulomb only (its closed form needs a constant kinetic "
+                     "friction): choose scheme located for friction_law = stribeck."
+                   : "friction_law = stribeck needs scheme located (the speed-dependent friction is solved inside "
+                     "its steps): choose scheme located, or friction_law = coulomb.";
     return NULL;
 }
 
@@ -43,6 +49,12 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
     M->fast = p->fastPaths != 0;
     M->damped = !M->fast || p->c != 0.0;
     M->update = !M->fast || M->mu_k != M->mu_b;
+    M->stribeck = p->friction_law == DFO_LAW_STRIBECK;
+    M->law.law = M->stribeck ? DFO_LAW_STRIBECK : DFO_LAW_COULOMB;
+    M->law.mu_s = p->mu_s;
+    M->law.mu_k = M->mu_k;
+    M->law.v_s = p->v_s;
+    M->law.delta = p->delta;
 }
 
 double dfo_excitation(const dfo_model *M, double t)
@@ -111,5 +123,7 @@ int dfo_effects(const dfo_model *M, const dfo_inputs *u)
     if (u->N_ext_set) e |= DFO_EFFECT_NORMAL_INPUT;
     if (M->p.observe) e |= DFO_EFFECT_OBSERVABLES;
     if (M->p.sensitivity && M->p.scheme == DFO_SCHEME_EXACT) e |= DFO_EFFECT_SENSITIVITY;
+    if (dfo_belt_on(u)) e |= DFO_EFFECT_BELT;
+    if (M->stribeck && (e & DFO_EFFECT_FRICTION)) e |= DFO_EFFECT_STRIBECK;
     return e;
 }

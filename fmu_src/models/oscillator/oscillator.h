@@ -28,6 +28,8 @@ typedef struct {
     int observe;                     /* compute the in-FMU observables */
     int fastPaths;                   /* skip the physics a run does not need (same numbers) */
     int sensitivity;                 /* propagate the Jacobian of the state (exact scheme only) */
+    int friction_law;                /* DFO_LAW_COULOMB or DFO_LAW_STRIBECK (friction.h) */
+    double v_s, delta;               /* Stribeck velocity (m/s) and exponent */
 } dfo_params;
 
 /* Co-simulation inputs, held constant over a communication step. An input never set is never read:
@@ -42,6 +44,8 @@ typedef struct {
     double t_d;
     int F_ext_set, N_ext_set;
     int ramp;
+    double v_belt;  /* velocity of the rough surface (held; no derivatives) */
+    int v_belt_set;
 } dfo_inputs;
 
 /* Bits of the "effects" calculated parameter: what a run simulates. */
@@ -52,7 +56,9 @@ enum {
     DFO_EFFECT_FORCE_INPUT = 8,   /* input F_ext read */
     DFO_EFFECT_NORMAL_INPUT = 16, /* input N_ext read */
     DFO_EFFECT_OBSERVABLES = 32,  /* in-FMU observables computed */
-    DFO_EFFECT_SENSITIVITY = 64   /* Jacobian of the state propagated (exact scheme) */
+    DFO_EFFECT_SENSITIVITY = 64,  /* Jacobian of the state propagated (exact scheme) */
+    DFO_EFFECT_BELT = 128,        /* input v_belt read: friction on the velocity relative to the surface */
+    DFO_EFFECT_STRIBECK = 256     /* speed-dependent friction coefficient (friction_law = stribeck) */
 };
 
 /* Parameters plus the constants derived from them once, at initialisation. */
@@ -66,6 +72,8 @@ typedef struct {
     int fast;                /* fast paths enabled */
     int damped;              /* c != 0 (or fast paths off) */
     int update;              /* mu_k != mu_b (or fast paths off) */
+    int stribeck;            /* friction_law = stribeck */
+    dfo_friction_law law;    /* the sliding law (friction.h), mu_k = chi mu_s */
 } dfo_model;
 
 /* Checks that involve several parameters; NULL when consistent, else a sentence. */
@@ -88,6 +96,11 @@ double dfo_excitation_rate(const dfo_model *M, double t);
 
 /* Normal force used: max(N + N_ext, 0), N_ext read only when it has been set. */
 double dfo_normal_force(const dfo_model *M, const dfo_inputs *u);
+/* The belt's velocity: v_belt when it has been set, else 0 (a belt never set is never read). */
+static inline double dfo_belt_speed(const dfo_inputs *u) { return u->v_belt_set ? u->v_belt : 0.0; }
+/* The belt acts: v_belt set (then every scheme works on the relative velocity). */
+static inline int dfo_belt_on(const dfo_inputs *u) { return u->v_belt_set; }
+
 /* External force: F_ext when it has been set, else 0. */
 double dfo_external_force(const dfo_model *M, const dfo_inputs *u);
 

@@ -68,6 +68,10 @@ def nondim_table(
     n = lam.size
     out = np.empty((n, len(PARAM_COLUMNS)))
     col = {name: i for i, name in enumerate(PARAM_COLUMNS)}
+    md = model.default()
+    for name, i in col.items():  # the columns set below are overwritten; the rest (v_s, delta) at their starts
+        if name != "t_stop":
+            out[:, i] = md.var(name).start
     omega = lam * w0
     T = 2.0 * np.pi / omega
     out[:, col["m"]] = m
