@@ -230,7 +230,7 @@ class _Chain(Driver):
         self.time = float(start_time)
 
     def set_inputs(self, values: Mapping[str, Any]) -> None:
-        """F_ext and/or N_ext (a scalar for every block or n values), held until set again."""
+        """F_ext, N_ext and/or v_belt (a scalar for every block or n values), held until set again."""
         unknown = set(values) - set(INPUTS)
         if unknown:
             raise ValueError(f"the chain's inputs are {', '.join(INPUTS)}, not {', '.join(sorted(unknown))}")
