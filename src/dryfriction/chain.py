@@ -41,9 +41,9 @@ __all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainError", "
            "ChainFMU2", "ChainFMU3", "default_chain_fmu", "default_chain_fmu3", "expand", "open_chain"]
 
 #: per-block parameters (arrays of n), inputs and outputs, and the chain's scalars (docs/chain.md)
-ARRAY_PARAMS = ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")
+ARRAY_PARAMS = ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "k_site", "c_site")
 SCALAR_PARAMS = ("k_end", "c_end", "omega", "h", "alpha", "scheme")
-INPUTS = ("F_ext", "N_ext")
+INPUTS = ("F_ext", "N_ext", "v_belt")
 OUTPUTS = ("x", "v", "a", "F_friction", "mode")
 _REAL_OUTPUTS = ("x", "v", "a", "F_friction")
 
@@ -230,7 +230,7 @@ class _Chain(Driver):
         self.time = float(start_time)
 
     def set_inputs(self, values: Mapping[str, Any]) -> None:
-        """F_ext and/or N_ext (a scalar for every block or n values), held until set again."""
+        """F_ext, N_ext and/or v_belt (a scalar for every block or n values), held until set again."""
         unknown = set(values) - set(INPUTS)
         if unknown:
             raise ValueError(f"the chain's inputs are {', '.join(INPUTS)}, not {', '.join(sorted(unknown))}")

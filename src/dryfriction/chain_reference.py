@@ -1,6 +1,7 @@
 """Event-driven reference solution of the chain of n blocks with dry friction (method.md section 9).
 
     wall -k[0],c[0]- m[0] -k[1],c[1]- m[1] - ... - m[n-1] -k_end,c_end- wall
+    (each block i also tied to the ground by the site spring k_site[i] and damper c_site[i])
     M x'' + C x' + K x = P(t) + F_ext + F,   P_i = P0_i cos(omega t + phi_i),
     F_i = -s_i mu_k_i N_i sliding in direction s_i,  |F_i| <= max(mu_s_i, mu_k_i) N_i stuck.
 
@@ -41,6 +42,12 @@ class Chain:
     k_end: float = 0.0
     c_end: float = 0.0
     F_ext: Optional[np.ndarray] = None
+    k_site: Optional[np.ndarray] = None  # springs from each block to the ground (None: none)
+    c_site: Optional[np.ndarray] = None  # dampers from each block to the ground (None: none)
+    v_belt: Optional[np.ndarray] = None  # belt speed under each block (None: at rest)
+    law: str = "coulomb"                 # friction law: "coulomb" or "stribeck"
+    v_s: Optional[np.ndarray] = None     # Stribeck velocity of each block (> 0)
+    delta: Optional[np.ndarray] = None   # Stribeck exponent of each block (> 0)
 
     @classmethod
     def make(cls, n: int, omega: float = 1.0, k_end: float = 0.0, c_end: float = 0.0,
@@ -50,7 +57,8 @@ class Chain:
         chi = 0.7, x0 = v0 = 0."""
         defaults = {"m": 1.0, "k": 1.0, "c": 0.0, "P0": None, "phi": 0.0, "N": 0.8, "mu_s": 0.5,
                     "chi": 0.7, "x0": 0.0, "v0": 0.0}
-        unknown = set(arrays) - set(defaults) - {"F_ext"}
+        extra = ("k_site", "c_site", "v_belt", "v_s", "delta")
+        unknown = set(arrays) - set(defaults) - {"F_ext", "law", *extra}
         if unknown:
             raise ValueError(f"unknown chain parameters {sorted(unknown)}")
         vals: dict[str, Any] = {}
@@ -65,7 +73,11 @@ class Chain:
         F_ext = arrays.get("F_ext")
         if F_ext is not None:
             F_ext = np.broadcast_to(np.asarray(F_ext, dtype=float), (n,)).copy()
-        ch = cls(omega=float(omega), k_end=float(k_end), c_end=float(c_end), F_ext=F_ext, **vals)
+        site = {name: None if arrays.get(name) is None
+                else np.broadcast_to(np.asarray(arrays[name], dtype=float), (n,)).copy()
+                for name in extra}
+        ch = cls(omega=float(omega), k_end=float(k_end), c_end=float(c_end), F_ext=F_ext,
+                 law=str(arrays.get("law", "coulomb")), **vals, **site)
         ch.validate()
         return ch
 
@@ -76,6 +88,13 @@ class Chain:
     @property
     def mu_k(self) -> np.ndarray:
         return self.chi * self.mu_s
+
+    def mu(self, u: np.ndarray) -> np.ndarray:
+        """The sliding coefficient of each block at the relative speeds u >= 0 (n values)."""
+        if self.law == "coulomb":
+            return self.mu_k + 0.0 * u
+        assert self.v_s is not None and self.delta is not None
+        return self.mu_k + (self.mu_s - self.mu_k) * np.exp(-(u / self.v_s) ** self.delta)
 
     @property
     def Fb(self) -> np.ndarray:
@@ -97,12 +116,34 @@ class Chain:
             if bad.size:
                 i = int(bad[0])
                 raise ValueError(f"invalid value {getattr(self, name)[i]} for {name}[{i + 1}]")
+        for name in ("k_site", "c_site"):
+            a = getattr(self, name)
+            if a is None:
+                continue
+            bad = np.flatnonzero(~(np.isfinite(a) & (a >= 0)))
+            if a.shape != (self.n,) or bad.size:
+                raise ValueError(f"{name} must hold {self.n} finite values >= 0")
+        if self.v_belt is not None and (self.v_belt.shape != (self.n,) or not np.all(np.isfinite(self.v_belt))):
+            raise ValueError(f"v_belt must hold {self.n} finite values")
+        if self.law not in ("coulomb", "stribeck"):
+            raise ValueError(f"law must be 'coulomb' or 'stribeck', not {self.law!r}")
+        if self.law == "stribeck":
+            for name in ("v_s", "delta"):
+                a = getattr(self, name)
+                if a is None or a.shape != (self.n,) or not np.all(np.isfinite(a) & (a > 0)):
+                    raise ValueError(f"the Stribeck law needs {name}: {self.n} finite values > 0")
         if not (self.omega >= 0 and self.k_end >= 0 and self.c_end >= 0):
             raise ValueError("omega, k_end and c_end must be >= 0")
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray]:
-        """The tridiagonal stiffness and damping matrices K, C (dense, n x n)."""
-        return _tridiag(self.k, self.k_end), _tridiag(self.c, self.c_end)
+        """The tridiagonal stiffness and damping matrices K, C (dense, n x n), the site springs and
+        dampers on their diagonals."""
+        K, C = _tridiag(self.k, self.k_end), _tridiag(self.c, self.c_end)
+        if self.k_site is not None:
+            K += np.diag(self.k_site)
+        if self.c_site is not None:
+            C += np.diag(self.c_site)
+        return K, C
 
     def driver_args(self) -> list[str]:
         """Arguments of tests/c/chain_driver for these parameters."""
@@ -112,7 +153,21 @@ class Chain:
             args.append(f"{name}=" + ",".join(repr(float(v)) for v in getattr(self, name)))
         if self.F_ext is not None:
             args.append("F_ext=" + ",".join(repr(float(v)) for v in self.F_ext))
+        if any(getattr(self, a) is not None for a in ("k_site", "c_site", "v_belt")) or self.law != "coulomb":
+            raise ValueError("tests/c/chain_driver has no site springs, dampers, belts or Stribeck law: run the FMU")
         return args
+
+    def fmu_params(self) -> dict[str, Any]:
+        """The chain FMU's parameters for these values (dryfriction.chain; F_ext is an input)."""
+        p: dict[str, Any] = {name: getattr(self, name).tolist()
+                             for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
+        p.update(omega=self.omega, k_end=self.k_end, c_end=self.c_end)
+        if self.v_belt is not None or self.law != "coulomb":
+            raise ValueError("the chain FMU takes v_belt as an input and has no friction_law: not these values")
+        for name in ("k_site", "c_site"):
+            if getattr(self, name) is not None:
+                p[name] = getattr(self, name).tolist()
+        return p
 
 
 def _tridiag(s: np.ndarray, s_end: float) -> np.ndarray:
@@ -174,27 +229,48 @@ class ChainSolution:
 def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-14,
                 max_events: int = 100000, steps_per_period: float = 32.0,
                 F_ext_t: Optional[Callable[[float], np.ndarray]] = None,
-                N_ext_t: Optional[Callable[[float], np.ndarray]] = None) -> ChainSolution:
+                N_ext_t: Optional[Callable[[float], np.ndarray]] = None,
+                belt_changes: Sequence[tuple[float, Sequence[float]]] = ()) -> ChainSolution:
     """The event-driven reference on [0, t_end] (see the module docstring). The ODE steps are at
     most 1/steps_per_period of the shortest time scale (natural or forcing period). F_ext_t, when
     given, is a smooth time-varying external force (n values at time t) added to ch.F_ext: a
     polynomial or harmonic input of a coupled run; it enters the stuck blocks' breakaway events
     as the excitation does. N_ext_t likewise adds a time-varying normal force (the normal force
     max(N + N_ext_t(t), 0), its limits following it in the motion and in the events); which
-    blocks have friction is decided at t = 0."""
+    blocks have friction is decided at t = 0.
+
+    Belts: block i's friction acts on v_rel = v_i - v_belt_i (ch.v_belt, then the n speeds of
+    belt_changes (t, speeds) from each t on, sorted by t). Stuck means v_i = v_belt_i (x_i moves
+    with the belt) while the held force is within max(mu_s, mu_k) N_i; sliding, the friction is
+    -sign(v_rel) N_i mu(|v_rel|) (ch.mu: Coulomb or Stribeck). A belt change while stuck keeps
+    the velocity: the block slides the way v_rel points (stays stuck if v_rel is 0)."""
     if not (np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be finite and > 0, got {t_end}")
     n = ch.n
     K, C = ch.matrices()
-    m, Fb0, mukN0 = ch.m, ch.Fb, ch.mu_k * ch.N
+    m, Fb0 = ch.m, ch.Fb
     mu_b = np.maximum(ch.mu_s, ch.mu_k)
+    changes = sorted((float(tc), np.asarray(vc, dtype=float)) for tc, vc in belt_changes)
+    for tc, vc in changes:
+        if vc.shape != (n,) or not np.all(np.isfinite(vc)) or not (0.0 < tc):
+            raise ValueError(f"a belt change needs a time > 0 and {n} finite speeds, not ({tc}, {vc})")
+
+    def belt(t: float) -> np.ndarray:
+        vb = np.zeros(n) if ch.v_belt is None else ch.v_belt
+        for tc, vc in changes:
+            if t >= tc:
+                vb = vc
+        return vb
+
+    def normal(t: float) -> np.ndarray:
+        return ch.N if N_ext_t is None else np.maximum(ch.N + np.asarray(N_ext_t(t), dtype=float), 0.0)
 
     def limits(t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Breakaway limits and kinetic magnitudes at t."""
-        if N_ext_t is None:
-            return Fb0, mukN0
-        N = np.maximum(ch.N + np.asarray(N_ext_t(t), dtype=float), 0.0)
-        return mu_b * N, ch.mu_k * N
+        """Breakaway limits and the kinetic magnitudes at rest relative to the belt (mu(0) N) at t."""
+        if N_ext_t is None and ch.law == "coulomb":
+            return Fb0, ch.mu_k * ch.N
+        N = normal(t)
+        return mu_b * N, ch.mu(np.zeros(n)) * N
 
     Fb, mukN = limits(0.0)
     u = np.zeros(n) if ch.F_ext is None else ch.F_ext
@@ -212,27 +288,29 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
     max_step = 2.0 * np.pi / w_max / steps_per_period
     sol = ChainSolution(ch)
     t = 0.0
+    vb = belt(0.0)
     x, v = ch.x0.astype(float).copy(), ch.v0.astype(float).copy()
     acc = np.zeros(3)
-    modes = np.where(fric & (v == 0.0), 0, np.sign(v)).astype(int)
+    modes = np.where(fric & (v == vb), 0, np.sign(v - vb)).astype(int)
     S0 = net(0.0, x, v)
-    for i in np.flatnonzero(fric & (v == 0.0)):
+    for i in np.flatnonzero(fric & (v == vb)):
         modes[i] = 0 if abs(S0[i]) <= Fb[i] else int(np.sign(S0[i]))
 
     def settle(t: float, x: np.ndarray, v: np.ndarray, modes: np.ndarray) -> None:
         """Make the mode set consistent at t: stops and breakaways due now (one block at a time)."""
         Fb, mukN = limits(t)
+        vb = belt(t)
         for _ in range(4 * n + 4):
             S = net(t, x, v)
             changed = False
             for i in np.flatnonzero(fric):
                 s = modes[i]
-                if s != 0 and s * v[i] < 0.0:
-                    v[i] = 0.0
+                if s != 0 and s * (v[i] - vb[i]) < 0.0:
+                    v[i] = vb[i]
                 tol = 1e-12 * (abs(S[i]) + mukN[i])
-                if s != 0 and v[i] == 0.0 and s * (S[i] - s * mukN[i]) < -tol:
-                    # at rest and decelerating (not a breakaway at chi >= 1, which starts with zero
-                    # acceleration): the rest rule decides
+                if s != 0 and v[i] == vb[i] and s * (S[i] - s * mukN[i]) < -tol:
+                    # at rest on the belt and decelerating (not a breakaway at chi >= 1, which
+                    # starts with zero acceleration): the rest rule decides
                     new = 0 if abs(S[i]) <= Fb[i] else int(np.sign(S[i]))
                 elif s == 0 and abs(S[i]) > Fb[i]:
                     new = int(np.sign(S[i]))
@@ -251,18 +329,20 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
     for _ in range(max_events):
         stuck = fric & (modes == 0)
         free = ~stuck
-        Ff = np.where(fric, -modes * mukN, 0.0)
+        vb = belt(t)
+        t_stop = min([tc for tc, _ in changes if tc > t] + [t_end])
         fmodes = np.where(fric, -modes, 0).astype(float)
 
-        def rhs(tt: float, y: np.ndarray, free: np.ndarray = free,
-                Ff: np.ndarray = Ff, fmodes: np.ndarray = fmodes) -> np.ndarray:
+        def rhs(tt: float, y: np.ndarray, free: np.ndarray = free, stuck: np.ndarray = stuck,
+                fmodes: np.ndarray = fmodes, vb: np.ndarray = vb) -> np.ndarray:
             xx, vv = y[:n], y[n:2 * n]
-            if N_ext_t is not None:
-                Ff = fmodes * limits(tt)[1]
+            N = normal(tt)
+            Ff = fmodes * ch.mu(np.abs(vv - vb)) * N
             P = applied(tt)
-            a = np.where(free, (P - K @ xx - C @ vv + Ff) / m, 0.0)
-            vd = np.where(free, vv, 0.0)
-            Fs = np.where(free, Ff, 0.0)
+            Sn = P - K @ xx - C @ vv
+            a = np.where(free, (Sn + Ff) / m, 0.0)
+            vd = np.where(free, vv, vb)
+            Fs = np.where(free, Ff, -Sn)  # a stuck block's friction holds it on its belt
             return np.concatenate([vd, a, [P @ vd, Fs @ vd, vd @ C @ vd]])
 
         events: list[Callable[..., float]] = []
@@ -273,7 +353,7 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
                 # a grazing restart (|S| at the limit, a stop found at once and no mode change):
                 # the next stop must go below a velocity margin of rounding size
                 dv = 1e-12 * (1.0 + float(np.max(np.abs(v)))) if int(i) in grace else 0.0
-                ev = (lambda tt, y, i=i, s=s, dv=dv: s * y[n + i] + dv)
+                ev = (lambda tt, y, i=i, s=s, dv=dv, vbi=float(vb[i]): s * (y[n + i] - vbi) + dv)
                 ev.terminal, ev.direction = True, -1  # type: ignore[attr-defined]
                 events.append(ev)
                 owners.append(int(i))
@@ -287,7 +367,7 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
         y0 = np.concatenate([x, v, acc])
         # the event functions of stuck blocks move with the forcing even when nothing else does:
         # steps no longer than a fraction of the shortest time scale, so no crossing hides in a step
-        r = solve_ivp(rhs, (t, t_end), y0, method="DOP853", rtol=rtol, atol=atol,
+        r = solve_ivp(rhs, (t, t_stop), y0, method="DOP853", rtol=rtol, atol=atol,
                       events=events or None, dense_output=True, max_step=max_step)
         if r.status < 0:
             raise RuntimeError(f"reference integration failed at t = {t}: {r.message}")
@@ -295,25 +375,43 @@ def solve_chain(ch: Chain, t_end: float, rtol: float = 1e-12, atol: float = 1e-1
         sol.phases.append(_Phase(t, t1, modes.copy(), r.sol, y0))
         y1 = r.y[:, -1]
         x, v, acc = y1[:n].copy(), y1[n:2 * n].copy(), y1[2 * n:].copy()
-        v[stuck] = 0.0
-        if r.status == 0 or t1 >= t_end:
+        v[stuck] = vb[stuck]
+        if t1 >= t_end:
             return sol
-        fired = [j for j, te in enumerate(r.t_events) if te.size and te[-1] == t1]
         Fb, mukN = limits(t1)
         n_events = len(sol.events)
-        grazing = [owners[j] for j in fired if modes[owners[j]] != 0]
-        for j in fired:
-            i = owners[j]
-            if modes[i] != 0:
-                v[i] = 0.0
-                S = net(t1, x, v)
-                new = 0 if abs(S[i]) <= Fb[i] else int(np.sign(S[i]))
-            else:
-                S = net(t1, x, v)
-                new = int(np.sign(S[i])) if S[i] != 0 else int(modes[i])
-            if new != modes[i]:
-                sol.events.append((t1, i, int(modes[i]), new))
-                modes[i] = new
+        grazing: list[int] = []
+        if any(tc == t1 for tc, _ in changes):
+            # a belt change at t1: stuck blocks keep their velocity and slide the way v_rel points,
+            # sliding ones take the sign of their new v_rel (the rest rule when it is 0)
+            vb1 = belt(t1)
+            S = net(t1, x, v)
+            for i in np.flatnonzero(fric):
+                vr = v[i] - vb1[i]
+                if vr != 0.0:
+                    new = int(np.sign(vr))
+                elif modes[i] == 0:
+                    continue
+                else:
+                    new = 0 if abs(S[i]) <= Fb[i] else int(np.sign(S[i]))
+                if new != modes[i]:
+                    sol.events.append((t1, int(i), int(modes[i]), new))
+                    modes[i] = new
+        if r.status == 1:
+            fired = [j for j, te in enumerate(r.t_events) if te.size and te[-1] == t1]
+            grazing = [owners[j] for j in fired if modes[owners[j]] != 0]
+            for j in fired:
+                i = owners[j]
+                if modes[i] != 0:
+                    v[i] = vb[i]
+                    S = net(t1, x, v)
+                    new = 0 if abs(S[i]) <= Fb[i] else int(np.sign(S[i]))
+                else:
+                    S = net(t1, x, v)
+                    new = int(np.sign(S[i])) if S[i] != 0 else int(modes[i])
+                if new != modes[i]:
+                    sol.events.append((t1, i, int(modes[i]), new))
+                    modes[i] = new
         settle(t1, x, v, modes)
         stalled = len(sol.events) == n_events and t1 <= t + 1e-12 * (1.0 + abs(t))
         grace = set(grazing) if stalled else set()

@@ -107,7 +107,9 @@ static const double *arr(const cset *p, int slot)
     }
 }
 
-static const unsigned ARRAY_VR[DFO_NUM_AP] = {VR_m, VR_k, VR_c, VR_P0, VR_phi, VR_N, VR_mu_s, VR_chi, VR_x0, VR_v0};
+/* the arrays the harness sets (the others keep their start values) */
+enum { N_ARRAYS_SET = 10 };
+static const unsigned ARRAY_VR[N_ARRAYS_SET] = {VR_m, VR_k, VR_c, VR_P0, VR_phi, VR_N, VR_mu_s, VR_chi, VR_x0, VR_v0};
 static const unsigned SCALAR_VR[5] = {VR_k_end, VR_c_end, VR_omega, VR_h, VR_alpha};
 
 /* ---- FMI 2.0 ------------------------------------------------------------------------------- */
@@ -117,7 +119,7 @@ static fmi2ValueReference elem(unsigned base, size_t i) { return (fmi2ValueRefer
 
 static int set_params2(const fmi2_api *a, fmi2Component c, const cset *p)
 {
-    for (int j = 0; j < DFO_NUM_AP; j++)
+    for (int j = 0; j < N_ARRAYS_SET; j++)
         for (size_t b = 0; b < p->n; b++) {
             const fmi2ValueReference vr = elem(ARRAY_VR[j], b);
             if (a->set_real(c, &vr, 1, &arr(p, j)[b]) != fmi2OK) return 0;
@@ -185,7 +187,7 @@ static int set_params3(const fmi3_api *a, fmi3Instance c, const cset *p)
     const fmi3UInt64 n = p->n;
     if (a->enter_config(c) != fmi3OK || a->set_uint64(c, &vn, 1, &n, 1) != fmi3OK || a->exit_config(c) != fmi3OK)
         return 0;
-    for (int j = 0; j < DFO_NUM_AP; j++) {
+    for (int j = 0; j < N_ARRAYS_SET; j++) {
         const fmi3ValueReference vr = ARRAY_VR[j];
         if (a->set_float64(c, &vr, 1, arr(p, j), p->n) != fmi3OK) return 0;
     }

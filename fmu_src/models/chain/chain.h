@@ -2,6 +2,7 @@
  * scheme of the oscillator with the friction posed as the 2n LCP of the chain.
  *
  *     wall -k[0],c[0]- m[0] -k[1],c[1]- m[1] - ... - m[n-1] -k_end,c_end- wall
+ *     (and each block i tied to the ground by k_site[i], c_site[i], 0 unless set)
  *     M x'' + C x' + K x = P(t) + F_ext + F,     P_i = P0_i cos(omega t + phi_i),
  *     F_i Coulomb on block i: |F_i| <= max(mu_s_i, mu_k_i) N_i stuck, -/+ mu_k_i N_i sliding,
  *     mu_k_i = chi_i mu_s_i, N_i = max(N_i + N_ext_i, 0).
@@ -43,6 +44,9 @@ typedef struct {
     double k_end, c_end, omega, h, alpha;
     int scheme;  /* dfo_scheme: 1 paper, 2 consistent, 3 located */
     int account_energy;  /* keep the energy accounts of chain_state (costs O(n) per step) */
+    /* springs and dampers from each block to the ground frame (NULL: none; the Burridge-Knopoff
+     * model's site springs), added to K's and C's diagonals */
+    const double *k_site, *c_site;
 } chain_params;
 
 /* Inputs held over a communication step: arrays of length n, or NULL when never set. */
@@ -136,6 +140,22 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
  * location) takes the inputs at its end; the fast paths do not apply. */
 chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, chain_state *s,
                                   double t_target, int stop_at_switch, chain_switch_fn on_switch, void *ctx);
+/* Belts: block i's friction acts on v_i - vb[i] (vb: n speeds held from ramp->t_ref, or s->t without a
+ * ramp; NULL: chain_advance_ramped itself). Stuck means v_i = vb[i]: the block rides its belt while
+ * the force that holds it is within its limit. Stepped in the frame y = x - vb (t - t_ref) (the
+ * ramp machinery: no fast paths), x and v given back. The energy accounts are the moving frame's. */
+chain_status chain_advance_belt(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
+                                chain_state *s, double t_target, int stop_at_switch, chain_switch_fn on_switch,
+                                void *ctx);
+/* chain_start with belts vb (NULL: chain_start): a block with friction and v0 = vb starts stuck while
+ * its net force is within its limit. */
+void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, double t0, chain_state *s);
+/* Belt speeds changed at s->t (NULL: 0): a stuck block keeps its velocity and slides the way
+ * v - vb_new points; a sliding block whose v - vb_new changed sign slides that way, one that the new
+ * belt meets (v = vb_new) takes the rest rule; the new mode set restarts consistently. Switches are
+ * reported through on_switch. Inputs in: the current ones. */
+void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old, const double *vb_new, chain_state *s,
+                    chain_switch_fn on_switch, void *ctx);
 /* Input k (0 F_ext, 1 N_ext) of block i at time t under the ramp (NULL: held), and its rate. */
 void chain_ramp_value(const chain_inputs *in, const chain_ramp *ramp, int k, size_t i, double t, double *value,
                       double *rate);

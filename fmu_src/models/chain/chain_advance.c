@@ -419,3 +419,115 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
             return CHAIN_ERR_NONFINITE;
     return CHAIN_OK;
 }
+
+/* ---- belts (chain.h: chain_advance_belt) ------------------------------------------------------
+ * With the belt speeds vb held from t_ref, y = x - vb (t - t_ref) obeys the chain's equation with
+ * friction on y' = v - vb and the external force F_ext - C vb - K vb (t - t_ref): a ramp of rate
+ * -K vb (chain_advance_ramped, exact for a linear input), stuck meaning y' = 0. The state is moved
+ * into y before and back after; the net forces, hence A and F, are the same in both. */
+
+typedef struct {
+    chain_switch_fn fn;
+    void *ctx;
+    const double *vb;
+    double t_ref;
+} belt_switch;
+
+static void belt_on_switch(void *ctx, double t, size_t block, double x, int from, int to)
+{
+    const belt_switch *b = (const belt_switch *)ctx;
+    if (b->fn) b->fn(b->ctx, t, block, x + b->vb[block] * (t - b->t_ref), from, to);
+}
+
+/* The inputs and ramp of the moving frame into M's belt workspace (bF, bD). */
+static void belt_frame(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
+                       chain_inputs *bin, chain_ramp *bramp)
+{
+    const size_t n = M->n;
+    for (size_t i = 0; i < n; i++) {
+        const double Cvb = M->damped ? chain_Cv(M, vb, i) : 0.0;
+        M->bF[i] = (in->F_ext ? in->F_ext[i] : 0.0) - Cvb;
+        M->bD[i] = (ramp && ramp->dF_ext[0] ? ramp->dF_ext[0][i] : 0.0) - chain_Kx(M, vb, i);
+    }
+    bin->F_ext = M->bF;
+    bin->N_ext = in->N_ext;
+    if (ramp) *bramp = *ramp;
+    else {
+        bramp->dF_ext[1] = bramp->dN_ext[0] = bramp->dN_ext[1] = NULL;
+    }
+    bramp->dF_ext[0] = M->bD;
+}
+
+static void belt_shift(const chain_model *M, chain_state *s, const double *vb, double t_ref, double sign)
+{
+    for (size_t i = 0; i < M->n; i++) {
+        s->X[i] += sign * (vb[i] * (s->t - t_ref));
+        s->V[i] += sign * vb[i];
+    }
+}
+
+chain_status chain_advance_belt(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
+                                chain_state *s, double t_target, int stop_at_switch, chain_switch_fn on_switch,
+                                void *ctx)
+{
+    if (!vb) return chain_advance_ramped(M, in, ramp, s, t_target, stop_at_switch, on_switch, ctx);
+    chain_inputs bin;
+    chain_ramp bramp;
+    belt_frame(M, in, ramp, vb, &bin, &bramp);
+    bramp.t_ref = ramp ? ramp->t_ref : s->t;
+    belt_switch bs = {on_switch, ctx, vb, bramp.t_ref};
+    belt_shift(M, s, vb, bramp.t_ref, -1.0);
+    const chain_status st = chain_advance_ramped(M, &bin, &bramp, s, t_target, stop_at_switch, belt_on_switch, &bs);
+    belt_shift(M, s, vb, bramp.t_ref, 1.0);
+    return st;
+}
+
+void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, double t0, chain_state *s)
+{
+    if (!vb) { chain_start(M, in, t0, s); return; }
+    chain_inputs bin;
+    chain_ramp bramp;
+    belt_frame(M, in, NULL, vb, &bin, &bramp);
+    /* the start in the moving frame: v0 - vb (M's v0 restored after) */
+    for (size_t i = 0; i < M->n; i++) M->v0[i] -= vb[i];
+    chain_start(M, &bin, t0, s);
+    for (size_t i = 0; i < M->n; i++) {
+        M->v0[i] += vb[i];
+        s->V[i] += vb[i];
+    }
+    /* (the stuck blocks' rest, V - vb = 0 exactly: V = vb) */
+    for (size_t i = 0; i < M->n; i++)
+        if (s->mode[i] == 0 && chain_has_friction(M, i)) s->V[i] = vb[i];
+}
+
+void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old, const double *vb_new, chain_state *s,
+                    chain_switch_fn on_switch, void *ctx)
+{
+    const size_t n = M->n;
+    chain_loads_init(M, in);
+    int changed = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!chain_has_friction(M, i)) continue;
+        const double vo = vb_old ? vb_old[i] : 0.0, vn = vb_new ? vb_new[i] : 0.0;
+        if (vo == vn) continue;
+        const double vr = s->V[i] - vn;
+        const int from = s->mode[i];
+        int to = chain_sgn(vr);
+        if (vr == 0.0 && from != 0) {
+            /* a slide that the new belt meets: the rest rule */
+            const span G = chain_whole(M, s);
+            chain_net_forces(M, s, &G, M->S);
+            to = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
+        }
+        if (to == from) continue;
+        s->mode[i] = to;
+        if (to == 0) s->t_stick[i] = s->t;
+        chain_report(M, s, i, from, on_switch, ctx);
+        changed = 1;
+    }
+    if (!changed) return;
+    /* the consistent restart of the new mode set in the moving frame (net forces are the same) */
+    const span G = chain_whole(M, s);
+    chain_restart(M, s, &G);
+    M->jerk_valid = 0;
+}

@@ -135,8 +135,9 @@ static double damping_power(const chain_model *M, const double *v)
     double D = 0.0;
     for (size_t i = 0; i < M->n; i++) {
         const double dv = v[i] - (i > 0 ? v[i - 1] : 0.0);
-        const double cl = M->Cd[i] + ((i + 1 < M->n) ? M->Co[i] : -M->c_end);
+        const double cl = (M->Cd[i] - M->cs[i]) + ((i + 1 < M->n) ? M->Co[i] : -M->c_end);
         D += cl * dv * dv;
+        if (M->cs[i] != 0.0) D += M->cs[i] * v[i] * v[i];
     }
     return D + M->c_end * v[M->n - 1] * v[M->n - 1];
 }

@@ -39,6 +39,9 @@ dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn
         if (r.var->home != DFO_IN_INPUTS || r.var->type != DFO_REAL)
             return dfo_inst_fail(lc, "%s: %s (value reference %u) is not a real input: derivatives can be set for the "
                                  "inputs F_ext and N_ext only.", fn, r.name, vr[j]);
+        if (r.var->slot == DFO_AI_v_belt)
+            return dfo_inst_fail(lc, "%s: v_belt (value reference %u) takes no derivatives: the belt speeds are "
+                                 "held over a communication step (derivatives: F_ext and N_ext only).", fn, vr[j]);
         if (order[j] < 1 || order[j] > 2)
             return dfo_inst_fail(lc, "%s: order %d of the derivative of %s (value reference %u) is out of range "
                                  "(valid: 1 ... 2).", fn, order[j], r.name, vr[j]);

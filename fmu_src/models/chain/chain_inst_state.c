@@ -116,7 +116,8 @@ dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **st
 /* ---- serialisation (core/fmu_state.h's format): fixed-size little-endian fields, the same bytes on
  * every platform: n, n_config, the scalar parameters, the input flags, the pending event's block,
  * the arrays, the input derivatives and the last switch, the state, then the run. The chain's
- * fields of format version 4 (a body without the input derivatives) are refused by their size. ---- */
+ * fields of format version 4 (a body without the input derivatives, or one without the site arrays
+ * k_site, c_site) are refused by their size. ---- */
 
 static size_t body_size(size_t n)
 {

@@ -45,14 +45,27 @@ static dfo_inst_status step_failed(chain_instance *in, const char *fn, chain_sta
 
 /* Inputs set since the last step: the state takes their jump at the step's start (chain_new_inputs;
  * with derivatives, ramp, the new inputs at the state's time). */
-static void take_inputs(chain_values *v, const chain_ramp *ramp)
+static void take_inputs(chain_values *v, const chain_ramp *ramp, chain_switch_fn fn, void *ctx)
 {
     if (!memcmp(v->u_set, v->u_set_used, sizeof v->u_set) &&
         !memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double)))
         return;
     const chain_inputs old_in = chain_inst_inputs_of(v, 1), new_in = chain_inst_inputs_of(v, 0);
     chain_new_inputs_ramped(v->M, &old_in, &new_in, (ramp && ramp->dF_ext[0]) ? ramp : NULL, &v->s);
+    const double *vb_old = chain_inst_belt_of(v, 1), *vb_new = chain_inst_belt_of(v, 0);
+    if (vb_old || vb_new) chain_new_belt(v->M, &new_in, vb_old, vb_new, &v->s, fn, ctx);
     v->acc_valid = 0;
+}
+
+/* A moving belt under the paper scheme: refused (its stuck blocks creep with Bossak's acceleration,
+ * which the belt's moving frame does not carry over); 1 when refused. */
+static int belt_refused(chain_instance *in, const char *fn)
+{
+    chain_values *v = &in->v;
+    if (!chain_inst_belt_of(v, 0) || (int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER) return 0;
+    (void)dfo_inst_fail(&in->lc, "%s: v_belt is set but the paper scheme has no moving belt (its stuck blocks creep "
+                        "with Bossak's acceleration); use scheme consistent or located.", fn);
+    return 1;
 }
 
 /* The step from t_ref ends at the host's time t: the inputs with derivatives take their values at
@@ -79,14 +92,16 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     double t_target = 0.0;
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, chain_inst_step_h(v), &t_target);
     if (chk != DFO_INST_OK) return chk;
+    if (belt_refused(in, fn)) return DFO_INST_ERROR;
     chain_state_copy(&v->s0, &v->s);
     chain_ramp ramp = chain_inst_ramp_of(v);
     ramp.t_ref = in->lc.run.time; /* the polynomials are in the host's time (as the oscillator's) */
-    take_inputs(v, &ramp);
-    const chain_inputs ci = chain_inst_inputs_of(v, 0);
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
+    take_inputs(v, &ramp, on_switch, &rec);
+    const chain_inputs ci = chain_inst_inputs_of(v, 0);
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
-    const chain_status st = chain_advance_ramped(v->M, &ci, &ramp, &v->s, t_target, stop, on_switch, &rec);
+    const chain_status st = chain_advance_belt(v->M, &ci, &ramp, chain_inst_belt_of(v, 0), &v->s, t_target, stop,
+                                               on_switch, &rec);
     if (st != CHAIN_OK && st != CHAIN_SWITCHED) return step_failed(in, fn, st);
     const double snap = dfo_snap(chain_inst_step_h(v), t_target);
     in->lc.switched = rec.count > 0;
@@ -103,12 +118,12 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
  * early return and no callback); one on the communication point is an event there. */
 /* An input point inside the step (opt->input_points): the inputs the host set there hold from the
  * state's time on (their jump taken as at a step's start); derivatives, if any, end there. */
-static void point_inputs(chain_values *v)
+static void point_inputs(chain_values *v, switch_rec *rec)
 {
     const int changed = memcmp(v->u_set, v->u_set_used, sizeof v->u_set) ||
                         memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     if (!changed) return;
-    take_inputs(v, NULL);
+    take_inputs(v, NULL, on_switch, rec);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     memset(v->ud, 0, 2 * (size_t)DFO_NUM_AI * v->n * sizeof(double));
@@ -123,11 +138,13 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     dfo_inst_status done;
     double t_target = 0.0;
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, chain_inst_step_h(v), opt, res, &done, &t_target)) return done;
+    if (belt_refused(in, fn)) return DFO_INST_ERROR;
     chain_state_copy(&v->s0, &v->s);
     const double t_start = in->lc.run.time;
     chain_ramp ramp = chain_inst_ramp_of(v);
     ramp.t_ref = t_start;
-    take_inputs(v, &ramp);
+    switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
+    take_inputs(v, &ramp, on_switch, &rec);
     chain_inputs ci = chain_inst_inputs_of(v, 0);
     const double t_ref = ramp.t_ref, h = chain_inst_step_h(v);
     const double snap = dfo_snap(h, t_target);
@@ -137,7 +154,6 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
         memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     }
-    switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     int at_end = 0;
     for (;;) {
         const int before = rec.count;
@@ -146,7 +162,8 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
             const double g = v->s.t0 + (double)(v->s.n_grid + 1) * h;
             if (g < t_target - snap) t_call = g;
         }
-        const chain_status st = chain_advance_ramped(v->M, &ci, &ramp, &v->s, t_call, 1, on_switch, &rec);
+        const chain_status st = chain_advance_belt(v->M, &ci, &ramp, chain_inst_belt_of(v, 0), &v->s, t_call, 1,
+                                                   on_switch, &rec);
         if (st != CHAIN_OK && st != CHAIN_SWITCHED) {
             in->lc.run.time = t_start;
             return step_failed(in, fn, st);
@@ -157,7 +174,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
             in->lc.run.time = v->s.t;
             v->acc_valid = 0;
             stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
-            point_inputs(v); /* (also before an early return there: the inputs hold from t on) */
+            point_inputs(v, &rec); /* (also before an early return there: the inputs hold from t on) */
             if (!stop) {
                 ci = chain_inst_inputs_of(v, 0);
                 ramp = chain_inst_ramp_of(v);
@@ -180,7 +197,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
              * point too */
             if (!stop && points && v->s.t == t_call && t_call != t_target) {
                 stop = opt->intermediate(opt->ctx, v->s.t, opt->early_return, 1) && opt->early_return;
-                point_inputs(v);
+                point_inputs(v, &rec);
                 if (!stop) {
                     ci = chain_inst_inputs_of(v, 0);
                     ramp = chain_inst_ramp_of(v);

@@ -158,6 +158,8 @@ chain_params chain_inst_params_of(const chain_values *v)
     p.chi = pa + (size_t)DFO_AP_chi * n;
     p.x0 = pa + (size_t)DFO_AP_x0 * n;
     p.v0 = pa + (size_t)DFO_AP_v0 * n;
+    p.k_site = pa + (size_t)DFO_AP_k_site * n;
+    p.c_site = pa + (size_t)DFO_AP_c_site * n;
     p.k_end = v->sp[DFO_SP_k_end];
     p.c_end = v->sp[DFO_SP_c_end];
     p.omega = v->sp[DFO_SP_omega];
@@ -184,6 +186,17 @@ chain_inputs chain_inst_inputs_of(const chain_values *v, int used)
     ci.F_ext = set[DFO_AI_F_ext] ? u + (size_t)DFO_AI_F_ext * v->n : NULL;
     ci.N_ext = set[DFO_AI_N_ext] ? u + (size_t)DFO_AI_N_ext * v->n : NULL;
     return ci;
+}
+
+const double *chain_inst_belt_of(const chain_values *v, int used)
+{
+    const double *u = used ? v->ua_used : v->ua;
+    const int *set = used ? v->u_set_used : v->u_set;
+    if (!set[DFO_AI_v_belt]) return NULL;
+    const double *vb = u + (size_t)DFO_AI_v_belt * v->n;
+    for (size_t i = 0; i < v->n; i++)
+        if (vb[i] != 0.0) return vb;
+    return NULL; /* belts at rest: the fixed support's path and bits */
 }
 
 chain_ramp chain_inst_ramp_of(const chain_values *v)
@@ -225,13 +238,16 @@ const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)
     const chain_params p = chain_inst_params_of(v);
     const char *msg = chain_check_params(&p, buf, len);
     if (msg) return msg;
+    if (chain_inst_belt_of(v, 0) && p.scheme == DFO_SCHEME_PAPER)
+        return "v_belt is set but the paper scheme has no moving belt (its stuck blocks creep with Bossak's "
+               "acceleration); use scheme consistent or located";
     chain_inst_free_model(v);
     const chain_alloc al = chain_inst_allocator(in);
     const char *err = NULL;
     v->M = chain_create(&p, &al, &err);
     if (!v->M) return err ? err : "out of memory";
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
-    chain_start(v->M, &ci, in->lc.run.start_time, &v->s);
+    chain_start_belt(v->M, &ci, chain_inst_belt_of(v, 0), in->lc.run.start_time, &v->s);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
     in->lc.run.time = in->lc.run.start_time;

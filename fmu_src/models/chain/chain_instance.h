@@ -77,6 +77,8 @@ chain_params chain_inst_params_of(const chain_values *v);
 double chain_inst_step_h(const chain_values *v);
 /* The inputs now (used: those of the last step); an input never set is NULL (never read). */
 chain_inputs chain_inst_inputs_of(const chain_values *v, int used);
+/* The belt speeds v_belt (the ones used, or the current ones): NULL when never set or all 0. */
+const double *chain_inst_belt_of(const chain_values *v, int used);
 /* The input derivatives of the next step (NULL arrays when none is set; t_ref: the state's time,
  * which the steps replace by the host's). */
 chain_ramp chain_inst_ramp_of(const chain_values *v);

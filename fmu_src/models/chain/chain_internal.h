@@ -85,6 +85,8 @@ struct chain_model {
     double *mu_k, *mu_b;        /* kinetic coefficient chi mu_s, breakaway coefficient max(mu_s, mu_k) */
     double *x0, *v0;            /* initial state */
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 (0 on the last) */
+    double *ks, *cs;            /* k_site, c_site: the parts of Kd[i], Cd[i] tying block i to the ground */
+    double *bF, *bD;            /* belts (chain_advance_belt): the moving frame's F_ext and its rate */
     double *dF, *eF;            /* M_hat of a whole grid step: diagonal, off-diagonal */
     fast_row *rows;             /* per block, for the fused grid step */
     /* per block: the loads of the current inputs (chain_loads_init) */

@@ -33,6 +33,10 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len)
         if (!(p->chi[i] >= 0.0 && isfinite(p->chi[i]))) return bad(buf, len, "chi", i, p->chi[i], ">= 0, finite");
         if (!isfinite(p->x0[i])) return bad(buf, len, "x0", i, p->x0[i], "finite");
         if (!isfinite(p->v0[i])) return bad(buf, len, "v0", i, p->v0[i], "finite");
+        if (p->k_site && !(p->k_site[i] >= 0.0 && isfinite(p->k_site[i])))
+            return bad(buf, len, "k_site", i, p->k_site[i], ">= 0, finite");
+        if (p->c_site && !(p->c_site[i] >= 0.0 && isfinite(p->c_site[i])))
+            return bad(buf, len, "c_site", i, p->c_site[i], ">= 0, finite");
     }
     if (!(p->k_end >= 0.0 && isfinite(p->k_end))) return bad_scalar(buf, len, "k_end", p->k_end, ">= 0, finite");
     if (!(p->c_end >= 0.0 && isfinite(p->c_end))) return bad_scalar(buf, len, "c_end", p->c_end, ">= 0, finite");
@@ -57,7 +61,8 @@ static void gershgorin(const chain_params *p, double *kmax, double *cmax)
     for (size_t i = 0; i < n; i++) {
         const double kr = (i + 1 < n) ? p->k[i + 1] : p->k_end, cr = (i + 1 < n) ? p->c[i + 1] : p->c_end;
         const double kl = (i > 0) ? p->k[i] : 0.0, cl = (i > 0) ? p->c[i] : 0.0;
-        const double kd = p->k[i] + kr, cd = p->c[i] + cr;
+        const double kd = p->k[i] + kr + (p->k_site ? p->k_site[i] : 0.0);
+        const double cd = p->c[i] + cr + (p->c_site ? p->c_site[i] : 0.0);
         *kmax = fmax(*kmax, (n == 1 ? kd : kd + kl + ((i + 1 < n) ? kr : 0.0)) / p->m[i]);
         *cmax = fmax(*cmax, (n == 1 ? cd : cd + cl + ((i + 1 < n) ? cr : 0.0)) / p->m[i]);
     }
@@ -81,9 +86,9 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (39 of them, the last, box, 2n long), one for
+    /* one block of doubles for all per-block arrays (43 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 39 };
+    enum { NARR = 43 };
     double *blk = dalloc(al, (NARR + 1) * n);
     int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
@@ -101,7 +106,7 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
                           &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->q,  &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs, &M->bF, &M->bD, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
@@ -140,6 +145,11 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         M->v0[i] = p->v0[i];
         M->Kd[i] = p->k[i] + kr;
         M->Cd[i] = p->c[i] + cr;
+        /* site springs and dampers only when set (else today's bits: no + 0.0) */
+        M->ks[i] = p->k_site ? p->k_site[i] : 0.0;
+        if (M->ks[i] != 0.0) M->Kd[i] += M->ks[i];
+        M->cs[i] = p->c_site ? p->c_site[i] : 0.0;
+        if (M->cs[i] != 0.0) { M->Cd[i] += M->cs[i]; M->damped = 1; }
         M->Ko[i] = (i + 1 < n) ? -kr : 0.0;
         M->Co[i] = (i + 1 < n) ? -cr : 0.0;
         if (p->c[i] != 0.0) M->damped = 1;
@@ -234,8 +244,9 @@ double chain_energy(const chain_model *M, const chain_state *s)
     double E = 0.0;
     for (size_t i = 0; i < M->n; i++) {
         const double ext = s->X[i] - (i > 0 ? s->X[i - 1] : 0.0);
-        const double kl = M->Kd[i] + ((i + 1 < M->n) ? M->Ko[i] : -M->k_end);
+        const double kl = (M->Kd[i] - M->ks[i]) + ((i + 1 < M->n) ? M->Ko[i] : -M->k_end);
         E += 0.5 * M->m[i] * s->V[i] * s->V[i] + 0.5 * kl * ext * ext;
+        if (M->ks[i] != 0.0) E += 0.5 * M->ks[i] * s->X[i] * s->X[i];
     }
     E += 0.5 * M->k_end * s->X[M->n - 1] * s->X[M->n - 1];
     return E;
