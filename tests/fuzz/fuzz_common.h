@@ -263,6 +263,7 @@ struct ctx {
     int silenced; /* error logging switched off by fmi2SetDebugLogging */
     double t;     /* the host's view of the time */
     int trace;    /* print the status of every call (fuzz_fmi.c: env FUZZ_TRACE set) */
+    double v_belt_stepped; /* fuzz_fmi.c: v_belt read after the last good doStep (a stuck block rides it) */
 };
 
 static inline void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
