@@ -27,10 +27,10 @@ import math
 from dataclasses import dataclass
 
 import mpmath as mp
+from mp_roots import first_stop, illinois as _illinois
 
 mp.mp.dps = 40
 CELLS = 64          # grid cells per excitation period and per damping time
-TOUCH = mp.mpf("1e-14")
 
 
 @dataclass
@@ -41,29 +41,6 @@ class Segment:
     x0: mp.mpf
     v0: mp.mpf
     F: mp.mpf          # F_ext held over the segment
-
-
-def _illinois(f, a, b, fa, fb, tol):
-    """A zero of f in [a, b] with fa > 0 >= fb (or the reverse)."""
-    side = 0
-    for _ in range(400):
-        c = (a * fb - b * fa) / (fb - fa)
-        if not (min(a, b) < c < max(a, b)):
-            c = (a + b) / 2
-        fc = f(c)
-        if fc == 0 or abs(b - a) <= tol:
-            return c
-        if (fc > 0) == (fa > 0):
-            a, fa = c, fc
-            if side == -1:
-                fb /= 2
-            side = -1
-        else:
-            b, fb = c, fc
-            if side == 1:
-                fa /= 2
-            side = 1
-    return (a + b) / 2
 
 
 class FreeReference:
@@ -155,34 +132,10 @@ class FreeReference:
     def _stop(self, s, ta, t_end, xa, va, F):
         """The first stop of the slide in (ta, t_end]: (time, touch?) or (None, False); 'null' when a
         slide from rest cannot start."""
-        x, v, a = self.slide(s, ta, xa, va, F)
-        g = lambda t: s * v(t)
-        ga = lambda t: s * a(t)
+        _, v, a = self.slide(s, ta, xa, va, F)
         h = self._cell()
-        t = ta
-        if va == 0:
-            eps = h * mp.mpf(10) ** -12
-            if not g(ta + eps) > 0:
-                return "null", False
-            t = ta + eps
         scale = abs(va) + abs(self.P0) / self.m / max(self.w, self.b, mp.mpf(10) ** -30) + abs(F - s * self.muk_N) / self.m * h
-        g0, a0 = g(t), ga(t)
-        tol = mp.mpf(10) ** -36 * (1 + abs(t_end))
-        while t < t_end:
-            t1 = min(t + h, t_end)
-            g1, a1 = g(t1), ga(t1)
-            scale = max(scale, abs(g1))
-            if g1 <= 0:
-                return _illinois(g, t, t1, g0, g1, tol), False
-            if a0 < 0 < a1:           # a local minimum of s v inside the cell
-                tm = _illinois(ga, t, t1, a0, a1, tol)
-                gm = g(tm)
-                if gm <= TOUCH * scale:
-                    if gm < -TOUCH * scale:
-                        return _illinois(g, t, tm, g0, gm, tol), False
-                    return tm, True
-            t, g0, a0 = t1, g1, a1
-        return None, False
+        return first_stop(v, a, s, ta, t_end, va, h, scale)
 
     def solve(self, t_end, schedule=None):
         """Segments up to t_end; schedule: [(t_i, F_i)], F_i held from t_i (t_0 = 0)."""

@@ -30,10 +30,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import mpmath as mp
+from mp_roots import first_stop, illinois as _illinois
 
 mp.mp.dps = 40
 CELLS = 128  # grid cells per excitation period, free period and decay time
-TOUCH = mp.mpf("1e-14")
 
 
 @dataclass
@@ -45,28 +45,6 @@ class Segment:
     v0: mp.mpf
     s: int     # the friction direction of the slide's closed form (0: stuck, or no friction)
     free: bool = False  # a piece without friction (one slide)
-
-
-def _illinois(f, a, b, fa, fb, tol):
-    side = 0
-    for _ in range(400):
-        c = (a * fb - b * fa) / (fb - fa)
-        if not (min(a, b) < c < max(a, b)):
-            c = (a + b) / 2
-        fc = f(c)
-        if fc == 0 or abs(b - a) <= tol:
-            return c
-        if (fc > 0) == (fa > 0):
-            a, fa = c, fc
-            if side == -1:
-                fb /= 2
-            side = -1
-        else:
-            b, fb = c, fc
-            if side == 1:
-                fa /= 2
-            side = 1
-    return (a + b) / 2
 
 
 class PolyReference:
@@ -214,34 +192,10 @@ class PolyReference:
 
     def _stop(self, s, ta, t_end, xa, va):
         """The first stop of the slide in (ta, t_end]: time, None, or 'null' (a slide from rest that cannot start)."""
-        x, v, a = self.slide(s, ta, xa, va)
-        g = lambda t: s * v(t)
-        ga = lambda t: s * a(t)
+        _, v, a = self.slide(s, ta, xa, va)
         h = self.cell
-        t = ta
-        if va == 0:
-            eps = h * mp.mpf(10) ** -12
-            if not g(ta + eps) > 0:
-                return "null"
-            t = ta + eps
-        scale = abs(va) + abs(self.P0 / self.m) * h + abs(ga(ta)) * h
-        g0, a0 = g(t), ga(t)
-        tol = mp.mpf(10) ** -36 * (1 + abs(t_end))
-        while t < t_end:
-            t1 = min(t + h, t_end)
-            g1, a1 = g(t1), ga(t1)
-            scale = max(scale, abs(g1))
-            if g1 <= 0:
-                return _illinois(g, t, t1, g0, g1, tol)
-            if a0 < 0 < a1:  # a local minimum of s v inside the cell
-                tm = _illinois(ga, t, t1, a0, a1, tol)
-                gm = g(tm)
-                if gm <= TOUCH * scale:
-                    if gm < -TOUCH * scale:
-                        return _illinois(g, t, tm, g0, gm, tol)
-                    return tm
-            t, g0, a0 = t1, g1, a1
-        return None
+        scale = abs(va) + abs(self.P0 / self.m) * h + abs(s * a(ta)) * h
+        return first_stop(v, a, s, ta, t_end, va, h, scale)[0]
 
     def _pieces(self, t_end):
         """The times 0 < ... < t_end cutting the run at the zeros of N + N_ext(t)."""

@@ -5,6 +5,7 @@
  * ends where one unbounded step would (a chained run at 1/20 of the work per call). */
 #define DFO_EXACT_MAX_EVENTS 20000LL
 #include "check.h"
+#include "osc_params.h"
 #include "exact.c"
 
 #include <stdio.h>
@@ -14,18 +15,8 @@ int main(void)
 {
     checks T0 = {0, 0, NULL, {0}};
     checks *T = &T0;
-    dfo_params p;
-    memset(&p, 0, sizeof p);
-    p.m = 1.0;
-    p.k = 1.0;
-    p.P0 = 1.0;
-    p.omega = 0.3;
+    dfo_params p = osc_test_params(DFO_SCHEME_EXACT, 1.0, 1.0, 0.0, 1.0, 0.3, 0.0, 0.0, 0.0);
     p.v0 = 1.0;
-    p.alpha = -0.1;
-    p.t_obs_stop = 1e300;
-    p.scheme = DFO_SCHEME_EXACT;
-    p.frictionUpdates = 1;
-    p.fastPaths = 1;
     dfo_model M;
     dfo_model_init(&M, &p);
     dfo_inputs in;

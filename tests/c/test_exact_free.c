@@ -14,6 +14,7 @@
  *    state; the same work in shorter steps succeeds. */
 #define DFO_EXACT_MAX_EVENTS 20000LL
 #include "check.h"
+#include "osc_params.h"
 #include "exact_free.c"
 
 #include <stdio.h>
@@ -21,22 +22,7 @@
 
 static dfo_params free_params(double c, double chi)
 {
-    dfo_params p;
-    memset(&p, 0, sizeof p);
-    p.m = 1.0;
-    p.k = 0.0;
-    p.c = c;
-    p.P0 = 1.0;
-    p.omega = 1.0;
-    p.N = 1.0;
-    p.mu_s = 0.4;
-    p.chi = chi;
-    p.alpha = -0.1;
-    p.t_obs_stop = 1e300;
-    p.scheme = DFO_SCHEME_EXACT;
-    p.frictionUpdates = 1;
-    p.fastPaths = 1;
-    return p;
+    return osc_test_params(DFO_SCHEME_EXACT, 1.0, 0.0, c, 1.0, 1.0, 1.0, 0.4, chi);
 }
 
 static void test_closed_form(checks *T)

@@ -23,6 +23,7 @@
  * ("point t x v mode events F A"), then "obs x_max x_min t_stuck E_friction transitions", all %.17g.
  * Bad input: one line on stderr and exit status 2. */
 #include "check.h"
+#include "osc_params.h"
 #include "exact.h"
 
 #include <math.h>
@@ -34,27 +35,7 @@ typedef struct {
     double F[3], N[3]; /* F_ext(t) = F[0] + F[1] t + F[2] t^2 / 2, N_ext(t) likewise */
 } inputs_poly;
 
-static dfo_params base_params(void)
-{
-    dfo_params p;
-    memset(&p, 0, sizeof p);
-    p.m = 1.0;
-    p.k = 1.0;
-    p.c = 0.05;
-    p.P0 = 1.0;
-    p.omega = 0.5;
-    p.N = 0.4;
-    p.mu_s = 1.0;
-    p.chi = 0.7;
-    p.x0 = 0.3;
-    p.v0 = 0.5;
-    p.alpha = -0.1;
-    p.t_obs_stop = 1e300;
-    p.scheme = DFO_SCHEME_EXACT;
-    p.frictionUpdates = 1;
-    p.fastPaths = 1;
-    return p;
-}
+static dfo_params base_params(void) { return osc_test_exact_base(); }
 
 /* The host's view at the communication point tc: the values at tc, the derivatives there. */
 static void host_inputs(const inputs_poly *g, double tc, dfo_inputs *in, dfo_input_poly *q)

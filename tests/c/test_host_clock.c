@@ -19,6 +19,7 @@
  * 3. An explicit off-grid point farther than the tolerance is honoured exactly, with a shortened
  *    step; one closer is the grid point. */
 #include "check.h"
+#include "osc_params.h"
 #include "newmark.h"
 #include "oscillator.h"
 
@@ -36,24 +37,8 @@ typedef struct {
 /* The FMU's defaults (modelDescription.xml): h = 1e-3, a mostly sliding motion with short stops. */
 static dfo_params default_model(int scheme)
 {
-    dfo_params p;
-    memset(&p, 0, sizeof p);
-    p.m = 1.0;
-    p.k = 100.0;
-    p.c = 0.0;
-    p.P0 = 1.0;
-    p.omega = 5.0;
-    p.phi = 0.0;
-    p.N = 1.0;
-    p.mu_s = 0.4;
-    p.chi = 0.7;
+    dfo_params p = osc_test_params(scheme, 1.0, 100.0, 0.0, 1.0, 5.0, 1.0, 0.4, 0.7);
     p.h = 0.001;
-    p.alpha = -0.1;
-    p.t_obs_start = 0.0;
-    p.t_obs_stop = 1e300;
-    p.scheme = scheme;
-    p.frictionUpdates = 1;
-    p.fastPaths = 1;
     return p;
 }
 

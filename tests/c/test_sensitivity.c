@@ -8,6 +8,7 @@
  * Prints the Jacobians' bits (%a): the same on every platform (the transition-matrix line's worst
  * error is not: its reference is long double, 80-bit on x86, 128-bit on aarch64). */
 #include "check.h"
+#include "osc_params.h"
 #include "exact.h"
 
 #include <math.h>
@@ -53,27 +54,7 @@ static double rel_diff(const double A[4], const double B[4], double w)
     return d / n;
 }
 
-static dfo_params base_params(void)
-{
-    dfo_params p;
-    memset(&p, 0, sizeof p);
-    p.m = 1.0;
-    p.k = 1.0;
-    p.c = 0.05;
-    p.P0 = 1.0;
-    p.omega = 0.5;
-    p.N = 0.4;
-    p.mu_s = 1.0;
-    p.chi = 0.7;
-    p.x0 = 0.3;
-    p.v0 = 0.5;
-    p.alpha = -0.1;
-    p.t_obs_stop = 1e300;
-    p.scheme = DFO_SCHEME_EXACT;
-    p.frictionUpdates = 1;
-    p.fastPaths = 1;
-    return p;
-}
+static dfo_params base_params(void) { return osc_test_exact_base(); }
 
 static void test_transition_matrix(checks *T)
 {
