@@ -99,7 +99,7 @@ def belt_json(res: Any) -> dict[str, Any]:
         "motion": res.motion, "reason": res.reason or None, "v_belt": pr.v_belt, "law": pr.law,
         "scheme": pr.scheme, "h": pr.step, "x_eq": eq.x_eq,
         "equilibrium": {"x_eq": eq.x_eq, "stable": eq.stable, "multipliers": [_cplx(m) for m in eq.multipliers],
-                        "slowest_multiplier": eq.mu_max, "tau": eq.tau, "growth_rate": _num(eq.growth_rate),
+                        "neutral": eq.neutral, "slowest_multiplier": eq.mu_max, "tau": eq.tau, "growth_rate": _num(eq.growth_rate),
                         "jacobian": eq.jacobian},
         "hopf_formula": _num(res.hopf_formula),
         "orbit": None,
@@ -114,8 +114,11 @@ def belt_json(res: Any) -> dict[str, Any]:
                         "multipliers": [_cplx(m) for m in o.multipliers], "v0": o.v0, "residual": _num(o.residual),
                         "converged": o.converged, "reason": o.reason or None, "iterations": o.iterations,
                         "transitions": o.transitions, "jacobian": o.jacobian}
-    for k in ("period", "amplitude", "stick_fraction", "stable"):
-        out[k] = out["orbit"][k] if res.motion in ("stick-slip", "slip orbit") else None
+    moving = res.motion in ("stick-slip", "slip orbit")
+    for k in ("period", "amplitude", "stick_fraction"):
+        out[k] = out["orbit"][k] if moving else None
+    # the motion's stability: the orbit's, or steady sliding's
+    out["stable"] = out["orbit"]["stable"] if moving else (eq.stable if res.motion == "steady sliding" else None)
     return out
 
 
@@ -191,7 +194,8 @@ def belt_main(args: argparse.Namespace) -> int:
               f"Jacobian by {o.jacobian})")
     else:
         print(f"{res.motion}" + (f": {res.reason}" if res.reason else ""))
-    print(f"steady sliding at x_eq = {eq.x_eq:.6g} m: {'stable' if eq.stable else 'unstable'}, slowest multiplier "
+    state = "neutral" if eq.neutral else ("stable" if eq.stable else "unstable")
+    print(f"steady sliding at x_eq = {eq.x_eq:.6g} m: {state}, slowest multiplier "
           f"{eq.mu_max:.6g} over tau = {eq.tau:.4g} s (growth rate {eq.growth_rate:.4g} 1/s)")
     if math.isfinite(res.hopf_formula):
         print(f"Hopf belt speed v* = v_s ln(N (mu_s - mu_k) / (c v_s)) = {res.hopf_formula:.6g} m/s")

@@ -28,7 +28,8 @@ trace(M). Converged when the scaled residual max(|R_x| / X, |R_v| / (X w0)) is a
 (X = mu_s N / k, the friction's deflection; w0 = sqrt(k / m)).
 
 **Steady sliding** is stable when both multipliers of the flow over a fixed time tau (a natural
-period) from the equilibrium are inside the unit circle (M by central differences with ``located``,
+period) from the equilibrium are inside the unit circle (by more than NEUTRAL = 1e-6; within it of
+the circle: neutral) (M by central differences with ``located``,
 the sensitivity with ``exact``). With Stribeck friction (delta = 1) it loses stability at the Hopf
 belt speed where c + N mu'(|v_belt|) = 0: :func:`locate_hopf` finds it from the model, by Brent's
 method on ln |mu|max / tau (the growth rate of the equilibrium's flow) in the belt speed.
@@ -60,6 +61,10 @@ LAWS = {"coulomb": 1, "stribeck": 2}
 SCHEMES = ("located", "exact")
 #: an orbit (and steady sliding) is stable when its nontrivial multipliers have |mu| < 1 - STABILITY_MARGIN
 STABILITY_MARGIN = 1e-9
+#: steady sliding is neutral (neither stable nor unstable: e.g. undamped Coulomb, a centre) when its
+#: largest |mu| is within this of 1 (the located scheme's own damping and the differences' error are
+#: far smaller: 5e-8 over a period at 2000 steps)
+NEUTRAL = 1e-6
 #: internal steps per natural period by default (scheme located)
 STEPS_PER_PERIOD = 2000
 #: relative size of the central differences, of the state's scales X and X w0
@@ -256,7 +261,8 @@ class Equilibrium:
     x_eq: float                      # m
     multipliers: np.ndarray          # of the flow over tau from the equilibrium (complex, |mu| descending)
     tau: float                       # s
-    stable: bool                     # every |mu| < 1 - STABILITY_MARGIN
+    stable: bool                     # every |mu| < 1 - NEUTRAL
+    neutral: bool                    # | |mu|max - 1 | <= NEUTRAL
     growth_rate: float               # ln |mu|max / tau, 1/s (< 0: disturbances decay)
     jacobian: str                    # "sensitivity" | "central differences"
 
@@ -274,7 +280,8 @@ def _equilibrium(flow: _Flow, tau: float | None = None) -> Equilibrium:
     mu = mu[np.argsort(-np.abs(mu))]
     mmax = float(np.abs(mu[0]))
     rate = math.log(mmax) / t if mmax > 0 else -math.inf
-    return Equilibrium(x_eq=xe, multipliers=mu, tau=t, stable=bool(mmax < 1.0 - STABILITY_MARGIN), growth_rate=rate,
+    return Equilibrium(x_eq=xe, multipliers=mu, tau=t, stable=bool(mmax < 1.0 - NEUTRAL),
+                       neutral=bool(abs(mmax - 1.0) <= NEUTRAL), growth_rate=rate,
                        jacobian="sensitivity" if flow.exact else "central differences")
 
 
