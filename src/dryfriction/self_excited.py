@@ -65,6 +65,9 @@ STABILITY_MARGIN = 1e-9
 #: largest |mu| is within this of 1 (the located scheme's own damping and the differences' error are
 #: far smaller: 5e-8 over a period at 2000 steps)
 NEUTRAL = 1e-6
+#: a solution with |v0| under TRIVIAL V on the section is steady sliding itself (R vanishes there
+#: for every T), not an orbit
+TRIVIAL = 1e-6
 #: internal steps per natural period by default (scheme located)
 STEPS_PER_PERIOD = 2000
 #: relative size of the central differences, of the state's scales X and X w0
@@ -405,6 +408,9 @@ class _Orbit:
     def finish(self, v0: float, T: float, nr: float, it: int, reason: str) -> BeltOrbit:
         prob, flow = self.prob, self.flow
         _, e = self.residual(v0, T, observe=True)
+        if not reason and abs(v0) < TRIVIAL * flow.V:
+            reason = (f"Newton converged onto steady sliding (|v0| = {abs(v0):.3g} m/s on the section), not onto "
+                      "an orbit")
         converged = not reason and nr <= self.tol
         xe = prob.x_eq
         try:
