@@ -137,12 +137,15 @@ def test_stribeck_below_and_above_the_hopf(fmu: OscillatorFMU) -> None:
 
 
 def test_hopf_located_from_the_model(fmu: OscillatorFMU) -> None:
-    # measured relative errors: 3.3e-9 at h = T0 / 2000 (3.1e-3), 6.3e-10 at 2e-3, 3.8e-11 at 1e-3 (the
-    # differences' floor about 4e-10 at finer steps)
-    for h, tol in ((None, 2e-8), (1e-3, 2e-9)):
+    # measured relative errors: 3.2e-9 at h = T0 / 2000 (3.1e-3), 7.0e-10 at 2e-3, 1.4e-11 at 1e-3 (the
+    # differences' floor about 1e-10 at finer steps); the frequency there is w0 = 1 (c + N mu' = 0: undamped), to the
+    # scheme's second order (measured -1.08e-6, -4.38e-7, -1.10e-7)
+    for h, tol, ftol in ((None, 2e-8, 2e-6), (1e-3, 2e-9, 2e-7)):
         hp = locate_hopf(stribeck(0.2, h=h), 0.05, 1.0, fmu=fmu)
         assert hp.bracket[0] < hp.formula < hp.bracket[1]
         assert hp.relative_error < tol, (h, hp)
+        assert abs(hp.frequency - 1.0) < ftol and np.all(np.abs(np.abs(hp.multipliers) - 1.0) < 1e-8)
+        assert hp.multipliers[0] == np.conj(hp.multipliers[1]) and abs(hp.multipliers[0].imag) > 0.99
     with pytest.raises(RuntimeError, match="does not change stability"):
         locate_hopf(stribeck(0.2), 0.4, 1.0, fmu=fmu)
 

@@ -42,6 +42,7 @@ from stick-slip at low belt speed up to where the branch turns and on to where i
 
 from __future__ import annotations
 
+import cmath
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -595,6 +596,9 @@ class HopfPoint:
     bracket: tuple[float, float]     # the scan's interval with the sign change
     evaluations: int
     h: float                         # the FMU's internal step
+    multipliers: np.ndarray          # steady sliding's over tau at the located speed (a complex pair on |mu| = 1)
+    tau: float                       # s
+    frequency: float                 # |arg mu| / tau there, rad/s (the frequency the orbits are born with)
 
     @property
     def relative_error(self) -> float:
@@ -603,8 +607,11 @@ class HopfPoint:
 
 def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: OscillatorFMU2 | None = None,
                 xtol: float = 1e-13) -> HopfPoint:
-    """The belt speed in [lo, hi] (same sign, |lo| < |hi|) where the growth rate of steady sliding,
-    ln |mu|max / tau, changes sign: a scan of ``num`` speeds (geometric), then Brent's method."""
+    """The belt speed in [lo, hi] (same sign, |lo| < |hi|) where steady sliding changes stability: its
+    multipliers over tau = a quarter of the natural period (a complex pair near +-i there, well apart)
+    followed over a scan of ``num`` speeds (geometric), then Brent's method on the growth rate
+    ln |mu|max / tau. RuntimeError if no sign change, or if what crosses |mu| = 1 is not a complex
+    pair (then it is not a Hopf point)."""
     from scipy.optimize import brentq
 
     if not (lo * hi > 0 and abs(lo) < abs(hi)):
@@ -612,9 +619,11 @@ def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: 
     with _fmu(fmu) as f:
         n = [0]
 
+        tau = prob.natural_period / 4.0
+
         def rate(vb: float) -> float:
             n[0] += 1
-            return _equilibrium(_Flow(f, prob.with_(v_belt=float(vb)))).growth_rate
+            return _equilibrium(_Flow(f, prob.with_(v_belt=float(vb))), tau).growth_rate
 
         s = math.copysign(1.0, lo)
         speeds = s * np.geomspace(abs(lo), abs(hi), num)
@@ -625,7 +634,13 @@ def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: 
                                f"(growth rates {rates[0]:.3g} ... {rates[-1]:.3g} 1/s)")
         a, b = float(speeds[k]), float(speeds[k + 1])
         v = float(brentq(rate, a, b, xtol=xtol, rtol=1e-15, maxiter=200))
-        return HopfPoint(v, hopf_formula(prob), (a, b), n[0], prob.step)
+        eq = _equilibrium(_Flow(f, prob.with_(v_belt=v)), tau)
+        mu = eq.multipliers
+        if not abs(mu[0].imag) > 1e-6:
+            raise RuntimeError(f"steady sliding changes stability at v_belt = {v:.8g} m/s through a real multiplier "
+                               f"({mu[0].real:.6g}), not a complex pair: not a Hopf point")
+        return HopfPoint(v, hopf_formula(prob), (a, b), n[0] + 1, prob.step, mu, tau,
+                         abs(cmath.phase(complex(mu[0]))) / tau)
 
 
 # ---- the branch in v_belt -------------------------------------------------------------------------------
