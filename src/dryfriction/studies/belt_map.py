@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
+from matplotlib.colors import LogNorm
 
 from ..belt_reference import hopf_belt_speed
 from ..params import Oscillator
@@ -136,13 +137,14 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.save_dataset(ds, "belt_map.nc")
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), sharey=True)
-    for ax, key, label in ((axes[0], "amplitude", "amplitude (m)"), (axes[1], "period", "period (s)")):
+    for ax, key, label in ((axes[0], "amplitude", "amplitude (m)"), (axes[1], "period", "period (s, log scale)")):
         z = np.where(data["motion"] == 0, np.nan, data[key])
+        norm = LogNorm() if key == "period" and np.nanmin(z, initial=np.inf) > 0 and np.isfinite(z).any() else None
         if vb.size > 1 and Ns.size > 1:
-            mesh = ax.pcolormesh(vb, Ns, z, shading="nearest", cmap="viridis")
+            mesh = ax.pcolormesh(vb, Ns, z, shading="nearest", cmap="viridis", norm=norm)
             fig.colorbar(mesh, ax=ax, label=label)
         else:
-            sc = ax.scatter(np.tile(vb, Ns.size), np.repeat(Ns, vb.size), c=z.ravel(), cmap="viridis")
+            sc = ax.scatter(np.tile(vb, Ns.size), np.repeat(Ns, vb.size), c=z.ravel(), cmap="viridis", norm=norm)
             fig.colorbar(sc, ax=ax, label=label)
         still = data["motion"] == 0
         ax.plot(np.tile(vb, Ns.size)[still.ravel()], np.repeat(Ns, vb.size)[still.ravel()], ".", color="0.6", ms=3,
