@@ -114,6 +114,19 @@ def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: Oscillator
     assert r.equilibrium.stable and r.equilibrium.growth_rate == pytest.approx(-0.025, rel=1e-4)
 
 
+def test_slow_belt_long_stick_phases(fmu: OscillatorFMU) -> None:
+    """v_belt = 1e-3: stuck 99 % of a 388 s cycle (the guess's transient covers five such cycles)."""
+    prob = BeltProblem(DAMPED, 1e-3)
+    o = self_excited(prob, fmu=fmu).orbit
+    assert o is not None and o.converged and o.stick_fraction > 0.99
+    ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=1e-3),
+                   np.arange(0.0, 1300.0, 0.05), v_belt=1e-3)
+    br = ref.times("breakaway")
+    assert br.size >= 3 and abs(br[-1] - br[-2] - (br[-2] - br[-3])) < 1e-8
+    # measured 9.8e-8 relative
+    assert abs(o.period - (br[-1] - br[-2])) < 1e-6 * o.period
+
+
 # ---- Stribeck: the Hopf, stability, multipliers -------------------------------------------------------
 
 def test_stribeck_below_and_above_the_hopf(fmu: OscillatorFMU) -> None:

@@ -69,6 +69,8 @@ NEUTRAL = 1e-6
 #: a solution with |v0| under TRIVIAL V on the section is steady sliding itself (R vanishes there
 #: for every T), not an orbit
 TRIVIAL = 1e-6
+#: the most samples of a transient (a slow belt's long stick phases)
+MAX_SAMPLES = 200_000
 #: internal steps per natural period by default (scheme located)
 STEPS_PER_PERIOD = 2000
 #: relative size of the central differences, of the state's scales X and X w0
@@ -353,6 +355,11 @@ class _Orbit:
         self.flow, self.tol, self.max_iter = flow, tol, max_iter
         self.prob = flow.prob
 
+    def fd_step(self, v0: float) -> float:
+        """The differences' relative step: FD_STEP, smaller on an orbit that is slow on the section
+        (|v0| << X w0: the map is steep there), at least 1e-3 FD_STEP."""
+        return FD_STEP * min(1.0, max(abs(v0) / self.flow.V, 1e-3))
+
     def residual(self, v0: float, T: float, observe: bool = False) -> tuple[np.ndarray, dict[str, float]]:
         xe = self.prob.x_eq
         e = self.flow.end(xe, v0, T, observe)
@@ -361,7 +368,7 @@ class _Orbit:
     def dR(self, v0: float, T: float, e: dict[str, float]) -> np.ndarray:
         """dR / d(v0, T), scaled."""
         X, V = self.flow.X, self.flow.V
-        M = self.flow.jacobian(self.prob.x_eq, v0, T, e, columns=(1,))
+        M = self.flow.jacobian(self.prob.x_eq, v0, T, e, columns=(1,), step=self.fd_step(v0))
         if int(e["mode"]) == 0:          # stuck at the end: rides the belt
             fx, fv = self.prob.v_belt, 0.0
         else:
@@ -415,7 +422,7 @@ class _Orbit:
         converged = not reason and nr <= self.tol
         xe = prob.x_eq
         try:
-            M = flow.jacobian(xe, v0, T, e)
+            M = flow.jacobian(xe, v0, T, e, step=self.fd_step(v0))
         except FloatingPointError:
             M = np.full((2, 2), np.nan)
         stick = e["stick_fraction"]
@@ -474,11 +481,12 @@ class Transient:
 def transient(prob: BeltProblem, x0: float | None = None, v0: float | None = None, periods: float = 40.0,
               samples: int = 256, *, fmu: OscillatorFMU2 | None = None) -> Transient:
     """The motion over ``periods`` natural periods from (x0, v0) (default: riding on the belt at x_eq),
-    ``samples`` per natural period, with its section crossings (linear interpolation)."""
+    ``samples`` per natural period (fewer, but at least 16, when that would be more than MAX_SAMPLES
+    in all), with its section crossings (linear interpolation)."""
     xs = prob.x_eq if x0 is None else float(x0)
     vs = prob.v_belt if v0 is None else float(v0)
     T0 = prob.natural_period
-    n = max(int(round(periods * samples)), 2)
+    n = max(int(round(periods * min(samples, max(16, MAX_SAMPLES // max(periods, 1.0))))), 2)
     grid = np.linspace(0.0, periods * T0, n + 1)
     with _fmu(fmu) as f:
         q = object.__new__(Oscillator)
@@ -525,8 +533,8 @@ def hopf_formula(prob: BeltProblem) -> float:
 def self_excited(prob: BeltProblem, *, fmu: OscillatorFMU2 | None = None, periods: float = 40.0,
                  guess: tuple[float, float] | None = None, tol: float | None = None) -> SelfExcited:
     """The self-excited motion of ``prob``: the equilibrium's stability, then the orbit from a guess
-    (v0, T) or from a transient of ``periods`` natural periods that starts riding on the belt at x_eq
-    (a stick-slip orbit passes there). A transient that decays (successive crossings slower by more
+    (v0, T) or from a transient of ``periods`` natural periods (at least five estimated stick-slip
+    cycles) that starts riding on the belt at x_eq (a stick-slip orbit passes there). A transient that decays (successive crossings slower by more
     than 1e-3) while the equilibrium is stable is steady sliding; otherwise Newton from its last
     crossing."""
     with _fmu(fmu) as f:
@@ -536,6 +544,12 @@ def self_excited(prob: BeltProblem, *, fmu: OscillatorFMU2 | None = None, period
         t = (1e-12 if prob.scheme == "exact" else 1e-10) if tol is None else tol
         solver = _Orbit(flow, t, 30)
         if guess is None:
+            # at least 5 cycles of stick-slip: a natural period and the ride from the catch to the
+            # breakaway, at most about 2 (F_s - N min(mu_s, mu_k)) / (k |v_belt|) (Coulomb's cycle with
+            # the smallest kinetic friction)
+            p = prob.oscillator
+            ride = 2.0 * abs(p.mu_s - p.mu_k) * p.N / (p.k * abs(prob.v_belt))
+            periods = max(periods, 5.0 * (1.0 + ride / prob.natural_period))
             tr = transient(prob, periods=periods, fmu=f)
             X, V = prob.scales
             amp = tr.window()["amplitude"]
