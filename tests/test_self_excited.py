@@ -25,7 +25,7 @@ from dryfriction.belt_reference import Belt, limit_cycle, simulate
 from dryfriction.errors import FMUError
 from dryfriction.fmu import OscillatorFMU
 from dryfriction.params import Oscillator
-from dryfriction.self_excited import (BeltProblem, continue_orbits, equilibrium, find_orbit, hopf_formula,
+from dryfriction.self_excited import (BeltProblem, Branch, continue_orbits, equilibrium, find_orbit, hopf_formula,
                                       locate_hopf, self_excited)
 
 MU_S, CHI = 0.5, 0.6                       # mu_k = 0.3
@@ -202,12 +202,12 @@ def test_unstable_slip_orbit_and_its_multiplier_against_the_reference_map(fmu: O
 # ---- the branch in v_belt -----------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def branch(fmu: OscillatorFMU):  # type: ignore[no-untyped-def]
+def branch(fmu: OscillatorFMU) -> tuple[Branch, float]:
     vs = hopf_formula(stribeck(0.2))
     return continue_orbits(stribeck(0.2), 0.5 * vs, 0.05, 2.0, fmu=fmu), vs
 
 
-def test_branch_stick_slip_leg_turns_at_the_grazing_and_ends_at_the_hopf(branch) -> None:  # type: ignore[no-untyped-def]
+def test_branch_stick_slip_leg_turns_at_the_grazing_and_ends_at_the_hopf(branch: tuple[Branch, float]) -> None:
     br, vs = branch
     a = br.arrays()
     stick = a["stick_fraction"] > 0
@@ -226,7 +226,7 @@ def test_branch_stick_slip_leg_turns_at_the_grazing_and_ends_at_the_hopf(branch)
 
 
 @pytest.mark.slow
-def test_branch_end_against_reference_transients(branch) -> None:  # type: ignore[no-untyped-def]
+def test_branch_end_against_reference_transients(branch: tuple[Branch, float]) -> None:
     """Just below the grazing speed the motion from riding on the belt stays stick-slip; just above it
     it decays (the reference: event-driven, none of the FMU's code)."""
     br, _ = branch

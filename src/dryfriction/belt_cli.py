@@ -39,7 +39,8 @@ def add_belt_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argpars
     g.add_argument("--zeta", type=number("--zeta", 0.0), default=None, help="damping ratio c / (2 sqrt(k m))")
     g.add_argument("--N", type=number("--N", 0.0, True), default=1.0, help="normal force, N (default 1)")
     g.add_argument("--mu-s", type=number("--mu-s", 0.0, True), default=0.5, help="static coefficient (default 0.5)")
-    g.add_argument("--mu-k", type=number("--mu-k", 0.0), default=None, help="kinetic coefficient (or --chi; default 0.3)")
+    g.add_argument("--mu-k", type=number("--mu-k", 0.0), default=None,
+                   help="kinetic coefficient (or --chi; default 0.3)")
     g.add_argument("--chi", type=number("--chi", 0.0), default=None, help="mu_k / mu_s")
     g.add_argument("--F-ext", dest="F_ext", type=number("--F-ext"), default=0.0, help="constant force, N (default 0)")
     b.add_argument("--v-belt", dest="v_belt", type=number("--v-belt"), required=True, help="belt speed, m/s (nonzero)")
@@ -99,7 +100,8 @@ def belt_json(res: Any) -> dict[str, Any]:
         "motion": res.motion, "reason": res.reason or None, "v_belt": pr.v_belt, "law": pr.law,
         "scheme": pr.scheme, "h": pr.step, "x_eq": eq.x_eq,
         "equilibrium": {"x_eq": eq.x_eq, "stable": eq.stable, "multipliers": [_cplx(m) for m in eq.multipliers],
-                        "neutral": eq.neutral, "slowest_multiplier": eq.mu_max, "tau": eq.tau, "growth_rate": _num(eq.growth_rate),
+                        "neutral": eq.neutral, "slowest_multiplier": eq.mu_max, "tau": eq.tau,
+                        "growth_rate": _num(eq.growth_rate),
                         "jacobian": eq.jacobian},
         "hopf_formula": _num(res.hopf_formula),
         "orbit": None,

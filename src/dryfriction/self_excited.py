@@ -106,7 +106,8 @@ class BeltProblem:
             raise ValueError(f"the self-excited motion needs no excitation: P0 = 0 or omega = 0 (a constant force), "
                              f"not P0 = {p.P0:g} at omega = {p.omega:g}")
         if not p.k > 0:
-            raise ValueError(f"k (stiffness) must be > 0 for a self-excited motion (a sliding equilibrium), not {p.k!r}")
+            raise ValueError(f"k (stiffness) must be > 0 for a self-excited motion (a sliding equilibrium), "
+                             f"not {p.k!r}")
         if not p.N > 0:
             raise ValueError(f"N (normal force) must be > 0 for a self-excited motion, not {p.N!r}")
         for name in ("v_belt", "v_s", "delta", "F_ext"):
@@ -247,7 +248,8 @@ class _Flow:
                 raise FloatingPointError("the FMU's sensitivity is not available (NaN)")
             return J
         if richardson:
-            return (4.0 * self.jacobian(x, v, T, None, columns, step / 2.0) - self.jacobian(x, v, T, None, columns, step)) / 3.0
+            fine = self.jacobian(x, v, T, None, columns, step / 2.0)
+            return (4.0 * fine - self.jacobian(x, v, T, None, columns, step)) / 3.0
         J = np.full((2, 2), np.nan)
         for j in columns:
             d = step * (self.X if j == 0 else self.V)
@@ -534,9 +536,9 @@ def self_excited(prob: BeltProblem, *, fmu: OscillatorFMU2 | None = None, period
                  guess: tuple[float, float] | None = None, tol: float | None = None) -> SelfExcited:
     """The self-excited motion of ``prob``: the equilibrium's stability, then the orbit from a guess
     (v0, T) or from a transient of ``periods`` natural periods (at least five estimated stick-slip
-    cycles) that starts riding on the belt at x_eq (a stick-slip orbit passes there). A transient that decays (successive crossings slower by more
-    than 1e-3) while the equilibrium is stable is steady sliding; otherwise Newton from its last
-    crossing."""
+    cycles) that starts riding on the belt at x_eq (a stick-slip orbit passes there). A transient
+    that decays (successive crossings slower by more than 1e-3) while the equilibrium is stable is
+    steady sliding; otherwise Newton from its last crossing."""
     with _fmu(fmu) as f:
         flow = _Flow(f, prob)
         eq = _equilibrium(flow)

@@ -129,7 +129,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             "eq_mu_max": "largest |multiplier| of steady sliding's flow over a natural period",
             "eq_stable": "steady sliding stable (1) or not (0)", "residual": "scaled Newton residual of the orbit"}
     ds = xr.Dataset({k: (("N", "v_belt"), data[k], {"units": units[k], "description": desc.get(k, "")})
-                     for k in names}, coords={"N": ("N", Ns, {"units": "N"}), "v_belt": ("v_belt", vb, {"units": "m/s"})})
+                     for k in names},
+                    coords={"N": ("N", Ns, {"units": "N"}), "v_belt": ("v_belt", vb, {"units": "m/s"})})
     ds["method"] = (("N", "v_belt"), methods.astype(str))
     ds["hopf_v_belt"] = ("N", hopf, {"units": "m/s", "description": "v*(N) = v_s ln(N (mu_s - mu_k) / (c v_s))"})
     ds.attrs.update({f"param_{k}": v for k, v in p.items()})
