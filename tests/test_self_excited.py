@@ -245,6 +245,24 @@ def test_branch_end_against_reference_transients(branch: tuple[Branch, float]) -
             assert np.ptp(ref.x[late]) / 2 < 0.05
 
 
+@pytest.mark.slow
+def test_coulomb_branch_ends_at_its_grazing(fmu: OscillatorFMU) -> None:
+    """Damped Coulomb: no Hopf (steady sliding is stable at every speed), no slip orbits; the stick-slip
+    leg ends where its catch of the belt grazes, with a stick phase still there (measured v_g =
+    0.3322743, stick share 0.095); the reference from the belt: stick-slip at 0.995 v_g, decay at 1.005."""
+    br = continue_orbits(BeltProblem(DAMPED, 0.1), 0.1, 0.01, 2.0, fmu=fmu)
+    a = br.arrays()
+    assert np.all(a["stick_fraction"] > 0.09) and np.all(a["stable"] == 1) and np.all(np.diff(a["v_belt"]) > 0)
+    assert br.turning_points == [] and math.isnan(br.hopf) and "no slip leg" in br.end
+    assert br.grazing == a["v_belt"][-1] and 0.33 < br.grazing < 0.335
+    for fac, sticks in ((0.995, True), (1.005, False)):
+        vb = fac * br.grazing
+        ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=BeltProblem(DAMPED, vb).x_eq, v0=vb),
+                       np.arange(0.0, 120.0, 0.01), v_belt=vb)
+        stops = ref.times("stop")
+        assert (stops.size > 15 and stops[-1] > 105.0) if sticks else stops.size == 0
+
+
 # ---- input errors -----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("kw, match", [

@@ -751,17 +751,20 @@ class _Continuer:
                 return None
         return None
 
-    def point(self, y: np.ndarray, nr: float) -> BranchPoint:
+    def point(self, y: np.ndarray, nr: float, report: bool = True) -> BranchPoint:
         o = self.solver(y[2]).finish(float(y[0]), float(y[1]), nr, 0, "")
         p = BranchPoint(float(y[2]), o.period, o.v0, o.amplitude, o.stick_fraction, o.multipliers, o.stable, nr)
-        if self.progress:
+        if report and self.progress:
             self.progress(p)
         return p
 
     def leg(self, y: np.ndarray, tan: np.ndarray, max_points: int, amplitude_min: float,
-            stop: Callable[[BranchPoint], str]) -> tuple[list[BranchPoint], list[float], str, np.ndarray]:
-        """Points from y along tan until ``stop`` says why (a non-empty sentence), the amplitude falls
-        under amplitude_min X, the belt speed leaves the range, or max_points."""
+            accept: Callable[[BranchPoint], bool]) -> tuple[list[BranchPoint], list[float], str, np.ndarray]:
+        """Points from y along tan until the amplitude falls under amplitude_min X, the belt speed
+        leaves the range, max_points, or the corrector fails at the smallest step. A corrected point
+        that ``accept`` refuses (the leg's kind of orbit: with a stick phase or without), or that is
+        steady sliding itself (|v0| < TRIVIAL X w0), counts as a failed corrector: the step is halved
+        (so a leg ends at its grazing, approached in ever smaller steps)."""
         pts: list[BranchPoint] = []
         turning: list[float] = []
         h, last_dir = self.ds, 0.0
@@ -775,6 +778,13 @@ class _Continuer:
                     break
                 continue
             yc, nr, e, s = got
+            cand = self.point(yc, nr, report=False)
+            if abs(cand.v0) < TRIVIAL * self.V or not accept(cand):
+                h *= 0.5
+                if h < self.ds_min:
+                    end = f"the next point is not on this leg at the smallest step (v_belt {y[2]:.8g})"
+                    break
+                continue
             tn = _null(self.J(yc, e, s))
             if tn @ ((yc - y) / self.S) < 0:                     # oriented along the secant
                 tn = -tn
@@ -783,12 +793,10 @@ class _Continuer:
                 turning.append(float(y[2]))
             last_dir = d or last_dir
             y, tan = yc, tn
-            pts.append(self.point(y, nr))
+            pts.append(cand)
+            if self.progress:
+                self.progress(cand)
             h = min(h * 1.5, self.ds_max)
-            why = stop(pts[-1])
-            if why:
-                end = why
-                break
             if pts[-1].amplitude < amplitude_min * self.X:
                 end = f"amplitude below {amplitude_min:g} X: the orbit shrinks onto the equilibrium (the Hopf)"
                 break
@@ -804,6 +812,12 @@ class _Continuer:
         return None if got is None else (got[0], got[1])
 
 
+#: how a leg ends at its edge (the sentences of _Continuer.leg)
+EDGE = ("the corrector failed at the smallest step", "the next point is not on this leg")
+#: the slip leg meets the stick-slip leg when its last belt speed is within MEET of the grazing (relative)
+MEET = 1e-4
+
+
 def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float, *,
                     fmu: OscillatorFMU2 | None = None, ds: float = 0.02, ds_min: float = 1e-5,
                     ds_max: float = 0.1, max_points: int = 200, amplitude_min: float = 2e-3,
@@ -815,13 +829,17 @@ def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float
     unknowns (v0 / V, T / T0, v_belt / V); ``ds`` its first step, halved on a failed corrector down to
     ``ds_min``, grown by 1.5 up to ``ds_max``.
 
-    The stick-slip leg has no smooth fold (its nontrivial multiplier is 0): it ends where its stick
-    phase vanishes (the orbit grazes the belt speed, ``grazing``) and the branch turns there with a
-    corner onto orbits that never stick. The corrector cannot turn that corner; with ``slip_leg`` the
-    other leg is continued from its other end instead: the Hopf located from the model
-    (:func:`locate_hopf` in [v_min, grazing]), seeded by the orbit through (x_eq, v0) with |v0| =
-    ``seed_amplitude`` V (T and v_belt solved for) and continued up to where it sticks; its points are
-    appended in the order of the branch (from the corner down to the Hopf)."""
+    The stick-slip leg has no smooth fold (its nontrivial multiplier is 0): it ends where the catch
+    of the belt becomes tangential (a grazing: beyond it the motion no longer reaches the belt's
+    speed), ``grazing``, the last belt speed where the corrector still finds a stick-slip orbit (steps
+    halved down to ``ds_min``). With Stribeck friction the branch turns there, with a corner, onto
+    orbits that never stick; the corrector cannot turn that corner, so with ``slip_leg`` the other
+    leg is continued from its other end instead: the Hopf located from the model (:func:`locate_hopf`
+    in [v_min, grazing]), seeded by the orbit through (x_eq, v0) with |v0| = ``seed_amplitude`` V (T
+    and v_belt solved for) and continued up to where it would stick; its points are appended in the
+    order of the branch (from the corner down to the Hopf), and the grazing is a turning point when
+    the legs meet there (within MEET). Without a Hopf in the range (Coulomb) the branch ends at the
+    grazing."""
     t = (1e-12 if prob.scheme == "exact" else 1e-10) if tol is None else tol
     with _fmu(fmu) as f:
         se = self_excited(prob.with_(v_belt=v_from), fmu=f)
@@ -837,15 +855,14 @@ def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float
             tan = -tan
         sticks = first.stick_fraction > 0.0
 
-        def stick_stop(p: BranchPoint) -> str:
-            return "the stick phase vanished" if sticks and p.stick_fraction == 0.0 else ""
+        def same_kind(p: BranchPoint) -> bool:
+            return (p.stick_fraction > 0.0) == sticks
 
-        pts, turning, end, y = c.leg(y, tan, max_points - 1, amplitude_min, stick_stop)
+        pts, turning, end, y = c.leg(y, tan, max_points - 1, amplitude_min, same_kind)
         pts.insert(0, first)
         grazing = math.nan
-        if sticks and pts[-1].stick_fraction > 0.0 and pts[-1].stick_fraction < 0.02:
+        if sticks and end.startswith(EDGE):          # the stick-slip orbits end there (the catch grazes)
             grazing = pts[-1].v_belt
-            turning.append(grazing)
         hopf = math.nan
         if slip_leg and math.isfinite(grazing):
             try:
@@ -865,15 +882,20 @@ def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float
                     if tan[0] * -c.sgn < 0:               # towards larger |v0| (larger orbits)
                         tan = -tan
 
-                    def slip_stop(p: BranchPoint) -> str:
-                        return "it sticks: the corner at the grazing" if p.stick_fraction > 0.0 else ""
+                    def slides(p: BranchPoint) -> bool:
+                        return p.stick_fraction == 0.0
 
-                    more, turn2, end2, _ = c.leg(ys, tan, max_points, 0.0, slip_stop)
-                    leg2 = [p0] + [p for p in more if p.stick_fraction == 0.0]
+                    more, turn2, end2, _ = c.leg(ys, tan, max_points, 0.0, slides)
+                    leg2 = [p0] + more
                     pts += leg2[::-1]
                     turning += turn2
+                    meet = abs(leg2[-1].v_belt - grazing) <= MEET * abs(grazing)
+                    if meet:
+                        turning.append(grazing)
                     end = (f"the stick-slip leg ends at its grazing (v_belt {grazing:.8g}, {end}); the slip leg "
-                           f"from the Hopf {hopf:.8g} up to v_belt {leg2[-1].v_belt:.8g} ({end2})")
+                           f"from the Hopf {hopf:.8g} up to v_belt {leg2[-1].v_belt:.8g} ({end2}); "
+                           + ("they meet: the branch turns at the grazing" if meet else
+                              "they do not meet: two branches"))
         return Branch(pts, turning, end, pts[-1].v_belt, grazing, hopf)
 
 
