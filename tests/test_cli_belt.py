@@ -14,7 +14,7 @@ from dryfriction.belt_reference import limit_cycle
 from dryfriction.cli import main
 
 KEYS = {"motion", "reason", "v_belt", "law", "scheme", "h", "x_eq", "equilibrium", "hopf_formula", "orbit", "units",
-        "period", "amplitude", "stick_fraction", "stable", "files"}
+        "period", "amplitude", "stick_fraction", "stable", "coexists_with_steady_sliding", "files"}
 ORBIT_KEYS = {"period", "amplitude", "offset", "x_max", "x_min", "stick_fraction", "stable", "multipliers", "v0",
               "residual", "converged", "reason", "iterations", "transitions", "jacobian"}
 
@@ -63,6 +63,9 @@ def test_stribeck_steady_sliding_and_stick_slip(fmu_path: Path, capsys: pytest.C
     assert eq["tau"] == pytest.approx(2 * math.pi / 2.0, rel=1e-15)
     low = run_json([*base, "--v-belt", f"{0.5 * v_star}"], capsys)
     assert low["motion"] == "stick-slip" and low["equilibrium"]["stable"] is False
+    assert low["coexists_with_steady_sliding"] is False and high["coexists_with_steady_sliding"] is False
+    both = run_json([*base, "--v-belt", f"{1.2 * v_star}"], capsys)           # subcritical: bistable
+    assert both["motion"] == "stick-slip" and both["coexists_with_steady_sliding"] is True
     assert 0 < low["stick_fraction"] < 1 and low["orbit"]["multipliers"][1] == [0.0, 0.0]
 
 
@@ -70,6 +73,7 @@ def test_the_table(fmu_path: Path, capsys: pytest.CaptureFixture[str], tmp_path:
     assert main(["belt", "--v-belt", "-0.2", "--c", "0.05", "--out", str(tmp_path), "--fmu", str(fmu_path)]) == 0
     out = capsys.readouterr().out
     assert "stick-slip: period" in out and "steady sliding at x_eq = -0.3 m: stable" in out
+    assert "the two motions coexist" in out
     assert f"wrote {tmp_path / 'belt.png'}" in out and (tmp_path / "belt.png").stat().st_size > 1000
 
 

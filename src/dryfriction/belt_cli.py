@@ -121,6 +121,7 @@ def belt_json(res: Any) -> dict[str, Any]:
         out[k] = out["orbit"][k] if moving else None
     # the motion's stability: the orbit's, or steady sliding's
     out["stable"] = out["orbit"]["stable"] if moving else (eq.stable if res.motion == "steady sliding" else None)
+    out["coexists_with_steady_sliding"] = bool(moving and eq.stable)
     return out
 
 
@@ -194,6 +195,8 @@ def belt_main(args: argparse.Namespace) -> int:
               f"stuck {100 * o.stick_fraction:.2f} % of the cycle, stable (multipliers "
               f"{abs(o.multipliers[0]):.6g}, {abs(o.multipliers[1]):.3g}; residual {o.residual:.1e}, "
               f"Jacobian by {o.jacobian})")
+        if eq.stable:
+            print("steady sliding is stable too: the two motions coexist (the start decides)")
     else:
         print(f"{res.motion}" + (f": {res.reason}" if res.reason else ""))
     state = "neutral" if eq.neutral else ("stable" if eq.stable else "unstable")
