@@ -7,7 +7,9 @@ Each normal force is a row walked up in belt speed: a point's orbit is Newton's 
 point's stable orbit (warm start); where that fails or is not stable, from a transient that starts
 riding on the belt at x_eq (:func:`~dryfriction.self_excited.self_excited`); where the orbit solve
 fails there too, the transient's last quarter gives the numbers, and the data says so (``motion`` 3,
-``method`` per point). Runs in this process (a point costs a few FMU runs of a period).
+``method`` per point). With ``numerics.grazing`` the end of stick-slip per N is located too, by
+continuation in v_belt from the row's slowest stick-slip orbit (``grazing_v_belt``, the red line).
+Runs in this process (a point costs a few FMU runs of a period).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from matplotlib.colors import LogNorm
 
 from ..belt_reference import hopf_belt_speed
 from ..params import Oscillator
-from ..self_excited import BeltProblem, LAWS, find_orbit, self_excited, transient
+from ..self_excited import BeltProblem, LAWS, continue_orbits, find_orbit, self_excited, transient
 from .common import StudyContext, plt
 from .config import grid, require
 
@@ -50,6 +52,7 @@ def check(cfg: dict[str, Any]) -> None:
     require(bool(np.all(N > 0)), f"grid.N must be > 0, not {g['N']}")
     require(n["steps_per_period"] >= 20, f"numerics.steps_per_period must be >= 20, not {n['steps_per_period']}")
     require(n["transient_periods"] >= 5, f"numerics.transient_periods must be >= 5, not {n['transient_periods']}")
+    require(isinstance(n["grazing"], bool), f"numerics.grazing must be true or false, not {n['grazing']!r}")
 
 
 def problem(p: dict[str, Any], N: float, vb: float, steps: int) -> BeltProblem:
@@ -120,6 +123,20 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         bar.close()
     hopf = np.array([hopf_belt_speed(p["c"], float(N), p["mu_s"], p["mu_k"], p["v_s"])
                      if p["law"] == "stribeck" and p["delta"] == 1.0 else math.nan for N in Ns])
+    grazing = np.full(Ns.size, np.nan)
+    if n["grazing"]:
+        # where stick-slip ends, by continuation of each row's slowest stick-slip orbit (its leg only)
+        for i, N in enumerate(Ns):
+            j = next((j for j in range(vb.size) if data["motion"][i, j] == 1), None)
+            if j is None:
+                continue
+            try:
+                br = continue_orbits(problem(p, float(N), float(vb[j]), int(n["steps_per_period"])), float(vb[j]),
+                                     float(vb[j]), 10.0 * float(vb.max()), fmu=fmu, slip_leg=False)
+            except RuntimeError as e:
+                ctx.log(f"belt_map: N = {N:g}: no continuation from v_belt {vb[j]:g}: {e}")
+                continue
+            grazing[i] = br.grazing
     units = {"amplitude": "m", "offset": "m", "period": "s", "stick_fraction": "1", "motion": "1", "mu": "1",
              "eq_mu_max": "1", "eq_stable": "1", "residual": "1"}
     desc = {"amplitude": "(x_max - x_min) / 2 of the orbit (0: steady sliding)",
@@ -133,6 +150,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
                     coords={"N": ("N", Ns, {"units": "N"}), "v_belt": ("v_belt", vb, {"units": "m/s"})})
     ds["method"] = (("N", "v_belt"), methods.astype(str))
     ds["hopf_v_belt"] = ("N", hopf, {"units": "m/s", "description": "v*(N) = v_s ln(N (mu_s - mu_k) / (c v_s))"})
+    ds["grazing_v_belt"] = ("N", grazing, {"units": "m/s", "description": "the end of stick-slip (the catch grazes), "
+                                                                         "by continuation in v_belt (NaN: not computed)"})
     ds.attrs.update({f"param_{k}": v for k, v in p.items()})
     ds.attrs["steps_per_period"] = int(n["steps_per_period"])
     ctx.save_dataset(ds, "belt_map.nc")
@@ -157,6 +176,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         if np.isfinite(hopf).any():
             ax.plot(hopf, Ns, "w--", lw=1.5, label="Hopf line v*(N)")
             ax.plot(hopf, Ns, "k:", lw=1.0)
+        if np.isfinite(grazing).any():
+            ax.plot(grazing, Ns, "-", color="C3", lw=1.2, label="end of stick-slip (continuation)")
         ax.set_xlim(vb.min() - 0.02 * np.ptp(vb), vb.max() + 0.02 * np.ptp(vb))
         ax.set_xlabel("belt speed v_belt (m/s)")
         ax.legend(fontsize=7, loc="upper left")
@@ -180,6 +201,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         "max_amplitude_m": float(np.nanmax(data["amplitude"])),
         "hopf_v_belt": [float(h) for h in hopf],
         "stick_slip_edge_v_belt": edge,
+        "grazing_v_belt": [float(v) for v in grazing],
         "N": [float(v) for v in Ns],
     }
     ctx.log(f"belt_map: {summary['stick_slip']} stick-slip, {summary['slip_orbit']} slip orbits, "
