@@ -91,6 +91,23 @@ def test_exact_scheme_on_the_closed_form_cycle(fmu: OscillatorFMU) -> None:
     assert o.multipliers[1] == 0.0
 
 
+@pytest.mark.slow
+def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU) -> None:
+    """Damped Coulomb with scheme exact (where the FMU has it on a belt): the reference's period to
+    1e-9 (measured 6.5849654 both), against the located one's 5.7e-6."""
+    prob = BeltProblem(DAMPED, 0.2, scheme="exact")
+    try:
+        o = find_orbit(prob, -0.26, 6.6, fmu=fmu)
+    except FMUError as e:
+        assert "scheme exact supports v_belt = 0 only" in str(e)
+        pytest.skip("this FMU's exact scheme refuses a moving belt")
+    ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=0.2),
+                   np.arange(0.0, 60.0, 1e-3), v_belt=0.2)
+    br = ref.times("breakaway")
+    assert o.converged and o.jacobian == "sensitivity" and o.multipliers[1] == 0.0
+    assert abs(o.period - (br[-1] - br[-2])) < 1e-9 * o.period
+
+
 # ---- damped Coulomb against a long transient of the reference ---------------------------------------
 
 def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: OscillatorFMU) -> None:
