@@ -1,4 +1,4 @@
-"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov | chain | orbit``.
+"""Command line: ``dryfriction validate | run | response | scenes | study | lyapunov | chain | orbit | belt``.
 
 Invalid arguments, an unusable FMU and an error the FMU reports end with one readable line on
 stderr (``dryfriction: error: ...``) and exit status 2, before any work where they can be found
@@ -117,6 +117,9 @@ def build_parser() -> Parser:
     from .orbit_cli import add_orbit_parser
 
     add_orbit_parser(sub, parents=common)
+    from .belt_cli import add_belt_parser
+
+    add_belt_parser(sub, parents=common)
 
     s = sub.add_parser("study", parents=common, help="the paper's studies ('dryfriction study list')",
                        description="Reproduce a study of the paper (see 'list').")
@@ -406,11 +409,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         from .chain_cli import chain_main
         from .chaos.cli import lyapunov_main
         from .continuation_cli import continuation_main
+        from .belt_cli import belt_main
         from .orbit_cli import orbit_main
 
         handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
                    "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main, "orbit": orbit_main,
-                   "continuation": continuation_main, "bifurcation": continuation_main}[args.command]
+                   "continuation": continuation_main, "bifurcation": continuation_main, "belt": belt_main}[args.command]
         with fmu_warnings_on_stderr("dryfriction", bool(getattr(args, "strict", False))):
             return handler(args)
     except (UsageError, FileNotFoundError, FMUError) as e:

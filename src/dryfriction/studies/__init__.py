@@ -48,6 +48,9 @@ STUDIES.update({m.NAME: m for m in (chain2, chain_waves)})
 from . import fig8_9_orbits, fig10_11_orbits  # noqa: E402
 STUDIES.update({m.NAME: m for m in (fig8_9_orbits, fig10_11_orbits)})
 
+from . import belt_map  # noqa: E402
+STUDIES.update({belt_map.NAME: belt_map})
+
 ALIASES = {"fig5": "fig5_6", "fig6": "fig5_6", "fig8": "fig8_9", "fig9": "fig8_9", "fig10": "fig10_11",
            "fig11": "fig10_11", "fig12": "fig12_14", "fig13": "fig12_14", "fig14": "fig12_14"}
 
