@@ -132,11 +132,43 @@ CASES = {
     "chi > 1, belt stopped": (dict(BASE, chi=1.2), REF.with_(mu_k=0.6), 0.15, [(12.0, 0.0)]),
     "k = 0, belt reversed": (dict(BASE, k=0.0, c=0.3, x0=1.0), REF.with_(k=0.0, c=0.3, x0=1.0), 0.3,
                              [(10.0, -0.1), (20.0, 0.2)]),
+    "k = 0, forced: turns inside slides": (dict(BASE, k=0.0, c=0.3, x0=1.0, P0=1.0, omega=1.0, N=0.2),
+                                           REF.with_(k=0.0, c=0.3, x0=1.0, P0=1.0, omega=1.0, N=0.2), 0.1, []),
     "undamped, forced, backward belt": (dict(BASE, c=0.0, P0=0.6, omega=1.3), REF.with_(c=0.0, P0=0.6, omega=1.3),
                                         -0.25, [(15.0, 0.4)]),
     "heavy damping, F_ext": (dict(BASE, c=1.5, F_ext=0.1, P0=0.4), REF.with_(c=1.5, F_ext=0.1, P0=0.4), 0.2,
                              [(8.0, 0.5), (16.0, 0.05)]),
 }
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_extremes_against_the_reference_on_a_fine_grid(name: str) -> None:
+    """x_max, x_min over [5, 30] (observe): at least the largest (least) x of the reference on a grid of
+    1e-3 s, and within the grid's reach of it (the turning points inside slides are found: x is not
+    monotone in a slide on a belt)."""
+    params, ref, vb, changes = CASES[name]
+    p = dict(params, v_belt=vb, observe=True, t_obs_start=5.0)
+    r = FMI2Run(p)
+    try:
+        vr, t = r.vars["v_belt"].valueReference, 0.0
+        for tc, v in list(changes) + [(30.0, None)]:
+            r.slave.doStep(t, tc - t)
+            t = tc
+            if v is not None:
+                r.slave.setReal([vr], [v])
+        x_max, x_min = r.get(["x_max", "x_min"])
+    finally:
+        r.close()
+    grid = np.linspace(0.0, 30.0, 30001)
+    b = simulate(ref, grid, v_belt=vb, changes=changes)
+    w = grid >= 5.0
+    xs, vs, ms = b.x[w], b.v[w], b.mode[w]
+    reach = 1e-3 * np.abs(vs).max()  # (x moves at most by this between two grid points: a turning point lies within)
+    assert -1e-10 <= x_max - xs.max() <= reach and -1e-10 <= xs.min() - x_min <= reach, (x_max, xs.max(), x_min,
+                                                                                        xs.min())
+    # a turning point inside a slide: the reference's v changes sign while v - v_belt keeps it
+    turns = np.sum((np.sign(vs[1:]) != np.sign(vs[:-1])) & (ms[1:] != 0) & (ms[1:] == ms[:-1]))
+    assert turns > 0, name
 
 
 @pytest.mark.parametrize("name", list(CASES))

@@ -1236,8 +1236,8 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
     const double vb = dfo_belt_speed(u);
-    if (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0) /* (the belt may have changed) */
-        belt_start(M, u, vb, s, on_switch, switch_ctx);
+    if (dfo_belt_on(u) && (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0))
+        belt_start(M, u, vb, s, on_switch, switch_ctx); /* (the belt may have changed) */
     if (vb != 0.0) return belt_advance(M, u, NULL, s, t_target, on_switch, switch_ctx, vb);
     if (M->p.k == 0.0) return dfo_exact_free_advance(M, u, s, t_target, on_switch, switch_ctx); /* no spring */
     ex_ctx C;
@@ -1889,7 +1889,8 @@ static void belt_start(const dfo_model *M, const dfo_inputs *u, double vb, dfo_s
         dfo_loads_init(&L, M, u);
         const double k = M->p.k, w0 = sqrt(k / M->p.m);
         const double len = (k > 0.0) ? fabs(s->X) + (M->P_amp + fabs(L.F_ext) + L.Fb) / k : 0.0;
-        const double thr = 4.0 * ROUND * (fabs(s->V) + fabs(vb) + w0 * len);
+        const double harm = (k == 0.0 && M->p.omega > 0.0) ? M->P_amp / (M->p.m * M->p.omega) : 0.0;
+        const double thr = 4.0 * ROUND * (fabs(s->V) + fabs(vb) + w0 * len + harm);
         if (s->mode * (s->V - vb) < -thr) to = -s->mode;
     }
     if (to == s->mode) return;
@@ -1898,21 +1899,66 @@ static void belt_start(const dfo_model *M, const dfo_inputs *u, double vb, dfo_s
     if (M->p.observe && s->t > M->p.t_obs_start && s->t <= M->p.t_obs_stop) s->transitions++;
 }
 
-/* The switch reports of a call without a spring on a belt (free_belt): positions from the belt's frame. */
+/* A call without a spring on a belt (free_belt): the switch reports with x from the belt's frame, and
+ * (observe) the extremes of x, phase by phase, from the switches: a stuck block rides on the belt (x
+ * linear), a slide may turn inside (dfo_exact_free_slide_extremes). */
 typedef struct {
     dfo_switch_fn fn;
     void *ctx;
     double vb, t0;
-} belt_switch;
+    const dfo_model *M;
+    const dfo_inputs *u; /* the inputs (physical frame) */
+    int observe, poly, have;
+    double ta, xa, va;   /* the current phase's start (physical frame) */
+    int mode;
+    double lo, hi;       /* the extremes of x in the window so far (have) */
+} belt_free;
 
-static void belt_switch_fn(void *ctx, double t, double x, int from_mode, int to_mode)
+static void belt_free_sample(belt_free *b, double x)
 {
-    const belt_switch *b = (const belt_switch *)ctx;
-    b->fn(b->ctx, t, x + b->vb * (t - b->t0), from_mode, to_mode);
+    if (!b->have) b->lo = b->hi = x;
+    b->have = 1;
+    b->lo = fmin(b->lo, x);
+    b->hi = fmax(b->hi, x);
+}
+
+/* The phase from b's start to tb (physical x there: xb) in b->mode, into the extremes. */
+static void belt_free_phase(belt_free *b, double tb, double xb)
+{
+    const dfo_params *p = &b->M->p;
+    const double w0 = p->t_obs_start, w1 = p->t_obs_stop, ta = b->ta;
+    if (!b->observe || tb < w0 || ta > w1 || b->poly) return;
+    const double t0 = fmax(ta, w0), t1 = fmin(tb, w1);
+    if (b->mode == 0) {
+        belt_free_sample(b, (t0 == ta) ? b->xa : b->xa + b->vb * (t0 - ta));
+        belt_free_sample(b, (t1 == tb) ? xb : b->xa + b->vb * (t1 - ta));
+    } else {
+        double lo, hi;
+        dfo_exact_free_slide_extremes(b->M, b->u, ta, b->xa, b->va, b->mode, t0, t1, &lo, &hi);
+        belt_free_sample(b, lo);
+        belt_free_sample(b, hi);
+        if (t0 == ta) belt_free_sample(b, b->xa);
+        if (t1 == tb) belt_free_sample(b, xb);
+    }
+}
+
+static void belt_free_switch(void *ctx, double t, double x, int from_mode, int to_mode)
+{
+    belt_free *b = (belt_free *)ctx;
+    const double xp = x + b->vb * (t - b->t0);
+    if (b->fn) b->fn(b->ctx, t, xp, from_mode, to_mode);
+    belt_free_phase(b, t, xp);
+    b->ta = t;
+    b->xa = xp;
+    b->va = b->vb; /* every event is at v = vb */
+    b->mode = to_mode;
 }
 
 /* No spring on a belt: in the belt's frame (x - vb (t - t0), v - vb) the motion is the one on a support
- * at rest with the constant force -c vb added (the damper's pull; k = 0: no drift), exactly. */
+ * at rest with the constant force -c vb added (the damper's pull; k = 0: no drift), exactly. Its
+ * observables but x's extremes are those of the belt's frame (the stick time, the friction's work on the
+ * relative motion, the transitions); the extremes are of x itself (with input derivatives: not computed,
+ * NaN). */
 static dfo_status free_belt(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
                             double t_target, dfo_switch_fn on_switch, void *switch_ctx, double vb)
 {
@@ -1921,23 +1967,32 @@ static dfo_status free_belt(const dfo_model *M, const dfo_inputs *u, const dfo_i
     ub.F_ext_set = 1;
     ub.v_belt = 0.0;
     ub.v_belt_set = 0;
-    const double t0 = s->t;
-    belt_switch bs = {on_switch, switch_ctx, vb, t0};
-    const int obs = M->p.observe, had = s->observed;
+    const int poly = q != NULL && dfo_input_poly_active(q);
+    belt_free b = {on_switch, switch_ctx, vb, s->t, M, u, M->p.observe, poly, 0, s->t, s->X, s->V, s->mode, 0.0, 0.0};
+    const int had = s->observed;
     const double x_max = s->x_max, x_min = s->x_min;
+    const int report = on_switch != NULL || M->p.observe;
     s->V -= vb;
     dfo_status st;
-    if (q != NULL && dfo_input_poly_active(q))
-        st = dfo_exact_advance_poly(M, &ub, q, s, t_target, on_switch ? belt_switch_fn : NULL, &bs);
+    if (poly)
+        st = dfo_exact_advance_poly(M, &ub, q, s, t_target, report ? belt_free_switch : NULL, &b);
     else
-        st = dfo_exact_advance(M, &ub, s, t_target, on_switch ? belt_switch_fn : NULL, &bs);
-    const double dt = s->t - t0;
+        st = dfo_exact_advance(M, &ub, s, t_target, report ? belt_free_switch : NULL, &b);
     s->V += vb;
-    s->X += vb * dt;
-    if (obs) { /* the extremes of x in the belt's frame are not those of x: not computed on a belt without a spring */
-        s->x_max = had ? x_max : s->x_max;
-        s->x_min = had ? x_min : s->x_min;
-        if (s->observed) s->x_max = s->x_min = NAN;
+    s->X += vb * (s->t - b.t0);
+    if (M->p.observe) {
+        belt_free_phase(&b, s->t, s->X); /* the last phase, to the call's end */
+        s->observed = had || s->observed;
+        if (poly && s->observed) {
+            s->x_max = s->x_min = NAN; /* (not computed) */
+        } else if (s->observed) {
+            s->x_max = had ? x_max : -INFINITY;
+            s->x_min = had ? x_min : INFINITY;
+            if (b.have) {
+                s->x_max = fmax(s->x_max, b.hi);
+                s->x_min = fmin(s->x_min, b.lo);
+            }
+        }
     }
     return st;
 }
@@ -1958,7 +2013,8 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     if (!(isfinite(q->t0) && isfinite(q->F[0]) && isfinite(q->F[1]) && isfinite(q->N[0]) && isfinite(q->N[1])))
         return DFO_ERR_NONFINITE;
     const double vb = dfo_belt_speed(u);
-    if (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0) belt_start(M, u, vb, s, on_switch, switch_ctx);
+    if (dfo_belt_on(u) && (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0))
+        belt_start(M, u, vb, s, on_switch, switch_ctx);
     if (vb != 0.0) return belt_advance(M, u, q, s, t_target, on_switch, switch_ctx, vb);
     return poly_core(M, u, q, s, t_target, on_switch, switch_ctx, 0.0);
 }

@@ -466,6 +466,48 @@ static int find_stop(const fr_ctx *C, const fr_phase *P, double U, fr_val *out)
     }
 }
 
+#define MAX_TURNS 4096 /* turning points of x looked for in one slide (dfo_exact_free_slide_extremes) */
+
+void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, double ta, double X, double V, int s,
+                                   double t0, double t1, double *lo, double *hi)
+{
+    fr_ctx C;
+    ctx_init(&C, M, u);
+    fr_phase P;
+    phase_init(&C, &P, ta, X, V, s);
+    fr_val a, b;
+    eval(&C, &P, t0 - ta, &a);
+    eval(&C, &P, t1 - ta, &b);
+    *lo = fmin(a.x, b.x);
+    *hi = fmax(a.x, b.x);
+    double t = t0, x = a.x, v = a.v, acc = a.a, vm = a.vmag;
+    for (int n = 0; n < MAX_TURNS && t < t1; n++) {
+        /* the same motion from t (its friction that of P), searched for the next zero of v */
+        fr_phase Q;
+        phase_init(&C, &Q, t, x, v, s);
+        int dir = (fabs(v) > ROUND * vm) ? dfo_sign(v) : dfo_sign(acc);
+        if (dir == 0) dir = 1;
+        if (fabs(v) <= ROUND * vm) Q.va = 0.0; /* at a turning point: from rest */
+        fr_val z;
+        int r = SEARCH_NULL;
+        for (int k = 0; k < 2 && r == SEARCH_NULL; k++, dir = -dir) {
+            Q.s = dir;
+            r = find_stop(&C, &Q, t1 - t, &z);
+        }
+        if (r != SEARCH_STOP || !(z.tau > 0.0)) return;
+        t += z.tau;
+        if (!(t < t1)) return;
+        fr_val w;
+        eval(&C, &P, t - ta, &w); /* x there by P's own closed form */
+        *lo = fmin(*lo, w.x);
+        *hi = fmax(*hi, w.x);
+        x = w.x;
+        v = 0.0;
+        acc = w.a;
+        vm = w.vmag;
+    }
+}
+
 /* ---- observables and switch reports (as exact.c) ------------------------------------------------ */
 
 /* x of a slip phase at time t from its start */
