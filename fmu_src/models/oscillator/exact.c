@@ -332,12 +332,6 @@ static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V,
         phase_at(C, ta, &P->c0, &P->s0);
     }
     const double y0 = X - P->xc, v0 = V / C->w0 - (P->poly ? P->xp1 : 0.0); /* (the harmonic part's data) */
-    P->xp1a = P->xp1;
-    P->vbu = 0.0;
-    if (C->belt) { /* (poly: the held inputs' particular solution is xc alone) */
-        P->vbu = C->vbs / C->w0;
-        P->xp1 = P->xp1a - P->vbu;
-    }
     if (C->uniform) {
         const double qr = 0.5 * a * P->s0 * C->inv_wd, qi = -0.5 * a * P->c0 * C->inv_wd;
         P->Qr = qr;
@@ -380,6 +374,15 @@ static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V,
         P->fA = fabs(hy - beta);
         P->fB = fabs(beta);
     }
+}
+
+/* On a belt: the phase's y' made the velocity relative to the belt (phase_start's data are of the motion
+ * itself: its harmonic part does not depend on the belt). */
+static inline void belt_shift(const ex_ctx *C, ex_phase *P)
+{
+    P->xp1a = P->xp1;
+    P->vbu = C->vbs / C->w0;
+    P->xp1 = P->xp1a - P->vbu;
 }
 
 static inline void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
@@ -994,7 +997,7 @@ static double phase_x(const void *ctx, const void *phase, double t)
     ex_val v;
     const double u = C->w0 * t;
     eval(C, P, u, &v);
-    if (P->vbu != 0.0) return (P->xc + (v.hy + u * (P->xp1a + 0.5 * u * P->xp2))) * C->Ls; /* on a belt: x itself */
+    if (C->belt) return (P->xc + (v.hy + u * (P->xp1a + 0.5 * u * P->xp2))) * C->Ls; /* on a belt: x itself */
     return (P->xc + v.y) * C->Ls;
 }
 
@@ -1627,6 +1630,7 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
         ex_phase P;
         ex_val v;
         phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
+        if (belt) belt_shift(C, &P);
         const double u_max = w0 * ((t_target - t.hi) - t.lo);
         const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
         const double u_end = cut ? C->u_span : u_max;
