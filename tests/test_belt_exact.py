@@ -9,6 +9,7 @@ central finite differences; stribeck still refused with exact."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -201,6 +202,98 @@ def test_fmi3_same_bits() -> None:
     finally:
         ref.close()
         fmu.close()
+
+
+# ---- input derivatives on a belt -------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class RampBelt(Belt):
+    """The reference's block with F_ext + F1 t instead of F_ext (a ramp). ``P0`` is only the reference's
+    bound of the force's rate (|P0| omega bounds it: set to P_true + |F1| / omega); the excitation is
+    P_true cos(omega t + phi)."""
+
+    F1: float = 0.0
+    P_true: float = 0.0
+
+    def applied(self, t: float, x: float, v: float) -> float:
+        return (self.P_true * math.cos(self.omega * t + self.phi) + self.F_ext + self.F1 * t - self.c * v
+                - self.k * x)
+
+
+@pytest.mark.parametrize("k", [1.0, 0.0], ids=["spring", "no spring"])
+def test_F_ext_ramp_on_a_belt(k: float) -> None:
+    """F_ext = 0.05 + 0.01 t given at every communication point with its derivative (so the FMU's
+    polynomial is the ramp itself), on a belt changed once: against the reference with that ramp."""
+    F0, F1, vb, dt = 0.05, 0.01, 0.3, 0.1
+    x0 = 1.0 if k == 0.0 else 0.0
+    r = FMI2Run(dict(BASE, k=k, x0=x0, v_belt=vb, observe=True), log_events=True)
+    try:
+        vr, vbr = r.vars["F_ext"].valueReference, r.vars["v_belt"].valueReference
+        xs, vs = [], []
+        for i in range(300):
+            t = i * dt
+            if i == 150:
+                r.slave.setReal([vbr], [-0.1])
+            r.slave.setReal([vr], [F0 + F1 * t])
+            r.slave.setRealInputDerivatives([vr], [1], [F1])
+            r.slave.doStep(t, dt)
+            x, v = r.get(["x", "v"])
+            xs.append(x)
+            vs.append(v)
+        sw = list(r.switches)
+    finally:
+        r.close()
+    ref = RampBelt(m=1.0, k=k, c=0.05, N=1.0, mu_s=0.5, mu_k=0.3, P0=0.2 + F1 / 0.7, omega=0.7, F_ext=F0, F1=F1,
+                   P_true=0.2, x0=x0)
+    grid = np.arange(301) * dt
+    b = simulate(ref, grid, v_belt=vb, changes=[(15.0, -0.1)])
+    assert np.max(np.abs(np.array(xs) - b.x[1:])) < 1e-10 and np.max(np.abs(np.array(vs) - b.v[1:])) < 1e-10
+    assert kinds([(a, c) for _, a, c in sw]) == [k_ for _, k_ in b.events] and len(sw) >= 3, (sw, b.events)
+
+
+def test_extremes_without_spring_with_a_normal_force_ramp() -> None:
+    """k = 0 on a belt, N_ext falling through 0 (the friction ends at t = 12: the slide's pieces) and F_ext
+    rising, both given with their derivatives at every communication point of 0.1: x_max, x_min over
+    [2, 20] against the x of the same run sampled every 1e-3 (at least each sample, within the sampling's
+    reach; x turns inside the slides)."""
+    def run(dt: float, observe: bool) -> tuple[np.ndarray, list[float]]:
+        r = FMI2Run(dict(BASE, k=0.0, c=0.3, x0=1.0, P0=1.0, omega=1.0, N=0.6, v_belt=0.1, observe=observe,
+                         t_obs_start=2.0, t_obs_stop=20.0))
+        try:
+            vF, vN = r.vars["F_ext"].valueReference, r.vars["N_ext"].valueReference
+            xs = []
+            n = int(round(20.0 / dt))
+            for i in range(n):
+                t = i * dt
+                r.slave.setReal([vF, vN], [0.02 * t, -0.05 * t])
+                r.slave.setRealInputDerivatives([vF, vN], [1, 1], [0.02, -0.05])
+                r.slave.doStep(t, dt)
+                xs.append(r.get(["x"])[0])
+            return np.array(xs), (r.get(["x_max", "x_min"]) if observe else [])
+        finally:
+            r.close()
+    _, (x_max, x_min) = run(0.1, True)
+    xs, _ = run(1e-3, False)
+    w = xs[1999:]  # t in [2, 20]
+    assert -1e-10 <= x_max - w.max() <= 1e-5 and -1e-10 <= w.min() - x_min <= 1e-5, (x_max, w.max(), x_min, w.min())
+    assert np.any(np.diff(np.sign(np.diff(w))) != 0)  # x turns
+
+
+def test_fmu_state_round_trip_on_a_belt() -> None:
+    r = FMI2Run(dict(BASE, observe=True, v_belt=0.3))
+    try:
+        r.slave.doStep(0.0, 3.0)
+        state = r.slave.serializeFMUstate(r.slave.getFMUstate())
+        r.slave.setReal([r.vars["v_belt"].valueReference], [-0.1])
+        r.slave.doStep(3.0, 4.0)
+        first = r.get(OUT)
+        r.slave.setFMUstate(r.slave.deSerializeFMUstate(state))
+        r.slave.setReal([r.vars["v_belt"].valueReference], [-0.1])
+        r.slave.doStep(3.0, 4.0)
+        assert np.array_equal(np.asarray(r.get(OUT), float).view(np.int64),
+                              np.asarray(first, float).view(np.int64))
+    finally:
+        r.close()
 
 
 # ---- one long doStep, many short ones ---------------------------------------------------------------

@@ -1911,8 +1911,9 @@ typedef struct {
     void *ctx;
     double vb, t0;
     const dfo_model *M;
-    const dfo_inputs *u; /* the inputs (physical frame) */
-    int observe, poly, have;
+    const dfo_inputs *u;      /* the inputs (physical frame) */
+    const dfo_input_poly *q;  /* their polynomials (NULL: held) */
+    int observe, have;
     double ta, xa, va;   /* the current phase's start (physical frame) */
     int mode;
     double lo, hi;       /* the extremes of x in the window so far (have) */
@@ -1931,18 +1932,37 @@ static void belt_free_phase(belt_free *b, double tb, double xb)
 {
     const dfo_params *p = &b->M->p;
     const double w0 = p->t_obs_start, w1 = p->t_obs_stop, ta = b->ta;
-    if (!b->observe || tb < w0 || ta > w1 || b->poly) return;
+    if (!b->observe || tb < w0 || ta > w1) return;
     const double t0 = fmax(ta, w0), t1 = fmin(tb, w1);
     if (b->mode == 0) {
         belt_free_sample(b, (t0 == ta) ? b->xa : b->xa + b->vb * (t0 - ta));
         belt_free_sample(b, (t1 == tb) ? xb : b->xa + b->vb * (t1 - ta));
-    } else {
-        double lo, hi;
-        dfo_exact_free_slide_extremes(b->M, b->u, ta, b->xa, b->va, b->mode, t0, t1, &lo, &hi);
+        return;
+    }
+    if (t0 == ta) belt_free_sample(b, b->xa);
+    if (t1 == tb) belt_free_sample(b, xb);
+    double lo, hi, Xe, Ve;
+    if (b->q == NULL) {
+        dfo_exact_free_slide_extremes(b->M, b->u, NULL, ta, b->xa, b->va, b->mode, t0, t1, t1, &lo, &hi, &Xe, &Ve);
         belt_free_sample(b, lo);
         belt_free_sample(b, hi);
-        if (t0 == ta) belt_free_sample(b, b->xa);
-        if (t1 == tb) belt_free_sample(b, xb);
+        return;
+    }
+    /* polynomial inputs: the pieces between the zeros of N + N_ext(t), the motion carried over each */
+    const dfo_input_poly *q = b->q;
+    const double n0 = p->N + (b->u->N_ext_set ? b->u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
+    double z[2], poly[7] = {q->t0, dfo_external_force(b->M, b->u), q->F[0], q->F[1], 0.0, 0.0, 0.0};
+    const int nz = poly_zeros(n0, n1, n2, ta - q->t0, tb - q->t0, z);
+    double X = b->xa, V = b->va;
+    for (int i = 0; i <= nz; i++) {
+        const double a = (i == 0) ? ta : q->t0 + z[i - 1], e = (i == nz) ? tb : q->t0 + z[i];
+        piece_normal(n0, n1, n2, 0.5 * (a + e) - q->t0, poly + 4);
+        dfo_exact_free_slide_extremes(b->M, b->u, poly, a, X, V, b->mode, fmax(a, t0), fmin(e, t1), e, &lo, &hi, &X,
+                                      &V);
+        if (fmin(e, t1) >= fmax(a, t0)) {
+            belt_free_sample(b, lo);
+            belt_free_sample(b, hi);
+        }
     }
 }
 
@@ -1961,8 +1981,7 @@ static void belt_free_switch(void *ctx, double t, double x, int from_mode, int t
 /* No spring on a belt: in the belt's frame (x - vb (t - t0), v - vb) the motion is the one on a support
  * at rest with the constant force -c vb added (the damper's pull; k = 0: no drift), exactly. Its
  * observables but x's extremes are those of the belt's frame (the stick time, the friction's work on the
- * relative motion, the transitions); the extremes are of x itself (with input derivatives: not computed,
- * NaN). */
+ * relative motion, the transitions); the extremes are of x itself. */
 static dfo_status free_belt(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
                             double t_target, dfo_switch_fn on_switch, void *switch_ctx, double vb)
 {
@@ -1972,7 +1991,8 @@ static dfo_status free_belt(const dfo_model *M, const dfo_inputs *u, const dfo_i
     ub.v_belt = 0.0;
     ub.v_belt_set = 0;
     const int poly = q != NULL && dfo_input_poly_active(q);
-    belt_free b = {on_switch, switch_ctx, vb, s->t, M, u, M->p.observe, poly, 0, s->t, s->X, s->V, s->mode, 0.0, 0.0};
+    belt_free b = {on_switch, switch_ctx, vb, s->t, M, u, poly ? q : NULL, M->p.observe, 0, s->t, s->X, s->V, s->mode,
+                   0.0, 0.0};
     const int had = s->observed;
     const double x_max = s->x_max, x_min = s->x_min;
     const int report = on_switch != NULL || M->p.observe;
@@ -1987,9 +2007,7 @@ static dfo_status free_belt(const dfo_model *M, const dfo_inputs *u, const dfo_i
     if (M->p.observe) {
         belt_free_phase(&b, s->t, s->X); /* the last phase, to the call's end */
         s->observed = had || s->observed;
-        if (poly && s->observed) {
-            s->x_max = s->x_min = NAN; /* (not computed) */
-        } else if (s->observed) {
+        if (s->observed) {
             s->x_max = had ? x_max : -INFINITY;
             s->x_min = had ? x_min : INFINITY;
             if (b.have) {

@@ -94,6 +94,7 @@ void dfo_input_poly_at(const dfo_inputs *u, const dfo_input_poly *q, double t, d
  * (k > 0 and k = 0): NULL. */
 const char *dfo_exact_poly_unsupported(const dfo_model *M);
 
+
 /* Advance to t_target > s->t with the inputs varying as q's polynomials (q->t0 <= s->t): the contract
  * of dfo_exact_advance otherwise (on return A, F are those at t_target with the inputs there). When
  * no derivative is nonzero (dfo_input_poly_active(q) == 0) it is dfo_exact_advance itself, bit for bit.
