@@ -370,6 +370,8 @@ SENS = [
     ("stick phases, undamped, chi > 1", dict(BASE, c=0.0, chi=1.2, P0=0.5, omega=1.1, x0=0.2, v0=0.1), -0.2,
      (6.0, 18.0), ()),
     ("belt changed while stuck", dict(BASE, x0=0.1, v0=0.6), 0.3, (26.5,), ((12.0, 0.1), (20.0, -0.2))),
+    ("no spring, stick phases", dict(BASE, k=0.0, c=0.2, N=1.5, P0=1.0, omega=2.0, x0=0.0, v0=0.5), 0.3, (3.5, 14.5),
+     ()),
 ]
 
 
