@@ -142,7 +142,8 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("name", list(CASES))
+@pytest.mark.parametrize("name", [n if i == 0 else pytest.param(n, marks=pytest.mark.slow)
+                                  for i, n in enumerate(CASES)])  # (the reference on 30001 points: 1.5-4.5 s each)
 def test_extremes_against_the_reference_on_a_fine_grid(name: str) -> None:
     """x_max, x_min over [5, 30] (observe): at least the largest (least) x of the reference on a grid of
     1e-3 s, and within the grid's reach of it (the turning points inside slides are found: x is not
