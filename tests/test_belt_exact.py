@@ -184,6 +184,28 @@ def test_against_the_event_driven_reference(name: str) -> None:
     assert np.max(np.abs(np.array([s[0] for s in sw]) - np.array([e[0] for e in b.events]))) < 1e-9
 
 
+def test_long_stick_phase_with_a_brief_crossing() -> None:
+    """A slow belt (0.002) drags the stuck block's holding force 0.05 cos(3 t) + 0.3 - 0.002 t down over
+    some 180 excitation periods until one trough of the excitation dips past -F_s: one doStep of 400 s
+    finds that breakaway (and the slides after it) at the reference's times."""
+    p = dict(BASE, c=0.0, P0=0.05, omega=3.0, x0=-0.3, v0=0.002)
+    ref = REF.with_(c=0.0, P0=0.05, omega=3.0, x0=-0.3, v0=0.002)
+    r = FMI2Run(dict(p, v_belt=0.002), log_events=True)
+    try:
+        r.slave.doStep(0.0, 400.0)
+        x, v = r.get(["x", "v"])
+        sw = list(r.switches)
+    finally:
+        r.close()
+    b = simulate(ref, [0.0, 400.0], v_belt=0.002)
+    assert sw and sw[0][1] == 0 and 300.0 < sw[0][0] < 400.0, sw
+    assert kinds([(a, c) for _, a, c in sw]) == [k_ for _, k_ in b.events]
+    assert np.max(np.abs(np.array([q[0] for q in sw]) - np.array([e[0] for e in b.events]))) < 1e-9
+    # the crossing lies near a trough of the excitation: cos(3 t_b) close to -1
+    assert math.cos(3.0 * sw[0][0]) < -0.9
+    assert abs(x - b.x[-1]) < 1e-10 and abs(v - b.v[-1]) < 1e-10
+
+
 def test_fmi3_same_bits() -> None:
     """FMI 3.0 gives FMI 2.0's bits with a belt changed at communication points."""
     params = dict(BASE, observe=True, v_belt=0.3)
