@@ -125,7 +125,8 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
         const fmi2Integer law_iv[] = {p.law};
         if (a->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK || a->set_real(c, vr, 13, rv) != fmi2OK ||
             a->set_integer(c, ivr, 2, iv) != fmi2OK || a->set_boolean(c, bvr, 1, bv) != fmi2OK ||
-            (p.belt && (a->set_real(c, belt_vr, 3, belt_rv) != fmi2OK || a->set_integer(c, law_vr, 1, law_iv) != fmi2OK)) ||
+            (p.belt &&
+             (a->set_real(c, belt_vr, 3, belt_rv) != fmi2OK || a->set_integer(c, law_vr, 1, law_iv) != fmi2OK)) ||
             a->enter_init(c) != fmi2OK || a->exit_init(c) != fmi2OK) {
             printf("err %d 0 initialisation\n", set);
             a->free_instance(c);

@@ -1439,7 +1439,7 @@ static double phase_work(const void *ctx, const void *phase, double t0, double t
     return poly_work(C, (const ex_phase *)phase, C->w0 * t0, C->w0 * t1);
 }
 
-#define MAX_TURNS 4096 /* turning points of x looked for in one slide on a belt (observe) */
+#define MAX_TURNS DFO_EXACT_MAX_EVENTS /* turning points of x in one slide on a belt (observe): the work bound */
 
 /* On a belt the block may turn inside a slide (v through 0 while v - vb keeps its sign): the turning
  * points of the slide P in tau in (ua, ub) (from its start) sampled for the window's extremes, found by
@@ -1450,7 +1450,7 @@ static void belt_turns(const ex_ctx *C, const ex_phase *P, double ua, double ub,
     D.belt = 0;
     const double w0 = C->w0, vbu = P->vbu;
     double u = ua;
-    for (int n = 0; n < MAX_TURNS && u < ub; n++) {
+    for (long long n = 0; n < MAX_TURNS && u < ub; n++) {
         ex_val w;
         eval(C, P, u, &w);
         const double X = P->xc + (w.hy + u * (P->xp1a + 0.5 * u * P->xp2)), va = w.y1 + vbu; /* x, v / w0 */
@@ -1477,7 +1477,8 @@ static void belt_after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, d
                              double xb, int mode_during, int mode_after, int event)
 {
     const dfo_model *M = C->M;
-    if (event && mode_after != mode_during && C->on_switch) C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
+    if (event && mode_after != mode_during && C->on_switch)
+        C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
     if (!M->p.observe) return;
     const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
     if (tb < w0 || ta > w1) return;

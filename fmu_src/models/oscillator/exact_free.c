@@ -923,7 +923,7 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
 
 /* ---- a belt's turning points (exact.c's free_belt) ------------------------------------------------ */
 
-#define MAX_TURNS 4096 /* turning points of x looked for in one slide (dfo_exact_free_slide_extremes) */
+#define MAX_TURNS DFO_EXACT_MAX_EVENTS /* turning points of x looked for in one slide (the work bound, newmark.h) */
 
 void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, const double *poly, double ta, double X,
                                    double V, int s, double t0, double t1, double te, double *lo, double *hi, double *Xe,
@@ -951,7 +951,7 @@ void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, cons
     *lo = fmin(a.x, b.x);
     *hi = fmax(a.x, b.x);
     double t = t0, x = a.x, v = a.v, acc = a.a, vm = a.vmag;
-    for (int n = 0; n < MAX_TURNS && t < t1; n++) {
+    for (long long n = 0; n < MAX_TURNS && t < t1; n++) {
         /* the same motion from t (its friction that of P), searched for the next zero of v */
         fr_phase Q;
         phase_init(&C, &Q, t, x, v, s);
