@@ -4,7 +4,7 @@
  * allocates. Output: CSV on stdout, or written atomically to --csv FILE.
  *
  *   bench_stepper [--fmu-lib PATH] [--reps N] [--periods P] [--steps-per-period N[,N...]]
- *                 [--schemes paper,consistent,located] [--alpha A]
+ *                 [--schemes paper,consistent,located,exact] [--alpha A]
  *                 [--case NAME,lambda,mu_s_sigma,chi,zeta]... [--observe 0|1] [--csv FILE]
  *
  * Every timing is the minimum over --reps repetitions (bare and FMU alternate, so both see the
@@ -97,7 +97,7 @@ typedef struct {
     int observe; /* the in-FMU observables on (bare loop and FMU alike); default off */
     int n_spp;
     double spp[MAX_SPP];
-    int schemes[3];
+    int schemes[4];
     int n_schemes;
     int n_cases;
     bench_case cases[MAX_CASES];
@@ -197,8 +197,9 @@ static void parse_schemes(options *o, const char *text)
         if (!strcmp(tok, "paper")) s = DFO_SCHEME_PAPER;
         else if (!strcmp(tok, "consistent")) s = DFO_SCHEME_CONSISTENT;
         else if (!strcmp(tok, "located")) s = DFO_SCHEME_LOCATED;
-        else die("--schemes: unknown scheme '%s' (paper, consistent, located)", tok);
-        if (o->n_schemes >= 3) die("--schemes: at most three schemes");
+        else if (!strcmp(tok, "exact")) s = DFO_SCHEME_EXACT; /* (its steps are its events) */
+        else die("--schemes: unknown scheme '%s' (paper, consistent, located, exact)", tok);
+        if (o->n_schemes >= 4) die("--schemes: at most four schemes");
         o->schemes[o->n_schemes++] = s;
     }
     if (o->n_schemes == 0) die("--schemes needs at least one scheme");
@@ -245,7 +246,7 @@ static void parse_args(options *o, int argc, char **argv)
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             printf("usage: bench_stepper [--fmu-lib PATH] [--reps N] [--periods P] [--steps-per-period N[,N...]]\n"
-                   "                     [--schemes paper,consistent,located] [--alpha A]\n"
+                   "                     [--schemes paper,consistent,located,exact] [--alpha A]\n"
                    "                     [--case NAME,lambda,mu_s_sigma,chi,zeta]... [--observe 0|1] [--csv FILE]\n");
             exit(0);
         }
@@ -436,7 +437,7 @@ static void write_atomically(const char *path, const char *data, size_t len)
 
 static const char *scheme_name(int s)
 {
-    return s == DFO_SCHEME_PAPER ? "paper" : s == DFO_SCHEME_CONSISTENT ? "consistent" : "located";
+    return s == DFO_SCHEME_PAPER ? "paper" : s == DFO_SCHEME_CONSISTENT ? "consistent" : s == DFO_SCHEME_LOCATED ? "located" : "exact";
 }
 
 int main(int argc, char **argv)

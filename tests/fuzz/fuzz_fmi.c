@@ -10,7 +10,8 @@
  * Besides ASan/UBSan, the target checks these oracles and aborts when one fails:
  *   - an fmi2Error of a live instance comes with a logged message (while error logging is on);
  *   - outputs read with fmi2OK or fmi2Warning (an observable read while observe is false) are
- *     finite, mode is -1, 0 or +1, and mode 0 means v == 0;
+ *     finite, mode is -1, 0 or +1, and mode 0 means v == v_belt (every scheme, exact included: a
+ *     stuck block rides on the belt; until the step after a change of v_belt, the last step's belt);
  *   - outputs read right after an input is set (direct feedthrough of a and F_friction) are finite;
  *   - output and directional derivatives read with fmi2OK are finite, x and v have no feed-through;
  *   - after an fmi2OK doStep the FMU's time (fmi2LastSuccessfulTime) is exactly tc + dt

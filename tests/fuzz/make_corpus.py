@@ -13,7 +13,8 @@ from pathlib import Path
 INST, SETUP, ENTER, EXIT, SETR, SETI, SETB, STEP, GETR, GETIB, TERM, RESET = range(12)
 GETS, SETS, FREES, SER, DESER, LOG, STATUS, OUTS = range(12, 20)
 VR = {"m": 0, "k": 1, "c": 2, "P0": 3, "omega": 4, "N": 6, "mu_s": 7, "chi": 8, "x0": 9, "v0": 10, "h": 11,
-      "alpha": 12, "scheme": 15, "frictionUpdates": 16, "observe": 17, "fastPaths": 18, "F_ext": 19, "N_ext": 20}
+      "alpha": 12, "scheme": 15, "frictionUpdates": 16, "observe": 17, "fastPaths": 18, "F_ext": 19, "N_ext": 20,
+      "v_belt": 38}
 
 
 def raw(x: float) -> bytes:
@@ -50,6 +51,10 @@ SEEDS = {
     + step(200) + bytes([GETR]),
     "misuse": bytes([STEP, 0, 1, 0, EXIT, GETR, ENTER, ENTER, SETUP, 0]) + setr("m", -1.0)
     + bytes([EXIT]) + step(3) + bytes([STEP, 3, 0, 255]) + struct.pack("<d", -1.0) + bytes([TERM, STEP, 0, 1, 0]),
+    # the exact scheme on a moving belt, the belt changed at communication points (a stuck block slides)
+    "exact_belt": seti("scheme", 4) + setup(0.0) + setr("v_belt", 0.3) + bytes([ENTER, EXIT]) + step(3000) * 3
+    + setr("v_belt", -0.2) + step(2000) * 2 + setr("v_belt", 0.0) + step(3000) + bytes([GETR, OUTS])
+    + bytes([GETS, 0, SER, 0, DESER, 0, 1, SETS, 1]) + setr("F_ext", 0.5) + step(500),
     "late_start": setup(1e6) + bytes([ENTER, EXIT]) + step(100) * 3,
     "logging": bytes([LOG, 0, LOG, 0b10000111, LOG, 1, INST, 1, 1]) + setup(0.0) + bytes([ENTER, EXIT])
     + step(1000) + bytes([STATUS, 2, OUTS]),

@@ -113,6 +113,10 @@ typedef struct {
      * piece where it is > 0, all 0 on a piece where it is <= 0: the normal force max(N + N_ext(t), 0)) */
     int poly;
     double q_t0, qF[3], qN[3];
+    /* a moving belt (belt = 1, with poly = 1: its loop): the friction acts on the velocity relative to the
+     * belt vb (physical; vbs = vb / Ls), a stuck block rides on it (X = X_a + vbs (t - t_a), V = vbs) */
+    int belt;
+    double vb, vbs;
 } ex_ctx;
 
 /* One slip phase from (ta, X, V) in direction s. */
@@ -132,6 +136,9 @@ typedef struct {
      * particular solution, y the harmonic motion above), and the normal force n0 + n1 u + n2 u^2 / 2 */
     int poly;
     double xp1, xp2, n0, n1, n2;
+    /* on a belt, y' is the velocity relative to the belt (xp1 = xp1a - vbu, vbu = vbs / w0, xp1a the
+     * particular solution's own): x = xc + y + vbu u, the search's zero is the stop at v = vb */
+    double xp1a, vbu;
 } ex_phase;
 
 /* y and its derivatives in tau up to the sixth at tau = u, and the free part's decay factors there. */
@@ -166,6 +173,7 @@ static void ctx_scale(ex_ctx *C, int e)
     C->Ls_.muk_N *= C->iLs;
     C->Ls_.Fb *= C->iLs;
     C->fP = C->M->P_amp * C->iLs;
+    C->vbs = C->vb * C->iLs;
     C->fF = C->Ls_.F_ext;
     C->a = C->fP / C->k;
     const double z = C->zeta;
@@ -237,6 +245,8 @@ static void ctx_init_scaled(ex_ctx *C, const dfo_model *M, const dfo_inputs *in,
     /* y'' = a cos theta - 2 zeta y' - y and its derivatives: y^(k+2) = a cos^(k) theta - 2 zeta y^(k+1) - y^(k) */
     double lk = 1.0;
     for (int k = 0; k < 8; k++, lk *= C->lam) C->lk[k] = lk;
+    C->belt = 0;
+    C->vb = 0.0;
     ctx_scale(C, e);
     C->on_switch = NULL;
     C->switch_ctx = NULL;
@@ -364,6 +374,15 @@ static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V,
         P->fA = fabs(hy - beta);
         P->fB = fabs(beta);
     }
+}
+
+/* On a belt: the phase's y' made the velocity relative to the belt (phase_start's data are of the motion
+ * itself: its harmonic part does not depend on the belt). */
+static inline void belt_shift(const ex_ctx *C, ex_phase *P)
+{
+    P->xp1a = P->xp1;
+    P->vbu = C->vbs / C->w0;
+    P->xp1 = P->xp1a - P->vbu;
 }
 
 static inline void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
@@ -976,7 +995,9 @@ static double phase_x(const void *ctx, const void *phase, double t)
     const ex_ctx *C = (const ex_ctx *)ctx;
     const ex_phase *P = (const ex_phase *)phase;
     ex_val v;
-    eval(C, P, C->w0 * t, &v);
+    const double u = C->w0 * t;
+    eval(C, P, u, &v);
+    if (C->belt) return (P->xc + (v.hy + u * (P->xp1a + 0.5 * u * P->xp2))) * C->Ls; /* on a belt: x itself */
     return (P->xc + v.y) * C->Ls;
 }
 
@@ -1209,9 +1230,18 @@ static dfo_status end_state(const ex_ctx *C, dfo_state *s, const dfo_loads *L, d
     return DFO_OK;
 }
 
+static dfo_status belt_advance(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                               double t_target, dfo_switch_fn on_switch, void *switch_ctx, double vb);
+static void belt_start(const dfo_model *M, const dfo_inputs *u, double vb, dfo_state *s, dfo_switch_fn on_switch,
+                       void *switch_ctx);
+
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx)
 {
+    const double vb = dfo_belt_speed(u);
+    if (dfo_belt_on(u) && (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0))
+        belt_start(M, u, vb, s, on_switch, switch_ctx); /* (the belt may have changed) */
+    if (vb != 0.0) return belt_advance(M, u, NULL, s, t_target, on_switch, switch_ctx, vb);
     if (M->p.k == 0.0) return dfo_exact_free_advance(M, u, s, t_target, on_switch, switch_ctx); /* no spring */
     ex_ctx C;
     ctx_init_scaled(&C, M, u, scale_exponent(M, u, s));
@@ -1272,9 +1302,17 @@ static dd poly_breakaway_from(const ex_ctx *C, double Xs, dd ta, dd tend, int *d
     for (long it = 0; it < MAX_SEARCH; it++) {
         dfo_loads L;
         double S1, Fb1;
-        const double S = poly_static_force(C, t, Xs, &L, &S1, &Fb1);
+        /* on a belt the block rides on it, X = Xs + vbs (t - ta): the holding force S - c vbs drifts with
+         * -k vbs (a ramp: |g''| is bounded by B as without the belt) */
+        const double Xt = C->belt ? Xs + C->vbs * dd_span(ta, t) : Xs;
+        double S = poly_static_force(C, t, Xt, &L, &S1, &Fb1);
+        if (C->belt) {
+            S -= C->M->p.c * C->vbs;
+            S1 -= C->k * C->vbs;
+        }
         const double gp = L.Fb - S, gm = L.Fb + S, gp1 = Fb1 - S1, gm1 = Fb1 + S1;
-        const double tol = 4.0 * DBL_EPSILON * (C->fP + fabs(L.F_ext) + fabs(C->k * Xs) + L.Fb);
+        const double tol = 4.0 * DBL_EPSILON * (C->fP + fabs(L.F_ext) + fabs(C->k * Xt) + L.Fb +
+                                                (C->belt ? fabs(C->M->p.c * C->vbs) : 0.0));
         *dS = S1;
         *dFb = Fb1;
         if (gp < 0.0 || gm < 0.0) { /* beyond the limit */
@@ -1401,13 +1439,74 @@ static double phase_work(const void *ctx, const void *phase, double t0, double t
     return poly_work(C, (const ex_phase *)phase, C->w0 * t0, C->w0 * t1);
 }
 
+#define MAX_TURNS DFO_EXACT_MAX_EVENTS /* turning points of x in one slide on a belt (observe): the work bound */
+
+/* On a belt the block may turn inside a slide (v through 0 while v - vb keeps its sign): the turning
+ * points of the slide P in tau in (ua, ub) (from its start) sampled for the window's extremes, found by
+ * the stop search itself on the absolute velocity (a phase of the same motion restarted at each one). */
+static void belt_turns(const ex_ctx *C, const ex_phase *P, double ua, double ub, dfo_state *s)
+{
+    ex_ctx D = *C; /* phase_start without the belt's shift: y' is then v itself */
+    D.belt = 0;
+    const double w0 = C->w0, vbu = P->vbu;
+    double u = ua;
+    for (long long n = 0; n < MAX_TURNS && u < ub; n++) {
+        ex_val w;
+        eval(C, P, u, &w);
+        const double X = P->xc + (w.hy + u * (P->xp1a + 0.5 * u * P->xp2)), va = w.y1 + vbu; /* x, v / w0 */
+        const double tol = tol_of(C, P, &w) + ROUND * fabs(vbu);
+        int dir = (fabs(va) > tol) ? dfo_sign(va) : dfo_sign(w.y2);
+        if (dir == 0) dir = 1;
+        int r = SEARCH_NULL;
+        ex_val z;
+        for (int k = 0; k < 2 && r == SEARCH_NULL; k++, dir = -dir) {
+            ex_phase Q;
+            phase_start(&D, &Q, dd_add_quot(dd_of(P->ta, 0.0), u, 0.0, w0), X, w0 * va, P->s, NULL);
+            Q.s = dir; /* the motion of P (its friction), searched for the zero of dir v */
+            r = find_stop(&D, &Q, X - Q.xc, va, ub - u, &z);
+        }
+        if (r != SEARCH_STOP || !(z.u > 0.0)) return;
+        u += z.u;
+        if (u < ub) sample(s, phase_x(C, P, u / w0));
+    }
+}
+
+/* The bookkeeping of a phase on a belt (after_phase): x moves while stuck (X = xa + vb (t - ta)), and in
+ * a slide it may turn (belt_turns); the friction's work is on the relative motion. */
+static void belt_after_phase(const ex_ctx *C, dfo_state *s, const ex_phase *P, double ta, double tb, double xa,
+                             double xb, int mode_during, int mode_after, int event)
+{
+    const dfo_model *M = C->M;
+    if (event && mode_after != mode_during && C->on_switch)
+        C->on_switch(C->switch_ctx, tb, xb, mode_during, mode_after);
+    if (!M->p.observe) return;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    if (tb < w0 || ta > w1) return;
+    const double a = fmax(ta, w0), b = fmin(tb, w1);
+    if (P == NULL) { /* riding on the belt */
+        s->t_stuck += (mode_during == 0) ? fmax(b - a, 0.0) : 0.0;
+        sample(s, (a == ta) ? xa : xa + C->vb * (a - ta));
+        sample(s, (b == tb) ? xb : xa + C->vb * (b - ta));
+    } else {
+        sample(s, (a == ta) ? xa : phase_x(C, P, a - ta));
+        sample(s, (b == tb) ? xb : phase_x(C, P, b - ta));
+        if (b > a) {
+            s->E_friction += poly_work(C, P, C->w0 * (a - ta), C->w0 * (b - ta)); /* relative: y is */
+            belt_turns(C, P, C->w0 * (a - ta), C->w0 * (b - ta), s);
+        }
+    }
+    if (event && mode_after != mode_during && tb > w0 && tb <= w1) s->transitions++;
+}
+
 /* A phase [ta, tb] spent in mode_during (P its slip, NULL while stuck), from xa to xb (physical), after
  * which the mode is mode_after (an event at tb when event is set): with polynomial inputs (poly), a
  * slide's friction work from its normal force (varying or not). */
 static DFO_EXACT_INLINE void after_phase(const ex_ctx *C, int poly, dfo_state *s, const ex_phase *P, double ta,
                                          double tb, double xa, double xb, int mode_during, int mode_after, int event)
 {
-    if (poly) {
+    if (poly && C->belt) {
+        belt_after_phase(C, s, P, ta, tb, xa, xb, mode_during, mode_after, event);
+    } else if (poly) {
         const double n[3] = {P ? P->n0 : 0.0, P ? P->n1 : 0.0, P ? P->n2 : 0.0};
         dfo_exact_after_phase_poly(C->M, C->on_switch, C->switch_ctx, s, phase_x, phase_work, C, P, P ? n : NULL, ta,
                                    tb, xa, xb, mode_during, mode_after, event);
@@ -1430,6 +1529,8 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
     dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
     double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
     const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
+    const int belt = poly && C->belt;     /* a moving belt (its calls take the polynomial inputs' loop) */
+    const double cvb = belt ? C->M->p.c * C->vbs : 0.0; /* riding on the belt, the damper pulls with c vb */
     const int fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0))
                           : C->Ls_.Fb > 0.0;
     while (dd_lt(t, target)) {
@@ -1449,6 +1550,10 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
                 S = poly_static_force(C, t, Xs, &L, &dS, NULL);
                 phase_at(C, t, &c, &sn);
                 d2S = -C->omega * C->omega * (C->fP * c) + C->qF[2] * C->iLs;
+                if (belt) { /* at v = vb: the relative acceleration's sign and rates */
+                    S -= cvb;
+                    dS -= C->k * C->vbs;
+                }
             } else {
                 phase_at(C, t, &c, &sn);
                 S = C->fP * c + C->fF - C->k * Xs;
@@ -1475,15 +1580,25 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
             skip = 0;
             if (sens) dfo_sens_stick(s->J);
             if (!dd_lt(tb, target)) {
+                if (belt) { /* riding on the belt to the end */
+                    Xs += C->vbs * dd_span(t, target);
+                    s->X = Xs * Ls;
+                    if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+                }
                 s->t = t_target;
                 t = target;
-                after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+                after_phase(C, poly, s, NULL, ta, t_target, xa, s->X, 0, 0, 0);
                 break;
+            }
+            if (belt) {
+                Xs += C->vbs * dd_span(t, tb);
+                s->X = Xs * Ls;
+                if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
             }
             t = tb;
             s->t = tb.hi;
-            Vs = 0.0;
-            s->V = 0.0;
+            Vs = belt ? C->vbs : 0.0;
+            s->V = belt ? C->vb : 0.0;
             s->mode = dir;
             if (poly) {
                 carried = 0;
@@ -1508,7 +1623,7 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
                 }
             } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
             C->events++;
-            after_phase(C, poly, s, NULL, ta, tb.hi, xa, xa, 0, dir, 1);
+            after_phase(C, poly, s, NULL, ta, tb.hi, xa, s->X, 0, dir, 1);
             continue;
         }
         /* a slip in direction sd from (t, X, V) */
@@ -1516,15 +1631,20 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
         ex_phase P;
         ex_val v;
         phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
+        if (belt) belt_shift(C, &P);
         const double u_max = w0 * ((t_target - t.hi) - t.lo);
         const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
         const double u_end = cut ? C->u_span : u_max;
-        const int r = find_stop(C, &P, Xs - P.xc, Vs / w0, u_end, &v);
+        const int r = find_stop(C, &P, Xs - P.xc, belt ? (Vs - C->vbs) / w0 : Vs / w0, u_end, &v);
         if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
         if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
         if (r == SEARCH_NONE) {
             Xs = P.xc + v.y;
             Vs = w0 * v.y1;
+            if (belt) { /* (eval: v.hy is the harmonic part) */
+                Xs = P.xc + (v.hy + v.u * (P.xp1a + 0.5 * v.u * P.xp2));
+                Vs = w0 * v.y1 + C->vbs;
+            }
             s->X = Xs * Ls;
             s->V = Vs * Ls;
             if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
@@ -1545,8 +1665,14 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
         s->t = ts.hi;
         Xs = P.xc + v.y;
         Vs = 0.0;
+        if (belt) { /* x itself from the harmonic part (v may be a Taylor model's, without it) */
+            ex_val w;
+            eval(C, &P, v.u, &w);
+            Xs = P.xc + (w.hy + w.u * (P.xp1a + 0.5 * w.u * P.xp2));
+            Vs = C->vbs;
+        }
         s->X = Xs * Ls;
-        s->V = 0.0;
+        s->V = belt ? C->vb : 0.0;
         if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
         /* the static force at a stop from the excitation phase there (known from the search), and the
          * loads there */
@@ -1556,6 +1682,7 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
         if (poly) {
             Fs = poly_static_force(C, ts, Xs, &Lp, NULL, NULL);
             if (r == SEARCH_STOP && !at_end) Fs = C->fP * v.cth + Lp.F_ext - C->k * Xs;
+            Fs -= cvb; /* (on a belt, the holding force: the damper pulls with c vb) */
             L = &Lp;
         } else {
             Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * Xs : static_force(C, ts, Xs);
@@ -1572,6 +1699,10 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
                 eval(C, &P, v.u, &w);
                 Xs = P.xc + w.y;
                 Vs = w0 * w.y1;
+                if (belt) {
+                    Xs = P.xc + (w.hy + w.u * (P.xp1a + 0.5 * w.u * P.xp2));
+                    Vs += C->vbs;
+                }
                 s->X = Xs * Ls;
                 s->V = Vs * Ls;
                 v.cth = w.cth;
@@ -1674,13 +1805,11 @@ static void piece_normal(double n0, double n1, double n2, double q, double qN[3]
     qN[2] = pos ? n2 : 0.0;
 }
 
-dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
-                                  double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+/* The polynomial inputs' calls (q active), and every call on a belt (vb != 0; q with zero derivatives for
+ * held inputs): the pieces between the zeros of N + N_ext(t), each by the polynomial inputs' loop. */
+static dfo_status poly_core(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                            double t_target, dfo_switch_fn on_switch, void *switch_ctx, double vb)
 {
-    if (!dfo_input_poly_active(q)) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
-    /* (the FMU refuses non-finite derivatives with a sentence; here they would be a wrong motion) */
-    if (!(isfinite(q->t0) && isfinite(q->F[0]) && isfinite(q->F[1]) && isfinite(q->N[0]) && isfinite(q->N[1])))
-        return DFO_ERR_NONFINITE;
     const double n0 = M->p.N + (u->N_ext_set ? u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
     double z[2];
     const int nz = poly_zeros(n0, n1, n2, s->t - q->t0, t_target - q->t0, z);
@@ -1703,6 +1832,12 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     int e = scale_exponent(M, u, s);
     e = (scale_exponent(M, &u1, s) > e) ? scale_exponent(M, &u1, s) : e;
     e = (scale_exponent(M, &u2, s) > e) ? scale_exponent(M, &u2, s) : e;
+    if (vb != 0.0) { /* on a belt: its speed over w0, and where a block riding on it gets to */
+        dfo_state sb = *s;
+        sb.V = vb;
+        sb.X = s->X + vb * (t_target - s->t);
+        e = (scale_exponent(M, u, &sb) > e) ? scale_exponent(M, u, &sb) : e;
+    }
     ex_ctx C;
     ctx_init_scaled(&C, M, u, e);
     C.on_switch = on_switch;
@@ -1712,6 +1847,11 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     C.qF[0] = dfo_external_force(M, u);
     C.qF[1] = q->F[0];
     C.qF[2] = q->F[1];
+    if (vb != 0.0) {
+        C.belt = 1;
+        C.vb = vb;
+        C.vbs = vb * C.iLs;
+    }
     if (out_of_range(&C, s)) return DFO_ERR_NONFINITE;
     /* the pieces between the zeros of N + N_ext(t) */
     dfo_status st = DFO_OK;
@@ -1729,5 +1869,175 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     const dd te = {s->t, 0.0};
     dfo_loads L;
     const double S = poly_static_force(&C, te, s->X * C.iLs, &L, NULL, NULL);
+    if (C.belt && s->mode == 0) { /* riding on the belt: the friction holds S - c vb */
+        s->V = vb;
+        s->A = 0.0;
+        s->F = dfo_stick_force(&L, S - M->p.c * C.vbs) * C.Ls;
+        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+        return DFO_OK;
+    }
     return end_state(&C, s, &L, S);
+}
+
+/* A call's start after a change of the belt at this communication point (the block keeps its velocity):
+ * a stuck block whose velocity is not the belt's slides in the direction of v - vb, and a sliding one
+ * whose v - vb now points against its mode (beyond the rounding of the last call's end, at which a
+ * slide may end a few ulps past its stop) slides the other way: a switch. */
+static void belt_start(const dfo_model *M, const dfo_inputs *u, double vb, dfo_state *s, dfo_switch_fn on_switch,
+                       void *switch_ctx)
+{
+    int to = s->mode;
+    if (s->mode == 0) {
+        if (s->V != vb) to = dfo_sign(s->V - vb);
+    } else {
+        dfo_loads L;
+        dfo_loads_init(&L, M, u);
+        const double k = M->p.k, w0 = sqrt(k / M->p.m);
+        const double len = (k > 0.0) ? fabs(s->X) + (M->P_amp + fabs(L.F_ext) + L.Fb) / k : 0.0;
+        const double harm = (k == 0.0 && M->p.omega > 0.0) ? M->P_amp / (M->p.m * M->p.omega) : 0.0;
+        const double thr = 4.0 * ROUND * (fabs(s->V) + fabs(vb) + w0 * len + harm);
+        if (s->mode * (s->V - vb) < -thr) to = -s->mode;
+    }
+    if (to == s->mode) return;
+    if (on_switch) on_switch(switch_ctx, s->t, s->X, s->mode, to);
+    s->mode = to;
+    if (M->p.observe && s->t > M->p.t_obs_start && s->t <= M->p.t_obs_stop) s->transitions++;
+}
+
+/* A call without a spring on a belt (free_belt): the switch reports with x from the belt's frame, and
+ * (observe) the extremes of x, phase by phase, from the switches: a stuck block rides on the belt (x
+ * linear), a slide may turn inside (dfo_exact_free_slide_extremes). */
+typedef struct {
+    dfo_switch_fn fn;
+    void *ctx;
+    double vb, t0;
+    const dfo_model *M;
+    const dfo_inputs *u;      /* the inputs (physical frame) */
+    const dfo_input_poly *q;  /* their polynomials (NULL: held) */
+    int observe, have;
+    double ta, xa, va;   /* the current phase's start (physical frame) */
+    int mode;
+    double lo, hi;       /* the extremes of x in the window so far (have) */
+} belt_free;
+
+static void belt_free_sample(belt_free *b, double x)
+{
+    if (!b->have) b->lo = b->hi = x;
+    b->have = 1;
+    b->lo = fmin(b->lo, x);
+    b->hi = fmax(b->hi, x);
+}
+
+/* The phase from b's start to tb (physical x there: xb) in b->mode, into the extremes. */
+static void belt_free_phase(belt_free *b, double tb, double xb)
+{
+    const dfo_params *p = &b->M->p;
+    const double w0 = p->t_obs_start, w1 = p->t_obs_stop, ta = b->ta;
+    if (!b->observe || tb < w0 || ta > w1) return;
+    const double t0 = fmax(ta, w0), t1 = fmin(tb, w1);
+    if (b->mode == 0) {
+        belt_free_sample(b, (t0 == ta) ? b->xa : b->xa + b->vb * (t0 - ta));
+        belt_free_sample(b, (t1 == tb) ? xb : b->xa + b->vb * (t1 - ta));
+        return;
+    }
+    if (t0 == ta) belt_free_sample(b, b->xa);
+    if (t1 == tb) belt_free_sample(b, xb);
+    double lo, hi, Xe, Ve;
+    if (b->q == NULL) {
+        dfo_exact_free_slide_extremes(b->M, b->u, NULL, ta, b->xa, b->va, b->mode, t0, t1, t1, &lo, &hi, &Xe, &Ve);
+        belt_free_sample(b, lo);
+        belt_free_sample(b, hi);
+        return;
+    }
+    /* polynomial inputs: the pieces between the zeros of N + N_ext(t), the motion carried over each */
+    const dfo_input_poly *q = b->q;
+    const double n0 = p->N + (b->u->N_ext_set ? b->u->N_ext : 0.0), n1 = q->N[0], n2 = q->N[1];
+    double z[2], poly[7] = {q->t0, dfo_external_force(b->M, b->u), q->F[0], q->F[1], 0.0, 0.0, 0.0};
+    const int nz = poly_zeros(n0, n1, n2, ta - q->t0, tb - q->t0, z);
+    double X = b->xa, V = b->va;
+    for (int i = 0; i <= nz; i++) {
+        const double a = (i == 0) ? ta : q->t0 + z[i - 1], e = (i == nz) ? tb : q->t0 + z[i];
+        piece_normal(n0, n1, n2, 0.5 * (a + e) - q->t0, poly + 4);
+        dfo_exact_free_slide_extremes(b->M, b->u, poly, a, X, V, b->mode, fmax(a, t0), fmin(e, t1), e, &lo, &hi, &X,
+                                      &V);
+        if (fmin(e, t1) >= fmax(a, t0)) {
+            belt_free_sample(b, lo);
+            belt_free_sample(b, hi);
+        }
+    }
+}
+
+static void belt_free_switch(void *ctx, double t, double x, int from_mode, int to_mode)
+{
+    belt_free *b = (belt_free *)ctx;
+    const double xp = x + b->vb * (t - b->t0);
+    if (b->fn) b->fn(b->ctx, t, xp, from_mode, to_mode);
+    belt_free_phase(b, t, xp);
+    b->ta = t;
+    b->xa = xp;
+    b->va = b->vb; /* every event is at v = vb */
+    b->mode = to_mode;
+}
+
+/* No spring on a belt: in the belt's frame (x - vb (t - t0), v - vb) the motion is the one on a support
+ * at rest with the constant force -c vb added (the damper's pull; k = 0: no drift), exactly. Its
+ * observables but x's extremes are those of the belt's frame (the stick time, the friction's work on the
+ * relative motion, the transitions); the extremes are of x itself. */
+static dfo_status free_belt(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                            double t_target, dfo_switch_fn on_switch, void *switch_ctx, double vb)
+{
+    dfo_inputs ub = *u;
+    ub.F_ext = dfo_external_force(M, u) - M->p.c * vb;
+    ub.F_ext_set = 1;
+    ub.v_belt = 0.0;
+    ub.v_belt_set = 0;
+    const int poly = q != NULL && dfo_input_poly_active(q);
+    belt_free b = {on_switch, switch_ctx, vb, s->t, M, u, poly ? q : NULL, M->p.observe, 0, s->t, s->X, s->V, s->mode,
+                   0.0, 0.0};
+    const int had = s->observed;
+    const double x_max = s->x_max, x_min = s->x_min;
+    const int report = on_switch != NULL || M->p.observe;
+    s->V -= vb;
+    dfo_status st;
+    if (poly)
+        st = dfo_exact_advance_poly(M, &ub, q, s, t_target, report ? belt_free_switch : NULL, &b);
+    else
+        st = dfo_exact_advance(M, &ub, s, t_target, report ? belt_free_switch : NULL, &b);
+    s->V += vb;
+    s->X += vb * (s->t - b.t0);
+    if (M->p.observe) {
+        belt_free_phase(&b, s->t, s->X); /* the last phase, to the call's end */
+        s->observed = had || s->observed;
+        if (s->observed) {
+            s->x_max = had ? x_max : -INFINITY;
+            s->x_min = had ? x_min : INFINITY;
+            if (b.have) {
+                s->x_max = fmax(s->x_max, b.hi);
+                s->x_min = fmin(s->x_min, b.lo);
+            }
+        }
+    }
+    return st;
+}
+
+static dfo_status belt_advance(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                               double t_target, dfo_switch_fn on_switch, void *switch_ctx, double vb)
+{
+    if (M->p.k == 0.0) return free_belt(M, u, q, s, t_target, on_switch, switch_ctx, vb);
+    const dfo_input_poly held = {s->t, {0.0, 0.0}, {0.0, 0.0}};
+    return poly_core(M, u, (q != NULL && dfo_input_poly_active(q)) ? q : &held, s, t_target, on_switch, switch_ctx, vb);
+}
+
+dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                  double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+{
+    if (!dfo_input_poly_active(q)) return dfo_exact_advance(M, u, s, t_target, on_switch, switch_ctx);
+    /* (the FMU refuses non-finite derivatives with a sentence; here they would be a wrong motion) */
+    if (!(isfinite(q->t0) && isfinite(q->F[0]) && isfinite(q->F[1]) && isfinite(q->N[0]) && isfinite(q->N[1])))
+        return DFO_ERR_NONFINITE;
+    const double vb = dfo_belt_speed(u);
+    if (dfo_belt_on(u) && (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0))
+        belt_start(M, u, vb, s, on_switch, switch_ctx);
+    if (vb != 0.0) return belt_advance(M, u, q, s, t_target, on_switch, switch_ctx, vb);
+    return poly_core(M, u, q, s, t_target, on_switch, switch_ctx, 0.0);
 }

@@ -47,6 +47,17 @@
  * (t0 + n h <= t < t0 + (n + 1) h, checked when a state is loaded). The work of one call is bounded by
  * its events (DFO_EXACT_MAX_EVENTS, newmark.h), not by h. The counter `steps` counts events.
  *
+ * A moving belt (v_belt != 0, held; friction_law coulomb): a slide's motion does not depend on the belt,
+ * only its end, the zero of s (v - v_belt) (the phase's velocity written relative to the belt, its
+ * position that of the block); at it the rest rule decides with the holding force P + F_ext - c v_belt -
+ * k x; a stuck block rides on the belt (x = x_a + v_belt (t - t_a), v = v_belt) and its holding force
+ * drifts, so its breakaway is found by the polynomial inputs' search (every call on a belt runs that
+ * loop; the held inputs' loop has none of the belt's code). A call whose belt changed at its start keeps
+ * the block's velocity: a stuck block slides, a slide whose v - v_belt points the other way reverses.
+ * x's extremes include the turning points inside slides (v through 0), E_friction is the work on the
+ * relative motion, the sensitivity's saltations are those at v = v_belt. k = 0 on a belt: the belt's
+ * frame, where the motion is the one on a support at rest with the force -c v_belt added (docs/belt.md).
+ *
  * k = 0 (a free mass on a rough support) is handed to exact_free.c. Plain C, no FMI types. */
 #ifndef DFO_EXACT_H
 #define DFO_EXACT_H

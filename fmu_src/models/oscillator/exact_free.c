@@ -920,3 +920,61 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
     poly_loads(&C, s->t, &L, NULL, NULL);
     return end_state(M, s, &L, dfo_excitation(M, s->t) + L.F_ext);
 }
+
+/* ---- a belt's turning points (exact.c's free_belt) ------------------------------------------------ */
+
+#define MAX_TURNS DFO_EXACT_MAX_EVENTS /* turning points of x looked for in one slide (the work bound, newmark.h) */
+
+void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, const double *poly, double ta, double X,
+                                   double V, int s, double t0, double t1, double te, double *lo, double *hi, double *Xe,
+                                   double *Ve)
+{
+    fr_ctx C;
+    ctx_init(&C, M, u);
+    if (poly) {
+        C.poly = 1;
+        C.q_t0 = poly[0];
+        for (int i = 0; i < 3; i++) {
+            C.qF[i] = poly[1 + i];
+            C.qN[i] = poly[4 + i];
+        }
+    }
+    fr_phase P;
+    phase_init(&C, &P, ta, X, V, s);
+    fr_val a, b, e;
+    eval(&C, &P, te - ta, &e);
+    *Xe = e.x;
+    *Ve = e.v;
+    if (!(t1 >= t0)) return;
+    eval(&C, &P, t0 - ta, &a);
+    eval(&C, &P, t1 - ta, &b);
+    *lo = fmin(a.x, b.x);
+    *hi = fmax(a.x, b.x);
+    double t = t0, x = a.x, v = a.v, acc = a.a, vm = a.vmag;
+    for (long long n = 0; n < MAX_TURNS && t < t1; n++) {
+        /* the same motion from t (its friction that of P), searched for the next zero of v */
+        fr_phase Q;
+        phase_init(&C, &Q, t, x, v, s);
+        const int rest = !(fabs(v) > ROUND * vm); /* at a turning point: from rest */
+        int dir = rest ? dfo_sign(acc) : dfo_sign(v);
+        if (dir == 0) dir = 1;
+        if (rest) Q.va = 0.0;
+        fr_val z;
+        int r = SEARCH_NULL;
+        for (int k = 0; k < 2 && r == SEARCH_NULL; k++, dir = -dir) {
+            Q.s = dir;
+            r = poly ? find_stop_poly(&C, &Q, t1 - t, &z) : find_stop(&C, &Q, t1 - t, &z);
+        }
+        if (r != SEARCH_STOP || !(z.tau > 0.0)) return;
+        t += z.tau;
+        if (!(t < t1)) return;
+        fr_val w;
+        eval(&C, &P, t - ta, &w); /* x there by P's own closed form */
+        *lo = fmin(*lo, w.x);
+        *hi = fmax(*hi, w.x);
+        x = w.x;
+        v = 0.0;
+        acc = w.a;
+        vm = w.vmag;
+    }
+}

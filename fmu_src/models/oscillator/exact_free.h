@@ -60,4 +60,14 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
                                        const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
                                        void *switch_ctx);
 
+/* On a moving belt a slide's x may turn inside it (v through 0 while v - v_belt keeps its sign): the least
+ * and the greatest x over [t0, t1] (ta <= t0; left alone when t1 < t0) of the slide in direction s from
+ * (ta, X, V) with the inputs u held (poly NULL) or varying as poly = {q_t0, qF[3], qN[3]} (on one piece, as
+ * dfo_exact_free_advance_poly's), physical units, k = 0: from its values at t0, t1 and at every zero of v
+ * in between (found by the stop search on v itself); and its state at te in *Xe, *Ve. exact.c's
+ * observables of a belt without a spring. */
+void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, const double *poly, double ta, double X,
+                                   double V, int s, double t0, double t1, double te, double *lo, double *hi, double *Xe,
+                                   double *Ve);
+
 #endif

@@ -344,18 +344,6 @@ static int output_int(const osc_values *v, const dfo_run *r, int id)
 static dfo_inst_status ramp_refused(osc_instance *in, const char *fn);
 static const char *ramp_unsupported(const dfo_params *p);
 
-/* The exact scheme follows a block on a fixed support only: a moving belt is refused, by name. */
-static int belt_unsupported(const osc_values *v)
-{
-    return v->p.scheme == DFO_SCHEME_EXACT && dfo_belt_speed(&v->u) != 0.0;
-}
-
-static dfo_inst_status belt_refused(osc_instance *in, const char *fn)
-{
-    return dfo_inst_fail(&in->lc, "%s: scheme exact supports v_belt = 0 only (a support at rest; v_belt = %.17g): "
-                         "choose scheme located (or paper, consistent) for a moving belt.", fn, in->v.u.v_belt);
-}
-
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     osc_instance *in = osc(lc);
@@ -363,7 +351,6 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     const char *msg = dfo_check_params(&v->p);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
     if (v->u.ramp && ramp_unsupported(&v->p)) return ramp_refused(in, fn);
-    if (belt_unsupported(v)) return belt_refused(in, fn);
     v->u.t_d = in->lc.run.start_time; /* input derivatives set before: of the start */
     prepare(v, in->lc.run.start_time);
     in->lc.run.time = in->lc.run.start_time;
@@ -596,7 +583,6 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
     if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && ramp_unsupported(&v->M.p)) return ramp_refused(in, fn);
-    if (belt_unsupported(v)) return belt_refused(in, fn);
     const dfo_state before = v->s;
     if (!same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
     dfo_status st;
@@ -801,7 +787,6 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     double t_target = 0.0;
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
     if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && ramp_unsupported(&v->M.p)) return ramp_refused(in, fn);
-    if (belt_unsupported(v)) return belt_refused(in, fn);
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!same_inputs(&v->u, &v->u_used)) {
         dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
