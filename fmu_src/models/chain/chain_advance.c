@@ -285,7 +285,7 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
         const int dir = s->mode[i];
         if (!chain_has_friction(M, i)) s->F[i] = 0.0;
         else if (dir != 0 && s->V[i] == 0.0)
-            s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
+            s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - chain_start_mag(M, i), 0.0) / M->m[i];
     }
 }
 
@@ -347,7 +347,7 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
     t_target = dfo_grid_snap(s->t0, h, s->n_grid, s->t, t_target, SNAP_REL_H * h);
     /* whole grid steps of the located scheme try the fast path first (step_fast) */
     const int fast_grid =
-        M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy && !M->ramped;
+        M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy && !M->ramped && !M->stribeck;
     fast_ctx F;
     fast_ctx_init(M, &F);
     double g_prev = s->t0 + (double)s->n_grid * h;  /* the grid point n_grid */
@@ -458,6 +458,13 @@ static void belt_frame(chain_model *M, const chain_inputs *in, const chain_ramp 
     bramp->dF_ext[0] = M->bD;
 }
 
+/* The belt speeds of the fixed frame's state (Stribeck's relative speed outside the steps) */
+static void belt_keep(chain_model *M, const double *vb)
+{
+    for (size_t i = 0; i < M->n; i++) M->bV[i] = vb ? vb[i] : 0.0;
+    M->vrel_b = vb ? M->bV : NULL;
+}
+
 static void belt_shift(const chain_model *M, chain_state *s, const double *vb, double t_ref, double sign)
 {
     for (size_t i = 0; i < M->n; i++) {
@@ -470,6 +477,7 @@ chain_status chain_advance_belt(chain_model *M, const chain_inputs *in, const ch
                                 chain_state *s, double t_target, int stop_at_switch, chain_switch_fn on_switch,
                                 void *ctx)
 {
+    belt_keep(M, vb);
     if (!vb) return chain_advance_ramped(M, in, ramp, s, t_target, stop_at_switch, on_switch, ctx);
     chain_inputs bin;
     chain_ramp bramp;
@@ -477,13 +485,16 @@ chain_status chain_advance_belt(chain_model *M, const chain_inputs *in, const ch
     bramp.t_ref = ramp ? ramp->t_ref : s->t;
     belt_switch bs = {on_switch, ctx, vb, bramp.t_ref};
     belt_shift(M, s, vb, bramp.t_ref, -1.0);
+    M->vrel_b = NULL; /* in the belt's frame V is the relative velocity */
     const chain_status st = chain_advance_ramped(M, &bin, &bramp, s, t_target, stop_at_switch, belt_on_switch, &bs);
+    M->vrel_b = M->bV;
     belt_shift(M, s, vb, bramp.t_ref, 1.0);
     return st;
 }
 
 void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, double t0, chain_state *s)
 {
+    belt_keep(M, NULL);
     if (!vb) { chain_start(M, in, t0, s); return; }
     chain_inputs bin;
     chain_ramp bramp;
@@ -498,6 +509,7 @@ void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, 
     /* (the stuck blocks' rest, V - vb = 0 exactly: V = vb) */
     for (size_t i = 0; i < M->n; i++)
         if (s->mode[i] == 0 && chain_has_friction(M, i)) s->V[i] = vb[i];
+    belt_keep(M, vb);
 }
 
 void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old, const double *vb_new, chain_state *s,
@@ -505,6 +517,7 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
 {
     const size_t n = M->n;
     chain_loads_init(M, in);
+    belt_keep(M, vb_new);
     int changed = 0;
     for (size_t i = 0; i < n; i++) {
         if (!chain_has_friction(M, i)) continue;
@@ -519,7 +532,11 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
             chain_net_forces(M, s, &G, M->S);
             to = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
         }
-        if (to == from) continue;
+        if (to == from) {
+            /* Stribeck: a slide goes on at another relative speed, so with another force */
+            if (M->stribeck && to != 0) changed = 1;
+            continue;
+        }
         s->mode[i] = to;
         if (to == 0) s->t_stick[i] = s->t;
         chain_report(M, s, i, from, on_switch, ctx);

@@ -28,6 +28,8 @@ void chain_loads_ramp(chain_model *M, double t)
         M->u[i] = u;
         M->mukN[i] = M->mu_k[i] * N;
         M->Fb[i] = M->mu_b[i] * N;
+        M->Nn[i] = N;
+        M->mlN[i] = M->stribeck ? fmin(M->law[i].mu_s, M->law[i].mu_k) * N : M->mukN[i];
         M->rows[i].u = M->u[i];
         M->rows[i].mukN = M->mukN[i];
         M->rows[i].Fb = M->Fb[i];
@@ -56,6 +58,8 @@ void chain_loads_init(chain_model *M, const chain_inputs *in)
         M->u[i] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
         M->mukN[i] = M->mu_k[i] * N;
         M->Fb[i] = M->mu_b[i] * N;
+        M->Nn[i] = N;
+        M->mlN[i] = M->stribeck ? fmin(M->law[i].mu_s, M->law[i].mu_k) * N : M->mukN[i];
         M->rows[i].u = M->u[i];
         M->rows[i].mukN = M->mukN[i];
         M->rows[i].Fb = M->Fb[i];
@@ -96,7 +100,7 @@ void chain_mode_accels(chain_model *M, const chain_state *s, const span *G, doub
     chain_phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = G->a; i < G->b; i++) {
         if (chain_held(M, s, i)) { a[i] = 0.0; continue; }
-        const double F = chain_has_friction(M, i) ? -s->mode[i] * M->mukN[i] : 0.0;
+        const double F = chain_has_friction(M, i) ? -s->mode[i] * chain_slide_mag(M, s, i) : 0.0;
         /* summed as the oscillator's accel_of */
         a[i] = (chain_P_at(M, i, cw, sw) + M->u[i] - chain_Kx(M, s->X, i) + F - chain_Cv(M, s->V, i)) / M->m[i];
     }
@@ -171,7 +175,7 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
          * search), the limits of the trial's modes with them, and the jerk from them (as the
          * oscillator's trial sub-steps) */
         chain_loads_ramp(M, M->t_load);
-        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         M->jerk_valid = 0;
     }
     const double a = M->alpha;
@@ -198,9 +202,13 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                 const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
                 /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
                  * internal step's, as the oscillator's jerk) */
-                if (M->ramped)
-                    j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i)) / M->m[i];
-                else j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
+                double f;
+                if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i);
+                else f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i);
+                /* Stribeck: d F / dt = -N mu'(u) a, u the relative speed (as the oscillator's jerk) */
+                if (M->stribeck && chain_has_friction(M, i))
+                    f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * M->A0[i];
+                j = f / M->m[i];
             }
             M->J[i] = j;
         }
@@ -246,7 +254,9 @@ double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i)
     chain_ramp_value(&M->rin, &M->ramp, 0, i, s->t, &u, &du);
     chain_ramp_value(&M->rin, &M->ramp, 1, i, s->t, &Ne, &dNe);
     const double dN = (M->N[i] + Ne > 0.0) ? dNe : 0.0;
-    return du - (chain_has_friction(M, i) ? s->mode[i] * M->mu_k[i] * dN : 0.0);
+    if (!chain_has_friction(M, i)) return du;
+    const double mu = M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i)) : M->mu_k[i];
+    return du - s->mode[i] * mu * dN;
 }
 
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant
@@ -264,7 +274,8 @@ void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V
             const double X1 = M->xp[i] + cV * V1[i];
             W += 0.5 * hh * ((chain_P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] +
                              (chain_P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1[i]);
-            Wf += F1[i] * (X1 - s->X[i]);
+            /* Stribeck: the force varies over the step (trapezoidal, as the oscillator's E_friction) */
+            Wf += (M->stribeck ? 0.5 * (s->F[i] + F1[i]) : F1[i]) * (X1 - s->X[i]);
         }
         s->W_applied += W;
         s->W_friction += Wf;
@@ -289,7 +300,7 @@ void chain_restart(chain_model *M, chain_state *s, const span *G)
         s->hA[i] = 0.0;
         if (!chain_has_friction(M, i)) continue;
         if (s->mode[i] == 0) s->F[i] = -fmax(-M->Fb[i], fmin(M->Fb[i], M->S[i]));
-        else s->F[i] = -s->mode[i] * M->mukN[i];
+        else s->F[i] = -s->mode[i] * chain_slide_mag(M, s, i);
     }
 }
 
@@ -303,12 +314,19 @@ double chain_block_breakaway(const chain_model *M, const chain_state *s, size_t 
     return dfo_next_breakaway(&P, &L, M->u[i] - chain_Kx(M, s->X, i), s->t_stick[i], dir);
 }
 
+/* Block i's kinetic coefficient at the state: mu_k, or (stribeck) mu(|v_rel|) */
+static double kinetic_mu(const chain_model *M, const chain_state *s, size_t i)
+{
+    return M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i)) : M->mu_k[i];
+}
+
 /* Block i's external force and kinetic friction magnitude under the inputs in. */
-static void block_loads(const chain_model *M, const chain_inputs *in, size_t i, double *u, double *mukN)
+static void block_loads(const chain_model *M, const chain_state *s, const chain_inputs *in, size_t i, double *u,
+                        double *mukN)
 {
     const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
     *u = (in && in->F_ext) ? in->F_ext[i] : 0.0;
-    *mukN = M->mu_k[i] * N;
+    *mukN = kinetic_mu(M, s, i) * N;
 }
 
 void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s)
@@ -322,14 +340,14 @@ void chain_new_inputs_ramped(const chain_model *M, const chain_inputs *old_in, c
     for (size_t i = 0; i < M->n; i++) {
         if (s->mode[i] == 0) continue;
         double u0, f0, u1, f1;
-        block_loads(M, old_in, i, &u0, &f0);
+        block_loads(M, s, old_in, i, &u0, &f0);
         if (ramp) { /* the new inputs' polynomials at the state's time (as the oscillator's dfo_new_inputs) */
             double Ne, rate;
             chain_ramp_value(new_in, ramp, 0, i, s->t, &u1, &rate);
             chain_ramp_value(new_in, ramp, 1, i, s->t, &Ne, &rate);
-            f1 = M->mu_k[i] * fmax(M->N[i] + Ne, 0.0);
+            f1 = kinetic_mu(M, s, i) * fmax(M->N[i] + Ne, 0.0);
         } else {
-            block_loads(M, new_in, i, &u1, &f1);
+            block_loads(M, s, new_in, i, &u1, &f1);
         }
         const double dF = (u1 - u0) - s->mode[i] * (f1 - f0);
         if (dF == 0.0) continue;

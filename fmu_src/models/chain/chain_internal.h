@@ -87,11 +87,20 @@ struct chain_model {
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 (0 on the last) */
     double *ks, *cs;            /* k_site, c_site: the parts of Kd[i], Cd[i] tying block i to the ground */
     double *bF, *bD;            /* belts (chain_advance_belt): the moving frame's F_ext and its rate */
+    double *bV;                 /* the belt speeds of the fixed frame's state (0 without belts) */
+    const double *vrel_b;       /* what to subtract from s->V for the speed relative to the belt: bV in the
+                                 * fixed frame with belts, NULL while stepping in the belt's frame (or
+                                 * without belts), where V is the relative velocity */
+    int stribeck;               /* friction_law = stribeck: sliding friction N mu(|v_rel|) (law) */
+    dfo_friction_law *law;      /* per block (stribeck only, else NULL) */
     double *dF, *eF;            /* M_hat of a whole grid step: diagonal, off-diagonal */
     fast_row *rows;             /* per block, for the fused grid step */
     /* per block: the loads of the current inputs (chain_loads_init) */
     double *u;                  /* external force F_ext (0 when never set) */
     double *mukN, *Fb;          /* kinetic friction mu_k N and breakaway limit mu_b N, N = max(N + N_ext, 0) */
+    double *Nn;                 /* that normal force N */
+    double *mlN;                /* the located LCP's sliding limit: mu_k N, or (stribeck) min(mu_s, mu_k) N,
+                                 * where the LCP stops a block every speed stops it */
     /* workspace, per block */
     double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
     double *A0;                 /* the trial's re-based A0 (when any block is re-based) */
@@ -185,6 +194,27 @@ static inline double chain_Cv(const chain_model *M, const double *v, size_t i)
 }
 
 static inline int chain_has_friction(const chain_model *M, size_t i) { return M->Fb[i] > 0.0; }
+
+/* Block i's speed relative to its belt (the state's velocity while stepping in the belt's frame) */
+static inline double chain_rel_speed(const chain_model *M, const chain_state *s, size_t i)
+{
+    return fabs(M->vrel_b ? s->V[i] - M->vrel_b[i] : s->V[i]);
+}
+
+/* The kinetic friction magnitude of sliding block i at the state: mu_k N, or N mu(|v_rel|) */
+static inline double chain_slide_mag(const chain_model *M, const chain_state *s, size_t i)
+{
+    if (!M->stribeck) return M->mukN[i];
+    return M->Nn[i] * dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i));
+}
+
+/* The kinetic magnitude a slide starts with from rest (the rest rule's and breakaway's): mu_k N, or
+ * N mu(0) (as the oscillator's start_loads) */
+static inline double chain_start_mag(const chain_model *M, size_t i)
+{
+    if (!M->stribeck) return M->mukN[i];
+    return M->Nn[i] * dfo_friction_mu(&M->law[i], 0.0);
+}
 
 /* held at rest in the current step: stuck (schemes whose stuck blocks rest) */
 static inline int chain_held(const chain_model *M, const chain_state *s, size_t i)

@@ -49,16 +49,106 @@ static void solve_kept(chain_model *M)
     }
 }
 
+/* Stribeck: the sliding blocks' friction at the step's end, -s N mu(u), u = s V the relative speed
+ * (implicit, as the damper: Bossak's second order kept), after the basis solve with the smaller
+ * kinetic limit min(mu_s, mu_k) N has decided the modes. Over each run of consecutive free rows
+ * of the span (its other rows held at V = 0 or ghosts) the equations M_hat V = p_hat + F(V), F_i =
+ * -s_i N_i mu(max(s_i V_i, 0)) (continued below u = 0 with mu(0), so that s_i V_i is continuous in
+ * the step length and its sign tells a stop) are solved by Newton's iteration from the basis
+ * solve, one tridiagonal solve per iteration; a run of one row takes the oscillator's scalar
+ * iteration (friction.h's dfo_stribeck_speed), so that n = 1 is the oscillator's arithmetic. The
+ * held rows' forces are then read anew. */
+static int stribeck_row(const chain_model *M, size_t i)
+{
+    return M->st[i] != 0 && chain_has_friction(M, i);
+}
+
+static void stribeck_run(chain_model *M, size_t lo, size_t hi, size_t r0, size_t r1)
+{
+    const double *d = M->cd, *e = M->ce, *q = M->q;
+    double *V = M->Vt, *F = M->Ft, *cp = M->cp, *dp = M->dp;
+    if (r1 - r0 == 1) {
+        const size_t i = r0;
+        double p = -q[i];
+        if (i > lo) p -= e[i - 1] * V[i - 1];
+        if (i + 1 < hi) p -= e[i] * V[i + 1];
+        const int sd = M->st[i];
+        const double u = dfo_stribeck_speed(&M->law[i], M->Nn[i], sd * p, d[i], 1.0 / d[i]);
+        V[i] = sd * u;
+        F[i] = -sd * M->Nn[i] * dfo_friction_mu(&M->law[i], fmax(u, 0.0));
+        return;
+    }
+    int done = 0;
+    for (int it = 0; it < 60 && !done; it++) {
+        /* the residual and the Jacobian's diagonal, eliminated at once (Thomas) */
+        double cprev = 0.0, dprev = 0.0;
+        for (size_t i = r0; i < r1; i++) {
+            double R = d[i] * V[i] + q[i], J = d[i];
+            if (i > lo) R += e[i - 1] * V[i - 1];
+            if (i + 1 < hi) R += e[i] * V[i + 1];
+            if (stribeck_row(M, i)) {
+                const int sd = M->st[i];
+                const double u = sd * V[i];
+                R += sd * M->Nn[i] * dfo_friction_mu(&M->law[i], fmax(u, 0.0));
+                if (u > 0.0) J += M->Nn[i] * dfo_friction_dmu(&M->law[i], u);
+            }
+            const double lo_e = (i > r0) ? e[i - 1] : 0.0;
+            const double inv = 1.0 / (J - lo_e * cprev);
+            cp[i] = (i + 1 < r1) ? e[i] * inv : 0.0;
+            dp[i] = (R - lo_e * dprev) * inv;
+            cprev = cp[i];
+            dprev = dp[i];
+        }
+        double dn = 0.0, dmax = 0.0, vmax = 0.0;
+        for (size_t j = r1; j-- > r0;) {
+            dn = dp[j] - cp[j] * dn;
+            V[j] -= dn;
+            dmax = fmax(dmax, fabs(dn));
+            vmax = fmax(vmax, fabs(V[j]));
+        }
+        done = dmax <= 4.0 * DBL_EPSILON * vmax;
+    }
+    if (!done && M->err == CHAIN_OK) M->err = CHAIN_ERR_FRICTION;
+    for (size_t i = r0; i < r1; i++)
+        if (stribeck_row(M, i))
+            F[i] = -M->st[i] * M->Nn[i] * dfo_friction_mu(&M->law[i], fmax(M->st[i] * V[i], 0.0));
+}
+
+static COLD_CALL void stribeck_solve(chain_model *M, const span *G)
+{
+    const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+    int any = 0;
+    for (size_t i = G->a; i < G->b;) {
+        const int held = M->st[i] == 0 && M->l[i] > 0.0;
+        if (held) { i++; continue; }
+        size_t r1 = i;
+        int fr = 0;
+        while (r1 < G->b && !(M->st[r1] == 0 && M->l[r1] > 0.0)) fr |= stribeck_row(M, r1++);
+        if (fr) { stribeck_run(M, lo, hi, i, r1); any = 1; }
+        i = r1;
+    }
+    if (!any) return;
+    for (size_t i = G->a; i < G->b; i++) { /* the held rows' forces with their neighbours' new V */
+        if (!(M->st[i] == 0 && M->l[i] > 0.0)) continue;
+        double f = M->q[i];
+        if (i > lo) f += M->ce[i - 1] * M->Vt[i - 1];
+        if (i + 1 < hi) f += M->ce[i] * M->Vt[i + 1];
+        M->Ft[i] = f;
+    }
+}
+
 static void solve_modes(chain_model *M, const span *G)
 {
     if (M->cd == M->dF && G->a == 0 && G->b == M->n && !G->has[0] && !G->has[1]) {
         solve_kept(M);
-        return;
+    } else {
+        const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+        /* l (set with st): Fb for held rows (a flag there), the LCP's sliding limit mlN for sliding
+         * ones, 0 without friction */
+        lcp_box_basis(lo, hi, G->has[0], G->gV[0], G->has[1], G->gV[1], M->cd, M->ce, M->q, M->l, M->st, M->Vt,
+                      M->Ft, M->cp, M->dp);
     }
-    const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
-    /* l (set with st): Fb for held rows (a flag there), mu_k N for sliding ones, 0 without friction */
-    lcp_box_basis(lo, hi, G->has[0], G->gV[0], G->has[1], G->gV[1], M->cd, M->ce, M->q, M->l, M->st, M->Vt, M->Ft,
-               M->cp, M->dp);
+    if (M->stribeck) stribeck_solve(M, G);
 }
 
 /* How far block i is from its switch at the trial (> 0: not yet): s V for a sliding block (as the
@@ -138,7 +228,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
         const int dir = s->mode[i];
-        if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
+        if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - chain_start_mag(M, i), 0.0) / M->m[i];
     }
     if (M->ramped) chain_loads_ramp(M, M->t_step);
 }
@@ -236,7 +326,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         const double r = (phase == 0) ? hh : t_end - s->t;
         for (size_t i = G->a; i < G->b; i++) {
             M->st[i] = (chain_held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
-            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         }
         double cw1, sw1;
         chain_phase_of(M, s, t_end, &cw1, &sw1);
@@ -396,7 +486,7 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
         }
         for (size_t i = 0; i < n; i++) {
             M->st[i] = chain_held(M, s, i) ? 0 : s->mode[i];
-            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         }
         chain_trial(M, s, &G0, hh, cw1, sw1);
         solve_modes(M, &G0);
