@@ -58,10 +58,9 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len)
         for (size_t i = 0; p->delta && i < p->n; i++)
             if (p->delta[i] < 1.0) {
                 snprintf(buf, len,
-                         "friction_law = stribeck supports delta >= 1 only here, not delta[%zu] = %g (below 1 the "
-                         "friction's slope is infinite at zero relative speed, which the located scheme's step does "
-                         "not resolve): choose delta >= 1",
-                         i + 1, p->delta[i]);
+                         "friction_law = stribeck supports delta >= 1 only, not %g for delta[%zu] (below 1 the "
+                         "friction's slope is infinite at zero relative speed)",
+                         p->delta[i], i + 1);
                 return buf;
             }
         if (p->scheme != DFO_SCHEME_LOCATED)
