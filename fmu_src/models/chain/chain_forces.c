@@ -123,6 +123,16 @@ void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_sta
     const chain_state *s = &copy;
     const span G = chain_whole(M, s);
     chain_physical_accel(M, s, &G, a);
+    if (M->stribeck) {
+        /* a slide's force is the state's (its step's end solve), as the oscillator's output a: N mu(u)
+         * at the solved relative speed u, not at its rounding |V - vb| */
+        double cw, sw;
+        chain_phase_of(M, s, s->t, &cw, &sw);
+        for (size_t i = 0; i < M->n; i++)
+            if (s->mode[i] != 0 && chain_has_friction(M, i))
+                a[i] = (chain_P_at(M, i, cw, sw) + M->u[i] - chain_Kx(M, s->X, i) + s->F[i] - chain_Cv(M, s->V, i)) /
+                       M->m[i];
+    }
     if (M->scheme != DFO_SCHEME_PAPER) return;
     /* the paper's stuck block is not at rest: it creeps with the force of its LCP (Bossak's A
      * throughout), as the oscillator reports it */
@@ -241,8 +251,18 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         if (i > 0) kx += M->Ko[i - 1] * xp[i - 1];
         if (i + 1 < n) kx += M->Ko[i] * xp[i + 1];
         /* q = -p_hat (the negation is exact: the solves read p_hat's bits back) */
-        q[i] = -(M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
-                 M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx);
+        const double p = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
+                         M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
+        if (!M->vbf) {
+            q[i] = -p;
+            continue;
+        }
+        /* belts: the LCP on W = V - vb, M_hat W = p_hat - M_hat vb + F (the oscillator's shifted LCP) */
+        const double *vb = M->vbf, *cd = M->cd, *ce = M->ce;
+        double mv = cd[i] * vb[i];
+        if (i > 0) mv += ce[i - 1] * vb[i - 1];
+        if (i + 1 < n) mv += ce[i] * vb[i + 1];
+        q[i] = -(p - mv);
     }
 }
 
@@ -262,8 +282,15 @@ double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i)
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant
  * over the step for the moving blocks with friction): X, V, A, F, hA, the energy accounts (whole
  * chain only); not the time. */
-void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1)
+static COLD_CALL void belt_finish(chain_model *M, chain_state *s, const span *G, const double *W, const double *F1,
+                                  double t1);
+
+void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1, double t1)
 {
+    if (M->vbf) {
+        belt_finish(M, s, G, V1, F1, t1);
+        return;
+    }
     M->jerk_valid = 0;
     const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h;
     if (M->energy && G->a == 0 && G->b == M->n) {
@@ -285,6 +312,42 @@ void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V
         s->X[i] = M->xp[i] + cV * V1[i];
         s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * M->A0p[i];
         s->V[i] = V1[i];
+        s->F[i] = F1[i];
+        s->hA[i] = hh;
+    }
+}
+
+/* chain_finish with belts (vbf): V = W + vb; a held block rides on its belt to t1 (X = X0 + vb (t1 -
+ * t), as the oscillator's stuck phase), the others take Newmark's kinematics. */
+static COLD_CALL void belt_finish(chain_model *M, chain_state *s, const span *G, const double *W, const double *F1,
+                                  double t1)
+{
+    M->jerk_valid = 0;
+    const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h, *vb = M->vbf;
+    if (M->energy && G->a == 0 && G->b == M->n) {
+        const size_t n = M->n;
+        double cw0, sw0, Wa = 0.0, Wf = 0.0;
+        chain_phase_of(M, s, s->t, &cw0, &sw0);
+        for (size_t i = 0; i < n; i++) {
+            const int held = M->st[i] == 0 && M->l[i] > 0.0;
+            const double V1 = W[i] + vb[i];
+            const double X1 = held ? s->X[i] + vb[i] * (t1 - s->t) : M->xp[i] + cV * V1;
+            Wa += 0.5 * hh * ((chain_P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] +
+                              (chain_P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1);
+            Wf += (M->stribeck ? 0.5 * (s->F[i] + F1[i]) : F1[i]) * (X1 - s->X[i]);
+        }
+        s->W_applied += Wa;
+        s->W_friction += Wf;
+        double *V1s = M->box; /* (free here) */
+        for (size_t i = 0; i < n; i++) V1s[i] = W[i] + vb[i];
+        s->D_damping += 0.5 * hh * (damping_power(M, s->V) + damping_power(M, V1s));
+    }
+    for (size_t i = G->a; i < G->b; i++) {
+        const double V1 = W[i] + vb[i];
+        if (M->st[i] == 0 && M->l[i] > 0.0) s->X[i] = s->X[i] + vb[i] * (t1 - s->t);
+        else s->X[i] = M->xp[i] + cV * V1;
+        s->A[i] = (V1 - s->V[i]) * c1 - g1 * M->A0p[i];
+        s->V[i] = V1;
         s->F[i] = F1[i];
         s->hA[i] = hh;
     }

@@ -91,6 +91,10 @@ struct chain_model {
     const double *vrel_b;       /* what to subtract from s->V for the speed relative to the belt: bV in the
                                  * fixed frame with belts, NULL while stepping in the belt's frame (or
                                  * without belts), where V is the relative velocity */
+    const double *vbf;          /* belts of the located scheme's fixed-frame stepping (bV, while it steps;
+                                 * else NULL): the LCP on the velocity relative to the belts (p_hat
+                                 * shifted by M_hat vb, solved for W = V - vb), a stuck block riding on its
+                                 * belt, as the oscillator's located step (chain_advance_belt) */
     int stribeck;               /* friction_law = stribeck: sliding friction N mu(|v_rel|) (law) */
     dfo_friction_law *law;      /* per block (stribeck only, else NULL) */
     double *dF, *eF;            /* M_hat of a whole grid step: diagonal, off-diagonal */
@@ -195,6 +199,9 @@ static inline double chain_Cv(const chain_model *M, const double *v, size_t i)
 
 static inline int chain_has_friction(const chain_model *M, size_t i) { return M->Fb[i] > 0.0; }
 
+/* block i's belt speed in the fixed-frame stepping (0 without belts) */
+static inline double chain_vb(const chain_model *M, size_t i) { return M->vbf ? M->vbf[i] : 0.0; }
+
 /* Block i's speed relative to its belt (the state's velocity while stepping in the belt's frame) */
 static inline double chain_rel_speed(const chain_model *M, const chain_state *s, size_t i)
 {
@@ -289,8 +296,9 @@ void chain_physical_accel(chain_model *M, const chain_state *s, const span *G, d
  * (cd, ce), the re-based A0 (A0p), xp and q; a ghost's xp and velocity at the end. */
 void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, double cw1, double sw1);
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1: X, V, A,
- * F, hA and the energy accounts (whole chain only); not the time. */
-void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1);
+ * F, hA and the energy accounts (whole chain only); not the time. With belts (vbf) V1 is the velocity
+ * relative to the belts (W) and a held block rides on its belt to t1, the trial's end. */
+void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1, double t1);
 /* After a switch: the consistent restart of the span's new mode set (physical accelerations,
  * hA = 0) and the friction forces of its stuck blocks. */
 void chain_restart(chain_model *M, chain_state *s, const span *G);
