@@ -156,6 +156,53 @@ static double damping_power(const chain_model *M, const double *v)
     return D + M->c_end * v[M->n - 1] * v[M->n - 1];
 }
 
+/* Block b's physical acceleration at the state in its mode (chain_mode_accels' value; a ghost's its
+ * interpolated one), the phase (cw, sw) at s->t */
+static double block_accel(const chain_model *M, const chain_state *s, const span *G, size_t b, double cw, double sw)
+{
+    for (int k = 0; k < 2; k++)
+        if (G->has[k] && b == G->idx[k]) return s->A[b];
+    if (chain_held(M, s, b)) return 0.0;
+    const double F = chain_has_friction(M, b) ? -s->mode[b] * chain_slide_mag(M, s, b) : 0.0;
+    return (chain_P_at(M, b, cw, sw) + M->u[b] - chain_Kx(M, s->X, b) + F - chain_Cv(M, s->V, b)) / M->m[b];
+}
+
+/* chain_trial's re-basing of A on hh for the span's blocks that need it, into A0 (method.md section 8) */
+static void rebase_sparse(chain_model *M, const chain_state *s, const span *G, double hh)
+{
+    const size_t n = M->n;
+    const double a = M->alpha, tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    const double cw = dfo_cos(M->omega * s->t + M->phi0), sw = dfo_sin(M->omega * s->t + M->phi0);
+    double pcw, psw;
+    chain_phase_of(M, s, s->t, &pcw, &psw);
+    for (size_t i = G->a; i < G->b; i++) {
+        const double hA = s->hA[i];
+        const int ri = hh != hA && fabs(hh - hA) > tol && M->rate_max * fmax(hh, hA) <= 1.0;
+        if (!ri) {
+            M->A0[i] = s->A[i];
+            continue;
+        }
+        double j = 0.0;
+        if (!chain_held(M, s, i)) {
+            const double ai = block_accel(M, s, G, i, pcw, psw);
+            double cv = 0.0; /* chain_Cv of the physical accelerations */
+            if (M->damped) {
+                cv = M->Cd[i] * ai;
+                if (i > 0) cv += M->Co[i - 1] * block_accel(M, s, G, i - 1, pcw, psw);
+                if (i + 1 < n) cv += M->Co[i] * block_accel(M, s, G, i + 1, pcw, psw);
+            }
+            const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
+            double f;
+            if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - cv + chain_ramp_rate(M, s, i);
+            else f = Pd - chain_Kx(M, s->V, i) - cv;
+            if (M->stribeck && chain_has_friction(M, i))
+                f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * ai;
+            j = f / M->m[i];
+        }
+        M->A0[i] = s->A[i] + a * (hh - hA) * j;
+    }
+}
+
 /* The step of length hh of the span's blocks from the state to t1 (cw1, sw1: the excitation phase
  * at t1): M_hat, the re-based A0, the predicted position xp and p_hat (method.md sections 2, 8
  * and 9); a ghost's xp and velocity at t1 from its interpolation. */
@@ -198,7 +245,13 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                      M->rate_max * fmax(hh, hA) <= 1.0;
         }
     }
-    if (rebase && !M->jerk_valid) {
+    const int sparse = rebase && !M->jerk_valid && (b0 - a0) > 2 * M->w + 3;
+    if (sparse) {
+        /* a long span (the whole of a long chain, after a switch in a cluster): only the re-based
+         * blocks' jerks, each from the physical accelerations of it and its neighbours (the same
+         * values as below, not kept: O(re-based blocks), not O(n), per step) */
+        rebase_sparse(M, s, G, hh);
+    } else if (rebase && !M->jerk_valid) {
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
@@ -224,7 +277,9 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         }
         M->jerk_valid = 1;
     }
-    if (rebase) {
+    if (sparse) {
+        M->A0p = M->A0;
+    } else if (rebase) {
         for (size_t i = a0; i < b0; i++) {
             const double hA = s->hA[i];
             const int ri = hh != hA && fabs(hh - hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&

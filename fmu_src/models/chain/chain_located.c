@@ -79,6 +79,7 @@ static void stribeck_run(chain_model *M, size_t lo, size_t hi, size_t r0, size_t
         return;
     }
     int done = 0;
+    double dlast = INFINITY;
     for (int it = 0; it < 60 && !done; it++) {
         /* the residual and the Jacobian's diagonal, eliminated at once (Thomas) */
         double cprev = 0.0, dprev = 0.0;
@@ -106,7 +107,10 @@ static void stribeck_run(chain_model *M, size_t lo, size_t hi, size_t r0, size_t
             dmax = fmax(dmax, fabs(dn));
             vmax = fmax(vmax, fabs(V[j]));
         }
-        done = dmax <= 4.0 * DBL_EPSILON * vmax;
+        /* converged to a few ulps, or (a long run) to the rounding of its residual: the correction
+         * small and no longer contracting, as Newton's quadratic convergence would */
+        done = dmax <= 4.0 * DBL_EPSILON * vmax || (dmax <= 1e-10 * vmax && dmax >= 0.25 * dlast);
+        dlast = dmax;
     }
     if (!done && M->err == CHAIN_OK) M->err = CHAIN_ERR_FRICTION;
     for (size_t i = r0; i < r1; i++)
