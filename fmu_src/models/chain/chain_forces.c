@@ -245,11 +245,11 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                      M->rate_max * fmax(hh, hA) <= 1.0;
         }
     }
-    const int sparse = rebase && !M->jerk_valid && (b0 - a0) > 2 * M->w + 3;
+    const int sparse = rebase && !M->jerk_valid && M->sparse_rebase;
     if (sparse) {
-        /* a long span (the whole of a long chain, after a switch in a cluster): only the re-based
-         * blocks' jerks, each from the physical accelerations of it and its neighbours (the same
-         * values as below, not kept: O(re-based blocks), not O(n), per step) */
+        /* the first trial of a long chain's step (chain_step_located; after a switch in a cluster):
+         * only the re-based blocks' jerks, each from the physical accelerations of it and its
+         * neighbours (the same values as below, not kept: O(re-based blocks), not O(n), per step) */
         rebase_sparse(M, s, G, hh);
     } else if (rebase && !M->jerk_valid) {
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
@@ -306,18 +306,19 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         if (i > 0) kx += M->Ko[i - 1] * xp[i - 1];
         if (i + 1 < n) kx += M->Ko[i] * xp[i + 1];
         /* q = -p_hat (the negation is exact: the solves read p_hat's bits back) */
-        const double p = M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
-                         M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx;
-        if (!M->vbf) {
-            q[i] = -p;
-            continue;
-        }
-        /* belts: the LCP on W = V - vb, M_hat W = p_hat - M_hat vb + F (the oscillator's shifted LCP) */
+        q[i] = -(M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
+                 M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx);
+    }
+    if (M->vbf) {
+        /* belts: the LCP on W = V - vb, M_hat W = p_hat - M_hat vb + F (the oscillator's shifted LCP:
+         * q = -(p_hat - (M_hat vb)_i), p_hat's bits read back from -q) */
         const double *vb = M->vbf, *cd = M->cd, *ce = M->ce;
-        double mv = cd[i] * vb[i];
-        if (i > 0) mv += ce[i - 1] * vb[i - 1];
-        if (i + 1 < n) mv += ce[i] * vb[i + 1];
-        q[i] = -(p - mv);
+        for (size_t i = a0; i < b0; i++) {
+            double mv = cd[i] * vb[i];
+            if (i > 0) mv += ce[i - 1] * vb[i - 1];
+            if (i + 1 < n) mv += ce[i] * vb[i + 1];
+            q[i] = -(-q[i] - mv);
+        }
     }
 }
 

@@ -117,6 +117,8 @@ struct chain_model {
     double *sX, *sV, *sA, *sF, *shA;  /* blocks' states saved around a cluster (chain_step_located) */
     double *J;                  /* jerks at the current state (trial's re-basing), when jerk_valid */
     int jerk_valid;             /* J holds the jerks of the current state */
+    int sparse_rebase;          /* chain_trial re-bases only the blocks that need it, their jerks not
+                                 * kept (the one trial of a long chain's step before its clusters) */
     double *box;                /* 2n: lcp_box's work */
     int *frozen;                /* per block: held at rest to the step's end (a slide that cannot move,
                                  * or judged by the consistent scheme) */

@@ -395,7 +395,7 @@ static int ramp_breaks(const chain_model *M, const chain_state *s, const span *G
  * positive; with ramped inputs, a stuck one whose force crosses its limit inside the step; on belts,
  * a stuck one between resting neighbours whose static force at t_end, the belts carrying them, is
  * beyond its limit (the oscillator's test; its held force's rounding aside). */
-static int is_candidate(chain_model *M, const chain_state *s, const span *G, size_t i, double t_end)
+static HOT_INLINE int is_candidate(chain_model *M, const chain_state *s, const span *G, size_t i, double t_end)
 {
     if (M->vbf && M->st[i] == 0 && neighbours_rest(M, s, G, i)) return belt_breaks(M, s, i, t_end);
     return switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, G, i, t_end);
@@ -605,13 +605,21 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
             M->st[i] = chain_held(M, s, i) ? 0 : s->mode[i];
             M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         }
+        M->sparse_rebase = n > 2 * M->w + 3 && !stop_at_switch && !M->energy;  /* (its clusters' own) */
         chain_trial(M, s, &G0, hh, cw1, sw1);
+        M->sparse_rebase = 0;
         solve_modes(M, &G0);
         s->solves++;
     }
     M->ncand = 0;
-    for (size_t i = 0; i < n; i++)
-        if (chain_has_friction(M, i) && is_candidate(M, s, &G0, i, t_end)) M->cand[M->ncand++] = i;
+    if (!M->vbf) { /* (the fixed support's loop as it was) */
+        for (size_t i = 0; i < n; i++)
+            if (chain_has_friction(M, i) && (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, &G0, i, t_end)))
+                M->cand[M->ncand++] = i;
+    } else {
+        for (size_t i = 0; i < n; i++)
+            if (chain_has_friction(M, i) && is_candidate(M, s, &G0, i, t_end)) M->cand[M->ncand++] = i;
+    }
     if (M->ncand == 0) {  /* the warm basis solves the LCP: O(n), no pivot */
         chain_finish(M, s, &G0, M->Vt, M->Ft, t_end);
         for (size_t i = 0; i < n; i++)
