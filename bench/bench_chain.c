@@ -74,7 +74,7 @@ static void chain_case_make(chain_case *cc, size_t n, double spp, double normal)
         N[i] = normal; mu_s[i] = 0.5; chi[i] = 0.7; x0[i] = 0.0; v0[i] = 0.0;
     }
     const double T = 2.0 * DFO_PI / OMEGA, h = T / spp;
-    const chain_params p = {n, m, k, c, P0, phi, N, mu_s, chi, x0, v0, (n == 1) ? 0.0 : 1.0, 0.0, OMEGA, h, -0.1, 3, 0, NULL, NULL};
+    const chain_params p = {n, m, k, c, P0, phi, N, mu_s, chi, x0, v0, (n == 1) ? 0.0 : 1.0, 0.0, OMEGA, h, -0.1, 3, 0, NULL, NULL, 0, NULL, NULL};
     const chain_alloc al = {std_alloc, std_free, NULL};
     cc->arr = arr;
     cc->M = chain_create(&p, &al, NULL);

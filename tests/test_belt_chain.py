@@ -343,26 +343,74 @@ def test_belt_derivatives_refused(chain_fmu2: Path) -> None:
             f2.inst.set_real_input_derivatives([vr], 1, [0.1])
 
 
-def test_one_block_chain_against_the_oscillator_with_a_belt(fmu_path: Path) -> None:
-    """n = 1 with a belt at 0.4 m/s changed to -0.2 at the communication point t = 9, located scheme,
-    h = 0.005: the chain and the oscillator FMU agree to 1e-9 (measured 1.2e-10). Not bit for bit:
-    the chain steps in the belt's moving frame (the input-ramp path), the oscillator on the belt's
-    relative velocity."""
+# n = 1 is the oscillator bit for bit: (parameters, friction law or None, h, belt speeds set at
+# communication points {index: speed}, end time); communication step 0.05
+_OSC = dict(m=1.0, k=1.0, c=0.05, P0=0.3, omega=0.7, phi=0.2, N=1.0, mu_s=0.5, chi=0.6, x0=0.1, v0=0.0)
+ONE_BLOCK_CASES = {
+    "coulomb": (_OSC, None, 0.005, {0: 0.4, 180: -0.2}, 20.0),
+    "coulomb-chi>1": ({**_OSC, "chi": 1.2}, None, 0.004, {0: 0.15, 120: 0.0, 200: 0.3}, 20.0),
+    "stribeck-d1": (_OSC, (0.1, 1.0), 0.005, {0: 0.4, 180: -0.2}, 20.0),
+    "stribeck-d2-undamped": ({**_OSC, "c": 0.0, "P0": 0.5}, (0.05, 2.0), 0.002, {0: -0.25, 150: 0.4, 300: 0.1}, 25.0),
+    "stribeck-fixed-support": ({**_OSC, "P0": 0.8}, (0.1, 1.0), 0.005, {}, 20.0),
+    "stribeck-chi0.2": ({**_OSC, "chi": 0.2, "P0": 0.45, "c": 0.1}, (0.02, 1.0), 0.001, {0: 0.05, 100: -0.05}, 15.0),
+}
+_OUT = ("x", "v", "a", "F_friction", "mode")
+
+
+def _oscillator_series(fmi: int, fmu_path: Path, p: dict, law, h: float, changes: dict, t: np.ndarray) -> dict:
     from dryfriction.fmu import OscillatorFMU2, Settings
+    from dryfriction.fmu3 import OscillatorFMU3
     from dryfriction.params import Oscillator
 
-    p = dict(m=1.0, k=1.0, c=0.05, P0=0.3, omega=0.7, phi=0.2, N=1.0, mu_s=0.5, chi=0.6, x0=0.1, v0=0.0)
-    t = np.linspace(0.0, 18.0, 361)
-    osc = OscillatorFMU2(fmu_path=fmu_path)
-    osc.start(Oscillator(**p), Settings(h=0.005, scheme="located", extra={"v_belt": 0.4}))
-    xo = []
-    for k in range(1, t.size):
-        if k - 1 == 180:
-            osc.set({"v_belt": -0.2})
-        osc.step_to(float(t[k]))
-        xo.append(osc.get("x"))
+    extra: dict = {} if law is None else {"friction_law": 2, "v_s": law[0], "delta": law[1]}
+    if 0 in changes:
+        extra["v_belt"] = changes[0]
+    if fmi == 2:
+        osc = OscillatorFMU2(fmu_path=fmu_path)
+        osc.start(Oscillator(**p), Settings(h=h, scheme="located", extra=extra))
+    else:
+        osc = OscillatorFMU3(params={**p, "h": h, "scheme": 3, **extra})
+    try:
+        out = {k: [float(osc.get(k))] for k in _OUT}
+        for k in range(1, t.size):
+            if k - 1 in changes and k > 1:
+                osc.set({"v_belt": changes[k - 1]})
+            if fmi == 2:
+                osc.step_to(float(t[k]))
+            else:
+                osc.do_step(float(t[k] - t[k - 1]))
+            for name in _OUT:
+                out[name].append(float(osc.get(name)))
+    finally:
+        osc.close()
+    return {k: np.array(v) for k, v in out.items()}
+
+
+@pytest.mark.parametrize("case", list(ONE_BLOCK_CASES))
+def test_one_block_chain_is_the_oscillator_on_a_belt(case: str, fmu_path: Path) -> None:
+    """n = 1, located scheme, belts changed at communication points, Coulomb and Stribeck: the chain
+    FMU's x, v, a, F_friction and mode are the oscillator FMU's (FMI 2.0 and 3.0) bit for bit at
+    every point, through stick-slip (the chain steps on the velocity relative to the belt, the
+    stuck block riding on it, as the oscillator)."""
+    p, law, h, changes, T = ONE_BLOCK_CASES[case]
+    t = np.arange(int(round(T / 0.05)) + 1) * 0.05
+    params = {**p, "h": h}
+    if law is not None:
+        params.update(friction_law="stribeck", v_s=law[0], delta=law[1])
     with ChainFMU3(n=1) as fmu:
-        ch = Chain.make(1, **{k: v for k, v in p.items()})
-        xc = _belt_run(fmu, ch, 0.005, t, [0.4], {180: [-0.2]})["x"][1:, 0]
-    d = np.max(np.abs(xc - np.array(xo, dtype=float)))
-    assert 0.0 <= d < 1e-9, d
+        fmu.start(params=params, inputs={"v_belt": [changes[0]]} if 0 in changes else None)
+        o = fmu.outputs()
+        ch = {k: [o[k][0]] for k in _OUT}
+        for k in range(1, t.size):
+            if k - 1 in changes and k > 1:
+                fmu.set_inputs({"v_belt": [changes[k - 1]]})
+            fmu.step_to(float(t[k]))
+            o = fmu.outputs()
+            for name in _OUT:
+                ch[name].append(o[name][0])
+    for fmi in (2, 3):
+        osc = _oscillator_series(fmi, fmu_path, p, law, h, changes, t)
+        for name in _OUT:
+            assert np.array_equal(np.array(ch[name], dtype=float), osc[name]), (fmi, name)
+    modes = np.array(ch["mode"])
+    assert np.count_nonzero(np.diff(modes)) >= 4 and (modes == 0).any() and (modes != 0).any()

@@ -3,6 +3,8 @@
 #include "friction.h"
 #include "dmath.h"
 
+#include <float.h>
+
 #define TWO_PI (2.0 * DFO_PI)
 
 /* Earliest theta >= th0 with cos(theta) > lim, as an offset from th0; acos_lim = acos(lim). */
@@ -61,4 +63,21 @@ double dfo_friction_dmu(const dfo_friction_law *F, double u)
     else if (r == 0.0) dp = F->delta > 1.0 ? 0.0 : INFINITY;
     else dp = F->delta * dfo_pow_pos(r, F->delta - 1.0) / F->v_s;
     return -(F->mu_s - F->mu_k) * dp * dfo_exp(-stribeck_power(F, u));
+}
+
+double dfo_stribeck_speed(const dfo_friction_law *F, double N, double q, double mh, double im)
+{
+    const double g0 = q - N * dfo_friction_mu(F, 0.0);
+    if (!(g0 > 0.0)) return g0 * im;
+    double u = fmax((q - N * fmin(F->mu_s, F->mu_k)) * im, DBL_MIN);
+    for (int i = 0; i < 60; i++) {
+        const double g = mh * u - q + N * dfo_friction_mu(F, u);
+        const double dg = mh + N * dfo_friction_dmu(F, u);
+        double u1 = (dg > 0.0) ? u - g / dg : 0.5 * u;
+        if (!(u1 > 0.0)) u1 = 0.5 * u;
+        const int done = fabs(u1 - u) <= 4.0 * DBL_EPSILON * u;
+        u = u1;
+        if (done) break;
+    }
+    return u;
 }

@@ -87,4 +87,12 @@ typedef struct {
 double dfo_friction_mu(const dfo_friction_law *F, double u);
 double dfo_friction_dmu(const dfo_friction_law *F, double u);
 
+/* A sliding step's relative speed at its end with the law F (stribeck): the root u > 0 of
+ * mh u = q - N mu(u) (mh the step's effective mass, im = 1 / mh, q the driving force along the
+ * slide), by Newton's iteration from the root with the smaller coefficient min(mu_s, mu_k)
+ * (monotone: mu is convex for mu_s > mu_k, concave otherwise, while mh > N |mu'|). Where no root
+ * exists (q <= N mu(0)) it returns (q - N mu(0)) im <= 0, continuous in the step length, whose
+ * sign tells a stop. The arithmetic of the oscillator's located step (the chain's block of one). */
+double dfo_stribeck_speed(const dfo_friction_law *F, double N, double q, double mh, double im);
+
 #endif

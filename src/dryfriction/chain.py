@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,8 +42,10 @@ __all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainError", "
            "ChainFMU2", "ChainFMU3", "default_chain_fmu", "default_chain_fmu3", "expand", "open_chain"]
 
 #: per-block parameters (arrays of n), inputs and outputs, and the chain's scalars (docs/chain.md)
-ARRAY_PARAMS = ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "k_site", "c_site")
-SCALAR_PARAMS = ("k_end", "c_end", "omega", "h", "alpha", "scheme")
+ARRAY_PARAMS = ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "k_site", "c_site", "v_s", "delta")
+SCALAR_PARAMS = ("k_end", "c_end", "omega", "h", "alpha", "scheme", "friction_law")
+#: the enumerations among the scalars: parameter -> its type's name in the model description
+_ENUMS = {"scheme": "Scheme", "friction_law": "FrictionLaw"}
 INPUTS = ("F_ext", "N_ext", "v_belt")
 OUTPUTS = ("x", "v", "a", "F_friction", "mode")
 _REAL_OUTPUTS = ("x", "v", "a", "F_friction")
@@ -146,6 +149,9 @@ class _Chain(Driver):
     def _set_scheme(self, value: int) -> None:
         raise NotImplementedError
 
+    def _set_enum(self, name: str, value: int) -> None:
+        raise NotImplementedError
+
     def _begin(self, start_time: float) -> None:
         raise NotImplementedError
 
@@ -182,6 +188,37 @@ class _Chain(Driver):
                              f"not {scheme!r}")
         return int(scheme)
 
+    def enum_items(self, name: str) -> dict[str, int]:
+        """The items (name -> value) of the enumeration parameter ``name``, from the model description."""
+        if name == "scheme":
+            return self.schemes
+        cache: dict[str, dict[str, int]] = self.__dict__.setdefault("_enum_cache", {})
+        if name not in cache:
+            root = ET.parse(Path(self.unzip_dir) / "modelDescription.xml").getroot()
+            items: dict[str, int] = {}
+            for st in list(root.iterfind("TypeDefinitions/SimpleType")) + list(
+                    root.iterfind("TypeDefinitions/EnumerationType")):
+                if st.get("name") == _ENUMS[name]:
+                    e = st.find("Enumeration")
+                    items = {i.get("name", ""): int(i.get("value", "0"))
+                             for i in (e if e is not None else st).iterfind("Item")}
+            cache[name] = items
+        return cache[name]
+
+    def enum_value(self, name: str, value: str | int) -> int:
+        """The number of an enumeration parameter's value given by name or number (ValueError else)."""
+        if name == "scheme":
+            return self.scheme_value(value)
+        items = self.enum_items(name)
+        if isinstance(value, str):
+            if value not in items:
+                raise ValueError(f"{name} must be one of {', '.join(items)}, not {value!r}")
+            return items[value]
+        if isinstance(value, bool) or int(value) != value or int(value) not in items.values():
+            raise ValueError(f"{name} must be one of {', '.join(f'{v} ({k})' for k, v in items.items())}, "
+                             f"not {value!r}")
+        return int(value)
+
     def check(self, params: Mapping[str, Any]) -> list[tuple[str, Any]]:
         """The values to set (arrays of n, the scheme's number), or ValueError with one sentence for
         an unknown name, an array of the wrong length, a non-number or an unknown scheme."""
@@ -189,8 +226,8 @@ class _Chain(Driver):
         for name, value in params.items():
             if name in ARRAY_PARAMS or name in INPUTS:
                 todo.append((name, expand(name, value, self.n)))
-            elif name == "scheme":
-                todo.append((name, self.scheme_value(value)))
+            elif name in _ENUMS:
+                todo.append((name, self.enum_value(name, value)))
             elif name in SCALAR_PARAMS:
                 try:
                     x = float(value)
@@ -208,6 +245,8 @@ class _Chain(Driver):
         for name, value in todo:
             if name == "scheme":
                 self._set_scheme(int(value))
+            elif name in _ENUMS:
+                self._set_enum(name, int(value))
             else:
                 self._set_reals(name, value)
         return dict(todo)
@@ -400,6 +439,10 @@ class ChainFMU3(_Chain):
         v = self.vars["scheme"]
         self.inst.set(v.call_type, [v.vr], [value])
 
+    def _set_enum(self, name: str, value: int) -> None:
+        v = self.vars[name]
+        self.inst.set(v.call_type, [v.vr], [value])
+
     def set_raw(self, name: str, values: Sequence[float]) -> None:
         """fmi3SetFloat64 of ``name`` with exactly these values (no length check here: the FMU's)."""
         self._set_reals(name, np.asarray(values, dtype=float))
@@ -462,6 +505,9 @@ class ChainFMU2(_Chain):
 
     def _set_scheme(self, value: int) -> None:
         self.inst.set("Integer", [self.md.vr("scheme")], [value])
+
+    def _set_enum(self, name: str, value: int) -> None:
+        self.inst.set("Integer", [self.md.vr(name)], [value])
 
     def __enter__(self) -> "ChainFMU2":
         return self

@@ -162,11 +162,14 @@ class Chain:
         p: dict[str, Any] = {name: getattr(self, name).tolist()
                              for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
         p.update(omega=self.omega, k_end=self.k_end, c_end=self.c_end)
-        if self.v_belt is not None or self.law != "coulomb":
-            raise ValueError("the chain FMU takes v_belt as an input and has no friction_law: not these values")
+        if self.v_belt is not None:
+            raise ValueError("the chain FMU takes v_belt as an input (ChainFMU.run(inputs=...)), not as a parameter")
         for name in ("k_site", "c_site"):
             if getattr(self, name) is not None:
                 p[name] = getattr(self, name).tolist()
+        if self.law != "coulomb":
+            assert self.v_s is not None and self.delta is not None
+            p.update(friction_law=self.law, v_s=self.v_s.tolist(), delta=self.delta.tolist())
         return p
 
 

@@ -82,7 +82,7 @@ int main(int argc, char **argv)
         }
     }
     const chain_params p = {n, arr[0], arr[1], arr[2], arr[3], arr[4], arr[5], arr[6], arr[7], arr[8], arr[9],
-                            k_end, c_end, omega, h, alpha, scheme, energy, NULL, NULL};
+                            k_end, c_end, omega, h, alpha, scheme, energy, NULL, NULL, 0, NULL, NULL};
     char buf[200];
     const char *msg = chain_check_params(&p, buf, sizeof buf);
     if (msg) { fprintf(stderr, "chain_driver: %s\n", msg); return 2; }

@@ -47,7 +47,7 @@ static void setup_fill(chain_setup *c, size_t n, double omega, double h, int sch
     }
     c->P0[0] = 1.0;
     chain_params p = {n, c->m, c->k, c->c, c->P0, c->phi, c->N, c->mu_s, c->chi, c->x0, c->v0,
-                      0.0, 0.0, omega, h, -0.1, scheme, 1, NULL, NULL};
+                      0.0, 0.0, omega, h, -0.1, scheme, 1, NULL, NULL, 0, NULL, NULL};
     c->p = p;
 }
 
@@ -517,7 +517,7 @@ static void test_hard(checks *T)
             arr[6][i] = 0.5; arr[7][i] = cases[c].chi; arr[8][i] = 0.0; arr[9][i] = 0.0;
         }
         const chain_params p = {n, arr[0], arr[1], arr[2], arr[3], arr[4], arr[5], arr[6], arr[7], arr[8], arr[9],
-                                1.0, 0.0, 0.5, cases[c].h, -0.1, cases[c].scheme, 0, NULL, NULL};
+                                1.0, 0.0, 0.5, cases[c].h, -0.1, cases[c].scheme, 0, NULL, NULL, 0, NULL, NULL};
         chain_model *C = chain_create(&p, &AL, NULL);
         chain_state s;
         CHECK(C != NULL && chain_state_init(C, &s));

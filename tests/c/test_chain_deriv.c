@@ -503,7 +503,7 @@ static void test_long_chain_ramp(checks *T)
         mu_s[i] = 0.5; chi[i] = 0.7; x0[i] = 0.0; v0[i] = 0.0; F[i] = 0.0;
         dF[i] = 0.02 * (double)(i % 5); dN[i] = -0.01;
     }
-    const chain_params p = {NB, m, k, c, P0, phi, N, mu_s, chi, x0, v0, 0.0, 0.0, 0.5, 0.012566370614359173 /* T / 1000, T = 4 pi */, -0.1, 3, 0, NULL, NULL};
+    const chain_params p = {NB, m, k, c, P0, phi, N, mu_s, chi, x0, v0, 0.0, 0.0, 0.5, 0.012566370614359173 /* T / 1000, T = 4 pi */, -0.1, 3, 0, NULL, NULL, 0, NULL, NULL};
     const chain_alloc al = {std_alloc, std_release, NULL};
     chain_model *A = chain_create(&p, &al, NULL), *B = chain_create(&p, &al, NULL);
     chain_state sa, sb;

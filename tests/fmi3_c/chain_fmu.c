@@ -542,7 +542,7 @@ static void c_free(void *env_, void *p)
 static void reference(const chain_case *C, double t_end, double dt, switches *S)
 {
     const chain_params p = {C->n, C->m, C->k, C->c, C->P0, C->phi, C->N, C->mu_s, C->chi, C->x0, C->v0,
-                            C->k_end, C->c_end, C->omega, C->h, C->alpha, C->scheme, 0, NULL, NULL};
+                            C->k_end, C->c_end, C->omega, C->h, C->alpha, C->scheme, 0, NULL, NULL, 0, NULL, NULL};
     const chain_alloc al = {c_alloc, c_free, NULL};
     chain_model *M = chain_create(&p, &al, NULL);
     chain_state s;

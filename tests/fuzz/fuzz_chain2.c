@@ -33,6 +33,20 @@ static fmi2ValueReference any_vr(reader *r)
     return (fmi2ValueReference)u32(r);
 }
 
+
+/* The friction oracle: with N = max(N + N_ext, 0) and mu_k = chi mu_s, a sliding block's friction
+ * opposes its mode and its magnitude lies within [min, max](mu_s, mu_k) N (Stribeck's mu between
+ * them at any speed, Coulomb's mu_k; rounding aside); a stuck one holds at most max(mu_s, mu_k) N. */
+static void check_friction(int mode, double F, double mu_s, double chi, double N)
+{
+    const double mu_k = chi * mu_s, lo = fmin(mu_s, mu_k) * N, hi = fmax(mu_s, mu_k) * N;
+    if (!(isfinite(lo) && isfinite(hi) && hi <= 1e300) || !isfinite(F)) return;
+    const double tol = 1e-9 * hi + 1e-300;
+    if (fabs(F) > hi + tol) oracle_fail("|F_friction| above max(mu_s, mu_k) N");
+    if (mode != 0 && (F * mode > tol || fabs(F) < lo - tol))
+        oracle_fail("a sliding block's F_friction outside -mode [min, max](mu_s, mu_k) N");
+}
+
 static void check_outputs(ctx *X)
 {
     const unsigned outs[4] = {VR_x, VR_v, VR_a, VR_F_friction};
@@ -45,7 +59,11 @@ static void check_outputs(ctx *X)
     for (unsigned i = 1; i <= DFO_CHAIN_N; i++) {
         const fmi2ValueReference vr = VR_mode + i;
         fmi2Integer m;
-        if (fmi2GetInteger(X->c, &vr, 1, &m) == fmi2OK && (m < -1 || m > 1)) oracle_fail("mode out of range");
+        if (fmi2GetInteger(X->c, &vr, 1, &m) != fmi2OK) continue;
+        if (m < -1 || m > 1) oracle_fail("mode out of range");
+        const fmi2ValueReference pv[5] = {VR_mu_s + i, VR_chi + i, VR_N + i, VR_N_ext + i, VR_F_friction + i};
+        fmi2Real p[5];
+        if (fmi2GetReal(X->c, pv, 5, p) == fmi2OK) check_friction(m, p[4], p[0], p[1], fmax(p[2] + p[3], 0.0));
     }
 }
 

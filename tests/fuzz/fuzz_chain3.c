@@ -45,6 +45,20 @@ static size_t blocks(const ctx *X)
     return (size_t)n;
 }
 
+
+/* The friction oracle: with N = max(N + N_ext, 0) and mu_k = chi mu_s, a sliding block's friction
+ * opposes its mode and its magnitude lies within [min, max](mu_s, mu_k) N (Stribeck's mu between
+ * them at any speed, Coulomb's mu_k; rounding aside); a stuck one holds at most max(mu_s, mu_k) N. */
+static void check_friction(int mode, double F, double mu_s, double chi, double N)
+{
+    const double mu_k = chi * mu_s, lo = fmin(mu_s, mu_k) * N, hi = fmax(mu_s, mu_k) * N;
+    if (!(isfinite(lo) && isfinite(hi) && hi <= 1e300) || !isfinite(F)) return;
+    const double tol = 1e-9 * hi + 1e-300;
+    if (fabs(F) > hi + tol) oracle_fail("|F_friction| above max(mu_s, mu_k) N");
+    if (mode != 0 && (F * mode > tol || fabs(F) < lo - tol))
+        oracle_fail("a sliding block's F_friction outside -mode [min, max](mu_s, mu_k) N");
+}
+
 static void check_outputs(ctx *X)
 {
     const size_t n = blocks(X);
@@ -56,9 +70,16 @@ static void check_outputs(ctx *X)
             if (!isfinite(v[i])) oracle_fail("an output read with OK is not finite");
     const fmi3ValueReference vm = VR_mode;
     fmi3Int32 m[NBUF];
-    if (fmi3GetInt32(X->c, &vm, 1, m, n) == fmi3OK)
-        for (size_t i = 0; i < n; i++)
-            if (m[i] < -1 || m[i] > 1) oracle_fail("mode out of range");
+    if (fmi3GetInt32(X->c, &vm, 1, m, n) != fmi3OK) return;
+    for (size_t i = 0; i < n; i++)
+        if (m[i] < -1 || m[i] > 1) oracle_fail("mode out of range");
+    /* the friction oracle, with the parameters and the inputs read back */
+    const fmi3ValueReference pv[4] = {VR_mu_s, VR_chi, VR_N, VR_N_ext};
+    fmi3Float64 pr[4 * NBUF];
+    if (fmi3GetFloat64(X->c, pv, 4, pr, 4 * n) != fmi3OK) return;
+    if (fmi3GetFloat64(X->c, vr, 5, v, 4 * n + 1) != fmi3OK) return;
+    for (size_t i = 0; i < n; i++)
+        check_friction(m[i], v[3 * n + i], pr[i], pr[n + i], fmax(pr[2 * n + i] + pr[3 * n + i], 0.0));
 }
 
 static fmi3UInt64 any_n(reader *r)
@@ -86,7 +107,8 @@ static fmi3Status call(ctx *X, reader *r, unsigned op)
     case 6: return enter_initialization(X, r);
     case 7: st = fmi3ExitInitializationMode(X->c); break;
     case 8: case 9: { /* an array (or any variable) with n values, sometimes a wrong count */
-        const fmi3ValueReference vr = (u8(r) < 200) ? (fmi3ValueReference)(DFO_ARRAY_VR_STRIDE * (1 + u8(r) % 12))
+        /* (arrays 1 ... 22: m ... N_ext, k_site, c_site, v_belt, v_s, delta among them) */
+        const fmi3ValueReference vr = (u8(r) < 200) ? (fmi3ValueReference)(DFO_ARRAY_VR_STRIDE * (1 + u8(r) % 22))
                                                     : any_vr(r);
         const size_t n = blocks(X);
         size_t nv = n;
@@ -98,13 +120,14 @@ static fmi3Status call(ctx *X, reader *r, unsigned op)
         st = fmi3SetFloat64(X->c, &vr, 1, v, nv);
         break;
     }
-    case 10: { /* scalars and the scheme */
+    case 10: { /* scalars, the scheme and the friction law */
         if (u8(r) & 1) {
             const fmi3ValueReference vr = 2 + u8(r) % 4; /* k_end, c_end, omega, h */
             const fmi3Float64 v = real(r);
             st = fmi3SetFloat64(X->c, &vr, 1, &v, 1);
         } else {
-            const fmi3ValueReference vr = (u8(r) < 230) ? VR_scheme : any_vr(r);
+            const unsigned sel = u8(r);
+            const fmi3ValueReference vr = (sel < 160) ? VR_scheme : (sel < 230) ? VR_friction_law : any_vr(r);
             const fmi3Int64 v = (fmi3Int64)(u8(r) % 7) - 1;
             st = fmi3SetInt64(X->c, &vr, 1, &v, 1);
         }
@@ -211,6 +234,20 @@ static size_t random_input(long k, uint64_t *s, uint8_t *buf)
             buf[n++] = (uint8_t)(x >> 8);
         } else if (pick == 6) { /* FMU states */
             n = put_state_op(buf, n, 17, x);
+        } else if (pick == 7 && (x & 1)) { /* friction_law = stribeck (takes effect at a (re)start) */
+            buf[n++] = 10;
+            buf[n++] = 0;   /* the scheme branch */
+            buf[n++] = 200; /* friction_law */
+            buf[n++] = 3;   /* 3 % 7 - 1 = 2 */
+        } else if (pick == 7 && n + blocks_k + 8 < FUZZ_RANDOM_LEN) { /* belts of n values */
+            buf[n++] = 8;
+            buf[n++] = 0;
+            buf[n++] = 19; /* array 20: v_belt */
+            buf[n++] = 255;
+            buf[n++] = 100;
+            buf[n++] = (uint8_t)(x >> 8);
+            buf[n++] = (uint8_t)(x >> 16);
+            for (size_t i = 0; i < blocks_k; i++) buf[n++] = 0;
         } else {
             n = put_any(buf, n, x);
         }

@@ -13,6 +13,10 @@
  *   ... fixed                                       (a fifth argument) only the sets of n = DFO_CHAIN_N,
  *                                                   as FMI 2.0 runs them: FMI 3.0 then prints the same
  *
+ * Sets NSETS_BASE ... NSETS - 1 add belts (v_belt set at the start and changed before points
+ * NPTS / 4 + 1 and 3 NPTS / 4 + 1), site springs and dampers and the Stribeck law (schemes located,
+ * and consistent with Coulomb); the sets before them are those of the earlier harness, line for line.
+ *
  * Output lines: "out SET POINT t" then per block "x v a F_friction mode" (reals as %.17g:hex),
  * "state SET HEX"; "err SET POINT what" when a call fails. A resumed run's "out" lines equal the
  * second half of the run's. */
@@ -25,6 +29,8 @@
 
 #define HARNESS_NAME "chain_harness"
 #define MAX_STATE (1 << 20)
+#define NSETS_BASE 300 /* the first sets (Coulomb on fixed supports), as before the belts */
+#define NSETS 390      /* then belts changed at two points, site springs and dampers, Stribeck */
 #include "harness_common.h"
 
 #ifndef DFO_CHAIN_N
@@ -41,7 +47,14 @@ typedef struct {
         v0[NMAXB], F_ext[NMAXB];
     double k_end, c_end, omega, h, alpha, dt;
     int scheme, inputs;
+    /* sets from NSETS_BASE on: belts (vb[0] from the start, vb[1], vb[2] from the change points),
+     * site springs and dampers, the friction law (1 coulomb, 2 stribeck) */
+    int ext, belt, law;
+    double vb[3][NMAXB], k_site[NMAXB], c_site[NMAXB], v_s[NMAXB], delta[NMAXB];
 } cset;
+
+#define BELT_CHANGE_1 (NPTS / 4 + 1) /* the belts change before these points' steps */
+#define BELT_CHANGE_2 (3 * NPTS / 4 + 1)
 
 /* Set i: n blocks (every third set the FMI 2.0 build's n), the schemes in turn, the rest drawn over
  * the model's ranges (stick-dominated to free sliding, free or walled right end, 100 to 2000 steps
@@ -74,6 +87,23 @@ static cset make_set(int i)
     p.alpha = unif(&s, -1.0 / 3.0, 0.0);
     p.inputs = i % 5 == 0;
     p.dt = T / 4.0; /* NPTS points = 4 excitation periods; comm points off the internal grid */
+    p.law = 1;
+    if (i < NSETS_BASE) return p;
+    /* belts, site springs and dampers, Stribeck: drawn from a stream of their own */
+    uint64_t s2 = 0xB17E0000ULL + (uint64_t)i;
+    p.ext = 1;
+    p.law = (i % 2) ? 2 : 1;
+    p.belt = (i % 3) != 1;
+    p.scheme = (p.law == 1 && i % 4 == 0) ? 2 : 3; /* consistent (Coulomb only), else located */
+    static const double deltas[3] = {1.0, 2.0, 1.5};
+    for (size_t b = 0; b < p.n; b++) {
+        p.k_site[b] = (rng(&s2) % 2) ? unif(&s2, 0.0, 2.0) : 0.0;
+        p.c_site[b] = (rng(&s2) % 3 == 0) ? unif(&s2, 0.0, 0.2) : 0.0;
+        p.v_s[b] = unif(&s2, 0.02, 0.3);
+        p.delta[b] = deltas[rng(&s2) % 3];
+        for (int j = 0; j < 3; j++) p.vb[j][b] = (rng(&s2) % 4 == 0) ? 0.0 : unif(&s2, -0.3, 0.3);
+        if (rng(&s2) % 3 == 0) p.v0[b] = p.vb[0][b]; /* starts on its belt */
+    }
     return p;
 }
 
@@ -117,6 +147,15 @@ static const unsigned SCALAR_VR[5] = {VR_k_end, VR_c_end, VR_omega, VR_h, VR_alp
 /* FMI 2.0: element i (0-based) of the array with value reference base. */
 static fmi2ValueReference elem(unsigned base, size_t i) { return (fmi2ValueReference)(base + i + 1); }
 
+static int set_belts2(const fmi2_api *a, fmi2Component c, const cset *p, int j)
+{
+    for (size_t b = 0; b < p->n; b++) {
+        const fmi2ValueReference vr = elem(VR_v_belt, b);
+        if (a->set_real(c, &vr, 1, &p->vb[j][b]) != fmi2OK) return 0;
+    }
+    return 1;
+}
+
 static int set_params2(const fmi2_api *a, fmi2Component c, const cset *p)
 {
     for (int j = 0; j < N_ARRAYS_SET; j++)
@@ -131,7 +170,21 @@ static int set_params2(const fmi2_api *a, fmi2Component c, const cset *p)
     const double sv[5] = {p->k_end, p->c_end, p->omega, p->h, p->alpha};
     const fmi2ValueReference vs = VR_scheme;
     const fmi2Integer sc = p->scheme;
-    return a->set_real(c, SCALAR_VR, 5, sv) == fmi2OK && a->set_integer(c, &vs, 1, &sc) == fmi2OK;
+    if (a->set_real(c, SCALAR_VR, 5, sv) != fmi2OK || a->set_integer(c, &vs, 1, &sc) != fmi2OK) return 0;
+    if (!p->ext) return 1; /* (the first sets: as before) */
+    if (p->law == 2) {
+        const fmi2ValueReference vl = VR_friction_law;
+        const fmi2Integer law = p->law;
+        if (a->set_integer(c, &vl, 1, &law) != fmi2OK) return 0;
+    }
+    const unsigned extra[4] = {VR_k_site, VR_c_site, VR_v_s, VR_delta};
+    const double *ev[4] = {p->k_site, p->c_site, p->v_s, p->delta};
+    for (int j = 0; j < 4 && (p->law == 2 || j < 2); j++)
+        for (size_t b = 0; b < p->n; b++) {
+            const fmi2ValueReference vr = elem(extra[j], b);
+            if (a->set_real(c, &vr, 1, &ev[j][b]) != fmi2OK) return 0;
+        }
+    return !p->belt || set_belts2(a, c, p, 0);
 }
 
 static int get_outputs2(const fmi2_api *a, fmi2Component c, size_t n, double *r, int *mode)
@@ -167,7 +220,9 @@ static int run2(const fmi2_api *a, int set, FILE *states, const state_table *tab
     int mode[NMAXB];
     for (int k = k0; k <= NPTS; k++) {
         const double t0 = (k - 1) * p.dt, t1 = k * p.dt;
-        if (a->do_step(c, t0, t1 - t0, fmi2True) != fmi2OK || !get_outputs2(a, c, p.n, r, mode)) {
+        const int change = p.belt && (k == BELT_CHANGE_1 || k == BELT_CHANGE_2);
+        if ((change && !set_belts2(a, c, &p, (k == BELT_CHANGE_1) ? 1 : 2)) ||
+            a->do_step(c, t0, t1 - t0, fmi2True) != fmi2OK || !get_outputs2(a, c, p.n, r, mode)) {
             printf("err %d %d doStep\n", set, k);
             fails++;
             break;
@@ -196,7 +251,19 @@ static int set_params3(const fmi3_api *a, fmi3Instance c, const cset *p)
     const double sv[5] = {p->k_end, p->c_end, p->omega, p->h, p->alpha};
     const fmi3ValueReference vs = VR_scheme;
     const fmi3Int64 sc = p->scheme;
-    return a->set_float64(c, SCALAR_VR, 5, sv, 5) == fmi3OK && a->set_int64(c, &vs, 1, &sc, 1) == fmi3OK;
+    if (a->set_float64(c, SCALAR_VR, 5, sv, 5) != fmi3OK || a->set_int64(c, &vs, 1, &sc, 1) != fmi3OK) return 0;
+    if (!p->ext) return 1; /* (the first sets: as before) */
+    if (p->law == 2) {
+        const fmi3ValueReference vl = VR_friction_law;
+        const fmi3Int64 law = p->law;
+        if (a->set_int64(c, &vl, 1, &law, 1) != fmi3OK) return 0;
+    }
+    const fmi3ValueReference extra[4] = {VR_k_site, VR_c_site, VR_v_s, VR_delta};
+    const double *ev[4] = {p->k_site, p->c_site, p->v_s, p->delta};
+    for (int j = 0; j < 4 && (p->law == 2 || j < 2); j++)
+        if (a->set_float64(c, &extra[j], 1, ev[j], p->n) != fmi3OK) return 0;
+    const fmi3ValueReference vb = VR_v_belt;
+    return !p->belt || a->set_float64(c, &vb, 1, p->vb[0], p->n) == fmi3OK;
 }
 
 static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab)
@@ -219,7 +286,10 @@ static int run3(const fmi3_api *a, int set, FILE *states, const state_table *tab
         const double t0 = (k - 1) * p.dt, t1 = k * p.dt;
         fmi3Boolean ev, term, early;
         fmi3Float64 last;
-        if (a->do_step(c, t0, t1 - t0, fmi3True, &ev, &term, &early, &last) != fmi3OK ||
+        const fmi3ValueReference vb = VR_v_belt;
+        const int change = p.belt && (k == BELT_CHANGE_1 || k == BELT_CHANGE_2);
+        if ((change && a->set_float64(c, &vb, 1, p.vb[(k == BELT_CHANGE_1) ? 1 : 2], p.n) != fmi3OK) ||
+            a->do_step(c, t0, t1 - t0, fmi3True, &ev, &term, &early, &last) != fmi3OK ||
             a->get_float64(c, rvr, 4, r, 4 * p.n) != fmi3OK || a->get_int32(c, &vm, 1, mode, p.n) != fmi3OK) {
             printf("err %d %d doStep\n", set, k);
             fails++;

@@ -5,7 +5,8 @@
  *     (and each block i tied to the ground by k_site[i], c_site[i], 0 unless set)
  *     M x'' + C x' + K x = P(t) + F_ext + F,     P_i = P0_i cos(omega t + phi_i),
  *     F_i Coulomb on block i: |F_i| <= max(mu_s_i, mu_k_i) N_i stuck, -/+ mu_k_i N_i sliding,
- *     mu_k_i = chi_i mu_s_i, N_i = max(N_i + N_ext_i, 0).
+ *     mu_k_i = chi_i mu_s_i, N_i = max(N_i + N_ext_i, 0); or (friction_law = stribeck) sliding
+ *     -/+ N_i mu_i(|v_i - vb_i|), mu_i(u) = mu_k_i + (mu_s_i - mu_k_i) exp(-(u / v_s_i)^delta_i).
  *
  * k[i], c[i] is the spring and damper on the left of block i (k[0], c[0] tie block 0 to the left
  * wall); k_end = c_end = 0 is a free right end. Springs are relaxed at x = 0.
@@ -47,6 +48,11 @@ typedef struct {
     /* springs and dampers from each block to the ground frame (NULL: none; the Burridge-Knopoff
      * model's site springs), added to K's and C's diagonals */
     const double *k_site, *c_site;
+    /* the sliding friction law (friction.h): 0 or DFO_LAW_COULOMB (1) mu_k; DFO_LAW_STRIBECK (2)
+     * mu(u) = mu_k + (mu_s - mu_k) exp(-(u / v_s)^delta) at the speed u relative to the belt, with
+     * v_s[i] > 0 and delta[i] >= 1 per block (arrays of n; NULL: 0.01 and 1); located scheme only */
+    int friction_law;
+    const double *v_s, *delta;
 } chain_params;
 
 /* Inputs held over a communication step: arrays of length n, or NULL when never set. */
@@ -68,7 +74,8 @@ typedef enum {
     CHAIN_ERR_NO_PROGRESS = 2,  /* too many switches inside one internal step */
     CHAIN_ERR_NONFINITE = 3,    /* the state overflowed */
     CHAIN_ERR_RESOLUTION = 4,   /* a step would not advance time */
-    CHAIN_SWITCHED = 5          /* stopped at the first switch (stop_at_switch): s->t is its time */
+    CHAIN_SWITCHED = 5,         /* stopped at the first switch (stop_at_switch): s->t is its time */
+    CHAIN_ERR_FRICTION = 6      /* the speed-dependent (Stribeck) friction's implicit solve did not converge */
 } chain_status;
 
 typedef struct chain_model chain_model;

@@ -276,16 +276,18 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
     }
     const span G = chain_whole(M, s);
     chain_net_forces(M, s, &G, M->S);
+    /* (belts, vbf: at rest on its belt, V = vb; else the mode of V - vb) */
     for (size_t i = 0; i < n; i++) {
-        if (chain_has_friction(M, i) && s->V[i] == 0.0) s->mode[i] = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
-        else s->mode[i] = chain_sgn(s->V[i]);
+        const double vr = M->vbf ? s->V[i] - M->vbf[i] : s->V[i];
+        if (chain_has_friction(M, i) && vr == 0.0) s->mode[i] = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
+        else s->mode[i] = chain_sgn(vr);
     }
     chain_restart(M, s, &G);
     for (size_t i = 0; i < n; i++) {
         const int dir = s->mode[i];
         if (!chain_has_friction(M, i)) s->F[i] = 0.0;
-        else if (dir != 0 && s->V[i] == 0.0)
-            s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
+        else if (dir != 0 && s->V[i] == chain_vb(M, i))
+            s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - chain_start_mag(M, i), 0.0) / M->m[i];
     }
 }
 
@@ -319,7 +321,9 @@ static COLD_CALL long long stuck_until(chain_model *M, const chain_state *s, dou
  * which it stopped would still carry the deceleration. */
 static void rest_forces(chain_model *M, chain_state *s)
 {
-    if (M->scheme != DFO_SCHEME_CONSISTENT) return;
+    /* (belts, vbf: a stuck block riding on its belt holds the force of its position where the call
+     * ends, as the oscillator's, the same as its LCP's to rounding) */
+    if (M->scheme != DFO_SCHEME_CONSISTENT && !M->vbf) return;
     double cw, sw;
     chain_phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = 0; i < M->n; i++) {
@@ -346,8 +350,9 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
     /* a requested time within SNAP_REL_H h of a grid point is that grid point */
     t_target = dfo_grid_snap(s->t0, h, s->n_grid, s->t, t_target, SNAP_REL_H * h);
     /* whole grid steps of the located scheme try the fast path first (step_fast) */
-    const int fast_grid =
-        M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy && !M->ramped;
+    const int fast_grid = M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy &&
+                          !M->ramped && !M->stribeck && !M->vbf;
+    if (M->vbf) M->stuck_ok = 0; /* (belts: a stuck block moves) */
     fast_ctx F;
     fast_ctx_init(M, &F);
     double g_prev = s->t0 + (double)s->n_grid * h;  /* the grid point n_grid */
@@ -458,6 +463,13 @@ static void belt_frame(chain_model *M, const chain_inputs *in, const chain_ramp 
     bramp->dF_ext[0] = M->bD;
 }
 
+/* The belt speeds of the fixed frame's state (Stribeck's relative speed outside the steps) */
+static void belt_keep(chain_model *M, const double *vb)
+{
+    for (size_t i = 0; i < M->n; i++) M->bV[i] = vb ? vb[i] : 0.0;
+    M->vrel_b = vb ? M->bV : NULL;
+}
+
 static void belt_shift(const chain_model *M, chain_state *s, const double *vb, double t_ref, double sign)
 {
     for (size_t i = 0; i < M->n; i++) {
@@ -466,25 +478,50 @@ static void belt_shift(const chain_model *M, chain_state *s, const double *vb, d
     }
 }
 
+/* The located scheme (on steps that resolve the motion) steps in the fixed frame with the LCP on the
+ * velocity relative to the belts, as the oscillator's located step; the consistent scheme (and a
+ * stiff grid, which hands its steps to it) in the belts' moving frame. */
+static int belt_fixed_frame(const chain_model *M)
+{
+    return M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * M->h > STIFF_STEP);
+}
+
 chain_status chain_advance_belt(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
                                 chain_state *s, double t_target, int stop_at_switch, chain_switch_fn on_switch,
                                 void *ctx)
 {
+    belt_keep(M, vb);
     if (!vb) return chain_advance_ramped(M, in, ramp, s, t_target, stop_at_switch, on_switch, ctx);
+    if (belt_fixed_frame(M)) {
+        M->vbf = M->bV;
+        const chain_status st = chain_advance_ramped(M, in, ramp, s, t_target, stop_at_switch, on_switch, ctx);
+        M->vbf = NULL;
+        return st;
+    }
     chain_inputs bin;
     chain_ramp bramp;
     belt_frame(M, in, ramp, vb, &bin, &bramp);
     bramp.t_ref = ramp ? ramp->t_ref : s->t;
     belt_switch bs = {on_switch, ctx, vb, bramp.t_ref};
     belt_shift(M, s, vb, bramp.t_ref, -1.0);
+    M->vrel_b = NULL; /* in the belt's frame V is the relative velocity */
     const chain_status st = chain_advance_ramped(M, &bin, &bramp, s, t_target, stop_at_switch, belt_on_switch, &bs);
+    M->vrel_b = M->bV;
     belt_shift(M, s, vb, bramp.t_ref, 1.0);
     return st;
 }
 
 void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, double t0, chain_state *s)
 {
+    belt_keep(M, NULL);
     if (!vb) { chain_start(M, in, t0, s); return; }
+    if (belt_fixed_frame(M)) {
+        belt_keep(M, vb);
+        M->vbf = M->bV;
+        chain_start(M, in, t0, s);
+        M->vbf = NULL;
+        return;
+    }
     chain_inputs bin;
     chain_ramp bramp;
     belt_frame(M, in, NULL, vb, &bin, &bramp);
@@ -498,6 +535,7 @@ void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, 
     /* (the stuck blocks' rest, V - vb = 0 exactly: V = vb) */
     for (size_t i = 0; i < M->n; i++)
         if (s->mode[i] == 0 && chain_has_friction(M, i)) s->V[i] = vb[i];
+    belt_keep(M, vb);
 }
 
 void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old, const double *vb_new, chain_state *s,
@@ -505,6 +543,7 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
 {
     const size_t n = M->n;
     chain_loads_init(M, in);
+    belt_keep(M, vb_new);
     int changed = 0;
     for (size_t i = 0; i < n; i++) {
         if (!chain_has_friction(M, i)) continue;
@@ -519,7 +558,12 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
             chain_net_forces(M, s, &G, M->S);
             to = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
         }
-        if (to == from) continue;
+        if (to == from) {
+            /* a slide goes on relative to the new belt: it restarts with the physical acceleration (as
+             * the oscillator's; with Stribeck at another relative speed, so with another force) */
+            if (to != 0) changed = 1;
+            continue;
+        }
         s->mode[i] = to;
         if (to == 0) s->t_stick[i] = s->t;
         chain_report(M, s, i, from, on_switch, ctx);

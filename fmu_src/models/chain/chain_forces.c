@@ -28,6 +28,8 @@ void chain_loads_ramp(chain_model *M, double t)
         M->u[i] = u;
         M->mukN[i] = M->mu_k[i] * N;
         M->Fb[i] = M->mu_b[i] * N;
+        M->Nn[i] = N;
+        M->mlN[i] = M->stribeck ? fmin(M->law[i].mu_s, M->law[i].mu_k) * N : M->mukN[i];
         M->rows[i].u = M->u[i];
         M->rows[i].mukN = M->mukN[i];
         M->rows[i].Fb = M->Fb[i];
@@ -56,6 +58,8 @@ void chain_loads_init(chain_model *M, const chain_inputs *in)
         M->u[i] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
         M->mukN[i] = M->mu_k[i] * N;
         M->Fb[i] = M->mu_b[i] * N;
+        M->Nn[i] = N;
+        M->mlN[i] = M->stribeck ? fmin(M->law[i].mu_s, M->law[i].mu_k) * N : M->mukN[i];
         M->rows[i].u = M->u[i];
         M->rows[i].mukN = M->mukN[i];
         M->rows[i].Fb = M->Fb[i];
@@ -96,7 +100,7 @@ void chain_mode_accels(chain_model *M, const chain_state *s, const span *G, doub
     chain_phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = G->a; i < G->b; i++) {
         if (chain_held(M, s, i)) { a[i] = 0.0; continue; }
-        const double F = chain_has_friction(M, i) ? -s->mode[i] * M->mukN[i] : 0.0;
+        const double F = chain_has_friction(M, i) ? -s->mode[i] * chain_slide_mag(M, s, i) : 0.0;
         /* summed as the oscillator's accel_of */
         a[i] = (chain_P_at(M, i, cw, sw) + M->u[i] - chain_Kx(M, s->X, i) + F - chain_Cv(M, s->V, i)) / M->m[i];
     }
@@ -119,6 +123,16 @@ void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_sta
     const chain_state *s = &copy;
     const span G = chain_whole(M, s);
     chain_physical_accel(M, s, &G, a);
+    if (M->stribeck) {
+        /* a slide's force is the state's (its step's end solve), as the oscillator's output a: N mu(u)
+         * at the solved relative speed u, not at its rounding |V - vb| */
+        double cw, sw;
+        chain_phase_of(M, s, s->t, &cw, &sw);
+        for (size_t i = 0; i < M->n; i++)
+            if (s->mode[i] != 0 && chain_has_friction(M, i))
+                a[i] = (chain_P_at(M, i, cw, sw) + M->u[i] - chain_Kx(M, s->X, i) + s->F[i] - chain_Cv(M, s->V, i)) /
+                       M->m[i];
+    }
     if (M->scheme != DFO_SCHEME_PAPER) return;
     /* the paper's stuck block is not at rest: it creeps with the force of its LCP (Bossak's A
      * throughout), as the oscillator reports it */
@@ -140,6 +154,53 @@ static double damping_power(const chain_model *M, const double *v)
         if (M->cs[i] != 0.0) D += M->cs[i] * v[i] * v[i];
     }
     return D + M->c_end * v[M->n - 1] * v[M->n - 1];
+}
+
+/* Block b's physical acceleration at the state in its mode (chain_mode_accels' value; a ghost's its
+ * interpolated one), the phase (cw, sw) at s->t */
+static double block_accel(const chain_model *M, const chain_state *s, const span *G, size_t b, double cw, double sw)
+{
+    for (int k = 0; k < 2; k++)
+        if (G->has[k] && b == G->idx[k]) return s->A[b];
+    if (chain_held(M, s, b)) return 0.0;
+    const double F = chain_has_friction(M, b) ? -s->mode[b] * chain_slide_mag(M, s, b) : 0.0;
+    return (chain_P_at(M, b, cw, sw) + M->u[b] - chain_Kx(M, s->X, b) + F - chain_Cv(M, s->V, b)) / M->m[b];
+}
+
+/* chain_trial's re-basing of A on hh for the span's blocks that need it, into A0 (method.md section 8) */
+static void rebase_sparse(chain_model *M, const chain_state *s, const span *G, double hh)
+{
+    const size_t n = M->n;
+    const double a = M->alpha, tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    const double cw = dfo_cos(M->omega * s->t + M->phi0), sw = dfo_sin(M->omega * s->t + M->phi0);
+    double pcw, psw;
+    chain_phase_of(M, s, s->t, &pcw, &psw);
+    for (size_t i = G->a; i < G->b; i++) {
+        const double hA = s->hA[i];
+        const int ri = hh != hA && fabs(hh - hA) > tol && M->rate_max * fmax(hh, hA) <= 1.0;
+        if (!ri) {
+            M->A0[i] = s->A[i];
+            continue;
+        }
+        double j = 0.0;
+        if (!chain_held(M, s, i)) {
+            const double ai = block_accel(M, s, G, i, pcw, psw);
+            double cv = 0.0; /* chain_Cv of the physical accelerations */
+            if (M->damped) {
+                cv = M->Cd[i] * ai;
+                if (i > 0) cv += M->Co[i - 1] * block_accel(M, s, G, i - 1, pcw, psw);
+                if (i + 1 < n) cv += M->Co[i] * block_accel(M, s, G, i + 1, pcw, psw);
+            }
+            const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
+            double f;
+            if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - cv + chain_ramp_rate(M, s, i);
+            else f = Pd - chain_Kx(M, s->V, i) - cv;
+            if (M->stribeck && chain_has_friction(M, i))
+                f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * ai;
+            j = f / M->m[i];
+        }
+        M->A0[i] = s->A[i] + a * (hh - hA) * j;
+    }
 }
 
 /* The step of length hh of the span's blocks from the state to t1 (cw1, sw1: the excitation phase
@@ -171,7 +232,7 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
          * search), the limits of the trial's modes with them, and the jerk from them (as the
          * oscillator's trial sub-steps) */
         chain_loads_ramp(M, M->t_load);
-        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+        for (size_t i = a0; i < b0; i++) M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         M->jerk_valid = 0;
     }
     const double a = M->alpha;
@@ -184,7 +245,13 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                      M->rate_max * fmax(hh, hA) <= 1.0;
         }
     }
-    if (rebase && !M->jerk_valid) {
+    const int sparse = rebase && !M->jerk_valid && M->sparse_rebase;
+    if (sparse) {
+        /* the first trial of a long chain's step (chain_step_located; after a switch in a cluster):
+         * only the re-based blocks' jerks, each from the physical accelerations of it and its
+         * neighbours (the same values as below, not kept: O(re-based blocks), not O(n), per step) */
+        rebase_sparse(M, s, G, hh);
+    } else if (rebase && !M->jerk_valid) {
         /* jerk_i = (P'_i - (K V)_i - (C a)_i) / m_i for the moving blocks, 0 for the held ones; a
          * function of the state only, kept for the further trials from it (root finding) */
         /* the excitation's rate -P0 omega sin(omega t + phi), as the oscillator's */
@@ -198,15 +265,21 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                 const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
                 /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
                  * internal step's, as the oscillator's jerk) */
-                if (M->ramped)
-                    j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i)) / M->m[i];
-                else j = (Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i)) / M->m[i];
+                double f;
+                if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i);
+                else f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i);
+                /* Stribeck: d F / dt = -N mu'(u) a, u the relative speed (as the oscillator's jerk) */
+                if (M->stribeck && chain_has_friction(M, i))
+                    f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * M->A0[i];
+                j = f / M->m[i];
             }
             M->J[i] = j;
         }
         M->jerk_valid = 1;
     }
-    if (rebase) {
+    if (sparse) {
+        M->A0p = M->A0;
+    } else if (rebase) {
         for (size_t i = a0; i < b0; i++) {
             const double hA = s->hA[i];
             const int ri = hh != hA && fabs(hh - hA) > 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t) &&
@@ -236,6 +309,17 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         q[i] = -(M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
                  M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx);
     }
+    if (M->vbf) {
+        /* belts: the LCP on W = V - vb, M_hat W = p_hat - M_hat vb + F (the oscillator's shifted LCP:
+         * q = -(p_hat - (M_hat vb)_i), p_hat's bits read back from -q) */
+        const double *vb = M->vbf, *cd = M->cd, *ce = M->ce;
+        for (size_t i = a0; i < b0; i++) {
+            double mv = cd[i] * vb[i];
+            if (i > 0) mv += ce[i - 1] * vb[i - 1];
+            if (i + 1 < n) mv += ce[i] * vb[i + 1];
+            q[i] = -(-q[i] - mv);
+        }
+    }
 }
 
 /* Ramped inputs: the rate of block i's applied force from its inputs at the state's time,
@@ -246,14 +330,23 @@ double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i)
     chain_ramp_value(&M->rin, &M->ramp, 0, i, s->t, &u, &du);
     chain_ramp_value(&M->rin, &M->ramp, 1, i, s->t, &Ne, &dNe);
     const double dN = (M->N[i] + Ne > 0.0) ? dNe : 0.0;
-    return du - (chain_has_friction(M, i) ? s->mode[i] * M->mu_k[i] * dN : 0.0);
+    if (!chain_has_friction(M, i)) return du;
+    const double mu = M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i)) : M->mu_k[i];
+    return du - s->mode[i] * mu * dN;
 }
 
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1 (constant
  * over the step for the moving blocks with friction): X, V, A, F, hA, the energy accounts (whole
  * chain only); not the time. */
-void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1)
+static COLD_CALL void belt_finish(chain_model *M, chain_state *s, const span *G, const double *W, const double *F1,
+                                  double t1);
+
+void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1, double t1)
 {
+    if (M->vbf) {
+        belt_finish(M, s, G, V1, F1, t1);
+        return;
+    }
     M->jerk_valid = 0;
     const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h;
     if (M->energy && G->a == 0 && G->b == M->n) {
@@ -264,7 +357,8 @@ void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V
             const double X1 = M->xp[i] + cV * V1[i];
             W += 0.5 * hh * ((chain_P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] +
                              (chain_P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1[i]);
-            Wf += F1[i] * (X1 - s->X[i]);
+            /* Stribeck: the force varies over the step (trapezoidal, as the oscillator's E_friction) */
+            Wf += (M->stribeck ? 0.5 * (s->F[i] + F1[i]) : F1[i]) * (X1 - s->X[i]);
         }
         s->W_applied += W;
         s->W_friction += Wf;
@@ -274,6 +368,42 @@ void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V
         s->X[i] = M->xp[i] + cV * V1[i];
         s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * M->A0p[i];
         s->V[i] = V1[i];
+        s->F[i] = F1[i];
+        s->hA[i] = hh;
+    }
+}
+
+/* chain_finish with belts (vbf): V = W + vb; a held block rides on its belt to t1 (X = X0 + vb (t1 -
+ * t), as the oscillator's stuck phase), the others take Newmark's kinematics. */
+static COLD_CALL void belt_finish(chain_model *M, chain_state *s, const span *G, const double *W, const double *F1,
+                                  double t1)
+{
+    M->jerk_valid = 0;
+    const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h, *vb = M->vbf;
+    if (M->energy && G->a == 0 && G->b == M->n) {
+        const size_t n = M->n;
+        double cw0, sw0, Wa = 0.0, Wf = 0.0;
+        chain_phase_of(M, s, s->t, &cw0, &sw0);
+        for (size_t i = 0; i < n; i++) {
+            const int held = M->st[i] == 0 && M->l[i] > 0.0;
+            const double V1 = W[i] + vb[i];
+            const double X1 = held ? s->X[i] + vb[i] * (t1 - s->t) : M->xp[i] + cV * V1;
+            Wa += 0.5 * hh * ((chain_P_at(M, i, cw0, sw0) + M->u[i]) * s->V[i] +
+                              (chain_P_at(M, i, M->cw1, M->sw1) + M->u[i]) * V1);
+            Wf += (M->stribeck ? 0.5 * (s->F[i] + F1[i]) : F1[i]) * (X1 - s->X[i]);
+        }
+        s->W_applied += Wa;
+        s->W_friction += Wf;
+        double *V1s = M->box; /* (free here) */
+        for (size_t i = 0; i < n; i++) V1s[i] = W[i] + vb[i];
+        s->D_damping += 0.5 * hh * (damping_power(M, s->V) + damping_power(M, V1s));
+    }
+    for (size_t i = G->a; i < G->b; i++) {
+        const double V1 = W[i] + vb[i];
+        if (M->st[i] == 0 && M->l[i] > 0.0) s->X[i] = s->X[i] + vb[i] * (t1 - s->t);
+        else s->X[i] = M->xp[i] + cV * V1;
+        s->A[i] = (V1 - s->V[i]) * c1 - g1 * M->A0p[i];
+        s->V[i] = V1;
         s->F[i] = F1[i];
         s->hA[i] = hh;
     }
@@ -289,7 +419,7 @@ void chain_restart(chain_model *M, chain_state *s, const span *G)
         s->hA[i] = 0.0;
         if (!chain_has_friction(M, i)) continue;
         if (s->mode[i] == 0) s->F[i] = -fmax(-M->Fb[i], fmin(M->Fb[i], M->S[i]));
-        else s->F[i] = -s->mode[i] * M->mukN[i];
+        else s->F[i] = -s->mode[i] * chain_slide_mag(M, s, i);
     }
 }
 
@@ -303,12 +433,19 @@ double chain_block_breakaway(const chain_model *M, const chain_state *s, size_t 
     return dfo_next_breakaway(&P, &L, M->u[i] - chain_Kx(M, s->X, i), s->t_stick[i], dir);
 }
 
+/* Block i's kinetic coefficient at the state: mu_k, or (stribeck) mu(|v_rel|) */
+static double kinetic_mu(const chain_model *M, const chain_state *s, size_t i)
+{
+    return M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i)) : M->mu_k[i];
+}
+
 /* Block i's external force and kinetic friction magnitude under the inputs in. */
-static void block_loads(const chain_model *M, const chain_inputs *in, size_t i, double *u, double *mukN)
+static void block_loads(const chain_model *M, const chain_state *s, const chain_inputs *in, size_t i, double *u,
+                        double *mukN)
 {
     const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
     *u = (in && in->F_ext) ? in->F_ext[i] : 0.0;
-    *mukN = M->mu_k[i] * N;
+    *mukN = kinetic_mu(M, s, i) * N;
 }
 
 void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s)
@@ -322,14 +459,14 @@ void chain_new_inputs_ramped(const chain_model *M, const chain_inputs *old_in, c
     for (size_t i = 0; i < M->n; i++) {
         if (s->mode[i] == 0) continue;
         double u0, f0, u1, f1;
-        block_loads(M, old_in, i, &u0, &f0);
+        block_loads(M, s, old_in, i, &u0, &f0);
         if (ramp) { /* the new inputs' polynomials at the state's time (as the oscillator's dfo_new_inputs) */
             double Ne, rate;
             chain_ramp_value(new_in, ramp, 0, i, s->t, &u1, &rate);
             chain_ramp_value(new_in, ramp, 1, i, s->t, &Ne, &rate);
-            f1 = M->mu_k[i] * fmax(M->N[i] + Ne, 0.0);
+            f1 = kinetic_mu(M, s, i) * fmax(M->N[i] + Ne, 0.0);
         } else {
-            block_loads(M, new_in, i, &u1, &f1);
+            block_loads(M, s, new_in, i, &u1, &f1);
         }
         const double dF = (u1 - u0) - s->mode[i] * (f1 - f0);
         if (dF == 0.0) continue;

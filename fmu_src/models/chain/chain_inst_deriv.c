@@ -111,7 +111,12 @@ static double jerk(chain_values *v, size_t i)
     const double *ua = v->ua;
     const double Ne = v->u_set[DFO_AI_N_ext] ? ua[(size_t)DFO_AI_N_ext * n + i] : 0.0;
     const double dN = (M->N[i] + Ne > 0.0 && chain_has_friction(M, i)) ? dNe : 0.0;
-    return (Pd + du - s->mode[i] * M->mu_k[i] * dN - chain_Kx(M, s->V, i) - chain_Cv(M, v->scratch, i)) / M->m[i];
+    const double kmu = M->stribeck ? chain_inst_kinetic_mu(v, i) : M->mu_k[i];
+    double f = Pd + du - s->mode[i] * kmu * dN - chain_Kx(M, s->V, i) - chain_Cv(M, v->scratch, i);
+    /* Stribeck: d F / dt = -N mu'(u) a, u the relative speed */
+    if (M->stribeck && chain_has_friction(M, i))
+        f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * v->scratch[i];
+    return f / M->m[i];
 }
 
 dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
@@ -172,7 +177,7 @@ static double jac(const chain_values *v, int id, int slot, size_t i)
     const chain_inputs now = chain_inst_inputs_of(v, 0), used = chain_inst_inputs_of(v, 1);
     const double m = pa[(size_t)DFO_AP_m * n + i], N = pa[(size_t)DFO_AP_N * n + i];
     const double mu_s = pa[(size_t)DFO_AP_mu_s * n + i], mu_k = pa[(size_t)DFO_AP_chi * n + i] * mu_s;
-    const double mu_b = fmax(mu_s, mu_k);
+    const double mu_b = fmax(mu_s, mu_k), kmu = chain_inst_kinetic_mu(v, i);
     const double Ne = now.N_ext ? now.N_ext[i] : 0.0, Ne0 = used.N_ext ? used.N_ext[i] : 0.0;
     const double N1 = fmax(N + Ne, 0.0), N0 = fmax(N + Ne0, 0.0);
     const int live = N + Ne > 0.0; /* the normal force follows N_ext */
@@ -180,12 +185,12 @@ static double jac(const chain_values *v, int id, int slot, size_t i)
     const int F_ext = slot == DFO_AI_F_ext;
     if (id == DFO_OUT_a && !(mode == 0 && mu_b * N1 > 0.0)) { /* moving, or no friction */
         if (F_ext) return 1.0 / m;
-        return (mu_b * N1 > 0.0 && live) ? -mode * mu_k / m : 0.0;
+        return (mu_b * N1 > 0.0 && live) ? -mode * kmu / m : 0.0;
     }
     /* F_friction (chain_inst_friction_out) */
     double dF = 0.0;
     if (mode != 0) {
-        dF = (!F_ext && live) ? -mode * mu_k : 0.0;
+        dF = (!F_ext && live) ? -mode * kmu : 0.0;
     } else if (mu_b * N0 > 0.0) { /* held: its force takes the change of F_ext, up to the limit */
         const double u1 = now.F_ext ? now.F_ext[i] : 0.0, u0 = used.F_ext ? used.F_ext[i] : 0.0;
         const double Fs = v->s.F[i] - (u1 - u0);

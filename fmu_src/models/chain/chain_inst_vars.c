@@ -5,6 +5,7 @@
  * value checked before any is stored, the outputs, and the structural parameter n. No FMI types. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_instance.h"
+#include "friction.h" /* the Stribeck law of the outputs */
 
 #include <math.h>
 #include <stdio.h>
@@ -107,6 +108,17 @@ static void block_inputs(const chain_values *v, int used, size_t i, double *u, d
     *N = fmax(v->pa[(size_t)DFO_AP_N * v->n + i] + (ci.N_ext ? ci.N_ext[i] : 0.0), 0.0);
 }
 
+double chain_inst_kinetic_mu(const chain_values *v, size_t i)
+{
+    const size_t n = v->n;
+    const double mu_s = v->pa[(size_t)DFO_AP_mu_s * n + i], mu_k = v->pa[(size_t)DFO_AP_chi * n + i] * mu_s;
+    if ((int)v->sp[DFO_SP_friction_law] != DFO_LAW_STRIBECK) return mu_k;
+    const dfo_friction_law L = {DFO_LAW_STRIBECK, mu_s, mu_k, v->pa[(size_t)DFO_AP_v_s * n + i],
+                                v->pa[(size_t)DFO_AP_delta * n + i]};
+    const double *vb = chain_inst_belt_of(v, 0);
+    return dfo_friction_mu(&L, fabs(vb ? v->s.V[i] - vb[i] : v->s.V[i]));
+}
+
 double chain_inst_friction_out(const chain_values *v, size_t i)
 {
     const double F = v->s.F[i];
@@ -117,7 +129,7 @@ double chain_inst_friction_out(const chain_values *v, size_t i)
     const size_t n = v->n;
     const double mu_s = v->pa[(size_t)DFO_AP_mu_s * n + i], mu_k = v->pa[(size_t)DFO_AP_chi * n + i] * mu_s;
     const int mode = v->s.mode[i];
-    if (mode != 0) return 0.0 - mode * (mu_k * N1); /* the kinetic force of the new normal force */
+    if (mode != 0) return 0.0 - mode * (chain_inst_kinetic_mu(v, i) * N1); /* the kinetic force of the new normal force */
     const double mu_b = fmax(mu_s, mu_k);
     if (!(mu_b * N0 > 0.0)) return F; /* not held: no friction before */
     const double Fb = mu_b * N1;
@@ -128,10 +140,19 @@ void chain_inst_accelerations(chain_values *v)
 {
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
     chain_accelerations(v->M, &ci, &v->s, v->scratch);
+    const size_t n = v->n;
+    if ((int)v->sp[DFO_SP_friction_law] == DFO_LAW_STRIBECK) {
+        /* the core's a takes a slide's force from the state: with inputs set since the step, the
+         * kinetic force of the new normal force (F_friction's; the same bits when unchanged) */
+        for (size_t i = 0; i < n; i++) {
+            if (v->s.mode[i] == 0) continue;
+            const double F = chain_inst_friction_out(v, i);
+            if (F != v->s.F[i]) v->scratch[i] += (F - v->s.F[i]) / v->pa[(size_t)DFO_AP_m * n + i];
+        }
+    }
     if ((int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER) return;
     /* the paper's stuck block creeps with the force that holds it: with inputs set since the step,
      * the held force that takes their change (the same bits when they are unchanged) */
-    const size_t n = v->n;
     for (size_t i = 0; i < n; i++) {
         if (v->s.mode[i] != 0) continue;
         const double F = chain_inst_friction_out(v, i);
@@ -153,7 +174,14 @@ static void left_limit(const chain_values *v, int event_from, const double *a_ri
     const double F_right = chain_inst_friction_out(v, b);
     const double S = m * a_right[b] - F_right; /* the net applied force (continuous) */
     if (event_from != 0) {
-        *F = -(double)event_from * mu_k * N;
+        /* (Stribeck: the slide ends at zero relative speed, mu(0)) */
+        double kmu = mu_k;
+        if ((int)v->sp[DFO_SP_friction_law] == DFO_LAW_STRIBECK) {
+            const dfo_friction_law L = {DFO_LAW_STRIBECK, mu_s, mu_k, pa[(size_t)DFO_AP_v_s * n + b],
+                                        pa[(size_t)DFO_AP_delta * n + b]};
+            kmu = dfo_friction_mu(&L, 0.0);
+        }
+        *F = -(double)event_from * kmu * N;
         *a = (S + *F) / m;
     } else {
         const double Fb = fmax(mu_s, mu_k) * N;

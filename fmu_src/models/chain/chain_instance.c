@@ -160,6 +160,9 @@ chain_params chain_inst_params_of(const chain_values *v)
     p.v0 = pa + (size_t)DFO_AP_v0 * n;
     p.k_site = pa + (size_t)DFO_AP_k_site * n;
     p.c_site = pa + (size_t)DFO_AP_c_site * n;
+    p.v_s = pa + (size_t)DFO_AP_v_s * n;
+    p.delta = pa + (size_t)DFO_AP_delta * n;
+    p.friction_law = (int)v->sp[DFO_SP_friction_law];
     p.k_end = v->sp[DFO_SP_k_end];
     p.c_end = v->sp[DFO_SP_c_end];
     p.omega = v->sp[DFO_SP_omega];

@@ -79,6 +79,8 @@ double chain_inst_step_h(const chain_values *v);
 chain_inputs chain_inst_inputs_of(const chain_values *v, int used);
 /* The belt speeds v_belt (the ones used, or the current ones): NULL when never set or all 0. */
 const double *chain_inst_belt_of(const chain_values *v, int used);
+/* Block i's kinetic coefficient at the state: mu_k, or (friction_law = stribeck) mu(|v - v_belt|). */
+double chain_inst_kinetic_mu(const chain_values *v, size_t i);
 /* The input derivatives of the next step (NULL arrays when none is set; t_ref: the state's time,
  * which the steps replace by the host's). */
 chain_ramp chain_inst_ramp_of(const chain_values *v);

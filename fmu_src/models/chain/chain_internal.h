@@ -87,11 +87,24 @@ struct chain_model {
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 (0 on the last) */
     double *ks, *cs;            /* k_site, c_site: the parts of Kd[i], Cd[i] tying block i to the ground */
     double *bF, *bD;            /* belts (chain_advance_belt): the moving frame's F_ext and its rate */
+    double *bV;                 /* the belt speeds of the fixed frame's state (0 without belts) */
+    const double *vrel_b;       /* what to subtract from s->V for the speed relative to the belt: bV in the
+                                 * fixed frame with belts, NULL while stepping in the belt's frame (or
+                                 * without belts), where V is the relative velocity */
+    const double *vbf;          /* belts of the located scheme's fixed-frame stepping (bV, while it steps;
+                                 * else NULL): the LCP on the velocity relative to the belts (p_hat
+                                 * shifted by M_hat vb, solved for W = V - vb), a stuck block riding on its
+                                 * belt, as the oscillator's located step (chain_advance_belt) */
+    int stribeck;               /* friction_law = stribeck: sliding friction N mu(|v_rel|) (law) */
+    dfo_friction_law *law;      /* per block (stribeck only, else NULL) */
     double *dF, *eF;            /* M_hat of a whole grid step: diagonal, off-diagonal */
     fast_row *rows;             /* per block, for the fused grid step */
     /* per block: the loads of the current inputs (chain_loads_init) */
     double *u;                  /* external force F_ext (0 when never set) */
     double *mukN, *Fb;          /* kinetic friction mu_k N and breakaway limit mu_b N, N = max(N + N_ext, 0) */
+    double *Nn;                 /* that normal force N */
+    double *mlN;                /* the located LCP's sliding limit: mu_k N, or (stribeck) min(mu_s, mu_k) N,
+                                 * where the LCP stops a block every speed stops it */
     /* workspace, per block */
     double *d, *e;              /* M_hat of the current trial step (when it is not a grid step) */
     double *A0;                 /* the trial's re-based A0 (when any block is re-based) */
@@ -104,6 +117,8 @@ struct chain_model {
     double *sX, *sV, *sA, *sF, *shA;  /* blocks' states saved around a cluster (chain_step_located) */
     double *J;                  /* jerks at the current state (trial's re-basing), when jerk_valid */
     int jerk_valid;             /* J holds the jerks of the current state */
+    int sparse_rebase;          /* chain_trial re-bases only the blocks that need it, their jerks not
+                                 * kept (the one trial of a long chain's step before its clusters) */
     double *box;                /* 2n: lcp_box's work */
     int *frozen;                /* per block: held at rest to the step's end (a slide that cannot move,
                                  * or judged by the consistent scheme) */
@@ -186,6 +201,30 @@ static inline double chain_Cv(const chain_model *M, const double *v, size_t i)
 
 static inline int chain_has_friction(const chain_model *M, size_t i) { return M->Fb[i] > 0.0; }
 
+/* block i's belt speed in the fixed-frame stepping (0 without belts) */
+static inline double chain_vb(const chain_model *M, size_t i) { return M->vbf ? M->vbf[i] : 0.0; }
+
+/* Block i's speed relative to its belt (the state's velocity while stepping in the belt's frame) */
+static inline double chain_rel_speed(const chain_model *M, const chain_state *s, size_t i)
+{
+    return fabs(M->vrel_b ? s->V[i] - M->vrel_b[i] : s->V[i]);
+}
+
+/* The kinetic friction magnitude of sliding block i at the state: mu_k N, or N mu(|v_rel|) */
+static inline double chain_slide_mag(const chain_model *M, const chain_state *s, size_t i)
+{
+    if (!M->stribeck) return M->mukN[i];
+    return M->Nn[i] * dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i));
+}
+
+/* The kinetic magnitude a slide starts with from rest (the rest rule's and breakaway's): mu_k N, or
+ * N mu(0) (as the oscillator's start_loads) */
+static inline double chain_start_mag(const chain_model *M, size_t i)
+{
+    if (!M->stribeck) return M->mukN[i];
+    return M->Nn[i] * dfo_friction_mu(&M->law[i], 0.0);
+}
+
 /* held at rest in the current step: stuck (schemes whose stuck blocks rest) */
 static inline int chain_held(const chain_model *M, const chain_state *s, size_t i)
 {
@@ -259,8 +298,9 @@ void chain_physical_accel(chain_model *M, const chain_state *s, const span *G, d
  * (cd, ce), the re-based A0 (A0p), xp and q; a ghost's xp and velocity at the end. */
 void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, double cw1, double sw1);
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1: X, V, A,
- * F, hA and the energy accounts (whole chain only); not the time. */
-void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1);
+ * F, hA and the energy accounts (whole chain only); not the time. With belts (vbf) V1 is the velocity
+ * relative to the belts (W) and a held block rides on its belt to t1, the trial's end. */
+void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1, double t1);
 /* After a switch: the consistent restart of the span's new mode set (physical accelerations,
  * hA = 0) and the friction forces of its stuck blocks. */
 void chain_restart(chain_model *M, chain_state *s, const span *G);

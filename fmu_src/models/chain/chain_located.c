@@ -49,16 +49,115 @@ static void solve_kept(chain_model *M)
     }
 }
 
+/* Stribeck: the sliding blocks' friction at the step's end, -s N mu(u), u = s V the relative speed
+ * (implicit, as the damper: Bossak's second order kept), after the basis solve with the smaller
+ * kinetic limit min(mu_s, mu_k) N has decided the modes. Over each run of consecutive free rows
+ * of the span (its other rows held at V = 0 or ghosts) the equations M_hat V = p_hat + F(V), F_i =
+ * -s_i N_i mu(max(s_i V_i, 0)) (continued below u = 0 with mu(0), so that s_i V_i is continuous in
+ * the step length and its sign tells a stop) are solved by Newton's iteration from the basis
+ * solve, one tridiagonal solve per iteration; a run of one row takes the oscillator's scalar
+ * iteration (friction.h's dfo_stribeck_speed), so that n = 1 is the oscillator's arithmetic. The
+ * held rows' forces are then read anew. */
+static int stribeck_row(const chain_model *M, size_t i)
+{
+    return M->st[i] != 0 && chain_has_friction(M, i);
+}
+
+static void stribeck_run(chain_model *M, size_t lo, size_t hi, size_t r0, size_t r1)
+{
+    const double *d = M->cd, *e = M->ce, *q = M->q;
+    double *V = M->Vt, *F = M->Ft, *cp = M->cp, *dp = M->dp;
+    if (r1 - r0 == 1) {
+        const size_t i = r0;
+        double p = -q[i];
+        if (i > lo) p -= e[i - 1] * V[i - 1];
+        if (i + 1 < hi) p -= e[i] * V[i + 1];
+        const int sd = M->st[i];
+        const double u = dfo_stribeck_speed(&M->law[i], M->Nn[i], sd * p, d[i], 1.0 / d[i]);
+        V[i] = sd * u;
+        F[i] = -sd * M->Nn[i] * dfo_friction_mu(&M->law[i], fmax(u, 0.0));
+        return;
+    }
+    int done = 0;
+    double dlast = INFINITY;
+    for (int it = 0; it < 60 && !done; it++) {
+        /* the residual and the Jacobian's diagonal, eliminated at once (Thomas) */
+        double cprev = 0.0, dprev = 0.0;
+        for (size_t i = r0; i < r1; i++) {
+            double R = d[i] * V[i] + q[i], J = d[i];
+            if (i > lo) R += e[i - 1] * V[i - 1];
+            if (i + 1 < hi) R += e[i] * V[i + 1];
+            if (stribeck_row(M, i)) {
+                const int sd = M->st[i];
+                const double u = sd * V[i];
+                R += sd * M->Nn[i] * dfo_friction_mu(&M->law[i], fmax(u, 0.0));
+                if (u > 0.0) J += M->Nn[i] * dfo_friction_dmu(&M->law[i], u);
+            }
+            const double lo_e = (i > r0) ? e[i - 1] : 0.0;
+            const double inv = 1.0 / (J - lo_e * cprev);
+            cp[i] = (i + 1 < r1) ? e[i] * inv : 0.0;
+            dp[i] = (R - lo_e * dprev) * inv;
+            cprev = cp[i];
+            dprev = dp[i];
+        }
+        double dn = 0.0, dmax = 0.0, vmax = 0.0;
+        for (size_t j = r1; j-- > r0;) {
+            dn = dp[j] - cp[j] * dn;
+            V[j] -= dn;
+            dmax = fmax(dmax, fabs(dn));
+            vmax = fmax(vmax, fabs(V[j]));
+        }
+        /* converged to a few ulps, or (a long run) to the rounding of its residual: the correction
+         * small and no longer contracting, as Newton's quadratic convergence would */
+        done = dmax <= 4.0 * DBL_EPSILON * vmax || (dmax <= 1e-10 * vmax && dmax >= 0.25 * dlast);
+        dlast = dmax;
+    }
+    if (!done && M->err == CHAIN_OK) M->err = CHAIN_ERR_FRICTION;
+    for (size_t i = r0; i < r1; i++)
+        if (stribeck_row(M, i))
+            F[i] = -M->st[i] * M->Nn[i] * dfo_friction_mu(&M->law[i], fmax(M->st[i] * V[i], 0.0));
+}
+
+static COLD_CALL void stribeck_solve(chain_model *M, const span *G)
+{
+    const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+    int any = 0;
+    for (size_t i = G->a; i < G->b;) {
+        const int held = M->st[i] == 0 && M->l[i] > 0.0;
+        if (held) { i++; continue; }
+        size_t r1 = i;
+        int fr = 0;
+        while (r1 < G->b && !(M->st[r1] == 0 && M->l[r1] > 0.0)) fr |= stribeck_row(M, r1++);
+        if (fr) { stribeck_run(M, lo, hi, i, r1); any = 1; }
+        i = r1;
+    }
+    if (!any) return;
+    for (size_t i = G->a; i < G->b; i++) { /* the held rows' forces with their neighbours' new V */
+        if (!(M->st[i] == 0 && M->l[i] > 0.0)) continue;
+        double f = M->q[i];
+        if (i > lo) f += M->ce[i - 1] * M->Vt[i - 1];
+        if (i + 1 < hi) f += M->ce[i] * M->Vt[i + 1];
+        M->Ft[i] = f;
+    }
+}
+
 static void solve_modes(chain_model *M, const span *G)
 {
     if (M->cd == M->dF && G->a == 0 && G->b == M->n && !G->has[0] && !G->has[1]) {
         solve_kept(M);
-        return;
+    } else {
+        const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
+        /* l (set with st): Fb for held rows (a flag there), the LCP's sliding limit mlN for sliding
+         * ones, 0 without friction */
+        double g0 = G->gV[0], g1 = G->gV[1];
+        if (M->vbf) { /* the ghosts' velocities relative to their belts */
+            if (G->has[0]) g0 -= M->vbf[G->idx[0]];
+            if (G->has[1]) g1 -= M->vbf[G->idx[1]];
+        }
+        lcp_box_basis(lo, hi, G->has[0], g0, G->has[1], g1, M->cd, M->ce, M->q, M->l, M->st, M->Vt, M->Ft, M->cp,
+                      M->dp);
     }
-    const size_t lo = G->a - (size_t)G->has[0], hi = G->b + (size_t)G->has[1];
-    /* l (set with st): Fb for held rows (a flag there), mu_k N for sliding ones, 0 without friction */
-    lcp_box_basis(lo, hi, G->has[0], G->gV[0], G->has[1], G->gV[1], M->cd, M->ce, M->q, M->l, M->st, M->Vt, M->Ft,
-               M->cp, M->dp);
+    if (M->stribeck) stribeck_solve(M, G);
 }
 
 /* How far block i is from its switch at the trial (> 0: not yet): s V for a sliding block (as the
@@ -114,8 +213,9 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         M->cand[nsw++] = i;
         if (s->mode[i] != 0) {
             /* a slide from rest that cannot move in double precision: held to the step's end */
-            if (immediate && s->V[i] == 0.0) M->frozen[i] = M->any_frozen = 1;
-            s->V[i] = 0.0;
+            const double vb = chain_vb(M, i);
+            if (immediate && s->V[i] == vb) M->frozen[i] = M->any_frozen = 1;
+            s->V[i] = vb;
         }
     }
     M->ncand = nsw;
@@ -138,7 +238,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
     for (size_t k = 0; k < nsw; k++) {
         const size_t i = M->cand[k];
         const int dir = s->mode[i];
-        if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - M->mukN[i], 0.0) / M->m[i];
+        if (dir != 0) s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - chain_start_mag(M, i), 0.0) / M->m[i];
     }
     if (M->ramped) chain_loads_ramp(M, M->t_step);
 }
@@ -202,18 +302,85 @@ static double ramp_breakaway(const chain_model *M, const chain_state *s, size_t 
     return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
-static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, double t_end,
-                               int *dir)
+/* Block i's neighbours are at rest (held, or frozen inside the span) */
+static int neighbours_rest(const chain_model *M, const chain_state *s, const span *G, size_t i)
 {
     for (int side = -1; side <= 1; side += 2) {
         if ((side < 0 && i == 0) || (side > 0 && i + 1 >= M->n)) continue;
         const size_t j = (side < 0) ? i - 1 : i + 1;
         const int inside = j >= G->a && j < G->b;
-        if (!(chain_held(M, s, j) || (inside && M->frozen[j]))) return INFINITY;
+        if (!(chain_held(M, s, j) || (inside && M->frozen[j]))) return 0;
     }
+    return 1;
+}
+
+/* ---- belts (vbf): a stuck block riding on its belt, its neighbours on theirs ----
+ * side times block i's static force beyond its limit at t, every block at X + vb (t - s->t), the
+ * loads at t (ramped inputs) or held: side (P + u - (K x)_i - (C vb)_i) - Fb, the oscillator's
+ * belt_gap for one block. */
+typedef struct {
+    const chain_model *M;
+    const chain_state *s;
+    size_t i;
+    int side;
+} belt_gap_ctx;
+
+static double belt_gap(const chain_model *M, const chain_state *s, size_t i, double t, int side)
+{
+    double u = M->u[i], Fb = M->Fb[i], cw, sw;
+    if (M->ramped) {
+        double Ne, rate;
+        chain_ramp_value(&M->rin, &M->ramp, 0, i, t, &u, &rate);
+        chain_ramp_value(&M->rin, &M->ramp, 1, i, t, &Ne, &rate);
+        Fb = M->mu_b[i] * fmax(M->N[i] + Ne, 0.0);
+    }
+    const double *X = s->X, *vb = M->vbf, dt = t - s->t;
+    double kx = M->Kd[i] * (X[i] + vb[i] * dt);
+    if (i > 0) kx += M->Ko[i - 1] * (X[i - 1] + vb[i - 1] * dt);
+    if (i + 1 < M->n) kx += M->Ko[i] * (X[i + 1] + vb[i + 1] * dt);
+    chain_phase_of(M, s, t, &cw, &sw);
+    return side * (chain_P_at(M, i, cw, sw) + u - kx - chain_Cv(M, vb, i)) - Fb;
+}
+
+static double belt_gap_fn(void *vctx, double x)
+{
+    const belt_gap_ctx *g = (const belt_gap_ctx *)vctx;
+    return -belt_gap(g->M, g->s, g->i, g->s->t + x, g->side);
+}
+
+/* broken away by t_end (either side) */
+static int belt_breaks(const chain_model *M, const chain_state *s, size_t i, double t_end)
+{
+    return belt_gap(M, s, i, t_end, -1) > 0.0 || belt_gap(M, s, i, t_end, 1) > 0.0;
+}
+
+/* The breakaway inside [s->t, tb] of stuck block i riding on its belt between resting neighbours:
+ * the side broken through at tb, the time the root of the gap (Brent), as the oscillator's
+ * belt_breakaway; INFINITY when not broken through at tb. */
+static double belt_breakaway(const chain_model *M, const chain_state *s, size_t i, double tb, int *dir)
+{
+    const double ta = s->t;
+    for (int sd = -1; sd <= 1; sd += 2) {
+        const double ghi = belt_gap(M, s, i, tb, sd);
+        if (!(ghi > 0.0)) continue;
+        *dir = sd;
+        const double g0 = belt_gap(M, s, i, ta, sd);
+        if (g0 >= 0.0) return ta;
+        belt_gap_ctx g = {M, s, i, sd};
+        return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
+    }
+    return INFINITY;
+}
+
+static double closed_breakaway(const chain_model *M, const chain_state *s, const span *G, size_t i, double t_end,
+                               int *dir)
+{
+    if (!neighbours_rest(M, s, G, i)) return INFINITY;
+    if (M->vbf) return belt_breakaway(M, s, i, t_end, dir);  /* the static force drifts with the belts */
     if (M->ramped) return ramp_breakaway(M, s, i, t_end, dir);  /* the closed form holds for held inputs */
     return chain_block_breakaway(M, s, i, dir);
 }
+
 
 /* Ramped inputs: a stuck block whose static force crosses its limit inside the step, also where it
  * is back inside at the step's end (the oscillator's breakaway test), is a candidate. */
@@ -222,6 +389,43 @@ static int ramp_breaks(const chain_model *M, const chain_state *s, const span *G
     if (!M->ramped || M->st[i] != 0) return 0;
     int dir = 0;
     return closed_breakaway(M, s, G, i, t_end, &dir) <= t_end;
+}
+
+/* Whether a block with friction is a candidate to switch in the trial to t_end: its margin is not
+ * positive; with ramped inputs, a stuck one whose force crosses its limit inside the step; on belts,
+ * a stuck one between resting neighbours whose static force at t_end, the belts carrying them, is
+ * beyond its limit (the oscillator's test; its held force's rounding aside). */
+static HOT_INLINE int is_candidate(chain_model *M, const chain_state *s, const span *G, size_t i, double t_end)
+{
+    if (M->vbf && M->st[i] == 0 && neighbours_rest(M, s, G, i)) return belt_breaks(M, s, i, t_end);
+    return switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, G, i, t_end);
+}
+
+/* On belts, a sliver of a step after a switch (r <= 1e-6 h, every block of the span restarted: hA =
+ * 0, one of them moving): V = vb + u is not small, and Bossak's A = (V1 - V) / (gamma r) would be
+ * its rounding over r; Taylor's expansion with the physical accelerations is exact to O(r^2)
+ * instead (the oscillator's), the held blocks riding on their belts. Returns 1 when taken. */
+#define BELT_TINY_REL_H 1e-6
+static int belt_sliver(chain_model *M, chain_state *s, const span *G, double t_end, double r)
+{
+    if (!(r <= BELT_TINY_REL_H * M->h)) return 0;
+    int moving = 0;
+    for (size_t i = G->a; i < G->b; i++) {
+        if (s->hA[i] != 0.0) return 0;
+        moving |= !(chain_held(M, s, i) || M->frozen[i]);
+    }
+    if (!moving) return 0;
+    for (size_t i = G->a; i < G->b; i++) {
+        if (chain_held(M, s, i) || M->frozen[i]) {
+            s->X[i] = s->X[i] + M->vbf[i] * (t_end - s->t);
+        } else {
+            s->X[i] += (s->V[i] + 0.5 * s->A[i] * r) * r;
+            s->V[i] += s->A[i] * r;
+        }
+    }
+    M->jerk_valid = 0;
+    s->t = t_end;
+    return 1;
 }
 
 /* The located step of a span from s->t to t_end (first phase of length hh): phases in the current
@@ -234,9 +438,10 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         if (phase >= max_phases) { M->err = CHAIN_ERR_NO_PROGRESS; return; }
         chain_set_ghosts(M, s, G);
         const double r = (phase == 0) ? hh : t_end - s->t;
+        if (M->vbf && belt_sliver(M, s, G, t_end, r)) return;
         for (size_t i = G->a; i < G->b; i++) {
             M->st[i] = (chain_held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
-            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         }
         double cw1, sw1;
         chain_phase_of(M, s, t_end, &cw1, &sw1);
@@ -246,10 +451,10 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         M->ncand = 0;
         for (size_t i = G->a; i < G->b; i++) {
             if (!chain_has_friction(M, i) || M->frozen[i]) continue;
-            if (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, G, i, t_end)) M->cand[M->ncand++] = i;
+            if (is_candidate(M, s, G, i, t_end)) M->cand[M->ncand++] = i;
         }
         if (M->ncand == 0) {  /* the warm basis solves the LCP: the whole remainder in these modes */
-            chain_finish(M, s, G, M->Vt, M->Ft);
+            chain_finish(M, s, G, M->Vt, M->Ft, t_end);
             for (size_t i = G->a; i < G->b; i++)
                 if (!chain_has_friction(M, i)) s->mode[i] = chain_sgn(s->V[i]);
             s->t = t_end;
@@ -274,7 +479,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
                 M->t_load = M->t_step;
                 solve_modes(M, G);
                 s->solves++;
-                chain_finish(M, s, G, M->Vt, M->Ft);
+                chain_finish(M, s, G, M->Vt, M->Ft, tb);
             }
             s->t = tb;
             size_t nsw = 0;
@@ -295,7 +500,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         double lo = 0.0, glo = INFINITY;
         for (size_t k = 0; k < M->ncand; k++) {
             const size_t i = M->cand[k];
-            glo = (M->st[i] != 0) ? fmin(glo, s->mode[i] * s->V[i]) : -INFINITY;
+            glo = (M->st[i] != 0) ? fmin(glo, s->mode[i] * (M->vbf ? s->V[i] - M->vbf[i] : s->V[i])) : -INFINITY;
         }
         if (!(glo > 0.0)) {
             lo = r;
@@ -347,8 +552,9 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
                 if (M->st[i] != 0 && switch_margin(M, s, i) <= 0.0) M->Vt[i] = 0.0;
             }
         }
-        chain_finish(M, s, G, M->Vt, M->Ft);
-        s->t = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
+        const double t_new = (hs >= r) ? t_end : fmax(t1, nextafter(ta, INFINITY));
+        chain_finish(M, s, G, M->Vt, M->Ft, t_new);
+        s->t = t_new;
         chain_set_ghosts(M, s, G);
         apply_switches(M, s, G, 0, fn, ctx);
         if (stop_at_switch && M->switched) return;
@@ -394,20 +600,28 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
             for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
             M->any_frozen = 0;
         }
+        if (M->vbf && belt_sliver(M, s, &G0, t_end, hh)) return;
         for (size_t i = 0; i < n; i++) {
             M->st[i] = chain_held(M, s, i) ? 0 : s->mode[i];
-            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mukN[i];
+            M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
         }
+        M->sparse_rebase = n > 2 * M->w + 3 && !stop_at_switch && !M->energy;  /* (its clusters' own) */
         chain_trial(M, s, &G0, hh, cw1, sw1);
+        M->sparse_rebase = 0;
         solve_modes(M, &G0);
         s->solves++;
     }
     M->ncand = 0;
-    for (size_t i = 0; i < n; i++)
-        if (chain_has_friction(M, i) && (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, &G0, i, t_end)))
-            M->cand[M->ncand++] = i;
+    if (!M->vbf) { /* (the fixed support's loop as it was) */
+        for (size_t i = 0; i < n; i++)
+            if (chain_has_friction(M, i) && (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, &G0, i, t_end)))
+                M->cand[M->ncand++] = i;
+    } else {
+        for (size_t i = 0; i < n; i++)
+            if (chain_has_friction(M, i) && is_candidate(M, s, &G0, i, t_end)) M->cand[M->ncand++] = i;
+    }
     if (M->ncand == 0) {  /* the warm basis solves the LCP: O(n), no pivot */
-        chain_finish(M, s, &G0, M->Vt, M->Ft);
+        chain_finish(M, s, &G0, M->Vt, M->Ft, t_end);
         for (size_t i = 0; i < n; i++)
             if (!chain_has_friction(M, i)) s->mode[i] = chain_sgn(s->V[i]);
         s->t = t_end;
@@ -432,7 +646,7 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
     }
     /* everything in the current modes first */
     const double t_start = s->t;
-    chain_finish(M, s, &G0, M->Vt, M->Ft);
+    chain_finish(M, s, &G0, M->Vt, M->Ft, t_end);
     for (size_t i = 0; i < n; i++)
         if (!chain_has_friction(M, i)) s->mode[i] = chain_sgn(s->V[i]);
     for (size_t j = 0; j < nc && M->err == CHAIN_OK; j++) {

@@ -74,7 +74,7 @@ COLD_CALL void chain_step_lcp(chain_model *M, chain_state *s, double t_end, doub
         total += update;
     }
     if (total > 0) s->pivot_steps++;
-    chain_finish(M, s, &G0, M->Vt, M->Ft);
+    chain_finish(M, s, &G0, M->Vt, M->Ft, t_end);
     s->t = t_end;
     for (size_t i = 0; i < n; i++) {
         const int from = s->mode[i];

@@ -37,6 +37,13 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len)
             return bad(buf, len, "k_site", i, p->k_site[i], ">= 0, finite");
         if (p->c_site && !(p->c_site[i] >= 0.0 && isfinite(p->c_site[i])))
             return bad(buf, len, "c_site", i, p->c_site[i], ">= 0, finite");
+        if (p->v_s && !(p->v_s[i] > 0.0 && isfinite(p->v_s[i]))) return bad(buf, len, "v_s", i, p->v_s[i], "> 0, finite");
+        if (p->delta && !(p->delta[i] > 0.0 && isfinite(p->delta[i])))
+            return bad(buf, len, "delta", i, p->delta[i], "> 0, finite");
+    }
+    if (p->friction_law < 0 || p->friction_law > DFO_LAW_STRIBECK) {
+        snprintf(buf, len, "invalid value %d for friction_law (valid: 1 coulomb, 2 stribeck)", p->friction_law);
+        return buf;
     }
     if (!(p->k_end >= 0.0 && isfinite(p->k_end))) return bad_scalar(buf, len, "k_end", p->k_end, ">= 0, finite");
     if (!(p->c_end >= 0.0 && isfinite(p->c_end))) return bad_scalar(buf, len, "c_end", p->c_end, ">= 0, finite");
@@ -46,6 +53,19 @@ const char *chain_check_params(const chain_params *p, char *buf, size_t len)
     if (p->scheme < DFO_SCHEME_PAPER || p->scheme > DFO_SCHEME_LOCATED) {
         snprintf(buf, len, "invalid value %d for scheme (valid: 1 paper, 2 consistent, 3 located)", p->scheme);
         return buf;
+    }
+    if (p->friction_law == DFO_LAW_STRIBECK) {
+        for (size_t i = 0; p->delta && i < p->n; i++)
+            if (p->delta[i] < 1.0) {
+                snprintf(buf, len,
+                         "friction_law = stribeck supports delta >= 1 only, not %g for delta[%zu] (below 1 the "
+                         "friction's slope is infinite at zero relative speed)",
+                         p->delta[i], i + 1);
+                return buf;
+            }
+        if (p->scheme != DFO_SCHEME_LOCATED)
+            return "friction_law = stribeck needs scheme located (the speed-dependent friction is solved inside its "
+                   "steps): choose scheme located, or friction_law = coulomb";
     }
     return NULL;
 }
@@ -86,9 +106,9 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (43 of them, the last, box, 2n long), one for
+    /* one block of doubles for all per-block arrays (46 of them, the last, box, 2n long), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 43 };
+    enum { NARR = 46 };
     double *blk = dalloc(al, (NARR + 1) * n);
     int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
@@ -106,12 +126,32 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
                           &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->q,  &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs, &M->bF, &M->bD, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs, &M->bF, &M->bD,
+                          &M->Nn, &M->mlN, &M->bV, &M->box};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
     M->frozen = iblk;
     M->st = iblk + n;
     M->smode = iblk + 2 * n;
     M->clu = M->cand + n;
+    M->stribeck = p->friction_law == DFO_LAW_STRIBECK;
+    M->law = NULL;
+    M->vrel_b = NULL;
+    if (M->stribeck) {
+        M->law = (dfo_friction_law *)al->allocate(al->env, n, sizeof(dfo_friction_law));
+        if (!M->law) {
+            chain_destroy(M);
+            if (err) *err = oom;
+            return NULL;
+        }
+        for (size_t i = 0; i < n; i++) {
+            dfo_friction_law *L = &M->law[i];
+            L->law = DFO_LAW_STRIBECK;
+            L->mu_s = p->mu_s[i];
+            L->mu_k = p->chi[i] * p->mu_s[i];
+            L->v_s = p->v_s ? p->v_s[i] : 0.01;
+            L->delta = p->delta ? p->delta[i] : 1.0;
+        }
+    }
     M->k_end = p->k_end;
     M->c_end = p->c_end;
     M->omega = p->omega;
@@ -214,6 +254,7 @@ void chain_destroy(chain_model *M)
     al.release(al.env, M->frozen);
     al.release(al.env, M->cand);
     al.release(al.env, M->rows);
+    if (M->law) al.release(al.env, M->law);
     al.release(al.env, M);
 }
 
@@ -261,6 +302,9 @@ const char *chain_status_text(chain_status st)
     case CHAIN_ERR_NONFINITE: return "the state became non-finite (overflow)";
     case CHAIN_ERR_RESOLUTION: return "the internal step h is below the time resolution at this time";
     case CHAIN_SWITCHED: return "stopped at a switch";
+    case CHAIN_ERR_FRICTION:
+        return "the speed-dependent friction's implicit solve did not converge (the step does not resolve the "
+               "friction's fall: a smaller h, or a larger v_s)";
     }
     return "unknown status";
 }
