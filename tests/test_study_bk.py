@@ -142,12 +142,14 @@ def test_moments_are_slip_sums_and_the_chain_keeps_up_with_the_plate(chain_fmu3:
     cfg["run"].update(t_transient=0.0, t_record=200.0, dt=0.1, segment=50.0)
     m, r, d, num = cfg["model"], cfg["run"], cfg["detect"], cfg["numerics"]
     res = bk.simulate(chain_fmu3, m, r, d, num)
-    ev = res["events"]
-    assert ev.count >= 5
     from dryfriction.chain import ChainFMU3
     with ChainFMU3(n=24, fmu_path=chain_fmu3) as chain:
-        run = chain.run(r["t_record"], r["dt"], bk.chain_params(m, num), inputs={"v_belt": -nu})
-    np.testing.assert_array_equal(run.t, res["t"])
+        run = chain.run(r["t_record"], r["dt"], bk.chain_params(m, num, r["dt"]), inputs={"v_belt": -nu})
+    ev = detect_events(run.t, run.x, run.v, -nu, d["v_threshold"], d["d_threshold"])
+    assert ev.count >= 5
+    # the study's run (recorded in segments) starts with the same events; the chain is chaotic,
+    # and the runs part after some events (the segments' communication times differ in the last bit)
+    np.testing.assert_allclose(res["events"].moment[:5], ev.moment[:5], rtol=1e-6)
     checked = 0
     for k in range(ev.count):
         others = [q for q in range(ev.count) if q != k and ev.start[q] < ev.stop[k] and ev.stop[q] > ev.start[k]]
@@ -161,7 +163,7 @@ def test_moments_are_slip_sums_and_the_chain_keeps_up_with_the_plate(chain_fmu3:
     assert checked >= 3
     T = run.t[-1] - run.t[0]
     drift = run.x[-1].mean() - run.x[0].mean()
-    assert nu * T > 5.9 and abs(drift) < 1.0 and np.ptp(res["x_mean"]) < 1.5
+    assert nu * T > 5.9 and abs(drift) < 1.0 and np.ptp(run.x.mean(axis=1)) < 1.5 and np.ptp(res["x_mean"]) < 1.5
     assert math.isclose(ev.moment.sum() / 24, nu * T + drift, rel_tol=1e-9)
 
 
@@ -192,7 +194,7 @@ def test_study_quick_writes_its_files(tmp_path: Path, chain_fmu3: Path) -> None:
     assert s["n"] == 256 and s["events"] == ds.event.size > 10
     assert np.all(ds.n_blocks.values >= 1) and np.all(ds.moment.values > 0)
     assert np.all((ds.position.values >= 1) & (ds.position.values <= 256))
-    assert math.isclose(float(ds.count.sum()), float(np.sum(ds.moment.values > 0)))
+    assert math.isclose(float(ds.event_count.sum()), float(np.sum(ds.moment.values > 0)))
     assert math.isclose(s["event_rate"], s["events"] / s["t_record"])
     assert (out / "burridge_knopoff.png").stat().st_size > 10_000 and (out / "config.toml").exists()
 
@@ -206,4 +208,4 @@ def test_bad_values_and_a_missing_friction_law_are_refused(capsys: pytest.Captur
     if "friction_law" not in ARRAY_PARAMS + SCALAR_PARAMS:
         cfg = _cfg(friction_law="stribeck")
         with pytest.raises(ConfigError, match="friction_law = stribeck needs a chain FMU with the Stribeck law"):
-            bk.chain_params(cfg["model"], cfg["numerics"])
+            bk.chain_params(cfg["model"], cfg["numerics"], 0.1)

@@ -65,6 +65,7 @@ def check(cfg: dict[str, Any]) -> None:
             f"numerics.scheme must be located or consistent (the paper scheme has no belt), not {num['scheme']!r}")
     require(all(1 <= k <= 4096 for k in sp["n"]), f"speed.n must hold chain sizes in [1, 4096], not {sp['n']}")
     require(sp["t"] > 0, f"speed.t must be > 0, not {sp['t']}")
+    require(sp["nu"] > 0, f"speed.nu must be > 0, not {sp['nu']}")
 
 
 # ---- the model ----------------------------------------------------------------------------------
@@ -74,13 +75,21 @@ def shortest_period(l2: float) -> float:
     return 2 * math.pi / math.sqrt(1.0 + 4.0 * l2)
 
 
-def chain_params(m: Mapping[str, Any], num: Mapping[str, Any], seed_offset: int = 0) -> dict[str, Any]:
+def internal_step(l2: float, steps_per_period: float, dt: float) -> float:
+    """The internal step: at most the shortest period over ``steps_per_period``, and a whole
+    fraction of the sampling step ``dt`` (the communication points are internal grid points, so
+    the sampling does not change the run)."""
+    return dt / math.ceil(dt * steps_per_period / shortest_period(l2) - 1e-9)
+
+
+def chain_params(m: Mapping[str, Any], num: Mapping[str, Any], dt: float, seed_offset: int = 0) -> dict[str, Any]:
     """The FMU's parameters of Carlson-Langer's dimensionless model (units: block mass, k_p, the
     static friction F0 = mu_s N; so omega_p = 1, D0 = F0 / k_p = 1, v_p = nu):
 
     m = 1, k_site = k_p = 1, k[1] = 0 and k_end = 0 (free ends), k[i] = k_c = l2 between
     neighbours, N = 1, mu_s = 1, chi = mu_k / mu_s; with the Stribeck law v_s = 1 / (2 alpha)
-    (Carlson-Langer's initial slope of the friction, -2 alpha F0 per unit speed) and delta; no
+    (Carlson-Langer's initial slope of the friction, -2 alpha F0 per unit speed) and delta; the
+    internal step from :func:`internal_step` with the sampling step ``dt``; no
     forcing; blocks start riding their belts (v0 = -nu) at small random x0 (uniform in +-
     x0_amplitude, seeded)."""
     n = int(m["n"])
@@ -88,7 +97,7 @@ def chain_params(m: Mapping[str, Any], num: Mapping[str, Any], seed_offset: int 
     l2 = float(m["l2"])
     k = np.full(n, l2)
     k[0] = 0.0
-    h = shortest_period(l2) / float(num["steps_per_period"])
+    h = internal_step(l2, float(num["steps_per_period"]), dt)
     p: dict[str, Any] = {
         "m": 1.0, "k": k, "c": 0.0, "k_site": 1.0, "c_site": float(m["c_site"]), "N": 1.0, "mu_s": 1.0,
         "chi": float(m["chi"]), "P0": 0.0, "phi": 0.0, "omega": 1.0,
@@ -118,7 +127,7 @@ def simulate(fmu_path: Path, m: Mapping[str, Any], r: Mapping[str, Any], d: Mapp
     the wall time and the internal steps taken."""
     n = int(m["n"])
     nu = float(m["nu"])
-    p = chain_params(m, num)
+    p = chain_params(m, num, float(r["dt"]))
     t0, t1, seg, dt = float(r["t_transient"]), float(r["t_transient"] + r["t_record"]), float(r["segment"]), float(r["dt"])
     det = EventDetector(-nu, float(d["v_threshold"]), float(d["d_threshold"]), bool(d["diagonal"]))
     ts, xmean, sliding, xspan = [], [], [], []
@@ -160,7 +169,7 @@ def measure_speed(fmu_path: Path, m: Mapping[str, Any], num: Mapping[str, Any], 
     rows = []
     for n in sizes:
         mm = {**m, "n": int(n)}
-        p = chain_params(mm, num)
+        p = chain_params(mm, num, dt)
         with ChainFMU3(n=int(n), fmu_path=fmu_path) as chain:
             w0 = time.perf_counter()
             run = chain.run(t, dt, p, inputs={"v_belt": -float(m["nu"])})
@@ -230,7 +239,7 @@ def slip_image(ev: SlipEvents, t_lo: float, t_hi: float, rows: int) -> tuple[np.
 def run(ctx: StudyContext) -> dict[str, Any]:
     cfg = ctx.cfg
     m, r, d, f, num, sp = cfg["model"], cfg["run"], cfg["detect"], cfg["fit"], cfg["numerics"], cfg["speed"]
-    chain_params(m, num)  # a friction law the FMU lacks: refused before the run
+    chain_params(m, num, float(r["dt"]))  # a friction law the FMU lacks: refused before the run
     progress = ctx.engine_options.progress
     res = simulate(ctx.fmu_path, m, r, d, num, progress)
     n = int(m["n"])
@@ -255,7 +264,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             f"D(M) ~ M^{fit['slope']:.3f} +- {fit['slope_err']:.3f} (b = {fit['b']:.3f}) over {fit['bins']} bins")
     ctx.log(f"  moment rate {moment_rate:.4g} against the plate's n nu = {n * m['nu']:.4g}; "
             f"mean position over the record {x_mean.min():.4g} ... {x_mean.max():.4g} (bounded)")
-    speed = measure_speed(ctx.fmu_path, m, num, [int(k) for k in sp["n"]], float(sp["t"]), float(r["dt"]), progress)
+    speed = measure_speed(ctx.fmu_path, {**m, "nu": sp["nu"]}, num, [int(k) for k in sp["n"]], float(sp["t"]),
+                          float(r["dt"]), progress)
     for row in speed:
         ctx.log(f"  speed n = {row['n']}: {row['wall_per_time_unit_s'] * 1e3:.2f} ms wall per time unit, "
                 f"{row['ns_per_block_step']:.1f} ns per block-step (h = {row['h']:.3g}, "
@@ -292,7 +302,7 @@ def dataset(ev: SlipEvents, hist: Mapping[str, np.ndarray], res: Mapping[str, An
          "block_hi": (("event",), ev.block_hi.astype(np.int32) + 1, {"long_name": "last block (from 1)"}),
          "rate_density": (("moment_bin",), hist["rate_density"],
                           {"long_name": "events per unit time and unit moment, D(M)"}),
-         "count": (("moment_bin",), hist["count"].astype(np.int64)),
+         "event_count": (("moment_bin",), hist["count"].astype(np.int64), {"long_name": "events per moment bin"}),
          "moment_edges": (("moment_edge",), hist["edges"]),
          "x_mean": (("time",), res["x_mean"], {"units": "D0", "long_name": "mean block position, plate frame"}),
          "x_span": (("time",), res["x_span"], {"units": "D0", "long_name": "max - min block position"}),
@@ -325,18 +335,18 @@ def plot(ev: SlipEvents, hist: Mapping[str, np.ndarray], fit: Mapping[str, float
     ax_all.set_xlabel("block")
     ax_all.set_ylabel("t (1/omega_p)")
     ax_all.set_title(f"slip events in space and time, {t1 - t0:g} time units", fontsize=9)
-    # zoom: the largest event with the time before it
+    # zoom: the largest event, from a little before its start to a little after its end
     if ev.count:
         k = int(np.argmax(ev.moment))
-        z1 = min(ev.stop[k] + 0.1 * (t1 - t0) / 20, t1)
-        z0 = max(z1 - (t1 - t0) / 20, t0)
+        pad = max(0.5 * float(ev.duration[k]), 5.0)
+        z0, z1 = max(float(ev.start[k]) - pad, t0), min(float(ev.stop[k]) + pad, t1)
         zimg, zedges = slip_image(ev, z0, z1, max(int((z1 - z0) / r["dt"]), 1))
         zmax = max(float(zimg.max()), 1e-12)
         im2 = ax_zoom.pcolormesh(blocks, zedges, np.where(zimg > 0, zimg, np.nan),
                                  norm=LogNorm(vmin=max(zmax * 1e-4, 1e-12), vmax=zmax), cmap="inferno_r",
                                  shading="flat", rasterized=True)
         fig.colorbar(im2, ax=ax_zoom, label="slip per block and sample interval (D0)")
-        ax_zoom.set_title(f"zoom: t {z0:.0f} ... {z1:.0f}, ending with the largest event "
+        ax_zoom.set_title(f"zoom: t {z0:.1f} ... {z1:.1f}, the largest event "
                           f"({int(ev.n_blocks[k])} blocks, M = {ev.moment[k]:.3g})", fontsize=9)
     ax_zoom.set_xlabel("block")
     ax_zoom.set_ylabel("t (1/omega_p)")
