@@ -339,8 +339,12 @@ def plot(ev: SlipEvents, hist: Mapping[str, np.ndarray], fit: Mapping[str, float
     if ev.count:
         k = int(np.argmax(ev.moment))
         pad = max(0.5 * float(ev.duration[k]), 5.0)
-        z0, z1 = max(float(ev.start[k]) - pad, t0), min(float(ev.stop[k]) + pad, t1)
-        zimg, zedges = slip_image(ev, z0, z1, max(int((z1 - z0) / r["dt"]), 1))
+        dt = float(r["dt"])
+        # bins on the sample grid: one sample interval per row
+        z0 = t0 + dt * math.floor((max(float(ev.start[k]) - pad, t0) - t0) / dt)
+        rows = max(int(round((min(float(ev.stop[k]) + pad, t1) - z0) / dt)), 1)
+        z1 = z0 + rows * dt
+        zimg, zedges = slip_image(ev, z0, z1, rows)
         zmax = max(float(zimg.max()), 1e-12)
         im2 = ax_zoom.pcolormesh(blocks, zedges, np.where(zimg > 0, zimg, np.nan),
                                  norm=LogNorm(vmin=max(zmax * 1e-4, 1e-12), vmax=zmax), cmap="inferno_r",
