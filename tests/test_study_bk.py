@@ -186,6 +186,7 @@ def test_moment_histogram_and_power_law_fit() -> None:
 
 # ---- the study ----------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_study_quick_writes_its_files(tmp_path: Path, chain_fmu3: Path) -> None:
     res = run_study("burridge_knopoff", quick=True, out=tmp_path, fmu=chain_fmu3, progress=False, workers=0)
     out = res.out_dir
