@@ -261,7 +261,9 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.log(f"  {ev.count} complete slip events ({allev.count - ev.count} cut by the record's ends), "
             f"rate {rate:.4g} per time unit; largest {int(ev.n_blocks.max()) if ev.count else 0} blocks, "
             f"moment {float(ev.moment.max()) if ev.count else 0:.4g}; small events (<= {f['max_blocks']} blocks): "
-            f"D(M) ~ M^{fit['slope']:.3f} +- {fit['slope_err']:.3f} (b = {fit['b']:.3f}) over {fit['bins']} bins")
+            + (f"D(M) ~ M^{fit['slope']:.3f} +- {fit['slope_err']:.3f} (b = {fit['b']:.3f}) over {fit['bins']} bins"
+               if math.isfinite(fit["slope"]) else
+               f"power law not fitted: {fit['bins']} bins with >= {f['min_count']} events (3 needed; a longer run)"))
     ctx.log(f"  moment rate {moment_rate:.4g} against the plate's n nu = {n * m['nu']:.4g}; "
             f"mean position over the record {x_mean.min():.4g} ... {x_mean.max():.4g} (bounded)")
     speed = measure_speed(ctx.fmu_path, {**m, "nu": sp["nu"]}, num, [int(k) for k in sp["n"]], float(sp["t"]),
