@@ -42,8 +42,8 @@ STUDIES: dict[str, ModuleType] = {m.NAME: m for m in (
 from . import chaos_basins, chaos_scan, chaos_transients  # noqa: E402
 STUDIES.update({m.NAME: m for m in (chaos_scan, chaos_basins, chaos_transients)})
 
-from . import chain2, chain_waves  # noqa: E402
-STUDIES.update({m.NAME: m for m in (chain2, chain_waves)})
+from . import burridge_knopoff, chain2, chain_waves  # noqa: E402
+STUDIES.update({m.NAME: m for m in (chain2, chain_waves, burridge_knopoff)})
 
 from . import fig8_9_orbits, fig10_11_orbits  # noqa: E402
 STUDIES.update({m.NAME: m for m in (fig8_9_orbits, fig10_11_orbits)})
