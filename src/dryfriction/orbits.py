@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fmu import OscillatorFMU2, Settings
+from .fmu import OscillatorFMU2, Restarts, Settings
 from .params import Oscillator
 
 __all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
@@ -83,7 +83,12 @@ def scales(p: Oscillator) -> tuple[float, float]:
 
 
 class _Map:
-    """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation)."""
+    """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation,
+    through the FMU driver's :class:`~dryfriction.fmu.Restarts`: start's calls with the value arrays
+    built once)."""
+
+    #: the outputs of an evaluation: the state, the Jacobian (and the observables, see _ObservingMap)
+    names: tuple[str, ...] = ("x", "v") + JACOBIAN
 
     def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, samples: int = SAMPLES) -> None:
         self.fmu, self.p, self.K, self.samples = fmu, p, K, samples
@@ -91,6 +96,14 @@ class _Map:
         self.xs, self.w = scales(p)
         self.settings = Settings(scheme="exact", extra={"sensitivity": True})
         self.evaluations = 0
+        self._runs: Restarts | None = None      # made at the first evaluation
+
+    def retarget(self, p: Oscillator) -> None:
+        """The same map of another oscillator (the same K and settings)."""
+        self.p, self.T = p, p.period
+        self.xs, self.w = scales(p)
+        if self._runs is not None:
+            self._runs.retarget(p)
 
     def scaled(self, z: np.ndarray) -> np.ndarray:
         return np.array([z[0] / self.xs, z[1] / (self.xs * self.w)])
@@ -105,15 +118,33 @@ class _Map:
         q.__dict__.update(self.p.__dict__, x0=x, v0=v)
         return q
 
+    def _run(self, x: float, v: float, t_s: float) -> "Restarts":
+        """One run of K periods from (x, v) at t_s (the outputs in the returned runs' ``real`` / ``int``)."""
+        if not (math.isfinite(x) and math.isfinite(v)):
+            self.p.with_(x0=x, v0=v)               # raises: the check names the non-finite value
+        runs = self._runs
+        if runs is None:
+            runs = self._runs = self.fmu.restarts(self.p, self.settings, self.names, ("mode",) + self.ints)
+        runs.run(x, v, t_s, t_s + self.K * self.T, self._mid(t_s))
+        self.evaluations += 1
+        return runs
+
+    ints: tuple[str, ...] = ()
+
+    def _mid(self, t_s: float) -> float | None:
+        return None
+
+    def eval(self, x: float, v: float, t_s: float) -> tuple[float, float, float, float, float, float, int]:
+        """(P^K(z), its Jacobian's entries row by row, the mode at the end) as plain floats, for the
+        state z = (x, v) at the section time t_s."""
+        runs = self._run(x, v, t_s)
+        r = runs.real
+        return r[0], r[1], r[2], r[3], r[4], r[5], runs.int[0]
+
     def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
         """(P^K(z), its Jacobian, the mode at the end) for the state z at the section time t_s."""
-        f = self.fmu
-        f.start(self.at(z), self.settings, t0=t_s)
-        f.step_to(t_s + self.K * self.T)
-        out = f.get(("x", "v", "mode") + JACOBIAN)
-        self.evaluations += 1
-        J = np.array([out[n] for n in JACOBIAN], dtype=float).reshape(2, 2)
-        return np.array([out["x"], out["v"]]), J, int(out["mode"])
+        px, pv, a, b, c, d, md = self.eval(float(z[0]), float(z[1]), t_s)
+        return np.array([px, pv]), np.array([[a, b], [c, d]]), md
 
     def cycle(self, z: np.ndarray, t_s: float, periods: int | None = None) -> dict[str, np.ndarray | float]:
         """A sampled run of ``periods`` (default K) periods from z at t_s, with the FMU's observables
@@ -189,8 +220,15 @@ class _Solver:
     def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int,
                  samples: int = SAMPLES, map_: "_Map | None" = None) -> None:
         self.map = _Map(fmu, p, K, samples) if map_ is None else map_
-        self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
-        self.KT = K * p.period
+        self.K, self.tol, self.max_iter = K, tol, max_iter
+        self.retarget(p)
+
+    def retarget(self, p: Oscillator) -> None:
+        """The same solver for another oscillator (its map moved along)."""
+        self.p = p
+        self.KT = self.K * p.period
+        if self.map.p is not p:
+            self.map.retarget(p)
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
         # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
         # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
@@ -201,48 +239,57 @@ class _Solver:
         self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
+        return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
+
+    def _residual(self, z0: float, z1: float, p0: float, p1: float) -> float:
         # plain floats: two components (numpy's per-call cost is larger than the arithmetic)
         xs, xw = self.map.xs, self.map.xs * self.map.w
-        z0, z1 = float(z[0]), float(z[1])
-        r = max(abs(float(Pz[0]) - z0) / xs, abs(float(Pz[1]) - z1) / xw)
+        r = max(abs(p0 - z0) / xs, abs(p1 - z1) / xw)
         return r / max(1.0, abs(z0) / xs, abs(z1) / xw)
 
     def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
-        """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking."""
-        Pz, J, md = self.map(z, t_s)
-        r = self.residual(z, Pz)
+        """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking (plain
+        floats: a 2 x 2 system)."""
+        ev, res, tol = self.map.eval, self._residual, self.tol
+        xs, xw = self.map.xs, self.map.xs * self.map.w
+        x, v = float(z[0]), float(z[1])
+        px, pv, ja, jb, jc, jd, md = ev(x, v, t_s)
+        r = res(x, v, px, pv)
         it = 0
-        if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
-            return z, J, r, it, (f"the guess is beyond the bound of {BOUND:g} times the frictionless "
-                                 "amplitude"), md
-        while r > self.tol:
+
+        def out(reason: str) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
+            return np.array([x, v]), np.array([[ja, jb], [jc, jd]]), r, it, reason, md
+
+        if max(abs(x) / xs, abs(v) / xw) > self.bound:
+            return out(f"the guess is beyond the bound of {BOUND:g} times the frictionless amplitude")
+        while r > tol:
             if it >= self.max_iter:
-                return z, J, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
-            a, b, c, d = float(J[0, 0]) - 1.0, float(J[0, 1]), float(J[1, 0]), float(J[1, 1]) - 1.0
-            if not all(math.isfinite(e) for e in (a, b, c, d)):
-                return z, J, r, it, "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md
+                return out(f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})")
+            a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
+            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c) and math.isfinite(d)):
+                return out("the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)")
             det = a * d - b * c
             if det == 0.0 or not math.isfinite(det):
-                return z, J, r, it, "J - I is singular (a multiplier 1: a fold or a family of orbits)", md
-            r0, r1 = float(z[0]) - float(Pz[0]), float(z[1]) - float(Pz[1])     # (J - I) dz = -(P(z) - z)
-            dz = np.array([(d * r0 - b * r1) / det, (a * r1 - c * r0) / det])
+                return out("J - I is singular (a multiplier 1: a fold or a family of orbits)")
+            r0, r1 = x - px, v - pv                         # (J - I) dz = -(P(z) - z)
+            dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
             lam, accepted = 1.0, False
             for _ in range(30):
-                zn = z + lam * dz
-                Pn, Jn, mn = self.map(zn, t_s)
-                rn = self.residual(zn, Pn)
-                if rn < (1.0 - 1e-4 * lam) * r or rn <= self.tol:
+                xn, vn = x + lam * dx, v + lam * dv
+                pxn, pvn, ja_, jb_, jc_, jd_, mn = ev(xn, vn, t_s)
+                rn = res(xn, vn, pxn, pvn)
+                if rn < (1.0 - 1e-4 * lam) * r or rn <= tol:
                     accepted = True
                     break
                 lam *= 0.5
             it += 1
             if not accepted:
-                return z, J, r, it, f"the line search found no decrease (residual {r:.3g})", md
-            z, Pz, J, r, md = zn, Pn, Jn, rn, mn
-            if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
-                return z, J, r, it, (f"Newton diverged: the state left the bound of {BOUND:g} times the "
-                                     "frictionless amplitude"), md
-        return z, J, r, it, "", md
+                return out(f"the line search found no decrease (residual {r:.3g})")
+            x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
+            if max(abs(x) / xs, abs(v) / xw) > self.bound:
+                return out(f"Newton diverged: the state left the bound of {BOUND:g} times the frictionless "
+                           "amplitude")
+        return out("")
 
 
 def _check(p: Oscillator, K: int) -> None:
@@ -467,74 +514,72 @@ class _ObservingMap(_Map):
     last evaluation is the orbit's cycle once Newton has converged (no separate cycle run). One per
     FMU instance, moved to each new oscillator by :meth:`retarget` (no new Settings per point)."""
 
+    names = ("x", "v") + JACOBIAN + ("x_max", "x_min", "stick_fraction")
+    ints = ("transitions",)
+
     def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int) -> None:
         super().__init__(fmu, p, K)
         self.settings = Settings(scheme="exact", observe=True, extra={"sensitivity": True})
         self.last: dict[str, float] = {}
-        self.names = ("x", "v", "mode", "x_max", "x_min", "stick_fraction", "transitions") + JACOBIAN
 
-    def retarget(self, p: Oscillator) -> None:
-        self.p, self.T = p, p.period
-        self.xs, self.w = scales(p)
-
-    def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
-        f, KT = self.fmu, self.K * self.T
+    def _mid(self, t_s: float) -> float | None:
+        KT = self.K * self.T
         t_end = t_s + KT
         mark = KT * math.floor(t_end / KT + 1e-12)          # the multiple of K T in (t_s, t_s + K T]
-        st = self.settings
-        st.t_obs_start, st.t_obs_stop = t_s, t_end
-        f.start(self.at(z), st, t0=t_s)
-        if mark < t_end - 1e-12 * KT:
-            f.step_to(mark)
-            y0 = f.get(("x", "v"))
-        else:
-            y0 = None
-        f.step_to(t_end)
-        out = f.get(self.names)
-        self.evaluations += 1
-        self.last = out
-        out["x0"], out["v0"] = (out["x"], out["v"]) if y0 is None else (y0["x"], y0["v"])
-        J = np.array([[out["dx_dx0"], out["dx_dv0"]], [out["dv_dx0"], out["dv_dv0"]]])
-        return np.array([out["x"], out["v"]]), J, int(out["mode"])
+        return mark if mark < t_end - 1e-12 * KT else None
+
+    def observed(self) -> dict[str, float]:
+        """The last evaluation's observables and its state x0, v0 at the period mark."""
+        runs = self._runs
+        assert runs is not None
+        r = runs.real
+        mid = runs.mid if runs.mid is not None else (r[0], r[1])
+        return {"x_max": r[6], "x_min": r[7], "stick_fraction": r[8], "transitions": runs.int[1],
+                "x0": mid[0], "v0": mid[1]}
 
 
 class OrbitFollower:
-    """:func:`follow_orbit` through one FMU instance, point after point (a sweep): one map and one
-    Settings for all of them."""
+    """:func:`follow_orbit` through one FMU instance, point after point (a sweep): one map, one
+    solver and one set of value arrays for all of them (moved to each new oscillator)."""
 
     def __init__(self, fmu: OscillatorFMU2, tol: float = 1e-12, max_iter: int = 40) -> None:
         self.fmu, self.tol, self.max_iter = fmu, tol, max_iter
         self.map: _ObservingMap | None = None
+        self._sol: _Solver | None = None
 
     def __call__(self, oscillator: Oscillator, state: Sequence[float], section: float) -> Orbit | None:
         p = oscillator
         _check(p, 1)
-        if self.map is None:
+        sol = self._sol
+        if sol is None:
             self.map = _ObservingMap(self.fmu, p, 1)
-        m = self.map
-        m.retarget(p)
-        sol = _Solver(self.fmu, p, 1, self.tol, self.max_iter, map_=m)
+            sol = self._sol = _Solver(self.fmu, p, 1, self.tol, self.max_iter, map_=self.map)
+        elif sol.p is not p:
+            sol.retarget(p)
+        m = sol.map
         t_s = float(section) % p.period
         z, J, r, it, reason, md = sol.newton(np.asarray(state, dtype=float), t_s)
         if reason or md == 0:
             return None
-        y = m.last
+        y = m.last = m.observed()
         stick = float(y["stick_fraction"])
+        j00, j01, j10, j11 = float(J[0, 0]), float(J[0, 1]), float(J[1, 0]), float(J[1, 1])
         if stick > 0.0:
-            mu = np.array([complex(J[0, 0] + J[1, 1]), 0j])
+            mu = np.array([complex(j00 + j11), 0j])
         else:
-            tr, det = float(J[0, 0] + J[1, 1]), float(J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0])
+            tr, det = j00 + j11, j00 * j11 - j01 * j10
             root = cmath.sqrt(complex(tr * tr / 4.0 - det))
-            mu = np.array([tr / 2.0 + root, tr / 2.0 - root])
-            mu = mu[np.argsort(-np.abs(mu))]
+            m1, m2 = tr / 2.0 + root, tr / 2.0 - root
+            mu = np.array([m1, m2] if abs(m1) >= abs(m2) else [m2, m1])
         x0, v0 = float(y["x0"]), float(y["v0"])
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = float(y["x_max"]), float(y["x_min"])
+        lim = 1.0 - STABILITY_MARGIN
         return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                     stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+                     stable=bool(abs(mu[0]) < lim and abs(mu[1]) < lim), residual=r,
                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
                      events={"transitions": int(y["transitions"])}, converged=True, section=t_s, jacobian=J,
-                     section_state=np.array(z, dtype=float), iterations=it)
+                     section_state=z, iterations=it)
 
 
 def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,
