@@ -566,17 +566,20 @@ class OrbitFollower:
         j00, j01, j10, j11 = float(J[0, 0]), float(J[0, 1]), float(J[1, 0]), float(J[1, 1])
         if stick > 0.0:
             mu = np.array([complex(j00 + j11), 0j])
+            mag = np.abs(mu)
         else:
             tr, det = j00 + j11, j00 * j11 - j01 * j10
             root = cmath.sqrt(complex(tr * tr / 4.0 - det))
-            m1, m2 = tr / 2.0 + root, tr / 2.0 - root
-            mu = np.array([m1, m2] if abs(m1) >= abs(m2) else [m2, m1])
+            mu = np.array([tr / 2.0 + root, tr / 2.0 - root])
+            mag = np.abs(mu)                    # numpy's (its array abs may differ in the last bit)
+            if mag[1] > mag[0]:
+                mu, mag = mu[::-1], mag[::-1]
         x0, v0 = float(y["x0"]), float(y["v0"])
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = float(y["x_max"]), float(y["x_min"])
         lim = 1.0 - STABILITY_MARGIN
         return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                     stable=bool(abs(mu[0]) < lim and abs(mu[1]) < lim), residual=r,
+                     stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
                      events={"transitions": int(y["transitions"])}, converged=True, section=t_s, jacobian=J,
                      section_state=z, iterations=it)

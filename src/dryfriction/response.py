@@ -53,6 +53,7 @@ from typing import Any
 import numpy as np
 
 from .fmu import FMUError, OscillatorFMU, Settings
+from .orbits import SAME, STABILITY_MARGIN, scales
 from .params import Oscillator
 
 __all__ = ["SteadyState", "steady_state", "frequency_response", "plot_response", "TOL", "TOL_STICK",
@@ -243,35 +244,37 @@ class _Branch:
     branch: a polynomial predictor (quadratic through three points, else linear) of its section
     state and phase at the next frequency."""
 
+    __slots__ = ("orbit", "f", "T", "history", "point")
+
     def __init__(self, orbit: Any, f: float, T: float, before: "_Branch | None" = None) -> None:
         self.orbit, self.f, self.T = orbit, f, T
         hist = [] if before is None else [before, *before.history[:1]]
         self.history = [b for b in hist if b.f != f]
-        self.point = (orbit.section_state[0], orbit.section_state[1], orbit.section / T)
+        z = orbit.section_state
+        self.point = (float(z[0]), float(z[1]), orbit.section / T)
 
-    def guess(self, f: float) -> tuple[np.ndarray, float]:
+    def guess(self, f: float) -> tuple[tuple[float, float], float]:
         """(state, section phase in periods) predicted at the frequency f."""
         pts = [self, *self.history]
-        if any(abs(b.point[2] - self.point[2]) > 0.25 for b in pts[1:]):
+        ph0 = self.point[2]
+        if any(abs(b.point[2] - ph0) > 0.25 for b in pts[1:]):
             pts = pts[:1]                       # the section was chosen again: no extrapolation
-        fs = [b.f for b in pts]
-        # Lagrange weights of the points at f
-        wts = []
-        for i, fi in enumerate(fs):
+        x = v = ph = 0.0
+        for i, bi in enumerate(pts):            # Lagrange weights of the points at f
             w = 1.0
-            for j, fj in enumerate(fs):
+            for j, bj in enumerate(pts):
                 if j != i:
-                    w *= (f - fj) / (fi - fj)
-            wts.append(w)
-        x, v, ph = (sum(w * b.point[c] for w, b in zip(wts, pts)) for c in range(3))
-        return np.array([x, v]), ph
+                    w *= (f - bj.f) / (bi.f - bj.f)
+            px, pv, pp = bi.point
+            x += w * px
+            v += w * pv
+            ph += w * pp
+        return (x, v), ph
 
 
 def _attracting(o: Any, p: Oscillator) -> bool:
     """A steady state: a stable orbit; without a spring (every orbit one of a family shifted in x,
     a multiplier exactly 1, ``stable`` false) one whose other multiplier is inside the unit circle."""
-    from .orbits import STABILITY_MARGIN
-
     if o.stable:
         return True
     if p.k > 0 or o.stuck:
@@ -283,17 +286,18 @@ def _attracting(o: Any, p: Oscillator) -> bool:
 def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
     """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart);
     without a spring the members of a family shifted in x are one (x0 - offset and v0 compared)."""
-    from .orbits import SAME, scales
-
+    if len(orbits) < 2:
+        return list(orbits)
     xs, w = scales(p)
     out: list[Any] = []
-    seen: list[np.ndarray] = []
+    seen: list[tuple[float, float]] = []
     for o in orbits:
         x = o.x0 - o.offset if p.k == 0 and math.isfinite(o.offset) else o.x0
-        a = np.array([x / xs, o.v0 / (xs * w)])
-        if o.period == 1 and any(np.max(np.abs(a - q)) <= SAME * max(1.0, float(np.max(np.abs(a)))) for q in seen):
+        a0, a1 = x / xs, o.v0 / (xs * w)
+        tol = SAME * max(1.0, abs(a0), abs(a1))
+        if o.period == 1 and any(max(abs(a0 - q0), abs(a1 - q1)) <= tol for q0, q1 in seen):
             continue
-        seen.append(a)
+        seen.append((a0, a1))
         out.append(o)
     return out
 
@@ -363,7 +367,7 @@ def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_
     transients (its spread of initial conditions), each followed by Newton from t = 0 (as a
     section), find_orbits for one that cannot be; a new orbit's mirror image (the state -z half a
     period later) followed too."""
-    from .orbits import _auto_guesses, DEFAULT_SPREAD, SAME, find_orbits, scales
+    from .orbits import _auto_guesses, DEFAULT_SPREAD, find_orbits
 
     follow, T = opts["follower"], p.period
     xs, w = scales(p)
