@@ -118,8 +118,16 @@ class _Map:
         q.__dict__.update(self.p.__dict__, x0=x, v0=v)
         return q
 
-    def _run(self, x: float, v: float, t_s: float) -> "Restarts":
-        """One run of K periods from (x, v) at t_s (the outputs in the returned runs' ``real`` / ``int``)."""
+    #: Integer outputs read besides the mode
+    ints: tuple[str, ...] = ()
+
+    def _mid(self, t_s: float) -> float | None:
+        """An intermediate stop of the run from t_s (none: the map reads only the end)."""
+        return None
+
+    def eval(self, x: float, v: float, t_s: float) -> tuple[float, float, float, float, float, float, int]:
+        """(P^K(z), its Jacobian's entries row by row, the mode at the end) as plain floats, for the
+        state z = (x, v) at the section time t_s."""
         if not (math.isfinite(x) and math.isfinite(v)):
             self.p.with_(x0=x, v0=v)               # raises: the check names the non-finite value
         runs = self._runs
@@ -127,17 +135,6 @@ class _Map:
             runs = self._runs = self.fmu.restarts(self.p, self.settings, self.names, ("mode",) + self.ints)
         runs.run(x, v, t_s, t_s + self.K * self.T, self._mid(t_s))
         self.evaluations += 1
-        return runs
-
-    ints: tuple[str, ...] = ()
-
-    def _mid(self, t_s: float) -> float | None:
-        return None
-
-    def eval(self, x: float, v: float, t_s: float) -> tuple[float, float, float, float, float, float, int]:
-        """(P^K(z), its Jacobian's entries row by row, the mode at the end) as plain floats, for the
-        state z = (x, v) at the section time t_s."""
-        runs = self._run(x, v, t_s)
         r = runs.real
         return r[0], r[1], r[2], r[3], r[4], r[5], runs.int[0]
 
@@ -242,35 +239,46 @@ class _Solver:
         return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
 
     def _residual(self, z0: float, z1: float, p0: float, p1: float) -> float:
-        # plain floats: two components (numpy's per-call cost is larger than the arithmetic)
+        # plain floats, the max by comparisons (as max(): the first argument unless a later is larger)
         xs, xw = self.map.xs, self.map.xs * self.map.w
-        r = max(abs(p0 - z0) / xs, abs(p1 - z1) / xw)
-        return r / max(1.0, abs(z0) / xs, abs(z1) / xw)
+        r, e = abs(p0 - z0) / xs, abs(p1 - z1) / xw
+        if e > r:
+            r = e
+        s, e = abs(z0) / xs, abs(z1) / xw
+        if not s > 1.0:
+            s = 1.0
+        if e > s:
+            s = e
+        return r / s
 
     def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
-        """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking (plain
-        floats: a 2 x 2 system)."""
+        """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking."""
+        x, v, ja, jb, jc, jd, r, it, reason, md = self.solve(float(z[0]), float(z[1]), t_s)
+        return np.array([x, v]), np.array([[ja, jb], [jc, jd]]), r, it, reason, md
+
+    def solve(self, x: float, v: float,
+              t_s: float) -> tuple[float, float, float, float, float, float, float, int, str, int]:
+        """:meth:`newton` on plain floats (a 2 x 2 system): (x, v, the Jacobian's entries row by row,
+        residual, iterations, reason, mode at the end)."""
         ev, res, tol = self.map.eval, self._residual, self.tol
         xs, xw = self.map.xs, self.map.xs * self.map.w
-        x, v = float(z[0]), float(z[1])
         px, pv, ja, jb, jc, jd, md = ev(x, v, t_s)
         r = res(x, v, px, pv)
         it = 0
-
-        def out(reason: str) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
-            return np.array([x, v]), np.array([[ja, jb], [jc, jd]]), r, it, reason, md
-
         if max(abs(x) / xs, abs(v) / xw) > self.bound:
-            return out(f"the guess is beyond the bound of {BOUND:g} times the frictionless amplitude")
+            return (x, v, ja, jb, jc, jd, r, it,
+                    f"the guess is beyond the bound of {BOUND:g} times the frictionless amplitude", md)
         while r > tol:
             if it >= self.max_iter:
-                return out(f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})")
+                return x, v, ja, jb, jc, jd, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
             a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
             if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c) and math.isfinite(d)):
-                return out("the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)")
+                return (x, v, ja, jb, jc, jd, r, it,
+                        "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md)
             det = a * d - b * c
             if det == 0.0 or not math.isfinite(det):
-                return out("J - I is singular (a multiplier 1: a fold or a family of orbits)")
+                return (x, v, ja, jb, jc, jd, r, it,
+                        "J - I is singular (a multiplier 1: a fold or a family of orbits)", md)
             r0, r1 = x - px, v - pv                         # (J - I) dz = -(P(z) - z)
             dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
             lam, accepted = 1.0, False
@@ -284,12 +292,12 @@ class _Solver:
                 lam *= 0.5
             it += 1
             if not accepted:
-                return out(f"the line search found no decrease (residual {r:.3g})")
+                return x, v, ja, jb, jc, jd, r, it, f"the line search found no decrease (residual {r:.3g})", md
             x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
-            if max(abs(x) / xs, abs(v) / xw) > self.bound:
-                return out(f"Newton diverged: the state left the bound of {BOUND:g} times the frictionless "
-                           "amplitude")
-        return out("")
+            if abs(x) / xs > self.bound or abs(v) / xw > self.bound:
+                return (x, v, ja, jb, jc, jd, r, it, f"Newton diverged: the state left the bound of {BOUND:g} "
+                        "times the frictionless amplitude", md)
+        return x, v, ja, jb, jc, jd, r, it, "", md
 
 
 def _check(p: Oscillator, K: int) -> None:
@@ -558,12 +566,11 @@ class OrbitFollower:
             sol.retarget(p)
         m = sol.map
         t_s = float(section) % p.period
-        z, J, r, it, reason, md = sol.newton(np.asarray(state, dtype=float), t_s)
+        x, v, j00, j01, j10, j11, r, it, reason, md = sol.solve(float(state[0]), float(state[1]), t_s)
         if reason or md == 0:
             return None
         y = m.last = m.observed()
-        stick = float(y["stick_fraction"])
-        j00, j01, j10, j11 = float(J[0, 0]), float(J[0, 1]), float(J[1, 0]), float(J[1, 1])
+        stick = y["stick_fraction"]
         if stick > 0.0:
             mu = np.array([complex(j00 + j11), 0j])
             mag = np.abs(mu)
@@ -574,15 +581,15 @@ class OrbitFollower:
             mag = np.abs(mu)                    # numpy's (its array abs may differ in the last bit)
             if mag[1] > mag[0]:
                 mu, mag = mu[::-1], mag[::-1]
-        x0, v0 = float(y["x0"]), float(y["v0"])
+        x0, v0 = y["x0"], y["v0"]
         z0, zd0 = _nondim(p, x0, v0)
-        xmax, xmin = float(y["x_max"]), float(y["x_min"])
+        xmax, xmin = y["x_max"], y["x_min"]
         lim = 1.0 - STABILITY_MARGIN
         return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
                      stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
-                     events={"transitions": int(y["transitions"])}, converged=True, section=t_s, jacobian=J,
-                     section_state=z, iterations=it)
+                     events={"transitions": y["transitions"]}, converged=True, section=t_s,
+                     jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
 
 
 def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,
