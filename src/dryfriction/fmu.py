@@ -381,6 +381,8 @@ class Restarts:
                 names.append(name)
                 vals.append(int(value))
         self._rnames = rnames
+        #: (index, value) of the Real extras, written over the standard values at each retarget
+        self._extra_at = [(rnames.index(n), v) for n, v in self._extra_reals.items()]
         self._rvr = (ctypes.c_uint * len(rnames))(*[md.vr(n) for n in rnames])
         self._rval = (ctypes.c_double * len(rnames))()
         self._nr = len(rnames)
@@ -420,11 +422,10 @@ class Restarts:
         st = self.settings
         h = st.h if st.h is not None else (p.period / 1000.0 if p.omega > 0 else 0.0)
         vals = self.fmu._osc_values(p) + (h, st.alpha, st.t_obs_start, st.t_obs_stop, st.v_s, st.delta)
-        n = len(vals)
-        self._rval[:n] = vals
-        for i, name in enumerate(self._rnames):
-            if name in self._extra_reals:
-                self._rval[i] = self._extra_reals[name]
+        rv = self._rval
+        rv[:len(vals)] = vals
+        for i, value in self._extra_at:
+            rv[i] = value
 
     def run(self, x0: float, v0: float, t0: float, t_end: float, t_mid: float | None = None) -> None:
         """Start from (x0, v0) at t0 (with ``observe``, the observation window is [t0, t_end]), step

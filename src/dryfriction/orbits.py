@@ -71,7 +71,7 @@ class Orbit:
 
     @property
     def mu_max(self) -> float:
-        return float(np.max(np.abs(self.multipliers)))
+        return float(np.abs(self.multipliers).max())
 
 
 def scales(p: Oscillator) -> tuple[float, float]:
@@ -98,10 +98,10 @@ class _Map:
         self.evaluations = 0
         self._runs: Restarts | None = None      # made at the first evaluation
 
-    def retarget(self, p: Oscillator) -> None:
-        """The same map of another oscillator (the same K and settings)."""
+    def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None) -> None:
+        """The same map of another oscillator (the same K and settings; ``xs_w``: its scales if known)."""
         self.p, self.T = p, p.period
-        self.xs, self.w = scales(p)
+        self.xs, self.w = scales(p) if xs_w is None else xs_w
         if self._runs is not None:
             self._runs.retarget(p)
 
@@ -121,8 +121,8 @@ class _Map:
     #: Integer outputs read besides the mode
     ints: tuple[str, ...] = ()
 
-    def _mid(self, t_s: float) -> float | None:
-        """An intermediate stop of the run from t_s (none: the map reads only the end)."""
+    def _mid(self, t_s: float, t_end: float, KT: float) -> float | None:
+        """An intermediate stop of the run from t_s to t_end = t_s + KT (none: the map reads only the end)."""
         return None
 
     def eval(self, x: float, v: float, t_s: float) -> tuple[float, float, float, float, float, float, int]:
@@ -133,7 +133,9 @@ class _Map:
         runs = self._runs
         if runs is None:
             runs = self._runs = self.fmu.restarts(self.p, self.settings, self.names, ("mode",) + self.ints)
-        runs.run(x, v, t_s, t_s + self.K * self.T, self._mid(t_s))
+        KT = self.K * self.T
+        t_end = t_s + KT
+        runs.run(x, v, t_s, t_end, self._mid(t_s, t_end, KT))
         self.evaluations += 1
         r = runs.real
         return r[0], r[1], r[2], r[3], r[4], r[5], runs.int[0]
@@ -224,13 +226,13 @@ class _Solver:
         """The same solver for another oscillator (its map moved along)."""
         self.p = p
         self.KT = self.K * p.period
+        xs, w = scales(p)
         if self.map.p is not p:
-            self.map.retarget(p)
+            self.map.retarget(p, (xs, w))
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
         # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
         # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
         # MAX_AMPLIFICATION (else Newton "converges" on the unbounded growth, relative to a huge state)
-        xs, w = scales(p)
         den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
         X = abs(p.P0) / den if den > 0 else math.inf
         self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
@@ -530,9 +532,7 @@ class _ObservingMap(_Map):
         self.settings = Settings(scheme="exact", observe=True, extra={"sensitivity": True})
         self.last: dict[str, float] = {}
 
-    def _mid(self, t_s: float) -> float | None:
-        KT = self.K * self.T
-        t_end = t_s + KT
+    def _mid(self, t_s: float, t_end: float, KT: float) -> float | None:
         mark = KT * math.floor(t_end / KT + 1e-12)          # the multiple of K T in (t_s, t_s + K T]
         return mark if mark < t_end - 1e-12 * KT else None
 

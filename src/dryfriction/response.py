@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from .fmu import FMUError, OscillatorFMU, Settings
-from .orbits import SAME, STABILITY_MARGIN, scales
+from .orbits import SAME, STABILITY_MARGIN, find_orbits, scales
 from .params import Oscillator
 
 __all__ = ["SteadyState", "steady_state", "frequency_response", "plot_response", "TOL", "TOL_STICK",
@@ -260,12 +260,13 @@ class _Branch:
         ph0 = self.point[2]
         if any(abs(b.point[2] - ph0) > 0.25 for b in pts[1:]):
             pts = pts[:1]                       # the section was chosen again: no extrapolation
+        fs = [b.f for b in pts]
         x = v = ph = 0.0
-        for i, bi in enumerate(pts):            # Lagrange weights of the points at f
-            w = 1.0
-            for j, bj in enumerate(pts):
-                if j != i:
-                    w *= (f - bj.f) / (bi.f - bj.f)
+        for bi in pts:                          # Lagrange weights of the points at f
+            w, fi = 1.0, bi.f
+            for fj in fs:
+                if fj != fi:                    # the points' frequencies differ (history)
+                    w *= (f - fj) / (fi - fj)
             px, pv, pp = bi.point
             x += w * px
             v += w * pv
@@ -310,8 +311,6 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
     initial conditions followed too (:func:`_transient_check`); where a branch is lost (or K > 1),
     find_orbits from the previous orbits; without branches or when none is stable, find_orbits from
     transients too."""
-    from .orbits import find_orbits
-
     K, T = opts["period"], p.period
     follow = opts["follower"]
     if K == 1 and branches:
@@ -329,6 +328,8 @@ def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Bra
             if any(_attracting(b.orbit, p) for b in followed):
                 if cold:
                     followed = _transient_check(inst, p, f, followed, opts)
+                if len(followed) == 1:
+                    return followed
                 keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
                 return [b for b in followed if id(b.orbit) in keep]
     guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
@@ -368,7 +369,7 @@ def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_
     transients (its spread of initial conditions), each followed by Newton from t = 0 (as a
     section), find_orbits for one that cannot be; a new orbit's mirror image (the state -z half a
     period later) followed too."""
-    from .orbits import _auto_guesses, DEFAULT_SPREAD, find_orbits
+    from .orbits import _auto_guesses, DEFAULT_SPREAD
 
     follow, T = opts["follower"], p.period
     xs, w = scales(p)
@@ -416,13 +417,13 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
     reasons: list[str] = []
     branches: list[_Branch] = []
     checked = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f_hz[0])})
-    for i, f in enumerate(f_hz):
+    for i, f in enumerate(np.asarray(f_hz, dtype=float).tolist()):
         # the oscillator at f: the checked one with omega replaced (f is checked finite and > 0 by
         # frequency_response; a new check per point would cost a fifth of the sweep)
         p = object.__new__(Oscillator)
-        p.__dict__.update(checked.__dict__, omega=2.0 * math.pi * float(f))
+        p.__dict__.update(checked.__dict__, omega=2.0 * math.pi * f)
         try:
-            branches = _orbits_at(inst, p, float(f), branches, not branches or i % opts["cold_every"] == 0, opts)
+            branches = _orbits_at(inst, p, f, branches, not branches or i % opts["cold_every"] == 0, opts)
         except FMUError as e:   # this frequency is not computed: its row says why, the sweep goes on
             table.append([])
             reasons.append(e.message)
@@ -442,10 +443,9 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
         table.append(rows)
         reasons.append("")
     width = max([len(r) for r in table] + [1])
-    out = np.full((len(f_hz), width, len(ORBIT_COLUMNS) + 1), np.nan)
-    for i, rows in enumerate(table):
-        if rows:
-            out[i, :len(rows)] = np.array(rows, dtype=float)
+    pad = (math.nan,) * (len(ORBIT_COLUMNS) + 1)
+    out = np.array([rows + [pad] * (width - len(rows)) for rows in table], dtype=float).reshape(
+        len(f_hz), width, len(ORBIT_COLUMNS) + 1)
     return {"orbits": out, "reason": np.array(reasons, dtype=object), "cpu": np.array([time.process_time() - t0])}
 
 
