@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import cmath
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -370,22 +370,35 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
     KT = K * p.period
     # (state, time) guesses: the attractors at t = transients K T, the given ones at t = 0
     todo: list[tuple[np.ndarray, float, bool]] = []
-    st = Settings(scheme="exact")
-    for z in _auto_guesses(p, spread):
-        if transients > 0:
-            f.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
-            f.step_to(transients * KT)
-            y = f.get(("x", "v"))
-            z = np.array([y["x"], y["v"]])
-        todo.append((z, 0.0, False))
+    starts = _auto_guesses(p, spread)
+    if transients > 0 and starts:
+        runs = f.restarts(p, Settings(scheme="exact"))     # reads x, v at the end
+        for z in starts:
+            runs.run(float(z[0]), float(z[1]), 0.0, transients * KT)
+            todo.append((np.array(runs.real), 0.0, False))
+    else:
+        todo.extend((z, 0.0, False) for z in starts)
     for g in guesses or ():
         todo.append((np.asarray(g, dtype=float), 0.0, True))
     found: list[Orbit] = []
     cycles: list[np.ndarray] = []        # scaled states of each found orbit at the K marks
     failed: list[Orbit] = []
+
+    def seen(z: np.ndarray, t_s: float) -> bool:
+        # a converged state of an orbit found already: its states at the K marks from one run
+        # (no sampled cycle; the comparison's tolerance SAME is far above the runs' rounding)
+        if not cycles:
+            return False
+        T = p.period
+        marks = T * np.arange(math.floor(t_s / T) + 1, math.floor((t_s + KT) / T + 1e-12) + 1)
+        grid = np.concatenate([[t_s], marks[marks > t_s]])
+        run = f.trajectory(sol.map.at(z), grid, Settings(scheme="exact"), ("x", "v"))
+        sm = np.array([sol.map.scaled(np.array([x, v])) for x, v in zip(run["x"][1:], run["v"][1:])])
+        return any(_same(sm, c) for c in cycles)
+
     while todo:
         z, t_g, given = todo.pop(0)
-        orbit, marks, halfway = _solve(sol, z, t_g)
+        orbit, marks, halfway = _solve(sol, z, t_g, seen)
         if orbit is None:
             continue
         if not orbit.converged:
@@ -421,10 +434,12 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return any(np.max(np.abs(np.roll(a, s, axis=0) - b)) <= tol for s in range(a.shape[0]))
 
 
-def _solve(sol: _Solver, z: np.ndarray, t_g: float) -> tuple[Orbit | None, list[np.ndarray],
-                                                              tuple[np.ndarray, float] | None]:
+def _solve(sol: _Solver, z: np.ndarray, t_g: float,
+           seen: Callable[[np.ndarray, float], bool] | None = None) -> tuple[Orbit | None, list[np.ndarray],
+                                                                             tuple[np.ndarray, float] | None]:
     """Solve from the guess z at time t_g: (the orbit, its states at the K period marks, the state and
-    time half a period after the section, for the symmetry image)."""
+    time half a period after the section, for the symmetry image); (None, [], None) when ``seen``
+    tells that the converged state (z, t_s) is of an orbit known already (no cycle run for it)."""
     K, KT = sol.K, sol.KT
     m = sol.map
     t_s = t_g
@@ -453,6 +468,8 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float) -> tuple[Orbit | None, list[
             z = zc
             reason = "the converged orbit is stuck at every section tried"
             continue
+        if seen is not None and seen(zc, t_s):
+            return None, [], None
         return _finish(sol, zc, t_s, J, r, it)
     return _failed(sol, z, t_s, np.full((2, 2), np.nan), math.nan, 0, reason), [], None
 

@@ -380,11 +380,11 @@ def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_
         tol = SAME * max(1.0, abs(a[0]), abs(a[1]))
         return any(abs(a[0] - b.orbit.x0 / xs) <= tol and abs(a[1] - b.orbit.v0 / (xs * w)) <= tol for b in out)
 
-    st = default_settings(p)
+    runs = opts["transient_runs"]         # one set of value arrays for the sweep's cold searches
+    runs.retarget(p)
     for z in _auto_guesses(p, DEFAULT_SPREAD):
-        inst.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
-        inst.step_to(opts["transients"] * T)
-        y = inst.get(("x", "v"))
+        runs.run(float(z[0]), float(z[1]), 0.0, opts["transients"] * T)
+        y = {"x": runs.real[0], "v": runs.real[1]}
         o = follow(p, (y["x"], y["v"]), 0.0)
         if o is None:
             new = [q for q in find_orbits(p, guesses=[(y["x"], y["v"])], transients=0, spread=(), fmu=inst,
@@ -411,12 +411,13 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
     from .orbits import OrbitFollower
 
     inst = fmu_for(fmu)
-    opts = {**opts, "follower": OrbitFollower(inst)}
     t0 = time.process_time()
     table: list[list[tuple[float, ...]]] = []
     reasons: list[str] = []
     branches: list[_Branch] = []
     checked = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f_hz[0])})
+    # the transients of the cold searches read x, v at their end
+    opts = {**opts, "follower": OrbitFollower(inst), "transient_runs": inst.restarts(checked, default_settings(checked))}
     for i, f in enumerate(np.asarray(f_hz, dtype=float).tolist()):
         # the oscillator at f: the checked one with omega replaced (f is checked finite and > 0 by
         # frequency_response; a new check per point would cost a fifth of the sweep)
