@@ -97,6 +97,7 @@ class _Map:
         self.settings = Settings(scheme="exact", extra={"sensitivity": True})
         self.evaluations = 0
         self._runs: Restarts | None = None      # made at the first evaluation
+        self.final = True                       # the last evaluation was a final one
 
     def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None) -> None:
         """The same map of another oscillator (the same K and settings; ``xs_w``: its scales if known)."""
@@ -125,9 +126,11 @@ class _Map:
         """An intermediate stop of the run from t_s to t_end = t_s + KT (none: the map reads only the end)."""
         return None
 
-    def eval(self, x: float, v: float, t_s: float) -> tuple[float, float, float, float, float, float, int]:
+    def eval(self, x: float, v: float, t_s: float,
+             final: bool = True) -> tuple[float, float, float, float, float, float, int]:
         """(P^K(z), its Jacobian's entries row by row, the mode at the end) as plain floats, for the
-        state z = (x, v) at the section time t_s."""
+        state z = (x, v) at the section time t_s (``final`` False: an evaluation unlikely to be the
+        converged one, which may leave out what only the converged one needs)."""
         if not (math.isfinite(x) and math.isfinite(v)):
             self.p.with_(x0=x, v0=v)               # raises: the check names the non-finite value
         runs = self._runs
@@ -135,7 +138,8 @@ class _Map:
             runs = self._runs = self.fmu.restarts(self.p, self.settings, self.names, ("mode",) + self.ints)
         KT = self.K * self.T
         t_end = t_s + KT
-        runs.run(x, v, t_s, t_end, self._mid(t_s, t_end, KT))
+        runs.run(x, v, t_s, t_end, self._mid(t_s, t_end, KT) if final else None)
+        self.final = final
         self.evaluations += 1
         r = runs.real
         return r[0], r[1], r[2], r[3], r[4], r[5], runs.int[0]
@@ -264,7 +268,7 @@ class _Solver:
         residual, iterations, reason, mode at the end)."""
         ev, res, tol = self.map.eval, self._residual, self.tol
         xs, xw = self.map.xs, self.map.xs * self.map.w
-        px, pv, ja, jb, jc, jd, md = ev(x, v, t_s)
+        px, pv, ja, jb, jc, jd, md = ev(x, v, t_s, False)      # the guess: rarely converged already
         r = res(x, v, px, pv)
         it = 0
         if max(abs(x) / xs, abs(v) / xw) > self.bound:
@@ -554,9 +558,10 @@ class _ObservingMap(_Map):
         return mark if mark < t_end - 1e-12 * KT else None
 
     def observed(self) -> dict[str, float]:
-        """The last evaluation's observables and its state x0, v0 at the period mark."""
+        """The last evaluation's observables and its state x0, v0 at the period mark (the last
+        evaluation a ``final`` one: it stopped at the mark)."""
         runs = self._runs
-        assert runs is not None
+        assert runs is not None and self.final
         r = runs.real
         mid = runs.mid if runs.mid is not None else (r[0], r[1])
         return {"x_max": r[6], "x_min": r[7], "stick_fraction": r[8], "transitions": runs.int[1],
@@ -586,6 +591,8 @@ class OrbitFollower:
         x, v, j00, j01, j10, j11, r, it, reason, md = sol.solve(float(state[0]), float(state[1]), t_s)
         if reason or md == 0:
             return None
+        if not m.final:             # the guess was periodic already: run it again with the stop at the mark
+            m.eval(x, v, t_s)
         y = m.last = m.observed()
         stick = y["stick_fraction"]
         if stick > 0.0:
