@@ -405,6 +405,10 @@ class Restarts:
             raise ValueError(f"the observables {', '.join(sorted(set(reals) & set(OBSERVABLE_OUTPUTS)))} "
                              "need Settings(observe=True)")
         self.reals, self.ints = tuple(reals), tuple(ints)
+        self._nor, self._noi = len(self.reals), len(self.ints)
+        f = fmu.fmi.f
+        self._fns = (f.Reset, f.SetupExperiment, f.SetReal, f.SetInteger, f.SetBoolean, f.EnterInitializationMode,
+                     f.ExitInitializationMode, f.DoStep, f.GetReal, f.GetInteger)
         self._ovr = (ctypes.c_uint * len(reals))(*[md.vr(n) for n in reals])
         self._oval = (ctypes.c_double * len(reals))()
         self._oivr = (ctypes.c_uint * len(ints))(*[md.vr(n) for n in ints])
@@ -433,43 +437,46 @@ class Restarts:
         each, and read the outputs (:attr:`real`, :attr:`int`)."""
         fmu = self.fmu
         inst = fmu.fmi
-        f, c, n = inst.f, inst.component, len(inst.messages)
+        c, n = inst.component, len(inst.messages)
+        reset, setup, set_real, set_int, set_bool, enter, exit_, do_step, get_real, get_int = self._fns
         rv = self._rval
         rv[self._ix0], rv[self._iv0] = x0, v0
         if self._observe:
             rv[self._its], rv[self._ite] = t0, t_end
-        if s := f.Reset(c):
+        if s := reset(c):
             inst.check("fmi2Reset", s, n)
-        if s := f.SetupExperiment(c, 0, 0.0, t0, 0, 0.0):
+        if s := setup(c, 0, 0.0, t0, 0, 0.0):
             inst.check("fmi2SetupExperiment", s, n)
-        if s := f.SetReal(c, self._rvr, self._nr, rv):
+        if s := set_real(c, self._rvr, self._nr, rv):
             inst.check("fmi2SetReal", s, n)
-        if s := f.SetInteger(c, self._ivr, self._ni, self._ival):
+        if s := set_int(c, self._ivr, self._ni, self._ival):
             inst.check("fmi2SetInteger", s, n)
-        if s := f.SetBoolean(c, self._bvr, self._nb, self._bval):
+        if s := set_bool(c, self._bvr, self._nb, self._bval):
             inst.check("fmi2SetBoolean", s, n)
-        if s := f.EnterInitializationMode(c):
+        if s := enter(c):
             inst.check("fmi2EnterInitializationMode", s, n)
-        if s := f.ExitInitializationMode(c):
+        if s := exit_(c):
             inst.check("fmi2ExitInitializationMode", s, n)
         fmu.time = t = t0
-        self.mid = None
-        if t_mid is not None:
-            if s := f.DoStep(c, t, t_mid - t, 1):
+        if t_mid is None:
+            self.mid = None
+        else:
+            if s := do_step(c, t, t_mid - t, 1):
                 inst.check("fmi2DoStep", s, n)
             fmu.time = t = t_mid
-            if s := f.GetReal(c, self._xvvr, 2, self._xv):
+            xv = self._xv
+            if s := get_real(c, self._xvvr, 2, xv):
                 inst.check("fmi2GetReal", s, n)
-            self.mid = (self._xv[0], self._xv[1])
-        if s := f.DoStep(c, t, t_end - t, 1):
+            self.mid = (xv[0], xv[1])
+        if s := do_step(c, t, t_end - t, 1):
             inst.check("fmi2DoStep", s, n)
         fmu.time = t_end
-        if self.reals:
-            if s := f.GetReal(c, self._ovr, len(self.reals), self._oval):
+        if self._nor:
+            if s := get_real(c, self._ovr, self._nor, self._oval):
                 inst.check("fmi2GetReal", s, n)
             self.real = self._oval[:]
-        if self.ints:
-            if s := f.GetInteger(c, self._oivr, len(self.ints), self._oival):
+        if self._noi:
+            if s := get_int(c, self._oivr, self._noi, self._oival):
                 inst.check("fmi2GetInteger", s, n)
             self.int = self._oival[:]
 
