@@ -7,7 +7,8 @@
    orbit, in this process, one FMU instance): the engineer's example of the README (0.5 kg, 2000 N/m,
    zeta 0.003, 10 N, N 20 N, mu_s 0.3, mu_k 0.2, 5 to 15 Hz) and a light-damping case (zeta = 0.01,
    m = k = 1, P0 = 1, lambda 0.5 to 1.5, with friction N = 0.1, mu_s 0.3, mu_k 0.2, and without,
-   N = 0). Wall time, min of ``--repeats``.
+   N = 0). Wall time, min of ``--repeats``; per point; the evaluations of the stroboscopic map per
+   point (counted in one more, untimed run).
 2. At zeta = 0.01, the transient method (``steady_state``, scheme exact) at tol 1e-3 ... 1e-12:
    its largest amplitude error against the orbit's (without friction: both against the closed
    form), its time, and the time of the cheapest tolerance whose error is within the target
@@ -24,7 +25,6 @@ from __future__ import annotations
 import json
 import math
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -34,19 +34,35 @@ from dryfriction import Oscillator
 from dryfriction.argparsing import count, make_parser
 from dryfriction.response import frequency_response
 
+HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:
+    sys.path.insert(0, str(HERE))
+from timing import timed  # noqa: E402  (bench/timing.py)
+
 ENGINEER = dict(m=0.5, k=2000.0, zeta=0.003, P0=10.0, N=20.0, mu_s=0.3, mu_k=0.2)
 LIGHT = dict(m=1.0, k=1.0, zeta=0.01, P0=1.0, mu_s=0.3, mu_k=0.2)
 TOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
 TARGETS = (1e-6, 1e-10)
 
 
-def timed(fn: Any, repeats: int) -> tuple[float, Any]:
-    best, out = math.inf, None
-    for _ in range(repeats):
-        t = time.perf_counter()
+def evaluations(fn: Any) -> tuple[int, Any]:
+    """(how many evaluations of the stroboscopic map one call of fn makes, its result): the map's
+    evaluation counted in one untimed call."""
+    from dryfriction import orbits
+
+    count = [0]
+    original = orbits._Map.eval
+
+    def counting(self: Any, *args: Any, **kwargs: Any) -> Any:
+        count[0] += 1
+        return original(self, *args, **kwargs)
+
+    orbits._Map.eval = counting  # type: ignore[method-assign]
+    try:
         out = fn()
-        best = min(best, time.perf_counter() - t)
-    return best, out
+    finally:
+        orbits._Map.eval = original  # type: ignore[method-assign]
+    return count[0], out
 
 
 def closed_form(p: Oscillator, f: np.ndarray) -> np.ndarray:
@@ -102,8 +118,10 @@ def main(argv: list[str] | None = None) -> int:
     orbit_ds = {}
     for name, p, f in cases:
         t, ds = timed(lambda: frequency_response(p, f, fmu_path=fmu), R)
+        n_eval, _ = evaluations(lambda: frequency_response(p, f, fmu_path=fmu))
         orbit_ds[name] = (t, ds)
-        out["responses"].append({"case": name, "seconds": t, "orbits": int(ds["n_orbits"].sum()),
+        out["responses"].append({"case": name, "seconds": t, "us_per_point": 1e6 * t / n,
+                                 "evaluations_per_point": n_eval / n, "orbits": int(ds["n_orbits"].sum()),
                                  "stable": int((ds["stable"].values == 1.0).sum()),
                                  "frequencies_with_a_stable_orbit": int(ds["converged"].sum()),
                                  "max_residual": float(np.nanmax(ds["residual"].values))})
@@ -137,10 +155,11 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(out))
         return 0
     print(f"frequency responses from orbits, {n} points, every orbit's stability (min of {R} runs, wall time)")
-    print(f"{'case':<20} {'seconds':>8} {'orbits':>7} {'stable':>7} {'with stable':>11} {'max residual':>12}")
+    print(f"{'case':<20} {'seconds':>8} {'us/point':>8} {'evals/point':>11} {'orbits':>7} {'stable':>7} "
+          f"{'with stable':>11} {'max residual':>12}")
     for r in out["responses"]:
-        print(f"{r['case']:<20} {r['seconds']:8.3f} {r['orbits']:7d} {r['stable']:7d} "
-              f"{r['frequencies_with_a_stable_orbit']:11d} {r['max_residual']:12.1e}")
+        print(f"{r['case']:<20} {r['seconds']:8.3f} {r['us_per_point']:8.0f} {r['evaluations_per_point']:11.2f} "
+              f"{r['orbits']:7d} {r['stable']:7d} {r['frequencies_with_a_stable_orbit']:11d} {r['max_residual']:12.1e}")
     for row in out["transient"]:
         e = row["orbit_error"]
         print(f"\n{row['case']}: orbit method {row['orbit_seconds']:.3f} s"

@@ -31,13 +31,18 @@ import math
 import subprocess
 import sys
 import tempfile
-import time
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from dryfriction.argparsing import count, make_parser, number
+
+HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:
+    sys.path.insert(0, str(HERE))
+from timing import timed  # noqa: E402  (bench/timing.py)
 
 CASE = dict(m=1.0, k=1.0, zeta=0.01, P0=1.0, N=0.3, mu=1.0)
 LAMBDAS = (0.5, 0.8, 1.0, 1.2, 1.5)
@@ -94,15 +99,6 @@ def pyharm_amplitude(Maestro: Any, w: float, nh: int, nti: int, eps: float) -> t
     an.initialise(None)
     sol = an.SolList[0]
     return fourier_amplitude(np.asarray(sol.x, dtype=float), nh), bool(getattr(sol, "flag_R", True))
-
-
-def timed(fn: Any, repeats: int) -> tuple[float, Any]:
-    best, out = math.inf, None
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return best, out
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -30,7 +30,7 @@ from .model import default_fmu_path
 from .params import Oscillator
 
 __all__ = ["FMUError", "FMUCallError", "OscillatorFMU", "OscillatorFMU2", "OscillatorFMU3", "Run", "Switch",
-           "Settings", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS", "OBSERVABLE_OUTPUTS", "SCHEMES",
+           "Settings", "Restarts", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS", "OBSERVABLE_OUTPUTS", "SCHEMES",
            "EFFECT_BITS"]
 
 #: scheme name -> enumeration value and effect bit -> name, both read from the model description
@@ -219,6 +219,12 @@ class OscillatorFMU2(Driver):
             inst.check("fmi2ExitInitializationMode", s, n)
         self.time = t0
 
+    def restarts(self, p: Oscillator, settings: Settings | None = None, reals: Sequence[str] = ("x", "v"),
+                 ints: Sequence[str] = ()) -> "Restarts":
+        """Repeated runs of ``p`` with ``settings`` from varying initial states and start times, the
+        FMU's calls of :meth:`start` with every value array filled once (:class:`Restarts`)."""
+        return Restarts(self, p, settings or Settings(), reals, ints)
+
     def do_step(self, dt: float, *legacy: float) -> None:
         """One fmi2DoStep of length ``dt`` from the current communication point :attr:`time`
         (checked); :attr:`time` is then time + dt.
@@ -324,6 +330,155 @@ class OscillatorFMU2(Driver):
         """Names of the effects the current run simulates (the model's vendor annotation)."""
         name = self.md.effects_variable or "effects"
         return self.md.effect_names(int(self.get([name])[name]))
+
+
+class Restarts:
+    """Runs of one oscillator and one :class:`Settings` from varying initial states (x0, v0) at
+    varying start times t0, through one :class:`OscillatorFMU2`: the calls of
+    :meth:`OscillatorFMU2.start` (reset, setup, the values of every parameter, ``settings.extra``
+    included, initialisation) with the value arrays built once; per run only x0, v0, t0 and the
+    observation window [t0, t_end] change (:meth:`run`). For a host that runs the same model from
+    many states, e.g. a shooting method's map evaluations (a few microseconds of host time per run).
+
+    After :meth:`run`, :attr:`real` holds the values of ``reals`` at t_end, :attr:`int` those of
+    ``ints``, :attr:`mid` (x, v) at the intermediate stop when one was asked for (else None). :meth:`retarget`
+    moves it to another oscillator with the same settings. Every FMI status is checked as in
+    :meth:`OscillatorFMU2.start`."""
+
+    def __init__(self, fmu: OscillatorFMU2, p: Oscillator, settings: Settings, reals: Sequence[str],
+                 ints: Sequence[str]) -> None:
+        st = settings
+        self.fmu, self.settings = fmu, st
+        scheme = fmu._schemes.get(st.scheme)
+        if scheme is None:
+            raise FMUError(f"scheme must be one of {', '.join(fmu._schemes)}, not {st.scheme!r}")
+        md = fmu.md
+        # the standard arrays of start, then settings.extra grouped per type (a name of the standard
+        # arrays given again in extra: its value replaces the standard one, as start's later set does)
+        rnames = list(_OSC_FIELDS + _SETTINGS_REALS)
+        inames, bnames = ["scheme", "frictionUpdates", "friction_law"], ["observe", "fastPaths"]
+        ivals: list[int] = [scheme, st.frictionUpdates, st.friction_law]
+        bvals: list[int] = [int(bool(st.observe)), int(bool(st.fastPaths))]
+        self._extra_reals: dict[str, float] = {}
+        for name, value in st.extra.items():
+            var = fmu.vars.get(name)
+            if var is None:
+                raise FMUError(f"unknown variable {name!r}")
+            if var.call_type == "Real":
+                if name not in rnames:
+                    rnames.append(name)
+                self._extra_reals[name] = float(value)
+                continue
+            if var.type == "Enumeration" and isinstance(value, str):
+                try:
+                    value = md.scheme_value(value)
+                except ValueError as e:
+                    raise FMUError(str(e)) from None
+            names, vals = (inames, ivals) if var.call_type == "Integer" else (bnames, bvals)
+            if name in names:
+                vals[names.index(name)] = int(value)
+            else:
+                names.append(name)
+                vals.append(int(value))
+        self._rnames = rnames
+        #: (index, value) of the Real extras, written over the standard values at each retarget
+        self._extra_at = [(rnames.index(n), v) for n, v in self._extra_reals.items()]
+        self._rvr = (ctypes.c_uint * len(rnames))(*[md.vr(n) for n in rnames])
+        self._rval = (ctypes.c_double * len(rnames))()
+        self._nr = len(rnames)
+        self._ivr = (ctypes.c_uint * len(inames))(*[md.vr(n) for n in inames])
+        self._ival = (ctypes.c_int * len(inames))(*ivals)
+        self._ni = len(inames)
+        self._bvr = (ctypes.c_uint * len(bnames))(*[md.vr(n) for n in bnames])
+        self._bval = (ctypes.c_int * len(bnames))(*bvals)
+        self._nb = len(bnames)
+        self._ix0, self._iv0 = rnames.index("x0"), rnames.index("v0")
+        self._its, self._ite = rnames.index("t_obs_start"), rnames.index("t_obs_stop")
+        self._observe = bool(st.observe)
+        for name in reals:
+            if md.var(name).call_type != "Real":
+                raise FMUError(f"{name!r} is not a Real variable")
+        for name in ints:
+            if md.var(name).call_type != "Integer":
+                raise FMUError(f"{name!r} is not an Integer variable")
+        if not st.observe and set(reals) & set(OBSERVABLE_OUTPUTS):
+            raise ValueError(f"the observables {', '.join(sorted(set(reals) & set(OBSERVABLE_OUTPUTS)))} "
+                             "need Settings(observe=True)")
+        self.reals, self.ints = tuple(reals), tuple(ints)
+        self._nor, self._noi = len(self.reals), len(self.ints)
+        f = fmu.fmi.f
+        self._fns = (f.Reset, f.SetupExperiment, f.SetReal, f.SetInteger, f.SetBoolean, f.EnterInitializationMode,
+                     f.ExitInitializationMode, f.DoStep, f.GetReal, f.GetInteger)
+        self._ovr = (ctypes.c_uint * len(reals))(*[md.vr(n) for n in reals])
+        self._oval = (ctypes.c_double * len(reals))()
+        self._oivr = (ctypes.c_uint * len(ints))(*[md.vr(n) for n in ints])
+        self._oival = (ctypes.c_int * len(ints))()
+        self._xvvr = (ctypes.c_uint * 2)(md.vr("x"), md.vr("v"))
+        self._xv = (ctypes.c_double * 2)()
+        #: the values of ``reals`` / ``ints`` at the end of the last run, (x, v) at its intermediate stop
+        self.real: list[float] = []
+        self.int: list[int] = []
+        self.mid: tuple[float, float] | None = None
+        self.retarget(p)
+
+    def retarget(self, p: Oscillator) -> None:
+        """Use the oscillator ``p`` (its x0, v0 replaced at each run) with the same settings."""
+        st = self.settings
+        h = st.h if st.h is not None else (p.period / 1000.0 if p.omega > 0 else 0.0)
+        vals = self.fmu._osc_values(p) + (h, st.alpha, st.t_obs_start, st.t_obs_stop, st.v_s, st.delta)
+        rv = self._rval
+        rv[:len(vals)] = vals
+        for i, value in self._extra_at:
+            rv[i] = value
+
+    def run(self, x0: float, v0: float, t0: float, t_end: float, t_mid: float | None = None) -> None:
+        """Start from (x0, v0) at t0 (with ``observe``, the observation window is [t0, t_end]), step
+        to t_mid (if given: (x, v) there in :attr:`mid`) and on to t_end in one communication step
+        each, and read the outputs (:attr:`real`, :attr:`int`)."""
+        fmu = self.fmu
+        inst = fmu.fmi
+        c, n = inst.component, len(inst.messages)
+        reset, setup, set_real, set_int, set_bool, enter, exit_, do_step, get_real, get_int = self._fns
+        rv = self._rval
+        rv[self._ix0], rv[self._iv0] = x0, v0
+        if self._observe:
+            rv[self._its], rv[self._ite] = t0, t_end
+        if s := reset(c):
+            inst.check("fmi2Reset", s, n)
+        if s := setup(c, 0, 0.0, t0, 0, 0.0):
+            inst.check("fmi2SetupExperiment", s, n)
+        if s := set_real(c, self._rvr, self._nr, rv):
+            inst.check("fmi2SetReal", s, n)
+        if s := set_int(c, self._ivr, self._ni, self._ival):
+            inst.check("fmi2SetInteger", s, n)
+        if s := set_bool(c, self._bvr, self._nb, self._bval):
+            inst.check("fmi2SetBoolean", s, n)
+        if s := enter(c):
+            inst.check("fmi2EnterInitializationMode", s, n)
+        if s := exit_(c):
+            inst.check("fmi2ExitInitializationMode", s, n)
+        fmu.time = t = t0
+        if t_mid is None:
+            self.mid = None
+        else:
+            if s := do_step(c, t, t_mid - t, 1):
+                inst.check("fmi2DoStep", s, n)
+            fmu.time = t = t_mid
+            xv = self._xv
+            if s := get_real(c, self._xvvr, 2, xv):
+                inst.check("fmi2GetReal", s, n)
+            self.mid = (xv[0], xv[1])
+        if s := do_step(c, t, t_end - t, 1):
+            inst.check("fmi2DoStep", s, n)
+        fmu.time = t_end
+        if self._nor:
+            if s := get_real(c, self._ovr, self._nor, self._oval):
+                inst.check("fmi2GetReal", s, n)
+            self.real = self._oval[:]
+        if self._noi:
+            if s := get_int(c, self._oivr, self._noi, self._oival):
+                inst.check("fmi2GetInteger", s, n)
+            self.int = self._oival[:]
 
 
 #: the former name of :class:`OscillatorFMU2` (the same class)

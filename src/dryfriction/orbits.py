@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import cmath
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fmu import OscillatorFMU2, Settings
+from .fmu import OscillatorFMU2, Restarts, Settings
 from .params import Oscillator
 
 __all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
@@ -71,7 +71,7 @@ class Orbit:
 
     @property
     def mu_max(self) -> float:
-        return float(np.max(np.abs(self.multipliers)))
+        return float(np.abs(self.multipliers).max())
 
 
 def scales(p: Oscillator) -> tuple[float, float]:
@@ -83,7 +83,12 @@ def scales(p: Oscillator) -> tuple[float, float]:
 
 
 class _Map:
-    """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation)."""
+    """The stroboscopic map P^K of one oscillator through one FMU instance (reset per evaluation,
+    through the FMU driver's :class:`~dryfriction.fmu.Restarts`: start's calls with the value arrays
+    built once)."""
+
+    #: the outputs of an evaluation: the state, the Jacobian (and the observables, see _ObservingMap)
+    names: tuple[str, ...] = ("x", "v") + JACOBIAN
 
     def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, samples: int = SAMPLES) -> None:
         self.fmu, self.p, self.K, self.samples = fmu, p, K, samples
@@ -91,6 +96,15 @@ class _Map:
         self.xs, self.w = scales(p)
         self.settings = Settings(scheme="exact", extra={"sensitivity": True})
         self.evaluations = 0
+        self._runs: Restarts | None = None      # made at the first evaluation
+        self.final = True                       # the last evaluation was a final one
+
+    def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None) -> None:
+        """The same map of another oscillator (the same K and settings; ``xs_w``: its scales if known)."""
+        self.p, self.T = p, p.period
+        self.xs, self.w = scales(p) if xs_w is None else xs_w
+        if self._runs is not None:
+            self._runs.retarget(p)
 
     def scaled(self, z: np.ndarray) -> np.ndarray:
         return np.array([z[0] / self.xs, z[1] / (self.xs * self.w)])
@@ -105,15 +119,35 @@ class _Map:
         q.__dict__.update(self.p.__dict__, x0=x, v0=v)
         return q
 
+    #: Integer outputs read besides the mode
+    ints: tuple[str, ...] = ()
+
+    def _mid(self, t_s: float, t_end: float, KT: float) -> float | None:
+        """An intermediate stop of the run from t_s to t_end = t_s + KT (none: the map reads only the end)."""
+        return None
+
+    def eval(self, x: float, v: float, t_s: float,
+             final: bool = True) -> tuple[float, float, float, float, float, float, int]:
+        """(P^K(z), its Jacobian's entries row by row, the mode at the end) as plain floats, for the
+        state z = (x, v) at the section time t_s (``final`` False: an evaluation unlikely to be the
+        converged one, which may leave out what only the converged one needs)."""
+        if not (math.isfinite(x) and math.isfinite(v)):
+            self.p.with_(x0=x, v0=v)               # raises: the check names the non-finite value
+        runs = self._runs
+        if runs is None:
+            runs = self._runs = self.fmu.restarts(self.p, self.settings, self.names, ("mode",) + self.ints)
+        KT = self.K * self.T
+        t_end = t_s + KT
+        runs.run(x, v, t_s, t_end, self._mid(t_s, t_end, KT) if final else None)
+        self.final = final
+        self.evaluations += 1
+        r = runs.real
+        return r[0], r[1], r[2], r[3], r[4], r[5], runs.int[0]
+
     def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
         """(P^K(z), its Jacobian, the mode at the end) for the state z at the section time t_s."""
-        f = self.fmu
-        f.start(self.at(z), self.settings, t0=t_s)
-        f.step_to(t_s + self.K * self.T)
-        out = f.get(("x", "v", "mode") + JACOBIAN)
-        self.evaluations += 1
-        J = np.array([out[n] for n in JACOBIAN], dtype=float).reshape(2, 2)
-        return np.array([out["x"], out["v"]]), J, int(out["mode"])
+        px, pv, a, b, c, d, md = self.eval(float(z[0]), float(z[1]), t_s)
+        return np.array([px, pv]), np.array([[a, b], [c, d]]), md
 
     def cycle(self, z: np.ndarray, t_s: float, periods: int | None = None) -> dict[str, np.ndarray | float]:
         """A sampled run of ``periods`` (default K) periods from z at t_s, with the FMU's observables
@@ -189,60 +223,87 @@ class _Solver:
     def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int, tol: float, max_iter: int,
                  samples: int = SAMPLES, map_: "_Map | None" = None) -> None:
         self.map = _Map(fmu, p, K, samples) if map_ is None else map_
-        self.p, self.K, self.tol, self.max_iter = p, K, tol, max_iter
-        self.KT = K * p.period
+        self.K, self.tol, self.max_iter = K, tol, max_iter
+        self.retarget(p)
+
+    def retarget(self, p: Oscillator) -> None:
+        """The same solver for another oscillator (its map moved along)."""
+        self.p = p
+        self.KT = self.K * p.period
+        xs, w = scales(p)
+        if self.map.p is not p:
+            self.map.retarget(p, (xs, w))
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
         # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
         # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
         # MAX_AMPLIFICATION (else Newton "converges" on the unbounded growth, relative to a huge state)
-        xs, w = scales(p)
         den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
         X = abs(p.P0) / den if den > 0 else math.inf
         self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
-        # plain floats: two components (numpy's per-call cost is larger than the arithmetic)
+        return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
+
+    def _residual(self, z0: float, z1: float, p0: float, p1: float) -> float:
+        # plain floats, the max by comparisons (as max(): the first argument unless a later is larger)
         xs, xw = self.map.xs, self.map.xs * self.map.w
-        z0, z1 = float(z[0]), float(z[1])
-        r = max(abs(float(Pz[0]) - z0) / xs, abs(float(Pz[1]) - z1) / xw)
-        return r / max(1.0, abs(z0) / xs, abs(z1) / xw)
+        r, e = abs(p0 - z0) / xs, abs(p1 - z1) / xw
+        if e > r:
+            r = e
+        s, e = abs(z0) / xs, abs(z1) / xw
+        if not s > 1.0:
+            s = 1.0
+        if e > s:
+            s = e
+        return r / s
 
     def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
         """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking."""
-        Pz, J, md = self.map(z, t_s)
-        r = self.residual(z, Pz)
+        x, v, ja, jb, jc, jd, r, it, reason, md = self.solve(float(z[0]), float(z[1]), t_s)
+        return np.array([x, v]), np.array([[ja, jb], [jc, jd]]), r, it, reason, md
+
+    def solve(self, x: float, v: float,
+              t_s: float) -> tuple[float, float, float, float, float, float, float, int, str, int]:
+        """:meth:`newton` on plain floats (a 2 x 2 system): (x, v, the Jacobian's entries row by row,
+        residual, iterations, reason, mode at the end)."""
+        ev, res, tol = self.map.eval, self._residual, self.tol
+        xs, xw = self.map.xs, self.map.xs * self.map.w
+        px, pv, ja, jb, jc, jd, md = ev(x, v, t_s, False)      # the guess: rarely converged already
+        r = res(x, v, px, pv)
         it = 0
-        if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
-            return z, J, r, it, (f"the guess is beyond the bound of {BOUND:g} times the frictionless "
-                                 "amplitude"), md
-        while r > self.tol:
+        if max(abs(x) / xs, abs(v) / xw) > self.bound:
+            return (x, v, ja, jb, jc, jd, r, it,
+                    f"the guess is beyond the bound of {BOUND:g} times the frictionless amplitude", md)
+        while r > tol:
             if it >= self.max_iter:
-                return z, J, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
-            a, b, c, d = float(J[0, 0]) - 1.0, float(J[0, 1]), float(J[1, 0]), float(J[1, 1]) - 1.0
-            if not all(math.isfinite(e) for e in (a, b, c, d)):
-                return z, J, r, it, "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md
+                return x, v, ja, jb, jc, jd, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
+            a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
+            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c) and math.isfinite(d)):
+                return (x, v, ja, jb, jc, jd, r, it,
+                        "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md)
             det = a * d - b * c
             if det == 0.0 or not math.isfinite(det):
-                return z, J, r, it, "J - I is singular (a multiplier 1: a fold or a family of orbits)", md
-            r0, r1 = float(z[0]) - float(Pz[0]), float(z[1]) - float(Pz[1])     # (J - I) dz = -(P(z) - z)
-            dz = np.array([(d * r0 - b * r1) / det, (a * r1 - c * r0) / det])
+                return (x, v, ja, jb, jc, jd, r, it,
+                        "J - I is singular (a multiplier 1: a fold or a family of orbits)", md)
+            r0, r1 = x - px, v - pv                         # (J - I) dz = -(P(z) - z)
+            dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
             lam, accepted = 1.0, False
             for _ in range(30):
-                zn = z + lam * dz
-                Pn, Jn, mn = self.map(zn, t_s)
-                rn = self.residual(zn, Pn)
-                if rn < (1.0 - 1e-4 * lam) * r or rn <= self.tol:
+                xn, vn = x + lam * dx, v + lam * dv
+                pxn, pvn, ja_, jb_, jc_, jd_, mn = ev(xn, vn, t_s)
+                rn = res(xn, vn, pxn, pvn)
+                if rn < (1.0 - 1e-4 * lam) * r or rn <= tol:
                     accepted = True
                     break
                 lam *= 0.5
             it += 1
             if not accepted:
-                return z, J, r, it, f"the line search found no decrease (residual {r:.3g})", md
-            z, Pz, J, r, md = zn, Pn, Jn, rn, mn
-            if max(abs(float(z[0])) / self.map.xs, abs(float(z[1])) / (self.map.xs * self.map.w)) > self.bound:
-                return z, J, r, it, (f"Newton diverged: the state left the bound of {BOUND:g} times the "
-                                     "frictionless amplitude"), md
-        return z, J, r, it, "", md
+                return x, v, ja, jb, jc, jd, r, it, f"the line search found no decrease (residual {r:.3g})", md
+            x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
+            if abs(x) / xs > self.bound or abs(v) / xw > self.bound:
+                return (x, v, ja, jb, jc, jd, r, it, f"Newton diverged: the state left the bound of {BOUND:g} "
+                        "times the frictionless amplitude", md)
+        return x, v, ja, jb, jc, jd, r, it, "", md
 
 
 def _check(p: Oscillator, K: int) -> None:
@@ -313,22 +374,35 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
     KT = K * p.period
     # (state, time) guesses: the attractors at t = transients K T, the given ones at t = 0
     todo: list[tuple[np.ndarray, float, bool]] = []
-    st = Settings(scheme="exact")
-    for z in _auto_guesses(p, spread):
-        if transients > 0:
-            f.start(p.with_(x0=float(z[0]), v0=float(z[1])), st)
-            f.step_to(transients * KT)
-            y = f.get(("x", "v"))
-            z = np.array([y["x"], y["v"]])
-        todo.append((z, 0.0, False))
+    starts = _auto_guesses(p, spread)
+    if transients > 0 and starts:
+        runs = f.restarts(p, Settings(scheme="exact"))     # reads x, v at the end
+        for z in starts:
+            runs.run(float(z[0]), float(z[1]), 0.0, transients * KT)
+            todo.append((np.array(runs.real), 0.0, False))
+    else:
+        todo.extend((z, 0.0, False) for z in starts)
     for g in guesses or ():
         todo.append((np.asarray(g, dtype=float), 0.0, True))
     found: list[Orbit] = []
     cycles: list[np.ndarray] = []        # scaled states of each found orbit at the K marks
     failed: list[Orbit] = []
+
+    def seen(z: np.ndarray, t_s: float) -> bool:
+        # a converged state of an orbit found already: its states at the K marks from one run
+        # (no sampled cycle; the comparison's tolerance SAME is far above the runs' rounding)
+        if not cycles:
+            return False
+        T = p.period
+        marks = T * np.arange(math.floor(t_s / T) + 1, math.floor((t_s + KT) / T + 1e-12) + 1)
+        grid = np.concatenate([[t_s], marks[marks > t_s]])
+        run = f.trajectory(sol.map.at(z), grid, Settings(scheme="exact"), ("x", "v"))
+        sm = np.array([sol.map.scaled(np.array([x, v])) for x, v in zip(run["x"][1:], run["v"][1:])])
+        return any(_same(sm, c) for c in cycles)
+
     while todo:
         z, t_g, given = todo.pop(0)
-        orbit, marks, halfway = _solve(sol, z, t_g)
+        orbit, marks, halfway = _solve(sol, z, t_g, seen)
         if orbit is None:
             continue
         if not orbit.converged:
@@ -364,10 +438,12 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return any(np.max(np.abs(np.roll(a, s, axis=0) - b)) <= tol for s in range(a.shape[0]))
 
 
-def _solve(sol: _Solver, z: np.ndarray, t_g: float) -> tuple[Orbit | None, list[np.ndarray],
-                                                              tuple[np.ndarray, float] | None]:
+def _solve(sol: _Solver, z: np.ndarray, t_g: float,
+           seen: Callable[[np.ndarray, float], bool] | None = None) -> tuple[Orbit | None, list[np.ndarray],
+                                                                             tuple[np.ndarray, float] | None]:
     """Solve from the guess z at time t_g: (the orbit, its states at the K period marks, the state and
-    time half a period after the section, for the symmetry image)."""
+    time half a period after the section, for the symmetry image); (None, [], None) when ``seen``
+    tells that the converged state (z, t_s) is of an orbit known already (no cycle run for it)."""
     K, KT = sol.K, sol.KT
     m = sol.map
     t_s = t_g
@@ -396,6 +472,8 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float) -> tuple[Orbit | None, list[
             z = zc
             reason = "the converged orbit is stuck at every section tried"
             continue
+        if seen is not None and seen(zc, t_s):
+            return None, [], None
         return _finish(sol, zc, t_s, J, r, it)
     return _failed(sol, z, t_s, np.full((2, 2), np.nan), math.nan, 0, reason), [], None
 
@@ -467,74 +545,75 @@ class _ObservingMap(_Map):
     last evaluation is the orbit's cycle once Newton has converged (no separate cycle run). One per
     FMU instance, moved to each new oscillator by :meth:`retarget` (no new Settings per point)."""
 
+    names = ("x", "v") + JACOBIAN + ("x_max", "x_min", "stick_fraction")
+    ints = ("transitions",)
+
     def __init__(self, fmu: OscillatorFMU2, p: Oscillator, K: int) -> None:
         super().__init__(fmu, p, K)
         self.settings = Settings(scheme="exact", observe=True, extra={"sensitivity": True})
         self.last: dict[str, float] = {}
-        self.names = ("x", "v", "mode", "x_max", "x_min", "stick_fraction", "transitions") + JACOBIAN
 
-    def retarget(self, p: Oscillator) -> None:
-        self.p, self.T = p, p.period
-        self.xs, self.w = scales(p)
-
-    def __call__(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, int]:
-        f, KT = self.fmu, self.K * self.T
-        t_end = t_s + KT
+    def _mid(self, t_s: float, t_end: float, KT: float) -> float | None:
         mark = KT * math.floor(t_end / KT + 1e-12)          # the multiple of K T in (t_s, t_s + K T]
-        st = self.settings
-        st.t_obs_start, st.t_obs_stop = t_s, t_end
-        f.start(self.at(z), st, t0=t_s)
-        if mark < t_end - 1e-12 * KT:
-            f.step_to(mark)
-            y0 = f.get(("x", "v"))
-        else:
-            y0 = None
-        f.step_to(t_end)
-        out = f.get(self.names)
-        self.evaluations += 1
-        self.last = out
-        out["x0"], out["v0"] = (out["x"], out["v"]) if y0 is None else (y0["x"], y0["v"])
-        J = np.array([[out["dx_dx0"], out["dx_dv0"]], [out["dv_dx0"], out["dv_dv0"]]])
-        return np.array([out["x"], out["v"]]), J, int(out["mode"])
+        return mark if mark < t_end - 1e-12 * KT else None
+
+    def observed(self) -> dict[str, float]:
+        """The last evaluation's observables and its state x0, v0 at the period mark (the last
+        evaluation a ``final`` one: it stopped at the mark)."""
+        runs = self._runs
+        assert runs is not None and self.final
+        r = runs.real
+        mid = runs.mid if runs.mid is not None else (r[0], r[1])
+        return {"x_max": r[6], "x_min": r[7], "stick_fraction": r[8], "transitions": runs.int[1],
+                "x0": mid[0], "v0": mid[1]}
 
 
 class OrbitFollower:
-    """:func:`follow_orbit` through one FMU instance, point after point (a sweep): one map and one
-    Settings for all of them."""
+    """:func:`follow_orbit` through one FMU instance, point after point (a sweep): one map, one
+    solver and one set of value arrays for all of them (moved to each new oscillator)."""
 
     def __init__(self, fmu: OscillatorFMU2, tol: float = 1e-12, max_iter: int = 40) -> None:
         self.fmu, self.tol, self.max_iter = fmu, tol, max_iter
         self.map: _ObservingMap | None = None
+        self._sol: _Solver | None = None
 
     def __call__(self, oscillator: Oscillator, state: Sequence[float], section: float) -> Orbit | None:
         p = oscillator
         _check(p, 1)
-        if self.map is None:
+        sol = self._sol
+        if sol is None:
             self.map = _ObservingMap(self.fmu, p, 1)
-        m = self.map
-        m.retarget(p)
-        sol = _Solver(self.fmu, p, 1, self.tol, self.max_iter, map_=m)
+            sol = self._sol = _Solver(self.fmu, p, 1, self.tol, self.max_iter, map_=self.map)
+        elif sol.p is not p:
+            sol.retarget(p)
+        m = sol.map
         t_s = float(section) % p.period
-        z, J, r, it, reason, md = sol.newton(np.asarray(state, dtype=float), t_s)
+        x, v, j00, j01, j10, j11, r, it, reason, md = sol.solve(float(state[0]), float(state[1]), t_s)
         if reason or md == 0:
             return None
-        y = m.last
-        stick = float(y["stick_fraction"])
+        if not m.final:             # the guess was periodic already: run it again with the stop at the mark
+            m.eval(x, v, t_s)
+        y = m.last = m.observed()
+        stick = y["stick_fraction"]
         if stick > 0.0:
-            mu = np.array([complex(J[0, 0] + J[1, 1]), 0j])
+            mu = np.array([complex(j00 + j11), 0j])
+            mag = np.abs(mu)
         else:
-            tr, det = float(J[0, 0] + J[1, 1]), float(J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0])
+            tr, det = j00 + j11, j00 * j11 - j01 * j10
             root = cmath.sqrt(complex(tr * tr / 4.0 - det))
             mu = np.array([tr / 2.0 + root, tr / 2.0 - root])
-            mu = mu[np.argsort(-np.abs(mu))]
-        x0, v0 = float(y["x0"]), float(y["v0"])
+            mag = np.abs(mu)                    # numpy's (its array abs may differ in the last bit)
+            if mag[1] > mag[0]:
+                mu, mag = mu[::-1], mag[::-1]
+        x0, v0 = y["x0"], y["v0"]
         z0, zd0 = _nondim(p, x0, v0)
-        xmax, xmin = float(y["x_max"]), float(y["x_min"])
+        xmax, xmin = y["x_max"], y["x_min"]
+        lim = 1.0 - STABILITY_MARGIN
         return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                     stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+                     stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
-                     events={"transitions": int(y["transitions"])}, converged=True, section=t_s, jacobian=J,
-                     section_state=np.array(z, dtype=float), iterations=it)
+                     events={"transitions": y["transitions"]}, converged=True, section=t_s,
+                     jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
 
 
 def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,
