@@ -34,7 +34,6 @@ static void *sym(void *lib, const char *name) { return dlsym(lib, name); }
 
 #ifndef NSETS
 #define NSETS 300 /* (a harness may add sets after these: define it before the include) */
-#define NSETS 300 /* (a harness may run more: its sets after these) */
 #endif
 #define NPTS 16
 #define HALF (NPTS / 2)
