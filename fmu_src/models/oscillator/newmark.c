@@ -254,28 +254,13 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
  * dir (V1 - vb) at its end, the root of m_hat u = q - N mu(u), q = dir (p_hat - m_hat vb) (coulomb:
  * closed form). Where no root u > 0 exists (q <= N mu(0)) it returns (q - N mu(0)) / m_hat <= 0, so
  * that the value is continuous in the step length and its sign tells a stop (dfo_brent's root).
- * Newton's iteration from the coulomb root (mu_k) converges monotonically (mu is convex for mu_s >
- * mu_k, concave otherwise) while m_hat > N |mu'|, i.e. on steps that resolve the friction's fall. */
+ * The root is dfo_stribeck_speed's (friction.h), the chain's too. */
 static double slide_value(const step_ctx *C, const dfo_loads *L, const trial *tr, int dir)
 {
     const double im = tr->co->inv_m_hat, mh = tr->co->m_hat;
     const double q = dir * (C->belt ? tr->p_hat - mh * C->vb : tr->p_hat);
     if (!C->M->stribeck) return (q - L->muk_N) * im;
-    const dfo_friction_law *F = &C->M->law;
-    const double N = L->N;
-    const double g0 = q - N * dfo_friction_mu(F, 0.0);
-    if (!(g0 > 0.0)) return g0 * im;
-    double u = fmax((q - N * fmin(F->mu_s, F->mu_k)) * im, DBL_MIN);
-    for (int i = 0; i < 60; i++) {
-        const double g = mh * u - q + N * dfo_friction_mu(F, u);
-        const double dg = mh + N * dfo_friction_dmu(F, u);
-        double u1 = (dg > 0.0) ? u - g / dg : 0.5 * u;
-        if (!(u1 > 0.0)) u1 = 0.5 * u;
-        const int done = fabs(u1 - u) <= 4.0 * DBL_EPSILON * u;
-        u = u1;
-        if (done) break;
-    }
-    return u;
+    return dfo_stribeck_speed(&C->M->law, L->N, q, mh, im);
 }
 
 /* ---- phases, stick and observables ----------------------------------------------------------- */
