@@ -82,3 +82,16 @@ def chain_params(ch: Chain, h: float, scheme: str = "located", alpha: float = -0
     """The FMU's parameters of a reference chain."""
     p = {k: getattr(ch, k) for k in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
     return {**p, "omega": ch.omega, "k_end": ch.k_end, "c_end": ch.c_end, "h": h, "alpha": alpha, "scheme": scheme}
+
+
+def belt_run(fmu, ch: Chain, h: float, t: np.ndarray, vb0, changes: dict[int, list[float]]) -> dict:
+    """Step on the grid t, the belts vb0 from the start and changes[k] set at t[k]."""
+    fmu.start(params={**ch.fmu_params(), "h": h}, inputs={"v_belt": vb0})
+    out = {k: [v] for k, v in fmu.outputs().items()}
+    for k in range(1, t.size):
+        if k - 1 in changes:
+            fmu.set_inputs({"v_belt": changes[k - 1]})
+        fmu.step_to(float(t[k]))
+        for name, v in fmu.outputs().items():
+            out[name].append(v)
+    return {k: np.array(v) for k, v in out.items()}

@@ -18,6 +18,7 @@ import pytest
 from dryfriction.chain import ChainFMU2, ChainFMU3
 from dryfriction.chain_reference import Chain, solve_chain
 from dryfriction.errors import FMUCallError
+from chain_cases import belt_run as _belt_run
 
 PERIODS = 6
 
@@ -209,17 +210,6 @@ BELT = Chain.make(3, omega=0.6, k=[1.0, 0.8, 1.2], c=[0.0, 0.05, 0.0], k_end=0.5
 VB0, VB1 = [0.3, -0.2, 0.1], [-0.1, 0.25, 0.0]
 
 
-def _belt_run(fmu, ch: Chain, h: float, t: np.ndarray, vb0, changes: dict[int, list[float]]) -> dict:
-    """Step on the grid t, the belts vb0 from the start and changes[k] set at t[k]."""
-    fmu.start(params={**ch.fmu_params(), "h": h}, inputs={"v_belt": vb0})
-    out = {k: [v] for k, v in fmu.outputs().items()}
-    for k in range(1, t.size):
-        if k - 1 in changes:
-            fmu.set_inputs({"v_belt": changes[k - 1]})
-        fmu.step_to(float(t[k]))
-        for name, v in fmu.outputs().items():
-            out[name].append(v)
-    return {k: np.array(v) for k, v in out.items()}
 
 
 def test_located_second_order_with_belts() -> None:

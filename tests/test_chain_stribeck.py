@@ -17,6 +17,7 @@ import pytest
 from dryfriction.chain import ChainFMU2, ChainFMU3
 from dryfriction.chain_reference import Chain, solve_chain
 from dryfriction.errors import FMUCallError
+from chain_cases import belt_run as _belt_run
 
 # (chain, belts from the start, belts from the communication point at half the run, periods);
 # T = 2 pi / 0.6 where the chain is unforced
@@ -43,17 +44,6 @@ def _period(ch: Chain) -> float:
     return ch.period if ch.omega > 0 else 2 * np.pi / 0.6
 
 
-def _belt_run(fmu, ch: Chain, h: float, t: np.ndarray, vb0, changes: dict[int, list[float]]) -> dict:
-    """Step on the grid t, the belts vb0 from the start and changes[k] set at t[k]."""
-    fmu.start(params={**ch.fmu_params(), "h": h}, inputs={"v_belt": vb0})
-    out = {k: [v] for k, v in fmu.outputs().items()}
-    for k in range(1, t.size):
-        if k - 1 in changes:
-            fmu.set_inputs({"v_belt": changes[k - 1]})
-        fmu.step_to(float(t[k]))
-        for name, v in fmu.outputs().items():
-            out[name].append(v)
-    return {k: np.array(v) for k, v in out.items()}
 
 
 @pytest.mark.parametrize("case", list(CASES))
