@@ -34,19 +34,6 @@ static fmi2ValueReference any_vr(reader *r)
 }
 
 
-/* The friction oracle: with N = max(N + N_ext, 0) and mu_k = chi mu_s, a sliding block's friction
- * opposes its mode and its magnitude lies within [min, max](mu_s, mu_k) N (Stribeck's mu between
- * them at any speed, Coulomb's mu_k; rounding aside); a stuck one holds at most max(mu_s, mu_k) N. */
-static void check_friction(int mode, double F, double mu_s, double chi, double N)
-{
-    const double mu_k = chi * mu_s, lo = fmin(mu_s, mu_k) * N, hi = fmax(mu_s, mu_k) * N;
-    if (!(isfinite(lo) && isfinite(hi) && hi <= 1e300) || !isfinite(F)) return;
-    const double tol = 1e-9 * hi + 1e-300;
-    if (fabs(F) > hi + tol) oracle_fail("|F_friction| above max(mu_s, mu_k) N");
-    if (mode != 0 && (F * mode > tol || fabs(F) < lo - tol))
-        oracle_fail("a sliding block's F_friction outside -mode [min, max](mu_s, mu_k) N");
-}
-
 static void check_outputs(ctx *X)
 {
     const unsigned outs[4] = {VR_x, VR_v, VR_a, VR_F_friction};
