@@ -247,13 +247,13 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
  * plus a constant, and its next breakaway after the stick phase's start is known in closed form
  * (friction.h, as the oscillator's); INFINITY when it does not apply. */
 /* Ramped inputs: side times block i's static force beyond its limit at t, with the inputs at t
- * (> 0: broken away). */
+ * (> 0: broken away). The root finder's context of a block's gap (ramped or on belts). */
 typedef struct {
     const chain_model *M;
     const chain_state *s;
     size_t i;
     int side;
-} ramp_gap_ctx;
+} block_gap_ctx;
 
 static double ramp_gap(const chain_model *M, const chain_state *s, size_t i, double t, int side)
 {
@@ -267,7 +267,7 @@ static double ramp_gap(const chain_model *M, const chain_state *s, size_t i, dou
 
 static double ramp_gap_fn(void *vctx, double x)
 {
-    const ramp_gap_ctx *g = (const ramp_gap_ctx *)vctx;
+    const block_gap_ctx *g = (const block_gap_ctx *)vctx;
     return -ramp_gap(g->M, g->s, g->i, g->s->t + x, g->side);
 }
 
@@ -298,7 +298,7 @@ static double ramp_breakaway(const chain_model *M, const chain_state *s, size_t 
     *dir = side;
     const double g0 = ramp_gap(M, s, i, ta, side);
     if (g0 >= 0.0) return ta;
-    ramp_gap_ctx g = {M, s, i, side};
+    block_gap_ctx g = {M, s, i, side};
     return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
@@ -318,13 +318,6 @@ static int neighbours_rest(const chain_model *M, const chain_state *s, const spa
  * side times block i's static force beyond its limit at t, every block at X + vb (t - s->t), the
  * loads at t (ramped inputs) or held: side (P + u - (K x)_i - (C vb)_i) - Fb, the oscillator's
  * belt_gap for one block. */
-typedef struct {
-    const chain_model *M;
-    const chain_state *s;
-    size_t i;
-    int side;
-} belt_gap_ctx;
-
 static double belt_gap(const chain_model *M, const chain_state *s, size_t i, double t, int side)
 {
     double u = M->u[i], Fb = M->Fb[i], cw, sw;
@@ -344,7 +337,7 @@ static double belt_gap(const chain_model *M, const chain_state *s, size_t i, dou
 
 static double belt_gap_fn(void *vctx, double x)
 {
-    const belt_gap_ctx *g = (const belt_gap_ctx *)vctx;
+    const block_gap_ctx *g = (const block_gap_ctx *)vctx;
     return -belt_gap(g->M, g->s, g->i, g->s->t + x, g->side);
 }
 
@@ -366,7 +359,7 @@ static double belt_breakaway(const chain_model *M, const chain_state *s, size_t 
         *dir = sd;
         const double g0 = belt_gap(M, s, i, ta, sd);
         if (g0 >= 0.0) return ta;
-        belt_gap_ctx g = {M, s, i, sd};
+        block_gap_ctx g = {M, s, i, sd};
         return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
     }
     return INFINITY;
