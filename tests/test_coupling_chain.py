@@ -275,6 +275,24 @@ def test_fmi2_output_derivatives_and_errors(chain2: Slave) -> None:
         assert any(words in m for m in chain2.messages[n:]), chain2.messages[n:]
 
 
+def test_fmi2_directional_derivative_seed_and_overflow_errors(chain2: Slave) -> None:
+    """A non-finite seed, and a derivative too large for a double (block 2 sliding with mu_k = 1e300
+    on N = 1e-300 and m = 1e-10: da[2]/dN_ext[2] = -mu_k / m), are errors naming the element, not
+    an OK inf; block 1's derivatives stay exact (da[1]/dF_ext[1] = 1 / m)."""
+    from fmpy.fmi1 import FMICallException
+    ch = Chain.make(2, omega=1.3, m=[1.0, 1e-10], k=[4.0, 2.0], c=[0.05, 0.02], P0=[1.0, 0.6], phi=[0.0, 0.7],
+                    N=[0.5, 1e-300], mu_s=[0.5, 1e300], chi=[0.7, 0.7], v0=[0.5, 1.0], k_end=0.5)
+    chain2.start(chain_reals(ch, 1e-3))
+    a, F, N = ([chain2.vr[f"{n}[{i}]"] for i in (1, 2)] for n in ("a", "F_ext", "N_ext"))
+    assert chain2.s.getDirectionalDerivative([a[0]], [F[0]], [1.0]) == [1.0]
+    for args, words in [(([a[1]], [N[1]], [1.0]), "directional derivative of a[2] is not representable"),
+                        (([a[0]], [F[0]], [float("inf")]), "invalid seed inf for F_ext[1]")]:
+        n = len(chain2.messages)
+        with pytest.raises(FMICallException):
+            chain2.s.getDirectionalDerivative(*args)
+        assert any(words in m for m in chain2.messages[n:]), chain2.messages[n:]
+
+
 # ---- n = 1 is the oscillator, with input derivatives --------------------------------------------
 
 DRIVER_N1 = Path(os.environ.get("DFO_CHAIN_DERIV_N1", ROOT / "build" / "tests" / "c" / "chain_deriv_n1"))

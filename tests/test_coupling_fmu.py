@@ -444,6 +444,24 @@ def test_directional_derivative_errors(inst: Inst) -> None:
                       contains=("unknown F_ext", "not a real output"))
     inst.expect_error(s.getDirectionalDerivative, [vr("mode")], [vr("F_ext")], [1.0],
                       contains=("unknown mode", "not a real output"))
+    inst.expect_error(s.getDirectionalDerivative, [vr("a")], [vr("F_ext")], [float("nan")],
+                      contains=("invalid seed nan for F_ext", "valid range: finite"))
+
+
+def test_directional_derivative_overflow_is_an_error(unzipped: tuple[str, object]) -> None:
+    """A derivative too large for a double is an error with its sentence, not an OK inf: sliding
+    with mu_k = 1e300 on a tiny normal force (N mu_k = 0.7 N, a finite) and m = 1e-10, da/dN_ext =
+    -mu_k / m overflows; da/dF_ext = 1/m = 1e10 stays exact."""
+    i = start(unzipped, 1e-3, N=1e-300, mu_s=1e300, m=1e-10, v0=1.0)
+    s = i.s
+    try:
+        assert s.getInteger([i.vr("mode")])[0] == 1
+        assert np.isfinite(s.getReal([i.vr("a")])[0])
+        assert s.getDirectionalDerivative([i.vr("a")], [i.vr("F_ext")], [1.0]) == [1e10]
+        i.expect_error(s.getDirectionalDerivative, [i.vr("a")], [i.vr("N_ext")], [1.0],
+                       contains=("directional derivative of a", "not representable", "overflow"))
+    finally:
+        i.free()
 
 
 # ---------------------------------------------------------------------------- FMI 3.0

@@ -260,6 +260,16 @@ static dfo_inst_status directional(dfo_lifecycle *lc, const char *fn, const unsi
                                "between stick and slip there (event pending); update the discrete states first.", fn,
                                U[a].var->name, (unsigned long)b + 1, in->lc.run.time, (unsigned long)b + 1);
     }
+    /* the seeds (over the knowns, or the unknowns for the adjoint) are finite */
+    const span_ref *S = adjoint ? U : K, *O = adjoint ? K : U;
+    const size_t n_s = adjoint ? nu : nk, n_o = adjoint ? nk : nu;
+    for (size_t b = 0; b < n_s && st == DFO_INST_OK; b++)
+        for (size_t e = 0; e < S[b].c; e++)
+            if (!isfinite(seed[S[b].off + e])) {
+                st = dfo_inst_fail(lc, "%s: invalid seed %.17g for %s[%lu]; valid range: finite.", fn,
+                                   seed[S[b].off + e], S[b].var->name, (unsigned long)(S[b].i0 + e) + 1);
+                break;
+            }
     if (st == DFO_INST_OK) {
         if (adjoint) memset(sens, 0, n_known * sizeof(double));
         else memset(sens, 0, n_unknown * sizeof(double));
@@ -275,6 +285,15 @@ static dfo_inst_status directional(dfo_lifecycle *lc, const char *fn, const unsi
                 }
             }
         }
+        for (size_t b = 0; b < n_o && st == DFO_INST_OK; b++) /* a tiny m or a huge mu: not representable */
+            for (size_t e = 0; e < O[b].c; e++)
+                if (!isfinite(sens[O[b].off + e])) {
+                    st = dfo_inst_fail(lc, "%s: the %s derivative of %s[%lu] is not representable in double "
+                                       "precision (overflow: a tiny mass or a huge friction coefficient).", fn,
+                                       adjoint ? "adjoint" : "directional",
+                                       O[b].var->name, (unsigned long)(O[b].i0 + e) + 1);
+                    break;
+                }
     }
     lc->host.free(lc->host.ctx, U);
     return st;

@@ -1122,7 +1122,12 @@ static dfo_inst_status partials(dfo_lifecycle *lc, const char *fn, const unsigne
     osc_instance *in = osc(lc);
     osc_values tmp;
     const osc_values *v = computed(in, &tmp);
-    const size_t n_out = adjoint ? nk : nu;
+    const size_t n_out = adjoint ? nk : nu, n_seed = adjoint ? nu : nk;
+    const unsigned int *seed_vr = adjoint ? unknown : known, *out_vr = adjoint ? known : unknown;
+    for (size_t o = 0; o < n_seed; o++)
+        if (!isfinite(seed[o]))
+            return dfo_inst_fail(lc, "%s: invalid seed %.17g for %s (value reference %u); valid range: finite.", fn,
+                                 seed[o], dfo_find_var(seed_vr[o])->name, seed_vr[o]);
     for (size_t o = 0; o < n_out; o++) sensitivity[o] = 0.0;
     for (size_t i = 0; i < nu; i++)
         for (size_t j = 0; j < nk; j++) {
@@ -1131,6 +1136,12 @@ static dfo_inst_status partials(dfo_lifecycle *lc, const char *fn, const unsigne
             if (adjoint) sensitivity[j] += J * seed[i];
             else sensitivity[i] += J * seed[j];
         }
+    for (size_t o = 0; o < n_out; o++)
+        if (!isfinite(sensitivity[o]))
+            return dfo_inst_fail(lc, "%s: the %s derivative of %s (value reference %u) is not representable in double "
+                                 "precision (overflow: a tiny mass m = %.17g or a huge friction coefficient).", fn,
+                                 adjoint ? "adjoint" : "directional", dfo_find_var(out_vr[o])->name, out_vr[o],
+                                 v->M.p.m);
     return DFO_INST_OK;
 }
 
