@@ -59,23 +59,52 @@ def test_restarts_follow_the_closed_form_without_friction(fmu: OscillatorFMU) ->
 @pytest.mark.parametrize("settings", [SENS, Settings(scheme="exact", extra={"sensitivity": True, "h": 1e-3}),
                                       Settings(scheme="located", h=2e-3, extra={"frictionUpdates": 2})])
 def test_restarts_equal_start_step_get_bit_for_bit(fmu: OscillatorFMU, settings: Settings) -> None:
-    # stick-slip: every value read equals the driver's start / step_to / get from the same state
+    # stick-slip: every value read equals the driver's start / step_to / get from the same state,
+    # the FMU's clock from 0 and the excitation's phase that of t0 (phi + omega t0); and that run
+    # is the motion started at t0 on the absolute clock
     p = Oscillator.physical(m=1.0, k=1.0, zeta=0.02, P0=1.0, N=1.2, mu_s=0.5, mu_k=0.3, omega=0.8)
     T = p.period
     reals = ("x", "v", "a", "F_friction") + (JAC if settings.extra.get("sensitivity") else ()) + \
         (OBS if settings.observe else ())
     runs = fmu.restarts(p, settings, reals, ("mode",))
     for x0, v0, t0 in ((0.3, -0.2, 0.25 * T), (-1.1, 0.0, 0.6 * T), (0.0, 0.9, 0.0)):
-        runs.run(x0, v0, t0, t0 + 2 * T, t0 + 0.5 * T)
-        st = Settings(**{**settings.__dict__, "t_obs_start": t0, "t_obs_stop": t0 + 2 * T})
-        fmu.start(p.with_(x0=x0, v0=v0), st, t0=t0)
-        fmu.step_to(t0 + 0.5 * T)
+        t_mid, t_end = t0 + 0.5 * T, t0 + 2 * T
+        runs.run(x0, v0, t0, t_end, t_mid)
+        st = Settings(**{**settings.__dict__, "t_obs_start": 0.0, "t_obs_stop": t_end - t0})
+        fmu.start(p.with_(x0=x0, v0=v0, phi=p.phi + p.omega * t0), st)
+        fmu.step_to(t_mid - t0)
         mid = fmu.get(("x", "v"))
-        fmu.step_to(t0 + 2 * T)
+        fmu.step_to(t_end - t0)
         ref = fmu.get(reals + ("mode",))
         assert runs.mid == (mid["x"], mid["v"])
         assert runs.real == [ref[n] for n in reals] and runs.int == [ref["mode"]]
-        assert fmu.time == t0 + 2 * T
+        assert fmu.time == t_end - t0
+        fmu.start(p.with_(x0=x0, v0=v0), Settings(**{**settings.__dict__, "t_obs_start": t0, "t_obs_stop": t_end}),
+                  t0=t0)
+        fmu.step_to(t_end)
+        absolute = fmu.get(("x", "v"))
+        # exact: to 1e-12; a Bossak scheme's internal grid from t0 differs from it in rounding, far
+        # inside its error (h^2)
+        tol = 1e-12 if settings.scheme == "exact" else 1e-2 * settings.h ** 2
+        assert abs(runs.real[0] - absolute["x"]) <= tol and abs(runs.real[1] - absolute["v"]) <= tol
+
+
+def test_restarts_keep_one_template_state_per_settings(fmu: OscillatorFMU) -> None:
+    # the initialisation-mode state is made once per set of Integer / Boolean values and instance:
+    # another Restarts with the same settings reuses it, other settings make their own, and runs
+    # of the two interleaved give each its own results
+    p = Oscillator.physical(m=1.0, k=1.0, zeta=0.02, P0=1.0, N=1.2, mu_s=0.5, mu_k=0.3, omega=0.8)
+    fmu._restart_templates.clear()
+    a, b = fmu.restarts(p, SENS, ("x", "v")), fmu.restarts(p, SENS, ("x",))
+    c = fmu.restarts(p, Settings(scheme="located", h=1e-3), ("x", "v"))
+    a.run(0.1, 0.2, 0.0, 3.0)
+    first = a.real
+    b.run(0.1, 0.2, 0.0, 3.0)
+    assert b.real == first[:1] and len(fmu._restart_templates) == 1
+    c.run(0.1, 0.2, 0.0, 3.0)
+    assert len(fmu._restart_templates) == 2 and c.real != first
+    a.run(0.1, 0.2, 0.0, 3.0)
+    assert a.real == first
 
 
 def test_restarts_retarget_is_the_new_oscillator(fmu: OscillatorFMU) -> None:
@@ -84,9 +113,9 @@ def test_restarts_retarget_is_the_new_oscillator(fmu: OscillatorFMU) -> None:
     runs = fmu.restarts(p, SENS, ("x", "v") + OBS)
     runs.retarget(q)
     runs.run(0.4, -0.3, 0.1, 0.1 + q.period)
-    fmu.start(q.with_(x0=0.4, v0=-0.3), Settings(**{**SENS.__dict__, "t_obs_start": 0.1,
-                                                    "t_obs_stop": 0.1 + q.period}), t0=0.1)
-    fmu.step_to(0.1 + q.period)
+    fmu.start(q.with_(x0=0.4, v0=-0.3, phi=q.phi + q.omega * 0.1),
+              Settings(**{**SENS.__dict__, "t_obs_start": 0.0, "t_obs_stop": (0.1 + q.period) - 0.1}))
+    fmu.step_to((0.1 + q.period) - 0.1)
     assert runs.real == list(fmu.get(("x", "v") + OBS).values())
 
 
