@@ -234,8 +234,8 @@ def test_stuck_for_good(fmu: OscillatorFMU) -> None:
         assert np.array_equal(o.jacobian, [[1.0, 0.0], [0.0, 0.0]])
 
 
-def test_autonomous_is_not_there_yet() -> None:
-    with pytest.raises(NotImplementedError, match="issue 23"):
+def test_autonomous_points_to_the_self_excited_orbits() -> None:
+    with pytest.raises(NotImplementedError, match="self_excited"):
         find_orbits(Oscillator(omega=0.0))
     with pytest.raises(ValueError, match="period"):
         find_orbits(nd(0.5, 0.6, 0.7), period=0)

@@ -407,6 +407,7 @@ class Restarts:
         self._iphi = rnames.index("phi")
         # the template state holds every Integer and Boolean value (the Reals are set at each run)
         self._key = (tuple(inames), tuple(ivals), tuple(bnames), tuple(bvals))
+        self._state: Any = None             # the template (made at the first run)
         self._observe = bool(st.observe)
         for name in reals:
             if md.var(name).call_type != "Real":
@@ -479,7 +480,9 @@ class Restarts:
         inst = fmu.fmi
         c, n = inst.component, len(inst.messages)
         set_state, set_real, exit_, do_step, get_real, get_int = self._run_fns
-        template = self._template()
+        template = self._state
+        if template is None or not template.handle:
+            template = self._state = self._template()
         rv = self._rval
         rv[self._ix0], rv[self._iv0] = x0, v0
         rv[self._iphi] = self._phi + self._omega * t0

@@ -72,8 +72,8 @@ def _oscillator(args: argparse.Namespace) -> Any:
             raise
         raise UsageError(str(e)) from None
     if not (p.omega > 0 and p.P0 != 0):
-        raise UsageError("an orbit needs an excitation: the frequency must be > 0 and P0 != 0 (the autonomous "
-                         "case is not there yet)")
+        raise UsageError("an orbit needs an excitation: the frequency must be > 0 and P0 != 0 (the self-excited "
+                         "orbits of the autonomous case, on a moving belt: dryfriction belt)")
     return p
 
 

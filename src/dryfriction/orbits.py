@@ -23,6 +23,7 @@ import cmath
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -69,8 +70,9 @@ class Orbit:
     iterations: int = 0
     stuck: bool = False              # never slides (stuck for good)
 
-    @property
+    @cached_property
     def mu_max(self) -> float:
+        """The largest |multiplier| (computed once)."""
         return float(np.abs(self.multipliers).max())
 
 
@@ -99,9 +101,10 @@ class _Map:
         self._runs: Restarts | None = None      # made at the first evaluation
         self.final = True                       # the last evaluation was a final one
 
-    def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None) -> None:
-        """The same map of another oscillator (the same K and settings; ``xs_w``: its scales if known)."""
-        self.p, self.T = p, p.period
+    def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None, T: float | None = None) -> None:
+        """The same map of another oscillator (the same K and settings; ``xs_w``: its scales, ``T``
+        its period, if known)."""
+        self.p, self.T = p, p.period if T is None else T
         self.xs, self.w = scales(p) if xs_w is None else xs_w
         if self._runs is not None:
             self._runs.retarget(p)
@@ -229,10 +232,11 @@ class _Solver:
     def retarget(self, p: Oscillator) -> None:
         """The same solver for another oscillator (its map moved along)."""
         self.p = p
-        self.KT = self.K * p.period
+        T = p.period
+        self.KT = self.K * T
         xs, w = scales(p)
         if self.map.p is not p:
-            self.map.retarget(p, (xs, w))
+            self.map.retarget(p, (xs, w), T)
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
         # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
         # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
@@ -311,8 +315,9 @@ def _check(p: Oscillator, K: int) -> None:
         raise ValueError(f"period must be an integer >= 1 (excitation periods), not {K!r}")
     if not (p.omega > 0 and p.P0 != 0):
         raise NotImplementedError(
-            "find_orbits needs an excitation (omega > 0, P0 != 0): the orbits of the autonomous system (no "
-            "excitation, the period an unknown) need the moving belt of issue 23 and are not there yet")
+            "find_orbits needs an excitation (omega > 0, P0 != 0): the self-excited orbits of the autonomous "
+            "system (no excitation, on a moving belt, the period an unknown) are dryfriction.self_excited's "
+            "find_orbit (or: dryfriction belt)")
 
 
 def _auto_guesses(p: Oscillator, spread: Sequence[tuple[float, float]]) -> list[np.ndarray]:
@@ -579,7 +584,8 @@ class OrbitFollower:
 
     def __call__(self, oscillator: Oscillator, state: Sequence[float], section: float) -> Orbit | None:
         p = oscillator
-        _check(p, 1)
+        if not (p.omega > 0 and p.P0 != 0):
+            _check(p, 1)                          # raises with the sentence
         sol = self._sol
         if sol is None:
             self.map = _ObservingMap(self.fmu, p, 1)
@@ -609,11 +615,13 @@ class OrbitFollower:
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = y["x_max"], y["x_min"]
         lim = 1.0 - STABILITY_MARGIN
-        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                     stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
-                     amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
-                     events={"transitions": y["transitions"]}, converged=True, section=t_s,
-                     jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
+        orbit = Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
+                      stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
+                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
+                      events={"transitions": y["transitions"]}, converged=True, section=t_s,
+                      jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
+        orbit.__dict__["mu_max"] = float(mag[0])   # = np.abs(mu).max(), known already
+        return orbit
 
 
 def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,

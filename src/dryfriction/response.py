@@ -258,8 +258,10 @@ class _Branch:
         """(state, section phase in periods) predicted at the frequency f."""
         pts = [self, *self.history]
         ph0 = self.point[2]
-        if any(abs(b.point[2] - ph0) > 0.25 for b in pts[1:]):
-            pts = pts[:1]                       # the section was chosen again: no extrapolation
+        for b in self.history:
+            if abs(b.point[2] - ph0) > 0.25:
+                pts = pts[:1]                   # the section was chosen again: no extrapolation
+                break
         fs = [b.f for b in pts]
         x = v = ph = 0.0
         for bi in pts:                          # Lagrange weights of the points at f
