@@ -227,6 +227,8 @@ class _Solver:
                  samples: int = SAMPLES, map_: "_Map | None" = None) -> None:
         self.map = _Map(fmu, p, K, samples) if map_ is None else map_
         self.K, self.tol, self.max_iter = K, tol, max_iter
+        self._slide_runs: Restarts | None = None    # slides_throughout's runs (made at its first call)
+        self._slide_p: Oscillator | None = None
         self.retarget(p)
 
     def retarget(self, p: Oscillator) -> None:
@@ -247,6 +249,22 @@ class _Solver:
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
+
+    def slides_throughout(self, z: np.ndarray, t_s: float) -> bool:
+        """Whether the run of K periods from z at t_s never sticks (the FMU's stuck time over it is
+        0 and it ends sliding): one run with the observables instead of a sampled cycle."""
+        x, v = float(z[0]), float(z[1])
+        if not (math.isfinite(x) and math.isfinite(v)):
+            return False
+        runs = self._slide_runs
+        if runs is None:
+            runs = self._slide_runs = self.map.fmu.restarts(self.p, Settings(scheme="exact", observe=True),
+                                                            ("stick_fraction",), ("mode",))
+        elif self._slide_p is not self.p:
+            runs.retarget(self.p)
+        self._slide_p = self.p
+        runs.run(x, v, t_s, t_s + self.KT)
+        return runs.real[0] == 0.0 and runs.int[0] != 0
 
     def _residual(self, z0: float, z1: float, p0: float, p1: float) -> float:
         # plain floats, the max by comparisons (as max(): the first argument unless a later is larger)
@@ -454,8 +472,11 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
     t_s = t_g
     reason = ""
     for attempt in range(4):
-        cyc = m.cycle(z, t_s)
-        t_new = _slide_section(cyc["t"], cyc["mode"], 0.0, KT)
+        if attempt == 0 and sol.slides_throughout(z, t_s):
+            t_new: float | None = math.nan      # any section will do: no sampled cycle needed
+        else:
+            cyc = m.cycle(z, t_s)
+            t_new = _slide_section(cyc["t"], cyc["mode"], 0.0, KT)
         if t_new is None:           # never slides over the cycle: a stuck orbit (or stuck for now)
             Pz, J, md = m(z, t_s)
             r = sol.residual(z, Pz)
