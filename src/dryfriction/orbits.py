@@ -141,8 +141,9 @@ class _Map:
             runs = self._runs = self.fmu.restarts(self.p, self.settings, self.names, ("mode",) + self.ints)
         KT = self.K * self.T
         t_end = t_s + KT
-        runs.run(x, v, t_s, t_end, self._mid(t_s, t_end, KT) if final else None)
-        self.final = final
+        mid = self._mid(t_s, t_end, KT)
+        runs.run(x, v, t_s, t_end, mid if final else None)
+        self.final = final or mid is None        # without a stop to make, every run is a final one
         self.evaluations += 1
         r = runs.real
         return r[0], r[1], r[2], r[3], r[4], r[5], runs.int[0]
