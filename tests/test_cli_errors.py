@@ -212,3 +212,16 @@ def test_chain_command_bad_input_is_one_line(argv: list[str], words: str, tmp_pa
     err = capsys.readouterr().err
     assert words in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_output_into_a_closed_pipe_is_quiet() -> None:
+    """`dryfriction orbit ... --json | head -c 10`: the reader gone before the output is written
+    ends the command quietly (exit 141, as the shell's tools), no traceback on stderr."""
+    cmd = [sys.executable, "-m", "dryfriction", "orbit", "--m", "1", "--k", "1", "--zeta", "0.01", "--P0", "1",
+           "--f", "0.16", "--N", "0.1", "--mu-s", "0.3", "--mu-k", "0.2", "--period", "2", "--json"]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert p.stdout is not None and p.stderr is not None
+    p.stdout.close()                      # the reader is gone before anything is written
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 141, err
+    assert "Traceback" not in err and err == ""

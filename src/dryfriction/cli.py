@@ -426,6 +426,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("dryfriction: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the output piped into head & co., which stopped reading: quiet, as the shell's tools (the
+        # rest of the output goes nowhere, so that the flush at exit does not raise again)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 if __name__ == "__main__":
