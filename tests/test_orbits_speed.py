@@ -105,6 +105,16 @@ def test_restarts_keep_one_template_state_per_settings(fmu: OscillatorFMU) -> No
     assert len(fmu._restart_templates) == 2 and c.real != first
     a.run(0.1, 0.2, 0.0, 3.0)
     assert a.real == first
+    # a Real extra is set by its own runs only: a template made with it is not another's (F_ext
+    # 0.5 held in one, the start value 0 in the other, whichever made its template first)
+    fmu._restart_templates.clear()
+    d = fmu.restarts(p, Settings(scheme="exact", extra={"F_ext": 0.5}), ("x", "v"))
+    e = fmu.restarts(p, Settings(scheme="exact"), ("x", "v"))
+    d.run(0.1, 0.2, 0.0, 3.0)
+    e.run(0.1, 0.2, 0.0, 3.0)
+    fmu.start(p.with_(x0=0.1, v0=0.2), Settings(scheme="exact"))
+    fmu.step_to(3.0)
+    assert e.real == list(fmu.get(("x", "v")).values()) and d.real != e.real
 
 
 def test_restarts_retarget_is_the_new_oscillator(fmu: OscillatorFMU) -> None:

@@ -98,8 +98,8 @@ class OscillatorFMU2(Driver):
         self.fmi = self.inst
         self.vars = self.md.variables
         self._get_plans: dict[tuple[str, ...], list[tuple[str, Any, Any, Any, list[str]]]] = {}
-        #: the initialisation-mode FMU states of :class:`Restarts`, one per set of Integer and
-        #: Boolean values (freed with the instance)
+        #: the initialisation-mode FMU states of :class:`Restarts`, one per set of Real parameters
+        #: set per run and of Integer and Boolean values (freed with the instance)
         self._restart_templates: dict[tuple[Any, ...], Any] = {}
         self._prepare_start()
 
@@ -343,7 +343,7 @@ class Restarts:
 
     The first run makes :meth:`OscillatorFMU2.start`'s calls up to initialisation mode (reset, setup
     at time 0, every parameter, ``settings.extra`` included, enter initialisation) and keeps that
-    FMU state (fmi2GetFMUstate, one per set of Integer and Boolean values and FMU instance); every
+    FMU state (fmi2GetFMUstate, one per FMU instance, set of Reals and Integer and Boolean values); every
     run restores it, sets the Real parameters (one call, the arrays built once) and leaves
     initialisation: four FMI calls fewer than a reset. The FMU's clock starts at 0 at every run: a
     run "from t0" starts the excitation at its phase at t0 (``phi`` + ``omega`` t0 in place of
@@ -405,8 +405,9 @@ class Restarts:
         self._ix0, self._iv0 = rnames.index("x0"), rnames.index("v0")
         self._its, self._ite = rnames.index("t_obs_start"), rnames.index("t_obs_stop")
         self._iphi = rnames.index("phi")
-        # the template state holds every Integer and Boolean value (the Reals are set at each run)
-        self._key = (tuple(inames), tuple(ivals), tuple(bnames), tuple(bvals))
+        # the template state holds every Integer and Boolean value and the Reals a run does not set
+        # (at their start values only if the template's maker set the same Reals: part of the key)
+        self._key = (tuple(rnames), tuple(inames), tuple(ivals), tuple(bnames), tuple(bvals))
         self._state: Any = None             # the template (made at the first run)
         self._observe = bool(st.observe)
         for name in reals:
@@ -455,7 +456,7 @@ class Restarts:
         if state is not None and not state.freed:
             return state
         c, n = inst.component, len(inst.messages)
-        reset, setup, set_real, set_int, set_bool, enter = self._fns[:6]
+        reset, setup, set_real, set_int, set_bool, enter = self._fns
         if s := reset(c):
             inst.check("fmi2Reset", s, n)
         if s := setup(c, 0, 0.0, 0.0, 0, 0.0):

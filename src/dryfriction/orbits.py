@@ -101,10 +101,9 @@ class _Map:
         self._runs: Restarts | None = None      # made at the first evaluation
         self.final = True                       # the last evaluation was a final one
 
-    def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None, T: float | None = None) -> None:
-        """The same map of another oscillator (the same K and settings; ``xs_w``: its scales, ``T``
-        its period, if known)."""
-        self.p, self.T = p, p.period if T is None else T
+    def retarget(self, p: Oscillator, xs_w: tuple[float, float] | None = None) -> None:
+        """The same map of another oscillator (the same K and settings; ``xs_w``: its scales if known)."""
+        self.p, self.T = p, p.period
         self.xs, self.w = scales(p) if xs_w is None else xs_w
         if self._runs is not None:
             self._runs.retarget(p)
@@ -229,17 +228,17 @@ class _Solver:
         self.map = _Map(fmu, p, K, samples) if map_ is None else map_
         self.K, self.tol, self.max_iter = K, tol, max_iter
         self._slide_runs: Restarts | None = None    # slides_throughout's runs (made at its first call)
-        self._slide_p: Oscillator | None = None
         self.retarget(p)
 
     def retarget(self, p: Oscillator) -> None:
         """The same solver for another oscillator (its map moved along)."""
         self.p = p
-        T = p.period
-        self.KT = self.K * T
+        self.KT = self.K * p.period
         xs, w = scales(p)
         if self.map.p is not p:
-            self.map.retarget(p, (xs, w), T)
+            self.map.retarget(p, (xs, w))
+        if self._slide_runs is not None:
+            self._slide_runs.retarget(p)
         # friction only takes energy: an orbit stays within the frictionless harmonic amplitude (a
         # generous multiple of it bounds Newton's iterates). Undamped at resonance X is infinite, or
         # huge where omega hits w0 up to rounding: the amplification k X / P0 is capped at
@@ -261,9 +260,6 @@ class _Solver:
         if runs is None:
             runs = self._slide_runs = self.map.fmu.restarts(self.p, Settings(scheme="exact", observe=True),
                                                             ("stick_fraction",), ("mode",))
-        elif self._slide_p is not self.p:
-            runs.retarget(self.p)
-        self._slide_p = self.p
         runs.run(x, v, t_s, t_s + self.KT)
         return runs.real[0] == 0.0 and runs.int[0] != 0
 
@@ -606,8 +602,7 @@ class OrbitFollower:
 
     def __call__(self, oscillator: Oscillator, state: Sequence[float], section: float) -> Orbit | None:
         p = oscillator
-        if not (p.omega > 0 and p.P0 != 0):
-            _check(p, 1)                          # raises with the sentence
+        _check(p, 1)
         sol = self._sol
         if sol is None:
             self.map = _ObservingMap(self.fmu, p, 1)
@@ -637,13 +632,11 @@ class OrbitFollower:
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = y["x_max"], y["x_min"]
         lim = 1.0 - STABILITY_MARGIN
-        orbit = Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                      stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
-                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
-                      events={"transitions": y["transitions"]}, converged=True, section=t_s,
-                      jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
-        orbit.__dict__["mu_max"] = float(mag[0])   # = np.abs(mu).max(), known already
-        return orbit
+        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
+                     stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
+                     amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
+                     events={"transitions": y["transitions"]}, converged=True, section=t_s,
+                     jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
 
 
 def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,
