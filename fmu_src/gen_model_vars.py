@@ -60,6 +60,10 @@ TIME_VR = 0  # the FMI 3.0 independent variable `time` (no variable of the sourc
 FMI3_GLUE, FMI2_GLUE = "fmi3_cs.c", "fmi2_cs.c"
 DBL_MIN = sys.float_info.min  # the smallest positive normal double
 INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+CAUSALITIES = ("parameter", "calculatedParameter", "input", "output", "local", "structuralParameter")
+# computed by the instance core (an output id): outputs, local variables (read by value reference,
+# not listed in <ModelStructure>, so that a host records them only when asked) and calculated parameters
+COMPUTED = ("output", "local", "calculatedParameter")
 
 # --------------------------------------------------------------------------------------- model
 
@@ -78,7 +82,7 @@ class Variable:
     name: str
     vr: int
     type: str  # "Real", "Integer", "Boolean", "Enumeration"
-    causality: str  # "parameter", "calculatedParameter", "input", "output"
+    causality: str  # "parameter", "calculatedParameter", "input", "output", "local", "structuralParameter"
     variability: str  # "constant", "fixed", "tunable", "discrete", "continuous"
     initial: str | None = None
     start: float | int | bool | None = None
@@ -179,6 +183,7 @@ def parse(xml_path: Path) -> Model:
     for u in root.iterfind("ModelStructure/Outputs/Unknown"):
         d = u.get("dependencies")
         deps[int(u.get("index"))] = None if d is None else tuple(int(i) for i in d.split())
+    _check_structure(root, svs, set(deps))
     zero = {z.get("variable"): z.get("zero", "") for z in
             root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
     variables = []
@@ -221,6 +226,31 @@ def parse(xml_path: Path) -> Model:
     return model
 
 
+def _check_structure(root: ET.Element, svs: list[ET.Element], outputs: set[int]) -> None:
+    """<ModelStructure> lists what FMI 2.0 (and 3.0) require and nothing else: <Outputs> exactly the
+    variables of causality output, <InitialUnknowns> exactly the outputs with initial approx or
+    calculated and the calculated parameters (a local variable is in neither list)."""
+    def indices(*causalities: str, initial: tuple[str | None, ...] | None = None) -> set[int]:
+        return {i for i, sv in enumerate(svs, start=1) if sv.get("causality", "local") in causalities
+                and (initial is None or sv.get("initial") in initial)}
+
+    def differ(listed: set[int], want: set[int]) -> str:
+        def names(ix: set[int]) -> str:
+            return ", ".join(svs[i - 1].get("name", "?") if 0 < i <= len(svs) else f"index {i}" for i in sorted(ix))
+        return "; ".join(f"{what} {names(ix)}" for what, ix in (("missing", want - listed), ("listed", listed - want))
+                         if ix)
+
+    want = indices("output")
+    if outputs != want:
+        raise ModelError(f"ModelStructure/Outputs must list exactly the outputs: {differ(outputs, want)}")
+    init = {int(u.get("index")) for u in root.iterfind("ModelStructure/InitialUnknowns/Unknown")}
+    # an output's initial defaults to calculated (FMI 2.0 and 3.0)
+    want = indices("output", initial=("approx", "calculated", None)) | indices("calculatedParameter")
+    if init != want:
+        raise ModelError("ModelStructure/InitialUnknowns must list exactly the outputs with initial approx or "
+                         f"calculated and the calculated parameters: {differ(init, want)}")
+
+
 def _in_range(v: Variable, x: float) -> bool:
     return (v.min is None or x >= v.min) and (v.max is None or x <= v.max)
 
@@ -243,7 +273,7 @@ def check(model: Model) -> None:
             raise ModelError(f"variable {v.name}: dimension {v.dimension} is not a structural parameter")
         if v.causality == "structuralParameter" and (v.type != "UInt64" or v.dimension is not None):
             raise ModelError(f"variable {v.name}: a structural parameter is a scalar UInt64")
-        if v.causality not in ("parameter", "calculatedParameter", "input", "output", "structuralParameter"):
+        if v.causality not in CAUSALITIES:
             raise ModelError(f"variable {v.name}: unsupported causality {v.causality}")
         if v.start is not None and v.type != "Boolean" and not _in_range(v, float(v.start)):
             raise ModelError(f"variable {v.name}: start {v.start} outside its range")
@@ -268,11 +298,11 @@ def check(model: Model) -> None:
 C_TYPES = {"Real": "DFO_REAL", "Integer": "DFO_INTEGER", "Enumeration": "DFO_INTEGER", "Boolean": "DFO_BOOLEAN",
            "UInt64": "DFO_UINT64"}
 C_CAUSALITIES = {"parameter": "DFO_PARAMETER", "calculatedParameter": "DFO_CALCULATED", "input": "DFO_INPUT",
-                 "output": "DFO_OUTPUT", "structuralParameter": "DFO_STRUCTURAL"}
+                 "output": "DFO_OUTPUT", "structuralParameter": "DFO_STRUCTURAL", "local": "DFO_LOCAL"}
 # the kinds every model's table has (one enum for all models: the shared core switches on them)
 C_KIND_ENUMS = [
     "typedef enum { DFO_REAL, DFO_INTEGER, DFO_BOOLEAN, DFO_UINT64 } dfo_var_type;",
-    "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT, DFO_STRUCTURAL } dfo_var_causality;",
+    "typedef enum { DFO_PARAMETER, DFO_CALCULATED, DFO_INPUT, DFO_OUTPUT, DFO_STRUCTURAL, DFO_LOCAL } dfo_var_causality;",
     "typedef enum { DFO_CONSTANT, DFO_FIXED, DFO_TUNABLE, DFO_DISCRETE, DFO_CONTINUOUS } dfo_var_variability;",
 ]
 C_VARIABILITIES = {"constant": "DFO_CONSTANT", "fixed": "DFO_FIXED", "tunable": "DFO_TUNABLE",
@@ -418,7 +448,7 @@ def _bounds(v: Variable) -> tuple[str, str]:
 def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     if any(v.causality == "structuralParameter" for v in model.variables):
         return emit_c_header_indexed(model, source)
-    computed = [v for v in model.variables if v.causality in ("output", "calculatedParameter")]
+    computed = [v for v in model.variables if v.causality in COMPUTED]
     stored = [v for v in model.variables if v.causality in ("parameter", "input")]
     if stored and not all(model.structs.get(k) for k in ("header", "parameters", "inputs")):
         raise ModelError("parameters and inputs live in C structs: name them in <Tool name=\"dryfriction.c\">"
@@ -432,7 +462,7 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
         L += [f"    DFO_MD_EFFECT_{upper_snake(e.name)} = {e.bit}, /* {e.description} */" for e in model.effects]
         L += [f"    DFO_MD_EFFECTS_ALL = {sum(e.bit for e in model.effects)}", "};"]
     L += _c_log_categories(model)
-    L += ["};", "", "/* outputs and calculated parameters: ids the instance core computes */", "enum {"]
+    L += ["};", "", "/* outputs, local variables and calculated parameters: ids the instance core computes */", "enum {"]
     L += [f"    DFO_OUT_{v.name}," for v in computed]
     L += ["    DFO_NUM_OUTS", "};", ""]
     L += [
@@ -486,7 +516,7 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         "DFO_SP": [v for v in model.variables if v.causality == "parameter" and v.dimension is None],
         "DFO_AP": [v for v in model.variables if v.causality == "parameter" and v.dimension is not None],
         "DFO_AI": [v for v in model.variables if v.causality == "input"],
-        "DFO_OUT": [v for v in model.variables if v.causality in ("output", "calculatedParameter")],
+        "DFO_OUT": [v for v in model.variables if v.causality in COMPUTED],
         "DFO_STRUCT": [v for v in model.variables if v.causality == "structuralParameter"],
     }
     L = _c_header_head(model, source, [],

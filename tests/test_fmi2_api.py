@@ -109,6 +109,7 @@ def test_fixed_parameter_after_initialisation(inst: Inst) -> None:
     inst.expect_error(s.setInteger, [vr("scheme")], [1], contains=("scheme", "fixed parameter"))
     inst.expect_error(s.setBoolean, [vr("observe")], [True], contains=("observe", "fixed parameter"))
     inst.expect_error(s.setReal, [vr("x")], [1.0], contains=("x", "output"))
+    inst.expect_error(s.setReal, [vr("dx_dx0")], [1.0], contains=("dx_dx0", "is a local variable and cannot be set"))
     inst.expect_error(s.setInteger, [vr("effects")], [0], contains=("effects", "calculated parameter"))
     s.setReal([vr("F_ext")], [0.5])  # inputs may be set in step mode
     s.doStep(0.0, 0.01)

@@ -6,9 +6,10 @@ the FMI 3.0 chain also with n = 3 (and array start values of that size); the FMU
 (modelica-tools/FMUComplianceChecker, FMI 1/2 only) runs the two FMI 2.0 FMUs. Each must reach the
 default stop time, exit 0 and report no warning or error (fmusim: every logged message of status OK,
 nothing on stderr; the checker: its summary counts 0 of each, for the FMU and for itself), and its x
-must equal fmpy's on the same settings within 1e-12 at every output point. A second co-simulation
-library, libcosim (libcosimpy), steps the FMI 2.0 oscillator and chain to the package's / fmpy's
-trajectories.
+must equal fmpy's on the same settings within 1e-12 at every output point. What each host records
+by default is exactly the FMU's outputs: the oscillator's sensitivity Jacobian (dx_dx0 ... dv_dv0,
+NaN unless asked for) is local, not an output, so no empty column. A second co-simulation library,
+libcosim (libcosimpy), steps the FMI 2.0 oscillator and chain to the package's / fmpy's trajectories.
 
 The tools come from ``FMUSIM`` / ``FMUCHECK`` (paths of the executables), else from
 ``../shared/tools/`` beside the repository (see its README). When neither is there a test is
@@ -104,6 +105,17 @@ def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return t, x
 
 
+def _assert_records_the_outputs(csv_path: Path, fmu: Path, host: str) -> None:
+    """A host's CSV has the columns time and the FMU's outputs, no other (no local variable: the
+    oscillator's dx_dx0 ... dv_dv0 are local, read by value reference only when asked for)."""
+    with open(csv_path, newline="") as f:
+        names = [n.strip().strip('"') for n in next(csv.reader(f))]
+    md = read_model_description(str(fmu))
+    outputs = {v.name for v in md.modelVariables if v.causality == "output"}
+    assert len(names) == len(set(names)) and set(names) == {"time"} | outputs, (host, fmu.name, names)
+    assert not set(names) & {"dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0"}
+
+
 def _on_grid(t: np.ndarray, x: np.ndarray, t0: float, h: float) -> dict[int, np.ndarray]:
     """The rows at the output points t0 + k h (the last row of each: after an event), by k."""
     k = np.rint((t - t0) / h)
@@ -181,6 +193,7 @@ def _run_fmusim(tmp_path: Path, fmu: Path, *options: str) -> tuple[np.ndarray, n
     assert bad == [], f"fmusim logged {len(bad)} messages of a status other than OK: {bad[:3]}"
     assert r.stderr.strip() == "", r.stderr[-500:]
     assert messages, "fmusim --logging-on logged nothing: the log was not read"
+    _assert_records_the_outputs(out, fmu, "fmusim")
     return _read_csv(out)
 
 
@@ -262,6 +275,7 @@ def test_compliance_checker_finds_nothing(tmp_path: Path, key: str) -> None:
     assert _summary(text) == (0, 0, 0), [ln for ln in text.splitlines() if "WARNING" in ln or "ERROR" in ln][:5]
     bad = [ln for ln in text.splitlines() if re.match(r"\s*\[(WARNING|ERROR|FATAL)\]", ln)]
     assert bad == [], bad[:5]
+    _assert_records_the_outputs(out, fmu, "the checker")
     t, x = _read_csv(out)
     assert t[0] == t0 and math.isclose(t[-1], stop, rel_tol=1e-12), (t[0], t[-1], stop)
     _assert_same_x((t, x), _fmpy_x(fmu, h, stop), t0, h, stop, f"checker {key}")

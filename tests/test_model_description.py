@@ -13,7 +13,10 @@
   the XML declares: names, ranges, schemes, effect bits);
 - the FMI 3.0 description says what the FMI 2.0 one says (both generated from the one
   modelDescription.xml), plus the independent variable time, with the same enumeration, units and
-  output dependencies.
+  output dependencies;
+- the sensitivity's Jacobian (dx_dx0 ... dv_dv0) is local in both versions, in neither <Outputs> nor
+  <InitialUnknowns>, and the generator refuses a <ModelStructure> that lists anything but what FMI
+  asks for.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ ROOT = Path(__file__).resolve().parents[1]
 XML = ROOT / "modelDescription.xml"
 fmi2OK, fmi2Warning = 0, 1
 OBSERVABLES = ("x_max", "x_min", "stick_fraction", "transitions", "E_friction")
+JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")  # local variables (sensitivity = true, scheme exact)
 DBL_MIN = sys.float_info.min
 TYPES_2_TO_3 = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
 
@@ -192,6 +196,29 @@ def test_the_generator_refuses_an_inconsistent_description(tmp_path: Path) -> No
                         str(tmp_path / "model_vars.h")], capture_output=True, text=True)
     text = (tmp_path / "model_vars.h").read_text()
     assert r.returncode == 0 and "offsetof(dfo_params, mu_s)" in text and "DFO_MD_EFFECT_FRICTION = 1" in text
+
+
+@pytest.mark.parametrize("case", ["local in Outputs", "output missing", "local in InitialUnknowns"])
+def test_the_generator_keeps_the_model_structure_to_the_standard(tmp_path: Path, case: str) -> None:
+    """<Outputs> lists exactly the outputs and <InitialUnknowns> exactly the outputs (initial
+    calculated) and the calculated parameters (FMI 2.0 and 3.0): a local variable listed there, or
+    an output left out, is refused at build time with one line naming it, status 1."""
+    src = XML.read_text()
+    index = {sv.get("name"): i for i, sv in enumerate(ET.fromstring(src).find("ModelVariables"), start=1)}
+    outputs_end, initial_end = "    </Outputs>", "    </InitialUnknowns>"
+    bad, named = {
+        "local in Outputs": (src.replace(outputs_end, f'      <Unknown index="{index["dx_dx0"]}" dependencies=""/>\n'
+                                         + outputs_end), "dx_dx0"),
+        "output missing": (src.replace(f'      <Unknown index="{index["x"]}" dependencies=""/>\n', "", 1), "missing x"),
+        "local in InitialUnknowns": (src.replace(initial_end, f'      <Unknown index="{index["dv_dv0"]}"/>\n'
+                                                 + initial_end), "dv_dv0"),
+    }[case]
+    assert bad != src
+    (tmp_path / "md.xml").write_text(bad)
+    r = _gen(str(tmp_path / "md.xml"), str(tmp_path / "model_vars.h"))
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert named in r.stderr and "ModelStructure" in r.stderr, r.stderr
+    assert not (tmp_path / "model_vars.h").exists()
 
 
 def _gen(*args: str) -> subprocess.CompletedProcess[str]:
@@ -563,6 +590,22 @@ def test_same_variables_as_fmi2(md2, md3) -> None:
                 assert str(da).lower() == str(db).lower(), (a.name, attr)
             else:
                 assert float(da) == float(db), (a.name, attr, da, db)
+
+
+def test_the_jacobian_is_local_in_both_versions(md2, md3) -> None:
+    """dx_dx0 ... dv_dv0 (NaN unless sensitivity = true with scheme exact) are local variables in the
+    FMI 2.0 and the generated FMI 3.0 description, at their value references 51-54, in neither
+    <Outputs> nor <InitialUnknowns>: a host records them only when asked. Every other output stays an
+    output, listed in both."""
+    for md in (md2, md3):
+        by_name = {v.name: v for v in md.modelVariables}
+        assert [(by_name[n].causality, by_name[n].valueReference) for n in JACOBIAN] == \
+            [("local", 51), ("local", 52), ("local", 53), ("local", 54)], md.fmiVersion
+        listed = {u.variable.name for u in md.outputs} | {u.variable.name for u in md.initialUnknowns}
+        assert not listed & set(JACOBIAN)
+        assert {u.variable.name for u in md.outputs} == {v.name for v in md.modelVariables if v.causality == "output"}
+        assert {"x", "v", "a", "F_friction", "mode", *OBSERVABLES} <= {u.variable.name for u in md.outputs}
+        assert [v.name for v in md.modelVariables if v.causality == "local"] == list(JACOBIAN)
 
 
 def test_independent_time_variable(md3) -> None:

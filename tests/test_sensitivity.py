@@ -1,7 +1,8 @@
-"""The exact Jacobian of the state inside the oscillator FMU (parameter `sensitivity`, outputs dx_dx0,
-dx_dv0, dv_dx0, dv_dv0; scheme exact): against exp(A t) without friction (scipy.linalg.expm), against a
-central finite-difference Jacobian of the FMU's own map with stick-slip, rank one over a stick phase,
-the identity after a state restore, and not computed (NaN, one sentence) otherwise."""
+"""The exact Jacobian of the state inside the oscillator FMU (parameter `sensitivity`, local variables
+dx_dx0, dx_dv0, dv_dx0, dv_dv0; scheme exact): against exp(A t) without friction (scipy.linalg.expm),
+against a central finite-difference Jacobian of the FMU's own map with stick-slip, rank one over a
+stick phase, the identity after a state restore, and not computed (NaN, one sentence) otherwise; read
+by value reference with the bits it read as an output, recorded by a host only when asked."""
 
 from __future__ import annotations
 
@@ -9,8 +10,11 @@ import math
 
 import numpy as np
 import pytest
+from fmpy import read_model_description, simulate_fmu
 from scipy.linalg import expm
 
+from dryfriction.fmi3 import default_fmi3_path
+from dryfriction.fmu import default_fmu_path
 from fmi2_helpers import Inst, fmi2Warning
 
 EXACT, LOCATED = 4, 3
@@ -307,3 +311,53 @@ def test_fmi3_gives_the_same_jacobian_and_restores_to_identity(unzipped: tuple[s
         J3e = np.array([fmu.get(list(JAC))[n] for n in JAC]).reshape(2, 2)
     assert returns > 3
     assert rel(J3e, J2) < 1e-9
+
+
+# ---- local variables: read by value reference, recorded by a host only when asked -----------------
+
+#: (x, v, dx_dx0, dx_dv0, dv_dx0, dv_dv0) as float.hex at the last end time of each STICK_SLIP case
+#: (three equal communication steps), read by value reference from the FMI 2.0 build in which the four
+#: were outputs: making them local variables moved no bit
+PINNED = {
+    "chi 0.7": ('0x1.4196b5766e0eap+0', '-0x1.a3645b94eaad0p-6',
+                '0x1.2720977bd25f2p-7', '-0x1.68699e4479226p-9', '-0x1.9f21b09cb4758p-8', '0x1.faf68bbbe8f72p-10'),
+    "chi 1": ('0x1.9380ada828cf6p-2', '-0x1.9988b10bd7a5ap-1',
+              '0x1.bff7b072da944p-10', '-0x1.56f2262f85281p-7', '0x1.3c0e7c0814a4cp-11', '-0x1.e3eb9d08a8582p-9'),
+    "chi 0.3": ('0x1.627c0963bc90ep-3', '-0x1.c1fac7b099e6fp-1',
+                '-0x1.93cdd02c7f34fp-8', '-0x1.fea531f1af21ap-6', '-0x1.cd8496d1a5b50p-9', '-0x1.23d097e98703ap-6'),
+    "reversals": ('0x1.532d488f9d1aap-9', '-0x1.bb82f6b612e45p-2',
+                  '0x1.5ee59dc292ed2p-5', '-0x1.5a08e58bdcc90p-15', '0x1.1ddcaae4be450p+0', '0x1.ce053d87aae30p-6'),
+    "undamped": ('0x1.9a2ea4c89cdd4p-2', '-0x1.7f64d50081172p-2',
+                 '0x1.73de1513afddfp-2', '-0x1.6f90af12d8038p-2', '0x1.416eb3ba5d8f3p-2', '0x1.8557ccf68d2dep-2'),
+    "no spring": ('0x1.2459cad191addp+0', '-0x1.66544f3287c95p-2',
+                  '0x1.0000000000000p+0', '0x1.cbcb7c9c5f12ap+1', '0x0.0p+0', '0x1.f21f0c1f2a20fp-7'),
+}
+
+
+@pytest.mark.parametrize("name, p, periods", STICK_SLIP, ids=[c[0] for c in STICK_SLIP])
+def test_local_jacobian_reads_the_bits_it_read_as_an_output(unzipped: tuple[str, object], name: str,
+                                                            p: dict[str, float], periods: tuple[float, ...]) -> None:
+    T = 2.0 * math.pi / p["omega"]
+    y, J, _ = run(unzipped, p, periods[-1] * T, 3)
+    assert [float(v).hex() for v in (*y, *J.ravel())] == list(PINNED[name]), name
+
+
+@pytest.mark.parametrize("version", ["2.0", "3.0"])
+def test_a_host_records_the_jacobian_only_when_asked(unzipped: tuple[str, object], version: str) -> None:
+    """fmpy's simulate_fmu records the outputs by default: the four local variables are not among its
+    columns (they were four NaN columns), with sensitivity on or off; asked for by name, it records
+    them, the same bits as a run that reads them by value reference."""
+    path = str(default_fmu_path() if version == "2.0" else default_fmi3_path())
+    md = read_model_description(path)
+    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    sens = {"scheme": EXACT, "sensitivity": True}
+    for start_values in ({}, sens):
+        res = simulate_fmu(path, stop_time=1.0, output_interval=0.125, start_values=start_values)
+        assert len(res.dtype.names) == 1 + len(outputs) and set(res.dtype.names) == {"time", *outputs}
+        assert not set(res.dtype.names) & set(JAC)
+    res = simulate_fmu(path, stop_time=2.0, output_interval=0.125, start_values=sens, output=["x", *JAC])
+    assert list(res.dtype.names) == ["time", "x", *JAC]
+    assert np.array_equal([res[n][0] for n in JAC], [1.0, 0.0, 0.0, 1.0])  # the identity at the start
+    _, J, _ = run(unzipped, {}, 2.0, 16)  # the FMU's default parameters, the same communication points
+    assert np.array_equal([res[n][-1] for n in JAC], J.ravel())
+    assert not np.array_equal(J, np.eye(2))

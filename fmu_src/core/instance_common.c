@@ -141,7 +141,9 @@ int dfo_inst_settable(const dfo_lifecycle *lc, const char *fn, const dfo_var_inf
                       dfo_phase_name(ph));
     else
         dfo_inst_fail(lc, "%s: variable %s (value reference %u) is %s and cannot be set.", fn, name, vr,
-                      var->causality == DFO_OUTPUT ? "an output" : "a calculated parameter");
+                      var->causality == DFO_OUTPUT ? "an output"
+                      : var->causality == DFO_LOCAL ? "a local variable"
+                                                    : "a calculated parameter");
     return 0;
 }
 

@@ -428,7 +428,8 @@ static inline int fuzz_drive(const fuzz_target *T, const uint8_t *data, size_t s
 
 #ifdef VR_x_max
 /* The oscillator's rule for a value not computed (observe false, or a window not yet sampled): its
- * observables read NaN with OK (transitions -1). Any other non-finite value read with OK is a bug. */
+ * observables read NaN with OK (transitions -1), and so do the local variables of the sensitivity
+ * unless sensitivity is on with scheme exact. Any other non-finite value read with OK is a bug. */
 static int fuzz_finite_or_not_computed(unsigned vr, double v)
 {
     if (isfinite(v)) return 1;
