@@ -148,6 +148,32 @@ def test_gauss_seidel_steps_the_units_in_order(blocks: Any) -> None:
     assert res["b1.a"].shape == (3,)
 
 
+def test_a_local_variable_is_recorded_when_asked(blocks: Any) -> None:
+    """record= takes a local variable (the oscillator's Jacobian, scheme exact with sensitivity on):
+    the identity at the start, then at every point what the unit reads by value reference (the last
+    one read again from the unit after the run); a local is no port to couple."""
+    b1, b2, element = split_chain2(CASE)
+    f1, f2 = blocks
+    f1.start(b1, Settings(h=0.0, scheme="exact", extra={"sensitivity": True}))
+    f2.start(b2, Settings(h=0.0, scheme="exact"))
+    s = System()
+    s.add("b1", f1)
+    s.add("b2", f2)
+    s.couple(element)
+    jac = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
+    res = s.run(4 * T / 50, T / 50, record=[f"b1.{n}" for n in jac])
+    assert [res[f"b1.{n}"][0] for n in jac] == [1.0, 0.0, 0.0, 1.0]
+    end = f1.get(list(jac))
+    assert [res[f"b1.{n}"][-1] for n in jac] == [end[n] for n in jac]
+    assert res["b1.dx_dx0"].shape == (5,) and np.all(np.isfinite(res["b1.dv_dx0"]))
+    assert res["b1.dv_dx0"][-1] != 0.0  # the Jacobian moved
+    s.connect("b1.dx_dx0", "b2.N_ext")
+    with pytest.raises(ValueError, match="b1.dx_dx0 is not an output \\(its causality is local\\)"):
+        s.run(T, T / 50)
+    with pytest.raises(ValueError, match="b1.F_ext is not an output or a local variable"):
+        split(blocks).run(T, T / 50, record=["b1.F_ext"])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("case, expected", [
     ("stick-dominated", [0.01396, 0.004185, 0.000877, 0.0002209]),

@@ -49,6 +49,7 @@ METHODS = ("jacobi", "gauss-seidel")
 INPUT_MODES = ("hold", "extrapolate", "derivatives")
 JACOBIANS = ("steps", "directional")
 DERIVATIVE_SOURCES = ("auto", "outputs", "fmu")
+_CAUSALITY_NAMES = {"input": "an input", "output": "an output", "local": "a local variable"}
 
 
 class System:
@@ -78,14 +79,17 @@ class System:
         element.terms()  # checked now
         self.elements.append(element)
 
-    def _port(self, port: str, causality: str) -> tuple[Unit, int]:
+    def _port(self, port: str, *causalities: str) -> tuple[Unit, int]:
+        """The unit and value reference of ``port`` (``instance.variable``), a variable of one of
+        ``causalities``."""
         uname, var = split(port)
         unit = self.units.get(uname)
         if unit is None:
             raise ValueError(f"{port}: no instance named {uname!r} (instances: {', '.join(self.units) or 'none'})")
         vr = unit.vr(var)
-        if unit.causality(var) != causality:
-            raise ValueError(f"{port} is not an {causality} (its causality is {unit.causality(var)})")
+        if unit.causality(var) not in causalities:
+            kinds = " or ".join(_CAUSALITY_NAMES.get(c, c) for c in causalities)
+            raise ValueError(f"{port} is not {kinds} (its causality is {unit.causality(var)})")
         return unit, vr
 
     # ---- running ----------------------------------------------------------------------------------
@@ -98,7 +102,8 @@ class System:
         derivative used to extrapolate (1 or 2); ``input_order``: the highest input derivative
         sent (``inputs="derivatives"``, FMI 2.0: 1 or 2); ``source``: where output derivatives
         come from (``outputs``: outputs that are derivatives, ``fmu``: the FMU's own output
-        derivatives, ``auto``: the first where known); ``record``: more output ports to keep."""
+        derivatives, ``auto``: the first where known); ``record``: more ports to keep, outputs or local variables
+        (the oscillator's Jacobian ``dx_dx0`` ..., read by value reference)."""
         plan = _Plan(self, t_stop, H, method, inputs, order, input_order, source, correction, jacobian, tol,
                      max_halvings, record)
         return plan.run(progress)
@@ -164,7 +169,7 @@ class _Plan:
             for name, (ii, vv) in idx.items():
                 store[name] = (np.array(ii, dtype=int), vv)
         self.record = [p for p in dict.fromkeys(record) if p not in out_ports]
-        self.rec_vr = {p: sys._port(p, "output") for p in self.record}
+        self.rec_vr = {p: sys._port(p, "output", "local") for p in self.record}
         # where each output's derivatives come from: per unit, per derivative order, a list of
         # (output column, vr, from_fmu)
         self.need_derivs = inputs != "hold"
