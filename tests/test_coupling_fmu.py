@@ -444,6 +444,9 @@ def test_directional_derivative_errors(inst: Inst) -> None:
                       contains=("unknown F_ext", "not a real output"))
     inst.expect_error(s.getDirectionalDerivative, [vr("mode")], [vr("F_ext")], [1.0],
                       contains=("unknown mode", "not a real output"))
+    # a local variable is in no <ModelStructure> list, so no unknown of a directional derivative (FMI)
+    inst.expect_error(s.getDirectionalDerivative, [vr("dx_dx0")], [vr("F_ext")], [1.0],
+                      contains=("unknown dx_dx0", "not a real output"))
     inst.expect_error(s.getDirectionalDerivative, [vr("a")], [vr("F_ext")], [float("nan")],
                       contains=("invalid seed nan for F_ext", "valid range: finite"))
 
