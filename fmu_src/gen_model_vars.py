@@ -24,7 +24,8 @@ as further emitters without touching the parser:
    reference, type, causality, variability, start, min, max, unit, description, an optional array
    shape; enumeration types; log categories; the ``effects`` bits of the vendor annotation; the
    declared output dependencies). Consistency is checked here (unique names and value references,
-   start values inside their ranges, effect bits distinct powers of two).
+   start values inside their ranges, effect bits distinct powers of two, <ModelStructure> listing
+   what FMI asks: the outputs, never a local variable).
 2. ``Model`` is plain data (frozen dataclasses), independent of any FMI version.
 3. Emitters: ``emit_c_header`` writes the C view used by the instance core -- GUID, identifier,
    ``VR_<name>``/``START_<name>`` macros, the effect bits, the enumeration values, the log
