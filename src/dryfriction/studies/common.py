@@ -53,12 +53,19 @@ class StudyContext:
     out_dir: Path
     engine_options: EngineOptions
     messages: list[str] = field(default_factory=list)
+    #: where the results end up (``out_dir`` is then the staging folder they are written into)
+    final_dir: Path | None = None
     _engine: Engine | None = None
     _fmu: OscillatorFMU | None = None
 
     @property
     def chunk_dir(self) -> Path:
-        return self.out_dir / "chunks"
+        """The sweeps' finished chunks: in the results folder itself (they outlive a failed run)."""
+        return (self.final_dir or self.out_dir) / "chunks"
+
+    def shown(self, path: Path) -> Path:
+        """Where a file written into ``out_dir`` ends up."""
+        return (self.final_dir or self.out_dir) / path.relative_to(self.out_dir)
 
     @property
     def fmu_path(self) -> Path:
@@ -97,7 +104,7 @@ class StudyContext:
         ds.attrs.setdefault("study", self.name)
         ds.attrs.setdefault("quick", int(self.quick))
         path = write_netcdf(ds, self.out_dir / filename)
-        self.log(f"wrote {path}")
+        self.log(f"wrote {self.shown(path)}")
         return path
 
     def save_figure(self, fig: Any, filename: str) -> Path:
@@ -105,9 +112,11 @@ class StudyContext:
         try:
             with atomic_path(path) as tmp:
                 fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
+        except OSError as e:
+            raise OSError(f"cannot write {filename}: {e.strerror or e}") from None
         finally:
             plt.close(fig)
-        self.log(f"wrote {path}")
+        self.log(f"wrote {self.shown(path)}")
         return path
 
 
