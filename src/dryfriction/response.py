@@ -630,12 +630,13 @@ def _frequencies(f_hz: Any) -> np.ndarray:
     if isinstance(f_hz, (str, bytes)):
         raise ValueError(f"the frequencies must be numbers in Hz, not the string {f_hz!r}")
     arr = np.asarray(f_hz)
-    if arr.dtype.kind not in "iuf":
-        bad = next((x for x in np.ravel(arr)
-                    if isinstance(x, (str, bytes, bool, np.bool_)) or not isinstance(x, (int, float, np.number))),
-                   None)
-        if bad is not None or arr.size == 0 and arr.dtype.kind not in "iufO":
-            what = f"{type(bad).__name__} {bad!r}" if bad is not None else f"{arr.dtype} values"
+    if arr.dtype.kind not in "iuf" or isinstance(f_hz, (list, tuple)):
+        items = (x.item() if isinstance(x, np.generic) else x
+                 for x in (f_hz if isinstance(f_hz, (list, tuple)) else np.ravel(arr)))
+        ok = object()
+        bad = next((x for x in items if isinstance(x, (str, bytes, bool)) or not isinstance(x, (int, float))), ok)
+        if bad is not ok or arr.size == 0 and arr.dtype.kind not in "iufO":
+            what = f"{type(bad).__name__} {bad!r}" if bad is not ok else f"{arr.dtype} values"
             raise ValueError(f"the frequencies must be numbers in Hz, not {what}")
     f = np.asarray(arr, dtype=float)
     if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):

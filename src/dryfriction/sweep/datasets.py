@@ -91,7 +91,10 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
     ds.attrs = _clean_attrs(ds.attrs)
     for v in ds.variables.values():
         v.attrs = _clean_attrs(v.attrs)
-    data = bytes(ds.to_netcdf(None, engine="h5netcdf"))
+    import dask
+
+    with dask.config.set(scheduler="synchronous"):  # a live Dask client's locks are not for bytes in memory
+        data = bytes(ds.to_netcdf(None, engine="h5netcdf"))
     try:
         atomic_write_bytes(path, data)
     except OSError as e:
