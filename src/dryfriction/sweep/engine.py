@@ -300,7 +300,7 @@ class Engine:
             arr, why = read_chunk(path, key, i, params)
             if arr is None:
                 if why:
-                    self.note(f"chunk {path} {why}: recomputed")
+                    self.note(f"chunk {path}: {why}; recomputed")
                 todo.append(i)
             else:
                 out[i * spec.chunk_runs:i * spec.chunk_runs + rows] = arr
