@@ -84,6 +84,10 @@ def test_api_refuses_frequencies_that_are_not_numbers(bad: object, what: str) ->
     ["chain", "--n", "3"],
     ["response", *BLOCK, "--f-start", "5", "--f-stop", "15"],
     ["study", "fig8_9", "--quick", "--workers", "0"],
+    ["study", "chaos_scan", "--quick", "--workers", "0"],
+    ["study", "chaos_basins", "--quick", "--workers", "0"],
+    ["study", "chaos_transients", "--quick", "--workers", "0"],
+    ["study", "chain2", "--quick", "--workers", "0"],
 ])
 def test_every_command_refuses_work_above_max_work(argv: list[str], capsys: pytest.CaptureFixture[str],
                                                    tmp_path: Path) -> None:

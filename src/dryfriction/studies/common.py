@@ -82,6 +82,18 @@ class StudyContext:
             self._fmu = OscillatorFMU(self.fmu_path)
         return self._fmu
 
+    def check_work(self, runs: float, periods: float, numerics: Mapping[str, Any], what: str, blocks: int = 1) -> None:
+        """Refuse (:class:`~dryfriction.budget.WorkBoundError`) before a batch of ``runs`` runs of
+        ``periods`` excitation periods each whose work exceeds ``--max-work`` (the sweep engine
+        checks its sweeps itself): steps per period from ``numerics`` (the exact scheme's count,
+        else ``steps_per_period``), once per block of a chain."""
+        from ..budget import EXACT_PERIOD_STEPS, check_work, fmt
+
+        spp = EXACT_PERIOD_STEPS if str(numerics.get("scheme")) == "exact" else float(numerics["steps_per_period"])
+        check_work(runs * periods * spp * blocks,
+                   f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(spp * blocks)} steps",
+                   self.engine_options.max_work)
+
     def run_sweep(self, spec: SweepSpec) -> np.ndarray:
         out = self.engine().run(spec, self.chunk_dir)
         self.log(self.engine().stats[-1].line())

@@ -306,9 +306,14 @@ class Engine:
                 out[i * spec.chunk_runs:i * spec.chunk_runs + rows] = arr
                 stats.loaded += 1
         if todo:
-            work = sweep_work(spec, todo)
-            check_work(work, f"{sum(spec.chunk(i).shape[0] for i in todo):,} runs of sweep {spec.name}",
-                       self.opt.max_work)
+            runs = sum(spec.chunk(i).shape[0] for i in todo)
+            check_work(sweep_work(spec, todo), f"{runs:,} runs of sweep {spec.name}", self.opt.max_work)
+            # the chunks and the dataset made of them: found before the work when the disk lacks room
+            need = 2.0 * runs * len(OUTPUT_COLUMNS) * 8 + 400.0 * len(todo)
+            free = shutil.disk_usage(folder).free
+            if free < need:
+                raise OSError(f"cannot write the chunks of sweep {spec.name} into {folder}: {free / 1e6:.3g} MB free, "
+                              f"about {need / 1e6:.3g} MB needed")
 
         if todo:
             budget = None if self.opt.max_chunks is None else max(self.opt.max_chunks - self._new_chunks, 0)
