@@ -104,14 +104,21 @@ def add_max_work_argument(p: object, default: object = None) -> None:
 
 
 def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "") -> Path:
-    """Before the work: ``folder`` (created if missing) takes a file, and its file system has room
-    for ``nbytes`` (with a margin); a :class:`UsageError` naming the folder and the cause otherwise."""
+    """Before the work: ``folder`` can take files (tried in it, or where it would be created: its
+    nearest existing parent; nothing is left behind, no folder created), and its file system has
+    room for ``nbytes`` (with a margin); a :class:`UsageError` naming the folder and the cause
+    otherwise."""
+    import errno
     import tempfile
 
     d = Path(folder)
+    probe = d if str(d) else Path(".")
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
     try:
-        d.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(dir=d, prefix=".probe-", suffix=".tmp")
+        if not probe.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR))
+        fd, name = tempfile.mkstemp(dir=probe, prefix=".probe-", suffix=".tmp")
         try:
             os.write(fd, b"x")
         finally:
@@ -120,7 +127,7 @@ def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: st
     except OSError as e:
         raise UsageError(f"cannot write into the output folder {d}: {e.strerror or e}") from None
     if nbytes > 0:
-        free = shutil.disk_usage(d).free
+        free = shutil.disk_usage(probe).free
         if free < 1.2 * nbytes + 1e6:
             raise UsageError(f"the output folder {d} has {free / 1e6:.3g} MB free, {what or 'the results'} "
                              f"need about {nbytes / 1e6:.3g} MB")

@@ -261,6 +261,10 @@ def cmd_response(args: argparse.Namespace) -> int:
     method = args.method or ("orbit" if args.scheme in (None, "exact") else "transient")
     if method == "orbit" and args.scheme not in (None, "exact"):
         raise UsageError(f"--method orbit needs the exact scheme, not --scheme {args.scheme} (or --method transient)")
+    if args.out is not None or not args.json:  # found before the work: a folder that cannot take the files
+        from .budget import check_writable
+
+        check_writable(args.out or Path("results/response"), 1000.0 * f.size, "the response's files")
     ds = frequency_response(p, f, method=method, tol=args.tol, min_periods=args.min_periods,
                             max_periods=args.max_periods, scheme=args.scheme, period=args.period, workers=workers,
                             progress=progress, fmu_path=args.fmu, max_work=args.max_work)
