@@ -206,3 +206,54 @@ def test_every_worker_killed_at_once(tmp_path: Path, fmu_path: Path, clean: xr.D
         assert proc.returncode == 1 and len(lines) == 1 and "run again to resume" in lines[0], proc.stderr
     run(tmp_path, fmu_path, sets=["numerics.chunk_runs=2"])
     same(read_netcdf(tmp_path / "fig8_9" / "fig8_9.nc"), clean)
+
+
+def _square(x: float) -> float:
+    return x * x
+
+
+@pytest.mark.slow
+@pytest.mark.no_sanitizer
+def test_tasks_are_streamed_a_few_at_a_time() -> None:
+    """The tasks are drawn from their generator as earlier ones finish: at most twice the workers
+    (2 here) are submitted before the first result comes back, and every result arrives once."""
+    from dryfriction.sweep.cluster import Cluster, stream
+
+    drawn: list[int] = []
+
+    def tasks():
+        for i in range(40):
+            drawn.append(i)
+            yield i, (float(i),)
+
+    cluster = Cluster(1)
+    try:
+        got = {}
+        for key, value in stream(cluster, _square, tasks()):
+            if not got:
+                assert len(drawn) == 2
+            got[key] = value
+            assert len(drawn) <= len(got) + 2
+    finally:
+        cluster.close()
+    assert got == {i: float(i) ** 2 for i in range(40)}
+
+
+@pytest.mark.slow
+@pytest.mark.no_sanitizer
+def test_response_on_dask_says_nothing_of_dask(tmp_path: Path, fmu_path: Path) -> None:
+    """A response on 2 Dask workers: stdout the table, stderr empty (no Dask log line, no graph
+    warning), the numbers those of the same response in this process."""
+    block = ["--m", "0.5", "--k", "2000", "--zeta", "0.003", "--P0", "10", "--N", "20", "--mu-s", "0.3",
+             "--mu-k", "0.2", "--f-start", "5", "--f-stop", "15", "--num", "24", "--no-progress", "--format", "netcdf",
+             "--no-plot", "--fmu", str(fmu_path)]
+    outs = {}
+    for workers in ("2", "0"):
+        out = tmp_path / f"w{workers}"
+        proc = subprocess.run([sys.executable, "-m", "dryfriction", "response", *block, "--workers", workers,
+                               "--out", str(out)], capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+        outs[workers] = read_netcdf(out / "response.nc")
+    a, b = outs["2"], outs["0"]
+    for n in ("amplitude_m", "stable", "mu_max"):
+        assert np.allclose(a[n].values, b[n].values, rtol=1e-9, atol=0, equal_nan=True), n
