@@ -196,14 +196,13 @@ def sweep_work(spec: SweepSpec, chunks: list[int]) -> float:
     total = 0.0
     for i in chunks:
         P = spec.chunk(i)
-        t = P[:, col["t_stop"]]
-        if exact or "h" not in col:
-            per = 2.0 * np.pi / np.maximum(P[:, col["omega"]], 1e-300)
-            total += float(np.sum(t / per)) * EXACT_PERIOD_STEPS
-        else:
+        periods = P[:, col["t_stop"]] * np.maximum(P[:, col["omega"]], 0.0) / (2.0 * np.pi)
+        if exact:
+            total += float(np.sum(periods)) * EXACT_PERIOD_STEPS
+        else:   # t_stop / h, or the typical steps per period where h is derived (0)
             h = P[:, col["h"]]
-            per = 2.0 * np.pi / np.maximum(P[:, col["omega"]], 1e-300)
-            total += float(np.sum(np.where(h > 0, t / np.where(h > 0, h, 1.0), t / per * BOSSAK_PERIOD_STEPS)))
+            steps = np.where(h > 0, P[:, col["t_stop"]] / np.where(h > 0, h, 1.0), periods * BOSSAK_PERIOD_STEPS)
+            total += float(np.sum(steps))
     return total
 
 
