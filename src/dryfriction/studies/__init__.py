@@ -6,10 +6,10 @@
     python -m dryfriction.studies <name> ...
 
 Each study reads ``configs/<name>.toml`` (see :mod:`dryfriction.studies.config`), writes its
-NetCDF dataset(s), PNG figure(s), the effective ``config.toml`` and ``summary.json`` to
-``<out>/<name>/`` (default ``results/<name>/``), every file through a temp name and a rename.
-Sweeps keep their finished chunks in ``<out>/<name>/chunks/``: a killed sweep started again
-loads them and computes only the rest.
+NetCDF dataset(s), PNG figure(s), the effective ``config.toml`` and ``summary.json`` into a staging
+folder and moves them into ``<out>/<name>/`` (default ``results/<name>/``) together when all are
+written (:func:`run_study`). Sweeps keep their finished chunks in ``<out>/<name>/chunks/``, checked
+when loaded: a killed sweep started again loads them and computes only the rest.
 """
 
 from __future__ import annotations

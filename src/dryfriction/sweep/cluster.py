@@ -108,6 +108,8 @@ class Cluster:
         return self.client.run(rss)
 
     def close(self) -> None:
+        """Close the client and the LocalCluster (quietly, whatever state the workers are in) and
+        give Dask's loggers and warnings back their settings."""
         try:
             self.client.close()
             if self.cluster is not None:
