@@ -217,7 +217,7 @@ def _square(x: float) -> float:
 def test_tasks_are_streamed_a_few_at_a_time() -> None:
     """The tasks are drawn from their generator as earlier ones finish: at most twice the workers
     (2 here) are submitted before the first result comes back, and every result arrives once."""
-    from dryfriction.sweep.cluster import Cluster, stream
+    from dryfriction.cluster import Cluster, stream
 
     drawn: list[int] = []
 

@@ -25,6 +25,7 @@ from .diagnostics import DryFrictionWarning
 from .errors import FMUError
 from .fmu import Settings
 from .params import Oscillator
+from .cluster import ClusterLost
 
 
 def _global_options(suppress: bool) -> argparse.ArgumentParser:
@@ -434,6 +435,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DryFrictionWarning as e:
         print(f"dryfriction: error: {e} (an FMU warning, an error under --strict)", file=sys.stderr)
         return EXIT_USAGE
+    except ClusterLost as e:  # the Dask workers lost too often: one line
+        print(f"dryfriction: failed: {e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("dryfriction: interrupted", file=sys.stderr)
         return 130

@@ -1,7 +1,7 @@
 """Batches of chaos runs on Dask workers (or in this process): one FMU instance per process.
 
 The tasks take plain arrays and dicts and return arrays, so a chunk is one Dask task, streamed as
-the sweep engine streams its chunks (:mod:`dryfriction.sweep.cluster`): the workers of a
+the sweep engine streams its chunks (:mod:`dryfriction.cluster`): the workers of a
 LocalCluster read the FMU from its path, an external scheduler's tasks carry its bytes.
 """
 
@@ -133,10 +133,10 @@ def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunk
     """``func(fmu, *chunk)`` for every chunk, in order; on a LocalCluster of ``workers`` single-
     threaded processes (or ``scheduler``), or in this process if ``workers == 0`` and no scheduler.
     ``chunks`` may be a generator (``total``: its length, for the progress bar): the tasks are
-    streamed, a few in flight at a time (:func:`dryfriction.sweep.cluster.stream`: no large graph,
+    streamed, a few in flight at a time (:func:`dryfriction.cluster.stream`: no large graph,
     a task of a lost worker submitted again, Dask's logs and warnings silenced). The FMU warnings
     raised on a worker are recorded there and emitted again here, once each."""
-    from ..sweep.cluster import Cluster, stream
+    from ..cluster import Cluster, stream
 
     t0 = time.perf_counter()
     if total is None and isinstance(chunks, Sequence):

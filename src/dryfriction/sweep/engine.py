@@ -21,7 +21,7 @@ Workers: ``workers = 0`` runs in this process (no Dask), ``workers = N`` starts 
 ``LocalCluster`` of N single-threaded worker processes, ``scheduler = "host:port"`` uses an
 existing Dask cluster (each task carries the FMU's bytes; the workers need this package installed).
 The chunks are streamed, a few in flight, and a chunk whose worker was lost is submitted again
-(:mod:`dryfriction.sweep.cluster`).
+(:mod:`dryfriction.cluster`).
 """
 
 from __future__ import annotations
@@ -224,7 +224,7 @@ class Engine:
     # ---- Dask ----
     def _ensure_client(self) -> Any:
         if self._cluster is None:
-            from .cluster import Cluster
+            from ..cluster import Cluster
 
             self._cluster = Cluster(self.opt.workers, self.opt.scheduler)
             self.startup = self._cluster.startup
@@ -256,7 +256,7 @@ class Engine:
             yield i, run_batch_timed(fmu, settings, spec.chunk(i))
 
     def _compute_dask(self, spec: SweepSpec, todo: list[int]) -> Iterator[tuple[int, Any]]:
-        from .cluster import stream
+        from ..cluster import stream
 
         cluster = self._ensure_client()
         settings = dict(spec.settings)
