@@ -257,3 +257,27 @@ def test_response_on_dask_says_nothing_of_dask(tmp_path: Path, fmu_path: Path) -
     a, b = outs["2"], outs["0"]
     for n in ("amplitude_m", "stable", "mu_max"):
         assert np.allclose(a[n].values, b[n].values, rtol=1e-9, atol=0, equal_nan=True), n
+
+
+def _die(x: float) -> float:
+    os._exit(1)
+
+
+@pytest.mark.slow
+@pytest.mark.no_sanitizer
+def test_a_task_that_keeps_losing_its_worker_ends_with_one_line() -> None:
+    """A task whose worker dies every time it runs: submitted again ``retries`` times, then
+    ClusterLost, one sentence (the CLI prints it as one line)."""
+    import dask
+
+    from dryfriction.cluster import Cluster, ClusterLost, stream
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        cluster = Cluster(1)
+        try:
+            with pytest.raises(ClusterLost) as err:
+                list(stream(cluster, _die, [(0, (1.0,))], retries=1))
+        finally:
+            cluster.close()
+    assert str(err.value) == ("the Dask workers were lost 2 times while one task ran; finished chunks are kept, "
+                              "run again to resume")
