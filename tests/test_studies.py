@@ -231,7 +231,7 @@ def test_killed_sweep_restarts_from_its_chunks(tmp_path: Path, fmu_path: Path, f
     with pytest.raises(SweepInterrupted):
         run("fig8_9", tmp_path, fmu_path, workers=2, max_chunks=5)
     assert not final.exists()
-    chunks = sorted((tmp_path / "fig8_9" / "chunks").glob("fig8_9-*/c*.npy"))
+    chunks = sorted((tmp_path / "fig8_9" / "chunks").glob("fig8_9-*/c*.chunk"))
     assert len(chunks) == 5
     stamp = {c: c.stat().st_mtime_ns for c in chunks}
     # restarted: the 5 are loaded, not recomputed, the 7 others computed
@@ -242,7 +242,7 @@ def test_killed_sweep_restarts_from_its_chunks(tmp_path: Path, fmu_path: Path, f
     _same(read_netcdf(final), fig8_9_local)
     # the final file and some chunks deleted (a crash mid-write): only those chunks are recomputed
     final.unlink()
-    all_chunks = sorted(chunks[0].parent.glob("c*.npy"))
+    all_chunks = sorted(chunks[0].parent.glob("c*.chunk"))
     for c in all_chunks[::4]:
         c.unlink()
     _, res = run("fig8_9", tmp_path, fmu_path, workers=0)
@@ -259,13 +259,13 @@ KILLED_AFTER_3_CHUNKS = """
 import os, signal, sys
 import dryfriction.sweep.engine as engine
 from dryfriction.studies import main
-save, saved = engine._atomic_save_npy, []
+save, saved = engine.save_chunk, []
 def save_then_die(path, arr):
     save(path, arr)
     saved.append(path)
     if len(saved) == 3:
         os.kill(os.getpid(), signal.SIGKILL)  # killed right after its third chunk is on disk
-engine._atomic_save_npy = save_then_die
+engine.save_chunk = save_then_die
 sys.exit(main(sys.argv[1:]))
 """
 
@@ -284,7 +284,7 @@ def test_sigkilled_sweep_resumes(tmp_path: Path, fmu_path: Path, fig8_9_local: x
     proc = subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, timeout=300)
     assert proc.returncode == -signal.SIGKILL, proc.stderr
     assert not (tmp_path / "fig8_9" / "fig8_9.nc").exists()
-    kept = {c: c.stat().st_mtime_ns for c in (tmp_path / "fig8_9" / "chunks").glob("fig8_9-*/c*.npy")}
+    kept = {c: c.stat().st_mtime_ns for c in (tmp_path / "fig8_9" / "chunks").glob("fig8_9-*/c*.chunk")}
     assert len(kept) == 3
     _, res = run("fig8_9", tmp_path, fmu_path, sets=["numerics.chunk_runs=4"])
     st = res["stats"][0]

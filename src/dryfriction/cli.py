@@ -25,6 +25,7 @@ from .diagnostics import DryFrictionWarning
 from .errors import FMUError
 from .fmu import Settings
 from .params import Oscillator
+from .cluster import ClusterLost
 
 
 def _global_options(suppress: bool) -> argparse.ArgumentParser:
@@ -36,6 +37,9 @@ def _global_options(suppress: bool) -> argparse.ArgumentParser:
                    help="path of the FMU (default: $DFO_FMU, else the installed package's, else build/)")
     g.add_argument("--strict", action="store_true", default=default,
                    help="a warning of the FMU (e.g. a step too coarse for the dynamics) is an error: exit 2")
+    from .budget import add_max_work_argument
+
+    add_max_work_argument(g, default)
     return g
 
 
@@ -258,9 +262,13 @@ def cmd_response(args: argparse.Namespace) -> int:
     method = args.method or ("orbit" if args.scheme in (None, "exact") else "transient")
     if method == "orbit" and args.scheme not in (None, "exact"):
         raise UsageError(f"--method orbit needs the exact scheme, not --scheme {args.scheme} (or --method transient)")
+    if args.out is not None or not args.json:  # found before the work: a folder that cannot take the files
+        from .budget import check_writable
+
+        check_writable(args.out or Path("results/response"), 1000.0 * f.size, "the response's files")
     ds = frequency_response(p, f, method=method, tol=args.tol, min_periods=args.min_periods,
                             max_periods=args.max_periods, scheme=args.scheme, period=args.period, workers=workers,
-                            progress=progress, fmu_path=args.fmu)
+                            progress=progress, fmu_path=args.fmu, max_work=args.max_work)
     if method == "orbit":
         from .orbit_cli import print_orbit_response
 
@@ -404,6 +412,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         args.fmu = getattr(args, "fmu", None)
+        args.max_work = getattr(args, "max_work", None)
+        from .budget import check_command
+
+        check_command(args)  # the work estimated from the arguments, refused above --max-work
         if args.fmu is not None:
             _check_fmu_option(args.fmu, args.command)
         from .chain_cli import chain_main
@@ -423,6 +435,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DryFrictionWarning as e:
         print(f"dryfriction: error: {e} (an FMU warning, an error under --strict)", file=sys.stderr)
         return EXIT_USAGE
+    except ClusterLost as e:  # the Dask workers lost too often: one line
+        print(f"dryfriction: failed: {e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("dryfriction: interrupted", file=sys.stderr)
         return 130

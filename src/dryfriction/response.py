@@ -52,12 +52,13 @@ from typing import Any
 
 import numpy as np
 
+from .budget import check_memory, check_work
 from .fmu import FMUError, OscillatorFMU, Settings
 from .orbits import SAME, STABILITY_MARGIN, find_orbits, scales
 from .params import Oscillator
 
 __all__ = ["SteadyState", "steady_state", "frequency_response", "plot_response", "TOL", "TOL_STICK",
-           "MIN_PERIODS", "MAX_PERIODS", "METHODS", "default_settings", "remaining_error"]
+           "MIN_PERIODS", "MAX_PERIODS", "METHODS", "default_settings", "remaining_error", "response_work"]
 
 #: relative agreement of successive windows (amplitude and offset, relative to the amplitude)
 TOL = 1e-3
@@ -456,7 +457,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                        tol: float = TOL, min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
                        scheme: str | None = None, h: float = 0.0, period: int = 1, transients: int = 60,
                        cold_every: int = COLD_EVERY, workers: int = 0, progress: bool = False,
-                       fmu_path: str | os.PathLike[str] | None = None) -> Any:
+                       fmu_path: str | os.PathLike[str] | None = None, max_work: float | None = None) -> Any:
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
     (dimension ``f_hz``; attributes: the oscillator and the settings, with units).
 
@@ -475,16 +476,20 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     ``converged`` False and the FMU's sentence in ``reason``; the other frequencies go on.
 
     ``scheme`` None: exact (also at k = 0). ``workers`` > 0 runs
-    the frequencies on a Dask LocalCluster of that many processes (for long sweeps)."""
+    the frequencies on a Dask LocalCluster of that many processes (for long sweeps), streamed in
+    chunks of at most :data:`MAX_CHUNK` frequencies.
+
+    The work is estimated before it starts (:func:`response_work`, in steps,
+    :mod:`dryfriction.budget`) and refused (:class:`~dryfriction.budget.WorkBoundError`) above
+    ``max_work`` (default :data:`~dryfriction.budget.DEFAULT_MAX_WORK`), as is a table too large for
+    half this machine's memory."""
     import xarray as xr
 
     from .chaos.batch import map_chunks
     from . import paths
     from .steady import den_hartog_amplitude, inman_amplitude
 
-    f = np.asarray(f_hz, dtype=float)
-    if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
-        raise ValueError("the frequencies must be a non-empty list of finite values > 0 Hz")
+    f = _frequencies(f_hz)
     if method is None:
         method = "orbit" if scheme in (None, "exact") else "transient"
     if method not in METHODS:
@@ -494,20 +499,26 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                          "use method='transient' for the Bossak schemes")
     if not (isinstance(period, int) and period >= 1):
         raise ValueError(f"period must be an integer >= 1 (excitation periods), not {period!r}")
+    if method == "orbit" and not (isinstance(cold_every, int) and cold_every >= 1):
+        raise ValueError(f"cold_every must be an integer >= 1 (frequencies), not {cold_every!r}")
+    work, what = response_work(p, f.size, method, period=period, transients=transients, cold_every=cold_every,
+                               max_periods=max_periods, scheme=scheme, h=h)
+    check_work(work, what, max_work, option="max_work")
+    check_memory(f.size * RESPONSE_BYTES, f"{f.size:,} frequencies", "fewer frequencies")
     path = paths.fmu_path(paths.OSCILLATOR, fmu_path)
     base = {k: v for k, v in p.as_dict().items() if k != "omega"}
     if method == "orbit":
-        if not (isinstance(cold_every, int) and cold_every >= 1):
-            raise ValueError(f"cold_every must be an integer >= 1 (frequencies), not {cold_every!r}")
         opts: dict[str, Any] = {"period": period, "transients": transients, "cold_every": cold_every}
-        per_chunk = math.ceil(f.size / max(1, 2 * workers)) if workers else f.size
+        per_chunk = min(math.ceil(f.size / max(1, 2 * workers)), MAX_CHUNK) if workers else f.size
         task: Any = _orbit_chunk
     else:
         opts = {"tol": tol, "min_periods": min_periods, "max_periods": max_periods, "scheme": scheme, "h": h}
         per_chunk = max(1, min(16, math.ceil(f.size / max(1, 4 * workers)))) if workers else max(1, min(8, f.size))
         task = _chunk
-    chunks = [(base, f[i:i + per_chunk], opts) for i in range(0, f.size, per_chunk)]
-    results, _ = map_chunks(task, path, chunks, workers=workers, progress=progress, desc="response")
+    # streamed: each task built when it is submitted, from a slice of the frequencies
+    chunks = ((base, f[i:i + per_chunk], opts) for i in range(0, f.size, per_chunk))
+    results, _ = map_chunks(task, path, chunks, workers=workers, progress=progress, desc="response",
+                            total=-(-f.size // per_chunk))
     reason = np.concatenate([r["reason"] for r in results]).astype(str)
     lam = 2.0 * math.pi * f / p.w0 if p.k > 0 else np.full(f.shape, np.inf)
     applies = p.k > 0 and p.c == 0 and p.P0 != 0
@@ -574,6 +585,63 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
         attrs={**attrs, "tol": tol, "tol_stick": TOL_STICK, "min_periods": min_periods, "max_periods": max_periods},
     )
     return ds
+
+
+#: frequencies of one Dask task of the orbit method at most (a worker's memory and a lost
+#: worker's redo stay small)
+MAX_CHUNK = 2000
+#: bytes the response holds per frequency in this process (the results of the tasks and the
+#: Dataset; measured: 2.56 GB for 10^6 frequencies of the orbit method)
+RESPONSE_BYTES = 3000
+#: steps (:mod:`dryfriction.budget`) one frequency of the orbit method counts, besides its cold
+#: searches: Newton from the predicted orbits, their multipliers, the cycle run (measured: 183
+#: microseconds per frequency over 10^6 frequencies, about 12,000 Bossak steps)
+ORBIT_FREQUENCY_STEPS = 12000.0
+
+
+def response_work(p: Oscillator, n: int, method: str, *, period: int = 1, transients: int = 60,
+                  cold_every: int = COLD_EVERY, max_periods: int = MAX_PERIODS, scheme: str | None = None,
+                  h: float = 0.0) -> tuple[float, str]:
+    """The estimated work of :func:`frequency_response` over ``n`` frequencies, in steps
+    (:mod:`dryfriction.budget`), and what it is made of: the orbit method's Newton periods and
+    cold searches (transients from each of the spread's initial conditions at the first frequency
+    and every ``cold_every``); the transient method's bound, 2 ``max_periods`` periods per
+    frequency (32 + 64 + ... up to the limit)."""
+    from .budget import BOSSAK_PERIOD_STEPS, EXACT_PERIOD_STEPS, fmt
+    from .orbits import DEFAULT_SPREAD
+
+    if method == "orbit":
+        cold = len(DEFAULT_SPREAD) * (transients + 10) * period * EXACT_PERIOD_STEPS
+        per = ORBIT_FREQUENCY_STEPS * period + cold / cold_every
+        return n * per + cold, f"{n:,} frequencies x about {fmt(per)} steps"
+    if scheme in (None, "exact"):
+        steps = EXACT_PERIOD_STEPS
+    elif h > 0:
+        steps = max(p.period / h, 1.0)
+    else:
+        steps = BOSSAK_PERIOD_STEPS
+    periods = 2.0 * max_periods
+    return n * periods * steps, f"{n:,} frequencies x up to {fmt(periods)} periods x {fmt(steps)} steps"
+
+
+def _frequencies(f_hz: Any) -> np.ndarray:
+    """The frequencies as a 1-D float array, checked: numbers (not strings, not booleans), finite,
+    > 0, at least one."""
+    if isinstance(f_hz, (str, bytes)):
+        raise ValueError(f"the frequencies must be numbers in Hz, not the string {f_hz!r}")
+    arr = np.asarray(f_hz)
+    if arr.dtype.kind not in "iuf" or isinstance(f_hz, (list, tuple)):
+        items = (x.item() if isinstance(x, np.generic) else x
+                 for x in (f_hz if isinstance(f_hz, (list, tuple)) else np.ravel(arr)))
+        ok = object()
+        bad = next((x for x in items if isinstance(x, (str, bytes, bool)) or not isinstance(x, (int, float))), ok)
+        if bad is not ok or arr.size == 0 and arr.dtype.kind not in "iufO":
+            what = f"{type(bad).__name__} {bad!r}" if bad is not ok else f"{arr.dtype} values"
+            raise ValueError(f"the frequencies must be numbers in Hz, not {what}")
+    f = np.asarray(arr, dtype=float)
+    if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError("the frequencies must be a non-empty list of finite values > 0 Hz")
+    return f
 
 
 def never_converges_note(p: Oscillator) -> str:

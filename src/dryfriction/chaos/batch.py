@@ -1,13 +1,12 @@
 """Batches of chaos runs on Dask workers (or in this process): one FMU instance per process.
 
-The tasks take plain arrays and dicts and return arrays, so a chunk is one Dask task. The FMU is
-sent to the workers as bytes (written once per machine to a temp file named by its hash), exactly
-as the sweep engine does, so an external scheduler works too.
+The tasks take plain arrays and dicts and return arrays, so a chunk is one Dask task, streamed as
+the sweep engine streams its chunks (:mod:`dryfriction.cluster`): the workers of a
+LocalCluster read the FMU from its path, an external scheduler's tasks carry its bytes.
 """
 
 from __future__ import annotations
 
-import logging
 import sys
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -128,54 +127,60 @@ class ChunkStats:
     task_cpu: float
 
 
-def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunks: Sequence[tuple[Any, ...]],
+def map_chunks(func: Callable[..., dict[str, np.ndarray]], fmu_path: Path, chunks: Iterable[tuple[Any, ...]],
                workers: int = 0, scheduler: str | None = None, progress: bool = False,
-               desc: str = "chaos") -> tuple[list[dict[str, np.ndarray]], ChunkStats]:
+               desc: str = "chaos", total: int | None = None) -> tuple[list[dict[str, np.ndarray]], ChunkStats]:
     """``func(fmu, *chunk)`` for every chunk, in order; on a LocalCluster of ``workers`` single-
     threaded processes (or ``scheduler``), or in this process if ``workers == 0`` and no scheduler.
-    The FMU warnings raised on a worker are recorded there and emitted again here, once each."""
+    ``chunks`` may be a generator (``total``: its length, for the progress bar): the tasks are
+    streamed, a few in flight at a time (:func:`dryfriction.cluster.stream`: no large graph,
+    a task of a lost worker submitted again, Dask's logs and warnings silenced). The FMU warnings
+    raised on a worker are recorded there and emitted again here, once each."""
+    from ..cluster import Cluster, stream
+
     t0 = time.perf_counter()
-    results: list[dict[str, np.ndarray] | None] = [None] * len(chunks)
+    if total is None and isinstance(chunks, Sequence):
+        total = len(chunks)
+    results: dict[int, dict[str, np.ndarray]] = {}
     bar = None
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(chunks), unit="chunk", desc=desc, file=sys.stderr, dynamic_ncols=True)
+        bar = tqdm(total=total, unit="chunk", desc=desc, file=sys.stderr, dynamic_ncols=True)
     startup = 0.0
-    if workers == 0 and not scheduler:
-        for i, c in enumerate(chunks):
-            results[i] = func(str(fmu_path), *c)
-            if bar is not None:
-                bar.update(1)
-    else:
-        from distributed import Client, LocalCluster, as_completed
-
-        cluster = None
-        if scheduler:
-            client = Client(scheduler, timeout="20s")
-        else:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
-            client = Client(cluster)
-        try:
-            fut_fmu = client.scatter(Path(fmu_path).read_bytes(), broadcast=True, hash=True)
-            startup = time.perf_counter() - t0
-            futures = {client.submit(recorded, func, fut_fmu, *c, pure=False): i for i, c in enumerate(chunks)}
-            seen: set[str] = set()
-            for fut in as_completed(futures):
-                results[futures[fut]], msgs = fut.result()
-                emit_new(msgs, seen)  # the worker's FMU warnings, once each
+    try:
+        if workers == 0 and not scheduler:
+            for i, c in enumerate(chunks):
+                results[i] = func(str(fmu_path), *c)
                 if bar is not None:
                     bar.update(1)
-        finally:
-            client.close()
-            if cluster is not None:
+        else:
+            cluster = Cluster(workers, scheduler)
+            try:
+                startup = cluster.startup
+                fmu = cluster.fmu_arg(fmu_path)
+                seen: set[str] = set()
+                tasks = ((i, (func, fmu, *c)) for i, c in enumerate(chunks))
+                for i, (res, msgs) in stream(cluster, recorded, tasks):
+                    results[i] = res
+                    emit_new(msgs, seen)  # the worker's FMU warnings, once each
+                    if bar is not None:
+                        bar.update(1)
+                global LAST_PEAK_RSS
+                LAST_PEAK_RSS = cluster.peak_rss()
+            finally:
                 cluster.close()
-    if bar is not None:
-        bar.close()
-    out = [r for r in results if r is not None]
+    finally:
+        if bar is not None:
+            bar.close()
+    out = [results[i] for i in sorted(results)]
     cpu = float(sum(float(r["cpu"].sum()) for r in out if "cpu" in r))
-    return out, ChunkStats(len(chunks), time.perf_counter() - t0, startup, cpu)
+    return out, ChunkStats(len(out), time.perf_counter() - t0, startup, cpu)
+
+
+#: each worker's peak resident memory (bytes, by worker address) of the last :func:`map_chunks` on
+#: Dask (measured for docs/performance.md)
+LAST_PEAK_RSS: dict[str, float] = {}
 
 
 def concat(results: Iterable[Mapping[str, np.ndarray]], key: str) -> np.ndarray:

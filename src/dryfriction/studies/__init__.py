@@ -6,10 +6,10 @@
     python -m dryfriction.studies <name> ...
 
 Each study reads ``configs/<name>.toml`` (see :mod:`dryfriction.studies.config`), writes its
-NetCDF dataset(s), PNG figure(s), the effective ``config.toml`` and ``summary.json`` to
-``<out>/<name>/`` (default ``results/<name>/``), every file through a temp name and a rename.
-Sweeps keep their finished chunks in ``<out>/<name>/chunks/``: a killed sweep started again
-loads them and computes only the rest.
+NetCDF dataset(s), PNG figure(s), the effective ``config.toml`` and ``summary.json`` into a staging
+folder and moves them into ``<out>/<name>/`` (default ``results/<name>/``) together when all are
+written (:func:`run_study`). Sweeps keep their finished chunks in ``<out>/<name>/chunks/``, checked
+when loaded: a killed sweep started again loads them and computes only the rest.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig
 from .. import paths
 from ..argparsing import UsageError, make_parser
 from ..atomic import atomic_write_text
+from ..budget import add_max_work_argument
 from .config import ConfigError, build_config, config_dir, load_toml
 
 __all__ = ["STUDIES", "ALIASES", "main", "run_args", "add_arguments", "run_study", "resolve", "effective_config",
@@ -111,10 +112,21 @@ class StudyOutcome:
 def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "results", workers: int | None = None,
               scheduler: str | None = None, sets: Sequence[str] = (), config_file: str | os.PathLike[str] | None = None,
               fmu: str | os.PathLike[str] | None = None, max_chunks: int | None = None,
-              progress: bool = True) -> StudyOutcome:
+              progress: bool = True, max_work: float | None = None) -> StudyOutcome:
     """Run one study (Python API of ``dryfriction study``). Raises ConfigError before any work if
-    an argument or config value is invalid, SweepInterrupted if ``max_chunks`` stopped a sweep."""
-    from ..sweep.engine import EngineOptions
+    an argument or config value is invalid or the output folder cannot be written,
+    :class:`~dryfriction.budget.WorkBoundError` if a sweep's work exceeds ``max_work`` (steps,
+    :mod:`dryfriction.budget`), SweepInterrupted if ``max_chunks`` stopped a sweep.
+
+    The results (datasets, figures), ``config.toml`` and ``summary.json`` are written into a staging
+    folder and moved into ``<out>/<study>/`` together once all are written
+    (:func:`dryfriction.atomic.staged_outputs`): a failed or interrupted run leaves the previous
+    results and their configuration as they were. A folder holding another configuration's results
+    is started clean (a note says so): they are replaced when this run's are complete, and the
+    chunks of the previous configuration are removed only then."""
+    from ..atomic import staged_outputs
+    from ..budget import check_writable, max_work_value
+    from ..sweep.engine import EngineOptions, prune_stale
     from .common import StudyContext
 
     key = resolve(name)
@@ -127,28 +139,65 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
         raise ConfigError(f"--workers must be >= 0, not {n_workers}")
     if max_chunks is not None and max_chunks < 0:
         raise ConfigError(f"--max-chunks must be >= 0, not {max_chunks}")
+    max_work_value(max_work)
     out_dir = Path(out) / key
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ConfigError(f"cannot create the output folder {out_dir}: {e.strerror}") from None
-    if not os.access(out_dir, os.W_OK):
-        raise ConfigError(f"the output folder {out_dir} is not writable")
+    # found before the work: a folder that cannot take a file, a disk without room for the results
+    check_writable(out_dir, STUDY_BYTES, "a study's results")
+    config_text = dump_toml(cfg, header=f"effective configuration of study {key}" + (" (--quick)" if quick else ""))
+    previous = _previous_config(out_dir)
+    if previous is not None and previous != cfg:
+        print(f"note: {out_dir} holds the results of another configuration; this run starts clean and "
+              "replaces them (with their config.toml) when its results are complete", file=sys.stderr, flush=True)
 
     opts = EngineOptions(fmu=fmu_path, workers=n_workers, scheduler=scheduler, progress=progress,
-                         max_chunks=max_chunks)
-    ctx = StudyContext(name=key, cfg=cfg, quick=quick, out_dir=out_dir, engine_options=opts)
-    atomic_write_text(out_dir / "config.toml", dump_toml(cfg, header=f"effective configuration of study {key}"
-                                                          + (" (--quick)" if quick else "")))
-    try:
-        summary = STUDIES[key].run(ctx)
-    finally:
-        stats = list(ctx._engine.stats) if ctx._engine is not None else []
-        ctx.close()
-    record = {"study": key, "quick": quick, "summary": summary,
-              "sweeps": [s.__dict__ for s in stats]}
-    atomic_write_text(out_dir / "summary.json", json.dumps(record, indent=2, default=float) + "\n")
+                         max_chunks=max_chunks, max_work=max_work)
+    with staged_outputs(out_dir) as stage:
+        ctx = StudyContext(name=key, cfg=cfg, quick=quick, out_dir=stage, engine_options=opts, final_dir=out_dir)
+        folders: set[Path] = set()
+        try:
+            summary = STUDIES[key].run(ctx)
+        finally:
+            stats = list(ctx._engine.stats) if ctx._engine is not None else []
+            folders = set(ctx._engine.folders) if ctx._engine is not None else set()
+            ctx.close()
+        record = {"study": key, "quick": quick, "summary": summary,
+                  "sweeps": [s.__dict__ for s in stats]}
+        _write(stage / "summary.json", json.dumps(record, indent=2, default=float) + "\n")
+        _write(stage / "config.toml", config_text)
+        new_files = {p.relative_to(stage) for p in stage.rglob("*") if p.is_file()}
+    # in place: the previous configuration's files that this run did not write, and its chunks, go
+    if previous is not None and previous != cfg:
+        for p in out_dir.iterdir():
+            if p.is_file() and p.suffix in (".nc", ".png", ".json", ".csv") and Path(p.name) not in new_files:
+                p.unlink(missing_ok=True)
+    prune_stale(ctx.chunk_dir, folders)
     return StudyOutcome(key, out_dir, summary, stats, ctx.messages)
+
+
+#: bytes a study's results take at least (the free-space check before the work)
+STUDY_BYTES = 20e6
+
+
+def _write(path: Path, text: str) -> None:
+    """A result file; a failure (a full disk) is one line naming the file and the cause."""
+    try:
+        atomic_write_text(path, text)
+    except OSError as e:
+        raise OSError(f"cannot write {path.name}: {e.strerror or e}") from None
+
+
+def _previous_config(out_dir: Path) -> dict[str, Any] | None:
+    """The configuration of the results in ``out_dir`` (its config.toml), None if there are none;
+    an unreadable one counts as another configuration."""
+    import tomllib
+
+    path = out_dir / "config.toml"
+    if not path.is_file():
+        return None
+    try:
+        return tomllib.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
 
 
 def dump_toml(cfg: dict[str, Any], header: str = "") -> str:
@@ -181,6 +230,8 @@ def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.Argu
     p.add_argument("--max-chunks", type=int, default=None, metavar="N",
                    help="stop after computing N new chunks (exit 3; run again to finish)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    if fmu:  # else the caller's parser has the global --max-work
+        add_max_work_argument(p)
     p.add_argument("--show-config", action="store_true", help="print the effective config and exit")
     return p
 
@@ -236,7 +287,7 @@ def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
             print(f"== study {n}: {STUDIES[n].TITLE}", flush=True)
             run_study(n, quick=args.quick, out=args.out, workers=args.workers, scheduler=args.scheduler,
                       sets=args.sets, config_file=args.config, fmu=fmu, max_chunks=args.max_chunks,
-                      progress=not args.no_progress)
+                      progress=not args.no_progress, max_work=getattr(args, "max_work", None))
         return EXIT_OK
     except UsageError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)

@@ -99,6 +99,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     n = int(num["chunk_runs"])
     chunks = [(ch, w, num, rows[i:i + n]) for i in range(0, len(rows), n)]
     o = ctx.engine_options
+    ctx.check_work(len(rows), float(w["periods"]), num, "chain2", blocks=2)
     res, st = map_chunks(rows_task, o.fmu, chunks, o.workers, o.scheduler, o.progress, "chain2")
     shape = (len(configs), lam.size, x1.size, x2.size, 2)
     amp = concat(res, "amplitude").reshape(shape)

@@ -57,6 +57,7 @@ def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, floa
     chunks = [(nd, num, float(t["chi"]), ics[i:i + n], int(t["transient"]), int(t["tail"]))
               for i in range(0, ics.shape[0], n)]
     o = ctx.engine_options
+    ctx.check_work(ics.shape[0], int(t["transient"]) + int(t["tail"]), num, f"basins {case}")
     res, st = map_chunks(orbit_tails, o.fmu, chunks, o.workers, o.scheduler, o.progress, f"basins {case}")
     tails = concat(res, "tails")
     cat = Catalogue(tol=float(g["match_tol"]))

@@ -47,6 +47,7 @@ def _scan(ctx: StudyContext, chis: np.ndarray, ics: np.ndarray, ly: dict[str, An
         rows = np.column_stack([np.full(len(ics), chi), ics])
         chunks.append((cfg["params"], cfg["numerics"], ly, rows, int(ly["keep"])))
     o = ctx.engine_options
+    ctx.check_work(len(chis) * len(ics) * 2, int(ly["transient"]) + int(ly["periods"]), cfg["numerics"], desc)
     res, st = map_chunks(lyapunov_rows, o.fmu, chunks, o.workers, o.scheduler, o.progress, desc)
     ctx.log(f"{desc}: {len(chis)} chi x {len(ics)} initial conditions x {ly['transient']} + {ly['periods']} periods "
             f"in {st.wall:.1f} s (cluster start {st.startup:.1f} s, task CPU {st.task_cpu:.1f} s)")

@@ -44,6 +44,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     chunks = [(nd, num, float(chi), ics[i:i + n], cps, int(s["tail"]), float(s["tol"]), int(s["samples_per_period"]))
               for chi in chis for i in range(0, ics.shape[0], n)]
     o = ctx.engine_options
+    ctx.check_work(chis.size * ics.shape[0], max(cps), num, "transients")
     res, st = map_chunks(transient_rows, o.fmu, chunks, o.workers, o.scheduler, o.progress, "transients")
     ctx.log(f"transients: {chis.size} chi x {ics.shape[0]} initial conditions x {cps[-1]} periods in {st.wall:.1f} s "
             f"(cluster start {st.startup:.1f} s, task CPU {st.task_cpu:.1f} s)")

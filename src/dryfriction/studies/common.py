@@ -53,12 +53,19 @@ class StudyContext:
     out_dir: Path
     engine_options: EngineOptions
     messages: list[str] = field(default_factory=list)
+    #: where the results end up (``out_dir`` is then the staging folder they are written into)
+    final_dir: Path | None = None
     _engine: Engine | None = None
     _fmu: OscillatorFMU | None = None
 
     @property
     def chunk_dir(self) -> Path:
-        return self.out_dir / "chunks"
+        """The sweeps' finished chunks: in the results folder itself (they outlive a failed run)."""
+        return (self.final_dir or self.out_dir) / "chunks"
+
+    def shown(self, path: Path) -> Path:
+        """Where a file written into ``out_dir`` ends up."""
+        return (self.final_dir or self.out_dir) / path.relative_to(self.out_dir)
 
     @property
     def fmu_path(self) -> Path:
@@ -74,6 +81,18 @@ class StudyContext:
         if self._fmu is None:
             self._fmu = OscillatorFMU(self.fmu_path)
         return self._fmu
+
+    def check_work(self, runs: float, periods: float, numerics: Mapping[str, Any], what: str, blocks: int = 1) -> None:
+        """Refuse (:class:`~dryfriction.budget.WorkBoundError`) before a batch of ``runs`` runs of
+        ``periods`` excitation periods each whose work exceeds ``--max-work`` (the sweep engine
+        checks its sweeps itself): steps per period from ``numerics`` (the exact scheme's count,
+        else ``steps_per_period``), once per block of a chain."""
+        from ..budget import EXACT_PERIOD_STEPS, check_work, fmt
+
+        spp = EXACT_PERIOD_STEPS if str(numerics.get("scheme")) == "exact" else float(numerics["steps_per_period"])
+        check_work(runs * periods * spp * blocks,
+                   f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(spp * blocks)} steps",
+                   self.engine_options.max_work)
 
     def run_sweep(self, spec: SweepSpec) -> np.ndarray:
         out = self.engine().run(spec, self.chunk_dir)
@@ -97,7 +116,7 @@ class StudyContext:
         ds.attrs.setdefault("study", self.name)
         ds.attrs.setdefault("quick", int(self.quick))
         path = write_netcdf(ds, self.out_dir / filename)
-        self.log(f"wrote {path}")
+        self.log(f"wrote {self.shown(path)}")
         return path
 
     def save_figure(self, fig: Any, filename: str) -> Path:
@@ -105,9 +124,11 @@ class StudyContext:
         try:
             with atomic_path(path) as tmp:
                 fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
+        except OSError as e:
+            raise OSError(f"cannot write {filename}: {e.strerror or e}") from None
         finally:
             plt.close(fig)
-        self.log(f"wrote {path}")
+        self.log(f"wrote {self.shown(path)}")
         return path
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..atomic import atomic_path
+from ..atomic import atomic_write_bytes
 from .runner import OUTPUT_COLUMNS
 
 __all__ = ["observables_dataset", "write_netcdf", "read_netcdf"]
@@ -82,15 +82,23 @@ def _clean_attrs(attrs: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
-    """Write ``ds`` to ``path`` (NetCDF-4 via h5netcdf): temp file, then rename."""
+    """Write ``ds`` to ``path`` (NetCDF-4 via h5netcdf): serialised in memory first, then its bytes
+    to a temp file and a rename. A full disk or an unwritable folder is an :class:`OSError` of one
+    line naming the file and the cause (HDF5 never writes to the disk, so it cannot fail there),
+    and an earlier ``path`` is left as it was."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     ds = ds.copy()
     ds.attrs = _clean_attrs(ds.attrs)
     for v in ds.variables.values():
         v.attrs = _clean_attrs(v.attrs)
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="h5netcdf")
+    import dask
+
+    with dask.config.set(scheduler="synchronous"):  # a live Dask client's locks are not for bytes in memory
+        data = bytes(ds.to_netcdf(None, engine="h5netcdf"))
+    try:
+        atomic_write_bytes(path, data)
+    except OSError as e:
+        raise OSError(f"cannot write {path}: {e.strerror or e}") from None
     return path
 
 

@@ -5,16 +5,23 @@ and the settings shared by all of them. :class:`Engine` runs it:
 
 - the table is cut into chunks of ``chunk_runs`` rows; each chunk is one Dask task, run by a
   worker process on its own FMU instance (loaded once per process, reset per run);
-- every finished chunk is written to ``<chunk_dir>/<sweep>-<key>/cNNNNN.npy`` (temp name, then
+- every finished chunk is written to ``<chunk_dir>/<sweep>-<key>/cNNNNN.chunk`` (temp name, then
   rename), where ``key`` hashes the table, the settings and the FMU binary, so a changed config or
-  a rebuilt FMU never reuses stale chunks;
-- on a restart, the chunks on disk are loaded, only the missing ones are computed;
+  a rebuilt FMU never reuses stale chunks; the file names what it holds (the key, the chunk's
+  index, a digest of its parameter rows) and carries a checksum of its data (:func:`chunk_bytes`);
+- on a restart, the chunks on disk are loaded, only the missing ones are computed; a chunk file
+  that is empty, unreadable, damaged (its checksum) or another chunk's (its key, index or rows) is
+  recomputed with a one-line note;
+- the work of the chunks to compute is estimated first (:func:`sweep_work`) and refused above the
+  bound (:mod:`dryfriction.budget`);
 - the result is the table of outputs in row order, whatever the number of workers: each run is
   independent and deterministic, so 1 or N workers give bit-identical numbers.
 
 Workers: ``workers = 0`` runs in this process (no Dask), ``workers = N`` starts a
 ``LocalCluster`` of N single-threaded worker processes, ``scheduler = "host:port"`` uses an
-existing Dask cluster (the FMU binary is sent to the workers, which need this package installed).
+existing Dask cluster (each task carries the FMU's bytes; the workers need this package installed).
+The chunks are streamed, a few in flight, and a chunk whose worker was lost is submitted again
+(:mod:`dryfriction.cluster`).
 """
 
 from __future__ import annotations
@@ -32,11 +39,13 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import atomic_path
+from ..atomic import atomic_write_bytes
+from ..budget import BOSSAK_PERIOD_STEPS, EXACT_PERIOD_STEPS, check_work
 from ..diagnostics import emit_new, recorded
 from .runner import OUTPUT_COLUMNS, PARAM_COLUMNS, run_batch_timed
 
-__all__ = ["SweepSpec", "EngineOptions", "SweepStats", "SweepInterrupted", "Engine"]
+__all__ = ["SweepSpec", "EngineOptions", "SweepStats", "SweepInterrupted", "Engine", "sweep_work", "chunk_bytes",
+           "read_chunk", "save_chunk", "prune_stale", "CHUNK_MAGIC"]
 
 
 class SweepInterrupted(RuntimeError):
@@ -86,6 +95,7 @@ class EngineOptions:
     scheduler: str | None = None     # address of an existing Dask scheduler
     progress: bool = True
     max_chunks: int | None = None    # compute at most this many new chunks (then SweepInterrupted)
+    max_work: float | None = None    # bound of a sweep's work, steps (dryfriction.budget; None: the default)
 
 
 @dataclass
@@ -106,19 +116,94 @@ class SweepStats:
                 f"({self.loaded} loaded from disk, {self.computed} computed) in {self.wall:.1f} s{rate}")
 
 
-def _atomic_save_npy(path: Path, arr: np.ndarray) -> None:
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        np.save(f, arr)
+#: the first bytes of a chunk file
+CHUNK_MAGIC = b"DFOCHUNK 1\n"
 
 
-def _load_chunk(path: Path, n_rows: int) -> np.ndarray | None:
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def chunk_bytes(key: str, index: int, params: np.ndarray, out: np.ndarray) -> bytes:
+    """A chunk file's bytes: :data:`CHUNK_MAGIC`, one JSON line naming what it holds (the sweep's
+    key, the chunk's index, the digest of its parameter rows, its shape, the digest of its data),
+    then the outputs (float64, little-endian, C order)."""
+    data = np.ascontiguousarray(out, dtype="<f8").tobytes()
+    head = {"key": key, "index": index, "params": _digest(np.ascontiguousarray(params, dtype="<f8").tobytes()),
+            "shape": list(out.shape), "sha256": _digest(data)}
+    return CHUNK_MAGIC + json.dumps(head, sort_keys=True).encode() + b"\n" + data
+
+
+def read_chunk(path: Path, key: str, index: int, params: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """The outputs a chunk file holds, checked against what it must hold (the sweep's ``key``, the
+    chunk ``index``, the digest of ``params``, the shape, the checksum of the data); else ``None``
+    and why (``""`` when there is no file)."""
     try:
-        arr = np.load(path)
-    except (OSError, ValueError):
-        return None
-    if arr.shape != (n_rows, len(OUTPUT_COLUMNS)) or arr.dtype != np.float64:
-        return None
-    return arr
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        return None, ""
+    except OSError as e:
+        return None, f"unreadable ({e.strerror})"
+    if not raw:
+        return None, "empty"
+    if not raw.startswith(CHUNK_MAGIC):
+        return None, "not a chunk file"
+    rest = raw[len(CHUNK_MAGIC):]
+    nl = rest.find(b"\n")
+    try:
+        head = json.loads(rest[:nl]) if nl > 0 else None
+    except ValueError:
+        head = None
+    if not isinstance(head, dict):
+        return None, "its header is unreadable"
+    data = rest[nl + 1:]
+    shape = (params.shape[0], len(OUTPUT_COLUMNS))
+    if head.get("sha256") != _digest(data) or head.get("shape") != list(shape) or len(data) != 8 * shape[0] * shape[1]:
+        return None, "its checksum does not match (damaged or truncated)"
+    if head.get("key") != key or head.get("index") != index or \
+            head.get("params") != _digest(np.ascontiguousarray(params, dtype="<f8").tobytes()):
+        return None, "it holds another chunk (its sweep, index or parameters differ)"
+    return np.frombuffer(data, dtype="<f8").reshape(shape).astype(np.float64), ""
+
+
+def save_chunk(path: Path, data: bytes) -> None:
+    """Write a chunk file (temp name, then rename); a failure is one line naming the file and the
+    cause (an :class:`OSError`)."""
+    try:
+        atomic_write_bytes(path, data)
+    except OSError as e:
+        raise OSError(f"cannot write the chunk {path}: {e.strerror or e}") from None
+
+
+def prune_stale(chunk_root: Path, keep: set[Path]) -> None:
+    """Remove the chunk folders of older configurations (or FMUs) of the sweeps in ``keep`` (called
+    once the results they were superseded by are in place)."""
+    names = {k.name[:-17] for k in keep}
+    for old in Path(chunk_root).glob("*-*"):
+        stem, _, suffix = old.name.rpartition("-")
+        if old in keep or stem not in names or not old.is_dir():
+            continue
+        if len(suffix) == 16 and all(c in "0123456789abcdef" for c in suffix):
+            shutil.rmtree(old, ignore_errors=True)
+
+
+def sweep_work(spec: SweepSpec, chunks: list[int]) -> float:
+    """The work of the given chunks of a sweep, steps (:mod:`dryfriction.budget`): each run's stop
+    time over its step h (Bossak schemes), or over its excitation period times
+    :data:`~dryfriction.budget.EXACT_PERIOD_STEPS` (the exact scheme)."""
+    col = {n: j for j, n in enumerate(PARAM_COLUMNS)}
+    exact = str(spec.settings.get("scheme", "")).lower() in ("exact", "4")
+    total = 0.0
+    for i in chunks:
+        P = spec.chunk(i)
+        periods = P[:, col["t_stop"]] * np.maximum(P[:, col["omega"]], 0.0) / (2.0 * np.pi)
+        if exact:
+            total += float(np.sum(periods)) * EXACT_PERIOD_STEPS
+        else:   # t_stop / h, or the typical steps per period where h is derived (0)
+            h = P[:, col["h"]]
+            steps = np.where(h > 0, P[:, col["t_stop"]] / np.where(h > 0, h, 1.0), periods * BOSSAK_PERIOD_STEPS)
+            total += float(np.sum(steps))
+    return total
 
 
 class Engine:
@@ -126,41 +211,26 @@ class Engine:
 
     def __init__(self, options: EngineOptions) -> None:
         self.opt = options
-        self._fmu_bytes = Path(options.fmu).read_bytes()
-        self.fmu_digest = hashlib.sha256(self._fmu_bytes).hexdigest()
-        self._client: Any = None
+        self.fmu_digest = hashlib.sha256(Path(options.fmu).read_bytes()).hexdigest()
         self._cluster: Any = None
-        self._fmu_future: Any = None
         self.stats: list[SweepStats] = []
+        #: the chunk folders of this engine's sweeps (the others of the same sweeps are stale)
+        self.folders: set[Path] = set()
+        #: one-line notes (a chunk file recomputed, and why)
+        self.notes: list[str] = []
         self._new_chunks = 0
         self.startup = 0.0
 
     # ---- Dask ----
     def _ensure_client(self) -> Any:
-        if self._client is not None:
-            return self._client
-        t0 = time.perf_counter()
-        from distributed import Client, LocalCluster
+        if self._cluster is None:
+            from ..cluster import Cluster
 
-        if self.opt.scheduler:
-            self._client = Client(self.opt.scheduler, timeout="20s")
-        else:
-            self._cluster = LocalCluster(
-                n_workers=self.opt.workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
-            self._client = Client(self._cluster)
-        self._fmu_future = self._client.scatter(self._fmu_bytes, broadcast=True, hash=True)
-        self.startup = time.perf_counter() - t0
-        return self._client
+            self._cluster = Cluster(self.opt.workers, self.opt.scheduler)
+            self.startup = self._cluster.startup
+        return self._cluster
 
     def close(self) -> None:
-        if self._client is not None:
-            self._client.close()
-            self._client = None
         if self._cluster is not None:
             self._cluster.close()
             self._cluster = None
@@ -177,7 +247,7 @@ class Engine:
 
     # ---- chunks ----
     def _chunk_path(self, folder: Path, i: int) -> Path:
-        return folder / f"c{i:05d}.npy"
+        return folder / f"c{i:05d}.chunk"
 
     def _compute_local(self, spec: SweepSpec, todo: list[int]) -> Iterator[tuple[int, Any]]:
         settings = dict(spec.settings)
@@ -186,23 +256,22 @@ class Engine:
             yield i, run_batch_timed(fmu, settings, spec.chunk(i))
 
     def _compute_dask(self, spec: SweepSpec, todo: list[int]) -> Iterator[tuple[int, Any]]:
-        from distributed import as_completed
+        from ..cluster import stream
 
-        client = self._ensure_client()
+        cluster = self._ensure_client()
         settings = dict(spec.settings)
-        futures = {}
-        for i in todo:
-            fut = client.submit(recorded, run_batch_timed, self._fmu_future, settings, spec.chunk(i), pure=False)
-            futures[fut] = i
+        fmu = cluster.fmu_arg(self.opt.fmu)
         seen: set[str] = set()
-        try:
-            for fut in as_completed(futures):
-                result, msgs = fut.result()
-                emit_new(msgs, seen)  # the worker's FMU warnings, once each
-                yield futures[fut], result
-        finally:
-            for fut in futures:
-                fut.cancel()
+        # each task is built when it is submitted: its chunk's rows only (a few in flight)
+        tasks = ((i, (run_batch_timed, fmu, settings, spec.chunk(i))) for i in todo)
+        for i, (result, msgs) in stream(cluster, recorded, tasks):
+            emit_new(msgs, seen)  # the worker's FMU warnings, once each
+            yield i, result
+
+    def note(self, msg: str) -> None:
+        """A one-line note on stderr (kept in :attr:`notes`)."""
+        self.notes.append(msg)
+        print(f"note: {msg}", file=sys.stderr, flush=True)
 
     def run(self, spec: SweepSpec, chunk_root: Path) -> np.ndarray:
         """All outputs of the sweep (shape ``(n_runs, len(OUTPUT_COLUMNS))``), loading finished
@@ -210,26 +279,40 @@ class Engine:
         t0 = time.perf_counter()
         key = spec.key(self.fmu_digest)
         folder = Path(chunk_root) / f"{spec.name}-{key}"
-        folder.mkdir(parents=True, exist_ok=True)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise OSError(f"cannot create the chunk folder {folder}: {e.strerror or e}") from None
+        self.folders.add(folder)
         for tmp in folder.glob(".c*.tmp"):  # half-written chunks of a killed run
             tmp.unlink(missing_ok=True)
-        # chunks of an older config or FMU of the same sweep are stale: remove them
-        for old in Path(chunk_root).glob(f"{spec.name}-*"):
-            suffix = old.name[len(spec.name) + 1:]
-            if old != folder and old.is_dir() and len(suffix) == 16 and all(c in "0123456789abcdef" for c in suffix):
-                shutil.rmtree(old, ignore_errors=True)
+        # the chunks of an older config or FMU of the same sweep stay until the results that
+        # replace them are in place (prune_stale, called by the study)
 
         out = np.empty((spec.n_runs, len(OUTPUT_COLUMNS)))
         stats = SweepStats(spec.name, spec.n_runs, spec.n_chunks)
         todo: list[int] = []
         for i in range(spec.n_chunks):
-            rows = spec.chunk(i).shape[0]
-            arr = _load_chunk(self._chunk_path(folder, i), rows)
+            params = spec.chunk(i)
+            rows = params.shape[0]
+            path = self._chunk_path(folder, i)
+            arr, why = read_chunk(path, key, i, params)
             if arr is None:
+                if why:
+                    self.note(f"chunk {path}: {why}; recomputed")
                 todo.append(i)
             else:
                 out[i * spec.chunk_runs:i * spec.chunk_runs + rows] = arr
                 stats.loaded += 1
+        if todo:
+            runs = sum(spec.chunk(i).shape[0] for i in todo)
+            check_work(sweep_work(spec, todo), f"{runs:,} runs of sweep {spec.name}", self.opt.max_work)
+            # the chunks and the dataset made of them: found before the work when the disk lacks room
+            need = 2.0 * runs * len(OUTPUT_COLUMNS) * 8 + 400.0 * len(todo)
+            free = shutil.disk_usage(folder).free
+            if free < need:
+                raise OSError(f"cannot write the chunks of sweep {spec.name} into {folder}: {free / 1e6:.3g} MB free, "
+                              f"about {need / 1e6:.3g} MB needed")
 
         if todo:
             budget = None if self.opt.max_chunks is None else max(self.opt.max_chunks - self._new_chunks, 0)
@@ -241,7 +324,7 @@ class Engine:
                 bar = tqdm(total=spec.n_runs, initial=done_runs, unit="run", desc=spec.name,
                            file=sys.stderr, dynamic_ncols=True, smoothing=0.05)
             compute = self._compute_dask if self.uses_dask else self._compute_local
-            if self.uses_dask and self._client is None:
+            if self.uses_dask and self._cluster is None:
                 self._ensure_client()
                 stats.startup = self.startup
             interrupted = False
@@ -252,7 +335,7 @@ class Engine:
                     for i, (arr, cpu, wall) in compute(spec, todo):
                         stats.task_cpu += cpu
                         stats.task_wall += wall
-                        _atomic_save_npy(self._chunk_path(folder, i), arr)
+                        save_chunk(self._chunk_path(folder, i), chunk_bytes(key, i, spec.chunk(i), arr))
                         rows = arr.shape[0]
                         out[i * spec.chunk_runs:i * spec.chunk_runs + rows] = arr
                         stats.computed += 1

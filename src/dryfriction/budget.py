@@ -1,0 +1,210 @@
+"""Work and memory bounded before a computation starts.
+
+Every command (and :func:`dryfriction.response.frequency_response`) estimates, from its arguments
+alone, the work it is about to do and the memory it will hold, and refuses with one line naming the
+option and the limit what would exceed the bound, unless the user raises it (``--max-work`` on the
+command line, ``max_work=`` in the API).
+
+**The unit of work is one internal step of a Bossak scheme** (one time step of the FMU: about 16
+ns of one core, measured on the 2-core development machine). An excitation period of the exact
+scheme (closed form from event to event, about 0.7 microseconds) counts as
+:data:`EXACT_PERIOD_STEPS` steps, a frequency of the orbit method as its measured cost
+(:data:`dryfriction.response.ORBIT_FREQUENCY_STEPS`), and a step of the chain once per block. The
+estimate is an upper bound where the computation has one (the transient method's period limit, a
+sweep's stop times), else the typical count (the orbit method's Newton iterations).
+
+**The default bound is** :data:`DEFAULT_MAX_WORK` = 1e10 steps, a few minutes of one core: every
+command of the README and every study's default configuration is within it (the largest, fig8_9's
+sweep, is 4.0e9); ``dryfriction response ... --num 100000000`` (1.2e12) and 10^6 frequencies
+through the API (1.2e10) are not.
+
+Memory: the estimate of what the command holds at once (results in this process, a task's
+arguments) is compared with half of this machine's memory (:func:`memory_limit`); more is refused
+whatever ``--max-work`` says, with the option that makes it large named.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+from pathlib import Path
+
+from .argparsing import UsageError
+
+__all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "check_work",
+           "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
+           "command_work", "check_command"]
+
+#: the default bound of a command's work, in steps (module doc)
+DEFAULT_MAX_WORK = 1e10
+#: steps one excitation period of the exact scheme counts as (a few stick/slip events, each a closed
+#: form with its root finding: measured 0.7 microseconds, about 45 Bossak steps)
+EXACT_PERIOD_STEPS = 50.0
+#: steps per period of a Bossak scheme whose step is derived (h = 0: the step rule's typical count)
+BOSSAK_PERIOD_STEPS = 1000.0
+
+
+class WorkBoundError(UsageError):
+    """A computation refused before it starts: its estimated work or memory exceeds the bound
+    (one line naming the option and the limit; exit status 2 on the command line)."""
+
+
+def fmt(x: float) -> str:
+    """A count for a message: 3 significant digits, plain below 10^6."""
+    return f"{x:,.0f}" if x < 1e6 else f"{x:.3g}"
+
+
+def max_work_value(max_work: float | None) -> float:
+    """The bound in force: ``max_work`` (checked: a number > 0) or :data:`DEFAULT_MAX_WORK`."""
+    if max_work is None:
+        return DEFAULT_MAX_WORK
+    if isinstance(max_work, bool) or not isinstance(max_work, (int, float)) or not max_work > 0:
+        raise WorkBoundError(f"max_work must be a number > 0 (steps), not {max_work!r}")
+    return float(max_work)
+
+
+def check_work(work: float, what: str, max_work: float | None = None, option: str = "--max-work") -> float:
+    """Refuse (:class:`WorkBoundError`) when ``work`` (steps) exceeds the bound; ``what`` says what
+    the work is made of (``"41 frequencies x 16,384 periods x 20 steps"``). Returns ``work``."""
+    bound = max_work_value(max_work)
+    if not math.isfinite(work) or work > bound:
+        raise WorkBoundError(
+            f"about {fmt(work)} steps of work ({what}) exceed the bound {option} {fmt(bound)} (steps); "
+            f"ask for less or raise {option}")
+    return work
+
+
+def memory_limit() -> float:
+    """Half of this machine's physical memory, bytes (4 GB where it cannot be read)."""
+    try:
+        return 0.5 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 4e9
+
+
+def check_memory(nbytes: float, what: str, option: str) -> float:
+    """Refuse when the estimated memory ``nbytes`` exceeds :func:`memory_limit`; ``option`` is the
+    one that makes it large."""
+    limit = memory_limit()
+    if nbytes > limit:
+        raise WorkBoundError(f"about {nbytes / 1e9:.3g} GB of memory ({what}) exceed half this machine's memory "
+                             f"({limit / 1e9:.3g} GB); ask for less ({option})")
+    return nbytes
+
+
+def add_max_work_argument(p: object, default: object = None) -> None:
+    """``--max-work STEPS`` on a command's parser (``default``: argparse.SUPPRESS on subcommands
+    that share it with the main parser)."""
+    from .argparsing import number
+
+    p.add_argument("--max-work", type=number("--max-work", 0.0, True), default=default, metavar="STEPS",  # type: ignore[attr-defined]
+                   help=f"refuse work estimated above STEPS internal steps (default {DEFAULT_MAX_WORK:.0e}; "
+                        f"an exact-scheme period counts {EXACT_PERIOD_STEPS:g})")
+
+
+def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "") -> Path:
+    """Before the work: ``folder`` can take files (tried in it, or where it would be created: its
+    nearest existing parent; nothing is left behind, no folder created), and its file system has
+    room for ``nbytes`` (with a margin); a :class:`UsageError` naming the folder and the cause
+    otherwise."""
+    import errno
+    import tempfile
+
+    d = Path(folder)
+    probe = d if str(d) else Path(".")
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    try:
+        if not probe.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR))
+        fd, name = tempfile.mkstemp(dir=probe, prefix=".probe-", suffix=".tmp")
+        try:
+            os.write(fd, b"x")
+        finally:
+            os.close(fd)
+            os.unlink(name)
+    except OSError as e:
+        raise UsageError(f"cannot write into the output folder {d}: {e.strerror or e}") from None
+    if nbytes > 0:
+        free = shutil.disk_usage(probe).free
+        if free < 1.2 * nbytes + 1e6:
+            raise UsageError(f"the output folder {d} has {free / 1e6:.3g} MB free, {what or 'the results'} "
+                             f"need about {nbytes / 1e6:.3g} MB")
+    return d
+
+
+def _steps_per_period(args: object, default: float) -> float:
+    """A command's steps per excitation period: the exact scheme's count, ``--steps-per-period``."""
+    if str(getattr(args, "scheme", "") or "") == "exact":
+        return EXACT_PERIOD_STEPS
+    return float(getattr(args, "steps_per_period", None) or default)
+
+
+def command_work(args: object) -> tuple[float, str] | None:
+    """The estimated work (steps) of a parsed command and what it is made of; None for a command
+    that does no bounded-size work of its own (``scenes``, ``validate``)."""
+    a: object = args
+    cmd = getattr(a, "command", None)
+    g = lambda name, default=None: getattr(a, name, default) if getattr(a, name, None) is not None else default  # noqa: E731
+    if cmd == "response":
+        from .params import Oscillator
+        from .response import response_work
+
+        num = int(g("num", 41))
+        method = g("method") or ("orbit" if g("scheme") in (None, "exact") else "transient")
+        p = Oscillator(m=1.0, k=1.0, omega=1.0)
+        return response_work(p, num, method, period=int(g("period", 1)), max_periods=int(g("max_periods", 8192)),
+                             scheme=g("scheme"))
+    if cmd == "run":
+        spp = EXACT_PERIOD_STEPS if g("scheme") == "exact" else float(g("steps_per_period", 1000))
+        periods = float(g("periods", 30.0)) + 1.0
+        return periods * spp, f"{fmt(periods)} periods x {fmt(spp)} steps"
+    if cmd == "lyapunov":
+        spp = EXACT_PERIOD_STEPS if g("exact", False) else _steps_per_period(a, 1000)
+        periods = 2.0 * (int(g("periods", 500)) + int(g("transient", 100)))
+        return periods * spp, f"2 runs x {fmt(periods / 2)} periods x {fmt(spp)} steps"
+    if cmd == "orbit":
+        from .orbits import DEFAULT_SPREAD
+
+        n = len(DEFAULT_SPREAD)
+        periods = n * (int(g("transients", 60)) + 10) * int(g("period", 1))
+        return periods * EXACT_PERIOD_STEPS, f"{n} searches x {fmt(periods / n)} periods x {EXACT_PERIOD_STEPS:g} steps"
+    if cmd == "continuation":
+        pts = int(g("max_points", 400)) * int(g("max_branches", 8))
+        periods = pts * 10 * int(g("period", 1))
+        return periods * EXACT_PERIOD_STEPS, (f"{fmt(pts)} points x about {10 * int(g('period', 1))} periods x "
+                                              f"{EXACT_PERIOD_STEPS:g} steps")
+    if cmd == "bifurcation":
+        quick = bool(g("quick", False))
+        values = int(g("values", 16 if quick else 80))
+        ics = int(g("ics", 5 if quick else 11)) ** 2
+        runs = values * ics
+        periods = int(g("periods", 30)) + 1
+        return runs * periods * 1000.0, f"{fmt(runs)} runs x {periods} periods x 1,000 steps"
+    if cmd == "belt":
+        spp = EXACT_PERIOD_STEPS if g("scheme") == "exact" else float(g("steps_per_period", 2000))
+        periods = float(g("periods", 40.0)) * 3.0   # the transient, the orbit's search and its cycle
+        return periods * spp, f"about {fmt(periods)} periods x {fmt(spp)} steps"
+    if cmd == "chain":
+        n = int(g("n", 2) or 2)
+        t_end, dt = float(g("t_end", 20.0)), float(g("dt", 0.05))
+        h = None
+        for item in g("sets", []) or []:
+            name, _, text = str(item).partition("=")
+            if name.strip() == "h":
+                try:
+                    h = float(text)
+                except ValueError:
+                    h = None
+        per_dt = max(dt / h, 1.0) if h and h > 0 else 100.0
+        steps = t_end / dt * per_dt * n
+        return steps, f"{n} blocks x {fmt(t_end / dt)} communication steps x {fmt(per_dt)} internal steps"
+    return None
+
+
+def check_command(args: object) -> None:
+    """Refuse a parsed command whose estimated work exceeds ``--max-work`` (before any work)."""
+    est = command_work(args)
+    if est is not None:
+        check_work(est[0], est[1], getattr(args, "max_work", None))
