@@ -30,7 +30,8 @@ import numpy as np
 from .fmu import OscillatorFMU2, Restarts, Settings
 from .params import Oscillator
 
-__all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
+__all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "rest_interval",
+           "STABILITY_MARGIN"]
 
 JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
@@ -69,11 +70,32 @@ class Orbit:
     section_state: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))  # (x, v) at the section
     iterations: int = 0
     stuck: bool = False              # never slides (stuck for good)
+    neutral: bool = False            # a multiplier exactly 1 along a continuum of orbits, the other < 1: a
+    #                                  steady state but not an isolated one (the block at rest, a member of
+    #                                  rest_interval; without a spring, one of a family shifted in x)
+    rest_interval: tuple[float, float] | None = None   # the block at rest: every x (m) it can rest at
 
     @cached_property
     def mu_max(self) -> float:
         """The largest |multiplier| (computed once)."""
         return float(np.abs(self.multipliers).max())
+
+
+def rest_interval(p: Oscillator) -> tuple[float, float] | None:
+    """The positions x (m) where the block rests for good, or None when there are none: stuck at x
+    (v = 0) the friction force holds P(t) - k x for every t while |P0 cos(omega t + phi) - k x| <= F_b,
+    F_b = max(mu_s, mu_k) N the breakaway force (method.md section 1; a tangential touch of the limit
+    keeps it stuck), i.e. for all t exactly when |k x| <= F_b - |P0|. So the block at rest is a
+    closed interval [-(F_b - |P0|) / k, (F_b - |P0|) / k] when |P0| <= F_b (the single point 0 at
+    |P0| = F_b), the whole line without a spring (k = 0), and empty when |P0| > F_b (the excitation
+    breaks any rest). Every member is a periodic orbit of period 1 (damping plays no part: v = 0)."""
+    margin = p.breakaway - abs(p.P0)
+    if not margin >= 0.0:
+        return None
+    if p.k == 0.0:
+        return (-math.inf, math.inf)
+    h = margin / p.k
+    return (-h, h)
 
 
 def scales(p: Oscillator) -> tuple[float, float]:
@@ -193,10 +215,11 @@ def _events(mode: np.ndarray) -> dict[str, int]:
     return {"stops": stops, "breakaways": breaks, "reversals": revs}
 
 
-def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float) -> float | None:
+def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float, stuck: bool = False) -> float | None:
     """The middle of the longest run of sliding samples of a cycle (cyclic), as a time in
-    [t_from, t_from + span); None if it never slides."""
-    slide = mode != 0
+    [t_from, t_from + span); None if it never slides. ``stuck``: of the longest run of stuck samples
+    instead (None if it never sticks)."""
+    slide = (mode == 0) if stuck else (mode != 0)
     if not slide.any():
         return None
     if slide.all():               # slides all the time: any section will do (NaN: keep it)
@@ -469,11 +492,19 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
     t_s = t_g
     reason = ""
     for attempt in range(4):
+        in_stick = False        # the section in a stick phase (the slides are shorter than the samples)
         if attempt == 0 and sol.slides_throughout(z, t_s):
             t_new: float | None = math.nan      # any section will do: no sampled cycle needed
         else:
             cyc = m.cycle(z, t_s)
             t_new = _slide_section(cyc["t"], cyc["mode"], 0.0, KT)
+            if (t_new is None or attempt >= 2) and cyc["stick_fraction"] < 1.0:
+                # it slides (the FMU's stuck time says so) between samples, or the orbit came out stuck
+                # at the slide's section twice: solve in the longest stick phase instead, where the
+                # map is the scalar one of the stuck states (x, 0) (its Jacobian's v column is 0)
+                t_stick = _slide_section(cyc["t"], cyc["mode"], 0.0, KT, stuck=True)
+                if t_stick is not None:          # NaN: every sample stuck, the guess's section will do
+                    t_new, in_stick = (t_s % KT if math.isnan(t_stick) else t_stick), True
         if t_new is None:           # never slides over the cycle: a stuck orbit (or stuck for now)
             Pz, J, md = m(z, t_s)
             r = sol.residual(z, Pz)
@@ -488,10 +519,12 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
             z, t_s = np.array([cyc["x"][i], cyc["v"][i]]), float(cyc["t"][i] % KT)
         elif math.isnan(t_new):
             t_s = t_s % KT
+        if in_stick:
+            z = np.array([z[0], 0.0])            # stuck there (the sample's v is 0 already)
         zc, J, r, it, reason, md = sol.newton(z, t_s)
         if reason:
             return _failed(sol, zc, t_s, J, r, it, reason), [], None
-        if md == 0:                 # a stick phase came onto the section: choose it again
+        if md == 0 and not (in_stick and zc[1] == 0.0):    # a stick phase came onto the section: choose it again
             z = zc
             reason = "the converged orbit is stuck at every section tried"
             continue

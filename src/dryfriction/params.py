@@ -22,7 +22,15 @@ from typing import Any
 
 from . import model
 
-__all__ = ["Oscillator", "UNITS"]
+__all__ = ["Oscillator", "UNITS", "SCALE_LIMIT"]
+
+#: m and k (k > 0) must lie within [1 / SCALE_LIMIT, SCALE_LIMIT] (kg, N/m): then the natural
+#: frequency sqrt(k/m), the time 1/w0 and every product the solution and its Jacobian form stay inside
+#: double precision's normal range (checked: the stroboscopic map and its Jacobian scale exactly,
+#: within 1e-9 of the unit oscillator's, on a grid of m, k and P0 from 1e-200 to 1e200 wherever m, k and
+#: sqrt(k/m) lie within it; beyond it the FMU's Jacobian overflows (k > 1e154 with friction) or its run
+#: silently loses the motion (m = k = 1e-300: stuck where it slides))
+SCALE_LIMIT = 1e100
 
 #: unit of every field and derived quantity (the model description's, plus the derived ones; read
 #: on first use)
@@ -88,6 +96,13 @@ class Oscillator:
             except ValueError as e:
                 raise ValueError(f"Oscillator: {e}") from None
             object.__setattr__(self, f.name, x)
+        for name, what, unit in (("m", "mass", "kg"), ("k", "stiffness", "N/m")):
+            x = getattr(self, name)
+            if x != 0.0 and not 1.0 / SCALE_LIMIT <= x <= SCALE_LIMIT:
+                zero = " (or 0: no spring)" if name == "k" else ""
+                raise ValueError(f"Oscillator: invalid value {x!r} for {name} ({what}); valid range: "
+                                 f"{1.0 / SCALE_LIMIT:g} to {SCALE_LIMIT:g} {unit}{zero}: beyond it the oscillator's "
+                                 "scales (the natural frequency sqrt(k/m) among them) leave double precision")
 
     # --- derived quantities (method.md section 1) ---
     @property
