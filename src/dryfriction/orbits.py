@@ -45,6 +45,9 @@ SAME = 1e-7
 BOUND = 1e3
 #: the frictionless amplification k X / P0 the bound assumes at most (zeta >= 5e-7 at resonance)
 MAX_AMPLIFICATION = 1e6
+#: Newton steps at most after the residual is within tol, while the step itself is not (a multiplier
+#: near 1: the residual then understates the distance to the orbit)
+POLISH = 2
 
 
 @dataclass
@@ -345,6 +348,27 @@ class _Solver:
             if abs(x) / xs > self.bound or abs(v) / xw > self.bound:
                 return (x, v, ja, jb, jc, jd, r, it, f"Newton diverged: the state left the bound of {BOUND:g} "
                         "times the frictionless amplitude", md)
+        for _ in range(POLISH):
+            # r <= tol, but the distance left to the fixed point is the Newton step, about r / |1 - mu|:
+            # far more than r where a multiplier is near 1 (a slow creep, e.g. at lambda 1e-6, or onto the
+            # edge of the interval of rest positions): step on while the step is above tol
+            a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
+            det = a * d - b * c
+            if det == 0.0 or not math.isfinite(det):
+                break
+            r0, r1 = x - px, v - pv
+            dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
+            size = max(1.0, abs(x) / xs, abs(v) / xw)
+            if not max(abs(dx) / xs, abs(dv) / xw) > tol * size:
+                break
+            xn, vn = x + dx, v + dv
+            pxn, pvn, ja_, jb_, jc_, jd_, mn = ev(xn, vn, t_s)
+            rn = res(xn, vn, pxn, pvn)
+            if not rn <= tol:
+                ev(x, v, t_s)            # the map's last evaluation is the state kept (its observables)
+                break
+            it += 1
+            x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
         return x, v, ja, jb, jc, jd, r, it, "", md
 
 
@@ -427,7 +451,10 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
         todo.extend((z, 0.0, False) for z in starts)
     for g in guesses or ():
         todo.append((np.asarray(g, dtype=float), 0.0, True))
-    found: list[Orbit] = []
+    rest = rest_interval(p)
+    # the block at rest: one orbit for the whole interval of rest positions (members reached by the
+    # guesses are not listed again)
+    found: list[Orbit] = [] if rest is None else [_rest_orbit(f, sol, rest, max(transients, REST_PERIODS) * K)]
     cycles: list[np.ndarray] = []        # scaled states of each found orbit at the K marks
     failed: list[Orbit] = []
 
@@ -452,6 +479,8 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
             if keep_failed and given:
                 failed.append(orbit)
             continue
+        if orbit.stuck and rest is not None:
+            continue                     # a member of the rest interval, reported once
         sm = np.array([sol.map.scaled(m) for m in marks])
         if any(_same(sm, c) for c in cycles):
             continue
@@ -468,7 +497,7 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
         found.append(orbit)
         if symmetry and halfway is not None:
             todo.insert(0, (-halfway[0], halfway[1], False))
-    found.sort(key=lambda o: (not o.stable, -o.amplitude))
+    found.sort(key=lambda o: (not o.stable, not o.neutral, -o.amplitude))
     return found + failed
 
 
@@ -534,6 +563,21 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
     return _failed(sol, z, t_s, np.full((2, 2), np.nan), math.nan, 0, reason), [], None
 
 
+#: a converged state whose x moves over its cycle by more than this share of its peak-to-peak motion is
+#: not an orbit but a creep (within tol only because the motion is tiny against the static deflection:
+#: e.g. a block creeping onto the edge of the interval of rest positions, a breakaway per period)
+CREEP = 1e-3
+
+
+def _creeps(drift: float, x_max: float, x_min: float) -> bool:
+    return drift > CREEP * (x_max - x_min)
+
+
+def _creep_reason(drift: float, x_max: float, x_min: float) -> str:
+    return (f"not periodic: x moves by {drift:.3g} m per cycle, more than {CREEP:g} of its peak-to-peak "
+            f"{x_max - x_min:.3g} m (a creep, e.g. onto the edge of the interval of rest positions)")
+
+
 def _multipliers(J: np.ndarray, sticks: bool) -> np.ndarray:
     """Eigenvalues of J, |mu| descending. With a stick phase on the cycle J has rank one (the FMU sets
     its v row to 0 there): its multipliers are then exactly trace(J) and 0."""
@@ -553,6 +597,11 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
             it: int) -> tuple[Orbit, list[np.ndarray], tuple[np.ndarray, float] | None]:
     p, K, KT, T = sol.p, sol.K, sol.KT, sol.p.period
     cyc = sol.map.cycle(z, t_s)
+    if cyc["stick_fraction"] >= 1.0:             # Newton stepped into the interval of rest positions
+        return _stuck_orbit(sol, z, t_s, J, r), [z] * K, None
+    drift = abs(float(cyc["x"][-1]) - float(z[0]))
+    if _creeps(drift, cyc["x_max"], cyc["x_min"]):
+        return _failed(sol, z, t_s, J, r, it, _creep_reason(drift, cyc["x_max"], cyc["x_min"])), [], None
     t = cyc["t"]
     marks = [np.array([cyc["x"][i], cyc["v"][i]]) for i in (int(np.argmin(np.abs(t - tm))) for tm in cyc["marks"])]
     # the state at t = 0 mod K T: at the multiple of K T in (t_s, t_s + K T]
@@ -582,7 +631,37 @@ def _stuck_orbit(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: floa
     return Orbit(period=1, x0=x0, v0=0.0, z0=z0, zdot0=zd0, multipliers=mu, stable=False, residual=r,
                  amplitude=0.0, offset=x0, stick_fraction=1.0,
                  events={"stops": 0, "breakaways": 0, "reversals": 0, "transitions": 0}, converged=True,
-                 section=t_s, jacobian=J, section_state=np.array([x0, 0.0]), stuck=True)
+                 section=t_s, jacobian=J, section_state=np.array([x0, 0.0]), stuck=True, neutral=True,
+                 rest_interval=rest_interval(p))
+
+
+#: the transient from the oscillator's initial state that finds where the block comes to rest runs at
+#: least this many excitation periods
+REST_PERIODS = 60
+
+
+def _rest_orbit(f: OscillatorFMU2, sol: _Solver, rest: tuple[float, float], periods: int) -> Orbit:
+    """The block at rest (``rest``: :func:`rest_interval`): the rest position the transient from the
+    oscillator's initial state (x0, v0) reaches (``periods`` excitation periods of the FMU, as the
+    transient method runs; it is at rest for good once stuck inside the interval at a period mark),
+    else the point of the interval nearest to where that transient ended (it creeps onto the
+    interval's edge, a breakaway per period, or moves on another orbit), 1e-12 of the half-width
+    inside the edge (on the edge the force touches the limit once per period, which rounding may
+    read as a breakaway); its map over one period evaluated by the FMU (residual, Jacobian
+    [[1, 0], [0, 0]]: multipliers exactly 1, along the interval, and 0). Neutrally stable:
+    ``neutral``, not ``stable``."""
+    p = sol.p
+    lo, hi = rest
+    runs = f.restarts(p, Settings(scheme="exact"), ("x", "v"), ("mode",))
+    runs.run(p.x0, p.v0, 0.0, periods * p.period)
+    x, v = runs.real
+    if not (runs.int[0] == 0 and v == 0.0 and lo <= x <= hi):
+        x = min(max(x, lo * (1.0 - 1e-12)), hi * (1.0 - 1e-12))    # lo = -hi (or -inf, inf without a spring)
+    z = np.array([x, 0.0])
+    Pz, J, _ = _Map(f, p, 1)(z, 0.0)
+    orbit = _stuck_orbit(sol, z, 0.0, J, sol.residual(z, Pz))
+    orbit.rest_interval = rest
+    return orbit
 
 
 def _failed(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float, it: int, reason: str) -> Orbit:
@@ -612,6 +691,12 @@ class _ObservingMap(_Map):
     def _mid(self, t_s: float, t_end: float, KT: float) -> float | None:
         mark = KT * math.floor(t_end / KT + 1e-12)          # the multiple of K T in (t_s, t_s + K T]
         return mark if mark < t_end - 1e-12 * KT else None
+
+    @property
+    def end(self) -> tuple[float, float]:
+        """(x, v) at the end of the last evaluation."""
+        assert self._runs is not None
+        return self._runs.real[0], self._runs.real[1]
 
     def observed(self) -> dict[str, float]:
         """The last evaluation's observables and its state x0, v0 at the period mark (the last
@@ -645,12 +730,14 @@ class OrbitFollower:
         m = sol.map
         t_s = float(section) % p.period
         x, v, j00, j01, j10, j11, r, it, reason, md = sol.solve(float(state[0]), float(state[1]), t_s)
-        if reason or md == 0:
+        if reason or (md == 0 and not (float(state[1]) == 0.0 and v == 0.0)):   # stuck at a slide's section
             return None
         if not m.final:             # the guess was periodic already: run it again with the stop at the mark
             m.eval(x, v, t_s)
         y = m.last = m.observed()
         stick = y["stick_fraction"]
+        if stick >= 1.0 or _creeps(abs(m.end[0] - x), y["x_max"], y["x_min"]):
+            return None                 # at rest for good, or creeping onto a rest position: find_orbits
         if stick > 0.0:
             mu = np.array([complex(j00 + j11), 0j])
             mag = np.abs(mu)
@@ -679,7 +766,9 @@ def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float,
     of a sweep): Newton shooting as :func:`find_orbits`, without its cycle runs (the converged
     evaluation's own observables give the amplitude, offset and stick share, its stop at t = T the
     state x0, v0). None when Newton does not converge or the converged orbit is stuck at the section
-    (then :func:`find_orbits` chooses a section). ``events`` holds only the FMU's count of mode
+    (then :func:`find_orbits` chooses a section), unless the section is a stick phase already (a
+    stuck state v = 0 given, as find_orbits' section where the slides are shorter than its samples:
+    Newton then solves for the stuck position, the Jacobian's v column being 0). ``events`` holds only the FMU's count of mode
     changes (``transitions``; stops, breakaways and reversals need find_orbits' sampled cycle). The
     multipliers: with a stick phase exactly trace(J) and 0, else the roots of the characteristic
     polynomial of J. For a sweep, :class:`OrbitFollower` does the same with less set-up per point."""
