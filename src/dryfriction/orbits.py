@@ -612,7 +612,10 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
     mu = _multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)
     z0, zd0 = _nondim(p, x0, v0)
     xmax, xmin = float(cyc["x_max"]), float(cyc["x_min"])
-    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
+    mods = np.sort(np.abs(mu))
+    # without a spring: one of a family shifted in x (a multiplier 1), neutral when the other is inside
+    neutral = bool(p.k == 0 and abs(mods[-1] - 1.0) <= STABILITY_MARGIN and mods[0] < 1.0 - STABILITY_MARGIN)
+    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
                   stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
                   amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0,
                   stick_fraction=float(cyc["stick_fraction"]), events=events, converged=True, section=t_s,
