@@ -102,11 +102,17 @@ def rest_interval(p: Oscillator) -> tuple[float, float] | None:
 
 
 def scales(p: Oscillator) -> tuple[float, float]:
-    """(x_s, w): the position and rate scales of the residual (module doc)."""
+    """(x_s, w): the position and rate scales of the residual (module doc): the excitation's
+    deflection against the larger of the spring and the inertia at omega, x_s = |P0| / max(k, m omega^2),
+    and w = max(w0, omega). Below the natural frequency (lambda <= 1) the static deflection |P0| / k
+    and w0; above it |P0| / (m omega^2) and omega, the size of the forced motion there (at lambda = 1e3
+    a millionth of the static deflection: a tolerance in static deflections would be none); without a
+    spring (k = 0) the amplitude of the free mass under the excitation and omega."""
     P0 = abs(p.P0)
-    if p.k > 0:
+    inertia = p.m * p.omega ** 2
+    if p.k >= inertia:
         return P0 / p.k, p.w0
-    return P0 / (p.m * p.omega ** 2), p.omega
+    return P0 / inertia, p.omega
 
 
 class _Map:
