@@ -57,6 +57,22 @@ def _at_least(field: str, value: Any, lo: float, where: str, open_: bool = False
         raise ValueError(f"{where}: invalid value {x!r} for {field}; valid range: {'>' if open_ else '>='} {lo:g}")
     return x
 
+#: the fields whose size SCALE_LIMIT bounds, with their units (k = 0, no spring, is valid too)
+SCALED = {"m": "kg", "k": "N/m"}
+
+
+def _check_scale(name: str, x: float, what: str) -> None:
+    """ValueError naming the field and its valid range unless 1 / SCALE_LIMIT <= x <= SCALE_LIMIT (or
+    k = 0)."""
+    if name == "k" and x == 0.0:
+        return
+    if not 1.0 / SCALE_LIMIT <= x <= SCALE_LIMIT:
+        zero = " (or 0: no spring)" if name == "k" else ""
+        raise ValueError(f"Oscillator: invalid value {x!r} for {name} ({what}); valid range: {1.0 / SCALE_LIMIT:g} "
+                         f"to {SCALE_LIMIT:g} {SCALED[name]}{zero}: beyond it the oscillator's scales (the natural "
+                         "frequency sqrt(k/m) among them) leave double precision")
+
+
 def _start(name: str) -> float:
     """The start value of a parameter in the model description (the defaults below, read when
     first needed, never at import)."""
@@ -91,18 +107,13 @@ class Oscillator:
         for f in fields(self):
             value = getattr(self, f.name)
             x = _real(f.name, value)
+            if f.name in SCALED:
+                _check_scale(f.name, x, md.var(f.name).description.split(" (")[0])
             try:
                 md.check(f.name, x, where=f"{f.name} ({md.var(f.name).description.split(' (')[0]})")
             except ValueError as e:
                 raise ValueError(f"Oscillator: {e}") from None
             object.__setattr__(self, f.name, x)
-        for name, what, unit in (("m", "mass", "kg"), ("k", "stiffness", "N/m")):
-            x = getattr(self, name)
-            if x != 0.0 and not 1.0 / SCALE_LIMIT <= x <= SCALE_LIMIT:
-                zero = " (or 0: no spring)" if name == "k" else ""
-                raise ValueError(f"Oscillator: invalid value {x!r} for {name} ({what}); valid range: "
-                                 f"{1.0 / SCALE_LIMIT:g} to {SCALE_LIMIT:g} {unit}{zero}: beyond it the oscillator's "
-                                 "scales (the natural frequency sqrt(k/m) among them) leave double precision")
 
     # --- derived quantities (method.md section 1) ---
     @property
@@ -189,8 +200,10 @@ class Oscillator:
             raise ValueError(f"{where}: give the excitation frequency as f (Hz) or omega (rad/s), exactly one")
         if mu_k is not None and chi is not None:
             raise ValueError(f"{where}: give mu_k or chi, not both")
-        m = _at_least("m (mass, kg)", m, 0.0, where, open_=True)
-        k = _at_least("k (stiffness, N/m)", k, 0.0, where)
+        m = _real("m (mass, kg)", m, where)
+        _check_scale("m", m, "mass")
+        k = _real("k (stiffness, N/m)", k, where)
+        _check_scale("k", k, "spring stiffness")
         mu_s = _at_least("mu_s (static friction coefficient)", mu_s, 0.0, where)
         if zeta is not None:
             c = 2.0 * _at_least("zeta (damping ratio)", zeta, 0.0, where) * math.sqrt(k * m)
