@@ -84,7 +84,7 @@ def test_stick_slip_at_every_size(fmu: OscillatorFMU, m: float, k: float) -> Non
 def test_the_whole_grid_agrees_with_the_transient_method(fmu: OscillatorFMU) -> None:
     """m and k over 1e-12 ... 1e6 in decades of 3 (49 oscillators), the stick-slip case: the same
     non-dimensional amplitude within 1e-10 everywhere, equal to the transient method's (tol 1e-6)
-    wherever it converges (all 49: seen within 2e-9)."""
+    wherever it converges (all 49: seen within 4.2e-15; the grid within 2.3e-15 of the unit oscillator)."""
     ref = unit_stick_slip(fmu).amplitude / 3.0
     for m, k in itertools.product(ALL_SIZES, ALL_SIZES):
         p = stick_slip_case(m, k)
