@@ -1,20 +1,24 @@
 """Periodic orbits of the excited oscillator by Newton shooting on the exact stroboscopic map
-(issue 22, item 1; docs/orbits.md).
+(docs/orbits.md).
 
 The map P^K: (x, v) at the section time t_s -> (x, v) at t_s + K T, T = 2 pi / omega, is the FMU's
 scheme ``exact`` run in one ``doStep`` through :class:`~dryfriction.fmu.OscillatorFMU2`; its 2 x 2
 Jacobian is the FMU's own (``sensitivity = true``: the linear flow of each slide and the saltation
 matrix of each event), never a finite difference. Newton: solve (J - I) dz = -r, r = P^K(z) - z, with
 a backtracking line search on the scaled residual; converged when the residual is at most ``tol``
-(default 1e-12) relative: ``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` with S = diag(x_s, x_s w), the
-static deflection x_s = |P0| / k and w = w0 (without a spring: x_s = |P0| / (m omega^2), the
-amplitude of the free mass under the excitation, and w = omega).
+(default 1e-12) relative: ``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` with S = diag(x_s, x_s w) the
+problem's own scales (:func:`scales`: the static deflection |P0| / k and w0 below the natural
+frequency, the forced motion |P0| / (m omega^2) and omega above it and without a spring), then
+while the Newton step itself is above ``tol`` (a multiplier near 1) up to two more steps. A converged
+state that creeps (x moves over its cycle by more than 1e-3 of its motion) is not an orbit.
 
 Section rule: the map is not differentiable in v inside a stick phase, so the section t_s is taken in
 the middle of the longest slide of the guess's cycle (re-chosen if the converged orbit moved a stick
-phase onto it); the state at t = 0 mod K T is then read from a run of the converged orbit. An orbit
-that never slides (stuck for good) is an orbit too: one of a line of stuck states; its Jacobian is
-the FMU's over K T, rank one, multipliers exactly 1 (along the line of stuck states: neutral) and 0.
+phase onto it), or, where the slides are shorter than the cycle's samples, of its longest stick
+phase (Newton then solves for the stuck position); the state at t = 0 mod K T is then read from a run
+of the converged orbit. The block at rest (|P0| within the breakaway force) is one orbit: a member of
+the interval of rest positions :func:`rest_interval`, its Jacobian the FMU's over a period, rank one,
+multipliers exactly 1 (along the interval: ``neutral``) and 0.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ SAMPLES = 512
 #: scaled distance under which two converged states are the same orbit
 SAME = 1e-7
 #: Newton's iterates must stay within BOUND times the frictionless harmonic amplitude (plus the
-#: static deflection), else the solve is reported as diverged
+#: static deflections of the excitation and of friction), else the solve is reported as diverged
 BOUND = 1e3
 #: the frictionless amplification k X / P0 the bound assumes at most (zeta >= 5e-7 at resonance)
 MAX_AMPLIFICATION = 1e6
@@ -277,7 +281,10 @@ class _Solver:
         # MAX_AMPLIFICATION (else Newton "converges" on the unbounded growth, relative to a huge state)
         den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
         X = abs(p.P0) / den if den > 0 else math.inf
-        self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
+        # the static deflections of the excitation and of friction too (an orbit may stick at an offset
+        # of that size: far beyond X where the inertia sets x_s, lambda >> 1)
+        static = (abs(p.P0) + p.breakaway) / p.k if p.k > 0 else 0.0
+        self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION) + static / xs)
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
