@@ -105,18 +105,24 @@ def rest_interval(p: Oscillator) -> tuple[float, float] | None:
     return (-h, h)
 
 
+#: x_s is at least this share of the static deflection |P0| / k: the exact scheme computes positions in
+#: static deflections (rounding about 1.4e-14 of one), so a tolerance of 1e-12 in x_s stays above it
+RESOLVED = 1e-2
+
+
 def scales(p: Oscillator) -> tuple[float, float]:
     """(x_s, w): the position and rate scales of the residual (module doc): the excitation's
     deflection against the larger of the spring and the inertia at omega, x_s = |P0| / max(k, m omega^2),
     and w = max(w0, omega). Below the natural frequency (lambda <= 1) the static deflection |P0| / k
-    and w0; above it |P0| / (m omega^2) and omega, the size of the forced motion there (at lambda = 1e3
-    a millionth of the static deflection: a tolerance in static deflections would be none); without a
-    spring (k = 0) the amplitude of the free mass under the excitation and omega."""
+    and w0; above it |P0| / (m omega^2) and omega, the size of the forced motion there (at lambda = 10
+    a hundredth of the static deflection), but at least RESOLVED static deflections (lambda > 10: the
+    FMU resolves no finer); without a spring (k = 0) the amplitude of the free mass under the
+    excitation and omega."""
     P0 = abs(p.P0)
     inertia = p.m * p.omega ** 2
     if p.k >= inertia:
         return P0 / p.k, p.w0
-    return P0 / inertia, p.omega
+    return max(P0 / inertia, RESOLVED * P0 / p.k) if p.k > 0 else P0 / inertia, p.omega
 
 
 class _Map:
@@ -591,6 +597,28 @@ def _creep_reason(drift: float, x_max: float, x_min: float) -> str:
             f"{x_max - x_min:.3g} m (a creep, e.g. onto the edge of the interval of rest positions)")
 
 
+def _neutral(mods: np.ndarray, p: Oscillator) -> bool:
+    """A multiplier 1 (within :func:`neutral_margin`), the other inside the unit circle: one of a
+    family of orbits shifted in x, neutrally stable (without a spring; or with one too weak against the
+    inertia for the FMU to tell the family's members apart)."""
+    lo, hi = float(min(mods)), float(max(mods))
+    margin = neutral_margin(p)
+    return abs(hi - 1.0) <= margin and lo < 1.0 - margin
+
+
+#: the exact scheme's relative rounding of positions, in its unit the static deflection |P0| / k
+ROUNDING = 64 * 2.0 ** -52
+
+
+def neutral_margin(p: Oscillator) -> float:
+    """How close to 1 a multiplier must be to count as 1: STABILITY_MARGIN, or where the inertia
+    dwarfs the spring (lambda >> 1) the FMU's resolution of the motion, ROUNDING lambda^2 (it
+    computes positions in static deflections, |P0| / k, the motion is |P0| / (m omega^2): at lambda
+    4.4e4 its members drift by 4e-8 of their offset per period, below the rounding of the map)."""
+    ratio = p.m * p.omega ** 2 / p.k if p.k > 0 else 0.0
+    return max(STABILITY_MARGIN, ROUNDING * ratio)
+
+
 def _multipliers(J: np.ndarray, sticks: bool) -> np.ndarray:
     """Eigenvalues of J, |mu| descending. With a stick phase on the cycle J has rank one (the FMU sets
     its v row to 0 there): its multipliers are then exactly trace(J) and 0."""
@@ -625,11 +653,9 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
     mu = _multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)
     z0, zd0 = _nondim(p, x0, v0)
     xmax, xmin = float(cyc["x_max"]), float(cyc["x_min"])
-    mods = np.sort(np.abs(mu))
-    # without a spring: one of a family shifted in x (a multiplier 1), neutral when the other is inside
-    neutral = bool(p.k == 0 and abs(mods[-1] - 1.0) <= STABILITY_MARGIN and mods[0] < 1.0 - STABILITY_MARGIN)
+    neutral = _neutral(np.abs(mu), p)
     orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
-                  stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+                  stable=not neutral and bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
                   amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0,
                   stick_fraction=float(cyc["stick_fraction"]), events=events, converged=True, section=t_s,
                   jacobian=J, section_state=np.array(z, dtype=float), iterations=it)
@@ -768,8 +794,9 @@ class OrbitFollower:
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = y["x_max"], y["x_min"]
         lim = 1.0 - STABILITY_MARGIN
-        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                     stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
+        neutral = _neutral(mag, p)
+        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
+                     stable=not neutral and bool(mag[0] < lim and mag[1] < lim), residual=r,
                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
                      events={"transitions": y["transitions"]}, converged=True, section=t_s,
                      jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)

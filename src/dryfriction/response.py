@@ -292,14 +292,15 @@ def _attracting(o: Any, p: Oscillator) -> bool:
 
 def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
     """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart);
-    without a spring the members of a family shifted in x are one (x0 - offset and v0 compared)."""
+    the members of a family shifted in x (without a spring, or neutral: a spring too weak to tell them
+    apart) are one (x0 - offset and v0 compared)."""
     if len(orbits) < 2:
         return list(orbits)
     xs, w = scales(p)
     out: list[Any] = []
     seen: list[tuple[float, float]] = []
     for o in orbits:
-        x = o.x0 - o.offset if p.k == 0 and math.isfinite(o.offset) else o.x0
+        x = o.x0 - o.offset if (p.k == 0 or o.neutral) and math.isfinite(o.offset) else o.x0
         a0, a1 = x / xs, o.v0 / (xs * w)
         tol = SAME * max(1.0, abs(a0), abs(a1))
         if o.period == 1 and any(max(abs(a0 - q0), abs(a1 - q1)) <= tol for q0, q1 in seen):
