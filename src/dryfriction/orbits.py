@@ -35,7 +35,7 @@ from .fmu import OscillatorFMU2, Restarts, Settings
 from .params import Oscillator
 
 __all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "rest_interval",
-           "STABILITY_MARGIN"]
+           "neutral_margin", "STABILITY_MARGIN"]
 
 JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
@@ -811,8 +811,9 @@ def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float,
     state x0, v0). None when Newton does not converge or the converged orbit is stuck at the section
     (then :func:`find_orbits` chooses a section), unless the section is a stick phase already (a
     stuck state v = 0 given, as find_orbits' section where the slides are shorter than its samples:
-    Newton then solves for the stuck position, the Jacobian's v column being 0). ``events`` holds only the FMU's count of mode
-    changes (``transitions``; stops, breakaways and reversals need find_orbits' sampled cycle). The
+    Newton then solves for the stuck position, the Jacobian's v column being 0), or when it is at rest
+    for good or creeps (then None too). ``events`` holds only the FMU's count of mode changes
+    (``transitions``; stops, breakaways and reversals need find_orbits' sampled cycle). The
     multipliers: with a stick phase exactly trace(J) and 0, else the roots of the characteristic
     polynomial of J. For a sweep, :class:`OrbitFollower` does the same with less set-up per point."""
     return OrbitFollower(fmu, tol, max_iter)(oscillator, state, section)

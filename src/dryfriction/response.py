@@ -550,12 +550,12 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                 "has_orbit": (dims, has, {"long_name": "an orbit at this index (False: padding, every variable "
                                                        "NaN or False there)"}),
                 "period": (dims, col["period"], {"units": "excitation periods", "long_name": "period K of the orbit"}),
-                "stable": (dims, flag["stable"], {"long_name": "stable: every |multiplier| < 1 (False for an "
-                                                               "unstable or neutral orbit, and where has_orbit is False)"}),
-                "neutral": (dims, flag["neutral"], {"long_name": "neutrally stable: a multiplier exactly 1 along a "
-                                                                 "continuum of orbits, the other inside the unit circle "
-                                                                 "(the block at rest; without a spring a family shifted "
-                                                                 "in x)"}),
+                "stable": (dims, flag["stable"], {
+                    "long_name": "stable: every |multiplier| < 1 (False for an unstable or neutral orbit, and where "
+                                 "has_orbit is False)"}),
+                "neutral": (dims, flag["neutral"], {
+                    "long_name": "neutrally stable: a multiplier exactly 1 along a continuum of orbits, the other "
+                                 "inside the unit circle (the block at rest; a family shifted in x)"}),
                 "mu_max": (dims, col["mu_max"], {"units": "1", "long_name": "largest |Floquet multiplier|"}),
                 "amplitude_m": (dims, col["amplitude_m"], {"units": "m",
                                                            "long_name": "amplitude, half peak-to-peak of x over the orbit"}),
