@@ -143,3 +143,18 @@ def test_the_stuck_orbit_in_json(fmu_path: Path, capsys: pytest.CaptureFixture[s
     assert len(out) == 4 and out[1].split()[:3] == ["1", "1", "neutral"]
     assert out[2].startswith("1 orbit of 1 excitation period found (0 stable, 1 neutral)")
     assert "rests for good at any x in [-0.005, 0.005] m" in out[3]
+
+
+def test_a_small_block_in_the_table(fmu_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """m = 1e-9 kg (lambda 4.4e-5): two stable orbits (formerly none), each stuck but for slides of
+    about 1e-4 of the cycle: the stuck share printed with the digits that tell it from 100 % (99.98,
+    99.99), not as 100.0, which would read as a block at rest."""
+    argv = ["--m", "1e-9", "--k", "2000", "--zeta", "0.003", "--P0", "10", "--f", "10", "--N", "20", "--mu-s", "0.3",
+            "--mu-k", "0.2", "--fmu", str(fmu_path)]
+    res = run_json(argv, capsys)["orbits"]
+    assert len(res) == 2 and all(o["stable"] and 0.999 < o["stick_fraction"] < 1.0 for o in res)
+    assert main(["orbit", *argv]) == 0
+    rows = capsys.readouterr().out.splitlines()[1:3]
+    shares = [float(r.split()[-4]) for r in rows]
+    assert all(99.9 < s < 100.0 for s in shares), rows
+    assert shares == pytest.approx([100 * o["stick_fraction"] for o in res], abs=0.006)

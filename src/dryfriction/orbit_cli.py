@@ -83,6 +83,17 @@ def _oscillator(args: argparse.Namespace) -> Any:
     return p
 
 
+def _percent(share: float) -> str:
+    """A share in % with one decimal, more where that would read 0 or 100 of a share that is neither
+    (a block stuck but for slides of 1e-4 of the cycle is not at rest)."""
+    text = f"{100 * share:.1f}"
+    digits = 1
+    while 0.0 < share < 1.0 and text in ("0.0", "100.0") and digits < 12:
+        digits += 1
+        text = f"{100 * share:.{digits}f}"
+    return text
+
+
 def _num(v: float) -> float | None:
     return float(v) if math.isfinite(v) else None
 
@@ -135,7 +146,7 @@ def orbit_main(args: argparse.Namespace) -> int:
     for i, o in enumerate(orbits, 1):
         mu = ", ".join(f"{m.real:.4g}" + (f"{m.imag:+.3g}j" if m.imag else "") for m in o.multipliers)
         print(f"{i:2d} {o.period:2d} {_stability(o):>7} {o.mu_max:9.4g} {mu:>30} {o.amplitude:14.6g} "
-              f"{o.offset:11.3g} {100 * o.stick_fraction:9.1f} {o.x0:12.6g} {o.v0:12.6g} {o.residual:8.1e}")
+              f"{o.offset:11.3g} {_percent(o.stick_fraction):>9} {o.x0:12.6g} {o.v0:12.6g} {o.residual:8.1e}")
     print(f"{orbit_headline(orbits, args.period)}; "
           f"T = {p.period:.6g} s, static deflection P0/k = {abs(p.P0) / p.k if p.k > 0 else math.nan:.4g} m")
     for o in orbits:
@@ -255,7 +266,7 @@ def print_orbit_response(ds: Any, args: argparse.Namespace, p: Any, f: Any) -> i
             st = ("True" if ds["stable"].values[i, j] else "neutral" if ds["neutral"].values[i, j] else "False")
             lead = f"{f[i]:10.4g}" if j == 0 else " " * 10
             print(f"{lead} {j:2d} {int(v['period']):2d} {st:>7} {v['mu_max']:9.4g} "
-                  f"{v['amplitude_m']:14.6g} {v['offset_m']:12.3g} {100 * v['stick_fraction']:9.1f}")
+                  f"{v['amplitude_m']:14.6g} {v['offset_m']:12.3g} {_percent(v['stick_fraction']):>9}")
     failed = int(sum(bool(r) for r in reasons))
     total = int(ds["n_orbits"].values.sum())
     stable = int(ds["stable"].values.sum())
