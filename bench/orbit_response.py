@@ -124,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         orbit_ds[name] = (t, ds)
         out["responses"].append({"case": name, "seconds": t, "us_per_point": 1e6 * t / n,
                                  "evaluations_per_point": n_eval / n, "orbits": int(ds["n_orbits"].sum()),
-                                 "stable": int((ds["stable"].values == 1.0).sum()),
+                                 "stable": int(ds["stable"].values.sum()),
                                  "frequencies_with_a_stable_orbit": int(ds["converged"].sum()),
                                  "max_residual": float(np.nanmax(ds["residual"].values))})
 

@@ -31,7 +31,7 @@ def main() -> None:
             print(f"{f:6.2f} Hz  no stable orbit (not converged)")
         for j in range(int(ds["n_orbits"].values[i])):
             a, s = ds["amplitude_m"].values[i, j], ds["stick_fraction"].values[i, j]
-            kind = "stable (converged)" if ds["stable"].values[i, j] == 1 else "unstable"
+            kind = "stable (converged)" if ds["stable"].values[i, j] else "unstable"
             print(f"{f:6.2f} Hz  amplitude {1000 * a:8.3f} mm  stuck {100 * s:5.1f} %  {kind}")
     png = plot_response(ds, args.out / "sweep.png")
     print(f"wrote {png}")

@@ -59,7 +59,7 @@ def test_a_bad_value_is_an_fmu_call_error_naming_the_variable(fmu: OscillatorFMU
 
 
 def test_a_failed_step_is_an_fmu_call_error_in_both_versions(fmu: OscillatorFMU2) -> None:
-    huge = dict(P0=1e307, N=0.0, omega=0.0, k=1e-300)
+    huge = dict(P0=1e307, N=0.0, omega=0.0, k=1e-100)
     fmu.start(Oscillator(**huge), Settings(h=1e-3))
     with pytest.raises(FMUCallError, match="non-finite") as err:
         fmu.do_step(1e6)

@@ -314,3 +314,69 @@ def test_no_orbit_at_an_undamped_resonance(fmu: OscillatorFMU) -> None:
     for K in (1, 2):
         assert find_orbits(p, period=K, fmu=fmu) == []
     assert find_orbits(Oscillator.physical(m=1.0, k=100.0, P0=1.0, N=1.0, mu_s=0.3, omega=10.0), fmu=fmu) == []
+
+
+# ---- the block at rest, and just above the breakaway force ------------------------------------------
+
+def at_rest(p: Oscillator, o: Orbit) -> None:
+    """o is the block at rest of p: one orbit, neutral (not unstable), multipliers exactly 1 and 0,
+    amplitude 0, the interval |k x| <= F_b - |P0| (method.md section 1), and the exact piecewise
+    solution (dryfriction.exact) from its state stays stuck there over a period."""
+    from dryfriction.exact import solve_exact
+    from dryfriction.orbits import rest_interval
+
+    h = (max(p.mu_s, p.mu_k) * p.N - abs(p.P0)) / p.k
+    assert o.stuck and o.neutral and not o.stable and o.converged and o.period == 1
+    assert list(o.multipliers) == [1.0, 0.0] and o.amplitude == 0.0 and o.v0 == 0.0 and o.stick_fraction == 1.0
+    assert o.rest_interval == rest_interval(p) and o.rest_interval == pytest.approx((-h, h), rel=1e-14, abs=0)
+    assert o.rest_interval[0] <= o.x0 <= o.rest_interval[1]
+    ref = solve_exact(p.with_(x0=o.x0, v0=0.0), 3 * p.period)
+    assert [s.mode for s in ref.segments] == [0] and ref.segments[0].x0 == o.x0
+
+
+def test_the_block_at_rest_is_one_neutral_orbit(fmu: OscillatorFMU) -> None:
+    """mu_s sigma 1.5 (P0 two thirds of the breakaway force): one orbit, where the transient from
+    the initial state rests: started at rest at z0 = 0.3 inside the interval it stays there; started
+    at z0 = 2 outside it, it slides and comes to rest where the exact solution does (within 1e-12 of
+    the static deflection), inside the interval [-0.5, 0.5] static deflections."""
+    from dryfriction.exact import solve_exact
+
+    for z0 in (0.3, 2.0):
+        p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=1.5, chi=0.7, zeta=0.05, z0=z0)
+        (o,) = find_orbits(p, fmu=fmu)
+        at_rest(p, o)
+        assert o.rest_interval == pytest.approx((-0.005, 0.005), rel=1e-12)
+        ref = solve_exact(p, 60 * p.period).segments[-1]
+        assert ref.mode == 0 and abs(o.x0 - ref.x0) <= 1e-12 * p.P0 / p.k, (o.x0, ref.x0)
+        if z0 == 0.3:
+            assert o.x0 == p.x0
+
+
+def test_on_either_side_of_the_breakaway_force(fmu: OscillatorFMU) -> None:
+    """mu_s = mu_k, zeta 0.05, lambda 0.5: P0 just below the breakaway force (mu_s sigma 1.001,
+    1.0): the block at rest only, over the interval |k x| <= mu_s N - P0 (1e-3 static deflections;
+    a single point at 1.0), no orbit creeping onto its edge (formerly two 'stable' ones 1.00015e-5 m
+    out, amplitude 2e-15 m, a breakaway a period); just above it (0.999): no rest, one stable
+    stick-slip orbit of small amplitude (9.0e-6 static deflections) that the exact solution repeats
+    within 1e-9 of its amplitude, with the exact solution's amplitude within 1e-9 and the transient
+    method's within its tolerance."""
+    from dryfriction.exact import solve_exact
+    from dryfriction.orbits import rest_interval
+    from dryfriction.response import steady_state
+
+    for mss in (1.001, 1.0):
+        p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=mss, chi=1.0, zeta=0.05, z0=0.3)
+        (o,) = find_orbits(p, fmu=fmu)
+        at_rest(p, o)
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.999, chi=1.0, zeta=0.05, z0=0.3)
+    assert rest_interval(p) is None
+    (o,) = find_orbits(p, fmu=fmu)
+    assert o.stable and not o.neutral and 0.0 < o.stick_fraction < 1.0
+    assert o.amplitude == pytest.approx(9.0e-6 * p.P0 / p.k, rel=1e-2)
+    sol = solve_exact(p.with_(x0=o.x0, v0=o.v0), p.period)
+    x, v, _, _ = sol.evaluate(np.array([p.period]))
+    ends = [s.x0 for s in sol.segments] + [float(x[0])]       # x turns only at stops: extremes among these
+    assert abs(float(x[0]) - o.x0) <= 1e-9 * o.amplitude and abs(float(v[0]) - o.v0) <= 1e-9 * o.amplitude * p.w0
+    assert abs((max(ends) - min(ends)) / 2 - o.amplitude) <= 1e-9 * o.amplitude
+    s = steady_state(fmu, p, tol=1e-6)
+    assert s.converged and abs(s.amplitude - o.amplitude) <= 1e-6 * o.amplitude

@@ -86,7 +86,8 @@ def test_frequency_response_dataset(fmu_path: Path) -> None:
     assert ds.attrs["method"] == "orbit" and ds["amplitude_m"].dims == ("f_hz", "orbit")
     assert ds["amplitude_m"].attrs["units"] == "m" and ds["f_hz"].attrs["units"] == "Hz"
     assert bool(ds["converged"].all()) and list(ds["n_orbits"].values) == [1, 1, 1]
-    assert np.all(ds["stable"].values[:, 0] == 1.0) and np.all(ds["mu_max"].values[:, 0] < 1.0)
+    assert ds["stable"].dtype == bool and ds["neutral"].dtype == bool and ds["has_orbit"].dtype == bool
+    assert ds["stable"].values[:, 0].all() and np.all(ds["mu_max"].values[:, 0] < 1.0)
     assert float(ds["amplitude_m"].sel(f_hz=10.0)[0]) == pytest.approx(0.23557, rel=1e-4)
     tr = frequency_response(p, [7.0, 10.0, 13.0], method="transient", fmu_path=fmu_path)
     assert tr.attrs["method"] == "transient" and tr["amplitude_m"].dims == ("f_hz",) and bool(tr["converged"].all())
@@ -193,7 +194,7 @@ def test_orbit_response_equals_find_orbits_and_marks_the_unstable(fmu_path: Path
     ds = frequency_response(p, f, fmu_path=fmu_path)
     i = int(np.argmin(np.abs(f - 5.85)))
     assert int(ds["n_orbits"].values[i]) == 3
-    assert list(ds["stable"].values[i]) == [1.0, 1.0, 0.0]
+    assert ds["stable"].values[i].tolist() == [True, True, False] and not ds["neutral"].values[i].any()
     assert sorted(ds["offset_m"].values[i, :2]) == pytest.approx([-4.08097e-4, 4.08097e-4], rel=1e-4)
     assert float(ds["mu_max"].values[i, 2]) == pytest.approx(1.0251, abs=1e-3)
     for k in range(f.size):
@@ -285,7 +286,8 @@ def test_a_free_mass_by_the_orbit_method(fmu_path: Path) -> None:
     f = [0.5, 1.0, 2.0]
     ds = frequency_response(p, f, fmu_path=fmu_path)
     assert list(ds["n_orbits"].values) == [1, 1, 1] and bool(ds["converged"].all())
-    assert np.all(ds["stable"].values[:, 0] == 0.0) and np.all(ds["mu_max"].values[:, 0] == 1.0)
+    assert not ds["stable"].values[:, 0].any() and ds["neutral"].values[:, 0].all()
+    assert np.all(ds["mu_max"].values[:, 0] == 1.0)
     tr = frequency_response(p, f, method="transient", min_periods=8, max_periods=256, fmu_path=fmu_path)
     np.testing.assert_allclose(ds["amplitude_m"].values[:, 0], tr["amplitude_m"].values, rtol=1e-3)
 
@@ -308,7 +310,7 @@ def test_orbit_method_agrees_with_long_transients(fmu_path: Path, name: str) -> 
     ds = frequency_response(p, f, fmu_path=fmu_path)
     tr = frequency_response(p, f, method="transient", tol=1e-6, fmu_path=fmu_path)
     for i in range(f.size):
-        st = ds["stable"].values[i] == 1.0
+        st = ds["stable"].values[i]
         if tr["converged"].values[i]:
             a, o = ds["amplitude_m"].values[i][st], ds["offset_m"].values[i][st]
             assert a.size, (name, f[i])
@@ -316,10 +318,39 @@ def test_orbit_method_agrees_with_long_transients(fmu_path: Path, name: str) -> 
             assert d.min() <= 1e-8, (name, f[i], a, tr["amplitude_m"].values[i])
     if name != "heavy friction":
         i44 = int(np.argmin(np.abs(f - 0.44 * p.f_n_hz)))
-        assert 2.0 in ds["period"].values[i44][ds["stable"].values[i44] == 1.0]
+        assert 2.0 in ds["period"].values[i44][ds["stable"].values[i44]]
         i1 = int(np.argmin(np.abs(f - p.f_n_hz)))
         assert f[i1] == pytest.approx(p.f_n_hz, rel=1e-12)
         assert int(ds["n_orbits"].values[i1]) == 0 and not tr["converged"].values[i1]
         assert int(ds["converged"].sum()) == f.size - 1
     else:
         assert bool(ds["converged"].all())
+
+
+def test_the_block_at_rest_in_the_response(fmu_path: Path, tmp_path: Path) -> None:
+    """P0 = 1 N below the breakaway force mu_s N = 3 N: at every frequency one orbit, amplitude 0,
+    neutral (not stable, not unstable), converged like the transient method's amplitude 0, with the
+    interval of rest positions |k x| <= 2 N / 100 N/m; the padding of the orbit dimension (a wider
+    frequency elsewhere) is the has_orbit mask with stable, neutral False, and the bools survive the
+    NetCDF file."""
+    import xarray as xr
+
+    p = Oscillator.physical(m=1, k=100, zeta=0.01, P0=1, f=1, N=10, mu_s=0.3)
+    f = [1.0, 1.5, 2.0]
+    ds = frequency_response(p, f, fmu_path=fmu_path)
+    tr = frequency_response(p, f, method="transient", fmu_path=fmu_path)
+    assert list(ds["n_orbits"].values) == [1, 1, 1] and bool(ds["converged"].all()) and bool(tr["converged"].all())
+    assert np.all(ds["amplitude_m"].values[:, 0] == 0.0) and np.all(tr["amplitude_m"].values == 0.0)
+    assert ds["neutral"].values[:, 0].all() and not ds["stable"].values.any()
+    assert np.all(ds["rest_from_m"].values[:, 0] == -0.02) and np.all(ds["rest_to_m"].values[:, 0] == 0.02)
+    assert np.all(ds["mu_max"].values[:, 0] == 1.0) and np.all(ds["x0_m"].values[:, 0] == 0.0)
+    wide = frequency_response(Oscillator.physical(**ENGINEER, f=5.0), [5.8, 5.85], fmu_path=fmu_path)
+    has = wide["has_orbit"].values
+    assert has.tolist() == [[True, False, False], [True, True, True]]
+    assert not (wide["stable"].values[~has].any() or wide["neutral"].values[~has].any())
+    assert np.isnan(wide["amplitude_m"].values[~has]).all()
+    path = tmp_path / "r.nc"
+    ds.to_netcdf(path)
+    back = xr.open_dataset(path)
+    assert all(back[v].dtype == bool for v in ("stable", "neutral", "has_orbit", "converged"))
+    back.close()

@@ -523,6 +523,11 @@ class _Run:
         if orbit is not None:
             b = Branch(len(self.branches), orbit.period, "full", parent)
             self.branches.append(b)
+            if orbit.stuck and orbit.rest_interval is not None:
+                lo, hi = orbit.rest_interval
+                raise _Failure(f"the start orbit is the block at rest, one of the interval of rest positions "
+                               f"[{lo:.6g}, {hi:.6g}] m (|k x| <= F_b - |P0|, a multiplier exactly 1): a continuum, "
+                               "not a branch to follow; it holds while |P0| <= F_b")
             m, u = self.start_map(orbit)
             b.kind = m.kind
             e, _ = self.correct(m, u, None, None, 0.0)

@@ -7,9 +7,15 @@
 The oscillator is given in the paper's non-dimensional form (as ``dryfriction lyapunov``: --lam,
 --mu-s-sigma, --chi, --zeta) or in physical units (as ``dryfriction run``: --m, --k, --c | --zeta,
 --P0, --f | --omega, --N, --mu-s, --mu-k). A table by default; ``--json`` prints exactly one object
-``{"orbits": [{"period", "stable", "multipliers": [[re, im], ...], "x0", "v0", "z0", "zdot0",
-"amplitude_m", "offset_m", "stick_fraction", "residual"}, ...]}`` (x0 in m, v0 in m/s, z0 = k x0 / P0
-and zdot0 = dz/dtau, tau = w0 t, at t = 0 mod K T; null for NaN).
+``{"orbits": [{"period", "stable", "neutral", "multipliers": [[re, im], ...], "x0", "v0", "z0", "zdot0",
+"amplitude_m", "offset_m", "stick_fraction", "residual", "rest_interval_m"}, ...]}`` (x0 in m, v0 in
+m/s, z0 = k x0 / P0 and zdot0 = dz/dtau, tau = w0 t, at t = 0 mod K T; null for NaN or infinite;
+``rest_interval_m`` [from, to] for the block at rest, else null).
+
+The orbits listed are those of period K and those whose minimal period divides K (a period-1 orbit
+asked for as K = 2 comes back after one period and is listed once, with its period 1); the last
+line counts them by period. The block at rest (P0 within the breakaway force) is one row, neutral,
+and one line gives the interval of its rest positions.
 """
 
 from __future__ import annotations
@@ -77,17 +83,52 @@ def _oscillator(args: argparse.Namespace) -> Any:
     return p
 
 
+def _percent(share: float) -> str:
+    """A share in % with one decimal, more where that would read 0 or 100 of a share that is neither
+    (a block stuck but for slides of 1e-4 of the cycle is not at rest)."""
+    text = f"{100 * share:.1f}"
+    digits = 1
+    while 0.0 < share < 1.0 and text in ("0.0", "100.0") and digits < 12:
+        digits += 1
+        text = f"{100 * share:.{digits}f}"
+    return text
+
+
 def _num(v: float) -> float | None:
     return float(v) if math.isfinite(v) else None
 
 
 def orbit_json(orbits: list[Any]) -> dict[str, Any]:
     """The ``--json`` object of a list of :class:`~dryfriction.orbits.Orbit`."""
-    return {"orbits": [{"period": o.period, "stable": bool(o.stable),
+    return {"orbits": [{"period": o.period, "stable": bool(o.stable), "neutral": bool(o.neutral),
                         "multipliers": [[float(m.real), float(m.imag)] for m in o.multipliers],
                         "x0": o.x0, "v0": o.v0, "z0": _num(o.z0), "zdot0": _num(o.zdot0),
                         "amplitude_m": o.amplitude, "offset_m": o.offset, "stick_fraction": o.stick_fraction,
-                        "residual": _num(o.residual)} for o in orbits]}
+                        "residual": _num(o.residual),
+                        "rest_interval_m": None if o.rest_interval is None else [_num(v) for v in o.rest_interval]}
+                       for o in orbits]}
+
+
+def _stability(o: Any) -> str:
+    """stable, neutral (the block at rest; a family shifted in x) or unstable, as the tables print it."""
+    return "True" if o.stable else ("neutral" if o.neutral else "False")
+
+
+def orbit_headline(orbits: list[Any], K: int) -> str:
+    """The table's count: the orbits of period K, then those whose minimal period is a divisor j < K
+    (found as K-orbits, they repeat after j periods), each with its stable (and neutral) ones."""
+    def count(group: list[Any]) -> str:
+        neutral = sum(bool(o.neutral) for o in group)
+        return f"{sum(bool(o.stable) for o in group)} stable" + (f", {neutral} neutral" if neutral else "")
+
+    per = lambda n: "s" if n != 1 else ""     # noqa: E731
+    own = [o for o in orbits if o.period == K]
+    line = f"{len(own)} orbit{per(len(own))} of {K} excitation period{per(K)} found ({count(own)})"
+    for j in sorted({o.period for o in orbits if o.period != K}, reverse=True):
+        group = [o for o in orbits if o.period == j]
+        line += (f"; {len(group)} of period {j} ({count(group)}), listed with their minimal period: they repeat "
+                 f"after {j} period{per(j)}, so after {K} too")
+    return line
 
 
 def orbit_main(args: argparse.Namespace) -> int:
@@ -100,16 +141,28 @@ def orbit_main(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(orbit_json(orbits)))
         return 0
-    print(f"{'#':>2} {'K':>2} {'stable':>6} {'|mu|max':>9} {'multipliers':>30} {'amplitude (m)':>14} "
+    print(f"{'#':>2} {'K':>2} {'stable':>7} {'|mu|max':>9} {'multipliers':>30} {'amplitude (m)':>14} "
           f"{'offset (m)':>11} {'stuck (%)':>9} {'x0 (m)':>12} {'v0 (m/s)':>12} {'residual':>8}")
     for i, o in enumerate(orbits, 1):
         mu = ", ".join(f"{m.real:.4g}" + (f"{m.imag:+.3g}j" if m.imag else "") for m in o.multipliers)
-        print(f"{i:2d} {o.period:2d} {str(o.stable):>6} {o.mu_max:9.4g} {mu:>30} {o.amplitude:14.6g} "
-              f"{o.offset:11.3g} {100 * o.stick_fraction:9.1f} {o.x0:12.6g} {o.v0:12.6g} {o.residual:8.1e}")
-    print(f"{len(orbits)} orbit{'s' if len(orbits) != 1 else ''} of {args.period} excitation period"
-          f"{'s' if args.period > 1 else ''} found ({sum(o.stable for o in orbits)} stable); "
+        print(f"{i:2d} {o.period:2d} {_stability(o):>7} {o.mu_max:9.4g} {mu:>30} {o.amplitude:14.6g} "
+              f"{o.offset:11.3g} {_percent(o.stick_fraction):>9} {o.x0:12.6g} {o.v0:12.6g} {o.residual:8.1e}")
+    print(f"{orbit_headline(orbits, args.period)}; "
           f"T = {p.period:.6g} s, static deflection P0/k = {abs(p.P0) / p.k if p.k > 0 else math.nan:.4g} m")
+    for o in orbits:
+        if o.rest_interval is not None:
+            print(rest_line(o.rest_interval, p))
     return 0
+
+
+def rest_line(rest: tuple[float, float], p: Any) -> str:
+    """The sentence on the block at rest: the interval of its rest positions."""
+    lo, hi = rest
+    where = ("at any x (no spring)" if not math.isfinite(hi) else
+             f"at any x in [{lo:.6g}, {hi:.6g}] m (|k x| <= F_b - |P0| = {p.breakaway - abs(p.P0):.4g} N)")
+    return (f"the block at rest: P0 = {abs(p.P0):.4g} N within the breakaway force F_b = {p.breakaway:.4g} N, it "
+            f"rests for good {where}; each rest position is a periodic orbit (multipliers 1 and 0: neutral), "
+            "listed once, at the position the transient from x0, v0 reaches")
 
 
 # ---- dryfriction response --method orbit: the table, the JSON object and the files ---------------
@@ -123,7 +176,7 @@ def write_orbit_csv(ds: Any, path: Any) -> Any:
     import numpy as np
 
     from .atomic import atomic_write_text
-    from .response import ORBIT_COLUMNS
+    from .response import ORBIT_COLUMNS, ORBIT_FLAGS
 
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -136,7 +189,9 @@ def write_orbit_csv(ds: Any, path: Any) -> Any:
             cells = [f"{v:.10g}" for v in vals]
             if n:
                 cells[0] = str(int(vals[0]))
-                cells[1] = str(bool(vals[1])).lower()
+                for c in ORBIT_FLAGS:
+                    k = ORBIT_COLUMNS.index(c)
+                    cells[k] = str(bool(vals[k])).lower()
             w.writerow([f"{float(f[i]):.10g}", str(j) if n else "", *cells,
                         f"{float(ds['den_hartog_m'].values[i]):.10g}", f"{float(ds['inman_m'].values[i]):.10g}",
                         str(ds["reason"].values[i])])
@@ -145,14 +200,15 @@ def write_orbit_csv(ds: Any, path: Any) -> Any:
 
 def orbit_response_json(ds: Any) -> dict[str, Any]:
     """The orbits of a response Dataset per frequency (lists of objects; no NaN padding)."""
-    from .response import ORBIT_COLUMNS
+    from .response import ORBIT_COLUMNS, ORBIT_FLAGS
 
     out = []
     for i in range(ds.sizes["f_hz"]):
         rows = []
         for j in range(int(ds["n_orbits"].values[i])):
-            r: dict[str, Any] = {c: _num(float(ds[c].values[i, j])) for c in ORBIT_COLUMNS}
-            r["period"], r["stable"] = int(r["period"]), bool(r["stable"])
+            r: dict[str, Any] = {c: (bool(ds[c].values[i, j]) if c in ORBIT_FLAGS else _num(float(ds[c].values[i, j])))
+                                 for c in ORBIT_COLUMNS}
+            r["period"] = int(r["period"])
             rows.append(r)
         out.append(rows)
     return {"orbits": out}
@@ -161,6 +217,8 @@ def orbit_response_json(ds: Any) -> dict[str, Any]:
 def print_orbit_response(ds: Any, args: argparse.Namespace, p: Any, f: Any) -> int:
     """``dryfriction response --method orbit``: files, then the table or the JSON object."""
     from pathlib import Path
+
+    import numpy as np
 
     from .response import plot_response
 
@@ -189,10 +247,11 @@ def print_orbit_response(ds: Any, args: argparse.Namespace, p: Any, f: Any) -> i
                           "scheme": ds.attrs["scheme"], "period": ds.attrs["period"],
                           "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
                                     "x0_m": "m", "v0_m_per_s": "m/s", "mu_max": "1", "period": "excitation periods",
+                                    "rest_from_m": "m", "rest_to_m": "m",
                                     "den_hartog_m": "m", "inman_m": "m"},
                           "natural_frequency_hz": p.f_n_hz, "note": note, "files": [str(x) for x in files]}))
         return 0
-    print(f"{'f (Hz)':>10} {'#':>2} {'K':>2} {'stable':>6} {'|mu|max':>9} {'amplitude (m)':>14} {'offset (m)':>12} "
+    print(f"{'f (Hz)':>10} {'#':>2} {'K':>2} {'stable':>7} {'|mu|max':>9} {'amplitude (m)':>14} {'offset (m)':>12} "
           f"{'stuck (%)':>9}")
     for i in range(f.size):
         if reasons[i]:
@@ -202,19 +261,26 @@ def print_orbit_response(ds: Any, args: argparse.Namespace, p: Any, f: Any) -> i
         if n == 0:
             print(f"{f[i]:10.4g} no orbit found")
         for j in range(n):
-            v = {c: float(ds[c].values[i, j]) for c in ("period", "stable", "mu_max", "amplitude_m", "offset_m",
+            v = {c: float(ds[c].values[i, j]) for c in ("period", "mu_max", "amplitude_m", "offset_m",
                                                         "stick_fraction")}
+            st = ("True" if ds["stable"].values[i, j] else "neutral" if ds["neutral"].values[i, j] else "False")
             lead = f"{f[i]:10.4g}" if j == 0 else " " * 10
-            print(f"{lead} {j:2d} {int(v['period']):2d} {str(bool(v['stable'])):>6} {v['mu_max']:9.4g} "
-                  f"{v['amplitude_m']:14.6g} {v['offset_m']:12.3g} {100 * v['stick_fraction']:9.1f}")
+            print(f"{lead} {j:2d} {int(v['period']):2d} {st:>7} {v['mu_max']:9.4g} "
+                  f"{v['amplitude_m']:14.6g} {v['offset_m']:12.3g} {_percent(v['stick_fraction']):>9}")
     failed = int(sum(bool(r) for r in reasons))
     total = int(ds["n_orbits"].values.sum())
-    stable = int((ds["stable"].values == 1.0).sum())
-    print(f"natural frequency {p.f_n_hz:.6g} Hz; {total} orbits at {f.size} frequencies ({stable} stable); "
-          f"{int(conv.sum())} of {conv.size} with a stable orbit" + (f"; {failed} not computed" if failed else "")
+    stable = int(ds["stable"].values.sum())
+    neutral = int(ds["neutral"].values.sum())
+    print(f"natural frequency {p.f_n_hz:.6g} Hz; {total} orbits at {f.size} frequencies ({stable} stable"
+          + (f", {neutral} neutral" if neutral else "") + f"); {int(conv.sum())} of {conv.size} with a stable orbit"
+          + (" or at rest" if neutral else "") + (f"; {failed} not computed" if failed else "")
           + f"; method orbit, scheme {ds.attrs['scheme']}")
     if note:
         print(note)
+    rest = np.isfinite(ds["rest_to_m"].values)
+    if rest.any():
+        i, j = np.argwhere(rest)[0]
+        print(rest_line((float(ds["rest_from_m"].values[i, j]), float(ds["rest_to_m"].values[i, j])), p))
     for x in files:
         print(f"wrote {x}")
     return 0

@@ -1,20 +1,24 @@
 """Periodic orbits of the excited oscillator by Newton shooting on the exact stroboscopic map
-(issue 22, item 1; docs/orbits.md).
+(docs/orbits.md).
 
 The map P^K: (x, v) at the section time t_s -> (x, v) at t_s + K T, T = 2 pi / omega, is the FMU's
 scheme ``exact`` run in one ``doStep`` through :class:`~dryfriction.fmu.OscillatorFMU2`; its 2 x 2
 Jacobian is the FMU's own (``sensitivity = true``: the linear flow of each slide and the saltation
 matrix of each event), never a finite difference. Newton: solve (J - I) dz = -r, r = P^K(z) - z, with
 a backtracking line search on the scaled residual; converged when the residual is at most ``tol``
-(default 1e-12) relative: ``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` with S = diag(x_s, x_s w), the
-static deflection x_s = |P0| / k and w = w0 (without a spring: x_s = |P0| / (m omega^2), the
-amplitude of the free mass under the excitation, and w = omega).
+(default 1e-12) relative: ``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` with S = diag(x_s, x_s w) the
+problem's own scales (:func:`scales`: the static deflection |P0| / k and w0 below the natural
+frequency, the forced motion |P0| / (m omega^2) and omega above it and without a spring), then
+while the Newton step itself is above ``tol`` (a multiplier near 1) up to two more steps. A converged
+state that creeps (x moves over its cycle by more than 1e-3 of its motion) is not an orbit.
 
 Section rule: the map is not differentiable in v inside a stick phase, so the section t_s is taken in
 the middle of the longest slide of the guess's cycle (re-chosen if the converged orbit moved a stick
-phase onto it); the state at t = 0 mod K T is then read from a run of the converged orbit. An orbit
-that never slides (stuck for good) is an orbit too: one of a line of stuck states; its Jacobian is
-the FMU's over K T, rank one, multipliers exactly 1 (along the line of stuck states: neutral) and 0.
+phase onto it), or, where the slides are shorter than the cycle's samples, of its longest stick
+phase (Newton then solves for the stuck position); the state at t = 0 mod K T is then read from a run
+of the converged orbit. The block at rest (|P0| within the breakaway force) is one orbit: a member of
+the interval of rest positions :func:`rest_interval`, its Jacobian the FMU's over a period, rank one,
+multipliers exactly 1 (along the interval: ``neutral``) and 0.
 """
 
 from __future__ import annotations
@@ -30,7 +34,8 @@ import numpy as np
 from .fmu import OscillatorFMU2, Restarts, Settings
 from .params import Oscillator
 
-__all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "STABILITY_MARGIN"]
+__all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "rest_interval",
+           "neutral_margin", "STABILITY_MARGIN"]
 
 JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
@@ -40,10 +45,13 @@ SAMPLES = 512
 #: scaled distance under which two converged states are the same orbit
 SAME = 1e-7
 #: Newton's iterates must stay within BOUND times the frictionless harmonic amplitude (plus the
-#: static deflection), else the solve is reported as diverged
+#: static deflections of the excitation and of friction), else the solve is reported as diverged
 BOUND = 1e3
 #: the frictionless amplification k X / P0 the bound assumes at most (zeta >= 5e-7 at resonance)
 MAX_AMPLIFICATION = 1e6
+#: Newton steps at most after the residual is within tol, while the step itself is not (a multiplier
+#: near 1: the residual then understates the distance to the orbit)
+POLISH = 2
 
 
 @dataclass
@@ -69,6 +77,10 @@ class Orbit:
     section_state: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))  # (x, v) at the section
     iterations: int = 0
     stuck: bool = False              # never slides (stuck for good)
+    neutral: bool = False            # a multiplier exactly 1 along a continuum of orbits, the other < 1: a
+    #                                  steady state but not an isolated one (the block at rest, a member of
+    #                                  rest_interval; without a spring, one of a family shifted in x)
+    rest_interval: tuple[float, float] | None = None   # the block at rest: every x (m) it can rest at
 
     @cached_property
     def mu_max(self) -> float:
@@ -76,12 +88,41 @@ class Orbit:
         return float(np.abs(self.multipliers).max())
 
 
+def rest_interval(p: Oscillator) -> tuple[float, float] | None:
+    """The positions x (m) where the block rests for good, or None when there are none: stuck at x
+    (v = 0) the friction force holds P(t) - k x for every t while |P0 cos(omega t + phi) - k x| <= F_b,
+    F_b = max(mu_s, mu_k) N the breakaway force (method.md section 1; a tangential touch of the limit
+    keeps it stuck), i.e. for all t exactly when |k x| <= F_b - |P0|. So the block at rest is a
+    closed interval [-(F_b - |P0|) / k, (F_b - |P0|) / k] when |P0| <= F_b (the single point 0 at
+    |P0| = F_b), the whole line without a spring (k = 0), and empty when |P0| > F_b (the excitation
+    breaks any rest). Every member is a periodic orbit of period 1 (damping plays no part: v = 0)."""
+    margin = p.breakaway - abs(p.P0)
+    if not margin >= 0.0:
+        return None
+    if p.k == 0.0:
+        return (-math.inf, math.inf)
+    h = margin / p.k
+    return (-h, h)
+
+
+#: x_s is at least this share of the static deflection |P0| / k: the exact scheme computes positions in
+#: static deflections (rounding about 1.4e-14 of one), so a tolerance of 1e-12 in x_s stays above it
+RESOLVED = 1e-2
+
+
 def scales(p: Oscillator) -> tuple[float, float]:
-    """(x_s, w): the position and rate scales of the residual (module doc)."""
+    """(x_s, w): the position and rate scales of the residual (module doc): the excitation's
+    deflection against the larger of the spring and the inertia at omega, x_s = |P0| / max(k, m omega^2),
+    and w = max(w0, omega). Below the natural frequency (lambda <= 1) the static deflection |P0| / k
+    and w0; above it |P0| / (m omega^2) and omega, the size of the forced motion there (at lambda = 10
+    a hundredth of the static deflection), but at least RESOLVED static deflections (lambda > 10: the
+    FMU resolves no finer); without a spring (k = 0) the amplitude of the free mass under the
+    excitation and omega."""
     P0 = abs(p.P0)
-    if p.k > 0:
+    inertia = p.m * p.omega ** 2
+    if p.k >= inertia:
         return P0 / p.k, p.w0
-    return P0 / (p.m * p.omega ** 2), p.omega
+    return max(P0 / inertia, RESOLVED * P0 / p.k) if p.k > 0 else P0 / inertia, p.omega
 
 
 class _Map:
@@ -193,10 +234,11 @@ def _events(mode: np.ndarray) -> dict[str, int]:
     return {"stops": stops, "breakaways": breaks, "reversals": revs}
 
 
-def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float) -> float | None:
+def _slide_section(t: np.ndarray, mode: np.ndarray, t_from: float, span: float, stuck: bool = False) -> float | None:
     """The middle of the longest run of sliding samples of a cycle (cyclic), as a time in
-    [t_from, t_from + span); None if it never slides."""
-    slide = mode != 0
+    [t_from, t_from + span); None if it never slides. ``stuck``: of the longest run of stuck samples
+    instead (None if it never sticks)."""
+    slide = (mode == 0) if stuck else (mode != 0)
     if not slide.any():
         return None
     if slide.all():               # slides all the time: any section will do (NaN: keep it)
@@ -245,7 +287,10 @@ class _Solver:
         # MAX_AMPLIFICATION (else Newton "converges" on the unbounded growth, relative to a huge state)
         den = math.hypot(p.k - p.m * p.omega ** 2, p.c * p.omega)
         X = abs(p.P0) / den if den > 0 else math.inf
-        self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION))
+        # the static deflections of the excitation and of friction too (an orbit may stick at an offset
+        # of that size: far beyond X where the inertia sets x_s, lambda >> 1)
+        static = (abs(p.P0) + p.breakaway) / p.k if p.k > 0 else 0.0
+        self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION) + static / xs)
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
@@ -322,6 +367,27 @@ class _Solver:
             if abs(x) / xs > self.bound or abs(v) / xw > self.bound:
                 return (x, v, ja, jb, jc, jd, r, it, f"Newton diverged: the state left the bound of {BOUND:g} "
                         "times the frictionless amplitude", md)
+        for _ in range(POLISH):
+            # r <= tol, but the distance left to the fixed point is the Newton step, about r / |1 - mu|:
+            # far more than r where a multiplier is near 1 (a slow creep, e.g. at lambda 1e-6, or onto the
+            # edge of the interval of rest positions): step on while the step is above tol
+            a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
+            det = a * d - b * c
+            if det == 0.0 or not math.isfinite(det):
+                break
+            r0, r1 = x - px, v - pv
+            dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
+            size = max(1.0, abs(x) / xs, abs(v) / xw)
+            if not max(abs(dx) / xs, abs(dv) / xw) > tol * size:
+                break
+            xn, vn = x + dx, v + dv
+            pxn, pvn, ja_, jb_, jc_, jd_, mn = ev(xn, vn, t_s)
+            rn = res(xn, vn, pxn, pvn)
+            if not rn <= tol:
+                ev(x, v, t_s)            # the map's last evaluation is the state kept (its observables)
+                break
+            it += 1
+            x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
         return x, v, ja, jb, jc, jd, r, it, "", md
 
 
@@ -404,7 +470,10 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
         todo.extend((z, 0.0, False) for z in starts)
     for g in guesses or ():
         todo.append((np.asarray(g, dtype=float), 0.0, True))
-    found: list[Orbit] = []
+    rest = rest_interval(p)
+    # the block at rest: one orbit for the whole interval of rest positions (members reached by the
+    # guesses are not listed again)
+    found: list[Orbit] = [] if rest is None else [_rest_orbit(f, sol, rest, max(transients, REST_PERIODS) * K)]
     cycles: list[np.ndarray] = []        # scaled states of each found orbit at the K marks
     failed: list[Orbit] = []
 
@@ -429,6 +498,8 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
             if keep_failed and given:
                 failed.append(orbit)
             continue
+        if orbit.stuck and rest is not None:
+            continue                     # a member of the rest interval, reported once
         sm = np.array([sol.map.scaled(m) for m in marks])
         if any(_same(sm, c) for c in cycles):
             continue
@@ -445,7 +516,7 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
         found.append(orbit)
         if symmetry and halfway is not None:
             todo.insert(0, (-halfway[0], halfway[1], False))
-    found.sort(key=lambda o: (not o.stable, -o.amplitude))
+    found.sort(key=lambda o: (not o.stable, not o.neutral, -o.amplitude))
     return found + failed
 
 
@@ -469,11 +540,19 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
     t_s = t_g
     reason = ""
     for attempt in range(4):
+        in_stick = False        # the section in a stick phase (the slides are shorter than the samples)
         if attempt == 0 and sol.slides_throughout(z, t_s):
             t_new: float | None = math.nan      # any section will do: no sampled cycle needed
         else:
             cyc = m.cycle(z, t_s)
             t_new = _slide_section(cyc["t"], cyc["mode"], 0.0, KT)
+            if (t_new is None or attempt >= 2) and cyc["stick_fraction"] < 1.0:
+                # it slides (the FMU's stuck time says so) between samples, or the orbit came out stuck
+                # at the slide's section twice: solve in the longest stick phase instead, where the
+                # map is the scalar one of the stuck states (x, 0) (its Jacobian's v column is 0)
+                t_stick = _slide_section(cyc["t"], cyc["mode"], 0.0, KT, stuck=True)
+                if t_stick is not None:          # NaN: every sample stuck, the guess's section will do
+                    t_new, in_stick = (t_s % KT if math.isnan(t_stick) else t_stick), True
         if t_new is None:           # never slides over the cycle: a stuck orbit (or stuck for now)
             Pz, J, md = m(z, t_s)
             r = sol.residual(z, Pz)
@@ -488,10 +567,12 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
             z, t_s = np.array([cyc["x"][i], cyc["v"][i]]), float(cyc["t"][i] % KT)
         elif math.isnan(t_new):
             t_s = t_s % KT
+        if in_stick:
+            z = np.array([z[0], 0.0])            # stuck there (the sample's v is 0 already)
         zc, J, r, it, reason, md = sol.newton(z, t_s)
         if reason:
             return _failed(sol, zc, t_s, J, r, it, reason), [], None
-        if md == 0:                 # a stick phase came onto the section: choose it again
+        if md == 0 and not (in_stick and zc[1] == 0.0):    # a stick phase came onto the section: choose it again
             z = zc
             reason = "the converged orbit is stuck at every section tried"
             continue
@@ -499,6 +580,43 @@ def _solve(sol: _Solver, z: np.ndarray, t_g: float,
             return None, [], None
         return _finish(sol, zc, t_s, J, r, it)
     return _failed(sol, z, t_s, np.full((2, 2), np.nan), math.nan, 0, reason), [], None
+
+
+#: a converged state whose x moves over its cycle by more than this share of its peak-to-peak motion is
+#: not an orbit but a creep (within tol only because the motion is tiny against the static deflection:
+#: e.g. a block creeping onto the edge of the interval of rest positions, a breakaway per period)
+CREEP = 1e-3
+
+
+def _creeps(drift: float, x_max: float, x_min: float) -> bool:
+    return drift > CREEP * (x_max - x_min)
+
+
+def _creep_reason(drift: float, x_max: float, x_min: float) -> str:
+    return (f"not periodic: x moves by {drift:.3g} m per cycle, more than {CREEP:g} of its peak-to-peak "
+            f"{x_max - x_min:.3g} m (a creep, e.g. onto the edge of the interval of rest positions)")
+
+
+def _neutral(mods: np.ndarray, p: Oscillator) -> bool:
+    """A multiplier 1 (within :func:`neutral_margin`), the other inside the unit circle: one of a
+    family of orbits shifted in x, neutrally stable (without a spring; or with one too weak against the
+    inertia for the FMU to tell the family's members apart)."""
+    lo, hi = float(min(mods)), float(max(mods))
+    margin = neutral_margin(p)
+    return abs(hi - 1.0) <= margin and lo < 1.0 - margin
+
+
+#: the exact scheme's relative rounding of positions, in its unit the static deflection |P0| / k
+ROUNDING = 64 * 2.0 ** -52
+
+
+def neutral_margin(p: Oscillator) -> float:
+    """How close to 1 a multiplier must be to count as 1: STABILITY_MARGIN, or where the inertia
+    dwarfs the spring (lambda >> 1) the FMU's resolution of the motion, ROUNDING lambda^2 (it
+    computes positions in static deflections, |P0| / k, the motion is |P0| / (m omega^2): at lambda
+    4.4e4 its members drift by 4e-8 of their offset per period, below the rounding of the map)."""
+    ratio = p.m * p.omega ** 2 / p.k if p.k > 0 else 0.0
+    return max(STABILITY_MARGIN, ROUNDING * ratio)
 
 
 def _multipliers(J: np.ndarray, sticks: bool) -> np.ndarray:
@@ -520,6 +638,11 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
             it: int) -> tuple[Orbit, list[np.ndarray], tuple[np.ndarray, float] | None]:
     p, K, KT, T = sol.p, sol.K, sol.KT, sol.p.period
     cyc = sol.map.cycle(z, t_s)
+    if cyc["stick_fraction"] >= 1.0:             # Newton stepped into the interval of rest positions
+        return _stuck_orbit(sol, z, t_s, J, r), [z] * K, None
+    drift = abs(float(cyc["x"][-1]) - float(z[0]))
+    if _creeps(drift, cyc["x_max"], cyc["x_min"]):
+        return _failed(sol, z, t_s, J, r, it, _creep_reason(drift, cyc["x_max"], cyc["x_min"])), [], None
     t = cyc["t"]
     marks = [np.array([cyc["x"][i], cyc["v"][i]]) for i in (int(np.argmin(np.abs(t - tm))) for tm in cyc["marks"])]
     # the state at t = 0 mod K T: at the multiple of K T in (t_s, t_s + K T]
@@ -530,8 +653,9 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
     mu = _multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)
     z0, zd0 = _nondim(p, x0, v0)
     xmax, xmin = float(cyc["x_max"]), float(cyc["x_min"])
-    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                  stable=bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+    neutral = _neutral(np.abs(mu), p)
+    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
+                  stable=not neutral and bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
                   amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0,
                   stick_fraction=float(cyc["stick_fraction"]), events=events, converged=True, section=t_s,
                   jacobian=J, section_state=np.array(z, dtype=float), iterations=it)
@@ -549,7 +673,37 @@ def _stuck_orbit(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: floa
     return Orbit(period=1, x0=x0, v0=0.0, z0=z0, zdot0=zd0, multipliers=mu, stable=False, residual=r,
                  amplitude=0.0, offset=x0, stick_fraction=1.0,
                  events={"stops": 0, "breakaways": 0, "reversals": 0, "transitions": 0}, converged=True,
-                 section=t_s, jacobian=J, section_state=np.array([x0, 0.0]), stuck=True)
+                 section=t_s, jacobian=J, section_state=np.array([x0, 0.0]), stuck=True, neutral=True,
+                 rest_interval=rest_interval(p))
+
+
+#: the transient from the oscillator's initial state that finds where the block comes to rest runs at
+#: least this many excitation periods
+REST_PERIODS = 60
+
+
+def _rest_orbit(f: OscillatorFMU2, sol: _Solver, rest: tuple[float, float], periods: int) -> Orbit:
+    """The block at rest (``rest``: :func:`rest_interval`): the rest position the transient from the
+    oscillator's initial state (x0, v0) reaches (``periods`` excitation periods of the FMU, as the
+    transient method runs; it is at rest for good once stuck inside the interval at a period mark),
+    else the point of the interval nearest to where that transient ended (it creeps onto the
+    interval's edge, a breakaway per period, or moves on another orbit), 1e-12 of the half-width
+    inside the edge (on the edge the force touches the limit once per period, which rounding may
+    read as a breakaway); its map over one period evaluated by the FMU (residual, Jacobian
+    [[1, 0], [0, 0]]: multipliers exactly 1, along the interval, and 0). Neutrally stable:
+    ``neutral``, not ``stable``."""
+    p = sol.p
+    lo, hi = rest
+    runs = f.restarts(p, Settings(scheme="exact"), ("x", "v"), ("mode",))
+    runs.run(p.x0, p.v0, 0.0, periods * p.period)
+    x, v = runs.real
+    if not (runs.int[0] == 0 and v == 0.0 and lo <= x <= hi):
+        x = min(max(x, lo * (1.0 - 1e-12)), hi * (1.0 - 1e-12))    # lo = -hi (or -inf, inf without a spring)
+    z = np.array([x, 0.0])
+    Pz, J, _ = _Map(f, p, 1)(z, 0.0)
+    orbit = _stuck_orbit(sol, z, 0.0, J, sol.residual(z, Pz))
+    orbit.rest_interval = rest
+    return orbit
 
 
 def _failed(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float, it: int, reason: str) -> Orbit:
@@ -579,6 +733,12 @@ class _ObservingMap(_Map):
     def _mid(self, t_s: float, t_end: float, KT: float) -> float | None:
         mark = KT * math.floor(t_end / KT + 1e-12)          # the multiple of K T in (t_s, t_s + K T]
         return mark if mark < t_end - 1e-12 * KT else None
+
+    @property
+    def end(self) -> tuple[float, float]:
+        """(x, v) at the end of the last evaluation."""
+        assert self._runs is not None
+        return self._runs.real[0], self._runs.real[1]
 
     def observed(self) -> dict[str, float]:
         """The last evaluation's observables and its state x0, v0 at the period mark (the last
@@ -612,12 +772,14 @@ class OrbitFollower:
         m = sol.map
         t_s = float(section) % p.period
         x, v, j00, j01, j10, j11, r, it, reason, md = sol.solve(float(state[0]), float(state[1]), t_s)
-        if reason or md == 0:
+        if reason or (md == 0 and not (float(state[1]) == 0.0 and v == 0.0)):   # stuck at a slide's section
             return None
         if not m.final:             # the guess was periodic already: run it again with the stop at the mark
             m.eval(x, v, t_s)
         y = m.last = m.observed()
         stick = y["stick_fraction"]
+        if stick >= 1.0 or _creeps(abs(m.end[0] - x), y["x_max"], y["x_min"]):
+            return None                 # at rest for good, or creeping onto a rest position: find_orbits
         if stick > 0.0:
             mu = np.array([complex(j00 + j11), 0j])
             mag = np.abs(mu)
@@ -632,8 +794,9 @@ class OrbitFollower:
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = y["x_max"], y["x_min"]
         lim = 1.0 - STABILITY_MARGIN
-        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu,
-                     stable=bool(mag[0] < lim and mag[1] < lim), residual=r,
+        neutral = _neutral(mag, p)
+        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
+                     stable=not neutral and bool(mag[0] < lim and mag[1] < lim), residual=r,
                      amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
                      events={"transitions": y["transitions"]}, converged=True, section=t_s,
                      jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
@@ -646,8 +809,11 @@ def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float,
     of a sweep): Newton shooting as :func:`find_orbits`, without its cycle runs (the converged
     evaluation's own observables give the amplitude, offset and stick share, its stop at t = T the
     state x0, v0). None when Newton does not converge or the converged orbit is stuck at the section
-    (then :func:`find_orbits` chooses a section). ``events`` holds only the FMU's count of mode
-    changes (``transitions``; stops, breakaways and reversals need find_orbits' sampled cycle). The
+    (then :func:`find_orbits` chooses a section), unless the section is a stick phase already (a
+    stuck state v = 0 given, as find_orbits' section where the slides are shorter than its samples:
+    Newton then solves for the stuck position, the Jacobian's v column being 0), or when it is at rest
+    for good or creeps (then None too). ``events`` holds only the FMU's count of mode changes
+    (``transitions``; stops, breakaways and reversals need find_orbits' sampled cycle). The
     multipliers: with a stick phase exactly trace(J) and 0, else the roots of the characteristic
     polynomial of J. For a sweep, :class:`OrbitFollower` does the same with less set-up per point."""
     return OrbitFollower(fmu, tol, max_iter)(oscillator, state, section)

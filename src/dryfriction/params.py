@@ -22,7 +22,15 @@ from typing import Any
 
 from . import model
 
-__all__ = ["Oscillator", "UNITS"]
+__all__ = ["Oscillator", "UNITS", "SCALE_LIMIT"]
+
+#: m and k (k > 0) must lie within [1 / SCALE_LIMIT, SCALE_LIMIT] (kg, N/m): then the natural
+#: frequency sqrt(k/m), the time 1/w0 and every product the solution and its Jacobian form stay inside
+#: double precision's normal range (checked: the stroboscopic map and its Jacobian scale exactly,
+#: within 1e-9 of the unit oscillator's, on a grid of m, k and P0 from 1e-200 to 1e200 wherever m, k and
+#: sqrt(k/m) lie within it; beyond it the FMU's Jacobian overflows (k > 1e154 with friction) or its run
+#: silently loses the motion (m = k = 1e-300: stuck where it slides))
+SCALE_LIMIT = 1e100
 
 #: unit of every field and derived quantity (the model description's, plus the derived ones; read
 #: on first use)
@@ -48,6 +56,22 @@ def _at_least(field: str, value: Any, lo: float, where: str, open_: bool = False
     if x < lo or (open_ and x == lo):
         raise ValueError(f"{where}: invalid value {x!r} for {field}; valid range: {'>' if open_ else '>='} {lo:g}")
     return x
+
+#: the fields whose size SCALE_LIMIT bounds, with their units (k = 0, no spring, is valid too)
+SCALED = {"m": "kg", "k": "N/m"}
+
+
+def _check_scale(name: str, x: float, what: str) -> None:
+    """ValueError naming the field and its valid range unless 1 / SCALE_LIMIT <= x <= SCALE_LIMIT (or
+    k = 0)."""
+    if name == "k" and x == 0.0:
+        return
+    if not 1.0 / SCALE_LIMIT <= x <= SCALE_LIMIT:
+        zero = " (or 0: no spring)" if name == "k" else ""
+        raise ValueError(f"Oscillator: invalid value {x!r} for {name} ({what}); valid range: {1.0 / SCALE_LIMIT:g} "
+                         f"to {SCALE_LIMIT:g} {SCALED[name]}{zero}: beyond it the oscillator's scales (the natural "
+                         "frequency sqrt(k/m) among them) leave double precision")
+
 
 def _start(name: str) -> float:
     """The start value of a parameter in the model description (the defaults below, read when
@@ -83,6 +107,8 @@ class Oscillator:
         for f in fields(self):
             value = getattr(self, f.name)
             x = _real(f.name, value)
+            if f.name in SCALED:
+                _check_scale(f.name, x, md.var(f.name).description.split(" (")[0])
             try:
                 md.check(f.name, x, where=f"{f.name} ({md.var(f.name).description.split(' (')[0]})")
             except ValueError as e:
@@ -174,8 +200,10 @@ class Oscillator:
             raise ValueError(f"{where}: give the excitation frequency as f (Hz) or omega (rad/s), exactly one")
         if mu_k is not None and chi is not None:
             raise ValueError(f"{where}: give mu_k or chi, not both")
-        m = _at_least("m (mass, kg)", m, 0.0, where, open_=True)
-        k = _at_least("k (stiffness, N/m)", k, 0.0, where)
+        m = _real("m (mass, kg)", m, where)
+        _check_scale("m", m, "mass")
+        k = _real("k (stiffness, N/m)", k, where)
+        _check_scale("k", k, "spring stiffness")
         mu_s = _at_least("mu_s (static friction coefficient)", mu_s, 0.0, where)
         if zeta is not None:
             c = 2.0 * _at_least("zeta (damping ratio)", zeta, 0.0, where) * math.sqrt(k * m)

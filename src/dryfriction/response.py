@@ -236,7 +236,9 @@ COLD_EVERY = 100
 ORBIT_SAMPLES = 32
 #: columns of the orbit method's table per (frequency, orbit)
 ORBIT_COLUMNS = ("period", "stable", "mu_max", "amplitude_m", "offset_m", "stick_fraction", "x0_m", "v0_m_per_s",
-                 "residual")
+                 "residual", "neutral", "rest_from_m", "rest_to_m")
+#: the columns of ORBIT_COLUMNS that are booleans (the Dataset's bool variables)
+ORBIT_FLAGS = ("stable", "neutral")
 METHODS = ("orbit", "transient")
 
 
@@ -278,9 +280,10 @@ class _Branch:
 
 
 def _attracting(o: Any, p: Oscillator) -> bool:
-    """A steady state: a stable orbit; without a spring (every orbit one of a family shifted in x,
-    a multiplier exactly 1, ``stable`` false) one whose other multiplier is inside the unit circle."""
-    if o.stable:
+    """A steady state: a stable orbit, the block at rest (``neutral``: one of the interval of rest
+    positions); without a spring (every orbit one of a family shifted in x, a multiplier exactly 1,
+    ``stable`` false) one whose other multiplier is inside the unit circle."""
+    if o.stable or o.neutral:
         return True
     if p.k > 0 or o.stuck:
         return False
@@ -290,14 +293,15 @@ def _attracting(o: Any, p: Oscillator) -> bool:
 
 def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
     """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart);
-    without a spring the members of a family shifted in x are one (x0 - offset and v0 compared)."""
+    the members of a family shifted in x (without a spring, or neutral: a spring too weak to tell them
+    apart) are one (x0 - offset and v0 compared)."""
     if len(orbits) < 2:
         return list(orbits)
     xs, w = scales(p)
     out: list[Any] = []
     seen: list[tuple[float, float]] = []
     for o in orbits:
-        x = o.x0 - o.offset if p.k == 0 and math.isfinite(o.offset) else o.x0
+        x = o.x0 - o.offset if (p.k == 0 or o.neutral) and math.isfinite(o.offset) else o.x0
         a0, a1 = x / xs, o.v0 / (xs * w)
         tol = SAME * max(1.0, abs(a0), abs(a1))
         if o.period == 1 and any(max(abs(a0 - q0), abs(a1 - q1)) <= tol for q0, q1 in seen):
@@ -436,13 +440,14 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
         rows, kept, stuck = [], [], False
         for b in branches:
             o = b.orbit
-            if o.stuck:        # a line of stuck states: reported once
+            if o.stuck:        # the interval of rest positions: reported once
                 if stuck:
                     continue
                 stuck = True
             kept.append(b)
+            lo, hi = o.rest_interval if o.rest_interval is not None else (math.nan, math.nan)
             rows.append((float(o.period), float(o.stable), o.mu_max, o.amplitude, o.offset, o.stick_fraction,
-                         o.x0, o.v0, o.residual, float(_attracting(o, p))))
+                         o.x0, o.v0, o.residual, float(o.neutral), lo, hi, float(_attracting(o, p))))
         branches = kept
         table.append(rows)
         reasons.append("")
@@ -466,8 +471,13 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     (:func:`dryfriction.orbits.find_orbits`; the previous frequency's orbits are the next one's
     guesses, ``transients`` the length of the cold searches' transients, ``cold_every`` their
     spacing in frequencies besides the first one and where no stable orbit is found), along a second dimension
-    ``orbit`` padded with NaN: period, stable, mu_max, amplitude_m, offset_m, stick_fraction, x0_m,
-    v0_m_per_s, residual; ``n_orbits`` and ``converged`` (at least one stable orbit) per frequency.
+    ``orbit``: period, stable, neutral, mu_max, amplitude_m, offset_m, stick_fraction, x0_m,
+    v0_m_per_s, residual, rest_from_m, rest_to_m (the block at rest: one orbit, amplitude 0, ``neutral``,
+    with the interval of its rest positions); ``n_orbits`` and ``converged`` (at least one stable orbit,
+    or the block at rest) per frequency. The padding of ``orbit`` (fewer orbits than the widest
+    frequency's) is the bool mask ``has_orbit``: the numbers are NaN there and the bool variables
+    ``stable``, ``neutral`` False (they stay bool: NaN would make them floats, None objects, which NetCDF
+    cannot hold).
 
     ``method`` ``"transient"``: :func:`steady_state` (variables amplitude_m, offset_m, stick_fraction,
     converged, periods, change, error).
@@ -540,14 +550,23 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
         tab = np.concatenate([np.pad(r["orbits"], ((0, 0), (0, width - r["orbits"].shape[1]), (0, 0)),
                                      constant_values=np.nan) for r in results], axis=0)
         col = {n: tab[:, :, i] for i, n in enumerate(ORBIT_COLUMNS + ("attracting",))}
-        n_orbits = np.sum(np.isfinite(col["amplitude_m"]), axis=1)
-        stable = col["stable"]
+        # a bool stays a bool: the padding (no orbit) is the mask has_orbit, the flags False there (NaN
+        # would make them floats, None objects, which NetCDF cannot hold)
+        has = np.isfinite(col["period"])
+        n_orbits = np.sum(has, axis=1)
+        flag = {n: has & (col[n] == 1.0) for n in ORBIT_FLAGS + ("attracting",)}
         dims = ("f_hz", "orbit")
         ds = xr.Dataset(
             {
+                "has_orbit": (dims, has, {"long_name": "an orbit at this index (False: padding, every variable "
+                                                       "NaN or False there)"}),
                 "period": (dims, col["period"], {"units": "excitation periods", "long_name": "period K of the orbit"}),
-                "stable": (dims, stable, {"long_name": "1: stable (every |multiplier| < 1), 0: unstable, NaN: "
-                                                       "no orbit"}),
+                "stable": (dims, flag["stable"], {
+                    "long_name": "stable: every |multiplier| < 1 (False for an unstable or neutral orbit, and where "
+                                 "has_orbit is False)"}),
+                "neutral": (dims, flag["neutral"], {
+                    "long_name": "neutrally stable: a multiplier exactly 1 along a continuum of orbits, the other "
+                                 "inside the unit circle (the block at rest; a family shifted in x)"}),
                 "mu_max": (dims, col["mu_max"], {"units": "1", "long_name": "largest |Floquet multiplier|"}),
                 "amplitude_m": (dims, col["amplitude_m"], {"units": "m",
                                                            "long_name": "amplitude, half peak-to-peak of x over the orbit"}),
@@ -556,14 +575,20 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                 "x0_m": (dims, col["x0_m"], {"units": "m", "long_name": "x at t = 0 mod K T"}),
                 "v0_m_per_s": (dims, col["v0_m_per_s"], {"units": "m/s", "long_name": "v at t = 0 mod K T"}),
                 "residual": (dims, col["residual"], {"units": "1", "long_name": "scaled Newton residual"}),
+                "rest_from_m": (dims, col["rest_from_m"], {"units": "m", "long_name": "the block at rest: the lowest "
+                                                                     "rest position, -(F_b - |P0|) / k (NaN for "
+                                                                     "other orbits)"}),
+                "rest_to_m": (dims, col["rest_to_m"], {"units": "m", "long_name": "the block at rest: the highest rest "
+                                                                 "position, (F_b - |P0|) / k"}),
                 "n_orbits": ("f_hz", n_orbits, {"units": "1", "long_name": "orbits found"}),
-                "converged": ("f_hz", np.any(col["attracting"] == 1.0, axis=1),
-                              {"long_name": "a stable orbit was found (a steady state; without a spring: "
-                                            "one attracting but for its neutral shift in x)"}),
+                "converged": ("f_hz", np.any(flag["attracting"], axis=1),
+                              {"long_name": "a stable orbit was found (a steady state; the block at rest "
+                                            "counts, neutral; without a spring: one attracting but for its neutral "
+                                            "shift in x)"}),
                 **common,
             },
             coords={**coords, "orbit": ("orbit", np.arange(width), {"long_name": "orbit index (stable first, "
-                                                                                  "then by amplitude)"})},
+                                                                                  "then neutral, then by amplitude)"})},
             attrs={**attrs, "period": period, "transients": transients, "cold_every": cold_every},
         )
         return ds
@@ -669,16 +694,18 @@ def plot_response(ds: Any, path: str | os.PathLike[str]) -> Path:
     conv = ds["converged"].values.astype(bool)
     orbit = ds.attrs.get("method") == "orbit"
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
-    if orbit:   # every orbit: stable filled on solid lines, unstable hollow on dashed ones
-        st = ds["stable"].values
+    if orbit:   # every orbit: stable (and neutral: at rest) filled on solid lines, unstable hollow on dashed ones
+        has = ds["has_orbit"].values
+        st = ds["stable"].values | ds["neutral"].values
+        un = has & ~st
         for j in range(amp.shape[1]):
             a = amp[:, j]
-            ax.plot(f, np.where(st[:, j] == 1.0, a, np.nan), "-", color="C0", lw=1, zorder=1)
-            ax.plot(f, np.where(st[:, j] == 0.0, a, np.nan), "--", color="C3", lw=1, zorder=1)
+            ax.plot(f, np.where(st[:, j], a, np.nan), "-", color="C0", lw=1, zorder=1)
+            ax.plot(f, np.where(un[:, j], a, np.nan), "--", color="C3", lw=1, zorder=1)
         ff = np.broadcast_to(f[:, None], amp.shape)
-        ax.plot(ff[st == 1.0], amp[st == 1.0], "o", ms=4, color="C0", label="stable orbit", zorder=3)
-        if (st == 0.0).any():
-            ax.plot(ff[st == 0.0], amp[st == 0.0], "o", ms=5, mfc="none", mec="C3", mew=1.2,
+        ax.plot(ff[st], amp[st], "o", ms=4, color="C0", label="stable orbit (or at rest)", zorder=3)
+        if un.any():
+            ax.plot(ff[un], amp[un], "o", ms=5, mfc="none", mec="C3", mew=1.2,
                     label="unstable orbit", zorder=3)
     else:
         ax.plot(f, amp, "-", color="0.6", lw=1, zorder=1)
@@ -703,7 +730,7 @@ def plot_response(ds: Any, path: str | os.PathLike[str]) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     if orbit:
-        sf = np.where(ds["stable"].values == 1.0, ds["stick_fraction"].values, np.nan)
+        sf = np.where(ds["stable"].values | ds["neutral"].values, ds["stick_fraction"].values, np.nan)
         for j in range(sf.shape[1]):
             bx.plot(f, 100 * sf[:, j], "s-", ms=3, color="C1", label="stuck share of the stable orbits" if j == 0 else None)
     else:
