@@ -156,7 +156,7 @@ def test_the_cli_reports_an_unusable_fmu_in_one_line(make, words: str, command: 
     (["fig3", "--workers", "two"], "invalid int value"),
     (["fig3", "--config", "/nonexistent.toml"], "config file not found"),
     (["fig3", "--fmu", "/nonexistent.fmu"], "FMU not found"),
-    (["fig3", "--bogus"], "unrecognized arguments"),
+    (["fig3", "--bogus"], "unknown option --bogus (dryfriction study --help lists the options)"),
 ])
 @pytest.mark.min_versions
 def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: str, tmp_path: Path,
