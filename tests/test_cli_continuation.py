@@ -62,7 +62,7 @@ def test_files_and_the_band(tmp_path: Path, fmu_path: Path, capsys: pytest.Captu
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--param", "chi", "--from", "0.5", "--to", "0.5"], "start and stop must differ"),
+    (["--param", "chi", "--from", "0.5", "--to", "0.5"], "dryfriction: error: --from and --to must differ (both 0.5)"),
     (["--param", "chi", "--from", "0.6", "--to", "0.5", "--lam", "0.5", "--m", "1"],
      "give physical units or the non-dimensional form, not both (--lam)"),
     (["--param", "chi", "--from", "0.6", "--to", "-0.5"], "chi"),

@@ -182,6 +182,10 @@ RUN_UNITS = {"amplitude": "m", "asymmetry": "m", "x_max": "m", "x_min": "m", "st
              "run_periods": "excitation periods"}
 
 
+#: the numbers ``dryfriction run`` prints that are counts (whole numbers in its JSON)
+RUN_COUNTS = ("transitions", "samples")
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
     from .console import check_output_folder
     from .report import validate
@@ -230,7 +234,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.scene == "sweep":
         head["measured"] = scenes.sweep_window_text(p, args.periods)
     if "t" not in res:  # observables: a few numbers
-        print(json.dumps({**head, **{k: float(v) for k, v in res.items()},
+        print(json.dumps({**head, **{k: int(v) if k in RUN_COUNTS else float(v) for k, v in res.items()},
                           "units": {k: RUN_UNITS.get(k, "") for k in res}}, indent=2))
         return 0
     if args.out:

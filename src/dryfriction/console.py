@@ -146,9 +146,9 @@ def _flush_and_exit(code: int) -> None:
 
 
 @contextmanager
-def _handlers() -> Iterator[None]:
+def _handlers(restore: bool = True) -> Iterator[None]:
     """Our handler for SIGINT and SIGTERM while the block runs (main thread only; elsewhere the
-    block runs with the handlers as they are), the previous ones restored after it."""
+    block runs with the handlers as they are), the previous ones restored after it (``restore``)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -156,7 +156,7 @@ def _handlers() -> Iterator[None]:
     try:
         yield
     finally:
-        for s, h in old.items():
+        for s, h in old.items() if restore else ():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
 
 
@@ -275,8 +275,9 @@ def _check_names(path: Path, option: str, extra: int) -> None:
         limit = name_max - (extra if i == len(parts) - 1 else 0)
         if len(os.fsencode(part)) > limit:
             raise UsageError(f"{option} {_short(str(path), 60)}: the name {_short(part, 40)!r} is "
-                             f"{len(os.fsencode(part))} bytes long; at most {limit} fit "
-                             f"({name_max} per name on this file system)")
+                             f"{len(os.fsencode(part))} bytes long, more than the {limit} it may have here "
+                             f"({name_max} per name on this file system"
+                             + (", less the temporary name's suffix)" if limit < name_max else ")"))
     if len(os.fsencode(str(path.absolute()))) + extra + 64 > path_max:
         raise UsageError(f"{option} {_short(str(path), 60)}: the path is too long for this file system "
                          f"(at most {path_max - extra - 64} bytes here)")
@@ -305,9 +306,9 @@ def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -
     path = Path(folder)
     if str(folder) == "":
         raise UsageError(f"{option} must name a folder, not ''")
+    _check_names(path, option, extra=len(".staging-") + 9)
     if path.exists() and not path.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)} is a file, not a folder")
-    _check_names(path, option, extra=len(".staging-") + 9)
     parent = path.parent
     where = _nearest_existing(parent)
     if not where.is_dir():
@@ -332,9 +333,9 @@ def check_output_file(file: str | os.PathLike[str], option: str = "--out") -> Pa
     path = Path(file)
     if str(file) == "" or path.name in ("", ".", ".."):
         raise UsageError(f"{option} must name a file, not {str(file)!r}")
+    _check_names(path, option, extra=len("..") + 8 + len(".tmp"))
     if path.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)} is a folder, not a file")
-    _check_names(path, option, extra=len("..") + 8 + len(".tmp"))
     where = _nearest_existing(path.parent)
     if not where.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)}: {_short(str(where), 80)} is a file, not a folder")
@@ -443,10 +444,13 @@ def main() -> None:
     removed by then, the one line printed)."""
     st = _STATE
     st.console = True
-    with _handlers():
+    with _handlers(restore=False):
         gate = None
         try:
-            gate = st.gate = _StderrGate()
+            from .atomic import signals_held
+
+            with signals_held():   # no signal half-way (and none ever handled by the pump thread)
+                gate = st.gate = _StderrGate()
             from .cli import main as cli_main
 
             code = cli_main(sys.argv[1:])
@@ -461,4 +465,8 @@ def main() -> None:
         if gate is not None:
             gate.close()
             st.gate = None
+        # the command is over: a signal from here to the end of the process changes nothing (and
+        # is not left to Python's finalization, which restores the default action: death by it)
+        for s in _SIGNALS:
+            signal.signal(s, signal.SIG_IGN)
     raise SystemExit(code)

@@ -188,7 +188,7 @@ def write_csv(c: Any, path: Path) -> None:
     lines = [",".join(cols)]
     for i in range(ds.point.size):
         row = [str(int(v["branch"][i])), str(int(v["period"][i])), str(v["kind"][i]), repr(float(v["param"][i])),
-               str(int(bool(v["converged"][i]))), str(int(bool(v["stable"][i])))]
+               str(bool(v["converged"][i])).lower(), str(bool(v["stable"][i])).lower()]
         row += [repr(float(v[n][i])) for n in ("x0", "v0", "amplitude_m", "offset_m", "stick_fraction")]
         row += [str(int(v["transitions"][i])), repr(float(v["mu_max"][i]))]
         for j in range(2):

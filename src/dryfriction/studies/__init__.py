@@ -164,7 +164,8 @@ def dump_toml(cfg: dict[str, Any], header: str = "") -> str:
 def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.ArgumentParser:
     """The study command's arguments (``fmu=False``: the caller's parser has a global ``--fmu``)."""
     p.formatter_class = argparse.RawDescriptionHelpFormatter
-    p.epilog = "studies:\n" + "\n".join(f"  {n:9s} {m.TITLE}" for n, m in STUDIES.items())
+    width = max(map(len, STUDIES))
+    p.epilog = "studies:\n" + "\n".join(f"  {n:{width}s}  {m.TITLE}" for n, m in STUDIES.items())
     p.add_argument("name", help="study name (fig2, fig3, ..., or list, all)")
     p.add_argument("--quick", action="store_true", help="small sizes (CI): the config's [quick] table")
     p.add_argument("--out", default="results", metavar="DIR", help="results root; files go to DIR/<study>/")
