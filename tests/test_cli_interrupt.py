@@ -41,10 +41,13 @@ def old_result_set(folder: Path) -> dict[str, bytes]:
     return snap
 
 
+@pytest.mark.parametrize("signum, status, line", [(signal.SIGINT, 130, "dryfriction: interrupted"),
+                                                 (signal.SIGTERM, 143, "dryfriction: terminated")])
 def test_an_interrupt_while_the_files_are_written_leaves_the_folder_as_it_was(
-        tmp_path: Path, fmu_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
-    """SIGINT after the CSV and the NetCDF are written, while the PNG is: exit 130, the one line,
-    the older result set untouched, no staging folder left beside it."""
+        signum: int, status: int, line: str, tmp_path: Path, fmu_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """SIGINT (or SIGTERM) after the CSV and the NetCDF are written, while the PNG is: exit 130
+    (143), the one line, the older result set untouched, no staging folder left beside it."""
     import dryfriction.response as response
 
     out = tmp_path / "out"
@@ -54,14 +57,14 @@ def test_an_interrupt_while_the_files_are_written_leaves_the_folder_as_it_was(
     def plot_then_ctrl_c(ds, path):  # type: ignore[no-untyped-def]
         assert (path.parent / "response.csv").is_file() and (path.parent / "response.nc").is_file()
         plot(ds, path)
-        signal.raise_signal(signal.SIGINT)
+        signal.raise_signal(signum)
         return path
 
     monkeypatch.setattr(response, "plot_response", plot_then_ctrl_c)
     handler = signal.getsignal(signal.SIGINT)
-    assert main([*TRANSIENT, "--num", "2", "--out", str(out), "--fmu", str(fmu_path)]) == 130
+    assert main([*TRANSIENT, "--num", "2", "--out", str(out), "--fmu", str(fmu_path)]) == status
     cap = capsys.readouterr()
-    assert cap.err == "dryfriction: interrupted\n" and cap.out == ""
+    assert cap.err == line + "\n" and cap.out == ""
     assert snapshot(out) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
     # the command's handler is gone again: a Python caller is interrupted as usual
