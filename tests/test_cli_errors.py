@@ -278,7 +278,7 @@ def _no_computation(monkeypatch: pytest.MonkeyPatch, target: str) -> None:
 
 
 @pytest.mark.parametrize("command", list(OUT_COMMANDS))
-@pytest.mark.parametrize("bad", ["empty", "file", "long", "read-only"])
+@pytest.mark.parametrize("bad", ["empty", "file", "long", "read-only", "read-only itself"])
 def test_an_unusable_out_is_refused_before_the_computation(command: str, bad: str, tmp_path: Path,
                                                            request: pytest.FixtureRequest,
                                                            capsys: pytest.CaptureFixture[str],
@@ -291,11 +291,15 @@ def test_an_unusable_out_is_refused_before_the_computation(command: str, bad: st
         "empty": ("", "--out must name a folder, not ''"),
         "file": ("notes.txt", "--out notes.txt is a file, not a folder"),
         "long": ("x" * 300, "bytes long, more than the 237 it may have here (255 per name"),
-        "read-only": ("", "cannot write in"),
+        "read-only": ("", ""),
+        "read-only itself": ("", ""),
     }[bad]
-    if bad == "read-only":
+    if bad == "read-only":          # the folder to be made inside a read-only one
         out = str(request.getfixturevalue("read_only_dir") / "results")
         words = f"--out {out}: cannot write in {Path(out).parent} ("
+    elif bad == "read-only itself":  # an existing folder that cannot be written
+        out = str(request.getfixturevalue("read_only_dir"))
+        words = f"--out {out}: cannot write in it"
     before = sorted(p.name for p in tmp_path.iterdir())
     assert main([*argv, "--out", out]) == 2
     err = capsys.readouterr().err
@@ -303,6 +307,8 @@ def test_an_unusable_out_is_refused_before_the_computation(command: str, bad: st
     assert sorted(p.name for p in tmp_path.iterdir()) == before
     if bad == "read-only":
         assert list(Path(out).parent.iterdir()) == []
+    if bad == "read-only itself":
+        assert list(Path(out).iterdir()) == []
 
 
 def test_run_out_is_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:

@@ -207,3 +207,15 @@ def test_ctrl_c_at_any_moment(workers: int, points: int, tmp_path: Path, fmu_pat
     # a signal once the files are in place: the run completes
     assert found[-1][1] == 0
     assert any(code == 130 for _, code in found)
+
+
+def test_an_interrupted_study_says_its_chunks_are_kept(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    from dryfriction import studies
+
+    def ctrl_c(ctx: object) -> None:
+        signal.raise_signal(signal.SIGINT)
+
+    monkeypatch.setattr(studies.STUDIES["fig3"], "run", ctrl_c)
+    assert main(["study", "fig3", "--quick", "--workers", "0", "--no-progress", "--out", str(tmp_path)]) == 130
+    assert capsys.readouterr().err == "dryfriction: interrupted; finished chunks are kept, run again to resume\n"

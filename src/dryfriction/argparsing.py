@@ -36,17 +36,8 @@ class Parser(argparse.ArgumentParser):
     def parse_known_args(self, args: Sequence[str] | None = None,  # type: ignore[override]
                          namespace: argparse.Namespace | None = None) -> tuple[argparse.Namespace, list[str]]:
         arg_list = list(sys.argv[1:] if args is None else args)
-        try:
-            ns, extras = super().parse_known_args(arg_list, namespace)
-        except UsageError:
-            self._refuse_unknown(arg_list)
-            raise
-        except SystemExit:
-            if self.exit_on_usage_error:
-                self._refuse_unknown(arg_list)
-            raise
-        self._refuse_unknown(extras)
-        return ns, extras
+        self._refuse_unknown(arg_list)     # first: argparse would report a missing option instead
+        return super().parse_known_args(arg_list, namespace)
 
     def _unknown(self, args: Sequence[str]) -> str | None:
         """The first option in ``args`` this parser does not know (before ``--``), or None."""

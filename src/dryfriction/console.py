@@ -160,12 +160,11 @@ def _handlers(restore: bool = True) -> Iterator[None]:
             signal.signal(s, h if h is not None else signal.SIG_DFL)
 
 
-def guarded(command: Callable[[], int], *, note: str = "") -> int:
+def guarded(command: Callable[[], int]) -> int:
     """Run ``command`` (returns an exit status) as a command of the program: signals handled as
     described in the module docstring, and every error a user can cause as one line
     ``dryfriction: error: ...`` (exit 2: bad input, an unusable FMU, an error the FMU reports;
-    exit 1: the system refused, e.g. a full disk) instead of a traceback. ``note``: said after
-    ``interrupted`` (one line still)."""
+    exit 1: the system refused, e.g. a full disk) instead of a traceback."""
     from .argparsing import UsageError
     from .diagnostics import DryFrictionWarning
     from .errors import FMUError
@@ -173,7 +172,7 @@ def guarded(command: Callable[[], int], *, note: str = "") -> int:
     st = _STATE
     if st.active:                            # already guarded (a command inside a command)
         return command()
-    st.active, st.committed, st.signum, st.note = True, False, 0, note
+    st.active, st.committed, st.signum, st.note = True, False, 0, ""
     try:
         with _handlers():
             try:
@@ -184,10 +183,12 @@ def guarded(command: Callable[[], int], *, note: str = "") -> int:
                     _silence()
                 _say(_message(st.signum))
                 return 128 + st.signum
-            except Exception as e:
-                if st.signum:                # an error of the libraries' teardown after the interrupt
+            except BaseException as e:
+                if st.signum:                # the libraries' teardown after the interrupt raised
                     _say(_message(st.signum))
                     return 128 + st.signum
+                if not isinstance(e, Exception):
+                    raise
                 if isinstance(e, (UsageError, FileNotFoundError, FMUError)):
                     _say(f"{PREFIX}: error: {e}")
                     return EXIT_USAGE
@@ -296,8 +297,8 @@ def _probe_error(option: str, path: Path, where: Path, e: OSError) -> Exception:
 def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -> Path:
     """Refuse (UsageError, one line naming ``option``) a result folder the command could not
     write, before any work: a file where the folder is meant, a name too long, a place not
-    writable (a probe created and removed where :func:`result_set` will stage, and inside the
-    folder if it exists). Nothing is left behind; a missing folder is not created."""
+    writable (a probe created and removed where :func:`result_set` will stage; an existing folder
+    asked whether it may be written). Nothing is left behind; a missing folder is not created."""
     import shutil
     import tempfile
 
@@ -313,13 +314,13 @@ def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -
     where = _nearest_existing(parent)
     if not where.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)}: {_short(str(where), 80)} is a file, not a folder")
-    places = [where] + ([path] if path.is_dir() else [])
-    for place in places:
-        try:
-            probe = tempfile.mkdtemp(dir=place, prefix=f".{path.name or 'out'}.staging-" if place == where else ".probe-")
-        except OSError as e:
-            raise _probe_error(option, path, place, e) from None
-        shutil.rmtree(probe, ignore_errors=True)
+    try:
+        probe = tempfile.mkdtemp(dir=where, prefix=f".{path.name or 'out'}.staging-")
+    except OSError as e:
+        raise _probe_error(option, path, where, e) from None
+    shutil.rmtree(probe, ignore_errors=True)
+    if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):  # (the folder itself left untouched)
+        raise UsageError(f"{option} {_short(str(path), 80)}: cannot write in it (permission denied)")
     return path
 
 
