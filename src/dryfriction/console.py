@@ -450,8 +450,9 @@ def main() -> None:
         try:
             from .atomic import signals_held
 
-            with signals_held():   # no signal half-way (and none ever handled by the pump thread)
-                gate = st.gate = _StderrGate()
+            if os.name == "posix":  # (pipes in select, a pipe as the wakeup fd)
+                with signals_held():   # no signal half-way (and none ever handled by the pump thread)
+                    gate = st.gate = _StderrGate()
             from .cli import main as cli_main
 
             code = cli_main(sys.argv[1:])

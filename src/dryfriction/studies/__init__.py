@@ -27,7 +27,7 @@ from typing import Any
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
 from .. import paths
-from ..argparsing import UsageError, make_parser
+from ..argparsing import make_parser, path_arg
 from ..atomic import atomic_write_text
 from .config import ConfigError, build_config, config_dir, load_toml
 
@@ -168,7 +168,8 @@ def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.Argu
     p.epilog = "studies:\n" + "\n".join(f"  {n:{width}s}  {m.TITLE}" for n, m in STUDIES.items())
     p.add_argument("name", help="study name (fig2, fig3, ..., or list, all)")
     p.add_argument("--quick", action="store_true", help="small sizes (CI): the config's [quick] table")
-    p.add_argument("--out", default="results", metavar="DIR", help="results root; files go to DIR/<study>/")
+    p.add_argument("--out", type=path_arg("--out"), default="results", metavar="DIR",
+                   help="results root; files go to DIR/<study>/")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="Dask LocalCluster worker processes (default: all cores; 0: no Dask, this process)")
     p.add_argument("--scheduler", default=None, metavar="ADDR",
