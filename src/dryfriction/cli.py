@@ -3,7 +3,8 @@
 Invalid arguments, an unusable FMU and an error the FMU reports end with one readable line on
 stderr (``dryfriction: error: ...``) and exit status 2, before any work where they can be found
 before it. Every warning an FMU logs is one line on stderr (``dryfriction: warning: ...``);
-``--strict`` makes it an error.
+``--strict`` makes it an error. A command's files are written all or nothing, an unusable ``--out``
+is refused before the work, and Ctrl-C prints one line and exits 130 (:mod:`dryfriction.console`).
 """
 
 from __future__ import annotations

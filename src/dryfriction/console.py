@@ -176,7 +176,9 @@ def guarded(command: Callable[[], int]) -> int:
     try:
         with _handlers():
             try:
-                return command()
+                code = command()
+                st.committed = True          # done: a signal now changes nothing
+                return code
             except KeyboardInterrupt:
                 if not st.signum:            # raised without our handler (e.g. by another thread)
                     st.signum = int(signal.SIGINT)
