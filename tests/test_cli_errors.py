@@ -257,6 +257,36 @@ def read_only_dir(tmp_path: Path) -> Iterator[Path]:
         ro.chmod(0o755)
 
 
+@pytest.fixture
+def small_fs(tmp_path: Path) -> Iterator[Path]:
+    """A file system of 32 KiB (a tmpfs; mounting needs root's rights, else skipped)."""
+    mnt = tmp_path / "small"
+    mnt.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=32k", "tmpfs", str(mnt)], capture_output=True)
+    if r.returncode != 0:
+        pytest.skip("no right to mount a small file system")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", str(mnt)], check=True)
+
+
+def test_a_full_disk_while_the_results_are_written(small_fs: Path, fmu_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """The CSV fits, the PNG (some 60 KB) does not: one line naming the folder and the cause, exit
+    1, the older result set there untouched, nothing else left."""
+    out = small_fs / "out"
+    out.mkdir()
+    (out / "response.csv").write_text("an older table\n")
+    assert main(["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",
+                 "--f-stop", "2", "--num", "2", "--format", "csv", "--no-progress", "--out", str(out),
+                 "--fmu", str(fmu_path)]) == 1
+    cap = capsys.readouterr()
+    assert cap.err == f"dryfriction: error: cannot write {out}: no space left on the device; nothing of it was kept\n"
+    assert [p.name for p in small_fs.iterdir()] == ["out"] and [p.name for p in out.iterdir()] == ["response.csv"]
+    assert (out / "response.csv").read_text() == "an older table\n"
+
+
 #: each command that writes a result set, and the function that computes it (must not be called)
 OUT_COMMANDS = {
     "response": (["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",

@@ -37,7 +37,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["main", "guarded", "result_set", "result_file", "check_output_folder", "check_output_file",
+__all__ = ["main", "guarded", "result_set", "result_file", "check_output_folder", "check_output_file", "OutputError",
            "committed", "interrupted", "interrupt_note", "EXIT_INTERRUPTED", "EXIT_FAILED", "EXIT_USAGE", "PREFIX"]
 
 PREFIX = "dryfriction"
@@ -230,6 +230,11 @@ def _short(text: str, limit: int = 120) -> str:
 
 # ---- result sets -------------------------------------------------------------------------------
 
+class OutputError(OSError):
+    """A result set (or file) that could not be written, with the cause; nothing of it was kept
+    (the command line: one line, exit status 1)."""
+
+
 @contextmanager
 def result_set(folder: str | os.PathLike[str]) -> Iterator[Path]:
     """A command's result set in ``folder``, all or nothing: yields the staging folder to write
@@ -238,9 +243,14 @@ def result_set(folder: str | os.PathLike[str]) -> Iterator[Path]:
     the files in ``folder`` are ``folder / path.relative_to(stage)``."""
     from .atomic import staged_outputs
 
-    with staged_outputs(folder) as stage:
-        yield stage
-        committed()
+    try:
+        with staged_outputs(folder) as stage:
+            yield stage
+            committed()
+    except OSError as e:
+        if interrupted():
+            raise
+        raise OutputError(f"cannot write {_short(str(folder), 80)}: {_cause(e)}; nothing of it was kept") from None
 
 
 @contextmanager
@@ -250,9 +260,14 @@ def result_file(path: str | os.PathLike[str]) -> Iterator[Path]:
     error, the command committed (:func:`committed`) just before."""
     from .atomic import atomic_path
 
-    with atomic_path(path) as tmp:
-        yield tmp
-        committed()
+    try:
+        with atomic_path(path) as tmp:
+            yield tmp
+            committed()
+    except OSError as e:
+        if interrupted():
+            raise
+        raise OutputError(f"cannot write {_short(str(path), 80)}: {_cause(e)}; it was left as it was") from None
 
 
 def _nearest_existing(path: Path) -> Path:
@@ -286,14 +301,18 @@ def _check_names(path: Path, option: str, extra: int) -> None:
                          f"(at most {path_max - extra - 64} bytes here)")
 
 
+def _cause(e: OSError) -> str:
+    """The cause of an OSError in a few words."""
+    return {errno.EACCES: "permission denied", errno.EPERM: "permission denied",
+            errno.EROFS: "a read-only file system", errno.ENOSPC: "no space left on the device",
+            errno.EDQUOT: "the disk quota is exceeded", errno.ENAMETOOLONG: "a name too long",
+            errno.ENOTDIR: "not a folder"}.get(e.errno or 0, e.strerror or str(e))
+
+
 def _probe_error(option: str, path: Path, where: Path, e: OSError) -> Exception:
     from .argparsing import UsageError
 
-    cause = {errno.EACCES: "permission denied", errno.EPERM: "permission denied",
-             errno.EROFS: "a read-only file system", errno.ENOSPC: "no space left on the device",
-             errno.EDQUOT: "the disk quota is exceeded", errno.ENAMETOOLONG: "a name too long",
-             errno.ENOTDIR: "not a folder"}.get(e.errno or 0, e.strerror or str(e))
-    return UsageError(f"{option} {_short(str(path), 80)}: cannot write in {_short(str(where), 80)} ({cause})")
+    return UsageError(f"{option} {_short(str(path), 80)}: cannot write in {_short(str(where), 80)} ({_cause(e)})")
 
 
 def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -> Path:
