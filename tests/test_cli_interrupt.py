@@ -219,3 +219,21 @@ def test_an_interrupted_study_says_its_chunks_are_kept(tmp_path: Path, capsys: p
     monkeypatch.setattr(studies.STUDIES["fig3"], "run", ctrl_c)
     assert main(["study", "fig3", "--quick", "--workers", "0", "--no-progress", "--out", str(tmp_path)]) == 130
     assert capsys.readouterr().err == "dryfriction: interrupted; finished chunks are kept, run again to resume\n"
+
+
+def test_an_interrupted_chain_leaves_no_files(tmp_path: Path, chain_fmu3: Path, capsys: pytest.CaptureFixture[str],
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """The chain's CSV and NetCDF written, Ctrl-C while its PNG is: nothing appears."""
+    import dryfriction.chain_cli as chain_cli
+
+    plot = chain_cli.plot_run
+
+    def plot_then_ctrl_c(run, path):  # type: ignore[no-untyped-def]
+        plot(run, path)
+        signal.raise_signal(signal.SIGINT)
+        return path
+
+    monkeypatch.setattr(chain_cli, "plot_run", plot_then_ctrl_c)
+    assert main(["chain", "--t-end", "1", "--out", str(tmp_path / "out"), "--fmu", str(chain_fmu3)]) == 130
+    assert capsys.readouterr().err == "dryfriction: interrupted\n"
+    assert list(tmp_path.iterdir()) == []
