@@ -140,17 +140,18 @@ def _group_gone(pgid: int) -> bool:
 @pytest.mark.skipif(not Path("/proc/self/status").is_file(), reason="reads /proc to see the handlers installed")
 @pytest.mark.parametrize("workers, points", [(0, 13), (2, 11)])
 def test_ctrl_c_at_any_moment(workers: int, points: int, tmp_path: Path, fmu_path: Path) -> None:
-    """``dryfriction response --method transient`` as a process, interrupted at ``points`` moments
-    spread from 0.05 s to past the end of an uninterrupted run (SIGINT to the process group, as a
-    terminal's Ctrl-C, and to the process alone, in turn). Each run either completes (exit 0, the
-    full result set there, the CSV equal to the uninterrupted run's) or is interrupted (exit 130,
-    stderr exactly ``dryfriction: interrupted``, the older result set in the folder byte for byte);
-    never a traceback, no staging folder left, no worker process left behind. The last signal is
-    sent the moment the new files are seen in the folder: that run completes. (The moments are
-    counted from the start, but a signal is not sent before the program has installed its handler:
-    before its first instruction Python itself reacts.)"""
-    cmd = [sys.executable, "-m", "dryfriction", *TRANSIENT, "--workers", str(workers), "--fmu", str(fmu_path),
-           "--out", "out"]
+    """``dryfriction response --method transient`` (the console script) as a process, interrupted
+    at ``points`` moments spread from 0.05 s to past the end of an uninterrupted run (SIGINT to the
+    process group, as a terminal's Ctrl-C, and to the process alone, in turn). Each run either
+    completes (exit 0, the full result set there, the CSV equal to the uninterrupted run's) or is
+    interrupted (exit 130, stderr exactly ``dryfriction: interrupted``, the older result set in the
+    folder byte for byte); never a traceback, no staging folder left, no worker process left
+    behind. The last signal is sent the moment the new files are seen in the folder: that run
+    completes. (The moments are counted from the start, but a signal is not sent before the
+    program has installed its handler: before its first instruction Python itself reacts.)"""
+    script = Path(sys.executable).with_name("dryfriction")  # the console script, else python -m dryfriction
+    program = [str(script)] if script.is_file() else [sys.executable, "-m", "dryfriction"]
+    cmd = [*program, *TRANSIENT, "--workers", str(workers), "--fmu", str(fmu_path), "--out", "out"]
     ref = tmp_path / "ref"
     ref.mkdir()
     t0 = time.monotonic()

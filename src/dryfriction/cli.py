@@ -429,13 +429,19 @@ def _check_fmu_option(path: Path, command: str) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line ``argv`` (default ``sys.argv[1:]``) and return its exit status: 0, 1
-    (the system refused, e.g. a full disk), 2 (bad input, an unusable FMU, an error the FMU
-    reports), 130 (interrupted), 141 (output into a closed pipe); every error one line
-    ``dryfriction: error: ...`` (:func:`dryfriction.console.guarded`)."""
+    """Run the command line ``argv`` and return its exit status: 0, 1 (the system refused, e.g. a
+    full disk), 2 (bad input, an unusable FMU, an error the FMU reports), 130 (interrupted), 141
+    (output into a closed pipe); every error one line ``dryfriction: error: ...``
+    (:func:`dryfriction.console.guarded`). Without ``argv`` this is the program itself
+    (:func:`dryfriction.console.main`, which exits; a console script installed before it existed
+    calls this)."""
     from .console import guarded
 
-    args_list = list(sys.argv[1:] if argv is None else argv)
+    if argv is None:
+        from .console import main as program
+
+        program()
+    args_list = list(argv or [])
     return guarded(lambda: _run(args_list))
 
 

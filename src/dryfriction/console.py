@@ -35,7 +35,7 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NoReturn
 
 __all__ = ["main", "guarded", "result_set", "result_file", "check_output_folder", "check_output_file", "OutputError",
            "committed", "interrupted", "interrupt_note", "EXIT_INTERRUPTED", "EXIT_FAILED", "EXIT_USAGE", "PREFIX"]
@@ -459,7 +459,7 @@ class _StderrGate:
         signal.set_wakeup_fd(self._old_wakeup)
 
 
-def main() -> None:
+def main() -> NoReturn:
     """The console script ``dryfriction`` (and ``python -m dryfriction``): the signal handlers first,
     then the command line (:func:`dryfriction.cli.main`); exits with its status. After an interrupt
     the process ends without running the libraries' exit handlers (every file is in place or
