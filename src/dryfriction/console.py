@@ -33,7 +33,7 @@ import signal
 import sys
 import threading
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
 from typing import IO, Any, NoReturn
 
@@ -236,38 +236,37 @@ class OutputError(OSError):
 
 
 @contextmanager
-def result_set(folder: str | os.PathLike[str]) -> Iterator[Path]:
+def _all_or_nothing(writer: Callable[[Any], Any], target: str | os.PathLike[str], kept: str) -> Iterator[Path]:
+    """``writer(target)``'s temporary place, the command committed when the block ends without
+    error; a write the system refuses is :class:`OutputError` naming ``target``, the cause and
+    ``kept`` (what is left)."""
+    try:
+        with writer(target) as place:
+            yield place
+            committed()
+    except OSError as e:
+        if interrupted():
+            raise
+        raise OutputError(f"cannot write {_short(str(target), 80)}: {_cause(e)}; {kept}") from None
+
+
+def result_set(folder: str | os.PathLike[str]) -> AbstractContextManager[Path]:
     """A command's result set in ``folder``, all or nothing: yields the staging folder to write
     the files into (:func:`dryfriction.atomic.staged_outputs`); when the block ends without error
     the command is committed (:func:`committed`) and every file moves into ``folder``. The paths of
     the files in ``folder`` are ``folder / path.relative_to(stage)``."""
     from .atomic import staged_outputs
 
-    try:
-        with staged_outputs(folder) as stage:
-            yield stage
-            committed()
-    except OSError as e:
-        if interrupted():
-            raise
-        raise OutputError(f"cannot write {_short(str(folder), 80)}: {_cause(e)}; nothing of it was kept") from None
+    return _all_or_nothing(staged_outputs, folder, "nothing of it was kept")
 
 
-@contextmanager
-def result_file(path: str | os.PathLike[str]) -> Iterator[Path]:
+def result_file(path: str | os.PathLike[str]) -> AbstractContextManager[Path]:
     """One result file, all or nothing: yields a temporary path beside ``path``
     (:func:`dryfriction.atomic.atomic_path`), renamed to ``path`` when the block ends without
     error, the command committed (:func:`committed`) just before."""
     from .atomic import atomic_path
 
-    try:
-        with atomic_path(path) as tmp:
-            yield tmp
-            committed()
-    except OSError as e:
-        if interrupted():
-            raise
-        raise OutputError(f"cannot write {_short(str(path), 80)}: {_cause(e)}; it was left as it was") from None
+    return _all_or_nothing(atomic_path, path, "it was left as it was")
 
 
 def _nearest_existing(path: Path) -> Path:
