@@ -152,10 +152,13 @@ def test_ctrl_c_at_any_moment(workers: int, points: int, tmp_path: Path, fmu_pat
     script = Path(sys.executable).with_name("dryfriction")  # the console script, else python -m dryfriction
     program = [str(script)] if script.is_file() else [sys.executable, "-m", "dryfriction"]
     cmd = [*program, *TRANSIENT, "--workers", str(workers), "--fmu", str(fmu_path), "--out", "out"]
+    # Dask's warning that its port 8787 is taken (by another cluster on the machine) is not what
+    # this test is about (the cluster's own quiet is tested with it)
+    env = {**os.environ, "PYTHONWARNINGS": "ignore::UserWarning:distributed.node"}
     ref = tmp_path / "ref"
     ref.mkdir()
     t0 = time.monotonic()
-    r = subprocess.run(cmd, cwd=ref, capture_output=True, timeout=600)
+    r = subprocess.run(cmd, cwd=ref, capture_output=True, timeout=600, env=env)
     duration = time.monotonic() - t0
     assert r.returncode == 0, r.stderr.decode()
     reference = (ref / "out" / "response.csv").read_bytes()
@@ -167,7 +170,8 @@ def test_ctrl_c_at_any_moment(workers: int, points: int, tmp_path: Path, fmu_pat
     for i, delay in enumerate(delays):
         work = tmp_path / f"run{i}"
         before = old_result_set(work / "out")
-        p = subprocess.Popen(cmd, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        p = subprocess.Popen(cmd, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+                             env=env)
         start = time.monotonic()
         while not _sigterm_caught(p.pid) and time.monotonic() - start < 60:
             time.sleep(0.002)
@@ -192,8 +196,8 @@ def test_ctrl_c_at_any_moment(workers: int, points: int, tmp_path: Path, fmu_pat
         if p.returncode == 130:
             assert err == "dryfriction: interrupted\n", (sent, err)
             assert snapshot(work / "out") == before, sent
-        else:  # (stderr may hold a warning of Dask's, e.g. its port taken by another cluster)
-            assert "interrupted" not in err and "error" not in err, (sent, err)
+        else:
+            assert err == "", (sent, err)
             assert (work / "out" / "response.csv").read_bytes() == reference, sent
             for name in ("response.nc", "response.png"):
                 assert (work / "out" / name).stat().st_size > 1000, (sent, name)
