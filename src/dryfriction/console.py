@@ -285,7 +285,7 @@ def _check_names(path: Path, option: str, extra: int) -> None:
     try:
         name_max = os.pathconf(base, "PC_NAME_MAX")
         path_max = os.pathconf(base, "PC_PATH_MAX")
-    except (OSError, ValueError):
+    except (OSError, ValueError, AttributeError):  # (no pathconf on Windows)
         name_max, path_max = 255, 4096
     parts = path.absolute().parts
     for i, part in enumerate(parts):
