@@ -55,6 +55,8 @@ def test_files_and_the_band(tmp_path: Path, fmu_path: Path, capsys: pytest.Captu
     assert header[:4] == ["branch", "period", "kind", "param"] and len(csv) == ds.point.size + 1
     col = header.index("amplitude_m")
     assert [float(r.split(",")[col]) for r in csv[1:]] == [float(v) for v in ds.amplitude_m.values]
+    st = header.index("stable")  # booleans as in response.csv
+    assert [r.split(",")[st] for r in csv[1:]] == [str(bool(v)).lower() for v in ds.stable.values]
     assert set(np.unique(ds.branch.values)) == {0, 1, 2} and ds.attrs["param"] == "chi"
     assert (tmp_path / "continuation.png").stat().st_size > 20_000
     sb = float(text.split("symmetry_breaking at chi = ")[1].split()[0])
@@ -62,7 +64,7 @@ def test_files_and_the_band(tmp_path: Path, fmu_path: Path, capsys: pytest.Captu
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--param", "chi", "--from", "0.5", "--to", "0.5"], "start and stop must differ"),
+    (["--param", "chi", "--from", "0.5", "--to", "0.5"], "dryfriction: error: --from and --to must differ (both 0.5)"),
     (["--param", "chi", "--from", "0.6", "--to", "0.5", "--lam", "0.5", "--m", "1"],
      "give physical units or the non-dimensional form, not both (--lam)"),
     (["--param", "chi", "--from", "0.6", "--to", "-0.5"], "chi"),

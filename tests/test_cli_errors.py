@@ -9,6 +9,7 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -101,8 +102,13 @@ def test_the_readmes_error_line_is_the_one_printed(capsys: pytest.CaptureFixture
     assert quoted, "the README quotes an error line"
     for line in quoted:
         m = re.fullmatch(r"dryfriction: error: --m must be > 0, not (\S+)", line)
-        assert m, f"a quoted error line without a command here to check it: {line}"
-        assert main(["run", "--m", m.group(1), "--k", "1", "--P0", "1", "--f", "1", "--N", "1", "--mu-s", "0.1"]) == 2
+        typo = re.fullmatch(r"dryfriction: error: unknown option (\S+); did you mean \S+\?", line)
+        assert m or typo, f"a quoted error line without a command here to check it: {line}"
+        if m:
+            argv = ["run", "--m", m.group(1), "--k", "1", "--P0", "1", "--f", "1", "--N", "1", "--mu-s", "0.1"]
+        else:
+            argv = ["response", "--m", "1", typo.group(1), "5"]  # type: ignore[union-attr]
+        assert main(argv) == 2
         assert capsys.readouterr().err.strip() == line
 
 
@@ -156,7 +162,7 @@ def test_the_cli_reports_an_unusable_fmu_in_one_line(make, words: str, command: 
     (["fig3", "--workers", "two"], "invalid int value"),
     (["fig3", "--config", "/nonexistent.toml"], "config file not found"),
     (["fig3", "--fmu", "/nonexistent.fmu"], "FMU not found"),
-    (["fig3", "--bogus"], "unrecognized arguments"),
+    (["fig3", "--bogus"], "unknown option --bogus (dryfriction study --help lists the options)"),
 ])
 @pytest.mark.min_versions
 def test_bad_input_is_one_line_and_exit_2_before_work(argv: list[str], words: str, tmp_path: Path,
@@ -225,3 +231,176 @@ def test_output_into_a_closed_pipe_is_quiet() -> None:
     err = p.stderr.read().decode()
     assert p.wait(timeout=120) == 141, err
     assert "Traceback" not in err and err == ""
+
+
+# ---- the output path: refused before the computation -------------------------------------------
+
+@pytest.fixture
+def read_only_dir(tmp_path: Path) -> Iterator[Path]:
+    """A folder nothing can be written in: without write permission, or (as root, whom permissions
+    do not stop) a read-only tmpfs mounted there; skipped where neither is possible."""
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    mounted = False
+    if os.access(ro, os.W_OK):
+        r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(ro)], capture_output=True)
+        if r.returncode != 0:
+            ro.chmod(0o755)
+            pytest.skip("running as root without the right to mount a read-only file system")
+        mounted = True
+    try:
+        yield ro
+    finally:
+        if mounted:
+            subprocess.run(["umount", str(ro)], check=True)
+        ro.chmod(0o755)
+
+
+@pytest.fixture
+def small_fs(tmp_path: Path) -> Iterator[Path]:
+    """A file system of 32 KiB (a tmpfs; mounting needs root's rights, else skipped)."""
+    mnt = tmp_path / "small"
+    mnt.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=32k", "tmpfs", str(mnt)], capture_output=True)
+    if r.returncode != 0:
+        pytest.skip("no right to mount a small file system")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", str(mnt)], check=True)
+
+
+def test_a_full_disk_while_the_results_are_written(small_fs: Path, fmu_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """The CSV fits, the PNG (some 60 KB) does not: one line naming the folder and the cause, exit
+    1, the older result set there untouched, nothing else left."""
+    out = small_fs / "out"
+    out.mkdir()
+    (out / "response.csv").write_text("an older table\n")
+    assert main(["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",
+                 "--f-stop", "2", "--num", "2", "--format", "csv", "--no-progress", "--out", str(out),
+                 "--fmu", str(fmu_path)]) == 1
+    cap = capsys.readouterr()
+    assert cap.err == f"dryfriction: error: cannot write {out}: no space left on the device; nothing of it was kept\n"
+    assert [p.name for p in small_fs.iterdir()] == ["out"] and [p.name for p in out.iterdir()] == ["response.csv"]
+    assert (out / "response.csv").read_text() == "an older table\n"
+
+
+#: each command that writes a result set, and the function that computes it (must not be called)
+OUT_COMMANDS = {
+    "response": (["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",
+                  "--f-stop", "2", "--num", "2"], "dryfriction.response.frequency_response"),
+    "chain": (["chain", "--t-end", "1"], "dryfriction.chain.ChainFMU3.run"),
+    "continuation": (["continuation", "--param", "chi", "--from", "0.7", "--to", "0.6"],
+                     "dryfriction.continuation.continue_orbits"),
+    "bifurcation": (["bifurcation", "--quick"], "dryfriction.sweep.runner.run_batch"),
+    "belt": (["belt", "--v-belt", "0.2"], "dryfriction.self_excited.self_excited"),
+    "validate": (["validate", "--quick"], "dryfriction.report.run_validation"),
+}
+
+
+def _no_computation(monkeypatch: pytest.MonkeyPatch, target: str) -> None:
+    def computed(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the computation started")
+
+    monkeypatch.setattr(target, computed)
+
+
+@pytest.mark.parametrize("command", list(OUT_COMMANDS))
+@pytest.mark.parametrize("bad", ["empty", "file", "long", "read-only", "read-only itself"])
+def test_an_unusable_out_is_refused_before_the_computation(command: str, bad: str, tmp_path: Path,
+                                                           request: pytest.FixtureRequest,
+                                                           capsys: pytest.CaptureFixture[str],
+                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    argv, compute = OUT_COMMANDS[command]
+    _no_computation(monkeypatch, compute)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "notes.txt").write_text("a file")
+    out, words = {
+        "empty": ("", "--out must name a folder, not ''"),
+        "file": ("notes.txt", "--out notes.txt is a file, not a folder"),
+        "long": ("x" * 300, "bytes long, more than the 237 it may have here (255 per name"),
+        "read-only": ("", ""),
+        "read-only itself": ("", ""),
+    }[bad]
+    if bad == "read-only":          # the folder to be made inside a read-only one
+        out = str(request.getfixturevalue("read_only_dir") / "results")
+        words = f"--out {out}: cannot write in {Path(out).parent} ("
+    elif bad == "read-only itself":  # an existing folder that cannot be written
+        out = str(request.getfixturevalue("read_only_dir"))
+        words = f"--out {out}: cannot write in it"
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main([*argv, "--out", out]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dryfriction: error: --out") and words in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    if bad == "read-only":
+        assert list(Path(out).parent.iterdir()) == []
+    if bad == "read-only itself":
+        assert list(Path(out).iterdir()) == []
+
+
+def test_run_out_is_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """``run --out`` names a CSV file: a folder, '' and a name too long are refused before the run."""
+    _no_computation(monkeypatch, "dryfriction.scenes.run_validation")
+    for out, words in ((str(tmp_path), f"--out {tmp_path} is a folder, not a file"),
+                       ("", "--out must name a file, not ''"),
+                       (str(tmp_path / ("x" * 300)), "bytes long, more than the")):
+        assert main(["run", "--periods", "2", "--out", out]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("dryfriction: error: ") and words in err and err.count("\n") == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---- what the messages say ------------------------------------------------------------------------
+
+@pytest.mark.parametrize("command", [["scenes"], ["chain", "--t-end", "1"], ["study", "list"]])
+def test_fmu_option_naming_a_directory(command: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--fmu", str(tmp_path), *command]) == 2
+    assert capsys.readouterr().err == f"dryfriction: error: --fmu: {tmp_path} is a directory, not an FMU file\n"
+
+
+@pytest.mark.parametrize("argv, line", [
+    # a required option missing too: the unknown one is reported, with the closest valid one
+    (["response", "--m", "1", "--f-strat", "5"], "unknown option --f-strat; did you mean --f-start?"),
+    (["response", "--m", "1", "--f-strat=5", "--f-stop", "6"], "unknown option --f-strat; did you mean --f-start?"),
+    (["run", "--sceen", "sweep"], "unknown option --sceen; did you mean --scene?"),
+    (["--strickt", "scenes"], "unknown option --strickt; did you mean --strict?"),
+    (["continuation", "--param", "chi", "--form", "0.7", "--to", "0.6"], "unknown option --form; did you mean --from?"),
+    (["study", "fig3", "--quik"], "unknown option --quik; did you mean --quick?"),
+    (["scenes", "--zzz"], "unknown option --zzz (dryfriction scenes --help lists the options)"),
+])
+def test_a_typo_is_named_with_the_closest_option(argv: list[str], line: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(argv) == 2
+    assert capsys.readouterr().err == f"dryfriction: error: {line}\n"
+
+
+def test_an_abbreviation_is_still_accepted(fmu_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", "--scen", "sweep", "--periods", "3", "--fmu", str(fmu_path)]) == 0
+    assert json.loads(capsys.readouterr().out)["scene"] == "sweep"
+
+
+@pytest.mark.parametrize("argv, line", [
+    (["fig99"], "dryfriction: error: unknown study 'fig99'; the studies are: "),
+    (["fig3", "--quik"], "dryfriction: error: unknown option --quik; did you mean --quick?"),
+    (["fig3", "--fmu", "/nonexistent.fmu"], "dryfriction: error: FMU not found: /nonexistent.fmu (no such file)"),
+])
+def test_python_m_dryfriction_studies_has_the_one_prefix(argv: list[str], line: str, tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    assert studies_main([*argv, "--out", str(tmp_path)], prog="python -m dryfriction.studies") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(line) and err.count("\n") == 1, err
+
+
+def test_a_study_that_fails_says_error(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """A study that fails (here: a RuntimeError from its run) is one line with the one prefix, exit 1."""
+    from dryfriction import studies
+
+    def fail(ctx: object) -> None:
+        raise RuntimeError("the sweep lost its workers")
+
+    monkeypatch.setattr(studies.STUDIES["fig3"], "run", fail)
+    assert studies_main(["fig3", "--quick", "--workers", "0", "--no-progress", "--out", str(tmp_path)]) == 1
+    assert capsys.readouterr().err == "dryfriction: error: the sweep lost its workers\n"

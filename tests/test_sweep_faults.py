@@ -153,7 +153,7 @@ def test_full_disk_ends_with_one_line_and_earlier_results_intact(limit: int, vic
     assert proc.returncode == 1, proc.stderr                  # not 139 / -11: no segmentation fault
     lines = [ln for ln in proc.stderr.splitlines() if not ln.startswith("note:")]
     assert len(lines) == 1, proc.stderr
-    assert re.fullmatch(r"dryfriction study: failed: cannot write " + victim + ": File too large", lines[0]), lines
+    assert re.fullmatch(r"dryfriction: error: cannot write " + victim + ": File too large", lines[0]), lines
     assert {p.name: p.read_bytes() for p in folder.iterdir() if p.is_file()} == before
     assert not list(tmp_path.glob(".fig8_9.staging-*"))
     # room again: the run completes with the clean numbers (the chunks written before are reused)

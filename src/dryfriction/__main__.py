@@ -1,5 +1,5 @@
-"""python -m dryfriction: the command line (dryfriction.cli)."""
+"""python -m dryfriction: the command line (dryfriction.console, then dryfriction.cli)."""
 
-from .cli import main
+from .console import main
 
-raise SystemExit(main())
+main()

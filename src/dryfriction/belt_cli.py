@@ -21,7 +21,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from .argparsing import UsageError, count, number
+from .argparsing import UsageError, count, number, path_arg
 
 __all__ = ["add_belt_parser", "belt_main", "belt_json"]
 
@@ -54,7 +54,7 @@ def add_belt_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argpars
                    help="internal steps per natural period (default 2000)")
     b.add_argument("--periods", type=number("--periods", 0.0, True), default=40.0,
                    help="natural periods of the transient that gives the guess (default 40)")
-    b.add_argument("--out", type=Path, default=None, help="folder of the PNG (default results/belt)")
+    b.add_argument("--out", type=path_arg("--out"), default=None, help="folder of the PNG (default results/belt)")
     b.add_argument("--no-plot", action="store_true", help="no PNG")
     b.add_argument("--json", action="store_true", help="print one JSON object")
     return b
@@ -171,17 +171,19 @@ def belt_main(args: argparse.Namespace) -> int:
     from .fmu import OscillatorFMU2
     from .self_excited import self_excited
 
+    from .console import check_output_folder, result_set
+
     prob = _problem(args)
+    out = None
+    if not args.no_plot and (args.out is not None or not args.json):
+        out = check_output_folder(args.out or Path("results/belt"))
     with OscillatorFMU2(getattr(args, "fmu", None)) as fmu:
         res = self_excited(prob, fmu=fmu, periods=args.periods)
         files: list[Path] = []
-        if not args.no_plot and (args.out is not None or not args.json):
-            out = args.out or Path("results/belt")
-            try:
-                out.mkdir(parents=True, exist_ok=True)
-            except OSError as e:
-                raise UsageError(f"cannot create the output folder {out}: {e.strerror}") from None
-            files.append(plot_belt(res, fmu, out / "belt.png"))
+        if out is not None:
+            with result_set(out) as stage:
+                plot_belt(res, fmu, stage / "belt.png")
+            files.append(out / "belt.png")
     if args.json:
         doc = belt_json(res)
         doc["files"] = [str(f) for f in files]

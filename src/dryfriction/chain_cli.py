@@ -11,13 +11,12 @@ space-time image of the modes and the positions); prints each block's share of t
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .argparsing import EXIT_USAGE, UsageError, count, number
+from .argparsing import UsageError, count, number, path_arg
 
 __all__ = ["add_chain_parser", "chain_main", "parse_sets", "write_csv", "plot_run"]
 
@@ -34,7 +33,8 @@ def add_chain_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argpar
     c.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter: one value for every block (mu_s=0.3), n values (P0=1,0,0), a scalar "
                         "(omega=0.5, h=0.002, k_end=1) or the scheme (scheme=consistent); repeatable")
-    c.add_argument("--out", type=Path, default=Path("results/chain"), help="output folder (default results/chain)")
+    c.add_argument("--out", type=path_arg("--out"), default=Path("results/chain"),
+                   help="output folder (default results/chain)")
     c.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
     c.add_argument("--no-plot", action="store_true", help="no PNG")
     return c
@@ -110,9 +110,11 @@ def plot_run(run: Any, path: Path) -> Path:
 
 def chain_main(args: argparse.Namespace) -> int:
     from .chain import ChainFMU2, ChainFMU3
-    from .errors import FMUCallError
+
+    from .console import check_output_folder, result_set
 
     params = parse_sets(args.sets)
+    out: Path = check_output_folder(args.out)
     try:
         if args.fmi == 3:
             fmu: Any = ChainFMU3(2 if args.n is None else args.n, params, fmu_path=args.fmu)
@@ -122,19 +124,17 @@ def chain_main(args: argparse.Namespace) -> int:
             run = fmu.run(args.t_end, args.dt)
     except ValueError as e:
         raise UsageError(str(e)) from None
-    except FMUCallError as e:
-        print(f"dryfriction chain: error: {e}", file=sys.stderr)
-        return EXIT_USAGE
-    out: Path = args.out
     files = []
-    if args.format in ("csv", "both"):
-        files.append(write_csv(run, out / "chain.csv"))
-    if args.format in ("netcdf", "both"):
-        from .sweep.datasets import write_netcdf
+    with result_set(out) as stage:
+        if args.format in ("csv", "both"):
+            files.append(write_csv(run, stage / "chain.csv"))
+        if args.format in ("netcdf", "both"):
+            from .sweep.datasets import write_netcdf
 
-        files.append(write_netcdf(run.to_dataset(), out / "chain.nc"))
-    if not args.no_plot:
-        files.append(plot_run(run, out / "chain.png"))
+            files.append(write_netcdf(run.to_dataset(), stage / "chain.nc"))
+        if not args.no_plot:
+            files.append(plot_run(run, stage / "chain.png"))
+    files = [out / f.relative_to(stage) for f in files]
     share = run.stick_share()
     print(f"chain of {run.n} blocks (FMI {args.fmi}), {run.t.size} points to t = {run.t[-1]:g} s")
     shown = ", ".join(f"{s:.3f}" for s in share[:16]) + (" ..." if run.n > 16 else "")

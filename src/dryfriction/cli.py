@@ -3,7 +3,8 @@
 Invalid arguments, an unusable FMU and an error the FMU reports end with one readable line on
 stderr (``dryfriction: error: ...``) and exit status 2, before any work where they can be found
 before it. Every warning an FMU logs is one line on stderr (``dryfriction: warning: ...``);
-``--strict`` makes it an error.
+``--strict`` makes it an error. A command's files are written all or nothing, an unusable ``--out``
+is refused before the work, and Ctrl-C prints one line and exits 130 (:mod:`dryfriction.console`).
 """
 
 from __future__ import annotations
@@ -20,12 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from . import __version__, model, scenes
-from .argparsing import EXIT_USAGE, Parser, UsageError, count, make_parser, number
+from .argparsing import Parser, UsageError, count, make_parser, number, path_arg
 from .diagnostics import DryFrictionWarning
-from .errors import FMUError
 from .fmu import Settings
 from .params import Oscillator
-from .cluster import ClusterLost
 
 
 def _global_options(suppress: bool) -> argparse.ArgumentParser:
@@ -47,17 +46,19 @@ def build_parser() -> Parser:
     p = make_parser("dryfriction", "Dry-friction oscillator FMU: validation, scenes and studies.",
                     parents=[_global_options(False)])
     p.add_argument("--version", action="version", version=f"dryfriction {__version__}")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser, metavar="COMMAND",
+                           help="the command ('dryfriction COMMAND --help' for its options)")
     common = [_global_options(True)]
 
     v = sub.add_parser("validate", parents=common,
                        help="FMU against the exact solution: errors, orders, results/validation.png")
-    v.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results)")
+    v.add_argument("--out", type=path_arg("--out"), default=Path("results"), help="output folder (default: results)")
     v.add_argument("--quick", action="store_true", help="two cases, three step sizes")
 
     schemes = list(model.default().schemes)
     r = sub.add_parser("run", parents=common, help="run one scene and print its result as JSON")
-    r.add_argument("--scene", choices=list(scenes.SCENES), default="validation")
+    r.add_argument("--scene", choices=list(scenes.SCENES), default="validation",
+                   help="what to run and print (default validation; 'dryfriction scenes' describes each)")
     nd = r.add_argument_group("non-dimensional form (the paper's; the default: lam 0.5, mu_s sigma 0.4, chi 0.7)")
     nd.add_argument("--lam", type=number("--lam", 0.0, True), default=None, help="frequency ratio omega/w0")
     nd.add_argument("--mu-s-sigma", type=number("--mu-s-sigma", 0.0), default=None, help="mu_s N / P0")
@@ -71,8 +72,9 @@ def build_parser() -> Parser:
                    help="internal steps per excitation period (default 1000)")
     r.add_argument("--h", type=number("--h", 0.0), default=None,
                    help="internal step, s (0: derived by the FMU from the dynamics; overrides --steps-per-period)")
-    r.add_argument("--scheme", choices=schemes, default=Settings().scheme)
-    r.add_argument("--out", type=Path, default=None, help="CSV file for the trajectory scenes")
+    r.add_argument("--scheme", choices=schemes, default=Settings().scheme,
+                   help=f"the FMU's integration scheme (default {Settings().scheme})")
+    r.add_argument("--out", type=path_arg("--out", "file"), default=None, help="CSV file for the trajectory scenes")
 
     from .response import MAX_PERIODS, MIN_PERIODS, TOL
 
@@ -97,7 +99,7 @@ def build_parser() -> Parser:
     q.add_argument("--max-periods", type=count("--max-periods", 2), default=MAX_PERIODS,
                    help=f"period limit; beyond it converged = false (default {MAX_PERIODS})")
     q.add_argument("--scheme", choices=schemes, default=None, help="default: exact (closed form, also for k = 0)")
-    q.add_argument("--out", type=Path, default=None,
+    q.add_argument("--out", type=path_arg("--out"), default=None,
                    help="output folder (default results/response; with --json: no files unless --out is given)")
     q.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
     q.add_argument("--no-plot", action="store_true", help="no PNG")
@@ -184,9 +186,15 @@ RUN_UNITS = {"amplitude": "m", "asymmetry": "m", "x_max": "m", "x_min": "m", "st
              "run_periods": "excitation periods"}
 
 
+#: the numbers ``dryfriction run`` prints that are counts (whole numbers in its JSON)
+RUN_COUNTS = ("transitions", "samples")
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
+    from .console import check_output_folder
     from .report import validate
 
+    check_output_folder(args.out)
     print(validate(args.out, quick=args.quick, fmu_path=args.fmu, progress=sys.stderr.isatty()))
     return 0
 
@@ -207,6 +215,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         p = Oscillator.from_nondimensional(lam=nondim.get("lam", 0.5), mu_s_sigma=nondim.get("mu_s_sigma", 0.4),
                                            chi=nondim.get("chi", 0.7), zeta=args.zeta or 0.0,
                                            z0=nondim.get("z0", 0.0), dz0=nondim.get("dz0", 0.0))
+    if args.out is not None and scenes.SCENES[args.scene].trajectory:
+        from .console import check_output_file
+
+        check_output_file(args.out)
     h = args.h if args.h is not None else p.period / args.steps_per_period
     st = Settings(h=h, scheme=args.scheme)
     with OscillatorFMU(args.fmu) as fmu:
@@ -226,19 +238,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.scene == "sweep":
         head["measured"] = scenes.sweep_window_text(p, args.periods)
     if "t" not in res:  # observables: a few numbers
-        print(json.dumps({**head, **{k: float(v) for k, v in res.items()},
+        print(json.dumps({**head, **{k: int(v) if k in RUN_COUNTS else float(v) for k, v in res.items()},
                           "units": {k: RUN_UNITS.get(k, "") for k in res}}, indent=2))
         return 0
     if args.out:
         import numpy as np
 
-        from .atomic import atomic_write_bytes
+        from .console import result_file
 
         keys = list(res)
         rows = np.column_stack([res[k] for k in keys])
         header = ",".join(keys)
         lines = [header] + [",".join(f"{x:.17g}" for x in row) for row in rows]
-        atomic_write_bytes(args.out, ("\n".join(lines) + "\n").encode())
+        with result_file(args.out) as tmp:
+            tmp.write_text("\n".join(lines) + "\n")
     print(json.dumps({**head, "samples": int(len(res["t"])), "x_final": float(res["x"][-1]),
                       "out": str(args.out) if args.out else None,
                       "units": {"x_final": "m", "csv columns": "t s, x m, v m/s, a m/s2, F_friction N, mode 1"}},
@@ -262,10 +275,12 @@ def cmd_response(args: argparse.Namespace) -> int:
     method = args.method or ("orbit" if args.scheme in (None, "exact") else "transient")
     if method == "orbit" and args.scheme not in (None, "exact"):
         raise UsageError(f"--method orbit needs the exact scheme, not --scheme {args.scheme} (or --method transient)")
-    if args.out is not None or not args.json:  # found before the work: a folder that cannot take the files
+    if args.out is not None or not args.json:  # --json alone writes only to stdout; found before the work
         from .budget import check_writable
+        from .console import check_output_folder
 
-        check_writable(args.out or Path("results/response"), 1000.0 * f.size, "the response's files")
+        args.out = check_output_folder(args.out or Path("results/response"))
+        check_writable(args.out, 1000.0 * f.size, "the response's files")
     ds = frequency_response(p, f, method=method, tol=args.tol, min_periods=args.min_periods,
                             max_periods=args.max_periods, scheme=args.scheme, period=args.period, workers=workers,
                             progress=progress, fmu_path=args.fmu, max_work=args.max_work)
@@ -274,8 +289,8 @@ def cmd_response(args: argparse.Namespace) -> int:
 
         return print_orbit_response(ds, args, p, f)
     files = []
-    if args.out is not None or not args.json:  # --json alone writes only to stdout
-        files = _write_response(ds, args.out or Path("results/response"), args.format, not args.no_plot)
+    if args.out is not None:
+        files = _write_response(ds, args.out, args.format, not args.no_plot)
     conv = ds["converged"].values
     note = ds.attrs["never_converges"]
     if args.json:
@@ -310,7 +325,16 @@ def cmd_response(args: argparse.Namespace) -> int:
 
 
 def _write_response(ds: Any, out: Path, fmt: str, plot: bool) -> list[Path]:
-    """The response table as CSV and/or NetCDF and its PNG in ``out``; the paths written."""
+    """The response table as CSV and/or NetCDF and its PNG in ``out``, all or nothing
+    (:func:`dryfriction.console.result_set`); the paths written."""
+    from .console import result_set
+
+    with result_set(out) as stage:
+        files = _response_files(ds, stage, fmt, plot)
+    return [out / f.relative_to(stage) for f in files]
+
+
+def _response_files(ds: Any, out: Path, fmt: str, plot: bool) -> list[Path]:
     import csv
     import io
 
@@ -349,7 +373,7 @@ def cmd_scenes(_: argparse.Namespace) -> int:
 def cmd_study(args: argparse.Namespace) -> int:
     from .studies import run_args
 
-    return int(run_args(args, prog="dryfriction study"))
+    return int(run_args(args))
 
 
 #: distinct FMU warnings printed in full by one command; the rest are counted in one line at its end
@@ -393,6 +417,8 @@ def _check_fmu_option(path: Path, command: str) -> None:
     checks its own kind), the chain command checks its own."""
     from . import paths
 
+    if path.is_dir():
+        raise UsageError(f"--fmu: {path} is a directory, not an FMU file")
     if not path.is_file():
         raise UsageError(f"--fmu: no such file: {path}")
     if command == "chain":
@@ -408,45 +434,42 @@ def _check_fmu_option(path: Path, command: str) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    try:
-        args = build_parser().parse_args(argv)
-        args.fmu = getattr(args, "fmu", None)
-        args.max_work = getattr(args, "max_work", None)
-        from .budget import check_command
+    """Run the command line ``argv`` and return its exit status: 0, 1 (the system refused, e.g. a
+    full disk, or the Dask workers were lost too often), 2 (bad input, an unusable FMU, an error the
+    FMU reports, work above --max-work), 130 (interrupted), 141 (output into a closed pipe); every
+    error one line ``dryfriction: error: ...`` (:func:`dryfriction.console.guarded`). Without
+    ``argv`` this is the program itself (:func:`dryfriction.console.main`, which exits; a console
+    script installed before it existed calls this)."""
+    from .console import guarded
 
-        check_command(args)  # the work estimated from the arguments, refused above --max-work
-        if args.fmu is not None:
-            _check_fmu_option(args.fmu, args.command)
-        from .chain_cli import chain_main
-        from .chaos.cli import lyapunov_main
-        from .continuation_cli import continuation_main
-        from .belt_cli import belt_main
-        from .orbit_cli import orbit_main
+    if argv is None:
+        from .console import main as program
 
-        handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
-                   "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main, "orbit": orbit_main,
-                   "continuation": continuation_main, "bifurcation": continuation_main, "belt": belt_main}[args.command]
-        with fmu_warnings_on_stderr("dryfriction", bool(getattr(args, "strict", False))):
-            return handler(args)
-    except (UsageError, FileNotFoundError, FMUError) as e:
-        print(f"dryfriction: error: {e}", file=sys.stderr)
-        return EXIT_USAGE
-    except DryFrictionWarning as e:
-        print(f"dryfriction: error: {e} (an FMU warning, an error under --strict)", file=sys.stderr)
-        return EXIT_USAGE
-    except ClusterLost as e:  # the Dask workers lost too often: one line
-        print(f"dryfriction: failed: {e}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print("dryfriction: interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:
-        # the output piped into head & co., which stopped reading: quiet, as the shell's tools (the
-        # rest of the output goes nowhere, so that the flush at exit does not raise again)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        return 141
+        program()
+    args_list = list(argv or [])
+    return guarded(lambda: _run(args_list))
+
+
+def _run(argv: list[str]) -> int:
+    args = build_parser().parse_args(argv)
+    args.fmu = getattr(args, "fmu", None)
+    args.max_work = getattr(args, "max_work", None)
+    from .budget import check_command
+
+    check_command(args)  # the work estimated from the arguments, refused above --max-work
+    if args.fmu is not None:
+        _check_fmu_option(args.fmu, args.command)
+    from .chain_cli import chain_main
+    from .chaos.cli import lyapunov_main
+    from .continuation_cli import continuation_main
+    from .belt_cli import belt_main
+    from .orbit_cli import orbit_main
+
+    handler = {"validate": cmd_validate, "run": cmd_run, "response": cmd_response, "scenes": cmd_scenes,
+               "study": cmd_study, "lyapunov": lyapunov_main, "chain": chain_main, "orbit": orbit_main,
+               "continuation": continuation_main, "bifurcation": continuation_main, "belt": belt_main}[args.command]
+    with fmu_warnings_on_stderr("dryfriction", bool(getattr(args, "strict", False))):
+        return handler(args)
 
 
 if __name__ == "__main__":

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .argparsing import UsageError, count, number
+from .argparsing import UsageError, count, number, path_arg
 
 __all__ = ["add_continuation_parsers", "continuation_main"]
 
@@ -55,7 +55,7 @@ def _common(c: argparse.ArgumentParser, default_out: str) -> None:
                    help="branches in all, the switched ones included (default 8)")
     c.add_argument("--no-switch", action="store_true",
                    help="do not continue the doubled and the asymmetric branches")
-    c.add_argument("--out", type=Path, default=None, help=f"output folder (default {default_out})")
+    c.add_argument("--out", type=path_arg("--out"), default=None, help=f"output folder (default {default_out})")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -188,14 +188,16 @@ def write_csv(c: Any, path: Path) -> None:
     lines = [",".join(cols)]
     for i in range(ds.point.size):
         row = [str(int(v["branch"][i])), str(int(v["period"][i])), str(v["kind"][i]), repr(float(v["param"][i])),
-               str(int(bool(v["converged"][i]))), str(int(bool(v["stable"][i])))]
+               str(bool(v["converged"][i])).lower(), str(bool(v["stable"][i])).lower()]
         row += [repr(float(v[n][i])) for n in ("x0", "v0", "amplitude_m", "offset_m", "stick_fraction")]
         row += [str(int(v["transitions"][i])), repr(float(v["mu_max"][i]))]
         for j in range(2):
             row += [repr(float(v["multiplier_re"][i, j])), repr(float(v["multiplier_im"][i, j]))]
         row += [repr(float(v["residual"][i])), '"' + str(v["reason"][i]).replace('"', "'") + '"']
         lines.append(",".join(row))
-    path.write_text("\n".join(lines) + "\n")
+    from .atomic import atomic_write_text
+
+    atomic_write_text(path, "\n".join(lines) + "\n")
 
 
 def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
@@ -263,21 +265,27 @@ def _describe(p: Any, name: str, start: float) -> str:
 
 
 def continuation_main(args: argparse.Namespace) -> int:
+    from .console import check_output_folder, result_set
+
     if args.command == "bifurcation":
         return bifurcation_main(args)
+    if args.start == args.stop:
+        raise UsageError(f"--from and --to must differ (both {args.start:g})")
     p = _oscillator(args)
+    out = None
+    if args.out is not None or not args.json:
+        out = check_output_folder(args.out or Path("results/continuation"))
     c = _continue(args, p)
     files: dict[str, str] = {}
-    if args.out is not None or not args.json:
-        out = args.out or Path("results/continuation")
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         from .sweep.datasets import write_netcdf
 
-        files["netcdf"] = str(write_netcdf(c.dataset, out / "continuation.nc"))
-        write_csv(c, out / "continuation.csv")
-        files["csv"] = str(out / "continuation.csv")
-        plot(c, out / "continuation.png", _describe(p, args.param, args.start))
-        files["png"] = str(out / "continuation.png")
+        with result_set(out) as stage:
+            write_netcdf(c.dataset, stage / "continuation.nc")
+            write_csv(c, stage / "continuation.csv")
+            plot(c, stage / "continuation.png", _describe(p, args.param, args.start))
+        files = {kind: str(out / f"continuation.{ext}") for kind, ext in (("netcdf", "nc"), ("csv", "csv"),
+                                                                          ("png", "png"))}
     if args.json:
         print(json.dumps(_clean({"param": args.param, "branches": branches_json(c),
                                  "bifurcations": [b.as_dict() for b in c.bifurcations], "files": files})))
@@ -298,6 +306,7 @@ def continuation_main(args: argparse.Namespace) -> int:
 
 def bifurcation_main(args: argparse.Namespace) -> int:
     from . import paths
+    from .console import check_output_folder, result_set
     from .studies.common import M_REF, K_REF, MU_S_REF, P0_REF, sweep_settings, table
     from .sweep.datasets import observables_dataset
     from .sweep.runner import run_batch
@@ -306,7 +315,8 @@ def bifurcation_main(args: argparse.Namespace) -> int:
     start = 1.0 if args.start is None else args.start
     stop = 0.2 if args.stop is None else args.stop
     if start == stop:
-        raise UsageError(f"--from and --to must differ (both {start!r})")
+        raise UsageError(f"--from and --to must differ (both {start:g})")
+    outdir = check_output_folder(args.out or Path("results/bifurcation"))
     nd = {"lam": args.lam, "mu_s_sigma": args.mu_s_sigma, "chi": args.chi, "zeta": args.zeta, "phi": 0.0}
     n_val = args.values or (16 if args.quick else 80)
     n_ic = args.ics or (5 if args.quick else 11)
@@ -351,11 +361,12 @@ def bifurcation_main(args: argparse.Namespace) -> int:
                       "solid: stable, dashed: unstable; F fold, PD period doubling, SB symmetry breaking, G grazing",
                       fontsize=8)
     fig.tight_layout()
-    outdir = args.out or Path("results/bifurcation")
-    outdir.mkdir(parents=True, exist_ok=True)
     png = outdir / "bifurcation.png"
-    fig.savefig(png, dpi=120)
-    plt.close(fig)
+    try:
+        with result_set(outdir) as stage:
+            fig.savefig(stage / png.name, dpi=120)
+    finally:
+        plt.close(fig)
     for f in c.bifurcations:
         print(f"{f.type} at {args.param} = {f.param:.10g} (branch {f.branch}, period {f.period})")
     print(f"{P.shape[0]} runs for the scatter, {c.dataset.point.size} branch points; wrote {png}")

@@ -215,24 +215,25 @@ def orbit_response_json(ds: Any) -> dict[str, Any]:
 
 
 def print_orbit_response(ds: Any, args: argparse.Namespace, p: Any, f: Any) -> int:
-    """``dryfriction response --method orbit``: files, then the table or the JSON object."""
-    from pathlib import Path
-
+    """``dryfriction response --method orbit``: the files in ``args.out`` (if given; all or nothing,
+    :func:`dryfriction.console.result_set`), then the table or the JSON object."""
     import numpy as np
 
+    from .console import result_set
     from .response import plot_response
 
     files = []
-    if args.out is not None or not args.json:
-        out = args.out or Path("results/response")
-        if args.format in ("csv", "both"):
-            files.append(write_orbit_csv(ds, out / "response.csv"))
-        if args.format in ("netcdf", "both"):
-            from .sweep.datasets import write_netcdf
+    if args.out is not None:
+        with result_set(args.out) as stage:
+            if args.format in ("csv", "both"):
+                files.append(write_orbit_csv(ds, stage / "response.csv"))
+            if args.format in ("netcdf", "both"):
+                from .sweep.datasets import write_netcdf
 
-            files.append(write_netcdf(ds, out / "response.nc"))
-        if not args.no_plot:
-            files.append(plot_response(ds, out / "response.png"))
+                files.append(write_netcdf(ds, stage / "response.nc"))
+            if not args.no_plot:
+                files.append(plot_response(ds, stage / "response.png"))
+        files = [args.out / f.relative_to(stage) for f in files]
     conv = ds["converged"].values
     reasons = ds["reason"].values
     note = ds.attrs["never_converges"]

@@ -95,12 +95,18 @@ def plot(path: Path, fc: FirstCycle, results: dict[tuple[str, str], Convergence]
 
 
 def validate(out: Path, quick: bool = False, fmu_path: Path | None = None, progress: bool = True) -> str:
+    """Validate the FMU (every case and scheme, or two cases with ``quick``), write
+    ``out/validation.csv`` and ``out/validation.png`` together (all or nothing:
+    :func:`dryfriction.console.result_set`) and return the report's text."""
+    from .console import result_set
+
     cases = ["stick-dominated", "chi-small"] if quick else list(CASES)
     steps = (400, 800, 1600) if quick else (400, 800, 1600, 3200)
     with OscillatorFMU(fmu_path) as fmu:
         fc, results = run_validation(fmu, cases, steps, progress)
-    write_csv(out / "validation.csv", results)
-    plot(out / "validation.png", fc, results)
+    with result_set(out) as stage:
+        write_csv(stage / "validation.csv", results)
+        plot(stage / "validation.png", fc, results)
     lines = [
         "First cycle (lambda 0.3, mu_s sigma 0.7, chi 0.5, h = T/1000): max error / range:",
         "  " + ", ".join(f"{k} {v:.2e}" for k, v in fc.errors.items())

@@ -20,7 +20,7 @@ import math
 import sys
 from typing import Any
 
-from ..argparsing import count, number
+from ..argparsing import UsageError, count, number
 from ..fmu import SCHEMES
 from .attractors import period_of
 from .lyapunov import benettin
@@ -61,8 +61,7 @@ def lyapunov_main(args: argparse.Namespace) -> int:
     from ..fmu import OscillatorFMU
 
     if args.renorm > args.periods:
-        print(f"dryfriction: error: --renorm ({args.renorm}) must not exceed --periods ({args.periods})", file=sys.stderr)
-        return 2
+        raise UsageError(f"--renorm ({args.renorm}) must not exceed --periods ({args.periods})")
     nd = NDParams(args.lam, args.mu_s_sigma, args.chi, args.zeta)
     fmu = None
     try:

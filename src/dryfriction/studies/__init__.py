@@ -27,7 +27,7 @@ from typing import Any
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
 from .. import paths
-from ..argparsing import UsageError, make_parser
+from ..argparsing import make_parser, path_arg
 from ..atomic import atomic_write_text
 from ..budget import add_max_work_argument
 from .config import ConfigError, build_config, config_dir, load_toml
@@ -213,10 +213,12 @@ def dump_toml(cfg: dict[str, Any], header: str = "") -> str:
 def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.ArgumentParser:
     """The study command's arguments (``fmu=False``: the caller's parser has a global ``--fmu``)."""
     p.formatter_class = argparse.RawDescriptionHelpFormatter
-    p.epilog = "studies:\n" + "\n".join(f"  {n:9s} {m.TITLE}" for n, m in STUDIES.items())
+    width = max(map(len, STUDIES))
+    p.epilog = "studies:\n" + "\n".join(f"  {n:{width}s}  {m.TITLE}" for n, m in STUDIES.items())
     p.add_argument("name", help="study name (fig2, fig3, ..., or list, all)")
     p.add_argument("--quick", action="store_true", help="small sizes (CI): the config's [quick] table")
-    p.add_argument("--out", default="results", metavar="DIR", help="results root; files go to DIR/<study>/")
+    p.add_argument("--out", type=path_arg("--out"), default="results", metavar="DIR",
+                   help="results root; files go to DIR/<study>/")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="Dask LocalCluster worker processes (default: all cores; 0: no Dask, this process)")
     p.add_argument("--scheduler", default=None, metavar="ADDR",
@@ -241,32 +243,42 @@ def _parser(prog: str) -> argparse.ArgumentParser:
 
 
 def _list() -> str:
-    rows = [f"{'study':9s} {'figures':32s} title"]
-    for n, m in STUDIES.items():
-        rows.append(f"{n:9s} {', '.join(m.FIGURES):32s} {m.TITLE}")
-    rows.append("aliases: " + ", ".join(f"{a} -> {b}" for a, b in ALIASES.items()))
-    return "\n".join(rows)
+    """The studies as a table, its columns as wide as their longest entry."""
+    rows = [("study", "figures", "title")] + [(n, ", ".join(m.FIGURES), m.TITLE) for n, m in STUDIES.items()]
+    w0, w1 = (max(len(r[i]) for r in rows) for i in (0, 1))
+    lines = [f"{a:{w0}s}  {b:{w1}s}  {c}" for a, b, c in rows]
+    lines.append("aliases: " + ", ".join(f"{a} -> {b}" for a, b in ALIASES.items()))
+    return "\n".join(lines)
 
 
 def main(argv: Sequence[str] | None = None, prog: str = "dryfriction study") -> int:
-    """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input or an error the FMU reports, 3 stopped)."""
+    """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input or an error
+    the FMU reports, 3 stopped, 130 interrupted). Errors are one line ``dryfriction: error: ...``
+    (:func:`dryfriction.console.guarded`), as from ``dryfriction study``."""
+    from ..console import guarded
+
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] in ("-h", "--help"):
         _parser(prog).print_help()
         return EXIT_OK
-    try:
-        args = _parser(prog).parse_args(args_list)
-    except UsageError as e:
-        print(f"{prog}: error: {e}", file=sys.stderr)
-        return EXIT_USAGE
-    except SystemExit as e:  # --help anywhere
-        return int(e.code or 0)
-    return run_args(args, prog)
+
+    def command() -> int:
+        try:
+            args = _parser(prog).parse_args(args_list)
+        except SystemExit as e:  # --help anywhere
+            return int(e.code or 0)
+        return run_args(args, prog)
+
+    return guarded(command)
 
 
 def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
-    """Run the study command of parsed arguments (see :func:`add_arguments`)."""
-    from ..fmu import FMUError
+    """Run the study command of parsed arguments (see :func:`add_arguments`); ``prog`` names the
+    command in its help only. Bad input raises UsageError (one line, exit 2, reported by the
+    caller: :func:`main`, ``dryfriction study``); an interrupt is KeyboardInterrupt (finished
+    chunks are kept)."""
+    from ..console import PREFIX, interrupt_note, interrupted
+    from ..errors import FMUError
     from ..sweep.engine import SweepInterrupted
 
     try:
@@ -283,27 +295,18 @@ def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
                 print(dump_toml(cfg, header=f"study {n}" + (" (--quick)" if args.quick else "")))
             return EXIT_OK
         fmu = getattr(args, "fmu", None)
+        interrupt_note("finished chunks are kept, run again to resume")
         for n in names:
             print(f"== study {n}: {STUDIES[n].TITLE}", flush=True)
             run_study(n, quick=args.quick, out=args.out, workers=args.workers, scheduler=args.scheduler,
                       sets=args.sets, config_file=args.config, fmu=fmu, max_chunks=args.max_chunks,
                       progress=not args.no_progress, max_work=getattr(args, "max_work", None))
         return EXIT_OK
-    except UsageError as e:
-        print(f"{prog}: error: {e}", file=sys.stderr)
-        return EXIT_USAGE
-    except BrokenPipeError:  # output piped into head & co.
-        sys.stderr.close()
-        return EXIT_FAILED
     except SweepInterrupted as e:
-        print(f"{prog}: {e}", file=sys.stderr)
+        print(f"{PREFIX}: {e}", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except FMUError as e:  # an error the FMU reports: one line, as a bad argument
-        print(f"{prog}: error: {e}", file=sys.stderr)
-        return EXIT_USAGE
-    except (RuntimeError, OSError) as e:
-        print(f"{prog}: failed: {e}", file=sys.stderr)
+    except RuntimeError as e:
+        if interrupted() or isinstance(e, FMUError):  # said by the caller: the interrupt, exit 2
+            raise
+        print(f"{PREFIX}: error: {e}", file=sys.stderr)
         return EXIT_FAILED
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted; finished chunks are kept, run again to resume", file=sys.stderr)
-        return 130
