@@ -271,16 +271,24 @@ def small_fs(tmp_path: Path) -> Iterator[Path]:
         subprocess.run(["umount", str(mnt)], check=True)
 
 
-def test_a_full_disk_while_the_results_are_written(small_fs: Path, fmu_path: Path,
+def test_a_full_disk_while_the_results_are_written(small_fs: Path, fmu_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                   capsys: pytest.CaptureFixture[str]) -> None:
-    """The CSV fits, the PNG (some 60 KB) does not: one line naming the folder and the cause, exit
-    1, the older result set there untouched, nothing else left."""
+    """A folder without room for the estimated files is refused before the work (exit 2); a disk
+    that fills after that check (the check bypassed here) while the files are written: the PNG
+    (some 60 KB) does not fit, one line naming the folder and the cause, exit 1, the older result
+    set there untouched, nothing else left."""
     out = small_fs / "out"
     out.mkdir()
     (out / "response.csv").write_text("an older table\n")
-    assert main(["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",
-                 "--f-stop", "2", "--num", "2", "--format", "csv", "--no-progress", "--out", str(out),
-                 "--fmu", str(fmu_path)]) == 1
+    argv = ["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",
+            "--f-stop", "2", "--num", "2", "--format", "csv", "--no-progress", "--out", str(out), "--fmu", str(fmu_path)]
+    assert main(argv) == 2
+    line = capsys.readouterr().err
+    assert line.startswith(f"dryfriction: error: the output folder {out} has ") and "MB free" in line, line
+    import dryfriction.budget
+
+    monkeypatch.setattr(dryfriction.budget, "check_writable", lambda folder, *a, **k: Path(folder))
+    assert main(argv) == 1
     cap = capsys.readouterr()
     assert cap.err == f"dryfriction: error: cannot write {out}: no space left on the device; nothing of it was kept\n"
     assert [p.name for p in small_fs.iterdir()] == ["out"] and [p.name for p in out.iterdir()] == ["response.csv"]

@@ -149,7 +149,7 @@ def test_unwritable_output_folder_found_before_the_work(tmp_path: Path, fmu_path
     # response: before the work, nothing created
     assert main([*RESPONSE, "--num", "3", "--out", str(blocker / "resp")]) == 2
     line = _one_line_error(capsys.readouterr().err)
-    assert f"cannot write into the output folder {blocker}/resp: Not a directory" in line
+    assert f"--out {blocker}/resp: {blocker} is a file, not a folder" in line
     fresh = tmp_path / "new" / "deeper"
     assert check_writable(fresh) == fresh and not (tmp_path / "new").exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".probe")]
