@@ -28,13 +28,14 @@ from __future__ import annotations
 import math
 import os
 import shutil
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .argparsing import UsageError
 
 __all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "check_work",
            "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
-           "command_work", "check_command"]
+           "command_work", "check_command", "Estimate", "period_steps", "continuation_work"]
 
 #: the default bound of a command's work, in steps (module doc)
 DEFAULT_MAX_WORK = 1e10
@@ -73,6 +74,58 @@ def check_work(work: float, what: str, max_work: float | None = None, option: st
             f"about {fmt(work)} steps of work ({what}) exceed the bound {option} {fmt(bound)} (steps); "
             f"ask for less or raise {option}")
     return work
+
+
+def period_steps(scheme: object, steps_per_period: float) -> float:
+    """Steps one excitation period counts: :data:`EXACT_PERIOD_STEPS` for the exact scheme, else
+    ``steps_per_period`` (h = T / steps_per_period)."""
+    return EXACT_PERIOD_STEPS if str(scheme).lower() in ("exact", "4") else float(steps_per_period)
+
+
+def continuation_work(max_points: int, max_branches: int, period: int = 1) -> tuple[float, str]:
+    """A continuation's work (exact scheme): every point of every branch, about 10 periods of
+    Newton's corrector each."""
+    pts = int(max_points) * int(max_branches)
+    periods = pts * 10 * int(period)
+    return periods * EXACT_PERIOD_STEPS, (f"{fmt(pts)} points x about {10 * int(period)} periods x "
+                                          f"{EXACT_PERIOD_STEPS:g} steps")
+
+
+@dataclass
+class Estimate:
+    """What a computation (a study) will do, from its configuration alone: its work in steps, part
+    by part (a sweep, a batch, a trajectory), and the bytes it will write (results and chunks)."""
+
+    #: (what, steps) of every part, in the order they run
+    parts: list[tuple[str, float]] = field(default_factory=list)
+    #: bytes of the results and chunk files written
+    out_bytes: float = 0.0
+
+    def add(self, what: str, steps: float, nbytes: float = 0.0) -> "Estimate":
+        """Count a part of ``steps`` steps writing ``nbytes`` bytes; returns self."""
+        self.parts.append((what, float(steps)))
+        self.out_bytes += float(nbytes)
+        return self
+
+    def runs(self, what: str, runs: float, periods: float, steps_per_period: float, nbytes: float = 0.0) -> "Estimate":
+        """Count ``runs`` runs of ``periods`` periods at ``steps_per_period`` steps each."""
+        return self.add(f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(steps_per_period)} steps",
+                        runs * periods * steps_per_period, nbytes)
+
+    @property
+    def total(self) -> float:
+        """All parts' steps."""
+        return float(sum(s for _, s in self.parts))
+
+    def describe(self, limit: int = 3) -> str:
+        """The largest parts (at most ``limit``) for a message, with how many more there are."""
+        big = sorted(self.parts, key=lambda p: -p[1])
+        text = "; ".join(w for w, _ in big[:limit])
+        return text + (f"; and {len(big) - limit} smaller parts" if len(big) > limit else "")
+
+    def check(self, name: str, max_work: float | None = None) -> float:
+        """Refuse (:class:`WorkBoundError`) when the total exceeds the bound (``--max-work``)."""
+        return check_work(self.total, f"{name}: {self.describe()}", max_work)
 
 
 def memory_limit() -> float:
@@ -171,10 +224,7 @@ def command_work(args: object) -> tuple[float, str] | None:
         periods = n * (int(g("transients", 60)) + 10) * int(g("period", 1))
         return periods * EXACT_PERIOD_STEPS, f"{n} searches x {fmt(periods / n)} periods x {EXACT_PERIOD_STEPS:g} steps"
     if cmd == "continuation":
-        pts = int(g("max_points", 400)) * int(g("max_branches", 8))
-        periods = pts * 10 * int(g("period", 1))
-        return periods * EXACT_PERIOD_STEPS, (f"{fmt(pts)} points x about {10 * int(g('period', 1))} periods x "
-                                              f"{EXACT_PERIOD_STEPS:g} steps")
+        return continuation_work(int(g("max_points", 400)), int(g("max_branches", 8)), int(g("period", 1)))
     if cmd == "bifurcation":
         quick = bool(g("quick", False))
         values = int(g("values", 16 if quick else 80))

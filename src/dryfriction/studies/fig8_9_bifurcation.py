@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from ..sweep import SweepSpec, observables_dataset
-from .common import StudyContext, check_numerics, check_params, check_window, plt, sweep_settings, table
+from .common import FIGURE_BYTES, Estimate, StudyContext, sweep_estimate, check_numerics, check_params, check_window, plt, sweep_settings, table
 from .config import grid, require
 
 NAME = "fig8_9"
@@ -133,3 +133,15 @@ def run(ctx: StudyContext) -> dict[str, float]:
             f"largest amplitude spread {float(cls.amplitude_spread.max()):.3f} at chi = "
             f"{float(chi[int(np.argmax(cls.amplitude_spread.values))]):.3g}")
     return {"chi_bifurcation": lo, "chi_symmetric_max": hi, "runs": float(sp.n_runs)}
+
+
+def runs(cfg: dict[str, Any]) -> int:
+    """The sweep's runs: chi x z0 x dz0, from the sizes alone."""
+    s = cfg["sweep"]
+    return int(s["chi"]["num"]) * int(s["z0"]["num"]) * int(s["dz0"]["num"])
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one sweep."""
+    est = sweep_estimate(Estimate(), "fig8_9", runs(cfg), cfg["sweep"]["periods"], cfg["numerics"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

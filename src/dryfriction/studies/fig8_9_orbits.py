@@ -33,7 +33,8 @@ from ..sweep import SweepSpec, observables_dataset
 from . import fig8_9_bifurcation as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations
-from .common import StudyContext, plt, sweep_settings, table
+from ..budget import continuation_work
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt, sweep_estimate, sweep_settings, table
 from .config import require
 
 NAME = "fig8_9_orbits"
@@ -250,3 +251,20 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     for b in cont.branches:
         ctx.log(f"fig8_9_orbits: branch {b.id} (period {b.period}, {b.kind}, {b.points} points): {b.stopped}")
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): fig8_9's sweep, the long runs
+    (5 per chi of the continuation's range), the doubling runs (at most 2 sweeps of 2 per such chi)
+    and the continuation (every point of ``max_branches`` branches)."""
+    c, bf, num = cfg["continuation"], cfg["brute_force"], cfg["numerics"]
+    est = sweep_estimate(Estimate(), "fig8_9", base.runs(cfg), cfg["sweep"]["periods"], num)
+    chi = base.axes(cfg)["chi"]
+    n_long = int(np.sum((chi >= min(c["start"], c["stop"])) & (chi <= max(c["start"], c["stop"]))))
+    if n_long:
+        sweep_estimate(est, "fig8_9_long", 5 * n_long, bf["long_periods"], num)
+    if n_long > 1:
+        sweep_estimate(est, "fig8_9_doubling (at most)", 2 * 2 * n_long, bf["doubling_periods"], num)
+    steps, what = continuation_work(c["max_points"], c["max_branches"])
+    est.add(f"continuation: {what}", steps, 400.0 * c["max_points"] * c["max_branches"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))
