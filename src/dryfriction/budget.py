@@ -33,7 +33,7 @@ from pathlib import Path
 
 from .argparsing import UsageError
 
-__all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "check_work",
+__all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "SAMPLE_STEPS", "check_work",
            "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
            "command_work", "check_command", "Estimate", "period_steps", "continuation_work"]
 
@@ -42,6 +42,9 @@ DEFAULT_MAX_WORK = 1e10
 #: steps one excitation period of the exact scheme counts as (a few stick/slip events, each a closed
 #: form with its root finding: measured 0.7 microseconds, about 45 Bossak steps)
 EXACT_PERIOD_STEPS = 50.0
+#: steps one sampled communication point of a trajectory counts (a doStep call and its outputs read
+#: back through Python: measured about 5 microseconds)
+SAMPLE_STEPS = 300.0
 #: steps per period of a Bossak scheme whose step is derived (h = 0: the step rule's typical count)
 BOSSAK_PERIOD_STEPS = 1000.0
 
@@ -118,8 +121,9 @@ class Estimate:
         return float(sum(s for _, s in self.parts))
 
     def describe(self, limit: int = 3) -> str:
-        """The largest parts (at most ``limit``) for a message, with how many more there are."""
-        big = sorted(self.parts, key=lambda p: -p[1])
+        """The largest parts (at most ``limit``; those of no work, the figures, left out) for a
+        message, with how many more there are."""
+        big = sorted((p for p in self.parts if p[1] > 0), key=lambda p: -p[1])
         text = "; ".join(w for w, _ in big[:limit])
         return text + (f"; and {len(big) - limit} smaller parts" if len(big) > limit else "")
 

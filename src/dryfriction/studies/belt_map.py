@@ -14,6 +14,7 @@ Runs in this process (a point costs a few FMU runs of a period).
 
 from __future__ import annotations
 
+import inspect
 import math
 from typing import Any
 
@@ -22,6 +23,7 @@ import xarray as xr
 from matplotlib.colors import LogNorm
 
 from ..belt_reference import hopf_belt_speed
+from ..budget import SAMPLE_STEPS, fmt
 from ..params import Oscillator
 from ..self_excited import BeltProblem, LAWS, continue_orbits, find_orbit, self_excited, transient
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
@@ -230,9 +232,12 @@ def work(cfg: dict[str, Any]) -> Estimate:
     Tn = 2.0 * math.pi * math.sqrt(p["m"] / p["k"])
     # an orbit's length in natural periods: 1 + the ride from the catch to the breakaway
     cycle = 1.0 + 2.0 * abs(p["mu_s"] - p["mu_k"]) * Ns[:, None] / (p["k"] * vb[None, :]) / Tn
-    periods = np.maximum(float(n["transient_periods"]), 5.0 * cycle) + NEWTON_ORBIT_PERIODS * cycle
+    sampled = np.maximum(float(n["transient_periods"]), 5.0 * cycle)     # the transient, sampled
+    periods = sampled + NEWTON_ORBIT_PERIODS * cycle
+    samples = float(sampled.sum()) * inspect.signature(transient).parameters["samples"].default
     est = Estimate().add(f"{vb.size * Ns.size} points x about {float(periods.mean()):,.0f} natural periods x "
-                         f"{spp:g} steps", float(periods.sum()) * spp, vb.size * Ns.size * 10 * 8 + 200.0 * vb.size * Ns.size)
+                         f"{spp:g} steps, {fmt(samples)} samples", float(periods.sum()) * spp + samples * SAMPLE_STEPS,
+                         vb.size * Ns.size * 10 * 8 + 200.0 * vb.size * Ns.size)
     if n["grazing"]:
         est.add(f"grazing: {Ns.size} continuations x {GRAZING_POINTS} points x about {NEWTON_ORBIT_PERIODS:g} "
                 f"orbit periods x {spp:g} steps", Ns.size * GRAZING_POINTS * NEWTON_ORBIT_PERIODS * float(cycle.mean()) * spp)

@@ -20,7 +20,7 @@ from .. import model  # noqa: E402
 from ..fmu import OscillatorFMU, Settings  # noqa: E402
 from ..params import Oscillator  # noqa: E402
 from ..atomic import atomic_path  # noqa: E402
-from ..budget import Estimate, fmt, period_steps  # noqa: E402
+from ..budget import SAMPLE_STEPS, Estimate, fmt, period_steps  # noqa: E402
 from ..sweep.datasets import write_netcdf  # noqa: E402
 from ..sweep.engine import Engine, EngineOptions, SweepSpec  # noqa: E402
 from ..sweep.runner import OUTPUT_COLUMNS  # noqa: E402
@@ -146,10 +146,15 @@ def trajectory_estimate(est: Estimate, what: str, runs: float, periods: float, n
                         samples_per_period: float = 0.0, variables: int = 8, blocks: int = 1) -> Estimate:
     """Count ``runs`` runs of ``periods`` excitation periods each (steps per period from
     ``numerics``: the exact scheme's count, else ``steps_per_period``; once per block of a chain),
-    sampled ``samples_per_period`` times a period into ``variables`` float64 variables."""
+    sampled ``samples_per_period`` times a period (each sample counts
+    :data:`~dryfriction.budget.SAMPLE_STEPS`) into ``variables`` float64 variables."""
     spp = period_steps(numerics.get("scheme"), float(numerics.get("steps_per_period", 1000)))
-    nbytes = runs * (periods * samples_per_period + 1.0) * variables * 8 if samples_per_period else 0.0
-    return est.runs(what, runs, periods, spp * blocks, nbytes)
+    if not samples_per_period:
+        return est.runs(what, runs, periods, spp * blocks)
+    samples = runs * (periods * samples_per_period + 1.0)
+    return est.add(f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(spp * blocks)} steps, "
+                   f"{fmt(samples)} samples", runs * periods * spp * blocks + samples * SAMPLE_STEPS,
+                   samples * variables * 8)
 
 
 # ---- checks -------------------------------------------------------------------------------------
