@@ -267,3 +267,18 @@ def test_output_estimate_checked_against_the_free_space(tmp_path: Path, fmu_path
     with pytest.raises(Exception, match=r"has 4\.\d+ MB free, the results and chunks of study fig8_9 need about 4"):
         run_study("fig8_9", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
     assert not list(tmp_path.rglob("*"))
+
+
+def test_study_memory_refused_before_the_work(tmp_path: Path, fmu_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import dryfriction.budget as budget
+    from dryfriction.sweep.runner import OUTPUT_COLUMNS, PARAM_COLUMNS
+
+    # 1000 x 5 x 5 runs hold their table, outputs and dataset: 25,000 x (18 + 2 x 6) x 8 bytes = 6 MB
+    row = (len(PARAM_COLUMNS) + 2 * len(OUTPUT_COLUMNS)) * 8
+    assert study_work("fig8_9", effective_config("fig8_9", True, sets=["sweep.chi.num=1000"])).memory == 25000 * row
+    monkeypatch.setattr(budget, "memory_limit", lambda: 1e6)
+    with pytest.raises(WorkBoundError, match=r"about 0\.006 GB of memory \(study fig8_9: sweep fig8_9: 25,000 runs .*"
+                                             r"\(0\.001 GB\); ask for less \(--set\)"):
+        run_study("fig8_9", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
+                  sets=["sweep.chi.num=1000"], max_work=1e15)
+    assert not list(tmp_path.rglob("*"))

@@ -33,8 +33,8 @@ from pathlib import Path
 
 from .argparsing import UsageError
 
-__all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "SAMPLE_STEPS", "check_work",
-           "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
+__all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "SAMPLE_STEPS",
+           "check_work", "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
            "command_work", "check_command", "Estimate", "period_steps", "continuation_work"]
 
 #: the default bound of a command's work, in steps (module doc)
@@ -103,17 +103,22 @@ class Estimate:
     parts: list[tuple[str, float]] = field(default_factory=list)
     #: bytes of the results and chunk files written
     out_bytes: float = 0.0
+    #: bytes held in memory at once, at most (the largest part's tables and results)
+    memory: float = 0.0
 
-    def add(self, what: str, steps: float, nbytes: float = 0.0) -> "Estimate":
-        """Count a part of ``steps`` steps writing ``nbytes`` bytes; returns self."""
+    def add(self, what: str, steps: float, nbytes: float = 0.0, memory: float | None = None) -> "Estimate":
+        """Count a part of ``steps`` steps writing ``nbytes`` bytes and holding ``memory`` bytes
+        (default: twice ``nbytes``, its results and their dataset); returns self."""
         self.parts.append((what, float(steps)))
         self.out_bytes += float(nbytes)
+        self.memory = max(self.memory, 2.0 * float(nbytes) if memory is None else float(memory))
         return self
 
-    def runs(self, what: str, runs: float, periods: float, steps_per_period: float, nbytes: float = 0.0) -> "Estimate":
+    def runs(self, what: str, runs: float, periods: float, steps_per_period: float, nbytes: float = 0.0,
+             memory: float | None = None) -> "Estimate":
         """Count ``runs`` runs of ``periods`` periods at ``steps_per_period`` steps each."""
         return self.add(f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(steps_per_period)} steps",
-                        runs * periods * steps_per_period, nbytes)
+                        runs * periods * steps_per_period, nbytes, memory)
 
     @property
     def total(self) -> float:
@@ -127,9 +132,12 @@ class Estimate:
         text = "; ".join(w for w, _ in big[:limit])
         return text + (f"; and {len(big) - limit} smaller parts" if len(big) > limit else "")
 
-    def check(self, name: str, max_work: float | None = None) -> float:
-        """Refuse (:class:`WorkBoundError`) when the total exceeds the bound (``--max-work``)."""
-        return check_work(self.total, f"{name}: {self.describe()}", max_work)
+    def check(self, name: str, max_work: float | None = None, option: str = "--set") -> float:
+        """Refuse (:class:`WorkBoundError`) when the total exceeds the bound (``--max-work``), or
+        the memory half this machine's (``option`` makes it large). Returns the total."""
+        check_work(self.total, f"{name}: {self.describe()}", max_work)
+        check_memory(self.memory, f"{name}: {self.describe(1)}", option)
+        return self.total
 
 
 def memory_limit() -> float:

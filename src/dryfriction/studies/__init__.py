@@ -183,7 +183,8 @@ def study_work(name: str, cfg: dict[str, Any]) -> Estimate:
 def check_study(name: str, cfg: dict[str, Any], out_dir: str | os.PathLike[str],
                 max_work: float | None = None) -> Estimate:
     """Before any work: refuse (:class:`~dryfriction.budget.WorkBoundError`, one line naming
-    ``--max-work`` and the estimate) a study whose total work exceeds ``max_work``, and (a
+    ``--max-work`` and the estimate) a study whose total work exceeds ``max_work`` or whose memory
+    exceeds half this machine's (naming ``--set``), and (a
     :class:`UsageError`) an output folder that cannot take a file or lacks room for the estimated
     results and chunks (with a margin). Returns the estimate."""
     from ..budget import check_writable, max_work_value

@@ -240,5 +240,6 @@ def work(cfg: dict[str, Any]) -> Estimate:
                          vb.size * Ns.size * 10 * 8 + 200.0 * vb.size * Ns.size)
     if n["grazing"]:
         est.add(f"grazing: {Ns.size} continuations x {GRAZING_POINTS} points x about {NEWTON_ORBIT_PERIODS:g} "
-                f"orbit periods x {spp:g} steps", Ns.size * GRAZING_POINTS * NEWTON_ORBIT_PERIODS * float(cycle.mean()) * spp)
+                f"orbit periods x {spp:g} steps",
+                Ns.size * GRAZING_POINTS * NEWTON_ORBIT_PERIODS * float(cycle.mean()) * spp)
     return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -23,7 +23,7 @@ from ..atomic import atomic_path  # noqa: E402
 from ..budget import SAMPLE_STEPS, Estimate, fmt, period_steps  # noqa: E402
 from ..sweep.datasets import write_netcdf  # noqa: E402
 from ..sweep.engine import Engine, EngineOptions, SweepSpec  # noqa: E402
-from ..sweep.runner import OUTPUT_COLUMNS  # noqa: E402
+from ..sweep.runner import OUTPUT_COLUMNS, PARAM_COLUMNS  # noqa: E402
 from ..sweep.table import nondim_table  # noqa: E402
 from .config import ConfigError, require  # noqa: E402,F401
 
@@ -138,8 +138,10 @@ def sweep_estimate(est: Estimate, name: str, runs: int, periods: float, numerics
     table is built), its chunk files and the dataset made of them."""
     chunks = -(-int(runs) // int(numerics["chunk_runs"]))
     nbytes = 2.0 * runs * len(OUTPUT_COLUMNS) * 8 + 400.0 * chunks
+    # held at once: the run table, the outputs and the dataset made of them
+    memory = runs * (len(PARAM_COLUMNS) + 2 * len(OUTPUT_COLUMNS)) * 8
     return est.runs(f"sweep {name}", runs, periods, period_steps(numerics.get("scheme"), numerics["steps_per_period"]),
-                    nbytes)
+                    nbytes, memory)
 
 
 def trajectory_estimate(est: Estimate, what: str, runs: float, periods: float, numerics: Mapping[str, Any],

@@ -13,7 +13,8 @@ import numpy as np
 import xarray as xr
 
 from ..exact import solve_exact
-from .common import FIGURE_BYTES, Estimate, StudyContext, trajectory_estimate, check_numerics, check_params, ensure, nondim_trajectory, oscillator, plt
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
+                     oscillator, plt, trajectory_estimate)
 from .config import require
 
 NAME = "fig2"

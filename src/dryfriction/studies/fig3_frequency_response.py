@@ -14,8 +14,8 @@ import numpy as np
 
 from ..steady import den_hartog_amplitude, inman_amplitude
 from ..sweep import SweepSpec, observables_dataset
-from .common import (FIGURE_BYTES, Estimate, StudyContext, sweep_estimate, check_numerics, check_params, check_window, ensure, oscillator, plt,
-                     sweep_settings, table)
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, ensure,
+                     oscillator, plt, sweep_estimate, sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig3"

@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .common import FIGURE_BYTES, Estimate, StudyContext, trajectory_estimate, check_numerics, check_params, ensure, nondim_trajectory, plt
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt,
+                     trajectory_estimate)
 from .config import require
 
 NAME = "fig4"

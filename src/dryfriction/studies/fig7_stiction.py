@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from ..sweep import SweepSpec, observables_dataset
-from .common import FIGURE_BYTES, Estimate, StudyContext, sweep_estimate, check_numerics, check_params, ensure, plt, sweep_settings, table
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, plt, sweep_estimate,
+                     sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig7"

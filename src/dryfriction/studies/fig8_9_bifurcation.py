@@ -20,7 +20,8 @@ import numpy as np
 import xarray as xr
 
 from ..sweep import SweepSpec, observables_dataset
-from .common import FIGURE_BYTES, Estimate, StudyContext, sweep_estimate, check_numerics, check_params, check_window, plt, sweep_settings, table
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, plt,
+                     sweep_estimate, sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig8_9"
