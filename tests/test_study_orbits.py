@@ -74,6 +74,7 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     lr = read_netcdf(band / "long_runs.nc")
     chi = lr.chi.values
     sym = _symmetric(lr.amplitude.values, lr.asymmetry.values)
+    assert lr.symmetric_periodic.dtype == bool and np.array_equal(lr.symmetric_periodic.values, sym)
     i = int(np.argmax(sym))                              # quick: 0.6
     assert i > 0 and sym[i:].all() and not sym[i - 1]
     lo, hi = chi[i - 1], chi[i]
@@ -99,6 +100,7 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     k = int(np.where(split > 1e-2)[0][-1])
     assert np.all(split[k + 1:] < 1e-6) and k + 1 < split.size
     pd_lo, pd_hi = dr.chi.values[k], dr.chi.values[k + 1]
+    assert dr.period_1.dtype == bool and np.array_equal(dr.period_1.values, split <= 1e-6)
     assert doc["brute_force"]["period_doubling"] == [pytest.approx(pd_lo, abs=1e-15), pytest.approx(pd_hi, abs=1e-15)]
     assert pd_hi - pd_lo == pytest.approx(float(np.diff(sc.chi.values).max()), rel=1e-12)
     assert doc["reference_period_doubling"] == [0.236, 0.237]

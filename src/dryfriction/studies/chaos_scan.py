@@ -190,7 +190,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             "strobe_dz": (("chi", "ic", "k"), scan["strobe"][..., 1], {"long_name": "stroboscopic z' at t = kT"}),
             "period": (("chi", "ic"), cls["period"], {"long_name": "period of the stroboscopic points (0: none up to 32)"}),
             "attractors": (("chi",), cls["attractors"], {"long_name": "distinct attractors reached by the initial conditions"}),
-            "chaotic": (("chi", "ic"), cls["chaotic"].astype(np.int8), {"long_name": "exponent > 3 stderr and non-periodic"}),
+            "chaotic": (("chi", "ic"), cls["chaotic"].astype(bool), {"long_name": "exponent > 3 stderr and non-periodic"}),
             "section_z": (("n",), section[:, 0]),
             "section_dz": (("n",), section[:, 1]),
         },

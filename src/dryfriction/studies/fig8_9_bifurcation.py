@@ -99,10 +99,10 @@ def run(ctx: StudyContext) -> dict[str, float]:
     cls = classify(ds)
     for name in cls.data_vars:
         ds[name] = cls[name]
-    ds["symmetric_periodic"] = ds.symmetric_periodic.astype(np.int8)
+    ds["symmetric_periodic"] = ds.symmetric_periodic.astype(bool)
     ds.amplitude_spread.attrs["long_name"] = "(max - min) of the amplitude over the initial conditions / median"
     ds.asymmetry_max.attrs["long_name"] = "max |asymmetry| over the initial conditions / median amplitude"
-    ds.symmetric_periodic.attrs["long_name"] = "1: one amplitude and zero asymmetry for all initial conditions (1e-3)"
+    ds.symmetric_periodic.attrs["long_name"] = "True: one amplitude and zero asymmetry for all initial conditions (1e-3)"
     ctx.save_dataset(ds, DATASET)
 
     chi = ax["chi"]

@@ -106,7 +106,7 @@ def doubling_runs(ctx: StudyContext, chi: np.ndarray, ax: dict[str, np.ndarray])
     ds = b.copy()
     ds["split"] = gap
     ds.split.attrs["long_name"] = "max |change of z_max, z_min| from the last period but one to the last / amplitude"
-    ds["period_1"] = (gap.max("ic") <= 1e-6).astype(np.int8)
+    ds["period_1"] = (gap.max("ic") <= 1e-6).astype(bool)
     ds.attrs.update(periods=n)
     return ds
 
@@ -138,7 +138,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     cls = base.classify(sc)
     for name in cls.data_vars:
         sc[name] = cls[name]
-    sc["symmetric_periodic"] = sc.symmetric_periodic.astype(np.int8)
+    sc["symmetric_periodic"] = sc.symmetric_periodic.astype(bool)
     sc.attrs.update({f"param_{k}": v for k, v in nd.items()})
     sc.attrs.update(periods=s["periods"], obs_periods=s["obs_periods"], runs=sp.n_runs)
     ctx.save_dataset(sc, DATASETS[0])
@@ -152,10 +152,10 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ref_lo, ref_hi = (float(v) for v in cfg["brute_force"]["reference_period_doubling"])
     if chi_long.size:
         lr = long_runs(ctx, chi_long, ax)
-        lr["symmetric_periodic"] = ("chi", symmetric_after(lr).astype(np.int8))
+        lr["symmetric_periodic"] = ("chi", symmetric_after(lr).astype(bool))
         lr.attrs.update(periods=float(cfg["brute_force"]["long_periods"]))
         ctx.save_dataset(lr, "long_runs.nc")
-        brute["symmetry_breaking"] = sb_bracket(chi_long, lr.symmetric_periodic.values.astype(bool))
+        brute["symmetry_breaking"] = sb_bracket(chi_long, lr.symmetric_periodic.values)
     cont = continue_nd(ctx, {**nd}, "chi", c["start"], c["stop"], c)
     pds = [b.param for b in cont.bifurcations if b.type == "period_doubling"]
     if pds and chi_long.size > 1:
@@ -165,7 +165,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         if near.size > 1:
             dr = doubling_runs(ctx, near, ax)
             ctx.save_dataset(dr, "doubling_runs.nc")
-            brute["period_doubling"] = pd_bracket(near, dr.period_1.values.astype(bool))
+            brute["period_doubling"] = pd_bracket(near, dr.period_1.values)
     ds = collect([({}, cont)])
     ds.attrs.update({f"param_{k}": v for k, v in nd.items() if k != "chi"})
     ctx.save_dataset(ds, DATASETS[1])
