@@ -9,14 +9,16 @@ command line, ``max_work=`` in the API).
 ns of one core, measured on the 2-core development machine). An excitation period of the exact
 scheme (closed form from event to event, about 0.7 microseconds) counts as
 :data:`EXACT_PERIOD_STEPS` steps, a frequency of the orbit method as its measured cost
-(:data:`dryfriction.response.ORBIT_FREQUENCY_STEPS`), and a step of the chain once per block. The
-estimate is an upper bound where the computation has one (the transient method's period limit, a
-sweep's stop times), else the typical count (the orbit method's Newton iterations).
+(:data:`dryfriction.response.ORBIT_FREQUENCY_STEPS`), a sampled point of a trajectory as
+:data:`SAMPLE_STEPS`, and a step of the chain once per block. The estimate is an upper bound
+where the computation has one (the transient method's period limit, a sweep's stop times), else
+the typical count (the orbit method's Newton iterations).
 
 **The default bound is** :data:`DEFAULT_MAX_WORK` = 1e10 steps, a few minutes of one core: every
-command of the README and every study's default configuration is within it (the largest, fig8_9's
-sweep, is 4.0e9); ``dryfriction response ... --num 100000000`` (1.2e12) and 10^6 frequencies
-through the API (1.2e10) are not.
+command of the README and every study's default configuration is within it (the largest study,
+fig10_11_orbits, is 8.0e9 in all: a study's :class:`Estimate` sums every part it runs);
+``dryfriction response ... --num 100000000`` (1.2e12) and 10^6 frequencies through the API
+(1.2e10) are not.
 
 Memory: the estimate of what the command holds at once (results in this process, a task's
 arguments) is compared with half of this machine's memory (:func:`memory_limit`); more is refused

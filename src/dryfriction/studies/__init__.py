@@ -115,7 +115,8 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
               progress: bool = True, max_work: float | None = None) -> StudyOutcome:
     """Run one study (Python API of ``dryfriction study``). Raises ConfigError before any work if
     an argument or config value is invalid or the output folder cannot be written,
-    :class:`~dryfriction.budget.WorkBoundError` if a sweep's work exceeds ``max_work`` (steps,
+    :class:`~dryfriction.budget.WorkBoundError` before any work if the study's estimated total work
+    (every sweep, batch and trajectory it runs: :func:`study_work`) exceeds ``max_work`` (steps,
     :mod:`dryfriction.budget`), SweepInterrupted if ``max_chunks`` stopped a sweep.
 
     The results (datasets, figures), ``config.toml`` and ``summary.json`` are written into a staging
@@ -184,9 +185,9 @@ def check_study(name: str, cfg: dict[str, Any], out_dir: str | os.PathLike[str],
                 max_work: float | None = None) -> Estimate:
     """Before any work: refuse (:class:`~dryfriction.budget.WorkBoundError`, one line naming
     ``--max-work`` and the estimate) a study whose total work exceeds ``max_work`` or whose memory
-    exceeds half this machine's (naming ``--set``), and (a
-    :class:`UsageError`) an output folder that cannot take a file or lacks room for the estimated
-    results and chunks (with a margin). Returns the estimate."""
+    exceeds half this machine's (naming ``--set``), and (a :class:`UsageError`) an output folder
+    that cannot take a file or lacks room for the estimated results and chunks (twice the estimate,
+    :data:`OUTPUT_MARGIN`). Returns the estimate."""
     from ..budget import check_writable, max_work_value
 
     max_work_value(max_work)
