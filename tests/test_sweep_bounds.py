@@ -282,3 +282,14 @@ def test_study_memory_refused_before_the_work(tmp_path: Path, fmu_path: Path, mo
         run_study("fig8_9", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
                   sets=["sweep.chi.num=1000"], max_work=1e15)
     assert not list(tmp_path.rglob("*"))
+
+
+def test_every_default_study_within_the_default_bound() -> None:
+    # 'dryfriction study all' at full size is not refused: the largest, fig10_11 and its orbit study,
+    # 263,917 runs x 30 periods x 1000 steps = 7.9e9 (+ 18 continuations of 1.6e6 steps)
+    totals = {n: study_work(n, effective_config(n)).total for n in STUDIES}
+    assert max(totals.values()) <= DEFAULT_MAX_WORK
+    assert totals["fig10_11"] == pytest.approx(263917 * 30 * 1000, rel=1e-12)
+    assert totals["fig10_11_orbits"] == pytest.approx(263917 * 30 * 1000 + 18 * 400 * 8 * 10 * EXACT_PERIOD_STEPS,
+                                                      rel=1e-12)
+    assert max(totals, key=totals.__getitem__) == "fig10_11_orbits"
