@@ -217,8 +217,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
 #: natural periods of Newton's orbit solve at a point, typically (a few iterations, each the orbit
 #: and its variations), and per point of the grazing continuation
 NEWTON_ORBIT_PERIODS = 10.0
-#: points of a row's grazing continuation (continue_orbits' max_points)
-GRAZING_POINTS = 200
+#: points of a row's grazing continuation, at most (continue_orbits' max_points)
+GRAZING_POINTS: int = inspect.signature(continue_orbits).parameters["max_points"].default
 
 
 def work(cfg: dict[str, Any]) -> Estimate:

@@ -128,7 +128,7 @@ class StudyContext:
 
 # ---- estimates (dryfriction.budget) -----------------------------------------------------------
 
-#: bytes a study's PNG figure takes at most (the free-space estimate; the largest, fig8_9's, ~0.3 MB)
+#: bytes a study's PNG figure takes at most (the free-space estimate; the gallery's largest: 0.24 MB)
 FIGURE_BYTES = 1e6
 
 

@@ -28,12 +28,12 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import continuation_work
 from ..continuation_cli import plot_branches
 from ..sweep import SweepSpec, observables_dataset
 from . import fig8_9_bifurcation as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations
-from ..budget import continuation_work
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt, sweep_estimate, sweep_settings, table
 from .config import require
 
