@@ -160,6 +160,7 @@ def test_scan_quick_verdict(tmp_path: Path, fmu_path: Path) -> None:
     assert 0.14 < s["chi_chaos_onset"] < 0.26 and s["chi_chaos_onset_uncertainty"] < 0.02
     ds = read_netcdf(out.out_dir / "chaos_scan.nc")
     chaotic = ((ds.lyapunov_per_period.values > 0) & (ds.period.values == 0)).all(axis=1)
+    assert ds.chaotic.dtype == bool and not ds.chaotic.values[ds.chi.values > 0.25].any()
     lyap, period, chi = ds.lyapunov_per_period.values, ds.period.values, ds.chi.values
     assert chaotic[chi < 0.15].all()
     assert (lyap[chi > 0.25] < 0).all()

@@ -153,7 +153,10 @@ def test_the_cli_reports_an_unusable_fmu_in_one_line(make, words: str, command: 
     (["fig99"], "unknown study"),
     (["fig8_9", "--set", "sweep.chi.num=abc"], "sweep.chi.num must be an integer"),
     (["fig8_9", "--set", "sweep.nope=1"], "unknown key 'sweep.nope'"),
-    (["fig8_9", "--set", "sweep.chi.num=0"], "sweep.chi.num must be >= 1"),
+    (["fig8_9", "--set", "sweep.chi.num=0"], "sweep.chi.num must be in [1, 10,000,000], not 0"),
+    (["fig8_9", "--set", "sweep.chi.num=10000000000"], "sweep.chi.num must be in [1, 10,000,000], not 10000000000"),
+    (["fig10_11", "--set", "fig11.lam.num=100000"],    # 3 x 100,000 x 41 x 41 runs x 30 periods x 1000 steps
+     "about 1.51e+13 steps of work (study fig10_11: sweep fig11: 5.04e+08 runs x 30 periods x 1,000 steps"),
     (["fig8_9", "--set", "numerics.scheme=fast"], "invalid value 'fast' for numerics.scheme; valid range: one of"),
     (["fig8_9", "--set", "params.lam=-1"], "params.lam"),
     (["fig8_9", "--set", "sweep.obs_periods=40"], "sweep.obs_periods must be in"),

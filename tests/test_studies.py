@@ -169,6 +169,9 @@ def test_fig8_9_bifurcation(fig8_9_local: xr.Dataset) -> None:
     spread = (a.max("ic") - a.min("ic")) / ref
     asym = abs(s).max("ic") / ref
     chi = ds.chi.values
+    # the classification, a bool per chi
+    assert ds.symmetric_periodic.dtype == bool
+    assert np.array_equal(ds.symmetric_periodic.values, ((spread < 1e-3) & (asym < 1e-3)).values)
     # above the bifurcation: symmetric, one amplitude for all initial conditions
     hi = chi >= 0.65
     assert hi.sum() >= 4

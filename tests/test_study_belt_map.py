@@ -53,11 +53,12 @@ def test_quick_physics(quick: Path) -> None:
     ds = read_netcdf(quick / "belt_map.nc")
     vb, Ns = ds.v_belt.values, ds.N.values
     motion, eq_stable = ds.motion.values, ds.eq_stable.values
+    assert eq_stable.dtype == bool
     hopf = ds.hopf_v_belt.values
     for i in range(Ns.size):
         below = vb < hopf[i]
-        assert np.all(motion[i, below] == 1) and np.all(eq_stable[i, below] == 0)      # stick-slip, unstable slide
-        assert np.all(eq_stable[i, ~below] == 1)
+        assert np.all(motion[i, below] == 1) and not np.any(eq_stable[i, below])       # stick-slip, unstable slide
+        assert np.all(eq_stable[i, ~below])
         assert np.all(ds.mu.values[i][motion[i] == 1] == 0.0)                         # a stick phase: mu = 0
         # stick-slip ends at a speed that grows with N (past v*: subcritical), steady sliding beyond
         s = np.nonzero(motion[i] == 1)[0]

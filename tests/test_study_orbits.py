@@ -74,6 +74,7 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     lr = read_netcdf(band / "long_runs.nc")
     chi = lr.chi.values
     sym = _symmetric(lr.amplitude.values, lr.asymmetry.values)
+    assert lr.symmetric_periodic.dtype == bool and np.array_equal(lr.symmetric_periodic.values, sym)
     i = int(np.argmax(sym))                              # quick: 0.6
     assert i > 0 and sym[i:].all() and not sym[i - 1]
     lo, hi = chi[i - 1], chi[i]
@@ -99,6 +100,7 @@ def test_fig8_9_bifurcations_within_the_brute_force_resolution(band: Path) -> No
     k = int(np.where(split > 1e-2)[0][-1])
     assert np.all(split[k + 1:] < 1e-6) and k + 1 < split.size
     pd_lo, pd_hi = dr.chi.values[k], dr.chi.values[k + 1]
+    assert dr.period_1.dtype == bool and np.array_equal(dr.period_1.values, split <= 1e-6)
     assert doc["brute_force"]["period_doubling"] == [pytest.approx(pd_lo, abs=1e-15), pytest.approx(pd_hi, abs=1e-15)]
     assert pd_hi - pd_lo == pytest.approx(float(np.diff(sc.chi.values).max()), rel=1e-12)
     assert doc["reference_period_doubling"] == [0.236, 0.237]
@@ -226,7 +228,7 @@ def test_branches_do_not_jump(band: Path, freq: Path) -> None:
     ("fig8_9_orbits", ["brute_force.long_periods=1"], "long_periods must be >= 2"),
     ("fig8_9_orbits", ["brute_force.doubling_periods=0"], "doubling_periods must be >= 2"),
     ("fig8_9_orbits", ["brute_force.doubling_steps=0"], "doubling_steps must be >= 1"),
-    ("fig8_9_orbits", ["sweep.chi.num=0"], "sweep.chi.num must be >= 1"),   # the base study's check
+    ("fig8_9_orbits", ["sweep.chi.num=0"], r"sweep.chi.num must be in \[1, 10,000,000\]"),   # the base study's check
     ("fig10_11_orbits", ["continuation.resonance_gap=[1.1,1.2]"], "must hold lambda = 1"),
     ("fig10_11_orbits", ["continuation.seeds=[-0.1]"], r"continuation.seeds\[0\] must be > 0"),
     ("fig10_11_orbits", ["continuation.colour=1"], "unknown key 'continuation.colour'"),

@@ -16,7 +16,8 @@ from dryfriction.budget import DEFAULT_MAX_WORK, EXACT_PERIOD_STEPS, WorkBoundEr
 from dryfriction.cli import main
 from dryfriction.params import Oscillator
 from dryfriction.response import MAX_PERIODS, ORBIT_FREQUENCY_STEPS, frequency_response, response_work
-from dryfriction.studies import run_study
+from dryfriction.budget import SAMPLE_STEPS
+from dryfriction.studies import STUDIES, effective_config, run_study, study_work
 from dryfriction.sweep import SweepSpec, nondim_table
 from dryfriction.sweep.engine import sweep_work
 
@@ -129,7 +130,8 @@ def test_sweep_work_counts_each_runs_steps() -> None:
 
 
 def test_study_refused_before_any_chunk(tmp_path: Path, fmu_path: Path) -> None:
-    with pytest.raises(WorkBoundError, match=r"300 runs of sweep fig8_9\) exceed the bound --max-work 1,000"):
+    with pytest.raises(WorkBoundError, match=r"about 9e\+06 steps of work \(study fig8_9: sweep fig8_9: 300 runs x 30 "
+                                             r"periods x 1,000 steps\) exceed the bound --max-work 1,000"):
         run_study("fig8_9", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False, max_work=1000)
     assert not list(tmp_path.rglob("*.chunk")) and not list(tmp_path.rglob("*.nc"))
     assert not (tmp_path / "fig8_9" / "config.toml").exists()
@@ -153,3 +155,141 @@ def test_unwritable_output_folder_found_before_the_work(tmp_path: Path, fmu_path
     fresh = tmp_path / "new" / "deeper"
     assert check_writable(fresh) == fresh and not (tmp_path / "new").exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".probe")]
+
+
+def _by_hand_belt_map() -> float:
+    """belt_map --quick counted point by point: v_belt 0.1 ... 1.0 (5), N 0.5 ... 1.5 (3); m = k = 1,
+    mu_s - mu_k = 0.2; 500 steps per natural period; a transient of max(20, 5 cycles) natural
+    periods sampled 256 times each, then 10 orbit periods of Newton; 3 grazing continuations of 200
+    points x 10 orbit periods (the grid's mean orbit)."""
+    Tn = 2 * math.pi
+    total, cycles = 0.0, []
+    for N in (0.5, 1.0, 1.5):
+        for v in (0.1, 0.325, 0.55, 0.775, 1.0):
+            cycle = 1 + 2 * 0.2 * N / v / Tn
+            cycles.append(cycle)
+            tr = max(20.0, 5 * cycle)
+            total += (tr + 10 * cycle) * 500 + tr * 256 * SAMPLE_STEPS
+    return total + 3 * 200 * 10 * (sum(cycles) / len(cycles)) * 500
+
+
+#: every study's work with --quick, counted by hand from configs/<study>.toml (steps; a sampled point
+#: counts SAMPLE_STEPS, an exact-scheme period EXACT_PERIOD_STEPS, a chain's step once per block)
+QUICK_BY_HAND = {
+    "fig2": 1 * 1 * 1000 + (1 * 1000 + 1) * SAMPLE_STEPS,
+    "fig3": 10 * 100 * 1000,                                  # no lambda of 0.3 ... 3.0 in (0.97, 1.03)
+    "fig4": 2 * (20 + 4) * 1000 + 2 * (4 * 500 + 1) * SAMPLE_STEPS,
+    "fig5_6": (20 + 2 * 50) * 1000 + ((20 * 100 + 1) + 2 * (50 * 100 + 1)) * SAMPLE_STEPS,
+    "fig7": 10 * 30 * 30 * 2000,
+    "fig8_9": 12 * 5 * 5 * 30 * 1000,
+    "fig10_11": (2 * 12 + 1 * 7) * 5 * 5 * 30 * 1000,
+    # Fig. 12/13: 2 x 17 periods, 2 sampled; Fig. 14: 0.05 apart down to 1e-4 is 9 halvings, + 2 ends;
+    # its 2 trajectories of 30 periods sampled 500 times each
+    "fig12_14": 2 * 17 * 1000 + 2 * (2 * 500 + 1) * SAMPLE_STEPS + (2 + 9) * 30 * 1000
+                + 2 * 30 * 1000 + 2 * (30 * 500 + 1) * SAMPLE_STEPS,
+    # scan 11 chi x 4 ICs x 2 and refinement 5 x 4 x 2, check 1 chi (FMU and exact pairs), section
+    "chaos_scan": (11 * 4 * 2 * (50 + 150) + 5 * 4 * 2 * (50 + 200) + 2 * 2 * (50 + 100) + (200 + 1000))
+                  * EXACT_PERIOD_STEPS,
+    "chaos_basins": 21 * 21 * ((400 + 16) + (200 + 16)) * EXACT_PERIOD_STEPS,
+    "chaos_transients": 5 * 5 * 5 * 300 * EXACT_PERIOD_STEPS,
+    "chain2": 2 * 12 * 2 * 2 * 24 * 1000 * 2,
+    "chain_waves": 2 * 64 * (2 * 2 * math.pi / 0.05 / 0.01),  # P0 0.5 and 1.0; h = 0.01 s
+    # h = dt / ceil(dt * 100 / (2 pi / sqrt(401))) = 0.1 / 32; 700 time units; 256 blocks
+    "burridge_knopoff": 256 * 700 / (0.1 / 32),
+    # fig8_9's sweep; 7 chi in [0.2, 0.8]: 5 long runs of 400 periods each, at most 2 x 2 doubling
+    # runs of 2000; a continuation of 400 points x 8 branches x 10 exact periods
+    "fig8_9_orbits": 12 * 5 * 5 * 30 * 1000 + 7 * 5 * 400 * 1000 + 7 * 2 * 2 * 2000 * 1000
+                     + 400 * 8 * 10 * EXACT_PERIOD_STEPS,
+    # fig10_11's sweeps; fig10: 2 chi x 3 pieces ([0.05, 0.35], [0.35, 0.98], [1.02, 1.6]) x 2 ways,
+    # fig11: 1 chi x 1 piece x 2 ways
+    "fig10_11_orbits": (2 * 12 + 1 * 7) * 5 * 5 * 30 * 1000 + (12 + 2) * 400 * 8 * 10 * EXACT_PERIOD_STEPS,
+    "belt_map": _by_hand_belt_map(),
+}
+
+
+def test_every_studys_quick_work_counted_by_hand() -> None:
+    assert set(QUICK_BY_HAND) == set(STUDIES)
+    for name, steps in QUICK_BY_HAND.items():
+        est = study_work(name, effective_config(name, quick=True))
+        assert est.total == pytest.approx(steps, rel=1e-9), name
+        assert 1e6 <= est.out_bytes <= 30e6, name    # a figure (1 MB) at least; the results and chunks
+    # the sweeps' parts agree with the engine's count of their tables
+    cfg = effective_config("fig8_9", quick=True)
+    from dryfriction.studies.fig8_9_bifurcation import spec
+
+    sp, _ = spec(cfg)
+    assert study_work("fig8_9", cfg).parts[0][1] == pytest.approx(sweep_work(sp, list(range(sp.n_chunks))), rel=1e-12)
+
+
+def test_second_sweep_too_large_refused_before_the_first(tmp_path: Path, fmu_path: Path,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    # fig10's sweep is small; fig11's, 1 x 100,000 x 25 runs x 30 periods x 1000 steps, is not: the
+    # study is refused before fig10's first chunk
+    argv = ["study", "fig10_11", "--quick", "--workers", "0", "--no-progress", "--out", str(tmp_path),
+            "--fmu", str(fmu_path), "--set", "fig11.lam.num=100000"]
+    assert main(argv) == 2
+    line = _one_line_error(capsys.readouterr().err)
+    assert line == ("dryfriction study: error: about 7.5e+10 steps of work (study fig10_11: sweep fig11: 2.5e+06 runs "
+                    "x 30 periods x 1,000 steps; sweep fig10: 600 runs x 30 periods x 1,000 steps) exceed the "
+                    "bound --max-work 1e+10 (steps); ask for less or raise --max-work")
+    assert not list(tmp_path.rglob("*")), "nothing written"
+    # a trajectory study and a chain study are bounded too
+    with pytest.raises(WorkBoundError, match=r"study fig5_6: fig6 trajectories: 2 runs x 1e\+07 periods"):
+        run_study("fig5_6", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
+                  sets=["beating.periods=1e7"])
+    with pytest.raises(WorkBoundError, match=r"study burridge_knopoff: run: 256 blocks x"):
+        run_study("burridge_knopoff", quick=True, out=tmp_path, workers=0, progress=False, max_work=1e7)
+    assert not list(tmp_path.rglob("*"))
+
+
+def test_study_all_checks_every_study_first(tmp_path: Path, fmu_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    # fig2 (3e5 steps) would pass; fig3 (1e6) does not: nothing runs
+    assert main(["study", "all", "--quick", "--workers", "0", "--no-progress", "--out", str(tmp_path),
+                 "--fmu", str(fmu_path), "--max-work", "5e5"]) == 2
+    out = capsys.readouterr()
+    assert "study fig3: sweep fig3: 10 runs x 100 periods" in _one_line_error(out.err)
+    assert "== study" not in out.out and not list(tmp_path.rglob("*"))
+
+
+def test_output_estimate_checked_against_the_free_space(tmp_path: Path, fmu_path: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    import shutil
+    from collections import namedtuple
+
+    est = study_work("fig8_9", effective_config("fig8_9", quick=True))
+    # 300 runs: chunks and dataset 2 x 300 x columns x 8 bytes + 400 per chunk (12), 2 figures of 1 MB
+    from dryfriction.sweep.runner import OUTPUT_COLUMNS
+
+    assert est.out_bytes == pytest.approx(2 * 300 * len(OUTPUT_COLUMNS) * 8 + 400 * 12 + 2e6, rel=1e-12)
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(1e12, 0, 2.0 * est.out_bytes))   # not the margin
+    with pytest.raises(Exception, match=r"has 4\.\d+ MB free, the results and chunks of study fig8_9 need about 4"):
+        run_study("fig8_9", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False)
+    assert not list(tmp_path.rglob("*"))
+
+
+def test_study_memory_refused_before_the_work(tmp_path: Path, fmu_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import dryfriction.budget as budget
+    from dryfriction.sweep.runner import OUTPUT_COLUMNS, PARAM_COLUMNS
+
+    # 1000 x 5 x 5 runs hold their table, outputs and dataset: 25,000 x (18 + 2 x 6) x 8 bytes = 6 MB
+    row = (len(PARAM_COLUMNS) + 2 * len(OUTPUT_COLUMNS)) * 8
+    assert study_work("fig8_9", effective_config("fig8_9", True, sets=["sweep.chi.num=1000"])).memory == 25000 * row
+    monkeypatch.setattr(budget, "memory_limit", lambda: 1e6)
+    with pytest.raises(WorkBoundError, match=r"about 0\.006 GB of memory \(study fig8_9: sweep fig8_9: 25,000 runs .*"
+                                             r"\(0\.001 GB\); ask for less \(--set\)"):
+        run_study("fig8_9", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
+                  sets=["sweep.chi.num=1000"], max_work=1e15)
+    assert not list(tmp_path.rglob("*"))
+
+
+def test_every_default_study_within_the_default_bound() -> None:
+    # 'dryfriction study all' at full size is not refused: the largest, fig10_11 and its orbit study,
+    # 263,917 runs x 30 periods x 1000 steps = 7.9e9 (+ 18 continuations of 1.6e6 steps)
+    totals = {n: study_work(n, effective_config(n)).total for n in STUDIES}
+    assert max(totals.values()) <= DEFAULT_MAX_WORK
+    assert totals["fig10_11"] == pytest.approx(263917 * 30 * 1000, rel=1e-12)
+    assert totals["fig10_11_orbits"] == pytest.approx(263917 * 30 * 1000 + 18 * 400 * 8 * 10 * EXACT_PERIOD_STEPS,
+                                                      rel=1e-12)
+    assert max(totals, key=totals.__getitem__) == "fig10_11_orbits"

@@ -29,13 +29,13 @@ from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig
 from .. import paths
 from ..argparsing import make_parser, path_arg
 from ..atomic import atomic_write_text
-from ..budget import add_max_work_argument
+from ..budget import Estimate, add_max_work_argument
 from .config import ConfigError, build_config, config_dir, load_toml
 
 __all__ = ["STUDIES", "ALIASES", "main", "run_args", "add_arguments", "run_study", "resolve", "effective_config",
-           "StudyOutcome", "dump_toml"]
+           "StudyOutcome", "dump_toml", "study_work", "check_study"]
 
-#: name -> module (NAME, TITLE, FIGURES, check(cfg), run(ctx) -> summary)
+#: name -> module (NAME, TITLE, FIGURES, check(cfg), work(cfg) -> Estimate, run(ctx) -> summary)
 STUDIES: dict[str, ModuleType] = {m.NAME: m for m in (
     fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
     fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)}
@@ -115,7 +115,8 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
               progress: bool = True, max_work: float | None = None) -> StudyOutcome:
     """Run one study (Python API of ``dryfriction study``). Raises ConfigError before any work if
     an argument or config value is invalid or the output folder cannot be written,
-    :class:`~dryfriction.budget.WorkBoundError` if a sweep's work exceeds ``max_work`` (steps,
+    :class:`~dryfriction.budget.WorkBoundError` before any work if the study's estimated total work
+    (every sweep, batch and trajectory it runs: :func:`study_work`) exceeds ``max_work`` (steps,
     :mod:`dryfriction.budget`), SweepInterrupted if ``max_chunks`` stopped a sweep.
 
     The results (datasets, figures), ``config.toml`` and ``summary.json`` are written into a staging
@@ -125,7 +126,6 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
     is started clean (a note says so): they are replaced when this run's are complete, and the
     chunks of the previous configuration are removed only then."""
     from ..atomic import staged_outputs
-    from ..budget import check_writable, max_work_value
     from ..sweep.engine import EngineOptions, prune_stale
     from .common import StudyContext
 
@@ -139,10 +139,10 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
         raise ConfigError(f"--workers must be >= 0, not {n_workers}")
     if max_chunks is not None and max_chunks < 0:
         raise ConfigError(f"--max-chunks must be >= 0, not {max_chunks}")
-    max_work_value(max_work)
     out_dir = Path(out) / key
-    # found before the work: a folder that cannot take a file, a disk without room for the results
-    check_writable(out_dir, STUDY_BYTES, "a study's results")
+    # found before the work: more work than --max-work, a folder that cannot take a file, a disk
+    # without room for the results and chunks
+    check_study(key, cfg, out_dir, max_work)
     config_text = dump_toml(cfg, header=f"effective configuration of study {key}" + (" (--quick)" if quick else ""))
     previous = _previous_config(out_dir)
     if previous is not None and previous != cfg:
@@ -174,8 +174,31 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
     return StudyOutcome(key, out_dir, summary, stats, ctx.messages)
 
 
-#: bytes a study's results take at least (the free-space check before the work)
-STUDY_BYTES = 20e6
+def study_work(name: str, cfg: dict[str, Any]) -> Estimate:
+    """What the study ``name`` will do with the configuration ``cfg``: its work in steps, part by
+    part (every sweep, batch and trajectory), and the bytes of its results and chunks
+    (:class:`~dryfriction.budget.Estimate`), from the configuration alone."""
+    return STUDIES[name].work(cfg)
+
+
+def check_study(name: str, cfg: dict[str, Any], out_dir: str | os.PathLike[str],
+                max_work: float | None = None) -> Estimate:
+    """Before any work: refuse (:class:`~dryfriction.budget.WorkBoundError`, one line naming
+    ``--max-work`` and the estimate) a study whose total work exceeds ``max_work`` or whose memory
+    exceeds half this machine's (naming ``--set``), and (a :class:`UsageError`) an output folder
+    that cannot take a file or lacks room for the estimated results and chunks (twice the estimate,
+    :data:`OUTPUT_MARGIN`). Returns the estimate."""
+    from ..budget import check_writable, max_work_value
+
+    max_work_value(max_work)
+    est = study_work(name, cfg)
+    est.check(f"study {name}", max_work)
+    check_writable(out_dir, OUTPUT_MARGIN * est.out_bytes, f"the results and chunks of study {name}")
+    return est
+
+
+#: the free space asked for, over a study's estimated output (results and chunks)
+OUTPUT_MARGIN = 2.0
 
 
 def _write(path: Path, text: str) -> None:
@@ -294,6 +317,14 @@ def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
             for n, cfg in cfgs.items():
                 print(dump_toml(cfg, header=f"study {n}" + (" (--quick)" if args.quick else "")))
             return EXIT_OK
+        # every study's work and output checked before the first starts
+        total = 0.0
+        for n, cfg in cfgs.items():
+            total += check_study(n, cfg, Path(args.out) / n, getattr(args, "max_work", None)).out_bytes
+        if len(names) > 1:
+            from ..budget import check_writable
+
+            check_writable(args.out, OUTPUT_MARGIN * total, "the results and chunks of all studies")
         fmu = getattr(args, "fmu", None)
         interrupt_note("finished chunks are kept, run again to resume")
         for n in names:

@@ -14,6 +14,7 @@ Runs in this process (a point costs a few FMU runs of a period).
 
 from __future__ import annotations
 
+import inspect
 import math
 from typing import Any
 
@@ -22,9 +23,10 @@ import xarray as xr
 from matplotlib.colors import LogNorm
 
 from ..belt_reference import hopf_belt_speed
+from ..budget import SAMPLE_STEPS, fmt
 from ..params import Oscillator
 from ..self_excited import BeltProblem, LAWS, continue_orbits, find_orbit, self_excited, transient
-from .common import StudyContext, plt
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import grid, require
 
 NAME = "belt_map"
@@ -76,7 +78,7 @@ def point(fmu: Any, prob: BeltProblem, warm: tuple[float, float] | None, periods
         res = self_excited(prob, fmu=fmu, periods=periods)
         method = "orbit, from a transient"
     eq = res.equilibrium
-    row = {"eq_mu_max": eq.mu_max, "eq_stable": float(eq.stable), "residual": math.nan, "mu": math.nan,
+    row = {"eq_mu_max": eq.mu_max, "eq_stable": bool(eq.stable), "residual": math.nan, "mu": math.nan,
            "amplitude": 0.0, "offset": eq.x_eq, "period": math.nan, "stick_fraction": 0.0}
     if res.motion in ("stick-slip", "slip orbit"):
         o = res.orbit
@@ -103,7 +105,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     Ns = grid(g["N"], "grid.N")
     shape = (Ns.size, vb.size)
     names = ("amplitude", "offset", "period", "stick_fraction", "motion", "mu", "eq_mu_max", "eq_stable", "residual")
-    data = {k: np.full(shape, np.nan) for k in names}
+    data = {k: np.full(shape, np.nan) for k in names if k != "eq_stable"}
+    data["eq_stable"] = np.zeros(shape, dtype=bool)     # every point's is computed
     methods = np.empty(shape, dtype=object)
     fmu = ctx.fmu()
     bar = tqdm(total=Ns.size * vb.size, desc=NAME, unit=" points", disable=not ctx.engine_options.progress,
@@ -138,14 +141,15 @@ def run(ctx: StudyContext) -> dict[str, Any]:
                 continue
             grazing[i] = br.grazing
     units = {"amplitude": "m", "offset": "m", "period": "s", "stick_fraction": "1", "motion": "1", "mu": "1",
-             "eq_mu_max": "1", "eq_stable": "1", "residual": "1"}
+             "eq_mu_max": "1", "residual": "1"}
     desc = {"amplitude": "(x_max - x_min) / 2 of the orbit (0: steady sliding)",
             "period": "period of the orbit (NaN: steady sliding)",
             "motion": "; ".join(f"{k} {v}" for k, v in MOTIONS.items()),
             "mu": "|nontrivial Floquet multiplier| (0 with a stick phase)",
             "eq_mu_max": "largest |multiplier| of steady sliding's flow over a natural period",
-            "eq_stable": "steady sliding stable (1) or not (0)", "residual": "scaled Newton residual of the orbit"}
-    ds = xr.Dataset({k: (("N", "v_belt"), data[k], {"units": units[k], "description": desc.get(k, "")})
+            "eq_stable": "steady sliding stable (True) or not", "residual": "scaled Newton residual of the orbit"}
+    ds = xr.Dataset({k: (("N", "v_belt"), data[k], {**({"units": units[k]} if k in units else {}),
+                                                    "description": desc.get(k, "")})
                      for k in names},
                     coords={"N": ("N", Ns, {"units": "N"}), "v_belt": ("v_belt", vb, {"units": "m/s"})})
     ds["method"] = (("N", "v_belt"), methods.astype(str))
@@ -208,3 +212,34 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             f"{summary['steady_sliding']} steady sliding, {summary['transient']} transients of {motion.size} points; "
             f"stick-slip up to v_belt {edge} at N {summary['N']} (Hopf line {summary['hopf_v_belt']})")
     return summary
+
+
+#: natural periods of Newton's orbit solve at a point, typically (a few iterations, each the orbit
+#: and its variations), and per point of the grazing continuation
+NEWTON_ORBIT_PERIODS = 10.0
+#: points of a row's grazing continuation, at most (continue_orbits' max_points)
+GRAZING_POINTS: int = inspect.signature(continue_orbits).parameters["max_points"].default
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): per grid point, a transient
+    of at least ``transient_periods`` natural periods (longer at low belt speed: five estimated
+    stick-slip cycles, as :func:`~dryfriction.self_excited.self_excited`) and Newton's solve, in
+    orbit periods (a natural period and the ride on the belt); per N, the grazing continuation."""
+    p, g, n = cfg["params"], cfg["grid"], cfg["numerics"]
+    vb, Ns = grid(g["v_belt"], "grid.v_belt"), grid(g["N"], "grid.N")
+    spp = float(n["steps_per_period"])
+    Tn = 2.0 * math.pi * math.sqrt(p["m"] / p["k"])
+    # an orbit's length in natural periods: 1 + the ride from the catch to the breakaway
+    cycle = 1.0 + 2.0 * abs(p["mu_s"] - p["mu_k"]) * Ns[:, None] / (p["k"] * vb[None, :]) / Tn
+    sampled = np.maximum(float(n["transient_periods"]), 5.0 * cycle)     # the transient, sampled
+    periods = sampled + NEWTON_ORBIT_PERIODS * cycle
+    samples = float(sampled.sum()) * inspect.signature(transient).parameters["samples"].default
+    est = Estimate().add(f"{vb.size * Ns.size} points x about {float(periods.mean()):,.0f} natural periods x "
+                         f"{spp:g} steps, {fmt(samples)} samples", float(periods.sum()) * spp + samples * SAMPLE_STEPS,
+                         vb.size * Ns.size * 10 * 8 + 200.0 * vb.size * Ns.size)
+    if n["grazing"]:
+        est.add(f"grazing: {Ns.size} continuations x {GRAZING_POINTS} points x about {NEWTON_ORBIT_PERIODS:g} "
+                f"orbit periods x {spp:g} steps",
+                Ns.size * GRAZING_POINTS * NEWTON_ORBIT_PERIODS * float(cycle.mean()) * spp)
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

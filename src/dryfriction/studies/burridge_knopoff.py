@@ -21,7 +21,7 @@ import xarray as xr
 from .. import paths
 from ..chain import ARRAY_PARAMS, SCALAR_PARAMS, ChainFMU3, default_chain_fmu3
 from ..slip_events import EventDetector, SlipEvents
-from .common import StudyContext, plt
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
 
 NAME = "burridge_knopoff"
@@ -378,3 +378,16 @@ def plot(ev: SlipEvents, hist: Mapping[str, np.ndarray], fit: Mapping[str, float
                  f"{law}; h = {res['h']:.3g}, sampled every {r['dt']:g}", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): the long run and the speed
+    runs, internal steps times blocks (the record: a few numbers per sample, and the events)."""
+    m, r, num, sp = cfg["model"], cfg["run"], cfg["numerics"], cfg["speed"]
+    dt, n = float(r["dt"]), int(m["n"])
+    h = internal_step(float(m["l2"]), float(num["steps_per_period"]), dt)
+    t = float(r["t_transient"] + r["t_record"])
+    est = Estimate().add(f"run: {n} blocks x {t / h:,.0f} steps", n * t / h, 4 * 8 * r["t_record"] / dt + 64.0 * n * n)
+    for k in sp["n"]:
+        est.add(f"speed n = {k}: {int(k)} blocks x {float(sp['t']) / h:,.0f} steps", int(k) * float(sp["t"]) / h)
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -16,7 +16,7 @@ import xarray as xr
 from .. import paths
 from ..chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
-from .common import StudyContext, plt
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt, trajectory_estimate
 from .config import grid, require
 
 NAME = "chain2"
@@ -99,7 +99,6 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     n = int(num["chunk_runs"])
     chunks = [(ch, w, num, rows[i:i + n]) for i in range(0, len(rows), n)]
     o = ctx.engine_options
-    ctx.check_work(len(rows), float(w["periods"]), num, "chain2", blocks=2)
     res, st = map_chunks(rows_task, o.fmu, chunks, o.workers, o.scheduler, o.progress, "chain2")
     shape = (len(configs), lam.size, x1.size, x2.size, 2)
     amp = concat(res, "amplitude").reshape(shape)
@@ -159,3 +158,13 @@ def plot(ds: xr.Dataset) -> Any:
                  f"chi = {a['chain_chi']}, c = {a['chain_c']}): median and range over "
                  f"{ds.x0_1.size * ds.x0_2.size} initial conditions", fontsize=9)
     return fig
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): every configuration,
+    frequency and pair of initial positions, a run of the two blocks."""
+    ch, sw, w = cfg["chain"], cfg["sweep"], cfg["window"]
+    runs = len(ch["configs"]) * int(sw["lam"]["num"]) * int(sw["x0_1"]["num"]) * int(sw["x0_2"]["num"])
+    est = trajectory_estimate(Estimate(), "chain2", runs, w["periods"], cfg["numerics"], blocks=2)
+    est.out_bytes += runs * 4 * 8
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -5,6 +5,7 @@ Configuration Mode, one Dask task per amplitude."""
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping
 from pathlib import Path
@@ -16,7 +17,7 @@ import xarray as xr
 from .. import paths
 from ..chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
-from .common import StudyContext, plt
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
 
 NAME = "chain_waves"
@@ -95,7 +96,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
 
     cfg = ctx.cfg
     ch, w, num = cfg["chain"], cfg["window"], cfg["numerics"]
-    levels = sorted({float(ch["P0"]), *(float(p) for p in ch["P0_levels"])})
+    levels = amplitudes(ch)
     o = ctx.engine_options
     chunks = [(ch, w, num, p) for p in levels]
     res, st = map_chunks(wave_task, o.fmu, chunks, o.workers, o.scheduler, o.progress, "chain_waves")
@@ -159,3 +160,20 @@ def plot(ds: xr.Dataset) -> Any:
                  f"mu_s N = {a['chain_mu_s'] * a['chain_N']:g}, chi = {a['chain_chi']}, k = {a['chain_k']}, "
                  f"c = {a['chain_c']}, free ends); {a['scheme']}, h = {a['h']} s", fontsize=9)
     return fig
+
+
+def amplitudes(ch: Mapping[str, Any]) -> list[float]:
+    """The forcing amplitudes run: ``P0`` and ``P0_levels``, each once, in order."""
+    return sorted({float(ch["P0"]), *(float(p) for p in ch["P0_levels"])})
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one run of the chain per
+    amplitude, internal steps times blocks; the modes of every sample and block."""
+    ch, w, num = cfg["chain"], cfg["window"], cfg["numerics"]
+    n, k = int(ch["n"]), len(amplitudes(ch))
+    steps = w["periods"] * 2 * math.pi / ch["omega"] / num["h"]
+    samples = w["periods"] * w["samples_per_period"] + 1
+    est = Estimate().add(f"{k} runs x {n} blocks x {steps:,.0f} steps", k * n * steps,
+                         k * (samples * (n + 8) + 5 * 8 * n))
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

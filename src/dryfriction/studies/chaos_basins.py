@@ -11,7 +11,7 @@ import xarray as xr
 from ..chaos.attractors import Catalogue
 from ..chaos.batch import concat, map_chunks, orbit_tails
 from ..chaos.maps import scheme_label
-from .common import StudyContext, check_numerics, check_params, plt
+from .common import FIGURE_BYTES, Estimate, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
 
 NAME = "chaos_basins"
@@ -57,7 +57,6 @@ def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, floa
     chunks = [(nd, num, float(t["chi"]), ics[i:i + n], int(t["transient"]), int(t["tail"]))
               for i in range(0, ics.shape[0], n)]
     o = ctx.engine_options
-    ctx.check_work(ics.shape[0], int(t["transient"]) + int(t["tail"]), num, f"basins {case}")
     res, st = map_chunks(orbit_tails, o.fmu, chunks, o.workers, o.scheduler, o.progress, f"basins {case}")
     tails = concat(res, "tails")
     cat = Catalogue(tol=float(g["match_tol"]))
@@ -128,3 +127,16 @@ def run(ctx: StudyContext) -> dict[str, Any]:
                          "attractors": [a.describe() for a in cat.attractors],
                          "shares": [float(s) for s in ds.share.values]}
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): a grid of runs per case."""
+    est = Estimate()
+    for case in cfg["cases"]:
+        t, g = cfg[case], cfg["grid"]
+        n = t.get("grid_num")
+        runs = int(n or g["z0"]["num"]) * int(n or g["dz0"]["num"])
+        num = {**cfg["numerics"], "steps_per_period": t.get("steps_per_period", cfg["numerics"]["steps_per_period"])}
+        trajectory_estimate(est, f"basins {case}", runs, t["transient"] + t["tail"], num)
+        est.add(f"figure {case}", 0.0, runs * (2 * int(t["tail"]) + 4) * 8 + FIGURE_BYTES)
+    return est

@@ -13,7 +13,8 @@ from ..chaos.attractors import Catalogue, period_of
 from ..chaos.batch import concat, lyapunov_rows, map_chunks, orbit_tails
 from ..chaos.lyapunov import benettin
 from ..chaos.maps import ExactMap, FMUMap, NDParams, scheme_label
-from .common import StudyContext, check_numerics, check_params, plt
+from ..budget import EXACT_PERIOD_STEPS
+from .common import Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
 
 NAME = "chaos_scan"
@@ -47,7 +48,6 @@ def _scan(ctx: StudyContext, chis: np.ndarray, ics: np.ndarray, ly: dict[str, An
         rows = np.column_stack([np.full(len(ics), chi), ics])
         chunks.append((cfg["params"], cfg["numerics"], ly, rows, int(ly["keep"])))
     o = ctx.engine_options
-    ctx.check_work(len(chis) * len(ics) * 2, int(ly["transient"]) + int(ly["periods"]), cfg["numerics"], desc)
     res, st = map_chunks(lyapunov_rows, o.fmu, chunks, o.workers, o.scheduler, o.progress, desc)
     ctx.log(f"{desc}: {len(chis)} chi x {len(ics)} initial conditions x {ly['transient']} + {ly['periods']} periods "
             f"in {st.wall:.1f} s (cluster start {st.startup:.1f} s, task CPU {st.task_cpu:.1f} s)")
@@ -190,7 +190,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             "strobe_dz": (("chi", "ic", "k"), scan["strobe"][..., 1], {"long_name": "stroboscopic z' at t = kT"}),
             "period": (("chi", "ic"), cls["period"], {"long_name": "period of the stroboscopic points (0: none up to 32)"}),
             "attractors": (("chi",), cls["attractors"], {"long_name": "distinct attractors reached by the initial conditions"}),
-            "chaotic": (("chi", "ic"), cls["chaotic"].astype(np.int8), {"long_name": "exponent > 3 stderr and non-periodic"}),
+            "chaotic": (("chi", "ic"), cls["chaotic"].astype(bool), {"long_name": "exponent > 3 stderr and non-periodic"}),
             "section_z": (("n",), section[:, 0]),
             "section_dz": (("n",), section[:, 1]),
         },
@@ -252,3 +252,22 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             + (f"; onset at chi = {summary['chi_chaos_onset']:.4f} +- {summary['chi_chaos_onset_uncertainty']:.4f}"
                if "chi_chaos_onset" in summary else ""))
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): the scan and the onset's
+    refinement (two runs per chi and initial condition, Benettin's pair), the check (an exact and
+    an FMU pair per chi) and the section."""
+    s, ly, num, r, ck, sc = cfg["scan"], cfg["lyapunov"], cfg["numerics"], cfg["refine"], cfg["check"], cfg["section"]
+    n_ic, keep = len(s["z0"]), int(ly["keep"])
+    runs = int(s["chi"]["num"]) * n_ic
+    est = trajectory_estimate(Estimate(), "lyapunov scan", 2 * runs, ly["transient"] + ly["periods"], num)
+    est.out_bytes += runs * (keep * 2 + 8) * 8
+    if r["num"] >= 2:
+        trajectory_estimate(est, "onset refinement", 2 * int(r["num"]) * n_ic, ly["transient"] + r["periods"], num)
+        est.out_bytes += int(r["num"]) * n_ic * (keep * 2 + 8) * 8
+    trajectory_estimate(est, "check (FMU)", 2 * len(ck["chi"]), ck["transient"] + ck["periods"], num)
+    est.runs("check (exact)", 2 * len(ck["chi"]), ck["transient"] + ck["periods"], EXACT_PERIOD_STEPS)
+    trajectory_estimate(est, "section", 1, sc["transient"] + sc["points"], num)
+    est.out_bytes += 16.0 * sc["points"]
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

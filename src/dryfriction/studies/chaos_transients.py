@@ -10,7 +10,7 @@ import xarray as xr
 
 from ..chaos.batch import concat, map_chunks, transient_rows
 from ..chaos.maps import scheme_label
-from .common import StudyContext, check_numerics, check_params, plt
+from .common import FIGURE_BYTES, Estimate, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
 
 NAME = "chaos_transients"
@@ -44,7 +44,6 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     chunks = [(nd, num, float(chi), ics[i:i + n], cps, int(s["tail"]), float(s["tol"]), int(s["samples_per_period"]))
               for chi in chis for i in range(0, ics.shape[0], n)]
     o = ctx.engine_options
-    ctx.check_work(chis.size * ics.shape[0], max(cps), num, "transients")
     res, st = map_chunks(transient_rows, o.fmu, chunks, o.workers, o.scheduler, o.progress, "transients")
     ctx.log(f"transients: {chis.size} chi x {ics.shape[0]} initial conditions x {cps[-1]} periods in {st.wall:.1f} s "
             f"(cluster start {st.startup:.1f} s, task CPU {st.task_cpu:.1f} s)")
@@ -114,3 +113,13 @@ def run(ctx: StudyContext) -> dict[str, Any]:
             "periods_final": sorted({int(p) for p in period[i]}),
         }
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): every chi and initial
+    condition run to the last checkpoint."""
+    s = cfg["scan"]
+    runs = int(s["chi"]["num"]) * int(s["z0"]["num"]) * int(s["dz0"]["num"])
+    est = trajectory_estimate(Estimate(), "transients", runs, max(s["checkpoints"]), cfg["numerics"])
+    est.out_bytes += runs * (len(s["checkpoints"]) + 4) * 8
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

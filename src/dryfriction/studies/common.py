@@ -20,13 +20,19 @@ from .. import model  # noqa: E402
 from ..fmu import OscillatorFMU, Settings  # noqa: E402
 from ..params import Oscillator  # noqa: E402
 from ..atomic import atomic_path  # noqa: E402
+from ..budget import SAMPLE_STEPS, Estimate, fmt, period_steps  # noqa: E402
 from ..sweep.datasets import write_netcdf  # noqa: E402
 from ..sweep.engine import Engine, EngineOptions, SweepSpec  # noqa: E402
+from ..sweep.runner import OUTPUT_COLUMNS, PARAM_COLUMNS  # noqa: E402
 from ..sweep.table import nondim_table  # noqa: E402
 from .config import ConfigError, require  # noqa: E402,F401
 
 __all__ = [
     "ConfigError",
+    "Estimate",
+    "FIGURE_BYTES",
+    "sweep_estimate",
+    "trajectory_estimate",
     "StudyContext",
     "check_numerics",
     "check_params",
@@ -82,18 +88,6 @@ class StudyContext:
             self._fmu = OscillatorFMU(self.fmu_path)
         return self._fmu
 
-    def check_work(self, runs: float, periods: float, numerics: Mapping[str, Any], what: str, blocks: int = 1) -> None:
-        """Refuse (:class:`~dryfriction.budget.WorkBoundError`) before a batch of ``runs`` runs of
-        ``periods`` excitation periods each whose work exceeds ``--max-work`` (the sweep engine
-        checks its sweeps itself): steps per period from ``numerics`` (the exact scheme's count,
-        else ``steps_per_period``), once per block of a chain."""
-        from ..budget import EXACT_PERIOD_STEPS, check_work, fmt
-
-        spp = EXACT_PERIOD_STEPS if str(numerics.get("scheme")) == "exact" else float(numerics["steps_per_period"])
-        check_work(runs * periods * spp * blocks,
-                   f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(spp * blocks)} steps",
-                   self.engine_options.max_work)
-
     def run_sweep(self, spec: SweepSpec) -> np.ndarray:
         out = self.engine().run(spec, self.chunk_dir)
         self.log(self.engine().stats[-1].line())
@@ -130,6 +124,39 @@ class StudyContext:
             plt.close(fig)
         self.log(f"wrote {self.shown(path)}")
         return path
+
+
+# ---- estimates (dryfriction.budget) -----------------------------------------------------------
+
+#: bytes a study's PNG figure takes at most (the free-space estimate; the gallery's largest: 0.24 MB)
+FIGURE_BYTES = 1e6
+
+
+def sweep_estimate(est: Estimate, name: str, runs: int, periods: float, numerics: Mapping[str, Any]) -> Estimate:
+    """Count a sweep of ``runs`` runs of ``periods`` excitation periods each (what
+    :func:`~dryfriction.sweep.engine.sweep_work` counts of its table, from the sizes alone: no
+    table is built), its chunk files and the dataset made of them."""
+    chunks = -(-int(runs) // int(numerics["chunk_runs"]))
+    nbytes = 2.0 * runs * len(OUTPUT_COLUMNS) * 8 + 400.0 * chunks
+    # held at once: the run table, the outputs and the dataset made of them
+    memory = runs * (len(PARAM_COLUMNS) + 2 * len(OUTPUT_COLUMNS)) * 8
+    return est.runs(f"sweep {name}", runs, periods, period_steps(numerics.get("scheme"), numerics["steps_per_period"]),
+                    nbytes, memory)
+
+
+def trajectory_estimate(est: Estimate, what: str, runs: float, periods: float, numerics: Mapping[str, Any],
+                        samples_per_period: float = 0.0, variables: int = 8, blocks: int = 1) -> Estimate:
+    """Count ``runs`` runs of ``periods`` excitation periods each (steps per period from
+    ``numerics``: the exact scheme's count, else ``steps_per_period``; once per block of a chain),
+    sampled ``samples_per_period`` times a period (each sample counts
+    :data:`~dryfriction.budget.SAMPLE_STEPS`) into ``variables`` float64 variables."""
+    spp = period_steps(numerics.get("scheme"), float(numerics.get("steps_per_period", 1000)))
+    if not samples_per_period:
+        return est.runs(what, runs, periods, spp * blocks)
+    samples = runs * (periods * samples_per_period + 1.0)
+    return est.add(f"{what}: {fmt(runs)} runs x {fmt(periods)} periods x {fmt(spp * blocks)} steps, "
+                   f"{fmt(samples)} samples", runs * periods * spp * blocks + samples * SAMPLE_STEPS,
+                   samples * variables * 8)
 
 
 # ---- checks -------------------------------------------------------------------------------------

@@ -167,11 +167,17 @@ def build_config(
 
 # ---- helpers for the studies' checks ----------------------------------------------------------
 
+#: the most values of one range table (a sweep's axis; 80 MB of float64): more is refused while the
+#: configuration is checked, before its values are made
+MAX_GRID = 10_000_000
+
+
 def grid(spec: Mapping[str, Any], key: str) -> np.ndarray:
-    """Values of a range table ``{start, stop, num}`` (both ends included)."""
+    """Values of a range table ``{start, stop, num}`` (both ends included; ``num`` from 1 to
+    :data:`MAX_GRID`)."""
     num = spec["num"]
-    if num < 1:
-        raise ConfigError(f"{key}.num must be >= 1, not {num}")
+    if not 1 <= num <= MAX_GRID:
+        raise ConfigError(f"{key}.num must be in [1, {MAX_GRID:,}], not {num}")
     if num == 1:
         return np.array([float(spec["start"])])
     return np.linspace(float(spec["start"]), float(spec["stop"]), int(num))

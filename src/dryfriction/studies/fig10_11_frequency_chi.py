@@ -16,7 +16,8 @@ import numpy as np
 import xarray as xr
 
 from ..sweep import SweepSpec, observables_dataset
-from .common import StudyContext, check_numerics, check_params, check_window, plt, sweep_settings, table
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, plt,
+                     sweep_estimate, sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig10_11"
@@ -92,3 +93,17 @@ def run(ctx: StudyContext) -> dict[str, float]:
     ctx.log("fig10_11: largest relative amplitude spread over the initial conditions: "
             + ", ".join(f"{k}: {v:.3f}" for k, v in summary.items()))
     return summary
+
+
+def part_runs(cfg: dict[str, Any], part: str) -> int:
+    """A part's runs: chi x lambda x z0 x dz0, from the sizes alone."""
+    ic, c = cfg["ics"], cfg[part]
+    return len(c["chi"]) * int(c["lam"]["num"]) * int(ic["z0"]["num"]) * int(ic["dz0"]["num"])
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one sweep per part."""
+    est = Estimate()
+    for part in PARTS:
+        sweep_estimate(est, part, part_runs(cfg, part), cfg["ics"]["periods"], cfg["numerics"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -20,8 +20,9 @@ from ..continuation import Continuation
 from . import fig10_11_frequency_chi as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations
-from .common import StudyContext, plt
-from .config import require
+from ..budget import continuation_work
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt
+from .config import grid, require
 
 NAME = "fig10_11_orbits"
 BASE_CONFIG = "fig10_11"
@@ -148,3 +149,17 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ctx.log(f"fig10_11_orbits: {len(all_rows)} bifurcations located ({n_g} grazings); "
             + ", ".join(f"{k} {v}" for k, v in summary.items() if k.endswith("points")))
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): fig10_11's sweeps and, per
+    part, chi and piece of the lambda range, a continuation each way."""
+    c = cfg["continuation"]
+    est = base.work(cfg)
+    steps, what = continuation_work(c["max_points"], c["max_branches"])
+    for part in base.PARTS:
+        lam = grid(cfg[part]["lam"], f"{part}.lam")
+        n = 2 * len(cfg[part]["chi"]) * len(pieces(float(lam.min()), float(lam.max()), list(c["seeds"]),
+                                                     list(c["resonance_gap"])))
+        est.add(f"{part}: {n} continuations x {what}", n * steps, n * 400.0 * c["max_points"] * c["max_branches"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -13,13 +13,15 @@ motions) follow each other until a stick phase and then part.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from ..fmu import Settings
-from .common import StudyContext, check_numerics, check_params, ensure, nondim_trajectory, oscillator, plt
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
+                     oscillator, plt, trajectory_estimate)
 from .config import require
 
 NAME = "fig12_14"
@@ -188,4 +190,21 @@ def run(ctx: StudyContext) -> dict[str, float]:
             "amplitude_a": A_a, "amplitude_b": A_b, "t_part": t_part, "t_first_stick": t_first_stick}
 
 
+def bisection_steps(cfg: dict[str, Any]) -> int:
+    """Halvings of Fig. 14's bisection: from ``ic_a``-``ic_b``'s distance down to ``separation``
+    (at most 200, as :func:`_bisect`)."""
+    f14 = cfg["fig14"]
+    d = float(np.hypot(*(np.asarray(f14["ic_b"], float) - np.asarray(f14["ic_a"], float))))
+    return min(200, max(0, math.ceil(math.log2(d / f14["separation"])))) if d > f14["separation"] else 0
 
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): Fig. 12/13's two trajectories,
+    Fig. 14's bisection (a run of ``fig14.periods`` per halving, two for its ends) and its two
+    trajectories."""
+    num, f12, f14, spp = cfg["numerics"], cfg["fig12"], cfg["fig14"], cfg["run"]["samples_per_period"]
+    periods12 = f12["skip_periods"] + f12["cycles"]
+    est = trajectory_estimate(Estimate(), "fig12 trajectories", 2, periods12, num, spp * f12["cycles"] / periods12)
+    trajectory_estimate(est, "fig14 bisection", 2 + bisection_steps(cfg), f14["periods"], num)
+    trajectory_estimate(est, "fig14 trajectories", 2, f14["periods"], num, spp)
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -13,7 +13,8 @@ import numpy as np
 import xarray as xr
 
 from ..exact import solve_exact
-from .common import StudyContext, check_numerics, check_params, ensure, nondim_trajectory, oscillator, plt
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
+                     oscillator, plt, trajectory_estimate)
 from .config import require
 
 NAME = "fig2"
@@ -95,3 +96,10 @@ def run(ctx: StudyContext) -> dict[str, float]:
     ctx.log(f"fig2: max |z - z_exact| = {err['z']:.2e} ({summary['rel_err_z']:.1e} of max |z| = {amp:.3f}), "
             f"max |z' - z'_exact| = {err['dz']:.2e}, modes differ at {summary['mode_mismatches']} of {c.size} points")
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one trajectory."""
+    r = cfg["run"]
+    est = trajectory_estimate(Estimate(), "fig2 trajectory", 1, r["periods"], cfg["numerics"], r["samples_per_period"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

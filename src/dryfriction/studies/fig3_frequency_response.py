@@ -14,8 +14,8 @@ import numpy as np
 
 from ..steady import den_hartog_amplitude, inman_amplitude
 from ..sweep import SweepSpec, observables_dataset
-from .common import (StudyContext, check_numerics, check_params, check_window, ensure, oscillator, plt,
-                     sweep_settings, table)
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, ensure,
+                     oscillator, plt, sweep_estimate, sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig3"
@@ -102,3 +102,8 @@ def run(ctx: StudyContext) -> dict[str, float]:
                                                                summary["max_rel_dev_inman_below"]))
     return summary
 
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one sweep."""
+    est = sweep_estimate(Estimate(), "fig3", lambdas(cfg).size, cfg["sweep"]["periods"], cfg["numerics"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .common import StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt,
+                     trajectory_estimate)
 from .config import require
 
 NAME = "fig4"
@@ -73,3 +74,13 @@ def run(ctx: StudyContext) -> dict[str, float]:
     ctx.log(f"fig4: stuck {100 * stuck['below']:.1f}% of the time at lambda = {cases['below']}, "
             f"{100 * stuck['above']:.1f}% at lambda = {cases['above']}")
     return {"stuck_below": stuck["below"], "stuck_above": stuck["above"]}
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): two trajectories, sampled
+    over their last ``run.cycles`` periods."""
+    r = cfg["run"]
+    periods = r["skip_periods"] + r["cycles"]
+    est = trajectory_estimate(Estimate(), "fig4 trajectories", 2, periods, cfg["numerics"],
+                              r["samples_per_period"] * r["cycles"] / periods)
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .common import StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt,
+                     trajectory_estimate)
 from .config import require
 
 NAME = "fig5_6"
@@ -115,3 +116,12 @@ def run(ctx: StudyContext) -> dict[str, float]:
     ctx.log(f"fig5_6: 4 mu_k N / (pi P0) = {4 * f / math.pi:.3f} ({kind} resonance); "
             f"growth of max |z| {growth:.4f} per period, averaging theory {theory:.4f}")
     return {"growth_per_period": growth, "growth_theory": theory}
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): the resonant trajectory and
+    one per beating frequency."""
+    res, beat, num, spp = cfg["resonance"], cfg["beating"], cfg["numerics"], cfg["run"]["samples_per_period"]
+    est = trajectory_estimate(Estimate(), "fig5 trajectory", 1, res["periods"], num, spp)
+    trajectory_estimate(est, "fig6 trajectories", len(beat["lam"]), beat["periods"], num, spp)
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

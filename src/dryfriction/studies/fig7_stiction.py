@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from ..sweep import SweepSpec, observables_dataset
-from .common import StudyContext, check_numerics, check_params, ensure, plt, sweep_settings, table
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, plt, sweep_estimate,
+                     sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig7"
@@ -80,3 +81,10 @@ def run(ctx: StudyContext) -> dict[str, float]:
     ctx.log("fig7: mean stiction % below / above resonance per mu_s sigma: " + ", ".join(
         f"{mu:g}: {b:.0f}/{a:.0f}" for mu, b, a in zip(mus, below.values, above.values)))
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one sweep."""
+    s = cfg["sweep"]
+    est = sweep_estimate(Estimate(), "fig7", len(s["mu_s_sigma"]) * int(s["lam"]["num"]), s["cycle"], cfg["numerics"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

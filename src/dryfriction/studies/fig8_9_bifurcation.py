@@ -20,7 +20,8 @@ import numpy as np
 import xarray as xr
 
 from ..sweep import SweepSpec, observables_dataset
-from .common import StudyContext, check_numerics, check_params, check_window, plt, sweep_settings, table
+from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, plt,
+                     sweep_estimate, sweep_settings, table)
 from .config import grid, require
 
 NAME = "fig8_9"
@@ -98,10 +99,10 @@ def run(ctx: StudyContext) -> dict[str, float]:
     cls = classify(ds)
     for name in cls.data_vars:
         ds[name] = cls[name]
-    ds["symmetric_periodic"] = ds.symmetric_periodic.astype(np.int8)
+    ds["symmetric_periodic"] = ds.symmetric_periodic.astype(bool)
     ds.amplitude_spread.attrs["long_name"] = "(max - min) of the amplitude over the initial conditions / median"
     ds.asymmetry_max.attrs["long_name"] = "max |asymmetry| over the initial conditions / median amplitude"
-    ds.symmetric_periodic.attrs["long_name"] = "1: one amplitude and zero asymmetry for all initial conditions (1e-3)"
+    ds.symmetric_periodic.attrs["long_name"] = "True: one amplitude and zero asymmetry for all initial conditions (1e-3)"
     ctx.save_dataset(ds, DATASET)
 
     chi = ax["chi"]
@@ -133,3 +134,15 @@ def run(ctx: StudyContext) -> dict[str, float]:
             f"largest amplitude spread {float(cls.amplitude_spread.max()):.3f} at chi = "
             f"{float(chi[int(np.argmax(cls.amplitude_spread.values))]):.3g}")
     return {"chi_bifurcation": lo, "chi_symmetric_max": hi, "runs": float(sp.n_runs)}
+
+
+def runs(cfg: dict[str, Any]) -> int:
+    """The sweep's runs: chi x z0 x dz0, from the sizes alone."""
+    s = cfg["sweep"]
+    return int(s["chi"]["num"]) * int(s["z0"]["num"]) * int(s["dz0"]["num"])
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): one sweep."""
+    est = sweep_estimate(Estimate(), "fig8_9", runs(cfg), cfg["sweep"]["periods"], cfg["numerics"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))

@@ -28,12 +28,13 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import continuation_work
 from ..continuation_cli import plot_branches
 from ..sweep import SweepSpec, observables_dataset
 from . import fig8_9_bifurcation as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations
-from .common import StudyContext, plt, sweep_settings, table
+from .common import FIGURE_BYTES, Estimate, StudyContext, plt, sweep_estimate, sweep_settings, table
 from .config import require
 
 NAME = "fig8_9_orbits"
@@ -105,7 +106,7 @@ def doubling_runs(ctx: StudyContext, chi: np.ndarray, ax: dict[str, np.ndarray])
     ds = b.copy()
     ds["split"] = gap
     ds.split.attrs["long_name"] = "max |change of z_max, z_min| from the last period but one to the last / amplitude"
-    ds["period_1"] = (gap.max("ic") <= 1e-6).astype(np.int8)
+    ds["period_1"] = (gap.max("ic") <= 1e-6).astype(bool)
     ds.attrs.update(periods=n)
     return ds
 
@@ -137,7 +138,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     cls = base.classify(sc)
     for name in cls.data_vars:
         sc[name] = cls[name]
-    sc["symmetric_periodic"] = sc.symmetric_periodic.astype(np.int8)
+    sc["symmetric_periodic"] = sc.symmetric_periodic.astype(bool)
     sc.attrs.update({f"param_{k}": v for k, v in nd.items()})
     sc.attrs.update(periods=s["periods"], obs_periods=s["obs_periods"], runs=sp.n_runs)
     ctx.save_dataset(sc, DATASETS[0])
@@ -151,10 +152,10 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     ref_lo, ref_hi = (float(v) for v in cfg["brute_force"]["reference_period_doubling"])
     if chi_long.size:
         lr = long_runs(ctx, chi_long, ax)
-        lr["symmetric_periodic"] = ("chi", symmetric_after(lr).astype(np.int8))
+        lr["symmetric_periodic"] = ("chi", symmetric_after(lr).astype(bool))
         lr.attrs.update(periods=float(cfg["brute_force"]["long_periods"]))
         ctx.save_dataset(lr, "long_runs.nc")
-        brute["symmetry_breaking"] = sb_bracket(chi_long, lr.symmetric_periodic.values.astype(bool))
+        brute["symmetry_breaking"] = sb_bracket(chi_long, lr.symmetric_periodic.values)
     cont = continue_nd(ctx, {**nd}, "chi", c["start"], c["stop"], c)
     pds = [b.param for b in cont.bifurcations if b.type == "period_doubling"]
     if pds and chi_long.size > 1:
@@ -164,7 +165,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         if near.size > 1:
             dr = doubling_runs(ctx, near, ax)
             ctx.save_dataset(dr, "doubling_runs.nc")
-            brute["period_doubling"] = pd_bracket(near, dr.period_1.values.astype(bool))
+            brute["period_doubling"] = pd_bracket(near, dr.period_1.values)
     ds = collect([({}, cont)])
     ds.attrs.update({f"param_{k}": v for k, v in nd.items() if k != "chi"})
     ctx.save_dataset(ds, DATASETS[1])
@@ -250,3 +251,20 @@ def run(ctx: StudyContext) -> dict[str, Any]:
     for b in cont.branches:
         ctx.log(f"fig8_9_orbits: branch {b.id} (period {b.period}, {b.kind}, {b.points} points): {b.stopped}")
     return summary
+
+
+def work(cfg: dict[str, Any]) -> Estimate:
+    """The study's work and output size (:mod:`dryfriction.budget`): fig8_9's sweep, the long runs
+    (5 per chi of the continuation's range), the doubling runs (at most 2 sweeps of 2 per such chi)
+    and the continuation (every point of ``max_branches`` branches)."""
+    c, bf, num = cfg["continuation"], cfg["brute_force"], cfg["numerics"]
+    est = sweep_estimate(Estimate(), "fig8_9", base.runs(cfg), cfg["sweep"]["periods"], num)
+    chi = base.axes(cfg)["chi"]
+    n_long = int(np.sum((chi >= min(c["start"], c["stop"])) & (chi <= max(c["start"], c["stop"]))))
+    if n_long:
+        sweep_estimate(est, "fig8_9_long", 5 * n_long, bf["long_periods"], num)
+    if n_long > 1:
+        sweep_estimate(est, "fig8_9_doubling (at most)", 2 * 2 * n_long, bf["doubling_periods"], num)
+    steps, what = continuation_work(c["max_points"], c["max_branches"])
+    est.add(f"continuation: {what}", steps, 400.0 * c["max_points"] * c["max_branches"])
+    return est.add("figures", 0.0, FIGURE_BYTES * len(FIGURES))
