@@ -28,7 +28,7 @@ RESPONSE = ["response", *BLOCK, "--f-start", "5", "--f-stop", "15"]
 def _one_line_error(err: str) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
-    assert re.match(r"dryfriction( study)?: error: ", lines[0]) and "Traceback" not in err
+    assert re.match(r"dryfriction: error: ", lines[0]) and "Traceback" not in err
     return lines[0]
 
 
@@ -229,7 +229,7 @@ def test_second_sweep_too_large_refused_before_the_first(tmp_path: Path, fmu_pat
             "--fmu", str(fmu_path), "--set", "fig11.lam.num=100000"]
     assert main(argv) == 2
     line = _one_line_error(capsys.readouterr().err)
-    assert line == ("dryfriction study: error: about 7.5e+10 steps of work (study fig10_11: sweep fig11: 2.5e+06 runs "
+    assert line == ("dryfriction: error: about 7.5e+10 steps of work (study fig10_11: sweep fig11: 2.5e+06 runs "
                     "x 30 periods x 1,000 steps; sweep fig10: 600 runs x 30 periods x 1,000 steps) exceed the "
                     "bound --max-work 1e+10 (steps); ask for less or raise --max-work")
     assert not list(tmp_path.rglob("*")), "nothing written"
