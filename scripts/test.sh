@@ -3,10 +3,11 @@
 # examples (examples/*.py at full size), the lowest declared dependency versions
 # (scripts/check_min_versions.sh), the cross-platform check (Windows x86-64 under wine, Linux aarch64
 # under qemu: scripts/cross_check.sh), then the C tests and the pytest suite again with the FMU built
-# with AddressSanitizer and UBSan, and the fuzzer.
+# with AddressSanitizer and UBSan (every test that runs C: not the no_sanitizer and python_only
+# markers), and the fuzzer.
 # Prints the duration of every stage at the end (also when a stage fails).
 #
-# bash scripts/test.sh --quick: the quick loop (under 3 minutes on 2 cores once set up). Setup only
+# bash scripts/test.sh --quick: the quick loop (about 100 s of CPU time once set up). Setup only
 # when needed (no .venv, no build/, or pyproject.toml newer than the installed package), else an
 # incremental build; then ctest and the fast pytest subset (-m "not slow": without the wheel, the
 # rebuilds, the external hosts, the examples, the long studies). tests/README.md lists what it leaves
