@@ -75,6 +75,10 @@ asan_pytest() {
   DFO_FMU3="$PWD/build-asan/fmi3/DryFrictionOscillator.fmu" \
   DFO_CHAIN_FMU="$PWD/build-asan/DryFrictionChain.fmu" \
   DFO_CHAIN_FMU3="$PWD/build-asan/fmi3/DryFrictionChain.fmu" \
+  DFO_CHAIN_DRIVER="$PWD/build-asan/tests/c/chain_driver" \
+  DFO_CHAIN_DERIV="$PWD/build-asan/tests/c/test_chain_deriv" \
+  DFO_CHAIN_DERIV_N1="$PWD/build-asan/tests/c/chain_deriv_n1" \
+  DFO_POLY_DRIVER="$PWD/build-asan/tests/c/test_exact_poly" \
   LD_PRELOAD="$asan $ubsan" \
   ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
