@@ -3,10 +3,11 @@
 # examples (examples/*.py at full size), the lowest declared dependency versions
 # (scripts/check_min_versions.sh), the cross-platform check (Windows x86-64 under wine, Linux aarch64
 # under qemu: scripts/cross_check.sh), then the C tests and the pytest suite again with the FMU built
-# with AddressSanitizer and UBSan, and the fuzzer.
+# with AddressSanitizer and UBSan (every test that runs C: not the no_sanitizer and python_only
+# markers), and the fuzzer.
 # Prints the duration of every stage at the end (also when a stage fails).
 #
-# bash scripts/test.sh --quick: the quick loop (under 3 minutes on 2 cores once set up). Setup only
+# bash scripts/test.sh --quick: the quick loop (about 100 s of CPU time once set up). Setup only
 # when needed (no .venv, no build/, or pyproject.toml newer than the installed package), else an
 # incremental build; then ctest and the fast pytest subset (-m "not slow": without the wheel, the
 # rebuilds, the external hosts, the examples, the long studies). tests/README.md lists what it leaves
@@ -21,6 +22,29 @@ case "${1-}" in
   --quick) QUICK=1 ;;
   *) echo "usage: bash scripts/test.sh [--quick]" >&2; exit 2 ;;
 esac
+
+# pytest runs on the cores that are idle when it starts (pytest-xdist, one worker per idle core, one
+# test module per worker at a time: --dist loadfile builds a module's fixtures once); on busy cores
+# one process, as more workers would only add their start-up (the scheduler shares the CPU between
+# sessions, not processes).
+idle_cores() {  # the idle share of the CPU over 1 s, in cores (rounded)
+  local a b
+  read -r -a a < <(head -1 /proc/stat); sleep 1; read -r -a b < <(head -1 /proc/stat)
+  local idle=$(( b[4] + b[5] - a[4] - a[5] )) total=0 i
+  for i in 1 2 3 4 5 6 7 8; do total=$(( total + b[i] - a[i] )); done
+  echo $(( total > 0 ? (2 * idle * $(nproc) + total) / (2 * total) : 1 ))
+}
+pytest_() {  # pytest_ ARGS...: the pytest suite on the idle cores
+  local n
+  n=$(idle_cores)
+  if [ "$n" -gt 1 ]; then
+    echo "pytest: $n workers ($n of $(nproc) cores idle)"
+    .venv/bin/python -m pytest -q -n "$n" --dist loadfile "$@"
+  else
+    echo "pytest: one process (no two of the $(nproc) cores idle)"
+    .venv/bin/python -m pytest -q "$@"
+  fi
+}
 
 DURATIONS=()
 stage() {  # stage NAME COMMAND...: run, time, remember
@@ -51,10 +75,14 @@ asan_pytest() {
   DFO_FMU3="$PWD/build-asan/fmi3/DryFrictionOscillator.fmu" \
   DFO_CHAIN_FMU="$PWD/build-asan/DryFrictionChain.fmu" \
   DFO_CHAIN_FMU3="$PWD/build-asan/fmi3/DryFrictionChain.fmu" \
+  DFO_CHAIN_DRIVER="$PWD/build-asan/tests/c/chain_driver" \
+  DFO_CHAIN_DERIV="$PWD/build-asan/tests/c/test_chain_deriv" \
+  DFO_CHAIN_DERIV_N1="$PWD/build-asan/tests/c/chain_deriv_n1" \
+  DFO_POLY_DRIVER="$PWD/build-asan/tests/c/test_exact_poly" \
   LD_PRELOAD="$asan $ubsan" \
   ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-    .venv/bin/python -m pytest -q -m "not no_sanitizer"
+    pytest_ -m "not no_sanitizer and not python_only"
 }
 fuzz() {  # libFuzzer + ASan/UBSan: the oscillator's FMI 2.0 entry points 60 s, the chain's FMI 3.0 30 s; installs clang if missing
   PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" bash tests/fuzz/run_fuzz.sh 60
@@ -113,14 +141,14 @@ quick_setup() {
 if [ "$QUICK" = 1 ]; then
   stage "setup (quick)" quick_setup
   stage "ctest" ctest --test-dir build --output-on-failure -j2
-  stage "pytest not slow" .venv/bin/python -m pytest -q -m "not slow"
+  stage "pytest not slow" pytest_ -m "not slow"
   exit 0
 fi
 
 stage "setup" bash scripts/setup.sh
 stage "ctest" ctest --test-dir build --output-on-failure -j2
 stage "host-libs" host_libs
-stage "pytest" .venv/bin/python -m pytest -q
+stage "pytest" pytest_
 examples() {  # every example at its own size, in a scratch folder
   local d f
   d=$(mktemp -d)

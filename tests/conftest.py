@@ -23,6 +23,24 @@ from chain_cases import CASES, PERIODS
 from fmi2_helpers import Inst
 
 
+# The modules that load no FMU and run no C program (the pure-Python references and parsers): their
+# tests are marked python_only, which the ASan/UBSan pass of scripts/test.sh deselects (there is
+# nothing in them for the sanitizers to check). A test of one that asks for an FMU fixture is an
+# error at collection.
+PYTHON_ONLY = frozenset({"test_references.py", "test_belt_reference.py", "test_chain_driver.py",
+                         "test_packaging_requirements.py"})
+FMU_FIXTURES = frozenset({"fmu", "fmu_path", "chain_fmu2", "chain_fmu3", "unzipped", "inst", "md2", "md3"})
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Marks the tests of the PYTHON_ONLY modules python_only."""
+    for item in items:
+        if item.path.name in PYTHON_ONLY:
+            if used := FMU_FIXTURES.intersection(getattr(item, "fixturenames", ())):
+                raise pytest.UsageError(f"{item.nodeid}: a python_only module's test uses {sorted(used)}")
+            item.add_marker(pytest.mark.python_only)
+
+
 # Every FMU comes from dryfriction.locate: DFO_FMU, DFO_FMU3, DFO_CHAIN_FMU, DFO_CHAIN_FMU3 select
 # other builds (the ASan/UBSan one), else the installed package's, else build/.
 

@@ -60,12 +60,17 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="module")
 def venv(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A fresh virtual environment outside the repository with the wheel (and its dependencies
-    from the index) installed; returns its bin/ folder."""
+    from the index) installed; returns its bin/ folder. The install is uv's (from its cache, as
+    scripts/setup.sh's: seconds) where this environment has uv, else the fresh venv's pip."""
     env_dir = tmp_path_factory.mktemp("fresh") / "venv"
     assert ROOT not in env_dir.parents
     _run([sys.executable, "-m", "venv", str(env_dir)], cwd=env_dir.parent)
     bin_dir = env_dir / "bin"
-    _run([str(bin_dir / "python"), "-m", "pip", "install", "--quiet", str(wheel)], cwd=env_dir.parent, timeout=900)
+    if subprocess.run([sys.executable, "-m", "uv", "--version"], capture_output=True).returncode == 0:
+        install = [sys.executable, "-m", "uv", "pip", "install", "--python", str(bin_dir / "python")]
+    else:
+        install = [str(bin_dir / "python"), "-m", "pip", "install"]
+    _run([*install, "--quiet", str(wheel)], cwd=env_dir.parent, timeout=900)
     return bin_dir
 
 
