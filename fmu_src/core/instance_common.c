@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef char dfo_static_assert_log_categories[DFO_NUM_LOG_CATEGORIES <= DFO_MAX_LOG_CATEGORIES ? 1 : -1];
@@ -262,9 +263,12 @@ const char *dfo_scale_refused(double limit, double F, const char *F_text, double
 {
     const double lo = 1.0 / limit, floor = lo * lo;
     if (k != 0.0 && !(k >= lo)) {
-        snprintf(buf, len, "invalid value %.17g for %s; valid range: 0 (no spring) or %g to %g N/m: a softer spring "
+        char kt[32]; /* the shortest of 15 and 17 digits that reads back as k */
+        snprintf(kt, sizeof kt, "%.15g", k);
+        if (strtod(kt, NULL) != k) snprintf(kt, sizeof kt, "%.17g", k);
+        snprintf(buf, len, "invalid value %s for %s; valid range: 0 (no spring) or %g to %g N/m: a softer spring "
                  "takes the oscillator's scales (the natural frequency sqrt(k/m) among them) out of double precision",
-                 k, k_name, lo, limit);
+                 kt, k_name, lo, limit);
         return buf;
     }
     if (!(F > 0.0)) return NULL;
