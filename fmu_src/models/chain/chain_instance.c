@@ -258,7 +258,8 @@ static const char *scale_refused(const chain_params *p, char *buf, size_t len)
         snprintf(k_name, sizeof k_name, "k_site[%zu]", i + 1);
         if (!msg) msg = dfo_scale_refused(DFO_SCALE_LIMIT, F, F_text, p->m[i], m_name, p->k_site[i], k_name, buf, len);
     }
-    return msg ? msg : dfo_scale_refused(DFO_SCALE_LIMIT, F, F_text, p->m[p->n - 1], m_name, p->k_end, "k_end", buf, len);
+    if (msg) return msg;
+    return dfo_scale_refused(DFO_SCALE_LIMIT, F, F_text, p->m[p->n - 1], m_name, p->k_end, "k_end", buf, len);
 }
 
 const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)
