@@ -376,7 +376,22 @@ def _c_header_head(model: Model, source: str, before_guid: list[str], after_time
             L.append(f"#define START_{v.name} {start}")
         if v.type in ("Real", "Integer", "UInt64") and v.causality == "structuralParameter":
             L.append(f"#define MAX_{v.name} {int(v.max)}")
+    L += _c_scale_limit(model)
     return L
+
+
+def _c_scale_limit(model: Model) -> list[str]:
+    """DFO_SCALE_LIMIT, the mass's declared maximum (its minimum the reciprocal, checked here): the
+    scales the computation honours, m and every stiffness k > 0 within [1/limit, limit] and the
+    motion's scales (force over mass, force over stiffness) at least 1/limit^2, checked by the
+    instance core at the end of initialisation (dfo_scale.h). None without a bounded m."""
+    m = next((v for v in model.variables if v.name == "m" and v.type == "Real"), None)
+    if m is None or m.max is None:
+        return []
+    if m.min is None or m.min != 1.0 / m.max:
+        raise SystemExit(f"gen_model_vars: m's range [{m.min}, {m.max}] is not [1/limit, limit]")
+    return ["/* the scales the computation honours: m's declared range [1/limit, limit] (dfo_scale.h) */",
+            f"#define DFO_SCALE_LIMIT {c_double(m.max)}"]
 
 
 def _c_enumerations(model: Model) -> list[str]:

@@ -19,18 +19,28 @@ minute in a Release build); the long-run and fine-step cases say which size they
 from __future__ import annotations
 
 import math
+import shutil
+import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from dryfriction import DryFrictionWarning
+from dryfriction.chain import default_chain_fmu, default_chain_fmu3
 from dryfriction.exact import linear_solution, solve_exact
-from dryfriction.fmu import OscillatorFMU, Settings
-from dryfriction.params import Oscillator
+from dryfriction.fmi3 import default_fmi3_path
+from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.params import SCALE_LIMIT, Oscillator
+
+from fmi2_helpers import Counting
 
 ND = Oscillator.from_nondimensional
 COMPLEMENTARITY_RTOL = 1e-12
@@ -566,3 +576,153 @@ def test_random_parameters(fmu: OscillatorFMU, lam: float, ms: float, chi: float
         check_invariants(con, "consistent", one_step_reversal_stick=True)
         diffs.append(np.abs(loc.x - con.x)[:: n // 250].max() / scale)
     assert diffs[1] <= 0.05 or diffs[1] <= 0.5 * diffs[0], f"consistent vs located: {diffs}"
+
+
+# --------------------------------------------------------------------------- the scales the FMUs honour
+# m within [1 / SCALE_LIMIT, SCALE_LIMIT] and k <= SCALE_LIMIT are declared (a host sees them); k > 0
+# below 1 / SCALE_LIMIT and a motion whose force scale over m or over k is below 1 / SCALE_LIMIT^2
+# are refused at the end of initialisation with a sentence naming the variables and the range. Each
+# of the four FMUs through fmpy itself (no driver of the package between), against its unit-scale run.
+
+FOUR = [("oscillator", 2), ("oscillator", 3), ("chain", 2), ("chain", 3)]
+_LOCATE = {("oscillator", 2): default_fmu_path, ("oscillator", 3): default_fmi3_path,
+           ("chain", 2): default_chain_fmu, ("chain", 3): default_chain_fmu3}
+# the unit oscillator (w0 = 1, zeta = 0.05, lambda = 0.8, mu_s sigma = 0.4, chi = 0.7): stick-slip
+UNIT = dict(c=0.1, omega=0.8, mu_s=0.4, chi=0.7)
+
+
+@pytest.fixture(scope="module")
+def four() -> Iterator[dict[tuple[str, int], tuple[str, Any]]]:
+    """The four FMUs unzipped, with fmpy's model descriptions."""
+    out = {}
+    for key, locate in _LOCATE.items():
+        path = str(locate())
+        out[key] = (extract(path, unzipdir=tempfile.mkdtemp(prefix="dfo-scale-")), read_model_description(path))
+    yield out
+    for d, _ in out.values():
+        shutil.rmtree(d, ignore_errors=True)
+
+
+class Refused(Exception):
+    """An FMI call failed; the FMU's logged error sentences."""
+
+
+def _fmpy_run(fmu: tuple[str, Any], version: int, reals: dict[str, float], ints: dict[str, int], t_stop: float,
+              steps: int = 20) -> np.ndarray:
+    """x and v of the first block at steps equal communication points through fmpy's FMU2Slave or
+    FMU3Slave; a chain's array parameters get the same value in every block. Refused (with the
+    logged error sentences) when a call fails."""
+    d, md = fmu
+    vars_ = {v.name: v for v in md.modelVariables}
+    log: list[tuple[int, str]] = []
+
+    def names(name: str) -> list[str]:  # an FMI 2.0 chain's arrays are m[1] ... m[n]
+        return [name] if name in vars_ else sorted((n for n in vars_ if n.startswith(name + "[")),
+                                                   key=lambda n: int(n[len(name) + 1:-1]))
+
+    def size(name: str) -> int:  # an FMI 3.0 array's length: the start of its structural parameter
+        dims = getattr(vars_[name], "dimensions", None) or []
+        return int(vars_[dims[0].variable.name].start) if dims else 1
+
+    if version == 2:
+        cb = Counting()
+        s: Any = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                           instanceName="scale")
+        s.instantiate(callbacks=cb.struct)
+    else:
+        s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="scale")
+        s.instantiate(logMessage=lambda env, status, cat, msg: log.append((status, msg.decode())))
+    try:
+        if version == 2:
+            s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        for name, value in reals.items():
+            for n in names(name):
+                if version == 2:
+                    s.setReal([vars_[n].valueReference], [value])
+                else:
+                    s.setFloat64([vars_[n].valueReference], [value] * size(n))
+        for name, value in ints.items():
+            (s.setInteger if version == 2 else s.setInt64)([vars_[name].valueReference], [value])
+        s.exitInitializationMode()
+        vr = [vars_[names(n)[0]].valueReference for n in ("x", "v")]
+        out = []
+        for i in range(steps):
+            s.doStep(i * t_stop / steps, t_stop / steps)
+            got = s.getReal(vr) if version == 2 else s.getFloat64(vr, nValues=2 * size(names("x")[0]))
+            out.append([got[0], got[1 if version == 2 else size(names("x")[0])]])
+        s.terminate()
+        return np.array(out)
+    except Exception as e:  # fmpy raises its own exception for a failed call: the FMU's sentences
+        msgs = [m for st, _, m in cb.messages if st >= 3] if version == 2 else [m for st, m in log if st >= 3]
+        raise Refused(" | ".join(msgs) or str(e)) from None
+    finally:
+        s.freeInstance()
+
+
+def _scaled(fmu: tuple[str, Any], model: str, version: int, m: float, k: float, s: float,
+            scheme: int | None = None) -> np.ndarray:
+    """The unit oscillator scaled: mass m, stiffness k, forces s (P0 and N), so that x scales as s/k
+    and time as sqrt(m/k); returned non-dimensional (x k/s and v sqrt(k m)/s over w0 t in [0, 20])."""
+    w0 = math.sqrt(k) / math.sqrt(m)
+    reals = dict(m=m, k=k, c=UNIT["c"] * math.sqrt(k) * math.sqrt(m), P0=s, omega=UNIT["omega"] * w0, N=s,
+                 mu_s=UNIT["mu_s"], chi=UNIT["chi"])
+    r = _fmpy_run(fmu, version, reals, {} if scheme is None else {"scheme": scheme}, 20.0 / w0)
+    return np.column_stack([r[:, 0] / s * k, r[:, 1] / s * math.sqrt(k) * math.sqrt(m)])
+
+
+def test_the_scale_limit_is_the_declared_range_of_every_fmu(four: dict) -> None:
+    """One source of truth: params.SCALE_LIMIT (the Python side's check) is the range every FMU
+    declares for m ([1/limit, limit]) and every stiffness (<= limit), in both FMI versions."""
+    for key, (_, md) in four.items():
+        by = {v.name: v for v in md.modelVariables}
+        ms = [v for n, v in by.items() if n == "m" or n.startswith("m[")]
+        ks = [v for n, v in by.items() if n.split("[")[0] in ("k", "k_end", "k_site")]
+        assert ms and ks, key
+        for v in ms:
+            assert (float(v.min), float(v.max)) == (1.0 / SCALE_LIMIT, SCALE_LIMIT), (key, v.name)
+        for v in ks:
+            assert (float(v.min), float(v.max)) == (0.0, SCALE_LIMIT), (key, v.name)
+    assert SCALE_LIMIT == 1e100
+
+
+@pytest.mark.parametrize("model, version", FOUR)
+@pytest.mark.parametrize("m, k, s", [(1e-100, 1e-100, 1.5e-300), (1e100, 1e100, 1.5e-100), (1e-100, 1e100, 1.5e-100),
+                                     (1e100, 1e-100, 1.5e-100), (1e100, 1e100, 1e300)])
+def test_the_edges_of_the_valid_range_give_the_scaled_result(four: dict, model: str, version: int, m: float,
+                                                             k: float, s: float) -> None:
+    """m and k at 1e-100 and 1e100 (w0 from 1e-100 to 1e100), the force scale at 1.5 times its
+    floor (force / m or force / k = 1.5e-200) or at 1e300: the unit run's motion within 1e-9 (the
+    exact scheme and the located one for the oscillator, the chain's default)."""
+    schemes = [4, 3] if model == "oscillator" else [None]
+    for scheme in schemes:
+        ref = _scaled(four[(model, version)], model, version, 1.0, 1.0, 1.0, scheme)
+        got = _scaled(four[(model, version)], model, version, m, k, s, scheme)
+        assert np.max(np.abs(ref[:, 0])) > 0.5  # it moves
+        assert np.max(np.abs(got - ref)) <= 1e-9 * np.max(np.abs(ref)), (scheme, np.max(np.abs(got - ref)))
+
+
+@pytest.mark.parametrize("model, version", FOUR)
+@pytest.mark.parametrize("reals, says", [
+    (dict(m=1e-300, k=1e-300), ["invalid value 1e-300 for", "m", "1e-100, 1e+100"]),   # the exact run that said 0
+    (dict(m=1.01e100), ["invalid value 1.01e+100 for", "m", "1e-100, 1e+100"]),
+    (dict(k=1e155), ["invalid value 1e+155 for", "k", "0, 1e+100"]),                    # its Jacobian turned NaN
+    (dict(k=1e-300), ["invalid value 1e-300 for k", "valid range: 0 (no spring) or 1e-100 to 1e+100 N/m"]),
+    (dict(P0=1e-250, N=1e-250), ["force scale", "1e-250 N over m", "below 1e-200 m/s2",
+                                 "valid range: force scale / m >= 1e-200 m/s2 and force scale / k >= 1e-200 m"]),
+    (dict(k=1e100, P0=1e-150, N=1e-150), ["force scale", "1e-150 N over k", "= 1e+100 N/m is below 1e-200 m"]),
+])
+def test_values_no_computation_honours_are_refused_with_the_reason(four: dict, model: str, version: int,
+                                                                   reals: dict[str, float], says: list[str]) -> None:
+    """Each refused with an error and a logged sentence naming the variable (the chain: its element)
+    and the valid range: m or k beyond their declared ranges when set, k > 0 below 1e-100 and a
+    motion below double precision's normal range at the end of initialisation."""
+    params = {**dict(m=1.0, k=1.0, c=0.0, P0=1.0, omega=0.8, N=1.0, mu_s=0.4, chi=0.7), **reals}
+    with pytest.raises(Refused) as err:
+        _fmpy_run(four[(model, version)], version, params, {}, 1.0)
+    msg = str(err.value)
+    for part in says:
+        assert part in msg, (part, msg)
+    if model == "chain" and "force scale" not in msg:
+        assert "[1]" in msg, msg   # the element named

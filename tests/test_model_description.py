@@ -137,9 +137,11 @@ def _ranged(md: object) -> list[tuple[str, str, float | None, float | None]]:
 def test_the_ranges_are_in_the_model_description() -> None:
     md = read_model_description(str(XML))
     by = {v.name: v for v in md.modelVariables}
-    assert float(by["m"].min) == DBL_MIN and float(by["h"].min) == 0.0   # h: 0 (derived) or a normal number
+    assert (float(by["m"].min), float(by["m"].max)) == (1e-100, 1e100)  # the scales computed right (HAZARDS.md)
+    assert float(by["h"].min) == 0.0   # h: 0 (derived) or a normal number
     assert float(by["h"].start) == 0.0 and by["h_used"].causality == "calculatedParameter"
-    for n in ("k", "c", "N", "mu_s", "chi", "omega"):
+    assert (float(by["k"].min), float(by["k"].max)) == (0.0, 1e100)   # k > 0 below 1e-100: at exit-initialisation
+    for n in ("c", "N", "mu_s", "chi", "omega"):
         assert float(by[n].min) == 0.0 and by[n].max is None, n
     assert float(by["alpha"].min) == -1.0 / 3.0 and float(by["alpha"].max) == 0.0
     assert (int(by["frictionUpdates"].min), int(by["frictionUpdates"].max)) == (0, 100)
@@ -175,18 +177,19 @@ def test_the_binary_enforces_exactly_the_declared_ranges(unzipped: tuple[str, ob
             checked += 1
             sl.s.reset()
         assert checked >= (9 if side == "min" else 2)
-        # subnormal m and h are below the normal minimum
-        for name in ("m", "h"):
+        # a subnormal h is below the normal minimum, a subnormal m below m's
+        for name, rng in (("m", "in [1e-100, 1e+100]"), ("h", "a normal number")):
             with pytest.raises(FMICallException):
                 sl.s.setReal([sl.vr(name)], [DBL_MIN / 2])
-            assert "a normal number" in sl.log.messages[-1][2]
+            assert rng in sl.log.messages[-1][2]
     finally:
         sl.s.freeInstance()
 
 
 def test_the_generator_refuses_an_inconsistent_description(tmp_path: Path) -> None:
     """A start value outside its own range is caught at build time, with one line and status 1."""
-    bad = XML.read_text().replace('<Real min="0" unit="N/m" start="100"/>', '<Real min="0" unit="N/m" start="-1"/>')
+    good = '<Real min="0" max="1e+100" unit="N/m" start="100"/>'
+    bad = XML.read_text().replace(good, good.replace('start="100"', 'start="-1"'))
     assert bad != XML.read_text()
     (tmp_path / "md.xml").write_text(bad)
     r = subprocess.run([sys.executable, str(ROOT / "fmu_src" / "gen_model_vars.py"), str(tmp_path / "md.xml"),

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef char dfo_static_assert_log_categories[DFO_NUM_LOG_CATEGORIES <= DFO_MAX_LOG_CATEGORIES ? 1 : -1];
@@ -256,3 +257,28 @@ int dfo_inst_update_events(dfo_lifecycle *lc)
 }
 
 double dfo_inst_time(const dfo_lifecycle *lc) { return lc->run.time; }
+
+const char *dfo_scale_refused(double limit, double F, const char *F_text, double m, const char *m_name, double k,
+                              const char *k_name, char *buf, size_t len)
+{
+    const double lo = 1.0 / limit, floor = lo * lo;
+    if (k != 0.0 && !(k >= lo)) {
+        char kt[32]; /* the shortest of 15 and 17 digits that reads back as k */
+        snprintf(kt, sizeof kt, "%.15g", k);
+        if (strtod(kt, NULL) != k) snprintf(kt, sizeof kt, "%.17g", k);
+        snprintf(buf, len, "invalid value %s for %s; valid range: 0 (no spring) or %g to %g N/m: a softer spring "
+                 "takes the oscillator's scales (the natural frequency sqrt(k/m) among them) out of double precision",
+                 kt, k_name, lo, limit);
+        return buf;
+    }
+    if (!(F > 0.0)) return NULL;
+    const int accel = !(F / m >= floor);
+    if (!accel && !(k > 0.0 && !(F / k >= floor))) return NULL;
+    snprintf(buf, len, "the motion is too small for double precision: the force scale %s = %.6g N over %s = %.6g %s "
+             "is below %g %s (its velocities and accelerations underflow and the motion is lost); valid range: "
+             "force scale / m >= %g m/s2 and force scale / k >= %g m (k > 0), or no force at all: choose smaller "
+             "units (micrometres, micronewtons) for this oscillator",
+             F_text, F, accel ? m_name : k_name, accel ? m : k, accel ? "kg" : "N/m", floor, accel ? "m/s2" : "m",
+             floor, floor);
+    return buf;
+}

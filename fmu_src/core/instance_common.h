@@ -52,6 +52,15 @@ int dfo_inst_events_begin(dfo_lifecycle *lc, const char *fn, double tc, double d
 /* The snap tolerance: a stepper's time within it of a target t (internal step h) stands on it. */
 static inline double dfo_snap(double h, double t) { return fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t)); }
 
+/* The scales a run honours, limit the model's DFO_SCALE_LIMIT (m's declared maximum, 1/limit its
+ * minimum): a stiffness k (named k_name) is 0 or within [1/limit, limit] N/m, and a force scale F > 0
+ * (F_text: how it is formed) gives an acceleration scale F/m and, with k > 0, a static deflection
+ * F/k of at least 1/limit^2 (m/s2, m); below that the motion underflows double precision and is
+ * lost (measured: stuck where it slides, with status OK). NULL when inside, else the sentence in
+ * buf naming the variables and the valid range. */
+const char *dfo_scale_refused(double limit, double F, const char *F_text, double m, const char *m_name, double k,
+                              const char *k_name, char *buf, size_t len);
+
 /* A deserialised run: NULL when plausible, else why not. config: the model has a configuration mode. */
 const char *dfo_run_implausible(const dfo_run *r, int config);
 /* A deserialised stepper time t on the internal grid (start t0, interval n_grid of step h) and, once

@@ -29,7 +29,10 @@ __all__ = ["Oscillator", "UNITS", "SCALE_LIMIT"]
 #: double precision's normal range (checked: the stroboscopic map and its Jacobian scale exactly,
 #: within 1e-9 of the unit oscillator's, on a grid of m, k and P0 from 1e-200 to 1e200 wherever m, k and
 #: sqrt(k/m) lie within it; beyond it the FMU's Jacobian overflows (k > 1e154 with friction) or its run
-#: silently loses the motion (m = k = 1e-300: stuck where it slides))
+#: silently loses the motion (m = k = 1e-300: stuck where it slides)). The FMUs declare the same
+#: range for m and the same maximum for every stiffness (tested equal: tests/test_hazards.py), and
+#: refuse at the end of initialisation a stiffness 0 < k < 1 / SCALE_LIMIT and a motion whose force
+#: scale over m or over k is below 1 / SCALE_LIMIT^2 (tests/HAZARDS.md, Scales)
 SCALE_LIMIT = 1e100
 
 #: unit of every field and derived quantity (the model description's, plus the derived ones; read

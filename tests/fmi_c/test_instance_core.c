@@ -97,7 +97,7 @@ static void test_table_and_time(checks *T)
     const unsigned int vm = VR_m;
     const double bad = -1.0;
     EXPECT(dfo_inst_set_real(in, "set", &vm, 1, &bad) == DFO_INST_ERROR);
-    EXPECT(strstr(L.last, "invalid value -1 for variable m (value reference 1); valid range: > 0") != NULL);
+    EXPECT(strstr(L.last, "invalid value -1 for variable m (value reference 1); valid range: in [1e-100, 1e+100]") != NULL);
     dfo_inst_delete(in);
     in = start(T, &L);
     double t = 0.0, reached = -1.0;

@@ -195,7 +195,7 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const cha
 {
     chain_values *v = &in->v;
     if (!chain_inst_started(in)) {
-        char buf[200];
+        char buf[640];
         const char *msg = chain_inst_prepare(in, buf, sizeof buf);
         if (msg) return dfo_inst_fail(&in->lc, "%s: %s cannot be computed: %s.", fn, r->name, msg);
     }

@@ -11,6 +11,7 @@
 #include "bossak.h" /* DFO_STEPS_PER_PERIOD, DFO_MIN_STEPS_PER_PERIOD */
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* The model description's scheme values are those of the physics. */
@@ -235,12 +236,39 @@ void chain_inst_ramp_done(chain_values *v, double t_ref)
     v->ud_set = 0;
 }
 
+/* The scales the computation honours (dfo_scale_refused), for every block: each stiffness, and the
+ * chain's force scale (the largest excitation, friction limit and initial spring force or momentum
+ * rate of any block) over each mass and each stiffness > 0. NULL when inside, else the sentence. */
+static const char *scale_refused(const chain_params *p, char *buf, size_t len)
+{
+    double F = 0.0;
+    for (size_t i = 0; i < p->n; i++) {
+        const double K = p->k[i] + (i + 1 < p->n ? p->k[i + 1] : p->k_end) + p->k_site[i];
+        F = fmax(F, fmax(fmax(fabs(p->P0[i]), fmax(p->mu_s[i], p->chi[i] * p->mu_s[i]) * p->N[i]),
+                         fmax(K * fabs(p->x0[i]), sqrt(K) * sqrt(p->m[i]) * fabs(p->v0[i]))));
+    }
+    static const char *const F_text = "max over the blocks of |P0|, max(mu_s, mu_k) N, K |x0|, sqrt(K m) |v0| "
+                                      "(K: the block's springs)";
+    char m_name[32], k_name[32];
+    const char *msg = NULL;
+    for (size_t i = 0; i < p->n && !msg; i++) {
+        snprintf(m_name, sizeof m_name, "m[%zu]", i + 1);
+        snprintf(k_name, sizeof k_name, "k[%zu]", i + 1);
+        msg = dfo_scale_refused(DFO_SCALE_LIMIT, F, F_text, p->m[i], m_name, p->k[i], k_name, buf, len);
+        snprintf(k_name, sizeof k_name, "k_site[%zu]", i + 1);
+        if (!msg) msg = dfo_scale_refused(DFO_SCALE_LIMIT, F, F_text, p->m[i], m_name, p->k_site[i], k_name, buf, len);
+    }
+    if (msg) return msg;
+    return dfo_scale_refused(DFO_SCALE_LIMIT, F, F_text, p->m[p->n - 1], m_name, p->k_end, "k_end", buf, len);
+}
+
 const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)
 {
     chain_values *v = &in->v;
     const chain_params p = chain_inst_params_of(v);
     const char *msg = chain_check_params(&p, buf, len);
     if (msg) return msg;
+    if ((msg = scale_refused(&p, buf, len))) return msg;
     if (chain_inst_belt_of(v, 0) && p.scheme == DFO_SCHEME_PAPER)
         return "v_belt is set but the paper scheme has no moving belt (its stuck blocks creep with Bossak's "
                "acceleration); use scheme consistent or located";
@@ -290,7 +318,7 @@ void dfo_inst_delete(dfo_lifecycle *lc)
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     chain_instance *in = chn(lc);
-    char buf[200];
+    char buf[640];
     const char *msg = chain_inst_prepare(in, buf, sizeof buf);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s.", fn, msg);
     in->lc.run.phase = DFO_PHASE_STEP;

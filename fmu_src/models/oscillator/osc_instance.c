@@ -344,12 +344,24 @@ static int output_int(const osc_values *v, const dfo_run *r, int id)
 static dfo_inst_status ramp_refused(osc_instance *in, const char *fn);
 static const char *ramp_unsupported(const dfo_params *p);
 
+/* The scales the computation honours (dfo_scale_refused): k, and the force scale of the excitation,
+ * the friction limit and the initial state over m and k. NULL when inside, else the sentence. */
+static const char *scale_refused(const dfo_params *p, char *buf, size_t len)
+{
+    const double F = fmax(fmax(fabs(p->P0), fmax(p->mu_s, p->chi * p->mu_s) * p->N),
+                          fmax(p->k * fabs(p->x0), sqrt(p->k) * sqrt(p->m) * fabs(p->v0)));
+    return dfo_scale_refused(DFO_SCALE_LIMIT, F, "max(|P0|, max(mu_s, mu_k) N, k |x0|, sqrt(k m) |v0|)", p->m, "m",
+                             p->k, "k", buf, len);
+}
+
 dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     osc_instance *in = osc(lc);
     osc_values *v = &in->v;
     const char *msg = dfo_check_params(&v->p);
     if (msg) return dfo_inst_fail(&in->lc, "%s: %s", fn, msg);
+    char buf[640];
+    if ((msg = scale_refused(&v->p, buf, sizeof buf))) return dfo_inst_fail(&in->lc, "%s: %s.", fn, msg);
     if (v->u.ramp && ramp_unsupported(&v->p)) return ramp_refused(in, fn);
     v->u.t_d = in->lc.run.start_time; /* input derivatives set before: of the start */
     prepare(v, in->lc.run.start_time);
