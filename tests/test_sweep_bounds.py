@@ -145,7 +145,7 @@ def test_unwritable_output_folder_found_before_the_work(tmp_path: Path, fmu_path
     assert main(["study", "fig8_9", "--quick", "--workers", "0", "--no-progress", "--out", str(blocker),
                  "--fmu", str(fmu_path)]) == 2
     line = _one_line_error(capsys.readouterr().err)
-    assert f"cannot write into the output folder {blocker}/fig8_9" in line and "Not a directory" in line
+    assert line == f"dryfriction: error: --out {blocker}/fig8_9: {blocker} is a file, not a folder"
     with pytest.raises(Exception, match="has .* MB free"):
         check_writable(tmp_path, nbytes=1e18)
     # response: before the work, nothing created

@@ -170,31 +170,17 @@ def add_max_work_argument(p: object, default: object = None) -> None:
                         f"an exact-scheme period counts {EXACT_PERIOD_STEPS:g})")
 
 
-def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "") -> Path:
-    """Before the work: ``folder`` can take files (tried in it, or where it would be created: its
-    nearest existing parent; nothing is left behind, no folder created), and its file system has
-    room for ``nbytes`` (with a margin); a :class:`UsageError` naming the folder and the cause
-    otherwise."""
-    import errno
-    import tempfile
+def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "",
+                   option: str = "--out") -> Path:
+    """Before the work: ``folder`` can take a result set (:func:`dryfriction.console.check_output_folder`:
+    a probe created and removed where the set will be staged; nothing is left behind, no folder
+    created), and its file system has room for ``nbytes`` (with a margin); a :class:`UsageError`
+    naming ``option``, the folder and the cause otherwise."""
+    from .console import check_output_folder, nearest_existing
 
-    d = Path(folder)
-    probe = d if str(d) else Path(".")
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    try:
-        if not probe.is_dir():
-            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR))
-        fd, name = tempfile.mkstemp(dir=probe, prefix=".probe-", suffix=".tmp")
-        try:
-            os.write(fd, b"x")
-        finally:
-            os.close(fd)
-            os.unlink(name)
-    except OSError as e:
-        raise UsageError(f"cannot write into the output folder {d}: {e.strerror or e}") from None
+    d = check_output_folder(folder, option)
     if nbytes > 0:
-        free = shutil.disk_usage(probe).free
+        free = shutil.disk_usage(nearest_existing(d)).free
         if free < 1.2 * nbytes + 1e6:
             raise UsageError(f"the output folder {d} has {free / 1e6:.3g} MB free, {what or 'the results'} "
                              f"need about {nbytes / 1e6:.3g} MB")

@@ -277,10 +277,8 @@ def cmd_response(args: argparse.Namespace) -> int:
         raise UsageError(f"--method orbit needs the exact scheme, not --scheme {args.scheme} (or --method transient)")
     if args.out is not None or not args.json:  # --json alone writes only to stdout; found before the work
         from .budget import check_writable
-        from .console import check_output_folder
 
-        args.out = check_output_folder(args.out or Path("results/response"))
-        check_writable(args.out, 1000.0 * f.size, "the response's files")
+        args.out = check_writable(args.out or Path("results/response"), 1000.0 * f.size, "the response's files")
     ds = frequency_response(p, f, method=method, tol=args.tol, min_periods=args.min_periods,
                             max_periods=args.max_periods, scheme=args.scheme, period=args.period, workers=workers,
                             progress=progress, fmu_path=args.fmu, max_work=args.max_work)

@@ -275,7 +275,8 @@ def result_file(path: str | os.PathLike[str]) -> AbstractContextManager[Path]:
     return _all_or_nothing(atomic_path, path, "it was left as it was")
 
 
-def _nearest_existing(path: Path) -> Path:
+def nearest_existing(path: Path) -> Path:
+    """``path`` or its nearest parent that exists."""
     p = path
     while not os.path.lexists(p) and p != p.parent:
         p = p.parent
@@ -287,7 +288,7 @@ def _check_names(path: Path, option: str, extra: int) -> None:
     the whole path within the file system's limits, else UsageError naming the option."""
     from .argparsing import UsageError
 
-    base = _nearest_existing(path.absolute().parent)
+    base = nearest_existing(path.absolute().parent)
     try:
         name_max = os.pathconf(base, "PC_NAME_MAX")
         path_max = os.pathconf(base, "PC_PATH_MAX")
@@ -337,7 +338,7 @@ def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -
     if path.exists() and not path.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)} is a file, not a folder")
     parent = path.parent
-    where = _nearest_existing(parent)
+    where = nearest_existing(parent)
     if not where.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)}: {_short(str(where), 80)} is a file, not a folder")
     try:
@@ -363,7 +364,7 @@ def check_output_file(file: str | os.PathLike[str], option: str = "--out") -> Pa
     _check_names(path, option, extra=len("..") + 8 + len(".tmp"))
     if path.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)} is a folder, not a file")
-    where = _nearest_existing(path.parent)
+    where = nearest_existing(path.parent)
     if not where.is_dir():
         raise UsageError(f"{option} {_short(str(path), 80)}: {_short(str(where), 80)} is a file, not a folder")
     try:
