@@ -91,15 +91,32 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
     ds.attrs = _clean_attrs(ds.attrs)
     for v in ds.variables.values():
         v.attrs = _clean_attrs(v.attrs)
-    import dask
-
-    with dask.config.set(scheduler="synchronous"):  # a live Dask client's locks are not for bytes in memory
-        data = bytes(ds.to_netcdf(None, engine="h5netcdf"))
+    data = _netcdf_bytes(ds)
     try:
         atomic_write_bytes(path, data)
     except OSError as e:
         raise OSError(f"cannot write {path}: {e.strerror or e}") from None
     return path
+
+
+def _netcdf_bytes(ds: xr.Dataset) -> bytes:
+    """The NetCDF-4 file of ``ds`` as bytes, built in memory by h5netcdf (an HDF5 file on a
+    BytesIO: xarray's own ``to_netcdf(None, engine="h5netcdf")`` exists only in its newest
+    releases)."""
+    import io
+
+    import dask
+    import h5netcdf
+    from xarray.backends import H5NetCDFStore
+
+    buf = io.BytesIO()
+    with dask.config.set(scheduler="synchronous"):  # a live Dask client's locks are not for bytes in memory
+        store = H5NetCDFStore(h5netcdf.File(buf, "w"), mode="w")
+        try:
+            ds.dump_to_store(store)
+        finally:
+            store.close()
+    return buf.getvalue()
 
 
 def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
