@@ -483,6 +483,30 @@ def test_chaotic_set_statistics_converge(fmu: OscillatorFMU) -> None:
 # --------------------------------------------------------------------------- start on the limit
 
 
+# At rest at x0 = P0 / k: the static force P0 (cos w t - 1) is 0 at t = 0 and leaves it like t^2; a
+# breakaway limit of 5e-24 N is below the rounding of P0 (1.1e-16 N), so the limit over P0 rounds to
+# the force's extreme (the closed-form breakaway's acos argument is -1 exactly).
+BELOW_ROUNDING = Oscillator(P0=1.0, N=1e-23, mu_s=0.5, chi=1.0, k=64.0, omega=8.0, x0=1.0 / 64.0)
+
+
+@pytest.mark.parametrize("scheme", ["located", "consistent", "exact"])
+def test_breakaway_limit_below_rounding(fmu: OscillatorFMU, scheme: str) -> None:
+    """A breakaway limit below the rounding of the static force: the block breaks away backward at
+    once (the exact solution: at 5e-13 T), as with no static friction, and follows the exact motion;
+    never held stuck while the static force is far over the limit (it was, for half a period in the
+    located scheme and for good in the exact one: 2.5 and 6.5 P0/k off)."""
+    p = BELOW_ROUNDING
+    assert p.k * p.x0 == p.P0 and 0.0 < p.breakaway < 1e-16 * p.P0
+    T = p.period
+    r = run(fmu, p, 2 * T, T / 4000, scheme=scheme)
+    check_invariants(r, scheme, one_step_reversal_stick=scheme == "consistent")
+    assert r.mode[0] == 0 and r.mode[1] == -1 and r.v[1] < 0.0
+    err, _ = exact_error(r)
+    # measured: 1.07e-5 P0/k (located and consistent, the exact motion's start is z' = -tau^3/6) and 1.8e-13
+    assert err <= (1e-12 if scheme == "exact" else 2e-5) * p.P0 / p.k, err
+
+
+
 def test_start_at_rest_on_the_limit_force_falling(fmu: OscillatorFMU) -> None:
     """x0 with P(0) - k x0 = limit exactly (binary-exact values), force falling: stays stuck
     (the limit is inclusive) until it breaks backward at t = T/4 exactly as the exact solution."""
@@ -606,6 +630,9 @@ def near_tie_time(ex: ExactSolution, delta: float) -> float:
 # whether the block breaks away depends on the last bit (found by Hypothesis: the two schemes 1.34
 # apart at T/4000, 1.7e-4 at T/16000). Nothing is compared past t = 0 here.
 @example(lam=1.0, ms=1.0, chi=0.5, zeta=0.0, z0=2.220446049250313e-16, dz0=0.0, phi=0.0)
+# A breakaway limit below the rounding of the static force (test_breakaway_limit_below_rounding):
+# the located and exact schemes held the block stuck with the force 2 N over the limit.
+@example(lam=1.0, ms=5.231643411550108e-24, chi=1.0, zeta=0.0, z0=1.0, dz0=0.0, phi=0.0)
 # A near tie: the backward slide ending at t = 1.2145 T stops where the static force is 0.500723 P0,
 # 7.2e-4 P0 over the limit 0.5 P0: the exact motion reverses. The consistent scheme decides with the
 # force at the step's end (first order: the forcing alone falls 1.1e-3 P0 over a step of T/4000), so
