@@ -633,6 +633,9 @@ def near_tie_time(ex: ExactSolution, delta: float) -> float:
 # A breakaway limit below the rounding of the static force (test_breakaway_limit_below_rounding):
 # the located and exact schemes held the block stuck with the force 2 N over the limit.
 @example(lam=1.0, ms=5.231643411550108e-24, chi=1.0, zeta=0.0, z0=1.0, dz0=0.0, phi=0.0)
+# No friction, a stop within rounding of t_end: the exact reference's root finder had no bracket there
+# (tests/test_references.py::test_stop_within_rounding_at_the_end).
+@example(lam=2.0, ms=0.0, chi=1.0, zeta=0.0, z0=2.0, dz0=0.0, phi=2.0)
 # A near tie: the backward slide ending at t = 1.2145 T stops where the static force is 0.500723 P0,
 # 7.2e-4 P0 over the limit 0.5 P0: the exact motion reverses. The consistent scheme decides with the
 # force at the step's end (first order: the forcing alone falls 1.1e-3 P0 over a step of T/4000), so

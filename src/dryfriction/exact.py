@@ -369,12 +369,18 @@ class _Slip:
 
 
 def _brentq(f: Any, a: float, b: float) -> float:
-    """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision."""
+    """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision.
+
+    The bracket comes from a scan evaluated on a vector; f here is evaluated on scalars, whose last
+    bits can differ: an end value within rounding of 0 may come back with the other sign. Then the
+    root is at that end (the end with the smaller |f|)."""
     fa, fb = f(a), f(b)
     if fa == 0.0:
         return a
     if fb == 0.0:
         return b
+    if (fa > 0.0) == (fb > 0.0):
+        return a if abs(fa) <= abs(fb) else b
     return float(brentq(f, a, b, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200))
 
 
