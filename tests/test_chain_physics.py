@@ -104,6 +104,22 @@ def test_decoupled_chain_has_the_single_block_error() -> None:
             assert e_single < 5e-4 * (400 / ppp) ** 2
 
 
+@pytest.mark.parametrize("scheme", [2, 3])
+def test_breakaway_limit_below_rounding(scheme: int) -> None:
+    """A block at rest at x0 = P0 / k (static force P0 (cos w t - 1): 0 at t = 0) with a breakaway
+    limit of 5e-24 N, below the rounding of P0: it breaks away backward at once (the exact solution:
+    at 5e-13 T) and follows the exact motion. (The chain's stick test reads the force at the step's
+    end before the closed-form breakaway, whose acos argument is -1 here; the oscillator's did not.)"""
+    ch = Chain.make(1, omega=8.0, k=[64.0], P0=[1.0], N=[1e-23], mu_s=[0.5], chi=[1.0], x0=[1.0 / 64.0])
+    p = Oscillator(m=1.0, k=64.0, P0=1.0, omega=8.0, N=1e-23, mu_s=0.5, chi=1.0, x0=1.0 / 64.0)
+    T = ch.period
+    run = run_driver(ch, 2 * T, T / 4000, scheme=scheme)
+    assert run["mode"][0, 0] == 0 and run["mode"][1, 0] == -1
+    x = solve_exact(p, 2 * T).evaluate(run["t"])[0]
+    err = np.max(np.abs(run["x"][:, 0] - x))
+    assert err <= 2e-5 * p.P0 / p.k, err  # 1.07e-5 P0/k measured (the single block's error)
+
+
 def test_energy_balance_second_order() -> None:
     """E - E0 - W_applied - W_friction + D_damping at every point, O(h^2)."""
     ch = CASES["damped-walled"]

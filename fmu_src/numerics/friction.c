@@ -7,7 +7,10 @@
 
 #define TWO_PI (2.0 * DFO_PI)
 
-/* Earliest theta >= th0 with cos(theta) > lim, as an offset from th0; acos_lim = acos(lim). */
+/* Earliest theta >= th0 with cos(theta) > lim, as an offset from th0; acos_lim = acos(lim) for
+ * -1 <= lim < 1. lim = -1 (a limit that rounds to the static force's extreme, as a breakaway force
+ * below the rounding of the excitation) needs acos(-1) = pi, not 0: cos > -1 everywhere but at pi,
+ * so the offset is 0 (the force leaves the limit at once), never half a turn. */
 static double until_above(double th0, double lim, double acos_lim)
 {
     if (lim >= 1.0) return INFINITY;
@@ -28,8 +31,8 @@ double dfo_next_breakaway(const dfo_harmonic *P, const dfo_loads *L, double C0, 
     }
     const double lim_hi = (Fb - C0) / amp; /* F_static >  Fb  <=>  cos(theta)      > lim_hi */
     const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
-    const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
-    const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
+    const double acos_hi = (lim_hi >= -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
+    const double acos_lo = (lim_lo >= -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
     const double th = w * ta + P->phase;
     const double up = until_above(th, lim_hi, acos_hi), down = until_above(th + DFO_PI, lim_lo, acos_lo);
     *dir = (up <= down) ? 1 : -1;

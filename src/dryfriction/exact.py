@@ -60,6 +60,9 @@ _ROUND = 64.0 * _EPS        # relative rounding level used for the zero tests
 _GEOM_LEVELS = 45           # geometric grid u = h 2^-k, k = 1..45, at the start of a slip from rest
 _CHUNK0 = 64                # grid points in the first scan chunk of a slip (then doubling)
 _CHUNK_MAX = 4096
+# |z| below which phi1(z) = 1 + z / 2 to rounding (the next term z^2 / 6 < 2^-53); also where the
+# complex quotient (e^z - 1) / z would divide by a subnormal (numpy's overflows: zeta 1e-298)
+_PHI1_SERIES = 1e-9
 
 
 # --------------------------------------------------------------------------- public types
@@ -286,13 +289,13 @@ class _Lib:
         em_re = self.expm1(x) * self.cos(y) - 2.0 * self.sin(0.5 * y) ** 2
         em_im = self.exp(x) * self.sin(y)
         if self.scalar:
-            if x == 0.0 and y == 0.0:
-                return 1.0 + 0.0j
+            if abs(x) + abs(y) < _PHI1_SERIES:
+                return 1.0 + 0.5 * complex(x, y)
             return complex(em_re, em_im) / complex(x, y)
         den = x + 1j * y
-        zero = den == 0
-        res = (em_re + 1j * em_im) / np.where(zero, 1.0, den)
-        return np.where(zero, 1.0 + 0.0j, res)
+        small = np.abs(x) + np.abs(y) < _PHI1_SERIES
+        res = (em_re + 1j * em_im) / np.where(small, 1.0, den)
+        return np.where(small, 1.0 + 0.5 * den, res)
 
 
 _MATH = _Lib(math, True)
@@ -369,12 +372,18 @@ class _Slip:
 
 
 def _brentq(f: Any, a: float, b: float) -> float:
-    """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision."""
+    """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision.
+
+    The bracket comes from a scan evaluated on a vector; f here is evaluated on scalars, whose last
+    bits can differ: an end value within rounding of 0 may come back with the other sign. Then the
+    root is at that end (the end with the smaller |f|)."""
     fa, fb = f(a), f(b)
     if fa == 0.0:
         return a
     if fb == 0.0:
         return b
+    if (fa > 0.0) == (fb > 0.0):
+        return a if abs(fa) <= abs(fb) else b
     return float(brentq(f, a, b, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200))
 
 

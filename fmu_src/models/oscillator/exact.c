@@ -1015,7 +1015,7 @@ static double turn_of(const ex_ctx *C, dd t)
 }
 
 /* Earliest phase >= psi (in [0, 2 pi)) with cos > lim, as an offset from psi; acos_lim = acos(lim)
- * (friction.c's rule). */
+ * for -1 <= lim < 1 (friction.c's rule, acos(-1) = pi included). */
 static double until_above(double psi, double lim, double acos_lim)
 {
     if (lim >= 1.0) return INFINITY;
@@ -1043,8 +1043,8 @@ static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs
     }
     const double lim_hi = (Fb - C0) / amp; /* F_static >  Fb  <=>  cos(theta)      > lim_hi */
     const double lim_lo = (Fb + C0) / amp; /* F_static < -Fb  <=>  cos(theta + pi) > lim_lo */
-    const double acos_hi = (lim_hi > -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
-    const double acos_lo = (lim_lo > -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
+    const double acos_hi = (lim_hi >= -1.0 && lim_hi < 1.0) ? dfo_acos(lim_hi) : 0.0;
+    const double acos_lo = (lim_lo >= -1.0 && lim_lo < 1.0) ? dfo_acos(lim_lo) : 0.0;
     const double psi = turn_of(C, ta);
     double psi2 = psi + DFO_PI;
     if (psi2 >= TWO_PI) psi2 -= TWO_PI;
