@@ -230,7 +230,9 @@ def _os_error(e: OSError) -> str:
     return str(e)
 
 
-def _short(text: str, limit: int = 120) -> str:
+def _short(text: str, limit: int = 240) -> str:
+    """``text`` whole up to ``limit`` characters (every ordinary path), else its two ends and its
+    length (a name too long to be one, shown readably)."""
     return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 3:]} ({len(text)} characters)"
 
 
@@ -253,7 +255,7 @@ def _all_or_nothing(writer: Callable[[Any], Any], target: str | os.PathLike[str]
     except OSError as e:
         if interrupted():
             raise
-        raise OutputError(f"cannot write {_short(str(target), 80)}: {_cause(e)}; {kept}") from None
+        raise OutputError(f"cannot write {_short(str(target))}: {_cause(e)}; {kept}") from None
 
 
 def result_set(folder: str | os.PathLike[str]) -> AbstractContextManager[Path]:
@@ -318,7 +320,7 @@ def _cause(e: OSError) -> str:
 def _probe_error(option: str, path: Path, where: Path, e: OSError) -> Exception:
     from .argparsing import UsageError
 
-    return UsageError(f"{option} {_short(str(path), 80)}: cannot write in {_short(str(where), 80)} ({_cause(e)})")
+    return UsageError(f"{option} {_short(str(path))}: cannot write in {_short(str(where))} ({_cause(e)})")
 
 
 def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -> Path:
@@ -336,18 +338,18 @@ def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -
         raise UsageError(f"{option} must name a folder, not ''")
     _check_names(path, option, extra=len(".staging-") + 9)
     if path.exists() and not path.is_dir():
-        raise UsageError(f"{option} {_short(str(path), 80)} is a file, not a folder")
+        raise UsageError(f"{option} {_short(str(path))} is a file, not a folder")
     parent = path.parent
     where = nearest_existing(parent)
     if not where.is_dir():
-        raise UsageError(f"{option} {_short(str(path), 80)}: {_short(str(where), 80)} is a file, not a folder")
+        raise UsageError(f"{option} {_short(str(path))}: {_short(str(where))} is a file, not a folder")
     try:
         probe = tempfile.mkdtemp(dir=where, prefix=f".{path.name or 'out'}.staging-")
     except OSError as e:
         raise _probe_error(option, path, where, e) from None
     shutil.rmtree(probe, ignore_errors=True)
     if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):  # (the folder itself left untouched)
-        raise UsageError(f"{option} {_short(str(path), 80)}: cannot write in it (permission denied)")
+        raise UsageError(f"{option} {_short(str(path))}: cannot write in it (permission denied)")
     return path
 
 
@@ -363,10 +365,10 @@ def check_output_file(file: str | os.PathLike[str], option: str = "--out") -> Pa
         raise UsageError(f"{option} must name a file, not {str(file)!r}")
     _check_names(path, option, extra=len("..") + 8 + len(".tmp"))
     if path.is_dir():
-        raise UsageError(f"{option} {_short(str(path), 80)} is a folder, not a file")
+        raise UsageError(f"{option} {_short(str(path))} is a folder, not a file")
     where = nearest_existing(path.parent)
     if not where.is_dir():
-        raise UsageError(f"{option} {_short(str(path), 80)}: {_short(str(where), 80)} is a file, not a folder")
+        raise UsageError(f"{option} {_short(str(path))}: {_short(str(where))} is a file, not a folder")
     try:
         fd, probe = tempfile.mkstemp(dir=where, prefix=f".{path.name}.", suffix=".tmp")
     except OSError as e:
