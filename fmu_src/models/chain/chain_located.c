@@ -4,6 +4,7 @@
  * See chain_internal.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_internal.h"
+#include "roots.h"
 
 #include <string.h>
 
@@ -300,7 +301,7 @@ static double ramp_breakaway(const chain_model *M, const chain_state *s, size_t 
     const double g0 = ramp_gap(M, s, i, ta, side);
     if (g0 >= 0.0) return ta;
     block_gap_ctx g = {M, s, NULL, i, side};
-    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+    return ta + dfo_root_bracketed(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
 /* Block i's neighbours are at rest (held, or frozen inside the span) */
@@ -362,7 +363,7 @@ static double belt_breakaway(const chain_model *M, const chain_state *s, const d
         const double g0 = belt_gap(M, s, vb, i, ta, sd);
         if (g0 >= 0.0) return ta;
         block_gap_ctx g = {M, s, vb, i, sd};
-        return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
+        return ta + dfo_root_bracketed(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
     }
     return INFINITY;
 }
@@ -512,7 +513,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
             continue;
         }
         const double ta = s->t;
-        const double hs = dfo_brent(min_margin, &mc, ta, lo, glo, hi, ghi);
+        const double hs = dfo_root_bracketed(min_margin, &mc, ta, lo, glo, hi, ghi);
         const double t1 = (hs >= r) ? t_end : ta + hs;
         double c1w, s1w;
         if (hs >= r) chain_phase_of(M, s, t_end, &c1w, &s1w);

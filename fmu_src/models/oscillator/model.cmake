@@ -6,7 +6,7 @@ set(MODEL_DESCRIPTION ${CMAKE_SOURCE_DIR}/modelDescription.xml)
 set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
-    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
+    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h numerics/roots.c numerics/roots.h
     models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/newmark.c
     models/oscillator/newmark.h models/oscillator/exact.c models/oscillator/exact.h
     models/oscillator/exact_free.c models/oscillator/exact_free.h)

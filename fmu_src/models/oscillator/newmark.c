@@ -4,6 +4,7 @@
 #include "dmath.h"
 
 #include "bossak.h"
+#include "roots.h"
 #include "exact.h"
 #include "friction.h"
 #include "lcp.h"
@@ -253,7 +254,7 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
 /* A sliding step in direction dir (dir (V1 - vb) > 0) with the friction law: the relative speed u =
  * dir (V1 - vb) at its end, the root of m_hat u = q - N mu(u), q = dir (p_hat - m_hat vb) (coulomb:
  * closed form). Where no root u > 0 exists (q <= N mu(0)) it returns (q - N mu(0)) / m_hat <= 0, so
- * that the value is continuous in the step length and its sign tells a stop (dfo_brent's root).
+ * that the value is continuous in the step length and its sign tells a stop (dfo_root_bracketed's root).
  * The root is dfo_stribeck_speed's (friction.h), the chain's too. */
 static double slide_value(const step_ctx *C, const dfo_loads *L, const trial *tr, int dir)
 {
@@ -501,7 +502,7 @@ static COLD double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, do
     dfo_state at = *s;
     at.t = ta;
     ramp_gap_ctx g = {C, &at, side};
-    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+    return ta + dfo_root_bracketed(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
 /* Riding on the belt from (ta, Xa): side times the static force beyond the limit at t (> 0: broken
@@ -541,7 +542,7 @@ static COLD double belt_breakaway(const step_ctx *C, dfo_state *s, double ta, do
         *dir = sd;
         const double g0 = belt_gap(&g, ta);
         if (g0 >= 0.0) return ta;
-        return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
+        return ta + dfo_root_bracketed(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
     }
     return INFINITY;
 }
@@ -603,7 +604,7 @@ static COLD void ramp_restart(step_ctx *C, dfo_state *s, int breakaway_dir)
     C->friction = friction_end;
 }
 
-/* dir V1 of a sliding step of length h, as a root function for dfo_brent. */
+/* dir V1 of a sliding step of length h, as a root function for dfo_root_bracketed. */
 typedef struct {
     const step_ctx *C;
     const dfo_state *s;
@@ -616,11 +617,11 @@ static double slide_root_fn(void *ctx, double h)
     return slide_velocity(r->C, r->s, h, &tr);
 }
 
-/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method (bossak.h) to a few ulps of t + h. */
+/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method (roots.h) to a few ulps of t + h. */
 static double stop_length(const step_ctx *C, const dfo_state *s, double lo, double flo, double hi, double fhi)
 {
     slide_root r = {C, s};
-    return dfo_brent(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
+    return dfo_root_bracketed(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
 }
 
 /* The located scheme's step. general: the belt and the Stribeck law may act; 0 for the plain
