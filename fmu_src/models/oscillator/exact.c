@@ -2,6 +2,7 @@
  * and method.md sections 5 and 10. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact.h"
+#include "ddouble.h"
 #include "dmath.h"
 #include "exact_free.h"
 
@@ -36,46 +37,8 @@
 #define SCALE_MAX 1000             /* |log2| of the length scale at most (a power of 2 that is a normal double) */
 #define SCALED_MAX 0x1p400         /* a scaled length beyond this: the motion leaves the double range */
 
-/* Double-double constants: pi/2, pi, 2 pi (hi + lo to 107 bits). */
-static const double PIO2_HI = 0x1.921fb54442d18p+0, PIO2_LO = 0x1.1a62633145c07p-54;
-static const double PI_HI = 0x1.921fb54442d18p+1, PI_LO = 0x1.1a62633145c07p-53;
-static const double TWOPI_HI = 0x1.921fb54442d18p+2, TWOPI_LO = 0x1.1a62633145c07p-52;
-
-/* A time or an angle as a double-double hi + lo (|lo| <= ulp(hi) / 2). Inside a call the events'
- * times are kept so: a time rounded to a double at every event would shift the motion against the
- * excitation by an ulp of t each time (omega ulp(t) relative, growing with t), and the same run cut
- * into other communication steps would round elsewhere. A call starts and ends on the host's
- * times, which are doubles. */
-typedef struct {
-    double hi, lo;
-} dd;
-
-static inline dd dd_of(double hi, double lo)
-{
-    dd r;
-    dfo_two_sum(hi, lo, &r.hi, &r.lo);
-    return r;
-}
-
-static inline dd dd_add(dd a, dd b)
-{
-    dd r;
-    double e;
-    dfo_two_sum(a.hi, b.hi, &r.hi, &e);
-    e += a.lo + b.lo;
-    dfo_fast_two_sum(r.hi, e, &r.hi, &r.lo);
-    return r;
-}
-
-/* a + d / w (a time plus a span of tau or of phase over its rate) */
-static inline dd dd_add_quot(dd a, double d, double d_lo, double w)
-{
-    const double q = d / w, p = q * w;
-    const double q_lo = (((d - p) - dfo_two_prod_err(q, w, p)) + d_lo) / w;
-    return dd_add(a, dd_of(q, q_lo));
-}
-
-static inline int dd_lt(dd a, dd b) { return a.hi < b.hi || (a.hi == b.hi && a.lo < b.lo); }
+/* Inside a call the events' times are double-doubles (ddouble.h); a call starts and ends on the
+ * host's times, which are doubles. */
 
 /* What is constant over one call. Lengths are in units of the length scale Ls (a power of 2, so the
  * scaling is exact): the motion's squares never overflow or underflow, whatever its size. */
@@ -86,7 +49,7 @@ typedef struct {
     double Ls, iLs;               /* the length scale and its inverse */
     double fP, fF;                /* |P0| / Ls, F_ext / Ls */
     double omega;                 /* excitation angular frequency */
-    dd ph;                        /* the excitation phase at t = 0 (phi, + pi when P0 < 0), reduced mod 2 pi */
+    dfo_dd ph;                        /* the excitation phase at t = 0 (phi, + pi when P0 < 0), reduced mod 2 pi */
     double k, w0, zeta, lam, a;   /* a = |P0| / (k Ls) */
     int near_crit;                /* wd or wh below NEAR_CRIT: the free part's bounds without 1 / wd, 1 / wh */
     int modal;                    /* over-damped away from critical: the derivatives from the two modes */
@@ -152,15 +115,7 @@ typedef struct {
 
 /* The excitation's phase at t = 0: phi mod 2 pi exactly (a large phi keeps its phase), then + pi for
  * a negative amplitude. */
-static dd phase0(const dfo_params *p)
-{
-    double rh, rl;
-    const int q = dfo_rem_pio2(p->phi, 0.0, &rh, &rl);
-    const double n = (q == 3) ? -1.0 : (double)q; /* n pi/2 + r, n in -1 ... 2: |phase| <= 5 pi / 4 */
-    dd ph = dd_add(dd_of(rh, rl), dd_of(n * PIO2_HI, n * PIO2_LO));
-    if (p->P0 < 0.0) ph = dd_add(ph, dd_of(-PI_HI, -PI_LO));
-    return ph;
-}
+static dfo_dd phase0(const dfo_params *p) { return dfo_dd_phase0(p->phi, p->P0 < 0.0); }
 
 /* The length scale: the loads over Ls, and what depends on them. */
 static void ctx_scale(ex_ctx *C, int e)
@@ -257,25 +212,17 @@ static void ctx_init_scaled(ex_ctx *C, const dfo_model *M, const dfo_inputs *in,
 
 /* The excitation phase omega t + phase at the time t (a double-double): exact to rounding for any t
  * and phi (the product omega t and the sum carried as double-doubles). */
-static inline dd theta_at(const ex_ctx *C, dd t)
-{
-    const double p = C->omega * t.hi;
-    dd th; /* (not renormalised: dfo_rem_pio2 takes any small tail) */
-    double e;
-    dfo_two_sum(p, C->ph.hi, &th.hi, &e);
-    th.lo = e + ((dfo_two_prod_err(C->omega, t.hi, p) + C->omega * t.lo) + C->ph.lo);
-    return th;
-}
+static inline dfo_dd theta_at(const ex_ctx *C, dfo_dd t) { return dfo_dd_theta(C->omega, C->ph, t); }
 
 /* cos, sin of the excitation phase at t */
-static inline void phase_at(const ex_ctx *C, dd t, double *c, double *s)
+static inline void phase_at(const ex_ctx *C, dfo_dd t, double *c, double *s)
 {
-    const dd th = theta_at(C, t);
+    const dfo_dd th = theta_at(C, t);
     dfo_sincos_dd(th.hi, th.lo, s, c);
 }
 
 /* The static force (over Ls) at rest at Xs at t: |P0| cos theta + F_ext - k X. */
-static double static_force(const ex_ctx *C, dd t, double Xs)
+static double static_force(const ex_ctx *C, dfo_dd t, double Xs)
 {
     double c, sn;
     phase_at(C, t, &c, &sn);
@@ -284,7 +231,7 @@ static double static_force(const ex_ctx *C, dd t, double Xs)
 
 /* The polynomial inputs' force F_ext(t) - s mu_k N(t) over Ls at ta and its two derivatives (in t);
  * the normal force N(t) (physical) likewise. */
-static void poly_force(const ex_ctx *C, dd ta, int s, double g[3], double n[3])
+static void poly_force(const ex_ctx *C, dfo_dd ta, int s, double g[3], double n[3])
 {
     const double q = (ta.hi - C->q_t0) + ta.lo, muk = C->M->mu_k;
     n[0] = C->qN[0] + q * (C->qN[1] + 0.5 * q * C->qN[2]);
@@ -300,7 +247,7 @@ static void poly_force(const ex_ctx *C, dd ta, int s, double g[3], double n[3])
  * m x'' + c x' + k x = g0 + g1 q + g2 q^2 / 2 (q = t - ta) is solved by x = p0 + p1 q + p2 q^2 / 2 with
  * k p2 = g2, k p1 + c p2 = g1, k p0 + c p1 + m p2 = g0; in tau = w0 q: xc = p0, xp1 = p1 / w0, xp2 = p2 / w0^2.
  * The rest of the motion, y = x - x_p, solves the phase's equation y'' + 2 zeta y' + y = a cos(theta). */
-static void poly_particular(const ex_ctx *C, ex_phase *P, dd ta, int s)
+static void poly_particular(const ex_ctx *C, ex_phase *P, dfo_dd ta, int s)
 {
     double g[3], n[3];
     poly_force(C, ta, s, g, n);
@@ -317,7 +264,7 @@ static void poly_particular(const ex_ctx *C, ex_phase *P, dd ta, int s)
 
 /* X, V in the scaled units; ta the start time; cs: cos, sin of the excitation phase at ta when known
  * (carried over a reversal), else NULL: from the absolute time. */
-static void phase_start(const ex_ctx *C, ex_phase *P, dd ta, double X, double V, int s, const double *cs)
+static void phase_start(const ex_ctx *C, ex_phase *P, dfo_dd ta, double X, double V, int s, const double *cs)
 {
     const double z = C->zeta, lam = C->lam, a = C->a;
     P->s = s;
@@ -387,7 +334,7 @@ static inline void belt_shift(const ex_ctx *C, ex_phase *P)
 
 static inline void phase_init(const ex_ctx *C, ex_phase *P, double ta, double X, double V, int s)
 {
-    phase_start(C, P, dd_of(ta, 0.0), X, V, s, NULL);
+    phase_start(C, P, dfo_dd_of(ta, 0.0), X, V, s, NULL);
 }
 
 /* phi1(x + i y) = (e^z - 1) / z without cancellation (x <= 0). */
@@ -1005,12 +952,12 @@ static double phase_x(const void *ctx, const void *phase, double t)
 
 /* The excitation phase at t reduced to psi in [0, 2 pi) (to a few ulps of 2 pi: the reduction is of
  * the double-double phase, so its error does not grow with t). */
-static double turn_of(const ex_ctx *C, dd t)
+static double turn_of(const ex_ctx *C, dfo_dd t)
 {
-    const dd th = theta_at(C, t);
+    const dfo_dd th = theta_at(C, t);
     double rh, rl;
     const int q = dfo_rem_pio2(th.hi, th.lo, &rh, &rl);
-    const double psi = q * PIO2_HI + (rh + (q * PIO2_LO + rl));
+    const double psi = q * DFO_PIO2_HI + (rh + (q * DFO_PIO2_LO + rl));
     return (psi < 0.0) ? psi + TWO_PI : psi;
 }
 
@@ -1021,7 +968,7 @@ static double until_above(double psi, double lim, double acos_lim)
     if (lim >= 1.0) return INFINITY;
     if (lim < -1.0) return 0.0;
     if (psi < acos_lim || psi > TWO_PI - acos_lim) return 0.0;
-    return (TWOPI_HI - acos_lim - psi) + TWOPI_LO;
+    return (DFO_TWOPI_HI - acos_lim - psi) + DFO_TWOPI_LO;
 }
 
 /* While stuck at Xs the static force is |P0| cos theta(t) + C0 (C0 = F_ext - k X, over Ls): the first
@@ -1030,7 +977,7 @@ static double until_above(double psi, double lim, double acos_lim)
  * is a few ulps of 2 pi whatever t, so a run cut into other communication steps finds the same time
  * to rounding). {INFINITY, 0}: none. cs[0], cs[1]: cos and sin of the excitation phase there when it
  * is a crossing later than ta (cos theta = the limit: known without evaluating), else cs[0] = NaN. */
-static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs)
+static dfo_dd next_breakaway(const ex_ctx *C, double Xs, dfo_dd ta, int *dir, double *cs)
 {
     cs[0] = NAN;
     const double Fb = C->Ls_.Fb, C0 = C->fF - C->k * Xs, amp = C->fP, w = C->omega;
@@ -1038,7 +985,7 @@ static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs
         const double F = static_force(C, ta, Xs);
         *dir = dfo_sign(F);
         if (fabs(F) > Fb) return ta;
-        const dd never = {INFINITY, 0.0};
+        const dfo_dd never = {INFINITY, 0.0};
         return never;
     }
     const double lim_hi = (Fb - C0) / amp; /* F_static >  Fb  <=>  cos(theta)      > lim_hi */
@@ -1052,7 +999,7 @@ static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs
     *dir = (up <= down) ? 1 : -1;
     const double off = fmin(up, down);
     if (!isfinite(off)) {
-        const dd never = {INFINITY, 0.0};
+        const dfo_dd never = {INFINITY, 0.0};
         return never;
     }
     if (off > 0.0) { /* cos theta rises through lim_hi (sin < 0), or cos(theta + pi) through lim_lo */
@@ -1060,25 +1007,25 @@ static dd next_breakaway(const ex_ctx *C, double Xs, dd ta, int *dir, double *cs
         cs[0] = (*dir > 0) ? l : -l;
         cs[1] = (*dir > 0) ? -sn : sn;
     }
-    return dd_add_quot(ta, off, 0.0, w);
+    return dfo_dd_add_quot(ta, off, 0.0, w);
 }
 
 /* The next breakaway of the stick phase at Xs from ta (kept in *tb for the stick phase: valid while
  * tb->hi is not NaN). With skip, a breakaway at ta itself (a limit touched, not crossed: the slide
  * just tried did not start) is passed over: the search restarts a little later, further each time,
  * until it finds a later one. */
-static dd breakaway(const ex_ctx *C, double Xs, dd ta, int skip, dd *tb, int *dir, double *cs)
+static dfo_dd breakaway(const ex_ctx *C, double Xs, dfo_dd ta, int skip, dfo_dd *tb, int *dir, double *cs)
 {
-    if (isnan(tb->hi) || (skip && !dd_lt(ta, *tb))) {
-        dd b = next_breakaway(C, Xs, ta, dir, cs);
+    if (isnan(tb->hi) || (skip && !dfo_dd_lt(ta, *tb))) {
+        dfo_dd b = next_breakaway(C, Xs, ta, dir, cs);
         if (skip) {
             double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
-            for (int i = 0; i < 200 && !dd_lt(dd_add(ta, dd_of(d, 0.0)), b) && isfinite(b.hi); i++, d *= 2.0)
-                b = next_breakaway(C, Xs, dd_add(ta, dd_of(d, 0.0)), dir, cs);
+            for (int i = 0; i < 200 && !dfo_dd_lt(dfo_dd_add(ta, dfo_dd_of(d, 0.0)), b) && isfinite(b.hi); i++, d *= 2.0)
+                b = next_breakaway(C, Xs, dfo_dd_add(ta, dfo_dd_of(d, 0.0)), dir, cs);
         }
         *tb = b;
     }
-    if (!dd_lt(ta, *tb)) {
+    if (!dfo_dd_lt(ta, *tb)) {
         cs[0] = NAN; /* at ta itself: the phase from the time */
         return ta;
     }
@@ -1147,8 +1094,6 @@ void dfo_sens_breakaway(double J[4], double coef)
 }
 
 /* The duration b - a of two double-double times, to rounding of the difference. */
-static inline double dd_span(dd a, dd b) { return (b.hi - a.hi) + (b.lo - a.lo); }
-
 /* The phases from s to t_target with the inputs held (the loop below the polynomial inputs' helpers). */
 static dfo_status advance(ex_ctx *C, dfo_state *s, double t_target);
 
@@ -1164,17 +1109,6 @@ long long dfo_exact_grid_index(const dfo_model *M, const dfo_state *s)
 }
 
 static inline void ctx_init(ex_ctx *C, const dfo_model *M, const dfo_inputs *in) { ctx_init_scaled(C, M, in, 0); }
-
-double dfo_exact_excitation(const dfo_model *M, double t)
-{
-    ex_ctx C; /* only what theta_at reads */
-    C.omega = M->p.omega;
-    C.ph = phase0(&M->p);
-    const dd tt = {t, 0.0};
-    double c, sn;
-    phase_at(&C, tt, &c, &sn);
-    return M->P_amp * c;
-}
 
 /* The length scale's exponent for this call: of the largest length of the motion (|P0|, |F_ext|, the
  * breakaway limit over k; |X|; |V| / w0), from the exponents alone (no quotient can overflow),
@@ -1253,7 +1187,7 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
     s->n = dfo_exact_grid_index(M, s);
     s->hA = 0.0;
     if (st != DFO_OK) return st;
-    const dd te = {s->t, 0.0};
+    const dfo_dd te = {s->t, 0.0};
     return end_state(&C, s, &C.Ls_, static_force(&C, te, s->X * C.iLs));
 }
 
@@ -1269,7 +1203,7 @@ dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state 
  * the zeros of N + N_ext(t) (or 0): the call is cut there (not an event). */
 
 /* The loads (over Ls) at t, with the rates of F_ext and F_b (over Ls, per s) in *dF, *dFb. */
-static void poly_loads(const ex_ctx *C, dd t, dfo_loads *L, double *dF, double *dFb)
+static void poly_loads(const ex_ctx *C, dfo_dd t, dfo_loads *L, double *dF, double *dFb)
 {
     const double q = (t.hi - C->q_t0) + t.lo, iLs = C->iLs;
     const double F = C->qF[0] + q * (C->qF[1] + 0.5 * q * C->qF[2]);
@@ -1280,7 +1214,7 @@ static void poly_loads(const ex_ctx *C, dd t, dfo_loads *L, double *dF, double *
 }
 
 /* The static force (over Ls) at rest at Xs at t with the loads there, and its rate (per s) in *dS. */
-static double poly_static_force(const ex_ctx *C, dd t, double Xs, dfo_loads *L, double *dS, double *dFb)
+static double poly_static_force(const ex_ctx *C, dfo_dd t, double Xs, dfo_loads *L, double *dS, double *dFb)
 {
     double c, sn, dF;
     phase_at(C, t, &c, &sn);
@@ -1292,19 +1226,19 @@ static double poly_static_force(const ex_ctx *C, dd t, double Xs, dfo_loads *L, 
 /* The first time in [ta, tend) at which the stick phase at Xs breaks away (|S| > F_b, or within
  * rounding of it and not receding), with the side in *dir, the rates of S and F_b there in *dS, *dFb and
  * *at_start = 1 when it is ta itself with the force beyond the limit (no crossing); tend when none. */
-static dd poly_breakaway_from(const ex_ctx *C, double Xs, dd ta, dd tend, int *dir, int *at_start, double *dS,
+static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int *dir, int *at_start, double *dS,
                               double *dFb)
 {
     const double iLs = C->iLs, mub = C->M->mu_b;
     const double B = BOUND_SAFETY * (C->fP * C->omega * C->omega + (fabs(C->qF[2]) + mub * fabs(C->qN[2])) * iLs);
-    dd t = ta;
+    dfo_dd t = ta;
     *at_start = 0;
     for (long it = 0; it < MAX_SEARCH; it++) {
         dfo_loads L;
         double S1, Fb1;
         /* on a belt the block rides on it, X = Xs + vbs (t - ta): the holding force S - c vbs drifts with
          * -k vbs (a ramp: |g''| is bounded by B as without the belt) */
-        const double Xt = C->belt ? Xs + C->vbs * dd_span(ta, t) : Xs;
+        const double Xt = C->belt ? Xs + C->vbs * dfo_dd_span(ta, t) : Xs;
         double S = poly_static_force(C, t, Xt, &L, &S1, &Fb1);
         if (C->belt) {
             S -= C->M->p.c * C->vbs;
@@ -1325,9 +1259,9 @@ static dd poly_breakaway_from(const ex_ctx *C, double Xs, dd ta, dd tend, int *d
             return t;
         }
         const double d = fmin(safe_step(gp, gp1, B), safe_step(gm, gm1, B));
-        const dd tn = dd_add(t, dd_of(d, 0.0));
-        if (!dd_lt(tn, tend)) return tend;
-        if (!dd_lt(t, tn)) { /* no progress: on the limit to the resolution of t */
+        const dfo_dd tn = dfo_dd_add(t, dfo_dd_of(d, 0.0));
+        if (!dfo_dd_lt(tn, tend)) return tend;
+        if (!dfo_dd_lt(t, tn)) { /* no progress: on the limit to the resolution of t */
             *dir = (gp <= gm) ? 1 : -1;
             return t;
         }
@@ -1339,17 +1273,17 @@ static dd poly_breakaway_from(const ex_ctx *C, double Xs, dd ta, dd tend, int *d
 
 /* The next breakaway from ta; with skip, one at ta itself (a slide just tried did not start) is passed
  * over: the search restarts a little later, further each time, until it finds a later one. */
-static dd poly_breakaway(const ex_ctx *C, double Xs, dd ta, dd tend, int skip, int *dir, int *at_start, double *dS,
+static dfo_dd poly_breakaway(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int skip, int *dir, int *at_start, double *dS,
                          double *dFb)
 {
-    dd b = poly_breakaway_from(C, Xs, ta, tend, dir, at_start, dS, dFb);
-    if (skip && !dd_lt(ta, b)) {
+    dfo_dd b = poly_breakaway_from(C, Xs, ta, tend, dir, at_start, dS, dFb);
+    if (skip && !dfo_dd_lt(ta, b)) {
         double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
         for (int i = 0; i < 200; i++, d *= 2.0) {
-            const dd t1 = dd_add(ta, dd_of(d, 0.0));
-            if (!dd_lt(t1, tend)) return tend;
+            const dfo_dd t1 = dfo_dd_add(ta, dfo_dd_of(d, 0.0));
+            if (!dfo_dd_lt(t1, tend)) return tend;
             b = poly_breakaway_from(C, Xs, t1, tend, dir, at_start, dS, dFb);
-            if (dd_lt(t1, b)) break;
+            if (dfo_dd_lt(t1, b)) break;
         }
     }
     return b;
@@ -1461,7 +1395,7 @@ static void belt_turns(const ex_ctx *C, const ex_phase *P, double ua, double ub,
         ex_val z;
         for (int k = 0; k < 2 && r == SEARCH_NULL; k++, dir = -dir) {
             ex_phase Q;
-            phase_start(&D, &Q, dd_add_quot(dd_of(P->ta, 0.0), u, 0.0, w0), X, w0 * va, P->s, NULL);
+            phase_start(&D, &Q, dfo_dd_add_quot(dfo_dd_of(P->ta, 0.0), u, 0.0, w0), X, w0 * va, P->s, NULL);
             Q.s = dir; /* the motion of P (its friction), searched for the zero of dir v */
             r = find_stop(&D, &Q, X - Q.xc, va, ub - u, &z);
         }
@@ -1525,15 +1459,15 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
     double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
     double stick_cs[2] = {NAN, 0.0}; /* held: the phase at the stick phase's breakaway (NaN: from the time) */
     const double Ls = C->Ls, w0 = C->w0;
-    const dd target = {t_target, 0.0};
-    dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
+    const dfo_dd target = {t_target, 0.0};
+    dfo_dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
     double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
     const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
     const int belt = poly && C->belt;     /* a moving belt (its calls take the polynomial inputs' loop) */
     const double cvb = belt ? C->M->p.c * C->vbs : 0.0; /* riding on the belt, the damper pulls with c vb */
     const int fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0))
                           : C->Ls_.Fb > 0.0;
-    while (dd_lt(t, target)) {
+    while (dfo_dd_lt(t, target)) {
         if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
         if (t.hi == t_last.hi && t.lo == t_last.lo) {
             if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
@@ -1569,7 +1503,7 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
         if (s->mode == 0) {
             int dir = 0, at_start = 0;
             double dS = 0.0, dFb = 0.0;
-            dd tb;
+            dfo_dd tb;
             if (poly) {
                 tb = poly_breakaway(C, Xs, t, target, skip, &dir, &at_start, &dS, &dFb);
             } else {
@@ -1579,9 +1513,9 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
             }
             skip = 0;
             if (sens) dfo_sens_stick(s->J);
-            if (!dd_lt(tb, target)) {
+            if (!dfo_dd_lt(tb, target)) {
                 if (belt) { /* riding on the belt to the end */
-                    Xs += C->vbs * dd_span(t, target);
+                    Xs += C->vbs * dfo_dd_span(t, target);
                     s->X = Xs * Ls;
                     if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
                 }
@@ -1591,7 +1525,7 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
                 break;
             }
             if (belt) {
-                Xs += C->vbs * dd_span(t, tb);
+                Xs += C->vbs * dfo_dd_span(t, tb);
                 s->X = Xs * Ls;
                 if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
             }
@@ -1648,8 +1582,8 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
             s->X = Xs * Ls;
             s->V = Vs * Ls;
             if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-            const dd tc = cut ? dd_add_quot(t, u_end, 0.0, w0) : target;
-            if (sens) dfo_sens_slide(C->M, dd_span(t, tc), s->J);
+            const dfo_dd tc = cut ? dfo_dd_add_quot(t, u_end, 0.0, w0) : target;
+            if (sens) dfo_sens_slide(C->M, dfo_dd_span(t, tc), s->J);
             carried = 0;
             s->t = tc.hi;
             after_phase(C, poly, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
@@ -1657,10 +1591,10 @@ static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double 
             if (cut) continue;
             break;
         }
-        dd ts = dd_add_quot(t, v.u, 0.0, w0);
-        if (dd_lt(target, ts)) ts = target;
-        const int at_end = !dd_lt(ts, target);
-        if (sens) dfo_sens_slide(C->M, dd_span(t, ts), s->J);
+        dfo_dd ts = dfo_dd_add_quot(t, v.u, 0.0, w0);
+        if (dfo_dd_lt(target, ts)) ts = target;
+        const int at_end = !dfo_dd_lt(ts, target);
+        if (sens) dfo_sens_slide(C->M, dfo_dd_span(t, ts), s->J);
         t = ts;
         s->t = ts.hi;
         Xs = P.xc + v.y;
@@ -1866,7 +1800,7 @@ static dfo_status poly_core(const dfo_model *M, const dfo_inputs *u, const dfo_i
     s->hA = 0.0;
     if (st != DFO_OK) return st;
     piece_normal(n0, n1, n2, t_target - q->t0, C.qN); /* the loads at the end: the piece there */
-    const dd te = {s->t, 0.0};
+    const dfo_dd te = {s->t, 0.0};
     dfo_loads L;
     const double S = poly_static_force(&C, te, s->X * C.iLs, &L, NULL, NULL);
     if (C.belt && s->mode == 0) { /* riding on the belt: the friction holds S - c vb */

@@ -45,7 +45,7 @@
  *
  * The step h has no effect on the results. It keeps only its bookkeeping roles: the grid index n
  * (t0 + n h <= t < t0 + (n + 1) h, checked when a state is loaded). The work of one call is bounded by
- * its events (DFO_EXACT_MAX_EVENTS, newmark.h), not by h. The counter `steps` counts events.
+ * its events (DFO_EXACT_MAX_EVENTS, below), not by h. The counter `steps` counts events.
  *
  * A moving belt (v_belt != 0, held; friction_law coulomb): a slide's motion does not depend on the belt,
  * only its end, the zero of s (v - v_belt) (the phase's velocity written relative to the belt, its
@@ -62,8 +62,18 @@
 #ifndef DFO_EXACT_H
 #define DFO_EXACT_H
 
-#include "newmark.h"
 #include "oscillator.h"
+#include "scheme_state.h"
+
+/* The exact scheme's work bound: the events (stops, reversals, breakaways, touches) one call of
+ * dfo_advance may take, i.e. one communication step. It takes no step h, so its work is counted in
+ * events, not in 1e9 h as the Bossak schemes' (DFO_MAX_STEPS_PER_CALL): 1e8 events are 25 million
+ * periods of a block that sticks and slips twice per period, or 50 million of a frictionless one,
+ * some 10 to 60 s of one core (0.1-0.6 us per event); a communication step that needs more is
+ * refused with DFO_ERR_EVENTS, never an endless loop. (Defined before the include to try it smaller.) */
+#ifndef DFO_EXACT_MAX_EVENTS
+#define DFO_EXACT_MAX_EVENTS 100000000LL
+#endif
 
 /* For exact.c and exact_free.c: the event loop is compiled once for each kind of inputs (held,
  * polynomial: a constant in each), so that the loop of held inputs carries none of the polynomial
@@ -74,7 +84,7 @@
 #define DFO_EXACT_INLINE inline
 #endif
 
-/* Advance to t_target > s->t with the inputs held: the contract of dfo_advance. */
+/* Advance to t_target > s->t with the inputs held: the contract of dfo_advance (scheme.h). */
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);
 
@@ -112,11 +122,6 @@ const char *dfo_exact_poly_unsupported(const dfo_model *M);
  * it first, naming the variable). */
 dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx);
-
-/* The excitation P0 cos(omega t + phi) as the exact scheme evaluates it: phi reduced mod 2 pi
- * exactly and omega t + phi carried as a double-double, so exact to rounding for any t and phi
- * (newmark.c's outputs a and F_friction of the exact scheme use it). */
-double dfo_exact_excitation(const dfo_model *M, double t);
 
 /* The grid index of s->t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks when a
  * state is loaded), shared by exact.c and exact_free.c. */

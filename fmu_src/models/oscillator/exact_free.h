@@ -44,8 +44,8 @@
 #define DFO_EXACT_FREE_H
 
 #include "exact.h"
-#include "newmark.h"
 #include "oscillator.h"
+#include "scheme_state.h"
 
 /* Advance to t_target > s->t with the inputs held, for a model with k = 0: the contract of
  * dfo_exact_advance (exact.h). */

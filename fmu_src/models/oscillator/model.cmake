@@ -5,9 +5,10 @@ set(MODEL_ID DryFrictionOscillator)
 set(MODEL_DESCRIPTION ${CMAKE_SOURCE_DIR}/modelDescription.xml)
 set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
-set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
-    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
-    models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/newmark.c
+set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/ddouble.h numerics/lcp.c
+    numerics/lcp.h numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
+    models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/scheme_state.h
+    models/oscillator/scheme.c models/oscillator/scheme.h models/oscillator/newmark.c
     models/oscillator/newmark.h models/oscillator/exact.c models/oscillator/exact.h
     models/oscillator/exact_free.c models/oscillator/exact_free.h)
 # the instance core (core/instance.h's model API)

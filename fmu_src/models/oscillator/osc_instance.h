@@ -7,7 +7,7 @@
 #define DFO_OSC_INSTANCE_H
 
 #include "instance.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 
 typedef struct {
