@@ -18,7 +18,7 @@
  * sigma = N, z = x. */
 #include "check.h"
 #include "scheme.h"
-#include "exact.c"
+#include "exact_spring.c"
 
 #include <stdio.h>
 #include <string.h>

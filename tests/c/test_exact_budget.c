@@ -7,7 +7,7 @@
 #include "check.h"
 #include "scheme.h"
 #include "osc_params.h"
-#include "exact.c"
+#include "exact_spring.c"
 
 #include <stdio.h>
 #include <string.h>

@@ -11,6 +11,7 @@
 #include "scheme.h"
 #include "osc_params.h"
 #include "exact.h"
+#include "exact_sens.h"
 
 #include <math.h>
 #include <stdio.h>
