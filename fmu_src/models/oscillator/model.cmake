@@ -16,7 +16,9 @@ set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/d
     models/oscillator/exact_observe.c models/oscillator/exact_observe.h models/oscillator/exact_sens.c
     models/oscillator/exact_sens.h)
 # the instance core (core/instance.h's model API)
-set(MODEL_CORE models/oscillator/osc_instance.c models/oscillator/osc_instance.h)
+set(MODEL_CORE models/oscillator/osc_instance.c models/oscillator/osc_instance.h models/oscillator/osc_inst_vars.c
+    models/oscillator/osc_inst_step.c models/oscillator/osc_inst_events.c models/oscillator/osc_inst_state.c
+    models/oscillator/osc_inst_deriv.c)
 # FMI 2.0: the description as written (no structural parameters), no build configuration header
 set(MODEL_FMI2_SIZE "")
 set(MODEL_CONFIG_HEADER "")
