@@ -9,7 +9,7 @@
 #include "engine.h"
 
 #include "chain.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "osc_params.h"
 
 #include <math.h>

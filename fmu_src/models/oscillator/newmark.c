@@ -5,7 +5,6 @@
 
 #include "bossak.h"
 #include "roots.h"
-#include "exact.h"
 #include "friction.h"
 #include "lcp.h"
 
@@ -804,7 +803,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
     make_ctx(&C, M, in);
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t0, phi) */
         C.t_grid = t0;
-        C.P_grid = dfo_exact_excitation(M, t0);
+        C.P_grid = dfo_excitation_exact(M, t0);
     }
     const dfo_state zero = {0};
     *s = zero;
@@ -948,20 +947,9 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
     return DFO_OK;
 }
 
-dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
-                       dfo_switch_fn on_switch, void *switch_ctx)
+dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
+                              dfo_switch_fn on_switch, void *switch_ctx)
 {
-    /* the exact scheme (exact.c) has no grid to snap to: it ends exactly on the host's time, where its
-     * closed form is exact (two hosts whose clocks differ by rounding get the motion at their times) */
-    if (M->p.scheme == DFO_SCHEME_EXACT) {
-        if (!in->ramp) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
-        /* varying inputs: its closed form with the input polynomials (the values at t_d held apart) */
-        dfo_inputs held = *in;
-        const dfo_input_poly q = {in->t_d, {in->F_ext_d[0], in->F_ext_d[1]}, {in->N_ext_d[0], in->N_ext_d[1]}};
-        held.F_ext_d[0] = held.F_ext_d[1] = held.N_ext_d[0] = held.N_ext_d[1] = 0.0;
-        held.ramp = 0;
-        return dfo_exact_advance_poly(M, &held, &q, s, t_target, on_switch, switch_ctx);
-    }
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;
@@ -974,7 +962,7 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
  * the state sits on the grid point the cache holds, else in closed form. */
 static double state_excitation(const dfo_model *M, const dfo_state *s)
 {
-    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_excitation(M, s->t); /* its phase, exact for any t, phi */
+    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_excitation_exact(M, s->t); /* its phase, exact for any t, phi */
     if (s->exc_n >= 0 && s->exc_n == s->n && s->t == s->t0 + (double)s->n * M->p.h) return M->p.P0 * dfo_clamp1(s->exc_c);
     return dfo_excitation(M, s->t);
 }
@@ -1070,7 +1058,7 @@ double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_stat
     if (stuck(&C, s) && C.rules->rests_when_stuck && !(C.belt && s->V != C.vb)) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t, phi) */
         C.t_grid = s->t;
-        C.P_grid = dfo_exact_excitation(M, s->t);
+        C.P_grid = dfo_excitation_exact(M, s->t);
     }
     return accel_of(&C, s, s->t, s->F);
 }
@@ -1084,7 +1072,7 @@ double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
     if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) {
         C.t_grid = s->t;
-        C.P_grid = dfo_exact_excitation(M, s->t);
+        C.P_grid = dfo_excitation_exact(M, s->t);
     }
     /* the rate of the acceleration in the current mode (jerk_of, with the state's own friction force) */
     const dfo_model *Mm = C.M;
@@ -1101,19 +1089,4 @@ double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)
 {
     const double span = fmin(s->t, M->p.t_obs_stop) - M->p.t_obs_start;
     return span > 0.0 ? s->t_stuck / span : 0.0;
-}
-
-const char *dfo_status_text(dfo_status st)
-{
-    switch (st) {
-    case DFO_OK: return "ok";
-    case DFO_ERR_LCP: return "the friction LCP could not be solved (Lemke failed)";
-    case DFO_ERR_NO_PROGRESS: return "too many stick/slip switches inside one internal step";
-    case DFO_ERR_NONFINITE: return "the state became non-finite (overflow)";
-    case DFO_ERR_RESOLUTION: return "the internal step h is below the time resolution at this time";
-    case DFO_ERR_EVENTS:
-        return "the communication step needs more than 1e8 events (stops, reversals, breakaways) of the exact "
-               "scheme, its work bound; use shorter communication steps";
-    }
-    return "unknown status";
 }
