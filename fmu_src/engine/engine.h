@@ -1,0 +1,301 @@
+/* The friction engine: the Bossak-Newmark schemes of method.md (sections 2-4, 8, 9, 12, 13)
+ * written once, for any structure with friction contacts, over operators the model supplies.
+ *
+ *     M x'' + C x' + K x = P(t) + F_ext(t) + W' f,      n degrees of freedom, nc contacts,
+ *     P_i(t) = Pc_i cos(omega t + phi0) - Ps_i sin(omega t + phi0),
+ *     contact j: slip velocity g_j' = w_j . x' - v_belt_j, force f_j along w_j,
+ *       stuck  (mode 0):  g_j' = 0,  |f_j| <= Fb_j = max(mu_s_j, mu_k_j) N_j,
+ *       sliding (+1/-1):  f_j = -mode_j N_j mu_j(|g_j'|)  (Coulomb: mu_k_j; Stribeck: friction.h),
+ *       N_j = max(N_j + N_ext_j(t), 0).
+ *
+ * The model owns M, C, K and the contact rows W (sparse: a few entries each); it hands the engine
+ *   - operators (eng_ops): y = K x, y = C v, y = M a, and "factor c_M M + c_C C + c_K K, then solve
+ *     with it" in a few slots (scalar, tridiagonal, banded or dense: the model's choice), and
+ *     optionally its own solver of the friction problem of a step (eng_friction_fn): the chain its
+ *     O(n) tridiagonal box LCP, the oscillator its scalar 2 x 2 fast path; without one the engine
+ *     forms the Delassus matrix D = W M_hat^-1 W' (nc x nc) and solves the contacts' LCP by Lemke
+ *     (eng_dense_friction, also callable from a model's solver as its fallback);
+ *   - data (eng_setup): sizes, contact rows, normal forces and coefficients, the friction law per
+ *     contact, the harmonic excitation, the Bossak parameter, the step, the scheme.
+ * The engine owns the time grid t0 + n h (snapped requested times, shortened last steps, the
+ * re-basing of Bossak's A on a new step length: method.md section 8), the excitation's grid cache,
+ * the three schemes (paper, consistent, located), the warm start of the friction problem from the
+ * previous modes, the located switch placement (the earliest switch inside the step by a
+ * bracketed root of the sub-step length, the step split there, the rest rule of friction.h per
+ * contact, the restart with the consistent accelerations of the new mode set), input derivatives
+ * (ramps: loads taken at each (sub-)step's end), belts (carried in the inputs, per contact), the
+ * Stribeck law, and calls the model's hooks: a switch callback, an observer of phases.
+ *
+ * State passes through the arguments: eng_state (the trajectory, serialisable: scalars plus arrays)
+ * and eng_inputs (the inputs of the current communication step, belts included). The engine object
+ * (eng) holds the setup and workspace only: no field of it carries a value from one call to the
+ * next, except the operators' factorisations, which are caches keyed by their coefficients.
+ *
+ * Memory: every array through the caller's allocation callbacks (eng_alloc), sized at eng_create
+ * (O(n + nc^2) with the dense default, O(n + nc) with a model's friction solver). No global
+ * state. Plain C99, no FMI types. */
+#ifndef DFO_ENGINE_H
+#define DFO_ENGINE_H
+
+#include "bossak.h"   /* dfo_scheme, the Bossak coefficients, the default step rule */
+#include "friction.h" /* dfo_friction_law, the rest rule */
+
+#include <stddef.h>
+
+/* ---- status -------------------------------------------------------------------------------- */
+
+typedef enum {
+    ENG_OK = 0,
+    ENG_ERR_LCP = 1,          /* the friction problem could not be solved (Lemke, or the model's solver) */
+    ENG_ERR_NO_PROGRESS = 2,  /* too many switches inside one internal step */
+    ENG_ERR_NONFINITE = 3,    /* the state overflowed */
+    ENG_ERR_RESOLUTION = 4,   /* a step would not advance time (h below the resolution of t) */
+    ENG_SWITCHED = 5,         /* stopped at the first switch (eng_hooks.stop_at_switch): s->t is its time */
+    ENG_ERR_FRICTION = 6,     /* the Stribeck law's implicit solve did not converge */
+    ENG_ERR_BAD_INPUT = 7     /* a setup or argument out of range (eng_create's *err says which) */
+} eng_status;
+
+const char *eng_status_text(eng_status st);
+
+/* ---- memory ---------------------------------------------------------------------------------- */
+
+/* Allocation callbacks (zero-filled memory, as FMI's calloc); env is passed through. The same shape
+ * as chain_alloc. */
+typedef struct {
+    void *(*allocate)(void *env, size_t nobj, size_t size);
+    void (*release)(void *env, void *obj);
+    void *env;
+} eng_alloc;
+
+/* ---- what the model supplies ------------------------------------------------------------------ */
+
+/* The factor slots of eng_ops.factor / solve: the engine refactors a slot only when its
+ * coefficients change (it remembers them), so a model keeps one factorisation per slot. */
+enum {
+    ENG_SLOT_GRID = 0,   /* M_hat of a whole grid step h (factored once per run) */
+    ENG_SLOT_TRIAL = 1,  /* M_hat of any other step length (shortened steps, switch searches) */
+    ENG_SLOT_MASS = 2,   /* M itself (physical accelerations: start-up, restarts, outputs) */
+    ENG_NSLOTS = 3
+};
+
+/* Contact j's row w_j of W: nnz entries w[k] at degrees of freedom idx[k] (e_i: DOF i against the
+ * ground; e_i - e_k: the slip between DOFs i and k). The arrays are the model's, read while the
+ * engine lives. */
+typedef struct {
+    size_t nnz;
+    const size_t *idx;
+    const double *w;
+} eng_row;
+
+/* The friction problem of one (trial) step, handed to a friction solver:
+ *     M_hat V1 = p_hat + W' f,   v = W V1 - vb  (the contacts' slip velocities at the step's end),
+ * with, per contact j and its mode m_j:
+ *     m_j = 0 (held):   v_j = 0 and |f_j| <= limit_j (for a basis solve: v_j = 0, f_j unknown);
+ *     m_j = +1/-1:      f_j = -m_j limit_j and m_j v_j >= 0 (basis solve: f_j = -m_j limit_j);
+ *     limit_j = 0:      no friction at j: f_j = 0 whatever its mode (its mode out: the sign of v_j).
+ * With law != NULL, a sliding contact j with law[j].law == DFO_LAW_STRIBECK has the implicit force
+ * f_j = -m_j N_j mu_j(max(m_j v_j, 0)) instead of -m_j limit_j (limit_j is then N_j min(mu_s, mu_k),
+ * where every speed stops it: the modes are decided with it, then the speed solved; friction.h's
+ * dfo_stribeck_speed for one contact). */
+typedef struct {
+    int slot;               /* the factorisation of M_hat to solve with (ENG_SLOT_GRID or _TRIAL) */
+    double h;               /* the step's length (M_hat = (1 - a) M / (g h) + C + (b h / g) K) */
+    double cM, cC, cK;      /* M_hat's coefficients, as passed to factor */
+    const double *p_hat;    /* n: the right-hand side */
+    const double *vb;       /* nc: belt speeds (NULL: 0) */
+    const double *limit;    /* nc: held contacts' limit Fb, sliding ones' kinetic magnitude */
+    const double *N;        /* nc: normal forces (read with law only) */
+    const dfo_friction_law *law;  /* nc, or NULL: no Stribeck contact in this problem */
+} eng_problem;
+
+/* What a friction solver is asked. */
+enum {
+    ENG_SOLVE_BASIS = 0,  /* solve with the modes as given (no test of the inequalities): the located
+                           * scheme's trial, O(1) solves; *mode is not changed */
+    ENG_SOLVE_LCP = 1     /* find the modes: the LCP, warm-started from *mode (the previous step's),
+                           * *mode out the solution's; *pivots the pivots done (0: the warm basis held) */
+};
+
+/* A friction solver: the problem P, the modes mode[nc] (in; out with ENG_SOLVE_LCP), into V1[n] and
+ * f[nc]. Returns ENG_OK, ENG_ERR_LCP (no solution found), ENG_ERR_NONFINITE (non-finite data) or
+ * ENG_ERR_FRICTION (Stribeck). ctx is eng_ops.ctx. */
+typedef eng_status (*eng_friction_fn)(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                                      int *pivots);
+
+/* The model's operators. Every vector of length n unless said; y and x never alias. */
+typedef struct {
+    void *ctx;
+    void (*apply_K)(void *ctx, const double *x, double *y);  /* y = K x */
+    void (*apply_C)(void *ctx, const double *v, double *y);  /* y = C v; NULL: C = 0 */
+    void (*apply_M)(void *ctx, const double *a, double *y);  /* y = M a */
+    /* Factor A = cM M + cC C + cK K into slot; 0 when A is not positive definite (then the step is
+     * refused with ENG_ERR_BAD_INPUT). cC is 0 when apply_C is NULL. */
+    int (*factor)(void *ctx, int slot, double cM, double cC, double cK);
+    /* x = A_slot^-1 b with the slot's last factorisation (b and x may be the same array). */
+    void (*solve)(void *ctx, int slot, const double *b, double *x);
+    /* The model's friction solver; NULL: eng_dense_friction. */
+    eng_friction_fn friction;
+} eng_ops;
+
+/* The harmonic excitation P_i(t) = Pc[i] cos(omega t + phi0) - Ps[i] sin(omega t + phi0) (Pc, Ps:
+ * n each; NULL: 0). On the grid t0 + k h the phase comes from the state's cache (excitation.h's
+ * dfo_grid_phase: a pure function of k), elsewhere it is evaluated (dmath's dfo_cos / dfo_sin). */
+typedef struct {
+    double omega, phi0;
+    const double *Pc, *Ps;
+} eng_harmonic;
+
+/* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
+ * copies none of them: a model keeps its parameters in its own struct and points at them). */
+typedef struct {
+    size_t n;                   /* degrees of freedom, >= 1 */
+    size_t nc;                  /* contacts, >= 0 */
+    eng_ops ops;
+    const eng_row *rows;        /* nc contact rows */
+    eng_harmonic exc;
+    const double *N;            /* nc normal forces (without N_ext), >= 0 */
+    const double *mu_s, *mu_k;  /* nc static and kinetic coefficients (breakaway: max of the two) */
+    const dfo_friction_law *law;  /* nc sliding laws (friction.h), or NULL: Coulomb with mu_k */
+    double h;                   /* internal step > 0 (bossak.h's dfo_step_rule) */
+    double alpha;               /* Bossak parameter in [-1/3, 0] */
+    int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
+    int friction_updates;       /* paper: coefficient updates (re-solves) per step, >= 0 */
+    int fast_paths;             /* skip work a run does not need (the same numbers: the stuck fast path) */
+    double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
+                                 * resolve the motion (located hands it to the consistent test), and
+                                 * A is re-based on a new step length only where rate_max h <= 1 */
+    /* the snap of a requested time to the grid: within
+     *   min(snap_max_rel_h h, max(snap_min_rel_h h, snap_eps_t DBL_EPSILON |t|))
+     * of a grid point is that grid point (the oscillator: 1e-5, 1e-7, 2^16; the chain: 1e-7, 1e-7, 0) */
+    double snap_max_rel_h, snap_min_rel_h, snap_eps_t;
+} eng_setup;
+
+/* ---- inputs ---------------------------------------------------------------------------------- */
+
+/* Inputs held over a communication step (NULL arrays: 0, never read), optionally varying over it as
+ * polynomials (ramps): u(t) = u + du[0] (t - t_ref) + du[1] (t - t_ref)^2 / 2. Belts are inputs:
+ * v_belt is carried here, per contact, and never stored by the engine. A belt is held over the
+ * step (no derivative); the friction of contact j acts on g_j' - v_belt[j], and a stuck contact
+ * moves with its belt. */
+typedef struct {
+    const double *F_ext;        /* n external forces */
+    const double *N_ext;        /* nc normal-force inputs */
+    const double *v_belt;       /* nc belt speeds (NULL: fixed supports) */
+    const double *dF_ext[2];    /* n: first and second derivatives of F_ext at t_ref (NULL: 0) */
+    const double *dN_ext[2];    /* nc: the same for N_ext */
+    double t_ref;
+} eng_inputs;
+
+/* ---- state ------------------------------------------------------------------------------------ */
+
+/* The trajectory: scalars plus arrays (n or nc long). Serialise the scalars and the arrays; copy
+ * with eng_state_copy. */
+typedef struct {
+    size_t n, nc;
+    double t0, t;               /* start time; current time */
+    long long n_grid;           /* the last grid point reached is t0 + n_grid h */
+    double *X, *V, *A;          /* n: positions, velocities, Bossak acceleration variables */
+    double *hA;                 /* n: the step length that produced A (0: a physical acceleration) */
+    double *F;                  /* nc: contact forces f at t (W' f acts on the DOFs) */
+    int *mode;                  /* nc: -1 / +1 sliding, 0 stuck (without friction: the sign of the slip) */
+    double *t_stick;            /* nc: when the contact's current stick phase began */
+    double *t_break;            /* nc: a stuck contact's next breakaway, if known (NaN: to be found) */
+    int *break_dir;             /* nc: its side */
+    double t_switch;            /* the time of the last switch (-inf: none) */
+    long long steps, solves, pivot_steps, switches;  /* counters */
+    long long exc_n;            /* excitation cache: cos, sin of omega (t0 + exc_n h) + phi0 (-1: empty) */
+    double exc_c, exc_s;
+    double *J;                  /* (2n)^2 row-major d(X, V)/d(X, V)(t_ref), or NULL: not propagated (eng_caps) */
+} eng_state;
+
+/* ---- hooks ------------------------------------------------------------------------------------- */
+
+/* A contact's change of mode: time, contact, the state there (positions and velocities at the
+ * switch), from and to. */
+typedef void (*eng_switch_fn)(void *ctx, double t, size_t contact, const eng_state *s, int from, int to);
+
+/* One phase of the motion [ta, tb] with the contacts' modes constant over it (a step, a sub-step
+ * between switches, or a stretch of stuck steps taken at once): what an observer needs to keep
+ * extremes, stick times, transitions and dissipated energy. */
+typedef struct {
+    double ta, tb;
+    const double *X0;           /* n: positions at ta (s->X holds those at tb) */
+    const int *mode0;           /* nc: modes during the phase (s->mode holds those after it) */
+    const double *f;            /* nc: the contact forces over it (for the work: the step's end value, or
+                                 * for Stribeck the mean of its ends) */
+    const double *v_belt;       /* nc: belts (NULL: fixed) */
+} eng_phase;
+
+/* The observer: on_phase is called only for phases that overlap [t_start, t_stop] (so a run that
+ * observes nothing pays one comparison per phase), and a stretch of stuck steps inside the window
+ * is still taken at once, as one phase (the window costs no steps). */
+typedef struct {
+    double t_start, t_stop;
+    void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);
+    void *ctx;
+} eng_observer;
+
+typedef struct {
+    eng_switch_fn on_switch;    /* NULL: none */
+    void *switch_ctx;
+    const eng_observer *obs;    /* NULL: none */
+    int stop_at_switch;         /* return ENG_SWITCHED at the first switch, the state complete there */
+} eng_hooks;
+
+/* ---- the engine ---------------------------------------------------------------------------------- */
+
+typedef struct eng eng;
+
+/* Check a setup; NULL when valid, else a sentence naming the field and value, written to buf. */
+const char *eng_check_setup(const eng_setup *S, char *buf, size_t len);
+
+/* Create the engine (copies the setup struct, not its arrays; allocates its workspace); NULL on a
+ * failed allocation or an invalid setup (then *err, if not NULL, says why). */
+eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err);
+void eng_destroy(eng *E);
+const eng_setup *eng_setup_of(const eng *E);
+
+/* What a scheme offers beyond the trajectory. */
+enum { ENG_CAP_SENSITIVITY = 1 /* propagates s->J when it is not NULL */ };
+int eng_caps(int scheme);
+
+/* State arrays through the engine's callbacks (with_jacobian: J too); 0 on failure. */
+int eng_state_init(const eng *E, eng_state *s, int with_jacobian);
+void eng_state_free(const eng *E, eng_state *s);
+/* dst (initialised for the same sizes) := src, arrays included (J only when both have it). */
+void eng_state_copy(eng_state *dst, const eng_state *src);
+
+/* Consistent start-up at t0 from x0, v0 (n each): a contact whose slip is 0 is at rest, and the
+ * rest rule of the contacts at rest together (their stuck forces solved jointly, a contact beyond
+ * its limit released in the direction it is driven, repeated: the causal cascade from "all
+ * stuck", method.md section 13) decides stick or slide; accelerations consistent with the modes. */
+void eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+
+/* The time eng_advance ends on for t_target: the grid point it snaps to, else t_target. */
+double eng_snap_target(const eng *E, const eng_state *s, double t_target);
+
+/* Advance to t_target > s->t with the inputs in (held, or ramped). On ENG_OK s->t is exactly
+ * eng_snap_target(E, s_before, t_target); on ENG_SWITCHED the time of the first switch. hooks may
+ * be NULL. */
+eng_status eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hooks);
+
+/* Inputs changed at the communication point s->t (from old_in to new_in, held over the next step):
+ * a sliding contact's DOFs take the jump of the physical acceleration and its force the new
+ * kinetic force; a belt that changed makes each contact's mode that of its new slip (one the belt
+ * meets takes the rest rule), and the new mode set restarts consistently (switches reported). */
+void eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
+                    const eng_hooks *hooks);
+
+/* Physical accelerations (n) at the state in its modes (stuck contacts' slip acceleration 0). */
+void eng_accelerations(eng *E, const eng_inputs *in, const eng_state *s, double *a);
+/* The contact forces (nc) at the state as the schemes whose stuck contacts rest report them: a
+ * sliding contact's kinetic force, a stuck one's holding force (clamped to its limit). */
+void eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double *f);
+
+/* The default friction solver: the Delassus matrix of the held contacts through ops.solve, the
+ * basis solve by Cholesky, the LCP (ENG_SOLVE_LCP) in its standard 2 nc form by Lemke (lcp.h),
+ * warm-started from *mode. A model's solver may call it as its fallback (ctx: the engine). */
+eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                              int *pivots);
+
+#endif
