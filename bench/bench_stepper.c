@@ -9,7 +9,9 @@
  *
  * Every timing is the minimum over --reps repetitions (bare and FMU alternate, so both see the
  * same machine load). Only the stepping is timed: dfo_advance for the bare loop, one fmi2DoStep
- * over the whole run for the FMU; start-up is outside the clock.
+ * over the whole run for the FMU; start-up is outside the clock. The observables' cost: the bare
+ * loop also runs with observe off and on in every repetition (whatever --observe says), and
+ * observe_cost is on / off per step (window [0, inf), observe's default).
  *
  * The cases default to bench/cases.py's (keep the two in sync); work_precision.py passes its own
  * with --case, so the Python study is the single source when it drives this program. */
@@ -369,30 +371,45 @@ static void fmu_setup(const fmu_api *api, fmi2Component comp, const dfo_params *
 
 typedef struct {
     double bare_ns, fmu_ns; /* best time of the stepping, ns */
+    double off_ns, on_ns;   /* best time of the bare loop with observe off and on, ns */
     long long steps;
 } step_timing;
 
-static step_timing time_stepping(const options *o, const fmu_api *api, fmi2Component comp, const dfo_params *p)
+/* One bare run from the start to t_end: the ns of dfo_advance; its steps in *steps. */
+static double time_bare(const dfo_model *M, double t_end, long long *steps)
 {
     const dfo_inputs u = {0};
+    dfo_state s;
+    dfo_start(M, &u, 0.0, &s);
+    const double t0 = bench_now_ns();
+    const dfo_status st = dfo_advance(M, &u, &s, t_end, NULL, NULL);
+    const double t1 = bench_now_ns();
+    if (st != DFO_OK) die("dfo_advance failed: %s", dfo_status_text(st));
+    *steps = s.steps;
+    return t1 - t0;
+}
+
+static step_timing time_stepping(const options *o, const fmu_api *api, fmi2Component comp, const dfo_params *p)
+{
     const double t_end = o->periods * 2.0 * DFO_PI / p->omega;
-    dfo_model M;
+    dfo_model M, M_obs[2];
     dfo_model_init(&M, p);
-    step_timing r = {INFINITY, INFINITY, 0};
+    for (int ob = 0; ob < 2; ob++) {
+        dfo_params q = *p;
+        q.observe = ob;
+        dfo_model_init(&M_obs[ob], &q);
+    }
+    step_timing r = {INFINITY, INFINITY, INFINITY, INFINITY, 0};
     for (int rep = 0; rep < o->reps; rep++) {
-        dfo_state s;
-        dfo_start(&M, &u, 0.0, &s);
-        double t0 = bench_now_ns();
-        const dfo_status st = dfo_advance(&M, &u, &s, t_end, NULL, NULL);
-        double t1 = bench_now_ns();
-        if (st != DFO_OK) die("dfo_advance failed: %s", dfo_status_text(st));
-        if (t1 - t0 < r.bare_ns) r.bare_ns = t1 - t0;
-        r.steps = s.steps;
+        r.bare_ns = fmin(r.bare_ns, time_bare(&M, t_end, &r.steps));
+        long long steps_ob;
+        r.off_ns = fmin(r.off_ns, time_bare(&M_obs[0], t_end, &steps_ob));
+        r.on_ns = fmin(r.on_ns, time_bare(&M_obs[1], t_end, &steps_ob));
 
         fmu_setup(api, comp, p);
-        t0 = bench_now_ns();
+        const double t0 = bench_now_ns();
         check(api->doStep(comp, 0.0, t_end, fmi2True), "fmi2DoStep");
-        t1 = bench_now_ns();
+        const double t1 = bench_now_ns();
         if (t1 - t0 < r.fmu_ns) r.fmu_ns = t1 - t0;
     }
     return r;
@@ -465,14 +482,14 @@ int main(int argc, char **argv)
         if (!out) die("cannot allocate the output buffer");
     }
     fprintf(out, "kind,case,scheme,alpha,steps_per_period,periods,steps,bare_ns_per_step,fmu_ns_per_step,"
-                 "fmu_over_bare,value,unit\n");
-    fprintf(out, "instance_bytes,,,,,,,,,,%zu,bytes\n", instance_bytes);
+                 "fmu_over_bare,value,unit,observe_off_ns_per_step,observe_on_ns_per_step,observe_cost\n");
+    fprintf(out, "instance_bytes,,,,,,,,,,%zu,bytes,,,\n", instance_bytes);
 
     /* the whole short run of the first case with the located scheme (compare with the host's) */
     const dfo_params p_run = case_params(&o.cases[0], DFO_SCHEME_LOCATED, o.alpha, 50.0, o.observe);
-    fprintf(out, "fmi2_setup,%s,located,%.17g,50,0,0,,,,%.1f,ns\n", o.cases[0].name, o.alpha,
+    fprintf(out, "fmi2_setup,%s,located,%.17g,50,0,0,,,,%.1f,ns,,,\n", o.cases[0].name, o.alpha,
             time_short_run(&o, &api, comp, &p_run, 0));
-    fprintf(out, "fmi2_run,%s,located,%.17g,50,1,50,,,,%.1f,ns\n", o.cases[0].name, o.alpha,
+    fprintf(out, "fmi2_run,%s,located,%.17g,50,1,50,,,,%.1f,ns,,,\n", o.cases[0].name, o.alpha,
             time_short_run(&o, &api, comp, &p_run, 1));
 
     for (int ci = 0; ci < o.n_cases; ci++) {
@@ -481,8 +498,10 @@ int main(int argc, char **argv)
                 const dfo_params p = case_params(&o.cases[ci], o.schemes[si], o.alpha, o.spp[k], o.observe);
                 const step_timing r = time_stepping(&o, &api, comp, &p);
                 const double bare = r.bare_ns / (double)r.steps, fmu = r.fmu_ns / (double)r.steps;
-                fprintf(out, "step,%s,%s,%.17g,%.17g,%.17g,%lld,%.3f,%.3f,%.4f,,\n", o.cases[ci].name,
-                        scheme_name(o.schemes[si]), o.alpha, o.spp[k], o.periods, r.steps, bare, fmu, fmu / bare);
+                const double off = r.off_ns / (double)r.steps, on = r.on_ns / (double)r.steps;
+                fprintf(out, "step,%s,%s,%.17g,%.17g,%.17g,%lld,%.3f,%.3f,%.4f,,,%.3f,%.3f,%.4f\n", o.cases[ci].name,
+                        scheme_name(o.schemes[si]), o.alpha, o.spp[k], o.periods, r.steps, bare, fmu, fmu / bare, off,
+                        on, on / off);
                 fflush(out);
             }
         }

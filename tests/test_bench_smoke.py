@@ -102,6 +102,8 @@ def test_c_benchmark_rows(study: Path) -> None:
         (c, s) for c in CASES for s in ("paper", "consistent", "located")}
     for r in steps:
         assert float(r["bare_ns_per_step"]) > 0 and float(r["fmu_ns_per_step"]) > 0
+        on, off = float(r["observe_on_ns_per_step"]), float(r["observe_off_ns_per_step"])
+        assert on > 0 and off > 0 and float(r["observe_cost"]) == pytest.approx(on / off, rel=1e-3)
         assert int(r["steps"]) == 10 * int(float(r["steps_per_period"]))
     inst = next(r for r in rows if r["kind"] == "instance_bytes")
     assert 0 < float(inst["value"]) < 1 << 20

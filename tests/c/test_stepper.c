@@ -5,7 +5,7 @@
  *    grid counter n, no drift over 10^6 steps;
  * 2. friction invariants at every communication point (schemes 1, 2, 3);
  * 3. energy balance of the located scheme with viscous damping;
- * 4. fast paths give the same numbers as the general path, bit for bit;
+ * 4. fast paths give the same numbers as the general path, bit for bit; a stuck block's observables;
  * 5. second order of the located scheme by self-convergence, across chi;
  * 6. hard inputs (zero coefficients, tiny and huge steps) run and stay finite;
  * 7. the caches of the state (excitation phase, next breakaway): emptied or forged mid-run, the run
@@ -17,6 +17,7 @@
 #include "scheme.h"
 #include "oscillator.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -392,6 +393,43 @@ static void test_fast_paths(checks *T)
            "also observe = 1 vs 0); F = +0 (fast) vs -0 (general) at %lld of them\n", points, zero_sign);
 }
 
+/* A block stuck for the whole run (static force |cos| <= 1 against a limit of 2): its observables
+ * are known exactly. The stuck time is the window's length, each call's stuck stretch added in one
+ * piece (one call: w1 - w0 bit for bit, stick fraction 1); X sampled and frozen, no work, no switch;
+ * the fast path (stuck steps skipped inside the window too) gives the general path's bits. */
+static void test_stuck_observables(checks *T)
+{
+    for (int scheme = 2; scheme <= 3; scheme++)
+        for (int calls = 1; calls <= 373; calls += 372)
+            for (int fast = 0; fast <= 1; fast++) {
+                dfo_params p = nondim(0.5, 2.0, 0.7, 0.05, scheme, 300);
+                p.x0 = 0.25;
+                p.observe = 1;
+                p.fastPaths = fast;
+                const double Tp = period_of(&p);
+                p.t_obs_start = 3.3 * Tp;
+                p.t_obs_stop = 7.7 * Tp;
+                check_context(T, "stuck observables: scheme %d, %d calls, fastPaths %d", scheme, calls, fast);
+                sim S;
+                sim_start(&S, &p, 0.0);
+                for (int k = 1; k <= calls; k++) CHECK_INT(DFO_OK, sim_to(&S, 10.0 * Tp * k / calls));
+                const double span = p.t_obs_stop - p.t_obs_start;
+                if (calls == 1) CHECK_SAME(span, S.s.t_stuck);
+                /* one stretch per call: a rounding of the window's scale each */
+                CHECK_RANGE(span - calls * 2.0 * DBL_EPSILON * p.t_obs_stop,
+                            span + calls * 2.0 * DBL_EPSILON * p.t_obs_stop, S.s.t_stuck);
+                if (calls == 1) CHECK_SAME(1.0, dfo_stick_fraction(&S.M, &S.s));
+                CHECK_INT(1, S.s.observed);
+                CHECK_SAME(0.25, S.s.x_max);
+                CHECK_SAME(0.25, S.s.x_min);
+                CHECK_SAME(0.0, S.s.E_friction);
+                CHECK_INT(0, (int)S.s.transitions);
+                CHECK_INT(0, S.s.mode);
+                CHECK_SAME(0.25, S.s.X);
+            }
+    T->context = NULL;
+}
+
 /* ---- 5. order of the located scheme ---------------------------------------------------------- */
 
 /* Errors at h, h/2, h/4 against h/64 over 10 periods, max over the communication points.
@@ -583,6 +621,7 @@ int main(void)
     test_invariants(T);
     test_energy(T);
     test_fast_paths(T);
+    test_stuck_observables(T);
     test_order(T);
     test_hard_inputs(T);
     test_caches(T);

@@ -46,7 +46,7 @@ typedef struct {
      * (clamped to the limit), set once at the end of each dfo_advance rather than at every step */
     int rests_when_stuck;
     /* the stuck fast path: a stuck block's whole grid steps before its known next breakaway may be
-     * taken at once (stuck_until), to the bits of stepping them */
+     * taken at once (stuck_until), to the bits of stepping them (the observables' too: stuck_skip) */
     int skips_stuck_steps;
 } scheme_rules;
 
@@ -72,6 +72,14 @@ typedef struct {
     dfo_status err;  /* first error met */
     dfo_switch_fn on_switch;
     void *switch_ctx;
+    /* the observables' stuck time: the stuck stretch (consecutive stuck phases) open since stuck_from,
+     * added to t_stuck in one piece, clipped to the observation window, when a phase in another mode
+     * ends or the call returns (so that a stretch costs the same whether its steps are taken one by
+     * one or at once) */
+    int stuck_open;
+    double stuck_from;
+    int observe;     /* the observables are on */
+    int after_w0;    /* the call began at or after the window's start, with a sample taken */
 } step_ctx;
 
 /* One Bossak step of length h from the current state, before the velocity is known (eq. 4). */
@@ -271,35 +279,60 @@ static HOT_INLINE phase_start begin_phase(const dfo_state *s)
     return b;
 }
 
+/* The stuck stretch open since C->stuck_from ends at t: its part inside the observation window is
+ * stuck time (comparisons, not fmin/fmax: those are library calls without -ffinite-math-only). */
+static HOT_INLINE void close_stuck(step_ctx *C, dfo_state *s, double t)
+{
+    const double w0 = C->M->p.t_obs_start, w1 = C->M->p.t_obs_stop;
+    const double lo = (C->stuck_from > w0) ? C->stuck_from : w0, hi = (t < w1) ? t : w1;
+    if (hi > lo) s->t_stuck += hi - lo;
+    C->stuck_open = 0;
+}
+
 /* Book-keeping after a phase [b->ta, s->t] spent in mode_during with friction force F: the stick
- * phase's breakaway to be found anew, switch reports and observables. */
-static HOT_INLINE void end_phase_on(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F,
+ * phase's breakaway to be found anew, switch reports and observables. A phase's X is sampled where
+ * it ends inside the window, its friction work and a switch counted where it ends after the window
+ * opens (ta <= tb: a phase that begins after the window also ends after it). */
+static HOT_INLINE void end_phase_on(step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F,
                                     const int belt)
 {
     const dfo_model *M = C->M;
-    const double ta = b->ta, dX = s->X - b->X0;
+    const double ta = b->ta, tb = s->t, dX = s->X - b->X0;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
     const int mode_before = b->mode0;
     if (s->mode == 0 && mode_before != 0) s->stick_tb = NAN; /* a new stick phase */
     if (s->mode != mode_before) {
-        s->t_switch = s->t;
-        if (C->on_switch) C->on_switch(C->switch_ctx, s->t, s->X, mode_before, s->mode);
+        s->t_switch = tb;
+        if (C->on_switch) C->on_switch(C->switch_ctx, tb, s->X, mode_before, s->mode);
+        if (C->observe && tb > w0 && tb <= w1) s->transitions++;
     }
-    if (!M->p.observe) return;
-    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop, tb = s->t;
-    if (tb < w0 || ta > w1) return;
-    if (mode_during == 0) s->t_stuck += fmax(fmin(tb, w1) - fmax(ta, w0), 0.0);
-    if (tb > w1) return;
-    if (!s->observed) { s->x_max = s->x_min = s->X; s->observed = 1; }
-    if (s->X > s->x_max) s->x_max = s->X;
-    if (s->X < s->x_min) s->x_min = s->X;
-    if (tb > w0) {
-        /* the energy dissipated: the friction's work on the relative motion */
-        s->E_friction -= F * (belt ? dX - C->vb * (tb - ta) : dX);
-        if (s->mode != mode_before) s->transitions++;
+    if (!C->observe) return;
+    if (mode_during == 0) {
+        if (!C->stuck_open) {
+            C->stuck_open = 1;
+            C->stuck_from = ta;
+        }
+    } else if (C->stuck_open) {
+        close_stuck(C, s, ta);
     }
+    /* the energy dissipated: the friction's work on the relative motion, where the phase ends after
+     * the window opens (a phase of length 0 has none: dX = 0, and E_friction, +0 at the start, is
+     * never -0) */
+    const double X = s->X;
+    double W = F * (belt ? dX - C->vb * (tb - ta) : dX);
+    if (C->after_w0) {  /* the call began in the window, sampled already: tb >= w0 */
+        if (tb > w1) return;
+    } else {
+        if (tb < w0 || tb > w1) return;
+        if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
+        if (!(tb > w0)) W = 0.0;
+    }
+    s->x_max = (X > s->x_max) ? X : s->x_max;
+    s->x_min = (X < s->x_min) ? X : s->x_min;
+    s->E_friction -= W;
 }
 
-static HOT_INLINE void end_phase(const step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
+static HOT_INLINE void end_phase(step_ctx *C, dfo_state *s, const phase_start *b, int mode_during, double F)
 {
     end_phase_on(C, s, b, mode_during, F, C->belt);
 }
@@ -789,6 +822,10 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->skip_stuck =
         C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h) && !C->ramp && !C->belt;
     C->err = DFO_OK;
+    C->stuck_open = 0;
+    C->stuck_from = 0.0;
+    C->observe = M->p.observe;
+    C->after_w0 = 0;
     C->t_grid = NAN;
     C->P_grid = 0.0;
     C->g1 = (1.0 - M->gamma) / M->gamma;
@@ -871,17 +908,19 @@ static HOT_INLINE int state_finite(const dfo_state *s)
 }
 
 /* The stuck fast path (scheme_rules.skips_stuck_steps): stuck on a grid point, with the stick
- * phase's next breakaway known, the whole grid steps before it (and before t_end, and outside the
- * observation window) change nothing but the time, so they can be taken at once. Returns the last
- * grid index they reach (s->n when there is none). fastPaths = false steps them one by one, to the
- * same bits. */
+ * phase's next breakaway known, the whole grid steps before it (and before t_end) change nothing but
+ * the time, so they can be taken at once; the observables account them in closed form (stuck_skip).
+ * They stop short of the observation window's ends (so that every step they skip is either outside
+ * the window or inside it, where it samples the frozen X). Returns the last grid index they reach
+ * (s->n when there is none). fastPaths = false steps them one by one, to the same bits. */
 static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_end)
 {
     const dfo_model *M = C->M;
     const double h = M->p.h;
     if (s->mode != 0 || !C->skip_stuck || !breakaway_known(C, s)) return s->n;
     double limit = fmin(s->stick_tb, t_end);
-    if (M->p.observe && !(s->t > M->p.t_obs_stop)) limit = fmin(limit, M->p.t_obs_start);
+    if (M->p.observe && !(s->t > M->p.t_obs_stop))
+        limit = fmin(limit, (s->t < M->p.t_obs_start) ? M->p.t_obs_start : M->p.t_obs_stop);
     if (!(limit > s->t)) return s->n;
     /* the last m with t0 + m h < limit (the grid points as the stepping loop computes them) */
     long long m = (long long)floor((limit - s->t0) / h);
@@ -890,10 +929,69 @@ static long long stuck_until(const step_ctx *C, const dfo_state *s, double t_end
     return (m > s->n) ? m : s->n;
 }
 
+/* The observables of the stuck grid steps from s->t to t (stuck_until's), as the steps one by one
+ * would leave them: the stuck stretch open (or still open), and, inside the window, X sampled (it is
+ * frozen); the friction does no work on a block at rest and no switch happens. */
+static void stuck_skip(step_ctx *C, dfo_state *s, double t)
+{
+    const dfo_model *M = C->M;
+    if (!C->observe) return;
+    if (!C->stuck_open) {
+        C->stuck_open = 1;
+        C->stuck_from = s->t;
+    }
+    if (t < M->p.t_obs_start || s->t > M->p.t_obs_stop || t > M->p.t_obs_stop) return;
+    if (!s->observed) { s->x_max = s->x_min = s->X; s->observed = 1; }
+    s->x_max = (s->X > s->x_max) ? s->X : s->x_max;
+    s->x_min = (s->X < s->x_min) ? s->X : s->x_min;
+}
+
 static COLD void ramp_loads(step_ctx *C, double t_end)
 {
     dfo_loads_ramp(&C->L, C->M, C->ramp, t_end);
     C->friction = C->L.Fb > 0.0;
+}
+
+/* The steps of one call of advance, up to t_end_call. */
+static dfo_status take_steps(step_ctx *C, dfo_state *s, double t_end_call)
+{
+    const dfo_model *M = C->M;
+    const double h = M->p.h;
+    double g_prev = s->t0 + (double)s->n * h;  /* the grid point at or before s->t */
+    while (s->t < t_end_call) {
+        if (s->t == g_prev) {
+            const long long m = stuck_until(C, s, t_end_call);
+            if (m > s->n) {
+                const double t_m = s->t0 + (double)m * h;
+                stuck_skip(C, s, t_m);
+                s->steps += m - s->n;
+                s->n = m;
+                g_prev = s->t = t_m;
+                continue;
+            }
+        }
+        const double grid = s->t0 + (double)(s->n + 1) * h;
+        double t_end = t_end_call;
+        C->t_grid = NAN;
+        const int from_grid = (s->t == g_prev);
+        if (grid <= t_end_call) {  /* the next grid point is reached in this call: the step ends there */
+            t_end = grid;
+            s->n++;
+            g_prev = grid;
+            C->t_grid = grid;
+            C->P_grid = grid_excitation(M, s);
+        }
+        if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
+        C->h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
+        if (C->ramp) ramp_loads(C, t_end); /* varying inputs: the loads at the step's end, where Bossak reads them */
+        step_to(C, s, t_end);
+        if (C->err != DFO_OK) return C->err;
+        /* An overflow is caught within 16 grid steps and at the end of the call (the friction LCP
+         * also refuses non-finite data at every step with friction): in between, a non-finite
+         * state only costs a few wasted steps, every loop being bounded. */
+        if ((s->n & 15) == 0 && !state_finite(s)) return DFO_ERR_NONFINITE;
+    }
+    return DFO_OK;
 }
 
 static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
@@ -903,41 +1001,11 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
     make_ctx(&C, M, in);
     C.on_switch = on_switch;
     C.switch_ctx = switch_ctx;
-    const double h = M->p.h;
+    C.after_w0 = C.observe && s->observed && s->t >= M->p.t_obs_start;
     /* from here on the call is exactly the one for the grid point t_target snapped to, if any */
-    const double t_end_call = dfo_snap_target(M, s, t_target);
-    double g_prev = s->t0 + (double)s->n * h;  /* the grid point at or before s->t */
-    while (s->t < t_end_call) {
-        if (s->t == g_prev) {
-            const long long m = stuck_until(&C, s, t_end_call);
-            if (m > s->n) {
-                s->steps += m - s->n;
-                s->n = m;
-                g_prev = s->t = s->t0 + (double)m * h;
-                continue;
-            }
-        }
-        const double grid = s->t0 + (double)(s->n + 1) * h;
-        double t_end = t_end_call;
-        C.t_grid = NAN;
-        const int from_grid = (s->t == g_prev);
-        if (grid <= t_end_call) {  /* the next grid point is reached in this call: the step ends there */
-            t_end = grid;
-            s->n++;
-            g_prev = grid;
-            C.t_grid = grid;
-            C.P_grid = grid_excitation(M, s);
-        }
-        if (!(t_end > s->t)) return DFO_ERR_RESOLUTION; /* h below the time resolution at t */
-        C.h_step = (from_grid && t_end == grid) ? h : t_end - s->t;
-        if (C.ramp) ramp_loads(&C, t_end); /* varying inputs: the loads at the step's end, where Bossak reads them */
-        step_to(&C, s, t_end);
-        if (C.err != DFO_OK) return C.err;
-        /* An overflow is caught within 16 grid steps and at the end of the call (the friction LCP
-         * also refuses non-finite data at every step with friction): in between, a non-finite
-         * state only costs a few wasted steps, every loop being bounded. */
-        if ((s->n & 15) == 0 && !state_finite(s)) return DFO_ERR_NONFINITE;
-    }
+    const dfo_status st = take_steps(&C, s, dfo_snap_target(M, s, t_target));
+    if (C.stuck_open) close_stuck(&C, s, s->t); /* the stuck time up to where the call stopped */
+    if (st != DFO_OK) return st;
     if (!state_finite(s)) return DFO_ERR_NONFINITE;
     /* a stuck block at rest: the friction holds the static force, evaluated here, at the
      * communication point, rather than at every stuck step */
