@@ -219,6 +219,7 @@ typedef struct {
     int stribeck;
     double F_ramp;     /* dF_ext/dt over the run (0: held) */
     double F_jump;     /* F_ext set to this at t = 10 (dfo_new_inputs / eng_new_inputs) */
+    double belt_to;    /* the belt's speed set to this at t = 10 (NaN: held) */
 } osc_case;
 
 /* max |x_engine - x_oscillator| / max |x| over 30 s of communication steps of 0.1 s at h = 1e-3;
@@ -257,15 +258,23 @@ static double osc_agreement(const osc_case *K, long long *sw_e, long long *sw_o)
     double d = 0.0, xm = 0.0;
     for (int k = 1; k <= 300; k++) {
         const double t = (double)(k * 100) * h;
-        if (k == 101 && K->F_jump != 0.0) { /* the inputs change at t = 10 s */
+        if (k == 101 && (K->F_jump != 0.0 || !isnan(K->belt_to))) { /* the inputs change at t = 10 s */
             const eng_inputs old = in;
-            static double Fj[1];
-            Fj[0] = K->F_jump;
-            in.F_ext = Fj;
-            eng_new_inputs(E, &old, &in, &s, NULL);
             const dfo_inputs oold = oi;
-            oi.F_ext = K->F_jump;
-            oi.F_ext_set = 1;
+            static double Fj[1];
+            if (K->F_jump != 0.0) {
+                Fj[0] = K->F_jump;
+                in.F_ext = Fj;
+                oi.F_ext = K->F_jump;
+                oi.F_ext_set = 1;
+            }
+            if (!isnan(K->belt_to)) {
+                vb[0] = K->belt_to;
+                in.v_belt = vb;
+                oi.v_belt = K->belt_to;
+                oi.v_belt_set = 1;
+            }
+            eng_new_inputs(E, &old, &in, &s, NULL);
             dfo_new_inputs(&Mo, &oold, &oi, &so);
         }
         if (eng_advance(E, &in, &s, t, NULL) != ENG_OK) { d = INFINITY; break; }
@@ -285,21 +294,23 @@ static void test_vs_oscillator(checks *T)
     static const char *const names[] = {"", "paper", "consistent", "located"};
     const double nan = NAN;
     const osc_case cases[] = {
-        {DFO_SCHEME_PAPER, 0.7, 0.0, nan, 0, 0.0, 0.0},       {DFO_SCHEME_CONSISTENT, 0.3, 0.0, nan, 0, 0.0, 0.0},
-        {DFO_SCHEME_LOCATED, 0.3, 0.0, nan, 0, 0.0, 0.0},     {DFO_SCHEME_LOCATED, 0.7, 0.05, nan, 0, 0.0, 0.0},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0},     {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 1, 0.0, 0.0},     {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.02, 0.0},
-        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.0, 0.25},    {DFO_SCHEME_CONSISTENT, 0.7, 0.0, nan, 0, 0.0, 0.25},
+        {DFO_SCHEME_PAPER, 0.7, 0.0, nan, 0, 0.0, 0.0, nan},      {DFO_SCHEME_CONSISTENT, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},    {DFO_SCHEME_LOCATED, 0.7, 0.05, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},    {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 1, 0.0, 0.0, nan},    {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.02, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},   {DFO_SCHEME_CONSISTENT, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},   {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},
+        {DFO_SCHEME_LOCATED, 0.6, 0.05, 0.3, 1, 0.0, 0.0, 0.1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const osc_case *K = &cases[k];
-        check_context(T, "one block against the oscillator: %s chi %.1f c %.2f belt %g stribeck %d ramp %g jump %g",
-                      names[K->scheme], K->chi, K->c, K->v_belt, K->stribeck, K->F_ramp, K->F_jump);
+        check_context(T, "one block against the oscillator: %s chi %.1f c %.2f belt %g (to %g) stribeck %d ramp %g jump %g",
+                      names[K->scheme], K->chi, K->c, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump);
         long long se = 0, so = 0;
         const double d = osc_agreement(K, &se, &so);
-        printf("  vs oscillator %-10s chi %.1f c %.2f belt %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / max |x| "
-               "%.2e, switches %lld\n",
-               names[K->scheme], K->chi, K->c, K->v_belt, K->stribeck, K->F_ramp, K->F_jump, d, se);
+        printf("  vs oscillator %-10s chi %.1f c %.2f belt %-4g to %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / "
+               "max |x| %.2e, switches %lld\n",
+               names[K->scheme], K->chi, K->c, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump, d, se);
         CHECK(d < 1e-9);
         CHECK(se >= 4);
     }
