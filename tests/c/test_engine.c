@@ -1,10 +1,11 @@
 /* The friction engine (fmu_src/engine) on small dense models: its located scheme against the
  * oscillator's exact scheme (an independent closed form) with the error falling 4x per halving of
- * h, the consistent scheme first order; a chain of two blocks against the chain's own stepper
- * (another implementation of the same scheme); two masses with a contact between them (w = [1, -1])
- * and one to the ground, second order under refinement, the stuck contact's slip held; the dense
- * friction solver against the enumeration of the 3^nc mode sets; one block against the oscillator's
- * three Bossak schemes (belt, Stribeck, input ramps and jumps); stop at switch and state copy. Prints the measured errors and ratios. */
+ * h, the consistent scheme first order; chains of 2 and 8 blocks against the chain's own stepper
+ * (another implementation of the same schemes) in all three schemes; two masses with a contact
+ * between them (w = [1, -1]) and one to the ground, second order under refinement, the stuck
+ * contact's slip held; the dense friction solver against the enumeration of the 3^nc mode sets;
+ * one block against the oscillator's three Bossak schemes (belt, Stribeck, input ramps, input and
+ * belt changes); stop at switch and state copy. Prints the measured errors and ratios. */
 #include "check.h"
 #include "engine.h"
 
@@ -17,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define NMAX 6
+#define NMAX 8
 
 /* A dense model: M, C, K (n x n, row-major), factors by Cholesky in three slots. */
 typedef struct {
@@ -318,17 +319,28 @@ static void test_vs_oscillator(checks *T)
 
 /* ---- a chain of two blocks against the chain's stepper --------------------------------------- */
 
-static void test_chain_two(checks *T)
+/* A chain of n blocks (n <= NMAX) stepped by chain_advance and by the engine over the same dense
+ * operators (W = I): max |x_engine - x_chain| / max |x| over 40 s, the switches of both. */
+static double chain_agreement(size_t n, int scheme, long long *sw_e, long long *sw_c)
 {
-    check_context(T, "chain of two blocks, located, against chain_advance");
     const double omega = 0.7, h = 2e-3;
-    const double m[2] = {1.0, 2.0}, k[2] = {1.0, 0.5}, c[2] = {0.0, 0.05}, P0[2] = {1.0, 0.6}, phi[2] = {0.0, 0.0};
-    const double N[2] = {0.3, 0.4}, mu_s[2] = {1.0, 0.8}, chi[2] = {0.7, 0.5}, x0[2] = {0.0, 0.0}, v0[2] = {0.0, 0.0};
+    double m[NMAX], k[NMAX], c[NMAX], P0[NMAX], phi[NMAX], N[NMAX], mu_s[NMAX], chi[NMAX], mk[NMAX], zero[NMAX];
+    for (size_t i = 0; i < n; i++) {
+        m[i] = 1.0 + 0.5 * (double)(i % 3);
+        k[i] = 1.0 - 0.1 * (double)(i % 4);
+        c[i] = (i % 2) ? 0.05 : 0.0;
+        P0[i] = (i % 3 == 1) ? 0.0 : 1.0 - 0.1 * (double)i;
+        phi[i] = zero[i] = 0.0;
+        N[i] = 0.3 + 0.05 * (double)(i % 3);
+        mu_s[i] = 1.0 - 0.05 * (double)i;
+        chi[i] = (i % 4 == 3) ? 1.2 : 0.7 - 0.05 * (double)(i % 3);
+        mk[i] = chi[i] * mu_s[i];
+    }
     chain_params cp;
     memset(&cp, 0, sizeof cp);
-    cp.n = 2;
+    cp.n = n;
     cp.m = m; cp.k = k; cp.c = c; cp.P0 = P0; cp.phi = phi; cp.N = N; cp.mu_s = mu_s; cp.chi = chi;
-    cp.x0 = x0; cp.v0 = v0; cp.omega = omega; cp.h = h; cp.alpha = -0.1; cp.scheme = DFO_SCHEME_LOCATED;
+    cp.x0 = zero; cp.v0 = zero; cp.omega = omega; cp.h = h; cp.alpha = -0.1; cp.scheme = scheme;
     const chain_alloc cal = {t_alloc, t_free, NULL};
     chain_model *CM = chain_create(&cp, &cal, NULL);
     chain_state cs;
@@ -336,43 +348,63 @@ static void test_chain_two(checks *T)
     const chain_inputs cin = {NULL, NULL};
     chain_start(CM, &cin, 0.0, &cs);
 
-    dense_model D;
+    dense_model D;  /* wall -k0- m0 -k1- m1 - ... - m(n-1), free right end */
     memset(&D, 0, sizeof D);
-    D.n = 2;
-    D.M[0] = m[0]; D.M[3] = m[1];
-    D.K[0] = k[0] + k[1]; D.K[1] = D.K[2] = -k[1]; D.K[3] = k[1];
-    D.C[0] = c[0] + c[1]; D.C[1] = D.C[2] = -c[1]; D.C[3] = c[1];
-    static const size_t i0[1] = {0}, i1[1] = {1};
+    D.n = n;
+    for (size_t i = 0; i < n; i++) {
+        D.M[i * n + i] = m[i];
+        D.K[i * n + i] = k[i] + ((i + 1 < n) ? k[i + 1] : 0.0);
+        D.C[i * n + i] = c[i] + ((i + 1 < n) ? c[i + 1] : 0.0);
+        if (i + 1 < n) {
+            D.K[i * n + i + 1] = D.K[(i + 1) * n + i] = -k[i + 1];
+            D.C[i * n + i + 1] = D.C[(i + 1) * n + i] = -c[i + 1];
+        }
+    }
+    static const size_t idx[NMAX] = {0, 1, 2, 3, 4, 5, 6, 7};
     static const double w1[1] = {1.0};
-    const eng_row rows[2] = {{1, i0, w1}, {1, i1, w1}};
-    const double mk[2] = {chi[0] * mu_s[0], chi[1] * mu_s[1]};
-    eng_setup S = setup_of(&D, 2, rows, N, mu_s, mk, P0, omega, h, DFO_SCHEME_LOCATED);
-    S.rate_max = chain_shortest_period(CM) > 0 ? 2.0 * DFO_PI / chain_shortest_period(CM) * 4.0 : S.rate_max;
+    eng_row rows[NMAX];
+    for (size_t i = 0; i < n; i++) { rows[i].nnz = 1; rows[i].idx = &idx[i]; rows[i].w = w1; }
+    eng_setup S = setup_of(&D, n, rows, N, mu_s, mk, P0, omega, h, scheme);
     eng_state s;
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng *E = eng_begin(&S, &in, &s);
     double dmax = 0.0, xmax = 0.0;
-    long long sw_e = 0, sw_c = 0;
     for (int j = 1; j <= 400; j++) {
         const double t = (double)(j * 50) * h;
-        CHECK_INT(ENG_OK, eng_advance(E, &in, &s, t, NULL));
-        CHECK_INT(CHAIN_OK, chain_advance(CM, &cin, &cs, t, 0, NULL, NULL));
-        for (int i = 0; i < 2; i++) {
+        if (eng_advance(E, &in, &s, t, NULL) != ENG_OK || chain_advance(CM, &cin, &cs, t, 0, NULL, NULL) != CHAIN_OK) {
+            dmax = INFINITY;
+            break;
+        }
+        for (size_t i = 0; i < n; i++) {
             dmax = fmax(dmax, fabs(s.X[i] - cs.X[i]));
             xmax = fmax(xmax, fabs(cs.X[i]));
         }
     }
-    sw_e = s.switches;
-    sw_c = cs.switches;
-    printf("  chain n = 2, h = %g, 40 s: max |x_engine - x_chain| %.3e (max |x| %.3f), switches %lld / %lld\n", h, dmax,
-           xmax, sw_e, sw_c);
-    CHECK(dmax < 1e-10 * xmax);
-    CHECK(sw_e > 10);
-    CHECK_RANGE((double)sw_c - 2.0, (double)sw_c + 2.0, (double)sw_e);
+    *sw_e = s.switches;
+    *sw_c = cs.switches;
     eng_state_free(E, &s);
     eng_destroy(E);
     chain_state_free(CM, &cs);
     chain_destroy(CM);
+    return dmax / xmax;
+}
+
+static void test_chains(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    static const size_t sizes[] = {2, 8};
+    for (size_t a = 0; a < 2; a++)
+        for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+            const size_t n = sizes[a];
+            check_context(T, "chain of %zu blocks, %s, against chain_advance", n, names[scheme]);
+            long long se = 0, sc = 0;
+            const double d = chain_agreement(n, scheme, &se, &sc);
+            printf("  chain n = %zu %-10s 40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / %lld\n", n,
+                   names[scheme], d, se, sc);
+            CHECK(d < 1e-9);
+            CHECK(se >= 5 * (long long)n);
+            CHECK_RANGE(0.97 * (double)sc - 2.0, 1.03 * (double)sc + 2.0, (double)se);
+        }
 }
 
 /* ---- two masses, a contact between them and one to the ground ---------------------------------- */
@@ -589,7 +621,7 @@ int main(void)
     checks C = {0, 0, NULL, {0}};
     checks *T = &C;
     test_block_orders(T);
-    test_chain_two(T);
+    test_chains(T);
     test_two_masses(T);
     test_dense_lcp(T);
     test_vs_oscillator(T);
