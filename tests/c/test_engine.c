@@ -1,7 +1,8 @@
 /* The friction engine (fmu_src/engine) on small dense models: its located scheme against the
  * oscillator's exact scheme (an independent closed form) with the error falling 4x per halving of
  * h, the consistent scheme first order; chains of 2 and 8 blocks against the chain's own stepper
- * (another implementation of the same schemes) in all three schemes; two masses with a contact
+ * (another implementation of the same schemes) in all three schemes, with the dense friction solver
+ * and with a model's own (the box LCP of numerics/lcp.h through the friction hook); two masses with a contact
  * between them (w = [1, -1]) and one to the ground, second order under refinement, the stuck
  * contact's slip held; the dense friction solver against the enumeration of the 3^nc mode sets;
  * one block against the oscillator's three Bossak schemes (belt, Stribeck, input ramps, input and
@@ -10,6 +11,7 @@
 #include "engine.h"
 
 #include "chain.h"
+#include "lcp.h"
 #include "scheme.h"
 #include "osc_params.h"
 
@@ -76,6 +78,29 @@ static void op_solve(void *c, int slot, const double *b, double *x)
         for (size_t k = i + 1; k < n; k++) s -= L[k * n + i] * x[k];
         x[i] = s / L[i * n + i];
     }
+}
+
+/* A model's own friction solver, as the chain's: W = I (contact i on DOF i), no belts, M_hat
+ * tridiagonal: the box LCP of numerics/lcp.h (lcp_box_basis in the given modes, lcp_box for the
+ * LCP), z the end velocities, w the forces, q = -p_hat. */
+static eng_status tri_friction(void *c, const eng_problem *P, int what, int *mode, double *V1, double *f, int *pivots)
+{
+    const dense_model *D = c;
+    const size_t n = D->n;
+    double d[NMAX], e[NMAX], q[NMAX], cp[NMAX], dp[NMAX], work[2 * NMAX];
+    for (size_t i = 0; i < n; i++) {
+        d[i] = P->cM * D->M[i * n + i] + P->cC * D->C[i * n + i] + P->cK * D->K[i * n + i];
+        e[i] = (i + 1 < n) ? P->cM * D->M[i * n + i + 1] + P->cC * D->C[i * n + i + 1] + P->cK * D->K[i * n + i + 1] : 0.0;
+        q[i] = -P->p_hat[i];
+    }
+    if (pivots) *pivots = 0;
+    if (what == ENG_SOLVE_BASIS) {
+        lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, q, P->limit, mode, V1, f, cp, dp);
+        for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
+            if (!(mode[i] == 0 && P->limit[i] > 0.0)) f[i] = (P->limit[i] > 0.0) ? -mode[i] * P->limit[i] : 0.0;
+        return ENG_OK;
+    }
+    return lcp_box(n, d, e, q, P->limit, mode, V1, f, work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
 }
 
 static void *t_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
@@ -321,7 +346,7 @@ static void test_vs_oscillator(checks *T)
 
 /* A chain of n blocks (n <= NMAX) stepped by chain_advance and by the engine over the same dense
  * operators (W = I): max |x_engine - x_chain| / max |x| over 40 s, the switches of both. */
-static double chain_agreement(size_t n, int scheme, long long *sw_e, long long *sw_c)
+static double chain_agreement(size_t n, int scheme, int hook, long long *sw_e, long long *sw_c)
 {
     const double omega = 0.7, h = 2e-3;
     double m[NMAX], k[NMAX], c[NMAX], P0[NMAX], phi[NMAX], N[NMAX], mu_s[NMAX], chi[NMAX], mk[NMAX], zero[NMAX];
@@ -365,6 +390,7 @@ static double chain_agreement(size_t n, int scheme, long long *sw_e, long long *
     eng_row rows[NMAX];
     for (size_t i = 0; i < n; i++) { rows[i].nnz = 1; rows[i].idx = &idx[i]; rows[i].w = w1; }
     eng_setup S = setup_of(&D, n, rows, N, mu_s, mk, P0, omega, h, scheme);
+    if (hook) S.ops.friction = tri_friction;
     eng_state s;
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng *E = eng_begin(&S, &in, &s);
@@ -393,18 +419,21 @@ static void test_chains(checks *T)
 {
     static const char *const names[] = {"", "paper", "consistent", "located"};
     static const size_t sizes[] = {2, 8};
-    for (size_t a = 0; a < 2; a++)
-        for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
-            const size_t n = sizes[a];
-            check_context(T, "chain of %zu blocks, %s, against chain_advance", n, names[scheme]);
-            long long se = 0, sc = 0;
-            const double d = chain_agreement(n, scheme, &se, &sc);
-            printf("  chain n = %zu %-10s 40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / %lld\n", n,
-                   names[scheme], d, se, sc);
-            CHECK(d < 1e-9);
-            CHECK(se >= 5 * (long long)n);
-            CHECK_RANGE(0.97 * (double)sc - 2.0, 1.03 * (double)sc + 2.0, (double)se);
-        }
+    for (int hook = 0; hook <= 1; hook++) {
+        for (size_t a = 0; a < 2; a++)
+            for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+                const size_t n = sizes[a];
+                check_context(T, "chain of %zu blocks, %s, %s, against chain_advance", n, names[scheme],
+                              hook ? "the model's box LCP" : "dense friction");
+                long long se = 0, sc = 0;
+                const double d = chain_agreement(n, scheme, hook, &se, &sc);
+                printf("  chain n = %zu %-10s %-13s 40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / %lld\n",
+                       n, names[scheme], hook ? "box LCP hook" : "dense", d, se, sc);
+                CHECK(d < 1e-9);
+                CHECK(se >= 5 * (long long)n);
+                CHECK_RANGE(0.97 * (double)sc - 2.0, 1.03 * (double)sc + 2.0, (double)se);
+            }
+    }
 }
 
 /* ---- two masses, a contact between them and one to the ground ---------------------------------- */
