@@ -70,7 +70,9 @@ typedef struct {
 /* ---- what the model supplies ------------------------------------------------------------------ */
 
 /* The factor slots of eng_ops.factor / solve: the engine refactors a slot only when its
- * coefficients change (it remembers them), so a model keeps one factorisation per slot. */
+ * coefficients change (it remembers them), so a model keeps one factorisation per slot. M, C and
+ * K themselves are taken as fixed for the engine's life: a model whose matrices change makes a new
+ * engine. */
 enum {
     ENG_SLOT_GRID = 0,   /* M_hat of a whole grid step h (factored once per run) */
     ENG_SLOT_TRIAL = 1,  /* M_hat of any other step length (shortened steps, switch searches) */
