@@ -9,9 +9,19 @@ modelDescription.xml, every other model's fmu_src/models/<name>/modelDescription
   fmi3/modelDescription.xml   --fmi3: the FMI 3.0 model description
   fmi3/buildDescription.xml   --fmi3-build: the FMI 3.0 sources' build description
   fmi2/modelDescription.xml   --fmi2 SIZE: a model with structural parameters, for an FMI 2.0 build
-                              whose structural parameters are all SIZE (arrays as name[i])
+                              whose structural parameters are all SIZE, or each its own value
+                              (SIZE n=4,nc=2); arrays as name[i], matrices as name[i,j]
   <model>_config.h            --config [SIZE]: a model with structural parameters: its build
-                              configuration (with SIZE: an FMI 2.0 build's; without: FMI 3.0's)
+                              configuration (with SIZE: an FMI 2.0 build's, with the layout of its
+                              array elements' value references; without: FMI 3.0's)
+
+Arrays: a source variable with dimension="n" is a vector of the structural parameter n, one with
+dimension="nc n" a matrix of nc rows of n (row-major; at most two dimensions). FMI 3.0 declares
+one <Dimension> per structural parameter. FMI 2.0 has no arrays: every element is a variable whose
+value reference comes from a layout generated for the build's sizes (fmi2_layout: no fixed
+stride, each array's elements from its own value reference + 1 and after the previous array's,
+any size whose last value reference fits in 32 bits), written into the description
+(<Tool name="dryfriction.layout">) and the build's configuration header (DFO_FMI2_ARRAYS).
 
 The C structs a model's parameters and inputs live in (reached by offsetof) are named by the source
 itself, in the vendor annotation <Tool name="dryfriction.c"><Structs header=... parameters=...
@@ -49,6 +59,7 @@ loaded by its path) for the effect table, so that one piece of code parses it.
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import re
 import sys
 import xml.etree.ElementTree as ET
@@ -57,6 +68,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+MAX_RANK = 2  # arrays: vectors and matrices
+UINT32_MAX = 2**32 - 1  # the largest value reference
 TIME_VR = 0  # the FMI 3.0 independent variable `time` (no variable of the source may use it)
 FMI3_GLUE, FMI2_GLUE = "fmi3_cs.c", "fmi2_cs.c"
 DBL_MIN = sys.float_info.min  # the smallest positive normal double
@@ -92,8 +105,9 @@ class Variable:
     unit: str | None = None
     description: str = ""
     declared_type: str | None = None  # the enumeration type of an Enumeration
-    dimensions: tuple[int, ...] = ()  # array shape (FMI 3.0 arrays); () for a scalar, the only kind today
-    dimension: str | None = None  # an array whose size is this structural parameter (the chain's n)
+    #: an array: the structural parameters of its dimensions, row-major (the source's dimension="n" or
+    #: dimension="nc n": nc rows of n); () for a scalar
+    dims: tuple[str, ...] = ()
     dependencies: tuple[str, ...] | None = None  # outputs: the knowns it depends on at once (None: all)
     zero: str | None = None  # min 0 and a ZeroOrNormal annotation: what 0 means; other values are normal
 
@@ -211,7 +225,7 @@ def parse(xml_path: Path) -> Model:
             start=_number(kind_el.get("start"), kind), min=None if lo is None else float(lo),
             max=None if hi is None else float(hi), unit=kind_el.get("unit"),
             description=sv.get("description", ""), declared_type=declared, dependencies=dep_names,
-            zero=zero.get(name), dimension=sv.get("dimension")))
+            zero=zero.get(name), dims=tuple((sv.get("dimension") or "").split())))
     effects_var, effects = _READER.parse_effects(root)
     structs_el = root.find("VendorAnnotations/Tool[@name='dryfriction.c']/Structs")
     structs = {} if structs_el is None else {k: structs_el.get(k, "") for k in ("header", "parameters", "inputs")}
@@ -267,12 +281,12 @@ def check(model: Model) -> None:
         vrs.add(v.vr)
         if v.vr == TIME_VR or v.name == "time":
             raise ModelError(f"variable {v.name}: name time and value reference {TIME_VR} are FMI 3.0's time")
-        if v.dimensions:
-            raise ModelError(f"variable {v.name}: arrays are not supported by the C emitter yet")
-        if v.dimension is not None and v.dimension not in {s.name for s in model.variables
-                                                           if s.causality == "structuralParameter"}:
-            raise ModelError(f"variable {v.name}: dimension {v.dimension} is not a structural parameter")
-        if v.causality == "structuralParameter" and (v.type != "UInt64" or v.dimension is not None):
+        for d in v.dims:
+            if d not in {s.name for s in model.variables if s.causality == "structuralParameter"}:
+                raise ModelError(f"variable {v.name}: dimension {d} is not a structural parameter")
+        if len(v.dims) > MAX_RANK:
+            raise ModelError(f"variable {v.name}: {len(v.dims)} dimensions (at most {MAX_RANK})")
+        if v.causality == "structuralParameter" and (v.type != "UInt64" or v.dims):
             raise ModelError(f"variable {v.name}: a structural parameter is a scalar UInt64")
         if v.causality not in CAUSALITIES:
             raise ModelError(f"variable {v.name}: unsupported causality {v.causality}")
@@ -514,29 +528,99 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
     return "\n".join(L)
 
 
-ARRAY_VR_STRIDE = 100000  # array j: value reference j * stride (FMI 3.0), element i: j * stride + i (FMI 2.0)
+# ------------------------------------------------------------------ the FMI 2.0 array layout
+
+
+@dataclass(frozen=True)
+class ArrayLayout:
+    """Where an array's elements sit among the FMI 2.0 value references of a build: element
+    (i, j) (1-based; i alone for a vector) at ``first + (i - 1) cols + (j - 1)``, row-major."""
+
+    name: str
+    vr: int  # the array's own value reference (FMI 3.0's)
+    first: int  # the value reference of its first element (FMI 2.0)
+    shape: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        """The number of elements."""
+        n = 1
+        for s in self.shape:
+            n *= s
+        return n
+
+    def elements(self) -> list[tuple[tuple[int, ...], int]]:
+        """(index, value reference) of every element, row-major (indices 1-based)."""
+        return [(idx, self.first + k) for k, idx in enumerate(itertools.product(*(range(1, s + 1) for s in self.shape)))]
+
+
+def fmi2_layout(model: Model, sizes: dict[str, int]) -> tuple[ArrayLayout, ...]:
+    """The FMI 2.0 value references of the array elements for a build's structural parameters: the
+    arrays in the order of their value references, each from the first value reference after its
+    own and after the previous array's elements (no fixed stride: the declared value references
+    are kept where the elements fit between them, and any size goes as long as the last fits in
+    32 bits). Scalars keep theirs and must all come before the arrays'."""
+    arrays = sorted((v for v in model.variables if v.dims), key=lambda v: v.vr)
+    scalars = [v for v in model.variables if not v.dims and v.causality != "structuralParameter"]
+    if arrays and scalars:
+        top = max(scalars, key=lambda v: v.vr)
+        if top.vr >= arrays[0].vr:
+            raise ModelError(f"scalar {top.name}: value reference {top.vr} is not below the arrays' "
+                             f"({arrays[0].name}: {arrays[0].vr})")
+    out, end = [], 0
+    for v in arrays:
+        first = max(v.vr + 1, end)
+        lay = ArrayLayout(v.name, v.vr, first, tuple(sizes[d] for d in v.dims))
+        end = first + lay.count
+        if end - 1 > UINT32_MAX:
+            shown = ", ".join(f"{k} = {n}" for k, n in sizes.items())
+            raise ModelError(f"with {shown} the FMI 2.0 value references of {v.name} end at {end - 1}, "
+                             f"beyond 32 bits ({UINT32_MAX})")
+        out.append(lay)
+    return tuple(out)
+
+
+def build_sizes(model: Model, text: str | int) -> dict[str, int]:
+    """The structural parameters of a build: ``SIZE`` (every one) or ``name=SIZE,name=SIZE`` (each),
+    every value inside its declared range."""
+    structural = [v for v in model.variables if v.causality == "structuralParameter"]
+    if not structural:
+        raise ModelError("a build configuration is for a model with structural parameters")
+    text = str(text)
+    if "=" in text:
+        sizes: dict[str, int] = {}
+        for part in text.split(","):
+            name, _, value = part.partition("=")
+            sizes[name.strip()] = int(value)
+        unknown = set(sizes) - {v.name for v in structural}
+        missing = [v.name for v in structural if v.name not in sizes]
+        if unknown or missing:
+            raise ModelError(f"sizes {text!r}: give each of {', '.join(v.name for v in structural)} once")
+    else:
+        sizes = {v.name: int(text) for v in structural}
+    for v in structural:
+        if not (v.min <= sizes[v.name] <= v.max):
+            raise ModelError(f"{v.name} = {sizes[v.name]} outside [{text_number(v.min)}, {text_number(v.max)}]")
+    return {v.name: sizes[v.name] for v in structural}
 
 
 def emit_c_header_indexed(model: Model, source: str) -> str:
     """The C view of a model with structural parameters and arrays over them (the chain): values live
     in slots (scalar parameters, array parameters, array inputs), outputs are computed by id; the
-    instance core (chain_instance.c) sizes the arrays by the structural parameter."""
+    instance core (chain_instance.c) sizes the arrays by the structural parameters. The FMI 2.0
+    value references of the elements depend on a build's sizes: emit_build_config writes them."""
     for v in model.variables:
-        if v.dimension is not None and v.vr % ARRAY_VR_STRIDE:
-            raise ModelError(f"array {v.name}: value reference {v.vr} is not a multiple of {ARRAY_VR_STRIDE}")
-        if v.dimension is None and v.vr >= ARRAY_VR_STRIDE:
-            raise ModelError(f"scalar {v.name}: value reference {v.vr} is in the arrays' range")
-        if v.causality == "input" and v.dimension is None:
+        if v.causality == "input" and not v.dims:
             raise ModelError(f"input {v.name}: scalar inputs are not supported in an indexed model")
     groups = {
-        "DFO_SP": [v for v in model.variables if v.causality == "parameter" and v.dimension is None],
-        "DFO_AP": [v for v in model.variables if v.causality == "parameter" and v.dimension is not None],
+        "DFO_SP": [v for v in model.variables if v.causality == "parameter" and not v.dims],
+        "DFO_AP": [v for v in model.variables if v.causality == "parameter" and v.dims],
         "DFO_AI": [v for v in model.variables if v.causality == "input"],
         "DFO_OUT": [v for v in model.variables if v.causality in COMPUTED],
         "DFO_STRUCT": [v for v in model.variables if v.causality == "structuralParameter"],
     }
-    L = _c_header_head(model, source, [],
-                       [f"#define DFO_ARRAY_VR_STRIDE {ARRAY_VR_STRIDE}u /* array j: j * stride; its element i (1-based): j * stride + i */"])
+    arrays = [v for v in model.variables if v.dims]
+    L = _c_header_head(model, source, [], [])
     L += _c_enumerations(model)
     L += _c_log_categories(model)
     L += ["};", "", "/* slots: scalar parameters (SP), array parameters (AP), array inputs (AI), computed (OUT),",
@@ -552,8 +636,9 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         "typedef enum { DFO_IN_PARAMS, DFO_IN_ARRAYS, DFO_IN_INPUTS, DFO_COMPUTED, DFO_IN_STRUCT } dfo_var_home;",
         "",
         *_c_var_info_struct([
-            "    int array;          /* an array of n values (n: the structural parameter) */",
+            "    int array;          /* an array (of the product of its dimensions' values) */",
             "    int slot;           /* index in its group */",
+            f"    int ndims, dims[{MAX_RANK}]; /* an array's dimensions: DFO_STRUCT_ slots, row-major; -1 unused */",
         ], "absent bounds: the type's extremes; an array's start is every element's"),
         "",
         f"#define DFO_NUM_VARS {len(model.variables)}",
@@ -564,9 +649,14 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
     causalities, types = C_CAUSALITIES, C_TYPES
     for v in model.variables:
         prefix = next(p for p, vs in groups.items() if v in vs)
+        dims = [f"DFO_STRUCT_{d}" for d in v.dims] + ["-1"] * (MAX_RANK - len(v.dims))
         L.append(_c_var_row(model, v, types[v.type], causalities[v.causality],
-                            f"{homes[prefix]}, {int(v.dimension is not None)}, {prefix}_{v.name}"))
-    L += ["};", "", "#endif", ""]
+                            f"{homes[prefix]}, {int(bool(v.dims))}, {prefix}_{v.name}, {len(v.dims)}, "
+                            f"{{{', '.join(dims)}}}"))
+    L += ["};", "", "/* the arrays' own value references (FMI 3.0), in declaration order */",
+          f"#define DFO_NUM_ARRAYS {len(arrays)}",
+          f"static const unsigned int DFO_ARRAY_VRS[DFO_NUM_ARRAYS] = {{{', '.join(f'{v.vr}u' for v in arrays)}}};",
+          "", "#endif", ""]
     return "\n".join(L)
 
 
@@ -667,13 +757,15 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
             el = next(iter(src))
             # the bounds as the source writes them (Int32 outputs without bounds stay without)
             pairs += [("min", el.get("min")), ("max", el.get("max"))]
-        if v.dimension is not None:
-            size = int(model.variable(v.dimension).start)
-            if v.start is not None:  # one start value per element of the structural parameter's start
+        if v.dims:
+            size = 1
+            for d in v.dims:
+                size *= int(model.variable(d).start)
+            if v.start is not None:  # one start value per element at the structural parameters' starts
                 pairs.append(("start", " ".join([_xml_number(v.start, v.type)] * size)))
-            dim_vr = model.variable(v.dimension).vr
             L.append(f"    <{kind}" + _attrs(pairs) + ">")
-            L.append("      <Dimension" + _attrs([("valueReference", str(dim_vr))]) + "/>")
+            # one <Dimension> per structural parameter, the outermost (rows) first
+            L += ["      <Dimension" + _attrs([("valueReference", str(model.variable(d).vr))]) + "/>" for d in v.dims]
             L.append(f"    </{kind}>")
             continue
         if v.start is not None:
@@ -718,24 +810,60 @@ def emit_fmi3_build_description(model: Model, source: Path) -> str:
     return "\n".join(L)
 
 
-def emit_fmi2_model_description(model: Model, source: Path, size: int) -> str:
-    """The FMI 2.0 model description of an indexed model for a build whose structural parameters
-    are all `size`: every array element a ScalarVariable named `name[i]` (value reference
-    array's + i), the structural parameters left out (fixed by the build), an array output's
-    dependency on an array input meaning the same element."""
+LAYOUT_TOOL = "dryfriction.layout"  # the vendor annotation holding an FMI 2.0 build's array layout
+
+
+def _element_name(name: str, idx: tuple[int, ...]) -> str:
+    """FMI 2.0's structured name of an array element: m[3], W[2,3]."""
+    return f"{name}[{','.join(str(i) for i in idx)}]" if idx else name
+
+
+def _layout_tool(layouts: tuple[ArrayLayout, ...], sizes: dict[str, int]) -> ET.Element:
+    """<Tool name="dryfriction.layout">: the build's sizes and every array's first element's value
+    reference and shape (dryfriction.model reads it and checks the elements against it)."""
+    tool = ET.Element("Tool", {"name": LAYOUT_TOOL})
+    lay = ET.SubElement(tool, "Layout", {"sizes": ",".join(f"{k}={n}" for k, n in sizes.items())})
+    lay.text = "\n        "
+    for k, a in enumerate(layouts):
+        el = ET.SubElement(lay, "Array", {"name": a.name, "valueReference": str(a.vr), "first": str(a.first),
+                                          "shape": " ".join(str(n) for n in a.shape)})
+        el.tail = "\n        " if k + 1 < len(layouts) else "\n      "
+    lay.tail = "\n    "
+    tool.text = "\n      "
+    tool.tail = "\n  "
+    return tool
+
+
+def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> str:
+    """The FMI 2.0 model description of an indexed model for a build's structural parameters
+    (``size``: one value for all, or ``n=4,nc=2``; build_sizes): every array element a
+    ScalarVariable with its structured name (``m[i]``, ``W[i,j]``) and the value reference of the
+    layout (fmi2_layout; written into the description's ``dryfriction.layout`` annotation), the
+    structural parameters left out (fixed by the build), an array output's dependency on an array
+    input of the same shape meaning the same element (of another shape: every element)."""
     root = ET.parse(source).getroot()
-    structural = {v.name for v in model.variables if v.causality == "structuralParameter"}
-    for v in model.variables:
-        if v.name in structural and not (v.min <= size <= v.max):
-            raise ModelError(f"{v.name} = {size} outside [{text_number(v.min)}, {text_number(v.max)}]")
-    if size >= ARRAY_VR_STRIDE:
-        raise ModelError(f"an array size of {size} does not fit the value references")
+    sizes = build_sizes(model, size)
+    layouts = {a.name: a for a in fmi2_layout(model, sizes)}
+    structural = set(sizes)
+    vendor = root.find("VendorAnnotations")
+    if vendor is None:
+        vendor = ET.Element("VendorAnnotations")
+        vendor.text, vendor.tail = "\n    ", "\n\n  "
+        root.insert(list(root).index(root.find("ModelVariables")), vendor)
+    elif len(vendor):
+        vendor[-1].tail = "\n    "
+    vendor.append(_layout_tool(tuple(layouts.values()), sizes))
     head = ET.tostring(root, encoding="unicode").split("<ModelVariables>")[0]
     head = re.sub(r"\s*<!--.*?-->", "", head, flags=re.S)  # the source's own comments
+    shown = ", ".join(f"{k} = {n}" for k, n in sizes.items())
     L = ['<?xml version="1.0" encoding="UTF-8"?>',
-         f"<!-- Generated from {source.name} by fmu_src/gen_model_vars.py for n = {size}. Do not edit. -->",
+         f"<!-- Generated from {source.name} by fmu_src/gen_model_vars.py for {shown}. Do not edit. -->",
          head.rstrip().replace("\n", "\n", 1), "", "  <ModelVariables>"]
-    index: dict[tuple[str, int], int] = {}
+
+    def elements(v: Variable) -> list[tuple[tuple[int, ...], int]]:
+        return layouts[v.name].elements() if v.dims else [((), v.vr)]
+
+    index: dict[tuple[str, tuple[int, ...]], int] = {}
     srcs = {sv.get("name"): sv for sv in root.iterfind("ModelVariables/ScalarVariable")}
     k = 0
     for v in model.variables:
@@ -743,52 +871,75 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int) -> str:
             continue
         sv = srcs[v.name]
         el = next(iter(sv))
-        for i in (range(1, size + 1) if v.dimension else (0,)):
+        for idx, vr in elements(v):
             k += 1
-            name, vr = (f"{v.name}[{i}]", v.vr + i) if v.dimension else (v.name, v.vr)
-            index[(v.name, i)] = k
+            index[(v.name, idx)] = k
             attrs = [(a, sv.get(a)) for a in ("causality", "variability", "initial")]
-            desc = sv.get("description") + (f" (block {i})" if v.dimension else "")
-            L.append("    <ScalarVariable" + _attrs([("name", name), ("valueReference", str(vr))] + attrs
-                                                    + [("description", desc)]) + ">"
+            where = "" if not idx else (f" (block {idx[0]})" if len(idx) == 1 else
+                                        f" (element {', '.join(str(i) for i in idx)})")
+            L.append("    <ScalarVariable" + _attrs([("name", _element_name(v.name, idx)), ("valueReference", str(vr))]
+                                                    + attrs + [("description", sv.get("description") + where)]) + ">"
                      + f"<{el.tag}" + _attrs(list(el.attrib.items())) + "/></ScalarVariable>")
+
+    def dep_indices(v: Variable, idx: tuple[int, ...], d: str) -> list[int]:
+        dv = model.variable(d)
+        if not dv.dims:
+            return [index[(d, ())]]
+        if dv.dims == v.dims:
+            return [index[(d, idx)]]
+        return [index[(d, j)] for j, _ in elements(dv)]
+
     L += ["  </ModelVariables>", "", "  <ModelStructure>", "    <Outputs>"]
     outputs = [v for v in model.variables if v.causality == "output"]
     for v in outputs:
-        for i in (range(1, size + 1) if v.dimension else (0,)):
+        for idx, _ in elements(v):
             deps = None
             if v.dependencies is not None:
-                deps = " ".join(str(index[(d, i if model.variable(d).dimension else 0)]) for d in v.dependencies)
-            L.append("      <Unknown" + _attrs([("index", str(index[(v.name, i)])), ("dependencies", deps)]) + "/>")
+                deps = " ".join(str(i) for d in v.dependencies for i in dep_indices(v, idx, d))
+            L.append("      <Unknown" + _attrs([("index", str(index[(v.name, idx)])), ("dependencies", deps)]) + "/>")
     L += ["    </Outputs>", "    <InitialUnknowns>"]
     for v in outputs + [v for v in model.variables if v.causality == "calculatedParameter"]:
-        for i in (range(1, size + 1) if v.dimension else (0,)):
-            L.append("      <Unknown" + _attrs([("index", str(index[(v.name, i)]))]) + "/>")
+        for idx, _ in elements(v):
+            L.append("      <Unknown" + _attrs([("index", str(index[(v.name, idx)]))]) + "/>")
     L += ["    </InitialUnknowns>", "  </ModelStructure>", "", "</fmiModelDescription>", ""]
     return "\n".join(L)
 
 
-def emit_build_config(model: Model, source: Path, size: int | None) -> str:
+def emit_build_config(model: Model, source: Path, size: int | str | None) -> str:
     """The build configuration header of an indexed model (``chain_config.h``), shipped in an FMU's
-    sources/ so that a plain compile of its listed files builds that FMU: with a size (an FMI 2.0
-    build, whose structural parameters are fixed) ``DFO_<MODEL>_FIXED_<NAME> size`` for each of
-    them; without, none (FMI 3.0: set in Configuration Mode)."""
+    sources/ so that a plain compile of its listed files builds that FMU: with sizes (an FMI 2.0
+    build, whose structural parameters are fixed: one value for all, or ``n=4,nc=2``)
+    ``DFO_<MODEL>_FIXED_<NAME> size`` for each of them and the value references of the array
+    elements (fmi2_layout: ``DFO_FMI2_ARRAYS``); without, none (FMI 3.0: set in Configuration Mode)."""
     structural = [v for v in model.variables if v.causality == "structuralParameter"]
     if not structural:
         raise ModelError("a build configuration is for a model with structural parameters")
     prefix = "DFO_" + upper_snake(model.identifier.replace("DryFriction", "")) + "_FIXED_"
     guard = "DFO_" + upper_snake(model.identifier.replace("DryFriction", "")) + "_CONFIG_H"
+    sizes = build_sizes(model, size) if size is not None else None
     L = [f"/* Generated from {source.name} by fmu_src/gen_model_vars.py"
-         + (f" for an FMI 2.0 build with {', '.join(v.name for v in structural)} = {size}" if size is not None
+         + (f" for an FMI 2.0 build with {', '.join(f'{k} = {n}' for k, n in sizes.items())}" if sizes is not None
             else " for an FMI 3.0 build (structural parameters set in Configuration Mode)") + ". Do not edit. */",
          f"#ifndef {guard}", f"#define {guard}", ""]
     for v in structural:
-        if size is None:
+        if sizes is None:
             L.append(f"/* {v.name}: a structural parameter, start {int(v.start)} (no {prefix}{upper_snake(v.name)}) */")
             continue
-        if not (v.min <= size <= v.max):
-            raise ModelError(f"{v.name} = {size} outside [{text_number(v.min)}, {text_number(v.max)}]")
-        L.append(f"#define {prefix}{upper_snake(v.name)} {size} /* {v.name}, fixed by this build */")
+        L.append(f"#define {prefix}{upper_snake(v.name)} {sizes[v.name]} /* {v.name}, fixed by this build */")
+    if sizes is not None:
+        layouts = fmi2_layout(model, sizes)
+        L += ["",
+              "/* FMI 2.0: the value references of the array elements (the layout of the model description's",
+              " * dryfriction.layout annotation): element (i, j) of array vr (1-based; i alone for a vector) is",
+              " * first + (i - 1) cols + (j - 1), for count elements; arrays in the order of their value references */",
+              "typedef struct {",
+              "    unsigned int vr, first, count, cols;",
+              "} dfo_fmi2_array;",
+              f"#define DFO_FMI2_NUM_ARRAYS {len(layouts)}",
+              "static const dfo_fmi2_array DFO_FMI2_ARRAYS[DFO_FMI2_NUM_ARRAYS] = {"]
+        L += [f"    {{{a.vr}u, {a.first}u, {a.count}u, {a.shape[-1] if len(a.shape) > 1 else 1}u}}, /* {a.name} */"
+              for a in layouts]
+        L.append("};")
     L += ["", "#endif", ""]
     return "\n".join(L)
 
@@ -800,9 +951,9 @@ EMITTERS = {"--header": lambda m, src: emit_c_header(m, src.name), "--fmi3": emi
 def main(argv: list[str]) -> int:
     sized = None
     if len(argv) == 5 and argv[3] == "--fmi2":  # an indexed model's FMI 2.0 description for a size
-        sized = lambda md: emit_fmi2_model_description(md, Path(argv[1]), int(argv[4]))  # noqa: E731
+        sized = lambda md: emit_fmi2_model_description(md, Path(argv[1]), argv[4])  # noqa: E731
     elif len(argv) in (4, 5) and argv[3] == "--config":  # an indexed model's build configuration header
-        sized = lambda md: emit_build_config(md, Path(argv[1]), int(argv[4]) if len(argv) == 5 else None)  # noqa: E731
+        sized = lambda md: emit_build_config(md, Path(argv[1]), argv[4] if len(argv) == 5 else None)  # noqa: E731
     if sized is not None:
         try:
             text = sized(parse(Path(argv[1])))

@@ -631,3 +631,171 @@ def test_output_dependencies_by_value_reference(md2, md3) -> None:
         return {u.variable.name: sorted(d.name for d in (u.dependencies or [])) for u in md.outputs}
     assert deps(md2) == deps(md3)
     assert {u.variable.name for u in md2.initialUnknowns} == {u.variable.name for u in md3.initialUnknowns}
+
+
+# ------------------------------------------------------------------ arrays of several dimensions
+
+#: a synthetic source with two structural parameters and matrices over them: M (n x n), W (nc x n)
+SPEC2D = """<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="2.0" modelName="Grid" guid="{00000000-0000-4000-8000-000000000001}"
+  variableNamingConvention="structured" numberOfEventIndicators="0">
+  <CoSimulation modelIdentifier="DryFrictionGrid" canHandleVariableCommunicationStepSize="true"/>
+  <LogCategories><Category name="logAll" description="every call"/></LogCategories>
+  <ModelVariables>
+    <ScalarVariable name="n" valueReference="1" causality="structuralParameter" variability="fixed" description="dofs"><UInt64 start="3" min="1" max="100000"/></ScalarVariable>
+    <ScalarVariable name="nc" valueReference="2" causality="structuralParameter" variability="fixed" description="contacts"><UInt64 start="2" min="1" max="100000"/></ScalarVariable>
+    <ScalarVariable name="h" valueReference="3" causality="parameter" variability="fixed" initial="exact" description="step"><Real min="0" start="0.001"/></ScalarVariable>
+    <ScalarVariable name="M" valueReference="100" dimension="n n" causality="parameter" variability="fixed" initial="exact" description="mass matrix"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="W" valueReference="200" dimension="nc n" causality="parameter" variability="fixed" initial="exact" description="contact rows"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="F_ext" valueReference="300" dimension="n" causality="input" variability="continuous" description="force"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="x" valueReference="400" dimension="n" causality="output" variability="continuous" initial="calculated" description="position"><Real/></ScalarVariable>
+    <ScalarVariable name="f" valueReference="500" dimension="nc" causality="output" variability="continuous" initial="calculated" description="contact force"><Real/></ScalarVariable>
+  </ModelVariables>
+  <ModelStructure>
+    <Outputs><Unknown index="7" dependencies="6"/><Unknown index="8" dependencies="6"/></Outputs>
+    <InitialUnknowns><Unknown index="7"/><Unknown index="8"/></InitialUnknowns>
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+#: prints the generated C view: every FMI 2.0 layout row, then every array's dimensions (DFO_STRUCT_ slots)
+LAYOUT_C = r"""
+#include <stdio.h>
+#include "cfg.h"
+#include "model_vars.h"
+int main(void)
+{
+    for (int a = 0; a < DFO_FMI2_NUM_ARRAYS; a++)
+        printf("L %u %u %u %u\n", DFO_FMI2_ARRAYS[a].vr, DFO_FMI2_ARRAYS[a].first, DFO_FMI2_ARRAYS[a].count,
+               DFO_FMI2_ARRAYS[a].cols);
+    for (int v = 0; v < DFO_NUM_VARS; v++)
+        if (DFO_VARS[v].array)
+            printf("D %s %d %d %d\n", DFO_VARS[v].name, DFO_VARS[v].ndims, DFO_VARS[v].dims[0], DFO_VARS[v].dims[1]);
+    printf("S %d %d\n", DFO_STRUCT_n, DFO_STRUCT_nc);
+    return 0;
+}
+"""
+
+
+def _spec2d(tmp_path: Path) -> Path:
+    src = tmp_path / "grid.xml"
+    src.write_text(SPEC2D)
+    return src
+
+
+def test_the_generator_lays_out_matrices_over_two_structural_parameters(tmp_path: Path) -> None:
+    """A source with n and nc and the arrays M (n x n), W (nc x n), F_ext, x (n), f (nc): the FMI 2.0
+    description of n = 3, nc = 2 names every element (W[2,3], row-major) with the layout's value
+    reference (each array from its own value reference + 1: M 101 ... 109, W 201 ... 206), writes the
+    layout into its annotation, and maps dependencies element to element (x[i] on F_ext[i]) or on
+    every element (f on F_ext); dryfriction.model reads the same; FMI 3.0 gives M two <Dimension>s."""
+    src = _spec2d(tmp_path)
+    r = _gen(str(src), str(tmp_path / "md2.xml"), "--fmi2", "n=3,nc=2")
+    assert r.returncode == 0, r.stderr
+    md2 = model.from_xml(tmp_path / "md2.xml")
+    assert md2.arrays()["W"] == ("W[1,1]", "W[1,2]", "W[1,3]", "W[2,1]", "W[2,2]", "W[2,3]")
+    assert [md2.vr(e) for e in md2.arrays()["M"]] == list(range(101, 110))
+    assert [md2.vr(e) for e in md2.arrays()["W"]] == list(range(201, 207))
+    assert md2.vr("x[3]") == 403 and md2.vr("f[2]") == 502 and md2.vr("h") == 3 and "n" not in md2.variables
+    assert md2.layout["W"].shape == (2, 3) and md2.layout["W"].element_vr(2, 1) == md2.vr("W[2,1]") == 204
+    assert md2.shape("M") == (3, 3) and md2.shape("f") == (2,)
+    root = ET.parse(tmp_path / "md2.xml").getroot()
+    svs = root.findall("ModelVariables/ScalarVariable")
+    assert len({sv.get("valueReference") for sv in svs}) == len(svs) == 1 + 9 + 6 + 3 + 3 + 2
+    index = {sv.get("name"): k for k, sv in enumerate(svs, start=1)}
+    deps = {int(u.get("index")): u.get("dependencies") for u in root.iterfind("ModelStructure/Outputs/Unknown")}
+    assert deps[index["x[2]"]] == str(index["F_ext[2]"])
+    assert deps[index["f[1]"]] == " ".join(str(index[f"F_ext[{i}]"]) for i in (1, 2, 3))
+    assert "W[2,3]" in (tmp_path / "md2.xml").read_text() and "(element 2, 3)" in (tmp_path / "md2.xml").read_text()
+    # FMI 3.0: one <Dimension> per structural parameter, the rows first; the start values at n = 3, nc = 2
+    assert _gen(str(src), str(tmp_path / "md3.xml"), "--fmi3").returncode == 0
+    root3 = ET.parse(tmp_path / "md3.xml").getroot()
+    w = root3.find("ModelVariables/Float64[@name='W']")
+    assert [d.get("valueReference") for d in w.iterfind("Dimension")] == ["2", "1"] and len(w.get("start").split()) == 6
+    md3 = model.from_xml(tmp_path / "md3.xml")
+    assert md3.var("W").dimensions == ("nc", "n") and md3.var("M").dimension == "n n" and md3.var("x").dimension == "n"
+    assert md3.shape("W") == (2, 3) and md3.vr("W") == 200 and md3.layout == {}
+    assert set(md3.arrays()) == set(md2.arrays()) == {"M", "W", "F_ext", "x", "f"}
+
+
+def test_the_generated_header_and_description_agree_on_the_layout(tmp_path: Path) -> None:
+    """The C view compiled and run (chain_config.h's DFO_FMI2_ARRAYS for n = 3, nc = 2; model_vars.h's
+    dimensions of each array) says what the FMI 2.0 description and dryfriction.model say."""
+    import shutil
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    src = _spec2d(tmp_path)
+    for args in (("cfg.h", "--config", "n=3,nc=2"), ("model_vars.h",), ("md2.xml", "--fmi2", "n=3,nc=2")):
+        r = _gen(str(src), str(tmp_path / args[0]), *args[1:])
+        assert r.returncode == 0, r.stderr
+    (tmp_path / "main.c").write_text(LAYOUT_C)
+    exe = tmp_path / "layout"
+    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(tmp_path), str(tmp_path / "main.c"),
+                    "-o", str(exe)], check=True, capture_output=True, text=True)
+    lines = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split("\n")
+    rows = [tuple(int(x) for x in ln.split()[1:]) for ln in lines if ln.startswith("L ")]
+    md2 = model.from_xml(tmp_path / "md2.xml")
+    want = sorted((a.vr, a.first, a.count, a.shape[-1] if len(a.shape) > 1 else 1) for a in md2.layout.values())
+    assert rows == want == [(100, 101, 9, 3), (200, 201, 6, 3), (300, 301, 3, 1), (400, 401, 3, 1), (500, 501, 2, 1)]
+    n_slot, nc_slot = (int(x) for x in next(ln for ln in lines if ln.startswith("S ")).split()[1:])
+    dims = {ln.split()[1]: tuple(int(x) for x in ln.split()[2:]) for ln in lines if ln.startswith("D ")}
+    assert dims == {"M": (2, n_slot, n_slot), "W": (2, nc_slot, n_slot), "F_ext": (1, n_slot, -1),
+                    "x": (1, n_slot, -1), "f": (1, nc_slot, -1)}
+    for name, (first_vr, count) in {"M": (101, 9), "W": (201, 6)}.items():
+        elements = md2.arrays()[name]
+        assert [md2.vr(e) for e in elements] == list(range(first_vr, first_vr + count))
+
+
+@pytest.mark.parametrize("sizes, fits", [("n=46000,nc=2", True), ("n=65536,nc=1", False), ("n=1,nc=100000", True)])
+def test_the_layout_takes_any_size_that_fits_in_32_bits(tmp_path: Path, sizes: str, fits: bool) -> None:
+    """No stride: M's n^2 elements push the later arrays up (n = 46000: M ends at 2116000100, W
+    starts after it), and a layout whose last value reference passes 2^32 - 1 (n = 65536: M alone
+    has 2^32 elements) is refused with one line naming the array."""
+    src = _spec2d(tmp_path)
+    r = _gen(str(src), str(tmp_path / "cfg.h"), "--config", sizes)
+    if not fits:
+        assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1
+        assert "beyond 32 bits" in r.stderr and "of M" in r.stderr and not (tmp_path / "cfg.h").exists()
+        return
+    assert r.returncode == 0, r.stderr
+    text = (tmp_path / "cfg.h").read_text()
+    rows = [tuple(int(x.rstrip("u")) for x in ln.split("{")[1].split("}")[0].split(", "))
+            for ln in text.splitlines() if ln.strip().startswith("{") and "/*" in ln]
+    n, nc = (int(p.split("=")[1]) for p in sizes.split(","))
+    counts = [n * n, nc * n, n, n, nc]
+    assert [c for _, _, c, _ in rows] == counts
+    end = 0
+    for (vr, first, count, _), declared in zip(rows, (100, 200, 300, 400, 500)):
+        assert vr == declared and first == max(declared + 1, end)  # after its own and the previous array's
+        end = first + count
+    assert end - 1 <= 2**32 - 1
+
+
+@pytest.mark.parametrize("sizes, says", [("n=3", "give each of n, nc once"), ("n=3,nc=0", "nc = 0 outside"),
+                                         ("n=3,nc=2,q=1", "give each of n, nc once")])
+def test_the_generator_refuses_bad_sizes(tmp_path: Path, sizes: str, says: str) -> None:
+    """The sizes of a build name every structural parameter once, inside its range: else one line."""
+    r = _gen(str(_spec2d(tmp_path)), str(tmp_path / "md2.xml"), "--fmi2", sizes)
+    assert r.returncode == 1 and says in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_a_scalar_above_the_arrays_is_refused(tmp_path: Path) -> None:
+    """The layout keeps every scalar's value reference, so the scalars must all come before the arrays'."""
+    bad = SPEC2D.replace('name="h" valueReference="3"', 'name="h" valueReference="250"')
+    (tmp_path / "bad.xml").write_text(bad)
+    r = _gen(str(tmp_path / "bad.xml"), str(tmp_path / "md2.xml"), "--fmi2", "2")
+    assert r.returncode == 1 and "scalar h: value reference 250 is not below the arrays'" in r.stderr
+
+
+def test_the_reader_refuses_a_layout_its_elements_contradict(tmp_path: Path) -> None:
+    """dryfriction.model checks an FMI 2.0 description's elements against its layout annotation: an
+    element moved off its place is one sentence, not a silently wrong value reference."""
+    src = _spec2d(tmp_path)
+    assert _gen(str(src), str(tmp_path / "md2.xml"), "--fmi2", "n=2,nc=2").returncode == 0
+    text = (tmp_path / "md2.xml").read_text()
+    moved = text.replace('name="W[2,1]" valueReference="203"', 'name="W[2,1]" valueReference="299"')
+    assert moved != text
+    with pytest.raises(ValueError, match=r"W\[2,1\] has value reference 299, its array's layout .* says 203"):
+        model.parse(moved)

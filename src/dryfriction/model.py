@@ -4,8 +4,12 @@ One reader for every description of the package, both models and both FMI versio
 oscillator's and the chain's FMI 2.0 descriptions (the chain's with structured names ``m[1]`` ...
 ``m[n]``), their FMI 3.0 descriptions (typed elements ``<Float64>``, arrays with ``<Dimension>``
 bound to the structural parameter ``n``, ``<Annotations>``) and the chain's source description
-(``dimension="n"``). Variables (name, value reference, type, causality, start, min, max, unit, the
-structural parameter that sizes an array), the scheme names of the ``Scheme`` enumeration and the
+(``dimension="n"``). Arrays may have several dimensions, each a structural parameter (FMI 3.0:
+one ``<Dimension>`` each, the rows first; the source's ``dimension="nc n"``; FMI 2.0: the
+structured names ``W[i,j]``, whose value references follow the build's layout, written into the
+description's ``<Tool name="dryfriction.layout">`` and checked here against the elements).
+Variables (name, value reference, type, causality, start, min, max, unit, the
+structural parameters that size an array), the scheme names of the ``Scheme`` enumeration and the
 effect bits of the vendor annotation (``<Tool name="dryfriction"><Effects>``, FMI 3.0:
 ``<Annotation type="dryfriction">``; parsed by :func:`parse_effects`, the one parser of that table)
 come from ``modelDescription.xml``: the FMU's own (:func:`from_fmu`) or the repository's
@@ -25,12 +29,12 @@ import os
 import re
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
-__all__ = ["Variable", "Effect", "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu", "repository",
+__all__ = ["Variable", "Effect", "ArrayLayout", "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu", "repository",
            "default", "default_fmu_path", "LazyMapping", "LazySequence"]
 
 #: FMI 2.0: the C call family that reads/writes a variable of each declared type
@@ -42,7 +46,9 @@ CALL_TYPE3 = {"Float64": "Float64", "Float32": "Float32", "Int32": "Int32", "Int
 #: the declared types holding real numbers and whole numbers (both FMI versions)
 REAL_TYPES = ("Real", "Float64", "Float32")
 INTEGER_TYPES = ("Integer", "Int32", "Int64", "UInt64", "Int8", "UInt8", "Int16", "UInt16", "UInt32")
-_INDEXED = re.compile(r"^(\w+)\[(\d+)\]$")
+_INDEXED = re.compile(r"^(\w+)\[(\d+(?:,\d+)*)\]$")
+#: the vendor annotation of an FMI 2.0 description's array layout
+LAYOUT_TOOL = "dryfriction.layout"
 
 
 @dataclass(frozen=True)
@@ -59,10 +65,16 @@ class Variable:
     description: str
     declared_type: str | None = None
     zero: str | None = None          # what 0 means when the range is "0 or a normal number" (h)
-    #: an array: the structural parameter that sizes it (FMI 3.0 ``<Dimension>``, the source's
-    #: ``dimension="n"``); None for a scalar (an FMI 2.0 element ``m[1]`` is a scalar)
+    #: an array: the structural parameters that size it, space-separated, the rows first (FMI 3.0
+    #: ``<Dimension>`` elements, the source's ``dimension="n"`` or ``dimension="nc n"``); None for a
+    #: scalar (an FMI 2.0 element ``m[1]`` or ``W[1,2]`` is a scalar)
     dimension: str | None = None
     fmi_version: str = "2.0"
+
+    @property
+    def dimensions(self) -> tuple[str, ...]:
+        """The structural parameters of an array's dimensions, the rows first; () for a scalar."""
+        return tuple(self.dimension.split()) if self.dimension else ()
 
     @property
     def call_type(self) -> str:
@@ -83,6 +95,31 @@ class Effect:
 
 
 @dataclass(frozen=True)
+class ArrayLayout:
+    """Where an FMI 2.0 build puts an array's elements: element (i, j) (1-based; i alone for a
+    vector) at value reference ``first + (i - 1) cols + (j - 1)``, row-major."""
+
+    name: str
+    vr: int                          # the array's own value reference (FMI 3.0's)
+    first: int                       # the value reference of its first element
+    shape: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        """The number of elements."""
+        return math.prod(self.shape)
+
+    def element_vr(self, *index: int) -> int:
+        """The value reference of element ``index`` (1-based, one index per dimension)."""
+        if len(index) != len(self.shape) or not all(1 <= i <= n for i, n in zip(index, self.shape)):
+            raise IndexError(f"{self.name}{list(index)}: outside its shape {self.shape}")
+        k = 0
+        for i, n in zip(index, self.shape):
+            k = k * n + (i - 1)
+        return self.first + k
+
+
+@dataclass(frozen=True)
 class ModelDescription:
     guid: str
     model_identifier: str
@@ -91,6 +128,8 @@ class ModelDescription:
     effects: tuple[Effect, ...]
     effects_variable: str | None
     fmi_version: str = "2.0"
+    #: FMI 2.0 with arrays: each array's layout (the ``dryfriction.layout`` annotation), by name
+    layout: Mapping[str, ArrayLayout] = field(default_factory=dict)
 
     # ---- lookups ----
     def var(self, name: str) -> Variable:
@@ -112,16 +151,30 @@ class ModelDescription:
     def arrays(self) -> dict[str, tuple[str, ...]]:
         """Array name -> its element names: an FMI 3.0 (or source) array is one variable (its own
         name, sized by :attr:`Variable.dimension`), an FMI 2.0 array the structured names
-        ``m[1]`` ... ``m[n]`` in index order."""
-        out: dict[str, list[tuple[int, str]]] = {}
+        ``m[1]`` ... ``m[n]`` (``W[1,1]``, ``W[1,2]`` ...: row-major) in index order."""
+        out: dict[str, list[tuple[tuple[int, ...], str]]] = {}
         for name, v in self.variables.items():
             if v.dimension is not None:
-                out[name] = [(0, name)]
+                out[name] = [((), name)]
                 continue
-            m = _INDEXED.match(name)
-            if m:
-                out.setdefault(m.group(1), []).append((int(m.group(2)), name))
+            index = _index(name)
+            if index is not None:
+                out.setdefault(index[0], []).append((index[1], name))
         return {k: tuple(n for _, n in sorted(v)) for k, v in out.items()}
+
+    def shape(self, name: str) -> tuple[int, ...]:
+        """An array's shape: FMI 2.0 the build's (its layout, else the largest index of each
+        dimension among its element names), FMI 3.0 and the source at the structural parameters'
+        start values."""
+        if name in self.layout:
+            return self.layout[name].shape
+        v = self.variables.get(name)
+        if v is not None and v.dimension is not None:
+            return tuple(int(self.var(d).start) if d in self.variables else int(d) for d in v.dimensions)
+        indices = [ix for n, ix in map(_index, self.arrays().get(name, ())) if n == name] if v is None else []
+        if not indices:
+            raise KeyError(f"the FMU has no array {name!r}")
+        return tuple(max(ix[k] for ix in indices) for k in range(len(indices[0])))
 
     def parameter_starts(self) -> dict[str, Any]:
         """Declared start values of the parameters, by name."""
@@ -197,6 +250,43 @@ class ModelDescription:
             self.check(name, value)
 
 
+def _index(name: str) -> tuple[str, tuple[int, ...]] | None:
+    """(array, index) of an FMI 2.0 element name (``m[3]``: ("m", (3,)); ``W[2,1]``: ("W", (2, 1))),
+    None for any other name."""
+    m = _INDEXED.match(name)
+    return None if m is None else (m.group(1), tuple(int(i) for i in m.group(2).split(",")))
+
+
+def _layout(root: ET.Element, variables: Mapping[str, Variable]) -> dict[str, ArrayLayout]:
+    """The ``dryfriction.layout`` annotation of an FMI 2.0 description, checked against its elements:
+    every element named by the layout present with the layout's value reference, and none beyond."""
+    tool = _annotation(root, LAYOUT_TOOL)
+    out: dict[str, ArrayLayout] = {}
+    for a in (tool.iterfind("Layout/Array") if tool is not None else ()):
+        lay = ArrayLayout(a.get("name", ""), int(a.get("valueReference", "0")), int(a.get("first", "0")),
+                          tuple(int(n) for n in a.get("shape", "").split()))
+        out[lay.name] = lay
+    counts: dict[str, int] = {}
+    for name, v in variables.items():
+        index = _index(name)
+        if index is None or index[0] not in out:
+            continue
+        lay = out[index[0]]
+        try:
+            want = lay.element_vr(*index[1])
+        except IndexError:
+            want = None
+        if want != v.vr:
+            raise ValueError(f"modelDescription.xml: {name} has value reference {v.vr}, its array's layout "
+                             f"(first {lay.first}, shape {' x '.join(map(str, lay.shape))}) says {want}")
+        counts[lay.name] = counts.get(lay.name, 0) + 1
+    for lay in out.values():
+        if counts.get(lay.name, 0) != lay.count:
+            raise ValueError(f"modelDescription.xml: array {lay.name} has {counts.get(lay.name, 0)} elements, "
+                             f"its layout {lay.count}")
+    return out
+
+
 def _number(text: str | None, kind: str) -> Any:
     if text is None:
         return None
@@ -262,11 +352,8 @@ def parse(xml: bytes | str) -> ModelDescription:
         els = list(root.iterfind("ModelVariables/*"))
         by_vr = {el.get("valueReference", ""): el.get("name", "") for el in els}
         for el in els:
-            dim = el.find("Dimension")
-            dname = None
-            if dim is not None:
-                dname = by_vr.get(dim.get("valueReference", ""), dim.get("start"))
-            items.append((el, el, dname))
+            dims = [by_vr.get(d.get("valueReference", ""), d.get("start")) or "" for d in el.iterfind("Dimension")]
+            items.append((el, el, " ".join(dims) if dims else None))
     else:
         for sv in root.iterfind("ModelVariables/ScalarVariable"):
             items.append((sv, next(iter(sv)), sv.get("dimension")))
@@ -294,7 +381,8 @@ def parse(xml: bytes | str) -> ModelDescription:
     token = root.get("instantiationToken") if fmi3 else root.get("guid")
     return ModelDescription(guid=token or "", model_identifier=cs.get("modelIdentifier", ""),
                             variables=variables, schemes=schemes, effects=effects,
-                            effects_variable=effects_var, fmi_version=version)
+                            effects_variable=effects_var, fmi_version=version,
+                            layout={} if fmi3 else _layout(root, variables))
 
 
 def from_xml(path: str | os.PathLike[str]) -> ModelDescription:

@@ -52,8 +52,9 @@ static void count_free(void *env, void *p)
 
 /* ---- the independent solver -------------------------------------------------------------------- */
 
-/* Solve M_JJ x = -q_J (k = |J|) by Gaussian elimination with partial pivoting into z (0 off J).
- * A: k (k + 1) doubles. Returns 0 when singular. */
+/* Solve M_JJ x = -q_J (k = |J|) into z (0 off J) by Gauss-Jordan elimination with row pivoting on
+ * the augmented matrix held by columns (A: column c of k entries at A + c k, the right-hand side
+ * last; k (k + 1) doubles): not the row elimination of the solver under test. 0 when singular. */
 static int solve_basis(int n, const double *M, const double *q, const int *in, double *z, double *A, int *J)
 {
     int k = 0;
@@ -61,31 +62,27 @@ static int solve_basis(int n, const double *M, const double *q, const int *in, d
         z[i] = 0.0;
         if (in[i]) J[k++] = i;
     }
-    const int s = k + 1;
-    for (int a = 0; a < k; a++) {
-        for (int b = 0; b < k; b++) A[a * s + b] = M[J[a] * n + J[b]];
-        A[a * s + k] = -q[J[a]];
-    }
+    for (int c = 0; c <= k; c++)
+        for (int r = 0; r < k; r++) A[c * k + r] = (c < k) ? M[J[r] * n + J[c]] : -q[J[r]];
     for (int c = 0; c < k; c++) {
+        double *col = A + c * k;
         int p = c;
-        for (int r = c + 1; r < k; r++)
-            if (fabs(A[r * s + c]) > fabs(A[p * s + c])) p = r;
-        if (A[p * s + c] == 0.0) return 0;
-        for (int b = 0; b <= k; b++) {
-            const double t = A[c * s + b];
-            A[c * s + b] = A[p * s + b];
-            A[p * s + b] = t;
+        for (int r = c; r < k; r++) p = fabs(col[r]) > fabs(col[p]) ? r : p;
+        const double piv = col[p];
+        if (piv == 0.0) return 0;
+        for (int cc = c; cc <= k; cc++) { /* swap rows c and p, then scale row c to a unit pivot */
+            double *x = A + cc * k;
+            const double t = x[p];
+            x[p] = x[c];
+            x[c] = t / piv;
         }
-        for (int r = c + 1; r < k; r++) {
-            const double f = A[r * s + c] / A[c * s + c];
-            for (int b = c; b <= k; b++) A[r * s + b] -= f * A[c * s + b];
+        for (int cc = k; cc >= c; cc--) { /* clear column c in every other row, the pivot column last */
+            double *x = A + cc * k;
+            for (int r = 0; r < k; r++)
+                if (r != c) x[r] -= col[r] * x[c];
         }
     }
-    for (int c = k - 1; c >= 0; c--) {
-        double v = A[c * s + k];
-        for (int b = c + 1; b < k; b++) v -= A[c * s + b] * z[J[b]];
-        z[J[c]] = v / A[c * s + c];
-    }
+    for (int r = 0; r < k; r++) z[J[r]] = A[k * k + r];
     return 1;
 }
 

@@ -95,7 +95,7 @@ static fmi3Status call(ctx *X, reader *r, unsigned op)
     case 7: st = fmi3ExitInitializationMode(X->c); break;
     case 8: case 9: { /* an array (or any variable) with n values, sometimes a wrong count */
         /* (arrays 1 ... 22: m ... N_ext, k_site, c_site, v_belt, v_s, delta among them) */
-        const fmi3ValueReference vr = (u8(r) < 200) ? (fmi3ValueReference)(DFO_ARRAY_VR_STRIDE * (1 + u8(r) % 22))
+        const fmi3ValueReference vr = (u8(r) < 200) ? (fmi3ValueReference)DFO_ARRAY_VRS[u8(r) % DFO_NUM_ARRAYS]
                                                     : any_vr(r);
         const size_t n = blocks(X);
         size_t nv = n;

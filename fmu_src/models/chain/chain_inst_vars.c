@@ -1,7 +1,8 @@
 /* The DryFrictionChain instance core (chain_instance.h), its variable access: value references
  * resolved through the generated table (model_vars.h gives each variable its group and slot; FMI
  * 3.0 reaches an array through its own value reference, n values; FMI 2.0 reaches element i,
- * 1-based, through the array's value reference + i, named m[i] in messages), get/set with every
+ * 1-based, through the value reference of the build's layout (chain_config.h's DFO_FMI2_ARRAYS),
+ * named m[i] in messages), get/set with every
  * value checked before any is stored, the outputs, and the structural parameter n. No FMI types. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_instance.h"
@@ -24,12 +25,15 @@ static int resolve(const chain_instance *in, unsigned int vr, chain_ref *r)
         snprintf(r->name, sizeof r->name, "%s", var->name);
         return 1;
     }
-    const unsigned int i = vr % DFO_ARRAY_VR_STRIDE;
-    var = dfo_find_var(vr - i);
-    if (var && var->array && i >= 1 && i <= in->v.n) {
-        r->var = var;
-        r->elem = (long)i - 1;
-        snprintf(r->name, sizeof r->name, "%s[%u]", var->name, i);
+    /* an element: the build's layout (chain_config.h) */
+    for (size_t a = 0; a < DFO_FMI2_NUM_ARRAYS; a++) {
+        const dfo_fmi2_array *L = &DFO_FMI2_ARRAYS[a];
+        if (vr < L->first || vr - L->first >= L->count) continue;
+        const unsigned int k = vr - L->first;
+        r->var = dfo_find_var(L->vr);
+        r->elem = (long)k;
+        if (L->cols > 1) snprintf(r->name, sizeof r->name, "%s[%u,%u]", r->var->name, k / L->cols + 1, k % L->cols + 1);
+        else snprintf(r->name, sizeof r->name, "%s[%u]", r->var->name, k + 1);
         return 1;
     }
     return 0;
