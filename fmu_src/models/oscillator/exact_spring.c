@@ -989,7 +989,8 @@ static dfo_dd breakaway(const ex_ctx *C, double Xs, dfo_dd ta, int skip, dfo_dd 
         dfo_dd b = next_breakaway(C, Xs, ta, dir, cs);
         if (skip) {
             double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
-            for (int i = 0; i < 200 && !dfo_dd_lt(dfo_dd_add(ta, dfo_dd_of(d, 0.0)), b) && isfinite(b.hi); i++, d *= 2.0)
+            for (int i = 0; i < 200 && !dfo_dd_lt(dfo_dd_add(ta, dfo_dd_of(d, 0.0)), b) && isfinite(b.hi);
+                 i++, d *= 2.0)
                 b = next_breakaway(C, Xs, dfo_dd_add(ta, dfo_dd_of(d, 0.0)), dir, cs);
         }
         *tb = b;
@@ -1114,7 +1115,8 @@ static double poly_static_force(const ex_ctx *C, dfo_dd t, double Xs, dfo_loads 
 /* The first time in [ta, tend) at which the stick phase at Xs breaks away (|S| > F_b, or within
  * rounding of it and not receding), with the side in *dir, the rates of S and F_b there in *dS, *dFb and
  * *at_start = 1 when it is ta itself with the force beyond the limit (no crossing); tend when none. */
-static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int *dir, int *at_start, double *dS,
+static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int *dir, int *at_start,
+                                  double *dS,
                               double *dFb)
 {
     const double iLs = C->iLs, mub = C->M->mu_b;
@@ -1161,7 +1163,8 @@ static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd 
 
 /* The next breakaway from ta; with skip, one at ta itself (a slide just tried did not start) is passed
  * over: the search restarts a little later, further each time, until it finds a later one. */
-static dfo_dd poly_breakaway(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int skip, int *dir, int *at_start, double *dS,
+static dfo_dd poly_breakaway(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int skip, int *dir, int *at_start,
+                             double *dS,
                          double *dFb)
 {
     dfo_dd b = poly_breakaway_from(C, Xs, ta, tend, dir, at_start, dS, dFb);
