@@ -31,6 +31,7 @@ dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const
     if (dfo_belt_on(u) && (vb != 0.0 || (s->mode == 0 && s->V != 0.0) || s->mode * s->V < 0.0))
         dfo_exact_belt_start(M, u, vb, s, on_switch, switch_ctx);
     if (vb != 0.0) return dfo_exact_belt_advance(M, u, q, s, t_target, on_switch, switch_ctx, vb);
-    if (M->p.k == 0.0) return dfo_exact_free_advance_pieces(M, u, q, s, t_target, on_switch, switch_ctx); /* no spring */
+    if (M->p.k == 0.0) /* no spring */
+        return dfo_exact_free_advance_pieces(M, u, q, s, t_target, on_switch, switch_ctx);
     return dfo_exact_spring_advance_poly(M, u, q, s, t_target, on_switch, switch_ctx, 0.0);
 }

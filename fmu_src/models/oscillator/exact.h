@@ -60,9 +60,11 @@
  *
  * The files, one job each behind its private header (no file calls into one that calls it):
  *     exact.c          this header's calls: each to the phases of its kind (belt, no spring, spring)
- *     exact_spring.c   k > 0: the closed-form slide, the certified stop search, the breakaway, the
- *                      event loop (held and polynomial inputs; on a belt its terms)  exact_spring.h
- *     exact_free.c     k = 0: a free mass on a rough support, its event loop         exact_free.h
+ *     exact_spring.c   k > 0: the closed-form slide, the certified stop search, the breakaway, a
+ *                      walk's phases (held and polynomial inputs; on a belt)           exact_spring.h
+ *     exact_free.c     k = 0: a free mass on a rough support, a walk's phases          exact_free.h
+ *     exact_loop.h     the one event loop of every walk: the work and stall bounds, the choice of
+ *                      the phase, the rule at a stop and its saltation (header only)
  *     exact_belt.c     a moving belt: the call's start after a change, k = 0 in the belt's frame
  *                                                                                     exact_belt.h
  *     exact_poly.c     polynomial inputs: the inputs at t, the pieces of the normal force

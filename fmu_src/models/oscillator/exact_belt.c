@@ -157,6 +157,6 @@ dfo_status dfo_exact_belt_advance(const dfo_model *M, const dfo_inputs *u, const
 {
     if (M->p.k == 0.0) return free_belt(M, u, q, s, t_target, on_switch, switch_ctx, vb);
     const dfo_input_poly held = {s->t, {0.0, 0.0}, {0.0, 0.0}};
-    return dfo_exact_spring_advance_poly(M, u, (q != NULL && dfo_input_poly_active(q)) ? q : &held, s, t_target, on_switch,
-                                         switch_ctx, vb);
+    const dfo_input_poly *qq = (q != NULL && dfo_input_poly_active(q)) ? q : &held;
+    return dfo_exact_spring_advance_poly(M, u, qq, s, t_target, on_switch, switch_ctx, vb);
 }

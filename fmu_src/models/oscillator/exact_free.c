@@ -3,6 +3,7 @@
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact_free.h"
 #include "dmath.h"
+#include "exact_loop.h"
 #include "exact_observe.h"
 #include "exact_poly.h"
 #include "exact_sens.h"
@@ -18,7 +19,6 @@
 #define ROUND DFO_EXACT_ROUND /* relative rounding level of the touch test (as exact_spring.c) */
 #define POLISH_TOL (4.0 * DBL_EPSILON) /* relative level at which a bracketed stop is taken */
 #define MAX_POLISH 200                 /* Newton / bisection steps of a bracketed stop */
-#define MAX_STALL 64                   /* events in a row at one instant before it is an error */
 #define SERIES_MAX 1.0                 /* |p tau| up to which E1, E2 are summed as Taylor series */
 #define SERIES_TERMS 22                /* terms of those series (the remainder is below 2^-60 there) */
 #define SKIP_MARGIN 1e-9               /* relative margin of the lower bound that skips intervals */
@@ -553,7 +553,7 @@ dfo_status dfo_exact_free_advance(const dfo_model *M, const dfo_inputs *u, dfo_s
 #define POLY_RES (4.0 * DBL_EPSILON) /* relative resolution of the searches' steps */
 
 /* Largest d with g0 + g1 d - B d^2 / 2 >= 0 (g0 >= 0): how far a function with these value and slope
- * and |second derivative| <= B provably stays positive (as exact.c's). */
+ * and |second derivative| <= B provably stays positive (as exact_spring.c's). */
 static double safe_step(double g0, double g1, double B)
 {
     if (!(B > 0.0)) return (g1 >= 0.0) ? INFINITY : g0 / -g1;
@@ -764,7 +764,7 @@ static double phase_work(const void *ctx, const void *phase, double t0, double t
     return poly_work((const fr_ctx *)ctx, (const fr_phase *)phase, t0, t1);
 }
 
-/* The bookkeeping of a phase (as exact.c's after_phase; poly: with polynomial inputs). */
+/* The bookkeeping of a phase (as exact_spring.c's after_phase; poly: with polynomial inputs). */
 static DFO_EXACT_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s, const fr_phase *P, double ta,
                                          double tb, double xa, double xb, int mode_during, int mode_after, int event)
 {
@@ -778,119 +778,167 @@ static DFO_EXACT_INLINE void after_phase(const fr_ctx *C, int poly, dfo_state *s
     }
 }
 
+/* The walk of one call through its phases (exact_loop.h's loop). */
+typedef struct {
+    fr_ctx *C;
+    dfo_state *s;
+    double t_target, t_last;
+    int skip;  /* a breakaway at the walk's time is passed over (a slide that could not start) */
+    int sens;  /* propagate s->J (exact.h) */
+    int fric;  /* the friction acts */
+} fr_walk;
+
+static int walk_running(const void *w)
+{
+    const fr_walk *W = (const fr_walk *)w;
+    return W->s->t < W->t_target;
+}
+
+static int walk_same_time(const void *w)
+{
+    const fr_walk *W = (const fr_walk *)w;
+    return W->s->t == W->t_last;
+}
+
+static void walk_mark_time(void *w)
+{
+    fr_walk *W = (fr_walk *)w;
+    W->t_last = W->s->t;
+}
+
+/* At rest without friction: a block at rest never sticks; it moves along the force (or its rate). */
+static DFO_EXACT_INLINE int walk_start_free(fr_walk *W, const int poly)
+{
+    fr_ctx *const C = W->C;
+    dfo_state *const s = W->s;
+    const double ta = s->t, xa = s->X;
+    /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+    double S, dS, d2S;
+    if (poly) {
+        dfo_loads L;
+        double dF;
+        poly_loads(C, ta, &L, &dF, NULL);
+        S = dfo_excitation(C->M, ta) + L.F_ext;
+        dS = dfo_excitation_rate(C->M, ta) + dF;
+        d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta) + C->qF[2];
+    } else {
+        S = static_force(C, ta, s->X);
+        dS = dfo_excitation_rate(C->M, ta);
+        d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
+    }
+    const int dir = dfo_free_start_dir(S, dS, d2S);
+    s->mode = dir;
+    C->events++;
+    after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+    return DFO_EXACT_NEXT;
+}
+
+/* A stick phase: to the breakaway (held: closed form; polynomial inputs: the search), or to the target. */
+static DFO_EXACT_INLINE int walk_stick(fr_walk *W, const int poly)
+{
+    fr_ctx *const C = W->C;
+    dfo_state *const s = W->s;
+    const double t_target = W->t_target;
+    const int sens = W->sens;
+    const double ta = s->t, xa = s->X;
+    int dir = 0;
+    /* (held: never NaN) */
+    const double tb = poly ? poly_breakaway(C, ta, t_target, W->skip, &dir) : breakaway(C, s, ta, W->skip, &dir);
+    W->skip = 0;
+    /* stuck: x frozen, v held at 0; without a spring the breakaway time does not depend on x,
+     * so the v row stays 0 across it */
+    if (sens) dfo_sens_stick(s->J);
+    if (!(tb < t_target)) {
+        s->t = t_target;
+        after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
+        return DFO_EXACT_DONE;
+    }
+    s->t = tb;
+    s->V = 0.0;
+    s->mode = dir;
+    C->events++;
+    after_phase(C, poly, s, NULL, ta, tb, xa, xa, 0, dir, 1);
+    return DFO_EXACT_NEXT;
+}
+
+/* A slip phase: to the first stop, or to the target; at a stop the rule at a stop (exact_loop.h) decides
+ * the next mode. */
+static DFO_EXACT_INLINE int walk_slide(fr_walk *W, const int poly)
+{
+    fr_ctx *const C = W->C;
+    dfo_state *const s = W->s;
+    const double t_target = W->t_target;
+    const int sens = W->sens;
+    const int fric = W->fric;
+    const double ta = s->t, xa = s->X;
+    /* a slip in direction sd from (ta, X, V) */
+    const int sd = s->mode;
+    fr_phase P;
+    fr_val v;
+    phase_init(C, &P, ta, s->X, s->V, sd);
+    const int r = poly ? find_stop_poly(C, &P, t_target - ta, &v) : find_stop(C, &P, t_target - ta, &v);
+    if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
+    if (r == SEARCH_NONE) {
+        if (sens) dfo_sens_slide(C->M, t_target - ta, s->J);
+        s->t = t_target;
+        s->X = v.x;
+        s->V = v.v;
+        after_phase(C, poly, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
+        return DFO_EXACT_DONE;
+    }
+    double ts = ta + v.tau;
+    if (ts > t_target) ts = t_target;
+    if (sens) dfo_sens_slide(C->M, ts - ta, s->J);
+    s->t = ts;
+    s->X = v.x;
+    s->V = 0.0;
+    /* the static force at a stop from the excitation phase there (known from the search), and the
+     * loads there */
+    const int known = r == SEARCH_STOP && ts < t_target && C->A > 0.0;
+    dfo_loads Lp;
+    const dfo_loads *L = &C->L;
+    double Fs;
+    if (poly) {
+        poly_loads(C, ts, &Lp, NULL, NULL);
+        Fs = (known ? C->M->P_amp * v.cth : dfo_excitation(C->M, ts)) + Lp.F_ext;
+        L = &Lp;
+    } else {
+        Fs = known ? dfo_static_force(C->M->p.k, &C->L, C->M->P_amp * v.cth, s->X) : static_force(C, ts, s->X);
+    }
+    const int next = dfo_exact_stop_mode(L, Fs, sd, r == SEARCH_NULL, fric, &W->skip);
+    if (next == 0) s->stick_tb = NAN; /* a new stick phase (polynomial inputs: NaN throughout) */
+    if (sens) dfo_exact_stop_saltation(s->J, L, Fs, sd, r == SEARCH_NULL, next);
+    s->mode = next;
+    C->events++;
+    after_phase(C, poly, s, &P, ta, ts, xa, s->X, sd, next, 1);
+    return DFO_EXACT_NEXT;
+}
+
+static int walk_start_free_held(void *w) { return walk_start_free((fr_walk *)w, 0); }
+static int walk_stick_held(void *w) { return walk_stick((fr_walk *)w, 0); }
+static int walk_slide_held(void *w) { return walk_slide((fr_walk *)w, 0); }
+static int walk_start_free_poly(void *w) { return walk_start_free((fr_walk *)w, 1); }
+static int walk_stick_poly(void *w) { return walk_stick((fr_walk *)w, 1); }
+static int walk_slide_poly(void *w) { return walk_slide((fr_walk *)w, 1); }
+static const dfo_exact_walk_fns WALK_HELD = {walk_running, walk_same_time, walk_mark_time,
+                                             walk_start_free_held, walk_stick_held, walk_slide_held};
+static const dfo_exact_walk_fns WALK_POLY = {walk_running, walk_same_time, walk_mark_time,
+                                             walk_start_free_poly, walk_stick_poly, walk_slide_poly};
+
 /* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
  * (C->qN > 0 inside it, or all 0): one loop, the two kinds of inputs differing only in the breakaway,
  * the stop's search, the loads at a stop and the phases' bookkeeping. */
 static DFO_EXACT_INLINE dfo_status advance_loop(fr_ctx *C, dfo_state *s, double t_target, const int poly)
 {
-    int skip = 0, stall = 0;
-    double t_last = s->t;
-    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
-    const int fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0))
-                          : C->L.Fb > 0.0;
-    while (s->t < t_target) {
-        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS;
-        if (s->t == t_last) {
-            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
-        } else {
-            stall = 0;
-            t_last = s->t;
-        }
-        const double ta = s->t, xa = s->X;
-        if (s->mode == 0 && !fric) {
-            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
-            double S, dS, d2S;
-            if (poly) {
-                dfo_loads L;
-                double dF;
-                poly_loads(C, ta, &L, &dF, NULL);
-                S = dfo_excitation(C->M, ta) + L.F_ext;
-                dS = dfo_excitation_rate(C->M, ta) + dF;
-                d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta) + C->qF[2];
-            } else {
-                S = static_force(C, ta, s->X);
-                dS = dfo_excitation_rate(C->M, ta);
-                d2S = -C->M->p.omega * C->M->p.omega * dfo_excitation(C->M, ta);
-            }
-            const int dir = dfo_free_start_dir(S, dS, d2S);
-            s->mode = dir;
-            C->events++;
-            after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
-            continue;
-        }
-        if (s->mode == 0) {
-            int dir = 0;
-            /* (held: never NaN) */
-            const double tb = poly ? poly_breakaway(C, ta, t_target, skip, &dir) : breakaway(C, s, ta, skip, &dir);
-            skip = 0;
-            /* stuck: x frozen, v held at 0; without a spring the breakaway time does not depend on x,
-             * so the v row stays 0 across it */
-            if (sens) dfo_sens_stick(s->J);
-            if (!(tb < t_target)) {
-                s->t = t_target;
-                after_phase(C, poly, s, NULL, ta, t_target, xa, xa, 0, 0, 0);
-                break;
-            }
-            s->t = tb;
-            s->V = 0.0;
-            s->mode = dir;
-            C->events++;
-            after_phase(C, poly, s, NULL, ta, tb, xa, xa, 0, dir, 1);
-            continue;
-        }
-        /* a slip in direction sd from (ta, X, V) */
-        const int sd = s->mode;
-        fr_phase P;
-        fr_val v;
-        phase_init(C, &P, ta, s->X, s->V, sd);
-        const int r = poly ? find_stop_poly(C, &P, t_target - ta, &v) : find_stop(C, &P, t_target - ta, &v);
-        if (!isfinite(v.x) || !isfinite(v.v)) return DFO_ERR_NONFINITE;
-        if (r == SEARCH_NONE) {
-            if (sens) dfo_sens_slide(C->M, t_target - ta, s->J);
-            s->t = t_target;
-            s->X = v.x;
-            s->V = v.v;
-            after_phase(C, poly, s, &P, ta, t_target, xa, s->X, sd, sd, 0);
-            break;
-        }
-        double ts = ta + v.tau;
-        if (ts > t_target) ts = t_target;
-        if (sens) dfo_sens_slide(C->M, ts - ta, s->J);
-        s->t = ts;
-        s->X = v.x;
-        s->V = 0.0;
-        /* the static force at a stop from the excitation phase there (known from the search), and the
-         * loads there */
-        const int known = r == SEARCH_STOP && ts < t_target && C->A > 0.0;
-        dfo_loads Lp;
-        const dfo_loads *L = &C->L;
-        double Fs;
-        if (poly) {
-            poly_loads(C, ts, &Lp, NULL, NULL);
-            Fs = (known ? C->M->P_amp * v.cth : dfo_excitation(C->M, ts)) + Lp.F_ext;
-            L = &Lp;
-        } else {
-            Fs = known ? dfo_static_force(C->M->p.k, &C->L, C->M->P_amp * v.cth, s->X) : static_force(C, ts, s->X);
-        }
-        int next = dfo_rest_mode(L, Fs);
-        if (!fric) {
-            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
-            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
-        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
-            next = 0;                                 /* rest, and a breakaway right now is passed over */
-            skip = 1;
-        }
-        if (next == 0) s->stick_tb = NAN; /* a new stick phase (polynomial inputs: NaN throughout) */
-        if (sens) { /* the saltation at the stop (as exact.c) */
-            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
-            else if (next == -sd && L->muk_N > 0.0)
-                dfo_sens_reversal(s->J, (Fs + sd * L->muk_N) / (Fs - sd * L->muk_N));
-        }
-        s->mode = next;
-        C->events++;
-        after_phase(C, poly, s, &P, ta, ts, xa, s->X, sd, next, 1);
-    }
-    return DFO_OK;
+    fr_walk W;
+    W.C = C;
+    W.s = s;
+    W.t_target = t_target;
+    W.t_last = s->t;
+    W.skip = 0;
+    W.sens = C->M->p.sensitivity;
+    W.fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0)) : C->L.Fb > 0.0;
+    return dfo_exact_event_loop(&W, poly ? &WALK_POLY : &WALK_HELD, s, &C->events, W.fric);
 }
 
 static dfo_status advance(fr_ctx *C, dfo_state *s, double t_target) { return advance_loop(C, s, t_target, 0); }

@@ -1,5 +1,5 @@
 /* What the exact scheme's files share (private: exact.h is the public header): the rounding level
- * of their zero tests and the inlining of their event loops. */
+ * of their zero tests and the inlining of the event loop (exact_loop.h). */
 #ifndef DFO_EXACT_PRIVATE_H
 #define DFO_EXACT_PRIVATE_H
 
@@ -10,9 +10,9 @@
 /* the relative rounding level of the zero tests (as the 40-digit references) */
 #define DFO_EXACT_ROUND (64.0 * DBL_EPSILON)
 
-/* For exact_spring.c and exact_free.c: the event loop is compiled once for each kind of inputs (held,
- * polynomial: a constant in each), so that the loop of held inputs carries none of the polynomial
- * inputs' code. */
+/* For exact_loop.h, exact_spring.c and exact_free.c: the event loop is compiled once for each kind of
+ * inputs (held, polynomial: a constant in each), so that the loop of held inputs carries none of the
+ * polynomial inputs' code. */
 #if defined(__GNUC__)
 #define DFO_EXACT_INLINE inline __attribute__((always_inline))
 #else

@@ -1,9 +1,10 @@
 /* The exact scheme's spring phase (k > 0): closed-form phases, events found without stepping over a
- * zero, and its event loop. See exact_spring.h, exact.h and method.md sections 5 and 10. */
+ * zero, the phases of a walk (exact_loop.h). See exact_spring.h, exact.h and method.md sections 5 and 10. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact_spring.h"
 #include "ddouble.h"
 #include "dmath.h"
+#include "exact_loop.h"
 #include "exact_observe.h"
 #include "exact_poly.h"
 #include "exact_sens.h"
@@ -23,7 +24,6 @@
 #define BOUND_SAFETY (1.0 + 1e-9)  /* the bounds are computed in floating point */
 #define MAX_SEARCH 10000000L       /* evaluations one phase's search may take before it is an error */
 #define MAX_START 200              /* steps of a slide from rest before it counts as not starting */
-#define MAX_STALL 64               /* events in a row at one instant before it is an error */
 #define MAX_POLISH 60              /* Newton / bisection steps of a bracketed stop */
 #define START_FRACTION 0.9         /* share of the certified first step of a slide from rest */
 #define QUINTIC_STEPS 1            /* Newton steps from the cubic guess to the quintic model's root */
@@ -989,7 +989,8 @@ static dfo_dd breakaway(const ex_ctx *C, double Xs, dfo_dd ta, int skip, dfo_dd 
         dfo_dd b = next_breakaway(C, Xs, ta, dir, cs);
         if (skip) {
             double d = 4.0 * DBL_EPSILON * fmax(fabs(ta.hi), 1.0 / (C->w0 + fabs(C->omega)));
-            for (int i = 0; i < 200 && !dfo_dd_lt(dfo_dd_add(ta, dfo_dd_of(d, 0.0)), b) && isfinite(b.hi); i++, d *= 2.0)
+            for (int i = 0; i < 200 && !dfo_dd_lt(dfo_dd_add(ta, dfo_dd_of(d, 0.0)), b) && isfinite(b.hi);
+                 i++, d *= 2.0)
                 b = next_breakaway(C, Xs, dfo_dd_add(ta, dfo_dd_of(d, 0.0)), dir, cs);
         }
         *tb = b;
@@ -1114,7 +1115,8 @@ static double poly_static_force(const ex_ctx *C, dfo_dd t, double Xs, dfo_loads 
 /* The first time in [ta, tend) at which the stick phase at Xs breaks away (|S| > F_b, or within
  * rounding of it and not receding), with the side in *dir, the rates of S and F_b there in *dS, *dFb and
  * *at_start = 1 when it is ta itself with the force beyond the limit (no crossing); tend when none. */
-static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int *dir, int *at_start, double *dS,
+static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int *dir, int *at_start,
+                                  double *dS,
                               double *dFb)
 {
     const double iLs = C->iLs, mub = C->M->mu_b;
@@ -1161,7 +1163,8 @@ static dfo_dd poly_breakaway_from(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd 
 
 /* The next breakaway from ta; with skip, one at ta itself (a slide just tried did not start) is passed
  * over: the search restarts a little later, further each time, until it finds a later one. */
-static dfo_dd poly_breakaway(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int skip, int *dir, int *at_start, double *dS,
+static dfo_dd poly_breakaway(const ex_ctx *C, double Xs, dfo_dd ta, dfo_dd tend, int skip, int *dir, int *at_start,
+                             double *dS,
                          double *dFb)
 {
     dfo_dd b = poly_breakaway_from(C, Xs, ta, tend, dir, at_start, dS, dFb);
@@ -1322,226 +1325,304 @@ static DFO_EXACT_INLINE void after_phase(const ex_ctx *C, int poly, dfo_state *s
     }
 }
 
+/* The walk of one call through its phases (exact_loop.h's loop): the time as a double-double, the state
+ * over Ls, and what carries from one phase to the next. */
+typedef struct {
+    ex_ctx *C;
+    dfo_state *s;
+    double t_target;
+    dfo_dd target, t, t_last;
+    double Xs, Vs;        /* the state over Ls */
+    int skip;             /* a breakaway at the walk's time is passed over (a slide that could not start) */
+    int carried;          /* reversals in a row whose excitation phase cs is carried */
+    double cs[2];         /* the excitation phase at t when carried (carried > 0) */
+    dfo_dd stick_tb;      /* held: the stick phase's next breakaway (NaN: to be computed), its side and */
+    int stick_dir;
+    double stick_cs[2];   /* the phase there (NaN: from the time) */
+    int sens;             /* propagate s->J (exact.h) */
+    int belt;             /* a moving belt (its calls take the polynomial inputs' loop) */
+    double cvb;           /* riding on the belt, the damper pulls with c vb */
+    int fric;             /* the friction acts */
+} ex_walk;
+
+static int walk_running(const void *w)
+{
+    const ex_walk *W = (const ex_walk *)w;
+    return dfo_dd_lt(W->t, W->target);
+}
+
+static int walk_same_time(const void *w)
+{
+    const ex_walk *W = (const ex_walk *)w;
+    return W->t.hi == W->t_last.hi && W->t.lo == W->t_last.lo;
+}
+
+static void walk_mark_time(void *w)
+{
+    ex_walk *W = (ex_walk *)w;
+    W->t_last = W->t;
+}
+
+/* At rest without friction: a block at rest never sticks; it moves along the force (or its rate). */
+static DFO_EXACT_INLINE int walk_start_free(ex_walk *W, const int poly)
+{
+    ex_ctx *const C = W->C;
+    dfo_state *const s = W->s;
+    const int belt = W->belt;
+    const double cvb = W->cvb;
+    const double ta = W->t.hi, xa = s->X;
+    /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
+    double c, sn, S, dS, d2S;
+    if (poly) {
+        dfo_loads L;
+        S = poly_static_force(C, W->t, W->Xs, &L, &dS, NULL);
+        phase_at(C, W->t, &c, &sn);
+        d2S = -C->omega * C->omega * (C->fP * c) + C->qF[2] * C->iLs;
+        if (belt) { /* at v = vb: the relative acceleration's sign and rates */
+            S -= cvb;
+            dS -= C->k * C->vbs;
+        }
+    } else {
+        phase_at(C, W->t, &c, &sn);
+        S = C->fP * c + C->fF - C->k * W->Xs;
+        dS = -C->fP * C->omega * sn;
+        d2S = -C->omega * C->omega * (C->fP * c);
+    }
+    const int dir = dfo_free_start_dir(S, dS, d2S);
+    s->mode = dir;
+    C->events++;
+    after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
+    return DFO_EXACT_NEXT;
+}
+
+/* A stick phase: to the breakaway (held: closed form, the next one cached; polynomial inputs: the root of
+ * the varying static force), or to the target; on a belt the block rides on it. */
+static DFO_EXACT_INLINE int walk_stick(ex_walk *W, const int poly)
+{
+    ex_ctx *const C = W->C;
+    dfo_state *const s = W->s;
+    const double t_target = W->t_target;
+    const dfo_dd target = W->target;
+    const double Ls = C->Ls;
+    const int sens = W->sens;
+    const int belt = W->belt;
+    const double ta = W->t.hi, xa = s->X;
+    int dir = 0, at_start = 0;
+    double dS = 0.0, dFb = 0.0;
+    dfo_dd tb;
+    if (poly) {
+        tb = poly_breakaway(C, W->Xs, W->t, target, W->skip, &dir, &at_start, &dS, &dFb);
+    } else {
+        if (isnan(W->stick_tb.hi)) W->stick_dir = 0;
+        tb = breakaway(C, W->Xs, W->t, W->skip, &W->stick_tb, &W->stick_dir, W->stick_cs);
+        dir = W->stick_dir;
+    }
+    W->skip = 0;
+    if (sens) dfo_sens_stick(s->J);
+    if (!dfo_dd_lt(tb, target)) {
+        if (belt) { /* riding on the belt to the end */
+            W->Xs += C->vbs * dfo_dd_span(W->t, target);
+            s->X = W->Xs * Ls;
+            if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+        }
+        s->t = t_target;
+        W->t = target;
+        after_phase(C, poly, s, NULL, ta, t_target, xa, s->X, 0, 0, 0);
+        return DFO_EXACT_DONE;
+    }
+    if (belt) {
+        W->Xs += C->vbs * dfo_dd_span(W->t, tb);
+        s->X = W->Xs * Ls;
+        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+    }
+    W->t = tb;
+    s->t = tb.hi;
+    W->Vs = belt ? C->vbs : 0.0;
+    s->V = belt ? C->vb : 0.0;
+    s->mode = dir;
+    if (poly) {
+        W->carried = 0;
+        if (sens && !at_start) {
+            /* h = dir S(t) - F_b(t) = 0 at t_b: dt_b = k dx / D, D = S' - dir F_b' (S' = P' + F_ext'), and
+             * the slide starts with a+ = dir (F_b - mu_k N) / m: the v row becomes -a+ k / D times the x
+             * row */
+            dfo_loads L;
+            poly_loads(C, tb, &L, NULL, NULL);
+            const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
+            /* (D = 0: a tangential breakaway, the Jacobian not finite, as with held inputs) */
+            dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0);
+        }
+    } else if (!isnan(W->stick_cs[0])) { /* the slide starts with the crossing's phase */
+        W->carried = 1;
+        W->cs[0] = W->stick_cs[0];
+        W->cs[1] = W->stick_cs[1];
+        if (sens) { /* dt_b = k dx / P'(t_b); the slide starts with a+ = dir (F_b - mu_k N) / m */
+            const double dP = -C->fP * C->omega * W->stick_cs[1];
+            const double a_plus = dir * (C->Ls_.Fb - C->Ls_.muk_N) / C->M->p.m;
+            dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / dP : 0.0);
+        }
+    } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
+    C->events++;
+    after_phase(C, poly, s, NULL, ta, tb.hi, xa, s->X, 0, dir, 1);
+    return DFO_EXACT_NEXT;
+}
+
+/* A slip phase: to the first stop (the certified search), or to the target, or (a long one) to a restart
+ * after u_span; at a stop the rule at a stop (exact_loop.h) decides the next mode. */
+static DFO_EXACT_INLINE int walk_slide(ex_walk *W, const int poly)
+{
+    ex_ctx *const C = W->C;
+    dfo_state *const s = W->s;
+    const double t_target = W->t_target;
+    const dfo_dd target = W->target;
+    const double Ls = C->Ls;
+    const double w0 = C->w0;
+    const int sens = W->sens;
+    const int belt = W->belt;
+    const double cvb = W->cvb;
+    const int fric = W->fric;
+    const double ta = W->t.hi, xa = s->X;
+    /* a slip in direction sd from (t, X, V) */
+    const int sd = s->mode;
+    ex_phase P;
+    ex_val v;
+    phase_start(C, &P, W->t, W->Xs, W->Vs, sd, W->carried ? W->cs : NULL);
+    if (belt) belt_shift(C, &P);
+    const double u_max = w0 * ((t_target - W->t.hi) - W->t.lo);
+    const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
+    const double u_end = cut ? C->u_span : u_max;
+    const int r = find_stop(C, &P, W->Xs - P.xc, belt ? (W->Vs - C->vbs) / w0 : W->Vs / w0, u_end, &v);
+    if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
+    if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
+    if (r == SEARCH_NONE) {
+        W->Xs = P.xc + v.y;
+        W->Vs = w0 * v.y1;
+        if (belt) { /* (eval: v.hy is the harmonic part) */
+            W->Xs = P.xc + (v.hy + v.u * (P.xp1a + 0.5 * v.u * P.xp2));
+            W->Vs = w0 * v.y1 + C->vbs;
+        }
+        s->X = W->Xs * Ls;
+        s->V = W->Vs * Ls;
+        if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
+        const dfo_dd tc = cut ? dfo_dd_add_quot(W->t, u_end, 0.0, w0) : target;
+        if (sens) dfo_sens_slide(C->M, dfo_dd_span(W->t, tc), s->J);
+        W->carried = 0;
+        s->t = tc.hi;
+        after_phase(C, poly, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
+        W->t = tc;
+        if (cut) return DFO_EXACT_NEXT;
+        return DFO_EXACT_DONE;
+    }
+    dfo_dd ts = dfo_dd_add_quot(W->t, v.u, 0.0, w0);
+    if (dfo_dd_lt(target, ts)) ts = target;
+    const int at_end = !dfo_dd_lt(ts, target);
+    if (sens) dfo_sens_slide(C->M, dfo_dd_span(W->t, ts), s->J);
+    W->t = ts;
+    s->t = ts.hi;
+    W->Xs = P.xc + v.y;
+    W->Vs = 0.0;
+    if (belt) { /* x itself from the harmonic part (v may be a Taylor model's, without it) */
+        ex_val w;
+        eval(C, &P, v.u, &w);
+        W->Xs = P.xc + (w.hy + w.u * (P.xp1a + 0.5 * w.u * P.xp2));
+        W->Vs = C->vbs;
+    }
+    s->X = W->Xs * Ls;
+    s->V = belt ? C->vb : 0.0;
+    if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
+    /* the static force at a stop from the excitation phase there (known from the search), and the
+     * loads there */
+    dfo_loads Lp;
+    const dfo_loads *L = &C->Ls_;
+    double Fs;
+    if (poly) {
+        Fs = poly_static_force(C, ts, W->Xs, &Lp, NULL, NULL);
+        if (r == SEARCH_STOP && !at_end) Fs = C->fP * v.cth + Lp.F_ext - C->k * W->Xs;
+        Fs -= cvb; /* (on a belt, the holding force: the damper pulls with c vb) */
+        L = &Lp;
+    } else {
+        Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * W->Xs : static_force(C, ts, W->Xs);
+    }
+    const int next = dfo_exact_stop_mode(L, Fs, sd, r == SEARCH_NULL, fric, &W->skip);
+    if (!fric && r == SEARCH_STOP && !at_end) {
+        /* no friction, a reversal: the motion is the same in either direction, so the next phase starts
+         * from the motion's own state there (its velocity within rounding of 0, not set to 0: undamped, a
+         * velocity error would never decay, and one made at every reversal would add up) */
+        ex_val w;
+        eval(C, &P, v.u, &w);
+        W->Xs = P.xc + w.y;
+        W->Vs = w0 * w.y1;
+        if (belt) {
+            W->Xs = P.xc + (w.hy + w.u * (P.xp1a + 0.5 * w.u * P.xp2));
+            W->Vs += C->vbs;
+        }
+        s->X = W->Xs * Ls;
+        s->V = W->Vs * Ls;
+        v.cth = w.cth;
+        v.sth = w.sth;
+    }
+    if (next == 0) W->stick_tb.hi = NAN; /* a new stick phase */
+    if (sens) dfo_exact_stop_saltation(s->J, L, Fs, sd, r == SEARCH_NULL, next);
+    if (next == -sd && r == SEARCH_STOP && !at_end && W->carried < CARRY_MAX) {
+        /* a reversal: the next slide starts here, with the phase the search reached (exact for the
+         * stop's time as a double-double, to the rounding of lambda tau) */
+        W->carried++;
+        W->cs[0] = v.cth;
+        W->cs[1] = v.sth;
+    } else {
+        W->carried = 0;
+    }
+    s->mode = next;
+    C->events++;
+    after_phase(C, poly, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
+    return DFO_EXACT_NEXT;
+}
+
+static int walk_start_free_held(void *w) { return walk_start_free((ex_walk *)w, 0); }
+static int walk_stick_held(void *w) { return walk_stick((ex_walk *)w, 0); }
+static int walk_slide_held(void *w) { return walk_slide((ex_walk *)w, 0); }
+static int walk_start_free_poly(void *w) { return walk_start_free((ex_walk *)w, 1); }
+static int walk_stick_poly(void *w) { return walk_stick((ex_walk *)w, 1); }
+static int walk_slide_poly(void *w) { return walk_slide((ex_walk *)w, 1); }
+static const dfo_exact_walk_fns WALK_HELD = {walk_running, walk_same_time, walk_mark_time,
+                                             walk_start_free_held, walk_stick_held, walk_slide_held};
+static const dfo_exact_walk_fns WALK_POLY = {walk_running, walk_same_time, walk_mark_time,
+                                             walk_start_free_poly, walk_stick_poly, walk_slide_poly};
+
 /* The phases from s to t_target, the inputs held (poly 0) or varying as polynomials (poly 1) over one piece
  * (C->qN a polynomial > 0 inside it, or 0): one loop, the two kinds of inputs differing only in the
  * stick phase's breakaway, the loads at a stop and the phases' bookkeeping. */
 static DFO_EXACT_INLINE dfo_status advance_loop(ex_ctx *C, dfo_state *s, double t_target, const int poly)
 {
-    int skip = 0, stall = 0, stick_dir = 0, carried = 0;
-    double cs[2] = {1.0, 0.0}; /* the excitation phase at t when carried (carried > 0) */
-    double stick_cs[2] = {NAN, 0.0}; /* held: the phase at the stick phase's breakaway (NaN: from the time) */
-    const double Ls = C->Ls, w0 = C->w0;
-    const dfo_dd target = {t_target, 0.0};
-    dfo_dd t = {s->t, 0.0}, t_last = t, stick_tb = {NAN, 0.0};
-    double Xs = s->X * C->iLs, Vs = s->V * C->iLs; /* the state over Ls */
-    const int sens = C->M->p.sensitivity; /* propagate s->J (exact.h) */
-    const int belt = poly && C->belt;     /* a moving belt (its calls take the polynomial inputs' loop) */
-    const double cvb = belt ? C->M->p.c * C->vbs : 0.0; /* riding on the belt, the damper pulls with c vb */
-    const int fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0))
-                          : C->Ls_.Fb > 0.0;
-    while (dfo_dd_lt(t, target)) {
-        if (C->events >= DFO_EXACT_MAX_EVENTS) return DFO_ERR_EVENTS; /* the work bound (newmark.h) */
-        if (t.hi == t_last.hi && t.lo == t_last.lo) {
-            if (++stall > MAX_STALL) return DFO_ERR_NO_PROGRESS;
-        } else {
-            stall = 0;
-            t_last = t;
-        }
-        const double ta = t.hi, xa = s->X;
-        if (s->mode == 0 && !fric) {
-            /* no friction: a block at rest never sticks; it moves along the force (or its rate) */
-            double c, sn, S, dS, d2S;
-            if (poly) {
-                dfo_loads L;
-                S = poly_static_force(C, t, Xs, &L, &dS, NULL);
-                phase_at(C, t, &c, &sn);
-                d2S = -C->omega * C->omega * (C->fP * c) + C->qF[2] * C->iLs;
-                if (belt) { /* at v = vb: the relative acceleration's sign and rates */
-                    S -= cvb;
-                    dS -= C->k * C->vbs;
-                }
-            } else {
-                phase_at(C, t, &c, &sn);
-                S = C->fP * c + C->fF - C->k * Xs;
-                dS = -C->fP * C->omega * sn;
-                d2S = -C->omega * C->omega * (C->fP * c);
-            }
-            const int dir = dfo_free_start_dir(S, dS, d2S);
-            s->mode = dir;
-            C->events++;
-            after_phase(C, poly, s, NULL, ta, ta, xa, xa, 0, dir, 1);
-            continue;
-        }
-        if (s->mode == 0) {
-            int dir = 0, at_start = 0;
-            double dS = 0.0, dFb = 0.0;
-            dfo_dd tb;
-            if (poly) {
-                tb = poly_breakaway(C, Xs, t, target, skip, &dir, &at_start, &dS, &dFb);
-            } else {
-                if (isnan(stick_tb.hi)) stick_dir = 0;
-                tb = breakaway(C, Xs, t, skip, &stick_tb, &stick_dir, stick_cs);
-                dir = stick_dir;
-            }
-            skip = 0;
-            if (sens) dfo_sens_stick(s->J);
-            if (!dfo_dd_lt(tb, target)) {
-                if (belt) { /* riding on the belt to the end */
-                    Xs += C->vbs * dfo_dd_span(t, target);
-                    s->X = Xs * Ls;
-                    if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-                }
-                s->t = t_target;
-                t = target;
-                after_phase(C, poly, s, NULL, ta, t_target, xa, s->X, 0, 0, 0);
-                break;
-            }
-            if (belt) {
-                Xs += C->vbs * dfo_dd_span(t, tb);
-                s->X = Xs * Ls;
-                if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-            }
-            t = tb;
-            s->t = tb.hi;
-            Vs = belt ? C->vbs : 0.0;
-            s->V = belt ? C->vb : 0.0;
-            s->mode = dir;
-            if (poly) {
-                carried = 0;
-                if (sens && !at_start) {
-                    /* h = dir S(t) - F_b(t) = 0 at t_b: dt_b = k dx / D, D = S' - dir F_b' (S' = P' + F_ext'), and
-                     * the slide starts with a+ = dir (F_b - mu_k N) / m: the v row becomes -a+ k / D times the x
-                     * row */
-                    dfo_loads L;
-                    poly_loads(C, tb, &L, NULL, NULL);
-                    const double a_plus = dir * (L.Fb - L.muk_N) / C->M->p.m, D = dS - dir * dFb;
-                    /* (D = 0: a tangential breakaway, the Jacobian not finite, as with held inputs) */
-                    dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / D : 0.0);
-                }
-            } else if (!isnan(stick_cs[0])) { /* the slide starts with the crossing's phase */
-                carried = 1;
-                cs[0] = stick_cs[0];
-                cs[1] = stick_cs[1];
-                if (sens) { /* dt_b = k dx / P'(t_b); the slide starts with a+ = dir (F_b - mu_k N) / m */
-                    const double dP = -C->fP * C->omega * stick_cs[1];
-                    const double a_plus = dir * (C->Ls_.Fb - C->Ls_.muk_N) / C->M->p.m;
-                    dfo_sens_breakaway(s->J, (a_plus != 0.0) ? -a_plus * C->k / dP : 0.0);
-                }
-            } /* (a breakaway at the phase's start: the force is beyond the limit already, dt_b = 0) */
-            C->events++;
-            after_phase(C, poly, s, NULL, ta, tb.hi, xa, s->X, 0, dir, 1);
-            continue;
-        }
-        /* a slip in direction sd from (t, X, V) */
-        const int sd = s->mode;
-        ex_phase P;
-        ex_val v;
-        phase_start(C, &P, t, Xs, Vs, sd, carried ? cs : NULL);
-        if (belt) belt_shift(C, &P);
-        const double u_max = w0 * ((t_target - t.hi) - t.lo);
-        const int cut = u_max > C->u_span; /* a long phase: restart after u_span (not an event) */
-        const double u_end = cut ? C->u_span : u_max;
-        const int r = find_stop(C, &P, Xs - P.xc, belt ? (Vs - C->vbs) / w0 : Vs / w0, u_end, &v);
-        if (r == SEARCH_FAIL) return DFO_ERR_NO_PROGRESS;
-        if (!isfinite(v.y) || !isfinite(v.y1)) return DFO_ERR_NONFINITE;
-        if (r == SEARCH_NONE) {
-            Xs = P.xc + v.y;
-            Vs = w0 * v.y1;
-            if (belt) { /* (eval: v.hy is the harmonic part) */
-                Xs = P.xc + (v.hy + v.u * (P.xp1a + 0.5 * v.u * P.xp2));
-                Vs = w0 * v.y1 + C->vbs;
-            }
-            s->X = Xs * Ls;
-            s->V = Vs * Ls;
-            if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX)) return DFO_ERR_NONFINITE;
-            const dfo_dd tc = cut ? dfo_dd_add_quot(t, u_end, 0.0, w0) : target;
-            if (sens) dfo_sens_slide(C->M, dfo_dd_span(t, tc), s->J);
-            carried = 0;
-            s->t = tc.hi;
-            after_phase(C, poly, s, &P, ta, tc.hi, xa, s->X, sd, sd, 0);
-            t = tc;
-            if (cut) continue;
-            break;
-        }
-        dfo_dd ts = dfo_dd_add_quot(t, v.u, 0.0, w0);
-        if (dfo_dd_lt(target, ts)) ts = target;
-        const int at_end = !dfo_dd_lt(ts, target);
-        if (sens) dfo_sens_slide(C->M, dfo_dd_span(t, ts), s->J);
-        t = ts;
-        s->t = ts.hi;
-        Xs = P.xc + v.y;
-        Vs = 0.0;
-        if (belt) { /* x itself from the harmonic part (v may be a Taylor model's, without it) */
-            ex_val w;
-            eval(C, &P, v.u, &w);
-            Xs = P.xc + (w.hy + w.u * (P.xp1a + 0.5 * w.u * P.xp2));
-            Vs = C->vbs;
-        }
-        s->X = Xs * Ls;
-        s->V = belt ? C->vb : 0.0;
-        if (!(fabs(s->X) <= DBL_MAX)) return DFO_ERR_NONFINITE; /* (never an event at an infinite x) */
-        /* the static force at a stop from the excitation phase there (known from the search), and the
-         * loads there */
-        dfo_loads Lp;
-        const dfo_loads *L = &C->Ls_;
-        double Fs;
-        if (poly) {
-            Fs = poly_static_force(C, ts, Xs, &Lp, NULL, NULL);
-            if (r == SEARCH_STOP && !at_end) Fs = C->fP * v.cth + Lp.F_ext - C->k * Xs;
-            Fs -= cvb; /* (on a belt, the holding force: the damper pulls with c vb) */
-            L = &Lp;
-        } else {
-            Fs = (r == SEARCH_STOP && !at_end) ? C->fP * v.cth + C->fF - C->k * Xs : static_force(C, ts, Xs);
-        }
-        int next = dfo_rest_mode(L, Fs);
-        if (!fric) {
-            /* no friction: never stuck; at a zero force the velocity, falling through 0, reverses */
-            if (next == 0 || (r == SEARCH_NULL && next == sd)) next = -sd;
-            if (r == SEARCH_STOP && !at_end) {
-                /* the motion is the same in either direction: the next phase starts from the motion's
-                 * own state there (its velocity within rounding of 0, not set to 0: undamped, a
-                 * velocity error would never decay, and one made at every reversal would add up) */
-                ex_val w;
-                eval(C, &P, v.u, &w);
-                Xs = P.xc + w.y;
-                Vs = w0 * w.y1;
-                if (belt) {
-                    Xs = P.xc + (w.hy + w.u * (P.xp1a + 0.5 * w.u * P.xp2));
-                    Vs += C->vbs;
-                }
-                s->X = Xs * Ls;
-                s->V = Vs * Ls;
-                v.cth = w.cth;
-                v.sth = w.sth;
-            }
-        } else if (r == SEARCH_NULL && next != -sd) { /* the slide could not start: the block stays at */
-            next = 0;                                 /* rest, and a breakaway right now is passed over */
-            skip = 1;
-        }
-        if (next == 0) stick_tb.hi = NAN; /* a new stick phase */
-        if (sens) {
-            /* the saltation at the stop: stick (rank one), or a reversal (a- = (F_s - sd mu_k N) / m before,
-             * a+ = (F_s + sd mu_k N) / m after, the kinetic force at ts); a touch that slides on, or a
-             * reversal without friction (a+ = a-), leaves J as it is */
-            if (next == 0 || r == SEARCH_NULL) dfo_sens_stick(s->J);
-            else if (next == -sd && L->muk_N > 0.0)
-                dfo_sens_reversal(s->J, (Fs + sd * L->muk_N) / (Fs - sd * L->muk_N));
-        }
-        if (next == -sd && r == SEARCH_STOP && !at_end && carried < CARRY_MAX) {
-            /* a reversal: the next slide starts here, with the phase the search reached (exact for the
-             * stop's time as a double-double, to the rounding of lambda tau) */
-            carried++;
-            cs[0] = v.cth;
-            cs[1] = v.sth;
-        } else {
-            carried = 0;
-        }
-        s->mode = next;
-        C->events++;
-        after_phase(C, poly, s, &P, ta, ts.hi, xa, s->X, sd, next, 1);
-    }
-    s->X = Xs * Ls;
-    s->V = Vs * Ls;
+    const int belt = poly && C->belt;
+    ex_walk W;
+    W.C = C;
+    W.s = s;
+    W.t_target = t_target;
+    W.target.hi = t_target;
+    W.target.lo = 0.0;
+    W.t.hi = s->t;
+    W.t.lo = 0.0;
+    W.t_last = W.t;
+    W.Xs = s->X * C->iLs;
+    W.Vs = s->V * C->iLs;
+    W.skip = 0;
+    W.carried = 0;
+    W.cs[0] = 1.0;
+    W.cs[1] = 0.0;
+    W.stick_tb.hi = NAN;
+    W.stick_tb.lo = 0.0;
+    W.stick_dir = 0;
+    W.stick_cs[0] = NAN;
+    W.stick_cs[1] = 0.0;
+    W.sens = C->M->p.sensitivity;
+    W.belt = belt;
+    W.cvb = belt ? C->M->p.c * C->vbs : 0.0;
+    W.fric = poly ? (C->M->mu_b > 0.0 && (C->qN[0] != 0.0 || C->qN[1] != 0.0 || C->qN[2] != 0.0)) : C->Ls_.Fb > 0.0;
+    const dfo_status st = dfo_exact_event_loop(&W, poly ? &WALK_POLY : &WALK_HELD, s, &C->events, W.fric);
+    if (st != DFO_OK) return st;
+    s->X = W.Xs * C->Ls;
+    s->V = W.Vs * C->Ls;
     return DFO_OK;
 }
 

@@ -2,8 +2,9 @@
  * and y = x - x_c, y'' + 2 zeta y' + y = a cos(theta_a + lambda tau) in closed form, its end the first
  * zero of s y' found by the certified stop search, a stick phase's end the closed-form breakaway (the
  * root of the varying static force with polynomial inputs); exact.h says how. Lengths over a power-of-2
- * scale chosen per call; times inside a call as double-doubles. The event loop is compiled once for
- * held and once for polynomial inputs; a belt (vb != 0) runs the polynomial inputs' loop. */
+ * scale chosen per call; times inside a call as double-doubles. Its phases run under exact_loop.h's
+ * event loop, compiled once for held and once for polynomial inputs; a belt (vb != 0) runs the
+ * polynomial inputs' one. */
 #ifndef DFO_EXACT_SPRING_H
 #define DFO_EXACT_SPRING_H
 

@@ -184,7 +184,8 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     dfo_inst_status done;
     double t_target = 0.0;
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT;
-    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && osc_inst_ramp_unsupported(&v->M.p)) return osc_inst_ramp_refused(in, fn);
+    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && osc_inst_ramp_unsupported(&v->M.p))
+        return osc_inst_ramp_refused(in, fn);
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!osc_inst_same_inputs(&v->u, &v->u_used)) {
         dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);

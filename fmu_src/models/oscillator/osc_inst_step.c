@@ -69,7 +69,8 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     in->lc.work_by_events = v->M.p.scheme == DFO_SCHEME_EXACT && !(flags & DFO_STEP_STOP_AT_SWITCH);
     const dfo_inst_status chk = dfo_inst_check_step(&in->lc, fn, tc, dt, v->M.p.h, &t_target);
     if (chk != DFO_INST_OK) return chk;
-    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && osc_inst_ramp_unsupported(&v->M.p)) return osc_inst_ramp_refused(in, fn);
+    if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && osc_inst_ramp_unsupported(&v->M.p))
+        return osc_inst_ramp_refused(in, fn);
     const dfo_state before = v->s;
     if (!osc_inst_same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
     dfo_status st;
