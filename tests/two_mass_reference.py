@@ -24,10 +24,11 @@ freezes x1, a stuck contact between the masses makes the pair move as one, both 
 
 At a switch the new mode set follows the rest rule of contacts at rest together (method.md section
 13): every contact at rest (its slip 0: the one that stopped, and those stuck) is first held; the
-holding forces are solved jointly; the held contact most beyond its limit starts to slide the way
-it is driven (against its holding force), and the rest are solved again, until all held ones are
-within their limits. A stuck contact that reaches its limit breaks
-away the same way. The start at t0 takes the same rule for the contacts whose slip is 0.
+holding forces are solved jointly; among the contacts that just came to rest, the one most beyond
+its limit starts to slide the way it is driven (against its holding force), and the rest are solved
+again, until all of them are within their limits; then a stuck contact the new set drives beyond
+its limit breaks away the same way. A stuck contact that reaches its limit breaks away too. The
+start at t0 takes the same rule for the contacts whose slip is 0.
 
 Positions, velocities and the modes are available at any time (dense output); the switches are
 listed with their times, contacts and modes."""
@@ -172,19 +173,28 @@ def accelerations(p: TwoMass, modes: tuple[int, int], t: float, x: np.ndarray,
 
 
 def rest_rule(p: TwoMass, t: float, x: np.ndarray, v: np.ndarray, modes: list[int], rest: list[bool]) -> list[int]:
-    """The modes of the contacts at rest (rest[j]: its slip 0 now, to be decided), the sliding
-    ones kept: all held first, then the held one most beyond its limit released against its holding
-    force, again until every held one is within its limit."""
+    """The modes after a switch. The contacts at rest (rest[j]: its slip 0 now) are decided together
+    with the held ones: all held first, then the resting one most beyond its limit released
+    against its holding force, again until every resting one is within its limit. Then a held
+    contact that the new set drives beyond its limit breaks away against its holding force (one
+    after the other, the forces solved again after each), until all held ones are within."""
     modes = [0 if rest[j] else modes[j] for j in range(2)]
     Fb = p.breakaway
     for _ in range(3):
         _, f = accelerations(p, tuple(modes), t, x, v)
-        # a held contact that the new set drives beyond its limit breaks away too
-        excess = [abs(f[j]) - Fb[j] if modes[j] == 0 and Fb[j] > 0.0 else -math.inf for j in range(2)]
+        excess = [abs(f[j]) - Fb[j] if rest[j] and modes[j] == 0 else -math.inf for j in range(2)]
         worst = int(np.argmax(excess))
         if not excess[worst] > 0.0:
             break
         modes[worst] = -int(np.sign(f[worst]))
+    for _ in range(3):
+        _, f = accelerations(p, tuple(modes), t, x, v)
+        beyond = [j for j in range(2) if modes[j] == 0 and Fb[j] > 0.0 and abs(f[j]) > Fb[j]]
+        if not beyond:
+            break
+        for j in beyond:
+            _, f = accelerations(p, tuple(modes), t, x, v)
+            modes[j] = -int(np.sign(f[j]))
     return modes
 
 
