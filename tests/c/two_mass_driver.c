@@ -22,8 +22,8 @@ int main(int argc, char **argv)
     p.m2 = 1.0;
     p.alpha = -0.1;
     p.scheme = DFO_SCHEME_LOCATED;
-    p.friction_updates = 1;
-    p.fast_paths = 1;
+    p.frictionUpdates = 1;
+    p.fastPaths = 1;
     double t_end = 1.0, dt = 0.1;
     struct {
         const char *name;

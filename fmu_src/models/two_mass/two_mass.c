@@ -69,8 +69,8 @@ const char *tm_check(const tm_params *p, char *buf, size_t len)
                  p->scheme);
         return buf;
     }
-    if (p->friction_updates < 0 || p->friction_updates > 10) {
-        snprintf(buf, len, "invalid value %d for frictionUpdates; valid range: 0 to 10", p->friction_updates);
+    if (p->frictionUpdates < 0 || p->frictionUpdates > 10) {
+        snprintf(buf, len, "invalid value %d for frictionUpdates; valid range: 0 to 10", p->frictionUpdates);
         return buf;
     }
     if (!(tm_rate_max(p) > 0.0)) {
@@ -150,8 +150,8 @@ int tm_model_init(tm_model *m, const tm_params *p, const eng_alloc *al, char *bu
     S.h = m->h;
     S.alpha = p->alpha;
     S.scheme = p->scheme;
-    S.friction_updates = p->friction_updates;
-    S.fast_paths = p->fast_paths;
+    S.friction_updates = p->frictionUpdates;
+    S.fast_paths = p->fastPaths;
     S.rate_max = tm_rate_max(p);
     /* the oscillator's snap of a host's rounded times to the grid */
     S.snap_max_rel_h = 1e-5;

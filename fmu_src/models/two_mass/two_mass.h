@@ -23,8 +23,14 @@ typedef struct {
     double N_c, mu_s_c, mu_k_c;              /* contact 1: mass 2 on mass 1 */
     double x1_0, x2_0, v1_0, v2_0;           /* initial state */
     double h, alpha;                         /* internal step (0: derived), Bossak parameter */
-    int scheme, friction_updates, fast_paths;
+    int scheme, frictionUpdates, fastPaths;  /* (the FMU's variable names) */
 } tm_params;
+
+/* The inputs (held over a communication step); <name>_set: the input has been set. */
+typedef struct {
+    double F1_ext, F2_ext;
+    int F1_ext_set, F2_ext_set;
+} tm_inputs;
 
 typedef struct {
     tm_params p;
