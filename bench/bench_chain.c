@@ -16,7 +16,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "chain.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 
 #include <math.h>

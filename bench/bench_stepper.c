@@ -19,7 +19,7 @@
 
 #include "fmi2Functions.h"
 #include "model_vars.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 
 #include <errno.h>

@@ -32,7 +32,7 @@ from cases import CASES  # noqa: E402
 
 LOOP_C = r"""
 #define _POSIX_C_SOURCE 199309L
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 #include <math.h>
 #include <stdio.h>

@@ -51,7 +51,7 @@ from dryfriction.sweep import BatchRunner
 ROOT = Path(__file__).resolve().parents[1]
 
 C_DRIVER = r"""
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 #include <stdio.h>
 #include <stdlib.h>

@@ -22,6 +22,7 @@
 #include "dmath.h"
 #include "excitation.h"
 #include "lcp.h"
+#include "roots.h"
 
 #include <float.h>
 #include <math.h>
@@ -60,6 +61,7 @@ struct eng {
     /* dense: columns A^-1 w_j (n x nc), D (nc x nc), Cholesky, Lemke's 2 nc problem */
     double *cols, *D, *Lc, *rhs, *sol, *Dinv, *lM, *lq, *lz, *lw;
     int *zb, *guess, *sel;
+    lcp_workspace *ws;           /* Lemke's, for 2 nc unknowns (NULL without contacts) */
     /* Stribeck's Newton */
     double *Jn, *res;
     /* a phase's start, saved for the switch search */
@@ -120,6 +122,8 @@ void eng_destroy(eng *E)
                           E->sA, E->shA, E->sF, E->smode};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+    const lcp_alloc la = {E->al.allocate, E->al.release, E->al.env};
+    lcp_workspace_free(E->ws, &la);
     E->al.release(E->al.env, E);
 }
 
@@ -159,6 +163,10 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     ok &= (E->lw = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->zb = (int *)alloc_n(al, 2 * nc, sizeof(int))) != NULL;
     ok &= (E->guess = (int *)alloc_n(al, 2 * nc, sizeof(int))) != NULL;
+    if (nc > 0) {
+        const lcp_alloc la = {al->allocate, al->release, al->env};
+        ok &= (E->ws = lcp_workspace_create((int)(2 * nc), &la)) != NULL;
+    }
     if (!ok) {
         eng_destroy(E);
         if (err) *err = oom;
@@ -637,7 +645,7 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
 }
 
 /* The LCP by an active set (principal pivoting on the basis solve): infeasible contacts flipped,
- * at most ACTIVE_SET_ROUNDS per contact; the fallback where Lemke's size is exceeded. */
+ * at most ACTIVE_SET_ROUNDS per contact: for the Stribeck law, a singular D, and where Lemke fails. */
 static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, double *V1, double *f, int *pivots)
 {
     const size_t nc = E->S.nc;
@@ -681,7 +689,7 @@ eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int 
     size_t m = 0;
     for (size_t j = 0; j < nc; j++)
         if (P->limit[j] > 0.0) E->sel[m++] = (int)j;
-    if (2 * m > LCP_MAX_N || E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
+    if (E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
     /* c = W A^-1 p_hat - vb (frictionless contacts carry no force), D = W A^-1 W' */
     S->ops.solve(S->ops.ctx, P->slot, P->p_hat, E->y);
     for (size_t a = 0; a < m; a++) {
@@ -722,8 +730,8 @@ eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int 
         E->guess[m + a] = mode[E->sel[a]] < 0;
     }
     int piv = 0;
-    const lcp_status ls = lcp_lemke_warm((int)m2, E->lM, E->lq, E->guess, LEMKE_PIVOTS_PER_N * (int)m2 + 16, E->lz,
-                                         E->lw, E->zb, &piv);
+    const lcp_status ls = lcp_lemke_warm_ws(E->ws, (int)m2, E->lM, E->lq, E->guess, LEMKE_PIVOTS_PER_N * (int)m2 + 16,
+                                            E->lz, E->lw, E->zb, &piv);
     if (pivots) *pivots = piv;
     if (ls == LCP_BAD_INPUT) return ENG_ERR_NONFINITE;
     if (ls != LCP_OK) return dense_active_set(E, P, mode, V1, f, pivots);
@@ -1133,7 +1141,8 @@ static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, doubl
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
-        const double hs = dfo_brent(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
         trial_margin(&mc, hs, &T);
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;

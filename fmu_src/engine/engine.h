@@ -160,7 +160,8 @@ typedef struct {
     double alpha;               /* Bossak parameter in [-1/3, 0] */
     int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
     int friction_updates;       /* paper: coefficient updates (re-solves) per step, >= 0 */
-    int fast_paths;             /* skip work a run does not need (the same numbers: the stuck fast path) */
+    int fast_paths;             /* skip work a run does not need, to the same numbers (read by no path yet:
+                                 * the engine has no stuck fast path; every step takes the general path) */
     double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
                                  * resolve the motion (located hands it to the consistent test), and
                                  * A is re-based on a new step length only where rate_max h <= 1 */
@@ -199,7 +200,8 @@ typedef struct {
     double *F;                  /* nc: contact forces f at t (W' f acts on the DOFs) */
     int *mode;                  /* nc: -1 / +1 sliding, 0 stuck (without friction: the sign of the slip) */
     double *t_stick;            /* nc: when the contact's current stick phase began */
-    double *t_break;            /* nc: a stuck contact's next breakaway, if known (NaN: to be found) */
+    double *t_break;            /* nc: a stuck contact's next breakaway, if known (NaN: to be found; the
+                                 * engine's schemes find breakaways by root finding and keep NaN here) */
     int *break_dir;             /* nc: its side */
     double t_switch;            /* the time of the last switch (-inf: none) */
     long long steps, solves, pivot_steps, switches;  /* counters */
@@ -227,8 +229,8 @@ typedef struct {
 } eng_phase;
 
 /* The observer: on_phase is called only for phases that overlap [t_start, t_stop] (so a run that
- * observes nothing pays one comparison per phase), and a stretch of stuck steps inside the window
- * is still taken at once, as one phase (the window costs no steps). */
+ * observes nothing pays one comparison per phase); every internal step, and every sub-step
+ * between switches, is a phase. */
 typedef struct {
     double t_start, t_stop;
     void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);
@@ -255,8 +257,10 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err);
 void eng_destroy(eng *E);
 const eng_setup *eng_setup_of(const eng *E);
 
-/* What a scheme offers beyond the trajectory. */
-enum { ENG_CAP_SENSITIVITY = 1 /* propagates s->J when it is not NULL */ };
+/* What a scheme offers beyond the trajectory: ENG_CAP_SENSITIVITY, it propagates s->J when that
+ * is not NULL. No Bossak scheme of the engine does yet (0 for every scheme; eng_start sets J to the
+ * identity): a model asks before it offers the map's Jacobian. */
+enum { ENG_CAP_SENSITIVITY = 1 };
 int eng_caps(int scheme);
 
 /* State arrays through the engine's callbacks (with_jacobian: J too); 0 on failure. */

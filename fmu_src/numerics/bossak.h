@@ -1,7 +1,7 @@
 /* The mathematics the oscillator (models/oscillator/newmark.c) and the chain (models/chain/) share:
  * the schemes' names, the rule of the default step, Bossak-Newmark's coefficients and the
- * kinematics of one step in velocity form (method.md section 2), and the bracketed root finder
- * that places a switch inside a step (Brent's method).
+ * kinematics of one step in velocity form (method.md section 2). The root finder that places a
+ * switch inside a step is roots.h's.
  *
  * Plain C, no FMI types. */
 #ifndef DFO_BOSSAK_H
@@ -63,49 +63,6 @@ static inline void dfo_bossak_kin_for(double h, double g, double b, dfo_bossak_k
     k->pred_V = h * (1.0 - b / g);
     k->pred_A = h * h * (0.5 - b / g);
     k->corr_V = b * h / g;
-}
-
-/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi), by Brent's method to a few ulps of t_abs + x:
- * returns the bracket end on the non-positive side (where the switch has happened). f is called
- * as f(ctx, x); a known f lets the compiler inline it. */
-typedef double (*dfo_root_fn)(void *ctx, double x);
-
-static inline double dfo_brent(dfo_root_fn f, void *ctx, double t_abs, double lo, double flo, double hi,
-                               double fhi)
-{
-    double a = lo, b = hi, fa = flo, fb = fhi, c = a, fc = fa, d = b - a, e = d;
-    for (int it = 0; it < 200; it++) {
-        if (fb == 0.0) return b;
-        if ((fb > 0.0) == (fc > 0.0)) { c = a; fc = fa; d = e = b - a; }
-        if (fabs(fc) < fabs(fb)) { a = b; b = c; c = a; fa = fb; fb = fc; fc = fa; }
-        const double tol = 4.0 * DBL_EPSILON * (fabs(t_abs) + fabs(b)) + DBL_MIN;
-        const double m = 0.5 * (c - b);
-        if (fabs(m) <= tol) break;
-        if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
-            double p, q, r;
-            const double ratio = fb / fa;
-            if (a == c) {
-                p = 2.0 * m * ratio;
-                q = 1.0 - ratio;
-            } else {
-                q = fa / fc;
-                r = fb / fc;
-                p = ratio * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
-                q = (q - 1.0) * (r - 1.0) * (ratio - 1.0);
-            }
-            if (p > 0.0) q = -q; else p = -p;
-            if (2.0 * p < fmin(3.0 * m * q - fabs(tol * q), fabs(e * q))) { e = d; d = p / q; }
-            else { d = m; e = m; }
-        } else {
-            d = m;
-            e = m;
-        }
-        a = b;
-        fa = fb;
-        b += (fabs(d) > tol) ? d : (m > 0.0 ? tol : -tol);
-        fb = f(ctx, b);
-    }
-    return (fb <= 0.0) ? b : c;
 }
 
 #endif

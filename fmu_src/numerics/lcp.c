@@ -42,7 +42,17 @@ static ALWAYS_INLINE void pivot(double *T, const int n, int row, int col)
  * the row whose (rhs, B^-1 row) / d is lexicographically smallest. B^-1 sits in the w columns.
  * Rows whose basic variable is z0 win ties (so the artificial variable leaves as soon as it can).
  * Returns -1 when no row qualifies (a ray). */
-static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const int *basis)
+static double column_scale(const double *T, const int n, int c)
+{
+    const int nc = COLS(n);
+    double cscale = 0.0;
+    for (int r = 0; r < n; r++) cscale = dmax(cscale, dabs(T[r * nc + c]));
+    return cscale;
+}
+
+/* cs: n doubles of scratch (the scales of the columns of B^-1, each computed once when a tie first
+ * needs it) */
+static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const int *basis, double *cs)
 {
     const int nc = COLS(n);
     const int rhs = 2 * n + 1;
@@ -50,6 +60,8 @@ static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const
     for (int i = 0; i < n; i++) colmax = dmax(colmax, dabs(T[i * nc + col]));
     const double tol = 1e-13 * colmax;
     int best = -1;
+    double rhs_scale = -1.0;
+    for (int k = 0; k < n; k++) cs[k] = -1.0;
     for (int i = 0; i < n; i++) {
         const double d = T[i * nc + col];
         if (!(d > tol)) continue;
@@ -63,8 +75,9 @@ static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const
         int cmp = 0;
         for (int k = -1; k < n && cmp == 0; k++) {
             const int c = (k < 0) ? rhs : k;
-            double cscale = 0.0;
-            for (int r = 0; r < n; r++) cscale = dmax(cscale, dabs(T[r * nc + c]));
+            double *slot = (k < 0) ? &rhs_scale : &cs[k];
+            if (*slot < 0.0) *slot = column_scale(T, n, c);
+            const double cscale = *slot;
             const double ad = T[i * nc + c] * db * colmax, bd = T[best * nc + c] * d * colmax;
             const double eps = 1e-12 * (dmax(dabs(ad), dabs(bd)) + cscale * dd);
             if (ad < bd - eps) cmp = -1;
@@ -79,11 +92,13 @@ static ALWAYS_INLINE int ratio_test(const double *T, const int n, int col, const
     return best;
 }
 
+/* Lemke on the tableau T (n x COLS(n)) with the basis list basis (n) and the scratch cs (n), all the
+ * caller's. */
 static lcp_status lemke(const int n, const double *M, const double *q, int max_pivots,
-                       double *z, double *w, int *z_basic, int *pivots)
+                       double *z, double *w, int *z_basic, int *pivots, double *T, int *basis, double *cs)
 {
     if (pivots) *pivots = 0;
-    if (n < 1 || n > LCP_MAX_N) return LCP_BAD_INPUT;
+    if (n < 1) return LCP_BAD_INPUT;
     int rmin = 0;
     double sM = 0.0, sq = 0.0;
     for (int i = 0; i < n; i++) {
@@ -105,8 +120,6 @@ static lcp_status lemke(const int n, const double *M, const double *q, int max_p
     const int nc = COLS(n);
     const int rhs = 2 * n + 1, z0 = 2 * n;
     const double iM = 1.0 / sM, iq = 1.0 / sq, zs = sq / sM;
-    double T[LCP_MAX_N * COLS(LCP_MAX_N)];
-    int basis[LCP_MAX_N];
     for (int i = 0; i < n; i++) {
         double *r = T + i * nc;
         for (int j = 0; j < n; j++) {
@@ -125,7 +138,7 @@ static lcp_status lemke(const int n, const double *M, const double *q, int max_p
     for (;;) {
         const int entering = (leaving < n) ? leaving + n : leaving - n; /* complement */
         if (count >= max_pivots) { if (pivots) *pivots = count; return LCP_MAX_PIVOTS; }
-        const int row = ratio_test(T, n, entering, basis);
+        const int row = ratio_test(T, n, entering, basis, cs);
         if (row < 0) { if (pivots) *pivots = count; return LCP_RAY; }
         leaving = basis[row];
         pivot(T, n, row, entering);
@@ -260,58 +273,151 @@ static lcp_status lemke2(const double *M, const double *q, int max_pivots, doubl
     return LCP_OK;
 }
 
+/* ---- the workspace ------------------------------------------------------------------------------ */
+
+/* Everything Lemke and the warm start use for problems of up to n unknowns: the tableau
+ * (n x COLS(n)), the warm start's elimination matrix (n x (n + 1)), the ratio test's column scales
+ * (n), the basis list and the index set. */
+struct lcp_workspace {
+    int n;
+    double *T, *A, *cs;
+    int *basis, *J;
+};
+
+/* doubles and ints a workspace for n needs, or 0 when n is out of range (the tableau's indices are
+ * int: n COLS(n) + n (n + 1) must fit) */
+static size_t ws_doubles(int n)
+{
+    if (n < 1 || n > 26000) return 0;  /* 3 n^2 + 4 n < INT_MAX up to n = 26754 */
+    return (size_t)n * (size_t)COLS(n) + (size_t)n * (size_t)(n + 1) + (size_t)n;
+}
+
+lcp_workspace *lcp_workspace_create(int n, const lcp_alloc *al)
+{
+    const size_t nd = ws_doubles(n);
+    if (nd == 0 || !al || !al->allocate || !al->release) return NULL;
+    lcp_workspace *ws = (lcp_workspace *)al->allocate(al->env, 1, sizeof(lcp_workspace));
+    if (!ws) return NULL;
+    ws->n = n;
+    ws->T = (double *)al->allocate(al->env, nd, sizeof(double));
+    ws->basis = (int *)al->allocate(al->env, 2 * (size_t)n, sizeof(int));
+    if (!ws->T || !ws->basis) {
+        lcp_workspace_free(ws, al);
+        return NULL;
+    }
+    ws->A = ws->T + (size_t)n * (size_t)COLS(n);
+    ws->cs = ws->A + (size_t)n * (size_t)(n + 1);
+    ws->J = ws->basis + n;
+    return ws;
+}
+
+void lcp_workspace_free(lcp_workspace *ws, const lcp_alloc *al)
+{
+    if (!ws || !al || !al->release) return;
+    if (ws->T) al->release(al->env, ws->T);
+    if (ws->basis) al->release(al->env, ws->basis);
+    al->release(al->env, ws);
+}
+
+int lcp_workspace_size(const lcp_workspace *ws) { return ws ? ws->n : 0; }
+
+/* A workspace on the stack for n <= LCP_STACK_N (the entry points without one). */
+typedef struct {
+    double T[LCP_STACK_N * COLS(LCP_STACK_N) + LCP_STACK_N * (LCP_STACK_N + 1) + LCP_STACK_N];
+    int basis[2 * LCP_STACK_N];
+    lcp_workspace ws;
+} stack_ws;
+
+static lcp_workspace *stack_workspace(stack_ws *s, int n)
+{
+    s->ws.n = n;
+    s->ws.T = s->T;
+    s->ws.A = s->T + (n > 0 ? n * COLS(n) : 0);
+    s->ws.cs = s->ws.A + (n > 0 ? n * (n + 1) : 0);
+    s->ws.basis = s->basis;
+    s->ws.J = s->basis + (n > 0 ? n : 0);
+    return &s->ws;
+}
+
+static int ws_fits(const lcp_workspace *ws, int n) { return ws && n >= 1 && n <= ws->n; }
+
+lcp_status lcp_lemke_general_ws(lcp_workspace *ws, int n, const double *M, const double *q, int max_pivots,
+                                double *z, double *w, int *z_basic, int *pivots)
+{
+    if (!ws_fits(ws, n)) {
+        if (pivots) *pivots = 0;
+        return LCP_BAD_INPUT;
+    }
+    return lemke(n, M, q, max_pivots, z, w, z_basic, pivots, ws->T, ws->basis, ws->cs);
+}
+
+lcp_status lcp_lemke_ws(lcp_workspace *ws, int n, const double *M, const double *q, int max_pivots,
+                        double *z, double *w, int *z_basic, int *pivots)
+{
+    /* the friction problem of one degree of freedom is 2 x 2: a copy specialised for it */
+    if (n == 2 && ws_fits(ws, n)) return lemke2(M, q, max_pivots, z, w, z_basic, pivots);
+    return lcp_lemke_general_ws(ws, n, M, q, max_pivots, z, w, z_basic, pivots);
+}
+
 lcp_status lcp_lemke_general(int n, const double *M, const double *q, int max_pivots,
                              double *z, double *w, int *z_basic, int *pivots)
 {
-    return lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
+    if (n > LCP_STACK_N) n = 0; /* refused below */
+    stack_ws s;
+    return lcp_lemke_general_ws(stack_workspace(&s, n), n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
                      double *z, double *w, int *z_basic, int *pivots)
 {
-    /* the friction problem of one degree of freedom is 2 x 2: a copy specialised for it */
     if (n == 2) return lemke2(M, q, max_pivots, z, w, z_basic, pivots);
-    return lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
+    return lcp_lemke_general(n, M, q, max_pivots, z, w, z_basic, pivots);
 }
 
 /* ---- warm start -------------------------------------------------------------------------------- */
 
 /* The complementary basis named by guess (z_i basic where guess[i], else w_i), if it solves the
- * problem: z_J = -M_JJ^-1 q_J >= 0 and w = M z + q >= 0 off J. Returns 1 and the solution, else 0. */
-static int try_basis(int n, const double *M, const double *q, const int *guess, double *z, double *w)
+ * problem: z_J = -M_JJ^-1 q_J >= 0 and w = M z + q >= 0 off J. Returns 1 and the solution, else 0.
+ * A: n (n + 1) doubles, J: n ints (workspace). */
+static int try_basis(int n, const double *M, const double *q, const int *guess, double *z, double *w, double *A,
+                     int *J)
 {
-    int J[LCP_MAX_N], k = 0;
+    int k = 0;
     for (int i = 0; i < n; i++) {
         z[i] = 0.0;
         if (guess[i]) J[k++] = i;
     }
     if (k > 0) {
-        /* M_JJ z_J = -q_J by Gaussian elimination with partial pivoting */
-        double A[LCP_MAX_N][LCP_MAX_N + 1];
+        /* M_JJ z_J = -q_J by Gaussian elimination with partial pivoting; A is k x (k + 1) */
+        const int s = k + 1;
         double scale = 0.0;
         for (int a = 0; a < k; a++) {
             for (int b = 0; b < k; b++) {
-                A[a][b] = M[J[a] * n + J[b]];
-                scale = dmax(scale, dabs(A[a][b]));
+                A[a * s + b] = M[J[a] * n + J[b]];
+                scale = dmax(scale, dabs(A[a * s + b]));
             }
-            A[a][k] = -q[J[a]];
+            A[a * s + k] = -q[J[a]];
         }
         for (int c = 0; c < k; c++) {
             int piv = c;
             for (int r = c + 1; r < k; r++)
-                if (dabs(A[r][c]) > dabs(A[piv][c])) piv = r;
-            if (!(dabs(A[piv][c]) > 1e-13 * scale)) return 0; /* singular: let Lemke decide */
+                if (dabs(A[r * s + c]) > dabs(A[piv * s + c])) piv = r;
+            if (!(dabs(A[piv * s + c]) > 1e-13 * scale)) return 0; /* singular: let Lemke decide */
             if (piv != c)
-                for (int b = c; b <= k; b++) { const double t = A[c][b]; A[c][b] = A[piv][b]; A[piv][b] = t; }
+                for (int b = c; b <= k; b++) {
+                    const double t = A[c * s + b];
+                    A[c * s + b] = A[piv * s + b];
+                    A[piv * s + b] = t;
+                }
             for (int r = c + 1; r < k; r++) {
-                const double f = A[r][c] / A[c][c];
-                for (int b = c; b <= k; b++) A[r][b] -= f * A[c][b];
+                const double f = A[r * s + c] / A[c * s + c];
+                for (int b = c; b <= k; b++) A[r * s + b] -= f * A[c * s + b];
             }
         }
         for (int c = k - 1; c >= 0; c--) {
-            double v = A[c][k];
-            for (int b = c + 1; b < k; b++) v -= A[c][b] * z[J[b]];
-            v /= A[c][c];
+            double v = A[c * s + k];
+            for (int b = c + 1; b < k; b++) v -= A[c * s + b] * z[J[b]];
+            v /= A[c * s + c];
             if (!(v >= 0.0)) return 0;
             z[J[c]] = v;
         }
@@ -326,11 +432,12 @@ static int try_basis(int n, const double *M, const double *q, const int *guess, 
     return 1;
 }
 
-lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
-                          double *z, double *w, int *z_basic, int *pivots)
+lcp_status lcp_lemke_warm_ws(lcp_workspace *ws, int n, const double *M, const double *q, const int *guess,
+                             int max_pivots, double *z, double *w, int *z_basic, int *pivots)
 {
-    if (guess && n == 2 && !(guess[0] && guess[1])) return lcp_lemke_warm2(M, q, guess, max_pivots, z, w, z_basic, pivots);
-    if (guess && n >= 1 && n <= LCP_MAX_N && try_basis(n, M, q, guess, z, w)) {
+    if (guess && n == 2 && ws_fits(ws, n) && !(guess[0] && guess[1]))
+        return lcp_lemke_warm2(M, q, guess, max_pivots, z, w, z_basic, pivots);
+    if (guess && ws_fits(ws, n) && try_basis(n, M, q, guess, z, w, ws->A, ws->J)) {
         /* non-finite data fails the sign tests above, except where it is never read: check all */
         double fin = 0.0;
         for (int i = 0; i < n; i++) {
@@ -343,7 +450,16 @@ lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *gu
             return LCP_OK;
         }
     }
-    return lcp_lemke(n, M, q, max_pivots, z, w, z_basic, pivots);
+    return lcp_lemke_ws(ws, n, M, q, max_pivots, z, w, z_basic, pivots);
+}
+
+lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
+                          double *z, double *w, int *z_basic, int *pivots)
+{
+    if (guess && n == 2 && !(guess[0] && guess[1])) return lcp_lemke_warm2(M, q, guess, max_pivots, z, w, z_basic, pivots);
+    if (n > LCP_STACK_N) n = 0; /* refused below */
+    stack_ws s;
+    return lcp_lemke_warm_ws(stack_workspace(&s, n), n, M, q, guess, max_pivots, z, w, z_basic, pivots);
 }
 
 const char *lcp_status_text(lcp_status s)

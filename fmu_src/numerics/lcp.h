@@ -5,7 +5,7 @@
  * with the conditions that make it a problem of each kind:
  *   lcp_lemke*  (standard LCP, a small dense M, method.md section 3): z >= 0, w >= 0, z . w = 0,
  *               by Lemke's complementary pivoting (lexicographic minimum-ratio test, no cycling on
- *               degenerate problems, covering vector e = 1, for any n <= LCP_MAX_N);
+ *               degenerate problems, covering vector e = 1, any n);
  *   lcp_box*    (box LCP, a symmetric positive definite tridiagonal M, method.md section 9): z free,
  *               |w_i| <= l_i, z_i > 0 => w_i = -l_i, z_i < 0 => w_i = +l_i (l_i = 0: w_i = 0),
  *               the optimality condition of min z'M z / 2 + q'z + sum l_i |z_i|; by principal
@@ -14,8 +14,10 @@
  * A basis is named by flags: Lemke's z_basic[i] (z_i basic), the box's mode[i] (0: z_i = 0 held,
  * w_i inside its box; +1 / -1: z_i free with w_i = -l_i / +l_i, i.e. the sign z_i has).
  * Both return an lcp_status and the pivots done through *pivots (NULL: not wanted); sizes are int
- * for Lemke (n <= LCP_MAX_N), size_t for the box (any n, O(n) memory). Neither
- * allocates: Lemke's workspace is on its own stack, the box's is the caller's.
+ * for Lemke, size_t for the box (any n, O(n) memory). Neither allocates while it solves: Lemke's
+ * workspace (O(n^2)) is made once for the largest n through the caller's allocation callbacks
+ * (lcp_workspace_create, the *_ws entry points) or, for n <= LCP_STACK_N, is on the solver's stack
+ * (the entry points without one); the box's is the caller's.
  * Plain C, no FMI types. */
 #ifndef DFO_LCP_H
 #define DFO_LCP_H
@@ -24,17 +26,18 @@
 #include <math.h>
 #include <stddef.h>
 
-#define LCP_MAX_N 12  /* Lemke's largest n (the tests pose the dense 2n form of a chain of up to 6 blocks) */
+#define LCP_STACK_N 12  /* the largest n of the Lemke entry points without a workspace (on the stack) */
 
 typedef enum {
     LCP_OK = 0,          /* solution found */
     LCP_RAY = 1,         /* secondary ray: no solution found (infeasible for this M; Lemke only) */
     LCP_MAX_PIVOTS = 2,  /* pivot budget used up */
-    LCP_BAD_INPUT = 3    /* n out of range or a non-finite entry (Lemke only: the box solver does
+    LCP_BAD_INPUT = 3    /* n out of range (n < 1, above LCP_STACK_N without a workspace, above the
+                          * workspace's size with one) or a non-finite entry (Lemke only: the box solver does
                           * not test its data, non-finite entries come out in z and w) */
 } lcp_status;
 
-/* M: n x n, row-major. q: n. On LCP_OK, z and w (n each) hold the solution and basic[i] is
+/* M: n x n, row-major (1 <= n <= LCP_STACK_N). q: n. On LCP_OK, z and w (n each) hold the solution and basic[i] is
  * 1 when z[i] is basic (its complementarity pair is "active" on the z side). pivots, if not NULL,
  * receives the number of pivots done. */
 lcp_status lcp_lemke(int n, const double *M, const double *q, int max_pivots,
@@ -51,6 +54,31 @@ lcp_status lcp_lemke_general(int n, const double *M, const double *q, int max_pi
  * with 0 pivots; otherwise Lemke's algorithm runs from the start, as lcp_lemke. */
 lcp_status lcp_lemke_warm(int n, const double *M, const double *q, const int *guess, int max_pivots,
                           double *z, double *w, int *z_basic, int *pivots);
+
+/* Allocation callbacks (zero-filled memory, as FMI's calloc); env is passed through. */
+typedef struct {
+    void *(*allocate)(void *env, size_t nobj, size_t size);
+    void (*release)(void *env, void *obj);
+    void *env;
+} lcp_alloc;
+
+/* Lemke's workspace for problems of up to n unknowns (O(n^2) doubles: the tableau and the warm
+ * start's elimination), made through al and freed with the same al. NULL when n < 1, n > 26000
+ * (the tableau's int indices) or an allocation failed. One workspace serves one solve at a time. */
+typedef struct lcp_workspace lcp_workspace;
+lcp_workspace *lcp_workspace_create(int n, const lcp_alloc *al);
+void lcp_workspace_free(lcp_workspace *ws, const lcp_alloc *al);  /* ws may be NULL */
+int lcp_workspace_size(const lcp_workspace *ws);                    /* its n; 0 for NULL */
+
+/* lcp_lemke, lcp_lemke_general and lcp_lemke_warm for any 1 <= n <= lcp_workspace_size(ws)
+ * (ws NULL or smaller: LCP_BAD_INPUT). The same pivots, and the same bits, as the entry points
+ * without a workspace wherever both apply. */
+lcp_status lcp_lemke_ws(lcp_workspace *ws, int n, const double *M, const double *q, int max_pivots,
+                        double *z, double *w, int *z_basic, int *pivots);
+lcp_status lcp_lemke_general_ws(lcp_workspace *ws, int n, const double *M, const double *q, int max_pivots,
+                                double *z, double *w, int *z_basic, int *pivots);
+lcp_status lcp_lemke_warm_ws(lcp_workspace *ws, int n, const double *M, const double *q, const int *guess,
+                             int max_pivots, double *z, double *w, int *z_basic, int *pivots);
 
 /* The basis {z_i, w_o} (o = 1 - i) of a 2 x 2 problem, if it solves it; i is a constant at each
  * call below, so that everything stays in registers. */

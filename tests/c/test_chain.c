@@ -17,7 +17,7 @@
 #include "chain.h"
 #include "check.h"
 #include "lcp.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 
 #include <math.h>

@@ -9,7 +9,7 @@
 #include "engine.h"
 
 #include "chain.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "osc_params.h"
 
 #include <math.h>
@@ -113,6 +113,38 @@ static eng_setup setup_of(dense_model *D, size_t nc, const eng_row *rows, const 
     return S;
 }
 
+/* One block of unit mass and stiffness with damping c, its contact to the ground (row). */
+static void one_block(dense_model *D, double c, eng_row *row)
+{
+    static const size_t idx0[1] = {0};
+    static const double w1[1] = {1.0};
+    memset(D, 0, sizeof *D);
+    D->n = 1;
+    D->M[0] = 1.0;
+    D->K[0] = 1.0;
+    D->C[0] = c;
+    row->nnz = 1;
+    row->idx = idx0;
+    row->w = w1;
+}
+
+/* The oscillator's model and state, started at 0 from rest (in: its inputs). */
+static void osc_begin(const dfo_params *p, const dfo_inputs *in, dfo_model *Mo, dfo_state *so)
+{
+    dfo_model_init(Mo, p);
+    dfo_start(Mo, in, 0.0, so);
+}
+
+/* An engine of S, its state s started at 0 from rest with the inputs in. */
+static eng *eng_begin(const eng_setup *S, const eng_inputs *in, eng_state *s)
+{
+    static const double zeros[NMAX] = {0.0};
+    eng *E = eng_create(S, &ALLOC, NULL);
+    eng_state_init(E, s, 0);
+    eng_start(E, in, 0.0, zeros, zeros, s);
+    return E;
+}
+
 /* ---- one block against the oscillator's exact scheme ---------------------------------------- */
 
 /* max |x - x_exact| over the communication points T/8 apart in [0, periods T], the engine at h = T/steps */
@@ -122,29 +154,18 @@ static double block_error(int scheme, double chi, double c, long steps, int peri
     dfo_params p = osc_test_params(DFO_SCHEME_EXACT, 1.0, 1.0, c, 1.0, omega, Nn, mu_s, chi);
     p.h = T / (double)steps;
     dfo_model Mo;
-    dfo_model_init(&Mo, &p);
     dfo_inputs in0;
     memset(&in0, 0, sizeof in0);
     dfo_state so;
-    dfo_start(&Mo, &in0, 0.0, &so);
-
+    osc_begin(&p, &in0, &Mo, &so);
     dense_model D;
-    memset(&D, 0, sizeof D);
-    D.n = 1;
-    D.M[0] = 1.0;
-    D.K[0] = 1.0;
-    D.C[0] = c;
-    static const size_t idx0[1] = {0};
-    static const double w1[1] = {1.0};
-    const eng_row row = {1, idx0, w1};
+    eng_row row;
+    one_block(&D, c, &row);
     const double N[1] = {Nn}, ms[1] = {mu_s}, mk[1] = {chi * mu_s}, Pc[1] = {1.0};
     eng_setup S = setup_of(&D, 1, &row, N, ms, mk, Pc, omega, T / (double)steps, scheme);
-    eng *E = eng_create(&S, &ALLOC, NULL);
     eng_state s;
-    eng_state_init(E, &s, 0);
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    const double x0[1] = {0.0}, v0[1] = {0.0};
-    eng_start(E, &in, 0.0, x0, v0, &s);
+    eng *E = eng_begin(&S, &in, &s);
     double err = 0.0;
     for (int k = 1; k <= 8 * periods; k++) {
         const double t = s.t0 + (double)(k * steps / 8) * S.h;
@@ -198,6 +219,7 @@ typedef struct {
     int stribeck;
     double F_ramp;     /* dF_ext/dt over the run (0: held) */
     double F_jump;     /* F_ext set to this at t = 10 (dfo_new_inputs / eng_new_inputs) */
+    double belt_to;    /* the belt's speed set to this at t = 10 (NaN: held) */
 } osc_case;
 
 /* max |x_engine - x_oscillator| / max |x| over 30 s of communication steps of 0.1 s at h = 1e-3;
@@ -213,49 +235,46 @@ static double osc_agreement(const osc_case *K, long long *sw_e, long long *sw_o)
         p.delta = 1.0;
     }
     dfo_model Mo;
-    dfo_model_init(&Mo, &p);
     dfo_inputs oi;
     memset(&oi, 0, sizeof oi);
     const int belt = !isnan(K->v_belt);
     if (belt) { oi.v_belt = K->v_belt; oi.v_belt_set = 1; }
     if (K->F_ramp != 0.0) { oi.F_ext_set = 1; oi.F_ext_d[0] = K->F_ramp; oi.ramp = 1; oi.t_d = 0.0; }
     dfo_state so;
-    dfo_start(&Mo, &oi, 0.0, &so);
-
+    osc_begin(&p, &oi, &Mo, &so);
     dense_model D;
-    memset(&D, 0, sizeof D);
-    D.n = 1;
-    D.M[0] = 1.0;
-    D.K[0] = 1.0;
-    D.C[0] = K->c;
-    static const size_t idx0[1] = {0};
-    static const double w1[1] = {1.0};
-    const eng_row row = {1, idx0, w1};
+    eng_row row;
+    one_block(&D, K->c, &row);
     const double N[1] = {Nn}, ms[1] = {mu_s}, mk[1] = {K->chi * mu_s}, Pc[1] = {P0};
     dfo_friction_law law[1] = {{DFO_LAW_STRIBECK, mu_s, K->chi * mu_s, 0.05, 1.0}};
     eng_setup S = setup_of(&D, 1, &row, N, ms, mk, Pc, omega, h, K->scheme);
     S.rate_max = Mo.rate_max;
     if (K->stribeck) S.law = law;
-    eng *E = eng_create(&S, &ALLOC, NULL);
-    eng_state s;
-    eng_state_init(E, &s, 0);
     double F0[1] = {0.0}, dF[1] = {K->F_ramp}, vb[1] = {belt ? K->v_belt : 0.0};
     eng_inputs in = {NULL, NULL, belt ? vb : NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     if (K->F_ramp != 0.0) { in.F_ext = F0; in.dF_ext[0] = dF; }
-    const double x0[1] = {0.0}, v0[1] = {0.0};
-    eng_start(E, &in, 0.0, x0, v0, &s);
+    eng_state s;
+    eng *E = eng_begin(&S, &in, &s);
     double d = 0.0, xm = 0.0;
     for (int k = 1; k <= 300; k++) {
         const double t = (double)(k * 100) * h;
-        if (k == 101 && K->F_jump != 0.0) { /* the inputs change at t = 10 s */
+        if (k == 101 && (K->F_jump != 0.0 || !isnan(K->belt_to))) { /* the inputs change at t = 10 s */
             const eng_inputs old = in;
-            static double Fj[1];
-            Fj[0] = K->F_jump;
-            in.F_ext = Fj;
-            eng_new_inputs(E, &old, &in, &s, NULL);
             const dfo_inputs oold = oi;
-            oi.F_ext = K->F_jump;
-            oi.F_ext_set = 1;
+            static double Fj[1];
+            if (K->F_jump != 0.0) {
+                Fj[0] = K->F_jump;
+                in.F_ext = Fj;
+                oi.F_ext = K->F_jump;
+                oi.F_ext_set = 1;
+            }
+            if (!isnan(K->belt_to)) {
+                vb[0] = K->belt_to;
+                in.v_belt = vb;
+                oi.v_belt = K->belt_to;
+                oi.v_belt_set = 1;
+            }
+            eng_new_inputs(E, &old, &in, &s, NULL);
             dfo_new_inputs(&Mo, &oold, &oi, &so);
         }
         if (eng_advance(E, &in, &s, t, NULL) != ENG_OK) { d = INFINITY; break; }
@@ -275,21 +294,23 @@ static void test_vs_oscillator(checks *T)
     static const char *const names[] = {"", "paper", "consistent", "located"};
     const double nan = NAN;
     const osc_case cases[] = {
-        {DFO_SCHEME_PAPER, 0.7, 0.0, nan, 0, 0.0, 0.0},       {DFO_SCHEME_CONSISTENT, 0.3, 0.0, nan, 0, 0.0, 0.0},
-        {DFO_SCHEME_LOCATED, 0.3, 0.0, nan, 0, 0.0, 0.0},     {DFO_SCHEME_LOCATED, 0.7, 0.05, nan, 0, 0.0, 0.0},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0},     {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 1, 0.0, 0.0},     {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.02, 0.0},
-        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.0, 0.25},    {DFO_SCHEME_CONSISTENT, 0.7, 0.0, nan, 0, 0.0, 0.25},
+        {DFO_SCHEME_PAPER, 0.7, 0.0, nan, 0, 0.0, 0.0, nan},      {DFO_SCHEME_CONSISTENT, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},    {DFO_SCHEME_LOCATED, 0.7, 0.05, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},    {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 1, 0.0, 0.0, nan},    {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.02, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},   {DFO_SCHEME_CONSISTENT, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},   {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},
+        {DFO_SCHEME_LOCATED, 0.6, 0.05, 0.3, 1, 0.0, 0.0, 0.1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const osc_case *K = &cases[k];
-        check_context(T, "one block against the oscillator: %s chi %.1f c %.2f belt %g stribeck %d ramp %g jump %g",
-                      names[K->scheme], K->chi, K->c, K->v_belt, K->stribeck, K->F_ramp, K->F_jump);
+        check_context(T, "one block against the oscillator: %s chi %.1f c %.2f belt %g (to %g) stribeck %d ramp %g jump %g",
+                      names[K->scheme], K->chi, K->c, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump);
         long long se = 0, so = 0;
         const double d = osc_agreement(K, &se, &so);
-        printf("  vs oscillator %-10s chi %.1f c %.2f belt %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / max |x| "
-               "%.2e, switches %lld\n",
-               names[K->scheme], K->chi, K->c, K->v_belt, K->stribeck, K->F_ramp, K->F_jump, d, se);
+        printf("  vs oscillator %-10s chi %.1f c %.2f belt %-4g to %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / "
+               "max |x| %.2e, switches %lld\n",
+               names[K->scheme], K->chi, K->c, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump, d, se);
         CHECK(d < 1e-9);
         CHECK(se >= 4);
     }
@@ -327,11 +348,9 @@ static void test_chain_two(checks *T)
     const double mk[2] = {chi[0] * mu_s[0], chi[1] * mu_s[1]};
     eng_setup S = setup_of(&D, 2, rows, N, mu_s, mk, P0, omega, h, DFO_SCHEME_LOCATED);
     S.rate_max = chain_shortest_period(CM) > 0 ? 2.0 * DFO_PI / chain_shortest_period(CM) * 4.0 : S.rate_max;
-    eng *E = eng_create(&S, &ALLOC, NULL);
     eng_state s;
-    eng_state_init(E, &s, 0);
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    eng_start(E, &in, 0.0, x0, v0, &s);
+    eng *E = eng_begin(&S, &in, &s);
     double dmax = 0.0, xmax = 0.0;
     long long sw_e = 0, sw_c = 0;
     for (int j = 1; j <= 400; j++) {
@@ -375,31 +394,32 @@ static void watch_phase(void *ctx, const eng_phase *ph, const eng_state *s)
     W->t_stuck += ph->tb - ph->ta;
 }
 
-static void two_mass_model(dense_model *D)
+/* Two masses, each on its own spring to the wall, the first damped and forced; contact 0 between
+ * them (w = [1, -1]), contact 1 from the first to the ground (w = [1, 0]). */
+static void two_mass_model(dense_model *D, eng_row rows[2])
 {
+    static const size_t ib[2] = {0, 1}, ig[1] = {0};
+    static const double wb[2] = {1.0, -1.0}, wg[1] = {1.0};
     memset(D, 0, sizeof *D);
     D->n = 2;
     D->M[0] = 1.0; D->M[3] = 0.5;
     D->K[0] = 1.0; D->K[3] = 2.0;  /* each to the wall on its own spring: coupled through the contact only */
     D->C[0] = 0.02;
+    rows[0].nnz = 2; rows[0].idx = ib; rows[0].w = wb;
+    rows[1].nnz = 1; rows[1].idx = ig; rows[1].w = wg;
 }
 
 static double two_mass_run(long steps_per_T, int scheme, double *x_out, slip_watch *W, long long *switches)
 {
     const double omega = 0.8, T = 2.0 * DFO_PI / omega;
     dense_model D;
-    two_mass_model(&D);
-    static const size_t ib[2] = {0, 1}, ig[1] = {0};
-    static const double wb[2] = {1.0, -1.0}, wg[1] = {1.0};
-    const eng_row rows[2] = {{2, ib, wb}, {1, ig, wg}};
+    eng_row rows[2];
+    two_mass_model(&D, rows);
     const double N[2] = {1.0, 0.3}, ms[2] = {0.6, 0.8}, mk[2] = {0.45, 0.6}, Pc[2] = {1.0, 0.0};
     eng_setup S = setup_of(&D, 2, rows, N, ms, mk, Pc, omega, T / (double)steps_per_T, scheme);
-    eng *E = eng_create(&S, &ALLOC, NULL);
     eng_state s;
-    eng_state_init(E, &s, 0);
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    const double x0[2] = {0.0, 0.0}, v0[2] = {0.0, 0.0};
-    eng_start(E, &in, 0.0, x0, v0, &s);
+    eng *E = eng_begin(&S, &in, &s);
     int ok = 1;
     const eng_observer obs = {T, 4.0 * T, watch_phase, W};
     const eng_hooks hk = {NULL, NULL, W ? &obs : NULL, 0};
@@ -535,19 +555,14 @@ static void test_stop_and_copy(checks *T)
 {
     check_context(T, "stop at switch, state copy");
     dense_model D;
-    two_mass_model(&D);
-    static const size_t ib[2] = {0, 1}, ig[1] = {0};
-    static const double wb[2] = {1.0, -1.0}, wg[1] = {1.0};
-    const eng_row rows[2] = {{2, ib, wb}, {1, ig, wg}};
+    eng_row rows[2];
+    two_mass_model(&D, rows);
     const double N[2] = {0.5, 0.3}, ms[2] = {0.6, 0.8}, mk[2] = {0.45, 0.6}, Pc[2] = {1.0, 0.0};
     eng_setup S = setup_of(&D, 2, rows, N, ms, mk, Pc, 0.8, 1e-2, DFO_SCHEME_LOCATED);
-    eng *E = eng_create(&S, &ALLOC, NULL);
     eng_state a, b;
-    eng_state_init(E, &a, 0);
-    eng_state_init(E, &b, 0);
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    const double x0[2] = {0.0, 0.0}, v0[2] = {0.0, 0.0};
-    eng_start(E, &in, 0.0, x0, v0, &a);
+    eng *E = eng_begin(&S, &in, &a);
+    eng_state_init(E, &b, 0);
     eng_state_copy(&b, &a);
     switch_log L = {0, 0.0};
     const eng_hooks stop = {on_switch, &L, NULL, 1};

@@ -17,7 +17,8 @@
  * Non-dimensional setting unless said otherwise: m = k = P0 = 1, so w0 = 1, lambda = omega,
  * sigma = N, z = x. */
 #include "check.h"
-#include "exact.c"
+#include "scheme.h"
+#include "exact_spring.c"
 
 #include <stdio.h>
 #include <string.h>

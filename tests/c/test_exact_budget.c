@@ -5,8 +5,9 @@
  * ends where one unbounded step would (a chained run at 1/20 of the work per call). */
 #define DFO_EXACT_MAX_EVENTS 20000LL
 #include "check.h"
+#include "scheme.h"
 #include "osc_params.h"
-#include "exact.c"
+#include "exact_spring.c"
 
 #include <stdio.h>
 #include <string.h>

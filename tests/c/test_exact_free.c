@@ -14,6 +14,7 @@
  *    state; the same work in shorter steps succeeds. */
 #define DFO_EXACT_MAX_EVENTS 20000LL
 #include "check.h"
+#include "scheme.h"
 #include "osc_params.h"
 #include "exact_free.c"
 

@@ -23,6 +23,7 @@
  * ("point t x v mode events F A"), then "obs x_max x_min t_stuck E_friction transitions", all %.17g.
  * Bad input: one line on stderr and exit status 2. */
 #include "check.h"
+#include "scheme.h"
 #include "osc_params.h"
 #include "exact.h"
 

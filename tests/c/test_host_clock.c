@@ -20,7 +20,7 @@
  *    step; one closer is the grid point. */
 #include "check.h"
 #include "osc_params.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 
 #include <float.h>

@@ -58,7 +58,7 @@ static double verify(checks *T, int n, const double *M, const double *q, const d
  * Returns the determinant (0 when singular); x may be NULL for the determinant only. */
 static double gauss(int k, const double *A_in, const double *b_in, double *x)
 {
-    double A[LCP_MAX_N * LCP_MAX_N], b[LCP_MAX_N];
+    double A[LCP_STACK_N * LCP_STACK_N], b[LCP_STACK_N];
     double det = 1.0;
     for (int i = 0; i < k * k; i++) A[i] = A_in[i];
     for (int i = 0; i < k; i++) b[i] = b_in ? b_in[i] : 0.0;
@@ -104,8 +104,8 @@ static int principal(int n, const double *M, unsigned mask, double *S, int *idx)
  * rounding near 0). */
 static int is_P_matrix(int n, const double *M)
 {
-    double S[LCP_MAX_N * LCP_MAX_N];
-    int idx[LCP_MAX_N];
+    double S[LCP_STACK_N * LCP_STACK_N];
+    int idx[LCP_STACK_N];
     for (unsigned mask = 1; mask < (1u << n); mask++) {
         const int k = principal(n, M, mask, S, idx);
         double size = 1.0;
@@ -124,15 +124,15 @@ static int is_P_matrix(int n, const double *M)
  * Returns the number of feasible bases found (1 for a non-degenerate P-matrix problem). */
 static int enumerate_solution(int n, const double *M, const double *q, double *z_out)
 {
-    double S[LCP_MAX_N * LCP_MAX_N], b[LCP_MAX_N], x[LCP_MAX_N];
-    int idx[LCP_MAX_N], found = 0;
+    double S[LCP_STACK_N * LCP_STACK_N], b[LCP_STACK_N], x[LCP_STACK_N];
+    int idx[LCP_STACK_N], found = 0;
     double qs = 0.0;
     for (int i = 0; i < n; i++) qs = fmax(qs, fabs(q[i]));
     for (unsigned mask = 0; mask < (1u << n); mask++) {
         const int k = principal(n, M, mask, S, idx);
         for (int a = 0; a < k; a++) b[a] = -q[idx[a]];
         if (k > 0 && gauss(k, S, b, x) == 0.0) continue;
-        double z[LCP_MAX_N] = {0};
+        double z[LCP_STACK_N] = {0};
         for (int a = 0; a < k; a++) z[idx[a]] = x[a];
         int ok = 1;
         double zs = 0.0;
@@ -188,10 +188,10 @@ static void warm_starts(checks *T, stats *st, int n, const double *M, const doub
                         const int *zb_cold, const double *z_ref, double tol, int friction)
 {
     for (unsigned mask = 0; mask < (1u << n); mask++) {
-        int guess[LCP_MAX_N];
+        int guess[LCP_STACK_N];
         for (int i = 0; i < n; i++) guess[i] = (mask >> i) & 1u;
-        double z[LCP_MAX_N], w[LCP_MAX_N];
-        int zb[LCP_MAX_N], piv = -1;
+        double z[LCP_STACK_N], w[LCP_STACK_N];
+        int zb[LCP_STACK_N], piv = -1;
         const lcp_status s = lcp_lemke_warm(n, M, q, guess, BIG_BUDGET, z, w, zb, &piv);
         st->warm_cases++;
         if (piv == 0) st->warm_zero_pivot++;
@@ -330,8 +330,8 @@ static void dump_problem(int n, const double *M, const double *q, lcp_status s, 
 static int general_case(checks *T, stats *st, int n, const double *M, const double *q, const double *z_ref,
                         double tol)
 {
-    double z[LCP_MAX_N], w[LCP_MAX_N];
-    int zb[LCP_MAX_N], piv = -1;
+    double z[LCP_STACK_N], w[LCP_STACK_N];
+    int zb[LCP_STACK_N], piv = -1;
     const lcp_status s = lcp_lemke(n, M, q, BIG_BUDGET, z, w, zb, &piv);
     same_as_tableau(T, st, n, M, q, BIG_BUDGET, s, z, w, zb, piv);
     if (!CHECK_INT(LCP_OK, s)) {
@@ -364,7 +364,7 @@ static void random_matrix(rng *r, int n, double *A)
  * definite as a quadratic form, hence a P-matrix) */
 static void random_pd(rng *r, int n, double *M, int skew)
 {
-    double A[LCP_MAX_N * LCP_MAX_N], B[LCP_MAX_N * LCP_MAX_N];
+    double A[LCP_STACK_N * LCP_STACK_N], B[LCP_STACK_N * LCP_STACK_N];
     random_matrix(r, n, A);
     random_matrix(r, n, B);
     const double d = rng_decades(r, -2, 0);
@@ -382,14 +382,14 @@ static void random_pd(rng *r, int n, double *M, int skew)
  * slightly perturbed; kept only when the principal minors confirm the P property. */
 static int random_P_triangular(rng *r, int n, double *M)
 {
-    int perm[LCP_MAX_N];
+    int perm[LCP_STACK_N];
     for (int i = 0; i < n; i++) perm[i] = i;
     for (int i = n - 1; i > 0; i--) {
         const int j = rng_int(r, i + 1), t = perm[i];
         perm[i] = perm[j];
         perm[j] = t;
     }
-    double U[LCP_MAX_N * LCP_MAX_N];
+    double U[LCP_STACK_N * LCP_STACK_N];
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
             U[i * n + j] = (i == j) ? rng_range(r, 0.5, 2.0) : (j > i ? rng_range(r, -5.0, 5.0) : rng_range(r, -0.01, 0.01));
@@ -401,10 +401,10 @@ static int random_P_triangular(rng *r, int n, double *M)
 static void test_general(checks *T, stats *st)
 {
     rng r = {77u};
-    double M[LCP_MAX_N * LCP_MAX_N], q[LCP_MAX_N], z_ref[LCP_MAX_N];
+    double M[LCP_STACK_N * LCP_STACK_N], q[LCP_STACK_N], z_ref[LCP_STACK_N];
     /* P-matrices: symmetric PD, non-symmetric PD, permuted triangular, diagonally dominant */
     for (int i = 0; i < 4000; i++) {
-        const int n = 2 + i % (LCP_MAX_N - 1), kind = (i / 7) % 4;
+        const int n = 2 + i % (LCP_STACK_N - 1), kind = (i / 7) % 4;
         switch (kind) {
         case 0: random_pd(&r, n, M, 0); break;
         case 1: random_pd(&r, n, M, 1); break;
@@ -427,7 +427,7 @@ static void test_general(checks *T, stats *st)
         st->pmatrix_cases++;
         /* z is invariant under scaling (M, q) by c > 0; and (M, d q) has the solution d z */
         const double c = rng_decades(&r, -12, 12), dq = rng_decades(&r, -12, 12);
-        double Mc[LCP_MAX_N * LCP_MAX_N], qc[LCP_MAX_N], zc[LCP_MAX_N];
+        double Mc[LCP_STACK_N * LCP_STACK_N], qc[LCP_STACK_N], zc[LCP_STACK_N];
         for (int a = 0; a < n * n; a++) Mc[a] = c * M[a];
         for (int a = 0; a < n; a++) qc[a] = c * q[a];
         check_context(T, "P-matrix kind %d, n = %d, case %d, (M, q) scaled by %.3g", kind, n, i, c);
@@ -443,8 +443,8 @@ static void test_general(checks *T, stats *st)
      * real entries, becomes infeasible or not at random once M and q are rounded: it is tested
      * with exactly representable data in test_degenerate. */
     for (int i = 0; i < 3000; i++) {
-        const int n = 2 + i % (LCP_MAX_N - 1), rank = 1 + rng_int(&r, n - 1), skew = (i / 7) % 2;
-        double B[LCP_MAX_N * LCP_MAX_N], S[LCP_MAX_N * LCP_MAX_N], zs[LCP_MAX_N], ws[LCP_MAX_N];
+        const int n = 2 + i % (LCP_STACK_N - 1), rank = 1 + rng_int(&r, n - 1), skew = (i / 7) % 2;
+        double B[LCP_STACK_N * LCP_STACK_N], S[LCP_STACK_N * LCP_STACK_N], zs[LCP_STACK_N], ws[LCP_STACK_N];
         random_matrix(&r, n, B);
         random_matrix(&r, n, S);
         for (int a = 0; a < n; a++)
@@ -475,9 +475,9 @@ static void test_general(checks *T, stats *st)
 static void test_degenerate(checks *T, stats *st)
 {
     rng r = {4242u};
-    double M[LCP_MAX_N * LCP_MAX_N], q[LCP_MAX_N], z_ref[LCP_MAX_N];
+    double M[LCP_STACK_N * LCP_STACK_N], q[LCP_STACK_N], z_ref[LCP_STACK_N];
     for (int i = 0; i < 2000; i++) {
-        const int n = 2 + i % (LCP_MAX_N - 1);
+        const int n = 2 + i % (LCP_STACK_N - 1);
         for (int a = 0; a < n; a++) {
             double s = 0.0;
             for (int b = 0; b < n; b++) {
@@ -495,7 +495,7 @@ static void test_degenerate(checks *T, stats *st)
         general_case(T, st, n, M, q, found >= 1 ? z_ref : NULL, 1e-12);
         /* the same degenerate problem scaled by a power of two (exact): same z */
         const double c = ldexp(1.0, rng_int(&r, 161) - 80);
-        double Mc[LCP_MAX_N * LCP_MAX_N], qc[LCP_MAX_N];
+        double Mc[LCP_STACK_N * LCP_STACK_N], qc[LCP_STACK_N];
         for (int a = 0; a < n * n; a++) Mc[a] = c * M[a];
         for (int a = 0; a < n; a++) qc[a] = c * q[a];
         check_context(T, "degenerate integer P-matrix, n = %d, case %d, scaled by %g", n, i, c);
@@ -503,8 +503,8 @@ static void test_degenerate(checks *T, stats *st)
         st->integer_cases++;
     }
     for (int i = 0; i < 2000; i++) {
-        const int n = 2 + i % (LCP_MAX_N - 1), rank = 1 + rng_int(&r, n);
-        double B[LCP_MAX_N * LCP_MAX_N], zs[LCP_MAX_N], ws[LCP_MAX_N];
+        const int n = 2 + i % (LCP_STACK_N - 1), rank = 1 + rng_int(&r, n);
+        double B[LCP_STACK_N * LCP_STACK_N], zs[LCP_STACK_N], ws[LCP_STACK_N];
         for (int a = 0; a < n * n; a++) B[a] = (double)(rng_int(&r, 3) - 1);
         for (int a = 0; a < n; a++)
             for (int b = 0; b < n; b++) {
@@ -532,8 +532,8 @@ static void test_degenerate(checks *T, stats *st)
 /* Infeasible problems end in a ray, within a few pivots (no looping). */
 static void ray_case(checks *T, int n, const double *M, const double *q, const char *what)
 {
-    double z[LCP_MAX_N], w[LCP_MAX_N];
-    int zb[LCP_MAX_N], piv = -1;
+    double z[LCP_STACK_N], w[LCP_STACK_N];
+    int zb[LCP_STACK_N], piv = -1;
     check_context(T, "infeasible: %s", what);
     CHECK_INT(LCP_RAY, lcp_lemke(n, M, q, BIG_BUDGET, z, w, zb, &piv));
     CHECK_RANGE(1, 2 * n + 2, piv);
@@ -563,8 +563,8 @@ static void test_infeasible(checks *T)
  * reported as LCP_MAX_PIVOTS with k - 1. */
 static void test_budget(checks *T)
 {
-    double z[LCP_MAX_N], w[LCP_MAX_N];
-    int zb[LCP_MAX_N], piv = -1;
+    double z[LCP_STACK_N], w[LCP_STACK_N];
+    int zb[LCP_STACK_N], piv = -1;
     /* the friction LCP in forward slip needs 2 pivots */
     const double M[4] = {10, -10, -10, 10}, q[2] = {0.4 - 1.0, 0.4 + 1.0};
     CHECK_INT(LCP_OK, lcp_lemke(2, M, q, 16, z, w, zb, &piv));
@@ -574,10 +574,10 @@ static void test_budget(checks *T)
     CHECK_INT(LCP_OK, lcp_lemke(2, M, q, 2, z, w, zb, &piv));
     /* random P-matrices with n = 8 */
     rng r = {99u};
-    double P[LCP_MAX_N * LCP_MAX_N], qq[LCP_MAX_N];
+    double P[LCP_STACK_N * LCP_STACK_N], qq[LCP_STACK_N];
     int tested = 0;
     for (int i = 0; i < 200; i++) {
-        const int n = LCP_MAX_N;
+        const int n = LCP_STACK_N;
         random_pd(&r, n, P, 1);
         for (int a = 0; a < n; a++) qq[a] = rng_range(&r, -1.0, 1.0);
         int k = -1;
@@ -600,8 +600,8 @@ static void test_budget(checks *T)
 
 static void test_bad_input(checks *T)
 {
-    double z[LCP_MAX_N + 1], w[LCP_MAX_N + 1];
-    int zb[LCP_MAX_N + 1], piv = -1;
+    double z[LCP_STACK_N + 1], w[LCP_STACK_N + 1];
+    int zb[LCP_STACK_N + 1], piv = -1;
     double M[4] = {1, 0, 0, 1}, q[2] = {-1, -1};
     const double bad[] = {NAN, INFINITY, -INFINITY};
     for (int b = 0; b < 3; b++) {
@@ -623,12 +623,12 @@ static void test_bad_input(checks *T)
     /* a NaN in q where q >= 0 otherwise (z = 0 would "solve" it) */
     const double qn[2] = {1, NAN};
     CHECK_INT(LCP_BAD_INPUT, lcp_lemke(2, M, qn, 16, z, w, zb, &piv));
-    double big[(LCP_MAX_N + 1) * (LCP_MAX_N + 1)] = {0}, qb[LCP_MAX_N + 1] = {0};
-    for (int i = 0; i <= LCP_MAX_N; i++) big[i * (LCP_MAX_N + 1) + i] = 1.0;
+    double big[(LCP_STACK_N + 1) * (LCP_STACK_N + 1)] = {0}, qb[LCP_STACK_N + 1] = {0};
+    for (int i = 0; i <= LCP_STACK_N; i++) big[i * (LCP_STACK_N + 1) + i] = 1.0;
     CHECK_INT(LCP_BAD_INPUT, lcp_lemke(0, M, q, 16, z, w, zb, &piv));
     CHECK_INT(LCP_BAD_INPUT, lcp_lemke(-1, M, q, 16, z, w, zb, &piv));
-    CHECK_INT(LCP_BAD_INPUT, lcp_lemke(LCP_MAX_N + 1, big, qb, 16, z, w, zb, &piv));
-    CHECK_INT(LCP_OK, lcp_lemke(LCP_MAX_N, big, qb, 16, z, w, zb, &piv));  /* the largest valid n */
+    CHECK_INT(LCP_BAD_INPUT, lcp_lemke(LCP_STACK_N + 1, big, qb, 16, z, w, zb, &piv));
+    CHECK_INT(LCP_OK, lcp_lemke(LCP_STACK_N, big, qb, 16, z, w, zb, &piv));  /* the largest valid n */
     CHECK(lcp_status_text(LCP_BAD_INPUT) != NULL && lcp_status_text((lcp_status)42) != NULL);
 }
 
@@ -700,7 +700,7 @@ static void regression_scale(checks *T)
 static int box_dense(int n, const double *d, const double *e, const double *q, const double *l, const int *s,
                      const int *fix, const double *zf, double *z, double *w)
 {
-    double A[LCP_MAX_N * LCP_MAX_N] = {0}, b[LCP_MAX_N];
+    double A[LCP_STACK_N * LCP_STACK_N] = {0}, b[LCP_STACK_N];
     for (int i = 0; i < n; i++) {
         if ((fix && fix[i]) || (s[i] == 0 && l[i] > 0.0)) {
             A[i * n + i] = 1.0;
@@ -726,7 +726,7 @@ static int box_dense(int n, const double *d, const double *e, const double *q, c
 static int box_enumerate(int n, const double *d, const double *e, const double *q, const double *l, double *z_out,
                          double *spread)
 {
-    int s[LCP_MAX_N], found = 0;
+    int s[LCP_STACK_N], found = 0;
     double sc = 0.0;
     for (int i = 0; i < n; i++) sc = fmax(sc, (fabs(q[i]) + l[i]) / d[i]);
     *spread = 0.0;
@@ -740,7 +740,7 @@ static int box_enumerate(int n, const double *d, const double *e, const double *
             if (!(l[i] > 0.0) && s[i] != 0) skip = 1; /* a frictionless row is free: one of its 3 */
         }
         if (skip) continue;
-        double z[LCP_MAX_N], w[LCP_MAX_N];
+        double z[LCP_STACK_N], w[LCP_STACK_N];
         if (!box_dense(n, d, e, q, l, s, NULL, NULL, z, w)) continue;
         int ok = 1;
         for (int i = 0; i < n && ok; i++) {

@@ -8,8 +8,10 @@
  * Prints the Jacobians' bits (%a): the same on every platform (the transition-matrix line's worst
  * error is not: its reference is long double, 80-bit on x86, 128-bit on aarch64). */
 #include "check.h"
+#include "scheme.h"
 #include "osc_params.h"
 #include "exact.h"
+#include "exact_sens.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -14,7 +14,7 @@
  * Non-dimensional setting unless said otherwise: m = k = P0 = 1, so w0 = 1, lambda = omega,
  * sigma = N, z = x. */
 #include "check.h"
-#include "newmark.h"
+#include "scheme.h"
 #include "oscillator.h"
 
 #include <float.h>

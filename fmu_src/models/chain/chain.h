@@ -173,12 +173,14 @@ void chain_ramp_value(const chain_inputs *in, const chain_ramp *ramp, int k, siz
  * limit (else every input change costs a first-order error); stuck blocks are decided by the next
  * step. As the oscillator's dfo_new_inputs. */
 void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s);
-/* The same with the new inputs varying as ramp's polynomials (taken at s->t; NULL: held). */
+/* The same with the new inputs varying as ramp's polynomials (taken at s->t; NULL: held), the state
+ * on the belts vb (n speeds, NULL: none; the Stribeck law's relative speed). */
 void chain_new_inputs_ramped(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in,
-                             const chain_ramp *ramp, chain_state *s);
+                             const chain_ramp *ramp, const double *vb, chain_state *s);
 
-/* Physical accelerations (0 for stuck blocks) into a (n values). */
-void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s, double *a);
+/* Physical accelerations (0 for stuck blocks) into a (n values), the state on the belts vb (n speeds,
+ * NULL: none; the Stribeck law's relative speed). */
+void chain_accelerations(chain_model *M, const chain_inputs *in, const double *vb, const chain_state *s, double *a);
 
 /* Mechanical energy: kinetic + springs (J). */
 double chain_energy(const chain_model *M, const chain_state *s);

@@ -258,7 +258,9 @@ static HOT_INLINE int fast_run(chain_model *M, const fast_ctx *C, chain_state *s
     }
 }
 
-void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state *s)
+/* chain_start from the velocities v0 (n), with the fixed-frame belts vb (span; NULL: none) */
+static void start_with(chain_model *M, const chain_inputs *in, const double *vb, const double *v0, double t0,
+                       chain_state *s)
 {
     const size_t n = M->n;
     chain_loads_init(M, in);
@@ -270,15 +272,15 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
     s->steps = s->pivot_steps = s->switches = s->solves = 0;
     for (size_t i = 0; i < n; i++) {
         s->X[i] = M->x0[i];
-        s->V[i] = M->v0[i];
+        s->V[i] = v0[i];
         s->hA[i] = 0.0;
         s->t_stick[i] = t0;
     }
-    const span G = chain_whole(M, s);
+    const span G = chain_whole(M, s, vb, vb);
     chain_net_forces(M, s, &G, M->S);
-    /* (belts, vbf: at rest on its belt, V = vb; else the mode of V - vb) */
+    /* (belts, vb: at rest on its belt, V = vb; else the mode of V - vb) */
     for (size_t i = 0; i < n; i++) {
-        const double vr = M->vbf ? s->V[i] - M->vbf[i] : s->V[i];
+        const double vr = vb ? s->V[i] - vb[i] : s->V[i];
         if (chain_has_friction(M, i) && vr == 0.0) s->mode[i] = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
         else s->mode[i] = chain_sgn(vr);
     }
@@ -286,9 +288,14 @@ void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state 
     for (size_t i = 0; i < n; i++) {
         const int dir = s->mode[i];
         if (!chain_has_friction(M, i)) s->F[i] = 0.0;
-        else if (dir != 0 && s->V[i] == chain_vb(M, i))
+        else if (dir != 0 && s->V[i] == chain_vb(&G, i))
             s->A[i] = dir * fmax(fmax(dir * M->S[i], M->Fb[i]) - chain_start_mag(M, i), 0.0) / M->m[i];
     }
+}
+
+void chain_start(chain_model *M, const chain_inputs *in, double t0, chain_state *s)
+{
+    start_with(M, in, NULL, M->v0, t0, s);
 }
 
 /* The stuck fast path: with every block stuck (all of them with friction) on a grid point, nothing
@@ -319,11 +326,11 @@ static COLD_CALL long long stuck_until(chain_model *M, const chain_state *s, dou
 /* The consistent scheme: a stuck block at rest holds its static force, clamped to the limit,
  * evaluated where a call ends (as the oscillator's dfo_advance); the LCP's force of the step in
  * which it stopped would still carry the deceleration. */
-static void rest_forces(chain_model *M, chain_state *s)
+static void rest_forces(chain_model *M, chain_state *s, const double *vb)
 {
-    /* (belts, vbf: a stuck block riding on its belt holds the force of its position where the call
+    /* (belts, vb: a stuck block riding on its belt holds the force of its position where the call
      * ends, as the oscillator's, the same as its LCP's to rounding) */
-    if (M->scheme != DFO_SCHEME_CONSISTENT && !M->vbf) return;
+    if (M->scheme != DFO_SCHEME_CONSISTENT && !vb) return;
     double cw, sw;
     chain_phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = 0; i < M->n; i++) {
@@ -339,8 +346,9 @@ chain_status chain_advance(chain_model *M, const chain_inputs *in, chain_state *
     return chain_advance_ramped(M, in, NULL, s, t_target, stop_at_switch, on_switch, ctx);
 }
 
-chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, chain_state *s,
-                                  double t_target, int stop_at_switch, chain_switch_fn on_switch, void *ctx)
+/* chain_advance_ramped with the fixed-frame belts vb (span; NULL: none) */
+static chain_status advance(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
+                            chain_state *s, double t_target, int stop_at_switch, chain_switch_fn on_switch, void *ctx)
 {
     const double h = M->h;
     chain_loads_ramped(M, in, ramp);
@@ -351,8 +359,8 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
     t_target = dfo_grid_snap(s->t0, h, s->n_grid, s->t, t_target, SNAP_REL_H * h);
     /* whole grid steps of the located scheme try the fast path first (step_fast) */
     const int fast_grid = M->scheme == DFO_SCHEME_LOCATED && !(M->rate_max * h > STIFF_STEP) && !M->energy &&
-                          !M->ramped && !M->stribeck && !M->vbf;
-    if (M->vbf) M->stuck_ok = 0; /* (belts: a stuck block moves) */
+                          !M->ramped && !M->stribeck && !vb;
+    if (vb) M->stuck_ok = 0; /* (belts: a stuck block moves) */
     fast_ctx F;
     fast_ctx_init(M, &F);
     double g_prev = s->t0 + (double)s->n_grid * h;  /* the grid point n_grid */
@@ -404,25 +412,31 @@ chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const 
                     grid = t_end;  /* a whole grid step, set up by fast_run: hh is h */
                 }
             }
-            chain_step_located(M, s, t_end, hh, cw1, sw1, fast, on_switch, ctx, stop_at_switch);
+            chain_step_located(M, s, vb, t_end, hh, cw1, sw1, fast, on_switch, ctx, stop_at_switch);
         } else {
-            chain_step_lcp(M, s, t_end, hh, on_switch, ctx, M->scheme == DFO_SCHEME_CONSISTENT);
+            chain_step_lcp(M, s, vb, t_end, hh, on_switch, ctx, M->scheme == DFO_SCHEME_CONSISTENT);
         }
         if (M->err != CHAIN_OK) return M->err;
         if (stop_at_switch && M->switched) {
             /* the grid index stays that of the last grid point at or before the time reached */
             if (s->t < t_end && t_end == grid) s->n_grid--;
             chain_loads_at(M, s->t);
-            rest_forces(M, s);
+            rest_forces(M, s, vb);
             return CHAIN_SWITCHED;  /* (g_prev is not used again) */
         }
     }
     chain_loads_at(M, s->t);
-    rest_forces(M, s);
+    rest_forces(M, s, vb);
     for (size_t i = 0; i < M->n; i++)
         if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX))
             return CHAIN_ERR_NONFINITE;
     return CHAIN_OK;
+}
+
+chain_status chain_advance_ramped(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, chain_state *s,
+                                  double t_target, int stop_at_switch, chain_switch_fn on_switch, void *ctx)
+{
+    return advance(M, in, ramp, NULL, s, t_target, stop_at_switch, on_switch, ctx);
 }
 
 /* ---- belts (chain.h: chain_advance_belt) ------------------------------------------------------
@@ -444,30 +458,25 @@ static void belt_on_switch(void *ctx, double t, size_t block, double x, int from
     if (b->fn) b->fn(b->ctx, t, block, x + b->vb[block] * (t - b->t_ref), from, to);
 }
 
-/* The inputs and ramp of the moving frame into M's belt workspace (bF, bD). */
-static void belt_frame(chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
-                       chain_inputs *bin, chain_ramp *bramp)
+/* The inputs and ramp of the moving frame, their arrays in fw (2n: F_ext, then its rate), handed
+ * back in bin and bramp. */
+static void belt_frame(const chain_model *M, const chain_inputs *in, const chain_ramp *ramp, const double *vb,
+                       double *fw, chain_inputs *bin, chain_ramp *bramp)
 {
     const size_t n = M->n;
+    double *bF = fw, *bD = fw + n;
     for (size_t i = 0; i < n; i++) {
         const double Cvb = M->damped ? chain_Cv(M, vb, i) : 0.0;
-        M->bF[i] = (in->F_ext ? in->F_ext[i] : 0.0) - Cvb;
-        M->bD[i] = (ramp && ramp->dF_ext[0] ? ramp->dF_ext[0][i] : 0.0) - chain_Kx(M, vb, i);
+        bF[i] = (in->F_ext ? in->F_ext[i] : 0.0) - Cvb;
+        bD[i] = (ramp && ramp->dF_ext[0] ? ramp->dF_ext[0][i] : 0.0) - chain_Kx(M, vb, i);
     }
-    bin->F_ext = M->bF;
+    bin->F_ext = bF;
     bin->N_ext = in->N_ext;
     if (ramp) *bramp = *ramp;
     else {
         bramp->dF_ext[1] = bramp->dN_ext[0] = bramp->dN_ext[1] = NULL;
     }
-    bramp->dF_ext[0] = M->bD;
-}
-
-/* The belt speeds of the fixed frame's state (Stribeck's relative speed outside the steps) */
-static void belt_keep(chain_model *M, const double *vb)
-{
-    for (size_t i = 0; i < M->n; i++) M->bV[i] = vb ? vb[i] : 0.0;
-    M->vrel_b = vb ? M->bV : NULL;
+    bramp->dF_ext[0] = bD;
 }
 
 static void belt_shift(const chain_model *M, chain_state *s, const double *vb, double t_ref, double sign)
@@ -490,52 +499,38 @@ chain_status chain_advance_belt(chain_model *M, const chain_inputs *in, const ch
                                 chain_state *s, double t_target, int stop_at_switch, chain_switch_fn on_switch,
                                 void *ctx)
 {
-    belt_keep(M, vb);
-    if (!vb) return chain_advance_ramped(M, in, ramp, s, t_target, stop_at_switch, on_switch, ctx);
-    if (belt_fixed_frame(M)) {
-        M->vbf = M->bV;
-        const chain_status st = chain_advance_ramped(M, in, ramp, s, t_target, stop_at_switch, on_switch, ctx);
-        M->vbf = NULL;
-        return st;
-    }
+    if (!vb) return advance(M, in, ramp, NULL, s, t_target, stop_at_switch, on_switch, ctx);
+    if (belt_fixed_frame(M)) return advance(M, in, ramp, vb, s, t_target, stop_at_switch, on_switch, ctx);
     chain_inputs bin;
     chain_ramp bramp;
-    belt_frame(M, in, ramp, vb, &bin, &bramp);
+    belt_frame(M, in, ramp, vb, M->fw, &bin, &bramp);
     bramp.t_ref = ramp ? ramp->t_ref : s->t;
     belt_switch bs = {on_switch, ctx, vb, bramp.t_ref};
     belt_shift(M, s, vb, bramp.t_ref, -1.0);
-    M->vrel_b = NULL; /* in the belt's frame V is the relative velocity */
-    const chain_status st = chain_advance_ramped(M, &bin, &bramp, s, t_target, stop_at_switch, belt_on_switch, &bs);
-    M->vrel_b = M->bV;
+    /* in the belt's frame V is the relative velocity: no belts inside */
+    const chain_status st = advance(M, &bin, &bramp, NULL, s, t_target, stop_at_switch, belt_on_switch, &bs);
     belt_shift(M, s, vb, bramp.t_ref, 1.0);
     return st;
 }
 
 void chain_start_belt(chain_model *M, const chain_inputs *in, const double *vb, double t0, chain_state *s)
 {
-    belt_keep(M, NULL);
     if (!vb) { chain_start(M, in, t0, s); return; }
     if (belt_fixed_frame(M)) {
-        belt_keep(M, vb);
-        M->vbf = M->bV;
-        chain_start(M, in, t0, s);
-        M->vbf = NULL;
+        start_with(M, in, vb, M->v0, t0, s);
         return;
     }
     chain_inputs bin;
     chain_ramp bramp;
-    belt_frame(M, in, NULL, vb, &bin, &bramp);
-    /* the start in the moving frame: v0 - vb (M's v0 restored after) */
-    for (size_t i = 0; i < M->n; i++) M->v0[i] -= vb[i];
-    chain_start(M, &bin, t0, s);
-    for (size_t i = 0; i < M->n; i++) {
-        M->v0[i] += vb[i];
-        s->V[i] += vb[i];
-    }
+    belt_frame(M, in, NULL, vb, M->fw, &bin, &bramp);
+    /* the start in the moving frame: from v0 - vb (in Vt, free until the first step) */
+    double *v0r = M->Vt;
+    for (size_t i = 0; i < M->n; i++) v0r[i] = M->v0[i] - vb[i];
+    start_with(M, &bin, NULL, v0r, t0, s);
+    for (size_t i = 0; i < M->n; i++) s->V[i] += vb[i];
     /* (the stuck blocks' rest, V - vb = 0 exactly: V = vb) */
     for (size_t i = 0; i < M->n; i++)
         if (s->mode[i] == 0 && chain_has_friction(M, i)) s->V[i] = vb[i];
-    belt_keep(M, vb);
 }
 
 void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old, const double *vb_new, chain_state *s,
@@ -543,7 +538,6 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
 {
     const size_t n = M->n;
     chain_loads_init(M, in);
-    belt_keep(M, vb_new);
     int changed = 0;
     for (size_t i = 0; i < n; i++) {
         if (!chain_has_friction(M, i)) continue;
@@ -554,7 +548,7 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
         int to = chain_sgn(vr);
         if (vr == 0.0 && from != 0) {
             /* a slide that the new belt meets: the rest rule */
-            const span G = chain_whole(M, s);
+            const span G = chain_whole(M, s, NULL, vb_new);
             chain_net_forces(M, s, &G, M->S);
             to = (fabs(M->S[i]) <= M->Fb[i]) ? 0 : chain_sgn(M->S[i]);
         }
@@ -571,7 +565,7 @@ void chain_new_belt(chain_model *M, const chain_inputs *in, const double *vb_old
     }
     if (!changed) return;
     /* the consistent restart of the new mode set in the moving frame (net forces are the same) */
-    const span G = chain_whole(M, s);
+    const span G = chain_whole(M, s, NULL, vb_new);
     chain_restart(M, s, &G);
     M->jerk_valid = 0;
 }

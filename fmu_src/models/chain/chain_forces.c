@@ -100,7 +100,7 @@ void chain_mode_accels(chain_model *M, const chain_state *s, const span *G, doub
     chain_phase_of(M, s, s->t, &cw, &sw);
     for (size_t i = G->a; i < G->b; i++) {
         if (chain_held(M, s, i)) { a[i] = 0.0; continue; }
-        const double F = chain_has_friction(M, i) ? -s->mode[i] * chain_slide_mag(M, s, i) : 0.0;
+        const double F = chain_has_friction(M, i) ? -s->mode[i] * chain_slide_mag(M, G->vrel, s, i) : 0.0;
         /* summed as the oscillator's accel_of */
         a[i] = (chain_P_at(M, i, cw, sw) + M->u[i] - chain_Kx(M, s->X, i) + F - chain_Cv(M, s->V, i)) / M->m[i];
     }
@@ -113,7 +113,7 @@ void chain_physical_accel(chain_model *M, const chain_state *s, const span *G, d
     chain_mode_accels(M, s, G, a);
 }
 
-void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_state *s0, double *a)
+void chain_accelerations(chain_model *M, const chain_inputs *in, const double *vb, const chain_state *s0, double *a)
 {
     chain_loads_init(M, in);
     /* the excitation in closed form at s->t, as the oscillator's output a (dfo_acceleration): the
@@ -121,7 +121,7 @@ void chain_accelerations(chain_model *M, const chain_inputs *in, const chain_sta
     chain_state copy = *s0;
     copy.exc_n = -1;
     const chain_state *s = &copy;
-    const span G = chain_whole(M, s);
+    const span G = chain_whole(M, s, NULL, vb);
     chain_physical_accel(M, s, &G, a);
     if (M->stribeck) {
         /* a slide's force is the state's (its step's end solve), as the oscillator's output a: N mu(u)
@@ -163,7 +163,7 @@ static double block_accel(const chain_model *M, const chain_state *s, const span
     for (int k = 0; k < 2; k++)
         if (G->has[k] && b == G->idx[k]) return s->A[b];
     if (chain_held(M, s, b)) return 0.0;
-    const double F = chain_has_friction(M, b) ? -s->mode[b] * chain_slide_mag(M, s, b) : 0.0;
+    const double F = chain_has_friction(M, b) ? -s->mode[b] * chain_slide_mag(M, G->vrel, s, b) : 0.0;
     return (chain_P_at(M, b, cw, sw) + M->u[b] - chain_Kx(M, s->X, b) + F - chain_Cv(M, s->V, b)) / M->m[b];
 }
 
@@ -193,10 +193,10 @@ static void rebase_sparse(chain_model *M, const chain_state *s, const span *G, d
             }
             const double Pd = -M->Pc[i] * M->omega * sw + -M->Ps[i] * M->omega * cw;
             double f;
-            if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - cv + chain_ramp_rate(M, s, i);
+            if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - cv + chain_ramp_rate(M, G->vrel, s, i);
             else f = Pd - chain_Kx(M, s->V, i) - cv;
             if (M->stribeck && chain_has_friction(M, i))
-                f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * ai;
+                f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(G->vrel, s, i)) * ai;
             j = f / M->m[i];
         }
         M->A0[i] = s->A[i] + a * (hh - hA) * j;
@@ -266,11 +266,11 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                 /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
                  * internal step's, as the oscillator's jerk) */
                 double f;
-                if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, s, i);
+                if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, G->vrel, s, i);
                 else f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i);
                 /* Stribeck: d F / dt = -N mu'(u) a, u the relative speed (as the oscillator's jerk) */
                 if (M->stribeck && chain_has_friction(M, i))
-                    f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * M->A0[i];
+                    f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(G->vrel, s, i)) * M->A0[i];
                 j = f / M->m[i];
             }
             M->J[i] = j;
@@ -309,10 +309,10 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
         q[i] = -(M->Pc[i] * cw1 - M->Ps[i] * sw1 + M->u[i] - M->am[i] * A0[i] +
                  M->am1[i] * (V[i] * c1 + g1 * A0[i]) - kx);
     }
-    if (M->vbf) {
+    if (G->vb) {
         /* belts: the LCP on W = V - vb, M_hat W = p_hat - M_hat vb + F (the oscillator's shifted LCP:
          * q = -(p_hat - (M_hat vb)_i), p_hat's bits read back from -q) */
-        const double *vb = M->vbf, *cd = M->cd, *ce = M->ce;
+        const double *vb = G->vb, *cd = M->cd, *ce = M->ce;
         for (size_t i = a0; i < b0; i++) {
             double mv = cd[i] * vb[i];
             if (i > 0) mv += ce[i - 1] * vb[i - 1];
@@ -324,14 +324,14 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
 
 /* Ramped inputs: the rate of block i's applied force from its inputs at the state's time,
  * u'(t) - mode mu_k N_ext'(t) (the normal force's rate only while N + N_ext > 0). */
-double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i)
+double chain_ramp_rate(const chain_model *M, const double *vrel, const chain_state *s, size_t i)
 {
     double u, du, Ne, dNe;
     chain_ramp_value(&M->rin, &M->ramp, 0, i, s->t, &u, &du);
     chain_ramp_value(&M->rin, &M->ramp, 1, i, s->t, &Ne, &dNe);
     const double dN = (M->N[i] + Ne > 0.0) ? dNe : 0.0;
     if (!chain_has_friction(M, i)) return du;
-    const double mu = M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i)) : M->mu_k[i];
+    const double mu = M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(vrel, s, i)) : M->mu_k[i];
     return du - s->mode[i] * mu * dN;
 }
 
@@ -343,7 +343,7 @@ static COLD_CALL void belt_finish(chain_model *M, chain_state *s, const span *G,
 
 void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1, double t1)
 {
-    if (M->vbf) {
+    if (G->vb) {
         belt_finish(M, s, G, V1, F1, t1);
         return;
     }
@@ -373,13 +373,13 @@ void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V
     }
 }
 
-/* chain_finish with belts (vbf): V = W + vb; a held block rides on its belt to t1 (X = X0 + vb (t1 -
+/* chain_finish with belts (G->vb): V = W + vb; a held block rides on its belt to t1 (X = X0 + vb (t1 -
  * t), as the oscillator's stuck phase), the others take Newmark's kinematics. */
 static COLD_CALL void belt_finish(chain_model *M, chain_state *s, const span *G, const double *W, const double *F1,
                                   double t1)
 {
     M->jerk_valid = 0;
-    const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h, *vb = M->vbf;
+    const double c1 = M->kin.c1, cV = M->kin.corr_V, g1 = M->g1, hh = M->kin.h, *vb = G->vb;
     if (M->energy && G->a == 0 && G->b == M->n) {
         const size_t n = M->n;
         double cw0, sw0, Wa = 0.0, Wf = 0.0;
@@ -419,7 +419,7 @@ void chain_restart(chain_model *M, chain_state *s, const span *G)
         s->hA[i] = 0.0;
         if (!chain_has_friction(M, i)) continue;
         if (s->mode[i] == 0) s->F[i] = -fmax(-M->Fb[i], fmin(M->Fb[i], M->S[i]));
-        else s->F[i] = -s->mode[i] * chain_slide_mag(M, s, i);
+        else s->F[i] = -s->mode[i] * chain_slide_mag(M, G->vrel, s, i);
     }
 }
 
@@ -433,40 +433,40 @@ double chain_block_breakaway(const chain_model *M, const chain_state *s, size_t 
     return dfo_next_breakaway(&P, &L, M->u[i] - chain_Kx(M, s->X, i), s->t_stick[i], dir);
 }
 
-/* Block i's kinetic coefficient at the state: mu_k, or (stribeck) mu(|v_rel|) */
-static double kinetic_mu(const chain_model *M, const chain_state *s, size_t i)
+/* Block i's kinetic coefficient at the state on the belts vb: mu_k, or (stribeck) mu(|v_rel|) */
+static double kinetic_mu(const chain_model *M, const double *vb, const chain_state *s, size_t i)
 {
-    return M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i)) : M->mu_k[i];
+    return M->stribeck ? dfo_friction_mu(&M->law[i], chain_rel_speed(vb, s, i)) : M->mu_k[i];
 }
 
 /* Block i's external force and kinetic friction magnitude under the inputs in. */
-static void block_loads(const chain_model *M, const chain_state *s, const chain_inputs *in, size_t i, double *u,
-                        double *mukN)
+static void block_loads(const chain_model *M, const double *vb, const chain_state *s, const chain_inputs *in, size_t i,
+                        double *u, double *mukN)
 {
     const double N = (in && in->N_ext) ? fmax(M->N[i] + in->N_ext[i], 0.0) : M->N[i];
     *u = (in && in->F_ext) ? in->F_ext[i] : 0.0;
-    *mukN = kinetic_mu(M, s, i) * N;
+    *mukN = kinetic_mu(M, vb, s, i) * N;
 }
 
 void chain_new_inputs(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in, chain_state *s)
 {
-    chain_new_inputs_ramped(M, old_in, new_in, NULL, s);
+    chain_new_inputs_ramped(M, old_in, new_in, NULL, NULL, s);
 }
 
 void chain_new_inputs_ramped(const chain_model *M, const chain_inputs *old_in, const chain_inputs *new_in,
-                             const chain_ramp *ramp, chain_state *s)
+                             const chain_ramp *ramp, const double *vb, chain_state *s)
 {
     for (size_t i = 0; i < M->n; i++) {
         if (s->mode[i] == 0) continue;
         double u0, f0, u1, f1;
-        block_loads(M, s, old_in, i, &u0, &f0);
+        block_loads(M, vb, s, old_in, i, &u0, &f0);
         if (ramp) { /* the new inputs' polynomials at the state's time (as the oscillator's dfo_new_inputs) */
             double Ne, rate;
             chain_ramp_value(new_in, ramp, 0, i, s->t, &u1, &rate);
             chain_ramp_value(new_in, ramp, 1, i, s->t, &Ne, &rate);
-            f1 = kinetic_mu(M, s, i) * fmax(M->N[i] + Ne, 0.0);
+            f1 = kinetic_mu(M, vb, s, i) * fmax(M->N[i] + Ne, 0.0);
         } else {
-            block_loads(M, s, new_in, i, &u1, &f1);
+            block_loads(M, vb, s, new_in, i, &u1, &f1);
         }
         const double dF = (u1 - u0) - s->mode[i] * (f1 - f0);
         if (dF == 0.0) continue;
@@ -480,7 +480,7 @@ void chain_step_problem(chain_model *M, const chain_inputs *in, const chain_stat
 {
     chain_loads_init(M, in);
     M->jerk_valid = 0;
-    span G = chain_whole(M, s);
+    span G = chain_whole(M, s, NULL, NULL);
     chain_trial(M, s, &G, h, dfo_cos(M->omega * (s->t + h) + M->phi0), dfo_sin(M->omega * (s->t + h) + M->phi0));
     for (size_t i = 0; i < M->n; i++) {
         d[i] = M->cd[i];

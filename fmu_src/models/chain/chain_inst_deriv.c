@@ -115,7 +115,7 @@ static double jerk(chain_values *v, size_t i)
     double f = Pd + du - s->mode[i] * kmu * dN - chain_Kx(M, s->V, i) - chain_Cv(M, v->scratch, i);
     /* Stribeck: d F / dt = -N mu'(u) a, u the relative speed */
     if (M->stribeck && chain_has_friction(M, i))
-        f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(M, s, i)) * v->scratch[i];
+        f -= M->Nn[i] * dfo_friction_dmu(&M->law[i], chain_rel_speed(chain_inst_state_belt(v), s, i)) * v->scratch[i];
     return f / M->m[i];
 }
 

@@ -51,7 +51,8 @@ static void take_inputs(chain_values *v, const chain_ramp *ramp, chain_switch_fn
         !memcmp(v->ua, v->ua_used, (size_t)DFO_NUM_AI * v->n * sizeof(double)))
         return;
     const chain_inputs old_in = chain_inst_inputs_of(v, 1), new_in = chain_inst_inputs_of(v, 0);
-    chain_new_inputs_ramped(v->M, &old_in, &new_in, (ramp && ramp->dF_ext[0]) ? ramp : NULL, &v->s);
+    chain_new_inputs_ramped(v->M, &old_in, &new_in, (ramp && ramp->dF_ext[0]) ? ramp : NULL, chain_inst_state_belt(v),
+                            &v->s);
     const double *vb_old = chain_inst_belt_of(v, 1), *vb_new = chain_inst_belt_of(v, 0);
     if (vb_old || vb_new) chain_new_belt(v->M, &new_in, vb_old, vb_new, &v->s, fn, ctx);
     v->acc_valid = 0;
@@ -82,6 +83,7 @@ static void step_done(chain_instance *in, double t, double t_ref, const switch_r
     chain_inst_ramp_done(v, t_ref);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
+    v->belts_unsynced = 0;
 }
 
 dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, double dt, unsigned int flags,
@@ -98,6 +100,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     ramp.t_ref = in->lc.run.time; /* the polynomials are in the host's time (as the oscillator's) */
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     take_inputs(v, &ramp, on_switch, &rec);
+    v->belts_unsynced = 1;
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
     const int stop = (flags & DFO_STEP_STOP_AT_SWITCH) != 0;
     const chain_status st = chain_advance_belt(v->M, &ci, &ramp, chain_inst_belt_of(v, 0), &v->s, t_target, stop,
@@ -145,6 +148,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     ramp.t_ref = t_start;
     switch_rec rec = {in, in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS], 0, 0.0, 0, 0, 0};
     take_inputs(v, &ramp, on_switch, &rec);
+    v->belts_unsynced = 1;
     chain_inputs ci = chain_inst_inputs_of(v, 0);
     const double t_ref = ramp.t_ref, h = chain_inst_step_h(v);
     const double snap = dfo_snap(h, t_target);
@@ -153,6 +157,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
     if (points) { /* the inputs of the step's start are the used ones (a failed step ends in the error phase) */
         memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
         memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
+        v->belts_unsynced = 0;
     }
     int at_end = 0;
     for (;;) {

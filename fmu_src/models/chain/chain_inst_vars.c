@@ -139,7 +139,7 @@ double chain_inst_friction_out(const chain_values *v, size_t i)
 void chain_inst_accelerations(chain_values *v)
 {
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
-    chain_accelerations(v->M, &ci, &v->s, v->scratch);
+    chain_accelerations(v->M, &ci, chain_inst_state_belt(v), &v->s, v->scratch);
     const size_t n = v->n;
     if ((int)v->sp[DFO_SP_friction_law] == DFO_LAW_STRIBECK) {
         /* the core's a takes a slide's force from the state: with inputs set since the step, the

@@ -203,6 +203,11 @@ const double *chain_inst_belt_of(const chain_values *v, int used)
     return NULL; /* belts at rest: the fixed support's path and bits */
 }
 
+const double *chain_inst_state_belt(const chain_values *v)
+{
+    return chain_inst_belt_of(v, !v->belts_unsynced);
+}
+
 chain_ramp chain_inst_ramp_of(const chain_values *v)
 {
     chain_ramp r;
@@ -281,6 +286,7 @@ const char *chain_inst_prepare(chain_instance *in, char *buf, size_t len)
     chain_start_belt(v->M, &ci, chain_inst_belt_of(v, 0), in->lc.run.start_time, &v->s);
     memcpy(v->ua_used, v->ua, (size_t)DFO_NUM_AI * v->n * sizeof(double));
     memcpy(v->u_set_used, v->u_set, sizeof v->u_set);
+    v->belts_unsynced = 0;
     in->lc.run.time = in->lc.run.start_time;
     v->acc_valid = 0;
     return NULL;

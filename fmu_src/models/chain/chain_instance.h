@@ -50,6 +50,8 @@ typedef struct {
     chain_state s0;             /* the state at the start of a step (restored when it fails) */
     double *scratch;            /* n doubles: the accelerations of the state and inputs */
     int acc_valid;              /* scratch holds them (cleared by every change of state or inputs) */
+    int belts_unsynced;         /* the state is on the belts of ua, taken at the start of a step that has not
+                                 * copied them to ua_used yet (else on those of ua_used) */
     size_t event_block;         /* the block of a pending event (the run's event_pending, event_from) */
 } chain_values;
 
@@ -79,6 +81,9 @@ double chain_inst_step_h(const chain_values *v);
 chain_inputs chain_inst_inputs_of(const chain_values *v, int used);
 /* The belt speeds v_belt (the ones used, or the current ones): NULL when never set or all 0. */
 const double *chain_inst_belt_of(const chain_values *v, int used);
+/* The belts the state is on (those of the last start, step or belt change; NULL: none): the
+ * Stribeck law's relative speed of the outputs. */
+const double *chain_inst_state_belt(const chain_values *v);
 /* Block i's kinetic coefficient at the state: mu_k, or (friction_law = stribeck) mu(|v - v_belt|). */
 double chain_inst_kinetic_mu(const chain_values *v, size_t i);
 /* The input derivatives of the next step (NULL arrays when none is set; t_ref: the state's time,

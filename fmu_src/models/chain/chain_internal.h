@@ -86,15 +86,8 @@ struct chain_model {
     double *x0, *v0;            /* initial state */
     double *Kd, *Ko, *Cd, *Co;  /* K and C: diagonal, and Ko[i], Co[i] coupling i and i + 1 (0 on the last) */
     double *ks, *cs;            /* k_site, c_site: the parts of Kd[i], Cd[i] tying block i to the ground */
-    double *bF, *bD;            /* belts (chain_advance_belt): the moving frame's F_ext and its rate */
-    double *bV;                 /* the belt speeds of the fixed frame's state (0 without belts) */
-    const double *vrel_b;       /* what to subtract from s->V for the speed relative to the belt: bV in the
-                                 * fixed frame with belts, NULL while stepping in the belt's frame (or
-                                 * without belts), where V is the relative velocity */
-    const double *vbf;          /* belts of the located scheme's fixed-frame stepping (bV, while it steps;
-                                 * else NULL): the LCP on the velocity relative to the belts (p_hat
-                                 * shifted by M_hat vb, solved for W = V - vb), a stuck block riding on its
-                                 * belt, as the oscillator's located step (chain_advance_belt) */
+    double *fw;                 /* 2n: scratch of chain_advance_belt, the moving frame's F_ext and its rate,
+                                 * handed on as the inputs of that call (no other function reads it) */
     int stribeck;               /* friction_law = stribeck: sliding friction N mu(|v_rel|) (law) */
     dfo_friction_law *law;      /* per block (stribeck only, else NULL) */
     double *dF, *eF;            /* M_hat of a whole grid step: diagonal, off-diagonal */
@@ -151,9 +144,15 @@ struct chain_model {
 /* A span of blocks [a, b) stepped on its own: the whole chain, or a cluster around switching
  * blocks (see chain_step_located). A cluster's outside neighbours a - 1 and b are ghosts: their motion
  * over the step, interpolated (cubic Hermite) between their states at its start and end, is
- * written into the state arrays at the current time. */
+ * written into the state arrays at the current time. The belts of the call travel with it (never
+ * in the model): vb, the located scheme's fixed-frame stepping on belts (the LCP on the velocity
+ * relative to the belts, p_hat shifted by M_hat vb and solved for W = V - vb, a stuck block riding
+ * on its belt, as the oscillator's located step), NULL without belts or in the belts' moving
+ * frame; vrel, what to subtract from s->V for the speed relative to the belt (the Stribeck law):
+ * vb while stepping, the state's belts outside the steps (chain_accelerations, input changes). */
 typedef struct {
     size_t a, b;      /* the span's blocks */
+    const double *vb, *vrel;  /* the call's belts (n each, or NULL), as above */
     int has[2];       /* ghost a - 1 (0), ghost b (1) present */
     size_t idx[2];    /* the ghosts' block indices */
     double t_start, H;  /* the step the ghosts' interpolation covers: start, length */
@@ -201,20 +200,21 @@ static inline double chain_Cv(const chain_model *M, const double *v, size_t i)
 
 static inline int chain_has_friction(const chain_model *M, size_t i) { return M->Fb[i] > 0.0; }
 
-/* block i's belt speed in the fixed-frame stepping (0 without belts) */
-static inline double chain_vb(const chain_model *M, size_t i) { return M->vbf ? M->vbf[i] : 0.0; }
+/* block i's belt speed in the fixed-frame stepping of span G (0 without belts) */
+static inline double chain_vb(const span *G, size_t i) { return G->vb ? G->vb[i] : 0.0; }
 
-/* Block i's speed relative to its belt (the state's velocity while stepping in the belt's frame) */
-static inline double chain_rel_speed(const chain_model *M, const chain_state *s, size_t i)
+/* Block i's speed relative to its belt vrel (NULL: the state's velocity, as while stepping in the
+ * belt's frame) */
+static inline double chain_rel_speed(const double *vrel, const chain_state *s, size_t i)
 {
-    return fabs(M->vrel_b ? s->V[i] - M->vrel_b[i] : s->V[i]);
+    return fabs(vrel ? s->V[i] - vrel[i] : s->V[i]);
 }
 
 /* The kinetic friction magnitude of sliding block i at the state: mu_k N, or N mu(|v_rel|) */
-static inline double chain_slide_mag(const chain_model *M, const chain_state *s, size_t i)
+static inline double chain_slide_mag(const chain_model *M, const double *vrel, const chain_state *s, size_t i)
 {
     if (!M->stribeck) return M->mukN[i];
-    return M->Nn[i] * dfo_friction_mu(&M->law[i], chain_rel_speed(M, s, i));
+    return M->Nn[i] * dfo_friction_mu(&M->law[i], chain_rel_speed(vrel, s, i));
 }
 
 /* The kinetic magnitude a slide starts with from rest (the rest rule's and breakaway's): mu_k N, or
@@ -231,12 +231,14 @@ static inline int chain_held(const chain_model *M, const chain_state *s, size_t 
     return s->mode[i] == 0 && chain_has_friction(M, i);
 }
 
-/* the whole chain as a span, from the state's time */
-static inline span chain_whole(const chain_model *M, const chain_state *s)
+/* the whole chain as a span, from the state's time, with the call's belts vb and vrel (span) */
+static inline span chain_whole(const chain_model *M, const chain_state *s, const double *vb, const double *vrel)
 {
     span G;
     G.a = 0;
     G.b = M->n;
+    G.vb = vb;
+    G.vrel = vrel;
     G.has[0] = G.has[1] = 0;
     G.idx[0] = G.idx[1] = 0;
     G.t_start = s->t;
@@ -298,7 +300,7 @@ void chain_physical_accel(chain_model *M, const chain_state *s, const span *G, d
  * (cd, ce), the re-based A0 (A0p), xp and q; a ghost's xp and velocity at the end. */
 void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, double cw1, double sw1);
 /* Accept the trial for the span's blocks with end velocities V1 and friction forces F1: X, V, A,
- * F, hA and the energy accounts (whole chain only); not the time. With belts (vbf) V1 is the velocity
+ * F, hA and the energy accounts (whole chain only); not the time. With belts (G->vb) V1 is the velocity
  * relative to the belts (W) and a held block rides on its belt to t1, the trial's end. */
 void chain_finish(chain_model *M, chain_state *s, const span *G, const double *V1, const double *F1, double t1);
 /* After a switch: the consistent restart of the span's new mode set (physical accelerations,
@@ -308,18 +310,20 @@ void chain_restart(chain_model *M, chain_state *s, const span *G);
  * closed form; its excitation as a single block's, its static offset u - (K x)_i). */
 double chain_block_breakaway(const chain_model *M, const chain_state *s, size_t i, int *dir);
 
-/* Ramped inputs: the rate of block i's applied force from its inputs at the state's time. */
-double chain_ramp_rate(const chain_model *M, const chain_state *s, size_t i);
+/* Ramped inputs: the rate of block i's applied force from its inputs at the state's time (vrel: the
+ * belts of its relative speed, span). */
+double chain_ramp_rate(const chain_model *M, const double *vrel, const chain_state *s, size_t i);
 
 /* ---- chain_located.c ---- */
 /* One located step from s->t to t_end (length hh, phase cw1, sw1 at its end); fast: step_fast's
  * result for it (-1: the trial in the current modes is solved already), or 0. */
-COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, double hh, double cw1, double sw1,
-                                  int fast, chain_switch_fn fn, void *ctx, int stop_at_switch);
+/* vb: the fixed-frame stepping's belts (span; NULL: none). */
+COLD_CALL void chain_step_located(chain_model *M, chain_state *s, const double *vb, double t_end, double hh, double cw1,
+                                  double sw1, int fast, chain_switch_fn fn, void *ctx, int stop_at_switch);
 
 /* ---- chain_paper.c ---- */
 /* One step of the paper scheme (consistent = 0) or of the consistent scheme (1) to t_end. */
-COLD_CALL void chain_step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
-                              int consistent);
+COLD_CALL void chain_step_lcp(chain_model *M, chain_state *s, const double *vb, double t_end, double hh,
+                              chain_switch_fn fn, void *ctx, int consistent);
 
 #endif

@@ -4,6 +4,7 @@
  * See chain_internal.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_internal.h"
+#include "roots.h"
 
 #include <string.h>
 
@@ -150,9 +151,9 @@ static void solve_modes(chain_model *M, const span *G)
         /* l (set with st): Fb for held rows (a flag there), the LCP's sliding limit mlN for sliding
          * ones, 0 without friction */
         double g0 = G->gV[0], g1 = G->gV[1];
-        if (M->vbf) { /* the ghosts' velocities relative to their belts */
-            if (G->has[0]) g0 -= M->vbf[G->idx[0]];
-            if (G->has[1]) g1 -= M->vbf[G->idx[1]];
+        if (G->vb) { /* the ghosts' velocities relative to their belts */
+            if (G->has[0]) g0 -= G->vb[G->idx[0]];
+            if (G->has[1]) g1 -= G->vb[G->idx[1]];
         }
         lcp_box_basis(lo, hi, G->has[0], g0, G->has[1], g1, M->cd, M->ce, M->q, M->l, M->st, M->Vt, M->Ft, M->cp,
                       M->dp);
@@ -213,7 +214,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
         M->cand[nsw++] = i;
         if (s->mode[i] != 0) {
             /* a slide from rest that cannot move in double precision: held to the step's end */
-            const double vb = chain_vb(M, i);
+            const double vb = chain_vb(G, i);
             if (immediate && s->V[i] == vb) M->frozen[i] = M->any_frozen = 1;
             s->V[i] = vb;
         }
@@ -251,6 +252,7 @@ static void apply_switches(chain_model *M, chain_state *s, const span *G, int im
 typedef struct {
     const chain_model *M;
     const chain_state *s;
+    const double *vb;  /* the belts (belt_gap), or NULL */
     size_t i;
     int side;
 } block_gap_ctx;
@@ -298,8 +300,8 @@ static double ramp_breakaway(const chain_model *M, const chain_state *s, size_t 
     *dir = side;
     const double g0 = ramp_gap(M, s, i, ta, side);
     if (g0 >= 0.0) return ta;
-    block_gap_ctx g = {M, s, i, side};
-    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+    block_gap_ctx g = {M, s, NULL, i, side};
+    return ta + dfo_root_bracketed(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
 /* Block i's neighbours are at rest (held, or frozen inside the span) */
@@ -314,11 +316,11 @@ static int neighbours_rest(const chain_model *M, const chain_state *s, const spa
     return 1;
 }
 
-/* ---- belts (vbf): a stuck block riding on its belt, its neighbours on theirs ----
+/* ---- belts (span's vb): a stuck block riding on its belt, its neighbours on theirs ----
  * side times block i's static force beyond its limit at t, every block at X + vb (t - s->t), the
  * loads at t (ramped inputs) or held: side (P + u - (K x)_i - (C vb)_i) - Fb, the oscillator's
  * belt_gap for one block. */
-static double belt_gap(const chain_model *M, const chain_state *s, size_t i, double t, int side)
+static double belt_gap(const chain_model *M, const chain_state *s, const double *vb, size_t i, double t, int side)
 {
     double u = M->u[i], Fb = M->Fb[i], cw, sw;
     if (M->ramped) {
@@ -327,7 +329,7 @@ static double belt_gap(const chain_model *M, const chain_state *s, size_t i, dou
         chain_ramp_value(&M->rin, &M->ramp, 1, i, t, &Ne, &rate);
         Fb = M->mu_b[i] * fmax(M->N[i] + Ne, 0.0);
     }
-    const double *X = s->X, *vb = M->vbf, dt = t - s->t;
+    const double *X = s->X, dt = t - s->t;
     double kx = M->Kd[i] * (X[i] + vb[i] * dt);
     if (i > 0) kx += M->Ko[i - 1] * (X[i - 1] + vb[i - 1] * dt);
     if (i + 1 < M->n) kx += M->Ko[i] * (X[i + 1] + vb[i + 1] * dt);
@@ -338,29 +340,30 @@ static double belt_gap(const chain_model *M, const chain_state *s, size_t i, dou
 static double belt_gap_fn(void *vctx, double x)
 {
     const block_gap_ctx *g = (const block_gap_ctx *)vctx;
-    return -belt_gap(g->M, g->s, g->i, g->s->t + x, g->side);
+    return -belt_gap(g->M, g->s, g->vb, g->i, g->s->t + x, g->side);
 }
 
 /* broken away by t_end (either side) */
-static int belt_breaks(const chain_model *M, const chain_state *s, size_t i, double t_end)
+static int belt_breaks(const chain_model *M, const chain_state *s, const double *vb, size_t i, double t_end)
 {
-    return belt_gap(M, s, i, t_end, -1) > 0.0 || belt_gap(M, s, i, t_end, 1) > 0.0;
+    return belt_gap(M, s, vb, i, t_end, -1) > 0.0 || belt_gap(M, s, vb, i, t_end, 1) > 0.0;
 }
 
 /* The breakaway inside [s->t, tb] of stuck block i riding on its belt between resting neighbours:
  * the side broken through at tb, the time the root of the gap (Brent), as the oscillator's
  * belt_breakaway; INFINITY when not broken through at tb. */
-static double belt_breakaway(const chain_model *M, const chain_state *s, size_t i, double tb, int *dir)
+static double belt_breakaway(const chain_model *M, const chain_state *s, const double *vb, size_t i, double tb,
+                             int *dir)
 {
     const double ta = s->t;
     for (int sd = -1; sd <= 1; sd += 2) {
-        const double ghi = belt_gap(M, s, i, tb, sd);
+        const double ghi = belt_gap(M, s, vb, i, tb, sd);
         if (!(ghi > 0.0)) continue;
         *dir = sd;
-        const double g0 = belt_gap(M, s, i, ta, sd);
+        const double g0 = belt_gap(M, s, vb, i, ta, sd);
         if (g0 >= 0.0) return ta;
-        block_gap_ctx g = {M, s, i, sd};
-        return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
+        block_gap_ctx g = {M, s, vb, i, sd};
+        return ta + dfo_root_bracketed(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
     }
     return INFINITY;
 }
@@ -369,7 +372,7 @@ static double closed_breakaway(const chain_model *M, const chain_state *s, const
                                int *dir)
 {
     if (!neighbours_rest(M, s, G, i)) return INFINITY;
-    if (M->vbf) return belt_breakaway(M, s, i, t_end, dir);  /* the static force drifts with the belts */
+    if (G->vb) return belt_breakaway(M, s, G->vb, i, t_end, dir);  /* the static force drifts with the belts */
     if (M->ramped) return ramp_breakaway(M, s, i, t_end, dir);  /* the closed form holds for held inputs */
     return chain_block_breakaway(M, s, i, dir);
 }
@@ -390,7 +393,7 @@ static int ramp_breaks(const chain_model *M, const chain_state *s, const span *G
  * beyond its limit (the oscillator's test; its held force's rounding aside). */
 static HOT_INLINE int is_candidate(chain_model *M, const chain_state *s, const span *G, size_t i, double t_end)
 {
-    if (M->vbf && M->st[i] == 0 && neighbours_rest(M, s, G, i)) return belt_breaks(M, s, i, t_end);
+    if (G->vb && M->st[i] == 0 && neighbours_rest(M, s, G, i)) return belt_breaks(M, s, G->vb, i, t_end);
     return switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, G, i, t_end);
 }
 
@@ -410,7 +413,7 @@ static int belt_sliver(chain_model *M, chain_state *s, const span *G, double t_e
     if (!moving) return 0;
     for (size_t i = G->a; i < G->b; i++) {
         if (chain_held(M, s, i) || M->frozen[i]) {
-            s->X[i] = s->X[i] + M->vbf[i] * (t_end - s->t);
+            s->X[i] = s->X[i] + G->vb[i] * (t_end - s->t);
         } else {
             s->X[i] += (s->V[i] + 0.5 * s->A[i] * r) * r;
             s->V[i] += s->A[i] * r;
@@ -431,7 +434,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         if (phase >= max_phases) { M->err = CHAIN_ERR_NO_PROGRESS; return; }
         chain_set_ghosts(M, s, G);
         const double r = (phase == 0) ? hh : t_end - s->t;
-        if (M->vbf && belt_sliver(M, s, G, t_end, r)) return;
+        if (G->vb && belt_sliver(M, s, G, t_end, r)) return;
         for (size_t i = G->a; i < G->b; i++) {
             M->st[i] = (chain_held(M, s, i) || M->frozen[i]) ? 0 : s->mode[i];
             M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
@@ -493,7 +496,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
         double lo = 0.0, glo = INFINITY;
         for (size_t k = 0; k < M->ncand; k++) {
             const size_t i = M->cand[k];
-            glo = (M->st[i] != 0) ? fmin(glo, s->mode[i] * (M->vbf ? s->V[i] - M->vbf[i] : s->V[i])) : -INFINITY;
+            glo = (M->st[i] != 0) ? fmin(glo, s->mode[i] * (G->vb ? s->V[i] - G->vb[i] : s->V[i])) : -INFINITY;
         }
         if (!(glo > 0.0)) {
             lo = r;
@@ -510,7 +513,7 @@ static void located_span(chain_model *M, chain_state *s, span *G, double t_end, 
             continue;
         }
         const double ta = s->t;
-        const double hs = dfo_brent(min_margin, &mc, ta, lo, glo, hi, ghi);
+        const double hs = dfo_root_bracketed(min_margin, &mc, ta, lo, glo, hi, ghi);
         const double t1 = (hs >= r) ? t_end : ta + hs;
         double c1w, s1w;
         if (hs >= r) chain_phase_of(M, s, t_end, &c1w, &s1w);
@@ -576,24 +579,24 @@ static void save_blocks(chain_model *M, chain_state *s, size_t a, size_t b, int 
  * own, switches placed inside, with its outside neighbours as interpolated ghosts. A short chain,
  * stop_at_switch and the energy accounts take the located step on the whole chain. fast: step_fast's
  * result for this step (-1: it has solved the step in the current modes), or 0. */
-COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, double hh, double cw1, double sw1,
-                                   int fast, chain_switch_fn fn, void *ctx, int stop_at_switch)
+COLD_CALL void chain_step_located(chain_model *M, chain_state *s, const double *vb, double t_end, double hh, double cw1,
+                                   double sw1, int fast, chain_switch_fn fn, void *ctx, int stop_at_switch)
 {
     const size_t n = M->n;
     /* a stiff step (several periods of the fastest mode) cannot place a switch: restarts with the
      * physical acceleration would feed the unresolved mode; the consistent test, which is stable,
      * takes it (as in the oscillator) */
     if (M->rate_max * hh > STIFF_STEP) {
-        chain_step_lcp(M, s, t_end, hh, fn, ctx, 1);
+        chain_step_lcp(M, s, vb, t_end, hh, fn, ctx, 1);
         return;
     }
-    span G0 = chain_whole(M, s);
+    span G0 = chain_whole(M, s, vb, vb);
     if (fast == 0) {  /* else step_fast has solved the trial in the current modes */
         if (M->any_frozen) {
             for (size_t i = 0; i < n; i++) M->frozen[i] = 0;
             M->any_frozen = 0;
         }
-        if (M->vbf && belt_sliver(M, s, &G0, t_end, hh)) return;
+        if (G0.vb && belt_sliver(M, s, &G0, t_end, hh)) return;
         for (size_t i = 0; i < n; i++) {
             M->st[i] = chain_held(M, s, i) ? 0 : s->mode[i];
             M->l[i] = (M->st[i] == 0) ? M->Fb[i] : M->mlN[i];
@@ -605,7 +608,7 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
         s->solves++;
     }
     M->ncand = 0;
-    if (!M->vbf) { /* (the fixed support's loop as it was) */
+    if (!G0.vb) { /* (the fixed support's loop as it was) */
         for (size_t i = 0; i < n; i++)
             if (chain_has_friction(M, i) && (switch_margin(M, s, i) <= 0.0 || ramp_breaks(M, s, &G0, i, t_end)))
                 M->cand[M->ncand++] = i;
@@ -645,6 +648,7 @@ COLD_CALL void chain_step_located(chain_model *M, chain_state *s, double t_end, 
     for (size_t j = 0; j < nc && M->err == CHAIN_OK; j++) {
         span G;
         memset(&G, 0, sizeof G);
+        G.vb = G.vrel = vb;
         G.a = M->clu[2 * j];
         G.b = M->clu[2 * j + 1];
         G.t_start = t_start;

@@ -4,13 +4,13 @@
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "chain_internal.h"
 
-COLD_CALL void chain_step_lcp(chain_model *M, chain_state *s, double t_end, double hh, chain_switch_fn fn, void *ctx,
-                               int consistent)
+COLD_CALL void chain_step_lcp(chain_model *M, chain_state *s, const double *vb, double t_end, double hh,
+                               chain_switch_fn fn, void *ctx, int consistent)
 {
     const size_t n = M->n;
     double cw1, sw1;
     chain_phase_of(M, s, t_end, &cw1, &sw1);
-    span G0 = chain_whole(M, s);
+    span G0 = chain_whole(M, s, vb, vb);
     chain_trial(M, s, &G0, hh, cw1, sw1);
     /* the LCP with the coefficient of each block's mode before the step, from that basis */
     for (size_t i = 0; i < n; i++) {

@@ -106,10 +106,10 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (46 of them, the last, box, 2n long), one for
+    /* one block of doubles for all per-block arrays (42 of n, then fw and box of 2n), one for
      * the ints, one for the candidates and clusters */
-    enum { NARR = 46 };
-    double *blk = dalloc(al, (NARR + 1) * n);
+    enum { NARR = 42 };
+    double *blk = dalloc(al, (NARR + 4) * n); /* and fw, box: 2n each */
     int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
     M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
     M->rows = (fast_row *)al->allocate(al->env, n, sizeof(fast_row));
@@ -126,16 +126,17 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
                           &M->x0, &M->v0,
                           &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
                           &M->q,  &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs, &M->bF, &M->bD,
-                          &M->Nn, &M->mlN, &M->bV, &M->box};
+                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs,
+                          &M->Nn, &M->mlN};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
+    M->fw = blk + (size_t)NARR * n;
+    M->box = blk + (size_t)(NARR + 2) * n;
     M->frozen = iblk;
     M->st = iblk + n;
     M->smode = iblk + 2 * n;
     M->clu = M->cand + n;
     M->stribeck = p->friction_law == DFO_LAW_STRIBECK;
     M->law = NULL;
-    M->vrel_b = NULL;
     if (M->stribeck) {
         M->law = (dfo_friction_law *)al->allocate(al->env, n, sizeof(dfo_friction_law));
         if (!M->law) {

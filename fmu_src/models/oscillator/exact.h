@@ -45,7 +45,7 @@
  *
  * The step h has no effect on the results. It keeps only its bookkeeping roles: the grid index n
  * (t0 + n h <= t < t0 + (n + 1) h, checked when a state is loaded). The work of one call is bounded by
- * its events (DFO_EXACT_MAX_EVENTS, newmark.h), not by h. The counter `steps` counts events.
+ * its events (DFO_EXACT_MAX_EVENTS, below), not by h. The counter `steps` counts events.
  *
  * A moving belt (v_belt != 0, held; friction_law coulomb): a slide's motion does not depend on the belt,
  * only its end, the zero of s (v - v_belt) (the phase's velocity written relative to the belt, its
@@ -58,23 +58,37 @@
  * relative motion, the sensitivity's saltations are those at v = v_belt. k = 0 on a belt: the belt's
  * frame, where the motion is the one on a support at rest with the force -c v_belt added (docs/belt.md).
  *
- * k = 0 (a free mass on a rough support) is handed to exact_free.c. Plain C, no FMI types. */
+ * The files, one job each behind its private header (no file calls into one that calls it):
+ *     exact.c          this header's calls: each to the phases of its kind (belt, no spring, spring)
+ *     exact_spring.c   k > 0: the closed-form slide, the certified stop search, the breakaway, the
+ *                      event loop (held and polynomial inputs; on a belt its terms)  exact_spring.h
+ *     exact_free.c     k = 0: a free mass on a rough support, its event loop         exact_free.h
+ *     exact_belt.c     a moving belt: the call's start after a change, k = 0 in the belt's frame
+ *                                                                                     exact_belt.h
+ *     exact_poly.c     polynomial inputs: the inputs at t, the pieces of the normal force
+ *                                                                                     exact_poly.h
+ *     exact_observe.c  the observables and switch reports after each phase; the grid index
+ *                                                                                     exact_observe.h
+ *     exact_sens.c     the sensitivity's closed forms                                 exact_sens.h
+ * and what they share, exact_private.h. Double-double arithmetic: numerics/ddouble.h. Plain C, no FMI
+ * types. */
 #ifndef DFO_EXACT_H
 #define DFO_EXACT_H
 
-#include "newmark.h"
 #include "oscillator.h"
+#include "scheme_state.h"
 
-/* For exact.c and exact_free.c: the event loop is compiled once for each kind of inputs (held,
- * polynomial: a constant in each), so that the loop of held inputs carries none of the polynomial
- * inputs' code. */
-#if defined(__GNUC__)
-#define DFO_EXACT_INLINE inline __attribute__((always_inline))
-#else
-#define DFO_EXACT_INLINE inline
+/* The exact scheme's work bound: the events (stops, reversals, breakaways, touches) one call of
+ * dfo_advance may take, i.e. one communication step. It takes no step h, so its work is counted in
+ * events, not in 1e9 h as the Bossak schemes' (DFO_MAX_STEPS_PER_CALL): 1e8 events are 25 million
+ * periods of a block that sticks and slips twice per period, or 50 million of a frictionless one,
+ * some 10 to 60 s of one core (0.1-0.6 us per event); a communication step that needs more is
+ * refused with DFO_ERR_EVENTS, never an endless loop. (Defined before the include to try it smaller.) */
+#ifndef DFO_EXACT_MAX_EVENTS
+#define DFO_EXACT_MAX_EVENTS 100000000LL
 #endif
 
-/* Advance to t_target > s->t with the inputs held: the contract of dfo_advance. */
+/* Advance to t_target > s->t with the inputs held: the contract of dfo_advance (scheme.h). */
 dfo_status dfo_exact_advance(const dfo_model *M, const dfo_inputs *u, dfo_state *s, double t_target,
                              dfo_switch_fn on_switch, void *switch_ctx);
 
@@ -112,54 +126,5 @@ const char *dfo_exact_poly_unsupported(const dfo_model *M);
  * it first, naming the variable). */
 dfo_status dfo_exact_advance_poly(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
                                   double t_target, dfo_switch_fn on_switch, void *switch_ctx);
-
-/* The excitation P0 cos(omega t + phi) as the exact scheme evaluates it: phi reduced mod 2 pi
- * exactly and omega t + phi carried as a double-double, so exact to rounding for any t and phi
- * (newmark.c's outputs a and F_friction of the exact scheme use it). */
-double dfo_exact_excitation(const dfo_model *M, double t);
-
-/* The grid index of s->t: t0 + n h <= t < t0 + (n + 1) h (the bookkeeping the FMU checks when a
- * state is loaded), shared by exact.c and exact_free.c. */
-long long dfo_exact_grid_index(const dfo_model *M, const dfo_state *s);
-
-/* x of a slip phase at time t (from its start) by the phase's own closed form (ctx, phase: the
- * caller's); used at the observation window's edges. */
-typedef double (*dfo_phase_x_fn)(const void *ctx, const void *phase, double t);
-
-/* The bookkeeping after a phase [ta, tb] spent in mode_during from xa to xb, after which the mode is
- * mode_after (an event at tb when event is set), shared by exact.c and exact_free.c: the switch
- * report, and (observe) the window's extremes, stick time, friction work mu_k N |dx| and
- * transitions. phase NULL: a stick phase (x frozen). */
-void dfo_exact_after_phase(const dfo_model *M, double muk_N, dfo_switch_fn on_switch, void *switch_ctx,
-                           dfo_state *s, dfo_phase_x_fn x_at, const void *ctx, const void *phase, double ta,
-                           double tb, double xa, double xb, int mode_during, int mode_after, int event);
-
-/* The friction work mu_k int N |dx| (physical) of a slip phase over [t0, t1] (times from its start) with
- * a varying normal force (ctx, phase: the caller's). */
-typedef double (*dfo_phase_work_fn)(const void *ctx, const void *phase, double t0, double t1);
-
-/* dfo_exact_after_phase with polynomial inputs, shared by exact.c and exact_free.c: n the slide's normal
- * force n[0] + n[1] u + n[2] u^2 / 2 (physical; NULL: a stick phase). A constant one is the held inputs'
- * mu_k N |dx|; a varying one adds work(ctx, phase, ...) over the part of the phase inside the window. */
-void dfo_exact_after_phase_poly(const dfo_model *M, dfo_switch_fn on_switch, void *switch_ctx, dfo_state *s,
-                                dfo_phase_x_fn x_at, dfo_phase_work_fn work, const void *ctx, const void *phase,
-                                const double *n, double ta, double tb, double xa, double xb, int mode_during,
-                                int mode_after, int event);
-
-/* The sensitivity (parameter sensitivity, exact scheme only): the Jacobian J = d(X, V) / d(X, V)(t_ref)
- * in s->J, row-major, propagated in closed form (method.md section 11). Each function updates J:
- *  - dfo_sens_slide: J = Phi(dt) J, Phi the state-transition matrix exp(A dt) of the slide dynamics
- *    m x'' + c x' + k x = forcing, A = [[0, 1], [-k/m, -c/m]] (the forcing does not enter);
- *  - dfo_sens_stick: the v row is 0 (a stop, and every stick phase: x frozen, v held at 0);
- *  - dfo_sens_reversal: the v row times a+ / a- (a slide that reverses at v = 0: the saltation
- *    [[1, 0], [0, a+/a-]]);
- *  - dfo_sens_breakaway: the v row becomes coef times the x row (a breakaway at t_b from a stick
- *    phase, whose v row is 0: dz = dz_b - f(t_b+) dt_b with dt_b = k dx / P'(t_b), coef = -a+ k / P';
- *    with polynomial inputs dt_b = k dx / D, D = P' + F_ext' - s max(mu_s, mu_k) N' at t_b, s the side:
- *    the rate of the force's excess h = s (P + F_ext - k x) - max(mu_s, mu_k) N over the limit). */
-void dfo_sens_slide(const dfo_model *M, double dt, double J[4]);
-void dfo_sens_stick(double J[4]);
-void dfo_sens_reversal(double J[4], double ratio);
-void dfo_sens_breakaway(double J[4], double coef);
 
 #endif

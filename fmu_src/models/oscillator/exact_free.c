@@ -2,8 +2,10 @@
  * of the applied force. See exact_free.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "exact_free.h"
-#include "exact.h"
 #include "dmath.h"
+#include "exact_observe.h"
+#include "exact_poly.h"
+#include "exact_sens.h"
 
 #include "friction.h"
 
@@ -13,7 +15,7 @@
 
 #define TWO_PI (2.0 * DFO_PI)
 #define HALF_PI (0.5 * DFO_PI)
-#define ROUND (64.0 * DBL_EPSILON) /* relative rounding level of the touch test (as exact.c) */
+#define ROUND DFO_EXACT_ROUND /* relative rounding level of the touch test (as exact_spring.c) */
 #define POLISH_TOL (4.0 * DBL_EPSILON) /* relative level at which a bracketed stop is taken */
 #define MAX_POLISH 200                 /* Newton / bisection steps of a bracketed stop */
 #define MAX_STALL 64                   /* events in a row at one instant before it is an error */
@@ -466,7 +468,7 @@ static int find_stop(const fr_ctx *C, const fr_phase *P, double U, fr_val *out)
     }
 }
 
-/* ---- observables and switch reports (as exact.c) ------------------------------------------------ */
+/* ---- observables (exact_observe.h) ------------------------------------------------------------ */
 
 /* x of a slip phase at time t from its start */
 static double phase_x(const void *ctx, const void *phase, double t)
@@ -476,7 +478,7 @@ static double phase_x(const void *ctx, const void *phase, double t)
     return v.x;
 }
 
-/* ---- the phases (the event loop of exact.c) ----------------------------------------------------- */
+/* ---- the phases (the event loop, as exact_spring.c's) ------------------------------------------- */
 
 /* The next breakaway of the stick phase from ta (cached in the state per stick phase). With skip, a
  * breakaway at ta itself (a slide just tried did not start) is passed over: the search restarts a
@@ -921,9 +923,26 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
     return end_state(M, s, &L, dfo_excitation(M, s->t) + L.F_ext);
 }
 
-/* ---- a belt's turning points (exact.c's free_belt) ------------------------------------------------ */
+dfo_status dfo_exact_free_advance_pieces(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                         double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+{
+    double n[3], z[2];
+    const int nz = dfo_exact_normal_zeros(M, u, q, s->t, t_target, n, z);
+    const double qF[3] = {dfo_external_force(M, u), q->F[0], q->F[1]};
+    dfo_status st = DFO_OK;
+    for (int i = 0; i <= nz && st == DFO_OK; i++) {
+        const double a = (i == 0) ? s->t : q->t0 + z[i - 1], b = (i == nz) ? t_target : q->t0 + z[i];
+        if (!(b > s->t)) continue;
+        double qN[3];
+        dfo_exact_piece_normal(n, 0.5 * (a + b) - q->t0, qN);
+        st = dfo_exact_free_advance_poly(M, u, q->t0, qF, qN, s, b, on_switch, switch_ctx);
+    }
+    return st;
+}
 
-#define MAX_TURNS DFO_EXACT_MAX_EVENTS /* turning points of x looked for in one slide (the work bound, newmark.h) */
+/* ---- a belt's turning points (exact_belt.c's free_belt) ------------------------------------------- */
+
+#define MAX_TURNS DFO_EXACT_MAX_EVENTS /* turning points of x looked for in one slide (the work bound, exact.h) */
 
 void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, const double *poly, double ta, double X,
                                    double V, int s, double t0, double t1, double te, double *lo, double *hi, double *Xe,

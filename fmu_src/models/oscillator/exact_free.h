@@ -3,8 +3,9 @@
  *
  *     m x'' + c x' = P0 cos(omega t + phi) + F_ext + F,   F Coulomb friction (mu_s, mu_k = chi mu_s, N),
  *
- * followed in closed form between its events, as exact.c does for k > 0. exact.c's entry point
- * dfo_exact_advance hands every k = 0 call to dfo_exact_free_advance, which has the same contract
+ * followed in closed form between its events, as exact_spring.c does for k > 0. A private header (exact.h
+ * is the public one): exact.c's entry point dfo_exact_advance hands every k = 0 call to
+ * dfo_exact_free_advance, which has the same contract
  * (exact.h): the state (t, X, V, mode, the stick phase's breakaway) is all a continuation needs, on
  * return A is the physical acceleration, hA = 0, F the friction force, the observables are exact and
  * the counter `steps` counts events.
@@ -43,9 +44,7 @@
 #ifndef DFO_EXACT_FREE_H
 #define DFO_EXACT_FREE_H
 
-#include "exact.h"
-#include "newmark.h"
-#include "oscillator.h"
+#include "exact_private.h"
 
 /* Advance to t_target > s->t with the inputs held, for a model with k = 0: the contract of
  * dfo_exact_advance (exact.h). */
@@ -60,11 +59,16 @@ dfo_status dfo_exact_free_advance_poly(const dfo_model *M, const dfo_inputs *u, 
                                        const double qN[3], dfo_state *s, double t_target, dfo_switch_fn on_switch,
                                        void *switch_ctx);
 
+/* dfo_exact_advance_poly (exact.h) for a model with k = 0 (q checked finite by the caller): the pieces
+ * between the zeros of N + N_ext(t), each by dfo_exact_free_advance_poly. */
+dfo_status dfo_exact_free_advance_pieces(const dfo_model *M, const dfo_inputs *u, const dfo_input_poly *q, dfo_state *s,
+                                         double t_target, dfo_switch_fn on_switch, void *switch_ctx);
+
 /* On a moving belt a slide's x may turn inside it (v through 0 while v - v_belt keeps its sign): the least
  * and the greatest x over [t0, t1] (ta <= t0; left alone when t1 < t0) of the slide in direction s from
  * (ta, X, V) with the inputs u held (poly NULL) or varying as poly = {q_t0, qF[3], qN[3]} (on one piece, as
  * dfo_exact_free_advance_poly's), physical units, k = 0: from its values at t0, t1 and at every zero of v
- * in between (found by the stop search on v itself); and its state at te in *Xe, *Ve. exact.c's
+ * in between (found by the stop search on v itself); and its state at te in *Xe, *Ve. exact_belt.c's
  * observables of a belt without a spring. */
 void dfo_exact_free_slide_extremes(const dfo_model *M, const dfo_inputs *u, const double *poly, double ta, double X,
                                    double V, int s, double t0, double t1, double te, double *lo, double *hi, double *Xe,

@@ -5,13 +5,21 @@ set(MODEL_ID DryFrictionOscillator)
 set(MODEL_DESCRIPTION ${CMAKE_SOURCE_DIR}/modelDescription.xml)
 set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
-set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
-    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
-    models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/newmark.c
+set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/ddouble.h numerics/lcp.c
+    numerics/lcp.h numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
+    numerics/roots.c numerics/roots.h
+    models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/scheme_state.h
+    models/oscillator/scheme.c models/oscillator/scheme.h models/oscillator/newmark.c
     models/oscillator/newmark.h models/oscillator/exact.c models/oscillator/exact.h
-    models/oscillator/exact_free.c models/oscillator/exact_free.h)
+    models/oscillator/exact_private.h models/oscillator/exact_spring.c models/oscillator/exact_spring.h
+    models/oscillator/exact_free.c models/oscillator/exact_free.h models/oscillator/exact_belt.c
+    models/oscillator/exact_belt.h models/oscillator/exact_poly.c models/oscillator/exact_poly.h
+    models/oscillator/exact_observe.c models/oscillator/exact_observe.h models/oscillator/exact_sens.c
+    models/oscillator/exact_sens.h)
 # the instance core (core/instance.h's model API)
-set(MODEL_CORE models/oscillator/osc_instance.c models/oscillator/osc_instance.h)
+set(MODEL_CORE models/oscillator/osc_instance.c models/oscillator/osc_instance.h models/oscillator/osc_inst_vars.c
+    models/oscillator/osc_inst_step.c models/oscillator/osc_inst_events.c models/oscillator/osc_inst_state.c
+    models/oscillator/osc_inst_deriv.c)
 # FMI 2.0: the description as written (no structural parameters), no build configuration header
 set(MODEL_FMI2_SIZE "")
 set(MODEL_CONFIG_HEADER "")

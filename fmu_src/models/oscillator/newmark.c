@@ -4,7 +4,7 @@
 #include "dmath.h"
 
 #include "bossak.h"
-#include "exact.h"
+#include "roots.h"
 #include "friction.h"
 #include "lcp.h"
 
@@ -261,7 +261,7 @@ static HOT_INLINE int solve_friction(step_ctx *C, dfo_state *s, const trial *tr,
 /* A sliding step in direction dir (dir (V1 - vb) > 0) with the friction law: the relative speed u =
  * dir (V1 - vb) at its end, the root of m_hat u = q - N mu(u), q = dir (p_hat - m_hat vb) (coulomb:
  * closed form). Where no root u > 0 exists (q <= N mu(0)) it returns (q - N mu(0)) / m_hat <= 0, so
- * that the value is continuous in the step length and its sign tells a stop (dfo_brent's root).
+ * that the value is continuous in the step length and its sign tells a stop (dfo_root_bracketed's root).
  * The root is dfo_stribeck_speed's (friction.h), the chain's too. */
 static double slide_value(const step_ctx *C, const dfo_loads *L, const trial *tr, int dir)
 {
@@ -534,7 +534,7 @@ static COLD double ramp_breakaway(const step_ctx *C, dfo_state *s, double ta, do
     dfo_state at = *s;
     at.t = ta;
     ramp_gap_ctx g = {C, &at, side};
-    return ta + dfo_brent(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
+    return ta + dfo_root_bracketed(ramp_gap_fn, &g, ta, 0.0, -g0, hi - ta, -ghi);
 }
 
 /* Riding on the belt from (ta, Xa): side times the static force beyond the limit at t (> 0: broken
@@ -574,7 +574,7 @@ static COLD double belt_breakaway(const step_ctx *C, dfo_state *s, double ta, do
         *dir = sd;
         const double g0 = belt_gap(&g, ta);
         if (g0 >= 0.0) return ta;
-        return ta + dfo_brent(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
+        return ta + dfo_root_bracketed(belt_gap_fn, &g, ta, 0.0, -g0, tb - ta, -ghi);
     }
     return INFINITY;
 }
@@ -636,7 +636,7 @@ static COLD void ramp_restart(step_ctx *C, dfo_state *s, int breakaway_dir)
     C->friction = friction_end;
 }
 
-/* dir V1 of a sliding step of length h, as a root function for dfo_brent. */
+/* dir V1 of a sliding step of length h, as a root function for dfo_root_bracketed. */
 typedef struct {
     const step_ctx *C;
     const dfo_state *s;
@@ -649,11 +649,11 @@ static double slide_root_fn(void *ctx, double h)
     return slide_velocity(r->C, r->s, h, &tr);
 }
 
-/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method (bossak.h) to a few ulps of t + h. */
+/* Root of f in (lo, hi] with f(lo) > 0 >= f(hi): Brent's method (roots.h) to a few ulps of t + h. */
 static double stop_length(const step_ctx *C, const dfo_state *s, double lo, double flo, double hi, double fhi)
 {
     slide_root r = {C, s};
-    return dfo_brent(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
+    return dfo_root_bracketed(slide_root_fn, &r, s->t, lo, flo, hi, fhi);
 }
 
 /* The located scheme's step. general: the belt and the Stribeck law may act; 0 for the plain
@@ -840,7 +840,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
     make_ctx(&C, M, in);
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t0, phi) */
         C.t_grid = t0;
-        C.P_grid = dfo_exact_excitation(M, t0);
+        C.P_grid = dfo_excitation_exact(M, t0);
     }
     const dfo_state zero = {0};
     *s = zero;
@@ -1015,20 +1015,9 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
     return DFO_OK;
 }
 
-dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
-                       dfo_switch_fn on_switch, void *switch_ctx)
+dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
+                              dfo_switch_fn on_switch, void *switch_ctx)
 {
-    /* the exact scheme (exact.c) has no grid to snap to: it ends exactly on the host's time, where its
-     * closed form is exact (two hosts whose clocks differ by rounding get the motion at their times) */
-    if (M->p.scheme == DFO_SCHEME_EXACT) {
-        if (!in->ramp) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
-        /* varying inputs: its closed form with the input polynomials (the values at t_d held apart) */
-        dfo_inputs held = *in;
-        const dfo_input_poly q = {in->t_d, {in->F_ext_d[0], in->F_ext_d[1]}, {in->N_ext_d[0], in->N_ext_d[1]}};
-        held.F_ext_d[0] = held.F_ext_d[1] = held.N_ext_d[0] = held.N_ext_d[1] = 0.0;
-        held.ramp = 0;
-        return dfo_exact_advance_poly(M, &held, &q, s, t_target, on_switch, switch_ctx);
-    }
     /* work on a copy that no other pointer can reach, so that the compiler may keep it in registers
      * across the steps; it is written back whatever the outcome (as if worked on in place) */
     dfo_state w = *s;
@@ -1041,7 +1030,7 @@ dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, d
  * the state sits on the grid point the cache holds, else in closed form. */
 static double state_excitation(const dfo_model *M, const dfo_state *s)
 {
-    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_exact_excitation(M, s->t); /* its phase, exact for any t, phi */
+    if (M->p.scheme == DFO_SCHEME_EXACT) return dfo_excitation_exact(M, s->t); /* its phase, exact for any t, phi */
     if (s->exc_n >= 0 && s->exc_n == s->n && s->t == s->t0 + (double)s->n * M->p.h) return M->p.P0 * dfo_clamp1(s->exc_c);
     return dfo_excitation(M, s->t);
 }
@@ -1137,7 +1126,7 @@ double dfo_acceleration(const dfo_model *M, const dfo_inputs *in, const dfo_stat
     if (stuck(&C, s) && C.rules->rests_when_stuck && !(C.belt && s->V != C.vb)) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) { /* the exact scheme's excitation (exact for any t, phi) */
         C.t_grid = s->t;
-        C.P_grid = dfo_exact_excitation(M, s->t);
+        C.P_grid = dfo_excitation_exact(M, s->t);
     }
     return accel_of(&C, s, s->t, s->F);
 }
@@ -1151,7 +1140,7 @@ double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
     if (stuck(&C, s) && C.rules->rests_when_stuck) return 0.0;
     if (M->p.scheme == DFO_SCHEME_EXACT) {
         C.t_grid = s->t;
-        C.P_grid = dfo_exact_excitation(M, s->t);
+        C.P_grid = dfo_excitation_exact(M, s->t);
     }
     /* the rate of the acceleration in the current mode (jerk_of, with the state's own friction force) */
     const dfo_model *Mm = C.M;
@@ -1168,19 +1157,4 @@ double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)
 {
     const double span = fmin(s->t, M->p.t_obs_stop) - M->p.t_obs_start;
     return span > 0.0 ? s->t_stuck / span : 0.0;
-}
-
-const char *dfo_status_text(dfo_status st)
-{
-    switch (st) {
-    case DFO_OK: return "ok";
-    case DFO_ERR_LCP: return "the friction LCP could not be solved (Lemke failed)";
-    case DFO_ERR_NO_PROGRESS: return "too many stick/slip switches inside one internal step";
-    case DFO_ERR_NONFINITE: return "the state became non-finite (overflow)";
-    case DFO_ERR_RESOLUTION: return "the internal step h is below the time resolution at this time";
-    case DFO_ERR_EVENTS:
-        return "the communication step needs more than 1e8 events (stops, reversals, breakaways) of the exact "
-               "scheme, its work bound; use shorter communication steps";
-    }
-    return "unknown status";
 }

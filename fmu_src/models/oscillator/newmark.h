@@ -2,8 +2,9 @@
  *
  * Three Bossak variants (dfo_scheme): the paper's literal scheme, the consistent stick test (first
  * order) and the located scheme (default; every stick/slip switch placed inside its step, second
- * order). dfo_advance also dispatches the fourth scheme, exact (exact.h: closed form between events,
- * no Bossak step), so that every caller has one entry point.
+ * order), advanced by dfo_bossak_advance below scheme.h's dfo_advance, which dispatches every scheme.
+ * Start-up, the outputs at a state and the grid snapping below serve every scheme (the exact scheme's
+ * excitation is oscillator.h's dfo_excitation_exact).
  * The internal grid is t0 + n h; dfo_advance ends exactly on any requested time off that grid with a
  * shortened step whose Bossak acceleration is corrected for the new length (method.md section 8),
  * and on the grid point itself when the requested time is a host's rounding of one (see "Snapping
@@ -14,56 +15,7 @@
 #define DFO_NEWMARK_H
 
 #include "oscillator.h"
-
-typedef enum {
-    DFO_OK = 0,
-    DFO_ERR_LCP = 1,          /* Lemke reported failure */
-    DFO_ERR_NO_PROGRESS = 2,  /* too many switches inside one internal step */
-    DFO_ERR_NONFINITE = 3,    /* the state overflowed */
-    DFO_ERR_RESOLUTION = 4,   /* a step would not advance time (h below the resolution of t) */
-    DFO_ERR_EVENTS = 5        /* the exact scheme: more than DFO_EXACT_MAX_EVENTS events in one call */
-} dfo_status;
-
-/* The exact scheme's work bound: the events (stops, reversals, breakaways, touches) one call of
- * dfo_advance may take, i.e. one communication step. It takes no step h, so its work is counted in
- * events, not in 1e9 h as the Bossak schemes' (DFO_MAX_STEPS_PER_CALL): 1e8 events are 25 million
- * periods of a block that sticks and slips twice per period, or 50 million of a frictionless one,
- * some 10 to 60 s of one core (0.1-0.6 us per event); a communication step that needs more is
- * refused with DFO_ERR_EVENTS, never an endless loop. (Defined before the include to try it smaller.) */
-#ifndef DFO_EXACT_MAX_EVENTS
-#define DFO_EXACT_MAX_EVENTS 100000000LL
-#endif
-
-typedef struct {
-    /* time: the last internal grid point reached is t0 + n h; t is the current time */
-    double t0, t;
-    long long n;
-    /* kinematics: position, velocity, Bossak acceleration variable, and the step length that
-     * produced A (0 when A is a physical acceleration: start-up, stick, consistent restart) */
-    double X, V, A, hA;
-    double F;      /* friction force at t */
-    int mode;      /* -1 backward slip, 0 stuck, +1 forward slip */
-    double t_switch; /* the time of the last stick/slip switch of the Bossak schemes (-inf: none), as
-                      * reported (a switch on a step's end: its t + h, to rounding) */
-    /* in-FMU observables over [t_obs_start, t_obs_stop] (only updated when observe is on) */
-    double x_max, x_min, t_stuck, E_friction;
-    long long transitions;
-    int observed;  /* a sample has been taken */
-    /* the stick phase's next breakaway: time and side, computed at its first step for the constant
-     * part of the static force stick_C = F_ext - k X and the limit stick_Fb (NaN: to be computed) */
-    double stick_C, stick_Fb, stick_tb;
-    int stick_dir;
-    /* excitation cache: cos and sin of the excitation phase omega (t0 + exc_n h) + phi at the grid
-     * point exc_n (-1: empty). A pure function of exc_n: exact at every multiple of DFO_EXC_ANCHOR,
-     * advanced by rotations by omega h in between. */
-    long long exc_n;
-    double exc_c, exc_s;
-    /* counters */
-    long long steps, lcp_solves;
-    /* the Jacobian d(X, V) / d(X, V)(t_ref), row-major (dX/dX0, dX/dV0, dV/dX0, dV/dV0), t_ref the end of
-     * initialisation or the last state restore: propagated by the exact scheme when sensitivity is on */
-    double J[4];
-} dfo_state;
+#include "scheme_state.h"
 
 /* Consistent start-up at t0 from x0, v0 (method.md section 4, "Start-up"). */
 void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s);
@@ -75,9 +27,6 @@ void dfo_forget_caches(dfo_state *s);
  * cache only if it equals its recomputation, else empty it; a breakaway side out of range makes the
  * next breakaway be computed anew. */
 void dfo_check_caches(const dfo_model *M, dfo_state *s);
-
-/* Called at every change of mode (stick/slip switch) with its time and position. */
-typedef void (*dfo_switch_fn)(void *ctx, double t, double x, int from_mode, int to_mode);
 
 /* Snapping to the grid. A host that builds its communication points by adding dt repeatedly asks
  * for t = 0.020000000000000011 where it means the grid point 0.02, and after 10^5 additions of
@@ -105,18 +54,9 @@ double dfo_snap_tolerance(const dfo_model *M, double t);
  * s->t) that t_target snaps to, else t_target itself. */
 double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
 
-/* Advance to t_target > s->t, with the inputs held constant, or with in->ramp varying as their
- * polynomials: every internal step (and sub-step of the located scheme) then takes the loads at its
- * end, and a stick phase's breakaway is the root of the varying static force (second order). The
- * exact scheme follows the polynomials in closed form (exact.h's dfo_exact_advance_poly, where
- * dfo_exact_poly_unsupported says it can: the caller checks). on_switch may be NULL.
- * Contract: on DFO_OK, s->t is exactly dfo_snap_target(M, s_before, t_target): t_target itself or
- * the grid point it snapped to (the caller keeps and reports its own time). Everything after a
- * snap is exactly as if the grid point had been requested (same steps, same excitation cache,
- * same fast paths), so a host adding dt and a host computing n dt get bit-identical states. A
- * t_target that snaps to s->t itself is a no-op. */
-dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
-                       dfo_switch_fn on_switch, void *switch_ctx);
+/* dfo_advance (scheme.h) for the Bossak schemes (paper, consistent, located): its contract. */
+dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
+                              dfo_switch_fn on_switch, void *switch_ctx);
 
 /* The friction force at the current state with the inputs in, by the current mode's law: sliding
  * -mode mu_k N; stuck, the force that holds the block (the static force, clamped to the breakaway
@@ -142,7 +82,5 @@ double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
 
 /* Share of the observed time spent stuck (0 before the window opens). */
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s);
-
-const char *dfo_status_text(dfo_status st);
 
 #endif

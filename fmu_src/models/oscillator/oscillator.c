@@ -1,6 +1,7 @@
 /* The dry-friction oscillator: parameters, forces. See oscillator.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "oscillator.h"
+#include "ddouble.h"
 #include "dmath.h"
 
 #include "bossak.h"
@@ -63,6 +64,15 @@ void dfo_model_init(dfo_model *M, const dfo_params *p)
 double dfo_excitation(const dfo_model *M, double t)
 {
     return M->p.P0 * dfo_cos(M->p.omega * t + M->p.phi);
+}
+
+double dfo_excitation_exact(const dfo_model *M, double t)
+{
+    const dfo_dd tt = {t, 0.0};
+    const dfo_dd theta = dfo_dd_theta(M->p.omega, dfo_dd_phase0(M->p.phi, M->p.P0 < 0.0), tt);
+    double c, sn;
+    dfo_sincos_dd(theta.hi, theta.lo, &sn, &c);
+    return M->P_amp * c;
 }
 
 double dfo_excitation_rate(const dfo_model *M, double t)

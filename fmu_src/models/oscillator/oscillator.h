@@ -93,6 +93,10 @@ void dfo_model_init(dfo_model *M, const dfo_params *p);
 /* Excitation P0 cos(omega t + phi) and its time derivative. */
 double dfo_excitation(const dfo_model *M, double t);
 double dfo_excitation_rate(const dfo_model *M, double t);
+/* The excitation as the exact scheme evaluates it: phi reduced mod 2 pi exactly and omega t + phi
+ * carried as a double-double (ddouble.h), so exact to rounding for any t and phi (the outputs a and
+ * F_friction of the exact scheme use it). */
+double dfo_excitation_exact(const dfo_model *M, double t);
 
 /* Normal force used: max(N + N_ext, 0), N_ext read only when it has been set. */
 double dfo_normal_force(const dfo_model *M, const dfo_inputs *u);

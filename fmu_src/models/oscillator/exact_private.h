@@ -1,0 +1,22 @@
+/* What the exact scheme's files share (private: exact.h is the public header): the rounding level
+ * of their zero tests and the inlining of their event loops. */
+#ifndef DFO_EXACT_PRIVATE_H
+#define DFO_EXACT_PRIVATE_H
+
+#include "exact.h"
+
+#include <float.h>
+
+/* the relative rounding level of the zero tests (as the 40-digit references) */
+#define DFO_EXACT_ROUND (64.0 * DBL_EPSILON)
+
+/* For exact_spring.c and exact_free.c: the event loop is compiled once for each kind of inputs (held,
+ * polynomial: a constant in each), so that the loop of held inputs carries none of the polynomial
+ * inputs' code. */
+#if defined(__GNUC__)
+#define DFO_EXACT_INLINE inline __attribute__((always_inline))
+#else
+#define DFO_EXACT_INLINE inline
+#endif
+
+#endif

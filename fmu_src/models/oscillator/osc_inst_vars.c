@@ -1,0 +1,297 @@
+/* The DryFrictionOscillator instance core (osc_instance.h), its variable access: value references
+ * resolved through the table generated from modelDescription.xml (model_vars.h), get/set with every
+ * value checked before any is stored, and the outputs (those a run does not compute read NaN, or -1,
+ * with one sentence per run). No FMI types. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "osc_instance.h"
+#include "instance_common.h"
+
+#include <math.h>
+#include <stddef.h>
+
+/* ---- the variable table ---------------------------------------------------------------------- */
+
+static const dfo_var_info *lookup(const osc_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
+{
+    const dfo_var_info *var = dfo_find_var(vr);
+    if (!var) {
+        dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
+        return NULL;
+    }
+    if (var->type != type) {
+        dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
+                      dfo_type_name(var->type), dfo_type_name(type));
+        return NULL;
+    }
+    return var;
+}
+
+static int settable(const osc_instance *in, const char *fn, const dfo_var_info *var)
+{
+    return dfo_inst_settable(&in->lc, fn, var, var->name, var->vr);
+}
+
+static int check_value(const osc_instance *in, const char *fn, const dfo_var_info *var, double x)
+{
+    const char *range = dfo_inst_invalid(var, x);
+    if (!range) return 1;
+    dfo_inst_fail(&in->lc, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
+                  var->name, var->vr, range);
+    return 0;
+}
+
+/* ---- outputs -------------------------------------------------------------------------------- */
+
+/* Whether the inputs (values and set flags) are those of the last step: walks the table. */
+int osc_inst_same_inputs(const dfo_inputs *a, const dfo_inputs *b)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home != DFO_IN_INPUTS) continue;
+        const char *pa = (const char *)a, *pb = (const char *)b;
+        if (*(const int *)(pa + var->set_offset) != *(const int *)(pb + var->set_offset)) return 0;
+        if (var->type == DFO_REAL ? *(const double *)(pa + var->offset) != *(const double *)(pb + var->offset)
+                                  : *(const int *)(pa + var->offset) != *(const int *)(pb + var->offset))
+            return 0;
+    }
+    return 1;
+}
+
+/* The friction force at the current state for the current inputs. With the inputs of the last step
+ * it is the stepper's own; with inputs set since, the current mode's friction law with them:
+ * sliding -s mu_k N, stuck the force that holds the block, within the breakaway limit. */
+double osc_inst_friction_now(const osc_values *v)
+{
+    if (osc_inst_same_inputs(&v->u, &v->u_used)) return v->s.F;
+    return dfo_friction_force(&v->M, &v->u, &v->s);
+}
+
+double osc_inst_acceleration_now(const osc_values *v)
+{
+    if (osc_inst_same_inputs(&v->u, &v->u_used)) return dfo_acceleration(&v->M, &v->u, &v->s);
+    dfo_state s = v->s;
+    s.F = osc_inst_friction_now(v);
+    return dfo_acceleration(&v->M, &v->u, &s);
+}
+
+/* A pending event's left limit: the state at the switch in the mode before it, with that mode's
+ * friction force (kinetic -from mu_k N; stuck, the static force clamped to the breakaway limit). */
+dfo_state osc_inst_left_limit(const osc_values *v, int event_from)
+{
+    dfo_state s = v->s;
+    s.mode = event_from;
+    s.F = dfo_friction_force(&v->M, &v->u, &s);
+    return s;
+}
+
+static int needs_observe(int id)
+{
+    return id == DFO_OUT_x_max || id == DFO_OUT_x_min || id == DFO_OUT_stick_fraction ||
+           id == DFO_OUT_transitions || id == DFO_OUT_E_friction;
+}
+
+static int is_sensitivity(int id)
+{
+    return id == DFO_OUT_dx_dx0 || id == DFO_OUT_dx_dv0 || id == DFO_OUT_dv_dx0 || id == DFO_OUT_dv_dv0;
+}
+
+/* The sensitivity is computed: asked for, and by the exact scheme (the only one that propagates it). */
+static int sens_computed(const dfo_params *p) { return p->sensitivity && p->scheme == DFO_SCHEME_EXACT; }
+
+/* A value this run has not computed: an observable while observe is false (every one of them),
+ * x_max / x_min before the observation window has taken its first sample, or the sensitivity
+ * unless it is computed. */
+static int not_computed(const osc_values *v, int id)
+{
+    if (is_sensitivity(id))
+        return !sens_computed(&v->p) || !(isfinite(v->s.J[0]) && isfinite(v->s.J[1]) && isfinite(v->s.J[2]) &&
+                                          isfinite(v->s.J[3]));
+    if (!needs_observe(id)) return 0;
+    if (!v->p.observe) return 1;
+    return (id == DFO_OUT_x_max || id == DFO_OUT_x_min) && !v->s.observed;
+}
+
+/* What a value not computed reads: NaN (Real), DFO_NOT_COMPUTED_INT (Integer, transitions). Status
+ * OK; one sentence per run, logged under logNotComputed, says why. */
+#define DFO_NOT_COMPUTED_INT (-1)
+#define WARNED_OBSERVE 1u     /* lc.warned: the observables' sentence was logged */
+#define WARNED_SENSITIVITY 2u /* the sensitivity's */
+
+static void note_not_computed(osc_instance *in, const char *fn, const dfo_var_info *var)
+{
+    if (is_sensitivity(var->id)) {
+        if (in->lc.warned & WARNED_SENSITIVITY) return;
+        in->lc.warned |= WARNED_SENSITIVITY;
+        if (sens_computed(&in->v.p))
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) reads NaN: the Jacobian dx_dx0, dx_dv0, dv_dx0, "
+                         "dv_dv0 overflowed or met a tangential event since t_ref (a breakaway with a stationary "
+                         "force, a stop with zero deceleration), where the map is not differentiable; it is the "
+                         "identity again after a state restore.", fn, var->name, var->vr);
+        else if (!in->v.p.sensitivity)
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) is not computed while sensitivity is false: the "
+                         "Jacobian dx_dx0, dx_dv0, dv_dx0, dv_dv0 reads NaN in this run; set sensitivity = true "
+                         "(before initialisation, with scheme exact) to compute it.", fn, var->name, var->vr);
+        else
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) is not computed with scheme %s: the Jacobian "
+                         "dx_dx0, dx_dv0, dv_dx0, dv_dv0 reads NaN in this run; only scheme exact computes it.",
+                         fn, var->name, var->vr, osc_inst_scheme_name(in->v.p.scheme));
+        return;
+    }
+    if (in->lc.warned & WARNED_OBSERVE) return;
+    in->lc.warned |= WARNED_OBSERVE;
+    if (!in->v.p.observe)
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) is not computed while observe is false: the "
+                     "observables x_max, x_min, stick_fraction, E_friction read NaN and transitions reads -1 in "
+                     "this run; set observe = true (before initialisation) to compute them.", fn, var->name,
+                     var->vr);
+    else
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) reads NaN: the observation window [%.17g, %.17g] has "
+                     "not taken a sample yet (t = %.17g).", fn, var->name, var->vr, in->v.p.t_obs_start,
+                     in->v.p.t_obs_stop, in->v.s.t);
+}
+
+static double output_real(const osc_values *v, const dfo_run *r, int id)
+{
+    const dfo_state *s = &v->s;
+    if (r->event_pending && (id == DFO_OUT_a || id == DFO_OUT_F_friction)) {
+        const dfo_state left = osc_inst_left_limit(v, r->event_from);
+        return id == DFO_OUT_a ? dfo_acceleration(&v->M, &v->u, &left) : left.F;
+    }
+    switch (id) {
+    case DFO_OUT_x: return s->X;
+    case DFO_OUT_v: return s->V;
+    case DFO_OUT_a: return osc_inst_acceleration_now(v);
+    case DFO_OUT_F_friction: return osc_inst_friction_now(v);
+    case DFO_OUT_x_max: return s->x_max;
+    case DFO_OUT_x_min: return s->x_min;
+    case DFO_OUT_stick_fraction: return dfo_stick_fraction(&v->M, s);
+    case DFO_OUT_E_friction: return s->E_friction;
+    case DFO_OUT_h_used: return v->M.p.h;
+    case DFO_OUT_dx_dx0: return s->J[0];
+    case DFO_OUT_dx_dv0: return s->J[1];
+    case DFO_OUT_dv_dx0: return s->J[2];
+    case DFO_OUT_dv_dv0: return s->J[3];
+    default: return 0.0;
+    }
+}
+
+static int output_int(const osc_values *v, const dfo_run *r, int id)
+{
+    switch (id) {
+    case DFO_OUT_mode: return r->event_pending ? r->event_from : v->s.mode;
+    case DFO_OUT_transitions: return (int)v->s.transitions;
+    case DFO_OUT_effects: return v->effects;
+    default: return 0;
+    }
+}
+
+/* ---- get / set ------------------------------------------------------------------------------- */
+
+dfo_inst_status dfo_inst_get_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, double value[])
+{
+    osc_instance *in = osc(lc);
+    osc_values tmp;
+    const osc_values *v = NULL;
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
+        if (!var) return DFO_INST_ERROR;
+        if (var->home != DFO_COMPUTED) {
+            value[i] = *(const double *)osc_cslot(&in->v, var);
+            continue;
+        }
+        if (!v) v = osc_inst_computed(in, &tmp);
+        if (not_computed(v, var->id)) {
+            value[i] = NAN;
+            note_not_computed(in, fn, var);
+            continue;
+        }
+        value[i] = output_real(v, &in->lc.run, var->id);
+        if (!isfinite(value[i]))
+            return dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is not representable in double precision "
+                                 "for these parameters (overflow).", fn, var->name, vr[i]);
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    osc_instance *in = osc(lc);
+    osc_values tmp;
+    const osc_values *v = NULL;
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
+        if (!var) return DFO_INST_ERROR;
+        if (var->home != DFO_COMPUTED) {
+            value[i] = *(const int *)osc_cslot(&in->v, var);
+            continue;
+        }
+        if (!v) v = osc_inst_computed(in, &tmp);
+        if (not_computed(v, var->id)) {
+            value[i] = DFO_NOT_COMPUTED_INT;
+            note_not_computed(in, fn, var);
+            continue;
+        }
+        value[i] = output_int(v, &in->lc.run, var->id);
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    osc_instance *in = osc(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
+        if (!var) return DFO_INST_ERROR;
+        value[i] = *(const int *)osc_cslot(&in->v, var) ? 1 : 0;
+    }
+    return DFO_INST_OK;
+}
+
+/* Store a checked value; setting an input raises its flag (an input never set is never read). */
+static void store(osc_values *v, const dfo_var_info *var, double x)
+{
+    if (var->type == DFO_REAL) *(double *)osc_slot(v, var) = x;
+    else *(int *)osc_slot(v, var) = (int)x;
+    if (var->home == DFO_IN_INPUTS) *(int *)((char *)&v->u + var->set_offset) = 1;
+}
+
+dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[])
+{
+    osc_instance *in = osc(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
+        if (!var || !settable(in, fn, var) || !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i]);
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                 const int value[])
+{
+    osc_instance *in = osc(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
+        if (!var || !settable(in, fn, var) || !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i]);
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const int value[])
+{
+    osc_instance *in = osc(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
+        if (!var || !settable(in, fn, var)) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i] ? 1.0 : 0.0);
+    return DFO_INST_OK;
+}
