@@ -1,0 +1,654 @@
+/* The instance core of the TwoMass FMUs (the model API of core/instance.h): start values, get/set
+ * through the variable table generated from the model's description (model_vars.h),
+ * initialisation, doStep (with FMI 3.0's early return at a switch), FMU states and their
+ * serialisation (core/fmu_state.h's format). The physics is two_mass.h's over the friction engine.
+ * No input or output derivatives, no directional derivatives (the description says so). No FMI
+ * types. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "engine.h"
+#include "fmu_state.h"
+#include "instance_common.h"
+#include "two_mass.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#define DFO_SAME(name, a, b) typedef char dfo_static_assert_##name[((int)(a) == (int)(b)) ? 1 : -1]
+DFO_SAME(scheme_paper, DFO_MD_SCHEME_PAPER, DFO_SCHEME_PAPER);
+DFO_SAME(scheme_consistent, DFO_MD_SCHEME_CONSISTENT, DFO_SCHEME_CONSISTENT);
+DFO_SAME(scheme_located, DFO_MD_SCHEME_LOCATED, DFO_SCHEME_LOCATED);
+
+#define STATE_MAGIC 0x544d53544154452aULL /* "TMSTATE*" */
+
+/* The engine's state as plain values (its arrays copied): what an FMU state holds. */
+typedef struct {
+    double t0, t;
+    long long n_grid;
+    double X[2], V[2], A[2], hA[2], F[2], t_stick[2], t_break[2];
+    int mode[2], break_dir[2];
+    double t_switch;
+    long long steps, solves, pivot_steps, switches;
+    long long exc_n;
+    double exc_c, exc_s;
+} tm_snap;
+
+/* The values of an instance that an FMU state copies. */
+typedef struct {
+    tm_params p;
+    tm_inputs u;
+    int started;      /* the model is built and the state started */
+    tm_snap snap;     /* the state when saved (kept in step with the engine's at every save) */
+} tm_values;
+
+typedef struct {
+    dfo_lifecycle lc; /* first: the glues see the instance as its life cycle */
+    tm_values v;
+    tm_model m;       /* built at the end of initialisation (m.E NULL before) */
+    eng_state s;      /* the engine's state (arrays through the host) */
+    int s_ready;
+} tm_instance;
+
+typedef struct {
+    uint64_t magic;
+    dfo_run run;
+    tm_values v;
+} saved_state;
+
+static tm_instance *tmi(dfo_lifecycle *lc) { return (tm_instance *)lc; }
+static const tm_instance *ctmi(const dfo_lifecycle *lc) { return (const tm_instance *)lc; }
+
+/* ---- memory ----------------------------------------------------------------------------------- */
+
+static void *host_alloc(void *env, size_t nobj, size_t size)
+{
+    tm_instance *in = (tm_instance *)env;
+    return in->lc.host.alloc(in->lc.host.ctx, nobj, size);
+}
+
+static void host_free(void *env, void *obj)
+{
+    tm_instance *in = (tm_instance *)env;
+    if (obj) in->lc.host.free(in->lc.host.ctx, obj);
+}
+
+static eng_alloc allocator(tm_instance *in)
+{
+    const eng_alloc al = {host_alloc, host_free, in};
+    return al;
+}
+
+static void free_model(tm_instance *in)
+{
+    const eng_alloc al = allocator(in);
+    if (in->s_ready) eng_state_free(in->m.E, &in->s);
+    in->s_ready = 0;
+    tm_model_free(&in->m, &al);
+}
+
+/* Build the model and its state arrays from v->p (NULL, or why not, in buf). */
+static const char *build_model(tm_instance *in, char *buf, size_t len)
+{
+    free_model(in);
+    const eng_alloc al = allocator(in);
+    const char *err = NULL;
+    if (!tm_model_init(&in->m, &in->v.p, &al, buf, len, &err)) return err;
+    if (!eng_state_init(in->m.E, &in->s, 0)) {
+        free_model(in);
+        return "out of memory";
+    }
+    in->s_ready = 1;
+    return NULL;
+}
+
+static void snap_of(const eng_state *s, tm_snap *d)
+{
+    d->t0 = s->t0;
+    d->t = s->t;
+    d->n_grid = s->n_grid;
+    for (int i = 0; i < 2; i++) {
+        d->X[i] = s->X[i];
+        d->V[i] = s->V[i];
+        d->A[i] = s->A[i];
+        d->hA[i] = s->hA[i];
+        d->F[i] = s->F[i];
+        d->t_stick[i] = s->t_stick[i];
+        d->t_break[i] = s->t_break[i];
+        d->mode[i] = s->mode[i];
+        d->break_dir[i] = s->break_dir[i];
+    }
+    d->t_switch = s->t_switch;
+    d->steps = s->steps;
+    d->solves = s->solves;
+    d->pivot_steps = s->pivot_steps;
+    d->switches = s->switches;
+    d->exc_n = s->exc_n;
+    d->exc_c = s->exc_c;
+    d->exc_s = s->exc_s;
+}
+
+static void state_of(const tm_snap *d, eng_state *s)
+{
+    s->t0 = d->t0;
+    s->t = d->t;
+    s->n_grid = d->n_grid;
+    for (int i = 0; i < 2; i++) {
+        s->X[i] = d->X[i];
+        s->V[i] = d->V[i];
+        s->A[i] = d->A[i];
+        s->hA[i] = d->hA[i];
+        s->F[i] = d->F[i];
+        s->t_stick[i] = d->t_stick[i];
+        s->t_break[i] = d->t_break[i];
+        s->mode[i] = d->mode[i];
+        s->break_dir[i] = d->break_dir[i];
+    }
+    s->t_switch = d->t_switch;
+    s->steps = d->steps;
+    s->solves = d->solves;
+    s->pivot_steps = d->pivot_steps;
+    s->switches = d->switches;
+    s->exc_n = d->exc_n;
+    s->exc_c = d->exc_c;
+    s->exc_s = d->exc_s;
+}
+
+/* ---- the variable table ---------------------------------------------------------------------- */
+
+static void *slot(tm_values *v, const dfo_var_info *var)
+{
+    char *base = (var->home == DFO_IN_PARAMS) ? (char *)&v->p : (char *)&v->u;
+    return base + var->offset;
+}
+
+static void set_start_values(tm_instance *in)
+{
+    const tm_values zero = {0};
+    const dfo_run run0 = {0};
+    in->v = zero;
+    in->lc.run = run0;
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home == DFO_COMPUTED || !var->has_start) continue;
+        if (var->type == DFO_REAL) *(double *)slot(&in->v, var) = var->start;
+        else *(int *)slot(&in->v, var) = (int)var->start;
+    }
+    in->lc.run.phase = DFO_PHASE_INSTANTIATED;
+}
+
+static const dfo_var_info *lookup(const tm_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
+{
+    const dfo_var_info *var = dfo_find_var(vr);
+    if (!var) {
+        dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
+        return NULL;
+    }
+    if (var->type != type) {
+        dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
+                      dfo_type_name(var->type), dfo_type_name(type));
+        return NULL;
+    }
+    return var;
+}
+
+static int check_value(const tm_instance *in, const char *fn, const dfo_var_info *var, double x)
+{
+    const char *range = dfo_inst_invalid(var, x);
+    if (!range) return 1;
+    dfo_inst_fail(&in->lc, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
+                  var->name, var->vr, range);
+    return 0;
+}
+
+/* ---- life cycle ------------------------------------------------------------------------------- */
+
+dfo_lifecycle *dfo_inst_new(const dfo_host *host, const char *name, int logging_on)
+{
+    tm_instance *in = (tm_instance *)dfo_lifecycle_new(host, sizeof(tm_instance), name, logging_on);
+    if (!in) return NULL;
+    set_start_values(in);
+    return &in->lc;
+}
+
+void dfo_inst_delete(dfo_lifecycle *lc)
+{
+    if (!lc) return;
+    free_model(tmi(lc));
+    lc->host.free(lc->host.ctx, lc);
+}
+
+size_t dfo_inst_n_values(const dfo_lifecycle *lc, const unsigned int vr[], size_t nvr)
+{
+    (void)lc;
+    (void)vr;
+    return nvr; /* scalars only */
+}
+
+void dfo_inst_log_event_handled(const dfo_lifecycle *lc)
+{
+    const tm_instance *in = ctmi(lc);
+    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled, modes %d %d.", dfo_inst_time(lc),
+                 in->s_ready ? in->s.mode[0] : 0, in->s_ready ? in->s.mode[1] : 0);
+}
+
+#define NO_STRUCTURAL(lc, fn) dfo_inst_fail(lc, "%s: the FMU has no structural parameters.", fn)
+
+int dfo_inst_has_structural(void) { return 0; }
+dfo_inst_status dfo_inst_enter_config(dfo_lifecycle *lc, const char *fn) { return NO_STRUCTURAL(lc, fn); }
+dfo_inst_status dfo_inst_exit_config(dfo_lifecycle *lc, const char *fn) { return NO_STRUCTURAL(lc, fn); }
+dfo_inst_status dfo_inst_get_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                    unsigned long long value[])
+{
+    (void)vr;
+    (void)n;
+    (void)value;
+    return NO_STRUCTURAL(lc, fn);
+}
+dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                    const unsigned long long value[])
+{
+    (void)vr;
+    (void)n;
+    (void)value;
+    return NO_STRUCTURAL(lc, fn);
+}
+
+/* The engine's inputs from the instance's (an input never set reads 0). */
+static eng_inputs inputs_of(const tm_values *v, double F[2])
+{
+    F[0] = v->u.F1_ext_set ? v->u.F1_ext : 0.0;
+    F[1] = v->u.F2_ext_set ? v->u.F2_ext : 0.0;
+    eng_inputs e;
+    memset(&e, 0, sizeof e);
+    e.F_ext = F;
+    return e;
+}
+
+static void on_switch(void *ctx, double t, size_t contact, const eng_state *s, int from, int to)
+{
+    tm_instance *in = (tm_instance *)ctx;
+    in->lc.switched = 1;
+    dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: contact %s switches from mode %d to %d (x1 = "
+                 "%.17g, x2 = %.17g).", t, contact == 0 ? "ground" : "between", from, to, s->X[0], s->X[1]);
+}
+
+dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
+{
+    tm_instance *in = tmi(lc);
+    char buf[256];
+    const char *why = build_model(in, buf, sizeof buf);
+    if (why) return dfo_inst_fail(lc, "%s: %s.", fn, why);
+    double F[2];
+    const eng_inputs e = inputs_of(&in->v, F);
+    const double x0[2] = {in->v.p.x1_0, in->v.p.x2_0}, v0[2] = {in->v.p.v1_0, in->v.p.v2_0};
+    eng_start(in->m.E, &e, in->lc.run.start_time, x0, v0, &in->s);
+    in->v.started = 1;
+    in->lc.run.time = in->lc.run.start_time;
+    in->lc.run.phase = DFO_PHASE_STEP;
+    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: modes %d %d, h = %.17g.", in->s.t,
+                 in->s.mode[0], in->s.mode[1], in->m.h);
+    return DFO_INST_OK;
+}
+
+void dfo_inst_reset(dfo_lifecycle *lc)
+{
+    tm_instance *in = tmi(lc);
+    free_model(in);
+    set_start_values(in);
+    in->lc.warned = 0;
+}
+
+/* ---- get / set ------------------------------------------------------------------------------- */
+
+static double output_real(tm_instance *in, int id)
+{
+    if (id == DFO_OUT_h_used) return tm_step(&in->v.p);
+    if (!in->v.started) return NAN;
+    const eng_state *s = &in->s;
+    double F[2], a[2], f[2];
+    const eng_inputs e = inputs_of(&in->v, F);
+    switch (id) {
+    case DFO_OUT_x1: return s->X[0];
+    case DFO_OUT_x2: return s->X[1];
+    case DFO_OUT_v1: return s->V[0];
+    case DFO_OUT_v2: return s->V[1];
+    case DFO_OUT_a1:
+    case DFO_OUT_a2: eng_accelerations(in->m.E, &e, s, a); return a[id == DFO_OUT_a2];
+    case DFO_OUT_F_g:
+    case DFO_OUT_F_c: eng_contact_forces(in->m.E, &e, s, f); return f[id == DFO_OUT_F_c];
+    }
+    return NAN;
+}
+
+dfo_inst_status dfo_inst_get_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, double value[])
+{
+    tm_instance *in = tmi(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_REAL);
+        if (!var) return DFO_INST_ERROR;
+        value[i] = (var->home != DFO_COMPUTED) ? *(const double *)slot(&in->v, var) : output_real(in, var->id);
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    tm_instance *in = tmi(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_INTEGER);
+        if (!var) return DFO_INST_ERROR;
+        if (var->home != DFO_COMPUTED) value[i] = *(const int *)slot(&in->v, var);
+        else value[i] = in->v.started ? in->s.mode[var->id == DFO_OUT_mode_c] : 0;
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    tm_instance *in = tmi(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], DFO_BOOLEAN);
+        if (!var) return DFO_INST_ERROR;
+        value[i] = *(const int *)slot(&in->v, var) ? 1 : 0;
+    }
+    return DFO_INST_OK;
+}
+
+static void store(tm_values *v, const dfo_var_info *var, double x)
+{
+    if (var->type == DFO_REAL) *(double *)slot(v, var) = x;
+    else *(int *)slot(v, var) = (int)x;
+    if (var->home == DFO_IN_INPUTS) *(int *)((char *)&v->u + var->set_offset) = 1;
+}
+
+static dfo_inst_status set_values(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[], dfo_var_type type)
+{
+    tm_instance *in = tmi(lc);
+    for (size_t i = 0; i < n; i++) {
+        const dfo_var_info *var = lookup(in, fn, vr[i], type);
+        if (!var || !dfo_inst_settable(lc, fn, var, var->name, var->vr)) return DFO_INST_ERROR;
+        if (type != DFO_BOOLEAN && !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
+    }
+    for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i]);
+    return DFO_INST_OK;
+}
+
+/* A batch of values as doubles (at most this many per call; a longer call is split). */
+#define BATCH 64
+
+dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[])
+{
+    return set_values(lc, fn, vr, n, value, DFO_REAL);
+}
+
+static dfo_inst_status set_ints(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, const int value[],
+                                dfo_var_type type)
+{
+    double x[BATCH];
+    /* all checked before any is stored: one batch at a time would store part of a rejected call */
+    if (n > BATCH) return dfo_inst_fail(lc, "%s: at most %d values per call.", fn, BATCH);
+    for (size_t i = 0; i < n; i++) x[i] = (type == DFO_BOOLEAN) ? (value[i] ? 1.0 : 0.0) : (double)value[i];
+    return set_values(lc, fn, vr, n, x, type);
+}
+
+dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                 const int value[])
+{
+    return set_ints(lc, fn, vr, n, value, DFO_INTEGER);
+}
+
+dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const int value[])
+{
+    return set_ints(lc, fn, vr, n, value, DFO_BOOLEAN);
+}
+
+/* ---- doStep ---------------------------------------------------------------------------------- */
+
+/* Advance to t_target (stop_at_switch: at the first switch); the host's time follows. */
+static dfo_inst_status advance(tm_instance *in, const char *fn, double t_target, int stop_at_switch)
+{
+    tm_snap before;
+    snap_of(&in->s, &before);
+    double F[2];
+    const eng_inputs e = inputs_of(&in->v, F);
+    eng_hooks hk;
+    memset(&hk, 0, sizeof hk);
+    hk.on_switch = on_switch;
+    hk.switch_ctx = in;
+    hk.stop_at_switch = stop_at_switch;
+    in->lc.switched = 0;
+    const eng_status st = eng_advance(in->m.E, &e, &in->s, t_target, &hk);
+    if (st != ENG_OK && st != ENG_SWITCHED) {
+        const double t_fail = in->s.t;
+        state_of(&before, &in->s);
+        in->lc.run.phase = DFO_PHASE_ERROR;
+        return dfo_inst_fail(&in->lc, "%s: step from t = %.17g failed at t = %.17g: %s. The FMU keeps the state at "
+                             "t = %.17g; reset it or restore an earlier FMU state.", fn, in->lc.run.time, t_fail,
+                             eng_status_text(st), in->lc.run.time);
+    }
+    const double snap = dfo_snap(in->m.h, t_target);
+    in->lc.run.time = (st == ENG_SWITCHED && in->s.t < t_target - snap) ? in->s.t : t_target;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, double dt, unsigned int flags,
+                                 double *t_reached)
+{
+    tm_instance *in = tmi(lc);
+    double t_target = 0.0;
+    in->lc.work_by_events = 0;
+    const dfo_inst_status chk = dfo_inst_check_step(lc, fn, tc, dt, in->m.h, &t_target);
+    if (chk != DFO_INST_OK) return chk;
+    const dfo_inst_status st = advance(in, fn, t_target, (flags & DFO_STEP_STOP_AT_SWITCH) != 0);
+    if (st == DFO_INST_OK && t_reached) *t_reached = in->lc.run.time;
+    return st;
+}
+
+/* FMI 3.0: with early return the step ends at the first switch strictly inside it (the state just
+ * after it); in event mode a switch on which the step ends stays pending until the host handles it
+ * (the outputs are then the right limits already: this model keeps no left limits). */
+dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
+                                        const dfo_event_opts *opt, dfo_step_result *res)
+{
+    tm_instance *in = tmi(lc);
+    dfo_inst_status done;
+    double t_target = 0.0;
+    in->lc.work_by_events = 0;
+    if (dfo_inst_events_begin(lc, fn, tc, dt, in->m.h, opt, res, &done, &t_target)) return done;
+    const dfo_inst_status st = advance(in, fn, t_target, opt->early_return || opt->intermediate);
+    if (st != DFO_INST_OK) return st;
+    const int switched = in->lc.switched;
+    if (switched && opt->intermediate) opt->intermediate(opt->ctx, in->lc.run.time, opt->early_return, 0);
+    if (switched && in->lc.run.time < t_target && !opt->early_return) {
+        /* a switch inside the step without early return: go on to the target */
+        const dfo_inst_status st2 = advance(in, fn, t_target, 0);
+        if (st2 != DFO_INST_OK) return st2;
+    }
+    res->t_reached = in->lc.run.time;
+    res->early = in->lc.run.time < t_target;
+    res->event = opt->event_mode && switched;
+    if (res->event) {
+        in->lc.run.event_pending = 1;
+        in->lc.run.event_from = 0;
+    }
+    return DFO_INST_OK;
+}
+
+/* ---- FMU states ------------------------------------------------------------------------------ */
+
+static dfo_inst_status store_state(tm_instance *in, const char *fn, void **state, const dfo_run *run,
+                                   const tm_values *v)
+{
+    int fresh;
+    if (dfo_state_take(&in->lc, fn, state, STATE_MAGIC, sizeof(saved_state), &fresh) != DFO_INST_OK)
+        return DFO_INST_ERROR;
+    saved_state *st = (saved_state *)*state;
+    st->magic = STATE_MAGIC;
+    st->run = *run;
+    st->v = *v;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **state)
+{
+    tm_instance *in = tmi(lc);
+    if (in->v.started) snap_of(&in->s, &in->v.snap);
+    return store_state(in, fn, state, &in->lc.run, &in->v);
+}
+
+dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void *state)
+{
+    tm_instance *in = tmi(lc);
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
+    const tm_values v = st->v;
+    if (v.started) {
+        /* the model from the state's parameters (rebuilt only when they differ from the built one's) */
+        if (!in->s_ready || memcmp(&in->m.p, &v.p, sizeof v.p) != 0) {
+            in->v = v;
+            char buf[256];
+            const char *why = build_model(in, buf, sizeof buf);
+            if (why) return dfo_inst_fail(lc, "%s: %s.", fn, why);
+        }
+        state_of(&v.snap, &in->s);
+    } else {
+        free_model(in);
+    }
+    in->v = v;
+    in->lc.run = st->run;
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)
+{
+    if (!dfo_state_droppable(lc, fn, state, STATE_MAGIC)) return DFO_INST_ERROR;
+    dfo_state_drop(lc, state);
+    return DFO_INST_OK;
+}
+
+#define BODY_BYTES (sizeof(tm_values) + DFO_STATE_RUN_BYTES)
+
+size_t dfo_inst_state_size(const dfo_lifecycle *lc, const void *state)
+{
+    (void)lc;
+    const saved_state *st = (const saved_state *)state;
+    return (st && st->magic == STATE_MAGIC) ? DFO_STATE_HEADER_BYTES + BODY_BYTES : 0;
+}
+
+dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf,
+                                   size_t size)
+{
+    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
+    if (!st) return DFO_INST_ERROR;
+    if (size < DFO_STATE_HEADER_BYTES + BODY_BYTES)
+        return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
+                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
+    dfo_cursor c = {buf + DFO_STATE_HEADER_BYTES, NULL};
+    dfo_put_bytes(&c, &st->v, sizeof st->v);
+    dfo_put_run(&c, &st->run);
+    dfo_state_seal(buf, BODY_BYTES, MODEL_GUID);
+    return DFO_INST_OK;
+}
+
+/* A deserialised state must describe a simulation this FMU could have reached. */
+static const char *implausible(const dfo_run *r, tm_values *v, char *buf, size_t len)
+{
+    for (int i = 0; i < DFO_NUM_VARS; i++) {
+        const dfo_var_info *var = &DFO_VARS[i];
+        if (var->home == DFO_COMPUTED || var->type == DFO_BOOLEAN) continue;
+        const double x = var->type == DFO_REAL ? *(const double *)slot(v, var) : *(const int *)slot(v, var);
+        if (dfo_inst_invalid(var, x)) return "a parameter or input is out of range";
+    }
+    const char *why = dfo_run_implausible(r, 0);
+    if (why) return why;
+    if ((why = tm_check(&v->p, buf, len))) return why;
+    if (v->started != 0 && v->started != 1) return "the start flag is invalid";
+    if (!v->started) return NULL;
+    const tm_snap *s = &v->snap;
+    for (int i = 0; i < 2; i++) {
+        if (!isfinite(s->X[i]) || !isfinite(s->V[i]) || !isfinite(s->A[i]) || !isfinite(s->F[i]) ||
+            !isfinite(s->hA[i]))
+            return "the state is not finite";
+        if (s->mode[i] < -1 || s->mode[i] > 1 || s->break_dir[i] < -1 || s->break_dir[i] > 1)
+            return "a mode is invalid";
+    }
+    if (!isfinite(s->t) || !isfinite(s->t0) || s->n_grid < 0 || isnan(s->t_switch)) return "the state is not finite";
+    if (s->exc_n < -1) return "the excitation cache is invalid";
+    return dfo_grid_implausible(r, s->t0, s->n_grid, tm_step(&v->p), s->t);
+}
+
+dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const unsigned char *buf, size_t size,
+                                     void **state)
+{
+    size_t body = 0;
+    if (dfo_state_open(lc, fn, buf, size, MODEL_GUID, &body) != DFO_INST_OK) return DFO_INST_ERROR;
+    if (body != BODY_BYTES)
+        return dfo_inst_fail(lc, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
+                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
+    tm_values v;
+    dfo_run run;
+    dfo_cursor c = {NULL, buf + DFO_STATE_HEADER_BYTES};
+    dfo_get_bytes(&c, &v, sizeof v);
+    dfo_get_run(&c, &run);
+    char msg[256];
+    const char *why = implausible(&run, &v, msg, sizeof msg);
+    if (why) return dfo_inst_fail(lc, "%s: rejected, %s.", fn, why);
+    v.snap.exc_n = -1; /* the excitation cache is rebuilt, never trusted */
+    return store_state(tmi(lc), fn, state, &run, &v);
+}
+
+/* ---- no derivatives (the description: canInterpolateInputs false, maxOutputDerivativeOrder 0,
+ * providesDirectionalDerivative false) ------------------------------------------------------------ */
+
+int dfo_inst_max_input_order(void) { return 0; }
+int dfo_inst_max_output_order(void) { return 0; }
+
+#define NO_DERIVATIVES(lc, fn, what) dfo_inst_fail(lc, "%s: the TwoMass FMU provides no %s.", fn, what)
+
+dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
+                                               const int order[], const double value[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)order;
+    (void)value;
+    return NO_DERIVATIVES(lc, fn, "input derivatives");
+}
+
+dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
+                                                size_t nvr, const int order[], double value[])
+{
+    (void)vr;
+    (void)nvr;
+    (void)order;
+    (void)value;
+    return NO_DERIVATIVES(lc, fn, "output derivatives");
+}
+
+dfo_inst_status dfo_inst_directional(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                     const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
+{
+    (void)unknown;
+    (void)nu;
+    (void)known;
+    (void)nk;
+    (void)seed;
+    (void)sensitivity;
+    return NO_DERIVATIVES(lc, fn, "directional derivatives");
+}
+
+dfo_inst_status dfo_inst_adjoint(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
+                                 const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
+{
+    (void)unknown;
+    (void)nu;
+    (void)known;
+    (void)nk;
+    (void)seed;
+    (void)sensitivity;
+    return NO_DERIVATIVES(lc, fn, "adjoint derivatives");
+}
