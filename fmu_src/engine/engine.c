@@ -58,8 +58,13 @@ struct eng {
     double *lim, *f, *f2;
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
-    /* dense: columns A^-1 w_j (n x nc), D (nc x nc), Cholesky, Lemke's 2 nc problem */
-    double *cols, *D, *Lc, *rhs, *sol, *Dinv, *lM, *lq, *lz, *lw;
+    /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
+     * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
+     * Cholesky, Lemke's 2 nc problem */
+    double *ccol;
+    int *cok;
+    const double **colp;
+    double *D, *Lc, *rhs, *sol, *Dinv, *lM, *lq, *lz, *lw;
     int *zb, *guess, *sel;
     lcp_workspace *ws;           /* Lemke's, for 2 nc unknowns (NULL without contacts) */
     /* Stribeck's Newton */
@@ -117,7 +122,7 @@ void eng_destroy(eng *E)
     if (!E) return;
     void *const ptrs[] = {E->mu_b, E->u, E->Nn, E->mukN, E->Fb, E->mlN, E->zero_nc, E->A0, E->xp, E->ph,
                           E->V1, E->r, E->y, E->y2, E->X0, E->acc, E->jk, E->rb, E->lim, E->f, E->f2, E->st,
-                          E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->cols, E->D, E->Lc, E->rhs, E->sol,
+                          E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp, E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
                           E->sA, E->shA, E->sF, E->smode};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
@@ -152,7 +157,9 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++) ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++) ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
-    ok &= (E->cols = (double *)alloc_n(al, n * nc, sizeof(double))) != NULL;
+    ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * nc, sizeof(double))) != NULL;
+    ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
+    ok &= (E->colp = (const double **)alloc_n(al, nc, sizeof(double *))) != NULL;
     ok &= (E->D = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
     ok &= (E->Lc = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
     ok &= (E->Dinv = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
@@ -416,10 +423,31 @@ static int factor_slot(eng *E, int slot, double cM, double cC, double cK)
     double *c = E->slot_c[slot];
     if (E->slot_ok[slot] && c[0] == cM && c[1] == cC && c[2] == cK) return 1;
     E->slot_ok[slot] = E->S.ops.factor(E->S.ops.ctx, slot, cM, cC, cK);
+    for (size_t j = 0; j < E->S.nc; j++) E->cok[(size_t)slot * E->S.nc + j] = 0; /* its columns anew */
     c[0] = cM;
     c[1] = cC;
     c[2] = cK;
     return E->slot_ok[slot];
+}
+
+/* colp[a] := A_slot^-1 w_j for the selected contacts j = sel[a], a < m, each solved once per
+ * factorisation of the slot. */
+static void columns(eng *E, int slot, size_t m)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = S->n, nc = S->nc;
+    for (size_t a = 0; a < m; a++) {
+        const size_t j = (size_t)E->sel[a];
+        double *col = E->ccol + ((size_t)slot * nc + j) * n;
+        int *done = &E->cok[(size_t)slot * nc + j];
+        if (!*done) {
+            for (size_t i = 0; i < n; i++) col[i] = 0.0;
+            row_axpy(&S->rows[j], 1.0, col);
+            S->ops.solve(S->ops.ctx, slot, col, col);
+            *done = 1;
+        }
+        E->colp[a] = col;
+    }
 }
 
 /* ---- constrained solves ------------------------------------------------------------------- */
@@ -435,15 +463,10 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     for (size_t j = 0; j < nc; j++)
         if (held[j]) E->sel[m++] = (int)j;
     if (m == 0) return;
-    for (size_t a = 0; a < m; a++) {
-        double *col = E->cols + a * n;
-        for (size_t i = 0; i < n; i++) col[i] = 0.0;
-        row_axpy(&S->rows[E->sel[a]], 1.0, col);
-        S->ops.solve(S->ops.ctx, slot, col, col);
-    }
+    columns(E, slot, m);
     for (size_t a = 0; a < m; a++) {
         const eng_row *Ra = &S->rows[E->sel[a]];
-        for (size_t c = 0; c <= a; c++) E->D[a * m + c] = E->D[c * m + a] = row_dot(Ra, E->cols + c * n);
+        for (size_t c = 0; c <= a; c++) E->D[a * m + c] = E->D[c * m + a] = row_dot(Ra, E->colp[c]);
         E->rhs[a] = target[E->sel[a]] - row_dot(Ra, y);
     }
     int *dep = E->st2;
@@ -451,7 +474,7 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     chol_solve(m, E->Lc, m, dep, E->rhs, E->sol);
     for (size_t a = 0; a < m; a++) {
         const double fa = E->sol[a];
-        const double *col = E->cols + a * n;
+        const double *col = E->colp[a];
         for (size_t i = 0; i < n; i++) y[i] += col[i] * fa;
         f[E->sel[a]] = fa;
     }
@@ -542,14 +565,9 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
         if (!in && P->limit[j] > 0.0 && mode[j] != 0) row_axpy(&S->rows[j], f[j], E->r);
     }
     S->ops.solve(S->ops.ctx, P->slot, E->r, V0);
-    for (size_t a = 0; a < m; a++) {
-        double *col = E->cols + a * n;
-        for (size_t i = 0; i < n; i++) col[i] = 0.0;
-        row_axpy(&S->rows[E->sel[a]], 1.0, col);
-        S->ops.solve(S->ops.ctx, P->slot, col, col);
-    }
+    columns(E, P->slot, m);
     for (size_t a = 0; a < m; a++)
-        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[E->sel[a]], E->cols + c * n);
+        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[E->sel[a]], E->colp[c]);
     double *fs = E->sol, *dlt = E->rhs;
     for (size_t a = 0; a < m; a++) fs[a] = f[E->sel[a]];
     int done = 0;
@@ -605,7 +623,7 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
     for (size_t i = 0; i < n; i++) V1[i] = V0[i];
     for (size_t a = 0; a < m; a++) {
         f[E->sel[a]] = fs[a];
-        const double *col = E->cols + a * n;
+        const double *col = E->colp[a];
         for (size_t i = 0; i < n; i++) V1[i] += col[i] * fs[a];
     }
     return ENG_OK;
@@ -672,7 +690,7 @@ eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int 
 {
     eng *E = (eng *)engine;
     const eng_setup *S = &E->S;
-    const size_t n = S->n, nc = S->nc;
+    const size_t nc = S->nc;
     if (pivots) *pivots = 0;
     if (what == ENG_SOLVE_BASIS) return dense_basis(E, P, mode, V1, f);
     /* the warm basis first: when it solves the LCP, no pivot */
@@ -692,15 +710,10 @@ eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int 
     if (E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
     /* c = W A^-1 p_hat - vb (frictionless contacts carry no force), D = W A^-1 W' */
     S->ops.solve(S->ops.ctx, P->slot, P->p_hat, E->y);
-    for (size_t a = 0; a < m; a++) {
-        double *col = E->cols + a * n;
-        for (size_t i = 0; i < n; i++) col[i] = 0.0;
-        row_axpy(&S->rows[E->sel[a]], 1.0, col);
-        S->ops.solve(S->ops.ctx, P->slot, col, col);
-    }
+    columns(E, P->slot, m);
     for (size_t a = 0; a < m; a++) {
         const size_t j = (size_t)E->sel[a];
-        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->cols + c * n);
+        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
         E->rhs[a] = row_dot(&S->rows[j], E->y) - (P->vb ? P->vb[j] : 0.0);
     }
     int *dep = E->st2;
