@@ -1,7 +1,7 @@
 /* The friction engine (fmu_src/engine) on small dense models: its located scheme against the
  * oscillator's exact scheme (an independent closed form) with the error falling 4x per halving of
  * h, the consistent scheme first order; chains of 2 and 8 blocks against the chain's own stepper
- * (another implementation of the same schemes) in all three schemes, with the dense friction solver
+ * (another implementation of the same schemes) in all three schemes and with the Stribeck law, with the dense friction solver
  * and with a model's own (the box LCP of numerics/lcp.h through the friction hook); two masses with a contact
  * between them (w = [1, -1]) and one to the ground, second order under refinement, the stuck
  * contact's slip held; the dense friction solver against the enumeration of the 3^nc mode sets;
@@ -346,7 +346,7 @@ static void test_vs_oscillator(checks *T)
 
 /* A chain of n blocks (n <= NMAX) stepped by chain_advance and by the engine over the same dense
  * operators (W = I): max |x_engine - x_chain| / max |x| over 40 s, the switches of both. */
-static double chain_agreement(size_t n, int scheme, int hook, long long *sw_e, long long *sw_c)
+static double chain_agreement(size_t n, int scheme, int hook, int stribeck, long long *sw_e, long long *sw_c)
 {
     const double omega = 0.7, h = 2e-3;
     double m[NMAX], k[NMAX], c[NMAX], P0[NMAX], phi[NMAX], N[NMAX], mu_s[NMAX], chi[NMAX], mk[NMAX], zero[NMAX];
@@ -366,6 +366,22 @@ static double chain_agreement(size_t n, int scheme, int hook, long long *sw_e, l
     cp.n = n;
     cp.m = m; cp.k = k; cp.c = c; cp.P0 = P0; cp.phi = phi; cp.N = N; cp.mu_s = mu_s; cp.chi = chi;
     cp.x0 = zero; cp.v0 = zero; cp.omega = omega; cp.h = h; cp.alpha = -0.1; cp.scheme = scheme;
+    double vs[NMAX], dl[NMAX];
+    dfo_friction_law law[NMAX];
+    for (size_t i = 0; i < n; i++) {
+        vs[i] = 0.05 + 0.01 * (double)(i % 3);
+        dl[i] = 1.0;
+        law[i].law = DFO_LAW_STRIBECK;
+        law[i].mu_s = mu_s[i];
+        law[i].mu_k = mk[i];
+        law[i].v_s = vs[i];
+        law[i].delta = dl[i];
+    }
+    if (stribeck) {
+        cp.friction_law = DFO_LAW_STRIBECK;
+        cp.v_s = vs;
+        cp.delta = dl;
+    }
     const chain_alloc cal = {t_alloc, t_free, NULL};
     chain_model *CM = chain_create(&cp, &cal, NULL);
     chain_state cs;
@@ -391,6 +407,7 @@ static double chain_agreement(size_t n, int scheme, int hook, long long *sw_e, l
     for (size_t i = 0; i < n; i++) { rows[i].nnz = 1; rows[i].idx = &idx[i]; rows[i].w = w1; }
     eng_setup S = setup_of(&D, n, rows, N, mu_s, mk, P0, omega, h, scheme);
     if (hook) S.ops.friction = tri_friction;
+    if (stribeck) S.law = law;
     eng_state s;
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng *E = eng_begin(&S, &in, &s);
@@ -426,13 +443,26 @@ static void test_chains(checks *T)
                 check_context(T, "chain of %zu blocks, %s, %s, against chain_advance", n, names[scheme],
                               hook ? "the model's box LCP" : "dense friction");
                 long long se = 0, sc = 0;
-                const double d = chain_agreement(n, scheme, hook, &se, &sc);
+                const double d = chain_agreement(n, scheme, hook, 0, &se, &sc);
                 printf("  chain n = %zu %-10s %-13s 40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / %lld\n",
                        n, names[scheme], hook ? "box LCP hook" : "dense", d, se, sc);
                 CHECK(d < 1e-9);
                 CHECK(se >= 5 * (long long)n);
                 CHECK_RANGE(0.97 * (double)sc - 2.0, 1.03 * (double)sc + 2.0, (double)se);
             }
+    }
+    /* Stribeck on every block (located: the chain's law): the engine's Newton on the sliding
+     * contacts together against the chain's per run of free rows */
+    for (size_t a = 0; a < 2; a++) {
+        const size_t n = sizes[a];
+        check_context(T, "chain of %zu blocks, located, Stribeck, against chain_advance", n);
+        long long se = 0, sc = 0;
+        const double d = chain_agreement(n, DFO_SCHEME_LOCATED, 0, 1, &se, &sc);
+        printf("  chain n = %zu located   Stribeck      40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / "
+               "%lld\n", n, d, se, sc);
+        CHECK(d < 1e-9);
+        CHECK(se >= 5 * (long long)n);
+        CHECK_RANGE(0.97 * (double)sc - 2.0, 1.03 * (double)sc + 2.0, (double)se);
     }
 }
 
