@@ -85,7 +85,10 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
         snprintf(buf, len, "the model's operators are incomplete (apply_K, apply_M, factor and solve are needed)");
         return buf;
     }
-    if (!(S->h > 0.0) || !isfinite(S->h)) { snprintf(buf, len, "invalid step h = %g (valid: > 0, finite)", S->h); return buf; }
+    if (!(S->h > 0.0) || !isfinite(S->h)) {
+        snprintf(buf, len, "invalid step h = %g (valid: > 0, finite)", S->h);
+        return buf;
+    }
     if (!(S->alpha >= -1.0 / 3.0 && S->alpha <= 0.0)) {
         snprintf(buf, len, "invalid Bossak parameter alpha = %g (valid: -1/3 ... 0)", S->alpha);
         return buf;
@@ -94,7 +97,10 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
         snprintf(buf, len, "invalid scheme %d (valid: 1 paper, 2 consistent, 3 located)", S->scheme);
         return buf;
     }
-    if (S->friction_updates < 0) { snprintf(buf, len, "invalid friction_updates %d (valid: >= 0)", S->friction_updates); return buf; }
+    if (S->friction_updates < 0) {
+        snprintf(buf, len, "invalid friction_updates %d (valid: >= 0)", S->friction_updates);
+        return buf;
+    }
     if (S->nc > 0 && (!S->rows || !S->N || !S->mu_s || !S->mu_k)) {
         snprintf(buf, len, "%zu contacts without their rows, normal forces or coefficients", S->nc);
         return buf;
@@ -109,8 +115,8 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
                 return buf;
             }
         if (!(S->N[j] >= 0.0) || !(S->mu_s[j] >= 0.0) || !(S->mu_k[j] >= 0.0)) {
-            snprintf(buf, len, "contact %zu: invalid N %g, mu_s %g or mu_k %g (valid: >= 0)", j + 1, S->N[j], S->mu_s[j],
-                     S->mu_k[j]);
+            snprintf(buf, len, "contact %zu: invalid N %g, mu_s %g or mu_k %g (valid: >= 0)", j + 1, S->N[j],
+                     S->mu_s[j], S->mu_k[j]);
             return buf;
         }
     }
@@ -122,7 +128,8 @@ void eng_destroy(eng *E)
     if (!E) return;
     void *const ptrs[] = {E->mu_b, E->u, E->Nn, E->mukN, E->Fb, E->mlN, E->zero_nc, E->A0, E->xp, E->ph,
                           E->V1, E->r, E->y, E->y2, E->X0, E->acc, E->jk, E->rb, E->lim, E->f, E->f2, E->st,
-                          E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp, E->D, E->Lc, E->rhs, E->sol,
+                          E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
+                          E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
                           E->sA, E->shA, E->sF, E->smode};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
@@ -154,8 +161,10 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
                      &E->rhs, &E->sol, &E->res, &E->sF};
     int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode};
     int ok = 1;
-    for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++) ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
-    for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++) ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++)
+        ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
+    for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++)
+        ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * nc, sizeof(double))) != NULL;
     ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
@@ -584,7 +593,8 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
                 const double u = mode[j] * v, up = fmax(u, 0.0);
                 E->res[a] = fs[a] + mode[j] * P->N[j] * dfo_friction_mu(&P->law[j], up);
                 const double dmu = (u > 0.0) ? dfo_friction_dmu(&P->law[j], u) : 0.0;
-                for (size_t c = 0; c < m; c++) E->Jn[a * m + c] = ((a == c) ? 1.0 : 0.0) + P->N[j] * dmu * E->D[a * m + c];
+                for (size_t c = 0; c < m; c++)
+                    E->Jn[a * m + c] = ((a == c) ? 1.0 : 0.0) + P->N[j] * dmu * E->D[a * m + c];
             }
         }
         for (size_t a = 0; a < m; a++) dlt[a] = E->res[a];
@@ -1289,7 +1299,8 @@ eng_status eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_targ
     loads_at(E, in, s->t);
     if (S->scheme != DFO_SCHEME_PAPER) rest_forces(E, s);
     for (size_t i = 0; i < S->n; i++)
-        if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX)) return ENG_ERR_NONFINITE;
+        if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX))
+            return ENG_ERR_NONFINITE;
     return ENG_OK;
 }
 

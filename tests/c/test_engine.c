@@ -1,12 +1,13 @@
 /* The friction engine (fmu_src/engine) on small dense models: its located scheme against the
  * oscillator's exact scheme (an independent closed form) with the error falling 4x per halving of
  * h, the consistent scheme first order; chains of 2 and 8 blocks against the chain's own stepper
- * (another implementation of the same schemes) in all three schemes and with the Stribeck law, with the dense friction solver
- * and with a model's own (the box LCP of numerics/lcp.h through the friction hook); two masses with a contact
- * between them (w = [1, -1]) and one to the ground, second order under refinement, the stuck
- * contact's slip held; the dense friction solver against the enumeration of the 3^nc mode sets;
- * one block against the oscillator's three Bossak schemes (belt, Stribeck, input ramps, input and
- * belt changes); stop at switch and state copy. Prints the measured errors and ratios. */
+ * (another implementation of the same schemes) in all three schemes and with the Stribeck law,
+ * with the dense friction solver and with a model's own (the box LCP of numerics/lcp.h through the
+ * friction hook); two masses with a contact between them (w = [1, -1]) and one to the ground,
+ * second order under refinement, the stuck contact's slip held; the dense friction solver against
+ * the enumeration of the 3^nc mode sets; one block against the oscillator's three Bossak schemes
+ * (belt, Stribeck, input ramps, input and belt changes); stop at switch and state copy. Prints the
+ * measured errors and ratios. */
 #include "check.h"
 #include "engine.h"
 
@@ -90,7 +91,8 @@ static eng_status tri_friction(void *c, const eng_problem *P, int what, int *mod
     double d[NMAX], e[NMAX], q[NMAX], cp[NMAX], dp[NMAX], work[2 * NMAX];
     for (size_t i = 0; i < n; i++) {
         d[i] = P->cM * D->M[i * n + i] + P->cC * D->C[i * n + i] + P->cK * D->K[i * n + i];
-        e[i] = (i + 1 < n) ? P->cM * D->M[i * n + i + 1] + P->cC * D->C[i * n + i + 1] + P->cK * D->K[i * n + i + 1] : 0.0;
+        const size_t o = i * n + i + 1; /* (i, i + 1) */
+        e[i] = (i + 1 < n) ? P->cM * D->M[o] + P->cC * D->C[o] + P->cK * D->K[o] : 0.0;
         q[i] = -P->p_hat[i];
     }
     if (pivots) *pivots = 0;
@@ -320,18 +322,25 @@ static void test_vs_oscillator(checks *T)
     static const char *const names[] = {"", "paper", "consistent", "located"};
     const double nan = NAN;
     const osc_case cases[] = {
-        {DFO_SCHEME_PAPER, 0.7, 0.0, nan, 0, 0.0, 0.0, nan},      {DFO_SCHEME_CONSISTENT, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},
-        {DFO_SCHEME_LOCATED, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},    {DFO_SCHEME_LOCATED, 0.7, 0.05, nan, 0, 0.0, 0.0, nan},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},    {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 1, 0.0, 0.0, nan},    {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.02, 0.0, nan},
-        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},   {DFO_SCHEME_CONSISTENT, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},
-        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},   {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},
+        {DFO_SCHEME_PAPER, 0.7, 0.0, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_CONSISTENT, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.3, 0.0, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.05, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 1, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.02, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},
+        {DFO_SCHEME_CONSISTENT, 0.7, 0.0, nan, 0, 0.0, 0.25, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},
+        {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.3, 0, 0.0, 0.0, -0.2},
         {DFO_SCHEME_LOCATED, 0.6, 0.05, 0.3, 1, 0.0, 0.0, 0.1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const osc_case *K = &cases[k];
-        check_context(T, "one block against the oscillator: %s chi %.1f c %.2f belt %g (to %g) stribeck %d ramp %g jump %g",
-                      names[K->scheme], K->chi, K->c, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump);
+        check_context(T, "one block against the oscillator: %s chi %.1f c %.2f belt %g (to %g) stribeck %d ramp %g "
+                      "jump %g", names[K->scheme], K->chi, K->c, K->v_belt, K->belt_to, K->stribeck, K->F_ramp,
+                      K->F_jump);
         long long se = 0, so = 0;
         const double d = osc_agreement(K, &se, &so);
         printf("  vs oscillator %-10s chi %.1f c %.2f belt %-4g to %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / "
@@ -444,8 +453,8 @@ static void test_chains(checks *T)
                               hook ? "the model's box LCP" : "dense friction");
                 long long se = 0, sc = 0;
                 const double d = chain_agreement(n, scheme, hook, 0, &se, &sc);
-                printf("  chain n = %zu %-10s %-13s 40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / %lld\n",
-                       n, names[scheme], hook ? "box LCP hook" : "dense", d, se, sc);
+                printf("  chain n = %zu %-10s %-13s 40 s: max |x_engine - x_chain| / max |x| %.2e, switches %lld / "
+                       "%lld\n", n, names[scheme], hook ? "box LCP hook" : "dense", d, se, sc);
                 CHECK(d < 1e-9);
                 CHECK(se >= 5 * (long long)n);
                 CHECK_RANGE(0.97 * (double)sc - 2.0, 1.03 * (double)sc + 2.0, (double)se);
@@ -514,7 +523,8 @@ static double two_mass_run(long steps_per_T, int scheme, double *x_out, slip_wat
     int ok = 1;
     const eng_observer obs = {T, 4.0 * T, watch_phase, W};
     const eng_hooks hk = {NULL, NULL, W ? &obs : NULL, 0};
-    for (int k = 1; k <= 32 && ok; k++) ok = eng_advance(E, &in, &s, (double)(k * steps_per_T / 8) * S.h, &hk) == ENG_OK;
+    for (int k = 1; k <= 32 && ok; k++)
+        ok = eng_advance(E, &in, &s, (double)(k * steps_per_T / 8) * S.h, &hk) == ENG_OK;
     x_out[0] = s.X[0];
     x_out[1] = s.X[1];
     if (switches) *switches = s.switches;

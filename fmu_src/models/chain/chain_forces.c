@@ -266,7 +266,8 @@ void chain_trial(chain_model *M, const chain_state *s, span *G, double hh, doubl
                 /* ramped inputs: with the rates of the inputs at the state's time (the loads are the
                  * internal step's, as the oscillator's jerk) */
                 double f;
-                if (M->ramped) f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, G->vrel, s, i);
+                if (M->ramped)
+                    f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i) + chain_ramp_rate(M, G->vrel, s, i);
                 else f = Pd - chain_Kx(M, s->V, i) - chain_Cv(M, M->A0, i);
                 /* Stribeck: d F / dt = -N mu'(u) a, u the relative speed (as the oscillator's jerk) */
                 if (M->stribeck && chain_has_friction(M, i))
