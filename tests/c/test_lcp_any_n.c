@@ -272,7 +272,8 @@ static void test_random(checks *T, stats *st, lcp_workspace *ws)
             for (int kind = SPD; kind <= SKEW_PD; kind++) {
                 check_context(T, "random P-matrix n = %d kind %d rep %d", n, kind, rep);
                 random_P(&r, n, kind, M);
-                for (int i = 0; i < n; i++) q[i] = rng_range(&r, -1.0, 1.0) * pow(10.0, rng_range(&r, -3.0, 3.0) * (rep % 2));
+                for (int i = 0; i < n; i++) /* odd reps: q over six decades */
+                    q[i] = rng_range(&r, -1.0, 1.0) * pow(10.0, rng_range(&r, -3.0, 3.0) * (rep % 2));
                 one_case(T, st, ws, n, M, q);
             }
     }
@@ -309,7 +310,8 @@ static lcp_status lemke_least_row(int n, const double *M, const double *q, int b
                 const double d = T[i * nc + col];
                 if (!(d > 1e-12)) continue;
                 const double ratio = T[i * nc + rhs] / d;
-                if (r < 0 || ratio < best - 1e-12 || (fabs(ratio - best) <= 1e-12 && basis[i] == z0 && basis[r] != z0)) {
+                const int tie = fabs(ratio - best) <= 1e-12;
+                if (r < 0 || ratio < best - 1e-12 || (tie && basis[i] == z0 && basis[r] != z0)) {
                     r = i;
                     best = ratio;
                 }
