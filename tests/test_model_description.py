@@ -642,14 +642,22 @@ SPEC2D = """<?xml version="1.0" encoding="UTF-8"?>
   <CoSimulation modelIdentifier="DryFrictionGrid" canHandleVariableCommunicationStepSize="true"/>
   <LogCategories><Category name="logAll" description="every call"/></LogCategories>
   <ModelVariables>
-    <ScalarVariable name="n" valueReference="1" causality="structuralParameter" variability="fixed" description="dofs"><UInt64 start="3" min="1" max="100000"/></ScalarVariable>
-    <ScalarVariable name="nc" valueReference="2" causality="structuralParameter" variability="fixed" description="contacts"><UInt64 start="2" min="1" max="100000"/></ScalarVariable>
-    <ScalarVariable name="h" valueReference="3" causality="parameter" variability="fixed" initial="exact" description="step"><Real min="0" start="0.001"/></ScalarVariable>
-    <ScalarVariable name="M" valueReference="100" dimension="n n" causality="parameter" variability="fixed" initial="exact" description="mass matrix"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="W" valueReference="200" dimension="nc n" causality="parameter" variability="fixed" initial="exact" description="contact rows"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="F_ext" valueReference="300" dimension="n" causality="input" variability="continuous" description="force"><Real start="0"/></ScalarVariable>
-    <ScalarVariable name="x" valueReference="400" dimension="n" causality="output" variability="continuous" initial="calculated" description="position"><Real/></ScalarVariable>
-    <ScalarVariable name="f" valueReference="500" dimension="nc" causality="output" variability="continuous" initial="calculated" description="contact force"><Real/></ScalarVariable>
+    <ScalarVariable name="n" valueReference="1"
+      causality="structuralParameter" variability="fixed" description="dofs"><UInt64 start="3" min="1" max="100000"/></ScalarVariable>
+    <ScalarVariable name="nc" valueReference="2"
+      causality="structuralParameter" variability="fixed" description="contacts"><UInt64 start="2" min="1" max="100000"/></ScalarVariable>
+    <ScalarVariable name="h" valueReference="3"
+      causality="parameter" variability="fixed" initial="exact" description="step"><Real min="0" start="0.001"/></ScalarVariable>
+    <ScalarVariable name="M" valueReference="100" dimension="n n"
+      causality="parameter" variability="fixed" initial="exact" description="mass matrix"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="W" valueReference="200" dimension="nc n"
+      causality="parameter" variability="fixed" initial="exact" description="contact rows"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="F_ext" valueReference="300" dimension="n"
+      causality="input" variability="continuous" description="force"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="x" valueReference="400" dimension="n"
+      causality="output" variability="continuous" initial="calculated" description="position"><Real/></ScalarVariable>
+    <ScalarVariable name="f" valueReference="500" dimension="nc"
+      causality="output" variability="continuous" initial="calculated" description="contact force"><Real/></ScalarVariable>
   </ModelVariables>
   <ModelStructure>
     <Outputs><Unknown index="7" dependencies="6"/><Unknown index="8" dependencies="6"/></Outputs>

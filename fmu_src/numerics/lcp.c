@@ -522,15 +522,32 @@ void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, do
     }
 }
 
+/* ---- the box LCP's driver, for any M ----------------------------------------------------------
+ * The same pivoting for the tridiagonal and the dense M, written once over what differs: the basis
+ * solve of the modes (solve), and a row of M for projected Gauss-Seidel (row: -q_i minus the
+ * off-diagonal terms of row i times z, and M_ii). Inlined into each solver with its own functions,
+ * so that neither pays for the other. */
+
+typedef struct box_ops box_ops;
+struct box_ops {
+    void (*solve)(box_ops *ops, const int *mode, double *z, double *w);
+    double (*row)(const box_ops *ops, size_t i, const double *z, double *diag);
+    const double *d, *e, *M, *q, *l; /* the tridiagonal's d, e, or the dense M */
+    size_t n;
+    double *work;
+    int failed;                       /* the dense solve met a pivot <= 0: M not positive definite */
+};
+
 /* Principal pivoting from the modes: all infeasible rows flipped for three rounds, then the least
  * index only (Murty's rule); infeasibilities up to tol of the problem's scale accepted. Returns the
  * pivots, or -1 when max_it ran out. */
-static long box_pivoting(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
-                         double *z, double *w, double *work, long max_it, double tol)
+static ALWAYS_INLINE long box_pivoting(box_ops *ops, int *mode, double *z, double *w, long max_it, double tol)
 {
-    double *cp = work, *dp = work + n;
+    const size_t n = ops->n;
+    const double *q = ops->q, *l = ops->l;
     for (long it = 0; it < max_it; it++) {
-        lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, q, l, mode, z, w, cp, dp);
+        ops->solve(ops, mode, z, w);
+        if (ops->failed) return -1;
         double zs = 0.0, ws = 0.0;
         if (tol > 0.0)
             for (size_t i = 0; i < n; i++) { zs = fmax(zs, fabs(z[i])); ws = fmax(ws, fabs(q[i]) + l[i]); }
@@ -551,12 +568,13 @@ static long box_pivoting(size_t n, const double *d, const double *e, const doubl
     return -1;
 }
 
-lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
-                   double *z, double *w, double *work, int *pivots)
+static ALWAYS_INLINE lcp_status box_solve(box_ops *ops, int *mode, double *z, double *w, int *pivots)
 {
+    const size_t n = ops->n;
+    const double *l = ops->l;
     const long budget = 8 * (long)n + 32;
-    long piv = box_pivoting(n, d, e, q, l, mode, z, w, work, budget, 0.0);
-    if (piv < 0) {
+    long piv = box_pivoting(ops, mode, z, w, budget, 0.0);
+    if (piv < 0 && !ops->failed) {
         /* Stiff problems (M far from diagonal dominance) can make the pivoting wander: projected
          * Gauss-Seidel (coordinate descent on the strictly convex min z'M z / 2 + q'z + sum l |z|,
          * convergent for M positive definite) finds the modes, the pivoting polishes. */
@@ -564,10 +582,9 @@ lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, 
         for (long sweep = 0; sweep < 1000000; sweep++) {
             double dz = 0.0, zs = 0.0;
             for (size_t i = 0; i < n; i++) {
-                double r = -q[i];
-                if (i > 0) r -= e[i - 1] * z[i - 1];
-                if (i + 1 < n) r -= e[i] * z[i + 1];
-                const double v = (r > l[i]) ? (r - l[i]) / d[i] : (r < -l[i]) ? (r + l[i]) / d[i] : 0.0;
+                double di;
+                const double r = ops->row(ops, i, z, &di);
+                const double v = (r > l[i]) ? (r - l[i]) / di : (r < -l[i]) ? (r + l[i]) / di : 0.0;
                 dz = fmax(dz, fabs(v - z[i]));
                 zs = fmax(zs, fabs(v));
                 z[i] = v;
@@ -577,9 +594,114 @@ lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, 
         for (size_t i = 0; i < n; i++) mode[i] = sgn(z[i]);
         /* the polish accepts infeasibilities of rounding size (1e-10 of the problem's scale): on an
          * ill-conditioned M they would make the exact rule cycle */
-        piv = box_pivoting(n, d, e, q, l, mode, z, w, work, budget, 1e-10);
+        piv = box_pivoting(ops, mode, z, w, budget, 1e-10);
         if (piv >= 0) piv += budget;
     }
     if (pivots) *pivots = (piv >= 0) ? (int)piv : 0;
+    if (ops->failed) return LCP_BAD_INPUT;
     return (piv >= 0) ? LCP_OK : LCP_MAX_PIVOTS;
+}
+
+/* ---- the tridiagonal M ---- */
+
+static void tri_solve(box_ops *ops, const int *mode, double *z, double *w)
+{
+    lcp_box_basis(0, ops->n, 0, 0.0, 0, 0.0, ops->d, ops->e, ops->q, ops->l, mode, z, w, ops->work,
+                  ops->work + ops->n);
+}
+
+static double tri_row(const box_ops *ops, size_t i, const double *z, double *diag)
+{
+    double r = -ops->q[i];
+    if (i > 0) r -= ops->e[i - 1] * z[i - 1];
+    if (i + 1 < ops->n) r -= ops->e[i] * z[i + 1];
+    *diag = ops->d[i];
+    return r;
+}
+
+lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
+                   double *z, double *w, double *work, int *pivots)
+{
+    box_ops ops = {tri_solve, tri_row, d, e, NULL, q, l, n, work, 0};
+    return box_solve(&ops, mode, z, w, pivots);
+}
+
+/* ---- the dense M ---- */
+
+size_t lcp_box_dense_work(size_t n) { return n * n + 2 * n; }
+
+/* The basis solve of the modes: rows held at z_i = 0 (mode 0, l > 0) out, the others with
+ * w_i = -mode_i l_i (l_i = 0: w_i = 0); M_FF z_F = -q_F - mode_F l_F by Cholesky (M_FF = L L', L
+ * by columns into work), then w = M z + q on the held rows. */
+static void dense_solve(box_ops *ops, const int *mode, double *z, double *w)
+{
+    const size_t n = ops->n;
+    const double *M = ops->M, *q = ops->q, *l = ops->l;
+    double *L = ops->work, *b = ops->work + n * n;
+    double *Fd = ops->work + n * n + n; /* the free rows' indices (as doubles: exact) */
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+        z[i] = 0.0;
+        if (!(mode[i] == 0 && l[i] > 0.0)) Fd[k++] = (double)i;
+    }
+#define F(r) ((size_t)Fd[r])
+    for (size_t c = 0; c < k; c++) { /* L's column c, from row c down */
+        for (size_t r = c; r < k; r++) {
+            double v = M[F(r) * n + F(c)];
+            for (size_t j = 0; j < c; j++) v -= L[j * k + r] * L[j * k + c];
+            L[c * k + r] = v;
+        }
+        const double piv = L[c * k + c];
+        if (!(piv > 0.0)) {
+            ops->failed = 1;
+            return;
+        }
+        const double s = sqrt(piv);
+        for (size_t r = c; r < k; r++) L[c * k + r] /= s;
+    }
+    for (size_t r = 0; r < k; r++) { /* L y = b */
+        const size_t i = F(r);
+        double v = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+        for (size_t j = 0; j < r; j++) v -= L[j * k + r] * b[j];
+        b[r] = v / L[r * k + r];
+    }
+    for (size_t r = k; r-- > 0;) { /* L' z = y */
+        double v = b[r];
+        for (size_t j = r + 1; j < k; j++) v -= L[r * k + j] * z[F(j)];
+        z[F(r)] = v / L[r * k + r];
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            double v = q[i];
+            for (size_t j = 0; j < n; j++) v += M[i * n + j] * z[j];
+            w[i] = v;
+        } else {
+            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+#undef F
+}
+
+static double dense_row(const box_ops *ops, size_t i, const double *z, double *diag)
+{
+    const size_t n = ops->n;
+    const double *Mi = ops->M + i * n;
+    double r = -ops->q[i];
+    for (size_t j = 0; j < n; j++)
+        if (j != i) r -= Mi[j] * z[j];
+    *diag = Mi[i];
+    return r;
+}
+
+lcp_status lcp_box_dense(size_t n, const double *M, const double *q, const double *l, int *mode, double *z,
+                         double *w, double *work, int *pivots)
+{
+    if (pivots) *pivots = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!(fabs(q[i]) <= DBL_MAX) || !(l[i] >= 0.0 && l[i] <= DBL_MAX)) return LCP_BAD_INPUT;
+        for (size_t j = 0; j < n; j++)
+            if (!(fabs(M[i * n + j]) <= DBL_MAX)) return LCP_BAD_INPUT;
+    }
+    box_ops ops = {dense_solve, dense_row, NULL, NULL, M, q, l, n, work, 0};
+    return box_solve(&ops, mode, z, w, pivots);
 }

@@ -6,7 +6,8 @@
  *   lcp_lemke*  (standard LCP, a small dense M, method.md section 3): z >= 0, w >= 0, z . w = 0,
  *               by Lemke's complementary pivoting (lexicographic minimum-ratio test, no cycling on
  *               degenerate problems, covering vector e = 1, any n);
- *   lcp_box*    (box LCP, a symmetric positive definite tridiagonal M, method.md section 9): z free,
+ *   lcp_box*    (box LCP, a symmetric positive definite M, tridiagonal (lcp_box, method.md section 9)
+ *               or dense (lcp_box_dense, a structure's Delassus matrix)): z free,
  *               |w_i| <= l_i, z_i > 0 => w_i = -l_i, z_i < 0 => w_i = +l_i (l_i = 0: w_i = 0),
  *               the optimality condition of min z'M z / 2 + q'z + sum l_i |z_i|; by principal
  *               pivoting on the modes (the chain's friction: z the end velocities V, w the friction
@@ -33,8 +34,9 @@ typedef enum {
     LCP_RAY = 1,         /* secondary ray: no solution found (infeasible for this M; Lemke only) */
     LCP_MAX_PIVOTS = 2,  /* pivot budget used up */
     LCP_BAD_INPUT = 3    /* n out of range (n < 1, above LCP_STACK_N without a workspace, above the
-                          * workspace's size with one) or a non-finite entry (Lemke only: the box solver does
-                          * not test its data, non-finite entries come out in z and w) */
+                          * workspace's size with one) or a non-finite entry (Lemke and the dense box; the
+                          * tridiagonal box solver does not test its data, non-finite entries come out in
+                          * z and w), or a dense box M not positive definite */
 } lcp_status;
 
 /* M: n x n, row-major (1 <= n <= LCP_STACK_N). q: n. On LCP_OK, z and w (n each) hold the solution and basic[i] is
@@ -149,6 +151,17 @@ void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, do
  * LCP_OK, or LCP_MAX_PIVOTS when the polish did not settle either. */
 lcp_status lcp_box(size_t n, const double *d, const double *e, const double *q, const double *l, int *mode,
                    double *z, double *w, double *work, int *pivots);
+
+/* ---- the box LCP of a dense M ------------------------------------------------------------------- *
+ * The same problem for a dense symmetric positive definite M (n x n, row-major; e.g. a structure's
+ * contacts through their Delassus matrix W M^-1 W'): the same conditions, modes, pivoting rules,
+ * budget and Gauss-Seidel fallback as lcp_box, each basis solved by Cholesky's factorisation of its
+ * free rows, O(n^3) per pivot. work: lcp_box_dense_work(n) doubles (n^2 + 2n), the caller's. M is
+ * not tested for symmetry; a free block whose Cholesky pivot is <= 0 (M not positive definite to
+ * rounding) and a non-finite entry (or l < 0) give LCP_BAD_INPUT. */
+size_t lcp_box_dense_work(size_t n);
+lcp_status lcp_box_dense(size_t n, const double *M, const double *q, const double *l, int *mode, double *z,
+                         double *w, double *work, int *pivots);
 
 const char *lcp_status_text(lcp_status s);
 

@@ -13,7 +13,12 @@
  *    which the minimum-ratio test with ties broken by the least row cycles (shown with that rule
  *    written here) while the lexicographic rule solves it.
  * 4. The workspace: made and freed through the caller's callbacks (every block released), a failed
- *    allocation (NULL, nothing leaked), n out of range, a problem larger than the workspace. */
+ *    allocation (NULL, nothing leaked), n out of range, a problem larger than the workspace.
+ * 5. The box LCP of a dense positive definite M (lcp_box_dense), n = 1 to 64: the box conditions to
+ *    1e-12, z against a reference written here (projected Gauss-Seidel, then its modes' free rows
+ *    solved by Gauss-Jordan and flipped until every row is in its box), rows without friction
+ *    (l = 0), warm starts from the solution's modes (no pivot), a tridiagonal M posed densely (as
+ *    lcp_box), q = 0, q on the boxes' edges, and the input it refuses. */
 #include "check.h"
 #include "lcp.h"
 
@@ -136,6 +141,17 @@ static int reference(int n, const double *M, const double *q, double *z, double 
     return -1;
 }
 
+/* max |a - ref| / max |ref| (absolute when ref = 0) */
+static double rel_diff(int n, const double *a, const double *ref)
+{
+    double d = 0.0, s = 0.0;
+    for (int i = 0; i < n; i++) {
+        d = fmax(d, fabs(a[i] - ref[i]));
+        s = fmax(s, fabs(ref[i]));
+    }
+    return s > 0.0 ? d / s : d;
+}
+
 /* ---- the conditions on an answer --------------------------------------------------------------- */
 
 /* z >= 0, w >= 0, z_i w_i = 0, |w - (M z + q)| and the complementarity z . (M z + q) within tol of
@@ -210,25 +226,16 @@ static void one_case(checks *T, stats *st, lcp_workspace *ws, int n, const doubl
     st->nmax = n > st->nmax ? n : st->nmax;
     st->residual = fmax(st->residual, complementarity(T, n, M, q, z, w, 1e-12));
     if (CHECK(reference(n, M, q, zr, A, J, in) >= 0)) {
-        double d = 0.0, s = 0.0;
-        for (int i = 0; i < n; i++) {
-            d = fmax(d, fabs(z[i] - zr[i]));
-            s = fmax(s, fabs(zr[i]));
-        }
-        const double rel = s > 0.0 ? d / s : d;
+        const double rel = rel_diff(n, z, zr);
         CHECK_RANGE(0.0, 1e-10, rel);
         st->vs_reference = fmax(st->vs_reference, rel);
     }
     /* warm: the solution's own basis is accepted with no pivot; a wrong guess falls back to cold */
     if (CHECK_INT(LCP_OK, lcp_lemke_warm_ws(ws, n, M, q, zb, BUDGET, z2, w2, zb2, &piv2))) {
         if (piv2 == 0) st->warm_zero++;
-        double d = 0.0, s = 0.0;
-        for (int i = 0; i < n; i++) {
-            d = fmax(d, fabs(z2[i] - z[i]));
-            s = fmax(s, fabs(z[i]));
-        }
-        st->warm_vs_cold = fmax(st->warm_vs_cold, s > 0.0 ? d / s : d);
-        CHECK_RANGE(0.0, 1e-12, s > 0.0 ? d / s : d);
+        const double rel = rel_diff(n, z2, z);
+        st->warm_vs_cold = fmax(st->warm_vs_cold, rel);
+        CHECK_RANGE(0.0, 1e-12, rel);
     }
     for (int i = 0; i < n; i++) in[i] = !zb[i]; /* the complement: not the solution for q < 0 somewhere */
     int any_neg = 0;
@@ -265,7 +272,8 @@ static void test_random(checks *T, stats *st, lcp_workspace *ws)
             for (int kind = SPD; kind <= SKEW_PD; kind++) {
                 check_context(T, "random P-matrix n = %d kind %d rep %d", n, kind, rep);
                 random_P(&r, n, kind, M);
-                for (int i = 0; i < n; i++) q[i] = rng_range(&r, -1.0, 1.0) * pow(10.0, rng_range(&r, -3.0, 3.0) * (rep % 2));
+                for (int i = 0; i < n; i++) /* odd reps: q over six decades */
+                    q[i] = rng_range(&r, -1.0, 1.0) * pow(10.0, rng_range(&r, -3.0, 3.0) * (rep % 2));
                 one_case(T, st, ws, n, M, q);
             }
     }
@@ -302,7 +310,8 @@ static lcp_status lemke_least_row(int n, const double *M, const double *q, int b
                 const double d = T[i * nc + col];
                 if (!(d > 1e-12)) continue;
                 const double ratio = T[i * nc + rhs] / d;
-                if (r < 0 || ratio < best - 1e-12 || (fabs(ratio - best) <= 1e-12 && basis[i] == z0 && basis[r] != z0)) {
+                const int tie = fabs(ratio - best) <= 1e-12;
+                if (r < 0 || ratio < best - 1e-12 || (tie && basis[i] == z0 && basis[r] != z0)) {
                     r = i;
                     best = ratio;
                 }
@@ -430,6 +439,182 @@ static void test_workspace(checks *T)
     T->context = NULL;
 }
 
+/* ---- the dense box LCP ------------------------------------------------------------------------- */
+
+/* The box conditions on an answer (lcp_box's, for a dense M): w = M z + q to tol of the scale,
+ * |w| <= l, held rows (mode 0, l > 0) at z = 0 exactly, the others with w = -mode l exactly and
+ * mode z >= 0 (l = 0: w = 0, mode the sign of z). Returns the relative residual. */
+static double box_conditions(checks *T, int n, const double *M, const double *q, const double *l, const int *mode,
+                             const double *z, const double *w, double tol)
+{
+    double res = 0.0, scale = 0.0;
+    for (int i = 0; i < n; i++) {
+        double r = q[i], a = fabs(q[i]) + l[i];
+        for (int j = 0; j < n; j++) {
+            r += M[i * n + j] * z[j];
+            a += fabs(M[i * n + j] * z[j]);
+        }
+        scale = fmax(scale, a);
+        res = fmax(res, fabs(w[i] - r));
+        CHECK(isfinite(z[i]) && isfinite(w[i]) && fabs(w[i]) <= l[i]);
+        if (l[i] > 0.0 && mode[i] == 0) CHECK(z[i] == 0.0);
+        else if (l[i] > 0.0) CHECK(w[i] == -mode[i] * l[i] && mode[i] * z[i] >= 0.0);
+        else CHECK(w[i] == 0.0 && mode[i] == (z[i] > 0.0) - (z[i] < 0.0));
+    }
+    const double rel = scale > 0.0 ? res / scale : res;
+    CHECK_RANGE(0.0, tol, rel);
+    return rel;
+}
+
+/* The reference of a box LCP with M positive definite: projected Gauss-Seidel (convergent) run
+ * until its modes settle, then those modes' free rows solved (solve_basis above, with the held
+ * rows' z = 0 and the free rows' right-hand side moved by their limits) and the box checked; a
+ * row outside its box flips its mode and the solve repeats. Returns 0 when that does not settle. */
+static int box_reference(int n, const double *M, const double *q, const double *l, double *z, double *A, int *J)
+{
+    static double qs[NMAX], zz[NMAX];
+    static int free_[NMAX], md[NMAX];
+    for (int i = 0; i < n; i++) z[i] = 0.0;
+    for (int sweep = 0; sweep < 5000; sweep++) {
+        double dz = 0.0, zs = 0.0;
+        for (int i = 0; i < n; i++) {
+            double r = -q[i] + M[i * n + i] * z[i];
+            for (int j = 0; j < n; j++) r -= M[i * n + j] * z[j];
+            const double v = (r > l[i]) ? (r - l[i]) / M[i * n + i] : (r < -l[i]) ? (r + l[i]) / M[i * n + i] : 0.0;
+            dz = fmax(dz, fabs(v - z[i]));
+            zs = fmax(zs, fabs(v));
+            z[i] = v;
+        }
+        if (dz <= 1e-13 * zs) break;
+    }
+    for (int i = 0; i < n; i++) md[i] = (z[i] > 0.0) - (z[i] < 0.0);
+    for (int round = 0; round < 4 * n + 8; round++) {
+        for (int i = 0; i < n; i++) {
+            free_[i] = md[i] != 0 || !(l[i] > 0.0);
+            qs[i] = q[i] + ((l[i] > 0.0) ? md[i] * l[i] : 0.0); /* M_FF z_F = -q_F - mode l */
+        }
+        if (!solve_basis(n, M, qs, free_, zz, A, J)) return 0;
+        int flip = -1;
+        for (int i = 0; i < n && flip < 0; i++) {
+            double w = q[i];
+            for (int j = 0; j < n; j++) w += M[i * n + j] * zz[j];
+            if (!(l[i] > 0.0)) continue;
+            if (md[i] != 0 && md[i] * zz[i] < 0.0) flip = i;
+            else if (md[i] == 0 && fabs(w) > l[i] * (1.0 + 1e-12)) flip = i;
+        }
+        if (flip < 0) {
+            memcpy(z, zz, (size_t)n * sizeof(double));
+            return 1;
+        }
+        if (md[flip] != 0) md[flip] = 0;
+        else {
+            double w = q[flip];
+            for (int j = 0; j < n; j++) w += M[flip * n + j] * zz[j];
+            md[flip] = (w > 0.0) ? -1 : 1;
+        }
+    }
+    return 0;
+}
+
+typedef struct {
+    double residual, vs_reference, vs_tridiagonal;
+    long cases, tri_cases;
+    int pivots_max, nmax;
+} box_stats;
+
+static void test_box_dense(checks *T, box_stats *bs)
+{
+    static double M[64 * 64], q[64], l[64], z[64], w[64], zr[64], work[64 * 64 + 128], A[64 * 65], d[64], e[64],
+        z2[64], w2[64], work2[128];
+    static int mode[64], mode2[64], J[64];
+    rng r = {4242};
+    static const int sizes[] = {1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 16, 24, 32, 48, 64};
+    for (size_t si = 0; si < sizeof sizes / sizeof sizes[0]; si++) {
+        const int n = sizes[si];
+        CHECK(lcp_box_dense_work((size_t)n) == (size_t)(n * n + 2 * n));
+        for (int rep = 0; rep < (n <= 16 ? 6 : 2); rep++) {
+            check_context(T, "dense box LCP n = %d rep %d", n, rep);
+            random_P(&r, n, SPD, M);
+            if (rep == 5) { /* stiff: masses on springs of k up to 1e7 coupling every neighbour, far from
+                             * diagonal dominance, plus the random part */
+                const double k = rng_decades(&r, 3.0, 7.0);
+                for (int i = 0; i < n; i++) {
+                    M[i * n + i] += 2.0 * k;
+                    if (i + 1 < n) {
+                        M[i * n + i + 1] -= k;
+                        M[(i + 1) * n + i] -= k;
+                    }
+                }
+            }
+            for (int i = 0; i < n; i++) {
+                q[i] = rng_range(&r, -2.0, 2.0);
+                l[i] = (rep % 3 == 2 && i % 4 == 0) ? 0.0 : rng_range(&r, 0.0, 1.0); /* some rows free (l = 0) */
+                mode[i] = rep % 2 ? rng_int(&r, 3) - 1 : 0;                            /* a guess, or none */
+            }
+            int piv = -1;
+            if (!CHECK_INT(LCP_OK, lcp_box_dense((size_t)n, M, q, l, mode, z, w, work, &piv))) continue;
+            bs->cases++;
+            bs->pivots_max = piv > bs->pivots_max ? piv : bs->pivots_max;
+            bs->nmax = n > bs->nmax ? n : bs->nmax;
+            bs->residual = fmax(bs->residual, box_conditions(T, n, M, q, l, mode, z, w, 1e-12));
+            if (CHECK(box_reference(n, M, q, l, zr, A, J))) {
+                const double rel = rel_diff(n, z, zr);
+                CHECK_RANGE(0.0, 1e-10, rel);
+                bs->vs_reference = fmax(bs->vs_reference, rel);
+            }
+            /* warm: from the solution's own modes, no pivot */
+            memcpy(mode2, mode, sizeof mode2);
+            if (CHECK_INT(LCP_OK, lcp_box_dense((size_t)n, M, q, l, mode2, z2, w2, work, &piv))) CHECK_INT(0, piv);
+        }
+        /* a tridiagonal M posed densely: lcp_box's answer */
+        check_context(T, "dense box LCP = lcp_box on a tridiagonal M, n = %d", n);
+        for (int rep = 0; rep < 4; rep++) {
+            for (int i = 0; i < n; i++) e[i] = -rng_range(&r, 0.0, 1.0);
+            for (int i = 0; i < n * n; i++) M[i] = 0.0;
+            for (int i = 0; i < n; i++) {
+                d[i] = (i > 0 ? -e[i - 1] : 0.0) + (i + 1 < n ? -e[i] : 0.0) + rng_range(&r, 0.1, 1.0);
+                M[i * n + i] = d[i];
+                if (i + 1 < n) M[i * n + i + 1] = M[(i + 1) * n + i] = e[i];
+                q[i] = rng_range(&r, -2.0, 2.0);
+                l[i] = rng_range(&r, 0.0, 1.0);
+                mode[i] = mode2[i] = 0;
+            }
+            if (CHECK_INT(LCP_OK, lcp_box_dense((size_t)n, M, q, l, mode, z, w, work, NULL)) &&
+                CHECK_INT(LCP_OK, lcp_box((size_t)n, d, e, q, l, mode2, z2, w2, work2, NULL))) {
+                for (int i = 0; i < n; i++) CHECK_INT(mode2[i], mode[i]);
+                const double rel = rel_diff(n, z, z2);
+                CHECK_RANGE(0.0, 1e-12, rel);
+                bs->vs_tridiagonal = fmax(bs->vs_tridiagonal, rel);
+                bs->tri_cases++;
+            }
+        }
+    }
+    /* degenerate: q = 0 (z = 0, every row held, no pivot); q on a box's edge (w = l with z = 0) */
+    check_context(T, "dense box LCP degenerate");
+    const int n = 5;
+    random_P(&r, n, SPD, M);
+    for (int i = 0; i < n; i++) { q[i] = 0.0; l[i] = 0.5; mode[i] = 0; }
+    int piv = -1;
+    if (CHECK_INT(LCP_OK, lcp_box_dense(n, M, q, l, mode, z, w, work, &piv))) {
+        CHECK_INT(0, piv);
+        for (int i = 0; i < n; i++) CHECK(z[i] == 0.0 && w[i] == 0.0 && mode[i] == 0);
+    }
+    for (int i = 0; i < n; i++) { q[i] = (i % 2) ? 0.5 : -0.5; mode[i] = 1; } /* on the edges: z = 0 */
+    if (CHECK_INT(LCP_OK, lcp_box_dense(n, M, q, l, mode, z, w, work, &piv))) {
+        box_conditions(T, n, M, q, l, mode, z, w, 1e-14);
+        for (int i = 0; i < n; i++) CHECK(fabs(z[i]) <= 1e-15);
+    }
+    /* bad input: not positive definite (a free block with a pivot <= 0), NaN, l < 0 */
+    check_context(T, "dense box LCP bad input");
+    const double Mneg[4] = {1.0, 2.0, 2.0, 1.0}, qq[2] = {-5.0, -5.0}, ll[2] = {0.1, 0.1};
+    int md[2] = {1, 1};
+    CHECK_INT(LCP_BAD_INPUT, lcp_box_dense(2, Mneg, qq, ll, md, z, w, work, &piv));
+    const double Mnan[4] = {1.0, NAN, NAN, 1.0}, lneg[2] = {0.1, -1.0};
+    CHECK_INT(LCP_BAD_INPUT, lcp_box_dense(2, Mnan, qq, ll, md, z, w, work, &piv));
+    CHECK_INT(LCP_BAD_INPUT, lcp_box_dense(2, M, qq, lneg, md, z, w, work, &piv));
+    T->context = NULL;
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}}, *T = &C;
@@ -444,6 +629,11 @@ int main(void)
     lcp_workspace_free(ws, &al);
     CHECK_INT(0, c.live);
     test_workspace(T);
+    box_stats bs = {0};
+    test_box_dense(T, &bs);
+    printf("dense box LCP: %ld problems, n = 1 ... %d, max pivots %d, max relative residual %.2e, max relative "
+           "difference to the reference %.2e; %ld tridiagonal problems as lcp_box's to %.2e\n",
+           bs.cases, bs.nmax, bs.pivots_max, bs.residual, bs.vs_reference, bs.tri_cases, bs.vs_tridiagonal);
     printf("random P-matrices: %ld problems, n = 1 ... %d, max pivots %d, max relative residual %.2e, max relative "
            "difference to the reference %.2e, warm start from the solution's basis: %ld with 0 pivots (max "
            "difference %.2e), stack entry points bit for bit: %ld\n",
