@@ -1,5 +1,5 @@
-/* Unit tests of the exact scheme (fmu_src/models/oscillator/exact.[ch]), driven directly (no FMI). The file includes
- * exact.c to reach its closed-form phase (phase_init, eval) for the checks that need the motion
+/* Unit tests of the exact scheme (fmu_src/models/oscillator/exact.h), driven directly (no FMI). The file includes
+ * exact_spring.c to reach its closed-form phase (phase_init, eval) for the checks that need the motion
  * inside a phase.
  *
  * 1. the closed forms: the uniform and the steady-state forms agree where both hold; frictionless

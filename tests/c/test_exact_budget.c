@@ -1,4 +1,4 @@
-/* The exact scheme's work bound with a spring (exact.c): the file includes exact.c with a small event
+/* The exact scheme's work bound with a spring (exact_spring.c): the file includes it with a small event
  * budget, DFO_EXACT_MAX_EVENTS = 20000, so that a runaway communication step is reached in
  * milliseconds. A frictionless oscillator reverses twice per natural period: a communication step of
  * 10^5 periods fails with DFO_ERR_EVENTS at a finite state; the same motion in 20 steps succeeds and

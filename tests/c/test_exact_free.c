@@ -1,7 +1,7 @@
 /* Unit tests of the exact scheme without a spring (fmu_src/models/oscillator/exact_free.[ch]) and of the exact
  * schemes' work bound, driven directly (no FMI). The file includes exact_free.c (to reach its closed
  * form) with a small event budget, DFO_EXACT_MAX_EVENTS = 20000, so that a runaway communication
- * step is reached in milliseconds; tests/c/test_exact_budget.c does the same for exact.c (k > 0).
+ * step is reached in milliseconds; tests/c/test_exact_budget.c does the same for exact_spring.c (k > 0).
  *
  * 1. the closed form: the Taylor series and the phi1 form agree where they meet (|p tau| = 1), the
  *    limits c -> 0 and omega tau -> 0 are continuous, the equation of motion holds (central

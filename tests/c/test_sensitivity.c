@@ -1,4 +1,4 @@
-/* Unit tests of the exact scheme's sensitivity (exact.h: dfo_sens_*, the Jacobian s->J propagated by
+/* Unit tests of the exact scheme's sensitivity (exact_sens.h: dfo_sens_*, the Jacobian s->J propagated by
  * dfo_exact_advance when p.sensitivity is set), driven directly (no FMI):
  * 1. the slide's state-transition matrix against exp(A t) by an independent route (Taylor series
  *    with scaling and squaring in long double), under-, critically and over-damped, k = 0;

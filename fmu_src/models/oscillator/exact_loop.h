@@ -57,8 +57,8 @@ static DFO_EXACT_INLINE dfo_status dfo_exact_event_loop(void *w, const dfo_exact
 
 /* The rule at a stop of a slide in direction sd: the rest rule of friction.h with the static force Fs
  * and the loads L there; without friction (fric 0) never stuck: at a zero force the velocity, falling
- * through 0, reverses. null: the slide could not start (the search met no motion at its start): with
- * friction the block stays at rest, and a breakaway right now is passed over (*skip set). */
+ * through 0, reverses. null: the slide could not start (a slide from rest that never left the rounding
+ * band): with friction the block stays at rest, and a breakaway right now is passed over (*skip set). */
 static inline int dfo_exact_stop_mode(const dfo_loads *L, double Fs, int sd, int null, int fric, int *skip)
 {
     int next = dfo_rest_mode(L, Fs);
