@@ -1,6 +1,6 @@
 """The FMI 2.0 oscillator and the rules of the standard. Static: fmpy's validation and the FMU
 Manipulation Toolbox find it compliant, the archive's layout, only fmi2 functions exported, a wrong
-GUID refused, the log categories honoured. Misuse, through fmpy's FMU2Slave (and its raw ctypes
+GUID refused, the log categories honoured (the static checks also over the TwoMass FMU). Misuse, through fmpy's FMU2Slave (and its raw ctypes
 functions where fmpy hides the call): every case returns fmi2Error (or fmi2Discard) with a logged
 sentence that names the variable / value / range, and the process and the instance keep working;
 steps that must not hang.
@@ -217,15 +217,25 @@ def test_tiny_internal_step_does_not_hang() -> None:
 
 # --------------------------------------- static checks, the archive, exports, GUID, log categories
 
-@pytest.mark.min_versions
-def test_fmpy_validate_finds_no_problem(fmu_path: Path) -> None:
-    assert validate_fmu(str(fmu_path)) == []
+@pytest.fixture(params=["oscillator", "two_mass"])
+def any_fmu_path(request: pytest.FixtureRequest) -> Path:
+    """The FMI 2.0 FMUs the standard's static checks run over: the oscillator's and the TwoMass
+    model's (a folder on the friction engine; test_two_mass_fmu.py)."""
+    if request.param == "oscillator":
+        return request.getfixturevalue("fmu_path")
+    from test_two_mass_fmu import FMU2
+    return FMU2
 
 
 @pytest.mark.min_versions
-def test_fmutool_check_reports_compliant(fmu_path: Path) -> None:
+def test_fmpy_validate_finds_no_problem(any_fmu_path: Path) -> None:
+    assert validate_fmu(str(any_fmu_path)) == []
+
+
+@pytest.mark.min_versions
+def test_fmutool_check_reports_compliant(any_fmu_path: Path) -> None:
     exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
-    r = subprocess.run([exe, "-input", str(fmu_path), "-check"], capture_output=True, text=True, timeout=120)
+    r = subprocess.run([exe, "-input", str(any_fmu_path), "-check"], capture_output=True, text=True, timeout=120)
     out = r.stdout + r.stderr
     assert r.returncode == 0, out
     assert "compliant with FMI-2.0" in out, out
@@ -233,11 +243,11 @@ def test_fmutool_check_reports_compliant(fmu_path: Path) -> None:
     assert "ERROR" not in out, out
 
 
-def test_archive_layout(fmu_path: Path) -> None:
-    names = set(zipfile.ZipFile(fmu_path).namelist())
+def test_archive_layout(any_fmu_path: Path) -> None:
+    names = set(zipfile.ZipFile(any_fmu_path).namelist())
+    md = read_model_description(str(any_fmu_path))
     assert "modelDescription.xml" in names
-    assert "binaries/linux64/DryFrictionOscillator.so" in names
-    md = read_model_description(str(fmu_path))
+    assert f"binaries/linux64/{md.coSimulation.modelIdentifier}.so" in names
     sources = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
     assert sources
     for src in sources:
@@ -246,10 +256,11 @@ def test_archive_layout(fmu_path: Path) -> None:
     assert md.coSimulation.canHandleVariableCommunicationStepSize
 
 
-def test_only_fmi2_functions_are_exported(fmu_path: Path, tmp_path: Path) -> None:
-    with zipfile.ZipFile(fmu_path) as z:
+def test_only_fmi2_functions_are_exported(any_fmu_path: Path, tmp_path: Path) -> None:
+    ident = read_model_description(str(any_fmu_path)).coSimulation.modelIdentifier
+    with zipfile.ZipFile(any_fmu_path) as z:
         so = tmp_path / "dfo.so"
-        so.write_bytes(z.read("binaries/linux64/DryFrictionOscillator.so"))
+        so.write_bytes(z.read(f"binaries/linux64/{ident}.so"))
     out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
     symbols = {line.split()[-1] for line in out.splitlines() if line.split()[1:2] == ["T"]}
     assert symbols, out

@@ -1,6 +1,7 @@
 """The FMI 3.0 oscillator and the rules of the standard: fmpy and fmu-manipulation-toolbox find it
 valid, its capabilities, the archive (binaries/x86_64-linux, buildable sources), every fmi3 function
-exported, fmi3UpdateDiscreteStates' report and phase rules, fmi3EnterEventMode only with event mode.
+exported, fmi3UpdateDiscreteStates' report and phase rules, fmi3EnterEventMode only with event mode
+(the static checks also over the TwoMass FMU).
 (Its model description against the FMI 2.0 one: test_model_description.py; events:
 test_fmi3_events.py; the C hosts: tests/fmi3_c.)"""
 
@@ -22,14 +23,24 @@ from dryfriction.fmi3 import FMI3Oscillator
 from fmi3_helpers import DT, FMU3
 
 
+def _fmu3_of(model: str) -> Path:
+    """The FMI 3.0 FMU of a model: the oscillator's, or the TwoMass model's (test_two_mass_fmu.py)."""
+    if model == "oscillator":
+        return FMU3
+    from test_two_mass_fmu import FMU3 as TWO_MASS_FMU3
+    return TWO_MASS_FMU3
+
+
 @pytest.mark.min_versions
-def test_fmpy_validate_finds_no_problem() -> None:
-    assert validate_fmu(str(FMU3)) == []
+@pytest.mark.parametrize("model", ["oscillator", "two_mass"])
+def test_fmpy_validate_finds_no_problem(model: str) -> None:
+    assert validate_fmu(str(_fmu3_of(model))) == []
 
 
-def test_fmutool_check_reports_compliant() -> None:
+@pytest.mark.parametrize("model", ["oscillator", "two_mass"])
+def test_fmutool_check_reports_compliant(model: str) -> None:
     exe = shutil.which("fmutool") or str(Path(sys.executable).with_name("fmutool"))
-    r = subprocess.run([exe, "-input", str(FMU3), "-check"], capture_output=True, text=True, timeout=120)
+    r = subprocess.run([exe, "-input", str(_fmu3_of(model)), "-check"], capture_output=True, text=True, timeout=120)
     out = r.stdout + r.stderr
     assert r.returncode == 0, out
     assert "compliant with FMI-3.0" in out, out
@@ -49,21 +60,25 @@ def test_capabilities(md3) -> None:
     assert md3.coSimulation.modelIdentifier == "DryFrictionOscillator"
 
 
-def test_archive_layout_and_build_description() -> None:
-    names = set(zipfile.ZipFile(FMU3).namelist())
-    assert "binaries/x86_64-linux/DryFrictionOscillator.so" in names
-    md = read_model_description(str(FMU3))
+@pytest.mark.parametrize("model", ["oscillator", "two_mass"])
+def test_archive_layout_and_build_description(model: str) -> None:
+    fmu3 = _fmu3_of(model)
+    names = set(zipfile.ZipFile(fmu3).namelist())
+    md = read_model_description(str(fmu3))
+    assert f"binaries/x86_64-linux/{md.coSimulation.modelIdentifier}.so" in names
     sources = md.buildConfigurations[0].sourceFileSets[0].sourceFiles
     assert "fmi3_cs.c" in sources and "fmi2_cs.c" not in sources
     for src in sources:
         assert f"sources/{src}" in names
 
 
-def test_every_fmi3_function_exported() -> None:
+@pytest.mark.parametrize("model", ["oscillator", "two_mass"])
+def test_every_fmi3_function_exported(model: str) -> None:
     header = Path(__import__("fmpy").__file__).parent / "c-code" / "fmi3FunctionTypes.h"
     import re
     wanted = set(re.findall(r"\b(fmi3\w+)TYPE\b", header.read_text()))
-    so = FMU3.parent / "lib" / "DryFrictionOscillator.so"
+    fmu3 = _fmu3_of(model)
+    so = fmu3.parent / "lib" / f"{read_model_description(str(fmu3)).coSimulation.modelIdentifier}.so"
     out = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in out.splitlines() if line.strip()}
     assert wanted, "no function types found in fmi3FunctionTypes.h"

@@ -5,8 +5,9 @@ set(MODEL_DESCRIPTION ${CMAKE_CURRENT_LIST_DIR}/modelDescription.xml)
 set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the engine and the numerics it uses included)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
-    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h numerics/roots.c
-    numerics/roots.h engine/engine.c engine/engine.h models/two_mass/two_mass.c models/two_mass/two_mass.h)
+    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
+    numerics/roots.c numerics/roots.h engine/engine.c engine/engine.h
+    models/two_mass/two_mass.c models/two_mass/two_mass.h)
 # the instance core (core/instance.h's model API)
 set(MODEL_CORE models/two_mass/tm_instance.c)
 # FMI 2.0: the description as written (no structural parameters), no build configuration header

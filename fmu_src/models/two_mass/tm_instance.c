@@ -102,56 +102,29 @@ static const char *build_model(tm_instance *in, char *buf, size_t len)
     return NULL;
 }
 
+/* The fields of tm_snap, which are eng_state's: scalars, and arrays of 2 (one per DOF or contact). */
+#define SNAP_SCALARS(DO) DO(t0) DO(t) DO(n_grid) DO(t_switch) DO(steps) DO(solves) DO(pivot_steps) DO(switches) \
+    DO(exc_n) DO(exc_c) DO(exc_s)
+#define SNAP_ARRAYS(DO) DO(X) DO(V) DO(A) DO(hA) DO(F) DO(t_stick) DO(t_break) DO(mode) DO(break_dir)
+
 static void snap_of(const eng_state *s, tm_snap *d)
 {
-    d->t0 = s->t0;
-    d->t = s->t;
-    d->n_grid = s->n_grid;
-    for (int i = 0; i < 2; i++) {
-        d->X[i] = s->X[i];
-        d->V[i] = s->V[i];
-        d->A[i] = s->A[i];
-        d->hA[i] = s->hA[i];
-        d->F[i] = s->F[i];
-        d->t_stick[i] = s->t_stick[i];
-        d->t_break[i] = s->t_break[i];
-        d->mode[i] = s->mode[i];
-        d->break_dir[i] = s->break_dir[i];
-    }
-    d->t_switch = s->t_switch;
-    d->steps = s->steps;
-    d->solves = s->solves;
-    d->pivot_steps = s->pivot_steps;
-    d->switches = s->switches;
-    d->exc_n = s->exc_n;
-    d->exc_c = s->exc_c;
-    d->exc_s = s->exc_s;
+#define TO_SNAP(f) d->f = s->f;
+#define TO_SNAP_2(f) d->f[0] = s->f[0]; d->f[1] = s->f[1];
+    SNAP_SCALARS(TO_SNAP)
+    SNAP_ARRAYS(TO_SNAP_2)
+#undef TO_SNAP
+#undef TO_SNAP_2
 }
 
 static void state_of(const tm_snap *d, eng_state *s)
 {
-    s->t0 = d->t0;
-    s->t = d->t;
-    s->n_grid = d->n_grid;
-    for (int i = 0; i < 2; i++) {
-        s->X[i] = d->X[i];
-        s->V[i] = d->V[i];
-        s->A[i] = d->A[i];
-        s->hA[i] = d->hA[i];
-        s->F[i] = d->F[i];
-        s->t_stick[i] = d->t_stick[i];
-        s->t_break[i] = d->t_break[i];
-        s->mode[i] = d->mode[i];
-        s->break_dir[i] = d->break_dir[i];
-    }
-    s->t_switch = d->t_switch;
-    s->steps = d->steps;
-    s->solves = d->solves;
-    s->pivot_steps = d->pivot_steps;
-    s->switches = d->switches;
-    s->exc_n = d->exc_n;
-    s->exc_c = d->exc_c;
-    s->exc_s = d->exc_s;
+#define TO_STATE(f) s->f = d->f;
+#define TO_STATE_2(f) s->f[0] = d->f[0]; s->f[1] = d->f[1];
+    SNAP_SCALARS(TO_STATE)
+    SNAP_ARRAYS(TO_STATE_2)
+#undef TO_STATE
+#undef TO_STATE_2
 }
 
 /* ---- the variable table ---------------------------------------------------------------------- */
@@ -240,17 +213,13 @@ dfo_inst_status dfo_inst_exit_config(dfo_lifecycle *lc, const char *fn) { return
 dfo_inst_status dfo_inst_get_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                     unsigned long long value[])
 {
-    (void)vr;
-    (void)n;
-    (void)value;
+    (void)vr, (void)n, (void)value;
     return NO_STRUCTURAL(lc, fn);
 }
 dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                     const unsigned long long value[])
 {
-    (void)vr;
-    (void)n;
-    (void)value;
+    (void)vr, (void)n, (void)value;
     return NO_STRUCTURAL(lc, fn);
 }
 
@@ -612,43 +581,34 @@ int dfo_inst_max_output_order(void) { return 0; }
 dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
                                                const int order[], const double value[])
 {
-    (void)vr;
-    (void)nvr;
-    (void)order;
-    (void)value;
+    (void)vr, (void)nvr, (void)order, (void)value;
     return NO_DERIVATIVES(lc, fn, "input derivatives");
 }
 
 dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
                                                 size_t nvr, const int order[], double value[])
 {
-    (void)vr;
-    (void)nvr;
-    (void)order;
-    (void)value;
+    (void)vr, (void)nvr, (void)order, (void)value;
     return NO_DERIVATIVES(lc, fn, "output derivatives");
+}
+
+/* Directional and adjoint derivatives alike: none. */
+static dfo_inst_status no_partials(dfo_lifecycle *lc, const char *fn, const char *what, const unsigned int unknown[],
+                                   size_t nu, const unsigned int known[], size_t nk, const double seed[],
+                                   double sensitivity[])
+{
+    (void)unknown, (void)nu, (void)known, (void)nk, (void)seed, (void)sensitivity;
+    return NO_DERIVATIVES(lc, fn, what);
 }
 
 dfo_inst_status dfo_inst_directional(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
                                      const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
 {
-    (void)unknown;
-    (void)nu;
-    (void)known;
-    (void)nk;
-    (void)seed;
-    (void)sensitivity;
-    return NO_DERIVATIVES(lc, fn, "directional derivatives");
+    return no_partials(lc, fn, "directional derivatives", unknown, nu, known, nk, seed, sensitivity);
 }
 
 dfo_inst_status dfo_inst_adjoint(dfo_lifecycle *lc, const char *fn, const unsigned int unknown[], size_t nu,
                                  const unsigned int known[], size_t nk, const double seed[], double sensitivity[])
 {
-    (void)unknown;
-    (void)nu;
-    (void)known;
-    (void)nk;
-    (void)seed;
-    (void)sensitivity;
-    return NO_DERIVATIVES(lc, fn, "adjoint derivatives");
+    return no_partials(lc, fn, "adjoint derivatives", unknown, nu, known, nk, seed, sensitivity);
 }
