@@ -72,12 +72,6 @@ typedef struct {
     dfo_status err;  /* first error met */
     dfo_switch_fn on_switch;
     void *switch_ctx;
-    /* the observables' stuck time: the stuck stretch (consecutive stuck phases) open since stuck_from,
-     * added to t_stuck in one piece, clipped to the observation window, when a phase in another mode
-     * ends or the call returns (so that a stretch costs the same whether its steps are taken one by
-     * one or at once) */
-    int stuck_open;
-    double stuck_from;
     int observe;     /* the observables are on */
     int after_w0;    /* the call began at or after the window's start, with a sample taken */
 } step_ctx;
@@ -279,14 +273,21 @@ static HOT_INLINE phase_start begin_phase(const dfo_state *s)
     return b;
 }
 
-/* The stuck stretch open since C->stuck_from ends at t: its part inside the observation window is
- * stuck time (comparisons, not fmin/fmax: those are library calls without -ffinite-math-only). */
-static HOT_INLINE void close_stuck(step_ctx *C, dfo_state *s, double t)
+/* The part of [a, b] inside the observation window (comparisons, not fmin/fmax: those are library
+ * calls without -ffinite-math-only). */
+static HOT_INLINE double in_window(const dfo_model *M, double a, double b)
 {
-    const double w0 = C->M->p.t_obs_start, w1 = C->M->p.t_obs_stop;
-    const double lo = (C->stuck_from > w0) ? C->stuck_from : w0, hi = (t < w1) ? t : w1;
-    if (hi > lo) s->t_stuck += hi - lo;
-    C->stuck_open = 0;
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    const double lo = (a > w0) ? a : w0, hi = (b < w1) ? b : w1;
+    return (hi > lo) ? hi - lo : 0.0;
+}
+
+/* The stuck stretch open since s->stuck_from ends at t: its part inside the window is stuck time. */
+static HOT_INLINE void close_stuck(const dfo_model *M, dfo_state *s, double t)
+{
+    const double d = in_window(M, s->stuck_from, t);
+    if (d > 0.0) s->t_stuck += d;
+    s->stuck_from = NAN;
 }
 
 /* Book-keeping after a phase [b->ta, s->t] spent in mode_during with friction force F: the stick
@@ -308,12 +309,9 @@ static HOT_INLINE void end_phase_on(step_ctx *C, dfo_state *s, const phase_start
     }
     if (!C->observe) return;
     if (mode_during == 0) {
-        if (!C->stuck_open) {
-            C->stuck_open = 1;
-            C->stuck_from = ta;
-        }
-    } else if (C->stuck_open) {
-        close_stuck(C, s, ta);
+        if (isnan(s->stuck_from)) s->stuck_from = ta;
+    } else if (!isnan(s->stuck_from)) {
+        close_stuck(M, s, ta);
     }
     /* the energy dissipated: the friction's work on the relative motion, where the phase ends after
      * the window opens (a phase of length 0 has none: dX = 0, and E_friction, +0 at the start, is
@@ -822,8 +820,6 @@ static void make_ctx(step_ctx *C, const dfo_model *M, const dfo_inputs *in)
     C->skip_stuck =
         C->friction && M->fast && C->rules->skips_stuck_steps && resolves(M, M->p.h) && !C->ramp && !C->belt;
     C->err = DFO_OK;
-    C->stuck_open = 0;
-    C->stuck_from = 0.0;
     C->observe = M->p.observe;
     C->after_w0 = 0;
     C->t_grid = NAN;
@@ -850,6 +846,7 @@ void dfo_start(const dfo_model *M, const dfo_inputs *in, double t0, dfo_state *s
     dfo_forget_caches(s);
     s->stick_C = s->stick_Fb = s->stick_tb = NAN;
     s->stick_dir = 0;
+    s->stuck_from = NAN;
     s->t_switch = -INFINITY;
     if (s->V == C.vb && C.friction) {
         restart_from_rest(&C, s);
@@ -936,10 +933,7 @@ static void stuck_skip(step_ctx *C, dfo_state *s, double t)
 {
     const dfo_model *M = C->M;
     if (!C->observe) return;
-    if (!C->stuck_open) {
-        C->stuck_open = 1;
-        C->stuck_from = s->t;
-    }
+    if (isnan(s->stuck_from)) s->stuck_from = s->t;
     if (t < M->p.t_obs_start || s->t > M->p.t_obs_stop || t > M->p.t_obs_stop) return;
     if (!s->observed) { s->x_max = s->x_min = s->X; s->observed = 1; }
     s->x_max = (s->X > s->x_max) ? s->X : s->x_max;
@@ -1004,7 +998,6 @@ static dfo_status advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s
     C.after_w0 = C.observe && s->observed && s->t >= M->p.t_obs_start;
     /* from here on the call is exactly the one for the grid point t_target snapped to, if any */
     const dfo_status st = take_steps(&C, s, dfo_snap_target(M, s, t_target));
-    if (C.stuck_open) close_stuck(&C, s, s->t); /* the stuck time up to where the call stopped */
     if (st != DFO_OK) return st;
     if (!state_finite(s)) return DFO_ERR_NONFINITE;
     /* a stuck block at rest: the friction holds the static force, evaluated here, at the
@@ -1081,6 +1074,7 @@ static void new_belt(const dfo_model *M, const dfo_inputs *in, dfo_state *s)
     if (s->mode != b.mode0) {
         s->t_switch = s->t;
         if (M->p.observe && s->t > M->p.t_obs_start && s->t <= M->p.t_obs_stop) s->transitions++;
+        if (s->mode != 0 && !isnan(s->stuck_from)) close_stuck(M, s, s->t);
     }
 }
 
@@ -1153,8 +1147,13 @@ double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
     return j / Mm->p.m;
 }
 
+double dfo_stuck_time(const dfo_model *M, const dfo_state *s)
+{
+    return isnan(s->stuck_from) ? s->t_stuck : s->t_stuck + in_window(M, s->stuck_from, s->t);
+}
+
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)
 {
     const double span = fmin(s->t, M->p.t_obs_stop) - M->p.t_obs_start;
-    return span > 0.0 ? s->t_stuck / span : 0.0;
+    return span > 0.0 ? dfo_stuck_time(M, s) / span : 0.0;
 }

@@ -83,4 +83,8 @@ double dfo_jerk(const dfo_model *M, const dfo_inputs *in, const dfo_state *s);
 /* Share of the observed time spent stuck (0 before the window opens). */
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s);
 
+/* The stuck time observed so far: t_stuck and the part of the open stuck stretch (stuck_from) inside
+ * the window. */
+double dfo_stuck_time(const dfo_model *M, const dfo_state *s);
+
 #endif

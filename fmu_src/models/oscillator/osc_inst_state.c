@@ -115,6 +115,8 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
     if (!isfinite(s->t) || !isfinite(s->t0) || !isfinite(s->X) || !isfinite(s->V) || !isfinite(s->A) ||
         !isfinite(s->F) || !isfinite(s->hA) || s->n < 0 || isnan(s->t_switch))
         return "the state is not finite";
+    if (!isnan(s->stuck_from) && !(s->stuck_from >= s->t0 && s->stuck_from <= s->t))
+        return "the stuck stretch does not lie in the run";
     if (s->mode < -1 || s->mode > 1) return "the mode is invalid";
     return dfo_grid_implausible(r, s->t0, (long long)s->n, dfo_step_size(&v->p), s->t);
 }

@@ -30,6 +30,11 @@ typedef struct {
     double x_max, x_min, t_stuck, E_friction;
     long long transitions;
     int observed;  /* a sample has been taken */
+    /* the Bossak schemes' stuck stretch (consecutive stuck phases) open since stuck_from (NaN: none):
+     * its part inside the window is added to t_stuck in one piece when a phase in another mode ends
+     * (dfo_stuck_time reads the open part in), so that the stuck time is the same whether the steps
+     * are taken one by one or at once, and however the run is split into calls */
+    double stuck_from;
     /* the stick phase's next breakaway: time and side, computed at its first step for the constant
      * part of the static force stick_C = F_ext - k X and the limit stick_Fb (NaN: to be computed) */
     double stick_C, stick_Fb, stick_tb;
