@@ -3,7 +3,7 @@ block tied to the ground frame, the Burridge-Knopoff model's springs) through th
 located scheme second order against the event-driven reference (dryfriction.chain_reference) and,
 at n = 1, belt_reference, with belts changed at a communication point; a Burridge-Knopoff chain of
 64; bits (a site spring = a wall spring, belts at 0 = none); the step rule; the errors; FMI 3.0 =
-FMI 2.0. And the reference itself with belts and the Stribeck law: n = 1 against belt_reference,
+FMI 2.0; the belts of a restored FMU state (the Stribeck jerk). And the reference itself with belts and the Stribeck law: n = 1 against belt_reference,
 the closed-form limit cycle, energy balances. Numbers in docs/chain.md ("Site springs and
 dampers; belts")."""
 
@@ -404,3 +404,30 @@ def test_one_block_chain_is_the_oscillator_on_a_belt(case: str, fmu_path: Path) 
             assert np.array_equal(np.array(ch[name], dtype=float), osc[name]), (fmi, name)
     modes = np.array(ch["mode"])
     assert np.count_nonzero(np.diff(modes)) >= 4 and (modes == 0).any() and (modes != 0).any()
+
+
+def test_stribeck_jerk_on_belts_survives_a_state_restore() -> None:
+    """A Stribeck chain on belts: the second derivative of v (fmi3GetOutputDerivatives, the jerk,
+    which reads N mu'(|v - v_belt|)) after restoring an FMU state, in memory or deserialised, is the
+    one read when the state was taken, bit for bit: a restore rebuilds the physics, and the belts
+    the state is on come with the state, not with the model."""
+    ch = Chain.make(3, omega=0.6, k=[1.0, 0.8, 1.2], N=[0.5, 0.4, 0.6], chi=[0.7, 0.6, 0.5], P0=[1.2, 0.0, 0.6])
+    params = {**ch.fmu_params(), "h": ch.period / 400, "friction_law": "stribeck", "v_s": [0.5, 0.5, 0.5]}
+    vb = [0.2, -0.1, 0.3]
+    with ChainFMU3(n=3) as fmu:
+        v_vr = fmu.vars["v"].vr
+        fmu.start(params=params, inputs={"v_belt": vb})
+        fmu.step_to(2.7)
+        out = fmu.outputs()
+        sliding = (out["mode"] != 0) & (out["v"] != np.array(vb))
+        assert np.any(sliding), out  # a block slides relative to its belt: its jerk reads the belt
+        jerk0 = fmu.inst.get_output_derivatives([v_vr], 2, 3)
+        state = fmu.inst.get_state()
+        data = fmu.inst.serialize_state(state)
+        fmu.step_to(5.0)
+        fmu.inst.set_state(state)
+        jerk1 = fmu.inst.get_output_derivatives([v_vr], 2, 3)
+        fmu.inst.set_state(fmu.inst.deserialize_state(data))
+        jerk2 = fmu.inst.get_output_derivatives([v_vr], 2, 3)
+    assert jerk1.tobytes() == jerk0.tobytes(), (jerk0, jerk1)
+    assert jerk2.tobytes() == jerk0.tobytes(), (jerk0, jerk2)

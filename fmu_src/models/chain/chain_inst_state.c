@@ -193,6 +193,7 @@ static void read_body(dfo_cursor *c, dfo_run *run, chain_values *v)
     v->ud_set = dfo_get_i32(c);
     v->sw_t = dfo_get_f64(c);
     v->sw_block = (long long)dfo_get_u64(c);
+    v->belts_unsynced = 0; /* a state between steps: on the belts of ua_used */
     chain_state *s = &v->s;
     s->n = n;
     s->t0 = dfo_get_f64(c);
