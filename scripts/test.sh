@@ -79,6 +79,9 @@ asan_pytest() {
   DFO_CHAIN_DERIV="$PWD/build-asan/tests/c/test_chain_deriv" \
   DFO_CHAIN_DERIV_N1="$PWD/build-asan/tests/c/chain_deriv_n1" \
   DFO_POLY_DRIVER="$PWD/build-asan/tests/c/test_exact_poly" \
+  DFO_TWO_MASS_DRIVER="$PWD/build-asan/tests/c/two_mass_driver" \
+  DFO_TWO_MASS_FMU="$PWD/build-asan/TwoMass.fmu" \
+  DFO_TWO_MASS_FMU3="$PWD/build-asan/fmi3/TwoMass.fmu" \
   LD_PRELOAD="$asan $ubsan" \
   ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
