@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from dryfriction.cli import main
-from dryfriction.studies import main as studies_main
+from dryfriction.cli.study import main as studies_main
 
 from helpers import _not_zip, _zip_without_md
 

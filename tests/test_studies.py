@@ -29,7 +29,8 @@ import xarray as xr
 
 from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-from dryfriction.studies import main, run_study
+from dryfriction.cli.study import main
+from dryfriction.studies import run_study
 from dryfriction.sweep import BatchRunner, PARAM_COLUMNS, SweepInterrupted, nondim_table, read_netcdf
 
 
@@ -261,7 +262,7 @@ def test_killed_sweep_restarts_from_its_chunks(tmp_path: Path, fmu_path: Path, f
 KILLED_AFTER_3_CHUNKS = """
 import os, signal, sys
 import dryfriction.sweep.engine as engine
-from dryfriction.studies import main
+from dryfriction.cli.study import main
 save, saved = engine.save_chunk, []
 def save_then_die(path, arr):
     save(path, arr)

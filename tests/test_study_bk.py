@@ -14,7 +14,8 @@ import pytest
 
 from dryfriction.references.belt import limit_cycle
 from dryfriction.analysis.slip_events import EventDetector, detect_events, slip_cells
-from dryfriction.studies import effective_config, main, run_study
+from dryfriction.cli.study import main
+from dryfriction.studies import effective_config, run_study
 from dryfriction.studies import burridge_knopoff as bk
 from dryfriction.studies.config import ConfigError
 from dryfriction.sweep import read_netcdf

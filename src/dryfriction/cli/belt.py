@@ -21,13 +21,14 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ..errors import UsageError
-from .options import count, number, path_arg
+from .options import UsageError, count, number, path_arg
+from .output import finite
 
-__all__ = ["add_belt_parser", "belt_main", "belt_json"]
+__all__ = ["add_parser", "run", "work", "belt_json"]
 
 
-def add_belt_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
+    """Add the ``belt`` command to the main parser's subparsers ``sub``."""
     b = sub.add_parser("belt", parents=parents, help="self-excited stick-slip on a belt (no excitation)",
                        description="The self-excited motion of the block on a belt at a constant speed: the "
                                    "periodic orbit (period T an unknown, Newton shooting on a section where it "
@@ -58,12 +59,20 @@ def add_belt_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argpars
     b.add_argument("--out", type=path_arg("--out"), default=None, help="folder of the PNG (default results/belt)")
     b.add_argument("--no-plot", action="store_true", help="no PNG")
     b.add_argument("--json", action="store_true", help="print one JSON object")
-    return b
+
+
+def work(args: argparse.Namespace) -> tuple[float, str]:
+    """The transient, the orbit's search and its cycle: about three times ``--periods``."""
+    from ..budget import EXACT_PERIOD_STEPS, fmt
+
+    spp = EXACT_PERIOD_STEPS if args.scheme == "exact" else float(args.steps_per_period)
+    periods = float(args.periods) * 3.0
+    return periods * spp, f"about {fmt(periods)} periods x {fmt(spp)} steps"
 
 
 def _problem(args: argparse.Namespace) -> Any:
-    from ..params import Oscillator
     from ..analysis.self_excited import BeltProblem
+    from ..params import Oscillator
 
     if args.c is not None and args.zeta is not None:
         raise UsageError("give the damping as --c or --zeta, not both")
@@ -86,12 +95,8 @@ def _problem(args: argparse.Namespace) -> Any:
         raise UsageError(str(e).replace("Oscillator: ", "")) from None
 
 
-def _num(v: float) -> float | None:
-    return float(v) if math.isfinite(v) else None
-
-
 def _cplx(m: complex) -> list[float | None]:
-    return [_num(m.real), _num(m.imag)]
+    return [finite(m.real), finite(m.imag)]
 
 
 def belt_json(res: Any) -> dict[str, Any]:
@@ -102,9 +107,9 @@ def belt_json(res: Any) -> dict[str, Any]:
         "scheme": pr.scheme, "h": pr.step, "x_eq": eq.x_eq,
         "equilibrium": {"x_eq": eq.x_eq, "stable": eq.stable, "multipliers": [_cplx(m) for m in eq.multipliers],
                         "neutral": eq.neutral, "slowest_multiplier": eq.mu_max, "tau": eq.tau,
-                        "growth_rate": _num(eq.growth_rate),
+                        "growth_rate": finite(eq.growth_rate),
                         "jacobian": eq.jacobian},
-        "hopf_formula": _num(res.hopf_formula),
+        "hopf_formula": finite(res.hopf_formula),
         "orbit": None,
         "units": {"period": "s", "amplitude": "m", "offset": "m", "x_eq": "m", "v_belt": "m/s", "tau": "s",
                   "growth_rate": "1/s", "stick_fraction": "1", "h": "s", "hopf_formula": "m/s"},
@@ -114,7 +119,7 @@ def belt_json(res: Any) -> dict[str, Any]:
     if o is not None:
         out["orbit"] = {"period": o.period, "amplitude": o.amplitude, "offset": o.offset, "x_max": o.x_max,
                         "x_min": o.x_min, "stick_fraction": o.stick_fraction, "stable": o.stable,
-                        "multipliers": [_cplx(m) for m in o.multipliers], "v0": o.v0, "residual": _num(o.residual),
+                        "multipliers": [_cplx(m) for m in o.multipliers], "v0": o.v0, "residual": finite(o.residual),
                         "converged": o.converged, "reason": o.reason or None, "iterations": o.iterations,
                         "transitions": o.transitions, "jacobian": o.jacobian}
     moving = res.motion in ("stick-slip", "slip orbit")
@@ -134,8 +139,8 @@ def plot_belt(res: Any, fmu: Any, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..atomic import atomic_path
     from ..analysis.self_excited import transient
+    from ..atomic import atomic_path
 
     pr, o = res.problem, res.orbit
     if o is not None and o.converged:
@@ -168,17 +173,17 @@ def plot_belt(res: Any, fmu: Any, path: Path) -> Path:
     return path
 
 
-def belt_main(args: argparse.Namespace) -> int:
-    from ..drivers.oscillator import OscillatorFMU2
+def run(args: argparse.Namespace) -> int:
+    """Run ``dryfriction belt``; the exit status."""
     from ..analysis.self_excited import self_excited
-
+    from ..drivers.oscillator import OscillatorFMU2
     from .console import check_output_folder, result_set
 
     prob = _problem(args)
     out = None
     if not args.no_plot and (args.out is not None or not args.json):
         out = check_output_folder(args.out or Path("results/belt"))
-    with OscillatorFMU2(getattr(args, "fmu", None)) as fmu:
+    with OscillatorFMU2(args.fmu) as fmu:
         res = self_excited(prob, fmu=fmu, periods=args.periods)
         files: list[Path] = []
         if out is not None:

@@ -14,15 +14,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from .options import UsageError, count, number, path_arg
 
-from ..errors import UsageError
-from .options import count, number, path_arg
-
-__all__ = ["add_chain_parser", "chain_main", "parse_sets", "write_csv", "plot_run"]
+__all__ = ["add_parser", "run", "work", "parse_sets", "write_csv", "plot_run"]
 
 
-def add_chain_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
+    """Add the ``chain`` command to the main parser's subparsers ``sub``."""
     c = sub.add_parser("chain", parents=parents, help="run the chain of n blocks (DryFrictionChain.fmu)",
                        description="Run the chain of n blocks with dry friction once (FMI 3.0: n set in "
                                    "Configuration Mode) and write its trajectory as NetCDF/CSV and a PNG. "
@@ -38,7 +36,26 @@ def add_chain_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argpar
                    help="output folder (default results/chain)")
     c.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
     c.add_argument("--no-plot", action="store_true", help="no PNG")
-    return c
+
+
+def work(args: argparse.Namespace) -> tuple[float, str]:
+    """Blocks x communication steps x internal steps per communication step (``--set h=``; 100
+    when the step is not given)."""
+    from ..budget import fmt
+
+    n = int(args.n or 2)
+    t_end, dt = float(args.t_end), float(args.dt)
+    h = None
+    for item in args.sets:
+        name, _, text = str(item).partition("=")
+        if name.strip() == "h":
+            try:
+                h = float(text)
+            except ValueError:
+                h = None
+    per_dt = max(dt / h, 1.0) if h and h > 0 else 100.0
+    steps = t_end / dt * per_dt * n
+    return steps, f"{n} blocks x {fmt(t_end / dt)} communication steps x {fmt(per_dt)} internal steps"
 
 
 def parse_sets(sets: list[str]) -> dict[str, Any]:
@@ -61,6 +78,7 @@ def parse_sets(sets: list[str]) -> dict[str, Any]:
 
 
 def write_csv(run: Any, path: Path) -> Path:
+    """The chain's trajectory as CSV: t, then each output of every block."""
     from ..atomic import atomic_write_text
     from ..drivers.chain import OUTPUTS
 
@@ -77,7 +95,9 @@ def write_csv(run: Any, path: Path) -> Path:
 
 
 def plot_run(run: Any, path: Path) -> Path:
+    """The space-time image of the modes and the positions of a few blocks, as a PNG."""
     import matplotlib
+    import numpy as np
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -109,9 +129,11 @@ def plot_run(run: Any, path: Path) -> Path:
     return path
 
 
-def chain_main(args: argparse.Namespace) -> int:
-    from ..drivers.chain import ChainFMU2, ChainFMU3
+def run(args: argparse.Namespace) -> int:
+    """Run ``dryfriction chain``; the exit status."""
+    import numpy as np
 
+    from ..drivers.chain import ChainFMU2, ChainFMU3
     from .console import check_output_folder, result_set
 
     params = parse_sets(args.sets)
@@ -122,26 +144,26 @@ def chain_main(args: argparse.Namespace) -> int:
         else:
             fmu = ChainFMU2(params, fmu_path=args.fmu, n=args.n)
         with fmu:
-            run = fmu.run(args.t_end, args.dt)
+            result = fmu.run(args.t_end, args.dt)
     except ValueError as e:
         raise UsageError(str(e)) from None
     files = []
     with result_set(out) as stage:
         if args.format in ("csv", "both"):
-            files.append(write_csv(run, stage / "chain.csv"))
+            files.append(write_csv(result, stage / "chain.csv"))
         if args.format in ("netcdf", "both"):
             from ..sweep.datasets import write_netcdf
 
-            files.append(write_netcdf(run.to_dataset(), stage / "chain.nc"))
+            files.append(write_netcdf(result.to_dataset(), stage / "chain.nc"))
         if not args.no_plot:
-            files.append(plot_run(run, stage / "chain.png"))
+            files.append(plot_run(result, stage / "chain.png"))
     files = [out / f.relative_to(stage) for f in files]
-    share = run.stick_share()
-    print(f"chain of {run.n} blocks (FMI {args.fmi}), {run.t.size} points to t = {run.t[-1]:g} s")
-    shown = ", ".join(f"{s:.3f}" for s in share[:16]) + (" ..." if run.n > 16 else "")
+    share = result.stick_share()
+    print(f"chain of {result.n} blocks (FMI {args.fmi}), {result.t.size} points to t = {result.t[-1]:g} s")
+    shown = ", ".join(f"{s:.3f}" for s in share[:16]) + (" ..." if result.n > 16 else "")
     print(f"share of time stuck per block: {shown}")
-    print(f"largest |x| per block (m): " + ", ".join(f"{v:.4g}" for v in np.max(np.abs(run.x), axis=0)[:16])
-          + (" ..." if run.n > 16 else ""))
+    print("largest |x| per block (m): " + ", ".join(f"{v:.4g}" for v in np.max(np.abs(result.x), axis=0)[:16])
+          + (" ..." if result.n > 16 else ""))
     for f in files:
         print(f"wrote {f}")
     return 0

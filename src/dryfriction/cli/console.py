@@ -1,7 +1,7 @@
 """The command line as a process: interrupts, result sets written all or nothing, and the output
 paths checked before any work.
 
-    dryfriction ...                         # the console script: main() below, then dryfriction.cli
+    dryfriction ...                         # the console script: main() below, then the command
 
 **Interrupts.** While a command runs (:func:`guarded`), the first SIGINT (Ctrl-C) or SIGTERM stops
 it: the library code unwinds (a result set being staged is removed, Dask is closed) with every
@@ -13,6 +13,9 @@ caller). Once a command's results are complete and being committed (:func:`resul
 :func:`result_file`), a signal no longer stops it: the files are moved into place and the command
 ends as it would have, exit status 0. Outside :func:`guarded` nothing here changes how a signal
 is handled (the library API is interrupted as usual).
+
+**FMU warnings.** While a command runs (:func:`fmu_warnings_on_stderr`), every warning an FMU logs
+is one line on stderr, ``dryfriction: warning: ...`` (``--strict``: an error).
 
 **Result sets.** ``with result_set(folder) as stage:`` writes a command's files into a staging
 folder beside ``folder`` and moves them into it as one step (:func:`dryfriction.atomic.staged_outputs`);
@@ -38,7 +41,8 @@ from pathlib import Path
 from typing import IO, Any, NoReturn
 
 __all__ = ["main", "guarded", "result_set", "result_file", "check_output_folder", "check_output_file", "OutputError",
-           "committed", "interrupted", "interrupt_note", "EXIT_INTERRUPTED", "EXIT_FAILED", "EXIT_USAGE", "PREFIX"]
+           "committed", "interrupted", "interrupt_note", "fmu_warnings_on_stderr", "MAX_WARNING_LINES",
+           "EXIT_INTERRUPTED", "EXIT_FAILED", "EXIT_USAGE", "PREFIX"]
 
 PREFIX = "dryfriction"
 EXIT_FAILED = 1
@@ -166,9 +170,8 @@ def guarded(command: Callable[[], int]) -> int:
     ``dryfriction: error: ...`` (exit 2: bad input, an unusable FMU, an error the FMU reports;
     exit 1: the system refused, e.g. a full disk, or the Dask workers were lost too often) instead
     of a traceback."""
-    from ..errors import UsageError
     from ..diagnostics import DryFrictionWarning
-    from ..errors import FMUError
+    from ..errors import FMUError, UsageError
 
     st = _STATE
     if st.active:                            # already guarded (a command inside a command)
@@ -234,6 +237,48 @@ def _short(text: str, limit: int = 240) -> str:
     """``text`` whole up to ``limit`` characters (every ordinary path), else its two ends and its
     length (a name too long to be one, shown readably)."""
     return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 3:]} ({len(text)} characters)"
+
+
+# ---- FMU warnings ------------------------------------------------------------------------------
+
+#: distinct FMU warnings printed in full by one command; the rest are counted in one line at its end
+MAX_WARNING_LINES = 5
+
+
+@contextmanager
+def fmu_warnings_on_stderr(prog: str, strict: bool) -> Iterator[None]:
+    """While the block runs, an FMU warning (:class:`~dryfriction.diagnostics.DryFrictionWarning`)
+    is one line on stderr, ``<prog>: warning: <the FMU's sentence>`` (each sentence once; past
+    :data:`MAX_WARNING_LINES` of them, one line at the end counts the others); ``strict``: raised
+    instead."""
+    import warnings
+
+    from ..diagnostics import DryFrictionWarning
+
+    more = 0
+    with warnings.catch_warnings():
+        shown = warnings.showwarning
+        printed = 0
+
+        def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                 file: Any = None, line: str | None = None) -> None:
+            nonlocal printed, more
+            if not issubclass(category, DryFrictionWarning):
+                shown(message, category, filename, lineno, file, line)
+            elif printed < MAX_WARNING_LINES:
+                printed += 1
+                print(f"{prog}: warning: {message}", file=sys.stderr, flush=True)
+            else:
+                more += 1
+
+        warnings.showwarning = show
+        warnings.simplefilter("error" if strict else "default", DryFrictionWarning)
+        try:
+            yield
+        finally:
+            if more:
+                print(f"{prog}: warning: {more} more FMU warning{'s' if more > 1 else ''} like these "
+                      "(--strict stops at the first)", file=sys.stderr, flush=True)
 
 
 # ---- result sets -------------------------------------------------------------------------------
@@ -467,11 +512,11 @@ class _StderrGate:
         signal.set_wakeup_fd(self._old_wakeup)
 
 
-def main() -> NoReturn:
+def main(command: Callable[[list[str]], int] | None = None) -> NoReturn:
     """The console script ``dryfriction`` (and ``python -m dryfriction``): the signal handlers first,
-    then the command line (:func:`dryfriction.cli.main`); exits with its status. After an interrupt
-    the process ends without running the libraries' exit handlers (every file is in place or
-    removed by then, the one line printed)."""
+    then ``command(sys.argv[1:])`` (default: the command line, :func:`dryfriction.cli.main`); exits
+    with its status. After an interrupt the process ends without running the libraries' exit
+    handlers (every file is in place or removed by then, the one line printed)."""
     st = _STATE
     st.console = True
     with _handlers(restore=False):
@@ -482,9 +527,9 @@ def main() -> NoReturn:
             if os.name == "posix":  # (pipes in select, a pipe as the wakeup fd)
                 with signals_held():   # no signal half-way (and none ever handled by the pump thread)
                     gate = st.gate = _StderrGate()
-            from .main import main as cli_main
-
-            code = cli_main(sys.argv[1:])
+            if command is None:
+                from . import main as command   # the dispatcher (dryfriction.cli.main)
+            code = command(sys.argv[1:])
         except KeyboardInterrupt:            # during the imports, before the command is guarded
             if not st.signum:
                 st.signum = int(signal.SIGINT)

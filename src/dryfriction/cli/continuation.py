@@ -18,33 +18,31 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from .options import (UsageError, count, nondim_given, nondim_options, number, one_form, path_arg, physical,
+                      physical_given, physical_options)
+from .output import json_safe
 
-from ..errors import UsageError
-from .options import count, number, path_arg
+__all__ = ["add_parser", "run", "work", "PARAMETERS"]
 
-__all__ = ["add_continuation_parsers", "continuation_main"]
-
+#: the parameters a branch is continued in, as :data:`dryfriction.analysis.continuation.PARAMETERS`
+#: has them (read here without loading it, for the help)
+PARAMETERS = ("m", "k", "c", "P0", "omega", "phi", "N", "mu_s", "chi", "f", "lam", "zeta", "mu_k", "mu_s_sigma",
+              "sigma")
 LABELS = {"fold": "F", "period_doubling": "PD", "symmetry_breaking": "SB", "grazing": "G"}
 MARKERS = {"fold": "s", "period_doubling": "D", "symmetry_breaking": "o", "grazing": "^"}
+#: the non-dimensional parameters of ``bifurcation`` (the scatter's form)
 NONDIM = ("lam", "mu_s_sigma", "chi", "zeta")
 
 
 def _oscillator_options(c: argparse.ArgumentParser) -> None:
-    from .main import _physical_options
-
-    nd = c.add_argument_group("non-dimensional form (the paper's; default lam 0.5, mu_s sigma 0.6, chi 0.7)")
-    nd.add_argument("--lam", type=number("--lam", 0.0, True), default=None, help="frequency ratio omega/w0")
-    nd.add_argument("--mu-s-sigma", type=number("--mu-s-sigma", 0.0), default=None, help="mu_s N / P0")
-    nd.add_argument("--chi", type=number("--chi", 0.0), default=None, help="mu_k / mu_s")
+    nondim_options(c, "non-dimensional form (the paper's; default lam 0.5, mu_s sigma 0.6, chi 0.7)")
     c.add_argument("--zeta", type=number("--zeta", 0.0), default=None, help="damping ratio (both forms)")
     c.add_argument("--phi", type=number("--phi"), default=0.0, help="excitation phase, rad (default 0)")
-    _physical_options(c.add_argument_group("physical units (SI; any of these selects them)"), required=False)
+    physical_options(c.add_argument_group("physical units (SI; any of these selects them)"), required=False)
 
 
 def _common(c: argparse.ArgumentParser, default_out: str) -> None:
@@ -60,10 +58,8 @@ def _common(c: argparse.ArgumentParser, default_out: str) -> None:
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def add_continuation_parsers(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
-    """Add the ``continuation`` and ``bifurcation`` subcommands to the main parser's subparsers."""
-    from ..analysis.continuation import PARAMETERS
-
+def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
+    """Add the ``continuation`` and ``bifurcation`` commands to the main parser's subparsers ``sub``."""
     c = sub.add_parser("continuation", parents=parents,
                        help="continue periodic orbits in a parameter: branches, stability, bifurcations",
                        description="Pseudo-arclength continuation of the periodic orbits of the exact stroboscopic "
@@ -98,20 +94,29 @@ def add_continuation_parsers(sub: Any, parents: list[argparse.ArgumentParser]) -
     _common(b, "results/bifurcation")
 
 
+def work(args: argparse.Namespace) -> tuple[float, str]:
+    """``continuation``: points x branches (:func:`dryfriction.budget.continuation_work`);
+    ``bifurcation``: the scatter's runs too."""
+    from ..budget import continuation_work, fmt
+
+    if args.command == "continuation":
+        return continuation_work(int(args.max_points), int(args.max_branches), int(args.period))
+    values = int(args.values or (16 if args.quick else 80))
+    ics = int(args.ics or (5 if args.quick else 11)) ** 2
+    runs = values * ics
+    periods = int(args.periods) + 1
+    return runs * periods * 1000.0, f"{fmt(runs)} runs x {periods} periods x 1,000 steps"
+
+
 def _oscillator(args: argparse.Namespace) -> Any:
-    from .main import PHYSICAL, _physical
     from ..params import Oscillator
 
-    physical = any(getattr(args, n, None) not in (None, 0.0) for n in PHYSICAL if n not in ("x0", "v0")) or \
-        args.x0 != 0.0 or args.v0 != 0.0
-    nondim = {n: getattr(args, n) for n in ("lam", "mu_s_sigma", "chi") if getattr(args, n) is not None}
-    if physical:
-        if nondim:
-            raise UsageError(f"give physical units or the non-dimensional form, not both "
-                             f"(--{next(iter(nondim)).replace('_', '-')})")
+    nondim = nondim_given(args)
+    if physical_given(args):
+        one_form(nondim)
         if args.param in ("f", "omega", "lam") and args.f is None and args.omega is None:
             args.omega = 1.0              # replaced by --from
-        p = _physical(args)
+        p = physical(args)
         return p.with_(phi=args.phi)
     return Oscillator.from_nondimensional(lam=nondim.get("lam", 0.5), mu_s_sigma=nondim.get("mu_s_sigma", 0.6),
                                           chi=nondim.get("chi", 0.7), zeta=args.zeta or 0.0, phi=args.phi)
@@ -137,11 +142,11 @@ class _Progress:
 
 def _continue(args: argparse.Namespace, p: Any) -> Any:
     from ..analysis.continuation import continue_orbits
-    from ..drivers.oscillator import OscillatorFMU
+    from ..drivers.oscillator import OscillatorFMU2
 
     prog = _Progress(not args.no_progress and sys.stderr.isatty())
     try:
-        with OscillatorFMU(args.fmu) as fmu:
+        with OscillatorFMU2(args.fmu) as fmu:
             return continue_orbits(p, args.param, args.start, args.stop, period=args.period, ds=args.ds,
                                    ds_min=min(1e-6, args.ds), ds_max=max(args.ds_max, args.ds),
                                    max_points=args.max_points, max_branches=args.max_branches,
@@ -152,20 +157,8 @@ def _continue(args: argparse.Namespace, p: Any) -> Any:
         prog.close()
 
 
-def _clean(x: Any) -> Any:
-    """JSON-safe: NaN and inf as null."""
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    if isinstance(x, np.generic):
-        return _clean(x.item())
-    return x
-
-
 def branches_json(c: Any) -> list[dict[str, Any]]:
+    """Every branch of a continuation with its points, as the ``--json`` object lists them."""
     ds = c.dataset
     out = []
     for b in c.branches:
@@ -182,6 +175,7 @@ def branches_json(c: Any) -> list[dict[str, Any]]:
 
 
 def write_csv(c: Any, path: Path) -> None:
+    """The continuation's points as CSV, one row each."""
     ds = c.dataset
     v = {n: ds[n].values for n in ds.data_vars}
     cols = ["branch", "period", "kind", "param", "converged", "stable", "x0", "v0", "amplitude_m", "offset_m",
@@ -204,6 +198,8 @@ def write_csv(c: Any, path: Path) -> None:
 def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
     """Amplitude (upper axes) and offset (lower) of every branch, stable solid, unstable dashed,
     bifurcations marked and labelled; lengths times ``scale``."""
+    import numpy as np
+
     ds = c.dataset
     for b in c.branches:
         s = ds.where((ds.branch == b.id) & ds.converged, drop=True)
@@ -265,11 +261,12 @@ def _describe(p: Any, name: str, start: float) -> str:
     return f"continuation in {name}; {fixed}"
 
 
-def continuation_main(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
+    """Run ``dryfriction continuation`` or ``dryfriction bifurcation``; the exit status."""
     from .console import check_output_folder, result_set
 
     if args.command == "bifurcation":
-        return bifurcation_main(args)
+        return _bifurcation(args)
     if args.start == args.stop:
         raise UsageError(f"--from and --to must differ (both {args.start:g})")
     p = _oscillator(args)
@@ -288,7 +285,7 @@ def continuation_main(args: argparse.Namespace) -> int:
         files = {kind: str(out / f"continuation.{ext}") for kind, ext in (("netcdf", "nc"), ("csv", "csv"),
                                                                           ("png", "png"))}
     if args.json:
-        print(json.dumps(_clean({"param": args.param, "branches": branches_json(c),
+        print(json.dumps(json_safe({"param": args.param, "branches": branches_json(c),
                                  "bifurcations": [b.as_dict() for b in c.bifurcations], "files": files})))
         return 0
     for b in c.branches:
@@ -305,13 +302,15 @@ def continuation_main(args: argparse.Namespace) -> int:
     return 0
 
 
-def bifurcation_main(args: argparse.Namespace) -> int:
+def _bifurcation(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from .. import paths
-    from .console import check_output_folder, result_set
-    from ..studies.common import M_REF, K_REF, MU_S_REF, P0_REF, sweep_settings, table
+    from ..params import Oscillator
+    from ..studies.common import K_REF, M_REF, MU_S_REF, P0_REF, sweep_settings, table
     from ..sweep.datasets import observables_dataset
     from ..sweep.runner import run_batch
-    from ..params import Oscillator
+    from .console import check_output_folder, result_set
 
     start = 1.0 if args.start is None else args.start
     stop = 0.2 if args.stop is None else args.stop

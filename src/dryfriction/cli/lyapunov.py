@@ -7,33 +7,30 @@
 The FMU's ``exact`` scheme is the default (``--scheme located`` etc. select the Bossak schemes,
 ``--exact`` the Python exact solution); the output names the scheme.
 
-The main parser only adds the subcommand (:func:`add_lyapunov_parser`) and calls
-:func:`lyapunov_main`; bad values end with one readable line and exit status 2 through the main
-parser's error handling.
+Bad values end with one readable line and exit status 2 through the main parser's error handling.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from typing import Any
 
-from ..errors import UsageError
-from .options import count, number
-from ..drivers.oscillator import SCHEMES
-from ..analysis.chaos.attractors import period_of
-from ..analysis.chaos.lyapunov import benettin
-from ..analysis.chaos.maps import DEFAULT_SCHEME, ExactMap, FMUMap, NDParams, step_free
+from .options import UsageError, count, number, schemes
 
-__all__ = ["add_lyapunov_parser", "lyapunov_main"]
+__all__ = ["add_parser", "run", "work", "DEFAULT_SCHEME"]
+
+#: the FMU's scheme of the command, as :data:`dryfriction.analysis.chaos.maps.DEFAULT_SCHEME` (read
+#: here without loading it, for the help)
+DEFAULT_SCHEME = "exact"
 
 
-def add_lyapunov_parser(sub: Any, parents: list[argparse.ArgumentParser] | None = None) -> argparse.ArgumentParser:
-    """Add the ``lyapunov`` subcommand to the subparsers ``sub`` of the main parser (``parents``: the
-    options every subcommand accepts)."""
-    p = sub.add_parser("lyapunov", parents=parents or [], help="largest Lyapunov exponent of one motion (Benettin, two trajectories)",
+def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
+    """Add the ``lyapunov`` command to the main parser's subparsers ``sub`` (``parents``: the
+    options every command accepts)."""
+    names, _ = schemes()
+    p = sub.add_parser("lyapunov", parents=parents, help="largest Lyapunov exponent of one motion (Benettin, two trajectories)",
                        description="Largest Lyapunov exponent of the stroboscopic map, per excitation period and "
                                    "per second, with a convergence estimate.")
     p.add_argument("--lam", type=number("--lam", 0.0, True), required=True, help="frequency ratio omega / w0")
@@ -48,18 +45,29 @@ def add_lyapunov_parser(sub: Any, parents: list[argparse.ArgumentParser] | None 
     p.add_argument("--renorm", type=count("--renorm", 1), default=1, help="periods between renormalisations (1)")
     p.add_argument("--steps-per-period", type=count("--steps-per-period", 10), default=1000,
                    help="FMU internal steps per period, h = T / N (default 1000; no effect on the exact scheme)")
-    p.add_argument("--scheme", choices=list(SCHEMES), default=DEFAULT_SCHEME,
+    p.add_argument("--scheme", choices=names, default=DEFAULT_SCHEME,
                    help=f"FMU scheme (default {DEFAULT_SCHEME}: closed form between events)")
     p.add_argument("--exact", action="store_true",
                    help="use the Python exact piecewise solution (dryfriction.references.exact, an independent reference) "
                         "instead of the FMU")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    return p
 
 
-def lyapunov_main(args: argparse.Namespace) -> int:
-    """Run the ``lyapunov`` subcommand; returns the exit status."""
-    from ..drivers.oscillator import OscillatorFMU
+def work(args: argparse.Namespace) -> tuple[float, str]:
+    """Two trajectories (the motion and its neighbour) over the transient and the measured periods."""
+    from ..budget import EXACT_PERIOD_STEPS, fmt
+
+    spp = EXACT_PERIOD_STEPS if args.exact or args.scheme == "exact" else float(args.steps_per_period)
+    periods = 2.0 * (int(args.periods) + int(args.transient))
+    return periods * spp, f"2 runs x {fmt(periods / 2)} periods x {fmt(spp)} steps"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``dryfriction lyapunov``; the exit status."""
+    from ..analysis.chaos.attractors import period_of
+    from ..analysis.chaos.lyapunov import benettin
+    from ..analysis.chaos.maps import ExactMap, FMUMap, NDParams, step_free
+    from ..drivers.oscillator import OscillatorFMU2
 
     if args.renorm > args.periods:
         raise UsageError(f"--renorm ({args.renorm}) must not exceed --periods ({args.periods})")
@@ -69,7 +77,7 @@ def lyapunov_main(args: argparse.Namespace) -> int:
         if args.exact:
             m: Any = ExactMap(nd)
         else:
-            fmu = OscillatorFMU(getattr(args, "fmu", None))
+            fmu = OscillatorFMU2(args.fmu)
             m = FMUMap(fmu, nd, args.steps_per_period, args.scheme)
         r = benettin(m, args.z0, args.dz0, periods=args.periods, transient=args.transient, d0=args.d0,
                      renorm=args.renorm)
@@ -94,8 +102,8 @@ def lyapunov_main(args: argparse.Namespace) -> int:
         "params": {"lam": nd.lam, "mu_s_sigma": nd.mu_s_sigma, "chi": nd.chi, "zeta": nd.zeta,
                    "z0": args.z0, "dz0": args.dz0},
         "method": r.method,
-        "map": "dryfriction.references.exact" if args.exact else "FMU",
-        "scheme": "exact (dryfriction.references.exact)" if args.exact else args.scheme,
+        "map": "dryfriction.exact" if args.exact else "FMU",
+        "scheme": "exact (dryfriction.exact)" if args.exact else args.scheme,
         "steps_per_period": None if args.exact or step_free(args.scheme) else args.steps_per_period,
     }
     if args.json:

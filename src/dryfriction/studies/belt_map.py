@@ -28,10 +28,11 @@ from ..params import Oscillator
 from ..analysis.self_excited import BeltProblem, LAWS, continue_orbits, find_orbit, self_excited, transient
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "belt_map"
-TITLE = "Self-excited stick-slip over belt speed x normal force, with the Hopf line"
-FIGURES = ("belt_map.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 
 #: ``motion`` codes of the dataset
 MOTIONS = {0: "steady sliding", 1: "stick-slip orbit", 2: "slip orbit", 3: "transient (the orbit solve failed)"}

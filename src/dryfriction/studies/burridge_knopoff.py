@@ -23,10 +23,11 @@ from ..drivers.chain import ARRAY_PARAMS, SCALAR_PARAMS, ChainFMU3, default_chai
 from ..analysis.slip_events import EventDetector, SlipEvents
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
+from . import REGISTRY
 
 NAME = "burridge_knopoff"
-TITLE = "Burridge-Knopoff fault model (Carlson-Langer): slip events, their moments, the power law"
-FIGURES = ("burridge_knopoff.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 
 #: the FMU this study runs (dryfriction.paths): the FMI 3.0 chain
 FMU_KIND = paths.CHAIN3

@@ -18,10 +18,11 @@ from ..drivers.chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt, trajectory_estimate
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "chain2"
-TITLE = "Chain of two blocks, the first forced: amplitude and stick share against frequency (friction on both / second)"
-FIGURES = ("chain2.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 CONFIGS = {"both": "friction on both blocks", "second": "friction on the second block only"}
 
 _CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))

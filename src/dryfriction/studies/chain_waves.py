@@ -19,10 +19,11 @@ from ..drivers.chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
+from . import REGISTRY
 
 NAME = "chain_waves"
-TITLE = "Stick-slip fronts along a chain of 256 blocks, the first forced: space-time image of the modes"
-FIGURES = ("chain_waves.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 
 _CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
 

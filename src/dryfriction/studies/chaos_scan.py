@@ -16,10 +16,11 @@ from ..analysis.chaos.maps import ExactMap, FMUMap, NDParams, scheme_label
 from ..budget import EXACT_PERIOD_STEPS
 from .common import Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "chaos_scan"
-TITLE = "Largest Lyapunov exponent and bifurcation diagram vs chi (Fig. 8/9 range); onset of chaos"
-FIGURES = ("chaos_bifurcation.png", "chaos_section.png")
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "chaos_scan.nc"
 
 

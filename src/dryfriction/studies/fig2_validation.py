@@ -16,10 +16,11 @@ from ..references.exact import solve_exact
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
                      oscillator, plt, trajectory_estimate)
 from .config import require
+from . import REGISTRY
 
 NAME = "fig2"
-TITLE = "FMU vs exact solution over the first cycle (z, z', z'')"
-FIGURES = ("fig2.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig2.nc"
 
 

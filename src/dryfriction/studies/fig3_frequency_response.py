@@ -17,10 +17,11 @@ from ..sweep import SweepSpec, observables_dataset
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, ensure,
                      oscillator, plt, sweep_estimate, sweep_settings, table)
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "fig3"
-TITLE = "Steady-state frequency response from rest vs Inman and Den Hartog"
-FIGURES = ("fig3.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig3.nc"
 
 

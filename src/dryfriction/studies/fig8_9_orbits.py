@@ -36,11 +36,12 @@ from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, co
     write_bifurcations
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt, sweep_estimate, sweep_settings, table
 from .config import require
+from . import REGISTRY
 
 NAME = "fig8_9_orbits"
 BASE_CONFIG = "fig8_9"
-TITLE = "Fig. 8/9 band: branches of periodic orbits in chi over the scatter, bifurcations vs brute force"
-FIGURES = ("fig8_9_orbits.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASETS = ("fig8_9.nc", "branches.nc")
 
 
