@@ -411,3 +411,36 @@ def test_fig3_sweep_without_an_excluded_band() -> None:
     cfg["sweep"]["exclude"] = [1.0]
     with pytest.raises(Exception, match=r"\[low, high\] or \[\]"):
         fig3.check(cfg)
+
+
+def test_the_registry_imports_a_study_only_when_it_runs() -> None:
+    """``import dryfriction.studies``, the names of the studies and ``dryfriction study --help``
+    import no study module (nor NumPy); asking for a study by name imports its module, whose NAME,
+    TITLE and FIGURES are the registry's."""
+    import json
+    import subprocess
+    import sys
+
+    code = """
+import json, sys
+from dryfriction.studies import REGISTRY, STUDIES, resolve
+names = list(STUDIES)
+before = sorted(m for m in sys.modules if m.startswith("dryfriction.studies.") or m.split(".")[0] == "numpy")
+fig4 = STUDIES["fig4"]
+after = sorted(m for m in sys.modules if m.startswith("dryfriction.studies."))
+print(json.dumps({"names": names, "before": before, "after": after, "fig4": fig4.__name__}))
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["before"] == []
+    assert res["fig4"] == "dryfriction.studies.fig4_steady_cycles" and res["fig4"] in res["after"]
+    assert "dryfriction.studies.fig8_9_bifurcation" not in res["after"]
+    from dryfriction.studies import REGISTRY, STUDIES
+
+    assert res["names"] == list(REGISTRY) and len(REGISTRY) == 17
+    for name, study in REGISTRY.items():
+        module = STUDIES[name]
+        assert module.__name__ == f"dryfriction.studies.{study.module}"
+        assert (module.NAME, module.TITLE, module.FIGURES) == (name, study.title, study.figures)
+        assert callable(module.run) and callable(module.work) and callable(module.check)

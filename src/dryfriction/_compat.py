@@ -69,8 +69,30 @@ NAMES: dict[tuple[str, str], tuple[str, str]] = {
        for n in ("OscillatorFMU3", "Run", "Switch", "Intermediate", "default_fmi3_path")},
     ("dryfriction.fmi.fmi3", "FMI3Oscillator"): ("dryfriction.drivers.oscillator3", "OscillatorFMU3"),
     ("dryfriction.fmi.fmi3", "FMUError"): ("dryfriction.errors", "FMUError"),
-    # the former module dryfriction.cli is the package's command-line module dryfriction.cli.main
-    ("dryfriction.cli", "*"): ("dryfriction.cli.main", "*"),
+    # the command line by concern: what the former dryfriction.cli, the *_cli modules,
+    # dryfriction.studies and dryfriction.budget had for the commands (dryfriction.cli.main and
+    # build_parser are where they were)
+    ("dryfriction.cli", "PHYSICAL"): ("dryfriction.cli.options", "PHYSICAL"),
+    ("dryfriction.cli", "RUN_UNITS"): ("dryfriction.cli.run", "RUN_UNITS"),
+    ("dryfriction.cli", "RUN_COUNTS"): ("dryfriction.cli.run", "RUN_COUNTS"),
+    ("dryfriction.cli", "fmu_warnings_on_stderr"): ("dryfriction.cli.console", "fmu_warnings_on_stderr"),
+    ("dryfriction.cli", "MAX_WARNING_LINES"): ("dryfriction.cli.console", "MAX_WARNING_LINES"),
+    ("dryfriction.cli.belt", "add_belt_parser"): ("dryfriction.cli.belt", "add_parser"),
+    ("dryfriction.cli.belt", "belt_main"): ("dryfriction.cli.belt", "run"),
+    ("dryfriction.cli.chain", "add_chain_parser"): ("dryfriction.cli.chain", "add_parser"),
+    ("dryfriction.cli.chain", "chain_main"): ("dryfriction.cli.chain", "run"),
+    ("dryfriction.cli.continuation", "add_continuation_parsers"): ("dryfriction.cli.continuation", "add_parser"),
+    ("dryfriction.cli.continuation", "continuation_main"): ("dryfriction.cli.continuation", "run"),
+    ("dryfriction.cli.lyapunov", "add_lyapunov_parser"): ("dryfriction.cli.lyapunov", "add_parser"),
+    ("dryfriction.cli.lyapunov", "lyapunov_main"): ("dryfriction.cli.lyapunov", "run"),
+    ("dryfriction.cli.orbit", "add_orbit_parser"): ("dryfriction.cli.orbit", "add_parser"),
+    ("dryfriction.cli.orbit", "orbit_main"): ("dryfriction.cli.orbit", "run"),
+    ("dryfriction.cli.orbit", "rest_line"): ("dryfriction.cli.output", "rest_line"),
+    ("dryfriction.studies", "main"): ("dryfriction.cli.study", "main"),
+    ("dryfriction.studies", "run_args"): ("dryfriction.cli.study", "run"),
+    ("dryfriction.studies", "add_arguments"): ("dryfriction.cli.study", "add_arguments"),
+    ("dryfriction.budget", "add_max_work_argument"): ("dryfriction.cli.options", "add_max_work_argument"),
+    ("dryfriction.budget", "command_work"): ("dryfriction.cli", "command_work"),
 }
 
 _HOMES = {module for module, _ in NAMES}
