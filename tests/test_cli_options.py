@@ -188,7 +188,8 @@ HEAVY = ("numpy", "scipy", "xarray", "matplotlib", "dask", "distributed", "fmpy"
 def test_version_and_help_import_nothing_heavy(argv: list[str]) -> None:
     """``dryfriction --version``, ``--help`` and a command's ``--help`` build every command's parser
     (the help is complete) from modules that import argparse and the package's light modules only:
-    no NumPy, SciPy, xarray, matplotlib, Dask or fmpy, no study, driver or analysis module."""
+    no NumPy, SciPy, xarray, matplotlib, Dask or fmpy, no study, driver or analysis module, no FMU
+    opened."""
     code = f"""
 import json, sys
 from dryfriction.cli import main
@@ -205,7 +206,8 @@ print(json.dumps(sorted(sys.modules)), file=sys.stderr)
     assert "usage: dryfriction" in r.stdout or r.stdout.startswith("dryfriction ")
     heavy = [m for m in modules if m.split(".")[0] in HEAVY]
     assert heavy == []
-    loaded = [m for m in modules if m.startswith(("dryfriction.drivers", "dryfriction.analysis", "dryfriction.fmi",
+    loaded = [m for m in modules if m.startswith(("dryfriction.model", "dryfriction.paths",   # no FMU opened
+                                                  "dryfriction.drivers", "dryfriction.analysis", "dryfriction.fmi",
                                                   "dryfriction.references", "dryfriction.sweep", "dryfriction.cosim",
                                                   "dryfriction.studies."))]
     assert loaded == []
@@ -260,4 +262,4 @@ def test_the_help_shows_the_librarys_defaults() -> None:
         (response.TOL, response.MIN_PERIODS, response.MAX_PERIODS)
     assert cli_continuation.PARAMETERS == tuple(continuation.PARAMETERS)
     assert cli_lyapunov.DEFAULT_SCHEME == maps.DEFAULT_SCHEME
-    assert options.schemes() == (list(SCHEMES), Settings().scheme)
+    assert (list(options.SCHEMES), options.DEFAULT_SCHEME) == (list(SCHEMES), Settings().scheme)

@@ -1,7 +1,8 @@
 """Work and memory bounded before a computation starts.
 
-Every command (and :func:`dryfriction.analysis.response.frequency_response`) estimates, from its arguments
-alone, the work it is about to do and the memory it will hold, and refuses with one line naming the
+Every command (its ``work(args)``, :func:`dryfriction.cli.command_work`) and
+:func:`dryfriction.analysis.response.frequency_response` estimate, from their arguments alone, the
+work they are about to do and the memory they will hold, and refuse with one line naming the
 option and the limit what would exceed the bound, unless the user raises it (``--max-work`` on the
 command line, ``max_work=`` in the API).
 

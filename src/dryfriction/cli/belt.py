@@ -16,13 +16,12 @@ object; a PNG of x(t) and the phase portrait (v against x, the belt's speed line
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 from typing import Any
 
 from .options import UsageError, count, number, path_arg
-from .output import finite
+from .output import finite, print_json
 
 __all__ = ["add_parser", "run", "work", "belt_json"]
 
@@ -193,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         doc = belt_json(res)
         doc["files"] = [str(f) for f in files]
-        print(json.dumps(doc))
+        print_json(doc)
         return 0
     o, eq = res.orbit, res.equilibrium
     print(f"belt {prob.v_belt:g} m/s, {prob.law} friction, scheme {prob.scheme} (h = {prob.step:.3g} s)")

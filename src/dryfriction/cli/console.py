@@ -107,9 +107,9 @@ def _silence() -> None:
 
 
 def _unsilence() -> None:
-    import logging
-
-    logging.disable(logging.NOTSET)
+    logging = sys.modules.get("logging")   # (not imported: nothing was silenced through it)
+    if logging is not None:
+        logging.disable(logging.NOTSET)
     if _STATE.stderr is not None:
         quiet, sys.stderr = sys.stderr, _STATE.stderr
         _STATE.stderr = None

@@ -17,14 +17,13 @@ exit status 2.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
 from .options import (UsageError, count, nondim_given, nondim_options, number, one_form, path_arg, physical,
                       physical_given, physical_options)
-from .output import json_safe
+from .output import json_safe, print_json
 
 __all__ = ["add_parser", "run", "work", "PARAMETERS"]
 
@@ -285,8 +284,8 @@ def run(args: argparse.Namespace) -> int:
         files = {kind: str(out / f"continuation.{ext}") for kind, ext in (("netcdf", "nc"), ("csv", "csv"),
                                                                           ("png", "png"))}
     if args.json:
-        print(json.dumps(json_safe({"param": args.param, "branches": branches_json(c),
-                                 "bifurcations": [b.as_dict() for b in c.bifurcations], "files": files})))
+        print_json(json_safe({"param": args.param, "branches": branches_json(c),
+                           "bifurcations": [b.as_dict() for b in c.bifurcations], "files": files}))
         return 0
     for b in c.branches:
         print(f"branch {b.id}: period {b.period}, {b.kind}, {b.points} points"

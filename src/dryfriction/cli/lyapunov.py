@@ -13,11 +13,11 @@ Bad values end with one readable line and exit status 2 through the main parser'
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import Any
 
-from .options import UsageError, count, number, schemes
+from .options import SCHEMES, UsageError, count, number
+from .output import print_json
 
 __all__ = ["add_parser", "run", "work", "DEFAULT_SCHEME"]
 
@@ -29,7 +29,6 @@ DEFAULT_SCHEME = "exact"
 def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     """Add the ``lyapunov`` command to the main parser's subparsers ``sub`` (``parents``: the
     options every command accepts)."""
-    names, _ = schemes()
     p = sub.add_parser("lyapunov", parents=parents, help="largest Lyapunov exponent of one motion (Benettin, two trajectories)",
                        description="Largest Lyapunov exponent of the stroboscopic map, per excitation period and "
                                    "per second, with a convergence estimate.")
@@ -45,7 +44,7 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     p.add_argument("--renorm", type=count("--renorm", 1), default=1, help="periods between renormalisations (1)")
     p.add_argument("--steps-per-period", type=count("--steps-per-period", 10), default=1000,
                    help="FMU internal steps per period, h = T / N (default 1000; no effect on the exact scheme)")
-    p.add_argument("--scheme", choices=names, default=DEFAULT_SCHEME,
+    p.add_argument("--scheme", choices=list(SCHEMES), default=DEFAULT_SCHEME,
                    help=f"FMU scheme (default {DEFAULT_SCHEME}: closed form between events)")
     p.add_argument("--exact", action="store_true",
                    help="use the Python exact piecewise solution (dryfriction.references.exact, an independent reference) "
@@ -107,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
         "steps_per_period": None if args.exact or step_free(args.scheme) else args.steps_per_period,
     }
     if args.json:
-        print(json.dumps(out))
+        print_json(out)
         return 0
     verdict = ("positive: chaotic" if r.lyapunov_per_period - 3 * r.stderr_per_period > 0
                else "negative: regular" if r.lyapunov_per_period + 3 * r.stderr_per_period < 0 else "not distinguishable from 0")

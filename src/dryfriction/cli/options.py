@@ -7,8 +7,8 @@ the paper's non-dimensional form (:func:`nondim_options`).
     p = make_parser("dryfriction study", "...")           # error() raises UsageError
     p = make_parser("bench_sweep.py", "...", exit=True)   # error() prints the line and exits 2
 
-This module imports only the standard library (and, when a parser is built, the model
-description): ``dryfriction --help`` builds every command's parser.
+This module imports only the standard library at its top: ``dryfriction --help`` builds every
+command's parser.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import Any, NoReturn
 from ..errors import UsageError
 
 __all__ = ["UsageError", "Parser", "make_parser", "number", "count", "path_arg", "EXIT_USAGE", "global_options",
-           "add_max_work_argument", "schemes", "PHYSICAL", "NONDIM", "physical_options", "nondim_options",
+           "add_max_work_argument", "SCHEMES", "DEFAULT_SCHEME", "PHYSICAL", "NONDIM", "physical_options", "nondim_options",
            "physical_given", "physical", "nondim_given", "one_form", "check_fmu_option"]
 
 EXIT_USAGE = 2
@@ -161,14 +161,10 @@ def add_max_work_argument(p: argparse.ArgumentParser, default: Any = None) -> No
                         f"an exact-scheme period counts {EXACT_PERIOD_STEPS:g})")
 
 
-def schemes() -> tuple[list[str], str]:
-    """The FMU's integration schemes and its default one, from the model description (read from
-    the FMU, not by loading it)."""
-    from .. import model
-
-    md = model.default()
-    start = md.var("scheme").start
-    return list(md.schemes), next(n for n, v in md.schemes.items() if v == start)
+#: the FMU's integration schemes and its default one, as its model description has them
+#: (:data:`dryfriction.drivers.oscillator.SCHEMES`; read here without opening the FMU, for the help)
+SCHEMES = ("paper", "consistent", "located", "exact")
+DEFAULT_SCHEME = "located"
 
 
 #: the oscillator's parameters in physical units (SI), as ``dryfriction run`` & co. take them

@@ -21,13 +21,12 @@ and one line gives the interval of its rest positions.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from typing import Any
 
 from .options import (NONDIM, PHYSICAL, UsageError, count, nondim_given, nondim_options, number, one_form, physical,
                       physical_options)
-from .output import finite, percent, rest_line
+from .output import finite, percent, print_json, rest_line
 
 __all__ = ["add_parser", "run", "work", "orbit_json", "orbit_headline"]
 
@@ -128,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     with OscillatorFMU2(args.fmu) as fmu:
         orbits = find_orbits(p, period=args.period, fmu=fmu, transients=args.transients)
     if args.json:
-        print(json.dumps(orbit_json(orbits)))
+        print_json(orbit_json(orbits))
         return 0
     print(f"{'#':>2} {'K':>2} {'stable':>7} {'|mu|max':>9} {'multipliers':>30} {'amplitude (m)':>14} "
           f"{'offset (m)':>11} {'stuck (%)':>9} {'x0 (m)':>12} {'v0 (m/s)':>12} {'residual':>8}")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-__all__ = ["finite", "json_safe", "percent", "rest_line"]
+__all__ = ["finite", "json_safe", "print_json", "percent", "rest_line"]
 
 
 def finite(v: float) -> float | None:
@@ -27,6 +27,13 @@ def json_safe(x: Any) -> Any:
     if isinstance(x, np.generic):
         return json_safe(x.item())
     return x
+
+
+def print_json(obj: Any, indent: int | None = None) -> None:
+    """``obj`` as JSON on stdout, one object (``indent``: pretty-printed)."""
+    import json
+
+    print(json.dumps(obj, indent=indent))
 
 
 def percent(share: float) -> str:

@@ -13,15 +13,14 @@ given), written all or nothing.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
 from pathlib import Path
 from typing import Any
 
-from .options import UsageError, count, number, path_arg, physical, physical_options, schemes
-from .output import finite, percent, rest_line
+from .options import SCHEMES, UsageError, count, number, path_arg, physical, physical_options
+from .output import finite, percent, print_json, rest_line
 
 __all__ = ["add_parser", "run", "work", "TOL", "MIN_PERIODS", "MAX_PERIODS"]
 
@@ -37,7 +36,6 @@ MAX_PERIODS = 8192
 
 def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     """Add the ``response`` command to the main parser's subparsers ``sub``."""
-    names, _ = schemes()
     q = sub.add_parser("response", parents=parents,
                        help="steady-state frequency response of an oscillator in physical units (m, Hz)",
                        description="Steady-state amplitude (half peak-to-peak of x, m), offset, stick share and "
@@ -58,7 +56,7 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
                    help=f"first run length in excitation periods (default {MIN_PERIODS})")
     q.add_argument("--max-periods", type=count("--max-periods", 2), default=MAX_PERIODS,
                    help=f"period limit; beyond it converged = false (default {MAX_PERIODS})")
-    q.add_argument("--scheme", choices=names, default=None, help="default: exact (closed form, also for k = 0)")
+    q.add_argument("--scheme", choices=list(SCHEMES), default=None, help="default: exact (closed form, also for k = 0)")
     q.add_argument("--out", type=path_arg("--out"), default=None,
                    help="output folder (default results/response; with --json: no files unless --out is given)")
     q.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
@@ -195,15 +193,15 @@ def _print_transient(ds: Any, args: argparse.Namespace, p: Any, f: Any, files: l
     conv = ds["converged"].values
     note = ds.attrs["never_converges"]
     if args.json:
-        print(json.dumps({"f_hz": _column(ds, "f_hz"), "amplitude_m": _column(ds, "amplitude_m"),
-                          "offset_m": _column(ds, "offset_m"), "stick_fraction": _column(ds, "stick_fraction"),
-                          "converged": [bool(c) for c in conv], "periods": _column(ds, "periods"),
-                          "den_hartog_m": _column(ds, "den_hartog_m"), "inman_m": _column(ds, "inman_m"),
-                          "reason": [str(r) or None for r in ds["reason"].values], "scheme": ds.attrs["scheme"],
-                          "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
-                                    "den_hartog_m": "m", "inman_m": "m"},
-                          "tol": args.tol, "natural_frequency_hz": p.f_n_hz, "note": note,
-                          "files": [str(x) for x in files]}))
+        print_json({"f_hz": _column(ds, "f_hz"), "amplitude_m": _column(ds, "amplitude_m"),
+                    "offset_m": _column(ds, "offset_m"), "stick_fraction": _column(ds, "stick_fraction"),
+                    "converged": [bool(c) for c in conv], "periods": _column(ds, "periods"),
+                    "den_hartog_m": _column(ds, "den_hartog_m"), "inman_m": _column(ds, "inman_m"),
+                    "reason": [str(r) or None for r in ds["reason"].values], "scheme": ds.attrs["scheme"],
+                    "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
+                              "den_hartog_m": "m", "inman_m": "m"},
+                    "tol": args.tol, "natural_frequency_hz": p.f_n_hz, "note": note,
+                    "files": [str(x) for x in files]})
         return 0
     print(f"{'f (Hz)':>10} {'amplitude (m)':>14} {'offset (m)':>12} {'stuck (%)':>9} {'converged':>9} {'periods':>7}")
     reasons = ds["reason"].values
@@ -246,16 +244,16 @@ def _print_orbits(ds: Any, args: argparse.Namespace, p: Any, f: Any, files: list
     reasons = ds["reason"].values
     note = ds.attrs["never_converges"]
     if args.json:
-        print(json.dumps({"method": "orbit", "f_hz": _column(ds, "f_hz"), "orbits": _orbits_json(ds),
-                          "n_orbits": [int(n) for n in ds["n_orbits"].values],
-                          "converged": [bool(c) for c in conv], "den_hartog_m": _column(ds, "den_hartog_m"),
-                          "inman_m": _column(ds, "inman_m"), "reason": [str(r) or None for r in reasons],
-                          "scheme": ds.attrs["scheme"], "period": ds.attrs["period"],
-                          "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
-                                    "x0_m": "m", "v0_m_per_s": "m/s", "mu_max": "1", "period": "excitation periods",
-                                    "rest_from_m": "m", "rest_to_m": "m",
-                                    "den_hartog_m": "m", "inman_m": "m"},
-                          "natural_frequency_hz": p.f_n_hz, "note": note, "files": [str(x) for x in files]}))
+        print_json({"method": "orbit", "f_hz": _column(ds, "f_hz"), "orbits": _orbits_json(ds),
+                    "n_orbits": [int(n) for n in ds["n_orbits"].values],
+                    "converged": [bool(c) for c in conv], "den_hartog_m": _column(ds, "den_hartog_m"),
+                    "inman_m": _column(ds, "inman_m"), "reason": [str(r) or None for r in reasons],
+                    "scheme": ds.attrs["scheme"], "period": ds.attrs["period"],
+                    "units": {"f_hz": "Hz", "amplitude_m": "m", "offset_m": "m", "stick_fraction": "1",
+                              "x0_m": "m", "v0_m_per_s": "m/s", "mu_max": "1", "period": "excitation periods",
+                              "rest_from_m": "m", "rest_to_m": "m",
+                              "den_hartog_m": "m", "inman_m": "m"},
+                    "natural_frequency_hz": p.f_n_hz, "note": note, "files": [str(x) for x in files]})
         return 0
     print(f"{'f (Hz)':>10} {'#':>2} {'K':>2} {'stable':>7} {'|mu|max':>9} {'amplitude (m)':>14} {'offset (m)':>12} "
           f"{'stuck (%)':>9}")

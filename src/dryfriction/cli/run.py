@@ -8,11 +8,11 @@ result printed as JSON (a trajectory also written as CSV with ``--out``).
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
-from .options import (UsageError, count, nondim_given, nondim_options, number, one_form, path_arg, physical,
-                      physical_given, physical_options, schemes)
+from .options import (DEFAULT_SCHEME, SCHEMES, UsageError, count, nondim_given, nondim_options, number, one_form,
+                      path_arg, physical, physical_given, physical_options)
+from .output import print_json
 
 __all__ = ["add_parser", "run", "work", "SCENES", "RUN_UNITS", "RUN_COUNTS"]
 
@@ -32,7 +32,6 @@ RUN_COUNTS = ("transitions", "samples")
 
 def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     """Add the ``run`` command to the main parser's subparsers ``sub``."""
-    names, default_scheme = schemes()
     r = sub.add_parser("run", parents=parents, help="run one scene and print its result as JSON")
     r.add_argument("--scene", choices=list(SCENES), default="validation",
                    help="what to run and print (default validation; 'dryfriction scenes' describes each)")
@@ -46,8 +45,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
                    help="internal steps per excitation period (default 1000)")
     r.add_argument("--h", type=number("--h", 0.0), default=None,
                    help="internal step, s (0: derived by the FMU from the dynamics; overrides --steps-per-period)")
-    r.add_argument("--scheme", choices=names, default=default_scheme,
-                   help=f"the FMU's integration scheme (default {default_scheme})")
+    r.add_argument("--scheme", choices=list(SCHEMES), default=DEFAULT_SCHEME,
+                   help=f"the FMU's integration scheme (default {DEFAULT_SCHEME})")
     r.add_argument("--out", type=path_arg("--out", "file"), default=None, help="CSV file for the trajectory scenes")
 
 
@@ -104,8 +103,8 @@ def run(args: argparse.Namespace) -> int:
     if args.scene == "sweep":
         head["measured"] = scenes.sweep_window_text(p, args.periods)
     if "t" not in res:  # observables: a few numbers
-        print(json.dumps({**head, **{k: int(v) if k in RUN_COUNTS else float(v) for k, v in res.items()},
-                          "units": {k: RUN_UNITS.get(k, "") for k in res}}, indent=2))
+        print_json({**head, **{k: int(v) if k in RUN_COUNTS else float(v) for k, v in res.items()},
+                    "units": {k: RUN_UNITS.get(k, "") for k in res}}, indent=2)
         return 0
     if args.out:
         import numpy as np
@@ -118,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
         lines = [header] + [",".join(f"{x:.17g}" for x in row) for row in rows]
         with result_file(args.out) as tmp:
             tmp.write_text("\n".join(lines) + "\n")
-    print(json.dumps({**head, "samples": int(len(res["t"])), "x_final": float(res["x"][-1]),
-                      "out": str(args.out) if args.out else None,
-                      "units": {"x_final": "m", "csv columns": "t s, x m, v m/s, a m/s2, F_friction N, mode 1"}},
-                     indent=2))
+    print_json({**head, "samples": int(len(res["t"])), "x_final": float(res["x"][-1]),
+                "out": str(args.out) if args.out else None,
+                "units": {"x_final": "m", "csv columns": "t s, x m, v m/s, a m/s2, F_friction N, mode 1"}},
+               indent=2)
     return 0
