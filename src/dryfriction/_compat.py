@@ -87,7 +87,6 @@ NAMES: dict[tuple[str, str], tuple[str, str]] = {
     ("dryfriction.cli.lyapunov", "lyapunov_main"): ("dryfriction.cli.lyapunov", "run"),
     ("dryfriction.cli.orbit", "add_orbit_parser"): ("dryfriction.cli.orbit", "add_parser"),
     ("dryfriction.cli.orbit", "orbit_main"): ("dryfriction.cli.orbit", "run"),
-    ("dryfriction.cli.orbit", "rest_line"): ("dryfriction.cli.output", "rest_line"),
     ("dryfriction.studies", "main"): ("dryfriction.cli.study", "main"),
     ("dryfriction.studies", "run_args"): ("dryfriction.cli.study", "run"),
     ("dryfriction.studies", "add_arguments"): ("dryfriction.cli.study", "add_arguments"),

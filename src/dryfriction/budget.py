@@ -37,8 +37,8 @@ from pathlib import Path
 from .errors import UsageError
 
 __all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "SAMPLE_STEPS",
-           "check_work", "check_memory", "memory_limit", "max_work_value", "check_writable", "fmt",
-           "Estimate", "period_steps", "continuation_work"]
+           "check_work", "check_memory", "memory_limit", "max_work_value", "check_writable", "fmt", "Estimate",
+           "period_steps", "continuation_work"]
 
 #: the default bound of a command's work, in steps (module doc)
 DEFAULT_MAX_WORK = 1e10
@@ -163,11 +163,11 @@ def check_memory(nbytes: float, what: str, option: str) -> float:
 
 def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "",
                    option: str = "--out") -> Path:
-    """Before the work: ``folder`` can take a result set (:func:`dryfriction.cli.console.check_output_folder`:
+    """Before the work: ``folder`` can take a result set (:func:`dryfriction.atomic.check_output_folder`:
     a probe created and removed where the set will be staged; nothing is left behind, no folder
     created), and its file system has room for ``nbytes`` (with a margin); a :class:`UsageError`
     naming ``option``, the folder and the cause otherwise."""
-    from .cli.console import check_output_folder, nearest_existing
+    from .atomic import check_output_folder, nearest_existing
 
     d = check_output_folder(folder, option)
     if nbytes > 0:

@@ -31,8 +31,6 @@ __all__ = ["add_parser", "run", "work", "PARAMETERS"]
 #: has them (read here without loading it, for the help)
 PARAMETERS = ("m", "k", "c", "P0", "omega", "phi", "N", "mu_s", "chi", "f", "lam", "zeta", "mu_k", "mu_s_sigma",
               "sigma")
-LABELS = {"fold": "F", "period_doubling": "PD", "symmetry_breaking": "SB", "grazing": "G"}
-MARKERS = {"fold": "s", "period_doubling": "D", "symmetry_breaking": "o", "grazing": "^"}
 #: the non-dimensional parameters of ``bifurcation`` (the scatter's form)
 NONDIM = ("lam", "mu_s_sigma", "chi", "zeta")
 
@@ -194,40 +192,13 @@ def write_csv(c: Any, path: Path) -> None:
     atomic_write_text(path, "\n".join(lines) + "\n")
 
 
-def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
-    """Amplitude (upper axes) and offset (lower) of every branch, stable solid, unstable dashed,
-    bifurcations marked and labelled; lengths times ``scale``."""
-    import numpy as np
-
-    ds = c.dataset
-    for b in c.branches:
-        s = ds.where((ds.branch == b.id) & ds.converged, drop=True)
-        if s.point.size == 0:
-            continue
-        x = s.param.values
-        st = s.stable.values.astype(bool)
-        color = f"C{b.id % 10}"
-        for ax, var in zip(axes, ("amplitude_m", "offset_m")):
-            y = s[var].values * scale
-            for mask, ls in ((st, "-"), (~st, "--")):
-                # join each run to its neighbours so that a change of stability leaves no gap
-                edge = mask | np.concatenate([mask[1:], [False]]) | np.concatenate([[False], mask[:-1]])
-                yy = np.where(edge, y, np.nan)
-                ax.plot(x, yy, ls=ls, color=color, lw=1.4,
-                        label=(f"branch {b.id} (K = {b.period}{', symmetric' if b.kind == 'symmetric' else ''})"
-                               if (ls == "-" and var == "amplitude_m" and label) else None))
-    for f in c.bifurcations:
-        for ax, y in zip(axes, (f.amplitude_m * scale, f.offset_m * scale)):
-            ax.plot([f.param], [y], MARKERS[f.type], color="k", ms=6, mfc="none")
-            ax.annotate(f"{LABELS[f.type]} {f.param:.5g}", (f.param, y), textcoords="offset points", xytext=(4, 4),
-                        fontsize=7)
-
-
 def plot(c: Any, path: Path, title: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from ..analysis.plots import plot_branches
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
     plot_branches(axes, c, 1.0)
@@ -305,6 +276,7 @@ def _bifurcation(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .. import paths
+    from ..analysis.plots import plot_branches
     from ..params import Oscillator
     from ..studies.common import K_REF, M_REF, MU_S_REF, P0_REF, sweep_settings, table
     from ..sweep.datasets import observables_dataset

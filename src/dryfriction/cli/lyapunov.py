@@ -101,8 +101,8 @@ def run(args: argparse.Namespace) -> int:
         "params": {"lam": nd.lam, "mu_s_sigma": nd.mu_s_sigma, "chi": nd.chi, "zeta": nd.zeta,
                    "z0": args.z0, "dz0": args.dz0},
         "method": r.method,
-        "map": "dryfriction.exact" if args.exact else "FMU",
-        "scheme": "exact (dryfriction.exact)" if args.exact else args.scheme,
+        "map": "dryfriction.references.exact" if args.exact else "FMU",
+        "scheme": "exact (dryfriction.references.exact)" if args.exact else args.scheme,
         "steps_per_period": None if args.exact or step_free(args.scheme) else args.steps_per_period,
     }
     if args.json:
