@@ -6,13 +6,14 @@ name patched or read through either is the one every module uses), ``dryfriction
 the very class ``OscillatorFMU2``. This module holds the one table of both (:data:`MODULES`,
 :data:`NAMES`) and the meta-path finder that serves them (:func:`install`, called by
 ``dryfriction/__init__.py``); there are no files at the old paths. It imports only the standard
-library.
+library, and not ``importlib.abc`` (which loads ``importlib.resources``, some 10 ms at every start
+of the command line): its finder and loaders follow the protocols of
+``importlib.abc.MetaPathFinder`` and ``importlib.abc.Loader`` without deriving from them.
 """
 
 from __future__ import annotations
 
 import importlib
-import importlib.abc
 import importlib.machinery
 import sys
 import warnings
@@ -149,7 +150,7 @@ def _install_getattr(module: ModuleType) -> None:
     module.__getattr__ = __getattr__  # type: ignore[method-assign]
 
 
-class _Alias(importlib.abc.Loader):
+class _Alias:
     """Loads a former path as the very module object of its new home."""
 
     def __init__(self, new: str) -> None:
@@ -165,10 +166,10 @@ class _Alias(importlib.abc.Loader):
         module.__spec__ = self._spec       # importlib set the alias's spec on the shared module
 
 
-class _Home(importlib.abc.Loader):
+class _Home:
     """Runs a module that has former names with its usual loader, then gives it the names."""
 
-    def __init__(self, inner: importlib.abc.Loader) -> None:
+    def __init__(self, inner: Any) -> None:
         self.inner = inner
 
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType | None:
@@ -182,7 +183,7 @@ class _Home(importlib.abc.Loader):
         return getattr(self.inner, name)
 
 
-class Finder(importlib.abc.MetaPathFinder):
+class Finder:
     """The meta-path finder of the former paths (first on ``sys.meta_path``)."""
 
     def find_spec(self, fullname: str, path: Sequence[str] | None = None,
