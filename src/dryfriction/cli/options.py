@@ -23,8 +23,8 @@ from typing import Any, NoReturn
 from ..errors import UsageError
 
 __all__ = ["UsageError", "Parser", "make_parser", "number", "count", "path_arg", "EXIT_USAGE", "global_options",
-           "add_max_work_argument", "SCHEMES", "DEFAULT_SCHEME", "PHYSICAL", "NONDIM", "physical_options", "nondim_options",
-           "physical_given", "physical", "nondim_given", "one_form", "check_fmu_option"]
+           "add_max_work_argument", "SCHEMES", "DEFAULT_SCHEME", "PHYSICAL", "NONDIM", "physical_options",
+           "nondim_options", "physical_given", "physical", "nondim_given", "one_form", "check_fmu_option"]
 
 EXIT_USAGE = 2
 

@@ -229,8 +229,8 @@ def _orbits_json(ds: Any) -> list[list[dict[str, Any]]]:
     for i in range(ds.sizes["f_hz"]):
         rows = []
         for j in range(int(ds["n_orbits"].values[i])):
-            r: dict[str, Any] = {c: (bool(ds[c].values[i, j]) if c in ORBIT_FLAGS else finite(float(ds[c].values[i, j])))
-                                 for c in ORBIT_COLUMNS}
+            r: dict[str, Any] = {c: (bool(ds[c].values[i, j]) if c in ORBIT_FLAGS
+                                     else finite(float(ds[c].values[i, j]))) for c in ORBIT_COLUMNS}
             r["period"] = int(r["period"])
             rows.append(r)
         out.append(rows)

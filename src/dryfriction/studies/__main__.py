@@ -1,4 +1,5 @@
-"""``python -m dryfriction.studies <name> [options]``: the same as ``dryfriction study`` (:func:`dryfriction.cli.study.main`)."""
+"""``python -m dryfriction.studies <name> [options]``: the same as ``dryfriction study``
+(:func:`dryfriction.cli.study.main`)."""
 
 import sys
 
