@@ -93,6 +93,7 @@ NAMES: dict[tuple[str, str], tuple[str, str]] = {
     ("dryfriction.studies", "add_arguments"): ("dryfriction.cli.study", "add_arguments"),
     ("dryfriction.budget", "add_max_work_argument"): ("dryfriction.cli.options", "add_max_work_argument"),
     ("dryfriction.budget", "command_work"): ("dryfriction.cli", "command_work"),
+    ("dryfriction.cli.continuation", "plot_branches"): ("dryfriction.analysis.plots", "plot_branches"),
 }
 
 _HOMES = {module for module, _ in NAMES}
