@@ -177,3 +177,90 @@ def test_run_json_counts_are_whole_numbers(capsys: pytest.CaptureFixture[str]) -
     assert main(["run", "--scene", "stiction", "--periods", "3"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert type(res["transitions"]) is int and res["transitions"] >= 2
+
+
+# ------------------------------------------------------------------ a command line that starts at once
+
+HEAVY = ("numpy", "scipy", "xarray", "matplotlib", "dask", "distributed", "fmpy", "pandas", "h5py", "h5netcdf")
+
+
+@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["response", "--help"], ["study", "--help"]])
+def test_version_and_help_import_nothing_heavy(argv: list[str]) -> None:
+    """``dryfriction --version``, ``--help`` and a command's ``--help`` build every command's parser
+    (the help is complete) from modules that import argparse and the package's light modules only:
+    no NumPy, SciPy, xarray, matplotlib, Dask or fmpy, no study, driver or analysis module, no FMU
+    opened."""
+    code = f"""
+import json, sys
+from dryfriction.cli import main
+try:
+    main({argv!r})
+except SystemExit:
+    pass
+print(json.dumps(sorted(sys.modules)), file=sys.stderr)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    modules = json.loads(r.stderr.strip().splitlines()[-1])
+    assert "dryfriction.cli.continuation" in modules and "dryfriction.cli.study" in modules   # every parser built
+    assert "usage: dryfriction" in r.stdout or r.stdout.startswith("dryfriction ")
+    heavy = [m for m in modules if m.split(".")[0] in HEAVY]
+    assert heavy == []
+    loaded = [m for m in modules if m.startswith(("dryfriction.model", "dryfriction.paths",   # no FMU opened
+                                                  "dryfriction.drivers", "dryfriction.analysis", "dryfriction.fmi",
+                                                  "dryfriction.references", "dryfriction.sweep", "dryfriction.cosim",
+                                                  "dryfriction.studies."))]
+    assert loaded == []
+
+
+def test_the_command_modules_import_no_other_command() -> None:
+    """One convention: every command module of dryfriction.cli has ``add_parser`` and ``run``, imports no
+    other command module (at its top or in a function), and the modules every parser needs
+    (the dispatcher, options, console, output, the commands' tops) import nothing of the layers
+    below the command line at their top but the errors, the result sets (atomic) and the study
+    registry."""
+    import ast
+
+    from dryfriction.cli import COMMANDS
+
+    folder = ROOT / "src" / "dryfriction" / "cli"
+    commands = set(COMMANDS.values())
+    assert commands | {"__init__", "options", "console", "output"} == {p.stem for p in folder.glob("*.py")}
+    for path in sorted(folder.glob("*.py")):
+        tree = ast.parse(path.read_text())
+        if path.stem in commands:
+            defined = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
+            assert {"add_parser", "run"} <= defined, path.name
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                names = [node.module] if node.module else [a.name for a in node.names]
+                others = [n for n in names if n in commands and n != path.stem]
+                assert others == [] or path.stem == "__init__", (path.name, others)
+        top = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
+        for node in top:
+            if isinstance(node, ast.ImportFrom) and node.level == 2:
+                assert node.module in ("errors", "atomic", "studies"), (path.name, node.module)
+            elif isinstance(node, ast.Import):
+                assert all(a.name.split(".")[0] not in HEAVY for a in node.names), path.name
+
+
+def test_the_help_shows_the_librarys_defaults() -> None:
+    """What the parsers take from light copies (so that the help imports no library) is what the
+    library has: the scenes, the transient method's defaults, the continuation's parameters, the
+    default scheme of lyapunov, the FMU's schemes and its default one."""
+    from dryfriction.analysis import continuation, response
+    from dryfriction.analysis.chaos import maps
+    from dryfriction.cli import continuation as cli_continuation
+    from dryfriction.cli import lyapunov as cli_lyapunov
+    from dryfriction.cli import options
+    from dryfriction.cli import response as cli_response
+    from dryfriction.cli import run as cli_run
+    from dryfriction.drivers import scenes
+    from dryfriction.drivers.oscillator import SCHEMES, Settings
+
+    assert cli_run.SCENES == tuple(scenes.SCENES)
+    assert (cli_response.TOL, cli_response.MIN_PERIODS, cli_response.MAX_PERIODS) == \
+        (response.TOL, response.MIN_PERIODS, response.MAX_PERIODS)
+    assert cli_continuation.PARAMETERS == tuple(continuation.PARAMETERS)
+    assert cli_lyapunov.DEFAULT_SCHEME == maps.DEFAULT_SCHEME
+    assert (list(options.SCHEMES), options.DEFAULT_SCHEME) == (list(SCHEMES), Settings().scheme)

@@ -1,4 +1,4 @@
-"""Where the FMUs come from (dryfriction.locate): the order (explicit path, DFO_FMU..., package
+"""Where the FMUs come from (dryfriction.paths): the order (explicit path, DFO_FMU..., package
 data, build tree), the one exception for every unusable FMU path, and nothing read at import time."""
 
 from __future__ import annotations
@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from dryfriction import locate, model
-from dryfriction.chain import ChainFMU, ChainFMU2
-from dryfriction.fmi3 import FMI3Oscillator, default_fmi3_path
-from dryfriction.fmu import OscillatorFMU
-from dryfriction.locate import FMUFileError
-from dryfriction.response import frequency_response
+from dryfriction import paths as locate, model
+from dryfriction.drivers.chain import ChainFMU3, ChainFMU2
+from dryfriction.drivers.oscillator3 import OscillatorFMU3, default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU2
+from dryfriction.paths import FMUFileError
+from dryfriction.analysis.response import frequency_response
 from dryfriction.studies import run_study
 
 from helpers import _bad_xml, _not_zip, _zip_without_md
@@ -59,8 +59,8 @@ def test_an_unusable_path_is_one_fmu_file_error(make, words: str, tmp_path: Path
 def test_another_model_or_fmi_version_is_refused_by_every_driver(fmus: dict[locate.Kind, Path]) -> None:
     """Each of the four drivers takes its own FMU only; the sentence names what the file is and
     what the driver needs."""
-    drivers = {locate.OSCILLATOR: lambda p: OscillatorFMU(p), locate.OSCILLATOR3: lambda p: FMI3Oscillator(fmu_path=p),
-               locate.CHAIN: lambda p: ChainFMU2(fmu_path=p), locate.CHAIN3: lambda p: ChainFMU(2, fmu_path=p)}
+    drivers = {locate.OSCILLATOR: lambda p: OscillatorFMU2(p), locate.OSCILLATOR3: lambda p: OscillatorFMU3(fmu_path=p),
+               locate.CHAIN: lambda p: ChainFMU2(fmu_path=p), locate.CHAIN3: lambda p: ChainFMU3(2, fmu_path=p)}
     for need, open_ in drivers.items():
         for have, path in fmus.items():
             if have == need:
@@ -86,7 +86,7 @@ def test_the_environment_variable_is_named_in_the_sentence(no_env: None, tmp_pat
                                                            monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("DFO_FMU", str(_not_zip(tmp_path)))
     with pytest.raises(FMUFileError) as err:
-        OscillatorFMU()
+        OscillatorFMU2()
     assert str(err.value) == f"DFO_FMU={tmp_path / 'README.md'} is not an FMU (not a zip archive)"
 
 
@@ -170,7 +170,7 @@ def hook(event, args):
         if os.path.basename(p) == "modelDescription.xml" or p.endswith((".fmu", ".toml")):
             events.append("open " + os.path.basename(p))
 sys.addaudithook(hook)
-import dryfriction.locate as locate, dryfriction.model as model
+import dryfriction.paths as locate, dryfriction.model as model
 def recorded(owner, name):
     real = getattr(owner, name)
     def call(*args, **kwargs):
@@ -191,7 +191,7 @@ print(json.dumps({"modules": names, "at_import": at_import, "at_use": events[len
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
-    assert {"dryfriction.locate", "dryfriction.cli", "dryfriction.fmu", "dryfriction.validation",
+    assert {"dryfriction.paths", "dryfriction.cli", "dryfriction.drivers.oscillator", "dryfriction.analysis.validation",
             "dryfriction.studies.chain2", "dryfriction.sweep.runner"} <= set(res["modules"])
     assert res["at_import"] == []
     assert "default" in res["at_use"] and "open modelDescription.xml" in res["at_use"], res["at_use"]

@@ -27,9 +27,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
-from dryfriction.studies import main, run_study
+from dryfriction.cli.study import main
+from dryfriction.studies import run_study
 from dryfriction.sweep import BatchRunner, PARAM_COLUMNS, SweepInterrupted, nondim_table, read_netcdf
 
 
@@ -55,8 +56,8 @@ def test_table_rows_equal_from_nondimensional() -> None:
 
 
 @pytest.mark.min_versions
-def test_batch_runner_equals_fmu_driver(fmu_path: Path, fmu: OscillatorFMU) -> None:
-    """The lean runner gives the observables of OscillatorFMU.observables bit for bit, and a row
+def test_batch_runner_equals_fmu_driver(fmu_path: Path, fmu: OscillatorFMU2) -> None:
+    """The lean runner gives the observables of OscillatorFMU2.observables bit for bit, and a row
     the FMU rejects gives nan with status 1 without spoiling the next rows."""
     rows = [dict(lam=0.5, mu_s_sigma=0.6, chi=c, z0=z, dz0=0.3) for c, z in ((0.3, 0.5), (0.9, -1.0), (1.2, 0.0))]
     P = np.vstack([nondim_table(r, 12, 10, 12, 800) for r in rows])
@@ -95,11 +96,11 @@ def test_fig2_fmu_follows_exact_solution(tmp_path: Path, fmu_path: Path) -> None
 
 
 def test_fig3_dataset_is_the_fmus_steady_state_and_the_references(tmp_path: Path, fmu_path: Path,
-                                                                   fmu: OscillatorFMU) -> None:
-    """The study's plumbing: each amplitude is the one OscillatorFMU.observables gives for the
+                                                                   fmu: OscillatorFMU2) -> None:
+    """The study's plumbing: each amplitude is the one OscillatorFMU2.observables gives for the
     same run, and the reference columns are steady.py's formulas. (The FMU against Den Hartog and
     Inman themselves: test_schemes.py.)"""
-    from dryfriction.steady import den_hartog_amplitude, inman_amplitude
+    from dryfriction.references.steady import den_hartog_amplitude, inman_amplitude
 
     out, res = run("fig3", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig3.nc")
@@ -261,7 +262,7 @@ def test_killed_sweep_restarts_from_its_chunks(tmp_path: Path, fmu_path: Path, f
 KILLED_AFTER_3_CHUNKS = """
 import os, signal, sys
 import dryfriction.sweep.engine as engine
-from dryfriction.studies import main
+from dryfriction.cli.study import main
 save, saved = engine.save_chunk, []
 def save_then_die(path, arr):
     save(path, arr)
@@ -331,7 +332,7 @@ def test_studies_run_through_the_module_entry_point(tmp_path: Path, fmu_path: Pa
 
 @pytest.fixture(scope="module")
 def chain_fmu3() -> Path:
-    from dryfriction.chain import default_chain_fmu3
+    from dryfriction.drivers.chain import default_chain_fmu3
 
     path = default_chain_fmu3()
     if not path.is_file():
@@ -342,7 +343,7 @@ def chain_fmu3() -> Path:
 def test_chain2_quick(tmp_path: Path, chain_fmu3: Path) -> None:
     """Two blocks, the first forced: the frictionless first block of the 'second' configuration
     never sticks; a row of the dataset is a direct run of the chain; the far block sticks more."""
-    from dryfriction.chain import ChainFMU
+    from dryfriction.drivers.chain import ChainFMU3
     from dryfriction.studies.chain2 import chain_params
 
     out, res = run("chain2", tmp_path, chain_fmu3)
@@ -362,7 +363,7 @@ def test_chain2_quick(tmp_path: Path, chain_fmu3: Path) -> None:
     num = {"steps_per_period": ds.attrs["steps_per_period"], "alpha": ds.attrs["alpha"], "scheme": ds.attrs["scheme"]}
     p = chain_params(ch, "both", lam, (-2.0, 2.0), num)
     T = 2 * np.pi / p["omega"]
-    with ChainFMU(2, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(2, fmu_path=chain_fmu3) as f:
         f.start(p)
         f.step_to((ds.attrs["periods"] - ds.attrs["obs_periods"]) * T)
         r = f.record(ds.attrs["periods"] * T, T / ds.attrs["samples_per_period"])
@@ -410,3 +411,36 @@ def test_fig3_sweep_without_an_excluded_band() -> None:
     cfg["sweep"]["exclude"] = [1.0]
     with pytest.raises(Exception, match=r"\[low, high\] or \[\]"):
         fig3.check(cfg)
+
+
+def test_the_registry_imports_a_study_only_when_it_runs() -> None:
+    """``import dryfriction.studies``, the names of the studies and ``dryfriction study --help``
+    import no study module (nor NumPy); asking for a study by name imports its module, whose NAME,
+    TITLE and FIGURES are the registry's."""
+    import json
+    import subprocess
+    import sys
+
+    code = """
+import json, sys
+from dryfriction.studies import REGISTRY, STUDIES, resolve
+names = list(STUDIES)
+before = sorted(m for m in sys.modules if m.startswith("dryfriction.studies.") or m.split(".")[0] == "numpy")
+fig4 = STUDIES["fig4"]
+after = sorted(m for m in sys.modules if m.startswith("dryfriction.studies."))
+print(json.dumps({"names": names, "before": before, "after": after, "fig4": fig4.__name__}))
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["before"] == []
+    assert res["fig4"] == "dryfriction.studies.fig4_steady_cycles" and res["fig4"] in res["after"]
+    assert "dryfriction.studies.fig8_9_bifurcation" not in res["after"]
+    from dryfriction.studies import REGISTRY, STUDIES
+
+    assert res["names"] == list(REGISTRY) and len(REGISTRY) == 17
+    for name, study in REGISTRY.items():
+        module = STUDIES[name]
+        assert module.__name__ == f"dryfriction.studies.{study.module}"
+        assert (module.NAME, module.TITLE, module.FIGURES) == (name, study.title, study.figures)
+        assert callable(module.run) and callable(module.work) and callable(module.check)

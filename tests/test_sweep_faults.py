@@ -129,7 +129,7 @@ def test_configuration_change_replaces_results_together(tmp_path: Path, fmu_path
 
 FULL_DISK = """
 import resource, signal, sys
-from dryfriction.studies import main
+from dryfriction.cli.study import main
 import dryfriction.studies.fig8_9_bifurcation, dryfriction.sweep.datasets, h5netcdf, matplotlib.pyplot  # noqa
 from dryfriction.sweep.runner import runner_for
 runner_for(sys.argv[sys.argv.index("--fmu") + 1])  # the FMU unzipped before the disk is full
@@ -165,7 +165,7 @@ KILL_WORKERS = """
 import os, signal, sys, threading, time
 from pathlib import Path
 import dryfriction.sweep.engine as engine
-from dryfriction.studies import main
+from dryfriction.cli.study import main
 
 ensure = engine.Engine._ensure_client
 

@@ -1,9 +1,15 @@
-"""The paper's studies, one module each, with a registry and the ``study`` command.
+"""The paper's studies and the project's own, one module each, and their registry.
 
-    dryfriction study list
+    dryfriction study list                   # the command (dryfriction.cli.study)
     dryfriction study <name> [--quick] [--out DIR] [--workers N] [--scheduler ADDR]
                              [--set key=value ...] [--config FILE] [--fmu PATH]
-    python -m dryfriction.studies <name> ...
+    python -m dryfriction.studies <name> ...  # the same
+    run_study("fig3", quick=True)            # the Python API
+
+:data:`REGISTRY` names every study, its module, title and figures; a study's module (and what it
+imports: NumPy, xarray, matplotlib, Dask) is imported only when the study runs or is asked for by
+name (:data:`STUDIES`), so that importing this package, listing the studies and the command's help
+are immediate.
 
 Each study reads ``configs/<name>.toml`` (see :mod:`dryfriction.studies.config`), writes its
 NetCDF dataset(s), PNG figure(s), the effective ``config.toml`` and ``summary.json`` into a staging
@@ -14,55 +20,103 @@ when loaded: a killed sweep started again loads them and computes only the rest.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from importlib import import_module
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
-               fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
-from .. import paths
-from ..argparsing import make_parser, path_arg
-from ..atomic import atomic_write_text
-from ..budget import Estimate, add_max_work_argument
-from .config import ConfigError, build_config, config_dir, load_toml
+if TYPE_CHECKING:
+    from ..budget import Estimate
 
-__all__ = ["STUDIES", "ALIASES", "main", "run_args", "add_arguments", "run_study", "resolve", "effective_config",
-           "StudyOutcome", "dump_toml", "study_work", "check_study"]
+__all__ = ["REGISTRY", "Study", "STUDIES", "ALIASES", "run_study", "resolve", "effective_config", "StudyOutcome",
+           "dump_toml", "study_work", "check_study", "OUTPUT_MARGIN"]
 
-#: name -> module (NAME, TITLE, FIGURES, check(cfg), work(cfg) -> Estimate, run(ctx) -> summary)
-STUDIES: dict[str, ModuleType] = {m.NAME: m for m in (
-    fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
-    fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)}
 
-from . import chaos_basins, chaos_scan, chaos_transients  # noqa: E402
-STUDIES.update({m.NAME: m for m in (chaos_scan, chaos_basins, chaos_transients)})
+@dataclass(frozen=True)
+class Study:
+    """A study in the registry: its module in this package (which defines ``check(cfg)``,
+    ``work(cfg) -> Estimate`` and ``run(ctx) -> summary``; its ``TITLE`` and ``FIGURES`` are these),
+    the figures it draws and its title."""
 
-from . import burridge_knopoff, chain2, chain_waves  # noqa: E402
-STUDIES.update({m.NAME: m for m in (chain2, chain_waves, burridge_knopoff)})
+    module: str
+    figures: tuple[str, ...]
+    title: str
 
-from . import fig8_9_orbits, fig10_11_orbits  # noqa: E402
-STUDIES.update({m.NAME: m for m in (fig8_9_orbits, fig10_11_orbits)})
 
-from . import belt_map  # noqa: E402
-STUDIES.update({belt_map.NAME: belt_map})
+#: study name -> :class:`Study`, in the order ``study list`` and ``study all`` take them
+REGISTRY: dict[str, Study] = {
+    "fig2": Study("fig2_validation", ("fig2.png",),
+              "FMU vs exact solution over the first cycle (z, z', z'')"),
+    "fig3": Study("fig3_frequency_response", ("fig3.png",),
+              "Steady-state frequency response from rest vs Inman and Den Hartog"),
+    "fig4": Study("fig4_steady_cycles", ("fig4.png",),
+              "Four steady-state cycles below and above resonance"),
+    "fig5_6": Study("fig5_6_resonance", ("fig5.png", "fig6.png"),
+                "Unbounded growth at resonance (4 mu_k N < pi P0) and beating near it"),
+    "fig7": Study("fig7_stiction", ("fig7.png",),
+              "Percentage stiction time in the 30th cycle vs frequency ratio, ten friction levels"),
+    "fig8_9": Study("fig8_9_bifurcation", ("fig8.png", "fig9.png"),
+                "Mean amplitude and asymmetry vs chi over a grid of initial conditions (bifurcation)"),
+    "fig10_11": Study("fig10_11_frequency_chi", ("fig10.png", "fig11.png"),
+                  "Frequency-response curves for several chi over a grid of initial conditions"),
+    "fig12_14": Study("fig12_14_subharmonic", ("fig12.png", "fig13.png", "fig14.png"),
+                  "Time histories, phase portraits and diverging nearby initial conditions (sub-harmonic zone)"),
+    "chaos_scan": Study("chaos_scan", ("chaos_bifurcation.png", "chaos_section.png"),
+                    "Largest Lyapunov exponent and bifurcation diagram vs chi (Fig. 8/9 range); onset of chaos"),
+    "chaos_basins": Study("chaos_basins", ("chaos_basins_<case>.png",),
+                      "Basins of attraction where motions coexist (end of the chaotic range of Fig. 8/9; Fig. 11 zone)"),
+    "chaos_transients": Study("chaos_transients", ("chaos_transients.png",),
+                          "Transient or permanent: spread after 30/300/1000 periods, transient lengths (Fig. 8/9 range)"),
+    "chain2": Study("chain2", ("chain2.png",),
+                "Chain of two blocks, the first forced: amplitude and stick share against frequency (friction on both / second)"),
+    "chain_waves": Study("chain_waves", ("chain_waves.png",),
+                     "Stick-slip fronts along a chain of 256 blocks, the first forced: space-time image of the modes"),
+    "burridge_knopoff": Study("burridge_knopoff", ("burridge_knopoff.png",),
+                          "Burridge-Knopoff fault model (Carlson-Langer): slip events, their moments, the power law"),
+    "fig8_9_orbits": Study("fig8_9_orbits", ("fig8_9_orbits.png",),
+                       "Fig. 8/9 band: branches of periodic orbits in chi over the scatter, bifurcations vs brute force"),
+    "fig10_11_orbits": Study("fig10_11_orbits", ("fig10_orbits.png", "fig11_orbits.png"),
+                         "Fig. 10/11 as branches of periodic orbits in lambda with stability, over the scatter"),
+    "belt_map": Study("belt_map", ("belt_map.png",),
+                  "Self-excited stick-slip over belt speed x normal force, with the Hopf line"),
+}
+
+
+class _Modules(Mapping[str, ModuleType]):
+    """Study name -> its module, imported when first asked for."""
+
+    def __getitem__(self, name: str) -> ModuleType:
+        return import_module(f"{__name__}.{REGISTRY[name].module}")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(REGISTRY)
+
+    def __len__(self) -> int:
+        return len(REGISTRY)
+
+
+#: study name -> its module (imported on first access: ``STUDIES["fig3"]``); the names alone
+#: (``list(STUDIES)``, ``name in STUDIES``) import nothing
+STUDIES: Mapping[str, ModuleType] = _Modules()
 
 ALIASES = {"fig5": "fig5_6", "fig6": "fig5_6", "fig8": "fig8_9", "fig9": "fig8_9", "fig10": "fig10_11",
            "fig11": "fig10_11", "fig12": "fig12_14", "fig13": "fig12_14", "fig14": "fig12_14"}
 
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 3
-
 
 
 def resolve(name: str) -> str:
+    """The registry's name of the study ``name`` (an alias, any case, ``-`` for ``_``); ConfigError
+    (one line listing the studies) for a name that is none."""
+    from .config import ConfigError
+
     key = name.strip().lower().replace("-", "_")
     key = ALIASES.get(key, key)
-    if key not in STUDIES:
+    if key not in REGISTRY:
         raise ConfigError(f"unknown study {name!r}; the studies are: {', '.join(STUDIES)} (or 'list', 'all')")
     return key
 
@@ -70,6 +124,8 @@ def resolve(name: str) -> str:
 def effective_config(name: str, quick: bool = False, config_file: str | os.PathLike[str] | None = None,
                      sets: Sequence[str] = ()) -> dict[str, Any]:
     """The checked configuration of a study (ConfigError if invalid)."""
+    from .config import ConfigError, build_config
+
     default = _default_config(name)
     cfg = build_config(default, quick=quick, config_file=config_file, sets=sets)
     try:
@@ -83,6 +139,8 @@ def _default_config(name: str) -> dict[str, Any]:
     """``configs/<name>.toml``; a study with ``BASE_CONFIG`` (it draws over another study's sweep)
     gets that study's file with its own tables added on top (their ``[quick]`` tables merged too),
     so the values of the shared sweep are written once."""
+    from .config import config_dir, load_toml
+
     own = load_toml(config_dir() / f"{name}.toml")
     base = getattr(STUDIES[name], "BASE_CONFIG", None)
     if base is None:
@@ -125,9 +183,11 @@ def run_study(name: str, *, quick: bool = False, out: str | os.PathLike[str] = "
     results and their configuration as they were. A folder holding another configuration's results
     is started clean (a note says so): they are replaced when this run's are complete, and the
     chunks of the previous configuration are removed only then."""
+    from .. import paths
     from ..atomic import staged_outputs
     from ..sweep.engine import EngineOptions, prune_stale
     from .common import StudyContext
+    from .config import ConfigError
 
     key = resolve(name)
     cfg = effective_config(key, quick=quick, config_file=config_file, sets=sets)
@@ -203,6 +263,8 @@ OUTPUT_MARGIN = 2.0
 
 def _write(path: Path, text: str) -> None:
     """A result file; a failure (a full disk) is one line naming the file and the cause."""
+    from ..atomic import atomic_write_text
+
     try:
         atomic_write_text(path, text)
     except OSError as e:
@@ -229,115 +291,3 @@ def dump_toml(cfg: dict[str, Any], header: str = "") -> str:
 
     text = tomli_w.dumps(cfg)
     return (f"# {header}\n" if header else "") + text
-
-
-# ---- command line -----------------------------------------------------------------------------
-
-def add_arguments(p: argparse.ArgumentParser, fmu: bool = True) -> argparse.ArgumentParser:
-    """The study command's arguments (``fmu=False``: the caller's parser has a global ``--fmu``)."""
-    p.formatter_class = argparse.RawDescriptionHelpFormatter
-    width = max(map(len, STUDIES))
-    p.epilog = "studies:\n" + "\n".join(f"  {n:{width}s}  {m.TITLE}" for n, m in STUDIES.items())
-    p.add_argument("name", help="study name (fig2, fig3, ..., or list, all)")
-    p.add_argument("--quick", action="store_true", help="small sizes (CI): the config's [quick] table")
-    p.add_argument("--out", type=path_arg("--out"), default="results", metavar="DIR",
-                   help="results root; files go to DIR/<study>/")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="Dask LocalCluster worker processes (default: all cores; 0: no Dask, this process)")
-    p.add_argument("--scheduler", default=None, metavar="ADDR",
-                   help="address of an existing Dask scheduler (tcp://host:8786) instead of a LocalCluster")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a config value, e.g. --set sweep.chi.num=20 (repeatable)")
-    p.add_argument("--config", default=None, metavar="FILE", help="TOML file overriding the study's config")
-    if fmu:
-        p.add_argument("--fmu", default=None, metavar="PATH",
-                       help="the FMU (default: $DFO_FMU, else the installed package's, else build/)")
-    p.add_argument("--max-chunks", type=int, default=None, metavar="N",
-                   help="stop after computing N new chunks (exit 3; run again to finish)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    if fmu:  # else the caller's parser has the global --max-work
-        add_max_work_argument(p)
-    p.add_argument("--show-config", action="store_true", help="print the effective config and exit")
-    return p
-
-
-def _parser(prog: str) -> argparse.ArgumentParser:
-    return add_arguments(make_parser(prog, "Reproduce a study of the paper (see 'list')."))
-
-
-def _list() -> str:
-    """The studies as a table, its columns as wide as their longest entry."""
-    rows = [("study", "figures", "title")] + [(n, ", ".join(m.FIGURES), m.TITLE) for n, m in STUDIES.items()]
-    w0, w1 = (max(len(r[i]) for r in rows) for i in (0, 1))
-    lines = [f"{a:{w0}s}  {b:{w1}s}  {c}" for a, b, c in rows]
-    lines.append("aliases: " + ", ".join(f"{a} -> {b}" for a, b in ALIASES.items()))
-    return "\n".join(lines)
-
-
-def main(argv: Sequence[str] | None = None, prog: str = "dryfriction study") -> int:
-    """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input or an error
-    the FMU reports, 3 stopped, 130 interrupted). Errors are one line ``dryfriction: error: ...``
-    (:func:`dryfriction.console.guarded`), as from ``dryfriction study``."""
-    from ..console import guarded
-
-    args_list = list(sys.argv[1:] if argv is None else argv)
-    if args_list and args_list[0] in ("-h", "--help"):
-        _parser(prog).print_help()
-        return EXIT_OK
-
-    def command() -> int:
-        try:
-            args = _parser(prog).parse_args(args_list)
-        except SystemExit as e:  # --help anywhere
-            return int(e.code or 0)
-        return run_args(args, prog)
-
-    return guarded(command)
-
-
-def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
-    """Run the study command of parsed arguments (see :func:`add_arguments`); ``prog`` names the
-    command in its help only. Bad input raises UsageError (one line, exit 2, reported by the
-    caller: :func:`main`, ``dryfriction study``); an interrupt is KeyboardInterrupt (finished
-    chunks are kept)."""
-    from ..console import PREFIX, interrupt_note, interrupted
-    from ..errors import FMUError
-    from ..sweep.engine import SweepInterrupted
-
-    try:
-        if args.name == "list":
-            print(_list())
-            return EXIT_OK
-        names = list(STUDIES) if args.name == "all" else [resolve(args.name)]
-        if args.name == "all" and (args.sets or args.config):
-            raise ConfigError("--set and --config apply to one study, not to 'all'")
-        # check every study's config before any work starts
-        cfgs = {n: effective_config(n, args.quick, args.config, args.sets) for n in names}
-        if args.show_config:
-            for n, cfg in cfgs.items():
-                print(dump_toml(cfg, header=f"study {n}" + (" (--quick)" if args.quick else "")))
-            return EXIT_OK
-        # every study's work and output checked before the first starts
-        total = 0.0
-        for n, cfg in cfgs.items():
-            total += check_study(n, cfg, Path(args.out) / n, getattr(args, "max_work", None)).out_bytes
-        if len(names) > 1:
-            from ..budget import check_writable
-
-            check_writable(args.out, OUTPUT_MARGIN * total, "the results and chunks of all studies")
-        fmu = getattr(args, "fmu", None)
-        interrupt_note("finished chunks are kept, run again to resume")
-        for n in names:
-            print(f"== study {n}: {STUDIES[n].TITLE}", flush=True)
-            run_study(n, quick=args.quick, out=args.out, workers=args.workers, scheduler=args.scheduler,
-                      sets=args.sets, config_file=args.config, fmu=fmu, max_chunks=args.max_chunks,
-                      progress=not args.no_progress, max_work=getattr(args, "max_work", None))
-        return EXIT_OK
-    except SweepInterrupted as e:
-        print(f"{PREFIX}: {e}", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except RuntimeError as e:
-        if interrupted() or isinstance(e, FMUError):  # said by the caller: the interrupt, exit 2
-            raise
-        print(f"{PREFIX}: error: {e}", file=sys.stderr)
-        return EXIT_FAILED

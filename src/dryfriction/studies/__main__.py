@@ -1,8 +1,9 @@
-"""``python -m dryfriction.studies <name> [options]``: see :func:`dryfriction.studies.main`."""
+"""``python -m dryfriction.studies <name> [options]``: the same as ``dryfriction study``
+(:func:`dryfriction.cli.study.main`)."""
 
 import sys
 
-from . import main
+from ..cli.study import main
 
 if __name__ == "__main__":
     sys.exit(main(prog="python -m dryfriction.studies"))

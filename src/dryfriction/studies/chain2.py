@@ -14,17 +14,18 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..chain import ChainFMU, default_chain_fmu3
+from ..drivers.chain import ChainFMU3, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt, trajectory_estimate
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "chain2"
-TITLE = "Chain of two blocks, the first forced: amplitude and stick share against frequency (friction on both / second)"
-FIGURES = ("chain2.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 CONFIGS = {"both": "friction on both blocks", "second": "friction on the second block only"}
 
-_CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
+_CHAINS: PerProcess[ChainFMU3] = PerProcess(lambda path: ChainFMU3(2, fmu_path=path))
 
 
 #: the FMU this study runs (dryfriction.paths): the FMI 3.0 chain
@@ -89,7 +90,7 @@ def rows_task(fmu: str | bytes, ch: Mapping[str, Any], window: Mapping[str, Any]
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
-    from ..chaos.batch import concat, map_chunks
+    from ..analysis.chaos.batch import concat, map_chunks
 
     cfg = ctx.cfg
     ch, sw, w, num = cfg["chain"], cfg["sweep"], cfg["window"], cfg["numerics"]

@@ -15,16 +15,17 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..chain import ChainFMU, default_chain_fmu3
+from ..drivers.chain import ChainFMU3, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
+from . import REGISTRY
 
 NAME = "chain_waves"
-TITLE = "Stick-slip fronts along a chain of 256 blocks, the first forced: space-time image of the modes"
-FIGURES = ("chain_waves.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 
-_CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
+_CHAINS: PerProcess[ChainFMU3] = PerProcess(lambda path: ChainFMU3(2, fmu_path=path))
 
 
 #: the FMU this study runs (dryfriction.paths): the FMI 3.0 chain
@@ -92,7 +93,7 @@ def front_speed(first: np.ndarray) -> float:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
-    from ..chaos.batch import map_chunks
+    from ..analysis.chaos.batch import map_chunks
 
     cfg = ctx.cfg
     ch, w, num = cfg["chain"], cfg["window"], cfg["numerics"]

@@ -8,15 +8,16 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..chaos.attractors import Catalogue
-from ..chaos.batch import concat, map_chunks, orbit_tails
-from ..chaos.maps import scheme_label
+from ..analysis.chaos.attractors import Catalogue
+from ..analysis.chaos.batch import concat, map_chunks, orbit_tails
+from ..analysis.chaos.maps import scheme_label
 from .common import FIGURE_BYTES, Estimate, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "chaos_basins"
-TITLE = "Basins of attraction where motions coexist (end of the chaotic range of Fig. 8/9; Fig. 11 zone)"
-FIGURES = ("chaos_basins_<case>.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 
 
 def check(cfg: dict[str, Any]) -> None:

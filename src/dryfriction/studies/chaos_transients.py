@@ -8,14 +8,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..chaos.batch import concat, map_chunks, transient_rows
-from ..chaos.maps import scheme_label
+from ..analysis.chaos.batch import concat, map_chunks, transient_rows
+from ..analysis.chaos.maps import scheme_label
 from .common import FIGURE_BYTES, Estimate, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "chaos_transients"
-TITLE = "Transient or permanent: spread after 30/300/1000 periods, transient lengths (Fig. 8/9 range)"
-FIGURES = ("chaos_transients.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "chaos_transients.nc"
 
 

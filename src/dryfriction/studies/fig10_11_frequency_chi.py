@@ -19,10 +19,11 @@ from ..sweep import SweepSpec, observables_dataset
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, plt,
                      sweep_estimate, sweep_settings, table)
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "fig10_11"
-TITLE = "Frequency-response curves for several chi over a grid of initial conditions"
-FIGURES = ("fig10.png", "fig11.png")
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASETS = ("fig10.nc", "fig11.nc")
 PARTS = ("fig10", "fig11")
 

@@ -16,18 +16,19 @@ from typing import Any
 
 import numpy as np
 
-from ..continuation import Continuation
+from ..analysis.continuation import Continuation
 from . import fig10_11_frequency_chi as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations
 from ..budget import continuation_work
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "fig10_11_orbits"
 BASE_CONFIG = "fig10_11"
-TITLE = "Fig. 10/11 as branches of periodic orbits in lambda with stability, over the scatter"
-FIGURES = ("fig10_orbits.png", "fig11_orbits.png")
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 MARK = {"fold": ("s", "F"), "period_doubling": ("D", "PD"), "symmetry_breaking": ("o", "SB"), "grazing": ("^", "")}
 
 

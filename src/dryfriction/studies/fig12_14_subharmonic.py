@@ -19,14 +19,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..fmu import Settings
+from ..drivers.oscillator import Settings
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
                      oscillator, plt, trajectory_estimate)
 from .config import require
+from . import REGISTRY
 
 NAME = "fig12_14"
-TITLE = "Time histories, phase portraits and diverging nearby initial conditions (sub-harmonic zone)"
-FIGURES = ("fig12.png", "fig13.png", "fig14.png")
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig12_14.nc"
 
 

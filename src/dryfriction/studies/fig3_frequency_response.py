@@ -12,15 +12,16 @@ from typing import Any
 
 import numpy as np
 
-from ..steady import den_hartog_amplitude, inman_amplitude
+from ..references.steady import den_hartog_amplitude, inman_amplitude
 from ..sweep import SweepSpec, observables_dataset
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, ensure,
                      oscillator, plt, sweep_estimate, sweep_settings, table)
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "fig3"
-TITLE = "Steady-state frequency response from rest vs Inman and Den Hartog"
-FIGURES = ("fig3.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig3.nc"
 
 

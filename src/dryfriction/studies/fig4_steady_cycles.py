@@ -15,10 +15,11 @@ import xarray as xr
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt,
                      trajectory_estimate)
 from .config import require
+from . import REGISTRY
 
 NAME = "fig4"
-TITLE = "Four steady-state cycles below and above resonance"
-FIGURES = ("fig4.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig4.nc"
 
 

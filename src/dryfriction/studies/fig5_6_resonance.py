@@ -19,10 +19,11 @@ import xarray as xr
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory, plt,
                      trajectory_estimate)
 from .config import require
+from . import REGISTRY
 
 NAME = "fig5_6"
-TITLE = "Unbounded growth at resonance (4 mu_k N < pi P0) and beating near it"
-FIGURES = ("fig5.png", "fig6.png")
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig5_6.nc"
 
 

@@ -17,10 +17,11 @@ from ..sweep import SweepSpec, observables_dataset
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, plt, sweep_estimate,
                      sweep_settings, table)
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "fig7"
-TITLE = "Percentage stiction time in the 30th cycle vs frequency ratio, ten friction levels"
-FIGURES = ("fig7.png",)
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig7.nc"
 
 

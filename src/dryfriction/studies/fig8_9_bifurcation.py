@@ -23,10 +23,11 @@ from ..sweep import SweepSpec, observables_dataset
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, plt,
                      sweep_estimate, sweep_settings, table)
 from .config import grid, require
+from . import REGISTRY
 
 NAME = "fig8_9"
-TITLE = "Mean amplitude and asymmetry vs chi over a grid of initial conditions (bifurcation)"
-FIGURES = ("fig8.png", "fig9.png")
+TITLE = REGISTRY[NAME].title
+FIGURES = REGISTRY[NAME].figures
 DATASET = "fig8_9.nc"
 
 
