@@ -3,7 +3,7 @@
 # .venv with the package and its test tools (uv pip install -e ".[test]"), and the FMUs built by
 # CMake into build/.
 # The editable install compiles nothing (pyproject.toml: scikit-build-core puts src/ on sys.path);
-# the package finds the FMUs in build/ (dryfriction.locate). A wheel with the FMUs inside:
+# the package finds the FMUs in build/ (dryfriction.paths). A wheel with the FMUs inside:
 # pip wheel . (see README.md, Development).
 # Usage: bash scripts/setup.sh        (idempotent; later runs only rebuild what changed)
 set -euo pipefail
