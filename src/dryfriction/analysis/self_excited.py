@@ -53,6 +53,7 @@ import numpy as np
 from ..errors import FMUError
 from ..drivers.oscillator import OscillatorFMU2, Settings
 from ..params import Oscillator
+from ..roots import find_root
 
 __all__ = ["BeltProblem", "BeltOrbit", "Equilibrium", "SelfExcited", "HopfPoint", "Branch", "BranchPoint",
            "LAWS", "SCHEMES", "equilibrium", "find_orbit", "self_excited", "locate_hopf", "continue_orbits",
@@ -579,10 +580,8 @@ def self_excited(prob: BeltProblem, *, fmu: OscillatorFMU2 | None = None, period
 def section_map(prob: BeltProblem, v0: float, *, fmu: OscillatorFMU2 | None = None,
                 samples: int = 512, periods: float = 3.0) -> tuple[float, float]:
     """(v1, t1): the velocity and the time of the next crossing of the section from (x_eq, v0), located
-    by a sampled run and Brent's method on x(t) - x_eq with the FMU's runs (a check of the
-    multipliers by differences of this map)."""
-    from scipy.optimize import brentq
-
+    by a sampled run and Brent's method (:func:`dryfriction.roots.find_root`) on x(t) - x_eq with the
+    FMU's runs (a check of the multipliers by differences of this map)."""
     with _fmu(fmu) as f:
         flow = _Flow(f, prob)
         xe, d = prob.x_eq, -prob.direction
@@ -597,7 +596,7 @@ def section_map(prob: BeltProblem, v0: float, *, fmu: OscillatorFMU2 | None = No
         def g(t: float) -> float:
             return d * (flow.end(xe, v0, t)["x"] - xe)
 
-        t1 = float(brentq(g, a, b, xtol=1e-15, rtol=1e-15, maxiter=200))
+        t1 = find_root(g, a, b, xtol=1e-15, rtol=1e-15, maxiter=200)
         return flow.end(xe, v0, t1)["v"], t1
 
 
@@ -625,11 +624,10 @@ def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: 
                 xtol: float = 1e-13) -> HopfPoint:
     """The belt speed in [lo, hi] (same sign, |lo| < |hi|) where steady sliding changes stability: its
     multipliers over tau = a quarter of the natural period (a complex pair near +-i there, well apart)
-    followed over a scan of ``num`` speeds (geometric), then Brent's method on the growth rate
-    ln |mu|max / tau. RuntimeError if no sign change, or if what crosses |mu| = 1 is not a complex
-    pair (then it is not a Hopf point)."""
-    from scipy.optimize import brentq
-
+    followed over a scan of ``num`` speeds (geometric), then Brent's method
+    (:func:`dryfriction.roots.find_root`, from the scan's two speeds around the sign change) on the
+    growth rate ln |mu|max / tau. RuntimeError if no sign change, or if what crosses |mu| = 1 is not a
+    complex pair (then it is not a Hopf point)."""
     if not (lo * hi > 0 and abs(lo) < abs(hi)):
         raise ValueError(f"locate_hopf needs 0 < |lo| < |hi| with one sign, not lo = {lo}, hi = {hi}")
     with _fmu(fmu) as f:
@@ -649,7 +647,7 @@ def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: 
             raise RuntimeError(f"steady sliding does not change stability between {lo:g} and {hi:g} m/s "
                                f"(growth rates {rates[0]:.3g} ... {rates[-1]:.3g} 1/s)")
         a, b = float(speeds[k]), float(speeds[k + 1])
-        v = float(brentq(rate, a, b, xtol=xtol, rtol=1e-15, maxiter=200))
+        v = find_root(rate, a, b, fa=rates[k], fb=rates[k + 1], xtol=xtol, rtol=1e-15, maxiter=200)
         eq = _equilibrium(_Flow(f, prob.with_(v_belt=v)), tau)
         mu = eq.multipliers
         if not abs(mu[0].imag) > 1e-6:
