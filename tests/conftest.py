@@ -28,7 +28,7 @@ from fmi2_helpers import Inst
 # nothing in them for the sanitizers to check). A test of one that asks for an FMU fixture is an
 # error at collection.
 PYTHON_ONLY = frozenset({"test_references.py", "test_belt_reference.py", "test_chain_driver.py",
-                         "test_packaging_requirements.py"})
+                         "test_packaging_requirements.py", "test_roots.py"})
 FMU_FIXTURES = frozenset({"fmu", "fmu_path", "chain_fmu2", "chain_fmu3", "unzipped", "inst", "md2", "md3"})
 
 

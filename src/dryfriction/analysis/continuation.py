@@ -47,15 +47,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
-import xarray as xr
 
 from ..drivers.oscillator import OscillatorFMU2, Settings
 from .orbits import JACOBIAN, STABILITY_MARGIN, Orbit, _Map, _multipliers, _slide_section, find_orbits, scales
 from ..params import Oscillator
 from ..roots import RootSearch
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["Bifurcation", "Branch", "Continuation", "continue_orbits", "PARAMETERS", "set_parameter",
            "get_parameter", "ArclengthProblem", "Evaluation", "CorrectorFailure", "correct", "tangent", "ARC_TOL"]
@@ -962,6 +964,8 @@ class _Run:
 
     # -- output --
     def result(self) -> Continuation:
+        import xarray as xr
+
         rows = self.rows
         n = len(rows)
 
