@@ -126,6 +126,7 @@ def set_parameter(p: Oscillator, name: str, value: float) -> Oscillator:
 
 
 def get_parameter(p: Oscillator, name: str) -> float:
+    """The value of the parameter ``name`` (a key of PARAMETERS) of p."""
     if name == "f":
         return p.f_hz
     if name == "mu_s_sigma":
@@ -166,6 +167,12 @@ class Bifurcation:
 
 @dataclass
 class Branch:
+    """One branch of a continuation, as a record: its ``id`` (the Dataset's ``branch``), ``period`` K,
+    ``kind`` (``"full"``: fixed points of P^K; ``"symmetric"``: of H = -P^{1/2}), the ``parent`` branch
+    it was switched from (None for a start), the ``points`` it holds in the Dataset and why it
+    ``stopped``. Its points are rows of :attr:`Continuation.dataset`; the self-excited belt's branch,
+    one branch with its points, is :class:`dryfriction.analysis.self_excited.BeltBranch`."""
+
     id: int
     period: int
     kind: str                        # "full" (P^K) or "symmetric" (H = -P^{1/2})
@@ -180,6 +187,11 @@ class Branch:
 
 @dataclass
 class Continuation:
+    """The result of :func:`continue_orbits`: the parameter's name, every point of every branch as an
+    xarray Dataset (dimension ``point``: param, x0, v0, amplitude_m, offset_m, stick_fraction,
+    transitions, mu_max, the multipliers, stable, converged, reason, bifurcation, branch, period,
+    kind, residual, section_s, arclength), the located bifurcations, the branches, the map's runs."""
+
     param: str
     dataset: xr.Dataset
     bifurcations: list[Bifurcation]
@@ -195,9 +207,9 @@ class Continuation:
 #
 # Pseudo-arclength continuation of G(u) = 0, u in R^(n+1) (scaled unknowns), for any problem with
 # the small interface ArclengthProblem: the forced orbits (_BranchMap below) and the self-excited
-# belt orbit (dryfriction.analysis.self_excited.branch). The engine owns the predictor, the
-# corrector, the tangent and the step size; each problem its unknowns, its residual and its walk
-# (what a branch point means, where a branch ends).
+# belt orbit (dryfriction.analysis.self_excited.branch). The engine owns the corrector (from the
+# predictor the walk gives it) and the tangent; each problem its unknowns, its residual and its walk
+# (the step control, what a branch point means, where a branch ends).
 
 #: the corrector's arclength constraint holds to this (scaled)
 ARC_TOL = 1e-13
@@ -291,12 +303,6 @@ def tangent(problem: ArclengthProblem, e: Evaluation, orient: np.ndarray | None 
     if orient is not None and float(t @ orient) < 0:
         t = -t
     return t
-
-
-def step(problem: ArclengthProblem, u: np.ndarray, t: np.ndarray, ds: float, *, tol: float, max_iter: int,
-         arc_tol: float = ARC_TOL) -> tuple[Evaluation, int]:
-    """One pseudo-arclength step: the predictor u + ds t, corrected on t . (u' - u) = ds."""
-    return correct(problem, u + ds * t, t, u, ds, tol=tol, max_iter=max_iter, arc_tol=arc_tol)
 
 
 # ---- the branch's map ---------------------------------------------------------------------------
