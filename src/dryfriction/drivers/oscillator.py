@@ -1,6 +1,5 @@
-"""A fast driver for the FMI 2.0 DryFrictionOscillator FMU: :class:`OscillatorFMU2` (the name
-:class:`OscillatorFMU` is the same class); the FMI 3.0 one is :class:`~dryfriction.drivers.oscillator3.OscillatorFMU3`
-(importable from here too).
+"""A fast driver for the FMI 2.0 DryFrictionOscillator FMU: :class:`OscillatorFMU2`; the FMI 3.0
+one is :class:`~dryfriction.drivers.oscillator3.OscillatorFMU3`.
 
 The FMU is unzipped and instantiated once through :mod:`dryfriction.fmi.fmi2`; every run then
 costs only reset, setup, the parameter values and the steps. Every FMI status is checked: an error
@@ -29,7 +28,7 @@ from ..fmi._base import State
 from ..model import default_fmu_path
 from ..params import Oscillator
 
-__all__ = ["FMUError", "FMUCallError", "OscillatorFMU", "OscillatorFMU2", "OscillatorFMU3", "Run", "Switch",
+__all__ = ["FMUError", "FMUCallError", "OscillatorFMU2", "Run", "Switch",
            "Settings", "Restarts", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS", "OBSERVABLE_OUTPUTS", "SCHEMES",
            "EFFECT_BITS"]
 
@@ -57,7 +56,7 @@ def _scheme_start() -> str:
 class Settings:
     """Numerical and scene settings of one run (FMU variable names; defaults: the model's starts, except
     ``observe``: off unless a run reads the observables, so that runs which do not pay nothing for them
-    per step; :meth:`OscillatorFMU.observables` and the scenes that read them turn it on)."""
+    per step; :meth:`OscillatorFMU2.observables` and the scenes that read them turn it on)."""
 
     h: float | None = None            # internal step, s (None: period / 1000; 0: the FMU derives it)
     alpha: float = field(default_factory=lambda: float(_start("alpha")))
@@ -520,15 +519,3 @@ class Restarts:
                 inst.check("fmi2GetInteger", s, n)
             self.int = self._oival[:]
 
-
-#: the former name of :class:`OscillatorFMU2` (the same class)
-OscillatorFMU = OscillatorFMU2
-
-
-def __getattr__(name: str) -> Any:
-    # the FMI 3.0 driver, importable from here too, without importing it with this module
-    if name in ("OscillatorFMU3", "FMI3Oscillator"):
-        from . import oscillator3 as fmu3
-
-        return getattr(fmu3, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ...drivers.oscillator import FMUError, OscillatorFMU
+from ...drivers.oscillator import FMUError, OscillatorFMU2
 from ...params import Oscillator
 from ..orbits import SAME, STABILITY_MARGIN, find_orbits, scales
 from .transient import default_settings
@@ -96,7 +96,7 @@ def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
     return out
 
 
-def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
+def _orbits_at(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
                opts: Mapping[str, Any]) -> list[_Branch]:
     """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
     :class:`dryfriction.analysis.orbits.OrbitFollower`), and with ``cold`` transients from the spread of
@@ -155,7 +155,7 @@ def _mirrors(p: Oscillator, f: float, followed: list[_Branch], follow: Any) -> N
             followed.append(_Branch(image, f, T))
 
 
-def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_Branch],
+def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[_Branch],
                      opts: Mapping[str, Any]) -> list[_Branch]:
     """The cold search of a sweep's later frequencies, cheap: the end states of find_orbits'
     transients (its spread of initial conditions), each followed by Newton from t = 0 (as a

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ...drivers.oscillator import FMUError, OscillatorFMU, Settings
+from ...drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from ...params import Oscillator
 
 #: relative agreement of successive windows (amplitude and offset, relative to the amplitude)
@@ -95,7 +95,7 @@ def _flow_error(p: Oscillator, J: np.ndarray, dev: float) -> float:
     return float(np.linalg.norm(Js, 2)) * dev
 
 
-def steady_state(fmu: OscillatorFMU, p: Oscillator, *, tol: float = TOL, tol_stick: float = TOL_STICK,
+def steady_state(fmu: OscillatorFMU2, p: Oscillator, *, tol: float = TOL, tol_stick: float = TOL_STICK,
                  min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
                  settings: Settings | None = None) -> SteadyState:
     """Run until the estimated error of the last window is within tol (see the module docstring);
