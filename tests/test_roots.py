@@ -36,7 +36,8 @@ def bisections(width: float, tol: float) -> int:
     (lambda x: x ** 3 - 2.0 * x - 5.0, 2.0, 3.0, 2.0945514815423265),        # Wallis's cubic
     (lambda x: (x - 1.0) * (x - 2.0) * (x - 3.0), 1.5, 2.7, 2.0),
     (lambda x: math.cos(x) - x, 0.0, 1.0, 0.7390851332151607),               # the Dottie number
-    (lambda x: 1e-30 * (x - 0.25), 0.0, 1.0, 0.25),                          # tiny values: no underflow
+    (lambda x: 1e-30 * (x - 0.25), 0.0, 1.0, 0.25),                          # tiny values
+    (lambda x: 1e-200 * (x - 0.3), 0.0, 1.0, 0.3),      # f(a) f(b) underflows to 0: the signs still count
     (lambda x: 1e300 * (x - 0.125) + 1e299 * (x - 0.125) ** 2, -1.0, 1.0, 0.125),  # huge values: no overflow
 ])
 def test_known_roots_to_the_tolerance(f, a, b, root):

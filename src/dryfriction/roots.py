@@ -10,15 +10,18 @@ when only two are usable, bisection otherwise). A bracket [a, b] with f(a), f(b)
 is kept at every step, so the method converges whatever f is, continuous or not: an interpolated
 step is taken only when it is shorter than half the step before the last one and falls well inside
 the bracket, otherwise the bracket is halved, so the steps shrink at least geometrically (at most
-about k^2 evaluations, k those of bisection; on a smooth simple root the order is about 1.8). It
-gives the same iterates as SciPy's ``brentq`` (tested), so the callers that used it keep their
-bits, and it needs no SciPy.
+about k^2 evaluations, k those of bisection; on a smooth simple root the order is about 1.8).
+It gives SciPy ``brentq``'s iterates (tested), so the callers that used it keep their bits, with two
+guards added: the signs of f are compared, not their product (which underflows to 0 when both
+values are below about 1e-162, and passes for a bracket or hides one), and a step that would not land strictly inside the
+bracket bisects instead. It needs no SciPy.
 
-Why this one: Illinois (regula falsi with halving) is simpler but of order 1.44 and has no bound
-better than bisection's only through an extra fallback; Chandrupatla's method needs a comparable
-number of evaluations on smooth functions but no published worst-case bound without an added
-safeguard; TOMS 748 (Alefeld-Potra-Shi) has the best asymptotic order but costs two or three
-evaluations per step. Brent's is the standard with a proven bound and matches what the callers had.
+Why this one: Illinois (regula falsi with halving, what the continuation had) is of order 1.44 and
+is bounded only through a bisection fallback; Chandrupatla's method needs about as many evaluations
+on smooth roots, but its steps are bounded below only by the tolerance, so without an added
+safeguard its worst case is no multiple of bisection's; TOMS 748 (Alefeld-Potra-Shi) has the better
+worst case but spends two or three evaluations per step and no fewer on smooth roots. Brent's is
+the standard with a proven bound, and it is what three of the callers used.
 
 **The tolerance convention (one for every caller).** The search stops when
 
