@@ -271,7 +271,6 @@ def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float
                 hopf = hp.v_belt
                 seed = c.seed_at_fixed_v0(-c.sgn * seed_amplitude * c.V, prob.natural_period, hopf)
                 if seed is not None:
-                    p0 = c.point(seed)
                     try:
                         tan = tangent(c, seed)
                     except CorrectorFailure:
@@ -279,6 +278,7 @@ def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float
                 if seed is None:
                     end += f"; no slip leg: no orbit with |v0| = {seed_amplitude:g} V near the Hopf {hopf:.6g}"
                 else:
+                    p0 = c.point(seed)
                     if tan[0] * -c.sgn < 0:               # towards larger |v0| (larger orbits)
                         tan = -tan
 
