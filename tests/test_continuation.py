@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from dryfriction import Oscillator
-from dryfriction.analysis.continuation import (PARAMETERS, Continuation, continue_orbits, get_parameter,
-                                      set_parameter)
+from dryfriction.analysis.continuation import (PARAMETERS, Continuation, CorrectorFailure, Evaluation,
+                                               continue_orbits, correct, get_parameter, set_parameter, tangent)
 from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.analysis.orbits import find_orbits, scales
 from dryfriction.references.steady import den_hartog_amplitude
@@ -41,6 +41,72 @@ def branch(c: Continuation, i: int):  # noqa: ANN201 - an xarray Dataset
 
 def of_type(c: Continuation, kind: str) -> list:
     return [b for b in c.bifurcations if b.type == kind]
+
+
+# ---- the engine, on a problem with a closed form ----------------------------------------------------
+
+class Circle:
+    """G(u) = |u|^2 - 1 over u = (y, q): a branch with two folds in q (at q = +-1), for the engine's
+    interface; counts its evaluations and derivatives."""
+
+    def __init__(self) -> None:
+        self.evaluations = self.derivatives = 0
+
+    def evaluate(self, u: np.ndarray) -> Evaluation:
+        self.evaluations += 1
+        return Evaluation(np.array(u, dtype=float), np.array([u[0] ** 2 + u[1] ** 2 - 1.0]))
+
+    def derive(self, e: Evaluation, parameter: bool) -> None:
+        if e.Gy is None:
+            self.derivatives += 1
+            e.Gy = np.array([[2.0 * e.u[0]]])
+        if parameter and e.Gq is None:
+            e.Gq = np.array([2.0 * e.u[1]])
+
+    def norm(self, e: Evaluation) -> float:
+        return float(abs(e.G[0]))
+
+    def check(self, u: np.ndarray, du: np.ndarray) -> None:
+        if np.max(np.abs(du)) > 10.0:
+            raise CorrectorFailure("the corrector diverged")
+
+
+def test_engine_follows_a_circle_through_both_folds() -> None:
+    """Pseudo-arclength steps around the unit circle: the constraint t . (u - u_prev) = ds along the
+    unit tangent at u_prev puts the next point sin(dphi) = ds further, so after n steps the angle is
+    exactly n asin(ds); every point on the circle to the tolerance; through the folds at q = +-1
+    (where a natural continuation in q stops), around once."""
+    c = Circle()
+    u = np.array([1.0, 0.0])
+    e, it = correct(c, u, None, None, 0.0, tol=1e-14, max_iter=8)
+    assert it == 0 and c.derivatives == 0            # converged: no derivative asked
+    t = tangent(c, e, np.array([0.0, 1.0]))
+    assert np.allclose(t, [0.0, 1.0], atol=1e-15)    # the circle's tangent, oriented
+    ds = 0.1
+    n = int(2.0 * math.pi / math.asin(ds))
+    q = []
+    for _ in range(n):
+        e, _ = correct(c, e.u + ds * t, t, e.u, ds, tol=1e-15, max_iter=8)
+        t = tangent(c, e, t)
+        assert abs(np.hypot(*e.u) - 1.0) <= 1e-15
+        q.append(e.u[1])
+    phi = math.atan2(e.u[1], e.u[0]) % (2.0 * math.pi)
+    assert abs(phi - n * math.asin(ds)) <= 1e-12
+    assert max(q) > 0.998 and min(q) < -0.998         # both folds passed
+    assert 2.0 * math.pi - phi < math.asin(ds)        # once around
+
+
+def test_engine_corrector_at_a_fixed_parameter_and_its_failures() -> None:
+    c = Circle()
+    e, it = correct(c, np.array([0.9, 0.6]), None, None, 0.0, tol=1e-15, max_iter=8)
+    assert e.u[1] == 0.6 and abs(e.u[0] - 0.8) <= 1e-15 and 3 <= it <= 6     # Newton, quadratic
+    assert c.derivatives == it and e.Gq is None       # Gy for each Newton step, G_q never
+    with pytest.raises(CorrectorFailure, match="no convergence in 2 corrector steps"):
+        correct(c, np.array([0.9, 0.6]), None, None, 0.0, tol=1e-15, max_iter=2)
+    with pytest.raises(CorrectorFailure, match="singular corrector matrix"):
+        correct(c, np.array([0.0, 0.6]), None, None, 0.0, tol=1e-15, max_iter=8)   # dG/dy = 0 there
+    with pytest.raises(CorrectorFailure, match="diverged"):
+        correct(c, np.array([1e-3, 0.6]), None, None, 0.0, tol=1e-15, max_iter=8)
 
 
 # ---- the parameters --------------------------------------------------------------------------------

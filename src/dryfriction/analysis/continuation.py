@@ -18,14 +18,20 @@ dG/dy is the FMU's exact Jacobian (``sensitivity = true``); dG/dq is a central f
 omega): ``t_s = phase * span``; when a stick phase comes near it (within ``SECTION_MARGIN`` of the
 span) it is chosen again at the middle of the longest slide, as find_orbits does.
 
-Predictor u + ds t (t the unit tangent, the null vector of [G_y | G_q]); corrector: Newton on
-[G(u); t . (u - u_prev) - ds]. Step control: halve on a failed corrector or a turn of the tangent by
-more than ``max_turn`` radians, grow by 1.5 after a corrector of at most 3 steps, within [ds_min,
-ds_max].
+**The engine** (also the self-excited belt branch's, dryfriction.analysis.self_excited): for any
+problem G(u) = 0, u in R^(n+1), that supplies the small interface :class:`ArclengthProblem` (the
+residual, its derivatives, its norm, a check of a Newton step): the predictor u + ds t (t the unit
+tangent, the null vector of [G_y | G_q], :func:`tangent`); the corrector :func:`correct`, Newton on
+[G(u); t . (u - u_prev) - ds] (or with one unknown held fixed), the derivatives asked only for a
+Newton step or a tangent. Each problem walks its own branch with it. Here: halve the step on a
+failed corrector or a turn of the tangent by more than ``max_turn`` radians, grow it by 1.5 after a
+corrector of at most 3 steps, within [ds_min, ds_max].
 
-Bifurcations, located between two branch points by Illinois regula falsi (bisection for grazing) on
-the arclength s of the step, each trial point corrected with the step's constraint, to ``ptol`` in
-the parameter; the orbit at the located parameter is the corrector's solution there:
+Bifurcations, located between two branch points on the arclength s of the step by Brent's method
+(:class:`dryfriction.roots.RootSearch`; bisection for grazing, whose test is the events per cycle),
+each trial point corrected with the step's constraint; the root finder's tolerance in s is
+``ptol`` max(1, |p|) in the parameter over the larger |dp/ds| of the step's two ends; the orbit at the
+located parameter is the corrector's solution there:
 
 - fold: det(J - I) changes sign (J the Jacobian of the branch's map) and so does dp/ds;
 - period doubling: det(J_P + I) changes sign (J_P of P^K); then the doubled branch is continued
@@ -41,17 +47,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
-import xarray as xr
 
 from ..drivers.oscillator import OscillatorFMU2, Settings
 from .orbits import JACOBIAN, STABILITY_MARGIN, Orbit, _Map, _multipliers, _slide_section, find_orbits, scales
 from ..params import Oscillator
+from ..roots import RootSearch
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["Bifurcation", "Branch", "Continuation", "continue_orbits", "PARAMETERS", "set_parameter",
-           "get_parameter"]
+           "get_parameter", "ArclengthProblem", "Evaluation", "CorrectorFailure", "correct", "tangent", "ARC_TOL"]
 
 #: a stick phase nearer to the section than this share of the map's span: choose the section again
 SECTION_MARGIN = 0.03
@@ -62,6 +71,8 @@ SYMMETRIC = 1e-8
 KINK_REACH = 3.0
 #: corrector steps allowed at the trial points of a location
 LOCATE_ITERATIONS = 60
+#: trial points of one location, at most
+LOCATE_POINTS = 200
 BIFURCATION_TYPES = ("fold", "period_doubling", "symmetry_breaking", "grazing")
 
 # ---- the parameters -----------------------------------------------------------------------------
@@ -115,6 +126,7 @@ def set_parameter(p: Oscillator, name: str, value: float) -> Oscillator:
 
 
 def get_parameter(p: Oscillator, name: str) -> float:
+    """The value of the parameter ``name`` (a key of PARAMETERS) of p."""
     if name == "f":
         return p.f_hz
     if name == "mu_s_sigma":
@@ -155,6 +167,12 @@ class Bifurcation:
 
 @dataclass
 class Branch:
+    """One branch of a continuation, as a record: its ``id`` (the Dataset's ``branch``), ``period`` K,
+    ``kind`` (``"full"``: fixed points of P^K; ``"symmetric"``: of H = -P^{1/2}), the ``parent`` branch
+    it was switched from (None for a start), the ``points`` it holds in the Dataset and why it
+    ``stopped``. Its points are rows of :attr:`Continuation.dataset`; the self-excited belt's branch,
+    one branch with its points, is :class:`dryfriction.analysis.self_excited.BeltBranch`."""
+
     id: int
     period: int
     kind: str                        # "full" (P^K) or "symmetric" (H = -P^{1/2})
@@ -169,6 +187,11 @@ class Branch:
 
 @dataclass
 class Continuation:
+    """The result of :func:`continue_orbits`: the parameter's name, every point of every branch as an
+    xarray Dataset (dimension ``point``: param, x0, v0, amplitude_m, offset_m, stick_fraction,
+    transitions, mu_max, the multipliers, stable, converged, reason, bifurcation, branch, period,
+    kind, residual, section_s, arclength), the located bifurcations, the branches, the map's runs."""
+
     param: str
     dataset: xr.Dataset
     bifurcations: list[Bifurcation]
@@ -180,32 +203,127 @@ class Continuation:
                 "bifurcations": [b.as_dict() for b in self.bifurcations]}
 
 
+# ---- the engine ---------------------------------------------------------------------------------
+#
+# Pseudo-arclength continuation of G(u) = 0, u in R^(n+1) (scaled unknowns), for any problem with
+# the small interface ArclengthProblem: the forced orbits (_BranchMap below) and the self-excited
+# belt orbit (dryfriction.analysis.self_excited.branch). The engine owns the corrector (from the
+# predictor the walk gives it) and the tangent; each problem its unknowns, its residual and its walk
+# (the step control, what a branch point means, where a branch ends).
+
+#: the corrector's arclength constraint holds to this (scaled)
+ARC_TOL = 1e-13
+
+
+class CorrectorFailure(Exception):
+    """A corrector that did not converge, or a residual the problem could not evaluate: the step is
+    refused (the walk halves it)."""
+
+
+@dataclass
+class Evaluation:
+    """The residual G at u; ``Gy`` = dG/du[:n] and ``Gq`` = dG/du[n] once the problem derived them
+    (None before). A problem keeps what else it needs in a subclass."""
+
+    u: np.ndarray
+    G: np.ndarray
+    Gy: np.ndarray | None = None
+    Gq: np.ndarray | None = None
+
+    @property
+    def A(self) -> np.ndarray:
+        """[Gy | Gq], n x (n + 1)."""
+        assert self.Gy is not None and self.Gq is not None
+        return np.hstack([self.Gy, self.Gq[:, None]])
+
+
+class ArclengthProblem(Protocol):
+    """What the engine needs of a problem (module doc, "the engine"): all may raise CorrectorFailure."""
+
+    def evaluate(self, u: np.ndarray) -> Evaluation:
+        """The residual at u."""
+
+    def derive(self, e: Evaluation, parameter: bool) -> None:
+        """Set e.Gy, and with ``parameter`` e.Gq too (nothing when set already)."""
+
+    def norm(self, e: Evaluation) -> float:
+        """The residual's size, against the corrector's tolerance."""
+
+    def check(self, u: np.ndarray, du: np.ndarray) -> None:
+        """CorrectorFailure when the Newton step du from u diverges or leaves the problem's domain."""
+
+
+def correct(problem: ArclengthProblem, u: np.ndarray, row: np.ndarray | None, anchor: np.ndarray | None,
+            c: float, *, tol: float, max_iter: int, arc_tol: float = ARC_TOL) -> tuple[Evaluation, int]:
+    """Newton on [G(u); row . (u - anchor) - c] = 0 from u: ``row`` the unit tangent t, ``anchor`` the
+    last point and c the step ds (pseudo-arclength), or ``row`` None: the last unknown held fixed.
+    Converged when norm(G) <= tol and the constraint holds to ``arc_tol``; the derivatives are
+    asked only for a Newton step. (Evaluation, Newton steps taken), or CorrectorFailure."""
+    u = np.array(u, dtype=float)
+    norm = math.nan
+    for it in range(max_iter + 1):
+        e = problem.evaluate(u)
+        arc = 0.0 if row is None else float(row @ (u - anchor) - c)
+        norm = problem.norm(e)
+        if norm <= tol and abs(arc) <= arc_tol:
+            return e, it
+        if it == max_iter:
+            break
+        problem.derive(e, parameter=row is not None)
+        if row is None:
+            A, rhs = e.Gy, -e.G
+        else:
+            A = np.vstack([e.A, row[None, :]])
+            rhs = -np.concatenate([e.G, [arc]])
+        try:
+            du = np.linalg.solve(A, rhs)
+        except np.linalg.LinAlgError:
+            raise CorrectorFailure("singular corrector matrix") from None
+        if row is None:
+            du = np.concatenate([du, [0.0]])
+        if not np.all(np.isfinite(du)):
+            raise CorrectorFailure("the corrector diverged")
+        problem.check(u, du)
+        u = u + du
+    raise CorrectorFailure(f"no convergence in {max_iter} corrector steps (residual {norm:.3g})")
+
+
+def tangent(problem: ArclengthProblem, e: Evaluation, orient: np.ndarray | None = None) -> np.ndarray:
+    """The unit null vector of [Gy | Gq] at e (the branch's direction), pointing along ``orient`` when
+    given (t . orient >= 0)."""
+    problem.derive(e, parameter=True)
+    A = e.A
+    if A.shape == (2, 3):
+        t = np.cross(A[0], A[1])
+        n = float(np.linalg.norm(t))
+        t = t / n if n > 0 else t
+    else:
+        t = np.linalg.svd(A)[2][-1]
+        t = t / np.linalg.norm(t)
+    if orient is not None and float(t @ orient) < 0:
+        t = -t
+    return t
+
+
 # ---- the branch's map ---------------------------------------------------------------------------
 
 
 @dataclass
-class _Eval:
-    """The map at u: residual G, G_y, G_q (NaN when not asked), the map's Jacobian J (raw, in z)."""
+class _Eval(Evaluation):
+    """The map at u: residual G, G_y (from J), G_q (None until derived), the map's Jacobian J (raw,
+    in z), the mode at the end."""
 
-    u: np.ndarray
-    p: Oscillator
-    G: np.ndarray
-    Gy: np.ndarray
-    Gq: np.ndarray
-    J: np.ndarray
-    mode: int
+    p: Oscillator | None = None
+    J: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan))
+    mode: int = 0
 
     def residual(self) -> float:
         return float(np.max(np.abs(self.G)) / max(1.0, float(np.max(np.abs(self.u[:2])))))
 
-    def tangent(self) -> np.ndarray:
-        A = np.hstack([self.Gy, self.Gq[:, None]])
-        t = np.cross(A[0], A[1])
-        n = float(np.linalg.norm(t))
-        return t / n if n > 0 else t
-
 
 class _BranchMap:
+    """The fixed points of a branch's map as an :class:`ArclengthProblem` (module doc)."""
+
     def __init__(self, fmu: OscillatorFMU2, base: Oscillator, name: str, p_a: float, p_s: float,
                  K: int, kind: str, phase: float, xs: float, w: float, fd_step: float,
                  counter: list[int]) -> None:
@@ -245,14 +363,37 @@ class _BranchMap:
         Mz, J, md = self.raw(z, p)
         return (Mz - z) / self.S, J, md
 
-    def eval(self, u: np.ndarray, derivative: bool = True) -> _Eval:
-        p = self.osc(float(u[2]))
-        G, J, md = self.G(u, p)
+    def evaluate(self, u: np.ndarray) -> _Eval:
+        """The residual at u with G_y (the FMU's Jacobian); CorrectorFailure when the parameter leaves
+        its valid range or the Jacobian is not available."""
+        try:
+            p = self.osc(float(u[2]))
+            G, J, md = self.G(u, p)
+        except ValueError as err:       # the parameter left its valid range
+            raise CorrectorFailure(str(err)) from None
+        if not np.all(np.isfinite(J)):
+            raise CorrectorFailure("the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)")
         Gy = (J - np.eye(2)) * self.S[None, :] / self.S[:, None]
-        e = _Eval(np.array(u, dtype=float), p, G, Gy, np.full(2, np.nan), J, md)
-        if derivative:
-            self.derivative(e)
-        return e
+        return _Eval(np.array(u, dtype=float), G, Gy, None, p, J, md)
+
+    def derive(self, e: Evaluation, parameter: bool) -> None:
+        if parameter and e.Gq is None:
+            assert isinstance(e, _Eval)
+            try:
+                self.derivative(e)
+            except ValueError as err:
+                raise CorrectorFailure(str(err)) from None
+            assert e.Gq is not None
+            if not np.all(np.isfinite(e.Gq)):
+                raise CorrectorFailure("dG/dparam is not finite")
+
+    def norm(self, e: Evaluation) -> float:
+        assert isinstance(e, _Eval)
+        return e.residual()
+
+    def check(self, u: np.ndarray, du: np.ndarray) -> None:
+        if np.max(np.abs(du)) > 10.0 * max(1.0, float(np.max(np.abs(u[:2])))):
+            raise CorrectorFailure("the corrector diverged")
 
     def derivative(self, e: _Eval) -> None:
         """e.Gq by a central difference in q (one-sided at the edge of the parameter's valid range)."""
@@ -284,10 +425,6 @@ class _Point:
     t: np.ndarray                    # unit tangent
     s: float                         # arclength from the branch's start
     info: dict[str, Any]             # the cycle's observables, multipliers, tests
-
-
-class _Failure(Exception):
-    pass
 
 
 # ---- the continuation ---------------------------------------------------------------------------
@@ -387,44 +524,12 @@ class _Run:
 
     def correct(self, m: _BranchMap, u: np.ndarray, t: np.ndarray | None, u_prev: np.ndarray | None,
                 ds: float, max_iter: int | None = None) -> tuple[_Eval, int]:
-        """Newton on [G; t . (u - u_prev) - ds] (t None: the parameter fixed). Next to a corner of the
-        branch (an event changes) dG/dq is a mix of both sides: Newton then converges only linearly,
-        so the location of a bifurcation allows more steps."""
-        u = np.array(u, dtype=float)
-        n_max = self.max_iter if max_iter is None else max_iter
-        for it in range(n_max + 1):
-            try:
-                e = m.eval(u, derivative=t is not None)
-                arc = 0.0 if t is None else float(t @ (u - u_prev) - ds)
-                done = e.residual() <= self.tol and abs(arc) <= 1e-13
-                if done and t is None:
-                    m.derivative(e)
-            except ValueError as err:       # the parameter left its valid range
-                raise _Failure(str(err)) from None
-            if not (np.all(np.isfinite(e.J)) and (np.all(np.isfinite(e.Gq)) or t is None)):
-                raise _Failure("the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)")
-            if done:
-                if not np.all(np.isfinite(e.Gq)):
-                    raise _Failure("dG/dparam is not finite")
-                return e, it
-            if it == n_max:
-                break
-            if t is None:
-                A = e.Gy
-                rhs = -e.G
-            else:
-                A = np.vstack([np.hstack([e.Gy, e.Gq[:, None]]), t[None, :]])
-                rhs = -np.concatenate([e.G, [arc]])
-            try:
-                du = np.linalg.solve(A, rhs)
-            except np.linalg.LinAlgError:
-                raise _Failure("singular corrector matrix") from None
-            if t is None:
-                du = np.concatenate([du, [0.0]])
-            if not np.all(np.isfinite(du)) or np.max(np.abs(du)) > 10.0 * max(1.0, float(np.max(np.abs(u[:2])))):
-                raise _Failure("the corrector diverged")
-            u = u + du
-        raise _Failure(f"no convergence in {n_max} corrector steps (residual {e.residual():.3g})")
+        """The engine's corrector on m (t None: the parameter fixed). Next to a corner of the branch
+        (an event changes) dG/dq is a mix of both sides: Newton then converges only linearly, so the
+        location of a bifurcation allows more steps."""
+        e, it = correct(m, u, t, u_prev, ds, tol=self.tol, max_iter=self.max_iter if max_iter is None else max_iter)
+        assert isinstance(e, _Eval)
+        return e, it
 
     def describe(self, m: _BranchMap, e: _Eval) -> dict[str, Any]:
         """The cycle's observables, multipliers and test functions at a converged point."""
@@ -494,7 +599,7 @@ class _Run:
             orbit, sw, parent = self.queue.pop(0)
             try:
                 self.branch(orbit, sw, parent)
-            except _Failure as err:
+            except CorrectorFailure as err:
                 self.branches[-1].stopped = f"could not start: {err}"
 
     def start_map(self, o: Orbit) -> tuple[_BranchMap, np.ndarray]:
@@ -502,7 +607,7 @@ class _Run:
         t_s = o.section % KT
         z = np.array(o.section_state, dtype=float)
         if not np.all(np.isfinite(z)):
-            raise _Failure("the start orbit has no section state")
+            raise CorrectorFailure("the start orbit has no section state")
         kind = "full"
         if self.use_symmetry and o.period == 1 and not o.stuck:
             T = self.p0.period
@@ -512,7 +617,7 @@ class _Run:
             else:
                 z0 = z
             u = np.array([*(z0 / h.S), 0.0])
-            e = h.eval(u, derivative=False)
+            e = h.evaluate(u)
             if e.residual() <= SYMMETRIC:
                 return h, u
         m = self.new_map(o.period, kind, t_s / KT)
@@ -525,17 +630,17 @@ class _Run:
             self.branches.append(b)
             if orbit.stuck and orbit.rest_interval is not None:
                 lo, hi = orbit.rest_interval
-                raise _Failure(f"the start orbit is the block at rest, one of the interval of rest positions "
+                raise CorrectorFailure(f"the start orbit is the block at rest, one of the interval of rest positions "
                                f"[{lo:.6g}, {hi:.6g}] m (|k x| <= F_b - |P0|, a multiplier exactly 1): a continuum, "
                                "not a branch to follow; it holds while |P0| <= F_b")
             m, u = self.start_map(orbit)
             b.kind = m.kind
             e, _ = self.correct(m, u, None, None, 0.0)
-            t = e.tangent()
+            t = tangent(m, e)
             if t[2] * (self.stop - self.start) < 0:
                 t = -t
             if abs(t[2]) < 1e-12:
-                raise _Failure("the start orbit is at a fold in the parameter (dp/ds = 0)")
+                raise CorrectorFailure("the start orbit is at a fold in the parameter (dp/ds = 0)")
             pt = _Point(e, t, 0.0, self.describe(m, e))
             self.record(b, m, pt, float(e.u[2]), True)
         else:
@@ -545,7 +650,7 @@ class _Run:
             self.branches.append(b)
             # the first step off the parent along the eigenvector: the parent's orbit is the branch
             # point; the new branch starts one step away
-            e0 = m.eval(u)
+            e0 = m.evaluate(u)
             pt = _Point(e0, t, 0.0, self.describe(m, e0))
             pt = self.first_step(b, m, pt)
             if pt is None:
@@ -558,18 +663,17 @@ class _Run:
         while ds >= self.ds_min:
             try:
                 e, _ = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds)
-            except _Failure:
+                gap = float(np.max(np.abs(e.u[:2] - pt.e.u[:2])))
+                if gap >= 0.1 * ds:
+                    t = tangent(m, e, pt.t)
+            except CorrectorFailure:
                 ds /= 2.0
                 continue
-            gap = float(np.max(np.abs(e.u[:2] - pt.e.u[:2])))
             if gap < 0.1 * ds:              # fell back onto the parent branch
                 ds *= 2.0
                 if ds > self.ds_max * 4:
                     break
                 continue
-            t = e.tangent()
-            if t @ pt.t < 0:
-                t = -t
             return _Point(e, t, ds, self.describe(m, e))
         b.stopped = "the switch found no branch off the bifurcation point"
         return None
@@ -599,29 +703,25 @@ class _Run:
             try:
                 try:
                     e, it = self.correct(m, u_pred, pt.t, pt.e.u, ds)
-                except _Failure:
+                except CorrectorFailure:
                     if ds > 1e-2 * self.ds0:
                         raise
                     # a short step that does not converge fast: next to a corner of the branch, where
                     # dG/dq straddles it (see correct)
                     e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds, max_iter=LOCATE_ITERATIONS)
-                t = e.tangent()
-                if t @ pt.t < 0:
-                    t = -t
+                t = tangent(m, e, pt.t)
                 turn = math.acos(max(-1.0, min(1.0, float(t @ pt.t))))
                 if turn > self.max_turn and ds > self.ds_min * 1.0001:
                     if self.signature(m, e) == pt.info["signature"]:
-                        raise _Failure(f"the tangent turned by {turn:.3g} rad")
+                        raise CorrectorFailure(f"the tangent turned by {turn:.3g} rad")
                     if float(np.linalg.norm(e.u - pt.e.u)) > KINK_REACH * ds:
-                        raise _Failure("the corrector went off to another branch")
+                        raise CorrectorFailure("the corrector went off to another branch")
                     # an event changed: the branch has a corner there (grazing); go on along the new
                     # tangent, pointing away from the last point
-                    t = e.tangent()
-                    if t @ (e.u - pt.e.u) < 0:
-                        t = -t
+                    t = tangent(m, e, e.u - pt.e.u)
                 if int(e.mode) == 0 and ds > self.ds_min * 1.0001:
-                    raise _Failure("the orbit is stuck at the section")
-            except _Failure as err:
+                    raise CorrectorFailure("the orbit is stuck at the section")
+            except CorrectorFailure as err:
                 last = str(err)
                 ds /= 2.0
                 continue
@@ -653,11 +753,9 @@ class _Run:
         u[2] = q_end
         try:
             e, _ = self.correct(m, u, None, None, 0.0)
-        except _Failure:
+            t = tangent(m, e, a.t)
+        except CorrectorFailure:
             return None
-        t = e.tangent()
-        if t @ a.t < 0:
-            t = -t
         # Newton at the fixed end may land on another branch: refused as a step of the walk would be
         # (too far, or the tangent turned too much); the walk then steps on towards the end
         if float(np.linalg.norm(e.u - a.e.u)) > KINK_REACH * float(np.linalg.norm(uc - a.e.u)) or \
@@ -698,9 +796,9 @@ class _Run:
         m2 = self.new_map(m.K, m.kind, off / span)
         try:
             e, _ = self.correct(m2, np.array([*(z / m2.S), pt.e.u[2]]), None, None, 0.0)
-        except _Failure:
+            tn = tangent(m2, e)
+        except CorrectorFailure:
             return m, pt
-        tn = e.tangent()
         if tn[2] * pt.t[2] < 0:
             tn = -tn
         return m2, _Point(e, tn, pt.s, self.describe(m2, e))
@@ -756,53 +854,38 @@ class _Run:
                 cache[s] = (e, self.signature(m, e) if kind == "grazing" else self.tests(m, e)[key])
             return cache[s]
 
-        s0, s1 = 0.0, ds
         g0 = a.info["signature"] if kind == "grazing" else a.info[key]
         g1 = c.info["signature"] if kind == "grazing" else c.info[key]
         sig0, sig1 = g0, g1
-        side = 0
+
+        def value(s: float) -> float:
+            """The test at s (grazing: -1 with the events of a, +1 with others)."""
+            g = at(s)[1]
+            if kind == "grazing":
+                return -1.0 if g == sig0 else 1.0
+            return float(g)
+
+        # the tolerance in s: ptol in the parameter over the larger |dp/ds| of the two ends (on a line
+        # of fixed parameters, natural, p is linear in s); a grazing to 1e-6 of the step too
+        p_a, p_c = self.param(a), self.param(c)
+        slope = abs(p_c - p_a) / ds if natural else self.p_s * max(abs(float(a.t[2])), abs(float(c.t[2])))
+        xtol = self.ptol * max(1.0, abs(p_a), abs(p_c)) / slope if slope > 0 else ds
+        if kind == "grazing":
+            xtol = min(xtol, 1e-6 * ds)
+        search = RootSearch(0.0, ds, -1.0 if kind == "grazing" else g0, 1.0 if kind == "grazing" else g1,
+                            xtol=max(xtol, 1e-14), rtol=0.0, maxiter=LOCATE_POINTS)
         note = ""
         try:
-            for _ in range(200):
-                p_lo = self.start + float((a.e.u + s0 * a.t)[2]) * self.p_s
-                p_hi = self.start + float((a.e.u + s1 * a.t)[2]) * self.p_s
-                e0 = cache[s0][0] if s0 in cache else a.e
-                e1 = cache[s1][0] if s1 in cache else c.e
-                p_lo, p_hi = self.start + float(e0.u[2]) * self.p_s, self.start + float(e1.u[2]) * self.p_s
-                small = abs(p_hi - p_lo) <= self.ptol * max(1.0, abs(p_lo))
-                if kind == "grazing":
-                    if small and s1 - s0 <= 1e-6 * ds or s1 - s0 <= 1e-14:
-                        break
-                    sm = 0.5 * (s0 + s1)
-                else:
-                    if (small and min(abs(g0), abs(g1)) <= 1e-12) or s1 - s0 <= 1e-14:
-                        break
-                    sm = s1 - g1 * (s1 - s0) / (g1 - g0)          # regula falsi (Illinois)
-                    if not (s0 < sm < s1):
-                        sm = 0.5 * (s0 + s1)
-                _, gm = at(sm)
-                if kind == "grazing":
-                    if gm == sig0:
-                        s0 = sm
-                    else:
-                        s1, sig1 = sm, gm
-                    continue
-                if _flip(gm, g1):
-                    s0, g0 = s1, g1
-                    s1, g1 = sm, gm
-                    if side == -1:
-                        g0 /= 2.0
-                    side = -1
-                else:
-                    s1, g1 = sm, gm
-                    if side == 1:
-                        g0 /= 2.0
-                    side = 1
-                if s0 > s1:
-                    s0, s1, g0, g1 = s1, s0, g1, g0
-        except _Failure as err:
+            while not search.done:
+                search.tell(value(search.x))
+            if not search.converged:
+                note = f"located only to the bracket ({LOCATE_POINTS} trial points)"
+        except CorrectorFailure as err:
             note = f"located only to the bracket (a corrector failed: {err})"
+        s0, _, s1, _ = search.bracket
         if kind == "grazing":
+            # s0 keeps the events of a, s1 has the others (a bracket of a step function)
+            sig1 = cache[s1][1] if s1 in cache else g1
             s_best = s1 if s1 in cache else s0
         else:
             s_best = min((s for s in (s0, s1) if s in cache), key=lambda s: abs(cache[s][1]),
@@ -887,6 +970,8 @@ class _Run:
 
     # -- output --
     def result(self) -> Continuation:
+        import xarray as xr
+
         rows = self.rows
         n = len(rows)
 

@@ -16,7 +16,7 @@ slides (or stays stuck if the new belt speed equals it).
 
 The solution is event-driven and uses none of the FMU's code: a stick phase is followed in closed
 form (x = x_a + v_belt (t - t_a)) and ends at the first time |f| reaches F_s, found by steps that a
-Lipschitz bound of f proves free of crossings, then bisection; a slip phase is integrated by
+Lipschitz bound of f proves free of crossings, then Brent's method (dryfriction.roots); a slip phase is integrated by
 scipy's DOP853 at a tight tolerance (rtol 1e-12 by default, steps of at most 1/256 of the shortest
 period so that a brief excursion of v_rel past 0 is not stepped over) up to the event v_rel = 0,
 where the rest rule decides: stick if |f| <= F_s, else slide the way f pushes.
@@ -30,7 +30,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
+
+from ..roots import find_root
 
 __all__ = ["Belt", "BeltRun", "LimitCycle", "simulate", "limit_cycle", "hopf_belt_speed"]
 
@@ -234,16 +235,19 @@ def _stick_end(b: Belt, ta: float, xa: float, vb: float, t_lim: float) -> tuple[
             return t, "breakaway"
         d = max(-gt / L, tiny)
         if t + d >= t_lim:
-            return (t_lim, "end") if g(t_lim) <= 0 else (_bisect(g, t, t_lim), "breakaway")
-        if g(t + d) > 0:
-            return _bisect(g, t, t + d), "breakaway"
+            g_lim = g(t_lim)
+            return (t_lim, "end") if g_lim <= 0 else (_crossing(g, t, t_lim, gt, g_lim), "breakaway")
+        g_next = g(t + d)
+        if g_next > 0:
+            return _crossing(g, t, t + d, gt, g_next), "breakaway"
         t += d
     raise RuntimeError(f"the stick phase from t = {ta} did not end (a tangency?)")
 
 
-def _bisect(g: Callable[[float], float], a: float, b: float) -> float:
-    """The crossing of g from <= 0 at a to > 0 at b, to rounding."""
-    return float(brentq(g, a, b, xtol=1e-15 * max(1.0, abs(b)), rtol=4 * np.finfo(float).eps, maxiter=500))
+def _crossing(g: Callable[[float], float], a: float, b: float, ga: float, gb: float) -> float:
+    """The crossing of g from ga = g(a) <= 0 to gb = g(b) > 0, to rounding."""
+    return find_root(g, a, b, fa=ga, fb=gb, xtol=1e-15 * max(1.0, abs(b)), rtol=4 * np.finfo(float).eps,
+                     maxiter=500)
 
 
 @dataclass(frozen=True)

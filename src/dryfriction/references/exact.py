@@ -47,9 +47,9 @@ from functools import cached_property
 from typing import Any, Optional
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..params import Oscillator
+from ..roots import find_root
 
 __all__ = ["Segment", "ExactSolution", "solve_exact", "linear_solution", "validate_oscillator"]
 
@@ -371,8 +371,9 @@ class _Slip:
 # --------------------------------------------------------------------------- stop search
 
 
-def _brentq(f: Any, a: float, b: float) -> float:
-    """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision.
+def _root(f: Any, a: float, b: float) -> float:
+    """Bracketing root of f on [a, b] (f(a) f(b) <= 0) to full double precision
+    (:func:`dryfriction.roots.find_root`, f(a) and f(b) not evaluated again).
 
     The bracket comes from a scan evaluated on a vector; f here is evaluated on scalars, whose last
     bits can differ: an end value within rounding of 0 may come back with the other sign. Then the
@@ -384,7 +385,7 @@ def _brentq(f: Any, a: float, b: float) -> float:
         return b
     if (fa > 0.0) == (fb > 0.0):
         return a if abs(fa) <= abs(fb) else b
-    return float(brentq(f, a, b, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200))
+    return find_root(f, a, b, fa=fa, fb=fb, xtol=1e-300, rtol=4.0 * _EPS, maxiter=200)
 
 
 def _find_stop(k: _Slip, u_max: float) -> Optional[float]:
@@ -454,13 +455,13 @@ def _scan_start(us: np.ndarray, svs: np.ndarray, sas: np.ndarray, tol: float,
         if svs[i] < -tol:                          # never started: stop where it leaves the band
             lo, hi = float(us[i - 1]), float(us[i])
             if svs[i - 1] > 0.0:
-                return _brentq(sv, lo, hi)
-            return _brentq(lambda u: sv(u) + tol, lo, hi)
+                return _root(sv, lo, hi)
+            return _root(lambda u: sv(u) + tol, lo, hi)
         if sas[i - 1] > 0.0 > sas[i]:              # a maximum inside the interval
-            um = _brentq(sa, float(us[i - 1]), float(us[i]))
+            um = _root(sa, float(us[i - 1]), float(us[i]))
             if sv(um) > tol:
                 if svs[i] <= 0.0:
-                    return _brentq(sv, um, float(us[i]))
+                    return _root(sv, um, float(us[i]))
                 return i
     return len(us)
 
@@ -473,14 +474,14 @@ def _scan_slip(us: np.ndarray, svs: np.ndarray, sas: np.ndarray, tol: float,
     mins = i0 + np.nonzero((sas[i0 - 1:-1] < 0.0) & (sas[i0:] >= 0.0))[0]
     for i in mins[mins <= i_neg]:
         lo, hi = float(us[i - 1]), float(us[i])
-        um = _brentq(sa, lo, hi)
+        um = _root(sa, lo, hi)
         svm = sv(um)
         if svm < -tol:
-            return _brentq(sv, lo, um)
+            return _root(sv, lo, um)
         if svm <= tol:                             # tangential stop
             return um
     if i_neg < len(us):
-        return _brentq(sv, float(us[i_neg - 1]), float(us[i_neg]))
+        return _root(sv, float(us[i_neg - 1]), float(us[i_neg]))
     return None
 
 

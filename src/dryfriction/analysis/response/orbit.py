@@ -1,0 +1,244 @@
+"""The orbit method: every periodic orbit at each frequency, the orbits of one frequency followed
+to the next (the package's doc, dryfriction.analysis.response)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ...drivers.oscillator import FMUError, OscillatorFMU2
+from ...params import Oscillator
+from ..orbits import SAME, STABILITY_MARGIN, find_orbits, scales
+from .transient import default_settings
+
+#: the orbit method's cold search (transients from several initial conditions) every this many
+#: frequencies, besides the first and wherever the warm start finds no stable orbit
+COLD_EVERY = 100
+#: samples per period of the orbit method's cycle runs (section choice; amplitudes, offsets and stick
+#: shares are the FMU's observables, exact whatever this is)
+ORBIT_SAMPLES = 32
+#: columns of the orbit method's table per (frequency, orbit)
+ORBIT_COLUMNS = ("period", "stable", "mu_max", "amplitude_m", "offset_m", "stick_fraction", "x0_m", "v0_m_per_s",
+                 "residual", "neutral", "rest_from_m", "rest_to_m")
+#: the columns of ORBIT_COLUMNS that are booleans (the Dataset's bool variables)
+ORBIT_FLAGS = ("stable", "neutral")
+
+
+class _Branch:
+    """One orbit of the previous frequencies (f, period T) with up to three before it on the same
+    branch: a polynomial predictor (cubic through four points, else through the points there are) of
+    its section state and phase at the next frequency (cubic rather than quadratic: about a third
+    fewer second Newton steps along a sweep, docs/performance.md)."""
+
+    __slots__ = ("orbit", "f", "T", "history", "point")
+
+    def __init__(self, orbit: Any, f: float, T: float, before: "_Branch | None" = None) -> None:
+        self.orbit, self.f, self.T = orbit, f, T
+        hist = [] if before is None else [before, *before.history[:2]]
+        self.history = [b for b in hist if b.f != f]
+        z = orbit.section_state
+        self.point = (float(z[0]), float(z[1]), orbit.section / T)
+
+    def guess(self, f: float) -> tuple[tuple[float, float], float]:
+        """(state, section phase in periods) predicted at the frequency f."""
+        pts = [self, *self.history]
+        ph0 = self.point[2]
+        for b in self.history:
+            if abs(b.point[2] - ph0) > 0.25:
+                pts = pts[:1]                   # the section was chosen again: no extrapolation
+                break
+        fs = [b.f for b in pts]
+        x = v = ph = 0.0
+        for bi in pts:                          # Lagrange weights of the points at f
+            w, fi = 1.0, bi.f
+            for fj in fs:
+                if fj != fi:                    # the points' frequencies differ (history)
+                    w *= (f - fj) / (fi - fj)
+            px, pv, pp = bi.point
+            x += w * px
+            v += w * pv
+            ph += w * pp
+        return (x, v), ph
+
+
+def _attracting(o: Any, p: Oscillator) -> bool:
+    """A steady state: a stable orbit, the block at rest (``neutral``: one of the interval of rest
+    positions); without a spring (every orbit one of a family shifted in x, a multiplier exactly 1,
+    ``stable`` false) one whose other multiplier is inside the unit circle."""
+    if o.stable or o.neutral:
+        return True
+    if p.k > 0 or o.stuck:
+        return False
+    mu = sorted(abs(complex(m)) for m in o.multipliers)
+    return len(mu) == 2 and mu[0] < 1.0 - STABILITY_MARGIN
+
+
+def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
+    """Orbits of period 1 whose states at t = 0 differ (scaled, as find_orbits tells orbits apart);
+    the members of a family shifted in x (without a spring, or neutral: a spring too weak to tell them
+    apart) are one (x0 - offset and v0 compared)."""
+    if len(orbits) < 2:
+        return list(orbits)
+    xs, w = scales(p)
+    out: list[Any] = []
+    seen: list[tuple[float, float]] = []
+    for o in orbits:
+        x = o.x0 - o.offset if (p.k == 0 or o.neutral) and math.isfinite(o.offset) else o.x0
+        a0, a1 = x / xs, o.v0 / (xs * w)
+        tol = SAME * max(1.0, abs(a0), abs(a1))
+        if o.period == 1 and any(max(abs(a0 - q0), abs(a1 - q1)) <= tol for q0, q1 in seen):
+            continue
+        seen.append((a0, a1))
+        out.append(o)
+    return out
+
+
+def _orbits_at(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
+               opts: Mapping[str, Any]) -> list[_Branch]:
+    """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
+    :class:`dryfriction.analysis.orbits.OrbitFollower`), and with ``cold`` transients from the spread of
+    initial conditions followed too (:func:`_transient_check`); where a branch is lost (or K > 1),
+    find_orbits from the previous orbits; without branches or when none is stable, find_orbits from
+    transients too."""
+    K, T = opts["period"], p.period
+    follow = opts["follower"]
+    if K == 1 and branches:
+        followed: list[_Branch] = []
+        for b in branches:
+            o = None
+            if not b.orbit.stuck and b.orbit.period == 1:
+                z, ph = b.guess(f)
+                o = follow(p, z, ph * T)
+            if o is None:
+                break
+            followed.append(_Branch(o, f, T, b))
+        else:
+            _mirrors(p, f, followed, follow)
+            if any(_attracting(b.orbit, p) for b in followed):
+                if cold:
+                    followed = _transient_check(inst, p, f, followed, opts)
+                if len(followed) == 1:
+                    return followed
+                keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
+                return [b for b in followed if id(b.orbit) in keep]
+    guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
+    kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
+    orbits = find_orbits(p, transients=0, spread=(), **kw) if branches else []
+    if not branches or not any(_attracting(o, p) for o in orbits):
+        orbits = find_orbits(p, transients=opts["transients"], **kw)
+    if not any(_attracting(o, p) for o in orbits):
+        # no stable orbit of K periods: the attractor may have doubled its period (reported with
+        # its minimal period, the unstable K-orbits kept)
+        kw["period"] = 2 * K
+        more = find_orbits(p, transients=opts["transients"], **kw)
+        orbits = orbits + [o for o in more if o.period != K]
+    return [_Branch(o, f, T) for o in _distinct(orbits, p)]
+
+
+def _mirrors(p: Oscillator, f: float, followed: list[_Branch], follow: Any) -> None:
+    """Add the mirror image (x, v)(t) -> -(x, v)(t + T/2) of each asymmetric orbit followed whose
+    image is not among them (a symmetric orbit followed through a symmetry-breaking pitchfork comes
+    out as one of the pair)."""
+    T = p.period
+    for b in list(followed):
+        o = b.orbit
+        if o.period != 1 or not abs(o.offset) > 1e-9 * o.amplitude:
+            continue
+        tol = 1e-7 * o.amplitude
+        if any(abs(q.orbit.offset + o.offset) <= tol and abs(q.orbit.amplitude - o.amplitude) <= tol for q in followed):
+            continue
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is not None:
+            followed.append(_Branch(image, f, T))
+
+
+def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[_Branch],
+                     opts: Mapping[str, Any]) -> list[_Branch]:
+    """The cold search of a sweep's later frequencies, cheap: the end states of find_orbits'
+    transients (its spread of initial conditions), each followed by Newton from t = 0 (as a
+    section), find_orbits for one that cannot be; a new orbit's mirror image (the state -z half a
+    period later) followed too."""
+    from ..orbits import _auto_guesses, DEFAULT_SPREAD
+
+    follow, T = opts["follower"], p.period
+    xs, w = scales(p)
+    out = list(found)
+
+    def known(x: float, v: float) -> bool:
+        a = (x / xs, v / (xs * w))
+        tol = SAME * max(1.0, abs(a[0]), abs(a[1]))
+        return any(abs(a[0] - b.orbit.x0 / xs) <= tol and abs(a[1] - b.orbit.v0 / (xs * w)) <= tol for b in out)
+
+    runs = opts["transient_runs"]         # one set of value arrays for the sweep's cold searches
+    runs.retarget(p)
+    for z in _auto_guesses(p, DEFAULT_SPREAD):
+        runs.run(float(z[0]), float(z[1]), 0.0, opts["transients"] * T)
+        y = {"x": runs.real[0], "v": runs.real[1]}
+        o = follow(p, (y["x"], y["v"]), 0.0)
+        if o is None:
+            new = [q for q in find_orbits(p, guesses=[(y["x"], y["v"])], transients=0, spread=(), fmu=inst,
+                                          samples=ORBIT_SAMPLES) if not known(q.x0, q.v0)]
+            out.extend(_Branch(q, f, T) for q in new)
+            continue
+        if known(o.x0, o.v0):
+            continue
+        out.append(_Branch(o, f, T))
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is not None and not known(image.x0, image.v0):
+            out.append(_Branch(image, f, T))
+    return out
+
+
+def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
+                 opts: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """One Dask task (or the in-process sweep): every orbit at the frequencies f_hz in turn, the
+    orbits of one frequency followed to the next."""
+    import time
+
+    from ..chaos.batch import fmu_for
+
+    from ..orbits import OrbitFollower
+
+    inst = fmu_for(fmu)
+    t0 = time.process_time()
+    table: list[list[tuple[float, ...]]] = []
+    reasons: list[str] = []
+    branches: list[_Branch] = []
+    checked = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f_hz[0])})
+    # the transients of the cold searches read x, v at their end
+    opts = {**opts, "follower": OrbitFollower(inst), "transient_runs": inst.restarts(checked, default_settings(checked))}
+    for i, f in enumerate(np.asarray(f_hz, dtype=float).tolist()):
+        # the oscillator at f: the checked one with omega replaced (f is checked finite and > 0 by
+        # frequency_response; a new check per point would cost a fifth of the sweep)
+        p = object.__new__(Oscillator)
+        p.__dict__.update(checked.__dict__, omega=2.0 * math.pi * f)
+        try:
+            branches = _orbits_at(inst, p, f, branches, not branches or i % opts["cold_every"] == 0, opts)
+        except FMUError as e:   # this frequency is not computed: its row says why, the sweep goes on
+            table.append([])
+            reasons.append(e.message)
+            branches = []
+            continue
+        rows, kept, stuck = [], [], False
+        for b in branches:
+            o = b.orbit
+            if o.stuck:        # the interval of rest positions: reported once
+                if stuck:
+                    continue
+                stuck = True
+            kept.append(b)
+            lo, hi = o.rest_interval if o.rest_interval is not None else (math.nan, math.nan)
+            rows.append((float(o.period), float(o.stable), o.mu_max, o.amplitude, o.offset, o.stick_fraction,
+                         o.x0, o.v0, o.residual, float(o.neutral), lo, hi, float(_attracting(o, p))))
+        branches = kept
+        table.append(rows)
+        reasons.append("")
+    width = max([len(r) for r in table] + [1])
+    pad = (math.nan,) * (len(ORBIT_COLUMNS) + 1)
+    out = np.array([rows + [pad] * (width - len(rows)) for rows in table], dtype=float).reshape(
+        len(f_hz), width, len(ORBIT_COLUMNS) + 1)
+    return {"orbits": out, "reason": np.array(reasons, dtype=object), "cpu": np.array([time.process_time() - t0])}
+
