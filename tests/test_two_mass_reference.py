@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from dryfriction.exact import linear_solution, solve_exact
+from dryfriction.references.exact import linear_solution, solve_exact
 from dryfriction.params import Oscillator
 from two_mass_reference import TwoMass, accelerations, simulate
 
