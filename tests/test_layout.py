@@ -84,10 +84,14 @@ FORMER_NAMES = {
 #: (former module path, name, the name's home): a name a former module re-exported that its new
 #: home has too (the module's warning only)
 FORMER_REEXPORTS = [
-    ("dryfriction.fmi3", "FMUError", "dryfriction.errors"), ("dryfriction.fmi3", "FMUCallError", "dryfriction.errors"),
-    ("dryfriction.fmi3", "Instance", "dryfriction.fmi.fmi3"), ("dryfriction.fmi2", "FMUError", "dryfriction.errors"),
-    ("dryfriction.fmi2", "Instance", "dryfriction.fmi.fmi2"), ("dryfriction.locate", "FMUFileError", "dryfriction.errors"),
-    ("dryfriction.argparsing", "UsageError", "dryfriction.errors"), ("dryfriction.fmu", "FMUError", "dryfriction.errors"),
+    ("dryfriction.fmi3", "FMUError", "dryfriction.errors"),
+    ("dryfriction.fmi3", "FMUCallError", "dryfriction.errors"),
+    ("dryfriction.fmi3", "Instance", "dryfriction.fmi.fmi3"),
+    ("dryfriction.fmi2", "FMUError", "dryfriction.errors"),
+    ("dryfriction.fmi2", "Instance", "dryfriction.fmi.fmi2"),
+    ("dryfriction.locate", "FMUFileError", "dryfriction.errors"),
+    ("dryfriction.argparsing", "UsageError", "dryfriction.errors"),
+    ("dryfriction.fmu", "FMUError", "dryfriction.errors"),
     ("dryfriction.console", "result_set", "dryfriction.atomic"),
 ]
 
@@ -162,7 +166,8 @@ def imports_of(name: str) -> list[tuple[str, int, bool]]:
                     visit(ast.Module(body=[sub], type_ignores=[]), eager)
                 continue
             if isinstance(child, ast.Import):
-                found.extend((a.name, child.lineno, eager) for a in child.names if a.name.split(".")[0] == "dryfriction")
+                found.extend((a.name, child.lineno, eager) for a in child.names
+                             if a.name.split(".")[0] == "dryfriction")
             elif isinstance(child, ast.ImportFrom):
                 if child.level:
                     base_parts = here[:len(here) - (child.level - 1)]
@@ -422,7 +427,8 @@ def test_every_module_imports_without_a_deprecation_warning() -> None:
             "with warnings.catch_warnings(record=True) as rec:\n"
             "    warnings.simplefilter('always')\n"
             "    for n in names:\n        importlib.import_module(n)\n"
-            "print(json.dumps([len(names), [str(w.message) for w in rec if 'deprecated; use dryfriction' in str(w.message)]]))")
+            "bad = [str(w.message) for w in rec if 'deprecated; use dryfriction' in str(w.message)]\n"
+            "print(json.dumps([len(names), bad]))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     count, deprecated = json.loads(r.stdout)

@@ -185,7 +185,8 @@ class _Home:
 
 
 class Finder:
-    """The meta-path finder of the former paths (first on ``sys.meta_path``)."""
+    """The meta-path finder of the former paths (first on ``sys.meta_path``; a finder and loaders
+    by protocol, without importlib.abc, which would import importlib.resources at start)."""
 
     def find_spec(self, fullname: str, path: Sequence[str] | None = None,
                   target: ModuleType | None = None) -> importlib.machinery.ModuleSpec | None:
