@@ -144,7 +144,8 @@ static inline void chn_solve(void *ctx, int slot, const double *b, double *x)
 }
 
 /* The box LCP of the slot's M_hat (W = I, no belts): lcp_box_basis in the given modes, lcp_box for
- * the LCP; z the end velocities, w the forces, q = -p_hat. (Coulomb, fixed supports only.) */
+ * the LCP; z the end velocities, w the forces, q = -p_hat. (Coulomb, fixed supports only: a problem
+ * with the Stribeck law or a belt is refused.) */
 static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
                                       int *pivots)
 {
@@ -152,7 +153,10 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
     const size_t n = C->n;
     const double *d = C->d[P->slot], *e = C->e[P->slot];
     if (P->law) return ENG_ERR_FRICTION;
-    for (size_t i = 0; i < n; i++) C->q[i] = -P->p_hat[i];
+    for (size_t i = 0; i < n; i++) {
+        if (P->vb && P->vb[i] != 0.0) return ENG_ERR_BAD_INPUT; /* belts: not this model's */
+        C->q[i] = -P->p_hat[i];
+    }
     if (pivots) *pivots = 0;
     if (what == ENG_SOLVE_BASIS) {
         lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, C->q, P->limit, mode, V1, f, C->work, C->work + n);
@@ -167,7 +171,11 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
 
 eng_status blk_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
 void blk_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+void blk_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
+                        const eng_hooks *hk);
 eng_status chn_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
 void chn_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+void chn_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
+                        const eng_hooks *hk);
 
 #endif
