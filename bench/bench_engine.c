@@ -39,15 +39,6 @@
 #define CHI 0.7
 #define NMAX_CASES 8
 
-static double now(void)
-{
-#if defined(CLOCK_THREAD_CPUTIME_ID) && !defined(_WIN32)
-    struct timespec ts;
-    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) == 0) return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-#endif
-    return 1e-9 * bench_now_ns();
-}
-
 static void *std_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
 static void std_free(void *env, void *obj) { (void)env; free(obj); }
 static const eng_alloc ALLOC = {std_alloc, std_free, NULL};
@@ -191,9 +182,9 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
         dfo_start(&B->osc, &u, 0.0, &s);
         dfo_advance(&B->osc, &u, &s, t1, NULL, NULL);
         const long long s0 = s.steps;
-        const double c0 = now();
+        const double c0 = bench_seconds(0);
         if (dfo_advance(&B->osc, &u, &s, t2, NULL, NULL) != DFO_OK) die("dfo_advance failed");
-        el = now() - c0;
+        el = bench_seconds(0) - c0;
         steps = (double)(s.steps - s0);
         x = s.X;
     } else if (v == V_OWN) {
@@ -201,9 +192,9 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
         chain_start(B->CM, &in, 0.0, &B->cs);
         chain_advance(B->CM, &in, &B->cs, t1, 0, NULL, NULL);
         const long long s0 = B->cs.steps;
-        const double c0 = now();
+        const double c0 = bench_seconds(0);
         if (chain_advance(B->CM, &in, &B->cs, t2, 0, NULL, NULL) != CHAIN_OK) die("chain_advance failed");
-        el = now() - c0;
+        el = bench_seconds(0) - c0;
         steps = (double)(B->cs.steps - s0);
         x = B->cs.X[B->n - 1];
     } else {
@@ -218,11 +209,11 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
         eng_status st = inl ? (one ? blk_eng_advance(E, &in, s, t1, NULL) : chn_eng_advance(E, &in, s, t1, NULL))
                             : eng_advance(E, &in, s, t1, NULL);
         const long long s0 = s->steps;
-        const double c0 = now();
+        const double c0 = bench_seconds(0);
         if (st == ENG_OK)
             st = inl ? (one ? blk_eng_advance(E, &in, s, t2, NULL) : chn_eng_advance(E, &in, s, t2, NULL))
                      : eng_advance(E, &in, s, t2, NULL);
-        el = now() - c0;
+        el = bench_seconds(0) - c0;
         if (st != ENG_OK) die(eng_status_text(st));
         steps = (double)(s->steps - s0);
         x = s->X[B->n - 1];
@@ -234,29 +225,22 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
 
 int main(int argc, char **argv)
 {
-    int reps = 5;
-    double periods = 4.0, spp = 1000.0;
+    bench_run_opts o = {5, 4.0, 1000.0, NULL};
     size_t ns[NMAX_CASES] = {1, 8, 64};
     int nn = 3;
-    const char *csv = NULL;
     for (int a = 1; a < argc; a++) {
-        if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
-        else if (!strcmp(argv[a], "--periods") && a + 1 < argc) periods = atof(argv[++a]);
-        else if (!strcmp(argv[a], "--steps-per-period") && a + 1 < argc) spp = atof(argv[++a]);
-        else if (!strcmp(argv[a], "--csv") && a + 1 < argc) csv = argv[++a];
-        else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
-            nn = 0;
-            for (char *tok = strtok(argv[++a], ","); tok && nn < NMAX_CASES; tok = strtok(NULL, ","))
-                ns[nn++] = (size_t)atol(tok);
+        if (bench_run_opt(argc, argv, &a, &o)) continue;
+        if (!strcmp(argv[a], "--n") && a + 1 < argc) {
+            nn = bench_sizes(argv[++a], ns, NMAX_CASES);
         } else {
             fprintf(stderr, "bench_engine: unknown or incomplete argument %s\n", argv[a]);
             return 2;
         }
     }
-    if (reps < 1 || !(periods > 0.0) || !(spp >= 10.0)) {
-        fprintf(stderr, "bench_engine: --reps >= 1, --periods > 0, --steps-per-period >= 10\n");
-        return 2;
-    }
+    if (bench_run_opts_bad(&o, "bench_engine")) return 2;
+    const int reps = o.reps;
+    const double periods = o.periods, spp = o.spp;
+    const char *csv = o.csv;
     for (int j = 0; j < nn; j++)
         if (ns[j] < 1) { fprintf(stderr, "bench_engine: --n values >= 1\n"); return 2; }
     FILE *out = csv ? fopen(csv, "w") : stdout;
