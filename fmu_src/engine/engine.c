@@ -76,7 +76,7 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode};
+                          E->sA, E->shA, E->sF, E->smode, E->pin};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     const lcp_alloc la = {E->al.allocate, E->al.release, E->al.env};
@@ -111,6 +111,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++)
         ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= (E->pin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * nc, sizeof(double))) != NULL;
     ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
     ok &= (E->colp = (const double **)alloc_n(al, nc, sizeof(double *))) != NULL;

@@ -571,12 +571,17 @@ static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, d
     T->cC = 1.0;
     T->cK = E->b * hh / E->g;
     if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
-    /* re-base A where it belongs to another step length */
+    /* re-base A where it belongs to another step length, except on a DOF a held contact pins alone
+     * (w_j = e_i: its acceleration and jerk are 0, A stays) */
     int any = 0;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
     for (size_t i = 0; i < n; i++) {
         E->A0[i] = s->A[i];
-        any |= a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol && S->rate_max * fmax(hh, s->hA[i]) <= 1.0;
+        any |= !E->pin[i] && a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol &&
+               S->rate_max * fmax(hh, s->hA[i]) <= 1.0;
     }
     if (any) {
         double *acc = E->acc, *jk = E->jk;
@@ -586,7 +591,7 @@ static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, d
         loads_at(E, in, t1);
         for (size_t i = 0; i < n; i++) {
             const double hA = s->hA[i];
-            if (a != 0.0 && hh != hA && fabs(hh - hA) > tol && S->rate_max * fmax(hh, hA) <= 1.0)
+            if (!E->pin[i] && a != 0.0 && hh != hA && fabs(hh - hA) > tol && S->rate_max * fmax(hh, hA) <= 1.0)
                 E->A0[i] = s->A[i] + a * (hh - hA) * jk[i];
         }
     }
