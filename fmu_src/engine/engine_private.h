@@ -38,6 +38,8 @@ struct eng {
     double *Nn, *mukN, *Fb, *mlN;/* nc: normal force, kinetic magnitude, breakaway limit, the located
                                   * LCP's sliding limit (Stribeck: min(mu_s, mu_k) N) */
     const double *vb;            /* nc: belts of the current call (the inputs' or zeros) */
+    const eng_inputs *loads_for; /* the held inputs the loads above are of (NULL: none; loads_at) */
+    dfo_bossak_kin kin_grid;     /* the kinematics of a grid step h */
     double *zero_nc;
     /* per-DOF workspace */
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;

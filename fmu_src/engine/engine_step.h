@@ -136,11 +136,14 @@ static double poly_rate(const double *const *du, const eng_inputs *in, size_t i,
 }
 
 /* The loads of the inputs at t (their polynomials' values with a ramp) into u, Nn, mukN, Fb, mlN,
- * and the belts into vb. */
+ * and the belts into vb. Held inputs give the same loads at every t: taken once per public call
+ * (loads_for: the inputs they are of, cleared on entry to every public function). */
 static void loads_at(eng *E, const eng_inputs *in, double t)
 {
     const eng_setup *S = &E->S;
+    if (in && in == E->loads_for) return;
     const int rp = ramped(in);
+    E->loads_for = rp ? NULL : in;
     for (size_t i = 0; i < ENG_N(E); i++)
         E->u[i] = !in ? 0.0 : rp ? poly_at(in->F_ext, in->dF_ext, in, i, t) : (in->F_ext ? in->F_ext[i] : 0.0);
     for (size_t j = 0; j < ENG_NC(E); j++) {
@@ -565,7 +568,8 @@ static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, d
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
     const double a = S->alpha;
-    dfo_bossak_kin_for(hh, E->g, E->b, &T->kin);
+    if (hh == S->h) T->kin = E->kin_grid;
+    else dfo_bossak_kin_for(hh, E->g, E->b, &T->kin);
     T->slot = (hh == S->h) ? ENG_SLOT_GRID : ENG_SLOT_TRIAL;
     T->cM = (1.0 - a) * T->kin.c1;
     T->cC = 1.0;
@@ -996,6 +1000,7 @@ static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, doubl
 
 ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s)
 {
+    E->loads_for = NULL;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     s->t0 = s->t = t0;
     s->n_grid = 0;
@@ -1048,6 +1053,7 @@ static void rest_forces(eng *E, eng_state *s)
 
 ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk)
 {
+    E->loads_for = NULL;
     const eng_setup *S = &E->S;
     const double h = S->h;
     t_target = ENG_FN(eng_snap_target)(E, s, t_target);
@@ -1095,6 +1101,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
 
 ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s, const eng_hooks *hk)
 {
+    E->loads_for = NULL;
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     /* belts: a contact whose belt changed takes the mode of its new slip; one the belt meets the rest rule */
@@ -1143,12 +1150,14 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
 
 ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_state *s, double *a)
 {
+    E->loads_for = NULL;
     loads_at(E, in, s->t);
     phys_accel(E, s, s->t, s->mode, a, E->f);
 }
 
 ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_state *s, double *f)
 {
+    E->loads_for = NULL;
     loads_at(E, in, s->t);
     phys_accel(E, s, s->t, s->mode, E->y2, f);
     for (size_t j = 0; j < ENG_NC(E); j++)
