@@ -154,24 +154,21 @@ static void osc_case_rep(osc_case *oc, double periods, double spp, int wall)
 
 int main(int argc, char **argv)
 {
-    bench_run_opts o = {5, 4.0, 1000.0, NULL};
+    size_t ns[16] = {1, 2, 8, 64, 512, 4096};
+    bench_run_opts o = {5, 4.0, 1000.0, NULL, ns, 16, 6};
     int wall = 0;
     double normal = 1.6;
-    size_t ns[16] = {1, 2, 8, 64, 512, 4096};
-    int nn = 6;
     for (int a = 1; a < argc; a++) {
         if (bench_run_opt(argc, argv, &a, &o)) continue;
         if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
         else if (!strcmp(argv[a], "--wall")) wall = 1;
-        else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
-            nn = bench_sizes(argv[++a], ns, 16);
-        } else {
+        else {
             fprintf(stderr, "bench_chain: unknown or incomplete argument %s\n", argv[a]);
             return 2;
         }
     }
     if (bench_run_opts_bad(&o, "bench_chain")) return 2;
-    const int reps = o.reps;
+    const int reps = o.reps, nn = o.nn;
     const double periods = o.periods, spp = o.spp;
     const char *csv = o.csv;
     FILE *out = csv ? fopen(csv, "w") : stdout;

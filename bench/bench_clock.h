@@ -42,14 +42,19 @@ static inline double bench_seconds(int wall)
 }
 
 /* The options of a timed run that bench_chain and bench_engine share: --reps N, --periods P,
- * --steps-per-period S, --csv FILE. bench_run_opt reads argv[*a] when it is one of them (then *a
- * moves onto its value, and it returns 1); bench_run_opts_bad says, in one line on stderr, what is
- * out of range (1) or nothing (0). */
+ * --steps-per-period S, --csv FILE, --n N[,N...] (at most max_n sizes into ns, nn of them).
+ * bench_run_opt reads argv[*a] when it is one of them (then *a moves onto its value, and it
+ * returns 1); bench_run_opts_bad says, in one line on stderr, what is out of range (1) or nothing
+ * (0). */
 typedef struct {
     int reps;
     double periods, spp;
     const char *csv;
+    size_t *ns;
+    int max_n, nn;
 } bench_run_opts;
+
+static inline int bench_sizes(char *list, size_t *ns, int max);
 
 static inline int bench_run_opt(int argc, char **argv, int *a, bench_run_opts *o)
 {
@@ -59,14 +64,17 @@ static inline int bench_run_opt(int argc, char **argv, int *a, bench_run_opts *o
     else if (!strcmp(k, "--periods")) o->periods = atof(argv[++*a]);
     else if (!strcmp(k, "--steps-per-period")) o->spp = atof(argv[++*a]);
     else if (!strcmp(k, "--csv")) o->csv = argv[++*a];
+    else if (!strcmp(k, "--n")) o->nn = bench_sizes(argv[++*a], o->ns, o->max_n);
     else return 0;
     return 1;
 }
 
 static inline int bench_run_opts_bad(const bench_run_opts *o, const char *prog)
 {
-    if (o->reps >= 1 && o->periods > 0.0 && o->spp >= 10.0) return 0;
-    fprintf(stderr, "%s: --reps >= 1, --periods > 0, --steps-per-period >= 10\n", prog);
+    int sizes_ok = o->nn >= 1;
+    for (int j = 0; j < o->nn; j++) sizes_ok &= o->ns[j] >= 1;
+    if (o->reps >= 1 && o->periods > 0.0 && o->spp >= 10.0 && sizes_ok) return 0;
+    fprintf(stderr, "%s: --reps >= 1, --periods > 0, --steps-per-period >= 10, --n sizes >= 1\n", prog);
     return 1;
 }
 

@@ -225,24 +225,17 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
 
 int main(int argc, char **argv)
 {
-    bench_run_opts o = {5, 4.0, 1000.0, NULL};
     size_t ns[NMAX_CASES] = {1, 8, 64};
-    int nn = 3;
-    for (int a = 1; a < argc; a++) {
-        if (bench_run_opt(argc, argv, &a, &o)) continue;
-        if (!strcmp(argv[a], "--n") && a + 1 < argc) {
-            nn = bench_sizes(argv[++a], ns, NMAX_CASES);
-        } else {
+    bench_run_opts o = {5, 4.0, 1000.0, NULL, ns, NMAX_CASES, 3};
+    for (int a = 1; a < argc; a++)
+        if (!bench_run_opt(argc, argv, &a, &o)) {
             fprintf(stderr, "bench_engine: unknown or incomplete argument %s\n", argv[a]);
             return 2;
         }
-    }
     if (bench_run_opts_bad(&o, "bench_engine")) return 2;
-    const int reps = o.reps;
+    const int reps = o.reps, nn = o.nn;
     const double periods = o.periods, spp = o.spp;
     const char *csv = o.csv;
-    for (int j = 0; j < nn; j++)
-        if (ns[j] < 1) { fprintf(stderr, "bench_engine: --n values >= 1\n"); return 2; }
     FILE *out = csv ? fopen(csv, "w") : stdout;
     if (!out) { fprintf(stderr, "bench_engine: cannot write %s\n", csv); return 2; }
     static const char *const schemes[] = {"", "paper", "consistent", "located"};
