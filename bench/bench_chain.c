@@ -171,8 +171,8 @@ int main(int argc, char **argv)
     const int reps = o.reps, nn = o.nn;
     const double periods = o.periods, spp = o.spp;
     const char *csv = o.csv;
-    FILE *out = csv ? fopen(csv, "w") : stdout;
-    if (!out) { fprintf(stderr, "bench_chain: cannot write %s\n", csv); return 2; }
+    FILE *out = bench_out(&o, "bench_chain");
+    if (!out) return 2;
     /* every model is timed once per repetition, in turn, so that a change of the machine's load
      * reaches all of them alike; each keeps its best repetition */
     osc_case osc[2];

@@ -78,6 +78,15 @@ static inline int bench_run_opts_bad(const bench_run_opts *o, const char *prog)
     return 1;
 }
 
+/* Where the CSV goes: --csv's file, else stdout; NULL (and one line on stderr) when it cannot be
+ * written. */
+static inline FILE *bench_out(const bench_run_opts *o, const char *prog)
+{
+    FILE *f = o->csv ? fopen(o->csv, "w") : stdout;
+    if (!f) fprintf(stderr, "%s: cannot write %s\n", prog, o->csv);
+    return f;
+}
+
 /* A comma-separated list of sizes ("1,8,64") into ns (at most max of them); how many were read. */
 static inline int bench_sizes(char *list, size_t *ns, int max)
 {

@@ -233,20 +233,18 @@ int main(int argc, char **argv)
             return 2;
         }
     if (bench_run_opts_bad(&o, "bench_engine")) return 2;
-    const int reps = o.reps, nn = o.nn;
-    const double periods = o.periods, spp = o.spp;
-    const char *csv = o.csv;
-    FILE *out = csv ? fopen(csv, "w") : stdout;
-    if (!out) { fprintf(stderr, "bench_engine: cannot write %s\n", csv); return 2; }
+    FILE *out = bench_out(&o, "bench_engine");
+    if (!out) return 2;
+    const int nn = o.nn;
     static const char *const schemes[] = {"", "paper", "consistent", "located"};
     bench_case *cases = (bench_case *)calloc((size_t)nn * 3, sizeof(bench_case));
     if (!cases) die("out of memory");
     for (int j = 0; j < nn; j++)
-        for (int sc = 0; sc < 3; sc++) case_make(&cases[j * 3 + sc], ns[j], DFO_SCHEME_PAPER + sc, spp);
-    for (int rep = 0; rep < reps; rep++)
+        for (int sc = 0; sc < 3; sc++) case_make(&cases[j * 3 + sc], ns[j], DFO_SCHEME_PAPER + sc, o.spp);
+    for (int rep = 0; rep < o.reps; rep++)
         for (int c = 0; c < nn * 3; c++)
             for (int v = 0; v < NVAR; v++)
-                if (v != V_DENSE || cases[c].n == 1) case_rep(&cases[c], v, periods, spp);
+                if (v != V_DENSE || cases[c].n == 1) case_rep(&cases[c], v, o.periods, o.spp);
     fprintf(out, "n,scheme,ns_per_step_%s,ns_per_step_%s,ns_per_step_%s,ns_per_step_%s,generic/own,inline/own,"
                  "same_bits,x_end_own,x_end_engine\n", VAR_NAMES[0], VAR_NAMES[1], VAR_NAMES[2], VAR_NAMES[3]);
     for (int c = 0; c < nn * 3; c++) {
@@ -258,6 +256,6 @@ int main(int argc, char **argv)
                 memcmp(&B->x_end[V_GENERIC], &B->x_end[V_INLINE], sizeof(double)) == 0, B->x_end[V_OWN],
                 B->x_end[V_GENERIC]);
     }
-    if (csv) fclose(out);
+    if (o.csv) fclose(out);
     return 0;
 }
