@@ -9,10 +9,11 @@
  * alpha = -0.1, h = T / S (S = 1000). Timed: chain_advance over P periods (after one period of
  * settling, outside the clock) in one call, as dfo_advance for the oscillator; the minimum over
  * the repetitions, every model timed once per repetition in turn (so that a change of the
- * machine's load reaches all of them alike), by the thread's CPU time (see now). Reported per n: ns per
- * block-step, ns per step, the share of steps whose warm basis was infeasible (a pivot or a located
- * switch), switches per block and period, and the share of time stuck. For n = 1 the oscillator's
- * dfo_advance on the same block (fastPaths on and off). CSV on stdout, or to --csv FILE. */
+ * machine's load reaches all of them alike), by the thread's CPU time (bench_clock.h's
+ * bench_seconds). Reported per n: ns per block-step, ns per step, the share of steps whose warm
+ * basis was infeasible (a pivot or a located switch), switches per block and period, and the
+ * share of time stuck. For n = 1 the oscillator's dfo_advance on the same block (fastPaths on and
+ * off). CSV on stdout, or to --csv FILE. */
 #define _POSIX_C_SOURCE 200809L
 
 #include "chain.h"
@@ -25,20 +26,6 @@
 #include <string.h>
 
 #include "bench_clock.h"
-
-/* The clock of the timings (s): the thread's CPU time where POSIX has it (time the thread spends
- * descheduled on a shared machine is not the code's), else the monotonic wall clock; --wall
- * takes the wall clock everywhere. */
-static double now(int wall)
-{
-#if defined(CLOCK_THREAD_CPUTIME_ID) && !defined(_WIN32)
-    struct timespec ts;
-    if (!wall && clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) == 0) return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-#else
-    (void)wall;
-#endif
-    return 1e-9 * bench_now_ns();
-}
 
 static void *std_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
 static void std_free(void *env, void *obj) { (void)env; free(obj); }
@@ -94,12 +81,12 @@ static void chain_case_rep(chain_case *cc, double periods, double spp, int wall)
     chain_advance(cc->M, &in, s, T, 0, NULL, NULL);
     const long long steps0 = s->steps, piv0 = s->pivot_steps, sw0 = s->switches;
     const long long nsteps = (long long)(periods * spp + 0.5);
-    const double t0 = now(wall);
+    const double t0 = bench_seconds(wall);
     if (chain_advance(cc->M, &in, s, T + (double)nsteps * h, 0, NULL, NULL) != CHAIN_OK) {
         fprintf(stderr, "bench_chain: n = %zu failed at t = %g\n", cc->n, s->t);
         exit(1);
     }
-    const double el = now(wall) - t0;
+    const double el = bench_seconds(wall) - t0;
     const double steps = (double)(s->steps - steps0);
     if (el < cc->best) {
         cc->best = el;
@@ -159,41 +146,33 @@ static void osc_case_rep(osc_case *oc, double periods, double spp, int wall)
     dfo_advance(&oc->M, &u, &s, T, NULL, NULL);
     const long long steps0 = s.steps;
     const long long nsteps = (long long)(periods * spp + 0.5);
-    const double t0 = now(wall);
+    const double t0 = bench_seconds(wall);
     dfo_advance(&oc->M, &u, &s, T + (double)nsteps * oc->M.p.h, NULL, NULL);
-    const double el = now(wall) - t0;
+    const double el = bench_seconds(wall) - t0;
     if (el < oc->best) { oc->best = el; oc->per = 1e9 * el / (double)(s.steps - steps0); }
 }
 
 int main(int argc, char **argv)
 {
-    int reps = 5, wall = 0;
-    double periods = 4.0, spp = 1000.0, normal = 1.6;
     size_t ns[16] = {1, 2, 8, 64, 512, 4096};
-    int nn = 6;
-    const char *csv = NULL;
+    bench_run_opts o = {5, 4.0, 1000.0, NULL, ns, 16, 6};
+    int wall = 0;
+    double normal = 1.6;
     for (int a = 1; a < argc; a++) {
-        if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
-        else if (!strcmp(argv[a], "--periods") && a + 1 < argc) periods = atof(argv[++a]);
-        else if (!strcmp(argv[a], "--steps-per-period") && a + 1 < argc) spp = atof(argv[++a]);
-        else if (!strcmp(argv[a], "--csv") && a + 1 < argc) csv = argv[++a];
-        else if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
+        if (bench_run_opt(argc, argv, &a, &o)) continue;
+        if (!strcmp(argv[a], "--N") && a + 1 < argc) normal = atof(argv[++a]);
         else if (!strcmp(argv[a], "--wall")) wall = 1;
-        else if (!strcmp(argv[a], "--n") && a + 1 < argc) {
-            nn = 0;
-            for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ","))
-                ns[nn++] = (size_t)atol(tok);
-        } else {
+        else {
             fprintf(stderr, "bench_chain: unknown or incomplete argument %s\n", argv[a]);
             return 2;
         }
     }
-    if (reps < 1 || !(periods > 0.0) || !(spp >= 10.0)) {
-        fprintf(stderr, "bench_chain: --reps >= 1, --periods > 0, --steps-per-period >= 10\n");
-        return 2;
-    }
-    FILE *out = csv ? fopen(csv, "w") : stdout;
-    if (!out) { fprintf(stderr, "bench_chain: cannot write %s\n", csv); return 2; }
+    if (bench_run_opts_bad(&o, "bench_chain")) return 2;
+    const int reps = o.reps, nn = o.nn;
+    const double periods = o.periods, spp = o.spp;
+    const char *csv = o.csv;
+    FILE *out = bench_out(&o, "bench_chain");
+    if (!out) return 2;
     /* every model is timed once per repetition, in turn, so that a change of the machine's load
      * reaches all of them alike; each keeps its best repetition */
     osc_case osc[2];

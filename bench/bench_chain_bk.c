@@ -23,15 +23,6 @@
 
 #include "bench_clock.h"
 
-static double now(void)
-{
-#if defined(CLOCK_THREAD_CPUTIME_ID) && !defined(_WIN32)
-    struct timespec ts;
-    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) == 0) return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-#endif
-    return 1e-9 * bench_now_ns();
-}
-
 static void *std_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
 static void std_free(void *env, void *obj) { (void)env; free(obj); }
 
@@ -103,7 +94,7 @@ static int bk_time(bk_run *b, double T, double dt, double settle)
     const long long steps0 = b->s.steps, piv0 = b->s.pivot_steps, sw0 = b->s.switches;
     double stuck = 0.0;
     long long samples = 0;
-    const double c0 = now();
+    const double c0 = bench_seconds(0);
     const int k_end = (int)floor(T / dt + 0.5);
     for (int k = 0; k < k_end; k++) {
         t += dt;
@@ -116,7 +107,7 @@ static int bk_time(bk_run *b, double T, double dt, double settle)
         for (size_t i = 0; i < b->n; i++) stuck += (b->s.mode[i] == 0);
         samples += (long long)b->n;
     }
-    const double el = now() - c0;
+    const double el = bench_seconds(0) - c0;
     const long long steps = b->s.steps - steps0;
     const double ns = 1e9 * el / ((double)steps * (double)b->n);
     if (ns < b->best) {
@@ -147,8 +138,7 @@ int main(int argc, char **argv)
             else if (strcmp(v, "both")) { fprintf(stderr, "bench_chain_bk: --law coulomb|stribeck|both\n"); return 2; }
             a++;
         } else if (!strcmp(argv[a], "--n")) {
-            nn = 0;
-            for (char *tok = strtok(argv[++a], ","); tok && nn < 16; tok = strtok(NULL, ",")) ns[nn++] = (size_t)atol(tok);
+            nn = bench_sizes(argv[++a], ns, 16);
         } else {
             fprintf(stderr, "usage: bench_chain_bk [--reps N] [--seconds T] [--settle S] [--n N,...] [--h H] [--dt DT] "
                             "[--law coulomb|stribeck|both]\n");

@@ -201,7 +201,7 @@ done
 
 # ---- 3b. the physics' C tests (tests/c) on every platform -------------------------------------------
 t0=$SECONDS
-CTESTS=(test_lcp test_stepper test_host_clock test_exact)
+CTESTS=(test_lcp test_stepper test_host_clock test_exact test_engine test_engine_step)
 for t in "${CTESTS[@]}"; do # all at once (qemu takes 3-18 s per test)
   for p in "${PLATS[@]}"; do
     { run_on "$p" "$(program "$p" "$t" | sed 's|/tests/platforms/|/tests/c/|')" >"$W/$t.$p.raw" 2>&1 </dev/null

@@ -1,0 +1,181 @@
+/* The two structures of bench_engine as engine models (fmu_src/engine): their operators as static
+ * inline functions, used both through eng_ops's function pointers (engine.c's schemes) and inlined
+ * into the schemes of engine_step.h (engine_block.c, engine_chain.c), so that the two builds of the
+ * schemes run the same arithmetic and differ only in how the operators are reached.
+ *
+ *   block: one mass m on a spring k and a damper c, its contact to the ground (w = 1): M_hat and
+ *          the friction problem scalar (the 2 x 2 LCP of one contact in closed form);
+ *   chain: n masses in a row between two walls (springs k_i from block i - 1 or the left wall to
+ *          block i, k_end to the right wall, no dampers), contact i on block i: M_hat tridiagonal
+ *          (Thomas), the friction problem the box LCP of numerics/lcp.h. */
+#ifndef DFO_BENCH_ENGINE_MODELS_H
+#define DFO_BENCH_ENGINE_MODELS_H
+
+#include "engine.h"
+#include "lcp.h"
+
+#include <math.h>
+#include <stddef.h>
+
+/* ---- one block ------------------------------------------------------------------------------ */
+
+typedef struct {
+    double m, c, k;
+    double a[ENG_NSLOTS]; /* each slot's factor: cM m + cC c + cK k */
+} blk_model;
+
+static inline void blk_K(void *ctx, const double *x, double *y) { y[0] = ((const blk_model *)ctx)->k * x[0]; }
+static inline void blk_C(void *ctx, const double *v, double *y) { y[0] = ((const blk_model *)ctx)->c * v[0]; }
+static inline void blk_M(void *ctx, const double *a, double *y) { y[0] = ((const blk_model *)ctx)->m * a[0]; }
+
+static inline int blk_factor(void *ctx, int slot, double cM, double cC, double cK)
+{
+    blk_model *B = (blk_model *)ctx;
+    B->a[slot] = cM * B->m + cC * B->c + cK * B->k;
+    return B->a[slot] > 0.0;
+}
+
+static inline void blk_solve(void *ctx, int slot, const double *b, double *x)
+{
+    x[0] = b[0] / ((const blk_model *)ctx)->a[slot];
+}
+
+/* The friction problem of one contact on one mass: V1 = (p_hat + f) / a. Held: V1 = vb, f the
+ * holding force a vb - p_hat; sliding: f = -mode limit. The LCP: held when the holding force is
+ * within the limit, else sliding the way the free motion goes. (Coulomb only: the bench has no
+ * Stribeck contact; a problem with one is refused.) */
+static inline eng_status blk_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                                      int *pivots)
+{
+    const double a = ((const blk_model *)ctx)->a[P->slot];
+    const double vb = P->vb ? P->vb[0] : 0.0, lim = P->limit[0], p = P->p_hat[0];
+    if (P->law && P->law[0].law == DFO_LAW_STRIBECK) return ENG_ERR_FRICTION;
+    if (pivots) *pivots = 0;
+    if (!(lim > 0.0)) {
+        f[0] = 0.0;
+        V1[0] = p / a;
+        if (what == ENG_SOLVE_LCP) mode[0] = (V1[0] - vb > 0.0) - (V1[0] - vb < 0.0);
+        return ENG_OK;
+    }
+    const double fh = a * vb - p;
+    if (what == ENG_SOLVE_LCP) {
+        const int m = (fabs(fh) <= lim) ? 0 : (fh > 0.0) ? -1 : 1;
+        if (pivots && m != mode[0]) *pivots = 1;
+        mode[0] = m;
+    }
+    if (mode[0] == 0) {
+        V1[0] = vb;
+        f[0] = fh;
+    } else {
+        f[0] = -mode[0] * lim;
+        V1[0] = (p + f[0]) / a;
+    }
+    return ENG_OK;
+}
+
+/* ---- a chain of n blocks -------------------------------------------------------------------- */
+
+typedef struct {
+    size_t n;
+    const double *m, *k;        /* n each: masses, springs (k[i] from block i - 1 or the left wall) */
+    double k_end;               /* the spring from the last block to the right wall */
+    double *d[ENG_NSLOTS];      /* n each: the slot's diagonal, */
+    double *e[ENG_NSLOTS];      /* its super-diagonal (e[n - 1] = 0), */
+    double *cp[ENG_NSLOTS];     /* Thomas's factors: cp = e / den, */
+    double *inv[ENG_NSLOTS];    /* inv = 1 / den */
+    double *q, *work;           /* n and 2 n: the box LCP's right-hand side and workspace */
+} chn_model;
+
+static inline double chn_kd(const chn_model *C, size_t i)
+{
+    return C->k[i] + ((i + 1 < C->n) ? C->k[i + 1] : C->k_end);
+}
+
+static inline void chn_K(void *ctx, const double *x, double *y)
+{
+    const chn_model *C = (const chn_model *)ctx;
+    const size_t n = C->n;
+    for (size_t i = 0; i < n; i++) {
+        double s = chn_kd(C, i) * x[i];
+        if (i > 0) s -= C->k[i] * x[i - 1];
+        if (i + 1 < n) s -= C->k[i + 1] * x[i + 1];
+        y[i] = s;
+    }
+}
+
+static inline void chn_M(void *ctx, const double *a, double *y)
+{
+    const chn_model *C = (const chn_model *)ctx;
+    for (size_t i = 0; i < C->n; i++) y[i] = C->m[i] * a[i];
+}
+
+static inline int chn_factor(void *ctx, int slot, double cM, double cC, double cK)
+{
+    chn_model *C = (chn_model *)ctx;
+    const size_t n = C->n;
+    double *d = C->d[slot], *e = C->e[slot], *cp = C->cp[slot], *inv = C->inv[slot];
+    (void)cC; /* no dampers */
+    for (size_t i = 0; i < n; i++) {
+        d[i] = cM * C->m[i] + cK * chn_kd(C, i);
+        e[i] = (i + 1 < n) ? -cK * C->k[i + 1] : 0.0;
+    }
+    double prev = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double den = d[i] - ((i > 0) ? e[i - 1] * prev : 0.0);
+        if (!(den > 0.0)) return 0;
+        inv[i] = 1.0 / den;
+        cp[i] = e[i] * inv[i];
+        prev = cp[i];
+    }
+    return 1;
+}
+
+static inline void chn_solve(void *ctx, int slot, const double *b, double *x)
+{
+    const chn_model *C = (const chn_model *)ctx;
+    const size_t n = C->n;
+    const double *e = C->e[slot], *cp = C->cp[slot], *inv = C->inv[slot];
+    double prev = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        prev = (b[i] - ((i > 0) ? e[i - 1] * prev : 0.0)) * inv[i];
+        x[i] = prev;
+    }
+    for (size_t i = n - 1; i-- > 0;) x[i] -= cp[i] * x[i + 1];
+}
+
+/* The box LCP of the slot's M_hat (W = I, no belts): lcp_box_basis in the given modes, lcp_box for
+ * the LCP; z the end velocities, w the forces, q = -p_hat. (Coulomb, fixed supports only: a problem
+ * with the Stribeck law or a belt is refused.) */
+static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                                      int *pivots)
+{
+    chn_model *C = (chn_model *)ctx;
+    const size_t n = C->n;
+    const double *d = C->d[P->slot], *e = C->e[P->slot];
+    if (P->law) return ENG_ERR_FRICTION;
+    for (size_t i = 0; i < n; i++) {
+        if (P->vb && P->vb[i] != 0.0) return ENG_ERR_BAD_INPUT; /* belts: not this model's */
+        C->q[i] = -P->p_hat[i];
+    }
+    if (pivots) *pivots = 0;
+    if (what == ENG_SOLVE_BASIS) {
+        lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, C->q, P->limit, mode, V1, f, C->work, C->work + n);
+        for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
+            if (!(mode[i] == 0 && P->limit[i] > 0.0)) f[i] = (P->limit[i] > 0.0) ? -mode[i] * P->limit[i] : 0.0;
+        return ENG_OK;
+    }
+    return lcp_box(n, d, e, C->q, P->limit, mode, V1, f, C->work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
+}
+
+/* ---- the specialised schemes (engine_block.c, engine_chain.c) ------------------------------- */
+
+eng_status blk_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
+void blk_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+void blk_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
+                        const eng_hooks *hk);
+eng_status chn_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
+void chn_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+void chn_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
+                        const eng_hooks *hk);
+
+#endif

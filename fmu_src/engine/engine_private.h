@@ -1,0 +1,68 @@
+/* The engine's private header: its constants and the engine object (setup, factor-slot caches and
+ * workspace), shared by engine.c (set-up, memory, the state's storage) and engine_step.h (the
+ * schemes, a template over the model's operators). Not for models: they use engine.h, or include
+ * engine_step.h to specialise the schemes by their own inline operators. */
+#ifndef DFO_ENGINE_PRIVATE_H
+#define DFO_ENGINE_PRIVATE_H
+
+#include "engine.h"
+
+#include "dmath.h"
+#include "excitation.h"
+#include "lcp.h"
+#include "roots.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
+#define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
+#define HALVINGS 60              /* search for a resolvable sub-step before the first switch */
+#define LEMKE_PIVOTS_PER_N 8     /* Lemke's pivot budget: 8 (2 nc) + 16 */
+#define ACTIVE_SET_ROUNDS 4      /* the active-set fallback: rounds per contact */
+#define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
+#define DEPENDENT_REL 1e-13      /* a Cholesky pivot below this share of its diagonal: a dependent row */
+
+struct eng {
+    eng_setup S;
+    eng_alloc al;
+    double g, b, g1;             /* Newmark's gamma, beta, (1 - gamma) / gamma */
+    double slot_c[ENG_NSLOTS][3];
+    int slot_ok[ENG_NSLOTS];
+    int any_law;                 /* some contact has the Stribeck law */
+    double *mu_b;                /* nc: breakaway coefficients max(mu_s, mu_k) */
+    /* loads of the current inputs at the current time (loads_at) */
+    double *u;                   /* n: external force */
+    double *Nn, *mukN, *Fb, *mlN;/* nc: normal force, kinetic magnitude, breakaway limit, the located
+                                  * LCP's sliding limit (Stribeck: min(mu_s, mu_k) N) */
+    const double *vb;            /* nc: belts of the current call (the inputs' or zeros) */
+    const eng_inputs *loads_for; /* the held inputs the loads above are of (NULL: none; loads_at) */
+    dfo_bossak_kin kin_grid;     /* the kinematics of a grid step h */
+    double *zero_nc;
+    /* per-DOF workspace */
+    double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
+    double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
+    /* per-contact workspace */
+    double *lim, *f, *f2;
+    int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
+    int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
+    double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
+    /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
+     * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
+     * Cholesky, Lemke's 2 nc problem */
+    double *ccol;
+    int *cok;
+    const double **colp;
+    double *D, *Lc, *rhs, *sol, *Dinv, *lM, *lq, *lz, *lw;
+    int *zb, *guess, *sel;
+    lcp_workspace *ws;           /* Lemke's, for 2 nc unknowns (NULL without contacts) */
+    /* Stribeck's Newton */
+    double *Jn, *res;
+    /* a phase's start, saved for the switch search */
+    double *sX, *sV, *sA, *shA, *sF;
+    int *smode;
+};
+
+#endif

@@ -1,0 +1,1165 @@
+/* The engine's schemes as a template over the model's operators: included once by engine.c with
+ * the defaults below (the operators through eng_ops's function pointers, the sizes from the setup:
+ * the public eng_* functions of engine.h), and by a model that wants its own operators inlined:
+ * before including this file it defines, as macros of the engine E,
+ *
+ *   ENG_N(E), ENG_NC(E)          the sizes (a model with fixed sizes gives constants: the loops unroll)
+ *   ENG_APPLY_K(E, x, y)         y = K x
+ *   ENG_APPLY_C(E, v, y)         y = C v (read only where ENG_HAS_C(E))
+ *   ENG_HAS_C(E)                 C is not 0
+ *   ENG_APPLY_M(E, a, y)         y = M a
+ *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
+ *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
+ *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
+ *                                eng_new_inputs, eng_snap_target, eng_accelerations,
+ *                                eng_contact_forces, eng_dense_friction): a prefix and static
+ *
+ * and gets the same schemes, their arithmetic in the same order: the same numbers as engine.c's
+ * with the same operators. The engine object is made by eng_create (engine.c) either way. Include
+ * once per translation unit, after "dfo_fp.h". See engine.c's header for the functions' order. */
+#include "engine_private.h"
+
+#ifndef ENG_FN
+#define ENG_FN(name) name
+#endif
+#ifndef ENG_API
+#define ENG_API
+#endif
+#ifndef ENG_N
+#define ENG_N(E) ((E)->S.n)
+#endif
+#ifndef ENG_NC
+#define ENG_NC(E) ((E)->S.nc)
+#endif
+#ifndef ENG_APPLY_K
+#define ENG_APPLY_K(E, x, y) ((E)->S.ops.apply_K((E)->S.ops.ctx, (x), (y)))
+#endif
+#ifndef ENG_APPLY_C
+#define ENG_APPLY_C(E, v, y) ((E)->S.ops.apply_C((E)->S.ops.ctx, (v), (y)))
+#endif
+#ifndef ENG_HAS_C
+#define ENG_HAS_C(E) ((E)->S.ops.apply_C != NULL)
+#endif
+#ifndef ENG_APPLY_M
+#define ENG_APPLY_M(E, a, y) ((E)->S.ops.apply_M((E)->S.ops.ctx, (a), (y)))
+#endif
+#ifndef ENG_FACTOR
+#define ENG_FACTOR(E, slot, cM, cC, cK) ((E)->S.ops.factor((E)->S.ops.ctx, (slot), (cM), (cC), (cK)))
+#endif
+#ifndef ENG_SOLVE
+#define ENG_SOLVE(E, slot, b, x) ((E)->S.ops.solve((E)->S.ops.ctx, (slot), (b), (x)))
+#endif
+#ifndef ENG_HAS_FRICTION
+#define ENG_HAS_FRICTION(E) ((E)->S.ops.friction != NULL)
+#endif
+#ifndef ENG_FRICTION
+#define ENG_FRICTION(E, P, what, mode, V1, f, pivots) \
+    ((E)->S.ops.friction((E)->S.ops.ctx, (P), (what), (mode), (V1), (f), (pivots)))
+#endif
+
+/* ---- small algebra --------------------------------------------------------------------------- */
+
+static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
+
+/* w_j . x */
+static double row_dot(const eng_row *R, const double *x)
+{
+    double d = 0.0;
+    for (size_t k = 0; k < R->nnz; k++) d += R->w[k] * x[R->idx[k]];
+    return d;
+}
+
+/* y += c w_j */
+static void row_axpy(const eng_row *R, double c, double *y)
+{
+    for (size_t k = 0; k < R->nnz; k++) y[R->idx[k]] += c * R->w[k];
+}
+
+/* Cholesky of the m x m matrix a (row-major, leading dimension ld) into L (lower, same layout); a
+ * pivot below DEPENDENT_REL of its diagonal marks a dependent row: dep[i] = 1, its row and column
+ * left out (its unknown 0: the minimum-norm choice among the solutions of a semi-definite system). */
+static void chol(size_t m, const double *a, size_t ld, double *L, int *dep)
+{
+    for (size_t i = 0; i < m; i++) {
+        dep[i] = 0;
+        for (size_t j = 0; j <= i; j++) {
+            double s = a[i * ld + j];
+            for (size_t k = 0; k < j; k++) s -= L[i * ld + k] * L[j * ld + k];
+            if (i == j) {
+                if (!(s > DEPENDENT_REL * fabs(a[i * ld + i])) || !(s > 0.0)) {
+                    dep[i] = 1;
+                    for (size_t k = 0; k <= i; k++) L[i * ld + k] = 0.0;
+                } else {
+                    L[i * ld + i] = sqrt(s);
+                }
+            } else {
+                L[i * ld + j] = dep[j] ? 0.0 : s / L[j * ld + j];
+            }
+        }
+    }
+}
+
+static void chol_solve(size_t m, const double *L, size_t ld, const int *dep, const double *b, double *x)
+{
+    for (size_t i = 0; i < m; i++) {
+        if (dep[i]) { x[i] = 0.0; continue; }
+        double s = b[i];
+        for (size_t k = 0; k < i; k++) s -= L[i * ld + k] * x[k];
+        x[i] = s / L[i * ld + i];
+    }
+    for (size_t i = m; i-- > 0;) {
+        if (dep[i]) continue;
+        double s = x[i];
+        for (size_t k = i + 1; k < m; k++) s -= L[k * ld + i] * x[k];
+        x[i] = s / L[i * ld + i];
+    }
+}
+
+/* ---- loads, excitation, slip --------------------------------------------------------------- */
+
+static int ramped(const eng_inputs *in)
+{
+    return in && (in->dF_ext[0] || in->dF_ext[1] || in->dN_ext[0] || in->dN_ext[1]);
+}
+
+static double poly_at(const double *u, const double *const *du, const eng_inputs *in, size_t i, double t)
+{
+    const double tau = t - in->t_ref;
+    const double u1 = du[0] ? du[0][i] : 0.0, u2 = du[1] ? du[1][i] : 0.0;
+    return (u ? u[i] : 0.0) + tau * (u1 + 0.5 * tau * u2);
+}
+
+static double poly_rate(const double *const *du, const eng_inputs *in, size_t i, double t)
+{
+    const double tau = t - in->t_ref;
+    return (du[0] ? du[0][i] : 0.0) + tau * (du[1] ? du[1][i] : 0.0);
+}
+
+/* The loads of the inputs at t (their polynomials' values with a ramp) into u, Nn, mukN, Fb, mlN,
+ * and the belts into vb. Held inputs give the same loads at every t: taken once per public call
+ * (loads_for: the inputs they are of, cleared on entry to every public function). */
+static void loads_at(eng *E, const eng_inputs *in, double t)
+{
+    const eng_setup *S = &E->S;
+    if (in && in == E->loads_for) return;
+    const int rp = ramped(in);
+    E->loads_for = rp ? NULL : in;
+    for (size_t i = 0; i < ENG_N(E); i++)
+        E->u[i] = !in ? 0.0 : rp ? poly_at(in->F_ext, in->dF_ext, in, i, t) : (in->F_ext ? in->F_ext[i] : 0.0);
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const double Ne = !in ? 0.0 : rp ? poly_at(in->N_ext, in->dN_ext, in, j, t) : (in->N_ext ? in->N_ext[j] : 0.0);
+        const double N = fmax(S->N[j] + Ne, 0.0);
+        E->Nn[j] = N;
+        E->mukN[j] = S->mu_k[j] * N;
+        E->Fb[j] = E->mu_b[j] * N;
+        const int strib = S->law && S->law[j].law == DFO_LAW_STRIBECK;
+        E->mlN[j] = strib ? fmin(S->law[j].mu_s, S->law[j].mu_k) * N : E->mukN[j];
+    }
+    E->vb = (in && in->v_belt) ? in->v_belt : E->zero_nc;
+}
+
+static int has_friction(const eng *E, size_t j) { return E->Fb[j] > 0.0; }
+
+static int is_strib(const eng *E, size_t j) { return E->S.law && E->S.law[j].law == DFO_LAW_STRIBECK; }
+
+/* The kinetic magnitude of contact j sliding at slip speed u >= 0 (Coulomb: mu_k N). */
+static double slide_mag(const eng *E, size_t j, double u)
+{
+    return is_strib(E, j) ? E->Nn[j] * dfo_friction_mu(&E->S.law[j], u) : E->mukN[j];
+}
+
+/* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
+static void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
+{
+    if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
+        *cw = dfo_clamp1(s->exc_c);
+        *sw = dfo_clamp1(s->exc_s);
+        return;
+    }
+    *cw = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
+    *sw = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+}
+
+/* P(t) + F_ext into out (the loads already at t) */
+static void applied_at(const eng *E, const eng_state *s, double t, double *out)
+{
+    const eng_harmonic *H = &E->S.exc;
+    double cw = 0.0, sw = 0.0;
+    if (H->Pc || H->Ps) phase_of(E, s, t, &cw, &sw);
+    for (size_t i = 0; i < ENG_N(E); i++) {
+        double p = E->u[i];
+        if (H->Pc) p += H->Pc[i] * cw;
+        if (H->Ps) p -= H->Ps[i] * sw;
+        out[i] = p;
+    }
+}
+
+/* dP/dt + dF_ext/dt at t into out */
+static void applied_rate(const eng *E, const eng_inputs *in, double t, double *out)
+{
+    const eng_harmonic *H = &E->S.exc;
+    const double th = H->omega * t + H->phi0;
+    const double cw = dfo_cos(th), sw = dfo_sin(th);
+    const int rp = ramped(in);
+    for (size_t i = 0; i < ENG_N(E); i++) {
+        double p = rp ? poly_rate(in->dF_ext, in, i, t) : 0.0;
+        if (H->Pc) p -= H->Pc[i] * H->omega * sw;
+        if (H->Ps) p -= H->Ps[i] * H->omega * cw;
+        out[i] = p;
+    }
+}
+
+/* contact j's slip velocity w_j . V - vb_j */
+static double slip(const eng *E, size_t j, const double *V) { return row_dot(&E->S.rows[j], V) - E->vb[j]; }
+
+/* Factor slot with the coefficients, unless it holds them already. */
+static int factor_slot(eng *E, int slot, double cM, double cC, double cK)
+{
+    if (!ENG_HAS_C(E)) cC = 0.0;
+    double *c = E->slot_c[slot];
+    if (E->slot_ok[slot] && c[0] == cM && c[1] == cC && c[2] == cK) return 1;
+    E->slot_ok[slot] = ENG_FACTOR(E, slot, cM, cC, cK);
+    for (size_t j = 0; j < ENG_NC(E); j++) E->cok[(size_t)slot * ENG_NC(E) + j] = 0; /* its columns anew */
+    c[0] = cM;
+    c[1] = cC;
+    c[2] = cK;
+    return E->slot_ok[slot];
+}
+
+/* colp[a] := A_slot^-1 w_j for the selected contacts j = sel[a], a < m, each solved once per
+ * factorisation of the slot. */
+static void columns(eng *E, int slot, size_t m)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    for (size_t a = 0; a < m; a++) {
+        const size_t j = (size_t)E->sel[a];
+        double *col = E->ccol + ((size_t)slot * nc + j) * n;
+        int *done = &E->cok[(size_t)slot * nc + j];
+        if (!*done) {
+            for (size_t i = 0; i < n; i++) col[i] = 0.0;
+            row_axpy(&S->rows[j], 1.0, col);
+            ENG_SOLVE(E, slot, col, col);
+            *done = 1;
+        }
+        E->colp[a] = col;
+    }
+}
+
+/* ---- constrained solves ------------------------------------------------------------------- */
+
+/* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
+ * f (other entries untouched). m: |S|. Uses cols, D, Lc, rhs, sol, sel. */
+static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    ENG_SOLVE(E, slot, r, y);
+    size_t m = 0;
+    for (size_t j = 0; j < nc; j++)
+        if (held[j]) E->sel[m++] = (int)j;
+    if (m == 0) return;
+    columns(E, slot, m);
+    for (size_t a = 0; a < m; a++) {
+        const eng_row *Ra = &S->rows[E->sel[a]];
+        for (size_t c = 0; c <= a; c++) E->D[a * m + c] = E->D[c * m + a] = row_dot(Ra, E->colp[c]);
+        E->rhs[a] = target[E->sel[a]] - row_dot(Ra, y);
+    }
+    int *dep = E->st2;
+    chol(m, E->D, m, E->Lc, dep);
+    chol_solve(m, E->Lc, m, dep, E->rhs, E->sol);
+    for (size_t a = 0; a < m; a++) {
+        const double fa = E->sol[a];
+        const double *col = E->colp[a];
+        for (size_t i = 0; i < n; i++) y[i] += col[i] * fa;
+        f[E->sel[a]] = fa;
+    }
+}
+
+/* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
+ * sliding contacts' f their kinetic force at their slip speed, held ones (mode 0 with friction)
+ * solved for slip acceleration 0. f out (nc), a out (n). The loads at t must be set. */
+static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, double *a, double *f)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    double *r = E->r, *y = E->y;
+    applied_at(E, s, t, r);
+    ENG_APPLY_K(E, s->X, y);
+    for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, s->V, y);
+        for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    }
+    for (size_t j = 0; j < nc; j++) {
+        E->held[j] = mode[j] == 0 && has_friction(E, j);
+        f[j] = 0.0;
+        if (has_friction(E, j) && mode[j] != 0) {
+            f[j] = -mode[j] * slide_mag(E, j, fabs(slip(E, j, s->V)));
+            row_axpy(&S->rows[j], f[j], r);
+        }
+    }
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, a, f);
+}
+
+/* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
+ * equation of motion with the inputs' rates; a: the physical accelerations. Into j. */
+static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double *a, double *jk)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    double *r = E->r, *y = E->y;
+    applied_rate(E, in, s->t, r);
+    ENG_APPLY_K(E, s->V, y);
+    for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, a, y);
+        for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    }
+    const int rp = ramped(in);
+    for (size_t j = 0; j < nc; j++) {
+        E->held[j] = s->mode[j] == 0 && has_friction(E, j);
+        if (!has_friction(E, j) || s->mode[j] == 0) continue;
+        double df = 0.0;
+        if (rp) { /* d(mu N)/dt of the normal force's rate */
+            const double Ne = poly_at(in->N_ext, in->dN_ext, in, j, s->t);
+            const double dN = (S->N[j] + Ne > 0.0) ? poly_rate(in->dN_ext, in, j, s->t) : 0.0;
+            df -= s->mode[j] * (is_strib(E, j) ? dfo_friction_mu(&S->law[j], fabs(slip(E, j, s->V))) : S->mu_k[j]) * dN;
+        }
+        if (is_strib(E, j)) { /* -mode N mu'(u) du/dt, u = mode (w . v - vb) */
+            const double u = fabs(slip(E, j, s->V));
+            df -= E->Nn[j] * dfo_friction_dmu(&S->law[j], u) * row_dot(&S->rows[j], a);
+        }
+        row_axpy(&S->rows[j], df, r);
+    }
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, jk, E->f2);
+}
+
+/* ---- dense friction (the default solver) -------------------------------------------------- */
+
+/* Newton on the Stribeck contacts sliding in mode[] (with the held ones), the others' forces
+ * fixed: f_T = -m N mu(max(m v_T, 0)), v = W V1 - vb, V1 = M_hat^-1 (p_hat + W' f). */
+static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode, double *V1, double *f)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    /* the set: held contacts and sliding Stribeck ones */
+    size_t m = 0;
+    for (size_t j = 0; j < nc; j++) {
+        const int held = mode[j] == 0 && P->limit[j] > 0.0;
+        const int tj = mode[j] != 0 && P->limit[j] > 0.0 && P->law[j].law == DFO_LAW_STRIBECK;
+        if (held || tj) E->sel[m++] = (int)j;
+    }
+    /* columns A^-1 w_j and D of the set; base velocity V0 = A^-1 (p_hat + W' f_other) */
+    double *V0 = E->y2;
+    for (size_t i = 0; i < n; i++) E->r[i] = P->p_hat[i];
+    for (size_t j = 0; j < nc; j++) {
+        int in = 0;
+        for (size_t a = 0; a < m; a++) in |= E->sel[a] == (int)j;
+        if (!in && P->limit[j] > 0.0 && mode[j] != 0) row_axpy(&S->rows[j], f[j], E->r);
+    }
+    ENG_SOLVE(E, P->slot, E->r, V0);
+    columns(E, P->slot, m);
+    for (size_t a = 0; a < m; a++)
+        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[E->sel[a]], E->colp[c]);
+    double *fs = E->sol, *dlt = E->rhs;
+    for (size_t a = 0; a < m; a++) fs[a] = f[E->sel[a]];
+    int done = 0;
+    for (int it = 0; it < NEWTON_ITERS && !done; it++) {
+        /* residual and Jacobian (dense m x m, Gaussian elimination with partial pivoting) */
+        for (size_t a = 0; a < m; a++) {
+            const size_t j = (size_t)E->sel[a];
+            double v = row_dot(&S->rows[j], V0) - (P->vb ? P->vb[j] : 0.0);
+            for (size_t c = 0; c < m; c++) v += E->D[a * m + c] * fs[c];
+            if (mode[j] == 0) {
+                E->res[a] = v;
+                for (size_t c = 0; c < m; c++) E->Jn[a * m + c] = E->D[a * m + c];
+            } else {
+                const double u = mode[j] * v, up = fmax(u, 0.0);
+                E->res[a] = fs[a] + mode[j] * P->N[j] * dfo_friction_mu(&P->law[j], up);
+                const double dmu = (u > 0.0) ? dfo_friction_dmu(&P->law[j], u) : 0.0;
+                for (size_t c = 0; c < m; c++)
+                    E->Jn[a * m + c] = ((a == c) ? 1.0 : 0.0) + P->N[j] * dmu * E->D[a * m + c];
+            }
+        }
+        for (size_t a = 0; a < m; a++) dlt[a] = E->res[a];
+        for (size_t k = 0; k < m; k++) {
+            size_t p = k;
+            for (size_t i = k + 1; i < m; i++)
+                if (fabs(E->Jn[i * m + k]) > fabs(E->Jn[p * m + k])) p = i;
+            if (p != k) {
+                for (size_t c = 0; c < m; c++) {
+                    const double t = E->Jn[k * m + c]; E->Jn[k * m + c] = E->Jn[p * m + c]; E->Jn[p * m + c] = t;
+                }
+                const double t = dlt[k]; dlt[k] = dlt[p]; dlt[p] = t;
+            }
+            const double piv = E->Jn[k * m + k];
+            if (piv == 0.0) return ENG_ERR_FRICTION;
+            for (size_t i = k + 1; i < m; i++) {
+                const double q = E->Jn[i * m + k] / piv;
+                for (size_t c = k; c < m; c++) E->Jn[i * m + c] -= q * E->Jn[k * m + c];
+                dlt[i] -= q * dlt[k];
+            }
+        }
+        double dmax = 0.0, fmx = 0.0;
+        for (size_t k = m; k-- > 0;) {
+            double s = dlt[k];
+            for (size_t c = k + 1; c < m; c++) s -= E->Jn[k * m + c] * dlt[c];
+            dlt[k] = s / E->Jn[k * m + k];
+        }
+        for (size_t a = 0; a < m; a++) {
+            fs[a] -= dlt[a];
+            dmax = fmax(dmax, fabs(dlt[a]));
+            fmx = fmax(fmx, fabs(fs[a]));
+        }
+        done = dmax <= 4.0 * DBL_EPSILON * fmx || dmax == 0.0;
+    }
+    if (!done) return ENG_ERR_FRICTION;
+    for (size_t i = 0; i < n; i++) V1[i] = V0[i];
+    for (size_t a = 0; a < m; a++) {
+        f[E->sel[a]] = fs[a];
+        const double *col = E->colp[a];
+        for (size_t i = 0; i < n; i++) V1[i] += col[i] * fs[a];
+    }
+    return ENG_OK;
+}
+
+/* The basis solve: sliding contacts at -mode limit, held ones at slip 0 (target vb). */
+static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, double *V1, double *f)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    for (size_t i = 0; i < n; i++) E->rb[i] = P->p_hat[i];
+    int strib = 0;
+    for (size_t j = 0; j < nc; j++) {
+        E->held[j] = mode[j] == 0 && P->limit[j] > 0.0;
+        f[j] = 0.0;
+        if (P->limit[j] > 0.0 && mode[j] != 0) {
+            f[j] = -mode[j] * P->limit[j];
+            row_axpy(&S->rows[j], f[j], E->rb);
+            strib |= P->law && P->law[j].law == DFO_LAW_STRIBECK;
+        }
+    }
+    csolve(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, V1, f);
+    /* a held contact on one DOF: its slip exactly 0 */
+    for (size_t j = 0; j < nc; j++) {
+        const eng_row *R = &S->rows[j];
+        if (E->held[j] && R->nnz == 1) V1[R->idx[0]] = (P->vb ? P->vb[j] : 0.0) / R->w[0];
+    }
+    if (strib) {
+        const eng_status st = stribeck_newton(E, P, mode, V1, f);
+        if (st != ENG_OK) return st;
+        for (size_t j = 0; j < nc; j++) {
+            const eng_row *R = &S->rows[j];
+            if (E->held[j] && R->nnz == 1) V1[R->idx[0]] = (P->vb ? P->vb[j] : 0.0) / R->w[0];
+        }
+    }
+    return ENG_OK;
+}
+
+/* The LCP by an active set (principal pivoting on the basis solve): infeasible contacts flipped,
+ * at most ACTIVE_SET_ROUNDS per contact: for the Stribeck law, a singular D, and where Lemke fails. */
+static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, double *V1, double *f, int *pivots)
+{
+    const size_t nc = ENG_NC(E);
+    int piv = 0;
+    for (size_t round = 0; round < ACTIVE_SET_ROUNDS * nc + 4; round++) {
+        const eng_status st = dense_basis(E, P, mode, V1, f);
+        if (st != ENG_OK) return st;
+        int changed = 0;
+        for (size_t j = 0; j < nc; j++) {
+            if (!(P->limit[j] > 0.0)) continue;
+            const double v = row_dot(&E->S.rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
+            if (mode[j] == 0 && fabs(f[j]) > P->limit[j]) { mode[j] = -sgn(f[j]); changed = 1; }
+            else if (mode[j] != 0 && mode[j] * v < 0.0) { mode[j] = 0; changed = 1; }
+        }
+        if (!changed) { if (pivots) *pivots = piv; return ENG_OK; }
+        piv++;
+    }
+    if (pivots) *pivots = piv;
+    return ENG_ERR_LCP;
+}
+
+ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                              int *pivots)
+{
+    eng *E = (eng *)engine;
+    const eng_setup *S = &E->S;
+    const size_t nc = ENG_NC(E);
+    if (pivots) *pivots = 0;
+    if (what == ENG_SOLVE_BASIS) return dense_basis(E, P, mode, V1, f);
+    /* the warm basis first: when it solves the LCP, no pivot */
+    eng_status st = dense_basis(E, P, mode, V1, f);
+    if (st != ENG_OK) return st;
+    int feasible = 1;
+    for (size_t j = 0; j < nc && feasible; j++) {
+        if (!(P->limit[j] > 0.0)) continue;
+        const double v = row_dot(&S->rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
+        feasible = (mode[j] == 0) ? fabs(f[j]) <= P->limit[j] : mode[j] * v > 0.0;
+    }
+    if (feasible) return ENG_OK;
+    /* the contacts with friction: the 2 m LCP in (u+, u-), w = (l + f, l - f), f = D^-1 (u+ - u- - c) */
+    size_t m = 0;
+    for (size_t j = 0; j < nc; j++)
+        if (P->limit[j] > 0.0) E->sel[m++] = (int)j;
+    if (E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
+    /* c = W A^-1 p_hat - vb (frictionless contacts carry no force), D = W A^-1 W' */
+    ENG_SOLVE(E, P->slot, P->p_hat, E->y);
+    columns(E, P->slot, m);
+    for (size_t a = 0; a < m; a++) {
+        const size_t j = (size_t)E->sel[a];
+        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
+        E->rhs[a] = row_dot(&S->rows[j], E->y) - (P->vb ? P->vb[j] : 0.0);
+    }
+    int *dep = E->st2;
+    chol(m, E->D, m, E->Lc, dep);
+    for (size_t a = 0; a < m; a++)
+        if (dep[a]) return dense_active_set(E, P, mode, V1, f, pivots); /* D singular: no inverse */
+    for (size_t c = 0; c < m; c++) { /* D^-1 column by column */
+        for (size_t a = 0; a < m; a++) E->sol[a] = (a == c) ? 1.0 : 0.0;
+        chol_solve(m, E->Lc, m, dep, E->sol, E->sol);
+        for (size_t a = 0; a < m; a++) E->Dinv[a * m + c] = E->sol[a];
+    }
+    const size_t m2 = 2 * m;
+    for (size_t a = 0; a < m; a++) {
+        double dc = 0.0;
+        for (size_t c = 0; c < m; c++) {
+            const double d = E->Dinv[a * m + c];
+            E->lM[a * m2 + c] = d;
+            E->lM[a * m2 + m + c] = -d;
+            E->lM[(m + a) * m2 + c] = -d;
+            E->lM[(m + a) * m2 + m + c] = d;
+            dc += d * E->rhs[c];
+        }
+        const double l = P->limit[E->sel[a]];
+        E->lq[a] = l - dc;
+        E->lq[m + a] = l + dc;
+        E->guess[a] = mode[E->sel[a]] > 0;
+        E->guess[m + a] = mode[E->sel[a]] < 0;
+    }
+    int piv = 0;
+    const lcp_status ls = lcp_lemke_warm_ws(E->ws, (int)m2, E->lM, E->lq, E->guess, LEMKE_PIVOTS_PER_N * (int)m2 + 16,
+                                            E->lz, E->lw, E->zb, &piv);
+    if (pivots) *pivots = piv;
+    if (ls == LCP_BAD_INPUT) return ENG_ERR_NONFINITE;
+    if (ls != LCP_OK) return dense_active_set(E, P, mode, V1, f, pivots);
+    for (size_t a = 0; a < m; a++) {
+        const size_t j = (size_t)E->sel[a];
+        mode[j] = (E->zb[a] && E->lz[a] > 0.0) ? 1 : (E->zb[m + a] && E->lz[m + a] > 0.0) ? -1 : 0;
+    }
+    /* the velocities from the active pairs' equations (the basis solve of the modes found) */
+    return dense_basis(E, P, mode, V1, f);
+}
+
+/* ---- the trial step ----------------------------------------------------------------------------- */
+
+/* The Bossak step of length hh from the state to t1 (loads at t1 set): the kinematics, M_hat's
+ * factor (slot), the re-based A0 (method.md section 8), x_pred and p_hat. */
+typedef struct {
+    dfo_bossak_kin kin;
+    int slot;
+    double cM, cC, cK;
+} trial;
+
+static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    const double a = S->alpha;
+    if (hh == S->h) T->kin = E->kin_grid;
+    else dfo_bossak_kin_for(hh, E->g, E->b, &T->kin);
+    T->slot = (hh == S->h) ? ENG_SLOT_GRID : ENG_SLOT_TRIAL;
+    T->cM = (1.0 - a) * T->kin.c1;
+    T->cC = 1.0;
+    T->cK = E->b * hh / E->g;
+    if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
+    /* re-base A where it belongs to another step length, except on a DOF a held contact pins alone
+     * (w_j = e_i: its acceleration and jerk are 0, A stays) */
+    int any = 0;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    for (size_t i = 0; i < n; i++) {
+        E->A0[i] = s->A[i];
+        any |= !E->pin[i] && a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol &&
+               S->rate_max * fmax(hh, s->hA[i]) <= 1.0;
+    }
+    if (any) {
+        double *acc = E->acc, *jk = E->jk;
+        loads_at(E, in, s->t);
+        phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        jerks(E, in, s, acc, jk);
+        loads_at(E, in, t1);
+        for (size_t i = 0; i < n; i++) {
+            const double hA = s->hA[i];
+            if (!E->pin[i] && a != 0.0 && hh != hA && fabs(hh - hA) > tol && S->rate_max * fmax(hh, hA) <= 1.0)
+                E->A0[i] = s->A[i] + a * (hh - hA) * jk[i];
+        }
+    }
+    /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
+    for (size_t i = 0; i < n; i++) {
+        E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
+        E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
+    }
+    ENG_APPLY_M(E, E->r, E->y);
+    applied_at(E, s, t1, E->ph);
+    ENG_APPLY_K(E, E->xp, E->y2);
+    for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
+    return ENG_OK;
+}
+
+/* The friction problem of the trial with limits lim and modes st: the model's solver or the dense one. */
+static eng_status solve_trial(eng *E, const trial *T, int what, int *st, double *V1, double *f, int *pivots)
+{
+    const eng_setup *S = &E->S;
+    eng_problem P;
+    P.slot = T->slot;
+    P.h = T->kin.h;
+    P.cM = T->cM;
+    P.cC = ENG_HAS_C(E) ? T->cC : 0.0;
+    P.cK = T->cK;
+    P.p_hat = E->ph;
+    P.vb = E->vb;
+    P.limit = E->lim;
+    P.N = E->Nn;
+    P.law = E->any_law ? S->law : NULL;
+    if (ENG_HAS_FRICTION(E)) return ENG_FRICTION(E, &P, what, st, V1, f, pivots);
+    return ENG_FN(eng_dense_friction)(E, &P, what, st, V1, f, pivots);
+}
+
+/* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes). */
+static void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
+{
+    const size_t n = ENG_N(E);
+    for (size_t i = 0; i < n; i++) {
+        s->X[i] = E->xp[i] + T->kin.corr_V * V1[i];
+        s->A[i] = (V1[i] - s->V[i]) * T->kin.c1 - E->g1 * E->A0[i];
+        s->V[i] = V1[i];
+        s->hA[i] = T->kin.h;
+    }
+    for (size_t j = 0; j < ENG_NC(E); j++) s->F[j] = f[j];
+}
+
+/* ---- phases, switches, restarts ------------------------------------------------------------- */
+
+static void begin_phase(eng *E, const eng_state *s, double *ta)
+{
+    *ta = s->t;
+    memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
+    if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
+}
+
+static void observe(eng *E, const eng_state *s, double ta, const double *f, const eng_hooks *hk)
+{
+    if (!hk || !hk->obs || !hk->obs->on_phase) return;
+    const eng_observer *o = hk->obs;
+    if (s->t < o->t_start || ta > o->t_stop) return;
+    eng_phase ph;
+    ph.ta = ta;
+    ph.tb = s->t;
+    ph.X0 = E->X0;
+    ph.mode0 = E->mode0;
+    ph.f = f;
+    ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
+    o->on_phase(o->ctx, &ph, s);
+}
+
+static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
+{
+    s->switches++;
+    s->t_switch = s->t;
+    if (s->mode[j] == 0) s->t_stick[j] = s->t;
+    if (hk && hk->on_switch) hk->on_switch(hk->switch_ctx, s->t, j, s, from, s->mode[j]);
+}
+
+/* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
+ * holding forces solved together with every stuck contact; the one most beyond its limit starts to
+ * slide the way it is driven, and the rest are solved again (the causal cascade). Sets mode[] of
+ * the resting contacts; f: their holding forces (the stuck ones'). */
+static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
+{
+    const size_t nc = ENG_NC(E);
+    for (size_t j = 0; j < nc; j++)
+        if (rest[j]) mode[j] = 0;
+    for (size_t round = 0; round <= nc; round++) {
+        phys_accel(E, s, t, mode, E->y2, E->f);
+        size_t worst = nc;
+        double excess = 0.0;
+        for (size_t j = 0; j < nc; j++) {
+            if (!rest[j] || mode[j] != 0 || !has_friction(E, j)) continue;
+            const double e = fabs(E->f[j]) - E->Fb[j];
+            if (e > excess) { excess = e; worst = j; }
+        }
+        if (worst == nc) return;
+        mode[worst] = -sgn(E->f[worst]); /* the holding force's opposite: the net applied force's side */
+    }
+}
+
+/* The consistent restart of the mode set in s->mode: physical accelerations, hA = 0, forces (a
+ * slide from rest at its start magnitude). */
+static void restart(eng *E, eng_state *s, double t)
+{
+    const size_t n = ENG_N(E);
+    phys_accel(E, s, t, s->mode, s->A, s->F);
+    for (size_t i = 0; i < n; i++) s->hA[i] = 0.0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (!has_friction(E, j)) s->F[j] = 0.0;
+}
+
+/* ---- the schemes ------------------------------------------------------------------------------ */
+
+/* The held contacts' forces clamped to their limits, the rested ones at rest exactly (one DOF). */
+static void rest_exact(eng *E, eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (s->mode[j] != 0 || !has_friction(E, j)) continue;
+        const eng_row *R = &S->rows[j];
+        if (R->nnz == 1) {
+            s->V[R->idx[0]] = E->vb[j] / R->w[0];
+            s->A[R->idx[0]] = 0.0;
+            s->hA[R->idx[0]] = 0.0;
+        }
+    }
+}
+
+/* The paper scheme (consistent = 0) and the consistent one (1): the LCP from the modes before the
+ * step, then the paper's coefficient updates, or the consistent scheme's rest rule at the predicted
+ * rest position. */
+static eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, int consistent,
+                           const eng_hooks *hk)
+{
+    const eng_setup *S = &E->S;
+    const size_t nc = ENG_NC(E);
+    double ta;
+    begin_phase(E, s, &ta);
+    trial T;
+    eng_status st = trial_step(E, in, s, hh, t_end, &T);
+    if (st != ENG_OK) return st;
+    for (size_t j = 0; j < nc; j++) {
+        E->st[j] = s->mode[j];
+        E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
+    }
+    int piv = 0, total = 0;
+    st = solve_trial(E, &T, ENG_SOLVE_LCP, E->st, E->V1, E->f, &piv);
+    s->solves++;
+    if (st != ENG_OK) return st;
+    total += piv;
+    if (!consistent) {
+        for (int u = 0; u < S->friction_updates; u++) {
+            int update = 0;
+            for (size_t j = 0; j < nc; j++) {
+                if (!has_friction(E, j)) continue;
+                const double l1 = (E->st[j] == 0) ? E->Fb[j] : E->mukN[j];
+                if (l1 != E->lim[j]) { E->lim[j] = l1; update = 1; }
+            }
+            if (!update) break;
+            st = solve_trial(E, &T, ENG_SOLVE_LCP, E->st, E->V1, E->f, &piv);
+            s->solves++;
+            if (st != ENG_OK) return st;
+            total += piv;
+        }
+    } else {
+        int update = 0;
+        for (size_t j = 0; j < nc; j++) {
+            E->frozen[j] = 0;
+            if (!has_friction(E, j)) continue;
+            const int from = s->mode[j];
+            if (from == 0 && E->st[j] != 0) { E->lim[j] = E->mukN[j]; update = 1; }
+            if (from != 0 && E->st[j] != from) { E->frozen[j] = 1; update = 1; }
+        }
+        if (update) {
+            /* the judged contacts: their holding force at the predicted rest position x_pred, with
+             * the velocities of the step's solution (a judged contact at rest) */
+            eng_state at = *s;
+            at.X = E->xp;
+            at.V = E->V1;
+            for (size_t j = 0; j < nc; j++) E->tmode[j] = E->frozen[j] ? 0 : s->mode[j];
+            phys_accel(E, &at, t_end, E->tmode, E->y2, E->f2);
+            for (size_t j = 0; j < nc; j++) {
+                if (!E->frozen[j]) continue;
+                const double Sj = -E->f2[j];
+                E->st[j] = (fabs(Sj) <= E->Fb[j]) ? 0 : sgn(Sj);
+                E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mukN[j];
+            }
+            for (size_t pass = 0; update && pass <= nc; pass++) {
+                st = solve_trial(E, &T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
+                s->solves++;
+                if (st != ENG_OK) return st;
+                update = 0;
+                for (size_t j = 0; j < nc; j++) {
+                    if (!has_friction(E, j) || E->st[j] == 0) continue;
+                    if (E->st[j] * slip(E, j, E->V1) > 0.0) continue;
+                    if (s->mode[j] == 0 && !E->frozen[j]) continue;
+                    E->st[j] = 0;
+                    E->lim[j] = E->Fb[j];
+                    update = 1;
+                }
+            }
+            total += 1;
+        }
+        for (size_t j = 0; j < nc; j++)
+            if (has_friction(E, j) && E->st[j] == 0) E->f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
+    }
+    if (total > 0) s->pivot_steps++;
+    finish(E, s, &T, E->V1, E->f);
+    s->t = t_end;
+    for (size_t j = 0; j < nc; j++) {
+        const int from = s->mode[j];
+        s->mode[j] = has_friction(E, j) ? E->st[j] : sgn(slip(E, j, s->V));
+        if (has_friction(E, j) && s->mode[j] != from) report(s, j, from, hk);
+    }
+    if (consistent) rest_exact(E, s);
+    observe(E, s, ta, s->F, hk);
+    return ENG_OK;
+}
+
+/* How far contact j is from its switch after the trial (> 0: not yet): m v for a sliding contact,
+ * Fb - |f| for a held one. */
+static double margin(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
+{
+    if (mode[j] != 0) return mode[j] * slip(E, j, V1);
+    return E->Fb[j] - fabs(f[j]);
+}
+
+/* A located trial of length x from the phase's start (the state), loads at its end; its solve in
+ * the modes st; returns the smallest margin of the candidates. */
+typedef struct {
+    eng *E;
+    const eng_inputs *in;
+    const eng_state *s;
+    double t_step;     /* the internal step's end (the loads' time of a whole remainder) */
+    double r;          /* the remainder */
+    eng_status err;
+} margin_ctx;
+
+static double trial_margin(margin_ctx *c, double x, trial *T)
+{
+    eng *E = c->E;
+    const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
+    loads_at(E, c->in, t1);
+    for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+    eng_status st = trial_step(E, c->in, c->s, x, t1, T);
+    if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
+    if (st != ENG_OK && c->err == ENG_OK) c->err = st;
+    double g = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (E->cand[j]) g = fmin(g, margin(E, E->st, j, E->V1, E->f));
+    return g;
+}
+
+static double margin_fn(void *ctx, double x)
+{
+    trial T;
+    return trial_margin((margin_ctx *)ctx, x, &T);
+}
+
+/* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes
+ * to rest and, with every contact at rest, the rest rule decides; a held one breaks away the way it
+ * is driven. Then the consistent restart. */
+static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks *hk)
+{
+    const size_t nc = ENG_NC(E);
+    int *rest = E->cand;
+    for (size_t j = 0; j < nc; j++) {
+        if (!rest[j]) continue;
+        if (!immediate && margin(E, s->mode, j, s->V, s->F) > 0.0) { rest[j] = 0; continue; }
+    }
+    memcpy(E->smode, s->mode, nc * sizeof(int));
+    /* held contacts breaking away: their side from their holding force */
+    for (size_t j = 0; j < nc; j++) {
+        if (!rest[j] || s->mode[j] != 0) continue;
+        phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+        s->mode[j] = -sgn(E->f[j]);
+        if (s->mode[j] == 0) s->mode[j] = -sgn(s->F[j]);
+        rest[j] = 0;
+    }
+    rest_decide(E, s, s->t, rest, s->mode);
+    for (size_t j = 0; j < nc; j++)
+        if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
+    restart(E, s, s->t);
+    /* a slide from rest starts at its start magnitude (Stribeck: mu_s N) and never against its way */
+    for (size_t j = 0; j < nc; j++) {
+        if (E->smode[j] == s->mode[j] || s->mode[j] == 0 || !has_friction(E, j)) continue;
+        s->F[j] = -s->mode[j] * slide_mag(E, j, 0.0);
+    }
+}
+
+/* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
+ * earliest switch of a contact. */
+static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
+                               const eng_hooks *hk)
+{
+    const eng_setup *S = &E->S;
+    const size_t nc = ENG_NC(E);
+    if (S->rate_max * hh > STIFF_STEP) return step_lcp(E, in, s, t_end, hh, 1, hk);
+    const long max_phases = MAX_PHASES_BASE + 4 * (long)nc;
+    const long long sw0 = s->switches;
+    const int stop = hk && hk->stop_at_switch;
+    for (long phase = 0; s->t < t_end; phase++) {
+        if (phase >= max_phases) return ENG_ERR_NO_PROGRESS;
+        double ta;
+        begin_phase(E, s, &ta);
+        const double r = (phase == 0) ? hh : t_end - s->t;
+        for (size_t j = 0; j < nc; j++) {
+            E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
+            if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
+            E->cand[j] = 0;
+        }
+        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
+        trial T;
+        trial_margin(&mc, r, &T);
+        s->solves++;
+        if (mc.err != ENG_OK) return mc.err;
+        size_t ncand = 0;
+        for (size_t j = 0; j < nc; j++)
+            if (has_friction(E, j) && margin(E, E->st, j, E->V1, E->f) <= 0.0) { E->cand[j] = 1; ncand++; }
+        if (ncand == 0) {
+            finish(E, s, &T, E->V1, E->f);
+            s->t = t_end;
+            for (size_t j = 0; j < nc; j++)
+                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+            rest_exact(E, s);
+            observe(E, s, ta, s->F, hk);
+            return ENG_OK;
+        }
+        if (phase == 0) s->pivot_steps++;
+        /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
+        double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
+        for (size_t j = 0; j < nc; j++) {
+            if (!E->cand[j]) continue;
+            ghi = fmin(ghi, margin(E, E->st, j, E->V1, E->f));
+            glo = (E->st[j] != 0) ? fmin(glo, E->st[j] * slip(E, j, s->V)) : -INFINITY;
+        }
+        if (!(glo > 0.0)) {
+            lo = r;
+            glo = -INFINITY;
+            for (int it = 0; it < HALVINGS && !(glo > 0.0); it++) {
+                lo *= 0.5;
+                glo = margin_fn(&mc, lo);
+                s->solves++;
+            }
+            if (mc.err != ENG_OK) return mc.err;
+        }
+        if (!(glo > 0.0)) { /* nothing resolvable before the switch: it happens now */
+            loads_at(E, in, s->t);
+            for (size_t j = 0; j < nc; j++)
+                if (E->cand[j] && s->mode[j] != 0) {
+                    const eng_row *R = &S->rows[j];
+                    if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+                }
+            apply_switches(E, s, 1, hk);
+            loads_at(E, in, t_end);
+            observe(E, s, ta, s->F, hk);
+            if (stop && s->switches != sw0) return ENG_SWITCHED;
+            continue;
+        }
+        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
+        trial_margin(&mc, hs, &T);
+        s->solves++;
+        if (mc.err != ENG_OK) return mc.err;
+        /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
+        int again = 0;
+        for (size_t j = 0; j < nc; j++)
+            if (E->cand[j] && E->st[j] != 0 && margin(E, E->st, j, E->V1, E->f) <= 0.0) {
+                E->st[j] = 0;
+                E->lim[j] = E->Fb[j];
+                again = 1;
+            }
+        if (again) {
+            const eng_status st = solve_trial(E, &T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
+            if (st != ENG_OK) return st;
+            for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
+                if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
+        }
+        const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
+        finish(E, s, &T, E->V1, E->f);
+        s->t = t_new;
+        loads_at(E, in, s->t);
+        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
+        for (size_t j = 0; j < nc; j++) {
+            if (!E->cand[j]) continue;
+            const int stopping = s->mode[j] != 0 && E->st[j] == 0;
+            const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
+            E->cand[j] = stopping || breaking;
+        }
+        observe(E, s, ta, s->F, hk);
+        apply_switches(E, s, 1, hk);
+        rest_exact(E, s);
+        loads_at(E, in, t_end);
+        if (stop && s->switches != sw0) return ENG_SWITCHED;
+    }
+    return ENG_OK;
+}
+
+/* ---- driving -------------------------------------------------------------------------------- */
+
+ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s)
+{
+    E->loads_for = NULL;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    s->t0 = s->t = t0;
+    s->n_grid = 0;
+    s->exc_n = -1;
+    s->exc_c = s->exc_s = 0.0;
+    s->t_switch = -INFINITY;
+    s->steps = s->solves = s->pivot_steps = s->switches = 0;
+    for (size_t i = 0; i < n; i++) {
+        s->X[i] = x0[i];
+        s->V[i] = v0[i];
+        s->hA[i] = 0.0;
+    }
+    loads_at(E, in, t0);
+    for (size_t j = 0; j < nc; j++) {
+        const double v = slip(E, j, s->V);
+        s->mode[j] = sgn(v);
+        E->cand[j] = has_friction(E, j) && v == 0.0;
+        s->t_stick[j] = t0;
+        s->t_break[j] = NAN;
+        s->break_dir[j] = 0;
+    }
+    rest_decide(E, s, t0, E->cand, s->mode);
+    restart(E, s, t0);
+    for (size_t j = 0; j < nc; j++)
+        if (E->cand[j] && s->mode[j] != 0) s->F[j] = -s->mode[j] * slide_mag(E, j, 0.0);
+    if (s->J) {
+        for (size_t i = 0; i < 4 * n * n; i++) s->J[i] = 0.0;
+        for (size_t i = 0; i < 2 * n; i++) s->J[i * 2 * n + i] = 1.0;
+    }
+}
+
+static double snap_tol(const eng *E, double t)
+{
+    const eng_setup *S = &E->S;
+    return fmin(S->snap_max_rel_h * S->h, fmax(S->snap_min_rel_h * S->h, S->snap_eps_t * DBL_EPSILON * fabs(t)));
+}
+
+ENG_API double ENG_FN(eng_snap_target)(const eng *E, const eng_state *s, double t_target)
+{
+    return dfo_grid_snap(s->t0, E->S.h, s->n_grid, s->t, t_target, snap_tol(E, t_target));
+}
+
+/* The stuck contacts' holding forces, clamped to their limits, at the state (schemes at rest). */
+static void rest_forces(eng *E, eng_state *s)
+{
+    phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
+}
+
+ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk)
+{
+    E->loads_for = NULL;
+    const eng_setup *S = &E->S;
+    const double h = S->h;
+    t_target = ENG_FN(eng_snap_target)(E, s, t_target);
+    double g_prev = s->t0 + (double)s->n_grid * h;
+    int switched = 0;
+    const long long sw0 = s->switches;
+    while (s->t < t_target) {
+        const double grid = s->t0 + (double)(s->n_grid + 1) * h;
+        const int from_grid = (s->t == g_prev);
+        double t_end = t_target;
+        if (grid <= t_target) {
+            t_end = grid;
+            s->n_grid++;
+            g_prev = grid;
+            double c, sn;
+            dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, h, E->rot_c, E->rot_s,
+                           s->exc_n, s->exc_c, s->exc_s, s->n_grid, &c, &sn);
+            s->exc_n = s->n_grid;
+            s->exc_c = c;
+            s->exc_s = sn;
+        }
+        if (!(t_end > s->t)) return ENG_ERR_RESOLUTION;
+        const double hh = (from_grid && t_end == grid) ? h : t_end - s->t;
+        s->steps++;
+        loads_at(E, in, t_end);
+        eng_status st;
+        if (S->scheme == DFO_SCHEME_LOCATED) st = step_located(E, in, s, t_end, hh, hk);
+        else st = step_lcp(E, in, s, t_end, hh, S->scheme == DFO_SCHEME_CONSISTENT, hk);
+        switched = s->switches != sw0;
+        if (st == ENG_SWITCHED || (hk && hk->stop_at_switch && switched)) {
+            if (s->t < t_end && t_end == grid) s->n_grid--;
+            loads_at(E, in, s->t);
+            if (S->scheme != DFO_SCHEME_PAPER) rest_forces(E, s);
+            return ENG_SWITCHED;
+        }
+        if (st != ENG_OK) return st;
+    }
+    loads_at(E, in, s->t);
+    if (S->scheme != DFO_SCHEME_PAPER) rest_forces(E, s);
+    for (size_t i = 0; i < ENG_N(E); i++)
+        if (!(fabs(s->X[i]) <= DBL_MAX && fabs(s->V[i]) <= DBL_MAX && fabs(s->A[i]) <= DBL_MAX))
+            return ENG_ERR_NONFINITE;
+    return ENG_OK;
+}
+
+ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s, const eng_hooks *hk)
+{
+    E->loads_for = NULL;
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    /* belts: a contact whose belt changed takes the mode of its new slip; one the belt meets the rest rule */
+    loads_at(E, new_in, s->t);
+    int belt_changed = 0;
+    memcpy(E->smode, s->mode, nc * sizeof(int));
+    for (size_t j = 0; j < nc; j++) {
+        const double vo = (old_in && old_in->v_belt) ? old_in->v_belt[j] : 0.0;
+        const double vn = (new_in && new_in->v_belt) ? new_in->v_belt[j] : 0.0;
+        E->cand[j] = 0;
+        if (vo == vn || !has_friction(E, j)) continue;
+        belt_changed = 1;
+        const double v = slip(E, j, s->V);
+        s->mode[j] = sgn(v);
+        E->cand[j] = v == 0.0;
+    }
+    if (belt_changed) {
+        rest_decide(E, s, s->t, E->cand, s->mode);
+        for (size_t j = 0; j < nc; j++)
+            if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
+        restart(E, s, s->t);
+        return;
+    }
+    /* the sliding contacts' force jumps, and the external forces': the acceleration jumps by
+     * M^-1 (dF_ext + W' df), the stuck contacts held */
+    double *r = E->r;
+    for (size_t i = 0; i < n; i++) r[i] = E->u[i];
+    loads_at(E, old_in, s->t);
+    for (size_t i = 0; i < n; i++) r[i] -= E->u[i];
+    loads_at(E, new_in, s->t);
+    int any = 0;
+    for (size_t i = 0; i < n; i++) any |= r[i] != 0.0;
+    for (size_t j = 0; j < nc; j++) {
+        E->held[j] = s->mode[j] == 0 && has_friction(E, j);
+        if (s->mode[j] == 0 || !has_friction(E, j)) continue;
+        const double fnew = -s->mode[j] * slide_mag(E, j, fabs(slip(E, j, s->V)));
+        const double df = fnew - s->F[j];
+        if (df != 0.0) { row_axpy(&S->rows[j], df, r); any = 1; }
+        s->F[j] = fnew;
+    }
+    if (!any) return;
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, E->y, E->f);
+    for (size_t i = 0; i < n; i++) s->A[i] += E->y[i];
+}
+
+ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_state *s, double *a)
+{
+    E->loads_for = NULL;
+    loads_at(E, in, s->t);
+    phys_accel(E, s, s->t, s->mode, a, E->f);
+}
+
+ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_state *s, double *f)
+{
+    E->loads_for = NULL;
+    loads_at(E, in, s->t);
+    phys_accel(E, s, s->t, s->mode, E->y2, f);
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j)) f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], f[j]));
+}

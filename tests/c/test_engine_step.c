@@ -1,0 +1,253 @@
+/* The engine's schemes specialised at compile time (fmu_src/engine/engine_step.h included with a
+ * model's inline operators: bench/engine_block.c, bench/engine_chain.c over bench/engine_models.h)
+ * against the same schemes through engine.c with the same operators behind eng_ops's function
+ * pointers: the same bits (positions, velocities, Bossak variables, forces, modes, counters, every
+ * switch's time), one block in the three Bossak schemes with a belt, input ramps and input and
+ * belt changes, a chain of 8 blocks in the three schemes with a change of the external forces; the
+ * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). */
+#include "check.h"
+#include "engine_models.h"
+
+#include "scheme.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NCHAIN 8
+
+static void *t_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
+static void t_free(void *env, void *p) { (void)env; free(p); }
+static const eng_alloc ALLOC = {t_alloc, t_free, NULL};
+
+/* The switches of a run: how many, and the sum of their times and contacts (a fingerprint). */
+typedef struct {
+    long count;
+    double t_sum;
+    size_t j_sum;
+} switch_log;
+
+static void on_switch(void *ctx, double t, size_t contact, const eng_state *s, int from, int to)
+{
+    switch_log *L = ctx;
+    (void)s; (void)from; (void)to;
+    L->count++;
+    L->t_sum += t;
+    L->j_sum += contact;
+}
+
+/* The entry points of one build of the schemes. */
+typedef struct {
+    void (*start)(eng *, const eng_inputs *, double, const double *, const double *, eng_state *);
+    eng_status (*advance)(eng *, const eng_inputs *, eng_state *, double, const eng_hooks *);
+    void (*new_inputs)(eng *, const eng_inputs *, const eng_inputs *, eng_state *, const eng_hooks *);
+} entry;
+
+static const entry GENERIC = {eng_start, eng_advance, eng_new_inputs};
+static const entry BLOCK = {blk_eng_start, blk_eng_advance, blk_eng_new_inputs};
+static const entry CHAIN = {chn_eng_start, chn_eng_advance, chn_eng_new_inputs};
+
+/* Run S with the entry points of X from rest: communication points every dt (off the grid) to
+ * t_end, the inputs in1 before t_change and in2 from there (eng_new_inputs at the change). The
+ * final state into s (initialised here; the caller frees it with E), the switches into L. */
+static eng *run(const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2, double t_change,
+                double dt, double t_end, eng_state *s, switch_log *L, eng_status *status)
+{
+    static const double zeros[NCHAIN] = {0.0};
+    eng *E = eng_create(S, &ALLOC, NULL);
+    if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    memset(L, 0, sizeof *L);
+    const eng_hooks hk = {on_switch, L, NULL, 0};
+    X->start(E, in1, 0.0, zeros, zeros, s);
+    const eng_inputs *in = in1;
+    *status = ENG_OK;
+    for (int k = 1; (double)k * dt <= t_end && *status == ENG_OK; k++) {
+        const double t = (double)k * dt;
+        if (in == in1 && t > t_change) {
+            *status = X->advance(E, in, s, t_change, &hk);
+            if (*status != ENG_OK) break;
+            X->new_inputs(E, in1, in2, s, &hk);
+            in = in2;
+        }
+        *status = X->advance(E, in, s, t, &hk);
+    }
+    return E;
+}
+
+/* The two runs' states and switches bit for bit. */
+static int same_bits(const eng_state *a, const eng_state *b, const switch_log *La, const switch_log *Lb)
+{
+    const size_t n = a->n, nc = a->nc;
+    int same = a->t == b->t && a->n_grid == b->n_grid && a->steps == b->steps && a->solves == b->solves &&
+               a->pivot_steps == b->pivot_steps && a->switches == b->switches && La->count == Lb->count &&
+               La->j_sum == Lb->j_sum && !memcmp(&La->t_sum, &Lb->t_sum, sizeof(double)) &&
+               !memcmp(&a->t_switch, &b->t_switch, sizeof(double));
+    same &= !memcmp(a->X, b->X, n * sizeof(double)) && !memcmp(a->V, b->V, n * sizeof(double));
+    same &= !memcmp(a->A, b->A, n * sizeof(double)) && !memcmp(a->hA, b->hA, n * sizeof(double));
+    same &= !memcmp(a->F, b->F, nc * sizeof(double)) && !memcmp(a->mode, b->mode, nc * sizeof(int));
+    same &= !memcmp(a->t_stick, b->t_stick, nc * sizeof(double));
+    return same;
+}
+
+static eng_setup setup_common(size_t n, const eng_row *rows, const double *N, const double *ms, const double *mk,
+                              const double *Pc, const double *Ps, int scheme, double rate)
+{
+    eng_setup S;
+    memset(&S, 0, sizeof S);
+    S.n = n;
+    S.nc = n;
+    S.rows = rows;
+    S.exc.omega = 0.5;
+    S.exc.Pc = Pc;
+    S.exc.Ps = Ps;
+    S.N = N;
+    S.mu_s = ms;
+    S.mu_k = mk;
+    S.h = 4.0 * DFO_PI / 800.0;
+    S.alpha = -0.1;
+    S.scheme = scheme;
+    S.friction_updates = 1;
+    S.fast_paths = 1;
+    S.rate_max = rate + 0.5;
+    S.snap_max_rel_h = S.snap_min_rel_h = 1e-7;
+    return S;
+}
+
+static void test_block(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    static const size_t idx[1] = {0};
+    static const double w1[1] = {1.0};
+    const eng_row row = {1, idx, w1};
+    const double N[1] = {0.6}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {1.0};
+    /* a belt at 0.2, a ramp of the normal force, then the belt at -0.1 and a held external force */
+    const double vb1[1] = {0.2}, vb2[1] = {-0.1}, F2[1] = {0.15}, dN[1] = {0.004};
+    const eng_inputs in1 = {NULL, NULL, vb1, {NULL, NULL}, {dN, NULL}, 0.0};
+    const eng_inputs in2 = {F2, NULL, vb2, {NULL, NULL}, {NULL, NULL}, 0.0};
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        check_context(T, "one block, %s: the inline build against engine.c", names[scheme]);
+        blk_model Bg = {1.0, 0.05, 1.0, {0.0, 0.0, 0.0}}, Bi = Bg;
+        eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
+        const eng_ops og = {&Bg, blk_K, blk_C, blk_M, blk_factor, blk_solve, blk_friction};
+        S.ops = og;
+        eng_state sg, si;
+        switch_log Lg, Li;
+        eng_status stg, sti;
+        eng *Eg = run(&S, &GENERIC, &in1, &in2, 20.0, 0.37, 40.0, &sg, &Lg, &stg);
+        S.ops.ctx = &Bi;
+        eng *Ei = run(&S, &BLOCK, &in1, &in2, 20.0, 0.37, 40.0, &si, &Li, &sti);
+        printf("  block %-10s 40 s: %ld switches, x %.17g / %.17g\n", names[scheme], Lg.count, sg.X[0], si.X[0]);
+        CHECK(stg == ENG_OK);
+        CHECK(sti == ENG_OK);
+        CHECK(Lg.count >= 10);
+        CHECK(same_bits(&sg, &si, &Lg, &Li));
+        eng_state_free(Eg, &sg);
+        eng_state_free(Ei, &si);
+        eng_destroy(Eg);
+        eng_destroy(Ei);
+    }
+}
+
+/* A chain of NCHAIN blocks between two walls: its model, rows and data. */
+typedef struct {
+    double m[NCHAIN], k[NCHAIN], N[NCHAIN], ms[NCHAIN], mk[NCHAIN], Pc[NCHAIN], Ps[NCHAIN];
+    double d[ENG_NSLOTS][NCHAIN], e[ENG_NSLOTS][NCHAIN], cp[ENG_NSLOTS][NCHAIN], inv[ENG_NSLOTS][NCHAIN];
+    double q[NCHAIN], work[2 * NCHAIN];
+    size_t idx[NCHAIN];
+    double w1[1];
+    eng_row rows[NCHAIN];
+    chn_model C;
+} chain_data;
+
+static void chain_make(chain_data *D)
+{
+    memset(D, 0, sizeof *D);
+    D->w1[0] = 1.0;
+    for (size_t i = 0; i < NCHAIN; i++) {
+        D->m[i] = 1.0 + 0.1 * (double)(i % 3);
+        D->k[i] = 1.0;
+        D->N[i] = 1.2;
+        D->ms[i] = 0.5;
+        D->mk[i] = 0.35;
+        D->Pc[i] = cos(0.1 * (double)i);
+        D->Ps[i] = sin(0.1 * (double)i);
+        D->idx[i] = i;
+        D->rows[i].nnz = 1;
+        D->rows[i].idx = &D->idx[i];
+        D->rows[i].w = D->w1;
+    }
+    chn_model *C = &D->C;
+    C->n = NCHAIN;
+    C->m = D->m;
+    C->k = D->k;
+    C->k_end = 1.0;
+    for (int s = 0; s < ENG_NSLOTS; s++) {
+        C->d[s] = D->d[s];
+        C->e[s] = D->e[s];
+        C->cp[s] = D->cp[s];
+        C->inv[s] = D->inv[s];
+    }
+    C->q = D->q;
+    C->work = D->work;
+}
+
+static void test_chain(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    double F2[NCHAIN];
+    for (size_t i = 0; i < NCHAIN; i++) F2[i] = (i == 0) ? 0.3 : (i == NCHAIN - 1) ? -0.2 : 0.0;
+    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    static chain_data Dg, Di;
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        check_context(T, "chain of %d blocks, %s: the inline build against engine.c", NCHAIN, names[scheme]);
+        chain_make(&Dg);
+        chain_make(&Di);
+        eng_setup S = setup_common(NCHAIN, Dg.rows, Dg.N, Dg.ms, Dg.mk, Dg.Pc, Dg.Ps, scheme, 2.0);
+        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+        S.ops = og;
+        eng_state sg, si;
+        switch_log Lg, Li;
+        eng_status stg, sti;
+        eng *Eg = run(&S, &GENERIC, &in1, &in2, 20.0, 0.37, 40.0, &sg, &Lg, &stg);
+        S.ops.ctx = &Di.C;
+        S.rows = Di.rows;
+        eng *Ei = run(&S, &CHAIN, &in1, &in2, 20.0, 0.37, 40.0, &si, &Li, &sti);
+        printf("  chain n = %d %-10s 40 s: %ld switches, x_1 %.17g / %.17g\n", NCHAIN, names[scheme], Lg.count,
+               sg.X[0], si.X[0]);
+        CHECK(stg == ENG_OK);
+        CHECK(sti == ENG_OK);
+        CHECK(Lg.count >= 5 * NCHAIN);
+        CHECK(same_bits(&sg, &si, &Lg, &Li));
+        eng_state_free(Eg, &sg);
+        eng_state_free(Ei, &si);
+        eng_destroy(Eg);
+        eng_destroy(Ei);
+    }
+    /* the chain's box LCP has no belts: a belt is refused, not ignored */
+    check_context(T, "chain of %d blocks with a belt: refused", NCHAIN);
+    chain_make(&Di);
+    eng_setup S = setup_common(NCHAIN, Di.rows, Di.N, Di.ms, Di.mk, Di.Pc, Di.Ps, DFO_SCHEME_LOCATED, 2.0);
+    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+    S.ops = oi;
+    double vb[NCHAIN] = {0.0};
+    vb[3] = 0.1;
+    const eng_inputs inb = {NULL, NULL, vb, {NULL, NULL}, {NULL, NULL}, 0.0};
+    eng_state s;
+    switch_log L;
+    eng_status st;
+    eng *E = run(&S, &CHAIN, &inb, &inb, 100.0, 0.37, 2.0, &s, &L, &st);
+    CHECK(st == ENG_ERR_BAD_INPUT);
+    eng_state_free(E, &s);
+    eng_destroy(E);
+}
+
+int main(void)
+{
+    checks C = {0, 0, NULL, {0}};
+    checks *T = &C;
+    test_block(T);
+    test_chain(T);
+    return checks_done(T, "test_engine_step");
+}
