@@ -3,7 +3,7 @@ exact solution, and the time of one run through a reused instance, two ways:
 
 - ``api``: what a user writes, ``OscillatorFMU.start(p, settings)``, ``step_to(t_end)``, ``get(['x'])``;
 - ``lean``: the same fmi2 calls on the same instance with the value-reference and value arrays
-  built once (the typed functions of dryfriction.fmi2), to separate the FMU's cost from the
+  built once (the typed functions of dryfriction.fmi.fmi2), to separate the FMU's cost from the
   Python wrapper's.
 
 A timed run simulates the whole horizon in one ``doStep`` and reads ``x``: what a sweep point costs.
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 PARAM_NAMES = ("m", "k", "c", "P0", "omega", "phi", "N", "mu_s", "chi", "x0", "v0")

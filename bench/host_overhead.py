@@ -15,8 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from dryfriction.argparsing import make_parser
-from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.cli.options import make_parser
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import PARAM_COLUMNS, BatchRunner
 

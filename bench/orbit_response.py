@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 
 from dryfriction import Oscillator
-from dryfriction.argparsing import count, make_parser
-from dryfriction.response import frequency_response
+from dryfriction.cli.options import count, make_parser
+from dryfriction.analysis.response import frequency_response
 
 HERE = Path(__file__).resolve().parent
 if str(HERE) not in sys.path:
@@ -50,7 +50,7 @@ TARGETS = (1e-6, 1e-10)
 def evaluations(fn: Any) -> tuple[int, Any]:
     """(how many evaluations of the stroboscopic map one call of fn makes, its result): the map's
     evaluation counted in one untimed call."""
-    from dryfriction import orbits
+    from dryfriction.analysis import orbits
 
     count = [0]
     original = orbits._Map.eval
@@ -76,8 +76,8 @@ def best_case_transient(p: Oscillator, f: np.ndarray, ref: np.ndarray, target: f
                         repeats: int) -> tuple[float, float]:
     """Per point the fewest periods n = 32, 64, ... whose window [n/2, n] T gives the amplitude within
     target of ref (found in hindsight), then the time of those single runs; (seconds, mean periods)."""
-    from dryfriction.fmu import OscillatorFMU
-    from dryfriction.response import default_settings
+    from dryfriction.drivers.oscillator import OscillatorFMU
+    from dryfriction.analysis.response import default_settings
 
     ns = []
     with OscillatorFMU(fmu_path) as fmu:

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from dryfriction.argparsing import count, make_parser, number
+from dryfriction.cli.options import count, make_parser, number
 
 HERE = Path(__file__).resolve().parent
 if str(HERE) not in sys.path:
@@ -129,8 +129,8 @@ def _main(argv: list[str] | None) -> int:
     warnings.filterwarnings("ignore", category=Warning, module="pyHarm")
 
     from dryfriction import Oscillator
-    from dryfriction.fmu import OscillatorFMU2
-    from dryfriction.orbits import find_orbits
+    from dryfriction.drivers.oscillator import OscillatorFMU2
+    from dryfriction.analysis.orbits import find_orbits
 
     base = Oscillator.physical(m=CASE["m"], k=CASE["k"], zeta=CASE["zeta"], P0=CASE["P0"], omega=1.0, N=CASE["N"],
                                mu_s=CASE["mu"], mu_k=CASE["mu"])

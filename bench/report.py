@@ -216,7 +216,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
     add("")
     add(f"Error = max |z - z_exact| over {cfg.periods} excitation periods from rest, in units of the static "
         "deflection (z = k x / P0; here P0/k = 1 cm), against the exact piecewise solution "
-        "(`dryfriction.exact.solve_exact`), sampled on a uniform grid of "
+        "(`dryfriction.references.exact.solve_exact`), sampled on a uniform grid of "
         f"{cfg.samples_per_period} points per period (the FMU at its internal nodes when h is coarser). "
         "Cost = wall time (time.perf_counter, minimum over repetitions) of one whole run, divided by the "
         "number of periods. The FMU runs through one reused `OscillatorFMU` instance (reset, set the "

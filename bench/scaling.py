@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 from fmu_runs import LeanRunner, api_run, best_time
@@ -161,13 +161,13 @@ def rss_bytes() -> int:
 def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps: int) -> list[dict]:
     """Bytes per FMU instance and RSS before/after long runs.
 
-    - per fmi2 instance: n_instances more instances (dryfriction.fmi2.Instance) of the already
+    - per fmi2 instance: n_instances more instances (dryfriction.fmi.fmi2.Instance) of the already
       unzipped FMU (the shared library is loaded once): RSS delta and Python-heap (tracemalloc)
       delta, per instance;
     - per OscillatorFMU (unzip + load a private copy + instantiate): RSS delta over a few;
     - a run of long_steps internal steps in one doStep, three times: RSS before and after each.
     """
-    from dryfriction.fmi2 import Instance
+    from dryfriction.fmi.fmi2 import Instance
 
     rows: list[dict] = []
     gc.collect()
@@ -220,6 +220,6 @@ def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps:
 
 def fmu_library_path(fmu: OscillatorFMU) -> Path:
     """The shared library the FMI layer loaded (what bench_stepper should time too)."""
-    from dryfriction.fmi2 import library_path
+    from dryfriction.fmi.fmi2 import library_path
 
     return library_path(fmu.unzip_dir, fmu.md.model_identifier)

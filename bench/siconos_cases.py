@@ -4,13 +4,13 @@ each is measured against.
 1. ``tutorial``: Siconos's own FrictionOscillator example, m = k = 1, Coulomb force 1 (mu_s = mu_k),
    x0 = 12, v0 = 6, no forcing, 30 s, against its closed form (:func:`tutorial_closed_form`).
 2. ``wp_<case>_chi1``: the five cases of bench/cases.py with chi = 1 (mu_k = mu_s), 10 excitation
-   periods from rest, against ``dryfriction.exact.solve_exact``; error in static deflections
+   periods from rest, against ``dryfriction.references.exact.solve_exact``; error in static deflections
    (z = k x / P0) as in bench/work_precision.py. The cases themselves (chi = 0.6, 0.8, 0.9, 1.5,
    0.05) are outside Siconos's relay law, which has one friction coefficient: distinct static and
    kinetic coefficients cannot be written as ``RelayNSL``, so they are compared at chi = 1 only.
 3. ``chain_n<n>``: the chain of docs/chain.md, n unit blocks on unit springs (wall at the left,
    free right end), mu_s = mu_k = 0.5, N = 1 on every block, block 1 forced by cos(0.5 t), from
-   rest, one forcing period (4 pi s), against ``dryfriction.chain_reference.solve_chain``; error
+   rest, one forcing period (4 pi s), against ``dryfriction.references.chain.solve_chain``; error
    max over blocks |x - x_ref| in metres (= static deflections of block 1's force on a unit spring).
 """
 
@@ -97,7 +97,7 @@ def tutorial_case() -> PeerCase:
 def wp_cases(names: tuple[str, ...] | None = None) -> list[PeerCase]:
     """The work-precision cases at chi = 1 (see the module docstring)."""
     from cases import CASES
-    from dryfriction.exact import solve_exact
+    from dryfriction.references.exact import solve_exact
     from dryfriction.params import Oscillator
 
     out = []
@@ -123,7 +123,7 @@ CHAIN_OMEGA = 0.5
 
 
 def chain_case(n: int) -> PeerCase:
-    from dryfriction.chain_reference import Chain, solve_chain
+    from dryfriction.references.chain import Chain, solve_chain
 
     P0 = np.zeros(n)
     P0[0] = 1.0
@@ -144,5 +144,5 @@ def chain_case(n: int) -> PeerCase:
                     t_end, 1.0, "m", 0.02,
                     f"the chain of docs/chain.md with n = {n} unit blocks and springs (wall at the left, free end), "
                     "mu_s = mu_k = 0.5, N = 1, block 1 forced by cos(0.5 t), one forcing period, against "
-                    "dryfriction.chain_reference",
+                    "dryfriction.references.chain",
                     reference=ref, chain_params=params)

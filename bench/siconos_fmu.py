@@ -36,14 +36,14 @@ class FmuSide:
     """The oscillator FMU (FMI 2.0) and the chain FMU (FMI 3.0), loaded once."""
 
     def __init__(self, budget_s: float, fmu_path: str | None = None) -> None:
-        from dryfriction.fmu import OscillatorFMU
+        from dryfriction.drivers.oscillator import OscillatorFMU
 
         self.osc = OscillatorFMU(fmu_path)
         self.chains: dict[int, object] = {}
         self.budget = budget_s
 
     def chain(self, n: int):
-        from dryfriction.chain import ChainFMU
+        from dryfriction.drivers.chain import ChainFMU
 
         if n not in self.chains:
             self.chains[n] = ChainFMU(n=n)
@@ -58,7 +58,7 @@ class FmuSide:
             idx = np.append(idx, steps)
         t = idx * h
         if case.kind == "oscillator":
-            from dryfriction.fmu import Settings
+            from dryfriction.drivers.oscillator import Settings
 
             p = case.oscillator
             st = Settings(h=h, alpha=-0.1, scheme=scheme)

@@ -14,7 +14,7 @@ both sides) on the cases of bench/siconos_cases.py:
    friction coefficient: the cases' own distinct mu_s and mu_k cannot be modelled), the harmonic
    force as the dynamical system's b(t), against the exact solution;
 3. the chain of docs/chain.md (mu_s = mu_k) at n = 2, 8, 64 and larger while a Siconos run keeps
-   within the budget, against dryfriction.chain_reference, with ns per block-step.
+   within the budget, against dryfriction.references.chain, with ns per block-step.
 
 Siconos: EulerMoreauOSI(theta) with theta = 0.5 and 1, h = 1e-2, 5e-3, ... until its error reaches
 1e-6 or the next h would pass the budget (60 s per case and theta). The FMU: the located scheme
@@ -191,8 +191,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     cfg = PeerConfig.make(args.quick, args.budget)
     log = sys.stderr
-    from dryfriction.chain import default_chain_fmu3
-    from dryfriction.fmu import default_fmu_path
+    from dryfriction.drivers.chain import default_chain_fmu3
+    from dryfriction.drivers.oscillator import default_fmu_path
 
     try:  # both FMUs before anything runs
         default_fmu_path()

@@ -6,7 +6,7 @@ instead.
                                    [--fmu PATH] [--bench-stepper PATH] [--no-siconos]
 
 Five cases (bench/cases.py), error = max |z - z_exact| over the run (z = k x / P0, the position in
-static deflections) against dryfriction.exact.solve_exact. The FMU: scheme paper / consistent /
+static deflections) against dryfriction.references.exact.solve_exact. The FMU: scheme paper / consistent /
 located, h = T/50 ... T/102400, alpha in {0, -0.1, -1/3}, timed through one reused OscillatorFMU
 (min of several runs, time.perf_counter). Peers (bench/peers.py): event-driven solve_ivp (RK45,
 DOP853, Radau) and a tanh-smoothed law (Radau, LSODA). Siconos (bench/siconos_study.py:
@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from dryfriction import model
-from dryfriction.argparsing import make_parser
+from dryfriction.cli.options import make_parser
 from dryfriction.atomic import atomic_path, atomic_write_text
 
 HERE = Path(__file__).resolve().parent
@@ -116,7 +116,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
             bad(f"--report-only: {out} lacks {', '.join(missing)} (run the study first)")
         args.out, args.md = out, md
         return args
-    from dryfriction.fmu import default_fmu_path
+    from dryfriction.drivers.oscillator import default_fmu_path
 
     fmu = Path(args.fmu) if args.fmu else default_fmu_path()
     if not fmu.is_file():
@@ -341,7 +341,7 @@ def run_c_bench(exe: Path, lib: Path, cases, cfg: StudyConfig, out: Path) -> lis
 def host_overhead(fmu, case, c_rows: list[dict], budget: float) -> list[dict]:
     """The short run bench_stepper times through the fmi2 functions (first case, located, h = T/50,
     one period, read x), timed from Python: the difference is the host's overhead per run."""
-    from dryfriction.fmu import Settings
+    from dryfriction.drivers.oscillator import Settings
     from fmu_runs import LeanRunner, api_run, best_time
 
     p = case.oscillator
@@ -371,8 +371,8 @@ def main(argv: list[str] | None = None) -> int:
     from tqdm import tqdm
 
     from cases import CASES
-    from dryfriction.exact import solve_exact
-    from dryfriction.fmu import OscillatorFMU
+    from dryfriction.references.exact import solve_exact
+    from dryfriction.drivers.oscillator import OscillatorFMU
     from peers import peer_settings
     import scaling
 

@@ -16,7 +16,7 @@ import argparse
 import numpy as np
 
 from dryfriction import Oscillator
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 
 
 def main() -> None:

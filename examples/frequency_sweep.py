@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from dryfriction import Oscillator
-from dryfriction.response import frequency_response, plot_response
+from dryfriction.analysis.response import frequency_response, plot_response
 
 
 def main() -> None:

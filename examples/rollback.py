@@ -9,7 +9,7 @@ Uses the public OscillatorFMU.get_state / set_state / serialize_state / restore;
 from __future__ import annotations
 
 from dryfriction import Oscillator
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 
 
 def main() -> None:

@@ -17,10 +17,10 @@ import math
 
 import numpy as np
 
-from dryfriction.chain import ChainFMU3
+from dryfriction.drivers.chain import ChainFMU3
 from dryfriction.cosim import System
 from dryfriction.cosim.split import split_chain2
-from dryfriction.fmu import OscillatorFMU2, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 
 CHAIN = dict(m=1.0, k=1.0, c=[0.05, 0.1], P0=[1.0, 0.0], N=[0.8, 0.5], mu_s=0.5, chi=0.7, omega=0.6)
 

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dryfriction.fmu import SCHEMES, default_fmu_path
+from dryfriction.drivers.oscillator import SCHEMES, default_fmu_path
 from dryfriction.studies import effective_config, run_study
 from dryfriction.studies.config import grid
 from dryfriction.sweep.table import nondim_table

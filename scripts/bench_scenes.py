@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from dryfriction import scenes
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers import scenes
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-from dryfriction.argparsing import make_parser
+from dryfriction.cli.options import make_parser
 from dryfriction.atomic import atomic_write_bytes
 
 

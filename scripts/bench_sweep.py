@@ -41,9 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from dryfriction import model
-from dryfriction.argparsing import make_parser
+from dryfriction.cli.options import make_parser
 from dryfriction.atomic import atomic_write_text
-from dryfriction.fmu import default_fmu_path
+from dryfriction.drivers.oscillator import default_fmu_path
 from dryfriction.studies import effective_config, run_study
 from dryfriction.studies.fig8_9_bifurcation import spec as fig8_9_spec
 from dryfriction.sweep import BatchRunner

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The chain FMU (FMI 3.0, through dryfriction.chain) against the event-driven reference on the
+"""The chain FMU (FMI 3.0, through dryfriction.drivers.chain) against the event-driven reference on the
 four coupled cases of docs/chain.md (tests/chain_cases.py): max |x - x_ref| over 10 periods at
 h = T/400 ... T/3200 for the three schemes, printed as a table, written as CSV (next to the figure)
 and drawn as a log-log figure. Part of the main job (scripts/main.sh: results/chain_validation.*).
@@ -19,9 +19,9 @@ sys.path.insert(0, str(ROOT / "tests"))  # the validation cases live with the te
 
 from chain_cases import CASES, PERIODS  # noqa: E402
 
-from dryfriction.argparsing import make_parser  # noqa: E402
-from dryfriction.chain import ChainFMU  # noqa: E402
-from dryfriction.chain_reference import solve_chain  # noqa: E402
+from dryfriction.cli.options import make_parser  # noqa: E402
+from dryfriction.drivers.chain import ChainFMU  # noqa: E402
+from dryfriction.references.chain import solve_chain  # noqa: E402
 
 PER_PERIOD = (400, 800, 1600, 3200)
 SCHEMES = ("located", "consistent", "paper")

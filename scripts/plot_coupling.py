@@ -4,7 +4,7 @@ dryfriction.cosim through the chain's middle spring and damper) against the macr
 inputs held (zero-order hold), held at the mean of their Taylor polynomial from the outputs'
 derivatives, and sent as input derivatives (FMI 2.0) or at the FMI 3.0 FMUs' input points; the
 error is max |x - x_ref| over ten periods against the chain's event-driven reference
-(dryfriction.chain_reference). The case of tests/test_cosim.py; prints the numbers.
+(dryfriction.references.chain). The case of tests/test_cosim.py; prints the numbers.
 
     python scripts/plot_coupling.py [--out results/coupling_order.png] [--periods 10]
 """
@@ -19,11 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from dryfriction.chain_reference import Chain, solve_chain
+from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.cosim import CosimResult, System
 from dryfriction.cosim.split import split_chain2
-from dryfriction.fmu import OscillatorFMU2, Settings
-from dryfriction.fmu3 import OscillatorFMU3
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
 CASE: dict[str, Any] = dict(m=1.0, k=1.0, c=[0.05, 0.1], P0=[1.0, 0.0], N=[0.8, 0.5], mu_s=0.5, chi=0.7, omega=0.6)
 DIVISIONS = (25, 50, 100, 200, 400, 800)

@@ -19,8 +19,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from dryfriction.exact import solve_exact  # noqa: E402
-from dryfriction.fmi3 import FMI3Oscillator  # noqa: E402
+from dryfriction.references.exact import solve_exact  # noqa: E402
+from dryfriction.drivers.oscillator3 import FMI3Oscillator  # noqa: E402
 from dryfriction.params import Oscillator  # noqa: E402
 
 

@@ -3,7 +3,7 @@
 # .venv with the package, its test tools and its docs tools (uv pip install -e ".[test,docs]"), and
 # the FMUs built by CMake into build/.
 # The editable install compiles nothing (pyproject.toml: scikit-build-core puts src/ on sys.path);
-# the package finds the FMUs in build/ (dryfriction.locate). A wheel with the FMUs inside:
+# the package finds the FMUs in build/ (dryfriction.paths). A wheel with the FMUs inside:
 # pip wheel . (docs/getting_started.md).
 # Usage: bash scripts/setup.sh        (idempotent; later runs only rebuild what changed)
 set -euo pipefail

@@ -12,7 +12,7 @@ from typing import Optional
 
 import numpy as np
 
-from dryfriction.chain_reference import Chain, ChainSolution, solve_chain
+from dryfriction.references.chain import Chain, ChainSolution, solve_chain
 
 
 ROOT = Path(__file__).resolve().parents[1]

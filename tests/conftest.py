@@ -13,11 +13,11 @@ from pathlib import Path
 import pytest
 from fmpy import extract, read_model_description
 
-from dryfriction.chain import default_chain_fmu, default_chain_fmu3
-from dryfriction.chain_reference import solve_chain
-from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import OscillatorFMU, default_fmu_path
-from dryfriction.locate import FMUFileError
+from dryfriction.drivers.chain import default_chain_fmu, default_chain_fmu3
+from dryfriction.references.chain import solve_chain
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU, default_fmu_path
+from dryfriction.paths import FMUFileError
 
 from chain_cases import CASES, PERIODS
 from fmi2_helpers import Inst
@@ -41,7 +41,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             item.add_marker(pytest.mark.python_only)
 
 
-# Every FMU comes from dryfriction.locate: DFO_FMU, DFO_FMU3, DFO_CHAIN_FMU, DFO_CHAIN_FMU3 select
+# Every FMU comes from dryfriction.paths: DFO_FMU, DFO_FMU3, DFO_CHAIN_FMU, DFO_CHAIN_FMU3 select
 # other builds (the ASan/UBSan one), else the installed package's, else build/.
 
 

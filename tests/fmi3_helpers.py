@@ -16,12 +16,12 @@ from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
                        fmi2CallbackLoggerTYPE)
 
-from dryfriction.fmi3 import default_fmi3_path
+from dryfriction.drivers.oscillator3 import default_fmi3_path
 from dryfriction.model import default_fmu_path
 
 
 ROOT = Path(__file__).resolve().parents[1]
-# the FMUs dryfriction.locate finds: DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
+# the FMUs dryfriction.paths finds: DFO_FMU / DFO_FMU3 select other builds (the ASan/UBSan one)
 FMU2 = default_fmu_path()
 FMU3 = default_fmi3_path()
 SWITCH_LOG = re.compile(r"t = ([-+0-9.eE]+): (backward slip|stick|forward slip) -> (backward slip|stick|forward slip)")
@@ -127,7 +127,7 @@ def as_array(x: Sequence[float]) -> np.ndarray:
 def assert_fmi3_equals_fmi2_on_belt(params: Mapping[str, float | int | bool], outputs: Sequence[str]) -> None:
     """FMI 3.0 gives FMI 2.0's bits over 15 communication steps of uneven length, with v_belt
     changed from params' value to 0.1 before step 3 and to -0.2 before step 8."""
-    from dryfriction.fmi3 import FMI3Oscillator
+    from dryfriction.drivers.oscillator3 import FMI3Oscillator
 
     ref, fmu = FMI2Run(params), FMI3Oscillator(params)
     try:

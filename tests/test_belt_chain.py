@@ -1,6 +1,6 @@
 """The chain's belts (input v_belt[i]) and site springs and dampers (k_site[i], c_site[i]: each
 block tied to the ground frame, the Burridge-Knopoff model's springs) through the FMUs: the
-located scheme second order against the event-driven reference (dryfriction.chain_reference) and,
+located scheme second order against the event-driven reference (dryfriction.references.chain) and,
 at n = 1, belt_reference, with belts changed at a communication point; a Burridge-Knopoff chain of
 64; bits (a site spring = a wall spring, belts at 0 = none); the step rule; the errors; FMI 3.0 =
 FMI 2.0. And the reference itself with belts and the Stribeck law: n = 1 against belt_reference,
@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainFMU2, ChainFMU3
-from dryfriction.chain_reference import Chain, solve_chain
+from dryfriction.drivers.chain import ChainFMU2, ChainFMU3
+from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.errors import FMUCallError
 from chain_cases import belt_run as _belt_run
 
@@ -134,7 +134,7 @@ def test_fmi3_equals_fmi2_with_site_terms(chain_fmu2: Path) -> None:
 
 def _one_block(law: str, vb: float, **kw):
     """The same block as a chain of one (chain_reference) and as belt_reference's Belt."""
-    from dryfriction.belt_reference import Belt
+    from dryfriction.references.belt import Belt
 
     p = dict(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=0.5, chi=0.6, P0=0.3, omega=0.7, phi=0.2, x0=0.1, v0=0.0)
     p.update(kw)
@@ -152,7 +152,7 @@ def test_reference_one_block_equals_belt_reference(law: str) -> None:
     reference is belt_reference's (an independent state machine: closed-form stick phases,
     bisected breakaways) within 1e-10 (measured 2.0e-12 in x, 2.3e-12 in v), with stick-slip on
     every belt."""
-    from dryfriction.belt_reference import simulate
+    from dryfriction.references.belt import simulate
 
     ch, b = _one_block(law, 0.4)
     changes = [(9.0, -0.2), (17.0, 0.25)]
@@ -173,7 +173,7 @@ def test_reference_closed_form_limit_cycle() -> None:
     """The undamped, unforced Coulomb block on a belt at 0.3 m/s from rest at the catch point
     (2 F_k - F_s) / k moving with the belt: period, stick and slip times of the closed form within
     1e-11 over five cycles (measured 4.8e-13), the extremes within 1e-6 (sampled on a grid)."""
-    from dryfriction.belt_reference import limit_cycle
+    from dryfriction.references.belt import limit_cycle
 
     lc = limit_cycle(1.0, 2.0, 1.0, 0.5, 0.3, 0.3)
     ch = Chain.make(1, omega=0.0, k=2.0, c=0.0, N=1.0, mu_s=0.5, chi=0.6, P0=0.0, x0=lc.x_stick_start,
@@ -239,7 +239,7 @@ def test_located_second_order_with_belts() -> None:
 def test_one_block_belt_against_belt_reference() -> None:
     """n = 1, a belt at 0.4 m/s changed to -0.2 at t = 9 (a communication point): the located
     scheme against belt_reference, second order (3.6 ... 4.4 per halving from h = 0.01)."""
-    from dryfriction.belt_reference import Belt, simulate
+    from dryfriction.references.belt import Belt, simulate
 
     ch = Chain.make(1, omega=0.7, k=1.0, c=0.05, N=1.0, mu_s=0.5, chi=0.6, P0=0.3, phi=0.2, x0=0.1)
     b = Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=0.5, mu_k=0.3, P0=0.3, omega=0.7, phi=0.2, x0=0.1)
@@ -348,8 +348,8 @@ _OUT = ("x", "v", "a", "F_friction", "mode")
 
 
 def _oscillator_series(fmi: int, fmu_path: Path, p: dict, law, h: float, changes: dict, t: np.ndarray) -> dict:
-    from dryfriction.fmu import OscillatorFMU2, Settings
-    from dryfriction.fmu3 import OscillatorFMU3
+    from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
     from dryfriction.params import Oscillator
 
     extra: dict = {} if law is None else {"friction_law": 2, "v_s": law[0], "delta": law[1]}

@@ -1,6 +1,6 @@
 """The exact scheme (scheme = exact) on a moving belt with Coulomb friction (docs/belt.md), against
 references that use none of the FMU's code: the closed-form stick-slip limit cycle of the undamped,
-unforced belt oscillator (dryfriction.belt_reference.limit_cycle) at several scales and in both belt
+unforced belt oscillator (dryfriction.references.belt.limit_cycle) at several scales and in both belt
 directions, FMI 2.0 and 3.0; the event-driven reference (belt_reference.simulate: closed-form stick
 phases, DOP853 at rtol 1e-12) with damping, forcing, belt changes at communication points, chi > 1
 and k = 0, events included; one long doStep against many short ones; the sensitivity outputs against
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from dryfriction.belt_reference import Belt, limit_cycle, simulate
-from dryfriction.fmi3 import FMI3Oscillator
+from dryfriction.references.belt import Belt, limit_cycle, simulate
+from dryfriction.drivers.oscillator3 import FMI3Oscillator
 from fmi3_helpers import FMI2Run, assert_fmi3_equals_fmi2_on_belt, kinds
 
 EXACT = 4

@@ -1,6 +1,6 @@
 """The oscillator FMU on a moving belt, with Coulomb and Stribeck friction (input v_belt, parameters
 friction_law, v_s, delta; docs/belt.md), against the independent references of
-dryfriction.belt_reference (event-driven stick/slip with DOP853 at rtol 1e-12, and the closed-form
+dryfriction.references.belt (event-driven stick/slip with DOP853 at rtol 1e-12, and the closed-form
 limit cycle of the undamped, unforced Coulomb belt oscillator), none of which uses the FMU's code.
 
 Asserted: the located scheme's error and its second order (halving h divides it by 4 +- 15 %) on
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from dryfriction.belt_reference import Belt, hopf_belt_speed, limit_cycle, simulate
+from dryfriction.references.belt import Belt, hopf_belt_speed, limit_cycle, simulate
 from fmi3_helpers import FMI2Run, assert_fmi3_equals_fmi2_on_belt
 
 OUT = ["x", "v", "a", "F_friction", "mode", "x_max", "x_min", "stick_fraction", "transitions", "E_friction",

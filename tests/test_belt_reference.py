@@ -1,6 +1,6 @@
-"""The belt references (dryfriction.belt_reference) checked against each other and against the
+"""The belt references (dryfriction.references.belt) checked against each other and against the
 project's other independent references: the event-driven solution reproduces the closed-form
-stick-slip limit cycle, the exact piecewise solution of the fixed support (dryfriction.exact) when
+stick-slip limit cycle, the exact piecewise solution of the fixed support (dryfriction.references.exact) when
 the belt stands still, the linear closed form without friction, and the Stribeck slide's loss of
 stability at the analytic belt speed; a belt change while stuck keeps the block's velocity."""
 
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from dryfriction import Oscillator
-from dryfriction.belt_reference import Belt, hopf_belt_speed, limit_cycle, simulate
-from dryfriction.exact import solve_exact
+from dryfriction.references.belt import Belt, hopf_belt_speed, limit_cycle, simulate
+from dryfriction.references.exact import solve_exact
 
 
 @pytest.mark.parametrize("m,k,N,mu_s,mu_k,vb", [

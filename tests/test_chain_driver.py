@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dryfriction.argparsing import UsageError
-from dryfriction.chain import ChainRun, expand
-from dryfriction.chain_cli import parse_sets
+from dryfriction.errors import UsageError
+from dryfriction.drivers.chain import ChainRun, expand
+from dryfriction.cli.chain import parse_sets
 from dryfriction.studies.chain_waves import first_slip, front_speed
 
 

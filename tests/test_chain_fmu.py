@@ -1,8 +1,8 @@
 """The chain's FMUs (FMI 3.0 build/fmi3/DryFrictionChain.fmu with n set in Configuration Mode, FMI
-2.0 build/DryFrictionChain.fmu with its built n) driven by dryfriction.chain, against independent
+2.0 build/DryFrictionChain.fmu with its built n) driven by dryfriction.drivers.chain, against independent
 numbers: the oscillator FMU (n = 1), each other (n = 2), the C chain's own driver
 (tests/c/chain_driver: the same physics, so the same bits), the event-driven reference
-(dryfriction.chain_reference: the errors and orders of docs/chain.md), the energy balance from the
+(dryfriction.references.chain: the errors and orders of docs/chain.md), the energy balance from the
 outputs, fmpy's and the FMU Manipulation Toolbox's checks and the FMU's errors for bad input.
 (Elsewhere: the command, test_cli_chain.py; libcosim, test_hosts.py; held inputs, test_inputs.py.)"""
 
@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainError, ChainFMU, ChainFMU2, ChainRun, ChainWarning
-from dryfriction.chain_reference import Chain
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.chain import ChainError, ChainFMU, ChainFMU2, ChainRun, ChainWarning
+from dryfriction.references.chain import Chain
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 from chain_cases import CASES, PERIODS, chain_params, run_driver

@@ -1,5 +1,5 @@
 """The chain of n blocks (fmu_src/chain.[ch], driven by tests/c/chain_driver) against the
-event-driven reference (dryfriction.chain_reference), and the reference against the exact
+event-driven reference (dryfriction.references.chain), and the reference against the exact
 single-block solution. Numbers in docs/chain.md."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from dryfriction.chain_reference import Chain, solve_chain
-from dryfriction.exact import solve_exact
+from dryfriction.references.chain import Chain, solve_chain
+from dryfriction.references.exact import solve_exact
 from dryfriction.params import Oscillator
 
 from chain_cases import CASES, DRIVER, PERIODS, convergence, run_driver

@@ -1,5 +1,5 @@
 """The chain's Stribeck law (friction_law = stribeck, v_s[i], delta[i]) through the FMUs: the located
-scheme second order against the event-driven reference (dryfriction.chain_reference, which shares
+scheme second order against the event-driven reference (dryfriction.references.chain, which shares
 no code with the FMU) on chains of 2 and 3 blocks with belts changed at a communication point and
 site springs; n = 1 the oscillator bit for bit without a belt; FMI 3.0 = FMI 2.0; the refusals
 (bad values, delta < 1, schemes paper and consistent); the outputs' derivative with respect to
@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainFMU2, ChainFMU3
-from dryfriction.chain_reference import Chain, solve_chain
+from dryfriction.drivers.chain import ChainFMU2, ChainFMU3
+from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.errors import FMUCallError
 from chain_cases import belt_run as _belt_run
 
@@ -87,7 +87,7 @@ def test_one_block_stribeck_is_the_oscillator(fmu_path: Path) -> None:
     """n = 1 on a fixed support with Stribeck (delta 1, 2 and 1.5, chi < 1 and > 1): x, v, a,
     F_friction and mode are the oscillator FMU's bit for bit (the chain's one-row solve is the
     oscillator's Newton iteration, friction.h's dfo_stribeck_speed)."""
-    from dryfriction.fmu import OscillatorFMU2, Settings
+    from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
     from dryfriction.params import Oscillator
 
     base = dict(m=1.0, k=1.0, c=0.05, P0=0.8, omega=0.7, phi=0.2, N=1.0, mu_s=0.5, chi=0.6, x0=0.1, v0=0.0)

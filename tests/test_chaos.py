@@ -7,7 +7,7 @@ The FMU's `exact` scheme is the chaos tools' default; `located` (Bossak) stays s
 - with `located` the exponent converges under refinement of h; with `exact` h has no effect; the
   exponent does not depend on d0 or on the renormalisation interval;
 - the chaotic motion at chi = 0.1 has a positive exponent (~0.21 per period) that the exact
-  solution (dryfriction.exact), driven as an independent perturbed pair, reproduces, from the FMU's
+  solution (dryfriction.references.exact), driven as an independent perturbed pair, reproduces, from the FMU's
   exact scheme (pair by pair while the trajectories stay together, then statistically) and from
   `located`; on a periodic motion the exact scheme's exponent is negative and equals the exact
   solution's;
@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.chaos import Catalogue, ExactMap, FMUMap, NDParams, benettin, period_of
-from dryfriction.fmu import OscillatorFMU
+from dryfriction.analysis.chaos import Catalogue, ExactMap, FMUMap, NDParams, benettin, period_of
+from dryfriction.drivers.oscillator import OscillatorFMU
 from dryfriction.studies import run_study
 from dryfriction.sweep import read_netcdf
 
@@ -86,7 +86,7 @@ def test_exact_scheme_step_free(fmu: OscillatorFMU) -> None:
 
 
 def test_exact_scheme_exponent_equals_exact_solution(fmu: OscillatorFMU) -> None:
-    """The FMU's exact scheme against the Python exact solution (dryfriction.exact), pair by pair."""
+    """The FMU's exact scheme against the Python exact solution (dryfriction.references.exact), pair by pair."""
     # chaotic motion: while the two reference trajectories stay together (1e-13 grows e-fold in about
     # 5 periods) every renormalisation measures the same stretching
     ex = benettin(ExactMap(CHAOTIC), 0.0, 0.0, periods=250, transient=20)

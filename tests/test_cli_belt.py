@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from dryfriction.belt_reference import limit_cycle
+from dryfriction.references.belt import limit_cycle
 from dryfriction.cli import main
 
 KEYS = {"motion", "reason", "v_belt", "law", "scheme", "h", "x_eq", "equilibrium", "hopf_formula", "orbit", "units",

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainFMU, ChainFMU2
+from dryfriction.drivers.chain import ChainFMU, ChainFMU2
 
 
 def test_chain_command_writes_the_run(tmp_path: Path, chain_fmu3: Path, capsys: pytest.CaptureFixture[str]) -> None:

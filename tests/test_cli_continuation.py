@@ -13,8 +13,8 @@ import pytest
 
 from dryfriction import Oscillator
 from dryfriction.cli import main
-from dryfriction.continuation import continue_orbits
-from dryfriction.fmu import OscillatorFMU
+from dryfriction.analysis.continuation import continue_orbits
+from dryfriction.drivers.oscillator import OscillatorFMU
 
 
 def test_json_holds_the_library_numbers(fmu: OscillatorFMU, fmu_path: Path,

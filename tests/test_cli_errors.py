@@ -301,13 +301,13 @@ def test_a_full_disk_while_the_results_are_written(small_fs: Path, fmu_path: Pat
 #: each command that writes a result set, and the function that computes it (must not be called)
 OUT_COMMANDS = {
     "response": (["response", "--m", "1", "--k", "100", "--P0", "1", "--N", "0.5", "--mu-s", "0.3", "--f-start", "1",
-                  "--f-stop", "2", "--num", "2"], "dryfriction.response.frequency_response"),
-    "chain": (["chain", "--t-end", "1"], "dryfriction.chain.ChainFMU3.run"),
+                  "--f-stop", "2", "--num", "2"], "dryfriction.analysis.response.frequency_response"),
+    "chain": (["chain", "--t-end", "1"], "dryfriction.drivers.chain.ChainFMU3.run"),
     "continuation": (["continuation", "--param", "chi", "--from", "0.7", "--to", "0.6"],
-                     "dryfriction.continuation.continue_orbits"),
+                     "dryfriction.analysis.continuation.continue_orbits"),
     "bifurcation": (["bifurcation", "--quick"], "dryfriction.sweep.runner.run_batch"),
-    "belt": (["belt", "--v-belt", "0.2"], "dryfriction.self_excited.self_excited"),
-    "validate": (["validate", "--quick"], "dryfriction.report.run_validation"),
+    "belt": (["belt", "--v-belt", "0.2"], "dryfriction.analysis.self_excited.self_excited"),
+    "validate": (["validate", "--quick"], "dryfriction.analysis.report.run_validation"),
 }
 
 
@@ -354,7 +354,7 @@ def test_an_unusable_out_is_refused_before_the_computation(command: str, bad: st
 
 def test_run_out_is_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """``run --out`` names a CSV file: a folder, '' and a name too long are refused before the run."""
-    _no_computation(monkeypatch, "dryfriction.scenes.run_validation")
+    _no_computation(monkeypatch, "dryfriction.drivers.scenes.run_validation")
     for out, words in ((str(tmp_path), f"--out {tmp_path} is a folder, not a file"),
                        ("", "--out must name a file, not ''"),
                        (str(tmp_path / ("x" * 300)), "bytes long, more than the")):

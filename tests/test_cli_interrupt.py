@@ -48,7 +48,7 @@ def test_an_interrupt_while_the_files_are_written_leaves_the_folder_as_it_was(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """SIGINT (or SIGTERM) after the CSV and the NetCDF are written, while the PNG is: exit 130
     (143), the one line, the older result set untouched, no staging folder left beside it."""
-    import dryfriction.response as response
+    import dryfriction.analysis.response as response
 
     out = tmp_path / "out"
     before = old_result_set(out)
@@ -77,7 +77,7 @@ def test_a_signal_once_the_results_are_committed_changes_nothing(
         tmp_path: Path, fmu_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """SIGINT at the moment the complete result set starts moving into place: the files are moved,
     the table printed, exit status 0."""
-    import dryfriction.console as console
+    import dryfriction.cli.console as console
 
     out = tmp_path / "out"
     old_result_set(out)
@@ -100,7 +100,7 @@ def test_a_signal_once_the_results_are_committed_changes_nothing(
 def test_the_library_is_interrupted_as_usual(tmp_path: Path) -> None:
     """Outside the command line a result set does not hold SIGINT back: inside the block it is
     KeyboardInterrupt (nothing moved), after it too (everything moved)."""
-    from dryfriction.console import result_set
+    from dryfriction.cli.console import result_set
 
     out = tmp_path / "out"
     with pytest.raises(KeyboardInterrupt):
@@ -229,7 +229,7 @@ def test_an_interrupted_study_says_its_chunks_are_kept(tmp_path: Path, capsys: p
 def test_an_interrupted_chain_leaves_no_files(tmp_path: Path, chain_fmu3: Path, capsys: pytest.CaptureFixture[str],
                                              monkeypatch: pytest.MonkeyPatch) -> None:
     """The chain's CSV and NetCDF written, Ctrl-C while its PNG is: nothing appears."""
-    import dryfriction.chain_cli as chain_cli
+    import dryfriction.cli.chain as chain_cli
 
     plot = chain_cli.plot_run
 

@@ -91,7 +91,7 @@ def test_lyapunov_cli_json_and_errors(capsys: pytest.CaptureFixture[str]) -> Non
 def _parsers() -> list[tuple[str, object]]:
     import argparse
 
-    from dryfriction.cli import build_parser
+    from dryfriction.cli.main import build_parser
 
     found = []
 

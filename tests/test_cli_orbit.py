@@ -12,7 +12,7 @@ import pytest
 
 from dryfriction import Oscillator
 from dryfriction.cli import main
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 
 KEYS = {"period", "stable", "neutral", "multipliers", "x0", "v0", "z0", "zdot0", "amplitude_m", "offset_m",
         "stick_fraction", "residual", "rest_interval_m"}

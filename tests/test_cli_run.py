@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dryfriction.cli import main
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 

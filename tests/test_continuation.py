@@ -1,4 +1,4 @@
-"""Continuation of periodic orbits and their bifurcations (dryfriction.continuation), against
+"""Continuation of periodic orbits and their bifurcations (dryfriction.analysis.continuation), against
 independent references: the closed-form harmonic response without friction, Den Hartog's exact
 non-stop solution and its stick condition (the grazing), find_orbits on either side of a located
 fold or period doubling, separate FMU runs of the located orbits, and the brute-force numbers of
@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from dryfriction import Oscillator
-from dryfriction.continuation import (PARAMETERS, Continuation, continue_orbits, get_parameter,
+from dryfriction.analysis.continuation import (PARAMETERS, Continuation, continue_orbits, get_parameter,
                                       set_parameter)
-from dryfriction.fmu import OscillatorFMU, Settings
-from dryfriction.orbits import find_orbits, scales
-from dryfriction.steady import den_hartog_amplitude
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.analysis.orbits import find_orbits, scales
+from dryfriction.references.steady import den_hartog_amplitude
 
 EXACT = Settings(scheme="exact")
 

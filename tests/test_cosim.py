@@ -3,7 +3,7 @@
 Block 1 (its wall spring, the harmonic force) and block 2 (k = 0) are two oscillator FMUs joined by
 the chain's middle spring and damper, computed by the master and set as F_ext, opposite on each.
 The chain at n = 2 with the same parameters is the monolithic answer: the event-driven reference
-(dryfriction.chain_reference, scipy at rtol 1e-12) and the chain FMU. Measured here:
+(dryfriction.references.chain, scipy at rtol 1e-12) and the chain FMU. Measured here:
 
 - zero-order-hold Jacobi converges at first order (max |x - x_ref| 1.563, 0.7211, 0.3449, 0.1686 at
   H = T/50 ... T/400), held inputs at the mean of the outputs' Taylor polynomial at second order
@@ -30,14 +30,14 @@ from typing import Any
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainFMU3
-from dryfriction.chain_reference import Chain, ChainSolution, solve_chain
+from dryfriction.drivers.chain import ChainFMU3
+from dryfriction.references.chain import Chain, ChainSolution, solve_chain
 from dryfriction.cosim import Connection, CosimResult, SpringDamper, System, coupling_matrix
 from dryfriction.cosim.split import split_chain, split_chain2
 from dryfriction.diagnostics import DryFrictionWarning
 from dryfriction.errors import FMUCallError, FMUError
 from dryfriction.fmi._base import read_capabilities
-from dryfriction.fmu import OscillatorFMU2, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 # both blocks stick (3 % and 1 % of the time), amplitudes 3.8 and 6.1
@@ -54,7 +54,7 @@ def reference() -> ChainSolution:
 
 @pytest.fixture(scope="module")
 def fmu3_path() -> Path:
-    from dryfriction.fmu3 import default_fmi3_path
+    from dryfriction.drivers.oscillator3 import default_fmi3_path
 
     return default_fmi3_path()
 
@@ -225,7 +225,7 @@ def test_a_chain_fmu_and_an_oscillator_are_the_three_block_chain(chain_fmu2: Pat
     second order with input derivatives (both FMUs take them)."""
     from chain_cases import CASES
 
-    from dryfriction.chain import ChainFMU2
+    from dryfriction.drivers.chain import ChainFMU2
 
     ch = CASES["damped-walled"]
     period = 2 * math.pi / ch.omega
@@ -382,7 +382,7 @@ def test_input_derivatives_in_the_exact_scheme(blocks: Any, reference: ChainSolu
 def test_fmi3_units_hold_as_fmi2_and_take_inputs_during_a_step(fmu3_path: Path, reference: ChainSolution) -> None:
     """FMI 3.0 oscillators: held inputs give the FMI 2.0 bits; inputs="derivatives" sets the
     polynomial at every intermediate update (the FMU's internal steps' ends): second order."""
-    from dryfriction.fmu3 import OscillatorFMU3
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
     b1, b2, element = split_chain2(CASE)
 
@@ -464,7 +464,7 @@ def test_directional_derivatives_of_the_layer(blocks: Any) -> None:
 def test_fmi3_layer_output_directional_and_adjoint_derivatives(fmu3_path: Path) -> None:
     """fmi3GetOutputDerivatives gives v and a for x, fmi3GetDirectionalDerivative d a / d F_ext =
     1/m while sliding, fmi3GetAdjointDerivative its transpose (the seed over the unknowns)."""
-    from dryfriction.fmu3 import OscillatorFMU3
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
     p = Oscillator(m=2.0, k=1.0, P0=3.0, omega=0.6, N=0.1, mu_s=0.5, chi=0.7)
     with OscillatorFMU3(params=dataclasses.asdict(p), fmu_path=fmu3_path) as f:

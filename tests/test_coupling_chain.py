@@ -1,6 +1,6 @@
 """The chain coupled at second order (docs/chain.md, "Coupling"): inputs given with their time
 derivatives over each communication step against the event-driven reference of the chain with the
-same smooth input (dryfriction.chain_reference.solve_chain with F_ext_t).
+same smooth input (dryfriction.references.chain.solve_chain with F_ext_t).
 
 The runs go through the chain's instance core (the FMU's code below its FMI glue) by the driver
 mode of tests/c/test_chain_deriv; the core's own checks (directional derivatives against finite
@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from dryfriction.chain_reference import Chain, ChainSolution, solve_chain
+from dryfriction.references.chain import Chain, ChainSolution, solve_chain
 
 ROOT = Path(__file__).resolve().parents[1]
 DRIVER = Path(os.environ.get("DFO_CHAIN_DERIV", ROOT / "build" / "tests" / "c" / "test_chain_deriv"))

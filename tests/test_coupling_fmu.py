@@ -23,8 +23,8 @@ import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Slave
 
-from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import default_fmu_path
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.drivers.oscillator import default_fmu_path
 
 from fmi2_helpers import Inst
 from poly_reference import PolyReference

@@ -11,11 +11,11 @@ from pathlib import Path
 import pytest
 
 from dryfriction import paths
-from dryfriction.argparsing import UsageError
-from dryfriction.chain import ChainFMU2, ChainFMU3
+from dryfriction.errors import UsageError
+from dryfriction.drivers.chain import ChainFMU2, ChainFMU3
 from dryfriction.errors import ChainError, FMUCallError, FMUError, FMUFileError
-from dryfriction.fmu import OscillatorFMU2, Settings
-from dryfriction.fmu3 import OscillatorFMU3
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 from dryfriction.params import Oscillator
 
 

@@ -27,8 +27,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainFMU
-from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.chain import ChainFMU
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 mp.mp.dps = 40

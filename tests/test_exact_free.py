@@ -13,7 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from free_reference import reference_for
 

@@ -1,5 +1,5 @@
 """The exact scheme (scheme 4) through the FMU: against the exact piecewise solution
-``dryfriction.exact`` (positions and the sequence of events), against an event-driven scipy
+``dryfriction.references.exact`` (positions and the sequence of events), against an event-driven scipy
 integration (helpers.event_driven) where the reference has no counterpart (chi = 0, inputs held
 over communication steps), and the FMU's features (observables, FMU states, event log, h without
 effect, bad input)."""
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from dryfriction.exact import ExactSolution, solve_exact
-from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.references.exact import ExactSolution, solve_exact
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-from dryfriction.validation import CASES
+from dryfriction.analysis.validation import CASES
 
 from helpers import event_driven, held_run
 

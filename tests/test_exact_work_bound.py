@@ -12,8 +12,8 @@ import os
 import numpy as np
 import pytest
 
-from dryfriction.exact import solve_exact
-from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.references.exact import solve_exact
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 # the README's 1.6 kHz oscillator (f_n = 1591.5 Hz), driven at 1 Hz
@@ -54,7 +54,7 @@ def test_a_long_dostep_matches_the_reference(fmu: OscillatorFMU) -> None:
 
 def test_the_sweep_point_that_ended_a_sweep(fmu: OscillatorFMU) -> None:
     """The steady state at 1 Hz (single doSteps of up to 8192 s) is computed, not an error."""
-    from dryfriction.response import steady_state
+    from dryfriction.analysis.response import steady_state
 
     s = steady_state(fmu, P16, settings=EXACT)
     assert math.isfinite(s.amplitude) and s.amplitude > 0.0 and s.periods >= 64

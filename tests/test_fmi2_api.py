@@ -27,8 +27,8 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from dryfriction import fmi2
-from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.fmi import fmi2
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 from fmi2_helpers import Inst, fmi2Error, fmi2LastSuccessfulTime
@@ -198,7 +198,7 @@ def test_tiny_internal_step_does_not_hang() -> None:
     code = textwrap.dedent(f"""
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
-        from dryfriction.fmu import OscillatorFMU, Settings
+        from dryfriction.drivers.oscillator import OscillatorFMU, Settings
         from dryfriction.params import Oscillator
         f = OscillatorFMU()
         f.start(Oscillator(), Settings(h=1e-300))

@@ -17,7 +17,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from dryfriction.fmi3 import FMI3Oscillator
+from dryfriction.drivers.oscillator3 import FMI3Oscillator
 
 from fmi3_helpers import DT, FMU3
 

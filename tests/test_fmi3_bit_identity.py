@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from dryfriction.fmi3 import FMI3Oscillator
+from dryfriction.drivers.oscillator3 import FMI3Oscillator
 from fmi3_helpers import FMI2Run, schemes
 
 OUTPUTS = ["x", "v", "a", "F_friction", "mode", "x_max", "x_min", "stick_fraction", "transitions", "E_friction",

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from dryfriction.exact import solve_exact
-from dryfriction.fmi3 import FMI3Oscillator
+from dryfriction.references.exact import solve_exact
+from dryfriction.drivers.oscillator3 import FMI3Oscillator
 from dryfriction.params import Oscillator
 
 from fmi3_helpers import DT, FMU2, FMU3, fmi2_switches, kinds, scheme_names, schemes

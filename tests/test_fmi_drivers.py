@@ -15,10 +15,10 @@ import pytest
 from fmpy import simulate_fmu
 
 from dryfriction import model, paths
-from dryfriction.chain import ChainFMU2, ChainFMU3
-from dryfriction.driver import Driver
-from dryfriction.fmu import OscillatorFMU2, Settings
-from dryfriction.fmu3 import OscillatorFMU3
+from dryfriction.drivers.chain import ChainFMU2, ChainFMU3
+from dryfriction.drivers.base import Driver
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 from dryfriction.params import Oscillator
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -91,15 +91,17 @@ def test_chain_fmu3_equals_simulate_fmu(chain_fmu3: Path) -> None:
 # ------------------------------------------------------------------ former names, uniform signatures
 
 def test_former_names_are_the_same_objects() -> None:
-    import dryfriction.chain as chain
     import dryfriction.errors as errors
     import dryfriction.fmi.fmi2 as layer2
     import dryfriction.fmi.fmi3 as layer3
-    import dryfriction.fmi2 as fmi2
-    import dryfriction.fmi3 as fmi3
-    import dryfriction.fmu as fmu
-    import dryfriction.fmu3 as fmu3
-    import dryfriction.locate as locate
+
+    with pytest.warns(DeprecationWarning):
+        import dryfriction.chain as chain
+        import dryfriction.fmi2 as fmi2
+        import dryfriction.fmi3 as fmi3
+        import dryfriction.fmu as fmu
+        import dryfriction.fmu3 as fmu3
+        import dryfriction.locate as locate
 
     assert fmu.OscillatorFMU is OscillatorFMU2 and fmu.OscillatorFMU3 is OscillatorFMU3
     assert fmi3.FMI3Oscillator is OscillatorFMU3 and fmu3.FMI3Oscillator is OscillatorFMU3

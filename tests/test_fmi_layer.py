@@ -1,4 +1,4 @@
-"""The package's FMI 2.0 layer (dryfriction.fmi2) through OscillatorFMU: statuses, errors (an
+"""The package's FMI 2.0 layer (dryfriction.fmi.fmi2) through OscillatorFMU: statuses, errors (an
 FMUError names the function, the status and the FMU's sentence), observables read without observe,
 the batch runner's strict error, instances in threads. (FMU states: test_fmu_state.py; what
 dryfriction.model reads from the XML: test_model_description.py; the Python range checks:
@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction import fmi2
-from dryfriction.fmu import FMUError, OBSERVABLE_OUTPUTS, OscillatorFMU, Settings
+from dryfriction.fmi import fmi2
+from dryfriction.drivers.oscillator import FMUError, OBSERVABLE_OUTPUTS, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import BatchRunner, PARAM_COLUMNS
 

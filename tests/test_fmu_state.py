@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.fmu import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 from fmi2_helpers import HEADER, Inst, deserialise_raw, fmi2Error, forge, serialised
@@ -88,7 +88,7 @@ FORGED_DERIVED_H = textwrap.dedent("""
     import fmi2_helpers as t
     from fmpy import extract, read_model_description
     import tempfile
-    from dryfriction.fmu import default_fmu_path
+    from dryfriction.drivers.oscillator import default_fmu_path
     path = str(default_fmu_path())
     md = read_model_description(path)
     d = extract(path, unzipdir=tempfile.mkdtemp())

@@ -34,10 +34,10 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from dryfriction import DryFrictionWarning
-from dryfriction.chain import default_chain_fmu, default_chain_fmu3
-from dryfriction.exact import ExactSolution, linear_solution, solve_exact
-from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.chain import default_chain_fmu, default_chain_fmu3
+from dryfriction.references.exact import ExactSolution, linear_solution, solve_exact
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
 from dryfriction.params import SCALE_LIMIT, Oscillator
 
 from fmi2_helpers import Counting

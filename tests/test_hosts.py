@@ -30,9 +30,9 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from dryfriction.chain import ChainFMU, ChainFMU2, default_chain_fmu, default_chain_fmu3
-from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.chain import ChainFMU, ChainFMU2, default_chain_fmu, default_chain_fmu3
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 
 
@@ -246,7 +246,7 @@ def test_fmusim_chain_with_three_blocks(tmp_path: Path) -> None:
                        "--start-value", "P0", " ".join(map(str, P0)))
     assert x.shape[1] == 3 and abs(t[-1] - stop) <= 1e-12 * stop
     # fmpy's simulate_fmu cannot set a structural parameter: the reference is fmpy's FMU3Slave
-    # through dryfriction.chain (Configuration Mode for n, the same output points t0 + k h)
+    # through dryfriction.drivers.chain (Configuration Mode for n, the same output points t0 + k h)
     with ChainFMU(n=3, params={"m": m, "P0": P0}, fmu_path=fmu) as chain:
         ref = chain.run(stop, h, start_time=t0)
     _assert_same_x((t, x), (ref.t, ref.x), t0, h, stop, "fmusim fmi3-chain n = 3")

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.chain import ChainFMU
-from dryfriction.chain_reference import Chain
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.chain import ChainFMU
+from dryfriction.references.chain import Chain
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 from chain_cases import chain_params, run_driver

@@ -38,7 +38,7 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackLoggerTYPE)
 
 from dryfriction import model
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import PARAM_COLUMNS
 

@@ -1,4 +1,4 @@
-"""Periodic orbits by Newton shooting on the exact stroboscopic map (dryfriction.orbits): against the
+"""Periodic orbits by Newton shooting on the exact stroboscopic map (dryfriction.analysis.orbits): against the
 closed-form harmonic response and exp(A T) without friction, the light-damping case the transient
 method gets wrong, and stick-slip orbits checked by separate FMU runs (a run of K periods returns to
 the orbit, central finite differences of the map give its multipliers, a nearby transient converges
@@ -13,8 +13,8 @@ import pytest
 from scipy.linalg import expm
 
 from dryfriction import Oscillator
-from dryfriction.fmu import OscillatorFMU, Settings
-from dryfriction.orbits import Orbit, find_orbits, scales, stroboscopic_map
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.analysis.orbits import Orbit, find_orbits, scales, stroboscopic_map
 
 EXACT = Settings(scheme="exact")
 
@@ -81,7 +81,7 @@ def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU) -> None:
     assert round(o.amplitude, 3) == 1.449
     assert abs(o.amplitude - X) <= 1e-9
     # the transient method on the same oscillator (current main: fooled, 2.883 'converged')
-    from dryfriction.response import steady_state
+    from dryfriction.analysis.response import steady_state
     ss = steady_state(fmu, p)
     assert abs(ss.amplitude - X) > 0.9 * X or not ss.converged
     assert o.stable and 1.0 - o.mu_max == pytest.approx(1.0 - math.exp(-p.c / (2 * p.m) * p.period), rel=1e-6)
@@ -89,8 +89,8 @@ def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU) -> None:
 
 @pytest.mark.parametrize("lam, mss", [(1.7, 0.2), (2.5, 0.3), (0.8, 0.1), (1.3, 0.3)])
 def test_undamped_non_stop_is_den_hartog(fmu: OscillatorFMU, lam: float, mss: float) -> None:
-    """zeta = 0, mu_s = mu_k, no stops: Den Hartog's exact steady amplitude (dryfriction.steady)."""
-    from dryfriction.steady import den_hartog_amplitude
+    """zeta = 0, mu_s = mu_k, no stops: Den Hartog's exact steady amplitude (dryfriction.references.steady)."""
+    from dryfriction.references.steady import den_hartog_amplitude
 
     p = Oscillator.from_nondimensional(lam=lam, mu_s_sigma=mss, chi=1.0)
     (o,) = find_orbits(p, fmu=fmu)
@@ -266,8 +266,8 @@ def test_multiplier_is_the_lyapunov_exponent(fmu: OscillatorFMU, lam: float, mss
     decays as 1/N (seen 7e-5 to 1.3e-2 over 1000 periods): the mean over the second half of the
     run is compared (seen: 1.6e-8 to 1.4e-6 with stick phases; 8e-5 to 3e-3 without, where the
     complex pair makes the one-period stretch beat)."""
-    from dryfriction.chaos.lyapunov import benettin
-    from dryfriction.chaos.maps import FMUMap, NDParams
+    from dryfriction.analysis.chaos.lyapunov import benettin
+    from dryfriction.analysis.chaos.maps import FMUMap, NDParams
 
     p = nd(lam, mss, chi, zeta)
     stable = [o for o in find_orbits(p, period=K, fmu=fmu) if o.stable and o.period == K]
@@ -284,7 +284,7 @@ def test_the_fmi3_fmu_gives_the_same_orbit(fmu: OscillatorFMU) -> None:
     (an instance per evaluation, started at the section time) from 1e-4 off the FMI 2.0 orbit comes
     back to the same orbit within 1e-12, with the same Jacobian within 1e-12 (stick-slip and
     slide-only orbits)."""
-    from dryfriction.fmi3 import OscillatorFMU3
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
     def map3(p: Oscillator, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray]:
         params = {**p.as_dict(), "x0": float(z[0]), "v0": float(z[1]), "scheme": 4, "sensitivity": True}
@@ -321,9 +321,9 @@ def test_no_orbit_at_an_undamped_resonance(fmu: OscillatorFMU) -> None:
 def at_rest(p: Oscillator, o: Orbit) -> None:
     """o is the block at rest of p: one orbit, neutral (not unstable), multipliers exactly 1 and 0,
     amplitude 0, the interval |k x| <= F_b - |P0| (method.md section 1), and the exact piecewise
-    solution (dryfriction.exact) from its state stays stuck there over a period."""
-    from dryfriction.exact import solve_exact
-    from dryfriction.orbits import rest_interval
+    solution (dryfriction.references.exact) from its state stays stuck there over a period."""
+    from dryfriction.references.exact import solve_exact
+    from dryfriction.analysis.orbits import rest_interval
 
     h = (max(p.mu_s, p.mu_k) * p.N - abs(p.P0)) / p.k
     assert o.stuck and o.neutral and not o.stable and o.converged and o.period == 1
@@ -339,7 +339,7 @@ def test_the_block_at_rest_is_one_neutral_orbit(fmu: OscillatorFMU) -> None:
     the initial state rests: started at rest at z0 = 0.3 inside the interval it stays there; started
     at z0 = 2 outside it, it slides and comes to rest where the exact solution does (within 1e-12 of
     the static deflection), inside the interval [-0.5, 0.5] static deflections."""
-    from dryfriction.exact import solve_exact
+    from dryfriction.references.exact import solve_exact
 
     for z0 in (0.3, 2.0):
         p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=1.5, chi=0.7, zeta=0.05, z0=z0)
@@ -360,9 +360,9 @@ def test_on_either_side_of_the_breakaway_force(fmu: OscillatorFMU) -> None:
     stick-slip orbit of small amplitude (9.0e-6 static deflections) that the exact solution repeats
     within 1e-9 of its amplitude, with the exact solution's amplitude within 1e-9 and the transient
     method's within its tolerance."""
-    from dryfriction.exact import solve_exact
-    from dryfriction.orbits import rest_interval
-    from dryfriction.response import steady_state
+    from dryfriction.references.exact import solve_exact
+    from dryfriction.analysis.orbits import rest_interval
+    from dryfriction.analysis.response import steady_state
 
     for mss in (1.001, 1.0):
         p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=mss, chi=1.0, zeta=0.05, z0=0.3)

@@ -1,6 +1,6 @@
 """The orbit method at every size of oscillator: m and k from 1e-12 to 1e6 (kg, N/m) with the
 non-dimensional parameters held fixed give the same non-dimensional orbit (Den Hartog's exact
-amplitude where it holds, the exact piecewise solution of dryfriction.exact elsewhere); a MEMS-sized
+amplitude where it holds, the exact piecewise solution of dryfriction.references.exact elsewhere); a MEMS-sized
 block (m down to 1e-12 kg, lambda down to 1.4e-6: slides far shorter than the samples of a cycle)
 has its orbit wherever the transient method converges, periodic under the exact solution; values no
 computation can honour are refused with the parameter and its valid range."""
@@ -17,19 +17,19 @@ import pytest
 
 from dryfriction import Oscillator
 from dryfriction.cli import main
-from dryfriction.exact import solve_exact
-from dryfriction.fmu import OscillatorFMU
-from dryfriction.orbits import Orbit, find_orbits
+from dryfriction.references.exact import solve_exact
+from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.analysis.orbits import Orbit, find_orbits
 from dryfriction.params import SCALE_LIMIT
-from dryfriction.response import frequency_response, steady_state
-from dryfriction.steady import den_hartog_amplitude
+from dryfriction.analysis.response import frequency_response, steady_state
+from dryfriction.references.steady import den_hartog_amplitude
 
 SIZES = [1e-12, 1e-6, 1.0, 1e6]
 ALL_SIZES = [1e-12, 1e-9, 1e-6, 1e-3, 1.0, 1e3, 1e6]
 
 
 def exact_cycle(p: Oscillator, o: Orbit) -> tuple[float, float, float]:
-    """(x, v) after one period of the exact piecewise solution (dryfriction.exact, Python, independent
+    """(x, v) after one period of the exact piecewise solution (dryfriction.references.exact, Python, independent
     of the FMU) from the orbit's state at t = 0, and its amplitude: every turning point of x is a stop
     (v = 0 ends a slide), so x's extremes are among the segments' start states and the end state."""
     sol = solve_exact(p.with_(x0=o.x0, v0=o.v0), o.period * p.period)

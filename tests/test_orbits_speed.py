@@ -15,9 +15,9 @@ from scipy.linalg import expm
 
 from dryfriction import Oscillator
 from dryfriction.errors import FMUError
-from dryfriction.fmu import OscillatorFMU, Settings
-from dryfriction.orbits import OrbitFollower, find_orbits
-from dryfriction.response import _Branch
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.analysis.orbits import OrbitFollower, find_orbits
+from dryfriction.analysis.response import _Branch
 
 JAC = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
 OBS = ("x_max", "x_min", "stick_fraction")

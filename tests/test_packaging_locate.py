@@ -1,4 +1,4 @@
-"""Where the FMUs come from (dryfriction.locate): the order (explicit path, DFO_FMU..., package
+"""Where the FMUs come from (dryfriction.paths): the order (explicit path, DFO_FMU..., package
 data, build tree), the one exception for every unusable FMU path, and nothing read at import time."""
 
 from __future__ import annotations
@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from dryfriction import locate, model
-from dryfriction.chain import ChainFMU, ChainFMU2
-from dryfriction.fmi3 import FMI3Oscillator, default_fmi3_path
-from dryfriction.fmu import OscillatorFMU
-from dryfriction.locate import FMUFileError
-from dryfriction.response import frequency_response
+from dryfriction import paths as locate, model
+from dryfriction.drivers.chain import ChainFMU, ChainFMU2
+from dryfriction.drivers.oscillator3 import FMI3Oscillator, default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.paths import FMUFileError
+from dryfriction.analysis.response import frequency_response
 from dryfriction.studies import run_study
 
 from helpers import _bad_xml, _not_zip, _zip_without_md
@@ -170,7 +170,7 @@ def hook(event, args):
         if os.path.basename(p) == "modelDescription.xml" or p.endswith((".fmu", ".toml")):
             events.append("open " + os.path.basename(p))
 sys.addaudithook(hook)
-import dryfriction.locate as locate, dryfriction.model as model
+import dryfriction.paths as locate, dryfriction.model as model
 def recorded(owner, name):
     real = getattr(owner, name)
     def call(*args, **kwargs):
@@ -191,7 +191,7 @@ print(json.dumps({"modules": names, "at_import": at_import, "at_use": events[len
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
-    assert {"dryfriction.locate", "dryfriction.cli", "dryfriction.fmu", "dryfriction.validation",
+    assert {"dryfriction.paths", "dryfriction.cli", "dryfriction.drivers.oscillator", "dryfriction.analysis.validation",
             "dryfriction.studies.chain2", "dryfriction.sweep.runner"} <= set(res["modules"])
     assert res["at_import"] == []
     assert "default" in res["at_use"] and "open modelDescription.xml" in res["at_use"], res["at_use"]

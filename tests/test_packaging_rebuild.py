@@ -30,9 +30,9 @@ import numpy as np
 import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 
-from dryfriction.chain import default_chain_fmu, default_chain_fmu3
-from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.chain import default_chain_fmu, default_chain_fmu3
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from dryfriction import locate
+from dryfriction import paths as locate
 
 ROOT = Path(__file__).resolve().parents[1]
 KINDS = {f"dryfriction/fmus/{k.relpath}": k for k in locate.KINDS}
@@ -88,7 +88,7 @@ def test_the_wheel_carries_the_four_fmus(wheel: Path, tmp_path: Path) -> None:
         names = set(z.namelist())
         assert set(KINDS) <= names, sorted(n for n in names if n.endswith(".fmu"))
         assert {f"dryfriction/configs/{p.name}" for p in (ROOT / "configs").glob("*.toml")} <= names
-        assert "dryfriction/locate.py" in names and not any("__pycache__" in n for n in names)
+        assert "dryfriction/paths.py" in names and not any("__pycache__" in n for n in names)
         for name, kind in KINDS.items():
             data = z.read(name)
             path = tmp_path / Path(name).name

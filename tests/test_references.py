@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from dryfriction.exact import ExactSolution, Segment, linear_solution, solve_exact
+from dryfriction.references.exact import ExactSolution, Segment, linear_solution, solve_exact
 from dryfriction.params import Oscillator
-from dryfriction.steady import den_hartog_amplitude, den_hartog_state, inman_amplitude
+from dryfriction.references.steady import den_hartog_amplitude, den_hartog_state, inman_amplitude
 
 ND = Oscillator.from_nondimensional
 

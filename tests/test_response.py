@@ -1,4 +1,4 @@
-"""The steady-state response (dryfriction.response): steady states that are steady (Den Hartog, the
+"""The steady-state response (dryfriction.analysis.response): steady states that are steady (Den Hartog, the
 exact solution), an undamped resonance reported as never converging, a slowly decaying free
 vibration never reported as converged and the tolerance bounding the error (the closed form, the
 orbits), the orbit method (every orbit with its stability; Den Hartog, a cold find_orbits), the
@@ -6,9 +6,9 @@ frequency response as a Dataset in physical units, a frequency that cannot be co
 command, and the exact scheme by default also for a free mass. (The command: test_cli_response.py;
 the default step: test_step_size.py; the parameters: test_params.py.)
 
-References: the exact piecewise solution (dryfriction.exact, independent of the FMU), Den Hartog's
+References: the exact piecewise solution (dryfriction.references.exact, independent of the FMU), Den Hartog's
 exact undamped steady state, the closed-form step rule, the FMU's own exact scheme (itself checked
-against dryfriction.exact to 4e-13 in test_exact_scheme.py).
+against dryfriction.references.exact to 4e-13 in test_exact_scheme.py).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ import pytest
 
 from dryfriction import Oscillator
 from dryfriction.cli import main
-from dryfriction.exact import solve_exact
-from dryfriction.fmu import OscillatorFMU, Settings
-from dryfriction.response import frequency_response, never_converges_note, steady_state
-from dryfriction.steady import den_hartog_amplitude
+from dryfriction.references.exact import solve_exact
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.analysis.response import frequency_response, never_converges_note, steady_state
+from dryfriction.references.steady import den_hartog_amplitude
 
 from helpers import ENGINEER
 
@@ -143,7 +143,7 @@ def test_the_tolerance_bounds_the_error_near_resonance(fmu: OscillatorFMU, lam: 
     amplitude is within tol of the orbit's (N = 0: of the closed form), at tol 1e-3 and 1e-6; the
     estimated error bounds the true one (seen: true errors 1e-14 to 4e-7, estimates 5 to 100 times
     larger)."""
-    from dryfriction.orbits import find_orbits
+    from dryfriction.analysis.orbits import find_orbits
 
     p = Oscillator.physical(m=1, k=1, zeta=0.01, P0=1, omega=lam, N=N, mu_s=0.3, mu_k=0.2)
     (o,) = find_orbits(p, fmu=fmu)
@@ -160,7 +160,7 @@ def test_the_tolerance_bounds_the_error_near_resonance(fmu: OscillatorFMU, lam: 
 def test_remaining_error_of_a_geometric_decay() -> None:
     """The three-window fit (used without the FMU's Jacobian): exact on A_j = A + B u^(2^j); no shrink
     is no convergence."""
-    from dryfriction.response import remaining_error
+    from dryfriction.analysis.response import remaining_error
 
     u, B = 0.6, 0.3
     A = [1.0 + B * u ** (2 ** j) for j in range(3)]
@@ -187,7 +187,7 @@ def test_orbit_response_equals_find_orbits_and_marks_the_unstable(fmu_path: Path
     """The warm-started sweep gives each frequency's orbits as a cold find_orbits does (within 1e-12 of
     the amplitude), the symmetry-breaking zone of the engineer's example (5.85 Hz: a stable mirror
     pair, offsets +-4.08e-4 m, and the unstable symmetric orbit, |mu| 1.025) included."""
-    from dryfriction.orbits import find_orbits
+    from dryfriction.analysis.orbits import find_orbits
 
     p = Oscillator.physical(**ENGINEER, f=5.0)
     f = np.linspace(5.7, 6.0, 7)
@@ -234,7 +234,7 @@ def test_the_method_is_checked(fmu_path: Path) -> None:
 
 def test_one_point_that_cannot_be_computed_does_not_end_the_sweep(fmu_path: Path, tmp_path: Path,
                                                                   capsys: pytest.CaptureFixture[str]) -> None:
-    from dryfriction.response import frequency_response, steady_state
+    from dryfriction.analysis.response import frequency_response, steady_state
 
     # a 1.6 kHz oscillator on the located scheme (h derived: 1/1000 of its period): at 0.001 Hz the
     # shortest run (4 periods, 4000 s) takes 6e9 internal steps, beyond the FMU's bound
@@ -267,7 +267,7 @@ def test_one_point_that_cannot_be_computed_does_not_end_the_sweep(fmu_path: Path
 def test_a_free_mass_responds_by_the_exact_scheme(fmu_path: Path) -> None:
     """k = 0: the response's default is the exact scheme (closed form), equal to the located scheme
     at a fine step within its error (second order: 1e-6 relative at T/4000)."""
-    from dryfriction.response import frequency_response
+    from dryfriction.analysis.response import frequency_response
 
     p = Oscillator.physical(m=1, k=0, c=0.5, P0=1, f=1, N=0.5, mu_s=0.3, mu_k=0.2)
     ex = frequency_response(p, [0.5, 2.0], method="transient", min_periods=8, max_periods=64, fmu_path=fmu_path)

@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dryfriction import scenes
-from dryfriction.exact import solve_exact
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers import scenes
+from dryfriction.references.exact import solve_exact
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 from helpers import OUT

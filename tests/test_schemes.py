@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dryfriction.exact import solve_exact
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.references.exact import solve_exact
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
-from dryfriction.steady import den_hartog_amplitude, inman_amplitude
-from dryfriction.validation import CASES, FIRST_CYCLE, convergence, first_cycle
+from dryfriction.references.steady import den_hartog_amplitude, inman_amplitude
+from dryfriction.analysis.validation import CASES, FIRST_CYCLE, convergence, first_cycle
 
 CONVERGENCE_CASES = ["stick-dominated", "reversal-only", "heavy-friction", "chi-small", "chi-large"]
 

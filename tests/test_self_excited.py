@@ -1,4 +1,4 @@
-"""Self-excited motion on a belt (dryfriction.self_excited): periodic orbits of the autonomous system
+"""Self-excited motion on a belt (dryfriction.analysis.self_excited): periodic orbits of the autonomous system
 (T an unknown), steady sliding's stability, the Hopf belt speed located from the model, the branch
 in v_belt; against independent references that use none of the FMU's code:
 
@@ -21,11 +21,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from dryfriction.belt_reference import Belt, limit_cycle, simulate
+from dryfriction.references.belt import Belt, limit_cycle, simulate
 from dryfriction.errors import FMUError
-from dryfriction.fmu import OscillatorFMU
+from dryfriction.drivers.oscillator import OscillatorFMU
 from dryfriction.params import Oscillator
-from dryfriction.self_excited import (BeltProblem, Branch, continue_orbits, equilibrium, find_orbit, hopf_formula,
+from dryfriction.analysis.self_excited import (BeltProblem, Branch, continue_orbits, equilibrium, find_orbit, hopf_formula,
                                       locate_hopf, self_excited)
 
 MU_S, CHI = 0.5, 0.6                       # mu_k = 0.3

@@ -13,8 +13,8 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from scipy.linalg import expm
 
-from dryfriction.fmi3 import default_fmi3_path
-from dryfriction.fmu import default_fmu_path
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.drivers.oscillator import default_fmu_path
 from fmi2_helpers import Inst, fmi2Warning
 
 EXACT, LOCATED = 4, 3
@@ -289,7 +289,7 @@ def test_not_computed_while_off(unzipped: tuple[str, object]) -> None:
 def test_fmi3_gives_the_same_jacobian_and_restores_to_identity(unzipped: tuple[str, object]) -> None:
     """The FMI 3.0 FMU (same description, same core) gives the FMI 2.0 Jacobian bit for bit, also
     with events landed on (early return at every switch); fmi3SetFMUState resets it to the identity."""
-    from dryfriction.fmi3 import OscillatorFMU3
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
     p = STICK_SLIP[0][1]
     T = 2.0 * math.pi / p["omega"]

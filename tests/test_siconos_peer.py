@@ -1,7 +1,7 @@
 """bench/siconos_peer.py: Siconos side by side with the FMU.
 
 Runs ``bench/siconos_peer.py --quick --json`` once and checks what it measured against the
-independent references (the tutorial's closed form, dryfriction.exact, dryfriction.chain_reference):
+independent references (the tutorial's closed form, dryfriction.references.exact, dryfriction.references.chain):
 the errors of both sides in their expected bands, the orders, the FMU's exact scheme, and the JSON
 object's schema and ratios. No timing assertions: times only have to be finite and positive.
 Skips, saying why, only when Siconos cannot be installed (python3-siconos for the system Python).
@@ -123,7 +123,7 @@ def test_forced_cases_against_the_exact_solution(peer: dict) -> None:
 
 
 def test_chain_against_the_reference(peer: dict) -> None:
-    """The chain (mu_s = mu_k) at n = 2 and 8 against dryfriction.chain_reference: the chain FMU's
+    """The chain (mu_s = mu_k) at n = 2 and 8 against dryfriction.references.chain: the chain FMU's
     located scheme 2.2e-5 m at h = 1e-2, 4x per halving; Siconos theta = 1 first order."""
     for name in ("chain_n2", "chain_n8"):
         c = _case(peer, name)
@@ -134,9 +134,9 @@ def test_chain_against_the_reference(peer: dict) -> None:
 
 
 def test_closed_form_is_the_exact_solution() -> None:
-    """The tutorial's closed form (bench/siconos_cases.py) against dryfriction.exact on the same
+    """The tutorial's closed form (bench/siconos_cases.py) against dryfriction.references.exact on the same
     parameters: two independent references agree."""
-    from dryfriction.exact import solve_exact
+    from dryfriction.references.exact import solve_exact
     from siconos_cases import tutorial_case, tutorial_closed_form
 
     case = tutorial_case()

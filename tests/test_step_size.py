@@ -9,7 +9,7 @@ import math
 import pytest
 
 from dryfriction import DryFrictionWarning
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 
 
@@ -76,7 +76,7 @@ def test_derived_step_rule(fmu: OscillatorFMU, params: dict[str, float], expecte
 @pytest.mark.parametrize("h, words", [(-1e-3, "valid range: 0 (derived from the dynamics) or > 0"),
                                       (1e-310, "a normal number"), (math.inf, "finite")])
 def test_bad_h_is_refused_with_its_range(fmu: OscillatorFMU, h: float, words: str) -> None:
-    from dryfriction.fmi2 import FMUError
+    from dryfriction.fmi.fmi2 import FMUError
 
     with pytest.raises(FMUError, match="variable h") as e:
         fmu.start(Oscillator(), Settings(h=h))

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 from dryfriction.params import Oscillator
 from dryfriction.studies import main, run_study
 from dryfriction.sweep import BatchRunner, PARAM_COLUMNS, SweepInterrupted, nondim_table, read_netcdf
@@ -99,7 +99,7 @@ def test_fig3_dataset_is_the_fmus_steady_state_and_the_references(tmp_path: Path
     """The study's plumbing: each amplitude is the one OscillatorFMU.observables gives for the
     same run, and the reference columns are steady.py's formulas. (The FMU against Den Hartog and
     Inman themselves: test_schemes.py.)"""
-    from dryfriction.steady import den_hartog_amplitude, inman_amplitude
+    from dryfriction.references.steady import den_hartog_amplitude, inman_amplitude
 
     out, res = run("fig3", tmp_path, fmu_path)
     ds = read_netcdf(out / "fig3.nc")
@@ -331,7 +331,7 @@ def test_studies_run_through_the_module_entry_point(tmp_path: Path, fmu_path: Pa
 
 @pytest.fixture(scope="module")
 def chain_fmu3() -> Path:
-    from dryfriction.chain import default_chain_fmu3
+    from dryfriction.drivers.chain import default_chain_fmu3
 
     path = default_chain_fmu3()
     if not path.is_file():
@@ -342,7 +342,7 @@ def chain_fmu3() -> Path:
 def test_chain2_quick(tmp_path: Path, chain_fmu3: Path) -> None:
     """Two blocks, the first forced: the frictionless first block of the 'second' configuration
     never sticks; a row of the dataset is a direct run of the chain; the far block sticks more."""
-    from dryfriction.chain import ChainFMU
+    from dryfriction.drivers.chain import ChainFMU
     from dryfriction.studies.chain2 import chain_params
 
     out, res = run("chain2", tmp_path, chain_fmu3)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.belt_reference import Belt, hopf_belt_speed, simulate
+from dryfriction.references.belt import Belt, hopf_belt_speed, simulate
 from dryfriction.studies import effective_config, run_study
 from dryfriction.studies.config import ConfigError
 from dryfriction.sweep import read_netcdf

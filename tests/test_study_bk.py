@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.belt_reference import limit_cycle
-from dryfriction.slip_events import EventDetector, detect_events, slip_cells
+from dryfriction.references.belt import limit_cycle
+from dryfriction.analysis.slip_events import EventDetector, detect_events, slip_cells
 from dryfriction.studies import effective_config, main, run_study
 from dryfriction.studies import burridge_knopoff as bk
 from dryfriction.studies.config import ConfigError
@@ -142,7 +142,7 @@ def test_moments_are_slip_sums_and_the_chain_keeps_up_with_the_plate(chain_fmu3:
     cfg["run"].update(t_transient=0.0, t_record=200.0, dt=0.1, segment=50.0)
     m, r, d, num = cfg["model"], cfg["run"], cfg["detect"], cfg["numerics"]
     res = bk.simulate(chain_fmu3, m, r, d, num)
-    from dryfriction.chain import ChainFMU3
+    from dryfriction.drivers.chain import ChainFMU3
     with ChainFMU3(n=24, fmu_path=chain_fmu3) as chain:
         run = chain.run(r["t_record"], r["dt"], bk.chain_params(m, num, r["dt"]), inputs={"v_belt": -nu})
     ev = detect_events(run.t, run.x, run.v, -nu, d["v_threshold"], d["d_threshold"])
@@ -205,7 +205,7 @@ def test_bad_values_and_a_missing_friction_law_are_refused(capsys: pytest.Captur
     assert "model.chi (mu_k / mu_s) must be in [0, 1)" in capsys.readouterr().err
     assert main(["burridge_knopoff", "--quick", "--set", "numerics.scheme=paper"]) == 2
     assert "paper scheme has no belt" in capsys.readouterr().err
-    from dryfriction.chain import ARRAY_PARAMS, SCALAR_PARAMS
+    from dryfriction.drivers.chain import ARRAY_PARAMS, SCALAR_PARAMS
     if "friction_law" not in ARRAY_PARAMS + SCALAR_PARAMS:
         cfg = _cfg(friction_law="stribeck")
         with pytest.raises(ConfigError, match="friction_law = stribeck needs a chain FMU with the Stribeck law"):

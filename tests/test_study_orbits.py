@@ -28,7 +28,7 @@ import pytest
 import xarray as xr
 
 from dryfriction.params import Oscillator
-from dryfriction.steady import den_hartog_amplitude
+from dryfriction.references.steady import den_hartog_amplitude
 from dryfriction.studies import run_study
 from dryfriction.studies.common import K_REF, M_REF, MU_S_REF, P0_REF
 from dryfriction.sweep import read_netcdf

@@ -15,7 +15,7 @@ import pytest
 from dryfriction.budget import DEFAULT_MAX_WORK, EXACT_PERIOD_STEPS, WorkBoundError, check_writable
 from dryfriction.cli import main
 from dryfriction.params import Oscillator
-from dryfriction.response import MAX_PERIODS, ORBIT_FREQUENCY_STEPS, frequency_response, response_work
+from dryfriction.analysis.response import MAX_PERIODS, ORBIT_FREQUENCY_STEPS, frequency_response, response_work
 from dryfriction.budget import SAMPLE_STEPS
 from dryfriction.studies import STUDIES, effective_config, run_study, study_work
 from dryfriction.sweep import SweepSpec, nondim_table
@@ -106,7 +106,7 @@ def test_every_command_refuses_work_above_max_work(argv: list[str], capsys: pyte
 
 def test_run_work_is_its_steps() -> None:
     from dryfriction.budget import command_work
-    from dryfriction.cli import build_parser
+    from dryfriction.cli.main import build_parser
 
     args = build_parser().parse_args(["run", "--periods", "30", "--steps-per-period", "1000"])
     assert command_work(args)[0] == 31 * 1000        # the periods, one more for the observed window

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from dryfriction import DryFrictionWarning, Oscillator
-from dryfriction.fmu import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU, Settings
 
 
 # the default oscillator (m = 1 kg, k = 100 N/m, omega = 5 rad/s): its shortest period is the natural one
@@ -50,8 +50,8 @@ def test_the_error_filter_turns_the_warning_into_an_exception(fmu: OscillatorFMU
 
 
 def test_fmi3_and_chain_warnings_are_the_same_category(chain_fmu2: Path, chain_fmu3: Path) -> None:
-    from dryfriction.chain import ChainFMU, ChainFMU2
-    from dryfriction.fmi3 import FMI3Oscillator
+    from dryfriction.drivers.chain import ChainFMU, ChainFMU2
+    from dryfriction.drivers.oscillator3 import FMI3Oscillator
 
     with pytest.warns(DryFrictionWarning, match="internal steps per 0.628319 s"):
         FMI3Oscillator({"h": T_NAT / 2}).close()
@@ -64,7 +64,7 @@ def test_fmi3_and_chain_warnings_are_the_same_category(chain_fmu2: Path, chain_f
 
 @pytest.mark.slow
 def test_warnings_on_dask_workers_reach_the_client(fmu_path: Path) -> None:
-    from dryfriction.response import frequency_response
+    from dryfriction.analysis.response import frequency_response
 
     p = Oscillator.physical(m=1, k=100, P0=1, f=1, N=0.5, mu_s=0.3)
     with pytest.warns(DryFrictionWarning) as caught:

@@ -9,6 +9,10 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
+from . import _compat
+
+_compat.install()   # the former module paths (dryfriction.fmu, ...): deprecated aliases
+
 __all__ = ["Oscillator", "DryFrictionWarning", "FMUError", "FMUCallError", "FMUFileError"]
 __version__ = "0.2.0"
 

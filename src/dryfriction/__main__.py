@@ -1,5 +1,5 @@
-"""python -m dryfriction: the command line (dryfriction.console, then dryfriction.cli)."""
+"""python -m dryfriction: the command line (:func:`dryfriction.cli.main`)."""
 
-from .console import main
+from .cli import main
 
 main()

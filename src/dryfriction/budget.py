@@ -1,6 +1,6 @@
 """Work and memory bounded before a computation starts.
 
-Every command (and :func:`dryfriction.response.frequency_response`) estimates, from its arguments
+Every command (and :func:`dryfriction.analysis.response.frequency_response`) estimates, from its arguments
 alone, the work it is about to do and the memory it will hold, and refuses with one line naming the
 option and the limit what would exceed the bound, unless the user raises it (``--max-work`` on the
 command line, ``max_work=`` in the API).
@@ -9,7 +9,7 @@ command line, ``max_work=`` in the API).
 ns of one core, measured on the 2-core development machine). An excitation period of the exact
 scheme (closed form from event to event, about 0.7 microseconds) counts as
 :data:`EXACT_PERIOD_STEPS` steps, a frequency of the orbit method as its measured cost
-(:data:`dryfriction.response.ORBIT_FREQUENCY_STEPS`), a sampled point of a trajectory as
+(:data:`dryfriction.analysis.response.ORBIT_FREQUENCY_STEPS`), a sampled point of a trajectory as
 :data:`SAMPLE_STEPS`, and a step of the chain once per block. The estimate is an upper bound
 where the computation has one (the transient method's period limit, a sweep's stop times), else
 the typical count (the orbit method's Newton iterations).
@@ -33,7 +33,7 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .argparsing import UsageError
+from .errors import UsageError
 
 __all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "SAMPLE_STEPS",
            "check_work", "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
@@ -163,7 +163,7 @@ def check_memory(nbytes: float, what: str, option: str) -> float:
 def add_max_work_argument(p: object, default: object = None) -> None:
     """``--max-work STEPS`` on a command's parser (``default``: argparse.SUPPRESS on subcommands
     that share it with the main parser)."""
-    from .argparsing import number
+    from .cli.options import number
 
     p.add_argument("--max-work", type=number("--max-work", 0.0, True), default=default, metavar="STEPS",  # type: ignore[attr-defined]
                    help=f"refuse work estimated above STEPS internal steps (default {DEFAULT_MAX_WORK:.0e}; "
@@ -172,11 +172,11 @@ def add_max_work_argument(p: object, default: object = None) -> None:
 
 def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "",
                    option: str = "--out") -> Path:
-    """Before the work: ``folder`` can take a result set (:func:`dryfriction.console.check_output_folder`:
+    """Before the work: ``folder`` can take a result set (:func:`dryfriction.cli.console.check_output_folder`:
     a probe created and removed where the set will be staged; nothing is left behind, no folder
     created), and its file system has room for ``nbytes`` (with a margin); a :class:`UsageError`
     naming ``option``, the folder and the cause otherwise."""
-    from .console import check_output_folder, nearest_existing
+    from .cli.console import check_output_folder, nearest_existing
 
     d = check_output_folder(folder, option)
     if nbytes > 0:
@@ -202,7 +202,7 @@ def command_work(args: object) -> tuple[float, str] | None:
     g = lambda name, default=None: getattr(a, name, default) if getattr(a, name, None) is not None else default  # noqa: E731
     if cmd == "response":
         from .params import Oscillator
-        from .response import response_work
+        from .analysis.response import response_work
 
         num = int(g("num", 41))
         method = g("method") or ("orbit" if g("scheme") in (None, "exact") else "transient")
@@ -218,7 +218,7 @@ def command_work(args: object) -> tuple[float, str] | None:
         periods = 2.0 * (int(g("periods", 500)) + int(g("transient", 100)))
         return periods * spp, f"2 runs x {fmt(periods / 2)} periods x {fmt(spp)} steps"
     if cmd == "orbit":
-        from .orbits import DEFAULT_SPREAD
+        from .analysis.orbits import DEFAULT_SPREAD
 
         n = len(DEFAULT_SPREAD)
         periods = n * (int(g("transients", 60)) + 10) * int(g("period", 1))

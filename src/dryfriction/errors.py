@@ -5,7 +5,7 @@
     |                          the message is the sentence the FMU logged (it names the variable of a bad value)
     |                          ChainError: the same class, the name the chain drivers used to raise
     +-- FMUFileError           an FMU file that cannot be used (missing, not a zip, another model or FMI version);
-                               also a :class:`~dryfriction.argparsing.UsageError` (a ValueError): one line, exit 2
+                               also a :class:`UsageError` (a ValueError): one line, exit 2
 
 An error of fmpy (still the reader of FMU archives) is translated into one of these where fmpy is
 called. The command line reports every FMUError as one line with exit status 2.
@@ -13,12 +13,14 @@ called. The command line reports every FMUError as one line with exit status 2.
 
 from __future__ import annotations
 
-from .argparsing import UsageError
-
-__all__ = ["FMUError", "FMUCallError", "FMUFileError", "ChainError", "status_name"]
+__all__ = ["UsageError", "FMUError", "FMUCallError", "FMUFileError", "ChainError", "status_name"]
 
 _FMI2_STATUS = ("fmi2OK", "fmi2Warning", "fmi2Discard", "fmi2Error", "fmi2Fatal", "fmi2Pending")
 _FMI3_STATUS = ("fmi3OK", "fmi3Warning", "fmi3Discard", "fmi3Error", "fmi3Fatal")
+
+
+class UsageError(ValueError):
+    """An invalid argument or configuration value: reported as one line, exit status 2."""
 
 
 def status_name(status: int, function: str | None = None) -> str:
@@ -54,7 +56,7 @@ ChainError = FMUCallError
 
 class FMUFileError(FMUError, UsageError):
     """An FMU path that cannot be used: missing, not a zip archive, no model description, another
-    model or another FMI version. A ValueError (a :class:`~dryfriction.argparsing.UsageError`): the
+    model or another FMI version. A ValueError (a :class:`UsageError`): the
     command line reports it as one line with exit status 2."""
 
     def __init__(self, message: str) -> None:

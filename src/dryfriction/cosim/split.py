@@ -17,7 +17,7 @@ from .coupling import SpringDamper
 __all__ = ["split_chain", "split_chain2", "CHAIN_BLOCK_FIELDS"]
 
 #: the per-block fields of the chain that are the oscillator's fields of the same name, with the
-#: chain's defaults (dryfriction.chain_reference.Chain.make)
+#: chain's defaults (dryfriction.references.chain.Chain.make)
 CHAIN_BLOCK_FIELDS = {"m": 1.0, "P0": 0.0, "phi": 0.0, "N": 0.8, "mu_s": 0.5, "chi": 0.7, "x0": 0.0, "v0": 0.0}
 
 

@@ -27,7 +27,7 @@ from typing import Any
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
 from .. import paths
-from ..argparsing import make_parser, path_arg
+from ..cli.options import make_parser, path_arg
 from ..atomic import atomic_write_text
 from ..budget import Estimate, add_max_work_argument
 from .config import ConfigError, build_config, config_dir, load_toml
@@ -277,8 +277,8 @@ def _list() -> str:
 def main(argv: Sequence[str] | None = None, prog: str = "dryfriction study") -> int:
     """``study <name> [options]``; returns the exit status (0 ok, 1 failed, 2 bad input or an error
     the FMU reports, 3 stopped, 130 interrupted). Errors are one line ``dryfriction: error: ...``
-    (:func:`dryfriction.console.guarded`), as from ``dryfriction study``."""
-    from ..console import guarded
+    (:func:`dryfriction.cli.console.guarded`), as from ``dryfriction study``."""
+    from ..cli.console import guarded
 
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] in ("-h", "--help"):
@@ -300,7 +300,7 @@ def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
     command in its help only. Bad input raises UsageError (one line, exit 2, reported by the
     caller: :func:`main`, ``dryfriction study``); an interrupt is KeyboardInterrupt (finished
     chunks are kept)."""
-    from ..console import PREFIX, interrupt_note, interrupted
+    from ..cli.console import PREFIX, interrupt_note, interrupted
     from ..errors import FMUError
     from ..sweep.engine import SweepInterrupted
 

@@ -2,7 +2,7 @@
 continuations collected into one dataset, the bifurcation table (csv, json), and a sweep whose
 chunks are shared with the study it draws over.
 
-The branches come from :func:`dryfriction.continuation.continue_orbits` (docs/orbits.md); lengths
+The branches come from :func:`dryfriction.analysis.continuation.continue_orbits` (docs/orbits.md); lengths
 are written in the paper's z = k x / P0 (static deflections) as the scatter is.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from ..atomic import atomic_write_text
-from ..continuation import Continuation, continue_orbits
+from ..analysis.continuation import Continuation, continue_orbits
 from ..sweep import SweepSpec
 from .common import K_REF, P0_REF, StudyContext, oscillator
 from .config import require

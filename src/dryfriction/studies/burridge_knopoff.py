@@ -2,7 +2,7 @@
 coupled by springs k_c, each pulled by a leaf spring k_p to a driver plate that moves at v_p, on
 velocity-weakening friction. Run in the plate's frame by the FMI 3.0 chain: site springs k_site =
 k_p to the frame, every belt at -v_p. A long run (the first loading cycles dropped) sampled at
-communication points; slip events found in space and time (:mod:`dryfriction.slip_events`); their
+communication points; slip events found in space and time (:mod:`dryfriction.analysis.slip_events`); their
 moments' distribution per unit time, the event rate and the small events' power law. See
 docs/burridge_knopoff.md and configs/burridge_knopoff.toml."""
 
@@ -19,8 +19,8 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..chain import ARRAY_PARAMS, SCALAR_PARAMS, ChainFMU3, default_chain_fmu3
-from ..slip_events import EventDetector, SlipEvents
+from ..drivers.chain import ARRAY_PARAMS, SCALAR_PARAMS, ChainFMU3, default_chain_fmu3
+from ..analysis.slip_events import EventDetector, SlipEvents
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
 

@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..chain import ChainFMU, default_chain_fmu3
+from ..drivers.chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt, trajectory_estimate
 from .config import grid, require
@@ -89,7 +89,7 @@ def rows_task(fmu: str | bytes, ch: Mapping[str, Any], window: Mapping[str, Any]
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
-    from ..chaos.batch import concat, map_chunks
+    from ..analysis.chaos.batch import concat, map_chunks
 
     cfg = ctx.cfg
     ch, sw, w, num = cfg["chain"], cfg["sweep"], cfg["window"], cfg["numerics"]

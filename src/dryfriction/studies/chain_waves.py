@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..chain import ChainFMU, default_chain_fmu3
+from ..drivers.chain import ChainFMU, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
@@ -92,7 +92,7 @@ def front_speed(first: np.ndarray) -> float:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
-    from ..chaos.batch import map_chunks
+    from ..analysis.chaos.batch import map_chunks
 
     cfg = ctx.cfg
     ch, w, num = cfg["chain"], cfg["window"], cfg["numerics"]

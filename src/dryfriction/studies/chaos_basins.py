@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..chaos.attractors import Catalogue
-from ..chaos.batch import concat, map_chunks, orbit_tails
-from ..chaos.maps import scheme_label
+from ..analysis.chaos.attractors import Catalogue
+from ..analysis.chaos.batch import concat, map_chunks, orbit_tails
+from ..analysis.chaos.maps import scheme_label
 from .common import FIGURE_BYTES, Estimate, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
 

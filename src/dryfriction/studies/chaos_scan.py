@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..chaos.attractors import Catalogue, period_of
-from ..chaos.batch import concat, lyapunov_rows, map_chunks, orbit_tails
-from ..chaos.lyapunov import benettin
-from ..chaos.maps import ExactMap, FMUMap, NDParams, scheme_label
+from ..analysis.chaos.attractors import Catalogue, period_of
+from ..analysis.chaos.batch import concat, lyapunov_rows, map_chunks, orbit_tails
+from ..analysis.chaos.lyapunov import benettin
+from ..analysis.chaos.maps import ExactMap, FMUMap, NDParams, scheme_label
 from ..budget import EXACT_PERIOD_STEPS
 from .common import Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
@@ -204,7 +204,7 @@ def run(ctx: StudyContext) -> dict[str, Any]:
         ds["refine_period"] = (("chi_refine", "ic"), ref["period"])
     er = np.array(exact_rows)
     ds = ds.assign_coords(chi_check=er[:, 0])
-    ds["check_exact_lyapunov"] = (("chi_check",), er[:, 1], {"long_name": "exponent / period from dryfriction.exact, from (0, 0)"})
+    ds["check_exact_lyapunov"] = (("chi_check",), er[:, 1], {"long_name": "exponent / period from dryfriction.references.exact, from (0, 0)"})
     ds["check_exact_stderr"] = (("chi_check",), er[:, 2])
     ds["check_fmu_lyapunov"] = (("chi_check",), er[:, 3], {"long_name": "exponent / period from the FMU, same start"})
     ds["check_fmu_stderr"] = (("chi_check",), er[:, 4])

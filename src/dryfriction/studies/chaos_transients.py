@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..chaos.batch import concat, map_chunks, transient_rows
-from ..chaos.maps import scheme_label
+from ..analysis.chaos.batch import concat, map_chunks, transient_rows
+from ..analysis.chaos.maps import scheme_label
 from .common import FIGURE_BYTES, Estimate, StudyContext, check_numerics, check_params, plt, trajectory_estimate
 from .config import grid, require
 

@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from .. import model  # noqa: E402
-from ..fmu import OscillatorFMU, Settings  # noqa: E402
+from ..drivers.oscillator import OscillatorFMU, Settings  # noqa: E402
 from ..params import Oscillator  # noqa: E402
 from ..atomic import atomic_path  # noqa: E402
 from ..budget import SAMPLE_STEPS, Estimate, fmt, period_steps  # noqa: E402

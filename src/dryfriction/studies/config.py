@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..argparsing import UsageError
+from ..errors import UsageError
 
 __all__ = [
     "ConfigError",

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..continuation import Continuation
+from ..analysis.continuation import Continuation
 from . import fig10_11_frequency_chi as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \
     write_bifurcations

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..fmu import Settings
+from ..drivers.oscillator import Settings
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
                      oscillator, plt, trajectory_estimate)
 from .config import require

@@ -1,7 +1,7 @@
 """Fig. 2: the FMU against the exact piecewise solution over the first excitation cycle.
 
 z, z' and z'' of the FMU (Bossak-Newmark + LCP, sampled at the communication points) and of the
-exact stitching solution (``dryfriction.exact``) at the same times, from rest, over one cycle of
+exact stitching solution (``dryfriction.references.exact``) at the same times, from rest, over one cycle of
 forward slip, stick and backward slip. The dataset keeps both and the errors.
 """
 
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..exact import solve_exact
+from ..references.exact import solve_exact
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, ensure, nondim_trajectory,
                      oscillator, plt, trajectory_estimate)
 from .config import require

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..steady import den_hartog_amplitude, inman_amplitude
+from ..references.steady import den_hartog_amplitude, inman_amplitude
 from ..sweep import SweepSpec, observables_dataset
 from .common import (Estimate, FIGURE_BYTES, StudyContext, check_numerics, check_params, check_window, ensure,
                      oscillator, plt, sweep_estimate, sweep_settings, table)

@@ -1,6 +1,6 @@
 """The Fig. 8/9 band solved: branches of periodic orbits in chi (stable solid, unstable dashed) over
 the brute-force scatter of fig8_9, with the symmetry breaking, the period doubling, the grazings
-and any fold located by the continuation (dryfriction.continuation) and set against the brute-force
+and any fold located by the continuation (dryfriction.analysis.continuation) and set against the brute-force
 numbers.
 
 The scatter is the fig8_9 study's own sweep (its config, its chunks when it has run). The
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import continuation_work
-from ..continuation_cli import plot_branches
+from ..cli.continuation import plot_branches
 from ..sweep import SweepSpec, observables_dataset
 from . import fig8_9_bifurcation as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \

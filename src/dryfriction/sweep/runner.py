@@ -3,7 +3,7 @@
 Every run goes through the FMU's own FMI 2.0 functions (fmi2Reset, fmi2SetupExperiment,
 fmi2SetReal/Integer/Boolean, fmi2Enter/ExitInitializationMode, one fmi2DoStep to the stop time,
 fmi2GetReal/Integer of the in-FMU observables), called through the package's one FMI layer
-(:mod:`dryfriction.fmi.fmi2`, the instance of an :class:`~dryfriction.fmu.OscillatorFMU2`): each run
+(:mod:`dryfriction.fmi.fmi2`, the instance of an :class:`~dryfriction.drivers.oscillator.OscillatorFMU2`): each run
 passes rows of pre-built numpy arrays by address instead of building ctypes arrays, about 10
 microseconds of Python per run (see ``bench/host_overhead.py``), and every status is checked.
 
@@ -27,7 +27,7 @@ import numpy as np
 from .. import model
 from ..atomic import atomic_write_bytes
 from ..errors import FMUError
-from ..fmu import OscillatorFMU
+from ..drivers.oscillator import OscillatorFMU
 
 __all__ = [
     "PARAM_COLUMNS",

@@ -1,0 +1,933 @@
+"""Continuation of periodic orbits in a parameter, with their bifurcations (issue 22, item 2;
+docs/orbits.md, "Continuation and bifurcations").
+
+Pseudo-arclength continuation of the fixed points of the exact stroboscopic map (dryfriction.analysis.orbits)
+in one oscillator parameter p. Unknowns u = (y, q): y = S^-1 z the state at a section time (scaled
+as find_orbits scales it, S = diag(x_s, x_s w) of the branch's first oscillator), q = (p - p_a) / p_s
+the parameter (p_a the start, p_s = max(|p_a|, |p_b|, |p_b - p_a|)). Residual G(y, q) = S^-1 (M(S y; p)
+- S y) with M the map of the branch:
+
+- ``P^K``: K excitation periods from the section time t_s (``kind = "full"``);
+- ``H = -P^{1/2}`` for an orbit invariant under the system's symmetry (x, v)(t) -> -(x, v)(t + T/2)
+  (``kind = "symmetric"``, K = 1): P = H o H, its fixed points are the symmetric orbits; a
+  multiplier of H through -1 is the symmetry-breaking pitchfork (P's multiplier through +1 without a
+  fold of the symmetric branch), through +1 a fold of the symmetric branch.
+
+dG/dy is the FMU's exact Jacobian (``sensitivity = true``); dG/dq is a central finite difference
+(step ``fd_step`` in q). The section time is a fixed share of the map's span (so it moves with
+omega): ``t_s = phase * span``; when a stick phase comes near it (within ``SECTION_MARGIN`` of the
+span) it is chosen again at the middle of the longest slide, as find_orbits does.
+
+Predictor u + ds t (t the unit tangent, the null vector of [G_y | G_q]); corrector: Newton on
+[G(u); t . (u - u_prev) - ds]. Step control: halve on a failed corrector or a turn of the tangent by
+more than ``max_turn`` radians, grow by 1.5 after a corrector of at most 3 steps, within [ds_min,
+ds_max].
+
+Bifurcations, located between two branch points by Illinois regula falsi (bisection for grazing) on
+the arclength s of the step, each trial point corrected with the step's constraint, to ``ptol`` in
+the parameter; the orbit at the located parameter is the corrector's solution there:
+
+- fold: det(J - I) changes sign (J the Jacobian of the branch's map) and so does dp/ds;
+- period doubling: det(J_P + I) changes sign (J_P of P^K); then the doubled branch is continued
+  (period 2K, from the located orbit along the -1 eigenvector);
+- symmetry breaking (symmetric branches): det(J_H + I) changes sign; then both asymmetric branches
+  are continued (period 1, along the eigenvector);
+- grazing: the orbit's events per cycle change (the FMU's count of mode changes, ``transitions``, or
+  whether it sticks at all, stick_fraction > 0).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..drivers.oscillator import OscillatorFMU2, Settings
+from .orbits import JACOBIAN, STABILITY_MARGIN, Orbit, _Map, _multipliers, _slide_section, find_orbits, scales
+from ..params import Oscillator
+
+__all__ = ["Bifurcation", "Branch", "Continuation", "continue_orbits", "PARAMETERS", "set_parameter",
+           "get_parameter"]
+
+#: a stick phase nearer to the section than this share of the map's span: choose the section again
+SECTION_MARGIN = 0.03
+#: an orbit is symmetric when |H(z) - z| (scaled, relative) is at most this
+SYMMETRIC = 1e-8
+#: past a corner of the branch the new point must lie within this many steps of the last one (else
+#: the corrector went off to another branch)
+KINK_REACH = 3.0
+#: corrector steps allowed at the trial points of a location
+LOCATE_ITERATIONS = 60
+BIFURCATION_TYPES = ("fold", "period_doubling", "symmetry_breaking", "grazing")
+
+# ---- the parameters -----------------------------------------------------------------------------
+
+
+def _lam(p: Oscillator, v: float) -> Oscillator:
+    if not p.k > 0:
+        raise ValueError("lam = omega / w0 needs a spring (k > 0)")
+    return p.with_(omega=v * p.w0)
+
+
+def _zeta(p: Oscillator, v: float) -> Oscillator:
+    return p.with_(c=2.0 * v * math.sqrt(p.k * p.m))
+
+
+def _mu_k(p: Oscillator, v: float) -> Oscillator:
+    if not p.mu_s > 0:
+        raise ValueError("mu_k is chi mu_s: it needs mu_s > 0")
+    return p.with_(chi=v / p.mu_s)
+
+
+def _mu_s_sigma(p: Oscillator, v: float) -> Oscillator:
+    if not (p.mu_s > 0 and p.P0 != 0):
+        raise ValueError("mu_s_sigma = mu_s N / P0 needs mu_s > 0 and P0 != 0")
+    return p.with_(N=v * abs(p.P0) / p.mu_s)
+
+
+#: every parameter a branch can be continued in: name -> (description with unit, setter); the fields
+#: of Oscillator set directly, the others through the field they define (the rest held fixed)
+PARAMETERS: dict[str, tuple[str, Callable[[Oscillator, float], Oscillator]]] = {
+    **{n: (d, (lambda n: lambda p, v: p.with_(**{n: v}))(n)) for n, d in (
+        ("m", "mass, kg"), ("k", "stiffness, N/m"), ("c", "viscous damping, N s/m"),
+        ("P0", "excitation amplitude, N"), ("omega", "excitation frequency, rad/s"), ("phi", "phase, rad"),
+        ("N", "normal force, N"), ("mu_s", "static friction coefficient (mu_k = chi mu_s follows)"),
+        ("chi", "mu_k / mu_s"))},
+    "f": ("excitation frequency, Hz (omega = 2 pi f)", lambda p, v: p.with_(omega=2.0 * math.pi * v)),
+    "lam": ("frequency ratio omega / w0 (omega set, k and m fixed)", _lam),
+    "zeta": ("damping ratio (c = 2 zeta sqrt(k m))", _zeta),
+    "mu_k": ("kinetic friction coefficient (chi = mu_k / mu_s)", _mu_k),
+    "mu_s_sigma": ("mu_s N / |P0| (N set)", _mu_s_sigma),
+    "sigma": ("N / |P0| (N set)", lambda p, v: p.with_(N=v * abs(p.P0))),
+}
+
+
+def set_parameter(p: Oscillator, name: str, value: float) -> Oscillator:
+    """p with the parameter ``name`` (a key of PARAMETERS) set to ``value`` (checked: the error names
+    the field and its valid range)."""
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown continuation parameter {name!r}; valid: {', '.join(PARAMETERS)}")
+    return PARAMETERS[name][1](p, float(value))
+
+
+def get_parameter(p: Oscillator, name: str) -> float:
+    if name == "f":
+        return p.f_hz
+    if name == "mu_s_sigma":
+        return p.mu_s * p.N / abs(p.P0)
+    return float(getattr(p, name))
+
+
+# ---- results ------------------------------------------------------------------------------------
+
+
+@dataclass
+class Bifurcation:
+    """A located bifurcation: ``type`` in BIFURCATION_TYPES, at ``param``, on the orbit (x0, v0) at
+    t = 0 mod K T of the branch ``branch``."""
+
+    type: str
+    param: float
+    period: int
+    x0: float
+    v0: float
+    multipliers: np.ndarray          # of P^K at the located orbit (|mu| descending)
+    branch: int
+    bracket: tuple[float, float]     # the parameters of the last bracket of the location
+    test: float                      # the test function at the located point (0 at a smooth one)
+    note: str = ""                   # e.g. which events changed, or "non-smooth: the multiplier jumps"
+    children: list[int] = field(default_factory=list)   # branches started here (doubled, asymmetric)
+    events: tuple[tuple[int, bool], tuple[int, bool]] | None = None   # grazing: (transitions, sticks) before/after
+    half_multipliers: np.ndarray | None = None           # of H on a symmetric branch
+    amplitude_m: float = math.nan                         # of the located orbit, m
+    offset_m: float = math.nan
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"type": self.type, "param": self.param, "period": self.period, "x0": self.x0, "v0": self.v0,
+                "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
+                "branch": self.branch, "bracket": list(self.bracket), "test": self.test, "note": self.note,
+                "children": list(self.children), "amplitude_m": self.amplitude_m, "offset_m": self.offset_m}
+
+
+@dataclass
+class Branch:
+    id: int
+    period: int
+    kind: str                        # "full" (P^K) or "symmetric" (H = -P^{1/2})
+    parent: int | None
+    points: int = 0
+    stopped: str = ""                # why the continuation of this branch ended
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"id": self.id, "period": self.period, "kind": self.kind, "parent": self.parent,
+                "points": self.points, "stopped": self.stopped}
+
+
+@dataclass
+class Continuation:
+    param: str
+    dataset: xr.Dataset
+    bifurcations: list[Bifurcation]
+    branches: list[Branch]
+    evaluations: int                 # runs of the map (each one FMU doStep over the map's span)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"param": self.param, "branches": [b.as_dict() for b in self.branches],
+                "bifurcations": [b.as_dict() for b in self.bifurcations]}
+
+
+# ---- the branch's map ---------------------------------------------------------------------------
+
+
+@dataclass
+class _Eval:
+    """The map at u: residual G, G_y, G_q (NaN when not asked), the map's Jacobian J (raw, in z)."""
+
+    u: np.ndarray
+    p: Oscillator
+    G: np.ndarray
+    Gy: np.ndarray
+    Gq: np.ndarray
+    J: np.ndarray
+    mode: int
+
+    def residual(self) -> float:
+        return float(np.max(np.abs(self.G)) / max(1.0, float(np.max(np.abs(self.u[:2])))))
+
+    def tangent(self) -> np.ndarray:
+        A = np.hstack([self.Gy, self.Gq[:, None]])
+        t = np.cross(A[0], A[1])
+        n = float(np.linalg.norm(t))
+        return t / n if n > 0 else t
+
+
+class _BranchMap:
+    def __init__(self, fmu: OscillatorFMU2, base: Oscillator, name: str, p_a: float, p_s: float,
+                 K: int, kind: str, phase: float, xs: float, w: float, fd_step: float,
+                 counter: list[int]) -> None:
+        self.counter = counter      # shared count of map runs
+        self.fmu, self.base, self.name, self.p_a, self.p_s = fmu, base, name, p_a, p_s
+        self.K, self.kind, self.phase, self.fd = K, kind, phase, fd_step
+        self.S = np.array([xs, xs * w])
+        self.settings = Settings(scheme="exact", extra={"sensitivity": True})
+
+    def param(self, q: float) -> float:
+        return self.p_a + q * self.p_s
+
+    def osc(self, q: float) -> Oscillator:
+        return set_parameter(self.base, self.name, self.param(q))
+
+    def span(self, p: Oscillator) -> float:
+        return p.period / 2.0 if self.kind == "symmetric" else self.K * p.period
+
+    def t_s(self, p: Oscillator) -> float:
+        return self.phase * self.span(p)
+
+    def raw(self, z: np.ndarray, p: Oscillator) -> tuple[np.ndarray, np.ndarray, int]:
+        t_s = self.t_s(p)
+        f = self.fmu
+        f.start(p.with_(x0=float(z[0]), v0=float(z[1])), self.settings, t0=t_s)
+        f.step_to(t_s + self.span(p))
+        out = f.get(("x", "v", "mode") + JACOBIAN)
+        self.counter[0] += 1
+        J = np.array([out[n] for n in JACOBIAN], dtype=float).reshape(2, 2)
+        Mz = np.array([out["x"], out["v"]])
+        if self.kind == "symmetric":
+            return -Mz, -J, int(out["mode"])
+        return Mz, J, int(out["mode"])
+
+    def G(self, u: np.ndarray, p: Oscillator) -> tuple[np.ndarray, np.ndarray, int]:
+        z = self.S * u[:2]
+        Mz, J, md = self.raw(z, p)
+        return (Mz - z) / self.S, J, md
+
+    def eval(self, u: np.ndarray, derivative: bool = True) -> _Eval:
+        p = self.osc(float(u[2]))
+        G, J, md = self.G(u, p)
+        Gy = (J - np.eye(2)) * self.S[None, :] / self.S[:, None]
+        e = _Eval(np.array(u, dtype=float), p, G, Gy, np.full(2, np.nan), J, md)
+        if derivative:
+            self.derivative(e)
+        return e
+
+    def derivative(self, e: _Eval) -> None:
+        """e.Gq by a central difference in q (one-sided at the edge of the parameter's valid range)."""
+        h, u = self.fd, e.u
+        side: list[np.ndarray | None] = []
+        for sgn in (1.0, -1.0):
+            try:
+                side.append(self.G(u, self.osc(float(u[2]) + sgn * h))[0])
+            except ValueError:
+                side.append(None)
+        Gp, Gm = side
+        if Gp is not None and Gm is not None:
+            e.Gq = (Gp - Gm) / (2.0 * h)
+        elif Gp is not None:
+            e.Gq = (Gp - e.G) / h
+        elif Gm is not None:
+            e.Gq = (e.G - Gm) / h
+        else:
+            raise ValueError(f"{self.name} cannot be varied by {h * self.p_s:g} either way")
+
+    def full_jacobian(self, J: np.ndarray) -> np.ndarray:
+        """The Jacobian of P^K from that of the branch's map (P = H o H on a symmetric branch)."""
+        return J @ J if self.kind == "symmetric" else J
+
+
+@dataclass
+class _Point:
+    e: _Eval
+    t: np.ndarray                    # unit tangent
+    s: float                         # arclength from the branch's start
+    info: dict[str, Any]             # the cycle's observables, multipliers, tests
+
+
+class _Failure(Exception):
+    pass
+
+
+# ---- the continuation ---------------------------------------------------------------------------
+
+
+def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: float, *, period: int = 1,
+                    orbit: Orbit | Sequence[Orbit] | None = None,
+                    guesses: Iterable[Sequence[float]] | None = None,
+                    ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 1.0, max_points: int = 400,
+                    tol: float = 1e-11, ptol: float = 1e-10, max_turn: float = 0.3, fd_step: float = 1e-6,
+                    max_iter: int = 8, switch: bool = True, max_branches: int = 8, symmetric: bool = True,
+                    detect: Sequence[str] = BIFURCATION_TYPES,
+                    fmu: OscillatorFMU2 | None = None,
+                    progress: Callable[[int], None] | None = None) -> Continuation:
+    """Continue the periodic orbits of ``period`` K excitation periods of ``oscillator`` in the
+    parameter ``param`` (a key of :data:`PARAMETERS`) from ``start`` to ``stop`` (module doc).
+
+    The branches start from ``orbit`` (one or more :class:`~dryfriction.analysis.orbits.Orbit` of the
+    oscillator with ``param = start``), else from every orbit find_orbits finds there (from
+    ``guesses``: states at t = 0, and its own). ``ds``, ``ds_min``, ``ds_max``: arclength steps in the
+    scaled unknowns (state in static deflections, parameter over p_s); ``tol``: the corrector's scaled
+    residual; ``ptol``: the location of a bifurcation, relative to max(1, |p|). ``switch``: continue
+    the doubled branch of every period doubling and the two asymmetric branches of every symmetry
+    breaking (at most ``max_branches`` branches in all). ``symmetric``: continue a symmetric
+    period-1 orbit as a fixed point of H = -P^{1/2}. ``progress``: called with the number of points
+    so far. Every DryFrictionWarning the FMU emits reaches the caller."""
+    if param not in PARAMETERS:
+        raise ValueError(f"unknown continuation parameter {param!r}; valid: {', '.join(PARAMETERS)}")
+    for n, v in (("start", start), ("stop", stop)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            raise ValueError(f"{n} must be a finite number, not {v!r}")
+    if start == stop:
+        raise ValueError(f"start and stop must differ (both {start!r})")
+    if not (isinstance(period, int) and period >= 1):
+        raise ValueError(f"period must be an integer >= 1 (excitation periods), not {period!r}")
+    if not (0 < ds_min <= ds <= ds_max):
+        raise ValueError(f"need 0 < ds_min <= ds <= ds_max (ds_min = {ds_min}, ds = {ds}, ds_max = {ds_max})")
+    if not (isinstance(max_points, int) and max_points >= 2):
+        raise ValueError(f"max_points must be an integer >= 2, not {max_points!r}")
+    bad = [d for d in detect if d not in BIFURCATION_TYPES]
+    if bad:
+        raise ValueError(f"unknown bifurcation type(s) {bad}; valid: {', '.join(BIFURCATION_TYPES)}")
+    p0 = set_parameter(oscillator, param, start)
+    set_parameter(oscillator, param, stop)            # both ends valid (the error names the field)
+    own = fmu is None
+    f = OscillatorFMU2() if own else fmu
+    try:
+        if orbit is None:
+            starts = find_orbits(p0, period, guesses, fmu=f)
+            if not starts:
+                raise ValueError(f"no orbit of period {period} found at {param} = {start!r} to continue")
+        else:
+            starts = [orbit] if isinstance(orbit, Orbit) else list(orbit)
+        run = _Run(f, p0, param, float(start), float(stop), ds, ds_min, ds_max, max_points, tol, ptol,
+                   max_turn, fd_step, max_iter, switch, max_branches, symmetric, tuple(detect), progress)
+        for o in starts:
+            if not o.converged:
+                raise ValueError(f"the start orbit did not converge ({o.reason}): nothing to continue")
+            run.queue.append((o, None, None))
+        run.go()
+        return run.result()
+    finally:
+        if own:
+            f.close()
+
+
+class _Run:
+    def __init__(self, fmu: OscillatorFMU2, p0: Oscillator, name: str, start: float, stop: float, ds: float,
+                 ds_min: float, ds_max: float, max_points: int, tol: float, ptol: float, max_turn: float,
+                 fd_step: float, max_iter: int, switch: bool, max_branches: int, symmetric: bool,
+                 detect: tuple[str, ...], progress: Callable[[int], None] | None) -> None:
+        self.fmu, self.p0, self.name, self.start, self.stop = fmu, p0, name, start, stop
+        self.lo, self.hi = min(start, stop), max(start, stop)
+        self.ds0, self.ds_min, self.ds_max, self.max_points = ds, ds_min, ds_max, max_points
+        self.tol, self.ptol, self.max_turn, self.fd, self.max_iter = tol, ptol, max_turn, fd_step, max_iter
+        self.switch, self.max_branches, self.use_symmetry, self.detect = switch, max_branches, symmetric, detect
+        self.progress = progress
+        self.p_s = max(abs(start), abs(stop), abs(stop - start))
+        self.xs, self.w = scales(p0)
+        # (start orbit or None, (map, u, tangent) of a switch or None, parent branch id)
+        self.queue: list[tuple[Orbit | None, tuple[_BranchMap, np.ndarray, np.ndarray] | None, int | None]] = []
+        self.branches: list[Branch] = []
+        self.rows: list[dict[str, Any]] = []
+        self.bifs: list[Bifurcation] = []
+        self.pending: list[tuple[float, _Point, str]] = []   # located orbits of one step, to record
+        self.counter = [0]         # runs of a map (each one FMU doStep over its span)
+        self.evaluations = 0       # other runs (cycles, event counts)
+
+    # -- helpers --
+    def new_map(self, K: int, kind: str, phase: float) -> _BranchMap:
+        return _BranchMap(self.fmu, self.p0, self.name, self.start, self.p_s, K, kind, phase, self.xs, self.w,
+                          self.fd, self.counter)
+
+    def in_range(self, q: float) -> bool:
+        v = self.start + q * self.p_s
+        return self.lo - 1e-12 * self.p_s <= v <= self.hi + 1e-12 * self.p_s
+
+    def correct(self, m: _BranchMap, u: np.ndarray, t: np.ndarray | None, u_prev: np.ndarray | None,
+                ds: float, max_iter: int | None = None) -> tuple[_Eval, int]:
+        """Newton on [G; t . (u - u_prev) - ds] (t None: the parameter fixed). Next to a corner of the
+        branch (an event changes) dG/dq is a mix of both sides: Newton then converges only linearly,
+        so the location of a bifurcation allows more steps."""
+        u = np.array(u, dtype=float)
+        n_max = self.max_iter if max_iter is None else max_iter
+        for it in range(n_max + 1):
+            try:
+                e = m.eval(u, derivative=t is not None)
+                arc = 0.0 if t is None else float(t @ (u - u_prev) - ds)
+                done = e.residual() <= self.tol and abs(arc) <= 1e-13
+                if done and t is None:
+                    m.derivative(e)
+            except ValueError as err:       # the parameter left its valid range
+                raise _Failure(str(err)) from None
+            if not (np.all(np.isfinite(e.J)) and (np.all(np.isfinite(e.Gq)) or t is None)):
+                raise _Failure("the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)")
+            if done:
+                if not np.all(np.isfinite(e.Gq)):
+                    raise _Failure("dG/dparam is not finite")
+                return e, it
+            if it == n_max:
+                break
+            if t is None:
+                A = e.Gy
+                rhs = -e.G
+            else:
+                A = np.vstack([np.hstack([e.Gy, e.Gq[:, None]]), t[None, :]])
+                rhs = -np.concatenate([e.G, [arc]])
+            try:
+                du = np.linalg.solve(A, rhs)
+            except np.linalg.LinAlgError:
+                raise _Failure("singular corrector matrix") from None
+            if t is None:
+                du = np.concatenate([du, [0.0]])
+            if not np.all(np.isfinite(du)) or np.max(np.abs(du)) > 10.0 * max(1.0, float(np.max(np.abs(u[:2])))):
+                raise _Failure("the corrector diverged")
+            u = u + du
+        raise _Failure(f"no convergence in {n_max} corrector steps (residual {e.residual():.3g})")
+
+    def describe(self, m: _BranchMap, e: _Eval) -> dict[str, Any]:
+        """The cycle's observables, multipliers and test functions at a converged point."""
+        p = e.p
+        z = m.S * e.u[:2]
+        t_s = m.t_s(p)
+        cm = _Map(self.fmu, p, m.K)
+        cyc = cm.cycle(z, t_s)
+        self.evaluations += 1
+        KT = m.K * p.period
+        t = cyc["t"]
+        i0 = int(np.argmin(np.abs(t - KT * math.floor((t_s + KT) / KT + 1e-12))))
+        sticks = float(cyc["stick_fraction"]) > 0.0 or bool(np.any(cyc["mode"] == 0))
+        JP = m.full_jacobian(e.J)
+        mu = _multipliers(JP, sticks)
+        info: dict[str, Any] = {
+            "x0": float(cyc["x"][i0]), "v0": float(cyc["v"][i0]),
+            "amplitude": (float(cyc["x_max"]) - float(cyc["x_min"])) / 2.0,
+            "offset": (float(cyc["x_max"]) + float(cyc["x_min"])) / 2.0,
+            "stick_fraction": float(cyc["stick_fraction"]), "transitions": int(cyc["transitions"]),
+            "mu": mu, "stable": bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)),
+            "section": t_s, "cycle": cyc,
+        }
+        info.update(self.tests(m, e))
+        info["signature"] = (info["transitions"], info["stick_fraction"] > 0.0)
+        return info
+
+    def tests(self, m: _BranchMap, e: _Eval) -> dict[str, float]:
+        """The test functions at a converged point (module doc)."""
+        J = e.J
+        JP = m.full_jacobian(J)
+        out = {"fold": float(np.linalg.det(J - np.eye(2))), "period_doubling": float(np.linalg.det(JP + np.eye(2)))}
+        out["symmetry_breaking"] = float(np.linalg.det(J + np.eye(2))) if m.kind == "symmetric" else math.nan
+        return out
+
+    def signature(self, m: _BranchMap, e: _Eval) -> tuple[int, bool]:
+        """(transitions, sticks) over one K-cycle: one run with the FMU's observables."""
+        p = e.p
+        z = m.S * e.u[:2]
+        t_s = m.t_s(p)
+        KT = m.K * p.period
+        st = Settings(scheme="exact", observe=True, t_obs_start=t_s, t_obs_stop=t_s + KT)
+        self.fmu.start(p.with_(x0=float(z[0]), v0=float(z[1])), st, t0=t_s)
+        self.fmu.step_to(t_s + KT)
+        o = self.fmu.get(("stick_fraction", "transitions"))
+        self.evaluations += 1
+        return int(o["transitions"]), float(o["stick_fraction"]) > 0.0
+
+    def record(self, b: Branch, m: _BranchMap, pt: _Point | None, q: float, converged: bool,
+               reason: str = "", bifurcation: str = "") -> None:
+        row: dict[str, Any] = {"branch": b.id, "period": m.K, "kind": m.kind, "param": self.start + q * self.p_s,
+                               "converged": converged, "reason": reason, "bifurcation": bifurcation}
+        if pt is not None:
+            i = pt.info
+            row.update(x0=i["x0"], v0=i["v0"], amplitude_m=i["amplitude"], offset_m=i["offset"],
+                       stick_fraction=i["stick_fraction"], transitions=i["transitions"],
+                       mu=i["mu"], stable=i["stable"], section_s=i["section"], residual=pt.e.residual(),
+                       arclength=pt.s)
+        self.rows.append(row)
+        b.points += 1
+        if self.progress is not None:
+            self.progress(len(self.rows))
+
+    # -- the branches --
+    def go(self) -> None:
+        while self.queue and len(self.branches) < self.max_branches:
+            orbit, sw, parent = self.queue.pop(0)
+            try:
+                self.branch(orbit, sw, parent)
+            except _Failure as err:
+                self.branches[-1].stopped = f"could not start: {err}"
+
+    def start_map(self, o: Orbit) -> tuple[_BranchMap, np.ndarray]:
+        KT = o.period * self.p0.period
+        t_s = o.section % KT
+        z = np.array(o.section_state, dtype=float)
+        if not np.all(np.isfinite(z)):
+            raise _Failure("the start orbit has no section state")
+        kind = "full"
+        if self.use_symmetry and o.period == 1 and not o.stuck:
+            T = self.p0.period
+            h = self.new_map(1, "symmetric", (t_s % (T / 2.0)) / (T / 2.0))
+            if t_s >= T / 2.0:          # the section in the second half: the state half a period before
+                z0 = -z
+            else:
+                z0 = z
+            u = np.array([*(z0 / h.S), 0.0])
+            e = h.eval(u, derivative=False)
+            if e.residual() <= SYMMETRIC:
+                return h, u
+        m = self.new_map(o.period, kind, t_s / KT)
+        return m, np.array([*(z / m.S), 0.0])
+
+    def branch(self, orbit: Orbit | None, sw: tuple[_BranchMap, np.ndarray, np.ndarray] | None,
+               parent: int | None) -> None:
+        if orbit is not None:
+            b = Branch(len(self.branches), orbit.period, "full", parent)
+            self.branches.append(b)
+            if orbit.stuck and orbit.rest_interval is not None:
+                lo, hi = orbit.rest_interval
+                raise _Failure(f"the start orbit is the block at rest, one of the interval of rest positions "
+                               f"[{lo:.6g}, {hi:.6g}] m (|k x| <= F_b - |P0|, a multiplier exactly 1): a continuum, "
+                               "not a branch to follow; it holds while |P0| <= F_b")
+            m, u = self.start_map(orbit)
+            b.kind = m.kind
+            e, _ = self.correct(m, u, None, None, 0.0)
+            t = e.tangent()
+            if t[2] * (self.stop - self.start) < 0:
+                t = -t
+            if abs(t[2]) < 1e-12:
+                raise _Failure("the start orbit is at a fold in the parameter (dp/ds = 0)")
+            pt = _Point(e, t, 0.0, self.describe(m, e))
+            self.record(b, m, pt, float(e.u[2]), True)
+        else:
+            assert sw is not None
+            m, u, t = sw
+            b = Branch(len(self.branches), m.K, m.kind, parent)
+            self.branches.append(b)
+            # the first step off the parent along the eigenvector: the parent's orbit is the branch
+            # point; the new branch starts one step away
+            e0 = m.eval(u)
+            pt = _Point(e0, t, 0.0, self.describe(m, e0))
+            pt = self.first_step(b, m, pt)
+            if pt is None:
+                return
+            self.record(b, m, pt, float(pt.e.u[2]), True)
+        self.walk(b, m, pt)
+
+    def first_step(self, b: Branch, m: _BranchMap, pt: _Point) -> _Point | None:
+        ds = self.ds0
+        while ds >= self.ds_min:
+            try:
+                e, _ = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds)
+            except _Failure:
+                ds /= 2.0
+                continue
+            gap = float(np.max(np.abs(e.u[:2] - pt.e.u[:2])))
+            if gap < 0.1 * ds:              # fell back onto the parent branch
+                ds *= 2.0
+                if ds > self.ds_max * 4:
+                    break
+                continue
+            t = e.tangent()
+            if t @ pt.t < 0:
+                t = -t
+            return _Point(e, t, ds, self.describe(m, e))
+        b.stopped = "the switch found no branch off the bifurcation point"
+        return None
+
+    def walk(self, b: Branch, m: _BranchMap, pt: _Point) -> None:
+        ds = self.ds0
+        while True:
+            if b.points >= self.max_points:
+                b.stopped = f"max_points ({self.max_points}) reached at {self.name} = {self.param(pt):.10g}"
+                return
+            if ds < self.ds_min:
+                b.stopped = (f"the step fell below ds_min = {self.ds_min:g} at {self.name} = "
+                             f"{self.param(pt):.10g}: {last}")
+                self.record(b, m, None, float(pt.e.u[2] + self.ds_min * pt.t[2]), False, last)
+                return
+            u_pred = pt.e.u + ds * pt.t
+            if not self.in_range(float(u_pred[2])):
+                # the step would leave the range: solve at its end, at a fixed parameter (a
+                # parameter's valid range may end there, e.g. N = 0)
+                end = self.end_point(m, pt, u_pred)
+                s_end = float(pt.t @ (end.e.u - pt.e.u)) if end is not None else 0.0
+                if end is not None and s_end > 0:
+                    self.locate_all(b, m, pt, end, s_end)
+                    b.stopped = f"reached the end of the range at {self.name} = {self.param(end):.10g}"
+                    self.record(b, m, end, float(end.e.u[2]), True)
+                    return
+            try:
+                try:
+                    e, it = self.correct(m, u_pred, pt.t, pt.e.u, ds)
+                except _Failure:
+                    if ds > 1e-2 * self.ds0:
+                        raise
+                    # a short step that does not converge fast: next to a corner of the branch, where
+                    # dG/dq straddles it (see correct)
+                    e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds, max_iter=LOCATE_ITERATIONS)
+                t = e.tangent()
+                if t @ pt.t < 0:
+                    t = -t
+                turn = math.acos(max(-1.0, min(1.0, float(t @ pt.t))))
+                if turn > self.max_turn and ds > self.ds_min * 1.0001:
+                    if self.signature(m, e) == pt.info["signature"]:
+                        raise _Failure(f"the tangent turned by {turn:.3g} rad")
+                    if float(np.linalg.norm(e.u - pt.e.u)) > KINK_REACH * ds:
+                        raise _Failure("the corrector went off to another branch")
+                    # an event changed: the branch has a corner there (grazing); go on along the new
+                    # tangent, pointing away from the last point
+                    t = e.tangent()
+                    if t @ (e.u - pt.e.u) < 0:
+                        t = -t
+                if int(e.mode) == 0 and ds > self.ds_min * 1.0001:
+                    raise _Failure("the orbit is stuck at the section")
+            except _Failure as err:
+                last = str(err)
+                ds /= 2.0
+                continue
+            new = _Point(e, t, pt.s + ds, self.describe(m, e))
+            if not self.in_range(float(e.u[2])):
+                self.locate_all(b, m, pt, new, ds)
+                end = self.end_point(m, pt, new)
+                b.stopped = f"reached the end of the range at {self.name} = {self.param(end or new):.10g}"
+                self.record(b, m, end or new, float((end or new).e.u[2]), True)
+                return
+            self.locate_all(b, m, pt, new, ds)
+            self.record(b, m, new, float(e.u[2]), True)
+            pt = new
+            m, pt = self.maybe_move_section(m, pt)
+            if it <= 3:
+                ds = min(self.ds_max, 1.5 * ds)
+
+    def end_point(self, m: _BranchMap, a: _Point, c: _Point | np.ndarray) -> _Point | None:
+        """The orbit at the end of the range (start or stop) between a (inside) and c (a point or a
+        predicted u outside), or None."""
+        uc = c if isinstance(c, np.ndarray) else c.e.u
+        qa, qc = float(a.e.u[2]), float(uc[2])
+        v = self.start + qc * self.p_s
+        q_end = (self.stop if abs(v - self.stop) < abs(v - self.start) else self.start) - self.start
+        q_end /= self.p_s
+        if qc == qa:
+            return None
+        u = a.e.u + (q_end - qa) / (qc - qa) * (uc - a.e.u)
+        u[2] = q_end
+        try:
+            e, _ = self.correct(m, u, None, None, 0.0)
+        except _Failure:
+            return None
+        t = e.tangent()
+        if t @ a.t < 0:
+            t = -t
+        # Newton at the fixed end may land on another branch: refused as a step of the walk would be
+        # (too far, or the tangent turned too much); the walk then steps on towards the end
+        if float(np.linalg.norm(e.u - a.e.u)) > KINK_REACH * float(np.linalg.norm(uc - a.e.u)) or \
+                math.acos(max(-1.0, min(1.0, float(t @ a.t)))) > self.max_turn:
+            return None
+        return _Point(e, t, a.s + float(np.linalg.norm(e.u - a.e.u)), self.describe(m, e))
+
+    def param(self, pt: _Point) -> float:
+        return self.start + float(pt.e.u[2]) * self.p_s
+
+    def maybe_move_section(self, m: _BranchMap, pt: _Point) -> tuple[_BranchMap, _Point]:
+        """Choose the section again when a stick phase is near it (module doc)."""
+        cyc = pt.info["cycle"]
+        t, mode = cyc["t"], cyc["mode"]
+        p = pt.e.p
+        span = m.span(p)
+        t_s = m.t_s(p)
+        stuck = mode == 0
+        if not stuck.any():
+            return m, pt
+        KT = m.K * p.period
+        d = np.abs(((t[stuck] - t_s) + KT / 2.0) % KT - KT / 2.0)
+        if m.kind == "symmetric":
+            d = np.minimum(d, np.abs(((t[stuck] - t_s - span) + KT / 2.0) % KT - KT / 2.0))
+        if float(d.min()) > SECTION_MARGIN * span:
+            return m, pt
+        t_new = _slide_section(t, mode, t_s, KT)
+        if t_new is None or math.isnan(t_new):
+            return m, pt
+        if abs(pt.t[2]) < 1e-3:         # near a fold the orientation is not safe to carry over: keep it
+            return m, pt
+        i = int(np.argmin(np.abs(t - t_new)))
+        t_i = float(t[i])
+        z = np.array([cyc["x"][i], cyc["v"][i]])
+        off = t_i % span
+        if m.kind == "symmetric" and int(round((t_i - off) / span)) % 2:
+            z = -z          # half a period on: the mirror image
+        m2 = self.new_map(m.K, m.kind, off / span)
+        try:
+            e, _ = self.correct(m2, np.array([*(z / m2.S), pt.e.u[2]]), None, None, 0.0)
+        except _Failure:
+            return m, pt
+        tn = e.tangent()
+        if tn[2] * pt.t[2] < 0:
+            tn = -tn
+        return m2, _Point(e, tn, pt.s, self.describe(m2, e))
+
+    # -- bifurcations between two points --
+    def locate_all(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float) -> None:
+        """Locate every bifurcation between a and c; their orbits join the branch's points, in order."""
+        self.pending = []
+        self._locate_all(b, m, a, c, ds)
+        for s, pt, typ in sorted(self.pending, key=lambda x: x[0]):
+            pt.s = s
+            self.record(b, m, pt, float(pt.e.u[2]), True, bifurcation=typ)
+
+    def _locate_all(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float) -> None:
+        ia, ic = a.info, c.info
+        tests: list[str] = []
+        if "fold" in self.detect and _flip(ia["fold"], ic["fold"]):
+            tests.append("fold")
+        elif "fold" in self.detect and _flip(float(a.t[2]), float(c.t[2])):
+            self.corner_fold(b, m, a, c)
+        if "period_doubling" in self.detect and _flip(ia["period_doubling"], ic["period_doubling"]):
+            tests.append("period_doubling")
+        if "symmetry_breaking" in self.detect and m.kind == "symmetric" and \
+                _flip(ia["symmetry_breaking"], ic["symmetry_breaking"]):
+            tests.append("symmetry_breaking")
+        for kind in tests:
+            self.locate(b, m, a, c, ds, kind)
+        if "grazing" in self.detect and ia["signature"] != ic["signature"]:
+            # at fixed parameter values, unless the step holds a fold too; if a corrector fails
+            # there, again along the step's arclength
+            natural = not _flip(float(a.t[2]), float(c.t[2])) and abs(c.e.u[2] - a.e.u[2]) > 1e-3 * ds
+            self.locate(b, m, a, c, ds, "grazing", natural)
+            if natural and self.bifs[-1].note.startswith("located only to the bracket"):
+                self.bifs.pop()
+                self.pending.pop()
+                self.locate(b, m, a, c, ds, "grazing", False)
+
+    def locate(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float, kind: str,
+               natural: bool = False) -> None:
+        key = kind
+        cache: dict[float, tuple[_Eval, Any]] = {}
+
+        def at(s: float) -> tuple[_Eval, Any]:
+            if s not in cache:
+                if natural:
+                    # a corner of the branch: at a fixed parameter (Newton in the state with the exact
+                    # Jacobian only; the finite difference in q would straddle the corner)
+                    u = a.e.u + (s / ds) * (c.e.u - a.e.u)
+                    e, _ = self.correct(m, u, None, None, 0.0, max_iter=LOCATE_ITERATIONS)
+                else:
+                    u = a.e.u + s * a.t
+                    e, _ = self.correct(m, u, a.t, a.e.u, s, max_iter=LOCATE_ITERATIONS)
+                cache[s] = (e, self.signature(m, e) if kind == "grazing" else self.tests(m, e)[key])
+            return cache[s]
+
+        s0, s1 = 0.0, ds
+        g0 = a.info["signature"] if kind == "grazing" else a.info[key]
+        g1 = c.info["signature"] if kind == "grazing" else c.info[key]
+        sig0, sig1 = g0, g1
+        side = 0
+        note = ""
+        try:
+            for _ in range(200):
+                p_lo = self.start + float((a.e.u + s0 * a.t)[2]) * self.p_s
+                p_hi = self.start + float((a.e.u + s1 * a.t)[2]) * self.p_s
+                e0 = cache[s0][0] if s0 in cache else a.e
+                e1 = cache[s1][0] if s1 in cache else c.e
+                p_lo, p_hi = self.start + float(e0.u[2]) * self.p_s, self.start + float(e1.u[2]) * self.p_s
+                small = abs(p_hi - p_lo) <= self.ptol * max(1.0, abs(p_lo))
+                if kind == "grazing":
+                    if small and s1 - s0 <= 1e-6 * ds or s1 - s0 <= 1e-14:
+                        break
+                    sm = 0.5 * (s0 + s1)
+                else:
+                    if (small and min(abs(g0), abs(g1)) <= 1e-12) or s1 - s0 <= 1e-14:
+                        break
+                    sm = s1 - g1 * (s1 - s0) / (g1 - g0)          # regula falsi (Illinois)
+                    if not (s0 < sm < s1):
+                        sm = 0.5 * (s0 + s1)
+                _, gm = at(sm)
+                if kind == "grazing":
+                    if gm == sig0:
+                        s0 = sm
+                    else:
+                        s1, sig1 = sm, gm
+                    continue
+                if _flip(gm, g1):
+                    s0, g0 = s1, g1
+                    s1, g1 = sm, gm
+                    if side == -1:
+                        g0 /= 2.0
+                    side = -1
+                else:
+                    s1, g1 = sm, gm
+                    if side == 1:
+                        g0 /= 2.0
+                    side = 1
+                if s0 > s1:
+                    s0, s1, g0, g1 = s1, s0, g1, g0
+        except _Failure as err:
+            note = f"located only to the bracket (a corrector failed: {err})"
+        if kind == "grazing":
+            s_best = s1 if s1 in cache else s0
+        else:
+            s_best = min((s for s in (s0, s1) if s in cache), key=lambda s: abs(cache[s][1]),
+                         default=None)  # type: ignore[arg-type]
+        if s_best is None or s_best not in cache:
+            e = c.e if kind == "grazing" else (a.e if abs(a.info.get(key, 1.0)) < abs(c.info.get(key, 1.0)) else c.e)
+        else:
+            e = cache[s_best][0]
+        e0 = cache[s0][0] if s0 in cache else a.e
+        e1 = cache[s1][0] if s1 in cache else c.e
+        bracket = tuple(sorted((self.start + float(e0.u[2]) * self.p_s, self.start + float(e1.u[2]) * self.p_s)))
+        info = self.describe(m, e)
+        test = 0.0 if kind == "grazing" else float(info[key])
+        mu = info["mu"]
+        typ = kind
+        if kind == "grazing":
+            note = (note + "; " if note else "") + (f"events per cycle (transitions, sticks): {sig0} -> {sig1}")
+        else:
+            target = {"fold": 1.0, "period_doubling": -1.0, "symmetry_breaking": -1.0}[kind]
+            mus = np.linalg.eigvals(m.full_jacobian(e.J) if kind == "period_doubling" else e.J)
+            gap = float(np.min(np.abs(mus - target)))
+            if gap > 1e-4:
+                note = (note + "; " if note else "") + (f"non-smooth: the multiplier jumps across {target:+g} "
+                                                       f"(nearest {gap:.2g} away; an event changes there)")
+            if kind == "fold" and not _flip(float(a.t[2]), float(c.t[2])):
+                note = (note + "; " if note else "") + "dp/ds keeps its sign: a branch point, not a fold"
+        bif = Bifurcation(type=typ, param=self.start + float(e.u[2]) * self.p_s, period=m.K, x0=info["x0"],
+                          v0=info["v0"], multipliers=mu, branch=b.id, bracket=(float(bracket[0]), float(bracket[1])),
+                          test=test, note=note,
+                          events=(sig0, sig1) if kind == "grazing" else None,
+                          half_multipliers=np.linalg.eigvals(e.J) if m.kind == "symmetric" else None,
+                          amplitude_m=info["amplitude"], offset_m=info["offset"])
+        self.bifs.append(bif)
+        self.pending.append((a.s + float(np.linalg.norm(e.u - a.e.u)), _Point(e, a.t, 0.0, info), typ))
+        if self.switch and kind in ("period_doubling", "symmetry_breaking") and "non-smooth" not in note:
+            self.spawn(b, m, e, bif, kind)
+
+    def corner_fold(self, b: Branch, m: _BranchMap, a: _Point, c: _Point) -> None:
+        """dp/ds changes sign between a and c but no multiplier crosses +1: the branch turns at a
+        corner (a non-smooth fold). Reported at the point of the two with the extreme parameter, not
+        located (the tangent's orientation at trial points past a corner is not known)."""
+        pa, pc = self.param(a), self.param(c)
+        # q (and p: p_s > 0) grew at a when a.t[2] > 0: the extreme is then the larger parameter
+        pt = a if (a.t[2] > 0) == (pa >= pc) else c
+        i = pt.info
+        self.bifs.append(Bifurcation(
+            type="fold", param=self.param(pt), period=m.K, x0=i["x0"], v0=i["v0"], multipliers=i["mu"],
+            branch=b.id, bracket=(min(pa, pc), max(pa, pc)), test=float(i["fold"]),
+            note=("non-smooth: dp/ds changes sign but no multiplier crosses +1 (a corner); not located, "
+                  "the extreme of the two branch points around it"),
+            amplitude_m=i["amplitude"], offset_m=i["offset"]))
+
+    def spawn(self, b: Branch, m: _BranchMap, e: _Eval, bif: Bifurcation, kind: str) -> None:
+        p = e.p
+        z = m.S * e.u[:2]
+        if kind == "period_doubling":
+            JP = m.full_jacobian(e.J)
+            w, V = np.linalg.eig(JP)
+            j = int(np.argmin(np.abs(w + 1.0)))
+            vec = np.real(V[:, j])
+            K2 = 2 * m.K
+            t_s = m.t_s(p)
+            m2 = self.new_map(K2, "full", t_s / (K2 * p.period))
+            dirs = [1.0]
+        else:
+            w, V = np.linalg.eig(e.J)
+            j = int(np.argmin(np.abs(w + 1.0)))
+            vec = np.real(V[:, j])
+            t_s = m.t_s(p)
+            m2 = self.new_map(1, "full", t_s / p.period)
+            dirs = [1.0, -1.0]
+        v = vec / m2.S
+        v = v / float(np.linalg.norm(v))
+        for sgn in dirs:
+            if len(self.branches) + len([x for x in self.queue if x[1] is not None]) >= self.max_branches:
+                bif.note = (bif.note + "; " if bif.note else "") + f"max_branches ({self.max_branches}) reached: not switched"
+                return
+            u = np.array([*(z / m2.S), e.u[2]])
+            t = np.array([sgn * v[0], sgn * v[1], 0.0])
+            bif.children.append(len(self.branches) + len([x for x in self.queue if x[1] is not None]))
+            self.queue.append((None, (m2, u, t), b.id))
+
+    # -- output --
+    def result(self) -> Continuation:
+        rows = self.rows
+        n = len(rows)
+
+        def col(k: str, default: Any = math.nan) -> np.ndarray:
+            return np.array([r.get(k, default) for r in rows])
+
+        mu = np.array([r["mu"] if "mu" in r else np.full(2, np.nan, dtype=complex) for r in rows]).reshape(n, 2)
+        ds = xr.Dataset(
+            {
+                "param": ("point", col("param").astype(float)),
+                "x0": ("point", col("x0").astype(float)),
+                "v0": ("point", col("v0").astype(float)),
+                "amplitude_m": ("point", col("amplitude_m").astype(float)),
+                "offset_m": ("point", col("offset_m").astype(float)),
+                "stick_fraction": ("point", col("stick_fraction").astype(float)),
+                "transitions": ("point", col("transitions", -1).astype(np.int64)),
+                "mu_max": ("point", np.abs(mu).max(axis=1) if n else np.zeros(0)),
+                "multiplier_re": (("point", "multiplier"), mu.real),
+                "multiplier_im": (("point", "multiplier"), mu.imag),
+                "stable": ("point", col("stable", False).astype(bool)),
+                "converged": ("point", col("converged", False).astype(bool)),
+                "reason": ("point", col("reason", "").astype(str)),
+                "bifurcation": ("point", col("bifurcation", "").astype(str)),
+                "branch": ("point", col("branch", -1).astype(np.int64)),
+                "period": ("point", col("period", 0).astype(np.int64)),
+                "kind": ("point", col("kind", "").astype(str)),
+                "residual": ("point", col("residual").astype(float)),
+                "section_s": ("point", col("section_s").astype(float)),
+                "arclength": ("point", col("arclength").astype(float)),
+            },
+            coords={"point": np.arange(n), "multiplier": [0, 1]},
+        )
+        ds["param"].attrs["long_name"] = f"{self.name} ({PARAMETERS[self.name][0]})"
+        ds["x0"].attrs["units"], ds["v0"].attrs["units"] = "m", "m/s"
+        ds["amplitude_m"].attrs["units"] = ds["offset_m"].attrs["units"] = "m"
+        ds["mu_max"].attrs["long_name"] = "largest |Floquet multiplier| of P^K"
+        ds.attrs.update(param=self.name, start=self.start, stop=self.stop,
+                        dp_dparam="central finite difference", dP_dz="the FMU's exact Jacobian (sensitivity)")
+        return Continuation(self.name, ds, self.bifs, self.branches, self.evaluations + self.counter[0])
+
+
+def _flip(a: float, b: float) -> bool:
+    """Whether a test function changes sign from a to b."""
+    return bool(math.isfinite(a) and math.isfinite(b) and (a > 0) != (b > 0))

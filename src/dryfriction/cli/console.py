@@ -1,0 +1,503 @@
+"""The command line as a process: interrupts, result sets written all or nothing, and the output
+paths checked before any work.
+
+    dryfriction ...                         # the console script: main() below, then dryfriction.cli
+
+**Interrupts.** While a command runs (:func:`guarded`), the first SIGINT (Ctrl-C) or SIGTERM stops
+it: the library code unwinds (a result set being staged is removed, Dask is closed) with every
+library's output silenced (logging, stderr, and in the console script also the stderr of the
+processes it started, Dask's workers included), then exactly one line is printed,
+``dryfriction: interrupted`` (``terminated`` for SIGTERM), and the exit status is 130 (143). A
+second signal while it unwinds exits at once (the console script) or is ignored (in a Python
+caller). Once a command's results are complete and being committed (:func:`result_set`,
+:func:`result_file`), a signal no longer stops it: the files are moved into place and the command
+ends as it would have, exit status 0. Outside :func:`guarded` nothing here changes how a signal
+is handled (the library API is interrupted as usual).
+
+**Result sets.** ``with result_set(folder) as stage:`` writes a command's files into a staging
+folder beside ``folder`` and moves them into it as one step (:func:`dryfriction.atomic.staged_outputs`);
+``with result_file(path) as tmp:`` does the same for one file. :func:`check_output_folder` and
+:func:`check_output_file` refuse, before the computation, an output path that cannot be written
+(read-only, a file where a folder is meant or the reverse, a name too long), by creating and
+removing a probe exactly where the results will be staged.
+
+This module imports only the standard library at the top, so that the console script installs
+its signal handlers before the package's heavy imports.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import signal
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
+from pathlib import Path
+from typing import IO, Any, NoReturn
+
+__all__ = ["main", "guarded", "result_set", "result_file", "check_output_folder", "check_output_file", "OutputError",
+           "committed", "interrupted", "interrupt_note", "EXIT_INTERRUPTED", "EXIT_FAILED", "EXIT_USAGE", "PREFIX"]
+
+PREFIX = "dryfriction"
+EXIT_FAILED = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130      # 128 + SIGINT, as the shell reports it
+EXIT_BROKEN_PIPE = 141      # 128 + SIGPIPE
+
+_SIGNALS = tuple(s for s in (getattr(signal, "SIGINT", None), getattr(signal, "SIGTERM", None)) if s is not None)
+
+
+class _State:
+    """What the signal handler needs to know about the command that runs."""
+
+    def __init__(self) -> None:
+        self.active = False          # a guarded command runs (its handlers are installed)
+        self.console = False         # we are the console script (a second signal exits at once)
+        self.committed = False       # the results are complete and being put in place
+        self.signum = 0              # the signal that interrupted the command (0: none)
+        self.note = ""               # said after "interrupted" (e.g. the study's chunks are kept)
+        self.stderr: IO[str] | None = None   # the real stderr while library output is silenced
+        self.gate: _StderrGate | None = None
+
+
+_STATE = _State()
+
+
+def committed() -> None:
+    """The running command's results are complete: from here on a signal no longer interrupts it
+    (called by :func:`result_set` and :func:`result_file` just before the files move into place;
+    without a guarded command it does nothing that matters)."""
+    _STATE.committed = True
+
+
+def interrupted() -> bool:
+    """Whether the running command has been interrupted (a signal arrived before its results
+    were committed)."""
+    return bool(_STATE.signum)
+
+
+def interrupt_note(text: str) -> None:
+    """Said after ``interrupted`` if the running command is interrupted (e.g. that a study's
+    finished chunks are kept)."""
+    _STATE.note = text
+
+
+def _message(signum: int) -> str:
+    word = "terminated" if signum == getattr(signal, "SIGTERM", -1) else "interrupted"
+    return f"{PREFIX}: {word}" + (f"; {_STATE.note}" if _STATE.note and word == "interrupted" else "")
+
+
+def _silence() -> None:
+    """From now on no library says anything: logging off, Python's stderr to /dev/null, the
+    children's stderr (the console script's gate) dropped."""
+    import logging
+
+    logging.disable(logging.CRITICAL)
+    if _STATE.stderr is None:
+        _STATE.stderr = sys.stderr
+        sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (closed when the command ends)
+    if _STATE.gate is not None:
+        _STATE.gate.drop()
+
+
+def _unsilence() -> None:
+    import logging
+
+    logging.disable(logging.NOTSET)
+    if _STATE.stderr is not None:
+        quiet, sys.stderr = sys.stderr, _STATE.stderr
+        _STATE.stderr = None
+        if quiet is not sys.stderr:
+            quiet.close()
+
+
+def _say(line: str) -> None:
+    """One line on the real stderr (also while library output is silenced)."""
+    out = _STATE.stderr or sys.stderr
+    try:
+        out.write(line + "\n")
+        out.flush()
+    except (OSError, ValueError):
+        pass
+
+
+def _on_signal(signum: int, frame: Any) -> None:
+    st = _STATE
+    if st.committed:
+        return                       # the results are moving into place: the command completes
+    if st.signum:
+        if st.console:               # a second Ctrl-C while the first unwinds: leave now
+            _say(_message(st.signum))
+            _flush_and_exit(128 + st.signum)
+        return
+    st.signum = signum
+    _silence()
+    raise KeyboardInterrupt
+
+
+def _flush_and_exit(code: int) -> None:
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        pass
+    os._exit(code)
+
+
+@contextmanager
+def _handlers(restore: bool = True) -> Iterator[None]:
+    """Our handler for SIGINT and SIGTERM while the block runs (main thread only; elsewhere the
+    block runs with the handlers as they are), the previous ones restored after it (``restore``)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {s: signal.signal(s, _on_signal) for s in _SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in old.items() if restore else ():
+            signal.signal(s, h if h is not None else signal.SIG_DFL)
+
+
+def guarded(command: Callable[[], int]) -> int:
+    """Run ``command`` (returns an exit status) as a command of the program: signals handled as
+    described in the module docstring, and every error a user can cause as one line
+    ``dryfriction: error: ...`` (exit 2: bad input, an unusable FMU, an error the FMU reports;
+    exit 1: the system refused, e.g. a full disk, or the Dask workers were lost too often) instead
+    of a traceback."""
+    from ..errors import UsageError
+    from ..diagnostics import DryFrictionWarning
+    from ..errors import FMUError
+
+    st = _STATE
+    if st.active:                            # already guarded (a command inside a command)
+        return command()
+    st.active, st.committed, st.signum, st.note = True, False, 0, ""
+    try:
+        with _handlers():
+            try:
+                code = command()
+                st.committed = True          # done: a signal now changes nothing
+                return code
+            except KeyboardInterrupt:
+                if not st.signum:            # raised without our handler (e.g. by another thread)
+                    st.signum = int(signal.SIGINT)
+                    _silence()
+                _say(_message(st.signum))
+                return 128 + st.signum
+            except BaseException as e:
+                if st.signum:                # the libraries' teardown after the interrupt raised
+                    _say(_message(st.signum))
+                    return 128 + st.signum
+                if not isinstance(e, Exception):
+                    raise
+                if isinstance(e, (UsageError, FileNotFoundError, FMUError)):
+                    _say(f"{PREFIX}: error: {e}")
+                    return EXIT_USAGE
+                if isinstance(e, DryFrictionWarning):
+                    _say(f"{PREFIX}: error: {e} (an FMU warning, an error under --strict)")
+                    return EXIT_USAGE
+                if isinstance(e, BrokenPipeError):
+                    # the output piped into head & co., which stopped reading: quiet, as the
+                    # shell's tools (the rest of the output goes nowhere, so that the flush at exit
+                    # does not raise again)
+                    devnull = os.open(os.devnull, os.O_WRONLY)
+                    os.dup2(devnull, sys.stdout.fileno())
+                    return EXIT_BROKEN_PIPE
+                if isinstance(e, OSError):
+                    _say(f"{PREFIX}: error: {_os_error(e)}")
+                    return EXIT_FAILED
+                from ..cluster import ClusterLost
+
+                if isinstance(e, ClusterLost):       # the Dask workers lost too often: one line
+                    _say(f"{PREFIX}: error: {e}")
+                    return EXIT_FAILED
+                raise
+    finally:
+        st.active = False
+        if st.console:
+            st.committed = True              # the command is over: a signal now changes nothing
+        else:
+            _unsilence()
+            st.committed, st.signum, st.note = False, 0, ""
+
+
+def _os_error(e: OSError) -> str:
+    """An OSError as a sentence: the cause and the file."""
+    if e.strerror and e.filename:
+        return f"{e.strerror}: {_short(str(e.filename))}"
+    return str(e)
+
+
+def _short(text: str, limit: int = 240) -> str:
+    """``text`` whole up to ``limit`` characters (every ordinary path), else its two ends and its
+    length (a name too long to be one, shown readably)."""
+    return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 3:]} ({len(text)} characters)"
+
+
+# ---- result sets -------------------------------------------------------------------------------
+
+class OutputError(OSError):
+    """A result set (or file) that could not be written, with the cause; nothing of it was kept
+    (the command line: one line, exit status 1)."""
+
+
+@contextmanager
+def _all_or_nothing(writer: Callable[[Any], Any], target: str | os.PathLike[str], kept: str) -> Iterator[Path]:
+    """``writer(target)``'s temporary place, the command committed when the block ends without
+    error; a write the system refuses is :class:`OutputError` naming ``target``, the cause and
+    ``kept`` (what is left)."""
+    try:
+        with writer(target) as place:
+            yield place
+            committed()
+    except OSError as e:
+        if interrupted():
+            raise
+        raise OutputError(f"cannot write {_short(str(target))}: {_cause(e)}; {kept}") from None
+
+
+def result_set(folder: str | os.PathLike[str]) -> AbstractContextManager[Path]:
+    """A command's result set in ``folder``, all or nothing: yields the staging folder to write
+    the files into (:func:`dryfriction.atomic.staged_outputs`); when the block ends without error
+    the command is committed (:func:`committed`) and every file moves into ``folder``. The paths of
+    the files in ``folder`` are ``folder / path.relative_to(stage)``."""
+    from ..atomic import staged_outputs
+
+    return _all_or_nothing(staged_outputs, folder, "nothing of it was kept")
+
+
+def result_file(path: str | os.PathLike[str]) -> AbstractContextManager[Path]:
+    """One result file, all or nothing: yields a temporary path beside ``path``
+    (:func:`dryfriction.atomic.atomic_path`), renamed to ``path`` when the block ends without
+    error, the command committed (:func:`committed`) just before."""
+    from ..atomic import atomic_path
+
+    return _all_or_nothing(atomic_path, path, "it was left as it was")
+
+
+def nearest_existing(path: Path) -> Path:
+    """``path`` or its nearest parent that exists."""
+    p = path
+    while not os.path.lexists(p) and p != p.parent:
+        p = p.parent
+    return p
+
+
+def _check_names(path: Path, option: str, extra: int) -> None:
+    """Every component of ``path`` (the last one ``extra`` bytes longer: the staging name) and
+    the whole path within the file system's limits, else UsageError naming the option."""
+    from ..errors import UsageError
+
+    base = nearest_existing(path.absolute().parent)
+    try:
+        name_max = os.pathconf(base, "PC_NAME_MAX")
+        path_max = os.pathconf(base, "PC_PATH_MAX")
+    except (OSError, ValueError, AttributeError):  # (no pathconf on Windows)
+        name_max, path_max = 255, 4096
+    parts = path.absolute().parts
+    for i, part in enumerate(parts):
+        limit = name_max - (extra if i == len(parts) - 1 else 0)
+        if len(os.fsencode(part)) > limit:
+            raise UsageError(f"{option} {_short(str(path), 60)}: the name {_short(part, 40)!r} is "
+                             f"{len(os.fsencode(part))} bytes long, more than the {limit} it may have here "
+                             f"({name_max} per name on this file system"
+                             + (", less the temporary name's suffix)" if limit < name_max else ")"))
+    if len(os.fsencode(str(path.absolute()))) + extra + 64 > path_max:
+        raise UsageError(f"{option} {_short(str(path), 60)}: the path is too long for this file system "
+                         f"(at most {path_max - extra - 64} bytes here)")
+
+
+def _cause(e: OSError) -> str:
+    """The cause of an OSError in a few words."""
+    return {errno.EACCES: "permission denied", errno.EPERM: "permission denied",
+            errno.EROFS: "a read-only file system", errno.ENOSPC: "no space left on the device",
+            errno.EDQUOT: "the disk quota is exceeded", errno.ENAMETOOLONG: "a name too long",
+            errno.ENOTDIR: "not a folder"}.get(e.errno or 0, e.strerror or str(e))
+
+
+def _probe_error(option: str, path: Path, where: Path, e: OSError) -> Exception:
+    from ..errors import UsageError
+
+    return UsageError(f"{option} {_short(str(path))}: cannot write in {_short(str(where))} ({_cause(e)})")
+
+
+def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -> Path:
+    """Refuse (UsageError, one line naming ``option``) a result folder the command could not
+    write, before any work: a file where the folder is meant, a name too long, a place not
+    writable (a probe created and removed where :func:`result_set` will stage; an existing folder
+    asked whether it may be written). Nothing is left behind; a missing folder is not created."""
+    import shutil
+    import tempfile
+
+    from ..errors import UsageError
+
+    path = Path(folder)
+    if str(folder) == "":
+        raise UsageError(f"{option} must name a folder, not ''")
+    _check_names(path, option, extra=len(".staging-") + 9)
+    if path.exists() and not path.is_dir():
+        raise UsageError(f"{option} {_short(str(path))} is a file, not a folder")
+    parent = path.parent
+    where = nearest_existing(parent)
+    if not where.is_dir():
+        raise UsageError(f"{option} {_short(str(path))}: {_short(str(where))} is a file, not a folder")
+    try:
+        probe = tempfile.mkdtemp(dir=where, prefix=f".{path.name or 'out'}.staging-")
+    except OSError as e:
+        raise _probe_error(option, path, where, e) from None
+    shutil.rmtree(probe, ignore_errors=True)
+    if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):  # (the folder itself left untouched)
+        raise UsageError(f"{option} {_short(str(path))}: cannot write in it (permission denied)")
+    return path
+
+
+def check_output_file(file: str | os.PathLike[str], option: str = "--out") -> Path:
+    """As :func:`check_output_folder` for one result file (:func:`result_file`): a folder where
+    the file is meant, a name too long, a place not writable are refused before any work."""
+    import tempfile
+
+    from ..errors import UsageError
+
+    path = Path(file)
+    if str(file) == "" or path.name in ("", ".", ".."):
+        raise UsageError(f"{option} must name a file, not {str(file)!r}")
+    _check_names(path, option, extra=len("..") + 8 + len(".tmp"))
+    if path.is_dir():
+        raise UsageError(f"{option} {_short(str(path))} is a folder, not a file")
+    where = nearest_existing(path.parent)
+    if not where.is_dir():
+        raise UsageError(f"{option} {_short(str(path))}: {_short(str(where))} is a file, not a folder")
+    try:
+        fd, probe = tempfile.mkstemp(dir=where, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as e:
+        raise _probe_error(option, path, where, e) from None
+    os.close(fd)
+    os.unlink(probe)
+    return path
+
+
+# ---- the console script ------------------------------------------------------------------------
+
+class _StderrGate:
+    """File descriptor 2 of this process, and so of every process it starts (Dask's workers, the
+    multiprocessing resource tracker), goes through a pipe that a thread copies to the real stderr
+    :data:`DELAY` seconds late; from the moment a SIGINT or SIGTERM arrives (seen at once through
+    the signal module's wakeup fd, even while the main thread is busy in C) whatever came through
+    and comes through is dropped, so that no child's traceback follows or precedes the one line.
+    Python's ``sys.stderr`` of this process writes to the real stderr directly."""
+
+    #: how long the output of the other processes is held back (a child that got the same Ctrl-C
+    #: prints its traceback within milliseconds; the drop comes first)
+    DELAY = 0.5
+
+    def __init__(self) -> None:
+        self.real = os.dup(2)
+        r, w = os.pipe()
+        os.dup2(w, 2)
+        os.close(w)
+        self._r = r
+        self._wake_r, wake_w = os.pipe()
+        os.set_blocking(wake_w, False)
+        self._wake_w = wake_w
+        self._old_wakeup = signal.set_wakeup_fd(wake_w, warn_on_full_buffer=False)
+        self._drop = False
+        self._closing = False
+        self._thread = threading.Thread(target=self._pump, name="dryfriction-stderr", daemon=True)
+        self._thread.start()
+        enc = getattr(sys.stderr, "encoding", None) or "utf-8"
+        sys.stderr = open(os.dup(self.real), "w", buffering=1, encoding=enc,  # noqa: SIM115
+                          errors="backslashreplace")
+
+    def _write(self, data: bytes) -> None:
+        while data and not self._drop:
+            try:
+                data = data[os.write(self.real, data):]
+            except OSError:
+                return
+
+    def _pump(self) -> None:
+        import select
+        import time
+
+        held: list[tuple[float, bytes]] = []
+        open_ = True
+        while open_ or held:
+            now = time.monotonic()
+            timeout = None if not held else max(0.0, held[0][0] + self.DELAY - now)
+            if self._closing:
+                timeout = 0.0
+            ready, _, _ = select.select([self._r, self._wake_r] if open_ else [self._wake_r], [], [], timeout)
+            if self._wake_r in ready:
+                if any(b in (int(signal.SIGINT), int(signal.SIGTERM)) for b in os.read(self._wake_r, 512)):
+                    self._drop = True
+            if self._r in ready:
+                try:
+                    data = os.read(self._r, 65536)
+                except OSError:
+                    data = b""
+                if data:
+                    held.append((time.monotonic(), data))
+                else:
+                    open_ = False
+            if self._drop:
+                held.clear()
+                if not open_:
+                    return
+                continue
+            now = time.monotonic()
+            while held and (self._closing or held[0][0] + self.DELAY <= now):
+                self._write(held.pop(0)[1])
+            if self._closing and not ready:
+                return
+
+    def drop(self) -> None:
+        self._drop = True
+
+    def close(self) -> None:
+        """fd 2 back to the real stderr; what is held is copied out now."""
+        try:
+            os.dup2(self.real, 2)
+        except OSError:
+            pass
+        self._closing = True
+        os.write(self._wake_w, b"\0")          # wake the pump: it flushes what it holds and ends
+        self._thread.join(timeout=1.0)
+        signal.set_wakeup_fd(self._old_wakeup)
+
+
+def main() -> NoReturn:
+    """The console script ``dryfriction`` (and ``python -m dryfriction``): the signal handlers first,
+    then the command line (:func:`dryfriction.cli.main`); exits with its status. After an interrupt
+    the process ends without running the libraries' exit handlers (every file is in place or
+    removed by then, the one line printed)."""
+    st = _STATE
+    st.console = True
+    with _handlers(restore=False):
+        gate = None
+        try:
+            from ..atomic import signals_held
+
+            if os.name == "posix":  # (pipes in select, a pipe as the wakeup fd)
+                with signals_held():   # no signal half-way (and none ever handled by the pump thread)
+                    gate = st.gate = _StderrGate()
+            from .main import main as cli_main
+
+            code = cli_main(sys.argv[1:])
+        except KeyboardInterrupt:            # during the imports, before the command is guarded
+            if not st.signum:
+                st.signum = int(signal.SIGINT)
+                _silence()
+            _say(_message(st.signum))
+            code = 128 + st.signum
+        if st.signum:
+            _flush_and_exit(code)
+        if gate is not None:
+            gate.close()
+            st.gate = None
+        # the command is over: a signal from here to the end of the process changes nothing (and
+        # is not left to Python's finalization, which restores the default action: death by it)
+        for s in _SIGNALS:
+            signal.signal(s, signal.SIG_IGN)
+    raise SystemExit(code)
