@@ -86,6 +86,39 @@ def test_the_sentence_splitter_finds_a_repeated_sentence() -> None:
     assert {s for s in _sentences(page) & _sentences(front) if len(s.split()) >= 12}
 
 
+REPO_PATH = re.compile(r"(?<![\w/.-])((?:fmu_src|src|tests|scripts|bench|configs|examples|cmake)/(?:[\w./*-]|\[ch\])*(?:[\w*]|\[ch\]))")
+
+
+def _named_paths(text: str) -> list[str]:
+    """The repository paths a page names (``fmu_src/numerics/lcp.[ch]``, ``tests/c/chain_driver``,
+    ``configs/*.toml``), link targets and link texts alike."""
+    return [m.group(1) for m in REPO_PATH.finditer(text)]
+
+
+def _exists(path: str) -> bool:
+    """A named path exists: a file or folder, a [ch] pair, a glob that matches, or a program built
+    from the C file of that name."""
+    if "[ch]" in path:
+        return all((ROOT / path.replace("[ch]", e)).exists() for e in "ch")
+    if "*" in path:
+        return any(ROOT.glob(path))
+    return (ROOT / path).exists() or (ROOT / f"{path}.c").exists()
+
+
+def test_every_path_the_docs_name_exists() -> None:
+    """No stale paths: every repository path the README and the docs pages name is there."""
+    named = {(page.name, path) for page in [README, *_docs_pages()] for path in _named_paths(page.read_text())}
+    assert len(named) > 50
+    stale = sorted((page, path) for page, path in named if not _exists(path))
+    assert not stale, "paths that do not exist:\n" + "\n".join(f"{p}: {x}" for p, x in stale)
+
+
+def test_a_stale_path_is_seen() -> None:
+    names = _named_paths("the reference (src/dryfriction/chain_reference.py) and fmu_src/numerics/lcp.[ch]")
+    assert names == ["src/dryfriction/chain_reference.py", "fmu_src/numerics/lcp.[ch]"]
+    assert [_exists(n) for n in names] == [False, True]
+
+
 ISSUE = re.compile(r"\bissues?\s+#?\d+", re.I)
 
 
