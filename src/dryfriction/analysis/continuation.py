@@ -1,5 +1,5 @@
-"""Continuation of periodic orbits in a parameter, with their bifurcations (issue 22, item 2;
-docs/orbits.md, "Continuation and bifurcations").
+"""Continuation of periodic orbits in a parameter, with their bifurcations
+(docs/orbits.md, "Continuation and bifurcations").
 
 Pseudo-arclength continuation of the fixed points of the exact stroboscopic map (dryfriction.analysis.orbits)
 in one oscillator parameter p. Unknowns u = (y, q): y = S^-1 z the state at a section time (scaled
