@@ -44,6 +44,7 @@ class Kind:
     env: str
 
     def describe(self) -> str:
+        """The FMU in words (``the FMI 2.0 DryFrictionOscillator FMU``)."""
         return f"the FMI {self.fmi_version} {self.model_identifier} FMU"
 
 

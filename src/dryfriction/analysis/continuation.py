@@ -115,6 +115,8 @@ def set_parameter(p: Oscillator, name: str, value: float) -> Oscillator:
 
 
 def get_parameter(p: Oscillator, name: str) -> float:
+    """The value of the continuation parameter ``name`` of an oscillator (``f`` in Hz, ``mu_s_sigma`` = mu_s N
+    / P0, else the attribute)."""
     if name == "f":
         return p.f_hz
     if name == "mu_s_sigma":
@@ -147,6 +149,7 @@ class Bifurcation:
     offset_m: float = math.nan
 
     def as_dict(self) -> dict[str, Any]:
+        """The bifurcation as a JSON-ready dict (multipliers as [real, imaginary] pairs)."""
         return {"type": self.type, "param": self.param, "period": self.period, "x0": self.x0, "v0": self.v0,
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
                 "branch": self.branch, "bracket": list(self.bracket), "test": self.test, "note": self.note,
@@ -155,6 +158,8 @@ class Bifurcation:
 
 @dataclass
 class Branch:
+    """One branch of periodic orbits of a continuation: its id, period (in excitation periods), kind (``full``
+    or ``symmetric``), the branch it started from, its number of points and why it stopped."""
     id: int
     period: int
     kind: str                        # "full" (P^K) or "symmetric" (H = -P^{1/2})
@@ -163,12 +168,15 @@ class Branch:
     stopped: str = ""                # why the continuation of this branch ended
 
     def as_dict(self) -> dict[str, Any]:
+        """The branch as a JSON-ready dict."""
         return {"id": self.id, "period": self.period, "kind": self.kind, "parent": self.parent,
                 "points": self.points, "stopped": self.stopped}
 
 
 @dataclass
 class Continuation:
+    """The result of :func:`continue_orbits`: every branch's points as an xarray Dataset, the bifurcations
+    located on them, the branches and the number of map evaluations."""
     param: str
     dataset: xr.Dataset
     bifurcations: list[Bifurcation]
@@ -176,6 +184,7 @@ class Continuation:
     evaluations: int                 # runs of the map (each one FMU doStep over the map's span)
 
     def as_dict(self) -> dict[str, Any]:
+        """The branches and the bifurcations as a JSON-ready dict (the Dataset left out)."""
         return {"param": self.param, "branches": [b.as_dict() for b in self.branches],
                 "bifurcations": [b.as_dict() for b in self.bifurcations]}
 

@@ -91,6 +91,7 @@ class SteadyState:
     error: float = math.nan  # estimated error left in the last window, relative to its amplitude
 
     def as_dict(self) -> dict[str, Any]:
+        """The steady state as a dict of its fields."""
         return asdict(self)
 
 
@@ -750,4 +751,5 @@ def plot_response(ds: Any, path: str | os.PathLike[str]) -> Path:
 
 
 def with_omega(p: Oscillator, f_hz: float) -> Oscillator:
+    """The oscillator driven at ``f_hz`` Hz instead (omega = 2 pi f)."""
     return replace(p, omega=2.0 * math.pi * f_hz)

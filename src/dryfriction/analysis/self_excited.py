@@ -133,23 +133,29 @@ class BeltProblem:
                              f"not {self.h!r}")
 
     def with_(self, **kw: Any) -> "BeltProblem":
+        """A copy with the given fields changed."""
         return replace(self, **kw)
 
     # ---- the model ----
     @property
     def m(self) -> float:
+        """The block's mass, kg."""
         return self.oscillator.m
 
     @property
     def w0(self) -> float:
+        """The natural angular frequency sqrt(k / m), rad/s."""
         return self.oscillator.w0
 
     @property
     def natural_period(self) -> float:
+        """The natural period 2 pi / w0, s."""
         return 2.0 * math.pi / self.w0
 
     @property
     def step(self) -> float:
+        """The FMU's internal step h: the given one, or the natural period over the default number of steps
+        per period."""
         return self.natural_period / STEPS_PER_PERIOD if self.h is None else float(self.h)
 
     @property
@@ -160,6 +166,7 @@ class BeltProblem:
 
     @property
     def mu_k(self) -> float:
+        """The kinetic friction coefficient."""
         return self.oscillator.mu_k
 
     def mu(self, u: float) -> float:
@@ -196,6 +203,8 @@ class BeltProblem:
         return (self.force - p.c * v - p.k * x + fr) / p.m
 
     def settings(self, sensitivity: bool = False, t_obs: float | None = None) -> Settings:
+        """The FMU settings of a run of this problem (belt speed, friction law, step; the state's Jacobian
+        when ``sensitivity``; the observables from ``t_obs`` on)."""
         extra: dict[str, Any] = {"v_belt": self.v_belt}
         if self.F_ext != 0.0:
             extra["F_ext"] = self.F_ext
@@ -276,6 +285,7 @@ class Equilibrium:
 
     @property
     def mu_max(self) -> float:
+        """The largest modulus of the equilibrium's multipliers (below 1: steady sliding is stable)."""
         return float(np.max(np.abs(self.multipliers)))
 
 
@@ -343,10 +353,12 @@ class BeltOrbit:
 
     @property
     def nontrivial(self) -> complex:
+        """The orbit's nontrivial Floquet multiplier (the other one is 1, along the flow)."""
         return complex(self.multipliers[1])
 
     @property
     def sticks(self) -> bool:
+        """Whether the orbit has a stick phase (it rides the belt for a while)."""
         return self.stick_fraction > 0.0
 
 
@@ -618,6 +630,7 @@ class HopfPoint:
 
     @property
     def relative_error(self) -> float:
+        """The located belt speed's relative distance from the formula's, c + N mu'(v_belt) = 0."""
         return abs(self.v_belt - self.formula) / abs(self.formula)
 
 
@@ -663,6 +676,8 @@ def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: 
 
 @dataclass
 class BranchPoint:
+    """One orbit on a branch in the belt speed: its period (s), v0 at the section, amplitude (m), stick share,
+    multipliers, stability and residual."""
     v_belt: float
     period: float
     v0: float
@@ -686,6 +701,7 @@ class Branch:
     hopf: float = math.nan           # where the slip leg was seeded (the located Hopf), m/s
 
     def arrays(self) -> dict[str, np.ndarray]:
+        """The branch's points as arrays by field (and the modulus of the nontrivial multiplier)."""
         keys = ("v_belt", "period", "v0", "amplitude", "stick_fraction", "stable", "residual")
         out = {k: np.array([getattr(p, k) for p in self.points], dtype=float) for k in keys}
         out["mu_nontrivial"] = np.array([abs(p.multipliers[1]) for p in self.points])

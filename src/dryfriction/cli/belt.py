@@ -28,6 +28,7 @@ __all__ = ["add_belt_parser", "belt_main", "belt_json"]
 
 
 def add_belt_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """Add the ``belt`` command and its options to the subcommands ``sub``."""
     b = sub.add_parser("belt", parents=parents, help="self-excited stick-slip on a belt (no excitation)",
                        description="The self-excited motion of the block on a belt at a constant speed: the "
                                    "periodic orbit (period T an unknown, Newton shooting on a section where it "
@@ -169,6 +170,8 @@ def plot_belt(res: Any, fmu: Any, path: Path) -> Path:
 
 
 def belt_main(args: argparse.Namespace) -> int:
+    """Run ``dryfriction belt``: the self-excited orbit or steady sliding, printed (or ``--json``) and written
+    to the output folder; returns the exit status."""
     from ..drivers.oscillator import OscillatorFMU2
     from ..analysis.self_excited import self_excited
 

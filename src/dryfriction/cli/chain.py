@@ -23,6 +23,7 @@ __all__ = ["add_chain_parser", "chain_main", "parse_sets", "write_csv", "plot_ru
 
 
 def add_chain_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """Add the ``chain`` command and its options to the subcommands ``sub``."""
     c = sub.add_parser("chain", parents=parents, help="run the chain of n blocks (DryFrictionChain.fmu)",
                        description="Run the chain of n blocks with dry friction once (FMI 3.0: n set in "
                                    "Configuration Mode) and write its trajectory as NetCDF/CSV and a PNG. "
@@ -61,6 +62,7 @@ def parse_sets(sets: list[str]) -> dict[str, Any]:
 
 
 def write_csv(run: Any, path: Path) -> Path:
+    """Write a chain run's outputs to a CSV file (a column per output and block), atomically."""
     from ..atomic import atomic_write_text
     from ..drivers.chain import OUTPUTS
 
@@ -77,6 +79,7 @@ def write_csv(run: Any, path: Path) -> Path:
 
 
 def plot_run(run: Any, path: Path) -> Path:
+    """Draw a chain run (positions and modes of every block over time) into a PNG."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -110,6 +113,8 @@ def plot_run(run: Any, path: Path) -> Path:
 
 
 def chain_main(args: argparse.Namespace) -> int:
+    """Run ``dryfriction chain``: one run of the chain FMU, written as NetCDF, CSV and PNG; returns the exit
+    status."""
     from ..drivers.chain import ChainFMU2, ChainFMU3
 
     from .console import check_output_folder, result_set

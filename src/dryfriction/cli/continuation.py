@@ -166,6 +166,7 @@ def _clean(x: Any) -> Any:
 
 
 def branches_json(c: Any) -> list[dict[str, Any]]:
+    """The continuation's branches as JSON-ready dicts with their points' values."""
     ds = c.dataset
     out = []
     for b in c.branches:
@@ -182,6 +183,7 @@ def branches_json(c: Any) -> list[dict[str, Any]]:
 
 
 def write_csv(c: Any, path: Path) -> None:
+    """Write every point of the continuation's branches to a CSV file, atomically."""
     ds = c.dataset
     v = {n: ds[n].values for n in ds.data_vars}
     cols = ["branch", "period", "kind", "param", "converged", "stable", "x0", "v0", "amplitude_m", "offset_m",
@@ -229,6 +231,8 @@ def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
 
 
 def plot(c: Any, path: Path, title: str) -> None:
+    """Draw the branches (amplitude and |mu|max against the parameter, unstable ones dashed) with the
+    bifurcations into a PNG."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -266,6 +270,8 @@ def _describe(p: Any, name: str, start: float) -> str:
 
 
 def continuation_main(args: argparse.Namespace) -> int:
+    """Run ``dryfriction continuation`` (or ``bifurcation``): the branches, printed (or ``--json``) and
+    written as NetCDF, CSV and PNG; returns the exit status."""
     from .console import check_output_folder, result_set
 
     if args.command == "bifurcation":
@@ -306,6 +312,8 @@ def continuation_main(args: argparse.Namespace) -> int:
 
 
 def bifurcation_main(args: argparse.Namespace) -> int:
+    """Run ``dryfriction bifurcation``: the branches of the Fig. 8/9 band over the brute-force attractor
+    scatter, one PNG; returns the exit status."""
     from .. import paths
     from .console import check_output_folder, result_set
     from ..studies.common import M_REF, K_REF, MU_S_REF, P0_REF, sweep_settings, table

@@ -45,6 +45,7 @@ def _global_options(suppress: bool) -> argparse.ArgumentParser:
 
 
 def build_parser() -> Parser:
+    """The command line's parser: the global options and every subcommand."""
     p = make_parser("dryfriction", "Dry-friction oscillator FMU: validation, scenes and studies.",
                     parents=[_global_options(False)])
     p.add_argument("--version", action="version", version=f"dryfriction {__version__}")
@@ -193,6 +194,8 @@ RUN_COUNTS = ("transitions", "samples")
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    """Run ``dryfriction validate``: the FMUs against their references, the table printed and the files
+    written; returns the exit status."""
     from .console import check_output_folder
     from ..analysis.report import validate
 
@@ -202,6 +205,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    """Run ``dryfriction run``: one run of a scene, its parameters and results printed with their units (or
+    ``--json``); returns the exit status."""
     from ..drivers.oscillator import OscillatorFMU
 
     physical = any(getattr(args, n) not in (None, 0.0) for n in PHYSICAL if n not in ("x0", "v0")) or \
@@ -262,6 +267,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_response(args: argparse.Namespace) -> int:
+    """Run ``dryfriction response``: the frequency response, printed (or ``--json``) and written as CSV,
+    NetCDF and PNG; returns the exit status."""
     import numpy as np
 
     from ..analysis.response import frequency_response
@@ -365,12 +372,14 @@ def _response_files(ds: Any, out: Path, fmt: str, plot: bool) -> list[Path]:
 
 
 def cmd_scenes(_: argparse.Namespace) -> int:
+    """Run ``dryfriction scenes``: list the scenes and what each simulates; returns 0."""
     for s in scenes.SCENES.values():
         print(f"{s.name:11s} {s.description}")
     return 0
 
 
 def cmd_study(args: argparse.Namespace) -> int:
+    """Run ``dryfriction study``: the named study (or ``list``, ``all``); returns the exit status."""
     from ..studies import run_args
 
     return int(run_args(args))

@@ -34,6 +34,7 @@ NONDIM = ("lam", "mu_s_sigma", "chi")
 
 
 def add_orbit_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """Add the ``orbit`` command and its options to the subcommands ``sub``."""
     from .main import _physical_options
 
     o = sub.add_parser("orbit", parents=parents, help="periodic orbits of K excitation periods with their stability",
@@ -133,6 +134,8 @@ def orbit_headline(orbits: list[Any], K: int) -> str:
 
 
 def orbit_main(args: argparse.Namespace) -> int:
+    """Run ``dryfriction orbit``: every periodic orbit of K periods with its multipliers, printed (or
+    ``--json``); returns the exit status."""
     from ..drivers.oscillator import OscillatorFMU2
     from ..analysis.orbits import find_orbits
 

@@ -76,6 +76,7 @@ class System:
         self.couple(Connection(source, target, gain))
 
     def couple(self, element: Connection | SpringDamper) -> None:
+        """Add a coupling element (checked now: ValueError or FMUError for a bad one)."""
         element.terms()  # checked now
         self.elements.append(element)
 

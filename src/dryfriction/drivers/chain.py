@@ -103,6 +103,7 @@ class ChainRun:
 
     @property
     def n(self) -> int:
+        """The number of blocks."""
         return int(self.x.shape[1])
 
     def stick_share(self, t_from: float = -np.inf) -> np.ndarray:

@@ -161,13 +161,16 @@ class OscillatorFMU2(Driver):
         return plan
 
     def last_successful_time(self) -> float:
+        """The time the last ``fmi2DoStep`` reached (``fmi2GetRealStatus``), s."""
         return self.fmi.last_successful_time()
 
     def reset(self) -> None:
+        """Reset the instance to its instantiated state (``fmi2Reset``), time 0."""
         self.fmi.reset()
         self.time = 0.0
 
     def set_debug_logging(self, on: bool, categories: Sequence[str] = ()) -> None:
+        """Switch the FMU's logging on or off for the given log categories (all when none is given)."""
         self.fmi.set_debug_logging(on, categories)
 
     # ---- runs ----
@@ -243,6 +246,8 @@ class OscillatorFMU2(Driver):
         self.time = t + dt
 
     def step_to(self, t: float) -> None:
+        """Step from the current time to ``t`` in one ``fmi2DoStep`` (FMUCallError with the FMU's sentence if
+        it fails)."""
         inst = self.fmi
         mark = len(inst.messages)
         if s := inst.f.DoStep(inst.component, float(self.time), float(t - self.time), 1):

@@ -93,6 +93,7 @@ class OscillatorFMU3(Driver):
         return self._slave
 
     def set_inputs(self, values: Mapping[str, float]) -> None:
+        """Set the inputs (``F_ext``, ``N_ext``, ``v_belt``) by name; they hold until set again."""
         self.set(values)
 
     def do_step(self, dt: float) -> tuple[bool, bool]:

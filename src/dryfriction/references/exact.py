@@ -97,6 +97,7 @@ class ExactSolution:
 
     @property
     def t_end(self) -> float:
+        """The time the solution ends, s."""
         return self.segments[-1].t1
 
     def switch_times(self) -> np.ndarray:

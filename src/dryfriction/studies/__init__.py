@@ -60,6 +60,8 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 3
 
 
 def resolve(name: str) -> str:
+    """The study's name for ``name`` (case, dashes and aliases such as ``fig5`` allowed); ConfigError naming
+    the studies otherwise."""
     key = name.strip().lower().replace("-", "_")
     key = ALIASES.get(key, key)
     if key not in STUDIES:
@@ -102,6 +104,8 @@ def _default_config(name: str) -> dict[str, Any]:
 
 @dataclass
 class StudyOutcome:
+    """What :func:`run_study` returns: the study's name, its output folder, its summary, the sweeps'
+    statistics and the messages it printed."""
     name: str
     out_dir: Path
     summary: dict[str, Any]
