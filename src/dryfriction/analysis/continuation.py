@@ -322,7 +322,28 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
     the doubled branch of every period doubling and the two asymmetric branches of every symmetry
     breaking (at most ``max_branches`` branches in all). ``symmetric``: continue a symmetric
     period-1 orbit as a fixed point of H = -P^{1/2}. ``progress``: called with the number of points
-    so far. Every DryFrictionWarning the FMU emits reaches the caller."""
+    so far. Every DryFrictionWarning the FMU emits reaches the caller.
+
+    Returns
+    -------
+    Continuation
+        The branches' points (an xarray Dataset: parameter, state, amplitude, multipliers, stability),
+        the bifurcations located on them and the branches.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``param`` or bifurcation type, ``start`` equal to ``stop``, steps out of order,
+        no orbit (or none that converged) to start from.
+
+    Examples
+    --------
+    >>> from dryfriction import Oscillator, continue_orbits
+    >>> p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.8)
+    >>> c = continue_orbits(p, "chi", 0.8, 0.22)
+    >>> [b["type"] for b in c.as_dict()["bifurcations"]]
+    ['symmetry_breaking', 'grazing', 'period_doubling', 'grazing', 'period_doubling']
+    """
     if param not in PARAMETERS:
         raise ValueError(f"unknown continuation parameter {param!r}; valid: {', '.join(PARAMETERS)}")
     for n, v in (("start", start), ("stop", stop)):

@@ -369,7 +369,36 @@ def _stop_time(t_stop: float | None, t_end: float | None) -> float:
 class ChainFMU3(_Chain):
     """The FMI 3.0 chain (``build/fmi3/DryFrictionChain.fmu``) with ``n`` blocks (set in
     Configuration Mode at every :meth:`start`); one instance, reused by every :meth:`run` (reset
-    between runs)."""
+    between runs).
+
+    Parameters
+    ----------
+    n
+        The number of blocks, 1 to 4096.
+    params
+        The chain's values by name: a scalar sets every block, a sequence gives one value per block.
+    fmu_path
+        The FMU; default: the environment's ``DFO_CHAIN_FMU3``, the installed package's, the
+        checkout's ``build/fmi3/``.
+
+    Raises
+    ------
+    ValueError
+        A list of the wrong length, an unknown name or scheme (before anything is set).
+    dryfriction.FMUCallError
+        A value the FMU refuses, with its sentence (``invalid value -1 for m[3]``).
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 3.0 chain FMU.
+
+    Examples
+    --------
+    >>> from dryfriction import ChainFMU3
+    >>> params = {"P0": [1.0] + [0.0] * 7, "k": 1.0, "N": 0.6, "mu_s": 0.5, "omega": 0.5, "h": 0.01}
+    >>> with ChainFMU3(n=8, params=params) as chain:
+    ...     run = chain.run(t_stop=60.0, dt=0.1)        # run.x, .v, .a, .F_friction, .mode: [601, 8]
+    >>> print(run.stick_share().round(2))
+    [0.14 0.45 0.56 0.67 1.   1.   1.   1.  ]
+    """
 
     KIND = paths.CHAIN3
     TERMINATE_ON_CLOSE = True
@@ -460,7 +489,35 @@ ChainFMU = ChainFMU3
 
 class ChainFMU2(_Chain):
     """The FMI 2.0 chain (``build/DryFrictionChain.fmu``): n fixed when it was built (read from the
-    model description: the number of ``m[i]``), structured names ``m[1]`` ... ``x[n]``."""
+    model description: the number of ``m[i]``), structured names ``m[1]`` ... ``x[n]``.
+
+    Parameters
+    ----------
+    params
+        The chain's values by name: a scalar sets every block, a sequence gives one value per block.
+    fmu_path
+        The FMU; default: the environment's ``DFO_CHAIN_FMU``, the installed package's, the checkout's
+        ``build/``.
+    n
+        The number of blocks expected (checked against the FMU's; None: the FMU's).
+
+    Raises
+    ------
+    ValueError
+        A list of the wrong length, an unknown name or scheme, an ``n`` that is not the FMU's.
+    dryfriction.FMUCallError
+        A value the FMU refuses, with its sentence.
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 2.0 chain FMU.
+
+    Examples
+    --------
+    >>> from dryfriction import ChainFMU2
+    >>> with ChainFMU2({"P0": [1.0, 0.0], "N": 0.6, "mu_s": 0.5, "omega": 0.5}) as chain:
+    ...     run = chain.run(t_stop=20.0, dt=0.1)
+    >>> run.x.shape
+    (201, 2)
+    """
 
     KIND = paths.CHAIN
 

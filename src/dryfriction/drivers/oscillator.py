@@ -81,7 +81,31 @@ _SETTINGS_REALS = ("h", "alpha", "t_obs_start", "t_obs_stop", "v_s", "delta")
 class OscillatorFMU2(Driver):
     """One loaded, instantiated FMI 2.0 oscillator FMU, reused across runs (not thread-safe: one
     per thread/worker). :meth:`start` sets an :class:`Oscillator` and :class:`Settings`, then
-    :meth:`do_step` / :meth:`step_to` / :meth:`run` step and :meth:`get` reads."""
+    :meth:`do_step` / :meth:`step_to` / :meth:`run` step and :meth:`get` reads.
+
+    Parameters
+    ----------
+    fmu_path
+        The FMU; default: the environment's ``DFO_FMU``, the installed package's, the checkout's
+        ``build/`` (:mod:`dryfriction.paths`).
+    logging
+        Switch the FMU's debug logging on (its messages become warnings and log records).
+
+    Raises
+    ------
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 2.0 oscillator FMU (one sentence says why).
+    dryfriction.FMUCallError
+        A call the FMU refuses, with the FMU's sentence (the instance stays usable).
+
+    Examples
+    --------
+    >>> from dryfriction import Oscillator, OscillatorFMU2, Settings
+    >>> block = Oscillator.physical(m=0.5, k=2000, zeta=0.003, P0=10, f=10, N=20, mu_s=0.3, mu_k=0.2)
+    >>> with OscillatorFMU2() as fmu:
+    ...     obs = fmu.observables(block, t_stop=100 * block.period, t_obs_start=99 * block.period)
+    ...     traj = fmu.trajectory(block, [i * block.period / 100 for i in range(101)], Settings(h=0))
+    """
 
     KIND = paths.OSCILLATOR
 

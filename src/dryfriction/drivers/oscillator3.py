@@ -40,7 +40,41 @@ def default_fmi3_path() -> Path:
 
 class OscillatorFMU3(Driver):
     """One instance of the FMI 3.0 oscillator FMU with its event options, as a context manager:
-    instantiated, ``params`` set in Initialization Mode, then in step mode at ``start_time``."""
+    instantiated, ``params`` set in Initialization Mode, then in step mode at ``start_time``.
+
+    Parameters
+    ----------
+    params
+        The FMU's variables by name (``m``, ``k``, ``scheme``, ...), set in Initialization Mode.
+    early_return
+        Return from ``fmi3DoStep`` at every stick/slip switch (``earlyReturnAllowed``).
+    event_mode
+        Enter Event Mode at every switch and record the left and right limits (``eventModeUsed``).
+    intermediate
+        An intermediate-update callback ``(t, can_return_early) -> bool``.
+    fmu_path
+        The FMU; default: the environment's ``DFO_FMU3``, the installed package's, the checkout's
+        ``build/fmi3/``.
+    start_time
+        The start time, s.
+    logging
+        Switch the FMU's debug logging on.
+
+    Raises
+    ------
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 3.0 oscillator FMU.
+    dryfriction.FMUCallError
+        A call the FMU refuses, with the FMU's sentence.
+
+    Examples
+    --------
+    >>> from dryfriction import OscillatorFMU3
+    >>> with OscillatorFMU3({"scheme": 3}, early_return=True) as fmu:
+    ...     run = fmu.run(t_stop=5.0, dt=0.1, outputs=("x", "mode"))
+    >>> [s.kind for s in run.switches][:3]
+    ['reversal', 'reversal', 'stop']
+    """
 
     KIND = paths.OSCILLATOR3
     TERMINATE_ON_CLOSE = True
