@@ -6,6 +6,7 @@ intersphinx, no remote images."""
 
 from __future__ import annotations
 
+import re
 import sys
 import types
 from pathlib import Path
@@ -68,7 +69,83 @@ nitpick_ignore_regex = [
     ("py:.*", r"(numpy|np|pathlib|xarray|xr|pandas|collections|collections\.abc|typing|argparse|contextlib|"
               r"ctypes|os|io|concurrent|dask|distributed|matplotlib|fmpy|scipy|enum|types|threading|"
               r"subprocess|dataclasses|array|json|signal|zipfile|tomllib|multiprocessing)(\..*)?"),
+    ("py:.*", r"(.*\._\w+.*|_\w+|T|dryfriction\.\w+(\.\w+)*\.T)"),      # private names, type variables
+    ("py:attr", r".*"),                    # instance attributes named in the prose are not documented
+    ("py:class", r"(OscillatorFMU|ChainFMU|FMI3Oscillator|ChainError)"),  # deprecated aliases
+    ("py:func", r"dryfriction\.cli\.main\.main"),   # the module cli.main is shadowed by the function cli.main
     ("py:class", r"(Path|Any|Callable|Iterator|Iterable|Sequence|Mapping|ndarray|Dataset|DataArray|"
                  r"ArgumentParser|Namespace|TextIO|Figure|Axes|NDArray|float|int|str|bool|complex|bytes|"
                  r"None|object|type|Self|optional|callable|array_like|array-like|Client|LocalCluster)"),
 ]
+
+
+def _keep_attribute_prose(app, what, name, obj, options, lines):  # noqa: ANN001
+    """The package's attribute and property docstrings are prose ("the step h: the given one, ..."):
+    undo napoleon's reading of the text before a first colon as a type."""
+    if what not in {"attribute", "data", "property"}:
+        return
+    for i, line in enumerate(lines):
+        if line.startswith(":type: "):
+            head = line[len(":type: "):]
+            del lines[i]
+            if i and not lines[i - 1].strip():
+                del lines[i - 1]
+            first = next((j for j, text in enumerate(lines) if text.strip()), None)
+            if first is None:
+                lines.append(head)
+            else:
+                lines[first] = f"{head}: {lines[first]}"
+            return
+
+
+
+def _skip_aliases(app, what, name, obj, skip, options):  # noqa: ANN001
+    """A class or function bound under a second name in its module (a deprecated alias) is
+    documented once, under its own name."""
+    own = getattr(obj, "__name__", name)
+    if (isinstance(obj, type) or callable(obj)) and own != name and not name.startswith("_") \
+            and getattr(obj, "__module__", "").startswith("dryfriction"):
+        return True
+    return None
+
+
+def _resolve_short_names(app, env, node, contnode):  # noqa: ANN001
+    """A reference by a short or re-exported name (``UsageError``, ``dryfriction.FMUCallError``,
+    ``dryfriction.cosim.System``) resolves to the one documented object of that name."""
+    if node.get("refdomain") != "py":
+        return None
+    target = node.get("reftarget", "")
+    last = target.rsplit(".", 1)[-1]
+    domain = env.get_domain("py")
+    hits = [name for name in domain.objects if name.rsplit(".", 1)[-1] == last
+            and name.startswith("dryfriction.") and ("." not in target or name.endswith(target.split(".", 1)[-1])
+                                                    or target.startswith("dryfriction."))]
+    if len(hits) != 1:
+        return None
+    node["reftarget"] = hits[0]
+    return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], hits[0], node, contnode)
+
+
+def _escape_bars(app, what, name, obj, options, lines):  # noqa: ANN001
+    """The docstrings write absolute values as |x| in prose; outside literals and literal blocks a
+    bar is escaped, so that reStructuredText does not read |x| as a substitution."""
+    literal_indent = None
+    for i, line in enumerate(lines):
+        indent = len(line) - len(line.lstrip())
+        if literal_indent is not None:
+            if line.strip() and indent <= literal_indent:
+                literal_indent = None
+            else:
+                continue
+        if line.rstrip().endswith("::"):
+            literal_indent = indent
+        parts = re.split(r"(``.*?``|`[^`]*`)", line)
+        lines[i] = "".join(part if j % 2 else part.replace("|", "\\|") for j, part in enumerate(parts))
+
+
+def setup(app):  # noqa: ANN001, ANN201
+    """Register the docstring fix-up after napoleon (priority 500)."""
+    app.connect("autodoc-process-docstring", _keep_attribute_prose, priority=600)
+    app.connect("autodoc-skip-member", _skip_aliases)
+    app.connect("autodoc-process-docstring", _escape_bars, priority=400)
+    app.connect("missing-reference", _resolve_short_names)

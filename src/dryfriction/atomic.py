@@ -1,5 +1,5 @@
 """The one way files are written: to a temporary name beside the target, then renamed over it,
-so that a reader (or a restarted sweep) never sees a half-written file.
+so that a reader (or a restarted sweep) never sees a half-written file::
 
     with atomic_path(path) as tmp:     # any writer that takes a path (to_netcdf, savefig, np.save)
         write(tmp)
@@ -83,7 +83,7 @@ def staged_outputs(folder: str | os.PathLike[str]) -> Iterator[Path]:
     (same file system); when the block ends without error every file written into it is moved into
     ``folder`` (created if missing: then the staging folder itself is renamed, one step), with
     SIGINT and SIGTERM held until the last one is in place. On an error or an interrupt inside the
-    block the staging folder is removed and ``folder`` is left exactly as it was.
+    block the staging folder is removed and ``folder`` is left exactly as it was::
 
         with staged_outputs(out) as stage:
             write_csv(stage / "response.csv"); write_png(stage / "response.png")

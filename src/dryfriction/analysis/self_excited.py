@@ -24,7 +24,7 @@ second column of the flow's Jacobian M = d(x, v)(T) / d(x, v)(0):
 M's eigenvalues are the Floquet multipliers: the trivial one 1 (along the flow) and the nontrivial
 one (the section map's derivative). A stick phase on the orbit makes M rank one (the block rides on
 the belt whatever it started from): the nontrivial multiplier is then exactly 0 and the trivial one
-trace(M). Converged when the scaled residual max(|R_x| / X, |R_v| / (X w0)) is at most ``tol``
+trace(M). Converged when the scaled residual ``max(|R_x| / X, |R_v| / (X w0))`` is at most ``tol``
 (X = mu_s N / k, the friction's deflection; w0 = sqrt(k / m)).
 
 **Steady sliding** is stable when both multipliers of the flow over a fixed time tau (a natural
@@ -32,7 +32,7 @@ period) from the equilibrium are inside the unit circle (by more than NEUTRAL = 
 the circle: neutral) (M by central differences with ``located``,
 the sensitivity with ``exact``). With Stribeck friction (delta = 1) it loses stability at the Hopf
 belt speed where c + N mu'(|v_belt|) = 0: :func:`locate_hopf` finds it from the model, by Brent's
-method on ln |mu|max / tau (the growth rate of the equilibrium's flow) in the belt speed.
+method on ``ln |mu|max / tau`` (the growth rate of the equilibrium's flow) in the belt speed.
 
 **The branch.** :func:`continue_orbits` follows the orbit in v_belt by pseudo-arclength
 continuation in (v0, T, v_belt) (dR/dv_belt by central differences: the section moves with x_eq),
@@ -636,7 +636,7 @@ class HopfPoint:
 
 def locate_hopf(prob: BeltProblem, lo: float, hi: float, *, num: int = 12, fmu: OscillatorFMU2 | None = None,
                 xtol: float = 1e-13) -> HopfPoint:
-    """The belt speed in [lo, hi] (same sign, |lo| < |hi|) where steady sliding changes stability: its
+    """The belt speed in [lo, hi] (same sign, ``|lo| < |hi|``) where steady sliding changes stability: its
     multipliers over tau = a quarter of the natural period (a complex pair near +-i there, well apart)
     followed over a scan of ``num`` speeds (geometric), then Brent's method on the growth rate
     ln |mu|max / tau. RuntimeError if no sign change, or if what crosses |mu| = 1 is not a complex

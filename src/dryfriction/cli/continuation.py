@@ -231,7 +231,7 @@ def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
 
 
 def plot(c: Any, path: Path, title: str) -> None:
-    """Draw the branches (amplitude and |mu|max against the parameter, unstable ones dashed) with the
+    """Draw the branches (amplitude and ``|mu|max`` against the parameter, unstable ones dashed) with the
     bifurcations into a PNG."""
     import matplotlib
 

@@ -2,7 +2,7 @@
 
 fmpy's ``simulate_fmu`` cannot set a structural parameter, so the number of blocks ``n`` of the
 FMI 3.0 chain is set here: instantiate, Configuration Mode, ``n``, then the arrays and scalars in
-Initialization Mode, then steps on the host's grid ``k dt`` with the outputs read at every point:
+Initialization Mode, then steps on the host's grid ``k dt`` with the outputs read at every point::
 
     from dryfriction.drivers.chain import ChainFMU3
     with ChainFMU3(n=8, params={"mu_s": 0.3, "P0": [1.0] + [0.0] * 7, "omega": 0.5}) as chain:
@@ -368,7 +368,7 @@ def _stop_time(t_stop: float | None, t_end: float | None) -> float:
 
 class ChainFMU3(_Chain):
     """The FMI 3.0 chain (``build/fmi3/DryFrictionChain.fmu``) with ``n`` blocks (set in
-    Configuration Mode at every :meth:`start`); one instance, reused by every :meth:`run` (reset
+    Configuration Mode at every :meth:`ChainFMU3.start`); one instance, reused by every :meth:`ChainFMU3.run` (reset
     between runs).
 
     Parameters

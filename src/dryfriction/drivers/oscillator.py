@@ -57,7 +57,7 @@ def _scheme_start() -> str:
 class Settings:
     """Numerical and scene settings of one run (FMU variable names; defaults: the model's starts, except
     ``observe``: off unless a run reads the observables, so that runs which do not pay nothing for them
-    per step; :meth:`OscillatorFMU.observables` and the scenes that read them turn it on)."""
+    per step; :meth:`OscillatorFMU2.observables` and the scenes that read them turn it on)."""
 
     h: float | None = None            # internal step, s (None: period / 1000; 0: the FMU derives it)
     alpha: float = field(default_factory=lambda: float(_start("alpha")))

@@ -1,7 +1,7 @@
 """Driving the FMI 3.0 oscillator FMU (build/fmi3/DryFrictionOscillator.fmu) through the package's
 FMI 3.0 layer (:mod:`dryfriction.fmi.fmi3`): plain stepping, early return at every stick/slip
 switch, event mode with the left and right limits of a switch, and the intermediate-update
-callback.
+callback::
 
     with OscillatorFMU3(params={"scheme": 3}, early_return=True) as fmu:
         run = fmu.run(t_stop=4.0, dt=0.1, outputs=("x", "mode"))
@@ -29,7 +29,8 @@ from ..fmi._base import State
 
 __all__ = ["OscillatorFMU3", "FMI3Oscillator", "Run", "Switch", "Intermediate", "default_fmi3_path"]
 
-Intermediate = Callable[[float, bool], bool]  # (time, canReturnEarly) -> earlyReturnRequested
+#: the intermediate-update callback: (time, canReturnEarly) -> earlyReturnRequested
+Intermediate = Callable[[float, bool], bool]
 
 
 def default_fmi3_path() -> Path:

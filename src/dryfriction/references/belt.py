@@ -2,7 +2,7 @@
 stick/slip solution for Coulomb and Stribeck friction, and the closed-form stick-slip limit cycle of
 the undamped, unforced Coulomb belt oscillator.
 
-The model (one block; the FMU's, issue "a moving rough surface and speed-dependent friction"):
+The model (one block; the FMU's)::
 
     m x'' + c x' + k x = P0 cos(omega t + phi) + F_ext + F,     v_rel = v - v_belt,
     stuck:   v = v_belt, while the force that keeps it so, |f|, f = P(t) + F_ext - c v_belt - k x,

@@ -1,4 +1,4 @@
-"""The paper's studies, one module each, with a registry and the ``study`` command.
+"""The paper's studies, one module each, with a registry and the ``study`` command::
 
     dryfriction study list
     dryfriction study <name> [--quick] [--out DIR] [--workers N] [--scheduler ADDR]

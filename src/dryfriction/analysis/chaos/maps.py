@@ -2,7 +2,7 @@
 solution.
 
 Everything is non-dimensional (method.md (2)): z = k x / P0, z' = dz/dtau, tau = w0 t, T the
-excitation period. A map is started *afresh* at each call of :meth:`advance`: the FMU is reset and
+excitation period. A map is started *afresh* at each call of :meth:`FMUMap.advance`: the FMU is reset and
 initialised at (z, z') with the excitation phase phi (a whole number of periods later the phase is
 the same), so that two calls from nearby points differ only by their initial point and not by any
 history the integrator carries (Bossak acceleration, caches). This is what the two-trajectory
@@ -112,7 +112,7 @@ class StroboscopicMap(Protocol):
 
 
 class FMUMap:
-    """The time-T map through one FMU instance (reset at every :meth:`advance`)."""
+    """The time-T map through one FMU instance (reset at every :meth:`FMUMap.advance`)."""
 
     def __init__(self, fmu: OscillatorFMU, nd: NDParams, steps_per_period: int = 1000, scheme: str = DEFAULT_SCHEME,
                  alpha: float = -0.1) -> None:
