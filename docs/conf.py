@@ -33,7 +33,7 @@ extensions = [
     "sphinx.ext.mathjax",
 ]
 
-source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}  # .rst first: autosummary writes its pages with the first
 root_doc = "index"
 exclude_patterns = ["_build", "_templates", "Thumbs.db", ".DS_Store"]
 templates_path = ["_templates"]
@@ -69,13 +69,14 @@ nitpick_ignore_regex = [
     ("py:.*", r"(numpy|np|pathlib|xarray|xr|pandas|collections|collections\.abc|typing|argparse|contextlib|"
               r"ctypes|os|io|concurrent|dask|distributed|matplotlib|fmpy|scipy|enum|types|threading|"
               r"subprocess|dataclasses|array|json|signal|zipfile|tomllib|multiprocessing)(\..*)?"),
-    ("py:.*", r"(.*\._\w+.*|_\w+|T|dryfriction\.\w+(\.\w+)*\.T)"),      # private names, type variables
+    ("py:.*", r"(.*\._\w+.*|_\w+(\.\w+)*|T|dryfriction\.\w+(\.\w+)*\.T)"),  # private names, type variables
     ("py:attr", r".*"),                    # instance attributes named in the prose are not documented
     ("py:class", r"(OscillatorFMU|ChainFMU|FMI3Oscillator|ChainError)"),  # deprecated aliases
     ("py:func", r"dryfriction\.cli\.main\.main"),   # the module cli.main is shadowed by the function cli.main
     ("py:class", r"(Path|Any|Callable|Iterator|Iterable|Sequence|Mapping|ndarray|Dataset|DataArray|"
                  r"ArgumentParser|Namespace|TextIO|Figure|Axes|NDArray|float|int|str|bool|complex|bytes|"
-                 r"None|object|type|Self|optional|callable|array_like|array-like|Client|LocalCluster)"),
+                 r"None|object|type|Self|optional|callable|array_like|array-like|Client|LocalCluster|module|"
+                 r"SimpleNamespace|Intermediate)"),
 ]
 
 
