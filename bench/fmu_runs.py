@@ -1,7 +1,7 @@
 """Running and timing the FMU from Python for the study: the error of one configuration against the
 exact solution, and the time of one run through a reused instance, two ways:
 
-- ``api``: what a user writes, ``OscillatorFMU.start(p, settings)``, ``step_to(t_end)``, ``get(['x'])``;
+- ``api``: what a user writes, ``OscillatorFMU2.start(p, settings)``, ``step_to(t_end)``, ``get(['x'])``;
 - ``lean``: the same fmi2 calls on the same instance with the value-reference and value arrays
   built once (the typed functions of dryfriction.fmi.fmi2), to separate the FMU's cost from the
   Python wrapper's.
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 PARAM_NAMES = ("m", "k", "c", "P0", "omega", "phi", "N", "mu_s", "chi", "x0", "v0")
@@ -57,11 +57,11 @@ class FmuConfig:
 
 
 class LeanRunner:
-    """The fmi2 calls of OscillatorFMU.start/step_to/get on the same instance, without the
+    """The fmi2 calls of OscillatorFMU2.start/step_to/get on the same instance, without the
     driver's Python around them: the FMI layer's typed functions and value arrays built once,
     filled once per configuration. Raises FMUError (through the layer's check) on a failed call."""
 
-    def __init__(self, fmu: OscillatorFMU) -> None:
+    def __init__(self, fmu: OscillatorFMU2) -> None:
         self.fmu = fmu
         self.inst = fmu.fmi
         md = fmu.md
@@ -98,8 +98,8 @@ class LeanRunner:
         return self.xval[0]
 
 
-def api_run(fmu: OscillatorFMU, p: Oscillator, st: Settings, t_end: float) -> float:
-    """One whole run the way a user writes it with the reused OscillatorFMU."""
+def api_run(fmu: OscillatorFMU2, p: Oscillator, st: Settings, t_end: float) -> float:
+    """One whole run the way a user writes it with the reused OscillatorFMU2."""
     fmu.start(p, st)
     fmu.step_to(t_end)
     return fmu.get(["x"])["x"]
@@ -113,7 +113,7 @@ def sample_times(p: Oscillator, periods: int, steps_per_period: int, samples_per
     return np.arange(n + 1) * (periods * p.period / n)
 
 
-def fmu_error(fmu: OscillatorFMU, p: Oscillator, cfg: FmuConfig, periods: int, samples_per_period: int,
+def fmu_error(fmu: OscillatorFMU2, p: Oscillator, cfg: FmuConfig, periods: int, samples_per_period: int,
               exact_x: Callable[[np.ndarray], np.ndarray]) -> tuple[float, int]:
     """max |z - z_exact| (z = k x / P0) at the sample points, and the number of samples."""
     t = sample_times(p, periods, cfg.steps_per_period, samples_per_period)

@@ -1,5 +1,5 @@
 """Host time per reused run, from Python: a short run (lambda 0.5, mu_s sigma 0.4, chi 0.7, located,
-h = T/50, one period, read x) through the ``OscillatorFMU`` API (start, step_to, get) and one row of
+h = T/50, one period, read x) through the ``OscillatorFMU2`` API (start, step_to, get) and one row of
 ``BatchRunner.run`` (reset ... doStep, read the observables). Prints the minimum over repetitions in
 microseconds; the FMU's own work is the same in both, so differences between versions of the
 Python layer are its overhead.
@@ -16,7 +16,7 @@ from collections.abc import Callable
 import numpy as np
 
 from dryfriction.cli.options import make_parser
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import PARAM_COLUMNS, BatchRunner
 
@@ -37,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     st = Settings(h=p.period / 50, alpha=-0.1, scheme="located")
-    with OscillatorFMU(args.fmu) as fmu:
+    with OscillatorFMU2(args.fmu) as fmu:
         def api() -> float:
             fmu.start(p, st)
             fmu.step_to(p.period)
@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     table = np.array([[row[c] for c in PARAM_COLUMNS]] * 100)
     batch_us = best_us(lambda: runner.run(table), max(args.reps // 100, 5)) / 100
     runner.close()
-    print(f"OscillatorFMU API run: {api_us:.2f} us")
+    print(f"OscillatorFMU2 API run: {api_us:.2f} us")
     print(f"BatchRunner row:       {batch_us:.2f} us")
     return 0
 

@@ -76,11 +76,11 @@ def best_case_transient(p: Oscillator, f: np.ndarray, ref: np.ndarray, target: f
                         repeats: int) -> tuple[float, float]:
     """Per point the fewest periods n = 32, 64, ... whose window [n/2, n] T gives the amplitude within
     target of ref (found in hindsight), then the time of those single runs; (seconds, mean periods)."""
-    from dryfriction.drivers.oscillator import OscillatorFMU
+    from dryfriction.drivers.oscillator import OscillatorFMU2
     from dryfriction.analysis.response import default_settings
 
     ns = []
-    with OscillatorFMU(fmu_path) as fmu:
+    with OscillatorFMU2(fmu_path) as fmu:
         for fi, a in zip(f, ref):
             q = p.with_(omega=2 * math.pi * fi)
             n = 32

@@ -132,7 +132,7 @@ def cost_growth(scaling: Sequence[dict], path: Path, bare_ns: float | None) -> N
     per = sorted((r for r in scaling if r["kind"] == "periods"), key=lambda r: r["x"])
     if per:
         x = np.array([r["x"] for r in per], float)
-        a1.loglog(x, [r["seconds_api"] * 1e6 for r in per], "o-", label="OscillatorFMU API")
+        a1.loglog(x, [r["seconds_api"] * 1e6 for r in per], "o-", label="OscillatorFMU2 API")
         a1.loglog(x, [r["seconds_lean"] * 1e6 for r in per], "s--", label="lean fmi2 calls")
         if bare_ns:
             a1.loglog(x, x * per[0]["steps"] / per[0]["x"] * bare_ns * 1e-3, "k:",
@@ -145,7 +145,7 @@ def cost_growth(scaling: Sequence[dict], path: Path, bare_ns: float | None) -> N
     spp = sorted((r for r in scaling if r["kind"] == "steps_per_period"), key=lambda r: r["x"])
     if spp:
         x = np.array([r["x"] for r in spp], float)
-        a2.loglog(x, [r["seconds_api"] * 1e6 for r in spp], "o-", label="OscillatorFMU API")
+        a2.loglog(x, [r["seconds_api"] * 1e6 for r in spp], "o-", label="OscillatorFMU2 API")
         a2.loglog(x, [r["seconds_lean"] * 1e6 for r in spp], "s--", label="lean fmi2 calls")
         a2.set_xlabel("internal steps per period")
         a2.set_ylabel("time per run (us)")

@@ -219,7 +219,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
         "(`dryfriction.references.exact.solve_exact`), sampled on a uniform grid of "
         f"{cfg.samples_per_period} points per period (the FMU at its internal nodes when h is coarser). "
         "Cost = wall time (time.perf_counter, minimum over repetitions) of one whole run, divided by the "
-        "number of periods. The FMU runs through one reused `OscillatorFMU` instance (reset, set the "
+        "number of periods. The FMU runs through one reused `OscillatorFMU2` instance (reset, set the "
         "parameters, initialise, one doStep over the horizon, read x); the peers (`bench/peers.py`) are "
         "scipy `solve_ivp` runs: the event-driven switching model restarted at every stop and breakaway "
         "(RK45, DOP853, Radau at several tolerances) and a tanh-smoothed (Stribeck-shaped) law "
@@ -340,8 +340,8 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
     ho = next((r for r in scal if r["kind"] == "host_overhead"), None)
     if ho:
         verdict = "PASS" if ho["overhead_api_us"] <= 20 else (
-            "MISS (the OscillatorFMU API); PASS with the lean fmi2 calls" if ho["overhead_lean_us"] <= 20 else "MISS")
-        add(f"| host overhead per reused fmpy run at most 20 us | OscillatorFMU API {ho['overhead_api_us']:.1f} us, "
+            "MISS (the OscillatorFMU2 API); PASS with the lean fmi2 calls" if ho["overhead_lean_us"] <= 20 else "MISS")
+        add(f"| host overhead per reused fmpy run at most 20 us | OscillatorFMU2 API {ho['overhead_api_us']:.1f} us, "
             f"lean fmi2 calls on the same instance {ho['overhead_lean_us']:.1f} us (run through fmpy minus the same "
             f"run through the fmi2 functions in C, {ho['c_fmi2_run_seconds'] * 1e6:.1f} us) | {verdict} |")
     add("")
@@ -413,7 +413,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
                  "shared host: see the plot; the host-overhead goal above measures the fixed cost directly)")
         add(f"- Time vs periods ({cases[0].name}, located, h = T/{spp:.0f}, {per[0]['x']}..{per[-1]['x']} periods) "
             f"{shape}: least squares (relative weights) give t = {a * 1e6:.1f} us + {b * 1e6:.1f} us x periods "
-            f"through the OscillatorFMU API (worst relative residual {res:.1%}), t = {al * 1e6:.1f} us + "
+            f"through the OscillatorFMU2 API (worst relative residual {res:.1%}), t = {al * 1e6:.1f} us + "
             f"{bl * 1e6:.1f} us x periods with the lean calls ({resl:.1%}). Per internal step: "
             f"{b / spp * 1e9:.0f} ns (API), {bl / spp * 1e9:.0f} ns (lean){bare_txt}. "
             f"The intercept is the fixed cost of a run (host calls, reset, initialisation).")
@@ -428,7 +428,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
         txt = ", ".join(f"{r['x']} worker{'s' if r['x'] > 1 else ''}: {r['runs_per_second']:.0f} runs/s" for r in dk)
         speed = dk[-1]["runs_per_second"] / dk[0]["runs_per_second"] if len(dk) > 1 else float("nan")
         add(f"- Dask sweep throughput ({dk[0]['runs']} runs of {cfg.dask_periods} periods at h = T/{cfg.dask_spp}, "
-            f"observables computed in the FMU, batches of {cfg.dask_batch}, one reused OscillatorFMU per worker "
+            f"observables computed in the FMU, batches of {cfg.dask_batch}, one reused OscillatorFMU2 per worker "
             f"process, best of {cfg.dask_reps} sweeps per cluster): {txt} (x{speed:.2f} from 1 to {dk[-1]['x']}). "
             "The machine has 2 cores shared with other jobs" + _baseline_text(scal) + ".")
     add("")
@@ -461,7 +461,7 @@ def write_report(md: Path, out: Path, cfg, cases, case_rows, rows, orders, c_row
         + ", ".join(f"{c.name} {_min_error(rows, c.name, 'smoothed'):.1e}" for c in cases) + ".")
     add("- 'Host overhead per run' is the time of a short run (first case, located, h = T/50, one period, "
         "read x) through fmpy minus the same run through the fmi2 functions in C (bench_stepper's `fmi2_run` row). "
-        "The OscillatorFMU API spends most of it building name->value dicts and ctypes arrays on every run; "
+        "The OscillatorFMU2 API spends most of it building name->value dicts and ctypes arrays on every run; "
         "the lean path builds them once.")
     add("- Quick mode (`--quick`) uses h = T/100 ... T/3200, two tolerances per peer, two widths and short timing "
         "budgets: "

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from fmu_runs import LeanRunner, api_run, best_time
@@ -23,7 +23,7 @@ from fmu_runs import LeanRunner, api_run, best_time
 
 # ---------------------------------------------------------------------------- time vs problem size
 
-def cost_vs_periods(fmu: OscillatorFMU, p: Oscillator, scheme: str, alpha: float, steps_per_period: int,
+def cost_vs_periods(fmu: OscillatorFMU2, p: Oscillator, scheme: str, alpha: float, steps_per_period: int,
                     periods: Sequence[int], budget_s: float) -> list[dict]:
     """Run time (api and lean) against the number of periods at a fixed step."""
     lean = LeanRunner(fmu)
@@ -39,7 +39,7 @@ def cost_vs_periods(fmu: OscillatorFMU, p: Oscillator, scheme: str, alpha: float
     return rows
 
 
-def cost_vs_steps(fmu: OscillatorFMU, p: Oscillator, scheme: str, alpha: float, periods: int,
+def cost_vs_steps(fmu: OscillatorFMU2, p: Oscillator, scheme: str, alpha: float, periods: int,
                   steps_per_period: Sequence[int], budget_s: float) -> list[dict]:
     """Run time (api and lean) against the steps per period over a fixed horizon."""
     lean = LeanRunner(fmu)
@@ -66,13 +66,13 @@ def linear_fit(x: Sequence[float], y: Sequence[float]) -> tuple[float, float, fl
 # ---------------------------------------------------------------------------- Dask throughput
 
 def _sweep_batch(fmu_path: str, points: list[tuple[float, ...]], periods: int, steps_per_period: int) -> list[float]:
-    """Runs on a Dask worker: one OscillatorFMU per worker process, reused for every point."""
+    """Runs on a Dask worker: one OscillatorFMU2 per worker process, reused for every point."""
     from distributed import get_worker
 
     w = get_worker()
     fmu = getattr(w, "_dfo_bench_fmu", None)
     if fmu is None:
-        fmu = OscillatorFMU(fmu_path)
+        fmu = OscillatorFMU2(fmu_path)
         w._dfo_bench_fmu = fmu
     out = []
     for lam, mss, chi, zeta in points:
@@ -158,13 +158,13 @@ def rss_bytes() -> int:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
-def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps: int) -> list[dict]:
+def memory_rows(fmu: OscillatorFMU2, p: Oscillator, n_instances: int, long_steps: int) -> list[dict]:
     """Bytes per FMU instance and RSS before/after long runs.
 
     - per fmi2 instance: n_instances more instances (dryfriction.fmi.fmi2.Instance) of the already
       unzipped FMU (the shared library is loaded once): RSS delta and Python-heap (tracemalloc)
       delta, per instance;
-    - per OscillatorFMU (unzip + load a private copy + instantiate): RSS delta over a few;
+    - per OscillatorFMU2 (unzip + load a private copy + instantiate): RSS delta over a few;
     - a run of long_steps internal steps in one doStep, three times: RSS before and after each.
     """
     from dryfriction.fmi.fmi2 import Instance
@@ -191,10 +191,10 @@ def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps:
 
     n_full = max(2, n_instances // 20)
     rss0 = rss_bytes()
-    extra = [OscillatorFMU(fmu.path) for _ in range(n_full)]
+    extra = [OscillatorFMU2(fmu.path) for _ in range(n_full)]
     rss1 = rss_bytes()
     rows.append(dict(kind="rss_per_OscillatorFMU", value=(rss1 - rss0) / n_full, unit="bytes",
-                     note=f"RSS delta over {n_full} OscillatorFMU objects (each unzips and loads its own copy)"))
+                     note=f"RSS delta over {n_full} OscillatorFMU2 objects (each unzips and loads its own copy)"))
     for e in extra:
         e.close()
     del extra
@@ -218,7 +218,7 @@ def memory_rows(fmu: OscillatorFMU, p: Oscillator, n_instances: int, long_steps:
     return rows
 
 
-def fmu_library_path(fmu: OscillatorFMU) -> Path:
+def fmu_library_path(fmu: OscillatorFMU2) -> Path:
     """The shared library the FMI layer loaded (what bench_stepper should time too)."""
     from dryfriction.fmi.fmi2 import library_path
 

@@ -46,7 +46,7 @@ class PeerCase:
     note: str
     reference: Callable[[np.ndarray], np.ndarray] | None = None  # t -> x [nt, n]
     oscillator: object | None = None  # dryfriction.params.Oscillator (kind oscillator)
-    chain_params: dict = field(default_factory=dict)  # ChainFMU parameters (kind chain)
+    chain_params: dict = field(default_factory=dict)  # ChainFMU3 parameters (kind chain)
 
     @property
     def n(self) -> int:

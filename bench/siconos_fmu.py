@@ -36,17 +36,17 @@ class FmuSide:
     """The oscillator FMU (FMI 2.0) and the chain FMU (FMI 3.0), loaded once."""
 
     def __init__(self, budget_s: float, fmu_path: str | None = None) -> None:
-        from dryfriction.drivers.oscillator import OscillatorFMU
+        from dryfriction.drivers.oscillator import OscillatorFMU2
 
-        self.osc = OscillatorFMU(fmu_path)
+        self.osc = OscillatorFMU2(fmu_path)
         self.chains: dict[int, object] = {}
         self.budget = budget_s
 
     def chain(self, n: int):
-        from dryfriction.drivers.chain import ChainFMU
+        from dryfriction.drivers.chain import ChainFMU3
 
         if n not in self.chains:
-            self.chains[n] = ChainFMU(n=n)
+            self.chains[n] = ChainFMU3(n=n)
         return self.chains[n]
 
     def run(self, case: PeerCase, scheme: str, h: float, steps: int, every: int) -> dict:

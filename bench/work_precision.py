@@ -7,7 +7,7 @@ instead.
 
 Five cases (bench/cases.py), error = max |z - z_exact| over the run (z = k x / P0, the position in
 static deflections) against dryfriction.references.exact.solve_exact. The FMU: scheme paper / consistent /
-located, h = T/50 ... T/102400, alpha in {0, -0.1, -1/3}, timed through one reused OscillatorFMU
+located, h = T/50 ... T/102400, alpha in {0, -0.1, -1/3}, timed through one reused OscillatorFMU2
 (min of several runs, time.perf_counter). Peers (bench/peers.py): event-driven solve_ivp (RK45,
 DOP853, Radau) and a tanh-smoothed law (Radau, LSODA). Siconos (bench/siconos_study.py:
 Moreau-Jean with the relay solved by Lemke, theta 0.5 and 1) on the same cases at chi = 1, the only
@@ -372,7 +372,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from cases import CASES
     from dryfriction.references.exact import solve_exact
-    from dryfriction.drivers.oscillator import OscillatorFMU
+    from dryfriction.drivers.oscillator import OscillatorFMU2
     from peers import peer_settings
     import scaling
 
@@ -382,7 +382,7 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     args.md.parent.mkdir(parents=True, exist_ok=True)
 
-    fmu = OscillatorFMU(args.fmu)
+    fmu = OscillatorFMU2(args.fmu)
     phases: dict[str, float] = {}
     t_phase = time.perf_counter()
 

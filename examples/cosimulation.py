@@ -16,7 +16,7 @@ import argparse
 import numpy as np
 
 from dryfriction import Oscillator
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 
 
 def main() -> None:
@@ -28,7 +28,7 @@ def main() -> None:
     block = Oscillator.physical(m=0.5, k=2000.0, P0=10.0, f=10.0, N=20.0, mu_s=0.3, mu_k=0.2)
     dt = block.period / 200                       # communication step
     n = args.periods * 200
-    with OscillatorFMU() as fmu:
+    with OscillatorFMU2() as fmu:
         fmu.start(block, Settings(h=0.0, extra={"F_ext": 0.0}))   # h = 0: the FMU derives its step
         x = np.empty(n + 1)
         for j in range(n + 1):

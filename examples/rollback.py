@@ -1,7 +1,7 @@
 """A rollback with FMU states: save the state, try a step, go back, try another input; and the
 same through serialised bytes (as a master that checkpoints to disk would).
 
-Uses the public OscillatorFMU.get_state / set_state / serialize_state / restore; no fmpy objects.
+Uses the public OscillatorFMU2.get_state / set_state / serialize_state / restore; no fmpy objects.
 
     python examples/rollback.py
 """
@@ -9,13 +9,13 @@ Uses the public OscillatorFMU.get_state / set_state / serialize_state / restore;
 from __future__ import annotations
 
 from dryfriction import Oscillator
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 
 
 def main() -> None:
     block = Oscillator.physical(m=0.5, k=2000.0, P0=10.0, f=10.0, N=20.0, mu_s=0.3, mu_k=0.2)
     dt = block.period / 50
-    with OscillatorFMU() as fmu:
+    with OscillatorFMU2() as fmu:
         fmu.start(block, Settings(h=0.0))
         fmu.step_to(10 * dt)
         saved = fmu.get_state()                       # an FMU state (inputs included)

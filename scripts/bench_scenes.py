@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from dryfriction.drivers import scenes
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from dryfriction.cli.options import make_parser
 from dryfriction.atomic import atomic_write_bytes
@@ -42,7 +42,7 @@ def best_pair(fa: Callable[[], object], fb: Callable[[], object], repeat: int,
     return best[0], best[1]
 
 
-def sampled_extremes(fmu: OscillatorFMU, p: Oscillator, t0: float, t1: float, h: float, general: bool) -> float:
+def sampled_extremes(fmu: OscillatorFMU2, p: Oscillator, t0: float, t1: float, h: float, general: bool) -> float:
     """The host-side way: sample x at every internal step through fmpy, reduce in numpy."""
     n0, n1 = int(round(t0 / h)), int(round(t1 / h))
     t = np.arange(n1 + 1) * h
@@ -51,7 +51,7 @@ def sampled_extremes(fmu: OscillatorFMU, p: Oscillator, t0: float, t1: float, h:
     return (x.max() - x.min()) / 2
 
 
-def scene_rows(fmu: OscillatorFMU, repeat: int, quick: bool) -> list[dict[str, object]]:
+def scene_rows(fmu: OscillatorFMU2, repeat: int, quick: bool) -> list[dict[str, object]]:
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     T = p.period
     h = T / (500 if quick else 1000)
@@ -87,7 +87,7 @@ def scene_rows(fmu: OscillatorFMU, repeat: int, quick: bool) -> list[dict[str, o
     return rows
 
 
-def effect_rows(fmu: OscillatorFMU, repeat: int, quick: bool) -> list[dict[str, object]]:
+def effect_rows(fmu: OscillatorFMU2, repeat: int, quick: bool) -> list[dict[str, object]]:
     """ns per internal step with and without each fast path (one long doStep)."""
     base = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     cases = {
@@ -143,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.fmu is not None and not args.fmu.is_file():
         print(f"bench_scenes: error: --fmu: no such file: {args.fmu}", file=sys.stderr)
         return 2
-    with OscillatorFMU(args.fmu) as fmu:
+    with OscillatorFMU2(args.fmu) as fmu:
         s = scene_rows(fmu, args.repeat, args.quick)
         e = effect_rows(fmu, args.repeat, args.quick)
     md = markdown(s, e)

@@ -20,7 +20,7 @@ sys.path.insert(0, str(ROOT / "tests"))  # the validation cases live with the te
 from chain_cases import CASES, PERIODS  # noqa: E402
 
 from dryfriction.cli.options import make_parser  # noqa: E402
-from dryfriction.drivers.chain import ChainFMU  # noqa: E402
+from dryfriction.drivers.chain import ChainFMU3  # noqa: E402
 from dryfriction.references.chain import solve_chain  # noqa: E402
 
 PER_PERIOD = (400, 800, 1600, 3200)
@@ -33,7 +33,7 @@ def errors(fmu_path: Path | None) -> dict[str, dict[str, np.ndarray]]:
         T = ch.period
         ref = solve_chain(ch, PERIODS * T)
         out[name] = {}
-        with ChainFMU(ch.n, fmu_path=fmu_path) as f:
+        with ChainFMU3(ch.n, fmu_path=fmu_path) as f:
             for scheme in SCHEMES:
                 e = []
                 for ppp in PER_PERIOD:

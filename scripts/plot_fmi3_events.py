@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from dryfriction.references.exact import solve_exact  # noqa: E402
-from dryfriction.drivers.oscillator3 import FMI3Oscillator  # noqa: E402
+from dryfriction.drivers.oscillator3 import OscillatorFMU3  # noqa: E402
 from dryfriction.params import Oscillator  # noqa: E402
 
 
@@ -34,11 +34,11 @@ def main(argv: list[str]) -> int:
     T = 2 * math.pi / p.omega
     t_end = a.periods * T
     try:
-        with FMI3Oscillator({"h": T / 1000}) as fmu:
+        with OscillatorFMU3({"h": T / 1000}) as fmu:
             fine = fmu.run(t_end, T / 1000, outputs=("x",))
-        with FMI3Oscillator({"h": T / 1000}) as fmu:
+        with OscillatorFMU3({"h": T / 1000}) as fmu:
             coarse = fmu.run(t_end, a.dt, outputs=("x",))
-        with FMI3Oscillator({"h": T / 1000}, early_return=True) as fmu:
+        with OscillatorFMU3({"h": T / 1000}, early_return=True) as fmu:
             early = fmu.run(t_end, a.dt, outputs=("x", "mode"))
     except (FileNotFoundError, OSError) as e:
         print(f"plot_fmi3_events: {e}", file=sys.stderr)

@@ -127,9 +127,9 @@ def as_array(x: Sequence[float]) -> np.ndarray:
 def assert_fmi3_equals_fmi2_on_belt(params: Mapping[str, float | int | bool], outputs: Sequence[str]) -> None:
     """FMI 3.0 gives FMI 2.0's bits over 15 communication steps of uneven length, with v_belt
     changed from params' value to 0.1 before step 3 and to -0.2 before step 8."""
-    from dryfriction.drivers.oscillator3 import FMI3Oscillator
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
-    ref, fmu = FMI2Run(params), FMI3Oscillator(params)
+    ref, fmu = FMI2Run(params), OscillatorFMU3(params)
     try:
         t = 0.0
         for i, dt in enumerate([0.37, 1.1, 0.05, 2.3, 0.6] * 3):

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 
@@ -121,7 +121,7 @@ def event_driven(p: Oscillator, t_grid: np.ndarray, F_ext: np.ndarray, N_ext: np
     return np.array(out)
 
 
-def held_run(f: OscillatorFMU, p: Oscillator, settings: Settings, t: np.ndarray, F_ext: np.ndarray,
+def held_run(f: OscillatorFMU2, p: Oscillator, settings: Settings, t: np.ndarray, F_ext: np.ndarray,
              N_ext: np.ndarray) -> np.ndarray:
     """x at t (t[0] the start) with F_ext[i], N_ext[i] set before the step to t[i + 1]."""
     f.start(p, settings)

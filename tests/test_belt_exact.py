@@ -16,7 +16,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 
 from dryfriction.references.belt import Belt, limit_cycle, simulate
-from dryfriction.drivers.oscillator3 import FMI3Oscillator
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 from fmi3_helpers import FMI2Run, assert_fmi3_equals_fmi2_on_belt, kinds
 
 EXACT = 4
@@ -68,7 +68,7 @@ def test_limit_cycle_closed_form(fmi: int, scale_name: str, ratio_name: str, sig
         finally:
             r.close()
     else:
-        f = FMI3Oscillator(p)
+        f = OscillatorFMU3(p)
         try:
             f.do_step(T)
             o = f.get(OUT)

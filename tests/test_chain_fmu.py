@@ -16,16 +16,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.drivers.chain import ChainError, ChainFMU, ChainFMU2, ChainRun, ChainWarning
+from dryfriction.errors import FMUCallError
+from dryfriction.drivers.chain import ChainFMU3, ChainFMU2, ChainRun
+from dryfriction.diagnostics import DryFrictionWarning
 from dryfriction.references.chain import Chain
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from chain_cases import CASES, PERIODS, chain_params, run_driver
 
 
 def fmu_run(ch: Chain, t_end: float, h: float, dt: float, chain_fmu3: Path, **kw) -> ChainRun:
-    with ChainFMU(ch.n, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(ch.n, fmu_path=chain_fmu3) as f:
         return f.run(t_end, dt, chain_params(ch, h, **kw))
 
 
@@ -38,7 +40,7 @@ ONE_BLOCK = [dict(m=1.0, k=1.0, c=0.0, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0
 
 @pytest.mark.parametrize("case", range(len(ONE_BLOCK)))
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
-def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, chain_fmu3: Path, fmu: OscillatorFMU) -> None:
+def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, chain_fmu3: Path, fmu: OscillatorFMU2) -> None:
     """One block of the FMI 3.0 chain gives the oscillator FMU's x, v, mode and F_friction bit for
     bit at every communication point (phi = 0; docs/chain.md says why a phase rounds apart), in
     every scheme, and a to 1e-14 (the chain sums the equation of motion in another order)."""
@@ -46,7 +48,7 @@ def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, chain_fmu3
     p = Oscillator(phi=0.0, **b)
     T = p.period
     h, dt = T / 500, T / 50
-    with ChainFMU(1, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(1, fmu_path=chain_fmu3) as f:
         run = f.run(6 * T, dt, {**b, "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme})
     ref = fmu.trajectory(p, run.t, Settings(h=h, alpha=-0.1, scheme=scheme))
     assert (run.mode == 0).any() and (run.mode != 0).any()
@@ -123,7 +125,7 @@ def test_located_second_order_with_random_communication_steps(refs: dict, chain_
     T = ch.period
     rng = np.random.default_rng(7)
     errs = []
-    with ChainFMU(ch.n, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(ch.n, fmu_path=chain_fmu3) as f:
         for ppp in (400, 800, 1600):
             h = T / ppp
             f.start(chain_params(ch, h))
@@ -215,8 +217,8 @@ def test_structured_names_and_dimensions(chain_fmu2: Path, chain_fmu3: Path) -> 
 
 @pytest.mark.parametrize("n", [0, 5000])
 def test_n_outside_its_range_is_the_fmus_error(n: int, chain_fmu3: Path) -> None:
-    with ChainFMU(n, fmu_path=chain_fmu3) as f:
-        with pytest.raises(ChainError, match=rf"invalid value {n} for n .*valid range: in \[1, 4096\]"):
+    with ChainFMU3(n, fmu_path=chain_fmu3) as f:
+        with pytest.raises(FMUCallError, match=rf"invalid value {n} for n .*valid range: in \[1, 4096\]"):
             f.run(1.0, 0.1)
         f.set_n(4)  # the instance recovers: reset, Configuration Mode again
         assert f.run(1.0, 0.1).x.shape == (11, 4)
@@ -224,24 +226,24 @@ def test_n_outside_its_range_is_the_fmus_error(n: int, chain_fmu3: Path) -> None
 
 def test_bad_array_values_name_the_element(chain_fmu3: Path, chain_fmu2: Path) -> None:
     m = [1.0, 1.0, -1.0]
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
-        with pytest.raises(ChainError, match=r"invalid value -1 for m\[3\]"):
+    with ChainFMU3(3, fmu_path=chain_fmu3) as f:
+        with pytest.raises(FMUCallError, match=r"invalid value -1 for m\[3\]"):
             f.run(1.0, 0.1, {"m": m})
         # the instance stays usable
         assert f.run(1.0, 0.1, {"m": 1.0}).x.shape == (11, 3)
     with ChainFMU2(fmu_path=chain_fmu2) as f2:
         bad = [1.0] * (f2.n - 1) + [-1.0]
-        with pytest.raises(ChainError, match=rf"invalid value -1 for m\[{f2.n}\]"):
+        with pytest.raises(FMUCallError, match=rf"invalid value -1 for m\[{f2.n}\]"):
             f2.run(1.0, 0.1, {"m": bad})
 
 
 def test_wrong_array_length(chain_fmu3: Path) -> None:
     """The driver names the parameter and n; the FMU itself refuses a wrong nValues."""
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(3, fmu_path=chain_fmu3) as f:
         with pytest.raises(ValueError, match=r"m needs 3 values \(one per block, n = 3\)"):
             f.run(1.0, 0.1, {"m": [1.0, 2.0]})
         f._begin(0.0)  # Configuration Mode (n = 3), then Initialization Mode
-        with pytest.raises(ChainError, match=r"nValues = 2, but the variables given hold 3 values: m \(3\)"):
+        with pytest.raises(FMUCallError, match=r"nValues = 2, but the variables given hold 3 values: m \(3\)"):
             f.set_raw("m", [1.0, 2.0])
 
 
@@ -279,13 +281,13 @@ def test_a_step_that_does_not_resolve_the_dynamics_is_a_warning(which: str, chai
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             if which == "fmi3":
-                with ChainFMU(3, fmu_path=chain_fmu3) as f:
+                with ChainFMU3(3, fmu_path=chain_fmu3) as f:
                     r = f.run(0.05, 0.01, params)
             else:
                 with ChainFMU2(fmu_path=chain_fmu2) as f:
                     r = f.run(0.05, 0.01, params)
         assert np.all(np.isfinite(r.x))
-        return [str(w.message) for w in caught if issubclass(w.category, ChainWarning)], r.x.shape[1]
+        return [str(w.message) for w in caught if issubclass(w.category, DryFrictionWarning)], r.x.shape[1]
 
     said, n = run(1e5)
     # Gershgorin's bound of max eig M^-1 K with a free right end: 4k for n >= 3, 3k for n = 2
@@ -301,7 +303,7 @@ def test_h_zero_derives_the_step_from_the_dynamics(chain_fmu2: Path, chain_fmu3:
     end, 2 pi / sqrt(3 k / m) for n = 2), the same in both FMUs for the same n, and the run is the
     run with that h set explicitly, bit for bit."""
     params = {"k": 50.0, "m": 2.0, "omega": 1.5, "mu_s": 0.3, "chi": 0.7, "N": 1.0, "P0": 1.0}
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(3, fmu_path=chain_fmu3) as f:
         derived = f.run(3.0, 0.05, {**params, "h": 0.0})
         h3 = float(f.get("h_used"))
         explicit = f.run(3.0, 0.05, {**params, "h": h3})

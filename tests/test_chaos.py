@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from dryfriction.analysis.chaos import Catalogue, ExactMap, FMUMap, NDParams, benettin, period_of
-from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.drivers.oscillator import OscillatorFMU2
 from dryfriction.studies import run_study
 from dryfriction.sweep import read_netcdf
 
@@ -34,7 +34,7 @@ CHAOTIC = NDParams(0.5, 0.6, 0.1)      # established by the chaos_scan study: ex
 PERIODIC = NDParams(0.5, 0.6, 1.0)     # symmetric period-1 motion for every initial condition
 
 
-def test_periodic_motion_negative_exponent_single_point(fmu: OscillatorFMU) -> None:
+def test_periodic_motion_negative_exponent_single_point(fmu: OscillatorFMU2) -> None:
     r = benettin(FMUMap(fmu, PERIODIC), 0.7, -0.4, periods=200, transient=50)
     assert r.lyapunov_per_period < -1.0                       # strongly attracting
     assert r.lyapunov_per_period + 5 * r.stderr_per_period < 0
@@ -50,7 +50,7 @@ def test_periodic_motion_negative_exponent_single_point(fmu: OscillatorFMU) -> N
     assert np.max(np.abs(loc[-1] - ex[-1])) < 1e-4
 
 
-def test_exponent_converges_under_h(fmu: OscillatorFMU) -> None:
+def test_exponent_converges_under_h(fmu: OscillatorFMU2) -> None:
     """The Bossak path (located): the exponent converges as h is refined."""
     # periodic, asymmetric motion (chi 0.4): deterministic exponent, converges as h^2
     lam = {n: benettin(FMUMap(fmu, NDParams(0.5, 0.6, 0.4), n, "located"), 0.0, 0.0, periods=100, transient=100)
@@ -66,7 +66,7 @@ def test_exponent_converges_under_h(fmu: OscillatorFMU) -> None:
     assert vals.max() - vals.min() < 0.02
 
 
-def test_exponent_independent_of_d0_and_renormalisation(fmu: OscillatorFMU) -> None:
+def test_exponent_independent_of_d0_and_renormalisation(fmu: OscillatorFMU2) -> None:
     m = FMUMap(fmu, CHAOTIC)
     by_d0 = [benettin(m, 0.0, 0.0, periods=600, transient=100, d0=d0).lyapunov_per_period
              for d0 in (1e-6, 1e-8, 1e-10)]
@@ -76,7 +76,7 @@ def test_exponent_independent_of_d0_and_renormalisation(fmu: OscillatorFMU) -> N
     assert max(by_renorm) - min(by_renorm) < 0.02
 
 
-def test_exact_scheme_step_free(fmu: OscillatorFMU) -> None:
+def test_exact_scheme_step_free(fmu: OscillatorFMU2) -> None:
     """The exact scheme: h has no effect, to the bit (chaotic and periodic motion)."""
     for nd in (CHAOTIC, NDParams(0.5, 0.6, 0.4)):
         a, b = (benettin(FMUMap(fmu, nd, n), 0.0, 0.0, periods=100, transient=20) for n in (100, 3000))
@@ -85,7 +85,7 @@ def test_exact_scheme_step_free(fmu: OscillatorFMU) -> None:
         assert a.method == "FMU scheme exact"
 
 
-def test_exact_scheme_exponent_equals_exact_solution(fmu: OscillatorFMU) -> None:
+def test_exact_scheme_exponent_equals_exact_solution(fmu: OscillatorFMU2) -> None:
     """The FMU's exact scheme against the Python exact solution (dryfriction.references.exact), pair by pair."""
     # chaotic motion: while the two reference trajectories stay together (1e-13 grows e-fold in about
     # 5 periods) every renormalisation measures the same stretching
@@ -108,7 +108,7 @@ def test_exact_scheme_exponent_equals_exact_solution(fmu: OscillatorFMU) -> None
     assert period_of(fp.strobe[-20:], 1e-9) == 1
 
 
-def test_chaotic_exponent_reproduced_by_exact_solution(fmu: OscillatorFMU) -> None:
+def test_chaotic_exponent_reproduced_by_exact_solution(fmu: OscillatorFMU2) -> None:
     """The Bossak path (located, h = T/2000) reproduces the exact solution's exponent."""
     fm = benettin(FMUMap(fmu, CHAOTIC, 2000, "located"), 0.0, 0.0, periods=1000, transient=100)
     ex = benettin(ExactMap(CHAOTIC), 0.0, 0.0, periods=250, transient=50)
@@ -129,7 +129,7 @@ def test_catalogue_labels_mirror_orbits_and_chaos() -> None:
 
 
 @pytest.mark.slow
-def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: OscillatorFMU) -> None:
+def test_basins_shares_and_direct_runs(tmp_path: Path, fmu_path: Path, fmu: OscillatorFMU2) -> None:
     out = run_study("chaos_basins", quick=True, out=tmp_path, fmu=fmu_path, workers=0, progress=False,
                     sets=['cases=["subharmonic", "end_of_chaos"]', "grid.z0.num=9", "grid.dz0.num=9"])
     for case in ("subharmonic", "end_of_chaos"):

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.drivers.chain import ChainFMU, ChainFMU2
+from dryfriction.drivers.chain import ChainFMU3, ChainFMU2
 
 
 def test_chain_command_writes_the_run(tmp_path: Path, chain_fmu3: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -23,7 +23,7 @@ def test_chain_command_writes_the_run(tmp_path: Path, chain_fmu3: Path, capsys: 
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "chain of 3 blocks (FMI 3), 49 points" in text and "share of time stuck per block" in text
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(3, fmu_path=chain_fmu3) as f:
         ref = f.run(12.0, 0.25, {"mu_s": 0.5, "P0": [1, 0, 0], "k": 1.0, "omega": 0.5, "h": 0.01})
     csv = np.loadtxt(out / "chain.csv", delimiter=",", skiprows=1)
     header = (out / "chain.csv").read_text().splitlines()[0].split(",")

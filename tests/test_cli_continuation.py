@@ -14,10 +14,10 @@ import pytest
 from dryfriction import Oscillator
 from dryfriction.cli import main
 from dryfriction.analysis.continuation import continue_orbits
-from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.drivers.oscillator import OscillatorFMU2
 
 
-def test_json_holds_the_library_numbers(fmu: OscillatorFMU, fmu_path: Path,
+def test_json_holds_the_library_numbers(fmu: OscillatorFMU2, fmu_path: Path,
                                         capsys: pytest.CaptureFixture[str]) -> None:
     """Physical units, N = 0, through resonance: the JSON's branch is continue_orbits' own, and its
     amplitudes are the closed form's."""

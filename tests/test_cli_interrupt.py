@@ -77,17 +77,17 @@ def test_a_signal_once_the_results_are_committed_changes_nothing(
         tmp_path: Path, fmu_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """SIGINT at the moment the complete result set starts moving into place: the files are moved,
     the table printed, exit status 0."""
-    import dryfriction.cli.console as console
+    import dryfriction.atomic as atomic
 
     out = tmp_path / "out"
     old_result_set(out)
-    commit = console.committed
+    commit = atomic.committed
 
     def commit_then_ctrl_c() -> None:
         commit()
         signal.raise_signal(signal.SIGINT)
 
-    monkeypatch.setattr(console, "committed", commit_then_ctrl_c)
+    monkeypatch.setattr(atomic, "committed", commit_then_ctrl_c)
     assert main([*TRANSIENT, "--num", "2", "--out", str(out), "--fmu", str(fmu_path)]) == 0
     cap = capsys.readouterr()
     assert cap.err == "" and "2 of 2 converged" in cap.out and f"wrote {out / 'response.png'}" in cap.out

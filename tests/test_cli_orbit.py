@@ -12,7 +12,7 @@ import pytest
 
 from dryfriction import Oscillator
 from dryfriction.cli import main
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 
 KEYS = {"period", "stable", "neutral", "multipliers", "x0", "v0", "z0", "zdot0", "amplitude_m", "offset_m",
         "stick_fraction", "residual", "rest_interval_m"}
@@ -33,7 +33,7 @@ def test_the_mirror_pair_in_json(fmu_path: Path, capsys: pytest.CaptureFixture[s
     assert list(res) == ["orbits"] and len(res["orbits"]) == 2
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4)
     xs = p.P0 / p.k
-    with OscillatorFMU(fmu_path) as fmu:
+    with OscillatorFMU2(fmu_path) as fmu:
         for o in res["orbits"]:
             assert set(o) == KEYS and o["period"] == 1 and o["stable"] is True and o["neutral"] is False
             assert o["rest_interval_m"] is None

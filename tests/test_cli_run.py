@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dryfriction.cli import main
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 
@@ -34,7 +34,7 @@ def test_run_sweep_says_it_measured_a_transient(capsys: pytest.CaptureFixture[st
     assert "periods 12 to 13" in res["measured"] and "dryfriction response" in res["measured"]
     # the window really is period 13 of one run from rest: the extremes of a sampled trajectory
     p = Oscillator()
-    with OscillatorFMU() as f:
+    with OscillatorFMU2() as f:
         full = f.trajectory(p, np.linspace(0.0, 13 * p.period, 13 * 2000 + 1), Settings(scheme="exact"))
     window = full["x"][12 * 2000:]
     assert res["x_max"] == pytest.approx(window.max(), rel=1e-6)

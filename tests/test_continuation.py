@@ -14,14 +14,14 @@ import pytest
 from dryfriction import Oscillator
 from dryfriction.analysis.continuation import (PARAMETERS, Continuation, continue_orbits, get_parameter,
                                       set_parameter)
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.analysis.orbits import find_orbits, scales
 from dryfriction.references.steady import den_hartog_amplitude
 
 EXACT = Settings(scheme="exact")
 
 
-def end_state(fmu: OscillatorFMU, p: Oscillator, x: float, v: float, t1: float) -> np.ndarray:
+def end_state(fmu: OscillatorFMU2, p: Oscillator, x: float, v: float, t1: float) -> np.ndarray:
     """(x, v) at t1 of a separate FMU run (scheme exact) from (x, v) at t = 0."""
     fmu.start(p.with_(x0=x, v0=v), EXACT)
     fmu.step_to(t1)
@@ -60,7 +60,7 @@ def test_parameters_set_the_fields_they_name() -> None:
         set_parameter(p, "N", -1.0)
 
 
-def test_bad_arguments_are_one_clear_error(fmu: OscillatorFMU) -> None:
+def test_bad_arguments_are_one_clear_error(fmu: OscillatorFMU2) -> None:
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.7)
     with pytest.raises(ValueError, match="start and stop must differ"):
         continue_orbits(p, "chi", 0.5, 0.5, fmu=fmu)
@@ -76,7 +76,7 @@ def test_bad_arguments_are_one_clear_error(fmu: OscillatorFMU) -> None:
 
 # ---- no friction: the closed form -------------------------------------------------------------------
 
-def test_no_friction_through_resonance_is_the_closed_form(fmu: OscillatorFMU) -> None:
+def test_no_friction_through_resonance_is_the_closed_form(fmu: OscillatorFMU2) -> None:
     p = Oscillator(m=1.0, k=1.0, c=0.1, N=0.0, P0=1.0, omega=0.5, phi=0.0, mu_s=0.5, chi=1.0)
     c = continue_orbits(p, "omega", 0.5, 1.6, ds=0.05, ds_max=0.2, fmu=fmu)
     ds = c.dataset
@@ -99,13 +99,13 @@ def test_no_friction_through_resonance_is_the_closed_form(fmu: OscillatorFMU) ->
 FOLD_CASE = Oscillator.from_nondimensional(lam=0.15, mu_s_sigma=0.6, chi=0.7, phi=0.7)
 
 
-def four_stop_orbit(fmu: OscillatorFMU):  # noqa: ANN201
+def four_stop_orbit(fmu: OscillatorFMU2):  # noqa: ANN201
     """The four-stop motion of Fig. 11/14 at lambda = 0.15 (coexisting with a two-stop one)."""
     (o,) = [o for o in find_orbits(FOLD_CASE, fmu=fmu) if o.events["transitions"] == 8]
     return o
 
 
-def test_fold_in_frequency_located_and_reproducible(fmu: OscillatorFMU) -> None:
+def test_fold_in_frequency_located_and_reproducible(fmu: OscillatorFMU2) -> None:
     o = four_stop_orbit(fmu)
     found = []
     for ds in (0.02, 0.0137):
@@ -138,12 +138,12 @@ def test_fold_in_frequency_located_and_reproducible(fmu: OscillatorFMU) -> None:
 # ---- the Fig. 8/9 band: symmetry breaking, grazing, period doubling and the doubled branch -----------
 
 @pytest.fixture(scope="module")
-def band(fmu: OscillatorFMU) -> Continuation:
+def band(fmu: OscillatorFMU2) -> Continuation:
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.8)
     return continue_orbits(p, "chi", 0.8, 0.22, ds=0.02, ds_max=0.2, fmu=fmu)
 
 
-def test_fig8_9_symmetry_breaking_against_the_sweep(band: Continuation, fmu: OscillatorFMU) -> None:
+def test_fig8_9_symmetry_breaking_against_the_sweep(band: Continuation, fmu: OscillatorFMU2) -> None:
     (sb,) = of_type(band, "symmetry_breaking")
     # the brute-force sweep: symmetric for chi >= 0.56, the mirror pair at 0.54 (Lyapunov scan, steps 0.02)
     assert 0.54 < sb.param < 0.56, sb.param
@@ -164,7 +164,7 @@ def test_fig8_9_symmetry_breaking_against_the_sweep(band: Continuation, fmu: Osc
     assert len(down) == 2 and down[0].offset == pytest.approx(-down[1].offset, rel=1e-9)
 
 
-def test_fig8_9_grazing_on_the_asymmetric_branches(band: Continuation, fmu: OscillatorFMU) -> None:
+def test_fig8_9_grazing_on_the_asymmetric_branches(band: Continuation, fmu: OscillatorFMU2) -> None:
     g = of_type(band, "grazing")
     assert len(g) == 2 and {x.branch for x in g} == set(of_type(band, "symmetry_breaking")[0].children)
     # both mirror branches: one stop turns into a reversal at the same chi
@@ -176,7 +176,7 @@ def test_fig8_9_grazing_on_the_asymmetric_branches(band: Continuation, fmu: Osci
         assert {o.events["transitions"] for o in find_orbits(p, fmu=fmu) if o.stable} == {tr}
 
 
-def test_fig8_9_period_doubling_and_the_doubled_branch(band: Continuation, fmu: OscillatorFMU) -> None:
+def test_fig8_9_period_doubling_and_the_doubled_branch(band: Continuation, fmu: OscillatorFMU2) -> None:
     pd = of_type(band, "period_doubling")
     assert len(pd) == 2                                     # one on each asymmetric branch
     assert abs(pd[0].param - pd[1].param) <= 1e-8
@@ -226,7 +226,7 @@ def test_every_point_is_converged_or_says_why(band: Continuation) -> None:
     assert np.all(np.abs(pd.multiplier_re.values[:, 0] + 1.0) <= 1e-6) and not bool(pd.stable.any())
 
 
-def test_a_branch_that_ends_early_says_why(fmu: OscillatorFMU) -> None:
+def test_a_branch_that_ends_early_says_why(fmu: OscillatorFMU2) -> None:
     """Past the fold of the four-stop motion the unstable branch runs into a tangential breakaway
     (its multiplier grows without bound near lambda = 0.1648): the step shrinks below ds_min and the
     continuation says so, with one not-converged point."""
@@ -243,7 +243,7 @@ def test_a_branch_that_ends_early_says_why(fmu: OscillatorFMU) -> None:
 
 # ---- grazing: the stick phase appears (Den Hartog's stick condition) ---------------------------------
 
-def test_grazing_where_den_hartog_stops_holding(fmu: OscillatorFMU) -> None:
+def test_grazing_where_den_hartog_stops_holding(fmu: OscillatorFMU2) -> None:
     """Undamped, mu_s = mu_k, lambda = 0.8, continued in mu_s sigma = mu_s N / P0: Den Hartog's
     non-stop solution holds while k X lambda^2 > mu_s N; it ends where f = mu_s sigma solves
     X k / P0 = sqrt(V^2 - f^2 U^2) = f / lambda^2, f* = |V| / sqrt(U^2 + lambda^-4)."""
@@ -269,7 +269,7 @@ def test_grazing_where_den_hartog_stops_holding(fmu: OscillatorFMU) -> None:
     assert abs(pg.k * o.amplitude * r * r - pg.mu_s * pg.N) <= 1e-7 * pg.P0
 
 
-def test_down_to_the_edge_of_the_valid_range(fmu: OscillatorFMU) -> None:
+def test_down_to_the_edge_of_the_valid_range(fmu: OscillatorFMU2) -> None:
     """The README's block at 10 Hz continued in N from 20 N down to 0 (the edge of N's valid range):
     the branch ends exactly at N = 0 on the closed-form harmonic response, and starts on find_orbits'
     orbit (0.2356 m, the transient method's number)."""
@@ -288,7 +288,7 @@ def test_down_to_the_edge_of_the_valid_range(fmu: OscillatorFMU) -> None:
     assert float(ds.stick_fraction[0]) == 0.0 and np.all(np.diff(ds.amplitude_m.values) > 0)
 
 
-def test_a_block_at_rest_is_not_a_branch(fmu: OscillatorFMU) -> None:
+def test_a_block_at_rest_is_not_a_branch(fmu: OscillatorFMU2) -> None:
     """P0 below the breakaway force (mu_s sigma 1.2): find_orbits gives the block at rest (one of an
     interval of rest positions, a multiplier exactly 1); the continuation does not start from it as
     from a fold (not 'the start orbit is at a fold in the parameter'): its branch says it is

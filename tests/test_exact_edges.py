@@ -27,8 +27,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from dryfriction.drivers.chain import ChainFMU
-from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.chain import ChainFMU3
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 mp.mp.dps = 40
@@ -40,8 +40,8 @@ def EXACT(h: float) -> Settings:
 
 
 @pytest.fixture(scope="module")
-def fmu(fmu_path) -> Iterator[OscillatorFMU]:
-    with OscillatorFMU(fmu_path, logging=True) as f:
+def fmu(fmu_path) -> Iterator[OscillatorFMU2]:
+    with OscillatorFMU2(fmu_path, logging=True) as f:
         yield f
 
 
@@ -50,7 +50,7 @@ def nondim(lam: float, mss: float, chi: float, zeta: float, **kw: float) -> Osci
                          "mu_s": 0.5, "chi": chi, "x0": 0.0, "v0": 0.0, **kw})
 
 
-def one_call(f: OscillatorFMU, p: Oscillator, t_end: float, h: float) -> dict[str, float]:
+def one_call(f: OscillatorFMU2, p: Oscillator, t_end: float, h: float) -> dict[str, float]:
     f.start(p, EXACT(h))
     f.step_to(t_end)
     return f.get(["x", "v", "a", "mode"])
@@ -59,7 +59,7 @@ def one_call(f: OscillatorFMU, p: Oscillator, t_end: float, h: float) -> dict[st
 # ---- one doStep over many periods = one doStep per period --------------------------------------
 
 @pytest.mark.slow
-def test_one_dostep_over_1e6_periods_equals_one_per_period(fmu: OscillatorFMU) -> None:
+def test_one_dostep_over_1e6_periods_equals_one_per_period(fmu: OscillatorFMU2) -> None:
     """Slip with two reversals a period (lambda 0.8, mu_s sigma 0.1, chi 0.7: 2e6 events): one
     doStep to 1e6 T and 1e6 doSteps of T agree within 1e-12 of the motion's size (before: 2.8e-8
     after 1e5 periods, growing as n^2: the excitation phase carried over the events and the event
@@ -91,7 +91,7 @@ def test_one_dostep_over_1e6_periods_equals_one_per_period(fmu: OscillatorFMU) -
     (0.8, 0.1, 0.7, 0.02, 20_000),   # reversals, light damping
     (1.3, 0.0, 1.0, 0.0, 20_000),    # neither friction nor damping: nothing decays (was 1.8e-10 after 5e4)
 ])
-def test_event_rich_runs_do_not_depend_on_the_communication_steps(fmu: OscillatorFMU, lam: float, mss: float,
+def test_event_rich_runs_do_not_depend_on_the_communication_steps(fmu: OscillatorFMU2, lam: float, mss: float,
                                                                    chi: float, zeta: float, periods: int) -> None:
     """One doStep, one doStep per period and doSteps of random length end on the same state
     within 1e-12 of the motion's size."""
@@ -143,7 +143,7 @@ CRITICAL = [1.0 - 2.0 ** -53, 1.0, 1.0 + 2.0 ** -52, 1.0 - 1e-12, 1.0 + 1e-12, 1
 
 @pytest.mark.parametrize("lam", [0.5, 1.0, 2.0])
 @pytest.mark.parametrize("zeta", CRITICAL)
-def test_near_critical_damping_equals_the_closed_form(fmu: OscillatorFMU, zeta: float, lam: float) -> None:
+def test_near_critical_damping_equals_the_closed_form(fmu: OscillatorFMU2, zeta: float, lam: float) -> None:
     """Frictionless (N = 0: the motion is linear, the FMU still stops at every v = 0) at and near
     critical damping: within 1e-13 of the 40-digit closed form (before: up to 4e-10, the free
     part's bounds grew like 1 / wd, 1 / wh near zeta = 1 and made the zero tests coarse)."""
@@ -158,7 +158,7 @@ def test_near_critical_damping_equals_the_closed_form(fmu: OscillatorFMU, zeta: 
 
 @pytest.mark.parametrize("lam, mss, chi", [(0.5, 0.4, 0.7), (1.0, 0.2, 0.7), (2.0, 0.4, 0.7), (0.3, 0.1, 1.0),
                                            (1.0, 0.3, 2.0)])
-def test_continuous_across_critical_damping(fmu: OscillatorFMU, lam: float, mss: float, chi: float) -> None:
+def test_continuous_across_critical_damping(fmu: OscillatorFMU2, lam: float, mss: float, chi: float) -> None:
     """With stick-slip: c = 2 (1 - 2^-53) sqrt(km), 2 sqrt(km) and 2 (1 + 2^-52) sqrt(km) give
     the same motion within 1e-13 (before: 2e-10 apart), with m, k not 1."""
     m, k = 2.5, 0.7
@@ -190,7 +190,7 @@ def creep_ref(zeta: float, x_eq: float, x0: float, t: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("cuts", ["one", "10", "100", "1000", "random"])
-def test_overdamped_creep_is_not_stuck_early(fmu: OscillatorFMU, cuts: str) -> None:
+def test_overdamped_creep_is_not_stuck_early(fmu: OscillatorFMU2, cuts: str) -> None:
     """zeta = 1000, constant force (omega = 0): the block creeps towards x_eq = (P0 - mu_k N) / k
     as e^{-t / 2000} and never stops (v = 0 only in the limit). Against the closed form within
     1e-12 at every communication point, and stuck only where the closed form is within 1e-12 of
@@ -218,7 +218,7 @@ def test_overdamped_creep_is_not_stuck_early(fmu: OscillatorFMU, cuts: str) -> N
 STICK_SLIP = dict(lam=0.5, mss=0.4, chi=0.7, zeta=0.05, x0=0.3, v0=-0.2)
 
 
-def scaled_run(f: OscillatorFMU, s: float, sigma: float = 1.0) -> dict[str, np.ndarray]:
+def scaled_run(f: OscillatorFMU2, s: float, sigma: float = 1.0) -> dict[str, np.ndarray]:
     """The stick-slip case with P0, N, x0, v0 times s and the time unit times sigma (m times sigma^2)."""
     c = STICK_SLIP
     p = Oscillator(m=sigma ** 2, k=1.0, c=2.0 * c["zeta"] * sigma, P0=s, omega=c["lam"] / sigma, N=c["mss"] / 0.5 * s,
@@ -228,7 +228,7 @@ def scaled_run(f: OscillatorFMU, s: float, sigma: float = 1.0) -> dict[str, np.n
 
 
 @pytest.mark.parametrize("s", [1e-200, 1e-170, 1e-150, 1e-100, 1e-30, 3.7, 1e30, 1e100, 1e150, 1e155, 1e200, 1e300])
-def test_x_scales_with_P0_and_N(fmu: OscillatorFMU, s: float) -> None:
+def test_x_scales_with_P0_and_N(fmu: OscillatorFMU2, s: float) -> None:
     """x / s and v / s equal the unscaled run's within 1e-13 (before: OK with x = v = a = 0 once
     |x| > 1e154, a relative error of 1e-4 below 1e-162: squares over- and underflowed)."""
     ref, r = scaled_run(fmu, 1.0), scaled_run(fmu, s)
@@ -239,7 +239,7 @@ def test_x_scales_with_P0_and_N(fmu: OscillatorFMU, s: float) -> None:
 
 
 @pytest.mark.parametrize("sigma, s", [(1e-3, 1.0), (1e4, 1.0), (1e-3, 1e-150), (1e5, 1e120)])
-def test_time_scales_with_sqrt_m_over_k(fmu: OscillatorFMU, sigma: float, s: float) -> None:
+def test_time_scales_with_sqrt_m_over_k(fmu: OscillatorFMU2, sigma: float, s: float) -> None:
     ref, r = scaled_run(fmu, 1.0), scaled_run(fmu, s, sigma)
     size = float(np.max(np.abs(ref["x"])))
     assert np.array_equal(r["mode"], ref["mode"])
@@ -247,7 +247,7 @@ def test_time_scales_with_sqrt_m_over_k(fmu: OscillatorFMU, sigma: float, s: flo
     assert np.max(np.abs(r["v"] * sigma / s - ref["v"])) <= 1e-13 * size * STICK_SLIP["lam"]
 
 
-def test_overflow_is_an_error_never_a_wrong_number(fmu: OscillatorFMU) -> None:
+def test_overflow_is_an_error_never_a_wrong_number(fmu: OscillatorFMU2) -> None:
     """At resonance without friction or damping x grows as t sin(t) P0 / 2k: with P0 = 1e307 it
     leaves the double range near t = 36. Every step until then is right (against P0 = 1 scaled),
     the step that would overflow is an error whose logged sentence names the overflow."""
@@ -267,7 +267,7 @@ def test_overflow_is_an_error_never_a_wrong_number(fmu: OscillatorFMU) -> None:
     assert any(cat == "logStatusError" and "overflow" in msg for _, cat, msg in fmu.messages[-3:])
 
 
-def test_a_huge_static_deflection_with_a_representable_motion(fmu: OscillatorFMU) -> None:
+def test_a_huge_static_deflection_with_a_representable_motion(fmu: OscillatorFMU2) -> None:
     """P0 / k = 1e310 (not a double) but lambda = 1e5: the motion (about P0 / (m omega^2) = 1e300)
     is representable and right: against the run with P0 = 1e-10."""
     p = dict(m=1.0, k=1e-10, c=0.0, omega=1.0, N=0.0, mu_s=0.5, chi=1.0)
@@ -286,7 +286,7 @@ def reduced(phi: float) -> float:
 
 @pytest.mark.parametrize("phi, P0, t0", [(1e12, 1.0, 0.0), (1e12, -1.0, 0.0), (-3e15, 1.0, 0.0), (1e300, 1.0, 0.0),
                                          (123.456, -1.0, 0.0), (1e12, 1.0, 12345.678)])
-def test_a_large_phi_keeps_its_phase(fmu: OscillatorFMU, phi: float, P0: float, t0: float) -> None:
+def test_a_large_phi_keeps_its_phase(fmu: OscillatorFMU2, phi: float, P0: float, t0: float) -> None:
     """phi = 1e12 against phi reduced mod 2 pi to 400 digits (then rounded): the same motion within
     1e-13 (before: 6.7e-5 apart, phi + omega t rounded to an ulp of 1e12), also from a start time
     t0 != 0 (the start's stick/slip decision and acceleration)."""
@@ -302,7 +302,7 @@ def test_a_large_phi_keeps_its_phase(fmu: OscillatorFMU, phi: float, P0: float, 
         assert np.max(np.abs(a[k] - b[k])) <= 1e-13 * np.max(np.abs(b[k])), k
 
 
-def test_a_large_phi_against_the_closed_form(fmu: OscillatorFMU) -> None:
+def test_a_large_phi_against_the_closed_form(fmu: OscillatorFMU2) -> None:
     """Frictionless, zeta = 0.1, phi = 1e12 exactly in the 40-digit closed form."""
     p = nondim(0.7, 0.0, 1.0, 0.1, phi=1e12, x0=0.2)
     t = np.linspace(0.0, 20.0 * p.period, 101)
@@ -322,7 +322,7 @@ ONE_BLOCK = [dict(m=2.0, k=3.0, c=0.2, P0=1.5, omega=1.1, N=0.6, mu_s=0.4, chi=1
 @pytest.mark.parametrize("phi", [0.3, -1.2, 2.5, math.pi, 1e3, 1e12])
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
 def test_chain_n1_is_the_oscillator_for_every_phi(case: int, phi: float, scheme: str, chain_fmu3: Path,
-                                                  fmu: OscillatorFMU) -> None:
+                                                  fmu: OscillatorFMU2) -> None:
     """One block of the FMI 3.0 chain gives the oscillator FMU's x, v, a, mode and F_friction bit
     for bit with phi != 0 (before: 5e-16 apart, the chain's P0 (cos phi cos wt - sin phi sin wt)
     against the oscillator's P0 cos(wt + phi)): blocks sharing one phase take the oscillator's
@@ -331,7 +331,7 @@ def test_chain_n1_is_the_oscillator_for_every_phi(case: int, phi: float, scheme:
     p = Oscillator(phi=phi, **b)
     T = p.period
     h, dt = T / 500, T / 50
-    with ChainFMU(1, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(1, fmu_path=chain_fmu3) as f:
         run = f.run(6 * T, dt, {**b, "phi": phi, "h": h, "alpha": -0.1, "scheme": scheme})
     ref = fmu.trajectory(p, run.t, Settings(h=h, alpha=-0.1, scheme=scheme))
     assert (run.mode != 0).any()

@@ -13,7 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from free_reference import reference_for
 
@@ -53,7 +53,7 @@ CASES = {
 
 @pytest.fixture(scope="module")
 def fmu(fmu_path):
-    with OscillatorFMU(fmu_path, logging=True) as f:
+    with OscillatorFMU2(fmu_path, logging=True) as f:
         yield f
 
 
@@ -61,7 +61,7 @@ def _settings(F_ext: float, **kw) -> Settings:
     return Settings(scheme=kw.pop("scheme", "exact"), extra={"F_ext": F_ext} if F_ext else {}, **kw)
 
 
-def _events(f: OscillatorFMU, since: int) -> list[tuple[float, int, int]]:
+def _events(f: OscillatorFMU2, since: int) -> list[tuple[float, int, int]]:
     out = []
     for _, cat, msg in f.messages[since:]:
         m = EVENT_RE.match(msg) if cat == "logEvents" else None
@@ -81,7 +81,7 @@ def _errors(tr: dict, ref, t: np.ndarray) -> tuple[float, float, np.ndarray]:
 # the heavily damped case takes about 9 s (a long slide sampled per damping time): slow
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "c>0 heavy damping" else n
                                   for n in CASES])
-def test_against_the_40_digit_reference(fmu: OscillatorFMU, name: str) -> None:
+def test_against_the_40_digit_reference(fmu: OscillatorFMU2, name: str) -> None:
     p, F = CASES[name]
     T = p.period
     t = np.linspace(0.0, 12.0 * T, 481)
@@ -108,7 +108,7 @@ def test_against_the_40_digit_reference(fmu: OscillatorFMU, name: str) -> None:
         assert np.all(tr["a"][stuck] == 0.0) and np.all(tr["v"][stuck] == 0.0)
 
 
-def test_a_stop_needs_no_sign_change_and_a_slide_from_rest_at_zero_acceleration(fmu: OscillatorFMU) -> None:
+def test_a_stop_needs_no_sign_change_and_a_slide_from_rest_at_zero_acceleration(fmu: OscillatorFMU2) -> None:
     """A touch: sliding forward with F_ext = mu_k N (f0 = 0, c = 0), v = v0 + (sin t - sin 0) / omega
     only touches 0 at t = 3 pi / 2 (v0 = 1 / omega): the block stops there (the touch is within
     rounding) and sticks, |P + F_ext| = mu_k N < mu_s N, until the force reaches mu_s N."""
@@ -125,7 +125,7 @@ def test_a_stop_needs_no_sign_change_and_a_slide_from_rest_at_zero_acceleration(
     assert ex <= TOL and np.array_equal(tr["mode"], mr)
 
 
-def test_inputs_held_over_communication_steps(fmu: OscillatorFMU) -> None:
+def test_inputs_held_over_communication_steps(fmu: OscillatorFMU2) -> None:
     rng = np.random.default_rng(7)
     p = free(c=0.15, chi=0.8)
     T = p.period
@@ -146,7 +146,7 @@ def test_inputs_held_over_communication_steps(fmu: OscillatorFMU) -> None:
     assert err <= TOL, err
 
 
-def test_one_long_dostep_equals_many_and_h_has_no_effect(fmu: OscillatorFMU) -> None:
+def test_one_long_dostep_equals_many_and_h_has_no_effect(fmu: OscillatorFMU2) -> None:
     """One doStep over n periods, n doSteps of a period, h: the same motion, within rounding. (The
     stop times are doubles: each event's rounding, ulp(t) / 4, shifts the later motion by that much,
     and a free mass keeps the resulting offset of x: 3e-13 after 200 periods.)"""
@@ -169,7 +169,7 @@ def test_one_long_dostep_equals_many_and_h_has_no_effect(fmu: OscillatorFMU) -> 
             assert abs(one["x"] - xr[0]) <= TOL * size and abs(many["x"][-1] - xr[0]) <= TOL * size
 
 
-def test_a_long_slide_costs_a_few_evaluations(fmu: OscillatorFMU) -> None:
+def test_a_long_slide_costs_a_few_evaluations(fmu: OscillatorFMU2) -> None:
     """10^6 periods of sliding in one doStep (damped, drifting under F_ext): no event, exact."""
     p, F = CASES["c>0 F_ext pure slide"]
     t_end = 1e6 * p.period
@@ -189,7 +189,7 @@ def test_a_long_slide_costs_a_few_evaluations(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.slow
-def test_observables(fmu: OscillatorFMU) -> None:
+def test_observables(fmu: OscillatorFMU2) -> None:
     p, F = CASES["c=0 F_ext drift with sticks"]
     T = p.period
     w0, w1 = 2.3 * T, 9.1 * T
@@ -211,7 +211,7 @@ def test_observables(fmu: OscillatorFMU) -> None:
 # ---------------------------------------------------------------- the other schemes at k = 0
 
 
-def test_located_scheme_is_second_order_at_k0(fmu: OscillatorFMU) -> None:
+def test_located_scheme_is_second_order_at_k0(fmu: OscillatorFMU2) -> None:
     p, F = CASES["c>0 chi=0.7 stick-slip"]
     T = p.period
     t = np.linspace(0.0, 10.0 * T, 201)
@@ -230,7 +230,7 @@ def test_located_scheme_is_second_order_at_k0(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("scheme, tol", [("paper", 5e-2), ("consistent", 5e-2), ("located", 1e-5)])
-def test_the_bossak_schemes_run_at_k0(fmu: OscillatorFMU, scheme: str, tol: float) -> None:
+def test_the_bossak_schemes_run_at_k0(fmu: OscillatorFMU2, scheme: str, tol: float) -> None:
     """They accept k = 0 and converge there (paper and consistent at first order, docs/schemes.md)."""
     p, F = CASES["c=0 chi=0.7 stick-slip"]
     T = p.period

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from dryfriction.references.exact import ExactSolution, solve_exact
-from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from dryfriction.analysis.validation import CASES
 
@@ -31,12 +31,12 @@ MODE = {"backward slip": -1, "stick": 0, "forward slip": 1}
 
 
 @pytest.fixture(scope="module")
-def fmu(fmu_path) -> Iterator[OscillatorFMU]:
-    with OscillatorFMU(fmu_path, logging=True) as f:
+def fmu(fmu_path) -> Iterator[OscillatorFMU2]:
+    with OscillatorFMU2(fmu_path, logging=True) as f:
         yield f
 
 
-def _events(f: OscillatorFMU, since: int) -> list[tuple[float, int, int, float]]:
+def _events(f: OscillatorFMU2, since: int) -> list[tuple[float, int, int, float]]:
     out = []
     for _, cat, msg in f.messages[since:]:
         m = EVENT_RE.match(msg) if cat == "logEvents" else None
@@ -59,7 +59,7 @@ def _phases(mode0: int, events: list[tuple[float, int]], t_end: float, tol: floa
     return out
 
 
-def _compare(f: OscillatorFMU, p: Oscillator, periods: float = 30.0, per_period: int = 40) -> tuple[float, int]:
+def _compare(f: OscillatorFMU2, p: Oscillator, periods: float = 30.0, per_period: int = 40) -> tuple[float, int]:
     """Run the FMU (exact) and the reference over `periods`: relative position error, events."""
     T = p.period
     t = np.linspace(0.0, periods * T, int(periods * per_period) + 1)
@@ -94,7 +94,7 @@ def _compare(f: OscillatorFMU, p: Oscillator, periods: float = 30.0, per_period:
 
 
 @pytest.mark.parametrize("name", list(CASES))
-def test_validation_cases_match_the_exact_solution(fmu: OscillatorFMU, name: str) -> None:
+def test_validation_cases_match_the_exact_solution(fmu: OscillatorFMU2, name: str) -> None:
     p, _ = CASES[name]
     err, n = _compare(fmu, p)
     assert err <= RTOL and n >= 30, (err, n)
@@ -103,7 +103,7 @@ def test_validation_cases_match_the_exact_solution(fmu: OscillatorFMU, name: str
 @pytest.mark.parametrize("zeta", [0.0, 0.05, 1.0, 3.0])
 @pytest.mark.parametrize("chi", [0.05, 0.7, 1.0, 2.0])
 @pytest.mark.parametrize("lam", [0.5, 1.0, 2.0])
-def test_grid_matches_the_exact_solution(fmu: OscillatorFMU, zeta: float, chi: float, lam: float) -> None:
+def test_grid_matches_the_exact_solution(fmu: OscillatorFMU2, zeta: float, chi: float, lam: float) -> None:
     p = ND(lam=lam, mu_s_sigma=0.3, chi=chi, zeta=zeta, z0=1.5, dz0=0.7, phi=0.3)
     err, _ = _compare(fmu, p)
     assert err <= RTOL, err
@@ -121,14 +121,14 @@ def _tiny_is_zero(v: float) -> float:
 @given(lam=st.floats(0.1, 3.0), mss=st.floats(0.0, 1.2).map(_tiny_is_zero), chi=st.floats(0.02, 2.5),
        zeta=st.floats(0.0, 3.0).map(_tiny_is_zero),
        z0=st.floats(-2.0, 2.0), dz0=st.floats(-2.0, 2.0), phi=st.floats(-math.pi, math.pi))
-def test_random_parameters_match_the_exact_solution(fmu: OscillatorFMU, lam: float, mss: float, chi: float,
+def test_random_parameters_match_the_exact_solution(fmu: OscillatorFMU2, lam: float, mss: float, chi: float,
                                                     zeta: float, z0: float, dz0: float, phi: float) -> None:
     p = ND(lam=lam, mu_s_sigma=mss, chi=chi, zeta=zeta, z0=z0, dz0=dz0, phi=phi)
     err, _ = _compare(fmu, p, periods=30.0, per_period=10)
     assert err <= RTOL, err
 
 
-def test_tangential_touch_and_start_on_the_limit(fmu: OscillatorFMU) -> None:
+def test_tangential_touch_and_start_on_the_limit(fmu: OscillatorFMU2) -> None:
     # a forward slip whose velocity touches 0 with zero acceleration at t* = 1 (non-dimensional)
     lam, b, ts, th = 0.5, 0.2, 1.0, -math.pi / 3
     phi, H = th - lam * ts, 1.0 / (1.0 - lam * lam)
@@ -154,7 +154,7 @@ def test_tangential_touch_and_start_on_the_limit(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
-def test_inputs_held_over_communication_steps(fmu: OscillatorFMU, seed: int) -> None:
+def test_inputs_held_over_communication_steps(fmu: OscillatorFMU2, seed: int) -> None:
     rng = np.random.default_rng(seed)
     p = ND(lam=0.6, mu_s_sigma=0.4, chi=0.6 if seed != 3 else 0.0, zeta=0.05 * seed)
     T = p.period
@@ -180,7 +180,7 @@ def _ref_observables(ref: ExactSolution, t0: float, t1: float) -> tuple[float, f
 
 
 @pytest.mark.parametrize("name", ["stick-dominated", "chi-small", "heavy-friction"])
-def test_observables_are_exact(fmu: OscillatorFMU, name: str) -> None:
+def test_observables_are_exact(fmu: OscillatorFMU2, name: str) -> None:
     p, _ = CASES[name]
     T = p.period
     obs = fmu.observables(p, t_stop=12.0 * T, t_obs_start=7.3 * T, t_obs_stop=11.6 * T, settings=EXACT)
@@ -193,7 +193,7 @@ def test_observables_are_exact(fmu: OscillatorFMU, name: str) -> None:
     assert obs["transitions"] == n
 
 
-def test_h_has_no_effect_and_states_continue_bit_for_bit(fmu: OscillatorFMU) -> None:
+def test_h_has_no_effect_and_states_continue_bit_for_bit(fmu: OscillatorFMU2) -> None:
     p, _ = CASES["chi-small"]
     t = np.linspace(0.0, 5.0 * p.period, 201)
     a = fmu.trajectory(p, t, Settings(scheme="exact", h=p.period / 1000))
@@ -223,7 +223,7 @@ def test_h_has_no_effect_and_states_continue_bit_for_bit(fmu: OscillatorFMU) -> 
     state.free()
 
 
-def test_switch_log_and_bad_input(fmu: OscillatorFMU) -> None:
+def test_switch_log_and_bad_input(fmu: OscillatorFMU2) -> None:
     p, _ = CASES["stick-dominated"]
     n0 = len(fmu.messages)
     fmu.trajectory(p, [0.0, 3.0 * p.period], EXACT)
@@ -244,7 +244,7 @@ def test_switch_log_and_bad_input(fmu: OscillatorFMU) -> None:
     dict(lam=1.0, z0=0.0, dz0=-3.46e-246, phi=1.0),  # a velocity below rounding against the force
     dict(lam=2.0, z0=0.0, dz0=0.0, phi=0.0),         # v touches 0 once per period
 ])
-def test_without_friction_the_block_never_sticks(fmu: OscillatorFMU, kw: dict) -> None:
+def test_without_friction_the_block_never_sticks(fmu: OscillatorFMU2, kw: dict) -> None:
     p = ND(mu_s_sigma=0.0, chi=1.0, **kw)
     err, n = _compare(fmu, p, periods=30.0, per_period=10)
     assert err <= RTOL and n >= 59

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from dryfriction.references.exact import solve_exact
-from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 # the 1.6 kHz oscillator of docs/fmu.md ("The default step") (f_n = 1591.5 Hz), driven at 1 Hz
@@ -21,7 +21,7 @@ P16 = Oscillator(m=0.01, k=1e6, omega=2.0 * math.pi)
 EXACT = Settings(h=0.0, scheme="exact")
 
 
-def test_a_long_dostep_of_a_fast_oscillator_runs_and_equals_short_ones(fmu: OscillatorFMU) -> None:
+def test_a_long_dostep_of_a_fast_oscillator_runs_and_equals_short_ones(fmu: OscillatorFMU2) -> None:
     """1024 s in one doStep (1.6e9 steps of the derived h = 6.3e-7 s: refused before) equals the same
     run in 64 doSteps of 16 s (each within the old bound), observables included."""
     st = Settings(h=0.0, scheme="exact", observe=True, t_obs_start=512.0)
@@ -40,7 +40,7 @@ def test_a_long_dostep_of_a_fast_oscillator_runs_and_equals_short_ones(fmu: Osci
     assert abs(one["stick_fraction"] - many["stick_fraction"]) <= 1e-9
 
 
-def test_a_long_dostep_matches_the_reference(fmu: OscillatorFMU) -> None:
+def test_a_long_dostep_matches_the_reference(fmu: OscillatorFMU2) -> None:
     """h = 1e-9 s: a 16 s doStep is 1.6e10 steps of it (refused before); the exact scheme ignores h."""
     fmu.start(P16, Settings(h=1e-9, scheme="exact"))
     fmu.step_to(16.0)
@@ -52,7 +52,7 @@ def test_a_long_dostep_matches_the_reference(fmu: OscillatorFMU) -> None:
     assert o["mode"] == mode[0]
 
 
-def test_the_sweep_point_that_ended_a_sweep(fmu: OscillatorFMU) -> None:
+def test_the_sweep_point_that_ended_a_sweep(fmu: OscillatorFMU2) -> None:
     """The steady state at 1 Hz (single doSteps of up to 8192 s) is computed, not an error."""
     from dryfriction.analysis.response import steady_state
 
@@ -60,7 +60,7 @@ def test_the_sweep_point_that_ended_a_sweep(fmu: OscillatorFMU) -> None:
     assert math.isfinite(s.amplitude) and s.amplitude > 0.0 and s.periods >= 64
 
 
-def test_the_bossak_schemes_keep_their_bound(fmu: OscillatorFMU) -> None:
+def test_the_bossak_schemes_keep_their_bound(fmu: OscillatorFMU2) -> None:
     fmu.start(P16, Settings(h=1e-9, scheme="located"))
     with pytest.raises(FMUError, match="more than 1e\\+09 internal steps"):
         fmu.step_to(16.0)
@@ -70,7 +70,7 @@ def test_the_bossak_schemes_keep_their_bound(fmu: OscillatorFMU) -> None:
 @pytest.mark.no_sanitizer
 @pytest.mark.skipif(not os.environ.get("DFO_LONG_TESTS"), reason="computes 1e8 events (about a minute): set "
                     "DFO_LONG_TESTS=1; the same bound with a budget of 20 000 events is ctest's test_exact_budget")
-def test_a_runaway_step_fails_with_a_sentence(fmu: OscillatorFMU) -> None:
+def test_a_runaway_step_fails_with_a_sentence(fmu: OscillatorFMU2) -> None:
     """A frictionless 1.6 kHz oscillator reverses 3183 times a second: 4e4 s in one doStep would be
     1.3e8 events. It fails after 1e8 of them (about a minute), saying why and what to do."""
     p = Oscillator(m=0.01, k=1e6, omega=2.0 * math.pi, N=0.0, v0=1.0)

@@ -8,7 +8,7 @@ steps that must not hang.
 Checked once, in the C API tests (tests/fmi_c) and not again here: every invalid parameter value,
 NULL instances and arrays, instantiate rejections, overflow, 32 instances in parallel threads, 10^4
 instantiate/free cycles. FMU states (forged serialised states among them): test_fmu_state.py. The
-package's own driver (OscillatorFMU): test_fmi_layer.py.
+package's own driver (OscillatorFMU2): test_fmi_layer.py.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from dryfriction.fmi import fmi2
-from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from fmi2_helpers import Inst, fmi2Error, fmi2LastSuccessfulTime
@@ -198,9 +198,9 @@ def test_tiny_internal_step_does_not_hang() -> None:
     code = textwrap.dedent(f"""
         import sys
         sys.path.insert(0, {str(Path(__file__).parent)!r})
-        from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+        from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
         from dryfriction.params import Oscillator
-        f = OscillatorFMU()
+        f = OscillatorFMU2()
         f.start(Oscillator(), Settings(h=1e-300))
         try:
             f.step_to(1e-3)
@@ -259,7 +259,7 @@ def test_only_fmi2_functions_are_exported(fmu_path: Path, tmp_path: Path) -> Non
         assert required in symbols
 
 
-def test_wrong_guid_is_refused(fmu: OscillatorFMU) -> None:
+def test_wrong_guid_is_refused(fmu: OscillatorFMU2) -> None:
     with pytest.raises(FMUError, match="does not match the FMU's GUID") as err:
         fmi2.Instance(fmu.unzip_dir, "{00000000-0000-0000-0000-000000000000}", fmu.md.model_identifier, "wrong-guid")
     assert err.value.function == "fmi2Instantiate"
@@ -269,7 +269,7 @@ def test_log_categories_are_honoured(fmu_path: Path) -> None:
     """logEvents reports every stick/slip switch when on, nothing when off."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     for on in (True, False):
-        with OscillatorFMU(fmu_path, logging=on) as f:
+        with OscillatorFMU2(fmu_path, logging=on) as f:
             f.trajectory(p, [0.0, 2 * p.period], Settings(h=p.period / 1000))
             events = [m for s, c, m in f.messages if c == "logEvents" and "->" in m]
             calls = [m for s, c, m in f.messages if c == "logAll"]
@@ -278,7 +278,7 @@ def test_log_categories_are_honoured(fmu_path: Path) -> None:
                 assert "fmi2DoStep" in calls
             else:
                 assert events == [] and calls == []
-    with OscillatorFMU(fmu_path) as f:
+    with OscillatorFMU2(fmu_path) as f:
         with pytest.raises(FMUError, match="fmi2SetDebugLogging returned fmi2Error"):
             f.set_debug_logging(True, ["noSuchCategory"])
         assert any("unknown log category noSuchCategory" in m for s, c, m in f.messages)

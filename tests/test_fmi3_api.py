@@ -17,7 +17,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from dryfriction.drivers.oscillator3 import FMI3Oscillator
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
 from fmi3_helpers import DT, FMU3
 
@@ -74,7 +74,7 @@ def test_every_fmi3_function_exported() -> None:
 # ------------------------------------------------------ phases: update discrete states, event mode
 
 def test_update_discrete_states_report_and_phase_rules() -> None:
-    fmu = FMI3Oscillator({}, early_return=True, event_mode=True)
+    fmu = OscillatorFMU3({}, early_return=True, event_mode=True)
     try:
         s = fmu.slave
         # a switch: eventHandlingNeeded with earlyReturn
@@ -108,7 +108,7 @@ def test_update_discrete_states_report_and_phase_rules() -> None:
 
 
 def test_enter_event_mode_needs_event_mode_used() -> None:
-    fmu = FMI3Oscillator({}, early_return=True)
+    fmu = OscillatorFMU3({}, early_return=True)
     try:
         with pytest.raises(FMICallException):
             fmu.slave.enterEventMode()

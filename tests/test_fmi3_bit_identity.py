@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from dryfriction.drivers.oscillator3 import FMI3Oscillator
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 from fmi3_helpers import FMI2Run, schemes
 
 OUTPUTS = ["x", "v", "a", "F_friction", "mode", "x_max", "x_min", "stick_fraction", "transitions", "E_friction",
@@ -53,7 +53,7 @@ def test_plain_stepping_is_fmi2_bit_for_bit(run) -> None:
     params, steps, inputs, option = run
     updates: list[float] = []
     ref = FMI2Run(params)
-    fmu = FMI3Oscillator(params, event_mode=option == "event_mode",
+    fmu = OscillatorFMU3(params, event_mode=option == "event_mode",
                          intermediate=(lambda t, can: updates.append(t) or False) if option == "intermediate" else None)
     try:
         assert same_bits(ref.get(OUTPUTS), list(fmu.get(OUTPUTS).values()))
@@ -84,7 +84,7 @@ def test_intermediate_updates_at_every_switch_leave_the_outputs_alone() -> None:
         params = {"scheme": scheme, "h": T / 1000, "observe": True}
         updates: list[float] = []
         ref = FMI2Run(params)
-        fmu = FMI3Oscillator(params, intermediate=lambda t, can: updates.append(t) or False)
+        fmu = OscillatorFMU3(params, intermediate=lambda t, can: updates.append(t) or False)
         try:
             t = 0.0
             for _ in range(20):

@@ -13,7 +13,7 @@ import pytest
 from fmpy import simulate_fmu
 
 from dryfriction.references.exact import solve_exact
-from dryfriction.drivers.oscillator3 import FMI3Oscillator
+from dryfriction.drivers.oscillator3 import OscillatorFMU3
 from dryfriction.params import Oscillator
 
 from fmi3_helpers import DT, FMU2, FMU3, fmi2_switches, kinds, scheme_names, schemes
@@ -30,7 +30,7 @@ def exact():
 
 
 def early_return_run(scheme: int, h: float, event_mode: bool = False):
-    with FMI3Oscillator({"scheme": scheme, "h": h}, early_return=True, event_mode=event_mode) as fmu:
+    with OscillatorFMU3({"scheme": scheme, "h": h}, early_return=True, event_mode=event_mode) as fmu:
         return fmu.run(T_END, DT, outputs=("x", "v", "mode"))
 
 
@@ -162,7 +162,7 @@ def test_intermediate_update_early_return_request_honoured() -> None:
     # h = DT / 100: the reference's communication points fall on the internal grid, so that its steps
     # are the one long step's steps
     grid = {"h": DT / 100}
-    fmu = FMI3Oscillator(grid, early_return=True, intermediate=lambda t, can: calls.append((t, can)) or len(calls) == 2)
+    fmu = OscillatorFMU3(grid, early_return=True, intermediate=lambda t, can: calls.append((t, can)) or len(calls) == 2)
     try:
         event, early = fmu.do_step(T_END / 2)
         assert early and not event

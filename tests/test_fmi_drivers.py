@@ -88,34 +88,17 @@ def test_chain_fmu3_equals_simulate_fmu(chain_fmu3: Path) -> None:
     assert np.array_equal(run.mode, ref["mode"])
 
 
-# ------------------------------------------------------------------ former names, uniform signatures
+# ------------------------------------------------------------------ the path functions, uniform signatures
 
-def test_former_names_are_the_same_objects() -> None:
-    import dryfriction.errors as errors
-    import dryfriction.fmi.fmi2 as layer2
-    import dryfriction.fmi.fmi3 as layer3
+def test_the_path_functions_are_thin_wrappers_of_fmu_path() -> None:
+    """The drivers' default FMU paths are :func:`dryfriction.paths.fmu_path` of their kind (the
+    former paths and names of the drivers: tests/test_layout.py)."""
+    from dryfriction.drivers import chain, oscillator, oscillator3
 
-    with pytest.warns(DeprecationWarning):
-        import dryfriction.chain as chain
-        import dryfriction.fmi2 as fmi2
-        import dryfriction.fmi3 as fmi3
-        import dryfriction.fmu as fmu
-        import dryfriction.fmu3 as fmu3
-        import dryfriction.locate as locate
-
-    assert fmu.OscillatorFMU is OscillatorFMU2 and fmu.OscillatorFMU3 is OscillatorFMU3
-    assert fmi3.FMI3Oscillator is OscillatorFMU3 and fmu3.FMI3Oscillator is OscillatorFMU3
-    assert fmi3.OscillatorFMU3 is OscillatorFMU3 and fmi3.Switch is fmu3.Switch and fmi3.Run is fmu3.Run
-    assert chain.ChainFMU is ChainFMU3 and chain.ChainError is errors.FMUCallError
-    assert locate is paths and locate.FMUFileError is errors.FMUFileError
-    assert fmi2.Instance is layer2.Instance and fmi2.State is layer2.State and fmi2.FMUError is errors.FMUError
-    assert fmi3.Instance is layer3.Instance and fmu.FMUError is errors.FMUError
-    assert fmi2.STATUS_NAMES == layer2.STATUS_NAMES and fmi2.library_path is layer2.library_path
-    # the former path functions: thin wrappers of paths.fmu_path
-    assert fmi3.default_fmi3_path() == paths.fmu_path(paths.OSCILLATOR3)
+    assert oscillator3.default_fmi3_path() == paths.fmu_path(paths.OSCILLATOR3)
     assert chain.default_chain_fmu3() == paths.fmu_path(paths.CHAIN3)
     assert chain.default_chain_fmu() == paths.fmu_path(paths.CHAIN)
-    assert fmu.default_fmu_path() == paths.fmu_path(paths.OSCILLATOR)
+    assert oscillator.default_fmu_path() == paths.fmu_path(paths.OSCILLATOR)
 
 
 @pytest.mark.parametrize("cls", DRIVERS)

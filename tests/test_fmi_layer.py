@@ -1,4 +1,4 @@
-"""The package's FMI 2.0 layer (dryfriction.fmi.fmi2) through OscillatorFMU: statuses, errors (an
+"""The package's FMI 2.0 layer (dryfriction.fmi.fmi2) through OscillatorFMU2: statuses, errors (an
 FMUError names the function, the status and the FMU's sentence), observables read without observe,
 the batch runner's strict error, instances in threads. (FMU states: test_fmu_state.py; what
 dryfriction.model reads from the XML: test_model_description.py; the Python range checks:
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from dryfriction.fmi import fmi2
-from dryfriction.drivers.oscillator import FMUError, OBSERVABLE_OUTPUTS, OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import FMUError, OBSERVABLE_OUTPUTS, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import BatchRunner, PARAM_COLUMNS
 
@@ -28,7 +28,7 @@ def test_status_constants_are_fmi2s() -> None:
 
 
 @pytest.mark.min_versions
-def test_check_accepts_ok_and_warning_and_raises_on_anything_else(fmu: OscillatorFMU) -> None:
+def test_check_accepts_ok_and_warning_and_raises_on_anything_else(fmu: OscillatorFMU2) -> None:
     inst = fmu.fmi
     assert inst.check("fmi2GetReal", fmi2.OK) == fmi2.OK
     assert inst.check("fmi2GetReal", fmi2.WARNING) == fmi2.WARNING
@@ -39,7 +39,7 @@ def test_check_accepts_ok_and_warning_and_raises_on_anything_else(fmu: Oscillato
         assert str(err.value).startswith(f"fmi2DoStep returned {fmi2.STATUS_NAMES[status]}: ")
 
 
-def test_a_failed_step_raises_with_the_fmus_sentence(fmu: OscillatorFMU) -> None:
+def test_a_failed_step_raises_with_the_fmus_sentence(fmu: OscillatorFMU2) -> None:
     """doStep that overflows: FMUError naming fmi2DoStep and fmi2Error with the FMU's sentence;
     reset recovers."""
     fmu.start(Oscillator(P0=1e307, N=0.0, omega=0.0, k=1e-100), Settings(h=1e-3))
@@ -50,7 +50,7 @@ def test_a_failed_step_raises_with_the_fmus_sentence(fmu: OscillatorFMU) -> None
     assert math.isfinite(r["x"][-1]) and r["x"][-1] != 0.0
 
 
-def test_observables_read_without_observe_are_not_an_error(fmu: OscillatorFMU) -> None:
+def test_observables_read_without_observe_are_not_an_error(fmu: OscillatorFMU2) -> None:
     """The FMU answers a read of the observables with observe off (the driver's default) by fmi2OK
     and NaN (transitions -1), not a number that looks like a result; the driver itself never asks
     (trajectory refuses the request)."""
@@ -89,7 +89,7 @@ def test_batch_runner_strict_error_names_the_run_and_the_call(fmu_path: Path) ->
 
 
 def _serial_run(fmu_path: Path, k: int) -> np.ndarray:
-    with OscillatorFMU(fmu_path) as f:
+    with OscillatorFMU2(fmu_path) as f:
         p = Oscillator(omega=3.0 + 0.25 * k, x0=0.001 * (k % 7), chi=0.2 + 0.1 * k)
         st = Settings(h=7e-4, scheme=list(f.md.schemes)[k % 3])
         r = f.trajectory(p, np.arange(101) * 0.01, st)
@@ -97,7 +97,7 @@ def _serial_run(fmu_path: Path, k: int) -> np.ndarray:
 
 
 def test_driver_instances_in_threads_match_serial_runs(fmu_path: Path) -> None:
-    """The driver in 8 threads (each its own OscillatorFMU: unzip, load, callbacks) gives the
+    """The driver in 8 threads (each its own OscillatorFMU2: unzip, load, callbacks) gives the
     serial numbers bit for bit. (The FMU's own reentrancy, 32 C threads: tests/fmi_c.)"""
     serial = [_serial_run(fmu_path, k) for k in range(8)]
     with ThreadPoolExecutor(max_workers=8) as ex:
@@ -110,7 +110,7 @@ def test_driver_instances_in_threads_match_serial_runs(fmu_path: Path) -> None:
 # ---------------------------------------------------------------- the FMU's error, as an exception
 
 
-def test_an_fmu_error_names_the_function_the_status_and_the_sentence(fmu: OscillatorFMU) -> None:
+def test_an_fmu_error_names_the_function_the_status_and_the_sentence(fmu: OscillatorFMU2) -> None:
     """The driver's error: the FMI function, its status and the FMU's logged sentence (the bad
     values themselves are the C API test's: tests/fmi_c/test_fmi_api.c, test_bad_values)."""
     fmu.reset()

@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.drivers.oscillator import FMUError, OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from fmi2_helpers import HEADER, Inst, deserialise_raw, fmi2Error, forge, serialised
 
 
-def test_state_round_trip_through_the_driver_is_bit_exact(fmu: OscillatorFMU) -> None:
+def test_state_round_trip_through_the_driver_is_bit_exact(fmu: OscillatorFMU2) -> None:
     p = Oscillator(x0=0.004, chi=0.5)
     st = Settings(h=7e-4, observe=True)
     t = 37 * 0.0123 + np.arange(201) * 0.01
@@ -49,7 +49,7 @@ def test_state_round_trip_through_the_driver_is_bit_exact(fmu: OscillatorFMU) ->
         data = fmu.serialize_state(state)
     assert state.freed
     # into another instance that was only instantiated: the state carries the whole setup
-    with OscillatorFMU(fmu.path) as other:
+    with OscillatorFMU2(fmu.path) as other:
         other.restore(data)
         assert other.time == t[0]
         assert other.serialize_state() == data
@@ -63,7 +63,7 @@ def test_state_round_trip_through_the_driver_is_bit_exact(fmu: OscillatorFMU) ->
 
 
 def test_states_left_open_are_freed_with_the_instance(fmu_path: Path) -> None:
-    f = OscillatorFMU(fmu_path)
+    f = OscillatorFMU2(fmu_path)
     f.start(Oscillator(), Settings(h=1e-3))
     states = [f.get_state() for _ in range(3)]
     f.close()

@@ -37,7 +37,7 @@ from dryfriction import DryFrictionWarning
 from dryfriction.drivers.chain import default_chain_fmu, default_chain_fmu3
 from dryfriction.references.exact import ExactSolution, linear_solution, solve_exact
 from dryfriction.drivers.oscillator3 import default_fmi3_path
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings, default_fmu_path
 from dryfriction.params import SCALE_LIMIT, Oscillator
 
 from fmi2_helpers import Counting
@@ -48,8 +48,8 @@ ENERGY_RTOL = 2e-5  # at h = T/2000; the residual is O(h^2), at most 2.3e-6 meas
 
 
 @pytest.fixture(scope="module")
-def fmu() -> Iterator[OscillatorFMU]:
-    f = OscillatorFMU()
+def fmu() -> Iterator[OscillatorFMU2]:
+    f = OscillatorFMU2()
     yield f
     f.close()
 
@@ -69,7 +69,7 @@ class Run:
     E_friction: float
 
 
-def run(fmu: OscillatorFMU, p: Oscillator, t_end: float, h: float, comm: float | None = None,
+def run(fmu: OscillatorFMU2, p: Oscillator, t_end: float, h: float, comm: float | None = None,
         scheme: str = "located", **extra: object) -> Run:
     """Dense run from 0 to t_end with communication step comm (default h), observe on over the
     whole run (E_friction is the friction dissipation on [0, t_end])."""
@@ -195,7 +195,7 @@ def exact_error(r: Run, t_end: float | None = None) -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("chi", [0.01, 3.0])
-def test_chi_extremes_match_exact(fmu: OscillatorFMU, chi: float) -> None:
+def test_chi_extremes_match_exact(fmu: OscillatorFMU2, chi: float) -> None:
     """chi near 0 (almost no kinetic friction: long slides after breakaway) and chi = 3 (breakaway
     at mu_k N, zero initial acceleration): located scheme within 3e-4 relative (8.9e-5 and 1.2e-5 measured, second order) of the exact
     solution at h = T/2000 over 10 periods, invariants and energy balance at every step."""
@@ -213,7 +213,7 @@ def test_chi_extremes_match_exact(fmu: OscillatorFMU, chi: float) -> None:
 
 
 @pytest.mark.parametrize("scheme", ["paper", "consistent", "located"])
-def test_static_friction_far_above_excitation_never_moves(fmu: OscillatorFMU, scheme: str) -> None:
+def test_static_friction_far_above_excitation_never_moves(fmu: OscillatorFMU2, scheme: str) -> None:
     """mu_s N = 100 P0: the block stays where it is, exactly, for 100 periods (no creep)."""
     p = Oscillator(N=250.0, mu_s=0.4, x0=0.003)
     T = p.period
@@ -225,7 +225,7 @@ def test_static_friction_far_above_excitation_never_moves(fmu: OscillatorFMU, sc
 
 @pytest.mark.parametrize("scheme", ["paper", "consistent", "located"])
 @pytest.mark.parametrize("mu_s,chi", [(0.5, 0.7), (0.25, 2.0)])
-def test_exactly_at_breakaway_threshold_stays(fmu: OscillatorFMU, scheme: str, mu_s: float, chi: float) -> None:
+def test_exactly_at_breakaway_threshold_stays(fmu: OscillatorFMU2, scheme: str, mu_s: float, chi: float) -> None:
     """max |P(t)| = max(mu_s, mu_k) N exactly (P0 = 1, N = 2, limit 1.0 in binary): the force
     touches the limit every half period but never exceeds it, so the block never moves."""
     p = Oscillator(P0=1.0, N=2.0, mu_s=mu_s, chi=chi)
@@ -236,7 +236,7 @@ def test_exactly_at_breakaway_threshold_stays(fmu: OscillatorFMU, scheme: str, m
     check_invariants(r, scheme)
 
 
-def test_just_above_breakaway_threshold_moves_as_exact(fmu: OscillatorFMU) -> None:
+def test_just_above_breakaway_threshold_moves_as_exact(fmu: OscillatorFMU2) -> None:
     """P0 = limit (1 + 1e-3): tiny slips near each force peak, matching the exact solution."""
     p = Oscillator(P0=1.0 + 1e-3, N=2.0, mu_s=0.5, chi=0.7)
     T = p.period
@@ -250,7 +250,7 @@ def test_just_above_breakaway_threshold_moves_as_exact(fmu: OscillatorFMU) -> No
 # --------------------------------------------------------------------------- no friction
 
 
-def test_zero_normal_force_is_the_linear_oscillator(fmu: OscillatorFMU) -> None:
+def test_zero_normal_force_is_the_linear_oscillator(fmu: OscillatorFMU2) -> None:
     """N = 0: no LCP (effects bit 1 clear), F = 0, matches the closed-form linear solution to
     second order; the general path (fastPaths = false) gives the same numbers."""
     p = Oscillator(N=0.0, c=0.5, x0=0.01, v0=-0.1)
@@ -273,7 +273,7 @@ def test_zero_normal_force_is_the_linear_oscillator(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("zeta", [1.0, 3.0])
-def test_heavy_viscous_damping(fmu: OscillatorFMU, zeta: float) -> None:
+def test_heavy_viscous_damping(fmu: OscillatorFMU2, zeta: float) -> None:
     """Critical and over-critical damping from a displaced start: creeps towards the force balance,
     sticks; matches the exact solution, energy balance includes the viscous dissipation."""
     p = ND(0.5, 0.2, 0.7, zeta=zeta, z0=3.0)
@@ -288,7 +288,7 @@ def test_heavy_viscous_damping(fmu: OscillatorFMU, zeta: float) -> None:
 # --------------------------------------------------------------------------- resonance, frequency
 
 
-def test_exact_resonance_1000_periods(fmu: OscillatorFMU) -> None:
+def test_exact_resonance_1000_periods(fmu: OscillatorFMU2) -> None:
     """lambda = 1, c = 0, 4 mu_k N < pi P0: the amplitude grows without bound (about
     (1 - 4 mu_k N / (pi P0)) P0 / (2k) per radian); over 1000 periods the FMU stays finite and on
     the exact solution (h = T/2000, outputs every T/20): the error is the accumulated phase error,
@@ -304,7 +304,7 @@ def test_exact_resonance_1000_periods(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("lam", [0.01, 20.0])
-def test_frequency_extremes(fmu: OscillatorFMU, lam: float) -> None:
+def test_frequency_extremes(fmu: OscillatorFMU2, lam: float) -> None:
     """lambda = 0.01 (quasi-static: long sticks, fast free oscillations inside each forcing
     period) and lambda = 20 (the block barely follows): h = (natural period)/1000 and
     T/1000 resp.; outputs every 10 internal steps for lambda = 0.01 (2 10^5 steps)."""
@@ -324,7 +324,7 @@ def test_frequency_extremes(fmu: OscillatorFMU, lam: float) -> None:
 
 
 @pytest.mark.parametrize("scheme", ["paper", "consistent", "located"])
-def test_coarse_step_T_over_8(fmu: OscillatorFMU, scheme: str) -> None:
+def test_coarse_step_T_over_8(fmu: OscillatorFMU2, scheme: str) -> None:
     """h = T/8 over 200 periods: finite, invariants at every step, amplitude bounded; the located
     scheme still lands within 15 % of the exact steady amplitude (its switches are exact)."""
     p = ND(0.5, 0.4, 0.7, zeta=0.02)
@@ -342,7 +342,7 @@ def test_coarse_step_T_over_8(fmu: OscillatorFMU, scheme: str) -> None:
         assert abs(amp / amp_e - 1) < 0.15, f"amplitude {amp:.4e} vs exact {amp_e:.4e}"
 
 
-def test_fine_step_T_over_1e6(fmu: OscillatorFMU) -> None:
+def test_fine_step_T_over_1e6(fmu: OscillatorFMU2) -> None:
     """h = T/10^6 over one period (10^6 internal steps, outputs every 1000): m_hat ~ 1/h is huge,
     sticking is still decided exactly (v == 0, no +-1e-17 velocities) and the error against the
     exact solution is at the rounding level (<= 1e-9 relative)."""
@@ -356,7 +356,7 @@ def test_fine_step_T_over_1e6(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("ratio", [1 / 7, 997.0])
-def test_communication_step_off_the_grid(fmu: OscillatorFMU, ratio: float) -> None:
+def test_communication_step_off_the_grid(fmu: OscillatorFMU2, ratio: float) -> None:
     """Communication step h/7 (shorter than the internal step) and 997 h (much longer, off the
     grid): the located scheme keeps its accuracy (within 2x of comm = h, h = T/1000)."""
     p = ND(0.5, 0.4, 0.7)
@@ -373,7 +373,7 @@ def test_communication_step_off_the_grid(fmu: OscillatorFMU, ratio: float) -> No
 
 @pytest.mark.parametrize("scheme", ["paper", "consistent", "located"])
 @pytest.mark.parametrize("k", [1e9, 1e12])
-def test_stiff_spring_stays_finite(fmu: OscillatorFMU, scheme: str, k: float) -> None:
+def test_stiff_spring_stays_finite(fmu: OscillatorFMU2, scheme: str, k: float) -> None:
     """A stiff spring against the step (k = 1e9 and 1e12 with m = 1, h = 1 ms: w0 h = 32 and
     1000; Bossak is unconditionally stable): the block hardly moves, |x| <= 2 (P0 + limit) / k,
     outputs finite, invariants hold (5 s, one doStep per 10 internal steps)."""
@@ -387,7 +387,7 @@ def test_stiff_spring_stays_finite(fmu: OscillatorFMU, scheme: str, k: float) ->
 # --------------------------------------------------------------------------- long runs
 
 
-def test_1e5_periods(fmu: OscillatorFMU) -> None:
+def test_1e5_periods(fmu: OscillatorFMU2) -> None:
     """10^5 periods: one doStep of 10^5 - 5 periods at h = T/100 (10^7 internal steps), then 5
     periods at every step. Nothing overflows, the periodic stick-slip orbit is the exact one (a
     drift of the time grid would shift its phase) and the energy balance holds over the last 5
@@ -421,7 +421,7 @@ def test_1e5_periods(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("h_div", [100, 64])
-def test_time_lands_exactly_on_the_communication_point_in_long_runs(fmu: OscillatorFMU, h_div: int) -> None:
+def test_time_lands_exactly_on_the_communication_point_in_long_runs(fmu: OscillatorFMU2, h_div: int) -> None:
     """After fmi2DoStep(0, t1) the FMU's time (fmi2LastSuccessfulTime) is t1 bit for bit, also
     when t1 = 99995 T is 10^7 internal steps away (there the grid snap tolerance 1e-9 h is below
     one ulp of t)."""
@@ -435,7 +435,7 @@ def test_time_lands_exactly_on_the_communication_point_in_long_runs(fmu: Oscilla
         assert got == t1, f"FMU time {got!r} != requested {t1!r} ({(got - t1) / np.spacing(t1):+.0f} ulp)"
 
 
-def test_long_stick_no_creep_and_exact_time(fmu: OscillatorFMU) -> None:
+def test_long_stick_no_creep_and_exact_time(fmu: OscillatorFMU2) -> None:
     """10^5 communication steps of T/3 while stuck: position frozen bit for bit, time equal to
     the host's k T/3 at every step (the FMU accepts currentCommunicationPoint = k dt)."""
     p = Oscillator(N=10.0, x0=-0.002)
@@ -454,7 +454,7 @@ def test_long_stick_no_creep_and_exact_time(fmu: OscillatorFMU) -> None:
 CHAOTIC = ND(0.25, 0.4, 0.05, zeta=0.05)
 
 
-def test_chaotic_set_statistics_converge(fmu: OscillatorFMU) -> None:
+def test_chaotic_set_statistics_converge(fmu: OscillatorFMU2) -> None:
     """A chaotic set (lambda 0.25, mu_s sigma 0.4, chi 0.05, zeta 0.05): a 1e-9 perturbation of
     x0 grows to the size of the motion (trajectories are not comparable past the Lyapunov time),
     but the statistics over periods 50..350 (stick fraction, mean amplitude, asymmetry) agree
@@ -490,7 +490,7 @@ BELOW_ROUNDING = Oscillator(P0=1.0, N=1e-23, mu_s=0.5, chi=1.0, k=64.0, omega=8.
 
 
 @pytest.mark.parametrize("scheme", ["located", "consistent", "exact"])
-def test_breakaway_limit_below_rounding(fmu: OscillatorFMU, scheme: str) -> None:
+def test_breakaway_limit_below_rounding(fmu: OscillatorFMU2, scheme: str) -> None:
     """A breakaway limit below the rounding of the static force: the block breaks away backward at
     once (the exact solution: at 5e-13 T), as with no static friction, and follows the exact motion;
     never held stuck while the static force is far over the limit (it was, for half a period in the
@@ -506,7 +506,7 @@ def test_breakaway_limit_below_rounding(fmu: OscillatorFMU, scheme: str) -> None
     assert err <= (1e-12 if scheme == "exact" else 2e-5) * p.P0 / p.k, err
 
 
-def test_start_at_rest_on_the_limit_force_falling(fmu: OscillatorFMU) -> None:
+def test_start_at_rest_on_the_limit_force_falling(fmu: OscillatorFMU2) -> None:
     """x0 with P(0) - k x0 = limit exactly (binary-exact values), force falling: stays stuck
     (the limit is inclusive) until it breaks backward at t = T/4 exactly as the exact solution."""
     p = Oscillator(P0=1.0, N=1.0, mu_s=0.5, chi=0.5, k=64.0, omega=4.0, x0=0.5 / 64.0)
@@ -521,7 +521,7 @@ def test_start_at_rest_on_the_limit_force_falling(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("chi", [0.5, 2.0])
-def test_start_at_rest_on_the_limit_force_rising(fmu: OscillatorFMU, chi: float) -> None:
+def test_start_at_rest_on_the_limit_force_rising(fmu: OscillatorFMU2, chi: float) -> None:
     """On the limit with the force rising (phi < 0): breaks away forward at once; for chi >= 1
     with zero initial acceleration (v grows like t^2). Matches the exact solution."""
     phi = -0.3
@@ -535,7 +535,7 @@ def test_start_at_rest_on_the_limit_force_rising(fmu: OscillatorFMU, chi: float)
     assert err <= 1e-4 * scale  # 7.6e-6 (chi 0.5) and 4.4e-5 (chi 2) measured, second order
 
 
-def test_consistent_reversal_keeps_friction_within_limit(fmu: OscillatorFMU) -> None:
+def test_consistent_reversal_keeps_friction_within_limit(fmu: OscillatorFMU2) -> None:
     """The consistent scheme, at a stop followed by a reversal whose solved velocity has the wrong
     sign, "sticks for this step" (method.md section 4) although the static force exceeds the
     limit (by 0.93 N at h = T/4000 here; this does not shrink with h). The friction output stays
@@ -553,7 +553,7 @@ def test_consistent_reversal_keeps_friction_within_limit(fmu: OscillatorFMU) -> 
 
 @pytest.mark.min_versions
 @pytest.mark.parametrize("alpha", [0.0, -0.1, -1 / 3])
-def test_energy_balance_second_order(fmu: OscillatorFMU, alpha: float) -> None:
+def test_energy_balance_second_order(fmu: OscillatorFMU2, alpha: float) -> None:
     """Energy balance with friction and viscous damping: the residual falls about 4x per halving
     of h (trapezoid quadrature and Bossak both O(h^2)) and is below ENERGY_RTOL at h = T/2000."""
     p = ND(0.8, 0.3, 0.6, zeta=0.05, z0=1.0)
@@ -649,7 +649,7 @@ def near_tie_time(ex: ExactSolution, delta: float) -> float:
 # the limit (within delta = 3.1e-2 here); the consistent scheme is 4.7e-4 P0/k off before it.
 @example(lam=0.20001220703125028, ms=0.5, chi=0.050781250000000076, zeta=0.0, z0=-0.5,
          dz0=-0.21875000000000033, phi=1.0)
-def test_random_parameters(fmu: OscillatorFMU, lam: float, ms: float, chi: float, zeta: float, z0: float,
+def test_random_parameters(fmu: OscillatorFMU2, lam: float, ms: float, chi: float, zeta: float, z0: float,
                            dz0: float, phi: float) -> None:
     """Random valid parameters: outputs finite, invariants at every step, and both Bossak schemes
     converge to the exact solution as h shrinks (over two periods), up to the first decision of the

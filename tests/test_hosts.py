@@ -30,9 +30,9 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from dryfriction.drivers.chain import ChainFMU, ChainFMU2, default_chain_fmu, default_chain_fmu3
+from dryfriction.drivers.chain import ChainFMU3, ChainFMU2, default_chain_fmu, default_chain_fmu3
 from dryfriction.drivers.oscillator3 import default_fmi3_path
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 
 
@@ -247,7 +247,7 @@ def test_fmusim_chain_with_three_blocks(tmp_path: Path) -> None:
     assert x.shape[1] == 3 and abs(t[-1] - stop) <= 1e-12 * stop
     # fmpy's simulate_fmu cannot set a structural parameter: the reference is fmpy's FMU3Slave
     # through dryfriction.drivers.chain (Configuration Mode for n, the same output points t0 + k h)
-    with ChainFMU(n=3, params={"m": m, "P0": P0}, fmu_path=fmu) as chain:
+    with ChainFMU3(n=3, params={"m": m, "P0": P0}, fmu_path=fmu) as chain:
         ref = chain.run(stop, h, start_time=t0)
     _assert_same_x((t, x), (ref.t, ref.x), t0, h, stop, "fmusim fmi3-chain n = 3")
     assert not np.array_equal(x[:, 0], x[:, 2])  # the heavier third block moves otherwise
@@ -284,7 +284,7 @@ def test_compliance_checker_finds_nothing(tmp_path: Path, key: str) -> None:
 # ---------------------------------------------------------------------------------------- libcosim
 
 @pytest.mark.min_versions
-def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU) -> None:
+def test_libcosim_gives_the_same_trajectory(fmu_path: Path, fmu: OscillatorFMU2) -> None:
     """A second host (libcosim via libcosimpy) steps the FMU to the same x(t) as fmpy (1e-12)."""
     from libcosimpy.CosimEnums import CosimExecutionState  # noqa: F401  (import check)
     from libcosimpy.CosimExecution import CosimExecution

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dryfriction.drivers.chain import ChainFMU
+from dryfriction.drivers.chain import ChainFMU3
 from dryfriction.references.chain import Chain
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from chain_cases import chain_params, run_driver
@@ -27,7 +27,7 @@ DIVS = (400, 800, 1600, 3200)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
-def test_located_stays_second_order_with_held_inputs(fmu: OscillatorFMU, seed: int) -> None:
+def test_located_stays_second_order_with_held_inputs(fmu: OscillatorFMU2, seed: int) -> None:
     rng = np.random.default_rng(seed)
     p = ND(lam=0.6, mu_s_sigma=0.4, chi=0.6, zeta=0.05 * seed)
     T = p.period
@@ -44,7 +44,7 @@ def test_located_stays_second_order_with_held_inputs(fmu: OscillatorFMU, seed: i
 
 
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
-def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU, chain_fmu3: Path, scheme: str) -> None:
+def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU2, chain_fmu3: Path, scheme: str) -> None:
     """x and v of one block with inputs changed before every step: the oscillator's bits."""
     b = dict(m=1.0, k=1.0, c=0.1, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0.7, x0=0.0, v0=0.0)
     p = Oscillator(phi=0.0, **b)
@@ -59,7 +59,7 @@ def test_chain_n1_takes_input_jumps_as_the_oscillator(fmu: OscillatorFMU, chain_
         k = int(round(time / dt))
         return {"F_ext": [float(F[k])], "N_ext": [float(Nx[k])]}
 
-    with ChainFMU(1, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(1, fmu_path=chain_fmu3) as f:
         run = f.run(t[-1], dt, {**b, "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme}, inputs=inputs)
     fmu.start(p, Settings(h=h, alpha=-0.1, scheme=scheme))
     x, v = [float(fmu.get(["x"])["x"])], [float(fmu.get(["v"])["v"])]
@@ -89,7 +89,7 @@ def test_chain_with_changing_inputs_converges_at_second_order(chain_fmu3: Path) 
                 "N_ext": [0.2 * np.cos(1.1 * k), 0.15 * np.sin(0.7 * k), -0.1 * np.cos(1.9 * k)]}
 
     def run(div: int) -> np.ndarray:
-        with ChainFMU(3, fmu_path=chain_fmu3) as f:
+        with ChainFMU3(3, fmu_path=chain_fmu3) as f:
             r = f.run(steps * dt, dt, chain_params(ch, T / div), inputs=inputs)
         assert (r.mode == 0).any() and (r.mode != 0).any()
         return r.x
@@ -103,7 +103,7 @@ def test_chain_with_changing_inputs_converges_at_second_order(chain_fmu3: Path) 
 
 # ------------------------------------------------ what the inputs are, and the chain's held inputs
 
-def test_inputs_are_the_forces_they_name(fmu: OscillatorFMU) -> None:
+def test_inputs_are_the_forces_they_name(fmu: OscillatorFMU2) -> None:
     """F_ext = F0 shifts the equilibrium by F0/k; N_ext adds to N (same numbers as N + N_ext)."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7, zeta=0.05)
     t = np.linspace(0, 5 * p.period, 201)
@@ -131,7 +131,7 @@ def test_held_inputs_equal_the_c_driver(chain_fmu3: Path) -> None:
     T = ch.period
     dt = T / 50
     drv = run_driver(ch, 200 * dt, T / 400, dt=dt)
-    with ChainFMU(3, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(3, fmu_path=chain_fmu3) as f:
         held = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs={"F_ext": F})
         func = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": F})
         fb = f.run(200 * dt, dt, chain_params(ch, T / 400), inputs=lambda t, y: {"F_ext": -0.5 * y["v"]})

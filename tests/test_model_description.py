@@ -38,7 +38,7 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackLoggerTYPE)
 
 from dryfriction import model
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from dryfriction.sweep.runner import PARAM_COLUMNS
 
@@ -509,7 +509,7 @@ def test_metadata_and_license(fmu_path: Path) -> None:
 
 # ------------------------------------- the FMU's own description, and what dryfriction.model reads
 
-def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU) -> None:
+def test_model_description_is_the_source_of_truth(fmu: OscillatorFMU2) -> None:
     """Every variable of modelDescription.xml reads back through its value reference with the
     declared start value, and unique value references per type (observe at its start, true: every
     output computed and finite)."""
@@ -560,11 +560,11 @@ def test_model_module_reads_what_the_xml_declares() -> None:
     assert PARAM_COLUMNS[:-1] == tuple(n for n in md.names("parameter") if md.var(n).type == "Real")
 
 
-def test_fmus_own_description_equals_the_repositorys(fmu: OscillatorFMU) -> None:
+def test_fmus_own_description_equals_the_repositorys(fmu: OscillatorFMU2) -> None:
     assert fmu.md == model.from_xml(XML)
 
 
-def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU) -> None:
+def test_effects_are_named_by_the_vendor_annotation(fmu: OscillatorFMU2) -> None:
     fmu.start(Oscillator(c=0.5, chi=1.0), Settings(h=1e-3, observe=True))
     mask = int(fmu.get(["effects"])["effects"])
     assert fmu.effects() == [e.name for e in fmu.md.effects if mask & e.bit]

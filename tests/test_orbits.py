@@ -13,7 +13,7 @@ import pytest
 from scipy.linalg import expm
 
 from dryfriction import Oscillator
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.analysis.orbits import Orbit, find_orbits, scales, stroboscopic_map
 
 EXACT = Settings(scheme="exact")
@@ -35,7 +35,7 @@ def harmonic(p: Oscillator) -> tuple[float, float, float]:
     return X, X * math.cos(p.phi - theta), -X * w * math.sin(p.phi - theta)
 
 
-def end_state(fmu: OscillatorFMU, p: Oscillator, x: float, v: float, t0: float, t1: float) -> np.ndarray:
+def end_state(fmu: OscillatorFMU2, p: Oscillator, x: float, v: float, t0: float, t1: float) -> np.ndarray:
     """(x, v) at t1 of a separate FMU run (scheme exact) from (x, v) at t0."""
     fmu.start(p.with_(x0=x, v0=v), EXACT, t0=t0)
     fmu.step_to(t1)
@@ -56,7 +56,7 @@ def scaled_gap(p: Oscillator, a: np.ndarray, b: np.ndarray) -> float:
     Oscillator(m=1.0, k=1.0, c=0.5, N=0.0, P0=2.0, omega=3.0, phi=-1.0, mu_s=0.5, chi=1.0),
     Oscillator(m=0.5, k=2000.0, c=0.3, N=0.0, P0=10.0, omega=2 * math.pi * 13, phi=0.0, mu_s=0.3, chi=0.7),
 ], ids=["below", "above", "stiff"])
-def test_no_friction_is_the_harmonic_response(fmu: OscillatorFMU, p: Oscillator) -> None:
+def test_no_friction_is_the_harmonic_response(fmu: OscillatorFMU2, p: Oscillator) -> None:
     orbits = find_orbits(p, fmu=fmu)
     assert len(orbits) == 1
     o = orbits[0]
@@ -72,7 +72,7 @@ def test_no_friction_is_the_harmonic_response(fmu: OscillatorFMU, p: Oscillator)
     assert o.stick_fraction == 0.0 and o.events["stops"] == 0 and o.events["reversals"] == 2
 
 
-def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU) -> None:
+def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU2) -> None:
     """The light-damping case: a transient method reports 2.883 (a slowly decaying free vibration);
     the orbit is the closed form's 1.449."""
     p = Oscillator.physical(m=1, k=1, zeta=1e-5, P0=1, omega=1.3, N=0, mu_s=0.0)
@@ -88,7 +88,7 @@ def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("lam, mss", [(1.7, 0.2), (2.5, 0.3), (0.8, 0.1), (1.3, 0.3)])
-def test_undamped_non_stop_is_den_hartog(fmu: OscillatorFMU, lam: float, mss: float) -> None:
+def test_undamped_non_stop_is_den_hartog(fmu: OscillatorFMU2, lam: float, mss: float) -> None:
     """zeta = 0, mu_s = mu_k, no stops: Den Hartog's exact steady amplitude (dryfriction.references.steady)."""
     from dryfriction.references.steady import den_hartog_amplitude
 
@@ -119,7 +119,7 @@ STICK_SLIP = [
 ]
 
 
-def fd_multipliers(fmu: OscillatorFMU, p: Oscillator, o: Orbit, eps: float) -> np.ndarray:
+def fd_multipliers(fmu: OscillatorFMU2, p: Oscillator, o: Orbit, eps: float) -> np.ndarray:
     """Eigenvalues of a central finite-difference Jacobian of the map P^K at the orbit's section."""
     xs, w = scales(p)
     z = o.section_state
@@ -134,7 +134,7 @@ def fd_multipliers(fmu: OscillatorFMU, p: Oscillator, o: Orbit, eps: float) -> n
 
 
 @pytest.mark.parametrize("name, p, K, stops", STICK_SLIP, ids=[c[0] for c in STICK_SLIP])
-def test_stick_slip_orbits(fmu: OscillatorFMU, name: str, p: Oscillator, K: int, stops: int | None) -> None:
+def test_stick_slip_orbits(fmu: OscillatorFMU2, name: str, p: Oscillator, K: int, stops: int | None) -> None:
     orbits = find_orbits(p, period=K, fmu=fmu)
     found = [o for o in orbits if o.period == K]
     assert found, f"{name}: no orbit of period {K}"
@@ -171,7 +171,7 @@ def test_stick_slip_orbits(fmu: OscillatorFMU, name: str, p: Oscillator, K: int,
     assert KT > 0
 
 
-def test_coexisting_orbits(fmu: OscillatorFMU) -> None:
+def test_coexisting_orbits(fmu: OscillatorFMU2) -> None:
     """lambda 0.5, mu_s sigma 0.6, chi 0.4 (Fig. 8/9, below the symmetry breaking near 0.55): a mirror
     pair of stable asymmetric orbits (the transients find one, the symmetry image the other), and the
     unstable symmetric orbit they branched from, found from a guess (the chi = 0.6 orbit)."""
@@ -191,7 +191,7 @@ def test_coexisting_orbits(fmu: OscillatorFMU) -> None:
     assert len(unstable) == 1 and unstable[0].mu_max > 1.5 and abs(unstable[0].offset) < 1e-12 * unstable[0].amplitude
 
 
-def test_newton_from_cold_starts(fmu: OscillatorFMU) -> None:
+def test_newton_from_cold_starts(fmu: OscillatorFMU2) -> None:
     """Without transients (Newton from the raw initial conditions, line search on): lambda 0.15, chi 0.7
     (Fig. 11's low-frequency zone) gives the two coexisting symmetric motions, their amplitudes a factor
     about 1.7 apart (four and two stops per cycle); chi 0.4 the stable mirror pair and the unstable
@@ -209,7 +209,7 @@ def test_newton_from_cold_starts(fmu: OscillatorFMU) -> None:
     assert not bad.converged and bad.reason
 
 
-def test_period_doubling(fmu: OscillatorFMU) -> None:
+def test_period_doubling(fmu: OscillatorFMU2) -> None:
     """Near chi = 0.2365 (Fig. 8/9's band): just above the period doubling the K = 1 orbit has a
     multiplier just above -1 (stable), just below it just below -1 (unstable), next to a stable mirror
     pair of period-2 orbits; the period-1 orbit asked for as K = 2 is reported with its minimal period."""
@@ -222,7 +222,7 @@ def test_period_doubling(fmu: OscillatorFMU) -> None:
     assert len(twos) == 2 and all(o.stable for o in twos)
 
 
-def test_stuck_for_good(fmu: OscillatorFMU) -> None:
+def test_stuck_for_good(fmu: OscillatorFMU2) -> None:
     """mu_s sigma > 1: the block never slides; a valid orbit, one of a line of stuck states: the
     Jacobian has an x row (1, 0) and a v row 0, multipliers exactly 1 (neutral, along the line) and 0."""
     p = nd(0.5, 1.5, 0.7)
@@ -258,7 +258,7 @@ LYAPUNOV = [
 
 
 @pytest.mark.parametrize("lam, mss, chi, zeta, K, tol", LYAPUNOV)
-def test_multiplier_is_the_lyapunov_exponent(fmu: OscillatorFMU, lam: float, mss: float, chi: float, zeta: float,
+def test_multiplier_is_the_lyapunov_exponent(fmu: OscillatorFMU2, lam: float, mss: float, chi: float, zeta: float,
                                              K: int, tol: float) -> None:
     """On a periodic attractor the largest Lyapunov exponent per period (chaos.lyapunov.benettin
     through the FMU's map, 400 periods from the orbit) is log|mu_max| / K. Benettin's estimate carries
@@ -279,7 +279,7 @@ def test_multiplier_is_the_lyapunov_exponent(fmu: OscillatorFMU, lam: float, mss
     assert r.collapses == 0
 
 
-def test_the_fmi3_fmu_gives_the_same_orbit(fmu: OscillatorFMU) -> None:
+def test_the_fmi3_fmu_gives_the_same_orbit(fmu: OscillatorFMU2) -> None:
     """The FMI 3.0 FMU has the same sensitivity outputs: Newton shooting with its map and Jacobian
     (an instance per evaluation, started at the section time) from 1e-4 off the FMI 2.0 orbit comes
     back to the same orbit within 1e-12, with the same Jacobian within 1e-12 (stick-slip and
@@ -306,7 +306,7 @@ def test_the_fmi3_fmu_gives_the_same_orbit(fmu: OscillatorFMU) -> None:
         assert np.max(np.abs(J - o.jacobian)) <= 1e-12 * max(1.0, float(np.max(np.abs(o.jacobian))))
 
 
-def test_no_orbit_at_an_undamped_resonance(fmu: OscillatorFMU) -> None:
+def test_no_orbit_at_an_undamped_resonance(fmu: OscillatorFMU2) -> None:
     """zeta = 0 at lambda = 1 (omega = w0 up to rounding) with 4 mu_k N < pi P0: the amplitude grows
     without bound and there is no orbit (not spurious ones at 1e13 to 1e15 m, where Newton
     would 'converge' relative to a huge state); for K = 1 and 2."""
@@ -334,7 +334,7 @@ def at_rest(p: Oscillator, o: Orbit) -> None:
     assert [s.mode for s in ref.segments] == [0] and ref.segments[0].x0 == o.x0
 
 
-def test_the_block_at_rest_is_one_neutral_orbit(fmu: OscillatorFMU) -> None:
+def test_the_block_at_rest_is_one_neutral_orbit(fmu: OscillatorFMU2) -> None:
     """mu_s sigma 1.5 (P0 two thirds of the breakaway force): one orbit, where the transient from
     the initial state rests: started at rest at z0 = 0.3 inside the interval it stays there; started
     at z0 = 2 outside it, it slides and comes to rest where the exact solution does (within 1e-12 of
@@ -352,7 +352,7 @@ def test_the_block_at_rest_is_one_neutral_orbit(fmu: OscillatorFMU) -> None:
             assert o.x0 == p.x0
 
 
-def test_on_either_side_of_the_breakaway_force(fmu: OscillatorFMU) -> None:
+def test_on_either_side_of_the_breakaway_force(fmu: OscillatorFMU2) -> None:
     """mu_s = mu_k, zeta 0.05, lambda 0.5: P0 just below the breakaway force (mu_s sigma 1.001,
     1.0): the block at rest only, over the interval |k x| <= mu_s N - P0 (1e-3 static deflections;
     a single point at 1.0), no orbit creeping onto its edge (not two 'stable' ones 1.00015e-5 m

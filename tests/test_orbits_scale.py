@@ -18,7 +18,7 @@ import pytest
 from dryfriction import Oscillator
 from dryfriction.cli import main
 from dryfriction.references.exact import solve_exact
-from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.drivers.oscillator import OscillatorFMU2
 from dryfriction.analysis.orbits import Orbit, find_orbits
 from dryfriction.params import SCALE_LIMIT
 from dryfriction.analysis.response import frequency_response, steady_state
@@ -43,7 +43,7 @@ def nd(m: float, k: float, **kw: float) -> Oscillator:
 
 
 @pytest.mark.parametrize("m, k", list(itertools.product(SIZES, SIZES)))
-def test_den_hartog_at_every_size(fmu: OscillatorFMU, m: float, k: float) -> None:
+def test_den_hartog_at_every_size(fmu: OscillatorFMU2, m: float, k: float) -> None:
     """zeta 0, mu_s = mu_k, lambda 1.7, mu_s sigma 0.2 (no stops): k X / P0 is Den Hartog's exact
     amplitude within 1e-10 at every m and k (seen within 2e-14)."""
     p = nd(m, k, lam=1.7, mu_s_sigma=0.2, chi=1.0)
@@ -57,13 +57,13 @@ def stick_slip_case(m: float, k: float) -> Oscillator:
     return nd(m, k, lam=0.5, mu_s_sigma=0.6, chi=0.7, zeta=0.02)
 
 
-def unit_stick_slip(fmu: OscillatorFMU) -> Orbit:
+def unit_stick_slip(fmu: OscillatorFMU2) -> Orbit:
     (o,) = find_orbits(stick_slip_case(1.0, 1.0), fmu=fmu)
     return o
 
 
 @pytest.mark.parametrize("m, k", list(itertools.product(SIZES, SIZES)))
-def test_stick_slip_at_every_size(fmu: OscillatorFMU, m: float, k: float) -> None:
+def test_stick_slip_at_every_size(fmu: OscillatorFMU2, m: float, k: float) -> None:
     """lambda 0.5, mu_s sigma 0.6, chi 0.7, zeta 0.02 (two stops a cycle): the non-dimensional state
     and amplitude are the unit oscillator's within 1e-10 and the multipliers within 1e-10; the exact
     solution from the orbit's state returns to it within 1e-12 of the amplitude after one period, its
@@ -81,7 +81,7 @@ def test_stick_slip_at_every_size(fmu: OscillatorFMU, m: float, k: float) -> Non
 
 
 @pytest.mark.slow
-def test_the_whole_grid_agrees_with_the_transient_method(fmu: OscillatorFMU) -> None:
+def test_the_whole_grid_agrees_with_the_transient_method(fmu: OscillatorFMU2) -> None:
     """m and k over 1e-12 ... 1e6 in decades of 3 (49 oscillators), the stick-slip case: the same
     non-dimensional amplitude within 1e-10 everywhere, equal to the transient method's (tol 1e-6)
     wherever it converges (all 49: seen within 4.2e-15; the grid within 2.3e-15 of the unit oscillator)."""
@@ -134,7 +134,7 @@ def test_a_small_block_has_its_orbit(fmu_path: Path, m: float) -> None:
 
 @pytest.mark.parametrize("m, k", [(1 / SCALE_LIMIT, 1 / SCALE_LIMIT), (SCALE_LIMIT, SCALE_LIMIT),
                                   (1 / SCALE_LIMIT, SCALE_LIMIT), (SCALE_LIMIT, 1 / SCALE_LIMIT)])
-def test_the_edges_of_the_valid_range(fmu: OscillatorFMU, m: float, k: float) -> None:
+def test_the_edges_of_the_valid_range(fmu: OscillatorFMU2, m: float, k: float) -> None:
     """m and k at 1e-100 and 1e100 (w0 from 1e-100 to 1e100): the unit oscillator's orbit within 1e-10."""
     ref = unit_stick_slip(fmu)
     p = stick_slip_case(m, k)

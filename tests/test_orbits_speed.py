@@ -15,7 +15,7 @@ from scipy.linalg import expm
 
 from dryfriction import Oscillator
 from dryfriction.errors import FMUError
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.analysis.orbits import OrbitFollower, find_orbits
 from dryfriction.analysis.response import _Branch
 
@@ -32,7 +32,7 @@ def harmonic_state(p: Oscillator, t: float) -> tuple[float, float, float]:
     return X, X * math.cos(w * t + p.phi - th), -X * w * math.sin(w * t + p.phi - th)
 
 
-def test_restarts_follow_the_closed_form_without_friction(fmu: OscillatorFMU) -> None:
+def test_restarts_follow_the_closed_form_without_friction(fmu: OscillatorFMU2) -> None:
     # from the harmonic steady state at t0, a run of one period comes back to it; its Jacobian is
     # exp(A T); the mid stop reads the steady state there; x_max - x_min is twice the amplitude
     p = Oscillator.physical(m=1.3, k=2.0, zeta=0.05, P0=0.7, N=0.0, mu_s=0.3, mu_k=0.2, omega=1.1)
@@ -58,7 +58,7 @@ def test_restarts_follow_the_closed_form_without_friction(fmu: OscillatorFMU) ->
 
 @pytest.mark.parametrize("settings", [SENS, Settings(scheme="exact", extra={"sensitivity": True, "h": 1e-3}),
                                       Settings(scheme="located", h=2e-3, extra={"frictionUpdates": 2})])
-def test_restarts_equal_start_step_get_bit_for_bit(fmu: OscillatorFMU, settings: Settings) -> None:
+def test_restarts_equal_start_step_get_bit_for_bit(fmu: OscillatorFMU2, settings: Settings) -> None:
     # stick-slip: every value read equals the driver's start / step_to / get from the same state,
     # the FMU's clock from 0 and the excitation's phase that of t0 (phi + omega t0); and that run
     # is the motion started at t0 on the absolute clock
@@ -89,7 +89,7 @@ def test_restarts_equal_start_step_get_bit_for_bit(fmu: OscillatorFMU, settings:
         assert abs(runs.real[0] - absolute["x"]) <= tol and abs(runs.real[1] - absolute["v"]) <= tol
 
 
-def test_restarts_keep_one_template_state_per_settings(fmu: OscillatorFMU) -> None:
+def test_restarts_keep_one_template_state_per_settings(fmu: OscillatorFMU2) -> None:
     # the initialisation-mode state is made once per set of Integer / Boolean values and instance:
     # another Restarts with the same settings reuses it, other settings make their own, and runs
     # of the two interleaved give each its own results
@@ -117,7 +117,7 @@ def test_restarts_keep_one_template_state_per_settings(fmu: OscillatorFMU) -> No
     assert e.real == list(fmu.get(("x", "v")).values()) and d.real != e.real
 
 
-def test_restarts_retarget_is_the_new_oscillator(fmu: OscillatorFMU) -> None:
+def test_restarts_retarget_is_the_new_oscillator(fmu: OscillatorFMU2) -> None:
     p = Oscillator.physical(m=1.0, k=1.0, zeta=0.01, P0=1.0, N=0.1, mu_s=0.3, mu_k=0.2, omega=0.9)
     q = p.with_(omega=1.2, N=0.2)
     runs = fmu.restarts(p, SENS, ("x", "v") + OBS)
@@ -129,7 +129,7 @@ def test_restarts_retarget_is_the_new_oscillator(fmu: OscillatorFMU) -> None:
     assert runs.real == list(fmu.get(("x", "v") + OBS).values())
 
 
-def test_restarts_refuse_with_a_sentence(fmu: OscillatorFMU) -> None:
+def test_restarts_refuse_with_a_sentence(fmu: OscillatorFMU2) -> None:
     p = Oscillator.physical(m=1.0, k=1.0, zeta=0.01, P0=1.0, N=0.1, mu_s=0.3, mu_k=0.2, omega=0.9)
     with pytest.raises(FMUError, match="scheme must be one of .*not 'rk4'"):
         fmu.restarts(p, Settings(scheme="rk4"))
@@ -167,7 +167,7 @@ def test_the_sweep_predictor_is_exact_for_a_cubic() -> None:
     assert abs(x - xr) <= 1e-12 and abs(v - vr) <= 1e-12 and abs(ph - phr) <= 1e-12
 
 
-def test_follower_from_a_periodic_state_reads_its_state_at_the_period_mark(fmu: OscillatorFMU) -> None:
+def test_follower_from_a_periodic_state_reads_its_state_at_the_period_mark(fmu: OscillatorFMU2) -> None:
     # the guess is the converged section state: Newton takes no step; the state at t = T, the
     # amplitude and the multipliers are those of find_orbits' orbit (its sampled cycle)
     p = Oscillator.physical(m=1.0, k=1.0, zeta=0.01, P0=1.0, N=0.1, mu_s=0.3, mu_k=0.2, omega=0.9)
@@ -179,7 +179,7 @@ def test_follower_from_a_periodic_state_reads_its_state_at_the_period_mark(fmu: 
     assert np.allclose(q.multipliers, o.multipliers, rtol=0, atol=1e-9)
 
 
-def test_find_orbits_keeps_every_orbit_and_each_stable_one_attracts(fmu: OscillatorFMU) -> None:
+def test_find_orbits_keeps_every_orbit_and_each_stable_one_attracts(fmu: OscillatorFMU2) -> None:
     # a mirror pair of stable stick-slip orbits (lambda 0.5, mu_s sigma 0.6, chi 0.4: the transients
     # find one, most of them converge onto it again and are dropped before their cycle runs, the
     # symmetry image gives the other); each attracts a long transient from a state nearby

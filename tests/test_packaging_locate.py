@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from dryfriction import paths as locate, model
-from dryfriction.drivers.chain import ChainFMU, ChainFMU2
-from dryfriction.drivers.oscillator3 import FMI3Oscillator, default_fmi3_path
-from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.drivers.chain import ChainFMU3, ChainFMU2
+from dryfriction.drivers.oscillator3 import OscillatorFMU3, default_fmi3_path
+from dryfriction.drivers.oscillator import OscillatorFMU2
 from dryfriction.paths import FMUFileError
 from dryfriction.analysis.response import frequency_response
 from dryfriction.studies import run_study
@@ -59,8 +59,8 @@ def test_an_unusable_path_is_one_fmu_file_error(make, words: str, tmp_path: Path
 def test_another_model_or_fmi_version_is_refused_by_every_driver(fmus: dict[locate.Kind, Path]) -> None:
     """Each of the four drivers takes its own FMU only; the sentence names what the file is and
     what the driver needs."""
-    drivers = {locate.OSCILLATOR: lambda p: OscillatorFMU(p), locate.OSCILLATOR3: lambda p: FMI3Oscillator(fmu_path=p),
-               locate.CHAIN: lambda p: ChainFMU2(fmu_path=p), locate.CHAIN3: lambda p: ChainFMU(2, fmu_path=p)}
+    drivers = {locate.OSCILLATOR: lambda p: OscillatorFMU2(p), locate.OSCILLATOR3: lambda p: OscillatorFMU3(fmu_path=p),
+               locate.CHAIN: lambda p: ChainFMU2(fmu_path=p), locate.CHAIN3: lambda p: ChainFMU3(2, fmu_path=p)}
     for need, open_ in drivers.items():
         for have, path in fmus.items():
             if have == need:
@@ -86,7 +86,7 @@ def test_the_environment_variable_is_named_in_the_sentence(no_env: None, tmp_pat
                                                            monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("DFO_FMU", str(_not_zip(tmp_path)))
     with pytest.raises(FMUFileError) as err:
-        OscillatorFMU()
+        OscillatorFMU2()
     assert str(err.value) == f"DFO_FMU={tmp_path / 'README.md'} is not an FMU (not a zip archive)"
 
 

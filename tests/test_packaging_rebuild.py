@@ -32,7 +32,7 @@ from fmpy import extract, read_model_description, simulate_fmu
 
 from dryfriction.drivers.chain import default_chain_fmu, default_chain_fmu3
 from dryfriction.drivers.oscillator3 import default_fmi3_path
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings, default_fmu_path
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings, default_fmu_path
 from dryfriction.params import Oscillator
 
 
@@ -206,7 +206,7 @@ def test_the_docs_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], ke
 # ------------------------ the oscillator's source FMU, rebuilt by fmpy (also under the sanitizers)
 
 @pytest.mark.slow
-def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU, tmp_path: Path) -> None:
+def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU2, tmp_path: Path) -> None:
     """A host can rebuild the binary from sources/ (fmpy's CMake build) and gets the same numbers."""
     from fmpy import extract
     from fmpy.build import build_platform_binary
@@ -221,7 +221,7 @@ def test_source_fmu_rebuilds_with_fmpy(fmu_path: Path, fmu: OscillatorFMU, tmp_p
             z.write(f, f.relative_to(unzip).as_posix())
     p = Oscillator()
     t = np.linspace(0, 4 * p.period, 81)
-    with OscillatorFMU(rebuilt) as other:
+    with OscillatorFMU2(rebuilt) as other:
         a = other.trajectory(p, t, Settings(h=p.period / 500))
     b = fmu.trajectory(p, t, Settings(h=p.period / 500))
     for k in ("x", "v", "F_friction", "mode"):

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 from dryfriction import model
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from helpers import ENGINEER
 
 
-def test_physical_and_nondimensional_constructions_give_the_same_fmu_parameters(fmu: OscillatorFMU) -> None:
+def test_physical_and_nondimensional_constructions_give_the_same_fmu_parameters(fmu: OscillatorFMU2) -> None:
     phys = Oscillator.physical(**ENGINEER, f=10.0, x0=0.001, v0=-0.02)
     nd = phys.to_nondimensional()
     back = Oscillator.from_nondimensional(**nd, m=phys.m, k=phys.k, P0=phys.P0, mu_s=phys.mu_s)
@@ -79,7 +79,7 @@ def test_physical_errors_name_the_field(change: dict[str, object], words: str) -
     assert words in str(e.value), str(e.value)
 
 
-def test_zero_frequency_and_no_spring_are_values_not_crashes(fmu: OscillatorFMU) -> None:
+def test_zero_frequency_and_no_spring_are_values_not_crashes(fmu: OscillatorFMU2) -> None:
     p = Oscillator(omega=0.0)
     assert p.period == math.inf and p.f_hz == 0.0
     q = Oscillator(k=0.0)

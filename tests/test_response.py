@@ -22,7 +22,7 @@ import pytest
 from dryfriction import Oscillator
 from dryfriction.cli import main
 from dryfriction.references.exact import solve_exact
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.analysis.response import frequency_response, never_converges_note, steady_state
 from dryfriction.references.steady import den_hartog_amplitude
 
@@ -30,8 +30,8 @@ from helpers import ENGINEER
 
 
 @pytest.fixture(scope="module")
-def fmu(fmu_path: Path) -> OscillatorFMU:
-    with OscillatorFMU(fmu_path) as f:
+def fmu(fmu_path: Path) -> OscillatorFMU2:
+    with OscillatorFMU2(fmu_path) as f:
         yield f
 
 
@@ -42,7 +42,7 @@ def fmu(fmu_path: Path) -> OscillatorFMU:
 # ------------------------------------------------------------------------------- steady states
 
 @pytest.mark.parametrize("lam", [0.6, 0.95, 1.05, 1.3, 2.0])
-def test_steady_state_equals_den_hartog(fmu: OscillatorFMU, lam: float) -> None:
+def test_steady_state_equals_den_hartog(fmu: OscillatorFMU2, lam: float) -> None:
     """Undamped, mu_s = mu_k (Den Hartog's exact non-stop steady state) below, near and above
     resonance: within 1e-5 (the task is 1 %)."""
     p = Oscillator.physical(m=1.0, k=100.0, P0=1.0, N=1.0, mu_s=0.3, omega=10.0 * lam)
@@ -52,7 +52,7 @@ def test_steady_state_equals_den_hartog(fmu: OscillatorFMU, lam: float) -> None:
 
 
 @pytest.mark.parametrize("f_hz", [7.0, 10.0, 13.0])
-def test_engineer_steady_state_equals_the_exact_solution(fmu: OscillatorFMU, f_hz: float) -> None:
+def test_engineer_steady_state_equals_the_exact_solution(fmu: OscillatorFMU2, f_hz: float) -> None:
     """The issue's example (0.3 % damping, mu_s 0.3, mu_k 0.2) below, at and above resonance: the
     steady amplitude equals the exact piecewise solution's over the same run within 1e-5; at
     10 Hz it is 0.2356 m, not the 0.198 m of a 30-period run."""
@@ -67,7 +67,7 @@ def test_engineer_steady_state_equals_the_exact_solution(fmu: OscillatorFMU, f_h
         assert s.amplitude == pytest.approx(0.2356, abs=5e-4) and s.periods >= 256
 
 
-def test_undamped_resonance_never_converges(fmu: OscillatorFMU) -> None:
+def test_undamped_resonance_never_converges(fmu: OscillatorFMU2) -> None:
     """zeta = 0, 4 mu_k N < pi P0, excited at the natural frequency: the amplitude grows by
     (pi P0 - 4 mu_k N) / k per period, so no two windows agree: converged = false."""
     p = Oscillator.physical(m=1.0, k=100.0, P0=1.0, N=1.0, mu_s=0.3, omega=10.0)
@@ -102,10 +102,11 @@ def harmonic_amplitude(p: Oscillator) -> float:
 
 
 @pytest.mark.parametrize("N", [0.0, 0.001])
-def test_a_slowly_decaying_free_vibration_is_not_converged(fmu: OscillatorFMU, N: float) -> None:
+def test_a_slowly_decaying_free_vibration_is_not_converged(fmu: OscillatorFMU2, N: float) -> None:
     """The light-damping case: zeta = 1e-5, omega = 1.3 w0; the free vibration from rest decays in 1 / (zeta
     w0) = 1e5 s, 2e4 periods: a test of the change between windows alone reads 2.883 'converged'
-    after 64 periods (2.878 with a little friction); here not converged at the limit; the orbit method reads 1.449."""
+    after 64 periods (2.878 with a little friction); here not converged at the limit; the orbit
+    method reads 1.449."""
     p = Oscillator.physical(m=1, k=1, zeta=1e-5, P0=1, omega=1.3, N=N, mu_s=0.3)
     s = steady_state(fmu, p)
     assert not s.converged and s.periods == 8192 and s.error > 0.1
@@ -138,9 +139,9 @@ ZETA_001 = [(lam, N) for lam in (0.9, 0.98, 1.0, 1.02, 1.1) for N in (0.0, 0.1)]
 
 
 @pytest.mark.parametrize("lam, N", ZETA_001)
-def test_the_tolerance_bounds_the_error_near_resonance(fmu: OscillatorFMU, lam: float, N: float) -> None:
-    """zeta = 0.01 near resonance (a test of the change alone: 'converged' at 0.12 % error with tol 1e-3): converged, the
-    amplitude is within tol of the orbit's (N = 0: of the closed form), at tol 1e-3 and 1e-6; the
+def test_the_tolerance_bounds_the_error_near_resonance(fmu: OscillatorFMU2, lam: float, N: float) -> None:
+    """zeta = 0.01 near resonance (a test of the change alone: 'converged' at 0.12 % error with
+    tol 1e-3): converged, the amplitude is within tol of the orbit's (N = 0: of the closed form), at tol 1e-3 and 1e-6; the
     estimated error bounds the true one (seen: true errors 1e-14 to 4e-7, estimates 5 to 100 times
     larger)."""
     from dryfriction.analysis.orbits import find_orbits
@@ -169,7 +170,7 @@ def test_remaining_error_of_a_geometric_decay() -> None:
     assert remaining_error(1e-3, 1e-17, floor=1e-16) == 1e-17
 
 
-def test_transient_method_with_a_bossak_scheme(fmu: OscillatorFMU) -> None:
+def test_transient_method_with_a_bossak_scheme(fmu: OscillatorFMU2) -> None:
     """Without the exact scheme's Jacobian the three-window fit decides: the light-damping case is not
     converged with the located scheme either; Den Hartog's case converges to within 1e-5."""
     st = Settings(h=0.0, scheme="located")
@@ -183,7 +184,7 @@ def test_transient_method_with_a_bossak_scheme(fmu: OscillatorFMU) -> None:
 
 # ------------------------------------------------------------------ the orbit method
 
-def test_orbit_response_equals_find_orbits_and_marks_the_unstable(fmu_path: Path, fmu: OscillatorFMU) -> None:
+def test_orbit_response_equals_find_orbits_and_marks_the_unstable(fmu_path: Path, fmu: OscillatorFMU2) -> None:
     """The warm-started sweep gives each frequency's orbits as a cold find_orbits does (within 1e-12 of
     the amplitude), the symmetry-breaking zone of the engineer's example (5.85 Hz: a stable mirror
     pair, offsets +-4.08e-4 m, and the unstable symmetric orbit, |mu| 1.025) included."""
@@ -245,7 +246,7 @@ def test_one_point_that_cannot_be_computed_does_not_end_the_sweep(fmu_path: Path
     assert math.isnan(amp[0]) and not bool(ds["converged"].values[0])
     assert "internal steps" in reason[0]
     assert reason[1] == "" and amp[1] > 0
-    with OscillatorFMU(fmu_path) as f:
+    with OscillatorFMU2(fmu_path) as f:
         ref = steady_state(f, p.with_(omega=2 * math.pi * 10.0), min_periods=4, max_periods=8,
                            settings=Settings(h=0.0, scheme="located"))
     assert amp[1] == ref.amplitude

@@ -11,7 +11,7 @@ import pytest
 
 from dryfriction.drivers import scenes
 from dryfriction.references.exact import solve_exact
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from helpers import OUT
@@ -28,7 +28,7 @@ FAST_PATH_CASES = {
 
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
 @pytest.mark.parametrize("case", list(FAST_PATH_CASES))
-def test_fast_path_is_bit_identical_to_general_path(fmu: OscillatorFMU, case: str, scheme: str) -> None:
+def test_fast_path_is_bit_identical_to_general_path(fmu: OscillatorFMU2, case: str, scheme: str) -> None:
     p = FAST_PATH_CASES[case]
     rng = np.random.default_rng(7)
     t = np.r_[0.0, np.cumsum(rng.uniform(0.2, 2.0, 400) * p.period / 300)]  # off-grid points too
@@ -38,13 +38,13 @@ def test_fast_path_is_bit_identical_to_general_path(fmu: OscillatorFMU, case: st
         assert np.array_equal(fast[k], general[k]), (case, scheme, k, np.max(np.abs(fast[k] - general[k])))
 
 
-def effects_of(fmu: OscillatorFMU, p: Oscillator, **settings) -> set[str]:
+def effects_of(fmu: OscillatorFMU2, p: Oscillator, **settings) -> set[str]:
     extra = settings.pop("extra", {})
     fmu.start(p, Settings(extra=extra, **settings))
     return set(fmu.effects())
 
 
-def test_effects_name_what_is_simulated(fmu: OscillatorFMU) -> None:
+def test_effects_name_what_is_simulated(fmu: OscillatorFMU2) -> None:
     base = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     assert effects_of(fmu, base) == {"friction", "coefficientUpdate"}
     assert effects_of(fmu, base.with_(chi=1.0)) == {"friction"}
@@ -56,7 +56,7 @@ def test_effects_name_what_is_simulated(fmu: OscillatorFMU) -> None:
     assert effects_of(fmu, base, extra={"F_ext": 0.0}) == {"friction", "coefficientUpdate", "forceInput"}
 
 
-def test_observables_do_not_change_the_motion(fmu: OscillatorFMU) -> None:
+def test_observables_do_not_change_the_motion(fmu: OscillatorFMU2) -> None:
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     t = np.linspace(0, 5 * p.period, 101)
     on = fmu.trajectory(p, t, Settings(observe=True, t_obs_start=p.period), OUT)
@@ -71,7 +71,7 @@ def test_observables_do_not_change_the_motion(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.parametrize("chi", [0.3, 0.7, 2.0])
-def test_observables_match_the_exact_solution(fmu: OscillatorFMU, chi: float) -> None:
+def test_observables_match_the_exact_solution(fmu: OscillatorFMU2, chi: float) -> None:
     """x_max, x_min, stick share, switch count and friction work over periods 5..8."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4 if chi < 1 else 0.2, chi=chi)
     T = p.period
@@ -91,7 +91,7 @@ def test_observables_match_the_exact_solution(fmu: OscillatorFMU, chi: float) ->
     assert abs(o["E_friction"] - p.mu_k * p.N * slip) < 1e-4 * p.mu_k * p.N * slip
 
 
-def test_sweep_and_stiction_scenes(fmu: OscillatorFMU) -> None:
+def test_sweep_and_stiction_scenes(fmu: OscillatorFMU2) -> None:
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.4, chi=0.7)
     sw = scenes.run_sweep_point(fmu, p, transient_periods=10, settings=Settings(h=p.period / 2000))
     traj = scenes.run_validation(fmu, p, 11, samples_per_period=2000, settings=Settings(h=p.period / 2000))
@@ -104,7 +104,7 @@ def test_sweep_and_stiction_scenes(fmu: OscillatorFMU) -> None:
     assert abs(st["stick_percent"] - 100 * stuck / p.period) < 0.05
 
 
-def test_coupled_scene_feeds_inputs(fmu: OscillatorFMU) -> None:
+def test_coupled_scene_feeds_inputs(fmu: OscillatorFMU2) -> None:
     """A master that adds N_ext = N while the block slides forward: friction doubles then."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.2, chi=0.7)
     res = scenes.run_coupled(fmu, p, 3 * p.period, p.period / 200,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from dryfriction.references.exact import solve_exact
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from dryfriction.references.steady import den_hartog_amplitude, inman_amplitude
 from dryfriction.analysis.validation import CASES, FIRST_CYCLE, convergence, first_cycle
@@ -15,7 +15,7 @@ CONVERGENCE_CASES = ["stick-dominated", "reversal-only", "heavy-friction", "chi-
 
 
 @pytest.mark.min_versions
-def test_first_cycle_matches_exact(fmu: OscillatorFMU) -> None:
+def test_first_cycle_matches_exact(fmu: OscillatorFMU2) -> None:
     """The paper's first validation: forward slip, stick and backward slip over the first cycle."""
     p = FIRST_CYCLE
     fc = first_cycle(fmu, p, steps_per_period=1000)
@@ -32,20 +32,20 @@ def test_first_cycle_matches_exact(fmu: OscillatorFMU) -> None:
 
 @pytest.mark.min_versions
 @pytest.mark.parametrize("case", CONVERGENCE_CASES)
-def test_located_is_second_order(fmu: OscillatorFMU, case: str) -> None:
+def test_located_is_second_order(fmu: OscillatorFMU2, case: str) -> None:
     """Error falls 4x (+-15 %) per halving of h from T/400 to T/3200 over 10 periods."""
     c = convergence(fmu, CASES[case][0], "located")
     assert np.all((c.ratios > 3.4) & (c.ratios < 4.6)), (c.errors, c.ratios)
 
 
 @pytest.mark.parametrize("alpha", [0.0, -1.0 / 3.0])
-def test_located_second_order_for_alpha(fmu: OscillatorFMU, alpha: float) -> None:
+def test_located_second_order_for_alpha(fmu: OscillatorFMU2, alpha: float) -> None:
     c = convergence(fmu, CASES["stick-dominated"][0], "located", alpha=alpha)
     assert np.all((c.ratios > 3.4) & (c.ratios < 4.6)), (c.errors, c.ratios)
 
 
 @pytest.mark.parametrize("case", CONVERGENCE_CASES)
-def test_located_second_order_with_random_communication_steps(fmu: OscillatorFMU, case: str) -> None:
+def test_located_second_order_with_random_communication_steps(fmu: OscillatorFMU2, case: str) -> None:
     """Communication steps drawn at random in [0.1 h, 3 h]: shortened steps keep the order."""
     p = CASES[case][0]
     t_end = 10 * p.period
@@ -63,7 +63,7 @@ def test_located_second_order_with_random_communication_steps(fmu: OscillatorFMU
 
 
 @pytest.mark.parametrize("case", CONVERGENCE_CASES)
-def test_consistent_converges_first_order(fmu: OscillatorFMU, case: str) -> None:
+def test_consistent_converges_first_order(fmu: OscillatorFMU2, case: str) -> None:
     """First order: the fitted order over h = T/1600 .. T/102400 is >= 0.8.
 
     Below T/1600 the consistent scheme is pre-asymptotic: a stop that falls near the breakaway
@@ -76,7 +76,7 @@ def test_consistent_converges_first_order(fmu: OscillatorFMU, case: str) -> None
     assert c.errors[-1] < 2e-3
 
 
-def test_paper_scheme_error_floor_where_chi_is_small(fmu: OscillatorFMU) -> None:
+def test_paper_scheme_error_floor_where_chi_is_small(fmu: OscillatorFMU2) -> None:
     """Documents the paper's literal scheme: at chi = 0.05 its error does not fall with h (a stop
     with mu_k N < |net force| <= mu_s N is read as a reversal), at chi = 0.7 it converges."""
     floor = convergence(fmu, CASES["chi-small"][0], "paper", steps_per_period=(800, 6400, 51200))
@@ -85,14 +85,14 @@ def test_paper_scheme_error_floor_where_chi_is_small(fmu: OscillatorFMU) -> None
     assert ok.errors[-1] < ok.errors[0] / 20, ok.errors  # first order here
 
 
-def steady_amplitude(fmu: OscillatorFMU, p: Oscillator, periods: int = 150) -> tuple[float, float]:
+def steady_amplitude(fmu: OscillatorFMU2, p: Oscillator, periods: int = 150) -> tuple[float, float]:
     T = p.period
     o = fmu.observables(p, periods * T, (periods - 5) * T, settings=Settings(h=T / 2000))
     return (o["x_max"] - o["x_min"]) / 2, (o["x_max"] + o["x_min"]) / 2
 
 
 @pytest.mark.parametrize("lam", [0.55, 0.8, 1.3, 2.0, 3.0])
-def test_steady_state_matches_den_hartog(fmu: OscillatorFMU, lam: float) -> None:
+def test_steady_state_matches_den_hartog(fmu: OscillatorFMU2, lam: float) -> None:
     """Den Hartog's exact non-stop steady state (zeta = 0, equal coefficients) to 0.5 %."""
     p = Oscillator.from_nondimensional(lam=lam, mu_s_sigma=0.3, chi=1.0)
     ref = den_hartog_amplitude(p)
@@ -103,14 +103,14 @@ def test_steady_state_matches_den_hartog(fmu: OscillatorFMU, lam: float) -> None
 
 
 @pytest.mark.parametrize("lam", [1.3, 2.0, 3.0])
-def test_steady_state_near_inman_above_resonance(fmu: OscillatorFMU, lam: float) -> None:
+def test_steady_state_near_inman_above_resonance(fmu: OscillatorFMU2, lam: float) -> None:
     """Inman's equivalent-damping approximation holds above resonance (within 5 %)."""
     p = Oscillator.from_nondimensional(lam=lam, mu_s_sigma=0.3, chi=1.0)
     amp, _ = steady_amplitude(fmu, p)
     assert abs(amp / inman_amplitude(p) - 1) <= 0.05
 
 
-def test_inman_departs_below_resonance_where_stiction_lasts(fmu: OscillatorFMU) -> None:
+def test_inman_departs_below_resonance_where_stiction_lasts(fmu: OscillatorFMU2) -> None:
     """Below resonance the block sticks part of each cycle and Inman's formula overestimates."""
     p = Oscillator.from_nondimensional(lam=0.3, mu_s_sigma=0.3, chi=1.0)
     amp, _ = steady_amplitude(fmu, p)

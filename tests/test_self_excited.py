@@ -23,7 +23,7 @@ from scipy.optimize import brentq
 
 from dryfriction.references.belt import Belt, limit_cycle, simulate
 from dryfriction.errors import FMUError
-from dryfriction.drivers.oscillator import OscillatorFMU
+from dryfriction.drivers.oscillator import OscillatorFMU2
 from dryfriction.params import Oscillator
 from dryfriction.analysis.self_excited import (BeltProblem, Branch, continue_orbits, equilibrium, find_orbit, hopf_formula,
                                       locate_hopf, self_excited)
@@ -41,7 +41,7 @@ def stribeck(vb: float, **kw: float) -> BeltProblem:
 
 # ---- undamped Coulomb: the closed-form limit cycle -------------------------------------------------
 
-def test_undamped_coulomb_orbit_is_the_closed_form_limit_cycle_second_order(fmu: OscillatorFMU) -> None:
+def test_undamped_coulomb_orbit_is_the_closed_form_limit_cycle_second_order(fmu: OscillatorFMU2) -> None:
     lc = limit_cycle(1.0, 1.0, 1.0, MU_S, 0.3, 0.2)
     errs = []
     for h in (2e-3, 1e-3):
@@ -63,7 +63,7 @@ def test_undamped_coulomb_orbit_is_the_closed_form_limit_cycle_second_order(fmu:
     assert s1 < 1e-8 and s2 < 1e-8, errs
 
 
-def test_belt_backwards_is_the_mirror_image(fmu: OscillatorFMU) -> None:
+def test_belt_backwards_is_the_mirror_image(fmu: OscillatorFMU2) -> None:
     a = self_excited(BeltProblem(DAMPED, 0.2), fmu=fmu).orbit
     b = self_excited(BeltProblem(DAMPED, -0.2), fmu=fmu).orbit
     assert a is not None and b is not None and a.converged and b.converged
@@ -73,7 +73,7 @@ def test_belt_backwards_is_the_mirror_image(fmu: OscillatorFMU) -> None:
     assert b.stick_fraction == pytest.approx(a.stick_fraction, abs=1e-9)
 
 
-def test_exact_scheme_on_the_closed_form_cycle(fmu: OscillatorFMU) -> None:
+def test_exact_scheme_on_the_closed_form_cycle(fmu: OscillatorFMU2) -> None:
     """With scheme exact the Jacobian is the FMU's sensitivity: the cycle to 1e-12, when the FMU's
     exact scheme runs on a moving belt; this FMU's refusal otherwise is a readable error."""
     lc = limit_cycle(1.0, 1.0, 1.0, MU_S, 0.3, 0.2)
@@ -92,7 +92,7 @@ def test_exact_scheme_on_the_closed_form_cycle(fmu: OscillatorFMU) -> None:
 
 
 @pytest.mark.slow
-def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU) -> None:
+def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU2) -> None:
     """Damped Coulomb with scheme exact (where the FMU has it on a belt): the reference's period to
     1e-9 (measured 6.5849654 both), against the located one's 5.7e-6."""
     prob = BeltProblem(DAMPED, 0.2, scheme="exact")
@@ -110,7 +110,7 @@ def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU) -> 
 
 # ---- damped Coulomb against a long transient of the reference ---------------------------------------
 
-def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: OscillatorFMU) -> None:
+def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: OscillatorFMU2) -> None:
     prob = BeltProblem(DAMPED, 0.2)
     r = self_excited(prob, fmu=fmu)
     o = r.orbit
@@ -131,7 +131,7 @@ def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: Oscillator
     assert r.equilibrium.stable and r.equilibrium.growth_rate == pytest.approx(-0.025, rel=1e-4)
 
 
-def test_slow_belt_long_stick_phases(fmu: OscillatorFMU) -> None:
+def test_slow_belt_long_stick_phases(fmu: OscillatorFMU2) -> None:
     """v_belt = 1e-3: stuck 99 % of a 388 s cycle (the guess's transient covers five such cycles)."""
     prob = BeltProblem(DAMPED, 1e-3)
     o = self_excited(prob, fmu=fmu).orbit
@@ -146,7 +146,7 @@ def test_slow_belt_long_stick_phases(fmu: OscillatorFMU) -> None:
 
 # ---- Stribeck: the Hopf, stability, multipliers -------------------------------------------------------
 
-def test_stribeck_below_and_above_the_hopf(fmu: OscillatorFMU) -> None:
+def test_stribeck_below_and_above_the_hopf(fmu: OscillatorFMU2) -> None:
     vs = hopf_formula(stribeck(0.2))
     assert vs == pytest.approx(0.1 * math.log(20.0), rel=1e-15)
     low = self_excited(stribeck(0.8 * vs), fmu=fmu)
@@ -166,7 +166,7 @@ def test_stribeck_below_and_above_the_hopf(fmu: OscillatorFMU) -> None:
     assert err[1] < 2e-7 and 4.0 / 1.15 < err[0] / err[1] < 4.0 * 1.15, err
 
 
-def test_hopf_located_from_the_model(fmu: OscillatorFMU) -> None:
+def test_hopf_located_from_the_model(fmu: OscillatorFMU2) -> None:
     # measured relative errors: 3.2e-9 at h = T0 / 2000 (3.1e-3), 7.0e-10 at 2e-3, 1.4e-11 at 1e-3 (the
     # differences' floor about 1e-10 at finer steps); the frequency there is w0 = 1 (c + N mu' = 0: undamped), to the
     # scheme's second order (measured -1.08e-6, -4.38e-7, -1.10e-7)
@@ -197,7 +197,7 @@ def _reference_section_map(vb: float, xe: float, v0: float) -> tuple[float, floa
     return float(sol.y_events[0][k][1]), float(sol.t_events[0][k])
 
 
-def test_unstable_slip_orbit_and_its_multiplier_against_the_reference_map(fmu: OscillatorFMU) -> None:
+def test_unstable_slip_orbit_and_its_multiplier_against_the_reference_map(fmu: OscillatorFMU2) -> None:
     """Above v* the orbit that never sticks is unstable (subcritical Hopf): Newton finds it all the same;
     its period, section velocity and nontrivial multiplier against the reference's section map."""
     prob = stribeck(0.45)
@@ -219,7 +219,7 @@ def test_unstable_slip_orbit_and_its_multiplier_against_the_reference_map(fmu: O
 # ---- the branch in v_belt -----------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def branch(fmu: OscillatorFMU) -> tuple[Branch, float]:
+def branch(fmu: OscillatorFMU2) -> tuple[Branch, float]:
     vs = hopf_formula(stribeck(0.2))
     return continue_orbits(stribeck(0.2), 0.5 * vs, 0.05, 2.0, fmu=fmu), vs
 
@@ -263,7 +263,7 @@ def test_branch_end_against_reference_transients(branch: tuple[Branch, float]) -
 
 
 @pytest.mark.slow
-def test_coulomb_branch_ends_at_its_grazing(fmu: OscillatorFMU) -> None:
+def test_coulomb_branch_ends_at_its_grazing(fmu: OscillatorFMU2) -> None:
     """Damped Coulomb: no Hopf (steady sliding is stable at every speed), no slip orbits; the stick-slip
     leg ends where its catch of the belt grazes, with a stick phase still there (measured v_g =
     0.3322743, stick share 0.095); the reference from the belt: stick-slip at 0.995 v_g, decay at 1.005."""
@@ -301,7 +301,7 @@ def test_bad_problems_are_refused_with_a_sentence(kw: dict, match: str) -> None:
         BeltProblem(**args)
 
 
-def test_constant_force_shifts_the_orbit(fmu: OscillatorFMU) -> None:
+def test_constant_force_shifts_the_orbit(fmu: OscillatorFMU2) -> None:
     """F_ext (or P0 with omega = 0) moves the equilibrium and the cycle by F / k, nothing else."""
     a = self_excited(BeltProblem(DAMPED, 0.2), fmu=fmu).orbit
     b = self_excited(BeltProblem(DAMPED, 0.2, F_ext=0.7), fmu=fmu).orbit

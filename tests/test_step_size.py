@@ -9,18 +9,18 @@ import math
 import pytest
 
 from dryfriction import DryFrictionWarning
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 
-def _amplitude(fmu: OscillatorFMU, p: Oscillator, h: float, scheme: str, periods: int = 100) -> float:
+def _amplitude(fmu: OscillatorFMU2, p: Oscillator, h: float, scheme: str, periods: int = 100) -> float:
     o = fmu.observables(p, periods * p.period, (periods - 1) * p.period, settings=Settings(h=h, scheme=scheme))
     return 0.5 * (o["x_max"] - o["x_min"])
 
 
 @pytest.mark.parametrize("f_n", [0.1, 10.0, 1591.5494309189535, 1e4])
 @pytest.mark.parametrize("lam, mu_s_sigma, zeta", [(0.9, 0.0, 0.0), (0.9, 0.2, 0.0), (2.0, 0.3, 0.01), (0.3, 0.5, 0.05)])
-def test_default_step_is_as_accurate_as_T_over_1000(fmu: OscillatorFMU, f_n: float, lam: float, mu_s_sigma: float,
+def test_default_step_is_as_accurate_as_T_over_1000(fmu: OscillatorFMU2, f_n: float, lam: float, mu_s_sigma: float,
                                                      zeta: float) -> None:
     """h = 0 (the default): one doStep over 100 periods with the in-FMU observables is at least as
     accurate as a run at h = T/1000 (T the excitation period), on natural frequencies from 0.1 Hz
@@ -39,7 +39,7 @@ def test_default_step_is_as_accurate_as_T_over_1000(fmu: OscillatorFMU, f_n: flo
     assert err_default < 0.01
 
 
-def test_the_old_fixed_step_on_a_stiff_oscillator_warns_and_says_what_to_choose(fmu: OscillatorFMU) -> None:
+def test_the_old_fixed_step_on_a_stiff_oscillator_warns_and_says_what_to_choose(fmu: OscillatorFMU2) -> None:
     """m = 0.01 kg, k = 1e6 N/m (1.6 kHz) at 0.9 of its natural frequency: h = 1 ms (the former
     default) is refused by nothing but logs a warning naming the step to choose; h = 0 is within
     1 % of the exact amplitude after 100 periods in one doStep."""
@@ -65,7 +65,7 @@ def test_the_old_fixed_step_on_a_stiff_oscillator_warns_and_says_what_to_choose(
     (dict(m=1.0, k=1.0, c=6.0, omega=0.5), 2 * math.pi / 6.0 / 1000),              # over-damped: c/m fastest
     (dict(m=2.0, k=0.0, c=0.0, omega=0.0), 1e-3),                                  # nothing: 1 ms
 ])
-def test_derived_step_rule(fmu: OscillatorFMU, params: dict[str, float], expected: float) -> None:
+def test_derived_step_rule(fmu: OscillatorFMU2, params: dict[str, float], expected: float) -> None:
     fmu.start(Oscillator(**params), Settings(h=0.0))
     assert fmu.get(["h_used"])["h_used"] == pytest.approx(expected, rel=1e-14)
     fmu.step_to(0.05)                                # and it runs
@@ -75,7 +75,7 @@ def test_derived_step_rule(fmu: OscillatorFMU, params: dict[str, float], expecte
 
 @pytest.mark.parametrize("h, words", [(-1e-3, "valid range: 0 (derived from the dynamics) or > 0"),
                                       (1e-310, "a normal number"), (math.inf, "finite")])
-def test_bad_h_is_refused_with_its_range(fmu: OscillatorFMU, h: float, words: str) -> None:
+def test_bad_h_is_refused_with_its_range(fmu: OscillatorFMU2, h: float, words: str) -> None:
     from dryfriction.fmi.fmi2 import FMUError
 
     with pytest.raises(FMUError, match="variable h") as e:
@@ -83,7 +83,7 @@ def test_bad_h_is_refused_with_its_range(fmu: OscillatorFMU, h: float, words: st
     assert words in str(e.value)
 
 
-def test_exact_scheme_with_a_coarse_h_does_not_warn(fmu: OscillatorFMU) -> None:
+def test_exact_scheme_with_a_coarse_h_does_not_warn(fmu: OscillatorFMU2) -> None:
     mark = len(fmu.messages)
     fmu.start(Oscillator(), Settings(h=10.0, scheme="exact"))
     assert not [m for s, c, m in fmu.messages[mark:] if c == "logStatusWarning"]

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 from dryfriction.studies import main, run_study
 from dryfriction.sweep import BatchRunner, PARAM_COLUMNS, SweepInterrupted, nondim_table, read_netcdf
@@ -55,8 +55,8 @@ def test_table_rows_equal_from_nondimensional() -> None:
 
 
 @pytest.mark.min_versions
-def test_batch_runner_equals_fmu_driver(fmu_path: Path, fmu: OscillatorFMU) -> None:
-    """The lean runner gives the observables of OscillatorFMU.observables bit for bit, and a row
+def test_batch_runner_equals_fmu_driver(fmu_path: Path, fmu: OscillatorFMU2) -> None:
+    """The lean runner gives the observables of OscillatorFMU2.observables bit for bit, and a row
     the FMU rejects gives nan with status 1 without spoiling the next rows."""
     rows = [dict(lam=0.5, mu_s_sigma=0.6, chi=c, z0=z, dz0=0.3) for c, z in ((0.3, 0.5), (0.9, -1.0), (1.2, 0.0))]
     P = np.vstack([nondim_table(r, 12, 10, 12, 800) for r in rows])
@@ -95,8 +95,8 @@ def test_fig2_fmu_follows_exact_solution(tmp_path: Path, fmu_path: Path) -> None
 
 
 def test_fig3_dataset_is_the_fmus_steady_state_and_the_references(tmp_path: Path, fmu_path: Path,
-                                                                   fmu: OscillatorFMU) -> None:
-    """The study's plumbing: each amplitude is the one OscillatorFMU.observables gives for the
+                                                                   fmu: OscillatorFMU2) -> None:
+    """The study's plumbing: each amplitude is the one OscillatorFMU2.observables gives for the
     same run, and the reference columns are steady.py's formulas. (The FMU against Den Hartog and
     Inman themselves: test_schemes.py.)"""
     from dryfriction.references.steady import den_hartog_amplitude, inman_amplitude
@@ -342,7 +342,7 @@ def chain_fmu3() -> Path:
 def test_chain2_quick(tmp_path: Path, chain_fmu3: Path) -> None:
     """Two blocks, the first forced: the frictionless first block of the 'second' configuration
     never sticks; a row of the dataset is a direct run of the chain; the far block sticks more."""
-    from dryfriction.drivers.chain import ChainFMU
+    from dryfriction.drivers.chain import ChainFMU3
     from dryfriction.studies.chain2 import chain_params
 
     out, res = run("chain2", tmp_path, chain_fmu3)
@@ -362,7 +362,7 @@ def test_chain2_quick(tmp_path: Path, chain_fmu3: Path) -> None:
     num = {"steps_per_period": ds.attrs["steps_per_period"], "alpha": ds.attrs["alpha"], "scheme": ds.attrs["scheme"]}
     p = chain_params(ch, "both", lam, (-2.0, 2.0), num)
     T = 2 * np.pi / p["omega"]
-    with ChainFMU(2, fmu_path=chain_fmu3) as f:
+    with ChainFMU3(2, fmu_path=chain_fmu3) as f:
         f.start(p)
         f.step_to((ds.attrs["periods"] - ds.attrs["obs_periods"]) * T)
         r = f.record(ds.attrs["periods"] * T, T / ds.attrs["samples_per_period"])

@@ -105,7 +105,7 @@ def test_every_command_refuses_work_above_max_work(argv: list[str], capsys: pyte
 
 
 def test_run_work_is_its_steps() -> None:
-    from dryfriction.budget import command_work
+    from dryfriction.cli.options import command_work
     from dryfriction.cli.main import build_parser
 
     args = build_parser().parse_args(["run", "--periods", "30", "--steps-per-period", "1000"])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from dryfriction import DryFrictionWarning, Oscillator
-from dryfriction.drivers.oscillator import OscillatorFMU, Settings
+from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 
 
 # the default oscillator (m = 1 kg, k = 100 N/m, omega = 5 rad/s): its shortest period is the natural one
@@ -24,7 +24,7 @@ def _fmu_messages(caught: list[warnings.WarningMessage]) -> list[str]:
     return [str(w.message) for w in caught if issubclass(w.category, DryFrictionWarning)]
 
 
-def test_a_coarse_step_is_a_python_warning_with_the_fmus_sentence(fmu: OscillatorFMU) -> None:
+def test_a_coarse_step_is_a_python_warning_with_the_fmus_sentence(fmu: OscillatorFMU2) -> None:
     p = Oscillator()
     with pytest.warns(DryFrictionWarning) as caught:
         fmu.start(p, COARSE)
@@ -35,14 +35,14 @@ def test_a_coarse_step_is_a_python_warning_with_the_fmus_sentence(fmu: Oscillato
     assert f"Choose h <= {T_NAT / 1000:.6g} s" in said[0]
 
 
-def test_a_resolved_step_warns_nothing(fmu: OscillatorFMU) -> None:
+def test_a_resolved_step_warns_nothing(fmu: OscillatorFMU2) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", DryFrictionWarning)
         fmu.start(Oscillator(), Settings(h=T_NAT / 2000))
         fmu.step_to(1.0)
 
 
-def test_the_error_filter_turns_the_warning_into_an_exception(fmu: OscillatorFMU) -> None:
+def test_the_error_filter_turns_the_warning_into_an_exception(fmu: OscillatorFMU2) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", DryFrictionWarning)
         with pytest.raises(DryFrictionWarning, match="internal steps per"):
@@ -50,12 +50,12 @@ def test_the_error_filter_turns_the_warning_into_an_exception(fmu: OscillatorFMU
 
 
 def test_fmi3_and_chain_warnings_are_the_same_category(chain_fmu2: Path, chain_fmu3: Path) -> None:
-    from dryfriction.drivers.chain import ChainFMU, ChainFMU2
-    from dryfriction.drivers.oscillator3 import FMI3Oscillator
+    from dryfriction.drivers.chain import ChainFMU3, ChainFMU2
+    from dryfriction.drivers.oscillator3 import OscillatorFMU3
 
     with pytest.warns(DryFrictionWarning, match="internal steps per 0.628319 s"):
-        FMI3Oscillator({"h": T_NAT / 2}).close()
-    for make in (lambda: ChainFMU(2, fmu_path=chain_fmu3), lambda: ChainFMU2(fmu_path=chain_fmu2)):
+        OscillatorFMU3({"h": T_NAT / 2}).close()
+    for make in (lambda: ChainFMU3(2, fmu_path=chain_fmu3), lambda: ChainFMU2(fmu_path=chain_fmu2)):
         with pytest.warns(DryFrictionWarning, match="internal steps per"):
             with make() as chain:
                 r = chain.run(0.05, 0.01, {"k": 1e5, "h": 1e-3})

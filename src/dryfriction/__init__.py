@@ -1,8 +1,11 @@
 """Dry-friction oscillator and chain: FMI 2.0 and FMI 3.0 co-simulation FMU tooling, analytical
 references and sweeps.
 
-The names below are imported on first use, so that ``import dryfriction`` itself is immediate
-(the console script installs its signal handlers before anything heavy is loaded)."""
+The public names below are importable from here and from their home module; each is imported on
+first use, so that ``import dryfriction`` itself is immediate (the console script installs its
+signal handlers before anything heavy is loaded). The package's former module paths and names
+(``dryfriction.drivers.oscillator``, ``OscillatorFMU2``, ...) still work for one release, with a
+DeprecationWarning naming the new home (:mod:`dryfriction._compat`)."""
 
 from __future__ import annotations
 
@@ -11,19 +14,47 @@ from typing import TYPE_CHECKING, Any
 
 from . import _compat
 
-_compat.install()   # the former module paths (dryfriction.fmu, ...): deprecated aliases
+_compat.install()
 
-__all__ = ["Oscillator", "DryFrictionWarning", "FMUError", "FMUCallError", "FMUFileError"]
 __version__ = "0.2.0"
 
 #: public name -> the module that defines it
-_EXPORTS = {"Oscillator": ".params", "DryFrictionWarning": ".diagnostics", "FMUError": ".errors",
-            "FMUCallError": ".errors", "FMUFileError": ".errors"}
+_EXPORTS = {
+    "Oscillator": ".params",
+    "frequency_response": ".analysis.response",
+    "steady_state": ".analysis.response",
+    "find_orbits": ".analysis.orbits",
+    "Orbit": ".analysis.orbits",
+    "continue_orbits": ".analysis.continuation",
+    "Branch": ".analysis.continuation",
+    "solve_exact": ".references.exact",
+    "OscillatorFMU2": ".drivers.oscillator",
+    "Settings": ".drivers.oscillator",
+    "OscillatorFMU3": ".drivers.oscillator3",
+    "ChainFMU2": ".drivers.chain",
+    "ChainFMU3": ".drivers.chain",
+    "open_chain": ".drivers.chain",
+    "System": ".cosim",
+    "FMUError": ".errors",
+    "FMUCallError": ".errors",
+    "FMUFileError": ".errors",
+    "UsageError": ".errors",
+    "DryFrictionWarning": ".diagnostics",
+}
+__all__ = list(_EXPORTS)
 
 if TYPE_CHECKING:
+    from .analysis.continuation import Branch, continue_orbits
+    from .analysis.orbits import Orbit, find_orbits
+    from .analysis.response import frequency_response, steady_state
+    from .cosim import System
     from .diagnostics import DryFrictionWarning
-    from .errors import FMUCallError, FMUError, FMUFileError
+    from .drivers.chain import ChainFMU2, ChainFMU3, open_chain
+    from .drivers.oscillator import OscillatorFMU2, Settings
+    from .drivers.oscillator3 import OscillatorFMU3
+    from .errors import FMUCallError, FMUError, FMUFileError, UsageError
     from .params import Oscillator
+    from .references.exact import solve_exact
 
 
 def __getattr__(name: str) -> Any:

@@ -69,6 +69,9 @@ NAMES: dict[tuple[str, str], tuple[str, str]] = {
        for n in ("OscillatorFMU3", "Run", "Switch", "Intermediate", "default_fmi3_path")},
     ("dryfriction.fmi.fmi3", "FMI3Oscillator"): ("dryfriction.drivers.oscillator3", "OscillatorFMU3"),
     ("dryfriction.fmi.fmi3", "FMUError"): ("dryfriction.errors", "FMUError"),
+    # the command line's parts of the work bound
+    **{("dryfriction.budget", n): ("dryfriction.cli.options", n)
+       for n in ("add_max_work_argument", "command_work", "check_command")},
     # the former module dryfriction.cli is the package's command-line module dryfriction.cli.main
     ("dryfriction.cli", "*"): ("dryfriction.cli.main", "*"),
 }
@@ -88,7 +91,8 @@ def _warn(old: str, new: str) -> None:
     """The DeprecationWarning, attributed to the line that imported or read the former name (the
     first frame outside importlib and this module)."""
     frame = sys._getframe(1)
-    while frame.f_back is not None and (frame.f_globals.get("__name__") == __name__
+    while frame.f_back is not None and (frame.f_globals.get("__name__", "").split(".")[0] == "importlib"
+                                        or frame.f_globals.get("__name__") == __name__
                                         or frame.f_code.co_filename.startswith("<frozen importlib")):
         frame = frame.f_back
     warnings.warn_explicit(f"{old} is deprecated; use {new}", DeprecationWarning, frame.f_code.co_filename,

@@ -36,8 +36,8 @@ from pathlib import Path
 from .errors import UsageError
 
 __all__ = ["WorkBoundError", "DEFAULT_MAX_WORK", "EXACT_PERIOD_STEPS", "BOSSAK_PERIOD_STEPS", "SAMPLE_STEPS",
-           "check_work", "check_memory", "memory_limit", "max_work_value", "add_max_work_argument", "check_writable", "fmt",
-           "command_work", "check_command", "Estimate", "period_steps", "continuation_work"]
+           "check_work", "check_memory", "memory_limit", "max_work_value", "check_writable", "fmt", "Estimate",
+           "period_steps", "continuation_work"]
 
 #: the default bound of a command's work, in steps (module doc)
 DEFAULT_MAX_WORK = 1e10
@@ -160,23 +160,13 @@ def check_memory(nbytes: float, what: str, option: str) -> float:
     return nbytes
 
 
-def add_max_work_argument(p: object, default: object = None) -> None:
-    """``--max-work STEPS`` on a command's parser (``default``: argparse.SUPPRESS on subcommands
-    that share it with the main parser)."""
-    from .cli.options import number
-
-    p.add_argument("--max-work", type=number("--max-work", 0.0, True), default=default, metavar="STEPS",  # type: ignore[attr-defined]
-                   help=f"refuse work estimated above STEPS internal steps (default {DEFAULT_MAX_WORK:.0e}; "
-                        f"an exact-scheme period counts {EXACT_PERIOD_STEPS:g})")
-
-
 def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: str = "",
                    option: str = "--out") -> Path:
-    """Before the work: ``folder`` can take a result set (:func:`dryfriction.cli.console.check_output_folder`:
+    """Before the work: ``folder`` can take a result set (:func:`dryfriction.atomic.check_output_folder`:
     a probe created and removed where the set will be staged; nothing is left behind, no folder
     created), and its file system has room for ``nbytes`` (with a margin); a :class:`UsageError`
     naming ``option``, the folder and the cause otherwise."""
-    from .cli.console import check_output_folder, nearest_existing
+    from .atomic import check_output_folder, nearest_existing
 
     d = check_output_folder(folder, option)
     if nbytes > 0:
@@ -185,76 +175,3 @@ def check_writable(folder: str | os.PathLike[str], nbytes: float = 0.0, what: st
             raise UsageError(f"the output folder {d} has {free / 1e6:.3g} MB free, {what or 'the results'} "
                              f"need about {nbytes / 1e6:.3g} MB")
     return d
-
-
-def _steps_per_period(args: object, default: float) -> float:
-    """A command's steps per excitation period: the exact scheme's count, ``--steps-per-period``."""
-    if str(getattr(args, "scheme", "") or "") == "exact":
-        return EXACT_PERIOD_STEPS
-    return float(getattr(args, "steps_per_period", None) or default)
-
-
-def command_work(args: object) -> tuple[float, str] | None:
-    """The estimated work (steps) of a parsed command and what it is made of; None for a command
-    that does no bounded-size work of its own (``scenes``, ``validate``)."""
-    a: object = args
-    cmd = getattr(a, "command", None)
-    g = lambda name, default=None: getattr(a, name, default) if getattr(a, name, None) is not None else default  # noqa: E731
-    if cmd == "response":
-        from .params import Oscillator
-        from .analysis.response import response_work
-
-        num = int(g("num", 41))
-        method = g("method") or ("orbit" if g("scheme") in (None, "exact") else "transient")
-        p = Oscillator(m=1.0, k=1.0, omega=1.0)
-        return response_work(p, num, method, period=int(g("period", 1)), max_periods=int(g("max_periods", 8192)),
-                             scheme=g("scheme"))
-    if cmd == "run":
-        spp = EXACT_PERIOD_STEPS if g("scheme") == "exact" else float(g("steps_per_period", 1000))
-        periods = float(g("periods", 30.0)) + 1.0
-        return periods * spp, f"{fmt(periods)} periods x {fmt(spp)} steps"
-    if cmd == "lyapunov":
-        spp = EXACT_PERIOD_STEPS if g("exact", False) else _steps_per_period(a, 1000)
-        periods = 2.0 * (int(g("periods", 500)) + int(g("transient", 100)))
-        return periods * spp, f"2 runs x {fmt(periods / 2)} periods x {fmt(spp)} steps"
-    if cmd == "orbit":
-        from .analysis.orbits import DEFAULT_SPREAD
-
-        n = len(DEFAULT_SPREAD)
-        periods = n * (int(g("transients", 60)) + 10) * int(g("period", 1))
-        return periods * EXACT_PERIOD_STEPS, f"{n} searches x {fmt(periods / n)} periods x {EXACT_PERIOD_STEPS:g} steps"
-    if cmd == "continuation":
-        return continuation_work(int(g("max_points", 400)), int(g("max_branches", 8)), int(g("period", 1)))
-    if cmd == "bifurcation":
-        quick = bool(g("quick", False))
-        values = int(g("values", 16 if quick else 80))
-        ics = int(g("ics", 5 if quick else 11)) ** 2
-        runs = values * ics
-        periods = int(g("periods", 30)) + 1
-        return runs * periods * 1000.0, f"{fmt(runs)} runs x {periods} periods x 1,000 steps"
-    if cmd == "belt":
-        spp = EXACT_PERIOD_STEPS if g("scheme") == "exact" else float(g("steps_per_period", 2000))
-        periods = float(g("periods", 40.0)) * 3.0   # the transient, the orbit's search and its cycle
-        return periods * spp, f"about {fmt(periods)} periods x {fmt(spp)} steps"
-    if cmd == "chain":
-        n = int(g("n", 2) or 2)
-        t_end, dt = float(g("t_end", 20.0)), float(g("dt", 0.05))
-        h = None
-        for item in g("sets", []) or []:
-            name, _, text = str(item).partition("=")
-            if name.strip() == "h":
-                try:
-                    h = float(text)
-                except ValueError:
-                    h = None
-        per_dt = max(dt / h, 1.0) if h and h > 0 else 100.0
-        steps = t_end / dt * per_dt * n
-        return steps, f"{n} blocks x {fmt(t_end / dt)} communication steps x {fmt(per_dt)} internal steps"
-    return None
-
-
-def check_command(args: object) -> None:
-    """Refuse a parsed command whose estimated work exceeds ``--max-work`` (before any work)."""
-    est = command_work(args)
-    if est is not None:
-        check_work(est[0], est[1], getattr(args, "max_work", None))

@@ -3,7 +3,6 @@
     FMUError                   the base: ``message``, ``function`` and ``status`` (None when no FMI call is involved)
     +-- FMUCallError           an FMI call returned Discard, Error or Fatal (or a status the host cannot accept);
     |                          the message is the sentence the FMU logged (it names the variable of a bad value)
-    |                          ChainError: the same class under a deprecated name
     +-- FMUFileError           an FMU file that cannot be used (missing, not a zip, another model or FMI version);
                                also a UsageError (a ValueError): one line, exit 2
 
@@ -13,7 +12,7 @@ called. The command line reports every FMUError as one line with exit status 2.
 
 from __future__ import annotations
 
-__all__ = ["UsageError", "FMUError", "FMUCallError", "FMUFileError", "ChainError", "status_name"]
+__all__ = ["UsageError", "FMUError", "FMUCallError", "FMUFileError", "status_name"]
 
 _FMI2_STATUS = ("fmi2OK", "fmi2Warning", "fmi2Discard", "fmi2Error", "fmi2Fatal", "fmi2Pending")
 _FMI3_STATUS = ("fmi3OK", "fmi3Warning", "fmi3Discard", "fmi3Error", "fmi3Fatal")
@@ -49,9 +48,6 @@ class FMUCallError(FMUError):
     def __init__(self, message: str, function: str | None = None, status: int | None = None) -> None:
         super().__init__(message, function, status)
 
-
-#: the name the chain drivers raised their FMU errors under (the same class)
-ChainError = FMUCallError
 
 
 class FMUFileError(FMUError, UsageError):

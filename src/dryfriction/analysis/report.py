@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_write_bytes
-from ..drivers.oscillator import OscillatorFMU
+from ..drivers.oscillator import OscillatorFMU2
 from .validation import CASES, Convergence, FirstCycle, convergence, first_cycle
 
 
 
-def run_validation(fmu: OscillatorFMU, cases: Sequence[str], steps: Sequence[int],
+def run_validation(fmu: OscillatorFMU2, cases: Sequence[str], steps: Sequence[int],
                    progress: bool = True) -> tuple[FirstCycle, dict[tuple[str, str], Convergence]]:
     """The main job's runs: the first cycle against the exact solution and, for every case and scheme, the
     errors over ``steps`` steps per period."""
@@ -103,12 +103,12 @@ def plot(path: Path, fc: FirstCycle, results: dict[tuple[str, str], Convergence]
 def validate(out: Path, quick: bool = False, fmu_path: Path | None = None, progress: bool = True) -> str:
     """Validate the FMU (every case and scheme, or two cases with ``quick``), write
     ``out/validation.csv`` and ``out/validation.png`` together (all or nothing:
-    :func:`dryfriction.cli.console.result_set`) and return the report's text."""
-    from ..cli.console import result_set
+    :func:`dryfriction.atomic.result_set`) and return the report's text."""
+    from ..atomic import result_set
 
     cases = ["stick-dominated", "chi-small"] if quick else list(CASES)
     steps = (400, 800, 1600) if quick else (400, 800, 1600, 3200)
-    with OscillatorFMU(fmu_path) as fmu:
+    with OscillatorFMU2(fmu_path) as fmu:
         fc, results = run_validation(fmu, cases, steps, progress)
     with result_set(out) as stage:
         write_csv(stage / "validation.csv", results)

@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import check_memory, check_work
-from ..drivers.oscillator import FMUError, OscillatorFMU, Settings
+from ..drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from .orbits import SAME, STABILITY_MARGIN, find_orbits, scales
 from ..params import Oscillator
 
@@ -143,7 +143,7 @@ def _flow_error(p: Oscillator, J: np.ndarray, dev: float) -> float:
     return float(np.linalg.norm(Js, 2)) * dev
 
 
-def steady_state(fmu: OscillatorFMU, p: Oscillator, *, tol: float = TOL, tol_stick: float = TOL_STICK,
+def steady_state(fmu: OscillatorFMU2, p: Oscillator, *, tol: float = TOL, tol_stick: float = TOL_STICK,
                  min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
                  settings: Settings | None = None) -> SteadyState:
     """Run until the estimated error of the last window is within tol (see the module docstring);
@@ -312,7 +312,7 @@ def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
     return out
 
 
-def _orbits_at(inst: OscillatorFMU, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
+def _orbits_at(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
                opts: Mapping[str, Any]) -> list[_Branch]:
     """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
     :class:`dryfriction.analysis.orbits.OrbitFollower`), and with ``cold`` transients from the spread of
@@ -371,7 +371,7 @@ def _mirrors(p: Oscillator, f: float, followed: list[_Branch], follow: Any) -> N
             followed.append(_Branch(image, f, T))
 
 
-def _transient_check(inst: OscillatorFMU, p: Oscillator, f: float, found: list[_Branch],
+def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[_Branch],
                      opts: Mapping[str, Any]) -> list[_Branch]:
     """The cold search of a sweep's later frequencies, cheap: the end states of find_orbits'
     transients (its spread of initial conditions), each followed by Newton from t = 0 (as a

@@ -97,7 +97,7 @@ class SlipEvents:
 class EventDetector:
     """Slip events of a record given segment by segment: each :meth:`feed` takes the samples
     ``t, x, v`` of the next segment, whose first sample is the last one of the previous segment
-    (the record of ``ChainFMU.record``), or a first segment. :meth:`events` labels the cells."""
+    (the record of ``ChainFMU3.record``), or a first segment. :meth:`events` labels the cells."""
 
     def __init__(self, v_belt: float | np.ndarray, v_threshold: float, d_threshold: float,
                  diagonal: bool = True) -> None:

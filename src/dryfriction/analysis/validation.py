@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..references.exact import solve_exact
-from ..drivers.oscillator import OscillatorFMU, Settings
+from ..drivers.oscillator import OscillatorFMU2, Settings
 from ..model import LazyMapping
 from ..params import Oscillator
 
@@ -89,7 +89,7 @@ def sample_times(p: Oscillator, periods: float, per_period: int = 20) -> np.ndar
 
 
 def convergence(
-    fmu: OscillatorFMU,
+    fmu: OscillatorFMU2,
     p: Oscillator,
     scheme: str = "located",
     steps_per_period: Sequence[int] = (400, 800, 1600, 3200),
@@ -119,7 +119,7 @@ class FirstCycle:
     errors: dict[str, float]           # max error of x, v, a relative to their ranges
 
 
-def first_cycle(fmu: OscillatorFMU, p: Oscillator | None = None, steps_per_period: int = 1000,
+def first_cycle(fmu: OscillatorFMU2, p: Oscillator | None = None, steps_per_period: int = 1000,
                 samples: int = 1000) -> FirstCycle:
     """The paper's first validation: one excitation period from rest, FMU against the exact solution
     (``p``: :func:`first_cycle_oscillator` unless given)."""

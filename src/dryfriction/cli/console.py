@@ -21,21 +21,24 @@ folder beside ``folder`` and moves them into it as one step (:func:`dryfriction.
 (read-only, a file where a folder is meant or the reverse, a name too long), by creating and
 removing a probe exactly where the results will be staged.
 
-This module imports only the standard library at the top, so that the console script installs
-its signal handlers before the package's heavy imports.
+The result sets, the output checks and the command's state shared with them live in
+:mod:`dryfriction.atomic` (imported from here too). This module imports only the standard library
+and :mod:`dryfriction.atomic` at the top, so that the console script installs its signal handlers
+before the package's heavy imports.
 """
 
 from __future__ import annotations
 
-import errno
 import os
 import signal
 import sys
 import threading
 from collections.abc import Callable, Iterator
-from contextlib import AbstractContextManager, contextmanager
-from pathlib import Path
+from contextlib import contextmanager
 from typing import IO, Any, NoReturn
+
+from ..atomic import (COMMAND, OutputError, check_output_file, check_output_folder, committed, interrupt_note,
+                      interrupted, nearest_existing, result_file, result_set, short_text as _short)
 
 __all__ = ["main", "guarded", "result_set", "result_file", "check_output_folder", "check_output_file", "OutputError",
            "committed", "interrupted", "interrupt_note", "EXIT_INTERRUPTED", "EXIT_FAILED", "EXIT_USAGE", "PREFIX"]
@@ -49,39 +52,8 @@ EXIT_BROKEN_PIPE = 141      # 128 + SIGPIPE
 _SIGNALS = tuple(s for s in (getattr(signal, "SIGINT", None), getattr(signal, "SIGTERM", None)) if s is not None)
 
 
-class _State:
-    """What the signal handler needs to know about the command that runs."""
-
-    def __init__(self) -> None:
-        self.active = False          # a guarded command runs (its handlers are installed)
-        self.console = False         # we are the console script (a second signal exits at once)
-        self.committed = False       # the results are complete and being put in place
-        self.signum = 0              # the signal that interrupted the command (0: none)
-        self.note = ""               # said after "interrupted" (e.g. the study's chunks are kept)
-        self.stderr: IO[str] | None = None   # the real stderr while library output is silenced
-        self.gate: _StderrGate | None = None
-
-
-_STATE = _State()
-
-
-def committed() -> None:
-    """The running command's results are complete: from here on a signal no longer interrupts it
-    (called by :func:`result_set` and :func:`result_file` just before the files move into place;
-    without a guarded command it does nothing that matters)."""
-    _STATE.committed = True
-
-
-def interrupted() -> bool:
-    """Whether the running command has been interrupted (a signal arrived before its results
-    were committed)."""
-    return bool(_STATE.signum)
-
-
-def interrupt_note(text: str) -> None:
-    """Said after ``interrupted`` if the running command is interrupted (e.g. that a study's
-    finished chunks are kept)."""
-    _STATE.note = text
+#: the running command (its result sets commit it, the signal handler reads it)
+_STATE = COMMAND
 
 
 def _message(signum: int) -> str:
@@ -228,154 +200,6 @@ def _os_error(e: OSError) -> str:
     if e.strerror and e.filename:
         return f"{e.strerror}: {_short(str(e.filename))}"
     return str(e)
-
-
-def _short(text: str, limit: int = 240) -> str:
-    """``text`` whole up to ``limit`` characters (every ordinary path), else its two ends and its
-    length (a name too long to be one, shown readably)."""
-    return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 3:]} ({len(text)} characters)"
-
-
-# ---- result sets -------------------------------------------------------------------------------
-
-class OutputError(OSError):
-    """A result set (or file) that could not be written, with the cause; nothing of it was kept
-    (the command line: one line, exit status 1)."""
-
-
-@contextmanager
-def _all_or_nothing(writer: Callable[[Any], Any], target: str | os.PathLike[str], kept: str) -> Iterator[Path]:
-    """``writer(target)``'s temporary place, the command committed when the block ends without
-    error; a write the system refuses is :class:`OutputError` naming ``target``, the cause and
-    ``kept`` (what is left)."""
-    try:
-        with writer(target) as place:
-            yield place
-            committed()
-    except OSError as e:
-        if interrupted():
-            raise
-        raise OutputError(f"cannot write {_short(str(target))}: {_cause(e)}; {kept}") from None
-
-
-def result_set(folder: str | os.PathLike[str]) -> AbstractContextManager[Path]:
-    """A command's result set in ``folder``, all or nothing: yields the staging folder to write
-    the files into (:func:`dryfriction.atomic.staged_outputs`); when the block ends without error
-    the command is committed (:func:`committed`) and every file moves into ``folder``. The paths of
-    the files in ``folder`` are ``folder / path.relative_to(stage)``."""
-    from ..atomic import staged_outputs
-
-    return _all_or_nothing(staged_outputs, folder, "nothing of it was kept")
-
-
-def result_file(path: str | os.PathLike[str]) -> AbstractContextManager[Path]:
-    """One result file, all or nothing: yields a temporary path beside ``path``
-    (:func:`dryfriction.atomic.atomic_path`), renamed to ``path`` when the block ends without
-    error, the command committed (:func:`committed`) just before."""
-    from ..atomic import atomic_path
-
-    return _all_or_nothing(atomic_path, path, "it was left as it was")
-
-
-def nearest_existing(path: Path) -> Path:
-    """``path`` or its nearest parent that exists."""
-    p = path
-    while not os.path.lexists(p) and p != p.parent:
-        p = p.parent
-    return p
-
-
-def _check_names(path: Path, option: str, extra: int) -> None:
-    """Every component of ``path`` (the last one ``extra`` bytes longer: the staging name) and
-    the whole path within the file system's limits, else UsageError naming the option."""
-    from ..errors import UsageError
-
-    base = nearest_existing(path.absolute().parent)
-    try:
-        name_max = os.pathconf(base, "PC_NAME_MAX")
-        path_max = os.pathconf(base, "PC_PATH_MAX")
-    except (OSError, ValueError, AttributeError):  # (no pathconf on Windows)
-        name_max, path_max = 255, 4096
-    parts = path.absolute().parts
-    for i, part in enumerate(parts):
-        limit = name_max - (extra if i == len(parts) - 1 else 0)
-        if len(os.fsencode(part)) > limit:
-            raise UsageError(f"{option} {_short(str(path), 60)}: the name {_short(part, 40)!r} is "
-                             f"{len(os.fsencode(part))} bytes long, more than the {limit} it may have here "
-                             f"({name_max} per name on this file system"
-                             + (", less the temporary name's suffix)" if limit < name_max else ")"))
-    if len(os.fsencode(str(path.absolute()))) + extra + 64 > path_max:
-        raise UsageError(f"{option} {_short(str(path), 60)}: the path is too long for this file system "
-                         f"(at most {path_max - extra - 64} bytes here)")
-
-
-def _cause(e: OSError) -> str:
-    """The cause of an OSError in a few words."""
-    return {errno.EACCES: "permission denied", errno.EPERM: "permission denied",
-            errno.EROFS: "a read-only file system", errno.ENOSPC: "no space left on the device",
-            errno.EDQUOT: "the disk quota is exceeded", errno.ENAMETOOLONG: "a name too long",
-            errno.ENOTDIR: "not a folder"}.get(e.errno or 0, e.strerror or str(e))
-
-
-def _probe_error(option: str, path: Path, where: Path, e: OSError) -> Exception:
-    from ..errors import UsageError
-
-    return UsageError(f"{option} {_short(str(path))}: cannot write in {_short(str(where))} ({_cause(e)})")
-
-
-def check_output_folder(folder: str | os.PathLike[str], option: str = "--out") -> Path:
-    """Refuse (UsageError, one line naming ``option``) a result folder the command could not
-    write, before any work: a file where the folder is meant, a name too long, a place not
-    writable (a probe created and removed where :func:`result_set` will stage; an existing folder
-    asked whether it may be written). Nothing is left behind; a missing folder is not created."""
-    import shutil
-    import tempfile
-
-    from ..errors import UsageError
-
-    path = Path(folder)
-    if str(folder) == "":
-        raise UsageError(f"{option} must name a folder, not ''")
-    _check_names(path, option, extra=len(".staging-") + 9)
-    if path.exists() and not path.is_dir():
-        raise UsageError(f"{option} {_short(str(path))} is a file, not a folder")
-    parent = path.parent
-    where = nearest_existing(parent)
-    if not where.is_dir():
-        raise UsageError(f"{option} {_short(str(path))}: {_short(str(where))} is a file, not a folder")
-    try:
-        probe = tempfile.mkdtemp(dir=where, prefix=f".{path.name or 'out'}.staging-")
-    except OSError as e:
-        raise _probe_error(option, path, where, e) from None
-    shutil.rmtree(probe, ignore_errors=True)
-    if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):  # (the folder itself left untouched)
-        raise UsageError(f"{option} {_short(str(path))}: cannot write in it (permission denied)")
-    return path
-
-
-def check_output_file(file: str | os.PathLike[str], option: str = "--out") -> Path:
-    """As :func:`check_output_folder` for one result file (:func:`result_file`): a folder where
-    the file is meant, a name too long, a place not writable are refused before any work."""
-    import tempfile
-
-    from ..errors import UsageError
-
-    path = Path(file)
-    if str(file) == "" or path.name in ("", ".", ".."):
-        raise UsageError(f"{option} must name a file, not {str(file)!r}")
-    _check_names(path, option, extra=len("..") + 8 + len(".tmp"))
-    if path.is_dir():
-        raise UsageError(f"{option} {_short(str(path))} is a folder, not a file")
-    where = nearest_existing(path.parent)
-    if not where.is_dir():
-        raise UsageError(f"{option} {_short(str(path))}: {_short(str(where))} is a file, not a folder")
-    try:
-        fd, probe = tempfile.mkstemp(dir=where, prefix=f".{path.name}.", suffix=".tmp")
-    except OSError as e:
-        raise _probe_error(option, path, where, e) from None
-    os.close(fd)
-    os.unlink(probe)
-    return path
 
 
 # ---- the console script ------------------------------------------------------------------------

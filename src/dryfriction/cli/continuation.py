@@ -30,13 +30,11 @@ from .options import count, number, path_arg
 
 __all__ = ["add_continuation_parsers", "continuation_main"]
 
-LABELS = {"fold": "F", "period_doubling": "PD", "symmetry_breaking": "SB", "grazing": "G"}
-MARKERS = {"fold": "s", "period_doubling": "D", "symmetry_breaking": "o", "grazing": "^"}
 NONDIM = ("lam", "mu_s_sigma", "chi", "zeta")
 
 
 def _oscillator_options(c: argparse.ArgumentParser) -> None:
-    from .main import _physical_options
+    from .options import _physical_options
 
     nd = c.add_argument_group("non-dimensional form (the paper's; default lam 0.5, mu_s sigma 0.6, chi 0.7)")
     nd.add_argument("--lam", type=number("--lam", 0.0, True), default=None, help="frequency ratio omega/w0")
@@ -99,7 +97,7 @@ def add_continuation_parsers(sub: Any, parents: list[argparse.ArgumentParser]) -
 
 
 def _oscillator(args: argparse.Namespace) -> Any:
-    from .main import PHYSICAL, _physical
+    from .options import PHYSICAL, _physical
     from ..params import Oscillator
 
     physical = any(getattr(args, n, None) not in (None, 0.0) for n in PHYSICAL if n not in ("x0", "v0")) or \
@@ -137,11 +135,11 @@ class _Progress:
 
 def _continue(args: argparse.Namespace, p: Any) -> Any:
     from ..analysis.continuation import continue_orbits
-    from ..drivers.oscillator import OscillatorFMU
+    from ..drivers.oscillator import OscillatorFMU2
 
     prog = _Progress(not args.no_progress and sys.stderr.isatty())
     try:
-        with OscillatorFMU(args.fmu) as fmu:
+        with OscillatorFMU2(args.fmu) as fmu:
             return continue_orbits(p, args.param, args.start, args.stop, period=args.period, ds=args.ds,
                                    ds_min=min(1e-6, args.ds), ds_max=max(args.ds_max, args.ds),
                                    max_points=args.max_points, max_branches=args.max_branches,
@@ -203,33 +201,6 @@ def write_csv(c: Any, path: Path) -> None:
     atomic_write_text(path, "\n".join(lines) + "\n")
 
 
-def plot_branches(axes: Any, c: Any, scale: float, label: bool = True) -> None:
-    """Amplitude (upper axes) and offset (lower) of every branch, stable solid, unstable dashed,
-    bifurcations marked and labelled; lengths times ``scale``."""
-    ds = c.dataset
-    for b in c.branches:
-        s = ds.where((ds.branch == b.id) & ds.converged, drop=True)
-        if s.point.size == 0:
-            continue
-        x = s.param.values
-        st = s.stable.values.astype(bool)
-        color = f"C{b.id % 10}"
-        for ax, var in zip(axes, ("amplitude_m", "offset_m")):
-            y = s[var].values * scale
-            for mask, ls in ((st, "-"), (~st, "--")):
-                # join each run to its neighbours so that a change of stability leaves no gap
-                edge = mask | np.concatenate([mask[1:], [False]]) | np.concatenate([[False], mask[:-1]])
-                yy = np.where(edge, y, np.nan)
-                ax.plot(x, yy, ls=ls, color=color, lw=1.4,
-                        label=(f"branch {b.id} (K = {b.period}{', symmetric' if b.kind == 'symmetric' else ''})"
-                               if (ls == "-" and var == "amplitude_m" and label) else None))
-    for f in c.bifurcations:
-        for ax, y in zip(axes, (f.amplitude_m * scale, f.offset_m * scale)):
-            ax.plot([f.param], [y], MARKERS[f.type], color="k", ms=6, mfc="none")
-            ax.annotate(f"{LABELS[f.type]} {f.param:.5g}", (f.param, y), textcoords="offset points", xytext=(4, 4),
-                        fontsize=7)
-
-
 def plot(c: Any, path: Path, title: str) -> None:
     """Draw the branches (amplitude and ``|mu|max`` against the parameter, unstable ones dashed) with the
     bifurcations into a PNG."""
@@ -237,6 +208,8 @@ def plot(c: Any, path: Path, title: str) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from ..analysis.plots import plot_branches
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
     plot_branches(axes, c, 1.0)
@@ -352,6 +325,8 @@ def bifurcation_main(args: argparse.Namespace) -> int:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from ..analysis.plots import plot_branches
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 7.5), sharex=True)
     xs = np.repeat(grid, n_ic * n_ic)

@@ -59,7 +59,7 @@ def add_lyapunov_parser(sub: Any, parents: list[argparse.ArgumentParser] | None 
 
 def lyapunov_main(args: argparse.Namespace) -> int:
     """Run the ``lyapunov`` subcommand; returns the exit status."""
-    from ..drivers.oscillator import OscillatorFMU
+    from ..drivers.oscillator import OscillatorFMU2
 
     if args.renorm > args.periods:
         raise UsageError(f"--renorm ({args.renorm}) must not exceed --periods ({args.periods})")
@@ -69,7 +69,7 @@ def lyapunov_main(args: argparse.Namespace) -> int:
         if args.exact:
             m: Any = ExactMap(nd)
         else:
-            fmu = OscillatorFMU(getattr(args, "fmu", None))
+            fmu = OscillatorFMU2(getattr(args, "fmu", None))
             m = FMUMap(fmu, nd, args.steps_per_period, args.scheme)
         r = benettin(m, args.z0, args.dz0, periods=args.periods, transient=args.transient, d0=args.d0,
                      renorm=args.renorm)

@@ -22,7 +22,7 @@ from typing import Any
 
 from .. import __version__, model
 from ..drivers import scenes
-from .options import Parser, count, make_parser, number, path_arg
+from .options import PHYSICAL, Parser, _physical, _physical_options, count, make_parser, number, path_arg
 from ..errors import UsageError
 from ..diagnostics import DryFrictionWarning
 from ..drivers.oscillator import Settings
@@ -38,7 +38,7 @@ def _global_options(suppress: bool) -> argparse.ArgumentParser:
                    help="path of the FMU (default: $DFO_FMU, else the installed package's, else build/)")
     g.add_argument("--strict", action="store_true", default=default,
                    help="a warning of the FMU (e.g. a step too coarse for the dynamics) is an error: exit 2")
-    from ..budget import add_max_work_argument
+    from .options import add_max_work_argument
 
     add_max_work_argument(g, default)
     return g
@@ -138,50 +138,6 @@ def build_parser() -> Parser:
     return p
 
 
-PHYSICAL = ("m", "k", "c", "P0", "f", "omega", "N", "mu_s", "mu_k", "x0", "v0")
-
-
-def _physical_options(g: Any, required: bool, frequency: bool = True) -> None:
-    """--m --k (--c | --zeta) --P0 (--f | --omega) --N --mu-s --mu-k --x0 --v0 (SI units)."""
-    req = " (required)" if required else ""
-    g.add_argument("--m", type=number("--m", 0.0, True), required=required, help=f"mass, kg{req}")
-    g.add_argument("--k", type=number("--k", 0.0), required=required, help=f"stiffness, N/m{req}")
-    g.add_argument("--c", type=number("--c", 0.0), default=None, help="viscous damping, N s/m (or --zeta)")
-    if required:
-        g.add_argument("--zeta", type=number("--zeta", 0.0), default=None,
-                       help="damping ratio c / (2 sqrt(k m)) (or --c; default 0)")
-    g.add_argument("--P0", type=number("--P0"), required=required, help=f"excitation amplitude, N{req}")
-    if frequency:
-        g.add_argument("--f", type=number("--f", 0.0), default=None, help="excitation frequency, Hz (or --omega)")
-        g.add_argument("--omega", type=number("--omega", 0.0), default=None, help="excitation frequency, rad/s")
-    g.add_argument("--N", type=number("--N", 0.0), required=required, help=f"normal force, N{req}")
-    g.add_argument("--mu-s", type=number("--mu-s", 0.0), required=required, help=f"static friction coefficient{req}")
-    g.add_argument("--mu-k", type=number("--mu-k", 0.0), default=None,
-                   help="kinetic friction coefficient (default: mu_s)")
-    g.add_argument("--x0", type=number("--x0"), default=0.0, help="initial position, m (default 0)")
-    g.add_argument("--v0", type=number("--v0"), default=0.0, help="initial velocity, m/s (default 0)")
-
-
-def _physical(args: argparse.Namespace, omega: float | None = None) -> Oscillator:
-    if args.c is not None and args.zeta is not None:
-        raise UsageError("give the damping as --c or --zeta, not both")
-    f = getattr(args, "f", None)
-    om = getattr(args, "omega", None) if omega is None else omega
-    if f is not None and om is not None:
-        raise UsageError("give the excitation frequency as --f (Hz) or --omega (rad/s), not both")
-    if f is None and om is None:
-        raise UsageError("the excitation frequency is missing: --f HZ or --omega RAD_PER_S")
-    missing = [o for o, v in (("--m", args.m), ("--k", args.k), ("--P0", args.P0), ("--N", args.N),
-                              ("--mu-s", args.mu_s)) if v is None]
-    if missing:
-        raise UsageError(f"physical units need {', '.join(missing)} too")
-    try:
-        return Oscillator.physical(m=args.m, k=args.k, c=args.c, zeta=args.zeta, P0=args.P0, f=f, omega=om,
-                                   N=args.N, mu_s=args.mu_s, mu_k=args.mu_k, x0=args.x0, v0=args.v0)
-    except ValueError as e:
-        raise UsageError(str(e)) from None
-
-
 #: units of the numbers ``dryfriction run`` prints
 RUN_UNITS = {"amplitude": "m", "asymmetry": "m", "x_max": "m", "x_min": "m", "stick_fraction": "1",
              "stick_percent": "%", "transitions": "1", "E_friction": "J", "x_final": "m", "samples": "1",
@@ -207,7 +163,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     """Run ``dryfriction run``: one run of a scene, its parameters and results printed with their units (or
     ``--json``); returns the exit status."""
-    from ..drivers.oscillator import OscillatorFMU
+    from ..drivers.oscillator import OscillatorFMU2
 
     physical = any(getattr(args, n) not in (None, 0.0) for n in PHYSICAL if n not in ("x0", "v0")) or \
         args.x0 != 0.0 or args.v0 != 0.0
@@ -228,7 +184,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         check_output_file(args.out)
     h = args.h if args.h is not None else p.period / args.steps_per_period
     st = Settings(h=h, scheme=args.scheme)
-    with OscillatorFMU(args.fmu) as fmu:
+    with OscillatorFMU2(args.fmu) as fmu:
         if args.scene == "validation":
             res = scenes.run_validation(fmu, p, args.periods, settings=st)
         elif args.scene == "sweep":
@@ -463,7 +419,7 @@ def _run(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     args.fmu = getattr(args, "fmu", None)
     args.max_work = getattr(args, "max_work", None)
-    from ..budget import check_command
+    from .options import check_command
 
     check_command(args)  # the work estimated from the arguments, refused above --max-work
     if args.fmu is not None:

@@ -35,7 +35,7 @@ NONDIM = ("lam", "mu_s_sigma", "chi")
 
 def add_orbit_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argparse.ArgumentParser:
     """Add the ``orbit`` command and its options to the subcommands ``sub``."""
-    from .main import _physical_options
+    from .options import _physical_options
 
     o = sub.add_parser("orbit", parents=parents, help="periodic orbits of K excitation periods with their stability",
                        description="Every periodic orbit of K excitation periods found by Newton shooting on the "
@@ -55,7 +55,7 @@ def add_orbit_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> argpar
 
 
 def _oscillator(args: argparse.Namespace) -> Any:
-    from .main import PHYSICAL, _physical
+    from .options import PHYSICAL, _physical
     from ..params import Oscillator
 
     physical = [n for n in PHYSICAL if n not in ("x0", "v0") and getattr(args, n) is not None]

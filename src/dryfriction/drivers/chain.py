@@ -11,12 +11,11 @@ Initialization Mode, then steps on the host's grid ``k dt`` with the outputs rea
 
 A scalar for an array parameter sets every block; a sequence must hold n values. The FMI 2.0
 chain (:class:`ChainFMU2`, ``n`` fixed when it was built, structured names ``m[1]``, ``x[1]``, ...)
-has the same interface. :class:`ChainFMU` is :class:`ChainFMU3` under its former name, and
-``run(t_end=...)`` the former name of ``t_stop``. Both run on the package's FMI layer
+has the same interface; ``run(t_end=...)`` is the former name of ``t_stop``. Both run on the package's FMI layer
 (:mod:`dryfriction.fmi`); the stepping loop reads every point's outputs with one typed call per
 type straight into the rows of preallocated numpy arrays (the layer's ``bulk_get``). Every name
 and value reference comes from the FMU's model description (:mod:`dryfriction.model`); an FMU
-error is an :class:`~dryfriction.errors.FMUCallError` (``ChainError`` is the same class) carrying
+error is an :class:`~dryfriction.errors.FMUCallError` carrying
 the FMU's logged sentence.
 """
 
@@ -33,12 +32,11 @@ from typing import Any
 import numpy as np
 
 from .. import paths
-from ..diagnostics import DryFrictionWarning
 from .base import Driver, grid
-from ..errors import ChainError, FMUFileError
+from ..errors import FMUFileError
 from ..fmi import fmi2, fmi3
 
-__all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainError", "ChainRun", "ChainFMU",
+__all__ = ["ARRAY_PARAMS", "SCALAR_PARAMS", "INPUTS", "OUTPUTS", "ChainRun",
            "ChainFMU2", "ChainFMU3", "default_chain_fmu", "default_chain_fmu3", "expand", "open_chain"]
 
 #: per-block parameters (arrays of n), inputs and outputs, and the chain's scalars (docs/chain.md)
@@ -81,11 +79,6 @@ def expand(name: str, value: Any, n: int) -> np.ndarray:
     if bad.size:
         raise ValueError(f"invalid value {a[bad[0]]} for {name}[{bad[0] + 1}]; valid range: finite")
     return a
-
-
-#: the warnings the chain FMUs log (e.g. an internal step h that does not resolve the dynamics): the
-#: package's one category, :class:`dryfriction.diagnostics.DryFrictionWarning`
-ChainWarning = DryFrictionWarning
 
 
 @dataclass
@@ -441,7 +434,7 @@ class ChainFMU3(_Chain):
 
     def _check_n(self, n: Any) -> int:
         """A whole number; its range ([n_min, n_max] of the model description) is the FMU's to
-        check, in Configuration Mode (its error is a ChainError naming n)."""
+        check, in Configuration Mode (its error is an FMUCallError naming n)."""
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or int(n) < 0:
             raise ValueError(f"invalid value {n!r} for n (number of blocks); valid range: "
                              f"a whole number in [{self.n_min}, {self.n_max}]")
@@ -479,10 +472,6 @@ class ChainFMU3(_Chain):
 
     def __enter__(self) -> "ChainFMU3":
         return self
-
-
-#: the former name of :class:`ChainFMU3` (the same class)
-ChainFMU = ChainFMU3
 
 
 # ---- FMI 2.0 ------------------------------------------------------------------------------------

@@ -1,6 +1,5 @@
-"""A fast driver for the FMI 2.0 DryFrictionOscillator FMU: :class:`OscillatorFMU2` (the name
-:class:`OscillatorFMU` is the same class); the FMI 3.0 one is :class:`~dryfriction.drivers.oscillator3.OscillatorFMU3`
-(importable from here too).
+"""A fast driver for the FMI 2.0 DryFrictionOscillator FMU: :class:`OscillatorFMU2`; the FMI 3.0
+one is :class:`~dryfriction.drivers.oscillator3.OscillatorFMU3`.
 
 The FMU is unzipped and instantiated once through :mod:`dryfriction.fmi.fmi2`; every run then
 costs only reset, setup, the parameter values and the steps. Every FMI status is checked: an error
@@ -29,7 +28,7 @@ from ..fmi._base import State
 from ..model import default_fmu_path
 from ..params import Oscillator
 
-__all__ = ["FMUError", "FMUCallError", "OscillatorFMU", "OscillatorFMU2", "OscillatorFMU3", "Run", "Switch",
+__all__ = ["FMUError", "FMUCallError", "OscillatorFMU2", "Run", "Switch",
            "Settings", "Restarts", "State", "default_fmu_path", "TRAJECTORY_OUTPUTS", "OBSERVABLE_OUTPUTS", "SCHEMES",
            "EFFECT_BITS"]
 
@@ -549,15 +548,3 @@ class Restarts:
                 inst.check("fmi2GetInteger", s, n)
             self.int = self._oival[:]
 
-
-#: the former name of :class:`OscillatorFMU2` (the same class)
-OscillatorFMU = OscillatorFMU2
-
-
-def __getattr__(name: str) -> Any:
-    # the FMI 3.0 driver, importable from here too, without importing it with this module
-    if name in ("OscillatorFMU3", "FMI3Oscillator"):
-        from . import oscillator3 as fmu3
-
-        return getattr(fmu3, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

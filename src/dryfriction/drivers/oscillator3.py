@@ -7,8 +7,7 @@ callback::
         run = fmu.run(t_stop=4.0, dt=0.1, outputs=("x", "mode"))
     print(run.switch_times)
 
-:class:`FMI3Oscillator` is the same class under its former name. The semantics of the events are
-documented in docs/fmi3.md.
+The semantics of the events are documented in docs/fmi3.md.
 """
 
 from __future__ import annotations
@@ -27,7 +26,7 @@ from ..errors import FMUCallError
 from ..fmi import fmi3
 from ..fmi._base import State
 
-__all__ = ["OscillatorFMU3", "FMI3Oscillator", "Run", "Switch", "Intermediate", "default_fmi3_path"]
+__all__ = ["OscillatorFMU3", "Run", "Switch", "Intermediate", "default_fmi3_path"]
 
 #: the intermediate-update callback: (time, canReturnEarly) -> earlyReturnRequested
 Intermediate = Callable[[float, bool], bool]
@@ -184,9 +183,6 @@ class OscillatorFMU3(Driver):
     def __enter__(self) -> "OscillatorFMU3":
         return self
 
-
-#: the former name of :class:`OscillatorFMU3` (the same class)
-FMI3Oscillator = OscillatorFMU3
 
 
 def _compat_error() -> type[FMUCallError]:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .oscillator import OscillatorFMU, Settings
+from .oscillator import OscillatorFMU2, Settings
 from ..params import Oscillator
 
 InputFn = Callable[[float, dict[str, float]], dict[str, float]]
@@ -57,14 +57,14 @@ def get_scene(name: str) -> Scene:
         raise ValueError(f"unknown scene {name!r}; choose one of: {', '.join(SCENES)}") from None
 
 
-def run_validation(fmu: OscillatorFMU, p: Oscillator, periods: float, samples_per_period: int = 100,
+def run_validation(fmu: OscillatorFMU2, p: Oscillator, periods: float, samples_per_period: int = 100,
                    settings: Settings | None = None) -> dict[str, np.ndarray]:
     """Scene 'validation': the full trajectory."""
     t = np.arange(int(round(periods * samples_per_period)) + 1) * (p.period / samples_per_period)
     return fmu.trajectory(p, t, SCENES["validation"].settings(settings))
 
 
-def run_sweep_point(fmu: OscillatorFMU, p: Oscillator, transient_periods: float = 30.0,
+def run_sweep_point(fmu: OscillatorFMU2, p: Oscillator, transient_periods: float = 30.0,
                     window_periods: float = 1.0, settings: Settings | None = None) -> dict[str, float]:
     """Scene 'sweep': amplitude (x_max - x_min)/2 and asymmetry (x_max + x_min)/2 after the
     transient, computed inside the FMU over [transient, transient + window] periods of one run
@@ -87,7 +87,7 @@ def sweep_window_text(p: Oscillator, transient_periods: float, window_periods: f
             "not a steady state; for the steady amplitude use 'dryfriction response'")
 
 
-def run_stiction(fmu: OscillatorFMU, p: Oscillator, period_index: int = 30,
+def run_stiction(fmu: OscillatorFMU2, p: Oscillator, period_index: int = 30,
                  settings: Settings | None = None) -> dict[str, float]:
     """Scene 'stiction': share of the period_index-th excitation period spent stuck (1-based)."""
     T = p.period
@@ -95,7 +95,7 @@ def run_stiction(fmu: OscillatorFMU, p: Oscillator, period_index: int = 30,
     return {"stick_percent": 100.0 * o["stick_fraction"], **o}
 
 
-def run_coupled(fmu: OscillatorFMU, p: Oscillator, t_stop: float, dt: float, inputs: InputFn,
+def run_coupled(fmu: OscillatorFMU2, p: Oscillator, t_stop: float, dt: float, inputs: InputFn,
                 settings: Settings | None = None) -> dict[str, np.ndarray]:
     """Scene 'coupled': at every communication point the master computes F_ext and N_ext from
     the time and the FMU's outputs (x, v), sets them and steps."""

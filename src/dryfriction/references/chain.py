@@ -167,7 +167,7 @@ class Chain:
                              for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
         p.update(omega=self.omega, k_end=self.k_end, c_end=self.c_end)
         if self.v_belt is not None:
-            raise ValueError("the chain FMU takes v_belt as an input (ChainFMU.run(inputs=...)), not as a parameter")
+            raise ValueError("the chain FMU takes v_belt as an input (ChainFMU3.run(inputs=...)), not as a parameter")
         for name in ("k_site", "c_site"):
             if getattr(self, name) is not None:
                 p[name] = getattr(self, name).tolist()

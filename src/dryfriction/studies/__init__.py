@@ -27,9 +27,9 @@ from typing import Any
 from . import (fig2_validation, fig3_frequency_response, fig4_steady_cycles, fig5_6_resonance, fig7_stiction,
                fig8_9_bifurcation, fig10_11_frequency_chi, fig12_14_subharmonic)
 from .. import paths
-from ..cli.options import make_parser, path_arg
+from ..cli.options import add_max_work_argument, make_parser, path_arg
 from ..atomic import atomic_write_text
-from ..budget import Estimate, add_max_work_argument
+from ..budget import Estimate
 from .config import ConfigError, build_config, config_dir, load_toml
 
 __all__ = ["STUDIES", "ALIASES", "main", "run_args", "add_arguments", "run_study", "resolve", "effective_config",

@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..drivers.chain import ChainFMU, default_chain_fmu3
+from ..drivers.chain import ChainFMU3, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt, trajectory_estimate
 from .config import grid, require
@@ -24,7 +24,7 @@ TITLE = "Chain of two blocks, the first forced: amplitude and stick share agains
 FIGURES = ("chain2.png",)
 CONFIGS = {"both": "friction on both blocks", "second": "friction on the second block only"}
 
-_CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
+_CHAINS: PerProcess[ChainFMU3] = PerProcess(lambda path: ChainFMU3(2, fmu_path=path))
 
 
 #: the FMU this study runs (dryfriction.paths): the FMI 3.0 chain

@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from .. import paths
-from ..drivers.chain import ChainFMU, default_chain_fmu3
+from ..drivers.chain import ChainFMU3, default_chain_fmu3
 from ..sweep.runner import PerProcess
 from .common import FIGURE_BYTES, Estimate, StudyContext, plt
 from .config import require
@@ -24,7 +24,7 @@ NAME = "chain_waves"
 TITLE = "Stick-slip fronts along a chain of 256 blocks, the first forced: space-time image of the modes"
 FIGURES = ("chain_waves.png",)
 
-_CHAINS: PerProcess[ChainFMU] = PerProcess(lambda path: ChainFMU(2, fmu_path=path))
+_CHAINS: PerProcess[ChainFMU3] = PerProcess(lambda path: ChainFMU3(2, fmu_path=path))
 
 
 #: the FMU this study runs (dryfriction.paths): the FMI 3.0 chain

@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from .. import model  # noqa: E402
-from ..drivers.oscillator import OscillatorFMU, Settings  # noqa: E402
+from ..drivers.oscillator import OscillatorFMU2, Settings  # noqa: E402
 from ..params import Oscillator  # noqa: E402
 from ..atomic import atomic_path  # noqa: E402
 from ..budget import SAMPLE_STEPS, Estimate, fmt, period_steps  # noqa: E402
@@ -62,7 +62,7 @@ class StudyContext:
     #: where the results end up (``out_dir`` is then the staging folder they are written into)
     final_dir: Path | None = None
     _engine: Engine | None = None
-    _fmu: OscillatorFMU | None = None
+    _fmu: OscillatorFMU2 | None = None
 
     @property
     def chunk_dir(self) -> Path:
@@ -84,10 +84,10 @@ class StudyContext:
             self._engine = Engine(self.engine_options)
         return self._engine
 
-    def fmu(self) -> OscillatorFMU:
+    def fmu(self) -> OscillatorFMU2:
         """An FMU instance in this process, for the trajectory studies."""
         if self._fmu is None:
-            self._fmu = OscillatorFMU(self.fmu_path)
+            self._fmu = OscillatorFMU2(self.fmu_path)
         return self._fmu
 
     def run_sweep(self, spec: SweepSpec) -> np.ndarray:
@@ -238,7 +238,7 @@ def table(values: Mapping[str, Any], periods: Any, obs_start: Any, obs_stop: Any
                         alpha=numerics["alpha"], m=M_REF, k=K_REF, P0=P0_REF, mu_s=MU_S_REF)
 
 
-def nondim_trajectory(fmu: OscillatorFMU, nd: Mapping[str, float], t_start: float, t_stop: float,
+def nondim_trajectory(fmu: OscillatorFMU2, nd: Mapping[str, float], t_start: float, t_stop: float,
                       samples_per_period: int, numerics: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """z, z', z'' (method.md (2)), the mode and the excitation cos(lam tau + phi) at the
     communication points ``t / T`` in [t_start, t_stop] (excitation periods); the FMU runs from

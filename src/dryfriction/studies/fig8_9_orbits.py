@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import continuation_work
-from ..cli.continuation import plot_branches
+from ..analysis.plots import plot_branches
 from ..sweep import SweepSpec, observables_dataset
 from . import fig8_9_bifurcation as base
 from .branches import Z_SCALE, bifurcation_rows, check_continuation, collect, continue_nd, shared_sweep, \

@@ -27,7 +27,7 @@ import numpy as np
 from .. import model
 from ..atomic import atomic_write_bytes
 from ..errors import FMUError
-from ..drivers.oscillator import OscillatorFMU
+from ..drivers.oscillator import OscillatorFMU2
 
 __all__ = [
     "PARAM_COLUMNS",
@@ -59,7 +59,7 @@ class BatchRunner:
     """
 
     def __init__(self, fmu_path: str | os.PathLike[str], settings: Mapping[str, Any] | None = None) -> None:
-        self.fmu = OscillatorFMU(fmu_path)
+        self.fmu = OscillatorFMU2(fmu_path)
         self.path = self.fmu.path
         self.md = self.fmu.md
         vr = self.md.vr

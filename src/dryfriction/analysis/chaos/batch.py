@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ...diagnostics import emit_new, recorded
-from ...drivers.oscillator import OscillatorFMU
+from ...drivers.oscillator import OscillatorFMU2
 from ...sweep.runner import PerProcess
 from .attractors import period_of
 from .lyapunov import benettin
@@ -25,10 +25,10 @@ from .maps import FMUMap, NDParams
 
 __all__ = ["fmu_for", "lyapunov_rows", "orbit_tails", "transient_rows", "map_chunks", "concat", "ChunkStats"]
 
-_FMUS: PerProcess[OscillatorFMU] = PerProcess(OscillatorFMU)
+_FMUS: PerProcess[OscillatorFMU2] = PerProcess(OscillatorFMU2)
 
 
-def fmu_for(fmu: str | bytes) -> OscillatorFMU:
+def fmu_for(fmu: str | bytes) -> OscillatorFMU2:
     """This process's FMU instance for ``fmu`` (a path or the FMU's bytes), loaded on first use."""
     return _FMUS.get(fmu)
 

@@ -11,7 +11,7 @@ state differ by about 1e-11 after a period, more than the initial separations us
 scheme is the FMU's ``exact`` one (closed form between events, about 1e-13; h has no effect);
 ``located`` and the first-order schemes stay selectable.
 
-:class:`FMUMap` drives the FMU through the package's public API (``OscillatorFMU.start``,
+:class:`FMUMap` drives the FMU through the package's public API (``OscillatorFMU2.start``,
 ``step_to``, ``get``); :class:`ExactMap` stitches the closed-form phases of
 :mod:`dryfriction.references.exact`, an independent reference.
 """
@@ -26,7 +26,7 @@ from typing import Protocol
 import numpy as np
 
 from ...references.exact import solve_exact
-from ...drivers.oscillator import SCHEMES, OscillatorFMU, Settings
+from ...drivers.oscillator import SCHEMES, OscillatorFMU2, Settings
 from ...params import Oscillator
 
 __all__ = ["Point", "StroboscopicMap", "FMUMap", "ExactMap", "NDParams", "DEFAULT_SCHEME", "check_scheme",
@@ -114,7 +114,7 @@ class StroboscopicMap(Protocol):
 class FMUMap:
     """The time-T map through one FMU instance (reset at every :meth:`FMUMap.advance`)."""
 
-    def __init__(self, fmu: OscillatorFMU, nd: NDParams, steps_per_period: int = 1000, scheme: str = DEFAULT_SCHEME,
+    def __init__(self, fmu: OscillatorFMU2, nd: NDParams, steps_per_period: int = 1000, scheme: str = DEFAULT_SCHEME,
                  alpha: float = -0.1) -> None:
         self.fmu, self.nd = fmu, nd
         self.scheme = check_scheme(scheme)
