@@ -9,7 +9,7 @@ so that a reader (or a restarted sweep) never sees a half-written file::
 The temporary name is ``.<name>.<random>.tmp`` in the same folder (so the rename is atomic); it is
 removed when the writer fails. The final file gets the usual permissions (0666 minus the umask).
 
-A command's outputs, all or nothing, with the output paths checked before any work:
+A command's outputs, all or nothing, with the output paths checked before any work::
 
     check_output_folder(out)           # before the work: a path that cannot be written is refused
     with result_set(out) as stage:     # the files written into stage move into out together
