@@ -48,7 +48,7 @@ autosummary_generate = True
 autosummary_imported_members = False
 autosummary_ignore_module_all = True
 autodoc_typehints = "description"
-autodoc_typehints_description_target = "documented_params"
+autodoc_typehints_description_target = "all"
 autodoc_member_order = "bysource"
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autoclass_content = "both"
@@ -68,7 +68,8 @@ html_show_sourcelink = False
 nitpick_ignore_regex = [
     ("py:.*", r"(numpy|np|pathlib|xarray|xr|pandas|collections|collections\.abc|typing|argparse|contextlib|"
               r"ctypes|os|io|concurrent|dask|distributed|matplotlib|fmpy|scipy|enum|types|threading|"
-              r"subprocess|dataclasses|array|json|signal|zipfile|tomllib|multiprocessing)(\..*)?"),
+              r"subprocess|dataclasses|array|json|signal|zipfile|tomllib|multiprocessing|xml|hashlib|shutil|tempfile|"
+              r"logging|warnings|inspect|importlib|functools|itertools|math|random|re|sys|time|datetime)(\..*)?"),
     ("py:.*", r"(.*\._\w+.*|_\w+(\.\w+)*|T|dryfriction\.\w+(\.\w+)*\.T)"),  # private names, type variables
     ("py:attr", r".*"),                    # instance attributes named in the prose are not documented
     ("py:class", r"(OscillatorFMU|ChainFMU|FMI3Oscillator|ChainError)"),  # deprecated aliases
