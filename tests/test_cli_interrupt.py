@@ -100,7 +100,7 @@ def test_a_signal_once_the_results_are_committed_changes_nothing(
 def test_the_library_is_interrupted_as_usual(tmp_path: Path) -> None:
     """Outside the command line a result set does not hold SIGINT back: inside the block it is
     KeyboardInterrupt (nothing moved), after it too (everything moved)."""
-    from dryfriction.cli.console import result_set
+    from dryfriction.atomic import result_set
 
     out = tmp_path / "out"
     with pytest.raises(KeyboardInterrupt):

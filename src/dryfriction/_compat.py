@@ -72,6 +72,7 @@ NAMES: dict[tuple[str, str], tuple[str, str]] = {
     # the command line's parts of the work bound
     **{("dryfriction.budget", n): ("dryfriction.cli.options", n)
        for n in ("add_max_work_argument", "command_work", "check_command")},
+    ("dryfriction.cli.continuation", "plot_branches"): ("dryfriction.analysis.plots", "plot_branches"),
     # the former module dryfriction.cli is the package's command-line module dryfriction.cli.main
     ("dryfriction.cli", "*"): ("dryfriction.cli.main", "*"),
 }

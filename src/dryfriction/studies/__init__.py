@@ -304,7 +304,8 @@ def run_args(args: argparse.Namespace, prog: str = "dryfriction study") -> int:
     command in its help only. Bad input raises UsageError (one line, exit 2, reported by the
     caller: :func:`main`, ``dryfriction study``); an interrupt is KeyboardInterrupt (finished
     chunks are kept)."""
-    from ..cli.console import PREFIX, interrupt_note, interrupted
+    from ..cli.console import PREFIX
+    from ..atomic import interrupt_note, interrupted
     from ..errors import FMUError
     from ..sweep.engine import SweepInterrupted
 
