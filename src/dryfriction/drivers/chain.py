@@ -11,7 +11,7 @@ Initialization Mode, then steps on the host's grid ``k dt`` with the outputs rea
 
 A scalar for an array parameter sets every block; a sequence must hold n values. The FMI 2.0
 chain (:class:`ChainFMU2`, ``n`` fixed when it was built, structured names ``m[1]``, ``x[1]``, ...)
-has the same interface; ``run(t_end=...)`` is the former name of ``t_stop``. Both run on the package's FMI layer
+has the same interface; ``t_end`` is a deprecated name of ``t_stop``. Both run on the package's FMI layer
 (:mod:`dryfriction.fmi`); the stepping loop reads every point's outputs with one typed call per
 type straight into the rows of preallocated numpy arrays (the layer's ``bulk_get``). Every name
 and value reference comes from the FMU's model description (:mod:`dryfriction.model`); an FMU
@@ -293,8 +293,8 @@ class _Chain(Driver):
             inputs: Inputs | None = None, start_time: float = 0.0, *, t_end: float | None = None) -> ChainRun:
         """Start afresh (:meth:`start` with ``params``), then :meth:`record` to ``t_stop``. Inputs
         given as values are set in Initialization Mode and held; a function is called before every
-        step (the first one after initialisation, with the outputs at the start). ``t_end`` is the
-        former name of ``t_stop``."""
+        step (the first one after initialisation, with the outputs at the start). ``t_end`` is a
+        deprecated name of ``t_stop``."""
         t_stop = _stop_time(t_stop, t_end)
         if dt is None:
             raise TypeError("run() needs dt, the communication step")

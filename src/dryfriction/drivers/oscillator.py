@@ -258,7 +258,7 @@ class OscillatorFMU2(Driver):
         """One fmi2DoStep of length ``dt`` from the current communication point :attr:`time`
         (checked); :attr:`time` is then time + dt.
 
-        Compatibility: the former signature ``do_step(t, dt)`` is still accepted, ``t`` being the
+        Compatibility: the signature ``do_step(t, dt)`` is accepted too, ``t`` being the
         current communication point as the host counts it (``k dt`` rather than the sum of the
         steps; the FMU checks that it is its own time, to its grid's tolerance, and refuses it
         otherwise); :attr:`time` is then t + dt."""
