@@ -12,7 +12,6 @@ library.
 from __future__ import annotations
 
 import importlib
-import importlib.abc
 import importlib.machinery
 import sys
 import warnings
@@ -133,7 +132,7 @@ def _install_getattr(module: ModuleType) -> None:
     module.__getattr__ = __getattr__  # type: ignore[method-assign]
 
 
-class _Alias(importlib.abc.Loader):
+class _Alias:
     """Loads a former path as the very module object of its new home."""
 
     def __init__(self, new: str) -> None:
@@ -149,10 +148,10 @@ class _Alias(importlib.abc.Loader):
         module.__spec__ = self._spec       # importlib set the alias's spec on the shared module
 
 
-class _Home(importlib.abc.Loader):
+class _Home:
     """Runs a module that has former names with its usual loader, then gives it the names."""
 
-    def __init__(self, inner: importlib.abc.Loader) -> None:
+    def __init__(self, inner: Any) -> None:
         self.inner = inner
 
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType | None:
@@ -166,8 +165,9 @@ class _Home(importlib.abc.Loader):
         return getattr(self.inner, name)
 
 
-class Finder(importlib.abc.MetaPathFinder):
-    """The meta-path finder of the former paths (first on ``sys.meta_path``)."""
+class Finder:
+    """The meta-path finder of the former paths (first on ``sys.meta_path``; a finder and loaders
+    by protocol, without importlib.abc, which would import importlib.resources at start)."""
 
     def find_spec(self, fullname: str, path: Sequence[str] | None = None,
                   target: ModuleType | None = None) -> importlib.machinery.ModuleSpec | None:
