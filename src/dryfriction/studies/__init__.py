@@ -160,6 +160,8 @@ def _default_config(name: str) -> dict[str, Any]:
 
 @dataclass
 class StudyOutcome:
+    """What :func:`run_study` returns: the study's name, its output folder, its summary, the sweeps'
+    statistics and the messages it printed."""
     name: str
     out_dir: Path
     summary: dict[str, Any]

@@ -39,6 +39,8 @@ MOTIONS = {0: "steady sliding", 1: "stick-slip orbit", 2: "slip orbit", 3: "tran
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the belt map with a value out of range (ConfigError naming the key), before
+    any work."""
     p, g, n = cfg["params"], cfg["grid"], cfg["numerics"]
     for key in ("m", "k", "mu_s"):
         require(p[key] > 0, f"params.{key} must be > 0, not {p[key]}")
@@ -59,6 +61,8 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def problem(p: dict[str, Any], N: float, vb: float, steps: int) -> BeltProblem:
+    """The belt problem of the map's point (normal force ``N``, belt speed ``vb``) with ``steps`` steps per
+    natural period."""
     osc = Oscillator(m=p["m"], k=p["k"], c=p["c"], P0=0.0, omega=0.0, phi=0.0, N=N, mu_s=p["mu_s"],
                      chi=p["mu_k"] / p["mu_s"], x0=0.0, v0=0.0)
     return BeltProblem(osc, vb, law=p["law"], v_s=p["v_s"], delta=p["delta"],
@@ -98,6 +102,7 @@ def point(fmu: Any, prob: BeltProblem, warm: tuple[float, float] | None, periods
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the belt map: its runs, dataset and figures in the study's folder; returns the summary."""
     from tqdm import tqdm
 
     cfg = ctx.cfg
