@@ -4,8 +4,8 @@ references and sweeps.
 The public names below are importable from here and from their home module; each is imported on
 first use, so that ``import dryfriction`` itself is immediate (the console script installs its
 signal handlers before anything heavy is loaded). The deprecated module paths and names
-(``dryfriction.fmu``, ``OscillatorFMU``, ...) still work for one release, with a
-DeprecationWarning naming the new home (:mod:`dryfriction._compat`)."""
+of the previous release (listed in the changelog and in :mod:`dryfriction._compat`) still work for
+one release, with a DeprecationWarning naming the new home."""
 
 from __future__ import annotations
 

@@ -1,5 +1,4 @@
-"""Where the FMUs and the study configs come from: the one place that decides, for the whole package
-(``dryfriction.locate``, a deprecated path, imports this module).
+"""Where the FMUs and the study configs come from: the one place that decides, for the whole package.
 
 An FMU of each kind (the oscillator and the chain, FMI 2.0 and FMI 3.0) is, in this order:
 

@@ -241,4 +241,5 @@ def never_converges_note(p: Oscillator) -> str:
 
 
 def with_omega(p: Oscillator, f_hz: float) -> Oscillator:
+    """The oscillator driven at ``f_hz`` Hz instead (omega = 2 pi f)."""
     return replace(p, omega=2.0 * math.pi * f_hz)

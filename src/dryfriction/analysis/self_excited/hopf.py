@@ -41,6 +41,7 @@ class HopfPoint:
 
     @property
     def relative_error(self) -> float:
+        """The located belt speed's relative distance from the formula's, c + N mu'(v_belt) = 0."""
         return abs(self.v_belt - self.formula) / abs(self.formula)
 
 

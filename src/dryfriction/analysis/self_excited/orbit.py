@@ -39,10 +39,12 @@ class BeltOrbit:
 
     @property
     def nontrivial(self) -> complex:
+        """The orbit's nontrivial Floquet multiplier (the other one is 1, along the flow)."""
         return complex(self.multipliers[1])
 
     @property
     def sticks(self) -> bool:
+        """Whether the orbit has a stick phase (it rides the belt for a while)."""
         return self.stick_fraction > 0.0
 
 
