@@ -1,8 +1,8 @@
 """The one argument parser of the package's commands and scripts: a bad argument is one readable
 line (``prog: error: message``) and exit status 2, never a usage dump or a traceback; and the
 options several commands share: ``--fmu --strict --max-work`` (:func:`global_options`), the
-oscillator in physical units (:data:`PHYSICAL`, :func:`physical_options`, :func:`physical`) or in
-the paper's non-dimensional form (:func:`nondim_options`).
+oscillator in physical units (:data:`PHYSICAL`, :func:`physical_options`,
+:func:`~dryfriction.cli.options.physical`) or in the paper's non-dimensional form (:func:`nondim_options`).
 
     p = make_parser("dryfriction study", "...")           # error() raises UsageError
     p = make_parser("bench_sweep.py", "...", exit=True)   # error() prints the line and exits 2

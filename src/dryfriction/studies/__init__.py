@@ -1,4 +1,4 @@
-"""The paper's studies and the project's own, one module each, and their registry.
+"""The paper's studies and the project's own, one module each, and their registry::
 
     dryfriction study list                   # the command (dryfriction.cli.study)
     dryfriction study <name> [--quick] [--out DIR] [--workers N] [--scheduler ADDR]

@@ -5,7 +5,7 @@ delta = 1: v* = v_s ln(N (mu_s - mu_k) / (c v_s))).
 
 Each normal force is a row walked up in belt speed: a point's orbit is Newton's from the previous
 point's stable orbit (warm start); where that fails or is not stable, from a transient that starts
-riding on the belt at x_eq (:func:`~dryfriction.analysis.self_excited.self_excited`); where the orbit solve
+riding on the belt at x_eq (:func:`~dryfriction.analysis.self_excited.motion.self_excited`); where the orbit solve
 fails there too, the transient's last quarter gives the numbers, and the data says so (``motion`` 3,
 ``method`` per point). With ``numerics.grazing`` the end of stick-slip per N is located too, by
 continuation in v_belt from the row's slowest stick-slip orbit (``grazing_v_belt``, the red line).
@@ -230,7 +230,7 @@ GRAZING_POINTS: int = inspect.signature(continue_orbits).parameters["max_points"
 def work(cfg: dict[str, Any]) -> Estimate:
     """The study's work and output size (:mod:`dryfriction.budget`): per grid point, a transient
     of at least ``transient_periods`` natural periods (longer at low belt speed: five estimated
-    stick-slip cycles, as :func:`~dryfriction.analysis.self_excited.self_excited`) and Newton's solve, in
+    stick-slip cycles, as :func:`~dryfriction.analysis.self_excited.motion.self_excited`) and Newton's solve, in
     orbit periods (a natural period and the ride on the belt); per N, the grazing continuation."""
     p, g, n = cfg["params"], cfg["grid"], cfg["numerics"]
     vb, Ns = grid(g["v_belt"], "grid.v_belt"), grid(g["N"], "grid.N")

@@ -10,7 +10,7 @@ import numpy as np
 
 from ...drivers.oscillator import OscillatorFMU2
 from ...roots import find_root
-from .equilibrium import _equilibrium
+from .equilibria import _equilibrium
 from .flow import _fmu, _Flow
 from .problem import BeltProblem
 

@@ -11,7 +11,7 @@ from ...drivers.oscillator import OscillatorFMU2
 from ...roots import find_root
 from .flow import _fmu, _Flow
 from .problem import FD_STEP, STABILITY_MARGIN, TRIVIAL, BeltProblem
-from .transient import transient
+from .transients import transient
 
 
 @dataclass
