@@ -249,3 +249,28 @@ def test_a_broken_anchor_fails_the_docs_build(tmp_path: Path) -> None:
     conf = (DOCS / "conf.py").read_text()
     assert "myst_heading_anchors = 4" in conf
     assert re.search(r"-W --keep-going -n", (ROOT / "scripts" / "docs.sh").read_text())
+
+
+#: the modules whose docstrings hold the main entry points' examples
+EXAMPLE_MODULES = ["dryfriction.analysis.response.sweep", "dryfriction.analysis.orbits",
+                   "dryfriction.analysis.continuation", "dryfriction.references.exact",
+                   "dryfriction.drivers.oscillator", "dryfriction.drivers.oscillator3",
+                   "dryfriction.drivers.chain", "dryfriction.cosim.system"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("module", EXAMPLE_MODULES)
+def test_the_docstring_examples_print_what_they_say(module: str) -> None:
+    """Every ``>>>`` example of the main entry points runs and prints what its docstring shows (the
+    API reference's examples are checked, not only rendered)."""
+    import doctest
+    import importlib
+
+    mod = importlib.import_module(module)
+    tests = [t for t in doctest.DocTestFinder().find(mod) if t.examples]
+    assert tests, f"{module} has no example"
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    for t in tests:
+        runner.run(t)
+    result = runner.summarize(verbose=False)
+    assert result.failed == 0 and result.attempted >= 1

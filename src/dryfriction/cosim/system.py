@@ -76,9 +76,11 @@ class System:
     >>> with OscillatorFMU2() as f1, OscillatorFMU2() as f2:
     ...     f1.start(b1, Settings(h=0.0)); f2.start(b2, Settings(h=0.0))
     ...     system = System()
-    ...     system.add("b1", f1); system.add("b2", f2)
+    ...     _ = system.add("b1", f1); _ = system.add("b2", f2)
     ...     system.couple(spring)                 # F on b1.F_ext, -F on b2.F_ext
     ...     res = system.run(t_stop=104.7, H=0.105, inputs="derivatives")
+    >>> round(float(res["b1.x"][-1]), 4)     # block 1's position at t = 104.7, m
+    1.1841
     """
 
     def __init__(self) -> None:
