@@ -89,10 +89,10 @@ static eng_setup setup_of(bench_case *B, int variant)
     S.nc = B->n;
     if (B->n == 1) {
         const eng_ops ops = {&B->blk, blk_K, blk_C, blk_M, blk_factor, blk_solve,
-                             variant == V_DENSE ? NULL : blk_friction};
+                             variant == V_DENSE ? NULL : blk_friction, variant == V_DENSE ? NULL : blk_breakaway};
         S.ops = ops;
     } else {
-        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
         S.ops = ops;
     }
     S.rows = B->rows;

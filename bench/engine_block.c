@@ -17,5 +17,7 @@
 #define ENG_SOLVE(E, slot, b, x) blk_solve(ENG_CTX(E), (slot), (b), (x))
 #define ENG_HAS_FRICTION(E) ((void)(E), 1)
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) blk_friction(ENG_CTX(E), (P), (what), (mode), (V1), (f), (pivots))
+#define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
+#define ENG_BREAKAWAY(E, s, in, Fb) blk_breakaway(ENG_CTX(E), &(E)->S.exc, (s), (in), (Fb))
 
 #include "engine_step.h"

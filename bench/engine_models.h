@@ -73,6 +73,25 @@ static inline eng_status blk_friction(void *ctx, const eng_problem *P, int what,
     return ENG_OK;
 }
 
+/* The block's closed-form breakaway (eng_ops.breakaway): held at rest at X, its holding force balances
+ * the static force P(t) + F_ext - k X, with P(t) = Pc cos(omega t + phi0) - Ps sin(omega t + phi0)
+ * written amp cos(omega t + phase) for friction.h's dfo_next_breakaway. */
+static inline double blk_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s, const eng_inputs *in,
+                                   const double *Fb)
+{
+    const blk_model *B = (const blk_model *)ctx;
+    const double Pc = exc->Pc ? exc->Pc[0] : 0.0, Ps = exc->Ps ? exc->Ps[0] : 0.0;
+    const double F = in->F_ext ? in->F_ext[0] : 0.0;
+    dfo_harmonic P;
+    if (Ps == 0.0) dfo_harmonic_init(&P, Pc, exc->omega, exc->phi0);
+    else dfo_harmonic_init(&P, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
+    dfo_loads L;
+    dfo_loads_set(&L, F, 0.0, 0.0, 0.0);
+    L.Fb = Fb[0];
+    int dir;
+    return dfo_next_breakaway(&P, &L, F - B->k * s->X[0], s->t, &dir);
+}
+
 /* ---- a chain of n blocks -------------------------------------------------------------------- */
 
 typedef struct {

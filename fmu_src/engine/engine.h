@@ -124,6 +124,22 @@ enum {
 typedef eng_status (*eng_friction_fn)(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
                                       int *pivots);
 
+struct eng_harmonic_s;
+struct eng_state_s;
+struct eng_inputs_s;
+
+/* A stuck structure's next breakaway in closed form (optional: the stuck fast path of the located
+ * scheme, with eng_setup.fast_paths). Asked only when every contact holds (mode 0, with friction), every
+ * DOF is pinned at rest by a held contact of its own (w_j = e_i, V = A = 0), the inputs are held (no
+ * ramps) and the belts still: exc the excitation, s the state, in the inputs, Fb (nc) the contacts'
+ * breakaway limits under them. Returns a time tb such that no contact's holding force reaches its
+ * limit on [s->t, tb) (+INFINITY: never; NaN: unknown). The scheme then takes at once the whole grid
+ * steps that end at least one grid step before tb (and outside the observer's window), to the bits
+ * of taking them one by one, provided the model's friction solver returns V1 = V exactly on a held
+ * pinned DOF (the scalar solver of one contact does; the dense default need not: no hook with it). */
+typedef double (*eng_breakaway_fn)(void *ctx, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
+                                   const struct eng_inputs_s *in, const double *Fb);
+
 /* The model's operators. Every vector of length n unless said; y and x never alias. */
 typedef struct {
     void *ctx;
@@ -137,12 +153,14 @@ typedef struct {
     void (*solve)(void *ctx, int slot, const double *b, double *x);
     /* The model's friction solver; NULL: eng_dense_friction. */
     eng_friction_fn friction;
+    /* The model's closed-form breakaway of a stuck structure; NULL: none (every stuck step taken). */
+    eng_breakaway_fn breakaway;
 } eng_ops;
 
 /* The harmonic excitation P_i(t) = Pc[i] cos(omega t + phi0) - Ps[i] sin(omega t + phi0) (Pc, Ps:
  * n each; NULL: 0). On the grid t0 + k h the phase comes from the state's cache (excitation.h's
  * dfo_grid_phase: a pure function of k), elsewhere it is evaluated (dmath's dfo_cos / dfo_sin). */
-typedef struct {
+typedef struct eng_harmonic_s {
     double omega, phi0;
     const double *Pc, *Ps;
 } eng_harmonic;
@@ -162,8 +180,8 @@ typedef struct {
     double alpha;               /* Bossak parameter in [-1/3, 0] */
     int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
     int friction_updates;       /* paper: coefficient updates (re-solves) per step, >= 0 */
-    int fast_paths;             /* skip work a run does not need, to the same numbers (read by no path yet:
-                                 * the engine has no stuck fast path; every step takes the general path) */
+    int fast_paths;             /* skip work a run does not need, to the same numbers: the located scheme's
+                                 * stuck fast path where the model supplies ops.breakaway */
     double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
                                  * resolve the motion (located hands it to the consistent test), and
                                  * A is re-based on a new step length only where rate_max h <= 1 */
@@ -180,7 +198,7 @@ typedef struct {
  * v_belt is carried here, per contact, and never stored by the engine. A belt is held over the
  * step (no derivative); the friction of contact j acts on g_j' - v_belt[j], and a stuck contact
  * moves with its belt. */
-typedef struct {
+typedef struct eng_inputs_s {
     const double *F_ext;        /* n external forces */
     const double *N_ext;        /* nc normal-force inputs */
     const double *v_belt;       /* nc belt speeds (NULL: fixed supports) */
@@ -193,7 +211,7 @@ typedef struct {
 
 /* The trajectory: scalars plus arrays (n or nc long). Serialise the scalars and the arrays; copy
  * with eng_state_copy. */
-typedef struct {
+typedef struct eng_state_s {
     size_t n, nc;
     double t0, t;               /* start time; current time */
     long long n_grid;           /* the last grid point reached is t0 + n_grid h */

@@ -10,6 +10,7 @@
  *   ENG_APPLY_M(E, a, y)         y = M a
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
+ *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -55,6 +56,12 @@
 #ifndef ENG_FRICTION
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) \
     ((E)->S.ops.friction((E)->S.ops.ctx, (P), (what), (mode), (V1), (f), (pivots)))
+#endif
+#ifndef ENG_HAS_BREAKAWAY
+#define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
+#endif
+#ifndef ENG_BREAKAWAY
+#define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
 #endif
 
 /* ---- small algebra --------------------------------------------------------------------------- */
@@ -1051,6 +1058,99 @@ static void rest_forces(eng *E, eng_state *s)
         if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
 }
 
+/* ---- the stuck fast path ------------------------------------------------------------------- */
+
+/* The model's breakaway of the current stick, kept over one call of eng_advance: tb for the stick
+ * that holds since the switch count sw (known: asked). */
+typedef struct {
+    double tb;
+    long long sw;
+    int known;
+} stick_cache;
+
+/* The largest grid index m >= s->n_grid with t0 + m h < x (incl: <= x), the grid points computed as
+ * eng_advance computes them; s->n_grid when there is none. x finite. */
+static long long grid_below(const eng_state *s, double h, double x, int incl)
+{
+    if (!(x > s->t)) return s->n_grid;
+    long long m = (long long)floor((x - s->t0) / h);
+    if (m < s->n_grid) m = s->n_grid;
+#define ENG_BELOW_(k) (incl ? s->t0 + (double)(k) * h <= x : s->t0 + (double)(k) * h < x)
+    while (m > s->n_grid && !ENG_BELOW_(m)) m--;
+    while (ENG_BELOW_(m + 1)) m++;
+#undef ENG_BELOW_
+    return m;
+}
+
+/* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway; the located scheme on a
+ * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
+ * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
+ * before the model's breakaway, at or before t_target and outside the observer's window change
+ * nothing but the time and the counters. Returns the last grid index they reach (s->n_grid: none). */
+static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, double t_target,
+                             const eng_hooks *hk, stick_cache *c)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h;
+    loads_at(E, in, s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++) {
+        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return s->n_grid;
+        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return s->n_grid;
+    if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
+        c->tb = ENG_BREAKAWAY(E, s, in, E->Fb);
+        c->sw = s->switches;
+        c->known = 1;
+    }
+    if (isnan(c->tb)) return s->n_grid;
+    long long m = grid_below(s, h, t_target, 1);
+    const long long mb = grid_below(s, h, fmin(c->tb, t_target + 2.0 * h), 0) - 1;
+    if (mb < m) m = mb;
+    if (hk && hk->obs && hk->obs->on_phase && !(s->t > hk->obs->t_stop)) {
+        const long long mo = grid_below(s, h, fmin(hk->obs->t_start, t_target + 2.0 * h), 0);
+        if (mo < m) m = mo;
+    }
+    return (m > s->n_grid) ? m : s->n_grid;
+}
+
+/* Take the stuck grid steps up to the grid index m at once, as the located scheme's steps one by
+ * one leave them: X through one step's predictor and corrector with V1 = V (the held solve), V at
+ * its belt (0), A and hA 0, the excitation's grid cache at m (a function of m alone), the steps and
+ * solves counted. (F is left: every path sets or reads it afresh after the steps.) */
+static void stuck_skip(eng *E, eng_state *s, long long m)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const long long k = m - s->n_grid;
+    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) {
+        for (size_t i = 0; i < n; i++)
+            s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
+        for (size_t j = 0; j < ENG_NC(E); j++) {
+            const eng_row *R = &S->rows[j];
+            if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+        }
+        for (size_t i = 0; i < n; i++) {
+            s->A[i] = 0.0;
+            s->hA[i] = 0.0;
+        }
+    }
+    double c, sn;
+    dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
+                   &sn);
+    s->exc_n = m;
+    s->exc_c = c;
+    s->exc_s = sn;
+    s->n_grid = m;
+    s->t = s->t0 + (double)m * S->h;
+    s->steps += k;
+    s->solves += k;
+}
+
 ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk)
 {
     E->loads_for = NULL;
@@ -1060,7 +1160,18 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     double g_prev = s->t0 + (double)s->n_grid * h;
     int switched = 0;
     const long long sw0 = s->switches;
+    const int skip = S->fast_paths && ENG_HAS_BREAKAWAY(E) && S->scheme == DFO_SCHEME_LOCATED &&
+                     S->rate_max * h <= STIFF_STEP && !ramped(in);
+    stick_cache cache = {NAN, 0, 0};
     while (s->t < t_target) {
+        if (skip && s->t == g_prev) {
+            const long long m = stuck_until(E, in, s, t_target, hk, &cache);
+            if (m > s->n_grid) {
+                stuck_skip(E, s, m);
+                g_prev = s->t;
+                continue;
+            }
+        }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);
         double t_end = t_target;

@@ -129,7 +129,7 @@ static void test_block(checks *T)
         check_context(T, "one block, %s: the inline build against engine.c", names[scheme]);
         blk_model Bg = {1.0, 0.05, 1.0, {0.0, 0.0, 0.0}}, Bi = Bg;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
-        const eng_ops og = {&Bg, blk_K, blk_C, blk_M, blk_factor, blk_solve, blk_friction};
+        const eng_ops og = {&Bg, blk_K, blk_C, blk_M, blk_factor, blk_solve, blk_friction, blk_breakaway};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -146,6 +146,96 @@ static void test_block(checks *T)
         eng_state_free(Ei, &si);
         eng_destroy(Eg);
         eng_destroy(Ei);
+    }
+}
+
+/* The stuck fast path (eng_ops.breakaway with fast_paths): the block's friction solves and
+ * breakaway questions counted behind the hooks, and an observer's phases summed. */
+typedef struct {
+    long solves, asks;
+    long phases;
+    double t_sum, x_max;
+} hook_count;
+
+static hook_count *counted; /* the run's counters (set by test_stuck_fast_path before each run) */
+
+static eng_status count_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                                 int *pivots)
+{
+    counted->solves++;
+    return blk_friction(ctx, P, what, mode, V1, f, pivots);
+}
+
+static double count_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s, const eng_inputs *in,
+                              const double *Fb)
+{
+    counted->asks++;
+    return blk_breakaway(ctx, exc, s, in, Fb);
+}
+
+static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
+{
+    hook_count *H = ctx;
+    H->phases++;
+    H->t_sum += ph->tb - ph->ta;
+    H->x_max = fmax(H->x_max, s->X[0]);
+}
+
+/* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a
+ * sine part), held inputs with a change of the external force at 20 s and an observer's window
+ * [12, 18]: the stuck fast path on and off, through engine.c and inlined, end on the same bits and
+ * observe the same phases; on, it asks the model's breakaway and takes a quarter fewer friction solves
+ * (the stick phases outside the window: about half the time; a sliding step takes several). */
+static void test_stuck_fast_path(checks *T)
+{
+    static const size_t idx[1] = {0};
+    static const double w1[1] = {1.0};
+    const eng_row row = {1, idx, w1};
+    const double N[1] = {1.8}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
+    const double F2[1] = {0.15};
+    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    eng_state s[4];
+    eng *E[4];
+    switch_log L[4];
+    hook_count H[4];
+    for (int r = 0; r < 4; r++) { /* r: 0 generic off, 1 generic on, 2 inline off, 3 inline on */
+        blk_model B = {1.0, 0.05, 1.0, {0.0, 0.0, 0.0}};
+        eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
+        const eng_ops ops = {&B, blk_K, blk_C, blk_M, blk_factor, blk_solve, count_friction, count_breakaway};
+        S.ops = ops;
+        S.fast_paths = r & 1;
+        memset(&H[r], 0, sizeof H[r]);
+        H[r].x_max = -INFINITY;
+        counted = &H[r];
+        const eng_observer obs = {12.0, 18.0, count_phase, &H[r]};
+        const entry *X = (r < 2) ? &GENERIC : &BLOCK;
+        E[r] = eng_create(&S, &ALLOC, NULL);
+        if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+        memset(&L[r], 0, sizeof L[r]);
+        const eng_hooks hk = {on_switch, &L[r], &obs, 0};
+        const double zero[1] = {0.0};
+        X->start(E[r], &in1, 0.0, zero, zero, &s[r]);
+        eng_status st = X->advance(E[r], &in1, &s[r], 20.0, &hk);
+        CHECK(st == ENG_OK);
+        X->new_inputs(E[r], &in1, &in2, &s[r], &hk);
+        for (int k = 1; k <= 40 && st == ENG_OK; k++) st = X->advance(E[r], &in2, &s[r], 20.0 + 1.37 * k, &hk);
+        CHECK(st == ENG_OK);
+    }
+    printf("  stuck fast path: %ld switches, solves off %ld / on %ld, breakaways asked %ld, x %.17g\n", L[0].count,
+           H[0].solves, H[1].solves, H[1].asks, s[0].X[0]);
+    check_context(T, "one block, located, the stuck fast path against the steps one by one");
+    CHECK(L[0].count >= 10);
+    CHECK(H[0].asks == 0 && H[1].asks > 0); /* (the inline runs call the block's hooks directly) */
+    CHECK(4 * H[1].solves < 3 * H[0].solves); /* (the stick phases outside the window skipped) */
+    for (int r = 1; r < 4; r++) {
+        CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
+        CHECK(H[r].phases == H[0].phases && H[r].t_sum == H[0].t_sum && H[r].x_max == H[0].x_max);
+    }
+    CHECK(H[0].phases > 100);
+    for (int r = 0; r < 4; r++) {
+        eng_state_free(E[r], &s[r]);
+        eng_destroy(E[r]);
     }
 }
 
@@ -205,7 +295,7 @@ static void test_chain(checks *T)
         chain_make(&Dg);
         chain_make(&Di);
         eng_setup S = setup_common(NCHAIN, Dg.rows, Dg.N, Dg.ms, Dg.mk, Dg.Pc, Dg.Ps, scheme, 2.0);
-        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -229,7 +319,7 @@ static void test_chain(checks *T)
     check_context(T, "chain of %d blocks with a belt: refused", NCHAIN);
     chain_make(&Di);
     eng_setup S = setup_common(NCHAIN, Di.rows, Di.N, Di.ms, Di.mk, Di.Pc, Di.Ps, DFO_SCHEME_LOCATED, 2.0);
-    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
     S.ops = oi;
     double vb[NCHAIN] = {0.0};
     vb[3] = 0.1;
@@ -248,6 +338,7 @@ int main(void)
     checks C = {0, 0, NULL, {0}};
     checks *T = &C;
     test_block(T);
+    test_stuck_fast_path(T);
     test_chain(T);
     return checks_done(T, "test_engine_step");
 }
