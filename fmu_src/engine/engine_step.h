@@ -64,6 +64,14 @@
 #define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
 #endif
 
+/* The functions of every step are inlined into the schemes (the state in registers; a call and its
+ * spills are a good part of a small structure's step). The same arithmetic either way. */
+#if defined(__GNUC__)
+#define ENG_HOT inline __attribute__((always_inline))
+#else
+#define ENG_HOT inline
+#endif
+
 /* ---- small algebra --------------------------------------------------------------------------- */
 
 static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
@@ -145,7 +153,7 @@ static double poly_rate(const double *const *du, const eng_inputs *in, size_t i,
 /* The loads of the inputs at t (their polynomials' values with a ramp) into u, Nn, mukN, Fb, mlN,
  * and the belts into vb. Held inputs give the same loads at every t: taken once per public call
  * (loads_for: the inputs they are of, cleared on entry to every public function). */
-static void loads_at(eng *E, const eng_inputs *in, double t)
+static ENG_HOT void loads_at(eng *E, const eng_inputs *in, double t)
 {
     const eng_setup *S = &E->S;
     if (in && in == E->loads_for) return;
@@ -176,7 +184,7 @@ static double slide_mag(const eng *E, size_t j, double u)
 }
 
 /* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
-static void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
+static ENG_HOT void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
 {
     if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
         *cw = dfo_clamp1(s->exc_c);
@@ -188,7 +196,7 @@ static void phase_of(const eng *E, const eng_state *s, double t, double *cw, dou
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
-static void applied_at(const eng *E, const eng_state *s, double t, double *out)
+static ENG_HOT void applied_at(const eng *E, const eng_state *s, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw = 0.0, sw = 0.0;
@@ -570,7 +578,7 @@ typedef struct {
     double cM, cC, cK;
 } trial;
 
-static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
+static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
@@ -619,7 +627,7 @@ static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, d
 }
 
 /* The friction problem of the trial with limits lim and modes st: the model's solver or the dense one. */
-static eng_status solve_trial(eng *E, const trial *T, int what, int *st, double *V1, double *f, int *pivots)
+static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st, double *V1, double *f, int *pivots)
 {
     const eng_setup *S = &E->S;
     eng_problem P;
@@ -638,7 +646,7 @@ static eng_status solve_trial(eng *E, const trial *T, int what, int *st, double 
 }
 
 /* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes). */
-static void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
+static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
 {
     const size_t n = ENG_N(E);
     for (size_t i = 0; i < n; i++) {
@@ -652,14 +660,14 @@ static void finish(const eng *E, eng_state *s, const trial *T, const double *V1,
 
 /* ---- phases, switches, restarts ------------------------------------------------------------- */
 
-static void begin_phase(eng *E, const eng_state *s, double *ta)
+static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta)
 {
     *ta = s->t;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }
 
-static void observe(eng *E, const eng_state *s, double ta, const double *f, const eng_hooks *hk)
+static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double *f, const eng_hooks *hk)
 {
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     const eng_observer *o = hk->obs;
@@ -719,7 +727,7 @@ static void restart(eng *E, eng_state *s, double t)
 /* ---- the schemes ------------------------------------------------------------------------------ */
 
 /* The held contacts' forces clamped to their limits, the rested ones at rest exactly (one DOF). */
-static void rest_exact(eng *E, eng_state *s)
+static ENG_HOT void rest_exact(eng *E, eng_state *s)
 {
     const eng_setup *S = &E->S;
     for (size_t j = 0; j < ENG_NC(E); j++) {
@@ -843,7 +851,7 @@ typedef struct {
     eng_status err;
 } margin_ctx;
 
-static double trial_margin(margin_ctx *c, double x, trial *T)
+static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
 {
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
