@@ -1,0 +1,52 @@
+/* The oscillator as a model of the friction engine (fmu_src/engine): one DOF, one contact to the
+ * ground or its belt (w = 1). Its operators (M_hat a scalar), its friction solver (the 2 x 2 LCP of one
+ * contact in closed form, belts; a Stribeck contact through the engine's dense solver) and its
+ * closed-form breakaway (friction.h's dfo_next_breakaway: the engine's stuck fast path), and the
+ * engine's schemes specialised by them (engine_step.h with the prefix osc_: osc_eng_start,
+ * osc_eng_advance, ...). The engine object is made by osc_eng_create; the same operators through
+ * eng_ops's function pointers (engine.c's eng_* functions) give the same bits.
+ *
+ * Not yet the oscillator's stepper: the FMU steps with newmark.c (dfo_advance). This is the model
+ * side of moving its Bossak schemes onto the engine; tests/c/test_osc_engine.c compares the two.
+ *
+ * Plain C, no FMI types. */
+#ifndef DFO_OSC_ENGINE_H
+#define DFO_OSC_ENGINE_H
+
+#include "engine.h"
+#include "oscillator.h"
+
+typedef struct {
+    double m, c, k;
+    double a[ENG_NSLOTS];        /* each slot's factor cM m + cC c + cK k */
+    size_t idx[1];
+    double w[1];
+    eng_row row;
+    double N[1], mu_s[1], mu_k[1], Pc[1];
+    dfo_friction_law law[1];
+    eng *E;                      /* the engine (the Stribeck contact's solver), set by osc_eng_create */
+} osc_eng_model;
+
+/* The engine of the model M (its scheme, step, Bossak parameter, friction updates, fast paths, law)
+ * over O (filled here; it must outlive the engine). NULL on failure (*err, if not NULL, says why). */
+eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, const char **err);
+
+/* The inputs u as the engine reads them (arrays in b, which must outlive in's use): only the inputs
+ * that were set, the derivatives only with a ramp. */
+typedef struct {
+    double F[1], N[1], vb[1], dF[2][1], dN[2][1];
+} osc_eng_inbuf;
+void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in);
+
+/* engine.h's entry points, the schemes specialised by the oscillator's operators */
+void osc_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+double osc_eng_snap_target(const eng *E, const eng_state *s, double t_target);
+eng_status osc_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hooks);
+void osc_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
+                        const eng_hooks *hooks);
+void osc_eng_accelerations(eng *E, const eng_inputs *in, const eng_state *s, double *a);
+void osc_eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double *f);
+eng_status osc_eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                                  int *pivots);
+
+#endif
