@@ -1,10 +1,10 @@
 /* The two structures of bench_engine as engine models (fmu_src/engine): their operators as static
  * inline functions, used both through eng_ops's function pointers (engine.c's schemes) and inlined
- * into the schemes of engine_step.h (engine_block.c, engine_chain.c), so that the two builds of the
+ * into the schemes of engine_step.h (models/oscillator/osc_engine.c, engine_chain.c), so that the two builds of the
  * schemes run the same arithmetic and differ only in how the operators are reached.
  *
- *   block: one mass m on a spring k and a damper c, its contact to the ground (w = 1): M_hat and
- *          the friction problem scalar (the 2 x 2 LCP of one contact in closed form);
+ *   block: the oscillator's operators (models/oscillator/osc_engine_ops.h: osc_eng_model, osc_K, ...):
+ *          one mass on a spring and a damper, M_hat and the friction problem of its contact scalar;
  *   chain: n masses in a row between two walls (springs k_i from block i - 1 or the left wall to
  *          block i, k_end to the right wall, no dampers), contact i on block i: M_hat tridiagonal
  *          (Thomas), the friction problem the box LCP of numerics/lcp.h. */
@@ -13,84 +13,10 @@
 
 #include "engine.h"
 #include "lcp.h"
+#include "osc_engine.h" /* the block: the oscillator's operators and its specialised schemes */
 
 #include <math.h>
 #include <stddef.h>
-
-/* ---- one block ------------------------------------------------------------------------------ */
-
-typedef struct {
-    double m, c, k;
-    double a[ENG_NSLOTS]; /* each slot's factor: cM m + cC c + cK k */
-} blk_model;
-
-static inline void blk_K(void *ctx, const double *x, double *y) { y[0] = ((const blk_model *)ctx)->k * x[0]; }
-static inline void blk_C(void *ctx, const double *v, double *y) { y[0] = ((const blk_model *)ctx)->c * v[0]; }
-static inline void blk_M(void *ctx, const double *a, double *y) { y[0] = ((const blk_model *)ctx)->m * a[0]; }
-
-static inline int blk_factor(void *ctx, int slot, double cM, double cC, double cK)
-{
-    blk_model *B = (blk_model *)ctx;
-    B->a[slot] = cM * B->m + cC * B->c + cK * B->k;
-    return B->a[slot] > 0.0;
-}
-
-static inline void blk_solve(void *ctx, int slot, const double *b, double *x)
-{
-    x[0] = b[0] / ((const blk_model *)ctx)->a[slot];
-}
-
-/* The friction problem of one contact on one mass: V1 = (p_hat + f) / a. Held: V1 = vb, f the
- * holding force a vb - p_hat; sliding: f = -mode limit. The LCP: held when the holding force is
- * within the limit, else sliding the way the free motion goes. (Coulomb only: the bench has no
- * Stribeck contact; a problem with one is refused.) */
-static inline eng_status blk_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
-                                      int *pivots)
-{
-    const double a = ((const blk_model *)ctx)->a[P->slot];
-    const double vb = P->vb ? P->vb[0] : 0.0, lim = P->limit[0], p = P->p_hat[0];
-    if (P->law && P->law[0].law == DFO_LAW_STRIBECK) return ENG_ERR_FRICTION;
-    if (pivots) *pivots = 0;
-    if (!(lim > 0.0)) {
-        f[0] = 0.0;
-        V1[0] = p / a;
-        if (what == ENG_SOLVE_LCP) mode[0] = (V1[0] - vb > 0.0) - (V1[0] - vb < 0.0);
-        return ENG_OK;
-    }
-    const double fh = a * vb - p;
-    if (what == ENG_SOLVE_LCP) {
-        const int m = (fabs(fh) <= lim) ? 0 : (fh > 0.0) ? -1 : 1;
-        if (pivots && m != mode[0]) *pivots = 1;
-        mode[0] = m;
-    }
-    if (mode[0] == 0) {
-        V1[0] = vb;
-        f[0] = fh;
-    } else {
-        f[0] = -mode[0] * lim;
-        V1[0] = (p + f[0]) / a;
-    }
-    return ENG_OK;
-}
-
-/* The block's closed-form breakaway (eng_ops.breakaway): held at rest at X, its holding force balances
- * the static force P(t) + F_ext - k X, with P(t) = Pc cos(omega t + phi0) - Ps sin(omega t + phi0)
- * written amp cos(omega t + phase) for friction.h's dfo_next_breakaway. */
-static inline double blk_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s, const eng_inputs *in,
-                                   const double *Fb)
-{
-    const blk_model *B = (const blk_model *)ctx;
-    const double Pc = exc->Pc ? exc->Pc[0] : 0.0, Ps = exc->Ps ? exc->Ps[0] : 0.0;
-    const double F = in->F_ext ? in->F_ext[0] : 0.0;
-    dfo_harmonic P;
-    if (Ps == 0.0) dfo_harmonic_init(&P, Pc, exc->omega, exc->phi0);
-    else dfo_harmonic_init(&P, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
-    dfo_loads L;
-    dfo_loads_set(&L, F, 0.0, 0.0, 0.0);
-    L.Fb = Fb[0];
-    int dir;
-    return dfo_next_breakaway(&P, &L, F - B->k * s->X[0], s->t, &dir);
-}
 
 /* ---- a chain of n blocks -------------------------------------------------------------------- */
 
@@ -186,12 +112,8 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
     return lcp_box(n, d, e, C->q, P->limit, mode, V1, f, C->work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
 }
 
-/* ---- the specialised schemes (engine_block.c, engine_chain.c) ------------------------------- */
+/* ---- the chain's specialised schemes (engine_chain.c; the block's: osc_engine.h) ------------ */
 
-eng_status blk_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
-void blk_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
-void blk_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
-                        const eng_hooks *hk);
 eng_status chn_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
 void chn_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
 void chn_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,

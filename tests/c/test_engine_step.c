@@ -1,12 +1,17 @@
 /* The engine's schemes specialised at compile time (fmu_src/engine/engine_step.h included with a
- * model's inline operators: bench/engine_block.c, bench/engine_chain.c over bench/engine_models.h)
+ * model's inline operators: models/oscillator/osc_engine.c, bench/engine_chain.c over bench/engine_models.h)
  * against the same schemes through engine.c with the same operators behind eng_ops's function
  * pointers: the same bits (positions, velocities, Bossak variables, forces, modes, counters, every
  * switch's time), one block in the three Bossak schemes with a belt, input ramps and input and
  * belt changes, a chain of 8 blocks in the three schemes with a change of the external forces; the
- * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). */
+ * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). The
+ * oscillator's engine model (the block above) against newmark.c's own Bossak schemes, to rounding;
+ * the located scheme's stuck fast path on against off. */
 #include "check.h"
 #include "engine_models.h"
+#include "osc_params.h"
+
+#include "newmark.h"
 
 #include "scheme.h"
 
@@ -45,7 +50,7 @@ typedef struct {
 } entry;
 
 static const entry GENERIC = {eng_start, eng_advance, eng_new_inputs};
-static const entry BLOCK = {blk_eng_start, blk_eng_advance, blk_eng_new_inputs};
+static const entry BLOCK = {osc_eng_start, osc_eng_advance, osc_eng_new_inputs};
 static const entry CHAIN = {chn_eng_start, chn_eng_advance, chn_eng_new_inputs};
 
 /* Run S with the entry points of X from rest: communication points every dt (off the grid) to
@@ -127,9 +132,14 @@ static void test_block(checks *T)
     const eng_inputs in2 = {F2, NULL, vb2, {NULL, NULL}, {NULL, NULL}, 0.0};
     for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
         check_context(T, "one block, %s: the inline build against engine.c", names[scheme]);
-        blk_model Bg = {1.0, 0.05, 1.0, {0.0, 0.0, 0.0}}, Bi = Bg;
+        osc_eng_model Bg, Bi;
+        memset(&Bg, 0, sizeof Bg);
+        Bg.m = 1.0;
+        Bg.c = 0.05;
+        Bg.k = 1.0;
+        Bi = Bg;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
-        const eng_ops og = {&Bg, blk_K, blk_C, blk_M, blk_factor, blk_solve, blk_friction, blk_breakaway};
+        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -163,14 +173,14 @@ static eng_status count_friction(void *ctx, const eng_problem *P, int what, int 
                                  int *pivots)
 {
     counted->solves++;
-    return blk_friction(ctx, P, what, mode, V1, f, pivots);
+    return osc_friction(ctx, P, what, mode, V1, f, pivots);
 }
 
 static double count_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s, const eng_inputs *in,
                               const double *Fb)
 {
     counted->asks++;
-    return blk_breakaway(ctx, exc, s, in, Fb);
+    return osc_breakaway(ctx, exc, s, in, Fb);
 }
 
 static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
@@ -200,9 +210,13 @@ static void test_stuck_fast_path(checks *T)
     switch_log L[4];
     hook_count H[4];
     for (int r = 0; r < 4; r++) { /* r: 0 generic off, 1 generic on, 2 inline off, 3 inline on */
-        blk_model B = {1.0, 0.05, 1.0, {0.0, 0.0, 0.0}};
+        osc_eng_model B;
+        memset(&B, 0, sizeof B);
+        B.m = 1.0;
+        B.c = 0.05;
+        B.k = 1.0;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
-        const eng_ops ops = {&B, blk_K, blk_C, blk_M, blk_factor, blk_solve, count_friction, count_breakaway};
+        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway};
         S.ops = ops;
         S.fast_paths = r & 1;
         memset(&H[r], 0, sizeof H[r]);
@@ -236,6 +250,130 @@ static void test_stuck_fast_path(checks *T)
     for (int r = 0; r < 4; r++) {
         eng_state_free(E[r], &s[r]);
         eng_destroy(E[r]);
+    }
+}
+
+/* ---- the oscillator's engine model against newmark.c ------------------------------------------ */
+
+/* What a comparison with the oscillator's own Bossak schemes varies. */
+typedef struct {
+    int scheme;
+    double chi, c, Nn;
+    double v_belt;   /* NaN: no belt */
+    int stribeck;
+    double F_ramp;   /* dF_ext/dt over the run (0: held) */
+    double F_jump;   /* F_ext set to this at t = 10 (0: none) */
+    double belt_to;  /* the belt's speed set to this at t = 10 (NaN: held) */
+} osc_case;
+
+static void count_switch(void *ctx, double t, double x, int from, int to)
+{
+    (void)t; (void)x; (void)from; (void)to;
+    ++*(long long *)ctx;
+}
+
+/* Run case K: newmark.c, and the engine through both entries, communication steps of 0.1 s over 30 s
+ * at h = 1e-3; max |x_engine - x_oscillator| / max |x| into *d, the switches into sw[0..2]. */
+static int run_case(checks *T, const osc_case *K, double *d, long long sw[3])
+{
+    const double h = 1e-3;
+    dfo_params p = osc_test_params(K->scheme, 1.0, 1.0, K->c, 0.6, 0.9, K->Nn, 0.8, K->chi);
+    p.h = h;
+    if (K->stribeck) {
+        p.friction_law = DFO_LAW_STRIBECK;
+        p.v_s = 0.05;
+        p.delta = 1.0;
+    }
+    dfo_model M;
+    dfo_model_init(&M, &p);
+    dfo_inputs u;
+    memset(&u, 0, sizeof u);
+    if (!isnan(K->v_belt)) { u.v_belt = K->v_belt; u.v_belt_set = 1; }
+    if (K->F_ramp != 0.0) { u.F_ext_set = 1; u.F_ext_d[0] = K->F_ramp; u.ramp = 1; u.t_d = 0.0; }
+    dfo_state so;
+    dfo_start(&M, &u, 0.0, &so);
+    osc_eng_model O[2];
+    eng *E[2];
+    eng_state s[2];
+    osc_eng_inbuf b[2][2]; /* per run: the current inputs and the former ones */
+    eng_inputs in[2], old[2];
+    const entry *X[2] = {&GENERIC, &BLOCK};
+    for (int r = 0; r < 2; r++) {
+        E[r] = osc_eng_create(&M, &O[r], &ALLOC, NULL);
+        if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: no engine\n"); exit(1); }
+        osc_eng_inputs(&u, &b[r][0], &in[r]);
+        X[r]->start(E[r], &in[r], 0.0, &p.x0, &p.v0, &s[r]);
+    }
+    double dmax = 0.0, xm = 0.0;
+    long long sw_o = 0;
+    int ok = 1;
+    for (int k = 1; k <= 300 && ok; k++) {
+        const double t = (double)(k * 100) * h;
+        if (k == 101 && (K->F_jump != 0.0 || !isnan(K->belt_to))) { /* the inputs change at t = 10 s */
+            const dfo_inputs uold = u;
+            if (K->F_jump != 0.0) { u.F_ext = K->F_jump; u.F_ext_set = 1; }
+            if (!isnan(K->belt_to)) { u.v_belt = K->belt_to; u.v_belt_set = 1; }
+            dfo_new_inputs(&M, &uold, &u, &so);
+            for (int r = 0; r < 2; r++) {
+                osc_eng_inputs(&uold, &b[r][1], &old[r]);
+                osc_eng_inputs(&u, &b[r][0], &in[r]);
+                X[r]->new_inputs(E[r], &old[r], &in[r], &s[r], NULL);
+            }
+        }
+        for (int r = 0; r < 2; r++) ok &= X[r]->advance(E[r], &in[r], &s[r], t, NULL) == ENG_OK;
+        ok &= dfo_advance(&M, &u, &so, t, count_switch, &sw_o) == DFO_OK;
+        dmax = fmax(dmax, fabs(s[0].X[0] - so.X));
+        xm = fmax(xm, fabs(so.X));
+    }
+    CHECK(ok);
+    const switch_log none = {0, 0.0, 0}; /* (no switch hook in these runs) */
+    CHECK(same_bits(&s[0], &s[1], &none, &none));
+    *d = dmax / xm;
+    sw[0] = sw_o;
+    sw[1] = s[0].switches;
+    sw[2] = s[1].switches;
+    for (int r = 0; r < 2; r++) {
+        eng_state_free(E[r], &s[r]);
+        eng_destroy(E[r]);
+    }
+    return ok;
+}
+
+/* The oscillator's engine model (osc_engine.c), inline and through engine.c, against newmark.c's
+ * Bossak schemes: the same bits between the two builds, the same trajectories to 1e-9 relative and
+ * the same switches as newmark.c (the three schemes, damping, a stick-dominated case, belts and a
+ * belt change, Stribeck, a ramp of F_ext, a jump of F_ext). */
+static void test_vs_newmark(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    const double nan = NAN;
+    const osc_case cases[] = {
+        {DFO_SCHEME_PAPER, 0.7, 0.0, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_CONSISTENT, 0.3, 0.0, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.3, 0.0, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.05, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, 0.7, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.5, 0.3, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.5, 0.3, 1, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, 0.5, nan, 0, 0.02, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, 0.5, nan, 0, 0.0, 0.25, nan},
+        {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.5, 0.3, 0, 0.0, 0.0, -0.2},
+        {DFO_SCHEME_LOCATED, 0.6, 0.05, 0.5, 0.3, 1, 0.0, 0.0, 0.1},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        const osc_case *K = &cases[k];
+        check_context(T, "%s chi %.1f c %.2f N %.1f belt %g (to %g) stribeck %d ramp %g jump %g", names[K->scheme],
+                      K->chi, K->c, K->Nn, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump);
+        double d = INFINITY;
+        long long sw[3] = {0, 0, 0};
+        run_case(T, K, &d, sw);
+        printf("  %-10s chi %.1f c %.2f N %.1f belt %-4g to %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / max |x| "
+               "%.2e, switches %lld / %lld\n",
+               names[K->scheme], K->chi, K->c, K->Nn, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump, d,
+               sw[0], sw[1]);
+        CHECK(d < 1e-9);
+        CHECK(sw[1] >= 4);
+        CHECK(sw[1] == sw[0] && sw[2] == sw[1]);
     }
 }
 
@@ -339,6 +477,7 @@ int main(void)
     checks *T = &C;
     test_block(T);
     test_stuck_fast_path(T);
+    test_vs_newmark(T);
     test_chain(T);
     return checks_done(T, "test_engine_step");
 }

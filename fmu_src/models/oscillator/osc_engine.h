@@ -7,25 +7,15 @@
  * eng_ops's function pointers (engine.c's eng_* functions) give the same bits.
  *
  * Not yet the oscillator's stepper: the FMU steps with newmark.c (dfo_advance). This is the model
- * side of moving its Bossak schemes onto the engine; tests/c/test_osc_engine.c compares the two.
+ * side of moving its Bossak schemes onto the engine; tests/c/test_engine_step.c compares the two.
  *
  * Plain C, no FMI types. */
 #ifndef DFO_OSC_ENGINE_H
 #define DFO_OSC_ENGINE_H
 
-#include "engine.h"
+#include "osc_engine_ops.h"
 #include "oscillator.h"
 
-typedef struct {
-    double m, c, k;
-    double a[ENG_NSLOTS];        /* each slot's factor cM m + cC c + cK k */
-    size_t idx[1];
-    double w[1];
-    eng_row row;
-    double N[1], mu_s[1], mu_k[1], Pc[1];
-    dfo_friction_law law[1];
-    eng *E;                      /* the engine (the Stribeck contact's solver), set by osc_eng_create */
-} osc_eng_model;
 
 /* The engine of the model M (its scheme, step, Bossak parameter, friction updates, fast paths, law)
  * over O (filled here; it must outlive the engine). NULL on failure (*err, if not NULL, says why). */
@@ -46,7 +36,5 @@ void osc_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_
                         const eng_hooks *hooks);
 void osc_eng_accelerations(eng *E, const eng_inputs *in, const eng_state *s, double *a);
 void osc_eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double *f);
-eng_status osc_eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
-                                  int *pivots);
 
 #endif
