@@ -744,7 +744,7 @@ static ENG_HOT void rest_exact(eng *E, eng_state *s)
 /* The paper scheme (consistent = 0) and the consistent one (1): the LCP from the modes before the
  * step, then the paper's coefficient updates, or the consistent scheme's rest rule at the predicted
  * rest position. */
-static eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, int consistent,
+static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, int consistent,
                            const eng_hooks *hk)
 {
     const eng_setup *S = &E->S;
@@ -834,7 +834,7 @@ static eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_
 
 /* How far contact j is from its switch after the trial (> 0: not yet): m v for a sliding contact,
  * Fb - |f| for a held one. */
-static double margin(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
+static ENG_HOT double margin(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
 {
     if (mode[j] != 0) return mode[j] * slip(E, j, V1);
     return E->Fb[j] - fabs(f[j]);
@@ -905,7 +905,7 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
 
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
-static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
+static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
                                const eng_hooks *hk)
 {
     const eng_setup *S = &E->S;
