@@ -114,9 +114,6 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
 
 /* ---- the chain's specialised schemes (engine_chain.c; the block's: osc_engine.h) ------------ */
 
-eng_status chn_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk);
-void chn_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
-void chn_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
-                        const eng_hooks *hk);
+ENG_DECLARE_SCHEMES(chn_);
 
 #endif

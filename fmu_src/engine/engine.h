@@ -322,4 +322,20 @@ void eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double
 eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
                               int *pivots);
 
+/* The entry points above as a model's specialisation of the schemes names them (engine_step.h with
+ * ENG_FN(name) = prefix##name, ENG_API empty): ENG_DECLARE_SCHEMES(osc_) in the model's header
+ * declares osc_eng_start, osc_eng_advance, ... */
+#define ENG_DECLARE_SCHEMES(prefix)                                                                                  \
+    void prefix##eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0,               \
+                           eng_state *s);                                                                            \
+    double prefix##eng_snap_target(const eng *E, const eng_state *s, double t_target);                               \
+    eng_status prefix##eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target,                      \
+                                   const eng_hooks *hooks);                                                          \
+    void prefix##eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,            \
+                                const eng_hooks *hooks);                                                             \
+    void prefix##eng_accelerations(eng *E, const eng_inputs *in, const eng_state *s, double *a);                     \
+    void prefix##eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double *f);                    \
+    eng_status prefix##eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1,       \
+                                          double *f, int *pivots)
+
 #endif

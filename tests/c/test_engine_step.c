@@ -279,11 +279,7 @@ static int run_case(checks *T, const osc_case *K, double *d, long long sw[3])
     const double h = 1e-3;
     dfo_params p = osc_test_params(K->scheme, 1.0, 1.0, K->c, 0.6, 0.9, K->Nn, 0.8, K->chi);
     p.h = h;
-    if (K->stribeck) {
-        p.friction_law = DFO_LAW_STRIBECK;
-        p.v_s = 0.05;
-        p.delta = 1.0;
-    }
+    if (K->stribeck) osc_test_stribeck(&p, 0.05, 1.0);
     dfo_model M;
     dfo_model_init(&M, &p);
     dfo_inputs u;

@@ -28,13 +28,7 @@ typedef struct {
 } osc_eng_inbuf;
 void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in);
 
-/* engine.h's entry points, the schemes specialised by the oscillator's operators */
-void osc_eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
-double osc_eng_snap_target(const eng *E, const eng_state *s, double t_target);
-eng_status osc_eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hooks);
-void osc_eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,
-                        const eng_hooks *hooks);
-void osc_eng_accelerations(eng *E, const eng_inputs *in, const eng_state *s, double *a);
-void osc_eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double *f);
+/* engine.h's entry points, the schemes specialised by the oscillator's operators (osc_eng_start,
+ * osc_eng_advance, ...), are declared by osc_engine_ops.h. */
 
 #endif

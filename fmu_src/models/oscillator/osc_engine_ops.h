@@ -23,9 +23,9 @@ typedef struct {
     eng *E;                      /* the engine (the Stribeck contact's solver), set by osc_eng_create */
 } osc_eng_model;
 
-/* engine_step.h's dense friction solver specialised by these operators (osc_engine.c) */
-eng_status osc_eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
-                                  int *pivots);
+/* engine_step.h's schemes specialised by these operators (osc_engine.c): osc_eng_dense_friction, the
+ * Stribeck contact's solver, and the rest (osc_engine.h) */
+ENG_DECLARE_SCHEMES(osc_);
 
 /* ---- the operators ----------------------------------------------------------------------------- */
 
