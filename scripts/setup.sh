@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Set up everything on a fresh machine (Python 3.11+, pip, gcc, cmake): a virtual environment in
-# .venv with the package and its test tools (uv pip install -e ".[test]"), and the FMUs built by
-# CMake into build/.
+# .venv with the package, its test tools and its docs tools (uv pip install -e ".[test,docs]"), and
+# the FMUs built by CMake into build/.
 # The editable install compiles nothing (pyproject.toml: scikit-build-core puts src/ on sys.path);
 # the package finds the FMUs in build/ (dryfriction.paths). A wheel with the FMUs inside:
-# pip wheel . (see README.md, Development).
+# pip wheel . (docs/getting_started.md).
 # Usage: bash scripts/setup.sh        (idempotent; later runs only rebuild what changed)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,15 +12,15 @@ PY=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
-rm -rf src/dryfriction.egg-info  # left by the former setuptools editable install
-# uv (installed into .venv by pip) installs the package and its test tools from its cache
+rm -rf src/dryfriction.egg-info  # a setuptools editable install's metadata would shadow this one
+# uv (installed into .venv by pip) installs the package and its tools from its cache
 # (~/.cache/uv): seconds once the wheels are there, where pip downloads them all again; pip does the
 # install if uv cannot be had.
 if .venv/bin/python -m uv --version >/dev/null 2>&1 ||
    .venv/bin/python -m pip install --quiet --disable-pip-version-check uv >/dev/null 2>&1; then
-  .venv/bin/python -m uv pip install --quiet --python .venv/bin/python -e ".[test]"
+  .venv/bin/python -m uv pip install --quiet --python .venv/bin/python -e ".[test,docs]"
 else
-  .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test,docs]"
 fi
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE="$PWD/.venv/bin/python" >/dev/null
 cmake --build build -j"$(nproc)" >/dev/null

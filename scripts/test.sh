@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # All tests, from a fresh clone: set up, C unit tests (ctest), the pytest suite through the FMU, the
-# examples (examples/*.py at full size), the lowest declared dependency versions
+# documentation site (scripts/docs.sh), the examples (examples/*.py at full size), the lowest declared dependency versions
 # (scripts/check_min_versions.sh), the cross-platform check (Windows x86-64 under wine, Linux aarch64
 # under qemu: scripts/cross_check.sh), then the C tests and the pytest suite again with the FMU built
 # with AddressSanitizer and UBSan (every test that runs C: not the no_sanitizer and python_only
@@ -152,6 +152,7 @@ stage "setup" bash scripts/setup.sh
 stage "ctest" ctest --test-dir build --output-on-failure -j2
 stage "host-libs" host_libs
 stage "pytest" pytest_
+stage "docs" bash scripts/docs.sh  # the site, warnings as errors, every internal link and anchor checked
 examples() {  # every example at its own size, in a scratch folder
   local d f
   d=$(mktemp -d)

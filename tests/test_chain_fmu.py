@@ -247,22 +247,22 @@ def test_wrong_array_length(chain_fmu3: Path) -> None:
             f.set_raw("m", [1.0, 2.0])
 
 
-# ---- the README ----------------------------------------------------------------------------------
+# ---- the docs' example ---------------------------------------------------------------------------
 
-def test_the_readmes_five_lines() -> None:
-    """The README's chain example runs as printed and prints what its comment says."""
+def test_the_docs_chain_example() -> None:
+    """The chain example of docs/chain.md runs as printed and prints what its comment says."""
     import contextlib
     import io
     import re
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    block = re.search(r"```python\n(from dryfriction(?:\.drivers)?(?:\.chain)? import ChainFMU3?\n.*?)```", readme, re.S)
+    readme = (Path(__file__).resolve().parents[1] / "docs" / "chain.md").read_text()
+    block = re.search(r"```python\n(from dryfriction import ChainFMU3\n.*?)```", readme, re.S)
     assert block is not None
     code = block.group(1)
     assert len(code.strip().splitlines()) == 5
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        exec(compile(code, "README.md", "exec"), {})
+        exec(compile(code, "docs/chain.md", "exec"), {})
     shown = re.search(r"print\(run.stick_share\(\).round\(2\)\).*# (\[[0-9. ]+\])", readme)
     assert shown is not None
     printed = [float(x) for x in buf.getvalue().strip(" []\n").split()]

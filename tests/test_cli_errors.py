@@ -1,7 +1,7 @@
 """What the command line says when something is wrong: every error is one line and exit status 2
 (bad arguments of every subcommand, an unusable --fmu, an error the FMU reports), every warning
-the FMU logs is one stderr line, --strict makes it an error, and the README's quoted error line
-is the one printed."""
+the FMU logs is one stderr line, --strict makes it an error, and the error lines quoted by docs/cli.md
+are the ones printed."""
 
 from __future__ import annotations
 
@@ -94,12 +94,12 @@ def test_console_script_warning_is_one_stderr_line(tmp_path: Path) -> None:
     assert r.stderr.count("\n") == 1 and r.stderr.startswith("dryfriction: warning: "), r.stderr
 
 
-def test_the_readmes_error_line_is_the_one_printed(capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_docs_error_lines_are_the_ones_printed(capsys: pytest.CaptureFixture[str]) -> None:
     import re
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    quoted = re.findall(r"`(dryfriction: error: [^`]+)`", readme)
-    assert quoted, "the README quotes an error line"
+    page = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text()
+    quoted = re.findall(r"`(dryfriction: error: [^`]+)`", page)
+    assert quoted, "docs/cli.md quotes an error line"
     for line in quoted:
         m = re.fullmatch(r"dryfriction: error: --m must be > 0, not (\S+)", line)
         typo = re.fullmatch(r"dryfriction: error: unknown option (\S+); did you mean \S+\?", line)

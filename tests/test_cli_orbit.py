@@ -126,7 +126,7 @@ def test_errors_are_one_line(argv: list[str], message: str, capsys: pytest.Captu
 
 
 def test_the_stuck_orbit_in_json(fmu_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """mu_s sigma 1.5 (P0 below the breakaway force): the block at rest, one orbit (formerly six
+    """mu_s sigma 1.5 (P0 below the breakaway force): the block at rest, one orbit (not six
     arbitrary rest positions, each 'unstable'), neutral with multipliers exactly 1 and 0, v0 = 0,
     stuck all the time, at x0 = 0 where it starts, with the interval of rest positions
     |k x| <= mu_s N - P0 (P0/k = 0.01 m: [-0.005, 0.005] m); the table lists it once as neutral and
@@ -146,7 +146,7 @@ def test_the_stuck_orbit_in_json(fmu_path: Path, capsys: pytest.CaptureFixture[s
 
 
 def test_a_small_block_in_the_table(fmu_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """m = 1e-9 kg (lambda 4.4e-5): two stable orbits (formerly none), each stuck but for slides of
+    """m = 1e-9 kg (lambda 4.4e-5): two stable orbits, each stuck but for slides of
     about 1e-4 of the cycle: the stuck share printed with the digits that tell it from 100 % (99.98,
     99.99), not as 100.0, which would read as a block at rest."""
     argv = ["--m", "1e-9", "--k", "2000", "--zeta", "0.003", "--P0", "10", "--f", "10", "--N", "20", "--mu-s", "0.3",

@@ -357,7 +357,7 @@ def test_down_to_the_edge_of_the_valid_range(fmu: OscillatorFMU2) -> None:
 def test_a_block_at_rest_is_not_a_branch(fmu: OscillatorFMU2) -> None:
     """P0 below the breakaway force (mu_s sigma 1.2): find_orbits gives the block at rest (one of an
     interval of rest positions, a multiplier exactly 1); the continuation does not start from it as
-    from a fold (formerly 'the start orbit is at a fold in the parameter'): its branch says it is
+    from a fold (not 'the start orbit is at a fold in the parameter'): its branch says it is
     the block at rest and gives the interval, and the Dataset's flags are bools even when empty."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=1.2, chi=1.0, zeta=0.05)
     c = continue_orbits(p, "mu_s_sigma", 1.2, 0.8, fmu=fmu)

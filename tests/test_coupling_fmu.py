@@ -1,4 +1,4 @@
-"""The oscillator FMU's coupling interface (issue 24, the FMU's side), through fmpy as an independent
+"""The oscillator FMU's coupling interface (the FMU's side), through fmpy as an independent
 host: input derivatives (fmi2SetRealInputDerivatives) taken by the Bossak schemes at every internal
 step, output derivatives (fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives), directional and
 adjoint derivatives of the outputs with respect to the inputs, and FMI 3.0 inputs set at the

@@ -1,4 +1,4 @@
-"""The exact scheme (scheme 4) at its edges (issue 20, item 8): each property against a 40-digit
+"""The exact scheme (scheme 4) at its edges: each property against a 40-digit
 reference (mpmath closed forms written here) or against the same run cut differently.
 
 - one doStep over 1e6 periods equals one doStep per period (within 1e-12 of the motion's size),

@@ -16,7 +16,7 @@ from dryfriction.references.exact import solve_exact
 from dryfriction.drivers.oscillator import FMUError, OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
-# the README's 1.6 kHz oscillator (f_n = 1591.5 Hz), driven at 1 Hz
+# the 1.6 kHz oscillator of docs/fmu.md ("The default step") (f_n = 1591.5 Hz), driven at 1 Hz
 P16 = Oscillator(m=0.01, k=1e6, omega=2.0 * math.pi)
 EXACT = Settings(h=0.0, scheme="exact")
 

@@ -551,7 +551,7 @@ def test_model_module_reads_what_the_xml_declares() -> None:
     p, st = Oscillator(), Settings()
     assert md.parameter_starts()["observe"] is True and st.observe is False
     for name, start in md.parameter_starts().items():
-        if name in ("h", "observe", "sensitivity"):  # sensitivity: not in Settings yet (issue 22's orbits)
+        if name in ("h", "observe", "sensitivity"):  # sensitivity: not in Settings (the orbits set it)
             continue
         value = getattr(p, name) if hasattr(p, name) else getattr(st, name)
         if name == "scheme":

@@ -73,7 +73,7 @@ def test_no_friction_is_the_harmonic_response(fmu: OscillatorFMU2, p: Oscillator
 
 
 def test_light_damping_reads_the_steady_amplitude(fmu: OscillatorFMU2) -> None:
-    """The case of issue 22: the transient method reports 2.883 (a slowly decaying free vibration);
+    """The light-damping case: a transient method reports 2.883 (a slowly decaying free vibration);
     the orbit is the closed form's 1.449."""
     p = Oscillator.physical(m=1, k=1, zeta=1e-5, P0=1, omega=1.3, N=0, mu_s=0.0)
     (o,) = find_orbits(p, fmu=fmu)
@@ -308,8 +308,8 @@ def test_the_fmi3_fmu_gives_the_same_orbit(fmu: OscillatorFMU2) -> None:
 
 def test_no_orbit_at_an_undamped_resonance(fmu: OscillatorFMU2) -> None:
     """zeta = 0 at lambda = 1 (omega = w0 up to rounding) with 4 mu_k N < pi P0: the amplitude grows
-    without bound and there is no orbit (formerly six spurious ones at 1e13 to 1e15 m: Newton
-    'converged' relative to a huge state); for K = 1 and 2."""
+    without bound and there is no orbit (not spurious ones at 1e13 to 1e15 m, where Newton
+    would 'converge' relative to a huge state); for K = 1 and 2."""
     p = nd(1.0, 0.6, 0.4)
     for K in (1, 2):
         assert find_orbits(p, period=K, fmu=fmu) == []
@@ -355,7 +355,7 @@ def test_the_block_at_rest_is_one_neutral_orbit(fmu: OscillatorFMU2) -> None:
 def test_on_either_side_of_the_breakaway_force(fmu: OscillatorFMU2) -> None:
     """mu_s = mu_k, zeta 0.05, lambda 0.5: P0 just below the breakaway force (mu_s sigma 1.001,
     1.0): the block at rest only, over the interval |k x| <= mu_s N - P0 (1e-3 static deflections;
-    a single point at 1.0), no orbit creeping onto its edge (formerly two 'stable' ones 1.00015e-5 m
+    a single point at 1.0), no orbit creeping onto its edge (not two 'stable' ones 1.00015e-5 m
     out, amplitude 2e-15 m, a breakaway a period); just above it (0.999): no rest, one stable
     stick-slip orbit of small amplitude (9.0e-6 static deflections) that the exact solution repeats
     within 1e-9 of its amplitude, with the exact solution's amplitude within 1e-9 and the transient

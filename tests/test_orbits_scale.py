@@ -101,10 +101,9 @@ MEMS = dict(k=2000.0, zeta=0.003, P0=10.0, N=20.0, mu_s=0.3, mu_k=0.2)
 
 @pytest.mark.parametrize("m", [1e-12, 1e-9, 1e-6, 1e-3, 1.0, 1e3, 1e6])
 def test_a_small_block_has_its_orbit(fmu_path: Path, m: float) -> None:
-    """The README's block with m from 1e-12 to 1e6 kg at 5, 10, 15 Hz (lambda 1.4e-6 to 1400): the
-    orbit method finds a stable orbit wherever the transient method converges (formerly none from
-    1e-9 kg down: the slides last a few 1e-7 of a period, between the cycle's samples, so the cycle
-    read as stuck), one of them at the transient's amplitude within the transient's tolerance 1e-3
+    """The block of the five lines of Python with m from 1e-12 to 1e6 kg at 5, 10, 15 Hz (lambda 1.4e-6 to 1400): the
+    orbit method finds a stable orbit wherever the transient method converges (also from 1e-9 kg
+    down, where the slides last a few 1e-7 of a period, between the cycle's samples), one of them at the transient's amplitude within the transient's tolerance 1e-3
     (seen 4e-11 to 2e-6), and every stable orbit returns to itself under the exact solution within
     1e-11 of its amplitude (plus 1e-15 static deflections, the reference's rounding: at 1e6 kg the
     motion is 1.6e-6 of the static deflection), with the exact solution's amplitude."""
@@ -173,8 +172,8 @@ def test_a_spring_too_weak_to_resolve_is_the_free_mass(fmu_path: Path, k: float,
     shifted in x as without a spring (the spring's pull, 4e-8 of the offset a period, is below the
     FMU's rounding of the motion: it computes positions in static deflections, 1e7 and 1e10 m): one
     orbit per frequency, neutral, converged, the amplitude of the free mass's (k = 0) within 1e-6 at
-    1e-6 N/m (seen 1e-9) and 1e-3 at 1e-9 N/m (seen 3e-5; formerly 1, 3 and 7 'unstable' orbits and
-    no steady state at 1e-9 N/m)."""
+    1e-6 N/m (seen 1e-9) and 1e-3 at 1e-9 N/m (seen 3e-5; not 1, 3 and 7 'unstable' orbits without a
+    steady state at 1e-9 N/m)."""
     f = [5.0, 10.0, 15.0]
     free = frequency_response(Oscillator.physical(m=0.5, k=0.0, c=1e-3, P0=10, f=10, N=20, mu_s=0.3, mu_k=0.2), f,
                               fmu_path=fmu_path)

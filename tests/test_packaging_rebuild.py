@@ -5,11 +5,11 @@ For each of the four FMUs, on an unzipped copy without its binaries:
 - the source list (FMI 2.0 ``<SourceFiles>``, FMI 3.0 ``sources/buildDescription.xml``) names
   exactly the ``.c`` files of ``sources/`` (so ``sources/*.c`` is the list), and the FMI 2.0 chain's
   ``n`` is in its generated ``sources/chain_config.h``;
-- ``fmpy compile`` (the README's command: ``fmpy.build.build_platform_binary``, fmpy's CMake
+- ``fmpy compile`` (the command of docs/platforms.md: ``fmpy.build.build_platform_binary``, fmpy's CMake
   project over the listed sources with its own flags, here with all warnings as errors) gives a
   binary whose outputs are the shipped one's bit for bit, on several parameter sets of every scheme
   (the FMI 3.0 FMUs also with early return and event mode);
-- so does the README's ``cc`` line, run as the README writes it;
+- so does the ``cc`` line of docs/platforms.md, run as written there;
 - and a host compiling with fused multiply-add contraction on (``-O2 -mfma -ffp-contract=fast``,
   where the CPU has FMA): ``sources/dfo_fp.h`` keeps the numbers.
 """
@@ -68,12 +68,12 @@ def _has_fma() -> bool:
 
 
 def _readme_cc() -> list[str]:
-    """The README's compiler call (its rebuild listing), as words."""
-    text = (ROOT / "README.md").read_text()
+    """The compiler call of docs/platforms.md (its rebuild listing), as words."""
+    text = (ROOT / "docs" / "platforms.md").read_text()
     blocks = re.findall(r"```sh\n(.*?)```", text, flags=re.S)
     lines = [ln for b in blocks for ln in b.replace("\\\n", " ").splitlines()
              if ln.startswith("cc ") and "sources/*.c" in ln]
-    assert len(lines) == 1, f"the README should list one cc line over sources/*.c, found {lines}"
+    assert len(lines) == 1, f"docs/platforms.md should list one cc line over sources/*.c, found {lines}"
     return shlex.split(lines[0].split("#")[0])
 
 
@@ -151,7 +151,7 @@ def _compare(shipped_dir: Path, rebuilt: Path, key: str, how: str) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("key", list(FMUS))
 def test_fmpy_compile_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, tmp_path: Path) -> None:
-    """The README's `fmpy compile X.fmu` (fmpy's command line, here with all warnings as errors) on
+    """The `fmpy compile X.fmu` of docs/platforms.md (fmpy's command line, here with all warnings as errors) on
     the FMU without its binaries."""
     from fmpy.util import create_zip_archive
 
@@ -177,7 +177,7 @@ def test_fmpy_compile_rebuilds_the_same_numbers(shipped: dict[str, Path], key: s
 @pytest.mark.slow
 @pytest.mark.parametrize("variant", ["readme", "fma"])
 @pytest.mark.parametrize("key", list(FMUS))
-def test_the_readme_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, variant: str,
+def test_the_docs_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], key: str, variant: str,
                                                       tmp_path: Path) -> None:
     if shutil.which("cc") is None:
         pytest.skip("did not run: no cc")
@@ -200,7 +200,7 @@ def test_the_readme_cc_line_rebuilds_the_same_numbers(shipped: dict[str, Path], 
         dis = subprocess.run(["objdump", "-d", str(d / out)], capture_output=True, text=True)
         if dis.returncode == 0:
             assert "vfmadd" not in dis.stdout and "vfmsub" not in dis.stdout, "fused multiply-adds in the binary"
-    _compare(shipped[key], d, key, f"the README's cc line ({variant})")
+    _compare(shipped[key], d, key, f"the cc line of docs/platforms.md ({variant})")
 
 
 # ------------------------ the oscillator's source FMU, rebuilt by fmpy (also under the sanitizers)

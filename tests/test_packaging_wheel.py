@@ -157,6 +157,6 @@ def test_the_readmes_five_lines_in_a_fresh_venv(venv: Path, workdir: Path) -> No
              float(m.group(6)))
             for m in re.finditer(rf"^\s*([0-9.]+)\s+(\d+)\s+{num}\s+(True|False)\s+{num}\s+{num}\s*$", out, re.M)]
     assert sorted({r[0] for r in rows}) == [5.0, 7.5, 10.0, 12.5, 15.0], out
-    at10 = [r for r in rows if r[0] == 10.0]   # stable: a bool (printed True), formerly the float 1.0
+    at10 = [r for r in rows if r[0] == 10.0]   # stable: a bool (printed True), not a float
     assert len(at10) == 1 and round(at10[0][2], 4) == 0.2356 and at10[0][3] == "True" and at10[0][4] < 1.0, out
     assert all(math.isfinite(r[2]) and r[2] > 0 and 0.0 <= r[5] <= 1.0 for r in rows), out

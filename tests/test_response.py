@@ -103,9 +103,10 @@ def harmonic_amplitude(p: Oscillator) -> float:
 
 @pytest.mark.parametrize("N", [0.0, 0.001])
 def test_a_slowly_decaying_free_vibration_is_not_converged(fmu: OscillatorFMU2, N: float) -> None:
-    """Issue 22's case: zeta = 1e-5, omega = 1.3 w0; the free vibration from rest decays in 1 / (zeta
-    w0) = 1e5 s, 2e4 periods: formerly 2.883 'converged' after 64 periods (2.878 with a little
-    friction), now not converged at the limit; the orbit method reads 1.449."""
+    """The light-damping case: zeta = 1e-5, omega = 1.3 w0; the free vibration from rest decays in 1 / (zeta
+    w0) = 1e5 s, 2e4 periods: a test of the change between windows alone reads 2.883 'converged'
+    after 64 periods (2.878 with a little friction); here not converged at the limit; the orbit
+    method reads 1.449."""
     p = Oscillator.physical(m=1, k=1, zeta=1e-5, P0=1, omega=1.3, N=N, mu_s=0.3)
     s = steady_state(fmu, p)
     assert not s.converged and s.periods == 8192 and s.error > 0.1
@@ -117,8 +118,8 @@ def test_a_slowly_decaying_free_vibration_is_not_converged(fmu: OscillatorFMU2, 
 
 def test_no_point_of_the_light_damping_sweep_is_converged_off(tmp_path: Path,
                                                               capsys: pytest.CaptureFixture[str]) -> None:
-    """The 11-point sweep 0.15 to 0.25 Hz of the light-damping case (formerly 5 of 11 points
-    'converged' at twice the amplitude): no point is marked converged with an amplitude off the
+    """The 11-point sweep 0.15 to 0.25 Hz of the light-damping case (where a test of the change
+    alone marks 5 of 11 points 'converged' at twice the amplitude): no point is marked converged with an amplitude off the
     closed form by more than the tolerance (none is marked converged: the runs end at 8192 periods,
     a tenth of a decay time)."""
     import json
@@ -139,8 +140,8 @@ ZETA_001 = [(lam, N) for lam in (0.9, 0.98, 1.0, 1.02, 1.1) for N in (0.0, 0.1)]
 
 @pytest.mark.parametrize("lam, N", ZETA_001)
 def test_the_tolerance_bounds_the_error_near_resonance(fmu: OscillatorFMU2, lam: float, N: float) -> None:
-    """zeta = 0.01 near resonance (formerly 'converged' at 0.12 % error with tol 1e-3): converged, the
-    amplitude is within tol of the orbit's (N = 0: of the closed form), at tol 1e-3 and 1e-6; the
+    """zeta = 0.01 near resonance (a test of the change alone: 'converged' at 0.12 % error with
+    tol 1e-3): converged, the amplitude is within tol of the orbit's (N = 0: of the closed form), at tol 1e-3 and 1e-6; the
     estimated error bounds the true one (seen: true errors 1e-14 to 4e-7, estimates 5 to 100 times
     larger)."""
     from dryfriction.analysis.orbits import find_orbits

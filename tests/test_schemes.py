@@ -68,7 +68,7 @@ def test_consistent_converges_first_order(fmu: OscillatorFMU2, case: str) -> Non
 
     Below T/1600 the consistent scheme is pre-asymptotic: a stop that falls near the breakaway
     limit is judged at the end of its step, so single steps of spurious stick make the error
-    erratic (measured; see the README)."""
+    erratic (measured; docs/schemes.md)."""
     ns = [1600 * 2**k for k in range(7)]
     c = convergence(fmu, CASES[case][0], "consistent", steps_per_period=ns)
     order = -np.polyfit(np.log2(ns), np.log2(c.errors), 1)[0]

@@ -40,9 +40,9 @@ def test_response_of_1e8_frequencies_refused_before_any_work(capsys: pytest.Capt
     line = _one_line_error(cap.err)
     assert "--max-work 1e+10" in line and "100,000,000 frequencies" in line
     assert cap.out == "" and not out.exists()
-    # the README quotes it
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    quoted = re.search(r'--num 100000000` says\s+"([^"]+)"', readme)
+    # docs/cli.md quotes it
+    page = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text()
+    quoted = re.search(r'--num 100000000` says\s+"([^"]+)"', page)
     assert quoted and " ".join(quoted.group(1).split()) == line.removeprefix("dryfriction: error: ")
 
 

@@ -3,9 +3,9 @@ references and sweeps.
 
 The public names below are importable from here and from their home module; each is imported on
 first use, so that ``import dryfriction`` itself is immediate (the console script installs its
-signal handlers before anything heavy is loaded). The package's former module paths and names
-(``dryfriction.drivers.oscillator``, ``OscillatorFMU2``, ...) still work for one release, with a
-DeprecationWarning naming the new home (:mod:`dryfriction._compat`)."""
+signal handlers before anything heavy is loaded). The deprecated module paths and names
+of the previous release (listed in the changelog and in :mod:`dryfriction._compat`) still work for
+one release, with a DeprecationWarning naming the new home."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The one way files are written: to a temporary name beside the target, then renamed over it,
-so that a reader (or a restarted sweep) never sees a half-written file.
+so that a reader (or a restarted sweep) never sees a half-written file::
 
     with atomic_path(path) as tmp:     # any writer that takes a path (to_netcdf, savefig, np.save)
         write(tmp)
@@ -9,7 +9,7 @@ so that a reader (or a restarted sweep) never sees a half-written file.
 The temporary name is ``.<name>.<random>.tmp`` in the same folder (so the rename is atomic); it is
 removed when the writer fails. The final file gets the usual permissions (0666 minus the umask).
 
-A command's outputs, all or nothing, with the output paths checked before any work:
+A command's outputs, all or nothing, with the output paths checked before any work::
 
     check_output_folder(out)           # before the work: a path that cannot be written is refused
     with result_set(out) as stage:     # the files written into stage move into out together
@@ -62,12 +62,14 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically (a temporary file beside it, then a rename); returns the path."""
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically; returns the path."""
     return atomic_write_bytes(path, text.encode())
 
 
@@ -96,7 +98,7 @@ def staged_outputs(folder: str | os.PathLike[str]) -> Iterator[Path]:
     (same file system); when the block ends without error every file written into it is moved into
     ``folder`` (created if missing: then the staging folder itself is renamed, one step), with
     SIGINT and SIGTERM held until the last one is in place. On an error or an interrupt inside the
-    block the staging folder is removed and ``folder`` is left exactly as it was.
+    block the staging folder is removed and ``folder`` is left exactly as it was::
 
         with staged_outputs(out) as stage:
             write_csv(stage / "response.csv"); write_png(stage / "response.png")

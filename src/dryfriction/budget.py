@@ -16,7 +16,7 @@ where the computation has one (the transient method's period limit, a sweep's st
 the typical count (the orbit method's Newton iterations).
 
 **The default bound is** :data:`DEFAULT_MAX_WORK` = 1e10 steps, a few minutes of one core: every
-command of the README and every study's default configuration is within it (the largest study,
+command of docs/cli.md and every study's default configuration is within it (the largest study,
 fig10_11_orbits, is 8.0e9 in all: a study's :class:`Estimate` sums every part it runs);
 ``dryfriction response ... --num 100000000`` (1.2e12) and 10^6 frequencies through the API
 (1.2e10) are not.

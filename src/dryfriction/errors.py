@@ -1,10 +1,10 @@
-"""The package's one exception hierarchy for everything that goes wrong with an FMU.
+"""The package's one exception hierarchy for everything that goes wrong with an FMU::
 
     FMUError                   the base: ``message``, ``function`` and ``status`` (None when no FMI call is involved)
     +-- FMUCallError           an FMI call returned Discard, Error or Fatal (or a status the host cannot accept);
     |                          the message is the sentence the FMU logged (it names the variable of a bad value)
     +-- FMUFileError           an FMU file that cannot be used (missing, not a zip, another model or FMI version);
-                               also a :class:`UsageError` (a ValueError): one line, exit 2
+                               also a UsageError (a ValueError): one line, exit 2
 
 An error of fmpy (still the reader of FMU archives) is translated into one of these where fmpy is
 called. The command line reports every FMUError as one line with exit status 2.

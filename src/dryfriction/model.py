@@ -53,6 +53,8 @@ LAYOUT_TOOL = "dryfriction.layout"
 
 @dataclass(frozen=True)
 class Variable:
+    """One variable of a model description: name, value reference, causality, variability, type, unit, start
+    value, valid range and, for an array, its dimension."""
     name: str
     vr: int
     type: str                    # Real, Integer, Enumeration, Boolean
@@ -84,11 +86,13 @@ class Variable:
 
     @property
     def is_real(self) -> bool:
+        """Whether the variable is a real number (FMI 2.0 ``Real``, FMI 3.0 ``Float64``)."""
         return self.type in REAL_TYPES
 
 
 @dataclass(frozen=True)
 class Effect:
+    """One bit of the ``effects`` calculated parameter: its value and what it means."""
     bit: int
     name: str
     description: str
@@ -121,6 +125,8 @@ class ArrayLayout:
 
 @dataclass(frozen=True)
 class ModelDescription:
+    """What ``dryfriction.model`` reads from a model description: identifiers, variables, schemes, effects and
+    log categories."""
     guid: str
     model_identifier: str
     variables: dict[str, Variable]
@@ -133,15 +139,18 @@ class ModelDescription:
 
     # ---- lookups ----
     def var(self, name: str) -> Variable:
+        """The variable ``name`` (FMUError naming it when the model has none)."""
         try:
             return self.variables[name]
         except KeyError:
             raise KeyError(f"the FMU has no variable {name!r}") from None
 
     def vr(self, name: str) -> int:
+        """The value reference of the variable ``name``."""
         return self.var(name).vr
 
     def names(self, causality: str | None = None) -> tuple[str, ...]:
+        """The variables' names, of one causality when given."""
         return tuple(n for n, v in self.variables.items() if causality is None or v.causality == causality)
 
     def structural_parameters(self) -> tuple[str, ...]:
@@ -192,10 +201,12 @@ class ModelDescription:
         return int(scheme)
 
     def effect_names(self, mask: int) -> list[str]:
+        """The names of the effects whose bits are set in ``mask``."""
         return [e.name for e in self.effects if mask & e.bit]
 
     # ---- validation ----
     def valid_range(self, name: str) -> str:
+        """The valid range of a variable in words, as the FMU's error messages give it."""
         v = self.var(name)
         if v.type == "Enumeration":
             return "one of " + ", ".join(f"{val} ({item})" for item, val in self.schemes.items())
@@ -246,6 +257,7 @@ class ModelDescription:
             raise ValueError(f"invalid value {value!r} for {label}; valid range: {rng}")
 
     def check_all(self, values: Mapping[str, Any]) -> None:
+        """Check every value against its variable's range (ValueError naming the first bad one)."""
         for name, value in values.items():
             self.check(name, value)
 
@@ -386,6 +398,7 @@ def parse(xml: bytes | str) -> ModelDescription:
 
 
 def from_xml(path: str | os.PathLike[str]) -> ModelDescription:
+    """The model description read from a ``modelDescription.xml`` file."""
     return parse(Path(path).read_bytes())
 
 

@@ -166,9 +166,11 @@ class Oscillator:
         return max(self.mu_s, self.mu_k) * self.N
 
     def with_(self, **changes: float) -> "Oscillator":
+        """A copy with the given parameters changed (checked again)."""
         return replace(self, **changes)
 
     def as_dict(self) -> dict[str, float]:
+        """The parameters as a dict, SI units."""
         return asdict(self)
 
     @classmethod

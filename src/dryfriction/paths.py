@@ -1,5 +1,4 @@
-"""Where the FMUs and the study configs come from: the one place that decides, for the whole package
-(``dryfriction.paths`` is the same module under its former name).
+"""Where the FMUs and the study configs come from: the one place that decides, for the whole package.
 
 An FMU of each kind (the oscillator and the chain, FMI 2.0 and FMI 3.0) is, in this order:
 
@@ -44,6 +43,7 @@ class Kind:
     env: str
 
     def describe(self) -> str:
+        """The FMU in words (``the FMI 2.0 DryFrictionOscillator FMU``)."""
         return f"the FMI {self.fmi_version} {self.model_identifier} FMU"
 
 

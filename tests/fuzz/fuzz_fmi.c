@@ -16,8 +16,9 @@
  *   - output and directional derivatives read with fmi2OK are finite, x and v have no feed-through;
  *   - after an fmi2OK doStep the FMU's time (fmi2LastSuccessfulTime) is exactly tc + dt
  *     (FUZZ_TIME_ORACLE, on by default; -DFUZZ_TIME_ORACLE=0 to explore past it).
- * A doStep whose step holds more than FUZZ_MAX_STEPS internal steps of the parameter h is
- * shortened to that many, so that long but legal runs do not read as hangs.
+ * A doStep that would take more than FUZZ_MAX_STEPS internal steps of the step used h, counted from
+ * the FMU's time, is shortened to that many (a communication point far ahead of that time is
+ * replaced by it), so that long but legal runs do not read as hangs.
  *
  * Built by tests/fuzz/CMakeLists.txt (clang, -fsanitize=fuzzer) and, with tests/fuzz/replay_main.c,
  * by tests/fmi_c/CMakeLists.txt as the ctest replay of the corpus and the regression inputs. */
@@ -206,9 +207,13 @@ static void op(ctx *X, reader *r)
         else dt = (double)(1 + u16(r)) * 1e-4;
         const fmi2ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         double h = 0.0;
-        if (X->c && isfinite(dt) && dt > 0.0 && fmi2GetReal(X->c, &vh, 1, &h) == fmi2OK && h > 0.0 &&
-            dt / h > FUZZ_MAX_STEPS)
-            dt = FUZZ_MAX_STEPS * h;
+        if (X->c && isfinite(dt) && dt > 0.0 && fmi2GetReal(X->c, &vh, 1, &h) == fmi2OK && h > 0.0) {
+            /* a tc the FMU takes for its own time (within its tolerance) still steps from its time:
+             * the steps are counted from there, and a tc that far ahead is replaced by the time */
+            if (isfinite(tc) && (tc - X->t) / h > FUZZ_MAX_STEPS / 2) tc = X->t;
+            const double ahead = isfinite(tc) && tc > X->t ? tc - X->t : 0.0;
+            if ((ahead + dt) / h > FUZZ_MAX_STEPS) dt = FUZZ_MAX_STEPS * h - ahead;
+        }
         TRACE(X, "fmi2DoStep(%.17g, %.17g)\n", tc, dt);
         st = fmi2DoStep(X->c, tc, dt, (fmi2Boolean)((f >> 2) & 1));
         if (st == fmi2OK) {

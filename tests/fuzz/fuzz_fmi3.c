@@ -125,11 +125,15 @@ static fmi3Status call(ctx *X, reader *r, unsigned op)
     }
     case 11: case 12: case 13: { /* doStep */
         double dt = real(r);
-        const double tc = (u8(r) < 230) ? X->t : real(r);
+        double tc = (u8(r) < 230) ? X->t : real(r);
         const fmi3ValueReference vh = VR_h_used; /* the step used (h = 0: derived) */
         fmi3Float64 h = 0.0;
-        if (fmi3GetFloat64(X->c, &vh, 1, &h, 1) == fmi3OK && h > 0.0 && isfinite(dt) && dt > FUZZ_MAX_STEPS * h)
-            dt = FUZZ_MAX_STEPS * h;
+        if (fmi3GetFloat64(X->c, &vh, 1, &h, 1) == fmi3OK && h > 0.0 && isfinite(dt)) {
+            /* the steps counted from the FMU's time (a tc it takes for its time still steps from it) */
+            if (isfinite(tc) && (tc - X->t) / h > FUZZ_MAX_STEPS / 2) tc = X->t;
+            const double ahead = isfinite(tc) && tc > X->t ? tc - X->t : 0.0;
+            if ((ahead + dt) / h > FUZZ_MAX_STEPS) dt = FUZZ_MAX_STEPS * h - ahead;
+        }
         fmi3Boolean ev = 7, term = 7, early = 7;
         fmi3Float64 last = NAN;
         st = fmi3DoStep(X->c, tc, dt, fmi3False, &ev, &term, &early, &last);

@@ -26,7 +26,7 @@
  * the state (t, X, V, mode) is all a continuation needs: FMU states and their serialisation continue
  * bit for bit (a stick phase's breakaway is found anew at each call, to the same time).
  *
- * Exact at the edges (issue 20):
+ * Exact at the edges:
  *  - time: inside a call the events' times are double-doubles (a call starts and ends on the host's
  *    times, doubles), and the excitation phase omega t + phi at a phase start is computed from that
  *    absolute time (phi reduced mod 2 pi exactly, omega t carried as a double-double; carried over at

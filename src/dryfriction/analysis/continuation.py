@@ -1,5 +1,5 @@
-"""Continuation of periodic orbits in a parameter, with their bifurcations (issue 22, item 2;
-docs/orbits.md, "Continuation and bifurcations").
+"""Continuation of periodic orbits in a parameter, with their bifurcations
+(docs/orbits.md, "Continuation and bifurcations").
 
 Pseudo-arclength continuation of the fixed points of the exact stroboscopic map (dryfriction.analysis.orbits)
 in one oscillator parameter p. Unknowns u = (y, q): y = S^-1 z the state at a section time (scaled
@@ -159,6 +159,7 @@ class Bifurcation:
     offset_m: float = math.nan
 
     def as_dict(self) -> dict[str, Any]:
+        """The bifurcation as a JSON-ready dict (multipliers as [real, imaginary] pairs)."""
         return {"type": self.type, "param": self.param, "period": self.period, "x0": self.x0, "v0": self.v0,
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
                 "branch": self.branch, "bracket": list(self.bracket), "test": self.test, "note": self.note,
@@ -181,6 +182,7 @@ class Branch:
     stopped: str = ""                # why the continuation of this branch ended
 
     def as_dict(self) -> dict[str, Any]:
+        """The branch as a JSON-ready dict."""
         return {"id": self.id, "period": self.period, "kind": self.kind, "parent": self.parent,
                 "points": self.points, "stopped": self.stopped}
 
@@ -199,6 +201,7 @@ class Continuation:
     evaluations: int                 # runs of the map (each one FMU doStep over the map's span)
 
     def as_dict(self) -> dict[str, Any]:
+        """The branches and the bifurcations as a JSON-ready dict (the Dataset left out)."""
         return {"param": self.param, "branches": [b.as_dict() for b in self.branches],
                 "bifurcations": [b.as_dict() for b in self.bifurcations]}
 
@@ -450,7 +453,28 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
     the doubled branch of every period doubling and the two asymmetric branches of every symmetry
     breaking (at most ``max_branches`` branches in all). ``symmetric``: continue a symmetric
     period-1 orbit as a fixed point of H = -P^{1/2}. ``progress``: called with the number of points
-    so far. Every DryFrictionWarning the FMU emits reaches the caller."""
+    so far. Every DryFrictionWarning the FMU emits reaches the caller.
+
+    Returns
+    -------
+    Continuation
+        The branches' points (an xarray Dataset: parameter, state, amplitude, multipliers, stability),
+        the bifurcations located on them and the branches.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``param`` or bifurcation type, ``start`` equal to ``stop``, steps out of order,
+        no orbit (or none that converged) to start from.
+
+    Examples
+    --------
+    >>> from dryfriction import Oscillator, continue_orbits
+    >>> p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.8)
+    >>> c = continue_orbits(p, "chi", 0.8, 0.22)
+    >>> [b["type"] for b in c.as_dict()["bifurcations"]]
+    ['symmetry_breaking', 'grazing', 'period_doubling', 'grazing', 'period_doubling']
+    """
     if param not in PARAMETERS:
         raise ValueError(f"unknown continuation parameter {param!r}; valid: {', '.join(PARAMETERS)}")
     for n, v in (("start", start), ("stop", stop)):

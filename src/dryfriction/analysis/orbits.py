@@ -441,7 +441,29 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     fewer is faster, the amplitude, offset and stick share are the FMU's observables whatever it is).
 
     ``fmu``: an :class:`OscillatorFMU2` to use (else one is loaded and closed). Every
-    DryFrictionWarning the FMU emits reaches the caller."""
+    DryFrictionWarning the FMU emits reaches the caller.
+
+    Returns
+    -------
+    list of Orbit
+        The orbits, stable ones first, each with its state at t = 0 (m, m/s), multipliers, amplitude,
+        offset (m) and stick share.
+
+    Raises
+    ------
+    ValueError
+        A ``period`` that is not an integer >= 1.
+    dryfriction.FMUCallError
+        The FMU refuses the oscillator's values (its sentence names the variable).
+
+    Examples
+    --------
+    >>> from dryfriction import Oscillator, find_orbits
+    >>> p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4)
+    >>> orbits = find_orbits(p)
+    >>> [(o.period, o.stable) for o in orbits]     # a mirror pair of stable period-1 orbits
+    [(1, True), (1, True)]
+    """
     p = oscillator
     _check(p, period)
     own = fmu is None

@@ -18,6 +18,8 @@ from .validation import CASES, Convergence, FirstCycle, convergence, first_cycle
 
 def run_validation(fmu: OscillatorFMU2, cases: Sequence[str], steps: Sequence[int],
                    progress: bool = True) -> tuple[FirstCycle, dict[tuple[str, str], Convergence]]:
+    """The main job's runs: the first cycle against the exact solution and, for every case and scheme, the
+    errors over ``steps`` steps per period."""
     from tqdm import tqdm
 
     fc = first_cycle(fmu, steps_per_period=1000)
@@ -29,6 +31,8 @@ def run_validation(fmu: OscillatorFMU2, cases: Sequence[str], steps: Sequence[in
 
 
 def table(results: dict[tuple[str, str], Convergence]) -> str:
+    """The convergence results as a text table: the error of each case and scheme per step and the observed
+    orders."""
     lines = []
     steps = next(iter(results.values())).steps_per_period
     head = f"{'case':16s} {'scheme':11s} " + " ".join(f"{'T/' + str(n):>9s}" for n in steps) + "   orders"
@@ -43,6 +47,7 @@ def table(results: dict[tuple[str, str], Convergence]) -> str:
 
 
 def write_csv(path: Path, results: dict[tuple[str, str], Convergence]) -> None:
+    """Write the convergence results to a CSV file (one row per case, scheme and step), atomically."""
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(["case", "scheme", "steps_per_period", "max_error_z", "observed_order"])
@@ -54,6 +59,7 @@ def write_csv(path: Path, results: dict[tuple[str, str], Convergence]) -> None:
 
 
 def plot(path: Path, fc: FirstCycle, results: dict[tuple[str, str], Convergence]) -> None:
+    """Draw the first cycle against the exact solution and the errors against the step into one PNG."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -78,10 +78,12 @@ class SlipEvents:
 
     @property
     def duration(self) -> np.ndarray:
+        """Each event's duration, s."""
         return self.stop - self.start
 
     @property
     def count(self) -> int:
+        """The number of events."""
         return int(self.start.size)
 
     def select(self, keep: np.ndarray) -> "SlipEvents":
@@ -112,6 +114,8 @@ class EventDetector:
         self.n: int | None = None
 
     def feed(self, t: np.ndarray, x: np.ndarray, v: np.ndarray) -> None:
+        """Add the next segment of a record (times [nt], positions and velocities [nt, n]); it must start at
+        the previous segment's last sample (ValueError otherwise)."""
         t = np.asarray(t, dtype=float)
         if self._last is not None and t[0] != self._last:
             raise ValueError(f"a segment must start at the previous segment's last sample {self._last}, not {t[0]}")
@@ -130,6 +134,7 @@ class EventDetector:
         self._last = float(t[-1])
 
     def events(self) -> SlipEvents:
+        """The slip events of everything fed so far (ValueError when nothing was fed)."""
         if self.n is None:
             raise ValueError("no record was fed")
         t = np.concatenate(self._times)

@@ -63,17 +63,21 @@ def __getattr__(name: str) -> Any:
 
 @dataclass(frozen=True)
 class Convergence:
+    """The errors of one scheme on one case against the exact solution, at several steps per period, with the
+    observed orders."""
     scheme: str
     steps_per_period: tuple[int, ...]
     errors: tuple[float, ...]          # max |x - x_exact| * k / P0 (non-dimensional)
 
     @property
     def orders(self) -> np.ndarray:
+        """The observed orders log2(e_i / e_{i+1}) between successive halvings of the step."""
         e = np.asarray(self.errors)
         return np.log2(e[:-1] / e[1:])
 
     @property
     def ratios(self) -> np.ndarray:
+        """The error ratios e_i / e_{i+1} between successive halvings of the step."""
         e = np.asarray(self.errors)
         return e[:-1] / e[1:]
 
@@ -106,6 +110,8 @@ def convergence(
 
 @dataclass(frozen=True)
 class FirstCycle:
+    """The FMU's first cycle of stick-slip against the exact solution: the sampled x, v, a of both, the modes
+    seen and the largest errors relative to their ranges."""
     t: np.ndarray
     fmu: dict[str, np.ndarray]
     exact: dict[str, np.ndarray]

@@ -1,5 +1,5 @@
 """``dryfriction belt``: the self-excited motion of the block on a belt at a constant speed, without
-excitation (:func:`dryfriction.analysis.self_excited.self_excited`; docs/self_excited.md).
+excitation (:func:`dryfriction.analysis.self_excited.motion.self_excited`; docs/self_excited.md).
 
     dryfriction belt --v-belt 0.2 [--law coulomb|stribeck --v-s 0.1 --delta 1] [--json] [--out DIR]
     dryfriction belt --m 0.5 --k 2000 --zeta 0.01 --N 20 --mu-s 0.3 --mu-k 0.2 --v-belt 0.05 --law stribeck

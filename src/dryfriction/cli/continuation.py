@@ -193,6 +193,8 @@ def write_csv(c: Any, path: Path) -> None:
 
 
 def plot(c: Any, path: Path, title: str) -> None:
+    """Draw the branches (amplitude and ``|mu|max`` against the parameter, unstable ones dashed) with the
+    bifurcations into a PNG."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -1,8 +1,8 @@
 """The one argument parser of the package's commands and scripts: a bad argument is one readable
 line (``prog: error: message``) and exit status 2, never a usage dump or a traceback; and the
 options several commands share: ``--fmu --strict --max-work`` (:func:`global_options`), the
-oscillator in physical units (:data:`PHYSICAL`, :func:`physical_options`, :func:`physical`) or in
-the paper's non-dimensional form (:func:`nondim_options`).
+oscillator in physical units (:data:`PHYSICAL`, :func:`physical_options`,
+:func:`~dryfriction.cli.options.physical`) or in the paper's non-dimensional form (:func:`nondim_options`).
 
     p = make_parser("dryfriction study", "...")           # error() raises UsageError
     p = make_parser("bench_sweep.py", "...", exit=True)   # error() prints the line and exits 2
@@ -41,6 +41,7 @@ class Parser(argparse.ArgumentParser):
 
     def parse_known_args(self, args: Sequence[str] | None = None,  # type: ignore[override]
                          namespace: argparse.Namespace | None = None) -> tuple[argparse.Namespace, list[str]]:
+        """Parse the arguments, first refusing an unknown option with the closest valid one named."""
         arg_list = list(sys.argv[1:] if args is None else args)
         self._refuse_unknown(arg_list)     # first: argparse would report a missing option instead
         return super().parse_known_args(arg_list, namespace)
@@ -76,6 +77,8 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         # argparse's "argument --m: --m must be > 0, not -1": the option is named once
+        """Report a usage error in one line: a :class:`~dryfriction.errors.UsageError`, or the line on stderr
+        and exit status 2."""
         head, sep, rest = message.partition(": ")
         if sep and head.startswith("argument ") and rest.startswith(head[len("argument "):].split("/")[0] + " "):
             message = rest

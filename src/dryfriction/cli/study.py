@@ -1,10 +1,10 @@
 """``dryfriction study``: run a study of the registry (:mod:`dryfriction.studies`), list them, show
-a study's effective configuration.
+a study's effective configuration::
 
     dryfriction study list
     dryfriction study <name> [--quick] [--out DIR] [--workers N] [--scheduler ADDR]
                              [--set key=value ...] [--config FILE] [--fmu PATH]
-    python -m dryfriction.studies <name> ...      # the same (:func:`main`)
+    python -m dryfriction.studies <name> ...      # the same (main)
 
 Exit status 0, 1 (the study failed), 2 (bad input or an error the FMU reports), 3 (stopped by
 ``--max-chunks``: run again to finish), 130 (interrupted; finished chunks are kept).

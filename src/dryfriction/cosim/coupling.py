@@ -54,6 +54,8 @@ class SpringDamper:
     force: str | tuple[str, str] = "F_ext"
 
     def terms(self) -> list[tuple[str, str, float]]:
+        """The element's terms (unit, variable, coefficient), its values checked (ValueError for a negative or
+        non-finite k or c)."""
         for name, val in (("k", self.k), ("c", self.c)):
             if not (math.isfinite(val) and val >= 0):
                 raise ValueError(f"SpringDamper({self.a}, {self.b}): {name} must be a finite number >= 0, not {val!r}")

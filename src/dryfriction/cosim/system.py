@@ -53,7 +53,35 @@ _CAUSALITY_NAMES = {"input": "an input", "output": "an output", "local": "a loca
 
 
 class System:
-    """FMUs coupled through named ports ``"instance.variable"``."""
+    """FMUs coupled through named ports ``"instance.variable"``.
+
+    Add started drivers with :meth:`add`, couple them with :meth:`couple` (a
+    :class:`~dryfriction.cosim.coupling.SpringDamper` or a :class:`~dryfriction.cosim.coupling.Connection`)
+    and :meth:`run` the master: Jacobi or Gauss-Seidel, inputs held, extrapolated or sent as input
+    derivatives, an interface-Jacobian correction, rollback with FMU states.
+
+    Raises
+    ------
+    ValueError
+        A bad coupling element (negative or non-finite k or c, an unknown instance).
+    dryfriction.FMUError
+        A port that is not a real scalar of its FMU.
+
+    Examples
+    --------
+    >>> from dryfriction import OscillatorFMU2, Settings, System
+    >>> from dryfriction.cosim.split import split_chain2
+    >>> chain = dict(m=1.0, k=1.0, c=[0.05, 0.1], P0=[1.0, 0.0], N=[0.8, 0.5], mu_s=0.5, chi=0.7, omega=0.6)
+    >>> b1, b2, spring = split_chain2(chain)
+    >>> with OscillatorFMU2() as f1, OscillatorFMU2() as f2:
+    ...     f1.start(b1, Settings(h=0.0)); f2.start(b2, Settings(h=0.0))
+    ...     system = System()
+    ...     _ = system.add("b1", f1); _ = system.add("b2", f2)
+    ...     system.couple(spring)                 # F on b1.F_ext, -F on b2.F_ext
+    ...     res = system.run(t_stop=104.7, H=0.105, inputs="derivatives")
+    >>> round(float(res["b1.x"][-1]), 4)     # block 1's position at t = 104.7, m
+    1.1841
+    """
 
     def __init__(self) -> None:
         self.units: dict[str, Unit] = {}
@@ -76,6 +104,7 @@ class System:
         self.couple(Connection(source, target, gain))
 
     def couple(self, element: Connection | SpringDamper) -> None:
+        """Add a coupling element (checked now: ValueError or FMUError for a bad one)."""
         element.terms()  # checked now
         self.elements.append(element)
 

@@ -47,6 +47,8 @@ class Unit:
 
     # ---- names ------------------------------------------------------------------------------------
     def vr(self, var: str) -> int:
+        """The value reference of a real scalar variable of this unit (FMUError if it has none or it is not
+        one)."""
         md = self.driver.md
         v = md.variables.get(var)
         if v is None:
@@ -56,6 +58,7 @@ class Unit:
         return int(v.vr)
 
     def causality(self, var: str) -> str:
+        """The causality of a variable (``input``, ``output``, ``parameter``, ``local``, ...)."""
         return str(self.driver.md.var(var).causality)
 
     def derivative_outputs(self, var: str) -> tuple[str, ...]:
@@ -64,9 +67,11 @@ class Unit:
 
     # ---- values -----------------------------------------------------------------------------------
     def get(self, vrs: Sequence[int]) -> np.ndarray:
+        """The values of the real variables ``vrs``."""
         return np.array(self.inst.get(self.kind, list(vrs)), dtype=float)
 
     def set(self, vrs: Sequence[int], values: Sequence[float]) -> None:
+        """Set the real variables ``vrs`` to ``values``."""
         if len(vrs):
             self.inst.set(self.kind, list(vrs), [float(v) for v in values])
 
@@ -111,12 +116,14 @@ class Unit:
         self._state = self.inst.get_state(self._state)
 
     def restore(self, t: float) -> None:
+        """Go back to the saved FMU state, at time ``t`` (FMUError when none was saved)."""
         if self._state is None:
             raise FMUError(f"{self.name}: no saved state to go back to")
         self.inst.set_state(self._state)
         self.driver.time = t
 
     def free_state(self) -> None:
+        """Free the saved FMU state, if any."""
         if self._state is not None:
             self._state.free()
             self._state = None

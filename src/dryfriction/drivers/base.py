@@ -44,6 +44,7 @@ class Switch:
 
     @property
     def kind(self) -> str:
+        """What the switch is: ``breakaway`` (from stuck), ``stop`` (to stuck) or ``reversal``."""
         if self.mode_before == 0:
             return "breakaway"
         if self.mode_after == 0:
@@ -62,6 +63,7 @@ class Run:
 
     @property
     def switch_times(self) -> np.ndarray:
+        """The times of the run's switches, s."""
         return np.array([s.t for s in self.switches])
 
     def __getitem__(self, name: str) -> np.ndarray:
@@ -112,10 +114,12 @@ class Driver:
 
     @property
     def fmi_version(self) -> int:
+        """The FMI version of the loaded FMU, 2 or 3."""
         return 3 if isinstance(self.inst, fmi3.Instance) else 2
 
     # ---- names --------------------------------------------------------------------------------
     def vr(self, name: str) -> int:
+        """The value reference of the variable ``name`` (FMUError for an unknown name)."""
         return self.md.vr(name)
 
     def size(self, name: str) -> int:
@@ -249,9 +253,11 @@ class Driver:
 
     # ---- stepping (the subclasses' own) ---------------------------------------------------------
     def do_step(self, dt: float) -> Any:
+        """One communication step of ``dt`` seconds from the current time; each driver implements it."""
         raise NotImplementedError
 
     def run(self, t_stop: float, dt: float, *args: Any, **kwargs: Any) -> Any:
+        """A whole run to ``t_stop`` on a grid of ``dt``; each driver implements it."""
         raise NotImplementedError
 
     # ---- the end --------------------------------------------------------------------------------

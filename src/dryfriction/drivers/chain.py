@@ -2,7 +2,7 @@
 
 fmpy's ``simulate_fmu`` cannot set a structural parameter, so the number of blocks ``n`` of the
 FMI 3.0 chain is set here: instantiate, Configuration Mode, ``n``, then the arrays and scalars in
-Initialization Mode, then steps on the host's grid ``k dt`` with the outputs read at every point:
+Initialization Mode, then steps on the host's grid ``k dt`` with the outputs read at every point::
 
     from dryfriction.drivers.chain import ChainFMU3
     with ChainFMU3(n=8, params={"mu_s": 0.3, "P0": [1.0] + [0.0] * 7, "omega": 0.5}) as chain:
@@ -11,7 +11,7 @@ Initialization Mode, then steps on the host's grid ``k dt`` with the outputs rea
 
 A scalar for an array parameter sets every block; a sequence must hold n values. The FMI 2.0
 chain (:class:`ChainFMU2`, ``n`` fixed when it was built, structured names ``m[1]``, ``x[1]``, ...)
-has the same interface; ``run(t_end=...)`` is the former name of ``t_stop``. Both run on the package's FMI layer
+has the same interface; ``t_end`` is a deprecated name of ``t_stop``. Both run on the package's FMI layer
 (:mod:`dryfriction.fmi`); the stepping loop reads every point's outputs with one typed call per
 type straight into the rows of preallocated numpy arrays (the layer's ``bulk_get``). Every name
 and value reference comes from the FMU's model description (:mod:`dryfriction.model`); an FMU
@@ -96,6 +96,7 @@ class ChainRun:
 
     @property
     def n(self) -> int:
+        """The number of blocks."""
         return int(self.x.shape[1])
 
     def stick_share(self, t_from: float = -np.inf) -> np.ndarray:
@@ -292,8 +293,8 @@ class _Chain(Driver):
             inputs: Inputs | None = None, start_time: float = 0.0, *, t_end: float | None = None) -> ChainRun:
         """Start afresh (:meth:`start` with ``params``), then :meth:`record` to ``t_stop``. Inputs
         given as values are set in Initialization Mode and held; a function is called before every
-        step (the first one after initialisation, with the outputs at the start). ``t_end`` is the
-        former name of ``t_stop``."""
+        step (the first one after initialisation, with the outputs at the start). ``t_end`` is a
+        deprecated name of ``t_stop``."""
         t_stop = _stop_time(t_stop, t_end)
         if dt is None:
             raise TypeError("run() needs dt, the communication step")
@@ -360,8 +361,37 @@ def _stop_time(t_stop: float | None, t_end: float | None) -> float:
 
 class ChainFMU3(_Chain):
     """The FMI 3.0 chain (``build/fmi3/DryFrictionChain.fmu``) with ``n`` blocks (set in
-    Configuration Mode at every :meth:`start`); one instance, reused by every :meth:`run` (reset
-    between runs)."""
+    Configuration Mode at every :meth:`ChainFMU3.start`); one instance, reused by every :meth:`ChainFMU3.run` (reset
+    between runs).
+
+    Parameters
+    ----------
+    n
+        The number of blocks, 1 to 4096.
+    params
+        The chain's values by name: a scalar sets every block, a sequence gives one value per block.
+    fmu_path
+        The FMU; default: the environment's ``DFO_CHAIN_FMU3``, the installed package's, the
+        checkout's ``build/fmi3/``.
+
+    Raises
+    ------
+    ValueError
+        A list of the wrong length, an unknown name or scheme (before anything is set).
+    dryfriction.FMUCallError
+        A value the FMU refuses, with its sentence (``invalid value -1 for m[3]``).
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 3.0 chain FMU.
+
+    Examples
+    --------
+    >>> from dryfriction import ChainFMU3
+    >>> params = {"P0": [1.0] + [0.0] * 7, "k": 1.0, "N": 0.6, "mu_s": 0.5, "omega": 0.5, "h": 0.01}
+    >>> with ChainFMU3(n=8, params=params) as chain:
+    ...     run = chain.run(t_stop=60.0, dt=0.1)        # run.x, .v, .a, .F_friction, .mode: [601, 8]
+    >>> print(run.stick_share().round(2))
+    [0.14 0.45 0.56 0.67 1.   1.   1.   1.  ]
+    """
 
     KIND = paths.CHAIN3
     TERMINATE_ON_CLOSE = True
@@ -448,7 +478,35 @@ class ChainFMU3(_Chain):
 
 class ChainFMU2(_Chain):
     """The FMI 2.0 chain (``build/DryFrictionChain.fmu``): n fixed when it was built (read from the
-    model description: the number of ``m[i]``), structured names ``m[1]`` ... ``x[n]``."""
+    model description: the number of ``m[i]``), structured names ``m[1]`` ... ``x[n]``.
+
+    Parameters
+    ----------
+    params
+        The chain's values by name: a scalar sets every block, a sequence gives one value per block.
+    fmu_path
+        The FMU; default: the environment's ``DFO_CHAIN_FMU``, the installed package's, the checkout's
+        ``build/``.
+    n
+        The number of blocks expected (checked against the FMU's; None: the FMU's).
+
+    Raises
+    ------
+    ValueError
+        A list of the wrong length, an unknown name or scheme, an ``n`` that is not the FMU's.
+    dryfriction.FMUCallError
+        A value the FMU refuses, with its sentence.
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 2.0 chain FMU.
+
+    Examples
+    --------
+    >>> from dryfriction import ChainFMU2
+    >>> with ChainFMU2({"P0": [1.0, 0.0], "N": 0.6, "mu_s": 0.5, "omega": 0.5}) as chain:
+    ...     run = chain.run(t_stop=20.0, dt=0.1)
+    >>> run.x.shape
+    (201, 2)
+    """
 
     KIND = paths.CHAIN
 

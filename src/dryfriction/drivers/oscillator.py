@@ -80,7 +80,31 @@ _SETTINGS_REALS = ("h", "alpha", "t_obs_start", "t_obs_stop", "v_s", "delta")
 class OscillatorFMU2(Driver):
     """One loaded, instantiated FMI 2.0 oscillator FMU, reused across runs (not thread-safe: one
     per thread/worker). :meth:`start` sets an :class:`Oscillator` and :class:`Settings`, then
-    :meth:`do_step` / :meth:`step_to` / :meth:`run` step and :meth:`get` reads."""
+    :meth:`do_step` / :meth:`step_to` / :meth:`run` step and :meth:`get` reads.
+
+    Parameters
+    ----------
+    fmu_path
+        The FMU; default: the environment's ``DFO_FMU``, the installed package's, the checkout's
+        ``build/`` (:mod:`dryfriction.paths`).
+    logging
+        Switch the FMU's debug logging on (its messages become warnings and log records).
+
+    Raises
+    ------
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 2.0 oscillator FMU (one sentence says why).
+    dryfriction.FMUCallError
+        A call the FMU refuses, with the FMU's sentence (the instance stays usable).
+
+    Examples
+    --------
+    >>> from dryfriction import Oscillator, OscillatorFMU2, Settings
+    >>> block = Oscillator.physical(m=0.5, k=2000, zeta=0.003, P0=10, f=10, N=20, mu_s=0.3, mu_k=0.2)
+    >>> with OscillatorFMU2() as fmu:
+    ...     obs = fmu.observables(block, t_stop=100 * block.period, t_obs_start=99 * block.period)
+    ...     traj = fmu.trajectory(block, [i * block.period / 100 for i in range(101)], Settings(h=0))
+    """
 
     KIND = paths.OSCILLATOR
 
@@ -160,13 +184,16 @@ class OscillatorFMU2(Driver):
         return plan
 
     def last_successful_time(self) -> float:
+        """The time the last ``fmi2DoStep`` reached (``fmi2GetRealStatus``), s."""
         return self.fmi.last_successful_time()
 
     def reset(self) -> None:
+        """Reset the instance to its instantiated state (``fmi2Reset``), time 0."""
         self.fmi.reset()
         self.time = 0.0
 
     def set_debug_logging(self, on: bool, categories: Sequence[str] = ()) -> None:
+        """Switch the FMU's logging on or off for the given log categories (all when none is given)."""
         self.fmi.set_debug_logging(on, categories)
 
     # ---- runs ----
@@ -231,7 +258,7 @@ class OscillatorFMU2(Driver):
         """One fmi2DoStep of length ``dt`` from the current communication point :attr:`time`
         (checked); :attr:`time` is then time + dt.
 
-        Compatibility: the former signature ``do_step(t, dt)`` is still accepted, ``t`` being the
+        Compatibility: the signature ``do_step(t, dt)`` is accepted too, ``t`` being the
         current communication point as the host counts it (``k dt`` rather than the sum of the
         steps; the FMU checks that it is its own time, to its grid's tolerance, and refuses it
         otherwise); :attr:`time` is then t + dt."""
@@ -242,6 +269,8 @@ class OscillatorFMU2(Driver):
         self.time = t + dt
 
     def step_to(self, t: float) -> None:
+        """Step from the current time to ``t`` in one ``fmi2DoStep`` (FMUCallError with the FMU's sentence if
+        it fails)."""
         inst = self.fmi
         mark = len(inst.messages)
         if s := inst.f.DoStep(inst.component, float(self.time), float(t - self.time), 1):

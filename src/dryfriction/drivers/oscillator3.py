@@ -1,7 +1,7 @@
 """Driving the FMI 3.0 oscillator FMU (build/fmi3/DryFrictionOscillator.fmu) through the package's
 FMI 3.0 layer (:mod:`dryfriction.fmi.fmi3`): plain stepping, early return at every stick/slip
 switch, event mode with the left and right limits of a switch, and the intermediate-update
-callback.
+callback::
 
     with OscillatorFMU3(params={"scheme": 3}, early_return=True) as fmu:
         run = fmu.run(t_stop=4.0, dt=0.1, outputs=("x", "mode"))
@@ -28,7 +28,8 @@ from ..fmi._base import State
 
 __all__ = ["OscillatorFMU3", "Run", "Switch", "Intermediate", "default_fmi3_path"]
 
-Intermediate = Callable[[float, bool], bool]  # (time, canReturnEarly) -> earlyReturnRequested
+#: the intermediate-update callback: (time, canReturnEarly) -> earlyReturnRequested
+Intermediate = Callable[[float, bool], bool]
 
 
 def default_fmi3_path() -> Path:
@@ -39,7 +40,41 @@ def default_fmi3_path() -> Path:
 
 class OscillatorFMU3(Driver):
     """One instance of the FMI 3.0 oscillator FMU with its event options, as a context manager:
-    instantiated, ``params`` set in Initialization Mode, then in step mode at ``start_time``."""
+    instantiated, ``params`` set in Initialization Mode, then in step mode at ``start_time``.
+
+    Parameters
+    ----------
+    params
+        The FMU's variables by name (``m``, ``k``, ``scheme``, ...), set in Initialization Mode.
+    early_return
+        Return from ``fmi3DoStep`` at every stick/slip switch (``earlyReturnAllowed``).
+    event_mode
+        Enter Event Mode at every switch and record the left and right limits (``eventModeUsed``).
+    intermediate
+        An intermediate-update callback ``(t, can_return_early) -> bool``.
+    fmu_path
+        The FMU; default: the environment's ``DFO_FMU3``, the installed package's, the checkout's
+        ``build/fmi3/``.
+    start_time
+        The start time, s.
+    logging
+        Switch the FMU's debug logging on.
+
+    Raises
+    ------
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 3.0 oscillator FMU.
+    dryfriction.FMUCallError
+        A call the FMU refuses, with the FMU's sentence.
+
+    Examples
+    --------
+    >>> from dryfriction import OscillatorFMU3
+    >>> with OscillatorFMU3({"scheme": 3}, early_return=True) as fmu:
+    ...     run = fmu.run(t_stop=5.0, dt=0.1, outputs=("x", "mode"))
+    >>> [s.kind for s in run.switches][:3]
+    ['reversal', 'reversal', 'stop']
+    """
 
     KIND = paths.OSCILLATOR3
     TERMINATE_ON_CLOSE = True
@@ -92,6 +127,7 @@ class OscillatorFMU3(Driver):
         return self._slave
 
     def set_inputs(self, values: Mapping[str, float]) -> None:
+        """Set the inputs (``F_ext``, ``N_ext``, ``v_belt``) by name; they hold until set again."""
         self.set(values)
 
     def do_step(self, dt: float) -> tuple[bool, bool]:

@@ -26,12 +26,15 @@ InputFn = Callable[[float, dict[str, float]], dict[str, float]]
 
 @dataclass(frozen=True)
 class Scene:
+    """A scene: a named way to run the FMU, with whether it computes the in-FMU observables and whether it
+    samples a trajectory."""
     name: str
     description: str
     observe: bool            # in-FMU observables on
     trajectory: bool         # outputs sampled at every communication point
 
     def settings(self, base: Settings | None = None) -> Settings:
+        """The settings of a run of this scene: ``base`` (or the defaults) with the scene's ``observe``."""
         return replace(base or Settings(), observe=self.observe)
 
 
@@ -47,6 +50,7 @@ SCENES: dict[str, Scene] = {
 
 
 def get_scene(name: str) -> Scene:
+    """The scene named ``name`` (ValueError naming the scenes there are)."""
     try:
         return SCENES[name]
     except KeyError:

@@ -8,8 +8,8 @@ Both share :mod:`dryfriction.fmi._base`: the library loaded once per instance, e
 once, every status checked (OK and Warning pass, anything else is an
 :class:`~dryfriction.errors.FMUCallError` with the FMU's logged sentence), the sentences logged
 with a warning status emitted as :class:`~dryfriction.diagnostics.DryFrictionWarning`, FMU states
-that free themselves with their instance, and the fast path of hot loops (:meth:`bulk_get` /
-:meth:`bulk_set`: one typed call into preallocated numpy buffers, the status checked only when it
+that free themselves with their instance, and the fast path of hot loops (:meth:`~dryfriction.fmi.fmi2.Instance.bulk_get` /
+:meth:`~dryfriction.fmi.fmi2.Instance.bulk_set`: one typed call into preallocated numpy buffers, the status checked only when it
 is not OK), and the coupling calls (input, output, directional and adjoint derivatives,
 inputs set during an FMI 3.0 step, the capabilities the model description declares; used by
 :mod:`dryfriction.cosim`). fmpy is not used to call the FMU; it only unzips archives and names the platform's

@@ -42,6 +42,7 @@ CO_SIMULATION = 1
 
 
 def status_name(status: int) -> str:
+    """The name of an FMI 2.0 status code (``fmi2OK``, ``fmi2Warning``, ...)."""
     return _status_name(status, "fmi2")
 
 
@@ -53,6 +54,8 @@ StepFinishedT = CFUNCTYPE(None, c_void_p, c_int)
 
 
 class CallbackFunctions(Structure):
+    """The ``fmi2CallbackFunctions`` structure handed to ``fmi2Instantiate`` (logger, memory, step finished,
+    environment)."""
     _fields_ = [("logger", LoggerT), ("allocateMemory", AllocateT), ("freeMemory", FreeT),
                 ("stepFinished", StepFinishedT), ("componentEnvironment", c_void_p)]
 
@@ -139,16 +142,20 @@ class Instance(BaseInstance):
     # ---- life cycle -------------------------------------------------------------------------------
     def setup_experiment(self, start: float = 0.0, stop: float | None = None,
                          tolerance: float | None = None) -> None:
+        """``fmi2SetupExperiment``: the start time, and the stop time and tolerance when given."""
         self.call("SetupExperiment", int(tolerance is not None), float(tolerance or 0.0), float(start),
                   int(stop is not None), float(stop or 0.0))
 
     def enter_initialization_mode(self) -> None:
+        """``fmi2EnterInitializationMode``."""
         self.call("EnterInitializationMode")
 
     def exit_initialization_mode(self) -> None:
+        """``fmi2ExitInitializationMode``."""
         self.call("ExitInitializationMode")
 
     def do_step(self, t: float, dt: float, no_set_prior_state: bool = True) -> int:
+        """``fmi2DoStep`` from ``t`` over ``dt``; returns the status (an error raises FMUCallError)."""
         return self.call("DoStep", float(t), float(dt), int(no_set_prior_state))
 
     def step_function(self) -> Callable[[float, float], int]:
@@ -165,16 +172,20 @@ class Instance(BaseInstance):
         return step
 
     def terminate(self) -> None:
+        """``fmi2Terminate``."""
         self.call("Terminate")
 
     def reset(self) -> None:
+        """``fmi2Reset``: back to the instantiated state."""
         self.call("Reset")
 
     def set_debug_logging(self, on: bool, categories: Sequence[str] = ()) -> None:
+        """``fmi2SetDebugLogging``: logging on or off for the given categories (all when none is given)."""
         arr = (c_char_p * len(categories))(*[c.encode() for c in categories])
         self.call("SetDebugLogging", int(bool(on)), len(categories), arr)
 
     def last_successful_time(self) -> float:
+        """The time the last ``fmi2DoStep`` reached (``fmi2GetRealStatus``), s."""
         out = c_double()
         self.call("GetRealStatus", LAST_SUCCESSFUL_TIME, byref(out))
         return out.value
@@ -195,6 +206,8 @@ class Instance(BaseInstance):
         return [bool(x) for x in buf] if kind == "Boolean" else list(buf)
 
     def set(self, kind: str, vrs: Sequence[int], values: Sequence[Any]) -> None:
+        """Set the variables ``vrs`` of type ``kind`` (``Real``, ``Integer``, ``Boolean``, ``String``) to
+        ``values`` (ValueError for lengths that differ)."""
         n = len(vrs)
         if len(values) != n:
             raise ValueError(f"{n} value references but {len(values)} values")

@@ -40,6 +40,7 @@ STATUS_NAMES = ("fmi3OK", "fmi3Warning", "fmi3Discard", "fmi3Error", "fmi3Fatal"
 
 
 def status_name(status: int) -> str:
+    """The name of an FMI 3.0 status code (``fmi3OK``, ``fmi3Warning``, ...)."""
     return _status_name(status, "fmi3")
 
 
@@ -249,26 +250,33 @@ class Instance(BaseInstance):
 
     # ---- life cycle -------------------------------------------------------------------------------
     def enter_configuration_mode(self) -> None:
+        """``fmi3EnterConfigurationMode``: structural parameters may be set."""
         self.call("EnterConfigurationMode")
 
     def exit_configuration_mode(self) -> None:
+        """``fmi3ExitConfigurationMode``."""
         self.call("ExitConfigurationMode")
 
     def enter_initialization_mode(self, start: float = 0.0, stop: float | None = None,
                                   tolerance: float | None = None) -> None:
+        """``fmi3EnterInitializationMode`` with the start time, and the stop time and tolerance when given."""
         self.call("EnterInitializationMode", tolerance is not None, float(tolerance or 0.0), float(start),
                   stop is not None, float(stop or 0.0))
 
     def exit_initialization_mode(self) -> None:
+        """``fmi3ExitInitializationMode``."""
         self.call("ExitInitializationMode")
 
     def enter_event_mode(self) -> None:
+        """``fmi3EnterEventMode``."""
         self.call("EnterEventMode")
 
     def enter_step_mode(self) -> None:
+        """``fmi3EnterStepMode``."""
         self.call("EnterStepMode")
 
     def update_discrete_states(self) -> DiscreteStates:
+        """``fmi3UpdateDiscreteStates``: what the FMU reports after an event, as a :class:`DiscreteStates`."""
         out = (c_bool(), c_bool(), c_bool(), c_bool(), c_bool(), c_double())
         self.call("UpdateDiscreteStates", *[byref(x) for x in out])
         return DiscreteStates(*(bool(x.value) for x in out[:5]), out[5].value)
@@ -320,12 +328,15 @@ class Instance(BaseInstance):
             raise err
 
     def terminate(self) -> None:
+        """``fmi3Terminate``."""
         self.call("Terminate")
 
     def reset(self) -> None:
+        """``fmi3Reset``: back to the instantiated state."""
         self.call("Reset")
 
     def set_debug_logging(self, on: bool, categories: Sequence[str] = ()) -> None:
+        """``fmi3SetDebugLogging``: logging on or off for the given categories (all when none is given)."""
         arr = (c_char_p * len(categories))(*[c.encode() for c in categories])
         self.call("SetDebugLogging", bool(on), len(categories), arr)
 

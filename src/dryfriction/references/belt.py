@@ -2,7 +2,7 @@
 stick/slip solution for Coulomb and Stribeck friction, and the closed-form stick-slip limit cycle of
 the undamped, unforced Coulomb belt oscillator.
 
-The model (one block; the FMU's, issue "a moving rough surface and speed-dependent friction"):
+The model (one block; the FMU's)::
 
     m x'' + c x' + k x = P0 cos(omega t + phi) + F_ext + F,     v_rel = v - v_belt,
     stuck:   v = v_belt, while the force that keeps it so, |f|, f = P(t) + F_ext - c v_belt - k x,
@@ -69,6 +69,7 @@ class Belt:
                 raise ValueError(f"{name} must be >= 0, not {getattr(self, name)!r}")
 
     def with_(self, **kw: float | str) -> "Belt":
+        """A copy with the given fields changed."""
         return replace(self, **kw)  # type: ignore[arg-type]
 
     def mu(self, u: float) -> float:
@@ -108,6 +109,7 @@ class BeltRun:
     events: list[tuple[float, str]] = field(default_factory=list)  # (time, "stop" | "breakaway" | "reversal")
 
     def times(self, kind: str) -> np.ndarray:
+        """The times of the run's events of one kind (``stick``, ``slip``, ...), s."""
         return np.array([t for t, k in self.events if k == kind])
 
 
@@ -264,10 +266,12 @@ class LimitCycle:
 
     @property
     def stick_fraction(self) -> float:
+        """The share of the period spent stuck (riding the belt)."""
         return self.t_stick / self.period
 
     @property
     def amplitude(self) -> float:
+        """Half the peak-to-peak of x over the cycle, m."""
         return (self.x_max - self.x_min) / 2.0
 
 

@@ -83,10 +83,12 @@ class Chain:
 
     @property
     def n(self) -> int:
+        """The number of blocks."""
         return int(self.m.size)
 
     @property
     def mu_k(self) -> np.ndarray:
+        """The kinetic friction coefficients, chi mu_s, per block."""
         return self.chi * self.mu_s
 
     def mu(self, u: np.ndarray) -> np.ndarray:
@@ -103,9 +105,11 @@ class Chain:
 
     @property
     def period(self) -> float:
+        """The excitation period 2 pi / omega, s."""
         return 2.0 * np.pi / self.omega
 
     def validate(self) -> None:
+        """Check every array's length and every value (ValueError naming the first bad one)."""
         for name in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0"):
             a = getattr(self, name)
             if a.shape != (self.n,) or not np.all(np.isfinite(a)):
@@ -201,6 +205,7 @@ class ChainSolution:
 
     @property
     def t_end(self) -> float:
+        """The time the solution ends, s."""
         return self.phases[-1].t1
 
     def evaluate(self, t: Sequence[float]) -> dict[str, np.ndarray]:

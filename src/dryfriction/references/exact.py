@@ -97,6 +97,7 @@ class ExactSolution:
 
     @property
     def t_end(self) -> float:
+        """The time the solution ends, s."""
         return self.segments[-1].t1
 
     def switch_times(self) -> np.ndarray:
@@ -191,6 +192,35 @@ def solve_exact(p: Oscillator, t_end: float, max_segments: int = 10**6) -> Exact
 
     With v0 = 0 the block starts stuck iff |P(0) - k x0| <= F_b, else it slides in the direction
     of the net force; with v0 != 0 it slides in the direction of v0.
+
+    Parameters
+    ----------
+    p
+        The oscillator (SI units; damping below critical).
+    t_end
+        The end of the solution, s.
+    max_segments
+        The most stick and slide segments to compute.
+
+    Returns
+    -------
+    ExactSolution
+        The segments between events, evaluated anywhere by :meth:`ExactSolution.evaluate`.
+
+    Raises
+    ------
+    ValueError
+        ``t_end`` not finite or negative.
+    RuntimeError
+        More than ``max_segments`` segments before ``t_end``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dryfriction import Oscillator, solve_exact
+    >>> p = Oscillator.from_nondimensional(lam=0.3, mu_s_sigma=0.7, chi=0.5)
+    >>> sol = solve_exact(p, 2 * p.period)
+    >>> x, v, a, mode = sol.evaluate(np.linspace(0.0, 2 * p.period, 5))
     """
     validate_oscillator(p)
     if not (math.isfinite(t_end) and t_end >= 0):

@@ -1,4 +1,4 @@
-"""The paper's studies and the project's own, one module each, and their registry.
+"""The paper's studies and the project's own, one module each, and their registry::
 
     dryfriction study list                   # the command (dryfriction.cli.study)
     dryfriction study <name> [--quick] [--out DIR] [--workers N] [--scheduler ADDR]
@@ -160,6 +160,8 @@ def _default_config(name: str) -> dict[str, Any]:
 
 @dataclass
 class StudyOutcome:
+    """What :func:`run_study` returns: the study's name, its output folder, its summary, the sweeps'
+    statistics and the messages it printed."""
     name: str
     out_dir: Path
     summary: dict[str, Any]

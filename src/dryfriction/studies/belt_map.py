@@ -5,7 +5,7 @@ delta = 1: v* = v_s ln(N (mu_s - mu_k) / (c v_s))).
 
 Each normal force is a row walked up in belt speed: a point's orbit is Newton's from the previous
 point's stable orbit (warm start); where that fails or is not stable, from a transient that starts
-riding on the belt at x_eq (:func:`~dryfriction.analysis.self_excited.self_excited`); where the orbit solve
+riding on the belt at x_eq (:func:`~dryfriction.analysis.self_excited.motion.self_excited`); where the orbit solve
 fails there too, the transient's last quarter gives the numbers, and the data says so (``motion`` 3,
 ``method`` per point). With ``numerics.grazing`` the end of stick-slip per N is located too, by
 continuation in v_belt from the row's slowest stick-slip orbit (``grazing_v_belt``, the red line).
@@ -39,6 +39,8 @@ MOTIONS = {0: "steady sliding", 1: "stick-slip orbit", 2: "slip orbit", 3: "tran
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the belt map with a value out of range (ConfigError naming the key), before
+    any work."""
     p, g, n = cfg["params"], cfg["grid"], cfg["numerics"]
     for key in ("m", "k", "mu_s"):
         require(p[key] > 0, f"params.{key} must be > 0, not {p[key]}")
@@ -59,6 +61,8 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def problem(p: dict[str, Any], N: float, vb: float, steps: int) -> BeltProblem:
+    """The belt problem of the map's point (normal force ``N``, belt speed ``vb``) with ``steps`` steps per
+    natural period."""
     osc = Oscillator(m=p["m"], k=p["k"], c=p["c"], P0=0.0, omega=0.0, phi=0.0, N=N, mu_s=p["mu_s"],
                      chi=p["mu_k"] / p["mu_s"], x0=0.0, v0=0.0)
     return BeltProblem(osc, vb, law=p["law"], v_s=p["v_s"], delta=p["delta"],
@@ -98,6 +102,7 @@ def point(fmu: Any, prob: BeltProblem, warm: tuple[float, float] | None, periods
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the belt map: its runs, dataset and figures in the study's folder; returns the summary."""
     from tqdm import tqdm
 
     cfg = ctx.cfg
@@ -225,7 +230,7 @@ GRAZING_POINTS: int = inspect.signature(continue_orbits).parameters["max_points"
 def work(cfg: dict[str, Any]) -> Estimate:
     """The study's work and output size (:mod:`dryfriction.budget`): per grid point, a transient
     of at least ``transient_periods`` natural periods (longer at low belt speed: five estimated
-    stick-slip cycles, as :func:`~dryfriction.analysis.self_excited.self_excited`) and Newton's solve, in
+    stick-slip cycles, as :func:`~dryfriction.analysis.self_excited.motion.self_excited`) and Newton's solve, in
     orbit periods (a natural period and the ride on the belt); per N, the grazing continuation."""
     p, g, n = cfg["params"], cfg["grid"], cfg["numerics"]
     vb, Ns = grid(g["v_belt"], "grid.v_belt"), grid(g["N"], "grid.N")

@@ -36,6 +36,7 @@ BIFURCATION_COLUMNS = ("type", "param", "param_value", "period", "branch", "ampl
 
 
 def check_continuation(c: dict[str, Any], where: str = "continuation") -> None:
+    """Refuse continuation settings out of range (ConfigError naming the key)."""
     require(0 < c["ds"] <= c["ds_max"], f"{where}: need 0 < ds <= ds_max (ds = {c['ds']}, ds_max = {c['ds_max']})")
     require(c["max_points"] >= 2, f"{where}.max_points must be >= 2, not {c['max_points']}")
     require(c["max_branches"] >= 1, f"{where}.max_branches must be >= 1, not {c['max_branches']}")

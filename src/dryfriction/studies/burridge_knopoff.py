@@ -36,10 +36,13 @@ LAWS = ("coulomb", "stribeck")
 
 
 def default_fmu() -> Path:
+    """The FMU the study runs by default: the FMI 3.0 chain."""
     return default_chain_fmu3()
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Burridge-Knopoff study with a value out of range (ConfigError naming the
+    key), before any work."""
     m, r, d, f, num, sp = cfg["model"], cfg["run"], cfg["detect"], cfg["fit"], cfg["numerics"], cfg["speed"]
     require(1 <= m["n"] <= 4096, f"model.n must be in [1, 4096], not {m['n']}")
     require(m["l2"] >= 0, f"model.l2 (k_c / k_p) must be >= 0, not {m['l2']}")
@@ -238,6 +241,8 @@ def slip_image(ev: SlipEvents, t_lo: float, t_hi: float, rows: int) -> tuple[np.
 # ---- the study ----------------------------------------------------------------------------------
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the Burridge-Knopoff study: its runs, dataset and figures in the study's folder; returns the
+    summary."""
     cfg = ctx.cfg
     m, r, d, f, num, sp = cfg["model"], cfg["run"], cfg["detect"], cfg["fit"], cfg["numerics"], cfg["speed"]
     chain_params(m, num, float(r["dt"]))  # a friction law the FMU lacks: refused before the run
@@ -320,6 +325,8 @@ def dataset(ev: SlipEvents, hist: Mapping[str, np.ndarray], res: Mapping[str, An
 
 def plot(ev: SlipEvents, hist: Mapping[str, np.ndarray], fit: Mapping[str, float], res: Mapping[str, Any],
          cfg: Mapping[str, Any]) -> Any:
+    """The study's figure: the slip events in space and time and their moments' distribution with the fitted
+    power law."""
     from matplotlib.colors import LogNorm
 
     m, r = cfg["model"], cfg["run"]

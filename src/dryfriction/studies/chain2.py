@@ -33,10 +33,13 @@ FMU_KIND = paths.CHAIN3
 
 
 def default_fmu() -> Path:
+    """The FMU the study runs by default: the FMI 3.0 chain."""
     return default_chain_fmu3()
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the two-block chain study with a value out of range (ConfigError naming the
+    key), before any work."""
     ch, w, num = cfg["chain"], cfg["window"], cfg["numerics"]
     require(ch["m"] > 0, f"chain.m must be > 0, not {ch['m']}")
     for key in ("k", "c", "N", "mu_s", "chi"):
@@ -90,6 +93,8 @@ def rows_task(fmu: str | bytes, ch: Mapping[str, Any], window: Mapping[str, Any]
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the two-block chain study: its runs, dataset and figures in the study's folder; returns the
+    summary."""
     from ..analysis.chaos.batch import concat, map_chunks
 
     cfg = ctx.cfg

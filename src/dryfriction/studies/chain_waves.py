@@ -33,10 +33,13 @@ FMU_KIND = paths.CHAIN3
 
 
 def default_fmu() -> Path:
+    """The FMU the study runs by default: the FMI 3.0 chain."""
     return default_chain_fmu3()
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the chain-waves study with a value out of range (ConfigError naming the key),
+    before any work."""
     ch, w, num = cfg["chain"], cfg["window"], cfg["numerics"]
     require(2 <= ch["n"] <= 4096, f"chain.n must be in [2, 4096], not {ch['n']}")
     require(ch["m"] > 0, f"chain.m must be > 0, not {ch['m']}")
@@ -93,6 +96,7 @@ def front_speed(first: np.ndarray) -> float:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the chain-waves study: its runs, dataset and figures in the study's folder; returns the summary."""
     from ..analysis.chaos.batch import map_chunks
 
     cfg = ctx.cfg
@@ -134,6 +138,8 @@ def run(ctx: StudyContext) -> dict[str, Any]:
 
 
 def plot(ds: xr.Dataset) -> Any:
+    """The study's figure: the blocks' modes over time (the stick-slip fronts) and the stick share along the
+    chain."""
     from matplotlib.colors import ListedColormap
 
     a = ds.attrs

@@ -21,6 +21,8 @@ FIGURES = REGISTRY[NAME].figures
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the basin maps with a value out of range (ConfigError naming the key), before
+    any work."""
     check_numerics(cfg["numerics"])
     require(isinstance(cfg["cases"], list) and len(cfg["cases"]) >= 1, "cases must be a non-empty list")
     for c in cfg["cases"]:
@@ -48,6 +50,8 @@ def case_grid(cfg: dict[str, Any], case: str) -> tuple[np.ndarray, np.ndarray, d
 
 
 def basin_map(ctx: StudyContext, case: str) -> tuple[xr.Dataset, Catalogue, float]:
+    """The basin map of one case: the attractor each initial condition of the grid settles on, the catalogue
+    of attractors and the wall time."""
     cfg = ctx.cfg
     t, g = cfg[case], cfg["grid"]
     z0, dz0, num = case_grid(cfg, case)
@@ -113,6 +117,7 @@ def plot_basins(ds: xr.Dataset) -> Any:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the basin maps: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     num = cfg["numerics"]
     summary: dict[str, Any] = {"scheme": num["scheme"]}

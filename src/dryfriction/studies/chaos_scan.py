@@ -25,6 +25,8 @@ DATASET = "chaos_scan.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the chaos scan with a value out of range (ConfigError naming the key), before
+    any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     s, ly = cfg["scan"], cfg["lyapunov"]
@@ -107,6 +109,7 @@ def zero_crossing(chi: np.ndarray, lyap: np.ndarray) -> tuple[float, float]:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the chaos scan: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, s, ly, num = cfg["params"], cfg["scan"], cfg["lyapunov"], cfg["numerics"]
     chis = grid(s["chi"], "scan.chi")

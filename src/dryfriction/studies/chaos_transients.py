@@ -21,6 +21,8 @@ DATASET = "chaos_transients.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the transients study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     s = cfg["scan"]
@@ -35,6 +37,7 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the transients study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, s, num = cfg["params"], cfg["scan"], cfg["numerics"]
     chis, z0, dz0 = grid(s["chi"], "scan.chi"), grid(s["z0"], "scan.z0"), grid(s["dz0"], "scan.dz0")

@@ -75,9 +75,11 @@ class StudyContext:
 
     @property
     def fmu_path(self) -> Path:
+        """The FMU the study runs."""
         return Path(self.engine_options.fmu)
 
     def engine(self) -> Engine:
+        """The study's sweep engine, started on first use."""
         if self._engine is None:
             self._engine = Engine(self.engine_options)
         return self._engine
@@ -89,11 +91,14 @@ class StudyContext:
         return self._fmu
 
     def run_sweep(self, spec: SweepSpec) -> np.ndarray:
+        """Run a sweep through the study's engine (chunks restartable in the study's folder) and log its
+        statistics; returns the table of results."""
         out = self.engine().run(spec, self.chunk_dir)
         self.log(self.engine().stats[-1].line())
         return out
 
     def close(self) -> None:
+        """Close the sweep engine (and its Dask cluster) if it was started."""
         if self._engine is not None:
             self._engine.close()
             self._engine = None
@@ -102,11 +107,14 @@ class StudyContext:
             self._fmu = None
 
     def log(self, msg: str) -> None:
+        """Print a message and keep it for the study's summary."""
         self.messages.append(msg)
         print(msg, flush=True)
 
     # ---- outputs ----
     def save_dataset(self, ds: xr.Dataset, filename: str) -> Path:
+        """Write a dataset as NetCDF into the study's folder, atomically, with the study's name and size in
+        its attributes; returns the path."""
         ds.attrs.setdefault("study", self.name)
         ds.attrs.setdefault("quick", int(self.quick))
         path = write_netcdf(ds, self.out_dir / filename)
@@ -114,6 +122,7 @@ class StudyContext:
         return path
 
     def save_figure(self, fig: Any, filename: str) -> Path:
+        """Write a figure as PNG into the study's folder, atomically, and close it; returns the path."""
         path = self.out_dir / filename
         try:
             with atomic_path(path) as tmp:
@@ -200,6 +209,7 @@ def _check_var(md: model.ModelDescription, name: str, value: Any) -> None:
 
 
 def check_window(periods: float, obs_periods: float, where: str) -> None:
+    """Refuse an observation window that is not inside the run (ConfigError naming ``where``)."""
     require(periods > 0, f"{where}.periods must be > 0, not {periods}")
     require(0 < obs_periods <= periods,
             f"{where}.obs_periods must be in (0, periods = {periods}], not {obs_periods}")
@@ -216,12 +226,14 @@ def oscillator(nd: Mapping[str, float]) -> Oscillator:
 
 
 def sweep_settings(numerics: Mapping[str, Any]) -> dict[str, Any]:
+    """The FMU settings of a sweep from a study's ``numerics`` table."""
     return {"scheme": numerics["scheme"], "frictionUpdates": int(numerics.get("frictionUpdates", 1)),
             "fastPaths": True}
 
 
 def table(values: Mapping[str, Any], periods: Any, obs_start: Any, obs_stop: Any,
           numerics: Mapping[str, Any]) -> np.ndarray:
+    """The sweep's parameter table of non-dimensional runs on the reference scales (one row per run)."""
     return nondim_table(values, periods, obs_start, obs_stop, numerics["steps_per_period"],
                         alpha=numerics["alpha"], m=M_REF, k=K_REF, P0=P0_REF, mu_s=MU_S_REF)
 

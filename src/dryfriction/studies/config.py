@@ -48,6 +48,7 @@ def config_dir() -> Path:
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read a TOML file (ConfigError with the file and the parser's sentence when it cannot be read)."""
     p = Path(path)
     try:
         with open(p, "rb") as f:
@@ -184,5 +185,6 @@ def grid(spec: Mapping[str, Any], key: str) -> np.ndarray:
 
 
 def require(ok: bool, message: str) -> None:
+    """Raise ConfigError with ``message`` unless ``ok``."""
     if not ok:
         raise ConfigError(message)

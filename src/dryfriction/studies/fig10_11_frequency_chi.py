@@ -29,6 +29,8 @@ PARTS = ("fig10", "fig11")
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 10/11 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     ic = cfg["ics"]
@@ -66,6 +68,7 @@ def _part(ctx: StudyContext, part: str) -> xr.Dataset:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 10/11 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd = cfg["params"]
     summary: dict[str, float] = {}

@@ -33,6 +33,8 @@ MARK = {"fold": ("s", "F"), "period_doubling": ("D", "PD"), "symmetry_breaking":
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 10/11 orbits study with a value out of range (ConfigError naming the
+    key), before any work."""
     base.check(cfg)
     c = cfg["continuation"]
     check_continuation(c)
@@ -85,6 +87,8 @@ def _draw(ax: Any, runs: list[tuple[dict[str, float], Continuation]], colors: di
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the Fig. 10/11 orbits study: its runs, dataset and figures in the study's folder; returns the
+    summary."""
     cfg = ctx.cfg
     nd, c = cfg["params"], cfg["continuation"]
     summary: dict[str, Any] = {}

@@ -32,6 +32,8 @@ DATASET = "fig12_14.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 12-14 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     f12, f14 = cfg["fig12"], cfg["fig14"]
@@ -81,6 +83,7 @@ def _bisect(ctx: StudyContext, nd: dict[str, float], a: np.ndarray, b: np.ndarra
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 12-14 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, num, f12, f14 = cfg["params"], cfg["numerics"], cfg["fig12"], cfg["fig14"]
     spp = cfg["run"]["samples_per_period"]

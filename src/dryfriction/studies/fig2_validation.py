@@ -25,6 +25,8 @@ DATASET = "fig2.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 2 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     require(cfg["params"]["zeta"] < 1, f"params.zeta must be < 1 for the exact solution, not {cfg['params']['zeta']}")
@@ -34,6 +36,7 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 2 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, num, r = cfg["params"], cfg["numerics"], cfg["run"]
     p = oscillator(nd)

@@ -26,6 +26,7 @@ DATASET = "fig3.nc"
 
 
 def lambdas(cfg: dict[str, Any]) -> np.ndarray:
+    """The frequency ratios of the sweep, the excluded ones left out."""
     s = cfg["sweep"]
     lam = grid(s["lam"], "sweep.lam")
     if not s["exclude"]:            # [] : nothing left out
@@ -35,6 +36,8 @@ def lambdas(cfg: dict[str, Any]) -> np.ndarray:
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 3 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     s = cfg["sweep"]
@@ -45,6 +48,7 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 3 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, s, num = cfg["params"], cfg["sweep"], cfg["numerics"]
     lam = lambdas(cfg)

@@ -24,6 +24,8 @@ DATASET = "fig4.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 4 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     r = cfg["run"]
@@ -34,6 +36,7 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 4 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, r, num = cfg["params"], cfg["run"], cfg["numerics"]
     cases = {"below": r["lam_below"], "above": r["lam_above"]}

@@ -28,6 +28,8 @@ DATASET = "fig5_6.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 5/6 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     res, beat = cfg["resonance"], cfg["beating"]
@@ -54,6 +56,7 @@ def _peak_growth(cycles: np.ndarray, z: np.ndarray) -> float:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 5/6 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, res, beat, num = cfg["params"], cfg["resonance"], cfg["beating"], cfg["numerics"]
     spp = cfg["run"]["samples_per_period"]

@@ -26,6 +26,8 @@ DATASET = "fig7.nc"
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 7 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     s = cfg["sweep"]
@@ -38,6 +40,7 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 7 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, s, num = cfg["params"], cfg["sweep"], cfg["numerics"]
     mus = np.asarray(s["mu_s_sigma"], dtype=float)

@@ -32,11 +32,14 @@ DATASET = "fig8_9.nc"
 
 
 def axes(cfg: dict[str, Any]) -> dict[str, np.ndarray]:
+    """The sweep's axes: chi and the grid of initial conditions (z0, dz0)."""
     s = cfg["sweep"]
     return {"chi": grid(s["chi"], "sweep.chi"), "z0": grid(s["z0"], "sweep.z0"), "dz0": grid(s["dz0"], "sweep.dz0")}
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 8/9 study with a value out of range (ConfigError naming the key),
+    before any work."""
     check_params(cfg["params"])
     check_numerics(cfg["numerics"])
     s = cfg["sweep"]
@@ -46,6 +49,7 @@ def check(cfg: dict[str, Any]) -> None:
 
 
 def spec(cfg: dict[str, Any]) -> tuple[SweepSpec, dict[str, np.ndarray]]:
+    """The sweep of the study (one run per chi and initial condition) and its axes."""
     nd, s, num = cfg["params"], cfg["sweep"], cfg["numerics"]
     ax = axes(cfg)
     C, Z, D = np.meshgrid(ax["chi"], ax["z0"], ax["dz0"], indexing="ij")
@@ -86,6 +90,7 @@ def symmetric_range(chi: np.ndarray, sym: np.ndarray) -> tuple[float, float]:
 
 
 def run(ctx: StudyContext) -> dict[str, float]:
+    """Run the Fig. 8/9 study: its runs, dataset and figures in the study's folder; returns the summary."""
     cfg = ctx.cfg
     nd, s, num = cfg["params"], cfg["sweep"], cfg["numerics"]
     sp, ax = spec(cfg)

@@ -46,6 +46,8 @@ DATASETS = ("fig8_9.nc", "branches.nc")
 
 
 def check(cfg: dict[str, Any]) -> None:
+    """Refuse a configuration of the Fig. 8/9 orbits study with a value out of range (ConfigError naming the
+    key), before any work."""
     base.check(cfg)
     c = cfg["continuation"]
     check_continuation(c)
@@ -131,6 +133,8 @@ def symmetric_after(ds: Any, tol: float = 1e-3) -> np.ndarray:
 
 
 def run(ctx: StudyContext) -> dict[str, Any]:
+    """Run the Fig. 8/9 orbits study: its runs, dataset and figures in the study's folder; returns the
+    summary."""
     cfg = ctx.cfg
     nd, s, c = cfg["params"], cfg["sweep"], cfg["continuation"]
     sp, ax = base.spec(cfg)

@@ -70,16 +70,21 @@ class SweepSpec:
 
     @property
     def n_runs(self) -> int:
+        """The number of runs."""
         return int(self.params.shape[0])
 
     @property
     def n_chunks(self) -> int:
+        """The number of chunks."""
         return -(-self.n_runs // self.chunk_runs)
 
     def chunk(self, i: int) -> np.ndarray:
+        """The parameter rows of chunk ``i``."""
         return self.params[i * self.chunk_runs:(i + 1) * self.chunk_runs]
 
     def key(self, fmu_digest: str) -> str:
+        """The sweep's key: a hash of its run table, its settings and the FMU binary's digest (chunks of
+        another key are never reused)."""
         h = hashlib.sha256()
         h.update(self.params.tobytes())
         h.update(json.dumps(dict(self.settings), sort_keys=True).encode())
@@ -90,6 +95,8 @@ class SweepSpec:
 
 @dataclass
 class EngineOptions:
+    """How a sweep runs: the FMU, the number of Dask workers (0: in this process) or a scheduler's address,
+    the chunk size and the progress bar."""
     fmu: Path
     workers: int = 0                 # 0: in this process; N: LocalCluster of N processes
     scheduler: str | None = None     # address of an existing Dask scheduler
@@ -100,6 +107,7 @@ class EngineOptions:
 
 @dataclass
 class SweepStats:
+    """What a sweep did: runs, chunks loaded from disk and computed, wall time."""
     name: str
     runs: int
     chunks: int
@@ -111,6 +119,7 @@ class SweepStats:
     task_wall: float = 0.0  # wall seconds of the computed chunks' tasks (summed over workers)
 
     def line(self) -> str:
+        """The statistics in one line."""
         rate = f", {self.runs / self.wall:,.0f} runs/s" if self.computed and self.wall > 0 else ""
         return (f"{self.name}: {self.runs:,} runs in {self.chunks} chunks "
                 f"({self.loaded} loaded from disk, {self.computed} computed) in {self.wall:.1f} s{rate}")
@@ -231,6 +240,7 @@ class Engine:
         return self._cluster
 
     def close(self) -> None:
+        """Close the Dask cluster the engine started, if any."""
         if self._cluster is not None:
             self._cluster.close()
             self._cluster = None
@@ -243,6 +253,7 @@ class Engine:
 
     @property
     def uses_dask(self) -> bool:
+        """Whether sweeps run on Dask (workers or a scheduler) rather than in this process."""
         return bool(self.opt.scheduler) or self.opt.workers > 0
 
     # ---- chunks ----

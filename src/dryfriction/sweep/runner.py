@@ -84,6 +84,7 @@ class BatchRunner:
         self._bools[:] = (1, 1 if settings.get("fastPaths", md.var("fastPaths").start) else 0)
 
     def close(self) -> None:
+        """Free the FMU instance."""
         self.fmu.close()
 
     def run(self, params: np.ndarray, strict: bool = False) -> np.ndarray:
@@ -178,6 +179,7 @@ class PerProcess(Generic[T]):
         atexit.register(self.close_all)
 
     def get(self, fmu: str | bytes) -> T:
+        """The process's object for this FMU (a path or the binary's bytes), made on first use."""
         key = fmu if isinstance(fmu, str) else hashlib.sha256(fmu).hexdigest()
         item = self._items.get(key)
         if item is None:

@@ -33,6 +33,7 @@ class Attractor:
     count: int = 0
 
     def describe(self) -> str:
+        """The attractor in words: ``non-periodic``, or its period and the z of its points."""
         if self.period == NONPERIODIC:
             return "non-periodic"
         zs = ", ".join(f"{z:+.3f}" for z in np.sort(self.points[:, 0]))
@@ -52,6 +53,8 @@ class Catalogue:
     attractors: list[Attractor] = field(default_factory=list)
 
     def label(self, tail: np.ndarray, period_tol: float | None = None) -> int:
+        """The index of the attractor the tail of an orbit (rows of (z, z')) settled on, adding it to the
+        catalogue when it is new; -1 when the tail is not finite."""
         tail = np.asarray(tail, dtype=float)
         if not np.all(np.isfinite(tail)):
             return -1

@@ -121,6 +121,7 @@ def transient_rows(fmu: str | bytes, nd: Mapping[str, float], num: Mapping[str, 
 
 @dataclass
 class ChunkStats:
+    """What a batch of chunked tasks cost: tasks, wall time, cluster start-up and the tasks' CPU time (s)."""
     tasks: int
     wall: float
     startup: float
@@ -184,4 +185,5 @@ LAST_PEAK_RSS: dict[str, float] = {}
 
 
 def concat(results: Iterable[Mapping[str, np.ndarray]], key: str) -> np.ndarray:
+    """The arrays under ``key`` of every chunk's result, concatenated along the first axis in chunk order."""
     return np.concatenate([r[key] for r in results], axis=0)

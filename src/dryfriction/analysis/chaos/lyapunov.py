@@ -30,6 +30,8 @@ N_BLOCKS = 10
 
 @dataclass
 class LyapunovResult:
+    """The largest Lyapunov exponent of a stroboscopic map, per period and per second, with its convergence
+    estimates (batch-means standard error, second half minus first half) and the run's parameters."""
     lyapunov_per_period: float
     lyapunov_per_second: float
     stderr_per_period: float          # batch-means standard error (10 blocks)
@@ -45,6 +47,8 @@ class LyapunovResult:
     running: np.ndarray = field(repr=False)    # running estimate per period after each interval
 
     def as_json(self) -> dict[str, Any]:
+        """The result as a JSON-ready dict (the stroboscopic record and the running estimate left out; the
+        last point kept)."""
         d = {k: v for k, v in asdict(self).items() if k not in ("strobe", "running")}
         d["last_point"] = [float(x) for x in self.strobe[-1]]
         return d

@@ -2,7 +2,7 @@
 solution.
 
 Everything is non-dimensional (method.md (2)): z = k x / P0, z' = dz/dtau, tau = w0 t, T the
-excitation period. A map is started *afresh* at each call of :meth:`advance`: the FMU is reset and
+excitation period. A map is started *afresh* at each call of :meth:`FMUMap.advance`: the FMU is reset and
 initialised at (z, z') with the excitation phase phi (a whole number of periods later the phase is
 the same), so that two calls from nearby points differ only by their initial point and not by any
 history the integrator carries (Bossak acceleration, caches). This is what the two-trajectory
@@ -59,6 +59,7 @@ def scheme_label(scheme: str, steps_per_period: int) -> str:
 
 
 def check_scheme(scheme: str) -> str:
+    """The scheme name if the maps know it, else a ValueError naming the valid ones."""
     if scheme not in SCHEMES:
         raise ValueError(f"scheme must be one of {', '.join(SCHEMES)}, not {scheme!r}")
     return scheme
@@ -76,11 +77,15 @@ class NDParams:
 
     @classmethod
     def from_mapping(cls, m: Mapping[str, float], **over: float) -> "NDParams":
+        """Non-dimensional parameters from a mapping with the keys ``lam``, ``mu_s_sigma``, ``chi`` and
+        optionally ``zeta``, ``phi``; keyword arguments override."""
         d = {k: float(m[k]) for k in ("lam", "mu_s_sigma", "chi", "zeta", "phi") if k in m}
         d.update({k: float(v) for k, v in over.items()})
         return cls(**d)
 
     def oscillator(self, z0: float = 0.0, dz0: float = 0.0) -> Oscillator:
+        """The :class:`~dryfriction.params.Oscillator` of these parameters on the reference scales, starting
+        at (z0, dz0)."""
         return Oscillator.from_nondimensional(lam=self.lam, mu_s_sigma=self.mu_s_sigma, chi=self.chi,
                                               zeta=self.zeta, z0=z0, dz0=dz0, phi=self.phi,
                                               m=M_REF, k=K_REF, P0=P0_REF, mu_s=MU_S_REF)
@@ -92,17 +97,22 @@ class NDParams:
 
 
 class StroboscopicMap(Protocol):
+    """The time-T map of the oscillator in (z, z') = (k x / P0, dz/dtau): what the chaos tools iterate
+    (:class:`FMUMap`, :class:`ExactMap`)."""
     nd: NDParams
     label: str
     T: float          # excitation period, s
 
-    def advance(self, z: float, dz: float, periods: int = 1) -> Point: ...
+    def advance(self, z: float, dz: float, periods: int = 1) -> Point:
+        """The point (z, z') after ``periods`` excitation periods from (z, dz)."""
 
-    def orbit(self, z0: float, dz0: float, transient: int, n: int) -> np.ndarray: ...
+    def orbit(self, z0: float, dz0: float, transient: int, n: int) -> np.ndarray:
+        """``n`` successive points of the map, one per period, after ``transient`` periods from (z0, dz0): an
+        array of shape (n, 2)."""
 
 
 class FMUMap:
-    """The time-T map through one FMU instance (reset at every :meth:`advance`)."""
+    """The time-T map through one FMU instance (reset at every :meth:`FMUMap.advance`)."""
 
     def __init__(self, fmu: OscillatorFMU2, nd: NDParams, steps_per_period: int = 1000, scheme: str = DEFAULT_SCHEME,
                  alpha: float = -0.1) -> None:
@@ -160,6 +170,8 @@ class ExactMap:
         self.label = "exact solution (dryfriction.references.exact)"
 
     def advance(self, z: float, dz: float, periods: int = 1) -> Point:
+        """The point (z, z') after ``periods`` excitation periods from (z, dz), by the exact piecewise
+        solution."""
         p = self._p.with_(x0=z * self._xs, v0=dz * self._vs)
         t = periods * self.T
         sol = solve_exact(p, t)
@@ -167,6 +179,8 @@ class ExactMap:
         return float(x[0]) / self._xs, float(v[0]) / self._vs
 
     def orbit(self, z0: float, dz0: float, transient: int, n: int) -> np.ndarray:
+        """``n`` successive points of the map, one per period, after ``transient`` periods from (z0, dz0): an
+        array of shape (n, 2)."""
         out = np.empty((n, 2))
         z, dz = z0, dz0
         if transient:

@@ -54,7 +54,32 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     The work is estimated before it starts (:func:`response_work`, in steps,
     :mod:`dryfriction.budget`) and refused (:class:`~dryfriction.budget.WorkBoundError`) above
     ``max_work`` (default :data:`~dryfriction.budget.DEFAULT_MAX_WORK`), as is a table too large for
-    half this machine's memory."""
+    half this machine's memory.
+
+    Returns
+    -------
+    xarray.Dataset
+        The steady states by frequency (and by orbit for ``method="orbit"``), SI units, the units and
+        the settings in the attributes.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``method``, a Bossak ``scheme`` with ``method="orbit"``, a ``period`` or
+        ``cold_every`` that is not an integer >= 1.
+    dryfriction.budget.WorkBoundError
+        The estimated work is above ``max_work`` (a :class:`~dryfriction.errors.UsageError`).
+    dryfriction.FMUFileError
+        No usable oscillator FMU at ``fmu_path`` (or found by :mod:`dryfriction.paths`).
+
+    Examples
+    --------
+    >>> from dryfriction import Oscillator, frequency_response
+    >>> block = Oscillator.physical(m=0.5, k=2000, zeta=0.003, P0=10, f=10, N=20, mu_s=0.3, mu_k=0.2)
+    >>> ds = frequency_response(block, [5, 10, 15])         # Hz
+    >>> round(float(ds.amplitude_m.sel(f_hz=10).max()), 4)   # m, one stable orbit
+    0.2356
+    """
     import xarray as xr
 
     from ..chaos.batch import map_chunks
@@ -241,4 +266,5 @@ def never_converges_note(p: Oscillator) -> str:
 
 
 def with_omega(p: Oscillator, f_hz: float) -> Oscillator:
+    """The oscillator driven at ``f_hz`` Hz instead (omega = 2 pi f)."""
     return replace(p, omega=2.0 * math.pi * f_hz)

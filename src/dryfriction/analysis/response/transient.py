@@ -44,6 +44,7 @@ class SteadyState:
     error: float = math.nan  # estimated error left in the last window, relative to its amplitude
 
     def as_dict(self) -> dict[str, Any]:
+        """The steady state as a dict of its fields."""
         return asdict(self)
 
 

@@ -34,7 +34,7 @@ the sensitivity with ``exact``). With Stribeck friction (delta = 1) it loses sta
 belt speed where c + N mu'(|v_belt|) = 0: :func:`locate_hopf` finds it from the model, by Brent's
 method on ln |mu|max / tau (the growth rate of the equilibrium's flow) in the belt speed.
 
-**The branch.** :func:`continue_orbits` follows the orbit in v_belt by pseudo-arclength
+**The branch.** :func:`~dryfriction.analysis.self_excited.branch.continue_orbits` follows the orbit in v_belt by pseudo-arclength
 continuation in (v0, T, v_belt) (dR/dv_belt by central differences: the section moves with x_eq),
 from stick-slip at low belt speed up to where the branch turns and on to where its amplitude vanishes
 (the Hopf), with the continuation engine of :mod:`dryfriction.analysis.continuation`.
@@ -48,13 +48,13 @@ in v_belt); every public name is importable from here.
 from __future__ import annotations
 
 from .branch import BeltBranch, Branch, BranchPoint, continue_orbits
-from .equilibrium import Equilibrium, equilibrium
+from .equilibria import Equilibrium, equilibrium
 from .hopf import HopfPoint, hopf_formula, locate_hopf
 from .motion import SelfExcited, self_excited
 from .orbit import BeltOrbit, find_orbit, section_map
 from .problem import (EQ_FD_STEP, FD_STEP, JACOBIAN, LAWS, MAX_SAMPLES, NEUTRAL, SCHEMES, STABILITY_MARGIN,
                       STEPS_PER_PERIOD, TRIVIAL, BeltProblem)
-from .transient import Transient, transient
+from .transients import Transient, transient
 
 __all__ = ["BeltProblem", "BeltOrbit", "Equilibrium", "SelfExcited", "HopfPoint", "Branch", "BranchPoint",
            "LAWS", "SCHEMES", "equilibrium", "find_orbit", "self_excited", "locate_hopf", "continue_orbits",

@@ -219,7 +219,7 @@ def continue_orbits(prob: BeltProblem, v_from: float, v_min: float, v_max: float
                     ds_max: float = 0.1, max_points: int = 200, amplitude_min: float = 2e-3,
                     slip_leg: bool = True, seed_amplitude: float = 0.02, tol: float | None = None,
                     progress: Callable[[BranchPoint], None] | None = None) -> BeltBranch:
-    """The orbit branch through the stable orbit at ``v_from`` (found by :func:`self_excited`), continued
+    """The orbit branch through the stable orbit at ``v_from`` (found by :func:`~dryfriction.analysis.self_excited.motion.self_excited`), continued
     by pseudo-arclength towards larger |v_belt| while it stays in [v_min, v_max] (same sign), until it
     turns, its amplitude falls under ``amplitude_min`` X, or ``max_points``. Arclength in the scaled
     unknowns (v0 / V, T / T0, v_belt / V); ``ds`` its first step, halved on a failed corrector down to

@@ -10,7 +10,7 @@ import numpy as np
 
 from ...drivers.oscillator import OscillatorFMU2
 from ...roots import find_root
-from .equilibrium import _equilibrium
+from .equilibria import _equilibrium
 from .flow import _fmu, _Flow
 from .problem import BeltProblem
 
@@ -41,6 +41,7 @@ class HopfPoint:
 
     @property
     def relative_error(self) -> float:
+        """The located belt speed's relative distance from the formula's, c + N mu'(v_belt) = 0."""
         return abs(self.v_belt - self.formula) / abs(self.formula)
 
 

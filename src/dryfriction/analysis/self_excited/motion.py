@@ -8,12 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...drivers.oscillator import OscillatorFMU2
-from .equilibrium import Equilibrium, _equilibrium
+from .equilibria import Equilibrium, _equilibrium
 from .flow import _fmu, _Flow
 from .hopf import hopf_formula
 from .orbit import BeltOrbit, _Orbit
 from .problem import BeltProblem
-from .transient import transient
+from .transients import transient
 
 
 @dataclass

@@ -11,7 +11,7 @@ from ...drivers.oscillator import OscillatorFMU2
 from ...roots import find_root
 from .flow import _fmu, _Flow
 from .problem import FD_STEP, STABILITY_MARGIN, TRIVIAL, BeltProblem
-from .transient import transient
+from .transients import transient
 
 
 @dataclass
@@ -39,10 +39,12 @@ class BeltOrbit:
 
     @property
     def nontrivial(self) -> complex:
+        """The orbit's nontrivial Floquet multiplier (the other one is 1, along the flow)."""
         return complex(self.multipliers[1])
 
     @property
     def sticks(self) -> bool:
+        """Whether the orbit has a stick phase (it rides the belt for a while)."""
         return self.stick_fraction > 0.0
 
 

@@ -84,23 +84,29 @@ class BeltProblem:
                              f"not {self.h!r}")
 
     def with_(self, **kw: Any) -> "BeltProblem":
+        """A copy with the given fields changed."""
         return replace(self, **kw)
 
     # ---- the model ----
     @property
     def m(self) -> float:
+        """The block's mass, kg."""
         return self.oscillator.m
 
     @property
     def w0(self) -> float:
+        """The natural angular frequency sqrt(k / m), rad/s."""
         return self.oscillator.w0
 
     @property
     def natural_period(self) -> float:
+        """The natural period 2 pi / w0, s."""
         return 2.0 * math.pi / self.w0
 
     @property
     def step(self) -> float:
+        """The FMU's internal step h: the given one, or the natural period over the default number of steps
+        per period."""
         return self.natural_period / STEPS_PER_PERIOD if self.h is None else float(self.h)
 
     @property
@@ -111,6 +117,7 @@ class BeltProblem:
 
     @property
     def mu_k(self) -> float:
+        """The kinetic friction coefficient."""
         return self.oscillator.mu_k
 
     def mu(self, u: float) -> float:
@@ -147,6 +154,8 @@ class BeltProblem:
         return (self.force - p.c * v - p.k * x + fr) / p.m
 
     def settings(self, sensitivity: bool = False, t_obs: float | None = None) -> Settings:
+        """The FMU settings of a run of this problem (belt speed, friction law, step; the state's Jacobian
+        when ``sensitivity``; the observables from ``t_obs`` on)."""
         extra: dict[str, Any] = {"v_belt": self.v_belt}
         if self.F_ext != 0.0:
             extra["F_ext"] = self.F_ext

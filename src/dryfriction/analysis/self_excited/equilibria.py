@@ -26,6 +26,7 @@ class Equilibrium:
 
     @property
     def mu_max(self) -> float:
+        """The largest modulus of the equilibrium's multipliers (below 1: steady sliding is stable)."""
         return float(np.max(np.abs(self.multipliers)))
 
 

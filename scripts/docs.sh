@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Build the documentation site offline into docs/_build/html/: warnings are errors, every internal
+# link and heading anchor is checked (MyST), the API reference is generated from the docstrings.
+# Usage: bash scripts/docs.sh            (needs the docs extra: scripts/setup.sh installs it)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-.venv/bin/python}
+[ -x "$PY" ] || PY=python3
+rm -rf docs/_build/html docs/_build/doctrees docs/api/generated
+exec "$PY" -m sphinx -b html -W --keep-going -n -q -d docs/_build/doctrees docs docs/_build/html "$@"
