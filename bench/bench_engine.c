@@ -94,6 +94,7 @@ static eng_setup setup_of(bench_case *B, int variant)
     } else {
         const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
         S.ops = ops;
+        S.sparse = &CHN_SPARSE;
     }
     S.rows = B->rows;
     S.exc.omega = OMEGA;
@@ -149,6 +150,9 @@ static void case_make(bench_case *B, size_t n, int scheme, double spp)
         C->n = n; C->m = B->m; C->k = B->k; C->k_end = 1.0;
         for (int s = 0; s < ENG_NSLOTS; s++) {
             C->d[s] = dalloc(n); C->e[s] = dalloc(n); C->cp[s] = dalloc(n); C->inv[s] = dalloc(n);
+            C->kcp[s] = dalloc(n); C->kinv[s] = dalloc(n);
+            C->kh[s] = (int *)calloc(n, sizeof(int));
+            if (!C->kh[s]) die("out of memory");
         }
         C->q = dalloc(n);
         C->work = dalloc(2 * n);

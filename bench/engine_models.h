@@ -28,6 +28,10 @@ typedef struct {
     double *e[ENG_NSLOTS];      /* its super-diagonal (e[n - 1] = 0), */
     double *cp[ENG_NSLOTS];     /* Thomas's factors: cp = e / den, */
     double *inv[ENG_NSLOTS];    /* inv = 1 / den */
+    /* the slot's factorisation for the basis solves, kept for a held pattern (chn_basis_kept): per
+     * row the pattern it is for (kh: 0 none yet, 1 free, 2 held), Thomas's cp and 1 / den */
+    int *kh[ENG_NSLOTS];
+    double *kcp[ENG_NSLOTS], *kinv[ENG_NSLOTS];
     double *q, *work;           /* n and 2 n: the box LCP's right-hand side and workspace */
 } chn_model;
 
@@ -64,6 +68,7 @@ static inline int chn_factor(void *ctx, int slot, double cM, double cC, double c
         d[i] = cM * C->m[i] + cK * chn_kd(C, i);
         e[i] = (i + 1 < n) ? -cK * C->k[i + 1] : 0.0;
     }
+    for (size_t i = 0; i < n; i++) C->kh[slot][i] = 0; /* the kept basis factors anew */
     double prev = 0.0;
     for (size_t i = 0; i < n; i++) {
         const double den = d[i] - ((i > 0) ? e[i - 1] * prev : 0.0);
@@ -88,6 +93,63 @@ static inline void chn_solve(void *ctx, int slot, const double *b, double *x)
     for (size_t i = n - 1; i-- > 0;) x[i] -= cp[i] * x[i + 1];
 }
 
+/* lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, q, l, mode, z, w, ...) of the slot's M_hat with its
+ * factorisation kept for the held pattern (mode 0 with l > 0): the same operations, so the same
+ * bits, without the divisions of the rows whose pattern is unchanged. A row is refactored when its
+ * own hold changed, or when it is free and the row above was refactored (a held row starts the
+ * elimination afresh: cp = 0). */
+static inline void chn_basis_kept(chn_model *C, int slot, const double *q, const double *l, const int *mode,
+                                  double *z, double *w)
+{
+    const size_t n = C->n;
+    const double *d = C->d[slot], *e = C->e[slot];
+    int *kh = C->kh[slot];
+    double *kcp = C->kcp[slot], *kinv = C->kinv[slot], *dp = C->work;
+    double cprev = 0.0, dprev = 0.0;
+    int refac = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int hold = mode[i] == 0 && l[i] > 0.0;
+        if (kh[i] != 1 + hold || (refac && !hold)) {
+            kh[i] = 1 + hold;
+            if (hold) {
+                kcp[i] = 0.0;
+            } else {
+                const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+                kinv[i] = 1.0 / (d[i] - lo_e * cprev);
+                kcp[i] = (i + 1 < n) ? e[i] * kinv[i] : 0.0;
+            }
+            refac = 1;
+        } else {
+            refac = 0;
+        }
+        double dpi = 0.0;
+        if (!hold) {
+            const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            dpi = (rhs - lo_e * dprev) * kinv[i];
+        }
+        dp[i] = dpi;
+        cprev = kcp[i];
+        dprev = dpi;
+    }
+    double zn = 0.0;
+    for (size_t j = n; j-- > 0;) {
+        zn = dp[j] - kcp[j] * zn;
+        z[j] = zn;
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            z[i] = 0.0;
+            double f = q[i];
+            if (i > 0) f += e[i - 1] * z[i - 1];
+            if (i + 1 < n) f += e[i] * z[i + 1];
+            w[i] = f;
+        } else {
+            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+}
+
 /* The box LCP of the slot's M_hat (W = I, no belts): lcp_box_basis in the given modes, lcp_box for
  * the LCP; z the end velocities, w the forces, q = -p_hat. (Coulomb, fixed supports only: a problem
  * with the Stribeck law or a belt is refused.) */
@@ -103,14 +165,28 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
         C->q[i] = -P->p_hat[i];
     }
     if (pivots) *pivots = 0;
+    const double *l = P->limit;
+    chn_basis_kept(C, P->slot, C->q, l, mode, V1, f);
     if (what == ENG_SOLVE_BASIS) {
-        lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, C->q, P->limit, mode, V1, f, C->work, C->work + n);
         for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
-            if (!(mode[i] == 0 && P->limit[i] > 0.0)) f[i] = (P->limit[i] > 0.0) ? -mode[i] * P->limit[i] : 0.0;
+            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
         return ENG_OK;
     }
-    return lcp_box(n, d, e, C->q, P->limit, mode, V1, f, C->work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
+    /* the warm basis: when lcp_box's first round would flip no row, its solution is this one */
+    int flip = 0;
+    for (size_t i = 0; i < n && !flip; i++)
+        flip = l[i] > 0.0 && ((mode[i] != 0 && mode[i] * V1[i] < 0.0) || (mode[i] == 0 && f[i] > l[i]) ||
+                              (mode[i] == 0 && f[i] < -l[i]));
+    if (!flip) {
+        for (size_t i = 0; i < n; i++)
+            if (!(l[i] > 0.0)) mode[i] = (V1[i] > 0.0) - (V1[i] < 0.0);
+        return ENG_OK;
+    }
+    return lcp_box(n, d, e, C->q, l, mode, V1, f, C->work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
 }
+
+/* The chain's sparse-structure operators (eng_sparse): its box LCP takes the held solves of M. */
+static const eng_sparse CHN_SPARSE = {1};
 
 /* ---- the chain's specialised schemes (engine_chain.c; the block's: osc_engine.h) ------------ */
 

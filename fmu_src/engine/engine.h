@@ -165,6 +165,18 @@ typedef struct eng_harmonic_s {
     const double *Pc, *Ps;
 } eng_harmonic;
 
+/* Optional operators of a sparse structure (eng_setup.sparse; NULL: none, the dense model's paths).
+ * A model whose contacts couple few DOFs offers them so that the engine's work per step follows
+ * the structure's sparsity instead of nc^3:
+ *   held_basis   the model's friction solver (eng_ops.friction, then required) also solves
+ *                ENG_SOLVE_BASIS problems of ENG_SLOT_MASS (cM = 1, cC = cK = 0, law NULL): the
+ *                engine's held solves (physical accelerations, jerks and input jumps: M y = r + W_H' f_H
+ *                with W_H y = 0 on the held contacts H) go through it instead of the Delassus matrix
+ *                of the held contacts (Cholesky, O(|H|^3)). */
+typedef struct {
+    int held_basis;
+} eng_sparse;
+
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
  * copies none of them: a model keeps its parameters in its own struct and points at them). */
 typedef struct {
@@ -189,6 +201,7 @@ typedef struct {
      *   min(snap_max_rel_h h, max(snap_min_rel_h h, snap_eps_t DBL_EPSILON |t|))
      * of a grid point is that grid point (the oscillator: 1e-5, 1e-7, 2^16; the chain: 1e-7, 1e-7, 0) */
     double snap_max_rel_h, snap_min_rel_h, snap_eps_t;
+    const eng_sparse *sparse;   /* the model's sparse-structure operators, or NULL (read while the engine lives) */
 } eng_setup;
 
 /* ---- inputs ---------------------------------------------------------------------------------- */

@@ -47,6 +47,8 @@ struct eng {
     /* per-contact workspace */
     double *lim, *f, *f2;
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
+    double *hlim, *hf;           /* nc: held_solve's limits and forces */
+    int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after

@@ -11,6 +11,7 @@
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
+ *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -56,6 +57,9 @@
 #ifndef ENG_FRICTION
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) \
     ((E)->S.ops.friction((E)->S.ops.ctx, (P), (what), (mode), (V1), (f), (pivots)))
+#endif
+#ifndef ENG_HELD_BASIS
+#define ENG_HELD_BASIS(E) ((E)->S.sparse && (E)->S.sparse->held_basis)
 #endif
 #ifndef ENG_HAS_BREAKAWAY
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
@@ -291,6 +295,36 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     }
 }
 
+/* csolve on the mass slot with target 0: y = M^-1 (r + W_H' f_H), W_H y = 0 on the contacts with
+ * held[j] (f_H out in f, other entries untouched); through the model's friction solver where it
+ * offers the held basis solve (eng_sparse.held_basis), else csolve's Delassus matrix. */
+static void held_solve(eng *E, const double *r, const int *held, double *y, double *f)
+{
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    if (!(ENG_HAS_FRICTION(E) && ENG_HELD_BASIS(E))) {
+        csolve(E, ENG_SLOT_MASS, r, held, E->zero_nc, y, f);
+        return;
+    }
+    const size_t nc = ENG_NC(E);
+    for (size_t j = 0; j < nc; j++) {
+        E->hlim[j] = held[j] ? E->Fb[j] : 0.0;
+        E->hmode[j] = held[j] ? 0 : 1;
+    }
+    eng_problem P;
+    P.slot = ENG_SLOT_MASS;
+    P.h = 0.0;
+    P.cM = 1.0;
+    P.cC = P.cK = 0.0;
+    P.p_hat = r;
+    P.vb = E->zero_nc;
+    P.limit = E->hlim;
+    P.N = E->Nn;
+    P.law = NULL;
+    (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->hmode, y, E->hf, NULL);
+    for (size_t j = 0; j < nc; j++)
+        if (held[j]) f[j] = E->hf[j];
+}
+
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
  * sliding contacts' f their kinetic force at their slip speed, held ones (mode 0 with friction)
  * solved for slip acceleration 0. f out (nc), a out (n). The loads at t must be set. */
@@ -314,8 +348,7 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
             row_axpy(&S->rows[j], f[j], r);
         }
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, a, f);
+    held_solve(E, r, E->held, a, f);
 }
 
 /* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
@@ -348,8 +381,7 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         }
         row_axpy(&S->rows[j], df, r);
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, jk, E->f2);
+    held_solve(E, r, E->held, jk, E->f2);
 }
 
 /* ---- dense friction (the default solver) -------------------------------------------------- */
@@ -1262,8 +1294,7 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
         s->F[j] = fnew;
     }
     if (!any) return;
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, E->y, E->f);
+    held_solve(E, r, E->held, E->y, E->f);
     for (size_t i = 0; i < n; i++) s->A[i] += E->y[i];
 }
 

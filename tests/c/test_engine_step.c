@@ -377,6 +377,8 @@ static void test_vs_newmark(checks *T)
 typedef struct {
     double m[NCHAIN], k[NCHAIN], N[NCHAIN], ms[NCHAIN], mk[NCHAIN], Pc[NCHAIN], Ps[NCHAIN];
     double d[ENG_NSLOTS][NCHAIN], e[ENG_NSLOTS][NCHAIN], cp[ENG_NSLOTS][NCHAIN], inv[ENG_NSLOTS][NCHAIN];
+    double kcp[ENG_NSLOTS][NCHAIN], kinv[ENG_NSLOTS][NCHAIN];
+    int kh[ENG_NSLOTS][NCHAIN];
     double q[NCHAIN], work[2 * NCHAIN];
     size_t idx[NCHAIN];
     double w1[1];
@@ -411,6 +413,9 @@ static void chain_make(chain_data *D)
         C->e[s] = D->e[s];
         C->cp[s] = D->cp[s];
         C->inv[s] = D->inv[s];
+        C->kh[s] = D->kh[s];
+        C->kcp[s] = D->kcp[s];
+        C->kinv[s] = D->kinv[s];
     }
     C->q = D->q;
     C->work = D->work;
