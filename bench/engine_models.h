@@ -20,7 +20,7 @@
 
 /* ---- a chain of n blocks -------------------------------------------------------------------- */
 
-typedef struct {
+typedef struct chn_model_s {
     size_t n;
     const double *m, *k;        /* n each: masses, springs (k[i] from block i - 1 or the left wall) */
     double k_end;               /* the spring from the last block to the right wall */
@@ -33,6 +33,12 @@ typedef struct {
     int *kh[ENG_NSLOTS];
     double *kcp[ENG_NSLOTS], *kinv[ENG_NSLOTS];
     double *q, *work;           /* n and 2 n: the box LCP's right-hand side and workspace */
+    /* spans (eng_sparse): a span of the chain is a chain of its own, a view of blocks [a - 1, b] with
+     * its end blocks ghosts where they are not the chain's ends (fix_lo, fix_hi: Dirichlet rows) */
+    int fix_lo, fix_hi;
+    size_t w;                   /* a span's reach: beyond w blocks a block's influence in one step is below
+                                 * 2^-56 (chn_set_reach; 0: no spans) */
+    struct chn_model_s *sub;    /* the span's view (chn_span_bind), its arrays its own */
 } chn_model;
 
 static inline double chn_kd(const chn_model *C, size_t i)
@@ -166,6 +172,16 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
     }
     if (pivots) *pivots = 0;
     const double *l = P->limit;
+    if (C->fix_lo || C->fix_hi) { /* a span: the ghosts' rows fixed at their entries of p_hat */
+        if (what != ENG_SOLVE_BASIS) return ENG_ERR_BAD_INPUT;
+        lcp_box_basis(0, n, C->fix_lo, P->p_hat[0], C->fix_hi, P->p_hat[n - 1], d, e, C->q, l, mode, V1, f, C->work,
+                      C->work + n);
+        for (size_t i = 0; i < n; i++)
+            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
+        if (C->fix_lo) f[0] = 0.0;
+        if (C->fix_hi) f[n - 1] = 0.0;
+        return ENG_OK;
+    }
     chn_basis_kept(C, P->slot, C->q, l, mode, V1, f);
     if (what == ENG_SOLVE_BASIS) {
         for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
@@ -185,8 +201,89 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
     return lcp_box(n, d, e, C->q, l, mode, V1, f, C->work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
 }
 
-/* The chain's sparse-structure operators (eng_sparse): its box LCP takes the held solves of M. */
-static const eng_sparse CHN_SPARSE = {1};
+/* A span's reach for the step h and the Bossak parameter alpha: M_hat^-1 decays like q^distance, q =
+ * (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa <= (1 + rho) / (1 - rho)
+ * the condition number of the diagonally scaled M_hat by Gershgorin, rho the largest ratio of a
+ * row's off-diagonal sum to its diagonal (shorter steps: smaller); w the smallest with q^w <= 2^-56
+ * (the chain's own rule, chain_setup.c). */
+static inline void chn_set_reach(chn_model *C, double h, double alpha)
+{
+    const size_t n = C->n;
+    const double g = dfo_bossak_gamma(alpha), b = dfo_bossak_beta(alpha);
+    const double cM = (1.0 - alpha) / (g * h), cK = b * h / g;
+    double rho = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double lo = (i > 0) ? cK * C->k[i] : 0.0, up = (i + 1 < n) ? cK * C->k[i + 1] : 0.0;
+        rho = fmax(rho, (lo + up) / (cM * C->m[i] + cK * chn_kd(C, i)));
+    }
+    const double sk = sqrt((1.0 + rho) / (1.0 - fmin(rho, 0.5))), q = (sk - 1.0) / (sk + 1.0);
+    size_t w = 1;
+    if (rho >= 0.5) w = n;
+    else if (rho > 0.0)
+        for (double qw = q; qw > 0x1p-56; qw *= q) w++;
+    C->w = w;
+}
+
+/* The spans around the candidate blocks (eng_sparse.span): w blocks either side of each, merged when
+ * less than 3 blocks apart (distinct ghosts), the blocks next to a span its ghosts (their contacts
+ * carried: a span's contacts are its blocks'). None (0) for a chain of at most 2 w + 3 blocks. */
+static inline size_t chn_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+{
+    const chn_model *C = (const chn_model *)ctx;
+    const size_t n = C->n, w = C->w;
+    if (w == 0 || n <= 2 * w + 3) return 0;
+    for (size_t i = 0; i < n; i++) dof_lab[i] = 0;
+    size_t ns = 0, pa = 0, pb = 0;
+    for (size_t c = 0; c <= n; c++) {
+        if (c < n && !cand[c]) continue;
+        const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
+        if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
+        if (ns > 0) { /* label the span [pa, pb) and its ghosts */
+            for (size_t i = pa; i < pb; i++) dof_lab[i] = (int)ns;
+            if (pa > 0) dof_lab[pa - 1] = -(int)ns;
+            if (pb < n) dof_lab[pb] = -(int)ns;
+        }
+        if (c == n) break;
+        pa = a;
+        pb = b;
+        ns++;
+    }
+    for (size_t i = 0; i < n; i++) ct_lab[i] = dof_lab[i];
+    return ns;
+}
+
+/* The span's view (eng_sparse.span_bind): blocks dofs[0] ... dofs[nd - 1] (consecutive), its ends
+ * fixed where they are ghosts. */
+static inline void chn_span_bind(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts,
+                                 size_t nct)
+{
+    const chn_model *C = (const chn_model *)ctx;
+    chn_model *V = C->sub;
+    (void)cts;
+    (void)nct; /* (the span's contacts are its blocks') */
+    V->n = nd;
+    V->m = C->m + dofs[0];
+    V->k = C->k + dofs[0];
+    V->k_end = C->k_end;
+    V->fix_lo = ghost[0];
+    V->fix_hi = ghost[nd - 1];
+    V->w = 0;
+    V->sub = NULL;
+}
+
+/* The chain's sparse-structure operators: its box LCP takes the held solves of M, and (with spans,
+ * C->sub the view's arrays, C->w set) the located scheme's switches are placed in spans. */
+static inline eng_sparse chn_sparse(chn_model *C, int spans)
+{
+    eng_sparse sp;
+    const eng_ops view = {C->sub, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+    sp.held_basis = 1;
+    sp.span_max = spans ? C->n : 0;
+    sp.span = spans ? chn_span : NULL;
+    sp.span_bind = spans ? chn_span_bind : NULL;
+    sp.span_ops = view;
+    return sp;
+}
 
 /* ---- the chain's specialised schemes (engine_chain.c; the block's: osc_engine.h) ------------ */
 

@@ -172,9 +172,36 @@ typedef struct eng_harmonic_s {
  *                ENG_SOLVE_BASIS problems of ENG_SLOT_MASS (cM = 1, cC = cK = 0, law NULL): the
  *                engine's held solves (physical accelerations, jerks and input jumps: M y = r + W_H' f_H
  *                with W_H y = 0 on the held contacts H) go through it instead of the Delassus matrix
- *                of the held contacts (Cholesky, O(|H|^3)). */
+ *                of the held contacts (Cholesky, O(|H|^3)).
+ *   spans        the located scheme's local switch placement. Where contacts would switch in a step,
+ *                the engine takes the whole step in the current modes, then steps again, on its own,
+ *                each span around the switching contacts: its DOFs from the step's start, switches
+ *                placed inside it, its boundary DOFs (ghosts: the DOFs outside it that its DOFs
+ *                couple to through M, C, K or a contact row) moving as prescribed over the step, by
+ *                cubic Hermite interpolation of their states at the step's start and end. A span
+ *                reaches as far as a contact's switch moves the solution by more than rounding (the
+ *                model's judgement: M_hat^-1's decay); the span costs O(its size), not O(n).
+ *     span_max   the most DOFs (ghosts included) and contacts one span holds (0: no spans)
+ *     span       the spans around the candidate contacts (cand: nc flags): labels per DOF (dof_lab,
+ *                n) and per contact (ct_lab, nc): 0 outside every span, s + 1 in span s, -(s + 1) a
+ *                ghost of span s (a DOF), or a contact carried by span s without friction (its row
+ *                on the span's DOFs and ghosts: a model may keep its numbering so). Every candidate in
+ *                a span (label > 0), a ghost of one span in no other, spans disjoint. Returns the
+ *                number of spans; 0: step the whole structure (a small one).
+ *     span_bind  make span_ops act on the span whose DOFs (ghosts included, ascending) are dofs[nd],
+ *                ghost[k] saying which are ghosts, and whose contacts are cts[nct] (ascending), in
+ *                that local numbering
+ *     span_ops   the operators of the bound span (local numbering): apply_K, apply_C, apply_M give
+ *                the span's rows (a ghost's row is not read); factor and the friction solver are for
+ *                the span's rows with the ghosts' entries prescribed: the friction problem's p_hat
+ *                holds a ghost's prescribed end velocity in its entry, and V1 returns it there
+ *                (Dirichlet rows). held_basis holds for them too. */
 typedef struct {
     int held_basis;
+    size_t span_max;
+    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
+    void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);
+    eng_ops span_ops;
 } eng_sparse;
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create

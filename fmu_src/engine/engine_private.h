@@ -65,6 +65,27 @@ struct eng {
     /* a phase's start, saved for the switch search */
     double *sX, *sV, *sA, *shA, *sF;
     int *smode;
+    /* spans (eng_sparse.span; the located scheme's local switch placement): the sub-engine that steps
+     * one span at a time (its S.n, S.nc and arrays set per span), its state, the labels, the local
+     * numbering (ldof, lgh: DOFs and ghost flags; lct: contacts; gmap: global DOF -> local), the
+     * span's gathered data and inputs, and the whole step's start state */
+    struct eng *sub;
+    eng_sparse sub_sparse;       /* the sub-engine's sparse operators: held_basis, no spans */
+    eng_state ss;
+    int *dlab, *clab, *lgh;
+    size_t *ldof, *lct, *lidx;
+    size_t lnnz;                 /* the longest contact row: lidx, lw hold lnnz entries per contact */
+    long *gmap;
+    eng_row *lrows;
+    double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
+    dfo_friction_law *llaw;
+    double *pX, *pV, *pA, *phA, *pF, *pts, *ptb;
+    int *pmode, *pbd;
+    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
+     * the step's start (gt0) and end (length gH), interpolated */
+    int *ghost;
+    double gt0, gH;
+    double *gX0, *gV0, *gX1, *gV1;
 };
 
 #endif

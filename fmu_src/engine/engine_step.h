@@ -76,6 +76,12 @@
 #define ENG_HOT inline
 #endif
 
+#if defined(__GNUC__)
+#define ENG_COLD __attribute__((noinline))
+#else
+#define ENG_COLD
+#endif
+
 /* ---- small algebra --------------------------------------------------------------------------- */
 
 static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
@@ -325,6 +331,27 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
         if (held[j]) f[j] = E->hf[j];
 }
 
+/* ---- a span's ghosts (a sub-engine's: E->ghost) ------------------------------------------------ */
+
+/* Ghost i's cubic Hermite interpolation at tau after the step's start: position, velocity,
+ * acceleration, jerk (any may be NULL). */
+static void ghost_at(const eng *E, size_t i, double tau, double *x, double *v, double *a, double *jk)
+{
+    const double H = E->gH, r = tau / H, dx = E->gX1[i] - E->gX0[i], v0 = E->gV0[i], v1 = E->gV1[i];
+    if (x) *x = E->gX0[i] + v0 * H * (r * r * r - 2.0 * r * r + r) + dx * (3.0 * r * r - 2.0 * r * r * r) +
+                v1 * H * (r * r * r - r * r);
+    if (v) *v = v0 * (3.0 * r * r - 4.0 * r + 1.0) + dx / H * (6.0 * r - 6.0 * r * r) + v1 * (3.0 * r * r - 2.0 * r);
+    if (a) *a = (v0 * (6.0 * r - 4.0) + dx / H * (6.0 - 12.0 * r) + v1 * (6.0 * r - 2.0)) / H;
+    if (jk) *jk = 6.0 * (v0 + v1 - 2.0 * dx / H) / (H * H);
+}
+
+/* The ghosts' states at the state's time, written into it. */
+static void ghosts_now(const eng *E, eng_state *s)
+{
+    for (size_t i = 0; i < ENG_N(E); i++)
+        if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+}
+
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
  * sliding contacts' f their kinetic force at their slip speed, held ones (mode 0 with friction)
  * solved for slip acceleration 0. f out (nc), a out (n). The loads at t must be set. */
@@ -348,6 +375,9 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
             row_axpy(&S->rows[j], f[j], r);
         }
     }
+    if (E->ghost) /* a ghost's acceleration is prescribed (Dirichlet: the solver returns it) */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) r[i] = s->A[i];
     held_solve(E, r, E->held, a, f);
 }
 
@@ -381,6 +411,9 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         }
         row_axpy(&S->rows[j], df, r);
     }
+    if (E->ghost)
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, NULL, NULL, NULL, &r[i]);
     held_solve(E, r, E->held, jk, E->f2);
 }
 
@@ -629,6 +662,8 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
     for (size_t i = 0; i < n; i++) E->pin[i] = 0;
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    if (E->ghost) /* (a ghost's A is not re-based: its motion is prescribed) */
+        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
     for (size_t i = 0; i < n; i++) {
         E->A0[i] = s->A[i];
         any |= !E->pin[i] && a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol &&
@@ -651,10 +686,20 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
         E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
         E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
     }
+    if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) {
+                double xg, vg;
+                ghost_at(E, i, s->t - E->gt0 + hh, &xg, &vg, NULL, NULL);
+                E->xp[i] = xg - T->kin.corr_V * vg;
+            }
     ENG_APPLY_M(E, E->r, E->y);
     applied_at(E, s, t1, E->ph);
     ENG_APPLY_K(E, E->xp, E->y2);
     for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
+    if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0 + hh, NULL, &E->ph[i], NULL, NULL);
     return ENG_OK;
 }
 
@@ -935,6 +980,16 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     }
 }
 
+static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
+                               eng_status *out);
+
+/* Spans are taken with held inputs and no hooks (a switch callback, an observer or a stop at the
+ * first switch step the whole structure). */
+static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
+{
+    return E->sub && !ramped(in) && !(hk && (hk->on_switch || hk->obs || hk->stop_at_switch));
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -948,6 +1003,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
     const int stop = hk && hk->stop_at_switch;
     for (long phase = 0; s->t < t_end; phase++) {
         if (phase >= max_phases) return ENG_ERR_NO_PROGRESS;
+        if (E->ghost) ghosts_now(E, s);
         double ta;
         begin_phase(E, s, &ta);
         const double r = (phase == 0) ? hh : t_end - s->t;
@@ -974,6 +1030,10 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             return ENG_OK;
         }
         if (phase == 0) s->pivot_steps++;
+        if (phase == 0 && spans_usable(E, in, hk)) {
+            eng_status sst;
+            if (step_spans(E, in, s, t_end, hh, &T, &sst)) return sst;
+        }
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
         for (size_t j = 0; j < nc; j++) {
@@ -1026,6 +1086,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
         finish(E, s, &T, E->V1, E->f);
         s->t = t_new;
+        if (E->ghost) ghosts_now(E, s);
         loads_at(E, in, s->t);
         /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
         for (size_t j = 0; j < nc; j++) {
@@ -1041,6 +1102,151 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
+}
+
+/* ---- spans ---------------------------------------------------------------------------------- */
+
+/* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
+ * inlined into itself. */
+static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
+{
+    return step_located(B, in, b, t_end, hh, NULL);
+}
+
+/* The located step with contacts switching (E->cand) by spans (eng_sparse.span): the whole step in
+ * the current modes (the trial T, solved in E->V1, E->f), then each span stepped again on its own by
+ * the sub-engine from the step's start, its ghosts interpolated between their states at the step's
+ * start and end. Returns 0 when the model gives no span (the whole structure is stepped as it is),
+ * else 1 with the step's status in *out. */
+static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
+                               eng_status *out)
+{
+    const eng_setup *S = &E->S;
+    const eng_sparse *sp = S->sparse;
+    const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
+    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
+    if (ns == 0) return 0;
+    *out = ENG_OK;
+    memcpy(E->pX, s->X, n * sizeof(double));
+    memcpy(E->pV, s->V, n * sizeof(double));
+    memcpy(E->pA, s->A, n * sizeof(double));
+    memcpy(E->phA, s->hA, n * sizeof(double));
+    memcpy(E->pF, s->F, nc * sizeof(double));
+    memcpy(E->pts, s->t_stick, nc * sizeof(double));
+    memcpy(E->ptb, s->t_break, nc * sizeof(double));
+    memcpy(E->pmode, s->mode, nc * sizeof(int));
+    memcpy(E->pbd, s->break_dir, nc * sizeof(int));
+    const double t_start = s->t;
+    /* everything in the current modes first */
+    finish(E, s, T, E->V1, E->f);
+    s->t = t_end;
+    for (size_t j = 0; j < nc; j++)
+        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    rest_exact(E, s);
+    eng *B = E->sub;
+    eng_state *b = &E->ss;
+    for (size_t k = 0; k < ns; k++) {
+        const int lab = (int)k + 1;
+        size_t nd = 0, nct = 0;
+        for (size_t i = 0; i < n; i++) {
+            E->gmap[i] = -1;
+            if (E->dlab[i] != lab && E->dlab[i] != -lab) continue;
+            if (nd == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
+            E->gmap[i] = (long)nd;
+            E->ldof[nd] = i;
+            E->lgh[nd++] = E->dlab[i] < 0;
+        }
+        for (size_t j = 0; j < nc; j++) {
+            if (E->clab[j] != lab && E->clab[j] != -lab) continue;
+            if (nct == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
+            E->lct[nct++] = j;
+        }
+        /* the span's contacts: rows in the local numbering, data, inputs */
+        for (size_t a = 0; a < nct; a++) {
+            const size_t j = E->lct[a];
+            const eng_row *R = &S->rows[j];
+            const int own = E->clab[j] > 0;
+            size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
+            double *w = E->lrw + a * E->lnnz;
+            for (size_t q = 0; q < R->nnz; q++) {
+                if (E->gmap[R->idx[q]] < 0) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
+                idx[q] = (size_t)E->gmap[R->idx[q]];
+                w[q] = R->w[q];
+            }
+            E->lrows[a].nnz = R->nnz;
+            E->lN[a] = own ? S->N[j] : 0.0; /* a carried contact: no friction */
+            E->lmus[a] = own ? S->mu_s[j] : 0.0;
+            E->lmuk[a] = own ? S->mu_k[j] : 0.0;
+            if (S->law) E->llaw[a] = S->law[j];
+            B->mu_b[a] = fmax(E->lmus[a], E->lmuk[a]);
+            E->lNe[a] = (own && in && in->N_ext) ? in->N_ext[j] : 0.0;
+            E->lvb[a] = (in && in->v_belt) ? in->v_belt[j] : 0.0;
+            b->F[a] = E->pF[j];
+            b->mode[a] = E->pmode[j];
+            b->t_stick[a] = E->pts[j];
+            b->t_break[a] = E->ptb[j];
+            b->break_dir[a] = E->pbd[j];
+        }
+        B->any_law = 0;
+        for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
+        /* the span's DOFs, its ghosts' motion over the step */
+        B->gt0 = t_start;
+        B->gH = t_end - t_start;
+        for (size_t q = 0; q < nd; q++) {
+            const size_t i = E->ldof[q];
+            if (S->exc.Pc) E->lPc[q] = S->exc.Pc[i];
+            if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
+            E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
+            B->ghost[q] = E->lgh[q];
+            B->gX0[q] = E->pX[i];
+            B->gV0[q] = E->pV[i];
+            B->gX1[q] = s->X[i];
+            B->gV1[q] = s->V[i];
+            b->X[q] = E->pX[i];
+            b->V[q] = E->pV[i];
+            b->A[q] = E->pA[i];
+            b->hA[q] = E->phA[i];
+        }
+        B->S.n = b->n = nd;
+        B->S.nc = b->nc = nct;
+        B->loads_for = NULL;
+        for (int slot = 0; slot < ENG_NSLOTS; slot++) B->slot_ok[slot] = 0;
+        sp->span_bind(S->ops.ctx, E->ldof, E->lgh, nd, E->lct, nct);
+        b->t0 = s->t0;
+        b->t = t_start;
+        b->n_grid = s->n_grid;
+        b->exc_n = s->exc_n;
+        b->exc_c = s->exc_c;
+        b->exc_s = s->exc_s;
+        b->t_switch = s->t_switch;
+        b->steps = b->solves = b->pivot_steps = b->switches = 0;
+        const eng_inputs bin = {E->lF, E->lNe, (in && in->v_belt) ? E->lvb : NULL, {NULL, NULL}, {NULL, NULL},
+                                in ? in->t_ref : 0.0};
+        loads_at(B, &bin, t_end);
+        const eng_status st = step_located_sub(B, &bin, b, t_end, hh);
+        if (st != ENG_OK) { *out = st; return 1; }
+        for (size_t q = 0; q < nd; q++) {
+            if (E->lgh[q]) continue;
+            const size_t i = E->ldof[q];
+            s->X[i] = b->X[q];
+            s->V[i] = b->V[q];
+            s->A[i] = b->A[q];
+            s->hA[i] = b->hA[q];
+        }
+        for (size_t a = 0; a < nct; a++) {
+            const size_t j = E->lct[a];
+            if (E->clab[j] <= 0) continue;
+            s->F[j] = b->F[a];
+            s->mode[j] = b->mode[a];
+            s->t_stick[j] = b->t_stick[a];
+            s->t_break[j] = b->t_break[a];
+            s->break_dir[j] = b->break_dir[a];
+        }
+        s->solves += b->solves;
+        s->switches += b->switches;
+        if (b->switches) s->t_switch = fmax(s->t_switch, b->t_switch);
+    }
+    return 1;
 }
 
 /* ---- driving -------------------------------------------------------------------------------- */
