@@ -28,11 +28,13 @@ typedef struct chn_model_s {
     double *e[ENG_NSLOTS];      /* its super-diagonal (e[n - 1] = 0), */
     double *cp[ENG_NSLOTS];     /* Thomas's factors: cp = e / den, */
     double *inv[ENG_NSLOTS];    /* inv = 1 / den */
+    int tok[ENG_NSLOTS];        /* cp and inv are the slot's (chn_factor makes them lazily) */
     /* the slot's factorisation for the basis solves, kept for a held pattern (chn_basis_kept): per
      * row the pattern it is for (kh: 0 none yet, 1 free, 2 held), Thomas's cp and 1 / den */
     int *kh[ENG_NSLOTS];
     double *kcp[ENG_NSLOTS], *kinv[ENG_NSLOTS];
     double *q, *work;           /* n and 2 n: the box LCP's right-hand side and workspace */
+    double *xs, *fs;            /* n each: the fused step's x_pred and forces (chn_step_held) */
     /* spans (eng_sparse): a span of the chain is a chain of its own, a view of blocks [a - 1, b] with
      * its end blocks ghosts where they are not the chain's ends (fix_lo, fix_hi: Dirichlet rows) */
     int fix_lo, fix_hi;
@@ -64,32 +66,47 @@ static inline void chn_M(void *ctx, const double *a, double *y)
     for (size_t i = 0; i < C->n; i++) y[i] = C->m[i] * a[i];
 }
 
-static inline int chn_factor(void *ctx, int slot, double cM, double cC, double cK)
+/* Thomas's factors of the slot (cp, inv): 0 when a pivot is not positive. */
+static inline int chn_thomas(chn_model *C, int slot)
 {
-    chn_model *C = (chn_model *)ctx;
-    const size_t n = C->n;
-    double *d = C->d[slot], *e = C->e[slot], *cp = C->cp[slot], *inv = C->inv[slot];
-    (void)cC; /* no dampers */
-    for (size_t i = 0; i < n; i++) {
-        d[i] = cM * C->m[i] + cK * chn_kd(C, i);
-        e[i] = (i + 1 < n) ? -cK * C->k[i + 1] : 0.0;
-    }
-    for (size_t i = 0; i < n; i++) C->kh[slot][i] = 0; /* the kept basis factors anew */
-    double prev = 0.0;
-    for (size_t i = 0; i < n; i++) {
+    const double *d = C->d[slot], *e = C->e[slot];
+    double *cp = C->cp[slot], *inv = C->inv[slot], prev = 0.0;
+    for (size_t i = 0; i < C->n; i++) {
         const double den = d[i] - ((i > 0) ? e[i - 1] * prev : 0.0);
         if (!(den > 0.0)) return 0;
         inv[i] = 1.0 / den;
         cp[i] = e[i] * inv[i];
         prev = cp[i];
     }
+    C->tok[slot] = 1;
     return 1;
+}
+
+/* M_hat of the slot; Thomas's factors (chn_solve's) made when first solved with, where M_hat is
+ * strictly diagonally dominant (so positive definite: the basis solves, chn_basis_kept, factor it
+ * their own way), else now. */
+static inline int chn_factor(void *ctx, int slot, double cM, double cC, double cK)
+{
+    chn_model *C = (chn_model *)ctx;
+    const size_t n = C->n;
+    double *d = C->d[slot], *e = C->e[slot];
+    (void)cC; /* no dampers */
+    int dominant = 1;
+    for (size_t i = 0; i < n; i++) {
+        d[i] = cM * C->m[i] + cK * chn_kd(C, i);
+        e[i] = (i + 1 < n) ? -cK * C->k[i + 1] : 0.0;
+        dominant &= d[i] > fabs(e[i]) + ((i > 0) ? fabs(e[i - 1]) : 0.0);
+        C->kh[slot][i] = 0; /* the kept basis factors anew */
+    }
+    C->tok[slot] = 0;
+    return dominant || chn_thomas(C, slot);
 }
 
 static inline void chn_solve(void *ctx, int slot, const double *b, double *x)
 {
-    const chn_model *C = (const chn_model *)ctx;
+    chn_model *C = (chn_model *)ctx;
     const size_t n = C->n;
+    if (!C->tok[slot]) (void)chn_thomas(C, slot); /* (positive pivots: chn_factor) */
     const double *e = C->e[slot], *cp = C->cp[slot], *inv = C->inv[slot];
     double prev = 0.0;
     for (size_t i = 0; i < n; i++) {
@@ -201,6 +218,48 @@ static inline eng_status chn_friction(void *ctx, const eng_problem *P, int what,
     return lcp_box(n, d, e, C->q, l, mode, V1, f, C->work, pivots) == LCP_OK ? ENG_OK : ENG_ERR_LCP;
 }
 
+/* The fused grid step in the held pattern (eng_sparse.step_held): x_pred and p_hat in one sweep (K's
+ * row needs x_pred one block ahead), the kept basis solve, the margins, the acceptance; the
+ * engine's arithmetic in its order (engine.h's eng_held_step), so the same bits. */
+static inline int chn_step_held(void *ctx, const eng_held_step *F, eng_state *s)
+{
+    chn_model *C = (chn_model *)ctx;
+    const size_t n = C->n;
+    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
+    const double *X = s->X, *V = s->V, *A0 = F->A0;
+    double *xpp = C->xs, *q = C->q, *V1 = C->work; /* (V1 over the solve's dp: each read before written) */
+    double xc = X[0] + pV * V[0] + pA * A0[0];
+    for (size_t i = 0; i < n; i++) {
+        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
+        xpp[i] = xc;
+        const double r = -a * A0[i] + (1.0 - a) * (V[i] * c1 + g1 * A0[i]);
+        const double y = C->m[i] * r;
+        double kx = chn_kd(C, i) * xc;
+        if (i > 0) kx -= C->k[i] * xpp[i - 1];
+        if (i + 1 < n) kx -= C->k[i + 1] * xr;
+        double p = F->u[i];
+        if (F->Pc) p += F->Pc[i] * F->cw;
+        if (F->Ps) p -= F->Ps[i] * F->sw;
+        q[i] = -(p + (y - kx));
+        xc = xr;
+    }
+    double *f = C->fs;
+    chn_basis_kept(C, F->slot, q, F->lim, F->st, V1, f);
+    for (size_t j = 0; j < n; j++) {
+        if (!(F->Fb[j] > 0.0)) continue;
+        const double mg = (F->st[j] != 0) ? F->st[j] * ((0.0 + 1.0 * V1[j]) - 0.0) : F->Fb[j] - fabs(f[j]);
+        if (mg <= 0.0) return 0;
+    }
+    for (size_t i = 0; i < n; i++) {
+        s->X[i] = xpp[i] + F->corr_V * V1[i];
+        s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * A0[i];
+        s->V[i] = V1[i];
+        s->hA[i] = F->h;
+        s->F[i] = f[i];
+    }
+    return 1;
+}
+
 /* A span's reach for the step h and the Bossak parameter alpha: M_hat^-1 decays like q^distance, q =
  * (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa <= (1 + rho) / (1 - rho)
  * the condition number of the diagonally scaled M_hat by Gershgorin, rho the largest ratio of a
@@ -278,6 +337,7 @@ static inline eng_sparse chn_sparse(chn_model *C, int spans)
     eng_sparse sp;
     const eng_ops view = {C->sub, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
     sp.held_basis = 1;
+    sp.step_held = chn_step_held;
     sp.span_max = spans ? C->n : 0;
     sp.span = spans ? chn_span : NULL;
     sp.span_bind = spans ? chn_span_bind : NULL;

@@ -195,14 +195,48 @@ typedef struct eng_harmonic_s {
  *                the span's rows (a ghost's row is not read); factor and the friction solver are for
  *                the span's rows with the ghosts' entries prescribed: the friction problem's p_hat
  *                holds a ghost's prescribed end velocity in its entry, and V1 returns it there
- *                (Dirichlet rows). held_basis holds for them too. */
+ *                (Dirichlet rows). held_basis holds for them too.
+ *   step_held    (optional) a whole grid step in the current modes, fused: the trial step (x_pred,
+ *                p_hat), the basis solve in the modes st with the limits lim, every contact's margin,
+ *                and where none would switch, the step's acceptance; in the model's own sweeps (the
+ *                chain: one forward and one backward sweep with its kept factorisation), written in
+ *                the engine's arithmetic and order (so the same bits as its trial, solve and finish;
+ *                eng_held_step says what each is). Returns 1 when taken (s->X, V, A, hA, F set as the
+ *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched: the
+ *                engine takes the step its general way). Asked by the located scheme on a grid step
+ *                whose A needs no re-basing, with held inputs and no belts. */
+typedef struct eng_held_step_s eng_held_step;
 typedef struct {
     int held_basis;
+    int (*step_held)(void *ctx, const eng_held_step *F, struct eng_state_s *s);
     size_t span_max;
     size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
     void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);
     eng_ops span_ops;
 } eng_sparse;
+
+/* What eng_sparse.step_held is given: the step's arithmetic as the engine's trial_step, its solve
+ * and finish do it, per DOF i and contact j:
+ *   xp_i = X_i + pred_V V_i + pred_A A0_i
+ *   r_i = -alpha A0_i + (1 - alpha) (V_i c1 + g1 A0_i)
+ *   p_i = u_i, then p_i += Pc_i cw, then p_i -= Ps_i sw (the terms of non-NULL arrays)
+ *   p_hat_i = p_i + ((M r)_i - (K xp)_i)              (apply_M, apply_K as the model's)
+ *   V1, f: the basis solve (eng_problem, ENG_SOLVE_BASIS) of p_hat in the modes st with limits lim
+ *   margin_j = st_j (w_j . V1) for st_j != 0, Fb_j - |f_j| for st_j = 0 (contacts with Fb_j > 0 only)
+ *   taken when every margin is > 0: X_i = xp_i + corr_V V1_i, A_i = (V1_i - V_i) c1 - g1 A0_i,
+ *   V_i = V1_i, hA_i = h, F_j = f_j. */
+struct eng_held_step_s {
+    int slot;                   /* the factored slot of M_hat (ENG_SLOT_GRID), with cM, cC, cK */
+    double cM, cC, cK;
+    double h, alpha, g1, c1, pred_V, pred_A, corr_V;
+    double cw, sw;              /* cos and sin of the excitation's phase at the step's end */
+    const double *Pc, *Ps;      /* n: the excitation (NULL: 0) */
+    const double *u;            /* n: external forces */
+    const double *A0;           /* n: Bossak's A for the step (not re-based: s->A) */
+    const int *st;              /* nc: modes (0 held, +1/-1 sliding; a contact without friction: 1) */
+    const double *lim;          /* nc: held contacts' breakaway limit, sliding ones' kinetic magnitude */
+    const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
+};
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
  * copies none of them: a model keeps its parameters in its own struct and points at them). */

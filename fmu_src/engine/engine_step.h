@@ -12,6 +12,7 @@
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
  *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
+ *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -60,6 +61,12 @@
 #endif
 #ifndef ENG_HELD_BASIS
 #define ENG_HELD_BASIS(E) ((E)->S.sparse && (E)->S.sparse->held_basis)
+#endif
+#ifndef ENG_HAS_STEP_HELD
+#define ENG_HAS_STEP_HELD(E) ((E)->S.sparse && (E)->S.sparse->step_held)
+#endif
+#ifndef ENG_STEP_HELD
+#define ENG_STEP_HELD(E, F, s) ((E)->S.sparse->step_held((E)->S.ops.ctx, (F), (s)))
 #endif
 #ifndef ENG_HAS_BREAKAWAY
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
@@ -643,6 +650,53 @@ typedef struct {
     double cM, cC, cK;
 } trial;
 
+/* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
+ * lengths' tolerance; a held contact's pin aside) */
+static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
+{
+    const double hA = s->hA[i];
+    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * fmax(hh, hA) <= 1.0;
+}
+
+/* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
+ * a DOF a held contact pins alone (w_j = e_i: its acceleration and jerk are 0, A stays) and on a
+ * ghost (its motion prescribed); E->pin says which are pinned when some A is of another length.
+ * The loads end at t1. */
+static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    int other = 0;
+    for (size_t i = 0; i < n; i++) other |= hh != s->hA[i];
+    if (!other || S->alpha == 0.0) return 0;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    if (E->ghost)
+        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
+    int any = 0;
+    for (size_t i = 0; i < n; i++) any |= !E->pin[i] && rebases(E, s, i, hh, tol);
+    return any;
+}
+
+static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    const double a = S->alpha;
+    for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
+    if (!needs_rebase(E, s, hh)) return;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    double *acc = E->acc, *jk = E->jk;
+    loads_at(E, in, s->t);
+    phys_accel(E, s, s->t, s->mode, acc, E->f2);
+    jerks(E, in, s, acc, jk);
+    loads_at(E, in, t1);
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+}
+
 static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
 {
     const eng_setup *S = &E->S;
@@ -655,32 +709,7 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
     T->cC = 1.0;
     T->cK = E->b * hh / E->g;
     if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
-    /* re-base A where it belongs to another step length, except on a DOF a held contact pins alone
-     * (w_j = e_i: its acceleration and jerk are 0, A stays) */
-    int any = 0;
-    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    if (E->ghost) /* (a ghost's A is not re-based: its motion is prescribed) */
-        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
-    for (size_t i = 0; i < n; i++) {
-        E->A0[i] = s->A[i];
-        any |= !E->pin[i] && a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol &&
-               S->rate_max * fmax(hh, s->hA[i]) <= 1.0;
-    }
-    if (any) {
-        double *acc = E->acc, *jk = E->jk;
-        loads_at(E, in, s->t);
-        phys_accel(E, s, s->t, s->mode, acc, E->f2);
-        jerks(E, in, s, acc, jk);
-        loads_at(E, in, t1);
-        for (size_t i = 0; i < n; i++) {
-            const double hA = s->hA[i];
-            if (!E->pin[i] && a != 0.0 && hh != hA && fabs(hh - hA) > tol && S->rate_max * fmax(hh, hA) <= 1.0)
-                E->A0[i] = s->A[i] + a * (hh - hA) * jk[i];
-        }
-    }
+    rebase(E, in, s, hh, t1);
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
     for (size_t i = 0; i < n; i++) {
         E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
@@ -980,6 +1009,43 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     }
 }
 
+/* The model's fused grid step in the current modes (eng_sparse.step_held; E->st the modes, the loads
+ * at t1 set): 1 taken, 0 not (a contact would switch, or A needs re-basing), -1 M_hat not positive
+ * definite. */
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1)
+{
+    const eng_setup *S = &E->S;
+    const size_t nc = ENG_NC(E);
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const double a = S->alpha;
+    if (needs_rebase(E, s, S->h)) return 0;
+    eng_held_step F;
+    F.slot = ENG_SLOT_GRID;
+    F.cM = (1.0 - a) * K->c1;
+    F.cC = 1.0;
+    F.cK = E->b * S->h / E->g;
+    if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return -1;
+    F.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
+    for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+    F.h = K->h;
+    F.alpha = a;
+    F.g1 = E->g1;
+    F.c1 = K->c1;
+    F.pred_V = K->pred_V;
+    F.pred_A = K->pred_A;
+    F.corr_V = K->corr_V;
+    F.cw = F.sw = 0.0;
+    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &F.cw, &F.sw);
+    F.Pc = S->exc.Pc;
+    F.Ps = S->exc.Ps;
+    F.u = E->u;
+    F.A0 = s->A;
+    F.st = E->st;
+    F.lim = E->lim;
+    F.Fb = E->Fb;
+    return ENG_STEP_HELD(E, &F, s);
+}
+
 static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
                                eng_status *out);
 
@@ -1011,6 +1077,19 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
             if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
             E->cand[j] = 0;
+        }
+        if (phase == 0 && ENG_HAS_STEP_HELD(E) && hh == S->h && !E->ghost && !ramped(in) && E->vb == E->zero_nc) {
+            const int taken = held_step(E, s, t_end);
+            if (taken < 0) return ENG_ERR_BAD_INPUT;
+            if (taken) {
+                s->solves++;
+                s->t = t_end;
+                for (size_t j = 0; j < nc; j++)
+                    if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+                rest_exact(E, s);
+                observe(E, s, ta, s->F, hk);
+                return ENG_OK;
+            }
         }
         margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
         trial T;
@@ -1225,6 +1304,15 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         loads_at(B, &bin, t_end);
         const eng_status st = step_located_sub(B, &bin, b, t_end, hh);
         if (st != ENG_OK) { *out = st; return 1; }
+        /* the span's A re-based on a grid step now, as the next step of the whole structure would
+         * (there over all of it) */
+        rebase(B, &bin, b, S->h, t_end);
+        const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
+        for (size_t q = 0; q < nd; q++)
+            if (!E->lgh[q] && rebases(B, b, q, S->h, tol) && !B->pin[q]) {
+                b->A[q] = B->A0[q];
+                b->hA[q] = S->h;
+            }
         for (size_t q = 0; q < nd; q++) {
             if (E->lgh[q]) continue;
             const size_t i = E->ldof[q];
