@@ -260,6 +260,29 @@ static inline int chn_step_held(void *ctx, const eng_held_step *F, eng_state *s)
     return 1;
 }
 
+/* Held block j's next breakaway in closed form (eng_sparse.contact_breakaway) where its neighbours
+ * are held too (its static force then P_j(t) + u_j - (K x)_j with x fixed: friction.h's
+ * dfo_next_breakaway, as the chain's own chain_block_breakaway); NaN else. */
+static inline double chn_contact_breakaway(void *ctx, size_t j, const eng_harmonic *exc, const eng_state *s,
+                                           const eng_inputs *in, const double *Fb)
+{
+    const chn_model *C = (const chn_model *)ctx;
+    const size_t n = C->n;
+    for (size_t k = (j > 0) ? j - 1 : j; k <= j + 1 && k < n; k++)
+        if (k != j && !(s->mode[k] == 0 && Fb[k] > 0.0)) return NAN;
+    const double Pc = exc->Pc ? exc->Pc[j] : 0.0, Ps = exc->Ps ? exc->Ps[j] : 0.0;
+    dfo_harmonic P;
+    dfo_harmonic_init(&P, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
+    const double u = (in && in->F_ext) ? in->F_ext[j] : 0.0;
+    double kx = chn_kd(C, j) * s->X[j];
+    if (j > 0) kx -= C->k[j] * s->X[j - 1];
+    if (j + 1 < n) kx -= C->k[j + 1] * s->X[j + 1];
+    const dfo_loads L = {u, 0.0, 0.0, Fb[j]}; /* (N and the kinetic magnitude are not read) */
+    int dir = 0;
+    const double tb = dfo_next_breakaway(&P, &L, u - kx, s->t_stick[j], &dir);
+    return tb;
+}
+
 /* A span's reach for the step h and the Bossak parameter alpha: M_hat^-1 decays like q^distance, q =
  * (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa <= (1 + rho) / (1 - rho)
  * the condition number of the diagonally scaled M_hat by Gershgorin, rho the largest ratio of a
@@ -338,6 +361,7 @@ static inline eng_sparse chn_sparse(chn_model *C, int spans)
     const eng_ops view = {C->sub, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
     sp.held_basis = 1;
     sp.step_held = chn_step_held;
+    sp.contact_breakaway = chn_contact_breakaway;
     sp.span_max = spans ? C->n : 0;
     sp.span = spans ? chn_span : NULL;
     sp.span_bind = spans ? chn_span_bind : NULL;

@@ -76,7 +76,7 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode,
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->pX, E->pV, E->pA,
                           E->phA, E->pF, E->pts, E->ptb, E->pmode, E->pbd, E->ghost, E->gX0, E->gV0, E->gX1,
@@ -171,7 +171,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     double **dn[] = {&E->u, &E->A0, &E->xp, &E->ph, &E->V1, &E->r, &E->y, &E->y2, &E->X0, &E->acc, &E->jk, &E->rb,
                      &E->sX, &E->sV, &E->sA, &E->shA};
     double **dc[] = {&E->mu_b, &E->Nn, &E->mukN, &E->Fb, &E->mlN, &E->zero_nc, &E->lim, &E->f, &E->f2,
-                     &E->rhs, &E->sol, &E->res, &E->sF, &E->hlim, &E->hf};
+                     &E->rhs, &E->sol, &E->res, &E->sF, &E->hlim, &E->hf, &E->tbk};
     int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode, &E->hmode};
     int ok = 1;
     for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++)

@@ -196,6 +196,14 @@ typedef struct eng_harmonic_s {
  *                the span's rows with the ghosts' entries prescribed: the friction problem's p_hat
  *                holds a ghost's prescribed end velocity in its entry, and V1 returns it there
  *                (Dirichlet rows). held_basis holds for them too.
+ *   contact_breakaway  (optional) held contact j's next breakaway in closed form, the structure
+ *                elsewhere where it is: the first time >= its stick's start s->t_stick[j] at which its
+ *                holding force reaches its limit Fb[j] under the inputs in (held inputs, still belts),
+ *                or NaN where the model's closed form does not hold (e.g. a DOF coupled to contact j's
+ *                moves). Where every contact that would switch in a (sub-)step is held and has a
+ *                breakaway there, the located scheme splits the step at the earliest of them at once
+ *                (no root finding; a force that crosses its limit and comes back inside the step is
+ *                seen); else as without.
  *   step_held    (optional) a whole grid step in the current modes, fused: the trial step (x_pred,
  *                p_hat), the basis solve in the modes st with the limits lim, every contact's margin,
  *                and where none would switch, the step's acceptance; in the model's own sweeps (the
@@ -209,6 +217,8 @@ typedef struct eng_held_step_s eng_held_step;
 typedef struct {
     int held_basis;
     int (*step_held)(void *ctx, const eng_held_step *F, struct eng_state_s *s);
+    double (*contact_breakaway)(void *ctx, size_t j, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
+                                const struct eng_inputs_s *in, const double *Fb);
     size_t span_max;
     size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
     void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);

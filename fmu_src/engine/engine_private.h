@@ -48,6 +48,7 @@ struct eng {
     double *lim, *f, *f2;
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
     double *hlim, *hf;           /* nc: held_solve's limits and forces */
+    double *tbk;                 /* nc: the candidates' closed-form breakaways (eng_sparse.contact_breakaway) */
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */

@@ -13,6 +13,8 @@
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
  *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
  *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
+ *   ENG_HAS_CONTACT_BREAKAWAY(E), ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb)   a held contact's breakaway
+ *                                in closed form (eng_sparse)
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -67,6 +69,13 @@
 #endif
 #ifndef ENG_STEP_HELD
 #define ENG_STEP_HELD(E, F, s) ((E)->S.sparse->step_held((E)->S.ops.ctx, (F), (s)))
+#endif
+#ifndef ENG_HAS_CONTACT_BREAKAWAY
+#define ENG_HAS_CONTACT_BREAKAWAY(E) ((E)->S.sparse && (E)->S.sparse->contact_breakaway)
+#endif
+#ifndef ENG_CONTACT_BREAKAWAY
+#define ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb) \
+    ((E)->S.sparse->contact_breakaway((E)->S.ops.ctx, (j), &(E)->S.exc, (s), (in), (Fb)))
 #endif
 #ifndef ENG_HAS_BREAKAWAY
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
@@ -1049,6 +1058,23 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1)
 static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
                                eng_status *out);
 
+/* The earliest closed-form breakaway of the candidates (eng_sparse.contact_breakaway; each into
+ * E->tbk) where every candidate is a held contact with one, held inputs and still belts; NaN else. */
+static double closed_breakaways(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    if (!ENG_HAS_CONTACT_BREAKAWAY(E) || ramped(in) || E->vb != E->zero_nc) return NAN;
+    double tb = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!E->cand[j]) continue;
+        if (E->st[j] != 0) return NAN;
+        const double t = ENG_CONTACT_BREAKAWAY(E, j, s, in, E->Fb);
+        if (!(t < INFINITY)) return NAN;
+        E->tbk[j] = t;
+        tb = fmin(tb, t);
+    }
+    return tb;
+}
+
 /* Spans are taken with held inputs and no hooks (a switch callback, an observer or a stop at the
  * first switch step the whole structure). */
 static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
@@ -1112,6 +1138,27 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (phase == 0 && spans_usable(E, in, hk)) {
             eng_status sst;
             if (step_spans(E, in, s, t_end, hh, &T, &sst)) return sst;
+        }
+        /* held contacts breaking away with closed forms: the step split at the earliest at once */
+        const double tb = closed_breakaways(E, in, s);
+        if (tb >= s->t && tb <= t_end) {
+            const double hs = tb - s->t;
+            if (hs > 0.0) {
+                trial_margin(&mc, (tb == t_end) ? r : hs, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
+                finish(E, s, &T, E->V1, E->f);
+            }
+            s->t = tb;
+            if (E->ghost) ghosts_now(E, s);
+            for (size_t j = 0; j < nc; j++) E->cand[j] = E->cand[j] && E->tbk[j] == tb;
+            loads_at(E, in, s->t);
+            observe(E, s, ta, s->F, hk);
+            apply_switches(E, s, 1, hk);
+            rest_exact(E, s);
+            loads_at(E, in, t_end);
+            if (stop && s->switches != sw0) return ENG_SWITCHED;
+            continue;
         }
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;

@@ -555,7 +555,7 @@ static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_la
 }
 
 /* The engine on B in scheme with the sparse operators: 0 none, 1 held_basis only, 2 and the fused
- * step, 3 and spans; h = T / steps. */
+ * step, 3 and the closed-form breakaways, 4 and spans; h = T / steps. */
 static eng_setup big_setup(big_chain *B, int scheme, int sparse, double steps)
 {
     eng_setup S = setup_common(B->n, B->rows, B->N, B->ms, B->mk, B->Pc, B->Ps, DFO_SCHEME_PAPER, 2.0);
@@ -564,9 +564,10 @@ static eng_setup big_setup(big_chain *B, int scheme, int sparse, double steps)
     S.scheme = scheme;
     S.h = 4.0 * DFO_PI / steps;
     chn_set_reach(&B->C, S.h, S.alpha);
-    B->sp = chn_sparse(&B->C, sparse >= 3);
+    B->sp = chn_sparse(&B->C, sparse >= 4);
     if (sparse < 2) B->sp.step_held = NULL;
-    if (sparse >= 3) B->sp.span = counting_span;
+    if (sparse < 3) B->sp.contact_breakaway = NULL;
+    if (sparse >= 4) B->sp.span = counting_span;
     S.sparse = sparse ? &B->sp : NULL;
     return S;
 }
@@ -599,26 +600,30 @@ static void test_chain_sparse(checks *T)
     for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
         check_context(T, "chain of %d blocks, %s: the held solves through the box LCP, the fused step", NCHAIN,
                       names[scheme]);
-        eng_state s[4];
-        eng_status st[4];
-        eng *E[4];
-        for (int v = 0; v < 3; v++) {
+        eng_state s[5];
+        eng_status st[5];
+        eng *E[5];
+        for (int v = 0; v < 4; v++) {
             const eng_setup S = big_setup(&B, scheme, v, 800.0);
             E[v] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[v], &st[v]);
         }
-        const eng_setup S = big_setup(&B, scheme, 2, 800.0);
-        E[3] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[3], &st[3]);
-        const double d = max_rel_diff(s[1].X, s[0].X, NCHAIN);
-        printf("  chain n = %d %-10s held solves by the box LCP against the dense: %.2e, %lld / %lld switches\n",
-               NCHAIN, names[scheme], d, s[1].switches, s[0].switches);
-        for (int v = 0; v < 4; v++) CHECK(st[v] == ENG_OK);
+        const eng_setup S = big_setup(&B, scheme, 3, 800.0);
+        E[4] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[4], &st[4]);
+        const double d = max_rel_diff(s[1].X, s[0].X, NCHAIN), db = max_rel_diff(s[3].X, s[2].X, NCHAIN);
+        printf("  chain n = %d %-10s held solves by the box LCP against the dense: %.2e, %lld / %lld switches; "
+               "closed-form breakaways against root finding: %.2e, %lld switches\n",
+               NCHAIN, names[scheme], d, s[1].switches, s[0].switches, db, s[3].switches);
+        for (int v = 0; v < 5; v++) CHECK(st[v] == ENG_OK);
         CHECK(s[0].switches >= 5 * NCHAIN);
         CHECK(s[1].switches == s[0].switches);
         CHECK(d < 1e-11);
         const switch_log none = {0, 0.0, 0};
         CHECK(same_bits(&s[2], &s[1], &none, &none)); /* the fused step: the general path's bits */
-        CHECK(same_bits(&s[3], &s[2], &none, &none)); /* inline: engine.c's bits */
-        for (int v = 0; v < 4; v++) {
+        CHECK(s[3].switches == s[2].switches);
+        CHECK(db < 1e-11);
+        if (scheme != DFO_SCHEME_LOCATED) CHECK(same_bits(&s[3], &s[2], &none, &none)); /* (located only) */
+        CHECK(same_bits(&s[4], &s[3], &none, &none)); /* inline: engine.c's bits */
+        for (int v = 0; v < 5; v++) {
             eng_state_free(E[v], &s[v]);
             eng_destroy(E[v]);
         }
@@ -634,10 +639,10 @@ static void test_chain_sparse(checks *T)
         eng_state s[3];
         eng_status st[3];
         eng *E[3];
-        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 2, steps);
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, steps);
         E[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[0], &st[0]);
         B.spans = 0;
-        S = big_setup(&B, DFO_SCHEME_LOCATED, 3, steps);
+        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, steps);
         E[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[1], &st[1]);
         const long spans = B.spans;
         E[2] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[2], &st[2]);
