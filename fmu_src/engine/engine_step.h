@@ -856,6 +856,15 @@ static ENG_HOT void rest_exact(eng *E, eng_state *s)
     }
 }
 
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1);
+
+/* The model's fused step may take a step of length hh: a grid step of the whole structure, held
+ * inputs, no belts */
+static ENG_HOT int fused_ok(const eng *E, const eng_inputs *in, double hh)
+{
+    return ENG_HAS_STEP_HELD(E) && hh == E->S.h && !E->ghost && !ramped(in) && E->vb == E->zero_nc;
+}
+
 /* The paper scheme (consistent = 0) and the consistent one (1): the LCP from the modes before the
  * step, then the paper's coefficient updates, or the consistent scheme's rest rule at the predicted
  * rest position. */
@@ -866,13 +875,28 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
     const size_t nc = ENG_NC(E);
     double ta;
     begin_phase(E, s, &ta);
-    trial T;
-    eng_status st = trial_step(E, in, s, hh, t_end, &T);
-    if (st != ENG_OK) return st;
     for (size_t j = 0; j < nc; j++) {
         E->st[j] = s->mode[j];
         E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
     }
+    if (fused_ok(E, in, hh) && !E->any_law) {
+        /* the model's fused step: where every margin is positive the LCP keeps the warm basis (no
+         * pivot, no coefficient update, no judged contact), and the fused step is its solution */
+        const int taken = held_step(E, s, t_end);
+        if (taken < 0) return ENG_ERR_BAD_INPUT;
+        if (taken) {
+            s->solves++;
+            s->t = t_end;
+            for (size_t j = 0; j < nc; j++)
+                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+            if (consistent) rest_exact(E, s);
+            observe(E, s, ta, s->F, hk);
+            return ENG_OK;
+        }
+    }
+    trial T;
+    eng_status st = trial_step(E, in, s, hh, t_end, &T);
+    if (st != ENG_OK) return st;
     int piv = 0, total = 0;
     st = solve_trial(E, &T, ENG_SOLVE_LCP, E->st, E->V1, E->f, &piv);
     s->solves++;
@@ -1018,13 +1042,12 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     }
 }
 
-/* The model's fused grid step in the current modes (eng_sparse.step_held; E->st the modes, the loads
- * at t1 set): 1 taken, 0 not (a contact would switch, or A needs re-basing), -1 M_hat not positive
- * definite. */
+/* The model's fused grid step in the current modes (eng_sparse.step_held; E->st the modes, E->lim
+ * their limits, the loads at t1 set): 1 taken, 0 not (a contact would switch, or A needs
+ * re-basing), -1 M_hat not positive definite. */
 static ENG_HOT int held_step(eng *E, eng_state *s, double t1)
 {
     const eng_setup *S = &E->S;
-    const size_t nc = ENG_NC(E);
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
     if (needs_rebase(E, s, S->h)) return 0;
@@ -1035,7 +1058,6 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1)
     F.cK = E->b * S->h / E->g;
     if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return -1;
     F.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
-    for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
     F.h = K->h;
     F.alpha = a;
     F.g1 = E->g1;
@@ -1104,7 +1126,8 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
             E->cand[j] = 0;
         }
-        if (phase == 0 && ENG_HAS_STEP_HELD(E) && hh == S->h && !E->ghost && !ramped(in) && E->vb == E->zero_nc) {
+        if (phase == 0 && fused_ok(E, in, hh)) {
+            for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
             const int taken = held_step(E, s, t_end);
             if (taken < 0) return ENG_ERR_BAD_INPUT;
             if (taken) {
