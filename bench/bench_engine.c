@@ -159,8 +159,6 @@ static void case_make(bench_case *B, size_t n, int scheme, double spp)
             }
             V->q = dalloc(n);
             V->work = dalloc(2 * n);
-            V->xs = dalloc(n);
-            V->fs = dalloc(n);
         }
         chn_set_reach(C, B->h, -0.1);
         B->sparse = chn_sparse(C, 1);

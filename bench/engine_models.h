@@ -34,7 +34,6 @@ typedef struct chn_model_s {
     int *kh[ENG_NSLOTS];
     double *kcp[ENG_NSLOTS], *kinv[ENG_NSLOTS];
     double *q, *work;           /* n and 2 n: the box LCP's right-hand side and workspace */
-    double *xs, *fs;            /* n each: the fused step's x_pred and forces (chn_step_held) */
     /* spans (eng_sparse): a span of the chain is a chain of its own, a view of blocks [a - 1, b] with
      * its end blocks ghosts where they are not the chain's ends (fix_lo, fix_hi: Dirichlet rows) */
     int fix_lo, fix_hi;
@@ -227,7 +226,7 @@ static inline int chn_step_held(void *ctx, const eng_held_step *F, eng_state *s)
     const size_t n = C->n;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
     const double *X = s->X, *V = s->V, *A0 = F->A0;
-    double *xpp = C->xs, *q = C->q, *V1 = C->work; /* (V1 over the solve's dp: each read before written) */
+    double *xpp = F->xp, *q = C->q, *V1 = F->V1;
     double xc = X[0] + pV * V[0] + pA * A0[0];
     for (size_t i = 0; i < n; i++) {
         const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
@@ -240,10 +239,11 @@ static inline int chn_step_held(void *ctx, const eng_held_step *F, eng_state *s)
         double p = F->u[i];
         if (F->Pc) p += F->Pc[i] * F->cw;
         if (F->Ps) p -= F->Ps[i] * F->sw;
-        q[i] = -(p + (y - kx));
+        F->ph[i] = p + (y - kx);
+        q[i] = -F->ph[i];
         xc = xr;
     }
-    double *f = C->fs;
+    double *f = F->f;
     chn_basis_kept(C, F->slot, q, F->lim, F->st, V1, f);
     for (size_t j = 0; j < n; j++) {
         if (!(F->Fb[j] > 0.0)) continue;

@@ -210,8 +210,9 @@ typedef struct eng_harmonic_s {
  *                chain: one forward and one backward sweep with its kept factorisation), written in
  *                the engine's arithmetic and order (so the same bits as its trial, solve and finish;
  *                eng_held_step says what each is). Returns 1 when taken (s->X, V, A, hA, F set as the
- *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched: the
- *                engine takes the step its general way). Asked by the located scheme on a grid step
+ *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched; the
+ *                trial and its solve in F's xp, ph, V1, f: the engine goes on from them its general
+ *                way). Asked by the located scheme on a grid step
  *                whose A needs no re-basing, with held inputs and no belts. */
 typedef struct eng_held_step_s eng_held_step;
 typedef struct {
@@ -233,6 +234,7 @@ typedef struct {
  *   p_hat_i = p_i + ((M r)_i - (K xp)_i)              (apply_M, apply_K as the model's)
  *   V1, f: the basis solve (eng_problem, ENG_SOLVE_BASIS) of p_hat in the modes st with limits lim
  *   margin_j = st_j (w_j . V1) for st_j != 0, Fb_j - |f_j| for st_j = 0 (contacts with Fb_j > 0 only)
+ *   (xp, p_hat, V1 and f out in F's arrays, taken or not)
  *   taken when every margin is > 0: X_i = xp_i + corr_V V1_i, A_i = (V1_i - V_i) c1 - g1 A0_i,
  *   V_i = V1_i, hA_i = h, F_j = f_j. */
 struct eng_held_step_s {
@@ -246,6 +248,8 @@ struct eng_held_step_s {
     const int *st;              /* nc: modes (0 held, +1/-1 sliding; a contact without friction: 1) */
     const double *lim;          /* nc: held contacts' breakaway limit, sliding ones' kinetic magnitude */
     const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
+    double *xp, *ph, *V1, *f;   /* n, n, n, nc: out, x_pred, p_hat and the basis solve's V1 and f (the
+                                 * engine's workspace: where the step is not taken it goes on from them) */
 };
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create

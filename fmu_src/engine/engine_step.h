@@ -856,7 +856,11 @@ static ENG_HOT void rest_exact(eng *E, eng_state *s)
     }
 }
 
-static ENG_HOT int held_step(eng *E, eng_state *s, double t1);
+/* What held_step did: taken (the step done), the trial and its basis solve left as trial_step and
+ * the solve leave them (T, E->A0, xp, ph, V1, f) for the general path, not tried, M_hat refused */
+enum { ENG_HELD_TAKEN = 1, ENG_HELD_TRIAL = 0, ENG_HELD_UNTRIED = 2, ENG_HELD_ERROR = -1 };
+
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T);
 
 /* The model's fused step may take a step of length hh: a grid step of the whole structure, held
  * inputs, no belts */
@@ -879,12 +883,14 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
         E->st[j] = s->mode[j];
         E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
     }
+    trial T;
+    int fused = ENG_HELD_UNTRIED;
     if (fused_ok(E, in, hh) && !E->any_law) {
         /* the model's fused step: where every margin is positive the LCP keeps the warm basis (no
          * pivot, no coefficient update, no judged contact), and the fused step is its solution */
-        const int taken = held_step(E, s, t_end);
-        if (taken < 0) return ENG_ERR_BAD_INPUT;
-        if (taken) {
+        fused = held_step(E, s, t_end, &T);
+        if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
+        if (fused == ENG_HELD_TAKEN) {
             s->solves++;
             s->t = t_end;
             for (size_t j = 0; j < nc; j++)
@@ -894,8 +900,8 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
             return ENG_OK;
         }
     }
-    trial T;
-    eng_status st = trial_step(E, in, s, hh, t_end, &T);
+    eng_status st = ENG_OK;
+    if (fused != ENG_HELD_TRIAL) st = trial_step(E, in, s, hh, t_end, &T); /* (else the fused step's trial) */
     if (st != ENG_OK) return st;
     int piv = 0, total = 0;
     st = solve_trial(E, &T, ENG_SOLVE_LCP, E->st, E->V1, E->f, &piv);
@@ -1043,20 +1049,21 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
 }
 
 /* The model's fused grid step in the current modes (eng_sparse.step_held; E->st the modes, E->lim
- * their limits, the loads at t1 set): 1 taken, 0 not (a contact would switch, or A needs
- * re-basing), -1 M_hat not positive definite. */
-static ENG_HOT int held_step(eng *E, eng_state *s, double t1)
+ * their limits, the loads at t1 set): ENG_HELD_TAKEN, _TRIAL (a contact's margin is not positive:
+ * T and the engine's arrays hold the trial and its basis solve), _UNTRIED (A needs re-basing) or
+ * _ERROR (M_hat not positive definite). */
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
 {
     const eng_setup *S = &E->S;
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
-    if (needs_rebase(E, s, S->h)) return 0;
+    if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
     eng_held_step F;
     F.slot = ENG_SLOT_GRID;
     F.cM = (1.0 - a) * K->c1;
     F.cC = 1.0;
     F.cK = E->b * S->h / E->g;
-    if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return -1;
+    if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return ENG_HELD_ERROR;
     F.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
     F.h = K->h;
     F.alpha = a;
@@ -1074,7 +1081,18 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1)
     F.st = E->st;
     F.lim = E->lim;
     F.Fb = E->Fb;
-    return ENG_STEP_HELD(E, &F, s);
+    F.xp = E->xp;
+    F.ph = E->ph;
+    F.V1 = E->V1;
+    F.f = E->f;
+    if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+    T->kin = *K;
+    T->slot = F.slot;
+    T->cM = F.cM;
+    T->cC = 1.0;
+    T->cK = F.cK;
+    memcpy(E->A0, s->A, ENG_N(E) * sizeof(double));
+    return ENG_HELD_TRIAL;
 }
 
 static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
@@ -1126,11 +1144,13 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
             E->cand[j] = 0;
         }
+        trial T;
+        int fused = ENG_HELD_UNTRIED;
         if (phase == 0 && fused_ok(E, in, hh)) {
             for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
-            const int taken = held_step(E, s, t_end);
-            if (taken < 0) return ENG_ERR_BAD_INPUT;
-            if (taken) {
+            fused = held_step(E, s, t_end, &T);
+            if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
+            if (fused == ENG_HELD_TAKEN) {
                 s->solves++;
                 s->t = t_end;
                 for (size_t j = 0; j < nc; j++)
@@ -1141,8 +1161,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             }
         }
         margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
-        trial T;
-        trial_margin(&mc, r, &T);
+        if (fused != ENG_HELD_TRIAL) trial_margin(&mc, r, &T); /* (else the fused step's trial, solved) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;

@@ -529,7 +529,7 @@ static void big_make(big_chain *B, size_t n)
             V->kh[s] = calloc(n, sizeof(int));
             if (!V->kh[s]) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
         }
-        V->q = dvec(n); V->work = dvec(2 * n); V->xs = dvec(n); V->fs = dvec(n);
+        V->q = dvec(n); V->work = dvec(2 * n);
     }
 }
 
@@ -540,7 +540,7 @@ static void big_free(big_chain *B)
             free(V->d[s]); free(V->e[s]); free(V->cp[s]); free(V->inv[s]); free(V->kcp[s]); free(V->kinv[s]);
             free(V->kh[s]);
         }
-        free(V->q); free(V->work); free(V->xs); free(V->fs);
+        free(V->q); free(V->work);
     }
     free(B->rows); free(B->idx); free(B->m); free(B->k); free(B->N); free(B->ms); free(B->mk); free(B->Pc);
     free(B->Ps); free(B->zero);
