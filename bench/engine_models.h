@@ -283,11 +283,8 @@ static inline double chn_contact_breakaway(void *ctx, size_t j, const eng_harmon
     return tb;
 }
 
-/* A span's reach for the step h and the Bossak parameter alpha: M_hat^-1 decays like q^distance, q =
- * (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa <= (1 + rho) / (1 - rho)
- * the condition number of the diagonally scaled M_hat by Gershgorin, rho the largest ratio of a
- * row's off-diagonal sum to its diagonal (shorter steps: smaller); w the smallest with q^w <= 2^-56
- * (the chain's own rule, chain_setup.c). */
+/* A span's reach for the step h and the Bossak parameter alpha: bossak.h's dfo_bossak_reach of
+ * M_hat's largest diagonally scaled off-diagonal row sum (the chain's own rule, chain_setup.c). */
 static inline void chn_set_reach(chn_model *C, double h, double alpha)
 {
     const size_t n = C->n;
@@ -298,12 +295,7 @@ static inline void chn_set_reach(chn_model *C, double h, double alpha)
         const double lo = (i > 0) ? cK * C->k[i] : 0.0, up = (i + 1 < n) ? cK * C->k[i + 1] : 0.0;
         rho = fmax(rho, (lo + up) / (cM * C->m[i] + cK * chn_kd(C, i)));
     }
-    const double sk = sqrt((1.0 + rho) / (1.0 - fmin(rho, 0.5))), q = (sk - 1.0) / (sk + 1.0);
-    size_t w = 1;
-    if (rho >= 0.5) w = n;
-    else if (rho > 0.0)
-        for (double qw = q; qw > 0x1p-56; qw *= q) w++;
-    C->w = w;
+    C->w = dfo_bossak_reach(rho, n);
 }
 
 /* The spans around the candidate blocks (eng_sparse.span): w blocks either side of each, merged when

@@ -869,6 +869,18 @@ static ENG_HOT int fused_ok(const eng *E, const eng_inputs *in, double hh)
     return ENG_HAS_STEP_HELD(E) && hh == E->S.h && !E->ghost && !ramped(in) && E->vb == E->zero_nc;
 }
 
+/* After the model's fused step: the time, the modes of contacts without friction, the rested
+ * contacts at rest exactly (rested: the schemes whose stuck contacts rest), the phase observed. */
+static ENG_HOT void held_done(eng *E, eng_state *s, double t_end, int rested, double ta, const eng_hooks *hk)
+{
+    s->solves++;
+    s->t = t_end;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    if (rested) rest_exact(E, s);
+    observe(E, s, ta, s->F, hk);
+}
+
 /* The paper scheme (consistent = 0) and the consistent one (1): the LCP from the modes before the
  * step, then the paper's coefficient updates, or the consistent scheme's rest rule at the predicted
  * rest position. */
@@ -891,12 +903,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
         fused = held_step(E, s, t_end, &T);
         if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
         if (fused == ENG_HELD_TAKEN) {
-            s->solves++;
-            s->t = t_end;
-            for (size_t j = 0; j < nc; j++)
-                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
-            if (consistent) rest_exact(E, s);
-            observe(E, s, ta, s->F, hk);
+            held_done(E, s, t_end, consistent, ta, hk);
             return ENG_OK;
         }
     }
@@ -1151,12 +1158,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             fused = held_step(E, s, t_end, &T);
             if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
             if (fused == ENG_HELD_TAKEN) {
-                s->solves++;
-                s->t = t_end;
-                for (size_t j = 0; j < nc; j++)
-                    if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
-                rest_exact(E, s);
-                observe(E, s, ta, s->F, hk);
+                held_done(E, s, t_end, 1, ta, hk);
                 return ENG_OK;
             }
         }
