@@ -6,11 +6,15 @@
  *   small algebra        dot products over contact rows, a dense Cholesky with dependent rows
  *   loads and forces     loads_at (inputs at t, ramps), exc_at (the grid cache), slip, factor_slot
  *   constrained solves   csolve: A y = r + W_S' f_S with W_S y = target_S (basis solves, physical
- *                        accelerations and jerks, holding forces)
+ *                        accelerations and jerks, holding forces); held_solve: the mass slot's, through
+ *                        the model's friction solver where it offers it (eng_sparse.held_basis)
  *   dense friction       eng_dense_friction: basis solve, Stribeck's Newton, Lemke on the 2 nc LCP
  *   the trial step       trial (M_hat, the re-based A0, x_pred, p_hat), solve_trial, finish
  *   switches             rest_decide (the rest rule of the contacts at rest together), restart
- *   schemes              step_lcp (paper, consistent), step_located (the earliest switch, split)
+ *   schemes              step_lcp (paper, consistent), step_located (the earliest switch, split),
+ *                        with the model's fused step (held_step), its closed-form breakaways
+ *                        (closed_breakaways) and spans (step_spans: a sub-engine steps each span, its
+ *                        ghosts interpolated: ghost_at, ghosts_now), where eng_sparse offers them
  *   driving              eng_start, eng_advance, eng_new_inputs, outputs
  *
  * Every value one function hands another passes as an argument or through the state; the engine's
