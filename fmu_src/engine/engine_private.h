@@ -52,6 +52,8 @@ struct eng {
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
+    double trig_t, trig_c, trig_s; /* cos, sin of omega t + phi0 at the last t evaluated (trig_at: a cache
+                                  * keyed by t, as the slots' by their coefficients; NaN: empty) */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
      * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
      * Cholesky, Lemke's 2 nc problem */

@@ -209,20 +209,32 @@ static double slide_mag(const eng *E, size_t j, double u)
     return is_strib(E, j) ? E->Nn[j] * dfo_friction_mu(&E->S.law[j], u) : E->mukN[j];
 }
 
+/* cos and sin of omega t + phi0, evaluated (dmath), the last time's kept (a switch's time is asked
+ * for several times: the rest rule, the restart, the re-basing's accelerations and jerks) */
+static void trig_at(eng *E, double t, double *cw, double *sw)
+{
+    if (t != E->trig_t) {
+        E->trig_t = t;
+        E->trig_c = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
+        E->trig_s = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    }
+    *cw = E->trig_c;
+    *sw = E->trig_s;
+}
+
 /* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
-static ENG_HOT void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
+static ENG_HOT void phase_of(eng *E, const eng_state *s, double t, double *cw, double *sw)
 {
     if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
         *cw = dfo_clamp1(s->exc_c);
         *sw = dfo_clamp1(s->exc_s);
         return;
     }
-    *cw = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
-    *sw = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    trig_at(E, t, cw, sw);
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
-static ENG_HOT void applied_at(const eng *E, const eng_state *s, double t, double *out)
+static ENG_HOT void applied_at(eng *E, const eng_state *s, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw = 0.0, sw = 0.0;
@@ -236,11 +248,11 @@ static ENG_HOT void applied_at(const eng *E, const eng_state *s, double t, doubl
 }
 
 /* dP/dt + dF_ext/dt at t into out */
-static void applied_rate(const eng *E, const eng_inputs *in, double t, double *out)
+static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
-    const double th = H->omega * t + H->phi0;
-    const double cw = dfo_cos(th), sw = dfo_sin(th);
+    double cw, sw;
+    trig_at(E, t, &cw, &sw);
     const int rp = ramped(in);
     for (size_t i = 0; i < ENG_N(E); i++) {
         double p = rp ? poly_rate(in->dF_ext, in, i, t) : 0.0;
@@ -775,9 +787,11 @@ static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const dou
 
 /* ---- phases, switches, restarts ------------------------------------------------------------- */
 
-static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta)
+/* A phase's start: its time, and for an observer its positions and modes */
+static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const eng_hooks *hk)
 {
     *ta = s->t;
+    if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }
@@ -890,7 +904,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
     const eng_setup *S = &E->S;
     const size_t nc = ENG_NC(E);
     double ta;
-    begin_phase(E, s, &ta);
+    begin_phase(E, s, &ta, hk);
     for (size_t j = 0; j < nc; j++) {
         E->st[j] = s->mode[j];
         E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
@@ -1144,7 +1158,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (phase >= max_phases) return ENG_ERR_NO_PROGRESS;
         if (E->ghost) ghosts_now(E, s);
         double ta;
-        begin_phase(E, s, &ta);
+        begin_phase(E, s, &ta, hk);
         const double r = (phase == 0) ? hh : t_end - s->t;
         for (size_t j = 0; j < nc; j++) {
             E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
