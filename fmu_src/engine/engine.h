@@ -202,8 +202,8 @@ typedef struct eng_harmonic_s {
  *                or NaN where the model's closed form does not hold (e.g. a DOF coupled to contact j's
  *                moves). Where every contact that would switch in a (sub-)step is held and has a
  *                breakaway there, the located scheme splits the step at the earliest of them at once
- *                (no root finding; a force that crosses its limit and comes back inside the step is
- *                seen); else as without.
+ *                (no root finding); else as without. Without ops.breakaway the stuck fast path takes
+ *                the earliest of the contacts' as the structure's.
  *   step_held    (optional) a whole grid step in the current modes, fused: the trial step (x_pred,
  *                p_hat), the basis solve in the modes st with the limits lim, every contact's margin,
  *                and where none would switch, the step's acceptance; in the model's own sweeps (the

@@ -1521,7 +1521,21 @@ static long long grid_below(const eng_state *s, double h, double x, int incl)
     return m;
 }
 
-/* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway; the located scheme on a
+/* A stuck structure's next breakaway from its contacts' (eng_sparse.contact_breakaway): the earliest,
+ * NaN where one is unknown. */
+static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
+{
+    double tb = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const double t = ENG_CONTACT_BREAKAWAY(E, j, s, in, E->Fb);
+        if (isnan(t)) return NAN;
+        tb = fmin(tb, t);
+    }
+    return tb;
+}
+
+/* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
+ * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
  * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
  * before the model's breakaway, at or before t_target and outside the observer's window change
@@ -1541,7 +1555,7 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
     for (size_t i = 0; i < n; i++)
         if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return s->n_grid;
     if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
-        c->tb = ENG_BREAKAWAY(E, s, in, E->Fb);
+        c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
         c->sw = s->switches;
         c->known = 1;
     }
@@ -1599,7 +1613,8 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     double g_prev = s->t0 + (double)s->n_grid * h;
     int switched = 0;
     const long long sw0 = s->switches;
-    const int skip = S->fast_paths && ENG_HAS_BREAKAWAY(E) && S->scheme == DFO_SCHEME_LOCATED &&
+    const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
+                     S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
     stick_cache cache = {NAN, 0, 0};
     while (s->t < t_target) {

@@ -546,6 +546,14 @@ static void big_free(big_chain *B)
     free(B->Ps); free(B->zero);
 }
 
+static long held_steps; /* calls of the fused step (counting_step_held) */
+
+static int counting_step_held(void *ctx, const eng_held_step *F, eng_state *s)
+{
+    held_steps++;
+    return chn_step_held(ctx, F, s);
+}
+
 static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
 {
     chn_model *C = ctx;
@@ -664,6 +672,35 @@ static void test_chain_sparse(checks *T)
     check_context(T, "chain of %zu blocks, located: spans against the whole structure, second order", n);
     printf("  spans against whole: %.2e, %.2e (ratio %.2f)\n", dh[0], dh[1], dh[0] / dh[1]);
     CHECK(dh[0] / dh[1] > 3.0);
+    big_free(&B);
+    /* the stuck fast path from the contacts' closed-form breakaways: a chain that sticks whole for
+     * stretches (one block slips near its excitation's peaks, the others hold), on against off */
+    check_context(T, "chain of %d blocks stuck for stretches: the stuck fast path from the contacts' breakaways",
+                  NCHAIN);
+    big_make(&B, NCHAIN);
+    for (size_t i = 0; i < NCHAIN; i++) B.N[i] = (i == 0) ? 1.99 : 2.1; /* block 0 slips near its peaks */
+    eng_state s2[2];
+    eng_status st2[2];
+    eng *E2[2];
+    long calls[2];
+    for (int v = 0; v < 2; v++) {
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, 800.0);
+        B.sp.step_held = counting_step_held;
+        S.fast_paths = v;
+        held_steps = 0;
+        E2[v] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s2[v], &st2[v]);
+        calls[v] = held_steps;
+    }
+    printf("  stuck fast path: %ld / %ld fused steps taken, %lld switches\n", calls[1], calls[0], s2[0].switches);
+    const switch_log none = {0, 0.0, 0};
+    CHECK(st2[0] == ENG_OK && st2[1] == ENG_OK);
+    CHECK(s2[0].switches >= 2 * NCHAIN);
+    CHECK(calls[1] < calls[0] - calls[0] / 10); /* stuck stretches skipped */
+    CHECK(same_bits(&s2[1], &s2[0], &none, &none));
+    for (int v = 0; v < 2; v++) {
+        eng_state_free(E2[v], &s2[v]);
+        eng_destroy(E2[v]);
+    }
     big_free(&B);
 }
 
