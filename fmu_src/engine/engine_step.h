@@ -1310,6 +1310,8 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
     const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
     if (ns == 0) return 0;
+    for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
+        if (E->cand[j] && E->clab[j] <= 0) return 0;
     *out = ENG_OK;
     memcpy(E->pX, s->X, n * sizeof(double));
     memcpy(E->pV, s->V, n * sizeof(double));
