@@ -822,8 +822,9 @@ static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
 /* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
  * holding forces solved together with every stuck contact; the one most beyond its limit starts to
  * slide the way it is driven, and the rest are solved again (the causal cascade). Sets mode[] of
- * the resting contacts; f: their holding forces (the stuck ones'). */
-static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
+ * the resting contacts; f: their holding forces (the stuck ones'). Returns 1 when its last solve
+ * (E->y2, E->f: physical accelerations and forces) is of the modes it ends with. */
+static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
 {
     const size_t nc = ENG_NC(E);
     for (size_t j = 0; j < nc; j++)
@@ -837,17 +838,24 @@ static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, i
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
         }
-        if (worst == nc) return;
+        if (worst == nc) return 1;
         mode[worst] = -sgn(E->f[worst]); /* the holding force's opposite: the net applied force's side */
     }
+    return 0;
 }
 
 /* The consistent restart of the mode set in s->mode: physical accelerations, hA = 0, forces (a
- * slide from rest at its start magnitude). */
-static void restart(eng *E, eng_state *s, double t)
+ * slide from rest at its start magnitude). decided: rest_decide's last solve (E->y2, E->f) is of
+ * this state and mode set (its return), so they are taken. */
+static void restart(eng *E, eng_state *s, double t, int decided)
 {
     const size_t n = ENG_N(E);
-    phys_accel(E, s, t, s->mode, s->A, s->F);
+    if (decided) {
+        memcpy(s->A, E->y2, n * sizeof(double));
+        if (ENG_NC(E)) memcpy(s->F, E->f, ENG_NC(E) * sizeof(double));
+    } else {
+        phys_accel(E, s, t, s->mode, s->A, s->F);
+    }
     for (size_t i = 0; i < n; i++) s->hA[i] = 0.0;
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (!has_friction(E, j)) s->F[j] = 0.0;
@@ -1058,10 +1066,10 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
         if (s->mode[j] == 0) s->mode[j] = -sgn(s->F[j]);
         rest[j] = 0;
     }
-    rest_decide(E, s, s->t, rest, s->mode);
+    const int decided = rest_decide(E, s, s->t, rest, s->mode);
     for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-    restart(E, s, s->t);
+    restart(E, s, s->t, decided);
     /* a slide from rest starts at its start magnitude (Stribeck: mu_s N) and never against its way */
     for (size_t j = 0; j < nc; j++) {
         if (E->smode[j] == s->mode[j] || s->mode[j] == 0 || !has_friction(E, j)) continue;
@@ -1470,8 +1478,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
         s->t_break[j] = NAN;
         s->break_dir[j] = 0;
     }
-    rest_decide(E, s, t0, E->cand, s->mode);
-    restart(E, s, t0);
+    restart(E, s, t0, rest_decide(E, s, t0, E->cand, s->mode));
     for (size_t j = 0; j < nc; j++)
         if (E->cand[j] && s->mode[j] != 0) s->F[j] = -s->mode[j] * slide_mag(E, j, 0.0);
     if (s->J) {
@@ -1686,10 +1693,10 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
         E->cand[j] = v == 0.0;
     }
     if (belt_changed) {
-        rest_decide(E, s, s->t, E->cand, s->mode);
+        const int decided = rest_decide(E, s, s->t, E->cand, s->mode);
         for (size_t j = 0; j < nc; j++)
             if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-        restart(E, s, s->t);
+        restart(E, s, s->t, decided);
         return;
     }
     /* the sliding contacts' force jumps, and the external forces': the acceleration jumps by
