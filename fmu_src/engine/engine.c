@@ -82,11 +82,11 @@ void eng_destroy(eng *E)
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
-                          E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->pX, E->pV, E->pA,
-                          E->phA, E->pF, E->pts, E->ptb, E->pmode, E->pbd, E->ghost, E->gX0, E->gV0, E->gX1,
+                          E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
                           E->gV1};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+    if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
     if (E->sub) {
         eng_state_free(E->sub, &E->ss);
         eng_destroy(E->sub);
@@ -119,12 +119,7 @@ static int create_spans(eng *E, const char **err)
     double **dl[] = {&E->lN, &E->lmus, &E->lmuk, &E->lPc, &E->lPs, &E->lF, &E->lNe, &E->lvb};
     for (size_t i = 0; i < sizeof dl / sizeof dl[0]; i++) ok &= (*dl[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
     if (S->law) ok &= (E->llaw = (dfo_friction_law *)alloc_n(al, L, sizeof(dfo_friction_law))) != NULL;
-    double **dn[] = {&E->pX, &E->pV, &E->pA, &E->phA};
-    for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++) ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
-    double **dc[] = {&E->pF, &E->pts, &E->ptb};
-    for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++) ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
-    ok &= (E->pmode = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
-    ok &= (E->pbd = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= eng_state_init(E, &E->ps, 0);
     if (!ok) { if (err) *err = "out of memory"; return 0; }
     E->lnnz = nnz;
     for (size_t j = 0; j < L; j++) {

@@ -71,7 +71,7 @@ struct eng {
     /* spans (eng_sparse.span; the located scheme's local switch placement): the sub-engine that steps
      * one span at a time (its S.n, S.nc and arrays set per span), its state, the labels, the local
      * numbering (ldof, lgh: DOFs and ghost flags; lct: contacts; gmap: global DOF -> local), the
-     * span's gathered data and inputs, and the whole step's start state */
+     * span's gathered data and inputs, and the whole step's start state (ps) */
     struct eng *sub;
     eng_sparse sub_sparse;       /* the sub-engine's sparse operators: held_basis, no spans */
     eng_state ss;
@@ -82,8 +82,7 @@ struct eng {
     eng_row *lrows;
     double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
     dfo_friction_law *llaw;
-    double *pX, *pV, *pA, *phA, *pF, *pts, *ptb;
-    int *pmode, *pbd;
+    eng_state ps;                /* the whole step's start (its arrays only) */
     /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
      * the step's start (gt0) and end (length gH), interpolated */
     int *ghost;

@@ -1087,33 +1087,13 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
     if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
-    eng_held_step F;
-    F.slot = ENG_SLOT_GRID;
-    F.cM = (1.0 - a) * K->c1;
-    F.cC = 1.0;
-    F.cK = E->b * S->h / E->g;
-    if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return ENG_HELD_ERROR;
-    F.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
-    F.h = K->h;
-    F.alpha = a;
-    F.g1 = E->g1;
-    F.c1 = K->c1;
-    F.pred_V = K->pred_V;
-    F.pred_A = K->pred_A;
-    F.corr_V = K->corr_V;
-    F.cw = F.sw = 0.0;
-    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &F.cw, &F.sw);
-    F.Pc = S->exc.Pc;
-    F.Ps = S->exc.Ps;
-    F.u = E->u;
-    F.A0 = s->A;
-    F.st = E->st;
-    F.lim = E->lim;
-    F.Fb = E->Fb;
-    F.xp = E->xp;
-    F.ph = E->ph;
-    F.V1 = E->V1;
-    F.f = E->f;
+    const double cM = (1.0 - a) * K->c1, cK = E->b * S->h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return ENG_HELD_ERROR;
+    double cw = 0.0, sw = 0.0;
+    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &cw, &sw);
+    const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
+                             K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
+                             E->Fb, E->xp, E->ph, E->V1, E->f};
     if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
     T->kin = *K;
     T->slot = F.slot;
@@ -1298,6 +1278,32 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
 
 /* ---- spans ---------------------------------------------------------------------------------- */
 
+/* DOF i of state d := DOF k of state s (X, V, A, hA); contact j of d := contact k of s (F, mode,
+ * stick start, breakaway and its side). */
+static void dof_copy(eng_state *d, size_t i, const eng_state *s, size_t k)
+{
+    d->X[i] = s->X[k];
+    d->V[i] = s->V[k];
+    d->A[i] = s->A[k];
+    d->hA[i] = s->hA[k];
+}
+
+static void contact_copy(eng_state *d, size_t j, const eng_state *s, size_t k)
+{
+    d->F[j] = s->F[k];
+    d->mode[j] = s->mode[k];
+    d->t_stick[j] = s->t_stick[k];
+    d->t_break[j] = s->t_break[k];
+    d->break_dir[j] = s->break_dir[k];
+}
+
+/* d's arrays := s's (the same sizes; its scalars left) */
+static void eng_state_arrays_copy(eng_state *d, const eng_state *s)
+{
+    for (size_t i = 0; i < s->n; i++) dof_copy(d, i, s, i);
+    for (size_t j = 0; j < s->nc; j++) contact_copy(d, j, s, j);
+}
+
 /* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
  * inlined into itself. */
 static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
@@ -1321,15 +1327,8 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
         if (E->cand[j] && E->clab[j] <= 0) return 0;
     *out = ENG_OK;
-    memcpy(E->pX, s->X, n * sizeof(double));
-    memcpy(E->pV, s->V, n * sizeof(double));
-    memcpy(E->pA, s->A, n * sizeof(double));
-    memcpy(E->phA, s->hA, n * sizeof(double));
-    memcpy(E->pF, s->F, nc * sizeof(double));
-    memcpy(E->pts, s->t_stick, nc * sizeof(double));
-    memcpy(E->ptb, s->t_break, nc * sizeof(double));
-    memcpy(E->pmode, s->mode, nc * sizeof(int));
-    memcpy(E->pbd, s->break_dir, nc * sizeof(int));
+    const eng_state *p = &E->ps;
+    eng_state_arrays_copy(&E->ps, s);
     const double t_start = s->t;
     /* everything in the current modes first */
     finish(E, s, T, E->V1, E->f);
@@ -1375,11 +1374,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             B->mu_b[a] = fmax(E->lmus[a], E->lmuk[a]);
             E->lNe[a] = (own && in && in->N_ext) ? in->N_ext[j] : 0.0;
             E->lvb[a] = (in && in->v_belt) ? in->v_belt[j] : 0.0;
-            b->F[a] = E->pF[j];
-            b->mode[a] = E->pmode[j];
-            b->t_stick[a] = E->pts[j];
-            b->t_break[a] = E->ptb[j];
-            b->break_dir[a] = E->pbd[j];
+            contact_copy(b, a, p, j);
         }
         B->any_law = 0;
         for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
@@ -1392,14 +1387,11 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
             E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
             B->ghost[q] = E->lgh[q];
-            B->gX0[q] = E->pX[i];
-            B->gV0[q] = E->pV[i];
+            B->gX0[q] = p->X[i];
+            B->gV0[q] = p->V[i];
             B->gX1[q] = s->X[i];
             B->gV1[q] = s->V[i];
-            b->X[q] = E->pX[i];
-            b->V[q] = E->pV[i];
-            b->A[q] = E->pA[i];
-            b->hA[q] = E->phA[i];
+            dof_copy(b, q, p, i);
         }
         B->S.n = b->n = nd;
         B->S.nc = b->nc = nct;
@@ -1428,23 +1420,10 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
                 b->A[q] = B->A0[q];
                 b->hA[q] = S->h;
             }
-        for (size_t q = 0; q < nd; q++) {
-            if (E->lgh[q]) continue;
-            const size_t i = E->ldof[q];
-            s->X[i] = b->X[q];
-            s->V[i] = b->V[q];
-            s->A[i] = b->A[q];
-            s->hA[i] = b->hA[q];
-        }
-        for (size_t a = 0; a < nct; a++) {
-            const size_t j = E->lct[a];
-            if (E->clab[j] <= 0) continue;
-            s->F[j] = b->F[a];
-            s->mode[j] = b->mode[a];
-            s->t_stick[j] = b->t_stick[a];
-            s->t_break[j] = b->t_break[a];
-            s->break_dir[j] = b->break_dir[a];
-        }
+        for (size_t q = 0; q < nd; q++)
+            if (!E->lgh[q]) dof_copy(s, E->ldof[q], b, q);
+        for (size_t a = 0; a < nct; a++)
+            if (E->clab[E->lct[a]] > 0) contact_copy(s, E->lct[a], b, a);
         s->solves += b->solves;
         s->switches += b->switches;
         if (b->switches) s->t_switch = fmax(s->t_switch, b->t_switch);

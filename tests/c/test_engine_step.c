@@ -387,23 +387,31 @@ typedef struct {
     chn_model C;
 } chain_data;
 
+/* A chain's data: masses 1 + dm (i mod 3), unit springs, normal forces 1.2 + dN (i mod 3), mu_s 0.5,
+ * mu_k 0.35, the excitation's phase 0.1 i, contact i on block i (its row w1 at DOF i). */
+static void chain_fill(size_t n, double dm, double dN, double *m, double *k, double *N, double *ms, double *mk,
+                       double *Pc, double *Ps, size_t *idx, eng_row *rows, const double *w1)
+{
+    for (size_t i = 0; i < n; i++) {
+        m[i] = 1.0 + dm * (double)(i % 3);
+        k[i] = 1.0;
+        N[i] = 1.2 + dN * (double)(i % 3);
+        ms[i] = 0.5;
+        mk[i] = 0.35;
+        Pc[i] = cos(0.1 * (double)i);
+        Ps[i] = sin(0.1 * (double)i);
+        idx[i] = i;
+        rows[i].nnz = 1;
+        rows[i].idx = &idx[i];
+        rows[i].w = w1;
+    }
+}
+
 static void chain_make(chain_data *D)
 {
     memset(D, 0, sizeof *D);
     D->w1[0] = 1.0;
-    for (size_t i = 0; i < NCHAIN; i++) {
-        D->m[i] = 1.0 + 0.1 * (double)(i % 3);
-        D->k[i] = 1.0;
-        D->N[i] = 1.2;
-        D->ms[i] = 0.5;
-        D->mk[i] = 0.35;
-        D->Pc[i] = cos(0.1 * (double)i);
-        D->Ps[i] = sin(0.1 * (double)i);
-        D->idx[i] = i;
-        D->rows[i].nnz = 1;
-        D->rows[i].idx = &D->idx[i];
-        D->rows[i].w = D->w1;
-    }
+    chain_fill(NCHAIN, 0.1, 0.0, D->m, D->k, D->N, D->ms, D->mk, D->Pc, D->Ps, D->idx, D->rows, D->w1);
     chn_model *C = &D->C;
     C->n = NCHAIN;
     C->m = D->m;
@@ -504,19 +512,8 @@ static void big_make(big_chain *B, size_t n)
     if (!B->rows || !B->idx) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
     B->m = dvec(n); B->k = dvec(n); B->N = dvec(n); B->ms = dvec(n); B->mk = dvec(n); B->Pc = dvec(n);
     B->Ps = dvec(n); B->zero = dvec(n);
-    for (size_t i = 0; i < n; i++) { /* bench_engine's chain, its normal forces varied along it */
-        B->m[i] = 1.0;
-        B->k[i] = 1.0;
-        B->N[i] = 1.2 + 0.4 * (double)(i % 3);
-        B->ms[i] = 0.5;
-        B->mk[i] = 0.35;
-        B->Pc[i] = cos(0.1 * (double)i);
-        B->Ps[i] = sin(0.1 * (double)i);
-        B->idx[i] = i;
-        B->rows[i].nnz = 1;
-        B->rows[i].idx = &B->idx[i];
-        B->rows[i].w = B->w1;
-    }
+    /* bench_engine's chain, its normal forces varied along it */
+    chain_fill(n, 0.0, 0.4, B->m, B->k, B->N, B->ms, B->mk, B->Pc, B->Ps, B->idx, B->rows, B->w1);
     B->C.sub = &B->view;
     for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
         V->n = n;
