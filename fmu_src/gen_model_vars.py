@@ -500,6 +500,7 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
         f"/* where a value lives: a field of {params_struct} or {inputs_struct} (named as the variable; Real: double,",
         " * Integer, Enumeration and Boolean: int), or computed by the core from its output id */",
         "typedef enum { DFO_IN_PARAMS, DFO_IN_INPUTS, DFO_COMPUTED } dfo_var_home;",
+        "#define DFO_VARS_BY_OFFSET 1 /* a table of scalars stored at struct offsets (instance_common.h) */",
         "",
         *_c_var_info_struct([
             "    size_t offset;      /* DFO_IN_PARAMS / DFO_IN_INPUTS: offset of the field */",

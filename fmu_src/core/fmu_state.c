@@ -178,3 +178,70 @@ void dfo_get_run(dfo_cursor *c, dfo_run *r)
     r->event_pending = dfo_get_i32(c);
     r->event_from = dfo_get_i32(c);
 }
+
+/* ---- a model whose whole state is one fixed-size block of values ---- */
+
+/* The block: the tag, the run, then the values at an offset kept aligned for any of their fields. */
+typedef struct {
+    uint64_t tag;
+    dfo_run run;
+} values_head;
+#define VALUES_OFFSET ((sizeof(values_head) + 15u) / 16u * 16u)
+
+dfo_inst_status dfo_values_state_store(const dfo_lifecycle *lc, const char *fn, void **state, uint64_t tag,
+                                       const dfo_run *run, const void *values, size_t vsize)
+{
+    int fresh;
+    if (dfo_state_take(lc, fn, state, tag, VALUES_OFFSET + vsize, &fresh) != DFO_INST_OK) return DFO_INST_ERROR;
+    values_head *h = (values_head *)*state;
+    h->run = *run;
+    memcpy((unsigned char *)*state + VALUES_OFFSET, values, vsize);
+    return DFO_INST_OK;
+}
+
+const void *dfo_values_state_get(const dfo_lifecycle *lc, const char *fn, const void *state, uint64_t tag,
+                                 dfo_run *run)
+{
+    const values_head *h = (const values_head *)dfo_state_block(lc, fn, state, tag);
+    if (!h) return NULL;
+    if (run) *run = h->run;
+    return (const unsigned char *)h + VALUES_OFFSET;
+}
+
+size_t dfo_values_state_size(const void *state, uint64_t tag, size_t vsize)
+{
+    uint64_t t = 0;
+    if (state) memcpy(&t, state, sizeof t);
+    return (state && t == tag) ? DFO_STATE_HEADER_BYTES + vsize + DFO_STATE_RUN_BYTES : 0;
+}
+
+dfo_inst_status dfo_values_state_serialize(const dfo_lifecycle *lc, const char *fn, const void *state, uint64_t tag,
+                                           size_t vsize, unsigned char *buf, size_t size, const char *guid)
+{
+    dfo_run run;
+    const void *values = dfo_values_state_get(lc, fn, state, tag, &run);
+    if (!values) return DFO_INST_ERROR;
+    const size_t body = vsize + DFO_STATE_RUN_BYTES;
+    if (size < DFO_STATE_HEADER_BYTES + body)
+        return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
+                             (unsigned long)(DFO_STATE_HEADER_BYTES + body));
+    dfo_cursor c = {buf + DFO_STATE_HEADER_BYTES, NULL};
+    dfo_put_bytes(&c, values, vsize);
+    dfo_put_run(&c, &run);
+    dfo_state_seal(buf, body, guid);
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_values_state_read(const dfo_lifecycle *lc, const char *fn, const unsigned char *buf, size_t size,
+                                      const char *guid, size_t vsize, void *values, dfo_run *run)
+{
+    size_t body = 0;
+    if (dfo_state_open(lc, fn, buf, size, guid, &body) != DFO_INST_OK) return DFO_INST_ERROR;
+    if (body != vsize + DFO_STATE_RUN_BYTES)
+        return dfo_inst_fail(lc, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
+                             (unsigned long)(DFO_STATE_HEADER_BYTES + vsize + DFO_STATE_RUN_BYTES));
+    dfo_cursor c = {NULL, buf + DFO_STATE_HEADER_BYTES};
+    dfo_get_bytes(&c, values, vsize);
+    dfo_get_run(&c, run);
+    return DFO_INST_OK;
+}

@@ -73,4 +73,44 @@ void dfo_get_bytes(dfo_cursor *c, void *x, size_t n);
 void dfo_put_run(dfo_cursor *c, const dfo_run *r);
 void dfo_get_run(dfo_cursor *c, dfo_run *r);
 
+/* ---- a model whose whole state is one fixed-size block of values (plain data, no pointers) ----
+ * In memory: the tag, the run and a copy of the values; serialised: the values' bytes, then the
+ * run. The model checks what it reads back (dfo_values_state_read hands it the values and the run
+ * before anything is stored). */
+
+/* Store the run and vsize bytes of values into *state (made a block tagged so when NULL). */
+dfo_inst_status dfo_values_state_store(const dfo_lifecycle *lc, const char *fn, void **state, uint64_t tag,
+                                       const dfo_run *run, const void *values, size_t vsize);
+/* The stored values of a state tagged so (its run into *run), else NULL (logged). */
+const void *dfo_values_state_get(const dfo_lifecycle *lc, const char *fn, const void *state, uint64_t tag,
+                                 dfo_run *run);
+/* The serialised size of a state tagged so, else 0. */
+size_t dfo_values_state_size(const void *state, uint64_t tag, size_t vsize);
+/* Serialise a state tagged so into buf (size bytes; the model's GUID in the header). */
+dfo_inst_status dfo_values_state_serialize(const dfo_lifecycle *lc, const char *fn, const void *state, uint64_t tag,
+                                           size_t vsize, unsigned char *buf, size_t size, const char *guid);
+/* Read a serialised state (header checked against guid, its body of exactly vsize + the run's
+ * bytes) into values and *run; logs why not. */
+dfo_inst_status dfo_values_state_read(const dfo_lifecycle *lc, const char *fn, const unsigned char *buf, size_t size,
+                                      const char *guid, size_t vsize, void *values, dfo_run *run);
+/* instance.h's dfo_inst_free_state, dfo_inst_state_size and dfo_inst_serialize of such a model (its
+ * values type VALUES, its tag TAG, its GUID): the model writes get, set and deserialize itself. */
+#define DFO_VALUES_STATE_ENTRY_POINTS(VALUES, TAG, GUID)                                                        \
+    dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)                       \
+    {                                                                                                          \
+        if (!dfo_state_droppable(lc, fn, state, (TAG))) return DFO_INST_ERROR;                                 \
+        dfo_state_drop(lc, state);                                                                             \
+        return DFO_INST_OK;                                                                                    \
+    }                                                                                                          \
+    size_t dfo_inst_state_size(const dfo_lifecycle *lc, const void *state)                                     \
+    {                                                                                                          \
+        (void)lc;                                                                                              \
+        return dfo_values_state_size(state, (TAG), sizeof(VALUES));                                            \
+    }                                                                                                          \
+    dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf, \
+                                       size_t size)                                                            \
+    {                                                                                                          \
+        return dfo_values_state_serialize(lc, fn, state, (TAG), sizeof(VALUES), buf, size, (GUID));            \
+    }
+
 #endif

@@ -120,6 +120,30 @@ const char *dfo_inst_invalid(const dfo_var_info *var, double x)
     return (x >= var->min && x <= var->max) ? NULL : var->range;
 }
 
+const dfo_var_info *dfo_inst_lookup(const dfo_lifecycle *lc, const char *fn, unsigned int vr, dfo_var_type type)
+{
+    const dfo_var_info *var = dfo_find_var(vr);
+    if (!var) {
+        dfo_inst_fail(lc, "%s: unknown value reference %u.", fn, vr);
+        return NULL;
+    }
+    if (var->type != type) {
+        dfo_inst_fail(lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
+                      dfo_type_name(var->type), dfo_type_name(type));
+        return NULL;
+    }
+    return var;
+}
+
+int dfo_inst_value_ok(const dfo_lifecycle *lc, const char *fn, const dfo_var_info *var, double x)
+{
+    const char *range = dfo_inst_invalid(var, x);
+    if (!range) return 1;
+    dfo_inst_fail(lc, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
+                  var->name, var->vr, range);
+    return 0;
+}
+
 int dfo_inst_settable(const dfo_lifecycle *lc, const char *fn, const dfo_var_info *var, const char *name,
                       unsigned int vr)
 {

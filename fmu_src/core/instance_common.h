@@ -31,6 +31,28 @@ const char *dfo_type_name(dfo_var_type t);
 /* NULL when x is a valid value of var, else the valid range as text. */
 const char *dfo_inst_invalid(const dfo_var_info *var, double x);
 
+/* The variable of vr when it is of type, else NULL with the reason logged (unknown value
+ * reference, or the variable's name and its type). Scalar variable tables only. */
+const dfo_var_info *dfo_inst_lookup(const dfo_lifecycle *lc, const char *fn, unsigned int vr, dfo_var_type type);
+/* Whether x is a valid value of var; logs the variable, the value and the valid range when not. */
+int dfo_inst_value_ok(const dfo_lifecycle *lc, const char *fn, const dfo_var_info *var, double x);
+
+#ifdef DFO_VARS_BY_OFFSET
+/* Where a stored value of a scalar variable table lives: in the model's parameter struct p or its
+ * input struct u (the generated offsets). */
+static inline void *dfo_var_slot(void *p, void *u, const dfo_var_info *var)
+{
+    return (char *)(var->home == DFO_IN_PARAMS ? p : u) + var->offset;
+}
+/* Store a checked value there; setting an input raises its flag (an input never set is never read). */
+static inline void dfo_var_store(void *p, void *u, const dfo_var_info *var, double x)
+{
+    if (var->type == DFO_REAL) *(double *)dfo_var_slot(p, u, var) = x;
+    else *(int *)dfo_var_slot(p, u, var) = (int)x;
+    if (var->home == DFO_IN_INPUTS) *(int *)((char *)u + var->set_offset) = 1;
+}
+#endif
+
 /* Whether a variable of this causality may be set in the current phase; logs the reason (naming the
  * variable `name`, value reference vr) when not. */
 int dfo_inst_settable(const dfo_lifecycle *lc, const char *fn, const dfo_var_info *var, const char *name,

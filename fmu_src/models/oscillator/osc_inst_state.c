@@ -12,31 +12,12 @@
 
 #define STATE_MAGIC 0x444650534d555354ULL /* "DFPSMUST" */
 
-/* An FMU state in memory: a tagged copy of the run and the values. */
-typedef struct {
-    uint64_t magic;
-    dfo_run run;
-    osc_values v;
-} saved_state;
-
-/* ---- FMU states ------------------------------------------------------------------------------ */
-
-static saved_state *as_state(const void *p)
-{
-    saved_state *st = (saved_state *)p;
-    return (st && st->magic == STATE_MAGIC) ? st : NULL;
-}
+/* ---- FMU states: the run and a copy of the values (core/fmu_state.h) ---------------------- */
 
 static dfo_inst_status store_state(osc_instance *in, const char *fn, void **state, const dfo_run *run,
                                    const osc_values *v)
 {
-    int fresh;
-    if (dfo_state_take(&in->lc, fn, state, STATE_MAGIC, sizeof(saved_state), &fresh) != DFO_INST_OK)
-        return DFO_INST_ERROR;
-    saved_state *st = (saved_state *)*state;
-    st->run = *run;
-    st->v = *v;
-    return DFO_INST_OK;
+    return dfo_values_state_store(&in->lc, fn, state, STATE_MAGIC, run, v, sizeof *v);
 }
 
 dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **state)
@@ -48,44 +29,16 @@ dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **sta
 dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void *state)
 {
     osc_instance *in = osc(lc);
-    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
-    if (!st) return DFO_INST_ERROR;
-    in->lc.run = st->run;
-    in->v = st->v;
+    dfo_run run;
+    const osc_values *v = (const osc_values *)dfo_values_state_get(lc, fn, state, STATE_MAGIC, &run);
+    if (!v) return DFO_INST_ERROR;
+    in->lc.run = run;
+    in->v = *v;
     osc_inst_sens_reset(&in->v.s); /* the sensitivity is of the state restored */
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)
-{
-    if (!dfo_state_droppable(lc, fn, state, STATE_MAGIC)) return DFO_INST_ERROR;
-    dfo_state_drop(lc, state);
-    return DFO_INST_OK;
-}
-
-/* The serialised body (core/fmu_state.h's format): the values' bytes, then the run. */
-#define BODY_BYTES (sizeof(osc_values) + DFO_STATE_RUN_BYTES)
-
-size_t dfo_inst_state_size(const dfo_lifecycle *lc, const void *state)
-{
-    (void)lc;
-    return as_state(state) ? DFO_STATE_HEADER_BYTES + BODY_BYTES : 0;
-}
-
-dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf,
-                                   size_t size)
-{
-    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
-    if (!st) return DFO_INST_ERROR;
-    if (size < DFO_STATE_HEADER_BYTES + BODY_BYTES)
-        return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
-                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
-    dfo_cursor c = {buf + DFO_STATE_HEADER_BYTES, NULL};
-    dfo_put_bytes(&c, &st->v, sizeof st->v);
-    dfo_put_run(&c, &st->run);
-    dfo_state_seal(buf, BODY_BYTES, MODEL_GUID);
-    return DFO_INST_OK;
-}
+DFO_VALUES_STATE_ENTRY_POINTS(osc_values, STATE_MAGIC, MODEL_GUID)
 
 static int finite_inputs(const dfo_inputs *u)
 {
@@ -124,16 +77,10 @@ static const char *implausible(const dfo_run *r, const osc_values *v)
 dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const unsigned char *buf, size_t size,
                                      void **state)
 {
-    size_t body = 0;
-    if (dfo_state_open(lc, fn, buf, size, MODEL_GUID, &body) != DFO_INST_OK) return DFO_INST_ERROR;
-    if (body != BODY_BYTES)
-        return dfo_inst_fail(lc, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
-                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
     osc_values v;
     dfo_run run;
-    dfo_cursor c = {NULL, buf + DFO_STATE_HEADER_BYTES};
-    dfo_get_bytes(&c, &v, sizeof v);
-    dfo_get_run(&c, &run);
+    if (dfo_values_state_read(lc, fn, buf, size, MODEL_GUID, sizeof v, &v, &run) != DFO_INST_OK)
+        return DFO_INST_ERROR;
     const char *why = implausible(&run, &v);
     if (why) return dfo_inst_fail(lc, "%s: rejected, %s.", fn, why);
     dfo_model_init(&v.M, &v.p);   /* derived constants follow from the parameters, never trusted */

@@ -13,17 +13,7 @@
 
 static const dfo_var_info *lookup(const osc_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
 {
-    const dfo_var_info *var = dfo_find_var(vr);
-    if (!var) {
-        dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
-        return NULL;
-    }
-    if (var->type != type) {
-        dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
-                      dfo_type_name(var->type), dfo_type_name(type));
-        return NULL;
-    }
-    return var;
+    return dfo_inst_lookup(&in->lc, fn, vr, type);
 }
 
 static int settable(const osc_instance *in, const char *fn, const dfo_var_info *var)
@@ -33,11 +23,7 @@ static int settable(const osc_instance *in, const char *fn, const dfo_var_info *
 
 static int check_value(const osc_instance *in, const char *fn, const dfo_var_info *var, double x)
 {
-    const char *range = dfo_inst_invalid(var, x);
-    if (!range) return 1;
-    dfo_inst_fail(&in->lc, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
-                  var->name, var->vr, range);
-    return 0;
+    return dfo_inst_value_ok(&in->lc, fn, var, x);
 }
 
 /* ---- outputs -------------------------------------------------------------------------------- */
@@ -252,13 +238,7 @@ dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsig
     return DFO_INST_OK;
 }
 
-/* Store a checked value; setting an input raises its flag (an input never set is never read). */
-static void store(osc_values *v, const dfo_var_info *var, double x)
-{
-    if (var->type == DFO_REAL) *(double *)osc_slot(v, var) = x;
-    else *(int *)osc_slot(v, var) = (int)x;
-    if (var->home == DFO_IN_INPUTS) *(int *)((char *)&v->u + var->set_offset) = 1;
-}
+static void store(osc_values *v, const dfo_var_info *var, double x) { dfo_var_store(&v->p, &v->u, var, x); }
 
 dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                   const double value[])

@@ -41,11 +41,7 @@ static inline osc_instance *osc(dfo_lifecycle *lc) { return (osc_instance *)lc; 
 static inline const osc_instance *cosc(const dfo_lifecycle *lc) { return (const osc_instance *)lc; }
 
 /* Where a stored value lives in v (parameters and inputs only). */
-static inline void *osc_slot(osc_values *v, const dfo_var_info *var)
-{
-    char *base = (var->home == DFO_IN_PARAMS) ? (char *)&v->p : (char *)&v->u;
-    return base + var->offset;
-}
+static inline void *osc_slot(osc_values *v, const dfo_var_info *var) { return dfo_var_slot(&v->p, &v->u, var); }
 static inline const void *osc_cslot(const osc_values *v, const dfo_var_info *var)
 {
     return osc_slot((osc_values *)v, var);

@@ -50,12 +50,6 @@ typedef struct {
     int s_ready;
 } tm_instance;
 
-typedef struct {
-    uint64_t magic;
-    dfo_run run;
-    tm_values v;
-} saved_state;
-
 static tm_instance *tmi(dfo_lifecycle *lc) { return (tm_instance *)lc; }
 static const tm_instance *ctmi(const dfo_lifecycle *lc) { return (const tm_instance *)lc; }
 
@@ -129,11 +123,7 @@ static void state_of(const tm_snap *d, eng_state *s)
 
 /* ---- the variable table ---------------------------------------------------------------------- */
 
-static void *slot(tm_values *v, const dfo_var_info *var)
-{
-    char *base = (var->home == DFO_IN_PARAMS) ? (char *)&v->p : (char *)&v->u;
-    return base + var->offset;
-}
+static void *slot(tm_values *v, const dfo_var_info *var) { return dfo_var_slot(&v->p, &v->u, var); }
 
 static void set_start_values(tm_instance *in)
 {
@@ -152,26 +142,7 @@ static void set_start_values(tm_instance *in)
 
 static const dfo_var_info *lookup(const tm_instance *in, const char *fn, unsigned int vr, dfo_var_type type)
 {
-    const dfo_var_info *var = dfo_find_var(vr);
-    if (!var) {
-        dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
-        return NULL;
-    }
-    if (var->type != type) {
-        dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, var->name, vr,
-                      dfo_type_name(var->type), dfo_type_name(type));
-        return NULL;
-    }
-    return var;
-}
-
-static int check_value(const tm_instance *in, const char *fn, const dfo_var_info *var, double x)
-{
-    const char *range = dfo_inst_invalid(var, x);
-    if (!range) return 1;
-    dfo_inst_fail(&in->lc, "%s: invalid value %.17g for variable %s (value reference %u); valid range: %s.", fn, x,
-                  var->name, var->vr, range);
-    return 0;
+    return dfo_inst_lookup(&in->lc, fn, vr, type);
 }
 
 /* ---- life cycle ------------------------------------------------------------------------------- */
@@ -324,12 +295,7 @@ dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsig
     return DFO_INST_OK;
 }
 
-static void store(tm_values *v, const dfo_var_info *var, double x)
-{
-    if (var->type == DFO_REAL) *(double *)slot(v, var) = x;
-    else *(int *)slot(v, var) = (int)x;
-    if (var->home == DFO_IN_INPUTS) *(int *)((char *)&v->u + var->set_offset) = 1;
-}
+static void store(tm_values *v, const dfo_var_info *var, double x) { dfo_var_store(&v->p, &v->u, var, x); }
 
 static dfo_inst_status set_values(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                   const double value[], dfo_var_type type)
@@ -338,7 +304,7 @@ static dfo_inst_status set_values(dfo_lifecycle *lc, const char *fn, const unsig
     for (size_t i = 0; i < n; i++) {
         const dfo_var_info *var = lookup(in, fn, vr[i], type);
         if (!var || !dfo_inst_settable(lc, fn, var, var->name, var->vr)) return DFO_INST_ERROR;
-        if (type != DFO_BOOLEAN && !check_value(in, fn, var, value[i])) return DFO_INST_ERROR;
+        if (type != DFO_BOOLEAN && !dfo_inst_value_ok(lc, fn, var, value[i])) return DFO_INST_ERROR;
     }
     for (size_t i = 0; i < n; i++) store(&in->v, dfo_find_var(vr[i]), value[i]);
     return DFO_INST_OK;
@@ -452,14 +418,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
 static dfo_inst_status store_state(tm_instance *in, const char *fn, void **state, const dfo_run *run,
                                    const tm_values *v)
 {
-    int fresh;
-    if (dfo_state_take(&in->lc, fn, state, STATE_MAGIC, sizeof(saved_state), &fresh) != DFO_INST_OK)
-        return DFO_INST_ERROR;
-    saved_state *st = (saved_state *)*state;
-    st->magic = STATE_MAGIC;
-    st->run = *run;
-    st->v = *v;
-    return DFO_INST_OK;
+    return dfo_values_state_store(&in->lc, fn, state, STATE_MAGIC, run, v, sizeof *v);
 }
 
 dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **state)
@@ -472,9 +431,10 @@ dfo_inst_status dfo_inst_get_state(dfo_lifecycle *lc, const char *fn, void **sta
 dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void *state)
 {
     tm_instance *in = tmi(lc);
-    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
-    if (!st) return DFO_INST_ERROR;
-    const tm_values v = st->v;
+    dfo_run run;
+    const tm_values *sv = (const tm_values *)dfo_values_state_get(lc, fn, state, STATE_MAGIC, &run);
+    if (!sv) return DFO_INST_ERROR;
+    const tm_values v = *sv;
     if (v.started) {
         /* the model from the state's parameters (rebuilt only when they differ from the built one's) */
         if (!in->s_ready || memcmp(&in->m.p, &v.p, sizeof v.p) != 0) {
@@ -488,40 +448,11 @@ dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void
         free_model(in);
     }
     in->v = v;
-    in->lc.run = st->run;
+    in->lc.run = run;
     return DFO_INST_OK;
 }
 
-dfo_inst_status dfo_inst_free_state(dfo_lifecycle *lc, const char *fn, void **state)
-{
-    if (!dfo_state_droppable(lc, fn, state, STATE_MAGIC)) return DFO_INST_ERROR;
-    dfo_state_drop(lc, state);
-    return DFO_INST_OK;
-}
-
-#define BODY_BYTES (sizeof(tm_values) + DFO_STATE_RUN_BYTES)
-
-size_t dfo_inst_state_size(const dfo_lifecycle *lc, const void *state)
-{
-    (void)lc;
-    const saved_state *st = (const saved_state *)state;
-    return (st && st->magic == STATE_MAGIC) ? DFO_STATE_HEADER_BYTES + BODY_BYTES : 0;
-}
-
-dfo_inst_status dfo_inst_serialize(dfo_lifecycle *lc, const char *fn, const void *state, unsigned char *buf,
-                                   size_t size)
-{
-    const saved_state *st = (const saved_state *)dfo_state_block(lc, fn, state, STATE_MAGIC);
-    if (!st) return DFO_INST_ERROR;
-    if (size < DFO_STATE_HEADER_BYTES + BODY_BYTES)
-        return dfo_inst_fail(lc, "%s: buffer of %lu bytes is too small (%lu needed).", fn, (unsigned long)size,
-                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
-    dfo_cursor c = {buf + DFO_STATE_HEADER_BYTES, NULL};
-    dfo_put_bytes(&c, &st->v, sizeof st->v);
-    dfo_put_run(&c, &st->run);
-    dfo_state_seal(buf, BODY_BYTES, MODEL_GUID);
-    return DFO_INST_OK;
-}
+DFO_VALUES_STATE_ENTRY_POINTS(tm_values, STATE_MAGIC, MODEL_GUID)
 
 /* A deserialised state must describe a simulation this FMU could have reached. */
 static const char *implausible(const dfo_run *r, tm_values *v, char *buf, size_t len)
@@ -553,16 +484,10 @@ static const char *implausible(const dfo_run *r, tm_values *v, char *buf, size_t
 dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const unsigned char *buf, size_t size,
                                      void **state)
 {
-    size_t body = 0;
-    if (dfo_state_open(lc, fn, buf, size, MODEL_GUID, &body) != DFO_INST_OK) return DFO_INST_ERROR;
-    if (body != BODY_BYTES)
-        return dfo_inst_fail(lc, "%s: %lu bytes given, a state of this FMU has %lu.", fn, (unsigned long)size,
-                             (unsigned long)(DFO_STATE_HEADER_BYTES + BODY_BYTES));
     tm_values v;
     dfo_run run;
-    dfo_cursor c = {NULL, buf + DFO_STATE_HEADER_BYTES};
-    dfo_get_bytes(&c, &v, sizeof v);
-    dfo_get_run(&c, &run);
+    if (dfo_values_state_read(lc, fn, buf, size, MODEL_GUID, sizeof v, &v, &run) != DFO_INST_OK)
+        return DFO_INST_ERROR;
     char msg[256];
     const char *why = implausible(&run, &v, msg, sizeof msg);
     if (why) return dfo_inst_fail(lc, "%s: rejected, %s.", fn, why);
