@@ -76,7 +76,7 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin};
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     const lcp_alloc la = {E->al.allocate, E->al.release, E->al.env};
@@ -112,6 +112,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
         ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->pin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
     ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * nc, sizeof(double))) != NULL;
     ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
     ok &= (E->colp = (const double **)alloc_n(al, nc, sizeof(double *))) != NULL;
@@ -155,13 +156,11 @@ int eng_caps(int scheme)
     return 0; /* no Bossak scheme propagates the Jacobian yet (the oscillator's exact scheme does, outside) */
 }
 
-int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
+int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian, eng_state *s)
 {
-    const size_t n = E->S.n, nc = E->S.nc;
     memset(s, 0, sizeof *s);
     s->n = n;
     s->nc = nc;
-    const eng_alloc *al = &E->al;
     int ok = 1;
     ok &= (s->X = (double *)alloc_n(al, n, sizeof(double))) != NULL;
     ok &= (s->V = (double *)alloc_n(al, n, sizeof(double))) != NULL;
@@ -173,17 +172,24 @@ int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
     ok &= (s->t_break = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (s->break_dir = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     if (with_jacobian) ok &= (s->J = (double *)alloc_n(al, 4 * n * n, sizeof(double))) != NULL;
-    if (!ok) eng_state_free(E, s);
+    if (!ok) eng_state_release(al, s);
     return ok;
 }
 
-void eng_state_free(const eng *E, eng_state *s)
+void eng_state_release(const eng_alloc *al, eng_state *s)
 {
     void *const ptrs[] = {s->X, s->V, s->A, s->hA, s->F, s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
-        if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+        if (ptrs[i]) al->release(al->env, ptrs[i]);
     memset(s, 0, sizeof *s);
 }
+
+int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
+{
+    return eng_state_alloc(&E->al, E->S.n, E->S.nc, with_jacobian, s);
+}
+
+void eng_state_free(const eng *E, eng_state *s) { eng_state_release(&E->al, s); }
 
 void eng_state_copy(eng_state *dst, const eng_state *src)
 {

@@ -180,6 +180,7 @@ typedef struct {
     double alpha;               /* Bossak parameter in [-1/3, 0] */
     int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
     int friction_updates;       /* paper: coefficient updates (re-solves) per step, >= 0 */
+    int account_energy;         /* keep eng_state's energy accounts (O(n) per step; no stuck fast path) */
     int fast_paths;             /* skip work a run does not need, to the same numbers: the located scheme's
                                  * stuck fast path where the model supplies ops.breakaway */
     double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
@@ -225,6 +226,12 @@ typedef struct eng_state_s {
     int *break_dir;             /* nc: its side */
     double t_switch;            /* the time of the last switch (-inf: none) */
     long long steps, solves, pivot_steps, switches;  /* counters */
+    /* energy accounts since the start (J), kept with eng_setup.account_energy: the work of the applied
+     * forces (excitation + F_ext, trapezoidal rule per (sub-)step), of friction (the step's force, or
+     * for Stribeck the mean of its ends, times the DOFs' displacement along w_j) and the dissipation in
+     * C (trapezoidal); so that the mechanical energy's change is W_applied + W_friction - D_damping to
+     * the scheme's error */
+    double W_applied, W_friction, D_damping;
     long long exc_n;            /* excitation cache: cos, sin of omega (t0 + exc_n h) + phi0 (-1: empty) */
     double exc_c, exc_s;
     double *J;                  /* (2n)^2 row-major d(X, V)/d(X, V)(t_ref), or NULL: not propagated (eng_caps) */
@@ -286,6 +293,10 @@ int eng_caps(int scheme);
 /* State arrays through the engine's callbacks (with_jacobian: J too); 0 on failure. */
 int eng_state_init(const eng *E, eng_state *s, int with_jacobian);
 void eng_state_free(const eng *E, eng_state *s);
+/* The same for n DOFs and nc contacts through al, without an engine (a saved state); release with
+ * eng_state_release and the same al. */
+int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian, eng_state *s);
+void eng_state_release(const eng_alloc *al, eng_state *s);
 /* dst (initialised for the same sizes) := src, arrays included (J only when both have it). */
 void eng_state_copy(eng_state *dst, const eng_state *src);
 

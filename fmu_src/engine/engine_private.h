@@ -43,6 +43,7 @@ struct eng {
     double *zero_nc;
     /* per-DOF workspace */
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
+    double *ew;                  /* 3 n: the energy accounts' work (account; NULL without them) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;

@@ -645,10 +645,40 @@ static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st,
     return ENG_FN(eng_dense_friction)(E, &P, what, st, V1, f, pivots);
 }
 
-/* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes). */
-static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
+/* The energy accounts of the trial's step from s to t1 with end velocities V1 and forces f (before
+ * finish moves the state): eng_state's W_applied, W_friction, D_damping. */
+static void account(eng *E, eng_state *s, const trial *T, double t1, const double *V1, const double *f)
 {
     const size_t n = ENG_N(E);
+    const double hh = T->kin.h;
+    double *P0 = E->ew, *P1 = E->ew + n, *dX = E->ew + 2 * n;
+    applied_at(E, s, s->t, P0);
+    applied_at(E, s, t1, P1);
+    double Wa = 0.0, Wf = 0.0, D = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        dX[i] = E->xp[i] + T->kin.corr_V * V1[i] - s->X[i];
+        Wa += 0.5 * hh * (P0[i] * s->V[i] + P1[i] * V1[i]);
+    }
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const double fj = is_strib(E, j) ? 0.5 * (s->F[j] + f[j]) : f[j];
+        Wf += fj * row_dot(&E->S.rows[j], dX);
+    }
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, s->V, P0);
+        ENG_APPLY_C(E, V1, P1);
+        for (size_t i = 0; i < n; i++) D += 0.5 * hh * (s->V[i] * P0[i] + V1[i] * P1[i]);
+    }
+    s->W_applied += Wa;
+    s->W_friction += Wf;
+    s->D_damping += D;
+}
+
+/* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes);
+ * the energy accounts when kept (t1: the step's end). */
+static ENG_HOT void finish(eng *E, eng_state *s, const trial *T, const double *V1, const double *f, double t1)
+{
+    const size_t n = ENG_N(E);
+    if (E->S.account_energy) account(E, s, T, t1, V1, f);
     for (size_t i = 0; i < n; i++) {
         s->X[i] = E->xp[i] + T->kin.corr_V * V1[i];
         s->A[i] = (V1[i] - s->V[i]) * T->kin.c1 - E->g1 * E->A0[i];
@@ -820,7 +850,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
             if (has_friction(E, j) && E->st[j] == 0) E->f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
     }
     if (total > 0) s->pivot_steps++;
-    finish(E, s, &T, E->V1, E->f);
+    finish(E, s, &T, E->V1, E->f, t_end);
     s->t = t_end;
     for (size_t j = 0; j < nc; j++) {
         const int from = s->mode[j];
@@ -933,7 +963,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         for (size_t j = 0; j < nc; j++)
             if (has_friction(E, j) && margin(E, E->st, j, E->V1, E->f) <= 0.0) { E->cand[j] = 1; ncand++; }
         if (ncand == 0) {
-            finish(E, s, &T, E->V1, E->f);
+            finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
             for (size_t j = 0; j < nc; j++)
                 if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
@@ -992,7 +1022,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
         const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
-        finish(E, s, &T, E->V1, E->f);
+        finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
         loads_at(E, in, s->t);
         /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
@@ -1023,6 +1053,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
     s->exc_c = s->exc_s = 0.0;
     s->t_switch = -INFINITY;
     s->steps = s->solves = s->pivot_steps = s->switches = 0;
+    s->W_applied = s->W_friction = s->D_damping = 0.0;
     for (size_t i = 0; i < n; i++) {
         s->X[i] = x0[i];
         s->V[i] = v0[i];
