@@ -1302,7 +1302,33 @@ ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_s
 {
     E->loads_for = NULL;
     loads_at(E, in, s->t);
-    phys_accel(E, s, s->t, s->mode, a, E->f);
+    const int paper = E->S.scheme == DFO_SCHEME_PAPER;
+    if (!paper && !E->any_law) {
+        phys_accel(E, s, s->t, s->mode, a, E->f);
+        return;
+    }
+    /* the state's forces where the scheme has them: a Stribeck slide's (at its solved speed, not at
+     * the rounding of its slip), and the paper scheme's stuck contact, which is not at rest (Bossak's
+     * A throughout: it creeps with the force of its LCP) */
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    double *r = E->r, *y = E->y;
+    applied_at(E, s, s->t, r);
+    ENG_APPLY_K(E, s->X, y);
+    for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, s->V, y);
+        for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    }
+    for (size_t j = 0; j < nc; j++) {
+        E->held[j] = !paper && s->mode[j] == 0 && has_friction(E, j);
+        if (!has_friction(E, j) || E->held[j]) continue;
+        /* a Coulomb slide's force follows the current loads (the inputs' feed-through) */
+        const double fj = (s->mode[j] != 0 && !is_strib(E, j)) ? -s->mode[j] * slide_mag(E, j, 0.0) : s->F[j];
+        row_axpy(&S->rows[j], fj, r);
+    }
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, a, E->f);
 }
 
 ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_state *s, double *f)

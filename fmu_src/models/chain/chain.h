@@ -29,6 +29,8 @@
 #ifndef DFO_CHAIN_H
 #define DFO_CHAIN_H
 
+#include "engine.h"
+
 #include <stddef.h>
 
 /* Allocation callbacks (zero-filled memory, as FMI's calloc); env is passed through. */
@@ -80,28 +82,12 @@ typedef enum {
 
 typedef struct chain_model chain_model;
 
-/* The state: plain fields plus seven arrays of length n. Copy with chain_state_copy; serialise as
- * the struct's scalar fields followed by the arrays. */
-typedef struct {
-    size_t n;
-    double t0, t;       /* start time; current time */
-    long long n_grid;   /* the last grid point reached is t0 + n_grid h */
-    double *X, *V, *A, *F;
-    double *hA;         /* per block: step length that produced A (0: A is the physical acceleration) */
-    double *t_stick;    /* per block: when its current stick phase began */
-    int *mode;          /* -1 backward slip, 0 stuck, +1 forward slip (sign of V without friction) */
-    /* energy accounts since the start (J): work of the applied forces (excitation + F_ext) and of
-     * friction, dissipation in the dampers (trapezoidal rule per (sub)step, friction exact) */
-    double W_applied, W_friction, D_damping;
-    /* counters: internal steps, steps whose warm basis was infeasible (a pivot or a located
-     * switch), switches, tridiagonal solves */
-    long long steps, pivot_steps, switches, solves;
-    /* excitation cache: cos and sin of omega (t0 + exc_n h) at the grid point exc_n (-1: empty), a
-     * pure function of exc_n (exact every DFO_EXC_ANCHOR = 64 points, rotations in between: excitation.h,
-     * as the oscillator) */
-    long long exc_n;
-    double exc_c, exc_s;
-} chain_state;
+/* The state: the friction engine's (engine.h's eng_state, contact i on block i: nc = n): time, grid
+ * point, X, V, A, hA, F, mode, t_stick per block, the energy accounts since the start (kept with
+ * chain_params.account_energy: the work of the applied forces and of friction, the dissipation in
+ * the dampers), the counters (internal steps, steps whose warm basis was infeasible, switches,
+ * solves) and the excitation's grid cache. Copy with chain_state_copy. */
+typedef eng_state chain_state;
 
 /* Check the parameters; NULL when valid, else a sentence naming the element, e.g.
  * "invalid value -1 for m[3] (valid: > 0)" (1-based indices, as the FMU's names), written to buf. */
