@@ -76,7 +76,7 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin, E->ew};
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->ew, E->cs_lim, E->cs_f, E->cs_mode};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     const lcp_alloc la = {E->al.allocate, E->al.release, E->al.env};
@@ -103,8 +103,8 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     double **dn[] = {&E->u, &E->A0, &E->xp, &E->ph, &E->V1, &E->r, &E->y, &E->y2, &E->X0, &E->acc, &E->jk, &E->rb,
                      &E->sX, &E->sV, &E->sA, &E->shA};
     double **dc[] = {&E->mu_b, &E->Nn, &E->mukN, &E->Fb, &E->mlN, &E->zero_nc, &E->lim, &E->f, &E->f2,
-                     &E->rhs, &E->sol, &E->res, &E->sF};
-    int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode};
+                     &E->rhs, &E->sol, &E->res, &E->sF, &E->cs_lim, &E->cs_f};
+    int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode, &E->cs_mode};
     int ok = 1;
     for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++)
         ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;

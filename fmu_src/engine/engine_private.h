@@ -47,6 +47,8 @@ struct eng {
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;
+    double *cs_lim, *cs_f;       /* nc: csolve's limits and forces through the model's solver */
+    int *cs_mode;                /* nc: its modes (all 0) */
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */

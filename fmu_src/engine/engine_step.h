@@ -264,8 +264,10 @@ static void columns(eng *E, int slot, size_t m)
 /* ---- constrained solves ------------------------------------------------------------------- */
 
 /* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
- * f (other entries untouched). m: |S|. Uses cols, D, Lc, rhs, sol, sel. */
-static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
+ * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S, their Delassus matrix by
+ * Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
+static void csolve_dense(eng *E, int slot, const double *r, const int *held, const double *target, double *y,
+                         double *f)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
@@ -289,6 +291,41 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
         for (size_t i = 0; i < n; i++) y[i] += col[i] * fa;
         f[E->sel[a]] = fa;
     }
+}
+
+/* csolve: with the model's friction solver, its basis solve (the held contacts at their targets,
+ * the others free: O(n) for the chain's tridiagonal box), else the dense one. */
+static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
+{
+    if (!ENG_HAS_FRICTION(E)) {
+        csolve_dense(E, slot, r, held, target, y, f);
+        return;
+    }
+    const size_t nc = ENG_NC(E);
+    int any = 0;
+    for (size_t j = 0; j < nc; j++) {
+        E->cs_lim[j] = held[j] ? 1.0 : 0.0;
+        E->cs_mode[j] = 0;
+        any |= held[j];
+    }
+    if (!any) {
+        ENG_SOLVE(E, slot, r, y);
+        return;
+    }
+    eng_problem P;
+    memset(&P, 0, sizeof P);
+    P.slot = slot;
+    P.cM = E->slot_c[slot][0];
+    P.cC = E->slot_c[slot][1];
+    P.cK = E->slot_c[slot][2];
+    P.p_hat = r;
+    P.vb = target;
+    P.limit = E->cs_lim;
+    P.N = E->Nn;
+    P.law = NULL;
+    (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->cs_mode, y, E->cs_f, NULL);
+    for (size_t j = 0; j < nc; j++)
+        if (held[j]) f[j] = E->cs_f[j];
 }
 
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
@@ -457,7 +494,7 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
             strib |= P->law && P->law[j].law == DFO_LAW_STRIBECK;
         }
     }
-    csolve(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, V1, f);
+    csolve_dense(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, V1, f);
     /* a held contact on one DOF: its slip exactly 0 */
     for (size_t j = 0; j < nc; j++) {
         const eng_row *R = &S->rows[j];
