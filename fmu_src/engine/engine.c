@@ -113,20 +113,24 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->pin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
-    ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * nc, sizeof(double))) != NULL;
+    /* the dense friction solver's workspace, O(n nc + nc^2): only where it may run (no model solver, or
+     * one that falls back on it) */
+    const int dense = !S->ops.friction || S->ops.dense_fallback;
+    const size_t dnc = dense ? nc : 0, dnn = dense ? nn : 0;
+    ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * dnc, sizeof(double))) != NULL;
     ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
     ok &= (E->colp = (const double **)alloc_n(al, nc, sizeof(double *))) != NULL;
-    ok &= (E->D = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->Lc = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->Dinv = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->Jn = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->lM = (double *)alloc_n(al, 4 * nn, sizeof(double))) != NULL;
+    ok &= (E->D = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->Lc = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->Dinv = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->Jn = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->lM = (double *)alloc_n(al, 4 * dnn, sizeof(double))) != NULL;
     ok &= (E->lq = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->lz = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->lw = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->zb = (int *)alloc_n(al, 2 * nc, sizeof(int))) != NULL;
     ok &= (E->guess = (int *)alloc_n(al, 2 * nc, sizeof(int))) != NULL;
-    if (nc > 0) {
+    if (dnc > 0) {
         const lcp_alloc la = {al->allocate, al->release, al->env};
         ok &= (E->ws = lcp_workspace_create((int)(2 * nc), &la)) != NULL;
     }

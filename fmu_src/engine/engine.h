@@ -155,6 +155,10 @@ typedef struct {
     eng_friction_fn friction;
     /* The model's closed-form breakaway of a stuck structure; NULL: none (every stuck step taken). */
     eng_breakaway_fn breakaway;
+    /* The model's friction solver calls eng_dense_friction for some problems (its fallback): the
+     * engine keeps the dense workspace, O(n nc + nc^2), which it allocates only for that or without
+     * a model solver. */
+    int dense_fallback;
 } eng_ops;
 
 /* The harmonic excitation P_i(t) = Pc[i] cos(omega t + phi0) - Ps[i] sin(omega t + phi0) (Pc, Ps:

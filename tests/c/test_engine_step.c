@@ -139,7 +139,7 @@ static void test_block(checks *T)
         Bg.k = 1.0;
         Bi = Bg;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
-        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
+        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -216,7 +216,7 @@ static void test_stuck_fast_path(checks *T)
         B.c = 0.05;
         B.k = 1.0;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
-        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway};
+        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway, 1};
         S.ops = ops;
         S.fast_paths = r & 1;
         memset(&H[r], 0, sizeof H[r]);
@@ -429,7 +429,7 @@ static void test_chain(checks *T)
         chain_make(&Dg);
         chain_make(&Di);
         eng_setup S = setup_common(NCHAIN, Dg.rows, Dg.N, Dg.ms, Dg.mk, Dg.Pc, Dg.Ps, scheme, 2.0);
-        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -453,7 +453,7 @@ static void test_chain(checks *T)
     check_context(T, "chain of %d blocks with a belt: refused", NCHAIN);
     chain_make(&Di);
     eng_setup S = setup_common(NCHAIN, Di.rows, Di.N, Di.ms, Di.mk, Di.Pc, Di.Ps, DFO_SCHEME_LOCATED, 2.0);
-    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
     S.ops = oi;
     double vb[NCHAIN] = {0.0};
     vb[3] = 0.1;

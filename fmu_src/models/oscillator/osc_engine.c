@@ -32,7 +32,7 @@ eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, c
     memset(&S, 0, sizeof S);
     S.n = 1;
     S.nc = 1;
-    const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
+    const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
     S.ops = ops;
     S.rows = &O->row;
     S.exc.omega = p->omega;
