@@ -63,7 +63,8 @@ typedef struct {
     double *w1;
     eng_row *rows;
     osc_eng_model blk;
-    chn_model chn;
+    chn_model chn, chn_view;   /* the chain, and its spans' view */
+    eng_sparse sparse;
     eng *E[NVAR];
     eng_state es[NVAR];
     dfo_model osc;
@@ -94,6 +95,7 @@ static eng_setup setup_of(bench_case *B, int variant)
     } else {
         const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
         S.ops = ops;
+        S.sparse = &B->sparse;
     }
     S.rows = B->rows;
     S.exc.omega = OMEGA;
@@ -147,11 +149,19 @@ static void case_make(bench_case *B, size_t n, int scheme, double spp)
     } else {
         chn_model *C = &B->chn;
         C->n = n; C->m = B->m; C->k = B->k; C->k_end = 1.0;
-        for (int s = 0; s < ENG_NSLOTS; s++) {
-            C->d[s] = dalloc(n); C->e[s] = dalloc(n); C->cp[s] = dalloc(n); C->inv[s] = dalloc(n);
+        C->sub = &B->chn_view;
+        for (chn_model *V = C; V; V = (V == C) ? C->sub : NULL) {
+            for (int s = 0; s < ENG_NSLOTS; s++) {
+                V->d[s] = dalloc(n); V->e[s] = dalloc(n); V->cp[s] = dalloc(n); V->inv[s] = dalloc(n);
+                V->kcp[s] = dalloc(n); V->kinv[s] = dalloc(n);
+                V->kh[s] = (int *)calloc(n, sizeof(int));
+                if (!V->kh[s]) die("out of memory");
+            }
+            V->q = dalloc(n);
+            V->work = dalloc(2 * n);
         }
-        C->q = dalloc(n);
-        C->work = dalloc(2 * n);
+        chn_set_reach(C, B->h, -0.1);
+        B->sparse = chn_sparse(C, 1);
         B->P0 = dalloc(n);
         for (size_t i = 0; i < n; i++) B->P0[i] = 1.0;
         const chain_params q = {n, B->m, B->k, B->zero, B->P0, B->phi, B->N, B->mu_s, B->chi, B->zero, B->zero,

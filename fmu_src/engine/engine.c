@@ -76,12 +76,80 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin, E->ew, E->cs_lim, E->cs_f, E->cs_mode};
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
+                          E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
+                          E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->pX, E->pV, E->pA,
+                          E->phA, E->pF, E->pts, E->ptb, E->pmode, E->pbd, E->ghost, E->gX0, E->gV0, E->gX1,
+                          E->gV1, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+    if (E->sub) {
+        eng_state_free(E->sub, &E->ss);
+        eng_destroy(E->sub);
+    }
     const lcp_alloc la = {E->al.allocate, E->al.release, E->al.env};
     lcp_workspace_free(E->ws, &la);
     E->al.release(E->al.env, E);
+}
+
+/* The spans' sub-engine (eng_sparse.span) and the parent's arrays for them: the sub-engine is made
+ * for span_max DOFs and contacts with placeholder rows (contact j on DOF j), then set to each span
+ * in turn by the located scheme (engine_step.h's step_spans). 0 on a failed allocation. */
+static int create_spans(eng *E, const char **err)
+{
+    const eng_setup *S = &E->S;
+    const eng_alloc *al = &E->al;
+    const size_t n = S->n, nc = S->nc, L = S->sparse->span_max;
+    size_t nnz = 1;
+    for (size_t j = 0; j < nc; j++) nnz = (S->rows[j].nnz > nnz) ? S->rows[j].nnz : nnz;
+    int ok = 1;
+    ok &= (E->dlab = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    ok &= (E->clab = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= (E->gmap = (long *)alloc_n(al, n, sizeof(long))) != NULL;
+    ok &= (E->lgh = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    ok &= (E->ldof = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
+    ok &= (E->lct = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
+    ok &= (E->lidx = (size_t *)alloc_n(al, L * nnz, sizeof(size_t))) != NULL;
+    ok &= (E->lrw = (double *)alloc_n(al, L * nnz, sizeof(double))) != NULL;
+    ok &= (E->lrows = (eng_row *)alloc_n(al, L, sizeof(eng_row))) != NULL;
+    double **dl[] = {&E->lN, &E->lmus, &E->lmuk, &E->lPc, &E->lPs, &E->lF, &E->lNe, &E->lvb};
+    for (size_t i = 0; i < sizeof dl / sizeof dl[0]; i++) ok &= (*dl[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
+    if (S->law) ok &= (E->llaw = (dfo_friction_law *)alloc_n(al, L, sizeof(dfo_friction_law))) != NULL;
+    double **dn[] = {&E->pX, &E->pV, &E->pA, &E->phA};
+    for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++) ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
+    double **dc[] = {&E->pF, &E->pts, &E->ptb};
+    for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++) ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    ok &= (E->pmode = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= (E->pbd = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    if (!ok) { if (err) *err = "out of memory"; return 0; }
+    E->lnnz = nnz;
+    for (size_t j = 0; j < L; j++) {
+        E->lidx[j * nnz] = j;
+        E->lrw[j * nnz] = 1.0;
+        E->lrows[j].nnz = 1;
+        E->lrows[j].idx = &E->lidx[j * nnz];
+        E->lrows[j].w = &E->lrw[j * nnz];
+    }
+    eng_setup T = *S;
+    T.n = T.nc = L;
+    T.ops = S->sparse->span_ops;
+    E->sub_sparse.held_basis = 1;
+    T.sparse = &E->sub_sparse;
+    T.rows = E->lrows;
+    T.N = E->lN;
+    T.mu_s = E->lmus;
+    T.mu_k = E->lmuk;
+    T.law = S->law ? E->llaw : NULL;
+    T.exc.Pc = S->exc.Pc ? E->lPc : NULL;
+    T.exc.Ps = S->exc.Ps ? E->lPs : NULL;
+    E->sub = eng_create(&T, al, err);
+    if (!E->sub || !eng_state_init(E->sub, &E->ss, 0)) { if (err) *err = "out of memory"; return 0; }
+    eng *B = E->sub;
+    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1};
+    for (size_t i = 0; i < sizeof dg / sizeof dg[0]; i++) ok &= (*dg[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
+    ok &= (B->ghost = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    if (!ok) { if (err) *err = "out of memory"; return 0; }
+    return 1;
 }
 
 eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
@@ -103,8 +171,8 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     double **dn[] = {&E->u, &E->A0, &E->xp, &E->ph, &E->V1, &E->r, &E->y, &E->y2, &E->X0, &E->acc, &E->jk, &E->rb,
                      &E->sX, &E->sV, &E->sA, &E->shA};
     double **dc[] = {&E->mu_b, &E->Nn, &E->mukN, &E->Fb, &E->mlN, &E->zero_nc, &E->lim, &E->f, &E->f2,
-                     &E->rhs, &E->sol, &E->res, &E->sF, &E->cs_lim, &E->cs_f};
-    int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode, &E->cs_mode};
+                     &E->rhs, &E->sol, &E->res, &E->sF, &E->hlim, &E->hf, &E->tbk};
+    int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode, &E->hmode};
     int ok = 1;
     for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++)
         ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
@@ -115,7 +183,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
     /* the dense friction solver's workspace, O(n nc + nc^2): only where it may run (no model solver, or
      * one that falls back on it) */
-    const int dense = !S->ops.friction || S->ops.dense_fallback;
+    const int dense = !S->ops.friction || S->ops.dense_fallback || !(S->sparse && S->sparse->held_basis);
     const size_t dnc = dense ? nc : 0, dnn = dense ? nn : 0;
     ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * dnc, sizeof(double))) != NULL;
     ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
@@ -149,6 +217,13 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);
+    const eng_sparse *sp = S->sparse;
+    if (sp && sp->span && sp->span_bind && sp->span_max > 0 && sp->held_basis && S->ops.friction &&
+        sp->span_ops.friction && nc > 0 &&
+        !create_spans(E, err)) {
+        eng_destroy(E);
+        return NULL;
+    }
     return E;
 }
 

@@ -156,8 +156,8 @@ typedef struct {
     /* The model's closed-form breakaway of a stuck structure; NULL: none (every stuck step taken). */
     eng_breakaway_fn breakaway;
     /* The model's friction solver calls eng_dense_friction for some problems (its fallback): the
-     * engine keeps the dense workspace, O(n nc + nc^2), which it allocates only for that or without
-     * a model solver. */
+     * engine keeps the dense workspace, O(n nc + nc^2), which it allocates only for that, without a
+     * model solver, or without the held basis solve (eng_sparse.held_basis). */
     int dense_fallback;
 } eng_ops;
 
@@ -168,6 +168,93 @@ typedef struct eng_harmonic_s {
     double omega, phi0;
     const double *Pc, *Ps;
 } eng_harmonic;
+
+/* Optional operators of a sparse structure (eng_setup.sparse; NULL: none, the dense model's paths).
+ * A model whose contacts couple few DOFs offers them so that the engine's work per step follows
+ * the structure's sparsity instead of nc^3:
+ *   held_basis   the model's friction solver (eng_ops.friction, then required) also solves
+ *                ENG_SOLVE_BASIS problems of ENG_SLOT_MASS (cM = 1, cC = cK = 0, law NULL): the
+ *                engine's held solves (physical accelerations, jerks and input jumps: M y = r + W_H' f_H
+ *                with W_H y = 0 on the held contacts H) go through it instead of the Delassus matrix
+ *                of the held contacts (Cholesky, O(|H|^3)).
+ *   spans        the located scheme's local switch placement. Where contacts would switch in a step,
+ *                the engine takes the whole step in the current modes, then steps again, on its own,
+ *                each span around the switching contacts: its DOFs from the step's start, switches
+ *                placed inside it, its boundary DOFs (ghosts: the DOFs outside it that its DOFs
+ *                couple to through M, C, K or a contact row) moving as prescribed over the step, by
+ *                cubic Hermite interpolation of their states at the step's start and end. A span
+ *                reaches as far as a contact's switch moves the solution by more than rounding (the
+ *                model's judgement: M_hat^-1's decay); the span costs O(its size), not O(n).
+ *     span_max   the most DOFs (ghosts included) and contacts one span holds (0: no spans)
+ *     span       the spans around the candidate contacts (cand: nc flags): labels per DOF (dof_lab,
+ *                n) and per contact (ct_lab, nc): 0 outside every span, s + 1 in span s, -(s + 1) a
+ *                ghost of span s (a DOF), or a contact carried by span s without friction (its row
+ *                on the span's DOFs and ghosts: a model may keep its numbering so). Every candidate in
+ *                a span (label > 0), a ghost of one span in no other, spans disjoint. Returns the
+ *                number of spans; 0: step the whole structure (a small one).
+ *     span_bind  make span_ops act on the span whose DOFs (ghosts included, ascending) are dofs[nd],
+ *                ghost[k] saying which are ghosts, and whose contacts are cts[nct] (ascending), in
+ *                that local numbering
+ *     span_ops   the operators of the bound span (local numbering): apply_K, apply_C, apply_M give
+ *                the span's rows (a ghost's row is not read); factor and the friction solver are for
+ *                the span's rows with the ghosts' entries prescribed: the friction problem's p_hat
+ *                holds a ghost's prescribed end velocity in its entry, and V1 returns it there
+ *                (Dirichlet rows). held_basis holds for them too.
+ *   contact_breakaway  (optional) held contact j's next breakaway in closed form, the structure
+ *                elsewhere where it is: the first time >= its stick's start s->t_stick[j] at which its
+ *                holding force reaches its limit Fb[j] under the inputs in (held inputs, still belts),
+ *                or NaN where the model's closed form does not hold (e.g. a DOF coupled to contact j's
+ *                moves). Where every contact that would switch in a (sub-)step is held and has a
+ *                breakaway there, the located scheme splits the step at the earliest of them at once
+ *                (no root finding; a force that crosses its limit and comes back inside the step is
+ *                seen); else as without.
+ *   step_held    (optional) a whole grid step in the current modes, fused: the trial step (x_pred,
+ *                p_hat), the basis solve in the modes st with the limits lim, every contact's margin,
+ *                and where none would switch, the step's acceptance; in the model's own sweeps (the
+ *                chain: one forward and one backward sweep with its kept factorisation), written in
+ *                the engine's arithmetic and order (so the same bits as its trial, solve and finish;
+ *                eng_held_step says what each is). Returns 1 when taken (s->X, V, A, hA, F set as the
+ *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched; the
+ *                trial and its solve in F's xp, ph, V1, f: the engine goes on from them its general
+ *                way). Asked by the located scheme on a grid step
+ *                whose A needs no re-basing, with held inputs and no belts. */
+typedef struct eng_held_step_s eng_held_step;
+typedef struct {
+    int held_basis;
+    int (*step_held)(void *ctx, const eng_held_step *F, struct eng_state_s *s);
+    double (*contact_breakaway)(void *ctx, size_t j, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
+                                const struct eng_inputs_s *in, const double *Fb);
+    size_t span_max;
+    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
+    void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);
+    eng_ops span_ops;
+} eng_sparse;
+
+/* What eng_sparse.step_held is given: the step's arithmetic as the engine's trial_step, its solve
+ * and finish do it, per DOF i and contact j:
+ *   xp_i = X_i + pred_V V_i + pred_A A0_i
+ *   r_i = -alpha A0_i + (1 - alpha) (V_i c1 + g1 A0_i)
+ *   p_i = u_i, then p_i += Pc_i cw, then p_i -= Ps_i sw (the terms of non-NULL arrays)
+ *   p_hat_i = p_i + ((M r)_i - (K xp)_i)              (apply_M, apply_K as the model's)
+ *   V1, f: the basis solve (eng_problem, ENG_SOLVE_BASIS) of p_hat in the modes st with limits lim
+ *   margin_j = st_j (w_j . V1) for st_j != 0, Fb_j - |f_j| for st_j = 0 (contacts with Fb_j > 0 only)
+ *   (xp, p_hat, V1 and f out in F's arrays, taken or not)
+ *   taken when every margin is > 0: X_i = xp_i + corr_V V1_i, A_i = (V1_i - V_i) c1 - g1 A0_i,
+ *   V_i = V1_i, hA_i = h, F_j = f_j. */
+struct eng_held_step_s {
+    int slot;                   /* the factored slot of M_hat (ENG_SLOT_GRID), with cM, cC, cK */
+    double cM, cC, cK;
+    double h, alpha, g1, c1, pred_V, pred_A, corr_V;
+    double cw, sw;              /* cos and sin of the excitation's phase at the step's end */
+    const double *Pc, *Ps;      /* n: the excitation (NULL: 0) */
+    const double *u;            /* n: external forces */
+    const double *A0;           /* n: Bossak's A for the step (not re-based: s->A) */
+    const int *st;              /* nc: modes (0 held, +1/-1 sliding; a contact without friction: 1) */
+    const double *lim;          /* nc: held contacts' breakaway limit, sliding ones' kinetic magnitude */
+    const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
+    double *xp, *ph, *V1, *f;   /* n, n, n, nc: out, x_pred, p_hat and the basis solve's V1 and f (the
+                                 * engine's workspace: where the step is not taken it goes on from them) */
+};
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
  * copies none of them: a model keeps its parameters in its own struct and points at them). */
@@ -194,6 +281,7 @@ typedef struct {
      *   min(snap_max_rel_h h, max(snap_min_rel_h h, snap_eps_t DBL_EPSILON |t|))
      * of a grid point is that grid point (the oscillator: 1e-5, 1e-7, 2^16; the chain: 1e-7, 1e-7, 0) */
     double snap_max_rel_h, snap_min_rel_h, snap_eps_t;
+    const eng_sparse *sparse;   /* the model's sparse-structure operators, or NULL (read while the engine lives) */
 } eng_setup;
 
 /* ---- inputs ---------------------------------------------------------------------------------- */

@@ -11,6 +11,10 @@
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
+ *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
+ *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
+ *   ENG_HAS_CONTACT_BREAKAWAY(E), ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb)   a held contact's breakaway
+ *                                in closed form (eng_sparse)
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -57,6 +61,22 @@
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) \
     ((E)->S.ops.friction((E)->S.ops.ctx, (P), (what), (mode), (V1), (f), (pivots)))
 #endif
+#ifndef ENG_HELD_BASIS
+#define ENG_HELD_BASIS(E) ((E)->S.sparse && (E)->S.sparse->held_basis)
+#endif
+#ifndef ENG_HAS_STEP_HELD
+#define ENG_HAS_STEP_HELD(E) ((E)->S.sparse && (E)->S.sparse->step_held)
+#endif
+#ifndef ENG_STEP_HELD
+#define ENG_STEP_HELD(E, F, s) ((E)->S.sparse->step_held((E)->S.ops.ctx, (F), (s)))
+#endif
+#ifndef ENG_HAS_CONTACT_BREAKAWAY
+#define ENG_HAS_CONTACT_BREAKAWAY(E) ((E)->S.sparse && (E)->S.sparse->contact_breakaway)
+#endif
+#ifndef ENG_CONTACT_BREAKAWAY
+#define ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb) \
+    ((E)->S.sparse->contact_breakaway((E)->S.ops.ctx, (j), &(E)->S.exc, (s), (in), (Fb)))
+#endif
 #ifndef ENG_HAS_BREAKAWAY
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
 #endif
@@ -70,6 +90,12 @@
 #define ENG_HOT inline __attribute__((always_inline))
 #else
 #define ENG_HOT inline
+#endif
+
+#if defined(__GNUC__)
+#define ENG_COLD __attribute__((noinline))
+#else
+#define ENG_COLD
 #endif
 
 /* ---- small algebra --------------------------------------------------------------------------- */
@@ -266,8 +292,7 @@ static void columns(eng *E, int slot, size_t m)
 /* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
  * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S, their Delassus matrix by
  * Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
-static void csolve_dense(eng *E, int slot, const double *r, const int *held, const double *target, double *y,
-                         double *f)
+static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
@@ -293,39 +318,55 @@ static void csolve_dense(eng *E, int slot, const double *r, const int *held, con
     }
 }
 
-/* csolve: with the model's friction solver, its basis solve (the held contacts at their targets,
- * the others free: O(n) for the chain's tridiagonal box), else the dense one. */
-static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
+/* csolve on the mass slot with target 0: y = M^-1 (r + W_H' f_H), W_H y = 0 on the contacts with
+ * held[j] (f_H out in f, other entries untouched); through the model's friction solver where it
+ * offers the held basis solve (eng_sparse.held_basis), else csolve's Delassus matrix. */
+static void held_solve(eng *E, const double *r, const int *held, double *y, double *f)
 {
-    if (!ENG_HAS_FRICTION(E)) {
-        csolve_dense(E, slot, r, held, target, y, f);
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    if (!(ENG_HAS_FRICTION(E) && ENG_HELD_BASIS(E))) {
+        csolve(E, ENG_SLOT_MASS, r, held, E->zero_nc, y, f);
         return;
     }
     const size_t nc = ENG_NC(E);
-    int any = 0;
     for (size_t j = 0; j < nc; j++) {
-        E->cs_lim[j] = held[j] ? 1.0 : 0.0;
-        E->cs_mode[j] = 0;
-        any |= held[j];
-    }
-    if (!any) {
-        ENG_SOLVE(E, slot, r, y);
-        return;
+        E->hlim[j] = held[j] ? E->Fb[j] : 0.0;
+        E->hmode[j] = held[j] ? 0 : 1;
     }
     eng_problem P;
-    memset(&P, 0, sizeof P);
-    P.slot = slot;
-    P.cM = E->slot_c[slot][0];
-    P.cC = E->slot_c[slot][1];
-    P.cK = E->slot_c[slot][2];
+    P.slot = ENG_SLOT_MASS;
+    P.h = 0.0;
+    P.cM = 1.0;
+    P.cC = P.cK = 0.0;
     P.p_hat = r;
-    P.vb = target;
-    P.limit = E->cs_lim;
+    P.vb = E->zero_nc;
+    P.limit = E->hlim;
     P.N = E->Nn;
     P.law = NULL;
-    (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->cs_mode, y, E->cs_f, NULL);
+    (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->hmode, y, E->hf, NULL);
     for (size_t j = 0; j < nc; j++)
-        if (held[j]) f[j] = E->cs_f[j];
+        if (held[j]) f[j] = E->hf[j];
+}
+
+/* ---- a span's ghosts (a sub-engine's: E->ghost) ------------------------------------------------ */
+
+/* Ghost i's cubic Hermite interpolation at tau after the step's start: position, velocity,
+ * acceleration, jerk (any may be NULL). */
+static void ghost_at(const eng *E, size_t i, double tau, double *x, double *v, double *a, double *jk)
+{
+    const double H = E->gH, r = tau / H, dx = E->gX1[i] - E->gX0[i], v0 = E->gV0[i], v1 = E->gV1[i];
+    if (x) *x = E->gX0[i] + v0 * H * (r * r * r - 2.0 * r * r + r) + dx * (3.0 * r * r - 2.0 * r * r * r) +
+                v1 * H * (r * r * r - r * r);
+    if (v) *v = v0 * (3.0 * r * r - 4.0 * r + 1.0) + dx / H * (6.0 * r - 6.0 * r * r) + v1 * (3.0 * r * r - 2.0 * r);
+    if (a) *a = (v0 * (6.0 * r - 4.0) + dx / H * (6.0 - 12.0 * r) + v1 * (6.0 * r - 2.0)) / H;
+    if (jk) *jk = 6.0 * (v0 + v1 - 2.0 * dx / H) / (H * H);
+}
+
+/* The ghosts' states at the state's time, written into it. */
+static void ghosts_now(const eng *E, eng_state *s)
+{
+    for (size_t i = 0; i < ENG_N(E); i++)
+        if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
 }
 
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
@@ -351,8 +392,10 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
             row_axpy(&S->rows[j], f[j], r);
         }
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, a, f);
+    if (E->ghost) /* a ghost's acceleration is prescribed (Dirichlet: the solver returns it) */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) r[i] = s->A[i];
+    held_solve(E, r, E->held, a, f);
 }
 
 /* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
@@ -385,8 +428,10 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         }
         row_axpy(&S->rows[j], df, r);
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, jk, E->f2);
+    if (E->ghost)
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, NULL, NULL, NULL, &r[i]);
+    held_solve(E, r, E->held, jk, E->f2);
 }
 
 /* ---- dense friction (the default solver) -------------------------------------------------- */
@@ -494,7 +539,7 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
             strib |= P->law && P->law[j].law == DFO_LAW_STRIBECK;
         }
     }
-    csolve_dense(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, V1, f);
+    csolve(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, V1, f);
     /* a held contact on one DOF: its slip exactly 0 */
     for (size_t j = 0; j < nc; j++) {
         const eng_row *R = &S->rows[j];
@@ -615,6 +660,53 @@ typedef struct {
     double cM, cC, cK;
 } trial;
 
+/* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
+ * lengths' tolerance; a held contact's pin aside) */
+static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
+{
+    const double hA = s->hA[i];
+    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * fmax(hh, hA) <= 1.0;
+}
+
+/* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
+ * a DOF a held contact pins alone (w_j = e_i: its acceleration and jerk are 0, A stays) and on a
+ * ghost (its motion prescribed); E->pin says which are pinned when some A is of another length.
+ * The loads end at t1. */
+static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    int other = 0;
+    for (size_t i = 0; i < n; i++) other |= hh != s->hA[i];
+    if (!other || S->alpha == 0.0) return 0;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    if (E->ghost)
+        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
+    int any = 0;
+    for (size_t i = 0; i < n; i++) any |= !E->pin[i] && rebases(E, s, i, hh, tol);
+    return any;
+}
+
+static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    const double a = S->alpha;
+    for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
+    if (!needs_rebase(E, s, hh)) return;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    double *acc = E->acc, *jk = E->jk;
+    loads_at(E, in, s->t);
+    phys_accel(E, s, s->t, s->mode, acc, E->f2);
+    jerks(E, in, s, acc, jk);
+    loads_at(E, in, t1);
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+}
+
 static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
 {
     const eng_setup *S = &E->S;
@@ -627,39 +719,26 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
     T->cC = 1.0;
     T->cK = E->b * hh / E->g;
     if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
-    /* re-base A where it belongs to another step length, except on a DOF a held contact pins alone
-     * (w_j = e_i: its acceleration and jerk are 0, A stays) */
-    int any = 0;
-    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    for (size_t i = 0; i < n; i++) {
-        E->A0[i] = s->A[i];
-        any |= !E->pin[i] && a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol &&
-               S->rate_max * fmax(hh, s->hA[i]) <= 1.0;
-    }
-    if (any) {
-        double *acc = E->acc, *jk = E->jk;
-        loads_at(E, in, s->t);
-        phys_accel(E, s, s->t, s->mode, acc, E->f2);
-        jerks(E, in, s, acc, jk);
-        loads_at(E, in, t1);
-        for (size_t i = 0; i < n; i++) {
-            const double hA = s->hA[i];
-            if (!E->pin[i] && a != 0.0 && hh != hA && fabs(hh - hA) > tol && S->rate_max * fmax(hh, hA) <= 1.0)
-                E->A0[i] = s->A[i] + a * (hh - hA) * jk[i];
-        }
-    }
+    rebase(E, in, s, hh, t1);
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
     for (size_t i = 0; i < n; i++) {
         E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
         E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
     }
+    if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) {
+                double xg, vg;
+                ghost_at(E, i, s->t - E->gt0 + hh, &xg, &vg, NULL, NULL);
+                E->xp[i] = xg - T->kin.corr_V * vg;
+            }
     ENG_APPLY_M(E, E->r, E->y);
     applied_at(E, s, t1, E->ph);
     ENG_APPLY_K(E, E->xp, E->y2);
     for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
+    if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0 + hh, NULL, &E->ph[i], NULL, NULL);
     return ENG_OK;
 }
 
@@ -808,6 +887,31 @@ static ENG_HOT void rest_exact(eng *E, eng_state *s)
     }
 }
 
+/* What held_step did: taken (the step done), the trial and its basis solve left as trial_step and
+ * the solve leave them (T, E->A0, xp, ph, V1, f) for the general path, not tried, M_hat refused */
+enum { ENG_HELD_TAKEN = 1, ENG_HELD_TRIAL = 0, ENG_HELD_UNTRIED = 2, ENG_HELD_ERROR = -1 };
+
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T);
+
+/* The model's fused step may take a step of length hh: a grid step of the whole structure, held
+ * inputs, no belts */
+static ENG_HOT int fused_ok(const eng *E, const eng_inputs *in, double hh)
+{
+    return ENG_HAS_STEP_HELD(E) && hh == E->S.h && !E->ghost && !ramped(in) && E->vb == E->zero_nc;
+}
+
+/* After the model's fused step: the time, the modes of contacts without friction, the rested
+ * contacts at rest exactly (rested: the schemes whose stuck contacts rest), the phase observed. */
+static ENG_HOT void held_done(eng *E, eng_state *s, double t_end, int rested, double ta, const eng_hooks *hk)
+{
+    s->solves++;
+    s->t = t_end;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    if (rested) rest_exact(E, s);
+    observe(E, s, ta, s->F, hk);
+}
+
 /* The paper scheme (consistent = 0) and the consistent one (1): the LCP from the modes before the
  * step, then the paper's coefficient updates, or the consistent scheme's rest rule at the predicted
  * rest position. */
@@ -818,13 +922,25 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
     const size_t nc = ENG_NC(E);
     double ta;
     begin_phase(E, s, &ta);
-    trial T;
-    eng_status st = trial_step(E, in, s, hh, t_end, &T);
-    if (st != ENG_OK) return st;
     for (size_t j = 0; j < nc; j++) {
         E->st[j] = s->mode[j];
         E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
     }
+    trial T;
+    int fused = ENG_HELD_UNTRIED;
+    if (fused_ok(E, in, hh) && !E->any_law) {
+        /* the model's fused step: where every margin is positive the LCP keeps the warm basis (no
+         * pivot, no coefficient update, no judged contact), and the fused step is its solution */
+        fused = held_step(E, s, t_end, &T);
+        if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
+        if (fused == ENG_HELD_TAKEN) {
+            held_done(E, s, t_end, consistent, ta, hk);
+            return ENG_OK;
+        }
+    }
+    eng_status st = ENG_OK;
+    if (fused != ENG_HELD_TRIAL) st = trial_step(E, in, s, hh, t_end, &T); /* (else the fused step's trial) */
+    if (st != ENG_OK) return st;
     int piv = 0, total = 0;
     st = solve_trial(E, &T, ENG_SOLVE_LCP, E->st, E->V1, E->f, &piv);
     s->solves++;
@@ -970,6 +1086,80 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     }
 }
 
+/* The model's fused grid step in the current modes (eng_sparse.step_held; E->st the modes, E->lim
+ * their limits, the loads at t1 set): ENG_HELD_TAKEN, _TRIAL (a contact's margin is not positive:
+ * T and the engine's arrays hold the trial and its basis solve), _UNTRIED (A needs re-basing) or
+ * _ERROR (M_hat not positive definite). */
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
+{
+    const eng_setup *S = &E->S;
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const double a = S->alpha;
+    if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
+    eng_held_step F;
+    F.slot = ENG_SLOT_GRID;
+    F.cM = (1.0 - a) * K->c1;
+    F.cC = 1.0;
+    F.cK = E->b * S->h / E->g;
+    if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return ENG_HELD_ERROR;
+    F.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
+    F.h = K->h;
+    F.alpha = a;
+    F.g1 = E->g1;
+    F.c1 = K->c1;
+    F.pred_V = K->pred_V;
+    F.pred_A = K->pred_A;
+    F.corr_V = K->corr_V;
+    F.cw = F.sw = 0.0;
+    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &F.cw, &F.sw);
+    F.Pc = S->exc.Pc;
+    F.Ps = S->exc.Ps;
+    F.u = E->u;
+    F.A0 = s->A;
+    F.st = E->st;
+    F.lim = E->lim;
+    F.Fb = E->Fb;
+    F.xp = E->xp;
+    F.ph = E->ph;
+    F.V1 = E->V1;
+    F.f = E->f;
+    if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+    T->kin = *K;
+    T->slot = F.slot;
+    T->cM = F.cM;
+    T->cC = 1.0;
+    T->cK = F.cK;
+    memcpy(E->A0, s->A, ENG_N(E) * sizeof(double));
+    return ENG_HELD_TRIAL;
+}
+
+static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
+                               eng_status *out);
+
+/* The earliest closed-form breakaway of the candidates (eng_sparse.contact_breakaway; each into
+ * E->tbk) where every candidate is a held contact with one, held inputs and still belts; NaN else. */
+static double closed_breakaways(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    if (!ENG_HAS_CONTACT_BREAKAWAY(E) || ramped(in) || E->vb != E->zero_nc) return NAN;
+    double tb = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!E->cand[j]) continue;
+        if (E->st[j] != 0) return NAN;
+        const double t = ENG_CONTACT_BREAKAWAY(E, j, s, in, E->Fb);
+        if (!(t < INFINITY)) return NAN;
+        E->tbk[j] = t;
+        tb = fmin(tb, t);
+    }
+    return tb;
+}
+
+/* Spans are taken with held inputs and no hooks (a switch callback, an observer or a stop at the
+ * first switch step the whole structure). */
+static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
+{
+    return E->sub && !ramped(in) && !(hk && (hk->on_switch || hk->obs || hk->stop_at_switch));
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -983,6 +1173,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
     const int stop = hk && hk->stop_at_switch;
     for (long phase = 0; s->t < t_end; phase++) {
         if (phase >= max_phases) return ENG_ERR_NO_PROGRESS;
+        if (E->ghost) ghosts_now(E, s);
         double ta;
         begin_phase(E, s, &ta);
         const double r = (phase == 0) ? hh : t_end - s->t;
@@ -991,9 +1182,19 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
             E->cand[j] = 0;
         }
-        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
         trial T;
-        trial_margin(&mc, r, &T);
+        int fused = ENG_HELD_UNTRIED;
+        if (phase == 0 && fused_ok(E, in, hh)) {
+            for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            fused = held_step(E, s, t_end, &T);
+            if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
+            if (fused == ENG_HELD_TAKEN) {
+                held_done(E, s, t_end, 1, ta, hk);
+                return ENG_OK;
+            }
+        }
+        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
+        if (fused != ENG_HELD_TRIAL) trial_margin(&mc, r, &T); /* (else the fused step's trial, solved) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;
@@ -1009,6 +1210,31 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             return ENG_OK;
         }
         if (phase == 0) s->pivot_steps++;
+        if (phase == 0 && spans_usable(E, in, hk)) {
+            eng_status sst;
+            if (step_spans(E, in, s, t_end, hh, &T, &sst)) return sst;
+        }
+        /* held contacts breaking away with closed forms: the step split at the earliest at once */
+        const double tb = closed_breakaways(E, in, s);
+        if (tb >= s->t && tb <= t_end) {
+            const double hs = tb - s->t;
+            if (hs > 0.0) {
+                trial_margin(&mc, (tb == t_end) ? r : hs, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
+                finish(E, s, &T, E->V1, E->f, tb);
+            }
+            s->t = tb;
+            if (E->ghost) ghosts_now(E, s);
+            for (size_t j = 0; j < nc; j++) E->cand[j] = E->cand[j] && E->tbk[j] == tb;
+            loads_at(E, in, s->t);
+            observe(E, s, ta, s->F, hk);
+            apply_switches(E, s, 1, hk);
+            rest_exact(E, s);
+            loads_at(E, in, t_end);
+            if (stop && s->switches != sw0) return ENG_SWITCHED;
+            continue;
+        }
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
         for (size_t j = 0; j < nc; j++) {
@@ -1061,6 +1287,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
         finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
+        if (E->ghost) ghosts_now(E, s);
         loads_at(E, in, s->t);
         /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
         for (size_t j = 0; j < nc; j++) {
@@ -1076,6 +1303,160 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
+}
+
+/* ---- spans ---------------------------------------------------------------------------------- */
+
+/* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
+ * inlined into itself. */
+static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
+{
+    return step_located(B, in, b, t_end, hh, NULL);
+}
+
+/* The located step with contacts switching (E->cand) by spans (eng_sparse.span): the whole step in
+ * the current modes (the trial T, solved in E->V1, E->f), then each span stepped again on its own by
+ * the sub-engine from the step's start, its ghosts interpolated between their states at the step's
+ * start and end. Returns 0 when the model gives no span (the whole structure is stepped as it is),
+ * else 1 with the step's status in *out. */
+static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
+                               eng_status *out)
+{
+    const eng_setup *S = &E->S;
+    const eng_sparse *sp = S->sparse;
+    const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
+    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
+    if (ns == 0) return 0;
+    *out = ENG_OK;
+    memcpy(E->pX, s->X, n * sizeof(double));
+    memcpy(E->pV, s->V, n * sizeof(double));
+    memcpy(E->pA, s->A, n * sizeof(double));
+    memcpy(E->phA, s->hA, n * sizeof(double));
+    memcpy(E->pF, s->F, nc * sizeof(double));
+    memcpy(E->pts, s->t_stick, nc * sizeof(double));
+    memcpy(E->ptb, s->t_break, nc * sizeof(double));
+    memcpy(E->pmode, s->mode, nc * sizeof(int));
+    memcpy(E->pbd, s->break_dir, nc * sizeof(int));
+    const double t_start = s->t;
+    /* everything in the current modes first */
+    finish(E, s, T, E->V1, E->f, t_end);
+    s->t = t_end;
+    for (size_t j = 0; j < nc; j++)
+        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    rest_exact(E, s);
+    eng *B = E->sub;
+    eng_state *b = &E->ss;
+    for (size_t k = 0; k < ns; k++) {
+        const int lab = (int)k + 1;
+        size_t nd = 0, nct = 0;
+        for (size_t i = 0; i < n; i++) {
+            E->gmap[i] = -1;
+            if (E->dlab[i] != lab && E->dlab[i] != -lab) continue;
+            if (nd == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
+            E->gmap[i] = (long)nd;
+            E->ldof[nd] = i;
+            E->lgh[nd++] = E->dlab[i] < 0;
+        }
+        for (size_t j = 0; j < nc; j++) {
+            if (E->clab[j] != lab && E->clab[j] != -lab) continue;
+            if (nct == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
+            E->lct[nct++] = j;
+        }
+        /* the span's contacts: rows in the local numbering, data, inputs */
+        for (size_t a = 0; a < nct; a++) {
+            const size_t j = E->lct[a];
+            const eng_row *R = &S->rows[j];
+            const int own = E->clab[j] > 0;
+            size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
+            double *w = E->lrw + a * E->lnnz;
+            for (size_t q = 0; q < R->nnz; q++) {
+                if (E->gmap[R->idx[q]] < 0) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
+                idx[q] = (size_t)E->gmap[R->idx[q]];
+                w[q] = R->w[q];
+            }
+            E->lrows[a].nnz = R->nnz;
+            E->lN[a] = own ? S->N[j] : 0.0; /* a carried contact: no friction */
+            E->lmus[a] = own ? S->mu_s[j] : 0.0;
+            E->lmuk[a] = own ? S->mu_k[j] : 0.0;
+            if (S->law) E->llaw[a] = S->law[j];
+            B->mu_b[a] = fmax(E->lmus[a], E->lmuk[a]);
+            E->lNe[a] = (own && in && in->N_ext) ? in->N_ext[j] : 0.0;
+            E->lvb[a] = (in && in->v_belt) ? in->v_belt[j] : 0.0;
+            b->F[a] = E->pF[j];
+            b->mode[a] = E->pmode[j];
+            b->t_stick[a] = E->pts[j];
+            b->t_break[a] = E->ptb[j];
+            b->break_dir[a] = E->pbd[j];
+        }
+        B->any_law = 0;
+        for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
+        /* the span's DOFs, its ghosts' motion over the step */
+        B->gt0 = t_start;
+        B->gH = t_end - t_start;
+        for (size_t q = 0; q < nd; q++) {
+            const size_t i = E->ldof[q];
+            if (S->exc.Pc) E->lPc[q] = S->exc.Pc[i];
+            if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
+            E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
+            B->ghost[q] = E->lgh[q];
+            B->gX0[q] = E->pX[i];
+            B->gV0[q] = E->pV[i];
+            B->gX1[q] = s->X[i];
+            B->gV1[q] = s->V[i];
+            b->X[q] = E->pX[i];
+            b->V[q] = E->pV[i];
+            b->A[q] = E->pA[i];
+            b->hA[q] = E->phA[i];
+        }
+        B->S.n = b->n = nd;
+        B->S.nc = b->nc = nct;
+        B->loads_for = NULL;
+        for (int slot = 0; slot < ENG_NSLOTS; slot++) B->slot_ok[slot] = 0;
+        sp->span_bind(S->ops.ctx, E->ldof, E->lgh, nd, E->lct, nct);
+        b->t0 = s->t0;
+        b->t = t_start;
+        b->n_grid = s->n_grid;
+        b->exc_n = s->exc_n;
+        b->exc_c = s->exc_c;
+        b->exc_s = s->exc_s;
+        b->t_switch = s->t_switch;
+        b->steps = b->solves = b->pivot_steps = b->switches = 0;
+        const eng_inputs bin = {E->lF, E->lNe, (in && in->v_belt) ? E->lvb : NULL, {NULL, NULL}, {NULL, NULL},
+                                in ? in->t_ref : 0.0};
+        loads_at(B, &bin, t_end);
+        const eng_status st = step_located_sub(B, &bin, b, t_end, hh);
+        if (st != ENG_OK) { *out = st; return 1; }
+        /* the span's A re-based on a grid step now, as the next step of the whole structure would
+         * (there over all of it) */
+        rebase(B, &bin, b, S->h, t_end);
+        const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
+        for (size_t q = 0; q < nd; q++)
+            if (!E->lgh[q] && rebases(B, b, q, S->h, tol) && !B->pin[q]) {
+                b->A[q] = B->A0[q];
+                b->hA[q] = S->h;
+            }
+        for (size_t q = 0; q < nd; q++) {
+            if (E->lgh[q]) continue;
+            const size_t i = E->ldof[q];
+            s->X[i] = b->X[q];
+            s->V[i] = b->V[q];
+            s->A[i] = b->A[q];
+            s->hA[i] = b->hA[q];
+        }
+        for (size_t a = 0; a < nct; a++) {
+            const size_t j = E->lct[a];
+            if (E->clab[j] <= 0) continue;
+            s->F[j] = b->F[a];
+            s->mode[j] = b->mode[a];
+            s->t_stick[j] = b->t_stick[a];
+            s->t_break[j] = b->t_break[a];
+            s->break_dir[j] = b->break_dir[a];
+        }
+        s->solves += b->solves;
+        s->switches += b->switches;
+        if (b->switches) s->t_switch = fmax(s->t_switch, b->t_switch);
+    }
+    return 1;
 }
 
 /* ---- driving -------------------------------------------------------------------------------- */
@@ -1330,8 +1711,7 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
         s->F[j] = fnew;
     }
     if (!any) return;
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, E->y, E->f);
+    held_solve(E, r, E->held, E->y, E->f);
     for (size_t i = 0; i < n; i++) s->A[i] += E->y[i];
 }
 
@@ -1364,8 +1744,7 @@ ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_s
         const double fj = (s->mode[j] != 0 && !is_strib(E, j)) ? -s->mode[j] * slide_mag(E, j, 0.0) : s->F[j];
         row_axpy(&S->rows[j], fj, r);
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, a, E->f);
+    held_solve(E, r, E->held, a, E->f);
 }
 
 ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_state *s, double *f)

@@ -18,6 +18,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <stddef.h>
 #include <string.h>
 
 #define NCHAIN 8
@@ -377,6 +378,8 @@ static void test_vs_newmark(checks *T)
 typedef struct {
     double m[NCHAIN], k[NCHAIN], N[NCHAIN], ms[NCHAIN], mk[NCHAIN], Pc[NCHAIN], Ps[NCHAIN];
     double d[ENG_NSLOTS][NCHAIN], e[ENG_NSLOTS][NCHAIN], cp[ENG_NSLOTS][NCHAIN], inv[ENG_NSLOTS][NCHAIN];
+    double kcp[ENG_NSLOTS][NCHAIN], kinv[ENG_NSLOTS][NCHAIN];
+    int kh[ENG_NSLOTS][NCHAIN];
     double q[NCHAIN], work[2 * NCHAIN];
     size_t idx[NCHAIN];
     double w1[1];
@@ -411,6 +414,9 @@ static void chain_make(chain_data *D)
         C->e[s] = D->e[s];
         C->cp[s] = D->cp[s];
         C->inv[s] = D->inv[s];
+        C->kh[s] = D->kh[s];
+        C->kcp[s] = D->kcp[s];
+        C->kinv[s] = D->kinv[s];
     }
     C->q = D->q;
     C->work = D->work;
@@ -467,6 +473,200 @@ static void test_chain(checks *T)
     eng_destroy(E);
 }
 
+/* ---- the chain's sparse-structure operators (eng_sparse): held solves, the fused step, spans ---- */
+
+/* A chain of n blocks (engine_models.h's chn_model) with its spans' view, every array allocated. */
+typedef struct {
+    size_t n;
+    chn_model C, view;
+    eng_sparse sp;
+    eng_row *rows;
+    size_t *idx;
+    double *m, *k, *N, *ms, *mk, *Pc, *Ps, *zero;
+    double w1[1];
+    long spans; /* span calls that gave spans (counted by counting_span) */
+} big_chain;
+
+static double *dvec(size_t n)
+{
+    double *p = calloc(n, sizeof(double));
+    if (!p) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    return p;
+}
+
+static void big_make(big_chain *B, size_t n)
+{
+    memset(B, 0, sizeof *B);
+    B->n = n;
+    B->w1[0] = 1.0;
+    B->rows = calloc(n, sizeof(eng_row));
+    B->idx = calloc(n, sizeof(size_t));
+    if (!B->rows || !B->idx) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    B->m = dvec(n); B->k = dvec(n); B->N = dvec(n); B->ms = dvec(n); B->mk = dvec(n); B->Pc = dvec(n);
+    B->Ps = dvec(n); B->zero = dvec(n);
+    for (size_t i = 0; i < n; i++) { /* bench_engine's chain, its normal forces varied along it */
+        B->m[i] = 1.0;
+        B->k[i] = 1.0;
+        B->N[i] = 1.2 + 0.4 * (double)(i % 3);
+        B->ms[i] = 0.5;
+        B->mk[i] = 0.35;
+        B->Pc[i] = cos(0.1 * (double)i);
+        B->Ps[i] = sin(0.1 * (double)i);
+        B->idx[i] = i;
+        B->rows[i].nnz = 1;
+        B->rows[i].idx = &B->idx[i];
+        B->rows[i].w = B->w1;
+    }
+    B->C.sub = &B->view;
+    for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
+        V->n = n;
+        V->m = B->m;
+        V->k = B->k;
+        V->k_end = 1.0;
+        for (int s = 0; s < ENG_NSLOTS; s++) {
+            V->d[s] = dvec(n); V->e[s] = dvec(n); V->cp[s] = dvec(n); V->inv[s] = dvec(n);
+            V->kcp[s] = dvec(n); V->kinv[s] = dvec(n);
+            V->kh[s] = calloc(n, sizeof(int));
+            if (!V->kh[s]) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+        }
+        V->q = dvec(n); V->work = dvec(2 * n);
+    }
+}
+
+static void big_free(big_chain *B)
+{
+    for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
+        for (int s = 0; s < ENG_NSLOTS; s++) {
+            free(V->d[s]); free(V->e[s]); free(V->cp[s]); free(V->inv[s]); free(V->kcp[s]); free(V->kinv[s]);
+            free(V->kh[s]);
+        }
+        free(V->q); free(V->work);
+    }
+    free(B->rows); free(B->idx); free(B->m); free(B->k); free(B->N); free(B->ms); free(B->mk); free(B->Pc);
+    free(B->Ps); free(B->zero);
+}
+
+static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+{
+    chn_model *C = ctx;
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab);
+    if (ns > 0) ((big_chain *)((char *)C - offsetof(big_chain, C)))->spans++;
+    return ns;
+}
+
+/* The engine on B in scheme with the sparse operators: 0 none, 1 held_basis only, 2 and the fused
+ * step, 3 and the closed-form breakaways, 4 and spans; h = T / steps. */
+static eng_setup big_setup(big_chain *B, int scheme, int sparse, double steps)
+{
+    eng_setup S = setup_common(B->n, B->rows, B->N, B->ms, B->mk, B->Pc, B->Ps, DFO_SCHEME_PAPER, 2.0);
+    const eng_ops ops = {&B->C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
+    S.ops = ops;
+    S.scheme = scheme;
+    S.h = 4.0 * DFO_PI / steps;
+    chn_set_reach(&B->C, S.h, S.alpha);
+    B->sp = chn_sparse(&B->C, sparse >= 4);
+    if (sparse < 2) B->sp.step_held = NULL;
+    if (sparse < 3) B->sp.contact_breakaway = NULL;
+    if (sparse >= 4) B->sp.span = counting_span;
+    S.sparse = sparse ? &B->sp : NULL;
+    return S;
+}
+
+/* From rest to t_end in communication steps dt, without hooks (spans need none). */
+static eng *run_plain(const eng_setup *S, const entry *X, const double *zero, double dt, double t_end, eng_state *s,
+                      eng_status *status)
+{
+    eng *E = eng_create(S, &ALLOC, NULL);
+    if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    X->start(E, &in, 0.0, zero, zero, s);
+    *status = ENG_OK;
+    for (int k = 1; (double)k * dt <= t_end && *status == ENG_OK; k++) *status = X->advance(E, &in, s, (double)k * dt, NULL);
+    return E;
+}
+
+static double max_rel_diff(const double *a, const double *b, size_t n)
+{
+    double d = 0.0, m = 0.0;
+    for (size_t i = 0; i < n; i++) { d = fmax(d, fabs(a[i] - b[i])); m = fmax(m, fabs(b[i])); }
+    return d / m;
+}
+
+static void test_chain_sparse(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    big_chain B;
+    big_make(&B, NCHAIN);
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        check_context(T, "chain of %d blocks, %s: the held solves through the box LCP, the fused step", NCHAIN,
+                      names[scheme]);
+        eng_state s[5];
+        eng_status st[5];
+        eng *E[5];
+        for (int v = 0; v < 4; v++) {
+            const eng_setup S = big_setup(&B, scheme, v, 800.0);
+            E[v] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[v], &st[v]);
+        }
+        const eng_setup S = big_setup(&B, scheme, 3, 800.0);
+        E[4] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[4], &st[4]);
+        const double d = max_rel_diff(s[1].X, s[0].X, NCHAIN), db = max_rel_diff(s[3].X, s[2].X, NCHAIN);
+        printf("  chain n = %d %-10s held solves by the box LCP against the dense: %.2e, %lld / %lld switches; "
+               "closed-form breakaways against root finding: %.2e, %lld switches\n",
+               NCHAIN, names[scheme], d, s[1].switches, s[0].switches, db, s[3].switches);
+        for (int v = 0; v < 5; v++) CHECK(st[v] == ENG_OK);
+        CHECK(s[0].switches >= 5 * NCHAIN);
+        CHECK(s[1].switches == s[0].switches);
+        CHECK(d < 1e-11);
+        const switch_log none = {0, 0.0, 0};
+        CHECK(same_bits(&s[2], &s[1], &none, &none)); /* the fused step: the general path's bits */
+        CHECK(s[3].switches == s[2].switches);
+        CHECK(db < 1e-11);
+        if (scheme != DFO_SCHEME_LOCATED) CHECK(same_bits(&s[3], &s[2], &none, &none)); /* (located only) */
+        CHECK(same_bits(&s[4], &s[3], &none, &none)); /* inline: engine.c's bits */
+        for (int v = 0; v < 5; v++) {
+            eng_state_free(E[v], &s[v]);
+            eng_destroy(E[v]);
+        }
+    }
+    big_free(&B);
+    /* spans: a chain longer than two reaches, located; against the whole structure's steps at h and h / 2 */
+    const size_t n = 24;
+    big_make(&B, n);
+    double dh[2] = {0.0, 0.0};
+    for (int r = 0; r < 2; r++) {
+        const double steps = 800.0 * (double)(1 << r);
+        check_context(T, "chain of %zu blocks, located, h = T / %.0f: spans against the whole structure", n, steps);
+        eng_state s[3];
+        eng_status st[3];
+        eng *E[3];
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, steps);
+        E[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[0], &st[0]);
+        B.spans = 0;
+        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, steps);
+        E[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[1], &st[1]);
+        const long spans = B.spans;
+        E[2] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[2], &st[2]);
+        dh[r] = max_rel_diff(s[1].X, s[0].X, n);
+        printf("  chain n = %zu located T/%.0f: reach %zu, %ld steps by spans, %lld / %lld switches, spans against "
+               "whole %.2e\n", n, steps, B.C.w, spans, s[1].switches, s[0].switches, dh[r]);
+        for (int v = 0; v < 3; v++) CHECK(st[v] == ENG_OK);
+        CHECK(2 * B.C.w + 3 < n);
+        CHECK(spans > 50);
+        CHECK(labs((long)(s[1].switches - s[0].switches)) <= s[0].switches / 50);
+        CHECK(dh[r] < 1e-5);
+        const switch_log none = {0, 0.0, 0};
+        CHECK(same_bits(&s[2], &s[1], &none, &none));
+        for (int v = 0; v < 3; v++) {
+            eng_state_free(E[v], &s[v]);
+            eng_destroy(E[v]);
+        }
+    }
+    check_context(T, "chain of %zu blocks, located: spans against the whole structure, second order", n);
+    printf("  spans against whole: %.2e, %.2e (ratio %.2f)\n", dh[0], dh[1], dh[0] / dh[1]);
+    CHECK(dh[0] / dh[1] > 3.0);
+    big_free(&B);
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}};
@@ -475,5 +675,6 @@ int main(void)
     test_stuck_fast_path(T);
     test_vs_newmark(T);
     test_chain(T);
+    test_chain_sparse(T);
     return checks_done(T, "test_engine_step");
 }

@@ -59,6 +59,7 @@ struct chain_model {
     size_t *ridx;
     double *rw;
     chain_eng_ops ops;
+    eng_sparse sparse;          /* its sparse-structure operators (engine.h) */
     eng *E;
 };
 

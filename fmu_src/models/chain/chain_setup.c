@@ -137,6 +137,9 @@ static eng *make_engine(chain_model *M, const char **err)
     S.ops.solve = chain_op_solve;
     S.ops.friction = chain_op_friction;
     S.ops.breakaway = chain_op_breakaway;
+    memset(&M->sparse, 0, sizeof M->sparse);
+    M->sparse.held_basis = 1;
+    S.sparse = &M->sparse;
     S.rows = M->rows;
     S.exc.omega = M->omega;
     S.exc.phi0 = M->phi0;
