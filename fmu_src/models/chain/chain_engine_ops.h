@@ -3,13 +3,18 @@
  * tridiagonal (the springs and dampers between neighbours and to the walls, the site springs and
  * dampers on the diagonal), M_hat tridiagonal factored by Thomas's algorithm per slot; its friction
  * solver the box LCP of numerics/lcp.h on the velocities relative to the belts, O(n), with the
- * Stribeck law's implicit forces by Newton's iteration on the sliding rows (one tridiagonal solve
- * per iteration; a row alone takes the oscillator's scalar iteration); and the closed-form
- * breakaway of a chain held at rest. Static inline: through eng_ops's function pointers or inlined
- * into engine_step.h (chain_engine.c), the same arithmetic. Plain C, no FMI types. */
+ * factorisation of the basis solves kept for the held pattern, and the Stribeck law's implicit
+ * forces by Newton's iteration on the sliding rows (one tridiagonal solve per iteration); the
+ * closed-form breakaway of a chain held at rest and of a held block whose neighbours are held; and
+ * its sparse-structure operators (engine.h's eng_sparse): the held solves, the fused grid step in
+ * the held pattern, and spans (a span of the chain is a chain of its own: a view of consecutive
+ * blocks whose end blocks, where they are not the chain's ends, are ghosts with Dirichlet rows).
+ * Static inline: through eng_ops's function pointers or inlined into engine_step.h
+ * (chain_engine.c), the same arithmetic. Plain C, no FMI types. */
 #ifndef DFO_CHAIN_ENGINE_OPS_H
 #define DFO_CHAIN_ENGINE_OPS_H
 
+#include "bossak.h"
 #include "engine.h"
 #include "friction.h"
 #include "lcp.h"
@@ -19,9 +24,9 @@
 
 #define CHAIN_NEWTON_ITERS 60
 
-/* The operators' data: the model's arrays (read), the slots' factorisations and the solver's
- * workspace (written). */
-typedef struct {
+/* The operators' data: the model's arrays (read; a span's view points into them), the slots'
+ * factorisations and the solver's workspace (written; a view has its own). */
+typedef struct chain_eng_ops_s {
     size_t n;
     const double *m;              /* masses */
     const double *Kd, *Ko;        /* K: diagonal, and Ko[i] coupling i and i + 1 (0 on the last) */
@@ -30,9 +35,17 @@ typedef struct {
     double *d[ENG_NSLOTS];        /* each slot's M_hat: diagonal, */
     double *e[ENG_NSLOTS];        /* off-diagonal (e[n - 1] = 0), */
     double *cp[ENG_NSLOTS];       /* Thomas's factors cp = e / den, */
-    double *inv[ENG_NSLOTS];      /* inv = 1 / den */
+    double *inv[ENG_NSLOTS];      /* inv = 1 / den, */
+    int tok[ENG_NSLOTS];          /* made (chain_op_factor makes them lazily) */
+    /* the slot's factorisation for the basis solves, kept for a held pattern (chain_op_basis): per
+     * row the pattern it is for (kh: 0 none yet, 1 free, 2 held), Thomas's cp and 1 / den */
+    int *kh[ENG_NSLOTS];
+    double *kcp[ENG_NSLOTS], *kinv[ENG_NSLOTS];
     double *q, *work;             /* n and 2 n: the box LCP's right-hand side and workspace */
     double *nd, *ne, *nr;         /* n each: Newton's tridiagonal system (Stribeck) */
+    int fix_lo, fix_hi;           /* a span's view: its first / last row a ghost's (Dirichlet) */
+    size_t w;                     /* a span's reach (chain_op_set_reach; 0: no spans) */
+    struct chain_eng_ops_s *sub;  /* the span's view (chain_op_span_bind) */
 } chain_eng_ops;
 
 ENG_DECLARE_SCHEMES(chain_);
@@ -67,30 +80,45 @@ static inline void chain_op_M(void *ctx, const double *a, double *y)
     for (size_t i = 0; i < C->n; i++) y[i] = C->m[i] * a[i];
 }
 
-static inline int chain_op_factor(void *ctx, int slot, double cM, double cC, double cK)
+/* Thomas's factors of the slot (cp, inv): 0 when a pivot is not positive. */
+static inline int chain_op_thomas(chain_eng_ops *C, int slot)
 {
-    chain_eng_ops *C = (chain_eng_ops *)ctx;
-    const size_t n = C->n;
-    double *d = C->d[slot], *e = C->e[slot], *cp = C->cp[slot], *inv = C->inv[slot];
-    for (size_t i = 0; i < n; i++) {
-        d[i] = cM * C->m[i] + cK * C->Kd[i] + cC * C->Cd[i];
-        e[i] = (i + 1 < n) ? cK * C->Ko[i] + cC * C->Co[i] : 0.0;
-    }
-    double prev = 0.0;
-    for (size_t i = 0; i < n; i++) {
+    const double *d = C->d[slot], *e = C->e[slot];
+    double *cp = C->cp[slot], *inv = C->inv[slot], prev = 0.0;
+    for (size_t i = 0; i < C->n; i++) {
         const double den = d[i] - ((i > 0) ? e[i - 1] * prev : 0.0);
         if (!(den > 0.0)) return 0;
         inv[i] = 1.0 / den;
         cp[i] = e[i] * inv[i];
         prev = cp[i];
     }
+    C->tok[slot] = 1;
     return 1;
+}
+
+/* M_hat of the slot, cM M + cC C + cK K (the oscillator's order); Thomas's factors made when first
+ * solved with where M_hat is strictly diagonally dominant (so positive definite), else now. */
+static inline int chain_op_factor(void *ctx, int slot, double cM, double cC, double cK)
+{
+    chain_eng_ops *C = (chain_eng_ops *)ctx;
+    const size_t n = C->n;
+    double *d = C->d[slot], *e = C->e[slot];
+    int dominant = 1;
+    for (size_t i = 0; i < n; i++) {
+        d[i] = cM * C->m[i] + cC * C->Cd[i] + cK * C->Kd[i];
+        e[i] = (i + 1 < n) ? cC * C->Co[i] + cK * C->Ko[i] : 0.0;
+        dominant &= d[i] > fabs(e[i]) + ((i > 0) ? fabs(e[i - 1]) : 0.0);
+        C->kh[slot][i] = 0; /* the kept basis factors anew */
+    }
+    C->tok[slot] = 0;
+    return dominant || chain_op_thomas(C, slot);
 }
 
 static inline void chain_op_solve(void *ctx, int slot, const double *b, double *x)
 {
-    const chain_eng_ops *C = (const chain_eng_ops *)ctx;
+    chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
+    if (!C->tok[slot]) (void)chain_op_thomas(C, slot); /* (positive pivots: chain_op_factor) */
     const double *e = C->e[slot], *cp = C->cp[slot], *inv = C->inv[slot];
     double prev = 0.0;
     for (size_t i = 0; i < n; i++) {
@@ -100,23 +128,86 @@ static inline void chain_op_solve(void *ctx, int slot, const double *b, double *
     for (size_t i = n - 1; i-- > 0;) x[i] -= cp[i] * x[i + 1];
 }
 
+/* lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, q, l, mode, z, w, ...) of the slot's M_hat with its
+ * factorisation kept for the held pattern (mode 0 with l > 0): the same operations, so the same
+ * bits, without the divisions of the rows whose pattern is unchanged. A row is refactored when its
+ * own hold changed, or when it is free and the row above was refactored (a held row starts the
+ * elimination afresh: cp = 0). */
+static inline void chain_op_basis(chain_eng_ops *C, int slot, const double *q, const double *l, const int *mode,
+                                  double *z, double *w)
+{
+    const size_t n = C->n;
+    const double *d = C->d[slot], *e = C->e[slot];
+    int *kh = C->kh[slot];
+    double *kcp = C->kcp[slot], *kinv = C->kinv[slot], *dp = C->work;
+    double cprev = 0.0, dprev = 0.0;
+    int refac = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int hold = mode[i] == 0 && l[i] > 0.0;
+        if (kh[i] != 1 + hold || (refac && !hold)) {
+            kh[i] = 1 + hold;
+            if (hold) {
+                kcp[i] = 0.0;
+            } else {
+                const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+                kinv[i] = 1.0 / (d[i] - lo_e * cprev);
+                kcp[i] = (i + 1 < n) ? e[i] * kinv[i] : 0.0;
+            }
+            refac = 1;
+        } else {
+            refac = 0;
+        }
+        double dpi = 0.0;
+        if (!hold) {
+            const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            dpi = (rhs - lo_e * dprev) * kinv[i];
+        }
+        dp[i] = dpi;
+        cprev = kcp[i];
+        dprev = dpi;
+    }
+    double zn = 0.0;
+    for (size_t j = n; j-- > 0;) {
+        zn = dp[j] - kcp[j] * zn;
+        z[j] = zn;
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            z[i] = 0.0;
+            double f = q[i];
+            if (i > 0) f += e[i - 1] * z[i - 1];
+            if (i + 1 < n) f += e[i] * z[i + 1];
+            w[i] = f;
+        } else {
+            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+}
+
+/* A row whose W stays as the basis solve set it: held, or a span's ghost. */
+static inline int chain_op_fixed(const chain_eng_ops *C, const eng_problem *P, const int *mode, size_t i)
+{
+    return (mode[i] == 0 && P->limit[i] > 0.0) || (i == 0 && C->fix_lo) || (i + 1 == C->n && C->fix_hi);
+}
+
 /* The Stribeck rows' implicit forces after the modes are decided: with W the velocities relative to
- * the belts, M_hat W = r + F(W) on the free rows (r = p_hat - M_hat vb), F_i = -s_i N_i mu_i(max(s_i
- * W_i, 0)) on a sliding Stribeck row, -s_i limit_i on another sliding row, 0 without friction; held
- * rows stay at W = 0. Newton's iteration from the basis solve; a sliding Stribeck row with only held
- * neighbours takes friction.h's scalar iteration. */
+ * the belts, M_hat W = r + F(W) on the free rows (r = p_hat - M_hat vb, in C->q), F_i = -s_i N_i
+ * mu_i(max(s_i W_i, 0)) on a sliding Stribeck row, -s_i limit_i on another sliding row, 0 without
+ * friction; held rows and ghosts keep their W. Newton's iteration from the basis solve; then the
+ * held rows' forces from their equations. */
 static inline eng_status chain_op_stribeck(chain_eng_ops *C, const eng_problem *P, const int *mode, double *W,
                                            double *f)
 {
     const size_t n = C->n;
-    const double *d = C->d[P->slot], *e = C->e[P->slot], *r = C->q; /* q holds -r */
-    for (int it = 0; it < CHAIN_NEWTON_ITERS; it++) {
+    const double *d = C->d[P->slot], *e = C->e[P->slot], *r = C->q;
+    for (int it = 0; it <= CHAIN_NEWTON_ITERS; it++) {
         double res_max = 0.0, scale = 0.0;
         for (size_t i = 0; i < n; i++) {
-            const int held = mode[i] == 0 && P->limit[i] > 0.0;
-            if (held) {
+            const int fixed = chain_op_fixed(C, P, mode, i);
+            C->ne[i] = (i + 1 < n && !fixed && !chain_op_fixed(C, P, mode, i + 1)) ? e[i] : 0.0;
+            if (fixed) {
                 C->nd[i] = 1.0;
-                C->ne[i] = 0.0;
                 C->nr[i] = 0.0;
                 continue;
             }
@@ -132,114 +223,262 @@ static inline eng_status chain_op_stribeck(chain_eng_ops *C, const eng_problem *
                 }
             }
             double res = d[i] * W[i] - r[i] - Fi;
-            if (i > 0 && !(mode[i - 1] == 0 && P->limit[i - 1] > 0.0)) res += e[i - 1] * W[i - 1];
-            if (i + 1 < n && !(mode[i + 1] == 0 && P->limit[i + 1] > 0.0)) res += e[i] * W[i + 1];
+            if (i > 0) res += e[i - 1] * W[i - 1];
+            if (i + 1 < n) res += e[i] * W[i + 1];
             f[i] = Fi;
             C->nd[i] = d[i] - dFi;
-            C->ne[i] = (i + 1 < n && !(mode[i + 1] == 0 && P->limit[i + 1] > 0.0)) ? e[i] : 0.0;
             C->nr[i] = -res;
             res_max = fmax(res_max, fabs(res));
             scale = fmax(scale, fabs(d[i] * W[i]) + fabs(r[i]) + fabs(Fi));
         }
-        if (!(res_max <= 1e-14 * scale)) {
-            /* Thomas on (nd, ne) */
-            double prev = 0.0, pd = 0.0;
+        if (res_max <= 1e-14 * scale) {
             for (size_t i = 0; i < n; i++) {
-                const double lo = (i > 0) ? C->ne[i - 1] : 0.0;
-                const double den = C->nd[i] - lo * prev;
-                if (!(den != 0.0) || !isfinite(den)) return ENG_ERR_FRICTION;
-                prev = C->ne[i] / den;
-                pd = (C->nr[i] - lo * pd) / den;
-                C->work[i] = prev;
-                C->nr[i] = pd;
+                if (!(mode[i] == 0 && P->limit[i] > 0.0)) continue;
+                double fi = -r[i];
+                if (i > 0) fi += e[i - 1] * W[i - 1];
+                if (i + 1 < n) fi += e[i] * W[i + 1];
+                f[i] = fi;
             }
-            for (size_t i = n - 1; i-- > 0;) C->nr[i] -= C->work[i] * C->nr[i + 1];
-            for (size_t i = 0; i < n; i++) W[i] += C->nr[i];
-            continue;
+            return ENG_OK;
         }
-        /* converged: the held rows' forces from their equations */
+        if (it == CHAIN_NEWTON_ITERS) break;
+        double prev = 0.0, pd = 0.0; /* Thomas on (nd, ne) */
         for (size_t i = 0; i < n; i++) {
-            if (!(mode[i] == 0 && P->limit[i] > 0.0)) continue;
-            double fi = -r[i];
-            if (i > 0) fi += e[i - 1] * W[i - 1];
-            if (i + 1 < n) fi += e[i] * W[i + 1];
-            f[i] = fi;
+            const double lo = (i > 0) ? C->ne[i - 1] : 0.0;
+            const double den = C->nd[i] - lo * prev;
+            if (!(den != 0.0) || !isfinite(den)) return ENG_ERR_FRICTION;
+            prev = C->ne[i] / den;
+            pd = (C->nr[i] - lo * pd) / den;
+            C->work[i] = prev;
+            C->nr[i] = pd;
         }
-        return ENG_OK;
+        for (size_t i = n - 1; i-- > 0;) C->nr[i] -= C->work[i] * C->nr[i + 1];
+        for (size_t i = 0; i < n; i++) W[i] += C->nr[i];
     }
     return ENG_ERR_FRICTION;
 }
 
 /* The friction problem of a step: with W = V1 - vb, M_hat W = p_hat - M_hat vb + f, the box LCP of
- * lcp.h on W (lcp_box_basis in the given modes, lcp_box for the LCP); the Stribeck rows' forces
- * then by chain_op_stribeck. */
+ * lcp.h on W (the kept basis solve; lcp_box for the LCP unless the warm basis holds); a span's
+ * ghost rows fixed at their prescribed velocities (p_hat's entries there: Dirichlet rows); the
+ * Stribeck rows' forces then by chain_op_stribeck. */
 static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1,
                                            double *f, int *pivots)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
-    const double *d = C->d[P->slot], *e = C->e[P->slot];
+    const double *d = C->d[P->slot], *e = C->e[P->slot], *l = P->limit, *vb = P->vb;
     for (size_t i = 0; i < n; i++) {
         double r = P->p_hat[i];
-        if (P->vb) {
-            r -= d[i] * P->vb[i];
-            if (i > 0) r -= e[i - 1] * P->vb[i - 1];
-            if (i + 1 < n) r -= e[i] * P->vb[i + 1];
+        if (vb) {
+            r -= d[i] * vb[i];
+            if (i > 0) r -= e[i - 1] * vb[i - 1];
+            if (i + 1 < n) r -= e[i] * vb[i + 1];
         }
         C->q[i] = -r;
     }
     if (pivots) *pivots = 0;
-    if (what == ENG_SOLVE_BASIS) {
-        lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, C->q, P->limit, mode, V1, f, C->work, C->work + n);
-        for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
-            if (!(mode[i] == 0 && P->limit[i] > 0.0)) f[i] = (P->limit[i] > 0.0) ? -mode[i] * P->limit[i] : 0.0;
-    } else if (lcp_box(n, d, e, C->q, P->limit, mode, V1, f, C->work, pivots) != LCP_OK) {
-        return ENG_ERR_LCP;
+    if (C->fix_lo || C->fix_hi) { /* a span: the ghosts' rows fixed at their entries of p_hat */
+        if (what != ENG_SOLVE_BASIS) return ENG_ERR_BAD_INPUT;
+        const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
+        lcp_box_basis(0, n, C->fix_lo, zl, C->fix_hi, zh, d, e, C->q, l, mode, V1, f, C->work, C->work + n);
+        for (size_t i = 0; i < n; i++)
+            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
+    } else {
+        chain_op_basis(C, P->slot, C->q, l, mode, V1, f);
+        if (what == ENG_SOLVE_BASIS) {
+            for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
+                if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
+        } else {
+            /* the warm basis: when lcp_box's first round would flip no row, its solution is this one */
+            int flip = 0;
+            for (size_t i = 0; i < n && !flip; i++)
+                flip = l[i] > 0.0 && ((mode[i] != 0 && mode[i] * V1[i] < 0.0) || (mode[i] == 0 && f[i] > l[i]) ||
+                                      (mode[i] == 0 && f[i] < -l[i]));
+            if (!flip) {
+                for (size_t i = 0; i < n; i++)
+                    if (!(l[i] > 0.0)) mode[i] = (V1[i] > 0.0) - (V1[i] < 0.0);
+            } else if (lcp_box(n, d, e, C->q, l, mode, V1, f, C->work, pivots) != LCP_OK) {
+                return ENG_ERR_LCP;
+            }
+        }
     }
+    if (C->fix_lo) f[0] = 0.0;
+    if (C->fix_hi) f[n - 1] = 0.0;
     if (P->law) {
         int any = 0;
-        for (size_t i = 0; i < n; i++) any |= mode[i] != 0 && P->limit[i] > 0.0 && P->law[i].law == DFO_LAW_STRIBECK;
+        for (size_t i = 0; i < n; i++) any |= mode[i] != 0 && l[i] > 0.0 && P->law[i].law == DFO_LAW_STRIBECK;
         if (any) {
             for (size_t i = 0; i < n; i++) C->q[i] = -C->q[i]; /* r */
             const eng_status st = chain_op_stribeck(C, P, mode, V1, f);
             if (st != ENG_OK) return st;
         }
     }
-    if (P->vb)
-        for (size_t i = 0; i < n; i++) V1[i] += P->vb[i];
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(V1[i]) || !isfinite(f[i])) return ENG_ERR_NONFINITE;
+    if (vb)
+        for (size_t i = 0; i < n; i++) V1[i] += vb[i];
     return ENG_OK;
 }
 
-/* The chain held at rest at X (every block stuck, the inputs held, the belts still): block i's
- * holding force balances its static force P_i(t) + F_ext_i - (K X)_i, P_i(t) = Pc_i cos(omega t +
- * phi0) - Ps_i sin(omega t + phi0); the earliest of the blocks' closed-form breakaways (friction.h's
- * dfo_next_breakaway). */
+/* Block j held at rest with the loads (u, Fb) and its static force u - (K x)_j: its next breakaway
+ * from ta under its excitation Pc cos(omega t + phi0) - Ps sin(omega t + phi0) (friction.h). */
+static inline double chain_op_block_breakaway(const eng_harmonic *exc, size_t j, double u, double Fb, double kx,
+                                              double ta)
+{
+    const double Pc = exc->Pc ? exc->Pc[j] : 0.0, Ps = exc->Ps ? exc->Ps[j] : 0.0;
+    dfo_harmonic H;
+    if (Ps == 0.0) dfo_harmonic_init(&H, Pc, exc->omega, exc->phi0);
+    else dfo_harmonic_init(&H, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
+    dfo_loads L;
+    dfo_loads_set(&L, u, 0.0, 0.0, 0.0);
+    L.Fb = Fb;
+    int dir;
+    return dfo_next_breakaway(&H, &L, u - kx, ta, &dir);
+}
+
+static inline double chain_op_Kx(const chain_eng_ops *C, const double *x, size_t i)
+{
+    double kx = C->Kd[i] * x[i];
+    if (i > 0) kx += C->Ko[i - 1] * x[i - 1];
+    if (i + 1 < C->n) kx += C->Ko[i] * x[i + 1];
+    return kx;
+}
+
+/* The chain held at rest at X (every block stuck, the inputs held, the belts still): the earliest of
+ * the blocks' closed-form breakaways. */
 static inline double chain_op_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s,
                                         const eng_inputs *in, const double *Fb)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    const size_t n = C->n;
     double tb = INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        const double Pc = exc->Pc ? exc->Pc[i] : 0.0, Ps = exc->Ps ? exc->Ps[i] : 0.0;
-        const double F = in->F_ext ? in->F_ext[i] : 0.0;
-        double kx = C->Kd[i] * s->X[i];
-        if (i > 0) kx += C->Ko[i - 1] * s->X[i - 1];
-        if (i + 1 < n) kx += C->Ko[i] * s->X[i + 1];
-        dfo_harmonic H;
-        if (Ps == 0.0) dfo_harmonic_init(&H, Pc, exc->omega, exc->phi0);
-        else dfo_harmonic_init(&H, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
-        dfo_loads L;
-        dfo_loads_set(&L, F, 0.0, 0.0, 0.0);
-        L.Fb = Fb[i];
-        int dir;
-        const double t = dfo_next_breakaway(&H, &L, F - kx, s->t, &dir);
+    for (size_t i = 0; i < C->n; i++) {
+        const double u = in->F_ext ? in->F_ext[i] : 0.0;
+        const double t = chain_op_block_breakaway(exc, i, u, Fb[i], chain_op_Kx(C, s->X, i), s->t);
         if (isnan(t)) return NAN;
         if (t < tb) tb = t;
     }
     return tb;
+}
+
+/* Held block j's next breakaway in closed form (eng_sparse.contact_breakaway) where its neighbours
+ * are held too (its static force then P_j(t) + u_j - (K x)_j with x fixed); NaN else. */
+static inline double chain_op_contact_breakaway(void *ctx, size_t j, const eng_harmonic *exc, const eng_state *s,
+                                                const eng_inputs *in, const double *Fb)
+{
+    const chain_eng_ops *C = (const chain_eng_ops *)ctx;
+    for (size_t k = (j > 0) ? j - 1 : j; k <= j + 1 && k < C->n; k++)
+        if (k != j && !(s->mode[k] == 0 && Fb[k] > 0.0)) return NAN;
+    const double u = (in && in->F_ext) ? in->F_ext[j] : 0.0;
+    return chain_op_block_breakaway(exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
+}
+
+/* The fused grid step in the held pattern (eng_sparse.step_held): x_pred and p_hat in one sweep (K's
+ * row needs x_pred one block ahead), the kept basis solve, the margins, the acceptance; the
+ * engine's arithmetic in its order (engine.h's eng_held_step), so the same bits. */
+static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_state *s)
+{
+    chain_eng_ops *C = (chain_eng_ops *)ctx;
+    const size_t n = C->n;
+    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
+    const double *X = s->X, *V = s->V, *A0 = F->A0;
+    double *xpp = F->xp, *q = C->q, *V1 = F->V1;
+    double xc = X[0] + pV * V[0] + pA * A0[0];
+    for (size_t i = 0; i < n; i++) {
+        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
+        xpp[i] = xc;
+        const double r = -a * A0[i] + (1.0 - a) * (V[i] * c1 + g1 * A0[i]);
+        const double y = C->m[i] * r;
+        double kx = C->Kd[i] * xc;
+        if (i > 0) kx += C->Ko[i - 1] * xpp[i - 1];
+        if (i + 1 < n) kx += C->Ko[i] * xr;
+        double p = F->u[i];
+        if (F->Pc) p += F->Pc[i] * F->cw;
+        if (F->Ps) p -= F->Ps[i] * F->sw;
+        F->ph[i] = p + (y - kx);
+        q[i] = -F->ph[i];
+        xc = xr;
+    }
+    double *f = F->f;
+    chain_op_basis(C, F->slot, q, F->lim, F->st, V1, f);
+    for (size_t j = 0; j < n; j++) {
+        if (!(F->Fb[j] > 0.0)) continue;
+        const double mg = (F->st[j] != 0) ? F->st[j] * ((0.0 + 1.0 * V1[j]) - 0.0) : F->Fb[j] - fabs(f[j]);
+        if (mg <= 0.0) return 0;
+    }
+    for (size_t i = 0; i < n; i++) {
+        s->X[i] = xpp[i] + F->corr_V * V1[i];
+        s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * A0[i];
+        s->V[i] = V1[i];
+        s->hA[i] = F->h;
+        s->F[i] = f[i];
+    }
+    return 1;
+}
+
+/* A span's reach for the step h and the Bossak parameter alpha: bossak.h's dfo_bossak_reach of
+ * M_hat's largest diagonally scaled off-diagonal row sum. */
+static inline void chain_op_set_reach(chain_eng_ops *C, double h, double alpha)
+{
+    const size_t n = C->n;
+    const double g = dfo_bossak_gamma(alpha), b = dfo_bossak_beta(alpha);
+    const double cM = (1.0 - alpha) / (g * h), cK = b * h / g;
+    double rho = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double lo = (i > 0) ? fabs(C->Co[i - 1] + cK * C->Ko[i - 1]) : 0.0;
+        const double up = (i + 1 < n) ? fabs(C->Co[i] + cK * C->Ko[i]) : 0.0;
+        rho = fmax(rho, (lo + up) / (cM * C->m[i] + C->Cd[i] + cK * C->Kd[i]));
+    }
+    C->w = dfo_bossak_reach(rho, n);
+}
+
+/* The spans around the candidate blocks (eng_sparse.span): w blocks either side of each, merged when
+ * less than 3 blocks apart (distinct ghosts), the blocks next to a span its ghosts (their contacts
+ * carried: a span's contacts are its blocks'). None (0) for a chain of at most 2 w + 3 blocks. */
+static inline size_t chain_op_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+{
+    const chain_eng_ops *C = (const chain_eng_ops *)ctx;
+    const size_t n = C->n, w = C->w;
+    if (w == 0 || n <= 2 * w + 3) return 0;
+    for (size_t i = 0; i < n; i++) dof_lab[i] = 0;
+    size_t ns = 0, pa = 0, pb = 0;
+    for (size_t c = 0; c <= n; c++) {
+        if (c < n && !cand[c]) continue;
+        const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
+        if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
+        if (ns > 0) { /* label the span [pa, pb) and its ghosts */
+            for (size_t i = pa; i < pb; i++) dof_lab[i] = (int)ns;
+            if (pa > 0) dof_lab[pa - 1] = -(int)ns;
+            if (pb < n) dof_lab[pb] = -(int)ns;
+        }
+        if (c == n) break;
+        pa = a;
+        pb = b;
+        ns++;
+    }
+    for (size_t i = 0; i < n; i++) ct_lab[i] = dof_lab[i];
+    return ns;
+}
+
+/* The span's view (eng_sparse.span_bind): blocks dofs[0] ... dofs[nd - 1] (consecutive), its ends
+ * fixed where they are ghosts. */
+static inline void chain_op_span_bind(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts,
+                                      size_t nct)
+{
+    const chain_eng_ops *C = (const chain_eng_ops *)ctx;
+    chain_eng_ops *V = C->sub;
+    (void)cts;
+    (void)nct; /* (the span's contacts are its blocks') */
+    const size_t o = dofs[0];
+    V->n = nd;
+    V->m = C->m + o;
+    V->Kd = C->Kd + o;
+    V->Ko = C->Ko + o;
+    V->Cd = C->Cd + o;
+    V->Co = C->Co + o;
+    V->damped = C->damped;
+    V->fix_lo = ghost[0];
+    V->fix_hi = ghost[nd - 1];
+    V->w = 0;
+    V->sub = NULL;
 }
 
 #endif

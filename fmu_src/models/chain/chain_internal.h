@@ -59,6 +59,8 @@ struct chain_model {
     size_t *ridx;
     double *rw;
     chain_eng_ops ops;
+    chain_eng_ops view;         /* a span's view of the chain (its arrays its own) */
+    int *iblk;                  /* the operators' int arrays */
     eng_sparse sparse;          /* its sparse-structure operators (engine.h) */
     eng *E;
 };

@@ -137,8 +137,25 @@ static eng *make_engine(chain_model *M, const char **err)
     S.ops.solve = chain_op_solve;
     S.ops.friction = chain_op_friction;
     S.ops.breakaway = chain_op_breakaway;
+    /* its sparse-structure operators: the held solves always; the fused grid step and the spans
+     * (the located scheme's local switch placement) where the energy accounts are not kept (they
+     * would take the step past them), the fused step without Stribeck (its basis solve is then not
+     * the step's) */
     memset(&M->sparse, 0, sizeof M->sparse);
     M->sparse.held_basis = 1;
+    M->sparse.contact_breakaway = chain_op_contact_breakaway;
+    if (!M->energy && !M->stribeck) M->sparse.step_held = chain_op_step_held;
+    if (!M->energy) {
+        O->sub = &M->view;
+        chain_op_set_reach(O, M->h, M->alpha);
+        M->sparse.span_max = n;
+        M->sparse.span = chain_op_span;
+        M->sparse.span_bind = chain_op_span_bind;
+        const eng_ops view = {&M->view,        chain_op_K,        chain_op_C,         chain_op_M, chain_op_factor,
+                              chain_op_solve, chain_op_friction, chain_op_breakaway, 0};
+        M->sparse.span_ops = view;
+        if (!M->damped) M->sparse.span_ops.apply_C = NULL;
+    }
     S.sparse = &M->sparse;
     S.rows = M->rows;
     S.exc.omega = M->omega;
@@ -174,13 +191,16 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for the per-block arrays (NARR of n, and the operators' 4 ENG_NSLOTS + 5) */
-    enum { NARR = 24, NOPS = 4 * ENG_NSLOTS + 5 };
-    double *blk = dalloc(al, (size_t)(NARR + NOPS + 1) * n);
+    /* one block of doubles for the per-block arrays (NARR of n) and the operators' (NOPS of n, for the
+     * chain and for its span's view), one of ints for the kept factorisations' patterns */
+    enum { NARR = 22, NOPS = 6 * ENG_NSLOTS + 6 };
+    double *blk = dalloc(al, (size_t)(NARR + 2 * NOPS) * n);
+    int *iblk = (int *)al->allocate(al->env, 2 * ENG_NSLOTS * n, sizeof(int));
     M->rows = (eng_row *)al->allocate(al->env, n, sizeof(eng_row));
     M->ridx = (size_t *)al->allocate(al->env, n, sizeof(size_t));
-    if (!blk || !M->rows || !M->ridx) {
+    if (!blk || !iblk || !M->rows || !M->ridx) {
         if (blk) al->release(al->env, blk);
+        if (iblk) al->release(al->env, iblk);
         if (M->rows) al->release(al->env, M->rows);
         if (M->ridx) al->release(al->env, M->ridx);
         al->release(al->env, M);
@@ -189,21 +209,29 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     }
     double **arr[NARR] = {&M->m,  &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N,  &M->mu_s, &M->mu_k,
                           &M->mu_b, &M->x0, &M->v0, &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->ks,
-                          &M->cs, &M->u,  &M->mukN, &M->Fb, &M->Nn, &M->rw, NULL, NULL};
-    for (int j = 0; j < NARR; j++)
-        if (arr[j]) *arr[j] = blk + (size_t)j * n;
-    double *ob = blk + (size_t)NARR * n;
-    for (int k = 0; k < ENG_NSLOTS; k++) {
-        M->ops.d[k] = ob + (size_t)(4 * k) * n;
-        M->ops.e[k] = ob + (size_t)(4 * k + 1) * n;
-        M->ops.cp[k] = ob + (size_t)(4 * k + 2) * n;
-        M->ops.inv[k] = ob + (size_t)(4 * k + 3) * n;
+                          &M->cs, &M->u,  &M->mukN, &M->Fb, &M->Nn, &M->rw};
+    for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
+    chain_eng_ops *ops[2] = {&M->ops, &M->view};
+    for (int v = 0; v < 2; v++) {
+        chain_eng_ops *O = ops[v];
+        double *ob = blk + (size_t)(NARR + v * NOPS) * n;
+        int *ib = iblk + (size_t)(v * ENG_NSLOTS) * n;
+        for (int k = 0; k < ENG_NSLOTS; k++) {
+            O->d[k] = ob + (size_t)(6 * k) * n;
+            O->e[k] = ob + (size_t)(6 * k + 1) * n;
+            O->cp[k] = ob + (size_t)(6 * k + 2) * n;
+            O->inv[k] = ob + (size_t)(6 * k + 3) * n;
+            O->kcp[k] = ob + (size_t)(6 * k + 4) * n;
+            O->kinv[k] = ob + (size_t)(6 * k + 5) * n;
+            O->kh[k] = ib + (size_t)k * n;
+        }
+        O->q = ob + (size_t)(6 * ENG_NSLOTS) * n;
+        O->work = ob + (size_t)(6 * ENG_NSLOTS + 1) * n; /* 2 n */
+        O->nd = ob + (size_t)(6 * ENG_NSLOTS + 3) * n;
+        O->ne = ob + (size_t)(6 * ENG_NSLOTS + 4) * n;
+        O->nr = ob + (size_t)(6 * ENG_NSLOTS + 5) * n;
     }
-    M->ops.q = ob + (size_t)(4 * ENG_NSLOTS) * n;
-    M->ops.work = ob + (size_t)(4 * ENG_NSLOTS + 1) * n; /* 2 n */
-    M->ops.nd = ob + (size_t)(4 * ENG_NSLOTS + 3) * n;
-    M->ops.ne = ob + (size_t)(4 * ENG_NSLOTS + 4) * n;
-    M->ops.nr = ob + (size_t)(4 * ENG_NSLOTS + 5) * n;
+    M->iblk = iblk;
     M->stribeck = p->friction_law == DFO_LAW_STRIBECK;
     M->law = NULL;
     if (M->stribeck) {
@@ -294,6 +322,7 @@ void chain_destroy(chain_model *M)
     const chain_alloc al = M->al;
     if (M->E) eng_destroy(M->E);
     al.release(al.env, M->m);
+    al.release(al.env, M->iblk);
     al.release(al.env, M->rows);
     al.release(al.env, M->ridx);
     if (M->law) al.release(al.env, M->law);
