@@ -448,8 +448,8 @@ static void test_stop_and_copy(checks *T)
 
 static void test_fast_path(checks *T)
 {
-    /* the energy accounts send every step through the general path (chain_advance.c: step_fast and the
-     * stuck fast path stuck_until are off); on a chain short enough to be split whole, the two
+    /* the energy accounts send every step through the general path (the engine's fused step, the
+     * model's step_held, is not offered with them); on a chain short enough to be split whole, the two
      * runs must agree bit for bit: one with a block without friction, one stick-dominated (every
      * block stuck for long phases) */
     for (int variant = 0; variant < 2; variant++) {

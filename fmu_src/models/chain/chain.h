@@ -11,21 +11,18 @@
  * k[i], c[i] is the spring and damper on the left of block i (k[0], c[0] tie block 0 to the left
  * wall); k_end = c_end = 0 is a free right end. Springs are relaxed at x = 0.
  *
- * One step: M_hat V1 = p_hat + F1 with M_hat = (1 - a) M / (g h) + C + (b h / g) K (tridiagonal,
- * symmetric positive definite). The 2n LCP (z = (u+, u-), w = (mu N + F, mu N - F)) is solved from
- * the basis named by the blocks' modes (stuck blocks held at V = 0, sliding ones with their kinetic
- * force): a tridiagonal solve, O(n). When that basis is infeasible, the schemes differ:
- *   located (default): each infeasible block's switch is placed inside the step (a sliding block's
- *     V_i = 0, a stuck block's held force reaching its limit; a bracketed root of the step length),
- *     the earliest is taken, the step is split there, the switching block's new mode decided by the
- *     rest rule of friction.h with its own net force, and the chain restarts with the consistent
- *     accelerations of the new mode set;
- *   paper: principal pivoting on the box form of the LCP (limits mu_b N stuck, mu_k N sliding),
- *     then one coefficient update and a second solve; Bossak's A throughout;
- *   consistent: paper, with stuck blocks at rest (V = A = 0).
+ * The chain is a model of the friction engine (fmu_src/engine): contact i on block i (w_i = e_i),
+ * the engine's Bossak schemes (located, the default; paper; consistent) over the chain's operators
+ * (chain_engine_ops.h). One step: M_hat V1 = p_hat + F1 with M_hat = (1 - a) M / (g h) + C +
+ * (b h / g) K (tridiagonal, symmetric positive definite); the friction is the box form of the 2n
+ * LCP, solved from the basis named by the blocks' modes (stuck blocks held, sliding ones with their
+ * kinetic force): one tridiagonal solve, O(n), with the factorisation kept for the held pattern;
+ * where that basis is infeasible the located scheme places each switch inside its step in a span
+ * of nearby blocks (the engine's spans: O(span) per switch), the paper and consistent schemes pivot
+ * (lcp_box). engine.h says what each scheme does.
  *
- * Memory: O(n), every array through the caller's allocate/free callbacks. The state is plain data
- * plus arrays (chain_state_copy). Plain C, no FMI types. */
+ * Memory: O(n), every array through the caller's allocate/free callbacks (the engine's too). The
+ * state is the engine's (chain_state_copy). Plain C, no FMI types. */
 #ifndef DFO_CHAIN_H
 #define DFO_CHAIN_H
 
