@@ -1,7 +1,7 @@
 /* ns per internal step of the friction engine (fmu_src/engine) side by side with the models' own
  * steppers on the same motion, and what reaching the operators costs: the engine's schemes with the
  * operators through eng_ops's function pointers (engine.c) against the same schemes specialised at
- * compile time by the model's inline operators (engine_step.h included by engine_block.c and
+ * compile time by the model's inline operators (engine_step.h included by models/oscillator/osc_engine.c and
  * engine_chain.c with the operators of engine_models.h).
  *
  *   bench_engine [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--csv FILE]
@@ -13,7 +13,7 @@
  *   own        the model's own stepper (dfo_advance, chain_advance)
  *   generic    eng_advance, the model's operators and friction solver through function pointers
  *   dense      (one block) eng_advance with the engine's default friction solver (Delassus, Lemke)
- *   inline     the specialised schemes (blk_eng_advance, chn_eng_advance)
+ *   inline     the specialised schemes (osc_eng_advance, chn_eng_advance)
  * and the ratios generic / own and inline / own; same_bits says whether the generic and the
  * inline runs end on the same bits (they must: the same arithmetic in the same order). Timed: one
  * call over P periods after one period of settling (outside the clock), the thread's CPU time, the
@@ -62,8 +62,9 @@ typedef struct {
     size_t *idx;
     double *w1;
     eng_row *rows;
-    blk_model blk;
-    chn_model chn;
+    osc_eng_model blk;
+    chn_model chn, chn_view;   /* the chain, and its spans' view */
+    eng_sparse sparse;
     eng *E[NVAR];
     eng_state es[NVAR];
     dfo_model osc;
@@ -88,12 +89,13 @@ static eng_setup setup_of(bench_case *B, int variant)
     S.n = B->n;
     S.nc = B->n;
     if (B->n == 1) {
-        const eng_ops ops = {&B->blk, blk_K, blk_C, blk_M, blk_factor, blk_solve,
-                             variant == V_DENSE ? NULL : blk_friction};
+        const eng_ops ops = {&B->blk, osc_K, osc_C, osc_M, osc_factor, osc_solve,
+                             variant == V_DENSE ? NULL : osc_friction, variant == V_DENSE ? NULL : osc_breakaway};
         S.ops = ops;
     } else {
-        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
         S.ops = ops;
+        S.sparse = &B->sparse;
     }
     S.rows = B->rows;
     S.exc.omega = OMEGA;
@@ -147,11 +149,19 @@ static void case_make(bench_case *B, size_t n, int scheme, double spp)
     } else {
         chn_model *C = &B->chn;
         C->n = n; C->m = B->m; C->k = B->k; C->k_end = 1.0;
-        for (int s = 0; s < ENG_NSLOTS; s++) {
-            C->d[s] = dalloc(n); C->e[s] = dalloc(n); C->cp[s] = dalloc(n); C->inv[s] = dalloc(n);
+        C->sub = &B->chn_view;
+        for (chn_model *V = C; V; V = (V == C) ? C->sub : NULL) {
+            for (int s = 0; s < ENG_NSLOTS; s++) {
+                V->d[s] = dalloc(n); V->e[s] = dalloc(n); V->cp[s] = dalloc(n); V->inv[s] = dalloc(n);
+                V->kcp[s] = dalloc(n); V->kinv[s] = dalloc(n);
+                V->kh[s] = (int *)calloc(n, sizeof(int));
+                if (!V->kh[s]) die("out of memory");
+            }
+            V->q = dalloc(n);
+            V->work = dalloc(2 * n);
         }
-        C->q = dalloc(n);
-        C->work = dalloc(2 * n);
+        chn_set_reach(C, B->h, -0.1);
+        B->sparse = chn_sparse(C, 1);
         B->P0 = dalloc(n);
         for (size_t i = 0; i < n; i++) B->P0[i] = 1.0;
         const chain_params q = {n, B->m, B->k, B->zero, B->P0, B->phi, B->N, B->mu_s, B->chi, B->zero, B->zero,
@@ -203,15 +213,15 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
         const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
         const int inl = v == V_INLINE;
         const int one = B->n == 1;
-        if (inl && one) blk_eng_start(E, &in, 0.0, B->zero, B->zero, s);
+        if (inl && one) osc_eng_start(E, &in, 0.0, B->zero, B->zero, s);
         else if (inl) chn_eng_start(E, &in, 0.0, B->zero, B->zero, s);
         else eng_start(E, &in, 0.0, B->zero, B->zero, s);
-        eng_status st = inl ? (one ? blk_eng_advance(E, &in, s, t1, NULL) : chn_eng_advance(E, &in, s, t1, NULL))
+        eng_status st = inl ? (one ? osc_eng_advance(E, &in, s, t1, NULL) : chn_eng_advance(E, &in, s, t1, NULL))
                             : eng_advance(E, &in, s, t1, NULL);
         const long long s0 = s->steps;
         const double c0 = bench_seconds(0);
         if (st == ENG_OK)
-            st = inl ? (one ? blk_eng_advance(E, &in, s, t2, NULL) : chn_eng_advance(E, &in, s, t2, NULL))
+            st = inl ? (one ? osc_eng_advance(E, &in, s, t2, NULL) : chn_eng_advance(E, &in, s, t2, NULL))
                      : eng_advance(E, &in, s, t2, NULL);
         el = bench_seconds(0) - c0;
         if (st != ENG_OK) die(eng_status_text(st));

@@ -11,7 +11,9 @@
  * same machine load). Only the stepping is timed: dfo_advance for the bare loop, one fmi2DoStep
  * over the whole run for the FMU; start-up is outside the clock. The observables' cost: the bare
  * loop also runs with observe off and on in every repetition (whatever --observe says), and
- * observe_cost is on / off per step (window [0, inf), observe's default).
+ * observe_cost is on / off per step (window [0, inf), observe's default). The Bossak schemes' rows
+ * also time the oscillator's model of the friction engine (osc_engine.h, the same motion from the
+ * same model): engine_ns_per_step and engine_over_bare (empty for the exact scheme).
  *
  * The cases default to bench/cases.py's (keep the two in sync); work_precision.py passes its own
  * with --case, so the Python study is the single source when it drives this program. */
@@ -21,6 +23,7 @@
 #include "model_vars.h"
 #include "scheme.h"
 #include "oscillator.h"
+#include "osc_engine.h"
 
 #include <errno.h>
 #include <math.h>
@@ -372,6 +375,7 @@ static void fmu_setup(const fmu_api *api, fmi2Component comp, const dfo_params *
 typedef struct {
     double bare_ns, fmu_ns; /* best time of the stepping, ns */
     double off_ns, on_ns;   /* best time of the bare loop with observe off and on, ns */
+    double eng_ns;          /* best time of the oscillator's engine model (Bossak schemes; else NaN), ns */
     long long steps;
 } step_timing;
 
@@ -389,6 +393,31 @@ static double time_bare(const dfo_model *M, double t_end, long long *steps)
     return t1 - t0;
 }
 
+static void *eng_calloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
+static void eng_free(void *env, void *obj) { (void)env; free(obj); }
+
+/* One run of the oscillator's engine model (osc_engine.h: the engine's schemes specialised by its
+ * operators) from the start to t_end: its ns; its steps must be the bare loop's. */
+static double time_engine(const dfo_model *M, double t_end, long long steps)
+{
+    static const eng_alloc al = {eng_calloc, eng_free, NULL};
+    osc_eng_model O;
+    const char *err = NULL;
+    eng *E = osc_eng_create(M, &O, &al, &err);
+    eng_state s;
+    if (!E || !eng_state_init(E, &s, 0)) die("cannot make the engine: %s", err ? err : "out of memory");
+    const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    osc_eng_start(E, &in, 0.0, &M->p.x0, &M->p.v0, &s);
+    const double t0 = bench_now_ns();
+    const eng_status st = osc_eng_advance(E, &in, &s, t_end, NULL);
+    const double t1 = bench_now_ns();
+    if (st != ENG_OK) die("osc_eng_advance failed: %s", eng_status_text(st));
+    if (s.steps != steps) die("the engine took %lld steps, dfo_advance %lld", s.steps, steps);
+    eng_state_free(E, &s);
+    eng_destroy(E);
+    return t1 - t0;
+}
+
 static step_timing time_stepping(const options *o, const fmu_api *api, fmi2Component comp, const dfo_params *p)
 {
     const double t_end = o->periods * 2.0 * DFO_PI / p->omega;
@@ -399,12 +428,14 @@ static step_timing time_stepping(const options *o, const fmu_api *api, fmi2Compo
         q.observe = ob;
         dfo_model_init(&M_obs[ob], &q);
     }
-    step_timing r = {INFINITY, INFINITY, INFINITY, INFINITY, 0};
+    const int bossak = p->scheme != DFO_SCHEME_EXACT;
+    step_timing r = {INFINITY, INFINITY, INFINITY, INFINITY, bossak ? INFINITY : NAN, 0};
     for (int rep = 0; rep < o->reps; rep++) {
         r.bare_ns = fmin(r.bare_ns, time_bare(&M, t_end, &r.steps));
         long long steps_ob;
         r.off_ns = fmin(r.off_ns, time_bare(&M_obs[0], t_end, &steps_ob));
         r.on_ns = fmin(r.on_ns, time_bare(&M_obs[1], t_end, &steps_ob));
+        if (bossak) r.eng_ns = fmin(r.eng_ns, time_engine(&M, t_end, r.steps));
 
         fmu_setup(api, comp, p);
         const double t0 = bench_now_ns();
@@ -482,14 +513,15 @@ int main(int argc, char **argv)
         if (!out) die("cannot allocate the output buffer");
     }
     fprintf(out, "kind,case,scheme,alpha,steps_per_period,periods,steps,bare_ns_per_step,fmu_ns_per_step,"
-                 "fmu_over_bare,value,unit,observe_off_ns_per_step,observe_on_ns_per_step,observe_cost\n");
-    fprintf(out, "instance_bytes,,,,,,,,,,%zu,bytes,,,\n", instance_bytes);
+                 "fmu_over_bare,value,unit,observe_off_ns_per_step,observe_on_ns_per_step,observe_cost,"
+                 "engine_ns_per_step,engine_over_bare\n");
+    fprintf(out, "instance_bytes,,,,,,,,,,%zu,bytes,,,,,\n", instance_bytes);
 
     /* the whole short run of the first case with the located scheme (compare with the host's) */
     const dfo_params p_run = case_params(&o.cases[0], DFO_SCHEME_LOCATED, o.alpha, 50.0, o.observe);
-    fprintf(out, "fmi2_setup,%s,located,%.17g,50,0,0,,,,%.1f,ns,,,\n", o.cases[0].name, o.alpha,
+    fprintf(out, "fmi2_setup,%s,located,%.17g,50,0,0,,,,%.1f,ns,,,,,\n", o.cases[0].name, o.alpha,
             time_short_run(&o, &api, comp, &p_run, 0));
-    fprintf(out, "fmi2_run,%s,located,%.17g,50,1,50,,,,%.1f,ns,,,\n", o.cases[0].name, o.alpha,
+    fprintf(out, "fmi2_run,%s,located,%.17g,50,1,50,,,,%.1f,ns,,,,,\n", o.cases[0].name, o.alpha,
             time_short_run(&o, &api, comp, &p_run, 1));
 
     for (int ci = 0; ci < o.n_cases; ci++) {
@@ -499,9 +531,10 @@ int main(int argc, char **argv)
                 const step_timing r = time_stepping(&o, &api, comp, &p);
                 const double bare = r.bare_ns / (double)r.steps, fmu = r.fmu_ns / (double)r.steps;
                 const double off = r.off_ns / (double)r.steps, on = r.on_ns / (double)r.steps;
-                fprintf(out, "step,%s,%s,%.17g,%.17g,%.17g,%lld,%.3f,%.3f,%.4f,,,%.3f,%.3f,%.4f\n", o.cases[ci].name,
-                        scheme_name(o.schemes[si]), o.alpha, o.spp[k], o.periods, r.steps, bare, fmu, fmu / bare, off,
-                        on, on / off);
+                const double en = r.eng_ns / (double)r.steps;
+                fprintf(out, "step,%s,%s,%.17g,%.17g,%.17g,%lld,%.3f,%.3f,%.4f,,,%.3f,%.3f,%.4f,%.3f,%.4f\n",
+                        o.cases[ci].name, scheme_name(o.schemes[si]), o.alpha, o.spp[k], o.periods, r.steps, bare, fmu,
+                        fmu / bare, off, on, on / off, en, en / bare);
                 fflush(out);
             }
         }

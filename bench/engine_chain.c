@@ -15,5 +15,6 @@
 #define ENG_SOLVE(E, slot, b, x) chn_solve(ENG_CTX(E), (slot), (b), (x))
 #define ENG_HAS_FRICTION(E) ((void)(E), 1)
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) chn_friction(ENG_CTX(E), (P), (what), (mode), (V1), (f), (pivots))
+#define ENG_STEP_HELD(E, F, s) chn_step_held(ENG_CTX(E), (F), (s))
 
 #include "engine_step.h"

@@ -6,11 +6,15 @@
  *   small algebra        dot products over contact rows, a dense Cholesky with dependent rows
  *   loads and forces     loads_at (inputs at t, ramps), exc_at (the grid cache), slip, factor_slot
  *   constrained solves   csolve: A y = r + W_S' f_S with W_S y = target_S (basis solves, physical
- *                        accelerations and jerks, holding forces)
+ *                        accelerations and jerks, holding forces); held_solve: the mass slot's, through
+ *                        the model's friction solver where it offers it (eng_sparse.held_basis)
  *   dense friction       eng_dense_friction: basis solve, Stribeck's Newton, Lemke on the 2 nc LCP
  *   the trial step       trial (M_hat, the re-based A0, x_pred, p_hat), solve_trial, finish
  *   switches             rest_decide (the rest rule of the contacts at rest together), restart
- *   schemes              step_lcp (paper, consistent), step_located (the earliest switch, split)
+ *   schemes              step_lcp (paper, consistent), step_located (the earliest switch, split),
+ *                        with the model's fused step (held_step), its closed-form breakaways
+ *                        (closed_breakaways) and spans (step_spans: a sub-engine steps each span, its
+ *                        ghosts interpolated: ghost_at, ghosts_now), where eng_sparse offers them
  *   driving              eng_start, eng_advance, eng_new_inputs, outputs
  *
  * Every value one function hands another passes as an argument or through the state; the engine's
@@ -76,12 +80,75 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin};
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
+                          E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
+                          E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
+                          E->gV1};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+    if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
+    if (E->sub) {
+        eng_state_free(E->sub, &E->ss);
+        eng_destroy(E->sub);
+    }
     const lcp_alloc la = {E->al.allocate, E->al.release, E->al.env};
     lcp_workspace_free(E->ws, &la);
     E->al.release(E->al.env, E);
+}
+
+/* The spans' sub-engine (eng_sparse.span) and the parent's arrays for them: the sub-engine is made
+ * for span_max DOFs and contacts with placeholder rows (contact j on DOF j), then set to each span
+ * in turn by the located scheme (engine_step.h's step_spans). 0 on a failed allocation. */
+static int create_spans(eng *E, const char **err)
+{
+    const eng_setup *S = &E->S;
+    const eng_alloc *al = &E->al;
+    const size_t n = S->n, nc = S->nc, L = S->sparse->span_max;
+    size_t nnz = 1;
+    for (size_t j = 0; j < nc; j++) nnz = (S->rows[j].nnz > nnz) ? S->rows[j].nnz : nnz;
+    int ok = 1;
+    ok &= (E->dlab = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    ok &= (E->clab = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= (E->gmap = (long *)alloc_n(al, n, sizeof(long))) != NULL;
+    ok &= (E->lgh = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    ok &= (E->ldof = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
+    ok &= (E->lct = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
+    ok &= (E->lidx = (size_t *)alloc_n(al, L * nnz, sizeof(size_t))) != NULL;
+    ok &= (E->lrw = (double *)alloc_n(al, L * nnz, sizeof(double))) != NULL;
+    ok &= (E->lrows = (eng_row *)alloc_n(al, L, sizeof(eng_row))) != NULL;
+    double **dl[] = {&E->lN, &E->lmus, &E->lmuk, &E->lPc, &E->lPs, &E->lF, &E->lNe, &E->lvb};
+    for (size_t i = 0; i < sizeof dl / sizeof dl[0]; i++) ok &= (*dl[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
+    if (S->law) ok &= (E->llaw = (dfo_friction_law *)alloc_n(al, L, sizeof(dfo_friction_law))) != NULL;
+    ok &= eng_state_init(E, &E->ps, 0);
+    if (!ok) { if (err) *err = "out of memory"; return 0; }
+    E->lnnz = nnz;
+    for (size_t j = 0; j < L; j++) {
+        E->lidx[j * nnz] = j;
+        E->lrw[j * nnz] = 1.0;
+        E->lrows[j].nnz = 1;
+        E->lrows[j].idx = &E->lidx[j * nnz];
+        E->lrows[j].w = &E->lrw[j * nnz];
+    }
+    eng_setup T = *S;
+    T.n = T.nc = L;
+    T.ops = S->sparse->span_ops;
+    E->sub_sparse.held_basis = 1;
+    T.sparse = &E->sub_sparse;
+    T.rows = E->lrows;
+    T.N = E->lN;
+    T.mu_s = E->lmus;
+    T.mu_k = E->lmuk;
+    T.law = S->law ? E->llaw : NULL;
+    T.exc.Pc = S->exc.Pc ? E->lPc : NULL;
+    T.exc.Ps = S->exc.Ps ? E->lPs : NULL;
+    E->sub = eng_create(&T, al, err);
+    if (!E->sub || !eng_state_init(E->sub, &E->ss, 0)) { if (err) *err = "out of memory"; return 0; }
+    eng *B = E->sub;
+    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1};
+    for (size_t i = 0; i < sizeof dg / sizeof dg[0]; i++) ok &= (*dg[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
+    ok &= (B->ghost = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    if (!ok) { if (err) *err = "out of memory"; return 0; }
+    return 1;
 }
 
 eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
@@ -103,8 +170,8 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     double **dn[] = {&E->u, &E->A0, &E->xp, &E->ph, &E->V1, &E->r, &E->y, &E->y2, &E->X0, &E->acc, &E->jk, &E->rb,
                      &E->sX, &E->sV, &E->sA, &E->shA};
     double **dc[] = {&E->mu_b, &E->Nn, &E->mukN, &E->Fb, &E->mlN, &E->zero_nc, &E->lim, &E->f, &E->f2,
-                     &E->rhs, &E->sol, &E->res, &E->sF};
-    int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode};
+                     &E->rhs, &E->sol, &E->res, &E->sF, &E->hlim, &E->hf, &E->tbk};
+    int **ic[] = {&E->st, &E->cand, &E->held, &E->st2, &E->mode0, &E->frozen, &E->tmode, &E->sel, &E->smode, &E->hmode};
     int ok = 1;
     for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++)
         ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
@@ -144,6 +211,14 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);
+    E->trig_t = NAN;
+    const eng_sparse *sp = S->sparse;
+    if (sp && sp->span && sp->span_bind && sp->span_max > 0 && sp->held_basis && S->ops.friction &&
+        sp->span_ops.friction && nc > 0 &&
+        !create_spans(E, err)) {
+        eng_destroy(E);
+        return NULL;
+    }
     return E;
 }
 

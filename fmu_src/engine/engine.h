@@ -124,6 +124,22 @@ enum {
 typedef eng_status (*eng_friction_fn)(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
                                       int *pivots);
 
+struct eng_harmonic_s;
+struct eng_state_s;
+struct eng_inputs_s;
+
+/* A stuck structure's next breakaway in closed form (optional: the stuck fast path of the located
+ * scheme, with eng_setup.fast_paths). Asked only when every contact holds (mode 0, with friction), every
+ * DOF is pinned at rest by a held contact of its own (w_j = e_i, V = A = 0), the inputs are held (no
+ * ramps) and the belts still: exc the excitation, s the state, in the inputs, Fb (nc) the contacts'
+ * breakaway limits under them. Returns a time tb such that no contact's holding force reaches its
+ * limit on [s->t, tb) (+INFINITY: never; NaN: unknown). The scheme then takes at once the whole grid
+ * steps that end at least one grid step before tb (and outside the observer's window), to the bits
+ * of taking them one by one, provided the model's friction solver returns V1 = V exactly on a held
+ * pinned DOF (the scalar solver of one contact does; the dense default need not: no hook with it). */
+typedef double (*eng_breakaway_fn)(void *ctx, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
+                                   const struct eng_inputs_s *in, const double *Fb);
+
 /* The model's operators. Every vector of length n unless said; y and x never alias. */
 typedef struct {
     void *ctx;
@@ -137,15 +153,104 @@ typedef struct {
     void (*solve)(void *ctx, int slot, const double *b, double *x);
     /* The model's friction solver; NULL: eng_dense_friction. */
     eng_friction_fn friction;
+    /* The model's closed-form breakaway of a stuck structure; NULL: none (every stuck step taken). */
+    eng_breakaway_fn breakaway;
 } eng_ops;
 
 /* The harmonic excitation P_i(t) = Pc[i] cos(omega t + phi0) - Ps[i] sin(omega t + phi0) (Pc, Ps:
  * n each; NULL: 0). On the grid t0 + k h the phase comes from the state's cache (excitation.h's
  * dfo_grid_phase: a pure function of k), elsewhere it is evaluated (dmath's dfo_cos / dfo_sin). */
-typedef struct {
+typedef struct eng_harmonic_s {
     double omega, phi0;
     const double *Pc, *Ps;
 } eng_harmonic;
+
+/* Optional operators of a sparse structure (eng_setup.sparse; NULL: none, the dense model's paths).
+ * A model whose contacts couple few DOFs offers them so that the engine's work per step follows
+ * the structure's sparsity instead of nc^3:
+ *   held_basis   the model's friction solver (eng_ops.friction, then required) also solves
+ *                ENG_SOLVE_BASIS problems of ENG_SLOT_MASS (cM = 1, cC = cK = 0, law NULL): the
+ *                engine's held solves (physical accelerations, jerks and input jumps: M y = r + W_H' f_H
+ *                with W_H y = 0 on the held contacts H) go through it instead of the Delassus matrix
+ *                of the held contacts (Cholesky, O(|H|^3)).
+ *   spans        the located scheme's local switch placement. Where contacts would switch in a step,
+ *                the engine takes the whole step in the current modes, then steps again, on its own,
+ *                each span around the switching contacts: its DOFs from the step's start, switches
+ *                placed inside it, its boundary DOFs (ghosts: the DOFs outside it that its DOFs
+ *                couple to through M, C, K or a contact row) moving as prescribed over the step, by
+ *                cubic Hermite interpolation of their states at the step's start and end. A span
+ *                reaches as far as a contact's switch moves the solution by more than rounding (the
+ *                model's judgement: M_hat^-1's decay); the span costs O(its size), not O(n).
+ *     span_max   the most DOFs (ghosts included) and contacts one span holds (0: no spans)
+ *     span       the spans around the candidate contacts (cand: nc flags): labels per DOF (dof_lab,
+ *                n) and per contact (ct_lab, nc): 0 outside every span, s + 1 in span s, -(s + 1) a
+ *                ghost of span s (a DOF), or a contact carried by span s without friction (its row
+ *                on the span's DOFs and ghosts: a model may keep its numbering so). Every candidate in
+ *                a span (label > 0), a ghost of one span in no other, spans disjoint. Returns the
+ *                number of spans; 0: step the whole structure (a small one).
+ *     span_bind  make span_ops act on the span whose DOFs (ghosts included, ascending) are dofs[nd],
+ *                ghost[k] saying which are ghosts, and whose contacts are cts[nct] (ascending), in
+ *                that local numbering
+ *     span_ops   the operators of the bound span (local numbering): apply_K, apply_C, apply_M give
+ *                the span's rows (a ghost's row is not read); factor and the friction solver are for
+ *                the span's rows with the ghosts' entries prescribed: the friction problem's p_hat
+ *                holds a ghost's prescribed end velocity in its entry, and V1 returns it there
+ *                (Dirichlet rows). held_basis holds for them too.
+ *   contact_breakaway  (optional) held contact j's next breakaway in closed form, the structure
+ *                elsewhere where it is: the first time >= its stick's start s->t_stick[j] at which its
+ *                holding force reaches its limit Fb[j] under the inputs in (held inputs, still belts),
+ *                or NaN where the model's closed form does not hold (e.g. a DOF coupled to contact j's
+ *                moves). Where every contact that would switch in a (sub-)step is held and has a
+ *                breakaway there, the located scheme splits the step at the earliest of them at once
+ *                (no root finding); else as without. Without ops.breakaway the stuck fast path takes
+ *                the earliest of the contacts' as the structure's.
+ *   step_held    (optional) a whole grid step in the current modes, fused: the trial step (x_pred,
+ *                p_hat), the basis solve in the modes st with the limits lim, every contact's margin,
+ *                and where none would switch, the step's acceptance; in the model's own sweeps (the
+ *                chain: one forward and one backward sweep with its kept factorisation), written in
+ *                the engine's arithmetic and order (so the same bits as its trial, solve and finish;
+ *                eng_held_step says what each is). Returns 1 when taken (s->X, V, A, hA, F set as the
+ *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched; the
+ *                trial and its solve in F's xp, ph, V1, f: the engine goes on from them its general
+ *                way). Asked by the located scheme on a grid step
+ *                whose A needs no re-basing, with held inputs and no belts. */
+typedef struct eng_held_step_s eng_held_step;
+typedef struct {
+    int held_basis;
+    int (*step_held)(void *ctx, const eng_held_step *F, struct eng_state_s *s);
+    double (*contact_breakaway)(void *ctx, size_t j, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
+                                const struct eng_inputs_s *in, const double *Fb);
+    size_t span_max;
+    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
+    void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);
+    eng_ops span_ops;
+} eng_sparse;
+
+/* What eng_sparse.step_held is given: the step's arithmetic as the engine's trial_step, its solve
+ * and finish do it, per DOF i and contact j:
+ *   xp_i = X_i + pred_V V_i + pred_A A0_i
+ *   r_i = -alpha A0_i + (1 - alpha) (V_i c1 + g1 A0_i)
+ *   p_i = u_i, then p_i += Pc_i cw, then p_i -= Ps_i sw (the terms of non-NULL arrays)
+ *   p_hat_i = p_i + ((M r)_i - (K xp)_i)              (apply_M, apply_K as the model's)
+ *   V1, f: the basis solve (eng_problem, ENG_SOLVE_BASIS) of p_hat in the modes st with limits lim
+ *   margin_j = st_j (w_j . V1) for st_j != 0, Fb_j - |f_j| for st_j = 0 (contacts with Fb_j > 0 only)
+ *   (xp, p_hat, V1 and f out in F's arrays, taken or not)
+ *   taken when every margin is > 0: X_i = xp_i + corr_V V1_i, A_i = (V1_i - V_i) c1 - g1 A0_i,
+ *   V_i = V1_i, hA_i = h, F_j = f_j. */
+struct eng_held_step_s {
+    int slot;                   /* the factored slot of M_hat (ENG_SLOT_GRID), with cM, cC, cK */
+    double cM, cC, cK;
+    double h, alpha, g1, c1, pred_V, pred_A, corr_V;
+    double cw, sw;              /* cos and sin of the excitation's phase at the step's end */
+    const double *Pc, *Ps;      /* n: the excitation (NULL: 0) */
+    const double *u;            /* n: external forces */
+    const double *A0;           /* n: Bossak's A for the step (not re-based: s->A) */
+    const int *st;              /* nc: modes (0 held, +1/-1 sliding; a contact without friction: 1) */
+    const double *lim;          /* nc: held contacts' breakaway limit, sliding ones' kinetic magnitude */
+    const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
+    double *xp, *ph, *V1, *f;   /* n, n, n, nc: out, x_pred, p_hat and the basis solve's V1 and f (the
+                                 * engine's workspace: where the step is not taken it goes on from them) */
+};
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
  * copies none of them: a model keeps its parameters in its own struct and points at them). */
@@ -162,8 +267,8 @@ typedef struct {
     double alpha;               /* Bossak parameter in [-1/3, 0] */
     int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
     int friction_updates;       /* paper: coefficient updates (re-solves) per step, >= 0 */
-    int fast_paths;             /* skip work a run does not need, to the same numbers (read by no path yet:
-                                 * the engine has no stuck fast path; every step takes the general path) */
+    int fast_paths;             /* skip work a run does not need, to the same numbers: the located scheme's
+                                 * stuck fast path where the model supplies ops.breakaway */
     double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
                                  * resolve the motion (located hands it to the consistent test), and
                                  * A is re-based on a new step length only where rate_max h <= 1 */
@@ -171,6 +276,7 @@ typedef struct {
      *   min(snap_max_rel_h h, max(snap_min_rel_h h, snap_eps_t DBL_EPSILON |t|))
      * of a grid point is that grid point (the oscillator: 1e-5, 1e-7, 2^16; the chain: 1e-7, 1e-7, 0) */
     double snap_max_rel_h, snap_min_rel_h, snap_eps_t;
+    const eng_sparse *sparse;   /* the model's sparse-structure operators, or NULL (read while the engine lives) */
 } eng_setup;
 
 /* ---- inputs ---------------------------------------------------------------------------------- */
@@ -180,7 +286,7 @@ typedef struct {
  * v_belt is carried here, per contact, and never stored by the engine. A belt is held over the
  * step (no derivative); the friction of contact j acts on g_j' - v_belt[j], and a stuck contact
  * moves with its belt. */
-typedef struct {
+typedef struct eng_inputs_s {
     const double *F_ext;        /* n external forces */
     const double *N_ext;        /* nc normal-force inputs */
     const double *v_belt;       /* nc belt speeds (NULL: fixed supports) */
@@ -193,7 +299,7 @@ typedef struct {
 
 /* The trajectory: scalars plus arrays (n or nc long). Serialise the scalars and the arrays; copy
  * with eng_state_copy. */
-typedef struct {
+typedef struct eng_state_s {
     size_t n, nc;
     double t0, t;               /* start time; current time */
     long long n_grid;           /* the last grid point reached is t0 + n_grid h */
@@ -303,5 +409,21 @@ void eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double
  * warm-started from *mode. A model's solver may call it as its fallback (ctx: the engine). */
 eng_status eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
                               int *pivots);
+
+/* The entry points above as a model's specialisation of the schemes names them (engine_step.h with
+ * ENG_FN(name) = prefix##name, ENG_API empty): ENG_DECLARE_SCHEMES(osc_) in the model's header
+ * declares osc_eng_start, osc_eng_advance, ... */
+#define ENG_DECLARE_SCHEMES(prefix)                                                                                  \
+    void prefix##eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0,               \
+                           eng_state *s);                                                                            \
+    double prefix##eng_snap_target(const eng *E, const eng_state *s, double t_target);                               \
+    eng_status prefix##eng_advance(eng *E, const eng_inputs *in, eng_state *s, double t_target,                      \
+                                   const eng_hooks *hooks);                                                          \
+    void prefix##eng_new_inputs(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s,            \
+                                const eng_hooks *hooks);                                                             \
+    void prefix##eng_accelerations(eng *E, const eng_inputs *in, const eng_state *s, double *a);                     \
+    void prefix##eng_contact_forces(eng *E, const eng_inputs *in, const eng_state *s, double *f);                    \
+    eng_status prefix##eng_dense_friction(void *engine, const eng_problem *P, int what, int *mode, double *V1,       \
+                                          double *f, int *pivots)
 
 #endif

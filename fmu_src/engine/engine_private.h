@@ -47,8 +47,13 @@ struct eng {
     /* per-contact workspace */
     double *lim, *f, *f2;
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
+    double *hlim, *hf;           /* nc: held_solve's limits and forces */
+    double *tbk;                 /* nc: the candidates' closed-form breakaways (eng_sparse.contact_breakaway) */
+    int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
+    double trig_t, trig_c, trig_s; /* cos, sin of omega t + phi0 at the last t evaluated (trig_at: a cache
+                                  * keyed by t, as the slots' by their coefficients; NaN: empty) */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
      * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
      * Cholesky, Lemke's 2 nc problem */
@@ -63,6 +68,26 @@ struct eng {
     /* a phase's start, saved for the switch search */
     double *sX, *sV, *sA, *shA, *sF;
     int *smode;
+    /* spans (eng_sparse.span; the located scheme's local switch placement): the sub-engine that steps
+     * one span at a time (its S.n, S.nc and arrays set per span), its state, the labels, the local
+     * numbering (ldof, lgh: DOFs and ghost flags; lct: contacts; gmap: global DOF -> local), the
+     * span's gathered data and inputs, and the whole step's start state (ps) */
+    struct eng *sub;
+    eng_sparse sub_sparse;       /* the sub-engine's sparse operators: held_basis, no spans */
+    eng_state ss;
+    int *dlab, *clab, *lgh;
+    size_t *ldof, *lct, *lidx;
+    size_t lnnz;                 /* the longest contact row: lidx, lw hold lnnz entries per contact */
+    long *gmap;
+    eng_row *lrows;
+    double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
+    dfo_friction_law *llaw;
+    eng_state ps;                /* the whole step's start (its arrays only) */
+    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
+     * the step's start (gt0) and end (length gH), interpolated */
+    int *ghost;
+    double gt0, gH;
+    double *gX0, *gV0, *gX1, *gV1;
 };
 
 #endif

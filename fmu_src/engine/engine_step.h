@@ -10,6 +10,11 @@
  *   ENG_APPLY_M(E, a, y)         y = M a
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
+ *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
+ *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
+ *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
+ *   ENG_HAS_CONTACT_BREAKAWAY(E), ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb)   a held contact's breakaway
+ *                                in closed form (eng_sparse)
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -55,6 +60,42 @@
 #ifndef ENG_FRICTION
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) \
     ((E)->S.ops.friction((E)->S.ops.ctx, (P), (what), (mode), (V1), (f), (pivots)))
+#endif
+#ifndef ENG_HELD_BASIS
+#define ENG_HELD_BASIS(E) ((E)->S.sparse && (E)->S.sparse->held_basis)
+#endif
+#ifndef ENG_HAS_STEP_HELD
+#define ENG_HAS_STEP_HELD(E) ((E)->S.sparse && (E)->S.sparse->step_held)
+#endif
+#ifndef ENG_STEP_HELD
+#define ENG_STEP_HELD(E, F, s) ((E)->S.sparse->step_held((E)->S.ops.ctx, (F), (s)))
+#endif
+#ifndef ENG_HAS_CONTACT_BREAKAWAY
+#define ENG_HAS_CONTACT_BREAKAWAY(E) ((E)->S.sparse && (E)->S.sparse->contact_breakaway)
+#endif
+#ifndef ENG_CONTACT_BREAKAWAY
+#define ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb) \
+    ((E)->S.sparse->contact_breakaway((E)->S.ops.ctx, (j), &(E)->S.exc, (s), (in), (Fb)))
+#endif
+#ifndef ENG_HAS_BREAKAWAY
+#define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
+#endif
+#ifndef ENG_BREAKAWAY
+#define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
+#endif
+
+/* The functions of every step are inlined into the schemes (the state in registers; a call and its
+ * spills are a good part of a small structure's step). The same arithmetic either way. */
+#if defined(__GNUC__)
+#define ENG_HOT inline __attribute__((always_inline))
+#else
+#define ENG_HOT inline
+#endif
+
+#if defined(__GNUC__)
+#define ENG_COLD __attribute__((noinline))
+#else
+#define ENG_COLD
 #endif
 
 /* ---- small algebra --------------------------------------------------------------------------- */
@@ -138,7 +179,7 @@ static double poly_rate(const double *const *du, const eng_inputs *in, size_t i,
 /* The loads of the inputs at t (their polynomials' values with a ramp) into u, Nn, mukN, Fb, mlN,
  * and the belts into vb. Held inputs give the same loads at every t: taken once per public call
  * (loads_for: the inputs they are of, cleared on entry to every public function). */
-static void loads_at(eng *E, const eng_inputs *in, double t)
+static ENG_HOT void loads_at(eng *E, const eng_inputs *in, double t)
 {
     const eng_setup *S = &E->S;
     if (in && in == E->loads_for) return;
@@ -168,20 +209,32 @@ static double slide_mag(const eng *E, size_t j, double u)
     return is_strib(E, j) ? E->Nn[j] * dfo_friction_mu(&E->S.law[j], u) : E->mukN[j];
 }
 
+/* cos and sin of omega t + phi0, evaluated (dmath), the last time's kept (a switch's time is asked
+ * for several times: the rest rule, the restart, the re-basing's accelerations and jerks) */
+static void trig_at(eng *E, double t, double *cw, double *sw)
+{
+    if (t != E->trig_t) {
+        E->trig_t = t;
+        E->trig_c = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
+        E->trig_s = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    }
+    *cw = E->trig_c;
+    *sw = E->trig_s;
+}
+
 /* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
-static void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
+static ENG_HOT void phase_of(eng *E, const eng_state *s, double t, double *cw, double *sw)
 {
     if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
         *cw = dfo_clamp1(s->exc_c);
         *sw = dfo_clamp1(s->exc_s);
         return;
     }
-    *cw = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
-    *sw = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    trig_at(E, t, cw, sw);
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
-static void applied_at(const eng *E, const eng_state *s, double t, double *out)
+static ENG_HOT void applied_at(eng *E, const eng_state *s, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw = 0.0, sw = 0.0;
@@ -195,11 +248,11 @@ static void applied_at(const eng *E, const eng_state *s, double t, double *out)
 }
 
 /* dP/dt + dF_ext/dt at t into out */
-static void applied_rate(const eng *E, const eng_inputs *in, double t, double *out)
+static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
-    const double th = H->omega * t + H->phi0;
-    const double cw = dfo_cos(th), sw = dfo_sin(th);
+    double cw, sw;
+    trig_at(E, t, &cw, &sw);
     const int rp = ramped(in);
     for (size_t i = 0; i < ENG_N(E); i++) {
         double p = rp ? poly_rate(in->dF_ext, in, i, t) : 0.0;
@@ -276,6 +329,57 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     }
 }
 
+/* csolve on the mass slot with target 0: y = M^-1 (r + W_H' f_H), W_H y = 0 on the contacts with
+ * held[j] (f_H out in f, other entries untouched); through the model's friction solver where it
+ * offers the held basis solve (eng_sparse.held_basis), else csolve's Delassus matrix. */
+static void held_solve(eng *E, const double *r, const int *held, double *y, double *f)
+{
+    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
+    if (!(ENG_HAS_FRICTION(E) && ENG_HELD_BASIS(E))) {
+        csolve(E, ENG_SLOT_MASS, r, held, E->zero_nc, y, f);
+        return;
+    }
+    const size_t nc = ENG_NC(E);
+    for (size_t j = 0; j < nc; j++) {
+        E->hlim[j] = held[j] ? E->Fb[j] : 0.0;
+        E->hmode[j] = held[j] ? 0 : 1;
+    }
+    eng_problem P;
+    P.slot = ENG_SLOT_MASS;
+    P.h = 0.0;
+    P.cM = 1.0;
+    P.cC = P.cK = 0.0;
+    P.p_hat = r;
+    P.vb = E->zero_nc;
+    P.limit = E->hlim;
+    P.N = E->Nn;
+    P.law = NULL;
+    (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->hmode, y, E->hf, NULL);
+    for (size_t j = 0; j < nc; j++)
+        if (held[j]) f[j] = E->hf[j];
+}
+
+/* ---- a span's ghosts (a sub-engine's: E->ghost) ------------------------------------------------ */
+
+/* Ghost i's cubic Hermite interpolation at tau after the step's start: position, velocity,
+ * acceleration, jerk (any may be NULL). */
+static void ghost_at(const eng *E, size_t i, double tau, double *x, double *v, double *a, double *jk)
+{
+    const double H = E->gH, r = tau / H, dx = E->gX1[i] - E->gX0[i], v0 = E->gV0[i], v1 = E->gV1[i];
+    if (x) *x = E->gX0[i] + v0 * H * (r * r * r - 2.0 * r * r + r) + dx * (3.0 * r * r - 2.0 * r * r * r) +
+                v1 * H * (r * r * r - r * r);
+    if (v) *v = v0 * (3.0 * r * r - 4.0 * r + 1.0) + dx / H * (6.0 * r - 6.0 * r * r) + v1 * (3.0 * r * r - 2.0 * r);
+    if (a) *a = (v0 * (6.0 * r - 4.0) + dx / H * (6.0 - 12.0 * r) + v1 * (6.0 * r - 2.0)) / H;
+    if (jk) *jk = 6.0 * (v0 + v1 - 2.0 * dx / H) / (H * H);
+}
+
+/* The ghosts' states at the state's time, written into it. */
+static void ghosts_now(const eng *E, eng_state *s)
+{
+    for (size_t i = 0; i < ENG_N(E); i++)
+        if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+}
+
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
  * sliding contacts' f their kinetic force at their slip speed, held ones (mode 0 with friction)
  * solved for slip acceleration 0. f out (nc), a out (n). The loads at t must be set. */
@@ -299,8 +403,10 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
             row_axpy(&S->rows[j], f[j], r);
         }
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, a, f);
+    if (E->ghost) /* a ghost's acceleration is prescribed (Dirichlet: the solver returns it) */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) r[i] = s->A[i];
+    held_solve(E, r, E->held, a, f);
 }
 
 /* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
@@ -333,8 +439,10 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         }
         row_axpy(&S->rows[j], df, r);
     }
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, jk, E->f2);
+    if (E->ghost)
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, NULL, NULL, NULL, &r[i]);
+    held_solve(E, r, E->held, jk, E->f2);
 }
 
 /* ---- dense friction (the default solver) -------------------------------------------------- */
@@ -563,7 +671,54 @@ typedef struct {
     double cM, cC, cK;
 } trial;
 
-static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
+/* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
+ * lengths' tolerance; a held contact's pin aside) */
+static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
+{
+    const double hA = s->hA[i];
+    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * fmax(hh, hA) <= 1.0;
+}
+
+/* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
+ * a DOF a held contact pins alone (w_j = e_i: its acceleration and jerk are 0, A stays) and on a
+ * ghost (its motion prescribed); E->pin says which are pinned when some A is of another length.
+ * The loads end at t1. */
+static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    int other = 0;
+    for (size_t i = 0; i < n; i++) other |= hh != s->hA[i];
+    if (!other || S->alpha == 0.0) return 0;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    if (E->ghost)
+        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
+    int any = 0;
+    for (size_t i = 0; i < n; i++) any |= !E->pin[i] && rebases(E, s, i, hh, tol);
+    return any;
+}
+
+static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    const double a = S->alpha;
+    for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
+    if (!needs_rebase(E, s, hh)) return;
+    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    double *acc = E->acc, *jk = E->jk;
+    loads_at(E, in, s->t);
+    phys_accel(E, s, s->t, s->mode, acc, E->f2);
+    jerks(E, in, s, acc, jk);
+    loads_at(E, in, t1);
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+}
+
+static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
@@ -575,44 +730,31 @@ static eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, d
     T->cC = 1.0;
     T->cK = E->b * hh / E->g;
     if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
-    /* re-base A where it belongs to another step length, except on a DOF a held contact pins alone
-     * (w_j = e_i: its acceleration and jerk are 0, A stays) */
-    int any = 0;
-    const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    for (size_t i = 0; i < n; i++) {
-        E->A0[i] = s->A[i];
-        any |= !E->pin[i] && a != 0.0 && hh != s->hA[i] && fabs(hh - s->hA[i]) > tol &&
-               S->rate_max * fmax(hh, s->hA[i]) <= 1.0;
-    }
-    if (any) {
-        double *acc = E->acc, *jk = E->jk;
-        loads_at(E, in, s->t);
-        phys_accel(E, s, s->t, s->mode, acc, E->f2);
-        jerks(E, in, s, acc, jk);
-        loads_at(E, in, t1);
-        for (size_t i = 0; i < n; i++) {
-            const double hA = s->hA[i];
-            if (!E->pin[i] && a != 0.0 && hh != hA && fabs(hh - hA) > tol && S->rate_max * fmax(hh, hA) <= 1.0)
-                E->A0[i] = s->A[i] + a * (hh - hA) * jk[i];
-        }
-    }
+    rebase(E, in, s, hh, t1);
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
     for (size_t i = 0; i < n; i++) {
         E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
         E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
     }
+    if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) {
+                double xg, vg;
+                ghost_at(E, i, s->t - E->gt0 + hh, &xg, &vg, NULL, NULL);
+                E->xp[i] = xg - T->kin.corr_V * vg;
+            }
     ENG_APPLY_M(E, E->r, E->y);
     applied_at(E, s, t1, E->ph);
     ENG_APPLY_K(E, E->xp, E->y2);
     for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
+    if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
+        for (size_t i = 0; i < n; i++)
+            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0 + hh, NULL, &E->ph[i], NULL, NULL);
     return ENG_OK;
 }
 
 /* The friction problem of the trial with limits lim and modes st: the model's solver or the dense one. */
-static eng_status solve_trial(eng *E, const trial *T, int what, int *st, double *V1, double *f, int *pivots)
+static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st, double *V1, double *f, int *pivots)
 {
     const eng_setup *S = &E->S;
     eng_problem P;
@@ -631,7 +773,7 @@ static eng_status solve_trial(eng *E, const trial *T, int what, int *st, double 
 }
 
 /* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes). */
-static void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
+static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
 {
     const size_t n = ENG_N(E);
     for (size_t i = 0; i < n; i++) {
@@ -645,14 +787,16 @@ static void finish(const eng *E, eng_state *s, const trial *T, const double *V1,
 
 /* ---- phases, switches, restarts ------------------------------------------------------------- */
 
-static void begin_phase(eng *E, const eng_state *s, double *ta)
+/* A phase's start: its time, and for an observer its positions and modes */
+static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const eng_hooks *hk)
 {
     *ta = s->t;
+    if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }
 
-static void observe(eng *E, const eng_state *s, double ta, const double *f, const eng_hooks *hk)
+static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double *f, const eng_hooks *hk)
 {
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     const eng_observer *o = hk->obs;
@@ -678,8 +822,9 @@ static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
 /* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
  * holding forces solved together with every stuck contact; the one most beyond its limit starts to
  * slide the way it is driven, and the rest are solved again (the causal cascade). Sets mode[] of
- * the resting contacts; f: their holding forces (the stuck ones'). */
-static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
+ * the resting contacts; f: their holding forces (the stuck ones'). Returns 1 when its last solve
+ * (E->y2, E->f: physical accelerations and forces) is of the modes it ends with. */
+static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
 {
     const size_t nc = ENG_NC(E);
     for (size_t j = 0; j < nc; j++)
@@ -693,17 +838,24 @@ static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, i
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
         }
-        if (worst == nc) return;
+        if (worst == nc) return 1;
         mode[worst] = -sgn(E->f[worst]); /* the holding force's opposite: the net applied force's side */
     }
+    return 0;
 }
 
 /* The consistent restart of the mode set in s->mode: physical accelerations, hA = 0, forces (a
- * slide from rest at its start magnitude). */
-static void restart(eng *E, eng_state *s, double t)
+ * slide from rest at its start magnitude). decided: rest_decide's last solve (E->y2, E->f) is of
+ * this state and mode set (its return), so they are taken. */
+static void restart(eng *E, eng_state *s, double t, int decided)
 {
     const size_t n = ENG_N(E);
-    phys_accel(E, s, t, s->mode, s->A, s->F);
+    if (decided) {
+        memcpy(s->A, E->y2, n * sizeof(double));
+        if (ENG_NC(E)) memcpy(s->F, E->f, ENG_NC(E) * sizeof(double));
+    } else {
+        phys_accel(E, s, t, s->mode, s->A, s->F);
+    }
     for (size_t i = 0; i < n; i++) s->hA[i] = 0.0;
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (!has_friction(E, j)) s->F[j] = 0.0;
@@ -712,7 +864,7 @@ static void restart(eng *E, eng_state *s, double t)
 /* ---- the schemes ------------------------------------------------------------------------------ */
 
 /* The held contacts' forces clamped to their limits, the rested ones at rest exactly (one DOF). */
-static void rest_exact(eng *E, eng_state *s)
+static ENG_HOT void rest_exact(eng *E, eng_state *s)
 {
     const eng_setup *S = &E->S;
     for (size_t j = 0; j < ENG_NC(E); j++) {
@@ -726,23 +878,60 @@ static void rest_exact(eng *E, eng_state *s)
     }
 }
 
+/* What held_step did: taken (the step done), the trial and its basis solve left as trial_step and
+ * the solve leave them (T, E->A0, xp, ph, V1, f) for the general path, not tried, M_hat refused */
+enum { ENG_HELD_TAKEN = 1, ENG_HELD_TRIAL = 0, ENG_HELD_UNTRIED = 2, ENG_HELD_ERROR = -1 };
+
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T);
+
+/* The model's fused step may take a step of length hh: a grid step of the whole structure, held
+ * inputs, no belts */
+static ENG_HOT int fused_ok(const eng *E, const eng_inputs *in, double hh)
+{
+    return ENG_HAS_STEP_HELD(E) && hh == E->S.h && !E->ghost && !ramped(in) && E->vb == E->zero_nc;
+}
+
+/* After the model's fused step: the time, the modes of contacts without friction, the rested
+ * contacts at rest exactly (rested: the schemes whose stuck contacts rest), the phase observed. */
+static ENG_HOT void held_done(eng *E, eng_state *s, double t_end, int rested, double ta, const eng_hooks *hk)
+{
+    s->solves++;
+    s->t = t_end;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    if (rested) rest_exact(E, s);
+    observe(E, s, ta, s->F, hk);
+}
+
 /* The paper scheme (consistent = 0) and the consistent one (1): the LCP from the modes before the
  * step, then the paper's coefficient updates, or the consistent scheme's rest rule at the predicted
  * rest position. */
-static eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, int consistent,
+static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, int consistent,
                            const eng_hooks *hk)
 {
     const eng_setup *S = &E->S;
     const size_t nc = ENG_NC(E);
     double ta;
-    begin_phase(E, s, &ta);
-    trial T;
-    eng_status st = trial_step(E, in, s, hh, t_end, &T);
-    if (st != ENG_OK) return st;
+    begin_phase(E, s, &ta, hk);
     for (size_t j = 0; j < nc; j++) {
         E->st[j] = s->mode[j];
         E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
     }
+    trial T;
+    int fused = ENG_HELD_UNTRIED;
+    if (fused_ok(E, in, hh) && !E->any_law) {
+        /* the model's fused step: where every margin is positive the LCP keeps the warm basis (no
+         * pivot, no coefficient update, no judged contact), and the fused step is its solution */
+        fused = held_step(E, s, t_end, &T);
+        if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
+        if (fused == ENG_HELD_TAKEN) {
+            held_done(E, s, t_end, consistent, ta, hk);
+            return ENG_OK;
+        }
+    }
+    eng_status st = ENG_OK;
+    if (fused != ENG_HELD_TRIAL) st = trial_step(E, in, s, hh, t_end, &T); /* (else the fused step's trial) */
+    if (st != ENG_OK) return st;
     int piv = 0, total = 0;
     st = solve_trial(E, &T, ENG_SOLVE_LCP, E->st, E->V1, E->f, &piv);
     s->solves++;
@@ -819,7 +1008,7 @@ static eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, double t_
 
 /* How far contact j is from its switch after the trial (> 0: not yet): m v for a sliding contact,
  * Fb - |f| for a held one. */
-static double margin(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
+static ENG_HOT double margin(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
 {
     if (mode[j] != 0) return mode[j] * slip(E, j, V1);
     return E->Fb[j] - fabs(f[j]);
@@ -836,7 +1025,7 @@ typedef struct {
     eng_status err;
 } margin_ctx;
 
-static double trial_margin(margin_ctx *c, double x, trial *T)
+static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
 {
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
@@ -877,10 +1066,10 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
         if (s->mode[j] == 0) s->mode[j] = -sgn(s->F[j]);
         rest[j] = 0;
     }
-    rest_decide(E, s, s->t, rest, s->mode);
+    const int decided = rest_decide(E, s, s->t, rest, s->mode);
     for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-    restart(E, s, s->t);
+    restart(E, s, s->t, decided);
     /* a slide from rest starts at its start magnitude (Stribeck: mu_s N) and never against its way */
     for (size_t j = 0; j < nc; j++) {
         if (E->smode[j] == s->mode[j] || s->mode[j] == 0 || !has_friction(E, j)) continue;
@@ -888,9 +1077,63 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     }
 }
 
+/* The model's fused grid step in the current modes (eng_sparse.step_held; E->st the modes, E->lim
+ * their limits, the loads at t1 set): ENG_HELD_TAKEN, _TRIAL (a contact's margin is not positive:
+ * T and the engine's arrays hold the trial and its basis solve), _UNTRIED (A needs re-basing) or
+ * _ERROR (M_hat not positive definite). */
+static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
+{
+    const eng_setup *S = &E->S;
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const double a = S->alpha;
+    if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
+    const double cM = (1.0 - a) * K->c1, cK = E->b * S->h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return ENG_HELD_ERROR;
+    double cw = 0.0, sw = 0.0;
+    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &cw, &sw);
+    const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
+                             K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
+                             E->Fb, E->xp, E->ph, E->V1, E->f};
+    if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+    T->kin = *K;
+    T->slot = F.slot;
+    T->cM = F.cM;
+    T->cC = 1.0;
+    T->cK = F.cK;
+    memcpy(E->A0, s->A, ENG_N(E) * sizeof(double));
+    return ENG_HELD_TRIAL;
+}
+
+static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
+                               eng_status *out);
+
+/* The earliest closed-form breakaway of the candidates (eng_sparse.contact_breakaway; each into
+ * E->tbk) where every candidate is a held contact with one, held inputs and still belts; NaN else. */
+static double closed_breakaways(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    if (!ENG_HAS_CONTACT_BREAKAWAY(E) || ramped(in) || E->vb != E->zero_nc) return NAN;
+    double tb = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!E->cand[j]) continue;
+        if (E->st[j] != 0) return NAN;
+        const double t = ENG_CONTACT_BREAKAWAY(E, j, s, in, E->Fb);
+        if (!(t < INFINITY)) return NAN;
+        E->tbk[j] = t;
+        tb = fmin(tb, t);
+    }
+    return tb;
+}
+
+/* Spans are taken with held inputs and no hooks (a switch callback, an observer or a stop at the
+ * first switch step the whole structure). */
+static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
+{
+    return E->sub && !ramped(in) && !(hk && (hk->on_switch || hk->obs || hk->stop_at_switch));
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
-static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
+static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
                                const eng_hooks *hk)
 {
     const eng_setup *S = &E->S;
@@ -901,17 +1144,28 @@ static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, doubl
     const int stop = hk && hk->stop_at_switch;
     for (long phase = 0; s->t < t_end; phase++) {
         if (phase >= max_phases) return ENG_ERR_NO_PROGRESS;
+        if (E->ghost) ghosts_now(E, s);
         double ta;
-        begin_phase(E, s, &ta);
+        begin_phase(E, s, &ta, hk);
         const double r = (phase == 0) ? hh : t_end - s->t;
         for (size_t j = 0; j < nc; j++) {
             E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
             if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
             E->cand[j] = 0;
         }
-        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
         trial T;
-        trial_margin(&mc, r, &T);
+        int fused = ENG_HELD_UNTRIED;
+        if (phase == 0 && fused_ok(E, in, hh)) {
+            for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            fused = held_step(E, s, t_end, &T);
+            if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
+            if (fused == ENG_HELD_TAKEN) {
+                held_done(E, s, t_end, 1, ta, hk);
+                return ENG_OK;
+            }
+        }
+        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
+        if (fused != ENG_HELD_TRIAL) trial_margin(&mc, r, &T); /* (else the fused step's trial, solved) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;
@@ -927,6 +1181,31 @@ static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, doubl
             return ENG_OK;
         }
         if (phase == 0) s->pivot_steps++;
+        if (phase == 0 && spans_usable(E, in, hk)) {
+            eng_status sst;
+            if (step_spans(E, in, s, t_end, hh, &T, &sst)) return sst;
+        }
+        /* held contacts breaking away with closed forms: the step split at the earliest at once */
+        const double tb = closed_breakaways(E, in, s);
+        if (tb >= s->t && tb <= t_end) {
+            const double hs = tb - s->t;
+            if (hs > 0.0) {
+                trial_margin(&mc, (tb == t_end) ? r : hs, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
+                finish(E, s, &T, E->V1, E->f);
+            }
+            s->t = tb;
+            if (E->ghost) ghosts_now(E, s);
+            for (size_t j = 0; j < nc; j++) E->cand[j] = E->cand[j] && E->tbk[j] == tb;
+            loads_at(E, in, s->t);
+            observe(E, s, ta, s->F, hk);
+            apply_switches(E, s, 1, hk);
+            rest_exact(E, s);
+            loads_at(E, in, t_end);
+            if (stop && s->switches != sw0) return ENG_SWITCHED;
+            continue;
+        }
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
         for (size_t j = 0; j < nc; j++) {
@@ -979,6 +1258,7 @@ static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, doubl
         const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
         finish(E, s, &T, E->V1, E->f);
         s->t = t_new;
+        if (E->ghost) ghosts_now(E, s);
         loads_at(E, in, s->t);
         /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
         for (size_t j = 0; j < nc; j++) {
@@ -994,6 +1274,161 @@ static eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, doubl
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
+}
+
+/* ---- spans ---------------------------------------------------------------------------------- */
+
+/* DOF i of state d := DOF k of state s (X, V, A, hA); contact j of d := contact k of s (F, mode,
+ * stick start, breakaway and its side). */
+static void dof_copy(eng_state *d, size_t i, const eng_state *s, size_t k)
+{
+    d->X[i] = s->X[k];
+    d->V[i] = s->V[k];
+    d->A[i] = s->A[k];
+    d->hA[i] = s->hA[k];
+}
+
+static void contact_copy(eng_state *d, size_t j, const eng_state *s, size_t k)
+{
+    d->F[j] = s->F[k];
+    d->mode[j] = s->mode[k];
+    d->t_stick[j] = s->t_stick[k];
+    d->t_break[j] = s->t_break[k];
+    d->break_dir[j] = s->break_dir[k];
+}
+
+/* d's arrays := s's (the same sizes; its scalars left) */
+static void eng_state_arrays_copy(eng_state *d, const eng_state *s)
+{
+    for (size_t i = 0; i < s->n; i++) dof_copy(d, i, s, i);
+    for (size_t j = 0; j < s->nc; j++) contact_copy(d, j, s, j);
+}
+
+/* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
+ * inlined into itself. */
+static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
+{
+    return step_located(B, in, b, t_end, hh, NULL);
+}
+
+/* The located step with contacts switching (E->cand) by spans (eng_sparse.span): the whole step in
+ * the current modes (the trial T, solved in E->V1, E->f), then each span stepped again on its own by
+ * the sub-engine from the step's start, its ghosts interpolated between their states at the step's
+ * start and end. Returns 0 when the model gives no span (the whole structure is stepped as it is),
+ * else 1 with the step's status in *out. */
+static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh, const trial *T,
+                               eng_status *out)
+{
+    const eng_setup *S = &E->S;
+    const eng_sparse *sp = S->sparse;
+    const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
+    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
+    if (ns == 0) return 0;
+    for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
+        if (E->cand[j] && E->clab[j] <= 0) return 0;
+    *out = ENG_OK;
+    const eng_state *p = &E->ps;
+    eng_state_arrays_copy(&E->ps, s);
+    const double t_start = s->t;
+    /* everything in the current modes first */
+    finish(E, s, T, E->V1, E->f);
+    s->t = t_end;
+    for (size_t j = 0; j < nc; j++)
+        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    rest_exact(E, s);
+    eng *B = E->sub;
+    eng_state *b = &E->ss;
+    for (size_t k = 0; k < ns; k++) {
+        const int lab = (int)k + 1;
+        size_t nd = 0, nct = 0;
+        for (size_t i = 0; i < n; i++) {
+            E->gmap[i] = -1;
+            if (E->dlab[i] != lab && E->dlab[i] != -lab) continue;
+            if (nd == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
+            E->gmap[i] = (long)nd;
+            E->ldof[nd] = i;
+            E->lgh[nd++] = E->dlab[i] < 0;
+        }
+        for (size_t j = 0; j < nc; j++) {
+            if (E->clab[j] != lab && E->clab[j] != -lab) continue;
+            if (nct == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
+            E->lct[nct++] = j;
+        }
+        /* the span's contacts: rows in the local numbering, data, inputs */
+        for (size_t a = 0; a < nct; a++) {
+            const size_t j = E->lct[a];
+            const eng_row *R = &S->rows[j];
+            const int own = E->clab[j] > 0;
+            size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
+            double *w = E->lrw + a * E->lnnz;
+            for (size_t q = 0; q < R->nnz; q++) {
+                if (E->gmap[R->idx[q]] < 0) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
+                idx[q] = (size_t)E->gmap[R->idx[q]];
+                w[q] = R->w[q];
+            }
+            E->lrows[a].nnz = R->nnz;
+            E->lN[a] = own ? S->N[j] : 0.0; /* a carried contact: no friction */
+            E->lmus[a] = own ? S->mu_s[j] : 0.0;
+            E->lmuk[a] = own ? S->mu_k[j] : 0.0;
+            if (S->law) E->llaw[a] = S->law[j];
+            B->mu_b[a] = fmax(E->lmus[a], E->lmuk[a]);
+            E->lNe[a] = (own && in && in->N_ext) ? in->N_ext[j] : 0.0;
+            E->lvb[a] = (in && in->v_belt) ? in->v_belt[j] : 0.0;
+            contact_copy(b, a, p, j);
+        }
+        B->any_law = 0;
+        for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
+        /* the span's DOFs, its ghosts' motion over the step */
+        B->gt0 = t_start;
+        B->gH = t_end - t_start;
+        for (size_t q = 0; q < nd; q++) {
+            const size_t i = E->ldof[q];
+            if (S->exc.Pc) E->lPc[q] = S->exc.Pc[i];
+            if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
+            E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
+            B->ghost[q] = E->lgh[q];
+            B->gX0[q] = p->X[i];
+            B->gV0[q] = p->V[i];
+            B->gX1[q] = s->X[i];
+            B->gV1[q] = s->V[i];
+            dof_copy(b, q, p, i);
+        }
+        B->S.n = b->n = nd;
+        B->S.nc = b->nc = nct;
+        B->loads_for = NULL;
+        for (int slot = 0; slot < ENG_NSLOTS; slot++) B->slot_ok[slot] = 0;
+        sp->span_bind(S->ops.ctx, E->ldof, E->lgh, nd, E->lct, nct);
+        b->t0 = s->t0;
+        b->t = t_start;
+        b->n_grid = s->n_grid;
+        b->exc_n = s->exc_n;
+        b->exc_c = s->exc_c;
+        b->exc_s = s->exc_s;
+        b->t_switch = s->t_switch;
+        b->steps = b->solves = b->pivot_steps = b->switches = 0;
+        const eng_inputs bin = {E->lF, E->lNe, (in && in->v_belt) ? E->lvb : NULL, {NULL, NULL}, {NULL, NULL},
+                                in ? in->t_ref : 0.0};
+        loads_at(B, &bin, t_end);
+        const eng_status st = step_located_sub(B, &bin, b, t_end, hh);
+        if (st != ENG_OK) { *out = st; return 1; }
+        /* the span's A re-based on a grid step now, as the next step of the whole structure would
+         * (there over all of it) */
+        rebase(B, &bin, b, S->h, t_end);
+        const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
+        for (size_t q = 0; q < nd; q++)
+            if (!E->lgh[q] && rebases(B, b, q, S->h, tol) && !B->pin[q]) {
+                b->A[q] = B->A0[q];
+                b->hA[q] = S->h;
+            }
+        for (size_t q = 0; q < nd; q++)
+            if (!E->lgh[q]) dof_copy(s, E->ldof[q], b, q);
+        for (size_t a = 0; a < nct; a++)
+            if (E->clab[E->lct[a]] > 0) contact_copy(s, E->lct[a], b, a);
+        s->solves += b->solves;
+        s->switches += b->switches;
+        if (b->switches) s->t_switch = fmax(s->t_switch, b->t_switch);
+    }
+    return 1;
 }
 
 /* ---- driving -------------------------------------------------------------------------------- */
@@ -1022,8 +1457,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
         s->t_break[j] = NAN;
         s->break_dir[j] = 0;
     }
-    rest_decide(E, s, t0, E->cand, s->mode);
-    restart(E, s, t0);
+    restart(E, s, t0, rest_decide(E, s, t0, E->cand, s->mode));
     for (size_t j = 0; j < nc; j++)
         if (E->cand[j] && s->mode[j] != 0) s->F[j] = -s->mode[j] * slide_mag(E, j, 0.0);
     if (s->J) {
@@ -1051,6 +1485,113 @@ static void rest_forces(eng *E, eng_state *s)
         if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
 }
 
+/* ---- the stuck fast path ------------------------------------------------------------------- */
+
+/* The model's breakaway of the current stick, kept over one call of eng_advance: tb for the stick
+ * that holds since the switch count sw (known: asked). */
+typedef struct {
+    double tb;
+    long long sw;
+    int known;
+} stick_cache;
+
+/* The largest grid index m >= s->n_grid with t0 + m h < x (incl: <= x), the grid points computed as
+ * eng_advance computes them; s->n_grid when there is none. x finite. */
+static long long grid_below(const eng_state *s, double h, double x, int incl)
+{
+    if (!(x > s->t)) return s->n_grid;
+    long long m = (long long)floor((x - s->t0) / h);
+    if (m < s->n_grid) m = s->n_grid;
+#define ENG_BELOW_(k) (incl ? s->t0 + (double)(k) * h <= x : s->t0 + (double)(k) * h < x)
+    while (m > s->n_grid && !ENG_BELOW_(m)) m--;
+    while (ENG_BELOW_(m + 1)) m++;
+#undef ENG_BELOW_
+    return m;
+}
+
+/* A stuck structure's next breakaway from its contacts' (eng_sparse.contact_breakaway): the earliest,
+ * NaN where one is unknown. */
+static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
+{
+    double tb = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const double t = ENG_CONTACT_BREAKAWAY(E, j, s, in, E->Fb);
+        if (isnan(t)) return NAN;
+        tb = fmin(tb, t);
+    }
+    return tb;
+}
+
+/* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
+ * eng_sparse.contact_breakaway; the located scheme on a
+ * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
+ * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
+ * before the model's breakaway, at or before t_target and outside the observer's window change
+ * nothing but the time and the counters. Returns the last grid index they reach (s->n_grid: none). */
+static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, double t_target,
+                             const eng_hooks *hk, stick_cache *c)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h;
+    loads_at(E, in, s->t);
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++) {
+        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return s->n_grid;
+        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return s->n_grid;
+    if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
+        c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
+        c->sw = s->switches;
+        c->known = 1;
+    }
+    if (isnan(c->tb)) return s->n_grid;
+    long long m = grid_below(s, h, t_target, 1);
+    const long long mb = grid_below(s, h, fmin(c->tb, t_target + 2.0 * h), 0) - 1;
+    if (mb < m) m = mb;
+    if (hk && hk->obs && hk->obs->on_phase && !(s->t > hk->obs->t_stop)) {
+        const long long mo = grid_below(s, h, fmin(hk->obs->t_start, t_target + 2.0 * h), 0);
+        if (mo < m) m = mo;
+    }
+    return (m > s->n_grid) ? m : s->n_grid;
+}
+
+/* Take the stuck grid steps up to the grid index m at once, as the located scheme's steps one by
+ * one leave them: X through one step's predictor and corrector with V1 = V (the held solve), V at
+ * its belt (0), A and hA 0, the excitation's grid cache at m (a function of m alone), the steps and
+ * solves counted. (F is left: every path sets or reads it afresh after the steps.) */
+static void stuck_skip(eng *E, eng_state *s, long long m)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E);
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const long long k = m - s->n_grid;
+    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) {
+        for (size_t i = 0; i < n; i++)
+            s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
+        for (size_t j = 0; j < ENG_NC(E); j++) {
+            const eng_row *R = &S->rows[j];
+            if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+        }
+        for (size_t i = 0; i < n; i++) {
+            s->A[i] = 0.0;
+            s->hA[i] = 0.0;
+        }
+    }
+    double c, sn;
+    dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
+                   &sn);
+    s->exc_n = m;
+    s->exc_c = c;
+    s->exc_s = sn;
+    s->n_grid = m;
+    s->t = s->t0 + (double)m * S->h;
+    s->steps += k;
+    s->solves += k;
+}
+
 ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk)
 {
     E->loads_for = NULL;
@@ -1060,7 +1601,19 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     double g_prev = s->t0 + (double)s->n_grid * h;
     int switched = 0;
     const long long sw0 = s->switches;
+    const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
+                     S->scheme == DFO_SCHEME_LOCATED &&
+                     S->rate_max * h <= STIFF_STEP && !ramped(in);
+    stick_cache cache = {NAN, 0, 0};
     while (s->t < t_target) {
+        if (skip && s->t == g_prev) {
+            const long long m = stuck_until(E, in, s, t_target, hk, &cache);
+            if (m > s->n_grid) {
+                stuck_skip(E, s, m);
+                g_prev = s->t;
+                continue;
+            }
+        }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);
         double t_end = t_target;
@@ -1119,10 +1672,10 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
         E->cand[j] = v == 0.0;
     }
     if (belt_changed) {
-        rest_decide(E, s, s->t, E->cand, s->mode);
+        const int decided = rest_decide(E, s, s->t, E->cand, s->mode);
         for (size_t j = 0; j < nc; j++)
             if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-        restart(E, s, s->t);
+        restart(E, s, s->t, decided);
         return;
     }
     /* the sliding contacts' force jumps, and the external forces': the acceleration jumps by
@@ -1143,8 +1696,7 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
         s->F[j] = fnew;
     }
     if (!any) return;
-    factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
-    csolve(E, ENG_SLOT_MASS, r, E->held, E->zero_nc, E->y, E->f);
+    held_solve(E, r, E->held, E->y, E->f);
     for (size_t i = 0; i < n; i++) s->A[i] += E->y[i];
 }
 

@@ -9,6 +9,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 
 /* The schemes of both models (the FMUs' "scheme" enumeration; the chain has no exact scheme). */
 typedef enum { DFO_SCHEME_PAPER = 1, DFO_SCHEME_CONSISTENT = 2, DFO_SCHEME_LOCATED = 3,
@@ -63,6 +64,23 @@ static inline void dfo_bossak_kin_for(double h, double g, double b, dfo_bossak_k
     k->pred_V = h * (1.0 - b / g);
     k->pred_A = h * h * (0.5 - b / g);
     k->corr_V = b * h / g;
+}
+
+/* How far a DOF's influence reaches inside one step of a structure whose M_hat is a chain of
+ * couplings (a banded M_hat, its rows' diagonally scaled off-diagonal sums at most rho): M_hat^-1
+ * decays like q^distance with q = (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith,
+ * 1984), kappa <= (1 + rho) / (1 - rho) the condition number of the diagonally scaled M_hat by
+ * Gershgorin; the smallest w with q^w <= 2^-56 (beyond w DOFs the influence is below rounding), n
+ * where rho >= 1/2. By products (no libm log2: the same bits everywhere); q <= 0.27 below 1/2, so at
+ * most 30 products. */
+static inline size_t dfo_bossak_reach(double rho, size_t n)
+{
+    const double sk = sqrt((1.0 + rho) / (1.0 - fmin(rho, 0.5))), q = (sk - 1.0) / (sk + 1.0);
+    size_t w = 1;
+    if (rho >= 0.5) w = n;
+    else if (rho > 0.0)
+        for (double qw = q; qw > 0x1p-56; qw *= q) w++;
+    return w;
 }
 
 #endif

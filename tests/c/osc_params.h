@@ -28,6 +28,14 @@ static inline dfo_params osc_test_params(int scheme, double m, double k, double 
     return p;
 }
 
+/* The Stribeck law on p, with the velocity v_s and the exponent delta (friction.h). */
+static inline void osc_test_stribeck(dfo_params *p, double v_s, double delta)
+{
+    p->friction_law = DFO_LAW_STRIBECK;
+    p->v_s = v_s;
+    p->delta = delta;
+}
+
 /* The exact scheme's test case with an excitation, damping and stick-slip, started sliding. */
 static inline dfo_params osc_test_exact_base(void)
 {

@@ -257,11 +257,7 @@ static double osc_agreement(const osc_case *K, long long *sw_e, long long *sw_o)
     const double h = 1e-3, omega = 0.9, P0 = 0.6, Nn = 0.5, mu_s = 0.8;
     dfo_params p = osc_test_params(K->scheme, 1.0, 1.0, K->c, P0, omega, Nn, mu_s, K->chi);
     p.h = h;
-    if (K->stribeck) {
-        p.friction_law = DFO_LAW_STRIBECK;
-        p.v_s = 0.05;
-        p.delta = 1.0;
-    }
+    if (K->stribeck) osc_test_stribeck(&p, 0.05, 1.0);
     dfo_model Mo;
     dfo_inputs oi;
     memset(&oi, 0, sizeof oi);

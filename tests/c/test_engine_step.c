@@ -1,18 +1,24 @@
 /* The engine's schemes specialised at compile time (fmu_src/engine/engine_step.h included with a
- * model's inline operators: bench/engine_block.c, bench/engine_chain.c over bench/engine_models.h)
+ * model's inline operators: models/oscillator/osc_engine.c, bench/engine_chain.c over bench/engine_models.h)
  * against the same schemes through engine.c with the same operators behind eng_ops's function
  * pointers: the same bits (positions, velocities, Bossak variables, forces, modes, counters, every
  * switch's time), one block in the three Bossak schemes with a belt, input ramps and input and
  * belt changes, a chain of 8 blocks in the three schemes with a change of the external forces; the
- * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). */
+ * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). The
+ * oscillator's engine model (the block above) against newmark.c's own Bossak schemes, to rounding;
+ * the located scheme's stuck fast path on against off. */
 #include "check.h"
 #include "engine_models.h"
+#include "osc_params.h"
+
+#include "newmark.h"
 
 #include "scheme.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <stddef.h>
 #include <string.h>
 
 #define NCHAIN 8
@@ -45,7 +51,7 @@ typedef struct {
 } entry;
 
 static const entry GENERIC = {eng_start, eng_advance, eng_new_inputs};
-static const entry BLOCK = {blk_eng_start, blk_eng_advance, blk_eng_new_inputs};
+static const entry BLOCK = {osc_eng_start, osc_eng_advance, osc_eng_new_inputs};
 static const entry CHAIN = {chn_eng_start, chn_eng_advance, chn_eng_new_inputs};
 
 /* Run S with the entry points of X from rest: communication points every dt (off the grid) to
@@ -127,9 +133,14 @@ static void test_block(checks *T)
     const eng_inputs in2 = {F2, NULL, vb2, {NULL, NULL}, {NULL, NULL}, 0.0};
     for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
         check_context(T, "one block, %s: the inline build against engine.c", names[scheme]);
-        blk_model Bg = {1.0, 0.05, 1.0, {0.0, 0.0, 0.0}}, Bi = Bg;
+        osc_eng_model Bg, Bi;
+        memset(&Bg, 0, sizeof Bg);
+        Bg.m = 1.0;
+        Bg.c = 0.05;
+        Bg.k = 1.0;
+        Bi = Bg;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
-        const eng_ops og = {&Bg, blk_K, blk_C, blk_M, blk_factor, blk_solve, blk_friction};
+        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -149,10 +160,226 @@ static void test_block(checks *T)
     }
 }
 
+/* The stuck fast path (eng_ops.breakaway with fast_paths): the block's friction solves and
+ * breakaway questions counted behind the hooks, and an observer's phases summed. */
+typedef struct {
+    long solves, asks;
+    long phases;
+    double t_sum, x_max;
+} hook_count;
+
+static hook_count *counted; /* the run's counters (set by test_stuck_fast_path before each run) */
+
+static eng_status count_friction(void *ctx, const eng_problem *P, int what, int *mode, double *V1, double *f,
+                                 int *pivots)
+{
+    counted->solves++;
+    return osc_friction(ctx, P, what, mode, V1, f, pivots);
+}
+
+static double count_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s, const eng_inputs *in,
+                              const double *Fb)
+{
+    counted->asks++;
+    return osc_breakaway(ctx, exc, s, in, Fb);
+}
+
+static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
+{
+    hook_count *H = ctx;
+    H->phases++;
+    H->t_sum += ph->tb - ph->ta;
+    H->x_max = fmax(H->x_max, s->X[0]);
+}
+
+/* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a
+ * sine part), held inputs with a change of the external force at 20 s and an observer's window
+ * [12, 18]: the stuck fast path on and off, through engine.c and inlined, end on the same bits and
+ * observe the same phases; on, it asks the model's breakaway and takes a quarter fewer friction solves
+ * (the stick phases outside the window: about half the time; a sliding step takes several). */
+static void test_stuck_fast_path(checks *T)
+{
+    static const size_t idx[1] = {0};
+    static const double w1[1] = {1.0};
+    const eng_row row = {1, idx, w1};
+    const double N[1] = {1.8}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
+    const double F2[1] = {0.15};
+    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    eng_state s[4];
+    eng *E[4];
+    switch_log L[4];
+    hook_count H[4];
+    for (int r = 0; r < 4; r++) { /* r: 0 generic off, 1 generic on, 2 inline off, 3 inline on */
+        osc_eng_model B;
+        memset(&B, 0, sizeof B);
+        B.m = 1.0;
+        B.c = 0.05;
+        B.k = 1.0;
+        eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
+        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway};
+        S.ops = ops;
+        S.fast_paths = r & 1;
+        memset(&H[r], 0, sizeof H[r]);
+        H[r].x_max = -INFINITY;
+        counted = &H[r];
+        const eng_observer obs = {12.0, 18.0, count_phase, &H[r]};
+        const entry *X = (r < 2) ? &GENERIC : &BLOCK;
+        E[r] = eng_create(&S, &ALLOC, NULL);
+        if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+        memset(&L[r], 0, sizeof L[r]);
+        const eng_hooks hk = {on_switch, &L[r], &obs, 0};
+        const double zero[1] = {0.0};
+        X->start(E[r], &in1, 0.0, zero, zero, &s[r]);
+        eng_status st = X->advance(E[r], &in1, &s[r], 20.0, &hk);
+        CHECK(st == ENG_OK);
+        X->new_inputs(E[r], &in1, &in2, &s[r], &hk);
+        for (int k = 1; k <= 40 && st == ENG_OK; k++) st = X->advance(E[r], &in2, &s[r], 20.0 + 1.37 * k, &hk);
+        CHECK(st == ENG_OK);
+    }
+    printf("  stuck fast path: %ld switches, solves off %ld / on %ld, breakaways asked %ld, x %.17g\n", L[0].count,
+           H[0].solves, H[1].solves, H[1].asks, s[0].X[0]);
+    check_context(T, "one block, located, the stuck fast path against the steps one by one");
+    CHECK(L[0].count >= 10);
+    CHECK(H[0].asks == 0 && H[1].asks > 0); /* (the inline runs call the block's hooks directly) */
+    CHECK(4 * H[1].solves < 3 * H[0].solves); /* (the stick phases outside the window skipped) */
+    for (int r = 1; r < 4; r++) {
+        CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
+        CHECK(H[r].phases == H[0].phases && H[r].t_sum == H[0].t_sum && H[r].x_max == H[0].x_max);
+    }
+    CHECK(H[0].phases > 100);
+    for (int r = 0; r < 4; r++) {
+        eng_state_free(E[r], &s[r]);
+        eng_destroy(E[r]);
+    }
+}
+
+/* ---- the oscillator's engine model against newmark.c ------------------------------------------ */
+
+/* What a comparison with the oscillator's own Bossak schemes varies. */
+typedef struct {
+    int scheme;
+    double chi, c, Nn;
+    double v_belt;   /* NaN: no belt */
+    int stribeck;
+    double F_ramp;   /* dF_ext/dt over the run (0: held) */
+    double F_jump;   /* F_ext set to this at t = 10 (0: none) */
+    double belt_to;  /* the belt's speed set to this at t = 10 (NaN: held) */
+} osc_case;
+
+static void count_switch(void *ctx, double t, double x, int from, int to)
+{
+    (void)t; (void)x; (void)from; (void)to;
+    ++*(long long *)ctx;
+}
+
+/* Run case K: newmark.c, and the engine through both entries, communication steps of 0.1 s over 30 s
+ * at h = 1e-3; max |x_engine - x_oscillator| / max |x| into *d, the switches into sw[0..2]. */
+static int run_case(checks *T, const osc_case *K, double *d, long long sw[3])
+{
+    const double h = 1e-3;
+    dfo_params p = osc_test_params(K->scheme, 1.0, 1.0, K->c, 0.6, 0.9, K->Nn, 0.8, K->chi);
+    p.h = h;
+    if (K->stribeck) osc_test_stribeck(&p, 0.05, 1.0);
+    dfo_model M;
+    dfo_model_init(&M, &p);
+    dfo_inputs u;
+    memset(&u, 0, sizeof u);
+    if (!isnan(K->v_belt)) { u.v_belt = K->v_belt; u.v_belt_set = 1; }
+    if (K->F_ramp != 0.0) { u.F_ext_set = 1; u.F_ext_d[0] = K->F_ramp; u.ramp = 1; u.t_d = 0.0; }
+    dfo_state so;
+    dfo_start(&M, &u, 0.0, &so);
+    osc_eng_model O[2];
+    eng *E[2];
+    eng_state s[2];
+    osc_eng_inbuf b[2][2]; /* per run: the current inputs and the former ones */
+    eng_inputs in[2], old[2];
+    const entry *X[2] = {&GENERIC, &BLOCK};
+    for (int r = 0; r < 2; r++) {
+        E[r] = osc_eng_create(&M, &O[r], &ALLOC, NULL);
+        if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: no engine\n"); exit(1); }
+        osc_eng_inputs(&u, &b[r][0], &in[r]);
+        X[r]->start(E[r], &in[r], 0.0, &p.x0, &p.v0, &s[r]);
+    }
+    double dmax = 0.0, xm = 0.0;
+    long long sw_o = 0;
+    int ok = 1;
+    for (int k = 1; k <= 300 && ok; k++) {
+        const double t = (double)(k * 100) * h;
+        if (k == 101 && (K->F_jump != 0.0 || !isnan(K->belt_to))) { /* the inputs change at t = 10 s */
+            const dfo_inputs uold = u;
+            if (K->F_jump != 0.0) { u.F_ext = K->F_jump; u.F_ext_set = 1; }
+            if (!isnan(K->belt_to)) { u.v_belt = K->belt_to; u.v_belt_set = 1; }
+            dfo_new_inputs(&M, &uold, &u, &so);
+            for (int r = 0; r < 2; r++) {
+                osc_eng_inputs(&uold, &b[r][1], &old[r]);
+                osc_eng_inputs(&u, &b[r][0], &in[r]);
+                X[r]->new_inputs(E[r], &old[r], &in[r], &s[r], NULL);
+            }
+        }
+        for (int r = 0; r < 2; r++) ok &= X[r]->advance(E[r], &in[r], &s[r], t, NULL) == ENG_OK;
+        ok &= dfo_advance(&M, &u, &so, t, count_switch, &sw_o) == DFO_OK;
+        dmax = fmax(dmax, fabs(s[0].X[0] - so.X));
+        xm = fmax(xm, fabs(so.X));
+    }
+    CHECK(ok);
+    const switch_log none = {0, 0.0, 0}; /* (no switch hook in these runs) */
+    CHECK(same_bits(&s[0], &s[1], &none, &none));
+    *d = dmax / xm;
+    sw[0] = sw_o;
+    sw[1] = s[0].switches;
+    sw[2] = s[1].switches;
+    for (int r = 0; r < 2; r++) {
+        eng_state_free(E[r], &s[r]);
+        eng_destroy(E[r]);
+    }
+    return ok;
+}
+
+/* The oscillator's engine model (osc_engine.c), inline and through engine.c, against newmark.c's
+ * Bossak schemes: the same bits between the two builds, the same trajectories to 1e-9 relative and
+ * the same switches as newmark.c (the three schemes, damping, a stick-dominated case, belts and a
+ * belt change, Stribeck, a ramp of F_ext, a jump of F_ext). */
+static void test_vs_newmark(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    const double nan = NAN;
+    const osc_case cases[] = {
+        {DFO_SCHEME_PAPER, 0.7, 0.0, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_CONSISTENT, 0.3, 0.0, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.3, 0.0, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.05, 0.5, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, 0.7, nan, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.5, 0.3, 0, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.6, 0.0, 0.5, 0.3, 1, 0.0, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, 0.5, nan, 0, 0.02, 0.0, nan},
+        {DFO_SCHEME_LOCATED, 0.7, 0.0, 0.5, nan, 0, 0.0, 0.25, nan},
+        {DFO_SCHEME_CONSISTENT, 0.6, 0.0, 0.5, 0.3, 0, 0.0, 0.0, -0.2},
+        {DFO_SCHEME_LOCATED, 0.6, 0.05, 0.5, 0.3, 1, 0.0, 0.0, 0.1},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        const osc_case *K = &cases[k];
+        check_context(T, "%s chi %.1f c %.2f N %.1f belt %g (to %g) stribeck %d ramp %g jump %g", names[K->scheme],
+                      K->chi, K->c, K->Nn, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump);
+        double d = INFINITY;
+        long long sw[3] = {0, 0, 0};
+        run_case(T, K, &d, sw);
+        printf("  %-10s chi %.1f c %.2f N %.1f belt %-4g to %-4g stribeck %d ramp %-4g jump %-4g: max |dx| / max |x| "
+               "%.2e, switches %lld / %lld\n",
+               names[K->scheme], K->chi, K->c, K->Nn, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump, d,
+               sw[0], sw[1]);
+        CHECK(d < 1e-9);
+        CHECK(sw[1] >= 4);
+        CHECK(sw[1] == sw[0] && sw[2] == sw[1]);
+    }
+}
+
 /* A chain of NCHAIN blocks between two walls: its model, rows and data. */
 typedef struct {
     double m[NCHAIN], k[NCHAIN], N[NCHAIN], ms[NCHAIN], mk[NCHAIN], Pc[NCHAIN], Ps[NCHAIN];
     double d[ENG_NSLOTS][NCHAIN], e[ENG_NSLOTS][NCHAIN], cp[ENG_NSLOTS][NCHAIN], inv[ENG_NSLOTS][NCHAIN];
+    double kcp[ENG_NSLOTS][NCHAIN], kinv[ENG_NSLOTS][NCHAIN];
+    int kh[ENG_NSLOTS][NCHAIN];
     double q[NCHAIN], work[2 * NCHAIN];
     size_t idx[NCHAIN];
     double w1[1];
@@ -160,23 +387,31 @@ typedef struct {
     chn_model C;
 } chain_data;
 
+/* A chain's data: masses 1 + dm (i mod 3), unit springs, normal forces 1.2 + dN (i mod 3), mu_s 0.5,
+ * mu_k 0.35, the excitation's phase 0.1 i, contact i on block i (its row w1 at DOF i). */
+static void chain_fill(size_t n, double dm, double dN, double *m, double *k, double *N, double *ms, double *mk,
+                       double *Pc, double *Ps, size_t *idx, eng_row *rows, const double *w1)
+{
+    for (size_t i = 0; i < n; i++) {
+        m[i] = 1.0 + dm * (double)(i % 3);
+        k[i] = 1.0;
+        N[i] = 1.2 + dN * (double)(i % 3);
+        ms[i] = 0.5;
+        mk[i] = 0.35;
+        Pc[i] = cos(0.1 * (double)i);
+        Ps[i] = sin(0.1 * (double)i);
+        idx[i] = i;
+        rows[i].nnz = 1;
+        rows[i].idx = &idx[i];
+        rows[i].w = w1;
+    }
+}
+
 static void chain_make(chain_data *D)
 {
     memset(D, 0, sizeof *D);
     D->w1[0] = 1.0;
-    for (size_t i = 0; i < NCHAIN; i++) {
-        D->m[i] = 1.0 + 0.1 * (double)(i % 3);
-        D->k[i] = 1.0;
-        D->N[i] = 1.2;
-        D->ms[i] = 0.5;
-        D->mk[i] = 0.35;
-        D->Pc[i] = cos(0.1 * (double)i);
-        D->Ps[i] = sin(0.1 * (double)i);
-        D->idx[i] = i;
-        D->rows[i].nnz = 1;
-        D->rows[i].idx = &D->idx[i];
-        D->rows[i].w = D->w1;
-    }
+    chain_fill(NCHAIN, 0.1, 0.0, D->m, D->k, D->N, D->ms, D->mk, D->Pc, D->Ps, D->idx, D->rows, D->w1);
     chn_model *C = &D->C;
     C->n = NCHAIN;
     C->m = D->m;
@@ -187,6 +422,9 @@ static void chain_make(chain_data *D)
         C->e[s] = D->e[s];
         C->cp[s] = D->cp[s];
         C->inv[s] = D->inv[s];
+        C->kh[s] = D->kh[s];
+        C->kcp[s] = D->kcp[s];
+        C->kinv[s] = D->kinv[s];
     }
     C->q = D->q;
     C->work = D->work;
@@ -205,7 +443,7 @@ static void test_chain(checks *T)
         chain_make(&Dg);
         chain_make(&Di);
         eng_setup S = setup_common(NCHAIN, Dg.rows, Dg.N, Dg.ms, Dg.mk, Dg.Pc, Dg.Ps, scheme, 2.0);
-        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -229,7 +467,7 @@ static void test_chain(checks *T)
     check_context(T, "chain of %d blocks with a belt: refused", NCHAIN);
     chain_make(&Di);
     eng_setup S = setup_common(NCHAIN, Di.rows, Di.N, Di.ms, Di.mk, Di.Pc, Di.Ps, DFO_SCHEME_LOCATED, 2.0);
-    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction};
+    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
     S.ops = oi;
     double vb[NCHAIN] = {0.0};
     vb[3] = 0.1;
@@ -243,11 +481,234 @@ static void test_chain(checks *T)
     eng_destroy(E);
 }
 
+/* ---- the chain's sparse-structure operators (eng_sparse): held solves, the fused step, spans ---- */
+
+/* A chain of n blocks (engine_models.h's chn_model) with its spans' view, every array allocated. */
+typedef struct {
+    size_t n;
+    chn_model C, view;
+    eng_sparse sp;
+    eng_row *rows;
+    size_t *idx;
+    double *m, *k, *N, *ms, *mk, *Pc, *Ps, *zero;
+    double w1[1];
+    long spans; /* span calls that gave spans (counted by counting_span) */
+} big_chain;
+
+static double *dvec(size_t n)
+{
+    double *p = calloc(n, sizeof(double));
+    if (!p) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    return p;
+}
+
+static void big_make(big_chain *B, size_t n)
+{
+    memset(B, 0, sizeof *B);
+    B->n = n;
+    B->w1[0] = 1.0;
+    B->rows = calloc(n, sizeof(eng_row));
+    B->idx = calloc(n, sizeof(size_t));
+    if (!B->rows || !B->idx) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    B->m = dvec(n); B->k = dvec(n); B->N = dvec(n); B->ms = dvec(n); B->mk = dvec(n); B->Pc = dvec(n);
+    B->Ps = dvec(n); B->zero = dvec(n);
+    /* bench_engine's chain, its normal forces varied along it */
+    chain_fill(n, 0.0, 0.4, B->m, B->k, B->N, B->ms, B->mk, B->Pc, B->Ps, B->idx, B->rows, B->w1);
+    B->C.sub = &B->view;
+    for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
+        V->n = n;
+        V->m = B->m;
+        V->k = B->k;
+        V->k_end = 1.0;
+        for (int s = 0; s < ENG_NSLOTS; s++) {
+            V->d[s] = dvec(n); V->e[s] = dvec(n); V->cp[s] = dvec(n); V->inv[s] = dvec(n);
+            V->kcp[s] = dvec(n); V->kinv[s] = dvec(n);
+            V->kh[s] = calloc(n, sizeof(int));
+            if (!V->kh[s]) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+        }
+        V->q = dvec(n); V->work = dvec(2 * n);
+    }
+}
+
+static void big_free(big_chain *B)
+{
+    for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
+        for (int s = 0; s < ENG_NSLOTS; s++) {
+            free(V->d[s]); free(V->e[s]); free(V->cp[s]); free(V->inv[s]); free(V->kcp[s]); free(V->kinv[s]);
+            free(V->kh[s]);
+        }
+        free(V->q); free(V->work);
+    }
+    free(B->rows); free(B->idx); free(B->m); free(B->k); free(B->N); free(B->ms); free(B->mk); free(B->Pc);
+    free(B->Ps); free(B->zero);
+}
+
+static long held_steps; /* calls of the fused step (counting_step_held) */
+
+static int counting_step_held(void *ctx, const eng_held_step *F, eng_state *s)
+{
+    held_steps++;
+    return chn_step_held(ctx, F, s);
+}
+
+static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+{
+    chn_model *C = ctx;
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab);
+    if (ns > 0) ((big_chain *)((char *)C - offsetof(big_chain, C)))->spans++;
+    return ns;
+}
+
+/* The engine on B in scheme with the sparse operators: 0 none, 1 held_basis only, 2 and the fused
+ * step, 3 and the closed-form breakaways, 4 and spans; h = T / steps. */
+static eng_setup big_setup(big_chain *B, int scheme, int sparse, double steps)
+{
+    eng_setup S = setup_common(B->n, B->rows, B->N, B->ms, B->mk, B->Pc, B->Ps, DFO_SCHEME_PAPER, 2.0);
+    const eng_ops ops = {&B->C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+    S.ops = ops;
+    S.scheme = scheme;
+    S.h = 4.0 * DFO_PI / steps;
+    chn_set_reach(&B->C, S.h, S.alpha);
+    B->sp = chn_sparse(&B->C, sparse >= 4);
+    if (sparse < 2) B->sp.step_held = NULL;
+    if (sparse < 3) B->sp.contact_breakaway = NULL;
+    if (sparse >= 4) B->sp.span = counting_span;
+    S.sparse = sparse ? &B->sp : NULL;
+    return S;
+}
+
+/* From rest to t_end in communication steps dt, without hooks (spans need none). */
+static eng *run_plain(const eng_setup *S, const entry *X, const double *zero, double dt, double t_end, eng_state *s,
+                      eng_status *status)
+{
+    eng *E = eng_create(S, &ALLOC, NULL);
+    if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    X->start(E, &in, 0.0, zero, zero, s);
+    *status = ENG_OK;
+    for (int k = 1; (double)k * dt <= t_end && *status == ENG_OK; k++) *status = X->advance(E, &in, s, (double)k * dt, NULL);
+    return E;
+}
+
+static double max_rel_diff(const double *a, const double *b, size_t n)
+{
+    double d = 0.0, m = 0.0;
+    for (size_t i = 0; i < n; i++) { d = fmax(d, fabs(a[i] - b[i])); m = fmax(m, fabs(b[i])); }
+    return d / m;
+}
+
+static void test_chain_sparse(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    big_chain B;
+    big_make(&B, NCHAIN);
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        check_context(T, "chain of %d blocks, %s: the held solves through the box LCP, the fused step", NCHAIN,
+                      names[scheme]);
+        eng_state s[5];
+        eng_status st[5];
+        eng *E[5];
+        for (int v = 0; v < 4; v++) {
+            const eng_setup S = big_setup(&B, scheme, v, 800.0);
+            E[v] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[v], &st[v]);
+        }
+        const eng_setup S = big_setup(&B, scheme, 3, 800.0);
+        E[4] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[4], &st[4]);
+        const double d = max_rel_diff(s[1].X, s[0].X, NCHAIN), db = max_rel_diff(s[3].X, s[2].X, NCHAIN);
+        printf("  chain n = %d %-10s held solves by the box LCP against the dense: %.2e, %lld / %lld switches; "
+               "closed-form breakaways against root finding: %.2e, %lld switches\n",
+               NCHAIN, names[scheme], d, s[1].switches, s[0].switches, db, s[3].switches);
+        for (int v = 0; v < 5; v++) CHECK(st[v] == ENG_OK);
+        CHECK(s[0].switches >= 5 * NCHAIN);
+        CHECK(s[1].switches == s[0].switches);
+        CHECK(d < 1e-11);
+        const switch_log none = {0, 0.0, 0};
+        CHECK(same_bits(&s[2], &s[1], &none, &none)); /* the fused step: the general path's bits */
+        CHECK(s[3].switches == s[2].switches);
+        CHECK(db < 1e-11);
+        if (scheme != DFO_SCHEME_LOCATED) CHECK(same_bits(&s[3], &s[2], &none, &none)); /* (located only) */
+        CHECK(same_bits(&s[4], &s[3], &none, &none)); /* inline: engine.c's bits */
+        for (int v = 0; v < 5; v++) {
+            eng_state_free(E[v], &s[v]);
+            eng_destroy(E[v]);
+        }
+    }
+    big_free(&B);
+    /* spans: a chain longer than two reaches, located; against the whole structure's steps at h and h / 2 */
+    const size_t n = 24;
+    big_make(&B, n);
+    double dh[2] = {0.0, 0.0};
+    for (int r = 0; r < 2; r++) {
+        const double steps = 800.0 * (double)(1 << r);
+        check_context(T, "chain of %zu blocks, located, h = T / %.0f: spans against the whole structure", n, steps);
+        eng_state s[3];
+        eng_status st[3];
+        eng *E[3];
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, steps);
+        E[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[0], &st[0]);
+        B.spans = 0;
+        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, steps);
+        E[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[1], &st[1]);
+        const long spans = B.spans;
+        E[2] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[2], &st[2]);
+        dh[r] = max_rel_diff(s[1].X, s[0].X, n);
+        printf("  chain n = %zu located T/%.0f: reach %zu, %ld steps by spans, %lld / %lld switches, spans against "
+               "whole %.2e\n", n, steps, B.C.w, spans, s[1].switches, s[0].switches, dh[r]);
+        for (int v = 0; v < 3; v++) CHECK(st[v] == ENG_OK);
+        CHECK(2 * B.C.w + 3 < n);
+        CHECK(spans > 50);
+        CHECK(labs((long)(s[1].switches - s[0].switches)) <= s[0].switches / 50);
+        CHECK(dh[r] < 1e-5);
+        const switch_log none = {0, 0.0, 0};
+        CHECK(same_bits(&s[2], &s[1], &none, &none));
+        for (int v = 0; v < 3; v++) {
+            eng_state_free(E[v], &s[v]);
+            eng_destroy(E[v]);
+        }
+    }
+    check_context(T, "chain of %zu blocks, located: spans against the whole structure, second order", n);
+    printf("  spans against whole: %.2e, %.2e (ratio %.2f)\n", dh[0], dh[1], dh[0] / dh[1]);
+    CHECK(dh[0] / dh[1] > 3.0);
+    big_free(&B);
+    /* the stuck fast path from the contacts' closed-form breakaways: a chain that sticks whole for
+     * stretches (one block slips near its excitation's peaks, the others hold), on against off */
+    check_context(T, "chain of %d blocks stuck for stretches: the stuck fast path from the contacts' breakaways",
+                  NCHAIN);
+    big_make(&B, NCHAIN);
+    for (size_t i = 0; i < NCHAIN; i++) B.N[i] = (i == 0) ? 1.99 : 2.1; /* block 0 slips near its peaks */
+    eng_state s2[2];
+    eng_status st2[2];
+    eng *E2[2];
+    long calls[2];
+    for (int v = 0; v < 2; v++) {
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, 800.0);
+        B.sp.step_held = counting_step_held;
+        S.fast_paths = v;
+        held_steps = 0;
+        E2[v] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s2[v], &st2[v]);
+        calls[v] = held_steps;
+    }
+    printf("  stuck fast path: %ld / %ld fused steps taken, %lld switches\n", calls[1], calls[0], s2[0].switches);
+    const switch_log none = {0, 0.0, 0};
+    CHECK(st2[0] == ENG_OK && st2[1] == ENG_OK);
+    CHECK(s2[0].switches >= 2 * NCHAIN);
+    CHECK(calls[1] < calls[0] - calls[0] / 10); /* stuck stretches skipped */
+    CHECK(same_bits(&s2[1], &s2[0], &none, &none));
+    for (int v = 0; v < 2; v++) {
+        eng_state_free(E2[v], &s2[v]);
+        eng_destroy(E2[v]);
+    }
+    big_free(&B);
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}};
     checks *T = &C;
     test_block(T);
+    test_stuck_fast_path(T);
+    test_vs_newmark(T);
     test_chain(T);
+    test_chain_sparse(T);
     return checks_done(T, "test_engine_step");
 }

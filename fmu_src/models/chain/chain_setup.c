@@ -213,20 +213,12 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         R->u = R->Fb = R->mukN = 0.0;  /* (chain_loads_init) */
         R->fh = 0;
     }
-    /* beyond w blocks the influence of a block inside one step is below 2^-56: M_hat^-1 decays like
-     * q^distance with q = (sqrt(kappa) - 1) / (sqrt(kappa) + 1) (Demko, Moss and Smith, 1984), kappa
-     * <= (1 + rho) / (1 - rho) the condition number of the diagonally scaled M_hat by Gershgorin,
-     * rho the largest ratio of a row's off-diagonal sum to its diagonal (shorter steps: smaller) */
+    /* beyond w blocks the influence of a block inside one step is below 2^-56 (bossak.h's
+     * dfo_bossak_reach), rho the largest ratio of a row's off-diagonal sum to its diagonal (shorter
+     * steps: smaller) */
     double rho = 0.0;
     for (size_t i = 0; i < n; i++) rho = fmax(rho, (fabs(i > 0 ? M->eF[i - 1] : 0.0) + fabs(M->eF[i])) / M->dF[i]);
-    const double sk = sqrt((1.0 + rho) / (1.0 - fmin(rho, 0.5))), q = (sk - 1.0) / (sk + 1.0);
-    /* the smallest w with q^w <= 2^-56, by products (no libm log2: the same bits everywhere and
-     * no newer glibc symbol); q <= 0.27 here, so at most 30 products */
-    size_t w = 1;
-    if (rho >= 0.5) w = n;
-    else if (rho > 0.0)
-        for (double qw = q; qw > 0x1p-56; qw *= q) w++;
-    M->w = w;
+    M->w = dfo_bossak_reach(rho, n);
     if (err) *err = NULL;
     return M;
 }

@@ -1,0 +1,95 @@
+/* The oscillator as a model of the friction engine. See osc_engine.h. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "osc_engine.h"
+
+#include <math.h>
+#include <string.h>
+
+#define SNAP_MAX_REL_H 1e-5 /* the oscillator's snap of a requested time to the grid (newmark.h) */
+#define SNAP_MIN_REL_H 1e-7
+#define SNAP_EPS_T 0x1p16
+
+/* ---- set-up ------------------------------------------------------------------------------------ */
+
+eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, const char **err)
+{
+    const dfo_params *p = &M->p;
+    memset(O, 0, sizeof *O);
+    O->m = p->m;
+    O->c = p->c;
+    O->k = p->k;
+    O->idx[0] = 0;
+    O->w[0] = 1.0;
+    O->row.nnz = 1;
+    O->row.idx = O->idx;
+    O->row.w = O->w;
+    O->N[0] = p->N;
+    O->mu_s[0] = p->mu_s;
+    O->mu_k[0] = M->mu_k;
+    O->Pc[0] = p->P0;
+    O->law[0] = M->law;
+    eng_setup S;
+    memset(&S, 0, sizeof S);
+    S.n = 1;
+    S.nc = 1;
+    const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
+    S.ops = ops;
+    S.rows = &O->row;
+    S.exc.omega = p->omega;
+    S.exc.phi0 = p->phi;
+    S.exc.Pc = O->Pc;
+    S.N = O->N;
+    S.mu_s = O->mu_s;
+    S.mu_k = O->mu_k;
+    S.law = M->stribeck ? O->law : NULL;
+    S.h = p->h;
+    S.alpha = p->alpha;
+    S.scheme = p->scheme;
+    S.friction_updates = p->frictionUpdates;
+    S.fast_paths = M->fast;
+    S.rate_max = M->rate_max;
+    S.snap_max_rel_h = SNAP_MAX_REL_H;
+    S.snap_min_rel_h = SNAP_MIN_REL_H;
+    S.snap_eps_t = SNAP_EPS_T;
+    O->E = eng_create(&S, al, err);
+    return O->E;
+}
+
+void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in)
+{
+    memset(b, 0, sizeof *b);
+    memset(in, 0, sizeof *in);
+    b->F[0] = u->F_ext;
+    b->N[0] = u->N_ext;
+    b->vb[0] = u->v_belt;
+    in->F_ext = u->F_ext_set ? b->F : NULL;
+    in->N_ext = u->N_ext_set ? b->N : NULL;
+    in->v_belt = u->v_belt_set ? b->vb : NULL;
+    if (!u->ramp) return;
+    for (int d = 0; d < 2; d++) {
+        b->dF[d][0] = u->F_ext_d[d];
+        b->dN[d][0] = u->N_ext_d[d];
+        in->dF_ext[d] = b->dF[d];
+        in->dN_ext[d] = b->dN[d];
+    }
+    in->t_ref = u->t_d;
+}
+
+/* ---- the schemes, specialised ------------------------------------------------------------------ */
+
+#define ENG_FN(name) osc_##name
+#define ENG_N(E) ((void)(E), (size_t)1)
+#define ENG_NC(E) ((void)(E), (size_t)1)
+#define ENG_CTX(E) ((E)->S.ops.ctx)
+#define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
+#define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
+#define ENG_HAS_C(E) ((void)(E), 1)
+#define ENG_APPLY_M(E, a, y) osc_M(ENG_CTX(E), (a), (y))
+#define ENG_FACTOR(E, slot, cM, cC, cK) osc_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
+#define ENG_SOLVE(E, slot, b, x) osc_solve(ENG_CTX(E), (slot), (b), (x))
+#define ENG_HAS_FRICTION(E) ((void)(E), 1)
+#define ENG_FRICTION(E, P, what, mode, V1, f, pivots) osc_friction(ENG_CTX(E), (P), (what), (mode), (V1), (f), (pivots))
+#define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
+#define ENG_BREAKAWAY(E, s, in, Fb) osc_breakaway(ENG_CTX(E), &(E)->S.exc, (s), (in), (Fb))
+
+#include "engine_step.h"
