@@ -1,0 +1,259 @@
+/* The oscillator's Bossak schemes (paper, consistent, located) stepped by the friction engine: its
+ * model of osc_engine.h (the engine's schemes specialised by the block's operators), the state and
+ * the inputs mapped onto the engine's, the observables kept by the engine's observer hook and the
+ * switches reported through its switch hook. See newmark.h (dfo_bossak_advance, dfo_new_inputs).
+ *
+ * The engine of a call is made on the stack (a fixed arena: one DOF, one contact), so that a
+ * dfo_model stays a plain value without pointers; its set-up is a few hundred ns per call. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "newmark.h"
+#include "osc_engine.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#define ARENA_DOUBLES 1024 /* 8 KiB: the engine of one DOF and one contact needs about 2 KiB */
+
+/* ---- the engine of one call ------------------------------------------------------------------- */
+
+typedef struct {
+    double *buf;
+    size_t used, cap; /* in doubles */
+} arena;
+
+static void *arena_allocate(void *env, size_t nobj, size_t size)
+{
+    arena *a = (arena *)env;
+    if (size != 0 && nobj > SIZE_MAX / size) return NULL;
+    const size_t words = (nobj * size + sizeof(double) - 1) / sizeof(double);
+    if (words > a->cap - a->used) return NULL;
+    double *p = a->buf + a->used;
+    a->used += words;
+    memset(p, 0, words * sizeof(double));
+    return p;
+}
+
+static void arena_release(void *env, void *obj)
+{
+    (void)env;
+    (void)obj;
+}
+
+/* The engine's state of the block: its arrays of length one. */
+typedef struct {
+    double X, V, A, hA, F, t_stick, t_break;
+    int mode, break_dir;
+} block_arrays;
+
+typedef struct {
+    double buf[ARENA_DOUBLES];
+    arena ar;
+    osc_eng_model O;
+    eng *E;
+    block_arrays a;
+    eng_state es;
+} stepper;
+
+static int stepper_init(stepper *P, const dfo_model *M)
+{
+    P->ar.buf = P->buf;
+    P->ar.used = 0;
+    P->ar.cap = ARENA_DOUBLES;
+    const eng_alloc al = {arena_allocate, arena_release, &P->ar};
+    P->E = osc_eng_create(M, &P->O, &al, NULL);
+    return P->E != NULL;
+}
+
+static void state_to_engine(stepper *P, const dfo_state *s)
+{
+    eng_state *e = &P->es;
+    memset(e, 0, sizeof *e);
+    P->a.X = s->X;
+    P->a.V = s->V;
+    P->a.A = s->A;
+    P->a.hA = s->hA;
+    P->a.F = s->F;
+    P->a.mode = s->mode;
+    P->a.t_stick = s->t;
+    P->a.t_break = NAN;
+    P->a.break_dir = 0;
+    e->n = e->nc = 1;
+    e->t0 = s->t0;
+    e->t = s->t;
+    e->n_grid = s->n;
+    e->X = &P->a.X;
+    e->V = &P->a.V;
+    e->A = &P->a.A;
+    e->hA = &P->a.hA;
+    e->F = &P->a.F;
+    e->mode = &P->a.mode;
+    e->t_stick = &P->a.t_stick;
+    e->t_break = &P->a.t_break;
+    e->break_dir = &P->a.break_dir;
+    e->t_switch = s->t_switch;
+    e->steps = s->steps;
+    e->solves = s->lcp_solves;
+    e->exc_n = s->exc_n;
+    e->exc_c = s->exc_c;
+    e->exc_s = s->exc_s;
+    e->J = NULL; /* no Bossak scheme propagates the Jacobian (eng_caps): dfo_state's J is left */
+}
+
+static void state_from_engine(const stepper *P, dfo_state *s)
+{
+    const eng_state *e = &P->es;
+    s->t = e->t;
+    s->n = e->n_grid;
+    s->X = P->a.X;
+    s->V = P->a.V;
+    s->A = P->a.A;
+    s->hA = P->a.hA;
+    s->F = P->a.F;
+    s->mode = P->a.mode;
+    s->t_switch = e->t_switch;
+    s->steps = e->steps;
+    s->lcp_solves = e->solves;
+    s->exc_n = e->exc_n;
+    s->exc_c = e->exc_c;
+    s->exc_s = e->exc_s;
+}
+
+static dfo_status status_of(eng_status st)
+{
+    switch (st) {
+    case ENG_OK:
+    case ENG_SWITCHED: return DFO_OK;
+    case ENG_ERR_NO_PROGRESS: return DFO_ERR_NO_PROGRESS;
+    case ENG_ERR_NONFINITE: return DFO_ERR_NONFINITE;
+    case ENG_ERR_RESOLUTION: return DFO_ERR_RESOLUTION;
+    case ENG_ERR_LCP:
+    case ENG_ERR_FRICTION:
+    case ENG_ERR_BAD_INPUT: break;
+    }
+    return DFO_ERR_LCP;
+}
+
+/* ---- the hooks: switches and observables -------------------------------------------------------- */
+
+typedef struct {
+    const dfo_model *M;
+    dfo_state *s;           /* the observables' home */
+    dfo_switch_fn on_switch;
+    void *switch_ctx;
+} hook_ctx;
+
+/* A switch: reported with the block's position, counted as a transition where it lies in the window
+ * (t_obs_start, t_obs_stop]. */
+static void on_switch(void *ctx, double t, size_t contact, const eng_state *es, int from, int to)
+{
+    const hook_ctx *H = (const hook_ctx *)ctx;
+    const dfo_params *p = &H->M->p;
+    (void)contact;
+    if (p->observe && t > p->t_obs_start && t <= p->t_obs_stop) H->s->transitions++;
+    if (H->on_switch) H->on_switch(H->switch_ctx, t, es->X[0], from, to);
+}
+
+/* The part of [a, b] inside the observation window (comparisons, not fmin/fmax: those are library
+ * calls without -ffinite-math-only). */
+static double in_window(const dfo_model *M, double a, double b)
+{
+    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    const double lo = (a > w0) ? a : w0, hi = (b < w1) ? b : w1;
+    return (hi > lo) ? hi - lo : 0.0;
+}
+
+/* A phase [ta, tb] that overlaps the window (the engine calls no other): the stuck stretch opened or
+ * closed at its start (its part inside the window added in one piece when a phase in another mode
+ * begins, so that the stuck time is the same however the steps are taken), and where it ends inside
+ * the window X sampled and the friction's work on the relative motion counted (none where it ends
+ * on the window's start). */
+static void on_phase(void *ctx, const eng_phase *ph, const eng_state *es)
+{
+    const hook_ctx *H = (const hook_ctx *)ctx;
+    const dfo_model *M = H->M;
+    dfo_state *s = H->s;
+    const double ta = ph->ta, tb = ph->tb, w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
+    if (ph->mode0[0] == 0) {
+        if (isnan(s->stuck_from)) s->stuck_from = ta;
+    } else if (!isnan(s->stuck_from)) {
+        const double d = in_window(M, s->stuck_from, ta);
+        if (d > 0.0) s->t_stuck += d;
+        s->stuck_from = NAN;
+    }
+    if (tb < w0 || tb > w1) return;
+    const double X = es->X[0], dX = X - ph->X0[0];
+    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
+    if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
+    if (!(tb > w0)) W = 0.0;
+    s->x_max = (X > s->x_max) ? X : s->x_max;
+    s->x_min = (X < s->x_min) ? X : s->x_min;
+    s->E_friction -= W;
+}
+
+static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hooks *hk)
+{
+    memset(hk, 0, sizeof *hk);
+    hk->on_switch = on_switch;
+    hk->switch_ctx = H;
+    if (!M->p.observe) return;
+    obs->t_start = M->p.t_obs_start;
+    obs->t_stop = M->p.t_obs_stop;
+    obs->on_phase = on_phase;
+    obs->ctx = H;
+    hk->obs = obs;
+}
+
+/* ---- the entry points ----------------------------------------------------------------------------- */
+
+dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
+                              dfo_switch_fn on_switch_fn, void *switch_ctx)
+{
+    stepper P;
+    if (!stepper_init(&P, M)) return DFO_ERR_LCP;
+    osc_eng_inbuf ib;
+    eng_inputs ei;
+    osc_eng_inputs(in, &ib, &ei);
+    hook_ctx H = {M, s, on_switch_fn, switch_ctx};
+    eng_observer obs;
+    eng_hooks hk;
+    hooks_of(M, &H, &obs, &hk);
+    state_to_engine(&P, s);
+    const eng_status st = osc_eng_advance(P.E, &ei, &P.es, t_target, &hk);
+    state_from_engine(&P, s);
+    if (st != ENG_OK) return status_of(st);
+    if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX && fabs(s->F) <= DBL_MAX))
+        return DFO_ERR_NONFINITE;
+    /* the acceleration output too must be representable */
+    if (!isfinite(dfo_acceleration(M, in, s))) return DFO_ERR_NONFINITE;
+    return DFO_OK;
+}
+
+void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
+{
+    if (M->p.scheme == DFO_SCHEME_EXACT) return;
+    stepper P;
+    if (!stepper_init(&P, M)) return;
+    osc_eng_inbuf ib_old, ib_new;
+    eng_inputs e_old, e_new;
+    osc_eng_inputs(old_in, &ib_old, &e_old);
+    osc_eng_inputs(new_in, &ib_new, &e_new);
+    hook_ctx H = {M, s, NULL, NULL};
+    eng_observer obs;
+    eng_hooks hk;
+    hooks_of(M, &H, &obs, &hk);
+    state_to_engine(&P, s);
+    osc_eng_new_inputs(P.E, &e_old, &e_new, &P.es, &hk);
+    state_from_engine(&P, s);
+}
+
+double dfo_stuck_time(const dfo_model *M, const dfo_state *s)
+{
+    return isnan(s->stuck_from) ? s->t_stuck : s->t_stuck + in_window(M, s->stuck_from, s->t);
+}
+
+double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)
+{
+    const double span = fmin(s->t, M->p.t_obs_stop) - M->p.t_obs_start;
+    return span > 0.0 ? dfo_stuck_time(M, s) / span : 0.0;
+}
