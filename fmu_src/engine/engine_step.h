@@ -840,6 +840,15 @@ static ENG_HOT double margin(const eng *E, const int *mode, size_t j, const doub
     return E->Fb[j] - fabs(f[j]);
 }
 
+/* Contact j switches in the trial: a sliding one whose slip stopped or turned (margin <= 0), a held
+ * one whose holding force is beyond its limit (margin < 0: a force on the limit holds, the rest
+ * rule's |f| <= Fb). */
+static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
+{
+    const double g = margin(E, mode, j, V1, f);
+    return (mode[j] != 0) ? g <= 0.0 : g < 0.0;
+}
+
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
  * the modes st; returns the smallest margin of the candidates. */
 typedef struct {
@@ -931,7 +940,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;
         for (size_t j = 0; j < nc; j++)
-            if (has_friction(E, j) && margin(E, E->st, j, E->V1, E->f) <= 0.0) { E->cand[j] = 1; ncand++; }
+            if (has_friction(E, j) && switches(E, E->st, j, E->V1, E->f)) { E->cand[j] = 1; ncand++; }
         if (ncand == 0) {
             finish(E, s, &T, E->V1, E->f);
             s->t = t_end;
