@@ -134,7 +134,7 @@ struct eng_inputs_s;
  * ramps) and the belts still: exc the excitation, s the state, in the inputs, Fb (nc) the contacts'
  * breakaway limits under them. Returns a time tb such that no contact's holding force reaches its
  * limit on [s->t, tb) (+INFINITY: never; NaN: unknown). The scheme then takes at once the whole grid
- * steps that end at least one grid step before tb (and outside the observer's window), to the bits
+ * steps that end at least one grid step before tb (one phase for the observer), to the bits
  * of taking them one by one, provided the model's friction solver returns V1 = V exactly on a held
  * pinned DOF (the scalar solver of one contact does; the dense default need not: no hook with it). */
 typedef double (*eng_breakaway_fn)(void *ctx, const struct eng_harmonic_s *exc, const struct eng_state_s *s,

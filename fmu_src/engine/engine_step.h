@@ -64,6 +64,10 @@
 #define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
 #endif
 
+#ifndef ENG_OBSERVE
+#define ENG_OBSERVE(obs, ph, s) ((obs)->on_phase((obs)->ctx, (ph), (s)))
+#endif
+
 /* The functions of every step are inlined into the schemes (the state in registers; a call and its
  * spills are a good part of a small structure's step). The same arithmetic either way. */
 #if defined(__GNUC__)
@@ -1020,6 +1024,215 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
     return ENG_OK;
 }
 
+/* ---- the fused steps -------------------------------------------------------------------------- */
+
+/* The common step, fused: a whole grid step from a grid point, held inputs, in which the modes hold
+ * (located: the trial in the current modes has no switching contact; paper and consistent: the
+ * friction problem warm-started from the current modes returns them), taken in a tight loop over
+ * the grid points up to t_target with none of the general path's phase bookkeeping. The same
+ * arithmetic as step_located's and step_lcp's in the same order, so the same numbers. A model
+ * whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC) gets the loop's state in local arrays,
+ * which the compiler keeps in registers; otherwise it works on the state in place. The loop stops,
+ * the state untouched by the step it declines, before a step that would switch (the general path
+ * takes it), that re-bases A (a step length other than that of A, off a pinned DOF), a stuck
+ * structure the stuck fast path may skip (skip), a friction problem that fails, and a step past
+ * t_target. The observer is called for the steps that overlap its window, as the general path
+ * does. *g_prev: the last grid point reached. */
+#if defined(ENG_FUSED_N) && defined(ENG_FUSED_NC)
+#define ENG_FUSED_LOCAL 1
+#else
+#define ENG_FUSED_LOCAL 0
+#endif
+
+static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, const eng_hooks *hk, double *g_prev)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h, a = S->alpha;
+    const int located = S->scheme == DFO_SCHEME_LOCATED, consistent = S->scheme == DFO_SCHEME_CONSISTENT;
+    if (located && S->rate_max * h > STIFF_STEP) return;
+    const dfo_bossak_kin K = E->kin_grid;
+    const double cM = (1.0 - a) * K.c1, cK = E->b * h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
+    const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    const eng_harmonic *H = &S->exc;
+    eng_problem P;
+    P.slot = ENG_SLOT_GRID;
+    P.h = K.h;
+    P.cM = cM;
+    P.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
+    P.cK = cK;
+    P.vb = E->vb;
+    P.N = E->Nn;
+    P.law = E->any_law ? S->law : NULL;
+#if ENG_FUSED_LOCAL
+    double X[ENG_FUSED_N], V[ENG_FUSED_N], A[ENG_FUSED_N], hA[ENG_FUSED_N], X0[ENG_FUSED_N];
+    double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
+    double F[ENG_FUSED_NC + 1], f[ENG_FUSED_NC + 1], lim[ENG_FUSED_NC + 1];
+    int mode[ENG_FUSED_NC + 1], st[ENG_FUSED_NC + 1], mode0[ENG_FUSED_NC + 1], pin[ENG_FUSED_N];
+    for (size_t i = 0; i < n; i++) {
+        X[i] = s->X[i];
+        V[i] = s->V[i];
+        A[i] = s->A[i];
+        hA[i] = s->hA[i];
+    }
+    for (size_t j = 0; j < nc; j++) {
+        F[j] = s->F[j];
+        mode[j] = s->mode[j];
+    }
+#define ENG_FUSED_STORE_()                                                                                          \
+    do {                                                                                                            \
+        for (size_t i_ = 0; i_ < n; i_++) {                                                                         \
+            s->X[i_] = X[i_];                                                                                       \
+            s->V[i_] = V[i_];                                                                                       \
+            s->A[i_] = A[i_];                                                                                       \
+            s->hA[i_] = hA[i_];                                                                                     \
+        }                                                                                                           \
+        for (size_t j_ = 0; j_ < nc; j_++) {                                                                        \
+            s->F[j_] = F[j_];                                                                                       \
+            s->mode[j_] = mode[j_];                                                                                 \
+        }                                                                                                           \
+    } while (0)
+#else
+    double *const X = s->X, *const V = s->V, *const A = s->A, *const hA = s->hA, *const X0 = E->X0;
+    double *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2, *const ph = E->ph, *const V1 = E->V1;
+    double *const F = s->F, *const f = E->f, *const lim = E->lim;
+    int *const mode = s->mode, *const st = E->st, *const mode0 = E->mode0, *const pin = E->pin;
+#define ENG_FUSED_STORE_() ((void)0)
+#endif
+    P.p_hat = ph;
+    P.limit = lim;
+    long long ng = s->n_grid, steps = 0, solves = 0, pivot_steps = 0;
+    long long exc_n = s->exc_n;
+    double exc_c = s->exc_c, exc_s = s->exc_s, t = s->t;
+    for (;;) {
+        const double grid = s->t0 + (double)(ng + 1) * h;
+        if (!(grid <= t_target) || !(grid > t)) break;
+        /* held and pinned: the stuck fast path's to try; a step length to re-base A on: the general path's */
+        int held_all = skip, rebase = 0;
+        for (size_t i = 0; i < n; i++) pin[i] = 0;
+        for (size_t j = 0; j < nc; j++) {
+            const int held = mode[j] == 0 && has_friction(E, j);
+            held_all &= held && E->vb[j] == 0.0;
+            if (held && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+        }
+        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
+        for (size_t i = 0; i < n; i++) {
+            held_all &= pin[i] && V[i] == 0.0 && A[i] == 0.0;
+            rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * fmax(h, hA[i]) <= 1.0;
+        }
+        if (held_all || rebase) break;
+        /* the excitation at the grid point: the cache's rotation (dfo_grid_phase) */
+        double cw, sw;
+        dfo_grid_phase(H->omega, H->phi0, s->t0, h, E->rot_c, E->rot_s, exc_n, exc_c, exc_s, ng + 1, &cw, &sw);
+        /* the trial (trial_step, A0 = A) */
+        for (size_t i = 0; i < n; i++) {
+            xp[i] = X[i] + K.pred_V * V[i] + K.pred_A * A[i];
+            r[i] = -a * A[i] + (1.0 - a) * (V[i] * K.c1 + E->g1 * A[i]);
+        }
+        ENG_APPLY_M(E, r, y);
+        {
+            const double cwc = dfo_clamp1(cw), swc = dfo_clamp1(sw);
+            for (size_t i = 0; i < n; i++) {
+                double p = E->u[i];
+                if (H->Pc) p += H->Pc[i] * cwc;
+                if (H->Ps) p -= H->Ps[i] * swc;
+                ph[i] = p;
+            }
+        }
+        ENG_APPLY_K(E, xp, y2);
+        for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
+        /* the friction problem in the current modes */
+        int piv = 0;
+        eng_status fs;
+        if (located) {
+            for (size_t j = 0; j < nc; j++) {
+                st[j] = !has_friction(E, j) ? 1 : mode[j];
+                lim[j] = (st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            }
+            fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL)
+                                     : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL);
+            if (fs != ENG_OK) break;
+            int sw_any = 0;
+            for (size_t j = 0; j < nc; j++) sw_any |= has_friction(E, j) && switches(E, st, j, V1, f);
+            if (sw_any) break;
+        } else {
+            for (size_t j = 0; j < nc; j++) {
+                st[j] = mode[j];
+                lim[j] = !has_friction(E, j) ? 0.0 : (mode[j] == 0) ? E->Fb[j] : E->mukN[j];
+            }
+            fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_LCP, st, V1, f, &piv)
+                                     : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_LCP, st, V1, f, &piv);
+            if (fs != ENG_OK) break;
+            int changed = 0;
+            for (size_t j = 0; j < nc; j++) changed |= has_friction(E, j) && st[j] != mode[j];
+            if (changed) break;
+            if (consistent)
+                for (size_t j = 0; j < nc; j++)
+                    if (has_friction(E, j) && st[j] == 0) f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], f[j]));
+        }
+        /* the step is taken: the grid point, its excitation cache, the counters */
+        const double ta = t;
+        const int observed = obs && !(grid < obs->t_start) && !(ta > obs->t_stop);
+        if (observed) {
+            for (size_t i = 0; i < n; i++) X0[i] = X[i];
+            for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
+        }
+        ng++;
+        exc_n = ng;
+        exc_c = cw;
+        exc_s = sw;
+        steps++;
+        solves++;
+        pivot_steps += piv > 0;
+        /* finish */
+        for (size_t i = 0; i < n; i++) {
+            X[i] = xp[i] + K.corr_V * V1[i];
+            A[i] = (V1[i] - V[i]) * K.c1 - E->g1 * A[i];
+            V[i] = V1[i];
+            hA[i] = K.h;
+        }
+        for (size_t j = 0; j < nc; j++) F[j] = f[j];
+        t = grid;
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j)) mode[j] = sgn(slip(E, j, V));
+        if (located || consistent) /* rest_exact */
+            for (size_t j = 0; j < nc; j++) {
+                if (mode[j] != 0 || !has_friction(E, j)) continue;
+                const eng_row *R = &S->rows[j];
+                if (R->nnz == 1) {
+                    V[R->idx[0]] = E->vb[j] / R->w[0];
+                    A[R->idx[0]] = 0.0;
+                    hA[R->idx[0]] = 0.0;
+                }
+            }
+        if (observed) {
+            s->t = t;
+            s->n_grid = ng;
+            ENG_FUSED_STORE_();
+            eng_phase phs;
+            phs.ta = ta;
+            phs.tb = t;
+            phs.X0 = X0;
+            phs.mode0 = mode0;
+            phs.f = s->F;
+            phs.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
+            ENG_OBSERVE(obs, &phs, s);
+        }
+    }
+    ENG_FUSED_STORE_();
+#undef ENG_FUSED_STORE_
+    s->t = t;
+    s->n_grid = ng;
+    s->exc_n = exc_n;
+    s->exc_c = exc_c;
+    s->exc_s = exc_s;
+    s->steps += steps;
+    s->solves += solves;
+    s->pivot_steps += pivot_steps;
+    if (steps > 0) *g_prev = t;
+}
+
 /* ---- driving -------------------------------------------------------------------------------- */
 
 ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s)
@@ -1102,8 +1315,10 @@ static long long grid_below(const eng_state *s, double h, double x, int incl)
 /* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
  * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
- * before the model's breakaway, at or before t_target and outside the observer's window change
- * nothing but the time and the counters. Returns the last grid index they reach (s->n_grid: none). */
+ * before the model's breakaway and at or before t_target change nothing but the time and the
+ * counters (the observer sees them as one phase at rest, which ends inside its window where it began
+ * before the window's end: the positions, modes and forces it sees are those of each of them).
+ * Returns the last grid index they reach (s->n_grid: none). */
 static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, double t_target,
                              const eng_hooks *hk, stick_cache *c)
 {
@@ -1127,8 +1342,8 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
     long long m = grid_below(s, h, t_target, 1);
     const long long mb = grid_below(s, h, fmin(c->tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
-    if (hk && hk->obs && hk->obs->on_phase && !(s->t > hk->obs->t_stop)) {
-        const long long mo = grid_below(s, h, fmin(hk->obs->t_start, t_target + 2.0 * h), 0);
+    if (hk && hk->obs && hk->obs->on_phase && s->t < hk->obs->t_stop) { /* a stretch in the window ends in it */
+        const long long mo = grid_below(s, h, fmin(hk->obs->t_stop, t_target + 2.0 * h), 1);
         if (mo < m) m = mo;
     }
     return (m > s->n_grid) ? m : s->n_grid;
@@ -1180,14 +1395,23 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     const int skip = S->fast_paths && ENG_HAS_BREAKAWAY(E) && S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
     stick_cache cache = {NAN, 0, 0};
+    const int fuse = !ramped(in);
     while (s->t < t_target) {
         if (skip && s->t == g_prev) {
             const long long m = stuck_until(E, in, s, t_target, hk, &cache);
             if (m > s->n_grid) {
+                double ta;
+                begin_phase(E, s, &ta);
                 stuck_skip(E, s, m);
                 g_prev = s->t;
+                observe(E, s, ta, s->F, hk);
                 continue;
             }
+        }
+        if (fuse && s->t == g_prev) {
+            loads_at(E, in, s->t);
+            fused_steps(E, s, t_target, skip, hk, &g_prev);
+            if (!(s->t < t_target)) break;
         }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);

@@ -194,7 +194,7 @@ static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
 /* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a
  * sine part), held inputs with a change of the external force at 20 s and an observer's window
  * [12, 18]: the stuck fast path on and off, through engine.c and inlined, end on the same bits and
- * observe the same phases; on, it asks the model's breakaway and takes a quarter fewer friction solves
+ * observe the same motion (on, a stuck stretch taken at once is one phase); on, it asks the model's breakaway and takes a quarter fewer friction solves
  * (the stick phases outside the window: about half the time; a sliding step takes several). */
 static void test_stuck_fast_path(checks *T)
 {
@@ -244,8 +244,14 @@ static void test_stuck_fast_path(checks *T)
     CHECK(4 * H[1].solves < 3 * H[0].solves); /* (the stick phases outside the window skipped) */
     for (int r = 1; r < 4; r++) {
         CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
-        CHECK(H[r].phases == H[0].phases && H[r].t_sum == H[0].t_sum && H[r].x_max == H[0].x_max);
+        /* the same phases off (r = 2) and on (r = 3) through either build; on, a stuck stretch taken at
+         * once is one phase (fewer phases, the same time observed to rounding, the same positions) */
+        const int ref = r & 1;
+        CHECK(H[r].phases == H[ref].phases && H[r].t_sum == H[ref].t_sum && H[r].x_max == H[ref].x_max);
+        CHECK(H[r].phases <= H[0].phases && fabs(H[r].t_sum - H[0].t_sum) <= 1e-12 * H[0].t_sum &&
+              H[r].x_max == H[0].x_max);
     }
+    CHECK(H[1].phases < H[0].phases);
     CHECK(H[0].phases > 100);
     for (int r = 0; r < 4; r++) {
         eng_state_free(E[r], &s[r]);
