@@ -80,6 +80,8 @@ void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in)
 #define ENG_FN(name) osc_##name
 #define ENG_N(E) ((void)(E), (size_t)1)
 #define ENG_NC(E) ((void)(E), (size_t)1)
+#define ENG_FUSED_N 1
+#define ENG_FUSED_NC 1
 #define ENG_CTX(E) ((E)->S.ops.ctx)
 #define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
