@@ -11,6 +11,9 @@
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
+ *   ENG_ROW_DOT(E, j, x)         w_j . x for the contact rows it knows (a slip; row_dot's arithmetic)
+ *   ENG_OBSERVE(obs, ph, s)      the observer's call (obs->on_phase), for a model that inlines its own
+ *   ENG_FUSED_N, ENG_FUSED_NC    the sizes as constants: the fused steps' state in local arrays
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -64,6 +67,9 @@
 #define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
 #endif
 
+#ifndef ENG_ROW_DOT
+#define ENG_ROW_DOT(E, j, x) row_dot(&(E)->S.rows[(j)], (x))
+#endif
 #ifndef ENG_OBSERVE
 #define ENG_OBSERVE(obs, ph, s) ((obs)->on_phase((obs)->ctx, (ph), (s)))
 #endif
@@ -229,7 +235,7 @@ static void applied_rate(const eng *E, const eng_inputs *in, double t, double *o
 }
 
 /* contact j's slip velocity w_j . V - vb_j */
-static double slip(const eng *E, size_t j, const double *V) { return row_dot(&E->S.rows[j], V) - E->vb[j]; }
+static ENG_HOT double slip(const eng *E, size_t j, const double *V) { return ENG_ROW_DOT(E, j, V) - E->vb[j]; }
 
 /* Factor slot with the coefficients, unless it holds them already. */
 static int factor_slot(eng *E, int slot, double cM, double cC, double cK)
@@ -683,7 +689,7 @@ static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double 
     ph.mode0 = E->mode0;
     ph.f = f;
     ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
-    o->on_phase(o->ctx, &ph, s);
+    ENG_OBSERVE(o, &ph, s);
 }
 
 static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
@@ -916,6 +922,24 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     }
 }
 
+/* Every contact held on a still belt, every DOF pinned at rest by a held contact of its own, held
+ * inputs: the state the model's closed-form breakaway (ENG_BREAKAWAY) is asked about. The loads
+ * must be set. Uses pin. */
+static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    if (ramped(in)) return 0;
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++) {
+        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return 0;
+        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return 0;
+    return 1;
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -955,6 +979,31 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             return ENG_OK;
         }
         if (phase == 0) s->pivot_steps++;
+        /* a structure stuck at rest: the model's closed-form breakaway places the switch where it lies
+         * inside the step (the contact then released: the one most beyond its limit there) */
+        double hs = NAN, t_placed = NAN;
+        int placed = 0;
+        if (ENG_HAS_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
+            /* the first time from the closed form's on at which the trial's holding force is at or
+             * beyond the limit (a few ulps at most: the trial of a structure at rest holds the static
+             * force), so that a step ending there ends with the switch */
+            double tp = ENG_BREAKAWAY(E, s, in, E->Fb), ulp = 0.0;
+            for (int k = 0; k < PLACE_NUDGES && tp > s->t && tp <= t_end; k++) {
+                hs = (tp == t_end) ? r : tp - s->t;
+                trial_margin(&mc, hs, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
+                for (size_t j = 0; j < nc; j++) placed |= E->cand[j] && !(fabs(E->f[j]) < E->Fb[j]);
+                if (placed) {
+                    t_placed = tp;
+                    break;
+                }
+                if (tp == t_end) break;
+                ulp = (ulp == 0.0) ? nextafter(tp, INFINITY) - tp : 2.0 * ulp;
+                tp = (tp + ulp < t_end) ? tp + ulp : t_end;
+            }
+        }
+        if (!placed) {
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
         for (size_t j = 0; j < nc; j++) {
@@ -985,8 +1034,9 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
-        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
         if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
+        }
         trial_margin(&mc, hs, &T);
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
@@ -1004,15 +1054,19 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
-        const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
+        const double t_new = placed ? t_placed : (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
         finish(E, s, &T, E->V1, E->f);
         s->t = t_new;
         loads_at(E, in, s->t);
-        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
+        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit (at a
+         * placed breakaway, the one most beyond it) */
+        size_t jmax = nc;
+        for (size_t j = 0; placed && j < nc; j++)
+            if (E->cand[j] && (jmax == nc || fabs(E->f[j]) / E->Fb[j] > fabs(E->f[jmax]) / E->Fb[jmax])) jmax = j;
         for (size_t j = 0; j < nc; j++) {
             if (!E->cand[j]) continue;
             const int stopping = s->mode[j] != 0 && E->st[j] == 0;
-            const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
+            const int breaking = placed ? j == jmax : s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
             E->cand[j] = stopping || breaking;
         }
         observe(E, s, ta, s->F, hk);
@@ -1323,16 +1377,9 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
                              const eng_hooks *hk, stick_cache *c)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
     const double h = S->h;
     loads_at(E, in, s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < nc; j++) {
-        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return s->n_grid;
-        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    }
-    for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return s->n_grid;
+    if (!stuck_at_rest(E, in, s)) return s->n_grid;
     if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
         c->tb = ENG_BREAKAWAY(E, s, in, E->Fb);
         c->sw = s->switches;
