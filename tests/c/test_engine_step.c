@@ -240,7 +240,9 @@ static void test_stuck_fast_path(checks *T)
            H[0].solves, H[1].solves, H[1].asks, s[0].X[0]);
     check_context(T, "one block, located, the stuck fast path against the steps one by one");
     CHECK(L[0].count >= 10);
-    CHECK(H[0].asks == 0 && H[1].asks > 0); /* (the inline runs call the block's hooks directly) */
+    /* the breakaway placed by the model's closed form with the fast path off too (the same numbers);
+     * on, asked for the stuck stretches as well (the inline runs call the block's hooks directly) */
+    CHECK(H[0].asks > 0 && H[1].asks > H[0].asks);
     CHECK(4 * H[1].solves < 3 * H[0].solves); /* (the stick phases outside the window skipped) */
     for (int r = 1; r < 4; r++) {
         CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));

@@ -134,13 +134,14 @@ static dfo_status status_of(eng_status st)
     return DFO_ERR_LCP;
 }
 
-/* ---- the hooks: switches and observables -------------------------------------------------------- */
+/* ---- the hooks: switches (the observables: osc_engine.h's osc_eng_observe) ------------------------- */
 
 typedef struct {
     const dfo_model *M;
     dfo_state *s;           /* the observables' home */
     dfo_switch_fn on_switch;
     void *switch_ctx;
+    osc_observables obs;    /* the observer's context */
 } hook_ctx;
 
 /* A switch: reported with the block's position, counted as a transition where it lies in the window
@@ -154,53 +155,19 @@ static void on_switch(void *ctx, double t, size_t contact, const eng_state *es, 
     if (H->on_switch) H->on_switch(H->switch_ctx, t, es->X[0], from, to);
 }
 
-/* The part of [a, b] inside the observation window (comparisons, not fmin/fmax: those are library
- * calls without -ffinite-math-only). */
-static double in_window(const dfo_model *M, double a, double b)
-{
-    const double w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
-    const double lo = (a > w0) ? a : w0, hi = (b < w1) ? b : w1;
-    return (hi > lo) ? hi - lo : 0.0;
-}
-
-/* A phase [ta, tb] that overlaps the window (the engine calls no other): the stuck stretch opened or
- * closed at its start (its part inside the window added in one piece when a phase in another mode
- * begins, so that the stuck time is the same however the steps are taken), and where it ends inside
- * the window X sampled and the friction's work on the relative motion counted (none where it ends
- * on the window's start). */
-static void on_phase(void *ctx, const eng_phase *ph, const eng_state *es)
-{
-    const hook_ctx *H = (const hook_ctx *)ctx;
-    const dfo_model *M = H->M;
-    dfo_state *s = H->s;
-    const double ta = ph->ta, tb = ph->tb, w0 = M->p.t_obs_start, w1 = M->p.t_obs_stop;
-    if (ph->mode0[0] == 0) {
-        if (isnan(s->stuck_from)) s->stuck_from = ta;
-    } else if (!isnan(s->stuck_from)) {
-        const double d = in_window(M, s->stuck_from, ta);
-        if (d > 0.0) s->t_stuck += d;
-        s->stuck_from = NAN;
-    }
-    if (tb < w0 || tb > w1) return;
-    const double X = es->X[0], dX = X - ph->X0[0];
-    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
-    if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
-    if (!(tb > w0)) W = 0.0;
-    s->x_max = (X > s->x_max) ? X : s->x_max;
-    s->x_min = (X < s->x_min) ? X : s->x_min;
-    s->E_friction -= W;
-}
-
 static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hooks *hk)
 {
     memset(hk, 0, sizeof *hk);
     hk->on_switch = on_switch;
     hk->switch_ctx = H;
     if (!M->p.observe) return;
+    H->obs.w0 = M->p.t_obs_start;
+    H->obs.w1 = M->p.t_obs_stop;
+    H->obs.s = H->s;
     obs->t_start = M->p.t_obs_start;
     obs->t_stop = M->p.t_obs_stop;
-    obs->on_phase = on_phase;
-    obs->ctx = H;
+    obs->on_phase = osc_eng_observe;
+    obs->ctx = &H->obs;
     hk->obs = obs;
 }
 
@@ -214,7 +181,7 @@ dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_stat
     osc_eng_inbuf ib;
     eng_inputs ei;
     osc_eng_inputs(in, &ib, &ei);
-    hook_ctx H = {M, s, on_switch_fn, switch_ctx};
+    hook_ctx H = {M, s, on_switch_fn, switch_ctx, {0.0, 0.0, NULL}};
     eng_observer obs;
     eng_hooks hk;
     hooks_of(M, &H, &obs, &hk);
@@ -238,7 +205,7 @@ void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inpu
     eng_inputs e_old, e_new;
     osc_eng_inputs(old_in, &ib_old, &e_old);
     osc_eng_inputs(new_in, &ib_new, &e_new);
-    hook_ctx H = {M, s, NULL, NULL};
+    hook_ctx H = {M, s, NULL, NULL, {0.0, 0.0, NULL}};
     eng_observer obs;
     eng_hooks hk;
     hooks_of(M, &H, &obs, &hk);
@@ -249,7 +216,7 @@ void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inpu
 
 double dfo_stuck_time(const dfo_model *M, const dfo_state *s)
 {
-    return isnan(s->stuck_from) ? s->t_stuck : s->t_stuck + in_window(M, s->stuck_from, s->t);
+    return isnan(s->stuck_from) ? s->t_stuck : s->t_stuck + osc_in_window(M->p.t_obs_start, M->p.t_obs_stop, s->stuck_from, s->t);
 }
 
 double dfo_stick_fraction(const dfo_model *M, const dfo_state *s)

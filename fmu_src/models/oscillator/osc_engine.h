@@ -28,6 +28,10 @@ typedef struct {
 } osc_eng_inbuf;
 void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in);
 
+/* The observer of the oscillator's observables (ctx: an osc_observables): osc_engine_ops.h's
+ * osc_observe_phase, which the specialised schemes call inline. */
+void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s);
+
 /* engine.h's entry points, the schemes specialised by the oscillator's operators (osc_eng_start,
  * osc_eng_advance, ...), are declared by osc_engine_ops.h. */
 
