@@ -986,21 +986,34 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (ENG_HAS_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
             /* the first time from the closed form's on at which the trial's holding force is at or
              * beyond the limit (a few ulps at most: the trial of a structure at rest holds the static
-             * force), so that a step ending there ends with the switch */
+             * force), so that a step ending there ends with the switch; a closed form that misses the
+             * trial's force by more than rounding (a phase too large for it) is not used */
             double tp = ENG_BREAKAWAY(E, s, in, E->Fb), ulp = 0.0;
             for (int k = 0; k < PLACE_NUDGES && tp > s->t && tp <= t_end; k++) {
                 hs = (tp == t_end) ? r : tp - s->t;
                 trial_margin(&mc, hs, &T);
                 s->solves++;
                 if (mc.err != ENG_OK) return mc.err;
-                for (size_t j = 0; j < nc; j++) placed |= E->cand[j] && !(fabs(E->f[j]) < E->Fb[j]);
-                if (placed) {
+                int beyond = 0, far = 0; /* a force beyond its limit, farther than rounding */
+                for (size_t j = 0; j < nc; j++) {
+                    if (!E->cand[j] || fabs(E->f[j]) < E->Fb[j]) continue;
+                    beyond = 1;
+                    far |= !(fabs(E->f[j]) - E->Fb[j] <= PLACE_REL * E->Fb[j]);
+                }
+                if (far) break; /* the closed form is off (the margins' root instead) */
+                if (beyond) {
+                    placed = 1;
                     t_placed = tp;
                     break;
                 }
                 if (tp == t_end) break;
                 ulp = (ulp == 0.0) ? nextafter(tp, INFINITY) - tp : 2.0 * ulp;
                 tp = (tp + ulp < t_end) ? tp + ulp : t_end;
+            }
+            if (!placed && !isnan(hs)) { /* the whole remainder's trial again, for the bracket below */
+                trial_margin(&mc, r, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
             }
         }
         if (!placed) {
@@ -1124,6 +1137,9 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
     double F[ENG_FUSED_NC + 1], f[ENG_FUSED_NC + 1], lim[ENG_FUSED_NC + 1];
     int mode[ENG_FUSED_NC + 1], st[ENG_FUSED_NC + 1], mode0[ENG_FUSED_NC + 1], pin[ENG_FUSED_N];
+    /* the state's arrays, their addresses read once (a store through one may not change them) */
+    double *const sX = s->X, *const sV = s->V, *const sA = s->A, *const shA = s->hA, *const sF = s->F;
+    int *const smode = s->mode;
     for (size_t i = 0; i < n; i++) {
         X[i] = s->X[i];
         V[i] = s->V[i];
@@ -1137,14 +1153,14 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
 #define ENG_FUSED_STORE_()                                                                                          \
     do {                                                                                                            \
         for (size_t i_ = 0; i_ < n; i_++) {                                                                         \
-            s->X[i_] = X[i_];                                                                                       \
-            s->V[i_] = V[i_];                                                                                       \
-            s->A[i_] = A[i_];                                                                                       \
-            s->hA[i_] = hA[i_];                                                                                     \
+            sX[i_] = X[i_];                                                                                         \
+            sV[i_] = V[i_];                                                                                         \
+            sA[i_] = A[i_];                                                                                         \
+            shA[i_] = hA[i_];                                                                                       \
         }                                                                                                           \
         for (size_t j_ = 0; j_ < nc; j_++) {                                                                        \
-            s->F[j_] = F[j_];                                                                                       \
-            s->mode[j_] = mode[j_];                                                                                 \
+            sF[j_] = F[j_];                                                                                         \
+            smode[j_] = mode[j_];                                                                                   \
         }                                                                                                           \
     } while (0)
 #else
