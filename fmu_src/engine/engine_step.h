@@ -484,6 +484,15 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
     return ENG_OK;
 }
 
+/* The force a held contact may carry in the problem P: its limit, and for a Stribeck contact at
+ * least the law's value at rest, N mu(0) (a slide whose speed has no positive root, q below N mu(0),
+ * comes to rest and holds: the active set would otherwise flip it between held and sliding). */
+static double held_limit(const eng_problem *P, size_t j)
+{
+    if (!P->law || P->law[j].law != DFO_LAW_STRIBECK) return P->limit[j];
+    return fmax(P->limit[j], P->N[j] * dfo_friction_mu(&P->law[j], 0.0));
+}
+
 /* The LCP by an active set (principal pivoting on the basis solve): infeasible contacts flipped,
  * at most ACTIVE_SET_ROUNDS per contact: for the Stribeck law, a singular D, and where Lemke fails. */
 static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, double *V1, double *f, int *pivots)
@@ -497,7 +506,7 @@ static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, doub
         for (size_t j = 0; j < nc; j++) {
             if (!(P->limit[j] > 0.0)) continue;
             const double v = row_dot(&E->S.rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
-            if (mode[j] == 0 && fabs(f[j]) > P->limit[j]) { mode[j] = -sgn(f[j]); changed = 1; }
+            if (mode[j] == 0 && fabs(f[j]) > held_limit(P, j)) { mode[j] = -sgn(f[j]); changed = 1; }
             else if (mode[j] != 0 && mode[j] * v < 0.0) { mode[j] = 0; changed = 1; }
         }
         if (!changed) { if (pivots) *pivots = piv; return ENG_OK; }
@@ -522,7 +531,7 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     for (size_t j = 0; j < nc && feasible; j++) {
         if (!(P->limit[j] > 0.0)) continue;
         const double v = row_dot(&S->rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
-        feasible = (mode[j] == 0) ? fabs(f[j]) <= P->limit[j] : mode[j] * v > 0.0;
+        feasible = (mode[j] == 0) ? fabs(f[j]) <= held_limit(P, j) : mode[j] * v > 0.0;
     }
     if (feasible) return ENG_OK;
     /* the contacts with friction: the 2 m LCP in (u+, u-), w = (l + f, l - f), f = D^-1 (u+ - u- - c) */
