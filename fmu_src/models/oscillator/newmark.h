@@ -2,9 +2,12 @@
  *
  * Three Bossak variants (dfo_scheme): the paper's literal scheme, the consistent stick test (first
  * order) and the located scheme (default; every stick/slip switch placed inside its step, second
- * order), advanced by dfo_bossak_advance below scheme.h's dfo_advance, which dispatches every scheme.
- * Start-up, the outputs at a state and the grid snapping below serve every scheme (the exact scheme's
- * excitation is oscillator.h's dfo_excitation_exact).
+ * order), advanced by dfo_bossak_advance below scheme.h's dfo_advance, which dispatches every scheme:
+ * the friction engine's schemes (fmu_src/engine) specialised by the oscillator's operators
+ * (osc_engine.h), the state, inputs, switches and observables mapped (osc_bossak.c: dfo_bossak_advance,
+ * dfo_new_inputs, dfo_stuck_time, dfo_stick_fraction). Start-up, the outputs at a state and the grid
+ * snapping (newmark.c) serve every scheme (the exact scheme's excitation is oscillator.h's
+ * dfo_excitation_exact).
  * The internal grid is t0 + n h; dfo_advance ends exactly on any requested time off that grid with a
  * shortened step whose Bossak acceleration is corrected for the new length (method.md section 8),
  * and on the grid point itself when the requested time is a host's rounding of one (see "Snapping

@@ -65,58 +65,44 @@ static int stepper_init(stepper *P, const dfo_model *M)
     return P->E != NULL;
 }
 
+/* The scalars the engine's state and dfo_state share: (eng_state's, dfo_state's). */
+#define SHARED_SCALARS(DO)                                                                                           \
+    DO(t, t) DO(n_grid, n) DO(t_switch, t_switch) DO(steps, steps) DO(solves, lcp_solves) DO(exc_n, exc_n)         \
+    DO(exc_c, exc_c) DO(exc_s, exc_s)
+/* The block's arrays of length one: (eng_state's, dfo_state's). */
+#define SHARED_ARRAYS(DO) DO(X, X) DO(V, V) DO(A, A) DO(hA, hA) DO(F, F) DO(mode, mode)
+
 static void state_to_engine(stepper *P, const dfo_state *s)
 {
     eng_state *e = &P->es;
     memset(e, 0, sizeof *e);
-    P->a.X = s->X;
-    P->a.V = s->V;
-    P->a.A = s->A;
-    P->a.hA = s->hA;
-    P->a.F = s->F;
-    P->a.mode = s->mode;
+    e->n = e->nc = 1;
+    e->t0 = s->t0;
+#define TO_ENG_SCALAR(ef, sf) e->ef = s->sf;
+#define TO_ENG_ARRAY(ef, sf) P->a.ef = s->sf; e->ef = &P->a.ef;
+    SHARED_SCALARS(TO_ENG_SCALAR)
+    SHARED_ARRAYS(TO_ENG_ARRAY)
+#undef TO_ENG_SCALAR
+#undef TO_ENG_ARRAY
+    /* written by the engine only (its schemes keep no breakaway across calls) */
     P->a.t_stick = s->t;
     P->a.t_break = NAN;
     P->a.break_dir = 0;
-    e->n = e->nc = 1;
-    e->t0 = s->t0;
-    e->t = s->t;
-    e->n_grid = s->n;
-    e->X = &P->a.X;
-    e->V = &P->a.V;
-    e->A = &P->a.A;
-    e->hA = &P->a.hA;
-    e->F = &P->a.F;
-    e->mode = &P->a.mode;
     e->t_stick = &P->a.t_stick;
     e->t_break = &P->a.t_break;
     e->break_dir = &P->a.break_dir;
-    e->t_switch = s->t_switch;
-    e->steps = s->steps;
-    e->solves = s->lcp_solves;
-    e->exc_n = s->exc_n;
-    e->exc_c = s->exc_c;
-    e->exc_s = s->exc_s;
     e->J = NULL; /* no Bossak scheme propagates the Jacobian (eng_caps): dfo_state's J is left */
 }
 
 static void state_from_engine(const stepper *P, dfo_state *s)
 {
     const eng_state *e = &P->es;
-    s->t = e->t;
-    s->n = e->n_grid;
-    s->X = P->a.X;
-    s->V = P->a.V;
-    s->A = P->a.A;
-    s->hA = P->a.hA;
-    s->F = P->a.F;
-    s->mode = P->a.mode;
-    s->t_switch = e->t_switch;
-    s->steps = e->steps;
-    s->lcp_solves = e->solves;
-    s->exc_n = e->exc_n;
-    s->exc_c = e->exc_c;
-    s->exc_s = e->exc_s;
+#define FROM_ENG_SCALAR(ef, sf) s->sf = e->ef;
+#define FROM_ENG_ARRAY(ef, sf) s->sf = P->a.ef;
+    SHARED_SCALARS(FROM_ENG_SCALAR)
+    SHARED_ARRAYS(FROM_ENG_ARRAY)
+#undef FROM_ENG_SCALAR
+#undef FROM_ENG_ARRAY
 }
 
 static dfo_status status_of(eng_status st)
@@ -173,21 +159,34 @@ static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hoo
 
 /* ---- the entry points ----------------------------------------------------------------------------- */
 
+/* One call: the engine, its hooks, the state mapped onto the engine's. */
+typedef struct {
+    stepper P;
+    hook_ctx H;
+    eng_observer obs;
+    eng_hooks hk;
+} call;
+
+static int call_begin(call *C, const dfo_model *M, dfo_state *s, dfo_switch_fn on_switch_fn, void *switch_ctx)
+{
+    if (!stepper_init(&C->P, M)) return 0;
+    const hook_ctx H = {M, s, on_switch_fn, switch_ctx, {0.0, 0.0, NULL}};
+    C->H = H;
+    hooks_of(M, &C->H, &C->obs, &C->hk);
+    state_to_engine(&C->P, s);
+    return 1;
+}
+
 dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                               dfo_switch_fn on_switch_fn, void *switch_ctx)
 {
-    stepper P;
-    if (!stepper_init(&P, M)) return DFO_ERR_LCP;
+    call C;
+    if (!call_begin(&C, M, s, on_switch_fn, switch_ctx)) return DFO_ERR_LCP;
     osc_eng_inbuf ib;
     eng_inputs ei;
     osc_eng_inputs(in, &ib, &ei);
-    hook_ctx H = {M, s, on_switch_fn, switch_ctx, {0.0, 0.0, NULL}};
-    eng_observer obs;
-    eng_hooks hk;
-    hooks_of(M, &H, &obs, &hk);
-    state_to_engine(&P, s);
-    const eng_status st = osc_eng_advance(P.E, &ei, &P.es, t_target, &hk);
-    state_from_engine(&P, s);
+    const eng_status st = osc_eng_advance(C.P.E, &ei, &C.P.es, t_target, &C.hk);
+    state_from_engine(&C.P, s);
     if (st != ENG_OK) return status_of(st);
     if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX && fabs(s->F) <= DBL_MAX))
         return DFO_ERR_NONFINITE;
@@ -198,20 +197,14 @@ dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_stat
 
 void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
 {
-    if (M->p.scheme == DFO_SCHEME_EXACT) return;
-    stepper P;
-    if (!stepper_init(&P, M)) return;
+    call C;
+    if (M->p.scheme == DFO_SCHEME_EXACT || !call_begin(&C, M, s, NULL, NULL)) return;
     osc_eng_inbuf ib_old, ib_new;
     eng_inputs e_old, e_new;
     osc_eng_inputs(old_in, &ib_old, &e_old);
     osc_eng_inputs(new_in, &ib_new, &e_new);
-    hook_ctx H = {M, s, NULL, NULL, {0.0, 0.0, NULL}};
-    eng_observer obs;
-    eng_hooks hk;
-    hooks_of(M, &H, &obs, &hk);
-    state_to_engine(&P, s);
-    osc_eng_new_inputs(P.E, &e_old, &e_new, &P.es, &hk);
-    state_from_engine(&P, s);
+    osc_eng_new_inputs(C.P.E, &e_old, &e_new, &C.P.es, &C.hk);
+    state_from_engine(&C.P, s);
 }
 
 double dfo_stuck_time(const dfo_model *M, const dfo_state *s)

@@ -28,29 +28,10 @@ eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, c
     O->mu_k[0] = M->mu_k;
     O->Pc[0] = p->P0;
     O->law[0] = M->law;
-    eng_setup S;
-    memset(&S, 0, sizeof S);
-    S.n = 1;
-    S.nc = 1;
     const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
-    S.ops = ops;
-    S.rows = &O->row;
-    S.exc.omega = p->omega;
-    S.exc.phi0 = p->phi;
-    S.exc.Pc = O->Pc;
-    S.N = O->N;
-    S.mu_s = O->mu_s;
-    S.mu_k = O->mu_k;
-    S.law = M->stribeck ? O->law : NULL;
-    S.h = p->h;
-    S.alpha = p->alpha;
-    S.scheme = p->scheme;
-    S.friction_updates = p->frictionUpdates;
-    S.fast_paths = M->fast;
-    S.rate_max = M->rate_max;
-    S.snap_max_rel_h = SNAP_MAX_REL_H;
-    S.snap_min_rel_h = SNAP_MIN_REL_H;
-    S.snap_eps_t = SNAP_EPS_T;
+    const eng_setup S = {1, 1, ops, &O->row, {p->omega, p->phi, O->Pc, NULL}, O->N, O->mu_s, O->mu_k,
+                         M->stribeck ? O->law : NULL, p->h, p->alpha, p->scheme, p->frictionUpdates, M->fast,
+                         M->rate_max, SNAP_MAX_REL_H, SNAP_MIN_REL_H, SNAP_EPS_T};
     O->E = eng_create(&S, al, err);
     return O->E;
 }

@@ -6,8 +6,9 @@
  * osc_eng_advance, ...). The engine object is made by osc_eng_create; the same operators through
  * eng_ops's function pointers (engine.c's eng_* functions) give the same bits.
  *
- * Not yet the oscillator's stepper: the FMU steps with newmark.c (dfo_advance). This is the model
- * side of moving its Bossak schemes onto the engine; tests/c/test_engine_step.c compares the two.
+ * The oscillator's Bossak schemes step with it: osc_bossak.c's dfo_bossak_advance (below scheme.h's
+ * dfo_advance) makes the engine per call and maps the state, the inputs, the switches and the
+ * observables (osc_eng_observe, inlined into the specialised schemes).
  *
  * Plain C, no FMI types. */
 #ifndef DFO_OSC_ENGINE_H
