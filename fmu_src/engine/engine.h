@@ -241,7 +241,8 @@ typedef void (*eng_switch_fn)(void *ctx, double t, size_t contact, const eng_sta
  * extremes, stick times, transitions and dissipated energy. */
 typedef struct {
     double ta, tb;
-    const double *X0;           /* n: positions at ta (s->X holds those at tb) */
+    const double *X0;           /* n: positions at ta */
+    const double *X1;           /* n: positions at tb */
     const int *mode0;           /* nc: modes during the phase (s->mode holds those after it) */
     const double *f;            /* nc: the contact forces over it (for the work: the step's end value, or
                                  * for Stribeck the mean of its ends) */
@@ -250,7 +251,10 @@ typedef struct {
 
 /* The observer: on_phase is called only for phases that overlap [t_start, t_stop] (so a run that
  * observes nothing pays one comparison per phase); every internal step, and every sub-step
- * between switches, is a phase. */
+ * between switches, is a phase. It reads the phase (ph) and the state s after it; in a model's
+ * specialised fused steps (engine_step.h's ENG_FUSED_N) the state is written back only when a run
+ * of them ends, so that there s's time and arrays are those of the run's start (ph->tb and ph->X1
+ * are the phase's end). */
 typedef struct {
     double t_start, t_stop;
     void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);

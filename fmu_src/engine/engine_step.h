@@ -695,6 +695,7 @@ static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double 
     ph.ta = ta;
     ph.tb = s->t;
     ph.X0 = E->X0;
+    ph.X1 = s->X;
     ph.mode0 = E->mode0;
     ph.f = f;
     ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
@@ -1144,6 +1145,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
 #if ENG_FUSED_LOCAL
     double X[ENG_FUSED_N], V[ENG_FUSED_N], A[ENG_FUSED_N], hA[ENG_FUSED_N], X0[ENG_FUSED_N];
     double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
+    double X1[ENG_FUSED_N], F1[ENG_FUSED_NC + 1]; /* the observed phase's end (copies: X, F stay in registers) */
     double F[ENG_FUSED_NC + 1], f[ENG_FUSED_NC + 1], lim[ENG_FUSED_NC + 1];
     int mode[ENG_FUSED_NC + 1], st[ENG_FUSED_NC + 1], mode0[ENG_FUSED_NC + 1], pin[ENG_FUSED_N];
     /* the state's arrays, their addresses read once (a store through one may not change them) */
@@ -1174,6 +1176,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     } while (0)
 #else
     double *const X = s->X, *const V = s->V, *const A = s->A, *const hA = s->hA, *const X0 = E->X0;
+    const double *const X1 = s->X, *const F1 = s->F;
     double *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2, *const ph = E->ph, *const V1 = E->V1;
     double *const F = s->F, *const f = E->f, *const lim = E->lim;
     int *const mode = s->mode, *const st = E->st, *const mode0 = E->mode0, *const pin = E->pin;
@@ -1286,15 +1289,20 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
                 }
             }
         if (observed) {
+#if ENG_FUSED_LOCAL
+            for (size_t i = 0; i < n; i++) X1[i] = X[i];
+            for (size_t j = 0; j < nc; j++) F1[j] = F[j];
+#else
             s->t = t;
             s->n_grid = ng;
-            ENG_FUSED_STORE_();
+#endif
             eng_phase phs;
             phs.ta = ta;
             phs.tb = t;
             phs.X0 = X0;
+            phs.X1 = X1;
             phs.mode0 = mode0;
-            phs.f = s->F;
+            phs.f = F1;
             phs.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
             ENG_OBSERVE(obs, &phs, s);
         }

@@ -189,7 +189,8 @@ static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
     hook_count *H = ctx;
     H->phases++;
     H->t_sum += ph->tb - ph->ta;
-    H->x_max = fmax(H->x_max, s->X[0]);
+    (void)s;
+    H->x_max = fmax(H->x_max, ph->X1[0]);
 }
 
 /* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a

@@ -64,7 +64,8 @@ static inline void osc_observe_phase(void *ctx, const eng_phase *ph, const eng_s
         s->stuck_from = NAN;
     }
     if (tb < O->w0 || tb > O->w1) return;
-    const double X = es->X[0], dX = X - ph->X0[0];
+    (void)es;
+    const double X = ph->X1[0], dX = X - ph->X0[0];
     double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
     if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
     if (!(tb > O->w0)) W = 0.0;
