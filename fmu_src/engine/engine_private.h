@@ -45,6 +45,7 @@ struct eng {
     double *zero_nc;
     /* per-DOF workspace */
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
+    int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;

@@ -193,7 +193,8 @@ static double slide_mag(const eng *E, size_t j, double u)
     return is_strib(E, j) ? E->Nn[j] * dfo_friction_mu(&E->S.law[j], u) : E->mukN[j];
 }
 
-/* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
+/* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated
+ * (only what the excitation reads: cos where Pc is given, sin where Ps is) */
 static ENG_HOT void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
 {
     if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
@@ -201,8 +202,8 @@ static ENG_HOT void phase_of(const eng *E, const eng_state *s, double t, double 
         *sw = dfo_clamp1(s->exc_s);
         return;
     }
-    *cw = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
-    *sw = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    *cw = E->S.exc.Pc ? dfo_cos(E->S.exc.omega * t + E->S.exc.phi0) : 0.0;
+    *sw = E->S.exc.Ps ? dfo_sin(E->S.exc.omega * t + E->S.exc.phi0) : 0.0;
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
@@ -623,9 +624,12 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
     }
     if (any) {
         double *acc = E->acc, *jk = E->jk;
-        loads_at(E, in, s->t);
-        phys_accel(E, s, s->t, s->mode, acc, E->f2);
-        jerks(E, in, s, acc, jk);
+        if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
+            loads_at(E, in, s->t);
+            phys_accel(E, s, s->t, s->mode, acc, E->f2);
+            jerks(E, in, s, acc, jk);
+            E->jk_ok = 1;
+        }
         loads_at(E, in, t1);
         for (size_t i = 0; i < n; i++) {
             const double hA = s->hA[i];
@@ -682,6 +686,7 @@ static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const dou
 static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta)
 {
     *ta = s->t;
+    E->jk_ok = 0; /* the jerks of the phase's start: to be computed (trial_step) */
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }

@@ -1,30 +1,23 @@
 /* The oscillator's Bossak schemes (paper, consistent, located) stepped by the friction engine: its
  * model of osc_engine.h (the engine's schemes specialised by the block's operators), the state and
  * the inputs mapped onto the engine's, the observables kept by the engine's observer hook and the
- * switches reported through its switch hook. See newmark.h (dfo_bossak_advance, dfo_new_inputs).
- *
- * The engine of a call is made on the stack (a fixed arena: one DOF, one contact), so that a
- * dfo_model stays a plain value without pointers; its set-up is a few hundred ns per call. */
+ * switches reported through its switch hook. See newmark.h (dfo_bossak_advance, dfo_new_inputs)
+ * and osc_bossak.h (the engine a caller keeps; without one, made on the stack per call, so that a
+ * dfo_model stays a plain value without pointers). */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "newmark.h"
+#include "osc_bossak.h"
 #include "osc_engine.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-#define ARENA_DOUBLES 1024 /* 8 KiB: the engine of one DOF and one contact needs about 2 KiB */
-
-/* ---- the engine of one call ------------------------------------------------------------------- */
-
-typedef struct {
-    double *buf;
-    size_t used, cap; /* in doubles */
-} arena;
+/* ---- the engine ---------------------------------------------------------------------------------- */
 
 static void *arena_allocate(void *env, size_t nobj, size_t size)
 {
-    arena *a = (arena *)env;
+    osc_arena *a = (osc_arena *)env;
     if (size != 0 && nobj > SIZE_MAX / size) return NULL;
     const size_t words = (nobj * size + sizeof(double) - 1) / sizeof(double);
     if (words > a->cap - a->used) return NULL;
@@ -40,28 +33,45 @@ static void arena_release(void *env, void *obj)
     (void)obj;
 }
 
+/* The engine of c for the model M: kept where c was made for M at its place, else made (NULL: the
+ * model's engine cannot be made, which a valid model never meets). */
+static eng *engine_of(osc_bossak_engine *c, const dfo_model *M)
+{
+    if (c->self == c && c->E && memcmp(&c->M, M, sizeof *M) == 0) return c->E;
+    c->self = NULL;
+    c->ar.buf = c->buf;
+    c->ar.used = 0;
+    c->ar.cap = OSC_BOSSAK_ARENA;
+    const eng_alloc al = {arena_allocate, arena_release, &c->ar};
+    c->E = osc_eng_create(M, &c->O, &al, NULL);
+    if (!c->E) return NULL;
+    c->M = *M;
+    c->self = c;
+    return c->E;
+}
+
 /* The engine's state of the block: its arrays of length one. */
 typedef struct {
     double X, V, A, hA, F, t_stick, t_break;
     int mode, break_dir;
 } block_arrays;
 
+/* One call's engine (the caller's, or its own) and the state mapped onto the engine's. */
 typedef struct {
-    double buf[ARENA_DOUBLES];
-    arena ar;
-    osc_eng_model O;
+    osc_bossak_engine own;
     eng *E;
     block_arrays a;
     eng_state es;
 } stepper;
 
-static int stepper_init(stepper *P, const dfo_model *M)
+static int stepper_init(stepper *P, const dfo_model *M, osc_bossak_engine *cache)
 {
-    P->ar.buf = P->buf;
-    P->ar.used = 0;
-    P->ar.cap = ARENA_DOUBLES;
-    const eng_alloc al = {arena_allocate, arena_release, &P->ar};
-    P->E = osc_eng_create(M, &P->O, &al, NULL);
+    if (!cache) {
+        P->own.self = NULL;
+        P->own.E = NULL;
+        cache = &P->own;
+    }
+    P->E = engine_of(cache, M);
     return P->E != NULL;
 }
 
@@ -167,9 +177,10 @@ typedef struct {
     eng_hooks hk;
 } call;
 
-static int call_begin(call *C, const dfo_model *M, dfo_state *s, dfo_switch_fn on_switch_fn, void *switch_ctx)
+static int call_begin(call *C, const dfo_model *M, osc_bossak_engine *cache, dfo_state *s, dfo_switch_fn on_switch_fn,
+                      void *switch_ctx)
 {
-    if (!stepper_init(&C->P, M)) return 0;
+    if (!stepper_init(&C->P, M, cache)) return 0;
     const hook_ctx H = {M, s, on_switch_fn, switch_ctx, {0.0, 0.0, NULL}};
     C->H = H;
     hooks_of(M, &C->H, &C->obs, &C->hk);
@@ -177,11 +188,11 @@ static int call_begin(call *C, const dfo_model *M, dfo_state *s, dfo_switch_fn o
     return 1;
 }
 
-dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
-                              dfo_switch_fn on_switch_fn, void *switch_ctx)
+dfo_status dfo_bossak_advance(const dfo_model *M, osc_bossak_engine *cache, const dfo_inputs *in, dfo_state *s,
+                              double t_target, dfo_switch_fn on_switch_fn, void *switch_ctx)
 {
     call C;
-    if (!call_begin(&C, M, s, on_switch_fn, switch_ctx)) return DFO_ERR_LCP;
+    if (!call_begin(&C, M, cache, s, on_switch_fn, switch_ctx)) return DFO_ERR_LCP;
     osc_eng_inbuf ib;
     eng_inputs ei;
     osc_eng_inputs(in, &ib, &ei);
@@ -195,16 +206,22 @@ dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_stat
     return DFO_OK;
 }
 
-void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
+void dfo_new_inputs_cached(const dfo_model *M, osc_bossak_engine *cache, const dfo_inputs *old_in,
+                           const dfo_inputs *new_in, dfo_state *s)
 {
     call C;
-    if (M->p.scheme == DFO_SCHEME_EXACT || !call_begin(&C, M, s, NULL, NULL)) return;
+    if (M->p.scheme == DFO_SCHEME_EXACT || !call_begin(&C, M, cache, s, NULL, NULL)) return;
     osc_eng_inbuf ib_old, ib_new;
     eng_inputs e_old, e_new;
     osc_eng_inputs(old_in, &ib_old, &e_old);
     osc_eng_inputs(new_in, &ib_new, &e_new);
     osc_eng_new_inputs(C.P.E, &e_old, &e_new, &C.P.es, &C.hk);
     state_from_engine(&C.P, s);
+}
+
+void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
+{
+    dfo_new_inputs_cached(M, NULL, old_in, new_in, s);
 }
 
 double dfo_stuck_time(const dfo_model *M, const dfo_state *s)
