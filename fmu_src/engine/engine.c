@@ -211,7 +211,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);
-    E->trig_t = NAN;
+    E->trig_tc = E->trig_ts = NAN;
     const eng_sparse *sp = S->sparse;
     if (sp && sp->span && sp->span_bind && sp->span_max > 0 && sp->held_basis && S->ops.friction &&
         sp->span_ops.friction && nc > 0 &&

@@ -20,6 +20,8 @@
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
 #define HALVINGS 60              /* search for a resolvable sub-step before the first switch */
+#define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to the trial's switch */
+#define PLACE_REL 1e-11          /* a placed breakaway: the force beyond its limit by at most this share */
 #define LEMKE_PIVOTS_PER_N 8     /* Lemke's pivot budget: 8 (2 nc) + 16 */
 #define ACTIVE_SET_ROUNDS 4      /* the active-set fallback: rounds per contact */
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
@@ -43,6 +45,7 @@ struct eng {
     double *zero_nc;
     /* per-DOF workspace */
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
+    int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;
@@ -52,8 +55,8 @@ struct eng {
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
-    double trig_t, trig_c, trig_s; /* cos, sin of omega t + phi0 at the last t evaluated (trig_at: a cache
-                                  * keyed by t, as the slots' by their coefficients; NaN: empty) */
+    double trig_tc, trig_c, trig_ts, trig_s; /* cos and sin of omega t + phi0 at the last t each was evaluated
+                                  * for (trig_at; NaN: none) */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
      * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
      * Cholesky, Lemke's 2 nc problem */

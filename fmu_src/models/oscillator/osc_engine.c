@@ -28,29 +28,10 @@ eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, c
     O->mu_k[0] = M->mu_k;
     O->Pc[0] = p->P0;
     O->law[0] = M->law;
-    eng_setup S;
-    memset(&S, 0, sizeof S);
-    S.n = 1;
-    S.nc = 1;
     const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
-    S.ops = ops;
-    S.rows = &O->row;
-    S.exc.omega = p->omega;
-    S.exc.phi0 = p->phi;
-    S.exc.Pc = O->Pc;
-    S.N = O->N;
-    S.mu_s = O->mu_s;
-    S.mu_k = O->mu_k;
-    S.law = M->stribeck ? O->law : NULL;
-    S.h = p->h;
-    S.alpha = p->alpha;
-    S.scheme = p->scheme;
-    S.friction_updates = p->frictionUpdates;
-    S.fast_paths = M->fast;
-    S.rate_max = M->rate_max;
-    S.snap_max_rel_h = SNAP_MAX_REL_H;
-    S.snap_min_rel_h = SNAP_MIN_REL_H;
-    S.snap_eps_t = SNAP_EPS_T;
+    const eng_setup S = {1, 1, ops, &O->row, {p->omega, p->phi, O->Pc, NULL}, O->N, O->mu_s, O->mu_k,
+                         M->stribeck ? O->law : NULL, p->h, p->alpha, p->scheme, p->frictionUpdates, M->fast,
+                         M->rate_max, SNAP_MAX_REL_H, SNAP_MIN_REL_H, SNAP_EPS_T, NULL};
     O->E = eng_create(&S, al, err);
     return O->E;
 }
@@ -75,11 +56,19 @@ void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in)
     in->t_ref = u->t_d;
 }
 
+void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_observe_phase(ctx, ph, s); }
+
 /* ---- the schemes, specialised ------------------------------------------------------------------ */
 
 #define ENG_FN(name) osc_##name
 #define ENG_N(E) ((void)(E), (size_t)1)
 #define ENG_NC(E) ((void)(E), (size_t)1)
+#define ENG_FUSED_N 1
+#define ENG_OBSERVE(obs, ph, s)                                                                                      \
+    (((obs)->on_phase == osc_eng_observe) ? osc_observe_phase((obs)->ctx, (ph), (s))                                \
+                                          : (obs)->on_phase((obs)->ctx, (ph), (s)))
+#define ENG_ROW_DOT(E, j, x) ((void)(E), (void)(j), 0.0 + (x)[0]) /* row_dot of w = 1 */
+#define ENG_FUSED_NC 1
 #define ENG_CTX(E) ((E)->S.ops.ctx)
 #define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
