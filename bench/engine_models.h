@@ -261,15 +261,19 @@ static inline int chn_step_held(void *ctx, const eng_held_step *F, eng_state *s)
 }
 
 /* Held block j's next breakaway in closed form (eng_sparse.contact_breakaway) where its neighbours
- * are held too (its static force then P_j(t) + u_j - (K x)_j with x fixed: friction.h's
- * dfo_next_breakaway, as the chain's own chain_block_breakaway); NaN else. */
+ * are held too (its static force then P_j(t) + u_j - (K x)_j with x fixed since the latest of their
+ * stick phases' starts: friction.h's dfo_next_breakaway from there, as the chain's own
+ * chain_block_breakaway); NaN else. */
 static inline double chn_contact_breakaway(void *ctx, size_t j, const eng_harmonic *exc, const eng_state *s,
                                            const eng_inputs *in, const double *Fb)
 {
     const chn_model *C = (const chn_model *)ctx;
     const size_t n = C->n;
-    for (size_t k = (j > 0) ? j - 1 : j; k <= j + 1 && k < n; k++)
+    double ta = s->t_stick[j]; /* since when block j and its neighbours are held: its static force fixed */
+    for (size_t k = (j > 0) ? j - 1 : j; k <= j + 1 && k < n; k++) {
         if (k != j && !(s->mode[k] == 0 && Fb[k] > 0.0)) return NAN;
+        ta = fmax(ta, s->t_stick[k]);
+    }
     const double Pc = exc->Pc ? exc->Pc[j] : 0.0, Ps = exc->Ps ? exc->Ps[j] : 0.0;
     dfo_harmonic P;
     dfo_harmonic_init(&P, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
@@ -279,8 +283,7 @@ static inline double chn_contact_breakaway(void *ctx, size_t j, const eng_harmon
     if (j + 1 < n) kx -= C->k[j + 1] * s->X[j + 1];
     const dfo_loads L = {u, 0.0, 0.0, Fb[j]}; /* (N and the kinetic magnitude are not read) */
     int dir = 0;
-    const double tb = dfo_next_breakaway(&P, &L, u - kx, s->t_stick[j], &dir);
-    return tb;
+    return dfo_next_breakaway(&P, &L, u - kx, ta, &dir);
 }
 
 /* A span's reach for the step h and the Bossak parameter alpha: bossak.h's dfo_bossak_reach of

@@ -6,11 +6,15 @@
  *   small algebra        dot products over contact rows, a dense Cholesky with dependent rows
  *   loads and forces     loads_at (inputs at t, ramps), exc_at (the grid cache), slip, factor_slot
  *   constrained solves   csolve: A y = r + W_S' f_S with W_S y = target_S (basis solves, physical
- *                        accelerations and jerks, holding forces)
+ *                        accelerations and jerks, holding forces); held_solve: the mass slot's, through
+ *                        the model's friction solver where it offers it (eng_sparse.held_basis)
  *   dense friction       eng_dense_friction: basis solve, Stribeck's Newton, Lemke on the 2 nc LCP
  *   the trial step       trial (M_hat, the re-based A0, x_pred, p_hat), solve_trial, finish
  *   switches             rest_decide (the rest rule of the contacts at rest together), restart
- *   schemes              step_lcp (paper, consistent), step_located (the earliest switch, split)
+ *   schemes              step_lcp (paper, consistent), step_located (the earliest switch, split),
+ *                        with the model's fused step (held_step), its closed-form breakaways
+ *                        (closed_breakaways) and spans (step_spans: a sub-engine steps each span, its
+ *                        ghosts interpolated: ghost_at, ghosts_now), where eng_sparse offers them
  *   driving              eng_start, eng_advance, eng_new_inputs, outputs
  *
  * Every value one function hands another passes as an argument or through the state; the engine's
@@ -78,11 +82,11 @@ void eng_destroy(eng *E)
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
-                          E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->pX, E->pV, E->pA,
-                          E->phA, E->pF, E->pts, E->ptb, E->pmode, E->pbd, E->ghost, E->gX0, E->gV0, E->gX1,
+                          E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
                           E->gV1, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+    if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
     if (E->sub) {
         eng_state_free(E->sub, &E->ss);
         eng_destroy(E->sub);
@@ -115,12 +119,7 @@ static int create_spans(eng *E, const char **err)
     double **dl[] = {&E->lN, &E->lmus, &E->lmuk, &E->lPc, &E->lPs, &E->lF, &E->lNe, &E->lvb};
     for (size_t i = 0; i < sizeof dl / sizeof dl[0]; i++) ok &= (*dl[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
     if (S->law) ok &= (E->llaw = (dfo_friction_law *)alloc_n(al, L, sizeof(dfo_friction_law))) != NULL;
-    double **dn[] = {&E->pX, &E->pV, &E->pA, &E->phA};
-    for (size_t i = 0; i < sizeof dn / sizeof dn[0]; i++) ok &= (*dn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
-    double **dc[] = {&E->pF, &E->pts, &E->ptb};
-    for (size_t i = 0; i < sizeof dc / sizeof dc[0]; i++) ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
-    ok &= (E->pmode = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
-    ok &= (E->pbd = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= eng_state_init(E, &E->ps, 0);
     if (!ok) { if (err) *err = "out of memory"; return 0; }
     E->lnnz = nnz;
     for (size_t j = 0; j < L; j++) {
@@ -217,6 +216,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);
+    E->trig_tc = E->trig_ts = NAN;
     const eng_sparse *sp = S->sparse;
     if (sp && sp->span && sp->span_bind && sp->span_max > 0 && sp->held_basis && S->ops.friction &&
         sp->span_ops.friction && nc > 0 &&

@@ -134,7 +134,7 @@ struct eng_inputs_s;
  * ramps) and the belts still: exc the excitation, s the state, in the inputs, Fb (nc) the contacts'
  * breakaway limits under them. Returns a time tb such that no contact's holding force reaches its
  * limit on [s->t, tb) (+INFINITY: never; NaN: unknown). The scheme then takes at once the whole grid
- * steps that end at least one grid step before tb (and outside the observer's window), to the bits
+ * steps that end at least one grid step before tb (one phase for the observer), to the bits
  * of taking them one by one, provided the model's friction solver returns V1 = V exactly on a held
  * pinned DOF (the scalar solver of one contact does; the dense default need not: no hook with it). */
 typedef double (*eng_breakaway_fn)(void *ctx, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
@@ -206,8 +206,8 @@ typedef struct eng_harmonic_s {
  *                or NaN where the model's closed form does not hold (e.g. a DOF coupled to contact j's
  *                moves). Where every contact that would switch in a (sub-)step is held and has a
  *                breakaway there, the located scheme splits the step at the earliest of them at once
- *                (no root finding; a force that crosses its limit and comes back inside the step is
- *                seen); else as without.
+ *                (no root finding); else as without. Without ops.breakaway the stuck fast path takes
+ *                the earliest of the contacts' as the structure's.
  *   step_held    (optional) a whole grid step in the current modes, fused: the trial step (x_pred,
  *                p_hat), the basis solve in the modes st with the limits lim, every contact's margin,
  *                and where none would switch, the step's acceptance; in the model's own sweeps (the
@@ -340,7 +340,8 @@ typedef void (*eng_switch_fn)(void *ctx, double t, size_t contact, const eng_sta
  * extremes, stick times, transitions and dissipated energy. */
 typedef struct {
     double ta, tb;
-    const double *X0;           /* n: positions at ta (s->X holds those at tb) */
+    const double *X0;           /* n: positions at ta */
+    const double *X1;           /* n: positions at tb */
     const int *mode0;           /* nc: modes during the phase (s->mode holds those after it) */
     const double *f;            /* nc: the contact forces over it (for the work: the step's end value, or
                                  * for Stribeck the mean of its ends) */
@@ -349,7 +350,10 @@ typedef struct {
 
 /* The observer: on_phase is called only for phases that overlap [t_start, t_stop] (so a run that
  * observes nothing pays one comparison per phase); every internal step, and every sub-step
- * between switches, is a phase. */
+ * between switches, is a phase. It reads the phase (ph) and the state s after it; in a model's
+ * specialised fused steps (engine_step.h's ENG_FUSED_N) the state is written back only when a run
+ * of them ends, so that there s's time and arrays are those of the run's start (ph->tb and ph->X1
+ * are the phase's end). */
 typedef struct {
     double t_start, t_stop;
     void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);

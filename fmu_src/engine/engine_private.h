@@ -20,6 +20,8 @@
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
 #define HALVINGS 60              /* search for a resolvable sub-step before the first switch */
+#define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to the trial's switch */
+#define PLACE_REL 1e-11          /* a placed breakaway: the force beyond its limit by at most this share */
 #define LEMKE_PIVOTS_PER_N 8     /* Lemke's pivot budget: 8 (2 nc) + 16 */
 #define ACTIVE_SET_ROUNDS 4      /* the active-set fallback: rounds per contact */
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
@@ -44,6 +46,7 @@ struct eng {
     /* per-DOF workspace */
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
     double *ew;                  /* 3 n: the energy accounts' work (account; NULL without them) */
+    int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;
@@ -53,6 +56,8 @@ struct eng {
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
+    double trig_tc, trig_c, trig_ts, trig_s; /* cos and sin of omega t + phi0 at the last t each was evaluated
+                                  * for (trig_at; NaN: none) */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
      * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
      * Cholesky, Lemke's 2 nc problem */
@@ -70,7 +75,7 @@ struct eng {
     /* spans (eng_sparse.span; the located scheme's local switch placement): the sub-engine that steps
      * one span at a time (its S.n, S.nc and arrays set per span), its state, the labels, the local
      * numbering (ldof, lgh: DOFs and ghost flags; lct: contacts; gmap: global DOF -> local), the
-     * span's gathered data and inputs, and the whole step's start state */
+     * span's gathered data and inputs, and the whole step's start state (ps) */
     struct eng *sub;
     eng_sparse sub_sparse;       /* the sub-engine's sparse operators: held_basis, no spans */
     eng_state ss;
@@ -81,8 +86,7 @@ struct eng {
     eng_row *lrows;
     double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
     dfo_friction_law *llaw;
-    double *pX, *pV, *pA, *phA, *pF, *pts, *ptb;
-    int *pmode, *pbd;
+    eng_state ps;                /* the whole step's start (its arrays only) */
     /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
      * the step's start (gt0) and end (length gH), interpolated */
     int *ghost;

@@ -15,6 +15,9 @@
  *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
  *   ENG_HAS_CONTACT_BREAKAWAY(E), ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb)   a held contact's breakaway
  *                                in closed form (eng_sparse)
+ *   ENG_ROW_DOT(E, j, x)         w_j . x for the contact rows it knows (a slip; row_dot's arithmetic)
+ *   ENG_OBSERVE(obs, ph, s)      the observer's call (obs->on_phase), for a model that inlines its own
+ *   ENG_FUSED_N, ENG_FUSED_NC    the sizes as constants: the fused steps' state in local arrays
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -82,6 +85,13 @@
 #endif
 #ifndef ENG_BREAKAWAY
 #define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
+#endif
+
+#ifndef ENG_ROW_DOT
+#define ENG_ROW_DOT(E, j, x) row_dot(&(E)->S.rows[(j)], (x))
+#endif
+#ifndef ENG_OBSERVE
+#define ENG_OBSERVE(obs, ph, s) ((obs)->on_phase((obs)->ctx, (ph), (s)))
 #endif
 
 /* The functions of every step are inlined into the schemes (the state in registers; a call and its
@@ -209,20 +219,38 @@ static double slide_mag(const eng *E, size_t j, double u)
     return is_strib(E, j) ? E->Nn[j] * dfo_friction_mu(&E->S.law[j], u) : E->mukN[j];
 }
 
+/* cos and sin of omega t + phi0, evaluated (dmath), the last time's kept (a switch's time is asked
+ * for several times: the rest rule, the restart, the re-basing's accelerations and jerks); only the
+ * ones asked for (want_c, want_s: the excitation's P reads cos where Pc is given, sin where Ps is;
+ * its rate reads both), each kept for the last time it was evaluated */
+static void trig_at(eng *E, double t, double *cw, double *sw, int want_c, int want_s)
+{
+    const double th = E->S.exc.omega * t + E->S.exc.phi0;
+    if (want_c && t != E->trig_tc) {
+        E->trig_tc = t;
+        E->trig_c = dfo_cos(th);
+    }
+    if (want_s && t != E->trig_ts) {
+        E->trig_ts = t;
+        E->trig_s = dfo_sin(th);
+    }
+    *cw = want_c ? E->trig_c : 0.0;
+    *sw = want_s ? E->trig_s : 0.0;
+}
+
 /* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
-static ENG_HOT void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
+static ENG_HOT void phase_of(eng *E, const eng_state *s, double t, double *cw, double *sw)
 {
     if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
         *cw = dfo_clamp1(s->exc_c);
         *sw = dfo_clamp1(s->exc_s);
         return;
     }
-    *cw = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
-    *sw = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    trig_at(E, t, cw, sw, E->S.exc.Pc != NULL, E->S.exc.Ps != NULL);
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
-static ENG_HOT void applied_at(const eng *E, const eng_state *s, double t, double *out)
+static ENG_HOT void applied_at(eng *E, const eng_state *s, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw = 0.0, sw = 0.0;
@@ -236,11 +264,11 @@ static ENG_HOT void applied_at(const eng *E, const eng_state *s, double t, doubl
 }
 
 /* dP/dt + dF_ext/dt at t into out */
-static void applied_rate(const eng *E, const eng_inputs *in, double t, double *out)
+static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
-    const double th = H->omega * t + H->phi0;
-    const double cw = dfo_cos(th), sw = dfo_sin(th);
+    double cw, sw;
+    trig_at(E, t, &cw, &sw, 1, 1);
     const int rp = ramped(in);
     for (size_t i = 0; i < ENG_N(E); i++) {
         double p = rp ? poly_rate(in->dF_ext, in, i, t) : 0.0;
@@ -251,7 +279,7 @@ static void applied_rate(const eng *E, const eng_inputs *in, double t, double *o
 }
 
 /* contact j's slip velocity w_j . V - vb_j */
-static double slip(const eng *E, size_t j, const double *V) { return row_dot(&E->S.rows[j], V) - E->vb[j]; }
+static ENG_HOT double slip(const eng *E, size_t j, const double *V) { return ENG_ROW_DOT(E, j, V) - E->vb[j]; }
 
 /* Factor slot with the coefficients, unless it holds them already. */
 static int factor_slot(eng *E, int slot, double cM, double cC, double cK)
@@ -556,6 +584,15 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
     return ENG_OK;
 }
 
+/* The force a held contact may carry in the problem P: its limit, and for a Stribeck contact at
+ * least the law's value at rest, N mu(0) (a slide whose speed has no positive root, q below N mu(0),
+ * comes to rest and holds: the active set would otherwise flip it between held and sliding). */
+static double held_limit(const eng_problem *P, size_t j)
+{
+    if (!P->law || P->law[j].law != DFO_LAW_STRIBECK) return P->limit[j];
+    return fmax(P->limit[j], P->N[j] * dfo_friction_mu(&P->law[j], 0.0));
+}
+
 /* The LCP by an active set (principal pivoting on the basis solve): infeasible contacts flipped,
  * at most ACTIVE_SET_ROUNDS per contact: for the Stribeck law, a singular D, and where Lemke fails. */
 static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, double *V1, double *f, int *pivots)
@@ -569,7 +606,7 @@ static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, doub
         for (size_t j = 0; j < nc; j++) {
             if (!(P->limit[j] > 0.0)) continue;
             const double v = row_dot(&E->S.rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
-            if (mode[j] == 0 && fabs(f[j]) > P->limit[j]) { mode[j] = -sgn(f[j]); changed = 1; }
+            if (mode[j] == 0 && fabs(f[j]) > held_limit(P, j)) { mode[j] = -sgn(f[j]); changed = 1; }
             else if (mode[j] != 0 && mode[j] * v < 0.0) { mode[j] = 0; changed = 1; }
         }
         if (!changed) { if (pivots) *pivots = piv; return ENG_OK; }
@@ -594,7 +631,7 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     for (size_t j = 0; j < nc && feasible; j++) {
         if (!(P->limit[j] > 0.0)) continue;
         const double v = row_dot(&S->rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
-        feasible = (mode[j] == 0) ? fabs(f[j]) <= P->limit[j] : mode[j] * v > 0.0;
+        feasible = (mode[j] == 0) ? fabs(f[j]) <= held_limit(P, j) : mode[j] * v > 0.0;
     }
     if (feasible) return ENG_OK;
     /* the contacts with friction: the 2 m LCP in (u+, u-), w = (l + f, l - f), f = D^-1 (u+ - u- - c) */
@@ -699,9 +736,12 @@ static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, dou
     if (!needs_rebase(E, s, hh)) return;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
     double *acc = E->acc, *jk = E->jk;
-    loads_at(E, in, s->t);
-    phys_accel(E, s, s->t, s->mode, acc, E->f2);
-    jerks(E, in, s, acc, jk);
+    if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
+        loads_at(E, in, s->t);
+        phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        jerks(E, in, s, acc, jk);
+        E->jk_ok = 1;
+    }
     loads_at(E, in, t1);
     for (size_t i = 0; i < n; i++)
         if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
@@ -806,9 +846,12 @@ static ENG_HOT void finish(eng *E, eng_state *s, const trial *T, const double *V
 
 /* ---- phases, switches, restarts ------------------------------------------------------------- */
 
-static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta)
+/* A phase's start: its time, and for an observer its positions and modes */
+static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const eng_hooks *hk)
 {
     *ta = s->t;
+    E->jk_ok = 0; /* the jerks of the phase's start: to be computed (trial_step) */
+    if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }
@@ -822,10 +865,11 @@ static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double 
     ph.ta = ta;
     ph.tb = s->t;
     ph.X0 = E->X0;
+    ph.X1 = s->X;
     ph.mode0 = E->mode0;
     ph.f = f;
     ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
-    o->on_phase(o->ctx, &ph, s);
+    ENG_OBSERVE(o, &ph, s);
 }
 
 static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
@@ -839,8 +883,9 @@ static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
 /* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
  * holding forces solved together with every stuck contact; the one most beyond its limit starts to
  * slide the way it is driven, and the rest are solved again (the causal cascade). Sets mode[] of
- * the resting contacts; f: their holding forces (the stuck ones'). */
-static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
+ * the resting contacts; f: their holding forces (the stuck ones'). Returns 1 when its last solve
+ * (E->y2, E->f: physical accelerations and forces) is of the modes it ends with. */
+static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
 {
     const size_t nc = ENG_NC(E);
     for (size_t j = 0; j < nc; j++)
@@ -854,17 +899,24 @@ static void rest_decide(eng *E, const eng_state *s, double t, const int *rest, i
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
         }
-        if (worst == nc) return;
+        if (worst == nc) return 1;
         mode[worst] = -sgn(E->f[worst]); /* the holding force's opposite: the net applied force's side */
     }
+    return 0;
 }
 
 /* The consistent restart of the mode set in s->mode: physical accelerations, hA = 0, forces (a
- * slide from rest at its start magnitude). */
-static void restart(eng *E, eng_state *s, double t)
+ * slide from rest at its start magnitude). decided: rest_decide's last solve (E->y2, E->f) is of
+ * this state and mode set (its return), so they are taken. */
+static void restart(eng *E, eng_state *s, double t, int decided)
 {
     const size_t n = ENG_N(E);
-    phys_accel(E, s, t, s->mode, s->A, s->F);
+    if (decided) {
+        memcpy(s->A, E->y2, n * sizeof(double));
+        if (ENG_NC(E)) memcpy(s->F, E->f, ENG_NC(E) * sizeof(double));
+    } else {
+        phys_accel(E, s, t, s->mode, s->A, s->F);
+    }
     for (size_t i = 0; i < n; i++) s->hA[i] = 0.0;
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (!has_friction(E, j)) s->F[j] = 0.0;
@@ -921,7 +973,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
     const eng_setup *S = &E->S;
     const size_t nc = ENG_NC(E);
     double ta;
-    begin_phase(E, s, &ta);
+    begin_phase(E, s, &ta, hk);
     for (size_t j = 0; j < nc; j++) {
         E->st[j] = s->mode[j];
         E->lim[j] = !has_friction(E, j) ? 0.0 : (s->mode[j] == 0) ? E->Fb[j] : E->mukN[j];
@@ -1011,6 +1063,8 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
         if (has_friction(E, j) && s->mode[j] != from) report(s, j, from, hk);
     }
     if (consistent) rest_exact(E, s);
+    /* the step's modes are its friction problem's (the modes at its end): the phase's */
+    if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
     observe(E, s, ta, s->F, hk);
     return ENG_OK;
 }
@@ -1021,6 +1075,15 @@ static ENG_HOT double margin(const eng *E, const int *mode, size_t j, const doub
 {
     if (mode[j] != 0) return mode[j] * slip(E, j, V1);
     return E->Fb[j] - fabs(f[j]);
+}
+
+/* Contact j switches in the trial: a sliding one whose slip stopped or turned (margin <= 0), a held
+ * one whose holding force is beyond its limit (margin < 0: a force on the limit holds, the rest
+ * rule's |f| <= Fb). */
+static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
+{
+    const double g = margin(E, mode, j, V1, f);
+    return (mode[j] != 0) ? g <= 0.0 : g < 0.0;
 }
 
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
@@ -1075,10 +1138,10 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
         if (s->mode[j] == 0) s->mode[j] = -sgn(s->F[j]);
         rest[j] = 0;
     }
-    rest_decide(E, s, s->t, rest, s->mode);
+    const int decided = rest_decide(E, s, s->t, rest, s->mode);
     for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-    restart(E, s, s->t);
+    restart(E, s, s->t, decided);
     /* a slide from rest starts at its start magnitude (Stribeck: mu_s N) and never against its way */
     for (size_t j = 0; j < nc; j++) {
         if (E->smode[j] == s->mode[j] || s->mode[j] == 0 || !has_friction(E, j)) continue;
@@ -1096,33 +1159,13 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
     if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
-    eng_held_step F;
-    F.slot = ENG_SLOT_GRID;
-    F.cM = (1.0 - a) * K->c1;
-    F.cC = 1.0;
-    F.cK = E->b * S->h / E->g;
-    if (!factor_slot(E, F.slot, F.cM, F.cC, F.cK)) return ENG_HELD_ERROR;
-    F.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
-    F.h = K->h;
-    F.alpha = a;
-    F.g1 = E->g1;
-    F.c1 = K->c1;
-    F.pred_V = K->pred_V;
-    F.pred_A = K->pred_A;
-    F.corr_V = K->corr_V;
-    F.cw = F.sw = 0.0;
-    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &F.cw, &F.sw);
-    F.Pc = S->exc.Pc;
-    F.Ps = S->exc.Ps;
-    F.u = E->u;
-    F.A0 = s->A;
-    F.st = E->st;
-    F.lim = E->lim;
-    F.Fb = E->Fb;
-    F.xp = E->xp;
-    F.ph = E->ph;
-    F.V1 = E->V1;
-    F.f = E->f;
+    const double cM = (1.0 - a) * K->c1, cK = E->b * S->h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return ENG_HELD_ERROR;
+    double cw = 0.0, sw = 0.0;
+    if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &cw, &sw);
+    const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
+                             K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
+                             E->Fb, E->xp, E->ph, E->V1, E->f};
     if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
     T->kin = *K;
     T->slot = F.slot;
@@ -1160,6 +1203,24 @@ static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
     return E->sub && !ramped(in) && !(hk && (hk->on_switch || hk->obs || hk->stop_at_switch));
 }
 
+/* Every contact held on a still belt, every DOF pinned at rest by a held contact of its own, held
+ * inputs: the state the model's closed-form breakaway (ENG_BREAKAWAY) is asked about. The loads
+ * must be set. Uses pin. */
+static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    if (ramped(in)) return 0;
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++) {
+        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return 0;
+        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return 0;
+    return 1;
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -1175,7 +1236,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (phase >= max_phases) return ENG_ERR_NO_PROGRESS;
         if (E->ghost) ghosts_now(E, s);
         double ta;
-        begin_phase(E, s, &ta);
+        begin_phase(E, s, &ta, hk);
         const double r = (phase == 0) ? hh : t_end - s->t;
         for (size_t j = 0; j < nc; j++) {
             E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
@@ -1199,7 +1260,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;
         for (size_t j = 0; j < nc; j++)
-            if (has_friction(E, j) && margin(E, E->st, j, E->V1, E->f) <= 0.0) { E->cand[j] = 1; ncand++; }
+            if (has_friction(E, j) && switches(E, E->st, j, E->V1, E->f)) { E->cand[j] = 1; ncand++; }
         if (ncand == 0) {
             finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
@@ -1235,6 +1296,44 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
+        /* a structure stuck at rest: the model's closed-form breakaway places the switch where it lies
+         * inside the step (the contact then released: the one most beyond its limit there) */
+        double hs = NAN, t_placed = NAN;
+        int placed = 0;
+        if (ENG_HAS_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
+            /* the first time from the closed form's on at which the trial's holding force is at or
+             * beyond the limit (a few ulps at most: the trial of a structure at rest holds the static
+             * force), so that a step ending there ends with the switch; a closed form that misses the
+             * trial's force by more than rounding (a phase too large for it) is not used */
+            double tp = ENG_BREAKAWAY(E, s, in, E->Fb), ulp = 0.0;
+            for (int k = 0; k < PLACE_NUDGES && tp > s->t && tp <= t_end; k++) {
+                hs = (tp == t_end) ? r : tp - s->t;
+                trial_margin(&mc, hs, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
+                int beyond = 0, far = 0; /* a force beyond its limit, farther than rounding */
+                for (size_t j = 0; j < nc; j++) {
+                    if (!E->cand[j] || fabs(E->f[j]) < E->Fb[j]) continue;
+                    beyond = 1;
+                    far |= !(fabs(E->f[j]) - E->Fb[j] <= PLACE_REL * E->Fb[j]);
+                }
+                if (far) break; /* the closed form is off (the margins' root instead) */
+                if (beyond) {
+                    placed = 1;
+                    t_placed = tp;
+                    break;
+                }
+                if (tp == t_end) break;
+                ulp = (ulp == 0.0) ? nextafter(tp, INFINITY) - tp : 2.0 * ulp;
+                tp = (tp + ulp < t_end) ? tp + ulp : t_end;
+            }
+            if (!placed && !isnan(hs)) { /* the whole remainder's trial again, for the bracket below */
+                trial_margin(&mc, r, &T);
+                s->solves++;
+                if (mc.err != ENG_OK) return mc.err;
+            }
+        }
+        if (!placed) {
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
         for (size_t j = 0; j < nc; j++) {
@@ -1265,8 +1364,9 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
-        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
         if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
+        }
         trial_margin(&mc, hs, &T);
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
@@ -1284,16 +1384,20 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
-        const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
+        const double t_new = placed ? t_placed : (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
         finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
         if (E->ghost) ghosts_now(E, s);
         loads_at(E, in, s->t);
-        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
+        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit (at a
+         * placed breakaway, the one most beyond it) */
+        size_t jmax = nc;
+        for (size_t j = 0; placed && j < nc; j++)
+            if (E->cand[j] && (jmax == nc || fabs(E->f[j]) / E->Fb[j] > fabs(E->f[jmax]) / E->Fb[jmax])) jmax = j;
         for (size_t j = 0; j < nc; j++) {
             if (!E->cand[j]) continue;
             const int stopping = s->mode[j] != 0 && E->st[j] == 0;
-            const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
+            const int breaking = placed ? j == jmax : s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
             E->cand[j] = stopping || breaking;
         }
         observe(E, s, ta, s->F, hk);
@@ -1306,6 +1410,32 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
 }
 
 /* ---- spans ---------------------------------------------------------------------------------- */
+
+/* DOF i of state d := DOF k of state s (X, V, A, hA); contact j of d := contact k of s (F, mode,
+ * stick start, breakaway and its side). */
+static void dof_copy(eng_state *d, size_t i, const eng_state *s, size_t k)
+{
+    d->X[i] = s->X[k];
+    d->V[i] = s->V[k];
+    d->A[i] = s->A[k];
+    d->hA[i] = s->hA[k];
+}
+
+static void contact_copy(eng_state *d, size_t j, const eng_state *s, size_t k)
+{
+    d->F[j] = s->F[k];
+    d->mode[j] = s->mode[k];
+    d->t_stick[j] = s->t_stick[k];
+    d->t_break[j] = s->t_break[k];
+    d->break_dir[j] = s->break_dir[k];
+}
+
+/* d's arrays := s's (the same sizes; its scalars left) */
+static void eng_state_arrays_copy(eng_state *d, const eng_state *s)
+{
+    for (size_t i = 0; i < s->n; i++) dof_copy(d, i, s, i);
+    for (size_t j = 0; j < s->nc; j++) contact_copy(d, j, s, j);
+}
 
 /* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
  * inlined into itself. */
@@ -1327,16 +1457,11 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
     const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
     if (ns == 0) return 0;
+    for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
+        if (E->cand[j] && E->clab[j] <= 0) return 0;
     *out = ENG_OK;
-    memcpy(E->pX, s->X, n * sizeof(double));
-    memcpy(E->pV, s->V, n * sizeof(double));
-    memcpy(E->pA, s->A, n * sizeof(double));
-    memcpy(E->phA, s->hA, n * sizeof(double));
-    memcpy(E->pF, s->F, nc * sizeof(double));
-    memcpy(E->pts, s->t_stick, nc * sizeof(double));
-    memcpy(E->ptb, s->t_break, nc * sizeof(double));
-    memcpy(E->pmode, s->mode, nc * sizeof(int));
-    memcpy(E->pbd, s->break_dir, nc * sizeof(int));
+    const eng_state *p = &E->ps;
+    eng_state_arrays_copy(&E->ps, s);
     const double t_start = s->t;
     /* everything in the current modes first */
     finish(E, s, T, E->V1, E->f, t_end);
@@ -1382,11 +1507,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             B->mu_b[a] = fmax(E->lmus[a], E->lmuk[a]);
             E->lNe[a] = (own && in && in->N_ext) ? in->N_ext[j] : 0.0;
             E->lvb[a] = (in && in->v_belt) ? in->v_belt[j] : 0.0;
-            b->F[a] = E->pF[j];
-            b->mode[a] = E->pmode[j];
-            b->t_stick[a] = E->pts[j];
-            b->t_break[a] = E->ptb[j];
-            b->break_dir[a] = E->pbd[j];
+            contact_copy(b, a, p, j);
         }
         B->any_law = 0;
         for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
@@ -1399,14 +1520,11 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
             E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
             B->ghost[q] = E->lgh[q];
-            B->gX0[q] = E->pX[i];
-            B->gV0[q] = E->pV[i];
+            B->gX0[q] = p->X[i];
+            B->gV0[q] = p->V[i];
             B->gX1[q] = s->X[i];
             B->gV1[q] = s->V[i];
-            b->X[q] = E->pX[i];
-            b->V[q] = E->pV[i];
-            b->A[q] = E->pA[i];
-            b->hA[q] = E->phA[i];
+            dof_copy(b, q, p, i);
         }
         B->S.n = b->n = nd;
         B->S.nc = b->nc = nct;
@@ -1428,6 +1546,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         if (st != ENG_OK) { *out = st; return 1; }
         /* the span's A re-based on a grid step now, as the next step of the whole structure would
          * (there over all of it) */
+        B->jk_ok = 0; /* (the span's state, not a phase of B's) */
         rebase(B, &bin, b, S->h, t_end);
         const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
         for (size_t q = 0; q < nd; q++)
@@ -1435,28 +1554,234 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
                 b->A[q] = B->A0[q];
                 b->hA[q] = S->h;
             }
-        for (size_t q = 0; q < nd; q++) {
-            if (E->lgh[q]) continue;
-            const size_t i = E->ldof[q];
-            s->X[i] = b->X[q];
-            s->V[i] = b->V[q];
-            s->A[i] = b->A[q];
-            s->hA[i] = b->hA[q];
-        }
-        for (size_t a = 0; a < nct; a++) {
-            const size_t j = E->lct[a];
-            if (E->clab[j] <= 0) continue;
-            s->F[j] = b->F[a];
-            s->mode[j] = b->mode[a];
-            s->t_stick[j] = b->t_stick[a];
-            s->t_break[j] = b->t_break[a];
-            s->break_dir[j] = b->break_dir[a];
-        }
+        for (size_t q = 0; q < nd; q++)
+            if (!E->lgh[q]) dof_copy(s, E->ldof[q], b, q);
+        for (size_t a = 0; a < nct; a++)
+            if (E->clab[E->lct[a]] > 0) contact_copy(s, E->lct[a], b, a);
         s->solves += b->solves;
         s->switches += b->switches;
         if (b->switches) s->t_switch = fmax(s->t_switch, b->t_switch);
     }
     return 1;
+}
+
+/* ---- the fused steps -------------------------------------------------------------------------- */
+
+/* The common step, fused: a whole grid step from a grid point, held inputs, in which the modes hold
+ * (located: the trial in the current modes has no switching contact; paper and consistent: the
+ * friction problem warm-started from the current modes returns them), taken in a tight loop over
+ * the grid points up to t_target with none of the general path's phase bookkeeping. The same
+ * arithmetic as step_located's and step_lcp's in the same order, so the same numbers. A model
+ * whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC) gets the loop's state in local arrays,
+ * which the compiler keeps in registers; otherwise it works on the state in place. The loop stops,
+ * the state untouched by the step it declines, before a step that would switch (the general path
+ * takes it), that re-bases A (a step length other than that of A, off a pinned DOF), a stuck
+ * structure the stuck fast path may skip (skip), a friction problem that fails, and a step past
+ * t_target. The observer is called for the steps that overlap its window, as the general path
+ * does. *g_prev: the last grid point reached. */
+#if defined(ENG_FUSED_N) && defined(ENG_FUSED_NC)
+#define ENG_FUSED_LOCAL 1
+#else
+#define ENG_FUSED_LOCAL 0
+#endif
+
+static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, const eng_hooks *hk, double *g_prev)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h, a = S->alpha;
+    const int located = S->scheme == DFO_SCHEME_LOCATED, consistent = S->scheme == DFO_SCHEME_CONSISTENT;
+    if (located && S->rate_max * h > STIFF_STEP) return;
+    const dfo_bossak_kin K = E->kin_grid;
+    const double cM = (1.0 - a) * K.c1, cK = E->b * h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
+    const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    const eng_harmonic *H = &S->exc;
+    eng_problem P;
+    P.slot = ENG_SLOT_GRID;
+    P.h = K.h;
+    P.cM = cM;
+    P.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
+    P.cK = cK;
+    P.vb = E->vb;
+    P.N = E->Nn;
+    P.law = E->any_law ? S->law : NULL;
+#if ENG_FUSED_LOCAL
+    double X[ENG_FUSED_N], V[ENG_FUSED_N], A[ENG_FUSED_N], hA[ENG_FUSED_N], X0[ENG_FUSED_N];
+    double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
+    double X1[ENG_FUSED_N], F1[ENG_FUSED_NC + 1]; /* the observed phase's end (copies: X, F stay in registers) */
+    double F[ENG_FUSED_NC + 1], f[ENG_FUSED_NC + 1], lim[ENG_FUSED_NC + 1];
+    int mode[ENG_FUSED_NC + 1], st[ENG_FUSED_NC + 1], mode0[ENG_FUSED_NC + 1], pin[ENG_FUSED_N];
+    /* the state's arrays, their addresses read once (a store through one may not change them) */
+    double *const sX = s->X, *const sV = s->V, *const sA = s->A, *const shA = s->hA, *const sF = s->F;
+    int *const smode = s->mode;
+    for (size_t i = 0; i < n; i++) {
+        X[i] = s->X[i];
+        V[i] = s->V[i];
+        A[i] = s->A[i];
+        hA[i] = s->hA[i];
+    }
+    for (size_t j = 0; j < nc; j++) {
+        F[j] = s->F[j];
+        mode[j] = s->mode[j];
+    }
+#define ENG_FUSED_STORE_()                                                                                          \
+    do {                                                                                                            \
+        for (size_t i_ = 0; i_ < n; i_++) {                                                                         \
+            sX[i_] = X[i_];                                                                                         \
+            sV[i_] = V[i_];                                                                                         \
+            sA[i_] = A[i_];                                                                                         \
+            shA[i_] = hA[i_];                                                                                       \
+        }                                                                                                           \
+        for (size_t j_ = 0; j_ < nc; j_++) {                                                                        \
+            sF[j_] = F[j_];                                                                                         \
+            smode[j_] = mode[j_];                                                                                   \
+        }                                                                                                           \
+    } while (0)
+#else
+    double *const X = s->X, *const V = s->V, *const A = s->A, *const hA = s->hA, *const X0 = E->X0;
+    const double *const X1 = s->X, *const F1 = s->F;
+    double *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2, *const ph = E->ph, *const V1 = E->V1;
+    double *const F = s->F, *const f = E->f, *const lim = E->lim;
+    int *const mode = s->mode, *const st = E->st, *const mode0 = E->mode0, *const pin = E->pin;
+#define ENG_FUSED_STORE_() ((void)0)
+#endif
+    P.p_hat = ph;
+    P.limit = lim;
+    long long ng = s->n_grid, steps = 0, solves = 0, pivot_steps = 0;
+    long long exc_n = s->exc_n;
+    double exc_c = s->exc_c, exc_s = s->exc_s, t = s->t;
+    for (;;) {
+        const double grid = s->t0 + (double)(ng + 1) * h;
+        if (!(grid <= t_target) || !(grid > t)) break;
+        /* held and pinned: the stuck fast path's to try; a step length to re-base A on: the general path's */
+        int held_all = skip, rebase = 0;
+        for (size_t i = 0; i < n; i++) pin[i] = 0;
+        for (size_t j = 0; j < nc; j++) {
+            const int held = mode[j] == 0 && has_friction(E, j);
+            held_all &= held && E->vb[j] == 0.0;
+            if (held && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+        }
+        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
+        for (size_t i = 0; i < n; i++) {
+            held_all &= pin[i] && V[i] == 0.0 && A[i] == 0.0;
+            rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * fmax(h, hA[i]) <= 1.0;
+        }
+        if (held_all || rebase) break;
+        /* the excitation at the grid point: the cache's rotation (dfo_grid_phase) */
+        double cw, sw;
+        dfo_grid_phase(H->omega, H->phi0, s->t0, h, E->rot_c, E->rot_s, exc_n, exc_c, exc_s, ng + 1, &cw, &sw);
+        /* the trial (trial_step, A0 = A) */
+        for (size_t i = 0; i < n; i++) {
+            xp[i] = X[i] + K.pred_V * V[i] + K.pred_A * A[i];
+            r[i] = -a * A[i] + (1.0 - a) * (V[i] * K.c1 + E->g1 * A[i]);
+        }
+        ENG_APPLY_M(E, r, y);
+        {
+            const double cwc = dfo_clamp1(cw), swc = dfo_clamp1(sw);
+            for (size_t i = 0; i < n; i++) {
+                double p = E->u[i];
+                if (H->Pc) p += H->Pc[i] * cwc;
+                if (H->Ps) p -= H->Ps[i] * swc;
+                ph[i] = p;
+            }
+        }
+        ENG_APPLY_K(E, xp, y2);
+        for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
+        /* the friction problem in the current modes */
+        int piv = 0;
+        eng_status fs;
+        if (located) {
+            for (size_t j = 0; j < nc; j++) {
+                st[j] = !has_friction(E, j) ? 1 : mode[j];
+                lim[j] = (st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            }
+            fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL)
+                                     : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL);
+            if (fs != ENG_OK) break;
+            int sw_any = 0;
+            for (size_t j = 0; j < nc; j++) sw_any |= has_friction(E, j) && switches(E, st, j, V1, f);
+            if (sw_any) break;
+        } else {
+            for (size_t j = 0; j < nc; j++) {
+                st[j] = mode[j];
+                lim[j] = !has_friction(E, j) ? 0.0 : (mode[j] == 0) ? E->Fb[j] : E->mukN[j];
+            }
+            fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_LCP, st, V1, f, &piv)
+                                     : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_LCP, st, V1, f, &piv);
+            if (fs != ENG_OK) break;
+            int changed = 0;
+            for (size_t j = 0; j < nc; j++) changed |= has_friction(E, j) && st[j] != mode[j];
+            if (changed) break;
+            if (consistent)
+                for (size_t j = 0; j < nc; j++)
+                    if (has_friction(E, j) && st[j] == 0) f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], f[j]));
+        }
+        /* the step is taken: the grid point, its excitation cache, the counters */
+        const double ta = t;
+        const int observed = obs && !(grid < obs->t_start) && !(ta > obs->t_stop);
+        if (observed) {
+            for (size_t i = 0; i < n; i++) X0[i] = X[i];
+            for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
+        }
+        ng++;
+        exc_n = ng;
+        exc_c = cw;
+        exc_s = sw;
+        steps++;
+        solves++;
+        pivot_steps += piv > 0;
+        /* finish */
+        for (size_t i = 0; i < n; i++) {
+            X[i] = xp[i] + K.corr_V * V1[i];
+            A[i] = (V1[i] - V[i]) * K.c1 - E->g1 * A[i];
+            V[i] = V1[i];
+            hA[i] = K.h;
+        }
+        for (size_t j = 0; j < nc; j++) F[j] = f[j];
+        t = grid;
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j)) mode[j] = sgn(slip(E, j, V));
+        if (located || consistent) /* rest_exact */
+            for (size_t j = 0; j < nc; j++) {
+                if (mode[j] != 0 || !has_friction(E, j)) continue;
+                const eng_row *R = &S->rows[j];
+                if (R->nnz == 1) {
+                    V[R->idx[0]] = E->vb[j] / R->w[0];
+                    A[R->idx[0]] = 0.0;
+                    hA[R->idx[0]] = 0.0;
+                }
+            }
+        if (observed) {
+#if ENG_FUSED_LOCAL
+            for (size_t i = 0; i < n; i++) X1[i] = X[i];
+            for (size_t j = 0; j < nc; j++) F1[j] = F[j];
+#else
+            s->t = t;
+            s->n_grid = ng;
+#endif
+            eng_phase phs;
+            phs.ta = ta;
+            phs.tb = t;
+            phs.X0 = X0;
+            phs.X1 = X1;
+            phs.mode0 = mode0;
+            phs.f = F1;
+            phs.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
+            ENG_OBSERVE(obs, &phs, s);
+        }
+    }
+    ENG_FUSED_STORE_();
+#undef ENG_FUSED_STORE_
+    s->t = t;
+    s->n_grid = ng;
+    s->exc_n = exc_n;
+    s->exc_c = exc_c;
+    s->exc_s = exc_s;
+    s->steps += steps;
+    s->solves += solves;
+    s->pivot_steps += pivot_steps;
+    if (steps > 0) *g_prev = t;
 }
 
 /* ---- driving -------------------------------------------------------------------------------- */
@@ -1486,8 +1811,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
         s->t_break[j] = NAN;
         s->break_dir[j] = 0;
     }
-    rest_decide(E, s, t0, E->cand, s->mode);
-    restart(E, s, t0);
+    restart(E, s, t0, rest_decide(E, s, t0, E->cand, s->mode));
     for (size_t j = 0; j < nc; j++)
         if (E->cand[j] && s->mode[j] != 0) s->F[j] = -s->mode[j] * slide_mag(E, j, 0.0);
     if (s->J) {
@@ -1539,27 +1863,36 @@ static long long grid_below(const eng_state *s, double h, double x, int incl)
     return m;
 }
 
-/* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway; the located scheme on a
+/* A stuck structure's next breakaway from its contacts' (eng_sparse.contact_breakaway): the earliest,
+ * NaN where one is unknown. */
+static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
+{
+    double tb = INFINITY;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const double t = ENG_CONTACT_BREAKAWAY(E, j, s, in, E->Fb);
+        if (isnan(t)) return NAN;
+        tb = fmin(tb, t);
+    }
+    return tb;
+}
+
+/* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
+ * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
  * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
- * before the model's breakaway, at or before t_target and outside the observer's window change
- * nothing but the time and the counters. Returns the last grid index they reach (s->n_grid: none). */
+ * before the model's breakaway and at or before t_target change nothing but the time and the
+ * counters (the observer sees them as one phase at rest, which ends inside its window where it began
+ * before the window's end: the positions, modes and forces it sees are those of each of them).
+ * Returns the last grid index they reach (s->n_grid: none). */
 static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, double t_target,
                              const eng_hooks *hk, stick_cache *c)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
     const double h = S->h;
     loads_at(E, in, s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < nc; j++) {
-        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return s->n_grid;
-        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    }
-    for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return s->n_grid;
+    if (!stuck_at_rest(E, in, s)) return s->n_grid;
     if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
-        c->tb = ENG_BREAKAWAY(E, s, in, E->Fb);
+        c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
         c->sw = s->switches;
         c->known = 1;
     }
@@ -1567,8 +1900,8 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
     long long m = grid_below(s, h, t_target, 1);
     const long long mb = grid_below(s, h, fmin(c->tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
-    if (hk && hk->obs && hk->obs->on_phase && !(s->t > hk->obs->t_stop)) {
-        const long long mo = grid_below(s, h, fmin(hk->obs->t_start, t_target + 2.0 * h), 0);
+    if (hk && hk->obs && hk->obs->on_phase && s->t < hk->obs->t_stop) { /* a stretch in the window ends in it */
+        const long long mo = grid_below(s, h, fmin(hk->obs->t_stop, t_target + 2.0 * h), 1);
         if (mo < m) m = mo;
     }
     return (m > s->n_grid) ? m : s->n_grid;
@@ -1617,17 +1950,28 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     double g_prev = s->t0 + (double)s->n_grid * h;
     int switched = 0;
     const long long sw0 = s->switches;
-    const int skip = S->fast_paths && ENG_HAS_BREAKAWAY(E) && S->scheme == DFO_SCHEME_LOCATED &&
+    const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
+                     S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
     stick_cache cache = {NAN, 0, 0};
+    /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
+    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
     while (s->t < t_target) {
         if (skip && s->t == g_prev) {
             const long long m = stuck_until(E, in, s, t_target, hk, &cache);
             if (m > s->n_grid) {
+                double ta;
+                begin_phase(E, s, &ta, hk);
                 stuck_skip(E, s, m);
                 g_prev = s->t;
+                observe(E, s, ta, s->F, hk);
                 continue;
             }
+        }
+        if (fuse && s->t == g_prev) {
+            loads_at(E, in, s->t);
+            fused_steps(E, s, t_target, skip, hk, &g_prev);
+            if (!(s->t < t_target)) break;
         }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);
@@ -1687,10 +2031,10 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
         E->cand[j] = v == 0.0;
     }
     if (belt_changed) {
-        rest_decide(E, s, s->t, E->cand, s->mode);
+        const int decided = rest_decide(E, s, s->t, E->cand, s->mode);
         for (size_t j = 0; j < nc; j++)
             if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-        restart(E, s, s->t);
+        restart(E, s, s->t, decided);
         return;
     }
     /* the sliding contacts' force jumps, and the external forces': the acceleration jumps by

@@ -1,7 +1,9 @@
 /* Unit tests of the chain of n blocks (fmu_src/models/chain/chain.h), driven directly (no FMI).
  *
- * 1. n = 1 against the oscillator (newmark.h): same parameters, same communication points (every
- *    T/100, and at random), three schemes, seven cases: the same t, x, v and mode, bit for bit;
+ * 1. n = 1 against the oscillator (scheme.h): same parameters, same communication points (every
+ *    T/100, and at random), three schemes, seven cases: the same t and mode at every point, x and v
+ *    to N1_TOL (the oscillator steps through the friction engine, whose arithmetic is ordered
+ *    otherwise than the chain's own stepper: the two agree to rounding, not bit for bit);
  * 2. the 2n LCP: the chain's box solver (principal pivoting on the tridiagonal M_hat) and Lemke on
  *    the dense 2n x 2n problem against brute-force enumeration of all complementary bases, n <= 6,
  *    on random and degenerate problems (ties |p| = l, l = 0 on some blocks, one block stuck
@@ -30,6 +32,7 @@ static void std_free(void *env, void *obj) { (void)env; free(obj); }
 static const chain_alloc AL = {std_alloc, std_free, NULL};
 
 #define NMAX 64
+#define N1_TOL 1e-10 /* n = 1 against the oscillator: x and v relative to max(|value|, 1) (measured: 5.4e-12) */
 
 typedef struct {
     size_t n;
@@ -60,6 +63,7 @@ static void test_single(checks *T)
                                {0.5, 0.4, 0.05, 0.0, 0.0}, {0.5, 0.4, 0.0, 0.0, 0.0}, {0.5, 0.2, 2.0, 0.0, 0.0},
                                {1.3, 0.3, 0.9, 0.05, 0.7}};
     long long points = 0, differing = 0;
+    double worst = 0.0; /* the largest difference of x or v, relative to max(|value|, 1) */
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
         for (int scheme = 1; scheme <= 3; scheme++) {
             for (int random_steps = 0; random_steps <= 1; random_steps++) {
@@ -90,11 +94,12 @@ static void test_single(checks *T)
                     t += random_steps ? p.h * rng_range(&r, 0.1, 3.0) : 10.0 * T_per / 1000.0;
                     CHECK_INT(DFO_OK, dfo_advance(&M, &u, &s, t, NULL, NULL));
                     CHECK_INT(CHAIN_OK, chain_advance(C, &in, &q, t, 0, NULL, NULL));
-                    differing += !(s.t == q.t && s.X == q.X[0] && s.V == q.V[0] && s.mode == q.mode[0]);
+                    const double dx = fabs(s.X - q.X[0]) / fmax(fabs(q.X[0]), 1.0);
+                    const double dv = fabs(s.V - q.V[0]) / fmax(fabs(q.V[0]), 1.0);
+                    worst = fmax(worst, fmax(dx, dv));
+                    differing += !(s.t == q.t && s.mode == q.mode[0]);
                     points++;
                 }
-                CHECK_SAME(s.X, q.X[0]);
-                CHECK_SAME(s.V, q.V[0]);
                 chain_state_free(C, &q);
                 chain_destroy(C);
             }
@@ -102,8 +107,10 @@ static void test_single(checks *T)
     }
     check_context(T, "%s", "");
     CHECK_INT(0, differing);
+    CHECK(worst <= N1_TOL);
     printf("n = 1 against the oscillator: 7 cases x 3 schemes, communication every T/100 and at random "
-           "(0.1 h ... 3 h): %lld points, %lld with a differing t, x, v or mode\n", points, differing);
+           "(0.1 h ... 3 h): %lld points, %lld with a differing t or mode, x and v within %.3g relative\n", points,
+           differing, worst);
 }
 
 /* ---- 2. the 2n LCP against enumeration ------------------------------------------------------ */

@@ -75,11 +75,19 @@ void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in)
     in->t_ref = u->t_d;
 }
 
+void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_observe_phase(ctx, ph, s); }
+
 /* ---- the schemes, specialised ------------------------------------------------------------------ */
 
 #define ENG_FN(name) osc_##name
 #define ENG_N(E) ((void)(E), (size_t)1)
 #define ENG_NC(E) ((void)(E), (size_t)1)
+#define ENG_FUSED_N 1
+#define ENG_OBSERVE(obs, ph, s)                                                                                      \
+    (((obs)->on_phase == osc_eng_observe) ? osc_observe_phase((obs)->ctx, (ph), (s))                                \
+                                          : (obs)->on_phase((obs)->ctx, (ph), (s)))
+#define ENG_ROW_DOT(E, j, x) ((void)(E), (void)(j), 0.0 + (x)[0]) /* row_dot of w = 1 */
+#define ENG_FUSED_NC 1
 #define ENG_CTX(E) ((E)->S.ops.ctx)
 #define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))

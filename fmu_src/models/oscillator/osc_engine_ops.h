@@ -8,6 +8,7 @@
 #define DFO_OSC_ENGINE_OPS_H
 
 #include "engine.h"
+#include "scheme_state.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -15,6 +16,7 @@
 typedef struct {
     double m, c, k;
     double a[ENG_NSLOTS];        /* each slot's factor cM m + cC c + cK k */
+    double inv_a[ENG_NSLOTS];    /* and its inverse (a solve is a product, as newmark's 1 / m_hat was) */
     size_t idx[1];
     double w[1];
     eng_row row;
@@ -27,6 +29,51 @@ typedef struct {
  * Stribeck contact's solver, and the rest (osc_engine.h) */
 ENG_DECLARE_SCHEMES(osc_);
 
+/* ---- the observables -------------------------------------------------------------------------- */
+
+/* The part of [a, b] inside the window [w0, w1] (comparisons, not fmin/fmax: those are library calls
+ * without -ffinite-math-only). */
+static inline double osc_in_window(double w0, double w1, double a, double b)
+{
+    const double lo = (a > w0) ? a : w0, hi = (b < w1) ? b : w1;
+    return (hi > lo) ? hi - lo : 0.0;
+}
+
+/* The in-FMU observables of the window [w0, w1], kept in the state s (scheme_state.h) from the
+ * engine's phases: the observer's context (osc_engine.h's osc_eng_observe). */
+typedef struct {
+    double w0, w1;
+    dfo_state *s;
+} osc_observables;
+
+/* A phase [ta, tb] that overlaps the window (the engine calls no other): the stuck stretch opened or
+ * closed at its start (its part inside the window added in one piece when a phase in another mode
+ * begins, so that the stuck time is the same however the steps are taken), and where it ends inside
+ * the window X sampled and the friction's work on the relative motion counted (none where it ends
+ * on the window's start). */
+static inline void osc_observe_phase(void *ctx, const eng_phase *ph, const eng_state *es)
+{
+    const osc_observables *O = (const osc_observables *)ctx;
+    dfo_state *s = O->s;
+    const double ta = ph->ta, tb = ph->tb;
+    if (ph->mode0[0] == 0) {
+        if (isnan(s->stuck_from)) s->stuck_from = ta;
+    } else if (!isnan(s->stuck_from)) {
+        const double d = osc_in_window(O->w0, O->w1, s->stuck_from, ta);
+        if (d > 0.0) s->t_stuck += d;
+        s->stuck_from = NAN;
+    }
+    if (tb < O->w0 || tb > O->w1) return;
+    (void)es;
+    const double X = ph->X1[0], dX = X - ph->X0[0];
+    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
+    if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
+    if (!(tb > O->w0)) W = 0.0;
+    s->x_max = (X > s->x_max) ? X : s->x_max;
+    s->x_min = (X < s->x_min) ? X : s->x_min;
+    s->E_friction -= W;
+}
+
 /* ---- the operators ----------------------------------------------------------------------------- */
 
 static inline void osc_K(void *ctx, const double *x, double *y) { y[0] = ((const osc_eng_model *)ctx)->k * x[0]; }
@@ -37,15 +84,46 @@ static inline int osc_factor(void *ctx, int slot, double cM, double cC, double c
 {
     osc_eng_model *O = (osc_eng_model *)ctx;
     O->a[slot] = cM * O->m + cC * O->c + cK * O->k;
+    O->inv_a[slot] = 1.0 / O->a[slot];
     return O->a[slot] > 0.0;
 }
 
 static inline void osc_solve(void *ctx, int slot, const double *b, double *x)
 {
-    x[0] = b[0] / ((const osc_eng_model *)ctx)->a[slot];
+    x[0] = b[0] * ((const osc_eng_model *)ctx)->inv_a[slot];
 }
 
-/* The friction problem of the block: V1 = (p_hat + f) / a. Held: V1 = vb, f the holding force
+/* A Stribeck contact's friction problem through the engine's dense solver (its Newton on the implicit
+ * force), from the problem's values: out of line, so that the arrays of the inlined caller do not
+ * escape (the fused steps keep them in registers). */
+typedef struct {
+    eng_status st;
+    int mode, pivots;
+    double V1, f;
+} osc_stribeck_out;
+
+#if defined(__GNUC__)
+__attribute__((noinline, cold))
+#endif
+static osc_stribeck_out osc_stribeck_friction(const osc_eng_model *O, int slot, double h, double cM, double cC,
+                                              double cK, double p_hat, int belt, double vb, double limit, double N,
+                                              const dfo_friction_law *law, int what, int mode)
+{
+    osc_stribeck_out o = {ENG_ERR_FRICTION, mode, 0, 0.0, 0.0};
+    if (!O->E) return o;
+    const double ph[1] = {p_hat}, vbs[1] = {vb}, lim[1] = {limit}, Ns[1] = {N};
+    const eng_problem Q = {slot, h, cM, cC, cK, ph, belt ? vbs : NULL, lim, Ns, law};
+    int md[1] = {mode}, piv = 0;
+    double V1[1] = {0.0}, f[1] = {0.0};
+    o.st = osc_eng_dense_friction(O->E, &Q, what, md, V1, f, &piv);
+    o.mode = md[0];
+    o.pivots = piv;
+    o.V1 = V1[0];
+    o.f = f[0];
+    return o;
+}
+
+/* The friction problem of the block: V1 = (p_hat + f) / a (times 1 / a). Held: V1 = vb, f the holding force
  * a vb - p_hat; sliding: f = -mode limit. The LCP: held when the holding force is within the limit,
  * else sliding the way the free motion goes. A Stribeck contact: the engine's dense solver (its
  * Newton on the implicit force). */
@@ -53,14 +131,24 @@ static inline eng_status osc_friction(void *ctx, const eng_problem *P, int what,
                                       int *pivots)
 {
     const osc_eng_model *O = (const osc_eng_model *)ctx;
-    if (P->law && P->law[0].law == DFO_LAW_STRIBECK)
-        return O->E ? osc_eng_dense_friction(O->E, P, what, mode, V1, f, pivots) : ENG_ERR_FRICTION;
-    const double a = O->a[P->slot];
+    if (P->law && P->law[0].law == DFO_LAW_STRIBECK) {
+        const osc_stribeck_out o =
+            osc_stribeck_friction(O, P->slot, P->h, P->cM, P->cC, P->cK, P->p_hat[0], P->vb != NULL,
+                                  P->vb ? P->vb[0] : 0.0, P->limit[0], P->N[0], P->law, what, mode[0]);
+        if (o.st == ENG_OK) {
+            if (what == ENG_SOLVE_LCP) mode[0] = o.mode;
+            V1[0] = o.V1;
+            f[0] = o.f;
+        }
+        if (pivots) *pivots = o.pivots;
+        return o.st;
+    }
+    const double a = O->a[P->slot], ia = O->inv_a[P->slot];
     const double vb = P->vb ? P->vb[0] : 0.0, lim = P->limit[0], p = P->p_hat[0];
     if (pivots) *pivots = 0;
     if (!(lim > 0.0)) {
         f[0] = 0.0;
-        V1[0] = p / a;
+        V1[0] = p * ia;
         if (what == ENG_SOLVE_LCP) mode[0] = (V1[0] - vb > 0.0) - (V1[0] - vb < 0.0);
         return ENG_OK;
     }
@@ -75,7 +163,7 @@ static inline eng_status osc_friction(void *ctx, const eng_problem *P, int what,
         f[0] = fh;
     } else {
         f[0] = -mode[0] * lim;
-        V1[0] = (p + f[0]) / a;
+        V1[0] = (p + f[0]) * ia;
     }
     return ENG_OK;
 }
