@@ -1275,9 +1275,11 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             eng_status sst;
             if (step_spans(E, in, s, t_end, hh, &T, &sst)) return sst;
         }
-        /* held contacts breaking away with closed forms: the step split at the earliest at once */
+        /* held contacts breaking away with closed forms: the step split at the earliest at once (a
+         * breakaway at the phase's start itself, e.g. a limit below the rounding of the force, is
+         * the margins' root instead: the closed form's time is passed, the force not yet beyond) */
         const double tb = closed_breakaways(E, in, s);
-        if (tb >= s->t && tb <= t_end) {
+        if (tb > s->t && tb <= t_end) {
             const double hs = tb - s->t;
             if (hs > 0.0) {
                 trial_margin(&mc, (tb == t_end) ? r : hs, &T);
