@@ -853,6 +853,8 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
         if (has_friction(E, j) && s->mode[j] != from) report(s, j, from, hk);
     }
     if (consistent) rest_exact(E, s);
+    /* the step's modes are its friction problem's (the modes at its end): the phase's */
+    if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
     observe(E, s, ta, s->F, hk);
     return ENG_OK;
 }
