@@ -144,6 +144,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);
+    E->pt = NAN;
     return E;
 }
 

@@ -52,6 +52,7 @@ struct eng {
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
+    double pt, pt_c, pt_s;       /* the last off-grid time phase_of evaluated, its cos and sin (NaN: none) */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
      * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
      * Cholesky, Lemke's 2 nc problem */

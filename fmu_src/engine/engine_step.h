@@ -194,20 +194,26 @@ static double slide_mag(const eng *E, size_t j, double u)
 }
 
 /* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated
- * (only what the excitation reads: cos where Pc is given, sin where Ps is) */
-static ENG_HOT void phase_of(const eng *E, const eng_state *s, double t, double *cw, double *sw)
+ * (only what the excitation reads: cos where Pc is given, sin where Ps is), the last time's kept
+ * (a switch's restart reads it several times) */
+static ENG_HOT void phase_of(eng *E, const eng_state *s, double t, double *cw, double *sw)
 {
     if (s->exc_n >= 0 && t == s->t0 + (double)s->exc_n * E->S.h) {
         *cw = dfo_clamp1(s->exc_c);
         *sw = dfo_clamp1(s->exc_s);
         return;
     }
-    *cw = E->S.exc.Pc ? dfo_cos(E->S.exc.omega * t + E->S.exc.phi0) : 0.0;
-    *sw = E->S.exc.Ps ? dfo_sin(E->S.exc.omega * t + E->S.exc.phi0) : 0.0;
+    if (t != E->pt) {
+        E->pt = t;
+        E->pt_c = E->S.exc.Pc ? dfo_cos(E->S.exc.omega * t + E->S.exc.phi0) : 0.0;
+        E->pt_s = E->S.exc.Ps ? dfo_sin(E->S.exc.omega * t + E->S.exc.phi0) : 0.0;
+    }
+    *cw = E->pt_c;
+    *sw = E->pt_s;
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
-static ENG_HOT void applied_at(const eng *E, const eng_state *s, double t, double *out)
+static ENG_HOT void applied_at(eng *E, const eng_state *s, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw = 0.0, sw = 0.0;
