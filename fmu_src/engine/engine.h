@@ -342,7 +342,8 @@ typedef struct {
     double ta, tb;
     const double *X0;           /* n: positions at ta */
     const double *X1;           /* n: positions at tb */
-    const int *mode0;           /* nc: modes during the phase (s->mode holds those after it) */
+    const int *mode0;           /* nc: modes during the phase (located: those of its start; paper and
+                                 * consistent: the step's friction problem's, those at its end) */
     const double *f;            /* nc: the contact forces over it (for the work: the step's end value, or
                                  * for Stribeck the mean of its ends) */
     const double *v_belt;       /* nc: belts (NULL: fixed) */

@@ -1762,14 +1762,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             s->t = t;
             s->n_grid = ng;
 #endif
-            eng_phase phs;
-            phs.ta = ta;
-            phs.tb = t;
-            phs.X0 = X0;
-            phs.X1 = X1;
-            phs.mode0 = mode0;
-            phs.f = F1;
-            phs.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
+            const eng_phase phs = {ta, t, X0, X1, mode0, F1, (E->vb == E->zero_nc) ? NULL : E->vb};
             ENG_OBSERVE(obs, &phs, s);
         }
     }
