@@ -1597,6 +1597,9 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const double cM = (1.0 - a) * K.c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
     const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    /* the observer's window and the belts, read once (a store through the state may not change them) */
+    const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
     const eng_harmonic *H = &S->exc;
     eng_problem P;
     P.slot = ENG_SLOT_GRID;
@@ -1720,7 +1723,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         }
         /* the step is taken: the grid point, its excitation cache, the counters */
         const double ta = t;
-        const int observed = obs && !(grid < obs->t_start) && !(ta > obs->t_stop);
+        const int observed = obs && !(grid < obs_t0) && !(ta > obs_t1);
         if (observed) {
             for (size_t i = 0; i < n; i++) X0[i] = X[i];
             for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
@@ -1761,7 +1764,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             s->t = t;
             s->n_grid = ng;
 #endif
-            const eng_phase phs = {ta, t, X0, X1, mode0, F1, (E->vb == E->zero_nc) ? NULL : E->vb};
+            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs};
             ENG_OBSERVE(obs, &phs, s);
         }
     }
