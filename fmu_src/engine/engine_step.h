@@ -112,6 +112,17 @@
 
 static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
 
+/* fmax(a, b) and fmin(a, b) for b not NaN (a NaN a gives b, as fmax and fmin do), and f clamped to
+ * [-lim, lim] (lim > 0 not NaN; a NaN f gives lim) as fmax(-lim, fmin(lim, f)) does: comparisons,
+ * the same values; fmin and fmax are library calls without -ffinite-math-only, on the step's path. */
+static ENG_HOT double max_b(double a, double b) { return (a > b) ? a : b; }
+static ENG_HOT double min_b(double a, double b) { return (a < b) ? a : b; }
+static ENG_HOT double clamp_lim(double f, double lim)
+{
+    const double u = min_b(f, lim);
+    return max_b(u, -lim);
+}
+
 /* w_j . x */
 static double row_dot(const eng_row *R, const double *x)
 {
@@ -282,7 +293,7 @@ static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 static ENG_HOT double slip(const eng *E, size_t j, const double *V) { return ENG_ROW_DOT(E, j, V) - E->vb[j]; }
 
 /* Factor slot with the coefficients, unless it holds them already. */
-static int factor_slot(eng *E, int slot, double cM, double cC, double cK)
+static ENG_HOT int factor_slot(eng *E, int slot, double cM, double cC, double cK)
 {
     if (!ENG_HAS_C(E)) cC = 0.0;
     double *c = E->slot_c[slot];
@@ -325,6 +336,22 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     ENG_SOLVE(E, slot, r, y);
+    if (n == 1 && nc == 1) { /* one DOF, one contact: the steps below in scalars, the same arithmetic */
+        if (!held[0]) return;
+        const double w = S->rows[0].w[0];
+        double col = 0.0 + 1.0 * w; /* row_axpy into zeros, then the solve */
+        ENG_SOLVE(E, slot, &col, &col);
+        const double D = 0.0 + w * col, rhs = target[0] - (0.0 + w * y[0]);
+        double x = 0.0;
+        if (!(!(D > DEPENDENT_REL * fabs(D)) || !(D > 0.0))) { /* chol's test of a dependent row */
+            const double L = sqrt(D);
+            x = rhs / L;
+            x = x / L;
+        }
+        y[0] += col * x;
+        f[0] = x;
+        return;
+    }
     size_t m = 0;
     for (size_t j = 0; j < nc; j++)
         if (held[j]) E->sel[m++] = (int)j;
@@ -702,7 +729,7 @@ typedef struct {
 static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
 {
     const double hA = s->hA[i];
-    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * fmax(hh, hA) <= 1.0;
+    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * max_b(hA, hh) <= 1.0;
 }
 
 /* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
@@ -1052,7 +1079,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
             total += 1;
         }
         for (size_t j = 0; j < nc; j++)
-            if (has_friction(E, j) && E->st[j] == 0) E->f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
+            if (has_friction(E, j) && E->st[j] == 0) E->f[j] = clamp_lim(E->f[j], E->Fb[j]);
     }
     if (total > 0) s->pivot_steps++;
     finish(E, s, &T, E->V1, E->f, t_end);
@@ -1107,8 +1134,11 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;
     double g = INFINITY;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (E->cand[j]) g = fmin(g, margin(E, E->st, j, E->V1, E->f));
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!E->cand[j]) continue;
+        const double gj = margin(E, E->st, j, E->V1, E->f);
+        g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
+    }
     return g;
 }
 
@@ -1598,6 +1628,9 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const double cM = (1.0 - a) * K.c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
     const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    /* the observer's window and the belts, read once (a store through the state may not change them) */
+    const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
     const eng_harmonic *H = &S->exc;
     eng_problem P;
     P.slot = ENG_SLOT_GRID;
@@ -1667,7 +1700,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
         for (size_t i = 0; i < n; i++) {
             held_all &= pin[i] && V[i] == 0.0 && A[i] == 0.0;
-            rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * fmax(h, hA[i]) <= 1.0;
+            rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * max_b(hA[i], h) <= 1.0;
         }
         if (held_all || rebase) break;
         /* the excitation at the grid point: the cache's rotation (dfo_grid_phase) */
@@ -1717,11 +1750,11 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             if (changed) break;
             if (consistent)
                 for (size_t j = 0; j < nc; j++)
-                    if (has_friction(E, j) && st[j] == 0) f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], f[j]));
+                    if (has_friction(E, j) && st[j] == 0) f[j] = clamp_lim(f[j], E->Fb[j]);
         }
         /* the step is taken: the grid point, its excitation cache, the counters */
         const double ta = t;
-        const int observed = obs && !(grid < obs->t_start) && !(ta > obs->t_stop);
+        const int observed = obs && !(grid < obs_t0) && !(ta > obs_t1);
         if (observed) {
             for (size_t i = 0; i < n; i++) X0[i] = X[i];
             for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
@@ -1762,7 +1795,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             s->t = t;
             s->n_grid = ng;
 #endif
-            const eng_phase phs = {ta, t, X0, X1, mode0, F1, (E->vb == E->zero_nc) ? NULL : E->vb};
+            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs};
             ENG_OBSERVE(obs, &phs, s);
         }
     }
@@ -1818,7 +1851,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
 static double snap_tol(const eng *E, double t)
 {
     const eng_setup *S = &E->S;
-    return fmin(S->snap_max_rel_h * S->h, fmax(S->snap_min_rel_h * S->h, S->snap_eps_t * DBL_EPSILON * fabs(t)));
+    return min_b(S->snap_max_rel_h * S->h, max_b(S->snap_eps_t * DBL_EPSILON * fabs(t), S->snap_min_rel_h * S->h));
 }
 
 ENG_API double ENG_FN(eng_snap_target)(const eng *E, const eng_state *s, double t_target)
@@ -1831,7 +1864,7 @@ static void rest_forces(eng *E, eng_state *s)
 {
     phys_accel(E, s, s->t, s->mode, E->y2, E->f);
     for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
+        if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = clamp_lim(E->f[j], E->Fb[j]);
 }
 
 /* ---- the stuck fast path ------------------------------------------------------------------- */
@@ -1893,10 +1926,10 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
     }
     if (isnan(c->tb)) return s->n_grid;
     long long m = grid_below(s, h, t_target, 1);
-    const long long mb = grid_below(s, h, fmin(c->tb, t_target + 2.0 * h), 0) - 1;
+    const long long mb = grid_below(s, h, min_b(c->tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
     if (hk && hk->obs && hk->obs->on_phase && s->t < hk->obs->t_stop) { /* a stretch in the window ends in it */
-        const long long mo = grid_below(s, h, fmin(hk->obs->t_stop, t_target + 2.0 * h), 1);
+        const long long mo = grid_below(s, h, min_b(hk->obs->t_stop, t_target + 2.0 * h), 1);
         if (mo < m) m = mo;
     }
     return (m > s->n_grid) ? m : s->n_grid;
@@ -2092,5 +2125,5 @@ ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_
     loads_at(E, in, s->t);
     phys_accel(E, s, s->t, s->mode, E->y2, f);
     for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j)) f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], f[j]));
+        if (s->mode[j] == 0 && has_friction(E, j)) f[j] = clamp_lim(f[j], E->Fb[j]);
 }
