@@ -1196,7 +1196,8 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                              K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
                              E->Fb, E->xp, E->ph, E->V1, E->f};
-    if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+    if (!E->held_ready && ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+    E->held_ready = 0;
     T->kin = *K;
     T->slot = F.slot;
     T->cM = F.cM;
@@ -1812,6 +1813,82 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     if (steps > 0) *g_prev = t;
 }
 
+/* The model's fused grid step (eng_sparse.step_held) in a tight loop: the located scheme's grid
+ * steps in which no contact switches, held inputs, no belts, no ghosts, one after the other, with
+ * the general path's bookkeeping of such a step (eng_advance's grid point, step_located's phase of
+ * one trial, held_step, held_done) done once where a taken step leaves it unchanged: the modes and
+ * limits (a taken step switches no contact with friction), M_hat's factor, the re-basing test (after
+ * a taken step A is of the grid's length, or 0 on a pinned DOF). The same arithmetic in the same
+ * order, so the same numbers. Stops, the state untouched by the step it declines, before a step the
+ * model declines (the general path takes it from there), a stuck structure the stuck fast path may
+ * skip (skip), and a step past t_target. *g_prev: the last grid point reached. */
+static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, double t_target, int skip,
+                               const eng_hooks *hk, double *g_prev)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h, a = S->alpha;
+    if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h) || needs_rebase(E, s, h)) return;
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
+    int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++) {
+        E->st[j] = !has_friction(E, j) ? 1 : s->mode[j];
+        E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+        all_held &= s->mode[j] == 0 && has_friction(E, j);
+        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    }
+    for (size_t i = 0; i < n; i++) all_held &= E->pin[i];
+    const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    const eng_harmonic *H = &S->exc;
+    const int trig = H->Pc || H->Ps;
+    eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
+                       K->pred_A, K->corr_V, 0.0, 0.0, H->Pc, H->Ps, E->u, s->A, E->st, E->lim,
+                       E->Fb, E->xp, E->ph, E->V1, E->f};
+    long long ng = s->n_grid;
+    const long long ng0 = ng;
+    for (;;) {
+        const double grid = s->t0 + (double)(ng + 1) * h;
+        if (!(grid <= t_target) || !(grid > s->t)) break;
+        if (all_held) { /* at rest: the stuck fast path's to try */
+            int rest = 1;
+            for (size_t i = 0; i < n; i++) rest &= s->V[i] == 0.0 && s->A[i] == 0.0;
+            if (rest) break;
+        }
+        double c, sn; /* the grid point's excitation cache, as eng_advance's */
+        dfo_grid_phase(H->omega, H->phi0, s->t0, h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, ng + 1, &c, &sn);
+        if (trig) {
+            F.cw = dfo_clamp1(c);
+            F.sw = dfo_clamp1(sn);
+        }
+        const double ta = s->t;
+        if (obs) {
+            memcpy(E->X0, s->X, n * sizeof(double));
+            if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
+        }
+        if (!ENG_STEP_HELD(E, &F, s)) { /* declined: its trial for the general path's held_step */
+            E->held_ready = 1;
+            break;
+        }
+        ng++;
+        s->n_grid = ng;
+        s->exc_n = ng;
+        s->exc_c = c;
+        s->exc_s = sn;
+        s->steps++;
+        s->solves++;
+        s->t = grid;
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+        rest_exact(E, s);
+        if (obs && !(grid < obs_t0) && !(ta > obs_t1)) observe(E, s, ta, s->F, hk);
+    }
+    if (ng > ng0) *g_prev = s->t;
+}
+
 /* ---- driving -------------------------------------------------------------------------------- */
 
 ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s)
@@ -1972,6 +2049,7 @@ static void stuck_skip(eng *E, eng_state *s, long long m)
 ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk)
 {
     E->loads_for = NULL;
+    E->held_ready = 0;
     const eng_setup *S = &E->S;
     const double h = S->h;
     t_target = ENG_FN(eng_snap_target)(E, s, t_target);
@@ -1984,6 +2062,8 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     stick_cache cache = {NAN, 0, 0};
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
     const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
+    const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
+                          S->scheme == DFO_SCHEME_LOCATED;
     while (s->t < t_target) {
         if (skip && s->t == g_prev) {
             const long long m = stuck_until(E, in, s, t_target, hk, &cache);
@@ -1999,6 +2079,11 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         if (fuse && s->t == g_prev) {
             loads_at(E, in, s->t);
             fused_steps(E, s, t_target, skip, hk, &g_prev);
+            if (!(s->t < t_target)) break;
+        }
+        if (fuse_held && s->t == g_prev) {
+            loads_at(E, in, s->t);
+            held_steps(E, in, s, t_target, skip, hk, &g_prev);
             if (!(s->t < t_target)) break;
         }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
@@ -2022,6 +2107,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         eng_status st;
         if (S->scheme == DFO_SCHEME_LOCATED) st = step_located(E, in, s, t_end, hh, hk);
         else st = step_lcp(E, in, s, t_end, hh, S->scheme == DFO_SCHEME_CONSISTENT, hk);
+        E->held_ready = 0;
         switched = s->switches != sw0;
         if (st == ENG_SWITCHED || (hk && hk->stop_at_switch && switched)) {
             if (s->t < t_end && t_end == grid) s->n_grid--;
