@@ -81,7 +81,7 @@ void eng_destroy(eng *E)
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
-                          E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
+                          E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
                           E->gV1, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
@@ -110,6 +110,8 @@ static int create_spans(eng *E, const char **err)
     ok &= (E->dlab = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     ok &= (E->clab = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->gmap = (long *)alloc_n(al, n, sizeof(long))) != NULL;
+    ok &= (E->drng = (size_t *)alloc_n(al, 2 * n, sizeof(size_t))) != NULL; /* (spans: at most n) */
+    ok &= (E->crng = (size_t *)alloc_n(al, 2 * n, sizeof(size_t))) != NULL;
     ok &= (E->lgh = (int *)alloc_n(al, L, sizeof(int))) != NULL;
     ok &= (E->ldof = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
     ok &= (E->lct = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;

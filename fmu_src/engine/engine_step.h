@@ -1242,11 +1242,11 @@ static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     if (ramped(in)) return 0;
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < nc; j++) {
+    for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return 0;
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++)
         if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    }
     for (size_t i = 0; i < n; i++)
         if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return 0;
     return 1;
@@ -1463,13 +1463,6 @@ static void contact_copy(eng_state *d, size_t j, const eng_state *s, size_t k)
     d->break_dir[j] = s->break_dir[k];
 }
 
-/* d's arrays := s's (the same sizes; its scalars left) */
-static void eng_state_arrays_copy(eng_state *d, const eng_state *s)
-{
-    for (size_t i = 0; i < s->n; i++) dof_copy(d, i, s, i);
-    for (size_t j = 0; j < s->nc; j++) contact_copy(d, j, s, j);
-}
-
 /* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
  * inlined into itself. */
 static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
@@ -1493,8 +1486,33 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
         if (E->cand[j] && E->clab[j] <= 0) return 0;
     *out = ENG_OK;
+    if (ns > n) { *out = ENG_ERR_BAD_INPUT; return 1; } /* (a span holds a DOF) */
+    /* each span's index ranges (so that a span's work is its own size, not the structure's) */
+    size_t *dr = E->drng, *cr = E->crng;
+    for (size_t k = 0; k < ns; k++) {
+        dr[2 * k] = n;
+        dr[2 * k + 1] = 0;
+        cr[2 * k] = nc;
+        cr[2 * k + 1] = 0;
+    }
+    for (size_t i = 0; i < n; i++) {
+        const size_t k = (size_t)((E->dlab[i] < 0) ? -E->dlab[i] : E->dlab[i]) - 1;
+        if (E->dlab[i] == 0 || k >= ns) continue;
+        if (i < dr[2 * k]) dr[2 * k] = i;
+        dr[2 * k + 1] = i + 1;
+    }
+    for (size_t j = 0; j < nc; j++) {
+        const size_t k = (size_t)((E->clab[j] < 0) ? -E->clab[j] : E->clab[j]) - 1;
+        if (E->clab[j] == 0 || k >= ns) continue;
+        if (j < cr[2 * k]) cr[2 * k] = j;
+        cr[2 * k + 1] = j + 1;
+    }
+    /* the step's start where the spans read it */
     const eng_state *p = &E->ps;
-    eng_state_arrays_copy(&E->ps, s);
+    for (size_t k = 0; k < ns; k++) {
+        for (size_t i = dr[2 * k]; i < dr[2 * k + 1]; i++) dof_copy(&E->ps, i, s, i);
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) contact_copy(&E->ps, j, s, j);
+    }
     const double t_start = s->t;
     /* everything in the current modes first */
     finish(E, s, T, E->V1, E->f, t_end);
@@ -1507,15 +1525,14 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     for (size_t k = 0; k < ns; k++) {
         const int lab = (int)k + 1;
         size_t nd = 0, nct = 0;
-        for (size_t i = 0; i < n; i++) {
-            E->gmap[i] = -1;
+        for (size_t i = dr[2 * k]; i < dr[2 * k + 1]; i++) {
             if (E->dlab[i] != lab && E->dlab[i] != -lab) continue;
             if (nd == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
             E->gmap[i] = (long)nd;
             E->ldof[nd] = i;
             E->lgh[nd++] = E->dlab[i] < 0;
         }
-        for (size_t j = 0; j < nc; j++) {
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) {
             if (E->clab[j] != lab && E->clab[j] != -lab) continue;
             if (nct == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
             E->lct[nct++] = j;
@@ -1528,7 +1545,8 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
             double *w = E->lrw + a * E->lnnz;
             for (size_t q = 0; q < R->nnz; q++) {
-                if (E->gmap[R->idx[q]] < 0) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
+                const int dl = E->dlab[R->idx[q]];
+                if (dl != lab && dl != -lab) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
                 idx[q] = (size_t)E->gmap[R->idx[q]];
                 w[q] = R->w[q];
             }
