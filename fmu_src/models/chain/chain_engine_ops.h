@@ -371,45 +371,112 @@ static inline double chain_op_contact_breakaway(void *ctx, size_t j, const eng_h
     return chain_op_block_breakaway(exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
 }
 
-/* The fused grid step in the held pattern (eng_sparse.step_held): x_pred and p_hat in one sweep (K's
- * row needs x_pred one block ahead), the kept basis solve, the margins, the acceptance; the
- * engine's arithmetic in its order (engine.h's eng_held_step), so the same bits. */
+/* Row i of the fused step once its neighbours' V1 are known (vlo: row i - 1's, unused for i = 0; vi:
+ * its own; vhi: row i + 1's, unused for the last): its force as chain_op_basis sets it (a held row's
+ * from its equation, a sliding row's its limit's) into F->f, and whether its margin is positive. */
+static inline int chain_op_row_done(const chain_eng_ops *C, const eng_held_step *F, size_t i, double vlo, double vi,
+                                    double vhi)
+{
+    const size_t n = C->n;
+    const double *e = C->e[F->slot], *l = F->lim;
+    const int *mode = F->st;
+    double fi;
+    if (mode[i] == 0 && l[i] > 0.0) {
+        fi = C->q[i];
+        if (i > 0) fi += e[i - 1] * vlo;
+        if (i + 1 < n) fi += e[i] * vhi;
+    } else {
+        fi = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+    }
+    F->f[i] = fi;
+    if (!(F->Fb[i] > 0.0)) return 1;
+    return (mode[i] != 0) ? mode[i] * ((0.0 + 1.0 * vi) - 0.0) > 0.0 : F->Fb[i] - fabs(fi) > 0.0;
+}
+
+/* The fused grid step in the held pattern (eng_sparse.step_held): x_pred, p_hat and the kept basis
+ * solve's elimination in one forward sweep (K's row needs x_pred one block ahead), its back
+ * substitution with the held rows' forces and the margins in one backward sweep, the acceptance;
+ * the engine's arithmetic in its order (engine.h's eng_held_step, chain_op_basis), so the same
+ * bits. */
 static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_state *s)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
+    const int slot = F->slot;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
-    const double *X = s->X, *V = s->V, *A0 = F->A0;
-    double *xpp = F->xp, *q = C->q, *V1 = F->V1;
-    double xc = X[0] + pV * V[0] + pA * A0[0];
+    const double *X = s->X, *V = s->V, *A0 = F->A0, *l = F->lim;
+    const double *d = C->d[slot], *e = C->e[slot];
+    const int *mode = F->st;
+    int *kh = C->kh[slot];
+    double *kcp = C->kcp[slot], *kinv = C->kinv[slot], *dp = C->work;
+    double *xpp = F->xp, *q = C->q, *V1 = F->V1, *f = F->f, *ph = F->ph;
+    /* the inputs read once (a store through an output may not change them) */
+    const double *m = C->m, *Kd = C->Kd, *Ko = C->Ko, *u = F->u, *Pc = F->Pc, *Ps = F->Ps;
+    const double cw = F->cw, sw = F->sw;
+    double xc = X[0] + pV * V[0] + pA * A0[0], cprev = 0.0, dprev = 0.0;
+    int refac = 0;
     for (size_t i = 0; i < n; i++) {
+        /* x_pred and p_hat */
         const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
         xpp[i] = xc;
         const double r = -a * A0[i] + (1.0 - a) * (V[i] * c1 + g1 * A0[i]);
-        const double y = C->m[i] * r;
-        double kx = C->Kd[i] * xc;
-        if (i > 0) kx += C->Ko[i - 1] * xpp[i - 1];
-        if (i + 1 < n) kx += C->Ko[i] * xr;
-        double p = F->u[i];
-        if (F->Pc) p += F->Pc[i] * F->cw;
-        if (F->Ps) p -= F->Ps[i] * F->sw;
-        F->ph[i] = p + (y - kx);
-        q[i] = -F->ph[i];
+        const double y = m[i] * r;
+        double kx = Kd[i] * xc;
+        if (i > 0) kx += Ko[i - 1] * xpp[i - 1];
+        if (i + 1 < n) kx += Ko[i] * xr;
+        double p = u[i];
+        if (Pc) p += Pc[i] * cw;
+        if (Ps) p -= Ps[i] * sw;
+        const double phi = p + (y - kx);
+        ph[i] = phi;
+        q[i] = -phi;
         xc = xr;
+        /* chain_op_basis's forward elimination of row i */
+        const int hold = mode[i] == 0 && l[i] > 0.0;
+        const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+        if (kh[i] != 1 + hold || (refac && !hold)) {
+            kh[i] = 1 + hold;
+            if (hold) {
+                kcp[i] = 0.0;
+            } else {
+                kinv[i] = 1.0 / (d[i] - lo_e * cprev);
+                kcp[i] = (i + 1 < n) ? e[i] * kinv[i] : 0.0;
+            }
+            refac = 1;
+        } else {
+            refac = 0;
+        }
+        double dpi = 0.0;
+        if (!hold) {
+            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            dpi = (rhs - lo_e * dprev) * kinv[i];
+        }
+        dp[i] = dpi;
+        cprev = kcp[i];
+        dprev = dpi;
     }
-    double *f = F->f;
-    chain_op_basis(C, F->slot, q, F->lim, F->st, V1, f);
-    for (size_t j = 0; j < n; j++) {
-        if (!(F->Fb[j] > 0.0)) continue;
-        const double mg = (F->st[j] != 0) ? F->st[j] * ((0.0 + 1.0 * V1[j]) - 0.0) : F->Fb[j] - fabs(f[j]);
-        if (mg <= 0.0) return 0;
+    /* back substitution (zn: the elimination's value; a held row's V1 then 0) and row j + 1's force
+     * and margin once row j is known (its neighbours' V1 then are); row 0's after */
+    int ok = 1;
+    double zn = 0.0, v1 = 0.0, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
+    for (size_t j = n; j-- > 0;) {
+        zn = dp[j] - kcp[j] * zn;
+        const double vj = (mode[j] == 0 && l[j] > 0.0) ? 0.0 : zn;
+        V1[j] = vj;
+        if (j + 1 < n) ok &= chain_op_row_done(C, F, j + 1, vj, v1, v2);
+        v2 = v1;
+        v1 = vj;
     }
+    ok &= chain_op_row_done(C, F, 0, 0.0, v1, v2);
+    if (!ok) return 0;
+    double *sX = s->X, *sV = s->V, *sA = s->A, *shA = s->hA, *sF = s->F;
+    const double cV = F->corr_V, hh = F->h;
     for (size_t i = 0; i < n; i++) {
-        s->X[i] = xpp[i] + F->corr_V * V1[i];
-        s->A[i] = (V1[i] - s->V[i]) * c1 - g1 * A0[i];
-        s->V[i] = V1[i];
-        s->hA[i] = F->h;
-        s->F[i] = f[i];
+        sX[i] = xpp[i] + cV * V1[i];
+        sA[i] = (V1[i] - sV[i]) * c1 - g1 * A0[i];
+        sV[i] = V1[i];
+        shA[i] = hh;
+        sF[i] = f[i];
     }
     return 1;
 }
