@@ -1851,14 +1851,17 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
     const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
     int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
     for (size_t j = 0; j < nc; j++) {
         E->st[j] = !has_friction(E, j) ? 1 : s->mode[j];
         E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
         all_held &= s->mode[j] == 0 && has_friction(E, j);
-        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
     }
-    for (size_t i = 0; i < n; i++) all_held &= E->pin[i];
+    if (all_held) {
+        for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+        for (size_t j = 0; j < nc; j++)
+            if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+        for (size_t i = 0; i < n; i++) all_held &= E->pin[i];
+    }
     const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
     const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
     const eng_harmonic *H = &S->exc;
