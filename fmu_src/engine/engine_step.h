@@ -1851,7 +1851,10 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
     const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
     int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
+    int frictionless = 0, held_any = 0; /* contacts whose modes follow their slip; held ones (rest_exact) */
     for (size_t j = 0; j < nc; j++) {
+        frictionless |= !has_friction(E, j);
+        held_any |= s->mode[j] == 0 && has_friction(E, j);
         E->st[j] = !has_friction(E, j) ? 1 : s->mode[j];
         E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
         all_held &= s->mode[j] == 0 && has_friction(E, j);
@@ -1869,7 +1872,7 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
     eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                        K->pred_A, K->corr_V, 0.0, 0.0, H->Pc, H->Ps, E->u, s->A, E->st, E->lim,
                        E->Fb, E->xp, E->ph, E->V1, E->f};
-    long long ng = s->n_grid;
+    long long ng = s->n_grid, steps = 0;
     const long long ng0 = ng;
     for (;;) {
         const double grid = s->t0 + (double)(ng + 1) * h;
@@ -1899,14 +1902,21 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
         s->exc_n = ng;
         s->exc_c = c;
         s->exc_s = sn;
-        s->steps++;
-        s->solves++;
+        steps++;
         s->t = grid;
-        for (size_t j = 0; j < nc; j++)
-            if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
-        rest_exact(E, s);
-        if (obs && !(grid < obs_t0) && !(ta > obs_t1)) observe(E, s, ta, s->F, hk);
+        if (frictionless)
+            for (size_t j = 0; j < nc; j++)
+                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+        if (held_any) rest_exact(E, s);
+        if (obs && !(grid < obs_t0) && !(ta > obs_t1)) {
+            s->steps += steps;
+            s->solves += steps;
+            steps = 0;
+            observe(E, s, ta, s->F, hk);
+        }
     }
+    s->steps += steps;
+    s->solves += steps;
     if (ng > ng0) *g_prev = s->t;
 }
 
