@@ -128,6 +128,32 @@ static inline void chain_op_solve(void *ctx, int slot, const double *b, double *
     for (size_t i = n - 1; i-- > 0;) x[i] -= cp[i] * x[i + 1];
 }
 
+/* Row i of chain_op_basis's forward elimination: its kept factor made anew where its hold changed or,
+ * free, where the row above was (*refac, then set for the row below), *cprev its Thomas factor then;
+ * returns its eliminated right-hand side (rhs: -q_i less the sliding force; 0 on a held row). */
+static inline double chain_op_elim_row(chain_eng_ops *C, int slot, size_t i, int hold, double rhs, double *cprev,
+                                       double dprev, int *refac)
+{
+    const double *d = C->d[slot], *e = C->e[slot];
+    int *kh = C->kh[slot];
+    double *kcp = C->kcp[slot], *kinv = C->kinv[slot];
+    const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+    if (kh[i] != 1 + hold || (*refac && !hold)) {
+        kh[i] = 1 + hold;
+        if (hold) {
+            kcp[i] = 0.0;
+        } else {
+            kinv[i] = 1.0 / (d[i] - lo_e * *cprev);
+            kcp[i] = (i + 1 < C->n) ? e[i] * kinv[i] : 0.0;
+        }
+        *refac = 1;
+    } else {
+        *refac = 0;
+    }
+    *cprev = kcp[i];
+    return hold ? 0.0 : (rhs - lo_e * dprev) * kinv[i];
+}
+
 /* lcp_box_basis(0, n, 0, 0.0, 0, 0.0, d, e, q, l, mode, z, w, ...) of the slot's M_hat with its
  * factorisation kept for the held pattern (mode 0 with l > 0): the same operations, so the same
  * bits, without the divisions of the rows whose pattern is unchanged. A row is refactored when its
@@ -137,35 +163,15 @@ static inline void chain_op_basis(chain_eng_ops *C, int slot, const double *q, c
                                   double *z, double *w)
 {
     const size_t n = C->n;
-    const double *d = C->d[slot], *e = C->e[slot];
-    int *kh = C->kh[slot];
-    double *kcp = C->kcp[slot], *kinv = C->kinv[slot], *dp = C->work;
+    const double *e = C->e[slot];
+    double *kcp = C->kcp[slot], *dp = C->work;
     double cprev = 0.0, dprev = 0.0;
     int refac = 0;
     for (size_t i = 0; i < n; i++) {
         const int hold = mode[i] == 0 && l[i] > 0.0;
-        if (kh[i] != 1 + hold || (refac && !hold)) {
-            kh[i] = 1 + hold;
-            if (hold) {
-                kcp[i] = 0.0;
-            } else {
-                const double lo_e = (i > 0) ? e[i - 1] : 0.0;
-                kinv[i] = 1.0 / (d[i] - lo_e * cprev);
-                kcp[i] = (i + 1 < n) ? e[i] * kinv[i] : 0.0;
-            }
-            refac = 1;
-        } else {
-            refac = 0;
-        }
-        double dpi = 0.0;
-        if (!hold) {
-            const double lo_e = (i > 0) ? e[i - 1] : 0.0;
-            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            dpi = (rhs - lo_e * dprev) * kinv[i];
-        }
-        dp[i] = dpi;
-        cprev = kcp[i];
-        dprev = dpi;
+        const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+        dprev = chain_op_elim_row(C, slot, i, hold, rhs, &cprev, dprev, &refac);
+        dp[i] = dprev;
     }
     double zn = 0.0;
     for (size_t j = n; j-- > 0;) {
@@ -405,10 +411,8 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
     const int slot = F->slot;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
     const double *X = s->X, *V = s->V, *A0 = F->A0, *l = F->lim;
-    const double *d = C->d[slot], *e = C->e[slot];
     const int *mode = F->st;
-    int *kh = C->kh[slot];
-    double *kcp = C->kcp[slot], *kinv = C->kinv[slot], *dp = C->work;
+    double *kcp = C->kcp[slot], *dp = C->work;
     double *xpp = F->xp, *q = C->q, *V1 = F->V1, *f = F->f, *ph = F->ph;
     /* the inputs read once (a store through an output may not change them) */
     const double *m = C->m, *Kd = C->Kd, *Ko = C->Ko, *u = F->u, *Pc = F->Pc, *Ps = F->Ps;
@@ -433,27 +437,9 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
         xc = xr;
         /* chain_op_basis's forward elimination of row i */
         const int hold = mode[i] == 0 && l[i] > 0.0;
-        const double lo_e = (i > 0) ? e[i - 1] : 0.0;
-        if (kh[i] != 1 + hold || (refac && !hold)) {
-            kh[i] = 1 + hold;
-            if (hold) {
-                kcp[i] = 0.0;
-            } else {
-                kinv[i] = 1.0 / (d[i] - lo_e * cprev);
-                kcp[i] = (i + 1 < n) ? e[i] * kinv[i] : 0.0;
-            }
-            refac = 1;
-        } else {
-            refac = 0;
-        }
-        double dpi = 0.0;
-        if (!hold) {
-            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            dpi = (rhs - lo_e * dprev) * kinv[i];
-        }
-        dp[i] = dpi;
-        cprev = kcp[i];
-        dprev = dpi;
+        const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+        dprev = chain_op_elim_row(C, slot, i, hold, rhs, &cprev, dprev, &refac);
+        dp[i] = dprev;
     }
     /* back substitution (zn: the elimination's value; a held row's V1 then 0) and row j + 1's force
      * and margin once row j is known (its neighbours' V1 then are); row 0's after */
