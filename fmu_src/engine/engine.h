@@ -254,6 +254,11 @@ struct eng_held_step_s {
     const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
     double *xp, *ph, *V1, *f;   /* n, n, n, nc: out, x_pred, p_hat and the basis solve's V1 and f (the
                                  * engine's workspace: where the step is not taken it goes on from them) */
+    int run;                    /* 0: a step on its own; 1: the first step of a run whose F differs from
+                                 * step to step only in cw and sw (the same arrays, their contents and the
+                                 * slot's factor unchanged while the run lasts); 2: a later step of that
+                                 * run, the last one taken (the model may keep what it took from F at the
+                                 * run's first step, in its own layout, and read that instead) */
 };
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create

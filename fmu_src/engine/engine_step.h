@@ -1195,7 +1195,7 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &cw, &sw);
     const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                              K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
-                             E->Fb, E->xp, E->ph, E->V1, E->f};
+                             E->Fb, E->xp, E->ph, E->V1, E->f, 0};
     if (!E->held_ready && ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
     E->held_ready = 0;
     T->kin = *K;
@@ -1871,7 +1871,7 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
     const int trig = H->Pc || H->Ps;
     eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                        K->pred_A, K->corr_V, 0.0, 0.0, H->Pc, H->Ps, E->u, s->A, E->st, E->lim,
-                       E->Fb, E->xp, E->ph, E->V1, E->f};
+                       E->Fb, E->xp, E->ph, E->V1, E->f, 1};
     long long ng = s->n_grid, steps = 0;
     const long long ng0 = ng;
     for (;;) {
@@ -1897,6 +1897,7 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
             E->held_ready = 1;
             break;
         }
+        F.run = 2;
         ng++;
         s->n_grid = ng;
         s->exc_n = ng;

@@ -24,6 +24,23 @@
 
 #define CHAIN_NEWTON_ITERS 60
 
+/* Block i's data for the fused steps of a run (eng_held_step.run; chain_op_run_take), together in
+ * memory: its coefficients, the run's load and mode, the slot's off-diagonal, and the slot's
+ * factorisation for the basis solve kept for the held pattern (as chain_op_basis keeps its own). */
+typedef struct {
+    double m, Kd, Ko;             /* M and K's row (Ko: coupling i and i + 1) */
+    double Pc, Ps;                /* the excitation (0 where the run's arrays are NULL) */
+    double u;                     /* external force */
+    double e;                     /* M_hat's off-diagonal e[i] */
+    double cp, inv;               /* Thomas's cp and 1 / den of the kept factorisation (pattern kh) */
+    double sl;                    /* the sliding force's term of the right-hand side: mode lim where lim > 0, else 0 */
+    double Fb;                    /* breakaway limit */
+    int hold;                     /* held: mode 0 with lim > 0 */
+    int st;                       /* mode */
+    int kh;                       /* the pattern cp, inv are for: 0 none yet, 1 free, 2 held */
+    int pad;                      /* (the struct's size a multiple of 8) */
+} chain_run_row;
+
 /* The operators' data: the model's arrays (read; a span's view points into them), the slots'
  * factorisations and the solver's workspace (written; a view has its own). */
 typedef struct chain_eng_ops_s {
@@ -46,6 +63,12 @@ typedef struct chain_eng_ops_s {
     int fix_lo, fix_hi;           /* a span's view: its first / last row a ghost's (Dirichlet) */
     size_t w;                     /* a span's reach (chain_op_set_reach; 0: no spans) */
     struct chain_eng_ops_s *sub;  /* the span's view (chain_op_span_bind) */
+    /* the fused steps' run (n rows; NULL: the rows not offered, runs stepped as lone steps), the slot and
+     * coefficients their M_hat is of (rr_slot -1: none yet), and the arrays their coefficients are of */
+    chain_run_row *rr;
+    int rr_slot;
+    double rr_c[3];
+    const double *rr_src[5];
 } chain_eng_ops;
 
 ENG_DECLARE_SCHEMES(chain_);
@@ -404,9 +427,12 @@ static inline int chain_op_row_done(const chain_eng_ops *C, const eng_held_step 
  * substitution with the held rows' forces and the margins in one backward sweep, the acceptance;
  * the engine's arithmetic in its order (engine.h's eng_held_step, chain_op_basis), so the same
  * bits. */
+static inline int chain_op_step_run(chain_eng_ops *C, const eng_held_step *F, eng_state *s);
+
 static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_state *s)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
+    if (F->run && C->rr) return chain_op_step_run(C, F, s);
     const size_t n = C->n;
     const int slot = F->slot;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
@@ -462,6 +488,150 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
         sA[i] = (V1[i] - sV[i]) * c1 - g1 * A0[i];
         sV[i] = V1[i];
         shA[i] = hh;
+        sF[i] = f[i];
+    }
+    return 1;
+}
+
+/* The run's first step (eng_held_step.run = 1): F's data into the rows -- the coefficients where
+ * their arrays are not those the rows hold, M_hat's off-diagonal where the slot or its coefficients
+ * changed (then the kept factorisation anew), the loads and modes -- and the kept factorisation made
+ * for the run's held pattern as chain_op_elim_row makes it (so the same bits: a row refactored when
+ * its own hold changed, or when it is free and the row above was). */
+static inline void chain_op_run_take(chain_eng_ops *C, const eng_held_step *F)
+{
+    const size_t n = C->n;
+    chain_run_row *R = C->rr;
+    const double *d = C->d[F->slot], *e = C->e[F->slot];
+    if (C->rr_src[0] != C->m || C->rr_src[1] != C->Kd || C->rr_src[2] != C->Ko || C->rr_src[3] != F->Pc ||
+        C->rr_src[4] != F->Ps) {
+        for (size_t i = 0; i < n; i++) {
+            R[i].m = C->m[i];
+            R[i].Kd = C->Kd[i];
+            R[i].Ko = C->Ko[i];
+            R[i].Pc = F->Pc ? F->Pc[i] : 0.0;
+            R[i].Ps = F->Ps ? F->Ps[i] : 0.0;
+        }
+        C->rr_src[0] = C->m;
+        C->rr_src[1] = C->Kd;
+        C->rr_src[2] = C->Ko;
+        C->rr_src[3] = F->Pc;
+        C->rr_src[4] = F->Ps;
+    }
+    if (C->rr_slot != F->slot || C->rr_c[0] != F->cM || C->rr_c[1] != F->cC || C->rr_c[2] != F->cK) {
+        for (size_t i = 0; i < n; i++) {
+            R[i].e = e[i];
+            R[i].kh = 0;
+        }
+        C->rr_slot = F->slot;
+        C->rr_c[0] = F->cM;
+        C->rr_c[1] = F->cC;
+        C->rr_c[2] = F->cK;
+    }
+    const double *l = F->lim, *u = F->u, *Fb = F->Fb;
+    const int *mode = F->st;
+    double cprev = 0.0;
+    int refac = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int hold = mode[i] == 0 && l[i] > 0.0;
+        R[i].u = u[i];
+        R[i].Fb = Fb[i];
+        R[i].st = mode[i];
+        R[i].hold = hold;
+        R[i].sl = (l[i] > 0.0) ? mode[i] * l[i] : 0.0;
+        if (R[i].kh != 1 + hold || (refac && !hold)) {
+            R[i].kh = 1 + hold;
+            if (hold) {
+                R[i].cp = 0.0;
+            } else {
+                const double lo_e = (i > 0) ? e[i - 1] : 0.0;
+                R[i].inv = 1.0 / (d[i] - lo_e * cprev);
+                R[i].cp = (i + 1 < n) ? e[i] * R[i].inv : 0.0;
+            }
+            refac = 1;
+        } else {
+            refac = 0;
+        }
+        cprev = R[i].cp;
+    }
+}
+
+/* A fused step of a run (eng_held_step.run > 0) from the rows (chain_op_run_take): chain_op_step_held's
+ * arithmetic in its order, so the same bits. */
+static inline int chain_op_step_run(chain_eng_ops *C, const eng_held_step *F, eng_state *s)
+{
+    if (F->run == 1) chain_op_run_take(C, F);
+    const size_t n = C->n;
+    const chain_run_row *restrict R = C->rr;
+    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
+    const double cw = F->cw, sw = F->sw, am = 1.0 - a;
+    const int hasPc = F->Pc != NULL, hasPs = F->Ps != NULL;
+    const double *A0 = F->A0; /* (s->A: read before written) */
+    double *restrict X = s->X, *restrict V = s->V, *A = s->A, *restrict hA = s->hA, *restrict sF = s->F;
+    double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
+    double *restrict dp = C->work;
+    /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
+    double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, elo = 0.0, dprev = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
+        xpp[i] = xc;
+        const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
+        const double y = R[i].m * r;
+        double kx = R[i].Kd * xc;
+        if (i > 0) kx += R[i - 1].Ko * xl;
+        if (i + 1 < n) kx += R[i].Ko * xr;
+        double p = R[i].u;
+        if (hasPc) p += R[i].Pc * cw;
+        if (hasPs) p -= R[i].Ps * sw;
+        const double phi = p + (y - kx);
+        ph[i] = phi;
+        xl = xc;
+        xc = xr;
+        dprev = R[i].hold ? 0.0 : ((phi - R[i].sl) - elo * dprev) * R[i].inv;
+        dp[i] = dprev;
+        elo = R[i].e;
+    }
+    /* back substitution, and row j + 1's force and margin once row j is known; row 0's after */
+    int ok = 1;
+    double zn = 0.0, v1 = 0.0, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
+    for (size_t j = n; j-- > 0;) {
+        zn = dp[j] - R[j].cp * zn;
+        const double vj = R[j].hold ? 0.0 : zn;
+        V1[j] = vj;
+        if (j + 1 < n) {
+            const size_t i = j + 1;
+            double fi;
+            if (R[i].hold) {
+                fi = -ph[i];
+                fi += R[j].e * vj;
+                if (i + 1 < n) fi += R[i].e * v2;
+            } else {
+                fi = 0.0 - R[i].sl;
+            }
+            f[i] = fi;
+            ok &= !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * v1 > 0.0 : R[i].Fb - fabs(fi) > 0.0);
+        }
+        v2 = v1;
+        v1 = vj;
+    }
+    {
+        double fi;
+        if (R[0].hold) {
+            fi = -ph[0];
+            if (n > 1) fi += R[0].e * v2;
+        } else {
+            fi = 0.0 - R[0].sl;
+        }
+        f[0] = fi;
+        ok &= !(R[0].Fb > 0.0) || (R[0].st != 0 ? R[0].st * v1 > 0.0 : R[0].Fb - fabs(fi) > 0.0);
+    }
+    if (!ok) return 0;
+    const double cV = F->corr_V, hh = F->h;
+    for (size_t i = 0; i < n; i++) {
+        X[i] = xpp[i] + cV * V1[i];
+        A[i] = (V1[i] - V[i]) * c1 - g1 * A0[i];
+        V[i] = V1[i];
+        hA[i] = hh;
         sF[i] = f[i];
     }
     return 1;
