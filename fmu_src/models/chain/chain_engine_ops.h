@@ -24,6 +24,16 @@
 
 #define CHAIN_NEWTON_ITERS 60
 
+/* The fused step of a run inlined into the engine's loop of them (chain_engine.c's ENG_STEP_RUN),
+ * its rows taken at the run's first step out of line */
+#if defined(__GNUC__)
+#define CHAIN_OP_HOT inline __attribute__((always_inline))
+#define CHAIN_OP_COLD __attribute__((noinline))
+#else
+#define CHAIN_OP_HOT inline
+#define CHAIN_OP_COLD
+#endif
+
 /* Block i's data for the fused steps of a run (eng_held_step.run; chain_op_run_take), together in
  * memory: its coefficients, the run's load and mode, the slot's off-diagonal, and the slot's
  * factorisation for the basis solve kept for the held pattern (as chain_op_basis keeps its own). */
@@ -427,7 +437,7 @@ static inline int chain_op_row_done(const chain_eng_ops *C, const eng_held_step 
  * substitution with the held rows' forces and the margins in one backward sweep, the acceptance;
  * the engine's arithmetic in its order (engine.h's eng_held_step, chain_op_basis), so the same
  * bits. */
-static inline int chain_op_step_run(chain_eng_ops *C, const eng_held_step *F, eng_state *s);
+static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s);
 
 static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_state *s)
 {
@@ -493,16 +503,13 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
     return 1;
 }
 
-/* The run's first step (eng_held_step.run = 1): F's data into the rows -- the coefficients where
- * their arrays are not those the rows hold, M_hat's off-diagonal where the slot or its coefficients
- * changed (then the kept factorisation anew), the loads and modes -- and the kept factorisation made
- * for the run's held pattern as chain_op_elim_row makes it (so the same bits: a row refactored when
- * its own hold changed, or when it is free and the row above was). */
-static inline void chain_op_run_take(chain_eng_ops *C, const eng_held_step *F)
+/* The run's first step (eng_held_step.run = 1): the coefficients into the rows where their arrays
+ * are not those the rows hold, M_hat's off-diagonal where the slot or its coefficients changed (then
+ * the kept factorisation anew). */
+static CHAIN_OP_COLD void chain_op_run_take(chain_eng_ops *C, const eng_held_step *F)
 {
     const size_t n = C->n;
     chain_run_row *R = C->rr;
-    const double *d = C->d[F->slot], *e = C->e[F->slot];
     if (C->rr_src[0] != C->m || C->rr_src[1] != C->Kd || C->rr_src[2] != C->Ko || C->rr_src[3] != F->Pc ||
         C->rr_src[4] != F->Ps) {
         for (size_t i = 0; i < n; i++) {
@@ -519,6 +526,7 @@ static inline void chain_op_run_take(chain_eng_ops *C, const eng_held_step *F)
         C->rr_src[4] = F->Ps;
     }
     if (C->rr_slot != F->slot || C->rr_c[0] != F->cM || C->rr_c[1] != F->cC || C->rr_c[2] != F->cK) {
+        const double *e = C->e[F->slot];
         for (size_t i = 0; i < n; i++) {
             R[i].e = e[i];
             R[i].kh = 0;
@@ -528,41 +536,34 @@ static inline void chain_op_run_take(chain_eng_ops *C, const eng_held_step *F)
         C->rr_c[1] = F->cC;
         C->rr_c[2] = F->cK;
     }
-    const double *l = F->lim, *u = F->u, *Fb = F->Fb;
-    const int *mode = F->st;
-    double cprev = 0.0;
-    int refac = 0;
-    for (size_t i = 0; i < n; i++) {
-        const int hold = mode[i] == 0 && l[i] > 0.0;
-        R[i].u = u[i];
-        R[i].Fb = Fb[i];
-        R[i].st = mode[i];
-        R[i].hold = hold;
-        R[i].sl = (l[i] > 0.0) ? mode[i] * l[i] : 0.0;
-        if (R[i].kh != 1 + hold || (refac && !hold)) {
-            R[i].kh = 1 + hold;
-            if (hold) {
-                R[i].cp = 0.0;
-            } else {
-                const double lo_e = (i > 0) ? e[i - 1] : 0.0;
-                R[i].inv = 1.0 / (d[i] - lo_e * cprev);
-                R[i].cp = (i + 1 < n) ? e[i] * R[i].inv : 0.0;
-            }
-            refac = 1;
-        } else {
-            refac = 0;
-        }
-        cprev = R[i].cp;
-    }
 }
 
-/* A fused step of a run (eng_held_step.run > 0) from the rows (chain_op_run_take): chain_op_step_held's
- * arithmetic in its order, so the same bits. */
-static inline int chain_op_step_run(chain_eng_ops *C, const eng_held_step *F, eng_state *s)
+/* Row i's kept factor at a run's first step, as chain_op_elim_row makes it (so the same bits): anew
+ * where its hold changed or, free, where the row above's was (refac, returned for the row below). */
+static inline int chain_op_run_factor(chain_run_row *R, const double *d, size_t i, size_t n, int hold, int refac)
 {
-    if (F->run == 1) chain_op_run_take(C, F);
+    if (R[i].kh == 1 + hold && !(refac && !hold)) return 0;
+    R[i].kh = 1 + hold;
+    if (hold) {
+        R[i].cp = 0.0;
+    } else {
+        const double lo_e = (i > 0) ? R[i - 1].e : 0.0, cprev = (i > 0) ? R[i - 1].cp : 0.0;
+        R[i].inv = 1.0 / (d[i] - lo_e * cprev);
+        R[i].cp = (i + 1 < n) ? R[i].e * R[i].inv : 0.0;
+    }
+    return 1;
+}
+
+/* A fused step of a run (eng_held_step.run > 0) from the rows: chain_op_step_held's arithmetic in
+ * its order, so the same bits. The run's first step takes F's loads and modes into the rows and
+ * makes the kept factorisation for its held pattern; the later ones read the rows alone. */
+static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s)
+{
+    chain_eng_ops *C = (chain_eng_ops *)ctx;
+    const int first = F->run == 1;
+    if (first) chain_op_run_take(C, F);
     const size_t n = C->n;
-    const chain_run_row *restrict R = C->rr;
+    chain_run_row *restrict R = C->rr;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
     const double cw = F->cw, sw = F->sw, am = 1.0 - a;
     const int hasPc = F->Pc != NULL, hasPs = F->Ps != NULL;
@@ -572,9 +573,27 @@ static inline int chain_op_step_run(chain_eng_ops *C, const eng_held_step *F, en
     double *restrict dp = C->work;
     /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
     double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, elo = 0.0, dprev = 0.0;
+    int refac = 0;
     for (size_t i = 0; i < n; i++) {
         const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
         xpp[i] = xc;
+        int hold;
+        double sl;
+        if (first) {
+            const int st = F->st[i];
+            const double li = F->lim[i];
+            hold = st == 0 && li > 0.0;
+            sl = (li > 0.0) ? st * li : 0.0;
+            R[i].u = F->u[i];
+            R[i].Fb = F->Fb[i];
+            R[i].st = st;
+            R[i].hold = hold;
+            R[i].sl = sl;
+            refac = chain_op_run_factor(R, C->d[F->slot], i, n, hold, refac);
+        } else {
+            hold = R[i].hold;
+            sl = R[i].sl;
+        }
         const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
         const double y = R[i].m * r;
         double kx = R[i].Kd * xc;
@@ -587,7 +606,7 @@ static inline int chain_op_step_run(chain_eng_ops *C, const eng_held_step *F, en
         ph[i] = phi;
         xl = xc;
         xc = xr;
-        dprev = R[i].hold ? 0.0 : ((phi - R[i].sl) - elo * dprev) * R[i].inv;
+        dprev = hold ? 0.0 : ((phi - sl) - elo * dprev) * R[i].inv;
         dp[i] = dprev;
         elo = R[i].e;
     }
