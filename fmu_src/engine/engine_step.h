@@ -1851,18 +1851,34 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     const double h = S->h, a = S->alpha;
-    if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h) || needs_rebase(E, s, h)) return;
+    if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h)) return;
+    /* the held contacts: rest_exact's (pinning a DOF alone, in its order, rl) and their DOFs (E->pin);
+     * then needs_rebase's test on the other DOFs */
+    int *const rl = E->held, *const pin = E->pin;
+    size_t nrl = 0;
+    int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
+    int frictionless = 0; /* contacts whose modes follow their slip */
+    memset(pin, 0, n * sizeof(int));
+    for (size_t j = 0; j < nc; j++) {
+        const int held = s->mode[j] == 0 && has_friction(E, j);
+        frictionless |= !has_friction(E, j);
+        all_held &= held;
+        if (held && S->rows[j].nnz == 1) {
+            rl[nrl++] = (int)j;
+            pin[S->rows[j].idx[0]] = 1;
+        }
+    }
+    if (a != 0.0) {
+        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t);
+        for (size_t i = 0; i < n; i++)
+            if (h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol)) return;
+    }
     const dfo_bossak_kin *K = &E->kin_grid;
     const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
-    int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
-    int frictionless = 0, held_any = 0; /* contacts whose modes follow their slip; held ones (rest_exact) */
     for (size_t j = 0; j < nc; j++) {
-        frictionless |= !has_friction(E, j);
-        held_any |= s->mode[j] == 0 && has_friction(E, j);
         E->st[j] = !has_friction(E, j) ? 1 : s->mode[j];
         E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
-        all_held &= s->mode[j] == 0 && has_friction(E, j);
     }
     if (all_held) {
         for (size_t i = 0; i < n; i++) E->pin[i] = 0;
@@ -1877,11 +1893,6 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
     eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                        K->pred_A, K->corr_V, 0.0, 0.0, H->Pc, H->Ps, E->u, s->A, E->st, E->lim,
                        E->Fb, E->xp, E->ph, E->V1, E->f, 1};
-    /* rest_exact's contacts (held, pinning a DOF alone), in its order */
-    int *const rl = E->held;
-    size_t nrl = 0;
-    for (size_t j = 0; held_any && j < nc; j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) rl[nrl++] = (int)j;
     /* the state's time, grid index and excitation cache kept here, in s where the loop ends and for
      * the observer */
     const double t0 = s->t0, rc = E->rot_c, rs = E->rot_s;
