@@ -1854,7 +1854,7 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
     if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h)) return;
     /* the held contacts: rest_exact's (pinning a DOF alone, in its order, rl) and their DOFs (E->pin);
      * then needs_rebase's test on the other DOFs */
-    int *const rl = E->held, *const pin = E->pin;
+    int *const rl = E->tmode, *const pin = E->pin; /* (tmode: step_lcp's; rebase's calls use held) */
     size_t nrl = 0;
     int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
     int frictionless = 0; /* contacts whose modes follow their slip */
@@ -1868,10 +1868,10 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
             pin[S->rows[j].idx[0]] = 1;
         }
     }
+    int rb = 0; /* the first step's A re-based (E->A0, by rebase as trial_step's) */
     if (a != 0.0) {
         const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t);
-        for (size_t i = 0; i < n; i++)
-            if (h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol)) return;
+        for (size_t i = 0; i < n && !rb; i++) rb = h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol);
     }
     const dfo_bossak_kin *K = &E->kin_grid;
     const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
@@ -1918,10 +1918,24 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
             memcpy(E->X0, s->X, n * sizeof(double));
             if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
         }
-        if (!ENG_STEP_RUN(E, &F, s)) { /* declined: its trial for the general path's held_step */
-            E->held_ready = 1;
+        if (rb) { /* a phase's start: its jerks afresh (begin_phase), the state's grid point and
+                   * excitation cache the step's end, as eng_advance's step holds them (the loop's
+                   * end restores them where the step is declined) */
+            s->n_grid = ng + 1;
+            s->exc_n = ng + 1;
+            s->exc_c = c;
+            s->exc_s = sn;
+            E->jk_ok = 0;
+            rebase(E, in, s, h, grid);
+            F.A0 = E->A0;
+        }
+        if (!ENG_STEP_RUN(E, &F, s)) { /* declined: its trial for the general path's held_step (not
+                                        * a re-based one: held_step takes A0 = A) */
+            E->held_ready = !rb;
             break;
         }
+        rb = 0;
+        F.A0 = s->A;
         F.run = 2;
         ng++;
         en = ng;
