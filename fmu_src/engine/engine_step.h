@@ -1841,10 +1841,13 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
  * the general path's bookkeeping of such a step (eng_advance's grid point, step_located's phase of
  * one trial, held_step, held_done) done once where a taken step leaves it unchanged: the modes and
  * limits (a taken step switches no contact with friction), M_hat's factor, the re-basing test (after
- * a taken step A is of the grid's length, or 0 on a pinned DOF). The same arithmetic in the same
- * order, so the same numbers. Stops, the state untouched by the step it declines, before a step the
- * model declines (the general path takes it from there), a stuck structure the stuck fast path may
- * skip (skip), and a step past t_target. *g_prev: the last grid point reached. */
+ * a taken step A is of the grid's length, or 0 on a pinned DOF: only the run's first step may be
+ * re-based, by trial_step's rebase). One run of the model's steps (eng_held_step.run: the model may
+ * take F's data into its own layout once). The same arithmetic in the same order, so the same
+ * numbers. Stops, the state untouched by the step it declines, before a step the model declines (the
+ * general path takes it from there, from the declined trial unless it was re-based), a stuck
+ * structure the stuck fast path may skip (skip), and a step past t_target. *g_prev: the last grid
+ * point reached. */
 static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, double t_target, int skip,
                                const eng_hooks *hk, double *g_prev)
 {

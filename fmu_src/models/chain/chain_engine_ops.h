@@ -7,7 +7,7 @@
  * forces by Newton's iteration on the sliding rows (one tridiagonal solve per iteration); the
  * closed-form breakaway of a chain held at rest and of a held block whose neighbours are held; and
  * its sparse-structure operators (engine.h's eng_sparse): the held solves, the fused grid step in
- * the held pattern, and spans (a span of the chain is a chain of its own: a view of consecutive
+ * the held pattern (a run of them from one packed row per block, chain_run_row), and spans (a span of the chain is a chain of its own: a view of consecutive
  * blocks whose end blocks, where they are not the chain's ends, are ghosts with Dirichlet rows).
  * Static inline: through eng_ops's function pointers or inlined into engine_step.h
  * (chain_engine.c), the same arithmetic. Plain C, no FMI types. */
@@ -436,7 +436,7 @@ static inline int chain_op_row_done(const chain_eng_ops *C, const eng_held_step 
  * solve's elimination in one forward sweep (K's row needs x_pred one block ahead), its back
  * substitution with the held rows' forces and the margins in one backward sweep, the acceptance;
  * the engine's arithmetic in its order (engine.h's eng_held_step, chain_op_basis), so the same
- * bits. */
+ * bits. A step of a run (F->run > 0) is chain_op_step_run's, from the rows (C->rr). */
 static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s);
 
 static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_state *s)
