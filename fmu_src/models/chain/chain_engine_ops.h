@@ -410,6 +410,21 @@ static inline double chain_op_contact_breakaway(void *ctx, size_t j, const eng_h
     return chain_op_block_breakaway(exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
 }
 
+/* The fused step's acceptance (engine.h's eng_held_step): X, A, V, hA and F from its x_pred, V1, f. */
+static inline void chain_op_held_accept(const eng_held_step *F, eng_state *s, size_t n)
+{
+    const double *xpp = F->xp, *V1 = F->V1, *f = F->f, *A0 = F->A0; /* (A0: s->A, read before written) */
+    double *X = s->X, *V = s->V, *A = s->A, *hA = s->hA, *sF = s->F;
+    const double cV = F->corr_V, hh = F->h, c1 = F->c1, g1 = F->g1;
+    for (size_t i = 0; i < n; i++) {
+        X[i] = xpp[i] + cV * V1[i];
+        A[i] = (V1[i] - V[i]) * c1 - g1 * A0[i];
+        V[i] = V1[i];
+        hA[i] = hh;
+        sF[i] = f[i];
+    }
+}
+
 /* Row i of the fused step once its neighbours' V1 are known (vlo: row i - 1's, unused for i = 0; vi:
  * its own; vhi: row i + 1's, unused for the last): its force as chain_op_basis sets it (a held row's
  * from its equation, a sliding row's its limit's) into F->f, and whether its margin is positive. */
@@ -449,7 +464,7 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
     const double *X = s->X, *V = s->V, *A0 = F->A0, *l = F->lim;
     const int *mode = F->st;
     double *kcp = C->kcp[slot], *dp = C->work;
-    double *xpp = F->xp, *q = C->q, *V1 = F->V1, *f = F->f, *ph = F->ph;
+    double *xpp = F->xp, *q = C->q, *V1 = F->V1, *ph = F->ph;
     /* the inputs read once (a store through an output may not change them) */
     const double *m = C->m, *Kd = C->Kd, *Ko = C->Ko, *u = F->u, *Pc = F->Pc, *Ps = F->Ps;
     const double cw = F->cw, sw = F->sw;
@@ -491,15 +506,7 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
     }
     ok &= chain_op_row_done(C, F, 0, 0.0, v1, v2);
     if (!ok) return 0;
-    double *sX = s->X, *sV = s->V, *sA = s->A, *shA = s->hA, *sF = s->F;
-    const double cV = F->corr_V, hh = F->h;
-    for (size_t i = 0; i < n; i++) {
-        sX[i] = xpp[i] + cV * V1[i];
-        sA[i] = (V1[i] - sV[i]) * c1 - g1 * A0[i];
-        sV[i] = V1[i];
-        shA[i] = hh;
-        sF[i] = f[i];
-    }
+    chain_op_held_accept(F, s, n);
     return 1;
 }
 
@@ -554,6 +561,22 @@ static inline int chain_op_run_factor(chain_run_row *R, const double *d, size_t 
     return 1;
 }
 
+/* chain_op_row_done from the rows: row i's force into f, whether its margin is positive. */
+static inline int chain_op_run_done(const chain_run_row *R, const double *ph, double *f, size_t i, size_t n,
+                                    double vlo, double vi, double vhi)
+{
+    double fi;
+    if (R[i].hold) {
+        fi = -ph[i];
+        if (i > 0) fi += R[i - 1].e * vlo;
+        if (i + 1 < n) fi += R[i].e * vhi;
+    } else {
+        fi = 0.0 - R[i].sl;
+    }
+    f[i] = fi;
+    return !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * vi > 0.0 : R[i].Fb - fabs(fi) > 0.0);
+}
+
 /* A fused step of a run (eng_held_step.run > 0) from the rows: chain_op_step_held's arithmetic in
  * its order, so the same bits. The run's first step takes F's loads and modes into the rows and
  * makes the kept factorisation for its held pattern; the later ones read the rows alone. */
@@ -567,8 +590,7 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
     const double cw = F->cw, sw = F->sw, am = 1.0 - a;
     const int hasPc = F->Pc != NULL, hasPs = F->Ps != NULL;
-    const double *A0 = F->A0; /* (s->A: read before written) */
-    double *restrict X = s->X, *restrict V = s->V, *A = s->A, *restrict hA = s->hA, *restrict sF = s->F;
+    const double *X = s->X, *V = s->V, *A0 = F->A0;
     double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
     double *restrict dp = C->work;
     /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
@@ -617,42 +639,13 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
         zn = dp[j] - R[j].cp * zn;
         const double vj = R[j].hold ? 0.0 : zn;
         V1[j] = vj;
-        if (j + 1 < n) {
-            const size_t i = j + 1;
-            double fi;
-            if (R[i].hold) {
-                fi = -ph[i];
-                fi += R[j].e * vj;
-                if (i + 1 < n) fi += R[i].e * v2;
-            } else {
-                fi = 0.0 - R[i].sl;
-            }
-            f[i] = fi;
-            ok &= !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * v1 > 0.0 : R[i].Fb - fabs(fi) > 0.0);
-        }
+        if (j + 1 < n) ok &= chain_op_run_done(R, ph, f, j + 1, n, vj, v1, v2);
         v2 = v1;
         v1 = vj;
     }
-    {
-        double fi;
-        if (R[0].hold) {
-            fi = -ph[0];
-            if (n > 1) fi += R[0].e * v2;
-        } else {
-            fi = 0.0 - R[0].sl;
-        }
-        f[0] = fi;
-        ok &= !(R[0].Fb > 0.0) || (R[0].st != 0 ? R[0].st * v1 > 0.0 : R[0].Fb - fabs(fi) > 0.0);
-    }
+    ok &= chain_op_run_done(R, ph, f, 0, n, 0.0, v1, v2);
     if (!ok) return 0;
-    const double cV = F->corr_V, hh = F->h;
-    for (size_t i = 0; i < n; i++) {
-        X[i] = xpp[i] + cV * V1[i];
-        A[i] = (V1[i] - V[i]) * c1 - g1 * A0[i];
-        V[i] = V1[i];
-        hA[i] = hh;
-        sF[i] = f[i];
-    }
+    chain_op_held_accept(F, s, n);
     return 1;
 }
 
