@@ -217,7 +217,7 @@ typedef struct eng_harmonic_s {
  *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched; the
  *                trial and its solve in F's xp, ph, V1, f: the engine goes on from them its general
  *                way). Asked by the located scheme on a grid step
- *                whose A needs no re-basing, with held inputs and no belts. */
+ *                with held inputs and no belts (A0: A, or re-based where the step is a run's first). */
 typedef struct eng_held_step_s eng_held_step;
 typedef struct {
     int held_basis;
@@ -248,12 +248,17 @@ struct eng_held_step_s {
     double cw, sw;              /* cos and sin of the excitation's phase at the step's end */
     const double *Pc, *Ps;      /* n: the excitation (NULL: 0) */
     const double *u;            /* n: external forces */
-    const double *A0;           /* n: Bossak's A for the step (not re-based: s->A) */
+    const double *A0;           /* n: Bossak's A for the step (s->A, or the engine's re-based A0) */
     const int *st;              /* nc: modes (0 held, +1/-1 sliding; a contact without friction: 1) */
     const double *lim;          /* nc: held contacts' breakaway limit, sliding ones' kinetic magnitude */
     const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
     double *xp, *ph, *V1, *f;   /* n, n, n, nc: out, x_pred, p_hat and the basis solve's V1 and f (the
                                  * engine's workspace: where the step is not taken it goes on from them) */
+    int run;                    /* 0: a step on its own; 1: the first step of a run whose F differs from
+                                 * step to step only in cw, sw and A0 (the other arrays, their contents
+                                 * and the slot's factor unchanged while the run lasts); 2: a later step
+                                 * of that run, the last one taken (the model may keep what it took from
+                                 * F at the run's first step, in its own layout, and read that instead) */
 };
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create

@@ -13,6 +13,8 @@
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
  *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
  *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
+ *   ENG_STEP_RUN(E, F, s)        that step within a run (F->run > 0; by default ENG_STEP_HELD): a model
+ *                                may inline it into the run's loop alone
  *   ENG_HAS_CONTACT_BREAKAWAY(E), ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb)   a held contact's breakaway
  *                                in closed form (eng_sparse)
  *   ENG_ROW_DOT(E, j, x)         w_j . x for the contact rows it knows (a slip; row_dot's arithmetic)
@@ -72,6 +74,9 @@
 #endif
 #ifndef ENG_STEP_HELD
 #define ENG_STEP_HELD(E, F, s) ((E)->S.sparse->step_held((E)->S.ops.ctx, (F), (s)))
+#endif
+#ifndef ENG_STEP_RUN
+#define ENG_STEP_RUN(E, F, s) ENG_STEP_HELD(E, F, s)
 #endif
 #ifndef ENG_HAS_CONTACT_BREAKAWAY
 #define ENG_HAS_CONTACT_BREAKAWAY(E) ((E)->S.sparse && (E)->S.sparse->contact_breakaway)
@@ -1195,7 +1200,7 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &cw, &sw);
     const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                              K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
-                             E->Fb, E->xp, E->ph, E->V1, E->f};
+                             E->Fb, E->xp, E->ph, E->V1, E->f, 0};
     if (!E->held_ready && ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
     E->held_ready = 0;
     T->kin = *K;
@@ -1836,28 +1841,47 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
  * the general path's bookkeeping of such a step (eng_advance's grid point, step_located's phase of
  * one trial, held_step, held_done) done once where a taken step leaves it unchanged: the modes and
  * limits (a taken step switches no contact with friction), M_hat's factor, the re-basing test (after
- * a taken step A is of the grid's length, or 0 on a pinned DOF). The same arithmetic in the same
- * order, so the same numbers. Stops, the state untouched by the step it declines, before a step the
- * model declines (the general path takes it from there), a stuck structure the stuck fast path may
- * skip (skip), and a step past t_target. *g_prev: the last grid point reached. */
-static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, double t_target, int skip,
+ * a taken step A is of the grid's length, or 0 on a pinned DOF: only the run's first step may be
+ * re-based, by trial_step's rebase). One run of the model's steps (eng_held_step.run: the model may
+ * take F's data into its own layout once). The same arithmetic in the same order, so the same
+ * numbers. Stops, the state untouched by the step it declines, before a step the model declines (the
+ * general path takes it from there, from the declined trial unless it was re-based), a stuck
+ * structure the stuck fast path may skip (skip), and a step past t_target. *g_prev: the last grid
+ * point reached. */
+static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, double t_target, int skip,
                                const eng_hooks *hk, double *g_prev)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     const double h = S->h, a = S->alpha;
-    if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h) || needs_rebase(E, s, h)) return;
+    if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h)) return;
+    /* the held contacts: rest_exact's (pinning a DOF alone, in its order, rl) and their DOFs (E->pin);
+     * then needs_rebase's test on the other DOFs */
+    int *const rl = E->tmode, *const pin = E->pin; /* (tmode: step_lcp's; rebase's calls use held) */
+    size_t nrl = 0;
+    int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
+    int frictionless = 0; /* contacts whose modes follow their slip */
+    memset(pin, 0, n * sizeof(int));
+    for (size_t j = 0; j < nc; j++) {
+        const int held = s->mode[j] == 0 && has_friction(E, j);
+        frictionless |= !has_friction(E, j);
+        all_held &= held;
+        if (held && S->rows[j].nnz == 1) {
+            rl[nrl++] = (int)j;
+            pin[S->rows[j].idx[0]] = 1;
+        }
+    }
+    int rb = 0; /* the first step's A re-based (E->A0, by rebase as trial_step's) */
+    if (a != 0.0) {
+        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t);
+        for (size_t i = 0; i < n && !rb; i++) rb = h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol);
+    }
     const dfo_bossak_kin *K = &E->kin_grid;
     const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
-    int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
-    int frictionless = 0, held_any = 0; /* contacts whose modes follow their slip; held ones (rest_exact) */
     for (size_t j = 0; j < nc; j++) {
-        frictionless |= !has_friction(E, j);
-        held_any |= s->mode[j] == 0 && has_friction(E, j);
         E->st[j] = !has_friction(E, j) ? 1 : s->mode[j];
         E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
-        all_held &= s->mode[j] == 0 && has_friction(E, j);
     }
     if (all_held) {
         for (size_t i = 0; i < n; i++) E->pin[i] = 0;
@@ -1871,53 +1895,86 @@ static ENG_HOT void held_steps(eng *E, const eng_inputs *in, eng_state *s, doubl
     const int trig = H->Pc || H->Ps;
     eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                        K->pred_A, K->corr_V, 0.0, 0.0, H->Pc, H->Ps, E->u, s->A, E->st, E->lim,
-                       E->Fb, E->xp, E->ph, E->V1, E->f};
-    long long ng = s->n_grid, steps = 0;
+                       E->Fb, E->xp, E->ph, E->V1, E->f, 1};
+    /* the state's time, grid index and excitation cache kept here, in s where the loop ends and for
+     * the observer */
+    const double t0 = s->t0, rc = E->rot_c, rs = E->rot_s;
+    double t = s->t, ec = s->exc_c, es = s->exc_s;
+    long long ng = s->n_grid, en = s->exc_n, steps = 0;
     const long long ng0 = ng;
     for (;;) {
-        const double grid = s->t0 + (double)(ng + 1) * h;
-        if (!(grid <= t_target) || !(grid > s->t)) break;
+        const double grid = t0 + (double)(ng + 1) * h;
+        if (!(grid <= t_target) || !(grid > t)) break;
         if (all_held) { /* at rest: the stuck fast path's to try */
             int rest = 1;
             for (size_t i = 0; i < n; i++) rest &= s->V[i] == 0.0 && s->A[i] == 0.0;
             if (rest) break;
         }
         double c, sn; /* the grid point's excitation cache, as eng_advance's */
-        dfo_grid_phase(H->omega, H->phi0, s->t0, h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, ng + 1, &c, &sn);
+        dfo_grid_phase(H->omega, H->phi0, t0, h, rc, rs, en, ec, es, ng + 1, &c, &sn);
         if (trig) {
             F.cw = dfo_clamp1(c);
             F.sw = dfo_clamp1(sn);
         }
-        const double ta = s->t;
+        const double ta = t;
         if (obs) {
             memcpy(E->X0, s->X, n * sizeof(double));
             if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
         }
-        if (!ENG_STEP_HELD(E, &F, s)) { /* declined: its trial for the general path's held_step */
-            E->held_ready = 1;
+        if (rb) { /* a phase's start: its jerks afresh (begin_phase), the state's grid point and
+                   * excitation cache the step's end, as eng_advance's step holds them (the loop's
+                   * end restores them where the step is declined) */
+            s->n_grid = ng + 1;
+            s->exc_n = ng + 1;
+            s->exc_c = c;
+            s->exc_s = sn;
+            E->jk_ok = 0;
+            rebase(E, in, s, h, grid);
+            F.A0 = E->A0;
+        }
+        if (!ENG_STEP_RUN(E, &F, s)) { /* declined: its trial for the general path's held_step (not
+                                        * a re-based one: held_step takes A0 = A) */
+            E->held_ready = !rb;
             break;
         }
+        rb = 0;
+        F.A0 = s->A;
+        F.run = 2;
         ng++;
-        s->n_grid = ng;
-        s->exc_n = ng;
-        s->exc_c = c;
-        s->exc_s = sn;
+        en = ng;
+        ec = c;
+        es = sn;
         steps++;
-        s->t = grid;
+        t = grid;
         if (frictionless)
             for (size_t j = 0; j < nc; j++)
                 if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
-        if (held_any) rest_exact(E, s);
+        for (size_t k = 0; k < nrl; k++) { /* rest_exact */
+            const eng_row *R = &S->rows[rl[k]];
+            s->V[R->idx[0]] = E->vb[rl[k]] / R->w[0];
+            s->A[R->idx[0]] = 0.0;
+            s->hA[R->idx[0]] = 0.0;
+        }
         if (obs && !(grid < obs_t0) && !(ta > obs_t1)) {
+            s->n_grid = ng;
+            s->exc_n = en;
+            s->exc_c = ec;
+            s->exc_s = es;
+            s->t = t;
             s->steps += steps;
             s->solves += steps;
             steps = 0;
             observe(E, s, ta, s->F, hk);
         }
     }
+    s->n_grid = ng;
+    s->exc_n = en;
+    s->exc_c = ec;
+    s->exc_s = es;
+    s->t = t;
     s->steps += steps;
     s->solves += steps;
-    if (ng > ng0) *g_prev = s->t;
+    if (ng > ng0) *g_prev = t;
 }
 
 /* ---- driving -------------------------------------------------------------------------------- */

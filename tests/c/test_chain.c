@@ -458,21 +458,24 @@ static void test_fast_path(checks *T)
     /* the energy accounts send every step through the general path (the engine's fused step, the
      * model's step_held, is not offered with them); on a chain short enough to be split whole, the two
      * runs must agree bit for bit: one with a block without friction, one stick-dominated (every
-     * block stuck for long phases) */
-    for (int variant = 0; variant < 2; variant++) {
+     * block stuck for long phases), one whose external and normal force inputs change every 200
+     * communication points (the fused steps' runs take the new loads) */
+    static const double Fx[2][5] = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.3, -0.2, 0.0, 0.25, -0.1}};
+    static const double Nx[2][5] = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.1, 0.4, -0.1, 0.0, 0.3}};
+    for (int variant = 0; variant < 3; variant++) {
         chain_state st[2];
         chain_model *C[2];
         for (int k = 0; k < 2; k++) {
             chain_setup cs;
             setup_fill(&cs, 5, 0.7, 2.0 * DFO_PI / 0.7 / 400, 3);
             for (size_t i = 0; i < 5; i++) {
-                cs.N[i] = (variant == 0) ? 0.2 + 0.15 * (double)i : 1.9 + 0.1 * (double)i;
+                cs.N[i] = (variant != 1) ? 0.2 + 0.15 * (double)i : 1.9 + 0.1 * (double)i;
                 cs.c[i] = 0.02;
                 cs.P0[i] = (i % 2) ? 0.0 : 1.0;
                 cs.phi[i] = 0.4 * (double)i;
             }
             if (variant == 0) cs.N[2] = 0.0; /* one block without friction */
-            else cs.P0[1] = -0.8;
+            else if (variant == 1) cs.P0[1] = -0.8;
             cs.p.k_end = 1.0;
             cs.p.account_energy = k;
             C[k] = chain_create(&cs.p, &AL, NULL);
@@ -480,10 +483,16 @@ static void test_fast_path(checks *T)
             const chain_inputs in = {NULL, NULL};
             chain_start(C[k], &in, 0.0, &st[k]);
         }
-        const chain_inputs in = {NULL, NULL};
+        chain_inputs in = {NULL, NULL};
         long long diffs = 0, all_stuck = 0;
         for (int j = 1; j <= 3000; j++) {
             const double t = j * 0.037;
+            if (variant == 2 && j % 200 == 0) {
+                const int u = (j / 200) % 2;
+                const chain_inputs to = {Fx[u], Nx[u]};
+                for (int k = 0; k < 2; k++) chain_new_inputs(C[k], &in, &to, &st[k]);
+                in = to;
+            }
             for (int k = 0; k < 2; k++) CHECK_INT(CHAIN_OK, chain_advance(C[k], &in, &st[k], t, 0, NULL, NULL));
             int stuck = 1;
             for (size_t i = 0; i < 5; i++) {

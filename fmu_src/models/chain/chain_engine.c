@@ -22,6 +22,7 @@
 #define ENG_FRICTION(E, P, what, mode, V1, f, pivots) \
     chain_op_friction(ENG_CTX(E), (P), (what), (mode), (V1), (f), (pivots))
 #define ENG_STEP_HELD(E, F, s) chain_op_step_held(ENG_CTX(E), (F), (s))
+#define ENG_STEP_RUN(E, F, s) chain_op_step_run(ENG_CTX(E), (F), (s))
 #define ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb) chain_op_contact_breakaway(ENG_CTX(E), (j), &(E)->S.exc, (s), (in), (Fb))
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
 #define ENG_BREAKAWAY(E, s, in, Fb) chain_op_breakaway(ENG_CTX(E), &(E)->S.exc, (s), (in), (Fb))

@@ -7,7 +7,7 @@
  * forces by Newton's iteration on the sliding rows (one tridiagonal solve per iteration); the
  * closed-form breakaway of a chain held at rest and of a held block whose neighbours are held; and
  * its sparse-structure operators (engine.h's eng_sparse): the held solves, the fused grid step in
- * the held pattern, and spans (a span of the chain is a chain of its own: a view of consecutive
+ * the held pattern (a run of them from one packed row per block, chain_run_row), and spans (a span of the chain is a chain of its own: a view of consecutive
  * blocks whose end blocks, where they are not the chain's ends, are ghosts with Dirichlet rows).
  * Static inline: through eng_ops's function pointers or inlined into engine_step.h
  * (chain_engine.c), the same arithmetic. Plain C, no FMI types. */
@@ -23,6 +23,33 @@
 #include <stddef.h>
 
 #define CHAIN_NEWTON_ITERS 60
+
+/* The fused step of a run inlined into the engine's loop of them (chain_engine.c's ENG_STEP_RUN),
+ * its rows taken at the run's first step out of line */
+#if defined(__GNUC__)
+#define CHAIN_OP_HOT inline __attribute__((always_inline))
+#define CHAIN_OP_COLD __attribute__((noinline))
+#else
+#define CHAIN_OP_HOT inline
+#define CHAIN_OP_COLD
+#endif
+
+/* Block i's data for the fused steps of a run (eng_held_step.run; chain_op_run_take), together in
+ * memory: its coefficients, the run's load and mode, the slot's off-diagonal, and the slot's
+ * factorisation for the basis solve kept for the held pattern (as chain_op_basis keeps its own). */
+typedef struct {
+    double m, Kd, Ko;             /* M and K's row (Ko: coupling i and i + 1) */
+    double Pc, Ps;                /* the excitation (0 where the run's arrays are NULL) */
+    double u;                     /* external force */
+    double e;                     /* M_hat's off-diagonal e[i] */
+    double cp, inv;               /* Thomas's cp and 1 / den of the kept factorisation (pattern kh) */
+    double sl;                    /* the sliding force's term of the right-hand side: mode lim where lim > 0, else 0 */
+    double Fb;                    /* breakaway limit */
+    int hold;                     /* held: mode 0 with lim > 0 */
+    int st;                       /* mode */
+    int kh;                       /* the pattern cp, inv are for: 0 none yet, 1 free, 2 held */
+    int pad;                      /* (the struct's size a multiple of 8) */
+} chain_run_row;
 
 /* The operators' data: the model's arrays (read; a span's view points into them), the slots'
  * factorisations and the solver's workspace (written; a view has its own). */
@@ -46,6 +73,12 @@ typedef struct chain_eng_ops_s {
     int fix_lo, fix_hi;           /* a span's view: its first / last row a ghost's (Dirichlet) */
     size_t w;                     /* a span's reach (chain_op_set_reach; 0: no spans) */
     struct chain_eng_ops_s *sub;  /* the span's view (chain_op_span_bind) */
+    /* the fused steps' run (n rows; NULL: the rows not offered, runs stepped as lone steps), the slot and
+     * coefficients their M_hat is of (rr_slot -1: none yet), and the arrays their coefficients are of */
+    chain_run_row *rr;
+    int rr_slot;
+    double rr_c[3];
+    const double *rr_src[5];
 } chain_eng_ops;
 
 ENG_DECLARE_SCHEMES(chain_);
@@ -377,6 +410,21 @@ static inline double chain_op_contact_breakaway(void *ctx, size_t j, const eng_h
     return chain_op_block_breakaway(exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
 }
 
+/* The fused step's acceptance (engine.h's eng_held_step): X, A, V, hA and F from its x_pred, V1, f. */
+static inline void chain_op_held_accept(const eng_held_step *F, eng_state *s, size_t n)
+{
+    const double *xpp = F->xp, *V1 = F->V1, *f = F->f, *A0 = F->A0; /* (A0: s->A, read before written) */
+    double *X = s->X, *V = s->V, *A = s->A, *hA = s->hA, *sF = s->F;
+    const double cV = F->corr_V, hh = F->h, c1 = F->c1, g1 = F->g1;
+    for (size_t i = 0; i < n; i++) {
+        X[i] = xpp[i] + cV * V1[i];
+        A[i] = (V1[i] - V[i]) * c1 - g1 * A0[i];
+        V[i] = V1[i];
+        hA[i] = hh;
+        sF[i] = f[i];
+    }
+}
+
 /* Row i of the fused step once its neighbours' V1 are known (vlo: row i - 1's, unused for i = 0; vi:
  * its own; vhi: row i + 1's, unused for the last): its force as chain_op_basis sets it (a held row's
  * from its equation, a sliding row's its limit's) into F->f, and whether its margin is positive. */
@@ -403,17 +451,20 @@ static inline int chain_op_row_done(const chain_eng_ops *C, const eng_held_step 
  * solve's elimination in one forward sweep (K's row needs x_pred one block ahead), its back
  * substitution with the held rows' forces and the margins in one backward sweep, the acceptance;
  * the engine's arithmetic in its order (engine.h's eng_held_step, chain_op_basis), so the same
- * bits. */
+ * bits. A step of a run (F->run > 0) is chain_op_step_run's, from the rows (C->rr). */
+static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s);
+
 static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_state *s)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
+    if (F->run && C->rr) return chain_op_step_run(C, F, s);
     const size_t n = C->n;
     const int slot = F->slot;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
     const double *X = s->X, *V = s->V, *A0 = F->A0, *l = F->lim;
     const int *mode = F->st;
     double *kcp = C->kcp[slot], *dp = C->work;
-    double *xpp = F->xp, *q = C->q, *V1 = F->V1, *f = F->f, *ph = F->ph;
+    double *xpp = F->xp, *q = C->q, *V1 = F->V1, *ph = F->ph;
     /* the inputs read once (a store through an output may not change them) */
     const double *m = C->m, *Kd = C->Kd, *Ko = C->Ko, *u = F->u, *Pc = F->Pc, *Ps = F->Ps;
     const double cw = F->cw, sw = F->sw;
@@ -455,15 +506,146 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
     }
     ok &= chain_op_row_done(C, F, 0, 0.0, v1, v2);
     if (!ok) return 0;
-    double *sX = s->X, *sV = s->V, *sA = s->A, *shA = s->hA, *sF = s->F;
-    const double cV = F->corr_V, hh = F->h;
-    for (size_t i = 0; i < n; i++) {
-        sX[i] = xpp[i] + cV * V1[i];
-        sA[i] = (V1[i] - sV[i]) * c1 - g1 * A0[i];
-        sV[i] = V1[i];
-        shA[i] = hh;
-        sF[i] = f[i];
+    chain_op_held_accept(F, s, n);
+    return 1;
+}
+
+/* The run's first step (eng_held_step.run = 1): the coefficients into the rows where their arrays
+ * are not those the rows hold, M_hat's off-diagonal where the slot or its coefficients changed (then
+ * the kept factorisation anew). */
+static CHAIN_OP_COLD void chain_op_run_take(chain_eng_ops *C, const eng_held_step *F)
+{
+    const size_t n = C->n;
+    chain_run_row *R = C->rr;
+    if (C->rr_src[0] != C->m || C->rr_src[1] != C->Kd || C->rr_src[2] != C->Ko || C->rr_src[3] != F->Pc ||
+        C->rr_src[4] != F->Ps) {
+        for (size_t i = 0; i < n; i++) {
+            R[i].m = C->m[i];
+            R[i].Kd = C->Kd[i];
+            R[i].Ko = C->Ko[i];
+            R[i].Pc = F->Pc ? F->Pc[i] : 0.0;
+            R[i].Ps = F->Ps ? F->Ps[i] : 0.0;
+        }
+        C->rr_src[0] = C->m;
+        C->rr_src[1] = C->Kd;
+        C->rr_src[2] = C->Ko;
+        C->rr_src[3] = F->Pc;
+        C->rr_src[4] = F->Ps;
     }
+    if (C->rr_slot != F->slot || C->rr_c[0] != F->cM || C->rr_c[1] != F->cC || C->rr_c[2] != F->cK) {
+        const double *e = C->e[F->slot];
+        for (size_t i = 0; i < n; i++) {
+            R[i].e = e[i];
+            R[i].kh = 0;
+        }
+        C->rr_slot = F->slot;
+        C->rr_c[0] = F->cM;
+        C->rr_c[1] = F->cC;
+        C->rr_c[2] = F->cK;
+    }
+}
+
+/* Row i's kept factor at a run's first step, as chain_op_elim_row makes it (so the same bits): anew
+ * where its hold changed or, free, where the row above's was (refac, returned for the row below). */
+static inline int chain_op_run_factor(chain_run_row *R, const double *d, size_t i, size_t n, int hold, int refac)
+{
+    if (R[i].kh == 1 + hold && !(refac && !hold)) return 0;
+    R[i].kh = 1 + hold;
+    if (hold) {
+        R[i].cp = 0.0;
+    } else {
+        const double lo_e = (i > 0) ? R[i - 1].e : 0.0, cprev = (i > 0) ? R[i - 1].cp : 0.0;
+        R[i].inv = 1.0 / (d[i] - lo_e * cprev);
+        R[i].cp = (i + 1 < n) ? R[i].e * R[i].inv : 0.0;
+    }
+    return 1;
+}
+
+/* chain_op_row_done from the rows: row i's force into f, whether its margin is positive. */
+static inline int chain_op_run_done(const chain_run_row *R, const double *ph, double *f, size_t i, size_t n,
+                                    double vlo, double vi, double vhi)
+{
+    double fi;
+    if (R[i].hold) {
+        fi = -ph[i];
+        if (i > 0) fi += R[i - 1].e * vlo;
+        if (i + 1 < n) fi += R[i].e * vhi;
+    } else {
+        fi = 0.0 - R[i].sl;
+    }
+    f[i] = fi;
+    return !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * vi > 0.0 : R[i].Fb - fabs(fi) > 0.0);
+}
+
+/* A fused step of a run (eng_held_step.run > 0) from the rows: chain_op_step_held's arithmetic in
+ * its order, so the same bits. The run's first step takes F's loads and modes into the rows and
+ * makes the kept factorisation for its held pattern; the later ones read the rows alone. */
+static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s)
+{
+    chain_eng_ops *C = (chain_eng_ops *)ctx;
+    const int first = F->run == 1;
+    if (first) chain_op_run_take(C, F);
+    const size_t n = C->n;
+    chain_run_row *restrict R = C->rr;
+    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
+    const double cw = F->cw, sw = F->sw, am = 1.0 - a;
+    const int hasPc = F->Pc != NULL, hasPs = F->Ps != NULL;
+    const double *X = s->X, *V = s->V, *A0 = F->A0;
+    double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
+    double *restrict dp = C->work;
+    /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
+    double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, elo = 0.0, dprev = 0.0;
+    int refac = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
+        xpp[i] = xc;
+        int hold;
+        double sl;
+        if (first) {
+            const int st = F->st[i];
+            const double li = F->lim[i];
+            hold = st == 0 && li > 0.0;
+            sl = (li > 0.0) ? st * li : 0.0;
+            R[i].u = F->u[i];
+            R[i].Fb = F->Fb[i];
+            R[i].st = st;
+            R[i].hold = hold;
+            R[i].sl = sl;
+            refac = chain_op_run_factor(R, C->d[F->slot], i, n, hold, refac);
+        } else {
+            hold = R[i].hold;
+            sl = R[i].sl;
+        }
+        const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
+        const double y = R[i].m * r;
+        double kx = R[i].Kd * xc;
+        if (i > 0) kx += R[i - 1].Ko * xl;
+        if (i + 1 < n) kx += R[i].Ko * xr;
+        double p = R[i].u;
+        if (hasPc) p += R[i].Pc * cw;
+        if (hasPs) p -= R[i].Ps * sw;
+        const double phi = p + (y - kx);
+        ph[i] = phi;
+        xl = xc;
+        xc = xr;
+        dprev = hold ? 0.0 : ((phi - sl) - elo * dprev) * R[i].inv;
+        dp[i] = dprev;
+        elo = R[i].e;
+    }
+    /* back substitution, and row j + 1's force and margin once row j is known; row 0's after */
+    int ok = 1;
+    double zn = 0.0, v1 = 0.0, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
+    for (size_t j = n; j-- > 0;) {
+        zn = dp[j] - R[j].cp * zn;
+        const double vj = R[j].hold ? 0.0 : zn;
+        V1[j] = vj;
+        if (j + 1 < n) ok &= chain_op_run_done(R, ph, f, j + 1, n, vj, v1, v2);
+        v2 = v1;
+        v1 = vj;
+    }
+    ok &= chain_op_run_done(R, ph, f, 0, n, 0.0, v1, v2);
+    if (!ok) return 0;
+    chain_op_held_accept(F, s, n);
     return 1;
 }
 

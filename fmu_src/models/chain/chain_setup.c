@@ -198,11 +198,13 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     int *iblk = (int *)al->allocate(al->env, 2 * ENG_NSLOTS * n, sizeof(int));
     M->rows = (eng_row *)al->allocate(al->env, n, sizeof(eng_row));
     M->ridx = (size_t *)al->allocate(al->env, n, sizeof(size_t));
-    if (!blk || !iblk || !M->rows || !M->ridx) {
+    chain_run_row *rr = (chain_run_row *)al->allocate(al->env, n, sizeof(chain_run_row));
+    if (!blk || !iblk || !M->rows || !M->ridx || !rr) {
         if (blk) al->release(al->env, blk);
         if (iblk) al->release(al->env, iblk);
         if (M->rows) al->release(al->env, M->rows);
         if (M->ridx) al->release(al->env, M->ridx);
+        if (rr) al->release(al->env, rr);
         al->release(al->env, M);
         if (err) *err = oom;
         return NULL;
@@ -230,7 +232,11 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
         O->nd = ob + (size_t)(6 * ENG_NSLOTS + 3) * n;
         O->ne = ob + (size_t)(6 * ENG_NSLOTS + 4) * n;
         O->nr = ob + (size_t)(6 * ENG_NSLOTS + 5) * n;
+        O->rr = NULL; /* (the span's view steps no runs) */
+        O->rr_slot = -1;
+        for (int k = 0; k < 5; k++) O->rr_src[k] = NULL;
     }
+    M->ops.rr = rr;
     M->iblk = iblk;
     M->stribeck = p->friction_law == DFO_LAW_STRIBECK;
     M->law = NULL;
@@ -325,6 +331,7 @@ void chain_destroy(chain_model *M)
     al.release(al.env, M->iblk);
     al.release(al.env, M->rows);
     al.release(al.env, M->ridx);
+    al.release(al.env, M->ops.rr);
     if (M->law) al.release(al.env, M->law);
     al.release(al.env, M);
 }
