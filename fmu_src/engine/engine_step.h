@@ -740,18 +740,19 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
+    if (S->alpha == 0.0) return 0;
     int other = 0;
     for (size_t i = 0; i < n; i++) other |= hh != s->hA[i];
-    if (!other || S->alpha == 0.0) return 0;
+    if (!other) return 0;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    int *pin = E->pin;
+    if (E->ghost) memcpy(pin, E->ghost, n * sizeof(int));
+    else memset(pin, 0, n * sizeof(int));
     for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    if (E->ghost)
-        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
-    int any = 0;
-    for (size_t i = 0; i < n; i++) any |= !E->pin[i] && rebases(E, s, i, hh, tol);
-    return any;
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+    for (size_t i = 0; i < n; i++) /* (the pins complete: rebase and step_spans read them) */
+        if (!pin[i] && rebases(E, s, i, hh, tol)) return 1;
+    return 0;
 }
 
 static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
@@ -1188,7 +1189,8 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     const eng_setup *S = &E->S;
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
-    if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
+    /* (held_ready: held_steps found no re-basing for this state) */
+    if (!E->held_ready && needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
     const double cM = (1.0 - a) * K->c1, cK = E->b * S->h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return ENG_HELD_ERROR;
     double cw = 0.0, sw = 0.0;
