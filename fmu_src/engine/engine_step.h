@@ -454,7 +454,8 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
 }
 
 /* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
- * equation of motion with the inputs' rates; a: the physical accelerations. Into j. */
+ * equation of motion with the inputs' rates; a: the physical accelerations (read only with damping
+ * or a sliding law: rebase computes them only then). Into j. */
 static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double *a, double *jk)
 {
     const eng_setup *S = &E->S;
@@ -766,7 +767,8 @@ static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, dou
     double *acc = E->acc, *jk = E->jk;
     if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
         loads_at(E, in, s->t);
-        phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        /* (the physical accelerations: for the jerks' damping and Stribeck terms only) */
+        if (ENG_HAS_C(E) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
         jerks(E, in, s, acc, jk);
         E->jk_ok = 1;
     }
