@@ -727,10 +727,10 @@ typedef struct {
 
 /* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
  * lengths' tolerance; a held contact's pin aside) */
-static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
+static ENG_HOT int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
 {
-    const double hA = s->hA[i];
-    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * max_b(hA, hh) <= 1.0;
+    const double hA = s->hA[i]; /* (without branches: a loop's test) */
+    return (E->S.alpha != 0.0) & (hh != hA) & (fabs(hh - hA) > tol) & (E->S.rate_max * max_b(hA, hh) <= 1.0);
 }
 
 /* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
@@ -751,9 +751,11 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
     else memset(pin, 0, n * sizeof(int));
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
-    for (size_t i = 0; i < n; i++) /* (the pins complete: rebase and step_spans read them) */
-        if (!pin[i] && rebases(E, s, i, hh, tol)) return 1;
-    return 0;
+    /* rebases' test on the DOFs not pinned, without branches (the pins complete: rebase and
+     * step_spans read them) */
+    int any = 0;
+    for (size_t i = 0; i < n; i++) any |= (pin[i] == 0) & rebases(E, s, i, hh, tol);
+    return any;
 }
 
 static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
