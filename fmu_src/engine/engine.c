@@ -83,7 +83,7 @@ void eng_destroy(eng *E)
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
-                          E->gV1, E->ew};
+                          E->gV1, E->gidx, E->gve, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
@@ -146,9 +146,10 @@ static int create_spans(eng *E, const char **err)
     E->sub = eng_create(&T, al, err);
     if (!E->sub || !eng_state_init(E->sub, &E->ss, 0)) { if (err) *err = "out of memory"; return 0; }
     eng *B = E->sub;
-    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1};
+    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1, &B->gve};
     for (size_t i = 0; i < sizeof dg / sizeof dg[0]; i++) ok &= (*dg[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
     ok &= (B->ghost = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    ok &= (B->gidx = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
     if (!ok) { if (err) *err = "out of memory"; return 0; }
     return 1;
 }

@@ -91,9 +91,12 @@ struct eng {
     double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
     dfo_friction_law *llaw;
     eng_state ps;                /* the whole step's start (its arrays only) */
-    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
-     * the step's start (gt0) and end (length gH), interpolated */
+    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine; gidx: the ngh
+     * ghosts' indices, gve: their velocities at a trial's end): their states at the step's start (gt0)
+     * and end (length gH), interpolated */
     int *ghost;
+    size_t *gidx, ngh;
+    double *gve;
     double gt0, gH;
     double *gX0, *gV0, *gX1, *gV1;
 };

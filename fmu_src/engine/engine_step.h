@@ -420,8 +420,10 @@ static void ghost_at(const eng *E, size_t i, double tau, double *x, double *v, d
 /* The ghosts' states at the state's time, written into it. */
 static void ghosts_now(const eng *E, eng_state *s)
 {
-    for (size_t i = 0; i < ENG_N(E); i++)
-        if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+    for (size_t k = 0; k < E->ngh; k++) {
+        const size_t i = E->gidx[k];
+        ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+    }
 }
 
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
@@ -448,8 +450,7 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
         }
     }
     if (E->ghost) /* a ghost's acceleration is prescribed (Dirichlet: the solver returns it) */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) r[i] = s->A[i];
+        for (size_t k = 0; k < E->ngh; k++) r[E->gidx[k]] = s->A[E->gidx[k]];
     held_solve(E, r, E->held, a, f);
 }
 
@@ -485,8 +486,7 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         row_axpy(&S->rows[j], df, r);
     }
     if (E->ghost)
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, NULL, NULL, NULL, &r[i]);
+        for (size_t k = 0; k < E->ngh; k++) ghost_at(E, E->gidx[k], s->t - E->gt0, NULL, NULL, NULL, &r[E->gidx[k]]);
     held_solve(E, r, E->held, jk, E->f2);
 }
 
@@ -747,8 +747,9 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
     if (!other) return 0;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
     int *pin = E->pin;
-    if (E->ghost) memcpy(pin, E->ghost, n * sizeof(int));
-    else memset(pin, 0, n * sizeof(int));
+    memset(pin, 0, n * sizeof(int));
+    if (E->ghost)
+        for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
     /* rebases' test on the DOFs not pinned, without branches (the pins complete: rebase and
@@ -798,19 +799,17 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
         E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
     }
     if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) {
-                double xg, vg;
-                ghost_at(E, i, s->t - E->gt0 + hh, &xg, &vg, NULL, NULL);
-                E->xp[i] = xg - T->kin.corr_V * vg;
-            }
+        for (size_t k = 0; k < E->ngh; k++) {
+            double xg;
+            ghost_at(E, E->gidx[k], s->t - E->gt0 + hh, &xg, &E->gve[k], NULL, NULL);
+            E->xp[E->gidx[k]] = xg - T->kin.corr_V * E->gve[k];
+        }
     ENG_APPLY_M(E, E->r, E->y);
     applied_at(E, s, t1, E->ph);
     ENG_APPLY_K(E, E->xp, E->y2);
     for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
     if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0 + hh, NULL, &E->ph[i], NULL, NULL);
+        for (size_t k = 0; k < E->ngh; k++) E->ph[E->gidx[k]] = E->gve[k];
     return ENG_OK;
 }
 
@@ -1569,6 +1568,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         B->any_law = 0;
         for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
         /* the span's DOFs, its ghosts' motion over the step */
+        size_t ngh = 0;
         B->gt0 = t_start;
         B->gH = t_end - t_start;
         for (size_t q = 0; q < nd; q++) {
@@ -1577,12 +1577,14 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
             E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
             B->ghost[q] = E->lgh[q];
+            if (E->lgh[q]) B->gidx[ngh++] = q;
             B->gX0[q] = p->X[i];
             B->gV0[q] = p->V[i];
             B->gX1[q] = s->X[i];
             B->gV1[q] = s->V[i];
             dof_copy(b, q, p, i);
         }
+        B->ngh = ngh;
         B->S.n = b->n = nd;
         B->S.nc = b->nc = nct;
         B->loads_for = NULL;
