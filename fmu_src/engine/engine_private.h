@@ -86,7 +86,7 @@ struct eng {
     size_t lnnz;                 /* the longest contact row: lidx, lw hold lnnz entries per contact */
     long *gmap;
     size_t *drng, *crng;         /* per span k: [drng[2k], drng[2k + 1]) the DOF indices holding its labels,
-                                  * crng likewise the contacts' (step_spans) */
+                                  * crng likewise the contacts' (eng_sparse.span's) */
     eng_row *lrows;
     double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
     dfo_friction_law *llaw;

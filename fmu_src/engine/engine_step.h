@@ -1486,32 +1486,21 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     const eng_setup *S = &E->S;
     const eng_sparse *sp = S->sparse;
     const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
-    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
+    size_t *dr = E->drng, *cr = E->crng; /* each span's index ranges (its work its own size) */
+    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab, dr, cr);
     if (ns == 0) return 0;
-    for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
-        if (E->cand[j] && E->clab[j] <= 0) return 0;
-    *out = ENG_OK;
     if (ns > n) { *out = ENG_ERR_BAD_INPUT; return 1; } /* (a span holds a DOF) */
-    /* each span's index ranges (so that a span's work is its own size, not the structure's) */
-    size_t *dr = E->drng, *cr = E->crng;
+    size_t ncand = 0, inside = 0;
+    for (size_t j = 0; j < nc; j++) ncand += (size_t)(E->cand[j] != 0);
     for (size_t k = 0; k < ns; k++) {
-        dr[2 * k] = n;
-        dr[2 * k + 1] = 0;
-        cr[2 * k] = nc;
-        cr[2 * k + 1] = 0;
+        if (!(dr[2 * k] <= dr[2 * k + 1] && dr[2 * k + 1] <= n && cr[2 * k] <= cr[2 * k + 1] && cr[2 * k + 1] <= nc)) {
+            *out = ENG_ERR_BAD_INPUT;
+            return 1;
+        }
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) inside += E->cand[j] && E->clab[j] == (int)k + 1;
     }
-    for (size_t i = 0; i < n; i++) {
-        const size_t k = (size_t)((E->dlab[i] < 0) ? -E->dlab[i] : E->dlab[i]) - 1;
-        if (E->dlab[i] == 0 || k >= ns) continue;
-        if (i < dr[2 * k]) dr[2 * k] = i;
-        dr[2 * k + 1] = i + 1;
-    }
-    for (size_t j = 0; j < nc; j++) {
-        const size_t k = (size_t)((E->clab[j] < 0) ? -E->clab[j] : E->clab[j]) - 1;
-        if (E->clab[j] == 0 || k >= ns) continue;
-        if (j < cr[2 * k]) cr[2 * k] = j;
-        cr[2 * k + 1] = j + 1;
-    }
+    if (inside != ncand) return 0; /* a candidate in no span: the whole structure is stepped */
+    *out = ENG_OK;
     /* the step's start where the spans read it */
     const eng_state *p = &E->ps;
     for (size_t k = 0; k < ns; k++) {
@@ -1550,7 +1539,8 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
             double *w = E->lrw + a * E->lnnz;
             for (size_t q = 0; q < R->nnz; q++) {
-                const int dl = E->dlab[R->idx[q]];
+                const size_t g = R->idx[q]; /* (a label outside the span's range: none) */
+                const int dl = (g >= dr[2 * k] && g < dr[2 * k + 1]) ? E->dlab[g] : 0;
                 if (dl != lab && dl != -lab) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
                 idx[q] = (size_t)E->gmap[R->idx[q]];
                 w[q] = R->w[q];

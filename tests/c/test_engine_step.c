@@ -563,10 +563,10 @@ static int counting_step_held(void *ctx, const eng_held_step *F, eng_state *s)
     return chn_step_held(ctx, F, s);
 }
 
-static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
 {
     chn_model *C = ctx;
-    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab);
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
     if (ns > 0) ((big_chain *)((char *)C - offsetof(big_chain, C)))->spans++;
     return ns;
 }
