@@ -159,17 +159,7 @@ static inline void chn_basis_kept(chn_model *C, int slot, const double *q, const
         zn = dp[j] - kcp[j] * zn;
         z[j] = zn;
     }
-    for (size_t i = 0; i < n; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > 0) f += e[i - 1] * z[i - 1];
-            if (i + 1 < n) f += e[i] * z[i + 1];
-            w[i] = f;
-        } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
-        }
-    }
+    lcp_box_basis_w(0, n, 0, n, e, q, l, mode, z, w);
 }
 
 /* The box LCP of the slot's M_hat (W = I, no belts): lcp_box_basis in the given modes, lcp_box for

@@ -178,17 +178,7 @@ static inline void chain_op_basis(chain_eng_ops *C, int slot, const double *q, c
         zn = dp[j] - kcp[j] * zn;
         z[j] = zn;
     }
-    for (size_t i = 0; i < n; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > 0) f += e[i - 1] * z[i - 1];
-            if (i + 1 < n) f += e[i] * z[i + 1];
-            w[i] = f;
-        } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
-        }
-    }
+    lcp_box_basis_w(0, n, 0, n, e, q, l, mode, z, w);
 }
 
 /* lcp_box_basis(0, n, fix_lo, zl, fix_hi, zh, d, e, q, l, mode, z, w, ...) of a slot whose M_hat is
@@ -222,18 +212,7 @@ static inline void chain_op_diag(chain_eng_ops *C, int slot, int fix_lo, double 
         zn = dp[j] - cp[j] * zn;
         z[j] = zn;
     }
-    const size_t a = (size_t)fix_lo, b = n - (size_t)fix_hi;
-    for (size_t i = a; i < b; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > 0) f += e[i - 1] * z[i - 1];
-            if (i + 1 < n) f += e[i] * z[i + 1];
-            w[i] = f;
-        } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
-        }
-    }
+    lcp_box_basis_w(0, n, (size_t)fix_lo, n - (size_t)fix_hi, e, q, l, mode, z, w);
 }
 
 /* A row whose W stays as the basis solve set it: held, or a span's ghost. */
