@@ -47,6 +47,8 @@ struct eng {
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
     double *ew;                  /* 3 n: the energy accounts' work (account; NULL without them) */
     int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
+    int *rpin;                   /* n: the pins (needs_rebase's) of the current phase's start, where rpin_ok */
+    int rpin_ok;                 /* (rebase sets it, with held inputs; cleared with jk_ok) */
     int held_ready;              /* xp, ph, V1, f hold the model's declined fused step from the state as it is
                                   * (held_steps, for held_step's next call; eng_advance clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */

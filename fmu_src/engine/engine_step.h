@@ -765,8 +765,21 @@ static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, dou
     const size_t n = ENG_N(E);
     const double a = S->alpha;
     for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
-    if (!needs_rebase(E, s, hh)) return;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    /* the pins of the phase's start, kept for its further trials (rpin_ok, cleared with jk_ok) where
+     * the loads are held (a ramp's limits may change which contacts have friction) */
+    int any = 0;
+    if (E->rpin_ok) {
+        for (size_t i = 0; i < n; i++) any |= (E->rpin[i] == 0) & rebases(E, s, i, hh, tol);
+    } else {
+        any = needs_rebase(E, s, hh);
+        if (any && !ramped(in)) {
+            memcpy(E->rpin, E->pin, n * sizeof(int));
+            E->rpin_ok = 1;
+        }
+    }
+    if (!any) return;
+    const int *pin = E->rpin_ok ? E->rpin : E->pin;
     double *acc = E->acc, *jk = E->jk;
     if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
         loads_at(E, in, s->t);
@@ -777,7 +790,7 @@ static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, dou
     }
     loads_at(E, in, t1);
     for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+        if (!pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
 }
 
 static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
@@ -882,6 +895,7 @@ static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const en
 {
     *ta = s->t;
     E->jk_ok = 0; /* the jerks of the phase's start: to be computed (trial_step) */
+    E->rpin_ok = 0; /* (its pins likewise) */
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
@@ -1595,7 +1609,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         if (st != ENG_OK) { *out = st; return 1; }
         /* the span's A re-based on a grid step now, as the next step of the whole structure would
          * (there over all of it) */
-        B->jk_ok = 0; /* (the span's state, not a phase of B's) */
+        B->jk_ok = B->rpin_ok = 0; /* (the span's state, not a phase of B's) */
         rebase(B, &bin, b, S->h, t_end);
         const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
         for (size_t q = 0; q < nd; q++)
