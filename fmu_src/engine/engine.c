@@ -80,10 +80,10 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->rpin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
-                          E->gV1, E->ew};
+                          E->gV1, E->gidx, E->gve, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
@@ -146,9 +146,10 @@ static int create_spans(eng *E, const char **err)
     E->sub = eng_create(&T, al, err);
     if (!E->sub || !eng_state_init(E->sub, &E->ss, 0)) { if (err) *err = "out of memory"; return 0; }
     eng *B = E->sub;
-    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1};
+    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1, &B->gve};
     for (size_t i = 0; i < sizeof dg / sizeof dg[0]; i++) ok &= (*dg[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
     ok &= (B->ghost = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    ok &= (B->gidx = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
     if (!ok) { if (err) *err = "out of memory"; return 0; }
     return 1;
 }
@@ -181,6 +182,8 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
         ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->pin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    ok &= (E->rpin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    E->rpin_ok = 0;
     if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
     /* the dense friction solver's workspace, O(n nc + nc^2): only where it may run (no model solver, or
      * one that falls back on it) */

@@ -189,9 +189,13 @@ typedef struct eng_harmonic_s {
  *     span       the spans around the candidate contacts (cand: nc flags): labels per DOF (dof_lab,
  *                n) and per contact (ct_lab, nc): 0 outside every span, s + 1 in span s, -(s + 1) a
  *                ghost of span s (a DOF), or a contact carried by span s without friction (its row
- *                on the span's DOFs and ghosts: a model may keep its numbering so). Every candidate in
- *                a span (label > 0), a ghost of one span in no other, spans disjoint. Returns the
- *                number of spans; 0: step the whole structure (a small one).
+ *                on the span's DOFs and ghosts: a model may keep its numbering so); and each span's
+ *                index ranges: span s's labels lie in the DOFs [dof_rng[2 s], dof_rng[2 s + 1]) and
+ *                the contacts [ct_rng[2 s], ct_rng[2 s + 1]) (2 n entries each). Labels are read only
+ *                inside these ranges, so the model writes those only (its work the spans' size, not
+ *                the structure's). Every candidate in a span (label > 0), a ghost of one span in no
+ *                other, spans disjoint. Returns the number of spans; 0: step the whole structure (a
+ *                small one).
  *     span_bind  make span_ops act on the span whose DOFs (ghosts included, ascending) are dofs[nd],
  *                ghost[k] saying which are ghosts, and whose contacts are cts[nct] (ascending), in
  *                that local numbering
@@ -225,7 +229,7 @@ typedef struct {
     double (*contact_breakaway)(void *ctx, size_t j, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
                                 const struct eng_inputs_s *in, const double *Fb);
     size_t span_max;
-    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
+    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng);
     void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);
     eng_ops span_ops;
 } eng_sparse;

@@ -47,6 +47,8 @@ struct eng {
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
     double *ew;                  /* 3 n: the energy accounts' work (account; NULL without them) */
     int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
+    int *rpin;                   /* n: the pins (needs_rebase's) of the current phase's start, where rpin_ok */
+    int rpin_ok;                 /* (rebase sets it, with held inputs; cleared with jk_ok) */
     int held_ready;              /* xp, ph, V1, f hold the model's declined fused step from the state as it is
                                   * (held_steps, for held_step's next call; eng_advance clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
@@ -86,14 +88,17 @@ struct eng {
     size_t lnnz;                 /* the longest contact row: lidx, lw hold lnnz entries per contact */
     long *gmap;
     size_t *drng, *crng;         /* per span k: [drng[2k], drng[2k + 1]) the DOF indices holding its labels,
-                                  * crng likewise the contacts' (step_spans) */
+                                  * crng likewise the contacts' (eng_sparse.span's) */
     eng_row *lrows;
     double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
     dfo_friction_law *llaw;
     eng_state ps;                /* the whole step's start (its arrays only) */
-    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
-     * the step's start (gt0) and end (length gH), interpolated */
+    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine; gidx: the ngh
+     * ghosts' indices, gve: their velocities at a trial's end): their states at the step's start (gt0)
+     * and end (length gH), interpolated */
     int *ghost;
+    size_t *gidx, ngh;
+    double *gve;
     double gt0, gH;
     double *gX0, *gV0, *gX1, *gV1;
 };

@@ -425,8 +425,10 @@ static void ghost_at(const eng *E, size_t i, double tau, double *x, double *v, d
 /* The ghosts' states at the state's time, written into it. */
 static void ghosts_now(const eng *E, eng_state *s)
 {
-    for (size_t i = 0; i < ENG_N(E); i++)
-        if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+    for (size_t k = 0; k < E->ngh; k++) {
+        const size_t i = E->gidx[k];
+        ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+    }
 }
 
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
@@ -453,13 +455,13 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
         }
     }
     if (E->ghost) /* a ghost's acceleration is prescribed (Dirichlet: the solver returns it) */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) r[i] = s->A[i];
+        for (size_t k = 0; k < E->ngh; k++) r[E->gidx[k]] = s->A[E->gidx[k]];
     held_solve(E, r, E->held, a, f);
 }
 
 /* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
- * equation of motion with the inputs' rates; a: the physical accelerations. Into j. */
+ * equation of motion with the inputs' rates; a: the physical accelerations (read only with damping
+ * or a sliding law: rebase computes them only then). Into j. */
 static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double *a, double *jk)
 {
     const eng_setup *S = &E->S;
@@ -489,8 +491,7 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         row_axpy(&S->rows[j], df, r);
     }
     if (E->ghost)
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, NULL, NULL, NULL, &r[i]);
+        for (size_t k = 0; k < E->ngh; k++) ghost_at(E, E->gidx[k], s->t - E->gt0, NULL, NULL, NULL, &r[E->gidx[k]]);
     held_solve(E, r, E->held, jk, E->f2);
 }
 
@@ -731,10 +732,10 @@ typedef struct {
 
 /* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
  * lengths' tolerance; a held contact's pin aside) */
-static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
+static ENG_HOT int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
 {
-    const double hA = s->hA[i];
-    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * max_b(hA, hh) <= 1.0;
+    const double hA = s->hA[i]; /* (without branches: a loop's test) */
+    return (E->S.alpha != 0.0) & (hh != hA) & (fabs(hh - hA) > tol) & (E->S.rate_max * max_b(hA, hh) <= 1.0);
 }
 
 /* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
@@ -745,17 +746,21 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
+    if (S->alpha == 0.0) return 0;
     int other = 0;
     for (size_t i = 0; i < n; i++) other |= hh != s->hA[i];
-    if (!other || S->alpha == 0.0) return 0;
+    if (!other) return 0;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    int *pin = E->pin;
+    memset(pin, 0, n * sizeof(int));
     if (E->ghost)
-        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
+        for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+    /* rebases' test on the DOFs not pinned, without branches (the pins complete: rebase and
+     * step_spans read them) */
     int any = 0;
-    for (size_t i = 0; i < n; i++) any |= !E->pin[i] && rebases(E, s, i, hh, tol);
+    for (size_t i = 0; i < n; i++) any |= (pin[i] == 0) & rebases(E, s, i, hh, tol);
     return any;
 }
 
@@ -765,18 +770,32 @@ static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, dou
     const size_t n = ENG_N(E);
     const double a = S->alpha;
     for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
-    if (!needs_rebase(E, s, hh)) return;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    /* the pins of the phase's start, kept for its further trials (rpin_ok, cleared with jk_ok) where
+     * the loads are held (a ramp's limits may change which contacts have friction) */
+    int any = 0;
+    if (E->rpin_ok) {
+        for (size_t i = 0; i < n; i++) any |= (E->rpin[i] == 0) & rebases(E, s, i, hh, tol);
+    } else {
+        any = needs_rebase(E, s, hh);
+        if (any && !ramped(in)) {
+            memcpy(E->rpin, E->pin, n * sizeof(int));
+            E->rpin_ok = 1;
+        }
+    }
+    if (!any) return;
+    const int *pin = E->rpin_ok ? E->rpin : E->pin;
     double *acc = E->acc, *jk = E->jk;
     if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
         loads_at(E, in, s->t);
-        phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        /* (the physical accelerations: for the jerks' damping and Stribeck terms only) */
+        if (ENG_HAS_C(E) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
         jerks(E, in, s, acc, jk);
         E->jk_ok = 1;
     }
     loads_at(E, in, t1);
     for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+        if (!pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
 }
 
 static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
@@ -798,19 +817,17 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
         E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
     }
     if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) {
-                double xg, vg;
-                ghost_at(E, i, s->t - E->gt0 + hh, &xg, &vg, NULL, NULL);
-                E->xp[i] = xg - T->kin.corr_V * vg;
-            }
+        for (size_t k = 0; k < E->ngh; k++) {
+            double xg;
+            ghost_at(E, E->gidx[k], s->t - E->gt0 + hh, &xg, &E->gve[k], NULL, NULL);
+            E->xp[E->gidx[k]] = xg - T->kin.corr_V * E->gve[k];
+        }
     ENG_APPLY_M(E, E->r, E->y);
     applied_at(E, s, t1, E->ph);
     ENG_APPLY_K(E, E->xp, E->y2);
     for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
     if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0 + hh, NULL, &E->ph[i], NULL, NULL);
+        for (size_t k = 0; k < E->ngh; k++) E->ph[E->gidx[k]] = E->gve[k];
     return ENG_OK;
 }
 
@@ -883,6 +900,7 @@ static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const en
 {
     *ta = s->t;
     E->jk_ok = 0; /* the jerks of the phase's start: to be computed (trial_step) */
+    E->rpin_ok = 0; /* (its pins likewise) */
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
@@ -1193,7 +1211,8 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     const eng_setup *S = &E->S;
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
-    if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
+    /* (held_ready: held_steps found no re-basing for this state) */
+    if (!E->held_ready && needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
     const double cM = (1.0 - a) * K->c1, cK = E->b * S->h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return ENG_HELD_ERROR;
     double cw = 0.0, sw = 0.0;
@@ -1486,32 +1505,21 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     const eng_setup *S = &E->S;
     const eng_sparse *sp = S->sparse;
     const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
-    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
+    size_t *dr = E->drng, *cr = E->crng; /* each span's index ranges (its work its own size) */
+    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab, dr, cr);
     if (ns == 0) return 0;
-    for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
-        if (E->cand[j] && E->clab[j] <= 0) return 0;
-    *out = ENG_OK;
     if (ns > n) { *out = ENG_ERR_BAD_INPUT; return 1; } /* (a span holds a DOF) */
-    /* each span's index ranges (so that a span's work is its own size, not the structure's) */
-    size_t *dr = E->drng, *cr = E->crng;
+    size_t ncand = 0, inside = 0;
+    for (size_t j = 0; j < nc; j++) ncand += (size_t)(E->cand[j] != 0);
     for (size_t k = 0; k < ns; k++) {
-        dr[2 * k] = n;
-        dr[2 * k + 1] = 0;
-        cr[2 * k] = nc;
-        cr[2 * k + 1] = 0;
+        if (!(dr[2 * k] <= dr[2 * k + 1] && dr[2 * k + 1] <= n && cr[2 * k] <= cr[2 * k + 1] && cr[2 * k + 1] <= nc)) {
+            *out = ENG_ERR_BAD_INPUT;
+            return 1;
+        }
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) inside += E->cand[j] && E->clab[j] == (int)k + 1;
     }
-    for (size_t i = 0; i < n; i++) {
-        const size_t k = (size_t)((E->dlab[i] < 0) ? -E->dlab[i] : E->dlab[i]) - 1;
-        if (E->dlab[i] == 0 || k >= ns) continue;
-        if (i < dr[2 * k]) dr[2 * k] = i;
-        dr[2 * k + 1] = i + 1;
-    }
-    for (size_t j = 0; j < nc; j++) {
-        const size_t k = (size_t)((E->clab[j] < 0) ? -E->clab[j] : E->clab[j]) - 1;
-        if (E->clab[j] == 0 || k >= ns) continue;
-        if (j < cr[2 * k]) cr[2 * k] = j;
-        cr[2 * k + 1] = j + 1;
-    }
+    if (inside != ncand) return 0; /* a candidate in no span: the whole structure is stepped */
+    *out = ENG_OK;
     /* the step's start where the spans read it */
     const eng_state *p = &E->ps;
     for (size_t k = 0; k < ns; k++) {
@@ -1550,7 +1558,8 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
             double *w = E->lrw + a * E->lnnz;
             for (size_t q = 0; q < R->nnz; q++) {
-                const int dl = E->dlab[R->idx[q]];
+                const size_t g = R->idx[q]; /* (a label outside the span's range: none) */
+                const int dl = (g >= dr[2 * k] && g < dr[2 * k + 1]) ? E->dlab[g] : 0;
                 if (dl != lab && dl != -lab) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
                 idx[q] = (size_t)E->gmap[R->idx[q]];
                 w[q] = R->w[q];
@@ -1568,6 +1577,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         B->any_law = 0;
         for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
         /* the span's DOFs, its ghosts' motion over the step */
+        size_t ngh = 0;
         B->gt0 = t_start;
         B->gH = t_end - t_start;
         for (size_t q = 0; q < nd; q++) {
@@ -1576,12 +1586,14 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
             E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
             B->ghost[q] = E->lgh[q];
+            if (E->lgh[q]) B->gidx[ngh++] = q;
             B->gX0[q] = p->X[i];
             B->gV0[q] = p->V[i];
             B->gX1[q] = s->X[i];
             B->gV1[q] = s->V[i];
             dof_copy(b, q, p, i);
         }
+        B->ngh = ngh;
         B->S.n = b->n = nd;
         B->S.nc = b->nc = nct;
         B->loads_for = NULL;
@@ -1602,7 +1614,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         if (st != ENG_OK) { *out = st; return 1; }
         /* the span's A re-based on a grid step now, as the next step of the whole structure would
          * (there over all of it) */
-        B->jk_ok = 0; /* (the span's state, not a phase of B's) */
+        B->jk_ok = B->rpin_ok = 0; /* (the span's state, not a phase of B's) */
         rebase(B, &bin, b, S->h, t_end);
         const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
         for (size_t q = 0; q < nd; q++)

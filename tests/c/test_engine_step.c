@@ -563,11 +563,28 @@ static int counting_step_held(void *ctx, const eng_held_step *F, eng_state *s)
     return chn_step_held(ctx, F, s);
 }
 
-static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
 {
     chn_model *C = ctx;
-    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab);
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
     if (ns > 0) ((big_chain *)((char *)C - offsetof(big_chain, C)))->spans++;
+    return ns;
+}
+
+/* The chain's spans with every contact range emptied: no candidate lies in a span (the engine then steps
+ * the whole structure) */
+static size_t spans_off_range(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
+{
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    for (size_t k = 0; k < ns; k++) ct_rng[2 * k + 1] = ct_rng[2 * k];
+    return ns;
+}
+
+/* The chain's spans, the first one's DOF range past the structure's end (a model's error) */
+static size_t spans_bad_range(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
+{
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    if (ns > 0) dof_rng[1] = ((const chn_model *)ctx)->n + 1;
     return ns;
 }
 
@@ -681,6 +698,33 @@ static void test_chain_sparse(checks *T)
     check_context(T, "chain of %zu blocks, located: spans against the whole structure, second order", n);
     printf("  spans against whole: %.2e, %.2e (ratio %.2f)\n", dh[0], dh[1], dh[0] / dh[1]);
     CHECK(dh[0] / dh[1] > 3.0);
+    /* the spans' ranges: a candidate outside them, the whole structure stepped (the bits of no spans);
+     * a range past the structure, an error */
+    check_context(T, "chain of %zu blocks, located: spans whose ranges miss the candidates, or overrun", n);
+    {
+        eng_state s3[3];
+        eng_status st3[3];
+        eng *E3[3];
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, 800.0);
+        E3[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[0], &st3[0]);
+        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, 800.0);
+        B.sp.span = spans_off_range;
+        E3[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[1], &st3[1]);
+        B.sp.span = spans_bad_range;
+        E3[2] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[2], &st3[2]);
+        printf("  spans off their candidates: %lld / %lld switches; overrun: status %d at t = %g\n", s3[1].switches,
+               s3[0].switches, (int)st3[2], s3[2].t);
+        const switch_log none = {0, 0.0, 0};
+        CHECK(st3[0] == ENG_OK && st3[1] == ENG_OK);
+        CHECK(s3[0].switches > 50);
+        CHECK(same_bits(&s3[1], &s3[0], &none, &none));
+        CHECK(st3[2] == ENG_ERR_BAD_INPUT);
+        CHECK(s3[2].t < 40.0);
+        for (int v = 0; v < 3; v++) {
+            eng_state_free(E3[v], &s3[v]);
+            eng_destroy(E3[v]);
+        }
+    }
     big_free(&B);
     /* the stuck fast path from the contacts' closed-form breakaways: a chain that sticks whole for
      * stretches (one block slips near its excitation's peaks, the others hold), on against off */

@@ -211,17 +211,41 @@ static inline void chain_op_basis(chain_eng_ops *C, int slot, const double *q, c
         zn = dp[j] - kcp[j] * zn;
         z[j] = zn;
     }
+    lcp_box_basis_w(0, n, 0, n, e, q, l, mode, z, w);
+}
+
+/* lcp_box_basis(0, n, fix_lo, zl, fix_hi, zh, d, e, q, l, mode, z, w, ...) of a slot whose M_hat is
+ * diagonal (cC = cK = 0: e holds zeros, the mass slot of the engine's held solves): the same
+ * operations, so the same bits, but with no division on the elimination's chain (a row's pivot
+ * d - e cp is d itself: e cp is a zero and d > 0). */
+static inline void chain_op_diag(chain_eng_ops *C, int slot, int fix_lo, double zl, int fix_hi, double zh,
+                                 const double *q, const double *l, const int *mode, double *z, double *w)
+{
+    const size_t n = C->n;
+    const double *d = C->d[slot], *e = C->e[slot];
+    double *cp = C->work, *dp = C->work + n, dprev = 0.0;
     for (size_t i = 0; i < n; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > 0) f += e[i - 1] * z[i - 1];
-            if (i + 1 < n) f += e[i] * z[i + 1];
-            w[i] = f;
+        double c = 0.0, v;
+        if ((fix_lo && i == 0) || (fix_hi && i == n - 1)) {
+            v = (fix_lo && i == 0) ? zl : zh;
+        } else if (mode[i] == 0 && l[i] > 0.0) {
+            v = 0.0;
         } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+            const double lo_e = (i > 0) ? e[i - 1] : 0.0, inv = 1.0 / d[i];
+            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            c = (i + 1 < n) ? e[i] * inv : 0.0;
+            v = (rhs - lo_e * dprev) * inv;
         }
+        cp[i] = c;
+        dp[i] = v;
+        dprev = v;
     }
+    double zn = 0.0;
+    for (size_t j = n; j-- > 0;) {
+        zn = dp[j] - cp[j] * zn;
+        z[j] = zn;
+    }
+    lcp_box_basis_w(0, n, (size_t)fix_lo, n - (size_t)fix_hi, e, q, l, mode, z, w);
 }
 
 /* A row whose W stays as the basis solve set it: held, or a span's ghost. */
@@ -317,7 +341,12 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
         C->q[i] = -r;
     }
     if (pivots) *pivots = 0;
-    if (C->fix_lo || C->fix_hi) { /* a span: the ghosts' rows fixed at their entries of p_hat */
+    if (what == ENG_SOLVE_BASIS && P->cC == 0.0 && P->cK == 0.0) { /* M_hat diagonal (the held solves) */
+        const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
+        chain_op_diag(C, P->slot, C->fix_lo, zl, C->fix_hi, zh, C->q, l, mode, V1, f);
+        for (size_t i = 0; i < n; i++)
+            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
+    } else if (C->fix_lo || C->fix_hi) { /* a span: the ghosts' rows fixed at their entries of p_hat */
         if (what != ENG_SOLVE_BASIS) return ENG_ERR_BAD_INPUT;
         const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
         lcp_box_basis(0, n, C->fix_lo, zl, C->fix_hi, zh, d, e, C->q, l, mode, V1, f, C->work, C->work + n);
@@ -667,29 +696,30 @@ static inline void chain_op_set_reach(chain_eng_ops *C, double h, double alpha)
 
 /* The spans around the candidate blocks (eng_sparse.span): w blocks either side of each, merged when
  * less than 3 blocks apart (distinct ghosts), the blocks next to a span its ghosts (their contacts
- * carried: a span's contacts are its blocks'). None (0) for a chain of at most 2 w + 3 blocks. */
-static inline size_t chain_op_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+ * carried: a span's contacts are its blocks'), labelled over its range only. None (0) for a chain of
+ * at most 2 w + 3 blocks. */
+static inline size_t chain_op_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng,
+                                   size_t *ct_rng)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
     const size_t n = C->n, w = C->w;
     if (w == 0 || n <= 2 * w + 3) return 0;
-    for (size_t i = 0; i < n; i++) dof_lab[i] = 0;
     size_t ns = 0, pa = 0, pb = 0;
     for (size_t c = 0; c <= n; c++) {
         if (c < n && !cand[c]) continue;
         const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
         if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
-        if (ns > 0) { /* label the span [pa, pb) and its ghosts */
-            for (size_t i = pa; i < pb; i++) dof_lab[i] = (int)ns;
-            if (pa > 0) dof_lab[pa - 1] = -(int)ns;
-            if (pb < n) dof_lab[pb] = -(int)ns;
+        if (ns > 0) { /* label the span [pa, pb) and its ghosts, its contacts as its blocks */
+            const size_t lo = (pa > 0) ? pa - 1 : 0, hi = (pb < n) ? pb + 1 : n, k = ns - 1;
+            for (size_t i = lo; i < hi; i++) ct_lab[i] = dof_lab[i] = (i < pa || i >= pb) ? -(int)ns : (int)ns;
+            dof_rng[2 * k] = ct_rng[2 * k] = lo;
+            dof_rng[2 * k + 1] = ct_rng[2 * k + 1] = hi;
         }
         if (c == n) break;
         pa = a;
         pb = b;
         ns++;
     }
-    for (size_t i = 0; i < n; i++) ct_lab[i] = dof_lab[i];
     return ns;
 }
 
