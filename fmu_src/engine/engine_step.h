@@ -2062,6 +2062,9 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
         c->known = 1;
     }
     if (isnan(c->tb)) return s->n_grid;
+    /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
+     * bound below is then past the next grid point: its grid points rise with their index) */
+    if (!(s->t0 + (double)(s->n_grid + 2) * h < min_b(c->tb, t_target + 2.0 * h))) return s->n_grid;
     long long m = grid_below(s, h, t_target, 1);
     const long long mb = grid_below(s, h, min_b(c->tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
