@@ -1661,6 +1661,8 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
     /* the observer's window and the belts, read once (a store through the state may not change them) */
     const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    /* every step observed: the first grid point in the window, t_target at most its end */
+    const int obs_all = obs && !(s->t0 + (double)(s->n_grid + 1) * S->h < obs_t0) && !(t_target > obs_t1);
     const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
     const eng_harmonic *H = &S->exc;
     eng_problem P;
@@ -1802,7 +1804,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         }
         /* the step is taken: the grid point, its excitation cache, the counters */
         const double ta = t;
-        const int observed = obs && !(grid < obs_t0) && !(ta > obs_t1);
+        const int observed = obs_all || (obs && !(grid < obs_t0) && !(ta > obs_t1));
         if (observed) {
             for (size_t i = 0; i < n; i++) X0[i] = X[i];
             for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
