@@ -7,7 +7,8 @@
  * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). The
  * oscillator's stepper (scheme.h's dfo_advance: its engine model made per call, the state mapped
  * through dfo_state) against its engine model kept across the calls: the same bits; the located
- * scheme's stuck fast path on against off. */
+ * scheme's stuck fast path on against off; the fused loop of held-input grid steps against the
+ * general path, the three schemes, observed. */
 #include "check.h"
 #include "engine_models.h"
 #include "osc_params.h"
@@ -261,6 +262,72 @@ static void test_stuck_fast_path(checks *T)
     for (int r = 0; r < 4; r++) {
         eng_state_free(E[r], &s[r]);
         eng_destroy(E[r]);
+    }
+}
+
+/* The fused loop (engine_step.h's fused_steps: held inputs, no energy accounts) against the general
+ * path (the same run with the energy accounts, which take every step through step_located and
+ * step_lcp): one block, stick-dominated, on a coarse grid (50 steps per period: switches inside most
+ * of the steps that hold one), the three schemes through engine.c and inlined, an observer's window
+ * [12, 30] inside the run: the same bits, counters and switches, and the same observed phases (the
+ * fused loop's declined step handing its trial to the general path, the stuck step the stuck fast
+ * path declines taken in the loop, the window's test once per run). */
+static void test_fused_vs_general(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    static const size_t idx[1] = {0};
+    static const double w1[1] = {1.0};
+    const eng_row row = {1, idx, w1};
+    const double N[1] = {0.7}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
+    const double F2[1] = {0.15};
+    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        eng_state s[4];
+        eng *E[4];
+        switch_log L[4];
+        hook_count H[4];
+        for (int r = 0; r < 4; r++) { /* r: 0 generic general, 1 generic fused, 2 inline general, 3 inline fused */
+            osc_eng_model B;
+            memset(&B, 0, sizeof B);
+            B.m = 1.0;
+            B.c = 0.05;
+            B.k = 1.0;
+            eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, scheme, 1.0);
+            S.h = 4.0 * DFO_PI / 50.0;
+            const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+            S.ops = ops;
+            S.account_energy = !(r & 1);
+            memset(&H[r], 0, sizeof H[r]);
+            H[r].x_max = -INFINITY;
+            const eng_observer obs = {12.0, 30.0, count_phase, &H[r]};
+            const entry *X = (r < 2) ? &GENERIC : &BLOCK;
+            E[r] = eng_create(&S, &ALLOC, NULL);
+            if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+            memset(&L[r], 0, sizeof L[r]);
+            const eng_hooks hk = {on_switch, &L[r], &obs, 0};
+            const double zero[1] = {0.0};
+            X->start(E[r], &in1, 0.0, zero, zero, &s[r]);
+            eng_status st = X->advance(E[r], &in1, &s[r], 20.0, &hk);
+            CHECK(st == ENG_OK);
+            X->new_inputs(E[r], &in1, &in2, &s[r], &hk);
+            for (int k = 1; k <= 30 && st == ENG_OK; k++) st = X->advance(E[r], &in2, &s[r], 20.0 + 1.37 * k, &hk);
+            CHECK(st == ENG_OK);
+        }
+        printf("  fused loop, %-10s: %ld switches, %lld steps, %ld phases observed, x %.17g\n", names[scheme],
+               L[0].count, s[0].steps, H[0].phases, s[0].X[0]);
+        check_context(T, "one block, %s: the fused loop against the general path", names[scheme]);
+        CHECK(L[0].count >= 10);
+        CHECK(H[0].phases > 50);
+        for (int r = 1; r < 4; r++) {
+            CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
+            CHECK(H[r].phases == H[0].phases && !memcmp(&H[r].t_sum, &H[0].t_sum, sizeof(double)) &&
+                  H[r].x_max == H[0].x_max);
+        }
+        for (int r = 0; r < 4; r++) {
+            eng_state_free(E[r], &s[r]);
+            eng_destroy(E[r]);
+        }
     }
 }
 
@@ -719,6 +786,7 @@ int main(void)
     checks *T = &C;
     test_block(T);
     test_stuck_fast_path(T);
+    test_fused_vs_general(T);
     test_vs_stepper(T);
     test_chain(T);
     test_chain_sparse(T);
