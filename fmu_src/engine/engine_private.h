@@ -51,6 +51,9 @@ struct eng {
     int rpin_ok;                 /* (rebase sets it, with held inputs; cleared with jk_ok) */
     int held_ready;              /* xp, ph, V1, f hold the model's declined fused step from the state as it is
                                   * (held_steps, for held_step's next call; eng_advance clears it) */
+    int fused_ready;             /* xp, ph, V1, f, A0, lim hold fused_steps' declined located grid step from the
+                                  * state as it is (a contact switches in it: step_located's phase 0 takes it
+                                  * as its trial; eng_advance clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;

@@ -1310,6 +1310,15 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             }
         }
         margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
+        if (phase == 0 && E->fused_ready) { /* fused_steps' trial of this grid step, solved (as held_step's) */
+            T.kin = E->kin_grid;
+            T.slot = ENG_SLOT_GRID;
+            T.cM = (1.0 - S->alpha) * T.kin.c1;
+            T.cC = 1.0;
+            T.cK = E->b * hh / E->g;
+            fused = ENG_HELD_TRIAL;
+        }
+        E->fused_ready = 0;
         if (fused != ENG_HELD_TRIAL) trial_margin(&mc, r, &T); /* (else the fused step's trial, solved) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
@@ -1646,14 +1655,17 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
  * takes it), that re-bases A (a step length other than that of A, off a pinned DOF), a stuck
  * structure the stuck fast path may skip (skip), a friction problem that fails, and a step past
  * t_target. The observer is called for the steps that overlap its window, as the general path
- * does. *g_prev: the last grid point reached. */
+ * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
+ * point (the step from it is taken here, to the bits of the general path's). A declined located step
+ * leaves its trial, solved, for step_located (fused_ready). */
 #if defined(ENG_FUSED_N) && defined(ENG_FUSED_NC)
 #define ENG_FUSED_LOCAL 1
 #else
 #define ENG_FUSED_LOCAL 0
 #endif
 
-static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, const eng_hooks *hk, double *g_prev)
+static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, int declined, const eng_hooks *hk,
+                                double *g_prev)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
@@ -1666,6 +1678,8 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
     /* the observer's window and the belts, read once (a store through the state may not change them) */
     const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    /* every step observed: the first grid point in the window, t_target at most its end */
+    const int obs_all = obs && !(s->t0 + (double)(s->n_grid + 1) * S->h < obs_t0) && !(t_target > obs_t1);
     const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
     const eng_harmonic *H = &S->exc;
     eng_problem P;
@@ -1725,8 +1739,9 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     for (;;) {
         const double grid = s->t0 + (double)(ng + 1) * h;
         if (!(grid <= t_target) || !(grid > t)) break;
-        /* held and pinned: the stuck fast path's to try; a step length to re-base A on: the general path's */
-        int held_all = skip, rebase = 0;
+        /* held and pinned: the stuck fast path's to try (but where it declined: this grid point's step);
+         * a step length to re-base A on: the general path's */
+        int held_all = skip && !(declined && steps == 0), rebase = 0;
         for (size_t i = 0; i < n; i++) pin[i] = 0;
         for (size_t j = 0; j < nc; j++) {
             const int held = mode[j] == 0 && has_friction(E, j);
@@ -1772,7 +1787,23 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             if (fs != ENG_OK) break;
             int sw_any = 0;
             for (size_t j = 0; j < nc; j++) sw_any |= has_friction(E, j) && switches(E, st, j, V1, f);
-            if (sw_any) break;
+            if (sw_any) { /* the trial, solved, for step_located's phase 0 (fused_ready) */
+#if ENG_FUSED_LOCAL
+                for (size_t i = 0; i < n; i++) {
+                    E->xp[i] = xp[i];
+                    E->ph[i] = ph[i];
+                    E->V1[i] = V1[i];
+                }
+                for (size_t j = 0; j < nc; j++) {
+                    E->f[j] = f[j];
+                    E->st[j] = st[j];
+                    E->lim[j] = lim[j];
+                }
+#endif
+                for (size_t i = 0; i < n; i++) E->A0[i] = A[i];
+                E->fused_ready = 1;
+                break;
+            }
         } else {
             for (size_t j = 0; j < nc; j++) {
                 st[j] = mode[j];
@@ -1790,7 +1821,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         }
         /* the step is taken: the grid point, its excitation cache, the counters */
         const double ta = t;
-        const int observed = obs && !(grid < obs_t0) && !(ta > obs_t1);
+        const int observed = obs_all || (obs && !(grid < obs_t0) && !(ta > obs_t1));
         if (observed) {
             for (size_t i = 0; i < n; i++) X0[i] = X[i];
             for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
@@ -2102,6 +2133,9 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
         c->known = 1;
     }
     if (isnan(c->tb)) return s->n_grid;
+    /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
+     * bound below is then past the next grid point: its grid points rise with their index) */
+    if (!(s->t0 + (double)(s->n_grid + 2) * h < min_b(c->tb, t_target + 2.0 * h))) return s->n_grid;
     long long m = grid_below(s, h, t_target, 1);
     const long long mb = grid_below(s, h, min_b(c->tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
@@ -2155,6 +2189,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     t_target = ENG_FN(eng_snap_target)(E, s, t_target);
     double g_prev = s->t0 + (double)s->n_grid * h;
     int switched = 0;
+    E->fused_ready = 0;
     const long long sw0 = s->switches;
     const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
                      S->scheme == DFO_SCHEME_LOCATED &&
@@ -2165,8 +2200,10 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
                           S->scheme == DFO_SCHEME_LOCATED;
     while (s->t < t_target) {
+        int declined = 0; /* the stuck fast path declined this grid point */
         if (skip && s->t == g_prev) {
             const long long m = stuck_until(E, in, s, t_target, hk, &cache);
+            declined = 1;
             if (m > s->n_grid) {
                 double ta;
                 begin_phase(E, s, &ta, hk);
@@ -2178,7 +2215,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         }
         if (fuse && s->t == g_prev) {
             loads_at(E, in, s->t);
-            fused_steps(E, s, t_target, skip, hk, &g_prev);
+            fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
             if (!(s->t < t_target)) break;
         }
         if (fuse_held && s->t == g_prev) {
@@ -2208,6 +2245,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         if (S->scheme == DFO_SCHEME_LOCATED) st = step_located(E, in, s, t_end, hh, hk);
         else st = step_lcp(E, in, s, t_end, hh, S->scheme == DFO_SCHEME_CONSISTENT, hk);
         E->held_ready = 0;
+        E->fused_ready = 0;
         switched = s->switches != sw0;
         if (st == ENG_SWITCHED || (hk && hk->stop_at_switch && switched)) {
             if (s->t < t_end && t_end == grid) s->n_grid--;

@@ -7,7 +7,8 @@
  * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). The
  * oscillator's stepper (scheme.h's dfo_advance: its engine model made per call, the state mapped
  * through dfo_state) against its engine model kept across the calls: the same bits; the located
- * scheme's stuck fast path on against off. */
+ * scheme's stuck fast path on against off; the fused loop of held-input grid steps against the
+ * general path, the three schemes, observed. */
 #include "check.h"
 #include "engine_models.h"
 #include "osc_params.h"
@@ -194,6 +195,51 @@ static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
     H->x_max = fmax(H->x_max, ph->X1[0]);
 }
 
+/* Four runs of one block compared: their final states, engines, switches and observed phases. */
+typedef struct {
+    eng_state s[4];
+    eng *E[4];
+    switch_log L[4];
+    hook_count H[4];
+} four_runs;
+
+/* Held inputs: none, and an external force of 0.15 (the runs' change at 20 s). */
+static const double F_JUMP[1] = {0.15};
+static const eng_inputs HELD_NONE = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+static const eng_inputs HELD_F = {F_JUMP, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+
+/* The unit block of the runs below: m = k = 1, c = 0.05. */
+static void unit_block(osc_eng_model *B)
+{
+    memset(B, 0, sizeof *B);
+    B->m = 1.0;
+    B->c = 0.05;
+    B->k = 1.0;
+}
+
+/* One block of S from rest through the entry points of X, observed over [12, w1] (its phases counted
+ * into H): the inputs in1 to 20 s, then in2 (eng_new_inputs) and communication points every 1.37 s,
+ * k_max of them. The final state into s (initialised here), the switches into L. */
+static eng *run_observed(checks *T, const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2,
+                         double w1, int k_max, hook_count *H, switch_log *L, eng_state *s)
+{
+    memset(H, 0, sizeof *H);
+    H->x_max = -INFINITY;
+    const eng_observer obs = {12.0, w1, count_phase, H};
+    eng *E = eng_create(S, &ALLOC, NULL);
+    if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    memset(L, 0, sizeof *L);
+    const eng_hooks hk = {on_switch, L, &obs, 0};
+    const double zero[1] = {0.0};
+    X->start(E, in1, 0.0, zero, zero, s);
+    eng_status st = X->advance(E, in1, s, 20.0, &hk);
+    CHECK(st == ENG_OK);
+    X->new_inputs(E, in1, in2, s, &hk);
+    for (int k = 1; k <= k_max && st == ENG_OK; k++) st = X->advance(E, in2, s, 20.0 + 1.37 * k, &hk);
+    CHECK(st == ENG_OK);
+    return E;
+}
+
 /* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a
  * sine part), held inputs with a change of the external force at 20 s and an observer's window
  * [12, 18]: the stuck fast path on and off, through engine.c and inlined, end on the same bits and
@@ -205,62 +251,84 @@ static void test_stuck_fast_path(checks *T)
     static const double w1[1] = {1.0};
     const eng_row row = {1, idx, w1};
     const double N[1] = {1.8}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
-    const double F2[1] = {0.15};
-    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    eng_state s[4];
-    eng *E[4];
-    switch_log L[4];
-    hook_count H[4];
+    const eng_inputs *in1 = &HELD_NONE, *in2 = &HELD_F;
+    four_runs R;
     for (int r = 0; r < 4; r++) { /* r: 0 generic off, 1 generic on, 2 inline off, 3 inline on */
         osc_eng_model B;
-        memset(&B, 0, sizeof B);
-        B.m = 1.0;
-        B.c = 0.05;
-        B.k = 1.0;
+        unit_block(&B);
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
         const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway, 1};
         S.ops = ops;
         S.fast_paths = r & 1;
-        memset(&H[r], 0, sizeof H[r]);
-        H[r].x_max = -INFINITY;
-        counted = &H[r];
-        const eng_observer obs = {12.0, 18.0, count_phase, &H[r]};
-        const entry *X = (r < 2) ? &GENERIC : &BLOCK;
-        E[r] = eng_create(&S, &ALLOC, NULL);
-        if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
-        memset(&L[r], 0, sizeof L[r]);
-        const eng_hooks hk = {on_switch, &L[r], &obs, 0};
-        const double zero[1] = {0.0};
-        X->start(E[r], &in1, 0.0, zero, zero, &s[r]);
-        eng_status st = X->advance(E[r], &in1, &s[r], 20.0, &hk);
-        CHECK(st == ENG_OK);
-        X->new_inputs(E[r], &in1, &in2, &s[r], &hk);
-        for (int k = 1; k <= 40 && st == ENG_OK; k++) st = X->advance(E[r], &in2, &s[r], 20.0 + 1.37 * k, &hk);
-        CHECK(st == ENG_OK);
+        counted = &R.H[r];
+        R.E[r] = run_observed(T, &S, (r < 2) ? &GENERIC : &BLOCK, in1, in2, 18.0, 40, &R.H[r], &R.L[r], &R.s[r]);
     }
-    printf("  stuck fast path: %ld switches, solves off %ld / on %ld, breakaways asked %ld, x %.17g\n", L[0].count,
-           H[0].solves, H[1].solves, H[1].asks, s[0].X[0]);
+    printf("  stuck fast path: %ld switches, solves off %ld / on %ld, breakaways asked %ld, x %.17g\n", R.L[0].count,
+           R.H[0].solves, R.H[1].solves, R.H[1].asks, R.s[0].X[0]);
     check_context(T, "one block, located, the stuck fast path against the steps one by one");
-    CHECK(L[0].count >= 10);
+    CHECK(R.L[0].count >= 10);
     /* the breakaway placed by the model's closed form with the fast path off too (the same numbers);
      * on, asked for the stuck stretches as well (the inline runs call the block's hooks directly) */
-    CHECK(H[0].asks > 0 && H[1].asks > H[0].asks);
-    CHECK(4 * H[1].solves < 3 * H[0].solves); /* (the stick phases outside the window skipped) */
+    CHECK(R.H[0].asks > 0 && R.H[1].asks > R.H[0].asks);
+    CHECK(4 * R.H[1].solves < 3 * R.H[0].solves); /* (the stick phases outside the window skipped) */
     for (int r = 1; r < 4; r++) {
-        CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
+        CHECK(same_bits(&R.s[0], &R.s[r], &R.L[0], &R.L[r]));
         /* the same phases off (r = 2) and on (r = 3) through either build; on, a stuck stretch taken at
          * once is one phase (fewer phases, the same time observed to rounding, the same positions) */
         const int ref = r & 1;
-        CHECK(H[r].phases == H[ref].phases && H[r].t_sum == H[ref].t_sum && H[r].x_max == H[ref].x_max);
-        CHECK(H[r].phases <= H[0].phases && fabs(H[r].t_sum - H[0].t_sum) <= 1e-12 * H[0].t_sum &&
-              H[r].x_max == H[0].x_max);
+        CHECK(R.H[r].phases == R.H[ref].phases && R.H[r].t_sum == R.H[ref].t_sum && R.H[r].x_max == R.H[ref].x_max);
+        CHECK(R.H[r].phases <= R.H[0].phases && fabs(R.H[r].t_sum - R.H[0].t_sum) <= 1e-12 * R.H[0].t_sum &&
+              R.H[r].x_max == R.H[0].x_max);
     }
-    CHECK(H[1].phases < H[0].phases);
-    CHECK(H[0].phases > 100);
+    CHECK(R.H[1].phases < R.H[0].phases);
+    CHECK(R.H[0].phases > 100);
     for (int r = 0; r < 4; r++) {
-        eng_state_free(E[r], &s[r]);
-        eng_destroy(E[r]);
+        eng_state_free(R.E[r], &R.s[r]);
+        eng_destroy(R.E[r]);
+    }
+}
+
+/* The fused loop (engine_step.h's fused_steps: held inputs, no energy accounts) against the general
+ * path (the same run with the energy accounts, which take every step through step_located and
+ * step_lcp): one block, stick-dominated, on a coarse grid (50 steps per period: switches inside most
+ * of the steps that hold one), the three schemes through engine.c and inlined, an observer's window
+ * [12, 30] inside the run: the same bits, counters and switches, and the same observed phases (the
+ * fused loop's declined step handing its trial to the general path, the stuck step the stuck fast
+ * path declines taken in the loop, the window's test once per run). */
+static void test_fused_vs_general(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    static const size_t idx[1] = {0};
+    static const double w1[1] = {1.0};
+    const eng_row row = {1, idx, w1};
+    const double N[1] = {0.7}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
+    const eng_inputs *in1 = &HELD_NONE, *in2 = &HELD_F;
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        four_runs R;
+        for (int r = 0; r < 4; r++) { /* r: 0 generic general, 1 generic fused, 2 inline general, 3 inline fused */
+            osc_eng_model B;
+            unit_block(&B);
+            eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, scheme, 1.0);
+            S.h = 4.0 * DFO_PI / 50.0;
+            const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+            S.ops = ops;
+            S.account_energy = !(r & 1);
+            R.E[r] = run_observed(T, &S, (r < 2) ? &GENERIC : &BLOCK, in1, in2, 30.0, 30, &R.H[r], &R.L[r], &R.s[r]);
+        }
+        printf("  fused loop, %-10s: %ld switches, %lld steps, %ld phases observed, x %.17g\n", names[scheme],
+               R.L[0].count, R.s[0].steps, R.H[0].phases, R.s[0].X[0]);
+        check_context(T, "one block, %s: the fused loop against the general path", names[scheme]);
+        CHECK(R.L[0].count >= 10);
+        CHECK(R.H[0].phases > 50);
+        for (int r = 1; r < 4; r++) {
+            CHECK(same_bits(&R.s[0], &R.s[r], &R.L[0], &R.L[r]));
+            CHECK(R.H[r].phases == R.H[0].phases && !memcmp(&R.H[r].t_sum, &R.H[0].t_sum, sizeof(double)) &&
+                  R.H[r].x_max == R.H[0].x_max);
+        }
+        for (int r = 0; r < 4; r++) {
+            eng_state_free(R.E[r], &R.s[r]);
+            eng_destroy(R.E[r]);
+        }
     }
 }
 
@@ -763,6 +831,7 @@ int main(void)
     checks *T = &C;
     test_block(T);
     test_stuck_fast_path(T);
+    test_fused_vs_general(T);
     test_vs_stepper(T);
     test_chain(T);
     test_chain_sparse(T);
