@@ -78,6 +78,7 @@ static inline double dfo_pow2(int k)
 #define dfo_exp exp
 #define dfo_expm1 expm1
 #define dfo_acos acos
+#define dfo_atan2 atan2
 static inline void dfo_sincos(double x, double *s, double *c)
 {
     *s = sin(x);
@@ -101,6 +102,8 @@ double dfo_cos(double x);
 double dfo_exp(double x);
 double dfo_expm1(double x);
 double dfo_acos(double x);
+/* atan2(y, x) (IEEE's special values), within a few ulps of libm, the same bits on every platform */
+double dfo_atan2(double y, double x);
 /* x^y for x > 0 finite and y finite, the same bits on every platform (no libm): exp(y log x) with
  * log x to about an ulp, so within 8 + 3 |y ln x| ulp of libm (tests/platforms/test_dmath.c). */
 double dfo_pow_pos(double x, double y); /* NaN for x <= 0 or not finite */

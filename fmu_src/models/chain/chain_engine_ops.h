@@ -58,6 +58,7 @@ typedef struct chain_eng_ops_s {
     const double *m;              /* masses */
     const double *Kd, *Ko;        /* K: diagonal, and Ko[i] coupling i and i + 1 (0 on the last) */
     const double *Cd, *Co;        /* C likewise */
+    const double *P0, *phi;       /* each block's force amplitude and phase (its closed-form breakaway) */
     int damped;                   /* C is not 0 */
     double *d[ENG_NSLOTS];        /* each slot's M_hat: diagonal, */
     double *e[ENG_NSLOTS];        /* off-diagonal (e[n - 1] = 0), */
@@ -388,14 +389,14 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
 }
 
 /* Block j held at rest with the loads (u, Fb) and its static force u - (K x)_j: its next breakaway
- * from ta under its excitation Pc cos(omega t + phi0) - Ps sin(omega t + phi0) (friction.h). */
-static inline double chain_op_block_breakaway(const eng_harmonic *exc, size_t j, double u, double Fb, double kx,
-                                              double ta)
+ * from ta under its excitation P0_j cos(omega t + phi_j) (friction.h), from the block's own
+ * amplitude and phase (not from the engine's Pc, Ps: libm's hypot and atan2 differ in their last
+ * bits between platforms). */
+static inline double chain_op_block_breakaway(const chain_eng_ops *C, const eng_harmonic *exc, size_t j, double u,
+                                              double Fb, double kx, double ta)
 {
-    const double Pc = exc->Pc ? exc->Pc[j] : 0.0, Ps = exc->Ps ? exc->Ps[j] : 0.0;
     dfo_harmonic H;
-    if (Ps == 0.0) dfo_harmonic_init(&H, Pc, exc->omega, exc->phi0);
-    else dfo_harmonic_init(&H, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
+    dfo_harmonic_init(&H, C->P0[j], exc->omega, C->phi[j]);
     dfo_loads L;
     dfo_loads_set(&L, u, 0.0, 0.0, 0.0);
     L.Fb = Fb;
@@ -420,7 +421,7 @@ static inline double chain_op_breakaway(void *ctx, const eng_harmonic *exc, cons
     double tb = INFINITY;
     for (size_t i = 0; i < C->n; i++) {
         const double u = in->F_ext ? in->F_ext[i] : 0.0;
-        const double t = chain_op_block_breakaway(exc, i, u, Fb[i], chain_op_Kx(C, s->X, i), s->t);
+        const double t = chain_op_block_breakaway(C, exc, i, u, Fb[i], chain_op_Kx(C, s->X, i), s->t);
         if (isnan(t)) return NAN;
         if (t < tb) tb = t;
     }
@@ -436,7 +437,7 @@ static inline double chain_op_contact_breakaway(void *ctx, size_t j, const eng_h
     for (size_t k = (j > 0) ? j - 1 : j; k <= j + 1 && k < C->n; k++)
         if (k != j && !(s->mode[k] == 0 && Fb[k] > 0.0)) return NAN;
     const double u = (in && in->F_ext) ? in->F_ext[j] : 0.0;
-    return chain_op_block_breakaway(exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
+    return chain_op_block_breakaway(C, exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
 }
 
 /* The fused step's acceptance (engine.h's eng_held_step): X, A, V, hA and F from its x_pred, V1, f. */
@@ -739,6 +740,8 @@ static inline void chain_op_span_bind(void *ctx, const size_t *dofs, const int *
     V->Ko = C->Ko + o;
     V->Cd = C->Cd + o;
     V->Co = C->Co + o;
+    V->P0 = C->P0 + o;
+    V->phi = C->phi + o;
     V->damped = C->damped;
     V->fix_lo = ghost[0];
     V->fix_hi = ghost[nd - 1];

@@ -114,6 +114,8 @@ static eng *make_engine(chain_model *M, const char **err)
     O->n = n;
     O->m = M->m;
     O->Kd = M->Kd;
+    O->P0 = M->P0;
+    O->phi = M->phi;
     O->Ko = M->Ko;
     O->Cd = M->Cd;
     O->Co = M->Co;

@@ -177,9 +177,9 @@ static inline double osc_breakaway(void *ctx, const eng_harmonic *exc, const eng
     const osc_eng_model *O = (const osc_eng_model *)ctx;
     const double Pc = exc->Pc ? exc->Pc[0] : 0.0, Ps = exc->Ps ? exc->Ps[0] : 0.0;
     const double F = in->F_ext ? in->F_ext[0] : 0.0;
-    dfo_harmonic P;
+    dfo_harmonic P; /* (amplitude and phase without libm's hypot and atan2: the same bits everywhere) */
     if (Ps == 0.0) dfo_harmonic_init(&P, Pc, exc->omega, exc->phi0);
-    else dfo_harmonic_init(&P, hypot(Pc, Ps), exc->omega, exc->phi0 + atan2(Ps, Pc));
+    else dfo_harmonic_init(&P, sqrt(Pc * Pc + Ps * Ps), exc->omega, exc->phi0 + dfo_atan2(Ps, Pc));
     dfo_loads L;
     dfo_loads_set(&L, F, 0.0, 0.0, 0.0);
     L.Fb = Fb[0];
