@@ -1293,15 +1293,23 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         double ta;
         begin_phase(E, s, &ta, hk);
         const double r = (phase == 0) ? hh : t_end - s->t;
-        for (size_t j = 0; j < nc; j++) {
-            E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
-            if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
-            E->cand[j] = 0;
+        /* a declined fused step of the state as it is (held_steps', fused_steps') has set the modes
+         * and limits of its trial as below (the same modes: it switched none) */
+        const int ready = phase == 0 && (E->held_ready || E->fused_ready);
+        if (ready) {
+            if (nc) memset(E->cand, 0, nc * sizeof(int));
+        } else {
+            for (size_t j = 0; j < nc; j++) {
+                E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
+                if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
+                E->cand[j] = 0;
+            }
         }
         trial T;
         int fused = ENG_HELD_UNTRIED;
         if (phase == 0 && fused_ok(E, in, hh)) {
-            for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            if (!ready)
+                for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
             fused = held_step(E, s, t_end, &T);
             if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
             if (fused == ENG_HELD_TAKEN) {

@@ -25,6 +25,9 @@
 #define ENG_STEP_RUN(E, F, s) chain_op_step_run(ENG_CTX(E), (F), (s))
 #define ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb) chain_op_contact_breakaway(ENG_CTX(E), (j), &(E)->S.exc, (s), (in), (Fb))
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
+/* contact j's row is e_j (a span's too: its contacts are its blocks, in the same local numbering):
+ * row_dot's 0.0 + 1.0 x_j */
+#define ENG_ROW_DOT(E, j, x) ((void)(E), 0.0 + (x)[(j)])
 #define ENG_BREAKAWAY(E, s, in, Fb) chain_op_breakaway(ENG_CTX(E), &(E)->S.exc, (s), (in), (Fb))
 
 #include "engine_step.h"
