@@ -41,6 +41,7 @@ struct eng {
                                   * LCP's sliding limit (Stribeck: min(mu_s, mu_k) N) */
     const double *vb;            /* nc: belts of the current call (the inputs' or zeros) */
     const eng_inputs *loads_for; /* the held inputs the loads above are of (NULL: none; loads_at) */
+    int all_friction;            /* every contact has friction under these loads (Fb > 0: no mode follows a slip) */
     dfo_bossak_kin kin_grid;     /* the kinematics of a grid step h */
     double *zero_nc;
     /* per-DOF workspace */

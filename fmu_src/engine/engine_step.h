@@ -210,6 +210,7 @@ static ENG_HOT void loads_at(eng *E, const eng_inputs *in, double t)
     const eng_setup *S = &E->S;
     if (in && in == E->loads_for) return;
     const int rp = ramped(in);
+    int fr = 1;
     E->loads_for = rp ? NULL : in;
     for (size_t i = 0; i < ENG_N(E); i++)
         E->u[i] = !in ? 0.0 : rp ? poly_at(in->F_ext, in->dF_ext, in, i, t) : (in->F_ext ? in->F_ext[i] : 0.0);
@@ -221,7 +222,9 @@ static ENG_HOT void loads_at(eng *E, const eng_inputs *in, double t)
         E->Fb[j] = E->mu_b[j] * N;
         const int strib = S->law && S->law[j].law == DFO_LAW_STRIBECK;
         E->mlN[j] = strib ? fmin(S->law[j].mu_s, S->law[j].mu_k) * N : E->mukN[j];
+        fr &= E->Fb[j] > 0.0;
     }
+    E->all_friction = fr;
     E->vb = (in && in->v_belt) ? in->v_belt : E->zero_nc;
 }
 
@@ -1008,8 +1011,9 @@ static ENG_HOT void held_done(eng *E, eng_state *s, double t_end, int rested, do
 {
     s->solves++;
     s->t = t_end;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    if (!E->all_friction)
+        for (size_t j = 0; j < ENG_NC(E); j++)
+            if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
     if (rested) rest_exact(E, s);
     observe(E, s, ta, s->F, hk);
 }
@@ -1336,8 +1340,9 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (ncand == 0) {
             finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
-            for (size_t j = 0; j < nc; j++)
-                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+            if (!E->all_friction)
+                for (size_t j = 0; j < nc; j++)
+                    if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
             rest_exact(E, s);
             observe(E, s, ta, s->F, hk);
             return ENG_OK;
@@ -1547,8 +1552,9 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     /* everything in the current modes first */
     finish(E, s, T, E->V1, E->f, t_end);
     s->t = t_end;
-    for (size_t j = 0; j < nc; j++)
-        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    if (!E->all_friction)
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
     rest_exact(E, s);
     eng *B = E->sub;
     eng_state *b = &E->ss;
@@ -1913,10 +1919,13 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
     int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
     int frictionless = 0; /* contacts whose modes follow their slip */
     memset(pin, 0, n * sizeof(int));
+    /* (and the steps' modes and limits, as step_located sets them, in the same pass) */
     for (size_t j = 0; j < nc; j++) {
-        const int held = s->mode[j] == 0 && has_friction(E, j);
-        frictionless |= !has_friction(E, j);
+        const int fr = has_friction(E, j), held = s->mode[j] == 0 && fr;
+        frictionless |= !fr;
         all_held &= held;
+        E->st[j] = !fr ? 1 : s->mode[j];
+        E->lim[j] = held ? E->Fb[j] : E->mlN[j];
         if (held && S->rows[j].nnz == 1) {
             rl[nrl++] = (int)j;
             pin[S->rows[j].idx[0]] = 1;
@@ -1924,16 +1933,14 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
     }
     int rb = 0; /* the first step's A re-based (E->A0, by rebase as trial_step's) */
     if (a != 0.0) {
+        int other = 0; /* (a DOF not pinned whose A is of another length: then rebases' test) */
+        for (size_t i = 0; i < n; i++) other |= (h != s->hA[i]) & (pin[i] == 0);
         const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t);
-        for (size_t i = 0; i < n && !rb; i++) rb = h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol);
+        for (size_t i = 0; i < n && other && !rb; i++) rb = h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol);
     }
     const dfo_bossak_kin *K = &E->kin_grid;
     const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
-    for (size_t j = 0; j < nc; j++) {
-        E->st[j] = !has_friction(E, j) ? 1 : s->mode[j];
-        E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
-    }
     if (all_held) {
         for (size_t i = 0; i < n; i++) E->pin[i] = 0;
         for (size_t j = 0; j < nc; j++)
