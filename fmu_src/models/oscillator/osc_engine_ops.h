@@ -46,32 +46,73 @@ typedef struct {
     dfo_state *s;
 } osc_observables;
 
+/* The observables as one phase after another updates them: the window and the state's values, kept
+ * in locals over a run of the engine's fused steps (ENG_OBS_RUN, osc_engine.c) so that they stay in
+ * registers, written back when the run ends (on: the observer is osc_eng_observe's; else the steps
+ * call the observer's function). */
+typedef struct {
+    int on, observed;
+    double w0, w1, stuck_from, t_stuck, x_max, x_min, E_friction;
+} osc_obs_vals;
+
+static inline void osc_obs_load(osc_obs_vals *R, const osc_observables *O)
+{
+    const dfo_state *s = O->s;
+    R->w0 = O->w0;
+    R->w1 = O->w1;
+    R->stuck_from = s->stuck_from;
+    R->t_stuck = s->t_stuck;
+    R->x_max = s->x_max;
+    R->x_min = s->x_min;
+    R->E_friction = s->E_friction;
+    R->observed = s->observed;
+}
+
+static inline void osc_obs_store(const osc_obs_vals *R, const osc_observables *O)
+{
+    dfo_state *s = O->s;
+    s->stuck_from = R->stuck_from;
+    s->t_stuck = R->t_stuck;
+    s->x_max = R->x_max;
+    s->x_min = R->x_min;
+    s->E_friction = R->E_friction;
+    s->observed = R->observed;
+}
+
 /* A phase [ta, tb] that overlaps the window (the engine calls no other): the stuck stretch opened or
  * closed at its start (its part inside the window added in one piece when a phase in another mode
  * begins, so that the stuck time is the same however the steps are taken), and where it ends inside
  * the window X sampled and the friction's work on the relative motion counted (none where it ends
  * on the window's start). */
+static inline void osc_obs_phase(osc_obs_vals *R, const eng_phase *ph)
+{
+    const double ta = ph->ta, tb = ph->tb;
+    if (ph->mode0[0] == 0) {
+        if (isnan(R->stuck_from)) R->stuck_from = ta;
+    } else if (!isnan(R->stuck_from)) {
+        const double d = osc_in_window(R->w0, R->w1, R->stuck_from, ta);
+        if (d > 0.0) R->t_stuck += d;
+        R->stuck_from = NAN;
+    }
+    if (tb < R->w0 || tb > R->w1) return;
+    const double X = ph->X1[0], dX = X - ph->X0[0];
+    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
+    if (!R->observed) { R->x_max = R->x_min = X; R->observed = 1; }
+    if (!(tb > R->w0)) W = 0.0;
+    R->x_max = (X > R->x_max) ? X : R->x_max;
+    R->x_min = (X < R->x_min) ? X : R->x_min;
+    R->E_friction -= W;
+}
+
+/* The observer's call for one phase (ctx: an osc_observables) */
 static inline void osc_observe_phase(void *ctx, const eng_phase *ph, const eng_state *es)
 {
     const osc_observables *O = (const osc_observables *)ctx;
-    dfo_state *s = O->s;
-    const double ta = ph->ta, tb = ph->tb;
-    if (ph->mode0[0] == 0) {
-        if (isnan(s->stuck_from)) s->stuck_from = ta;
-    } else if (!isnan(s->stuck_from)) {
-        const double d = osc_in_window(O->w0, O->w1, s->stuck_from, ta);
-        if (d > 0.0) s->t_stuck += d;
-        s->stuck_from = NAN;
-    }
-    if (tb < O->w0 || tb > O->w1) return;
     (void)es;
-    const double X = ph->X1[0], dX = X - ph->X0[0];
-    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
-    if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
-    if (!(tb > O->w0)) W = 0.0;
-    s->x_max = (X > s->x_max) ? X : s->x_max;
-    s->x_min = (X < s->x_min) ? X : s->x_min;
-    s->E_friction -= W;
+    osc_obs_vals R;
+    osc_obs_load(&R, O);
+    osc_obs_phase(&R, ph);
+    osc_obs_store(&R, O);
 }
 
 /* ---- the operators ----------------------------------------------------------------------------- */
