@@ -19,9 +19,10 @@
  *                                in closed form (eng_sparse)
  *   ENG_ROW_DOT(E, j, x)         w_j . x for the contact rows it knows (a slip; row_dot's arithmetic)
  *   ENG_OBSERVE(obs, ph, s)      the observer's call (obs->on_phase), for a model that inlines its own
- *   ENG_OBS_RUN, ENG_OBS_RUN_BEGIN(obs, R), ENG_OBS_RUN_PHASE(obs, R, ph, s), ENG_OBS_RUN_END(obs, R)
+ *   ENG_OBS_RUN, ENG_OBS_RUN_BEGIN(obs, R, s), ENG_OBS_RUN_PHASE(obs, R, ph, s), ENG_OBS_RUN_END(obs, R)
  *                                the observer over a run of fused steps: R, a local of type ENG_OBS_RUN,
- *                                set up by _BEGIN (obs may be NULL), each observed step's phase given to
+ *                                set up by _BEGIN (obs may be NULL; s the state at the run's start, its
+ *                                phases begin at or after s->t), each observed step's phase given to
  *                                _PHASE, R written back by _END when the run ends (a model keeps its
  *                                observables in registers over the run; by default R is unused and
  *                                _PHASE is ENG_OBSERVE)
@@ -106,7 +107,7 @@
 #endif
 #ifndef ENG_OBS_RUN
 #define ENG_OBS_RUN int
-#define ENG_OBS_RUN_BEGIN(obs, R) ((void)(obs), (void)((R) = 0))
+#define ENG_OBS_RUN_BEGIN(obs, R, s) ((void)(obs), (void)(s), (void)((R) = 0))
 #define ENG_OBS_RUN_PHASE(obs, R, ph, s) ((void)(R), ENG_OBSERVE(obs, ph, s))
 #define ENG_OBS_RUN_END(obs, R) ((void)(obs), (void)(R))
 #endif
@@ -1694,7 +1695,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const int obs_all = obs && !(s->t0 + (double)(s->n_grid + 1) * S->h < obs_t0) && !(t_target > obs_t1);
     const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
     ENG_OBS_RUN obs_run; /* the observer's values over the run (ENG_OBS_RUN_BEGIN) */
-    ENG_OBS_RUN_BEGIN(obs, obs_run);
+    ENG_OBS_RUN_BEGIN(obs, obs_run, s);
     const eng_harmonic *H = &S->exc;
     eng_problem P;
     P.slot = ENG_SLOT_GRID;

@@ -79,11 +79,25 @@ void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_o
 
 /* The observables over a run of fused steps (engine_step.h's ENG_OBS_RUN): in locals where the
  * observer is osc_eng_observe, else R unused (the observer's own function called) */
-static inline void osc_obs_run_begin(const eng_observer *obs, osc_obs_vals *R)
+static inline void osc_obs_run_begin(const eng_observer *obs, osc_obs_vals *R, double t)
 {
     memset(R, 0, sizeof *R);
     R->on = obs && obs->on_phase == osc_eng_observe;
     if (R->on) osc_obs_load(R, (const osc_observables *)obs->ctx);
+    R->inside = R->on && R->observed && t >= R->w0;
+}
+
+/* A phase of the run: inside the window once open and sampled, only its end's side of the window
+ * tested (the phase ends after the run's start, so after w0) */
+static inline void osc_obs_run_phase(osc_obs_vals *R, const eng_phase *ph)
+{
+    if (!R->inside) {
+        osc_obs_phase(R, ph);
+        return;
+    }
+    osc_obs_stuck(R, ph->mode0[0], ph->ta);
+    if (ph->tb > R->w1) return;
+    osc_obs_sample(R, ph, 1);
 }
 
 /* Another observer's call for a phase of the run, out of line and from the phase's values (the run's
@@ -110,9 +124,9 @@ static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, doub
     (((obs)->on_phase == osc_eng_observe) ? osc_observe_phase((obs)->ctx, (ph), (s))                                \
                                           : (obs)->on_phase((obs)->ctx, (ph), (s)))
 #define ENG_OBS_RUN osc_obs_vals
-#define ENG_OBS_RUN_BEGIN(obs, R) osc_obs_run_begin((obs), &(R))
+#define ENG_OBS_RUN_BEGIN(obs, R, s) osc_obs_run_begin((obs), &(R), (s)->t)
 #define ENG_OBS_RUN_PHASE(obs, R, ph, s)                                                                            \
-    ((R).on ? osc_obs_phase(&(R), (ph))                                                                             \
+    ((R).on ? osc_obs_run_phase(&(R), (ph))                                                                           \
             : osc_obs_run_call((obs), (ph)->ta, (ph)->tb, (ph)->X0[0], (ph)->X1[0], (ph)->mode0[0], (ph)->f[0],      \
                                (ph)->v_belt, (s)))
 #define ENG_OBS_RUN_END(obs, R) ((R).on ? osc_obs_store(&(R), (const osc_observables *)(obs)->ctx) : (void)0)

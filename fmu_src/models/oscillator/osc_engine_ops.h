@@ -52,6 +52,7 @@ typedef struct {
  * call the observer's function). */
 typedef struct {
     int on, observed;
+    int inside;  /* a sample taken and the window open at the run's start (its phases end after w0) */
     double w0, w1, stuck_from, t_stuck, x_max, x_min, E_friction;
 } osc_obs_vals;
 
@@ -84,24 +85,36 @@ static inline void osc_obs_store(const osc_obs_vals *R, const osc_observables *O
  * begins, so that the stuck time is the same however the steps are taken), and where it ends inside
  * the window X sampled and the friction's work on the relative motion counted (none where it ends
  * on the window's start). */
-static inline void osc_obs_phase(osc_obs_vals *R, const eng_phase *ph)
+static inline void osc_obs_stuck(osc_obs_vals *R, int mode0, double ta)
 {
-    const double ta = ph->ta, tb = ph->tb;
-    if (ph->mode0[0] == 0) {
+    if (mode0 == 0) {
         if (isnan(R->stuck_from)) R->stuck_from = ta;
     } else if (!isnan(R->stuck_from)) {
         const double d = osc_in_window(R->w0, R->w1, R->stuck_from, ta);
         if (d > 0.0) R->t_stuck += d;
         R->stuck_from = NAN;
     }
-    if (tb < R->w0 || tb > R->w1) return;
+}
+
+/* X sampled at the end of a phase inside the window (a sample taken before), and the friction's
+ * work counted (work: the phase ends after the window's start) */
+static inline void osc_obs_sample(osc_obs_vals *R, const eng_phase *ph, int work)
+{
     const double X = ph->X1[0], dX = X - ph->X0[0];
-    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
-    if (!R->observed) { R->x_max = R->x_min = X; R->observed = 1; }
-    if (!(tb > R->w0)) W = 0.0;
+    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (ph->tb - ph->ta) : dX);
+    if (!work) W = 0.0;
     R->x_max = (X > R->x_max) ? X : R->x_max;
     R->x_min = (X < R->x_min) ? X : R->x_min;
     R->E_friction -= W;
+}
+
+static inline void osc_obs_phase(osc_obs_vals *R, const eng_phase *ph)
+{
+    const double tb = ph->tb;
+    osc_obs_stuck(R, ph->mode0[0], ph->ta);
+    if (tb < R->w0 || tb > R->w1) return;
+    if (!R->observed) { R->x_max = R->x_min = ph->X1[0]; R->observed = 1; }
+    osc_obs_sample(R, ph, tb > R->w0);
 }
 
 /* The observer's call for one phase (ctx: an osc_observables) */
