@@ -296,6 +296,34 @@ static void test_stuck_fast_path(checks *T)
     }
 }
 
+/* The stick-dominated block of the runs below (N mu_s = 0.35 against a unit excitation with a sine
+ * part) in scheme with the step h, its arrays in D; B its operators' model. */
+typedef struct {
+    size_t idx[1];
+    double w[1], N[1], ms[1], mk[1], Pc[1], Ps[1];
+    eng_row row;
+} stick_data;
+
+static eng_setup stick_block(stick_data *D, osc_eng_model *B, int scheme, double h)
+{
+    D->idx[0] = 0;
+    D->w[0] = 1.0;
+    D->N[0] = 0.7;
+    D->ms[0] = 0.5;
+    D->mk[0] = 0.35;
+    D->Pc[0] = cos(0.3);
+    D->Ps[0] = sin(0.3);
+    D->row.nnz = 1;
+    D->row.idx = D->idx;
+    D->row.w = D->w;
+    unit_block(B);
+    eng_setup S = setup_common(1, &D->row, D->N, D->ms, D->mk, D->Pc, D->Ps, scheme, 1.0);
+    S.h = h;
+    const eng_ops ops = {B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+    S.ops = ops;
+    return S;
+}
+
 /* The fused loop (engine_step.h's fused_steps: held inputs, no energy accounts) against the general
  * path (the same run with the energy accounts, which take every step through step_located and
  * step_lcp): one block, stick-dominated, on a coarse grid (50 steps per period: switches inside most
@@ -306,20 +334,13 @@ static void test_stuck_fast_path(checks *T)
 static void test_fused_vs_general(checks *T)
 {
     static const char *const names[] = {"", "paper", "consistent", "located"};
-    static const size_t idx[1] = {0};
-    static const double w1[1] = {1.0};
-    const eng_row row = {1, idx, w1};
-    const double N[1] = {0.7}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
     const eng_inputs *in1 = &HELD_NONE, *in2 = &HELD_F;
     for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
         four_runs R;
         for (int r = 0; r < 4; r++) { /* r: 0 generic general, 1 generic fused, 2 inline general, 3 inline fused */
             osc_eng_model B;
-            unit_block(&B);
-            eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, scheme, 1.0);
-            S.h = 4.0 * DFO_PI / 50.0;
-            const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
-            S.ops = ops;
+            stick_data D;
+            eng_setup S = stick_block(&D, &B, scheme, 4.0 * DFO_PI / 50.0);
             S.account_energy = !(r & 1);
             R.E[r] = run_observed(T, &S, (r < 2) ? &GENERIC : &BLOCK, in1, in2, 30.0, 30, &R.H[r], &R.L[r], &R.s[r]);
         }
@@ -355,10 +376,6 @@ static void other_observe(void *ctx, const eng_phase *ph, const eng_state *s) { 
 static void test_observables_in_run(checks *T)
 {
     static const char *const names[] = {"", "paper", "consistent", "located"};
-    static const size_t idx[1] = {0};
-    static const double w1[1] = {1.0};
-    const eng_row row = {1, idx, w1};
-    const double N[1] = {0.7}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
     for (int k = 0; k < 6; k++) {
         const int scheme = DFO_SCHEME_PAPER + k / 2;
         const double w0 = (k % 2) ? 20.0 : 12.0; /* the window opened inside a call, or where one starts */
@@ -368,11 +385,8 @@ static void test_observables_in_run(checks *T)
         switch_log L[3];
         for (int r = 0; r < 3; r++) { /* r: 0 general, 1 fused, 2 fused with another observer's function */
             osc_eng_model B;
-            unit_block(&B);
-            eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, scheme, 1.0);
-            S.h = 0.125; /* (20 s a grid point) */
-            const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
-            S.ops = ops;
+            stick_data D;
+            eng_setup S = stick_block(&D, &B, scheme, 0.125); /* (20 s a grid point) */
             S.account_energy = r == 0;
             memset(&d[r], 0, sizeof d[r]);
             d[r].stuck_from = NAN;

@@ -56,28 +56,25 @@ typedef struct {
     double w0, w1, stuck_from, t_stuck, x_max, x_min, E_friction;
 } osc_obs_vals;
 
+/* the state's observables osc_obs_vals keeps (every field but on, inside, w0, w1) */
+#define OSC_OBS_FIELDS(X) X(stuck_from) X(t_stuck) X(x_max) X(x_min) X(E_friction) X(observed)
+
 static inline void osc_obs_load(osc_obs_vals *R, const osc_observables *O)
 {
     const dfo_state *s = O->s;
     R->w0 = O->w0;
     R->w1 = O->w1;
-    R->stuck_from = s->stuck_from;
-    R->t_stuck = s->t_stuck;
-    R->x_max = s->x_max;
-    R->x_min = s->x_min;
-    R->E_friction = s->E_friction;
-    R->observed = s->observed;
+#define OSC_OBS_LOAD_(f) R->f = s->f;
+    OSC_OBS_FIELDS(OSC_OBS_LOAD_)
+#undef OSC_OBS_LOAD_
 }
 
 static inline void osc_obs_store(const osc_obs_vals *R, const osc_observables *O)
 {
     dfo_state *s = O->s;
-    s->stuck_from = R->stuck_from;
-    s->t_stuck = R->t_stuck;
-    s->x_max = R->x_max;
-    s->x_min = R->x_min;
-    s->E_friction = R->E_friction;
-    s->observed = R->observed;
+#define OSC_OBS_STORE_(f) s->f = R->f;
+    OSC_OBS_FIELDS(OSC_OBS_STORE_)
+#undef OSC_OBS_STORE_
 }
 
 /* A phase [ta, tb] that overlaps the window (the engine calls no other): the stuck stretch opened or
