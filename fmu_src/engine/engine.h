@@ -363,7 +363,8 @@ typedef struct {
  * between switches, is a phase. It reads the phase (ph) and the state s after it; in a model's
  * specialised fused steps (engine_step.h's ENG_FUSED_N) the state is written back only when a run
  * of them ends, so that there s's time and arrays are those of the run's start (ph->tb and ph->X1
- * are the phase's end). */
+ * are the phase's end). Such a model may also keep its observer's values in locals over the run
+ * (engine_step.h's optional ENG_OBS_RUN hooks; by default on_phase is called for every phase). */
 typedef struct {
     double t_start, t_stop;
     void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);

@@ -19,6 +19,13 @@
  *                                in closed form (eng_sparse)
  *   ENG_ROW_DOT(E, j, x)         w_j . x for the contact rows it knows (a slip; row_dot's arithmetic)
  *   ENG_OBSERVE(obs, ph, s)      the observer's call (obs->on_phase), for a model that inlines its own
+ *   ENG_OBS_RUN, ENG_OBS_RUN_BEGIN(obs, R, s), ENG_OBS_RUN_PHASE(obs, R, ph, s), ENG_OBS_RUN_END(obs, R)
+ *                                the observer over a run of fused steps: R, a local of type ENG_OBS_RUN,
+ *                                set up by _BEGIN (obs may be NULL; s the state at the run's start, its
+ *                                phases begin at or after s->t), each observed step's phase given to
+ *                                _PHASE, R written back by _END when the run ends (a model keeps its
+ *                                observables in registers over the run; by default R is unused and
+ *                                _PHASE is ENG_OBSERVE)
  *   ENG_FUSED_N, ENG_FUSED_NC    the sizes as constants: the fused steps' state in local arrays
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
@@ -97,6 +104,12 @@
 #endif
 #ifndef ENG_OBSERVE
 #define ENG_OBSERVE(obs, ph, s) ((obs)->on_phase((obs)->ctx, (ph), (s)))
+#endif
+#ifndef ENG_OBS_RUN
+#define ENG_OBS_RUN int
+#define ENG_OBS_RUN_BEGIN(obs, R, s) ((void)(obs), (void)(s), (void)((R) = 0))
+#define ENG_OBS_RUN_PHASE(obs, R, ph, s) ((void)(R), ENG_OBSERVE(obs, ph, s))
+#define ENG_OBS_RUN_END(obs, R) ((void)(obs), (void)(R))
 #endif
 
 /* The functions of every step are inlined into the schemes (the state in registers; a call and its
@@ -1695,6 +1708,8 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     /* every step observed: the first grid point in the window, t_target at most its end */
     const int obs_all = obs && !(s->t0 + (double)(s->n_grid + 1) * S->h < obs_t0) && !(t_target > obs_t1);
     const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
+    ENG_OBS_RUN obs_run; /* the observer's values over the run (ENG_OBS_RUN_BEGIN) */
+    ENG_OBS_RUN_BEGIN(obs, obs_run, s);
     const eng_harmonic *H = &S->exc;
     eng_problem P;
     P.slot = ENG_SLOT_GRID;
@@ -1877,9 +1892,10 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             s->n_grid = ng;
 #endif
             const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs};
-            ENG_OBSERVE(obs, &phs, s);
+            ENG_OBS_RUN_PHASE(obs, obs_run, &phs, s);
         }
     }
+    ENG_OBS_RUN_END(obs, obs_run);
     ENG_FUSED_STORE_();
 #undef ENG_FUSED_STORE_
     s->t = t;

@@ -8,7 +8,8 @@
  * oscillator's stepper (scheme.h's dfo_advance: its engine model made per call, the state mapped
  * through dfo_state) against its engine model kept across the calls: the same bits; the located
  * scheme's stuck fast path on against off; the fused loop of held-input grid steps against the
- * general path, the three schemes, observed. */
+ * general path, the three schemes, observed; the oscillator's observables over a fused run against
+ * the general path's. */
 #include "check.h"
 #include "engine_models.h"
 #include "osc_params.h"
@@ -217,19 +218,16 @@ static void unit_block(osc_eng_model *B)
     B->k = 1.0;
 }
 
-/* One block of S from rest through the entry points of X, observed over [12, w1] (its phases counted
- * into H): the inputs in1 to 20 s, then in2 (eng_new_inputs) and communication points every 1.37 s,
- * k_max of them. The final state into s (initialised here), the switches into L. */
-static eng *run_observed(checks *T, const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2,
-                         double w1, int k_max, hook_count *H, switch_log *L, eng_state *s)
+/* One block of S from rest through the entry points of X, observed by obs: the inputs in1 to 20 s,
+ * then in2 (eng_new_inputs) and communication points every 1.37 s, k_max of them. The final state
+ * into s (initialised here), the switches into L. */
+static eng *run_with(checks *T, const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2,
+                     const eng_observer *obs, int k_max, switch_log *L, eng_state *s)
 {
-    memset(H, 0, sizeof *H);
-    H->x_max = -INFINITY;
-    const eng_observer obs = {12.0, w1, count_phase, H};
     eng *E = eng_create(S, &ALLOC, NULL);
     if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
     memset(L, 0, sizeof *L);
-    const eng_hooks hk = {on_switch, L, &obs, 0};
+    const eng_hooks hk = {on_switch, L, obs, 0};
     const double zero[1] = {0.0};
     X->start(E, in1, 0.0, zero, zero, s);
     eng_status st = X->advance(E, in1, s, 20.0, &hk);
@@ -238,6 +236,16 @@ static eng *run_observed(checks *T, const eng_setup *S, const entry *X, const en
     for (int k = 1; k <= k_max && st == ENG_OK; k++) st = X->advance(E, in2, s, 20.0 + 1.37 * k, &hk);
     CHECK(st == ENG_OK);
     return E;
+}
+
+/* run_with observed over [12, w1], its phases counted into H */
+static eng *run_observed(checks *T, const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2,
+                         double w1, int k_max, hook_count *H, switch_log *L, eng_state *s)
+{
+    memset(H, 0, sizeof *H);
+    H->x_max = -INFINITY;
+    const eng_observer obs = {12.0, w1, count_phase, H};
+    return run_with(T, S, X, in1, in2, &obs, k_max, L, s);
 }
 
 /* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a
@@ -288,6 +296,34 @@ static void test_stuck_fast_path(checks *T)
     }
 }
 
+/* The stick-dominated block of the runs below (N mu_s = 0.35 against a unit excitation with a sine
+ * part) in scheme with the step h, its arrays in D; B its operators' model. */
+typedef struct {
+    size_t idx[1];
+    double w[1], N[1], ms[1], mk[1], Pc[1], Ps[1];
+    eng_row row;
+} stick_data;
+
+static eng_setup stick_block(stick_data *D, osc_eng_model *B, int scheme, double h)
+{
+    D->idx[0] = 0;
+    D->w[0] = 1.0;
+    D->N[0] = 0.7;
+    D->ms[0] = 0.5;
+    D->mk[0] = 0.35;
+    D->Pc[0] = cos(0.3);
+    D->Ps[0] = sin(0.3);
+    D->row.nnz = 1;
+    D->row.idx = D->idx;
+    D->row.w = D->w;
+    unit_block(B);
+    eng_setup S = setup_common(1, &D->row, D->N, D->ms, D->mk, D->Pc, D->Ps, scheme, 1.0);
+    S.h = h;
+    const eng_ops ops = {B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+    S.ops = ops;
+    return S;
+}
+
 /* The fused loop (engine_step.h's fused_steps: held inputs, no energy accounts) against the general
  * path (the same run with the energy accounts, which take every step through step_located and
  * step_lcp): one block, stick-dominated, on a coarse grid (50 steps per period: switches inside most
@@ -298,20 +334,13 @@ static void test_stuck_fast_path(checks *T)
 static void test_fused_vs_general(checks *T)
 {
     static const char *const names[] = {"", "paper", "consistent", "located"};
-    static const size_t idx[1] = {0};
-    static const double w1[1] = {1.0};
-    const eng_row row = {1, idx, w1};
-    const double N[1] = {0.7}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
     const eng_inputs *in1 = &HELD_NONE, *in2 = &HELD_F;
     for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
         four_runs R;
         for (int r = 0; r < 4; r++) { /* r: 0 generic general, 1 generic fused, 2 inline general, 3 inline fused */
             osc_eng_model B;
-            unit_block(&B);
-            eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, scheme, 1.0);
-            S.h = 4.0 * DFO_PI / 50.0;
-            const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
-            S.ops = ops;
+            stick_data D;
+            eng_setup S = stick_block(&D, &B, scheme, 4.0 * DFO_PI / 50.0);
             S.account_energy = !(r & 1);
             R.E[r] = run_observed(T, &S, (r < 2) ? &GENERIC : &BLOCK, in1, in2, 30.0, 30, &R.H[r], &R.L[r], &R.s[r]);
         }
@@ -328,6 +357,62 @@ static void test_fused_vs_general(checks *T)
         for (int r = 0; r < 4; r++) {
             eng_state_free(R.E[r], &R.s[r]);
             eng_destroy(R.E[r]);
+        }
+    }
+}
+
+/* The oscillator's observer (osc_eng_observe: osc_observables on a dfo_state) called through
+ * another function pointer: the specialised fused loop calls it out of line from the phase's values */
+static void other_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_observe_phase(ctx, ph, s); }
+
+/* The oscillator's observables over a fused run (its values in registers, ENG_OBS_RUN) against the
+ * general path's (the energy accounts on: every phase observed by its own call) and against the
+ * fused run with the observer called out of line (another function pointer): one block,
+ * stick-dominated, about 50 steps per period, the three schemes, inlined, the window [12, 30] opened in
+ * the middle of a call and closed in another (runs that start inside it, sampled, and runs that
+ * start before it), and [20, 30] opened where a call starts on a grid point (a run inside it, nothing
+ * sampled yet): x_max, x_min, the stuck time, the friction's work and the open stick stretch
+ * the same bits; the motion observed is stick-slip (a stuck time, a dissipated energy, a range). */
+static void test_observables_in_run(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    for (int k = 0; k < 6; k++) {
+        const int scheme = DFO_SCHEME_PAPER + k / 2;
+        const double w0 = (k % 2) ? 20.0 : 12.0; /* the window opened inside a call, or where one starts */
+        dfo_state d[3];
+        eng_state s[3];
+        eng *E[3];
+        switch_log L[3];
+        for (int r = 0; r < 3; r++) { /* r: 0 general, 1 fused, 2 fused with another observer's function */
+            osc_eng_model B;
+            stick_data D;
+            eng_setup S = stick_block(&D, &B, scheme, 0.125); /* (20 s a grid point) */
+            S.account_energy = r == 0;
+            memset(&d[r], 0, sizeof d[r]);
+            d[r].stuck_from = NAN;
+            d[r].x_max = 1e300; /* (not a sample: the first one replaces them) */
+            d[r].x_min = -1e300;
+            osc_observables O = {w0, 30.0, &d[r]};
+            const eng_observer obs = {w0, 30.0, (r == 2) ? other_observe : osc_eng_observe, &O};
+            E[r] = run_with(T, &S, &BLOCK, &HELD_NONE, &HELD_F, &obs, 30, &L[r], &s[r]);
+        }
+        printf("  observables in a fused run, %-10s, [%g, 30]: x in [%.6g, %.6g], stuck %.6g s, E_friction %.6g\n",
+               names[scheme], w0, d[0].x_min, d[0].x_max, d[0].t_stuck, d[0].E_friction);
+        check_context(T, "one block, %s, window from %g: the oscillator's observables in a fused run", names[scheme], w0);
+        CHECK(d[0].observed && d[0].x_max > d[0].x_min && d[0].t_stuck > 0.1 && d[0].t_stuck < 30.0 - w0 &&
+              d[0].E_friction > 0.0);
+        for (int r = 1; r < 3; r++) {
+            CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
+            CHECK(d[r].observed == d[0].observed && !memcmp(&d[r].x_max, &d[0].x_max, sizeof(double)) &&
+                  !memcmp(&d[r].x_min, &d[0].x_min, sizeof(double)) &&
+                  !memcmp(&d[r].t_stuck, &d[0].t_stuck, sizeof(double)) &&
+                  !memcmp(&d[r].E_friction, &d[0].E_friction, sizeof(double)) &&
+                  isnan(d[r].stuck_from) == isnan(d[0].stuck_from) &&
+                  (isnan(d[0].stuck_from) || d[r].stuck_from == d[0].stuck_from));
+        }
+        for (int r = 0; r < 3; r++) {
+            eng_state_free(E[r], &s[r]);
+            eng_destroy(E[r]);
         }
     }
 }
@@ -832,6 +917,7 @@ int main(void)
     test_block(T);
     test_stuck_fast_path(T);
     test_fused_vs_general(T);
+    test_observables_in_run(T);
     test_vs_stepper(T);
     test_chain(T);
     test_chain_sparse(T);

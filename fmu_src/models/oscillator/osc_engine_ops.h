@@ -46,32 +46,83 @@ typedef struct {
     dfo_state *s;
 } osc_observables;
 
+/* The observables as one phase after another updates them: the window and the state's values, kept
+ * in locals over a run of the engine's fused steps (ENG_OBS_RUN, osc_engine.c) so that they stay in
+ * registers, written back when the run ends (on: the observer is osc_eng_observe's; else the steps
+ * call the observer's function). */
+typedef struct {
+    int on, observed;
+    int inside;  /* a sample taken and the window open at the run's start (its phases end after w0) */
+    double w0, w1, stuck_from, t_stuck, x_max, x_min, E_friction;
+} osc_obs_vals;
+
+/* the state's observables osc_obs_vals keeps (every field but on, inside, w0, w1) */
+#define OSC_OBS_FIELDS(X) X(stuck_from) X(t_stuck) X(x_max) X(x_min) X(E_friction) X(observed)
+
+static inline void osc_obs_load(osc_obs_vals *R, const osc_observables *O)
+{
+    const dfo_state *s = O->s;
+    R->w0 = O->w0;
+    R->w1 = O->w1;
+#define OSC_OBS_LOAD_(f) R->f = s->f;
+    OSC_OBS_FIELDS(OSC_OBS_LOAD_)
+#undef OSC_OBS_LOAD_
+}
+
+static inline void osc_obs_store(const osc_obs_vals *R, const osc_observables *O)
+{
+    dfo_state *s = O->s;
+#define OSC_OBS_STORE_(f) s->f = R->f;
+    OSC_OBS_FIELDS(OSC_OBS_STORE_)
+#undef OSC_OBS_STORE_
+}
+
 /* A phase [ta, tb] that overlaps the window (the engine calls no other): the stuck stretch opened or
  * closed at its start (its part inside the window added in one piece when a phase in another mode
  * begins, so that the stuck time is the same however the steps are taken), and where it ends inside
  * the window X sampled and the friction's work on the relative motion counted (none where it ends
  * on the window's start). */
+static inline void osc_obs_stuck(osc_obs_vals *R, int mode0, double ta)
+{
+    if (mode0 == 0) {
+        if (isnan(R->stuck_from)) R->stuck_from = ta;
+    } else if (!isnan(R->stuck_from)) {
+        const double d = osc_in_window(R->w0, R->w1, R->stuck_from, ta);
+        if (d > 0.0) R->t_stuck += d;
+        R->stuck_from = NAN;
+    }
+}
+
+/* X sampled at the end of a phase inside the window (a sample taken before), and the friction's
+ * work counted (work: the phase ends after the window's start) */
+static inline void osc_obs_sample(osc_obs_vals *R, const eng_phase *ph, int work)
+{
+    const double X = ph->X1[0], dX = X - ph->X0[0];
+    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (ph->tb - ph->ta) : dX);
+    if (!work) W = 0.0;
+    R->x_max = (X > R->x_max) ? X : R->x_max;
+    R->x_min = (X < R->x_min) ? X : R->x_min;
+    R->E_friction -= W;
+}
+
+static inline void osc_obs_phase(osc_obs_vals *R, const eng_phase *ph)
+{
+    const double tb = ph->tb;
+    osc_obs_stuck(R, ph->mode0[0], ph->ta);
+    if (tb < R->w0 || tb > R->w1) return;
+    if (!R->observed) { R->x_max = R->x_min = ph->X1[0]; R->observed = 1; }
+    osc_obs_sample(R, ph, tb > R->w0);
+}
+
+/* The observer's call for one phase (ctx: an osc_observables) */
 static inline void osc_observe_phase(void *ctx, const eng_phase *ph, const eng_state *es)
 {
     const osc_observables *O = (const osc_observables *)ctx;
-    dfo_state *s = O->s;
-    const double ta = ph->ta, tb = ph->tb;
-    if (ph->mode0[0] == 0) {
-        if (isnan(s->stuck_from)) s->stuck_from = ta;
-    } else if (!isnan(s->stuck_from)) {
-        const double d = osc_in_window(O->w0, O->w1, s->stuck_from, ta);
-        if (d > 0.0) s->t_stuck += d;
-        s->stuck_from = NAN;
-    }
-    if (tb < O->w0 || tb > O->w1) return;
     (void)es;
-    const double X = ph->X1[0], dX = X - ph->X0[0];
-    double W = ph->f[0] * (ph->v_belt ? dX - ph->v_belt[0] * (tb - ta) : dX);
-    if (!s->observed) { s->x_max = s->x_min = X; s->observed = 1; }
-    if (!(tb > O->w0)) W = 0.0;
-    s->x_max = (X > s->x_max) ? X : s->x_max;
-    s->x_min = (X < s->x_min) ? X : s->x_min;
-    s->E_friction -= W;
+    osc_obs_vals R;
+    osc_obs_load(&R, O);
+    osc_obs_phase(&R, ph);
+    osc_obs_store(&R, O);
 }
 
 /* ---- the operators ----------------------------------------------------------------------------- */
