@@ -376,6 +376,10 @@ typedef struct {
     void *switch_ctx;
     const eng_observer *obs;    /* NULL: none */
     int stop_at_switch;         /* return ENG_SWITCHED at the first switch, the state complete there */
+    int report_turns;           /* a contact without friction reports each change of its mode (its slip's
+                                 * direction) as a switch, at the end of the step that holds it (a
+                                 * model that counts such a block's turns, as its closed form does);
+                                 * else its mode follows its slip silently */
 } eng_hooks;
 
 /* ---- the engine ---------------------------------------------------------------------------------- */

@@ -946,6 +946,20 @@ static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
     if (hk && hk->on_switch) hk->on_switch(hk->switch_ctx, s->t, j, s, from, s->mode[j]);
 }
 
+/* The modes of the contacts without friction: their slip's direction at the state's velocities, a
+ * change reported where the hooks ask for it (eng_hooks.report_turns). */
+static ENG_HOT void free_modes(eng *E, eng_state *s, const eng_hooks *hk)
+{
+    if (E->all_friction) return;
+    const int turns = hk && hk->report_turns;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (has_friction(E, j)) continue;
+        const int from = s->mode[j];
+        s->mode[j] = sgn(slip(E, j, s->V));
+        if (turns && s->mode[j] != from) report(s, j, from, hk);
+    }
+}
+
 /* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
  * holding forces solved together with every stuck contact; the one most beyond its limit starts to
  * slide the way it is driven, and the rest are solved again (the causal cascade). Sets mode[] of
@@ -1024,9 +1038,7 @@ static ENG_HOT void held_done(eng *E, eng_state *s, double t_end, int rested, do
 {
     s->solves++;
     s->t = t_end;
-    if (!E->all_friction)
-        for (size_t j = 0; j < ENG_NC(E); j++)
-            if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    free_modes(E, s, hk);
     if (rested) rest_exact(E, s);
     observe(E, s, ta, s->F, hk);
 }
@@ -1127,7 +1139,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
     for (size_t j = 0; j < nc; j++) {
         const int from = s->mode[j];
         s->mode[j] = has_friction(E, j) ? E->st[j] : sgn(slip(E, j, s->V));
-        if (has_friction(E, j) && s->mode[j] != from) report(s, j, from, hk);
+        if (s->mode[j] != from && (has_friction(E, j) || (hk && hk->report_turns))) report(s, j, from, hk);
     }
     if (consistent) rest_exact(E, s);
     /* the step's modes are its friction problem's (the modes at its end): the phase's */
@@ -1353,9 +1365,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (ncand == 0) {
             finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
-            if (!E->all_friction)
-                for (size_t j = 0; j < nc; j++)
-                    if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+            free_modes(E, s, hk);
             rest_exact(E, s);
             observe(E, s, ta, s->F, hk);
             return ENG_OK;
@@ -1764,6 +1774,10 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     P.limit = lim;
     long long ng = s->n_grid, steps = 0, solves = 0, pivot_steps = 0;
     long long exc_n = s->exc_n;
+    /* the turns of contacts without friction, where reported (eng_hooks.report_turns): the modes
+     * before the run's last step (scratch: smode) */
+    const int turns = hk && hk->report_turns && !E->all_friction;
+    int turned = 0, *const turn_from = E->smode;
     double exc_c = s->exc_c, exc_s = s->exc_s, t = s->t;
     for (;;) {
         const double grid = s->t0 + (double)(ng + 1) * h;
@@ -1871,8 +1885,13 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         }
         for (size_t j = 0; j < nc; j++) F[j] = f[j];
         t = grid;
-        for (size_t j = 0; j < nc; j++)
-            if (!has_friction(E, j)) mode[j] = sgn(slip(E, j, V));
+        for (size_t j = 0; j < nc; j++) { /* (a turn to report ends the run: after it, its report) */
+            if (has_friction(E, j)) continue;
+            const int m = sgn(slip(E, j, V));
+            turn_from[j] = mode[j];
+            turned |= turns & (m != mode[j]);
+            mode[j] = m;
+        }
         if (located || consistent) /* rest_exact */
             for (size_t j = 0; j < nc; j++) {
                 if (mode[j] != 0 || !has_friction(E, j)) continue;
@@ -1894,6 +1913,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs};
             ENG_OBS_RUN_PHASE(obs, obs_run, &phs, s);
         }
+        if (turned) break;
     }
     ENG_OBS_RUN_END(obs, obs_run);
     ENG_FUSED_STORE_();
@@ -1907,6 +1927,9 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     s->solves += solves;
     s->pivot_steps += pivot_steps;
     if (steps > 0) *g_prev = t;
+    if (turned)
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j) && s->mode[j] != turn_from[j]) report(s, j, turn_from[j], hk);
 }
 
 /* The model's fused grid step (eng_sparse.step_held) in a tight loop: the located scheme's grid
@@ -2229,7 +2252,8 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
     const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
-                          S->scheme == DFO_SCHEME_LOCATED;
+                          S->scheme == DFO_SCHEME_LOCATED &&
+                          !(hk && hk->report_turns && !E->all_friction); /* (turns: the general path's) */
     while (s->t < t_target) {
         int declined = 0; /* the stuck fast path declined this grid point */
         if (skip && s->t == g_prev) {

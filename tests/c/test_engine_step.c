@@ -67,7 +67,7 @@ static eng *run(const eng_setup *S, const entry *X, const eng_inputs *in1, const
     eng *E = eng_create(S, &ALLOC, NULL);
     if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
     memset(L, 0, sizeof *L);
-    const eng_hooks hk = {on_switch, L, NULL, 0};
+    const eng_hooks hk = {on_switch, L, NULL, 0, 0};
     X->start(E, in1, 0.0, zeros, zeros, s);
     const eng_inputs *in = in1;
     *status = ENG_OK;
@@ -227,7 +227,7 @@ static eng *run_with(checks *T, const eng_setup *S, const entry *X, const eng_in
     eng *E = eng_create(S, &ALLOC, NULL);
     if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
     memset(L, 0, sizeof *L);
-    const eng_hooks hk = {on_switch, L, obs, 0};
+    const eng_hooks hk = {on_switch, L, obs, 0, 0};
     const double zero[1] = {0.0};
     X->start(E, in1, 0.0, zero, zero, s);
     eng_status st = X->advance(E, in1, s, 20.0, &hk);

@@ -155,6 +155,7 @@ static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hoo
 {
     memset(hk, 0, sizeof *hk);
     hk->on_switch = on_switch;
+    hk->report_turns = 1; /* a block without friction: its turns are mode changes (as the exact scheme's) */
     hk->switch_ctx = H;
     if (!M->p.observe) return;
     H->obs.w0 = M->p.t_obs_start;
