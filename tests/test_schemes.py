@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -115,3 +117,28 @@ def test_inman_departs_below_resonance_where_stiction_lasts(fmu: OscillatorFMU2)
     p = Oscillator.from_nondimensional(lam=0.3, mu_s_sigma=0.3, chi=1.0)
     amp, _ = steady_amplitude(fmu, p)
     assert amp < 0.9 * inman_amplitude(p)
+
+
+def test_frictionless_block_counts_its_turns(fmu_path: Path) -> None:
+    """Without friction (N = 0) a block's mode is its direction of motion, and `transitions` counts
+    its turns in the window. Reference: the sign changes of the closed-form velocity of the undamped
+    block from rest under P0 cos(w t), sampled densely; every scheme counts them within one (the
+    Bossak schemes at the end of the step that holds a turn)."""
+    import fmpy
+
+    m, k, P0, w, t1 = 1.0, 1.0, 1.0, 0.5, 100.0
+    wn = np.sqrt(k / m)
+    # x(t) = P0 / (k - m w^2) (cos(w t) - cos(wn t)) from rest with P = P0 cos(w t)
+    t = np.linspace(0.0, t1, 4_000_001)
+    v = P0 / (k - m * w**2) * (-w * np.sin(w * t) + wn * np.sin(wn * t))
+    s = np.sign(v[1:])
+    turns = int(np.count_nonzero(s[1:] != s[:-1]))
+    counts = {}
+    for scheme in (1, 2, 3, 4):
+        r = fmpy.simulate_fmu(str(fmu_path), stop_time=t1, output_interval=0.5, output=["transitions"],
+                              start_values={"m": m, "k": k, "c": 0.0, "P0": P0, "omega": w, "phi": 0.0,
+                                            "N": 0.0, "scheme": scheme, "observe": True,
+                                            "t_obs_start": 0.0, "t_obs_stop": t1, "h": 2 * np.pi / w / 1000})
+        counts[scheme] = int(r["transitions"][-1])
+    assert turns > 25
+    assert all(abs(c - turns) <= 1 for c in counts.values()), (turns, counts)
