@@ -53,7 +53,7 @@ int main(int argc, char **argv)
     snprintf(expected, sizeof expected, "format version %s", argv[2]);
     printf("refused: %s\n", g_last);
     EXPECT(strstr(g_last, expected) != NULL);
-    EXPECT(strstr(g_last, "reads format version 5") != NULL);
+    EXPECT(strstr(g_last, "reads format version 6") != NULL);
     /* the current format: serialise and deserialise a state of this instance */
     EXPECT(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
     EXPECT(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) <= fmi2Warning);
