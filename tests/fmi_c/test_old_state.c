@@ -63,7 +63,7 @@ int main(int argc, char **argv)
     unsigned char *buf = (unsigned char *)malloc(size);
     fmi2FMUstate s2 = NULL;
     EXPECT(buf && fmi2SerializeFMUstate(c, s, (fmi2Byte *)buf, size) == fmi2OK);
-    EXPECT(buf && memcmp(buf, "DFOSTATE\x05\0\0\0", 12) == 0);
+    EXPECT(buf && memcmp(buf, "DFOSTATE\x06\0\0\0", 12) == 0);
     EXPECT(buf && fmi2DeSerializeFMUstate(c, (const fmi2Byte *)buf, size, &s2) == fmi2OK && s2 != NULL);
     EXPECT(fmi2SetFMUstate(c, s2) == fmi2OK);
     fmi2FreeFMUstate(c, &s);
