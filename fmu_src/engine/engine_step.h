@@ -1354,6 +1354,42 @@ static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
     return 1;
 }
 
+/* The stuck fast path applies (eng_advance's skip: the located scheme on a grid it resolves, the
+ * model's closed-form breakaway, held inputs) and the structure is stuck at rest (stuck_at_rest). */
+static int stuck_rests(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    return S->fast_paths && ENG_HAS_BREAKAWAY(E) && !S->account_energy && S->rate_max * S->h <= STIFF_STEP &&
+           stuck_at_rest(E, in, s);
+}
+
+static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c);
+
+/* The breakaway of the stick of a structure at rest (stuck_rests), kept (E->stick). */
+static double stuck_tb(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    stick_refresh(E, in, s, &E->stick);
+    return E->stick.tb;
+}
+
+/* A stuck step of a structure at rest, as its trial leaves X (V = A = 0: any step's kinematics K) and
+ * rest_exact the rest: X through the predictor and corrector with V1 = V, V at its belt (0), A and hA 0
+ * (F, the time and the counters the caller's). */
+static void stuck_rest(eng *E, eng_state *s, const dfo_bossak_kin *K)
+{
+    const eng_setup *S = &E->S;
+    for (size_t i = 0; i < ENG_N(E); i++)
+        s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const eng_row *R = &S->rows[j];
+        if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+    }
+    for (size_t i = 0; i < ENG_N(E); i++) {
+        s->A[i] = 0.0;
+        s->hA[i] = 0.0;
+    }
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -1382,6 +1418,17 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
                 E->cand[j] = 0;
             }
+        }
+        /* a structure come to rest and stuck inside the step (eng_advance's stuck fast path, ENG_BREAKAWAY):
+         * where its breakaway lies beyond a grid step after the step's end, the remainder is taken as
+         * that path takes a stuck step (stuck_skip: X through the predictor and corrector with V = A =
+         * 0, to the bits of the trial; F left), the breakaway kept for the next grid points */
+        if (phase > 0 && stuck_rests(E, in, s) && t_end + S->h < stuck_tb(E, in, s)) {
+            stuck_rest(E, s, &E->kin_grid);
+            s->t = t_end;
+            s->solves++;
+            observe(E, s, ta, s->F, hk);
+            return ENG_OK;
         }
         trial T;
         int fused = ENG_HELD_UNTRIED;
@@ -2164,14 +2211,6 @@ static void rest_forces(eng *E, eng_state *s)
 
 /* ---- the stuck fast path ------------------------------------------------------------------- */
 
-/* The model's breakaway of the current stick, kept over one call of eng_advance: tb for the stick
- * that holds since the switch count sw (known: asked). */
-typedef struct {
-    double tb;
-    long long sw;
-    int known;
-} stick_cache;
-
 /* The largest grid index m >= s->n_grid with t0 + m h < x (incl: <= x), the grid points computed as
  * eng_advance computes them; s->n_grid when there is none. x finite. */
 static long long grid_below(const eng_state *s, double h, double x, int incl)
@@ -2199,6 +2238,15 @@ static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
     return tb;
 }
 
+/* The stick's breakaway in c, asked of the model where c does not hold it (another stick, or passed). */
+static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c)
+{
+    if (c->known && c->sw == s->switches && s->t < c->tb) return;
+    c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
+    c->sw = s->switches;
+    c->known = 1;
+}
+
 /* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
  * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
@@ -2214,11 +2262,7 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
     const double h = S->h;
     loads_at(E, in, s->t);
     if (!stuck_at_rest(E, in, s)) return s->n_grid;
-    if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
-        c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
-        c->sw = s->switches;
-        c->known = 1;
-    }
+    stick_refresh(E, in, s, c);
     if (isnan(c->tb)) return s->n_grid;
     /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
      * bound below is then past the next grid point: its grid points rise with their index) */
@@ -2240,21 +2284,9 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
 static void stuck_skip(eng *E, eng_state *s, long long m)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E);
     const dfo_bossak_kin *K = &E->kin_grid;
     const long long k = m - s->n_grid;
-    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) {
-        for (size_t i = 0; i < n; i++)
-            s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
-        for (size_t j = 0; j < ENG_NC(E); j++) {
-            const eng_row *R = &S->rows[j];
-            if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
-        }
-        for (size_t i = 0; i < n; i++) {
-            s->A[i] = 0.0;
-            s->hA[i] = 0.0;
-        }
-    }
+    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) stuck_rest(E, s, K);
     double c, sn;
     dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
                    &sn);
@@ -2281,7 +2313,9 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
                      S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
-    stick_cache cache = {NAN, 0, 0};
+    E->stick.tb = NAN;
+    E->stick.sw = 0;
+    E->stick.known = 0;
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
     const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
@@ -2289,7 +2323,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     while (s->t < t_target) {
         int declined = 0; /* the stuck fast path declined this grid point */
         if (skip && s->t == g_prev) {
-            const long long m = stuck_until(E, in, s, t_target, hk, &cache);
+            const long long m = stuck_until(E, in, s, t_target, hk, &E->stick);
             declined = 1;
             if (m > s->n_grid) {
                 double ta;
