@@ -27,6 +27,15 @@
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
 #define DEPENDENT_REL 1e-13      /* a Cholesky pivot below this share of its diagonal: a dependent row */
 
+/* The model's breakaway of the current stick (ENG_BREAKAWAY, or its contacts'), kept over one call of
+ * eng_advance (the stuck fast path's, and the located step's for a stick that begins inside a step):
+ * tb for the stick that holds since the switch count sw (known: asked). */
+typedef struct {
+    double tb;
+    long long sw;
+    int known;
+} stick_cache;
+
 struct eng {
     eng_setup S;
     eng_alloc al;
@@ -52,6 +61,7 @@ struct eng {
     int rpin_ok;                 /* (rebase sets it, with held inputs; cleared with jk_ok) */
     int held_ready;              /* xp, ph, V1, f hold the model's declined fused step from the state as it is
                                   * (held_steps, for held_step's next call; eng_advance clears it) */
+    stick_cache stick;           /* the current stick's breakaway (eng_advance clears it) */
     int fused_ready;             /* xp, ph, V1, f, A0, lim hold fused_steps' declined located grid step from the
                                   * state as it is (a contact switches in it: step_located's phase 0 takes it
                                   * as its trial; eng_advance clears it) */

@@ -112,6 +112,15 @@
 #define ENG_OBS_RUN_END(obs, R) ((void)(obs), (void)(R))
 #endif
 
+/* A model whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC): the fused steps' and the trials'
+ * vectors in local arrays, which the compiler keeps in registers (stores through the engine's arrays
+ * would make it reload every double it reads after them). */
+#if defined(ENG_FUSED_N) && defined(ENG_FUSED_NC)
+#define ENG_FUSED_LOCAL 1
+#else
+#define ENG_FUSED_LOCAL 0
+#endif
+
 /* The functions of every step are inlined into the schemes (the state in registers; a call and its
  * spills are a good part of a small structure's step). The same arithmetic either way. */
 #if defined(__GNUC__)
@@ -780,12 +789,12 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
     return any;
 }
 
-static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, double *A0)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
     const double a = S->alpha;
-    for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
+    for (size_t i = 0; i < n; i++) A0[i] = s->A[i];
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
     /* the pins of the phase's start, kept for its further trials (rpin_ok, cleared with jk_ok) where
      * the loads are held (a ramp's limits may change which contacts have friction) */
@@ -811,7 +820,12 @@ static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, dou
     }
     loads_at(E, in, t1);
     for (size_t i = 0; i < n; i++)
-        if (!pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+        if (!pin[i] && rebases(E, s, i, hh, tol)) A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+}
+
+static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+{
+    rebase_into(E, in, s, hh, t1, E->A0);
 }
 
 static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
@@ -826,24 +840,39 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
     T->cC = 1.0;
     T->cK = E->b * hh / E->g;
     if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
-    rebase(E, in, s, hh, t1);
+#if ENG_FUSED_LOCAL /* (the vectors in locals, stored into the engine's arrays at the end) */
+    double A0[ENG_FUSED_N], xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N];
+#else
+    double *const A0 = E->A0, *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2,
+                 *const ph = E->ph;
+#endif
+    rebase_into(E, in, s, hh, t1, A0);
+    const dfo_bossak_kin K = T->kin;
+    const double g1 = E->g1;
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
     for (size_t i = 0; i < n; i++) {
-        E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
-        E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
+        xp[i] = s->X[i] + K.pred_V * s->V[i] + K.pred_A * A0[i];
+        r[i] = -a * A0[i] + (1.0 - a) * (s->V[i] * K.c1 + g1 * A0[i]);
     }
     if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
         for (size_t k = 0; k < E->ngh; k++) {
             double xg;
             ghost_at(E, E->gidx[k], s->t - E->gt0 + hh, &xg, &E->gve[k], NULL, NULL);
-            E->xp[E->gidx[k]] = xg - T->kin.corr_V * E->gve[k];
+            xp[E->gidx[k]] = xg - K.corr_V * E->gve[k];
         }
-    ENG_APPLY_M(E, E->r, E->y);
-    applied_at(E, s, t1, E->ph);
-    ENG_APPLY_K(E, E->xp, E->y2);
-    for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
+    ENG_APPLY_M(E, r, y);
+    applied_at(E, s, t1, ph);
+    ENG_APPLY_K(E, xp, y2);
+    for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
     if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
-        for (size_t k = 0; k < E->ngh; k++) E->ph[E->gidx[k]] = E->gve[k];
+        for (size_t k = 0; k < E->ngh; k++) ph[E->gidx[k]] = E->gve[k];
+#if ENG_FUSED_LOCAL
+    for (size_t i = 0; i < n; i++) {
+        E->A0[i] = A0[i];
+        E->xp[i] = xp[i];
+        E->ph[i] = ph[i];
+    }
+#endif
     return ENG_OK;
 }
 
@@ -1166,7 +1195,9 @@ static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const doubl
 }
 
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
- * the modes st; returns the smallest margin of the candidates. */
+ * the modes st; returns the smallest margin of the candidates. The phase's last trial is known by
+ * its length (x_last, its T at T_last: margin_fn's in Tm), so that a trial asked for again (the
+ * root's last point, a placed breakaway's) is taken as it stands in the engine's arrays. */
 typedef struct {
     eng *E;
     const eng_inputs *in;
@@ -1174,6 +1205,9 @@ typedef struct {
     double t_step;     /* the internal step's end (the loads' time of a whole remainder) */
     double r;          /* the remainder */
     eng_status err;
+    double x_last;     /* the length of the last trial (NaN: none) */
+    const trial *T_last; /* where its T was written */
+    trial Tm;          /* margin_fn's */
 } margin_ctx;
 
 static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
@@ -1185,6 +1219,8 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     eng_status st = trial_step(E, c->in, c->s, x, t1, T);
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;
+    c->x_last = x;
+    c->T_last = T;
     double g = INFINITY;
     for (size_t j = 0; j < ENG_NC(E); j++) {
         if (!E->cand[j]) continue;
@@ -1194,10 +1230,35 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     return g;
 }
 
+/* A phase's trials from the state s in the modes E->st. */
+static ENG_HOT void margin_init(margin_ctx *c, eng *E, const eng_inputs *in, const eng_state *s, double t_step,
+                                double r)
+{
+    c->E = E;
+    c->in = in;
+    c->s = s;
+    c->t_step = t_step;
+    c->r = r;
+    c->err = ENG_OK;
+    c->x_last = NAN;
+    c->T_last = NULL;
+}
+
 static double margin_fn(void *ctx, double x)
 {
-    trial T;
-    return trial_margin((margin_ctx *)ctx, x, &T);
+    margin_ctx *c = (margin_ctx *)ctx;
+    return trial_margin(c, x, &c->Tm);
+}
+
+/* The phase's trial of length x into T: its last one where it was of that length (the engine's
+ * arrays hold it), else taken. */
+static ENG_HOT void trial_again(margin_ctx *c, double x, trial *T)
+{
+    if (!(x == c->x_last)) {
+        trial_margin(c, x, T);
+        return;
+    }
+    if (c->T_last != T) *T = *c->T_last;
 }
 
 /* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes
@@ -1305,6 +1366,42 @@ static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
     return 1;
 }
 
+/* The stuck fast path applies (eng_advance's skip: the located scheme on a grid it resolves, the
+ * model's closed-form breakaway, held inputs) and the structure is stuck at rest (stuck_at_rest). */
+static int stuck_rests(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    return S->fast_paths && ENG_HAS_BREAKAWAY(E) && !S->account_energy && S->rate_max * S->h <= STIFF_STEP &&
+           stuck_at_rest(E, in, s);
+}
+
+static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c);
+
+/* The breakaway of the stick of a structure at rest (stuck_rests), kept (E->stick). */
+static double stuck_tb(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    stick_refresh(E, in, s, &E->stick);
+    return E->stick.tb;
+}
+
+/* A stuck step of a structure at rest, as its trial leaves X (V = A = 0: any step's kinematics K) and
+ * rest_exact the rest: X through the predictor and corrector with V1 = V, V at its belt (0), A and hA 0
+ * (F, the time and the counters the caller's). */
+static void stuck_rest(eng *E, eng_state *s, const dfo_bossak_kin *K)
+{
+    const eng_setup *S = &E->S;
+    for (size_t i = 0; i < ENG_N(E); i++)
+        s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const eng_row *R = &S->rows[j];
+        if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+    }
+    for (size_t i = 0; i < ENG_N(E); i++) {
+        s->A[i] = 0.0;
+        s->hA[i] = 0.0;
+    }
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -1334,6 +1431,17 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 E->cand[j] = 0;
             }
         }
+        /* a structure come to rest and stuck inside the step (eng_advance's stuck fast path, ENG_BREAKAWAY):
+         * where its breakaway lies beyond a grid step after the step's end, the remainder is taken as
+         * that path takes a stuck step (stuck_skip: X through the predictor and corrector with V = A =
+         * 0, to the bits of the trial; F left), the breakaway kept for the next grid points */
+        if (phase > 0 && stuck_rests(E, in, s) && t_end + S->h < stuck_tb(E, in, s)) {
+            stuck_rest(E, s, &E->kin_grid);
+            s->t = t_end;
+            s->solves++;
+            observe(E, s, ta, s->F, hk);
+            return ENG_OK;
+        }
         trial T;
         int fused = ENG_HELD_UNTRIED;
         if (phase == 0 && fused_ok(E, in, hh)) {
@@ -1346,7 +1454,8 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 return ENG_OK;
             }
         }
-        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
+        margin_ctx mc;
+        margin_init(&mc, E, in, s, t_end, r);
         if (phase == 0 && E->fused_ready) { /* fused_steps' trial of this grid step, solved (as held_step's) */
             T.kin = E->kin_grid;
             T.slot = ENG_SLOT_GRID;
@@ -1469,7 +1578,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
         if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
         }
-        trial_margin(&mc, hs, &T);
+        trial_again(&mc, hs, &T); /* (the root's, or the placement's, last trial where it was of hs) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
@@ -1695,12 +1804,6 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
  * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
  * point (the step from it is taken here, to the bits of the general path's). A declined located step
  * leaves its trial, solved, for step_located (fused_ready). */
-#if defined(ENG_FUSED_N) && defined(ENG_FUSED_NC)
-#define ENG_FUSED_LOCAL 1
-#else
-#define ENG_FUSED_LOCAL 0
-#endif
-
 static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, int declined, const eng_hooks *hk,
                                 double *g_prev)
 {
@@ -2131,14 +2234,6 @@ static void rest_forces(eng *E, eng_state *s)
 
 /* ---- the stuck fast path ------------------------------------------------------------------- */
 
-/* The model's breakaway of the current stick, kept over one call of eng_advance: tb for the stick
- * that holds since the switch count sw (known: asked). */
-typedef struct {
-    double tb;
-    long long sw;
-    int known;
-} stick_cache;
-
 /* The largest grid index m >= s->n_grid with t0 + m h < x (incl: <= x), the grid points computed as
  * eng_advance computes them; s->n_grid when there is none. x finite. */
 static long long grid_below(const eng_state *s, double h, double x, int incl)
@@ -2166,6 +2261,15 @@ static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
     return tb;
 }
 
+/* The stick's breakaway in c, asked of the model where c does not hold it (another stick, or passed). */
+static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c)
+{
+    if (c->known && c->sw == s->switches && s->t < c->tb) return;
+    c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
+    c->sw = s->switches;
+    c->known = 1;
+}
+
 /* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
  * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
@@ -2181,11 +2285,7 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
     const double h = S->h;
     loads_at(E, in, s->t);
     if (!stuck_at_rest(E, in, s)) return s->n_grid;
-    if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
-        c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
-        c->sw = s->switches;
-        c->known = 1;
-    }
+    stick_refresh(E, in, s, c);
     if (isnan(c->tb)) return s->n_grid;
     /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
      * bound below is then past the next grid point: its grid points rise with their index) */
@@ -2207,21 +2307,9 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
 static void stuck_skip(eng *E, eng_state *s, long long m)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E);
     const dfo_bossak_kin *K = &E->kin_grid;
     const long long k = m - s->n_grid;
-    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) {
-        for (size_t i = 0; i < n; i++)
-            s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
-        for (size_t j = 0; j < ENG_NC(E); j++) {
-            const eng_row *R = &S->rows[j];
-            if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
-        }
-        for (size_t i = 0; i < n; i++) {
-            s->A[i] = 0.0;
-            s->hA[i] = 0.0;
-        }
-    }
+    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) stuck_rest(E, s, K);
     double c, sn;
     dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
                    &sn);
@@ -2248,7 +2336,9 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
                      S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
-    stick_cache cache = {NAN, 0, 0};
+    E->stick.tb = NAN;
+    E->stick.sw = 0;
+    E->stick.known = 0;
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
     const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
@@ -2257,7 +2347,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     while (s->t < t_target) {
         int declined = 0; /* the stuck fast path declined this grid point */
         if (skip && s->t == g_prev) {
-            const long long m = stuck_until(E, in, s, t_target, hk, &cache);
+            const long long m = stuck_until(E, in, s, t_target, hk, &E->stick);
             declined = 1;
             if (m > s->n_grid) {
                 double ta;
