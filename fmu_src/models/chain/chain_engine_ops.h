@@ -345,20 +345,13 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
     if (what == ENG_SOLVE_BASIS && P->cC == 0.0 && P->cK == 0.0) { /* M_hat diagonal (the held solves) */
         const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
         chain_op_diag(C, P->slot, C->fix_lo, zl, C->fix_hi, zh, C->q, l, mode, V1, f);
-        for (size_t i = 0; i < n; i++)
-            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
     } else if (C->fix_lo || C->fix_hi) { /* a span: the ghosts' rows fixed at their entries of p_hat */
         if (what != ENG_SOLVE_BASIS) return ENG_ERR_BAD_INPUT;
         const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
         lcp_box_basis(0, n, C->fix_lo, zl, C->fix_hi, zh, d, e, C->q, l, mode, V1, f, C->work, C->work + n);
-        for (size_t i = 0; i < n; i++)
-            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
     } else {
         chain_op_basis(C, P->slot, C->q, l, mode, V1, f);
-        if (what == ENG_SOLVE_BASIS) {
-            for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
-                if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
-        } else {
+        if (what != ENG_SOLVE_BASIS) {
             /* the warm basis: when lcp_box's first round would flip no row, its solution is this one */
             int flip = 0;
             for (size_t i = 0; i < n && !flip; i++)
@@ -372,6 +365,8 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
             }
         }
     }
+    /* (every row's f is lcp_box_basis_w's: a held row's from its equation, another's its limit's,
+     * 0.0 - mode l, which is -mode l; a ghost's, which it does not set, 0) */
     if (C->fix_lo) f[0] = 0.0;
     if (C->fix_hi) f[n - 1] = 0.0;
     if (P->law) {
