@@ -672,7 +672,7 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
      * last row's from the forward sweep's register: its elimination's value dp - cp 0 is dp, as its
      * cp is +0 (the last row's, or a held row's). */
     int ok = 1;
-    const double vn = R[n - 1].hold ? 0.0 : dprev;
+    const double vn = dprev; /* (a held row's dprev is 0.0, its V1) */
     double zn = dprev, v1 = vn, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
     V1[n - 1] = vn;
     for (size_t j = n - 1; j-- > 0;) {
