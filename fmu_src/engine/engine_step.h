@@ -415,8 +415,8 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
     }
     const size_t nc = ENG_NC(E);
     for (size_t j = 0; j < nc; j++) {
-        E->hlim[j] = held[j] ? E->Fb[j] : 0.0;
-        E->hmode[j] = held[j] ? 0 : 1;
+        E->hlim[j] = dfo_select(held[j], E->Fb[j], 0.0);
+        E->hmode[j] = !held[j];
     }
     eng_problem P;
     P.slot = ENG_SLOT_MASS;
@@ -429,8 +429,7 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
     P.N = E->Nn;
     P.law = NULL;
     (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->hmode, y, E->hf, NULL);
-    for (size_t j = 0; j < nc; j++)
-        if (held[j]) f[j] = E->hf[j];
+    for (size_t j = 0; j < nc; j++) f[j] = dfo_select(held[j], E->hf[j], f[j]);
 }
 
 /* ---- a span's ghosts (a sub-engine's: E->ghost) ------------------------------------------------ */
@@ -780,8 +779,8 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
     memset(pin, 0, n * sizeof(int));
     if (E->ghost)
         for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+    for (size_t j = 0; j < ENG_NC(E); j++) /* (the mode's test without a branch) */
+        if (S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
     /* rebases' test on the DOFs not pinned, without branches (the pins complete: rebase and
      * step_spans read them) */
     int any = 0;
@@ -819,8 +818,10 @@ static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s
         E->jk_ok = 1;
     }
     loads_at(E, in, t1);
-    for (size_t i = 0; i < n; i++)
-        if (!pin[i] && rebases(E, s, i, hh, tol)) A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+    for (size_t i = 0; i < n; i++) { /* (jk is set for every DOF: both values, one selected, no branch) */
+        const double Ar = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+        A0[i] = dfo_select((pin[i] == 0) & rebases(E, s, i, hh, tol), Ar, A0[i]);
+    }
 }
 
 static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
@@ -1215,7 +1216,7 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
     loads_at(E, c->in, t1);
-    for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+    for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = dfo_select(E->st[j] == 0, E->Fb[j], E->mlN[j]);
     eng_status st = trial_step(E, c->in, c->s, x, t1, T);
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;

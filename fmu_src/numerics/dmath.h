@@ -19,6 +19,19 @@
 
 /* ---- exact helpers (plain IEEE double operations, the same in both builds) ------------------- */
 
+/* c ? a : b without a branch on c (the bits of a or b through a mask): for selects whose condition
+ * follows data a branch predictor misses, such as contacts' mixed modes */
+static inline double dfo_select(int c, double a, double b)
+{
+    uint64_t ua, ub;
+    memcpy(&ua, &a, sizeof ua);
+    memcpy(&ub, &b, sizeof ub);
+    const uint64_t m = (uint64_t)0 - (uint64_t)(c != 0), r = (ua & m) | (ub & ~m);
+    double x;
+    memcpy(&x, &r, sizeof x);
+    return x;
+}
+
 /* s + e = a + b exactly (Knuth's TwoSum: any a, b) */
 static inline void dfo_two_sum(double a, double b, double *s, double *e)
 {

@@ -8,6 +8,7 @@
  *                       value or one of the hard arguments' correctly rounded results is wrong, or
  *                       if dfo_sincos differs from dfo_sin, dfo_cos by a single bit.
  *                       dfo_atan2 within 4 ulps of atan2 on random points of every quadrant.
+ *                       dfo_select with the bits of the ternary's choice (signed zeros, NaNs, ...).
  *   test_dmath --dump   prints the bits of every result (also dfo_pow_pos's, dfo_atan2's) on a fixed
  *                       set of arguments (no libm): the cross-platform check compares these dumps between Linux x86-64, Windows
  *                       (wine) and Linux aarch64 (qemu) bit for bit. */
@@ -196,9 +197,34 @@ static int check_specials(void)
     return bad;
 }
 
+/* dfo_select(c, a, b): the bits of c ? a : b for any c (0, 1, other values) and any a, b: signed
+ * zeros, infinities, NaNs with payloads, subnormals, random doubles. Returns the failures. */
+static int check_select(void)
+{
+    double v[12] = {0.0, -0.0, INFINITY, -INFINITY, DBL_MIN / 4.0, -DBL_MIN, 1.0, -3.5, DBL_MAX, 0.0, 0.0, 0.0};
+    uint64_t nan_bits = 0x7FF8000000000123ULL, seed = 0x243F6A8885A308D3ULL;
+    memcpy(&v[9], &nan_bits, sizeof nan_bits);
+    nan_bits = 0xFFF0000000000001ULL; /* a signalling NaN's bits, negative */
+    memcpy(&v[10], &nan_bits, sizeof nan_bits);
+    const int cs[5] = {0, 1, -1, 2, 1 << 30};
+    int bad = 0;
+    for (int r = 0; r < 64; r++) {
+        v[11] = ldexp(uniform(&seed, -1.0, 1.0), (int)(rng_next(&seed) % 2000) - 1000);
+        for (size_t i = 0; i < 12; i++)
+            for (size_t j = 0; j < 12; j++)
+                for (size_t k = 0; k < 5; k++) {
+                    const double want = cs[k] ? v[i] : v[j], got = dfo_select(cs[k], v[i], v[j]);
+                    bad += bits(got) != bits(want);
+                }
+    }
+    printf("dfo_select: %d of %d selections differ from the ternary's bits\n", bad, 64 * 12 * 12 * 5);
+    return bad != 0;
+}
+
 static int compare(void)
 {
     int failed = check_specials();
+    failed |= check_select();
     uint64_t seed = 0x9E3779B97F4A7C15ULL;
     printf("%-6s %-44s %10s %10s\n", "fn", "range", "max ulps", "identical");
     for (size_t i = 0; i < sizeof RANGES / sizeof RANGES[0]; i++) {

@@ -345,20 +345,13 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
     if (what == ENG_SOLVE_BASIS && P->cC == 0.0 && P->cK == 0.0) { /* M_hat diagonal (the held solves) */
         const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
         chain_op_diag(C, P->slot, C->fix_lo, zl, C->fix_hi, zh, C->q, l, mode, V1, f);
-        for (size_t i = 0; i < n; i++)
-            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
     } else if (C->fix_lo || C->fix_hi) { /* a span: the ghosts' rows fixed at their entries of p_hat */
         if (what != ENG_SOLVE_BASIS) return ENG_ERR_BAD_INPUT;
         const double zl = P->p_hat[0] - (vb ? vb[0] : 0.0), zh = P->p_hat[n - 1] - (vb ? vb[n - 1] : 0.0);
         lcp_box_basis(0, n, C->fix_lo, zl, C->fix_hi, zh, d, e, C->q, l, mode, V1, f, C->work, C->work + n);
-        for (size_t i = 0; i < n; i++)
-            if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
     } else {
         chain_op_basis(C, P->slot, C->q, l, mode, V1, f);
-        if (what == ENG_SOLVE_BASIS) {
-            for (size_t i = 0; i < n; i++) /* a sliding row's force is its limit's (w is not set there) */
-                if (!(mode[i] == 0 && l[i] > 0.0)) f[i] = (l[i] > 0.0) ? -mode[i] * l[i] : 0.0;
-        } else {
+        if (what != ENG_SOLVE_BASIS) {
             /* the warm basis: when lcp_box's first round would flip no row, its solution is this one */
             int flip = 0;
             for (size_t i = 0; i < n && !flip; i++)
@@ -372,6 +365,8 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
             }
         }
     }
+    /* (every row's f is lcp_box_basis_w's: a held row's from its equation, another's its limit's,
+     * 0.0 - mode l, which is -mode l; a ghost's, which it does not set, 0) */
     if (C->fix_lo) f[0] = 0.0;
     if (C->fix_hi) f[n - 1] = 0.0;
     if (P->law) {
@@ -440,19 +435,27 @@ static inline double chain_op_contact_breakaway(void *ctx, size_t j, const eng_h
     return chain_op_block_breakaway(C, exc, j, u, Fb[j], chain_op_Kx(C, s->X, j), s->t_stick[j]);
 }
 
-/* The fused step's acceptance (engine.h's eng_held_step): X, A, V, hA and F from its x_pred, V1, f. */
-static inline void chain_op_held_accept(const eng_held_step *F, eng_state *s, size_t n)
+/* The fused step's acceptance (engine.h's eng_held_step): X, A, V, hA and F from its x_pred, V1, f;
+ * the last row's x_pred and V1 given as xn, vn (the sweeps' registers: no store and load of them on
+ * the step's chain of dependencies). */
+static inline void chain_op_held_accept(const eng_held_step *F, eng_state *s, size_t n, double xn, double vn)
 {
     const double *xpp = F->xp, *V1 = F->V1, *f = F->f, *A0 = F->A0; /* (A0: s->A, read before written) */
     double *X = s->X, *V = s->V, *A = s->A, *hA = s->hA, *sF = s->F;
     const double cV = F->corr_V, hh = F->h, c1 = F->c1, g1 = F->g1;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; i + 1 < n; i++) {
         X[i] = xpp[i] + cV * V1[i];
         A[i] = (V1[i] - V[i]) * c1 - g1 * A0[i];
         V[i] = V1[i];
         hA[i] = hh;
         sF[i] = f[i];
     }
+    const size_t i = n - 1;
+    X[i] = xn + cV * vn;
+    A[i] = (vn - V[i]) * c1 - g1 * A0[i];
+    V[i] = vn;
+    hA[i] = hh;
+    sF[i] = f[i];
 }
 
 /* Row i of the fused step once its neighbours' V1 are known (vlo: row i - 1's, unused for i = 0; vi:
@@ -525,18 +528,19 @@ static inline int chain_op_step_held(void *ctx, const eng_held_step *F, eng_stat
     /* back substitution (zn: the elimination's value; a held row's V1 then 0) and row j + 1's force
      * and margin once row j is known (its neighbours' V1 then are); row 0's after */
     int ok = 1;
-    double zn = 0.0, v1 = 0.0, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
+    double zn = 0.0, v1 = 0.0, v2 = 0.0, vn = 0.0; /* V1 of rows j + 1 and j + 2, and of the last */
     for (size_t j = n; j-- > 0;) {
         zn = dp[j] - kcp[j] * zn;
         const double vj = (mode[j] == 0 && l[j] > 0.0) ? 0.0 : zn;
         V1[j] = vj;
         if (j + 1 < n) ok &= chain_op_row_done(C, F, j + 1, vj, v1, v2);
+        else vn = vj;
         v2 = v1;
         v1 = vj;
     }
     ok &= chain_op_row_done(C, F, 0, 0.0, v1, v2);
     if (!ok) return 0;
-    chain_op_held_accept(F, s, n);
+    chain_op_held_accept(F, s, n, xpp[n - 1], vn);
     return 1;
 }
 
@@ -658,24 +662,30 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
         ph[i] = phi;
         xl = xc;
         xc = xr;
-        dprev = hold ? 0.0 : ((phi - sl) - elo * dprev) * R[i].inv;
+        /* (row 0: x - 0 0 is x, one subtraction less on the step's chain of dependencies) */
+        const double rhs = phi - sl;
+        dprev = hold ? 0.0 : ((i > 0) ? rhs - elo * dprev : rhs) * R[i].inv;
         dp[i] = dprev;
         elo = R[i].e;
     }
-    /* back substitution, and row j + 1's force and margin once row j is known; row 0's after */
+    /* back substitution, and row j + 1's force and margin once row j is known; row 0's after. The
+     * last row's from the forward sweep's register: its elimination's value dp - cp 0 is dp, as its
+     * cp is +0 (the last row's, or a held row's). */
     int ok = 1;
-    double zn = 0.0, v1 = 0.0, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
-    for (size_t j = n; j-- > 0;) {
+    const double vn = dprev; /* (a held row's dprev is 0.0, its V1) */
+    double zn = dprev, v1 = vn, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
+    V1[n - 1] = vn;
+    for (size_t j = n - 1; j-- > 0;) {
         zn = dp[j] - R[j].cp * zn;
         const double vj = R[j].hold ? 0.0 : zn;
         V1[j] = vj;
-        if (j + 1 < n) ok &= chain_op_run_done(R, ph, f, j + 1, n, vj, v1, v2);
+        ok &= chain_op_run_done(R, ph, f, j + 1, n, vj, v1, v2);
         v2 = v1;
         v1 = vj;
     }
     ok &= chain_op_run_done(R, ph, f, 0, n, 0.0, v1, v2);
     if (!ok) return 0;
-    chain_op_held_accept(F, s, n);
+    chain_op_held_accept(F, s, n, xl, vn);
     return 1;
 }
 
