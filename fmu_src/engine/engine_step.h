@@ -813,8 +813,10 @@ static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s
     double *acc = E->acc, *jk = E->jk;
     if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
         loads_at(E, in, s->t);
-        /* (the physical accelerations: for the jerks' damping and Stribeck terms only) */
-        if (ENG_HAS_C(E) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        /* (the physical accelerations: for the jerks' damping and Stribeck terms only; where C is 0,
+         * ops.apply_C NULL, a model whose ENG_HAS_C holds applies it to zeros) */
+        if ((ENG_HAS_C(E) && S->ops.apply_C) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        else if (ENG_HAS_C(E)) memset(acc, 0, ENG_N(E) * sizeof(double));
         jerks(E, in, s, acc, jk);
         E->jk_ok = 1;
     }
