@@ -1397,6 +1397,18 @@ static void stuck_rest(eng *E, eng_state *s, const dfo_bossak_kin *K)
     }
 }
 
+/* A phase ended by the switches of the candidates (E->cand) at the state's time: the phase observed,
+ * the switches applied (held: apply_switches'), the held contacts at rest exactly, the loads of the
+ * step's end t_end again. */
+static void switch_now(eng *E, const eng_inputs *in, eng_state *s, double ta, double t_end, int held,
+                       const eng_hooks *hk)
+{
+    observe(E, s, ta, s->F, hk);
+    apply_switches(E, s, 1, held, hk);
+    rest_exact(E, s);
+    loads_at(E, in, t_end);
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -1465,10 +1477,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 }
                 for (size_t j = 0; j < nc; j++) s->F[j] = clamp_lim(E->f[j], E->Fb[j]);
                 for (size_t j = 0; j < nc; j++) E->cand[j] = j == jmax;
-                observe(E, s, ta, s->F, hk);
-                apply_switches(E, s, 1, 1, hk);
-                rest_exact(E, s);
-                loads_at(E, in, t_end);
+                switch_now(E, in, s, ta, t_end, 1, hk);
                 if (stop && s->switches != sw0) return ENG_SWITCHED;
                 continue;
             }
@@ -1531,10 +1540,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (E->ghost) ghosts_now(E, s);
             for (size_t j = 0; j < nc; j++) E->cand[j] = E->cand[j] && E->tbk[j] == tb;
             loads_at(E, in, s->t);
-            observe(E, s, ta, s->F, hk);
-            apply_switches(E, s, 1, 0, hk);
-            rest_exact(E, s);
-            loads_at(E, in, t_end);
+            switch_now(E, in, s, ta, t_end, 0, hk);
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
@@ -1599,10 +1605,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
             E->cand[j] = stopping || breaking;
         }
-        observe(E, s, ta, s->F, hk);
-        apply_switches(E, s, 1, 0, hk);
-        rest_exact(E, s);
-        loads_at(E, in, t_end);
+        switch_now(E, in, s, ta, t_end, 0, hk);
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
