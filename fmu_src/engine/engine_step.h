@@ -1355,7 +1355,7 @@ static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
 /* Every contact held on a still belt, every DOF pinned at rest by a held contact of its own, held
  * inputs: the state the model's closed-form breakaway (ENG_BREAKAWAY) is asked about. The loads
  * must be set. Uses pin. */
-static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
+static int stuck_pinned(eng *E, const eng_inputs *in, const eng_state *s)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
@@ -1370,9 +1370,17 @@ static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
     return 1;
 }
 
+/* stuck_pinned where no contact slides (the test inline: most calls are of a sliding structure) */
+static ENG_HOT int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] != 0) return 0;
+    return stuck_pinned(E, in, s);
+}
+
 static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c);
 
-/* The breakaway of the stick of a structure at rest (stuck_rests), kept (E->stick). */
+/* The breakaway of the stick of a structure at rest (stuck_at_rest), kept (E->stick). */
 static double stuck_tb(eng *E, const eng_inputs *in, const eng_state *s)
 {
     stick_refresh(E, in, s, &E->stick);
