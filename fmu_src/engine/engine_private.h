@@ -19,9 +19,9 @@
 
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
+#define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to a holding force at its limit */
+#define PLACE_REL 1e-9           /* a stick's kept breakaway: beyond a step by more than this share of t + h */
 #define HALVINGS 60              /* search for a resolvable sub-step before the first switch */
-#define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to the trial's switch */
-#define PLACE_REL 1e-11          /* a placed breakaway: the force beyond its limit by at most this share */
 #define LEMKE_PIVOTS_PER_N 8     /* Lemke's pivot budget: 8 (2 nc) + 16 */
 #define ACTIVE_SET_ROUNDS 4      /* the active-set fallback: rounds per contact */
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */

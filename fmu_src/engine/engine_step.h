@@ -812,8 +812,10 @@ static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s
     double *acc = E->acc, *jk = E->jk;
     if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
         loads_at(E, in, s->t);
-        /* (the physical accelerations: for the jerks' damping and Stribeck terms only) */
-        if (ENG_HAS_C(E) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        /* (the physical accelerations: for the jerks' damping and Stribeck terms only; where C is 0,
+         * ops.apply_C NULL, a model whose ENG_HAS_C holds applies it to zeros) */
+        if ((ENG_HAS_C(E) && S->ops.apply_C) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        else if (ENG_HAS_C(E)) memset(acc, 0, ENG_N(E) * sizeof(double));
         jerks(E, in, s, acc, jk);
         E->jk_ok = 1;
     }
@@ -1198,7 +1200,7 @@ static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const doubl
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
  * the modes st; returns the smallest margin of the candidates. The phase's last trial is known by
  * its length (x_last, its T at T_last: margin_fn's in Tm), so that a trial asked for again (the
- * root's last point, a placed breakaway's) is taken as it stands in the engine's arrays. */
+ * root's last point) is taken as it stands in the engine's arrays. */
 typedef struct {
     eng *E;
     const eng_inputs *in;
@@ -1264,8 +1266,9 @@ static ENG_HOT void trial_again(margin_ctx *c, double x, trial *T)
 
 /* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes
  * to rest and, with every contact at rest, the rest rule decides; a held one breaks away the way it
- * is driven. Then the consistent restart. */
-static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks *hk)
+ * is driven. Then the consistent restart. held: E->y2 and E->f hold phys_accel's solve of this
+ * state in its modes at its time (taken for the first contact breaking away). */
+static void apply_switches(eng *E, eng_state *s, int immediate, int held, const eng_hooks *hk)
 {
     const size_t nc = ENG_NC(E);
     int *rest = E->cand;
@@ -1277,7 +1280,8 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     /* held contacts breaking away: their side from their holding force */
     for (size_t j = 0; j < nc; j++) {
         if (!rest[j] || s->mode[j] != 0) continue;
-        phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+        if (!held) phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+        held = 0;
         s->mode[j] = -sgn(E->f[j]);
         if (s->mode[j] == 0) s->mode[j] = -sgn(s->F[j]);
         rest[j] = 0;
@@ -1352,7 +1356,7 @@ static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
 /* Every contact held on a still belt, every DOF pinned at rest by a held contact of its own, held
  * inputs: the state the model's closed-form breakaway (ENG_BREAKAWAY) is asked about. The loads
  * must be set. Uses pin. */
-static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
+static int stuck_pinned(eng *E, const eng_inputs *in, const eng_state *s)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
@@ -1367,18 +1371,17 @@ static int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
     return 1;
 }
 
-/* The stuck fast path applies (eng_advance's skip: the located scheme on a grid it resolves, the
- * model's closed-form breakaway, held inputs) and the structure is stuck at rest (stuck_at_rest). */
-static int stuck_rests(eng *E, const eng_inputs *in, const eng_state *s)
+/* stuck_pinned where no contact slides (the test inline: most calls are of a sliding structure) */
+static ENG_HOT int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
 {
-    const eng_setup *S = &E->S;
-    return S->fast_paths && ENG_HAS_BREAKAWAY(E) && !S->account_energy && S->rate_max * S->h <= STIFF_STEP &&
-           stuck_at_rest(E, in, s);
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] != 0) return 0;
+    return stuck_pinned(E, in, s);
 }
 
 static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c);
 
-/* The breakaway of the stick of a structure at rest (stuck_rests), kept (E->stick). */
+/* The breakaway of the stick of a structure at rest (stuck_at_rest), kept (E->stick). */
 static double stuck_tb(eng *E, const eng_inputs *in, const eng_state *s)
 {
     stick_refresh(E, in, s, &E->stick);
@@ -1401,6 +1404,18 @@ static void stuck_rest(eng *E, eng_state *s, const dfo_bossak_kin *K)
         s->A[i] = 0.0;
         s->hA[i] = 0.0;
     }
+}
+
+/* A phase ended by the switches of the candidates (E->cand) at the state's time: the phase observed,
+ * the switches applied (held: apply_switches'), the held contacts at rest exactly, the loads of the
+ * step's end t_end again. */
+static void switch_now(eng *E, const eng_inputs *in, eng_state *s, double ta, double t_end, int held,
+                       const eng_hooks *hk)
+{
+    observe(E, s, ta, s->F, hk);
+    apply_switches(E, s, 1, held, hk);
+    rest_exact(E, s);
+    loads_at(E, in, t_end);
 }
 
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
@@ -1432,16 +1447,49 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 E->cand[j] = 0;
             }
         }
-        /* a structure come to rest and stuck inside the step (eng_advance's stuck fast path, ENG_BREAKAWAY):
-         * where its breakaway lies beyond a grid step after the step's end, the remainder is taken as
-         * that path takes a stuck step (stuck_skip: X through the predictor and corrector with V = A =
-         * 0, to the bits of the trial; F left), the breakaway kept for the next grid points */
-        if (phase > 0 && stuck_rests(E, in, s) && t_end + S->h < stuck_tb(E, in, s)) {
-            stuck_rest(E, s, &E->kin_grid);
-            s->t = t_end;
-            s->solves++;
-            observe(E, s, ta, s->F, hk);
-            return ENG_OK;
+        /* a structure stuck at rest: its stick ends at the model's closed-form breakaway (ENG_BREAKAWAY),
+         * as the old stepper ends it. A step that ends before it (the stick's kept breakaway beyond the
+         * step by more than its rounding) is a stuck step, taken as the stuck fast path takes one
+         * (stuck_rest: X through the predictor and corrector with V = A = 0, to the bits of the trial;
+         * F left). Else the breakaway asked from the phase's start: inside the step, the switch is
+         * placed there without a trial (the structure rests there, X, V = A = 0 as they are; the
+         * holding forces solved at that time and clamped to their limits; the contact most beyond its
+         * limit released). Models with their contacts' closed forms split the step at those instead
+         * (closed_breakaways, below). */
+        if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
+            const double eps = PLACE_REL * (fabs(t_end) + S->h);
+            double tp = (stuck_tb(E, in, s) > t_end + eps) ? INFINITY : ENG_BREAKAWAY(E, s, in, E->Fb);
+            if (tp > t_end) {
+                stuck_rest(E, s, &E->kin_grid);
+                s->t = t_end;
+                s->solves++;
+                observe(E, s, ta, s->F, hk);
+                return ENG_OK;
+            }
+            if (tp > s->t && tp <= t_end) {
+                /* (the first time from the closed form's on, by ulps doubling, at which a holding force is
+                 * at or beyond its limit, so that the switch's time does not follow the closed form's
+                 * rounding; where none is within PLACE_NUDGES, the closed form's last) */
+                double ulp = 0.0;
+                size_t jmax = nc;
+                for (int k = 0;; k++) {
+                    s->t = tp;
+                    if (E->ghost) ghosts_now(E, s);
+                    loads_at(E, in, s->t);
+                    phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+                    jmax = nc;
+                    for (size_t j = 0; j < nc; j++)
+                        if (jmax == nc || fabs(E->f[j]) / E->Fb[j] > fabs(E->f[jmax]) / E->Fb[jmax]) jmax = j;
+                    if (!(fabs(E->f[jmax]) < E->Fb[jmax]) || k == PLACE_NUDGES || tp == t_end) break;
+                    ulp = (ulp == 0.0) ? nextafter(tp, INFINITY) - tp : 2.0 * ulp;
+                    tp = (tp + ulp < t_end) ? tp + ulp : t_end;
+                }
+                for (size_t j = 0; j < nc; j++) s->F[j] = clamp_lim(E->f[j], E->Fb[j]);
+                for (size_t j = 0; j < nc; j++) E->cand[j] = j == jmax;
+                switch_now(E, in, s, ta, t_end, 1, hk);
+                if (stop && s->switches != sw0) return ENG_SWITCHED;
+                continue;
+            }
         }
         trial T;
         int fused = ENG_HELD_UNTRIED;
@@ -1501,51 +1549,10 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (E->ghost) ghosts_now(E, s);
             for (size_t j = 0; j < nc; j++) E->cand[j] = E->cand[j] && E->tbk[j] == tb;
             loads_at(E, in, s->t);
-            observe(E, s, ta, s->F, hk);
-            apply_switches(E, s, 1, hk);
-            rest_exact(E, s);
-            loads_at(E, in, t_end);
+            switch_now(E, in, s, ta, t_end, 0, hk);
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
-        /* a structure stuck at rest: the model's closed-form breakaway places the switch where it lies
-         * inside the step (the contact then released: the one most beyond its limit there) */
-        double hs = NAN, t_placed = NAN;
-        int placed = 0;
-        if (ENG_HAS_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
-            /* the first time from the closed form's on at which the trial's holding force is at or
-             * beyond the limit (a few ulps at most: the trial of a structure at rest holds the static
-             * force), so that a step ending there ends with the switch; a closed form that misses the
-             * trial's force by more than rounding (a phase too large for it) is not used */
-            double tp = ENG_BREAKAWAY(E, s, in, E->Fb), ulp = 0.0;
-            for (int k = 0; k < PLACE_NUDGES && tp > s->t && tp <= t_end; k++) {
-                hs = (tp == t_end) ? r : tp - s->t;
-                trial_margin(&mc, hs, &T);
-                s->solves++;
-                if (mc.err != ENG_OK) return mc.err;
-                int beyond = 0, far = 0; /* a force beyond its limit, farther than rounding */
-                for (size_t j = 0; j < nc; j++) {
-                    if (!E->cand[j] || fabs(E->f[j]) < E->Fb[j]) continue;
-                    beyond = 1;
-                    far |= !(fabs(E->f[j]) - E->Fb[j] <= PLACE_REL * E->Fb[j]);
-                }
-                if (far) break; /* the closed form is off (the margins' root instead) */
-                if (beyond) {
-                    placed = 1;
-                    t_placed = tp;
-                    break;
-                }
-                if (tp == t_end) break;
-                ulp = (ulp == 0.0) ? nextafter(tp, INFINITY) - tp : 2.0 * ulp;
-                tp = (tp + ulp < t_end) ? tp + ulp : t_end;
-            }
-            if (!placed && !isnan(hs)) { /* the whole remainder's trial again, for the bracket below */
-                trial_margin(&mc, r, &T);
-                s->solves++;
-                if (mc.err != ENG_OK) return mc.err;
-            }
-        }
-        if (!placed) {
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
         double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
         for (size_t j = 0; j < nc; j++) {
@@ -1570,16 +1577,15 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                     const eng_row *R = &S->rows[j];
                     if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
                 }
-            apply_switches(E, s, 1, hk);
+            apply_switches(E, s, 1, 0, hk);
             loads_at(E, in, t_end);
             observe(E, s, ta, s->F, hk);
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
-        hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
         if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
-        }
-        trial_again(&mc, hs, &T); /* (the root's, or the placement's, last trial where it was of hs) */
+        trial_again(&mc, hs, &T); /* (the root's last trial where it was of hs) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
@@ -1596,26 +1602,19 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
-        const double t_new = placed ? t_placed : (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
+        const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
         finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
         if (E->ghost) ghosts_now(E, s);
         loads_at(E, in, s->t);
-        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit (at a
-         * placed breakaway, the one most beyond it) */
-        size_t jmax = nc;
-        for (size_t j = 0; placed && j < nc; j++)
-            if (E->cand[j] && (jmax == nc || fabs(E->f[j]) / E->Fb[j] > fabs(E->f[jmax]) / E->Fb[jmax])) jmax = j;
+        /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
         for (size_t j = 0; j < nc; j++) {
             if (!E->cand[j]) continue;
             const int stopping = s->mode[j] != 0 && E->st[j] == 0;
-            const int breaking = placed ? j == jmax : s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
+            const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
             E->cand[j] = stopping || breaking;
         }
-        observe(E, s, ta, s->F, hk);
-        apply_switches(E, s, 1, hk);
-        rest_exact(E, s);
-        loads_at(E, in, t_end);
+        switch_now(E, in, s, ta, t_end, 0, hk);
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;

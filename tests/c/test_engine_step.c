@@ -275,9 +275,11 @@ static void test_stuck_fast_path(checks *T)
            R.H[0].solves, R.H[1].solves, R.H[1].asks, R.s[0].X[0]);
     check_context(T, "one block, located, the stuck fast path against the steps one by one");
     CHECK(R.L[0].count >= 10);
-    /* the breakaway placed by the model's closed form with the fast path off too (the same numbers);
-     * on, asked for the stuck stretches as well (the inline runs call the block's hooks directly) */
-    CHECK(R.H[0].asks > 0 && R.H[1].asks > R.H[0].asks);
+    /* the stick ended at the model's closed form with the fast path off too (the same numbers: the stick's
+     * breakaway kept, a stuck step taken without a trial where it lies beyond the step, asked again
+     * from the step that holds it); on, no more than off (the inline runs call the block's hooks
+     * directly) */
+    CHECK(R.H[0].asks > 0 && R.H[1].asks >= R.H[0].asks);
     CHECK(4 * R.H[1].solves < 3 * R.H[0].solves); /* (the stick phases outside the window skipped) */
     for (int r = 1; r < 4; r++) {
         CHECK(same_bits(&R.s[0], &R.s[r], &R.L[0], &R.L[r]));

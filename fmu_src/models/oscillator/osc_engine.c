@@ -32,7 +32,8 @@ eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, c
     memset(&S, 0, sizeof S);
     S.n = 1;
     S.nc = 1;
-    const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+    /* (no damping: no C, so that its terms and the accelerations only they read are not computed) */
+    const eng_ops ops = {O, osc_K, (p->c != 0.0) ? osc_C : NULL, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
     S.ops = ops;
     S.rows = &O->row;
     S.exc.omega = p->omega;
@@ -135,7 +136,7 @@ static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, doub
 #define ENG_CTX(E) ((E)->S.ops.ctx)
 #define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
-#define ENG_HAS_C(E) ((void)(E), 1)
+#define ENG_HAS_C(E) ((void)(E), 1) /* (c v whatever c is; ops.apply_C: NULL where c = 0) */
 #define ENG_APPLY_M(E, a, y) osc_M(ENG_CTX(E), (a), (y))
 #define ENG_FACTOR(E, slot, cM, cC, cK) osc_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
 #define ENG_SOLVE(E, slot, b, x) osc_solve(ENG_CTX(E), (slot), (b), (x))
