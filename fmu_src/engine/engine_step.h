@@ -1804,6 +1804,19 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
  * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
  * point (the step from it is taken here, to the bits of the general path's). A declined located step
  * leaves its trial, solved, for step_located (fused_ready). */
+/* A run of fused steps written back: its time, grid point, excitation cache and counters. */
+static ENG_HOT void run_store(eng_state *s, double t, long long ng, long long exc_n, double exc_c, double exc_s,
+                              long long steps, long long solves)
+{
+    s->t = t;
+    s->n_grid = ng;
+    s->exc_n = exc_n;
+    s->exc_c = exc_c;
+    s->exc_s = exc_s;
+    s->steps += steps;
+    s->solves += solves;
+}
+
 static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, int declined, const eng_hooks *hk,
                                 double *g_prev)
 {
@@ -2021,13 +2034,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     ENG_OBS_RUN_END(obs, obs_run);
     ENG_FUSED_STORE_();
 #undef ENG_FUSED_STORE_
-    s->t = t;
-    s->n_grid = ng;
-    s->exc_n = exc_n;
-    s->exc_c = exc_c;
-    s->exc_s = exc_s;
-    s->steps += steps;
-    s->solves += solves;
+    run_store(s, t, ng, exc_n, exc_c, exc_s, steps, solves);
     s->pivot_steps += pivot_steps;
     if (steps > 0) *g_prev = t;
     if (turned)
@@ -2156,24 +2163,12 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
             s->hA[R->idx[0]] = 0.0;
         }
         if (obs && !(grid < obs_t0) && !(ta > obs_t1)) {
-            s->n_grid = ng;
-            s->exc_n = en;
-            s->exc_c = ec;
-            s->exc_s = es;
-            s->t = t;
-            s->steps += steps;
-            s->solves += steps;
+            run_store(s, t, ng, en, ec, es, steps, steps);
             steps = 0;
             observe(E, s, ta, s->F, hk);
         }
     }
-    s->n_grid = ng;
-    s->exc_n = en;
-    s->exc_c = ec;
-    s->exc_s = es;
-    s->t = t;
-    s->steps += steps;
-    s->solves += steps;
+    run_store(s, t, ng, en, ec, es, steps, steps);
     if (ng > ng0) *g_prev = t;
 }
 
