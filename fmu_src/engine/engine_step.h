@@ -458,18 +458,25 @@ static void ghosts_now(const eng *E, eng_state *s)
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
  * sliding contacts' f their kinetic force at their slip speed, held ones (mode 0 with friction)
  * solved for slip acceleration 0. f out (nc), a out (n). The loads at t must be set. */
+/* r -= K x + C v (K first, then C where there is one; y: scratch) */
+static ENG_HOT void minus_kc(eng *E, const double *x, const double *v, double *r, double *y)
+{
+    const size_t n = ENG_N(E);
+    ENG_APPLY_K(E, x, y);
+    for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, v, y);
+        for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    }
+}
+
 static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, double *a, double *f)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const size_t nc = ENG_NC(E);
     double *r = E->r, *y = E->y;
     applied_at(E, s, t, r);
-    ENG_APPLY_K(E, s->X, y);
-    for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    if (ENG_HAS_C(E)) {
-        ENG_APPLY_C(E, s->V, y);
-        for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    }
+    minus_kc(E, s->X, s->V, r, y);
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = mode[j] == 0 && has_friction(E, j);
         f[j] = 0.0;
@@ -489,15 +496,10 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
 static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double *a, double *jk)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const size_t nc = ENG_NC(E);
     double *r = E->r, *y = E->y;
     applied_rate(E, in, s->t, r);
-    ENG_APPLY_K(E, s->V, y);
-    for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    if (ENG_HAS_C(E)) {
-        ENG_APPLY_C(E, a, y);
-        for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    }
+    minus_kc(E, s->V, a, r, y);
     const int rp = ramped(in);
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = s->mode[j] == 0 && has_friction(E, j);
@@ -2464,15 +2466,10 @@ ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_s
      * the rounding of its slip), and the paper scheme's stuck contact, which is not at rest (Bossak's
      * A throughout: it creeps with the force of its LCP) */
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const size_t nc = ENG_NC(E);
     double *r = E->r, *y = E->y;
     applied_at(E, s, s->t, r);
-    ENG_APPLY_K(E, s->X, y);
-    for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    if (ENG_HAS_C(E)) {
-        ENG_APPLY_C(E, s->V, y);
-        for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    }
+    minus_kc(E, s->X, s->V, r, y);
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = !paper && s->mode[j] == 0 && has_friction(E, j);
         if (!has_friction(E, j) || E->held[j]) continue;
