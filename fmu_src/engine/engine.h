@@ -234,6 +234,33 @@ typedef struct {
     eng_ops span_ops;
 } eng_sparse;
 
+/* eng_sparse.span for a row of n DOFs, DOF i with contact i and coupled to its neighbours only (a
+ * chain of blocks): w DOFs either side of each candidate, spans merged when less than 3 DOFs
+ * apart (distinct ghosts), the DOFs next to a span its ghosts (their contacts carried: a span's
+ * contacts are its DOFs'), labelled over its range only. None (0) where w is 0 or n <= 2 w + 3. */
+static inline size_t eng_row_spans(size_t n, size_t w, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng,
+                                   size_t *ct_rng)
+{
+    if (w == 0 || n <= 2 * w + 3) return 0;
+    size_t ns = 0, pa = 0, pb = 0;
+    for (size_t c = 0; c <= n; c++) {
+        if (c < n && !cand[c]) continue;
+        const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
+        if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
+        if (ns > 0) { /* label the span [pa, pb) and its ghosts, its contacts as its DOFs */
+            const size_t lo = (pa > 0) ? pa - 1 : 0, hi = (pb < n) ? pb + 1 : n, k = ns - 1;
+            for (size_t i = lo; i < hi; i++) ct_lab[i] = dof_lab[i] = (i < pa || i >= pb) ? -(int)ns : (int)ns;
+            dof_rng[2 * k] = ct_rng[2 * k] = lo;
+            dof_rng[2 * k + 1] = ct_rng[2 * k + 1] = hi;
+        }
+        if (c == n) break;
+        pa = a;
+        pb = b;
+        ns++;
+    }
+    return ns;
+}
+
 /* What eng_sparse.step_held is given: the step's arithmetic as the engine's trial_step, its solve
  * and finish do it, per DOF i and contact j:
  *   xp_i = X_i + pred_V V_i + pred_A A0_i

@@ -705,33 +705,12 @@ static inline void chain_op_set_reach(chain_eng_ops *C, double h, double alpha)
     C->w = dfo_bossak_reach(rho, n);
 }
 
-/* The spans around the candidate blocks (eng_sparse.span): w blocks either side of each, merged when
- * less than 3 blocks apart (distinct ghosts), the blocks next to a span its ghosts (their contacts
- * carried: a span's contacts are its blocks'), labelled over its range only. None (0) for a chain of
- * at most 2 w + 3 blocks. */
+/* The spans around the candidate blocks (eng_sparse.span): engine.h's eng_row_spans with the reach w. */
 static inline size_t chain_op_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng,
                                    size_t *ct_rng)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    const size_t n = C->n, w = C->w;
-    if (w == 0 || n <= 2 * w + 3) return 0;
-    size_t ns = 0, pa = 0, pb = 0;
-    for (size_t c = 0; c <= n; c++) {
-        if (c < n && !cand[c]) continue;
-        const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
-        if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
-        if (ns > 0) { /* label the span [pa, pb) and its ghosts, its contacts as its blocks */
-            const size_t lo = (pa > 0) ? pa - 1 : 0, hi = (pb < n) ? pb + 1 : n, k = ns - 1;
-            for (size_t i = lo; i < hi; i++) ct_lab[i] = dof_lab[i] = (i < pa || i >= pb) ? -(int)ns : (int)ns;
-            dof_rng[2 * k] = ct_rng[2 * k] = lo;
-            dof_rng[2 * k + 1] = ct_rng[2 * k + 1] = hi;
-        }
-        if (c == n) break;
-        pa = a;
-        pb = b;
-        ns++;
-    }
-    return ns;
+    return eng_row_spans(C->n, C->w, cand, dof_lab, ct_lab, dof_rng, ct_rng);
 }
 
 /* The span's view (eng_sparse.span_bind): blocks dofs[0] ... dofs[nd - 1] (consecutive), its ends
