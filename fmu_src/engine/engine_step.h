@@ -1806,6 +1806,14 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
  * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
  * point (the step from it is taken here, to the bits of the general path's). A declined located step
  * leaves its trial, solved, for step_located (fused_ready). */
+/* Every X, V, A finite (|x| <= DBL_MAX is false for infinities and NaN) */
+static ENG_HOT int finite_all(size_t n, const double *X, const double *V, const double *A)
+{
+    int ok = 1;
+    for (size_t i = 0; i < n; i++) ok &= (fabs(X[i]) <= DBL_MAX) & (fabs(V[i]) <= DBL_MAX) & (fabs(A[i]) <= DBL_MAX);
+    return ok;
+}
+
 /* A run of fused steps written back: its time, grid point, excitation cache and counters. */
 static ENG_HOT void run_store(eng_state *s, double t, long long ng, long long exc_n, double exc_c, double exc_s,
                               long long steps, long long solves)
@@ -1900,6 +1908,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     for (;;) {
         const double grid = s->t0 + (double)(ng + 1) * h;
         if (!(grid <= t_target) || !(grid > t)) break;
+        if ((steps & 15) == 15 && !finite_all(n, X, V, A)) break; /* (overflowed: eng_advance fails) */
         /* held and pinned: the stuck fast path's to try (but where it declined: this grid point's step);
          * a step length to re-base A on: the general path's */
         int held_all = skip && !(declined && steps == 0), rebase = 0;
@@ -2114,6 +2123,7 @@ static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, doub
     for (;;) {
         const double grid = t0 + (double)(ng + 1) * h;
         if (!(grid <= t_target) || !(grid > t)) break;
+        if ((steps & 15) == 15 && !finite_all(n, s->X, s->V, s->A)) break; /* (overflowed: eng_advance fails) */
         if (all_held) { /* at rest: the stuck fast path's to try */
             int rest = 1;
             for (size_t i = 0; i < n; i++) rest &= s->V[i] == 0.0 && s->A[i] == 0.0;
@@ -2358,11 +2368,13 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         if (fuse && s->t == g_prev) {
             loads_at(E, in, s->t);
             fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
+            if (!finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
             if (!(s->t < t_target)) break;
         }
         if (fuse_held && s->t == g_prev) {
             loads_at(E, in, s->t);
             held_steps(E, in, s, t_target, skip, hk, &g_prev);
+            if (!finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
             if (!(s->t < t_target)) break;
         }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
@@ -2396,6 +2408,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
             return ENG_SWITCHED;
         }
         if (st != ENG_OK) return st;
+        if ((s->n_grid & 15) == 0 && !finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
     }
     loads_at(E, in, s->t);
     if (S->scheme != DFO_SCHEME_PAPER) rest_forces(E, s);
