@@ -90,10 +90,10 @@ static eng_setup setup_of(bench_case *B, int variant)
     S.nc = B->n;
     if (B->n == 1) {
         const eng_ops ops = {&B->blk, osc_K, osc_C, osc_M, osc_factor, osc_solve,
-                             variant == V_DENSE ? NULL : osc_friction, variant == V_DENSE ? NULL : osc_breakaway};
+                             variant == V_DENSE ? NULL : osc_friction, variant == V_DENSE ? NULL : osc_breakaway, 1};
         S.ops = ops;
     } else {
-        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
         S.ops = ops;
         S.sparse = &B->sparse;
     }

@@ -159,17 +159,7 @@ static inline void chn_basis_kept(chn_model *C, int slot, const double *q, const
         zn = dp[j] - kcp[j] * zn;
         z[j] = zn;
     }
-    for (size_t i = 0; i < n; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > 0) f += e[i - 1] * z[i - 1];
-            if (i + 1 < n) f += e[i] * z[i + 1];
-            w[i] = f;
-        } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
-        }
-    }
+    lcp_box_basis_w(0, n, 0, n, e, q, l, mode, z, w);
 }
 
 /* The box LCP of the slot's M_hat (W = I, no belts): lcp_box_basis in the given modes, lcp_box for
@@ -301,32 +291,12 @@ static inline void chn_set_reach(chn_model *C, double h, double alpha)
     C->w = dfo_bossak_reach(rho, n);
 }
 
-/* The spans around the candidate blocks (eng_sparse.span): w blocks either side of each, merged when
- * less than 3 blocks apart (distinct ghosts), the blocks next to a span its ghosts (their contacts
- * carried: a span's contacts are its blocks'). None (0) for a chain of at most 2 w + 3 blocks. */
-static inline size_t chn_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+/* The spans around the candidate blocks (eng_sparse.span): engine.h's eng_row_spans with the reach w. */
+static inline size_t chn_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng,
+                              size_t *ct_rng)
 {
     const chn_model *C = (const chn_model *)ctx;
-    const size_t n = C->n, w = C->w;
-    if (w == 0 || n <= 2 * w + 3) return 0;
-    for (size_t i = 0; i < n; i++) dof_lab[i] = 0;
-    size_t ns = 0, pa = 0, pb = 0;
-    for (size_t c = 0; c <= n; c++) {
-        if (c < n && !cand[c]) continue;
-        const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
-        if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
-        if (ns > 0) { /* label the span [pa, pb) and its ghosts */
-            for (size_t i = pa; i < pb; i++) dof_lab[i] = (int)ns;
-            if (pa > 0) dof_lab[pa - 1] = -(int)ns;
-            if (pb < n) dof_lab[pb] = -(int)ns;
-        }
-        if (c == n) break;
-        pa = a;
-        pb = b;
-        ns++;
-    }
-    for (size_t i = 0; i < n; i++) ct_lab[i] = dof_lab[i];
-    return ns;
+    return eng_row_spans(C->n, C->w, cand, dof_lab, ct_lab, dof_rng, ct_rng);
 }
 
 /* The span's view (eng_sparse.span_bind): blocks dofs[0] ... dofs[nd - 1] (consecutive), its ends
@@ -353,7 +323,7 @@ static inline void chn_span_bind(void *ctx, const size_t *dofs, const int *ghost
 static inline eng_sparse chn_sparse(chn_model *C, int spans)
 {
     eng_sparse sp;
-    const eng_ops view = {C->sub, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+    const eng_ops view = {C->sub, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
     sp.held_basis = 1;
     sp.step_held = chn_step_held;
     sp.contact_breakaway = chn_contact_breakaway;

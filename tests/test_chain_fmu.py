@@ -24,6 +24,7 @@ from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
 
 from chain_cases import CASES, PERIODS, chain_params, run_driver
+from helpers import assert_rounding_apart
 
 
 def fmu_run(ch: Chain, t_end: float, h: float, dt: float, chain_fmu3: Path, **kw) -> ChainRun:
@@ -40,10 +41,11 @@ ONE_BLOCK = [dict(m=1.0, k=1.0, c=0.0, P0=1.0, omega=0.5, N=0.8, mu_s=0.5, chi=0
 
 @pytest.mark.parametrize("case", range(len(ONE_BLOCK)))
 @pytest.mark.parametrize("scheme", ["located", "consistent", "paper"])
-def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, chain_fmu3: Path, fmu: OscillatorFMU2) -> None:
-    """One block of the FMI 3.0 chain gives the oscillator FMU's x, v, mode and F_friction bit for
-    bit at every communication point (phi = 0; docs/chain.md says why a phase rounds apart), in
-    every scheme, and a to 1e-14 (the chain sums the equation of motion in another order)."""
+def test_n1_is_the_oscillator_fmu_to_rounding(case: int, scheme: str, chain_fmu3: Path, fmu: OscillatorFMU2) -> None:
+    """One block of the FMI 3.0 chain gives the oscillator FMU's mode at every communication point
+    (phi = 0; docs/chain.md says why a phase rounds apart), in every scheme, and its x, v, a and
+    F_friction to rounding (helpers.CHAIN_N1_REL: the oscillator steps through the friction engine,
+    the chain through its own stepper, their arithmetic ordered otherwise)."""
     b = ONE_BLOCK[case]
     p = Oscillator(phi=0.0, **b)
     T = p.period
@@ -52,13 +54,12 @@ def test_n1_is_the_oscillator_fmu_bit_for_bit(case: int, scheme: str, chain_fmu3
         run = f.run(6 * T, dt, {**b, "phi": 0.0, "h": h, "alpha": -0.1, "scheme": scheme})
     ref = fmu.trajectory(p, run.t, Settings(h=h, alpha=-0.1, scheme=scheme))
     assert (run.mode == 0).any() and (run.mode != 0).any()
-    for k in ("x", "v", "mode"):
-        assert np.array_equal(getattr(run, k)[:, 0], ref[k]), (k, np.max(np.abs(getattr(run, k)[:, 0] - ref[k])))
+    assert np.array_equal(run.mode[:, 0], ref["mode"])
+    for k in ("x", "v", "a", "F_friction"):
+        assert_rounding_apart(getattr(run, k)[:, 0], ref[k], k)
     stuck = run.mode[:, 0] == 0
     Fb = max(b["mu_s"], b["chi"] * b["mu_s"]) * b["N"]
     assert np.all(np.abs(run.F_friction[stuck, 0]) <= Fb * (1 + 1e-12))
-    assert np.array_equal(run.F_friction[:, 0], ref["F_friction"]), np.max(np.abs(run.F_friction[:, 0] - ref["F_friction"]))
-    assert np.max(np.abs(run.a[:, 0] - ref["a"])) <= 1e-14 * max(1.0, np.max(np.abs(ref["a"])))
 
 
 # ---- FMI 2.0 == FMI 3.0 ---------------------------------------------------------------------------

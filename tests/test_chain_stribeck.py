@@ -18,6 +18,7 @@ from dryfriction.drivers.chain import ChainFMU2, ChainFMU3
 from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.errors import FMUCallError
 from chain_cases import belt_run as _belt_run
+from helpers import assert_rounding_apart
 
 # (chain, belts from the start, belts from the communication point at half the run, periods);
 # T = 2 pi / 0.6 where the chain is unforced
@@ -85,8 +86,10 @@ def test_stribeck_chain_second_order_against_reference(case: str) -> None:
 
 def test_one_block_stribeck_is_the_oscillator(fmu_path: Path) -> None:
     """n = 1 on a fixed support with Stribeck (delta 1, 2 and 1.5, chi < 1 and > 1): x, v, a,
-    F_friction and mode are the oscillator FMU's bit for bit (the chain's one-row solve is the
-    oscillator's Newton iteration, friction.h's dfo_stribeck_speed)."""
+    F_friction and mode are the oscillator FMU's: the modes equal, the rest to rounding
+    (helpers.CHAIN_N1_REL: the chain's one-row solve is friction.h's dfo_stribeck_speed, the
+    oscillator's Bossak schemes step through the friction engine, their arithmetic ordered
+    otherwise)."""
     from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
     from dryfriction.params import Oscillator
 
@@ -107,7 +110,11 @@ def test_one_block_stribeck_is_the_oscillator(fmu_path: Path) -> None:
             rc = fmu.run(t_stop=float(t[-1]), dt=0.05,
                          params={**p, "h": h, "friction_law": "stribeck", "v_s": vs, "delta": dl})
         for n in names:
-            assert np.array_equal(np.asarray(getattr(rc, n))[1:, 0].astype(float), np.array(ro[n])), (p, n)
+            got = np.asarray(getattr(rc, n))[1:, 0].astype(float)
+            if n == "mode":
+                assert np.array_equal(got, np.array(ro[n])), (p, n)
+            else:
+                assert_rounding_apart(got, np.array(ro[n]), (p, n))
         assert np.count_nonzero(np.diff(rc.mode[:, 0])) >= 4
 
 

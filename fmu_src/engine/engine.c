@@ -80,10 +80,10 @@ void eng_destroy(eng *E)
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
-                          E->sA, E->shA, E->sF, E->smode, E->pin, E->hlim, E->hf, E->hmode, E->tbk,
-                          E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->lrows, E->lrw, E->lN,
+                          E->sA, E->shA, E->sF, E->smode, E->pin, E->rpin, E->hlim, E->hf, E->hmode, E->tbk,
+                          E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
-                          E->gV1};
+                          E->gV1, E->gidx, E->gve, E->ew};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
@@ -110,6 +110,8 @@ static int create_spans(eng *E, const char **err)
     ok &= (E->dlab = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     ok &= (E->clab = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->gmap = (long *)alloc_n(al, n, sizeof(long))) != NULL;
+    ok &= (E->drng = (size_t *)alloc_n(al, 2 * n, sizeof(size_t))) != NULL; /* (spans: at most n) */
+    ok &= (E->crng = (size_t *)alloc_n(al, 2 * n, sizeof(size_t))) != NULL;
     ok &= (E->lgh = (int *)alloc_n(al, L, sizeof(int))) != NULL;
     ok &= (E->ldof = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
     ok &= (E->lct = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
@@ -144,9 +146,10 @@ static int create_spans(eng *E, const char **err)
     E->sub = eng_create(&T, al, err);
     if (!E->sub || !eng_state_init(E->sub, &E->ss, 0)) { if (err) *err = "out of memory"; return 0; }
     eng *B = E->sub;
-    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1};
+    double **dg[] = {&B->gX0, &B->gV0, &B->gX1, &B->gV1, &B->gve};
     for (size_t i = 0; i < sizeof dg / sizeof dg[0]; i++) ok &= (*dg[i] = (double *)alloc_n(al, L, sizeof(double))) != NULL;
     ok &= (B->ghost = (int *)alloc_n(al, L, sizeof(int))) != NULL;
+    ok &= (B->gidx = (size_t *)alloc_n(al, L, sizeof(size_t))) != NULL;
     if (!ok) { if (err) *err = "out of memory"; return 0; }
     return 1;
 }
@@ -179,20 +182,27 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
         ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->pin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
-    ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * nc, sizeof(double))) != NULL;
+    ok &= (E->rpin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    E->rpin_ok = 0;
+    if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
+    /* the dense friction solver's workspace, O(n nc + nc^2): only where it may run (no model solver, or
+     * one that falls back on it) */
+    const int dense = !S->ops.friction || S->ops.dense_fallback || !(S->sparse && S->sparse->held_basis);
+    const size_t dnc = dense ? nc : 0, dnn = dense ? nn : 0;
+    ok &= (E->ccol = (double *)alloc_n(al, ENG_NSLOTS * n * dnc, sizeof(double))) != NULL;
     ok &= (E->cok = (int *)alloc_n(al, ENG_NSLOTS * nc, sizeof(int))) != NULL;
     ok &= (E->colp = (const double **)alloc_n(al, nc, sizeof(double *))) != NULL;
-    ok &= (E->D = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->Lc = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->Dinv = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->Jn = (double *)alloc_n(al, nn, sizeof(double))) != NULL;
-    ok &= (E->lM = (double *)alloc_n(al, 4 * nn, sizeof(double))) != NULL;
+    ok &= (E->D = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->Lc = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->Dinv = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->Jn = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->lM = (double *)alloc_n(al, 4 * dnn, sizeof(double))) != NULL;
     ok &= (E->lq = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->lz = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->lw = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;
     ok &= (E->zb = (int *)alloc_n(al, 2 * nc, sizeof(int))) != NULL;
     ok &= (E->guess = (int *)alloc_n(al, 2 * nc, sizeof(int))) != NULL;
-    if (nc > 0) {
+    if (dnc > 0) {
         const lcp_alloc la = {al->allocate, al->release, al->env};
         ok &= (E->ws = lcp_workspace_create((int)(2 * nc), &la)) != NULL;
     }
@@ -211,7 +221,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);
-    E->trig_t = NAN;
+    E->trig_tc = E->trig_ts = NAN;
     const eng_sparse *sp = S->sparse;
     if (sp && sp->span && sp->span_bind && sp->span_max > 0 && sp->held_basis && S->ops.friction &&
         sp->span_ops.friction && nc > 0 &&
@@ -230,13 +240,11 @@ int eng_caps(int scheme)
     return 0; /* no Bossak scheme propagates the Jacobian yet (the oscillator's exact scheme does, outside) */
 }
 
-int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
+int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian, eng_state *s)
 {
-    const size_t n = E->S.n, nc = E->S.nc;
     memset(s, 0, sizeof *s);
     s->n = n;
     s->nc = nc;
-    const eng_alloc *al = &E->al;
     int ok = 1;
     ok &= (s->X = (double *)alloc_n(al, n, sizeof(double))) != NULL;
     ok &= (s->V = (double *)alloc_n(al, n, sizeof(double))) != NULL;
@@ -248,17 +256,24 @@ int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
     ok &= (s->t_break = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (s->break_dir = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     if (with_jacobian) ok &= (s->J = (double *)alloc_n(al, 4 * n * n, sizeof(double))) != NULL;
-    if (!ok) eng_state_free(E, s);
+    if (!ok) eng_state_release(al, s);
     return ok;
 }
 
-void eng_state_free(const eng *E, eng_state *s)
+void eng_state_release(const eng_alloc *al, eng_state *s)
 {
     void *const ptrs[] = {s->X, s->V, s->A, s->hA, s->F, s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
-        if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+        if (ptrs[i]) al->release(al->env, ptrs[i]);
     memset(s, 0, sizeof *s);
 }
+
+int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
+{
+    return eng_state_alloc(&E->al, E->S.n, E->S.nc, with_jacobian, s);
+}
+
+void eng_state_free(const eng *E, eng_state *s) { eng_state_release(&E->al, s); }
 
 void eng_state_copy(eng_state *dst, const eng_state *src)
 {

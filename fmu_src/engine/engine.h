@@ -134,7 +134,7 @@ struct eng_inputs_s;
  * ramps) and the belts still: exc the excitation, s the state, in the inputs, Fb (nc) the contacts'
  * breakaway limits under them. Returns a time tb such that no contact's holding force reaches its
  * limit on [s->t, tb) (+INFINITY: never; NaN: unknown). The scheme then takes at once the whole grid
- * steps that end at least one grid step before tb (and outside the observer's window), to the bits
+ * steps that end at least one grid step before tb (one phase for the observer), to the bits
  * of taking them one by one, provided the model's friction solver returns V1 = V exactly on a held
  * pinned DOF (the scalar solver of one contact does; the dense default need not: no hook with it). */
 typedef double (*eng_breakaway_fn)(void *ctx, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
@@ -155,6 +155,10 @@ typedef struct {
     eng_friction_fn friction;
     /* The model's closed-form breakaway of a stuck structure; NULL: none (every stuck step taken). */
     eng_breakaway_fn breakaway;
+    /* The model's friction solver calls eng_dense_friction for some problems (its fallback): the
+     * engine keeps the dense workspace, O(n nc + nc^2), which it allocates only for that, without a
+     * model solver, or without the held basis solve (eng_sparse.held_basis). */
+    int dense_fallback;
 } eng_ops;
 
 /* The harmonic excitation P_i(t) = Pc[i] cos(omega t + phi0) - Ps[i] sin(omega t + phi0) (Pc, Ps:
@@ -185,9 +189,13 @@ typedef struct eng_harmonic_s {
  *     span       the spans around the candidate contacts (cand: nc flags): labels per DOF (dof_lab,
  *                n) and per contact (ct_lab, nc): 0 outside every span, s + 1 in span s, -(s + 1) a
  *                ghost of span s (a DOF), or a contact carried by span s without friction (its row
- *                on the span's DOFs and ghosts: a model may keep its numbering so). Every candidate in
- *                a span (label > 0), a ghost of one span in no other, spans disjoint. Returns the
- *                number of spans; 0: step the whole structure (a small one).
+ *                on the span's DOFs and ghosts: a model may keep its numbering so); and each span's
+ *                index ranges: span s's labels lie in the DOFs [dof_rng[2 s], dof_rng[2 s + 1]) and
+ *                the contacts [ct_rng[2 s], ct_rng[2 s + 1]) (2 n entries each). Labels are read only
+ *                inside these ranges, so the model writes those only (its work the spans' size, not
+ *                the structure's). Every candidate in a span (label > 0), a ghost of one span in no
+ *                other, spans disjoint. Returns the number of spans; 0: step the whole structure (a
+ *                small one).
  *     span_bind  make span_ops act on the span whose DOFs (ghosts included, ascending) are dofs[nd],
  *                ghost[k] saying which are ghosts, and whose contacts are cts[nct] (ascending), in
  *                that local numbering
@@ -213,7 +221,7 @@ typedef struct eng_harmonic_s {
  *                engine's finish sets them), 0 when some contact's margin is <= 0 (s untouched; the
  *                trial and its solve in F's xp, ph, V1, f: the engine goes on from them its general
  *                way). Asked by the located scheme on a grid step
- *                whose A needs no re-basing, with held inputs and no belts. */
+ *                with held inputs and no belts (A0: A, or re-based where the step is a run's first). */
 typedef struct eng_held_step_s eng_held_step;
 typedef struct {
     int held_basis;
@@ -221,10 +229,37 @@ typedef struct {
     double (*contact_breakaway)(void *ctx, size_t j, const struct eng_harmonic_s *exc, const struct eng_state_s *s,
                                 const struct eng_inputs_s *in, const double *Fb);
     size_t span_max;
-    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab);
+    size_t (*span)(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng);
     void (*span_bind)(void *ctx, const size_t *dofs, const int *ghost, size_t nd, const size_t *cts, size_t nct);
     eng_ops span_ops;
 } eng_sparse;
+
+/* eng_sparse.span for a row of n DOFs, DOF i with contact i and coupled to its neighbours only (a
+ * chain of blocks): w DOFs either side of each candidate, spans merged when less than 3 DOFs
+ * apart (distinct ghosts), the DOFs next to a span its ghosts (their contacts carried: a span's
+ * contacts are its DOFs'), labelled over its range only. None (0) where w is 0 or n <= 2 w + 3. */
+static inline size_t eng_row_spans(size_t n, size_t w, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng,
+                                   size_t *ct_rng)
+{
+    if (w == 0 || n <= 2 * w + 3) return 0;
+    size_t ns = 0, pa = 0, pb = 0;
+    for (size_t c = 0; c <= n; c++) {
+        if (c < n && !cand[c]) continue;
+        const size_t a = (c > w) ? c - w : 0, b = (c + w + 1 < n) ? c + w + 1 : n;
+        if (c < n && ns > 0 && a <= pb + 2) { pb = b; continue; }
+        if (ns > 0) { /* label the span [pa, pb) and its ghosts, its contacts as its DOFs */
+            const size_t lo = (pa > 0) ? pa - 1 : 0, hi = (pb < n) ? pb + 1 : n, k = ns - 1;
+            for (size_t i = lo; i < hi; i++) ct_lab[i] = dof_lab[i] = (i < pa || i >= pb) ? -(int)ns : (int)ns;
+            dof_rng[2 * k] = ct_rng[2 * k] = lo;
+            dof_rng[2 * k + 1] = ct_rng[2 * k + 1] = hi;
+        }
+        if (c == n) break;
+        pa = a;
+        pb = b;
+        ns++;
+    }
+    return ns;
+}
 
 /* What eng_sparse.step_held is given: the step's arithmetic as the engine's trial_step, its solve
  * and finish do it, per DOF i and contact j:
@@ -244,12 +279,17 @@ struct eng_held_step_s {
     double cw, sw;              /* cos and sin of the excitation's phase at the step's end */
     const double *Pc, *Ps;      /* n: the excitation (NULL: 0) */
     const double *u;            /* n: external forces */
-    const double *A0;           /* n: Bossak's A for the step (not re-based: s->A) */
+    const double *A0;           /* n: Bossak's A for the step (s->A, or the engine's re-based A0) */
     const int *st;              /* nc: modes (0 held, +1/-1 sliding; a contact without friction: 1) */
     const double *lim;          /* nc: held contacts' breakaway limit, sliding ones' kinetic magnitude */
     const double *Fb;           /* nc: breakaway limits (0: no friction, never a candidate) */
     double *xp, *ph, *V1, *f;   /* n, n, n, nc: out, x_pred, p_hat and the basis solve's V1 and f (the
                                  * engine's workspace: where the step is not taken it goes on from them) */
+    int run;                    /* 0: a step on its own; 1: the first step of a run whose F differs from
+                                 * step to step only in cw, sw and A0 (the other arrays, their contents
+                                 * and the slot's factor unchanged while the run lasts); 2: a later step
+                                 * of that run, the last one taken (the model may keep what it took from
+                                 * F at the run's first step, in its own layout, and read that instead) */
 };
 
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
@@ -267,6 +307,7 @@ typedef struct {
     double alpha;               /* Bossak parameter in [-1/3, 0] */
     int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
     int friction_updates;       /* paper: coefficient updates (re-solves) per step, >= 0 */
+    int account_energy;         /* keep eng_state's energy accounts (O(n) per step; no stuck fast path) */
     int fast_paths;             /* skip work a run does not need, to the same numbers: the located scheme's
                                  * stuck fast path where the model supplies ops.breakaway */
     double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
@@ -313,6 +354,12 @@ typedef struct eng_state_s {
     int *break_dir;             /* nc: its side */
     double t_switch;            /* the time of the last switch (-inf: none) */
     long long steps, solves, pivot_steps, switches;  /* counters */
+    /* energy accounts since the start (J), kept with eng_setup.account_energy: the work of the applied
+     * forces (excitation + F_ext, trapezoidal rule per (sub-)step), of friction (the step's force, or
+     * for Stribeck the mean of its ends, times the DOFs' displacement along w_j) and the dissipation in
+     * C (trapezoidal); so that the mechanical energy's change is W_applied + W_friction - D_damping to
+     * the scheme's error */
+    double W_applied, W_friction, D_damping;
     long long exc_n;            /* excitation cache: cos, sin of omega (t0 + exc_n h) + phi0 (-1: empty) */
     double exc_c, exc_s;
     double *J;                  /* (2n)^2 row-major d(X, V)/d(X, V)(t_ref), or NULL: not propagated (eng_caps) */
@@ -329,8 +376,10 @@ typedef void (*eng_switch_fn)(void *ctx, double t, size_t contact, const eng_sta
  * extremes, stick times, transitions and dissipated energy. */
 typedef struct {
     double ta, tb;
-    const double *X0;           /* n: positions at ta (s->X holds those at tb) */
-    const int *mode0;           /* nc: modes during the phase (s->mode holds those after it) */
+    const double *X0;           /* n: positions at ta */
+    const double *X1;           /* n: positions at tb */
+    const int *mode0;           /* nc: modes during the phase (located: those of its start; paper and
+                                 * consistent: the step's friction problem's, those at its end) */
     const double *f;            /* nc: the contact forces over it (for the work: the step's end value, or
                                  * for Stribeck the mean of its ends) */
     const double *v_belt;       /* nc: belts (NULL: fixed) */
@@ -338,7 +387,11 @@ typedef struct {
 
 /* The observer: on_phase is called only for phases that overlap [t_start, t_stop] (so a run that
  * observes nothing pays one comparison per phase); every internal step, and every sub-step
- * between switches, is a phase. */
+ * between switches, is a phase. It reads the phase (ph) and the state s after it; in a model's
+ * specialised fused steps (engine_step.h's ENG_FUSED_N) the state is written back only when a run
+ * of them ends, so that there s's time and arrays are those of the run's start (ph->tb and ph->X1
+ * are the phase's end). Such a model may also keep its observer's values in locals over the run
+ * (engine_step.h's optional ENG_OBS_RUN hooks; by default on_phase is called for every phase). */
 typedef struct {
     double t_start, t_stop;
     void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);
@@ -350,6 +403,10 @@ typedef struct {
     void *switch_ctx;
     const eng_observer *obs;    /* NULL: none */
     int stop_at_switch;         /* return ENG_SWITCHED at the first switch, the state complete there */
+    int report_turns;           /* a contact without friction reports each change of its mode (its slip's
+                                 * direction) as a switch, at the end of the step that holds it (a
+                                 * model that counts such a block's turns, as its closed form does);
+                                 * else its mode follows its slip silently */
 } eng_hooks;
 
 /* ---- the engine ---------------------------------------------------------------------------------- */
@@ -374,6 +431,10 @@ int eng_caps(int scheme);
 /* State arrays through the engine's callbacks (with_jacobian: J too); 0 on failure. */
 int eng_state_init(const eng *E, eng_state *s, int with_jacobian);
 void eng_state_free(const eng *E, eng_state *s);
+/* The same for n DOFs and nc contacts through al, without an engine (a saved state); release with
+ * eng_state_release and the same al. */
+int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian, eng_state *s);
+void eng_state_release(const eng_alloc *al, eng_state *s);
 /* dst (initialised for the same sizes) := src, arrays included (J only when both have it). */
 void eng_state_copy(eng_state *dst, const eng_state *src);
 

@@ -19,11 +19,22 @@
 
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
+#define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to a holding force at its limit */
+#define PLACE_REL 1e-9           /* a stick's kept breakaway: beyond a step by more than this share of t + h */
 #define HALVINGS 60              /* search for a resolvable sub-step before the first switch */
 #define LEMKE_PIVOTS_PER_N 8     /* Lemke's pivot budget: 8 (2 nc) + 16 */
 #define ACTIVE_SET_ROUNDS 4      /* the active-set fallback: rounds per contact */
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
 #define DEPENDENT_REL 1e-13      /* a Cholesky pivot below this share of its diagonal: a dependent row */
+
+/* The model's breakaway of the current stick (ENG_BREAKAWAY, or its contacts'), kept over one call of
+ * eng_advance (the stuck fast path's, and the located step's for a stick that begins inside a step):
+ * tb for the stick that holds since the switch count sw (known: asked). */
+typedef struct {
+    double tb;
+    long long sw;
+    int known;
+} stick_cache;
 
 struct eng {
     eng_setup S;
@@ -39,10 +50,21 @@ struct eng {
                                   * LCP's sliding limit (Stribeck: min(mu_s, mu_k) N) */
     const double *vb;            /* nc: belts of the current call (the inputs' or zeros) */
     const eng_inputs *loads_for; /* the held inputs the loads above are of (NULL: none; loads_at) */
+    int all_friction;            /* every contact has friction under these loads (Fb > 0: no mode follows a slip) */
     dfo_bossak_kin kin_grid;     /* the kinematics of a grid step h */
     double *zero_nc;
     /* per-DOF workspace */
     double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
+    double *ew;                  /* 3 n: the energy accounts' work (account; NULL without them) */
+    int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
+    int *rpin;                   /* n: the pins (needs_rebase's) of the current phase's start, where rpin_ok */
+    int rpin_ok;                 /* (rebase sets it, with held inputs; cleared with jk_ok) */
+    int held_ready;              /* xp, ph, V1, f hold the model's declined fused step from the state as it is
+                                  * (held_steps, for held_step's next call; eng_advance clears it) */
+    stick_cache stick;           /* the current stick's breakaway (eng_advance clears it) */
+    int fused_ready;             /* xp, ph, V1, f, A0, lim hold fused_steps' declined located grid step from the
+                                  * state as it is (a contact switches in it: step_located's phase 0 takes it
+                                  * as its trial; eng_advance clears it) */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;
@@ -52,8 +74,8 @@ struct eng {
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
-    double trig_t, trig_c, trig_s; /* cos, sin of omega t + phi0 at the last t evaluated (trig_at: a cache
-                                  * keyed by t, as the slots' by their coefficients; NaN: empty) */
+    double trig_tc, trig_c, trig_ts, trig_s; /* cos and sin of omega t + phi0 at the last t each was evaluated
+                                  * for (trig_at; NaN: none) */
     /* dense: the columns A_slot^-1 w_j of each slot (ENG_NSLOTS x nc x n), solved on first use after
      * the slot's factorisation (cok: solved), the selected ones' pointers (colp), D (nc x nc),
      * Cholesky, Lemke's 2 nc problem */
@@ -79,13 +101,18 @@ struct eng {
     size_t *ldof, *lct, *lidx;
     size_t lnnz;                 /* the longest contact row: lidx, lw hold lnnz entries per contact */
     long *gmap;
+    size_t *drng, *crng;         /* per span k: [drng[2k], drng[2k + 1]) the DOF indices holding its labels,
+                                  * crng likewise the contacts' (eng_sparse.span's) */
     eng_row *lrows;
     double *lrw, *lN, *lmus, *lmuk, *lPc, *lPs, *lF, *lNe, *lvb;
     dfo_friction_law *llaw;
     eng_state ps;                /* the whole step's start (its arrays only) */
-    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine): their states at
-     * the step's start (gt0) and end (length gH), interpolated */
+    /* a sub-engine's ghosts (ghost: n flags, NULL in the whole structure's engine; gidx: the ngh
+     * ghosts' indices, gve: their velocities at a trial's end): their states at the step's start (gt0)
+     * and end (length gH), interpolated */
     int *ghost;
+    size_t *gidx, ngh;
+    double *gve;
     double gt0, gH;
     double *gX0, *gV0, *gX1, *gV1;
 };

@@ -13,8 +13,20 @@
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
  *   ENG_HELD_BASIS(E)            its friction solver takes the held solves of the mass slot (eng_sparse)
  *   ENG_HAS_STEP_HELD(E), ENG_STEP_HELD(E, F, s)   its fused step in the held pattern (eng_sparse)
+ *   ENG_STEP_RUN(E, F, s)        that step within a run (F->run > 0; by default ENG_STEP_HELD): a model
+ *                                may inline it into the run's loop alone
  *   ENG_HAS_CONTACT_BREAKAWAY(E), ENG_CONTACT_BREAKAWAY(E, j, s, in, Fb)   a held contact's breakaway
  *                                in closed form (eng_sparse)
+ *   ENG_ROW_DOT(E, j, x)         w_j . x for the contact rows it knows (a slip; row_dot's arithmetic)
+ *   ENG_OBSERVE(obs, ph, s)      the observer's call (obs->on_phase), for a model that inlines its own
+ *   ENG_OBS_RUN, ENG_OBS_RUN_BEGIN(obs, R, s), ENG_OBS_RUN_PHASE(obs, R, ph, s), ENG_OBS_RUN_END(obs, R)
+ *                                the observer over a run of fused steps: R, a local of type ENG_OBS_RUN,
+ *                                set up by _BEGIN (obs may be NULL; s the state at the run's start, its
+ *                                phases begin at or after s->t), each observed step's phase given to
+ *                                _PHASE, R written back by _END when the run ends (a model keeps its
+ *                                observables in registers over the run; by default R is unused and
+ *                                _PHASE is ENG_OBSERVE)
+ *   ENG_FUSED_N, ENG_FUSED_NC    the sizes as constants: the fused steps' state in local arrays
  *   ENG_FN(name), ENG_API        the names and linkage of the entry points (eng_start, eng_advance,
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
@@ -70,6 +82,9 @@
 #ifndef ENG_STEP_HELD
 #define ENG_STEP_HELD(E, F, s) ((E)->S.sparse->step_held((E)->S.ops.ctx, (F), (s)))
 #endif
+#ifndef ENG_STEP_RUN
+#define ENG_STEP_RUN(E, F, s) ENG_STEP_HELD(E, F, s)
+#endif
 #ifndef ENG_HAS_CONTACT_BREAKAWAY
 #define ENG_HAS_CONTACT_BREAKAWAY(E) ((E)->S.sparse && (E)->S.sparse->contact_breakaway)
 #endif
@@ -82,6 +97,28 @@
 #endif
 #ifndef ENG_BREAKAWAY
 #define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
+#endif
+
+#ifndef ENG_ROW_DOT
+#define ENG_ROW_DOT(E, j, x) row_dot(&(E)->S.rows[(j)], (x))
+#endif
+#ifndef ENG_OBSERVE
+#define ENG_OBSERVE(obs, ph, s) ((obs)->on_phase((obs)->ctx, (ph), (s)))
+#endif
+#ifndef ENG_OBS_RUN
+#define ENG_OBS_RUN int
+#define ENG_OBS_RUN_BEGIN(obs, R, s) ((void)(obs), (void)(s), (void)((R) = 0))
+#define ENG_OBS_RUN_PHASE(obs, R, ph, s) ((void)(R), ENG_OBSERVE(obs, ph, s))
+#define ENG_OBS_RUN_END(obs, R) ((void)(obs), (void)(R))
+#endif
+
+/* A model whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC): the fused steps' and the trials'
+ * vectors in local arrays, which the compiler keeps in registers (stores through the engine's arrays
+ * would make it reload every double it reads after them). */
+#if defined(ENG_FUSED_N) && defined(ENG_FUSED_NC)
+#define ENG_FUSED_LOCAL 1
+#else
+#define ENG_FUSED_LOCAL 0
 #endif
 
 /* The functions of every step are inlined into the schemes (the state in registers; a call and its
@@ -101,6 +138,17 @@
 /* ---- small algebra --------------------------------------------------------------------------- */
 
 static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
+
+/* fmax(a, b) and fmin(a, b) for b not NaN (a NaN a gives b, as fmax and fmin do), and f clamped to
+ * [-lim, lim] (lim > 0 not NaN; a NaN f gives lim) as fmax(-lim, fmin(lim, f)) does: comparisons,
+ * the same values; fmin and fmax are library calls without -ffinite-math-only, on the step's path. */
+static ENG_HOT double max_b(double a, double b) { return (a > b) ? a : b; }
+static ENG_HOT double min_b(double a, double b) { return (a < b) ? a : b; }
+static ENG_HOT double clamp_lim(double f, double lim)
+{
+    const double u = min_b(f, lim);
+    return max_b(u, -lim);
+}
 
 /* w_j . x */
 static double row_dot(const eng_row *R, const double *x)
@@ -184,6 +232,7 @@ static ENG_HOT void loads_at(eng *E, const eng_inputs *in, double t)
     const eng_setup *S = &E->S;
     if (in && in == E->loads_for) return;
     const int rp = ramped(in);
+    int fr = 1;
     E->loads_for = rp ? NULL : in;
     for (size_t i = 0; i < ENG_N(E); i++)
         E->u[i] = !in ? 0.0 : rp ? poly_at(in->F_ext, in->dF_ext, in, i, t) : (in->F_ext ? in->F_ext[i] : 0.0);
@@ -195,7 +244,9 @@ static ENG_HOT void loads_at(eng *E, const eng_inputs *in, double t)
         E->Fb[j] = E->mu_b[j] * N;
         const int strib = S->law && S->law[j].law == DFO_LAW_STRIBECK;
         E->mlN[j] = strib ? fmin(S->law[j].mu_s, S->law[j].mu_k) * N : E->mukN[j];
+        fr &= E->Fb[j] > 0.0;
     }
+    E->all_friction = fr;
     E->vb = (in && in->v_belt) ? in->v_belt : E->zero_nc;
 }
 
@@ -210,16 +261,22 @@ static double slide_mag(const eng *E, size_t j, double u)
 }
 
 /* cos and sin of omega t + phi0, evaluated (dmath), the last time's kept (a switch's time is asked
- * for several times: the rest rule, the restart, the re-basing's accelerations and jerks) */
-static void trig_at(eng *E, double t, double *cw, double *sw)
+ * for several times: the rest rule, the restart, the re-basing's accelerations and jerks); only the
+ * ones asked for (want_c, want_s: the excitation's P reads cos where Pc is given, sin where Ps is;
+ * its rate reads both), each kept for the last time it was evaluated */
+static void trig_at(eng *E, double t, double *cw, double *sw, int want_c, int want_s)
 {
-    if (t != E->trig_t) {
-        E->trig_t = t;
-        E->trig_c = dfo_cos(E->S.exc.omega * t + E->S.exc.phi0);
-        E->trig_s = dfo_sin(E->S.exc.omega * t + E->S.exc.phi0);
+    const double th = E->S.exc.omega * t + E->S.exc.phi0;
+    if (want_c && t != E->trig_tc) {
+        E->trig_tc = t;
+        E->trig_c = dfo_cos(th);
     }
-    *cw = E->trig_c;
-    *sw = E->trig_s;
+    if (want_s && t != E->trig_ts) {
+        E->trig_ts = t;
+        E->trig_s = dfo_sin(th);
+    }
+    *cw = want_c ? E->trig_c : 0.0;
+    *sw = want_s ? E->trig_s : 0.0;
 }
 
 /* cos and sin of omega t + phi0: from the state's cache when t is its grid point, else evaluated */
@@ -230,7 +287,7 @@ static ENG_HOT void phase_of(eng *E, const eng_state *s, double t, double *cw, d
         *sw = dfo_clamp1(s->exc_s);
         return;
     }
-    trig_at(E, t, cw, sw);
+    trig_at(E, t, cw, sw, E->S.exc.Pc != NULL, E->S.exc.Ps != NULL);
 }
 
 /* P(t) + F_ext into out (the loads already at t) */
@@ -252,7 +309,7 @@ static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw, sw;
-    trig_at(E, t, &cw, &sw);
+    trig_at(E, t, &cw, &sw, 1, 1);
     const int rp = ramped(in);
     for (size_t i = 0; i < ENG_N(E); i++) {
         double p = rp ? poly_rate(in->dF_ext, in, i, t) : 0.0;
@@ -263,10 +320,10 @@ static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 }
 
 /* contact j's slip velocity w_j . V - vb_j */
-static double slip(const eng *E, size_t j, const double *V) { return row_dot(&E->S.rows[j], V) - E->vb[j]; }
+static ENG_HOT double slip(const eng *E, size_t j, const double *V) { return ENG_ROW_DOT(E, j, V) - E->vb[j]; }
 
 /* Factor slot with the coefficients, unless it holds them already. */
-static int factor_slot(eng *E, int slot, double cM, double cC, double cK)
+static ENG_HOT int factor_slot(eng *E, int slot, double cM, double cC, double cK)
 {
     if (!ENG_HAS_C(E)) cC = 0.0;
     double *c = E->slot_c[slot];
@@ -302,12 +359,29 @@ static void columns(eng *E, int slot, size_t m)
 /* ---- constrained solves ------------------------------------------------------------------- */
 
 /* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
- * f (other entries untouched). m: |S|. Uses cols, D, Lc, rhs, sol, sel. */
+ * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S, their Delassus matrix by
+ * Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
 static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
     ENG_SOLVE(E, slot, r, y);
+    if (n == 1 && nc == 1) { /* one DOF, one contact: the steps below in scalars, the same arithmetic */
+        if (!held[0]) return;
+        const double w = S->rows[0].w[0];
+        double col = 0.0 + 1.0 * w; /* row_axpy into zeros, then the solve */
+        ENG_SOLVE(E, slot, &col, &col);
+        const double D = 0.0 + w * col, rhs = target[0] - (0.0 + w * y[0]);
+        double x = 0.0;
+        if (!(!(D > DEPENDENT_REL * fabs(D)) || !(D > 0.0))) { /* chol's test of a dependent row */
+            const double L = sqrt(D);
+            x = rhs / L;
+            x = x / L;
+        }
+        y[0] += col * x;
+        f[0] = x;
+        return;
+    }
     size_t m = 0;
     for (size_t j = 0; j < nc; j++)
         if (held[j]) E->sel[m++] = (int)j;
@@ -341,8 +415,8 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
     }
     const size_t nc = ENG_NC(E);
     for (size_t j = 0; j < nc; j++) {
-        E->hlim[j] = held[j] ? E->Fb[j] : 0.0;
-        E->hmode[j] = held[j] ? 0 : 1;
+        E->hlim[j] = dfo_select(held[j], E->Fb[j], 0.0);
+        E->hmode[j] = !held[j];
     }
     eng_problem P;
     P.slot = ENG_SLOT_MASS;
@@ -355,8 +429,7 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
     P.N = E->Nn;
     P.law = NULL;
     (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->hmode, y, E->hf, NULL);
-    for (size_t j = 0; j < nc; j++)
-        if (held[j]) f[j] = E->hf[j];
+    for (size_t j = 0; j < nc; j++) f[j] = dfo_select(held[j], E->hf[j], f[j]);
 }
 
 /* ---- a span's ghosts (a sub-engine's: E->ghost) ------------------------------------------------ */
@@ -376,25 +449,34 @@ static void ghost_at(const eng *E, size_t i, double tau, double *x, double *v, d
 /* The ghosts' states at the state's time, written into it. */
 static void ghosts_now(const eng *E, eng_state *s)
 {
-    for (size_t i = 0; i < ENG_N(E); i++)
-        if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+    for (size_t k = 0; k < E->ngh; k++) {
+        const size_t i = E->gidx[k];
+        ghost_at(E, i, s->t - E->gt0, &s->X[i], &s->V[i], &s->A[i], NULL);
+    }
 }
 
 /* Physical accelerations at the state in the modes mode[]: M a = P + F_ext - K X - C V + W' f,
  * sliding contacts' f their kinetic force at their slip speed, held ones (mode 0 with friction)
  * solved for slip acceleration 0. f out (nc), a out (n). The loads at t must be set. */
+/* r -= K x + C v (K first, then C where there is one; y: scratch) */
+static ENG_HOT void minus_kc(eng *E, const double *x, const double *v, double *r, double *y)
+{
+    const size_t n = ENG_N(E);
+    ENG_APPLY_K(E, x, y);
+    for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, v, y);
+        for (size_t i = 0; i < n; i++) r[i] -= y[i];
+    }
+}
+
 static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, double *a, double *f)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const size_t nc = ENG_NC(E);
     double *r = E->r, *y = E->y;
     applied_at(E, s, t, r);
-    ENG_APPLY_K(E, s->X, y);
-    for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    if (ENG_HAS_C(E)) {
-        ENG_APPLY_C(E, s->V, y);
-        for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    }
+    minus_kc(E, s->X, s->V, r, y);
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = mode[j] == 0 && has_friction(E, j);
         f[j] = 0.0;
@@ -404,25 +486,20 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
         }
     }
     if (E->ghost) /* a ghost's acceleration is prescribed (Dirichlet: the solver returns it) */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) r[i] = s->A[i];
+        for (size_t k = 0; k < E->ngh; k++) r[E->gidx[k]] = s->A[E->gidx[k]];
     held_solve(E, r, E->held, a, f);
 }
 
 /* Jerks x''' at the state in its modes (held contacts' slip jerk 0), from the time derivative of the
- * equation of motion with the inputs' rates; a: the physical accelerations. Into j. */
+ * equation of motion with the inputs' rates; a: the physical accelerations (read only with damping
+ * or a sliding law: rebase computes them only then). Into j. */
 static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double *a, double *jk)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const size_t nc = ENG_NC(E);
     double *r = E->r, *y = E->y;
     applied_rate(E, in, s->t, r);
-    ENG_APPLY_K(E, s->V, y);
-    for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    if (ENG_HAS_C(E)) {
-        ENG_APPLY_C(E, a, y);
-        for (size_t i = 0; i < n; i++) r[i] -= y[i];
-    }
+    minus_kc(E, s->V, a, r, y);
     const int rp = ramped(in);
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = s->mode[j] == 0 && has_friction(E, j);
@@ -440,8 +517,7 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
         row_axpy(&S->rows[j], df, r);
     }
     if (E->ghost)
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0, NULL, NULL, NULL, &r[i]);
+        for (size_t k = 0; k < E->ngh; k++) ghost_at(E, E->gidx[k], s->t - E->gt0, NULL, NULL, NULL, &r[E->gidx[k]]);
     held_solve(E, r, E->held, jk, E->f2);
 }
 
@@ -567,6 +643,15 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
     return ENG_OK;
 }
 
+/* The force a held contact may carry in the problem P: its limit, and for a Stribeck contact at
+ * least the law's value at rest, N mu(0) (a slide whose speed has no positive root, q below N mu(0),
+ * comes to rest and holds: the active set would otherwise flip it between held and sliding). */
+static double held_limit(const eng_problem *P, size_t j)
+{
+    if (!P->law || P->law[j].law != DFO_LAW_STRIBECK) return P->limit[j];
+    return fmax(P->limit[j], P->N[j] * dfo_friction_mu(&P->law[j], 0.0));
+}
+
 /* The LCP by an active set (principal pivoting on the basis solve): infeasible contacts flipped,
  * at most ACTIVE_SET_ROUNDS per contact: for the Stribeck law, a singular D, and where Lemke fails. */
 static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, double *V1, double *f, int *pivots)
@@ -580,7 +665,7 @@ static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, doub
         for (size_t j = 0; j < nc; j++) {
             if (!(P->limit[j] > 0.0)) continue;
             const double v = row_dot(&E->S.rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
-            if (mode[j] == 0 && fabs(f[j]) > P->limit[j]) { mode[j] = -sgn(f[j]); changed = 1; }
+            if (mode[j] == 0 && fabs(f[j]) > held_limit(P, j)) { mode[j] = -sgn(f[j]); changed = 1; }
             else if (mode[j] != 0 && mode[j] * v < 0.0) { mode[j] = 0; changed = 1; }
         }
         if (!changed) { if (pivots) *pivots = piv; return ENG_OK; }
@@ -605,7 +690,7 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     for (size_t j = 0; j < nc && feasible; j++) {
         if (!(P->limit[j] > 0.0)) continue;
         const double v = row_dot(&S->rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
-        feasible = (mode[j] == 0) ? fabs(f[j]) <= P->limit[j] : mode[j] * v > 0.0;
+        feasible = (mode[j] == 0) ? fabs(f[j]) <= held_limit(P, j) : mode[j] * v > 0.0;
     }
     if (feasible) return ENG_OK;
     /* the contacts with friction: the 2 m LCP in (u+, u-), w = (l + f, l - f), f = D^-1 (u+ - u- - c) */
@@ -673,10 +758,10 @@ typedef struct {
 
 /* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
  * lengths' tolerance; a held contact's pin aside) */
-static int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
+static ENG_HOT int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
 {
-    const double hA = s->hA[i];
-    return E->S.alpha != 0.0 && hh != hA && fabs(hh - hA) > tol && E->S.rate_max * fmax(hh, hA) <= 1.0;
+    const double hA = s->hA[i]; /* (without branches: a loop's test) */
+    return (E->S.alpha != 0.0) & (hh != hA) & (fabs(hh - hA) > tol) & (E->S.rate_max * max_b(hA, hh) <= 1.0);
 }
 
 /* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
@@ -687,35 +772,65 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
+    if (S->alpha == 0.0) return 0;
     int other = 0;
     for (size_t i = 0; i < n; i++) other |= hh != s->hA[i];
-    if (!other || S->alpha == 0.0) return 0;
+    if (!other) return 0;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    int *pin = E->pin;
+    memset(pin, 0, n * sizeof(int));
     if (E->ghost)
-        for (size_t i = 0; i < n; i++) E->pin[i] |= E->ghost[i];
+        for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
+    for (size_t j = 0; j < ENG_NC(E); j++) /* (the mode's test without a branch) */
+        if (S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
+    /* rebases' test on the DOFs not pinned, without branches (the pins complete: rebase and
+     * step_spans read them) */
     int any = 0;
-    for (size_t i = 0; i < n; i++) any |= !E->pin[i] && rebases(E, s, i, hh, tol);
+    for (size_t i = 0; i < n; i++) any |= (pin[i] == 0) & rebases(E, s, i, hh, tol);
     return any;
 }
 
-static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, double *A0)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
     const double a = S->alpha;
-    for (size_t i = 0; i < n; i++) E->A0[i] = s->A[i];
-    if (!needs_rebase(E, s, hh)) return;
+    for (size_t i = 0; i < n; i++) A0[i] = s->A[i];
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
+    /* the pins of the phase's start, kept for its further trials (rpin_ok, cleared with jk_ok) where
+     * the loads are held (a ramp's limits may change which contacts have friction) */
+    int any = 0;
+    if (E->rpin_ok) {
+        for (size_t i = 0; i < n; i++) any |= (E->rpin[i] == 0) & rebases(E, s, i, hh, tol);
+    } else {
+        any = needs_rebase(E, s, hh);
+        if (any && !ramped(in)) {
+            memcpy(E->rpin, E->pin, n * sizeof(int));
+            E->rpin_ok = 1;
+        }
+    }
+    if (!any) return;
+    const int *pin = E->rpin_ok ? E->rpin : E->pin;
     double *acc = E->acc, *jk = E->jk;
-    loads_at(E, in, s->t);
-    phys_accel(E, s, s->t, s->mode, acc, E->f2);
-    jerks(E, in, s, acc, jk);
+    if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
+        loads_at(E, in, s->t);
+        /* (the physical accelerations: for the jerks' damping and Stribeck terms only; where C is 0,
+         * ops.apply_C NULL, a model whose ENG_HAS_C holds applies it to zeros) */
+        if ((ENG_HAS_C(E) && S->ops.apply_C) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
+        else if (ENG_HAS_C(E)) memset(acc, 0, ENG_N(E) * sizeof(double));
+        jerks(E, in, s, acc, jk);
+        E->jk_ok = 1;
+    }
     loads_at(E, in, t1);
-    for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] && rebases(E, s, i, hh, tol)) E->A0[i] = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+    for (size_t i = 0; i < n; i++) { /* (jk is set for every DOF: both values, one selected, no branch) */
+        const double Ar = s->A[i] + a * (hh - s->hA[i]) * jk[i];
+        A0[i] = dfo_select((pin[i] == 0) & rebases(E, s, i, hh, tol), Ar, A0[i]);
+    }
+}
+
+static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
+{
+    rebase_into(E, in, s, hh, t1, E->A0);
 }
 
 static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, trial *T)
@@ -730,26 +845,39 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
     T->cC = 1.0;
     T->cK = E->b * hh / E->g;
     if (!factor_slot(E, T->slot, T->cM, T->cC, T->cK)) return ENG_ERR_BAD_INPUT;
-    rebase(E, in, s, hh, t1);
+#if ENG_FUSED_LOCAL /* (the vectors in locals, stored into the engine's arrays at the end) */
+    double A0[ENG_FUSED_N], xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N];
+#else
+    double *const A0 = E->A0, *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2,
+                 *const ph = E->ph;
+#endif
+    rebase_into(E, in, s, hh, t1, A0);
+    const dfo_bossak_kin K = T->kin;
+    const double g1 = E->g1;
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
     for (size_t i = 0; i < n; i++) {
-        E->xp[i] = s->X[i] + T->kin.pred_V * s->V[i] + T->kin.pred_A * E->A0[i];
-        E->r[i] = -a * E->A0[i] + (1.0 - a) * (s->V[i] * T->kin.c1 + E->g1 * E->A0[i]);
+        xp[i] = s->X[i] + K.pred_V * s->V[i] + K.pred_A * A0[i];
+        r[i] = -a * A0[i] + (1.0 - a) * (s->V[i] * K.c1 + g1 * A0[i]);
     }
     if (E->ghost) /* a ghost's x_pred such that x_pred + corr_V V1 is its prescribed end position */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) {
-                double xg, vg;
-                ghost_at(E, i, s->t - E->gt0 + hh, &xg, &vg, NULL, NULL);
-                E->xp[i] = xg - T->kin.corr_V * vg;
-            }
-    ENG_APPLY_M(E, E->r, E->y);
-    applied_at(E, s, t1, E->ph);
-    ENG_APPLY_K(E, E->xp, E->y2);
-    for (size_t i = 0; i < n; i++) E->ph[i] += E->y[i] - E->y2[i];
+        for (size_t k = 0; k < E->ngh; k++) {
+            double xg;
+            ghost_at(E, E->gidx[k], s->t - E->gt0 + hh, &xg, &E->gve[k], NULL, NULL);
+            xp[E->gidx[k]] = xg - K.corr_V * E->gve[k];
+        }
+    ENG_APPLY_M(E, r, y);
+    applied_at(E, s, t1, ph);
+    ENG_APPLY_K(E, xp, y2);
+    for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
     if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
-        for (size_t i = 0; i < n; i++)
-            if (E->ghost[i]) ghost_at(E, i, s->t - E->gt0 + hh, NULL, &E->ph[i], NULL, NULL);
+        for (size_t k = 0; k < E->ngh; k++) ph[E->gidx[k]] = E->gve[k];
+#if ENG_FUSED_LOCAL
+    for (size_t i = 0; i < n; i++) {
+        E->A0[i] = A0[i];
+        E->xp[i] = xp[i];
+        E->ph[i] = ph[i];
+    }
+#endif
     return ENG_OK;
 }
 
@@ -772,10 +900,40 @@ static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st,
     return ENG_FN(eng_dense_friction)(E, &P, what, st, V1, f, pivots);
 }
 
-/* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes). */
-static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const double *V1, const double *f)
+/* The energy accounts of the trial's step from s to t1 with end velocities V1 and forces f (before
+ * finish moves the state): eng_state's W_applied, W_friction, D_damping. */
+static void account(eng *E, eng_state *s, const trial *T, double t1, const double *V1, const double *f)
 {
     const size_t n = ENG_N(E);
+    const double hh = T->kin.h;
+    double *P0 = E->ew, *P1 = E->ew + n, *dX = E->ew + 2 * n;
+    applied_at(E, s, s->t, P0);
+    applied_at(E, s, t1, P1);
+    double Wa = 0.0, Wf = 0.0, D = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        dX[i] = E->xp[i] + T->kin.corr_V * V1[i] - s->X[i];
+        Wa += 0.5 * hh * (P0[i] * s->V[i] + P1[i] * V1[i]);
+    }
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const double fj = is_strib(E, j) ? 0.5 * (s->F[j] + f[j]) : f[j];
+        Wf += fj * row_dot(&E->S.rows[j], dX);
+    }
+    if (ENG_HAS_C(E)) {
+        ENG_APPLY_C(E, s->V, P0);
+        ENG_APPLY_C(E, V1, P1);
+        for (size_t i = 0; i < n; i++) D += 0.5 * hh * (s->V[i] * P0[i] + V1[i] * P1[i]);
+    }
+    s->W_applied += Wa;
+    s->W_friction += Wf;
+    s->D_damping += D;
+}
+
+/* Accept the trial with end velocities V1 and forces f: X, V, A, hA, F (not the time, not the modes);
+ * the energy accounts when kept (t1: the step's end). */
+static ENG_HOT void finish(eng *E, eng_state *s, const trial *T, const double *V1, const double *f, double t1)
+{
+    const size_t n = ENG_N(E);
+    if (E->S.account_energy) account(E, s, T, t1, V1, f);
     for (size_t i = 0; i < n; i++) {
         s->X[i] = E->xp[i] + T->kin.corr_V * V1[i];
         s->A[i] = (V1[i] - s->V[i]) * T->kin.c1 - E->g1 * E->A0[i];
@@ -791,6 +949,8 @@ static ENG_HOT void finish(const eng *E, eng_state *s, const trial *T, const dou
 static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const eng_hooks *hk)
 {
     *ta = s->t;
+    E->jk_ok = 0; /* the jerks of the phase's start: to be computed (trial_step) */
+    E->rpin_ok = 0; /* (its pins likewise) */
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
@@ -805,10 +965,11 @@ static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double 
     ph.ta = ta;
     ph.tb = s->t;
     ph.X0 = E->X0;
+    ph.X1 = s->X;
     ph.mode0 = E->mode0;
     ph.f = f;
     ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
-    o->on_phase(o->ctx, &ph, s);
+    ENG_OBSERVE(o, &ph, s);
 }
 
 static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
@@ -817,6 +978,20 @@ static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
     s->t_switch = s->t;
     if (s->mode[j] == 0) s->t_stick[j] = s->t;
     if (hk && hk->on_switch) hk->on_switch(hk->switch_ctx, s->t, j, s, from, s->mode[j]);
+}
+
+/* The modes of the contacts without friction: their slip's direction at the state's velocities, a
+ * change reported where the hooks ask for it (eng_hooks.report_turns). */
+static ENG_HOT void free_modes(eng *E, eng_state *s, const eng_hooks *hk)
+{
+    if (E->all_friction) return;
+    const int turns = hk && hk->report_turns;
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (has_friction(E, j)) continue;
+        const int from = s->mode[j];
+        s->mode[j] = sgn(slip(E, j, s->V));
+        if (turns && s->mode[j] != from) report(s, j, from, hk);
+    }
 }
 
 /* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
@@ -897,8 +1072,7 @@ static ENG_HOT void held_done(eng *E, eng_state *s, double t_end, int rested, do
 {
     s->solves++;
     s->t = t_end;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    free_modes(E, s, hk);
     if (rested) rest_exact(E, s);
     observe(E, s, ta, s->F, hk);
 }
@@ -991,17 +1165,19 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
             total += 1;
         }
         for (size_t j = 0; j < nc; j++)
-            if (has_friction(E, j) && E->st[j] == 0) E->f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
+            if (has_friction(E, j) && E->st[j] == 0) E->f[j] = clamp_lim(E->f[j], E->Fb[j]);
     }
     if (total > 0) s->pivot_steps++;
-    finish(E, s, &T, E->V1, E->f);
+    finish(E, s, &T, E->V1, E->f, t_end);
     s->t = t_end;
     for (size_t j = 0; j < nc; j++) {
         const int from = s->mode[j];
         s->mode[j] = has_friction(E, j) ? E->st[j] : sgn(slip(E, j, s->V));
-        if (has_friction(E, j) && s->mode[j] != from) report(s, j, from, hk);
+        if (s->mode[j] != from && (has_friction(E, j) || (hk && hk->report_turns))) report(s, j, from, hk);
     }
     if (consistent) rest_exact(E, s);
+    /* the step's modes are its friction problem's (the modes at its end): the phase's */
+    if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
     observe(E, s, ta, s->F, hk);
     return ENG_OK;
 }
@@ -1014,8 +1190,19 @@ static ENG_HOT double margin(const eng *E, const int *mode, size_t j, const doub
     return E->Fb[j] - fabs(f[j]);
 }
 
+/* Contact j switches in the trial: a sliding one whose slip stopped or turned (margin <= 0), a held
+ * one whose holding force is beyond its limit (margin < 0: a force on the limit holds, the rest
+ * rule's |f| <= Fb). */
+static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
+{
+    const double g = margin(E, mode, j, V1, f);
+    return (mode[j] != 0) ? g <= 0.0 : g < 0.0;
+}
+
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
- * the modes st; returns the smallest margin of the candidates. */
+ * the modes st; returns the smallest margin of the candidates. The phase's last trial is known by
+ * its length (x_last, its T at T_last: margin_fn's in Tm), so that a trial asked for again (the
+ * root's last point) is taken as it stands in the engine's arrays. */
 typedef struct {
     eng *E;
     const eng_inputs *in;
@@ -1023,6 +1210,9 @@ typedef struct {
     double t_step;     /* the internal step's end (the loads' time of a whole remainder) */
     double r;          /* the remainder */
     eng_status err;
+    double x_last;     /* the length of the last trial (NaN: none) */
+    const trial *T_last; /* where its T was written */
+    trial Tm;          /* margin_fn's */
 } margin_ctx;
 
 static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
@@ -1030,26 +1220,57 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
     loads_at(E, c->in, t1);
-    for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+    for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = dfo_select(E->st[j] == 0, E->Fb[j], E->mlN[j]);
     eng_status st = trial_step(E, c->in, c->s, x, t1, T);
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;
+    c->x_last = x;
+    c->T_last = T;
     double g = INFINITY;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (E->cand[j]) g = fmin(g, margin(E, E->st, j, E->V1, E->f));
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!E->cand[j]) continue;
+        const double gj = margin(E, E->st, j, E->V1, E->f);
+        g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
+    }
     return g;
+}
+
+/* A phase's trials from the state s in the modes E->st. */
+static ENG_HOT void margin_init(margin_ctx *c, eng *E, const eng_inputs *in, const eng_state *s, double t_step,
+                                double r)
+{
+    c->E = E;
+    c->in = in;
+    c->s = s;
+    c->t_step = t_step;
+    c->r = r;
+    c->err = ENG_OK;
+    c->x_last = NAN;
+    c->T_last = NULL;
 }
 
 static double margin_fn(void *ctx, double x)
 {
-    trial T;
-    return trial_margin((margin_ctx *)ctx, x, &T);
+    margin_ctx *c = (margin_ctx *)ctx;
+    return trial_margin(c, x, &c->Tm);
+}
+
+/* The phase's trial of length x into T: its last one where it was of that length (the engine's
+ * arrays hold it), else taken. */
+static ENG_HOT void trial_again(margin_ctx *c, double x, trial *T)
+{
+    if (!(x == c->x_last)) {
+        trial_margin(c, x, T);
+        return;
+    }
+    if (c->T_last != T) *T = *c->T_last;
 }
 
 /* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes
  * to rest and, with every contact at rest, the rest rule decides; a held one breaks away the way it
- * is driven. Then the consistent restart. */
-static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks *hk)
+ * is driven. Then the consistent restart. held: E->y2 and E->f hold phys_accel's solve of this
+ * state in its modes at its time (taken for the first contact breaking away). */
+static void apply_switches(eng *E, eng_state *s, int immediate, int held, const eng_hooks *hk)
 {
     const size_t nc = ENG_NC(E);
     int *rest = E->cand;
@@ -1061,7 +1282,8 @@ static void apply_switches(eng *E, eng_state *s, int immediate, const eng_hooks 
     /* held contacts breaking away: their side from their holding force */
     for (size_t j = 0; j < nc; j++) {
         if (!rest[j] || s->mode[j] != 0) continue;
-        phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+        if (!held) phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+        held = 0;
         s->mode[j] = -sgn(E->f[j]);
         if (s->mode[j] == 0) s->mode[j] = -sgn(s->F[j]);
         rest[j] = 0;
@@ -1086,15 +1308,17 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     const eng_setup *S = &E->S;
     const dfo_bossak_kin *K = &E->kin_grid;
     const double a = S->alpha;
-    if (needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
+    /* (held_ready: held_steps found no re-basing for this state) */
+    if (!E->held_ready && needs_rebase(E, s, S->h)) return ENG_HELD_UNTRIED;
     const double cM = (1.0 - a) * K->c1, cK = E->b * S->h / E->g;
     if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return ENG_HELD_ERROR;
     double cw = 0.0, sw = 0.0;
     if (S->exc.Pc || S->exc.Ps) phase_of(E, s, t1, &cw, &sw);
     const eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
                              K->pred_A, K->corr_V, cw, sw, S->exc.Pc, S->exc.Ps, E->u, s->A, E->st, E->lim,
-                             E->Fb, E->xp, E->ph, E->V1, E->f};
-    if (ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+                             E->Fb, E->xp, E->ph, E->V1, E->f, 0};
+    if (!E->held_ready && ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
+    E->held_ready = 0;
     T->kin = *K;
     T->slot = F.slot;
     T->cM = F.cM;
@@ -1131,6 +1355,71 @@ static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
     return E->sub && !ramped(in) && !(hk && (hk->on_switch || hk->obs || hk->stop_at_switch));
 }
 
+/* Every contact held on a still belt, every DOF pinned at rest by a held contact of its own, held
+ * inputs: the state the model's closed-form breakaway (ENG_BREAKAWAY) is asked about. The loads
+ * must be set. Uses pin. */
+static int stuck_pinned(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    if (ramped(in)) return 0;
+    for (size_t j = 0; j < nc; j++)
+        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return 0;
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < nc; j++)
+        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+    for (size_t i = 0; i < n; i++)
+        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return 0;
+    return 1;
+}
+
+/* stuck_pinned where no contact slides (the test inline: most calls are of a sliding structure) */
+static ENG_HOT int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (s->mode[j] != 0) return 0;
+    return stuck_pinned(E, in, s);
+}
+
+static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c);
+
+/* The breakaway of the stick of a structure at rest (stuck_at_rest), kept (E->stick). */
+static double stuck_tb(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    stick_refresh(E, in, s, &E->stick);
+    return E->stick.tb;
+}
+
+/* A stuck step of a structure at rest, as its trial leaves X (V = A = 0: any step's kinematics K) and
+ * rest_exact the rest: X through the predictor and corrector with V1 = V, V at its belt (0), A and hA 0
+ * (F, the time and the counters the caller's). */
+static void stuck_rest(eng *E, eng_state *s, const dfo_bossak_kin *K)
+{
+    const eng_setup *S = &E->S;
+    for (size_t i = 0; i < ENG_N(E); i++)
+        s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        const eng_row *R = &S->rows[j];
+        if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+    }
+    for (size_t i = 0; i < ENG_N(E); i++) {
+        s->A[i] = 0.0;
+        s->hA[i] = 0.0;
+    }
+}
+
+/* A phase ended by the switches of the candidates (E->cand) at the state's time: the phase observed,
+ * the switches applied (held: apply_switches'), the held contacts at rest exactly, the loads of the
+ * step's end t_end again. */
+static void switch_now(eng *E, const eng_inputs *in, eng_state *s, double ta, double t_end, int held,
+                       const eng_hooks *hk)
+{
+    observe(E, s, ta, s->F, hk);
+    apply_switches(E, s, 1, held, hk);
+    rest_exact(E, s);
+    loads_at(E, in, t_end);
+}
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -1148,15 +1437,67 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         double ta;
         begin_phase(E, s, &ta, hk);
         const double r = (phase == 0) ? hh : t_end - s->t;
-        for (size_t j = 0; j < nc; j++) {
-            E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
-            if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
-            E->cand[j] = 0;
+        /* a declined fused step of the state as it is (held_steps', fused_steps') has set the modes
+         * and limits of its trial as below (the same modes: it switched none) */
+        const int ready = phase == 0 && (E->held_ready || E->fused_ready);
+        if (ready) {
+            if (nc) memset(E->cand, 0, nc * sizeof(int));
+        } else {
+            for (size_t j = 0; j < nc; j++) {
+                E->st[j] = (has_friction(E, j) && s->mode[j] == 0) ? 0 : s->mode[j];
+                if (!has_friction(E, j)) E->st[j] = 1; /* (no force: its mode is not read) */
+                E->cand[j] = 0;
+            }
+        }
+        /* a structure stuck at rest: its stick ends at the model's closed-form breakaway (ENG_BREAKAWAY),
+         * as the old stepper ends it. A step that ends before it (the stick's kept breakaway beyond the
+         * step by more than its rounding) is a stuck step, taken as the stuck fast path takes one
+         * (stuck_rest: X through the predictor and corrector with V = A = 0, to the bits of the trial;
+         * F left). Else the breakaway asked from the phase's start: inside the step, the switch is
+         * placed there without a trial (the structure rests there, X, V = A = 0 as they are; the
+         * holding forces solved at that time and clamped to their limits; the contact most beyond its
+         * limit released). Models with their contacts' closed forms split the step at those instead
+         * (closed_breakaways, below). */
+        if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
+            const double eps = PLACE_REL * (fabs(t_end) + S->h);
+            double tp = (stuck_tb(E, in, s) > t_end + eps) ? INFINITY : ENG_BREAKAWAY(E, s, in, E->Fb);
+            if (tp > t_end) {
+                stuck_rest(E, s, &E->kin_grid);
+                s->t = t_end;
+                s->solves++;
+                observe(E, s, ta, s->F, hk);
+                return ENG_OK;
+            }
+            if (tp > s->t && tp <= t_end) {
+                /* (the first time from the closed form's on, by ulps doubling, at which a holding force is
+                 * at or beyond its limit, so that the switch's time does not follow the closed form's
+                 * rounding; where none is within PLACE_NUDGES, the closed form's last) */
+                double ulp = 0.0;
+                size_t jmax = nc;
+                for (int k = 0;; k++) {
+                    s->t = tp;
+                    if (E->ghost) ghosts_now(E, s);
+                    loads_at(E, in, s->t);
+                    phys_accel(E, s, s->t, s->mode, E->y2, E->f);
+                    jmax = nc;
+                    for (size_t j = 0; j < nc; j++)
+                        if (jmax == nc || fabs(E->f[j]) / E->Fb[j] > fabs(E->f[jmax]) / E->Fb[jmax]) jmax = j;
+                    if (!(fabs(E->f[jmax]) < E->Fb[jmax]) || k == PLACE_NUDGES || tp == t_end) break;
+                    ulp = (ulp == 0.0) ? nextafter(tp, INFINITY) - tp : 2.0 * ulp;
+                    tp = (tp + ulp < t_end) ? tp + ulp : t_end;
+                }
+                for (size_t j = 0; j < nc; j++) s->F[j] = clamp_lim(E->f[j], E->Fb[j]);
+                for (size_t j = 0; j < nc; j++) E->cand[j] = j == jmax;
+                switch_now(E, in, s, ta, t_end, 1, hk);
+                if (stop && s->switches != sw0) return ENG_SWITCHED;
+                continue;
+            }
         }
         trial T;
         int fused = ENG_HELD_UNTRIED;
         if (phase == 0 && fused_ok(E, in, hh)) {
-            for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            if (!ready)
+                for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
             fused = held_step(E, s, t_end, &T);
             if (fused == ENG_HELD_ERROR) return ENG_ERR_BAD_INPUT;
             if (fused == ENG_HELD_TAKEN) {
@@ -1164,18 +1505,27 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 return ENG_OK;
             }
         }
-        margin_ctx mc = {E, in, s, t_end, r, ENG_OK};
+        margin_ctx mc;
+        margin_init(&mc, E, in, s, t_end, r);
+        if (phase == 0 && E->fused_ready) { /* fused_steps' trial of this grid step, solved (as held_step's) */
+            T.kin = E->kin_grid;
+            T.slot = ENG_SLOT_GRID;
+            T.cM = (1.0 - S->alpha) * T.kin.c1;
+            T.cC = 1.0;
+            T.cK = E->b * hh / E->g;
+            fused = ENG_HELD_TRIAL;
+        }
+        E->fused_ready = 0;
         if (fused != ENG_HELD_TRIAL) trial_margin(&mc, r, &T); /* (else the fused step's trial, solved) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;
         for (size_t j = 0; j < nc; j++)
-            if (has_friction(E, j) && margin(E, E->st, j, E->V1, E->f) <= 0.0) { E->cand[j] = 1; ncand++; }
+            if (has_friction(E, j) && switches(E, E->st, j, E->V1, E->f)) { E->cand[j] = 1; ncand++; }
         if (ncand == 0) {
-            finish(E, s, &T, E->V1, E->f);
+            finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
-            for (size_t j = 0; j < nc; j++)
-                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+            free_modes(E, s, hk);
             rest_exact(E, s);
             observe(E, s, ta, s->F, hk);
             return ENG_OK;
@@ -1195,16 +1545,13 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 trial_margin(&mc, (tb == t_end) ? r : hs, &T);
                 s->solves++;
                 if (mc.err != ENG_OK) return mc.err;
-                finish(E, s, &T, E->V1, E->f);
+                finish(E, s, &T, E->V1, E->f, tb);
             }
             s->t = tb;
             if (E->ghost) ghosts_now(E, s);
             for (size_t j = 0; j < nc; j++) E->cand[j] = E->cand[j] && E->tbk[j] == tb;
             loads_at(E, in, s->t);
-            observe(E, s, ta, s->F, hk);
-            apply_switches(E, s, 1, hk);
-            rest_exact(E, s);
-            loads_at(E, in, t_end);
+            switch_now(E, in, s, ta, t_end, 0, hk);
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
@@ -1232,7 +1579,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                     const eng_row *R = &S->rows[j];
                     if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
                 }
-            apply_switches(E, s, 1, hk);
+            apply_switches(E, s, 1, 0, hk);
             loads_at(E, in, t_end);
             observe(E, s, ta, s->F, hk);
             if (stop && s->switches != sw0) return ENG_SWITCHED;
@@ -1240,7 +1587,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         }
         double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
         if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
-        trial_margin(&mc, hs, &T);
+        trial_again(&mc, hs, &T); /* (the root's last trial where it was of hs) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
@@ -1258,7 +1605,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
         const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
-        finish(E, s, &T, E->V1, E->f);
+        finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
         if (E->ghost) ghosts_now(E, s);
         loads_at(E, in, s->t);
@@ -1269,10 +1616,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
             E->cand[j] = stopping || breaking;
         }
-        observe(E, s, ta, s->F, hk);
-        apply_switches(E, s, 1, hk);
-        rest_exact(E, s);
-        loads_at(E, in, t_end);
+        switch_now(E, in, s, ta, t_end, 0, hk);
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
@@ -1299,13 +1643,6 @@ static void contact_copy(eng_state *d, size_t j, const eng_state *s, size_t k)
     d->break_dir[j] = s->break_dir[k];
 }
 
-/* d's arrays := s's (the same sizes; its scalars left) */
-static void eng_state_arrays_copy(eng_state *d, const eng_state *s)
-{
-    for (size_t i = 0; i < s->n; i++) dof_copy(d, i, s, i);
-    for (size_t j = 0; j < s->nc; j++) contact_copy(d, j, s, j);
-}
-
 /* One located step of the sub-engine (a span): outside step_located, so that the scheme is not
  * inlined into itself. */
 static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
@@ -1324,34 +1661,48 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     const eng_setup *S = &E->S;
     const eng_sparse *sp = S->sparse;
     const size_t n = ENG_N(E), nc = ENG_NC(E), L = sp->span_max;
-    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab);
+    size_t *dr = E->drng, *cr = E->crng; /* each span's index ranges (its work its own size) */
+    const size_t ns = sp->span(S->ops.ctx, E->cand, E->dlab, E->clab, dr, cr);
     if (ns == 0) return 0;
-    for (size_t j = 0; j < nc; j++) /* a candidate in no span: the whole structure is stepped */
-        if (E->cand[j] && E->clab[j] <= 0) return 0;
+    if (ns > n) { *out = ENG_ERR_BAD_INPUT; return 1; } /* (a span holds a DOF) */
+    size_t ncand = 0, inside = 0;
+    for (size_t j = 0; j < nc; j++) ncand += (size_t)(E->cand[j] != 0);
+    for (size_t k = 0; k < ns; k++) {
+        if (!(dr[2 * k] <= dr[2 * k + 1] && dr[2 * k + 1] <= n && cr[2 * k] <= cr[2 * k + 1] && cr[2 * k + 1] <= nc)) {
+            *out = ENG_ERR_BAD_INPUT;
+            return 1;
+        }
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) inside += E->cand[j] && E->clab[j] == (int)k + 1;
+    }
+    if (inside != ncand) return 0; /* a candidate in no span: the whole structure is stepped */
     *out = ENG_OK;
+    /* the step's start where the spans read it */
     const eng_state *p = &E->ps;
-    eng_state_arrays_copy(&E->ps, s);
+    for (size_t k = 0; k < ns; k++) {
+        for (size_t i = dr[2 * k]; i < dr[2 * k + 1]; i++) dof_copy(&E->ps, i, s, i);
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) contact_copy(&E->ps, j, s, j);
+    }
     const double t_start = s->t;
     /* everything in the current modes first */
-    finish(E, s, T, E->V1, E->f);
+    finish(E, s, T, E->V1, E->f, t_end);
     s->t = t_end;
-    for (size_t j = 0; j < nc; j++)
-        if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+    if (!E->all_friction)
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
     rest_exact(E, s);
     eng *B = E->sub;
     eng_state *b = &E->ss;
     for (size_t k = 0; k < ns; k++) {
         const int lab = (int)k + 1;
         size_t nd = 0, nct = 0;
-        for (size_t i = 0; i < n; i++) {
-            E->gmap[i] = -1;
+        for (size_t i = dr[2 * k]; i < dr[2 * k + 1]; i++) {
             if (E->dlab[i] != lab && E->dlab[i] != -lab) continue;
             if (nd == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
             E->gmap[i] = (long)nd;
             E->ldof[nd] = i;
             E->lgh[nd++] = E->dlab[i] < 0;
         }
-        for (size_t j = 0; j < nc; j++) {
+        for (size_t j = cr[2 * k]; j < cr[2 * k + 1]; j++) {
             if (E->clab[j] != lab && E->clab[j] != -lab) continue;
             if (nct == L) { *out = ENG_ERR_BAD_INPUT; return 1; }
             E->lct[nct++] = j;
@@ -1364,7 +1715,9 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             size_t *idx = E->lidx + a * E->lnnz; /* (lrows[a] points there) */
             double *w = E->lrw + a * E->lnnz;
             for (size_t q = 0; q < R->nnz; q++) {
-                if (E->gmap[R->idx[q]] < 0) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
+                const size_t g = R->idx[q]; /* (a label outside the span's range: none) */
+                const int dl = (g >= dr[2 * k] && g < dr[2 * k + 1]) ? E->dlab[g] : 0;
+                if (dl != lab && dl != -lab) { *out = ENG_ERR_BAD_INPUT; return 1; } /* a row off the span */
                 idx[q] = (size_t)E->gmap[R->idx[q]];
                 w[q] = R->w[q];
             }
@@ -1381,6 +1734,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         B->any_law = 0;
         for (size_t a = 0; a < nct; a++) B->any_law |= S->law && E->llaw[a].law == DFO_LAW_STRIBECK && E->lN[a] > 0.0;
         /* the span's DOFs, its ghosts' motion over the step */
+        size_t ngh = 0;
         B->gt0 = t_start;
         B->gH = t_end - t_start;
         for (size_t q = 0; q < nd; q++) {
@@ -1389,12 +1743,14 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
             if (S->exc.Ps) E->lPs[q] = S->exc.Ps[i];
             E->lF[q] = (in && in->F_ext) ? in->F_ext[i] : 0.0;
             B->ghost[q] = E->lgh[q];
+            if (E->lgh[q]) B->gidx[ngh++] = q;
             B->gX0[q] = p->X[i];
             B->gV0[q] = p->V[i];
             B->gX1[q] = s->X[i];
             B->gV1[q] = s->V[i];
             dof_copy(b, q, p, i);
         }
+        B->ngh = ngh;
         B->S.n = b->n = nd;
         B->S.nc = b->nc = nct;
         B->loads_for = NULL;
@@ -1415,6 +1771,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         if (st != ENG_OK) { *out = st; return 1; }
         /* the span's A re-based on a grid step now, as the next step of the whole structure would
          * (there over all of it) */
+        B->jk_ok = B->rpin_ok = 0; /* (the span's state, not a phase of B's) */
         rebase(B, &bin, b, S->h, t_end);
         const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
         for (size_t q = 0; q < nd; q++)
@@ -1433,6 +1790,400 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
     return 1;
 }
 
+/* ---- the fused steps -------------------------------------------------------------------------- */
+
+/* The common step, fused: a whole grid step from a grid point, held inputs, in which the modes hold
+ * (located: the trial in the current modes has no switching contact; paper and consistent: the
+ * friction problem warm-started from the current modes returns them), taken in a tight loop over
+ * the grid points up to t_target with none of the general path's phase bookkeeping. The same
+ * arithmetic as step_located's and step_lcp's in the same order, so the same numbers. A model
+ * whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC) gets the loop's state in local arrays,
+ * which the compiler keeps in registers; otherwise it works on the state in place. The loop stops,
+ * the state untouched by the step it declines, before a step that would switch (the general path
+ * takes it), that re-bases A (a step length other than that of A, off a pinned DOF), a stuck
+ * structure the stuck fast path may skip (skip), a friction problem that fails, and a step past
+ * t_target. The observer is called for the steps that overlap its window, as the general path
+ * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
+ * point (the step from it is taken here, to the bits of the general path's). A declined located step
+ * leaves its trial, solved, for step_located (fused_ready). */
+/* Every X, V, A finite (|x| <= DBL_MAX is false for infinities and NaN) */
+static ENG_HOT int finite_all(size_t n, const double *X, const double *V, const double *A)
+{
+    int ok = 1;
+    for (size_t i = 0; i < n; i++) ok &= (fabs(X[i]) <= DBL_MAX) & (fabs(V[i]) <= DBL_MAX) & (fabs(A[i]) <= DBL_MAX);
+    return ok;
+}
+
+/* A run of fused steps written back: its time, grid point, excitation cache and counters. */
+static ENG_HOT void run_store(eng_state *s, double t, long long ng, long long exc_n, double exc_c, double exc_s,
+                              long long steps, long long solves)
+{
+    s->t = t;
+    s->n_grid = ng;
+    s->exc_n = exc_n;
+    s->exc_c = exc_c;
+    s->exc_s = exc_s;
+    s->steps += steps;
+    s->solves += solves;
+}
+
+static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, int declined, const eng_hooks *hk,
+                                double *g_prev)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h, a = S->alpha;
+    const int located = S->scheme == DFO_SCHEME_LOCATED, consistent = S->scheme == DFO_SCHEME_CONSISTENT;
+    if (located && S->rate_max * h > STIFF_STEP) return;
+    const dfo_bossak_kin K = E->kin_grid;
+    const double cM = (1.0 - a) * K.c1, cK = E->b * h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
+    const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    /* the observer's window and the belts, read once (a store through the state may not change them) */
+    const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    /* every step observed: the first grid point in the window, t_target at most its end */
+    const int obs_all = obs && !(s->t0 + (double)(s->n_grid + 1) * S->h < obs_t0) && !(t_target > obs_t1);
+    const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
+    ENG_OBS_RUN obs_run; /* the observer's values over the run (ENG_OBS_RUN_BEGIN) */
+    ENG_OBS_RUN_BEGIN(obs, obs_run, s);
+    const eng_harmonic *H = &S->exc;
+    eng_problem P;
+    P.slot = ENG_SLOT_GRID;
+    P.h = K.h;
+    P.cM = cM;
+    P.cC = ENG_HAS_C(E) ? 1.0 : 0.0;
+    P.cK = cK;
+    P.vb = E->vb;
+    P.N = E->Nn;
+    P.law = E->any_law ? S->law : NULL;
+#if ENG_FUSED_LOCAL
+    double X[ENG_FUSED_N], V[ENG_FUSED_N], A[ENG_FUSED_N], hA[ENG_FUSED_N], X0[ENG_FUSED_N];
+    double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
+    double X1[ENG_FUSED_N], F1[ENG_FUSED_NC + 1]; /* the observed phase's end (copies: X, F stay in registers) */
+    double F[ENG_FUSED_NC + 1], f[ENG_FUSED_NC + 1], lim[ENG_FUSED_NC + 1];
+    int mode[ENG_FUSED_NC + 1], st[ENG_FUSED_NC + 1], mode0[ENG_FUSED_NC + 1], pin[ENG_FUSED_N];
+    /* the state's arrays, their addresses read once (a store through one may not change them) */
+    double *const sX = s->X, *const sV = s->V, *const sA = s->A, *const shA = s->hA, *const sF = s->F;
+    int *const smode = s->mode;
+    for (size_t i = 0; i < n; i++) {
+        X[i] = s->X[i];
+        V[i] = s->V[i];
+        A[i] = s->A[i];
+        hA[i] = s->hA[i];
+    }
+    for (size_t j = 0; j < nc; j++) {
+        F[j] = s->F[j];
+        mode[j] = s->mode[j];
+    }
+#define ENG_FUSED_STORE_()                                                                                          \
+    do {                                                                                                            \
+        for (size_t i_ = 0; i_ < n; i_++) {                                                                         \
+            sX[i_] = X[i_];                                                                                         \
+            sV[i_] = V[i_];                                                                                         \
+            sA[i_] = A[i_];                                                                                         \
+            shA[i_] = hA[i_];                                                                                       \
+        }                                                                                                           \
+        for (size_t j_ = 0; j_ < nc; j_++) {                                                                        \
+            sF[j_] = F[j_];                                                                                         \
+            smode[j_] = mode[j_];                                                                                   \
+        }                                                                                                           \
+    } while (0)
+#else
+    double *const X = s->X, *const V = s->V, *const A = s->A, *const hA = s->hA, *const X0 = E->X0;
+    const double *const X1 = s->X, *const F1 = s->F;
+    double *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2, *const ph = E->ph, *const V1 = E->V1;
+    double *const F = s->F, *const f = E->f, *const lim = E->lim;
+    int *const mode = s->mode, *const st = E->st, *const mode0 = E->mode0, *const pin = E->pin;
+#define ENG_FUSED_STORE_() ((void)0)
+#endif
+    P.p_hat = ph;
+    P.limit = lim;
+    long long ng = s->n_grid, steps = 0, solves = 0, pivot_steps = 0;
+    long long exc_n = s->exc_n;
+    /* the turns of contacts without friction, where reported (eng_hooks.report_turns): the modes
+     * before the run's last step (scratch: smode) */
+    const int turns = hk && hk->report_turns && !E->all_friction;
+    int turned = 0, *const turn_from = E->smode;
+    double exc_c = s->exc_c, exc_s = s->exc_s, t = s->t;
+    for (;;) {
+        const double grid = s->t0 + (double)(ng + 1) * h;
+        if (!(grid <= t_target) || !(grid > t)) break;
+        if ((steps & 15) == 15 && !finite_all(n, X, V, A)) break; /* (overflowed: eng_advance fails) */
+        /* held and pinned: the stuck fast path's to try (but where it declined: this grid point's step);
+         * a step length to re-base A on: the general path's */
+        int held_all = skip && !(declined && steps == 0), rebase = 0;
+        for (size_t i = 0; i < n; i++) pin[i] = 0;
+        for (size_t j = 0; j < nc; j++) {
+            const int held = mode[j] == 0 && has_friction(E, j);
+            held_all &= held && E->vb[j] == 0.0;
+            if (held && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+        }
+        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
+        for (size_t i = 0; i < n; i++) {
+            held_all &= pin[i] && V[i] == 0.0 && A[i] == 0.0;
+            rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * max_b(hA[i], h) <= 1.0;
+        }
+        if (held_all || rebase) break;
+        /* the excitation at the grid point: the cache's rotation (dfo_grid_phase) */
+        double cw, sw;
+        dfo_grid_phase(H->omega, H->phi0, s->t0, h, E->rot_c, E->rot_s, exc_n, exc_c, exc_s, ng + 1, &cw, &sw);
+        /* the trial (trial_step, A0 = A) */
+        for (size_t i = 0; i < n; i++) {
+            xp[i] = X[i] + K.pred_V * V[i] + K.pred_A * A[i];
+            r[i] = -a * A[i] + (1.0 - a) * (V[i] * K.c1 + E->g1 * A[i]);
+        }
+        ENG_APPLY_M(E, r, y);
+        {
+            const double cwc = dfo_clamp1(cw), swc = dfo_clamp1(sw);
+            for (size_t i = 0; i < n; i++) {
+                double p = E->u[i];
+                if (H->Pc) p += H->Pc[i] * cwc;
+                if (H->Ps) p -= H->Ps[i] * swc;
+                ph[i] = p;
+            }
+        }
+        ENG_APPLY_K(E, xp, y2);
+        for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
+        /* the friction problem in the current modes */
+        int piv = 0;
+        eng_status fs;
+        if (located) {
+            for (size_t j = 0; j < nc; j++) {
+                st[j] = !has_friction(E, j) ? 1 : mode[j];
+                lim[j] = (st[j] == 0) ? E->Fb[j] : E->mlN[j];
+            }
+            fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL)
+                                     : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL);
+            if (fs != ENG_OK) break;
+            int sw_any = 0;
+            for (size_t j = 0; j < nc; j++) sw_any |= has_friction(E, j) && switches(E, st, j, V1, f);
+            if (sw_any) { /* the trial, solved, for step_located's phase 0 (fused_ready) */
+#if ENG_FUSED_LOCAL
+                for (size_t i = 0; i < n; i++) {
+                    E->xp[i] = xp[i];
+                    E->ph[i] = ph[i];
+                    E->V1[i] = V1[i];
+                }
+                for (size_t j = 0; j < nc; j++) {
+                    E->f[j] = f[j];
+                    E->st[j] = st[j];
+                    E->lim[j] = lim[j];
+                }
+#endif
+                for (size_t i = 0; i < n; i++) E->A0[i] = A[i];
+                E->fused_ready = 1;
+                break;
+            }
+        } else {
+            for (size_t j = 0; j < nc; j++) {
+                st[j] = mode[j];
+                lim[j] = !has_friction(E, j) ? 0.0 : (mode[j] == 0) ? E->Fb[j] : E->mukN[j];
+            }
+            fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_LCP, st, V1, f, &piv)
+                                     : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_LCP, st, V1, f, &piv);
+            if (fs != ENG_OK) break;
+            int changed = 0;
+            for (size_t j = 0; j < nc; j++) changed |= has_friction(E, j) && st[j] != mode[j];
+            if (changed) break;
+            if (consistent)
+                for (size_t j = 0; j < nc; j++)
+                    if (has_friction(E, j) && st[j] == 0) f[j] = clamp_lim(f[j], E->Fb[j]);
+        }
+        /* the step is taken: the grid point, its excitation cache, the counters */
+        const double ta = t;
+        const int observed = obs_all || (obs && !(grid < obs_t0) && !(ta > obs_t1));
+        if (observed) {
+            for (size_t i = 0; i < n; i++) X0[i] = X[i];
+            for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
+        }
+        ng++;
+        exc_n = ng;
+        exc_c = cw;
+        exc_s = sw;
+        steps++;
+        solves++;
+        pivot_steps += piv > 0;
+        /* finish */
+        for (size_t i = 0; i < n; i++) {
+            X[i] = xp[i] + K.corr_V * V1[i];
+            A[i] = (V1[i] - V[i]) * K.c1 - E->g1 * A[i];
+            V[i] = V1[i];
+            hA[i] = K.h;
+        }
+        for (size_t j = 0; j < nc; j++) F[j] = f[j];
+        t = grid;
+        for (size_t j = 0; j < nc; j++) { /* (a turn to report ends the run: after it, its report) */
+            if (has_friction(E, j)) continue;
+            const int m = sgn(slip(E, j, V));
+            turn_from[j] = mode[j];
+            turned |= turns & (m != mode[j]);
+            mode[j] = m;
+        }
+        if (located || consistent) /* rest_exact */
+            for (size_t j = 0; j < nc; j++) {
+                if (mode[j] != 0 || !has_friction(E, j)) continue;
+                const eng_row *R = &S->rows[j];
+                if (R->nnz == 1) {
+                    V[R->idx[0]] = E->vb[j] / R->w[0];
+                    A[R->idx[0]] = 0.0;
+                    hA[R->idx[0]] = 0.0;
+                }
+            }
+        if (observed) {
+#if ENG_FUSED_LOCAL
+            for (size_t i = 0; i < n; i++) X1[i] = X[i];
+            for (size_t j = 0; j < nc; j++) F1[j] = F[j];
+#else
+            s->t = t;
+            s->n_grid = ng;
+#endif
+            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs};
+            ENG_OBS_RUN_PHASE(obs, obs_run, &phs, s);
+        }
+        if (turned) break;
+    }
+    ENG_OBS_RUN_END(obs, obs_run);
+    ENG_FUSED_STORE_();
+#undef ENG_FUSED_STORE_
+    run_store(s, t, ng, exc_n, exc_c, exc_s, steps, solves);
+    s->pivot_steps += pivot_steps;
+    if (steps > 0) *g_prev = t;
+    if (turned)
+        for (size_t j = 0; j < nc; j++)
+            if (!has_friction(E, j) && s->mode[j] != turn_from[j]) report(s, j, turn_from[j], hk);
+}
+
+/* The model's fused grid step (eng_sparse.step_held) in a tight loop: the located scheme's grid
+ * steps in which no contact switches, held inputs, no belts, no ghosts, one after the other, with
+ * the general path's bookkeeping of such a step (eng_advance's grid point, step_located's phase of
+ * one trial, held_step, held_done) done once where a taken step leaves it unchanged: the modes and
+ * limits (a taken step switches no contact with friction), M_hat's factor, the re-basing test (after
+ * a taken step A is of the grid's length, or 0 on a pinned DOF: only the run's first step may be
+ * re-based, by trial_step's rebase). One run of the model's steps (eng_held_step.run: the model may
+ * take F's data into its own layout once). The same arithmetic in the same order, so the same
+ * numbers. Stops, the state untouched by the step it declines, before a step the model declines (the
+ * general path takes it from there, from the declined trial unless it was re-based), a stuck
+ * structure the stuck fast path may skip (skip), and a step past t_target. *g_prev: the last grid
+ * point reached. */
+static ENG_COLD void held_steps(eng *E, const eng_inputs *in, eng_state *s, double t_target, int skip,
+                               const eng_hooks *hk, double *g_prev)
+{
+    const eng_setup *S = &E->S;
+    const size_t n = ENG_N(E), nc = ENG_NC(E);
+    const double h = S->h, a = S->alpha;
+    if (S->rate_max * h > STIFF_STEP || !fused_ok(E, in, h)) return;
+    /* the held contacts: rest_exact's (pinning a DOF alone, in its order, rl) and their DOFs (E->pin);
+     * then needs_rebase's test on the other DOFs */
+    int *const rl = E->tmode, *const pin = E->pin; /* (tmode: step_lcp's; rebase's calls use held) */
+    size_t nrl = 0;
+    int all_held = skip; /* the stuck fast path's pattern: every contact held, every DOF pinned */
+    int frictionless = 0; /* contacts whose modes follow their slip */
+    memset(pin, 0, n * sizeof(int));
+    /* (and the steps' modes and limits, as step_located sets them, in the same pass) */
+    for (size_t j = 0; j < nc; j++) {
+        const int fr = has_friction(E, j), held = s->mode[j] == 0 && fr;
+        frictionless |= !fr;
+        all_held &= held;
+        E->st[j] = !fr ? 1 : s->mode[j];
+        E->lim[j] = held ? E->Fb[j] : E->mlN[j];
+        if (held && S->rows[j].nnz == 1) {
+            rl[nrl++] = (int)j;
+            pin[S->rows[j].idx[0]] = 1;
+        }
+    }
+    int rb = 0; /* the first step's A re-based (E->A0, by rebase as trial_step's) */
+    if (a != 0.0) {
+        int other = 0; /* (a DOF not pinned whose A is of another length: then rebases' test) */
+        for (size_t i = 0; i < n; i++) other |= (h != s->hA[i]) & (pin[i] == 0);
+        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(s->t);
+        for (size_t i = 0; i < n && other && !rb; i++) rb = h != s->hA[i] && !pin[i] && rebases(E, s, i, h, tol);
+    }
+    const dfo_bossak_kin *K = &E->kin_grid;
+    const double cM = (1.0 - a) * K->c1, cK = E->b * h / E->g;
+    if (!factor_slot(E, ENG_SLOT_GRID, cM, 1.0, cK)) return;
+    if (all_held) {
+        for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+        for (size_t j = 0; j < nc; j++)
+            if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
+        for (size_t i = 0; i < n; i++) all_held &= E->pin[i];
+    }
+    const eng_observer *obs = (hk && hk->obs && hk->obs->on_phase) ? hk->obs : NULL;
+    const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
+    const eng_harmonic *H = &S->exc;
+    const int trig = H->Pc || H->Ps;
+    eng_held_step F = {ENG_SLOT_GRID, cM, ENG_HAS_C(E) ? 1.0 : 0.0, cK, K->h, a, E->g1, K->c1, K->pred_V,
+                       K->pred_A, K->corr_V, 0.0, 0.0, H->Pc, H->Ps, E->u, s->A, E->st, E->lim,
+                       E->Fb, E->xp, E->ph, E->V1, E->f, 1};
+    /* the state's time, grid index and excitation cache kept here, in s where the loop ends and for
+     * the observer */
+    const double t0 = s->t0, rc = E->rot_c, rs = E->rot_s;
+    double t = s->t, ec = s->exc_c, es = s->exc_s;
+    long long ng = s->n_grid, en = s->exc_n, steps = 0;
+    const long long ng0 = ng;
+    for (;;) {
+        const double grid = t0 + (double)(ng + 1) * h;
+        if (!(grid <= t_target) || !(grid > t)) break;
+        if ((steps & 15) == 15 && !finite_all(n, s->X, s->V, s->A)) break; /* (overflowed: eng_advance fails) */
+        if (all_held) { /* at rest: the stuck fast path's to try */
+            int rest = 1;
+            for (size_t i = 0; i < n; i++) rest &= s->V[i] == 0.0 && s->A[i] == 0.0;
+            if (rest) break;
+        }
+        double c, sn; /* the grid point's excitation cache, as eng_advance's */
+        dfo_grid_phase(H->omega, H->phi0, t0, h, rc, rs, en, ec, es, ng + 1, &c, &sn);
+        if (trig) {
+            F.cw = dfo_clamp1(c);
+            F.sw = dfo_clamp1(sn);
+        }
+        const double ta = t;
+        if (obs) {
+            memcpy(E->X0, s->X, n * sizeof(double));
+            if (nc) memcpy(E->mode0, s->mode, nc * sizeof(int));
+        }
+        if (rb) { /* a phase's start: its jerks afresh (begin_phase), the state's grid point and
+                   * excitation cache the step's end, as eng_advance's step holds them (the loop's
+                   * end restores them where the step is declined) */
+            s->n_grid = ng + 1;
+            s->exc_n = ng + 1;
+            s->exc_c = c;
+            s->exc_s = sn;
+            E->jk_ok = 0;
+            rebase(E, in, s, h, grid);
+            F.A0 = E->A0;
+        }
+        if (!ENG_STEP_RUN(E, &F, s)) { /* declined: its trial for the general path's held_step (not
+                                        * a re-based one: held_step takes A0 = A) */
+            E->held_ready = !rb;
+            break;
+        }
+        rb = 0;
+        F.A0 = s->A;
+        F.run = 2;
+        ng++;
+        en = ng;
+        ec = c;
+        es = sn;
+        steps++;
+        t = grid;
+        if (frictionless)
+            for (size_t j = 0; j < nc; j++)
+                if (!has_friction(E, j)) s->mode[j] = sgn(slip(E, j, s->V));
+        for (size_t k = 0; k < nrl; k++) { /* rest_exact */
+            const eng_row *R = &S->rows[rl[k]];
+            s->V[R->idx[0]] = E->vb[rl[k]] / R->w[0];
+            s->A[R->idx[0]] = 0.0;
+            s->hA[R->idx[0]] = 0.0;
+        }
+        if (obs && !(grid < obs_t0) && !(ta > obs_t1)) {
+            run_store(s, t, ng, en, ec, es, steps, steps);
+            steps = 0;
+            observe(E, s, ta, s->F, hk);
+        }
+    }
+    run_store(s, t, ng, en, ec, es, steps, steps);
+    if (ng > ng0) *g_prev = t;
+}
+
 /* ---- driving -------------------------------------------------------------------------------- */
 
 ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s)
@@ -1445,6 +2196,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
     s->exc_c = s->exc_s = 0.0;
     s->t_switch = -INFINITY;
     s->steps = s->solves = s->pivot_steps = s->switches = 0;
+    s->W_applied = s->W_friction = s->D_damping = 0.0;
     for (size_t i = 0; i < n; i++) {
         s->X[i] = x0[i];
         s->V[i] = v0[i];
@@ -1471,7 +2223,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
 static double snap_tol(const eng *E, double t)
 {
     const eng_setup *S = &E->S;
-    return fmin(S->snap_max_rel_h * S->h, fmax(S->snap_min_rel_h * S->h, S->snap_eps_t * DBL_EPSILON * fabs(t)));
+    return min_b(S->snap_max_rel_h * S->h, max_b(S->snap_eps_t * DBL_EPSILON * fabs(t), S->snap_min_rel_h * S->h));
 }
 
 ENG_API double ENG_FN(eng_snap_target)(const eng *E, const eng_state *s, double t_target)
@@ -1484,18 +2236,10 @@ static void rest_forces(eng *E, eng_state *s)
 {
     phys_accel(E, s, s->t, s->mode, E->y2, E->f);
     for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = fmax(-E->Fb[j], fmin(E->Fb[j], E->f[j]));
+        if (s->mode[j] == 0 && has_friction(E, j)) s->F[j] = clamp_lim(E->f[j], E->Fb[j]);
 }
 
 /* ---- the stuck fast path ------------------------------------------------------------------- */
-
-/* The model's breakaway of the current stick, kept over one call of eng_advance: tb for the stick
- * that holds since the switch count sw (known: asked). */
-typedef struct {
-    double tb;
-    long long sw;
-    int known;
-} stick_cache;
 
 /* The largest grid index m >= s->n_grid with t0 + m h < x (incl: <= x), the grid points computed as
  * eng_advance computes them; s->n_grid when there is none. x finite. */
@@ -1524,37 +2268,40 @@ static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
     return tb;
 }
 
+/* The stick's breakaway in c, asked of the model where c does not hold it (another stick, or passed). */
+static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c)
+{
+    if (c->known && c->sw == s->switches && s->t < c->tb) return;
+    c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
+    c->sw = s->switches;
+    c->known = 1;
+}
+
 /* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
  * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
  * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
- * before the model's breakaway, at or before t_target and outside the observer's window change
- * nothing but the time and the counters. Returns the last grid index they reach (s->n_grid: none). */
+ * before the model's breakaway and at or before t_target change nothing but the time and the
+ * counters (the observer sees them as one phase at rest, which ends inside its window where it began
+ * before the window's end: the positions, modes and forces it sees are those of each of them).
+ * Returns the last grid index they reach (s->n_grid: none). */
 static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, double t_target,
                              const eng_hooks *hk, stick_cache *c)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E), nc = ENG_NC(E);
     const double h = S->h;
     loads_at(E, in, s->t);
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < nc; j++) {
-        if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return s->n_grid;
-        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
-    }
-    for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return s->n_grid;
-    if (!c->known || c->sw != s->switches || !(s->t < c->tb)) {
-        c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
-        c->sw = s->switches;
-        c->known = 1;
-    }
+    if (!stuck_at_rest(E, in, s)) return s->n_grid;
+    stick_refresh(E, in, s, c);
     if (isnan(c->tb)) return s->n_grid;
+    /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
+     * bound below is then past the next grid point: its grid points rise with their index) */
+    if (!(s->t0 + (double)(s->n_grid + 2) * h < min_b(c->tb, t_target + 2.0 * h))) return s->n_grid;
     long long m = grid_below(s, h, t_target, 1);
-    const long long mb = grid_below(s, h, fmin(c->tb, t_target + 2.0 * h), 0) - 1;
+    const long long mb = grid_below(s, h, min_b(c->tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
-    if (hk && hk->obs && hk->obs->on_phase && !(s->t > hk->obs->t_stop)) {
-        const long long mo = grid_below(s, h, fmin(hk->obs->t_start, t_target + 2.0 * h), 0);
+    if (hk && hk->obs && hk->obs->on_phase && s->t < hk->obs->t_stop) { /* a stretch in the window ends in it */
+        const long long mo = grid_below(s, h, min_b(hk->obs->t_stop, t_target + 2.0 * h), 1);
         if (mo < m) m = mo;
     }
     return (m > s->n_grid) ? m : s->n_grid;
@@ -1567,21 +2314,9 @@ static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, d
 static void stuck_skip(eng *E, eng_state *s, long long m)
 {
     const eng_setup *S = &E->S;
-    const size_t n = ENG_N(E);
     const dfo_bossak_kin *K = &E->kin_grid;
     const long long k = m - s->n_grid;
-    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) {
-        for (size_t i = 0; i < n; i++)
-            s->X[i] = (s->X[i] + K->pred_V * s->V[i] + K->pred_A * s->A[i]) + K->corr_V * s->V[i];
-        for (size_t j = 0; j < ENG_NC(E); j++) {
-            const eng_row *R = &S->rows[j];
-            if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
-        }
-        for (size_t i = 0; i < n; i++) {
-            s->A[i] = 0.0;
-            s->hA[i] = 0.0;
-        }
-    }
+    for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) stuck_rest(E, s, K);
     double c, sn;
     dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
                    &sn);
@@ -1597,24 +2332,50 @@ static void stuck_skip(eng *E, eng_state *s, long long m)
 ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk)
 {
     E->loads_for = NULL;
+    E->held_ready = 0;
     const eng_setup *S = &E->S;
     const double h = S->h;
     t_target = ENG_FN(eng_snap_target)(E, s, t_target);
     double g_prev = s->t0 + (double)s->n_grid * h;
     int switched = 0;
+    E->fused_ready = 0;
     const long long sw0 = s->switches;
     const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
                      S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
-    stick_cache cache = {NAN, 0, 0};
+    E->stick.tb = NAN;
+    E->stick.sw = 0;
+    E->stick.known = 0;
+    /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
+    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
+    const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
+                          S->scheme == DFO_SCHEME_LOCATED &&
+                          !(hk && hk->report_turns && !E->all_friction); /* (turns: the general path's) */
     while (s->t < t_target) {
+        int declined = 0; /* the stuck fast path declined this grid point */
         if (skip && s->t == g_prev) {
-            const long long m = stuck_until(E, in, s, t_target, hk, &cache);
+            const long long m = stuck_until(E, in, s, t_target, hk, &E->stick);
+            declined = 1;
             if (m > s->n_grid) {
+                double ta;
+                begin_phase(E, s, &ta, hk);
                 stuck_skip(E, s, m);
                 g_prev = s->t;
+                observe(E, s, ta, s->F, hk);
                 continue;
             }
+        }
+        if (fuse && s->t == g_prev) {
+            loads_at(E, in, s->t);
+            fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
+            if (!finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
+            if (!(s->t < t_target)) break;
+        }
+        if (fuse_held && s->t == g_prev) {
+            loads_at(E, in, s->t);
+            held_steps(E, in, s, t_target, skip, hk, &g_prev);
+            if (!finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
+            if (!(s->t < t_target)) break;
         }
         const double grid = s->t0 + (double)(s->n_grid + 1) * h;
         const int from_grid = (s->t == g_prev);
@@ -1637,6 +2398,8 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         eng_status st;
         if (S->scheme == DFO_SCHEME_LOCATED) st = step_located(E, in, s, t_end, hh, hk);
         else st = step_lcp(E, in, s, t_end, hh, S->scheme == DFO_SCHEME_CONSISTENT, hk);
+        E->held_ready = 0;
+        E->fused_ready = 0;
         switched = s->switches != sw0;
         if (st == ENG_SWITCHED || (hk && hk->stop_at_switch && switched)) {
             if (s->t < t_end && t_end == grid) s->n_grid--;
@@ -1645,6 +2408,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
             return ENG_SWITCHED;
         }
         if (st != ENG_OK) return st;
+        if ((s->n_grid & 15) == 0 && !finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
     }
     loads_at(E, in, s->t);
     if (S->scheme != DFO_SCHEME_PAPER) rest_forces(E, s);
@@ -1706,7 +2470,27 @@ ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_s
 {
     E->loads_for = NULL;
     loads_at(E, in, s->t);
-    phys_accel(E, s, s->t, s->mode, a, E->f);
+    const int paper = E->S.scheme == DFO_SCHEME_PAPER;
+    if (!paper && !E->any_law) {
+        phys_accel(E, s, s->t, s->mode, a, E->f);
+        return;
+    }
+    /* the state's forces where the scheme has them: a Stribeck slide's (at its solved speed, not at
+     * the rounding of its slip), and the paper scheme's stuck contact, which is not at rest (Bossak's
+     * A throughout: it creeps with the force of its LCP) */
+    const eng_setup *S = &E->S;
+    const size_t nc = ENG_NC(E);
+    double *r = E->r, *y = E->y;
+    applied_at(E, s, s->t, r);
+    minus_kc(E, s->X, s->V, r, y);
+    for (size_t j = 0; j < nc; j++) {
+        E->held[j] = !paper && s->mode[j] == 0 && has_friction(E, j);
+        if (!has_friction(E, j) || E->held[j]) continue;
+        /* a Coulomb slide's force follows the current loads (the inputs' feed-through) */
+        const double fj = (s->mode[j] != 0 && !is_strib(E, j)) ? -s->mode[j] * slide_mag(E, j, 0.0) : s->F[j];
+        row_axpy(&S->rows[j], fj, r);
+    }
+    held_solve(E, r, E->held, a, E->f);
 }
 
 ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_state *s, double *f)
@@ -1715,5 +2499,5 @@ ENG_API void ENG_FN(eng_contact_forces)(eng *E, const eng_inputs *in, const eng_
     loads_at(E, in, s->t);
     phys_accel(E, s, s->t, s->mode, E->y2, f);
     for (size_t j = 0; j < ENG_NC(E); j++)
-        if (s->mode[j] == 0 && has_friction(E, j)) f[j] = fmax(-E->Fb[j], fmin(E->Fb[j], f[j]));
+        if (s->mode[j] == 0 && has_friction(E, j)) f[j] = clamp_lim(f[j], E->Fb[j]);
 }

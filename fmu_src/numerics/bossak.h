@@ -1,4 +1,4 @@
-/* The mathematics the oscillator (models/oscillator/newmark.c) and the chain (models/chain/) share:
+/* The mathematics the friction engine (engine/), the oscillator and the chain (models/chain/) share:
  * the schemes' names, the rule of the default step, Bossak-Newmark's coefficients and the
  * kinematics of one step in velocity form (method.md section 2). The root finder that places a
  * switch inside a step is roots.h's.

@@ -536,6 +536,36 @@ double dfo_acos(double x)
     return PI_HI - (2.0 * asin_sqrt((1.0 + x) * 0.5) - PI_LO);
 }
 
+/* asin x for |x| <= 1 / sqrt(2) (a little beyond it by rounding): the kernels of dfo_acos */
+static double asin_part(double x)
+{
+    const double ax = x < 0.0 ? -x : x;
+    if (ax <= 0.5) return x + x * (x * x) * asin_poly(x * x);
+    const double r = PIO2_HI - (2.0 * asin_sqrt((1.0 - ax) * 0.5) - PIO2_LO);
+    return x < 0.0 ? -r : r;
+}
+
+double dfo_atan2(double y, double x)
+{
+    if (x != x || y != y) return x + y;
+    const double ax = x < 0.0 ? -x : x, ay = y < 0.0 ? -y : y;
+    double t; /* the angle of (|x|, |y|), in [0, pi/2] */
+    if (ay == 0.0) t = 0.0;
+    else if (ax == 0.0) t = PIO2_HI;
+    else if (ax == INFINITY || ay == INFINITY) t = (ax == ay) ? 0.5 * PIO2_HI : (ax == INFINITY) ? 0.0 : PIO2_HI;
+    else {
+        /* scaled by a power of 2 (exact) so that the squares neither overflow nor underflow; the
+         * smaller side over the radius is at most 1 / sqrt(2): asin is well conditioned there */
+        const double m = ax > ay ? ax : ay;
+        int e = 0;
+        (void)frexp(m, &e);
+        const double u = ldexp(ax, -e), v = ldexp(ay, -e), r = sqrt(u * u + v * v);
+        t = (ay <= ax) ? asin_part(v / r) : PIO2_HI - (asin_part(u / r) - PIO2_LO);
+    }
+    if (signbit(x)) t = PI_HI - (t - PI_LO);
+    return signbit(y) ? -t : t;
+}
+
 #else
 typedef int dfo_dmath_uses_libm; /* ISO C: a translation unit is not empty */
 #endif

@@ -19,6 +19,19 @@
 
 /* ---- exact helpers (plain IEEE double operations, the same in both builds) ------------------- */
 
+/* c ? a : b without a branch on c (the bits of a or b through a mask): for selects whose condition
+ * follows data a branch predictor misses, such as contacts' mixed modes */
+static inline double dfo_select(int c, double a, double b)
+{
+    uint64_t ua, ub;
+    memcpy(&ua, &a, sizeof ua);
+    memcpy(&ub, &b, sizeof ub);
+    const uint64_t m = (uint64_t)0 - (uint64_t)(c != 0), r = (ua & m) | (ub & ~m);
+    double x;
+    memcpy(&x, &r, sizeof x);
+    return x;
+}
+
 /* s + e = a + b exactly (Knuth's TwoSum: any a, b) */
 static inline void dfo_two_sum(double a, double b, double *s, double *e)
 {
@@ -78,6 +91,7 @@ static inline double dfo_pow2(int k)
 #define dfo_exp exp
 #define dfo_expm1 expm1
 #define dfo_acos acos
+#define dfo_atan2 atan2
 static inline void dfo_sincos(double x, double *s, double *c)
 {
     *s = sin(x);
@@ -101,6 +115,8 @@ double dfo_cos(double x);
 double dfo_exp(double x);
 double dfo_expm1(double x);
 double dfo_acos(double x);
+/* atan2(y, x) (IEEE's special values), within a few ulps of libm, the same bits on every platform */
+double dfo_atan2(double y, double x);
 /* x^y for x > 0 finite and y finite, the same bits on every platform (no libm): exp(y log x) with
  * log x to about an ulp, so within 8 + 3 |y ln x| ulp of libm (tests/platforms/test_dmath.c). */
 double dfo_pow_pos(double x, double y); /* NaN for x <= 0 or not finite */

@@ -508,18 +508,7 @@ void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, do
         zn = dp[j] - cp[j] * zn;
         z[j] = zn;
     }
-    const size_t a = lo + (size_t)fix_lo, b = hi - (size_t)fix_hi;
-    for (size_t i = a; i < b; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > lo) f += e[i - 1] * z[i - 1];
-            if (i + 1 < hi) f += e[i] * z[i + 1];
-            w[i] = f;
-        } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
-        }
-    }
+    lcp_box_basis_w(lo, hi, lo + (size_t)fix_lo, hi - (size_t)fix_hi, e, q, l, mode, z, w);
 }
 
 /* ---- the box LCP's driver, for any M ----------------------------------------------------------

@@ -133,6 +133,24 @@ static inline lcp_status lcp_lemke_warm2(const double *M, const double *q, const
  * M is given by its diagonal d[n] and off-diagonal e[n - 1] (e[i] couples rows i and i + 1; M
  * symmetric positive definite, so the problem has one solution z). */
 
+/* The end of a basis solve of rows [lo, hi) on its rows [a, b): a held row's (mode 0, l > 0) z_i set to
+ * 0 and its w_i = (M z + q)_i, another row's w_i = -mode_i l_i (0 where l_i = 0). */
+static inline void lcp_box_basis_w(size_t lo, size_t hi, size_t a, size_t b, const double *e, const double *q,
+                                   const double *l, const int *mode, double *z, double *w)
+{
+    for (size_t i = a; i < b; i++) {
+        if (mode[i] == 0 && l[i] > 0.0) {
+            z[i] = 0.0;
+            double f = q[i];
+            if (i > lo) f += e[i - 1] * z[i - 1];
+            if (i + 1 < hi) f += e[i] * z[i + 1];
+            w[i] = f;
+        } else {
+            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
+        }
+    }
+}
+
 /* The basis solve of rows [lo, hi): rows with mode 0 and l > 0 held at z_i = 0, the others with
  * w_i = -mode_i l_i (l_i = 0: w_i = 0, z_i free); the first row (fix_lo) and the last row (fix_hi)
  * may be fixed at the given values z_lo, z_hi instead (Dirichlet rows: the neighbours of a cluster

@@ -34,7 +34,9 @@ double dfo_root_bracketed(dfo_root_fn f, void *ctx, double x0, double lo, double
                 q = (q - 1.0) * (r - 1.0) * (ratio - 1.0);
             }
             if (p > 0.0) q = -q; else p = -p;
-            if (2.0 * p < fmin(3.0 * m * q - fabs(tol * q), fabs(e * q))) { e = d; d = p / q; }
+            /* fmin of the two bounds by comparison (a library call otherwise), NaN as fmin takes it */
+            const double b1 = 3.0 * m * q - fabs(tol * q), b2 = fabs(e * q);
+            if (2.0 * p < ((b1 < b2 || b2 != b2) ? b1 : b2)) { e = d; d = p / q; }
             else { d = m; e = m; }
         } else {
             d = m;

@@ -6,8 +6,8 @@
  *                [mu_s=...] [chi=...] [x0=...] [v0=...] [F_ext=...] [N_ext=...] [energy=0|1]
  *
  * energy=1 (default) keeps the energy accounts, which makes the located scheme split the whole
- * chain at every switch; energy=0 lets a long chain split only clusters around the switching
- * blocks (chain_located.c, chain_step_located), with the accounts left at 0.
+ * chain at every switch; energy=0 lets a long chain place its switches in spans around the
+ * switching blocks (the engine's eng_sparse spans), with the accounts left at 0.
  * A list with one value sets every block. Output: one row per communication point, columns t,
  * then x_i, v_i, F_i, mode_i for every block, then E (mechanical energy), W_applied, W_friction,
  * D_damping, steps, pivot_steps, switches. random_dt draws communication steps in [0.1 h, 3 h].

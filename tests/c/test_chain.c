@@ -1,7 +1,9 @@
 /* Unit tests of the chain of n blocks (fmu_src/models/chain/chain.h), driven directly (no FMI).
  *
- * 1. n = 1 against the oscillator (newmark.h): same parameters, same communication points (every
- *    T/100, and at random), three schemes, seven cases: the same t, x, v and mode, bit for bit;
+ * 1. n = 1 against the oscillator (scheme.h): same parameters, same communication points (every
+ *    T/100, and at random), three schemes, seven cases: the same t and mode at every point, x and v
+ *    to N1_TOL (the oscillator steps through the friction engine, whose arithmetic is ordered
+ *    otherwise than the chain's own stepper: the two agree to rounding, not bit for bit);
  * 2. the 2n LCP: the chain's box solver (principal pivoting on the tridiagonal M_hat) and Lemke on
  *    the dense 2n x 2n problem against brute-force enumeration of all complementary bases, n <= 6,
  *    on random and degenerate problems (ties |p| = l, l = 0 on some blocks, one block stuck
@@ -30,6 +32,7 @@ static void std_free(void *env, void *obj) { (void)env; free(obj); }
 static const chain_alloc AL = {std_alloc, std_free, NULL};
 
 #define NMAX 64
+#define N1_TOL 1e-10 /* n = 1 against the oscillator: x and v relative to max(|value|, 1) (measured: 5.4e-12) */
 
 typedef struct {
     size_t n;
@@ -60,6 +63,7 @@ static void test_single(checks *T)
                                {0.5, 0.4, 0.05, 0.0, 0.0}, {0.5, 0.4, 0.0, 0.0, 0.0}, {0.5, 0.2, 2.0, 0.0, 0.0},
                                {1.3, 0.3, 0.9, 0.05, 0.7}};
     long long points = 0, differing = 0;
+    double worst = 0.0; /* the largest difference of x or v, relative to max(|value|, 1) */
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
         for (int scheme = 1; scheme <= 3; scheme++) {
             for (int random_steps = 0; random_steps <= 1; random_steps++) {
@@ -90,11 +94,12 @@ static void test_single(checks *T)
                     t += random_steps ? p.h * rng_range(&r, 0.1, 3.0) : 10.0 * T_per / 1000.0;
                     CHECK_INT(DFO_OK, dfo_advance(&M, &u, &s, t, NULL, NULL));
                     CHECK_INT(CHAIN_OK, chain_advance(C, &in, &q, t, 0, NULL, NULL));
-                    differing += !(s.t == q.t && s.X == q.X[0] && s.V == q.V[0] && s.mode == q.mode[0]);
+                    const double dx = fabs(s.X - q.X[0]) / fmax(fabs(q.X[0]), 1.0);
+                    const double dv = fabs(s.V - q.V[0]) / fmax(fabs(q.V[0]), 1.0);
+                    worst = fmax(worst, fmax(dx, dv));
+                    differing += !(s.t == q.t && s.mode == q.mode[0]);
                     points++;
                 }
-                CHECK_SAME(s.X, q.X[0]);
-                CHECK_SAME(s.V, q.V[0]);
                 chain_state_free(C, &q);
                 chain_destroy(C);
             }
@@ -102,8 +107,10 @@ static void test_single(checks *T)
     }
     check_context(T, "%s", "");
     CHECK_INT(0, differing);
+    CHECK(worst <= N1_TOL);
     printf("n = 1 against the oscillator: 7 cases x 3 schemes, communication every T/100 and at random "
-           "(0.1 h ... 3 h): %lld points, %lld with a differing t, x, v or mode\n", points, differing);
+           "(0.1 h ... 3 h): %lld points, %lld with a differing t or mode, x and v within %.3g relative\n", points,
+           differing, worst);
 }
 
 /* ---- 2. the 2n LCP against enumeration ------------------------------------------------------ */
@@ -448,24 +455,27 @@ static void test_stop_and_copy(checks *T)
 
 static void test_fast_path(checks *T)
 {
-    /* the energy accounts send every step through the general path (chain_advance.c: step_fast and the
-     * stuck fast path stuck_until are off); on a chain short enough to be split whole, the two
+    /* the energy accounts send every step through the general path (the engine's fused step, the
+     * model's step_held, is not offered with them); on a chain short enough to be split whole, the two
      * runs must agree bit for bit: one with a block without friction, one stick-dominated (every
-     * block stuck for long phases) */
-    for (int variant = 0; variant < 2; variant++) {
+     * block stuck for long phases), one whose external and normal force inputs change every 200
+     * communication points (the fused steps' runs take the new loads) */
+    static const double Fx[2][5] = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.3, -0.2, 0.0, 0.25, -0.1}};
+    static const double Nx[2][5] = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.1, 0.4, -0.1, 0.0, 0.3}};
+    for (int variant = 0; variant < 3; variant++) {
         chain_state st[2];
         chain_model *C[2];
         for (int k = 0; k < 2; k++) {
             chain_setup cs;
             setup_fill(&cs, 5, 0.7, 2.0 * DFO_PI / 0.7 / 400, 3);
             for (size_t i = 0; i < 5; i++) {
-                cs.N[i] = (variant == 0) ? 0.2 + 0.15 * (double)i : 1.9 + 0.1 * (double)i;
+                cs.N[i] = (variant != 1) ? 0.2 + 0.15 * (double)i : 1.9 + 0.1 * (double)i;
                 cs.c[i] = 0.02;
                 cs.P0[i] = (i % 2) ? 0.0 : 1.0;
                 cs.phi[i] = 0.4 * (double)i;
             }
             if (variant == 0) cs.N[2] = 0.0; /* one block without friction */
-            else cs.P0[1] = -0.8;
+            else if (variant == 1) cs.P0[1] = -0.8;
             cs.p.k_end = 1.0;
             cs.p.account_energy = k;
             C[k] = chain_create(&cs.p, &AL, NULL);
@@ -473,10 +483,16 @@ static void test_fast_path(checks *T)
             const chain_inputs in = {NULL, NULL};
             chain_start(C[k], &in, 0.0, &st[k]);
         }
-        const chain_inputs in = {NULL, NULL};
+        chain_inputs in = {NULL, NULL};
         long long diffs = 0, all_stuck = 0;
         for (int j = 1; j <= 3000; j++) {
             const double t = j * 0.037;
+            if (variant == 2 && j % 200 == 0) {
+                const int u = (j / 200) % 2;
+                const chain_inputs to = {Fx[u], Nx[u]};
+                for (int k = 0; k < 2; k++) chain_new_inputs(C[k], &in, &to, &st[k]);
+                in = to;
+            }
             for (int k = 0; k < 2; k++) CHECK_INT(CHAIN_OK, chain_advance(C[k], &in, &st[k], t, 0, NULL, NULL));
             int stuck = 1;
             for (size_t i = 0; i < 5; i++) {

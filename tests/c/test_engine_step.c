@@ -5,8 +5,11 @@
  * switch's time), one block in the three Bossak schemes with a belt, input ramps and input and
  * belt changes, a chain of 8 blocks in the three schemes with a change of the external forces; the
  * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). The
- * oscillator's engine model (the block above) against newmark.c's own Bossak schemes, to rounding;
- * the located scheme's stuck fast path on against off. */
+ * oscillator's stepper (scheme.h's dfo_advance: its engine model made per call, the state mapped
+ * through dfo_state) against its engine model kept across the calls: the same bits; the located
+ * scheme's stuck fast path on against off; the fused loop of held-input grid steps against the
+ * general path, the three schemes, observed; the oscillator's observables over a fused run against
+ * the general path's. */
 #include "check.h"
 #include "engine_models.h"
 #include "osc_params.h"
@@ -64,7 +67,7 @@ static eng *run(const eng_setup *S, const entry *X, const eng_inputs *in1, const
     eng *E = eng_create(S, &ALLOC, NULL);
     if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
     memset(L, 0, sizeof *L);
-    const eng_hooks hk = {on_switch, L, NULL, 0};
+    const eng_hooks hk = {on_switch, L, NULL, 0, 0};
     X->start(E, in1, 0.0, zeros, zeros, s);
     const eng_inputs *in = in1;
     *status = ENG_OK;
@@ -140,7 +143,7 @@ static void test_block(checks *T)
         Bg.k = 1.0;
         Bi = Bg;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
-        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
+        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -189,13 +192,66 @@ static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
     hook_count *H = ctx;
     H->phases++;
     H->t_sum += ph->tb - ph->ta;
-    H->x_max = fmax(H->x_max, s->X[0]);
+    (void)s;
+    H->x_max = fmax(H->x_max, ph->X1[0]);
+}
+
+/* Four runs of one block compared: their final states, engines, switches and observed phases. */
+typedef struct {
+    eng_state s[4];
+    eng *E[4];
+    switch_log L[4];
+    hook_count H[4];
+} four_runs;
+
+/* Held inputs: none, and an external force of 0.15 (the runs' change at 20 s). */
+static const double F_JUMP[1] = {0.15};
+static const eng_inputs HELD_NONE = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+static const eng_inputs HELD_F = {F_JUMP, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+
+/* The unit block of the runs below: m = k = 1, c = 0.05. */
+static void unit_block(osc_eng_model *B)
+{
+    memset(B, 0, sizeof *B);
+    B->m = 1.0;
+    B->c = 0.05;
+    B->k = 1.0;
+}
+
+/* One block of S from rest through the entry points of X, observed by obs: the inputs in1 to 20 s,
+ * then in2 (eng_new_inputs) and communication points every 1.37 s, k_max of them. The final state
+ * into s (initialised here), the switches into L. */
+static eng *run_with(checks *T, const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2,
+                     const eng_observer *obs, int k_max, switch_log *L, eng_state *s)
+{
+    eng *E = eng_create(S, &ALLOC, NULL);
+    if (!E || !eng_state_init(E, s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    memset(L, 0, sizeof *L);
+    const eng_hooks hk = {on_switch, L, obs, 0, 0};
+    const double zero[1] = {0.0};
+    X->start(E, in1, 0.0, zero, zero, s);
+    eng_status st = X->advance(E, in1, s, 20.0, &hk);
+    CHECK(st == ENG_OK);
+    X->new_inputs(E, in1, in2, s, &hk);
+    for (int k = 1; k <= k_max && st == ENG_OK; k++) st = X->advance(E, in2, s, 20.0 + 1.37 * k, &hk);
+    CHECK(st == ENG_OK);
+    return E;
+}
+
+/* run_with observed over [12, w1], its phases counted into H */
+static eng *run_observed(checks *T, const eng_setup *S, const entry *X, const eng_inputs *in1, const eng_inputs *in2,
+                         double w1, int k_max, hook_count *H, switch_log *L, eng_state *s)
+{
+    memset(H, 0, sizeof *H);
+    H->x_max = -INFINITY;
+    const eng_observer obs = {12.0, w1, count_phase, H};
+    return run_with(T, S, X, in1, in2, &obs, k_max, L, s);
 }
 
 /* One block in the located scheme, stick-dominated (N mu_s = 0.8 against a unit excitation with a
  * sine part), held inputs with a change of the external force at 20 s and an observer's window
  * [12, 18]: the stuck fast path on and off, through engine.c and inlined, end on the same bits and
- * observe the same phases; on, it asks the model's breakaway and takes a quarter fewer friction solves
+ * observe the same motion (on, a stuck stretch taken at once is one phase); on, it asks the model's breakaway and takes a quarter fewer friction solves
  * (the stick phases outside the window: about half the time; a sliding step takes several). */
 static void test_stuck_fast_path(checks *T)
 {
@@ -203,60 +259,169 @@ static void test_stuck_fast_path(checks *T)
     static const double w1[1] = {1.0};
     const eng_row row = {1, idx, w1};
     const double N[1] = {1.8}, ms[1] = {0.5}, mk[1] = {0.35}, Pc[1] = {cos(0.3)}, Ps[1] = {sin(0.3)};
-    const double F2[1] = {0.15};
-    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    eng_state s[4];
-    eng *E[4];
-    switch_log L[4];
-    hook_count H[4];
+    const eng_inputs *in1 = &HELD_NONE, *in2 = &HELD_F;
+    four_runs R;
     for (int r = 0; r < 4; r++) { /* r: 0 generic off, 1 generic on, 2 inline off, 3 inline on */
         osc_eng_model B;
-        memset(&B, 0, sizeof B);
-        B.m = 1.0;
-        B.c = 0.05;
-        B.k = 1.0;
+        unit_block(&B);
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
-        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway};
+        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway, 1};
         S.ops = ops;
         S.fast_paths = r & 1;
-        memset(&H[r], 0, sizeof H[r]);
-        H[r].x_max = -INFINITY;
-        counted = &H[r];
-        const eng_observer obs = {12.0, 18.0, count_phase, &H[r]};
-        const entry *X = (r < 2) ? &GENERIC : &BLOCK;
-        E[r] = eng_create(&S, &ALLOC, NULL);
-        if (!E[r] || !eng_state_init(E[r], &s[r], 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
-        memset(&L[r], 0, sizeof L[r]);
-        const eng_hooks hk = {on_switch, &L[r], &obs, 0};
-        const double zero[1] = {0.0};
-        X->start(E[r], &in1, 0.0, zero, zero, &s[r]);
-        eng_status st = X->advance(E[r], &in1, &s[r], 20.0, &hk);
-        CHECK(st == ENG_OK);
-        X->new_inputs(E[r], &in1, &in2, &s[r], &hk);
-        for (int k = 1; k <= 40 && st == ENG_OK; k++) st = X->advance(E[r], &in2, &s[r], 20.0 + 1.37 * k, &hk);
-        CHECK(st == ENG_OK);
+        counted = &R.H[r];
+        R.E[r] = run_observed(T, &S, (r < 2) ? &GENERIC : &BLOCK, in1, in2, 18.0, 40, &R.H[r], &R.L[r], &R.s[r]);
     }
-    printf("  stuck fast path: %ld switches, solves off %ld / on %ld, breakaways asked %ld, x %.17g\n", L[0].count,
-           H[0].solves, H[1].solves, H[1].asks, s[0].X[0]);
+    printf("  stuck fast path: %ld switches, solves off %ld / on %ld, breakaways asked %ld, x %.17g\n", R.L[0].count,
+           R.H[0].solves, R.H[1].solves, R.H[1].asks, R.s[0].X[0]);
     check_context(T, "one block, located, the stuck fast path against the steps one by one");
-    CHECK(L[0].count >= 10);
-    CHECK(H[0].asks == 0 && H[1].asks > 0); /* (the inline runs call the block's hooks directly) */
-    CHECK(4 * H[1].solves < 3 * H[0].solves); /* (the stick phases outside the window skipped) */
+    CHECK(R.L[0].count >= 10);
+    /* the stick ended at the model's closed form with the fast path off too (the same numbers: the stick's
+     * breakaway kept, a stuck step taken without a trial where it lies beyond the step, asked again
+     * from the step that holds it); on, no more than off (the inline runs call the block's hooks
+     * directly) */
+    CHECK(R.H[0].asks > 0 && R.H[1].asks >= R.H[0].asks);
+    CHECK(4 * R.H[1].solves < 3 * R.H[0].solves); /* (the stick phases outside the window skipped) */
     for (int r = 1; r < 4; r++) {
-        CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
-        CHECK(H[r].phases == H[0].phases && H[r].t_sum == H[0].t_sum && H[r].x_max == H[0].x_max);
+        CHECK(same_bits(&R.s[0], &R.s[r], &R.L[0], &R.L[r]));
+        /* the same phases off (r = 2) and on (r = 3) through either build; on, a stuck stretch taken at
+         * once is one phase (fewer phases, the same time observed to rounding, the same positions) */
+        const int ref = r & 1;
+        CHECK(R.H[r].phases == R.H[ref].phases && R.H[r].t_sum == R.H[ref].t_sum && R.H[r].x_max == R.H[ref].x_max);
+        CHECK(R.H[r].phases <= R.H[0].phases && fabs(R.H[r].t_sum - R.H[0].t_sum) <= 1e-12 * R.H[0].t_sum &&
+              R.H[r].x_max == R.H[0].x_max);
     }
-    CHECK(H[0].phases > 100);
+    CHECK(R.H[1].phases < R.H[0].phases);
+    CHECK(R.H[0].phases > 100);
     for (int r = 0; r < 4; r++) {
-        eng_state_free(E[r], &s[r]);
-        eng_destroy(E[r]);
+        eng_state_free(R.E[r], &R.s[r]);
+        eng_destroy(R.E[r]);
     }
 }
 
-/* ---- the oscillator's engine model against newmark.c ------------------------------------------ */
+/* The stick-dominated block of the runs below (N mu_s = 0.35 against a unit excitation with a sine
+ * part) in scheme with the step h, its arrays in D; B its operators' model. */
+typedef struct {
+    size_t idx[1];
+    double w[1], N[1], ms[1], mk[1], Pc[1], Ps[1];
+    eng_row row;
+} stick_data;
 
-/* What a comparison with the oscillator's own Bossak schemes varies. */
+static eng_setup stick_block(stick_data *D, osc_eng_model *B, int scheme, double h)
+{
+    D->idx[0] = 0;
+    D->w[0] = 1.0;
+    D->N[0] = 0.7;
+    D->ms[0] = 0.5;
+    D->mk[0] = 0.35;
+    D->Pc[0] = cos(0.3);
+    D->Ps[0] = sin(0.3);
+    D->row.nnz = 1;
+    D->row.idx = D->idx;
+    D->row.w = D->w;
+    unit_block(B);
+    eng_setup S = setup_common(1, &D->row, D->N, D->ms, D->mk, D->Pc, D->Ps, scheme, 1.0);
+    S.h = h;
+    const eng_ops ops = {B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+    S.ops = ops;
+    return S;
+}
+
+/* The fused loop (engine_step.h's fused_steps: held inputs, no energy accounts) against the general
+ * path (the same run with the energy accounts, which take every step through step_located and
+ * step_lcp): one block, stick-dominated, on a coarse grid (50 steps per period: switches inside most
+ * of the steps that hold one), the three schemes through engine.c and inlined, an observer's window
+ * [12, 30] inside the run: the same bits, counters and switches, and the same observed phases (the
+ * fused loop's declined step handing its trial to the general path, the stuck step the stuck fast
+ * path declines taken in the loop, the window's test once per run). */
+static void test_fused_vs_general(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    const eng_inputs *in1 = &HELD_NONE, *in2 = &HELD_F;
+    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+        four_runs R;
+        for (int r = 0; r < 4; r++) { /* r: 0 generic general, 1 generic fused, 2 inline general, 3 inline fused */
+            osc_eng_model B;
+            stick_data D;
+            eng_setup S = stick_block(&D, &B, scheme, 4.0 * DFO_PI / 50.0);
+            S.account_energy = !(r & 1);
+            R.E[r] = run_observed(T, &S, (r < 2) ? &GENERIC : &BLOCK, in1, in2, 30.0, 30, &R.H[r], &R.L[r], &R.s[r]);
+        }
+        printf("  fused loop, %-10s: %ld switches, %lld steps, %ld phases observed, x %.17g\n", names[scheme],
+               R.L[0].count, R.s[0].steps, R.H[0].phases, R.s[0].X[0]);
+        check_context(T, "one block, %s: the fused loop against the general path", names[scheme]);
+        CHECK(R.L[0].count >= 10);
+        CHECK(R.H[0].phases > 50);
+        for (int r = 1; r < 4; r++) {
+            CHECK(same_bits(&R.s[0], &R.s[r], &R.L[0], &R.L[r]));
+            CHECK(R.H[r].phases == R.H[0].phases && !memcmp(&R.H[r].t_sum, &R.H[0].t_sum, sizeof(double)) &&
+                  R.H[r].x_max == R.H[0].x_max);
+        }
+        for (int r = 0; r < 4; r++) {
+            eng_state_free(R.E[r], &R.s[r]);
+            eng_destroy(R.E[r]);
+        }
+    }
+}
+
+/* The oscillator's observer (osc_eng_observe: osc_observables on a dfo_state) called through
+ * another function pointer: the specialised fused loop calls it out of line from the phase's values */
+static void other_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_observe_phase(ctx, ph, s); }
+
+/* The oscillator's observables over a fused run (its values in registers, ENG_OBS_RUN) against the
+ * general path's (the energy accounts on: every phase observed by its own call) and against the
+ * fused run with the observer called out of line (another function pointer): one block,
+ * stick-dominated, about 50 steps per period, the three schemes, inlined, the window [12, 30] opened in
+ * the middle of a call and closed in another (runs that start inside it, sampled, and runs that
+ * start before it), and [20, 30] opened where a call starts on a grid point (a run inside it, nothing
+ * sampled yet): x_max, x_min, the stuck time, the friction's work and the open stick stretch
+ * the same bits; the motion observed is stick-slip (a stuck time, a dissipated energy, a range). */
+static void test_observables_in_run(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    for (int k = 0; k < 6; k++) {
+        const int scheme = DFO_SCHEME_PAPER + k / 2;
+        const double w0 = (k % 2) ? 20.0 : 12.0; /* the window opened inside a call, or where one starts */
+        dfo_state d[3];
+        eng_state s[3];
+        eng *E[3];
+        switch_log L[3];
+        for (int r = 0; r < 3; r++) { /* r: 0 general, 1 fused, 2 fused with another observer's function */
+            osc_eng_model B;
+            stick_data D;
+            eng_setup S = stick_block(&D, &B, scheme, 0.125); /* (20 s a grid point) */
+            S.account_energy = r == 0;
+            memset(&d[r], 0, sizeof d[r]);
+            d[r].stuck_from = NAN;
+            d[r].x_max = 1e300; /* (not a sample: the first one replaces them) */
+            d[r].x_min = -1e300;
+            osc_observables O = {w0, 30.0, &d[r]};
+            const eng_observer obs = {w0, 30.0, (r == 2) ? other_observe : osc_eng_observe, &O};
+            E[r] = run_with(T, &S, &BLOCK, &HELD_NONE, &HELD_F, &obs, 30, &L[r], &s[r]);
+        }
+        printf("  observables in a fused run, %-10s, [%g, 30]: x in [%.6g, %.6g], stuck %.6g s, E_friction %.6g\n",
+               names[scheme], w0, d[0].x_min, d[0].x_max, d[0].t_stuck, d[0].E_friction);
+        check_context(T, "one block, %s, window from %g: the oscillator's observables in a fused run", names[scheme], w0);
+        CHECK(d[0].observed && d[0].x_max > d[0].x_min && d[0].t_stuck > 0.1 && d[0].t_stuck < 30.0 - w0 &&
+              d[0].E_friction > 0.0);
+        for (int r = 1; r < 3; r++) {
+            CHECK(same_bits(&s[0], &s[r], &L[0], &L[r]));
+            CHECK(d[r].observed == d[0].observed && !memcmp(&d[r].x_max, &d[0].x_max, sizeof(double)) &&
+                  !memcmp(&d[r].x_min, &d[0].x_min, sizeof(double)) &&
+                  !memcmp(&d[r].t_stuck, &d[0].t_stuck, sizeof(double)) &&
+                  !memcmp(&d[r].E_friction, &d[0].E_friction, sizeof(double)) &&
+                  isnan(d[r].stuck_from) == isnan(d[0].stuck_from) &&
+                  (isnan(d[0].stuck_from) || d[r].stuck_from == d[0].stuck_from));
+        }
+        for (int r = 0; r < 3; r++) {
+            eng_state_free(E[r], &s[r]);
+            eng_destroy(E[r]);
+        }
+    }
+}
+
+/* ---- the oscillator's stepper against its engine model kept across calls -------------------- */
+
+/* What a comparison of the oscillator's stepper with its engine model varies. */
 typedef struct {
     int scheme;
     double chi, c, Nn;
@@ -273,8 +438,9 @@ static void count_switch(void *ctx, double t, double x, int from, int to)
     ++*(long long *)ctx;
 }
 
-/* Run case K: newmark.c, and the engine through both entries, communication steps of 0.1 s over 30 s
- * at h = 1e-3; max |x_engine - x_oscillator| / max |x| into *d, the switches into sw[0..2]. */
+/* Run case K: the oscillator's stepper (dfo_advance), and the engine through both entries, communication
+ * steps of 0.1 s over 30 s at h = 1e-3; max |x_engine - x_stepper| / max |x| into *d, the switches into
+ * sw[0..2]. */
 static int run_case(checks *T, const osc_case *K, double *d, long long sw[3])
 {
     const double h = 1e-3;
@@ -336,11 +502,12 @@ static int run_case(checks *T, const osc_case *K, double *d, long long sw[3])
     return ok;
 }
 
-/* The oscillator's engine model (osc_engine.c), inline and through engine.c, against newmark.c's
- * Bossak schemes: the same bits between the two builds, the same trajectories to 1e-9 relative and
- * the same switches as newmark.c (the three schemes, damping, a stick-dominated case, belts and a
- * belt change, Stribeck, a ramp of F_ext, a jump of F_ext). */
-static void test_vs_newmark(checks *T)
+/* The oscillator's engine model (osc_engine.c), inline and through engine.c, against the oscillator's
+ * stepper (dfo_advance and dfo_new_inputs: a fresh engine per call, the state and the inputs mapped):
+ * the same bits between the two builds, the same positions and switches as the stepper (the three
+ * schemes, damping, a stick-dominated case, belts and a belt change, Stribeck, a ramp of F_ext, a
+ * jump of F_ext): nothing is lost between the calls. */
+static void test_vs_stepper(checks *T)
 {
     static const char *const names[] = {"", "paper", "consistent", "located"};
     const double nan = NAN;
@@ -368,7 +535,7 @@ static void test_vs_newmark(checks *T)
                "%.2e, switches %lld / %lld\n",
                names[K->scheme], K->chi, K->c, K->Nn, K->v_belt, K->belt_to, K->stribeck, K->F_ramp, K->F_jump, d,
                sw[0], sw[1]);
-        CHECK(d < 1e-9);
+        CHECK(d == 0.0);
         CHECK(sw[1] >= 4);
         CHECK(sw[1] == sw[0] && sw[2] == sw[1]);
     }
@@ -443,7 +610,7 @@ static void test_chain(checks *T)
         chain_make(&Dg);
         chain_make(&Di);
         eng_setup S = setup_common(NCHAIN, Dg.rows, Dg.N, Dg.ms, Dg.mk, Dg.Pc, Dg.Ps, scheme, 2.0);
-        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -467,7 +634,7 @@ static void test_chain(checks *T)
     check_context(T, "chain of %d blocks with a belt: refused", NCHAIN);
     chain_make(&Di);
     eng_setup S = setup_common(NCHAIN, Di.rows, Di.N, Di.ms, Di.mk, Di.Pc, Di.Ps, DFO_SCHEME_LOCATED, 2.0);
-    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
     S.ops = oi;
     double vb[NCHAIN] = {0.0};
     vb[3] = 0.1;
@@ -551,11 +718,28 @@ static int counting_step_held(void *ctx, const eng_held_step *F, eng_state *s)
     return chn_step_held(ctx, F, s);
 }
 
-static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab)
+static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
 {
     chn_model *C = ctx;
-    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab);
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
     if (ns > 0) ((big_chain *)((char *)C - offsetof(big_chain, C)))->spans++;
+    return ns;
+}
+
+/* The chain's spans with every contact range emptied: no candidate lies in a span (the engine then steps
+ * the whole structure) */
+static size_t spans_off_range(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
+{
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    for (size_t k = 0; k < ns; k++) ct_rng[2 * k + 1] = ct_rng[2 * k];
+    return ns;
+}
+
+/* The chain's spans, the first one's DOF range past the structure's end (a model's error) */
+static size_t spans_bad_range(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
+{
+    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    if (ns > 0) dof_rng[1] = ((const chn_model *)ctx)->n + 1;
     return ns;
 }
 
@@ -564,7 +748,7 @@ static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_la
 static eng_setup big_setup(big_chain *B, int scheme, int sparse, double steps)
 {
     eng_setup S = setup_common(B->n, B->rows, B->N, B->ms, B->mk, B->Pc, B->Ps, DFO_SCHEME_PAPER, 2.0);
-    const eng_ops ops = {&B->C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL};
+    const eng_ops ops = {&B->C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
     S.ops = ops;
     S.scheme = scheme;
     S.h = 4.0 * DFO_PI / steps;
@@ -669,6 +853,33 @@ static void test_chain_sparse(checks *T)
     check_context(T, "chain of %zu blocks, located: spans against the whole structure, second order", n);
     printf("  spans against whole: %.2e, %.2e (ratio %.2f)\n", dh[0], dh[1], dh[0] / dh[1]);
     CHECK(dh[0] / dh[1] > 3.0);
+    /* the spans' ranges: a candidate outside them, the whole structure stepped (the bits of no spans);
+     * a range past the structure, an error */
+    check_context(T, "chain of %zu blocks, located: spans whose ranges miss the candidates, or overrun", n);
+    {
+        eng_state s3[3];
+        eng_status st3[3];
+        eng *E3[3];
+        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, 800.0);
+        E3[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[0], &st3[0]);
+        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, 800.0);
+        B.sp.span = spans_off_range;
+        E3[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[1], &st3[1]);
+        B.sp.span = spans_bad_range;
+        E3[2] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[2], &st3[2]);
+        printf("  spans off their candidates: %lld / %lld switches; overrun: status %d at t = %g\n", s3[1].switches,
+               s3[0].switches, (int)st3[2], s3[2].t);
+        const switch_log none = {0, 0.0, 0};
+        CHECK(st3[0] == ENG_OK && st3[1] == ENG_OK);
+        CHECK(s3[0].switches > 50);
+        CHECK(same_bits(&s3[1], &s3[0], &none, &none));
+        CHECK(st3[2] == ENG_ERR_BAD_INPUT);
+        CHECK(s3[2].t < 40.0);
+        for (int v = 0; v < 3; v++) {
+            eng_state_free(E3[v], &s3[v]);
+            eng_destroy(E3[v]);
+        }
+    }
     big_free(&B);
     /* the stuck fast path from the contacts' closed-form breakaways: a chain that sticks whole for
      * stretches (one block slips near its excitation's peaks, the others hold), on against off */
@@ -707,7 +918,9 @@ int main(void)
     checks *T = &C;
     test_block(T);
     test_stuck_fast_path(T);
-    test_vs_newmark(T);
+    test_fused_vs_general(T);
+    test_observables_in_run(T);
+    test_vs_stepper(T);
     test_chain(T);
     test_chain_sparse(T);
     return checks_done(T, "test_engine_step");

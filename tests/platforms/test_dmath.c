@@ -7,8 +7,10 @@
  *                       results per range, and fails if any difference exceeds MAX_ULPS or a special
  *                       value or one of the hard arguments' correctly rounded results is wrong, or
  *                       if dfo_sincos differs from dfo_sin, dfo_cos by a single bit.
- *   test_dmath --dump   prints the bits of every result on a fixed set of arguments (no libm): the
- *                       cross-platform check compares these dumps between Linux x86-64, Windows
+ *                       dfo_atan2 within 4 ulps of atan2 on random points of every quadrant.
+ *                       dfo_select with the bits of the ternary's choice (signed zeros, NaNs, ...).
+ *   test_dmath --dump   prints the bits of every result (also dfo_pow_pos's, dfo_atan2's) on a fixed
+ *                       set of arguments (no libm): the cross-platform check compares these dumps between Linux x86-64, Windows
  *                       (wine) and Linux aarch64 (qemu) bit for bit. */
 #include <float.h>
 #include <inttypes.h>
@@ -164,6 +166,24 @@ static int check_specials(void)
     EXPECT(dfo_expm1(inf) == inf && isnan(dfo_expm1(nan_)) && dfo_expm1(1e-300) == 1e-300);
     EXPECT(dfo_acos(1.0) == 0.0 && dfo_acos(-1.0) == 0x1.921fb54442d18p+1 && dfo_acos(0.0) == 0x1.921fb54442d18p+0);
     EXPECT(isnan(dfo_acos(1.0000000000000002)) && isnan(dfo_acos(-2.0)) && isnan(dfo_acos(nan_)));
+    /* atan2: IEEE's special values, and within 4 ulps of libm on random points of every quadrant and
+     * scale (the smaller side down to 1e-12 of the larger) */
+    EXPECT(dfo_atan2(0.0, 1.0) == 0.0 && signbit(dfo_atan2(-0.0, 1.0)) && dfo_atan2(0.0, -1.0) == 0x1.921fb54442d18p+1);
+    EXPECT(dfo_atan2(1.0, 0.0) == 0x1.921fb54442d18p+0 && dfo_atan2(-1.0, 0.0) == -0x1.921fb54442d18p+0);
+    EXPECT(dfo_atan2(inf, inf) == atan2(inf, inf) && dfo_atan2(-inf, -inf) == atan2(-inf, -inf));
+    EXPECT(isnan(dfo_atan2(nan_, 1.0)) && isnan(dfo_atan2(1.0, nan_)) && dfo_atan2(1e-300, 1e300) == atan2(1e-300, 1e300));
+    {
+        uint64_t st = 12345;
+        double worst = 0.0;
+        for (int i = 0; i < 200000; i++) {
+            const double x = uniform(&st, -1.0, 1.0) * loguniform(&st, 1e-12, 1e12);
+            const double y = uniform(&st, -1.0, 1.0) * fabs(x) * loguniform(&st, 1e-12, 1e12);
+            const double d = (i & 1) ? ulps(dfo_atan2(y, x), atan2(y, x)) : ulps(dfo_atan2(x, y), atan2(x, y));
+            worst = d > worst ? d : worst;
+        }
+        printf("atan2: worst %.0f ulps against libm on 200000 points\n", worst);
+        EXPECT(worst <= 4.0);
+    }
     /* Payne-Hanek against correctly rounded values (4000-bit arithmetic), not against libm: glibc
      * 2.36 returns cos(hard) 8 ulps off, and the compiler may fold sin(constant) correctly at -O2 but
      * not at -O0. hard = 6381956970095103 2^797 lies 2^-61 from a multiple of pi/2 (the hardest
@@ -177,9 +197,34 @@ static int check_specials(void)
     return bad;
 }
 
+/* dfo_select(c, a, b): the bits of c ? a : b for any c (0, 1, other values) and any a, b: signed
+ * zeros, infinities, NaNs with payloads, subnormals, random doubles. Returns the failures. */
+static int check_select(void)
+{
+    double v[12] = {0.0, -0.0, INFINITY, -INFINITY, DBL_MIN / 4.0, -DBL_MIN, 1.0, -3.5, DBL_MAX, 0.0, 0.0, 0.0};
+    uint64_t nan_bits = 0x7FF8000000000123ULL, seed = 0x243F6A8885A308D3ULL;
+    memcpy(&v[9], &nan_bits, sizeof nan_bits);
+    nan_bits = 0xFFF0000000000001ULL; /* a signalling NaN's bits, negative */
+    memcpy(&v[10], &nan_bits, sizeof nan_bits);
+    const int cs[5] = {0, 1, -1, 2, 1 << 30};
+    int bad = 0;
+    for (int r = 0; r < 64; r++) {
+        v[11] = ldexp(uniform(&seed, -1.0, 1.0), (int)(rng_next(&seed) % 2000) - 1000);
+        for (size_t i = 0; i < 12; i++)
+            for (size_t j = 0; j < 12; j++)
+                for (size_t k = 0; k < 5; k++) {
+                    const double want = cs[k] ? v[i] : v[j], got = dfo_select(cs[k], v[i], v[j]);
+                    bad += bits(got) != bits(want);
+                }
+    }
+    printf("dfo_select: %d of %d selections differ from the ternary's bits\n", bad, 64 * 12 * 12 * 5);
+    return bad != 0;
+}
+
 static int compare(void)
 {
     int failed = check_specials();
+    failed |= check_select();
     uint64_t seed = 0x9E3779B97F4A7C15ULL;
     printf("%-6s %-44s %10s %10s\n", "fn", "range", "max ulps", "identical");
     for (size_t i = 0; i < sizeof RANGES / sizeof RANGES[0]; i++) {
@@ -252,6 +297,10 @@ static int dump(void)
     for (int n = 0; n < 2000; n++) {
         const double x = fabs(loguniform(&seed, 1e-6, 1e6)), y = uniform(&seed, 0.2, 4.0);
         printf("pow %016" PRIx64 " %016" PRIx64 " %016" PRIx64 "\n", bits(x), bits(y), bits(dfo_pow_pos(x, y)));
+    }
+    for (int n = 0; n < 2000; n++) {
+        const double x = uniform(&seed, -1.0, 1.0) * loguniform(&seed, 1e-6, 1e6), y = uniform(&seed, -4.0, 4.0);
+        printf("atan2 %016" PRIx64 " %016" PRIx64 " %016" PRIx64 "\n", bits(y), bits(x), bits(dfo_atan2(y, x)));
     }
     return 0;
 }

@@ -11,23 +11,22 @@
  * k[i], c[i] is the spring and damper on the left of block i (k[0], c[0] tie block 0 to the left
  * wall); k_end = c_end = 0 is a free right end. Springs are relaxed at x = 0.
  *
- * One step: M_hat V1 = p_hat + F1 with M_hat = (1 - a) M / (g h) + C + (b h / g) K (tridiagonal,
- * symmetric positive definite). The 2n LCP (z = (u+, u-), w = (mu N + F, mu N - F)) is solved from
- * the basis named by the blocks' modes (stuck blocks held at V = 0, sliding ones with their kinetic
- * force): a tridiagonal solve, O(n). When that basis is infeasible, the schemes differ:
- *   located (default): each infeasible block's switch is placed inside the step (a sliding block's
- *     V_i = 0, a stuck block's held force reaching its limit; a bracketed root of the step length),
- *     the earliest is taken, the step is split there, the switching block's new mode decided by the
- *     rest rule of friction.h with its own net force, and the chain restarts with the consistent
- *     accelerations of the new mode set;
- *   paper: principal pivoting on the box form of the LCP (limits mu_b N stuck, mu_k N sliding),
- *     then one coefficient update and a second solve; Bossak's A throughout;
- *   consistent: paper, with stuck blocks at rest (V = A = 0).
+ * The chain is a model of the friction engine (fmu_src/engine): contact i on block i (w_i = e_i),
+ * the engine's Bossak schemes (located, the default; paper; consistent) over the chain's operators
+ * (chain_engine_ops.h). One step: M_hat V1 = p_hat + F1 with M_hat = (1 - a) M / (g h) + C +
+ * (b h / g) K (tridiagonal, symmetric positive definite); the friction is the box form of the 2n
+ * LCP, solved from the basis named by the blocks' modes (stuck blocks held, sliding ones with their
+ * kinetic force): one tridiagonal solve, O(n), with the factorisation kept for the held pattern;
+ * where that basis is infeasible the located scheme places each switch inside its step in a span
+ * of nearby blocks (the engine's spans: O(span) per switch), the paper and consistent schemes pivot
+ * (lcp_box). engine.h says what each scheme does.
  *
- * Memory: O(n), every array through the caller's allocate/free callbacks. The state is plain data
- * plus arrays (chain_state_copy). Plain C, no FMI types. */
+ * Memory: O(n), every array through the caller's allocate/free callbacks (the engine's too). The
+ * state is the engine's (chain_state_copy). Plain C, no FMI types. */
 #ifndef DFO_CHAIN_H
 #define DFO_CHAIN_H
+
+#include "engine.h"
 
 #include <stddef.h>
 
@@ -80,28 +79,12 @@ typedef enum {
 
 typedef struct chain_model chain_model;
 
-/* The state: plain fields plus seven arrays of length n. Copy with chain_state_copy; serialise as
- * the struct's scalar fields followed by the arrays. */
-typedef struct {
-    size_t n;
-    double t0, t;       /* start time; current time */
-    long long n_grid;   /* the last grid point reached is t0 + n_grid h */
-    double *X, *V, *A, *F;
-    double *hA;         /* per block: step length that produced A (0: A is the physical acceleration) */
-    double *t_stick;    /* per block: when its current stick phase began */
-    int *mode;          /* -1 backward slip, 0 stuck, +1 forward slip (sign of V without friction) */
-    /* energy accounts since the start (J): work of the applied forces (excitation + F_ext) and of
-     * friction, dissipation in the dampers (trapezoidal rule per (sub)step, friction exact) */
-    double W_applied, W_friction, D_damping;
-    /* counters: internal steps, steps whose warm basis was infeasible (a pivot or a located
-     * switch), switches, tridiagonal solves */
-    long long steps, pivot_steps, switches, solves;
-    /* excitation cache: cos and sin of omega (t0 + exc_n h) at the grid point exc_n (-1: empty), a
-     * pure function of exc_n (exact every DFO_EXC_ANCHOR = 64 points, rotations in between: excitation.h,
-     * as the oscillator) */
-    long long exc_n;
-    double exc_c, exc_s;
-} chain_state;
+/* The state: the friction engine's (engine.h's eng_state, contact i on block i: nc = n): time, grid
+ * point, X, V, A, hA, F, mode, t_stick per block, the energy accounts since the start (kept with
+ * chain_params.account_energy: the work of the applied forces and of friction, the dissipation in
+ * the dampers), the counters (internal steps, steps whose warm basis was infeasible, switches,
+ * solves) and the excitation's grid cache. Copy with chain_state_copy. */
+typedef eng_state chain_state;
 
 /* Check the parameters; NULL when valid, else a sentence naming the element, e.g.
  * "invalid value -1 for m[3] (valid: > 0)" (1-based indices, as the FMU's names), written to buf. */

@@ -216,6 +216,13 @@ static void read_body(dfo_cursor *c, dfo_run *run, chain_values *v)
     dfo_get_f64s(c, s->hA, n);
     dfo_get_f64s(c, s->t_stick, n);
     for (size_t i = 0; i < n; i++) s->mode[i] = dfo_get_i32(c);
+    /* the engine's own bookkeeping, not serialised: no breakaway known, no switch (the instance keeps
+     * the last switch it reported in sw_t) */
+    s->t_switch = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        s->t_break[i] = NAN;
+        s->break_dir[i] = 0;
+    }
     dfo_get_run(c, run);
 }
 

@@ -95,6 +95,93 @@ static double shortest_period(double kmax, double cmax, double omega)
     return fastest > 0.0 ? 2.0 * DFO_PI / fastest : INFINITY;
 }
 
+static void *eng_calloc(void *env, size_t nobj, size_t size)
+{
+    const chain_alloc *al = (const chain_alloc *)env;
+    return al->allocate(al->env, nobj, size);
+}
+static void eng_free(void *env, void *obj)
+{
+    const chain_alloc *al = (const chain_alloc *)env;
+    al->release(al->env, obj);
+}
+
+/* The engine's setup of the model (its operators in M->ops, its rows in M->rows). */
+static eng *make_engine(chain_model *M, const char **err)
+{
+    const size_t n = M->n;
+    chain_eng_ops *O = &M->ops;
+    O->n = n;
+    O->m = M->m;
+    O->Kd = M->Kd;
+    O->P0 = M->P0;
+    O->phi = M->phi;
+    O->Ko = M->Ko;
+    O->Cd = M->Cd;
+    O->Co = M->Co;
+    O->damped = M->damped;
+    for (size_t i = 0; i < n; i++) {
+        M->ridx[i] = i;
+        M->rw[i] = 1.0;
+        M->rows[i].nnz = 1;
+        M->rows[i].idx = &M->ridx[i];
+        M->rows[i].w = &M->rw[i];
+    }
+    eng_setup S;
+    memset(&S, 0, sizeof S);
+    S.n = n;
+    S.nc = n;
+    S.ops.ctx = O;
+    S.ops.apply_K = chain_op_K;
+    S.ops.apply_C = M->damped ? chain_op_C : NULL;
+    S.ops.apply_M = chain_op_M;
+    S.ops.factor = chain_op_factor;
+    S.ops.solve = chain_op_solve;
+    S.ops.friction = chain_op_friction;
+    S.ops.breakaway = chain_op_breakaway;
+    /* its sparse-structure operators: the held solves always; the fused grid step and the spans
+     * (the located scheme's local switch placement) where the energy accounts are not kept (they
+     * would take the step past them), the fused step without Stribeck (its basis solve is then not
+     * the step's) */
+    memset(&M->sparse, 0, sizeof M->sparse);
+    M->sparse.held_basis = 1;
+    M->sparse.contact_breakaway = chain_op_contact_breakaway;
+    if (!M->energy && !M->stribeck) M->sparse.step_held = chain_op_step_held;
+    if (!M->energy) {
+        O->sub = &M->view;
+        chain_op_set_reach(O, M->h, M->alpha);
+        M->sparse.span_max = n;
+        M->sparse.span = chain_op_span;
+        M->sparse.span_bind = chain_op_span_bind;
+        const eng_ops view = {&M->view,        chain_op_K,        chain_op_C,         chain_op_M, chain_op_factor,
+                              chain_op_solve, chain_op_friction, chain_op_breakaway, 0};
+        M->sparse.span_ops = view;
+        if (!M->damped) M->sparse.span_ops.apply_C = NULL;
+    }
+    S.sparse = &M->sparse;
+    S.rows = M->rows;
+    S.exc.omega = M->omega;
+    S.exc.phi0 = M->phi0;
+    S.exc.Pc = M->Pc;
+    S.exc.Ps = M->Ps;
+    S.N = M->N;
+    S.mu_s = M->mu_s;
+    S.mu_k = M->mu_k;
+    S.law = M->law;
+    S.h = M->h;
+    S.alpha = M->alpha;
+    S.scheme = M->scheme;
+    S.friction_updates = 1;
+    S.account_energy = M->energy;
+    S.fast_paths = !M->energy;
+    S.rate_max = M->rate_max;
+    S.snap_max_rel_h = SNAP_REL_H;
+    S.snap_min_rel_h = SNAP_REL_H;
+    S.snap_eps_t = 0.0;
+    const eng_alloc ea = {eng_calloc, eng_free, &M->al};
+    return eng_create(&S, &ea, err);
+}
+
 chain_model *chain_create(const chain_params *p, const chain_alloc *al, const char **err)
 {
     static const char *const oom = "out of memory";
@@ -106,35 +193,53 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     const size_t n = p->n;
     M->al = *al;
     M->n = n;
-    /* one block of doubles for all per-block arrays (42 of n, then fw and box of 2n), one for
-     * the ints, one for the candidates and clusters */
-    enum { NARR = 42 };
-    double *blk = dalloc(al, (NARR + 4) * n); /* and fw, box: 2n each */
-    int *iblk = (int *)al->allocate(al->env, 3 * n, sizeof(int));
-    M->cand = (size_t *)al->allocate(al->env, 3 * n, sizeof(size_t));
-    M->rows = (fast_row *)al->allocate(al->env, n, sizeof(fast_row));
-    if (!blk || !iblk || !M->cand || !M->rows) {
+    /* one block of doubles for the per-block arrays (NARR of n) and the operators' (NOPS of n, for the
+     * chain and for its span's view), one of ints for the kept factorisations' patterns */
+    enum { NARR = 22, NOPS = 6 * ENG_NSLOTS + 6 };
+    double *blk = dalloc(al, (size_t)(NARR + 2 * NOPS) * n);
+    int *iblk = (int *)al->allocate(al->env, 2 * ENG_NSLOTS * n, sizeof(int));
+    M->rows = (eng_row *)al->allocate(al->env, n, sizeof(eng_row));
+    M->ridx = (size_t *)al->allocate(al->env, n, sizeof(size_t));
+    chain_run_row *rr = (chain_run_row *)al->allocate(al->env, n, sizeof(chain_run_row));
+    if (!blk || !iblk || !M->rows || !M->ridx || !rr) {
         if (blk) al->release(al->env, blk);
         if (iblk) al->release(al->env, iblk);
-        if (M->cand) al->release(al->env, M->cand);
         if (M->rows) al->release(al->env, M->rows);
+        if (M->ridx) al->release(al->env, M->ridx);
+        if (rr) al->release(al->env, rr);
         al->release(al->env, M);
         if (err) *err = oom;
         return NULL;
     }
-    double **arr[NARR] = {&M->m, &M->am, &M->am1, &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N, &M->mu_k, &M->mu_b,
-                          &M->x0, &M->v0,
-                          &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->dF, &M->eF, &M->d, &M->e, &M->A0, &M->xp,
-                          &M->q,  &M->Vt, &M->Ft, &M->cp, &M->dp, &M->u, &M->mukN, &M->Fb, &M->S, &M->l,
-                          &M->sX, &M->sV, &M->sA, &M->sF, &M->shA, &M->J, &M->ks, &M->cs,
-                          &M->Nn, &M->mlN};
+    double **arr[NARR] = {&M->m,  &M->Pc, &M->Ps, &M->P0, &M->phi, &M->N,  &M->mu_s, &M->mu_k,
+                          &M->mu_b, &M->x0, &M->v0, &M->Kd, &M->Ko, &M->Cd, &M->Co, &M->ks,
+                          &M->cs, &M->u,  &M->mukN, &M->Fb, &M->Nn, &M->rw};
     for (int j = 0; j < NARR; j++) *arr[j] = blk + (size_t)j * n;
-    M->fw = blk + (size_t)NARR * n;
-    M->box = blk + (size_t)(NARR + 2) * n;
-    M->frozen = iblk;
-    M->st = iblk + n;
-    M->smode = iblk + 2 * n;
-    M->clu = M->cand + n;
+    chain_eng_ops *ops[2] = {&M->ops, &M->view};
+    for (int v = 0; v < 2; v++) {
+        chain_eng_ops *O = ops[v];
+        double *ob = blk + (size_t)(NARR + v * NOPS) * n;
+        int *ib = iblk + (size_t)(v * ENG_NSLOTS) * n;
+        for (int k = 0; k < ENG_NSLOTS; k++) {
+            O->d[k] = ob + (size_t)(6 * k) * n;
+            O->e[k] = ob + (size_t)(6 * k + 1) * n;
+            O->cp[k] = ob + (size_t)(6 * k + 2) * n;
+            O->inv[k] = ob + (size_t)(6 * k + 3) * n;
+            O->kcp[k] = ob + (size_t)(6 * k + 4) * n;
+            O->kinv[k] = ob + (size_t)(6 * k + 5) * n;
+            O->kh[k] = ib + (size_t)k * n;
+        }
+        O->q = ob + (size_t)(6 * ENG_NSLOTS) * n;
+        O->work = ob + (size_t)(6 * ENG_NSLOTS + 1) * n; /* 2 n */
+        O->nd = ob + (size_t)(6 * ENG_NSLOTS + 3) * n;
+        O->ne = ob + (size_t)(6 * ENG_NSLOTS + 4) * n;
+        O->nr = ob + (size_t)(6 * ENG_NSLOTS + 5) * n;
+        O->rr = NULL; /* (the span's view steps no runs) */
+        O->rr_slot = -1;
+        for (int k = 0; k < 5; k++) O->rr_src[k] = NULL;
+    }
+    M->ops.rr = rr;
+    M->iblk = iblk;
     M->stribeck = p->friction_law == DFO_LAW_STRIBECK;
     M->law = NULL;
     if (M->stribeck) {
@@ -157,15 +262,10 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     M->c_end = p->c_end;
     M->omega = p->omega;
     M->h = p->h;
-    M->rot_c = dfo_cos(p->omega * p->h);
-    M->rot_s = dfo_sin(p->omega * p->h);
     M->phi0 = p->phi[0];
     for (size_t i = 1; i < n; i++)
         if (p->phi[i] != p->phi[0]) M->phi0 = 0.0;
     M->alpha = p->alpha;
-    M->gamma = dfo_bossak_gamma(p->alpha);
-    M->beta = dfo_bossak_beta(p->alpha);
-    M->g1 = (1.0 - M->gamma) / M->gamma;
     M->scheme = p->scheme;
     M->energy = p->account_energy;
     M->damped = p->c_end != 0.0;
@@ -173,20 +273,19 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     for (size_t i = 0; i < n; i++) {
         const double kr = (i + 1 < n) ? p->k[i + 1] : p->k_end, cr = (i + 1 < n) ? p->c[i + 1] : p->c_end;
         M->m[i] = p->m[i];
-        M->am[i] = p->alpha * p->m[i];
-        M->am1[i] = (1.0 - p->alpha) * p->m[i];
         M->Pc[i] = p->P0[i] * dfo_cos(p->phi[i] - M->phi0);
         M->Ps[i] = (M->phi0 == p->phi[i]) ? 0.0 : p->P0[i] * dfo_sin(p->phi[i]);
         M->P0[i] = p->P0[i];
         M->phi[i] = p->phi[i];
         M->N[i] = p->N[i];
+        M->mu_s[i] = p->mu_s[i];
         M->mu_k[i] = p->chi[i] * p->mu_s[i];
         M->mu_b[i] = fmax(p->mu_s[i], M->mu_k[i]);
         M->x0[i] = p->x0[i];
         M->v0[i] = p->v0[i];
         M->Kd[i] = p->k[i] + kr;
         M->Cd[i] = p->c[i] + cr;
-        /* site springs and dampers only when set (else today's bits: no + 0.0) */
+        /* site springs and dampers only when set (no + 0.0) */
         M->ks[i] = p->k_site ? p->k_site[i] : 0.0;
         if (M->ks[i] != 0.0) M->Kd[i] += M->ks[i];
         M->cs[i] = p->c_site ? p->c_site[i] : 0.0;
@@ -198,27 +297,13 @@ chain_model *chain_create(const chain_params *p, const chain_alloc *al, const ch
     gershgorin(p, &kmax, &cmax);
     M->rate_max = sqrt(kmax) + cmax + fabs(p->omega);
     M->T_min = shortest_period(kmax, cmax, p->omega);
-    dfo_bossak_kin_for(p->h, M->gamma, M->beta, &M->kinF);
-    M->kin = M->kinF;
-    const double c1 = M->kin.c1, bhg = M->beta * p->h / M->gamma;
-    for (size_t i = 0; i < n; i++) {
-        /* (k b) h / g, associated as the oscillator's m_hat (n = 1 gives its bits there) */
-        M->dF[i] = M->am1[i] * c1 + M->Kd[i] * M->beta * p->h / M->gamma + M->Cd[i];
-        M->eF[i] = M->Ko[i] * bhg + M->Co[i];
+    const char *why = NULL;
+    M->E = make_engine(M, &why);
+    if (!M->E) {
+        chain_destroy(M);
+        if (err) *err = why ? why : oom;
+        return NULL;
     }
-    for (size_t i = 0; i < n; i++) {
-        fast_row *R = &M->rows[i];
-        R->Pc = M->Pc[i]; R->Ps = M->Ps[i]; R->am = M->am[i]; R->am1 = M->am1[i];
-        R->Kd = M->Kd[i]; R->Ko = M->Ko[i]; R->d = M->dF[i]; R->e = M->eF[i];
-        R->u = R->Fb = R->mukN = 0.0;  /* (chain_loads_init) */
-        R->fh = 0;
-    }
-    /* beyond w blocks the influence of a block inside one step is below 2^-56 (bossak.h's
-     * dfo_bossak_reach), rho the largest ratio of a row's off-diagonal sum to its diagonal (shorter
-     * steps: smaller) */
-    double rho = 0.0;
-    for (size_t i = 0; i < n; i++) rho = fmax(rho, (fabs(i > 0 ? M->eF[i - 1] : 0.0) + fabs(M->eF[i])) / M->dF[i]);
-    M->w = dfo_bossak_reach(rho, n);
     if (err) *err = NULL;
     return M;
 }
@@ -243,10 +328,12 @@ void chain_destroy(chain_model *M)
 {
     if (!M) return;
     const chain_alloc al = M->al;
+    if (M->E) eng_destroy(M->E);
     al.release(al.env, M->m);
-    al.release(al.env, M->frozen);
-    al.release(al.env, M->cand);
+    al.release(al.env, M->iblk);
     al.release(al.env, M->rows);
+    al.release(al.env, M->ridx);
+    al.release(al.env, M->ops.rr);
     if (M->law) al.release(al.env, M->law);
     al.release(al.env, M);
 }
@@ -257,21 +344,7 @@ int chain_state_init(const chain_model *M, chain_state *s) { return chain_state_
 
 void chain_state_free(const chain_model *M, chain_state *s) { chain_state_release(&M->al, s); }
 
-void chain_state_copy(chain_state *dst, const chain_state *src)
-{
-    double *X = dst->X, *V = dst->V, *A = dst->A, *F = dst->F, *hA = dst->hA, *ts = dst->t_stick;
-    int *mode = dst->mode;
-    const size_t n = src->n;
-    *dst = *src;
-    dst->X = X; dst->V = V; dst->A = A; dst->F = F; dst->hA = hA; dst->t_stick = ts; dst->mode = mode;
-    memcpy(hA, src->hA, n * sizeof *hA);
-    memcpy(ts, src->t_stick, n * sizeof *ts);
-    memcpy(X, src->X, n * sizeof *X);
-    memcpy(V, src->V, n * sizeof *V);
-    memcpy(A, src->A, n * sizeof *A);
-    memcpy(F, src->F, n * sizeof *F);
-    memcpy(mode, src->mode, n * sizeof *mode);
-}
+void chain_state_copy(chain_state *dst, const chain_state *src) { eng_state_copy(dst, src); }
 
 double chain_energy(const chain_model *M, const chain_state *s)
 {
@@ -304,30 +377,14 @@ const char *chain_status_text(chain_status st)
 
 int chain_state_alloc(const chain_alloc *al, size_t n, chain_state *s)
 {
-    memset(s, 0, sizeof *s);
-    s->n = n;
-    double *b = dalloc(al, 6 * n);
-    int *mode = (int *)al->allocate(al->env, n, sizeof(int));
-    if (!b || !mode) {
-        if (b) al->release(al->env, b);
-        if (mode) al->release(al->env, mode);
-        return 0;
-    }
-    s->X = b;
-    s->V = b + n;
-    s->A = b + 2 * n;
-    s->F = b + 3 * n;
-    s->hA = b + 4 * n;
-    s->t_stick = b + 5 * n;
-    s->mode = mode;
+    const eng_alloc ea = {eng_calloc, eng_free, (void *)al};
+    if (!eng_state_alloc(&ea, n, n, 0, s)) return 0;
     s->exc_n = -1;
     return 1;
 }
 
 void chain_state_release(const chain_alloc *al, chain_state *s)
 {
-    if (s->X) al->release(al->env, s->X);
-    if (s->mode) al->release(al->env, s->mode);
-    s->X = s->V = s->A = s->F = s->hA = s->t_stick = NULL;
-    s->mode = NULL;
+    const eng_alloc ea = {eng_calloc, eng_free, (void *)al};
+    eng_state_release(&ea, s);
 }

@@ -7,10 +7,11 @@ set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/ddouble.h numerics/lcp.c
     numerics/lcp.h numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
-    numerics/roots.c numerics/roots.h
+    numerics/roots.c numerics/roots.h engine/engine.c engine/engine.h engine/engine_private.h engine/engine_step.h
     models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/scheme_state.h
     models/oscillator/scheme.c models/oscillator/scheme.h models/oscillator/newmark.c
-    models/oscillator/newmark.h models/oscillator/exact.c models/oscillator/exact.h
+    models/oscillator/newmark.h models/oscillator/osc_bossak.c models/oscillator/osc_bossak.h models/oscillator/osc_engine.c
+    models/oscillator/osc_engine.h models/oscillator/osc_engine_ops.h models/oscillator/exact.c models/oscillator/exact.h
     models/oscillator/exact_private.h models/oscillator/exact_loop.h models/oscillator/exact_spring.c
     models/oscillator/exact_spring.h models/oscillator/exact_free.c models/oscillator/exact_free.h
     models/oscillator/exact_belt.c models/oscillator/exact_belt.h models/oscillator/exact_poly.c

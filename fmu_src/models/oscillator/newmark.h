@@ -2,9 +2,12 @@
  *
  * Three Bossak variants (dfo_scheme): the paper's literal scheme, the consistent stick test (first
  * order) and the located scheme (default; every stick/slip switch placed inside its step, second
- * order), advanced by dfo_bossak_advance below scheme.h's dfo_advance, which dispatches every scheme.
- * Start-up, the outputs at a state and the grid snapping below serve every scheme (the exact scheme's
- * excitation is oscillator.h's dfo_excitation_exact).
+ * order), advanced by dfo_bossak_advance below scheme.h's dfo_advance, which dispatches every scheme:
+ * the friction engine's schemes (fmu_src/engine) specialised by the oscillator's operators
+ * (osc_engine.h), the state, inputs, switches and observables mapped (osc_bossak.c: dfo_bossak_advance,
+ * dfo_new_inputs, dfo_stuck_time, dfo_stick_fraction). Start-up, the outputs at a state and the grid
+ * snapping (newmark.c) serve every scheme (the exact scheme's excitation is oscillator.h's
+ * dfo_excitation_exact).
  * The internal grid is t0 + n h; dfo_advance ends exactly on any requested time off that grid with a
  * shortened step whose Bossak acceleration is corrected for the new length (method.md section 8),
  * and on the grid point itself when the requested time is a host's rounding of one (see "Snapping
@@ -54,9 +57,12 @@ double dfo_snap_tolerance(const dfo_model *M, double t);
  * s->t) that t_target snaps to, else t_target itself. */
 double dfo_snap_target(const dfo_model *M, const dfo_state *s, double t_target);
 
+/* The engine a caller may keep for its calls (osc_bossak.h; NULL: made per call). */
+struct osc_bossak_engine_s;
+
 /* dfo_advance (scheme.h) for the Bossak schemes (paper, consistent, located): its contract. */
-dfo_status dfo_bossak_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
-                              dfo_switch_fn on_switch, void *switch_ctx);
+dfo_status dfo_bossak_advance(const dfo_model *M, struct osc_bossak_engine_s *cache, const dfo_inputs *in,
+                              dfo_state *s, double t_target, dfo_switch_fn on_switch, void *switch_ctx);
 
 /* The friction force at the current state with the inputs in, by the current mode's law: sliding
  * -mode mu_k N; stuck, the force that holds the block (the static force, clamped to the breakaway
@@ -71,6 +77,9 @@ double dfo_friction_force(const dfo_model *M, const dfo_inputs *in, const dfo_st
  * starts on the right limit (without it, every input change costs a first-order error); a stuck
  * block's next step decides afresh. The exact scheme starts a new phase anyway: no change. */
 void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s);
+/* The same with the caller's engine (osc_bossak.h; NULL: made for the call). */
+void dfo_new_inputs_cached(const dfo_model *M, struct osc_bossak_engine_s *cache, const dfo_inputs *old_in,
+                           const dfo_inputs *new_in, dfo_state *s);
 
 /* Physical acceleration at the current state (0 while stuck for the schemes whose stuck block is
  * at rest: consistent and located). */

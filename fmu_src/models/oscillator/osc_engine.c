@@ -32,7 +32,8 @@ eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, c
     memset(&S, 0, sizeof S);
     S.n = 1;
     S.nc = 1;
-    const eng_ops ops = {O, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway};
+    /* (no damping: no C, so that its terms and the accelerations only they read are not computed) */
+    const eng_ops ops = {O, osc_K, (p->c != 0.0) ? osc_C : NULL, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
     S.ops = ops;
     S.rows = &O->row;
     S.exc.omega = p->omega;
@@ -75,15 +76,67 @@ void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in)
     in->t_ref = u->t_d;
 }
 
+void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_observe_phase(ctx, ph, s); }
+
+/* The observables over a run of fused steps (engine_step.h's ENG_OBS_RUN): in locals where the
+ * observer is osc_eng_observe, else R unused (the observer's own function called) */
+static inline void osc_obs_run_begin(const eng_observer *obs, osc_obs_vals *R, double t)
+{
+    memset(R, 0, sizeof *R);
+    R->on = obs && obs->on_phase == osc_eng_observe;
+    if (R->on) osc_obs_load(R, (const osc_observables *)obs->ctx);
+    R->inside = R->on && R->observed && t >= R->w0;
+}
+
+/* A phase of the run: inside the window once open and sampled, only its end's side of the window
+ * tested (the phase ends after the run's start, so after w0) */
+static inline void osc_obs_run_phase(osc_obs_vals *R, const eng_phase *ph)
+{
+    if (!R->inside) {
+        osc_obs_phase(R, ph);
+        return;
+    }
+    osc_obs_stuck(R, ph->mode0[0], ph->ta);
+    if (ph->tb > R->w1) return;
+    osc_obs_sample(R, ph, 1);
+}
+
+/* Another observer's call for a phase of the run, out of line and from the phase's values (the run's
+ * arrays, whose addresses it does not take, stay in registers) */
+#if defined(__GNUC__)
+__attribute__((noinline, cold))
+#endif
+static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, double X0, double X1, int mode0, double f,
+                             const double *v_belt, const eng_state *s)
+{
+    const double x0[1] = {X0}, x1[1] = {X1}, f1[1] = {f};
+    const int m0[1] = {mode0};
+    const eng_phase ph = {ta, tb, x0, x1, m0, f1, v_belt};
+    obs->on_phase(obs->ctx, &ph, s);
+}
+
 /* ---- the schemes, specialised ------------------------------------------------------------------ */
 
 #define ENG_FN(name) osc_##name
 #define ENG_N(E) ((void)(E), (size_t)1)
 #define ENG_NC(E) ((void)(E), (size_t)1)
+#define ENG_FUSED_N 1
+#define ENG_OBSERVE(obs, ph, s)                                                                                      \
+    (((obs)->on_phase == osc_eng_observe) ? osc_observe_phase((obs)->ctx, (ph), (s))                                \
+                                          : (obs)->on_phase((obs)->ctx, (ph), (s)))
+#define ENG_OBS_RUN osc_obs_vals
+#define ENG_OBS_RUN_BEGIN(obs, R, s) osc_obs_run_begin((obs), &(R), (s)->t)
+#define ENG_OBS_RUN_PHASE(obs, R, ph, s)                                                                            \
+    ((R).on ? osc_obs_run_phase(&(R), (ph))                                                                           \
+            : osc_obs_run_call((obs), (ph)->ta, (ph)->tb, (ph)->X0[0], (ph)->X1[0], (ph)->mode0[0], (ph)->f[0],      \
+                               (ph)->v_belt, (s)))
+#define ENG_OBS_RUN_END(obs, R) ((R).on ? osc_obs_store(&(R), (const osc_observables *)(obs)->ctx) : (void)0)
+#define ENG_ROW_DOT(E, j, x) ((void)(E), (void)(j), 0.0 + (x)[0]) /* row_dot of w = 1 */
+#define ENG_FUSED_NC 1
 #define ENG_CTX(E) ((E)->S.ops.ctx)
 #define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
-#define ENG_HAS_C(E) ((void)(E), 1)
+#define ENG_HAS_C(E) ((void)(E), 1) /* (c v whatever c is; ops.apply_C: NULL where c = 0) */
 #define ENG_APPLY_M(E, a, y) osc_M(ENG_CTX(E), (a), (y))
 #define ENG_FACTOR(E, slot, cM, cC, cK) osc_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
 #define ENG_SOLVE(E, slot, b, x) osc_solve(ENG_CTX(E), (slot), (b), (x))

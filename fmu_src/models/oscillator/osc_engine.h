@@ -6,8 +6,9 @@
  * osc_eng_advance, ...). The engine object is made by osc_eng_create; the same operators through
  * eng_ops's function pointers (engine.c's eng_* functions) give the same bits.
  *
- * Not yet the oscillator's stepper: the FMU steps with newmark.c (dfo_advance). This is the model
- * side of moving its Bossak schemes onto the engine; tests/c/test_engine_step.c compares the two.
+ * The oscillator's Bossak schemes step with it: osc_bossak.c's dfo_bossak_advance (below scheme.h's
+ * dfo_advance) makes the engine per call and maps the state, the inputs, the switches and the
+ * observables (osc_eng_observe, inlined into the specialised schemes).
  *
  * Plain C, no FMI types. */
 #ifndef DFO_OSC_ENGINE_H
@@ -27,6 +28,10 @@ typedef struct {
     double F[1], N[1], vb[1], dF[2][1], dN[2][1];
 } osc_eng_inbuf;
 void osc_eng_inputs(const dfo_inputs *u, osc_eng_inbuf *b, eng_inputs *in);
+
+/* The observer of the oscillator's observables (ctx: an osc_observables): osc_engine_ops.h's
+ * osc_observe_phase, which the specialised schemes call inline. */
+void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s);
 
 /* engine.h's entry points, the schemes specialised by the oscillator's operators (osc_eng_start,
  * osc_eng_advance, ...), are declared by osc_engine_ops.h. */

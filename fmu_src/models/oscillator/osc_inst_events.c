@@ -38,13 +38,14 @@ static void record_switch(void *ctx, double t, double x, int from, int to)
 }
 
 /* The state just after the switch r (index r->index of the step from start), into *out. */
-static int land(const osc_values *v, const dfo_state *start, const switch_rec *r, double t_end, dfo_state *out)
+static int land(const osc_values *v, osc_bossak_engine *eng, const dfo_state *start, const switch_rec *r, double t_end,
+                dfo_state *out)
 {
     double t = r->ts, ulp = nextafter(r->ts, INFINITY) - r->ts;
     for (int k = 0; k < 12 && t < t_end; k++, t = r->ts + ulp, ulp *= 2.0) {
         switch_rec check = {-INFINITY, 0, 0, 0, 0, 0, 0.0};
         dfo_state w = *start;
-        if (dfo_advance(&v->M, &v->u, &w, t, record_switch, &check) != DFO_OK) return 0;
+        if (dfo_advance_cached(&v->M, eng, &v->u, &w, t, record_switch, &check) != DFO_OK) return 0;
         if (check.count == r->index + 1 && w.mode == r->to && w.t < t_end) {
             *out = w;
             return 1;
@@ -55,7 +56,7 @@ static int land(const osc_values *v, const dfo_state *start, const switch_rec *r
     const double g = start->t0 + (floor((r->ts - start->t0) / h) + 1.0) * h;
     if (!(g < t_end)) return 0;
     dfo_state w = *start;
-    if (dfo_advance(&v->M, &v->u, &w, g, NULL, NULL) != DFO_OK || w.mode != r->to) return 0;
+    if (dfo_advance_cached(&v->M, eng, &v->u, &w, g, NULL, NULL) != DFO_OK || w.mode != r->to) return 0;
     *out = w;
     return 1;
 }
@@ -77,7 +78,7 @@ static int events_stretch(osc_instance *in, const char *fn, double t_end, int la
     for (;;) {
         switch_rec r = {t_after, 0, 0, 0, 0, 0, 0.0};
         dfo_state w = start;
-        const dfo_status st = dfo_advance(&v->M, &v->u, &w, t_end, record_switch, &r);
+        const dfo_status st = dfo_advance_cached(&v->M, &in->eng, &v->u, &w, t_end, record_switch, &r);
         if (st != DFO_OK) {
             *st_out = osc_inst_step_failed(in, fn, &start, &w, st);
             return 1;
@@ -85,7 +86,7 @@ static int events_stretch(osc_instance *in, const char *fn, double t_end, int la
         dfo_state at;
         /* in a stretch that is one internal step, a switch not landed on inside it is on its end
          * (the paper and consistent schemes switch on grid points, reported to rounding) */
-        const int inside = r.found && ((r.ts < w.t && land(v, &start, &r, w.t, &at)) || (!last && (at = w, 1)));
+        const int inside = r.found && ((r.ts < w.t && land(v, &in->eng, &start, &r, w.t, &at)) || (!last && (at = w, 1)));
         if (inside) {
             /* a switch inside the step: the state at it is readable during the intermediate update */
             int stop = opt->early_return && !opt->intermediate;
@@ -129,7 +130,7 @@ static int events_stretch(osc_instance *in, const char *fn, double t_end, int la
         }
         if (events_logged) {
             dfo_state again = start;
-            (void)dfo_advance(&v->M, &v->u, &again, t_end, osc_inst_on_switch, in);
+            (void)dfo_advance_cached(&v->M, &in->eng, &v->u, &again, t_end, osc_inst_on_switch, in);
         }
         v->s = w;
         in->lc.run.time = t_end;
@@ -171,7 +172,7 @@ static int input_point(osc_instance *in, const dfo_event_opts *opt)
         v->u.ramp = v->u.F_ext_d[0] != 0.0 || v->u.F_ext_d[1] != 0.0 || v->u.N_ext_d[0] != 0.0 ||
                     v->u.N_ext_d[1] != 0.0;
     }
-    if (!osc_inst_same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
+    if (!osc_inst_same_inputs(&v->u, &v->u_used)) dfo_new_inputs_cached(&v->M, &in->eng, &v->u_used, &v->u, &v->s);
     v->u_used = v->u;
     return stop;
 }
@@ -188,7 +189,7 @@ dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, doubl
         return osc_inst_ramp_refused(in, fn);
     if (dfo_inst_events_begin(&in->lc, fn, tc, dt, v->M.p.h, opt, res, &done, &t_target)) return done;
     if (!osc_inst_same_inputs(&v->u, &v->u_used)) {
-        dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
+        dfo_new_inputs_cached(&v->M, &in->eng, &v->u_used, &v->u, &v->s);
         v->u_used = v->u; /* (the state now belongs to them) */
     }
     /* input points: the end of every internal step before the target (the exact scheme has none) */

@@ -29,7 +29,7 @@ static dfo_status advance_to_switch(osc_instance *in, double t_target)
     while (v->s.t < t_target) {
         const double grid = v->s.t0 + (double)(v->s.n + 1) * h;
         const double t_next = (grid < t_target - snap) ? grid : t_target;
-        const dfo_status st = dfo_advance(&v->M, &v->u, &v->s, t_next, osc_inst_on_switch, in);
+        const dfo_status st = dfo_advance_cached(&v->M, &in->eng, &v->u, &v->s, t_next, osc_inst_on_switch, in);
         if (st != DFO_OK || in->lc.switched || t_next == t_target) return st;
     }
     return DFO_OK;
@@ -72,7 +72,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
     if (v->u.ramp && v->M.p.scheme == DFO_SCHEME_EXACT && osc_inst_ramp_unsupported(&v->M.p))
         return osc_inst_ramp_refused(in, fn);
     const dfo_state before = v->s;
-    if (!osc_inst_same_inputs(&v->u, &v->u_used)) dfo_new_inputs(&v->M, &v->u_used, &v->u, &v->s);
+    if (!osc_inst_same_inputs(&v->u, &v->u_used)) dfo_new_inputs_cached(&v->M, &in->eng, &v->u_used, &v->u, &v->s);
     dfo_status st;
     if (flags & DFO_STEP_STOP_AT_SWITCH) {
         st = advance_to_switch(in, t_target);
@@ -80,7 +80,7 @@ dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, d
         /* the switches are logged; their times (output derivatives do not exist at one) the Bossak
          * schemes keep in the state, the exact scheme's are noted by osc_inst_on_switch */
         const int events = (in->lc.host.log && in->lc.log_on[DFO_LOG_EVENTS]) || v->M.p.scheme == DFO_SCHEME_EXACT;
-        st = dfo_advance(&v->M, &v->u, &v->s, t_target, events ? osc_inst_on_switch : NULL, in);
+        st = dfo_advance_cached(&v->M, &in->eng, &v->u, &v->s, t_target, events ? osc_inst_on_switch : NULL, in);
     }
     if (st != DFO_OK) {
         const dfo_state failed = v->s;

@@ -21,6 +21,7 @@
 #include "model_vars.h"
 #include "oscillator.h"
 #include "scheme.h"
+#include "osc_bossak.h"
 
 typedef struct {
     dfo_params p;
@@ -35,6 +36,7 @@ typedef struct {
 typedef struct {
     dfo_lifecycle lc;         /* first: the glues see the instance as its life cycle */
     osc_values v;
+    osc_bossak_engine eng;    /* the Bossak schemes' engine (no part of the values: a cache) */
 } osc_instance;
 
 static inline osc_instance *osc(dfo_lifecycle *lc) { return (osc_instance *)lc; }

@@ -7,7 +7,13 @@
 dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx)
 {
-    if (M->p.scheme != DFO_SCHEME_EXACT) return dfo_bossak_advance(M, in, s, t_target, on_switch, switch_ctx);
+    return dfo_advance_cached(M, NULL, in, s, t_target, on_switch, switch_ctx);
+}
+
+dfo_status dfo_advance_cached(const dfo_model *M, struct osc_bossak_engine_s *cache, const dfo_inputs *in,
+                              dfo_state *s, double t_target, dfo_switch_fn on_switch, void *switch_ctx)
+{
+    if (M->p.scheme != DFO_SCHEME_EXACT) return dfo_bossak_advance(M, cache, in, s, t_target, on_switch, switch_ctx);
     if (!in->ramp) return dfo_exact_advance(M, in, s, t_target, on_switch, switch_ctx);
     /* varying inputs: its closed form with the input polynomials (the values at t_d held apart) */
     dfo_inputs held = *in;

@@ -28,6 +28,11 @@
 dfo_status dfo_advance(const dfo_model *M, const dfo_inputs *in, dfo_state *s, double t_target,
                        dfo_switch_fn on_switch, void *switch_ctx);
 
+/* dfo_advance with the caller's engine of the Bossak schemes (osc_bossak.h: made on first use, kept
+ * while the model is the same; NULL: dfo_advance), to the same numbers without the set-up. */
+dfo_status dfo_advance_cached(const dfo_model *M, struct osc_bossak_engine_s *cache, const dfo_inputs *in,
+                              dfo_state *s, double t_target, dfo_switch_fn on_switch, void *switch_ctx);
+
 /* A sentence for a status (for the FMU's log). */
 const char *dfo_status_text(dfo_status st);
 
