@@ -603,6 +603,13 @@ static eng_setup test_chain_setup(checks *T, test_chain_model *B, int scheme, do
     return S;
 }
 
+/* A run's state and engine freed. */
+static void run_free(eng *E, eng_state *s)
+{
+    eng_state_free(E, s);
+    eng_destroy(E);
+}
+
 /* The models made since the last release (their engines destroyed first). */
 static void test_chain_release(test_chain_model *B)
 {
@@ -647,10 +654,8 @@ static void test_chain(checks *T)
             CHECK(sti == ENG_OK);
             CHECK(Lg.count >= 5 * NCHAIN);
             CHECK(same_bits(&sg, &si, &Lg, &Li));
-            eng_state_free(Eg, &sg);
-            eng_state_free(Ei, &si);
-            eng_destroy(Eg);
-            eng_destroy(Ei);
+            run_free(Eg, &sg);
+            run_free(Ei, &si);
             test_chain_release(&B);
         }
         test_chain_free(&B);
@@ -681,12 +686,9 @@ static void test_chain(checks *T)
     CHECK(Lg.count >= 5 * NCHAIN);
     CHECK(same_bits(&sg, &si, &Lg, &Li));
     CHECK(fabs(sg.X[3] - s0.X[3]) > 1e-3); /* the belt is not ignored */
-    eng_state_free(Eg, &sg);
-    eng_state_free(Ei, &si);
-    eng_state_free(E0, &s0);
-    eng_destroy(Eg);
-    eng_destroy(Ei);
-    eng_destroy(E0);
+    run_free(Eg, &sg);
+    run_free(Ei, &si);
+    run_free(E0, &s0);
     /* block 3 held on its belt at 0.1: from rest it slides against its belt, sticks to it, is pulled
      * back by its springs, and again */
     eng *E = eng_create(&Sg, &ALLOC, NULL);
@@ -707,8 +709,7 @@ static void test_chain(checks *T)
     CHECK(st == ENG_OK);
     CHECK(held >= 10);
     CHECK(riding == held);
-    eng_state_free(E, &s);
-    eng_destroy(E);
+    run_free(E, &s);
     test_chain_free(&B);
 }
 
