@@ -1,8 +1,8 @@
 /* ns per internal step of the friction engine (fmu_src/engine) side by side with the models' own
  * steppers on the same motion, and what reaching the operators costs: the engine's schemes with the
  * operators through eng_ops's function pointers (engine.c) against the same schemes specialised at
- * compile time by the model's inline operators (engine_step.h included by models/oscillator/osc_engine.c and
- * engine_chain.c with the operators of engine_models.h).
+ * compile time by the model's inline operators (engine_step.h included by models/oscillator/osc_engine.c
+ * and models/chain/chain_engine.c, with the operators of osc_engine_ops.h and chain_engine_ops.h).
  *
  *   bench_engine [--reps N] [--periods P] [--steps-per-period S] [--n N[,N...]] [--csv FILE]
  *
@@ -11,17 +11,19 @@
  * block (the oscillator's dfo_advance, fastPaths on) and chains of n blocks between two walls
  * (chain_advance), in the three Bossak schemes. Per case and scheme:
  *   own        the model's own stepper (dfo_advance, chain_advance)
- *   generic    eng_advance, the model's operators and friction solver through function pointers
+ *   generic    eng_advance, the model's operators and friction solver through function pointers (the
+ *              chain: the engine chain_create makes, its operators chain_engine_ops.h's)
  *   dense      (one block) eng_advance with the engine's default friction solver (Delassus, Lemke)
- *   inline     the specialised schemes (osc_eng_advance, chn_eng_advance)
+ *   inline     the specialised schemes (osc_eng_advance; the chain's chain_eng_advance on the engine
+ *              of another chain_create, so that the two runs share no operator data)
  * and the ratios generic / own and inline / own; same_bits says whether the generic and the
  * inline runs end on the same bits (they must: the same arithmetic in the same order). Timed: one
  * call over P periods after one period of settling (outside the clock), the thread's CPU time, the
  * minimum over the repetitions, every variant timed once per repetition in turn. */
 #define _POSIX_C_SOURCE 200809L
 
-#include "chain.h"
-#include "engine_models.h"
+#include "chain_internal.h" /* the chain's engine (chain_model.E) and its specialised schemes */
+#include "osc_engine.h"     /* the block's operators and its specialised schemes */
 #include "oscillator.h"
 #include "scheme.h"
 
@@ -63,12 +65,10 @@ typedef struct {
     double *w1;
     eng_row *rows;
     osc_eng_model blk;
-    chn_model chn, chn_view;   /* the chain, and its spans' view */
-    eng_sparse sparse;
-    eng *E[NVAR];
+    eng *E[NVAR];              /* the engines of the variants (the chain's: those of CM[v]) */
     eng_state es[NVAR];
     dfo_model osc;
-    chain_model *CM;
+    chain_model *CM[NVAR];     /* the chain of each variant but the dense (own: chain_advance on CM[0]) */
     chain_state cs;
     double best[NVAR];
     double steps[NVAR];
@@ -82,21 +82,16 @@ static double *dalloc(size_t n)
     return p;
 }
 
-static eng_setup setup_of(bench_case *B, int variant)
+/* The block's engine setup (the chain's is chain_create's). */
+static eng_setup block_setup(bench_case *B, int variant)
 {
     eng_setup S;
     memset(&S, 0, sizeof S);
-    S.n = B->n;
-    S.nc = B->n;
-    if (B->n == 1) {
-        const eng_ops ops = {&B->blk, osc_K, osc_C, osc_M, osc_factor, osc_solve,
-                             variant == V_DENSE ? NULL : osc_friction, variant == V_DENSE ? NULL : osc_breakaway, 1};
-        S.ops = ops;
-    } else {
-        const eng_ops ops = {&B->chn, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
-        S.ops = ops;
-        S.sparse = &B->sparse;
-    }
+    S.n = 1;
+    S.nc = 1;
+    const eng_ops ops = {&B->blk, osc_K, osc_C, osc_M, osc_factor, osc_solve,
+                         variant == V_DENSE ? NULL : osc_friction, variant == V_DENSE ? NULL : osc_breakaway, 1};
+    S.ops = ops;
     S.rows = B->rows;
     S.exc.omega = OMEGA;
     S.exc.Pc = B->Pc;
@@ -109,7 +104,7 @@ static eng_setup setup_of(bench_case *B, int variant)
     S.scheme = B->scheme;
     S.friction_updates = 1;
     S.fast_paths = 1;
-    S.rate_max = ((B->n == 1) ? 1.0 : 2.0) + OMEGA; /* sqrt of M^-1 K's Gershgorin bound, + omega */
+    S.rate_max = 1.0 + OMEGA; /* sqrt of M^-1 K's Gershgorin bound, + omega */
     S.snap_max_rel_h = S.snap_min_rel_h = 1e-7;
     return S;
 }
@@ -147,33 +142,25 @@ static void case_make(bench_case *B, size_t n, int scheme, double spp)
         p.h = B->h; p.alpha = -0.1; p.t_obs_stop = 1e300; p.scheme = scheme; p.frictionUpdates = 1; p.fastPaths = 1;
         dfo_model_init(&B->osc, &p);
     } else {
-        chn_model *C = &B->chn;
-        C->n = n; C->m = B->m; C->k = B->k; C->k_end = 1.0;
-        C->sub = &B->chn_view;
-        for (chn_model *V = C; V; V = (V == C) ? C->sub : NULL) {
-            for (int s = 0; s < ENG_NSLOTS; s++) {
-                V->d[s] = dalloc(n); V->e[s] = dalloc(n); V->cp[s] = dalloc(n); V->inv[s] = dalloc(n);
-                V->kcp[s] = dalloc(n); V->kinv[s] = dalloc(n);
-                V->kh[s] = (int *)calloc(n, sizeof(int));
-                if (!V->kh[s]) die("out of memory");
-            }
-            V->q = dalloc(n);
-            V->work = dalloc(2 * n);
-        }
-        chn_set_reach(C, B->h, -0.1);
-        B->sparse = chn_sparse(C, 1);
         B->P0 = dalloc(n);
         for (size_t i = 0; i < n; i++) B->P0[i] = 1.0;
         const chain_params q = {n, B->m, B->k, B->zero, B->P0, B->phi, B->N, B->mu_s, B->chi, B->zero, B->zero,
                                 1.0, 0.0, OMEGA, B->h, -0.1, scheme, 0, NULL, NULL, 0, NULL, NULL};
         const chain_alloc al = {std_alloc, std_free, NULL};
-        B->CM = chain_create(&q, &al, NULL);
-        if (!B->CM || !chain_state_init(B->CM, &B->cs)) die("cannot make the chain");
+        for (int v = V_OWN; v <= V_INLINE; v++) {
+            B->CM[v] = chain_create(&q, &al, NULL);
+            if (!B->CM[v]) die("cannot make the chain");
+        }
+        if (!chain_state_init(B->CM[V_OWN], &B->cs)) die("cannot make the chain");
     }
     for (int v = V_GENERIC; v < NVAR; v++) {
         if (v == V_DENSE && n != 1) continue;
-        const eng_setup S = setup_of(B, v);
-        B->E[v] = eng_create(&S, &ALLOC, NULL);
+        if (n == 1) {
+            const eng_setup S = block_setup(B, v);
+            B->E[v] = eng_create(&S, &ALLOC, NULL);
+        } else {
+            B->E[v] = B->CM[v]->E;
+        }
         if (!B->E[v] || !eng_state_init(B->E[v], &B->es[v], 0)) die("cannot make an engine");
     }
     for (int v = 0; v < NVAR; v++) B->best[v] = INFINITY;
@@ -199,11 +186,11 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
         x = s.X;
     } else if (v == V_OWN) {
         const chain_inputs in = {NULL, NULL};
-        chain_start(B->CM, &in, 0.0, &B->cs);
-        chain_advance(B->CM, &in, &B->cs, t1, 0, NULL, NULL);
+        chain_start(B->CM[V_OWN], &in, 0.0, &B->cs);
+        chain_advance(B->CM[V_OWN], &in, &B->cs, t1, 0, NULL, NULL);
         const long long s0 = B->cs.steps;
         const double c0 = bench_seconds(0);
-        if (chain_advance(B->CM, &in, &B->cs, t2, 0, NULL, NULL) != CHAIN_OK) die("chain_advance failed");
+        if (chain_advance(B->CM[V_OWN], &in, &B->cs, t2, 0, NULL, NULL) != CHAIN_OK) die("chain_advance failed");
         el = bench_seconds(0) - c0;
         steps = (double)(B->cs.steps - s0);
         x = B->cs.X[B->n - 1];
@@ -214,14 +201,14 @@ static void case_rep(bench_case *B, int v, double periods, double spp)
         const int inl = v == V_INLINE;
         const int one = B->n == 1;
         if (inl && one) osc_eng_start(E, &in, 0.0, B->zero, B->zero, s);
-        else if (inl) chn_eng_start(E, &in, 0.0, B->zero, B->zero, s);
+        else if (inl) chain_eng_start(E, &in, 0.0, B->zero, B->zero, s);
         else eng_start(E, &in, 0.0, B->zero, B->zero, s);
-        eng_status st = inl ? (one ? osc_eng_advance(E, &in, s, t1, NULL) : chn_eng_advance(E, &in, s, t1, NULL))
+        eng_status st = inl ? (one ? osc_eng_advance(E, &in, s, t1, NULL) : chain_eng_advance(E, &in, s, t1, NULL))
                             : eng_advance(E, &in, s, t1, NULL);
         const long long s0 = s->steps;
         const double c0 = bench_seconds(0);
         if (st == ENG_OK)
-            st = inl ? (one ? osc_eng_advance(E, &in, s, t2, NULL) : chn_eng_advance(E, &in, s, t2, NULL))
+            st = inl ? (one ? osc_eng_advance(E, &in, s, t2, NULL) : chain_eng_advance(E, &in, s, t2, NULL))
                      : eng_advance(E, &in, s, t2, NULL);
         el = bench_seconds(0) - c0;
         if (st != ENG_OK) die(eng_status_text(st));

@@ -1,17 +1,21 @@
 /* The engine's schemes specialised at compile time (fmu_src/engine/engine_step.h included with a
- * model's inline operators: models/oscillator/osc_engine.c, bench/engine_chain.c over bench/engine_models.h)
- * against the same schemes through engine.c with the same operators behind eng_ops's function
- * pointers: the same bits (positions, velocities, Bossak variables, forces, modes, counters, every
- * switch's time), one block in the three Bossak schemes with a belt, input ramps and input and
- * belt changes, a chain of 8 blocks in the three schemes with a change of the external forces; the
- * runs switch many times. And the chain's friction solver refuses a belt (not silently wrong). The
+ * model's inline operators: models/oscillator/osc_engine.c, models/chain/chain_engine.c) against the
+ * same schemes through engine.c with the same operators behind eng_ops's function pointers: the
+ * same bits (positions, velocities, Bossak variables, forces, modes, counters, every switch's
+ * time), one block in the three Bossak schemes with a belt, input ramps and input and belt changes,
+ * a chain of 8 blocks (the chain's own model, chain_create's engine setup) in the three schemes with
+ * a change of the external forces, undamped and damped, and with a belt and its change; the runs
+ * switch many times. A chain's block held on its belt moves at the belt's speed. The chain's
+ * sparse-structure operators (eng_sparse) level by level: held solves, the fused step, closed-form
+ * breakaways, spans, their ranges checked. The
  * oscillator's stepper (scheme.h's dfo_advance: its engine model made per call, the state mapped
  * through dfo_state) against its engine model kept across the calls: the same bits; the located
  * scheme's stuck fast path on against off; the fused loop of held-input grid steps against the
  * general path, the three schemes, observed; the oscillator's observables over a fused run against
  * the general path's. */
 #include "check.h"
-#include "engine_models.h"
+#include "chain_internal.h" /* the chain's engine (chain_model.E), operators and specialised schemes */
+#include "osc_engine.h"     /* the block's operators and its specialised schemes */
 #include "osc_params.h"
 
 #include "newmark.h"
@@ -55,7 +59,7 @@ typedef struct {
 
 static const entry GENERIC = {eng_start, eng_advance, eng_new_inputs};
 static const entry BLOCK = {osc_eng_start, osc_eng_advance, osc_eng_new_inputs};
-static const entry CHAIN = {chn_eng_start, chn_eng_advance, chn_eng_new_inputs};
+static const entry CHAIN = {chain_eng_start, chain_eng_advance, chain_eng_new_inputs};
 
 /* Run S with the entry points of X from rest: communication points every dt (off the grid) to
  * t_end, the inputs in1 before t_change and in2 from there (eng_new_inputs at the change). The
@@ -541,126 +545,22 @@ static void test_vs_stepper(checks *T)
     }
 }
 
-/* A chain of NCHAIN blocks between two walls: its model, rows and data. */
-typedef struct {
-    double m[NCHAIN], k[NCHAIN], N[NCHAIN], ms[NCHAIN], mk[NCHAIN], Pc[NCHAIN], Ps[NCHAIN];
-    double d[ENG_NSLOTS][NCHAIN], e[ENG_NSLOTS][NCHAIN], cp[ENG_NSLOTS][NCHAIN], inv[ENG_NSLOTS][NCHAIN];
-    double kcp[ENG_NSLOTS][NCHAIN], kinv[ENG_NSLOTS][NCHAIN];
-    int kh[ENG_NSLOTS][NCHAIN];
-    double q[NCHAIN], work[2 * NCHAIN];
-    size_t idx[NCHAIN];
-    double w1[1];
-    eng_row rows[NCHAIN];
-    chn_model C;
-} chain_data;
+/* ---- the chain: its own operators (chain_engine_ops.h), inline (chain_engine.c) and generic ----- */
 
-/* A chain's data: masses 1 + dm (i mod 3), unit springs, normal forces 1.2 + dN (i mod 3), mu_s 0.5,
- * mu_k 0.35, the excitation's phase 0.1 i, contact i on block i (its row w1 at DOF i). */
-static void chain_fill(size_t n, double dm, double dN, double *m, double *k, double *N, double *ms, double *mk,
-                       double *Pc, double *Ps, size_t *idx, eng_row *rows, const double *w1)
-{
-    for (size_t i = 0; i < n; i++) {
-        m[i] = 1.0 + dm * (double)(i % 3);
-        k[i] = 1.0;
-        N[i] = 1.2 + dN * (double)(i % 3);
-        ms[i] = 0.5;
-        mk[i] = 0.35;
-        Pc[i] = cos(0.1 * (double)i);
-        Ps[i] = sin(0.1 * (double)i);
-        idx[i] = i;
-        rows[i].nnz = 1;
-        rows[i].idx = &idx[i];
-        rows[i].w = w1;
-    }
-}
-
-static void chain_make(chain_data *D)
-{
-    memset(D, 0, sizeof *D);
-    D->w1[0] = 1.0;
-    chain_fill(NCHAIN, 0.1, 0.0, D->m, D->k, D->N, D->ms, D->mk, D->Pc, D->Ps, D->idx, D->rows, D->w1);
-    chn_model *C = &D->C;
-    C->n = NCHAIN;
-    C->m = D->m;
-    C->k = D->k;
-    C->k_end = 1.0;
-    for (int s = 0; s < ENG_NSLOTS; s++) {
-        C->d[s] = D->d[s];
-        C->e[s] = D->e[s];
-        C->cp[s] = D->cp[s];
-        C->inv[s] = D->inv[s];
-        C->kh[s] = D->kh[s];
-        C->kcp[s] = D->kcp[s];
-        C->kinv[s] = D->kinv[s];
-    }
-    C->q = D->q;
-    C->work = D->work;
-}
-
-static void test_chain(checks *T)
-{
-    static const char *const names[] = {"", "paper", "consistent", "located"};
-    double F2[NCHAIN];
-    for (size_t i = 0; i < NCHAIN; i++) F2[i] = (i == 0) ? 0.3 : (i == NCHAIN - 1) ? -0.2 : 0.0;
-    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
-    static chain_data Dg, Di;
-    for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
-        check_context(T, "chain of %d blocks, %s: the inline build against engine.c", NCHAIN, names[scheme]);
-        chain_make(&Dg);
-        chain_make(&Di);
-        eng_setup S = setup_common(NCHAIN, Dg.rows, Dg.N, Dg.ms, Dg.mk, Dg.Pc, Dg.Ps, scheme, 2.0);
-        const eng_ops og = {&Dg.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
-        S.ops = og;
-        eng_state sg, si;
-        switch_log Lg, Li;
-        eng_status stg, sti;
-        eng *Eg = run(&S, &GENERIC, &in1, &in2, 20.0, 0.37, 40.0, &sg, &Lg, &stg);
-        S.ops.ctx = &Di.C;
-        S.rows = Di.rows;
-        eng *Ei = run(&S, &CHAIN, &in1, &in2, 20.0, 0.37, 40.0, &si, &Li, &sti);
-        printf("  chain n = %d %-10s 40 s: %ld switches, x_1 %.17g / %.17g\n", NCHAIN, names[scheme], Lg.count,
-               sg.X[0], si.X[0]);
-        CHECK(stg == ENG_OK);
-        CHECK(sti == ENG_OK);
-        CHECK(Lg.count >= 5 * NCHAIN);
-        CHECK(same_bits(&sg, &si, &Lg, &Li));
-        eng_state_free(Eg, &sg);
-        eng_state_free(Ei, &si);
-        eng_destroy(Eg);
-        eng_destroy(Ei);
-    }
-    /* the chain's box LCP has no belts: a belt is refused, not ignored */
-    check_context(T, "chain of %d blocks with a belt: refused", NCHAIN);
-    chain_make(&Di);
-    eng_setup S = setup_common(NCHAIN, Di.rows, Di.N, Di.ms, Di.mk, Di.Pc, Di.Ps, DFO_SCHEME_LOCATED, 2.0);
-    const eng_ops oi = {&Di.C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
-    S.ops = oi;
-    double vb[NCHAIN] = {0.0};
-    vb[3] = 0.1;
-    const eng_inputs inb = {NULL, NULL, vb, {NULL, NULL}, {NULL, NULL}, 0.0};
-    eng_state s;
-    switch_log L;
-    eng_status st;
-    eng *E = run(&S, &CHAIN, &inb, &inb, 100.0, 0.37, 2.0, &s, &L, &st);
-    CHECK(st == ENG_ERR_BAD_INPUT);
-    eng_state_free(E, &s);
-    eng_destroy(E);
-}
-
-/* ---- the chain's sparse-structure operators (eng_sparse): held solves, the fused step, spans ---- */
-
-/* A chain of n blocks (engine_models.h's chn_model) with its spans' view, every array allocated. */
+/* A chain of n blocks between two walls, the chain's own model (chain.h): masses 1 + dm (i mod 3),
+ * unit springs (k_end = 1) and dampers c (c_end = c), normal forces 1.2 + dN (i mod 3), mu_s 0.5,
+ * mu_k 0.35, the excitation cos(0.5 t + 0.1 i), at rest; the setups of its engines copied from the
+ * one chain_create makes (chain_setup.c's, through eng_setup_of), the models kept until
+ * test_chain_free (up to TC_MODELS). */
+enum { TC_MODELS = 8 };
 typedef struct {
     size_t n;
-    chn_model C, view;
-    eng_sparse sp;
-    eng_row *rows;
-    size_t *idx;
-    double *m, *k, *N, *ms, *mk, *Pc, *Ps, *zero;
-    double w1[1];
-    long spans; /* span calls that gave spans (counted by counting_span) */
-} big_chain;
+    double *m, *k, *c, *P0, *phi, *N, *ms, *chi, *zero;
+    double c_end;
+    chain_model *M[TC_MODELS];
+    int nm;
+    eng_sparse sp; /* the sparse-structure operators of the latest test_chain_setup */
+} test_chain_model;
 
 static double *dvec(size_t n)
 {
@@ -669,60 +569,165 @@ static double *dvec(size_t n)
     return p;
 }
 
-static void big_make(big_chain *B, size_t n)
+static void test_chain_make(test_chain_model *B, size_t n, double dm, double dN, double c)
 {
     memset(B, 0, sizeof *B);
     B->n = n;
-    B->w1[0] = 1.0;
-    B->rows = calloc(n, sizeof(eng_row));
-    B->idx = calloc(n, sizeof(size_t));
-    if (!B->rows || !B->idx) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
-    B->m = dvec(n); B->k = dvec(n); B->N = dvec(n); B->ms = dvec(n); B->mk = dvec(n); B->Pc = dvec(n);
-    B->Ps = dvec(n); B->zero = dvec(n);
-    /* bench_engine's chain, its normal forces varied along it */
-    chain_fill(n, 0.0, 0.4, B->m, B->k, B->N, B->ms, B->mk, B->Pc, B->Ps, B->idx, B->rows, B->w1);
-    B->C.sub = &B->view;
-    for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
-        V->n = n;
-        V->m = B->m;
-        V->k = B->k;
-        V->k_end = 1.0;
-        for (int s = 0; s < ENG_NSLOTS; s++) {
-            V->d[s] = dvec(n); V->e[s] = dvec(n); V->cp[s] = dvec(n); V->inv[s] = dvec(n);
-            V->kcp[s] = dvec(n); V->kinv[s] = dvec(n);
-            V->kh[s] = calloc(n, sizeof(int));
-            if (!V->kh[s]) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
-        }
-        V->q = dvec(n); V->work = dvec(2 * n);
+    B->m = dvec(n); B->k = dvec(n); B->c = dvec(n); B->P0 = dvec(n); B->phi = dvec(n); B->N = dvec(n);
+    B->ms = dvec(n); B->chi = dvec(n); B->zero = dvec(n);
+    B->c_end = c;
+    for (size_t i = 0; i < n; i++) {
+        B->m[i] = 1.0 + dm * (double)(i % 3);
+        B->k[i] = 1.0;
+        B->c[i] = c;
+        B->P0[i] = 1.0;
+        B->phi[i] = 0.1 * (double)i;
+        B->N[i] = 1.2 + dN * (double)(i % 3);
+        B->ms[i] = 0.5;
+        B->chi[i] = 0.7; /* (0.7 * 0.5: the double nearest 0.35) */
     }
 }
 
-static void big_free(big_chain *B)
+/* A chain_create of B in scheme with the step h: the engine setup it makes. */
+static eng_setup test_chain_setup(checks *T, test_chain_model *B, int scheme, double h)
 {
-    for (chn_model *V = &B->C; V; V = (V == &B->C) ? &B->view : NULL) {
-        for (int s = 0; s < ENG_NSLOTS; s++) {
-            free(V->d[s]); free(V->e[s]); free(V->cp[s]); free(V->inv[s]); free(V->kcp[s]); free(V->kinv[s]);
-            free(V->kh[s]);
-        }
-        free(V->q); free(V->work);
-    }
-    free(B->rows); free(B->idx); free(B->m); free(B->k); free(B->N); free(B->ms); free(B->mk); free(B->Pc);
-    free(B->Ps); free(B->zero);
+    const chain_params p = {B->n, B->m, B->k, B->c, B->P0, B->phi, B->N, B->ms, B->chi, B->zero, B->zero,
+                            1.0, B->c_end, 0.5, h, -0.1, scheme, 0, NULL, NULL, 0, NULL, NULL};
+    const chain_alloc al = {t_alloc, t_free, NULL};
+    const char *err = NULL;
+    chain_model *M = (B->nm < TC_MODELS) ? chain_create(&p, &al, &err) : NULL;
+    if (!M) { fprintf(stderr, "test_engine_step: no chain: %s\n", err ? err : "too many models"); exit(1); }
+    B->M[B->nm++] = M;
+    const eng_setup S = *eng_setup_of(M->E);
+    CHECK(S.n == B->n && S.nc == B->n && S.scheme == scheme && S.h == h && S.fast_paths == 1);
+    return S;
 }
 
-static long held_steps; /* calls of the fused step (counting_step_held) */
+/* A run's state and engine freed. */
+static void run_free(eng *E, eng_state *s)
+{
+    eng_state_free(E, s);
+    eng_destroy(E);
+}
+
+/* The models made since the last release (their engines destroyed first). */
+static void test_chain_release(test_chain_model *B)
+{
+    for (int j = 0; j < B->nm; j++) chain_destroy(B->M[j]);
+    B->nm = 0;
+}
+
+static void test_chain_free(test_chain_model *B)
+{
+    test_chain_release(B);
+    free(B->m); free(B->k); free(B->c); free(B->P0); free(B->phi); free(B->N); free(B->ms); free(B->chi);
+    free(B->zero);
+}
+
+/* The first comparison (the chain's inline build against engine.c), undamped and damped, and a belt:
+ * the chain's box LCP on the velocities relative to the belts, in both builds; a held block rides
+ * its belt. */
+static void test_chain(checks *T)
+{
+    static const char *const names[] = {"", "paper", "consistent", "located"};
+    const double h = 4.0 * DFO_PI / 800.0;
+    double F2[NCHAIN];
+    for (size_t i = 0; i < NCHAIN; i++) F2[i] = (i == 0) ? 0.3 : (i == NCHAIN - 1) ? -0.2 : 0.0;
+    const eng_inputs in1 = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_inputs in2 = {F2, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    for (int damped = 0; damped < 2; damped++) {
+        test_chain_model B;
+        test_chain_make(&B, NCHAIN, 0.1, 0.0, damped ? 0.05 : 0.0);
+        for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
+            check_context(T, "chain of %d blocks%s, %s: the inline build against engine.c", NCHAIN,
+                          damped ? " with dampers" : "", names[scheme]);
+            const eng_setup Sg = test_chain_setup(T, &B, scheme, h), Si = test_chain_setup(T, &B, scheme, h);
+            CHECK((Sg.ops.apply_C != NULL) == damped);
+            eng_state sg, si;
+            switch_log Lg, Li;
+            eng_status stg, sti;
+            eng *Eg = run(&Sg, &GENERIC, &in1, &in2, 20.0, 0.37, 40.0, &sg, &Lg, &stg);
+            eng *Ei = run(&Si, &CHAIN, &in1, &in2, 20.0, 0.37, 40.0, &si, &Li, &sti);
+            printf("  chain n = %d%s %-10s 40 s: %ld switches, x_1 %.17g / %.17g\n", NCHAIN, damped ? " damped" : "",
+                   names[scheme], Lg.count, sg.X[0], si.X[0]);
+            CHECK(stg == ENG_OK);
+            CHECK(sti == ENG_OK);
+            CHECK(Lg.count >= 5 * NCHAIN);
+            CHECK(same_bits(&sg, &si, &Lg, &Li));
+            run_free(Eg, &sg);
+            run_free(Ei, &si);
+            test_chain_release(&B);
+        }
+        test_chain_free(&B);
+    }
+    /* a belt under block 3, its speed changed at 20 s: the same bits in both builds, and block 3 held
+     * moves with its belt (its velocity the belt's to the bit) */
+    check_context(T, "chain of %d blocks with a belt: the inline build against engine.c, the block held on it",
+                  NCHAIN);
+    test_chain_model B;
+    test_chain_make(&B, NCHAIN, 0.1, 0.0, 0.0);
+    B.N[3] = 3.0; /* (block 3 held on its belt for stretches) */
+    double vb1[NCHAIN] = {0.0}, vb2[NCHAIN] = {0.0};
+    vb1[3] = 0.1;
+    vb2[3] = -0.05;
+    const eng_inputs inb1 = {NULL, NULL, vb1, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_inputs inb2 = {NULL, NULL, vb2, {NULL, NULL}, {NULL, NULL}, 0.0};
+    const eng_setup Sg = test_chain_setup(T, &B, DFO_SCHEME_LOCATED, h);
+    const eng_setup Si = test_chain_setup(T, &B, DFO_SCHEME_LOCATED, h);
+    eng_state sg, si, s0;
+    switch_log Lg, Li, L0;
+    eng_status stg, sti, st0;
+    eng *Eg = run(&Sg, &GENERIC, &inb1, &inb2, 20.0, 0.37, 40.0, &sg, &Lg, &stg);
+    eng *Ei = run(&Si, &CHAIN, &inb1, &inb2, 20.0, 0.37, 40.0, &si, &Li, &sti);
+    eng *E0 = run(&Si, &CHAIN, &in1, &in1, 100.0, 0.37, 40.0, &s0, &L0, &st0); /* no belt */
+    printf("  chain n = %d with a belt: %ld switches (without: %ld), x_4 %.17g (without: %.17g)\n", NCHAIN, Lg.count,
+           L0.count, sg.X[3], s0.X[3]);
+    CHECK(stg == ENG_OK && sti == ENG_OK && st0 == ENG_OK);
+    CHECK(Lg.count >= 5 * NCHAIN);
+    CHECK(same_bits(&sg, &si, &Lg, &Li));
+    CHECK(fabs(sg.X[3] - s0.X[3]) > 1e-3); /* the belt is not ignored */
+    run_free(Eg, &sg);
+    run_free(Ei, &si);
+    run_free(E0, &s0);
+    /* block 3 held on its belt at 0.1: from rest it slides against its belt, sticks to it, is pulled
+     * back by its springs, and again */
+    eng *E = eng_create(&Sg, &ALLOC, NULL);
+    eng_state s;
+    if (!E || !eng_state_init(E, &s, 0)) { fprintf(stderr, "test_engine_step: out of memory\n"); exit(1); }
+    chain_eng_start(E, &inb1, 0.0, B.zero, B.zero, &s);
+    int held = 0, riding = 0;
+    eng_status st = ENG_OK;
+    for (int k = 1; k <= 100 && st == ENG_OK; k++) {
+        st = chain_eng_advance(E, &inb1, &s, 0.37 * k, NULL);
+        if (s.mode[3] == 0) {
+            held++;
+            riding += s.V[3] == 0.1;
+        }
+    }
+    printf("  chain n = %d, block 4 on a belt at 0.1: held at %d of 100 points, at the belt's speed at %d\n", NCHAIN,
+           held, riding);
+    CHECK(st == ENG_OK);
+    CHECK(held >= 10);
+    CHECK(riding == held);
+    run_free(E, &s);
+    test_chain_free(&B);
+}
+
+/* ---- the chain's sparse-structure operators (eng_sparse): held solves, the fused step, spans ---- */
+
+static long held_steps;   /* calls of the fused step (counting_step_held) */
+static long spans_given;  /* span calls that gave spans (counting_span) */
 
 static int counting_step_held(void *ctx, const eng_held_step *F, eng_state *s)
 {
     held_steps++;
-    return chn_step_held(ctx, F, s);
+    return chain_op_step_held(ctx, F, s);
 }
 
 static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
 {
-    chn_model *C = ctx;
-    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
-    if (ns > 0) ((big_chain *)((char *)C - offsetof(big_chain, C)))->spans++;
+    const size_t ns = chain_op_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    if (ns > 0) spans_given++;
     return ns;
 }
 
@@ -730,7 +735,7 @@ static size_t counting_span(void *ctx, const int *cand, int *dof_lab, int *ct_la
  * the whole structure) */
 static size_t spans_off_range(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
 {
-    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    const size_t ns = chain_op_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
     for (size_t k = 0; k < ns; k++) ct_rng[2 * k + 1] = ct_rng[2 * k];
     return ns;
 }
@@ -738,28 +743,37 @@ static size_t spans_off_range(void *ctx, const int *cand, int *dof_lab, int *ct_
 /* The chain's spans, the first one's DOF range past the structure's end (a model's error) */
 static size_t spans_bad_range(void *ctx, const int *cand, int *dof_lab, int *ct_lab, size_t *dof_rng, size_t *ct_rng)
 {
-    const size_t ns = chn_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
-    if (ns > 0) dof_rng[1] = ((const chn_model *)ctx)->n + 1;
+    const size_t ns = chain_op_span(ctx, cand, dof_lab, ct_lab, dof_rng, ct_rng);
+    if (ns > 0) dof_rng[1] = ((const chain_eng_ops *)ctx)->n + 1;
     return ns;
 }
 
-/* The engine on B in scheme with the sparse operators: 0 none, 1 held_basis only, 2 and the fused
- * step, 3 and the closed-form breakaways, 4 and spans; h = T / steps. */
-static eng_setup big_setup(big_chain *B, int scheme, int sparse, double steps)
+/* The engine on a chain of B in scheme with the chain's sparse operators up to a level: 0 none, 1
+ * held_basis only, 2 and the fused step, 3 and the closed-form breakaways (the chain's whole one,
+ * ops.breakaway, and its contacts'), 4 and spans (counted by counting_span); h = T / steps. */
+static eng_setup big_setup(checks *T, test_chain_model *B, int scheme, int sparse, double steps)
 {
-    eng_setup S = setup_common(B->n, B->rows, B->N, B->ms, B->mk, B->Pc, B->Ps, DFO_SCHEME_PAPER, 2.0);
-    const eng_ops ops = {&B->C, chn_K, NULL, chn_M, chn_factor, chn_solve, chn_friction, NULL, 0};
-    S.ops = ops;
-    S.scheme = scheme;
-    S.h = 4.0 * DFO_PI / steps;
-    chn_set_reach(&B->C, S.h, S.alpha);
-    B->sp = chn_sparse(&B->C, sparse >= 4);
+    eng_setup S = test_chain_setup(T, B, scheme, 4.0 * DFO_PI / steps);
+    CHECK(S.sparse && S.sparse->held_basis && S.sparse->step_held && S.sparse->contact_breakaway && S.sparse->span);
+    B->sp = *S.sparse;
     if (sparse < 2) B->sp.step_held = NULL;
-    if (sparse < 3) B->sp.contact_breakaway = NULL;
-    if (sparse >= 4) B->sp.span = counting_span;
+    if (sparse < 3) {
+        B->sp.contact_breakaway = NULL;
+        S.ops.breakaway = NULL;
+    }
+    if (sparse < 4) {
+        B->sp.span_max = 0;
+        B->sp.span = NULL;
+        B->sp.span_bind = NULL;
+    } else {
+        B->sp.span = counting_span;
+    }
     S.sparse = sparse ? &B->sp : NULL;
     return S;
 }
+
+/* The reach of the spans of the latest big_setup's chain. */
+static size_t big_reach(const test_chain_model *B) { return B->M[B->nm - 1]->ops.w; }
 
 /* From rest to t_end in communication steps dt, without hooks (spans need none). */
 static eng *run_plain(const eng_setup *S, const entry *X, const double *zero, double dt, double t_end, eng_state *s,
@@ -784,8 +798,8 @@ static double max_rel_diff(const double *a, const double *b, size_t n)
 static void test_chain_sparse(checks *T)
 {
     static const char *const names[] = {"", "paper", "consistent", "located"};
-    big_chain B;
-    big_make(&B, NCHAIN);
+    test_chain_model B;
+    test_chain_make(&B, NCHAIN, 0.0, 0.4, 0.0); /* bench_engine's chain, its normal forces varied along it */
     for (int scheme = DFO_SCHEME_PAPER; scheme <= DFO_SCHEME_LOCATED; scheme++) {
         check_context(T, "chain of %d blocks, %s: the held solves through the box LCP, the fused step", NCHAIN,
                       names[scheme]);
@@ -793,10 +807,10 @@ static void test_chain_sparse(checks *T)
         eng_status st[5];
         eng *E[5];
         for (int v = 0; v < 4; v++) {
-            const eng_setup S = big_setup(&B, scheme, v, 800.0);
+            const eng_setup S = big_setup(T, &B, scheme, v, 800.0);
             E[v] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[v], &st[v]);
         }
-        const eng_setup S = big_setup(&B, scheme, 3, 800.0);
+        const eng_setup S = big_setup(T, &B, scheme, 3, 800.0);
         E[4] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[4], &st[4]);
         const double d = max_rel_diff(s[1].X, s[0].X, NCHAIN), db = max_rel_diff(s[3].X, s[2].X, NCHAIN);
         printf("  chain n = %d %-10s held solves by the box LCP against the dense: %.2e, %lld / %lld switches; "
@@ -816,11 +830,12 @@ static void test_chain_sparse(checks *T)
             eng_state_free(E[v], &s[v]);
             eng_destroy(E[v]);
         }
+        test_chain_release(&B);
     }
-    big_free(&B);
+    test_chain_free(&B);
     /* spans: a chain longer than two reaches, located; against the whole structure's steps at h and h / 2 */
     const size_t n = 24;
-    big_make(&B, n);
+    test_chain_make(&B, n, 0.0, 0.4, 0.0);
     double dh[2] = {0.0, 0.0};
     for (int r = 0; r < 2; r++) {
         const double steps = 800.0 * (double)(1 << r);
@@ -828,18 +843,19 @@ static void test_chain_sparse(checks *T)
         eng_state s[3];
         eng_status st[3];
         eng *E[3];
-        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, steps);
+        eng_setup S = big_setup(T, &B, DFO_SCHEME_LOCATED, 3, steps);
         E[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[0], &st[0]);
-        B.spans = 0;
-        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, steps);
+        spans_given = 0;
+        S = big_setup(T, &B, DFO_SCHEME_LOCATED, 4, steps);
         E[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s[1], &st[1]);
-        const long spans = B.spans;
+        const long spans = spans_given;
+        const size_t reach = big_reach(&B);
         E[2] = run_plain(&S, &CHAIN, B.zero, 0.37, 40.0, &s[2], &st[2]);
         dh[r] = max_rel_diff(s[1].X, s[0].X, n);
         printf("  chain n = %zu located T/%.0f: reach %zu, %ld steps by spans, %lld / %lld switches, spans against "
-               "whole %.2e\n", n, steps, B.C.w, spans, s[1].switches, s[0].switches, dh[r]);
+               "whole %.2e\n", n, steps, reach, spans, s[1].switches, s[0].switches, dh[r]);
         for (int v = 0; v < 3; v++) CHECK(st[v] == ENG_OK);
-        CHECK(2 * B.C.w + 3 < n);
+        CHECK(2 * reach + 3 < n);
         CHECK(spans > 50);
         CHECK(labs((long)(s[1].switches - s[0].switches)) <= s[0].switches / 50);
         CHECK(dh[r] < 1e-5);
@@ -849,6 +865,7 @@ static void test_chain_sparse(checks *T)
             eng_state_free(E[v], &s[v]);
             eng_destroy(E[v]);
         }
+        test_chain_release(&B);
     }
     check_context(T, "chain of %zu blocks, located: spans against the whole structure, second order", n);
     printf("  spans against whole: %.2e, %.2e (ratio %.2f)\n", dh[0], dh[1], dh[0] / dh[1]);
@@ -860,9 +877,9 @@ static void test_chain_sparse(checks *T)
         eng_state s3[3];
         eng_status st3[3];
         eng *E3[3];
-        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, 800.0);
+        eng_setup S = big_setup(T, &B, DFO_SCHEME_LOCATED, 3, 800.0);
         E3[0] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[0], &st3[0]);
-        S = big_setup(&B, DFO_SCHEME_LOCATED, 4, 800.0);
+        S = big_setup(T, &B, DFO_SCHEME_LOCATED, 4, 800.0);
         B.sp.span = spans_off_range;
         E3[1] = run_plain(&S, &GENERIC, B.zero, 0.37, 40.0, &s3[1], &st3[1]);
         B.sp.span = spans_bad_range;
@@ -879,20 +896,21 @@ static void test_chain_sparse(checks *T)
             eng_state_free(E3[v], &s3[v]);
             eng_destroy(E3[v]);
         }
+        test_chain_release(&B);
     }
-    big_free(&B);
+    test_chain_free(&B);
     /* the stuck fast path from the contacts' closed-form breakaways: a chain that sticks whole for
      * stretches (one block slips near its excitation's peaks, the others hold), on against off */
     check_context(T, "chain of %d blocks stuck for stretches: the stuck fast path from the contacts' breakaways",
                   NCHAIN);
-    big_make(&B, NCHAIN);
+    test_chain_make(&B, NCHAIN, 0.0, 0.4, 0.0);
     for (size_t i = 0; i < NCHAIN; i++) B.N[i] = (i == 0) ? 1.99 : 2.1; /* block 0 slips near its peaks */
     eng_state s2[2];
     eng_status st2[2];
     eng *E2[2];
     long calls[2];
     for (int v = 0; v < 2; v++) {
-        eng_setup S = big_setup(&B, DFO_SCHEME_LOCATED, 3, 800.0);
+        eng_setup S = big_setup(T, &B, DFO_SCHEME_LOCATED, 3, 800.0);
         B.sp.step_held = counting_step_held;
         S.fast_paths = v;
         held_steps = 0;
@@ -909,7 +927,7 @@ static void test_chain_sparse(checks *T)
         eng_state_free(E2[v], &s2[v]);
         eng_destroy(E2[v]);
     }
-    big_free(&B);
+    test_chain_free(&B);
 }
 
 int main(void)
