@@ -34,6 +34,7 @@
  * and gets the same schemes, their arithmetic in the same order: the same numbers as engine.c's
  * with the same operators. The engine object is made by eng_create (engine.c) either way. Include
  * once per translation unit, after "dfo_fp.h". See engine.c's header for the functions' order. */
+#include "dfo_inline.h"
 #include "engine_private.h"
 
 #ifndef ENG_FN
@@ -123,17 +124,8 @@
 
 /* The functions of every step are inlined into the schemes (the state in registers; a call and its
  * spills are a good part of a small structure's step). The same arithmetic either way. */
-#if defined(__GNUC__)
-#define ENG_HOT inline __attribute__((always_inline))
-#else
-#define ENG_HOT inline
-#endif
-
-#if defined(__GNUC__)
-#define ENG_COLD __attribute__((noinline))
-#else
-#define ENG_COLD
-#endif
+#define ENG_HOT DFO_FORCE_INLINE
+#define ENG_COLD DFO_NO_INLINE
 
 /* ---- small algebra --------------------------------------------------------------------------- */
 

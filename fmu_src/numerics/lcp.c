@@ -1,15 +1,12 @@
 /* Lemke's algorithm (lexicographic variant) and the box LCP of a tridiagonal M. See lcp.h. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "dfo_inline.h"
 #include "lcp.h"
 
 #include <math.h>
 
 /* The small helpers of the pivoting loops are compiled into them. */
-#if defined(__GNUC__)
-#define ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define ALWAYS_INLINE inline
-#endif
+#define ALWAYS_INLINE DFO_FORCE_INLINE
 
 static double dmax(double a, double b) { return a > b ? a : b; }
 static double dabs(double a) { return fabs(a); }

@@ -15,6 +15,7 @@
 #define DFO_CHAIN_ENGINE_OPS_H
 
 #include "bossak.h"
+#include "dfo_inline.h"
 #include "engine.h"
 #include "friction.h"
 #include "lcp.h"
@@ -26,13 +27,8 @@
 
 /* The fused step of a run inlined into the engine's loop of them (chain_engine.c's ENG_STEP_RUN),
  * its rows taken at the run's first step out of line */
-#if defined(__GNUC__)
-#define CHAIN_OP_HOT inline __attribute__((always_inline))
-#define CHAIN_OP_COLD __attribute__((noinline))
-#else
-#define CHAIN_OP_HOT inline
-#define CHAIN_OP_COLD
-#endif
+#define CHAIN_OP_HOT DFO_FORCE_INLINE
+#define CHAIN_OP_COLD DFO_NO_INLINE
 
 /* Block i's data for the fused steps of a run (eng_held_step.run; chain_op_run_take), together in
  * memory: its coefficients, the run's load and mode, the slot's off-diagonal, and the slot's

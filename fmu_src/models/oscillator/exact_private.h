@@ -3,6 +3,7 @@
 #ifndef DFO_EXACT_PRIVATE_H
 #define DFO_EXACT_PRIVATE_H
 
+#include "dfo_inline.h"
 #include "exact.h"
 
 #include <float.h>
@@ -13,10 +14,6 @@
 /* For exact_loop.h, exact_spring.c and exact_free.c: the event loop is compiled once for each kind of
  * inputs (held, polynomial: a constant in each), so that the loop of held inputs carries none of the
  * polynomial inputs' code. */
-#if defined(__GNUC__)
-#define DFO_EXACT_INLINE inline __attribute__((always_inline))
-#else
-#define DFO_EXACT_INLINE inline
-#endif
+#define DFO_EXACT_INLINE DFO_FORCE_INLINE
 
 #endif

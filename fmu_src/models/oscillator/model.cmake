@@ -5,7 +5,7 @@ set(MODEL_ID DryFrictionOscillator)
 set(MODEL_DESCRIPTION ${CMAKE_SOURCE_DIR}/modelDescription.xml)
 set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
-set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dmath.c numerics/dmath.h numerics/ddouble.h numerics/lcp.c
+set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numerics/dmath.h numerics/ddouble.h numerics/lcp.c
     numerics/lcp.h numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
     numerics/roots.c numerics/roots.h engine/engine.c engine/engine.h engine/engine_private.h engine/engine_step.h
     models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/scheme_state.h
