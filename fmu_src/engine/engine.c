@@ -1,8 +1,11 @@
-/* The friction engine: the Bossak schemes over a model's operators. See engine.h and method.md
- * sections 2-4, 8, 9, 12 and 13.
+/* The friction engine's set-up and memory: eng_check_setup, eng_create, the state's arrays, the
+ * status texts. See engine.h and method.md sections 2-4, 8, 9, 12 and 13.
  *
- * This file: set-up and memory (eng_check_setup, eng_create, the state's arrays), then the schemes
- * of engine_step.h with the operators through eng_ops. engine_step.h's functions, in order:
+ * The schemes themselves are engine_step.h, a template over the model's operators: engine_generic.c
+ * instantiates it with the operators through eng_ops's function pointers (eng_advance, ...); a
+ * model may instantiate it with its own inline operators instead (models/oscillator/osc_engine.c,
+ * models/chain/chain_engine.c), and then needs only this file of the engine. engine_step.h's
+ * functions, in order:
  *   small algebra        dot products over contact rows, a dense Cholesky with dependent rows
  *   loads and forces     loads_at (inputs at t, ramps), exc_at (the grid cache), slip, factor_slot
  *   constrained solves   csolve: A y = r + W_S' f_S with W_S y = target_S (basis solves, physical
@@ -310,5 +313,3 @@ const char *eng_status_text(eng_status st)
     }
     return "unknown status";
 }
-
-#include "engine_step.h" /* the schemes, the operators through eng_ops */

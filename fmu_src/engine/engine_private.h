@@ -1,6 +1,6 @@
 /* The engine's private header: its constants and the engine object (setup, factor-slot caches and
  * workspace), shared by engine.c (set-up, memory, the state's storage) and engine_step.h (the
- * schemes, a template over the model's operators). Not for models: they use engine.h, or include
+ * schemes, a template over the model's operators; engine_generic.c's instance of it). Not for models: they use engine.h, or include
  * engine_step.h to specialise the schemes by their own inline operators. */
 #ifndef DFO_ENGINE_PRIVATE_H
 #define DFO_ENGINE_PRIVATE_H

@@ -1,4 +1,4 @@
-/* The engine's schemes as a template over the model's operators: included once by engine.c with
+/* The engine's schemes as a template over the model's operators: included once by engine_generic.c with
  * the defaults below (the operators through eng_ops's function pointers, the sizes from the setup:
  * the public eng_* functions of engine.h), and by a model that wants its own operators inlined:
  * before including this file it defines, as macros of the engine E,
@@ -31,7 +31,7 @@
  *                                eng_new_inputs, eng_snap_target, eng_accelerations,
  *                                eng_contact_forces, eng_dense_friction): a prefix and static
  *
- * and gets the same schemes, their arithmetic in the same order: the same numbers as engine.c's
+ * and gets the same schemes, their arithmetic in the same order: the same numbers as engine_generic.c's
  * with the same operators. The engine object is made by eng_create (engine.c) either way. Include
  * once per translation unit, after "dfo_fp.h". See engine.c's header for the functions' order. */
 #include "dfo_inline.h"

@@ -4,7 +4,7 @@
  * closed-form breakaway (friction.h's dfo_next_breakaway: the engine's stuck fast path), and the
  * engine's schemes specialised by them (engine_step.h with the prefix osc_: osc_eng_start,
  * osc_eng_advance, ...). The engine object is made by osc_eng_create; the same operators through
- * eng_ops's function pointers (engine.c's eng_* functions) give the same bits.
+ * eng_ops's function pointers (engine_generic.c's eng_* functions) give the same bits.
  *
  * The oscillator's Bossak schemes step with it: osc_bossak.c's dfo_bossak_advance (below scheme.h's
  * dfo_advance) makes the engine per call and maps the state, the inputs, the switches and the
