@@ -1,8 +1,8 @@
-/* Forced inlining: the step's small functions compiled into the schemes' loops (the state kept in
- * registers; a call and its spills are a good part of a small structure's step), and the cold paths
- * kept out of them. The same arithmetic either way, so the same numbers.
- * DFO_NO_FORCE_INLINE leaves the choice to the compiler: the fuzz builds set it, where clang's
- * coverage, ASan and UBSan instrumentation of the flattened schemes takes minutes per file. */
+/* Forced inlining where it specialises code (the exact scheme's event loop compiled once per kind of
+ * inputs, a constant in each; Lemke's small helpers in its pivoting loops), and cold paths kept out
+ * of hot loops. The same arithmetic either way, so the same numbers. DFO_NO_FORCE_INLINE leaves
+ * the choice to the compiler (the fuzz builds set it: clang's coverage, ASan and UBSan
+ * instrumentation of flattened functions is slow to compile). */
 #ifndef DFO_INLINE_H
 #define DFO_INLINE_H
 

@@ -27,7 +27,7 @@
 
 /* The fused step of a run inlined into the engine's loop of them (chain_engine.c's ENG_STEP_RUN),
  * its rows taken at the run's first step out of line */
-#define CHAIN_OP_HOT DFO_FORCE_INLINE
+#define CHAIN_OP_HOT inline /* (as engine_step.h's ENG_HOT: the compiler's choice) */
 #define CHAIN_OP_COLD DFO_NO_INLINE
 
 /* Block i's data for the fused steps of a run (eng_held_step.run; chain_op_run_take), together in
