@@ -700,7 +700,7 @@ static void regression_scale(checks *T)
 static int box_dense(int n, const double *d, const double *e, const double *q, const double *l, const int *s,
                      const int *fix, const double *zf, double *z, double *w)
 {
-    double A[LCP_STACK_N * LCP_STACK_N] = {0}, b[LCP_STACK_N];
+    double A[LCP_STACK_N * LCP_STACK_N] = {0}, b[LCP_STACK_N] = {0};
     for (int i = 0; i < n; i++) {
         if ((fix && fix[i]) || (s[i] == 0 && l[i] > 0.0)) {
             A[i * n + i] = 1.0;
