@@ -1787,20 +1787,6 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
 
 /* ---- the fused steps -------------------------------------------------------------------------- */
 
-/* The common step, fused: a whole grid step from a grid point, held inputs, in which the modes hold
- * (located: the trial in the current modes has no switching contact; paper and consistent: the
- * friction problem warm-started from the current modes returns them), taken in a tight loop over
- * the grid points up to t_target with none of the general path's phase bookkeeping. The same
- * arithmetic as step_located's and step_lcp's in the same order, so the same numbers. A model
- * whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC) gets the loop's state in local arrays,
- * which the compiler keeps in registers; otherwise it works on the state in place. The loop stops,
- * the state untouched by the step it declines, before a step that would switch (the general path
- * takes it), that re-bases A (a step length other than that of A, off a pinned DOF), a stuck
- * structure the stuck fast path may skip (skip), a friction problem that fails, and a step past
- * t_target. The observer is called for the steps that overlap its window, as the general path
- * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
- * point (the step from it is taken here, to the bits of the general path's). A declined located step
- * leaves its trial, solved, for step_located (fused_ready). */
 /* Every X, V, A finite (|x| <= DBL_MAX is false for infinities and NaN) */
 static ENG_HOT int finite_all(size_t n, const double *X, const double *V, const double *A)
 {
@@ -1822,6 +1808,20 @@ static ENG_HOT void run_store(eng_state *s, double t, long long ng, long long ex
     s->solves += solves;
 }
 
+/* The common step, fused: a whole grid step from a grid point, held inputs, in which the modes hold
+ * (located: the trial in the current modes has no switching contact; paper and consistent: the
+ * friction problem warm-started from the current modes returns them), taken in a tight loop over
+ * the grid points up to t_target with none of the general path's phase bookkeeping. The same
+ * arithmetic as step_located's and step_lcp's in the same order, so the same numbers. A model
+ * whose sizes are constants (ENG_FUSED_N, ENG_FUSED_NC) gets the loop's state in local arrays,
+ * which the compiler keeps in registers; otherwise it works on the state in place. The loop stops,
+ * the state untouched by the step it declines, before a step that would switch (the general path
+ * takes it), that re-bases A (a step length other than that of A, off a pinned DOF), a stuck
+ * structure the stuck fast path may skip (skip), a friction problem that fails, and a step past
+ * t_target. The observer is called for the steps that overlap its window, as the general path
+ * does. *g_prev: the last grid point reached. declined: the stuck fast path declined the first grid
+ * point (the step from it is taken here, to the bits of the general path's). A declined located step
+ * leaves its trial, solved, for step_located (fused_ready). */
 static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip, int declined, const eng_hooks *hk,
                                 double *g_prev)
 {
