@@ -353,6 +353,13 @@ typedef struct eng_state_s {
                                  * engine's schemes find breakaways by root finding and keep NaN here) */
     int *break_dir;             /* nc: its side */
     double t_switch;            /* the time of the last switch (-inf: none) */
+    double stick_tb;            /* a structure stuck at rest (every contact held, every DOF pinned at
+                                 * rest): its stick's breakaway (ops.breakaway, or its contacts' earliest),
+                                 * found where the stick first needs it and kept while it lasts (NaN: to
+                                 * be found). Every switch and eng_new_inputs forget it; eng_advance too,
+                                 * at its start, unless its hooks say the caller checked it
+                                 * (eng_hooks.stick_kept): so that a run split into calls places the
+                                 * breakaway where one call does. */
     long long steps, solves, pivot_steps, switches;  /* counters */
     /* energy accounts since the start (J), kept with eng_setup.account_energy: the work of the applied
      * forces (excitation + F_ext, trapezoidal rule per (sub-)step), of friction (the step's force, or
@@ -407,6 +414,9 @@ typedef struct {
                                  * direction) as a switch, at the end of the step that holds it (a
                                  * model that counts such a block's turns, as its closed form does);
                                  * else its mode follows its slip silently */
+    int stick_kept;             /* the state's stick_tb is of this call's inputs and of the state's stick
+                                 * (a caller that changed neither since it was found, or that checked it
+                                 * against what it was found for): kept; else forgotten on entry */
 } eng_hooks;
 
 /* ---- the engine ---------------------------------------------------------------------------------- */

@@ -20,21 +20,11 @@
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
 #define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to a holding force at its limit */
-#define PLACE_REL 1e-9           /* a stick's kept breakaway: beyond a step by more than this share of t + h */
 #define HALVINGS 60              /* search for a resolvable sub-step before the first switch */
 #define LEMKE_PIVOTS_PER_N 8     /* Lemke's pivot budget: 8 (2 nc) + 16 */
 #define ACTIVE_SET_ROUNDS 4      /* the active-set fallback: rounds per contact */
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
 #define DEPENDENT_REL 1e-13      /* a Cholesky pivot below this share of its diagonal: a dependent row */
-
-/* The model's breakaway of the current stick (ENG_BREAKAWAY, or its contacts'), kept over one call of
- * eng_advance (the stuck fast path's, and the located step's for a stick that begins inside a step):
- * tb for the stick that holds since the switch count sw (known: asked). */
-typedef struct {
-    double tb;
-    long long sw;
-    int known;
-} stick_cache;
 
 struct eng {
     eng_setup S;
@@ -61,7 +51,6 @@ struct eng {
     int rpin_ok;                 /* (rebase sets it, with held inputs; cleared with jk_ok) */
     int held_ready;              /* xp, ph, V1, f hold the model's declined fused step from the state as it is
                                   * (held_steps, for held_step's next call; eng_advance clears it) */
-    stick_cache stick;           /* the current stick's breakaway (eng_advance clears it) */
     int fused_ready;             /* xp, ph, V1, f, A0, lim hold fused_steps' declined located grid step from the
                                   * state as it is (a contact switches in it: step_located's phase 0 takes it
                                   * as its trial; eng_advance clears it) */

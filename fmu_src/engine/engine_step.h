@@ -304,7 +304,7 @@ static void applied_rate(eng *E, const eng_inputs *in, double t, double *out)
 {
     const eng_harmonic *H = &E->S.exc;
     double cw, sw;
-    trig_at(E, t, &cw, &sw, 1, 1);
+    trig_at(E, t, &cw, &sw, H->Ps != NULL, H->Pc != NULL); /* (only the ones it reads) */
     const int rp = ramped(in);
     for (size_t i = 0; i < ENG_N(E); i++) {
         double p = rp ? poly_rate(in->dF_ext, in, i, t) : 0.0;
@@ -785,6 +785,21 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
     return any;
 }
 
+/* The jerks of the phase's start into E->jk, once per phase (jk_ok: whatever the trials' lengths);
+ * out of line, so that the trials' re-basing stays small enough to inline. The loads end at t. */
+static ENG_COLD void phase_jerks(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    const eng_setup *S = &E->S;
+    double *acc = E->acc;
+    loads_at(E, in, s->t);
+    /* (the physical accelerations: for the jerks' damping and Stribeck terms only; where C is 0,
+     * ops.apply_C NULL, a model whose ENG_HAS_C holds applies it to zeros) */
+    if ((ENG_HAS_C(E) && S->ops.apply_C) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
+    else if (ENG_HAS_C(E)) memset(acc, 0, ENG_N(E) * sizeof(double));
+    jerks(E, in, s, acc, E->jk);
+    E->jk_ok = 1;
+}
+
 static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, double *A0)
 {
     const eng_setup *S = &E->S;
@@ -806,17 +821,9 @@ static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s
     }
     if (!any) return;
     const int *pin = E->rpin_ok ? E->rpin : E->pin;
-    double *acc = E->acc, *jk = E->jk;
-    if (!E->jk_ok) { /* once per phase: its start's jerks, whatever the trial's length */
-        loads_at(E, in, s->t);
-        /* (the physical accelerations: for the jerks' damping and Stribeck terms only; where C is 0,
-         * ops.apply_C NULL, a model whose ENG_HAS_C holds applies it to zeros) */
-        if ((ENG_HAS_C(E) && S->ops.apply_C) || S->law) phys_accel(E, s, s->t, s->mode, acc, E->f2);
-        else if (ENG_HAS_C(E)) memset(acc, 0, ENG_N(E) * sizeof(double));
-        jerks(E, in, s, acc, jk);
-        E->jk_ok = 1;
-    }
+    if (!E->jk_ok) phase_jerks(E, in, s);
     loads_at(E, in, t1);
+    const double *jk = E->jk;
     for (size_t i = 0; i < n; i++) { /* (jk is set for every DOF: both values, one selected, no branch) */
         const double Ar = s->A[i] + a * (hh - s->hA[i]) * jk[i];
         A0[i] = dfo_select((pin[i] == 0) & rebases(E, s, i, hh, tol), Ar, A0[i]);
@@ -971,6 +978,7 @@ static void report(eng_state *s, size_t j, int from, const eng_hooks *hk)
 {
     s->switches++;
     s->t_switch = s->t;
+    s->stick_tb = NAN; /* (a new stick, or none) */
     if (s->mode[j] == 0) s->t_stick[j] = s->t;
     if (hk && hk->on_switch) hk->on_switch(hk->switch_ctx, s->t, j, s, from, s->mode[j]);
 }
@@ -1376,13 +1384,15 @@ static ENG_HOT int stuck_at_rest(eng *E, const eng_inputs *in, const eng_state *
     return stuck_pinned(E, in, s);
 }
 
-static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c);
+static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in);
 
-/* The breakaway of the stick of a structure at rest (stuck_at_rest), kept (E->stick). */
-static double stuck_tb(eng *E, const eng_inputs *in, const eng_state *s)
+/* The breakaway of the stick of a structure at rest (stuck_at_rest): the state's (eng_state.stick_tb),
+ * asked of the model where the state holds none or one passed. The loads must be set. */
+static double stuck_tb(eng *E, const eng_inputs *in, eng_state *s)
 {
-    stick_refresh(E, in, s, &E->stick);
-    return E->stick.tb;
+    if (!(s->stick_tb > s->t))
+        s->stick_tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
+    return s->stick_tb;
 }
 
 /* A stuck step of a structure at rest, as its trial leaves X (V = A = 0: any step's kinematics K) and
@@ -1445,17 +1455,15 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             }
         }
         /* a structure stuck at rest: its stick ends at the model's closed-form breakaway (ENG_BREAKAWAY),
-         * as the old stepper ends it. A step that ends before it (the stick's kept breakaway beyond the
-         * step by more than its rounding) is a stuck step, taken as the stuck fast path takes one
-         * (stuck_rest: X through the predictor and corrector with V = A = 0, to the bits of the trial;
-         * F left). Else the breakaway asked from the phase's start: inside the step, the switch is
-         * placed there without a trial (the structure rests there, X, V = A = 0 as they are; the
-         * holding forces solved at that time and clamped to their limits; the contact most beyond its
-         * limit released). Models with their contacts' closed forms split the step at those instead
-         * (closed_breakaways, below). */
+         * found where the stick first needs it and kept in the state (stuck_tb), as the old stepper
+         * ends it. A step that ends before it is a stuck step, taken as the stuck fast path takes one
+         * (stuck_rest: X through the predictor and corrector with V = A = 0, to the bits of the
+         * trial; F left). Inside the step, the switch is placed there without a trial (the structure
+         * rests there, X, V = A = 0 as they are; the holding forces solved at that time and clamped to
+         * their limits; the contact most beyond its limit released). Models with their contacts'
+         * closed forms split the step at those instead (closed_breakaways, below). */
         if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
-            const double eps = PLACE_REL * (fabs(t_end) + S->h);
-            double tp = (stuck_tb(E, in, s) > t_end + eps) ? INFINITY : ENG_BREAKAWAY(E, s, in, E->Fb);
+            double tp = stuck_tb(E, in, s);
             if (tp > t_end) {
                 stuck_rest(E, s, &E->kin_grid);
                 s->t = t_end;
@@ -1463,7 +1471,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 observe(E, s, ta, s->F, hk);
                 return ENG_OK;
             }
-            if (tp > s->t && tp <= t_end) {
+            if (tp > s->t) {
                 /* (the first time from the closed form's on, by ulps doubling, at which a holding force is
                  * at or beyond its limit, so that the switch's time does not follow the closed form's
                  * rounding; where none is within PLACE_NUDGES, the closed form's last) */
@@ -1758,6 +1766,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         b->exc_c = s->exc_c;
         b->exc_s = s->exc_s;
         b->t_switch = s->t_switch;
+        b->stick_tb = NAN;
         b->steps = b->solves = b->pivot_steps = b->switches = 0;
         const eng_inputs bin = {E->lF, E->lNe, (in && in->v_belt) ? E->lvb : NULL, {NULL, NULL}, {NULL, NULL},
                                 in ? in->t_ref : 0.0};
@@ -2190,6 +2199,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
     s->exc_n = -1;
     s->exc_c = s->exc_s = 0.0;
     s->t_switch = -INFINITY;
+    s->stick_tb = NAN;
     s->steps = s->solves = s->pivot_steps = s->switches = 0;
     s->W_applied = s->W_friction = s->D_damping = 0.0;
     for (size_t i = 0; i < n; i++) {
@@ -2263,15 +2273,6 @@ static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
     return tb;
 }
 
-/* The stick's breakaway in c, asked of the model where c does not hold it (another stick, or passed). */
-static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stick_cache *c)
-{
-    if (c->known && c->sw == s->switches && s->t < c->tb) return;
-    c->tb = ENG_HAS_BREAKAWAY(E) ? ENG_BREAKAWAY(E, s, in, E->Fb) : stuck_breakaway(E, s, in);
-    c->sw = s->switches;
-    c->known = 1;
-}
-
 /* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
  * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
@@ -2280,20 +2281,22 @@ static void stick_refresh(eng *E, const eng_inputs *in, const eng_state *s, stic
  * counters (the observer sees them as one phase at rest, which ends inside its window where it began
  * before the window's end: the positions, modes and forces it sees are those of each of them).
  * Returns the last grid index they reach (s->n_grid: none). */
-static long long stuck_until(eng *E, const eng_inputs *in, const eng_state *s, double t_target,
-                             const eng_hooks *hk, stick_cache *c)
+static long long stuck_until(eng *E, const eng_inputs *in, eng_state *s, double t_target, const eng_hooks *hk,
+                             int *at_rest)
 {
     const eng_setup *S = &E->S;
     const double h = S->h;
     loads_at(E, in, s->t);
+    *at_rest = 0;
     if (!stuck_at_rest(E, in, s)) return s->n_grid;
-    stick_refresh(E, in, s, c);
-    if (isnan(c->tb)) return s->n_grid;
+    const double tb = stuck_tb(E, in, s);
+    if (isnan(tb)) return s->n_grid;
+    *at_rest = 1;
     /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
      * bound below is then past the next grid point: its grid points rise with their index) */
-    if (!(s->t0 + (double)(s->n_grid + 2) * h < min_b(c->tb, t_target + 2.0 * h))) return s->n_grid;
+    if (!(s->t0 + (double)(s->n_grid + 2) * h < min_b(tb, t_target + 2.0 * h))) return s->n_grid;
     long long m = grid_below(s, h, t_target, 1);
-    const long long mb = grid_below(s, h, min_b(c->tb, t_target + 2.0 * h), 0) - 1;
+    const long long mb = grid_below(s, h, min_b(tb, t_target + 2.0 * h), 0) - 1;
     if (mb < m) m = mb;
     if (hk && hk->obs && hk->obs->on_phase && s->t < hk->obs->t_stop) { /* a stretch in the window ends in it */
         const long long mo = grid_below(s, h, min_b(hk->obs->t_stop, t_target + 2.0 * h), 1);
@@ -2338,9 +2341,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
                      S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
-    E->stick.tb = NAN;
-    E->stick.sw = 0;
-    E->stick.known = 0;
+    if (!(hk && hk->stick_kept)) s->stick_tb = NAN;
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
     const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
@@ -2348,8 +2349,9 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
                           !(hk && hk->report_turns && !E->all_friction); /* (turns: the general path's) */
     while (s->t < t_target) {
         int declined = 0; /* the stuck fast path declined this grid point */
+        int at_rest = 0;  /* and the structure rests there, its breakaway known (stuck_until) */
         if (skip && s->t == g_prev) {
-            const long long m = stuck_until(E, in, s, t_target, hk, &E->stick);
+            const long long m = stuck_until(E, in, s, t_target, hk, &at_rest);
             declined = 1;
             if (m > s->n_grid) {
                 double ta;
@@ -2360,7 +2362,10 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
                 continue;
             }
         }
-        if (fuse && s->t == g_prev) {
+        /* (a structure at rest whose model gives its breakaway, the step declined: step_located's,
+         * which takes it as a stuck step or places the breakaway in it without a trial) */
+        const int rest_step = at_rest && ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E);
+        if (fuse && s->t == g_prev && !rest_step) {
             loads_at(E, in, s->t);
             fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
             if (!finite_all(ENG_N(E), s->X, s->V, s->A)) return ENG_ERR_NONFINITE;
@@ -2418,6 +2423,7 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
     E->loads_for = NULL;
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
+    s->stick_tb = NAN; /* (of the old inputs) */
     /* belts: a contact whose belt changed takes the mode of its new slip; one the belt meets the rest rule */
     loads_at(E, new_in, s->t);
     int belt_changed = 0;

@@ -518,7 +518,7 @@ static double two_mass_run(long steps_per_T, int scheme, double *x_out, slip_wat
     eng *E = eng_begin(&S, &in, &s);
     int ok = 1;
     const eng_observer obs = {T, 4.0 * T, watch_phase, W};
-    const eng_hooks hk = {NULL, NULL, W ? &obs : NULL, 0, 0};
+    const eng_hooks hk = {NULL, NULL, W ? &obs : NULL, 0, 0, 0};
     for (int k = 1; k <= 32 && ok; k++)
         ok = eng_advance(E, &in, &s, (double)(k * steps_per_T / 8) * S.h, &hk) == ENG_OK;
     x_out[0] = s.X[0];
@@ -662,7 +662,7 @@ static void test_stop_and_copy(checks *T)
     eng_state_init(E, &b, 0);
     eng_state_copy(&b, &a);
     switch_log L = {0, 0.0};
-    const eng_hooks stop = {on_switch, &L, NULL, 1, 0};
+    const eng_hooks stop = {on_switch, &L, NULL, 1, 0, 0};
     int stops = 0;
     while (a.t < 20.0 && stops < 1000) {
         const eng_status st = eng_advance(E, &in, &a, 20.0, &stop);

@@ -102,6 +102,7 @@ static void state_to_engine(stepper *P, const dfo_state *s)
     e->t_break = &P->a.t_break;
     e->break_dir = &P->a.break_dir;
     e->J = NULL; /* no Bossak scheme propagates the Jacobian (eng_caps): dfo_state's J is left */
+    e->stick_tb = NAN; /* (dfo_bossak_advance's: kept_stick) */
 }
 
 static void state_from_engine(const stepper *P, dfo_state *s)
@@ -168,6 +169,30 @@ static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hoo
     hk->obs = obs;
 }
 
+/* ---- the stick's breakaway, kept in dfo_state ---------------------------------------------------- */
+
+/* The breakaway of the block's stick the state keeps (dfo_state.stick_tb, the engine's stick_tb) where
+ * it was found for these inputs at this position: the constant part of the static force F_ext - k X and
+ * the limit (stick_C, stick_Fb, the exact scheme's key); else NaN (to be found). */
+static double kept_stick(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
+{
+    if (in->ramp || isnan(s->stick_tb)) return NAN;
+    dfo_loads L;
+    dfo_loads_init(&L, M, in);
+    return (s->stick_C == L.F_ext - M->p.k * s->X && s->stick_Fb == L.Fb) ? s->stick_tb : NAN;
+}
+
+/* The engine's stick breakaway tb kept in the state with its key (kept_stick's) */
+static void keep_stick(const dfo_model *M, const dfo_inputs *in, double tb, dfo_state *s)
+{
+    dfo_loads L;
+    dfo_loads_init(&L, M, in);
+    s->stick_tb = tb;
+    s->stick_C = L.F_ext - M->p.k * s->X;
+    s->stick_Fb = L.Fb;
+    s->stick_dir = 0;
+}
+
 /* ---- the entry points ----------------------------------------------------------------------------- */
 
 /* One call: the engine, its hooks, the state mapped onto the engine's. */
@@ -197,8 +222,11 @@ dfo_status dfo_bossak_advance(const dfo_model *M, osc_bossak_engine *cache, cons
     osc_eng_inbuf ib;
     eng_inputs ei;
     osc_eng_inputs(in, &ib, &ei);
+    C.P.es.stick_tb = kept_stick(M, in, s);
+    C.hk.stick_kept = 1;
     const eng_status st = osc_eng_advance(C.P.E, &ei, &C.P.es, t_target, &C.hk);
     state_from_engine(&C.P, s);
+    keep_stick(M, in, C.P.es.stick_tb, s);
     if (st != ENG_OK) return status_of(st);
     if (!(fabs(s->X) <= DBL_MAX && fabs(s->V) <= DBL_MAX && fabs(s->A) <= DBL_MAX && fabs(s->F) <= DBL_MAX))
         return DFO_ERR_NONFINITE;
@@ -218,6 +246,7 @@ void dfo_new_inputs_cached(const dfo_model *M, osc_bossak_engine *cache, const d
     osc_eng_inputs(new_in, &ib_new, &e_new);
     osc_eng_new_inputs(C.P.E, &e_old, &e_new, &C.P.es, &C.hk);
     state_from_engine(&C.P, s);
+    s->stick_tb = NAN; /* (found anew for the new inputs) */
 }
 
 void dfo_new_inputs(const dfo_model *M, const dfo_inputs *old_in, const dfo_inputs *new_in, dfo_state *s)
