@@ -751,12 +751,18 @@ typedef struct {
     double cM, cC, cK;
 } trial;
 
+/* Whether an A of the step length hA is re-based on a step of length hh where alpha is not 0 (tol:
+ * the lengths' tolerance, >= 0, so that hh = hA is not: without branches, a loop's test) */
+static ENG_HOT int rebases_len(const eng_setup *S, double hA, double hh, double tol)
+{
+    return (fabs(hh - hA) > tol) & (S->rate_max * max_b(hA, hh) <= 1.0);
+}
+
 /* Whether DOF i's A, of the step length s->hA[i], is re-based on a step of length hh (tol: the
  * lengths' tolerance; a held contact's pin aside) */
 static ENG_HOT int rebases(const eng *E, const eng_state *s, size_t i, double hh, double tol)
 {
-    const double hA = s->hA[i]; /* (without branches: a loop's test) */
-    return (E->S.alpha != 0.0) & (hh != hA) & (fabs(hh - hA) > tol) & (E->S.rate_max * max_b(hA, hh) <= 1.0);
+    return (E->S.alpha != 0.0) & rebases_len(&E->S, s->hA[i], hh, tol);
 }
 
 /* A0 := A re-based where it belongs to another step length than hh (method.md section 8), except on
@@ -800,34 +806,50 @@ static ENG_COLD void phase_jerks(eng *E, const eng_inputs *in, const eng_state *
     E->jk_ok = 1;
 }
 
+/* The pins of the phase's start into E->rpin (needs_rebase's: the DOFs a held contact pins alone and
+ * the ghosts), kept for its further trials (rpin_ok, cleared with jk_ok) where the loads are held (a
+ * ramp's limits may change which contacts have friction). */
+static ENG_HOT const int *rebase_pins(eng *E, const eng_inputs *in, const eng_state *s)
+{
+    if (E->rpin_ok) return E->rpin;
+    const eng_setup *S = &E->S;
+    int *pin = E->rpin;
+    memset(pin, 0, ENG_N(E) * sizeof(int));
+    if (E->ghost)
+        for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
+    for (size_t j = 0; j < ENG_NC(E); j++) /* (the mode's test without a branch) */
+        if (S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
+    E->rpin_ok = !ramped(in);
+    return pin;
+}
+
+/* A0 := A re-based on the step length hh (rebase's); the pins it left out in E->rpin where some A
+ * is of another length. */
 static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1, double *A0)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E);
-    const double a = S->alpha;
-    for (size_t i = 0; i < n; i++) A0[i] = s->A[i];
+    const double a = S->alpha, *const A = s->A, *const hA = s->hA;
     const double tol = 1e-12 * hh + 4.0 * DBL_EPSILON * fabs(s->t);
-    /* the pins of the phase's start, kept for its further trials (rpin_ok, cleared with jk_ok) where
-     * the loads are held (a ramp's limits may change which contacts have friction) */
+    const int *pin = NULL;
     int any = 0;
-    if (E->rpin_ok) {
-        for (size_t i = 0; i < n; i++) any |= (E->rpin[i] == 0) & rebases(E, s, i, hh, tol);
-    } else {
-        any = needs_rebase(E, s, hh);
-        if (any && !ramped(in)) {
-            memcpy(E->rpin, E->pin, n * sizeof(int));
-            E->rpin_ok = 1;
+    if (a != 0.0) {
+        int other = E->rpin_ok; /* (the pins are asked for only where some A is of another length) */
+        for (size_t i = 0; i < n && !other; i++) other = hh != hA[i];
+        if (other) {
+            pin = rebase_pins(E, in, s);
+            for (size_t i = 0; i < n; i++) any |= (pin[i] == 0) & rebases_len(S, hA[i], hh, tol);
         }
     }
-    if (!any) return;
-    const int *pin = E->rpin_ok ? E->rpin : E->pin;
+    if (!any) {
+        for (size_t i = 0; i < n; i++) A0[i] = A[i];
+        return;
+    }
     if (!E->jk_ok) phase_jerks(E, in, s);
     loads_at(E, in, t1);
     const double *jk = E->jk;
-    for (size_t i = 0; i < n; i++) { /* (jk is set for every DOF: both values, one selected, no branch) */
-        const double Ar = s->A[i] + a * (hh - s->hA[i]) * jk[i];
-        A0[i] = dfo_select((pin[i] == 0) & rebases(E, s, i, hh, tol), Ar, A0[i]);
-    }
+    for (size_t i = 0; i < n; i++) /* (jk is set for every DOF: both values, one selected, no branch) */
+        A0[i] = dfo_select((pin[i] == 0) & rebases_len(S, hA[i], hh, tol), A[i] + a * (hh - hA[i]) * jk[i], A[i]);
 }
 
 static ENG_HOT void rebase(eng *E, const eng_inputs *in, const eng_state *s, double hh, double t1)
@@ -1779,7 +1801,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         rebase(B, &bin, b, S->h, t_end);
         const double tol = 1e-12 * S->h + 4.0 * DBL_EPSILON * fabs(b->t);
         for (size_t q = 0; q < nd; q++)
-            if (!E->lgh[q] && rebases(B, b, q, S->h, tol) && !B->pin[q]) {
+            if (!E->lgh[q] && rebases(B, b, q, S->h, tol) && !B->rpin[q]) {
                 b->A[q] = B->A0[q];
                 b->hA[q] = S->h;
             }
