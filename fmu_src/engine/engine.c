@@ -221,6 +221,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     }
     E->vb = E->zero_nc;
     E->loads_for = NULL;
+    E->pin_all = eng_pin_all(E);
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);

@@ -62,6 +62,8 @@ struct eng {
     double *tbk;                 /* nc: the candidates' closed-form breakaways (eng_sparse.contact_breakaway) */
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
+    int pin_all;                 /* every DOF is some contact's only one (w_j = e_i): held, they pin the
+                                  * whole structure (eng_pin_all) */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
     double trig_tc, trig_c, trig_ts, trig_s; /* cos and sin of omega t + phi0 at the last t each was evaluated
                                   * for (trig_at; NaN: none) */
@@ -105,5 +107,17 @@ struct eng {
     double gt0, gH;
     double *gX0, *gV0, *gX1, *gV1;
 };
+
+/* Whether every DOF of E's structure is some contact's only DOF (w_j = e_i), E->pin as scratch. */
+static inline int eng_pin_all(eng *E)
+{
+    const size_t n = E->S.n;
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < E->S.nc; j++)
+        if (E->S.rows[j].nnz == 1) E->pin[E->S.rows[j].idx[0]] = 1;
+    int all = 1;
+    for (size_t i = 0; i < n; i++) all &= E->pin[i];
+    return all;
+}
 
 #endif

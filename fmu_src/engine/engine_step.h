@@ -1382,19 +1382,15 @@ static int spans_usable(const eng *E, const eng_inputs *in, const eng_hooks *hk)
 
 /* Every contact held on a still belt, every DOF pinned at rest by a held contact of its own, held
  * inputs: the state the model's closed-form breakaway (ENG_BREAKAWAY) is asked about. The loads
- * must be set. Uses pin. */
+ * must be set. */
 static int stuck_pinned(eng *E, const eng_inputs *in, const eng_state *s)
 {
-    const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
-    if (ramped(in)) return 0;
+    if (!E->pin_all || ramped(in)) return 0;
     for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != 0 || !has_friction(E, j) || E->vb[j] != 0.0) return 0;
-    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
-    for (size_t j = 0; j < nc; j++)
-        if (S->rows[j].nnz == 1) E->pin[S->rows[j].idx[0]] = 1;
     for (size_t i = 0; i < n; i++)
-        if (!E->pin[i] || s->V[i] != 0.0 || s->A[i] != 0.0) return 0;
+        if (s->V[i] != 0.0 || s->A[i] != 0.0) return 0;
     return 1;
 }
 
@@ -1781,6 +1777,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         B->loads_for = NULL;
         for (int slot = 0; slot < ENG_NSLOTS; slot++) B->slot_ok[slot] = 0;
         sp->span_bind(S->ops.ctx, E->ldof, E->lgh, nd, E->lct, nct);
+        B->pin_all = eng_pin_all(B);
         b->t0 = s->t0;
         b->t = t_start;
         b->n_grid = s->n_grid;
@@ -1931,25 +1928,36 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const int turns = hk && hk->report_turns && !E->all_friction;
     int turned = 0, *const turn_from = E->smode;
     double exc_c = s->exc_c, exc_s = s->exc_s, t = s->t;
+    int held_modes = 0; /* every contact held on a still belt, every DOF pinned by one of them */
     for (;;) {
         const double grid = s->t0 + (double)(ng + 1) * h;
         if (!(grid <= t_target) || !(grid > t)) break;
         if ((steps & 15) == 15 && !finite_all(n, X, V, A)) break; /* (overflowed: eng_advance fails) */
         /* held and pinned: the stuck fast path's to try (but where it declined: this grid point's step);
-         * a step length to re-base A on: the general path's */
-        int held_all = skip && !(declined && steps == 0), rebase = 0;
-        for (size_t i = 0; i < n; i++) pin[i] = 0;
-        for (size_t j = 0; j < nc; j++) {
-            const int held = mode[j] == 0 && has_friction(E, j);
-            held_all &= held && E->vb[j] == 0.0;
-            if (held && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+         * a step length to re-base A on: the general path's. Both from the run's first step: its modes
+         * hold over the run (a step that would switch one ends it), and after a taken step A is of the
+         * grid's length, or 0 on a pinned DOF, so that only the first may re-base. */
+        if (steps == 0) {
+            int rebase = 0;
+            held_modes = 1;
+            for (size_t i = 0; i < n; i++) pin[i] = 0;
+            for (size_t j = 0; j < nc; j++) {
+                const int held = mode[j] == 0 && has_friction(E, j);
+                held_modes &= held && E->vb[j] == 0.0;
+                if (held && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+            }
+            const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
+            for (size_t i = 0; i < n; i++) {
+                held_modes &= pin[i];
+                rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * max_b(hA[i], h) <= 1.0;
+            }
+            if (rebase) break;
         }
-        const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
-        for (size_t i = 0; i < n; i++) {
-            held_all &= pin[i] && V[i] == 0.0 && A[i] == 0.0;
-            rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * max_b(hA[i], h) <= 1.0;
+        if (skip && held_modes && !(declined && steps == 0)) {
+            int rest = 1;
+            for (size_t i = 0; i < n; i++) rest &= V[i] == 0.0 && A[i] == 0.0;
+            if (rest) break;
         }
-        if (held_all || rebase) break;
         /* the excitation at the grid point: the cache's rotation (dfo_grid_phase) */
         double cw, sw;
         dfo_grid_phase(H->omega, H->phi0, s->t0, h, E->rot_c, E->rot_s, exc_n, exc_c, exc_s, ng + 1, &cw, &sw);
