@@ -1928,7 +1928,15 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const int turns = hk && hk->report_turns && !E->all_friction;
     int turned = 0, *const turn_from = E->smode;
     double exc_c = s->exc_c, exc_s = s->exc_s, t = s->t;
+    /* (located: the modes and limits of the run's basis solves, which do not change them; the others
+     * set theirs per step) */
+    for (size_t j = 0; j < nc; j++) {
+        st[j] = !has_friction(E, j) ? 1 : mode[j];
+        lim[j] = (st[j] == 0) ? E->Fb[j] : E->mlN[j];
+    }
     int held_modes = 0; /* every contact held on a still belt, every DOF pinned by one of them */
+    int rest_pins = 0;  /* (located, consistent) a held contact pins a DOF alone: rest_exact's */
+    const int free_any = !E->all_friction; /* contacts without friction: their modes follow their slips */
     for (;;) {
         const double grid = s->t0 + (double)(ng + 1) * h;
         if (!(grid <= t_target) || !(grid > t)) break;
@@ -1940,6 +1948,10 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         if (steps == 0) {
             int rebase = 0;
             held_modes = 1;
+            rest_pins = 0;
+            for (size_t j = 0; j < nc; j++)
+                rest_pins |= (located || consistent) && mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1;
+
             for (size_t i = 0; i < n; i++) pin[i] = 0;
             for (size_t j = 0; j < nc; j++) {
                 const int held = mode[j] == 0 && has_friction(E, j);
@@ -1982,10 +1994,6 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         int piv = 0;
         eng_status fs;
         if (located) {
-            for (size_t j = 0; j < nc; j++) {
-                st[j] = !has_friction(E, j) ? 1 : mode[j];
-                lim[j] = (st[j] == 0) ? E->Fb[j] : E->mlN[j];
-            }
             fs = ENG_HAS_FRICTION(E) ? ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL)
                                      : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL);
             if (fs != ENG_OK) break;
@@ -2046,14 +2054,14 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         }
         for (size_t j = 0; j < nc; j++) F[j] = f[j];
         t = grid;
-        for (size_t j = 0; j < nc; j++) { /* (a turn to report ends the run: after it, its report) */
+        for (size_t j = 0; j < nc && free_any; j++) { /* (a turn to report ends the run: after it, its report) */
             if (has_friction(E, j)) continue;
             const int m = sgn(slip(E, j, V));
             turn_from[j] = mode[j];
             turned |= turns & (m != mode[j]);
             mode[j] = m;
         }
-        if (located || consistent) /* rest_exact */
+        if (rest_pins) /* rest_exact */
             for (size_t j = 0; j < nc; j++) {
                 if (mode[j] != 0 || !has_friction(E, j)) continue;
                 const eng_row *R = &S->rows[j];
