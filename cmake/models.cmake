@@ -10,6 +10,8 @@
 #   MODEL_CONFIG_HEADER  empty, or the build configuration header generated per FMI version
 #                        (gen_model_vars.py --config [SIZE]), shipped in sources/
 #   MODEL_SETTINGS       the model's own cache variables (forwarded to the cross sub-builds)
+#   MODEL_ME             ON: Model Exchange too (its description declares <ModelExchange>; its core
+#                        provides core/instance_me.h): the glue fmi/fmi<v>_me.c is added
 # For each model, dfo_add_model sets DFO_<name>_ID, DFO_<name>_GEN (its generated folder, with
 # model_vars.h) and the target <name>_generated, and builds for each FMI version v the shared library
 # and .fmu of dfo_fmu() (cmake/fmu.cmake): FMI 2.0 target <ID> in the build folder, FMI 3.0 target
@@ -17,17 +19,19 @@
 
 # What every FMU holds besides its model: the life cycle and the FMU-state format (core/), the glue.
 set(DFO_CORE_FILES core/instance.h core/instance_common.c core/instance_common.h core/fmu_state.c core/fmu_state.h)
+# the FMI 2.0 glues' shared header (fmi2_cs.c, fmi2_me.c)
+set(DFO_FMI2_GLUE_HEADER fmi/fmi2_glue.h)
 set(DFO_GEN_SCRIPT ${CMAKE_SOURCE_DIR}/fmu_src/gen_model_vars.py)
 # the generator loads the package's model-description reader (one parser of the effect table)
 set(DFO_GEN_READER ${CMAKE_SOURCE_DIR}/src/dryfriction/model.py)
 
 # Read models/<name>/model.cmake into DFO_<name>_<field>.
 macro(dfo_read_model name)
-  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS)
+  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS ME)
     unset(MODEL_${f})
   endforeach()
   include(${CMAKE_SOURCE_DIR}/fmu_src/models/${name}/model.cmake)
-  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS)
+  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS ME)
     set(DFO_${name}_${f} ${MODEL_${f}})
   endforeach()
   set(DFO_${name}_GEN ${CMAKE_BINARY_DIR}/generated/${name})
@@ -124,11 +128,22 @@ function(dfo_add_model name)
     if(NOT "${cfg}" STREQUAL "")
       list(APPEND extra ${gen}/fmi${v}/${cfg})
     endif()
+    # the glue: co-simulation, and Model Exchange where the model has it
+    set(glue fmu_src/fmi/fmi${v}_cs.c)
+    if(v STREQUAL "2")
+      list(APPEND glue fmu_src/${DFO_FMI2_GLUE_HEADER})
+    endif()
+    if(DFO_${name}_ME AND v STREQUAL "2")
+      list(APPEND glue fmu_src/fmi/fmi${v}_me.c fmu_src/core/instance_me.h)
+    endif()
+    set(glue_c ${glue})
+    list(FILTER glue_c INCLUDE REGEX "[.]c$")
+    list(TRANSFORM glue_c PREPEND ${CMAKE_SOURCE_DIR}/)
     dfo_fmu(${target} FMI ${v} ID ${id} DIR ${dir} LIB_DIR ${lib_dir}
-            LIB_SOURCES ${core_c} ${CMAKE_SOURCE_DIR}/fmu_src/fmi/fmi${v}_cs.c LIBS ${name}_physics
+            LIB_SOURCES ${core_c} ${glue_c} LIBS ${name}_physics
             GEN_DIR ${gen} INCLUDE_DIRS ${gen}/fmi${v} ${core_dirs}
             MODEL_DESCRIPTION ${fmu_md}
-            SOURCES ${sources} fmu_src/fmi/fmi${v}_cs.c ${gen}/model_vars.h ${headers} ${extra}
+            SOURCES ${sources} ${glue} ${gen}/model_vars.h ${headers} ${extra}
             DEPENDS ${name}_generated)
   endforeach()
 endfunction()

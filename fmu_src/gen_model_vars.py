@@ -153,6 +153,11 @@ class Model:
     can_interpolate_inputs: bool = False
     max_output_derivative_order: int = 0
     provides_directional_derivative: bool = False
+    # Model Exchange (a <ModelExchange> element): the number of event indicators, and the continuous
+    # states with their derivatives (variable names, from the `derivative` attributes)
+    model_exchange: bool = False
+    event_indicators: int = 0
+    states: tuple[tuple[str, str], ...] = ()
 
     def intermediate_input(self, v: Variable) -> bool:
         """An input a host may set during an FMI 3.0 intermediate update."""
@@ -236,7 +241,11 @@ def parse(xml_path: Path) -> Model:
         provides_directional_derivative=cs.get("providesDirectionalDerivative", "false") == "true",
         variables=tuple(variables), enumerations=enums,
         log_categories=tuple((c.get("name"), c.get("description", "")) for c in root.iterfind("LogCategories/Category")),
-        effects_variable=effects_var, effects=tuple(effects), structs=structs)
+        effects_variable=effects_var, effects=tuple(effects), structs=structs,
+        model_exchange=root.find("ModelExchange") is not None,
+        event_indicators=int(root.get("numberOfEventIndicators", "0")),
+        states=tuple((svs[int(next(iter(sv)).get("derivative")) - 1].get("name"), sv.get("name"))
+                     for sv in svs if next(iter(sv)).get("derivative") is not None))
     check(model)
     return model
 
@@ -379,6 +388,8 @@ def _c_header_head(model: Model, source: str, before_guid: list[str], after_time
         f"#define DFO_CAN_INTERPOLATE_INPUTS {int(model.can_interpolate_inputs)}",
         f"#define DFO_MAX_OUTPUT_DERIVATIVE_ORDER {model.max_output_derivative_order}",
         f"#define DFO_PROVIDES_DIRECTIONAL_DERIVATIVE {int(model.provides_directional_derivative)}",
+        "/* Model Exchange (the description's ModelExchange element): the glues fmi2_me.c, fmi3_me.c */",
+        f"#define DFO_MODEL_EXCHANGE {int(model.model_exchange)}",
         *after_time,
         "",
         "/* value references and start values */",

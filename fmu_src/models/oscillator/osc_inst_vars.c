@@ -86,9 +86,10 @@ static int sens_computed(const dfo_params *p) { return p->sensitivity && p->sche
 
 /* A value this run has not computed: an observable while observe is false (every one of them),
  * x_max / x_min before the observation window has taken its first sample, or the sensitivity
- * unless it is computed. */
-static int not_computed(const osc_values *v, int id)
+ * unless it is computed; in Model Exchange (me) neither the observables nor the sensitivity. */
+static int not_computed(const osc_values *v, int id, int me)
 {
+    if (me && (is_sensitivity(id) || needs_observe(id))) return 1; /* Model Exchange computes neither */
     if (is_sensitivity(id))
         return !sens_computed(&v->p) || !(isfinite(v->s.J[0]) && isfinite(v->s.J[1]) && isfinite(v->s.J[2]) &&
                                           isfinite(v->s.J[3]));
@@ -105,6 +106,16 @@ static int not_computed(const osc_values *v, int id)
 
 static void note_not_computed(osc_instance *in, const char *fn, const dfo_var_info *var)
 {
+    if (in->me) {
+        if (in->lc.warned & WARNED_OBSERVE) return;
+        in->lc.warned |= WARNED_OBSERVE;
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) is not computed in Model Exchange (the host integrates "
+                     "x and v): the observables x_max, x_min, stick_fraction, E_friction and the Jacobian dx_dx0, "
+                     "dx_dv0, dv_dx0, dv_dv0 read NaN and transitions reads -1; a co-simulation instance computes "
+                     "them.", fn, var->name, var->vr);
+        return;
+    }
     if (is_sensitivity(var->id)) {
         if (in->lc.warned & WARNED_SENSITIVITY) return;
         in->lc.warned |= WARNED_SENSITIVITY;
@@ -191,7 +202,7 @@ dfo_inst_status dfo_inst_get_real(dfo_lifecycle *lc, const char *fn, const unsig
             continue;
         }
         if (!v) v = osc_inst_computed(in, &tmp);
-        if (not_computed(v, var->id)) {
+        if (not_computed(v, var->id, in->me)) {
             value[i] = NAN;
             note_not_computed(in, fn, var);
             continue;
@@ -217,7 +228,7 @@ dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsign
             continue;
         }
         if (!v) v = osc_inst_computed(in, &tmp);
-        if (not_computed(v, var->id)) {
+        if (not_computed(v, var->id, in->me)) {
             value[i] = DFO_NOT_COMPUTED_INT;
             note_not_computed(in, fn, var);
             continue;

@@ -1,0 +1,116 @@
+/* FMI 2.0 Model Exchange glue, the same for every model that declares <ModelExchange>: the fmi2
+ * signatures of Model Exchange, their argument checks, the status mapping and their part of the
+ * state table (the rest: fmi2_cs.c). Everything else is the model's instance core behind
+ * core/instance_me.h. Phases: event mode is DFO_PHASE_EVENT, continuous-time mode DFO_PHASE_STEP. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "fmi2_glue.h"
+#include "instance_me.h"
+
+#define PHASES_fmi2EnterEventMode P_STEP
+#define PHASES_fmi2NewDiscreteStates P_EVENT
+#define PHASES_fmi2EnterContinuousTimeMode P_EVENT
+#define PHASES_fmi2CompletedIntegratorStep P_STEP
+#define PHASES_fmi2SetTime (P_EVENT | P_STEP)
+#define PHASES_fmi2SetContinuousStates (P_EVENT | P_STEP)
+#define PHASES_fmi2GetDerivatives (P_INIT | P_EVENT | P_STEP | P_TERM | P_ERR)
+#define PHASES_fmi2GetEventIndicators (P_INIT | P_EVENT | P_STEP | P_TERM | P_ERR)
+#define PHASES_fmi2GetContinuousStates (P_INIT | P_EVENT | P_STEP | P_TERM | P_ERR)
+#define PHASES_fmi2GetNominalsOfContinuousStates P_ANY
+
+/* The function is one of Model Exchange and the instance was made for it. */
+#define BEGIN_ME(fn)                                                                                       \
+    BEGIN(fn);                                                                                             \
+    if (!in->me)                                                                                           \
+    return FAIL("%s: the instance was made for co-simulation (fmuType fmi2CoSimulation); Model Exchange "  \
+                "needs one made with fmuType fmi2ModelExchange.", #fn)
+
+/* An array argument of n values is not NULL. */
+#define NEED(p, n) \
+    if ((n) > 0 && !(p)) return FAIL("%s: %s is NULL.", fn_name, #p)
+
+fmi2Status fmi2EnterEventMode(fmi2Component c)
+{
+    BEGIN_ME(fmi2EnterEventMode);
+    return status_of(dfo_inst_me_enter_event_mode(in->core));
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
+{
+    BEGIN_ME(fmi2NewDiscreteStates);
+    if (!info) return FAIL("fmi2NewDiscreteStates: fmi2EventInfo is NULL.");
+    dfo_me_event_info e;
+    const dfo_inst_status st = dfo_inst_me_update(in->core, "fmi2NewDiscreteStates", &e);
+    info->newDiscreteStatesNeeded = e.discrete_states_need_update ? fmi2True : fmi2False;
+    info->terminateSimulation = e.terminate ? fmi2True : fmi2False;
+    info->nominalsOfContinuousStatesChanged = e.nominals_changed ? fmi2True : fmi2False;
+    info->valuesOfContinuousStatesChanged = e.values_changed ? fmi2True : fmi2False;
+    info->nextEventTimeDefined = e.next_time_defined ? fmi2True : fmi2False;
+    info->nextEventTime = e.next_time;
+    return status_of(st);
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
+{
+    BEGIN_ME(fmi2EnterContinuousTimeMode);
+    return status_of(dfo_inst_me_enter_continuous(in->core));
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
+{
+    BEGIN_ME(fmi2CompletedIntegratorStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!enterEventMode || !terminateSimulation)
+        return FAIL("fmi2CompletedIntegratorStep: enterEventMode or terminateSimulation is NULL.");
+    int enter = 0, stop = 0;
+    const dfo_inst_status st = dfo_inst_me_completed_step(in->core, "fmi2CompletedIntegratorStep", &enter, &stop);
+    *enterEventMode = enter ? fmi2True : fmi2False;
+    *terminateSimulation = stop ? fmi2True : fmi2False;
+    return status_of(st);
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
+{
+    BEGIN_ME(fmi2SetTime);
+    return status_of(dfo_inst_me_set_time(in->core, "fmi2SetTime", time));
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
+{
+    BEGIN_ME(fmi2SetContinuousStates);
+    const char *fn_name = "fmi2SetContinuousStates";
+    NEED(x, nx);
+    return status_of(dfo_inst_me_set_states(in->core, fn_name, x, nx));
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx)
+{
+    BEGIN_ME(fmi2GetDerivatives);
+    const char *fn_name = "fmi2GetDerivatives";
+    NEED(derivatives, nx);
+    return status_of(dfo_inst_me_derivatives(in->core, fn_name, derivatives, nx));
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
+{
+    BEGIN_ME(fmi2GetEventIndicators);
+    const char *fn_name = "fmi2GetEventIndicators";
+    NEED(eventIndicators, ni);
+    return status_of(dfo_inst_me_indicators(in->core, fn_name, eventIndicators, ni));
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
+{
+    BEGIN_ME(fmi2GetContinuousStates);
+    const char *fn_name = "fmi2GetContinuousStates";
+    NEED(x, nx);
+    return status_of(dfo_inst_me_get_states(in->core, fn_name, x, nx));
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
+{
+    BEGIN_ME(fmi2GetNominalsOfContinuousStates);
+    const char *fn_name = "fmi2GetNominalsOfContinuousStates";
+    NEED(x_nominal, nx);
+    return status_of(dfo_inst_me_nominals(in->core, fn_name, x_nominal, nx));
+}
