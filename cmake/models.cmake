@@ -19,8 +19,6 @@
 
 # What every FMU holds besides its model: the life cycle and the FMU-state format (core/), the glue.
 set(DFO_CORE_FILES core/instance.h core/instance_common.c core/instance_common.h core/fmu_state.c core/fmu_state.h)
-# the FMI 2.0 glues' shared header (fmi2_cs.c, fmi2_me.c)
-set(DFO_FMI2_GLUE_HEADER fmi/fmi2_glue.h)
 set(DFO_GEN_SCRIPT ${CMAKE_SOURCE_DIR}/fmu_src/gen_model_vars.py)
 # the generator loads the package's model-description reader (one parser of the effect table)
 set(DFO_GEN_READER ${CMAKE_SOURCE_DIR}/src/dryfriction/model.py)
@@ -130,10 +128,8 @@ function(dfo_add_model name)
     endif()
     # the glue: co-simulation, and Model Exchange where the model has it
     set(glue fmu_src/fmi/fmi${v}_cs.c)
-    if(v STREQUAL "2")
-      list(APPEND glue fmu_src/${DFO_FMI2_GLUE_HEADER})
-    endif()
-    if(DFO_${name}_ME AND v STREQUAL "2")
+    list(APPEND glue fmu_src/fmi/fmi${v}_glue.h)
+    if(DFO_${name}_ME)
       list(APPEND glue fmu_src/fmi/fmi${v}_me.c fmu_src/core/instance_me.h)
     endif()
     set(glue_c ${glue})

@@ -16,8 +16,10 @@
  * starts at v = v_belt, where its z0 is DBL_MIN > 0, so no indicator is 0 right after the switch it
  * caused; the rest rule's tie |F_static| = Fb (a stick on the limit, whose margin would be 0) slides.
  * At an event the new mode comes from the rest rule once (no event iteration): a stop sets v to the
- * belt's speed (valuesOfContinuousStatesChanged) and sticks or slides on (a reversal is one switch);
- * a breakaway slides in the direction of the static force. */
+ * belt's speed and sticks or slides on (a reversal is one switch); a breakaway slides in the
+ * direction of the static force. valuesOfContinuousStatesChanged at every switch: at a stop v was
+ * set, at a breakaway the derivatives jump and a host's integrator must restart (fmusim restarts
+ * CVODE only when told; without it the slide after a breakaway is lost). */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "osc_instance.h"
 #include "instance_me.h"
@@ -34,50 +36,23 @@ size_t dfo_inst_me_n_indicators(void) { return ME_INDICATORS; }
 
 void dfo_inst_me_start(dfo_lifecycle *lc) { osc(lc)->me = 1; }
 
-/* ---- the physics at the current state ------------------------------------------------------- */
-
-/* The loads under the current inputs; whether friction acts. */
-static int me_loads(const osc_values *v, dfo_loads *L)
-{
-    dfo_loads_init(L, &v->M, &v->u);
-    return L->Fb > 0.0;
-}
-
-/* The static force on the block at rest on the belt: friction.h's P + F_ext - k x, less the damper's
- * pull c v_belt, with the excitation as dfo_acceleration evaluates it. */
-static double me_static_force(const osc_values *v, const dfo_loads *L)
-{
-    const dfo_model *M = &v->M;
-    const double t = v->s.t;
-    const double P = M->p.scheme == DFO_SCHEME_EXACT ? dfo_excitation_exact(M, t) : dfo_excitation(M, t);
-    return dfo_static_force(M->p.k, L, P, v->s.X) - M->p.c * dfo_belt_speed(&v->u);
-}
+/* ---- the physics at the current state (the loads, the static force, the acceleration and the
+ * indicators: osc_inst_vars.c, which reads them as outputs too) ------------------------------------- */
 
 /* The new mode of a block at rest on the belt: the rest rule, its tie (|F_static| = Fb, where the
  * margin is 0) sliding. */
 static int me_rest_mode(const osc_values *v, const dfo_loads *L)
 {
-    const double Fs = me_static_force(v, L);
+    const double Fs = osc_inst_static_force(v, L);
     const int mode = dfo_rest_mode(L, Fs);
     return (mode == 0 && fabs(Fs) >= L->Fb) ? dfo_sign(Fs) : mode;
-}
-
-/* The friction force and the acceleration at the current state in its mode (stuck: 0). */
-static double me_acceleration(const osc_values *v, double *F)
-{
-    dfo_state s = v->s;
-    s.F = dfo_friction_force(&v->M, &v->u, &s);
-    if (F) *F = s.F;
-    dfo_loads L;
-    if (me_loads(v, &L) && s.mode == 0) return 0.0;
-    return dfo_acceleration(&v->M, &v->u, &s);
 }
 
 /* After the state, the time or the mode changed: the friction force and acceleration the outputs
  * read, for the current inputs. */
 static void me_refresh(osc_values *v)
 {
-    v->s.A = me_acceleration(v, &v->s.F);
+    v->s.A = osc_inst_me_acceleration(v, &v->s.F);
     v->s.hA = 0.0;
     v->u_used = v->u;
 }
@@ -147,23 +122,27 @@ dfo_inst_status dfo_inst_me_update(dfo_lifecycle *lc, const char *fn, dfo_me_eve
     const dfo_me_event_info none = {0, 0, 0, 0, 0, 0.0};
     *info = none;
     dfo_loads L;
-    if (!me_loads(v, &L)) return DFO_INST_OK; /* no friction: no events */
+    if (!osc_inst_loads(v, &L)) return DFO_INST_OK; /* no friction: no events */
     const double vb = dfo_belt_speed(&v->u);
     const int from = s->mode;
     int to = from;
+    double z[ME_INDICATORS];
+    osc_inst_indicators(v, z);
     if (from != 0) {
-        if (from * (s->V - vb) + DBL_MIN <= 0.0) { /* z0 reached 0: stopped */
+        if (z[0] <= 0.0) { /* the relative velocity reached 0: a stop */
             s->V = vb;
             info->values_changed = 1;
             to = me_rest_mode(v, &L);
         }
     } else if (s->V != vb) { /* the belt's speed changed under a stuck block: it slides at its own speed */
         to = dfo_sign(s->V - vb);
-    } else {
-        const double Fs = me_static_force(v, &L);
-        if (L.Fb - Fs <= 0.0 || L.Fb + Fs <= 0.0) to = me_rest_mode(v, &L);
+    } else if (z[0] <= 0.0 || z[1] <= 0.0) { /* a margin reached 0: the breakaway limit */
+        to = me_rest_mode(v, &L);
     }
     if (to != from) {
+        /* a breakaway leaves x and v as they are, but their derivatives jump: an integrator that
+         * keeps its history across the jump unless told (fmusim's CVODE) must restart */
+        info->values_changed = 1;
         s->mode = to;
         s->t_switch = s->t;
         osc_inst_on_switch(in, s->t, s->X, from, to);
@@ -179,7 +158,7 @@ dfo_inst_status dfo_inst_me_completed_step(dfo_lifecycle *lc, const char *fn, in
     const osc_values *v = &in->v;
     dfo_loads L;
     /* a stuck block whose belt's speed was changed by the host slides: an event to switch it */
-    *enter_event_mode = me_loads(v, &L) && v->s.mode == 0 && v->s.V != dfo_belt_speed(&v->u);
+    *enter_event_mode = osc_inst_loads(v, &L) && v->s.mode == 0 && v->s.V != dfo_belt_speed(&v->u);
     *terminate = 0;
     return DFO_INST_OK;
 }
@@ -246,7 +225,7 @@ dfo_inst_status dfo_inst_me_derivatives(dfo_lifecycle *lc, const char *fn, doubl
     osc_values tmp;
     const osc_values *v = me_values(in, &tmp);
     dx[0] = v->s.V;
-    dx[1] = me_acceleration(v, NULL);
+    dx[1] = osc_inst_me_acceleration(v, NULL);
     if (!isfinite(dx[1]))
         return dfo_inst_fail(lc, "%s: the acceleration at t = %.17g (x = %.17g, v = %.17g) is not representable in "
                              "double precision.", fn, v->s.t, v->s.X, v->s.V);
@@ -259,16 +238,6 @@ dfo_inst_status dfo_inst_me_indicators(dfo_lifecycle *lc, const char *fn, double
     if (!need_me(in, fn)) return DFO_INST_ERROR;
     if (nz != ME_INDICATORS) return bad_size(in, fn, "ni", nz, ME_INDICATORS, "event indicators");
     osc_values tmp;
-    const osc_values *v = me_values(in, &tmp);
-    dfo_loads L;
-    z[0] = z[1] = 1.0;
-    if (!me_loads(v, &L)) return DFO_INST_OK; /* no friction: no events */
-    if (v->s.mode != 0) {
-        z[0] = v->s.mode * (v->s.V - dfo_belt_speed(&v->u)) + DBL_MIN;
-    } else {
-        const double Fs = me_static_force(v, &L);
-        z[0] = L.Fb - Fs;
-        z[1] = L.Fb + Fs;
-    }
+    osc_inst_indicators(me_values(in, &tmp), z);
     return DFO_INST_OK;
 }

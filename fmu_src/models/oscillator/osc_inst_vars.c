@@ -6,6 +6,7 @@
 #include "osc_instance.h"
 #include "instance_common.h"
 
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -68,6 +69,53 @@ dfo_state osc_inst_left_limit(const osc_values *v, int event_from)
     s.mode = event_from;
     s.F = dfo_friction_force(&v->M, &v->u, &s);
     return s;
+}
+
+/* ---- Model Exchange's physics at the current state (osc_inst_me.c) -------------------------- */
+
+/* The loads under the current inputs; whether friction acts. */
+int osc_inst_loads(const osc_values *v, dfo_loads *L)
+{
+    dfo_loads_init(L, &v->M, &v->u);
+    return L->Fb > 0.0;
+}
+
+/* The static force on the block at rest on the belt: friction.h's P + F_ext - k x, less the damper's
+ * pull c v_belt, with the excitation as dfo_acceleration evaluates it. */
+double osc_inst_static_force(const osc_values *v, const dfo_loads *L)
+{
+    const dfo_model *M = &v->M;
+    const double t = v->s.t;
+    const double P = M->p.scheme == DFO_SCHEME_EXACT ? dfo_excitation_exact(M, t) : dfo_excitation(M, t);
+    return dfo_static_force(M->p.k, L, P, v->s.X) - M->p.c * dfo_belt_speed(&v->u);
+}
+
+/* The friction force and the acceleration at the current state in its mode (stuck: 0). */
+double osc_inst_me_acceleration(const osc_values *v, double *F)
+{
+    dfo_state s = v->s;
+    s.F = dfo_friction_force(&v->M, &v->u, &s);
+    if (F) *F = s.F;
+    dfo_loads L;
+    if (osc_inst_loads(v, &L) && s.mode == 0) return 0.0;
+    return dfo_acceleration(&v->M, &v->u, &s);
+}
+
+/* Model Exchange's event indicators (osc_inst_me.c): sliding, the relative velocity mode (v - v_belt)
+ * + DBL_MIN (the hysteresis: DBL_MIN > 0 where a slide starts) and 1; stuck, the margins Fb -+ the
+ * static force; 1 and 1 without friction. */
+void osc_inst_indicators(const osc_values *v, double z[2])
+{
+    dfo_loads L;
+    z[0] = z[1] = 1.0;
+    if (!osc_inst_loads(v, &L)) return; /* no friction: no events */
+    if (v->s.mode != 0) {
+        z[0] = v->s.mode * (v->s.V - dfo_belt_speed(&v->u)) + DBL_MIN;
+    } else {
+        const double Fs = osc_inst_static_force(v, &L);
+        z[0] = L.Fb - Fs;
+        z[1] = L.Fb + Fs;
+    }
 }
 
 static int needs_observe(int id)
@@ -173,6 +221,12 @@ static double output_real(const osc_values *v, const dfo_run *r, int id)
     case DFO_OUT_dx_dv0: return s->J[1];
     case DFO_OUT_dv_dx0: return s->J[2];
     case DFO_OUT_dv_dv0: return s->J[3];
+    case DFO_OUT_event_indicator_0:
+    case DFO_OUT_event_indicator_1: {
+        double z[2];
+        osc_inst_indicators(v, z);
+        return z[id == DFO_OUT_event_indicator_1];
+    }
     default: return 0.0;
     }
 }

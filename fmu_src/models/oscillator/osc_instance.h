@@ -79,6 +79,15 @@ double osc_inst_acceleration_now(const osc_values *v);
  * friction force. */
 dfo_state osc_inst_left_limit(const osc_values *v, int event_from);
 
+/* Model Exchange's physics at the current state (osc_inst_me.c), written with the schemes' (newmark.h,
+ * friction.h): the loads under the current inputs, whether friction acts; the static force on the
+ * block at rest on the belt; the friction force (in *F, if not NULL) and the acceleration in the
+ * current mode (stuck: 0); the two event indicators (the outputs event_indicator_0, _1). */
+int osc_inst_loads(const osc_values *v, dfo_loads *L);
+double osc_inst_static_force(const osc_values *v, const dfo_loads *L);
+double osc_inst_me_acceleration(const osc_values *v, double *F);
+void osc_inst_indicators(const osc_values *v, double z[2]);
+
 /* ---- osc_inst_step.c ---- */
 /* The stepper's switch callback (ctx: the instance): notes the switch and logs it. */
 void osc_inst_on_switch(void *ctx, double t, double x, int from, int to);
