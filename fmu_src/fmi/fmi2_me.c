@@ -17,12 +17,14 @@
 #define PHASES_fmi2GetContinuousStates (P_INIT | P_EVENT | P_STEP | P_TERM | P_ERR)
 #define PHASES_fmi2GetNominalsOfContinuousStates P_ANY
 
-/* The function is one of Model Exchange and the instance was made for it. */
+/* The function is one of Model Exchange and the instance was made for it (a co-simulation
+ * instance is told so in any phase), in one of the function's phases. */
 #define BEGIN_ME(fn)                                                                                       \
-    BEGIN(fn);                                                                                             \
-    if (!in->me)                                                                                           \
-    return FAIL("%s: the instance was made for co-simulation (fmuType fmi2CoSimulation); Model Exchange "  \
-                "needs one made with fmuType fmi2ModelExchange.", #fn)
+    Instance *in = (Instance *)c;                                                                          \
+    if (in && !in->me && allowed(in, #fn, P_ANY))                                                          \
+        return FAIL("%s: the instance was made for co-simulation (fmuType fmi2CoSimulation); Model "       \
+                    "Exchange needs one made with fmuType fmi2ModelExchange.", #fn);                       \
+    if (!allowed(in, #fn, PHASES_##fn)) return fmi2Error
 
 /* An array argument of n values is not NULL. */
 #define NEED(p, n) \

@@ -19,12 +19,14 @@
 #define PHASES_fmi3GetNumberOfEventIndicators P_ANY
 #define PHASES_fmi3GetNumberOfContinuousStates P_ANY
 
-/* The function is one of Model Exchange and the instance was made for it. */
+/* The function is one of Model Exchange and the instance was made for it (a co-simulation
+ * instance is told so in any phase), in one of the function's phases. */
 #define BEGIN_ME(fn)                                                                                        \
-    BEGIN(fn);                                                                                              \
-    if (!in->me)                                                                                            \
-    return FAIL("%s: the instance was made for co-simulation (fmi3InstantiateCoSimulation); Model Exchange " \
-                "needs one made with fmi3InstantiateModelExchange.", #fn)
+    Instance *in = (Instance *)instance;                                                                    \
+    if (in && !in->me && allowed(in, #fn, P_ANY))                                                           \
+        return FAIL("%s: the instance was made for co-simulation (fmi3InstantiateCoSimulation); Model "     \
+                    "Exchange needs one made with fmi3InstantiateModelExchange.", #fn);                     \
+    if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
 
 /* An array argument of n values is not NULL. */
 #define NEED(p, n, fn) \
