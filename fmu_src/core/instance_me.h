@@ -33,9 +33,7 @@ size_t dfo_inst_me_n_indicators(void);
 
 /* The end of initialisation: dfo_inst_exit_init, then event mode. */
 dfo_inst_status dfo_inst_me_exit_init(dfo_lifecycle *lc, const char *fn);
-/* Event mode (from continuous-time mode) and back. */
-dfo_inst_status dfo_inst_me_enter_event_mode(dfo_lifecycle *lc);
-dfo_inst_status dfo_inst_me_enter_continuous(dfo_lifecycle *lc);
+/* (Event mode and continuous-time mode: the glue sets the phase, DFO_PHASE_EVENT or DFO_PHASE_STEP.) */
 /* The event update: the new discrete state (mode) from the continuous states, once (no iteration). */
 dfo_inst_status dfo_inst_me_update(dfo_lifecycle *lc, const char *fn, dfo_me_event_info *info);
 /* The end of an accepted integrator step: *enter_event_mode when the host must handle an event

@@ -26,14 +26,11 @@
                     "Exchange needs one made with fmuType fmi2ModelExchange.", #fn);                       \
     if (!allowed(in, #fn, PHASES_##fn)) return fmi2Error
 
-/* An array argument of n values is not NULL. */
-#define NEED(p, n) \
-    if ((n) > 0 && !(p)) return FAIL("%s: %s is NULL.", fn_name, #p)
-
 fmi2Status fmi2EnterEventMode(fmi2Component c)
 {
     BEGIN_ME(fmi2EnterEventMode);
-    return status_of(dfo_inst_me_enter_event_mode(in->core));
+    in->core->run.phase = DFO_PHASE_EVENT;
+    return fmi2OK;
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
@@ -54,7 +51,8 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
     BEGIN_ME(fmi2EnterContinuousTimeMode);
-    return status_of(dfo_inst_me_enter_continuous(in->core));
+    in->core->run.phase = DFO_PHASE_STEP;
+    return fmi2OK;
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
@@ -77,42 +75,17 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
     return status_of(dfo_inst_me_set_time(in->core, "fmi2SetTime", time));
 }
 
-fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
-{
-    BEGIN_ME(fmi2SetContinuousStates);
-    const char *fn_name = "fmi2SetContinuousStates";
-    NEED(x, nx);
-    return status_of(dfo_inst_me_set_states(in->core, fn_name, x, nx));
-}
+/* A Model Exchange function with one array of n values: the array non-NULL, then the core. */
+#define ME_ARRAY(fn, core_fn, value_t, arg)                                       \
+    fmi2Status fn(fmi2Component c, value_t arg[], size_t n)    \
+    {                                                                             \
+        BEGIN_ME(fn);                                                             \
+        if (n > 0 && !arg) return FAIL("%s: %s is NULL.", #fn, #arg);            \
+        return status_of(core_fn(in->core, #fn, arg, n));                         \
+    }
 
-fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx)
-{
-    BEGIN_ME(fmi2GetDerivatives);
-    const char *fn_name = "fmi2GetDerivatives";
-    NEED(derivatives, nx);
-    return status_of(dfo_inst_me_derivatives(in->core, fn_name, derivatives, nx));
-}
-
-fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
-{
-    BEGIN_ME(fmi2GetEventIndicators);
-    const char *fn_name = "fmi2GetEventIndicators";
-    NEED(eventIndicators, ni);
-    return status_of(dfo_inst_me_indicators(in->core, fn_name, eventIndicators, ni));
-}
-
-fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
-{
-    BEGIN_ME(fmi2GetContinuousStates);
-    const char *fn_name = "fmi2GetContinuousStates";
-    NEED(x, nx);
-    return status_of(dfo_inst_me_get_states(in->core, fn_name, x, nx));
-}
-
-fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
-{
-    BEGIN_ME(fmi2GetNominalsOfContinuousStates);
-    const char *fn_name = "fmi2GetNominalsOfContinuousStates";
-    NEED(x_nominal, nx);
-    return status_of(dfo_inst_me_nominals(in->core, fn_name, x_nominal, nx));
-}
+ME_ARRAY(fmi2SetContinuousStates, dfo_inst_me_set_states, const fmi2Real, x)
+ME_ARRAY(fmi2GetDerivatives, dfo_inst_me_derivatives, fmi2Real, derivatives)
+ME_ARRAY(fmi2GetEventIndicators, dfo_inst_me_indicators, fmi2Real, eventIndicators)
+ME_ARRAY(fmi2GetContinuousStates, dfo_inst_me_get_states, fmi2Real, x)
+ME_ARRAY(fmi2GetNominalsOfContinuousStates, dfo_inst_me_nominals, fmi2Real, x_nominal)

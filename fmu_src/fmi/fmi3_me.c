@@ -28,14 +28,11 @@
                     "Exchange needs one made with fmi3InstantiateModelExchange.", #fn);                     \
     if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
 
-/* An array argument of n values is not NULL. */
-#define NEED(p, n, fn) \
-    if ((n) > 0 && !(p)) return FAIL("%s: %s is NULL.", fn, #p)
-
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
 {
     BEGIN_ME(fmi3EnterContinuousTimeMode);
-    return status_of(dfo_inst_me_enter_continuous(in->core));
+    in->core->run.phase = DFO_PHASE_STEP;
+    return fmi3OK;
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
@@ -58,40 +55,20 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
     return status_of(dfo_inst_me_set_time(in->core, "fmi3SetTime", time));
 }
 
-fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
-{
-    BEGIN_ME(fmi3SetContinuousStates);
-    NEED(x, nx, "fmi3SetContinuousStates");
-    return status_of(dfo_inst_me_set_states(in->core, "fmi3SetContinuousStates", x, nx));
-}
+/* A Model Exchange function with one array of n values: the array non-NULL, then the core. */
+#define ME_ARRAY(fn, core_fn, value_t, arg)                                       \
+    fmi3Status fn(fmi3Instance instance, value_t arg[], size_t n)    \
+    {                                                                             \
+        BEGIN_ME(fn);                                                             \
+        if (n > 0 && !arg) return FAIL("%s: %s is NULL.", #fn, #arg);            \
+        return status_of(core_fn(in->core, #fn, arg, n));                         \
+    }
 
-fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t nx)
-{
-    BEGIN_ME(fmi3GetContinuousStateDerivatives);
-    NEED(derivatives, nx, "fmi3GetContinuousStateDerivatives");
-    return status_of(dfo_inst_me_derivatives(in->core, "fmi3GetContinuousStateDerivatives", derivatives, nx));
-}
-
-fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t ni)
-{
-    BEGIN_ME(fmi3GetEventIndicators);
-    NEED(eventIndicators, ni, "fmi3GetEventIndicators");
-    return status_of(dfo_inst_me_indicators(in->core, "fmi3GetEventIndicators", eventIndicators, ni));
-}
-
-fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
-{
-    BEGIN_ME(fmi3GetContinuousStates);
-    NEED(x, nx, "fmi3GetContinuousStates");
-    return status_of(dfo_inst_me_get_states(in->core, "fmi3GetContinuousStates", x, nx));
-}
-
-fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t nx)
-{
-    BEGIN_ME(fmi3GetNominalsOfContinuousStates);
-    NEED(nominals, nx, "fmi3GetNominalsOfContinuousStates");
-    return status_of(dfo_inst_me_nominals(in->core, "fmi3GetNominalsOfContinuousStates", nominals, nx));
-}
+ME_ARRAY(fmi3SetContinuousStates, dfo_inst_me_set_states, const fmi3Float64, x)
+ME_ARRAY(fmi3GetContinuousStateDerivatives, dfo_inst_me_derivatives, fmi3Float64, derivatives)
+ME_ARRAY(fmi3GetEventIndicators, dfo_inst_me_indicators, fmi3Float64, eventIndicators)
+ME_ARRAY(fmi3GetContinuousStates, dfo_inst_me_get_states, fmi3Float64, x)
+ME_ARRAY(fmi3GetNominalsOfContinuousStates, dfo_inst_me_nominals, fmi3Float64, nominals)
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 {

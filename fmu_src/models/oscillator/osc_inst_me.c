@@ -29,7 +29,6 @@
 
 #define ME_STATES 2
 #define ME_INDICATORS 2
-#define STATES_TEXT "continuous states (x, v)"
 
 size_t dfo_inst_me_n_states(void) { return ME_STATES; }
 size_t dfo_inst_me_n_indicators(void) { return ME_INDICATORS; }
@@ -88,6 +87,19 @@ static void me_nominals(const dfo_params *p, double nominal[2])
     nominal[1] = isfinite(v) && v > 0.0 ? v : 1.0;
 }
 
+/* The start of a call with an array of n values: the instance made for Model Exchange, n the size
+ * (the argument arg, its one valid value want, what it counts). NULL (logged) when not. */
+static osc_instance *me_array(dfo_lifecycle *lc, const char *fn, const char *arg, size_t n, size_t want,
+                              const char *what)
+{
+    osc_instance *in = osc(lc);
+    if (!need_me(in, fn)) return NULL;
+    if (n == want) return in;
+    bad_size(in, fn, arg, n, want, what);
+    return NULL;
+}
+#define ME_STATES_ARRAY(lc, fn, nx) me_array(lc, fn, "nx", nx, ME_STATES, "continuous states (x, v)")
+
 /* ---- life cycle ----------------------------------------------------------------------------- */
 
 dfo_inst_status dfo_inst_me_exit_init(dfo_lifecycle *lc, const char *fn)
@@ -99,18 +111,6 @@ dfo_inst_status dfo_inst_me_exit_init(dfo_lifecycle *lc, const char *fn)
     me_refresh(&in->v);
     in->lc.run.phase = DFO_PHASE_EVENT;
     return st;
-}
-
-dfo_inst_status dfo_inst_me_enter_event_mode(dfo_lifecycle *lc)
-{
-    lc->run.phase = DFO_PHASE_EVENT;
-    return DFO_INST_OK;
-}
-
-dfo_inst_status dfo_inst_me_enter_continuous(dfo_lifecycle *lc)
-{
-    lc->run.phase = DFO_PHASE_STEP;
-    return DFO_INST_OK;
 }
 
 dfo_inst_status dfo_inst_me_update(dfo_lifecycle *lc, const char *fn, dfo_me_event_info *info)
@@ -184,9 +184,8 @@ dfo_inst_status dfo_inst_me_set_time(dfo_lifecycle *lc, const char *fn, double t
 
 dfo_inst_status dfo_inst_me_set_states(dfo_lifecycle *lc, const char *fn, const double x[], size_t nx)
 {
-    osc_instance *in = osc(lc);
-    if (!need_me(in, fn)) return DFO_INST_ERROR;
-    if (nx != ME_STATES) return bad_size(in, fn, "nx", nx, ME_STATES, STATES_TEXT);
+    osc_instance *in = ME_STATES_ARRAY(lc, fn, nx);
+    if (!in) return DFO_INST_ERROR;
     if (!isfinite(x[0]) || !isfinite(x[1]))
         return dfo_inst_fail(lc, "%s: the state x = %g, v = %g is not finite; x and v must be finite numbers.", fn,
                              x[0], x[1]);
@@ -198,9 +197,8 @@ dfo_inst_status dfo_inst_me_set_states(dfo_lifecycle *lc, const char *fn, const 
 
 dfo_inst_status dfo_inst_me_get_states(dfo_lifecycle *lc, const char *fn, double x[], size_t nx)
 {
-    osc_instance *in = osc(lc);
-    if (!need_me(in, fn)) return DFO_INST_ERROR;
-    if (nx != ME_STATES) return bad_size(in, fn, "nx", nx, ME_STATES, STATES_TEXT);
+    osc_instance *in = ME_STATES_ARRAY(lc, fn, nx);
+    if (!in) return DFO_INST_ERROR;
     osc_values tmp;
     const osc_values *v = me_values(in, &tmp);
     x[0] = v->s.X;
@@ -210,18 +208,16 @@ dfo_inst_status dfo_inst_me_get_states(dfo_lifecycle *lc, const char *fn, double
 
 dfo_inst_status dfo_inst_me_nominals(dfo_lifecycle *lc, const char *fn, double x_nominal[], size_t nx)
 {
-    osc_instance *in = osc(lc);
-    if (!need_me(in, fn)) return DFO_INST_ERROR;
-    if (nx != ME_STATES) return bad_size(in, fn, "nx", nx, ME_STATES, STATES_TEXT);
+    osc_instance *in = ME_STATES_ARRAY(lc, fn, nx);
+    if (!in) return DFO_INST_ERROR;
     me_nominals(&in->v.p, x_nominal);
     return DFO_INST_OK;
 }
 
 dfo_inst_status dfo_inst_me_derivatives(dfo_lifecycle *lc, const char *fn, double dx[], size_t nx)
 {
-    osc_instance *in = osc(lc);
-    if (!need_me(in, fn)) return DFO_INST_ERROR;
-    if (nx != ME_STATES) return bad_size(in, fn, "nx", nx, ME_STATES, STATES_TEXT);
+    osc_instance *in = ME_STATES_ARRAY(lc, fn, nx);
+    if (!in) return DFO_INST_ERROR;
     osc_values tmp;
     const osc_values *v = me_values(in, &tmp);
     dx[0] = v->s.V;
@@ -234,9 +230,8 @@ dfo_inst_status dfo_inst_me_derivatives(dfo_lifecycle *lc, const char *fn, doubl
 
 dfo_inst_status dfo_inst_me_indicators(dfo_lifecycle *lc, const char *fn, double z[], size_t nz)
 {
-    osc_instance *in = osc(lc);
-    if (!need_me(in, fn)) return DFO_INST_ERROR;
-    if (nz != ME_INDICATORS) return bad_size(in, fn, "ni", nz, ME_INDICATORS, "event indicators");
+    osc_instance *in = me_array(lc, fn, "ni", nz, ME_INDICATORS, "event indicators");
+    if (!in) return DFO_INST_ERROR;
     osc_values tmp;
     osc_inst_indicators(me_values(in, &tmp), z);
     return DFO_INST_OK;
