@@ -1,10 +1,12 @@
 /* FMI 2.0 co-simulation glue, the same for every model: the fmi2 signatures, argument checks,
- * status mapping and ONE table of the phases in which each function may be called. Everything
+ * status mapping and the table of the phases in which each function may be called (the functions
+ * of Model Exchange, for a model that declares it: fmi2_me.c, over core/instance_me.h). Everything
  * else (life cycle, get/set through the generated variable table, doStep, FMU states, logging) is
  * the model's FMI-independent instance core behind core/instance.h (the oscillator's
  * models/oscillator/osc_instance.c, the chain's models/chain/chain_instance.c), of which this file
  * sees only the life cycle (dfo_lifecycle) and the model API. The model's generated model_vars.h
- * gives its GUID and log categories. */
+ * gives its GUID, its log categories and whether it has Model Exchange (DFO_MODEL_EXCHANGE; without
+ * it the Model Exchange functions are exported here as errors). */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi2_glue.h"
 #if DFO_MODEL_EXCHANGE

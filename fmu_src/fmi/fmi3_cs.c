@@ -6,7 +6,9 @@
  * behind core/instance.h (the oscillator's osc_instance.c, the chain's chain_instance.c), of which
  * this file sees only the life cycle (dfo_lifecycle) and the model API; shared with fmi2_cs.c.
  * Structural parameters and configuration mode: only for a model that reports them
- * (dfo_inst_has_structural), an error otherwise.
+ * (dfo_inst_has_structural), an error otherwise. Model Exchange: for a model that declares it
+ * (DFO_MODEL_EXCHANGE), fmi3InstantiateModelExchange here and its own functions in fmi3_me.c;
+ * without it they are exported here as errors.
  *
  * Events (docs/fmi3.md): every stick/slip switch (of any block) is an event. earlyReturnAllowed: fmi3DoStep returns at
  * the first switch inside the step. eventModeUsed (with early return): eventHandlingNeeded there,
