@@ -63,8 +63,8 @@ static const osc_values *me_values(const osc_instance *in, osc_values *tmp) { re
 static dfo_inst_status bad_size(osc_instance *in, const char *fn, const char *arg, size_t n, size_t want,
                                 const char *what)
 {
-    return dfo_inst_fail(&in->lc, "%s: %s = %zu, but this FMU has %zu %s: %s must be %zu.", fn, arg, n, want, what, arg,
-                         want);
+    return dfo_inst_fail(&in->lc, "%s: %s = %lu, but this FMU has %lu %s: %s must be %lu.", fn, arg, (unsigned long)n,
+                         (unsigned long)want, what, arg, (unsigned long)want);
 }
 
 static int need_me(osc_instance *in, const char *fn)
