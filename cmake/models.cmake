@@ -10,14 +10,14 @@
 #   MODEL_CONFIG_HEADER  empty, or the build configuration header generated per FMI version
 #                        (gen_model_vars.py --config [SIZE]), shipped in sources/
 #   MODEL_SETTINGS       the model's own cache variables (forwarded to the cross sub-builds)
-#   MODEL_ME             ON: Model Exchange too (its description declares <ModelExchange>; its core
-#                        provides core/instance_me.h): the glue fmi/fmi<v>_me.c is added
 # For each model, dfo_add_model sets DFO_<name>_ID, DFO_<name>_GEN (its generated folder, with
 # model_vars.h) and the target <name>_generated, and builds for each FMI version v the shared library
 # and .fmu of dfo_fmu() (cmake/fmu.cmake): FMI 2.0 target <ID> in the build folder, FMI 3.0 target
 # <ID>_fmi3 in build/fmi3/. The sources/ of an FMU are flat: file names are unique across folders.
 
 # What every FMU holds besides its model: the life cycle and the FMU-state format (core/), the glue.
+# Model Exchange: a model whose description declares <ModelExchange> (DFO_MODEL_EXCHANGE in its
+# model_vars.h) and whose core provides core/instance_me.h; the glue fmi/fmi<v>_me.c of every model.
 set(DFO_CORE_FILES core/instance.h core/instance_common.c core/instance_common.h core/fmu_state.c core/fmu_state.h)
 set(DFO_GEN_SCRIPT ${CMAKE_SOURCE_DIR}/fmu_src/gen_model_vars.py)
 # the generator loads the package's model-description reader (one parser of the effect table)
@@ -25,11 +25,11 @@ set(DFO_GEN_READER ${CMAKE_SOURCE_DIR}/src/dryfriction/model.py)
 
 # Read models/<name>/model.cmake into DFO_<name>_<field>.
 macro(dfo_read_model name)
-  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS ME)
+  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS)
     unset(MODEL_${f})
   endforeach()
   include(${CMAKE_SOURCE_DIR}/fmu_src/models/${name}/model.cmake)
-  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS ME)
+  foreach(f ID DESCRIPTION FMI PHYSICS CORE FMI2_SIZE CONFIG_HEADER SETTINGS)
     set(DFO_${name}_${f} ${MODEL_${f}})
   endforeach()
   set(DFO_${name}_GEN ${CMAKE_BINARY_DIR}/generated/${name})
@@ -126,12 +126,8 @@ function(dfo_add_model name)
     if(NOT "${cfg}" STREQUAL "")
       list(APPEND extra ${gen}/fmi${v}/${cfg})
     endif()
-    # the glue: co-simulation, and Model Exchange where the model has it
-    set(glue fmu_src/fmi/fmi${v}_cs.c)
-    list(APPEND glue fmu_src/fmi/fmi${v}_glue.h)
-    if(DFO_${name}_ME)
-      list(APPEND glue fmu_src/fmi/fmi${v}_me.c fmu_src/core/instance_me.h)
-    endif()
+    # the glue: co-simulation and Model Exchange (errors for a model without it: DFO_MODEL_EXCHANGE)
+    set(glue fmu_src/fmi/fmi${v}_cs.c fmu_src/fmi/fmi${v}_me.c fmu_src/fmi/fmi${v}_glue.h fmu_src/core/instance_me.h)
     set(glue_c ${glue})
     list(FILTER glue_c INCLUDE REGEX "[.]c$")
     list(TRANSFORM glue_c PREPEND ${CMAKE_SOURCE_DIR}/)

@@ -5,8 +5,8 @@
  * the model's FMI-independent instance core behind core/instance.h (the oscillator's
  * models/oscillator/osc_instance.c, the chain's models/chain/chain_instance.c), of which this file
  * sees only the life cycle (dfo_lifecycle) and the model API. The model's generated model_vars.h
- * gives its GUID, its log categories and whether it has Model Exchange (DFO_MODEL_EXCHANGE; without
- * it the Model Exchange functions are exported here as errors). */
+ * gives its GUID, its log categories and whether it has Model Exchange (DFO_MODEL_EXCHANGE: its
+ * functions in fmi2_me.c, errors there for a model without it). */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi2_glue.h"
 #if DFO_MODEL_EXCHANGE
@@ -62,9 +62,6 @@ static void host_log(void *ctx, dfo_inst_status status, const char *category, co
 #define PHASES_fmi2SerializeFMUstate P_ANY
 #define PHASES_fmi2DeSerializeFMUstate P_ANY
 #define PHASES_fmi2GetDirectionalDerivative (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
-#if !DFO_MODEL_EXCHANGE
-#define PHASES_fmi2ModelExchange P_ANY /* the model-exchange functions: always an error, see not_me */
-#endif
 
 static int check_arrays(Instance *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *value)
 {
@@ -379,58 +376,3 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     return status_of(dfo_inst_directional(in->core, "fmi2GetDirectionalDerivative", vUnknown_ref, nUnknown, vKnown_ref,
                                           nKnown, dvKnown, dvUnknown));
 }
-
-#if !DFO_MODEL_EXCHANGE /* else fmi2_me.c */
-/* ---- model-exchange functions: exported (hosts resolve every symbol), always an error --------- */
-
-static fmi2Status not_me(fmi2Component c, const char *fn)
-{
-    Instance *in = (Instance *)c;
-    if (!allowed(in, fn, PHASES_fmi2ModelExchange)) return fmi2Error;
-    return FAIL("%s: this FMU is for co-simulation only.", fn);
-}
-
-fmi2Status fmi2EnterEventMode(fmi2Component c) { return not_me(c, "fmi2EnterEventMode"); }
-fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
-{
-    (void)info;
-    return not_me(c, "fmi2NewDiscreteStates");
-}
-fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return not_me(c, "fmi2EnterContinuousTimeMode"); }
-fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
-                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
-{
-    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
-    return not_me(c, "fmi2CompletedIntegratorStep");
-}
-fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
-{
-    (void)time;
-    return not_me(c, "fmi2SetTime");
-}
-fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return not_me(c, "fmi2SetContinuousStates");
-}
-fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx)
-{
-    (void)derivatives; (void)nx;
-    return not_me(c, "fmi2GetDerivatives");
-}
-fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
-{
-    (void)eventIndicators; (void)ni;
-    return not_me(c, "fmi2GetEventIndicators");
-}
-fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return not_me(c, "fmi2GetContinuousStates");
-}
-fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
-{
-    (void)x_nominal; (void)nx;
-    return not_me(c, "fmi2GetNominalsOfContinuousStates");
-}
-#endif

@@ -7,8 +7,8 @@
  * this file sees only the life cycle (dfo_lifecycle) and the model API; shared with fmi2_cs.c.
  * Structural parameters and configuration mode: only for a model that reports them
  * (dfo_inst_has_structural), an error otherwise. Model Exchange: for a model that declares it
- * (DFO_MODEL_EXCHANGE), fmi3InstantiateModelExchange here and its own functions in fmi3_me.c;
- * without it they are exported here as errors.
+ * (DFO_MODEL_EXCHANGE), fmi3InstantiateModelExchange here and its own functions in fmi3_me.c
+ * (without it, errors there).
  *
  * Events (docs/fmi3.md): every stick/slip switch (of any block) is an event. earlyReturnAllowed: fmi3DoStep returns at
  * the first switch inside the step. eventModeUsed (with early return): eventHandlingNeeded there,
@@ -794,58 +794,6 @@ fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
                        DFO_MODEL_EXCHANGE ? "the FMU has no clocks, so no discrete states to evaluate outside event mode."
                                           : CS_ONLY);
 }
-#if !DFO_MODEL_EXCHANGE /* else fmi3_me.c */
-fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
-{
-    return unsupported(instance, "fmi3EnterContinuousTimeMode", CS_ONLY);
-}
-fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
-{
-    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
-    return unsupported(instance, "fmi3CompletedIntegratorStep", CS_ONLY);
-}
-fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
-{
-    (void)time;
-    return unsupported(instance, "fmi3SetTime", CS_ONLY);
-}
-fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return unsupported(instance, "fmi3SetContinuousStates", CS_ONLY);
-}
-fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t nx)
-{
-    (void)derivatives; (void)nx;
-    return unsupported(instance, "fmi3GetContinuousStateDerivatives", CS_ONLY);
-}
-fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t ni)
-{
-    (void)eventIndicators; (void)ni;
-    return unsupported(instance, "fmi3GetEventIndicators", CS_ONLY);
-}
-fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return unsupported(instance, "fmi3GetContinuousStates", CS_ONLY);
-}
-fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t nx)
-{
-    (void)nominals; (void)nx;
-    return unsupported(instance, "fmi3GetNominalsOfContinuousStates", CS_ONLY);
-}
-fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
-{
-    (void)n;
-    return unsupported(instance, "fmi3GetNumberOfEventIndicators", CS_ONLY);
-}
-fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
-{
-    (void)n;
-    return unsupported(instance, "fmi3GetNumberOfContinuousStates", CS_ONLY);
-}
-#endif
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                     const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
 {

@@ -1,11 +1,13 @@
-/* FMI 3.0 Model Exchange glue, the same for every model that declares <ModelExchange>: the fmi3
- * signatures of Model Exchange, their argument checks, the status mapping and their part of the
- * state table (the rest, with fmi3InstantiateModelExchange, fmi3EnterEventMode and
- * fmi3UpdateDiscreteStates, which co-simulation shares: fmi3_cs.c). Everything else is the model's
- * instance core behind core/instance_me.h. Phases: event mode is DFO_PHASE_EVENT, continuous-time
- * mode DFO_PHASE_STEP. */
+/* FMI 3.0 Model Exchange glue, the same for every model: for a model that declares <ModelExchange>
+ * (model_vars.h: DFO_MODEL_EXCHANGE) the fmi3 signatures of Model Exchange, their argument checks,
+ * the status mapping and their part of the state table (the rest, with fmi3InstantiateModelExchange,
+ * fmi3EnterEventMode and fmi3UpdateDiscreteStates, which co-simulation shares: fmi3_cs.c),
+ * everything else being the model's instance core behind core/instance_me.h (phases: event mode is
+ * DFO_PHASE_EVENT, continuous-time mode DFO_PHASE_STEP); for any other model the same functions as
+ * errors. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "fmi3_glue.h"
+#if DFO_MODEL_EXCHANGE
 #include "instance_me.h"
 
 #define PHASES_fmi3EnterContinuousTimeMode P_EVENT
@@ -21,11 +23,11 @@
 
 /* The function is one of Model Exchange and the instance was made for it (a co-simulation
  * instance is told so in any phase), in one of the function's phases. */
-#define BEGIN_ME(fn)                                                                                        \
-    Instance *in = (Instance *)instance;                                                                    \
-    if (in && !in->me && allowed(in, #fn, P_ANY))                                                           \
-        return FAIL("%s: the instance was made for co-simulation (fmi3InstantiateCoSimulation); Model "     \
-                    "Exchange needs one made with fmi3InstantiateModelExchange.", #fn);                     \
+#define BEGIN_ME(fn)                                                                                    \
+    Instance *in = (Instance *)instance;                                                                \
+    if (in && !in->me && allowed(in, #fn, P_ANY))                                                       \
+        return FAIL("%s: the instance was made for co-simulation (fmi3InstantiateCoSimulation); Model " \
+                    "Exchange needs one made with fmi3InstantiateModelExchange.", #fn);                 \
     if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
@@ -56,19 +58,13 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 }
 
 /* A Model Exchange function with one array of n values: the array non-NULL, then the core. */
-#define ME_ARRAY(fn, core_fn, value_t, arg)                                       \
-    fmi3Status fn(fmi3Instance instance, value_t arg[], size_t n)    \
-    {                                                                             \
-        BEGIN_ME(fn);                                                             \
-        if (n > 0 && !arg) return FAIL("%s: %s is NULL.", #fn, #arg);            \
-        return status_of(core_fn(in->core, #fn, arg, n));                         \
+#define ME_ARRAY(fn, core_fn, value_t, arg)                                     \
+    fmi3Status fn(fmi3Instance instance, value_t arg[], size_t n)               \
+    {                                                                           \
+        BEGIN_ME(fn);                                                           \
+        if (n > 0 && !arg) return FAIL("%s: %s is NULL.", #fn, #arg);           \
+        return status_of(core_fn(in->core, #fn, arg, n));                       \
     }
-
-ME_ARRAY(fmi3SetContinuousStates, dfo_inst_me_set_states, const fmi3Float64, x)
-ME_ARRAY(fmi3GetContinuousStateDerivatives, dfo_inst_me_derivatives, fmi3Float64, derivatives)
-ME_ARRAY(fmi3GetEventIndicators, dfo_inst_me_indicators, fmi3Float64, eventIndicators)
-ME_ARRAY(fmi3GetContinuousStates, dfo_inst_me_get_states, fmi3Float64, x)
-ME_ARRAY(fmi3GetNominalsOfContinuousStates, dfo_inst_me_nominals, fmi3Float64, nominals)
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 {
@@ -85,3 +81,58 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
     *n = dfo_inst_me_n_states();
     return fmi3OK;
 }
+
+#else
+
+/* ---- a model without Model Exchange: the functions exported (hosts resolve every symbol), always an
+ * error ------------------------------------------------------------------------------------------- */
+
+static fmi3Status not_me(fmi3Instance instance, const char *fn)
+{
+    Instance *in = (Instance *)instance;
+    if (!allowed(in, fn, P_ANY)) return fmi3Error;
+    return FAIL("%s: this FMU is for co-simulation only.", fn);
+}
+
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
+{
+    return not_me(instance, "fmi3EnterContinuousTimeMode");
+}
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
+{
+    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
+    return not_me(instance, "fmi3CompletedIntegratorStep");
+}
+fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
+{
+    (void)time;
+    return not_me(instance, "fmi3SetTime");
+}
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
+{
+    (void)n;
+    return not_me(instance, "fmi3GetNumberOfEventIndicators");
+}
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
+{
+    (void)n;
+    return not_me(instance, "fmi3GetNumberOfContinuousStates");
+}
+
+/* A Model Exchange function with one array of n values. */
+#define ME_ARRAY(fn, core_fn, value_t, arg)                                     \
+    fmi3Status fn(fmi3Instance instance, value_t arg[], size_t n)               \
+    {                                                                           \
+        (void)arg;                                                              \
+        (void)n;                                                                \
+        return not_me(instance, #fn);                                           \
+    }
+
+#endif
+
+ME_ARRAY(fmi3SetContinuousStates, dfo_inst_me_set_states, const fmi3Float64, x)
+ME_ARRAY(fmi3GetContinuousStateDerivatives, dfo_inst_me_derivatives, fmi3Float64, derivatives)
+ME_ARRAY(fmi3GetEventIndicators, dfo_inst_me_indicators, fmi3Float64, eventIndicators)
+ME_ARRAY(fmi3GetContinuousStates, dfo_inst_me_get_states, fmi3Float64, x)
+ME_ARRAY(fmi3GetNominalsOfContinuousStates, dfo_inst_me_nominals, fmi3Float64, nominals)
