@@ -16,6 +16,8 @@
 # <ID>_fmi3 in build/fmi3/. The sources/ of an FMU are flat: file names are unique across folders.
 
 # What every FMU holds besides its model: the life cycle and the FMU-state format (core/), the glue.
+# Model Exchange: a model whose description declares <ModelExchange> (DFO_MODEL_EXCHANGE in its
+# model_vars.h) and whose core provides core/instance_me.h; the glue fmi/fmi<v>_me.c of every model.
 set(DFO_CORE_FILES core/instance.h core/instance_common.c core/instance_common.h core/fmu_state.c core/fmu_state.h)
 set(DFO_GEN_SCRIPT ${CMAKE_SOURCE_DIR}/fmu_src/gen_model_vars.py)
 # the generator loads the package's model-description reader (one parser of the effect table)
@@ -124,11 +126,16 @@ function(dfo_add_model name)
     if(NOT "${cfg}" STREQUAL "")
       list(APPEND extra ${gen}/fmi${v}/${cfg})
     endif()
+    # the glue: co-simulation and Model Exchange (errors for a model without it: DFO_MODEL_EXCHANGE)
+    set(glue fmu_src/fmi/fmi${v}_cs.c fmu_src/fmi/fmi${v}_me.c fmu_src/fmi/fmi${v}_glue.h fmu_src/core/instance_me.h)
+    set(glue_c ${glue})
+    list(FILTER glue_c INCLUDE REGEX "[.]c$")
+    list(TRANSFORM glue_c PREPEND ${CMAKE_SOURCE_DIR}/)
     dfo_fmu(${target} FMI ${v} ID ${id} DIR ${dir} LIB_DIR ${lib_dir}
-            LIB_SOURCES ${core_c} ${CMAKE_SOURCE_DIR}/fmu_src/fmi/fmi${v}_cs.c LIBS ${name}_physics
+            LIB_SOURCES ${core_c} ${glue_c} LIBS ${name}_physics
             GEN_DIR ${gen} INCLUDE_DIRS ${gen}/fmi${v} ${core_dirs}
             MODEL_DESCRIPTION ${fmu_md}
-            SOURCES ${sources} fmu_src/fmi/fmi${v}_cs.c ${gen}/model_vars.h ${headers} ${extra}
+            SOURCES ${sources} ${glue} ${gen}/model_vars.h ${headers} ${extra}
             DEPENDS ${name}_generated)
   endforeach()
 endfunction()

@@ -72,6 +72,7 @@ MAX_RANK = 2  # arrays: vectors and matrices
 UINT32_MAX = 2**32 - 1  # the largest value reference
 TIME_VR = 0  # the FMI 3.0 independent variable `time` (no variable of the source may use it)
 FMI3_GLUE, FMI2_GLUE = "fmi3_cs.c", "fmi2_cs.c"
+FMI3_ME_GLUE, FMI2_ME_GLUE = "fmi3_me.c", "fmi2_me.c"
 DBL_MIN = sys.float_info.min  # the smallest positive normal double
 INT_MIN, INT_MAX = -(2**31), 2**31 - 1
 CAUSALITIES = ("parameter", "calculatedParameter", "input", "output", "local", "structuralParameter")
@@ -153,6 +154,13 @@ class Model:
     can_interpolate_inputs: bool = False
     max_output_derivative_order: int = 0
     provides_directional_derivative: bool = False
+    # Model Exchange (a <ModelExchange> element): the number of event indicators, and the continuous
+    # states with their derivatives (variable names, from the `derivative` attributes)
+    model_exchange: bool = False
+    event_indicators: int = 0
+    states: tuple[tuple[str, str], ...] = ()
+    #: the variables that read the event indicators, in order (<Tool name="dryfriction.me">)
+    indicator_variables: tuple[str, ...] = ()
 
     def intermediate_input(self, v: Variable) -> bool:
         """An input a host may set during an FMI 3.0 intermediate update."""
@@ -229,6 +237,7 @@ def parse(xml_path: Path) -> Model:
     effects_var, effects = _READER.parse_effects(root)
     structs_el = root.find("VendorAnnotations/Tool[@name='dryfriction.c']/Structs")
     structs = {} if structs_el is None else {k: structs_el.get(k, "") for k in ("header", "parameters", "inputs")}
+    ei = root.find("VendorAnnotations/Tool[@name='dryfriction.me']/EventIndicators")
     model = Model(
         name=root.get("modelName"), guid=root.get("guid"), identifier=cs.get("modelIdentifier"),
         can_interpolate_inputs=cs.get("canInterpolateInputs", "false") == "true",
@@ -236,7 +245,12 @@ def parse(xml_path: Path) -> Model:
         provides_directional_derivative=cs.get("providesDirectionalDerivative", "false") == "true",
         variables=tuple(variables), enumerations=enums,
         log_categories=tuple((c.get("name"), c.get("description", "")) for c in root.iterfind("LogCategories/Category")),
-        effects_variable=effects_var, effects=tuple(effects), structs=structs)
+        effects_variable=effects_var, effects=tuple(effects), structs=structs,
+        model_exchange=root.find("ModelExchange") is not None,
+        event_indicators=int(root.get("numberOfEventIndicators", "0")),
+        states=tuple((svs[int(next(iter(sv)).get("derivative")) - 1].get("name"), sv.get("name"))
+                     for sv in svs if next(iter(sv)).get("derivative") is not None),
+        indicator_variables=tuple(ei.get("variables", "").split()) if ei is not None else ())
     check(model)
     return model
 
@@ -297,6 +311,12 @@ def check(model: Model) -> None:
                 raise ModelError(f"variable {v.name}: start {v.start} is not an item of {v.declared_type}")
         if v.min is not None and v.max is not None and v.min > v.max:
             raise ModelError(f"variable {v.name}: min > max")
+    if model.model_exchange and len(model.indicator_variables) != model.event_indicators:
+        raise ModelError(f"numberOfEventIndicators is {model.event_indicators}, but the dryfriction.me annotation "
+                         f"names {len(model.indicator_variables)} event indicator variables")
+    for n in model.indicator_variables:
+        if n not in names or model.variable(n).type != "Real" or model.variable(n).causality != "local":
+            raise ModelError(f"event indicator {n}: not a local Real variable")
     bits = [e.bit for e in model.effects]
     if any(b <= 0 or b & (b - 1) for b in bits) or len(set(bits)) != len(bits):
         raise ModelError("effect bits must be distinct powers of two")
@@ -379,6 +399,8 @@ def _c_header_head(model: Model, source: str, before_guid: list[str], after_time
         f"#define DFO_CAN_INTERPOLATE_INPUTS {int(model.can_interpolate_inputs)}",
         f"#define DFO_MAX_OUTPUT_DERIVATIVE_ORDER {model.max_output_derivative_order}",
         f"#define DFO_PROVIDES_DIRECTIONAL_DERIVATIVE {int(model.provides_directional_derivative)}",
+        "/* Model Exchange (the description's ModelExchange element): the glues fmi2_me.c, fmi3_me.c */",
+        f"#define DFO_MODEL_EXCHANGE {int(model.model_exchange)}",
         *after_time,
         "",
         "/* value references and start values */",
@@ -692,7 +714,26 @@ def _attrs(pairs: list[tuple[str, str | None]]) -> str:
 
 def _source_files(root: ET.Element) -> list[str]:
     files = [f.get("name") for f in root.iterfind("CoSimulation/SourceFiles/File")]
-    return [FMI3_GLUE if f == FMI2_GLUE else f for f in files]
+    return [{FMI2_GLUE: FMI3_GLUE, FMI2_ME_GLUE: FMI3_ME_GLUE}.get(f, f) for f in files]
+
+
+# FMI 2.0 Model Exchange attributes kept under their FMI 3.0 names
+FMI3_ME_KEPT = {"canBeInstantiatedOnlyOncePerProcess": "canBeInstantiatedOnlyOncePerProcess",
+                "canGetAndSetFMUstate": "canGetAndSetFMUState", "canSerializeFMUstate": "canSerializeFMUState",
+                "providesDirectionalDerivative": "providesDirectionalDerivatives"}
+
+
+def _fmi3_model_exchange(model: Model, root: ET.Element) -> list[str]:
+    """The FMI 3.0 <ModelExchange> element of a model that declares one (else nothing): FMI 2.0's
+    attributes under their FMI 3.0 names; completedIntegratorStepNotNeeded becomes
+    needsCompletedIntegratorStep."""
+    me = root.find("ModelExchange")
+    if me is None:
+        return []
+    needs = "false" if me.get("completedIntegratorStepNotNeeded", "false") == "true" else "true"
+    return ["  <ModelExchange" + _attrs([("modelIdentifier", model.identifier)]
+                                     + [(new, me.get(old)) for old, new in FMI3_ME_KEPT.items()]
+                                     + [("needsCompletedIntegratorStep", needs)]) + "/>", ""]
 
 
 def emit_fmi3_model_description(model: Model, source: Path) -> str:
@@ -704,6 +745,7 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
                                          + [("instantiationToken", model.guid)]
                                          + [(a, root.get(a)) for a in ROOT_ATTRIBUTES[1:]]) + ">",
          "",
+         *_fmi3_model_exchange(model, root),
          "  <CoSimulation" + _attrs([("modelIdentifier", model.identifier)]
                                     + [(new, cs.get(old)) for old, new in FMI3_CS_KEPT.items()]
                                     + [("providesAdjointDerivatives",
@@ -749,6 +791,9 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
             ("causality", v.causality), ("variability", v.variability), ("initial", v.initial)]
         if model.intermediate_input(v):
             pairs.append(("intermediateUpdate", "true"))
+        state_of = {d: st for st, d in model.states}  # a state derivative: the state's value reference
+        if v.name in state_of:
+            pairs.append(("derivative", str(model.variable(state_of[v.name]).vr)))
         if kind == "Enumeration":
             pairs.append(("declaredType", v.declared_type))
         if kind in ("Float64", "Int32", "UInt64"):
@@ -778,12 +823,16 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
         if v.causality == "output":
             deps = None if v.dependencies is None else " ".join(str(by_name[d].vr) for d in v.dependencies)
             L.append("    <Output" + _attrs([("valueReference", str(v.vr)), ("dependencies", deps)]) + "/>")
+    for _, d in model.states:
+        L.append("    <ContinuousStateDerivative" + _attrs([("valueReference", str(by_name[d].vr))]) + "/>")
     idx_to_vr = {i: v.vr for i, v in enumerate(model.variables, start=1)}
     for u in root.iterfind("ModelStructure/InitialUnknowns/Unknown"):
         d = u.get("dependencies")
         deps = None if d is None else " ".join(str(idx_to_vr[int(i)]) for i in d.split())
         L.append("    <InitialUnknown" + _attrs([("valueReference", str(idx_to_vr[int(u.get("index"))])),
                                                  ("dependencies", deps)]) + "/>")
+    L += ["    <EventIndicator" + _attrs([("valueReference", str(by_name[n].vr))]) + "/>"
+          for n in model.indicator_variables]
     L += ["  </ModelStructure>", ""]
     # FMI 2.0's VendorAnnotations/Tool are FMI 3.0's Annotations/Annotation (after the structure)
     tools = root.findall("VendorAnnotations/Tool")

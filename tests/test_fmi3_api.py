@@ -56,7 +56,10 @@ def test_capabilities(md3) -> None:
                  "hasEventMode", "mightReturnEarlyFromDoStep", "canReturnEarlyAfterIntermediateUpdate",
                  "providesIntermediateUpdate"):
         assert cs.get(flag) == "true", flag
-    assert root.find("ModelExchange") is None and root.find("ScheduledExecution") is None
+    assert root.find("ScheduledExecution") is None
+    # Model Exchange too (tests/test_model_exchange.py), from the same library
+    me = root.find("ModelExchange")
+    assert me.get("modelIdentifier") == cs.get("modelIdentifier") and me.get("needsCompletedIntegratorStep") == "true"
     assert md3.coSimulation.modelIdentifier == "DryFrictionOscillator"
 
 

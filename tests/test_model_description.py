@@ -608,7 +608,9 @@ def test_the_jacobian_is_local_in_both_versions(md2, md3) -> None:
         assert not listed & set(JACOBIAN)
         assert {u.variable.name for u in md.outputs} == {v.name for v in md.modelVariables if v.causality == "output"}
         assert {"x", "v", "a", "F_friction", "mode", *OBSERVABLES} <= {u.variable.name for u in md.outputs}
-        assert [v.name for v in md.modelVariables if v.causality == "local"] == list(JACOBIAN)
+        # and Model Exchange's event indicators (tests/test_model_exchange.py), local as well
+        assert [v.name for v in md.modelVariables if v.causality == "local"] == \
+            [*JACOBIAN, "event_indicator_0", "event_indicator_1"]
 
 
 def test_independent_time_variable(md3) -> None:

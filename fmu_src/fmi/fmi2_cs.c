@@ -1,24 +1,19 @@
 /* FMI 2.0 co-simulation glue, the same for every model: the fmi2 signatures, argument checks,
- * status mapping and ONE table of the phases in which each function may be called. Everything
+ * status mapping and the table of the phases in which each function may be called (the functions
+ * of Model Exchange, for a model that declares it: fmi2_me.c, over core/instance_me.h). Everything
  * else (life cycle, get/set through the generated variable table, doStep, FMU states, logging) is
  * the model's FMI-independent instance core behind core/instance.h (the oscillator's
  * models/oscillator/osc_instance.c, the chain's models/chain/chain_instance.c), of which this file
  * sees only the life cycle (dfo_lifecycle) and the model API. The model's generated model_vars.h
- * gives its GUID and log categories. */
+ * gives its GUID, its log categories and whether it has Model Exchange (DFO_MODEL_EXCHANGE: its
+ * functions in fmi2_me.c, errors there for a model without it). */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
-#include "fmi2Functions.h"
-#include "instance.h"
-#include "model_vars.h" /* MODEL_GUID, the log categories */
+#include "fmi2_glue.h"
+#if DFO_MODEL_EXCHANGE
+#include "instance_me.h"
+#endif
 
 #include <string.h>
-
-/* ---- instance: the model's core plus what FMI 2.0 gives at instantiation ---------------------- */
-
-typedef struct {
-    dfo_lifecycle *core;         /* the model's instance (its life cycle first) */
-    fmi2CallbackFunctions cb;
-    char *name;
-} Instance;
 
 static void *host_alloc(void *ctx, size_t n, size_t size)
 {
@@ -34,39 +29,23 @@ static void host_log(void *ctx, dfo_inst_status status, const char *category, co
     in->cb.logger(in->cb.componentEnvironment, in->name, st, category, message);
 }
 
-static fmi2Status status_of(dfo_inst_status st)
-{
-    switch (st) {
-    case DFO_INST_OK: return fmi2OK;
-    case DFO_INST_WARNING: return fmi2Warning;
-    case DFO_INST_ERROR: return fmi2Error;
-    }
-    return fmi2Error;
-}
-
-/* ---- the state table: in which phases each function may be called ---------------------------- */
-
-#define P_INST DFO_PHASE_INSTANTIATED
-#define P_INIT DFO_PHASE_INIT
-#define P_STEP DFO_PHASE_STEP
-#define P_TERM DFO_PHASE_TERMINATED
-#define P_ERR DFO_PHASE_ERROR
-#define P_ANY DFO_PHASE_ANY
+/* ---- the state table (Model Exchange's functions: fmi2_me.c; P_EVENT, its event mode, is never
+ * reached in co-simulation) ------------------------------------------------------------------------- */
 
 #define PHASES_fmi2SetDebugLogging P_ANY
 #define PHASES_fmi2SetupExperiment P_INST
 #define PHASES_fmi2EnterInitializationMode P_INST
 #define PHASES_fmi2ExitInitializationMode P_INIT
-#define PHASES_fmi2Terminate (P_STEP | P_ERR)
+#define PHASES_fmi2Terminate (P_STEP | P_EVENT | P_ERR)
 #define PHASES_fmi2Reset P_ANY
-#define PHASES_fmi2GetReal (P_INIT | P_STEP | P_TERM | P_ERR)
-#define PHASES_fmi2GetInteger (P_INIT | P_STEP | P_TERM | P_ERR)
-#define PHASES_fmi2GetBoolean (P_INIT | P_STEP | P_TERM | P_ERR)
-#define PHASES_fmi2GetString (P_INIT | P_STEP | P_TERM | P_ERR)
-#define PHASES_fmi2SetReal (P_INST | P_INIT | P_STEP)
-#define PHASES_fmi2SetInteger (P_INST | P_INIT | P_STEP)
-#define PHASES_fmi2SetBoolean (P_INST | P_INIT | P_STEP)
-#define PHASES_fmi2SetString (P_INST | P_INIT | P_STEP)
+#define PHASES_fmi2GetReal (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi2GetInteger (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi2GetBoolean (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi2GetString (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi2SetReal (P_INST | P_INIT | P_STEP | P_EVENT)
+#define PHASES_fmi2SetInteger (P_INST | P_INIT | P_STEP | P_EVENT)
+#define PHASES_fmi2SetBoolean (P_INST | P_INIT | P_STEP | P_EVENT)
+#define PHASES_fmi2SetString (P_INST | P_INIT | P_STEP | P_EVENT)
 #define PHASES_fmi2DoStep P_STEP
 #define PHASES_fmi2CancelStep P_STEP
 #define PHASES_fmi2SetRealInputDerivatives (P_INST | P_INIT | P_STEP)
@@ -76,29 +55,13 @@ static fmi2Status status_of(dfo_inst_status st)
 #define PHASES_fmi2GetIntegerStatus P_ANY
 #define PHASES_fmi2GetBooleanStatus P_ANY
 #define PHASES_fmi2GetStringStatus P_ANY
-#define PHASES_fmi2GetFMUstate (P_INIT | P_STEP | P_TERM | P_ERR)
-#define PHASES_fmi2SetFMUstate (P_INST | P_INIT | P_STEP | P_TERM | P_ERR)
+#define PHASES_fmi2GetFMUstate (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
+#define PHASES_fmi2SetFMUstate (P_INST | P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
 #define PHASES_fmi2FreeFMUstate P_ANY
 #define PHASES_fmi2SerializedFMUstateSize P_ANY
 #define PHASES_fmi2SerializeFMUstate P_ANY
 #define PHASES_fmi2DeSerializeFMUstate P_ANY
-#define PHASES_fmi2GetDirectionalDerivative (P_INIT | P_STEP | P_TERM | P_ERR)
-#define PHASES_fmi2ModelExchange P_ANY /* the model-exchange functions: always an error, see not_me */
-
-/* The instance is usable (non-NULL) and in one of the allowed phases; logs the call (logAll). */
-static int allowed(Instance *in, const char *fn, int phases)
-{
-    if (!in) return 0;
-    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
-    if (in->core->run.phase & phases) return 1;
-    dfo_inst_fail(in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core->run.phase));
-    return 0;
-}
-
-#define BEGIN(fn)                                   \
-    Instance *in = (Instance *)c;                   \
-    if (!allowed(in, #fn, PHASES_##fn)) return fmi2Error
-#define FAIL(...) ((void)dfo_inst_fail(in->core, __VA_ARGS__), fmi2Error)
+#define PHASES_fmi2GetDirectionalDerivative (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
 
 static int check_arrays(Instance *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *value)
 {
@@ -133,8 +96,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         dfo_inst_fail(&tmp_lc, "fmi2Instantiate: the instance name must be a non-empty string.");
         return NULL;
     }
-    if (fmuType != fmi2CoSimulation) {
-        dfo_inst_fail(&tmp_lc, "fmi2Instantiate: this FMU supports co-simulation only (fmuType %d requested).",
+    if (fmuType != fmi2CoSimulation && !(DFO_MODEL_EXCHANGE && fmuType == fmi2ModelExchange)) {
+        dfo_inst_fail(&tmp_lc, DFO_MODEL_EXCHANGE ? "fmi2Instantiate: fmuType %d is neither fmi2ModelExchange (0) nor "
+                                                    "fmi2CoSimulation (1)."
+                                                  : "fmi2Instantiate: this FMU supports co-simulation only (fmuType %d "
+                                                    "requested).",
                       (int)fmuType);
         return NULL;
     }
@@ -160,6 +126,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         functions->freeMemory(in);
         return NULL;
     }
+#if DFO_MODEL_EXCHANGE
+    in->me = fmuType == fmi2ModelExchange;
+    if (in->me) dfo_inst_me_start(in->core);
+#endif
     dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2Instantiate");
     return in;
 }
@@ -207,6 +177,9 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     BEGIN(fmi2ExitInitializationMode);
+#if DFO_MODEL_EXCHANGE
+    if (in->me) return status_of(dfo_inst_me_exit_init(in->core, "fmi2ExitInitializationMode")); /* to event mode */
+#endif
     return status_of(dfo_inst_exit_init(in->core, "fmi2ExitInitializationMode"));
 }
 
@@ -263,6 +236,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 {
     BEGIN(fmi2DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (in->me) return FAIL("fmi2DoStep: the instance was made for Model Exchange (fmuType fmi2ModelExchange); "
+                            "co-simulation needs one made with fmuType fmi2CoSimulation.");
     /* FMI 2.0 has no early return: always up to the communication point */
     return status_of(dfo_inst_do_step(in->core, "fmi2DoStep", currentCommunicationPoint, communicationStepSize, 0,
                                       NULL));
@@ -400,57 +375,4 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         return FAIL("fmi2GetDirectionalDerivative: the value reference, dvKnown or dvUnknown array is NULL.");
     return status_of(dfo_inst_directional(in->core, "fmi2GetDirectionalDerivative", vUnknown_ref, nUnknown, vKnown_ref,
                                           nKnown, dvKnown, dvUnknown));
-}
-
-/* ---- model-exchange functions: exported (hosts resolve every symbol), always an error --------- */
-
-static fmi2Status not_me(fmi2Component c, const char *fn)
-{
-    Instance *in = (Instance *)c;
-    if (!allowed(in, fn, PHASES_fmi2ModelExchange)) return fmi2Error;
-    return FAIL("%s: this FMU is for co-simulation only.", fn);
-}
-
-fmi2Status fmi2EnterEventMode(fmi2Component c) { return not_me(c, "fmi2EnterEventMode"); }
-fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
-{
-    (void)info;
-    return not_me(c, "fmi2NewDiscreteStates");
-}
-fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return not_me(c, "fmi2EnterContinuousTimeMode"); }
-fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
-                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
-{
-    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
-    return not_me(c, "fmi2CompletedIntegratorStep");
-}
-fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
-{
-    (void)time;
-    return not_me(c, "fmi2SetTime");
-}
-fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return not_me(c, "fmi2SetContinuousStates");
-}
-fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx)
-{
-    (void)derivatives; (void)nx;
-    return not_me(c, "fmi2GetDerivatives");
-}
-fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
-{
-    (void)eventIndicators; (void)ni;
-    return not_me(c, "fmi2GetEventIndicators");
-}
-fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return not_me(c, "fmi2GetContinuousStates");
-}
-fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
-{
-    (void)x_nominal; (void)nx;
-    return not_me(c, "fmi2GetNominalsOfContinuousStates");
 }

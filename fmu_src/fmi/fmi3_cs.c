@@ -6,7 +6,9 @@
  * behind core/instance.h (the oscillator's osc_instance.c, the chain's chain_instance.c), of which
  * this file sees only the life cycle (dfo_lifecycle) and the model API; shared with fmi2_cs.c.
  * Structural parameters and configuration mode: only for a model that reports them
- * (dfo_inst_has_structural), an error otherwise.
+ * (dfo_inst_has_structural), an error otherwise. Model Exchange: for a model that declares it
+ * (DFO_MODEL_EXCHANGE), fmi3InstantiateModelExchange here and its own functions in fmi3_me.c
+ * (without it, errors there).
  *
  * Events (docs/fmi3.md): every stick/slip switch (of any block) is an event. earlyReturnAllowed: fmi3DoStep returns at
  * the first switch inside the step. eventModeUsed (with early return): eventHandlingNeeded there,
@@ -16,8 +18,10 @@
  *
  * FMI 3.0 has no memory callbacks: the instance and its FMU states are allocated with calloc. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
-#include "fmi3Functions.h"
-#include "instance_common.h" /* the model API, its variable table (dfo_find_var) */
+#include "fmi3_glue.h"
+#if DFO_MODEL_EXCHANGE
+#include "instance_me.h"
+#endif
 
 #include <limits.h>
 #include <stdio.h>
@@ -25,20 +29,6 @@
 #include <string.h>
 
 typedef char dfo_static_assert_int32[sizeof(int) == sizeof(fmi3Int32) ? 1 : -1];
-
-/* ---- instance: the model's core plus what FMI 3.0 gives at instantiation ---------------------- */
-
-typedef struct {
-    dfo_lifecycle *core;         /* the model's instance (its life cycle first) */
-    char *name;
-    fmi3InstanceEnvironment env;
-    fmi3LogMessageCallback logger;
-    fmi3IntermediateUpdateCallback update;
-    int early_return_allowed, event_mode_used;
-    int in_update; /* inside the intermediate-update callback: only getters may be called, */
-    int set_requested; /* and, where the step reads its inputs, fmi3SetFloat64 of the inputs declared
-                        * intermediateUpdate="true" */
-} Instance;
 
 static void *host_alloc(void *ctx, size_t n, size_t size)
 {
@@ -59,28 +49,7 @@ static void host_log(void *ctx, dfo_inst_status status, const char *category, co
     in->logger(in->env, st, category, message);
 }
 
-static fmi3Status status_of(dfo_inst_status st)
-{
-    switch (st) {
-    case DFO_INST_OK: return fmi3OK;
-    case DFO_INST_WARNING: return fmi3Warning;
-    case DFO_INST_ERROR: return fmi3Error;
-    }
-    return fmi3Error;
-}
-
-/* ---- the state table: in which phases each function may be called ---------------------------- */
-
-#define P_INST DFO_PHASE_INSTANTIATED
-#define P_INIT DFO_PHASE_INIT
-#define P_STEP DFO_PHASE_STEP
-#define P_EVENT DFO_PHASE_EVENT
-#define P_TERM DFO_PHASE_TERMINATED
-#define P_ERR DFO_PHASE_ERROR
-#define P_ANY DFO_PHASE_ANY
-#define P_CONFIG DFO_PHASE_CONFIG
-#define P_GET (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR | P_CONFIG)
-#define P_SET (P_INST | P_INIT | P_STEP | P_EVENT | P_CONFIG)
+/* ---- the state table (Model Exchange's functions: fmi3_me.c) --------------------------------- */
 
 #define PHASES_fmi3SetDebugLogging P_ANY
 #define PHASES_fmi3EnterInitializationMode P_INST
@@ -113,33 +82,6 @@ static fmi3Status status_of(dfo_inst_status st)
 #define PHASES_fmi3GetDirectionalDerivative (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
 #define PHASES_fmi3GetAdjointDerivative (P_INIT | P_STEP | P_EVENT | P_TERM | P_ERR)
 #define PHASES_fmi3Unsupported P_ANY /* functions of features this FMU does not have: always an error */
-
-/* Functions a host may call from inside the intermediate-update callback (fmi3SetFloat64 of the
- * inputs declared intermediateUpdate="true" too, where the step asks for them: see fmi3SetFloat64). */
-#define IN_UPDATE_OK(in, fn)                                                                                     \
-    ((!strncmp(fn, "fmi3Get", 7) && strcmp(fn, "fmi3GetFMUState") != 0) ||                                     \
-     ((in)->set_requested && !strcmp(fn, "fmi3SetFloat64")))
-
-/* The instance is usable (non-NULL) and in one of the allowed phases; logs the call (logAll). */
-static int allowed(Instance *in, const char *fn, int phases)
-{
-    if (!in) return 0;
-    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
-    if (in->in_update && !IN_UPDATE_OK(in, fn)) {
-        dfo_inst_fail(in->core, "%s must not be called from the intermediate-update callback (only getters may).",
-                      fn);
-        return 0;
-    }
-    if (in->core->run.phase & phases) return 1;
-    dfo_inst_fail(in->core, "%s must not be called in %s.", fn, dfo_phase_name(in->core->run.phase));
-    return 0;
-}
-
-#define BEGIN(fn)                                   \
-    Instance *in = (Instance *)instance;            \
-    if (!allowed(in, #fn, PHASES_##fn)) return fmi3Error
-#define FAIL(...) ((void)dfo_inst_fail(in->core, __VA_ARGS__), fmi3Error)
-
 
 /* nValues must be the number of values the variables hold (one per scalar, n per array of the
  * structural parameter n); arrays non-NULL when used. The refusal names every variable given and
@@ -197,8 +139,9 @@ static double host_time(const Instance *in)
 
 const char *fmi3GetVersion(void) { return fmi3Version; }
 
-static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiationToken, fmi3Boolean loggingOn,
-                                fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
+/* An instance for co-simulation, or (me) for Model Exchange; fn names the instantiating function. */
+static fmi3Instance instantiate(const char *fn, int me, fmi3String instanceName, fmi3String instantiationToken,
+                                fmi3Boolean loggingOn, fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
                                 fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
                                 fmi3IntermediateUpdateCallback update)
 {
@@ -210,11 +153,11 @@ static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiatio
     dfo_lifecycle tmp_lc; /* only its logging is used */
     dfo_lifecycle_init(&tmp_lc, &tmp_host, instanceName ? instanceName : "?", 0);
     if (!instanceName || !*instanceName) {
-        dfo_inst_fail(&tmp_lc, "fmi3InstantiateCoSimulation: the instance name must be a non-empty string.");
+        dfo_inst_fail(&tmp_lc, "%s: the instance name must be a non-empty string.", fn);
         return NULL;
     }
     if (!instantiationToken || strcmp(instantiationToken, MODEL_GUID) != 0) {
-        dfo_inst_fail(&tmp_lc, "fmi3InstantiateCoSimulation: instantiationToken %s does not match the FMU's %s.",
+        dfo_inst_fail(&tmp_lc, "%s: instantiationToken %s does not match the FMU's %s.", fn,
                       instantiationToken ? instantiationToken : "(null)", MODEL_GUID);
         return NULL;
     }
@@ -239,7 +182,13 @@ static fmi3Instance instantiate(fmi3String instanceName, fmi3String instantiatio
         free(in);
         return NULL;
     }
-    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3InstantiateCoSimulation");
+#if DFO_MODEL_EXCHANGE
+    in->me = me;
+    if (me) dfo_inst_me_start(in->core);
+#else
+    (void)me;
+#endif
+    dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "%s", fn);
     return in;
 }
 
@@ -256,8 +205,8 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     (void)visible;
     (void)requiredIntermediateVariables; /* every output may be read during an intermediate update */
     (void)nRequiredIntermediateVariables;
-    return instantiate(instanceName, instantiationToken, loggingOn, eventModeUsed, earlyReturnAllowed,
-                       instanceEnvironment, logMessage, intermediateUpdate);
+    return instantiate("fmi3InstantiateCoSimulation", 0, instanceName, instantiationToken, loggingOn, eventModeUsed,
+                       earlyReturnAllowed, instanceEnvironment, logMessage, intermediateUpdate);
 }
 
 static void refuse_instance(fmi3String instanceName, fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
@@ -277,9 +226,16 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage)
 {
-    (void)instantiationToken; (void)resourcePath; (void)visible; (void)loggingOn;
+    (void)resourcePath; (void)visible;
+#if DFO_MODEL_EXCHANGE
+    /* event mode is Model Exchange's own; no early return, no intermediate update */
+    return instantiate("fmi3InstantiateModelExchange", 1, instanceName, instantiationToken, loggingOn, fmi3True,
+                       fmi3False, instanceEnvironment, logMessage, NULL);
+#else
+    (void)instantiationToken; (void)loggingOn;
     refuse_instance(instanceName, instanceEnvironment, logMessage, "fmi3InstantiateModelExchange");
     return NULL;
+#endif
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
@@ -334,6 +290,9 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     BEGIN(fmi3ExitInitializationMode);
+#if DFO_MODEL_EXCHANGE
+    if (in->me) return status_of(dfo_inst_me_exit_init(in->core, "fmi3ExitInitializationMode")); /* to event mode */
+#endif
     const dfo_inst_status st = dfo_inst_exit_init(in->core, "fmi3ExitInitializationMode");
     /* with event mode, a co-simulation FMU starts in event mode (nothing pending: the start is
      * consistent) */
@@ -344,7 +303,7 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 fmi3Status fmi3EnterEventMode(fmi3Instance instance)
 {
     BEGIN(fmi3EnterEventMode);
-    if (!in->event_mode_used)
+    if (!in->event_mode_used && !in->me)
         return FAIL("fmi3EnterEventMode: the FMU was instantiated with eventModeUsed = false.");
     in->core->run.phase = DFO_PHASE_EVENT;
     return fmi3OK;
@@ -353,6 +312,8 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance)
 fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 {
     BEGIN(fmi3EnterStepMode);
+    if (in->me) return FAIL("fmi3EnterStepMode: the instance was made for Model Exchange, which has no step mode "
+                            "(fmi3EnterContinuousTimeMode leaves event mode).");
     dfo_inst_update_events(in->core); /* an event not updated is handled by entering step mode */
     in->core->run.phase = DFO_PHASE_STEP;
     return fmi3OK;
@@ -366,6 +327,20 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Float64 *nextEventTime)
 {
     BEGIN(fmi3UpdateDiscreteStates);
+#if DFO_MODEL_EXCHANGE
+    if (in->me) {
+        dfo_me_event_info e;
+        const dfo_inst_status st = dfo_inst_me_update(in->core, "fmi3UpdateDiscreteStates", &e);
+        if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = e.discrete_states_need_update ? fmi3True : fmi3False;
+        if (terminateSimulation) *terminateSimulation = e.terminate ? fmi3True : fmi3False;
+        if (nominalsOfContinuousStatesChanged)
+            *nominalsOfContinuousStatesChanged = e.nominals_changed ? fmi3True : fmi3False;
+        if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = e.values_changed ? fmi3True : fmi3False;
+        if (nextEventTimeDefined) *nextEventTimeDefined = e.next_time_defined ? fmi3True : fmi3False;
+        if (nextEventTime) *nextEventTime = e.next_time;
+        return status_of(st);
+    }
+#endif
     const int was_pending = dfo_inst_update_events(in->core);
     if (was_pending) dfo_inst_log_event_handled(in->core);
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
@@ -539,6 +514,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Float64 *lastSuccessfulTime)
 {
     BEGIN(fmi3DoStep);
+    if (in->me) return FAIL("fmi3DoStep: the instance was made for Model Exchange (fmi3InstantiateModelExchange); "
+                            "co-simulation needs one made with fmi3InstantiateCoSimulation.");
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!eventHandlingNeeded || !terminateSimulation || !earlyReturn || !lastSuccessfulTime)
         return FAIL("fmi3DoStep: eventHandlingNeeded, terminateSimulation, earlyReturn and lastSuccessfulTime must "
@@ -813,57 +790,9 @@ fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference 
 }
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
 {
-    return unsupported(instance, "fmi3EvaluateDiscreteStates", CS_ONLY);
-}
-fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
-{
-    return unsupported(instance, "fmi3EnterContinuousTimeMode", CS_ONLY);
-}
-fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-                                       fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
-{
-    (void)noSetFMUStatePriorToCurrentPoint; (void)enterEventMode; (void)terminateSimulation;
-    return unsupported(instance, "fmi3CompletedIntegratorStep", CS_ONLY);
-}
-fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
-{
-    (void)time;
-    return unsupported(instance, "fmi3SetTime", CS_ONLY);
-}
-fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return unsupported(instance, "fmi3SetContinuousStates", CS_ONLY);
-}
-fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[], size_t nx)
-{
-    (void)derivatives; (void)nx;
-    return unsupported(instance, "fmi3GetContinuousStateDerivatives", CS_ONLY);
-}
-fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t ni)
-{
-    (void)eventIndicators; (void)ni;
-    return unsupported(instance, "fmi3GetEventIndicators", CS_ONLY);
-}
-fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
-{
-    (void)x; (void)nx;
-    return unsupported(instance, "fmi3GetContinuousStates", CS_ONLY);
-}
-fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[], size_t nx)
-{
-    (void)nominals; (void)nx;
-    return unsupported(instance, "fmi3GetNominalsOfContinuousStates", CS_ONLY);
-}
-fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
-{
-    (void)n;
-    return unsupported(instance, "fmi3GetNumberOfEventIndicators", CS_ONLY);
-}
-fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
-{
-    (void)n;
-    return unsupported(instance, "fmi3GetNumberOfContinuousStates", CS_ONLY);
+    return unsupported(instance, "fmi3EvaluateDiscreteStates",
+                       DFO_MODEL_EXCHANGE ? "the FMU has no clocks, so no discrete states to evaluate outside event mode."
+                                          : CS_ONLY);
 }
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                     const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)

@@ -20,7 +20,7 @@ set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numer
 # the instance core (core/instance.h's model API)
 set(MODEL_CORE models/oscillator/osc_instance.c models/oscillator/osc_instance.h models/oscillator/osc_inst_vars.c
     models/oscillator/osc_inst_step.c models/oscillator/osc_inst_events.c models/oscillator/osc_inst_state.c
-    models/oscillator/osc_inst_deriv.c)
+    models/oscillator/osc_inst_deriv.c models/oscillator/osc_inst_me.c)
 # FMI 2.0: the description as written (no structural parameters), no build configuration header
 set(MODEL_FMI2_SIZE "")
 set(MODEL_CONFIG_HEADER "")

@@ -6,6 +6,7 @@
 #include "osc_instance.h"
 #include "instance_common.h"
 
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -70,6 +71,53 @@ dfo_state osc_inst_left_limit(const osc_values *v, int event_from)
     return s;
 }
 
+/* ---- Model Exchange's physics at the current state (osc_inst_me.c) -------------------------- */
+
+/* The loads under the current inputs; whether friction acts. */
+int osc_inst_loads(const osc_values *v, dfo_loads *L)
+{
+    dfo_loads_init(L, &v->M, &v->u);
+    return L->Fb > 0.0;
+}
+
+/* The static force on the block at rest on the belt: friction.h's P + F_ext - k x, less the damper's
+ * pull c v_belt, with the excitation as dfo_acceleration evaluates it. */
+double osc_inst_static_force(const osc_values *v, const dfo_loads *L)
+{
+    const dfo_model *M = &v->M;
+    const double t = v->s.t;
+    const double P = M->p.scheme == DFO_SCHEME_EXACT ? dfo_excitation_exact(M, t) : dfo_excitation(M, t);
+    return dfo_static_force(M->p.k, L, P, v->s.X) - M->p.c * dfo_belt_speed(&v->u);
+}
+
+/* The friction force and the acceleration at the current state in its mode (stuck: 0). */
+double osc_inst_me_acceleration(const osc_values *v, double *F)
+{
+    dfo_state s = v->s;
+    s.F = dfo_friction_force(&v->M, &v->u, &s);
+    if (F) *F = s.F;
+    dfo_loads L;
+    if (osc_inst_loads(v, &L) && s.mode == 0) return 0.0;
+    return dfo_acceleration(&v->M, &v->u, &s);
+}
+
+/* Model Exchange's event indicators (osc_inst_me.c): sliding, the relative velocity mode (v - v_belt)
+ * + DBL_MIN (the hysteresis: DBL_MIN > 0 where a slide starts) and 1; stuck, the margins Fb -+ the
+ * static force; 1 and 1 without friction. */
+void osc_inst_indicators(const osc_values *v, double z[2])
+{
+    dfo_loads L;
+    z[0] = z[1] = 1.0;
+    if (!osc_inst_loads(v, &L)) return; /* no friction: no events */
+    if (v->s.mode != 0) {
+        z[0] = v->s.mode * (v->s.V - dfo_belt_speed(&v->u)) + DBL_MIN;
+    } else {
+        const double Fs = osc_inst_static_force(v, &L);
+        z[0] = L.Fb - Fs;
+        z[1] = L.Fb + Fs;
+    }
+}
+
 static int needs_observe(int id)
 {
     return id == DFO_OUT_x_max || id == DFO_OUT_x_min || id == DFO_OUT_stick_fraction ||
@@ -86,9 +134,10 @@ static int sens_computed(const dfo_params *p) { return p->sensitivity && p->sche
 
 /* A value this run has not computed: an observable while observe is false (every one of them),
  * x_max / x_min before the observation window has taken its first sample, or the sensitivity
- * unless it is computed. */
-static int not_computed(const osc_values *v, int id)
+ * unless it is computed; in Model Exchange (me) neither the observables nor the sensitivity. */
+static int not_computed(const osc_values *v, int id, int me)
 {
+    if (me && (is_sensitivity(id) || needs_observe(id))) return 1; /* Model Exchange computes neither */
     if (is_sensitivity(id))
         return !sens_computed(&v->p) || !(isfinite(v->s.J[0]) && isfinite(v->s.J[1]) && isfinite(v->s.J[2]) &&
                                           isfinite(v->s.J[3]));
@@ -105,6 +154,16 @@ static int not_computed(const osc_values *v, int id)
 
 static void note_not_computed(osc_instance *in, const char *fn, const dfo_var_info *var)
 {
+    if (in->me) {
+        if (in->lc.warned & WARNED_OBSERVE) return;
+        in->lc.warned |= WARNED_OBSERVE;
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) is not computed in Model Exchange (the host integrates "
+                     "x and v): the observables x_max, x_min, stick_fraction, E_friction and the Jacobian dx_dx0, "
+                     "dx_dv0, dv_dx0, dv_dv0 read NaN and transitions reads -1; a co-simulation instance computes "
+                     "them.", fn, var->name, var->vr);
+        return;
+    }
     if (is_sensitivity(var->id)) {
         if (in->lc.warned & WARNED_SENSITIVITY) return;
         in->lc.warned |= WARNED_SENSITIVITY;
@@ -162,6 +221,12 @@ static double output_real(const osc_values *v, const dfo_run *r, int id)
     case DFO_OUT_dx_dv0: return s->J[1];
     case DFO_OUT_dv_dx0: return s->J[2];
     case DFO_OUT_dv_dv0: return s->J[3];
+    case DFO_OUT_event_indicator_0:
+    case DFO_OUT_event_indicator_1: {
+        double z[2];
+        osc_inst_indicators(v, z);
+        return z[id == DFO_OUT_event_indicator_1];
+    }
     default: return 0.0;
     }
 }
@@ -191,7 +256,7 @@ dfo_inst_status dfo_inst_get_real(dfo_lifecycle *lc, const char *fn, const unsig
             continue;
         }
         if (!v) v = osc_inst_computed(in, &tmp);
-        if (not_computed(v, var->id)) {
+        if (not_computed(v, var->id, in->me)) {
             value[i] = NAN;
             note_not_computed(in, fn, var);
             continue;
@@ -217,7 +282,7 @@ dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsign
             continue;
         }
         if (!v) v = osc_inst_computed(in, &tmp);
-        if (not_computed(v, var->id)) {
+        if (not_computed(v, var->id, in->me)) {
             value[i] = DFO_NOT_COMPUTED_INT;
             note_not_computed(in, fn, var);
             continue;

@@ -165,10 +165,15 @@ dfo_inst_status osc_inst_ramp_refused(osc_instance *in, const char *fn)
 
 /* The scales the computation honours (dfo_scale_refused): k, and the force scale of the excitation,
  * the friction limit and the initial state over m and k. NULL when inside, else the sentence. */
+double osc_inst_force_scale(const dfo_params *p)
+{
+    return fmax(fmax(fabs(p->P0), fmax(p->mu_s, p->chi * p->mu_s) * p->N),
+                fmax(p->k * fabs(p->x0), sqrt(p->k) * sqrt(p->m) * fabs(p->v0)));
+}
+
 static const char *scale_refused(const dfo_params *p, char *buf, size_t len)
 {
-    const double F = fmax(fmax(fabs(p->P0), fmax(p->mu_s, p->chi * p->mu_s) * p->N),
-                          fmax(p->k * fabs(p->x0), sqrt(p->k) * sqrt(p->m) * fabs(p->v0)));
+    const double F = osc_inst_force_scale(p);
     return dfo_scale_refused(DFO_SCALE_LIMIT, F, "max(|P0|, max(mu_s, mu_k) N, k |x0|, sqrt(k m) |v0|)", p->m, "m",
                              p->k, "k", buf, len);
 }

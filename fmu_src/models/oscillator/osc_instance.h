@@ -7,8 +7,9 @@
  *   osc_inst_events.c  FMI 3.0's doStep with events (early return, event mode, intermediate update)
  *   osc_inst_state.c   FMU-state copies and their serialisation (core/fmu_state.h's format)
  *   osc_inst_deriv.c   coupling at second order: input, output, directional and adjoint derivatives
+ *   osc_inst_me.c      Model Exchange (core/instance_me.h): derivatives, event indicators, events
  * Each calls only the ones listed above it (osc_inst_state.c and osc_inst_deriv.c: the life cycle
- * and the variables).
+ * and the variables; osc_inst_me.c: the life cycle and the switch callback of osc_inst_step.c).
  *
  * The instance: the life cycle first, then the values that define where a simulation is, plain
  * values without pointers (an FMU state copies them, its serialisation writes their bytes). The
@@ -37,6 +38,7 @@ typedef struct {
     dfo_lifecycle lc;         /* first: the glues see the instance as its life cycle */
     osc_values v;
     osc_bossak_engine eng;    /* the Bossak schemes' engine (no part of the values: a cache) */
+    int me;                   /* made for Model Exchange (osc_inst_me.c): the host integrates x, v */
 } osc_instance;
 
 static inline osc_instance *osc(dfo_lifecycle *lc) { return (osc_instance *)lc; }
@@ -56,6 +58,8 @@ void osc_inst_sens_reset(dfo_state *s);
 /* The values with the started model: the instance's own, or during initialisation a copy in tmp
  * with the model derived from the current parameters. */
 const osc_values *osc_inst_computed(const osc_instance *in, osc_values *tmp);
+/* The force scale of a run: max(|P0|, max(mu_s, mu_k) N, k |x0|, sqrt(k m) |v0|) (N). */
+double osc_inst_force_scale(const dfo_params *p);
 /* The scheme's name in the model description ("?" out of range). */
 const char *osc_inst_scheme_name(int scheme);
 /* Why the exact scheme cannot follow input derivatives on these parameters (NULL: it can, and the
@@ -74,6 +78,15 @@ double osc_inst_acceleration_now(const osc_values *v);
 /* A pending event's left limit: the state at the switch in the mode before it, with that mode's
  * friction force. */
 dfo_state osc_inst_left_limit(const osc_values *v, int event_from);
+
+/* Model Exchange's physics at the current state (osc_inst_me.c), written with the schemes' (newmark.h,
+ * friction.h): the loads under the current inputs, whether friction acts; the static force on the
+ * block at rest on the belt; the friction force (in *F, if not NULL) and the acceleration in the
+ * current mode (stuck: 0); the two event indicators (the outputs event_indicator_0, _1). */
+int osc_inst_loads(const osc_values *v, dfo_loads *L);
+double osc_inst_static_force(const osc_values *v, const dfo_loads *L);
+double osc_inst_me_acceleration(const osc_values *v, double *F);
+void osc_inst_indicators(const osc_values *v, double z[2]);
 
 /* ---- osc_inst_step.c ---- */
 /* The stepper's switch callback (ctx: the instance): notes the switch and logs it. */

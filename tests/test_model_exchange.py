@@ -1,0 +1,360 @@
+"""Model Exchange of the oscillator's FMUs (FMI 2.0 and 3.0): the host integrates x and v.
+
+What is asserted, against independent numbers:
+- the descriptions declare <ModelExchange> beside an unchanged <CoSimulation>: the states, their
+  derivatives, two event indicators (FMI 3.0: <ContinuousStateDerivative>, <EventIndicator>);
+- the derivatives against the equation of motion written here (sliding: (P - k x - c v - mode mu_k
+  N) / m; stuck: 0), the event indicators against the relative velocity and the breakaway margins
+  mu_b N -+ F_static computed here, and the event update against the rest rule: a stop sets v to the
+  belt's speed, sticks or reverses in one update (no iteration), a breakaway slides; right after
+  every switch no indicator is 0 (the hysteresis); errors name the argument and its valid value;
+- fmpy's CVode and Euler run to the end with the defaults; with CVode at relative tolerance 1e-10
+  the five work-precision cases (bench/cases.py) over 20 periods stay within 1e-7 of the exact
+  solution (dryfriction.references.exact) with exactly its switches, at the times it gives within
+  the error the stuck position's error allows (1e-8 at relative tolerance 1e-12); the moving belt
+  and Stribeck's law against the co-simulation schemes (exact, located at a fine step);
+- the hosts fmusim (CVODE and Euler, both FMI versions) and the Compliance Checker's Model Exchange
+  run: to the end, no warning, the events of the exact solution (fmusim's CVODE at 1e-10).
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import zipfile
+from ctypes import POINTER, c_double, c_int, c_void_p
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Model
+
+from dryfriction.drivers.oscillator import default_fmu_path
+from dryfriction.drivers.oscillator3 import default_fmi3_path
+from dryfriction.params import Oscillator
+from dryfriction.references.exact import solve_exact
+from fmi2_helpers import Counting
+from test_hosts import fmucheck, fmusim
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+from cases import CASES  # noqa: E402  (bench/cases.py: the work-precision cases)
+
+DBL_MIN = sys.float_info.min
+PERIODS = 20
+
+
+def _fmu(version: int) -> Path:
+    path = default_fmu_path() if version == 2 else default_fmi3_path()
+    if not path.is_file():
+        pytest.skip(f"did not run: {path} not built")
+    return path
+
+
+def _mode_changes(result: np.ndarray) -> tuple[np.ndarray, int]:
+    """The times where fmpy's recorded mode changes (fmpy records both sides of every event), and how many."""
+    idx = np.nonzero(np.diff(result["mode"]))[0] + 1
+    return result["time"][idx], len(idx)
+
+
+# --------------------------------------------------------------------------- the descriptions
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_descriptions_declare_model_exchange(version: int) -> None:
+    md = read_model_description(str(_fmu(version)))
+    assert md.modelExchange is not None and md.coSimulation is not None
+    assert md.modelExchange.modelIdentifier == md.coSimulation.modelIdentifier == "DryFrictionOscillator"
+    assert [(d.variable.name, d.variable.derivative.name) for d in md.derivatives] == [("v", "x"), ("a", "v")]
+    assert [u.variable.name for u in md.outputs][:3] == ["x", "v", "a"]
+    if version == 2:
+        assert md.numberOfEventIndicators == 2
+    else:
+        assert [e.variable.name for e in md.eventIndicators] == ["event_indicator_0", "event_indicator_1"]
+    # co-simulation's capabilities are those it had
+    cs = md.coSimulation
+    assert cs.canHandleVariableCommunicationStepSize and cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
+
+
+def test_descriptions_are_valid() -> None:
+    from fmpy.validation import validate_fmu
+    assert validate_fmu(str(_fmu(3))) == []
+    assert validate_fmu(str(_fmu(2))) == []
+
+
+# --------------------------------------------------------------------------- one instance, by hand
+
+
+class ME:
+    """One FMI 2.0 Model Exchange instance through fmpy's FMU2Model, with the counting logger."""
+
+    def __init__(self, tmp: Path, **start: float) -> None:
+        path = _fmu(2)
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        d = extract(str(path), unzipdir=str(tmp / "me"))
+        self.cb = Counting()
+        self.f = FMU2Model(guid=self.md.guid, unzipDirectory=d, modelIdentifier="DryFrictionOscillator",
+                           instanceName="me")
+        self.f.instantiate(callbacks=self.cb.struct)
+        self.f.setupExperiment(startTime=0.0)
+        if start:
+            self.f.setReal([self.vr[n] for n in start], list(start.values()))
+        self.f.enterInitializationMode()
+        self.f.exitInitializationMode()
+        self.event()
+        self.f.enterContinuousTimeMode()
+
+    def event(self) -> tuple[bool, ...]:
+        info = self.f.newDiscreteStates()
+        assert not info[0], "no event iteration"
+        return info
+
+    def arr(self, getter: Any, n: int = 2) -> np.ndarray:
+        a = np.zeros(n)
+        getter(a.ctypes.data_as(POINTER(c_double)), n)
+        return a
+
+    def states(self) -> np.ndarray:
+        return self.arr(self.f.getContinuousStates)
+
+    def derivatives(self) -> np.ndarray:
+        return self.arr(self.f.getDerivatives)
+
+    def indicators(self) -> np.ndarray:
+        return self.arr(self.f.getEventIndicators)
+
+    def set(self, t: float, x: float, v: float) -> None:
+        self.f.setTime(t)
+        s = np.array([x, v])
+        self.f.setContinuousStates(s.ctypes.data_as(POINTER(c_double)), 2)
+
+    def mode(self) -> int:
+        return self.f.getInteger([self.vr["mode"]])[0]
+
+    def switch(self) -> tuple[bool, ...]:
+        """An event now: event mode, the update, back to continuous time."""
+        self.f.enterEventMode()
+        info = self.event()
+        self.f.enterContinuousTimeMode()
+        return info
+
+
+@pytest.fixture
+def me(tmp_path: Path) -> Iterator[ME]:
+    inst = ME(tmp_path)
+    yield inst
+    inst.f.terminate()
+    inst.f.freeInstance()
+
+
+def test_derivatives_indicators_and_switches_by_hand(me: ME) -> None:
+    """The default oscillator (m 1, k 100, P0 1, omega 5, N 1, mu_s 0.4, chi 0.7): P(0) = 1 N > mu_s N
+    at rest, so it starts sliding forward from v = 0, where the relative velocity is 0."""
+    o = Oscillator()
+    mu_k, Fb = o.chi * o.mu_s * o.N, o.mu_s * o.N
+
+    def accel(t: float, x: float, v: float, mode: int) -> float:
+        return (o.P0 * math.cos(o.omega * t + o.phi) - o.k * x - o.c * v - mode * mu_k) / o.m
+
+    assert me.mode() == 1
+    assert list(me.indicators()) == [DBL_MIN, 1.0]  # the hysteresis: not 0 right after the start of the slide
+    assert list(me.derivatives()) == pytest.approx([0.0, accel(0.0, 0.0, 0.0, 1)], rel=1e-15)
+    # sliding forward at t = 0.3: the derivatives and the relative velocity
+    me.set(0.3, 0.004, 0.02)
+    assert me.derivatives() == pytest.approx([0.02, accel(0.3, 0.004, 0.02, 1)], rel=1e-14)
+    assert me.indicators()[0] == pytest.approx(0.02, rel=1e-15)
+    # the velocity crossed 0 where the static force P - k x = 1 - 0.8 = 0.2 N is held: it sticks, v = 0
+    me.set(0.0, 0.008, -1e-9)
+    assert me.indicators()[0] < 0
+    info = me.switch()
+    assert info[3]  # valuesOfContinuousStatesChanged: v was set
+    assert me.mode() == 0 and list(me.states()) == [0.008, 0.0]
+    Fs = o.P0 - o.k * 0.008
+    assert me.indicators() == pytest.approx([Fb - Fs, Fb + Fs], rel=1e-14)
+    assert min(me.indicators()) > 0  # not 0 right after the stick
+    assert list(me.derivatives()) == [0.0, 0.0]
+    assert me.f.getReal([me.vr["F_friction"]])[0] == pytest.approx(-Fs, rel=1e-14)  # the holding force
+    # stuck at x = 0.015 the static force is -0.5 N beyond -Fb: the backward margin is negative; the
+    # update breaks away backward, x and v unchanged, the slide's indicator DBL_MIN
+    me.set(0.0, 0.015, 0.0)
+    assert me.indicators()[1] == pytest.approx(Fb + (o.P0 - o.k * 0.015), rel=1e-14) and me.indicators()[1] < 0
+    me.switch()
+    assert me.mode() == -1 and list(me.states()) == [0.015, 0.0]
+    assert list(me.indicators()) == [DBL_MIN, 1.0]
+    assert me.derivatives()[1] == pytest.approx(accel(0.0, 0.015, 0.0, -1), rel=1e-14)
+    # a reversal: sliding backward, the velocity crossed 0 at x = 0, where the static force P - k x = 1 N
+    # beyond Fb pushes forward: one update, forward slip from v = 0
+    me.set(0.0, 0.0, 1e-9)
+    assert me.indicators()[0] < 0
+    info = me.switch()
+    assert info[3] and me.mode() == 1 and list(me.states()) == [0.0, 0.0]
+    assert list(me.indicators()) == [DBL_MIN, 1.0]
+    # an event with nothing to switch changes nothing
+    me.set(0.1, 0.001, 0.01)
+    info = me.switch()
+    assert not info[3] and me.mode() == 1 and list(me.states()) == [0.001, 0.01]
+    # what Model Exchange does not compute reads NaN, with one sentence
+    assert math.isnan(me.f.getReal([me.vr["x_max"]])[0])
+    assert any("not computed in Model Exchange" in m for _, _, m in me.cb.messages)
+
+
+def test_errors_name_the_argument(me: ME) -> None:
+    z = np.zeros(3)
+    with pytest.raises(FMICallException):
+        me.f.getEventIndicators(z.ctypes.data_as(POINTER(c_double)), 3)
+    assert "ni = 3" in me.cb.last_error() and "must be 2" in me.cb.last_error()
+    with pytest.raises(FMICallException):
+        me.f.getDerivatives(z.ctypes.data_as(POINTER(c_double)), 1)
+    assert "nx = 1" in me.cb.last_error() and "must be 2" in me.cb.last_error()
+    bad = np.array([0.0, math.nan])
+    with pytest.raises(FMICallException):
+        me.f.setContinuousStates(bad.ctypes.data_as(POINTER(c_double)), 2)
+    assert "not finite" in me.cb.last_error()
+    do_step = me.f.dll.fmi2DoStep  # not bound by FMU2Model
+    do_step.argtypes, do_step.restype = [c_void_p, c_double, c_double, c_int], c_int
+    assert do_step(me.f.component, 0.0, 0.01, 1) == 3  # fmi2Error
+    assert "made for Model Exchange" in me.cb.last_error()
+
+
+# --------------------------------------------------------------------------- hosts through fmpy
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("solver", ["CVode", "Euler"])
+def test_fmpy_runs_to_the_end(version: int, solver: str) -> None:
+    r = simulate_fmu(str(_fmu(version)), fmi_type="ModelExchange", solver=solver, output=["x", "v", "mode"])
+    assert r["time"][-1] == pytest.approx(12.56, abs=1e-12)
+    assert np.all(np.isfinite(r["x"])) and np.all(np.isfinite(r["v"]))
+    times, n = _mode_changes(r)
+    assert n > 0 and np.all(np.diff(times) > 0)  # one switch per event: never two at one time (no chattering)
+    if solver == "CVode":  # default tolerance 1e-4: the exact solution's 29 switches, x within 1e-4
+        ex = solve_exact(Oscillator(), 12.56)
+        assert n == len(ex.switch_times()) == 29
+        assert abs(r["x"][-1] - ex.evaluate(np.array([12.56]))[0][0]) < 1e-4
+
+
+@pytest.fixture(scope="module")
+def exact_cases() -> dict[str, Any]:
+    return {c.name: solve_exact(c.oscillator, PERIODS * c.oscillator.period) for c in CASES}
+
+
+def _me_case(case: Any, rtol: float, version: int = 2) -> np.ndarray:
+    o = case.oscillator
+    return simulate_fmu(str(_fmu(version)), fmi_type="ModelExchange", solver="CVode", relative_tolerance=rtol,
+                        stop_time=PERIODS * o.period, output_interval=o.period / 100, start_values=o.as_dict(),
+                        output=["x", "mode"])
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_cvode_accuracy_on_the_work_precision_cases(case: Any, exact_cases: dict[str, Any]) -> None:
+    """CVode at 1e-10: x within 1e-7 of the exact solution over 20 periods, its switches exactly,
+    their times within 3e-7: a breakaway's time error is the stuck position's error over the static
+    force's rate, k dx / |dF/dt| (measured at most 1.3e-7 s, chi_near_0; at a stop the velocity's error
+    over the deceleration, at most 1.7e-8 s). At 1e-12 every time is within 1e-8."""
+    ex = exact_cases[case.name]
+    sw = ex.switch_times()
+    for rtol, t_tol in ((1e-10, 3e-7), (1e-12, 1e-8)):
+        r = _me_case(case, rtol)
+        t = r["time"]
+        x_exact = ex.evaluate(np.minimum(t, ex.t_end))[0]
+        assert np.max(np.abs(r["x"] - x_exact)) < (1e-7 if rtol == 1e-10 else 1e-9)
+        times, n = _mode_changes(r)
+        assert n == len(sw)
+        assert np.max(np.abs(times - sw)) < t_tol
+
+
+def test_fmi3_gives_fmi2s_numbers() -> None:
+    case = CASES[0]
+    r2, r3 = _me_case(case, 1e-10, 2), _me_case(case, 1e-10, 3)
+    assert np.array_equal(r2["time"], r3["time"]) and np.array_equal(r2["x"], r3["x"])
+
+
+def _against_cs(start: dict[str, float], t_end: float) -> tuple[float, int, int]:
+    fmu = str(_fmu(2))
+    me = simulate_fmu(fmu, fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-10, stop_time=t_end,
+                      output_interval=0.01, start_values=start, output=["x", "mode"])
+    cs = simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=t_end, output_interval=0.01, start_values=start,
+                      output=["x", "transitions"])
+    t, first = np.unique(me["time"], return_index=True)  # the left side of each event
+    x = np.interp(cs["time"], t, me["x"][first])
+    return float(np.max(np.abs(x - cs["x"]))), _mode_changes(me)[1], int(cs["transitions"][-1])
+
+
+@pytest.mark.parametrize("start", [
+    {"scheme": 4, "v_belt": 0.05},
+    {"scheme": 4, "v_belt": -0.05, "c": 0.1},
+    {"scheme": 3, "h": 2e-5, "friction_law": 2, "v_belt": 0.05, "P0": 0.0, "v_s": 0.01},
+    {"scheme": 3, "h": 2e-5, "friction_law": 2}],
+    ids=["belt", "belt-backward-damped", "stribeck-belt-self-excited", "stribeck-forced"])
+def test_belt_and_stribeck_against_cosimulation(start: dict[str, float]) -> None:
+    """The moving belt and Stribeck's law as in co-simulation: against the exact scheme (Coulomb)
+    within 1e-8, the located scheme at h = 2e-5 (Stribeck, second order: its own error ~1e-8) within
+    1e-7, with the same number of switches."""
+    err, n_me, n_cs = _against_cs(start, 4.0)
+    assert n_me == n_cs > 0
+    assert err < (1e-8 if start["scheme"] == 4 else 1e-7)
+
+
+# --------------------------------------------------------------------------- external hosts
+
+
+def _csv(path: Path) -> dict[str, np.ndarray]:
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    return {n: data[n] for n in data.dtype.names}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("solver", ["cvode", "euler"])
+def test_fmusim_model_exchange(version: int, solver: str, tmp_path: Path) -> None:
+    out = tmp_path / "out.csv"
+    args = [str(fmusim()), "--interface-type", "me", "--solver", solver, "--output-file", str(out)]
+    if solver == "cvode":
+        args += ["--tolerance", "1e-10"]
+    r = subprocess.run(args + [str(_fmu(version))], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "[WARNING]" not in r.stdout + r.stderr and "[ERROR]" not in r.stdout + r.stderr
+    d = _csv(out)
+    assert d["time"][-1] == pytest.approx(12.56)
+    if solver == "cvode":
+        ex = solve_exact(Oscillator(), 12.56)
+        assert np.count_nonzero(np.diff(d["mode"])) == len(ex.switch_times())
+        assert abs(d["x"][-1] - ex.evaluate(np.array([12.56]))[0][0]) < 1e-8
+
+
+@pytest.mark.slow
+def test_compliance_checker_model_exchange(tmp_path: Path) -> None:
+    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
+    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", "0.01", "-s", "12.56", "-o", str(out), "-e", str(log),
+                        str(_fmu(2))], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = log.read_text() + r.stdout
+    assert "0 warning(s) and error(s)" in text and "0 Error(s)" in text and "0 Warning(s)" in text
+    d = _csv(out)
+    assert d["time"][-1] == pytest.approx(12.56) and np.all(np.isfinite(d["x"]))
+
+
+def test_fmu_state_in_model_exchange(me: ME) -> None:
+    """An FMU state taken in continuous-time mode, serialised and restored, gives back the time, the
+    states and the mode; the derivatives follow them."""
+    me.set(0.0, 0.008, -1e-9)
+    me.switch()  # stuck at x = 0.008
+    me.set(0.25, 0.008, 0.0)
+    d0 = me.derivatives()
+    state = me.f.getFMUstate()
+    blob = me.f.serializeFMUstate(state)
+    me.set(0.0, 0.015, 0.0)
+    me.switch()  # broke away backward
+    assert me.mode() == -1
+    restored = me.f.deSerializeFMUstate(blob)
+    me.f.setFMUstate(restored)
+    assert me.mode() == 0 and list(me.states()) == [0.008, 0.0]
+    assert list(me.derivatives()) == list(d0) == [0.0, 0.0]
+    assert me.indicators()[0] == pytest.approx(0.4 - (math.cos(5 * 0.25) - 0.8), rel=1e-13)
+    me.f.freeFMUstate(state)
+    me.f.freeFMUstate(restored)
