@@ -39,6 +39,7 @@ static void copy_values(chain_values *dst, const chain_values *src)
     dst->s = keep.s;
     dst->s0 = keep.s0;
     dst->M = keep.M;
+    dst->me = keep.me;
     const size_t n = src->n;
     memcpy(dst->pa, src->pa, (size_t)DFO_NUM_AP * n * sizeof(double));
     memcpy(dst->ua, src->ua, (size_t)DFO_NUM_AI * n * sizeof(double));

@@ -154,7 +154,7 @@ void chain_inst_accelerations(chain_values *v)
             if (F != v->s.F[i]) v->scratch[i] += (F - v->s.F[i]) / v->pa[(size_t)DFO_AP_m * n + i];
         }
     }
-    if ((int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER) return;
+    if ((int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER || v->me) return;
     /* the paper's stuck block creeps with the force that holds it: with inputs set since the step,
      * the held force that takes their change (the same bits when they are unchanged) */
     for (size_t i = 0; i < n; i++) {
@@ -229,6 +229,8 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const cha
         case DFO_OUT_a: x = left ? a_left : v->scratch[i]; break;
         case DFO_OUT_F_friction: x = left ? F_left : chain_inst_friction_out(v, i); break;
         case DFO_OUT_mode: iout[i - i0] = left ? run->event_from : v->s.mode[i]; continue;
+        case DFO_OUT_event_indicator_0: x = chain_inst_me_indicator(v, 0, i); break;
+        case DFO_OUT_event_indicator_1: x = chain_inst_me_indicator(v, 1, i); break;
         default: break;
         }
         if (!isfinite(x))
