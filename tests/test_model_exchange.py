@@ -553,6 +553,30 @@ def test_chain_by_hand(tmp_path: Path) -> None:
         me.free()
 
 
+def test_chain_fmu_state_in_model_exchange(tmp_path: Path) -> None:
+    """An FMU state of the chain taken in continuous-time mode, serialised and restored after a
+    switch, gives back the time, the states, the modes and the derivatives."""
+    ch = Chain.make(3, omega=0.8, N=[0.6, 0.5, 0.4], P0=[1.0, 0.0, 0.3], x0=[0.0, 0.1, 0.0], v0=[0.2, 0.0, 0.0])
+    me = ChainME(tmp_path, ch)
+    try:
+        me.init()
+        me.set(0.3, [0.635, 0.3, 0.0], [0.1, 0.0, 0.0])
+        modes, x, dx = me.mode(), me.states(), me.derivatives()
+        state = me.f.getFMUState()
+        blob = me.f.serializeFMUState(state)
+        me.f.freeFMUState(state)
+        me.set(0.3, [0.635, 0.3, 0.0], [-1e-9, 0.0, 0.0])  # block 1 stops and sticks
+        me.switch()
+        assert me.mode() != modes
+        restored = me.f.deserializeFMUState(blob)
+        me.f.setFMUState(restored)
+        me.f.freeFMUState(restored)
+        assert me.mode() == modes and np.array_equal(me.states(), x)
+        assert np.array_equal(me.derivatives(), dx) and dx[3] != 0.0
+    finally:
+        me.free()
+
+
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("solver", ["CVode", "Euler"])
 def test_chain_fmpy_runs_to_the_end(version: int, solver: str) -> None:
@@ -621,6 +645,32 @@ def test_chain_cvode_accuracy_falls_with_the_tolerance(name: str) -> None:
     """At 1e-12 every block's x within 1e-8 of the reference (measured at most 3.9e-9), the switch
     times within 1e-7 s."""
     _chain_accuracy(name, 1e-12, 1e-8, 1e-7)
+
+
+@pytest.mark.parametrize("start", [
+    {"v_belt": [0.05, -0.05, 0.1]},
+    {"friction_law": 2, "v_s": [0.05] * 3},
+    {"v_belt": [0.05, 0.0, 0.1], "friction_law": 2, "v_s": [0.05] * 3}],
+    ids=["belts", "stribeck", "stribeck-belts"])
+def test_chain_belt_and_stribeck_against_cosimulation(start: dict[str, Any]) -> None:
+    """The moving belts and Stribeck's law as in co-simulation: three damped blocks over 2.5
+    excitation periods, CVode at 1e-10 against the located scheme at h = 2e-5 (its own error ~1e-8)
+    within 2e-7 (measured 2.6e-8 ... 5.2e-8), with the same number of switches."""
+    from dryfriction.drivers.chain import ChainFMU3
+    ch = Chain.make(3, omega=0.8, N=[0.6, 0.5, 0.4], chi=0.6, P0=[1.0, 0.0, 0.3], c=0.02)
+    t_end = 2.5 * ch.period
+    r = simulate_chain_me(ch, t_end, _chain_fmu(3), start=start, relative_tolerance=1e-10, output_interval=0.01,
+                          record_events=True)
+    t, first = np.unique(r["time"], return_index=True)  # the left side of each event
+    x_me = np.asarray(r["x"])[first]
+    inputs = {k: v for k, v in start.items() if k == "v_belt"}
+    params = {**ch.fmu_params(), **{k: v for k, v in start.items() if k != "v_belt"}, "h": 2e-5}
+    with ChainFMU3(n=3, params=params, fmu_path=_chain_fmu(3)) as cs:
+        run = cs.run(t_stop=t_end, dt=0.01, inputs=inputs)
+    x = np.stack([np.interp(run.t, t, x_me[:, i]) for i in range(3)], axis=1)
+    assert np.max(np.abs(x - run.x)) < 2e-7
+    n_me, n_cs = _chain_switches(np.asarray(r["mode"]), ch)[1], int(np.sum(np.diff(run.mode, axis=0) != 0))
+    assert n_me == n_cs > 10
 
 
 @pytest.mark.slow
