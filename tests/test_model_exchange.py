@@ -451,6 +451,10 @@ class ChainME:
         self.f.freeInstance()
 
 
+# the chain FMU's default parameters (2 blocks) as the reference's chain
+DEFAULT_CHAIN = Chain.make(2, omega=5.0, k=100.0, P0=1.0, N=1.0, mu_s=0.4, chi=0.7)
+
+
 def _chain_switches(modes: np.ndarray, ch: Chain) -> tuple[np.ndarray, int]:
     """The rows where the mode of a block with friction changes (fmpy records both sides of every
     event: one change per switch), and how many switches."""
@@ -591,7 +595,7 @@ def test_chain_fmpy_runs_to_the_end(version: int, solver: str) -> None:
     else:
         x, modes = np.asarray(r["x"]), np.asarray(r["mode"])
     assert r["time"][-1] == pytest.approx(12.56, abs=1e-12) and np.all(np.isfinite(x))
-    ch = Chain.make(2, omega=5.0, k=100.0, P0=1.0, N=1.0, mu_s=0.4, chi=0.7)
+    ch = DEFAULT_CHAIN
     ref = solve_chain(ch, 12.56)
     rows, n = _chain_switches(modes, ch)
     err = np.max(np.abs(x - ref.evaluate(r["time"])["x"]))
@@ -692,10 +696,27 @@ def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path) 
     a = np.array(rows, dtype=float)  # time, x[1], x[2], v ..., mode[1], mode[2] (FMI 3.0: arrays space-separated)
     t, x, modes = a[:, 0], a[:, 1:3], a[:, -2:]
     assert t[-1] == pytest.approx(12.56, abs=2e-4)
-    ch = Chain.make(2, omega=5.0, k=100.0, P0=1.0, N=1.0, mu_s=0.4, chi=0.7)
+    ch = DEFAULT_CHAIN
     ref = solve_chain(ch, 12.56)
     err = np.max(np.abs(x - ref.evaluate(t)["x"]))
     if solver == "cvode":
         assert _chain_switches(modes, ch)[1] == len(ref.events) == 41 and err < 1e-8
     else:
         assert err < 1e-3
+
+
+@pytest.mark.slow
+def test_compliance_checker_chain_model_exchange(tmp_path: Path) -> None:
+    """The Compliance Checker's Model Exchange run of the FMI 2.0 chain (its explicit Euler at 1e-3):
+    no warning or error, to the end, x within 1e-2 of the reference."""
+    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
+    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", "0.001", "-s", "12.56", "-o", str(out), "-e", str(log),
+                        str(_chain_fmu(2))], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = log.read_text() + r.stdout
+    assert "0 warning(s) and error(s)" in text and "0 Error(s)" in text and "0 Warning(s)" in text
+    data = np.genfromtxt(out, delimiter=",", skip_header=1)
+    t, x = data[:, 0], data[:, 1:3]
+    assert t[-1] == pytest.approx(12.56)
+    ref = solve_chain(DEFAULT_CHAIN, 12.56)
+    assert np.max(np.abs(x - ref.evaluate(t)["x"])) < 1e-2
