@@ -13,7 +13,6 @@ Usage: python bench/me_chain_tolerance.py [--fmu PATH] [--repeat 3] [--periods 1
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
@@ -22,6 +21,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "bench"))
+from me_tolerance import arguments  # noqa: E402
 from test_model_exchange import CHAIN_ME_CASES, _chain_switches  # noqa: E402
 
 from dryfriction.drivers.chain import default_chain_fmu3  # noqa: E402
@@ -33,11 +34,7 @@ TOLERANCES = (1e-6, 1e-8, 1e-10, 1e-12)
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table (markdown)."""
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--fmu", type=Path, default=None, help="the FMI 3.0 chain FMU (default: the build's)")
-    ap.add_argument("--repeat", type=int, default=3, help="runs per point, the fastest counted")
-    ap.add_argument("--periods", type=int, default=10, help="excitation periods per run")
-    a = ap.parse_args(argv)
+    a = arguments(argv, __doc__, "FMI 3.0 chain", 10)
     fmu = a.fmu or default_chain_fmu3()
     print("| case | n | rtol | max abs x error (m) | switches / reference's | max switch time error (s) | CPU per run (ms) |")
     print("|---|---|---|---|---|---|---|")

@@ -93,7 +93,47 @@ def test_descriptions_are_valid() -> None:
 # --------------------------------------------------------------------------- one instance, by hand
 
 
-class ME:
+class Host:
+    """What a host does with one Model Exchange instance ``f`` of nx states: read its arrays, handle
+    an event (its update ``update`` once, no iteration); ``derivatives_fn`` reads the derivatives."""
+
+    f: Any
+    nx: int
+    update: Any
+    derivatives_fn: Any
+
+    def event(self) -> tuple[Any, ...]:
+        info = self.update()
+        assert not info[0], "no event iteration"
+        return info
+
+    def arr(self, getter: Any, size: int | None = None) -> np.ndarray:
+        a = np.zeros(self.nx if size is None else size)
+        getter(a.ctypes.data_as(POINTER(c_double)), a.size)
+        return a
+
+    def states(self) -> np.ndarray:
+        return self.arr(self.f.getContinuousStates)
+
+    def derivatives(self) -> np.ndarray:
+        return self.arr(self.derivatives_fn)
+
+    def indicators(self) -> np.ndarray:
+        return self.arr(self.f.getEventIndicators)
+
+    def put(self, t: float, state: np.ndarray) -> None:
+        self.f.setTime(t)
+        self.f.setContinuousStates(state.ctypes.data_as(POINTER(c_double)), state.size)
+
+    def switch(self) -> tuple[Any, ...]:
+        """An event now: event mode, the update, back to continuous time."""
+        self.f.enterEventMode()
+        info = self.event()
+        self.f.enterContinuousTimeMode()
+        return info
+
+
+class ME(Host):
     """One FMI 2.0 Model Exchange instance through fmpy's FMU2Model, with the counting logger."""
 
     def __init__(self, tmp: Path, **start: float) -> None:
@@ -104,6 +144,7 @@ class ME:
         self.cb = Counting()
         self.f = FMU2Model(guid=self.md.guid, unzipDirectory=d, modelIdentifier="DryFrictionOscillator",
                            instanceName="me")
+        self.nx, self.update, self.derivatives_fn = 2, self.f.newDiscreteStates, self.f.getDerivatives
         self.f.instantiate(callbacks=self.cb.struct)
         self.f.setupExperiment(startTime=0.0)
         if start:
@@ -113,39 +154,11 @@ class ME:
         self.event()
         self.f.enterContinuousTimeMode()
 
-    def event(self) -> tuple[bool, ...]:
-        info = self.f.newDiscreteStates()
-        assert not info[0], "no event iteration"
-        return info
-
-    def arr(self, getter: Any, n: int = 2) -> np.ndarray:
-        a = np.zeros(n)
-        getter(a.ctypes.data_as(POINTER(c_double)), n)
-        return a
-
-    def states(self) -> np.ndarray:
-        return self.arr(self.f.getContinuousStates)
-
-    def derivatives(self) -> np.ndarray:
-        return self.arr(self.f.getDerivatives)
-
-    def indicators(self) -> np.ndarray:
-        return self.arr(self.f.getEventIndicators)
-
     def set(self, t: float, x: float, v: float) -> None:
-        self.f.setTime(t)
-        s = np.array([x, v])
-        self.f.setContinuousStates(s.ctypes.data_as(POINTER(c_double)), 2)
+        self.put(t, np.array([x, v]))
 
     def mode(self) -> int:
         return self.f.getInteger([self.vr["mode"]])[0]
-
-    def switch(self) -> tuple[bool, ...]:
-        """An event now: event mode, the update, back to continuous time."""
-        self.f.enterEventMode()
-        info = self.event()
-        self.f.enterContinuousTimeMode()
-        return info
 
 
 @pytest.fixture
@@ -331,15 +344,21 @@ def test_fmusim_model_exchange(version: int, solver: str, tmp_path: Path) -> Non
         assert abs(d["x"][-1] - ex.evaluate(np.array([12.56]))[0][0]) < 1e-8
 
 
-@pytest.mark.slow
-def test_compliance_checker_model_exchange(tmp_path: Path) -> None:
+def _fmucheck_me(fmu: Path, h: float, tmp_path: Path) -> Path:
+    """The Compliance Checker's Model Exchange run of fmu to 12.56 s at the step h: no warning or
+    error; its output file."""
     out, log = tmp_path / "out.csv", tmp_path / "log.txt"
-    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", "0.01", "-s", "12.56", "-o", str(out), "-e", str(log),
-                        str(_fmu(2))], capture_output=True, text=True, timeout=120)
+    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", repr(h), "-s", "12.56", "-o", str(out), "-e", str(log),
+                        str(fmu)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
     text = log.read_text() + r.stdout
     assert "0 warning(s) and error(s)" in text and "0 Error(s)" in text and "0 Warning(s)" in text
-    d = _csv(out)
+    return out
+
+
+@pytest.mark.slow
+def test_compliance_checker_model_exchange(tmp_path: Path) -> None:
+    d = _csv(_fmucheck_me(_fmu(2), 0.01, tmp_path))
     assert d["time"][-1] == pytest.approx(12.56) and np.all(np.isfinite(d["x"]))
 
 
@@ -374,7 +393,7 @@ def _chain_fmu(version: int) -> Path:
     return path
 
 
-class ChainME:
+class ChainME(Host):
     """One FMI 3.0 Model Exchange instance of the chain through fmpy's FMU3Model, n set in
     Configuration Mode, the FMU's messages kept."""
 
@@ -391,6 +410,8 @@ class ChainME:
 
         self.f = FMU3Model(guid=self.md.guid, unzipDirectory=extract(str(path), unzipdir=str(tmp / "chain-me")),
                            modelIdentifier="DryFrictionChain", instanceName="chain-me")
+        self.nx, self.update = 2 * n, self.f.updateDiscreteStates
+        self.derivatives_fn = self.f.getContinuousStateDerivatives
         self.f.instantiate(logMessage=log)
         self.f.enterConfigurationMode()
         self.f.setUInt64([self.vr["n"]], [n])
@@ -410,42 +431,14 @@ class ChainME:
         self.event()
         self.f.enterContinuousTimeMode()
 
-    def event(self) -> tuple[Any, ...]:
-        info = self.f.updateDiscreteStates()
-        assert not info[0], "no event iteration"
-        return info
-
-    def arr(self, getter: Any, size: int | None = None) -> np.ndarray:
-        a = np.zeros(2 * self.n if size is None else size)
-        getter(a.ctypes.data_as(POINTER(c_double)), a.size)
-        return a
-
-    def states(self) -> np.ndarray:
-        return self.arr(self.f.getContinuousStates)
-
-    def derivatives(self) -> np.ndarray:
-        return self.arr(self.f.getContinuousStateDerivatives)
-
-    def indicators(self) -> np.ndarray:
-        return self.arr(self.f.getEventIndicators)
-
     def set(self, t: float, x: Any, v: Any) -> None:
-        self.f.setTime(t)
-        s = np.concatenate([np.asarray(x, dtype=float), np.asarray(v, dtype=float)])
-        self.f.setContinuousStates(s.ctypes.data_as(POINTER(c_double)), s.size)
+        self.put(t, np.concatenate([np.asarray(x, dtype=float), np.asarray(v, dtype=float)]))
 
     def mode(self) -> list[int]:
         return list(self.f.getInt32([self.vr["mode"]], nValues=self.n))
 
     def real(self, name: str) -> np.ndarray:
         return np.array(self.f.getFloat64([self.vr[name]], nValues=self.n))
-
-    def switch(self) -> tuple[Any, ...]:
-        """An event now: event mode, the update, back to continuous time."""
-        self.f.enterEventMode()
-        info = self.event()
-        self.f.enterContinuousTimeMode()
-        return info
 
     def free(self) -> None:
         self.f.freeInstance()
@@ -709,13 +702,7 @@ def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path) 
 def test_compliance_checker_chain_model_exchange(tmp_path: Path) -> None:
     """The Compliance Checker's Model Exchange run of the FMI 2.0 chain (its explicit Euler at 1e-3):
     no warning or error, to the end, x within 1e-2 of the reference."""
-    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
-    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", "0.001", "-s", "12.56", "-o", str(out), "-e", str(log),
-                        str(_chain_fmu(2))], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0, r.stdout + r.stderr
-    text = log.read_text() + r.stdout
-    assert "0 warning(s) and error(s)" in text and "0 Error(s)" in text and "0 Warning(s)" in text
-    data = np.genfromtxt(out, delimiter=",", skip_header=1)
+    data = np.genfromtxt(_fmucheck_me(_chain_fmu(2), 0.001, tmp_path), delimiter=",", skip_header=1)
     t, x = data[:, 0], data[:, 1:3]
     assert t[-1] == pytest.approx(12.56)
     ref = solve_chain(DEFAULT_CHAIN, 12.56)
