@@ -1,4 +1,4 @@
-"""Model Exchange of the oscillator's FMUs (FMI 2.0 and 3.0): the host integrates x and v.
+"""Model Exchange of the oscillator's and the chain's FMUs (FMI 2.0 and 3.0): the host integrates x and v.
 
 What is asserted, against independent numbers:
 - the descriptions declare <ModelExchange> beside an unchanged <CoSimulation>: the states, their
@@ -14,7 +14,13 @@ What is asserted, against independent numbers:
   the error the stuck position's error allows (1e-8 at relative tolerance 1e-12); the moving belt
   and Stribeck's law against the co-simulation schemes (exact, located at a fine step);
 - the hosts fmusim (CVODE and Euler, both FMI versions) and the Compliance Checker's Model Exchange
-  run: to the end, no warning, the events of the exact solution (fmusim's CVODE at 1e-10).
+  run: to the end, no warning, the events of the exact solution (fmusim's CVODE at 1e-10);
+- the chain's likewise (FMI 3.0 with n set in Configuration Mode, dryfriction.drivers.chain_me): the
+  derivatives against M a = P - K x - C v + F written here (stuck blocks held), the indicators against
+  the relative velocities and each stuck block's margins, a breakaway, a stop and a reversal in one
+  update each; CVode at 1e-10 and 1e-12 on stick-slip chains of 3 to 5 blocks against the event-driven
+  reference (dryfriction.references.chain: x, switch count and times); the belts and Stribeck's law
+  against co-simulation; fmpy's, fmusim's and the Compliance Checker's runs of the default chain.
 """
 
 from __future__ import annotations
@@ -538,6 +544,13 @@ def test_chain_by_hand(tmp_path: Path) -> None:
         # an event with nothing to switch changes nothing
         info = me.switch()
         assert not info[3] and me.mode() == [0, -1, 0]
+        # the host moves block 1's belt under it while it is stuck: the step ends in an event, the block
+        # slides backward relative to its belt at its own speed
+        me.f.setFloat64([me.vr["v_belt"]], [0.2, 0.0, 0.0])
+        assert me.f.completedIntegratorStep()[0]  # enterEventMode
+        me.switch()
+        assert me.mode() == [-1, -1, 0] and me.states()[3] == 0.0
+        assert me.indicators()[0] == pytest.approx(0.2, rel=1e-15)
         # a wrong size names the argument and its valid value
         with pytest.raises(FMICallException):
             me.arr(me.f.getContinuousStateDerivatives, 4)
