@@ -559,6 +559,14 @@ def test_chain_by_hand(tmp_path: Path) -> None:
             me.arr(me.f.getEventIndicators, 3)
         assert "ni = 3" in me.messages[-1] and "must be 6" in me.messages[-1]
         assert me.f.getNumberOfContinuousStates() == me.f.getNumberOfEventIndicators() == 6
+        # the nominals: block i's static deflection F / K_i of the largest force F (here max(mu_s, mu_k) N
+        # = 1 N of block 2), K_i its springs, and sqrt(K_i / m_i) times it
+        K_i = np.array([30.0, 35.0, 20.0])
+        F = max(np.max(np.abs(ch.P0)), np.max(Fb), np.max(K_i * np.abs(ch.x0)), np.max(np.sqrt(K_i * ch.m) * ch.v0))
+        assert F == 1.0
+        nominal = F / K_i
+        assert me.arr(me.f.getNominalsOfContinuousStates) == pytest.approx(
+            np.concatenate([nominal, np.sqrt(K_i / ch.m) * nominal]), rel=1e-15)
     finally:
         me.free()
 
@@ -609,6 +617,14 @@ def test_chain_fmpy_runs_to_the_end(version: int, solver: str) -> None:
         assert n == len(ref.events) == 41 and err < 1e-4
     else:
         assert err < 1e-2
+
+
+def test_chain_fmi3_gives_fmi2s_numbers() -> None:
+    """The default chain (n = 2) through both FMUs with CVode at 1e-10: the same times and x, bit for bit."""
+    r2, r3 = (simulate_fmu(str(_chain_fmu(v)), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-10)
+              for v in (2, 3))
+    assert np.array_equal(r2["time"], r3["time"])
+    assert np.array_equal(np.stack([r2["x[1]"], r2["x[2]"]], axis=1), np.asarray(r3["x"]))
 
 
 # the stick-slip cases of n = 3 ... 5 blocks: the coupled validation cases (tests/chain_cases.py) and two

@@ -50,21 +50,25 @@ static dfo_loads block_loads(const chain_model *M, size_t i)
     return L;
 }
 
-/* Block i's static force: the net applied force on it at the state, the one its friction holds
- * while it is stuck (the engine's held solve: M diagonal, so -(its holding force)). */
-static double static_force(const chain_model *M, const chain_state *s, size_t i)
+/* The excitation's phase at the state's time: cos and sin of omega t + phi0 (once per call). */
+static void phase_now(const chain_model *M, const chain_state *s, double ph[2])
 {
-    double cw, sw;
-    chain_phase_of(M, s, s->t, &cw, &sw);
-    return chain_P_at(M, i, cw, sw) + M->u[i] - chain_Kx(M, s->X, i) - chain_Cv(M, s->V, i);
+    chain_phase_of(M, s, s->t, &ph[0], &ph[1]);
+}
+
+/* Block i's static force at the phase ph: the net applied force on it at the state, the one its
+ * friction holds while it is stuck (the engine's held solve: M diagonal, so -(its holding force)). */
+static double static_force(const chain_model *M, const chain_state *s, const double ph[2], size_t i)
+{
+    return chain_P_at(M, i, ph[0], ph[1]) + M->u[i] - chain_Kx(M, s->X, i) - chain_Cv(M, s->V, i);
 }
 
 /* The rest rule of a block at rest on its belt (friction.h's dfo_rest_mode), its tie
  * (|F_static| = Fb, where a margin is 0) sliding. */
-static int rest_mode(const chain_model *M, const chain_state *s, size_t i)
+static int rest_mode(const chain_model *M, const chain_state *s, const double ph[2], size_t i)
 {
     const dfo_loads L = block_loads(M, i);
-    const double Fs = static_force(M, s, i);
+    const double Fs = static_force(M, s, ph, i);
     const int mode = dfo_rest_mode(&L, Fs);
     return (mode == 0 && fabs(Fs) >= L.Fb) ? dfo_sign(Fs) : mode;
 }
@@ -86,16 +90,19 @@ static const double *me_loads(chain_values *v, chain_inputs *ci)
  * state, the accelerations (output a, the derivatives) into scratch. */
 static void me_refresh(chain_values *v)
 {
+    v->me_fresh = 1;
     chain_inputs ci;
     const double *vb = me_loads(v, &ci);
     chain_model *M = v->M;
     chain_state *s = &v->s;
+    double ph[2];
+    phase_now(M, s, ph);
     for (size_t i = 0; i < v->n; i++) {
         if (!chain_has_friction(M, i)) s->F[i] = 0.0;
         else if (s->mode[i] != 0) s->F[i] = -s->mode[i] * chain_slide_mag(M, vb, s, i);
         else {
             const dfo_loads L = block_loads(M, i);
-            s->F[i] = dfo_stick_force(&L, static_force(M, s, i));
+            s->F[i] = dfo_stick_force(&L, static_force(M, s, ph, i));
         }
     }
     chain_accelerations(M, &ci, vb, s, v->scratch);
@@ -106,9 +113,15 @@ static void me_refresh(chain_values *v)
     v->acc_valid = 1;
 }
 
+void chain_inst_me_refresh(chain_values *v)
+{
+    if (!v->me_fresh) me_refresh(v);
+}
+
 /* Block i's two event indicators at the state on the belts vb (NULL: none), the model's loads
  * those of the inputs. */
-static void block_indicators(const chain_model *M, const chain_state *s, const double *vb, size_t i, double z[2])
+static void block_indicators(const chain_model *M, const chain_state *s, const double *vb, const double ph[2], size_t i,
+                             double z[2])
 {
     z[0] = z[1] = 1.0;
     if (!chain_has_friction(M, i)) return;
@@ -116,7 +129,7 @@ static void block_indicators(const chain_model *M, const chain_state *s, const d
         z[0] = s->mode[i] * (s->V[i] - (vb ? vb[i] : 0.0)) + DBL_MIN;
         return;
     }
-    const double Fs = static_force(M, s, i);
+    const double Fs = static_force(M, s, ph, i);
     z[0] = M->Fb[i] - Fs;
     z[1] = M->Fb[i] + Fs;
 }
@@ -206,6 +219,8 @@ dfo_inst_status dfo_inst_me_update(dfo_lifecycle *lc, const char *fn, dfo_me_eve
             info->values_changed = 1;
         }
     }
+    double ph[2];
+    phase_now(M, s, ph);
     /* the new modes: every block at rest on its belt by the rest rule, a stuck block off its belt
      * (the host changed the belt's speed) slides at its own speed */
     for (size_t i = 0; i < n; i++) {
@@ -215,9 +230,9 @@ dfo_inst_status dfo_inst_me_update(dfo_lifecycle *lc, const char *fn, dfo_me_eve
         const int from = s->mode[i];
         int to = from;
         if (s->V[i] == b) {
-            const double Fs = static_force(M, s, i);
+            const double Fs = static_force(M, s, ph, i);
             const int at_limit = from == 0 && (M->Fb[i] - Fs <= 0.0 || M->Fb[i] + Fs <= 0.0);
-            if (from != 0 || at_limit) to = rest_mode(M, s, i);
+            if (from != 0 || at_limit) to = rest_mode(M, s, ph, i);
         } else if (from == 0) {
             to = chain_sgn(s->V[i] - b);
         }
@@ -274,7 +289,7 @@ dfo_inst_status dfo_inst_me_set_time(dfo_lifecycle *lc, const char *fn, double t
     const double k = floor((t - s->t0) / chain_step(in->v.M));
     s->n_grid = k > 0.0 && k < 9e18 ? (long long)k : 0;
     lc->run.time = t;
-    me_refresh(&in->v);
+    in->v.me_fresh = 0;
     return DFO_INST_OK;
 }
 
@@ -292,7 +307,7 @@ dfo_inst_status dfo_inst_me_set_states(dfo_lifecycle *lc, const char *fn, const 
         }
     memcpy(in->v.s.X, x, n * sizeof(double));
     memcpy(in->v.s.V, x + n, n * sizeof(double));
-    me_refresh(&in->v);
+    in->v.me_fresh = 0;
     me_done(in);
     return DFO_INST_OK;
 }
@@ -343,7 +358,7 @@ dfo_inst_status dfo_inst_me_derivatives(dfo_lifecycle *lc, const char *fn, doubl
     if (!in) return DFO_INST_ERROR;
     chain_values *v = &in->v;
     const size_t n = v->n;
-    me_refresh(v); /* (the inputs may have changed since the state was set) */
+    chain_inst_me_refresh(v);
     memcpy(dx, v->s.V, n * sizeof(double));
     memcpy(dx + n, v->scratch, n * sizeof(double));
     me_done(in);
@@ -362,9 +377,11 @@ dfo_inst_status dfo_inst_me_indicators(dfo_lifecycle *lc, const char *fn, double
     chain_inputs ci;
     const double *vb = me_loads(v, &ci);
     const size_t n = v->n;
+    double ph[2];
+    phase_now(v->M, &v->s, ph);
     for (size_t i = 0; i < n; i++) {
         double zi[2];
-        block_indicators(v->M, &v->s, vb, i, zi);
+        block_indicators(v->M, &v->s, vb, ph, i, zi);
         z[i] = zi[0];
         z[n + i] = zi[1];
     }
@@ -378,7 +395,8 @@ double chain_inst_me_indicator(chain_values *v, int which, size_t i)
 {
     const chain_inputs ci = chain_inst_inputs_of(v, 0);
     chain_loads_init(v->M, &ci);
-    double z[2];
-    block_indicators(v->M, &v->s, chain_inst_belt_of(v, 0), i, z);
+    double z[2], ph[2];
+    phase_now(v->M, &v->s, ph);
+    block_indicators(v->M, &v->s, chain_inst_belt_of(v, 0), ph, i, z);
     return z[which];
 }

@@ -91,7 +91,7 @@ dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void
     in->lc.run = st->run;
     copy_values(&in->v, &st->v);
     in->v.M = NULL;
-    in->v.acc_valid = 0;
+    in->v.acc_valid = in->v.me_fresh = 0;
     if (in->lc.run.phase & DFO_PHASES_STARTED) {
         /* the model follows from the parameters (the state is kept: it is the saved one) */
         const chain_params p = chain_inst_params_of(&in->v);

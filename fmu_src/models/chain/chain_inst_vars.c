@@ -211,6 +211,7 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const cha
         if (!chain_inst_started(in)) chain_inst_free_model(v);
         return DFO_INST_OK;
     }
+    if (v->me && chain_inst_started(in)) chain_inst_me_refresh(v); /* (the host moved the state or the inputs) */
     const int need_a = id == DFO_OUT_a || (in->lc.run.event_pending && id == DFO_OUT_F_friction);
     const int temporary = !chain_inst_started(in);
     if (need_a && (temporary || !v->acc_valid)) {
@@ -315,7 +316,7 @@ static dfo_inst_status set_values(chain_instance *in, const char *fn, const unsi
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) *chain_inst_stored(&in->v, r.var, i0 + i) = value[k + i];
         if (r.var->home == DFO_IN_INPUTS) in->v.u_set[r.var->slot] = 1;
-        in->v.acc_valid = 0;
+        in->v.acc_valid = in->v.me_fresh = 0;
         k += c;
     }
     return DFO_INST_OK;

@@ -55,6 +55,8 @@ typedef struct {
                                  * copied them to ua_used yet (else on those of ua_used) */
     size_t event_block;         /* the block of a pending event (the run's event_pending, event_from) */
     int me;                     /* made for Model Exchange (chain_inst_me.c): the host integrates x, v */
+    int me_fresh;               /* Model Exchange: the state's forces and scratch's accelerations are those of
+                                 * the state, time and inputs (cleared by every change of them) */
 } chain_values;
 
 typedef struct {
@@ -122,5 +124,8 @@ void chain_inst_accelerations(chain_values *v);
 /* The output event_indicator_0 (which = 0) or event_indicator_1 (1) of block i: Model Exchange's
  * event indicators at the state under the current inputs (the model built). */
 double chain_inst_me_indicator(chain_values *v, int which, size_t i);
+/* Model Exchange: the forces and accelerations of the state, time and inputs (into the state and
+ * scratch) unless they are (me_fresh). */
+void chain_inst_me_refresh(chain_values *v);
 
 #endif
