@@ -40,13 +40,19 @@ def run(unzipped: str, case: object, rtol: float, periods: int) -> tuple[np.ndar
     return r, time.process_time() - t0
 
 
+def arguments(argv: list[str] | None, doc: str, fmu: str, periods: int) -> argparse.Namespace:
+    """The options of a Model Exchange tolerance table: --fmu (``fmu`` says which), --repeat,
+    --periods (default ``periods``); ``doc``'s first paragraph the description."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    ap.add_argument("--fmu", type=Path, default=None, help=f"the {fmu} FMU (default: the build's)")
+    ap.add_argument("--repeat", type=int, default=3, help="runs per point, the fastest counted")
+    ap.add_argument("--periods", type=int, default=periods, help="excitation periods per run")
+    return ap.parse_args(argv)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the table (markdown)."""
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--fmu", type=Path, default=None, help="the FMI 2.0 oscillator FMU (default: the build's)")
-    ap.add_argument("--repeat", type=int, default=3, help="runs per point, the fastest counted")
-    ap.add_argument("--periods", type=int, default=20, help="excitation periods per run")
-    a = ap.parse_args(argv)
+    a = arguments(argv, __doc__, "FMI 2.0 oscillator", 20)
     fmu = a.fmu or default_fmu_path()
     with tempfile.TemporaryDirectory() as tmp:
         unzipped = extract(str(fmu), unzipdir=tmp)

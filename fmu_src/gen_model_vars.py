@@ -903,6 +903,9 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> 
     elif len(vendor):
         vendor[-1].tail = "\n    "
     vendor.append(_layout_tool(tuple(layouts.values()), sizes))
+    if model.model_exchange:  # the source counts the indicator variables, FMI 2.0 their elements
+        root.set("numberOfEventIndicators", str(sum(layouts[n].count if model.variable(n).dims else 1
+                                                    for n in model.indicator_variables)))
     head = ET.tostring(root, encoding="unicode").split("<ModelVariables>")[0]
     head = re.sub(r"\s*<!--.*?-->", "", head, flags=re.S)  # the source's own comments
     shown = ", ".join(f"{k} = {n}" for k, n in sizes.items())
@@ -915,6 +918,7 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> 
 
     index: dict[tuple[str, tuple[int, ...]], int] = {}
     srcs = {sv.get("name"): sv for sv in root.iterfind("ModelVariables/ScalarVariable")}
+    state_of = {d: st for st, d in model.states}  # a state derivative's element: its state's element
     k = 0
     for v in model.variables:
         if v.name in structural:
@@ -929,7 +933,8 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> 
                                         f" (element {', '.join(str(i) for i in idx)})")
             L.append("    <ScalarVariable" + _attrs([("name", _element_name(v.name, idx)), ("valueReference", str(vr))]
                                                     + attrs + [("description", sv.get("description") + where)]) + ">"
-                     + f"<{el.tag}" + _attrs(list(el.attrib.items())) + "/></ScalarVariable>")
+                     + f"<{el.tag}" + _attrs([(a, str(index[(state_of[v.name], idx)]) if a == "derivative" else x)
+                                              for a, x in el.attrib.items()]) + "/></ScalarVariable>")
 
     def dep_indices(v: Variable, idx: tuple[int, ...], d: str) -> list[int]:
         dv = model.variable(d)
@@ -947,7 +952,13 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> 
             if v.dependencies is not None:
                 deps = " ".join(str(i) for d in v.dependencies for i in dep_indices(v, idx, d))
             L.append("      <Unknown" + _attrs([("index", str(index[(v.name, idx)])), ("dependencies", deps)]) + "/>")
-    L += ["    </Outputs>", "    <InitialUnknowns>"]
+    L.append("    </Outputs>")
+    if model.states:
+        L.append("    <Derivatives>")
+        L += ["      <Unknown" + _attrs([("index", str(index[(d, idx)]))]) + "/>"
+              for _, d in model.states for idx, _ in elements(model.variable(d))]
+        L.append("    </Derivatives>")
+    L.append("    <InitialUnknowns>")
     for v in outputs + [v for v in model.variables if v.causality == "calculatedParameter"]:
         for idx, _ in elements(v):
             L.append("      <Unknown" + _attrs([("index", str(index[(v.name, idx)]))]) + "/>")

@@ -1,4 +1,4 @@
-"""Model Exchange of the oscillator's FMUs (FMI 2.0 and 3.0): the host integrates x and v.
+"""Model Exchange of the oscillator's and the chain's FMUs (FMI 2.0 and 3.0): the host integrates x and v.
 
 What is asserted, against independent numbers:
 - the descriptions declare <ModelExchange> beside an unchanged <CoSimulation>: the states, their
@@ -14,7 +14,13 @@ What is asserted, against independent numbers:
   the error the stuck position's error allows (1e-8 at relative tolerance 1e-12); the moving belt
   and Stribeck's law against the co-simulation schemes (exact, located at a fine step);
 - the hosts fmusim (CVODE and Euler, both FMI versions) and the Compliance Checker's Model Exchange
-  run: to the end, no warning, the events of the exact solution (fmusim's CVODE at 1e-10).
+  run: to the end, no warning, the events of the exact solution (fmusim's CVODE at 1e-10);
+- the chain's likewise (FMI 3.0 with n set in Configuration Mode, dryfriction.drivers.chain_me): the
+  derivatives against M a = P - K x - C v + F written here (stuck blocks held), the indicators against
+  the relative velocities and each stuck block's margins, a breakaway, a stop and a reversal in one
+  update each; CVode at 1e-10 and 1e-12 on stick-slip chains of 3 to 5 blocks against the event-driven
+  reference (dryfriction.references.chain: x, switch count and times); the belts and Stribeck's law
+  against co-simulation; fmpy's, fmusim's and the Compliance Checker's runs of the default chain.
 """
 
 from __future__ import annotations
@@ -33,9 +39,13 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 
+from chain_cases import CASES as CHAIN_CASES
+from dryfriction.drivers.chain import default_chain_fmu, default_chain_fmu3
+from dryfriction.drivers.chain_me import chain_me_description, simulate_chain_me
 from dryfriction.drivers.oscillator import default_fmu_path
 from dryfriction.drivers.oscillator3 import default_fmi3_path
 from dryfriction.params import Oscillator
+from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.references.exact import solve_exact
 from fmi2_helpers import Counting
 from test_hosts import fmucheck, fmusim
@@ -89,7 +99,47 @@ def test_descriptions_are_valid() -> None:
 # --------------------------------------------------------------------------- one instance, by hand
 
 
-class ME:
+class Host:
+    """What a host does with one Model Exchange instance ``f`` of nx states: read its arrays, handle
+    an event (its update ``update`` once, no iteration); ``derivatives_fn`` reads the derivatives."""
+
+    f: Any
+    nx: int
+    update: Any
+    derivatives_fn: Any
+
+    def event(self) -> tuple[Any, ...]:
+        info = self.update()
+        assert not info[0], "no event iteration"
+        return info
+
+    def arr(self, getter: Any, size: int | None = None) -> np.ndarray:
+        a = np.zeros(self.nx if size is None else size)
+        getter(a.ctypes.data_as(POINTER(c_double)), a.size)
+        return a
+
+    def states(self) -> np.ndarray:
+        return self.arr(self.f.getContinuousStates)
+
+    def derivatives(self) -> np.ndarray:
+        return self.arr(self.derivatives_fn)
+
+    def indicators(self) -> np.ndarray:
+        return self.arr(self.f.getEventIndicators)
+
+    def put(self, t: float, state: np.ndarray) -> None:
+        self.f.setTime(t)
+        self.f.setContinuousStates(state.ctypes.data_as(POINTER(c_double)), state.size)
+
+    def switch(self) -> tuple[Any, ...]:
+        """An event now: event mode, the update, back to continuous time."""
+        self.f.enterEventMode()
+        info = self.event()
+        self.f.enterContinuousTimeMode()
+        return info
+
+
+class ME(Host):
     """One FMI 2.0 Model Exchange instance through fmpy's FMU2Model, with the counting logger."""
 
     def __init__(self, tmp: Path, **start: float) -> None:
@@ -100,6 +150,7 @@ class ME:
         self.cb = Counting()
         self.f = FMU2Model(guid=self.md.guid, unzipDirectory=d, modelIdentifier="DryFrictionOscillator",
                            instanceName="me")
+        self.nx, self.update, self.derivatives_fn = 2, self.f.newDiscreteStates, self.f.getDerivatives
         self.f.instantiate(callbacks=self.cb.struct)
         self.f.setupExperiment(startTime=0.0)
         if start:
@@ -109,39 +160,11 @@ class ME:
         self.event()
         self.f.enterContinuousTimeMode()
 
-    def event(self) -> tuple[bool, ...]:
-        info = self.f.newDiscreteStates()
-        assert not info[0], "no event iteration"
-        return info
-
-    def arr(self, getter: Any, n: int = 2) -> np.ndarray:
-        a = np.zeros(n)
-        getter(a.ctypes.data_as(POINTER(c_double)), n)
-        return a
-
-    def states(self) -> np.ndarray:
-        return self.arr(self.f.getContinuousStates)
-
-    def derivatives(self) -> np.ndarray:
-        return self.arr(self.f.getDerivatives)
-
-    def indicators(self) -> np.ndarray:
-        return self.arr(self.f.getEventIndicators)
-
     def set(self, t: float, x: float, v: float) -> None:
-        self.f.setTime(t)
-        s = np.array([x, v])
-        self.f.setContinuousStates(s.ctypes.data_as(POINTER(c_double)), 2)
+        self.put(t, np.array([x, v]))
 
     def mode(self) -> int:
         return self.f.getInteger([self.vr["mode"]])[0]
-
-    def switch(self) -> tuple[bool, ...]:
-        """An event now: event mode, the update, back to continuous time."""
-        self.f.enterEventMode()
-        info = self.event()
-        self.f.enterContinuousTimeMode()
-        return info
 
 
 @pytest.fixture
@@ -327,15 +350,21 @@ def test_fmusim_model_exchange(version: int, solver: str, tmp_path: Path) -> Non
         assert abs(d["x"][-1] - ex.evaluate(np.array([12.56]))[0][0]) < 1e-8
 
 
-@pytest.mark.slow
-def test_compliance_checker_model_exchange(tmp_path: Path) -> None:
+def _fmucheck_me(fmu: Path, h: float, tmp_path: Path) -> Path:
+    """The Compliance Checker's Model Exchange run of fmu to 12.56 s at the step h: no warning or
+    error; its output file."""
     out, log = tmp_path / "out.csv", tmp_path / "log.txt"
-    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", "0.01", "-s", "12.56", "-o", str(out), "-e", str(log),
-                        str(_fmu(2))], capture_output=True, text=True, timeout=120)
+    r = subprocess.run([str(fmucheck()), "-k", "me", "-h", repr(h), "-s", "12.56", "-o", str(out), "-e", str(log),
+                        str(fmu)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
     text = log.read_text() + r.stdout
     assert "0 warning(s) and error(s)" in text and "0 Error(s)" in text and "0 Warning(s)" in text
-    d = _csv(out)
+    return out
+
+
+@pytest.mark.slow
+def test_compliance_checker_model_exchange(tmp_path: Path) -> None:
+    d = _csv(_fmucheck_me(_fmu(2), 0.01, tmp_path))
     assert d["time"][-1] == pytest.approx(12.56) and np.all(np.isfinite(d["x"]))
 
 
@@ -358,3 +387,352 @@ def test_fmu_state_in_model_exchange(me: ME) -> None:
     assert me.indicators()[0] == pytest.approx(0.4 - (math.cos(5 * 0.25) - 0.8), rel=1e-13)
     me.f.freeFMUstate(state)
     me.f.freeFMUstate(restored)
+
+
+# --------------------------------------------------------------------------- the chain
+
+
+def _chain_fmu(version: int) -> Path:
+    path = default_chain_fmu() if version == 2 else default_chain_fmu3()
+    if not path.is_file():
+        pytest.skip(f"did not run: {path} not built")
+    return path
+
+
+class ChainME(Host):
+    """One FMI 3.0 Model Exchange instance of the chain through fmpy's FMU3Model, n set in
+    Configuration Mode, the FMU's messages kept."""
+
+    def __init__(self, tmp: Path, ch: Chain, **start: Any) -> None:
+        from fmpy.fmi3 import FMU3Model
+        path = _chain_fmu(3)
+        self.n = n = ch.n
+        self.md = chain_me_description(path, n)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.messages: list[str] = []
+
+        def log(env: Any, status: int, category: bytes, message: bytes) -> None:
+            self.messages.append(message.decode())
+
+        self.f = FMU3Model(guid=self.md.guid, unzipDirectory=extract(str(path), unzipdir=str(tmp / "chain-me")),
+                           modelIdentifier="DryFrictionChain", instanceName="chain-me")
+        self.nx, self.update = 2 * n, self.f.updateDiscreteStates
+        self.derivatives_fn = self.f.getContinuousStateDerivatives
+        self.f.instantiate(logMessage=log)
+        self.f.enterConfigurationMode()
+        self.f.setUInt64([self.vr["n"]], [n])
+        self.f.exitConfigurationMode()
+        self.start = {**ch.fmu_params(), **start}
+
+    def init(self) -> None:
+        """Initialisation with the parameters, the first event update, continuous-time mode."""
+        for name, value in self.start.items():
+            vals = value if isinstance(value, list) else [value]
+            if isinstance(vals[0], int) and name in ("scheme", "friction_law"):
+                self.f.setInt64([self.vr[name]], vals)
+            else:
+                self.f.setFloat64([self.vr[name]], [float(x) for x in vals])
+        self.f.enterInitializationMode()
+        self.f.exitInitializationMode()
+        self.event()
+        self.f.enterContinuousTimeMode()
+
+    def set(self, t: float, x: Any, v: Any) -> None:
+        self.put(t, np.concatenate([np.asarray(x, dtype=float), np.asarray(v, dtype=float)]))
+
+    def mode(self) -> list[int]:
+        return list(self.f.getInt32([self.vr["mode"]], nValues=self.n))
+
+    def real(self, name: str) -> np.ndarray:
+        return np.array(self.f.getFloat64([self.vr[name]], nValues=self.n))
+
+    def free(self) -> None:
+        self.f.freeInstance()
+
+
+# the chain FMU's default parameters (2 blocks) as the reference's chain
+DEFAULT_CHAIN = Chain.make(2, omega=5.0, k=100.0, P0=1.0, N=1.0, mu_s=0.4, chi=0.7)
+
+
+def _chain_switches(modes: np.ndarray, ch: Chain) -> tuple[np.ndarray, int]:
+    """The rows where the mode of a block with friction changes (fmpy records both sides of every
+    event: one change per switch), and how many switches."""
+    fr = np.asarray(ch.N) > 0
+    changed = (np.diff(modes[:, fr], axis=0) != 0).sum(axis=1)
+    return np.nonzero(changed)[0] + 1, int(changed.sum())
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_chain_descriptions_declare_model_exchange(version: int) -> None:
+    """The chain's states x, v per block, their derivatives v, a, two event indicators per block."""
+    md = read_model_description(str(_chain_fmu(version)))
+    assert md.modelExchange is not None and md.coSimulation is not None
+    assert md.modelExchange.modelIdentifier == md.coSimulation.modelIdentifier == "DryFrictionChain"
+    pairs = [(d.variable.name, d.variable.derivative.name) for d in md.derivatives]
+    if version == 2:  # the build's n = 2, element by element
+        assert pairs == [("v[1]", "x[1]"), ("v[2]", "x[2]"), ("a[1]", "v[1]"), ("a[2]", "v[2]")]
+        assert md.numberOfEventIndicators == 4 and md.numberOfContinuousStates == 4
+    else:
+        assert pairs == [("v", "x"), ("a", "v")]
+        assert [e.variable.name for e in md.eventIndicators] == ["event_indicator_0", "event_indicator_1"]
+    from fmpy.validation import validate_fmu
+    assert validate_fmu(str(_chain_fmu(version))) == []
+
+
+def test_chain_by_hand(tmp_path: Path) -> None:
+    """Three blocks (different masses, springs, dampers, a wall spring): the derivatives against
+    M a = P(t) - K x - C v + F written here (F: -mode mu_k N sliding; stuck blocks held, a = 0), the
+    indicators against the relative velocities and the margins Fb -+ F_static, F_static = P - K x -
+    C v of the block; a breakaway, a stop that sticks and a reversal, each in one update."""
+    ch = Chain.make(3, omega=2.0, m=[1.0, 2.0, 1.5], k=[10.0, 20.0, 15.0], k_end=5.0, c=[0.1, 0.2, 0.3],
+                    P0=[1.0, 0.5, 0.0], phi=[0.0, 0.3, 0.0], N=[1.0, 2.0, 1.5], mu_s=0.5, chi=0.7,
+                    x0=[0.01, 0.02, 0.0], v0=[0.1, 0.0, 0.0])
+    me = ChainME(tmp_path, ch)
+    try:
+        me.init()
+        K, C = ch.matrices()
+        Fb, mukN = ch.mu_s * ch.N, ch.chi * ch.mu_s * ch.N
+
+        def static(t: float, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+            return ch.P0 * np.cos(ch.omega * t + ch.phi) - K @ x - C @ v
+
+        def accel(t: float, x: np.ndarray, v: np.ndarray, mode: np.ndarray) -> np.ndarray:
+            return np.where(mode == 0, 0.0, (static(t, x, v) - mode * mukN) / ch.m)
+
+        x, v = np.array(ch.x0), np.array(ch.v0)
+        Fs = static(0.0, x, v)
+        assert np.all(np.abs(Fs[1:]) < Fb[1:])  # blocks 2 and 3 start at rest within their limits
+        assert me.mode() == [1, 0, 0]
+        assert me.derivatives() == pytest.approx(np.concatenate([v, accel(0.0, x, v, np.array([1, 0, 0]))]),
+                                                 rel=1e-14, abs=1e-15)
+        z = me.indicators()
+        assert z == pytest.approx([0.1, Fb[1] - Fs[1], Fb[2] - Fs[2], 1.0, Fb[1] + Fs[1], Fb[2] + Fs[2]], rel=1e-14)
+        assert me.real("F_friction") == pytest.approx([-mukN[0], -Fs[1], -Fs[2]], rel=1e-14)  # the holding forces
+        # block 2 pulled beyond its forward limit (x[1] = -0.2: F_static about 7 N > Fb = 1 N): its margin is
+        # negative, the update breaks it away forward, the states as they were, its indicator DBL_MIN (block 3
+        # placed where its springs cancel: held)
+        x = np.array([0.01, -0.2, -0.15])
+        me.set(0.5, x, v)
+        z = me.indicators()
+        Fs = static(0.5, x, v)
+        assert z[1] == pytest.approx(Fb[1] - Fs[1], rel=1e-14) and z[1] < 0
+        info = me.switch()
+        assert info[3]  # valuesOfContinuousStatesChanged: the derivatives jumped
+        assert me.mode() == [1, 1, 0] and list(me.states()) == [*x, *v]
+        assert me.indicators()[1] == DBL_MIN
+        assert me.derivatives()[3:] == pytest.approx(accel(0.5, x, v, np.array([1, 1, 0])), rel=1e-14)
+        # block 1's velocity crossed 0 where its static force is within the limit: it sticks, v = 0; block 2
+        # slides on; one update
+        x, v = np.array([0.01, 0.02, 0.0]), np.array([-1e-9, 0.3, 0.0])
+        me.set(0.8, x, v)
+        Fs = static(0.8, x, np.array([0.0, 0.3, 0.0]))
+        assert abs(Fs[0]) < Fb[0] and me.indicators()[0] < 0
+        info = me.switch()
+        assert info[3] and me.mode() == [0, 1, 0] and list(me.states()) == [*x, 0.0, 0.3, 0.0]
+        assert me.indicators()[[0, 3]] == pytest.approx([Fb[0] - Fs[0], Fb[0] + Fs[0]], rel=1e-14)
+        assert me.derivatives()[3] == 0.0
+        # a reversal: block 2 sliding forward stops where its static force drives it backward beyond the
+        # limit (x[1] = 0.2; blocks 1 and 3 placed where their springs cancel, held): one update, slip
+        # backward from v = 0
+        x, v = np.array([0.4 / 3, 0.2, 0.15]), np.array([0.0, -1e-9, 0.0])
+        me.set(0.8, x, v)
+        assert np.all(np.abs(static(0.8, x, np.zeros(3))[[0, 2]]) < Fb[[0, 2]])
+        assert me.indicators()[1] < 0
+        info = me.switch()
+        assert info[3] and me.mode() == [0, -1, 0] and me.states()[4] == 0.0
+        assert me.indicators()[1] == DBL_MIN
+        # an event with nothing to switch changes nothing
+        info = me.switch()
+        assert not info[3] and me.mode() == [0, -1, 0]
+        # the host moves block 1's belt under it while it is stuck: the step ends in an event, the block
+        # slides backward relative to its belt at its own speed
+        me.f.setFloat64([me.vr["v_belt"]], [0.2, 0.0, 0.0])
+        assert me.f.completedIntegratorStep()[0]  # enterEventMode
+        me.switch()
+        assert me.mode() == [-1, -1, 0] and me.states()[3] == 0.0
+        assert me.indicators()[0] == pytest.approx(0.2, rel=1e-15)
+        # a wrong size names the argument and its valid value
+        with pytest.raises(FMICallException):
+            me.arr(me.f.getContinuousStateDerivatives, 4)
+        assert "nx = 4" in me.messages[-1] and "must be 6" in me.messages[-1]
+        with pytest.raises(FMICallException):
+            me.arr(me.f.getEventIndicators, 3)
+        assert "ni = 3" in me.messages[-1] and "must be 6" in me.messages[-1]
+        assert me.f.getNumberOfContinuousStates() == me.f.getNumberOfEventIndicators() == 6
+        # the nominals: block i's static deflection F / K_i of the largest force F (here max(mu_s, mu_k) N
+        # = 1 N of block 2), K_i its springs, and sqrt(K_i / m_i) times it
+        K_i = np.array([30.0, 35.0, 20.0])
+        F = max(np.max(np.abs(ch.P0)), np.max(Fb), np.max(K_i * np.abs(ch.x0)), np.max(np.sqrt(K_i * ch.m) * ch.v0))
+        assert F == 1.0
+        nominal = F / K_i
+        assert me.arr(me.f.getNominalsOfContinuousStates) == pytest.approx(
+            np.concatenate([nominal, np.sqrt(K_i / ch.m) * nominal]), rel=1e-15)
+    finally:
+        me.free()
+
+
+def test_chain_fmu_state_in_model_exchange(tmp_path: Path) -> None:
+    """An FMU state of the chain taken in continuous-time mode, serialised and restored after a
+    switch, gives back the time, the states, the modes and the derivatives."""
+    ch = Chain.make(3, omega=0.8, N=[0.6, 0.5, 0.4], P0=[1.0, 0.0, 0.3], x0=[0.0, 0.1, 0.0], v0=[0.2, 0.0, 0.0])
+    me = ChainME(tmp_path, ch)
+    try:
+        me.init()
+        me.set(0.3, [0.635, 0.3, 0.0], [0.1, 0.0, 0.0])
+        modes, x, dx = me.mode(), me.states(), me.derivatives()
+        state = me.f.getFMUState()
+        blob = me.f.serializeFMUState(state)
+        me.f.freeFMUState(state)
+        me.set(0.3, [0.635, 0.3, 0.0], [-1e-9, 0.0, 0.0])  # block 1 stops and sticks
+        me.switch()
+        assert me.mode() != modes
+        restored = me.f.deserializeFMUState(blob)
+        me.f.setFMUState(restored)
+        me.f.freeFMUState(restored)
+        assert me.mode() == modes and np.array_equal(me.states(), x)
+        assert np.array_equal(me.derivatives(), dx) and dx[3] != 0.0
+    finally:
+        me.free()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("solver", ["CVode", "Euler"])
+def test_chain_fmpy_runs_to_the_end(version: int, solver: str) -> None:
+    """The default chain (2 blocks, k 100, P0 1, omega 5, N 1, mu_s 0.4, chi 0.7) with fmpy's defaults:
+    to the end; CVode with the reference's switches and x within 1e-4; Euler (fmpy's step 1e-3)
+    within 1e-2. FMI 2.0 (the build's n = 2) and 3.0 give the same numbers."""
+    kw = {"step_size": 1e-4, "output_interval": 1e-3} if solver == "Euler" else {}
+    r = simulate_fmu(str(_chain_fmu(version)), fmi_type="ModelExchange", solver=solver, record_events=True, **kw)
+    if version == 2:
+        x = np.stack([r["x[1]"], r["x[2]"]], axis=1)
+        modes = np.stack([r["mode[1]"], r["mode[2]"]], axis=1)
+    else:
+        x, modes = np.asarray(r["x"]), np.asarray(r["mode"])
+    assert r["time"][-1] == pytest.approx(12.56, abs=1e-12) and np.all(np.isfinite(x))
+    ch = DEFAULT_CHAIN
+    ref = solve_chain(ch, 12.56)
+    rows, n = _chain_switches(modes, ch)
+    err = np.max(np.abs(x - ref.evaluate(r["time"])["x"]))
+    if solver == "CVode":
+        assert n == len(ref.events) == 41 and err < 1e-4
+    else:
+        assert err < 1e-2
+
+
+def test_chain_fmi3_gives_fmi2s_numbers() -> None:
+    """The default chain (n = 2) through both FMUs with CVode at 1e-10: the same times and x, bit for bit."""
+    r2, r3 = (simulate_fmu(str(_chain_fmu(v)), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-10)
+              for v in (2, 3))
+    assert np.array_equal(r2["time"], r3["time"])
+    assert np.array_equal(np.stack([r2["x[1]"], r2["x[2]"]], axis=1), np.asarray(r3["x"]))
+
+
+# the stick-slip cases of n = 3 ... 5 blocks: the coupled validation cases (tests/chain_cases.py) and two
+# longer chains, all blocks with friction
+CHAIN_ME_CASES = {
+    **{name: ch for name, ch in CHAIN_CASES.items() if name != "friction-on-one"},
+    "four-blocks": Chain.make(4, omega=0.6, k=[1.0, 2.0, 1.5, 1.0], m=[1.0, 0.5, 2.0, 1.0], N=[0.6, 0.3, 0.8, 0.4],
+                              chi=0.6, P0=[1.0, 0.0, 0.0, 0.8], phi=[0.0, 0.0, 0.0, 2.0], c=0.02),
+    "five-blocks": Chain.make(5, omega=0.4, N=[0.5, 0.7, 0.3, 0.6, 0.4], chi=[0.7, 0.5, 0.9, 0.6, 0.8],
+                              P0=[0.0, 0.0, 1.2, 0.0, 0.0], k_end=1.0),
+}
+
+
+def _chain_accuracy(name: str, rtol: float, x_tol: float, t_tol: float) -> None:
+    """CVode at rtol over 10 excitation periods of CHAIN_ME_CASES[name] against the event-driven
+    reference: every block's x within x_tol, exactly its switches, their times within t_tol."""
+    ch = CHAIN_ME_CASES[name]
+    t_end = 10 * ch.period
+    ref = solve_chain(ch, t_end)
+    r = simulate_chain_me(ch, t_end, _chain_fmu(3), relative_tolerance=rtol, output_interval=ch.period / 50,
+                          record_events=True)
+    x, modes = np.asarray(r["x"]), np.asarray(r["mode"])
+    assert r["time"][-1] == pytest.approx(t_end)
+    assert np.max(np.abs(x - ref.evaluate(r["time"])["x"])) < x_tol
+    rows, n = _chain_switches(modes, ch)
+    assert n == len(ref.events) > 20
+    per_row = (np.diff(modes[:, np.asarray(ch.N) > 0], axis=0)[rows - 1] != 0).sum(axis=1)
+    t_me, t_ref = np.repeat(r["time"][rows], per_row), np.array([e[0] for e in ref.events])
+    assert np.max(np.abs(np.sort(t_me) - np.sort(t_ref))) < t_tol
+
+
+@pytest.mark.parametrize("name", list(CHAIN_ME_CASES))
+def test_chain_cvode_accuracy_against_the_reference(name: str) -> None:
+    """CVode at 1e-10 over 10 excitation periods: every block's x within 3e-7 of the event-driven
+    reference (dryfriction.references.chain; measured 8.6e-9 ... 2.4e-7, the largest on the five
+    blocks whose x reaches 3 m), exactly its switches (count), at its times within 3e-6 s: a
+    breakaway's time error is the position's error over the static force's rate (measured at most
+    1.1e-6 s, five-blocks)."""
+    _chain_accuracy(name, 1e-10, 3e-7, 3e-6)
+
+
+@pytest.mark.parametrize("name", list(CHAIN_ME_CASES))
+def test_chain_cvode_accuracy_falls_with_the_tolerance(name: str) -> None:
+    """At 1e-12 every block's x within 1e-8 of the reference (measured at most 3.9e-9), the switch
+    times within 1e-7 s."""
+    _chain_accuracy(name, 1e-12, 1e-8, 1e-7)
+
+
+@pytest.mark.parametrize("start", [
+    {"v_belt": [0.05, -0.05, 0.1]},
+    {"friction_law": 2, "v_s": [0.05] * 3},
+    {"v_belt": [0.05, 0.0, 0.1], "friction_law": 2, "v_s": [0.05] * 3}],
+    ids=["belts", "stribeck", "stribeck-belts"])
+def test_chain_belt_and_stribeck_against_cosimulation(start: dict[str, Any]) -> None:
+    """The moving belts and Stribeck's law as in co-simulation: three damped blocks over 2.5
+    excitation periods, CVode at 1e-10 against the located scheme at h = 2e-5 (its own error ~1e-8)
+    within 2e-7 (measured 2.6e-8 ... 5.2e-8), with the same number of switches."""
+    from dryfriction.drivers.chain import ChainFMU3
+    ch = Chain.make(3, omega=0.8, N=[0.6, 0.5, 0.4], chi=0.6, P0=[1.0, 0.0, 0.3], c=0.02)
+    t_end = 2.5 * ch.period
+    r = simulate_chain_me(ch, t_end, _chain_fmu(3), start=start, relative_tolerance=1e-10, output_interval=0.01,
+                          record_events=True)
+    t, first = np.unique(r["time"], return_index=True)  # the left side of each event
+    x_me = np.asarray(r["x"])[first]
+    inputs = {k: v for k, v in start.items() if k == "v_belt"}
+    params = {**ch.fmu_params(), **{k: v for k, v in start.items() if k != "v_belt"}, "h": 2e-5}
+    with ChainFMU3(n=3, params=params, fmu_path=_chain_fmu(3)) as cs:
+        run = cs.run(t_stop=t_end, dt=0.01, inputs=inputs)
+    x = np.stack([np.interp(run.t, t, x_me[:, i]) for i in range(3)], axis=1)
+    assert np.max(np.abs(x - run.x)) < 2e-7
+    n_me, n_cs = _chain_switches(np.asarray(r["mode"]), ch)[1], int(np.sum(np.diff(run.mode, axis=0) != 0))
+    assert n_me == n_cs > 10
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("solver", ["cvode", "euler"])
+def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path) -> None:
+    """fmusim integrates the default chain (n = 2): to the end, no warning; CVODE at 1e-10 with the
+    reference's 41 switches and x within 1e-8; Euler at the step 1e-4 within 1e-3 (at its
+    default step, the description's 0.01, explicit Euler amplifies the chain's undamped modes, about
+    16 rad/s: a host's choice, not the FMU's)."""
+    out = tmp_path / "out.csv"
+    args = [str(fmusim()), "--interface-type", "me", "--solver", solver, "--output-file", str(out)]
+    args += ["--tolerance", "1e-10"] if solver == "cvode" else ["--output-interval", "1e-4"]
+    r = subprocess.run(args + [str(_chain_fmu(version))], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "[WARNING]" not in r.stdout + r.stderr and "[ERROR]" not in r.stdout + r.stderr
+    lines = out.read_text().splitlines()
+    rows = [line.replace('"', "").replace(" ", ",").split(",") for line in lines[1:]]
+    a = np.array(rows, dtype=float)  # time, x[1], x[2], v ..., mode[1], mode[2] (FMI 3.0: arrays space-separated)
+    t, x, modes = a[:, 0], a[:, 1:3], a[:, -2:]
+    assert t[-1] == pytest.approx(12.56, abs=2e-4)
+    ch = DEFAULT_CHAIN
+    ref = solve_chain(ch, 12.56)
+    err = np.max(np.abs(x - ref.evaluate(t)["x"]))
+    if solver == "cvode":
+        assert _chain_switches(modes, ch)[1] == len(ref.events) == 41 and err < 1e-8
+    else:
+        assert err < 1e-3
+
+
+@pytest.mark.slow
+def test_compliance_checker_chain_model_exchange(tmp_path: Path) -> None:
+    """The Compliance Checker's Model Exchange run of the FMI 2.0 chain (its explicit Euler at 1e-3):
+    no warning or error, to the end, x within 1e-2 of the reference."""
+    data = np.genfromtxt(_fmucheck_me(_chain_fmu(2), 0.001, tmp_path), delimiter=",", skip_header=1)
+    t, x = data[:, 0], data[:, 1:3]
+    assert t[-1] == pytest.approx(12.56)
+    ref = solve_chain(DEFAULT_CHAIN, 12.56)
+    assert np.max(np.abs(x - ref.evaluate(t)["x"])) < 1e-2

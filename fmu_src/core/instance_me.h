@@ -27,9 +27,10 @@ typedef struct {
 /* The instance is run by a host's integrator (Model Exchange): called once, right after
  * dfo_inst_new; every other dfo_inst_me_* function needs it. */
 void dfo_inst_me_start(dfo_lifecycle *lc);
-/* The number of continuous states and of event indicators (fixed for the model). */
-size_t dfo_inst_me_n_states(void);
-size_t dfo_inst_me_n_indicators(void);
+/* The number of continuous states and of event indicators of the instance (fixed for the model, or
+ * by its structural parameters: read after configuration mode). */
+size_t dfo_inst_me_n_states(const dfo_lifecycle *lc);
+size_t dfo_inst_me_n_indicators(const dfo_lifecycle *lc);
 
 /* The end of initialisation: dfo_inst_exit_init, then event mode. */
 dfo_inst_status dfo_inst_me_exit_init(dfo_lifecycle *lc, const char *fn);

@@ -70,7 +70,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 {
     BEGIN_ME(fmi3GetNumberOfEventIndicators);
     if (!n) return FAIL("fmi3GetNumberOfEventIndicators: nEventIndicators is NULL.");
-    *n = dfo_inst_me_n_indicators();
+    *n = dfo_inst_me_n_indicators(in->core);
     return fmi3OK;
 }
 
@@ -78,7 +78,7 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
 {
     BEGIN_ME(fmi3GetNumberOfContinuousStates);
     if (!n) return FAIL("fmi3GetNumberOfContinuousStates: nContinuousStates is NULL.");
-    *n = dfo_inst_me_n_states();
+    *n = dfo_inst_me_n_states(in->core);
     return fmi3OK;
 }
 

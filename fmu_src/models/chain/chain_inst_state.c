@@ -39,6 +39,7 @@ static void copy_values(chain_values *dst, const chain_values *src)
     dst->s = keep.s;
     dst->s0 = keep.s0;
     dst->M = keep.M;
+    dst->me = keep.me;
     const size_t n = src->n;
     memcpy(dst->pa, src->pa, (size_t)DFO_NUM_AP * n * sizeof(double));
     memcpy(dst->ua, src->ua, (size_t)DFO_NUM_AI * n * sizeof(double));
@@ -90,7 +91,7 @@ dfo_inst_status dfo_inst_set_state(dfo_lifecycle *lc, const char *fn, const void
     in->lc.run = st->run;
     copy_values(&in->v, &st->v);
     in->v.M = NULL;
-    in->v.acc_valid = 0;
+    in->v.acc_valid = in->v.me_fresh = 0;
     if (in->lc.run.phase & DFO_PHASES_STARTED) {
         /* the model follows from the parameters (the state is kept: it is the saved one) */
         const chain_params p = chain_inst_params_of(&in->v);

@@ -154,7 +154,7 @@ void chain_inst_accelerations(chain_values *v)
             if (F != v->s.F[i]) v->scratch[i] += (F - v->s.F[i]) / v->pa[(size_t)DFO_AP_m * n + i];
         }
     }
-    if ((int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER) return;
+    if ((int)v->sp[DFO_SP_scheme] != DFO_MD_SCHEME_PAPER || v->me) return;
     /* the paper's stuck block creeps with the force that holds it: with inputs set since the step,
      * the held force that takes their change (the same bits when they are unchanged) */
     for (size_t i = 0; i < n; i++) {
@@ -211,6 +211,7 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const cha
         if (!chain_inst_started(in)) chain_inst_free_model(v);
         return DFO_INST_OK;
     }
+    if (v->me && chain_inst_started(in)) chain_inst_me_refresh(v); /* (the host moved the state or the inputs) */
     const int need_a = id == DFO_OUT_a || (in->lc.run.event_pending && id == DFO_OUT_F_friction);
     const int temporary = !chain_inst_started(in);
     if (need_a && (temporary || !v->acc_valid)) {
@@ -229,6 +230,8 @@ static dfo_inst_status get_outputs(chain_instance *in, const char *fn, const cha
         case DFO_OUT_a: x = left ? a_left : v->scratch[i]; break;
         case DFO_OUT_F_friction: x = left ? F_left : chain_inst_friction_out(v, i); break;
         case DFO_OUT_mode: iout[i - i0] = left ? run->event_from : v->s.mode[i]; continue;
+        case DFO_OUT_event_indicator_0: x = chain_inst_me_indicator(v, 0, i); break;
+        case DFO_OUT_event_indicator_1: x = chain_inst_me_indicator(v, 1, i); break;
         default: break;
         }
         if (!isfinite(x))
@@ -313,7 +316,7 @@ static dfo_inst_status set_values(chain_instance *in, const char *fn, const unsi
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) *chain_inst_stored(&in->v, r.var, i0 + i) = value[k + i];
         if (r.var->home == DFO_IN_INPUTS) in->v.u_set[r.var->slot] = 1;
-        in->v.acc_valid = 0;
+        in->v.acc_valid = in->v.me_fresh = 0;
         k += c;
     }
     return DFO_INST_OK;

@@ -170,6 +170,7 @@ chain_params chain_inst_params_of(const chain_values *v)
     p.h = v->sp[DFO_SP_h];
     p.alpha = v->sp[DFO_SP_alpha];
     p.scheme = (int)v->sp[DFO_SP_scheme];
+    if (v->me) p.scheme = DFO_SCHEME_LOCATED; /* Model Exchange: the physics of the schemes whose stuck blocks rest */
     p.account_energy = 0;
     p.h = chain_step_size(&p); /* h = 0: derived from the dynamics */
     return p;

@@ -6,6 +6,7 @@
  *                       get/set, outputs, the structural parameter n
  *   chain_inst_step.c   doStep, with and without FMI 3.0 events
  *   chain_inst_state.c  FMU-state copies and their serialisation (core/fmu_state.h's format)
+ *   chain_inst_me.c     Model Exchange (core/instance_me.h): derivatives, event indicators, events
  *
  * The values: the structural parameter n, the scalar parameters, the per-block parameter and input
  * arrays (n values each, through the host's allocator), the chain model built from them at the end
@@ -53,6 +54,9 @@ typedef struct {
     int belts_unsynced;         /* the state is on the belts of ua, taken at the start of a step that has not
                                  * copied them to ua_used yet (else on those of ua_used) */
     size_t event_block;         /* the block of a pending event (the run's event_pending, event_from) */
+    int me;                     /* made for Model Exchange (chain_inst_me.c): the host integrates x, v */
+    int me_fresh;               /* Model Exchange: the state's forces and scratch's accelerations are those of
+                                 * the state, time and inputs (cleared by every change of them) */
 } chain_values;
 
 typedef struct {
@@ -115,5 +119,13 @@ double chain_inst_friction_out(const chain_values *v, size_t i);
 /* The output a of every block into v->scratch (chain_accelerations; the paper scheme's stuck blocks
  * with the held force of chain_inst_friction_out). */
 void chain_inst_accelerations(chain_values *v);
+
+/* ---- chain_inst_me.c ---- */
+/* The output event_indicator_0 (which = 0) or event_indicator_1 (1) of block i: Model Exchange's
+ * event indicators at the state under the current inputs (the model built). */
+double chain_inst_me_indicator(chain_values *v, int which, size_t i);
+/* Model Exchange: the forces and accelerations of the state, time and inputs (into the state and
+ * scratch) unless they are (me_fresh). */
+void chain_inst_me_refresh(chain_values *v);
 
 #endif

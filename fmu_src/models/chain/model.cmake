@@ -12,7 +12,7 @@ set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numer
     models/chain/chain_forces.c models/chain/chain_engine.c)
 # the instance core (core/instance.h's model API), split by concern (chain_instance.h)
 set(MODEL_CORE models/chain/chain_instance.c models/chain/chain_instance.h models/chain/chain_inst_vars.c
-    models/chain/chain_inst_step.c models/chain/chain_inst_state.c models/chain/chain_inst_deriv.c)
+    models/chain/chain_inst_step.c models/chain/chain_inst_state.c models/chain/chain_inst_deriv.c models/chain/chain_inst_me.c)
 # n is a structural parameter: FMI 3.0 sets it in configuration mode; an FMI 2.0 build fixes it,
 # with its description generated for that n (arrays as m[1] ...) and chain_config.h saying it
 set(MODEL_FMI2_SIZE ${DFO_CHAIN_N})

@@ -30,8 +30,16 @@
 #define ME_STATES 2
 #define ME_INDICATORS 2
 
-size_t dfo_inst_me_n_states(void) { return ME_STATES; }
-size_t dfo_inst_me_n_indicators(void) { return ME_INDICATORS; }
+size_t dfo_inst_me_n_states(const dfo_lifecycle *lc)
+{
+    (void)lc;
+    return ME_STATES;
+}
+size_t dfo_inst_me_n_indicators(const dfo_lifecycle *lc)
+{
+    (void)lc;
+    return ME_INDICATORS;
+}
 
 void dfo_inst_me_start(dfo_lifecycle *lc) { osc(lc)->me = 1; }
 
