@@ -41,7 +41,8 @@ def main() -> None:
     switch = np.nonzero(np.diff(me["mode"]))[0] + 1      # fmpy records both sides of every event
     print(f"Model Exchange (CVode, rtol {args.rtol:g}): {switch.size} events")
     for i in switch:
-        kind = "stop, stuck" if me["mode"][i] == 0 else f"reversal, sliding {'forward' if me['mode'][i] > 0 else 'backward'}"
+        way = "forward" if me["mode"][i] > 0 else "backward"
+        kind = "stop, stuck" if me["mode"][i] == 0 else f"reversal, sliding {way}"
         print(f"  t = {me['time'][i]:.6f} s  s = {me['x'][i]:.7f} m  {kind}")
     s_me, s_cs = float(me["x"][-1]), float(cs["x"][-1])
     stuck = me["mode"][-1] == 0 and cs["mode"][-1] == 0

@@ -20,12 +20,18 @@ What is asserted, against independent numbers:
   the relative velocities and each stuck block's margins, a breakaway, a stop and a reversal in one
   update each; CVode at 1e-10 and 1e-12 on stick-slip chains of 3 to 5 blocks against the event-driven
   reference (dryfriction.references.chain: x, switch count and times); the belts and Stribeck's law
-  against co-simulation; fmpy's, fmusim's and the Compliance Checker's runs of the default chain.
+  against co-simulation; fmpy's, fmusim's and the Compliance Checker's runs of the default chain;
+- the FMIZoo friction pendulum (SpringFrictionPendulum1D: the Modelica Standard Library's
+  MassWithStopAndFriction on a spring, dryfriction.drivers.modelica): the mapped FMU's friction force
+  and acceleration at four speeds against the element's equations written here, its holding force
+  and margins; Model Exchange (CVode 1e-10) and the located scheme against the event-driven reference
+  (dryfriction.references.belt: s(8), the four reversals and the stick) and Dymola's published s(8).
 """
 
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 import zipfile
@@ -364,6 +370,25 @@ def test_pendulum_mapping_gives_the_modelica_forces(tmp_path: Path) -> None:
     finally:
         inst.f.terminate()
         inst.f.freeInstance()
+
+
+def test_pendulum_mapping_edges() -> None:
+    """Without the Stribeck term (or with fexp = 0, where it is constant) the law is Coulomb's at
+    F_Coulomb (+ F_Stribeck); without friction mu_s = 0; bad values and a motion that may reach the
+    hard stops are refused in one line that names the value."""
+    assert SpringFrictionPendulum(F_Stribeck=0.0).start_values() == {
+        "m": 1.0, "k": 10.0, "c": 0.05, "P0": 0.0, "N": 1.0, "x0": 0.5, "v0": 0.0, "F_ext": 10.0,
+        "mu_s": 0.25, "chi": 1.0}
+    assert SpringFrictionPendulum(fexp=0.0).start_values()["mu_s"] == 0.75
+    assert "friction_law" not in SpringFrictionPendulum(fexp=0.0).start_values()
+    assert SpringFrictionPendulum(F_Coulomb=0.0, F_Stribeck=0.0).start_values()["mu_s"] == 0.0
+    assert SpringFrictionPendulum(s0=-24.0).reaches_stops and not SpringFrictionPendulum().reaches_stops  # 1 + 25 > 25
+    for kw, text in [({"m": 0.0}, "m must be > 0, not 0.0"), ({"F_Coulomb": -1.0}, "F_Coulomb must be >= 0"),
+                     ({"s0": 30.0}, "s0 = 30.0 must lie strictly between smin = -25.0")]:
+        with pytest.raises(ValueError, match=re.escape(text)):
+            SpringFrictionPendulum(**kw)
+    with pytest.raises(ValueError, match="may reach a hard stop"):
+        SpringFrictionPendulum(s0=-24.0).start_values()
 
 
 @pytest.fixture(scope="module")

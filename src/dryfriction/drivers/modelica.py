@@ -66,11 +66,9 @@ class SpringFrictionPendulum:
         for name in ("F_prop", "F_Coulomb", "F_Stribeck", "fexp"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"{name} must be >= 0, not {getattr(self, name)!r}")
-        if self.F_Stribeck > 0 and self.fexp == 0:
-            raise ValueError("fexp = 0 with F_Stribeck > 0 is Coulomb friction F_Coulomb + F_Stribeck: "
-                             "give it as F_Coulomb with F_Stribeck = 0")
         if not (math.isfinite(self.s0) and math.isfinite(self.v0) and self.smin < self.s0 < self.smax):
-            raise ValueError(f"s0 = {self.s0!r} must lie strictly between smin = {self.smin!r} and smax = {self.smax!r}")
+            raise ValueError(f"s0 = {self.s0!r} must lie strictly between smin = {self.smin!r} "
+                             f"and smax = {self.smax!r}")
 
     @property
     def breakaway(self) -> float:
@@ -104,6 +102,8 @@ class SpringFrictionPendulum:
         }
         if self.breakaway == 0:
             return {**start, "mu_s": 0.0, "chi": 1.0}
+        if self.F_Stribeck > 0 and self.fexp == 0:  # exp(0) = 1: Coulomb friction at F_Coulomb + F_Stribeck
+            return {**start, "mu_s": self.breakaway, "chi": 1.0}
         start.update(mu_s=self.breakaway, chi=self.F_Coulomb / self.breakaway)
         if self.F_Stribeck > 0:
             start.update(friction_law=2, v_s=1.0 / self.fexp, delta=1.0)
