@@ -19,9 +19,10 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
     ("cosimulation.py", ["--periods", "20"]),
     ("rollback.py", []),
     ("split_chain.py", ["--periods", "4"]),
+    ("friction_pendulum.py", []),
 ])
 def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path) -> None:
-    if name == "frequency_sweep.py":
+    if name in ("frequency_sweep.py", "friction_pendulum.py"):
         args = [*args, "--out", str(tmp_path)]
     env = {**os.environ, "DFO_FMU": str(fmu_path), "MPLBACKEND": "Agg"}
     r = subprocess.run([sys.executable, str(EXAMPLES / name), *args], capture_output=True, text=True, timeout=300,
@@ -33,8 +34,11 @@ def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path
         assert "bit-identical: True" in r.stdout
     if name == "split_chain.py":
         assert "inputs hold" in r.stdout and "inputs extrapolate" in r.stdout
+    if name == "friction_pendulum.py":
+        assert "5 events" in r.stdout and ": stuck" in r.stdout and (tmp_path / "pendulum.png").stat().st_size > 0
 
 
 def test_examples_are_all_tested() -> None:
-    assert sorted(p.name for p in EXAMPLES.glob("*.py")) == ["cosimulation.py", "frequency_sweep.py", "rollback.py",
+    assert sorted(p.name for p in EXAMPLES.glob("*.py")) == ["cosimulation.py", "frequency_sweep.py",
+                                                                 "friction_pendulum.py", "rollback.py",
                                                                  "split_chain.py"]

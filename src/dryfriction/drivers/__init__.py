@@ -6,7 +6,10 @@
   early return, the intermediate update);
 - :mod:`.chain`: the chain of oscillators, FMI 2.0 and 3.0 (:class:`~.chain.ChainFMU2`,
   :class:`~.chain.ChainFMU3`);
-- :mod:`.scenes`: the named parameter scenes a run starts from.
+- :mod:`.scenes`: the named parameter scenes a run starts from;
+- :mod:`.chain_me`: the FMI 3.0 chain's Model Exchange under fmpy (n set in Configuration Mode);
+- :mod:`.modelica`: the Modelica Standard Library's spring-and-friction pendulum (the FMIZoo's
+  ``SpringFrictionPendulum1D``) as the oscillator's start values.
 
 Nothing is imported with the package: ``import dryfriction.drivers`` loads no FMU code.
 """
