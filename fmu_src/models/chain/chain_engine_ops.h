@@ -22,6 +22,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #define CHAIN_NEWTON_ITERS 60
 
@@ -80,34 +81,39 @@ typedef struct chain_eng_ops_s {
 
 ENG_DECLARE_SCHEMES(chain_);
 
+/* y = T x for the symmetric tridiagonal T of diagonal D and off-diagonal O (O[i] couples i and i + 1),
+ * each row summed as D_i x_i + O_{i-1} x_{i-1} + O_i x_{i+1}; the end rows out of the loop (a loop
+ * without branches: the compiler vectorises it). x and y do not overlap. */
+static inline void chain_op_tri(size_t n, const double *D, const double *O, const double *x, double *y)
+{
+    if (n == 0) return;
+    if (n == 1) {
+        y[0] = D[0] * x[0];
+        return;
+    }
+    y[0] = D[0] * x[0] + O[0] * x[1];
+    for (size_t i = 1; i + 1 < n; i++) y[i] = (D[i] * x[i] + O[i - 1] * x[i - 1]) + O[i] * x[i + 1];
+    y[n - 1] = D[n - 1] * x[n - 1] + O[n - 2] * x[n - 2];
+}
+
 static inline void chain_op_K(void *ctx, const double *x, double *y)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    const size_t n = C->n;
-    for (size_t i = 0; i < n; i++) {
-        double s = C->Kd[i] * x[i];
-        if (i > 0) s += C->Ko[i - 1] * x[i - 1];
-        if (i + 1 < n) s += C->Ko[i] * x[i + 1];
-        y[i] = s;
-    }
+    chain_op_tri(C->n, C->Kd, C->Ko, x, y);
 }
 
 static inline void chain_op_C(void *ctx, const double *v, double *y)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    const size_t n = C->n;
-    for (size_t i = 0; i < n; i++) {
-        double s = C->Cd[i] * v[i];
-        if (i > 0) s += C->Co[i - 1] * v[i - 1];
-        if (i + 1 < n) s += C->Co[i] * v[i + 1];
-        y[i] = s;
-    }
+    chain_op_tri(C->n, C->Cd, C->Co, v, y);
 }
 
 static inline void chain_op_M(void *ctx, const double *a, double *y)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    for (size_t i = 0; i < C->n; i++) y[i] = C->m[i] * a[i];
+    const size_t n = C->n;
+    const double *m = C->m;
+    for (size_t i = 0; i < n; i++) y[i] = m[i] * a[i];
 }
 
 /* Thomas's factors of the slot (cp, inv): 0 when a pivot is not positive. */
@@ -133,13 +139,15 @@ static inline int chain_op_factor(void *ctx, int slot, double cM, double cC, dou
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
     double *d = C->d[slot], *e = C->e[slot];
-    int dominant = 1;
-    for (size_t i = 0; i < n; i++) {
-        d[i] = cM * C->m[i] + cC * C->Cd[i] + cK * C->Kd[i];
-        e[i] = (i + 1 < n) ? cC * C->Co[i] + cK * C->Ko[i] : 0.0;
-        dominant &= d[i] > fabs(e[i]) + ((i > 0) ? fabs(e[i - 1]) : 0.0);
-        C->kh[slot][i] = 0; /* the kept basis factors anew */
-    }
+    const double *m = C->m, *Cd = C->Cd, *Kd = C->Kd, *Co = C->Co, *Ko = C->Ko;
+    if (n == 0) return 1;
+    /* (each loop without branches: the first row's dominance fabs(e_0) + 0.0, which compares as fabs(e_0)) */
+    for (size_t i = 0; i < n; i++) d[i] = cM * m[i] + cC * Cd[i] + cK * Kd[i];
+    for (size_t i = 0; i + 1 < n; i++) e[i] = cC * Co[i] + cK * Ko[i];
+    e[n - 1] = 0.0;
+    int dominant = d[0] > fabs(e[0]);
+    for (size_t i = 1; i < n; i++) dominant &= d[i] > fabs(e[i]) + fabs(e[i - 1]);
+    memset(C->kh[slot], 0, n * sizeof(int)); /* the kept basis factors anew */
     C->tok[slot] = 0;
     return dominant || chain_op_thomas(C, slot);
 }
@@ -328,14 +336,15 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
     const double *d = C->d[P->slot], *e = C->e[P->slot], *l = P->limit, *vb = P->vb;
-    for (size_t i = 0; i < n; i++) {
-        double r = P->p_hat[i];
-        if (vb) {
-            r -= d[i] * vb[i];
-            if (i > 0) r -= e[i - 1] * vb[i - 1];
-            if (i + 1 < n) r -= e[i] * vb[i + 1];
-        }
-        C->q[i] = -r;
+    const double *ph = P->p_hat;
+    double *q = C->q;
+    if (!vb || n <= 1) {
+        for (size_t i = 0; i < n; i++) q[i] = -(vb ? ph[i] - d[i] * vb[i] : ph[i]);
+    } else { /* r = p_hat - M_hat vb row by row (its terms in the order d, lower, upper); the end rows
+              * out of the loop */
+        q[0] = -((ph[0] - d[0] * vb[0]) - e[0] * vb[1]);
+        for (size_t i = 1; i + 1 < n; i++) q[i] = -(((ph[i] - d[i] * vb[i]) - e[i - 1] * vb[i - 1]) - e[i] * vb[i + 1]);
+        q[n - 1] = -((ph[n - 1] - d[n - 1] * vb[n - 1]) - e[n - 2] * vb[n - 2]);
     }
     if (pivots) *pivots = 0;
     if (what == ENG_SOLVE_BASIS && P->cC == 0.0 && P->cK == 0.0) { /* M_hat diagonal (the held solves) */
