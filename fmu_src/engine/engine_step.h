@@ -838,7 +838,7 @@ static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s
         for (size_t i = 0; i < n && !other; i++) other = hh != hA[i];
         if (other) {
             pin = rebase_pins(E, in, s);
-            for (size_t i = 0; i < n; i++) any |= (pin[i] == 0) & rebases_len(S, hA[i], hh, tol);
+            for (size_t i = 0; i < n && !any; i++) any = (pin[i] == 0) & rebases_len(S, hA[i], hh, tol);
         }
     }
     if (!any) {
