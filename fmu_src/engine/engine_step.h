@@ -1237,15 +1237,42 @@ typedef struct {
     eng_status err;
     double x_last;     /* the length of the last trial (NaN: none) */
     const trial *T_last; /* where its T was written */
+    int hi_last;       /* its margin is not > 0 (a root's end it may return) */
+    double x_hi;       /* the length of the last such trial before it, kept in E's trial store (NaN: none) */
+    trial T_hi;        /* its T */
     trial Tm;          /* margin_fn's */
 } margin_ctx;
 
-static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
+/* The trial's vectors (A0, xp, ph, V1, f) and the trial store's (sA, sX, shA, sV, sF) exchanged */
+static ENG_HOT void trial_swap(eng *E)
+{
+    double *t;
+    t = E->A0, E->A0 = E->sA, E->sA = t;
+    t = E->xp, E->xp = E->sX, E->sX = t;
+    t = E->ph, E->ph = E->shA, E->shA = t;
+    t = E->V1, E->V1 = E->sV, E->sV = t;
+    t = E->f, E->f = E->sF, E->sF = t;
+}
+
+/* The loads and limits of the trial of length x (at its end) */
+static ENG_HOT double trial_loads(margin_ctx *c, double x)
 {
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
     loads_at(E, c->in, t1);
     for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = dfo_select(E->st[j] == 0, E->Fb[j], E->mlN[j]);
+    return t1;
+}
+
+static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
+{
+    eng *E = c->E;
+    if (c->hi_last) { /* the last trial into the store (a root's end the search may return: trial_again) */
+        trial_swap(E);
+        c->x_hi = c->x_last;
+        c->T_hi = *c->T_last;
+    }
+    const double t1 = trial_loads(c, x);
     eng_status st = trial_step(E, c->in, c->s, x, t1, T);
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;
@@ -1257,6 +1284,7 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
         const double gj = margin(E, E->st, j, E->V1, E->f);
         g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
     }
+    c->hi_last = !(g > 0.0) && st == ENG_OK;
     return g;
 }
 
@@ -1272,6 +1300,8 @@ static ENG_HOT void margin_init(margin_ctx *c, eng *E, const eng_inputs *in, con
     c->err = ENG_OK;
     c->x_last = NAN;
     c->T_last = NULL;
+    c->hi_last = 0;
+    c->x_hi = NAN;
 }
 
 static double margin_fn(void *ctx, double x)
@@ -1281,14 +1311,27 @@ static double margin_fn(void *ctx, double x)
 }
 
 /* The phase's trial of length x into T: its last one where it was of that length (the engine's
- * arrays hold it), else taken. */
+ * arrays hold it), or the one the trial store holds (its loads, limits and factor made again: the
+ * same numbers), else taken. */
 static ENG_HOT void trial_again(margin_ctx *c, double x, trial *T)
 {
-    if (!(x == c->x_last)) {
+    eng *E = c->E;
+    if (x == c->x_last) {
+        if (c->T_last != T) *T = *c->T_last;
+        return;
+    }
+    if (!(x == c->x_hi)) {
         trial_margin(c, x, T);
         return;
     }
-    if (c->T_last != T) *T = *c->T_last;
+    trial_swap(E);
+    *T = c->T_hi;
+    (void)trial_loads(c, x);
+    (void)factor_slot(E, T->slot, T->cM, T->cC, T->cK); /* (it was made once: it succeeds) */
+    c->x_last = x;
+    c->T_last = T;
+    c->hi_last = 0;
+    c->x_hi = NAN;
 }
 
 /* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes

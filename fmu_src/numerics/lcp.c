@@ -476,16 +476,17 @@ static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
 
 /* Row i of lcp_box_basis's forward elimination (ei: e_i, 0 on the last row; elo: e_{i-1}, 0 on the
  * first; cprev, dprev: the row above's cp and dp, updated): a held row's cp, dp 0, another's Thomas
- * step, its w its limit's (lcp_box_basis_w's) */
+ * step, its w its limit's (lcp_box_basis_w's). diag: the pivot d_i itself (lcp_box_basis_diag). */
 static inline void box_elim_row(size_t i, const double *d, double ei, double elo, const double *q, const double *l,
-                                const int *mode, double *cprev, double *dprev, double *cp, double *dp, double *w)
+                                const int *mode, double *cprev, double *dprev, double *cp, double *dp, double *w,
+                                int diag)
 {
     double c = 0.0, v = 0.0;
     if (!(mode[i] == 0 && l[i] > 0.0)) {
         /* M z = -q + w with w = -mode l: the right-hand side -q - mode l */
         const double ml = (l[i] > 0.0) ? mode[i] * l[i] : 0.0;
         const double rhs = -q[i] - ml;
-        const double den = d[i] - elo * *cprev;
+        const double den = diag ? d[i] : d[i] - elo * *cprev;
         const double inv = 1.0 / den;
         c = ei * inv;
         v = (rhs - elo * *dprev) * inv;
@@ -507,9 +508,10 @@ static inline double box_held_w(size_t lo, size_t hi, size_t i, const double *e,
     return f;
 }
 
-void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
-                   const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
-                   double *cp, double *dp)
+/* lcp_box_basis, and lcp_box_basis_diag with diag */
+static inline void box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                             const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                             double *cp, double *dp, int diag)
 {
     if (hi <= lo) return;
     /* forward elimination (Thomas) over the rows that are not fixed or held; a fixed or held row
@@ -522,10 +524,10 @@ void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, do
         cp[lo] = 0.0;
         dp[lo] = dprev = z_lo;
     }
-    if (a < bl) box_elim_row(a, d, e[a], (a > lo) ? e[a - 1] : 0.0, q, l, mode, &cprev, &dprev, cp, dp, w);
-    for (size_t i = a + 1; i < bl; i++) box_elim_row(i, d, e[i], e[i - 1], q, l, mode, &cprev, &dprev, cp, dp, w);
+    if (a < bl) box_elim_row(a, d, e[a], (a > lo) ? e[a - 1] : 0.0, q, l, mode, &cprev, &dprev, cp, dp, w, diag);
+    for (size_t i = a + 1; i < bl; i++) box_elim_row(i, d, e[i], e[i - 1], q, l, mode, &cprev, &dprev, cp, dp, w, diag);
     if (b == hi && a < hi) { /* the last row, not fixed: its cp 0 (not 0 / den) */
-        box_elim_row(hi - 1, d, 0.0, (hi - 1 > lo) ? e[hi - 2] : 0.0, q, l, mode, &cprev, &dprev, cp, dp, w);
+        box_elim_row(hi - 1, d, 0.0, (hi - 1 > lo) ? e[hi - 2] : 0.0, q, l, mode, &cprev, &dprev, cp, dp, w, diag);
         cp[hi - 1] = 0.0;
     }
     if (b < hi) {
@@ -563,6 +565,20 @@ void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, do
         zr1 = zn;
     }
     if (h1) w[lo] = box_held_w(lo, hi, lo, e, q, 0.0, zr2);
+}
+
+void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                   const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                   double *cp, double *dp)
+{
+    box_basis(lo, hi, fix_lo, z_lo, fix_hi, z_hi, d, e, q, l, mode, z, w, cp, dp, 0);
+}
+
+void lcp_box_basis_diag(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                        const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                        double *cp, double *dp)
+{
+    box_basis(lo, hi, fix_lo, z_lo, fix_hi, z_hi, d, e, q, l, mode, z, w, cp, dp, 1);
 }
 
 /* ---- the box LCP's driver, for any M ----------------------------------------------------------

@@ -220,37 +220,14 @@ static inline void chain_op_basis(chain_eng_ops *C, int slot, const double *q, c
 }
 
 /* lcp_box_basis(0, n, fix_lo, zl, fix_hi, zh, d, e, q, l, mode, z, w, ...) of a slot whose M_hat is
- * diagonal (cC = cK = 0: e holds zeros, the mass slot of the engine's held solves): the same
- * operations, so the same bits, but with no division on the elimination's chain (a row's pivot
- * d - e cp is d itself: e cp is a zero and d > 0). */
+ * diagonal (cC = cK = 0: e holds zeros, the mass slot of the engine's held solves): lcp_box_basis_diag,
+ * the same operations, so the same bits, but with no division on the elimination's chain (a row's
+ * pivot d - e cp is d itself: e cp is a zero and d > 0). */
 static inline void chain_op_diag(chain_eng_ops *C, int slot, int fix_lo, double zl, int fix_hi, double zh,
                                  const double *q, const double *l, const int *mode, double *z, double *w)
 {
-    const size_t n = C->n;
-    const double *d = C->d[slot], *e = C->e[slot];
-    double *cp = C->work, *dp = C->work + n, dprev = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        double c = 0.0, v;
-        if ((fix_lo && i == 0) || (fix_hi && i == n - 1)) {
-            v = (fix_lo && i == 0) ? zl : zh;
-        } else if (mode[i] == 0 && l[i] > 0.0) {
-            v = 0.0;
-        } else {
-            const double lo_e = (i > 0) ? e[i - 1] : 0.0, inv = 1.0 / d[i];
-            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            c = (i + 1 < n) ? e[i] * inv : 0.0;
-            v = (rhs - lo_e * dprev) * inv;
-        }
-        cp[i] = c;
-        dp[i] = v;
-        dprev = v;
-    }
-    double zn = 0.0;
-    for (size_t j = n; j-- > 0;) {
-        zn = dp[j] - cp[j] * zn;
-        z[j] = zn;
-    }
-    lcp_box_basis_w(0, n, (size_t)fix_lo, n - (size_t)fix_hi, e, q, l, mode, z, w);
+    lcp_box_basis_diag(0, C->n, fix_lo, zl, fix_hi, zh, C->d[slot], C->e[slot], q, l, mode, z, w, C->work,
+                       C->work + C->n);
 }
 
 /* A row whose W stays as the basis solve set it: held, or a span's ghost. */
