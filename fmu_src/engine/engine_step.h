@@ -1224,6 +1224,8 @@ static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const doubl
     return (mode[j] != 0) ? g <= 0.0 : g < 0.0;
 }
 
+#define MARGIN_LIST 8 /* the candidates margin_fn lists (more: every contact's cand read) */
+
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
  * the modes st; returns the smallest margin of the candidates. The phase's last trial is known by
  * its length (x_last, its T at T_last: margin_fn's in Tm), so that a trial asked for again (the
@@ -1241,6 +1243,9 @@ typedef struct {
     double x_hi;       /* the length of the last such trial before it, kept in E's trial store (NaN: none) */
     trial T_hi;        /* its T */
     trial Tm;          /* margin_fn's */
+    int lim_ok;        /* E->lim is of the phase's modes and of held loads (the trials' limits all alike) */
+    int ncl;           /* the candidates in cl (margin_fn's search: E->cand is set), or -1: none listed */
+    size_t cl[MARGIN_LIST];
 } margin_ctx;
 
 /* The trial's vectors (A0, xp, ph, V1, f) and the trial store's (sA, sX, shA, sV, sF) exchanged */
@@ -1260,7 +1265,9 @@ static ENG_HOT double trial_loads(margin_ctx *c, double x)
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
     loads_at(E, c->in, t1);
+    if (c->lim_ok && c->in && E->loads_for == c->in) return t1; /* (held loads: the limits as they are) */
     for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = dfo_select(E->st[j] == 0, E->Fb[j], E->mlN[j]);
+    c->lim_ok = c->in && E->loads_for == c->in;
     return t1;
 }
 
@@ -1279,10 +1286,17 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     c->x_last = x;
     c->T_last = T;
     double g = INFINITY;
-    for (size_t j = 0; j < ENG_NC(E); j++) {
-        if (!E->cand[j]) continue;
-        const double gj = margin(E, E->st, j, E->V1, E->f);
-        g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
+    if (c->ncl >= 0) {
+        for (int k = 0; k < c->ncl; k++) {
+            const double gj = margin(E, E->st, c->cl[k], E->V1, E->f);
+            g = (gj < g) ? gj : g;
+        }
+    } else {
+        for (size_t j = 0; j < ENG_NC(E); j++) {
+            if (!E->cand[j]) continue;
+            const double gj = margin(E, E->st, j, E->V1, E->f);
+            g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
+        }
     }
     c->hi_last = !(g > 0.0) && st == ENG_OK;
     return g;
@@ -1302,11 +1316,25 @@ static ENG_HOT void margin_init(margin_ctx *c, eng *E, const eng_inputs *in, con
     c->T_last = NULL;
     c->hi_last = 0;
     c->x_hi = NAN;
+    c->lim_ok = 0;
+    c->ncl = -1;
 }
 
+/* The search's trial (halvings, root): the candidates, set before it and kept through it, listed at
+ * its first (in ascending order, as trial_margin's loop over them) */
 static double margin_fn(void *ctx, double x)
 {
     margin_ctx *c = (margin_ctx *)ctx;
+    if (c->ncl == -1) {
+        const eng *E = c->E;
+        int m = 0;
+        for (size_t j = 0; j < ENG_NC(E) && m <= MARGIN_LIST; j++)
+            if (E->cand[j]) {
+                if (m < MARGIN_LIST) c->cl[m] = j;
+                m++;
+            }
+        c->ncl = (m <= MARGIN_LIST) ? m : -2; /* (-2: too many, the loop over them all, not listed again) */
+    }
     return trial_margin(c, x, &c->Tm);
 }
 
