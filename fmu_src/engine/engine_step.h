@@ -8,6 +8,9 @@
  *   ENG_APPLY_C(E, v, y)         y = C v (read only where ENG_HAS_C(E))
  *   ENG_HAS_C(E)                 C is not 0
  *   ENG_APPLY_M(E, a, y)         y = M a
+ *   ENG_ADD_MK(E, r, x, p)       optional: p_i += (M r)_i - (K x)_i, the products ENG_APPLY_M's and
+ *                                ENG_APPLY_K's (one pass for the trial's p_hat; by default the two
+ *                                operators and a loop)
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
@@ -889,10 +892,17 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
             ghost_at(E, E->gidx[k], s->t - E->gt0 + hh, &xg, &E->gve[k], NULL, NULL);
             xp[E->gidx[k]] = xg - K.corr_V * E->gve[k];
         }
+#ifdef ENG_ADD_MK
+    (void)y;
+    (void)y2;
+    applied_at(E, s, t1, ph);
+    ENG_ADD_MK(E, r, xp, ph);
+#else
     ENG_APPLY_M(E, r, y);
     applied_at(E, s, t1, ph);
     ENG_APPLY_K(E, xp, y2);
     for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
+#endif
     if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
         for (size_t k = 0; k < E->ngh; k++) ph[E->gidx[k]] = E->gve[k];
 #if ENG_FUSED_LOCAL

@@ -116,6 +116,23 @@ static inline void chain_op_M(void *ctx, const double *a, double *y)
     for (size_t i = 0; i < n; i++) y[i] = m[i] * a[i];
 }
 
+/* p_i += m_i r_i - (K x)_i (chain_op_M's and chain_op_K's products, in one pass; the end rows out of
+ * the loop) */
+static inline void chain_op_add_mk(void *ctx, const double *r, const double *x, double *p)
+{
+    const chain_eng_ops *C = (const chain_eng_ops *)ctx;
+    const size_t n = C->n;
+    const double *m = C->m, *D = C->Kd, *O = C->Ko;
+    if (n == 0) return;
+    if (n == 1) {
+        p[0] += m[0] * r[0] - D[0] * x[0];
+        return;
+    }
+    p[0] += m[0] * r[0] - (D[0] * x[0] + O[0] * x[1]);
+    for (size_t i = 1; i + 1 < n; i++) p[i] += m[i] * r[i] - ((D[i] * x[i] + O[i - 1] * x[i - 1]) + O[i] * x[i + 1]);
+    p[n - 1] += m[n - 1] * r[n - 1] - (D[n - 1] * x[n - 1] + O[n - 2] * x[n - 2]);
+}
+
 /* Thomas's factors of the slot (cp, inv): 0 when a pivot is not positive. */
 static inline int chain_op_thomas(chain_eng_ops *C, int slot)
 {
