@@ -594,78 +594,102 @@ static inline int chain_op_run_factor(chain_run_row *R, const double *d, size_t 
     return 1;
 }
 
-/* chain_op_row_done from the rows: row i's force into f, whether its margin is positive. */
-static inline int chain_op_run_done(const chain_run_row *R, const double *ph, double *f, size_t i, size_t n,
+/* chain_op_row_done from the rows: row i's force into f, whether its margin is positive (lo, hi:
+ * whether row i has a row above, below) */
+static inline int chain_op_run_done(const chain_run_row *R, const double *ph, double *f, size_t i, int lo, int hi,
                                     double vlo, double vi, double vhi)
 {
     double fi;
     if (R[i].hold) {
         fi = -ph[i];
-        if (i > 0) fi += R[i - 1].e * vlo;
-        if (i + 1 < n) fi += R[i].e * vhi;
+        if (lo) fi += R[i - 1].e * vlo;
+        if (hi) fi += R[i].e * vhi;
     } else {
         fi = 0.0 - R[i].sl;
     }
     f[i] = fi;
-    return !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * vi > 0.0 : R[i].Fb - fabs(fi) > 0.0);
+    const int slides = R[i].st * vi > 0.0, holds = R[i].Fb - fabs(fi) > 0.0; /* (both: no branch) */
+    return (!(R[i].Fb > 0.0)) | ((R[i].st != 0) ? slides : holds);
+}
+
+/* Row i's part of a run step's forward sweep (lo, hi: whether it has a row above, below): p_hat from
+ * x_pred (xc its own, xl the row above's, xr the row below's) and r, and the elimination with the kept
+ * factors (elo, dprev: the row above's e and eliminated value); returns its eliminated value. */
+static inline double chain_op_run_fwd(const chain_run_row *R, size_t i, int lo, int hi, double xc, double xl,
+                                      double xr, double r, const eng_held_step *F, double elo, double dprev,
+                                      double *ph, double *dp)
+{
+    const double y = R[i].m * r;
+    double kx = R[i].Kd * xc;
+    if (lo) kx += R[i - 1].Ko * xl;
+    if (hi) kx += R[i].Ko * xr;
+    double p = R[i].u;
+    if (F->Pc) p += R[i].Pc * F->cw;
+    if (F->Ps) p -= R[i].Ps * F->sw;
+    const double phi = p + (y - kx);
+    ph[i] = phi;
+    /* (row 0: x - 0 0 is x, one subtraction less on the step's chain of dependencies) */
+    const double rhs = phi - R[i].sl;
+    const double v = R[i].hold ? 0.0 : (lo ? rhs - elo * dprev : rhs) * R[i].inv;
+    dp[i] = v;
+    return v;
 }
 
 /* A fused step of a run (eng_held_step.run > 0) from the rows: chain_op_step_held's arithmetic in
  * its order, so the same bits. The run's first step takes F's loads and modes into the rows and
- * makes the kept factorisation for its held pattern; the later ones read the rows alone. */
+ * makes the kept factorisation for its held pattern; the later ones read the rows alone. The first
+ * and last rows out of the sweeps' loops. */
 static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
-    const int first = F->run == 1;
-    if (first) chain_op_run_take(C, F);
     const size_t n = C->n;
     chain_run_row *restrict R = C->rr;
-    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
-    const double cw = F->cw, sw = F->sw, am = 1.0 - a;
-    const int hasPc = F->Pc != NULL, hasPs = F->Ps != NULL;
-    const double *X = s->X, *V = s->V, *A0 = F->A0;
-    double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
-    double *restrict dp = C->work;
-    /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
-    double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, elo = 0.0, dprev = 0.0;
-    int refac = 0;
-    for (size_t i = 0; i < n; i++) {
-        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
-        xpp[i] = xc;
-        int hold;
-        double sl;
-        if (first) {
+    if (F->run == 1) {
+        chain_op_run_take(C, F);
+        int refac = 0;
+        for (size_t i = 0; i < n; i++) {
             const int st = F->st[i];
             const double li = F->lim[i];
-            hold = st == 0 && li > 0.0;
-            sl = (li > 0.0) ? st * li : 0.0;
+            const int hold = st == 0 && li > 0.0;
             R[i].u = F->u[i];
             R[i].Fb = F->Fb[i];
             R[i].st = st;
             R[i].hold = hold;
-            R[i].sl = sl;
+            R[i].sl = (li > 0.0) ? st * li : 0.0;
             refac = chain_op_run_factor(R, C->d[F->slot], i, n, hold, refac);
-        } else {
-            hold = R[i].hold;
-            sl = R[i].sl;
         }
-        const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
-        const double y = R[i].m * r;
-        double kx = R[i].Kd * xc;
-        if (i > 0) kx += R[i - 1].Ko * xl;
-        if (i + 1 < n) kx += R[i].Ko * xr;
-        double p = R[i].u;
-        if (hasPc) p += R[i].Pc * cw;
-        if (hasPs) p -= R[i].Ps * sw;
-        const double phi = p + (y - kx);
-        ph[i] = phi;
+    }
+    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A, am = 1.0 - a;
+    const double *X = s->X, *V = s->V, *A0 = F->A0;
+    double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
+    double *restrict dp = C->work;
+    /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
+    double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, dprev;
+    if (n == 1) {
+        xpp[0] = xc;
+        dprev = chain_op_run_fwd(R, 0, 0, 0, xc, 0.0, 0.0, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
+                                 dp);
+        xl = xc;
+    } else {
+        double xr = X[1] + pV * V[1] + pA * A0[1];
+        xpp[0] = xc;
+        dprev = chain_op_run_fwd(R, 0, 0, 1, xc, 0.0, xr, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
+                                 dp);
         xl = xc;
         xc = xr;
-        /* (row 0: x - 0 0 is x, one subtraction less on the step's chain of dependencies) */
-        const double rhs = phi - sl;
-        dprev = hold ? 0.0 : ((i > 0) ? rhs - elo * dprev : rhs) * R[i].inv;
-        dp[i] = dprev;
-        elo = R[i].e;
+        for (size_t i = 1; i + 1 < n; i++) {
+            xr = X[i + 1] + pV * V[i + 1] + pA * A0[i + 1];
+            xpp[i] = xc;
+            const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
+            dprev = chain_op_run_fwd(R, i, 1, 1, xc, xl, xr, r, F, R[i - 1].e, dprev, ph, dp);
+            xl = xc;
+            xc = xr;
+        }
+        const size_t i = n - 1;
+        xpp[i] = xc;
+        const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
+        dprev = chain_op_run_fwd(R, i, 1, 0, xc, xl, 0.0, r, F, R[i - 1].e, dprev, ph, dp);
+        xl = xc;
     }
     /* back substitution, and row j + 1's force and margin once row j is known; row 0's after. The
      * last row's from the forward sweep's register: its elimination's value dp - cp 0 is dp, as its
@@ -674,15 +698,24 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
     const double vn = dprev; /* (a held row's dprev is 0.0, its V1) */
     double zn = dprev, v1 = vn, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
     V1[n - 1] = vn;
-    for (size_t j = n - 1; j-- > 0;) {
+    if (n > 1) {
+        size_t j = n - 2;
         zn = dp[j] - R[j].cp * zn;
-        const double vj = R[j].hold ? 0.0 : zn;
+        double vj = R[j].hold ? 0.0 : zn;
         V1[j] = vj;
-        ok &= chain_op_run_done(R, ph, f, j + 1, n, vj, v1, v2);
+        ok &= chain_op_run_done(R, ph, f, j + 1, 1, 0, vj, v1, v2);
         v2 = v1;
         v1 = vj;
+        while (j-- > 0) {
+            zn = dp[j] - R[j].cp * zn;
+            vj = R[j].hold ? 0.0 : zn;
+            V1[j] = vj;
+            ok &= chain_op_run_done(R, ph, f, j + 1, 1, 1, vj, v1, v2);
+            v2 = v1;
+            v1 = vj;
+        }
     }
-    ok &= chain_op_run_done(R, ph, f, 0, n, 0.0, v1, v2);
+    ok &= chain_op_run_done(R, ph, f, 0, 0, n > 1, 0.0, v1, v2);
     if (!ok) return 0;
     chain_op_held_accept(F, s, n, xl, vn);
     return 1;
