@@ -608,17 +608,29 @@ static inline int chain_op_run_done(const chain_run_row *R, const double *ph, do
         fi = 0.0 - R[i].sl;
     }
     f[i] = fi;
-    const int slides = R[i].st * vi > 0.0, holds = R[i].Fb - fabs(fi) > 0.0; /* (both: no branch) */
-    return (!(R[i].Fb > 0.0)) | ((R[i].st != 0) ? slides : holds);
+    return !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * vi > 0.0 : R[i].Fb - fabs(fi) > 0.0);
 }
 
-/* Row i's part of a run step's forward sweep (lo, hi: whether it has a row above, below): p_hat from
- * x_pred (xc its own, xl the row above's, xr the row below's) and r, and the elimination with the kept
- * factors (elo, dprev: the row above's e and eliminated value); returns its eliminated value. */
-static inline double chain_op_run_fwd(const chain_run_row *R, size_t i, int lo, int hi, double xc, double xl,
-                                      double xr, double r, const eng_held_step *F, double elo, double dprev,
-                                      double *ph, double *dp)
+/* Row i's part of a run step's forward sweep (lo, hi: whether it has a row above, below): at the run's
+ * first step (first) its loads and mode taken into the row and its kept factor made (*refac: the row
+ * above's was, then row i's); p_hat from x_pred (xc its own, xl the row above's, xr the row below's)
+ * and r, and the elimination with the kept factors (elo, dprev: the row above's e and eliminated
+ * value); returns its eliminated value. */
+static inline double chain_op_run_fwd(const chain_eng_ops *C, chain_run_row *R, size_t i, int lo, int hi, int first,
+                                      int *refac, double xc, double xl, double xr, double r, const eng_held_step *F,
+                                      double elo, double dprev, double *ph, double *dp)
 {
+    if (first) {
+        const int st = F->st[i];
+        const double li = F->lim[i];
+        const int hold = st == 0 && li > 0.0;
+        R[i].u = F->u[i];
+        R[i].Fb = F->Fb[i];
+        R[i].st = st;
+        R[i].hold = hold;
+        R[i].sl = (li > 0.0) ? st * li : 0.0;
+        *refac = chain_op_run_factor(R, C->d[F->slot], i, C->n, hold, *refac);
+    }
     const double y = R[i].m * r;
     double kx = R[i].Kd * xc;
     if (lo) kx += R[i - 1].Ko * xl;
@@ -637,28 +649,16 @@ static inline double chain_op_run_fwd(const chain_run_row *R, size_t i, int lo, 
 
 /* A fused step of a run (eng_held_step.run > 0) from the rows: chain_op_step_held's arithmetic in
  * its order, so the same bits. The run's first step takes F's loads and modes into the rows and
- * makes the kept factorisation for its held pattern; the later ones read the rows alone. The first
- * and last rows out of the sweeps' loops. */
+ * makes the kept factorisation for its held pattern, row by row in its forward sweep; the later ones
+ * read the rows alone. The first and last rows out of the sweeps' loops. */
 static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
     chain_run_row *restrict R = C->rr;
-    if (F->run == 1) {
-        chain_op_run_take(C, F);
-        int refac = 0;
-        for (size_t i = 0; i < n; i++) {
-            const int st = F->st[i];
-            const double li = F->lim[i];
-            const int hold = st == 0 && li > 0.0;
-            R[i].u = F->u[i];
-            R[i].Fb = F->Fb[i];
-            R[i].st = st;
-            R[i].hold = hold;
-            R[i].sl = (li > 0.0) ? st * li : 0.0;
-            refac = chain_op_run_factor(R, C->d[F->slot], i, n, hold, refac);
-        }
-    }
+    const int first = F->run == 1;
+    if (first) chain_op_run_take(C, F);
+    int refac = 0;
     const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A, am = 1.0 - a;
     const double *X = s->X, *V = s->V, *A0 = F->A0;
     double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
@@ -667,13 +667,13 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
     double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, dprev;
     if (n == 1) {
         xpp[0] = xc;
-        dprev = chain_op_run_fwd(R, 0, 0, 0, xc, 0.0, 0.0, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
+        dprev = chain_op_run_fwd(C, R, 0, 0, 0, first, &refac, xc, 0.0, 0.0, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
                                  dp);
         xl = xc;
     } else {
         double xr = X[1] + pV * V[1] + pA * A0[1];
         xpp[0] = xc;
-        dprev = chain_op_run_fwd(R, 0, 0, 1, xc, 0.0, xr, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
+        dprev = chain_op_run_fwd(C, R, 0, 0, 1, first, &refac, xc, 0.0, xr, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
                                  dp);
         xl = xc;
         xc = xr;
@@ -681,14 +681,14 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
             xr = X[i + 1] + pV * V[i + 1] + pA * A0[i + 1];
             xpp[i] = xc;
             const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
-            dprev = chain_op_run_fwd(R, i, 1, 1, xc, xl, xr, r, F, R[i - 1].e, dprev, ph, dp);
+            dprev = chain_op_run_fwd(C, R, i, 1, 1, first, &refac, xc, xl, xr, r, F, R[i - 1].e, dprev, ph, dp);
             xl = xc;
             xc = xr;
         }
         const size_t i = n - 1;
         xpp[i] = xc;
         const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
-        dprev = chain_op_run_fwd(R, i, 1, 0, xc, xl, 0.0, r, F, R[i - 1].e, dprev, ph, dp);
+        dprev = chain_op_run_fwd(C, R, i, 1, 0, first, &refac, xc, xl, 0.0, r, F, R[i - 1].e, dprev, ph, dp);
         xl = xc;
     }
     /* back substitution, and row j + 1's force and margin once row j is known; row 0's after. The
