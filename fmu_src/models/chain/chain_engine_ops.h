@@ -83,7 +83,7 @@ ENG_DECLARE_SCHEMES(chain_);
 
 /* y = T x for the symmetric tridiagonal T of diagonal D and off-diagonal O (O[i] couples i and i + 1),
  * each row summed as D_i x_i + O_{i-1} x_{i-1} + O_i x_{i+1}; the end rows out of the loop (a loop
- * without branches: the compiler vectorises it). x and y do not overlap. */
+ * without branches). x and y do not overlap. */
 static inline void chain_op_tri(size_t n, const double *D, const double *O, const double *x, double *y)
 {
     if (n == 0) return;
@@ -665,16 +665,15 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
     double *restrict dp = C->work;
     /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
     double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, dprev;
+    const double r0 = -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]);
     if (n == 1) {
         xpp[0] = xc;
-        dprev = chain_op_run_fwd(C, R, 0, 0, 0, first, &refac, xc, 0.0, 0.0, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
-                                 dp);
+        dprev = chain_op_run_fwd(C, R, 0, 0, 0, first, &refac, xc, 0.0, 0.0, r0, F, 0.0, 0.0, ph, dp);
         xl = xc;
     } else {
         double xr = X[1] + pV * V[1] + pA * A0[1];
         xpp[0] = xc;
-        dprev = chain_op_run_fwd(C, R, 0, 0, 1, first, &refac, xc, 0.0, xr, -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]), F, 0.0, 0.0, ph,
-                                 dp);
+        dprev = chain_op_run_fwd(C, R, 0, 0, 1, first, &refac, xc, 0.0, xr, r0, F, 0.0, 0.0, ph, dp);
         xl = xc;
         xc = xr;
         for (size_t i = 1; i + 1 < n; i++) {
