@@ -893,9 +893,9 @@ static void test_box(checks *T)
 }
 
 /* The basis solve written row by row, every row's tests inside the loops (a fixed row, a held row, the
- * first and last rows' missing neighbours), then the held rows' w in a pass of their own: the
- * reference whose operations, in their order, lcp_box_basis and lcp_box_basis_diag keep (diag: each
- * free row's pivot d_i) */
+ * first and last rows' missing neighbours), then the rows' w in a pass of their own (lcp_box_basis_w):
+ * the reference whose operations, in their order, lcp_box_basis and lcp_box_basis_diag keep (diag:
+ * each free row's pivot d_i) */
 static void ref_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
                           const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
                           int diag)
@@ -923,17 +923,8 @@ static void ref_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix
         zn = dp[j] - cp[j] * zn;
         z[j] = zn;
     }
-    for (size_t i = lo + (size_t)fix_lo; i < hi - (size_t)fix_hi; i++) {
-        if (mode[i] == 0 && l[i] > 0.0) {
-            z[i] = 0.0;
-            double f = q[i];
-            if (i > lo) f += e[i - 1] * z[i - 1];
-            if (i + 1 < hi) f += e[i] * z[i + 1];
-            w[i] = f;
-        } else {
-            w[i] = (l[i] > 0.0) ? 0.0 - mode[i] * l[i] : 0.0;
-        }
-    }
+    if (hi - (size_t)fix_hi > lo + (size_t)fix_lo)
+        lcp_box_basis_w(lo, hi, lo + (size_t)fix_lo, hi - (size_t)fix_hi, e, q, l, mode, z, w);
 }
 
 /* lcp_box_basis and lcp_box_basis_diag (an M with zeros off the diagonal, of either sign) bit for bit
