@@ -78,7 +78,8 @@ struct eng {
     lcp_workspace *ws;           /* Lemke's, for 2 nc unknowns (NULL without contacts) */
     /* Stribeck's Newton */
     double *Jn, *res;
-    /* a phase's start, saved for the switch search */
+    /* the located trials' store (trial_margin, trial_again): a trial's xp, V1, A0, ph (n) and f (nc),
+     * exchanged with those above */
     double *sX, *sV, *sA, *shA, *sF;
     int *smode;
     /* spans (eng_sparse.span; the located scheme's local switch placement): the sub-engine that steps

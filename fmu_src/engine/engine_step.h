@@ -8,6 +8,9 @@
  *   ENG_APPLY_C(E, v, y)         y = C v (read only where ENG_HAS_C(E))
  *   ENG_HAS_C(E)                 C is not 0
  *   ENG_APPLY_M(E, a, y)         y = M a
+ *   ENG_ADD_MK(E, r, x, p)       optional: p_i += (M r)_i - (K x)_i, the products ENG_APPLY_M's and
+ *                                ENG_APPLY_K's (one pass for the trial's p_hat; by default the two
+ *                                operators and a loop)
  *   ENG_FACTOR(E, slot, cM, cC, cK), ENG_SOLVE(E, slot, b, x)   as eng_ops.factor and .solve
  *   ENG_HAS_FRICTION(E), ENG_FRICTION(E, P, what, mode, V1, f, pivots)   its friction solver
  *   ENG_HAS_BREAKAWAY(E), ENG_BREAKAWAY(E, s, in, Fb)   its closed-form breakaway (the stuck fast path)
@@ -838,7 +841,7 @@ static ENG_HOT void rebase_into(eng *E, const eng_inputs *in, const eng_state *s
         for (size_t i = 0; i < n && !other; i++) other = hh != hA[i];
         if (other) {
             pin = rebase_pins(E, in, s);
-            for (size_t i = 0; i < n; i++) any |= (pin[i] == 0) & rebases_len(S, hA[i], hh, tol);
+            for (size_t i = 0; i < n && !any; i++) any = (pin[i] == 0) & rebases_len(S, hA[i], hh, tol);
         }
     }
     if (!any) {
@@ -889,10 +892,17 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
             ghost_at(E, E->gidx[k], s->t - E->gt0 + hh, &xg, &E->gve[k], NULL, NULL);
             xp[E->gidx[k]] = xg - K.corr_V * E->gve[k];
         }
+#ifdef ENG_ADD_MK
+    (void)y;
+    (void)y2;
+    applied_at(E, s, t1, ph);
+    ENG_ADD_MK(E, r, xp, ph);
+#else
     ENG_APPLY_M(E, r, y);
     applied_at(E, s, t1, ph);
     ENG_APPLY_K(E, xp, y2);
     for (size_t i = 0; i < n; i++) ph[i] += y[i] - y2[i];
+#endif
     if (E->ghost) /* and its prescribed end velocity in p_hat's entry (Dirichlet) */
         for (size_t k = 0; k < E->ngh; k++) ph[E->gidx[k]] = E->gve[k];
 #if ENG_FUSED_LOCAL
@@ -1224,6 +1234,8 @@ static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const doubl
     return (mode[j] != 0) ? g <= 0.0 : g < 0.0;
 }
 
+#define MARGIN_LIST 8 /* the candidates margin_fn lists (more: every contact's cand read) */
+
 /* A located trial of length x from the phase's start (the state), loads at its end; its solve in
  * the modes st; returns the smallest margin of the candidates. The phase's last trial is known by
  * its length (x_last, its T at T_last: margin_fn's in Tm), so that a trial asked for again (the
@@ -1237,26 +1249,66 @@ typedef struct {
     eng_status err;
     double x_last;     /* the length of the last trial (NaN: none) */
     const trial *T_last; /* where its T was written */
+    int hi_last;       /* its margin is not > 0 (a root's end it may return) */
+    double x_hi;       /* the length of the last such trial before it, kept in E's trial store (NaN: none) */
+    trial T_hi;        /* its T */
     trial Tm;          /* margin_fn's */
+    int lim_ok;        /* E->lim is of the phase's modes and of held loads (the trials' limits all alike) */
+    int ncl;           /* the candidates in cl (margin_fn's search: E->cand is set), or -1: none listed */
+    size_t cl[MARGIN_LIST];
 } margin_ctx;
 
-static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
+/* The trial's vectors (A0, xp, ph, V1, f) and the trial store's (sA, sX, shA, sV, sF) exchanged */
+static ENG_HOT void trial_swap(eng *E)
+{
+    double *t;
+    t = E->A0, E->A0 = E->sA, E->sA = t;
+    t = E->xp, E->xp = E->sX, E->sX = t;
+    t = E->ph, E->ph = E->shA, E->shA = t;
+    t = E->V1, E->V1 = E->sV, E->sV = t;
+    t = E->f, E->f = E->sF, E->sF = t;
+}
+
+/* The loads and limits of the trial of length x (at its end) */
+static ENG_HOT double trial_loads(margin_ctx *c, double x)
 {
     eng *E = c->E;
     const double t1 = (x >= c->r) ? c->t_step : c->s->t + x;
     loads_at(E, c->in, t1);
+    if (c->lim_ok && c->in && E->loads_for == c->in) return t1; /* (held loads: the limits as they are) */
     for (size_t j = 0; j < ENG_NC(E); j++) E->lim[j] = dfo_select(E->st[j] == 0, E->Fb[j], E->mlN[j]);
+    c->lim_ok = c->in && E->loads_for == c->in;
+    return t1;
+}
+
+static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
+{
+    eng *E = c->E;
+    if (c->hi_last) { /* the last trial into the store (a root's end the search may return: trial_again) */
+        trial_swap(E);
+        c->x_hi = c->x_last;
+        c->T_hi = *c->T_last;
+    }
+    const double t1 = trial_loads(c, x);
     eng_status st = trial_step(E, c->in, c->s, x, t1, T);
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;
     c->x_last = x;
     c->T_last = T;
     double g = INFINITY;
-    for (size_t j = 0; j < ENG_NC(E); j++) {
-        if (!E->cand[j]) continue;
-        const double gj = margin(E, E->st, j, E->V1, E->f);
-        g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
+    if (c->ncl >= 0) {
+        for (int k = 0; k < c->ncl; k++) {
+            const double gj = margin(E, E->st, c->cl[k], E->V1, E->f);
+            g = (gj < g) ? gj : g;
+        }
+    } else {
+        for (size_t j = 0; j < ENG_NC(E); j++) {
+            if (!E->cand[j]) continue;
+            const double gj = margin(E, E->st, j, E->V1, E->f);
+            g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
+        }
     }
+    c->hi_last = !(g > 0.0) && st == ENG_OK;
     return g;
 }
 
@@ -1272,23 +1324,52 @@ static ENG_HOT void margin_init(margin_ctx *c, eng *E, const eng_inputs *in, con
     c->err = ENG_OK;
     c->x_last = NAN;
     c->T_last = NULL;
+    c->hi_last = 0;
+    c->x_hi = NAN;
+    c->lim_ok = 0;
+    c->ncl = -1;
 }
 
+/* The search's trial (halvings, root): the candidates, set before it and kept through it, listed at
+ * its first (in ascending order, as trial_margin's loop over them) */
 static double margin_fn(void *ctx, double x)
 {
     margin_ctx *c = (margin_ctx *)ctx;
+    if (c->ncl == -1) {
+        const eng *E = c->E;
+        int m = 0;
+        for (size_t j = 0; j < ENG_NC(E) && m <= MARGIN_LIST; j++)
+            if (E->cand[j]) {
+                if (m < MARGIN_LIST) c->cl[m] = j;
+                m++;
+            }
+        c->ncl = (m <= MARGIN_LIST) ? m : -2; /* (-2: too many, the loop over them all, not listed again) */
+    }
     return trial_margin(c, x, &c->Tm);
 }
 
 /* The phase's trial of length x into T: its last one where it was of that length (the engine's
- * arrays hold it), else taken. */
+ * arrays hold it), or the one the trial store holds (its loads, limits and factor made again: the
+ * same numbers), else taken. */
 static ENG_HOT void trial_again(margin_ctx *c, double x, trial *T)
 {
-    if (!(x == c->x_last)) {
+    eng *E = c->E;
+    if (x == c->x_last) {
+        if (c->T_last != T) *T = *c->T_last;
+        return;
+    }
+    if (!(x == c->x_hi)) {
         trial_margin(c, x, T);
         return;
     }
-    if (c->T_last != T) *T = *c->T_last;
+    trial_swap(E);
+    *T = c->T_hi;
+    (void)trial_loads(c, x);
+    (void)factor_slot(E, T->slot, T->cM, T->cC, T->cK); /* (it was made once: it succeeds) */
+    c->x_last = x;
+    c->T_last = T;
+    c->hi_last = 0;
+    c->x_hi = NAN;
 }
 
 /* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes

@@ -474,38 +474,111 @@ const char *lcp_status_text(lcp_status s)
 
 static int sgn(double x) { return (x > 0.0) - (x < 0.0); }
 
+/* Row i of lcp_box_basis's forward elimination (ei: e_i, 0 on the last row; elo: e_{i-1}, 0 on the
+ * first; cprev, dprev: the row above's cp and dp, updated): a held row's cp, dp 0, another's Thomas
+ * step, its w its limit's (lcp_box_basis_w's). diag: the pivot d_i itself (lcp_box_basis_diag). */
+static inline void box_elim_row(size_t i, const double *d, double ei, double elo, const double *q, const double *l,
+                                const int *mode, double *cprev, double *dprev, double *cp, double *dp, double *w,
+                                int diag)
+{
+    double c = 0.0, v = 0.0;
+    if (!(mode[i] == 0 && l[i] > 0.0)) {
+        /* M z = -q + w with w = -mode l: the right-hand side -q - mode l */
+        const double ml = (l[i] > 0.0) ? mode[i] * l[i] : 0.0;
+        const double rhs = -q[i] - ml;
+        const double den = diag ? d[i] : d[i] - elo * *cprev;
+        const double inv = 1.0 / den;
+        c = ei * inv;
+        v = (rhs - elo * *dprev) * inv;
+        w[i] = 0.0 - ml;
+    }
+    cp[i] = c;
+    dp[i] = v;
+    *cprev = c;
+    *dprev = v;
+}
+
+/* lcp_box_basis_w's w of held row i from its neighbours' z (zlo: row i - 1's, zhi: row i + 1's) */
+static inline double box_held_w(size_t lo, size_t hi, size_t i, const double *e, const double *q, double zlo,
+                                double zhi)
+{
+    double f = q[i];
+    if (i > lo) f += e[i - 1] * zlo;
+    if (i + 1 < hi) f += e[i] * zhi;
+    return f;
+}
+
+/* lcp_box_basis, and lcp_box_basis_diag with diag */
+static inline void box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                             const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                             double *cp, double *dp, int diag)
+{
+    if (hi <= lo) return;
+    /* forward elimination (Thomas) over the rows that are not fixed or held; a fixed or held row
+     * has cp = 0 and dp its value, so it starts the elimination afresh. The fixed rows [lo, a) and
+     * [b, hi) out of the loops (a row both first and last takes z_lo), and the last row's */
+    const size_t a = lo + (size_t)fix_lo, b = (hi - (size_t)fix_hi > a) ? hi - (size_t)fix_hi : a;
+    const size_t bl = (b < hi - 1) ? b : hi - 1; /* (the rows with an e_i) */
+    double cprev = 0.0, dprev = 0.0;
+    if (fix_lo) {
+        cp[lo] = 0.0;
+        dp[lo] = dprev = z_lo;
+    }
+    if (a < bl) box_elim_row(a, d, e[a], (a > lo) ? e[a - 1] : 0.0, q, l, mode, &cprev, &dprev, cp, dp, w, diag);
+    for (size_t i = a + 1; i < bl; i++) box_elim_row(i, d, e[i], e[i - 1], q, l, mode, &cprev, &dprev, cp, dp, w, diag);
+    if (b == hi && a < hi) { /* the last row, not fixed: its cp 0 (not 0 / den) */
+        box_elim_row(hi - 1, d, 0.0, (hi - 1 > lo) ? e[hi - 2] : 0.0, q, l, mode, &cprev, &dprev, cp, dp, w, diag);
+        cp[hi - 1] = 0.0;
+    }
+    if (b < hi) {
+        cp[hi - 1] = 0.0;
+        dp[hi - 1] = z_hi;
+    }
+    /* back substitution, with lcp_box_basis_w's end on the held rows of [a, b) once their neighbours
+     * are known: a held row's z set to 0 (read as such by the row below), the row above's z as the
+     * substitution left it (zr1, zr2: the substitution's z of rows j + 1 and j + 2; h1: row j + 1 is
+     * such a held row) */
+    double zn = 0.0, zr1 = 0.0, zr2 = 0.0;
+    int h1 = 0;
+    for (size_t j = hi; j-- > b;) {
+        zn = dp[j] - cp[j] * zn;
+        z[j] = zn;
+        zr2 = zr1;
+        zr1 = zn;
+    }
+    for (size_t j = b; j-- > a;) {
+        zn = dp[j] - cp[j] * zn;
+        const int held = mode[j] == 0 && l[j] > 0.0;
+        const double zj = held ? 0.0 : zn;
+        z[j] = zj;
+        if (h1) w[j + 1] = box_held_w(lo, hi, j + 1, e, q, zj, zr2);
+        h1 = held;
+        zr2 = zr1;
+        zr1 = zn;
+    }
+    for (size_t j = a; j-- > lo;) {
+        zn = dp[j] - cp[j] * zn;
+        z[j] = zn;
+        if (h1) w[j + 1] = box_held_w(lo, hi, j + 1, e, q, zn, zr2);
+        h1 = 0;
+        zr2 = zr1;
+        zr1 = zn;
+    }
+    if (h1) w[lo] = box_held_w(lo, hi, lo, e, q, 0.0, zr2);
+}
+
 void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
                    const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
                    double *cp, double *dp)
 {
-    /* forward elimination (Thomas) over the rows that are not fixed or held; a fixed or held row
-     * has cp = 0 and dp its value, so it starts the elimination afresh */
-    double cprev = 0.0, dprev = 0.0;
-    for (size_t i = lo; i < hi; i++) {
-        if ((fix_lo && i == lo) || (fix_hi && i == hi - 1)) {
-            cp[i] = 0.0;
-            dp[i] = (fix_lo && i == lo) ? z_lo : z_hi;
-        } else if (mode[i] == 0 && l[i] > 0.0) {
-            cp[i] = 0.0;
-            dp[i] = 0.0;
-        } else {
-            const double lo_e = (i > lo) ? e[i - 1] : 0.0;
-            /* M z = -q + w with w = -mode l: the right-hand side -q - mode l */
-            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            const double den = d[i] - lo_e * cprev;
-            const double inv = 1.0 / den;
-            cp[i] = (i + 1 < hi) ? e[i] * inv : 0.0;  /* e has hi - 1 entries */
-            dp[i] = (rhs - lo_e * dprev) * inv;
-        }
-        cprev = cp[i];
-        dprev = dp[i];
-    }
-    double zn = 0.0;
-    for (size_t j = hi; j-- > lo;) {
-        zn = dp[j] - cp[j] * zn;
-        z[j] = zn;
-    }
-    lcp_box_basis_w(lo, hi, lo + (size_t)fix_lo, hi - (size_t)fix_hi, e, q, l, mode, z, w);
+    box_basis(lo, hi, fix_lo, z_lo, fix_hi, z_hi, d, e, q, l, mode, z, w, cp, dp, 0);
+}
+
+void lcp_box_basis_diag(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                        const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                        double *cp, double *dp)
+{
+    box_basis(lo, hi, fix_lo, z_lo, fix_hi, z_hi, d, e, q, l, mode, z, w, cp, dp, 1);
 }
 
 /* ---- the box LCP's driver, for any M ----------------------------------------------------------

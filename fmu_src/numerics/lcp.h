@@ -160,6 +160,13 @@ void lcp_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, do
                    const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
                    double *cp, double *dp);
 
+/* lcp_box_basis for an M whose off-diagonal e holds zeros (signed or not) and whose diagonal is not 0:
+ * each free row's pivot taken as d_i, which the elimination's d_i - e_{i-1} cp_{i-1} is then (the same
+ * results, without the elimination's chain of dependencies through the pivots). */
+void lcp_box_basis_diag(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                        const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                        double *cp, double *dp);
+
 /* Solve the box LCP by principal pivoting from the basis in mode[] (in: a guess, e.g. the modes of
  * the previous step; out: the solution's, 0 where z_i = 0): every infeasible row flipped for three
  * rounds, then the one of least index (Murty's rule), at most 8 n + 32 pivots; when that budget

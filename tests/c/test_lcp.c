@@ -892,6 +892,78 @@ static void test_box(checks *T)
            cases, multi, worst_enum, worst_res, max_piv, fallback, worst_basis);
 }
 
+/* The basis solve written row by row, every row's tests inside the loops (a fixed row, a held row, the
+ * first and last rows' missing neighbours), then the rows' w in a pass of their own (lcp_box_basis_w):
+ * the reference whose operations, in their order, lcp_box_basis and lcp_box_basis_diag keep (diag:
+ * each free row's pivot d_i) */
+static void ref_box_basis(size_t lo, size_t hi, int fix_lo, double z_lo, int fix_hi, double z_hi, const double *d,
+                          const double *e, const double *q, const double *l, const int *mode, double *z, double *w,
+                          int diag)
+{
+    double cp[16], dp[16], cprev = 0.0, dprev = 0.0;
+    for (size_t i = lo; i < hi; i++) {
+        if ((fix_lo && i == lo) || (fix_hi && i == hi - 1)) {
+            cp[i] = 0.0;
+            dp[i] = (fix_lo && i == lo) ? z_lo : z_hi;
+        } else if (mode[i] == 0 && l[i] > 0.0) {
+            cp[i] = 0.0;
+            dp[i] = 0.0;
+        } else {
+            const double lo_e = (i > lo) ? e[i - 1] : 0.0;
+            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
+            const double inv = 1.0 / (diag ? d[i] : d[i] - lo_e * cprev);
+            cp[i] = (i + 1 < hi) ? e[i] * inv : 0.0;
+            dp[i] = (rhs - lo_e * dprev) * inv;
+        }
+        cprev = cp[i];
+        dprev = dp[i];
+    }
+    double zn = 0.0;
+    for (size_t j = hi; j-- > lo;) {
+        zn = dp[j] - cp[j] * zn;
+        z[j] = zn;
+    }
+    if (hi - (size_t)fix_hi > lo + (size_t)fix_lo)
+        lcp_box_basis_w(lo, hi, lo + (size_t)fix_lo, hi - (size_t)fix_hi, e, q, l, mode, z, w);
+}
+
+/* lcp_box_basis and lcp_box_basis_diag (an M with zeros off the diagonal, of either sign) bit for bit
+ * the row-by-row reference, on sub-ranges [lo, hi) of 1 to 9 rows with every choice of fixed ends,
+ * held, sliding and frictionless rows, zeros of either sign among q and the fixed values, and the
+ * entries outside the range (and the fixed rows' w) left as they were */
+static void test_box_basis_forms(checks *T)
+{
+    rng r = {0x243F6A8885A308D3ull};
+    long cases = 0;
+    for (int trial = 0; trial < 6000; trial++) {
+        const size_t lo = (size_t)rng_int(&r, 3), len = 1 + (size_t)(trial % 9), hi = lo + len;
+        const int diag = (trial / 9) % 2, fl = rng_int(&r, 2), fh = rng_int(&r, 2);
+        double d[16], e[16], q[16], l[16], z[16], w[16], zr[16], wr[16], cp[16], dp[16];
+        int mode[16];
+        for (size_t i = 0; i < 16; i++) {
+            d[i] = rng_decades(&r, -1, 2);
+            e[i] = diag ? ((rng_int(&r, 2) == 0) ? 0.0 : -0.0) : -rng_range(&r, 0.0, 0.45) * d[i];
+            l[i] = (rng_int(&r, 4) == 0) ? 0.0 : rng_range(&r, 0.0, 2.0);
+            q[i] = (rng_int(&r, 8) == 0) ? ((rng_int(&r, 2) == 0) ? 0.0 : -0.0) : rng_range(&r, -3.0, 3.0);
+            mode[i] = rng_int(&r, 3) - 1;
+            z[i] = zr[i] = w[i] = wr[i] = (double)i + 0.5; /* (untouched outside the range) */
+        }
+        const double zl = (rng_int(&r, 4) == 0) ? -0.0 : rng_range(&r, -1.0, 1.0), zh = rng_range(&r, -1.0, 1.0);
+        check_context(T, "box basis forms trial %d, [%zu, %zu), fixed %d %d, diag %d", trial, lo, hi, fl, fh, diag);
+        if (diag) lcp_box_basis_diag(lo, hi, fl, zl, fh, zh, d, e, q, l, mode, z, w, cp, dp);
+        else lcp_box_basis(lo, hi, fl, zl, fh, zh, d, e, q, l, mode, z, w, cp, dp);
+        ref_box_basis(lo, hi, fl, zl, fh, zh, d, e, q, l, mode, zr, wr, diag);
+        for (size_t i = 0; i < 16; i++) {
+            CHECK_SAME(zr[i], z[i]);
+            CHECK_SAME(wr[i], w[i]);
+        }
+        cases++;
+    }
+    check_context(T, "%s", "");
+    printf("box basis solve: %ld problems (1 to 9 rows, fixed ends, diagonal M) bit for bit the row-by-row "
+           "reference\n", cases);
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}}, *T = &C;
@@ -906,6 +978,7 @@ int main(void)
     regression_subnormal_pivot(T);
     regression_scale(T);
     test_box(T);
+    test_box_basis_forms(T);
     printf("friction LCP: %ld cases (%ld degenerate/extreme), max pivots %d, max relative residual %.2e, "
            "max error vs closed form %.2e (on the velocity scale (|p|+muN)/m_hat)\n",
            st.friction_cases, st.friction_degenerate, st.friction_pivots_max, st.friction_residual,

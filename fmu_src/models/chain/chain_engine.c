@@ -16,6 +16,7 @@
 #define ENG_APPLY_C(E, v, y) chain_op_C(ENG_CTX(E), (v), (y))
 #define ENG_HAS_C(E) ((E)->S.ops.apply_C != NULL)
 #define ENG_APPLY_M(E, a, y) chain_op_M(ENG_CTX(E), (a), (y))
+#define ENG_ADD_MK(E, r, x, p) chain_op_add_mk(ENG_CTX(E), (r), (x), (p))
 #define ENG_FACTOR(E, slot, cM, cC, cK) chain_op_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
 #define ENG_SOLVE(E, slot, b, x) chain_op_solve(ENG_CTX(E), (slot), (b), (x))
 #define ENG_HAS_FRICTION(E) ((void)(E), 1)

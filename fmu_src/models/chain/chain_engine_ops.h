@@ -22,6 +22,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #define CHAIN_NEWTON_ITERS 60
 
@@ -80,34 +81,56 @@ typedef struct chain_eng_ops_s {
 
 ENG_DECLARE_SCHEMES(chain_);
 
+/* y = T x for the symmetric tridiagonal T of diagonal D and off-diagonal O (O[i] couples i and i + 1),
+ * each row summed as D_i x_i + O_{i-1} x_{i-1} + O_i x_{i+1}; the end rows out of the loop (a loop
+ * without branches). x and y do not overlap. */
+static inline void chain_op_tri(size_t n, const double *D, const double *O, const double *x, double *y)
+{
+    if (n == 0) return;
+    if (n == 1) {
+        y[0] = D[0] * x[0];
+        return;
+    }
+    y[0] = D[0] * x[0] + O[0] * x[1];
+    for (size_t i = 1; i + 1 < n; i++) y[i] = (D[i] * x[i] + O[i - 1] * x[i - 1]) + O[i] * x[i + 1];
+    y[n - 1] = D[n - 1] * x[n - 1] + O[n - 2] * x[n - 2];
+}
+
 static inline void chain_op_K(void *ctx, const double *x, double *y)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    const size_t n = C->n;
-    for (size_t i = 0; i < n; i++) {
-        double s = C->Kd[i] * x[i];
-        if (i > 0) s += C->Ko[i - 1] * x[i - 1];
-        if (i + 1 < n) s += C->Ko[i] * x[i + 1];
-        y[i] = s;
-    }
+    chain_op_tri(C->n, C->Kd, C->Ko, x, y);
 }
 
 static inline void chain_op_C(void *ctx, const double *v, double *y)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    const size_t n = C->n;
-    for (size_t i = 0; i < n; i++) {
-        double s = C->Cd[i] * v[i];
-        if (i > 0) s += C->Co[i - 1] * v[i - 1];
-        if (i + 1 < n) s += C->Co[i] * v[i + 1];
-        y[i] = s;
-    }
+    chain_op_tri(C->n, C->Cd, C->Co, v, y);
 }
 
 static inline void chain_op_M(void *ctx, const double *a, double *y)
 {
     const chain_eng_ops *C = (const chain_eng_ops *)ctx;
-    for (size_t i = 0; i < C->n; i++) y[i] = C->m[i] * a[i];
+    const size_t n = C->n;
+    const double *m = C->m;
+    for (size_t i = 0; i < n; i++) y[i] = m[i] * a[i];
+}
+
+/* p_i += m_i r_i - (K x)_i (chain_op_M's and chain_op_K's products, in one pass; the end rows out of
+ * the loop) */
+static inline void chain_op_add_mk(void *ctx, const double *r, const double *x, double *p)
+{
+    const chain_eng_ops *C = (const chain_eng_ops *)ctx;
+    const size_t n = C->n;
+    const double *m = C->m, *D = C->Kd, *O = C->Ko;
+    if (n == 0) return;
+    if (n == 1) {
+        p[0] += m[0] * r[0] - D[0] * x[0];
+        return;
+    }
+    p[0] += m[0] * r[0] - (D[0] * x[0] + O[0] * x[1]);
+    for (size_t i = 1; i + 1 < n; i++) p[i] += m[i] * r[i] - ((D[i] * x[i] + O[i - 1] * x[i - 1]) + O[i] * x[i + 1]);
+    p[n - 1] += m[n - 1] * r[n - 1] - (D[n - 1] * x[n - 1] + O[n - 2] * x[n - 2]);
 }
 
 /* Thomas's factors of the slot (cp, inv): 0 when a pivot is not positive. */
@@ -133,13 +156,15 @@ static inline int chain_op_factor(void *ctx, int slot, double cM, double cC, dou
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
     double *d = C->d[slot], *e = C->e[slot];
-    int dominant = 1;
-    for (size_t i = 0; i < n; i++) {
-        d[i] = cM * C->m[i] + cC * C->Cd[i] + cK * C->Kd[i];
-        e[i] = (i + 1 < n) ? cC * C->Co[i] + cK * C->Ko[i] : 0.0;
-        dominant &= d[i] > fabs(e[i]) + ((i > 0) ? fabs(e[i - 1]) : 0.0);
-        C->kh[slot][i] = 0; /* the kept basis factors anew */
-    }
+    const double *m = C->m, *Cd = C->Cd, *Kd = C->Kd, *Co = C->Co, *Ko = C->Ko;
+    if (n == 0) return 1;
+    /* (each loop without branches: the first row's dominance fabs(e_0) + 0.0, which compares as fabs(e_0)) */
+    for (size_t i = 0; i < n; i++) d[i] = cM * m[i] + cC * Cd[i] + cK * Kd[i];
+    for (size_t i = 0; i + 1 < n; i++) e[i] = cC * Co[i] + cK * Ko[i];
+    e[n - 1] = 0.0;
+    int dominant = d[0] > fabs(e[0]);
+    for (size_t i = 1; i < n; i++) dominant &= d[i] > fabs(e[i]) + fabs(e[i - 1]);
+    memset(C->kh[slot], 0, n * sizeof(int)); /* the kept basis factors anew */
     C->tok[slot] = 0;
     return dominant || chain_op_thomas(C, slot);
 }
@@ -212,37 +237,14 @@ static inline void chain_op_basis(chain_eng_ops *C, int slot, const double *q, c
 }
 
 /* lcp_box_basis(0, n, fix_lo, zl, fix_hi, zh, d, e, q, l, mode, z, w, ...) of a slot whose M_hat is
- * diagonal (cC = cK = 0: e holds zeros, the mass slot of the engine's held solves): the same
- * operations, so the same bits, but with no division on the elimination's chain (a row's pivot
- * d - e cp is d itself: e cp is a zero and d > 0). */
+ * diagonal (cC = cK = 0: e holds zeros, the mass slot of the engine's held solves): lcp_box_basis_diag,
+ * the same operations, so the same bits, but with no division on the elimination's chain (a row's
+ * pivot d - e cp is d itself: e cp is a zero and d > 0). */
 static inline void chain_op_diag(chain_eng_ops *C, int slot, int fix_lo, double zl, int fix_hi, double zh,
                                  const double *q, const double *l, const int *mode, double *z, double *w)
 {
-    const size_t n = C->n;
-    const double *d = C->d[slot], *e = C->e[slot];
-    double *cp = C->work, *dp = C->work + n, dprev = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        double c = 0.0, v;
-        if ((fix_lo && i == 0) || (fix_hi && i == n - 1)) {
-            v = (fix_lo && i == 0) ? zl : zh;
-        } else if (mode[i] == 0 && l[i] > 0.0) {
-            v = 0.0;
-        } else {
-            const double lo_e = (i > 0) ? e[i - 1] : 0.0, inv = 1.0 / d[i];
-            const double rhs = -q[i] - ((l[i] > 0.0) ? mode[i] * l[i] : 0.0);
-            c = (i + 1 < n) ? e[i] * inv : 0.0;
-            v = (rhs - lo_e * dprev) * inv;
-        }
-        cp[i] = c;
-        dp[i] = v;
-        dprev = v;
-    }
-    double zn = 0.0;
-    for (size_t j = n; j-- > 0;) {
-        zn = dp[j] - cp[j] * zn;
-        z[j] = zn;
-    }
-    lcp_box_basis_w(0, n, (size_t)fix_lo, n - (size_t)fix_hi, e, q, l, mode, z, w);
+    lcp_box_basis_diag(0, C->n, fix_lo, zl, fix_hi, zh, C->d[slot], C->e[slot], q, l, mode, z, w, C->work,
+                       C->work + C->n);
 }
 
 /* A row whose W stays as the basis solve set it: held, or a span's ghost. */
@@ -328,14 +330,15 @@ static inline eng_status chain_op_friction(void *ctx, const eng_problem *P, int 
     chain_eng_ops *C = (chain_eng_ops *)ctx;
     const size_t n = C->n;
     const double *d = C->d[P->slot], *e = C->e[P->slot], *l = P->limit, *vb = P->vb;
-    for (size_t i = 0; i < n; i++) {
-        double r = P->p_hat[i];
-        if (vb) {
-            r -= d[i] * vb[i];
-            if (i > 0) r -= e[i - 1] * vb[i - 1];
-            if (i + 1 < n) r -= e[i] * vb[i + 1];
-        }
-        C->q[i] = -r;
+    const double *ph = P->p_hat;
+    double *q = C->q;
+    if (!vb || n <= 1) {
+        for (size_t i = 0; i < n; i++) q[i] = -(vb ? ph[i] - d[i] * vb[i] : ph[i]);
+    } else { /* r = p_hat - M_hat vb row by row (its terms in the order d, lower, upper); the end rows
+              * out of the loop */
+        q[0] = -((ph[0] - d[0] * vb[0]) - e[0] * vb[1]);
+        for (size_t i = 1; i + 1 < n; i++) q[i] = -(((ph[i] - d[i] * vb[i]) - e[i - 1] * vb[i - 1]) - e[i] * vb[i + 1]);
+        q[n - 1] = -((ph[n - 1] - d[n - 1] * vb[n - 1]) - e[n - 2] * vb[n - 2]);
     }
     if (pivots) *pivots = 0;
     if (what == ENG_SOLVE_BASIS && P->cC == 0.0 && P->cK == 0.0) { /* M_hat diagonal (the held solves) */
@@ -591,15 +594,16 @@ static inline int chain_op_run_factor(chain_run_row *R, const double *d, size_t 
     return 1;
 }
 
-/* chain_op_row_done from the rows: row i's force into f, whether its margin is positive. */
-static inline int chain_op_run_done(const chain_run_row *R, const double *ph, double *f, size_t i, size_t n,
+/* chain_op_row_done from the rows: row i's force into f, whether its margin is positive (lo, hi:
+ * whether row i has a row above, below) */
+static inline int chain_op_run_done(const chain_run_row *R, const double *ph, double *f, size_t i, int lo, int hi,
                                     double vlo, double vi, double vhi)
 {
     double fi;
     if (R[i].hold) {
         fi = -ph[i];
-        if (i > 0) fi += R[i - 1].e * vlo;
-        if (i + 1 < n) fi += R[i].e * vhi;
+        if (lo) fi += R[i - 1].e * vlo;
+        if (hi) fi += R[i].e * vhi;
     } else {
         fi = 0.0 - R[i].sl;
     }
@@ -607,62 +611,84 @@ static inline int chain_op_run_done(const chain_run_row *R, const double *ph, do
     return !(R[i].Fb > 0.0) || (R[i].st != 0 ? R[i].st * vi > 0.0 : R[i].Fb - fabs(fi) > 0.0);
 }
 
+/* Row i's part of a run step's forward sweep (lo, hi: whether it has a row above, below): at the run's
+ * first step (first) its loads and mode taken into the row and its kept factor made (*refac: the row
+ * above's was, then row i's); p_hat from x_pred (xc its own, xl the row above's, xr the row below's)
+ * and r, and the elimination with the kept factors (elo, dprev: the row above's e and eliminated
+ * value); returns its eliminated value. */
+static inline double chain_op_run_fwd(const chain_eng_ops *C, chain_run_row *R, size_t i, int lo, int hi, int first,
+                                      int *refac, double xc, double xl, double xr, double r, const eng_held_step *F,
+                                      double elo, double dprev, double *ph, double *dp)
+{
+    if (first) {
+        const int st = F->st[i];
+        const double li = F->lim[i];
+        const int hold = st == 0 && li > 0.0;
+        R[i].u = F->u[i];
+        R[i].Fb = F->Fb[i];
+        R[i].st = st;
+        R[i].hold = hold;
+        R[i].sl = (li > 0.0) ? st * li : 0.0;
+        *refac = chain_op_run_factor(R, C->d[F->slot], i, C->n, hold, *refac);
+    }
+    const double y = R[i].m * r;
+    double kx = R[i].Kd * xc;
+    if (lo) kx += R[i - 1].Ko * xl;
+    if (hi) kx += R[i].Ko * xr;
+    double p = R[i].u;
+    if (F->Pc) p += R[i].Pc * F->cw;
+    if (F->Ps) p -= R[i].Ps * F->sw;
+    const double phi = p + (y - kx);
+    ph[i] = phi;
+    /* (row 0: x - 0 0 is x, one subtraction less on the step's chain of dependencies) */
+    const double rhs = phi - R[i].sl;
+    const double v = R[i].hold ? 0.0 : (lo ? rhs - elo * dprev : rhs) * R[i].inv;
+    dp[i] = v;
+    return v;
+}
+
 /* A fused step of a run (eng_held_step.run > 0) from the rows: chain_op_step_held's arithmetic in
  * its order, so the same bits. The run's first step takes F's loads and modes into the rows and
- * makes the kept factorisation for its held pattern; the later ones read the rows alone. */
+ * makes the kept factorisation for its held pattern, row by row in its forward sweep; the later ones
+ * read the rows alone. The first and last rows out of the sweeps' loops. */
 static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng_state *s)
 {
     chain_eng_ops *C = (chain_eng_ops *)ctx;
-    const int first = F->run == 1;
-    if (first) chain_op_run_take(C, F);
     const size_t n = C->n;
     chain_run_row *restrict R = C->rr;
-    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A;
-    const double cw = F->cw, sw = F->sw, am = 1.0 - a;
-    const int hasPc = F->Pc != NULL, hasPs = F->Ps != NULL;
+    const int first = F->run == 1;
+    if (first) chain_op_run_take(C, F);
+    int refac = 0;
+    const double a = F->alpha, c1 = F->c1, g1 = F->g1, pV = F->pred_V, pA = F->pred_A, am = 1.0 - a;
     const double *X = s->X, *V = s->V, *A0 = F->A0;
     double *restrict xpp = F->xp, *restrict ph = F->ph, *restrict V1 = F->V1, *restrict f = F->f;
     double *restrict dp = C->work;
     /* forward: x_pred one block ahead, p_hat, the elimination with the kept factors */
-    double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, elo = 0.0, dprev = 0.0;
-    int refac = 0;
-    for (size_t i = 0; i < n; i++) {
-        const double xr = (i + 1 < n) ? X[i + 1] + pV * V[i + 1] + pA * A0[i + 1] : 0.0;
-        xpp[i] = xc;
-        int hold;
-        double sl;
-        if (first) {
-            const int st = F->st[i];
-            const double li = F->lim[i];
-            hold = st == 0 && li > 0.0;
-            sl = (li > 0.0) ? st * li : 0.0;
-            R[i].u = F->u[i];
-            R[i].Fb = F->Fb[i];
-            R[i].st = st;
-            R[i].hold = hold;
-            R[i].sl = sl;
-            refac = chain_op_run_factor(R, C->d[F->slot], i, n, hold, refac);
-        } else {
-            hold = R[i].hold;
-            sl = R[i].sl;
-        }
-        const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
-        const double y = R[i].m * r;
-        double kx = R[i].Kd * xc;
-        if (i > 0) kx += R[i - 1].Ko * xl;
-        if (i + 1 < n) kx += R[i].Ko * xr;
-        double p = R[i].u;
-        if (hasPc) p += R[i].Pc * cw;
-        if (hasPs) p -= R[i].Ps * sw;
-        const double phi = p + (y - kx);
-        ph[i] = phi;
+    double xc = X[0] + pV * V[0] + pA * A0[0], xl = 0.0, dprev;
+    const double r0 = -a * A0[0] + am * (V[0] * c1 + g1 * A0[0]);
+    if (n == 1) {
+        xpp[0] = xc;
+        dprev = chain_op_run_fwd(C, R, 0, 0, 0, first, &refac, xc, 0.0, 0.0, r0, F, 0.0, 0.0, ph, dp);
+        xl = xc;
+    } else {
+        double xr = X[1] + pV * V[1] + pA * A0[1];
+        xpp[0] = xc;
+        dprev = chain_op_run_fwd(C, R, 0, 0, 1, first, &refac, xc, 0.0, xr, r0, F, 0.0, 0.0, ph, dp);
         xl = xc;
         xc = xr;
-        /* (row 0: x - 0 0 is x, one subtraction less on the step's chain of dependencies) */
-        const double rhs = phi - sl;
-        dprev = hold ? 0.0 : ((i > 0) ? rhs - elo * dprev : rhs) * R[i].inv;
-        dp[i] = dprev;
-        elo = R[i].e;
+        for (size_t i = 1; i + 1 < n; i++) {
+            xr = X[i + 1] + pV * V[i + 1] + pA * A0[i + 1];
+            xpp[i] = xc;
+            const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
+            dprev = chain_op_run_fwd(C, R, i, 1, 1, first, &refac, xc, xl, xr, r, F, R[i - 1].e, dprev, ph, dp);
+            xl = xc;
+            xc = xr;
+        }
+        const size_t i = n - 1;
+        xpp[i] = xc;
+        const double r = -a * A0[i] + am * (V[i] * c1 + g1 * A0[i]);
+        dprev = chain_op_run_fwd(C, R, i, 1, 0, first, &refac, xc, xl, 0.0, r, F, R[i - 1].e, dprev, ph, dp);
+        xl = xc;
     }
     /* back substitution, and row j + 1's force and margin once row j is known; row 0's after. The
      * last row's from the forward sweep's register: its elimination's value dp - cp 0 is dp, as its
@@ -671,15 +697,24 @@ static CHAIN_OP_HOT int chain_op_step_run(void *ctx, const eng_held_step *F, eng
     const double vn = dprev; /* (a held row's dprev is 0.0, its V1) */
     double zn = dprev, v1 = vn, v2 = 0.0; /* V1 of rows j + 1 and j + 2 */
     V1[n - 1] = vn;
-    for (size_t j = n - 1; j-- > 0;) {
+    if (n > 1) {
+        size_t j = n - 2;
         zn = dp[j] - R[j].cp * zn;
-        const double vj = R[j].hold ? 0.0 : zn;
+        double vj = R[j].hold ? 0.0 : zn;
         V1[j] = vj;
-        ok &= chain_op_run_done(R, ph, f, j + 1, n, vj, v1, v2);
+        ok &= chain_op_run_done(R, ph, f, j + 1, 1, 0, vj, v1, v2);
         v2 = v1;
         v1 = vj;
+        while (j-- > 0) {
+            zn = dp[j] - R[j].cp * zn;
+            vj = R[j].hold ? 0.0 : zn;
+            V1[j] = vj;
+            ok &= chain_op_run_done(R, ph, f, j + 1, 1, 1, vj, v1, v2);
+            v2 = v1;
+            v1 = vj;
+        }
     }
-    ok &= chain_op_run_done(R, ph, f, 0, n, 0.0, v1, v2);
+    ok &= chain_op_run_done(R, ph, f, 0, 0, n > 1, 0.0, v1, v2);
     if (!ok) return 0;
     chain_op_held_accept(F, s, n, xl, vn);
     return 1;
