@@ -206,7 +206,9 @@ static void chol_solve(size_t m, const double *L, size_t ld, const int *dep, con
 
 static int ramped(const eng_inputs *in)
 {
-    return in && (in->dF_ext[0] || in->dF_ext[1] || in->dN_ext[0] || in->dN_ext[1]);
+    if (!in) return 0;
+    /* (the four tests without branches: a path asks for it at every phase) */
+    return (in->dF_ext[0] != NULL) | (in->dF_ext[1] != NULL) | (in->dN_ext[0] != NULL) | (in->dN_ext[1] != NULL);
 }
 
 static double poly_at(const double *u, const double *const *du, const eng_inputs *in, size_t i, double t)
@@ -1313,7 +1315,7 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
             g = (gj < g) ? gj : g; /* fmin's (a NaN margin left out), without its library call */
         }
     }
-    c->hi_last = !(g > 0.0) && st == ENG_OK;
+    c->hi_last = !(g > 0.0) & (st == ENG_OK); /* (no branch: the search's trials alternate) */
     return g;
 }
 
