@@ -1237,8 +1237,11 @@ static ENG_HOT double margin(const eng *E, const int *mode, size_t j, const doub
  * rule's |f| <= Fb). */
 static ENG_HOT int switches(const eng *E, const int *mode, size_t j, const double *V1, const double *f)
 {
-    const double g = margin(E, mode, j, V1, f);
-    return (mode[j] != 0) ? g <= 0.0 : g < 0.0;
+    /* (margin's two values, both taken and one selected, without a branch: a structure's contacts mix
+     * held and sliding ones, which a branch predictor misses) */
+    const int m = mode[j];
+    const double gs = m * slip(E, j, V1), gh = E->Fb[j] - fabs(f[j]);
+    return ((m != 0) & (gs <= 0.0)) | ((m == 0) & (gh < 0.0));
 }
 
 #define MARGIN_LIST 8 /* the candidates margin_fn lists (more: every contact's cand read) */
@@ -1629,8 +1632,11 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         size_t ncand = 0;
-        for (size_t j = 0; j < nc; j++)
-            if (has_friction(E, j) && switches(E, E->st, j, E->V1, E->f)) { E->cand[j] = 1; ncand++; }
+        for (size_t j = 0; j < nc; j++) {
+            const int c = has_friction(E, j) & switches(E, E->st, j, E->V1, E->f); /* (cand is 0 here) */
+            E->cand[j] = c;
+            ncand += (size_t)c;
+        }
         if (ncand == 0) {
             finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
@@ -2086,7 +2092,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
                                      : ENG_FN(eng_dense_friction)(E, &P, ENG_SOLVE_BASIS, st, V1, f, NULL);
             if (fs != ENG_OK) break;
             int sw_any = 0;
-            for (size_t j = 0; j < nc; j++) sw_any |= has_friction(E, j) && switches(E, st, j, V1, f);
+            for (size_t j = 0; j < nc; j++) sw_any |= has_friction(E, j) & switches(E, st, j, V1, f);
             if (sw_any) { /* the trial, solved, for step_located's phase 0 (fused_ready) */
 #if ENG_FUSED_LOCAL
                 for (size_t i = 0; i < n; i++) {
