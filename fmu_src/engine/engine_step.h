@@ -2043,19 +2043,19 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
             int rebase = 0;
             held_modes = 1;
             rest_pins = 0;
-            for (size_t j = 0; j < nc; j++)
-                rest_pins |= (located || consistent) && mode[j] == 0 && has_friction(E, j) && S->rows[j].nnz == 1;
-
             for (size_t i = 0; i < n; i++) pin[i] = 0;
             for (size_t j = 0; j < nc; j++) {
                 const int held = mode[j] == 0 && has_friction(E, j);
                 held_modes &= held && E->vb[j] == 0.0;
-                if (held && S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] = 1;
+                if (held && S->rows[j].nnz == 1) {
+                    pin[S->rows[j].idx[0]] = 1;
+                    rest_pins = located || consistent;
+                }
             }
             const double tol = 1e-12 * h + 4.0 * DBL_EPSILON * fabs(t);
             for (size_t i = 0; i < n; i++) {
                 held_modes &= pin[i];
-                rebase |= !pin[i] && a != 0.0 && h != hA[i] && fabs(h - hA[i]) > tol && S->rate_max * max_b(hA[i], h) <= 1.0;
+                rebase |= !pin[i] && a != 0.0 && rebases_len(S, hA[i], h, tol);
             }
             if (rebase) break;
         }

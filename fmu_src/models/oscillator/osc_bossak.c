@@ -171,25 +171,31 @@ static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hoo
 
 /* ---- the stick's breakaway, kept in dfo_state ---------------------------------------------------- */
 
+/* The key of the block's stick breakaway at the state and inputs: the constant part of the static
+ * force F_ext - k X and the limit (the exact scheme's stick_C, stick_Fb). */
+static void stick_key(const dfo_model *M, const dfo_inputs *in, const dfo_state *s, double *C, double *Fb)
+{
+    dfo_loads L;
+    dfo_loads_init(&L, M, in);
+    *C = L.F_ext - M->p.k * s->X;
+    *Fb = L.Fb;
+}
+
 /* The breakaway of the block's stick the state keeps (dfo_state.stick_tb, the engine's stick_tb) where
- * it was found for these inputs at this position: the constant part of the static force F_ext - k X and
- * the limit (stick_C, stick_Fb, the exact scheme's key); else NaN (to be found). */
+ * it was found for these inputs at this position (stick_key's); else NaN (to be found). */
 static double kept_stick(const dfo_model *M, const dfo_inputs *in, const dfo_state *s)
 {
     if (in->ramp || isnan(s->stick_tb)) return NAN;
-    dfo_loads L;
-    dfo_loads_init(&L, M, in);
-    return (s->stick_C == L.F_ext - M->p.k * s->X && s->stick_Fb == L.Fb) ? s->stick_tb : NAN;
+    double C, Fb;
+    stick_key(M, in, s, &C, &Fb);
+    return (s->stick_C == C && s->stick_Fb == Fb) ? s->stick_tb : NAN;
 }
 
-/* The engine's stick breakaway tb kept in the state with its key (kept_stick's) */
+/* The engine's stick breakaway tb kept in the state with its key */
 static void keep_stick(const dfo_model *M, const dfo_inputs *in, double tb, dfo_state *s)
 {
-    dfo_loads L;
-    dfo_loads_init(&L, M, in);
     s->stick_tb = tb;
-    s->stick_C = L.F_ext - M->p.k * s->X;
-    s->stick_Fb = L.Fb;
+    stick_key(M, in, s, &s->stick_C, &s->stick_Fb);
     s->stick_dir = 0;
 }
 
