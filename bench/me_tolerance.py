@@ -7,7 +7,13 @@ solution: dryfriction.references.exact), the events (mode changes) against the e
 switches, the largest error of the switch times (when the counts agree) and the CPU time of one
 run (the best of --repeat, fmpy's overhead included; the FMU unzipped once).
 
-Usage: python bench/me_tolerance.py [--fmu PATH] [--repeat 3] [--periods 20]
+With --control, instead, the control table: the same host on the same oscillators without friction (N = 0: a
+linear oscillator, no event at all), its largest x and v errors against the closed form and the
+largest error of its turning points (v = 0, found on CVode's output by cubic Hermite interpolation
+of v and a at period / 4000): the error of the smooth motion the host makes by itself, which bounds
+how well any switch of the friction oscillator (a stop is a turning point) can be timed.
+
+Usage: python bench/me_tolerance.py [--fmu PATH] [--repeat 3] [--periods 20] [--control]
 """
 
 from __future__ import annotations
@@ -18,8 +24,12 @@ import tempfile
 import time
 from pathlib import Path
 
+import dataclasses
+
 import numpy as np
 from fmpy import extract, simulate_fmu
+from scipy.interpolate import CubicHermiteSpline
+from scipy.optimize import brentq
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from cases import CASES  # noqa: E402
@@ -47,7 +57,31 @@ def arguments(argv: list[str] | None, doc: str, fmu: str, periods: int) -> argpa
     ap.add_argument("--fmu", type=Path, default=None, help=f"the {fmu} FMU (default: the build's)")
     ap.add_argument("--repeat", type=int, default=3, help="runs per point, the fastest counted")
     ap.add_argument("--periods", type=int, default=periods, help="excitation periods per run")
+    ap.add_argument("--control", action="store_true",
+                    help="the frictionless control instead: the host's own error of the smooth motion")
     return ap.parse_args(argv)
+
+
+def control(unzipped: str, case: object, rtol: float, periods: int) -> tuple[float, float, float]:
+    """The frictionless twin of a case (N = 0) under the same host: the largest x and v errors
+    against the closed form and the largest turning-point time error."""
+    o = dataclasses.replace(case.oscillator, N=0.0)  # type: ignore[attr-defined]
+    t_end = periods * o.period
+    ex = solve_exact(o, t_end)
+    r = simulate_fmu(unzipped, fmi_type="ModelExchange", solver="CVode", relative_tolerance=rtol,
+                     stop_time=t_end, output_interval=o.period / 4000, start_values=o.as_dict(),
+                     output=["x", "v", "a"])
+    t, v = r["time"], r["v"]
+    xe, ve = ex.evaluate(np.minimum(t, ex.t_end))[:2]
+    hermite = CubicHermiteSpline(t, v, r["a"])
+    turn = np.nonzero((v[1:] * v[:-1] < 0.0) & (np.sign(ve[1:]) != np.sign(ve[:-1])))[0]
+
+    def v_exact(tt: float) -> float:
+        return float(ex.evaluate(np.array([tt]))[1][0])
+
+    dt = [abs(brentq(hermite, t[k], t[k + 1], xtol=1e-15) - brentq(v_exact, t[k], t[k + 1], xtol=1e-15))
+          for k in turn]
+    return float(np.max(np.abs(r["x"] - xe))), float(np.max(np.abs(v - ve))), max(dt, default=float("nan"))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -56,6 +90,14 @@ def main(argv: list[str] | None = None) -> int:
     fmu = a.fmu or default_fmu_path()
     with tempfile.TemporaryDirectory() as tmp:
         unzipped = extract(str(fmu), unzipdir=tmp)
+        if a.control:
+            print("| case without friction | rtol | max abs x error (m) | max abs v error (m/s) | max turning-point time error (s) |")
+            print("|---|---|---|---|---|")
+            for case in CASES:
+                for rtol in (1e-8, 1e-10, 1e-12):
+                    ex_, ev_, et_ = control(unzipped, case, rtol, a.periods)
+                    print(f"| {case.name} | {rtol:.0e} | {ex_:.1e} | {ev_:.1e} | {et_:.1e} |")
+            return 0
         print("| case | rtol | max abs x error (m) | events / exact switches | max switch time error (s) | CPU per run (ms) |")
         print("|---|---|---|---|---|---|")
         for case in CASES:
