@@ -80,25 +80,27 @@ void osc_eng_observe(void *ctx, const eng_phase *ph, const eng_state *s) { osc_o
 
 /* The observables over a run of fused steps (engine_step.h's ENG_OBS_RUN): in locals where the
  * observer is osc_eng_observe, else R unused (the observer's own function called) */
-static inline void osc_obs_run_begin(const eng_observer *obs, osc_obs_vals *R, double t)
+static inline void osc_obs_run_begin(const eng_observer *obs, osc_obs_vals *R)
 {
     memset(R, 0, sizeof *R);
     R->on = obs && obs->on_phase == osc_eng_observe;
     if (R->on) osc_obs_load(R, (const osc_observables *)obs->ctx);
-    R->inside = R->on && R->observed && t >= R->w0;
 }
 
-/* A phase of the run: inside the window once open and sampled, only its end's side of the window
- * tested (the phase ends after the run's start, so after w0) */
+/* A phase of the run. After a phase sampled inside the window (inside), one in the same mode leaves
+ * the stuck stretch as it is (open in mode 0 it stays open, in a sliding mode none is open): only its
+ * end's side of the window tested, X sampled and the work counted (it ends after w0). Any other
+ * phase (the run's first, a mode other than the last phase's) as osc_obs_phase takes it. */
 static inline void osc_obs_run_phase(osc_obs_vals *R, const eng_phase *ph)
 {
-    if (!R->inside) {
-        osc_obs_phase(R, ph);
+    if (R->inside && ph->mode0[0] == R->mode_in) {
+        if (ph->tb > R->w1) return;
+        osc_obs_sample(R, ph, 1);
         return;
     }
-    osc_obs_stuck(R, ph->mode0[0], ph->ta);
-    if (ph->tb > R->w1) return;
-    osc_obs_sample(R, ph, 1);
+    osc_obs_phase(R, ph);
+    R->inside = R->observed && ph->tb >= R->w0;
+    R->mode_in = ph->mode0[0];
 }
 
 /* Another observer's call for a phase of the run, out of line and from the phase's values (the run's
@@ -125,7 +127,7 @@ static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, doub
     (((obs)->on_phase == osc_eng_observe) ? osc_observe_phase((obs)->ctx, (ph), (s))                                \
                                           : (obs)->on_phase((obs)->ctx, (ph), (s)))
 #define ENG_OBS_RUN osc_obs_vals
-#define ENG_OBS_RUN_BEGIN(obs, R, s) osc_obs_run_begin((obs), &(R), (s)->t)
+#define ENG_OBS_RUN_BEGIN(obs, R, s) ((void)(s), osc_obs_run_begin((obs), &(R)))
 #define ENG_OBS_RUN_PHASE(obs, R, ph, s)                                                                            \
     ((R).on ? osc_obs_run_phase(&(R), (ph))                                                                           \
             : osc_obs_run_call((obs), (ph)->ta, (ph)->tb, (ph)->X0[0], (ph)->X1[0], (ph)->mode0[0], (ph)->f[0],      \

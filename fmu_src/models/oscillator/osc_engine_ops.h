@@ -52,7 +52,8 @@ typedef struct {
  * call the observer's function). */
 typedef struct {
     int on, observed;
-    int inside;  /* a sample taken and the window open at the run's start (its phases end after w0) */
+    int inside;  /* the run's last phase was sampled and ended at or after w0 (the next ones end after it) */
+    int mode_in; /* that phase's mode at its start */
     double w0, w1, stuck_from, t_stuck, x_max, x_min, E_friction;
 } osc_obs_vals;
 
