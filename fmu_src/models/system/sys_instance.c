@@ -106,6 +106,17 @@ static void value_starts(double *vals, const sys_layout *L)
         for (size_t i = 0; i < c; i++) a[i] = var->start;
         if (var->home == DFO_IN_INPUTS) memcpy(vals + L->ai_used[var->slot], a, c * sizeof *a);
     }
+#if DFO_NUM_DIAG_STARTS > 0
+    /* matrices that start diagonal: the elements (i, j), i != j, at their own start (every matrix has
+     * n columns) */
+    for (int d = 0; d < DFO_NUM_DIAG_STARTS; d++) {
+        const dfo_var_info *var = &DFO_VARS[DFO_DIAG_STARTS[d].var];
+        const size_t c = sys_var_count(var, L->n, L->nc);
+        double *a = vals + L->ap[var->slot];
+        for (size_t k = 0; k < c; k++)
+            if (k / L->n != k % L->n) a[k] = DFO_DIAG_STARTS[d].off;
+    }
+#endif
 }
 
 dfo_inst_status sys_resize(sys_instance *in, const char *fn, size_t n, size_t nc)
