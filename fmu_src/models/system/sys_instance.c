@@ -564,8 +564,9 @@ static dfo_inst_status set_values(sys_instance *in, const char *fn, const unsign
     for (size_t j = 0; j < n; j++) {
         sys_ref r;
         if (!lookup(in, fn, vr[j], type, &r)) return DFO_INST_ERROR;
-        element_name(in, r.var, r.elem < 0 ? 0 : (size_t)r.elem, name, sizeof name);
-        if (!dfo_inst_settable(&in->lc, fn, r.var, r.var->array ? r.var->name : name, vr[j])) return DFO_INST_ERROR;
+        if (r.elem < 0) snprintf(name, sizeof name, "%s", r.var->name);
+        else element_name(in, r.var, (size_t)r.elem, name, sizeof name); /* an FMI 2.0 element */
+        if (!dfo_inst_settable(&in->lc, fn, r.var, name, vr[j])) return DFO_INST_ERROR;
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) {
             const double x = value[k + i];
