@@ -530,6 +530,28 @@ def test_the_start_values_are_a_valid_structure_of_any_size(tmp_path: Path) -> N
             f.close()
 
 
+@pytest.mark.parametrize("case", ["two_mass", "chain", "no time scale"])
+def test_h_zero_derives_the_step_from_the_eigenvalues(case: str, tmp_path: Path) -> None:
+    """h = 0: h_used is 1/1000 of 2 pi over sqrt(lambda_max(M^-1 K)) + lambda_max(M^-1 C) + omega (the
+    eigenvalues by numpy here, by power iteration in the FMU), 1 ms without any time scale."""
+    values = {"two_mass": two_mass_system(TM), "chain": chain_system(CHAIN),
+              "no time scale": {"K": [0.0] * 4, "C": [0.0] * 4, "omega": 0.0}}[case]
+    n = int(round(math.sqrt(len(np.ravel(values["K"])))))
+    nc = len(values.get("N", [1.0]))
+    f = Fmu3(SYS3, tmp_path, {"n": n, "nc": nc})
+    try:
+        f.start({**values, "h": 0.0})
+        got = f.real("h_used")[0]
+    finally:
+        f.close()
+    M = np.reshape(values.get("M", np.eye(n)), (n, n))
+    K, C = (np.reshape(values[k], (n, n)) for k in ("K", "C"))
+    rate = (math.sqrt(max(np.linalg.eigvals(np.linalg.solve(M, K)).real)) +
+            max(np.linalg.eigvals(np.linalg.solve(M, C)).real) + values["omega"])
+    want = 2 * math.pi / rate / 1000 if rate > 0 else 1e-3
+    assert got == pytest.approx(want, rel=1e-8)
+
+
 def test_the_generator_refuses_a_diagonal_start_of_a_vector(tmp_path: Path) -> None:
     src = ROOT / "fmu_src" / "models" / "system" / "modelDescription.xml"
     bad = src.read_text().replace('<DiagonalStart variable="W"', '<DiagonalStart variable="F_c"')

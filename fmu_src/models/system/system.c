@@ -270,10 +270,8 @@ double sys_step(const sys_params *p, const eng_alloc *al)
     double *L = (double *)al->allocate(al->env, n * n + 2 * n, sizeof(double));
     if (!L) return NAN;
     double h = NAN;
-    if (cholesky(n, p->M, 0.0, L, NULL)) {
-        const double rate = rate_with(p, L, L + n * n, L + n * n + n);
-        if (rate > 0.0) h = dfo_step_rule(0.0, 2.0 * DFO_PI / rate);
-    }
+    if (cholesky(n, p->M, 0.0, L, NULL)) /* (no time scale, rate 0: the rule's fallback, 1 ms) */
+        h = dfo_step_rule(0.0, 2.0 * DFO_PI / rate_with(p, L, L + n * n, L + n * n + n));
     al->release(al->env, L);
     return h;
 }
@@ -385,13 +383,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     m->has_C = max_abs(n * n, p->C) > 0.0;
     (void)cholesky(n, p->M, 0.0, m->L[ENG_SLOT_MASS], NULL); /* (passed sys_check) */
     m->rate = rate_with(p, m->L[ENG_SLOT_MASS], m->work, m->work + n);
-    m->h = p->h > 0.0 ? p->h : dfo_step_rule(0.0, 2.0 * DFO_PI / m->rate);
-    if (!(m->h > 0.0) || !isfinite(m->h)) {
-        sys_model_free(m, al);
-        snprintf(buf, len, "the model has no time scale (K = 0, C = 0, omega = 0): set h");
-        *err = buf;
-        return 0;
-    }
+    m->h = dfo_step_rule(p->h, 2.0 * DFO_PI / m->rate); /* (no time scale, rate 0: the rule's fallback, 1 ms) */
     eng_setup S;
     memset(&S, 0, sizeof S);
     S.n = n;

@@ -36,7 +36,7 @@ typedef struct {
 typedef struct {
     size_t n, nc;
     double h;                        /* the internal step used */
-    double rate;                     /* the fastest rate (1/s): sys_rate_max */
+    double rate;                     /* the fastest rate (1/s): sys_step's, the engine's rate_max */
     double *M, *C, *K;               /* n x n copies */
     double *L[ENG_NSLOTS];           /* per slot: the lower Cholesky factor, n x n row-major */
     double *Pc, *Ps;                 /* n: the engine's excitation (Ps = -F_s; NULL when F_s = 0) */
@@ -58,8 +58,12 @@ typedef struct {
 const char *sys_check(const sys_params *p, const eng_alloc *al, char *buf, size_t len);
 
 /* The internal step of p, for a structure that passed sys_check: p->h, or with p->h = 0 the default
- * rule (bossak.h's dfo_step_rule) over the fastest period 2 pi / sys_rate_max. NaN when the
- * structure cannot be factored or memory fails. */
+ * rule (bossak.h's dfo_step_rule) over the fastest period 2 pi / rate, the fastest rate being
+ *     rate = sqrt(lambda_max(M^-1 K)) + lambda_max(M^-1 C) + |omega|
+ * with each largest eigenvalue by power iteration on the symmetric L^-1 A L^-T (L the Cholesky
+ * factor of M; at most 200 iterations, stopped at a relative change of 1e-9: a lower estimate,
+ * exact for n = 1); without any (K = C = 0, omega = 0) the rule's fallback, 1 ms. NaN when M cannot
+ * be factored or memory fails. */
 double sys_step(const sys_params *p, const eng_alloc *al);
 
 /* Build the model and its engine (m must not move afterwards: the engine points into it). Returns 1,
