@@ -305,6 +305,36 @@ def test_a_valid_structure_starts_and_within_rounding_is_symmetric(tmp_path: Pat
         f.close()
 
 
+def test_a_moving_belt_under_the_paper_scheme_is_refused(tmp_path: Path) -> None:
+    """As the chain: at initialisation, and at a step after v_belt was set (the state kept, a belt at
+    rest again goes on)."""
+    sentence = ("v_belt is set but the paper scheme has no moving belt (its stuck contacts creep with Bossak's "
+                "acceleration); use scheme consistent or located.")
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 1})
+    try:
+        f.s.enterInitializationMode(startTime=0.0)
+        f.set({**VALID, "scheme": 1, "v_belt": [0.1]})
+        with pytest.raises(FMICallException):
+            f.s.exitInitializationMode()
+        assert f.messages[-1] == f"fmi3ExitInitializationMode: {sentence}"
+    finally:
+        f.s.freeInstance()
+        shutil.rmtree(f.dir, ignore_errors=True)
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 1})
+    try:
+        f.start({**VALID, "scheme": 1})
+        f.s.doStep(0.0, 0.1)
+        x = f.real("x", 2)
+        f.s.setFloat64([f.vr["v_belt"]], [0.1])
+        with pytest.raises(FMICallException):
+            f.s.doStep(0.1, 0.1)
+        assert f.messages[-1] == f"fmi3DoStep: {sentence}" and np.array_equal(f.real("x", 2), x)
+        f.s.setFloat64([f.vr["v_belt"]], [0.0])
+        f.s.doStep(0.1, 0.1)
+    finally:
+        f.close()
+
+
 @pytest.mark.parametrize("name,values,element", [
     ("K", [100.0, 0.0, 0.0, math.nan], "K[2,2]"), ("M", [1.0, math.inf, 0.0, 1.0], "M[1,2]"),
     ("N", [-1.0], "N[1]"), ("mu_s", [-0.1], "mu_s[1]"), ("mu_k", [math.nan], "mu_k[1]"), ("k_t", [-1.0], "k_t[1]")])

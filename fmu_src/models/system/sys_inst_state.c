@@ -31,6 +31,8 @@ static dfo_inst_status advance(sys_instance *in, const char *fn, double t_target
 {
     double *vals = in->vals;
     const sys_layout *L = &in->L;
+    const char *refused = sys_belt_refused(vals, L);
+    if (refused) return dfo_inst_fail(&in->lc, "%s: %s.", fn, refused); /* (nothing changed) */
     sys_snap_of(&in->s, vals, L); /* the state at the step's start */
     eng_hooks hk;
     memset(&hk, 0, sizeof hk);

@@ -265,6 +265,17 @@ int sys_inputs_changed(const double *vals, const sys_layout *L)
            memcmp(vals + L->ai_used[0], vals + L->ai[0], (L->ai_used[0] - L->ai[0]) * sizeof(double)) != 0;
 }
 
+const char *sys_belt_refused(const double *vals, const sys_layout *L)
+{
+    if ((int)vals[L->sp + DFO_SP_scheme] != DFO_MD_SCHEME_PAPER || vals[SYS_H_SET + DFO_AI_v_belt] == 0.0) return NULL;
+    const double *vb = vals + L->ai[DFO_AI_v_belt];
+    for (size_t j = 0; j < L->nc; j++)
+        if (vb[j] != 0.0)
+            return "v_belt is set but the paper scheme has no moving belt (its stuck contacts creep with Bossak's "
+                   "acceleration); use scheme consistent or located";
+    return NULL;
+}
+
 /* ---- life cycle ------------------------------------------------------------------------------- */
 
 static void set_start_values(sys_instance *in)
@@ -302,7 +313,8 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
 {
     sys_instance *in = sysi(lc);
     char buf[320];
-    const char *why = sys_build(in, buf, sizeof buf);
+    const char *why = sys_belt_refused(in->vals, &in->L);
+    if (!why) why = sys_build(in, buf, sizeof buf);
     if (why) return dfo_inst_fail(lc, "%s: %s.", fn, why);
     double *vals = in->vals;
     const sys_layout *L = &in->L;

@@ -90,6 +90,10 @@ eng_inputs sys_inputs_of(const double *vals, const sys_layout *L, int used);
  * contiguous: ai[0] ... ai_used[0].) */
 void sys_sync_inputs(double *vals, const sys_layout *L);
 int sys_inputs_changed(const double *vals, const sys_layout *L);
+/* A moving belt (v_belt set, some element not 0) under the paper scheme: its stuck contacts creep
+ * with Bossak's acceleration, which a belt's moving frame does not carry over (the chain's measured
+ * 0.053 at every h): refused, as the chain refuses it. The sentence, or NULL. */
+const char *sys_belt_refused(const double *vals, const sys_layout *L);
 /* Build the model and the state arrays from the values (NULL, or why not, in buf); the state is
  * not started. */
 const char *sys_build(sys_instance *in, char *buf, size_t len);
