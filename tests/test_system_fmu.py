@@ -263,6 +263,64 @@ def test_inputs_changed_between_steps_are_the_chain_fmus(scheme: str, tmp_path: 
     assert rel_diff(got, ref) <= 1e-12, rel_diff(got, ref)
 
 
+def test_without_contacts_it_is_the_modal_solution_to_second_order(tmp_path: Path) -> None:
+    """nc = 0: a free linear structure (arrays of no element), x(1 s) against its modal solution:
+    the error falls 4x per halving of h (Bossak's second order)."""
+    M, K = np.diag([1.0, 2.0]), np.array([[40.0, -10.0], [-10.0, 30.0]])
+    x0 = np.array([0.01, -0.02])
+    w2, V = np.linalg.eig(np.linalg.solve(M, K))
+    exact = V @ (np.linalg.solve(V, x0) * np.cos(np.sqrt(w2) * 1.0))
+    errs = []
+    for h in (1e-3, 5e-4):
+        f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 0})
+        try:
+            f.start({"M": M, "K": K, "C": [0.0] * 4, "F_c": [0.0, 0.0], "x0": x0, "h": h})
+            for k in range(10):
+                f.s.doStep(k * 0.1, 0.1)
+            errs.append(np.max(np.abs(f.real("x", 2) - exact)))
+            assert f.real("E_friction")[0] == 0.0 and len(f.s.getFloat64([f.vr["f"]], nValues=0)) == 0
+        finally:
+            f.close()
+    # measured: 1.0e-7 and 2.5e-8 (of |x| 0.02)
+    assert errs[0] < 5e-7 and 3.5 < errs[0] / errs[1] < 4.5, errs
+
+
+def test_early_return_ends_the_step_at_the_first_switch(tmp_path: Path) -> None:
+    """FMI 3.0 with early return: a long step ends at the first stick/slip switch, logged at that time
+    (logEvents), and stepping on from there continues the run."""
+    md = read_model_description(str(SYS3))
+    d = extract(str(SYS3), unzipdir=str(tmp_path / "early"))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    messages: list[str] = []
+
+    def log(env: Any, status: int, category: bytes, message: bytes) -> None:
+        messages.append(message.decode())
+
+    s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier)
+    s.instantiate(loggingOn=True, logMessage=log, earlyReturnAllowed=True)
+    try:
+        s.enterConfigurationMode()
+        s.setUInt64([vr["n"], vr["nc"]], [2, 2])
+        s.exitConfigurationMode()
+        s.enterInitializationMode(startTime=0.0)
+        for name, value in two_mass_system(TM).items():
+            s.setFloat64([vr[name]], [float(x) for x in np.ravel(value)])
+        s.exitInitializationMode()
+        t, ends = 0.0, []
+        while t < 2.0:
+            _, _, early, t_last = s.doStep(t, 2.0 - t)
+            if not early:
+                break
+            assert t_last > t
+            t = t_last
+            ends.append(t)
+        switches = [float(m.split(":")[0][4:]) for m in messages if "switches from mode" in m]
+        assert len(ends) >= 3 and ends == switches[:len(ends)]
+    finally:
+        s.terminate()
+        s.freeInstance()
+
+
 # --------------------------------------------------------------------- structures refused
 
 VALID = {"M": [1.0, 0.0, 0.0, 2.0], "K": [100.0, -20.0, -20.0, 50.0], "C": [0.0] * 4, "F_c": [1.0, 0.0],
