@@ -542,6 +542,43 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
     assert last[6].split() == ["nan", "nan"]
 
 
+FMUCHECK = Path(os.environ.get("FMUCHECK", ROOT.parent / "shared" / "tools" / "fmucheck" / "fmuCheck.linux64"))
+
+
+@pytest.mark.skipif(not FMUCHECK.is_file(), reason="fmuCheck not found (set FMUCHECK)")
+def test_the_compliance_checker_runs_the_fmi2_fmu_to_the_end(tmp_path: Path) -> None:
+    """The FMU Compliance Checker with its default settings (the default experiment, the start values)
+    on the FMI 2.0 FMU: no warning, no error, every output to the stop time, the same numbers as an
+    fmpy FMI 3.0 run at the same communication points, bit for bit."""
+    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
+    r = subprocess.run([str(FMUCHECK), "-o", str(out), "-e", str(log), str(SYS2)], capture_output=True, text=True,
+                       timeout=120)
+    text = log.read_text()
+    assert r.returncode == 0 and "0 Warning(s)" in text and "0 Error(s)" in text, text
+    lines = out.read_text().splitlines()
+    head = [c.strip('"') for c in lines[0].split(",")]
+    assert head == ["time", "E_friction", "x[1]", "x[2]", "v[1]", "v[2]", "a[1]", "a[2]", "f[1]", "mode[1]", "s[1]"]
+    rows = [line.split(",") for line in lines[1:]]
+    t = [float(row[0]) for row in rows]
+    assert t[-1] == pytest.approx(12.56, abs=1e-12) and rows[-1][-1] == "NAN"
+    # the checker's communication points: its rows' times, and one it steps through without a row
+    # (measured: 500 rows for 500 steps of 0.02512 s, none at 0.1256)
+    dt = 12.56 / 500  # its default: 500 steps over the default experiment
+    points = [t[0]]
+    for a, b in zip(t[:-1], t[1:]):
+        points += [a + dt, b] if b - a > 1.5 * dt else [b]
+    assert len(points) == 501
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 1})
+    try:
+        f.start({})
+        for k in range(1, len(points)):
+            f.s.doStep(points[k - 1], points[k] - points[k - 1])
+        x = f.real("x", 2)
+    finally:
+        f.close()
+    assert np.array_equal([float(v) for v in rows[-1][2:4]], x)  # (the CSV's 17 digits round-trip)
+
+
 def test_static_checks_of_both_fmus() -> None:
     """fmpy's validation and fmutool's check pass for both FMUs; the archives hold their sources and
     export the FMI functions only."""
