@@ -601,6 +601,21 @@ def test_static_checks_of_both_fmus() -> None:
             assert exported and all(e.startswith(f"fmi{version[0]}") for e in exported), exported
 
 
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no gcc")
+@pytest.mark.parametrize("which", ["fmi2", "fmi3"])
+def test_the_listed_sources_rebuild_the_fmu(which: str, tmp_path: Path) -> None:
+    """A plain C99 compile of the sources the description lists (sources/, its configuration header
+    included) links a library with no undefined symbol."""
+    path = SYS2 if which == "fmi2" else SYS3
+    md = read_model_description(str(path))
+    d = extract(str(path), unzipdir=str(tmp_path / which))
+    files = [str(Path(d) / "sources" / f) for f in md.buildConfigurations[0].sourceFileSets[0].sourceFiles]
+    r = subprocess.run(["gcc", "-std=c99", "-O0", "-shared", "-fPIC", "-I", str(Path(d) / "sources"), *files,
+                        "-o", str(tmp_path / "rebuilt.so"), "-lm", "-Wl,--no-undefined"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+
+
 def test_every_allocation_is_returned(tmp_path: Path) -> None:
     """Through the FMI 2.0 host's callbacks: a run, a state, a reset and a failed initialisation."""
     from fmi2_helpers import Inst
