@@ -23,6 +23,12 @@ stride, each array's elements from its own value reference + 1 and after the pre
 any size whose last value reference fits in 32 bits), written into the description
 (<Tool name="dryfriction.layout">) and the build's configuration header (DFO_FMI2_ARRAYS).
 
+A matrix (dimension="n n", "nc n") may start as a diagonal one: its start is the diagonal's (i = j), the
+annotation <Tool name="dryfriction.starts"><Starts><DiagonalStart variable=... offDiagonal=.../> ...
+</Starts></Tool> gives
+the start of every other element (M = I: start="1", offDiagonal="0"); FMI 3.0 and FMI 2.0 list the
+elements' starts so, the C table has DFO_DIAG_STARTS for the instance core.
+
 The C structs a model's parameters and inputs live in (reached by offsetof) are named by the source
 itself, in the vendor annotation <Tool name="dryfriction.c"><Structs header=... parameters=...
 inputs=.../></Tool>; a model with structural parameters keeps its values in slots and needs none.
@@ -111,6 +117,14 @@ class Variable:
     dims: tuple[str, ...] = ()
     dependencies: tuple[str, ...] | None = None  # outputs: the knowns it depends on at once (None: all)
     zero: str | None = None  # min 0 and a ZeroOrNormal annotation: what 0 means; other values are normal
+    #: a matrix's off-diagonal start (<DiagonalStart>): start is then the diagonal's (i = j); None: every element's
+    start_off: float | None = None
+
+    def element_start(self, idx: tuple[int, ...]) -> float | int | bool | None:
+        """The start of element idx (1-based; () for a scalar)."""
+        if self.start_off is not None and len(idx) == 2 and idx[0] != idx[1]:
+            return self.start_off
+        return self.start
 
     @property
     def normal(self) -> bool:
@@ -209,6 +223,11 @@ def parse(xml_path: Path) -> Model:
     _check_structure(root, svs, set(deps))
     zero = {z.get("variable"): z.get("zero", "") for z in
             root.iterfind("VendorAnnotations/Tool[@name='dryfriction.ranges']/Ranges/ZeroOrNormal")}
+    diag = {d.get("variable"): float(d.get("offDiagonal", "0")) for d in
+            root.iterfind("VendorAnnotations/Tool[@name='dryfriction.starts']/Starts/DiagonalStart")}
+    unknown = set(diag) - {sv.get("name") for sv in svs}
+    if unknown:
+        raise ModelError(f"DiagonalStart: no variable {', '.join(sorted(unknown))}")
     variables = []
     for index, sv in enumerate(svs, start=1):
         kind_el = next(iter(sv))
@@ -233,7 +252,7 @@ def parse(xml_path: Path) -> Model:
             start=_number(kind_el.get("start"), kind), min=None if lo is None else float(lo),
             max=None if hi is None else float(hi), unit=kind_el.get("unit"),
             description=sv.get("description", ""), declared_type=declared, dependencies=dep_names,
-            zero=zero.get(name), dims=tuple((sv.get("dimension") or "").split())))
+            zero=zero.get(name), dims=tuple((sv.get("dimension") or "").split()), start_off=diag.get(name)))
     effects_var, effects = _READER.parse_effects(root)
     structs_el = root.find("VendorAnnotations/Tool[@name='dryfriction.c']/Structs")
     structs = {} if structs_el is None else {k: structs_el.get(k, "") for k in ("header", "parameters", "inputs")}
@@ -311,6 +330,11 @@ def check(model: Model) -> None:
                 raise ModelError(f"variable {v.name}: start {v.start} is not an item of {v.declared_type}")
         if v.min is not None and v.max is not None and v.min > v.max:
             raise ModelError(f"variable {v.name}: min > max")
+        if v.start_off is not None:
+            if v.type != "Real" or len(v.dims) != 2 or v.start is None:
+                raise ModelError(f"variable {v.name}: a DiagonalStart is for a Real matrix with a start")
+            if not _in_range(v, v.start_off):
+                raise ModelError(f"variable {v.name}: off-diagonal start {v.start_off} outside its range")
     if model.model_exchange and len(model.indicator_variables) != model.event_indicators:
         raise ModelError(f"numberOfEventIndicators is {model.event_indicators}, but the dryfriction.me annotation "
                          f"names {len(model.indicator_variables)} event indicator variables")
@@ -676,7 +700,16 @@ def emit_c_header_indexed(model: Model, source: str) -> str:
         L.append(_c_var_row(model, v, types[v.type], causalities[v.causality],
                             f"{homes[prefix]}, {int(bool(v.dims))}, {prefix}_{v.name}, {len(v.dims)}, "
                             f"{{{', '.join(dims)}}}"))
-    L += ["};", "", "/* the arrays' own value references (FMI 3.0), in declaration order */",
+    diag = [(i, v) for i, v in enumerate(model.variables) if v.start_off is not None]
+    L += ["};", "", "/* matrices that start diagonal (dryfriction.starts): the variable's index in DFO_VARS and the",
+          " * start of its elements (i, j) with i != j (its start is that of the elements (i, i)) */",
+          f"#define DFO_NUM_DIAG_STARTS {len(diag)}"]
+    if diag:
+        L += ["typedef struct {", "    int var;", "    double off;", "} dfo_diag_start;",
+              "static const dfo_diag_start DFO_DIAG_STARTS[DFO_NUM_DIAG_STARTS] = {"]
+        L += [f"    {{{i}, {c_double(v.start_off)}}}, /* {v.name} */" for i, v in diag]
+        L.append("};")
+    L += ["", "/* the arrays' own value references (FMI 3.0), in declaration order */",
           f"#define DFO_NUM_ARRAYS {len(arrays)}",
           f"static const unsigned int DFO_ARRAY_VRS[DFO_NUM_ARRAYS] = {{{', '.join(f'{v.vr}u' for v in arrays)}}};",
           "", "#endif", ""]
@@ -804,11 +837,10 @@ def emit_fmi3_model_description(model: Model, source: Path) -> str:
             # the bounds as the source writes them (Int32 outputs without bounds stay without)
             pairs += [("min", el.get("min")), ("max", el.get("max"))]
         if v.dims:
-            size = 1
-            for d in v.dims:
-                size *= int(model.variable(d).start)
             if v.start is not None:  # one start value per element at the structural parameters' starts
-                pairs.append(("start", " ".join([_xml_number(v.start, v.type)] * size)))
+                shape = [int(model.variable(d).start) for d in v.dims]
+                idxs = itertools.product(*(range(1, s + 1) for s in shape))
+                pairs.append(("start", " ".join(_xml_number(v.element_start(i), v.type) for i in idxs)))
             L.append(f"    <{kind}" + _attrs(pairs) + ">")
             # one <Dimension> per structural parameter, the outermost (rows) first
             L += ["      <Dimension" + _attrs([("valueReference", str(model.variable(d).vr))]) + "/>" for d in v.dims]
@@ -933,7 +965,9 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> 
                                         f" (element {', '.join(str(i) for i in idx)})")
             L.append("    <ScalarVariable" + _attrs([("name", _element_name(v.name, idx)), ("valueReference", str(vr))]
                                                     + attrs + [("description", sv.get("description") + where)]) + ">"
-                     + f"<{el.tag}" + _attrs([(a, str(index[(state_of[v.name], idx)]) if a == "derivative" else x)
+                     + f"<{el.tag}" + _attrs([(a, str(index[(state_of[v.name], idx)]) if a == "derivative" else
+                                               _xml_number(v.element_start(idx), v.type) if a == "start" and
+                                               v.start_off is not None else x)
                                               for a, x in el.attrib.items()]) + "/></ScalarVariable>")
 
     def dep_indices(v: Variable, idx: tuple[int, ...], d: str) -> list[int]:

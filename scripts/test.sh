@@ -82,6 +82,8 @@ asan_pytest() {
   DFO_TWO_MASS_DRIVER="$PWD/build-asan/tests/c/two_mass_driver" \
   DFO_TWO_MASS_FMU="$PWD/build-asan/TwoMass.fmu" \
   DFO_TWO_MASS_FMU3="$PWD/build-asan/fmi3/TwoMass.fmu" \
+  DFO_SYSTEM_FMU="$PWD/build-asan/DryFrictionSystem.fmu" \
+  DFO_SYSTEM_FMU3="$PWD/build-asan/fmi3/DryFrictionSystem.fmu" \
   LD_PRELOAD="$asan $ubsan" \
   ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 \
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \

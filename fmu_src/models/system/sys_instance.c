@@ -1,0 +1,671 @@
+/* The instance core of the DryFrictionSystem FMUs (the model API of core/instance.h for the model of
+ * fmu_src/models/system/modelDescription.xml), its part for memory, the values' layout, start values,
+ * the model built from the values, the life cycle, configuration mode and variable access (the other
+ * part: sys_instance.h). The physics is system.h's over the friction engine. No FMI types. */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "sys_instance.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* The model description's scheme values are those of the physics. */
+typedef char dfo_static_assert_schemes[((int)DFO_MD_SCHEME_PAPER == (int)DFO_SCHEME_PAPER &&
+                                        (int)DFO_MD_SCHEME_CONSISTENT == (int)DFO_SCHEME_CONSISTENT &&
+                                        (int)DFO_MD_SCHEME_LOCATED == (int)DFO_SCHEME_LOCATED) ? 1 : -1];
+#if defined(DFO_SYSTEM_FIXED_N)
+typedef char dfo_static_assert_fixed_n[(DFO_SYSTEM_FIXED_N >= 1 && DFO_SYSTEM_FIXED_N <= MAX_n &&
+                                        DFO_SYSTEM_FIXED_NC >= 0 && DFO_SYSTEM_FIXED_NC <= MAX_nc) ? 1 : -1];
+#endif
+
+#define WARNED_SLIP 1u /* lc.warned: the sentence on s was logged */
+
+/* ---- memory and layout ------------------------------------------------------------------------ */
+
+static void *host_alloc(void *env, size_t nobj, size_t size)
+{
+    sys_instance *in = (sys_instance *)env;
+    return in->lc.host.alloc(in->lc.host.ctx, nobj, size);
+}
+
+static void host_free(void *env, void *obj)
+{
+    sys_instance *in = (sys_instance *)env;
+    if (obj) in->lc.host.free(in->lc.host.ctx, obj);
+}
+
+eng_alloc sys_allocator(sys_instance *in)
+{
+    const eng_alloc al = {host_alloc, host_free, in};
+    return al;
+}
+
+size_t sys_var_count(const dfo_var_info *var, size_t n, size_t nc)
+{
+    size_t c = 1;
+    for (int d = 0; d < var->ndims; d++) c *= var->dims[d] == DFO_STRUCT_n ? n : nc;
+    return c;
+}
+
+sys_layout sys_layout_of(size_t n, size_t nc)
+{
+    sys_layout L;
+    memset(&L, 0, sizeof L);
+    L.n = n;
+    L.nc = nc;
+    size_t k = SYS_HEAD;
+    L.sp = k;
+    k += DFO_NUM_SP;
+    for (int j = 0; j < DFO_NUM_VARS; j++) {
+        const dfo_var_info *var = &DFO_VARS[j];
+        if (var->home != DFO_IN_ARRAYS) continue;
+        L.ap[var->slot] = k;
+        k += sys_var_count(var, n, nc);
+    }
+    for (int pass = 0; pass < 2; pass++)
+        for (int j = 0; j < DFO_NUM_VARS; j++) {
+            const dfo_var_info *var = &DFO_VARS[j];
+            if (var->home != DFO_IN_INPUTS) continue;
+            (pass ? L.ai_used : L.ai)[var->slot] = k;
+            k += sys_var_count(var, n, nc);
+        }
+    L.snap = k;
+    k += SYS_SNAP_NS + SYS_SNAP_NA_N * n + SYS_SNAP_NA_NC * nc;
+    L.total = k;
+    return L;
+}
+
+void sys_free_model(sys_instance *in)
+{
+    const eng_alloc al = sys_allocator(in);
+    if (in->s_ready) eng_state_free(in->m.E, &in->s);
+    in->s_ready = 0;
+    sys_model_free(&in->m, &al);
+}
+
+static void free_values(sys_instance *in)
+{
+    if (in->vals) in->lc.host.free(in->lc.host.ctx, in->vals);
+    if (in->scratch) in->lc.host.free(in->lc.host.ctx, in->scratch);
+    in->vals = in->scratch = NULL;
+}
+
+/* Every value at its start (the run's flags cleared). */
+static void value_starts(double *vals, const sys_layout *L)
+{
+    memset(vals, 0, L->total * sizeof *vals);
+    vals[SYS_H_N] = (double)L->n;
+    vals[SYS_H_NC] = (double)L->nc;
+    vals[SYS_H_TOTAL] = (double)L->total;
+    for (int j = 0; j < DFO_NUM_VARS; j++) {
+        const dfo_var_info *var = &DFO_VARS[j];
+        if (var->home == DFO_IN_PARAMS) vals[L->sp + (size_t)var->slot] = var->start;
+        if (var->home != DFO_IN_ARRAYS && var->home != DFO_IN_INPUTS) continue;
+        const size_t c = sys_var_count(var, L->n, L->nc);
+        double *a = vals + (var->home == DFO_IN_ARRAYS ? L->ap[var->slot] : L->ai[var->slot]);
+        for (size_t i = 0; i < c; i++) a[i] = var->start;
+        if (var->home == DFO_IN_INPUTS) memcpy(vals + L->ai_used[var->slot], a, c * sizeof *a);
+    }
+#if DFO_NUM_DIAG_STARTS > 0
+    /* matrices that start diagonal: the elements (i, j), i != j, at their own start (every matrix has
+     * n columns) */
+    for (int d = 0; d < DFO_NUM_DIAG_STARTS; d++) {
+        const dfo_var_info *var = &DFO_VARS[DFO_DIAG_STARTS[d].var];
+        const size_t c = sys_var_count(var, L->n, L->nc);
+        double *a = vals + L->ap[var->slot];
+        for (size_t k = 0; k < c; k++)
+            if (k / L->n != k % L->n) a[k] = DFO_DIAG_STARTS[d].off;
+    }
+#endif
+}
+
+dfo_inst_status sys_resize(sys_instance *in, const char *fn, size_t n, size_t nc)
+{
+    if (in->vals && n == in->L.n && nc == in->L.nc) return DFO_INST_OK;
+    const sys_layout L = sys_layout_of(n, nc);
+    double *vals = (double *)in->lc.host.alloc(in->lc.host.ctx, L.total, sizeof(double));
+    double *scratch = (double *)in->lc.host.alloc(in->lc.host.ctx, n + nc + 1, sizeof(double));
+    if (!vals || !scratch) {
+        if (vals) in->lc.host.free(in->lc.host.ctx, vals);
+        if (scratch) in->lc.host.free(in->lc.host.ctx, scratch);
+        return dfo_inst_fail(&in->lc, "%s: out of memory for n = %lu, nc = %lu.", fn, (unsigned long)n,
+                             (unsigned long)nc);
+    }
+    sys_free_model(in);
+    free_values(in);
+    in->vals = vals;
+    in->scratch = scratch;
+    in->L = L;
+    value_starts(vals, &L);
+    return DFO_INST_OK;
+}
+
+/* ---- parameters, inputs, the model ------------------------------------------------------------ */
+
+sys_params sys_params_of(const double *vals, const sys_layout *L)
+{
+    sys_params p;
+    memset(&p, 0, sizeof p);
+    p.n = L->n;
+    p.nc = L->nc;
+    p.M = vals + L->ap[DFO_AP_M];
+    p.C = vals + L->ap[DFO_AP_C];
+    p.K = vals + L->ap[DFO_AP_K];
+    p.F_c = vals + L->ap[DFO_AP_F_c];
+    p.F_s = vals + L->ap[DFO_AP_F_s];
+    p.x0 = vals + L->ap[DFO_AP_x0];
+    p.v0 = vals + L->ap[DFO_AP_v0];
+    p.W = vals + L->ap[DFO_AP_W];
+    p.N = vals + L->ap[DFO_AP_N];
+    p.mu_s = vals + L->ap[DFO_AP_mu_s];
+    p.mu_k = vals + L->ap[DFO_AP_mu_k];
+    p.k_t = vals + L->ap[DFO_AP_k_t];
+    p.omega = vals[L->sp + DFO_SP_omega];
+    p.h = vals[L->sp + DFO_SP_h];
+    p.alpha = vals[L->sp + DFO_SP_alpha];
+    p.scheme = (int)vals[L->sp + DFO_SP_scheme];
+    p.frictionUpdates = (int)vals[L->sp + DFO_SP_frictionUpdates];
+    return p;
+}
+
+eng_inputs sys_inputs_of(const double *vals, const sys_layout *L, int used)
+{
+    const size_t *off = used ? L->ai_used : L->ai;
+    const double *set = vals + (used ? SYS_H_SET_USED : SYS_H_SET);
+    eng_inputs e;
+    memset(&e, 0, sizeof e);
+    e.F_ext = set[DFO_AI_F_ext] != 0.0 ? vals + off[DFO_AI_F_ext] : NULL;
+    e.N_ext = set[DFO_AI_N_ext] != 0.0 ? vals + off[DFO_AI_N_ext] : NULL;
+    e.v_belt = set[DFO_AI_v_belt] != 0.0 ? vals + off[DFO_AI_v_belt] : NULL;
+    return e;
+}
+
+const char *sys_build(sys_instance *in, char *buf, size_t len)
+{
+    sys_free_model(in);
+    const eng_alloc al = sys_allocator(in);
+    const sys_params p = sys_params_of(in->vals, &in->L);
+    const char *err = NULL;
+    if (!sys_model_init(&in->m, &p, &al, 1, buf, len, &err)) return err;
+    if (!eng_state_init(in->m.E, &in->s, 0)) {
+        sys_free_model(in);
+        return "out of memory";
+    }
+    in->s_ready = 1;
+    return NULL;
+}
+
+void sys_snap_of(const eng_state *s, double *vals, const sys_layout *L)
+{
+    size_t k = L->snap;
+    const size_t n = L->n, nc = L->nc;
+    vals[k++] = s->t0;
+    vals[k++] = s->t;
+    vals[k++] = (double)s->n_grid;
+    vals[k++] = s->t_switch;
+    vals[k++] = s->stick_tb;
+    vals[k++] = (double)s->steps;
+    vals[k++] = (double)s->solves;
+    vals[k++] = (double)s->pivot_steps;
+    vals[k++] = (double)s->switches;
+    vals[k++] = s->W_applied;
+    vals[k++] = s->W_friction;
+    vals[k++] = s->D_damping;
+    vals[k++] = (double)s->exc_n;
+    vals[k++] = s->exc_c;
+    vals[k++] = s->exc_s;
+    const double *arr[SYS_SNAP_NA_N] = {s->X, s->V, s->A, s->hA};
+    for (int a = 0; a < SYS_SNAP_NA_N; a++, k += n) memcpy(vals + k, arr[a], n * sizeof(double));
+    const double *carr[3] = {s->F, s->t_stick, s->t_break};
+    for (int a = 0; a < 3; a++, k += nc)
+        if (nc) memcpy(vals + k, carr[a], nc * sizeof(double));
+    for (size_t j = 0; j < nc; j++) vals[k + j] = (double)s->mode[j];
+    k += nc;
+    for (size_t j = 0; j < nc; j++) vals[k + j] = (double)s->break_dir[j];
+}
+
+void sys_state_of(const double *vals, const sys_layout *L, eng_state *s)
+{
+    size_t k = L->snap;
+    const size_t n = L->n, nc = L->nc;
+    s->t0 = vals[k++];
+    s->t = vals[k++];
+    s->n_grid = (long long)vals[k++];
+    s->t_switch = vals[k++];
+    s->stick_tb = vals[k++];
+    s->steps = (long long)vals[k++];
+    s->solves = (long long)vals[k++];
+    s->pivot_steps = (long long)vals[k++];
+    s->switches = (long long)vals[k++];
+    s->W_applied = vals[k++];
+    s->W_friction = vals[k++];
+    s->D_damping = vals[k++];
+    s->exc_n = (long long)vals[k++];
+    s->exc_c = vals[k++];
+    s->exc_s = vals[k++];
+    double *arr[SYS_SNAP_NA_N] = {s->X, s->V, s->A, s->hA};
+    for (int a = 0; a < SYS_SNAP_NA_N; a++, k += n) memcpy(arr[a], vals + k, n * sizeof(double));
+    double *carr[3] = {s->F, s->t_stick, s->t_break};
+    for (int a = 0; a < 3; a++, k += nc)
+        if (nc) memcpy(carr[a], vals + k, nc * sizeof(double));
+    for (size_t j = 0; j < nc; j++) s->mode[j] = (int)vals[k + j];
+    k += nc;
+    for (size_t j = 0; j < nc; j++) s->break_dir[j] = (int)vals[k + j];
+}
+
+void sys_sync_inputs(double *vals, const sys_layout *L)
+{
+    memcpy(vals + SYS_H_SET_USED, vals + SYS_H_SET, DFO_NUM_AI * sizeof(double));
+    memcpy(vals + L->ai_used[0], vals + L->ai[0], (L->ai_used[0] - L->ai[0]) * sizeof(double));
+}
+
+int sys_inputs_changed(const double *vals, const sys_layout *L)
+{
+    return memcmp(vals + SYS_H_SET_USED, vals + SYS_H_SET, DFO_NUM_AI * sizeof(double)) != 0 ||
+           memcmp(vals + L->ai_used[0], vals + L->ai[0], (L->ai_used[0] - L->ai[0]) * sizeof(double)) != 0;
+}
+
+const char *sys_belt_refused(const double *vals, const sys_layout *L)
+{
+    if ((int)vals[L->sp + DFO_SP_scheme] != DFO_MD_SCHEME_PAPER || vals[SYS_H_SET + DFO_AI_v_belt] == 0.0) return NULL;
+    const double *vb = vals + L->ai[DFO_AI_v_belt];
+    for (size_t j = 0; j < L->nc; j++)
+        if (vb[j] != 0.0)
+            return "v_belt is set but the paper scheme has no moving belt (its stuck contacts creep with Bossak's "
+                   "acceleration); use scheme consistent or located";
+    return NULL;
+}
+
+/* ---- life cycle ------------------------------------------------------------------------------- */
+
+static void set_start_values(sys_instance *in)
+{
+    const dfo_run run0 = {0};
+    value_starts(in->vals, &in->L);
+    in->n_config = in->L.n;
+    in->nc_config = in->L.nc;
+    in->lc.run = run0;
+    in->lc.run.phase = DFO_PHASE_INSTANTIATED;
+}
+
+dfo_lifecycle *dfo_inst_new(const dfo_host *host, const char *name, int logging_on)
+{
+    sys_instance *in = (sys_instance *)dfo_lifecycle_new(host, sizeof(sys_instance), name, logging_on);
+    if (!in) return NULL;
+    if (sys_resize(in, "instantiate", SYS_N_START, SYS_NC_START) != DFO_INST_OK) {
+        host->free(host->ctx, in);
+        return NULL;
+    }
+    set_start_values(in);
+    return &in->lc;
+}
+
+void dfo_inst_delete(dfo_lifecycle *lc)
+{
+    if (!lc) return;
+    sys_instance *in = sysi(lc);
+    sys_free_model(in);
+    free_values(in);
+    lc->host.free(lc->host.ctx, lc);
+}
+
+dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
+{
+    sys_instance *in = sysi(lc);
+    char buf[320];
+    const char *why = sys_belt_refused(in->vals, &in->L);
+    if (!why) why = sys_build(in, buf, sizeof buf);
+    if (why) return dfo_inst_fail(lc, "%s: %s.", fn, why);
+    double *vals = in->vals;
+    const sys_layout *L = &in->L;
+    sys_sync_inputs(vals, L);
+    const eng_inputs e = sys_inputs_of(vals, L, 1);
+    const sys_params p = sys_params_of(vals, L);
+    eng_start(in->m.E, &e, in->lc.run.start_time, p.x0, p.v0, &in->s);
+    vals[SYS_H_STARTED] = 1.0;
+    in->lc.run.time = in->lc.run.start_time;
+    in->lc.run.phase = DFO_PHASE_STEP;
+    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: n = %lu, nc = %lu, h = %.17g.", in->s.t,
+                 (unsigned long)L->n, (unsigned long)L->nc, in->m.h);
+    return DFO_INST_OK;
+}
+
+void dfo_inst_reset(dfo_lifecycle *lc)
+{
+    sys_instance *in = sysi(lc);
+    sys_free_model(in);
+    (void)sys_resize(in, "reset", SYS_N_START, SYS_NC_START); /* on failure the values keep their size */
+    set_start_values(in);
+    in->lc.warned = 0;
+}
+
+void dfo_inst_log_event_handled(const dfo_lifecycle *lc)
+{
+    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: event handled.", dfo_inst_time(lc));
+}
+
+int dfo_inst_has_structural(void) { return 1; }
+
+dfo_inst_status dfo_inst_enter_config(dfo_lifecycle *lc, const char *fn)
+{
+    sys_instance *in = sysi(lc);
+    (void)fn;
+    in->n_config = in->L.n;
+    in->nc_config = in->L.nc;
+    in->lc.run.phase = DFO_PHASE_CONFIG;
+    return DFO_INST_OK;
+}
+
+/* Leaving configuration mode with new sizes: every value at its start. */
+dfo_inst_status dfo_inst_exit_config(dfo_lifecycle *lc, const char *fn)
+{
+    sys_instance *in = sysi(lc);
+    if (sys_resize(in, fn, in->n_config, in->nc_config) != DFO_INST_OK) return DFO_INST_ERROR;
+    in->n_config = in->L.n;
+    in->nc_config = in->L.nc;
+    in->lc.run.phase = DFO_PHASE_INSTANTIATED;
+    return DFO_INST_OK;
+}
+
+/* ---- the variable table ----------------------------------------------------------------------- */
+
+/* A value reference resolved: the variable and, for an FMI 2.0 element, its index (0-based). */
+typedef struct {
+    const dfo_var_info *var;
+    long elem; /* -1: the whole variable (a scalar, or every element of an array) */
+} sys_ref;
+
+static int resolve(unsigned int vr, sys_ref *r)
+{
+    const dfo_var_info *var = dfo_find_var(vr);
+    r->var = NULL;
+    r->elem = -1;
+#if defined(DFO_SYSTEM_FIXED_N)
+    if (var && !var->array) {
+        r->var = var;
+        r->elem = -1;
+        return 1;
+    }
+    for (size_t a = 0; a < DFO_FMI2_NUM_ARRAYS; a++) {
+        const dfo_fmi2_array *A = &DFO_FMI2_ARRAYS[a];
+        if (vr < A->first || vr - A->first >= A->count) continue;
+        r->var = dfo_find_var(A->vr);
+        r->elem = (long)(vr - A->first);
+        return 1;
+    }
+    return 0;
+#else
+    if (!var) return 0;
+    r->var = var;
+    r->elem = -1;
+    return 1;
+#endif
+}
+
+/* The name of element i of var (0-based, row-major): M[2,3], N[1], or the variable's for a scalar. */
+static void element_name(const sys_instance *in, const dfo_var_info *var, size_t i, char *buf, size_t len)
+{
+    if (!var->array) snprintf(buf, len, "%s", var->name);
+    else if (var->ndims == 2) {
+        const size_t cols = in->L.n; /* every matrix has n columns */
+        snprintf(buf, len, "%s[%lu,%lu]", var->name, (unsigned long)(i / cols + 1), (unsigned long)(i % cols + 1));
+    } else snprintf(buf, len, "%s[%lu]", var->name, (unsigned long)i + 1);
+}
+
+static size_t count(const sys_instance *in, const sys_ref *r)
+{
+    return (r->var->array && r->elem < 0) ? sys_var_count(r->var, in->L.n, in->L.nc) : 1;
+}
+
+size_t dfo_inst_n_values(const dfo_lifecycle *lc, const unsigned int vr[], size_t nvr)
+{
+    const sys_instance *in = csysi(lc);
+    size_t total = 0;
+    for (size_t i = 0; i < nvr; i++) {
+        sys_ref r;
+        total += resolve(vr[i], &r) ? count(in, &r) : 1;
+    }
+    return total;
+}
+
+static int lookup(const sys_instance *in, const char *fn, unsigned int vr, dfo_var_type type, sys_ref *r)
+{
+    if (!resolve(vr, r)) {
+        dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
+        return 0;
+    }
+    if (r->var->type != type) {
+        dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, r->var->name, vr,
+                      dfo_type_name(r->var->type), dfo_type_name(type));
+        return 0;
+    }
+    return 1;
+}
+
+/* Where element i of a stored variable lives. */
+static double *stored(sys_instance *in, const dfo_var_info *var, size_t i)
+{
+    switch (var->home) {
+    case DFO_IN_PARAMS: return &in->vals[in->L.sp + (size_t)var->slot];
+    case DFO_IN_ARRAYS: return &in->vals[in->L.ap[var->slot] + i];
+    case DFO_IN_INPUTS: return &in->vals[in->L.ai[var->slot] + i];
+    default: return NULL;
+    }
+}
+
+static int started(const sys_instance *in) { return in->vals[SYS_H_STARTED] != 0.0 && in->s_ready; }
+
+/* ---- outputs ---------------------------------------------------------------------------------- */
+
+static void note_slip(sys_instance *in, const char *fn)
+{
+    if (in->lc.warned & WARNED_SLIP) return;
+    in->lc.warned |= WARNED_SLIP;
+    dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                 "%s: variable s (value reference %u) is not computed: every contact of this build is rigid (k_t = 0, "
+                 "no Jenkins element), so s reads NaN; logged once per run.", fn, VR_s);
+}
+
+static double h_used(sys_instance *in)
+{
+    if (in->m.E) return in->m.h;
+    const eng_alloc al = sys_allocator(in);
+    const sys_params p = sys_params_of(in->vals, &in->L);
+    char buf[320];
+    if (sys_check(&p, &al, buf, sizeof buf)) return NAN;
+    return sys_step(&p, &al);
+}
+
+/* Real (dout) or integer (iout) outputs of r: count(r) values. */
+static void get_outputs(sys_instance *in, const char *fn, const sys_ref *r, double *dout, int *iout)
+{
+    const size_t c = count(in, r), i0 = r->elem < 0 ? 0 : (size_t)r->elem;
+    const int id = r->var->slot;
+    if (id == DFO_OUT_h_used) {
+        dout[0] = h_used(in);
+        return;
+    }
+    if (id == DFO_OUT_s) note_slip(in, fn);
+    if (!started(in) || id == DFO_OUT_s) {
+        for (size_t i = 0; i < c; i++) {
+            if (iout) iout[i] = 0;
+            else dout[i] = NAN;
+        }
+        return;
+    }
+    const eng_state *s = &in->s;
+    const eng_inputs e = sys_inputs_of(in->vals, &in->L, 0);
+    const double *src = NULL;
+    switch (id) {
+    case DFO_OUT_E_friction: dout[0] = 0.0 - s->W_friction; return;
+    case DFO_OUT_x: src = s->X; break;
+    case DFO_OUT_v: src = s->V; break;
+    case DFO_OUT_a: eng_accelerations(in->m.E, &e, s, in->scratch); src = in->scratch; break;
+    case DFO_OUT_f:
+        /* the paper scheme's stuck contact creeps with the force its step's friction problem found (the
+         * oscillator's and the chain's F_friction): that force while the inputs are those of the step;
+         * otherwise the force at the state as the schemes whose stuck contacts rest report it */
+        if ((int)in->vals[in->L.sp + DFO_SP_scheme] == DFO_MD_SCHEME_PAPER && !sys_inputs_changed(in->vals, &in->L))
+            src = s->F;
+        else {
+            eng_contact_forces(in->m.E, &e, s, in->scratch);
+            src = in->scratch;
+        }
+        break;
+    case DFO_OUT_mode:
+        for (size_t i = 0; i < c; i++) iout[i] = s->mode[i0 + i];
+        return;
+    default: break;
+    }
+    for (size_t i = 0; i < c; i++) dout[i] = src ? src[i0 + i] : NAN;
+}
+
+/* ---- get / set -------------------------------------------------------------------------------- */
+
+static dfo_inst_status get_values(sys_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  dfo_var_type type, double *dout, int *iout)
+{
+    size_t k = 0;
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        if (!lookup(in, fn, vr[j], type, &r)) return DFO_INST_ERROR;
+        const size_t c = count(in, &r);
+        if (r.var->home == DFO_COMPUTED) {
+            get_outputs(in, fn, &r, dout ? dout + k : NULL, iout ? iout + k : NULL);
+        } else {
+            const size_t i0 = r.elem < 0 ? 0 : (size_t)r.elem;
+            for (size_t i = 0; i < c; i++) {
+                const double x = *stored(in, r.var, i0 + i);
+                if (dout) dout[k + i] = x;
+                else iout[k + i] = (int)x;
+            }
+        }
+        k += c;
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, double value[])
+{
+    return get_values(sysi(lc), fn, vr, n, DFO_REAL, value, NULL);
+}
+
+dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    return get_values(sysi(lc), fn, vr, n, DFO_INTEGER, NULL, value);
+}
+
+dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
+{
+    sys_instance *in = sysi(lc);
+    (void)value;
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        if (!lookup(in, fn, vr[j], DFO_BOOLEAN, &r)) return DFO_INST_ERROR;
+    }
+    return DFO_INST_OK; /* the model has no Boolean variables: lookup has failed on any */
+}
+
+/* Check every value of every variable (type, causality and phase, range per element), then store:
+ * a rejected call changes nothing. */
+static dfo_inst_status set_values(sys_instance *in, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[], dfo_var_type type)
+{
+    size_t k = 0;
+    char name[64];
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        if (!lookup(in, fn, vr[j], type, &r)) return DFO_INST_ERROR;
+        if (r.elem < 0) snprintf(name, sizeof name, "%s", r.var->name);
+        else element_name(in, r.var, (size_t)r.elem, name, sizeof name); /* an FMI 2.0 element */
+        if (!dfo_inst_settable(&in->lc, fn, r.var, name, vr[j])) return DFO_INST_ERROR;
+        const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
+        for (size_t i = 0; i < c; i++) {
+            const double x = value[k + i];
+            const char *range = dfo_inst_invalid(r.var, x);
+            if (!range) continue;
+            element_name(in, r.var, i0 + i, name, sizeof name);
+            if (isnan(x))
+                return dfo_inst_fail(&in->lc, "%s: %s (value reference %u) is not a finite number; valid range: %s.",
+                                     fn, name, vr[j], range);
+            return dfo_inst_fail(&in->lc, "%s: invalid value %.17g for %s (value reference %u); valid range: %s.", fn,
+                                 x, name, vr[j], range);
+        }
+        k += c;
+    }
+    k = 0;
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        (void)resolve(vr[j], &r);
+        const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
+        for (size_t i = 0; i < c; i++) *stored(in, r.var, i0 + i) = value[k + i];
+        if (r.var->home == DFO_IN_INPUTS) in->vals[SYS_H_SET + (size_t)r.var->slot] = 1.0;
+        k += c;
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const double value[])
+{
+    return set_values(sysi(lc), fn, vr, n, value, DFO_REAL);
+}
+
+/* Integer values (the scheme, frictionUpdates: scalars) through doubles, in chunks. */
+#define BATCH 64
+
+dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                 const int value[])
+{
+    double x[BATCH];
+    if (n > BATCH) return dfo_inst_fail(lc, "%s: at most %d values per call.", fn, BATCH);
+    for (size_t i = 0; i < n; i++) x[i] = (double)value[i];
+    return set_values(sysi(lc), fn, vr, n, x, DFO_INTEGER);
+}
+
+dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                  const int value[])
+{
+    sys_instance *in = sysi(lc);
+    (void)value;
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        if (!lookup(in, fn, vr[j], DFO_BOOLEAN, &r)) return DFO_INST_ERROR;
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_get_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                    unsigned long long value[])
+{
+    sys_instance *in = sysi(lc);
+    const int config = in->lc.run.phase == DFO_PHASE_CONFIG;
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        if (!lookup(in, fn, vr[j], DFO_UINT64, &r)) return DFO_INST_ERROR;
+        const int is_n = r.var->slot == DFO_STRUCT_n;
+        value[j] = (unsigned long long)(is_n ? (config ? in->n_config : in->L.n) : (config ? in->nc_config : in->L.nc));
+    }
+    return DFO_INST_OK;
+}
+
+dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
+                                    const unsigned long long value[])
+{
+    sys_instance *in = sysi(lc);
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        if (!lookup(in, fn, vr[j], DFO_UINT64, &r) || !dfo_inst_settable(&in->lc, fn, r.var, r.var->name, vr[j]))
+            return DFO_INST_ERROR;
+        if (value[j] < (unsigned long long)r.var->min || value[j] > (unsigned long long)r.var->max)
+            return dfo_inst_fail(&in->lc, "%s: invalid value %llu for %s (value reference %u); valid range: %s.", fn,
+                                 value[j], r.var->name, vr[j], r.var->range);
+    }
+    for (size_t j = 0; j < n; j++) {
+        sys_ref r;
+        (void)resolve(vr[j], &r);
+        if (r.var->slot == DFO_STRUCT_n) in->n_config = (size_t)value[j];
+        else in->nc_config = (size_t)value[j];
+    }
+    return DFO_INST_OK;
+}

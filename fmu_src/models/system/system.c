@@ -1,0 +1,424 @@
+/* The DryFrictionSystem model's operators, structure checks and engine setup (system.h). */
+#include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
+#include "system.h"
+
+#include "bossak.h"
+#include "excitation.h" /* DFO_PI */
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define SYM_TOL 1e-12  /* M, C, K symmetric: |A_ij - A_ji| <= SYM_TOL max|A| */
+#define PSD_TOL 1e-12  /* K, C: the Cholesky factorisation of A + PSD_TOL max|A| I must succeed */
+#define POWER_ITERS 200
+#define POWER_RTOL 1e-9
+
+/* ---- dense algebra ------------------------------------------------------------------------------ */
+
+static void matvec(size_t n, const double *A, const double *x, double *y)
+{
+    for (size_t i = 0; i < n; i++) {
+        const double *a = A + i * n;
+        double s = 0.0;
+        for (size_t k = 0; k < n; k++) s += a[k] * x[k];
+        y[i] = s;
+    }
+}
+
+/* The lower Cholesky factor of the symmetric A (its lower triangle read) into L (n x n; the upper
+ * triangle zeroed); shift added to the diagonal. Returns 0 when A + shift I is not positive definite
+ * (*row: the 0-based row where the pivot fails). */
+static int cholesky(size_t n, const double *A, double shift, double *L, size_t *row)
+{
+    for (size_t i = 0; i < n; i++) {
+        double *li = L + i * n;
+        for (size_t j = 0; j <= i; j++) {
+            const double *lj = L + j * n;
+            double s = A[i * n + j] + (i == j ? shift : 0.0);
+            for (size_t k = 0; k < j; k++) s -= li[k] * lj[k];
+            if (i == j) {
+                if (!(s > 0.0) || !isfinite(s)) {
+                    if (row) *row = i;
+                    return 0;
+                }
+                li[i] = sqrt(s);
+            } else {
+                li[j] = s / lj[j];
+            }
+        }
+        for (size_t j = i + 1; j < n; j++) li[j] = 0.0;
+    }
+    return 1;
+}
+
+/* x = (L L')^-1 b (b and x may be the same array). */
+static void chol_solve(size_t n, const double *L, const double *b, double *x)
+{
+    for (size_t i = 0; i < n; i++) {
+        const double *li = L + i * n;
+        double s = b[i];
+        for (size_t k = 0; k < i; k++) s -= li[k] * x[k];
+        x[i] = s / li[i];
+    }
+    for (size_t i = n; i-- > 0;) {
+        double s = x[i];
+        for (size_t k = i + 1; k < n; k++) s -= L[k * n + i] * x[k];
+        x[i] = s / L[i * n + i];
+    }
+}
+
+/* y = L^-1 b (forward) or y = L^-T b (backward), in place. */
+static void tri_forward(size_t n, const double *L, double *x)
+{
+    for (size_t i = 0; i < n; i++) {
+        double s = x[i];
+        for (size_t k = 0; k < i; k++) s -= L[i * n + k] * x[k];
+        x[i] = s / L[i * n + i];
+    }
+}
+
+static void tri_backward(size_t n, const double *L, double *x)
+{
+    for (size_t i = n; i-- > 0;) {
+        double s = x[i];
+        for (size_t k = i + 1; k < n; k++) s -= L[k * n + i] * x[k];
+        x[i] = s / L[i * n + i];
+    }
+}
+
+static double max_abs(size_t count, const double *a)
+{
+    double m = 0.0;
+    for (size_t i = 0; i < count; i++) m = fmax(m, fabs(a[i]));
+    return m;
+}
+
+/* The largest eigenvalue of M^-1 A (A symmetric positive semi-definite, L the Cholesky factor of M)
+ * by power iteration on the symmetric L^-1 A L^-T: at most POWER_ITERS iterations, stopped when the
+ * Rayleigh quotient changes by less than POWER_RTOL relatively (a lower estimate of the eigenvalue,
+ * exact for n = 1). x, y: n each of scratch. */
+static double largest_eig(size_t n, const double *L, const double *A, double *x, double *y)
+{
+    if (max_abs(n * n, A) == 0.0) return 0.0;
+    for (size_t i = 0; i < n; i++) x[i] = 1.0 + 0.01 * (double)(i % 7); /* not orthogonal to a mode, in practice */
+    double lam = 0.0;
+    for (int it = 0; it < POWER_ITERS; it++) {
+        double nx = 0.0;
+        for (size_t i = 0; i < n; i++) nx += x[i] * x[i];
+        nx = sqrt(nx);
+        if (!(nx > 0.0)) return lam;
+        for (size_t i = 0; i < n; i++) x[i] /= nx;
+        memcpy(y, x, n * sizeof *y);
+        tri_backward(n, L, y); /* y = L^-T x */
+        matvec(n, A, y, x);    /* x = A y */
+        memcpy(y, x, n * sizeof *y);
+        tri_forward(n, L, y); /* y = L^-1 A L^-T x_old */
+        /* Rayleigh quotient x_old . y: x holds A y; recompute from y and the normalised x_old */
+        double q = 0.0, ny = 0.0;
+        memcpy(x, y, n * sizeof *x);
+        for (size_t i = 0; i < n; i++) ny += y[i] * y[i];
+        q = sqrt(ny); /* ||B x_old|| with ||x_old|| = 1: converges to the largest eigenvalue of B >= 0 */
+        const int done = it > 0 && fabs(q - lam) <= POWER_RTOL * q;
+        lam = q;
+        if (done) break;
+    }
+    return lam;
+}
+
+/* ---- checks ------------------------------------------------------------------------------------- */
+
+static int finite_all(const char *name, const double *a, size_t rows, size_t cols, char *buf, size_t len)
+{
+    for (size_t i = 0; i < rows; i++)
+        for (size_t j = 0; j < cols; j++)
+            if (!isfinite(a[i * cols + j])) {
+                if (cols > 1 || rows > 1) {
+                    if (rows > 1 && cols > 1)
+                        snprintf(buf, len, "%s[%zu,%zu] is not a finite number", name, i + 1, j + 1);
+                    else
+                        snprintf(buf, len, "%s[%zu] is not a finite number", name, i * cols + j + 1);
+                } else {
+                    snprintf(buf, len, "%s[1] is not a finite number", name);
+                }
+                return 0;
+            }
+    return 1;
+}
+
+static int symmetric(const char *name, size_t n, const double *A, char *buf, size_t len)
+{
+    const double tol = SYM_TOL * max_abs(n * n, A);
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < i; j++)
+            if (!(fabs(A[i * n + j] - A[j * n + i]) <= tol)) {
+                snprintf(buf, len, "%s is not symmetric: %s[%zu,%zu] = %.17g but %s[%zu,%zu] = %.17g", name, name, i + 1,
+                         j + 1, A[i * n + j], name, j + 1, i + 1, A[j * n + i]);
+                return 0;
+            }
+    return 1;
+}
+
+static int nonneg(const char *name, const double *a, size_t nc, char *buf, size_t len)
+{
+    for (size_t j = 0; j < nc; j++)
+        if (!(a[j] >= 0.0)) {
+            snprintf(buf, len, "%s[%zu] = %.17g is negative; valid range: >= 0", name, j + 1, a[j]);
+            return 0;
+        }
+    return 1;
+}
+
+static const char *check_with(const sys_params *p, double *L, char *buf, size_t len)
+{
+    const size_t n = p->n, nc = p->nc;
+    if (n < 1 || n > 1024) {
+        snprintf(buf, len, "invalid size n = %zu; valid range: 1 to 1024", n);
+        return buf;
+    }
+    if (nc > 1024) {
+        snprintf(buf, len, "invalid size nc = %zu; valid range: 0 to 1024", nc);
+        return buf;
+    }
+    const struct {
+        const char *name;
+        const double *a;
+        size_t rows, cols;
+    } arr[] = {{"M", p->M, n, n},         {"C", p->C, n, n},       {"K", p->K, n, n},   {"F_c", p->F_c, 1, n},
+               {"F_s", p->F_s, 1, n},     {"x0", p->x0, 1, n},     {"v0", p->v0, 1, n}, {"W", p->W, nc, n},
+               {"N", p->N, 1, nc},        {"mu_s", p->mu_s, 1, nc}, {"mu_k", p->mu_k, 1, nc}, {"k_t", p->k_t, 1, nc}};
+    for (size_t a = 0; a < sizeof arr / sizeof arr[0]; a++) {
+        if (arr[a].rows == 0 || arr[a].cols == 0) continue;
+        if (!finite_all(arr[a].name, arr[a].a, arr[a].rows, arr[a].cols, buf, len)) return buf;
+    }
+    const struct {
+        const char *name;
+        double v, lo, hi;
+    } r[] = {{"omega", p->omega, 0.0, 1e100}, {"h", p->h, 0.0, 1e100}, {"alpha", p->alpha, -1.0 / 3.0, 0.0}};
+    for (size_t i = 0; i < sizeof r / sizeof r[0]; i++)
+        if (!(r[i].v >= r[i].lo && r[i].v <= r[i].hi)) {
+            snprintf(buf, len, "invalid value %.17g for %s; valid range: %g to %g", r[i].v, r[i].name, r[i].lo, r[i].hi);
+            return buf;
+        }
+    if (p->scheme < DFO_SCHEME_PAPER || p->scheme > DFO_SCHEME_LOCATED) {
+        snprintf(buf, len, "invalid scheme %d: the DryFrictionSystem model steps with paper (1), consistent (2) or "
+                 "located (3)", p->scheme);
+        return buf;
+    }
+    if (p->frictionUpdates < 0 || p->frictionUpdates > 10) {
+        snprintf(buf, len, "invalid value %d for frictionUpdates; valid range: 0 to 10", p->frictionUpdates);
+        return buf;
+    }
+    if (!symmetric("M", n, p->M, buf, len) || !symmetric("K", n, p->K, buf, len) || !symmetric("C", n, p->C, buf, len))
+        return buf;
+    size_t row = 0;
+    if (!cholesky(n, p->M, 0.0, L, &row)) {
+        snprintf(buf, len, "M is not positive definite (its Cholesky factorisation fails at row %zu)", row + 1);
+        return buf;
+    }
+    const double kmax = max_abs(n * n, p->K), cmax = max_abs(n * n, p->C);
+    if (kmax > 0.0 && !cholesky(n, p->K, PSD_TOL * kmax, L, &row)) {
+        snprintf(buf, len, "K has a negative eigenvalue beyond rounding (K + %g max|K| I is not positive definite)",
+                 PSD_TOL);
+        return buf;
+    }
+    if (cmax > 0.0 && !cholesky(n, p->C, PSD_TOL * cmax, L, &row)) {
+        snprintf(buf, len, "C has a negative eigenvalue beyond rounding (C + %g max|C| I is not positive definite)",
+                 PSD_TOL);
+        return buf;
+    }
+    for (size_t j = 0; j < nc; j++) {
+        if (max_abs(n, p->W + j * n) == 0.0) {
+            snprintf(buf, len, "W row %zu is zero: contact %zu acts on no degree of freedom", j + 1, j + 1);
+            return buf;
+        }
+    }
+    if (!nonneg("N", p->N, nc, buf, len) || !nonneg("mu_s", p->mu_s, nc, buf, len) ||
+        !nonneg("mu_k", p->mu_k, nc, buf, len) || !nonneg("k_t", p->k_t, nc, buf, len))
+        return buf;
+    for (size_t j = 0; j < nc; j++)
+        if (p->k_t[j] != 0.0) {
+            snprintf(buf, len, "k_t[%zu] = %.17g: Jenkins contacts (k_t > 0) are not in this build yet; use 0", j + 1,
+                     p->k_t[j]);
+            return buf;
+        }
+    return NULL;
+}
+
+const char *sys_check(const sys_params *p, const eng_alloc *al, char *buf, size_t len)
+{
+    if (p->n < 1 || p->n > 1024) return check_with(p, NULL, buf, len); /* (a size sentence, L unused) */
+    double *L = (double *)al->allocate(al->env, p->n * p->n, sizeof(double));
+    if (!L) return "out of memory";
+    const char *why = check_with(p, L, buf, len);
+    al->release(al->env, L);
+    return why;
+}
+
+/* The fastest rate with L the Cholesky factor of M (x, y: n scratch each). */
+static double rate_with(const sys_params *p, const double *L, double *x, double *y)
+{
+    const double lk = largest_eig(p->n, L, p->K, x, y), lc = largest_eig(p->n, L, p->C, x, y);
+    return sqrt(lk) + lc + fabs(p->omega);
+}
+
+double sys_step(const sys_params *p, const eng_alloc *al)
+{
+    if (p->h > 0.0) return p->h;
+    const size_t n = p->n;
+    double *L = (double *)al->allocate(al->env, n * n + 2 * n, sizeof(double));
+    if (!L) return NAN;
+    double h = NAN;
+    if (cholesky(n, p->M, 0.0, L, NULL)) /* (no time scale, rate 0: the rule's fallback, 1 ms) */
+        h = dfo_step_rule(0.0, 2.0 * DFO_PI / rate_with(p, L, L + n * n, L + n * n + n));
+    al->release(al->env, L);
+    return h;
+}
+
+/* ---- operators ---------------------------------------------------------------------------------- */
+
+static void op_K(void *ctx, const double *x, double *y) { const sys_model *m = (const sys_model *)ctx; matvec(m->n, m->K, x, y); }
+static void op_C(void *ctx, const double *v, double *y) { const sys_model *m = (const sys_model *)ctx; matvec(m->n, m->C, v, y); }
+static void op_M(void *ctx, const double *a, double *y) { const sys_model *m = (const sys_model *)ctx; matvec(m->n, m->M, a, y); }
+
+/* Cholesky of A = cM M + cC C + cK K into the slot (the lower triangle formed); 0 when A is not
+ * positive definite. */
+static int op_factor(void *ctx, int slot, double cM, double cC, double cK)
+{
+    sys_model *m = (sys_model *)ctx;
+    const size_t n = m->n;
+    double *L = m->L[slot];
+    /* A's lower triangle in place in L (cholesky reads A[i n + j], j <= i, before writing L[i n + j]) */
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j <= i; j++) {
+            const size_t k = i * n + j;
+            L[k] = cM * m->M[k] + cC * m->C[k] + cK * m->K[k];
+        }
+    return cholesky(n, L, 0.0, L, NULL);
+}
+
+static void op_solve(void *ctx, int slot, const double *b, double *x)
+{
+    const sys_model *m = (const sys_model *)ctx;
+    chol_solve(m->n, m->L[slot], b, x);
+}
+
+/* ---- the engine --------------------------------------------------------------------------------- */
+
+void sys_model_free(sys_model *m, const eng_alloc *al)
+{
+    if (m->E) eng_destroy(m->E);
+    m->E = NULL;
+    void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Pc, m->Ps, m->N, m->mu_s, m->mu_k,
+                      m->rows, m->idx, m->w, m->work};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        if (arrays[i]) al->release(al->env, arrays[i]);
+    memset(m, 0, sizeof *m);
+}
+
+static void *alloc_n(const eng_alloc *al, size_t count, size_t size, int *ok)
+{
+    void *p = al->allocate(al->env, count ? count : 1, size);
+    if (!p) *ok = 0;
+    return p;
+}
+
+int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int account_energy, char *buf, size_t len,
+                   const char **err)
+{
+    memset(m, 0, sizeof *m);
+    *err = sys_check(p, al, buf, len);
+    if (*err) return 0;
+    const size_t n = p->n, nc = p->nc;
+    size_t nnz = 0;
+    for (size_t k = 0; k < nc * n; k++) nnz += p->W[k] != 0.0;
+    int ok = 1, has_Fs = 0;
+    for (size_t i = 0; i < n; i++) has_Fs |= p->F_s[i] != 0.0;
+    m->n = n;
+    m->nc = nc;
+    m->M = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    m->C = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    m->K = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    for (int s = 0; s < ENG_NSLOTS; s++) m->L[s] = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    m->Pc = (double *)alloc_n(al, n, sizeof(double), &ok);
+    if (has_Fs) m->Ps = (double *)alloc_n(al, n, sizeof(double), &ok);
+    m->N = (double *)alloc_n(al, nc, sizeof(double), &ok);
+    m->mu_s = (double *)alloc_n(al, nc, sizeof(double), &ok);
+    m->mu_k = (double *)alloc_n(al, nc, sizeof(double), &ok);
+    m->rows = (eng_row *)alloc_n(al, nc, sizeof(eng_row), &ok);
+    m->idx = (size_t *)alloc_n(al, nnz, sizeof(size_t), &ok);
+    m->w = (double *)alloc_n(al, nnz, sizeof(double), &ok);
+    m->work = (double *)alloc_n(al, 2 * n, sizeof(double), &ok);
+    if (!ok) {
+        sys_model_free(m, al);
+        *err = "out of memory";
+        return 0;
+    }
+    memcpy(m->M, p->M, n * n * sizeof(double));
+    memcpy(m->C, p->C, n * n * sizeof(double));
+    memcpy(m->K, p->K, n * n * sizeof(double));
+    memcpy(m->Pc, p->F_c, n * sizeof(double));
+    if (m->Ps)
+        for (size_t i = 0; i < n; i++) m->Ps[i] = -p->F_s[i]; /* the engine's P = Pc cos - Ps sin */
+    if (nc) {
+        memcpy(m->N, p->N, nc * sizeof(double));
+        memcpy(m->mu_s, p->mu_s, nc * sizeof(double));
+        memcpy(m->mu_k, p->mu_k, nc * sizeof(double));
+    }
+    size_t k = 0;
+    for (size_t j = 0; j < nc; j++) {
+        m->rows[j].idx = m->idx + k;
+        m->rows[j].w = m->w + k;
+        size_t c = 0;
+        for (size_t i = 0; i < n; i++)
+            if (p->W[j * n + i] != 0.0) {
+                m->idx[k + c] = i;
+                m->w[k + c] = p->W[j * n + i];
+                c++;
+            }
+        m->rows[j].nnz = c;
+        k += c;
+    }
+    m->has_C = max_abs(n * n, p->C) > 0.0;
+    (void)cholesky(n, p->M, 0.0, m->L[ENG_SLOT_MASS], NULL); /* (passed sys_check) */
+    m->rate = rate_with(p, m->L[ENG_SLOT_MASS], m->work, m->work + n);
+    m->h = dfo_step_rule(p->h, 2.0 * DFO_PI / m->rate); /* (no time scale, rate 0: the rule's fallback, 1 ms) */
+    eng_setup S;
+    memset(&S, 0, sizeof S);
+    S.n = n;
+    S.nc = nc;
+    S.ops.ctx = m;
+    S.ops.apply_K = op_K;
+    S.ops.apply_C = m->has_C ? op_C : NULL;
+    S.ops.apply_M = op_M;
+    S.ops.factor = op_factor;
+    S.ops.solve = op_solve;
+    S.ops.friction = NULL; /* the engine's dense Delassus matrix and Lemke */
+    S.rows = m->rows;
+    S.exc.omega = p->omega;
+    S.exc.phi0 = 0.0;
+    S.exc.Pc = m->Pc;
+    S.exc.Ps = m->Ps;
+    S.N = m->N;
+    S.mu_s = m->mu_s;
+    S.mu_k = m->mu_k;
+    S.h = m->h;
+    S.alpha = p->alpha;
+    S.scheme = p->scheme;
+    S.friction_updates = p->frictionUpdates;
+    S.account_energy = account_energy;
+    S.fast_paths = 0; /* no closed-form breakaway: nothing to skip */
+    S.rate_max = m->rate;
+    /* the oscillator's (and TwoMass's) snap of a host's rounded times to the grid */
+    S.snap_max_rel_h = 1e-5;
+    S.snap_min_rel_h = 1e-7;
+    S.snap_eps_t = 65536.0;
+    m->E = eng_create(&S, al, err);
+    if (!m->E) {
+        if (!*err) *err = "out of memory";
+        sys_model_free(m, al);
+        return 0;
+    }
+    return 1;
+}
