@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: the layer of ``model``: an oscillator's defaults and units are read from the model description.
 LAYERS: dict[int, tuple[str, ...]] = {
     0: ("errors", "diagnostics", "atomic", "paths", "roots", "budget", "cluster", "_compat"),
-    1: ("model", "params", "fmi"),
+    1: ("model", "params", "fmi", "system"),
     2: ("drivers",),
     3: ("references",),
     4: ("analysis", "cosim", "sweep"),
@@ -111,7 +111,8 @@ CANONICAL = {
     "ChainFMU3": "dryfriction.drivers.chain",
     "open_chain": "dryfriction.drivers.chain",
     "Settings": "dryfriction.drivers.oscillator",
-    "System": "dryfriction.cosim",
+    "System": "dryfriction.system",
+    "Contact": "dryfriction.system",
     "FMUError": "dryfriction.errors",
     "FMUCallError": "dryfriction.errors",
     "FMUFileError": "dryfriction.errors",
