@@ -27,15 +27,19 @@ a sliding slider sticks where ``g_j'`` reaches 0; a stuck slider breaks away whe
 reaches ``F_b``, and its force drops to ``mu_k N`` at once: the slider jumps by
 ``(F_b - mu_k N) / k_t`` the way it slides.
 
-**The rest rule** (the mode set at an event, stated once): every rigid contact at rest (the one
-that stopped, with its slip set to exactly 0 by the momentum-consistent projection onto the at-rest
-set, and every one stuck) is held; the holding forces are solved together; the contact most beyond
-its limit (largest ``|f_j| - F_b``) is released, to slide the way it is driven (against its
-holding force, ``s = -sign(f_j)``); the forces of the others are solved again, and so on until
-every held contact is within its limit. A contact whose holding force reaches its limit is
-released first (the same way) and the others checked by the same rule. A contact without friction
-(``F_b = 0``) is never held. At t = 0 the rigid contacts whose slip is 0 are decided by the rule;
-the sliders start stuck with their springs relaxed (``s = g``).
+**The rest rule** (the mode set at an event; the engine's and tests/two_mass_reference.py's):
+every rigid contact at rest is held: the ones that came to rest (a stop, its slip set to exactly 0
+by the momentum-consistent projection onto the at-rest set) and the stuck ones. The holding forces
+are solved together; among the contacts that came to rest, the one most beyond its limit (largest
+``|f_j| - F_b``) is released, to slide the way it is driven (against its holding force, ``s =
+-sign(f_j)``), the forces are solved again, and so on until every one of them is within its limit.
+Then a contact stuck before that the new set drives beyond its limit breaks away the same way (the
+most beyond first, the forces solved again after each). A contact whose holding force reaches its
+limit is released first and the others are checked by the second part. A contact without friction
+(``F_b = 0``) is never held. At t = 0 the rigid contacts whose slip is 0 count as come to rest;
+the sliders start stuck with their springs relaxed (``s = g``). With ``mu_s > mu_k`` and contacts
+coupled through ``M`` another mode set can be consistent too (method.md section 13): this rule,
+the causal cascade from "all at rest held", picks one.
 
 Not modelled here: belts (the contacts' surfaces are at rest), time-varying inputs (``F_ext`` is a
 constant force), the Stribeck law.
@@ -176,21 +180,26 @@ class _Model:
 
     def rest_rule(self, t: float, y: np.ndarray, modes: list[int], rest: Sequence[int]) -> list[int]:
         """The rest rule of the module docstring: the contacts ``rest`` (slip 0) held with the stuck
-        ones, then the one most beyond its limit released, again until all held are within."""
+        ones; among ``rest`` the one most beyond its limit released, again until all of them are
+        within; then a held contact the new set drives beyond its limit breaks away (the most
+        beyond first, again until all held ones are within)."""
         modes = list(modes)
         for j in rest:
             modes[j] = 0
-        for _ in range(self.nc + 1):
-            _, f = self.forces(tuple(modes), t, y)
-            H = self.held(modes)
-            if not H.size:
-                break
-            excess = np.abs(f[H]) - self.Fb[H]
-            k = int(np.argmax(excess))
-            if not excess[k] > 0.0:
-                break
-            j = int(H[k])
-            modes[j] = -int(np.sign(f[j]))
+        for candidates in (np.array(sorted(rest), dtype=int), None):
+            for _ in range(self.nc + 1):
+                _, f = self.forces(tuple(modes), t, y)
+                H = self.held(modes)
+                if candidates is not None:
+                    H = np.intersect1d(H, candidates)
+                if not H.size:
+                    break
+                excess = np.abs(f[H]) - self.Fb[H]
+                k = int(np.argmax(excess))
+                if not excess[k] > 0.0:
+                    break
+                j = int(H[k])
+                modes[j] = -int(np.sign(f[j]))
         return modes
 
     def events(self, modes: tuple[int, ...]) -> list[Callable[[float, np.ndarray], float]]:
