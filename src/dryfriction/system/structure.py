@@ -322,19 +322,71 @@ class System:
                 and all(np.array_equal(getattr(self, a), getattr(other, a)) for a in ("N", "mu_s", "mu_k", "k_t")))
 
     # --- the fields ---
-    M = property(lambda self: self._M, doc="The mass matrix (n x n, read-only).")
-    C = property(lambda self: self._C, doc="The damping matrix (n x n, read-only).")
-    K = property(lambda self: self._K, doc="The stiffness matrix (n x n, read-only).")
-    contacts = property(lambda self: self._contacts, doc="The contacts (a tuple of Contact).")
-    F_c = property(lambda self: self._F_c, doc="The cosine amplitudes of the excitation (n, N).")
-    F_s = property(lambda self: self._F_s, doc="The sine amplitudes of the excitation (n, N).")
-    omega = property(lambda self: self._omega, doc="The excitation's angular frequency, rad/s.")
-    x0 = property(lambda self: self._x0, doc="The initial positions (n, m).")
-    v0 = property(lambda self: self._v0, doc="The initial velocities (n, m/s).")
-    h = property(lambda self: self._h, doc="The internal step, s (0: derived from the dynamics).")
-    scheme = property(lambda self: self._scheme, doc="The time-stepping scheme: located, consistent or paper.")
-    alpha = property(lambda self: self._alpha, doc="The Bossak parameter (-1/3 to 0).")
-    W = property(lambda self: self._W, doc="The contact rows (nc x n, read-only).")
+    @property
+    def M(self) -> np.ndarray:
+        """The mass matrix (n x n, read-only)."""
+        return self._M
+
+    @property
+    def C(self) -> np.ndarray:
+        """The damping matrix (n x n, read-only)."""
+        return self._C
+
+    @property
+    def K(self) -> np.ndarray:
+        """The stiffness matrix (n x n, read-only)."""
+        return self._K
+
+    @property
+    def contacts(self) -> tuple[Contact, ...]:
+        """The contacts (a tuple of Contact)."""
+        return self._contacts
+
+    @property
+    def F_c(self) -> np.ndarray:
+        """The cosine amplitudes of the excitation (n, N)."""
+        return self._F_c
+
+    @property
+    def F_s(self) -> np.ndarray:
+        """The sine amplitudes of the excitation (n, N)."""
+        return self._F_s
+
+    @property
+    def omega(self) -> float:
+        """The excitation's angular frequency, rad/s."""
+        return self._omega
+
+    @property
+    def x0(self) -> np.ndarray:
+        """The initial positions (n, m)."""
+        return self._x0
+
+    @property
+    def v0(self) -> np.ndarray:
+        """The initial velocities (n, m/s)."""
+        return self._v0
+
+    @property
+    def h(self) -> float:
+        """The internal step, s (0: derived from the dynamics)."""
+        return self._h
+
+    @property
+    def scheme(self) -> str:
+        """The time-stepping scheme: located, consistent or paper."""
+        return self._scheme
+
+    @property
+    def alpha(self) -> float:
+        """The Bossak parameter (-1/3 to 0)."""
+        return self._alpha
+
+    @property
+    def W(self) -> np.ndarray:
+        """The contact rows (nc x n, read-only)."""
+        return self._W
+
 
     @property
     def n(self) -> int:
