@@ -70,7 +70,8 @@ def test_the_fields_rows_and_contact_arrays() -> None:
     (dict(M=np.where(np.eye(3) > 0, [[np.inf]], M3)), r"M\[0, 0\] is inf"),
     (dict(F_s=[0.0, -np.inf, 0.0]), r"F_s\[1\] is -inf"),
     (dict(omega=math.nan), r"omega is nan"),
-    (dict(M=M3 + np.diag([0.0, 1e-3], 1)), r"M is not symmetric: M\[1, 2\] = 0.201 but M\[2, 1\] = 0.2 \(difference 0.001 beyond the tolerance 2e-12"),
+    (dict(M=M3 + np.diag([0.0, 1e-3], 1)),
+     r"M is not symmetric: M\[1, 2\] = 0.201 but M\[2, 1\] = 0.2 \(difference 0.001 beyond the tolerance 2e-12"),
     (dict(M=np.diag([1.0, 0.0, 1.0])), r"M is not positive definite: its Cholesky factorisation fails"),
     (dict(M=np.diag([1.0, -1.0, 1.0])), r"M is not positive definite.*smallest eigenvalue -1"),
     (dict(K=K3 + np.diag([1.0, 1.0], -1)), r"K is not symmetric: K\[0, 1\] = -100.0 but K\[1, 0\] = -99.0"),
@@ -306,12 +307,14 @@ x0 = 0.001
 
 
 @pytest.mark.parametrize("text, message", [
-    ("[structure]\nM = [[1.0]]\nK = [[1.0]]\nL = 2\n", r"unknown key 'L' in the table \[structure\]; valid keys: M, K, C"),
+    ("[structure]\nM = [[1.0]]\nK = [[1.0]]\nL = 2\n",
+     r"unknown key 'L' in the table \[structure\]; valid keys: M, K, C"),
     ("[structure]\nM = [[1.0]]\nK = [[1.0]]\n[excite]\nomega = 1\n", r"unknown table \[excite\]"),
     ("[structure]\nM = [[1.0]]\nK = [[1.0]]\n[run]\nsteps = 3\n", r"unknown key 'steps' in the table \[run\]"),
     ("[structure]\nM = [[1.0]]\nK = [[1.0]]\n[[contact]]\ndof = 0\nmu = 0.3\n",
      r"unknown key 'mu' in the table \[\[contact\]\] number 0"),
-    ("[structure]\nM = [[1.0]]\nK = [[1.0]]\n[[contact]]\ndof = 1\nN = 1.0\n", r"contacts\[0\]: dof = 1 is out of range"),
+    ("[structure]\nM = [[1.0]]\nK = [[1.0]]\n[[contact]]\ndof = 1\nN = 1.0\n",
+     r"contacts\[0\]: dof = 1 is out of range"),
     ("[structure]\nM = [[1.0]]\nK = [[1.0]]\n[[contact]]\nbetween = [0, 0]\n",
      r"\[\[contact\]\] number 0 \(0-based\): Contact: between = \(0, 0\) names one degree of freedom twice"),
     ("[structure]\nM = [[1.0]]\n", r"the table \[structure\] has no K"),

@@ -41,6 +41,13 @@ the sliders start stuck with their springs relaxed (``s = g``). With ``mu_s > mu
 coupled through ``M`` another mode set can be consistent too (method.md section 13): this rule,
 the causal cascade from "all at rest held", picks one.
 
+**Dependent rows.** Where the held rigid contacts' rows are dependent (two contacts on one row,
+or more held contacts than independent directions) their forces are not unique: the reference
+takes the minimum-norm ones, as the engine does. When one of them is then released while the
+others still hold its row, it cannot slip and the rest rule does not settle: the reference stops
+with an error naming those contacts (a contact that saturates at its limit while staying stuck is
+not modelled).
+
 Not modelled here: belts (the contacts' surfaces are at rest), time-varying inputs (``F_ext`` is a
 constant force), the Stribeck law.
 """
@@ -48,6 +55,7 @@ constant force), the Stribeck law.
 from __future__ import annotations
 
 import math
+from itertools import combinations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Optional, Sequence
 
@@ -227,6 +235,19 @@ class _Model:
         return out
 
 
+def _unsettled(m: _Model, modes: tuple[int, ...]) -> str:
+    """Why the rest rule did not settle: the rigid contacts with dependent rows, if any."""
+    rigid = [j for j in range(m.nc) if m.active[j] and not m.jenkins[j]]
+    groups = [list(g) for size in (2, 3) for g in combinations(rigid, size)] if len(rigid) <= 12 else []
+    for group in groups + [rigid]:
+        if len(group) > 1 and np.linalg.matrix_rank(m.W[group]) < len(group):
+            return (f"the rigid contacts {', '.join(map(str, group))} have dependent rows, so one of them "
+                    "released while the others hold cannot slip, and their holding forces are not unique: "
+                    "the reference needs independent rows (give such contacts as one, with the sum of "
+                    "their limits)")
+    return f"the rest rule does not settle the mode set {modes}"
+
+
 def _refine(rhs: Callable, event: Callable, ta: float, ya: np.ndarray, te: float, rtol: float,
             atol: np.ndarray) -> tuple[float, np.ndarray]:
     """The event's time and state by Brent's method on the motion integrated from (ta, ya)."""
@@ -389,8 +410,8 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
                 sol.switches.append(Switch(t1, i, md[i], new[i]))
         stalled = stalled + 1 if t1 <= t else 0
         if stalled > 4 * nc + 4:
-            raise RuntimeError(f"system reference: {stalled} switches at t = {t1} without time passing "
-                               "(a mode set the rest rule cannot settle)")
+            raise RuntimeError(f"system reference: {stalled} switches at t = {t1} without time passing: "
+                               f"{_unsettled(m, md)}")
         modes = new
         t = t1
     else:
