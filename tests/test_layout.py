@@ -27,7 +27,8 @@ PACKAGE = Path(dryfriction.__file__).resolve().parent
 ROOT = Path(__file__).resolve().parents[1]
 
 #: the layers, bottom to top: a module imports only from its own layer or below. ``params`` is in
-#: the layer of ``model``: an oscillator's defaults and units are read from the model description.
+#: the layer of ``model``: an oscillator's defaults and units are read from the model description;
+#: ``system`` (a structure with friction contacts) beside them: it makes systems of oscillators.
 LAYERS: dict[int, tuple[str, ...]] = {
     0: ("errors", "diagnostics", "atomic", "paths", "roots", "budget", "cluster", "_compat"),
     1: ("model", "params", "fmi", "system"),
