@@ -5,7 +5,9 @@ ratios asked are the ones Phi' C Phi has); the FMU's start values."""
 
 from __future__ import annotations
 
+import copy
 import math
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +57,7 @@ def test_the_fields_rows_and_contact_arrays() -> None:
     with pytest.raises(AttributeError, match="frozen"):
         s.omega = 3.0  # type: ignore[misc]
     assert _system() == s and s.replace(omega=6.0) != s
+    assert pickle.loads(pickle.dumps(s)) == s and copy.deepcopy(s) == s
     assert np.array_equal(System(M=M3, K=K3, F_c=2.0).F_c, [2.0, 2.0, 2.0])   # a scalar for every DOF
     assert np.array_equal(System(M=M3, K=K3).C, np.zeros((3, 3)))
 

@@ -315,6 +315,10 @@ class System:
 
     __hash__ = None  # type: ignore[assignment]
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled (and copied) as its fields, checked again when loaded."""
+        return (_make_system, (self._fields(),))
+
     def contacts_equal(self, other: "System") -> bool:
         """True when both have the same contact rows and the same friction per contact (the same
         direction given as dof, between or w counts as equal)."""
@@ -551,3 +555,8 @@ class System:
             "mu_k": self.mu_k.tolist(), "k_t": self.k_t.tolist(),
             "omega": self.omega, "h": self.h, "alpha": self.alpha, "scheme": SCHEMES[self.scheme],
         }
+
+
+def _make_system(fields: dict[str, Any]) -> System:
+    """A System from its fields (the unpickler's)."""
+    return System(**fields)
