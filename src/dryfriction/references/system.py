@@ -27,6 +27,10 @@ a sliding slider sticks where ``g_j'`` reaches 0; a stuck slider breaks away whe
 reaches ``F_b``, and its force drops to ``mu_k N`` at once: the slider jumps by
 ``(F_b - mu_k N) / k_t`` the way it slides.
 
+**Friction dissipation** ``E_friction``, integrated with the motion: ``mu_k N |w_j x'|`` per
+sliding contact (a sliding slider's ``-f_j s_j'``), plus the spring energy ``(F_b^2 - (mu_k
+N)^2) / 2 k_t`` a slider's breakaway releases.
+
 **The rest rule** (the mode set at an event; the engine's and tests/two_mass_reference.py's):
 every rigid contact at rest is held: the ones that came to rest (a stop, its slip set to exactly 0
 by the momentum-consistent projection onto the at-rest set) and the stuck ones. The holding forces
@@ -85,8 +89,8 @@ class Switch:
 
 @dataclass
 class Phase:
-    """A stretch [t0, t1] with the modes constant; ``sol`` its dense solution of (x, v, s) (None for
-    a phase of zero length: the state ``y0``)."""
+    """A stretch [t0, t1] with the modes constant; ``sol`` its dense solution of (x, v, s of the
+    Jenkins contacts, E_friction) (None for a phase of zero length: the state ``y0``)."""
 
     t0: float
     t1: float
@@ -165,12 +169,14 @@ class _Model:
         n = self.n
         stuck_slider = np.array([self.active[j] and modes[j] == 0 for j in self.jidx], dtype=bool)
         Wj = self.W[self.jidx]
+        sliding = np.array([j for j in range(self.nc) if self.active[j] and modes[j] != 0], dtype=int)
+        Ws, Fks = self.W[sliding], self.Fk[sliding]
 
         def f(t: float, y: np.ndarray) -> np.ndarray:
             a, _ = self.forces(modes, t, y)
             v = y[n:2 * n]
             sd = np.where(stuck_slider, 0.0, Wj @ v)
-            return np.concatenate([v, a, sd])
+            return np.concatenate([v, a, sd, [float(Fks @ np.abs(Ws @ v))]])
 
         return f
 
@@ -289,14 +295,14 @@ class SystemSolution:
         return self.phases[-1].t1
 
     def evaluate(self, t: Any) -> dict[str, np.ndarray]:
-        """x, v (len(t) x n), f, mode, s (len(t) x nc; s NaN for a rigid contact) at the times t
-        (at a switch time the later phase)."""
+        """x, v, a (len(t) x n), f, mode, s (len(t) x nc; s NaN for a rigid contact) and E_friction
+        (len(t)) at the times t (at a switch time the later phase)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         m = _Model(self.system, self.F_ext)
         n, nc = m.n, m.nc
         starts = np.array([p.t0 for p in self.phases])
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.phases) - 1)
-        Y = np.empty((t.size, 2 * n + m.jidx.size))
+        Y = np.empty((t.size, 2 * n + m.jidx.size + 1))
         modes = np.empty((t.size, nc), dtype=int)
         for i in np.unique(idx):
             sel = np.flatnonzero(idx == i)
@@ -304,24 +310,28 @@ class SystemSolution:
             Y[sel] = ph.y0 if ph.sol is None else ph.sol(np.clip(t[sel], ph.t0, ph.t1)).T
             modes[sel] = ph.modes
         f = np.empty((t.size, nc))
+        a = np.empty((t.size, n))
         for k in range(t.size):
-            f[k] = m.forces(tuple(int(c) for c in modes[k]), float(t[k]), Y[k])[1]
+            a[k], f[k] = m.forces(tuple(int(c) for c in modes[k]), float(t[k]), Y[k])
         s = np.full((t.size, nc), np.nan)
-        s[:, m.jidx] = Y[:, 2 * n:]
-        return {"x": Y[:, :n], "v": Y[:, n:2 * n], "f": f, "mode": modes, "s": s}
+        s[:, m.jidx] = Y[:, 2 * n:2 * n + m.jidx.size]
+        return {"x": Y[:, :n], "v": Y[:, n:2 * n], "a": a, "f": f, "mode": modes, "s": s, "E_friction": Y[:, -1]}
 
 
 @dataclass
 class SystemResult:
-    """The reference sampled at the times ``t``: ``x``, ``v`` (len(t) x n), ``f``, ``mode``, ``s``
-    (len(t) x nc), the ``switches`` (every contact's change of mode) and the whole ``solution``."""
+    """The reference sampled at the times ``t``: ``x``, ``v``, ``a`` (len(t) x n), ``f``, ``mode``,
+    ``s`` (len(t) x nc), ``E_friction`` (len(t): the energy friction dissipated since t = 0), the
+    ``switches`` (every contact's change of mode) and the whole ``solution``."""
 
     t: np.ndarray
     x: np.ndarray
     v: np.ndarray
+    a: np.ndarray
     f: np.ndarray
     mode: np.ndarray
     s: np.ndarray
+    E_friction: np.ndarray
     switches: list[Switch]
     solution: SystemSolution
 
@@ -350,12 +360,12 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
                   * m.omega ** 2, 1e-300)
     scale = max(force / k_scale, float(np.max(np.abs(system.x0))), float(np.max(np.abs(system.v0))) / m.w_max,
                 1e-300)
-    atol = atol_rel * scale * np.concatenate([np.ones(n), np.full(n, m.w_max), np.ones(m.jidx.size)])
+    atol = atol_rel * scale * np.concatenate([np.ones(n), np.full(n, m.w_max), np.ones(m.jidx.size), [force]])
     max_step = 2.0 * math.pi / m.w_max / STEPS_PER_PERIOD
     if m.omega > 0:
         max_step = min(max_step, 2.0 * math.pi / m.omega / STEPS_PER_PERIOD)
 
-    y = np.concatenate([system.x0, system.v0, (m.W @ system.x0)[m.jidx]])
+    y = np.concatenate([system.x0, system.v0, (m.W @ system.x0)[m.jidx], [0.0]])
     slip = m.W @ system.v0
     rest = [j for j in range(nc) if m.active[j] and not m.jenkins[j] and slip[j] == 0.0]
     m.project_rest(y, np.array(rest, dtype=int))
@@ -396,6 +406,7 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
                 s = -int(np.sign(fj))
                 new[j] = s
                 y[2 * n + m.slot[j]] = m.W[j] @ x - s * m.Fk[j] / m.kt[j]
+                y[-1] += (m.Fb[j] ** 2 - m.Fk[j] ** 2) / (2.0 * m.kt[j])   # the spring energy released
         else:
             if md[j] != 0:                                   # a stop: the rest rule
                 at_rest = [i for i in range(nc) if i == j or (m.active[i] and not m.jenkins[i] and md[i] == 0)]
@@ -417,4 +428,5 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
     else:
         raise RuntimeError(f"system reference: more than {max_phases} phases before t = {t_end}")
     out = sol.evaluate(t_eval)
-    return SystemResult(t_eval, out["x"], out["v"], out["f"], out["mode"], out["s"], sol.switches, sol)
+    return SystemResult(t_eval, out["x"], out["v"], out["a"], out["f"], out["mode"], out["s"], out["E_friction"],
+                        sol.switches, sol)
