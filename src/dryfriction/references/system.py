@@ -10,24 +10,27 @@ set at a time (each contact stuck, 0, or sliding, -1 / +1), by scipy's DOP853 at
 from the last accepted step (the dense interpolant alone places switches up to about 1e-9 of a
 period off).
 
-**Rigid contacts** (k_t = 0). Sliding in direction ``s``: ``f_j = -s mu_k N``. Stuck: the slip
-``w_j x'`` stays 0; the stuck set H's holding forces and the accelerations solve the constrained
+Each contact's surface moves at a constant speed ``v_belt_j`` (a belt; 0 by default): the slip
+velocity is ``w_j x' - v_belt_j``.
+
+**Rigid contacts** (k_t = 0). Sliding in direction ``s`` (the sign of the slip velocity):
+``f_j = -s mu_k N``. Stuck: the slip velocity stays 0; the stuck set H's holding forces and the accelerations solve the constrained
 (KKT) system ``M a = F + W_H' f_H``, ``W_H a = 0`` (F the applied, spring, damper and sliding
 forces), by its Schur complement: ``D f_H = -W_H M^-1 F``, ``D = W_H M^-1 W_H'`` (the Delassus
 matrix; its pseudo-inverse where the stuck rows are dependent: the minimum-norm forces, the
 accelerations unique all the same). All stuck contacts' forces are solved together.
 
 **Jenkins contacts** (k_t > 0): a spring k_t in series with a massless slider at ``s_j`` (part of
-the state), ``f_j = -k_t (g_j - s_j)``. Stuck: ``s_j' = 0``. Sliding in direction ``s``: ``|f_j| =
-mu_k N``, ``f_j = -s mu_k N`` and ``s_j' = g_j'``. A Jenkins contact never constrains the structure.
+the state), ``f_j = -k_t (g_j - s_j)``. Stuck: ``s_j' = v_belt_j``. Sliding in direction ``s`` (the
+sign of ``g_j' - v_belt_j``): ``|f_j| = mu_k N``, ``f_j = -s mu_k N`` and ``s_j' = g_j'``. A Jenkins contact never constrains the structure.
 
 **Events.** A sliding rigid contact stops where its slip velocity reaches 0 (against its
 direction); a stuck one breaks away where its holding force reaches ``F_b = max(mu_s, mu_k) N``;
-a sliding slider sticks where ``g_j'`` reaches 0; a stuck slider breaks away where its spring force
+a sliding slider sticks where ``g_j'`` reaches ``v_belt_j``; a stuck slider breaks away where its spring force
 reaches ``F_b``, and its force drops to ``mu_k N`` at once: the slider jumps by
 ``(F_b - mu_k N) / k_t`` the way it slides.
 
-**Friction dissipation** ``E_friction``, integrated with the motion: ``mu_k N |w_j x'|`` per
+**Friction dissipation** ``E_friction``, integrated with the motion: ``mu_k N |slip velocity|`` per
 sliding contact (a sliding slider's ``-f_j s_j'``), plus the spring energy ``(F_b^2 - (mu_k
 N)^2) / 2 k_t`` a slider's breakaway releases.
 
@@ -52,8 +55,7 @@ others still hold its row, it cannot slip and the rest rule does not settle: the
 with an error naming those contacts (a contact that saturates at its limit while staying stuck is
 not modelled).
 
-Not modelled here: belts (the contacts' surfaces are at rest), time-varying inputs (``F_ext`` is a
-constant force), the Stribeck law.
+Not modelled here: time-varying inputs (``F_ext`` and ``v_belt`` are constant), the Stribeck law.
 """
 
 from __future__ import annotations
@@ -102,7 +104,7 @@ class Phase:
 class _Model:
     """The system's arrays in the form the integration uses."""
 
-    def __init__(self, sys: System, F_ext: Optional[Sequence[float]]) -> None:
+    def __init__(self, sys: System, F_ext: Optional[Sequence[float]], v_belt: Optional[Sequence[float]]) -> None:
         self.sys = sys
         self.n, self.nc = sys.n, sys.nc
         self.M, self.C, self.K, self.W = (np.array(a) for a in (sys.M, sys.C, sys.K, sys.W))
@@ -116,6 +118,7 @@ class _Model:
         self.jidx = np.flatnonzero(self.jenkins)            # contact index of each slider state
         self.slot = {int(j): i for i, j in enumerate(self.jidx)}
         self.F_ext = np.zeros(self.n) if F_ext is None else np.asarray(F_ext, dtype=float).reshape(self.n)
+        self.vb = np.zeros(self.nc) if v_belt is None else np.asarray(v_belt, dtype=float).reshape(self.nc)
         self.omega = sys.omega
         Kj = self.K + (self.W.T * self.kt) @ self.W
         lam = np.linalg.eigvals(self.Minv @ Kj).real
@@ -131,33 +134,34 @@ class _Model:
         return np.array([j for j in range(self.nc) if modes[j] == 0 and self.active[j] and not self.jenkins[j]],
                         dtype=int)
 
-    def _stuck_ops(self, modes: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(H, M^-1 W_H', D^+ W_H M^-1) of a mode set (cached)."""
+    def _ops(self, modes: tuple[int, ...]) -> tuple[np.ndarray, ...]:
+        """The operators of a mode set (cached): the sliding forces (nc, 0 elsewhere), the stuck
+        sliders (contacts, their stiffnesses, rows, state indices), the held rigid contacts H,
+        M^-1 W_H' and D^+ W_H M^-1."""
         ops = self.cache.get(modes)
         if ops is None:
+            md = np.array(modes, dtype=float)
+            f0 = np.where(self.active & (md != 0), -md * self.Fk, 0.0)
+            J = np.array([j for j in self.jidx if self.active[j] and modes[j] == 0], dtype=int)
             H = self.held(modes)
             WH = self.W[H]
             A = self.Minv @ WH.T
-            D = WH @ A
-            ops = (H, A, np.linalg.pinv(D) @ WH @ self.Minv) if H.size else (H, A, np.zeros((0, self.n)))
+            P = np.linalg.pinv(WH @ A) @ WH @ self.Minv if H.size else np.zeros((0, self.n))
+            ops = (f0, J, self.kt[J], self.W[J], 2 * self.n + np.array([self.slot[int(j)] for j in J], dtype=int),
+                   H, A, P)
             self.cache[modes] = ops
         return ops
 
     def forces(self, modes: tuple[int, ...], t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The accelerations (n) and the contact forces (nc: sliding kinetic, stuck holding, a
-        slider's spring) in the mode set at state y = (x, v, s)."""
+        slider's spring) in the mode set at state y = (x, v, s, E_friction)."""
         n = self.n
         x, v = y[:n], y[n:2 * n]
-        f = np.zeros(self.nc)
-        for j in range(self.nc):
-            if not self.active[j]:
-                continue
-            if modes[j] != 0:
-                f[j] = -modes[j] * self.Fk[j]
-            elif self.jenkins[j]:
-                f[j] = -self.kt[j] * (self.W[j] @ x - y[2 * n + self.slot[j]])
+        f0, J, kJ, WJ, iJ, H, A, P = self._ops(modes)
+        f = f0.copy()
+        if J.size:
+            f[J] = -kJ * (WJ @ x - y[iJ])
         F = self.applied(t, x, v) + self.W.T @ f
-        H, A, P = self._stuck_ops(modes)
         a = self.Minv @ F
         if H.size:
             fH = -(P @ F)
@@ -169,27 +173,28 @@ class _Model:
         n = self.n
         stuck_slider = np.array([self.active[j] and modes[j] == 0 for j in self.jidx], dtype=bool)
         Wj = self.W[self.jidx]
+        vbj = self.vb[self.jidx]
         sliding = np.array([j for j in range(self.nc) if self.active[j] and modes[j] != 0], dtype=int)
-        Ws, Fks = self.W[sliding], self.Fk[sliding]
+        Ws, Fks, vbs = self.W[sliding], self.Fk[sliding], self.vb[sliding]
 
         def f(t: float, y: np.ndarray) -> np.ndarray:
             a, _ = self.forces(modes, t, y)
             v = y[n:2 * n]
-            sd = np.where(stuck_slider, 0.0, Wj @ v)
-            return np.concatenate([v, a, sd, [float(Fks @ np.abs(Ws @ v))]])
+            sd = np.where(stuck_slider, vbj, Wj @ v)
+            return np.concatenate([v, a, sd, [float(Fks @ np.abs(Ws @ v - vbs))]])
 
         return f
 
     def project_rest(self, y: np.ndarray, rest: np.ndarray) -> None:
-        """Sets the slip velocities of the rigid contacts ``rest`` to exactly 0 by the
-        momentum-consistent projection v -= M^-1 W_R' D_R^+ W_R v (in place)."""
+        """Sets the slip velocities of the rigid contacts ``rest`` relative to their belts to exactly 0
+        by the momentum-consistent projection v -= M^-1 W_R' D_R^+ (W_R v - v_belt,R) (in place)."""
         if not rest.size:
             return
         n = self.n
         WR = self.W[rest]
         v = y[n:2 * n]
         A = self.Minv @ WR.T
-        v -= A @ (np.linalg.pinv(WR @ A) @ (WR @ v))
+        v -= A @ (np.linalg.pinv(WR @ A) @ (WR @ v - self.vb[rest]))
         y[n:2 * n] = v
 
     def rest_rule(self, t: float, y: np.ndarray, modes: list[int], rest: Sequence[int]) -> list[int]:
@@ -225,7 +230,7 @@ class _Model:
                 continue
             if modes[j] != 0:
                 def ev(t: float, y: np.ndarray, j: int = j, s: int = modes[j]) -> float:
-                    return s * float(self.W[j] @ y[n:2 * n])
+                    return s * (float(self.W[j] @ y[n:2 * n]) - self.vb[j])
                 ev.direction = -1  # type: ignore[attr-defined]
             elif self.jenkins[j]:
                 def ev(t: float, y: np.ndarray, j: int = j) -> float:
@@ -288,6 +293,7 @@ class SystemSolution:
     phases: list[Phase]
     switches: list[Switch] = field(default_factory=list)
     F_ext: Optional[np.ndarray] = None
+    v_belt: Optional[np.ndarray] = None
 
     @property
     def t_end(self) -> float:
@@ -298,7 +304,7 @@ class SystemSolution:
         """x, v, a (len(t) x n), f, mode, s (len(t) x nc; s NaN for a rigid contact) and E_friction
         (len(t)) at the times t (at a switch time the later phase)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        m = _Model(self.system, self.F_ext)
+        m = _Model(self.system, self.F_ext, self.v_belt)
         n, nc = m.n, m.nc
         starts = np.array([p.t0 for p in self.phases])
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.phases) - 1)
@@ -342,15 +348,17 @@ class SystemResult:
 
 
 def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[Sequence[float]] = None,
-             rtol: float = RTOL, atol_rel: float = ATOL_REL, max_phases: int = MAX_PHASES) -> SystemResult:
+             v_belt: Optional[Sequence[float]] = None, rtol: float = RTOL, atol_rel: float = ATOL_REL,
+             max_phases: int = MAX_PHASES) -> SystemResult:
     """The reference motion of ``system`` on [0, t_end] from its x0, v0 (see the module docstring),
-    sampled at ``t_eval`` (default: 101 points). ``F_ext`` a constant external force (n values).
+    sampled at ``t_eval`` (default: 101 points). ``F_ext`` a constant external force (n values),
+    ``v_belt`` the constant speeds of the contacts' surfaces (nc values; default at rest).
 
     Raises ValueError for a t_end that is not finite and > 0, RuntimeError when the integration
     fails or more than ``max_phases`` phases (or a loop of switches at one time) occur."""
     if not (math.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be finite and > 0, not {t_end!r}")
-    m = _Model(system, F_ext)
+    m = _Model(system, F_ext, v_belt)
     n, nc = m.n, m.nc
     t_eval = np.linspace(0.0, t_end, 101) if t_eval is None else np.asarray(t_eval, dtype=float)
     # the motion's scale: the static deflection under the loads (or the initial state)
@@ -358,20 +366,20 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
                 float(np.max(m.Fb, initial=0.0)))
     k_scale = max(float(np.max(np.abs(np.linalg.eigvalsh(system.K)))), float(np.max(np.diag(system.M)))
                   * m.omega ** 2, 1e-300)
-    scale = max(force / k_scale, float(np.max(np.abs(system.x0))), float(np.max(np.abs(system.v0))) / m.w_max,
-                1e-300)
+    speed = max(float(np.max(np.abs(system.v0))), float(np.max(np.abs(m.vb), initial=0.0)))
+    scale = max(force / k_scale, float(np.max(np.abs(system.x0))), speed / m.w_max, 1e-300)
     atol = atol_rel * scale * np.concatenate([np.ones(n), np.full(n, m.w_max), np.ones(m.jidx.size), [force]])
     max_step = 2.0 * math.pi / m.w_max / STEPS_PER_PERIOD
     if m.omega > 0:
         max_step = min(max_step, 2.0 * math.pi / m.omega / STEPS_PER_PERIOD)
 
     y = np.concatenate([system.x0, system.v0, (m.W @ system.x0)[m.jidx], [0.0]])
-    slip = m.W @ system.v0
+    slip = m.W @ system.v0 - m.vb
     rest = [j for j in range(nc) if m.active[j] and not m.jenkins[j] and slip[j] == 0.0]
     m.project_rest(y, np.array(rest, dtype=int))
     modes = [0 if m.jenkins[j] or not m.active[j] else int(np.sign(slip[j])) for j in range(nc)]
     modes = m.rest_rule(0.0, y, modes, rest)
-    sol = SystemSolution(system, [], [], None if F_ext is None else m.F_ext)
+    sol = SystemSolution(system, [], [], None if F_ext is None else m.F_ext, None if v_belt is None else m.vb)
     t = 0.0
     stalled = 0
     for _ in range(max_phases):
