@@ -61,8 +61,8 @@ Not modelled here: time-varying inputs (``F_ext`` and ``v_belt`` are constant), 
 from __future__ import annotations
 
 import math
-from itertools import combinations
 from dataclasses import dataclass, field
+from itertools import combinations
 from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
@@ -123,7 +123,7 @@ class _Model:
         Kj = self.K + (self.W.T * self.kt) @ self.W
         lam = np.linalg.eigvals(self.Minv @ Kj).real
         self.w_max = max(math.sqrt(max(float(lam.max()), 0.0)), self.omega, 1e-300)
-        self.cache: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.cache: dict[tuple[int, ...], tuple[np.ndarray, ...]] = {}
 
     def applied(self, t: float, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """F_c cos + F_s sin + F_ext - K x - C v."""
