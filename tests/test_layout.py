@@ -27,10 +27,11 @@ PACKAGE = Path(dryfriction.__file__).resolve().parent
 ROOT = Path(__file__).resolve().parents[1]
 
 #: the layers, bottom to top: a module imports only from its own layer or below. ``params`` is in
-#: the layer of ``model``: an oscillator's defaults and units are read from the model description.
+#: the layer of ``model``: an oscillator's defaults and units are read from the model description;
+#: ``system`` (a structure with friction contacts) beside them: it makes systems of oscillators.
 LAYERS: dict[int, tuple[str, ...]] = {
     0: ("errors", "diagnostics", "atomic", "paths", "roots", "budget", "cluster", "_compat"),
-    1: ("model", "params", "fmi"),
+    1: ("model", "params", "fmi", "system"),
     2: ("drivers",),
     3: ("references",),
     4: ("analysis", "cosim", "sweep"),
@@ -111,7 +112,8 @@ CANONICAL = {
     "ChainFMU3": "dryfriction.drivers.chain",
     "open_chain": "dryfriction.drivers.chain",
     "Settings": "dryfriction.drivers.oscillator",
-    "System": "dryfriction.cosim",
+    "System": "dryfriction.system",
+    "Contact": "dryfriction.system",
     "FMUError": "dryfriction.errors",
     "FMUCallError": "dryfriction.errors",
     "FMUFileError": "dryfriction.errors",

@@ -34,7 +34,8 @@ _EXPORTS = {
     "ChainFMU2": ".drivers.chain",
     "ChainFMU3": ".drivers.chain",
     "open_chain": ".drivers.chain",
-    "System": ".cosim",
+    "System": ".system",
+    "Contact": ".system",
     "FMUError": ".errors",
     "FMUCallError": ".errors",
     "FMUFileError": ".errors",
@@ -47,7 +48,7 @@ if TYPE_CHECKING:
     from .analysis.continuation import Branch, continue_orbits
     from .analysis.orbits import Orbit, find_orbits
     from .analysis.response import frequency_response, steady_state
-    from .cosim import System
+    from .system import Contact, System
     from .diagnostics import DryFrictionWarning
     from .drivers.chain import ChainFMU2, ChainFMU3, open_chain
     from .drivers.oscillator import OscillatorFMU2, Settings

@@ -69,7 +69,8 @@ class System:
 
     Examples
     --------
-    >>> from dryfriction import OscillatorFMU2, Settings, System
+    >>> from dryfriction import OscillatorFMU2, Settings
+    >>> from dryfriction.cosim import System
     >>> from dryfriction.cosim.split import split_chain2
     >>> chain = dict(m=1.0, k=1.0, c=[0.05, 0.1], P0=[1.0, 0.0], N=[0.8, 0.5], mu_s=0.5, chi=0.7, omega=0.6)
     >>> b1, b2, spring = split_chain2(chain)

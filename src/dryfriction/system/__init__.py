@@ -1,0 +1,15 @@
+"""Any structure with dry-friction contacts (method.md section 13, docs/system.md): the structure
+(:class:`System`, its :class:`Contact` s) with its checks, damping helpers and the oscillator and the
+chain as systems, and the structure file (:mod:`dryfriction.system.spec`).
+
+    from dryfriction import System, Contact
+    sys = System(M=M, K=K, contacts=[Contact(dof=3, N=10.0, mu_s=0.3, mu_k=0.2),
+                                     Contact(between=(2, 5), N=5.0, mu_s=0.2, k_t=1e4)],
+                 F_c=F_c, omega=12.0).with_rayleigh(0.1, 1e-4)
+    sys = System.from_file("beam.toml")
+"""
+
+from .spec import load
+from .structure import SCHEMES, Contact, System
+
+__all__ = ["System", "Contact", "SCHEMES", "load"]
