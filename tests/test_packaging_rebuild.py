@@ -121,6 +121,19 @@ def test_the_source_list_is_exactly_the_sources(shipped: dict[str, Path], key: s
         assert "#define DFO_CHAIN_FIXED_N" not in (d / "sources" / "chain_config.h").read_text()
 
 
+BUILT = sorted(p.relative_to(ROOT / "build").as_posix() for d in ("build", "build/fmi3") for p in (ROOT / d).glob("*.fmu"))
+
+
+@pytest.mark.parametrize("name", BUILT)
+def test_every_fmu_lists_exactly_its_sources(tmp_path: Path, name: str) -> None:
+    """Every FMU of the build (the example models' too): its source list names exactly the .c files
+    of its sources/, so that a host compiling the list links."""
+    d = Path(extract(str(ROOT / "build" / name), unzipdir=str(tmp_path)))
+    listed = _listed_sources(d)
+    assert len(listed) == len(set(listed)), name
+    assert sorted(listed) == sorted(p.name for p in (d / "sources").glob("*.c")), name
+
+
 def _outputs(unzipped: Path) -> list[str]:
     md = read_model_description(str(unzipped))
     return [v.name for v in md.modelVariables if v.causality == "output"]
