@@ -218,6 +218,44 @@ int dfo_inst_events_begin(dfo_lifecycle *lc, const char *fn, double tc, double d
     return *st != DFO_INST_OK;
 }
 
+dfo_inst_status dfo_inst_step_by(dfo_lifecycle *lc, const char *fn, double tc, double dt, double h, unsigned int flags,
+                                 double *t_reached, dfo_advance_fn advance)
+{
+    double t_target = 0.0;
+    lc->work_by_events = 0;
+    const dfo_inst_status chk = dfo_inst_check_step(lc, fn, tc, dt, h, &t_target);
+    if (chk != DFO_INST_OK) return chk;
+    const dfo_inst_status st = advance(lc, fn, t_target, (flags & DFO_STEP_STOP_AT_SWITCH) != 0);
+    if (st == DFO_INST_OK && t_reached) *t_reached = lc->run.time;
+    return st;
+}
+
+dfo_inst_status dfo_inst_step_events_by(dfo_lifecycle *lc, const char *fn, double tc, double dt, double h,
+                                        const dfo_event_opts *opt, dfo_step_result *res, dfo_advance_fn advance)
+{
+    dfo_inst_status done;
+    double t_target = 0.0;
+    lc->work_by_events = 0;
+    if (dfo_inst_events_begin(lc, fn, tc, dt, h, opt, res, &done, &t_target)) return done;
+    const dfo_inst_status st = advance(lc, fn, t_target, opt->early_return || opt->intermediate);
+    if (st != DFO_INST_OK) return st;
+    const int switched = lc->switched;
+    if (switched && opt->intermediate) opt->intermediate(opt->ctx, lc->run.time, opt->early_return, 0);
+    if (switched && lc->run.time < t_target && !opt->early_return) {
+        /* a switch inside the step without early return: go on to the target */
+        const dfo_inst_status st2 = advance(lc, fn, t_target, 0);
+        if (st2 != DFO_INST_OK) return st2;
+    }
+    res->t_reached = lc->run.time;
+    res->early = lc->run.time < t_target;
+    res->event = opt->event_mode && switched;
+    if (res->event) {
+        lc->run.event_pending = 1;
+        lc->run.event_from = 0;
+    }
+    return DFO_INST_OK;
+}
+
 /* ---- deserialised runs ----------------------------------------------------------------------- */
 
 const char *dfo_run_implausible(const dfo_run *r, int config)

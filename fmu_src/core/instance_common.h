@@ -71,6 +71,22 @@ dfo_inst_status dfo_inst_check_step(const dfo_lifecycle *lc, const char *fn, dou
 int dfo_inst_events_begin(dfo_lifecycle *lc, const char *fn, double tc, double dt, double h,
                           const dfo_event_opts *opt, dfo_step_result *res, dfo_inst_status *st, double *t_target);
 
+/* A model's step from its state's time to t_target (stop_at_switch: end at the first switch strictly
+ * inside), the life cycle's time set to where it ended; DFO_INST_OK or the failure, logged. */
+typedef dfo_inst_status (*dfo_advance_fn)(dfo_lifecycle *lc, const char *fn, double t_target, int stop_at_switch);
+
+/* dfo_inst_do_step of a model that steps by advance (internal step h) and keeps no left limits:
+ * the step checked, taken (DFO_STEP_STOP_AT_SWITCH: to the first switch), *t_reached set. */
+dfo_inst_status dfo_inst_step_by(dfo_lifecycle *lc, const char *fn, double tc, double dt, double h, unsigned int flags,
+                                 double *t_reached, dfo_advance_fn advance);
+
+/* dfo_inst_do_step_events of such a model: with early return the step ends at the first switch
+ * strictly inside it (the state just after it); the intermediate update called at a switch; in event
+ * mode a switch on which the step ends stays pending until the host handles it (the outputs are the
+ * right limits already). */
+dfo_inst_status dfo_inst_step_events_by(dfo_lifecycle *lc, const char *fn, double tc, double dt, double h,
+                                        const dfo_event_opts *opt, dfo_step_result *res, dfo_advance_fn advance);
+
 /* The snap tolerance: a stepper's time within it of a target t (internal step h) stands on it. */
 static inline double dfo_snap(double h, double t) { return fmax(1e-9 * h, 8.0 * DBL_EPSILON * fabs(t)); }
 

@@ -27,8 +27,9 @@ static void on_switch(void *ctx, double t, size_t contact, const eng_state *s, i
 /* Advance to t_target (stop_at_switch: at the first switch); the host's time follows. Inputs set
  * since the last step are taken at its start (eng_new_inputs). On failure the state of the step's
  * start is kept (the snapshot in vals). */
-static dfo_inst_status advance(sys_instance *in, const char *fn, double t_target, int stop_at_switch)
+static dfo_inst_status advance(dfo_lifecycle *lc, const char *fn, double t_target, int stop_at_switch)
 {
+    sys_instance *in = sysi(lc);
     double *vals = in->vals;
     const sys_layout *L = &in->L;
     const char *refused = sys_belt_refused(vals, L);
@@ -63,43 +64,13 @@ static dfo_inst_status advance(sys_instance *in, const char *fn, double t_target
 dfo_inst_status dfo_inst_do_step(dfo_lifecycle *lc, const char *fn, double tc, double dt, unsigned int flags,
                                  double *t_reached)
 {
-    sys_instance *in = sysi(lc);
-    double t_target = 0.0;
-    in->lc.work_by_events = 0;
-    const dfo_inst_status chk = dfo_inst_check_step(lc, fn, tc, dt, in->m.h, &t_target);
-    if (chk != DFO_INST_OK) return chk;
-    const dfo_inst_status st = advance(in, fn, t_target, (flags & DFO_STEP_STOP_AT_SWITCH) != 0);
-    if (st == DFO_INST_OK && t_reached) *t_reached = in->lc.run.time;
-    return st;
+    return dfo_inst_step_by(lc, fn, tc, dt, sysi(lc)->m.h, flags, t_reached, advance);
 }
 
-/* FMI 3.0: with early return the step ends at the first switch strictly inside it (the state just
- * after it); in event mode a switch on which the step ends stays pending until the host handles it
- * (the outputs are then the right limits already: this model keeps no left limits). */
 dfo_inst_status dfo_inst_do_step_events(dfo_lifecycle *lc, const char *fn, double tc, double dt,
                                         const dfo_event_opts *opt, dfo_step_result *res)
 {
-    sys_instance *in = sysi(lc);
-    dfo_inst_status done;
-    double t_target = 0.0;
-    in->lc.work_by_events = 0;
-    if (dfo_inst_events_begin(lc, fn, tc, dt, in->m.h, opt, res, &done, &t_target)) return done;
-    const dfo_inst_status st = advance(in, fn, t_target, opt->early_return || opt->intermediate);
-    if (st != DFO_INST_OK) return st;
-    const int switched = in->lc.switched;
-    if (switched && opt->intermediate) opt->intermediate(opt->ctx, in->lc.run.time, opt->early_return, 0);
-    if (switched && in->lc.run.time < t_target && !opt->early_return) {
-        const dfo_inst_status st2 = advance(in, fn, t_target, 0);
-        if (st2 != DFO_INST_OK) return st2;
-    }
-    res->t_reached = in->lc.run.time;
-    res->early = in->lc.run.time < t_target;
-    res->event = opt->event_mode && switched;
-    if (res->event) {
-        in->lc.run.event_pending = 1;
-        in->lc.run.event_from = 0;
-    }
-    return DFO_INST_OK;
+    return dfo_inst_step_events_by(lc, fn, tc, dt, sysi(lc)->m.h, opt, res, advance);
 }
 
 /* ---- FMU states ------------------------------------------------------------------------------- */
