@@ -98,8 +98,12 @@ static const char *parse(sys_instance *in, const unsigned char *b, size_t len, i
             return buf;
         }
         if ((len - pos) / 8 < want) {
-            snprintf(buf, blen, "is truncated: the %lu values of %s need %lu bytes, %lu are left", (unsigned long)want,
-                     var->name, (unsigned long)(8 * want), (unsigned long)(len - pos));
+            if (want == 1)
+                snprintf(buf, blen, "is truncated: the value of %s needs 8 bytes, %lu are left", var->name,
+                         (unsigned long)(len - pos));
+            else
+                snprintf(buf, blen, "is truncated: the %lu values of %s need %lu bytes, %lu are left",
+                         (unsigned long)want, var->name, (unsigned long)(8 * want), (unsigned long)(len - pos));
             return buf;
         }
         double *dst = apply ? in->vals + (var->home == DFO_IN_ARRAYS ? in->L.ap[var->slot] : in->L.sp + (size_t)var->slot)
