@@ -28,7 +28,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     s = sub.add_parser("system", parents=parents, help="a structure with friction contacts: its FMU, a run",
                        description="A structure M x'' + C x' + K x = ... + W' f with friction contacts, described "
                                    "by a TOML file (docs/system.md): write its own FMU without a compiler, or run it.")
-    ss = s.add_subparsers(dest="system_command", required=True, metavar="SUBCOMMAND")
+    ss = s.add_subparsers(dest="system_command", required=True, metavar="SUBCOMMAND",
+                          help="fmu (write the structure's FMU) or run")
     f = ss.add_parser("fmu", help="write the structure's own FMU (no compiler needed)",
                       description="Write the structure's FMU: the prebuilt DryFrictionSystem binary with the "
                                   "structure's values as start values and in resources/structure.bin.")
