@@ -4,7 +4,9 @@ System's runs through the FMI 3.0 FMU (dryfriction.drivers.system).
 The written FMU is the prebuilt binary with the structure in resources/structure.bin and as start
 values: fmpy validates it; run in fmpy and in fmusim with NO start values it gives, bit for bit, the
 run of the prebuilt FMU with the structure's values set through the package's own FMI layer; a
-bad or truncated structure file is an error at instantiation naming the file. The driver is checked
+bad or truncated structure file is an error at instantiation naming the file. The FMI 2.0 FMU (at
+the prebuilt binary's sizes, n = 2, nc = 1): the same with flattened names, a percent-encoded
+resource URI decoded, the Compliance Checker to the end. The driver is checked
 against plain fmpy calls, and a held input F_ext against the same force as an excitation of
 frequency 0. "A user who has M and K as .mtx files gets a working FMU in two commands": tested
 as it reads."""
@@ -20,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
@@ -27,10 +30,12 @@ from dryfriction import Contact, FMUCallError, System
 from dryfriction.cli import main
 from dryfriction.drivers.system import SystemFMU3
 from dryfriction.errors import UsageError
+from dryfriction.fmi import fmi2
 from dryfriction.system.fmu import MAGIC, RESOURCE, write_fmu
 
 ROOT = Path(__file__).resolve().parents[1]
 FMUSIM = Path(os.environ.get("FMUSIM", ROOT.parent / "shared" / "tools" / "fmusim" / "fmusim"))
+FMUCHECK = Path(os.environ.get("FMUCHECK", ROOT.parent / "shared" / "tools" / "fmucheck" / "fmuCheck.linux64"))
 
 
 def structure(nc_between: bool = True) -> System:
@@ -285,3 +290,96 @@ def test_the_command_refuses_what_it_cannot_write(tmp_path: Path, capsys: pytest
     assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "nodir" / "S.fmu")]) == 2
     err = capsys.readouterr().err
     assert "does not exist" in err and err.count("\n") == 1, err
+
+
+# ----------------------------------------------------------------------------- FMI 2.0 at the build's sizes
+
+
+def two_dofs() -> System:
+    """A structure of the prebuilt FMI 2.0 binary's sizes (n = 2, nc = 1): a contact between the DOFs."""
+    M = np.array([[2.0, 0.3], [0.3, 1.0]])
+    K = np.array([[300.0, -100.0], [-100.0, 100.0]])
+    return System(M=M, K=K, C=0.01 * K, contacts=[Contact(between=(0, 1), N=1.0, mu_s=0.4, mu_k=0.3)],
+                  F_c=[2.0, 0.5], omega=9.0, x0=[0.001, 0.0], h=2e-4)
+
+
+@pytest.fixture(scope="module")
+def written2(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return write_fmu(two_dofs(), tmp_path_factory.mktemp("fmu2") / "Two.fmu", fmi=2)
+
+
+def test_fmi2_flattened_starts_and_fmpy_with_none_set(written2: Path) -> None:
+    s = two_dofs()
+    assert validate_fmu(str(written2)) == []
+    starts = {v.name: v.start for v in read_model_description(str(written2)).modelVariables}
+    assert [float(starts[f"M[{i},{j}]"]) for i in (1, 2) for j in (1, 2)] == s.M.ravel().tolist()
+    assert (float(starts["W[1,1]"]), float(starts["W[1,2]"]), float(starts["x0[1]"])) == (1.0, -1.0, 0.001)
+    assert starts["scheme"] == "3" and float(starts["mu_k[1]"]) == 0.3
+    res = simulate_fmu(str(written2), stop_time=2.0, output_interval=0.01,
+                       output=["x[1]", "x[2]", "f[1]", "mode[1]", "E_friction"])
+    ref = s.run(2.0, 0.01)  # the FMI 3.0 prebuilt FMU with the values set
+    assert np.array_equal(np.column_stack([res["x[1]"], res["x[2]"]]), ref.x)  # bit for bit
+    assert np.array_equal(res["f[1]"], ref.f[:, 0]) and np.array_equal(res["E_friction"], ref.E_friction)
+    assert set(res["mode[1]"].tolist()) == {-1, 0, 1}
+
+
+def test_fmi2_reads_its_resources_through_a_percent_encoded_uri(written2: Path, tmp_path: Path) -> None:
+    """fmpy hands FMI 2.0 a file: URI (Path.as_uri: a space as %20, a percent sign as %25): the
+    binary decodes it and reads the structure; without the file the prebuilt defaults run."""
+    s = two_dofs()
+    md = read_model_description(str(written2))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    rows = {}
+    for label, keep in (("with", True), ("without", False)):
+        d = Path(extract(str(written2), unzipdir=str(tmp_path / f"a b%20c {label}")))
+        assert " " in str(d) and "%" in str(d)
+        if not keep:
+            (d / RESOURCE).unlink()
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=str(d), modelIdentifier="DryFrictionSystem")
+        slave.instantiate()
+        try:
+            slave.setupExperiment(startTime=0.0)
+            slave.enterInitializationMode()
+            slave.exitInitializationMode()
+            slave.doStep(0.0, 0.5)
+            rows[label] = slave.getReal([vr["x[1]"], vr["x[2]"]])
+        finally:
+            slave.terminate()
+            slave.freeInstance()
+    ref = s.trajectory([0.0, 0.5])
+    assert rows["with"] == ref.x[-1].tolist()
+    assert rows["without"] != rows["with"]
+
+
+def test_fmi2_refuses_a_structure_of_other_sizes(written2: Path, sys3: System, tmp_path: Path) -> None:
+    with pytest.raises(UsageError, match=r"the prebuilt FMI 2.0 binary serves n = 2, nc = 1 only \(fixed when built\) "
+                                         r"but the structure has n = 3, nc = 2; use fmi=3"):
+        write_fmu(sys3, tmp_path / "T.fmu", fmi=2)
+    # and its binary a structure file of other sizes, at instantiation
+    with zipfile.ZipFile(write_fmu(sys3, tmp_path / "T3.fmu")) as z:
+        data3 = z.read(RESOURCE)
+    bad = _rewrite(written2, tmp_path / "Bad2.fmu", data3)
+    md = read_model_description(str(bad))
+    d = extract(str(bad), unzipdir=str(tmp_path / "bad2"))
+    with pytest.raises(FMUCallError) as err:
+        fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
+    assert "structure.bin gives n = 3, nc = 2 but this FMI 2.0 binary serves n = 2, nc = 1 only (fixed when built)" \
+        in str(err.value), str(err.value)
+
+
+@pytest.mark.skipif(not FMUCHECK.is_file(), reason="the Compliance Checker not there (../shared/tools/fmucheck; "
+                                                   "or set FMUCHECK)")
+def test_the_compliance_checker_runs_the_fmi2_fmu(written2: Path, tmp_path: Path) -> None:
+    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
+    r = subprocess.run([str(FMUCHECK), "-h", "0.01", "-s", "2", "-o", str(out), "-e", str(log), str(written2)],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = log.read_text(errors="replace") + r.stdout
+    assert "0 warning(s) and error(s)" in report, report
+    lines = out.read_text().splitlines()
+    head = [h.strip('"') for h in lines[0].split(",")]
+    last = [float(v) for v in lines[-1].split(",")]
+    ref = two_dofs().run(2.0, 0.01)
+    assert last[0] == 2.0
+    assert last[head.index("x[1]")] == pytest.approx(ref.x[-1, 0], rel=1e-15)  # 17 printed digits
+    assert last[head.index("E_friction")] == pytest.approx(ref.E_friction[-1], rel=1e-15)

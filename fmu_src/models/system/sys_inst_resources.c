@@ -69,6 +69,15 @@ static const char *parse(sys_instance *in, const unsigned char *b, size_t len, i
                  (unsigned long long)nc, (int)MAX_n, (int)MAX_nc);
         return buf;
     }
+#if defined(DFO_SYSTEM_FIXED_N)
+    /* an FMI 2.0 build: its flattened elements' value references are laid out for its own sizes */
+    if (n != (uint64_t)DFO_SYSTEM_FIXED_N || nc != (uint64_t)DFO_SYSTEM_FIXED_NC) {
+        snprintf(buf, blen, "gives n = %llu, nc = %llu but this FMI 2.0 binary serves n = %d, nc = %d only (fixed when "
+                 "built)", (unsigned long long)n, (unsigned long long)nc, (int)DFO_SYSTEM_FIXED_N,
+                 (int)DFO_SYSTEM_FIXED_NC);
+        return buf;
+    }
+#endif
     if (apply) {
         if (sys_resize(in, "instantiate", (size_t)n, (size_t)nc) != DFO_INST_OK) return "cannot be applied (out of memory)";
         in->n_config = in->L.n;

@@ -1,13 +1,14 @@
 """``dryfriction system``: a structure with friction contacts (docs/system.md).
 
-    dryfriction system fmu SPEC -o NAME.fmu [--fmi 3]     # the structure's own FMU, no compiler
+    dryfriction system fmu SPEC -o NAME.fmu [--fmi 2|3]   # the structure's own FMU, no compiler
     dryfriction system run SPEC --t-end 10 [--dt 0.01] [--json]
 
 ``SPEC`` is the TOML structure file (:mod:`dryfriction.system.spec`: the matrices inline or in
 ``.npy``, ``.csv`` or MatrixMarket ``.mtx`` files beside it). ``fmu`` writes the package's prebuilt
 ``DryFrictionSystem`` FMU with the structure's values as its start values and in
-``resources/structure.bin`` (:func:`dryfriction.system.fmu.write_fmu`); ``--fmu`` names another
-prebuilt FMI 3.0 system FMU to start from. ``run`` runs the structure through the FMI 3.0 FMU and
+``resources/structure.bin`` (:func:`dryfriction.system.fmu.write_fmu`; ``--fmi 2``: FMI 2.0, only at
+the sizes its prebuilt binary was built for); ``--fmu`` names another prebuilt system FMU to start
+from. ``run`` runs the structure through the FMI 3.0 FMU and
 prints the last output time's values (``--json``: one object with every output time).
 """
 
@@ -36,7 +37,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     f.add_argument("spec", type=path_arg("SPEC", "file"), metavar="SPEC", help="the TOML structure file")
     f.add_argument("-o", "--output", type=path_arg("-o", "file"), required=True, metavar="NAME.fmu",
                    help="the FMU to write")
-    f.add_argument("--fmi", type=int, choices=(2, 3), default=3, help="the FMI version (default 3; 2: not offered yet)")
+    f.add_argument("--fmi", type=int, choices=(2, 3), default=3, help="the FMI version (default 3; 2: only at the sizes of the prebuilt FMI 2.0 binary, "
+                        "n = 2, nc = 1)")
     r = ss.add_parser("run", help="run the structure through the FMI 3.0 FMU",
                       description="Run the structure through the FMI 3.0 DryFrictionSystem FMU from t = 0.")
     r.add_argument("spec", type=path_arg("SPEC", "file"), metavar="SPEC", help="the TOML structure file")

@@ -1,10 +1,12 @@
 """A structure's own FMU without a compiler: :func:`write_fmu` (``System.fmu``, ``dryfriction system fmu``).
 
-The FMU is the package's prebuilt FMI 3.0 ``DryFrictionSystem`` FMU (its binaries and sources as
-built, shipped in the wheel as the other FMUs) with the structure's values
+The FMU is the package's prebuilt ``DryFrictionSystem`` FMU (its binaries and sources as built,
+shipped in the wheel as the other FMUs; FMI 3.0 for any sizes, FMI 2.0 only at the sizes its binary
+was built for) with the structure's values
 
-* as the model description's start values (``n``, ``nc``, the arrays ``M``, ``C``, ``K``, ``W``
-  row-major, every per-DOF and per-contact array, the scalars), and
+* as the model description's start values (FMI 3.0: ``n``, ``nc``, the arrays ``M``, ``C``, ``K``,
+  ``W`` row-major, every per-DOF and per-contact array, the scalars; FMI 2.0: the flattened
+  elements as Modelica tools name them, ``M[1,2]``, ``x0[3]``, 1-based), and
 * in ``resources/structure.bin``, a small little-endian binary file the binary reads at
   instantiation (fmu_src/models/system/sys_inst_resources.c), so that its defaults are the
   description's starts whatever a host sets or not.
@@ -18,6 +20,7 @@ FMU's (the binary checks it); the model name becomes the file's stem.
 from __future__ import annotations
 
 import os
+import re
 import struct
 import zipfile
 from pathlib import Path
@@ -32,7 +35,7 @@ from ..errors import UsageError
 if TYPE_CHECKING:
     from .structure import System
 
-__all__ = ["write_fmu", "structure_bytes", "RESOURCE", "MAGIC", "VERSION"]
+__all__ = ["write_fmu", "structure_bytes", "fmi2_sizes", "RESOURCE", "MAGIC", "VERSION"]
 
 #: where the structure's values live in the FMU
 RESOURCE = "resources/structure.bin"
@@ -106,30 +109,83 @@ def _description(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[s
     return out, vrs
 
 
+_ELEMENT = re.compile(r"^(\w+)\[(\d+)(?:,(\d+))?\]$")
+
+
+def fmi2_sizes(root: ET.Element) -> dict[str, int]:
+    """The sizes an FMI 2.0 system FMU was built for (its ``dryfriction.layout`` annotation:
+    ``sizes="n=2,nc=1"``)."""
+    layout = root.find("VendorAnnotations/Tool[@name='dryfriction.layout']/Layout")
+    if layout is None:
+        raise UsageError("write_fmu: the base FMI 2.0 FMU has no dryfriction.layout annotation: not the "
+                         "DryFrictionSystem FMU")
+    return {k.strip(): int(v) for k, v in (part.split("=") for part in layout.get("sizes", "").split(","))}
+
+
+def _description2(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[str, int]]:
+    """The prebuilt FMI 2.0 model description (sizes fixed when built, which must be the system's)
+    with this system's start values on the flattened elements (``M[1,2]``, ``x0[3]``, 1-based)."""
+    root = ET.fromstring(xml)
+    if root.get("fmiVersion", "") != "2.0":
+        raise UsageError("write_fmu: the base FMU is not an FMI 2.0 FMU")
+    sizes = fmi2_sizes(root)
+    if (sizes.get("n"), sizes.get("nc")) != (system.n, system.nc):
+        raise UsageError(f"write_fmu: the prebuilt FMI 2.0 binary serves n = {sizes.get('n')}, nc = {sizes.get('nc')} "
+                         f"only (fixed when built) but the structure has n = {system.n}, nc = {system.nc}; use "
+                         "fmi=3 (--fmi 3)")
+    root.set("modelName", name)
+    root.set("description", f"{name}: a structure of n = {system.n} degrees of freedom and nc = {system.nc} "
+                            f"friction contacts (its values in {RESOURCE}). " + root.get("description", ""))
+    sv = {k: np.atleast_1d(np.asarray(v)) for k, v in system.start_values().items() if k not in _SIZES}
+    cols = {"M": system.n, "C": system.n, "K": system.n, "W": system.n}
+    mv = root.find("ModelVariables")
+    if mv is None:
+        raise UsageError("write_fmu: the base FMU's model description has no <ModelVariables>")
+    seen = set()
+    for var in mv:
+        vname = var.get("name", "")
+        m = _ELEMENT.match(vname)
+        base, idx = (m.group(1), (int(m.group(2)) - 1) * cols.get(m.group(1), 1) + int(m.group(3) or 1) - 1) \
+            if m else (vname, 0)
+        if base not in sv:
+            continue
+        typed = next(iter(var))
+        typed.set("start", _text(sv[base][idx].item()))
+        seen.add(base)
+    missing = [k for k in sv if k not in seen]
+    if missing:
+        raise UsageError(f"write_fmu: the base FMU has no variable {missing[0]}: not the DryFrictionSystem FMU")
+    # the binary reads FMI 3.0's array value references from the file: the arrays' own (the layout's)
+    vrs = {a.get("name", ""): int(a.get("valueReference", "0"))
+           for a in root.iterfind("VendorAnnotations/Tool[@name='dryfriction.layout']/Layout/Array")}
+    vrs.update({v.get("name", ""): int(v.get("valueReference", "0")) for v in mv if not _ELEMENT.match(v.get("name", ""))})
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True), vrs
+
+
 def write_fmu(system: "System", path: str | os.PathLike[str], fmi: int = 3,
               base: str | os.PathLike[str] | None = None) -> Path:
     """Write the FMU of ``system`` to ``path`` (a ``.fmu`` name; its folder must exist) from the
     prebuilt ``DryFrictionSystem`` FMU (``base``; default the package's, :mod:`dryfriction.paths`):
     its binaries and sources unchanged, the structure's values as start values and in
-    ``resources/structure.bin``. ``fmi``: 3 (FMI 3.0; FMI 2.0 at the structure's sizes is not
-    offered yet). Returns the path written. UsageError for a path or an FMI version that cannot be."""
-    if fmi == 2:
-        raise UsageError("write_fmu: an FMI 2.0 FMU of a structure is not offered yet (its prebuilt binary has "
-                         "fixed sizes); use fmi=3")
-    if fmi != 3:
+    ``resources/structure.bin``. ``fmi``: 3 (FMI 3.0, any sizes) or 2 (FMI 2.0: the flattened
+    elements ``M[1,2]``, ``x0[3]``; only at the sizes the prebuilt FMI 2.0 binary was built for,
+    n = 2, nc = 1 by default). Returns the path written. UsageError for a path, an FMI version or
+    sizes that cannot be."""
+    if fmi not in (2, 3):
         raise UsageError(f"write_fmu: fmi must be 2 or 3, not {fmi!r}")
     out = Path(path)
     if out.suffix.lower() != ".fmu":
         raise UsageError(f"write_fmu: {out} must end with .fmu")
     if not out.parent.is_dir():
         raise UsageError(f"write_fmu: the folder {out.parent} does not exist")
-    src = paths.fmu_path(paths.SYSTEM3, base)
+    src = paths.fmu_path(paths.SYSTEM3 if fmi == 3 else paths.SYSTEM, base)
+    describe = _description if fmi == 3 else _description2
     if src.resolve() == out.resolve():
         raise UsageError(f"write_fmu: {out} is the base FMU itself; give another name")
     tmp = out.with_name(out.name + ".part")
     try:
         with zipfile.ZipFile(src) as zin, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
-            xml, vrs = _description(zin.read("modelDescription.xml"), system, out.stem)
+            xml, vrs = describe(zin.read("modelDescription.xml"), system, out.stem)
             zout.writestr("modelDescription.xml", xml)
             for item in zin.infolist():
                 if item.filename in ("modelDescription.xml", RESOURCE):
