@@ -290,6 +290,10 @@ def test_the_command_refuses_what_it_cannot_write(tmp_path: Path, capsys: pytest
     assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "nodir" / "S.fmu")]) == 2
     err = capsys.readouterr().err
     assert "does not exist" in err and err.count("\n") == 1, err
+    assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "S.fmu"), "--fmi", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "serves n = 2, nc = 1 only (fixed when built) but the structure has n = 1, nc = 0" in err, err
+    assert not (tmp_path / "S.fmu").exists() and not list(tmp_path.glob("*.part"))
 
 
 # ----------------------------------------------------------------------------- FMI 2.0 at the build's sizes
