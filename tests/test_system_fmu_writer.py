@@ -387,3 +387,16 @@ def test_the_compliance_checker_runs_the_fmi2_fmu(written2: Path, tmp_path: Path
     assert last[0] == 2.0
     assert last[head.index("x[1]")] == pytest.approx(ref.x[-1, 0], rel=1e-15)  # 17 printed digits
     assert last[head.index("E_friction")] == pytest.approx(ref.E_friction[-1], rel=1e-15)
+
+
+def test_the_run_command_is_system_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    spec = tmp_path / "one.toml"
+    spec.write_text("[structure]\nM = [[1.0]]\nK = [[100.0]]\n[excitation]\nomega = 5.0\nF_c = [1.0]\n"
+                    "[[contact]]\ndof = 0\nN = 1.0\nmu_s = 0.4\nmu_k = 0.3\n", encoding="utf-8")
+    assert main(["system", "run", str(spec), "--t-end", "2", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    ref = System.from_file(spec).run(2.0)  # dt: 1/100 of the excitation period
+    assert np.array_equal(got["t"], ref.t) and np.array_equal(got["x"], ref.x.tolist())
+    assert got["mode"] == ref.mode.tolist() and {-1, 0, 1} <= {m[0] for m in got["mode"]}

@@ -158,7 +158,8 @@ def _description2(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[
     # the binary reads FMI 3.0's array value references from the file: the arrays' own (the layout's)
     vrs = {a.get("name", ""): int(a.get("valueReference", "0"))
            for a in root.iterfind("VendorAnnotations/Tool[@name='dryfriction.layout']/Layout/Array")}
-    vrs.update({v.get("name", ""): int(v.get("valueReference", "0")) for v in mv if not _ELEMENT.match(v.get("name", ""))})
+    vrs.update({v.get("name", ""): int(v.get("valueReference", "0")) for v in mv
+                if not _ELEMENT.match(v.get("name", ""))})
     return ET.tostring(root, encoding="utf-8", xml_declaration=True), vrs
 
 
