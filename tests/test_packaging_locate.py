@@ -15,6 +15,8 @@ from dryfriction import paths as locate, model
 from dryfriction.drivers.chain import ChainFMU3, ChainFMU2
 from dryfriction.drivers.oscillator3 import OscillatorFMU3, default_fmi3_path
 from dryfriction.drivers.oscillator import OscillatorFMU2
+from dryfriction.drivers.system import SystemFMU3
+from dryfriction import System
 from dryfriction.paths import FMUFileError
 from dryfriction.analysis.response import frequency_response
 from dryfriction.studies import run_study
@@ -28,7 +30,8 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def fmus(fmu_path: Path, chain_fmu2: Path, chain_fmu3: Path) -> dict[locate.Kind, Path]:
     return {locate.OSCILLATOR: fmu_path, locate.OSCILLATOR3: default_fmi3_path(), locate.CHAIN: chain_fmu2,
-            locate.CHAIN3: chain_fmu3}
+            locate.CHAIN3: chain_fmu3, locate.SYSTEM: locate.fmu_path(locate.SYSTEM),
+            locate.SYSTEM3: locate.fmu_path(locate.SYSTEM3)}
 
 
 @pytest.fixture()
@@ -57,10 +60,11 @@ def test_an_unusable_path_is_one_fmu_file_error(make, words: str, tmp_path: Path
 
 
 def test_another_model_or_fmi_version_is_refused_by_every_driver(fmus: dict[locate.Kind, Path]) -> None:
-    """Each of the four drivers takes its own FMU only; the sentence names what the file is and
+    """Each of the drivers takes its own FMU only; the sentence names what the file is and
     what the driver needs."""
     drivers = {locate.OSCILLATOR: lambda p: OscillatorFMU2(p), locate.OSCILLATOR3: lambda p: OscillatorFMU3(fmu_path=p),
-               locate.CHAIN: lambda p: ChainFMU2(fmu_path=p), locate.CHAIN3: lambda p: ChainFMU3(2, fmu_path=p)}
+               locate.CHAIN: lambda p: ChainFMU2(fmu_path=p), locate.CHAIN3: lambda p: ChainFMU3(2, fmu_path=p),
+               locate.SYSTEM3: lambda p: SystemFMU3(System(M=[[1.0]], K=[[1.0]]), p)}
     for need, open_ in drivers.items():
         for have, path in fmus.items():
             if have == need:

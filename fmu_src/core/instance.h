@@ -58,7 +58,7 @@ typedef struct {
 #define DFO_MAX_LOG_CATEGORIES 32
 
 /* The life cycle: the first member of every model's instance. */
-typedef struct {
+typedef struct dfo_lifecycle_s {
     dfo_run run;
     dfo_host host;
     const char *name;                      /* owned by the glue */
@@ -68,9 +68,25 @@ typedef struct {
     int work_by_events;                    /* a doStep's work is bounded by the model's events (the exact
                                             * scheme), not by DFO_MAX_STEPS_PER_CALL steps of h
                                             * (dfo_inst_check_step) */
+    /* A model whose FMU may carry its start values in its resources folder (the system) sets this
+     * hook in dfo_inst_new; the glue calls it through dfo_inst_resources (DFO_RES_LOAD once
+     * instantiated, DFO_RES_APPLY after every reset, DFO_RES_FREE before dfo_inst_delete). What it
+     * read is kept in res, through the host's allocator. NULL for the other models. */
+    dfo_inst_status (*resources)(struct dfo_lifecycle_s *lc, const char *dir, int op);
+    void *res;
 } dfo_lifecycle;
 
 /* ---- the life cycle alone (instance_common.c) ---- */
+
+/* The operations of the resources hook (dfo_lifecycle.resources). */
+enum { DFO_RES_LOAD = 0, DFO_RES_APPLY = 1, DFO_RES_FREE = 2 };
+/* Call the model's resources hook, if it has one: DFO_INST_OK when it has none. dir: the FMU's
+ * resources folder as a native path (NULL: none given), read by DFO_RES_LOAD only. */
+dfo_inst_status dfo_inst_resources(dfo_lifecycle *lc, const char *dir, int op);
+/* The native path of an FMI 2.0 fmuResourceLocation URI (file:///C:/a%20b/resources,
+ * file:/home/u/resources, file://localhost/...: percent-decoded, a Windows drive letter without its
+ * leading slash) in out (len bytes); 0 when it is not a local file URI or does not fit. */
+int dfo_path_of_file_uri(const char *uri, char *out, size_t len);
 
 /* host, name, phase instantiated, the experiment's times 0; every log category as logging_on says,
  * errors and warnings always on. Enough to log through (the glues' messages before an instance). */

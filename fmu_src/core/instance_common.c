@@ -94,6 +94,53 @@ dfo_lifecycle *dfo_lifecycle_new(const dfo_host *host, size_t size, const char *
     return lc;
 }
 
+/* ---- the FMU's resources ----------------------------------------------------------------------- */
+
+dfo_inst_status dfo_inst_resources(dfo_lifecycle *lc, const char *dir, int op)
+{
+    if (!lc || !lc->resources) return DFO_INST_OK;
+    return lc->resources(lc, dir, op);
+}
+
+static int hex_value(char c)
+{
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+}
+
+int dfo_path_of_file_uri(const char *uri, char *out, size_t len)
+{
+    if (!uri || !out || len == 0) return 0;
+    if (strncmp(uri, "file:", 5) != 0) return 0;
+    const char *p = uri + 5;
+    if (p[0] == '/' && p[1] == '/') { /* file://authority/path: an empty authority or localhost only */
+        p += 2;
+        if (strncmp(p, "localhost", 9) == 0 && (p[9] == '/' || p[9] == '\0')) p += 9;
+        if (*p != '/') return 0;
+    }
+    /* file:///C:/x or file:/C:/x: a Windows drive letter, no leading slash */
+    if (p[0] == '/' && ((p[1] >= 'A' && p[1] <= 'Z') || (p[1] >= 'a' && p[1] <= 'z')) &&
+        (p[2] == ':' || (p[2] == '%' && p[3] == '3' && (p[4] == 'A' || p[4] == 'a'))))
+        p += 1;
+    size_t k = 0;
+    while (*p) {
+        char c = *p++;
+        if (c == '%') {
+            const int hi = hex_value(p[0]), lo = hi < 0 ? -1 : hex_value(p[1]);
+            if (lo < 0) return 0;
+            c = (char)(hi * 16 + lo);
+            p += 2;
+            if (c == '\0') return 0;
+        }
+        if (k + 1 >= len) return 0;
+        out[k++] = c;
+    }
+    out[k] = '\0';
+    return k > 0;
+}
+
 /* ---- the variable table ---------------------------------------------------------------------- */
 
 const dfo_var_info *dfo_find_var(unsigned int vr)

@@ -81,7 +81,6 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn)
 {
-    (void)fmuResourceLocation;
     (void)visible;
     if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
     /* errors before there is an instance: logged through a temporary one */
@@ -126,6 +125,21 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         functions->freeMemory(in);
         return NULL;
     }
+    if (in->core->resources) { /* a model that reads its resources: the URI as a native path */
+        const size_t cap = fmuResourceLocation ? strlen(fmuResourceLocation) + 1 : 1;
+        char *dir = (char *)functions->allocateMemory(cap, 1);
+        const int have = dir && dfo_path_of_file_uri(fmuResourceLocation, dir, cap);
+        const dfo_inst_status st = dir ? dfo_inst_resources(in->core, have ? dir : NULL, DFO_RES_LOAD)
+                                       : dfo_inst_fail(in->core, "fmi2Instantiate: out of memory.");
+        if (dir) functions->freeMemory(dir);
+        if (st == DFO_INST_ERROR) {
+            (void)dfo_inst_resources(in->core, NULL, DFO_RES_FREE);
+    dfo_inst_delete(in->core);
+            functions->freeMemory(in->name);
+            functions->freeMemory(in);
+            return NULL;
+        }
+    }
 #if DFO_MODEL_EXCHANGE
     in->me = fmuType == fmi2ModelExchange;
     if (in->me) dfo_inst_me_start(in->core);
@@ -139,6 +153,7 @@ void fmi2FreeInstance(fmi2Component c)
     Instance *in = (Instance *)c;
     if (!in) return;
     dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi2FreeInstance");
+    (void)dfo_inst_resources(in->core, NULL, DFO_RES_FREE);
     dfo_inst_delete(in->core);
     fmi2CallbackFreeMemory freeMemory = in->cb.freeMemory;
     freeMemory(in->name);
@@ -193,6 +208,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 {
     BEGIN(fmi2Reset);
     dfo_inst_reset(in->core);
+    (void)dfo_inst_resources(in->core, NULL, DFO_RES_APPLY);
     return fmi2OK;
 }
 

@@ -141,7 +141,7 @@ const char *fmi3GetVersion(void) { return fmi3Version; }
 
 /* An instance for co-simulation, or (me) for Model Exchange; fn names the instantiating function. */
 static fmi3Instance instantiate(const char *fn, int me, fmi3String instanceName, fmi3String instantiationToken,
-                                fmi3Boolean loggingOn, fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
+                                fmi3String resourcePath, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
                                 fmi3InstanceEnvironment env, fmi3LogMessageCallback logger,
                                 fmi3IntermediateUpdateCallback update)
 {
@@ -182,6 +182,14 @@ static fmi3Instance instantiate(const char *fn, int me, fmi3String instanceName,
         free(in);
         return NULL;
     }
+    /* a model that reads its resources: resourcePath is a native path already (NULL: none) */
+    if (dfo_inst_resources(in->core, resourcePath && *resourcePath ? resourcePath : NULL, DFO_RES_LOAD) ==
+        DFO_INST_ERROR) {
+        dfo_inst_delete(in->core);
+        free(in->name);
+        free(in);
+        return NULL;
+    }
 #if DFO_MODEL_EXCHANGE
     in->me = me;
     if (me) dfo_inst_me_start(in->core);
@@ -201,11 +209,10 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3LogMessageCallback logMessage,
                                          fmi3IntermediateUpdateCallback intermediateUpdate)
 {
-    (void)resourcePath;
     (void)visible;
     (void)requiredIntermediateVariables; /* every output may be read during an intermediate update */
     (void)nRequiredIntermediateVariables;
-    return instantiate("fmi3InstantiateCoSimulation", 0, instanceName, instantiationToken, loggingOn, eventModeUsed,
+    return instantiate("fmi3InstantiateCoSimulation", 0, instanceName, instantiationToken, resourcePath, loggingOn, eventModeUsed,
                        earlyReturnAllowed, instanceEnvironment, logMessage, intermediateUpdate);
 }
 
@@ -226,13 +233,13 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage)
 {
-    (void)resourcePath; (void)visible;
+    (void)visible;
 #if DFO_MODEL_EXCHANGE
     /* event mode is Model Exchange's own; no early return, no intermediate update */
-    return instantiate("fmi3InstantiateModelExchange", 1, instanceName, instantiationToken, loggingOn, fmi3True,
+    return instantiate("fmi3InstantiateModelExchange", 1, instanceName, instantiationToken, resourcePath, loggingOn, fmi3True,
                        fmi3False, instanceEnvironment, logMessage, NULL);
 #else
-    (void)instantiationToken; (void)loggingOn;
+    (void)instantiationToken; (void)loggingOn; (void)resourcePath;
     refuse_instance(instanceName, instanceEnvironment, logMessage, "fmi3InstantiateModelExchange");
     return NULL;
 #endif
@@ -256,6 +263,7 @@ void fmi3FreeInstance(fmi3Instance instance)
     Instance *in = (Instance *)instance;
     if (!in) return;
     dfo_inst_log(in->core, DFO_INST_OK, DFO_LOG_ALL, "fmi3FreeInstance");
+    (void)dfo_inst_resources(in->core, NULL, DFO_RES_FREE);
     dfo_inst_delete(in->core);
     free(in->name);
     free(in);
@@ -363,6 +371,7 @@ fmi3Status fmi3Reset(fmi3Instance instance)
 {
     BEGIN(fmi3Reset);
     dfo_inst_reset(in->core);
+    (void)dfo_inst_resources(in->core, NULL, DFO_RES_APPLY);
     return fmi3OK;
 }
 

@@ -1,12 +1,13 @@
 """Where the FMUs and the study configs come from: the one place that decides, for the whole package.
 
-An FMU of each kind (the oscillator and the chain, FMI 2.0 and FMI 3.0) is, in this order:
+An FMU of each kind (the oscillator, the chain and the system, FMI 2.0 and FMI 3.0) is, in this order:
 
 1. the path given (``--fmu PATH``, ``fmu_path=...``);
 2. the environment variable of its kind: ``DFO_FMU``, ``DFO_FMU3``, ``DFO_CHAIN_FMU``,
-   ``DFO_CHAIN_FMU3``;
+   ``DFO_CHAIN_FMU3``, ``DFO_SYSTEM_FMU``, ``DFO_SYSTEM_FMU3``;
 3. the package data of an installed wheel: ``dryfriction/fmus/DryFrictionOscillator.fmu``,
-   ``DryFrictionChain.fmu``, ``fmi3/DryFrictionOscillator.fmu``, ``fmi3/DryFrictionChain.fmu``;
+   ``DryFrictionChain.fmu``, ``DryFrictionSystem.fmu``, ``fmi3/DryFrictionOscillator.fmu``,
+   ``fmi3/DryFrictionChain.fmu``, ``fmi3/DryFrictionSystem.fmu``;
 4. the CMake build tree of a source checkout (an editable install): ``<repository>/build/``, the
    same names.
 
@@ -28,13 +29,14 @@ from xml.etree import ElementTree as ET
 
 from .errors import FMUFileError
 
-__all__ = ["FMUFileError", "Kind", "OSCILLATOR", "OSCILLATOR3", "CHAIN", "CHAIN3", "KINDS", "fmu_path",
+__all__ = ["FMUFileError", "Kind", "OSCILLATOR", "OSCILLATOR3", "CHAIN", "CHAIN3", "SYSTEM", "SYSTEM3", "KINDS",
+           "fmu_path",
            "check_fmu", "extract", "candidates", "package_dir", "source_root", "build_dir", "configs_dir"]
 
 
 @dataclass(frozen=True)
 class Kind:
-    """One of the four FMUs: its model identifier, FMI version, place in the build tree and package
+    """One of the package's FMUs: its model identifier, FMI version, place in the build tree and package
     data (``relpath``) and the environment variable that selects another file."""
 
     model_identifier: str
@@ -51,7 +53,9 @@ OSCILLATOR = Kind("DryFrictionOscillator", "2.0", "DryFrictionOscillator.fmu", "
 OSCILLATOR3 = Kind("DryFrictionOscillator", "3.0", "fmi3/DryFrictionOscillator.fmu", "DFO_FMU3")
 CHAIN = Kind("DryFrictionChain", "2.0", "DryFrictionChain.fmu", "DFO_CHAIN_FMU")
 CHAIN3 = Kind("DryFrictionChain", "3.0", "fmi3/DryFrictionChain.fmu", "DFO_CHAIN_FMU3")
-KINDS = (OSCILLATOR, OSCILLATOR3, CHAIN, CHAIN3)
+SYSTEM = Kind("DryFrictionSystem", "2.0", "DryFrictionSystem.fmu", "DFO_SYSTEM_FMU")
+SYSTEM3 = Kind("DryFrictionSystem", "3.0", "fmi3/DryFrictionSystem.fmu", "DFO_SYSTEM_FMU3")
+KINDS = (OSCILLATOR, OSCILLATOR3, CHAIN, CHAIN3, SYSTEM, SYSTEM3)
 
 
 def package_dir() -> Path:

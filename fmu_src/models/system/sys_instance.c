@@ -4,6 +4,7 @@
  * part: sys_instance.h). The physics is system.h's over the friction engine. No FMI types. */
 #include "dfo_fp.h" /* first: no fused multiply-add, whatever the flags */
 #include "sys_instance.h"
+#include "sys_inst_resources.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -297,6 +298,7 @@ dfo_lifecycle *dfo_inst_new(const dfo_host *host, const char *name, int logging_
         return NULL;
     }
     set_start_values(in);
+    in->lc.resources = sys_inst_resources; /* a structure's FMU: its start values from resources/ */
     return &in->lc;
 }
 

@@ -1,5 +1,5 @@
 """The command line ``dryfriction COMMAND [options]``: validate, run, response, scenes, lyapunov,
-chain, continuation, bifurcation, orbit, belt, study.
+chain, continuation, bifurcation, orbit, belt, system, study.
 
     dryfriction --help                      # the commands; 'dryfriction COMMAND --help' for one
     python -m dryfriction ...               # the same
@@ -34,7 +34,8 @@ __all__ = ["main", "build_parser", "command_work", "COMMANDS"]
 #: command -> its module in this package (in the order of the help; one module may define two)
 COMMANDS = {"validate": "validate", "run": "run", "response": "response", "scenes": "scenes",
             "lyapunov": "lyapunov", "chain": "chain", "continuation": "continuation",
-            "bifurcation": "continuation", "orbit": "orbit", "belt": "belt", "study": "study"}
+            "bifurcation": "continuation", "orbit": "orbit", "belt": "belt", "system": "system",
+            "study": "study"}
 
 
 def _module(name: str) -> ModuleType:

@@ -261,7 +261,7 @@ def check_fmu_option(path: Path, command: str) -> None:
         raise UsageError(f"--fmu: {path} is a directory, not an FMU file")
     if not path.is_file():
         raise UsageError(f"--fmu: no such file: {path}")
-    if command == "chain":
+    if command in ("chain", "system"):  # each checks its own kind
         return
     if command == "study":
         for kind in paths.KINDS:

@@ -1,0 +1,303 @@
+"""Running a :class:`dryfriction.System` through the FMI 3.0 ``DryFrictionSystem`` FMU (docs/system.md).
+
+The structure's sizes ``n`` and ``nc`` are set in Configuration Mode, its values
+(:meth:`System.start_values`) in Initialization Mode, then the FMU steps on the host's points with
+the outputs ``x``, ``v``, ``a`` (n), ``f``, ``mode``, ``s`` (nc) and ``E_friction`` read at each::
+
+    from dryfriction import System, Contact
+    sys = System(M=[[1.0]], K=[[100.0]], contacts=[Contact(dof=0, N=1.0, mu_s=0.4, mu_k=0.3)],
+                 F_c=[1.0], omega=5.0)
+    run = sys.run(t_end=10.0, dt=0.01)          # run.x [nt, n], run.f [nt, nc], run.E_friction [nt]
+    with SystemFMU3(sys) as fmu:                # or the driver, to run again or to step by hand
+        run = fmu.run(10.0, 0.01, inputs={"F_ext": [0.5]})
+
+Inputs (``F_ext`` n values, ``N_ext`` and ``v_belt`` nc values; one number counts for every
+element) are given as values held from the start, or as a function ``(t, outputs) -> values``
+called before every step, as the chain's driver takes them. The driver runs on the package's FMI
+layer (:mod:`dryfriction.fmi`): an FMU error is an :class:`~dryfriction.errors.FMUCallError` with
+the FMU's sentence, a warning the FMU logs (the slip ``s`` of a rigid contact read, not computed)
+a :class:`~dryfriction.errors.DryFrictionWarning`.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import paths
+from ..errors import FMUFileError
+from ..fmi import fmi3
+from .base import Driver, grid
+from .chain import expand
+
+if TYPE_CHECKING:
+    from ..system.structure import System
+
+__all__ = ["SystemFMU3", "SystemRun", "INPUTS", "OUTPUTS", "default_system_fmu3", "run", "trajectory"]
+
+#: the inputs and their sizes (``n`` per degree of freedom, ``nc`` per contact)
+INPUTS = {"F_ext": "n", "N_ext": "nc", "v_belt": "nc"}
+#: the outputs recorded, in the order the FMU is read
+OUTPUTS = ("x", "v", "a", "f", "s", "E_friction", "mode")
+_REALS = (("x", "n"), ("v", "n"), ("a", "n"), ("f", "nc"), ("s", "nc"), ("E_friction", None))
+
+Inputs = Mapping[str, Any] | Callable[[float, Mapping[str, np.ndarray]], Mapping[str, Any]]
+
+
+def default_system_fmu3() -> Path:
+    """The FMI 3.0 system FMU: ``$DFO_SYSTEM_FMU3``, else the installed package's, else the build
+    tree's (:func:`dryfriction.paths.fmu_path`; FMUFileError if there is none or it is not that FMU)."""
+    return paths.fmu_path(paths.SYSTEM3)
+
+
+@dataclass
+class SystemRun:
+    """The outputs at the output times: ``t`` [nt]; ``x``, ``v``, ``a`` [nt, n]; ``f``, ``s``,
+    ``mode`` [nt, nc] (mode -1 backward slip, 0 stuck, +1 forward slip; ``s`` NaN for a rigid
+    contact); ``E_friction`` [nt], the energy the contacts have taken since the start."""
+
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    f: np.ndarray
+    s: np.ndarray
+    E_friction: np.ndarray
+    mode: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """The number of degrees of freedom."""
+        return int(self.x.shape[1])
+
+    @property
+    def nc(self) -> int:
+        """The number of contacts."""
+        return int(self.f.shape[1])
+
+    def stick_fraction(self, t_from: float = -np.inf) -> np.ndarray:
+        """The share of the output times at or after ``t_from`` at which each contact is stuck."""
+        return np.mean(self.mode[self.t >= t_from] == 0, axis=0)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return getattr(self, "t" if name == "time" else name)
+
+
+class SystemFMU3(Driver):
+    """One instance of the FMI 3.0 ``DryFrictionSystem`` FMU running ``system``, as a context
+    manager; every :meth:`start` (and so every :meth:`run`) resets it, sets ``n``, ``nc`` in
+    Configuration Mode and the system's values in Initialization Mode.
+
+    Parameters
+    ----------
+    system
+        The structure (:class:`dryfriction.System`).
+    fmu_path
+        The FMU; default: ``$DFO_SYSTEM_FMU3``, the installed package's, the checkout's
+        ``build/fmi3/``. A structure's own FMU (:meth:`System.fmu`) runs too.
+    logging
+        Switch the FMU's debug logging on.
+
+    Raises
+    ------
+    dryfriction.FMUFileError
+        ``fmu_path`` is not the FMI 3.0 system FMU.
+    dryfriction.FMUCallError
+        A structure or a call the FMU refuses, with its sentence.
+
+    Examples
+    --------
+    >>> from dryfriction import System, Contact
+    >>> sys = System(M=[[1.0]], K=[[100.0]], contacts=[Contact(dof=0, N=1.0, mu_s=0.4, mu_k=0.3)],
+    ...              F_c=[1.0], omega=5.0)
+    >>> with SystemFMU3(sys) as fmu:
+    ...     run = fmu.run(t_stop=4.0, dt=0.01)
+    >>> run.x.shape, run.mode.shape
+    ((401, 1), (401, 1))
+    """
+
+    KIND = paths.SYSTEM3
+    TERMINATE_ON_CLOSE = True
+
+    def __init__(self, system: "System", fmu_path: str | os.PathLike[str] | None = None, *,
+                 logging: bool = False) -> None:
+        from ..system.structure import System
+
+        if not isinstance(system, System):
+            raise TypeError(f"SystemFMU3 needs a dryfriction.System, not {type(system).__name__}")
+        self.system = system
+        self.n, self.nc = system.n, system.nc
+        self._open(fmu_path, "dfo_system3_")
+        try:
+            self.vars = self.md.variables
+            for name in ("n", "nc"):
+                v = self.vars.get(name)
+                if v is None or v.causality != "structuralParameter":
+                    raise FMUFileError(f"{self.path} has no structural parameter {name}: not the FMI 3.0 system FMU")
+            self.inst = fmi3.Instance(self.unzip_dir, self.md.guid, self.md.model_identifier, "system", logging)
+        except BaseException:
+            shutil.rmtree(self.unzip_dir, ignore_errors=True)
+            raise
+        self._fresh = True
+        self._step = self.inst.step_function()
+        sizes = {"n": self.n, "nc": self.nc, None: 1}
+        self._nreal = sum(sizes[d] for _, d in _REALS)
+        self._get_reals = self.inst.bulk_get("Float64", [self.vars[k].vr for k, _ in _REALS], self._nreal)
+        mode = self.vars["mode"]
+        self._mode_dtype = fmi3.DTYPES[mode.call_type]
+        self._get_modes = self.inst.bulk_get(mode.call_type, [mode.vr], self.nc) if self.nc else None
+        self.time = 0.0
+
+    def array_size(self, name: str) -> int:
+        """The size of an array variable for this system (n, nc, n x n or nc x n)."""
+        dims = {"M": self.n * self.n, "C": self.n * self.n, "K": self.n * self.n, "W": self.nc * self.n}
+        if name in dims:
+            return dims[name]
+        per = {"F_c", "F_s", "x0", "v0", "F_ext", "x", "v", "a", "x_max", "x_min"}
+        return self.n if name in per else self.nc
+
+    def _size_token(self) -> int:
+        return self.n * 4096 + self.nc
+
+    # ---- a run ----------------------------------------------------------------------------------
+    def _inputs(self, values: Mapping[str, Any]) -> list[tuple[int, list[float]]]:
+        """The inputs by value reference, checked (ValueError naming the input)."""
+        todo = []
+        for name, value in values.items():
+            if name not in INPUTS:
+                raise ValueError(f"the system's inputs are {', '.join(INPUTS)}, not {name!r}")
+            size = self.n if INPUTS[name] == "n" else self.nc
+            if size:
+                todo.append((self.vars[name].vr, expand(name, value, size).tolist()))
+        return todo
+
+    def set_inputs(self, values: Mapping[str, Any]) -> None:
+        """Set ``F_ext`` (n values), ``N_ext`` and/or ``v_belt`` (nc values; one number for every
+        element); they hold until set again."""
+        for vr, vals in self._inputs(values):
+            self.inst.set("Float64", [vr], vals)
+
+    def start(self, start_time: float = 0.0, inputs: Mapping[str, Any] | None = None) -> None:
+        """A fresh run of the system from ``start_time``: reset (after the first), ``n`` and ``nc``
+        in Configuration Mode, the system's values and ``inputs`` in Initialization Mode."""
+        todo = self._inputs(inputs or {})  # checked before the FMU is touched
+        inst = self.inst
+        if not self._fresh:
+            inst.reset()
+        self._fresh = False
+        inst.enter_configuration_mode()
+        inst.set("UInt64", [self.vars["n"].vr, self.vars["nc"].vr], [self.n, self.nc])
+        inst.exit_configuration_mode()
+        inst.enter_initialization_mode(float(start_time))
+        for name, value in self.system.start_values().items():
+            if name in ("n", "nc"):
+                continue
+            v = self.vars[name]
+            vals = [value] if np.ndim(value) == 0 else list(value)
+            if vals:
+                inst.set(v.call_type, [v.vr], vals)
+        for vr, vals in todo:
+            inst.set("Float64", [vr], vals)
+        inst.exit_initialization_mode()
+        self.time = float(start_time)
+
+    def outputs(self) -> dict[str, np.ndarray]:
+        """The current outputs (x, v, a, f, s, mode arrays; E_friction a 0-d array)."""
+        reals = np.empty(self._nreal)
+        modes = np.zeros(self.nc, dtype=self._mode_dtype)
+        self._get_reals(reals.ctypes.data)
+        if self._get_modes is not None:
+            self._get_modes(modes.ctypes.data)
+        return dict(zip(OUTPUTS, (*self._split(reals), modes.astype(np.int8)), strict=True))
+
+    def _split(self, reals: np.ndarray) -> list[np.ndarray]:
+        """x, v, a, f, s, E_friction of the FMU's values (along the last axis)."""
+        n, nc = self.n, self.nc
+        cuts = np.cumsum([n, n, n, nc, nc])
+        parts = np.split(reals, cuts, axis=-1)
+        parts[-1] = parts[-1][..., 0]
+        return parts
+
+    def do_step(self, dt: float) -> None:
+        """One communication step of ``dt`` from the current time."""
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite number > 0, not {dt!r}")
+        self._step(self.time, dt)
+        self.time = self.time + dt
+
+    def record_at(self, times: Iterable[float] | np.ndarray, inputs: Inputs | None = None) -> SystemRun:
+        """Step from the current time through ``times`` (strictly increasing; the first is the
+        current time), reading the outputs at each. ``inputs``: values held from now on, or a
+        function ``(t, outputs) -> values`` called before each step."""
+        t = np.asarray(list(times) if not isinstance(times, np.ndarray) else times, dtype=float)
+        if t.ndim != 1 or t.size < 1 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise ValueError("the output times must be a non-empty, finite, strictly increasing 1-D sequence")
+        if t[0] != self.time:
+            raise ValueError(f"the first output time {t[0]!r} must be the current time {self.time!r}")
+        if inputs is not None and not callable(inputs):
+            self.set_inputs(inputs)
+        reals = np.empty((t.size, self._nreal))
+        modes = np.zeros((t.size, self.nc), dtype=self._mode_dtype)
+        base_r, row_r = reals.ctypes.data, reals.strides[0]
+        base_m, row_m = modes.ctypes.data, modes.strides[0]
+        get_reals, get_modes, step = self._get_reals, self._get_modes, self._step
+        get_reals(base_r)
+        if get_modes is not None:
+            get_modes(base_m)
+        tl = t.tolist()
+        for i in range(1, t.size):
+            if callable(inputs):
+                self.set_inputs(inputs(self.time, self.outputs()))
+            step(self.time, tl[i] - self.time)
+            self.time = tl[i]
+            get_reals(base_r + i * row_r)
+            if get_modes is not None:
+                get_modes(base_m + i * row_m)
+        self.inst.flush_warnings()
+        x, v, a, f, s, E = self._split(reals)
+        return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8))
+
+    def run(self, t_stop: float, dt: float, inputs: Inputs | None = None, start_time: float = 0.0) -> SystemRun:
+        """A fresh run (:meth:`start`) to ``t_stop`` on the grid ``start_time + k dt`` (the last step
+        shortened). Inputs given as values are set in Initialization Mode and held."""
+        times = grid(float(start_time), float(t_stop), float(dt))
+        held = None if inputs is None or callable(inputs) else inputs
+        self.start(start_time, held)
+        return self.record_at(times, inputs if callable(inputs) else None)
+
+    def trajectory(self, times: Iterable[float] | np.ndarray, inputs: Inputs | None = None) -> SystemRun:
+        """A fresh run (:meth:`start` at ``times[0]``) with the outputs at ``times``."""
+        t = np.asarray(list(times) if not isinstance(times, np.ndarray) else times, dtype=float)
+        if t.ndim != 1 or t.size < 1:
+            raise ValueError("the output times must be a non-empty 1-D sequence")
+        held = None if inputs is None or callable(inputs) else inputs
+        self.start(float(t[0]), held)
+        return self.record_at(t, inputs if callable(inputs) else None)
+
+    def __enter__(self) -> "SystemFMU3":
+        return self
+
+
+def run(system: "System", t_end: float, dt: float | None = None, inputs: Inputs | None = None, *,
+        start_time: float = 0.0, fmu_path: str | os.PathLike[str] | None = None) -> SystemRun:
+    """``system`` through the FMI 3.0 FMU from ``start_time`` to ``t_end``, the outputs every ``dt``
+    (default: 1/100 of the excitation's period, or of the time span without one)."""
+    if dt is None:
+        span = float(t_end) - float(start_time)
+        dt = 2.0 * np.pi / system.omega / 100.0 if system.omega > 0 else span / 100.0
+        dt = min(dt, span) if span > 0 else 1.0
+    with SystemFMU3(system, fmu_path) as fmu:
+        return fmu.run(t_end, dt, inputs, start_time)
+
+
+def trajectory(system: "System", times: Iterable[float] | np.ndarray, inputs: Inputs | None = None, *,
+               fmu_path: str | os.PathLike[str] | None = None) -> SystemRun:
+    """``system`` through the FMI 3.0 FMU with the outputs at ``times`` (the first: the start)."""
+    with SystemFMU3(system, fmu_path) as fmu:
+        return fmu.trajectory(times, inputs)

@@ -1,0 +1,402 @@
+"""A structure's own FMU without a compiler (dryfriction.system.fmu, ``dryfriction system fmu``) and the
+System's runs through the FMI 3.0 FMU (dryfriction.drivers.system).
+
+The written FMU is the prebuilt binary with the structure in resources/structure.bin and as start
+values: fmpy validates it; run in fmpy and in fmusim with NO start values it gives, bit for bit, the
+run of the prebuilt FMU with the structure's values set through the package's own FMI layer; a
+bad or truncated structure file is an error at instantiation naming the file. The FMI 2.0 FMU (at
+the prebuilt binary's sizes, n = 2, nc = 1): the same with flattened names, a percent-encoded
+resource URI decoded, the Compliance Checker to the end. The driver is checked
+against plain fmpy calls, and a held input F_ext against the same force as an excitation of
+frequency 0. "A user who has M and K as .mtx files gets a working FMU in two commands": tested
+as it reads."""
+
+from __future__ import annotations
+
+import os
+import struct
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
+from fmpy.validation import validate_fmu
+
+from dryfriction import Contact, FMUCallError, System
+from dryfriction.cli import main
+from dryfriction.drivers.system import SystemFMU3
+from dryfriction.errors import UsageError
+from dryfriction.fmi import fmi2
+from dryfriction.system.fmu import MAGIC, RESOURCE, write_fmu
+
+ROOT = Path(__file__).resolve().parents[1]
+FMUSIM = Path(os.environ.get("FMUSIM", ROOT.parent / "shared" / "tools" / "fmusim" / "fmusim"))
+FMUCHECK = Path(os.environ.get("FMUCHECK", ROOT.parent / "shared" / "tools" / "fmucheck" / "fmuCheck.linux64"))
+
+
+def structure(nc_between: bool = True) -> System:
+    """Three DOFs, a ground contact and one between DOFs, damping, an excitation, an initial state."""
+    M = np.array([[2.0, 0.3, 0.0], [0.3, 1.0, 0.1], [0.0, 0.1, 1.5]])
+    K = np.array([[300.0, -100.0, 0.0], [-100.0, 200.0, -100.0], [0.0, -100.0, 150.0]])
+    contacts = [Contact(dof=0, N=2.0, mu_s=0.4, mu_k=0.3)]
+    if nc_between:
+        contacts.append(Contact(between=(1, 2), N=1.0, mu_s=0.3, mu_k=0.25))
+    return System(M=M, K=K, C=0.01 * K, contacts=contacts, F_c=[1.0, 0.5, 0.0], F_s=[0.0, 0.0, 0.2], omega=8.0,
+                  x0=[0.001, 0.0, -0.002], v0=[0.0, 0.01, 0.0], h=2e-4)
+
+
+@pytest.fixture(scope="module")
+def sys3() -> System:
+    return structure()
+
+
+@pytest.fixture(scope="module")
+def written(sys3: System, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return write_fmu(sys3, tmp_path_factory.mktemp("fmu") / "Three.fmu")
+
+
+def fmpy_run(path: Path, stop: float, dt: float) -> np.ndarray:
+    """fmpy's simulate_fmu with no start values: x, f, E_friction at every output time."""
+    res = simulate_fmu(str(path), stop_time=stop, output_interval=dt, output=["x", "f", "E_friction", "mode"])
+    return res
+
+
+def test_the_written_fmu_validates_and_carries_the_structure(written: Path, sys3: System) -> None:
+    assert validate_fmu(str(written)) == []
+    md = read_model_description(str(written))
+    starts = {v.name: v.start for v in md.modelVariables}
+    assert starts["n"] == "3" and starts["nc"] == "2"
+    assert [float(x) for x in starts["M"].split()] == sys3.M.ravel().tolist()
+    assert [float(x) for x in starts["W"].split()] == [1.0, 0.0, 0.0, 0.0, 1.0, -1.0]
+    assert md.modelName == "Three" and md.coSimulation.modelIdentifier == "DryFrictionSystem"
+    with zipfile.ZipFile(written) as z:
+        data = z.read(RESOURCE)
+    assert data[:8] == MAGIC
+    version, nrec, n, nc = struct.unpack_from("<IIQQ", data, 8)
+    assert (version, n, nc) == (1, 3, 2) and nrec == len(sys3.start_values()) - 2
+
+
+def test_fmpy_with_no_start_values_is_the_prebuilt_fmu_with_them(written: Path, sys3: System) -> None:
+    res = fmpy_run(written, 2.0, 0.01)
+    with SystemFMU3(sys3) as fmu:  # the prebuilt FMU (build/fmi3), the values set by the driver
+        ref = fmu.run(2.0, 0.01)
+    assert np.array_equal(res["time"], ref.t)
+    assert np.array_equal(np.asarray(res["x"]).reshape(ref.x.shape), ref.x)  # bit for bit
+    assert np.array_equal(np.asarray(res["f"]).reshape(ref.f.shape), ref.f)
+    assert np.array_equal(res["E_friction"], ref.E_friction)
+    modes = np.asarray(res["mode"]).reshape(ref.mode.shape)
+    assert np.array_equal(modes, ref.mode)
+    assert {0, 1}.issubset(set(modes[:, 0])) and ref.E_friction[-1] > 0  # it sticks and slips
+
+
+def test_the_written_fmu_is_its_structure_in_the_driver_too(written: Path, sys3: System) -> None:
+    """The driver on the written FMU (values set again) and on the prebuilt one: the same run."""
+    a = sys3.run(1.0, 0.02, fmu_path=written)
+    b = sys3.run(1.0, 0.02)
+    assert a.x.tobytes() == b.x.tobytes() and a.mode.tobytes() == b.mode.tobytes()
+
+
+def test_reset_goes_back_to_the_structure(written: Path, tmp_path: Path) -> None:
+    """After fmi3Reset the binary's values are the structure's again (not the prebuilt defaults)."""
+    md = read_model_description(str(written))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(str(written), unzipdir=str(tmp_path / "x"))
+    s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="DryFrictionSystem")
+    s.instantiate()
+    try:
+        rows = []
+        for _ in range(2):
+            s.enterInitializationMode(startTime=0.0)
+            s.exitInitializationMode()
+            s.doStep(0.0, 0.5)
+            rows.append(s.getFloat64([vr["x"]], nValues=3) + s.getFloat64([vr["E_friction"]]))
+            assert s.getUInt64([vr["n"], vr["nc"]]) == [3, 2]
+            s.reset()
+        assert rows[0] == rows[1] and rows[0][-1] > 0
+    finally:
+        s.freeInstance()
+
+
+def _rewrite(src: Path, dst: Path, data: bytes) -> Path:
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w") as zout:
+        for item in zin.infolist():
+            zout.writestr(item, data if item.filename == RESOURCE else zin.read(item.filename))
+    return dst
+
+
+@pytest.mark.parametrize("cut, words", [
+    (lambda b: b[:20], "is truncated: 20 bytes, fewer than its 32-byte header"),
+    (lambda b: b[:-4], "is truncated: the value of scheme needs 8 bytes, 4 are left"),
+    (lambda b: b[:-8 - 4 * 24], "is truncated: the 2 values of k_t need 16 bytes, 8 are left"),
+    (lambda b: b"NOTSTRUC" + b[8:], "does not begin with the magic DFOSTRUC"),
+    (lambda b: b + b"\0", "has 1 bytes after its last record"),
+    (lambda b: b[:8] + struct.pack("<I", 7) + b[12:], "has the version 7; this FMU reads version 1"),
+])
+def test_a_bad_structure_file_is_an_error_at_instantiation(written: Path, sys3: System, tmp_path: Path, cut,
+                                                           words: str) -> None:
+    with zipfile.ZipFile(written) as z:
+        data = z.read(RESOURCE)
+    bad = _rewrite(written, tmp_path / "Bad.fmu", cut(data))
+    with pytest.raises(FMUCallError) as err:
+        SystemFMU3(sys3, bad)
+    msg = str(err.value)
+    assert "structure.bin" in msg and words in msg, msg
+
+
+def test_a_value_out_of_range_in_the_file_is_named(written: Path, sys3: System, tmp_path: Path) -> None:
+    with zipfile.ZipFile(written) as z:
+        data = bytearray(z.read(RESOURCE))
+    # the record of N (value reference 900000): its first value made negative
+    rec = data.find(struct.pack("<IIQ", 900000, 0, 2))
+    assert rec > 0
+    struct.pack_into("<d", data, rec + 16, -1.0)
+    bad = _rewrite(written, tmp_path / "BadN.fmu", bytes(data))
+    with pytest.raises(FMUCallError, match=r"structure\.bin gives N element 0 \(0-based\) the value -1"):
+        SystemFMU3(sys3, bad)
+
+
+@pytest.mark.skipif(not FMUSIM.is_file(), reason="fmusim not there (../shared/tools/fmusim; or set FMUSIM)")
+def test_fmusim_runs_the_written_fmu_with_no_start_values(written: Path, sys3: System, tmp_path: Path) -> None:
+    out = tmp_path / "out.csv"
+    r = subprocess.run([str(FMUSIM), "--interface-type", "cs", "--output-interval", "0.01", "--stop-time", "2",
+                        "--output-file", str(out), str(written)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = out.read_text().splitlines()
+    head = [h.strip('"') for h in lines[0].split(",")]
+    last = lines[-1].split(",")
+    ref = sys3.run(2.0, 0.01)
+    assert float(last[0]) == 2.0 and len(lines) == ref.t.size + 1
+    x = [float(v) for v in last[head.index("x")].split()]
+    assert np.allclose(x, ref.x[-1], rtol=1e-15, atol=1e-17)  # fmusim prints 16 significant digits
+    assert float(last[head.index("E_friction")]) == pytest.approx(ref.E_friction[-1], rel=1e-14)
+
+
+# ----------------------------------------------------------------------------- the driver
+
+
+def test_the_driver_is_plain_fmpy_calls(sys3: System, tmp_path: Path) -> None:
+    """The driver's run against the prebuilt FMU driven by fmpy's FMU3Slave by hand."""
+    from dryfriction.drivers.system import default_system_fmu3
+
+    path = default_system_fmu3()
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(str(path), unzipdir=str(tmp_path / "p"))
+    s = FMU3Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="DryFrictionSystem")
+    s.instantiate()
+    times = np.arange(51) * 0.02
+    try:
+        s.enterConfigurationMode()
+        s.setUInt64([vr["n"], vr["nc"]], [3, 2])
+        s.exitConfigurationMode()
+        s.enterInitializationMode(startTime=0.0)
+        for name, value in sys3.start_values().items():
+            if name in ("n", "nc"):
+                continue
+            if name == "scheme":
+                s.setInt64([vr[name]], [int(value)])
+            else:
+                s.setFloat64([vr[name]], [float(v) for v in np.ravel(value)])
+        s.setFloat64([vr["F_ext"]], [0.1, -0.2, 0.3])
+        s.exitInitializationMode()
+        rows = []
+        for k, t in enumerate(times):
+            if k:
+                s.doStep(times[k - 1], t - times[k - 1])
+            rows.append(s.getFloat64([vr["x"], vr["v"], vr["f"]], nValues=8))
+    finally:
+        s.terminate()
+        s.freeInstance()
+    ref = np.array(rows)
+    got = sys3.trajectory(times, inputs={"F_ext": [0.1, -0.2, 0.3]})
+    assert np.array_equal(np.hstack([got.x, got.v, got.f]), ref)
+
+
+def test_a_held_force_is_an_excitation_of_frequency_zero() -> None:
+    """F_ext held from the start and F_c with omega = 0 are the same force: the same run (the
+    engine adds them in one place or the other: equal to rounding)."""
+    base = structure()
+    F = np.array([1.5, -1.0, 1.2])
+    held = base.replace(F_c=0.0, F_s=0.0, omega=0.0).run(2.0, 0.01, inputs={"F_ext": F})
+    excited = base.replace(F_c=F, F_s=0.0, omega=0.0).run(2.0, 0.01)
+    assert {0, 1} <= set(excited.mode[:, 0].tolist())  # it slips, then sticks
+    assert np.array_equal(held.mode, excited.mode)
+    assert np.max(np.abs(held.x - excited.x)) <= 1e-13 * np.max(np.abs(excited.x))
+
+
+def test_inputs_by_function_and_every_output(sys3: System) -> None:
+    """A function of (t, outputs) sets the inputs before each step; N_ext = -N frees a contact."""
+    seen = []
+
+    def inputs(t: float, out: dict) -> dict:
+        seen.append((t, out["x"].copy()))
+        return {"N_ext": [-10.0, 0.0]}  # the ground contact's normal force floored at 0: no friction
+
+    r = sys3.run(0.5, 0.05, inputs=inputs)
+    assert len(seen) == r.t.size - 1 and np.array_equal(seen[3][1], r.x[3])
+    assert np.all(r.f[1:, 0] == 0.0)  # the ground contact carries no force from the first step on
+    assert r.a.shape == (11, 3) and r.s.shape == (11, 2) and np.all(np.isnan(r.s))
+    with pytest.raises(ValueError, match="the system's inputs are F_ext, N_ext, v_belt, not 'P'"):
+        sys3.run(0.5, 0.05, inputs={"P": 1.0})
+    with pytest.raises(ValueError, match=r"F_ext needs 3 values"):
+        sys3.run(0.5, 0.05, inputs={"F_ext": [1.0, 2.0]})
+
+
+def test_the_fmi_version_and_the_name_are_checked(sys3: System, tmp_path: Path) -> None:
+    with pytest.raises(UsageError, match="must end with .fmu"):
+        write_fmu(sys3, tmp_path / "a.zip")
+    with pytest.raises(UsageError, match="fmi must be 2 or 3, not 4"):
+        write_fmu(sys3, tmp_path / "a.fmu", fmi=4)
+
+
+# ----------------------------------------------------------------------------- two commands, no compiler
+
+
+def test_mtx_files_to_a_working_fmu_in_two_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The user has M.mtx and K.mtx (as an FE code exports them: symmetric, sparse coordinates) and
+    writes a TOML file; `dryfriction system fmu` makes the FMU; fmpy runs it with no start values."""
+    from scipy.io import mmwrite
+    from scipy.sparse import coo_matrix
+
+    n = 6
+    k = 1000.0
+    K = np.diag(np.full(n, 2 * k)) - np.diag(np.full(n - 1, k), 1) - np.diag(np.full(n - 1, k), -1)
+    K[-1, -1] = k
+    M = np.diag(np.full(n, 0.5))
+    mmwrite(str(tmp_path / "M.mtx"), coo_matrix(M), symmetry="symmetric")
+    mmwrite(str(tmp_path / "K.mtx"), coo_matrix(K), symmetry="symmetric")
+    (tmp_path / "beam.toml").write_text(
+        '[structure]\nM = "M.mtx"\nK = "K.mtx"\n\n[damping]\nrayleigh = [0.5, 1e-4]\n\n'
+        "[excitation]\nomega = 20.0\ndof = 5\namplitude = 10.0\n\n"
+        "[[contact]]\ndof = 5\nN = 5.0\nmu_s = 0.4\nmu_k = 0.3\n\n"
+        "[[contact]]\nbetween = [2, 3]\nN = 3.0\nmu_s = 0.3\n", encoding="utf-8")
+    assert main(["system", "fmu", str(tmp_path / "beam.toml"), "-o", str(tmp_path / "Beam.fmu")]) == 0
+    assert "n = 6, nc = 2" in capsys.readouterr().out
+    res = simulate_fmu(str(tmp_path / "Beam.fmu"), stop_time=1.0, output_interval=0.01, output=["x", "mode"])
+    ref = System.from_file(tmp_path / "beam.toml").run(1.0, 0.01)
+    assert np.array_equal(np.asarray(res["x"]).reshape(ref.x.shape), ref.x)
+    assert np.max(np.abs(ref.x[:, 5])) > 1e-3  # it moves
+    modes = np.asarray(res["mode"]).reshape(ref.mode.shape)
+    assert {0, 1, -1} <= set(modes[:, 0].tolist())  # the tip's contact sticks and slips both ways
+    assert np.array_equal(System.from_file(tmp_path / "beam.toml").K, K)
+
+
+def test_the_command_refuses_what_it_cannot_write(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "s.toml").write_text("[structure]\nM = [[1.0]]\nK = [[4.0]]\n", encoding="utf-8")
+    assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "nodir" / "S.fmu")]) == 2
+    err = capsys.readouterr().err
+    assert "does not exist" in err and err.count("\n") == 1, err
+    assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "S.fmu"), "--fmi", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "serves n = 2, nc = 1 only (fixed when built) but the structure has n = 1, nc = 0" in err, err
+    assert not (tmp_path / "S.fmu").exists() and not list(tmp_path.glob("*.part"))
+
+
+# ----------------------------------------------------------------------------- FMI 2.0 at the build's sizes
+
+
+def two_dofs() -> System:
+    """A structure of the prebuilt FMI 2.0 binary's sizes (n = 2, nc = 1): a contact between the DOFs."""
+    M = np.array([[2.0, 0.3], [0.3, 1.0]])
+    K = np.array([[300.0, -100.0], [-100.0, 100.0]])
+    return System(M=M, K=K, C=0.01 * K, contacts=[Contact(between=(0, 1), N=1.0, mu_s=0.4, mu_k=0.3)],
+                  F_c=[2.0, 0.5], omega=9.0, x0=[0.001, 0.0], h=2e-4)
+
+
+@pytest.fixture(scope="module")
+def written2(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return write_fmu(two_dofs(), tmp_path_factory.mktemp("fmu2") / "Two.fmu", fmi=2)
+
+
+def test_fmi2_flattened_starts_and_fmpy_with_none_set(written2: Path) -> None:
+    s = two_dofs()
+    assert validate_fmu(str(written2)) == []
+    starts = {v.name: v.start for v in read_model_description(str(written2)).modelVariables}
+    assert [float(starts[f"M[{i},{j}]"]) for i in (1, 2) for j in (1, 2)] == s.M.ravel().tolist()
+    assert (float(starts["W[1,1]"]), float(starts["W[1,2]"]), float(starts["x0[1]"])) == (1.0, -1.0, 0.001)
+    assert starts["scheme"] == "3" and float(starts["mu_k[1]"]) == 0.3
+    res = simulate_fmu(str(written2), stop_time=2.0, output_interval=0.01,
+                       output=["x[1]", "x[2]", "f[1]", "mode[1]", "E_friction"])
+    ref = s.run(2.0, 0.01)  # the FMI 3.0 prebuilt FMU with the values set
+    assert np.array_equal(np.column_stack([res["x[1]"], res["x[2]"]]), ref.x)  # bit for bit
+    assert np.array_equal(res["f[1]"], ref.f[:, 0]) and np.array_equal(res["E_friction"], ref.E_friction)
+    assert set(res["mode[1]"].tolist()) == {-1, 0, 1}
+
+
+def test_fmi2_reads_its_resources_through_a_percent_encoded_uri(written2: Path, tmp_path: Path) -> None:
+    """fmpy hands FMI 2.0 a file: URI (Path.as_uri: a space as %20, a percent sign as %25): the
+    binary decodes it and reads the structure; without the file the prebuilt defaults run."""
+    s = two_dofs()
+    md = read_model_description(str(written2))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    rows = {}
+    for label, keep in (("with", True), ("without", False)):
+        d = Path(extract(str(written2), unzipdir=str(tmp_path / f"a b%20c {label}")))
+        assert " " in str(d) and "%" in str(d)
+        if not keep:
+            (d / RESOURCE).unlink()
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=str(d), modelIdentifier="DryFrictionSystem")
+        slave.instantiate()
+        try:
+            slave.setupExperiment(startTime=0.0)
+            slave.enterInitializationMode()
+            slave.exitInitializationMode()
+            slave.doStep(0.0, 0.5)
+            rows[label] = slave.getReal([vr["x[1]"], vr["x[2]"]])
+        finally:
+            slave.terminate()
+            slave.freeInstance()
+    ref = s.trajectory([0.0, 0.5])
+    assert rows["with"] == ref.x[-1].tolist()
+    assert rows["without"] != rows["with"]
+
+
+def test_fmi2_refuses_a_structure_of_other_sizes(written2: Path, sys3: System, tmp_path: Path) -> None:
+    with pytest.raises(UsageError, match=r"the prebuilt FMI 2.0 binary serves n = 2, nc = 1 only \(fixed when built\) "
+                                         r"but the structure has n = 3, nc = 2; use fmi=3"):
+        write_fmu(sys3, tmp_path / "T.fmu", fmi=2)
+    # and its binary a structure file of other sizes, at instantiation
+    with zipfile.ZipFile(write_fmu(sys3, tmp_path / "T3.fmu")) as z:
+        data3 = z.read(RESOURCE)
+    bad = _rewrite(written2, tmp_path / "Bad2.fmu", data3)
+    md = read_model_description(str(bad))
+    d = extract(str(bad), unzipdir=str(tmp_path / "bad2"))
+    with pytest.raises(FMUCallError) as err:
+        fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
+    assert "structure.bin gives n = 3, nc = 2 but this FMI 2.0 binary serves n = 2, nc = 1 only (fixed when built)" \
+        in str(err.value), str(err.value)
+
+
+@pytest.mark.skipif(not FMUCHECK.is_file(), reason="the Compliance Checker not there (../shared/tools/fmucheck; "
+                                                   "or set FMUCHECK)")
+def test_the_compliance_checker_runs_the_fmi2_fmu(written2: Path, tmp_path: Path) -> None:
+    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
+    r = subprocess.run([str(FMUCHECK), "-h", "0.01", "-s", "2", "-o", str(out), "-e", str(log), str(written2)],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = log.read_text(errors="replace") + r.stdout
+    assert "0 warning(s) and error(s)" in report, report
+    lines = out.read_text().splitlines()
+    head = [h.strip('"') for h in lines[0].split(",")]
+    last = [float(v) for v in lines[-1].split(",")]
+    ref = two_dofs().run(2.0, 0.01)
+    assert last[0] == 2.0
+    assert last[head.index("x[1]")] == pytest.approx(ref.x[-1, 0], rel=1e-15)  # 17 printed digits
+    assert last[head.index("E_friction")] == pytest.approx(ref.E_friction[-1], rel=1e-15)
+
+
+def test_the_run_command_is_system_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    spec = tmp_path / "one.toml"
+    spec.write_text("[structure]\nM = [[1.0]]\nK = [[100.0]]\n[excitation]\nomega = 5.0\nF_c = [1.0]\n"
+                    "[[contact]]\ndof = 0\nN = 1.0\nmu_s = 0.4\nmu_k = 0.3\n", encoding="utf-8")
+    assert main(["system", "run", str(spec), "--t-end", "2", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    ref = System.from_file(spec).run(2.0)  # dt: 1/100 of the excitation period
+    assert np.array_equal(got["t"], ref.t) and np.array_equal(got["x"], ref.x.tolist())
+    assert got["mode"] == ref.mode.tolist() and {-1, 0, 1} <= {m[0] for m in got["mode"]}
