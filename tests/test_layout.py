@@ -111,6 +111,7 @@ CANONICAL = {
     "ChainFMU2": "dryfriction.drivers.chain",
     "ChainFMU3": "dryfriction.drivers.chain",
     "open_chain": "dryfriction.drivers.chain",
+    "SystemFMU3": "dryfriction.drivers.system",
     "Settings": "dryfriction.drivers.oscillator",
     "System": "dryfriction.system",
     "Contact": "dryfriction.system",
@@ -219,10 +220,7 @@ def test_every_import_names_a_module_that_exists() -> None:
 
 
 #: modules that still import from a layer above (module -> why); their test is expected to fail
-_PENDING: dict[str, str] = {
-    "dryfriction.system.structure": "System.run and System.trajectory (the structure's API as the issue asks for "
-                                    "it) run through dryfriction.drivers.system, imported when called",
-}
+_PENDING: dict[str, str] = {}
 
 
 @pytest.mark.parametrize("name", [pytest.param(m, marks=pytest.mark.xfail(reason=_PENDING[m], strict=True))

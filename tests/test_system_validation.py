@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 from dryfriction import Contact, System
+from dryfriction.drivers.system import trajectory
 from dryfriction.references.system import simulate
 
 
@@ -88,7 +89,7 @@ def convergence() -> list[dict]:
         errs = {}
         for scheme, levels in (("located", 4), ("consistent", 6)):
             hs = h0 / 2.0 ** np.arange(levels)
-            errs[scheme] = (hs, np.array([np.max(np.abs(s.replace(h=h, scheme=scheme).trajectory(times).x - ref.x))
+            errs[scheme] = (hs, np.array([np.max(np.abs(trajectory(s.replace(h=h, scheme=scheme), times).x - ref.x))
                                           for h in hs]) / scale)
         kinds = {("stop" if sw.after == 0 else "breakaway" if sw.before == 0 else "reversal") for sw in ref.switches}
         out.append({"case": case, "system": s, "errs": errs, "kinds": kinds})
@@ -219,14 +220,14 @@ def test_no_friction_is_the_modal_closed_form_over_100_periods(seed: int) -> Non
     h = T_fast / 40.0
     steps = every * int(math.ceil(100.0 * T_slow / (every * h)))
     times = np.arange(steps // every + 1) * (every * h)
-    run = s.replace(h=h).trajectory(times)
+    got = trajectory(s.replace(h=h), times)
     scheme = scheme_closed_form(s, h, steps, every)
     amplitude = float(np.max(np.abs(scheme)))
     assert times[-1] >= 100.0 * T_slow
-    assert np.all(run.f == 0.0) and np.all(run.E_friction == 0.0)
+    assert np.all(got.f == 0.0) and np.all(got.E_friction == 0.0)
     # the FMU is the scheme's closed form (measured: 3.6e-13 and 5.1e-13 of the amplitude, 38110 and
     # 31320 steps)
-    assert np.max(np.abs(run.x - scheme)) <= 1e-10 * amplitude
+    assert np.max(np.abs(got.x - scheme)) <= 1e-10 * amplitude
     # and the scheme's closed form differs from the continuous one by the scheme's truncation error:
     # second order (measured ratios 4.00 and 3.98 per halving), 2.4e-3 and 4.3e-3 of the amplitude
     # over 100 slow periods at h = T_fast/40
@@ -247,6 +248,6 @@ def test_located_against_the_reference_where_the_reference_keeps_an_inconsistent
     times = np.linspace(0.0, t_end, 41)
     ref = simulate(s, t_end, t_eval=times)
     h0 = fastest_period(s) / 100.0
-    e = np.array([np.max(np.abs(s.replace(h=h0 / 2.0 ** k).trajectory(times).x - ref.x)) for k in range(3)])
+    e = np.array([np.max(np.abs(trajectory(s.replace(h=h0 / 2.0 ** k), times).x - ref.x)) for k in range(3)])
     ratios = e[:-1] / e[1:]  # measured 1.001, 1.000: the runs differ by a constant 1e-3 of the amplitude
     assert np.all((ratios >= 3.6) & (ratios <= 4.4)), ratios

@@ -34,6 +34,7 @@ _EXPORTS = {
     "ChainFMU2": ".drivers.chain",
     "ChainFMU3": ".drivers.chain",
     "open_chain": ".drivers.chain",
+    "SystemFMU3": ".drivers.system",
     "System": ".system",
     "Contact": ".system",
     "FMUError": ".errors",
@@ -53,6 +54,7 @@ if TYPE_CHECKING:
     from .drivers.chain import ChainFMU2, ChainFMU3, open_chain
     from .drivers.oscillator import OscillatorFMU2, Settings
     from .drivers.oscillator3 import OscillatorFMU3
+    from .drivers.system import SystemFMU3
     from .errors import FMUCallError, FMUError, FMUFileError, UsageError
     from .params import Oscillator
     from .references.exact import solve_exact

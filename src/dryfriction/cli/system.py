@@ -60,7 +60,9 @@ def run(args: argparse.Namespace) -> int:
         out = write_fmu(system, Path(args.output), fmi=args.fmi, base=args.fmu)
         print(f"wrote {out}: n = {system.n}, nc = {system.nc} (FMI {args.fmi}.0)")
         return 0
-    res = system.run(args.t_end, args.dt, fmu_path=args.fmu)
+    from ..drivers.system import run as run_system
+
+    res = run_system(system, args.t_end, args.dt, fmu_path=args.fmu)
     if args.json:
         print_json({"t": res.t.tolist(), "x": res.x.tolist(), "v": res.v.tolist(), "f": res.f.tolist(),
                     "mode": res.mode.tolist(), "E_friction": res.E_friction.tolist()})

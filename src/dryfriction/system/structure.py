@@ -542,26 +542,6 @@ class System:
 
         return load(path)
 
-    # --- runs ---
-    def run(self, t_end: float, dt: float | None = None, inputs: Any = None, *, start_time: float = 0.0,
-            fmu_path: Any = None) -> Any:
-        """This system through the FMI 3.0 ``DryFrictionSystem`` FMU from ``start_time`` to ``t_end``,
-        the outputs every ``dt`` (default 1/100 of the excitation period): a
-        :class:`~dryfriction.drivers.system.SystemRun` (``t``; ``x``, ``v``, ``a`` [nt, n]; ``f``,
-        ``s``, ``mode`` [nt, nc]; ``E_friction`` [nt]). ``inputs``: ``F_ext`` (n), ``N_ext``,
-        ``v_belt`` (nc) held from the start, or a function ``(t, outputs) -> values`` called before
-        every step (:mod:`dryfriction.drivers.system`)."""
-        from ..drivers.system import run
-
-        return run(self, t_end, dt, inputs, start_time=start_time, fmu_path=fmu_path)
-
-    def trajectory(self, times: Any, inputs: Any = None, *, fmu_path: Any = None) -> Any:
-        """This system through the FMI 3.0 FMU with the outputs at ``times`` (strictly increasing;
-        the first is the start time): a :class:`~dryfriction.drivers.system.SystemRun`."""
-        from ..drivers.system import trajectory
-
-        return trajectory(self, times, inputs, fmu_path=fmu_path)
-
     def fmu(self, path: Any, fmi: int = 3, *, base: Any = None) -> Any:
         """Write this structure's own FMU to ``path`` (``NAME.fmu``) without a compiler: the
         package's prebuilt ``DryFrictionSystem`` binary, this system's values as the model
