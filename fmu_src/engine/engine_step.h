@@ -1009,6 +1009,11 @@ static void account(eng *E, eng_state *s, const trial *T, double t1, const doubl
             const int stuck = has_friction(E, j) && E->st[j] == 0;
             const double ds = slider_end(E, s, T, V1, f, j) - s->slider[j];
             Wf += (stuck ? 0.5 * (s->F[j] + f[j]) : f[j]) * ds;
+            if (!stuck && s->mode[j] == 0 && has_friction(E, j)) { /* a breakaway inside the step (paper,
+                * consistent): its jump's released energy beyond the kinetic force's work over it */
+                const double d = E->Fb[j] - E->mukN[j];
+                Wf -= d * d / (2.0 * E->S.k_t[j]);
+            }
             continue;
         }
         const double fj = is_strib(E, j) ? 0.5 * (s->F[j] + f[j]) : f[j];
