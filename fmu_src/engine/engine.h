@@ -378,7 +378,10 @@ typedef struct eng_state_s {
     long long steps, solves, pivot_steps, switches;  /* counters */
     /* energy accounts since the start (J), kept with eng_setup.account_energy: the work of the applied
      * forces (excitation + F_ext, trapezoidal rule per (sub-)step), of friction (the step's force, or
-     * for Stribeck the mean of its ends, times the DOFs' displacement along w_j) and the dissipation in
+     * for Stribeck the mean of its ends, times the DOFs' displacement along w_j; a Jenkins contact's:
+     * its force times its slider's displacement (stuck: the mean of its ends), less the spring energy
+     * released at its breakaways, so that its spring's energy 0.5 k_t (w_j . X - s_j)^2 counts in the
+     * mechanical energy) and the dissipation in
      * C (trapezoidal); so that the mechanical energy's change is W_applied + W_friction - D_damping to
      * the scheme's error */
     double W_applied, W_friction, D_damping;
