@@ -304,3 +304,24 @@ def test_fmu_state_with_sliders_restores_and_round_trips_bit_for_bit(tmp_path: P
     finally:
         f.close()
         g.close()
+
+
+def test_h_zero_resolves_the_stuck_springs(tmp_path: Path) -> None:
+    """h = 0: h_used is 1/1000 of 2 pi over the fastest rate with every slider stuck, the stiffness
+    K + sum k_t w w' (eigenvalues by numpy here, by power iteration in the FMU); a rigid contact
+    adds nothing."""
+    s = two_mass(0.7, k_t=500.0)
+    got = []
+    for kt in (500.0, 0.0):
+        f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 1})
+        try:
+            f.start({**fmu_values(s, "located", 0.0), "k_t": [kt]})
+            got.append(f.real("h_used")[0])
+        finally:
+            f.close()
+    for kt, h in zip((500.0, 0.0), got):
+        Ke = s.K + kt * np.outer(s.W[0], s.W[0])
+        rate = (np.sqrt(max(np.linalg.eigvals(np.linalg.solve(s.M, Ke)).real)) +
+                max(np.linalg.eigvals(np.linalg.solve(s.M, s.C)).real) + s.omega)
+        assert h == pytest.approx(2 * np.pi / rate / 1000, rel=1e-8)
+    assert got[0] < 0.5 * got[1]
