@@ -2649,6 +2649,42 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     return ENG_OK;
 }
 
+/* The Jenkins contacts under the new normal forces (the loads set): a sliding slider whose spring
+ * force is below the new kinetic force sticks; one above it has its force drop to it; a stuck one
+ * beyond the new breakaway limit breaks away; without friction the force is 0 and the mode follows
+ * the slip. Where the force drops the slider jumps, the spring energy released counted as friction
+ * work (with the energy accounts). Switches reported; each force's jump into E->f2. */
+static void jenk_new_loads(eng *E, eng_state *s, const eng_hooks *hk)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        E->f2[j] = 0.0;
+        if (!is_jenk(E, j)) continue;
+        const double k = E->S.k_t[j], f0 = jenk_force(E, j, s);
+        const int from = s->mode[j];
+        int m = from;
+        double f1 = f0;
+        if (!has_friction(E, j)) {
+            m = sgn(slip(E, j, s->V));
+            f1 = 0.0;
+        } else if (m != 0 && fabs(f0) < E->mukN[j]) {
+            m = 0;
+        } else if (m != 0) {
+            f1 = -m * E->mukN[j];
+        } else if (fabs(f0) > E->Fb[j]) {
+            m = -sgn(f0);
+            f1 = -m * E->mukN[j];
+        }
+        if (f1 != f0) {
+            s->slider[j] = row_dot(&E->S.rows[j], s->X) + f1 / k;
+            if (E->S.account_energy) s->W_friction -= (f0 * f0 - f1 * f1) / (2.0 * k);
+        }
+        E->f2[j] = f1 - s->F[j];
+        s->F[j] = f1;
+        s->mode[j] = m;
+        if (m != from && has_friction(E, j)) report(s, j, from, hk);
+    }
+}
+
 ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s, const eng_hooks *hk)
 {
     E->loads_for = NULL;
@@ -2657,6 +2693,7 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
     s->stick_tb = NAN; /* (of the old inputs) */
     /* belts: a contact whose belt changed takes the mode of its new slip; one the belt meets the rest rule */
     loads_at(E, new_in, s->t);
+    if (E->any_jenk) jenk_new_loads(E, s, hk);
     int belt_changed = 0;
     memcpy(E->smode, s->mode, nc * sizeof(int));
     for (size_t j = 0; j < nc; j++) {
@@ -2687,12 +2724,15 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
     for (size_t i = 0; i < n; i++) any |= r[i] != 0.0;
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = s->mode[j] == 0 && has_friction(E, j) && !is_jenk(E, j);
+        if (is_jenk(E, j)) { /* its force's jump: jenk_new_loads' */
+            if (E->f2[j] != 0.0) { row_axpy(&S->rows[j], E->f2[j], r); any = 1; }
+            continue;
+        }
         if (s->mode[j] == 0 || !has_friction(E, j)) continue;
         const double fnew = -s->mode[j] * slide_mag(E, j, fabs(slip(E, j, s->V)));
         const double df = fnew - s->F[j];
         if (df != 0.0) { row_axpy(&S->rows[j], df, r); any = 1; }
         s->F[j] = fnew;
-        if (is_jenk(E, j)) s->slider[j] = row_dot(&S->rows[j], s->X) + fnew / S->k_t[j]; /* (where it slides) */
     }
     if (!any) return;
     held_solve(E, r, E->held, E->y, E->f);
