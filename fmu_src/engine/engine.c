@@ -67,7 +67,8 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
                 return buf;
             }
         if (S->k_t && !(S->k_t[j] >= 0.0 && S->k_t[j] < INFINITY)) {
-            snprintf(buf, len, "contact %zu: invalid tangential stiffness k_t %g (valid: >= 0, finite)", j + 1, S->k_t[j]);
+            snprintf(buf, len, "contact %zu: invalid tangential stiffness k_t %g (valid: >= 0, finite)", j + 1,
+                     S->k_t[j]);
             return buf;
         }
         if (S->k_t && S->k_t[j] > 0.0 && S->law && S->law[j].law == DFO_LAW_STRIBECK) {
@@ -290,7 +291,8 @@ int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian,
 
 void eng_state_release(const eng_alloc *al, eng_state *s)
 {
-    void *const ptrs[] = {s->X, s->V, s->A, s->hA, s->F, s->slider, s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
+    void *const ptrs[] = {s->X,    s->V,       s->A,       s->hA,         s->F, s->slider,
+                          s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) al->release(al->env, ptrs[i]);
     memset(s, 0, sizeof *s);

@@ -1114,7 +1114,8 @@ static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, in
         size_t worst = nc;
         double excess = 0.0;
         for (size_t j = 0; j < nc; j++) {
-            if (!rest[j] || mode[j] != 0 || !has_friction(E, j) || is_jenk(E, j)) continue; /* (a slider at rest sticks) */
+            /* (a slider that comes to rest sticks: its force is the kinetic one, within the limit) */
+            if (!rest[j] || mode[j] != 0 || !has_friction(E, j) || is_jenk(E, j)) continue;
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
         }
