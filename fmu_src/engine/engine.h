@@ -6,7 +6,9 @@
  *     contact j: slip velocity g_j' = w_j . x' - v_belt_j, force f_j along w_j,
  *       stuck  (mode 0):  g_j' = 0,  |f_j| <= Fb_j = max(mu_s_j, mu_k_j) N_j,
  *       sliding (+1/-1):  f_j = -mode_j N_j mu_j(|g_j'|)  (Coulomb: mu_k_j; Stribeck: friction.h),
- *       N_j = max(N_j + N_ext_j(t), 0).
+ *       N_j = max(N_j + N_ext_j(t), 0);
+ *     or a Jenkins element (eng_setup.k_t): f_j = -k_t_j (w_j . x - s_j), its massless slider s_j
+ *       stuck (mode 0: s_j' = v_belt_j, |f_j| <= Fb_j) or sliding (f_j = -mode_j mu_k_j N_j).
  *
  * The model owns M, C, K and the contact rows W (sparse: a few entries each); it hands the engine
  *   - operators (eng_ops): y = K x, y = C v, y = M a, and "factor c_M M + c_C C + c_K K, then solve

@@ -1,12 +1,13 @@
-/* The DryFrictionSystem model: any linear structure with rigid Coulomb friction contacts,
+/* The DryFrictionSystem model: any linear structure with Coulomb friction contacts, rigid or Jenkins,
  *
  *     M x'' + C x' + K x = F_c cos(omega t) + F_s sin(omega t) + F_ext + W' f,   x in R^n,
  *
  * M (symmetric positive definite), C and K (symmetric positive semi-definite) dense n x n, row-major;
  * nc contacts, contact j along the row w_j of W (nc x n, row-major; stored sparse for the engine: its
  * nonzero entries), normal force N_j (+ the input N_ext_j, floored at 0), static and kinetic
- * coefficients mu_s_j, mu_k_j, belt speed (an input) v_belt_j. Rigid contacts only in this version:
- * a contact's tangential stiffness k_t_j: 0, a rigid contact; > 0, a Jenkins element (engine.h's eng_setup.k_t).
+ * coefficients mu_s_j, mu_k_j, belt speed (an input) v_belt_j, and tangential stiffness k_t_j: 0, a
+ * rigid contact; > 0, a Jenkins element (a spring k_t_j in series with a massless slider whose
+ * position is part of the engine's state: engine.h's eng_setup.k_t, eng_state.slider).
  *
  * Stepped by the friction engine (engine.h) with its three Bossak schemes through its generic
  * function-pointer instance (engine_generic.c), as the TwoMass model. This file holds the model's
