@@ -333,7 +333,6 @@ REFUSED = [
     ({"C": [0.0, 1.0, 1.0, 0.0]}, "C has a negative eigenvalue beyond rounding (C + 1e-12 max|C| I is not positive definite)"),
     ({"K": [100.0, 1.0, 2.0, 50.0]}, "K is not symmetric: K[2,1] = 2 but K[1,2] = 1"),
     ({"W": [0.0, 0.0]}, "W row 1 is zero: contact 1 acts on no degree of freedom"),
-    ({"k_t": [5.0]}, "k_t[1] = 5: Jenkins contacts (k_t > 0) are not in this build yet; use 0"),
 ]
 
 

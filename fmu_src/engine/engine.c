@@ -66,11 +66,30 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
                          R->idx[k] + 1, R->w[k]);
                 return buf;
             }
+        if (S->k_t && !(S->k_t[j] >= 0.0 && S->k_t[j] < INFINITY)) {
+            snprintf(buf, len, "contact %zu: invalid tangential stiffness k_t %g (valid: >= 0, finite)", j + 1,
+                     S->k_t[j]);
+            return buf;
+        }
+        if (S->k_t && S->k_t[j] > 0.0 && S->law && S->law[j].law == DFO_LAW_STRIBECK) {
+            snprintf(buf, len, "contact %zu: a Jenkins contact (k_t > 0) takes the Coulomb law only", j + 1);
+            return buf;
+        }
         if (!(S->N[j] >= 0.0) || !(S->mu_s[j] >= 0.0) || !(S->mu_k[j] >= 0.0)) {
             snprintf(buf, len, "contact %zu: invalid N %g, mu_s %g or mu_k %g (valid: >= 0)", j + 1, S->N[j],
                      S->mu_s[j], S->mu_k[j]);
             return buf;
         }
+    }
+    int jenk = 0, strib = 0;
+    for (size_t j = 0; j < S->nc; j++) {
+        jenk |= S->k_t && S->k_t[j] > 0.0;
+        strib |= S->law && S->law[j].law == DFO_LAW_STRIBECK;
+    }
+    if (jenk && (strib || S->ops.friction || S->ops.breakaway || S->sparse)) {
+        snprintf(buf, len, "Jenkins contacts (k_t > 0) need the Coulomb law on every contact and the engine's "
+                           "default friction solver (no model solver, breakaway or sparse operators)");
+        return buf;
     }
     return NULL;
 }
@@ -86,7 +105,7 @@ void eng_destroy(eng *E)
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->rpin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
-                          E->gV1, E->gidx, E->gve, E->ew};
+                          E->gV1, E->gidx, E->gve, E->ew, E->vbj, E->comp, E->jstop};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
@@ -185,6 +204,9 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
         ok &= (*dc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     for (size_t i = 0; i < sizeof ic / sizeof ic[0]; i++) ok &= (*ic[i] = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->pin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+    ok &= (E->vbj = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    ok &= (E->comp = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    ok &= (E->jstop = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->rpin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     E->rpin_ok = 0;
     if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
@@ -215,7 +237,9 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
         return NULL;
     }
     E->any_law = 0;
+    E->any_jenk = 0;
     for (size_t j = 0; j < nc; j++) {
+        E->any_jenk |= S->k_t && S->k_t[j] > 0.0;
         E->mu_b[j] = fmax(S->mu_s[j], S->mu_k[j]);
         E->any_law |= S->law && S->law[j].law == DFO_LAW_STRIBECK;
     }
@@ -255,6 +279,7 @@ int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian,
     ok &= (s->A = (double *)alloc_n(al, n, sizeof(double))) != NULL;
     ok &= (s->hA = (double *)alloc_n(al, n, sizeof(double))) != NULL;
     ok &= (s->F = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    ok &= (s->slider = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (s->mode = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (s->t_stick = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (s->t_break = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
@@ -266,7 +291,8 @@ int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian,
 
 void eng_state_release(const eng_alloc *al, eng_state *s)
 {
-    void *const ptrs[] = {s->X, s->V, s->A, s->hA, s->F, s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
+    void *const ptrs[] = {s->X,    s->V,       s->A,       s->hA,         s->F, s->slider,
+                          s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) al->release(al->env, ptrs[i]);
     memset(s, 0, sizeof *s);
@@ -283,7 +309,7 @@ void eng_state_copy(eng_state *dst, const eng_state *src)
 {
     const size_t n = src->n, nc = src->nc;
     eng_state d = *src;
-    d.X = dst->X; d.V = dst->V; d.A = dst->A; d.hA = dst->hA; d.F = dst->F; d.mode = dst->mode;
+    d.X = dst->X; d.V = dst->V; d.A = dst->A; d.hA = dst->hA; d.F = dst->F; d.slider = dst->slider; d.mode = dst->mode;
     d.t_stick = dst->t_stick; d.t_break = dst->t_break; d.break_dir = dst->break_dir; d.J = dst->J;
     memcpy(d.X, src->X, n * sizeof(double));
     memcpy(d.V, src->V, n * sizeof(double));
@@ -291,6 +317,7 @@ void eng_state_copy(eng_state *dst, const eng_state *src)
     memcpy(d.hA, src->hA, n * sizeof(double));
     if (nc) {
         memcpy(d.F, src->F, nc * sizeof(double));
+        memcpy(d.slider, src->slider, nc * sizeof(double));
         memcpy(d.mode, src->mode, nc * sizeof(int));
         memcpy(d.t_stick, src->t_stick, nc * sizeof(double));
         memcpy(d.t_break, src->t_break, nc * sizeof(double));

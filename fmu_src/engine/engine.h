@@ -6,7 +6,9 @@
  *     contact j: slip velocity g_j' = w_j . x' - v_belt_j, force f_j along w_j,
  *       stuck  (mode 0):  g_j' = 0,  |f_j| <= Fb_j = max(mu_s_j, mu_k_j) N_j,
  *       sliding (+1/-1):  f_j = -mode_j N_j mu_j(|g_j'|)  (Coulomb: mu_k_j; Stribeck: friction.h),
- *       N_j = max(N_j + N_ext_j(t), 0).
+ *       N_j = max(N_j + N_ext_j(t), 0);
+ *     or a Jenkins element (eng_setup.k_t): f_j = -k_t_j (w_j . x - s_j), its massless slider s_j
+ *       stuck (mode 0: s_j' = v_belt_j, |f_j| <= Fb_j) or sliding (f_j = -mode_j mu_k_j N_j).
  *
  * The model owns M, C, K and the contact rows W (sparse: a few entries each); it hands the engine
  *   - operators (eng_ops): y = K x, y = C v, y = M a, and "factor c_M M + c_C C + c_K K, then solve
@@ -108,6 +110,11 @@ typedef struct {
     const double *limit;    /* nc: held contacts' limit Fb, sliding ones' kinetic magnitude */
     const double *N;        /* nc: normal forces (read with law only) */
     const dfo_friction_law *law;  /* nc, or NULL: no Stribeck contact in this problem */
+    /* nc compliances, or NULL: all 0 (rigid). A Jenkins contact (eng_setup.k_t) is the same problem
+     * with its slip v_j = w_j . V1 - vb_j + comp_j f_j (comp_j = 1 / (k_t corr_V), vb_j its shifted
+     * target (s_j + h v_belt_j - w_j . x_pred) / corr_V: v_j is its slider's slip over the step / corr_V):
+     * its Delassus diagonal gains comp_j. Only the default solver takes it (eng_dense_friction). */
+    const double *comp;
 } eng_problem;
 
 /* What a friction solver is asked. */
@@ -303,6 +310,14 @@ typedef struct {
     const double *N;            /* nc normal forces (without N_ext), >= 0 */
     const double *mu_s, *mu_k;  /* nc static and kinetic coefficients (breakaway: max of the two) */
     const dfo_friction_law *law;  /* nc sliding laws (friction.h), or NULL: Coulomb with mu_k */
+    /* nc tangential stiffnesses, or NULL: every contact rigid. k_t[j] > 0: contact j is a Jenkins
+     * element (method.md section 13), a spring k_t in series with a massless slider at s_j (the state's
+     * slider[j]), f_j = -k_t (w_j . x - s_j): stuck (mode 0) the slider moves with its belt and
+     * |f_j| <= Fb; sliding |f_j| = mu_k N against the slider's slip (mode: its side). It never constrains
+     * the accelerations. At a breakaway the force drops from Fb to mu_k N: the slider jumps by
+     * (Fb - mu_k N) / k_t and the spring energy released counts in W_friction. Coulomb law only, the
+     * default friction solver only (no model solver, no sparse operators, no closed-form breakaway). */
+    const double *k_t;
     double h;                   /* internal step > 0 (bossak.h's dfo_step_rule) */
     double alpha;               /* Bossak parameter in [-1/3, 0] */
     int scheme;                 /* DFO_SCHEME_PAPER, _CONSISTENT or _LOCATED */
@@ -347,6 +362,8 @@ typedef struct eng_state_s {
     double *X, *V, *A;          /* n: positions, velocities, Bossak acceleration variables */
     double *hA;                 /* n: the step length that produced A (0: a physical acceleration) */
     double *F;                  /* nc: contact forces f at t (W' f acts on the DOFs) */
+    double *slider;             /* nc: a Jenkins contact's slider position s_j (eng_setup.k_t; a rigid
+                                 * contact's entry is not read: 0) */
     int *mode;                  /* nc: -1 / +1 sliding, 0 stuck (without friction: the sign of the slip) */
     double *t_stick;            /* nc: when the contact's current stick phase began */
     double *t_break;            /* nc: a stuck contact's next breakaway, if known (NaN: to be found; the
@@ -363,7 +380,10 @@ typedef struct eng_state_s {
     long long steps, solves, pivot_steps, switches;  /* counters */
     /* energy accounts since the start (J), kept with eng_setup.account_energy: the work of the applied
      * forces (excitation + F_ext, trapezoidal rule per (sub-)step), of friction (the step's force, or
-     * for Stribeck the mean of its ends, times the DOFs' displacement along w_j) and the dissipation in
+     * for Stribeck the mean of its ends, times the DOFs' displacement along w_j; a Jenkins contact's:
+     * its force times its slider's displacement (stuck: the mean of its ends), less the spring energy
+     * released at its breakaways, so that its spring's energy 0.5 k_t (w_j . X - s_j)^2 counts in the
+     * mechanical energy) and the dissipation in
      * C (trapezoidal); so that the mechanical energy's change is W_applied + W_friction - D_damping to
      * the scheme's error */
     double W_applied, W_friction, D_damping;

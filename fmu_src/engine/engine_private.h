@@ -59,6 +59,10 @@ struct eng {
     double *lim, *f, *f2;
     int *st, *cand, *held, *st2, *mode0, *frozen, *tmode;
     double *hlim, *hf;           /* nc: held_solve's limits and forces */
+    int any_jenk;                /* some contact is a Jenkins element (S.k_t) */
+    double *vbj, *comp;          /* nc: a Jenkins trial's shifted targets and compliances (solve_trial) */
+    int *jstop;                  /* nc: a sliding slider that stops at the located sub-step's end */
+    const double *jsl;           /* the sliders of the state the current trial is from (trial_step) */
     double *tbk;                 /* nc: the candidates' closed-form breakaways (eng_sparse.contact_breakaway) */
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
@@ -115,7 +119,7 @@ static inline int eng_pin_all(eng *E)
     const size_t n = E->S.n;
     for (size_t i = 0; i < n; i++) E->pin[i] = 0;
     for (size_t j = 0; j < E->S.nc; j++)
-        if (E->S.rows[j].nnz == 1) E->pin[E->S.rows[j].idx[0]] = 1;
+        if (E->S.rows[j].nnz == 1 && !(E->S.k_t && E->S.k_t[j] > 0.0)) E->pin[E->S.rows[j].idx[0]] = 1;
     int all = 1;
     for (size_t i = 0; i < n; i++) all &= E->pin[i];
     return all;

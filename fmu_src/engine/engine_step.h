@@ -254,6 +254,15 @@ static int has_friction(const eng *E, size_t j) { return E->Fb[j] > 0.0; }
 
 static int is_strib(const eng *E, size_t j) { return E->S.law && E->S.law[j].law == DFO_LAW_STRIBECK; }
 
+/* contact j is a Jenkins element (eng_setup.k_t) */
+static int is_jenk(const eng *E, size_t j) { return E->any_jenk && E->S.k_t[j] > 0.0; }
+
+/* a Jenkins contact's spring force -k_t (w_j . X - s_j) at the state */
+static double jenk_force(const eng *E, size_t j, const eng_state *s)
+{
+    return -E->S.k_t[j] * (row_dot(&E->S.rows[j], s->X) - s->slider[j]);
+}
+
 /* The kinetic magnitude of contact j sliding at slip speed u >= 0 (Coulomb: mu_k N). */
 static double slide_mag(const eng *E, size_t j, double u)
 {
@@ -366,7 +375,8 @@ static void columns(eng *E, int slot, size_t m)
 /* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
  * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S, their Delassus matrix by
  * Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
-static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, double *y, double *f)
+static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, const double *comp,
+                   double *y, double *f)
 {
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);
@@ -376,7 +386,7 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
         const double w = S->rows[0].w[0];
         double col = 0.0 + 1.0 * w; /* row_axpy into zeros, then the solve */
         ENG_SOLVE(E, slot, &col, &col);
-        const double D = 0.0 + w * col, rhs = target[0] - (0.0 + w * y[0]);
+        const double D = (0.0 + w * col) + (comp ? comp[0] : 0.0), rhs = target[0] - (0.0 + w * y[0]);
         double x = 0.0;
         if (!(!(D > DEPENDENT_REL * fabs(D)) || !(D > 0.0))) { /* chol's test of a dependent row */
             const double L = sqrt(D);
@@ -395,6 +405,7 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     for (size_t a = 0; a < m; a++) {
         const eng_row *Ra = &S->rows[E->sel[a]];
         for (size_t c = 0; c <= a; c++) E->D[a * m + c] = E->D[c * m + a] = row_dot(Ra, E->colp[c]);
+        if (comp) E->D[a * m + a] += comp[E->sel[a]];
         E->rhs[a] = target[E->sel[a]] - row_dot(Ra, y);
     }
     int *dep = E->st2;
@@ -415,7 +426,7 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
 {
     factor_slot(E, ENG_SLOT_MASS, 1.0, 0.0, 0.0);
     if (!(ENG_HAS_FRICTION(E) && ENG_HELD_BASIS(E))) {
-        csolve(E, ENG_SLOT_MASS, r, held, E->zero_nc, y, f);
+        csolve(E, ENG_SLOT_MASS, r, held, E->zero_nc, NULL, y, f);
         return;
     }
     const size_t nc = ENG_NC(E);
@@ -433,6 +444,7 @@ static void held_solve(eng *E, const double *r, const int *held, double *y, doub
     P.limit = E->hlim;
     P.N = E->Nn;
     P.law = NULL;
+    P.comp = NULL;
     (void)ENG_FRICTION(E, &P, ENG_SOLVE_BASIS, E->hmode, y, E->hf, NULL);
     for (size_t j = 0; j < nc; j++) f[j] = dfo_select(held[j], E->hf[j], f[j]);
 }
@@ -485,6 +497,12 @@ static void phys_accel(eng *E, const eng_state *s, double t, const int *mode, do
     for (size_t j = 0; j < nc; j++) {
         E->held[j] = mode[j] == 0 && has_friction(E, j);
         f[j] = 0.0;
+        if (is_jenk(E, j)) { /* a spring (stuck) or the kinetic force (sliding): never held */
+            E->held[j] = 0;
+            if (has_friction(E, j)) f[j] = (mode[j] == 0) ? jenk_force(E, j, s) : -mode[j] * E->mukN[j];
+            row_axpy(&S->rows[j], f[j], r);
+            continue;
+        }
         if (has_friction(E, j) && mode[j] != 0) {
             f[j] = -mode[j] * slide_mag(E, j, fabs(slip(E, j, s->V)));
             row_axpy(&S->rows[j], f[j], r);
@@ -507,7 +525,11 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
     minus_kc(E, s->V, a, r, y);
     const int rp = ramped(in);
     for (size_t j = 0; j < nc; j++) {
-        E->held[j] = s->mode[j] == 0 && has_friction(E, j);
+        E->held[j] = s->mode[j] == 0 && has_friction(E, j) && !is_jenk(E, j);
+        if (is_jenk(E, j) && has_friction(E, j) && s->mode[j] == 0) { /* the spring's rate */
+            row_axpy(&S->rows[j], -S->k_t[j] * slip(E, j, s->V), r);
+            continue;
+        }
         if (!has_friction(E, j) || s->mode[j] == 0) continue;
         double df = 0.0;
         if (rp) { /* d(mu N)/dt of the normal force's rate */
@@ -631,11 +653,12 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
             strib |= P->law && P->law[j].law == DFO_LAW_STRIBECK;
         }
     }
-    csolve(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, V1, f);
-    /* a held contact on one DOF: its slip exactly 0 */
+    csolve(E, P->slot, E->rb, E->held, P->vb ? P->vb : E->zero_nc, P->comp, V1, f);
+    /* a held contact on one DOF: its slip exactly 0 (a compliant one's is not) */
     for (size_t j = 0; j < nc; j++) {
         const eng_row *R = &S->rows[j];
-        if (E->held[j] && R->nnz == 1) V1[R->idx[0]] = (P->vb ? P->vb[j] : 0.0) / R->w[0];
+        if (E->held[j] && R->nnz == 1 && !(P->comp && P->comp[j] != 0.0))
+            V1[R->idx[0]] = (P->vb ? P->vb[j] : 0.0) / R->w[0];
     }
     if (strib) {
         const eng_status st = stribeck_newton(E, P, mode, V1, f);
@@ -669,7 +692,8 @@ static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, doub
         int changed = 0;
         for (size_t j = 0; j < nc; j++) {
             if (!(P->limit[j] > 0.0)) continue;
-            const double v = row_dot(&E->S.rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
+            double v = row_dot(&E->S.rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
+            if (P->comp) v += P->comp[j] * f[j];
             if (mode[j] == 0 && fabs(f[j]) > held_limit(P, j)) { mode[j] = -sgn(f[j]); changed = 1; }
             else if (mode[j] != 0 && mode[j] * v < 0.0) { mode[j] = 0; changed = 1; }
         }
@@ -694,7 +718,8 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     int feasible = 1;
     for (size_t j = 0; j < nc && feasible; j++) {
         if (!(P->limit[j] > 0.0)) continue;
-        const double v = row_dot(&S->rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
+        double v = row_dot(&S->rows[j], V1) - (P->vb ? P->vb[j] : 0.0);
+        if (P->comp) v += P->comp[j] * f[j];
         feasible = (mode[j] == 0) ? fabs(f[j]) <= held_limit(P, j) : mode[j] * v > 0.0;
     }
     if (feasible) return ENG_OK;
@@ -709,6 +734,7 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     for (size_t a = 0; a < m; a++) {
         const size_t j = (size_t)E->sel[a];
         for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
+        if (P->comp) E->D[a * m + a] += P->comp[j];
         E->rhs[a] = row_dot(&S->rows[j], E->y) - (P->vb ? P->vb[j] : 0.0);
     }
     int *dep = E->st2;
@@ -793,7 +819,7 @@ static ENG_HOT int needs_rebase(eng *E, const eng_state *s, double hh)
     if (E->ghost)
         for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
     for (size_t j = 0; j < ENG_NC(E); j++) /* (the mode's test without a branch) */
-        if (S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
+        if (S->rows[j].nnz == 1 && !is_jenk(E, j)) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
     /* rebases' test on the DOFs not pinned, without branches (the pins complete: rebase and
      * step_spans read them) */
     int any = 0;
@@ -828,7 +854,7 @@ static ENG_HOT const int *rebase_pins(eng *E, const eng_inputs *in, const eng_st
     if (E->ghost)
         for (size_t k = 0; k < E->ngh; k++) pin[E->gidx[k]] = 1;
     for (size_t j = 0; j < ENG_NC(E); j++) /* (the mode's test without a branch) */
-        if (S->rows[j].nnz == 1) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
+        if (S->rows[j].nnz == 1 && !is_jenk(E, j)) pin[S->rows[j].idx[0]] |= (s->mode[j] == 0) & has_friction(E, j);
     E->rpin_ok = !ramped(in);
     return pin;
 }
@@ -886,6 +912,7 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
                  *const ph = E->ph;
 #endif
     rebase_into(E, in, s, hh, t1, A0);
+    E->jsl = s->slider;
     const dfo_bossak_kin K = T->kin;
     const double g1 = E->g1;
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
@@ -937,8 +964,30 @@ static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st,
     P.limit = E->lim;
     P.N = E->Nn;
     P.law = E->any_law ? S->law : NULL;
+    P.comp = NULL;
+    if (E->any_jenk) { /* a Jenkins contact's shifted target and compliance (engine.h's eng_problem) */
+        const double cV = T->kin.corr_V, hh = T->kin.h;
+        for (size_t j = 0; j < ENG_NC(E); j++) {
+            E->vbj[j] = E->vb[j];
+            E->comp[j] = 0.0;
+            if (!is_jenk(E, j)) continue;
+            E->vbj[j] = ((E->jsl[j] + hh * E->vb[j]) - row_dot(&S->rows[j], E->xp)) / cV;
+            E->comp[j] = 1.0 / (S->k_t[j] * cV);
+        }
+        P.vb = E->vbj;
+        P.comp = E->comp;
+    }
     if (ENG_HAS_FRICTION(E)) return ENG_FRICTION(E, &P, what, st, V1, f, pivots);
     return ENG_FN(eng_dense_friction)(E, &P, what, st, V1, f, pivots);
+}
+
+/* A Jenkins contact's slider at the end of the trial's step with end velocities V1 and forces f, in
+ * the step's mode E->st[j]: stuck, moved with its belt; sliding, where its force puts it. */
+static double slider_end(const eng *E, const eng_state *s, const trial *T, const double *V1, const double *f, size_t j)
+{
+    if (has_friction(E, j) && E->st[j] == 0) return s->slider[j] + T->kin.h * E->vb[j];
+    const eng_row *R = &E->S.rows[j];
+    return (row_dot(R, E->xp) + T->kin.corr_V * row_dot(R, V1)) + f[j] / E->S.k_t[j];
 }
 
 /* The energy accounts of the trial's step from s to t1 with end velocities V1 and forces f (before
@@ -956,6 +1005,17 @@ static void account(eng *E, eng_state *s, const trial *T, double t1, const doubl
         Wa += 0.5 * hh * (P0[i] * s->V[i] + P1[i] * V1[i]);
     }
     for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (is_jenk(E, j)) { /* the friction's work on the slider: f ds (stuck: trapezoidal, with its belt) */
+            const int stuck = has_friction(E, j) && E->st[j] == 0;
+            const double ds = slider_end(E, s, T, V1, f, j) - s->slider[j];
+            Wf += (stuck ? 0.5 * (s->F[j] + f[j]) : f[j]) * ds;
+            if (!stuck && s->mode[j] == 0 && has_friction(E, j)) { /* a breakaway inside the step (paper,
+                * consistent): its jump's released energy beyond the kinetic force's work over it */
+                const double d = E->Fb[j] - E->mukN[j];
+                Wf -= d * d / (2.0 * E->S.k_t[j]);
+            }
+            continue;
+        }
         const double fj = is_strib(E, j) ? 0.5 * (s->F[j] + f[j]) : f[j];
         Wf += fj * row_dot(&E->S.rows[j], dX);
     }
@@ -975,6 +1035,9 @@ static ENG_HOT void finish(eng *E, eng_state *s, const trial *T, const double *V
 {
     const size_t n = ENG_N(E);
     if (E->S.account_energy) account(E, s, T, t1, V1, f);
+    if (E->any_jenk)
+        for (size_t j = 0; j < ENG_NC(E); j++)
+            if (is_jenk(E, j)) s->slider[j] = slider_end(E, s, T, V1, f, j);
     for (size_t i = 0; i < n; i++) {
         s->X[i] = E->xp[i] + T->kin.corr_V * V1[i];
         s->A[i] = (V1[i] - s->V[i]) * T->kin.c1 - E->g1 * E->A0[i];
@@ -1051,7 +1114,8 @@ static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, in
         size_t worst = nc;
         double excess = 0.0;
         for (size_t j = 0; j < nc; j++) {
-            if (!rest[j] || mode[j] != 0 || !has_friction(E, j)) continue;
+            /* (a slider that comes to rest sticks: its force is the kinetic one, within the limit) */
+            if (!rest[j] || mode[j] != 0 || !has_friction(E, j) || is_jenk(E, j)) continue;
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
         }
@@ -1085,7 +1149,7 @@ static ENG_HOT void rest_exact(eng *E, eng_state *s)
 {
     const eng_setup *S = &E->S;
     for (size_t j = 0; j < ENG_NC(E); j++) {
-        if (s->mode[j] != 0 || !has_friction(E, j)) continue;
+        if (s->mode[j] != 0 || !has_friction(E, j) || is_jenk(E, j)) continue;
         const eng_row *R = &S->rows[j];
         if (R->nnz == 1) {
             s->V[R->idx[0]] = E->vb[j] / R->w[0];
@@ -1171,7 +1235,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
         int update = 0;
         for (size_t j = 0; j < nc; j++) {
             E->frozen[j] = 0;
-            if (!has_friction(E, j)) continue;
+            if (!has_friction(E, j) || is_jenk(E, j)) continue; /* (a slider: its LCP's mode) */
             const int from = s->mode[j];
             if (from == 0 && E->st[j] != 0) { E->lim[j] = E->mukN[j]; update = 1; }
             if (from != 0 && E->st[j] != from) { E->frozen[j] = 1; update = 1; }
@@ -1196,7 +1260,7 @@ static ENG_HOT eng_status step_lcp(eng *E, const eng_inputs *in, eng_state *s, d
                 if (st != ENG_OK) return st;
                 update = 0;
                 for (size_t j = 0; j < nc; j++) {
-                    if (!has_friction(E, j) || E->st[j] == 0) continue;
+                    if (!has_friction(E, j) || E->st[j] == 0 || is_jenk(E, j)) continue;
                     if (E->st[j] * slip(E, j, E->V1) > 0.0) continue;
                     if (s->mode[j] == 0 && !E->frozen[j]) continue;
                     E->st[j] = 0;
@@ -1382,6 +1446,19 @@ static ENG_HOT void trial_again(margin_ctx *c, double x, trial *T)
     c->x_hi = NAN;
 }
 
+/* The sliders that broke away (E->smode: their modes before, s->mode after): the force drops from its
+ * value to the kinetic one, the slider jumps there, and the spring energy released counts as friction
+ * work (with the energy accounts). */
+static void jenk_breakaways(eng *E, eng_state *s)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!is_jenk(E, j) || !has_friction(E, j) || E->smode[j] != 0 || s->mode[j] == 0) continue;
+        const double k = E->S.k_t[j], f0 = jenk_force(E, j, s), f1 = -s->mode[j] * E->mukN[j];
+        s->slider[j] = row_dot(&E->S.rows[j], s->X) + f1 / k;
+        if (E->S.account_energy) s->W_friction -= (f0 * f0 - f1 * f1) / (2.0 * k);
+    }
+}
+
 /* Switch the candidates whose margin is <= 0 (all of them when immediate): a stopping contact comes
  * to rest and, with every contact at rest, the rest rule decides; a held one breaks away the way it
  * is driven. Then the consistent restart. held: E->y2 and E->f hold phys_accel's solve of this
@@ -1407,6 +1484,7 @@ static void apply_switches(eng *E, eng_state *s, int immediate, int held, const 
     const int decided = rest_decide(E, s, s->t, rest, s->mode);
     for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
+    if (E->any_jenk) jenk_breakaways(E, s);
     restart(E, s, s->t, decided);
     /* a slide from rest starts at its start magnitude (Stribeck: mu_s N) and never against its way */
     for (size_t j = 0; j < nc; j++) {
@@ -1690,7 +1768,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (!(glo > 0.0)) { /* nothing resolvable before the switch: it happens now */
             loads_at(E, in, s->t);
             for (size_t j = 0; j < nc; j++)
-                if (E->cand[j] && s->mode[j] != 0) {
+                if (E->cand[j] && s->mode[j] != 0 && !is_jenk(E, j)) {
                     const eng_row *R = &S->rows[j];
                     if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
                 }
@@ -1707,12 +1785,18 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (mc.err != ENG_OK) return mc.err;
         /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
         int again = 0;
-        for (size_t j = 0; j < nc; j++)
+        for (size_t j = 0; j < nc; j++) {
+            E->jstop[j] = 0;
+            if (E->cand[j] && E->st[j] != 0 && margin(E, E->st, j, E->V1, E->f) <= 0.0 && is_jenk(E, j)) {
+                E->jstop[j] = 1; /* a slider stops: the sub-step slid to its end, the slider sticks there */
+                continue;
+            }
             if (E->cand[j] && E->st[j] != 0 && margin(E, E->st, j, E->V1, E->f) <= 0.0) {
                 E->st[j] = 0;
                 E->lim[j] = E->Fb[j];
                 again = 1;
             }
+        }
         if (again) {
             const eng_status st = solve_trial(E, &T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
             if (st != ENG_OK) return st;
@@ -1727,7 +1811,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         /* the margins at the switch: a stopped contact (slip 0) and a held one beyond its limit */
         for (size_t j = 0; j < nc; j++) {
             if (!E->cand[j]) continue;
-            const int stopping = s->mode[j] != 0 && E->st[j] == 0;
+            const int stopping = s->mode[j] != 0 && (E->st[j] == 0 || E->jstop[j]);
             const int breaking = s->mode[j] == 0 && !(fabs(E->f[j]) < E->Fb[j]);
             E->cand[j] = stopping || breaking;
         }
@@ -1973,6 +2057,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     P.vb = E->vb;
     P.N = E->Nn;
     P.law = E->any_law ? S->law : NULL;
+    P.comp = NULL; /* (no Jenkins contact in a run of fused steps) */
 #if ENG_FUSED_LOCAL
     double X[ENG_FUSED_N], V[ENG_FUSED_N], A[ENG_FUSED_N], hA[ENG_FUSED_N], X0[ENG_FUSED_N];
     double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
@@ -2344,6 +2429,11 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
         const double v = slip(E, j, s->V);
         s->mode[j] = sgn(v);
         E->cand[j] = has_friction(E, j) && v == 0.0;
+        if (is_jenk(E, j)) { /* a slider starts stuck, its spring relaxed */
+            s->slider[j] = row_dot(&E->S.rows[j], x0);
+            s->mode[j] = has_friction(E, j) ? 0 : s->mode[j];
+            E->cand[j] = 0;
+        }
         s->t_stick[j] = t0;
         s->t_break[j] = NAN;
         s->break_dir[j] = 0;
@@ -2475,7 +2565,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
     if (!(hk && hk->stick_kept)) s->stick_tb = NAN;
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
-    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy;
+    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy && !E->any_jenk;
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
                           S->scheme == DFO_SCHEME_LOCATED &&
                           !(hk && hk->report_turns && !E->all_friction); /* (turns: the general path's) */
@@ -2560,6 +2650,42 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     return ENG_OK;
 }
 
+/* The Jenkins contacts under the new normal forces (the loads set): a sliding slider whose spring
+ * force is below the new kinetic force sticks; one above it has its force drop to it; a stuck one
+ * beyond the new breakaway limit breaks away; without friction the force is 0 and the mode follows
+ * the slip. Where the force drops the slider jumps, the spring energy released counted as friction
+ * work (with the energy accounts). Switches reported; each force's jump into E->f2. */
+static void jenk_new_loads(eng *E, eng_state *s, const eng_hooks *hk)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        E->f2[j] = 0.0;
+        if (!is_jenk(E, j)) continue;
+        const double k = E->S.k_t[j], f0 = jenk_force(E, j, s);
+        const int from = s->mode[j];
+        int m = from;
+        double f1 = f0;
+        if (!has_friction(E, j)) {
+            m = sgn(slip(E, j, s->V));
+            f1 = 0.0;
+        } else if (m != 0 && fabs(f0) < E->mukN[j]) {
+            m = 0;
+        } else if (m != 0) {
+            f1 = -m * E->mukN[j];
+        } else if (fabs(f0) > E->Fb[j]) {
+            m = -sgn(f0);
+            f1 = -m * E->mukN[j];
+        }
+        if (f1 != f0) {
+            s->slider[j] = row_dot(&E->S.rows[j], s->X) + f1 / k;
+            if (E->S.account_energy) s->W_friction -= (f0 * f0 - f1 * f1) / (2.0 * k);
+        }
+        E->f2[j] = f1 - s->F[j];
+        s->F[j] = f1;
+        s->mode[j] = m;
+        if (m != from && has_friction(E, j)) report(s, j, from, hk);
+    }
+}
+
 ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s, const eng_hooks *hk)
 {
     E->loads_for = NULL;
@@ -2568,13 +2694,14 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
     s->stick_tb = NAN; /* (of the old inputs) */
     /* belts: a contact whose belt changed takes the mode of its new slip; one the belt meets the rest rule */
     loads_at(E, new_in, s->t);
+    if (E->any_jenk) jenk_new_loads(E, s, hk);
     int belt_changed = 0;
     memcpy(E->smode, s->mode, nc * sizeof(int));
     for (size_t j = 0; j < nc; j++) {
         const double vo = (old_in && old_in->v_belt) ? old_in->v_belt[j] : 0.0;
         const double vn = (new_in && new_in->v_belt) ? new_in->v_belt[j] : 0.0;
         E->cand[j] = 0;
-        if (vo == vn || !has_friction(E, j)) continue;
+        if (vo == vn || !has_friction(E, j) || is_jenk(E, j)) continue; /* (a stuck slider moves with its belt) */
         belt_changed = 1;
         const double v = slip(E, j, s->V);
         s->mode[j] = sgn(v);
@@ -2597,7 +2724,11 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
     int any = 0;
     for (size_t i = 0; i < n; i++) any |= r[i] != 0.0;
     for (size_t j = 0; j < nc; j++) {
-        E->held[j] = s->mode[j] == 0 && has_friction(E, j);
+        E->held[j] = s->mode[j] == 0 && has_friction(E, j) && !is_jenk(E, j);
+        if (is_jenk(E, j)) { /* its force's jump: jenk_new_loads' */
+            if (E->f2[j] != 0.0) { row_axpy(&S->rows[j], E->f2[j], r); any = 1; }
+            continue;
+        }
         if (s->mode[j] == 0 || !has_friction(E, j)) continue;
         const double fnew = -s->mode[j] * slide_mag(E, j, fabs(slip(E, j, s->V)));
         const double df = fnew - s->F[j];
@@ -2627,7 +2758,7 @@ ENG_API void ENG_FN(eng_accelerations)(eng *E, const eng_inputs *in, const eng_s
     applied_at(E, s, s->t, r);
     minus_kc(E, s->X, s->V, r, y);
     for (size_t j = 0; j < nc; j++) {
-        E->held[j] = !paper && s->mode[j] == 0 && has_friction(E, j);
+        E->held[j] = !paper && s->mode[j] == 0 && has_friction(E, j) && !is_jenk(E, j);
         if (!has_friction(E, j) || E->held[j]) continue;
         /* a Coulomb slide's force follows the current loads (the inputs' feed-through) */
         const double fj = (s->mode[j] != 0 && !is_strib(E, j)) ? -s->mode[j] * slide_mag(E, j, 0.0) : s->F[j];

@@ -587,7 +587,7 @@ static void test_dense_lcp(checks *T)
             lim[i] = rng_range(&R, 0.0, 3.0);
             vb[i] = (c % 3 == 0) ? rng_range(&R, -0.3, 0.3) : 0.0;
         }
-        eng_problem P = {ENG_SLOT_GRID, 0.1, 10.0, 1.0, 0.03, p, vb, lim, N, NULL};
+        eng_problem P = {ENG_SLOT_GRID, 0.1, 10.0, 1.0, 0.03, p, vb, lim, N, NULL, NULL};
         int mode[3];
         for (int i = 0; i < 3; i++) mode[i] = rng_int(&R, 3) - 1;
         double V1[3], f[3];

@@ -164,7 +164,7 @@ static osc_stribeck_out osc_stribeck_friction(const osc_eng_model *O, int slot, 
     osc_stribeck_out o = {ENG_ERR_FRICTION, mode, 0, 0.0, 0.0};
     if (!O->E) return o;
     const double ph[1] = {p_hat}, vbs[1] = {vb}, lim[1] = {limit}, Ns[1] = {N};
-    const eng_problem Q = {slot, h, cM, cC, cK, ph, belt ? vbs : NULL, lim, Ns, law};
+    const eng_problem Q = {slot, h, cM, cC, cK, ph, belt ? vbs : NULL, lim, Ns, law, NULL};
     int md[1] = {mode}, piv = 0;
     double V1[1] = {0.0}, f[1] = {0.0};
     o.st = osc_eng_dense_friction(O->E, &Q, what, md, V1, f, &piv);

@@ -193,6 +193,8 @@ static const char *implausible(sys_instance *in, const dfo_run *r, const double 
         const double m = s[SYS_SNAP_NS + SYS_SNAP_NA_N * n + 3 * nc + j];
         if (!(m == -1.0 || m == 0.0 || m == 1.0)) return "a mode is invalid";
     }
+    for (size_t j = 0; j < nc; j++)
+        if (!isfinite(s[SYS_SNAP_NS + SYS_SNAP_NA_N * n + 5 * nc + j])) return "the state is not finite"; /* sliders */
     if (isnan(s[3])) return "the state is not finite"; /* t_switch: -inf allowed */
     if (s[2] < 0.0 || s[2] != floor(s[2])) return "the state's grid index is invalid";
     if (s[12] < -1.0) return "the excitation cache is invalid";

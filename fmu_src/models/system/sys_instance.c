@@ -223,6 +223,8 @@ void sys_snap_of(const eng_state *s, double *vals, const sys_layout *L)
     for (size_t j = 0; j < nc; j++) vals[k + j] = (double)s->mode[j];
     k += nc;
     for (size_t j = 0; j < nc; j++) vals[k + j] = (double)s->break_dir[j];
+    k += nc;
+    if (nc) memcpy(vals + k, s->slider, nc * sizeof(double));
 }
 
 void sys_state_of(const double *vals, const sys_layout *L, eng_state *s)
@@ -252,6 +254,8 @@ void sys_state_of(const double *vals, const sys_layout *L, eng_state *s)
     for (size_t j = 0; j < nc; j++) s->mode[j] = (int)vals[k + j];
     k += nc;
     for (size_t j = 0; j < nc; j++) s->break_dir[j] = (int)vals[k + j];
+    k += nc;
+    if (nc) memcpy(s->slider, vals + k, nc * sizeof(double));
 }
 
 void sys_sync_inputs(double *vals, const sys_layout *L)
@@ -464,8 +468,8 @@ static void note_slip(sys_instance *in, const char *fn)
     if (in->lc.warned & WARNED_SLIP) return;
     in->lc.warned |= WARNED_SLIP;
     dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
-                 "%s: variable s (value reference %u) is not computed: every contact of this build is rigid (k_t = 0, "
-                 "no Jenkins element), so s reads NaN; logged once per run.", fn, VR_s);
+                 "%s: variable s (value reference %u) is not computed for a rigid contact (k_t = 0: no slider), so "
+                 "its entry reads NaN; logged once per run.", fn, VR_s);
 }
 
 static double h_used(sys_instance *in)
@@ -487,8 +491,18 @@ static void get_outputs(sys_instance *in, const char *fn, const sys_ref *r, doub
         dout[0] = h_used(in);
         return;
     }
-    if (id == DFO_OUT_s) note_slip(in, fn);
-    if (!started(in) || id == DFO_OUT_s) {
+    if (id == DFO_OUT_s) {
+        const double *kt = in->vals + in->L.ap[DFO_AP_k_t];
+        int rigid = 0;
+        for (size_t i = 0; i < c; i++) {
+            const int jenk = kt[i0 + i] > 0.0;
+            rigid |= !jenk;
+            dout[i] = (started(in) && jenk) ? in->s.slider[i0 + i] : NAN;
+        }
+        if (rigid) note_slip(in, fn);
+        return;
+    }
+    if (!started(in)) {
         for (size_t i = 0; i < c; i++) {
             if (iout) iout[i] = 0;
             else dout[i] = NAN;

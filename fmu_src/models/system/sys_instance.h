@@ -48,9 +48,9 @@ enum {
 #define SYS_SNAP_SCALARS(DO) DO(t0) DO(t) DO(n_grid) DO(t_switch) DO(stick_tb) DO(steps) DO(solves) DO(pivot_steps) \
     DO(switches) DO(W_applied) DO(W_friction) DO(D_damping) DO(exc_n) DO(exc_c) DO(exc_s)
 #define SYS_SNAP_NS 15
-/* and its arrays: X, V, A, hA (n each), F, t_stick, t_break, mode, break_dir (nc each) */
+/* and its arrays: X, V, A, hA (n each), F, t_stick, t_break, mode, break_dir, slider (nc each) */
 #define SYS_SNAP_NA_N 4
-#define SYS_SNAP_NA_NC 5
+#define SYS_SNAP_NA_NC 6
 
 /* Where each part of vals begins for sizes n, nc (in doubles). */
 typedef struct {

@@ -237,12 +237,6 @@ static const char *check_with(const sys_params *p, double *L, char *buf, size_t 
     if (!nonneg("N", p->N, nc, buf, len) || !nonneg("mu_s", p->mu_s, nc, buf, len) ||
         !nonneg("mu_k", p->mu_k, nc, buf, len) || !nonneg("k_t", p->k_t, nc, buf, len))
         return buf;
-    for (size_t j = 0; j < nc; j++)
-        if (p->k_t[j] != 0.0) {
-            snprintf(buf, len, "k_t[%zu] = %.17g: Jenkins contacts (k_t > 0) are not in this build yet; use 0", j + 1,
-                     p->k_t[j]);
-            return buf;
-        }
     return NULL;
 }
 
@@ -256,10 +250,28 @@ const char *sys_check(const sys_params *p, const eng_alloc *al, char *buf, size_
     return why;
 }
 
-/* The fastest rate with L the Cholesky factor of M (x, y: n scratch each). */
-static double rate_with(const sys_params *p, const double *L, double *x, double *y)
+/* Whether some contact of p is a Jenkins element (k_t > 0). */
+static int any_jenkins(const sys_params *p)
 {
-    const double lk = largest_eig(p->n, L, p->K, x, y), lc = largest_eig(p->n, L, p->C, x, y);
+    for (size_t j = 0; j < p->nc; j++)
+        if (p->k_t[j] > 0.0) return 1;
+    return 0;
+}
+
+/* The fastest rate with L the Cholesky factor of M (x, y: n scratch each; Kt: n x n scratch, read
+ * only with Jenkins contacts: the stiffness with every slider stuck, K + sum k_t w w'). */
+static double rate_with(const sys_params *p, const double *L, double *x, double *y, double *Kt)
+{
+    const size_t n = p->n;
+    const double *K = p->K;
+    if (Kt && any_jenkins(p)) {
+        memcpy(Kt, p->K, n * n * sizeof(double));
+        for (size_t j = 0; j < p->nc; j++)
+            for (size_t a = 0; a < n; a++)
+                for (size_t b = 0; b < n; b++) Kt[a * n + b] += p->k_t[j] * p->W[j * n + a] * p->W[j * n + b];
+        K = Kt;
+    }
+    const double lk = largest_eig(n, L, K, x, y), lc = largest_eig(n, L, p->C, x, y);
     return sqrt(lk) + lc + fabs(p->omega);
 }
 
@@ -267,11 +279,11 @@ double sys_step(const sys_params *p, const eng_alloc *al)
 {
     if (p->h > 0.0) return p->h;
     const size_t n = p->n;
-    double *L = (double *)al->allocate(al->env, n * n + 2 * n, sizeof(double));
+    double *L = (double *)al->allocate(al->env, 2 * n * n + 2 * n, sizeof(double));
     if (!L) return NAN;
     double h = NAN;
     if (cholesky(n, p->M, 0.0, L, NULL)) /* (no time scale, rate 0: the rule's fallback, 1 ms) */
-        h = dfo_step_rule(0.0, 2.0 * DFO_PI / rate_with(p, L, L + n * n, L + n * n + n));
+        h = dfo_step_rule(0.0, 2.0 * DFO_PI / rate_with(p, L, L + n * n, L + n * n + n, L + n * n + 2 * n));
     al->release(al->env, L);
     return h;
 }
@@ -310,7 +322,7 @@ void sys_model_free(sys_model *m, const eng_alloc *al)
 {
     if (m->E) eng_destroy(m->E);
     m->E = NULL;
-    void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Pc, m->Ps, m->N, m->mu_s, m->mu_k,
+    void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Pc, m->Ps, m->N, m->mu_s, m->mu_k, m->k_t,
                       m->rows, m->idx, m->w, m->work};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         if (arrays[i]) al->release(al->env, arrays[i]);
@@ -346,6 +358,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     m->N = (double *)alloc_n(al, nc, sizeof(double), &ok);
     m->mu_s = (double *)alloc_n(al, nc, sizeof(double), &ok);
     m->mu_k = (double *)alloc_n(al, nc, sizeof(double), &ok);
+    m->k_t = (double *)alloc_n(al, nc, sizeof(double), &ok);
     m->rows = (eng_row *)alloc_n(al, nc, sizeof(eng_row), &ok);
     m->idx = (size_t *)alloc_n(al, nnz, sizeof(size_t), &ok);
     m->w = (double *)alloc_n(al, nnz, sizeof(double), &ok);
@@ -365,7 +378,9 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
         memcpy(m->N, p->N, nc * sizeof(double));
         memcpy(m->mu_s, p->mu_s, nc * sizeof(double));
         memcpy(m->mu_k, p->mu_k, nc * sizeof(double));
+        memcpy(m->k_t, p->k_t, nc * sizeof(double));
     }
+    m->jenkins = any_jenkins(p);
     size_t k = 0;
     for (size_t j = 0; j < nc; j++) {
         m->rows[j].idx = m->idx + k;
@@ -382,7 +397,8 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     }
     m->has_C = max_abs(n * n, p->C) > 0.0;
     (void)cholesky(n, p->M, 0.0, m->L[ENG_SLOT_MASS], NULL); /* (passed sys_check) */
-    m->rate = rate_with(p, m->L[ENG_SLOT_MASS], m->work, m->work + n);
+    /* (the stiffness with the sliders stuck in a factor slot's storage, before its first factorisation) */
+    m->rate = rate_with(p, m->L[ENG_SLOT_MASS], m->work, m->work + n, m->L[ENG_SLOT_GRID]);
     m->h = dfo_step_rule(p->h, 2.0 * DFO_PI / m->rate); /* (no time scale, rate 0: the rule's fallback, 1 ms) */
     eng_setup S;
     memset(&S, 0, sizeof S);
@@ -403,6 +419,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.N = m->N;
     S.mu_s = m->mu_s;
     S.mu_k = m->mu_k;
+    S.k_t = m->jenkins ? m->k_t : NULL; /* (all rigid: NULL, the rigid paths as they were) */
     S.h = m->h;
     S.alpha = p->alpha;
     S.scheme = p->scheme;

@@ -1,12 +1,13 @@
-/* The DryFrictionSystem model: any linear structure with rigid Coulomb friction contacts,
+/* The DryFrictionSystem model: any linear structure with Coulomb friction contacts, rigid or Jenkins,
  *
  *     M x'' + C x' + K x = F_c cos(omega t) + F_s sin(omega t) + F_ext + W' f,   x in R^n,
  *
  * M (symmetric positive definite), C and K (symmetric positive semi-definite) dense n x n, row-major;
  * nc contacts, contact j along the row w_j of W (nc x n, row-major; stored sparse for the engine: its
  * nonzero entries), normal force N_j (+ the input N_ext_j, floored at 0), static and kinetic
- * coefficients mu_s_j, mu_k_j, belt speed (an input) v_belt_j. Rigid contacts only in this version:
- * a contact's tangential stiffness k_t_j must be 0 (Jenkins contacts, k_t > 0, are refused).
+ * coefficients mu_s_j, mu_k_j, belt speed (an input) v_belt_j, and tangential stiffness k_t_j: 0, a
+ * rigid contact; > 0, a Jenkins element (a spring k_t_j in series with a massless slider whose
+ * position is part of the engine's state: engine.h's eng_setup.k_t, eng_state.slider).
  *
  * Stepped by the friction engine (engine.h) with its three Bossak schemes through its generic
  * function-pointer instance (engine_generic.c), as the TwoMass model. This file holds the model's
@@ -28,7 +29,7 @@ typedef struct {
     const double *x0, *v0;           /* n: initial state */
     const double *W;                 /* nc x n, row-major: the contact rows */
     const double *N, *mu_s, *mu_k;   /* nc: normal forces, static and kinetic coefficients */
-    const double *k_t;               /* nc: tangential stiffness (0: rigid; > 0 refused in this version) */
+    const double *k_t;               /* nc: tangential stiffness (0: rigid; > 0: a Jenkins element) */
     double omega, h, alpha;          /* excitation frequency, internal step (0: derived), Bossak alpha */
     int scheme, frictionUpdates;     /* DFO_SCHEME_*, the paper scheme's coefficient updates */
 } sys_params;
@@ -40,7 +41,8 @@ typedef struct {
     double *M, *C, *K;               /* n x n copies */
     double *L[ENG_NSLOTS];           /* per slot: the lower Cholesky factor, n x n row-major */
     double *Pc, *Ps;                 /* n: the engine's excitation (Ps = -F_s; NULL when F_s = 0) */
-    double *N, *mu_s, *mu_k;         /* nc copies */
+    double *N, *mu_s, *mu_k, *k_t;   /* nc copies */
+    int jenkins;                     /* some contact is a Jenkins element (k_t > 0) */
     eng_row *rows;                   /* nc rows, their nonzeros in idx and w */
     size_t *idx;
     double *w;
@@ -53,13 +55,14 @@ typedef struct {
  * or NULL when p is a structure this build can step: sizes, finite values, M symmetric (within 1e-12
  * of its largest entry) and positive definite, K and C symmetric and positive semi-definite beyond
  * rounding (the Cholesky factorisation of K + 1e-12 max|K| I succeeds), no zero contact row, N, mu_s,
- * mu_k >= 0, k_t = 0, the scalars in range. al: the scratch of the factorisations (freed before
+ * mu_k, k_t >= 0, the scalars in range. al: the scratch of the factorisations (freed before
  * returning); NULL with "out of memory" when it fails. */
 const char *sys_check(const sys_params *p, const eng_alloc *al, char *buf, size_t len);
 
 /* The internal step of p, for a structure that passed sys_check: p->h, or with p->h = 0 the default
  * rule (bossak.h's dfo_step_rule) over the fastest period 2 pi / rate, the fastest rate being
- *     rate = sqrt(lambda_max(M^-1 K)) + lambda_max(M^-1 C) + |omega|
+ *     rate = sqrt(lambda_max(M^-1 K_t)) + lambda_max(M^-1 C) + |omega|,   K_t = K + sum_j k_t_j w_j w_j'
+ * (the stiffness with every Jenkins slider stuck; K without Jenkins contacts)
  * with each largest eigenvalue by power iteration on the symmetric L^-1 A L^-T (L the Cholesky
  * factor of M; at most 200 iterations, stopped at a relative change of 1e-9: a lower estimate,
  * exact for n = 1); without any (K = C = 0, omega = 0) the rule's fallback, 1 ms. NaN when M cannot
