@@ -61,6 +61,9 @@
 #ifndef ENG_HAS_C
 #define ENG_HAS_C(E) ((E)->S.ops.apply_C != NULL)
 #endif
+#ifndef ENG_HAS_JENKINS /* some contact is a Jenkins element (a model without any: 0, its code left out) */
+#define ENG_HAS_JENKINS(E) ((E)->any_jenk)
+#endif
 #ifndef ENG_APPLY_M
 #define ENG_APPLY_M(E, a, y) ((E)->S.ops.apply_M((E)->S.ops.ctx, (a), (y)))
 #endif
@@ -255,7 +258,7 @@ static int has_friction(const eng *E, size_t j) { return E->Fb[j] > 0.0; }
 static int is_strib(const eng *E, size_t j) { return E->S.law && E->S.law[j].law == DFO_LAW_STRIBECK; }
 
 /* contact j is a Jenkins element (eng_setup.k_t) */
-static int is_jenk(const eng *E, size_t j) { return E->any_jenk && E->S.k_t[j] > 0.0; }
+static int is_jenk(const eng *E, size_t j) { return ENG_HAS_JENKINS(E) && E->S.k_t[j] > 0.0; }
 
 /* a Jenkins contact's spring force -k_t (w_j . X - s_j) at the state */
 static double jenk_force(const eng *E, size_t j, const eng_state *s)
@@ -965,7 +968,7 @@ static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st,
     P.N = E->Nn;
     P.law = E->any_law ? S->law : NULL;
     P.comp = NULL;
-    if (E->any_jenk) { /* a Jenkins contact's shifted target and compliance (engine.h's eng_problem) */
+    if (ENG_HAS_JENKINS(E)) { /* a Jenkins contact's shifted target and compliance (engine.h's eng_problem) */
         const double cV = T->kin.corr_V, hh = T->kin.h;
         for (size_t j = 0; j < ENG_NC(E); j++) {
             E->vbj[j] = E->vb[j];
@@ -1035,7 +1038,7 @@ static ENG_HOT void finish(eng *E, eng_state *s, const trial *T, const double *V
 {
     const size_t n = ENG_N(E);
     if (E->S.account_energy) account(E, s, T, t1, V1, f);
-    if (E->any_jenk)
+    if (ENG_HAS_JENKINS(E))
         for (size_t j = 0; j < ENG_NC(E); j++)
             if (is_jenk(E, j)) s->slider[j] = slider_end(E, s, T, V1, f, j);
     for (size_t i = 0; i < n; i++) {
@@ -1484,7 +1487,7 @@ static void apply_switches(eng *E, eng_state *s, int immediate, int held, const 
     const int decided = rest_decide(E, s, s->t, rest, s->mode);
     for (size_t j = 0; j < nc; j++)
         if (s->mode[j] != E->smode[j]) report(s, j, E->smode[j], hk);
-    if (E->any_jenk) jenk_breakaways(E, s);
+    if (ENG_HAS_JENKINS(E)) jenk_breakaways(E, s);
     restart(E, s, s->t, decided);
     /* a slide from rest starts at its start magnitude (Stribeck: mu_s N) and never against its way */
     for (size_t j = 0; j < nc; j++) {
@@ -2565,7 +2568,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
     if (!(hk && hk->stick_kept)) s->stick_tb = NAN;
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
-    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy && !E->any_jenk;
+    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy && !ENG_HAS_JENKINS(E);
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
                           S->scheme == DFO_SCHEME_LOCATED &&
                           !(hk && hk->report_turns && !E->all_friction); /* (turns: the general path's) */
@@ -2694,7 +2697,7 @@ ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_
     s->stick_tb = NAN; /* (of the old inputs) */
     /* belts: a contact whose belt changed takes the mode of its new slip; one the belt meets the rest rule */
     loads_at(E, new_in, s->t);
-    if (E->any_jenk) jenk_new_loads(E, s, hk);
+    if (ENG_HAS_JENKINS(E)) jenk_new_loads(E, s, hk);
     int belt_changed = 0;
     memcpy(E->smode, s->mode, nc * sizeof(int));
     for (size_t j = 0; j < nc; j++) {

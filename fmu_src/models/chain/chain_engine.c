@@ -15,6 +15,7 @@
 #define ENG_APPLY_K(E, x, y) chain_op_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) chain_op_C(ENG_CTX(E), (v), (y))
 #define ENG_HAS_C(E) ((E)->S.ops.apply_C != NULL)
+#define ENG_HAS_JENKINS(E) ((void)(E), 0) /* (no Jenkins contact: eng_create refuses one with the model's own friction solver) */
 #define ENG_APPLY_M(E, a, y) chain_op_M(ENG_CTX(E), (a), (y))
 #define ENG_ADD_MK(E, r, x, p) chain_op_add_mk(ENG_CTX(E), (r), (x), (p))
 #define ENG_FACTOR(E, slot, cM, cC, cK) chain_op_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))

@@ -139,6 +139,7 @@ static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, doub
 #define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
 #define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
 #define ENG_HAS_C(E) ((void)(E), 1) /* (c v whatever c is; ops.apply_C: NULL where c = 0) */
+#define ENG_HAS_JENKINS(E) ((void)(E), 0) /* (no Jenkins contact: eng_create refuses one with the model's own friction solver) */
 #define ENG_APPLY_M(E, a, y) osc_M(ENG_CTX(E), (a), (y))
 #define ENG_FACTOR(E, slot, cM, cC, cK) osc_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
 #define ENG_SOLVE(E, slot, b, x) osc_solve(ENG_CTX(E), (slot), (b), (x))
