@@ -41,7 +41,10 @@ are solved together; among the contacts that came to rest, the one most beyond i
 ``|f_j| - F_b``) is released, to slide the way it is driven (against its holding force, ``s =
 -sign(f_j)``), the forces are solved again, and so on until every one of them is within its limit.
 Then a contact stuck before that the new set drives beyond its limit breaks away the same way (the
-most beyond first, the forces solved again after each). A contact whose holding force reaches its
+most beyond first, the forces solved again after each). Last, the set is made consistent: a contact
+that left rest at the event but whose slip would then accelerate against the way it slides (a later
+breakaway took its load) is held again where its holding force is within its limit beyond rounding
+(the first in contact order, the set checked again). A contact whose holding force reaches its
 limit is released first and the others are checked by the second part. A contact without friction
 (``F_b = 0``) is never held. At t = 0 the rigid contacts whose slip is 0 count as come to rest;
 the sliders start stuck with their springs relaxed (``s = g``). With ``mu_s > mu_k`` and contacts
@@ -197,12 +200,15 @@ class _Model:
         v -= A @ (np.linalg.pinv(WR @ A) @ (WR @ v - self.vb[rest]))
         y[n:2 * n] = v
 
-    def rest_rule(self, t: float, y: np.ndarray, modes: list[int], rest: Sequence[int]) -> list[int]:
+    def rest_rule(self, t: float, y: np.ndarray, modes: list[int], rest: Sequence[int],
+                  was: Sequence[int] | None = None) -> list[int]:
         """The rest rule of the module docstring: the contacts ``rest`` (slip 0) held with the stuck
         ones; among ``rest`` the one most beyond its limit released, again until all of them are
         within; then a held contact the new set drives beyond its limit breaks away (the most
-        beyond first, again until all held ones are within)."""
+        beyond first, again until all held ones are within); then the set made consistent
+        (:meth:`_consistent`)."""
         modes = list(modes)
+        before = list(was if was is not None else modes)  # the modes before the event
         for j in rest:
             modes[j] = 0
         for candidates in (np.array(sorted(rest), dtype=int), None):
@@ -219,6 +225,34 @@ class _Model:
                     break
                 j = int(H[k])
                 modes[j] = -int(np.sign(f[j]))
+        return self._consistent(t, y, modes, [j for j in range(self.nc) if modes[j] != 0 and (j in rest or
+                                                                                               before[j] == 0)])
+
+    def _consistent(self, t: float, y: np.ndarray, modes: list[int], left: list[int]) -> list[int]:
+        """The cascade's mode set made consistent: a contact that left rest at this event (``left``)
+        whose slip would accelerate against the way it slides once the others are decided (a later
+        breakaway took its load) is held again where its holding force is then within its limit,
+        the first such in contact order, and the set is checked again; one whose holding force would
+        be at or beyond its limit (to rounding, 1e-9 of it) keeps sliding (the cascade's choice
+        stands)."""
+        modes = list(modes)
+        left = [j for j in left if not self.jenkins[j]]
+        for _ in range(self.nc + 1):
+            a, _ = self.forces(tuple(modes), t, y)
+            bad = [j for j in left if modes[j] != 0 and modes[j] * (float(self.W[j] @ a)) < 0.0]
+            changed = False
+            for j in bad:
+                trial = list(modes)
+                trial[j] = 0
+                _, f = self.forces(tuple(trial), t, y)
+                if abs(f[j]) < (1.0 - 1e-9) * self.Fb[j]:  # (within beyond rounding: a breakaway at the limit,
+                    # chi > 1's tangential start, keeps sliding)
+                    modes = trial
+                    left.remove(j)
+                    changed = True
+                    break
+            if not changed:
+                break
         return modes
 
     def events(self, modes: tuple[int, ...]) -> list[Callable[[float, np.ndarray], float]]:
@@ -423,7 +457,7 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
             else:                                            # a breakaway, then the others checked
                 _, f = m.forces(md, t1, y)
                 new[j] = -int(np.sign(f[j]))
-                new = m.rest_rule(t1, y, new, [])
+                new = m.rest_rule(t1, y, new, [], was=md)
         for i in range(nc):
             if new[i] != md[i]:
                 sol.switches.append(Switch(t1, i, md[i], new[i]))
