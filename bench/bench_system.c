@@ -183,6 +183,8 @@ typedef struct {
     long long best_steps;
     double pivot_share, switches_per_contact_period, stuck_share, friction_share;
     double *X_end;
+    eng_status fail;                 /* ENG_OK, or why the case stopped (reported, not timed) */
+    double t_fail;
 } bench_case;
 
 static const eng_alloc AL = {std_alloc, std_free, NULL};
@@ -210,16 +212,16 @@ static void model_make(sys_model *m, const structure *s, double h, int scheme)
 }
 
 /* Advance E from a fresh start to the settling time, then by whole steps to t_end or until the
- * budget (CPU seconds) is spent; returns the timed seconds, *steps the timed steps. */
+ * budget (CPU seconds) is spent; returns the timed seconds, *steps the timed steps, *st_out the
+ * engine's status (ENG_OK, or the failure that stopped the run: the case is reported as failed). */
 static double timed_run(eng *E, const structure *s, eng_state *st, double h, double t_settle, double t_end,
-                        double budget, int wall, long long *steps)
+                        double budget, int wall, long long *steps, eng_status *st_out)
 {
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng_start(E, &in, 0.0, s->x0, s->v0, st);
-    if (eng_advance(E, &in, st, t_settle, NULL) != ENG_OK) {
-        fprintf(stderr, "bench_system: n = %zu, nc = %zu failed while settling at t = %g\n", s->n, s->nc, st->t);
-        exit(1);
-    }
+    *steps = 0;
+    *st_out = eng_advance(E, &in, st, t_settle, NULL);
+    if (*st_out != ENG_OK) return 0.0;
     const long long s0 = st->steps;
     const long long total = (long long)((t_end - t_settle) / h + 0.5);
     const long long chunk = (total >= 20) ? total / 20 : 1;
@@ -229,10 +231,8 @@ static double timed_run(eng *E, const structure *s, eng_state *st, double h, dou
     while (done < total) {
         const long long k = (done + chunk <= total) ? chunk : total - done;
         done += k;
-        if (eng_advance(E, &in, st, t_settle + (double)done * h, NULL) != ENG_OK) {
-            fprintf(stderr, "bench_system: n = %zu, nc = %zu failed at t = %g\n", s->n, s->nc, st->t);
-            exit(1);
-        }
+        *st_out = eng_advance(E, &in, st, t_settle + (double)done * h, NULL);
+        if (*st_out != ENG_OK) return 0.0;
         el = bench_seconds(wall) - t0;
         if (el > budget) break;
     }
@@ -261,8 +261,15 @@ static void case_rep(bench_case *c, const run_opts *o)
 {
     const double T = 2.0 * DFO_PI / OMEGA, h = c->m.h;
     long long steps = 0;
+    if (c->fail != ENG_OK) return;
+    eng_status es = ENG_OK;
     const double el = timed_run(c->m.E, &c->s, &c->st, h, 0.25 * T, 0.25 * T + o->periods * T, o->budget, o->wall,
-                                &steps);
+                                &steps, &es);
+    if (es != ENG_OK) {
+        c->fail = es;
+        c->t_fail = c->st.t;
+        return;
+    }
     if (el / (double)steps < c->best_s / (double)(c->best_steps ? c->best_steps : 1) || c->best_steps == 0) {
         c->best_s = el;
         c->best_steps = steps;
@@ -279,6 +286,13 @@ static void case_finish(bench_case *c, const run_opts *o)
     const long long steps = c->best_steps;
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng_state *st = &c->st;
+    if (c->fail != ENG_OK) {
+        eng_state_free(c->m.E, st);
+        sys_model_free(&c->m, &AL);
+        structure_free(&c->s);
+        free(c->X_end);
+        return;
+    }
     /* stuck share, pivots, switches: every step of one more run (the end of the last repetition) */
     eng_start(c->m.E, &in, 0.0, c->s.x0, c->s.v0, st);
     eng_advance(c->m.E, &in, st, t_settle, NULL);
@@ -482,6 +496,12 @@ int main(int argc, char **argv)
     for (int c = 0; c < nca; c++) {
         bench_case *b = &cases[c];
         case_finish(b, &ro);
+        if (b->fail != ENG_OK) {
+            fprintf(out, "%s,%s,%zu,%zu,failed: %s at t = %.6g,,,,,,\n", STRUCT_NAMES[b->kind], SCHEME_NAMES[b->scheme],
+                    b->n, b->nc, eng_status_text(b->fail), b->t_fail);
+            b->best_s = NAN;
+            continue;
+        }
         const double nsps = 1e9 * b->best_s / (double)b->best_steps;
         fprintf(out, "%s,%s,%zu,%zu,%.1f,%.2f,%.4f,%.4f,%.3f,%.3f,%lld\n", STRUCT_NAMES[b->kind], SCHEME_NAMES[b->scheme],
                 b->n, b->nc, nsps, nsps / (double)b->n, b->friction_share, b->pivot_share,
@@ -496,7 +516,7 @@ int main(int argc, char **argv)
                 const bench_case *b = &cases[c];
                 size_t nc = b->n / 4;
                 nc = nc < 1 ? 1 : nc > 128 ? 128 : nc;
-                if (b->kind == kinds[k] && b->scheme == schemes[sc] && b->n >= 32 && b->nc == nc) {
+                if (b->kind == kinds[k] && b->scheme == schemes[sc] && b->n >= 32 && b->nc == nc && b->fail == ENG_OK) {
                     fit_x[m] = log((double)b->n);
                     fit_y[m] = log(b->best_s);
                     m++;
