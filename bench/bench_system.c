@@ -27,9 +27,11 @@
  * more run of the same steps with the engine's default friction solver (eng_dense_friction: the
  * Delassus matrix W M_hat^-1 W' through the model's Cholesky solves, then the basis solve or
  * Lemke) called through a wrapper that times it with the monotonic clock (so the share includes
- * the Delassus matrix's assembly); that run ends in the same state to the bit (checked). Per case:
- * ns per step, ns per step per DOF, the friction share, the share of steps with a pivot or a
- * located switch, switches per contact and period, the stuck share. Then the exponent p of
+ * the Delassus matrix's assembly), and the model's factorisations of M_hat (dense Cholesky, O(n^3)
+ * each) timed and counted the same way; that run ends in the same state to the bit (checked). Per
+ * case: ns per step, ns per step per DOF, the friction share, the share of steps with a pivot or a
+ * located switch, switches per contact and period, the stuck share, the steps timed, the
+ * factorisations' share and their number per step. Then the exponent p of
  * ns per step ~ n^p fitted (least squares in logs) over n >= 32 per structure and scheme, on stderr
  * and as "# fit" comment lines at the CSV's end. CSV on stdout, or to --csv FILE. */
 #define _POSIX_C_SOURCE 200809L
@@ -144,8 +146,8 @@ static void structure_make(structure *s, int kind, size_t n, size_t nc, double n
 typedef struct {
     eng_ops inner;
     eng *E;
-    double ns;
-    long long calls;
+    double ns, ns_factor;            /* in the friction solver; in factor (M_hat's Cholesky) */
+    long long calls, factors;
 } timed_ctx;
 
 static void t_K(void *c, const double *x, double *y) { timed_ctx *t = (timed_ctx *)c; t->inner.apply_K(t->inner.ctx, x, y); }
@@ -154,7 +156,11 @@ static void t_M(void *c, const double *x, double *y) { timed_ctx *t = (timed_ctx
 static int t_factor(void *c, int slot, double cM, double cC, double cK)
 {
     timed_ctx *t = (timed_ctx *)c;
-    return t->inner.factor(t->inner.ctx, slot, cM, cC, cK);
+    const double t0 = bench_now_ns();
+    const int ok = t->inner.factor(t->inner.ctx, slot, cM, cC, cK);
+    t->ns_factor += bench_now_ns() - t0;
+    t->factors++;
+    return ok;
 }
 static void t_solve(void *c, int slot, const double *b, double *x)
 {
@@ -181,7 +187,7 @@ typedef struct {
     eng_state st;
     double best_s;
     long long best_steps;
-    double pivot_share, switches_per_contact_period, stuck_share, friction_share;
+    double pivot_share, switches_per_contact_period, stuck_share, friction_share, factor_share, factors_per_step;
     double *X_end;
     eng_status fail;                 /* ENG_OK, or why the case stopped (reported, not timed) */
     double t_fail;
@@ -326,7 +332,8 @@ static void case_finish(bench_case *c, const run_opts *o)
     if (!eng_state_init(tc.E, &s2, 0)) { fprintf(stderr, "bench_system: out of memory\n"); exit(1); }
     eng_start(tc.E, &in, 0.0, c->s.x0, c->s.v0, &s2);
     eng_advance(tc.E, &in, &s2, t_settle, NULL);
-    tc.ns = 0.0;
+    tc.ns = tc.ns_factor = 0.0;
+    tc.factors = 0;
     const double t0 = bench_now_ns();
     const long long chunk = (steps >= 20) ? steps / 20 : 1;
     for (long long k = chunk; k <= steps; k += chunk)
@@ -334,6 +341,8 @@ static void case_finish(bench_case *c, const run_opts *o)
     if (steps % chunk) eng_advance(tc.E, &in, &s2, t_settle + (double)steps * h, NULL);
     const double total = bench_now_ns() - t0;
     c->friction_share = tc.ns / total;
+    c->factor_share = tc.ns_factor / total;
+    c->factors_per_step = (double)tc.factors / (double)steps;
     for (size_t i = 0; i < c->n; i++)
         if (memcmp(&s2.X[i], &c->X_end[i], sizeof(double)) != 0) {
             fprintf(stderr, "bench_system: %s %s n = %zu nc = %zu: the timed-solver run ends elsewhere (x[%zu] %.17g vs %.17g)\n",
@@ -491,21 +500,21 @@ int main(int argc, char **argv)
     for (int rep = 0; rep < o.reps; rep++)
         for (int c = 0; c < nca; c++) case_rep(&cases[c], &ro);
     fprintf(out, "structure,scheme,n,nc,ns_per_step,ns_per_step_per_dof,friction_share,pivot_or_switch_step_share,"
-                 "switches_per_contact_period,stuck_share,steps_timed\n");
+                 "switches_per_contact_period,stuck_share,steps_timed,factor_share,factors_per_step\n");
     double fit_x[MAX_CASES], fit_y[MAX_CASES];
     for (int c = 0; c < nca; c++) {
         bench_case *b = &cases[c];
         case_finish(b, &ro);
         if (b->fail != ENG_OK) {
-            fprintf(out, "%s,%s,%zu,%zu,failed: %s at t = %.6g,,,,,,\n", STRUCT_NAMES[b->kind], SCHEME_NAMES[b->scheme],
+            fprintf(out, "%s,%s,%zu,%zu,failed: %s at t = %.6g,,,,,,,,\n", STRUCT_NAMES[b->kind], SCHEME_NAMES[b->scheme],
                     b->n, b->nc, eng_status_text(b->fail), b->t_fail);
             b->best_s = NAN;
             continue;
         }
         const double nsps = 1e9 * b->best_s / (double)b->best_steps;
-        fprintf(out, "%s,%s,%zu,%zu,%.1f,%.2f,%.4f,%.4f,%.3f,%.3f,%lld\n", STRUCT_NAMES[b->kind], SCHEME_NAMES[b->scheme],
-                b->n, b->nc, nsps, nsps / (double)b->n, b->friction_share, b->pivot_share,
-                b->switches_per_contact_period, b->stuck_share, b->best_steps);
+        fprintf(out, "%s,%s,%zu,%zu,%.1f,%.2f,%.4f,%.4f,%.3f,%.3f,%lld,%.4f,%.3f\n", STRUCT_NAMES[b->kind],
+                SCHEME_NAMES[b->scheme], b->n, b->nc, nsps, nsps / (double)b->n, b->friction_share, b->pivot_share,
+                b->switches_per_contact_period, b->stuck_share, b->best_steps, b->factor_share, b->factors_per_step);
         b->best_s = nsps; /* kept for the fit */
     }
     /* the growth: ns per step ~ n^p over the n sweep's n >= 32 (nc = n / 4 there), per structure and scheme */
