@@ -1,4 +1,4 @@
-/* ns per step of the DryFrictionSystem model (fmu_src/models/system/system.h) against the number of
+/* ns per grid step (h) of the DryFrictionSystem model (fmu_src/models/system/system.h) against the number of
  * degrees of freedom n and of contacts nc, on stick-slip structures, with the friction solve's share.
  *
  *   bench_system [--reps R] [--periods P] [--steps-per-period S] [--seconds B] [--n N[,N...]]
@@ -186,7 +186,7 @@ typedef struct {
     sys_model m;
     eng_state st;
     double best_s;
-    long long best_steps;
+    long long best_steps;            /* the grid steps of h timed: set by the first repetition (the budget's cut) */
     double pivot_share, switches_per_contact_period, stuck_share, friction_share, factor_share, factors_per_step;
     double *X_end;
     eng_status fail;                 /* ENG_OK, or why the case stopped (reported, not timed) */
@@ -217,32 +217,30 @@ static void model_make(sys_model *m, const structure *s, double h, int scheme)
     }
 }
 
-/* Advance E from a fresh start to the settling time, then by whole steps to t_end or until the
- * budget (CPU seconds) is spent; returns the timed seconds, *steps the timed steps, *st_out the
- * engine's status (ENG_OK, or the failure that stopped the run: the case is reported as failed). */
-static double timed_run(eng *E, const structure *s, eng_state *st, double h, double t_settle, double t_end,
-                        double budget, int wall, long long *steps, eng_status *st_out)
+/* Advance E from a fresh start to the settling time, then by grid steps of h, in chunks, to at most
+ * max_grid steps, stopping after the chunk that passes the budget (CPU seconds; INFINITY: all);
+ * returns the timed seconds, *grid the grid steps timed, *st_out the engine's status (ENG_OK, or the
+ * failure that stopped the run: the case is reported as failed). */
+static double timed_run(eng *E, const structure *s, eng_state *st, double h, double t_settle, long long max_grid,
+                        double budget, int wall, long long *grid, eng_status *st_out)
 {
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng_start(E, &in, 0.0, s->x0, s->v0, st);
-    *steps = 0;
+    *grid = 0;
     *st_out = eng_advance(E, &in, st, t_settle, NULL);
     if (*st_out != ENG_OK) return 0.0;
-    const long long s0 = st->steps;
-    const long long total = (long long)((t_end - t_settle) / h + 0.5);
-    const long long chunk = (total >= 20) ? total / 20 : 1;
+    const long long chunk = (max_grid >= 20) ? max_grid / 20 : 1;
     long long done = 0;
     const double t0 = bench_seconds(wall);
     double el = 0.0;
-    while (done < total) {
-        const long long k = (done + chunk <= total) ? chunk : total - done;
-        done += k;
+    while (done < max_grid) {
+        done += (done + chunk <= max_grid) ? chunk : max_grid - done;
         *st_out = eng_advance(E, &in, st, t_settle + (double)done * h, NULL);
         if (*st_out != ENG_OK) return 0.0;
         el = bench_seconds(wall) - t0;
         if (el > budget) break;
     }
-    *steps = st->steps - s0;
+    *grid = done;
     return el;
 }
 
@@ -266,20 +264,20 @@ static void case_make(bench_case *c, int kind, int scheme, size_t n, size_t nc, 
 static void case_rep(bench_case *c, const run_opts *o)
 {
     const double T = 2.0 * DFO_PI / OMEGA, h = c->m.h;
-    long long steps = 0;
     if (c->fail != ENG_OK) return;
+    /* the first repetition cuts the run at the budget; the others take the same grid steps */
+    const long long max_grid = c->best_steps ? c->best_steps : (long long)(o->periods * T / h + 0.5);
+    long long grid = 0;
     eng_status es = ENG_OK;
-    const double el = timed_run(c->m.E, &c->s, &c->st, h, 0.25 * T, 0.25 * T + o->periods * T, o->budget, o->wall,
-                                &steps, &es);
+    const double el = timed_run(c->m.E, &c->s, &c->st, h, 0.25 * T, max_grid, c->best_steps ? INFINITY : o->budget,
+                                o->wall, &grid, &es);
     if (es != ENG_OK) {
         c->fail = es;
         c->t_fail = c->st.t;
         return;
     }
-    if (el / (double)steps < c->best_s / (double)(c->best_steps ? c->best_steps : 1) || c->best_steps == 0) {
-        c->best_s = el;
-        c->best_steps = steps;
-    }
+    c->best_steps = grid;
+    if (el < c->best_s) c->best_s = el;
     memcpy(c->X_end, c->st.X, c->n * sizeof(double));
 }
 
