@@ -22,7 +22,8 @@ period.
   the thread's CPU time of the whole run (its 80 sample stops included), minimum of 3.
 - The reference: ours, located, at h = T / 20480 (n <= 32) or T / 10240 (n = 128); its own error
   is estimated by comparison with h doubled (a second-order scheme: about a third of that
-  difference) and reported.
+  difference) and reported, and for n <= 32 checked against dryfriction.references.system (the
+  event-driven reference, independent of the engine: DOP853 between events at rtol 1e-12).
 - Error: max over the samples and the DOFs of |x - x_ref|, divided by max |x_ref| (relative).
 - Per n: both sides' error and CPU time per h, the ns per step, and the CPU time each needs to
   reach the relative errors 1e-1, 3e-2, 1e-2, 3e-3, 1e-3 (report.cost_at: Pareto front, log-log
@@ -61,6 +62,7 @@ SAMPLES_PER_PERIOD = 40
 TARGETS = (1e-1, 3e-2, 1e-2, 3e-3, 1e-3)
 THETA = 0.5
 RUNNER = HERE / "siconos_system_run.py"
+EVENT_CHECK_MAX_N = 32  # the event-driven reference checks ours up to this n (it takes seconds there)
 
 
 def structure(n: int, normal: float = 1.6, mu: float = 0.4) -> dict[str, np.ndarray | float | int]:
@@ -168,6 +170,20 @@ def siconos_job(st: dict, m: int, reps: int) -> dict:
             "theta": THETA, "sample_every": steps_per_sample, "reps": reps}
 
 
+def event_check(st: dict, x_ref: np.ndarray) -> float:
+    """The reference's relative difference from dryfriction.references.system (event-driven,
+    DOP853 at rtol 1e-12, independent of the engine) at the same samples."""
+    from dryfriction import Contact, System
+    from dryfriction.references.system import simulate
+
+    contacts = [Contact(w=tuple(float(v) for v in st["W"][j]), N=float(st["N"][j]), mu_s=float(st["mu"][j]),
+                        mu_k=float(st["mu"][j])) for j in range(st["nc"])]
+    sy = System(M=st["M"], C=st["C"], K=st["K"], contacts=contacts, F_c=st["F_c"], F_s=st["F_s"], omega=OMEGA)
+    ns = PERIODS * SAMPLES_PER_PERIOD
+    t = np.arange(1, ns + 1) * PERIODS * T / ns
+    return rel_error(x_ref, np.asarray(simulate(sy, PERIODS * T, t_eval=t).x))
+
+
 def rel_error(x: np.ndarray, ref: np.ndarray) -> float:
     """max |x - ref| over samples and DOFs over max |ref|."""
     return float(np.max(np.abs(x - ref)) / np.max(np.abs(ref)))
@@ -187,7 +203,9 @@ def compare(n: int, exe: Path, worker: SystemWorker | None, quick: bool, budget:
     ref = ours(exe, st, m_ref, reps=1)
     half = ours(exe, st, m_ref // 2, reps=1)
     ref_err = rel_error(half["x"], ref["x"]) / 3.0
-    log.write(f"n = {n}, nc = {st['nc']}: reference h = T/{m_ref}, its error about {ref_err:.2g}\n")
+    event_diff = event_check(st, ref["x"]) if n <= EVENT_CHECK_MAX_N else None
+    log.write(f"n = {n}, nc = {st['nc']}: reference h = T/{m_ref}, its error about {ref_err:.2g}"
+              + ("" if event_diff is None else f"; against the event-driven reference {event_diff:.2g}") + "\n")
     mine = []
     for m in ((40, 80, 160) if quick else (40, 80, 160, 320, 640, 1280, 2560)):
         r = ours(exe, st, m)
@@ -217,7 +235,8 @@ def compare(n: int, exe: Path, worker: SystemWorker | None, quick: bool, budget:
         cs = cost_at([(r["error"], r["cpu_s"]) for r in sic], E)
         co = cost_at([(r["error"], r["cpu_s"]) for r in mine], E)
         ratios[f"{E:g}"] = {"siconos_s": cs, "ours_s": co, "ratio": (cs / co) if cs and co else None}
-    return {"n": n, "nc": st["nc"], "m_ref": m_ref, "ref_error": ref_err, "ours": mine, "siconos": sic,
+    return {"n": n, "nc": st["nc"], "m_ref": m_ref, "ref_error": ref_err, "ref_vs_event_driven": event_diff,
+            "ours": mine, "siconos": sic,
             "at_error": ratios}
 
 
@@ -227,7 +246,9 @@ def markdown(results: list[dict], version: str) -> str:
            "(bench_system --case); OPENBLAS_NUM_THREADS=1; relative error max|x - x_ref| / max|x_ref| over "
            f"{PERIODS} periods.", ""]
     for r in results:
-        out += [f"### n = {r['n']}, nc = {r['nc']} (reference h = T/{r['m_ref']}, its error about {r['ref_error']:.1g})",
+        ev = r["ref_vs_event_driven"]
+        out += [f"### n = {r['n']}, nc = {r['nc']} (reference h = T/{r['m_ref']}, its error about {r['ref_error']:.1g}"
+                + ("" if ev is None else f"; {ev:.1g} from the event-driven reference") + ")",
                 "", "| side | h | error | CPU s | ns per step |", "|---|---|---|---|---|"]
         for side in ("ours", "siconos"):
             for row in r[side]:
