@@ -476,7 +476,8 @@ int main(int argc, char **argv)
     FILE *out = bench_out(&o, "bench_system");
     if (!out) return 2;
     /* the cases: the n sweep (nc = n / 4, at most 128, at least 1), then the nc sweep at n = nc_at */
-    static bench_case cases[MAX_CASES];
+    bench_case *cases = (bench_case *)calloc(MAX_CASES, sizeof(bench_case));
+    if (!cases) { fprintf(stderr, "bench_system: out of memory\n"); return 1; }
     int nca = 0;
     for (int k = 0; k < nk; k++)
         for (int sc = 0; sc < nsch; sc++) {
@@ -540,6 +541,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "bench_system: %s %s: ns per step ~ n^%.2f over n >= 32 (nc = n / 4, at most 128)\n",
                     STRUCT_NAMES[kinds[k]], SCHEME_NAMES[schemes[sc]], sxy / sxx);
         }
+    free(cases);
     if (o.csv) fclose(out);
     return 0;
 }
