@@ -177,3 +177,83 @@ def test_orbit_response_benchmark_smoke() -> None:
             assert row["orbit_error"] <= 1e-12
         for t in row["tols"]:
             assert t["converged"] == 5 and t["max_error"] <= t["tol"] + 1e-11 and t["seconds"] > 0
+
+
+def _bench_system() -> Path:
+    sys.path.insert(0, str(ROOT / "bench"))
+    from siconos_system import bench_system_path
+
+    return bench_system_path(None)
+
+
+def test_system_benchmark_smoke(tmp_path: Path) -> None:
+    """bench/bench_system on small sizes, once: a row per structure, scheme and (n, nc), every case in
+    the stick-slip regime it is meant for (contacts both stuck and sliding, switches every period),
+    the friction solve's share a fraction, the growth fitted. No timing asserted (only positive)."""
+    out = tmp_path / "system.csv"
+    res = subprocess.run([str(_bench_system()), "--reps", "1", "--periods", "1", "--n", "8,32,64", "--nc-at", "32",
+                          "--nc", "2,16", "--csv", str(out)], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
+    lines = out.read_text().splitlines()
+    rows = list(csv.DictReader([ln for ln in lines if not ln.startswith("#")]))
+    want = {(st, sc, n, nc) for st in ("chain", "banded") for sc in ("located", "consistent", "paper")
+            for n, nc in (("8", "2"), ("32", "8"), ("64", "16"), ("32", "2"), ("32", "16"))}
+    assert {(r["structure"], r["scheme"], r["n"], r["nc"]) for r in rows} == want
+    for r in rows:
+        assert float(r["ns_per_step"]) > 0 and 0.0 < float(r["friction_share"]) < 1.0
+        assert 0.0 < float(r["stuck_share"]) < 1.0 and float(r["switches_per_contact_period"]) > 0.5
+    fits = [ln for ln in lines if ln.startswith("# fit ")]
+    assert len(fits) == 6 and all(math.isfinite(float(re.search(r"n\^(\S+)", f).group(1))) for f in fits)
+
+
+def test_system_benchmark_case_is_the_linear_closed_form() -> None:
+    """bench_system --case (the structure file bench/siconos_system.py writes) without friction
+    (N = 0) follows the linear closed form (the forced steady state plus the free transient by the
+    matrix exponential) to the located scheme's second-order error: within 1e-5 of the largest
+    deflection at h = T/2560, and about 4x closer per halving of h."""
+    from scipy.linalg import expm
+
+    sys.path.insert(0, str(ROOT / "bench"))
+    import siconos_system as ss
+
+    st = ss.structure(8)
+    st["N"] = np.zeros(st["nc"])
+    n = st["n"]
+    M, C, K, w = st["M"], st["C"], st["K"], ss.OMEGA
+    X = np.linalg.solve(K - w**2 * M + 1j * w * C, st["F_c"] - 1j * st["F_s"])
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    z0 = np.concatenate([-X.real, w * X.imag])  # at rest: minus the steady state's x and v at t = 0
+    ns = ss.PERIODS * ss.SAMPLES_PER_PERIOD
+    t = np.arange(1, ns + 1) * ss.PERIODS * ss.T / ns
+    exact = np.array([(X * np.exp(1j * w * tk)).real + (expm(A * tk) @ z0)[:n] for tk in t])
+    errs = []
+    for m in (1280, 2560):
+        x = ss.ours(_bench_system(), st, m, reps=1)["x"]
+        errs.append(float(np.max(np.abs(x - exact)) / np.max(np.abs(exact))))
+    assert errs[1] < 1e-5 and 3.5 < errs[0] / errs[1] < 4.5, errs
+
+
+def test_system_against_siconos_smoke(tmp_path: Path) -> None:
+    """bench/siconos_system.py --quick (n = 8): Siconos and the model simulate the same structure
+    (Siconos's trajectory within 1 % of the model's reference at h = T/80), that reference within
+    3e-5 of the event-driven one (dryfriction.references.system), the model's errors fall about 4x
+    per halving of h (located, second order), the JSON complete. No timing asserted.
+    Skips, saying why, only when Siconos cannot be installed."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    from siconos_side import SiconosUnavailable, ensure_siconos
+
+    try:
+        ensure_siconos()
+    except SiconosUnavailable as e:
+        pytest.skip(f"Siconos cannot be installed here: {e}")
+    out = tmp_path / "sic.json"
+    res = subprocess.run([sys.executable, str(ROOT / "bench" / "siconos_system.py"), "--quick", "--json", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr[-3000:]
+    (r,) = json.loads(out.read_text())["results"]
+    assert (r["n"], r["nc"]) == (8, 2) and r["ref_error"] < 1e-4 and r["ref_vs_event_driven"] < 3e-5
+    sic = {row["m"]: row for row in r["siconos"]}
+    assert sic[80]["error"] < 1e-2 and all(row["cpu_s"] > 0 for row in r["siconos"] + r["ours"])
+    e = [row["error"] for row in r["ours"]]
+    assert all(3.0 < a / b < 5.0 for a, b in zip(e, e[1:])), e
+    assert set(r["at_error"]) == {"0.1", "0.03", "0.01", "0.003", "0.001", "0.0003", "0.0001"}
