@@ -5,7 +5,7 @@ by 12 Euler-Bernoulli elements (2 DOFs per node: deflection and slope; 24 DOFs o
 clamped), 2 % modal damping on every mode (System.with_modal_damping), a harmonic force of 1 N at
 its tip. A friction damper presses on the deflection of the node at a third of the length (a rigid
 Coulomb contact, mu_s = 0.3, mu_k = 0.25). The tip's steady response amplitude against the forcing
-frequency, run as the DryFrictionSystem FMU (FMI 3.0) through fmpy with System.start_values(), for
+frequency, run as the DryFrictionSystem FMU (FMI 3.0) through the package's driver (dryfriction.drivers.system), for
 
 - N = 0: the linear beam, checked against the modal closed form |sum_r phi_r phi_r' F /
   (w_r^2 - w^2 + 2 i zeta w_r w)| at the tip;
@@ -28,16 +28,13 @@ the package's or the build tree's fmi3/DryFrictionSystem.fmu. Exits non-zero whe
 from __future__ import annotations
 
 import argparse
-import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from dryfriction import Contact, System
+from dryfriction.drivers.system import trajectory
 
 # the strip
 LENGTH, WIDTH, THICK = 0.5, 0.03, 0.004
@@ -102,72 +99,6 @@ def pinned_response(M: np.ndarray, C: np.ndarray, K: np.ndarray, F: np.ndarray, 
     return X
 
 
-def system_fmu() -> Path:
-    """The FMI 3.0 DryFrictionSystem FMU: $DFO_SYSTEM_FMU3, the package's, or the build tree's."""
-    from dryfriction import paths
-
-    env = os.environ.get("DFO_SYSTEM_FMU3")
-    places = [Path(env)] if env else []
-    places.append(paths.package_dir() / "fmus" / "fmi3" / "DryFrictionSystem.fmu")
-    b = paths.build_dir()
-    if b is not None:
-        places.append(b / "fmi3" / "DryFrictionSystem.fmu")
-    for p in places:
-        if p.is_file():
-            return p
-    raise SystemExit("DryFrictionSystem.fmu (FMI 3.0) not found: set DFO_SYSTEM_FMU3 or build it "
-                     "(cmake --build build)")
-
-
-class SystemRun:
-    """The FMU loaded once (fmpy, FMI 3.0 co-simulation); :meth:`tip` runs one system."""
-
-    INTS = ("scheme", "frictionUpdates")
-
-    def __init__(self, path: Path) -> None:
-        from fmpy import extract, read_model_description
-
-        self.md = read_model_description(str(path))
-        self.tmp = tempfile.mkdtemp(prefix="dfo-beam-")
-        self.dir = extract(str(path), unzipdir=self.tmp)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-
-    def tip(self, sys_: System, times: np.ndarray, tip: int, contact: int | None) -> tuple[np.ndarray, np.ndarray]:
-        """The tip's deflection at times (times[0] = 0) and the damper's modes there (-1/0/+1)."""
-        from fmpy.fmi3 import FMU3Slave
-
-        values: dict[str, Any] = sys_.start_values()
-        s = FMU3Slave(guid=self.md.guid, unzipDirectory=self.dir, modelIdentifier=self.md.coSimulation.modelIdentifier)
-        s.instantiate()
-        try:
-            s.enterConfigurationMode()
-            s.setUInt64([self.vr["n"], self.vr["nc"]], [int(values.pop("n")), int(values.pop("nc"))])
-            s.exitConfigurationMode()
-            s.enterInitializationMode(startTime=0.0)
-            for name, v in values.items():
-                if name in self.INTS:
-                    s.setInt64([self.vr[name]], [int(x) for x in np.ravel(v)])
-                else:
-                    s.setFloat64([self.vr[name]], [float(x) for x in np.ravel(v)])
-            s.exitInitializationMode()
-            x, modes = np.empty(len(times)), np.zeros(len(times), int)
-            n = sys_.n
-            for k, t in enumerate(times):
-                if k:
-                    s.doStep(times[k - 1], t - times[k - 1])
-                x[k] = s.getFloat64([self.vr["x"]], nValues=n)[tip]
-                if contact is not None:
-                    modes[k] = s.getInt32([self.vr["mode"]], nValues=sys_.nc)[contact]
-            return x, modes
-        finally:
-            s.terminate()
-            s.freeInstance()
-
-    def close(self) -> None:
-        """Remove the unzipped FMU."""
-        shutil.rmtree(self.tmp, ignore_errors=True)
-
-
 def first_harmonic(t: np.ndarray, x: np.ndarray, w: float) -> float:
     """|a + i b| of the least-squares fit a cos(w t) + b sin(w t) + c."""
     A = np.column_stack([np.cos(w * t), np.sin(w * t), np.ones_like(t)])
@@ -206,30 +137,27 @@ def main() -> int:
     print(f"{n} DOFs, first bending frequency {w1 / (2 * np.pi):.3f} Hz; damper at node {DAMPER_NODE} "
           f"(x = {DAMPER_NODE * LENGTH / ELEMENTS:.3f} m); the damper's largest holding force {react:.4g} N, "
           f"held for N >= {N_hold:.4g} N (at the first resonance: {N_1:.4g} N)")
-    fmu = SystemRun(system_fmu())
     amp = np.zeros((len(loads), len(ratios)))
     fit = np.zeros_like(amp)
     stuck_share = np.zeros_like(amp)
     closed_lin = np.array([abs(modal_response(M, K, ZETA, F, r * w1)[tip_dof(n)]) for r in ratios])
     closed_pin = np.array([abs(pinned_response(M, C, K, F, r * w1, pin)[tip_dof(n)]) for r in ratios])
-    try:
-        for i, N in enumerate(loads):
-            for k, r in enumerate(ratios):
-                w = r * w1
-                T = 2 * np.pi / w
-                X0 = pinned_response(M, C, K, F, w, pin) if N >= N_hold else modal_response(M, K, ZETA, F, w)
-                s = base.replace(contacts=[damper(N, args.k_t)], F_c=F, omega=w, x0=X0.real, v0=-w * X0.imag,
-                                 h=T / STEPS_PER_PERIOD)
-                t_obs = settle * T + np.arange(keep * SAMPLES_PER_PERIOD + 1) * T / SAMPLES_PER_PERIOD
-                times = np.concatenate([[0.0], t_obs])
-                x, modes = fmu.tip(s, times, tip_dof(n), 0)
-                amp[i, k] = 0.5 * (x[1:].max() - x[1:].min())
-                fit[i, k] = first_harmonic(t_obs, x[1:], w)
-                stuck_share[i, k] = float(np.mean(modes[1:] == 0))
-            print(f"N = {N:8.4g} N: tip amplitude (mm) " + " ".join(f"{1e3 * a:.3g}" for a in amp[i]) +
-                  f"; stuck {100 * stuck_share[i].mean():.0f} % of the samples")
-    finally:
-        fmu.close()
+    for i, N in enumerate(loads):
+        for k, r in enumerate(ratios):
+            w = r * w1
+            T = 2 * np.pi / w
+            X0 = pinned_response(M, C, K, F, w, pin) if N >= N_hold else modal_response(M, K, ZETA, F, w)
+            s = base.replace(contacts=[damper(N, args.k_t)], F_c=F, omega=w, x0=X0.real, v0=-w * X0.imag,
+                             h=T / STEPS_PER_PERIOD)
+            t_obs = settle * T + np.arange(keep * SAMPLES_PER_PERIOD + 1) * T / SAMPLES_PER_PERIOD
+            times = np.concatenate([[0.0], t_obs])
+            res = trajectory(s, times)  # the FMI 3.0 DryFrictionSystem FMU (dryfriction.drivers.system)
+            x, modes = res.x[:, tip_dof(n)], res.mode[:, 0]
+            amp[i, k] = 0.5 * (x[1:].max() - x[1:].min())
+            fit[i, k] = first_harmonic(t_obs, x[1:], w)
+            stuck_share[i, k] = float(np.mean(modes[1:] == 0))
+        print(f"N = {N:8.4g} N: tip amplitude (mm) " + " ".join(f"{1e3 * a:.3g}" for a in amp[i]) +
+              f"; stuck {100 * stuck_share[i].mean():.0f} % of the samples")
 
     ok = True
     e_lin = float(np.max(np.abs(fit[0] / closed_lin - 1.0)))
