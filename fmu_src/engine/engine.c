@@ -105,7 +105,7 @@ void eng_destroy(eng *E)
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->rpin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
-                          E->gV1, E->gidx, E->gve, E->ew, E->vbj, E->comp, E->jstop};
+                          E->gV1, E->gidx, E->gve, E->ew, E->vbj, E->comp, E->jstop, E->jf0};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
@@ -207,6 +207,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     ok &= (E->vbj = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (E->comp = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (E->jstop = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    ok &= (E->jf0 = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (E->rpin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     E->rpin_ok = 0;
     if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;

@@ -62,6 +62,8 @@ struct eng {
     int any_jenk;                /* some contact is a Jenkins element (S.k_t) */
     double *vbj, *comp;          /* nc: a Jenkins trial's shifted targets and compliances (solve_trial) */
     int *jstop;                  /* nc: a sliding slider that stops at the located sub-step's end */
+    double *jf0;                 /* nc: a stuck slider's force at the located phase's start, clamped to
+                                  * its limit (jenk_phase_forces) */
     const double *jsl;           /* the sliders of the state the current trial is from (trial_step) */
     double *tbk;                 /* nc: the candidates' closed-form breakaways (eng_sparse.contact_breakaway) */
     int *hmode;                  /* nc: held_solve's modes */

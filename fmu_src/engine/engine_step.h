@@ -1117,7 +1117,8 @@ static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, in
         size_t worst = nc;
         double excess = 0.0;
         for (size_t j = 0; j < nc; j++) {
-            /* (a slider that comes to rest sticks: its force is the kinetic one, within the limit) */
+            /* (a slider that comes to rest sticks: its force is the kinetic one, at most on its limit,
+             * where jenk_stuck_forces holds it) */
             if (!rest[j] || mode[j] != 0 || !has_friction(E, j) || is_jenk(E, j)) continue;
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
@@ -1358,6 +1359,33 @@ static ENG_HOT double trial_loads(margin_ctx *c, double x)
     return t1;
 }
 
+/* The stuck sliders' forces at a located phase's start s (E->jf0), clamped to their limits: a slider
+ * comes to rest at its kinetic force, which is its limit where mu_k >= mu_s (F_k = F_b), and its
+ * force computed from its spring may round a hair beyond. */
+static void jenk_phase_forces(eng *E, const eng_state *s)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        E->jf0[j] = (is_jenk(E, j) && s->mode[j] == 0) ? clamp_lim(jenk_force(E, j, s), E->Fb[j]) : 0.0;
+}
+
+/* A located trial's forces f (end velocities V1, from the phase's start s) of the sliders stuck in it:
+ * the force at the phase's start (E->jf0) plus the spring's change over the trial, -k_t (dg - h
+ * v_belt), rather than the spring force the trial's solve rounds afresh. So a stuck slider's force
+ * moves only as its spring does, and it breaks away where its spring is loaded beyond its limit, not
+ * where rounding puts its force a hair beyond: one that came to rest on its limit beside a rigid
+ * contact that holds the DOF (dg = 0) keeps its force on the limit, held as the rest rule holds a
+ * force on its limit (a tie holds). */
+static void jenk_stuck_forces(eng *E, const eng_state *s, const trial *T, const double *V1, double *f)
+{
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!is_jenk(E, j) || !has_friction(E, j) || s->mode[j] != 0 || E->st[j] != 0) continue;
+        const eng_row *R = &E->S.rows[j];
+        const double g1 = row_dot(R, E->xp) + T->kin.corr_V * row_dot(R, V1);
+        const double d = (g1 - row_dot(R, s->X)) - T->kin.h * E->vb[j];
+        f[j] = E->jf0[j] - E->S.k_t[j] * d;
+    }
+}
+
 static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
 {
     eng *E = c->E;
@@ -1369,6 +1397,7 @@ static ENG_HOT double trial_margin(margin_ctx *c, double x, trial *T)
     const double t1 = trial_loads(c, x);
     eng_status st = trial_step(E, c->in, c->s, x, t1, T);
     if (st == ENG_OK) st = solve_trial(E, T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
+    if (ENG_HAS_JENKINS(E) && st == ENG_OK) jenk_stuck_forces(E, c->s, T, E->V1, E->f);
     if (st != ENG_OK && c->err == ENG_OK) c->err = st;
     c->x_last = x;
     c->T_last = T;
@@ -1631,6 +1660,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (E->ghost) ghosts_now(E, s);
         double ta;
         begin_phase(E, s, &ta, hk);
+        if (ENG_HAS_JENKINS(E)) jenk_phase_forces(E, s);
         const double r = (phase == 0) ? hh : t_end - s->t;
         /* a declined fused step of the state as it is (held_steps', fused_steps') has set the modes
          * and limits of its trial as below (the same modes: it switched none) */
@@ -1707,6 +1737,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             T.cC = 1.0;
             T.cK = E->b * hh / E->g;
             fused = ENG_HELD_TRIAL;
+            if (ENG_HAS_JENKINS(E)) jenk_stuck_forces(E, s, &T, E->V1, E->f);
         }
         E->fused_ready = 0;
         if (fused != ENG_HELD_TRIAL) trial_margin(&mc, r, &T); /* (else the fused step's trial, solved) */
@@ -1803,6 +1834,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         if (again) {
             const eng_status st = solve_trial(E, &T, ENG_SOLVE_BASIS, E->st, E->V1, E->f, NULL);
             if (st != ENG_OK) return st;
+            if (ENG_HAS_JENKINS(E)) jenk_stuck_forces(E, s, &T, E->V1, E->f);
             for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }

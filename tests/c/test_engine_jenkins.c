@@ -10,7 +10,14 @@
  *     about 4 (second order across the breakaway) in x, s and the friction work; the consistent and
  *     paper schemes run to the same point within O(h);
  *   - with N huge the slider never moves: x = x0 cos(w1 t) (second order).
- *   - a rigid setup (k_t NULL) and the same one with k_t = 0 everywhere: the same bits. */
+ *   - a rigid setup (k_t NULL) and the same one with k_t = 0 everywhere: the same bits;
+ *   - a rigid contact beside a Jenkins one on the block, mu_k >= mu_s on the Jenkins (F_b = F_k): from
+ *     x0 at rest the rigid contact slides back (m x'' = -k x - k_t (x - x0) + Fk_r) until the spring
+ *     force reaches F_b, then the slider slides too (no jump: m x'' = -k x + Fk_r + Fk_j) until the
+ *     block stops at x_stop = (Fk_r + Fk_j) / k - R (R the amplitude of that swing), where the rigid
+ *     contact holds (|k x_stop - Fk_j| <= Fb_r) and the slider stops with its force on its limit:
+ *     both stay stuck, the slider at x_stop + Fk_j / k_t, its force within its limit (it used to
+ *     break away again at once, its force a hair beyond in rounding, without end). */
 #include "check.h"
 #include "engine.h"
 
@@ -160,11 +167,82 @@ static void test_rigid_unchanged(checks *T)
     }
 }
 
+/* The block with a rigid contact (contact 0) and a Jenkins one (contact 1) from x0 at rest to t_end
+ * (located, step h): its end position, slider, slider force and switches. */
+static outcome run_pair(block *B, const double *N, const double *mu_s, const double *mu_k, double kt, double x0,
+                        double h, double t_end, double *f1, long long *switches)
+{
+    const eng_row rows[2] = {{1, &IDX0, &ONE}, {1, &IDX0, &ONE}};
+    const double k_t[2] = {0.0, kt};
+    eng_setup S;
+    memset(&S, 0, sizeof S);
+    S.n = 1;
+    S.nc = 2;
+    S.ops.ctx = B;
+    S.ops.apply_K = op_K;
+    S.ops.apply_M = op_M;
+    S.ops.factor = op_factor;
+    S.ops.solve = op_solve;
+    S.rows = rows;
+    S.N = N;
+    S.mu_s = mu_s;
+    S.mu_k = mu_k;
+    S.k_t = k_t;
+    S.h = h;
+    S.alpha = -0.1;
+    S.scheme = DFO_SCHEME_LOCATED;
+    S.friction_updates = 1;
+    S.rate_max = sqrt((B->k + kt) / B->m);
+    S.snap_max_rel_h = S.snap_min_rel_h = 1e-7;
+    outcome o = {NAN, NAN, NAN, ENG_ERR_BAD_INPUT};
+    eng *E = eng_create(&S, &ALLOC, NULL);
+    eng_state s;
+    if (!E || !eng_state_init(E, &s, 0)) return o;
+    const double v0 = 0.0;
+    const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
+    eng_start(E, &in, 0.0, &x0, &v0, &s);
+    o.st = eng_advance(E, &in, &s, t_end, NULL);
+    o.x = s.X[0];
+    o.s = s.slider[1];
+    *f1 = s.F[1];
+    *switches = s.switches;
+    eng_state_free(E, &s);
+    eng_destroy(E);
+    return o;
+}
+
+static void test_slider_stops_beside_rigid(checks *T)
+{
+    block B = {1.0, 10.0, {0.0}};
+    const double N[2] = {10.0, 10.0}, mu_s[2] = {0.3, 0.3}, mu_k[2] = {0.2, 0.4}, kt = 50.0;
+    const double Fb_r = 3.0, Fk_r = 2.0, Fk_j = 4.0; /* the Jenkins contact's F_b = F_k */
+    const double w1 = sqrt((B.k + kt) / B.m), w0 = sqrt(B.k / B.m);
+    for (int q = 0; q < 8; q++) { /* (x0 varied: the stop's force rounds either side of the limit) */
+        const double x0 = 1.0 + 0.005 * q;
+        const double c = (kt * x0 + Fk_r) / (B.k + kt), x1 = x0 - Fk_j / kt;
+        const double ct = (x1 - c) / (x0 - c), v1 = -(x0 - c) * w1 * sqrt(1.0 - ct * ct);
+        const double c2 = (Fk_r + Fk_j) / B.k, R = hypot(x1 - c2, v1 / w0), x_stop = c2 - R;
+        CHECK(ct > -1.0 && fabs(B.k * x_stop - Fk_j) <= Fb_r); /* the slider breaks away, the block then held */
+        double f1 = NAN;
+        long long sw = 0;
+        const outcome o = run_pair(&B, N, mu_s, mu_k, kt, x0, 1e-3, 2.0, &f1, &sw);
+        CHECK_INT(ENG_OK, o.st);
+        printf("rigid + Jenkins, x0 = %g: |x - x_stop| = %.3e, |s - s_stop| = %.3e, f = %.17g, %lld switches\n", x0,
+               fabs(o.x - x_stop), fabs(o.s - (x_stop + Fk_j / kt)), f1, sw);
+        CHECK(fabs(o.x - x_stop) < 1e-6);
+        CHECK(fabs(o.s - (x_stop + Fk_j / kt)) < 1e-6);
+        CHECK(fabs(f1) <= Fk_j && fabs(f1) > Fk_j - 1e-9);
+        /* the rigid contact's stop, the slider's breakaway and stop (the start's slide not counted) */
+        CHECK_INT(3, (int)sw);
+    }
+}
+
 int main(void)
 {
     checks C = {0, 0, NULL, {0}}, *T = &C;
     test_breakaway(T);
     test_stuck_spring(T);
     test_rigid_unchanged(T);
+    test_slider_stops_beside_rigid(T);
     return checks_done(T, "test_engine_jenkins");
 }
