@@ -868,7 +868,8 @@ def _element_name(name: str, idx: tuple[int, ...]) -> str:
     return f"{name}[{','.join(str(i) for i in idx)}]" if idx else name
 
 
-def _layout_tool(layouts: tuple[ArrayLayout, ...], sizes: dict[str, int], dims: dict[str, tuple[str, ...]]) -> ET.Element:
+def _layout_tool(layouts: tuple[ArrayLayout, ...], sizes: dict[str, int],
+                 dims: dict[str, tuple[str, ...]]) -> ET.Element:
     """<Tool name="dryfriction.layout">: the build's sizes and every array's first element's value
     reference, shape and dimensions' structural parameters (dryfriction.model reads it and checks the
     elements against it; dryfriction.system.fmu lays the arrays out again for a structure's sizes)."""

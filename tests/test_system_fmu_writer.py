@@ -4,9 +4,11 @@ System's runs through the FMI 3.0 FMU (dryfriction.drivers.system).
 The written FMU is the prebuilt binary with the structure in resources/structure.bin and as start
 values: fmpy validates it; run in fmpy and in fmusim with NO start values it gives, bit for bit, the
 run of the prebuilt FMU with the structure's values set through the package's own FMI layer; a
-bad or truncated structure file is an error at instantiation naming the file. The FMI 2.0 FMU (at
-the prebuilt binary's sizes, n = 2, nc = 1): the same with flattened names, a percent-encoded
-resource URI decoded, the Compliance Checker to the end. The driver is checked
+bad or truncated structure file is an error at instantiation naming the file. The FMI 2.0 FMU (the
+prebuilt binary at any sizes, the layout in the structure file): the same with flattened names,
+bit for bit the FMI 3.0 FMU's run, the generator's description at the binary's own sizes, states and
+their serialisation, a value reference outside the layout refused, a percent-encoded resource URI
+decoded, fmusim and the Compliance Checker to the end. The driver is checked
 against plain fmpy calls, and a held input F_ext against the same force as an excitation of
 frequency 0. "A user who has M and K as .mtx files gets a working FMU in two commands": tested
 as it reads."""
@@ -300,7 +302,7 @@ def test_the_command_refuses_what_it_cannot_write(tmp_path: Path, capsys: pytest
     assert "M[1,1]" in names and "x[1]" in names and not [m for m in names if m.startswith(("f[", "W[", "mode["))]
 
 
-# ----------------------------------------------------------------------------- FMI 2.0 at the build's sizes
+# ----------------------------------------------------------------------------- FMI 2.0 at the binary's own sizes
 
 
 def two_dofs() -> System:
@@ -466,7 +468,8 @@ def test_fmi2_at_any_size_validates_with_its_layout(any_size: tuple[System, Path
     # a[i] depends on every input element F_ext[i] (the same element), N_ext, v_belt (all)
     a1 = next(u for u in md.outputs if u.variable.name == "a[1]")
     deps = sorted(d.name for d in a1.dependencies)
-    assert deps == sorted(["F_ext[1]"] + [f"N_ext[{j + 1}]" for j in range(nc)] + [f"v_belt[{j + 1}]" for j in range(nc)])
+    assert deps == sorted(["F_ext[1]"] + [f"N_ext[{j + 1}]" for j in range(nc)]
+                          + [f"v_belt[{j + 1}]" for j in range(nc)])
 
 
 def _fmpy_fmi2(path: Path, n: int, nc: int, stop: float, dt: float) -> dict[str, np.ndarray]:
@@ -558,6 +561,87 @@ def test_the_compliance_checker_runs_fmi2_at_any_size(any_size: tuple[System, Pa
     assert last[0] == 1.0
     for i in range(s.n):
         assert last[head.index(f"x[{i + 1}]")] == pytest.approx(ref.x[-1, i], rel=1e-15, abs=1e-300)
+
+
+def test_fmi2_a_start_value_set_by_the_host_is_used(any_size: tuple[System, Path, Path]) -> None:
+    """fmpy setting an element's start (F_c[n], the last DOF's excitation) on the FMI 2.0 FMU: the
+    run of the structure with that value, bit for bit."""
+    s, fmu2, _ = any_size
+    F_c = s.F_c.copy()
+    F_c[-1] = 3.0
+    a = simulate_fmu(str(fmu2), stop_time=0.5, output_interval=0.01, start_values={f"F_c[{s.n}]": 3.0},
+                     output=[f"x[{i + 1}]" for i in range(s.n)])
+    ref = run(s.replace(F_c=F_c), 0.5, 0.01)
+    assert np.column_stack([a[f"x[{i + 1}]"] for i in range(s.n)]).tobytes() == ref.x.tobytes()
+    assert ref.x.tobytes() != run(s, 0.5, 0.01).x.tobytes()
+
+
+def test_fmi2_written_at_the_builds_sizes_is_the_generators_description(written2: Path) -> None:
+    """The writer's flattening (from each array's first element) against the generator's own at the
+    binary's sizes (n = 2, nc = 1): the same variables, value references, descriptions and model
+    structure; only the start values, the name and the description differ."""
+    import xml.etree.ElementTree as ET
+
+    from dryfriction import paths
+
+    with zipfile.ZipFile(paths.fmu_path(paths.SYSTEM)) as z:
+        base = ET.fromstring(z.read("modelDescription.xml"))
+    with zipfile.ZipFile(written2) as z:
+        ours = ET.fromstring(z.read("modelDescription.xml"))
+
+    def variables(root: ET.Element) -> list[tuple]:
+        return [(v.get("name"), v.get("valueReference"), v.get("causality"), v.get("description"), next(iter(v)).tag,
+                 next(iter(v)).get("unit")) for v in root.iterfind("ModelVariables/ScalarVariable")]
+
+    def structure(root: ET.Element) -> list[tuple]:
+        return [(part.tag, u.get("index"), u.get("dependencies")) for part in root.find("ModelStructure")
+                for u in part]
+
+    assert variables(ours) == variables(base) and len(variables(base)) > 40
+    assert structure(ours) == structure(base) and len(structure(base)) > 15
+    lay = "VendorAnnotations/Tool[@name='dryfriction.layout']/Layout/Array"
+    assert [a.attrib for a in ours.iterfind(lay)] == [a.attrib for a in base.iterfind(lay)]
+
+
+def test_fmi2_a_bad_layout_in_the_file_is_named(tmp_path: Path) -> None:
+    """The layout section of the structure file checked at instantiation: an array's elements put
+    before its own value reference, and an array missing."""
+    s = structure_of(3, 2, 12)
+    fmu2 = write_fmu(s, tmp_path / "L.fmu", fmi=2)
+    with zipfile.ZipFile(fmu2) as z:
+        data = bytearray(z.read(RESOURCE))
+    md = read_model_description(str(fmu2))
+    bad = bytearray(data)
+    assert struct.unpack_from("<II", bad, 40) == (100000, 100001)  # M's entry
+    struct.pack_into("<I", bad, 44, 99999)
+    d = extract(str(_rewrite(fmu2, tmp_path / "B1.fmu", bytes(bad))), unzipdir=str(tmp_path / "b1"))
+    with pytest.raises(FMUCallError) as err:
+        fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
+    assert "structure.bin puts the 9 elements of M at the value references from 99999; valid: from 100001 (after " \
+        "its own 100000 and the previous array's elements), the last at most 4294967295" in str(err.value), str(err.value)
+    bad = bytearray(data)
+    struct.pack_into("<I", bad, 32, 20)
+    d = extract(str(_rewrite(fmu2, tmp_path / "B2.fmu", bytes(bad))), unzipdir=str(tmp_path / "b2"))
+    with pytest.raises(FMUCallError) as err:
+        fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
+    assert "structure.bin has a layout of 20 arrays; this FMU has 21" in str(err.value), str(err.value)
+
+
+@pytest.mark.skipif(not FMUSIM.is_file(), reason="fmusim not there (../shared/tools/fmusim; or set FMUSIM)")
+def test_fmusim_runs_fmi2_at_any_size(any_size: tuple[System, Path, Path], tmp_path: Path) -> None:
+    s, fmu2, _ = any_size
+    out = tmp_path / "out.csv"
+    r = subprocess.run([str(FMUSIM), "--interface-type", "cs", "--output-interval", "0.01", "--stop-time", "1",
+                        "--output-file", str(out), str(fmu2)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = out.read_text().splitlines()
+    head = [h.strip('"') for h in lines[0].split(",")]
+    last = lines[-1].split(",")
+    ref = run(s, 1.0, 0.01)
+    assert float(last[0]) == 1.0 and len(lines) == ref.t.size + 1
+    x = [float(last[head.index(f"x[{i + 1}]")]) for i in range(s.n)]
+    assert np.allclose(x, ref.x[-1], rtol=1e-15, atol=1e-17)  # fmusim prints 16 significant digits
+    assert [int(last[head.index(f"mode[{j + 1}]")]) for j in range(s.nc)] == ref.mode[-1].tolist()
 
 
 def test_the_run_command_is_system_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

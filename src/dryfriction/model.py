@@ -35,7 +35,8 @@ from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
-__all__ = ["Variable", "Effect", "ArrayLayout", "fmi2_layout", "UINT32_MAX", "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu",
+__all__ = ["Variable", "Effect", "ArrayLayout", "fmi2_layout", "UINT32_MAX",
+           "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu",
            "repository", "default", "default_fmu_path", "LazyMapping", "LazySequence"]
 
 #: FMI 2.0: the C call family that reads/writes a variable of each declared type

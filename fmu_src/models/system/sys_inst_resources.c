@@ -36,8 +36,7 @@
 /* What was read: the file's bytes. */
 typedef struct {
 #if defined(DFO_SYSTEM_FIXED_N)
-    int has_layout;                          /* 1: the file's layout, else the build's */
-    unsigned int first[DFO_FMI2_NUM_ARRAYS]; /* each array's first element (DFO_FMI2_ARRAYS' order) */
+    sys_res_layout lay; /* first: sys_res_fmi2_first reads it through lc->res */
 #endif
     size_t len;
     unsigned char bytes[];
@@ -103,8 +102,8 @@ static const char *parse_layout(sys_res *res, const unsigned char *b, size_t len
         }
         const uint64_t count = (uint64_t)sys_var_count(var, n, nc);
         if ((uint64_t)first <= (uint64_t)vr || (uint64_t)first < end || (uint64_t)first + count - 1 > 0xFFFFFFFFu) {
-            snprintf(buf, blen, "puts the %llu elements of %s at the value references from %lu; valid: from %llu (after "
-                     "its own %lu and the previous array's elements), the last at most 4294967295",
+            snprintf(buf, blen, "puts the %llu elements of %s at the value references from %lu; valid: from %llu "
+                     "(after its own %lu and the previous array's elements), the last at most 4294967295",
                      (unsigned long long)count, var->name, (unsigned long)first,
                      (unsigned long long)(end > (uint64_t)vr + 1 ? end : (uint64_t)vr + 1), (unsigned long)vr);
             return buf;
@@ -117,13 +116,13 @@ static const char *parse_layout(sys_res *res, const unsigned char *b, size_t len
                      (unsigned long)k + 1, DFO_FMI2_ARRAYS[k].vr);
             return buf;
         }
-        if (res) res->first[k] = first;
+        if (res) res->lay.first[k] = first;
 #endif
         end = (uint64_t)first + count;
         prev = vr;
     }
 #if defined(DFO_SYSTEM_FIXED_N)
-    if (res) res->has_layout = 1;
+    if (res) res->lay.has_layout = 1;
 #else
     (void)res;
 #endif
@@ -257,7 +256,7 @@ static dfo_inst_status load(sys_instance *in, const char *dir)
         } else {
             res->len = (size_t)size;
 #if defined(DFO_SYSTEM_FIXED_N)
-            res->has_layout = 0;
+            res->lay.has_layout = 0;
 #endif
             if (fread(res->bytes, 1, res->len, f) != res->len)
                 st = dfo_inst_fail(lc, "instantiate: the structure file %s cannot be read to its end.", path);
@@ -303,11 +302,3 @@ dfo_inst_status sys_inst_resources(dfo_lifecycle *lc, const char *dir, int op)
         return DFO_INST_OK;
     }
 }
-
-#if defined(DFO_SYSTEM_FIXED_N)
-unsigned int sys_res_fmi2_first(const dfo_lifecycle *lc, size_t a)
-{
-    const sys_res *res = (const sys_res *)lc->res;
-    return (res && res->has_layout) ? res->first[a] : DFO_FMI2_ARRAYS[a].first;
-}
-#endif
