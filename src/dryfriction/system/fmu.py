@@ -23,7 +23,6 @@ prebuilt FMU's (the binary checks it); the model name becomes the file's stem.
 
 from __future__ import annotations
 
-import copy
 import os
 import re
 import struct
@@ -204,15 +203,15 @@ def _description2(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[
             continue
         done.add(base)
         what = _SUFFIX.sub("", var.get("description", ""))
+        proto = next(iter(var))
         for k, (idx, vr) in enumerate(lays[base].elements()):
-            el = copy.deepcopy(var)
-            el.set("name", _element_name(base, idx))
-            el.set("valueReference", str(vr))
             where = f" (block {idx[0]})" if len(idx) == 1 else f" (element {', '.join(str(i) for i in idx)})"
-            el.set("description", what + where)
-            typed = next(iter(el))
+            el = ET.Element(var.tag, {**var.attrib, "name": _element_name(base, idx), "valueReference": str(vr),
+                                      "description": what + where})
+            typed = ET.SubElement(el, proto.tag, dict(proto.attrib))
             if base in sv:
                 typed.set("start", _text(sv[base][k].item()))
+            el.text, el.tail = var.text, var.tail
             new.append(el)
             index[(base, idx)] = len(new)
     for var in old:
