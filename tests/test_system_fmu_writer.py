@@ -627,6 +627,49 @@ def test_fmi2_a_bad_layout_in_the_file_is_named(tmp_path: Path) -> None:
     assert "structure.bin has a layout of 20 arrays; this FMU has 21" in str(err.value), str(err.value)
 
 
+def test_fmi2_a_state_of_other_sizes_is_refused(tmp_path: Path) -> None:
+    """The same binary (the same instantiation token) written for n = 3, nc = 2 and n = 1, nc = 1: a
+    state serialised by the one is refused by the other, in a sentence with both sizes; by its own
+    instance it is taken."""
+    insts = []
+    try:
+        for n, nc, seed in ((3, 2, 12), (1, 1, 11)):
+            fmu2 = write_fmu(structure_of(n, nc, seed), tmp_path / f"S{n}.fmu", fmi=2)
+            md = read_model_description(str(fmu2))
+            inst = fmi2.Instance(extract(str(fmu2), unzipdir=str(tmp_path / f"u{n}")), md.guid, "DryFrictionSystem",
+                                 name=f"s{n}")
+            insts.append(inst)
+            inst.setup_experiment(0.0)
+            inst.enter_initialization_mode()
+            inst.exit_initialization_mode()
+            inst.do_step(0.0, 0.1)
+        blob = insts[0].serialize_state(insts[0].get_state())
+        insts[0].set_state(insts[0].deserialize_state(blob))
+        with pytest.raises(FMUCallError) as err:
+            insts[1].deserialize_state(blob)
+        assert "rejected, its sizes n = 3, nc = 2 are not this instance's (n = 1, nc = 1, from its structure file or " \
+            "its build)" in str(err.value), str(err.value)
+    finally:
+        for inst in insts:
+            inst.free()
+
+
+def test_the_layout_lets_an_array_run_past_the_next_ones_own_reference() -> None:
+    """The layout rule (dryfriction.model.fmi2_layout, the generator's): M's n^2 elements beyond
+    C's own value reference push C's after them; beyond 32 bits an error naming the array."""
+    from dryfriction.model import fmi2_layout
+
+    arrays = [("C", 200000, ("n", "n")), ("M", 100000, ("n", "n")), ("W", 800000, ("nc", "n"))]
+    lay = {a.name: a for a in fmi2_layout(arrays, {"n": 320, "nc": 2}, [("omega", 3)])}
+    assert (lay["M"].first, lay["C"].first, lay["W"].first) == (100001, 100001 + 320**2, 800001)
+    assert lay["C"].elements()[-1] == ((320, 320), 100001 + 2 * 320**2 - 1)
+    with pytest.raises(ValueError, match=r"with n = 70000, nc = 2 the FMI 2\.0 value references of M end at "
+                                         r"4900100000, beyond 32 bits \(4294967295\)"):
+        fmi2_layout(arrays, {"n": 70000, "nc": 2})
+    with pytest.raises(ValueError, match=r"scalar omega: value reference 100000 is not below the arrays' \(M: 100000\)"):
+        fmi2_layout(arrays, {"n": 2, "nc": 1}, [("omega", 100000)])
+
+
 @pytest.mark.skipif(not FMUSIM.is_file(), reason="fmusim not there (../shared/tools/fmusim; or set FMUSIM)")
 def test_fmusim_runs_fmi2_at_any_size(any_size: tuple[System, Path, Path], tmp_path: Path) -> None:
     s, fmu2, _ = any_size
