@@ -18,7 +18,8 @@ modelDescription.xml, every other model's fmu_src/models/<name>/modelDescription
 Arrays: a source variable with dimension="n" is a vector of the structural parameter n, one with
 dimension="nc n" a matrix of nc rows of n (row-major; at most two dimensions). FMI 3.0 declares
 one <Dimension> per structural parameter. FMI 2.0 has no arrays: every element is a variable whose
-value reference comes from a layout generated for the build's sizes (fmi2_layout: no fixed
+value reference comes from a layout generated for the build's sizes (fmi2_layout, the package's
+dryfriction.model.fmi2_layout, which a structure's FMU written for other sizes uses too: no fixed
 stride, each array's elements from its own value reference + 1 and after the previous array's,
 any size whose last value reference fits in 32 bits), written into the description
 (<Tool name="dryfriction.layout">) and the build's configuration header (DFO_FMI2_ARRAYS).

@@ -540,6 +540,10 @@ def test_fmi2_at_any_size_states_and_unknown_references(any_size: tuple[System, 
         lo, hi = vr["x[1]"], last
         assert (f"value reference {last + 1} is no variable of this FMU: beyond the elements of x, x[1] to x[{s.n}] at "
                 f"value references {lo} to {hi} (n = {s.n}, nc = {s.nc})") in str(err.value), str(err.value)
+        with pytest.raises(FMUCallError) as err:  # M's own (FMI 3.0) value reference: no element
+            inst.set("Real", [100000], [1.0])
+        assert ("value reference 100000 is no variable of this FMU: no scalar has it and the array elements begin at "
+                "100001 (M[1,1])") in str(err.value), str(err.value)
     finally:
         inst.free()
 

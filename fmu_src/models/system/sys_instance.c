@@ -465,9 +465,16 @@ static int lookup(const sys_instance *in, const char *fn, unsigned int vr, dfo_v
                               "n = %lu, nc = %lu.", fn, vr, A->name, (unsigned long)in->L.n, (unsigned long)in->L.nc);
             return 0;
         }
-#endif
+        char lo[48];
+        const dfo_var_info *A0 = dfo_find_var(DFO_FMI2_ARRAYS[0].vr);
+        element_name(in, A0, 0, lo, sizeof lo);
+        dfo_inst_fail(&in->lc, "%s: value reference %u is no variable of this FMU: no scalar has it and the array "
+                      "elements begin at %u (%s).", fn, vr, sys_res_fmi2_first(&in->lc, 0), lo);
+        return 0;
+#else
         dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
         return 0;
+#endif
     }
     if (r->var->type != type) {
         dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, r->var->name, vr,
