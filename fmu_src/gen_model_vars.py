@@ -18,7 +18,8 @@ modelDescription.xml, every other model's fmu_src/models/<name>/modelDescription
 Arrays: a source variable with dimension="n" is a vector of the structural parameter n, one with
 dimension="nc n" a matrix of nc rows of n (row-major; at most two dimensions). FMI 3.0 declares
 one <Dimension> per structural parameter. FMI 2.0 has no arrays: every element is a variable whose
-value reference comes from a layout generated for the build's sizes (fmi2_layout: no fixed
+value reference comes from a layout generated for the build's sizes (fmi2_layout, the package's
+dryfriction.model.fmi2_layout, which a structure's FMU written for other sizes uses too: no fixed
 stride, each array's elements from its own value reference + 1 and after the previous array's,
 any size whose last value reference fits in 32 bits), written into the description
 (<Tool name="dryfriction.layout">) and the build's configuration header (DFO_FMI2_ARRAYS).
@@ -578,53 +579,21 @@ def emit_c_header(model: Model, source: str = "modelDescription.xml") -> str:
 # ------------------------------------------------------------------ the FMI 2.0 array layout
 
 
-@dataclass(frozen=True)
-class ArrayLayout:
-    """Where an array's elements sit among the FMI 2.0 value references of a build: element
-    (i, j) (1-based; i alone for a vector) at ``first + (i - 1) cols + (j - 1)``, row-major."""
-
-    name: str
-    vr: int  # the array's own value reference (FMI 3.0's)
-    first: int  # the value reference of its first element (FMI 2.0)
-    shape: tuple[int, ...]
-
-    @property
-    def count(self) -> int:
-        """The number of elements."""
-        n = 1
-        for s in self.shape:
-            n *= s
-        return n
-
-    def elements(self) -> list[tuple[tuple[int, ...], int]]:
-        """(index, value reference) of every element, row-major (indices 1-based)."""
-        return [(idx, self.first + k) for k, idx in enumerate(itertools.product(*(range(1, s + 1) for s in self.shape)))]
+#: where an array's elements sit among an FMI 2.0 build's value references: the package's own
+#: (src/dryfriction/model.py), so that a structure's FMU written for other sizes has this layout
+ArrayLayout = _READER.ArrayLayout
 
 
 def fmi2_layout(model: Model, sizes: dict[str, int]) -> tuple[ArrayLayout, ...]:
     """The FMI 2.0 value references of the array elements for a build's structural parameters: the
-    arrays in the order of their value references, each from the first value reference after its
-    own and after the previous array's elements (no fixed stride: the declared value references
-    are kept where the elements fit between them, and any size goes as long as the last fits in
-    32 bits). Scalars keep theirs and must all come before the arrays'."""
-    arrays = sorted((v for v in model.variables if v.dims), key=lambda v: v.vr)
-    scalars = [v for v in model.variables if not v.dims and v.causality != "structuralParameter"]
-    if arrays and scalars:
-        top = max(scalars, key=lambda v: v.vr)
-        if top.vr >= arrays[0].vr:
-            raise ModelError(f"scalar {top.name}: value reference {top.vr} is not below the arrays' "
-                             f"({arrays[0].name}: {arrays[0].vr})")
-    out, end = [], 0
-    for v in arrays:
-        first = max(v.vr + 1, end)
-        lay = ArrayLayout(v.name, v.vr, first, tuple(sizes[d] for d in v.dims))
-        end = first + lay.count
-        if end - 1 > UINT32_MAX:
-            shown = ", ".join(f"{k} = {n}" for k, n in sizes.items())
-            raise ModelError(f"with {shown} the FMI 2.0 value references of {v.name} end at {end - 1}, "
-                             f"beyond 32 bits ({UINT32_MAX})")
-        out.append(lay)
-    return tuple(out)
+    package's layout (dryfriction.model.fmi2_layout: each array from the first value reference after
+    its own and after the previous array's elements) of this model's arrays and scalars."""
+    arrays = [(v.name, v.vr, v.dims) for v in model.variables if v.dims]
+    scalars = [(v.name, v.vr) for v in model.variables if not v.dims and v.causality != "structuralParameter"]
+    try:
+        return _READER.fmi2_layout(arrays, sizes, scalars)
+    except ValueError as e:
+        raise ModelError(str(e)) from None
 
 
 def build_sizes(model: Model, text: str | int) -> dict[str, int]:
@@ -900,15 +869,18 @@ def _element_name(name: str, idx: tuple[int, ...]) -> str:
     return f"{name}[{','.join(str(i) for i in idx)}]" if idx else name
 
 
-def _layout_tool(layouts: tuple[ArrayLayout, ...], sizes: dict[str, int]) -> ET.Element:
+def _layout_tool(layouts: tuple[ArrayLayout, ...], sizes: dict[str, int],
+                 dims: dict[str, tuple[str, ...]]) -> ET.Element:
     """<Tool name="dryfriction.layout">: the build's sizes and every array's first element's value
-    reference and shape (dryfriction.model reads it and checks the elements against it)."""
+    reference, shape and dimensions' structural parameters (dryfriction.model reads it and checks the
+    elements against it; dryfriction.system.fmu lays the arrays out again for a structure's sizes)."""
     tool = ET.Element("Tool", {"name": LAYOUT_TOOL})
     lay = ET.SubElement(tool, "Layout", {"sizes": ",".join(f"{k}={n}" for k, n in sizes.items())})
     lay.text = "\n        "
     for k, a in enumerate(layouts):
         el = ET.SubElement(lay, "Array", {"name": a.name, "valueReference": str(a.vr), "first": str(a.first),
-                                          "shape": " ".join(str(n) for n in a.shape)})
+                                          "shape": " ".join(str(n) for n in a.shape),
+                                          "dims": " ".join(dims[a.name])})
         el.tail = "\n        " if k + 1 < len(layouts) else "\n      "
     lay.tail = "\n    "
     tool.text = "\n      "
@@ -934,7 +906,7 @@ def emit_fmi2_model_description(model: Model, source: Path, size: int | str) -> 
         root.insert(list(root).index(root.find("ModelVariables")), vendor)
     elif len(vendor):
         vendor[-1].tail = "\n    "
-    vendor.append(_layout_tool(tuple(layouts.values()), sizes))
+    vendor.append(_layout_tool(tuple(layouts.values()), sizes, {v.name: v.dims for v in model.variables if v.dims}))
     if model.model_exchange:  # the source counts the indicator variables, FMI 2.0 their elements
         root.set("numberOfEventIndicators", str(sum(layouts[n].count if model.variable(n).dims else 1
                                                     for n in model.indicator_variables)))

@@ -4,9 +4,11 @@ System's runs through the FMI 3.0 FMU (dryfriction.drivers.system).
 The written FMU is the prebuilt binary with the structure in resources/structure.bin and as start
 values: fmpy validates it; run in fmpy and in fmusim with NO start values it gives, bit for bit, the
 run of the prebuilt FMU with the structure's values set through the package's own FMI layer; a
-bad or truncated structure file is an error at instantiation naming the file. The FMI 2.0 FMU (at
-the prebuilt binary's sizes, n = 2, nc = 1): the same with flattened names, a percent-encoded
-resource URI decoded, the Compliance Checker to the end. The driver is checked
+bad or truncated structure file is an error at instantiation naming the file. The FMI 2.0 FMU (the
+prebuilt binary at any sizes, the layout in the structure file): the same with flattened names,
+bit for bit the FMI 3.0 FMU's run, the generator's description at the binary's own sizes, states and
+their serialisation, a value reference outside the layout refused, a percent-encoded resource URI
+decoded, fmusim and the Compliance Checker to the end. The driver is checked
 against plain fmpy calls, and a held input F_ext against the same force as an excitation of
 frequency 0. "A user who has M and K as .mtx files gets a working FMU in two commands": tested
 as it reads."""
@@ -14,6 +16,7 @@ as it reads."""
 from __future__ import annotations
 
 import os
+import shutil
 import struct
 import subprocess
 import zipfile
@@ -134,7 +137,7 @@ def _rewrite(src: Path, dst: Path, data: bytes) -> Path:
     (lambda b: b[:-8 - 4 * 24], "is truncated: the 2 values of k_t need 16 bytes, 8 are left"),
     (lambda b: b"NOTSTRUC" + b[8:], "does not begin with the magic DFOSTRUC"),
     (lambda b: b + b"\0", "has 1 bytes after its last record"),
-    (lambda b: b[:8] + struct.pack("<I", 7) + b[12:], "has the version 7; this FMU reads version 1"),
+    (lambda b: b[:8] + struct.pack("<I", 7) + b[12:], "has the version 7; this FMU reads versions 1 to 2"),
 ])
 def test_a_bad_structure_file_is_an_error_at_instantiation(written: Path, sys3: System, tmp_path: Path, cut,
                                                            words: str) -> None:
@@ -290,13 +293,17 @@ def test_the_command_refuses_what_it_cannot_write(tmp_path: Path, capsys: pytest
     assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "nodir" / "S.fmu")]) == 2
     err = capsys.readouterr().err
     assert "does not exist" in err and err.count("\n") == 1, err
-    assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "S.fmu"), "--fmi", "2"]) == 2
-    err = capsys.readouterr().err
-    assert "serves n = 2, nc = 1 only (fixed when built) but the structure has n = 1, nc = 0" in err, err
+    assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "S.fmu"), "--fmi", "4"]) == 2
     assert not (tmp_path / "S.fmu").exists() and not list(tmp_path.glob("*.part"))
+    capsys.readouterr()
+    # FMI 2.0 at sizes other than the binary's (n = 1, nc = 0: no contact at all)
+    assert main(["system", "fmu", str(tmp_path / "s.toml"), "-o", str(tmp_path / "S.fmu"), "--fmi", "2"]) == 0
+    assert validate_fmu(str(tmp_path / "S.fmu")) == []
+    names = [v.name for v in read_model_description(str(tmp_path / "S.fmu")).modelVariables]
+    assert "M[1,1]" in names and "x[1]" in names and not [m for m in names if m.startswith(("f[", "W[", "mode["))]
 
 
-# ----------------------------------------------------------------------------- FMI 2.0 at the build's sizes
+# ----------------------------------------------------------------------------- FMI 2.0 at the binary's own sizes
 
 
 def two_dofs() -> System:
@@ -355,11 +362,9 @@ def test_fmi2_reads_its_resources_through_a_percent_encoded_uri(written2: Path, 
     assert rows["without"] != rows["with"]
 
 
-def test_fmi2_refuses_a_structure_of_other_sizes(written2: Path, sys3: System, tmp_path: Path) -> None:
-    with pytest.raises(UsageError, match=r"the prebuilt FMI 2.0 binary serves n = 2, nc = 1 only \(fixed when built\) "
-                                         r"but the structure has n = 3, nc = 2; use fmi=3"):
-        write_fmu(sys3, tmp_path / "T.fmu", fmi=2)
-    # and its binary a structure file of other sizes, at instantiation
+def test_fmi2_refuses_a_file_of_other_sizes_without_a_layout(written2: Path, sys3: System, tmp_path: Path) -> None:
+    """A version 1 structure file (no layout: the FMI 3.0 FMU's) of other sizes than the FMI 2.0
+    binary's own: refused at instantiation."""
     with zipfile.ZipFile(write_fmu(sys3, tmp_path / "T3.fmu")) as z:
         data3 = z.read(RESOURCE)
     bad = _rewrite(written2, tmp_path / "Bad2.fmu", data3)
@@ -367,8 +372,8 @@ def test_fmi2_refuses_a_structure_of_other_sizes(written2: Path, sys3: System, t
     d = extract(str(bad), unzipdir=str(tmp_path / "bad2"))
     with pytest.raises(FMUCallError) as err:
         fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
-    assert "structure.bin gives n = 3, nc = 2 but this FMI 2.0 binary serves n = 2, nc = 1 only (fixed when built)" \
-        in str(err.value), str(err.value)
+    assert "structure.bin gives n = 3, nc = 2 and no layout (version 1), but without one this FMI 2.0 binary serves " \
+        "n = 2, nc = 1 only (its own layout)" in str(err.value), str(err.value)
 
 
 @pytest.mark.skipif(not FMUCHECK.is_file(), reason="the Compliance Checker not there (../shared/tools/fmucheck; "
@@ -387,6 +392,338 @@ def test_the_compliance_checker_runs_the_fmi2_fmu(written2: Path, tmp_path: Path
     assert last[0] == 2.0
     assert last[head.index("x[1]")] == pytest.approx(ref.x[-1, 0], rel=1e-15)  # 17 printed digits
     assert last[head.index("E_friction")] == pytest.approx(ref.E_friction[-1], rel=1e-15)
+
+
+# ----------------------------------------------------------------------------- FMI 2.0 at any size
+
+
+def structure_of(n: int, nc: int, seed: int) -> System:
+    """A random structure of n DOFs and nc contacts: a coupled SPD mass matrix, a chain of springs
+    to the ground, Rayleigh damping; contacts on the ground and between DOFs, rigid and Jenkins
+    (k_t > 0), mu_s above and below mu_k; driven near its first resonance; an initial state."""
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(n, n)) * 0.2
+    M = np.eye(n) + A @ A.T
+    k = rng.uniform(100.0, 300.0, n + 1)
+    K = np.diag(k[:-1] + k[1:])
+    for i in range(n - 1):
+        K[i, i + 1] = K[i + 1, i] = -k[i + 1]
+    w1 = float(np.sqrt(np.min(np.linalg.eigvals(np.linalg.solve(M, K)).real)))
+    contacts = []
+    for j in range(nc):
+        mu_s, mu_k = (0.4, 0.3) if j % 2 == 0 else (0.25, 0.3)
+        kw = dict(N=rng.uniform(2.0, 4.0), mu_s=mu_s, mu_k=mu_k, k_t=0.0 if j % 2 == 0 else 400.0)
+        if j == 1 and n > 1:
+            contacts.append(Contact(between=(0, n - 1), **kw))
+        else:
+            contacts.append(Contact(dof=(2 * j) % n, **kw))
+    return System(M=M, K=K, C=1e-3 * K + 0.05 * M, contacts=contacts, F_c=rng.uniform(0.5, 2.0, n),
+                  F_s=rng.uniform(-0.5, 0.5, n), omega=0.9 * w1, x0=rng.uniform(-1e-3, 1e-3, n),
+                  v0=rng.uniform(-1e-2, 1e-2, n), h=1e-3)
+
+
+SIZES = [(1, 1, 11), (3, 2, 12), (7, 3, 13)]
+
+
+@pytest.fixture(scope="module", params=SIZES, ids=[f"n{n}nc{nc}" for n, nc, _ in SIZES])
+def any_size(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> tuple[System, Path, Path]:
+    n, nc, seed = request.param
+    s = structure_of(n, nc, seed)
+    d = tmp_path_factory.mktemp(f"any{n}_{nc}")
+    return s, write_fmu(s, d / f"S{n}x{nc}.fmu", fmi=2), write_fmu(s, d / f"S{n}x{nc}_3.fmu", fmi=3)
+
+
+def test_fmi2_at_any_size_validates_with_its_layout(any_size: tuple[System, Path, Path]) -> None:
+    """The description: every element at the value reference of the package's layout (the
+    generator's, independently recomputed here from its rule), starts the structure's, the layout
+    annotation and the file's layout section the same."""
+    s, fmu2, fmu3 = any_size
+    assert validate_fmu(str(fmu2)) == []
+    md = read_model_description(str(fmu2))
+    byname = {v.name: v for v in md.modelVariables}
+    n, nc = s.n, s.nc
+    # the rule: arrays in the order of their own value references, each from max(own + 1, previous end);
+    # the arrays and their shapes from the FMI 3.0 description (its <Dimension>s: n or nc)
+    md3 = read_model_description(str(fmu3))
+    size_of = {v.valueReference: {"n": n, "nc": nc}[v.name] for v in md3.modelVariables if v.name in ("n", "nc")}
+    shapes = {v.name: tuple(size_of[d.valueReference] for d in v.dimensions) for v in md3.modelVariables
+              if v.dimensions}
+    assert shapes["M"] == (n, n) and shapes["W"] == (nc, n) and shapes["mode"] == (nc,) and len(shapes) >= 21
+    own = {v.name: v.valueReference for v in md3.modelVariables if v.name in shapes}
+    firsts, end = {}, 0
+    for name in sorted(shapes, key=own.get):
+        firsts[name] = max(own[name] + 1, end)
+        end = firsts[name] + int(np.prod(shapes[name]))
+    for name, shp in shapes.items():
+        elements = [byname[name + "[" + ",".join(str(i + 1) for i in idx) + "]"].valueReference
+                    for idx in np.ndindex(*shp)]
+        assert elements == list(range(firsts[name], firsts[name] + len(elements)))
+        assert len([v for v in byname if v.startswith(name + "[")]) == int(np.prod(shp))
+    with zipfile.ZipFile(fmu2) as z:
+        data = z.read(RESOURCE)
+    version, nrec, fn, fnc = struct.unpack_from("<IIQQ", data, 8)
+    nlay, zero = struct.unpack_from("<II", data, 32)
+    assert (version, fn, fnc, zero, nlay) == (2, n, nc, 0, len(shapes))
+    entries = [struct.unpack_from("<II", data, 40 + 8 * k) for k in range(nlay)]
+    assert entries == sorted((own[a], firsts[a]) for a in shapes)
+    assert [float(byname[f"M[{i + 1},{j + 1}]"].start) for i in range(n) for j in range(n)] == s.M.ravel().tolist()
+    assert [float(byname[f"W[{j + 1},{i + 1}]"].start) for j in range(nc) for i in range(n)] == s.W.ravel().tolist()
+    assert [float(byname[f"k_t[{j + 1}]"].start) for j in range(nc)] == [c.k_t for c in s.contacts]
+    # a[i] depends on every input element F_ext[i] (the same element), N_ext, v_belt (all)
+    a1 = next(u for u in md.outputs if u.variable.name == "a[1]")
+    deps = sorted(d.name for d in a1.dependencies)
+    assert deps == sorted(["F_ext[1]"] + [f"N_ext[{j + 1}]" for j in range(nc)]
+                          + [f"v_belt[{j + 1}]" for j in range(nc)])
+
+
+def _fmpy_fmi2(path: Path, n: int, nc: int, stop: float, dt: float) -> dict[str, np.ndarray]:
+    names = [f"x[{i + 1}]" for i in range(n)] + [f"f[{j + 1}]" for j in range(nc)] + \
+        [f"mode[{j + 1}]" for j in range(nc)] + ["E_friction"]
+    res = simulate_fmu(str(path), stop_time=stop, output_interval=dt, output=names)
+    return {"time": res["time"], "x": np.column_stack([res[f"x[{i + 1}]"] for i in range(n)]),
+            "f": np.column_stack([res[f"f[{j + 1}]"] for j in range(nc)]),
+            "mode": np.column_stack([res[f"mode[{j + 1}]"] for j in range(nc)]), "E_friction": res["E_friction"]}
+
+
+def test_fmi2_at_any_size_is_the_fmi3_fmu_bit_for_bit(any_size: tuple[System, Path, Path]) -> None:
+    """fmpy, no start values, on the FMI 2.0 and the FMI 3.0 FMU written for the structure: the same
+    engine, the same numbers bit for bit; the run sticks and slips."""
+    s, fmu2, fmu3 = any_size
+    a = _fmpy_fmi2(fmu2, s.n, s.nc, 1.5, 0.01)
+    b = simulate_fmu(str(fmu3), stop_time=1.5, output_interval=0.01, output=["x", "f", "mode", "E_friction"])
+    assert np.array_equal(a["time"], b["time"])
+    assert a["x"].tobytes() == np.asarray(b["x"], dtype=float).reshape(a["x"].shape).tobytes()
+    assert a["f"].tobytes() == np.asarray(b["f"], dtype=float).reshape(a["f"].shape).tobytes()
+    assert np.array_equal(a["mode"], np.asarray(b["mode"]).reshape(a["mode"].shape))
+    assert a["E_friction"].tobytes() == np.asarray(b["E_friction"], dtype=float).tobytes()
+    assert np.max(np.abs(a["x"])) > 1e-4 and a["E_friction"][-1] > 0  # it moves and friction works
+    assert 0 in a["mode"] and np.any(a["mode"] != 0)  # sticks and slips
+    ref = run(s, 1.5, 0.01)  # and the package's driver on the prebuilt FMI 3.0 FMU, values set
+    assert a["x"].tobytes() == ref.x.tobytes()
+
+
+def test_fmi2_at_any_size_states_and_unknown_references(any_size: tuple[System, Path, Path],
+                                                        tmp_path: Path) -> None:
+    """Get/set FMU state and its serialisation round trip at the file's sizes; a value reference
+    beyond an array's elements refused with a sentence naming the array and its range."""
+    s, fmu2, _ = any_size
+    md = read_model_description(str(fmu2))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    xs = [vr[f"x[{i + 1}]"] for i in range(s.n)] + [vr["E_friction"]]
+    d = extract(str(fmu2), unzipdir=str(tmp_path / "u"))
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="DryFrictionSystem")
+    slave.instantiate()
+    try:
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        slave.doStep(0.0, 0.3)
+        state = slave.getFMUstate()
+        blob = slave.serializeFMUstate(state)
+        slave.doStep(0.3, 0.4)
+        first = slave.getReal(xs)
+        slave.setFMUstate(state)
+        slave.doStep(0.3, 0.4)
+        assert slave.getReal(xs) == first
+        slave.doStep(0.7, 0.2)
+        state2 = slave.deSerializeFMUstate(blob)
+        slave.setFMUstate(state2)
+        slave.doStep(0.3, 0.4)
+        assert slave.getReal(xs) == first
+        assert first == trajectory(s, [0.0, 0.7]).x[-1].tolist() + [first[-1]]
+        slave.freeFMUstate(state)
+        slave.freeFMUstate(state2)
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+    inst = fmi2.Instance(d, md.guid, "DryFrictionSystem", name="vr")
+    try:
+        last = vr[f"x[{s.n}]"]
+        with pytest.raises(FMUCallError) as err:
+            inst.set("Real", [last + 1], [0.0])
+        lo, hi = vr["x[1]"], last
+        assert (f"value reference {last + 1} is no variable of this FMU: beyond the elements of x, x[1] to x[{s.n}] at "
+                f"value references {lo} to {hi} (n = {s.n}, nc = {s.nc})") in str(err.value), str(err.value)
+        with pytest.raises(FMUCallError) as err:  # M's own (FMI 3.0) value reference: no element
+            inst.set("Real", [100000], [1.0])
+        assert ("value reference 100000 is no variable of this FMU: no scalar has it and the array elements begin at "
+                "100001 (M[1,1])") in str(err.value), str(err.value)
+    finally:
+        inst.free()
+
+
+@pytest.mark.skipif(not FMUCHECK.is_file(), reason="the Compliance Checker not there (../shared/tools/fmucheck; "
+                                                   "or set FMUCHECK)")
+def test_the_compliance_checker_runs_fmi2_at_any_size(any_size: tuple[System, Path, Path], tmp_path: Path) -> None:
+    s, fmu2, _ = any_size
+    out, log = tmp_path / "out.csv", tmp_path / "log.txt"
+    r = subprocess.run([str(FMUCHECK), "-h", "0.01", "-s", "1", "-o", str(out), "-e", str(log), str(fmu2)],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = log.read_text(errors="replace") + r.stdout
+    assert "0 warning(s) and error(s)" in report, report
+    lines = out.read_text().splitlines()
+    head = [h.strip('"') for h in lines[0].split(",")]
+    last = [float(v) for v in lines[-1].split(",")]
+    ref = run(s, 1.0, 0.01)
+    assert last[0] == 1.0
+    for i in range(s.n):
+        assert last[head.index(f"x[{i + 1}]")] == pytest.approx(ref.x[-1, i], rel=1e-15, abs=1e-300)
+
+
+def test_fmi2_a_start_value_set_by_the_host_is_used(any_size: tuple[System, Path, Path]) -> None:
+    """fmpy setting an element's start (F_c[n], the last DOF's excitation) on the FMI 2.0 FMU: the
+    run of the structure with that value, bit for bit."""
+    s, fmu2, _ = any_size
+    F_c = s.F_c.copy()
+    F_c[-1] = 3.0
+    a = simulate_fmu(str(fmu2), stop_time=0.5, output_interval=0.01, start_values={f"F_c[{s.n}]": 3.0},
+                     output=[f"x[{i + 1}]" for i in range(s.n)])
+    ref = run(s.replace(F_c=F_c), 0.5, 0.01)
+    assert np.column_stack([a[f"x[{i + 1}]"] for i in range(s.n)]).tobytes() == ref.x.tobytes()
+    assert ref.x.tobytes() != run(s, 0.5, 0.01).x.tobytes()
+
+
+def test_fmi2_written_at_the_builds_sizes_is_the_generators_description(written2: Path) -> None:
+    """The writer's flattening (from each array's first element) against the generator's own at the
+    binary's sizes (n = 2, nc = 1): the same variables, value references, descriptions and model
+    structure; only the start values, the name and the description differ."""
+    import xml.etree.ElementTree as ET
+
+    from dryfriction import paths
+
+    with zipfile.ZipFile(paths.fmu_path(paths.SYSTEM)) as z:
+        base = ET.fromstring(z.read("modelDescription.xml"))
+    with zipfile.ZipFile(written2) as z:
+        ours = ET.fromstring(z.read("modelDescription.xml"))
+
+    def variables(root: ET.Element) -> list[tuple]:
+        return [(v.get("name"), v.get("valueReference"), v.get("causality"), v.get("description"), next(iter(v)).tag,
+                 next(iter(v)).get("unit")) for v in root.iterfind("ModelVariables/ScalarVariable")]
+
+    def structure(root: ET.Element) -> list[tuple]:
+        return [(part.tag, u.get("index"), u.get("dependencies")) for part in root.find("ModelStructure")
+                for u in part]
+
+    assert variables(ours) == variables(base) and len(variables(base)) > 40
+    assert structure(ours) == structure(base) and len(structure(base)) > 15
+    lay = "VendorAnnotations/Tool[@name='dryfriction.layout']/Layout/Array"
+    assert [a.attrib for a in ours.iterfind(lay)] == [a.attrib for a in base.iterfind(lay)]
+
+
+def test_fmi2_a_bad_layout_in_the_file_is_named(tmp_path: Path) -> None:
+    """The layout section of the structure file checked at instantiation: an array's elements put
+    before its own value reference, and an array missing."""
+    s = structure_of(3, 2, 12)
+    fmu2 = write_fmu(s, tmp_path / "L.fmu", fmi=2)
+    with zipfile.ZipFile(fmu2) as z:
+        data = bytearray(z.read(RESOURCE))
+    md = read_model_description(str(fmu2))
+    bad = bytearray(data)
+    assert struct.unpack_from("<II", bad, 40) == (100000, 100001)  # M's entry
+    struct.pack_into("<I", bad, 44, 99999)
+    d = extract(str(_rewrite(fmu2, tmp_path / "B1.fmu", bytes(bad))), unzipdir=str(tmp_path / "b1"))
+    with pytest.raises(FMUCallError) as err:
+        fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
+    assert "structure.bin puts the 9 elements of M at the value references from 99999; valid: from 100001 (after " \
+        "its own 100000 and the previous array's elements), the last at most 4294967295" in str(err.value), str(err.value)
+    bad = bytearray(data)
+    nlay = struct.unpack_from("<I", bad, 32)[0]
+    assert nlay >= 21
+    struct.pack_into("<I", bad, 32, nlay - 1)
+    d = extract(str(_rewrite(fmu2, tmp_path / "B2.fmu", bytes(bad))), unzipdir=str(tmp_path / "b2"))
+    with pytest.raises(FMUCallError) as err:
+        fmi2.Instance(d, md.guid, "DryFrictionSystem", name="bad")
+    assert f"structure.bin has a layout of {nlay - 1} arrays; this FMU has {nlay}" in str(err.value), str(err.value)
+
+
+def test_fmi2_a_state_of_other_sizes_is_refused(tmp_path: Path) -> None:
+    """The same binary (the same instantiation token) written for n = 3, nc = 2 and n = 1, nc = 1: a
+    state serialised by the one is refused by the other, in a sentence with both sizes; by its own
+    instance it is taken."""
+    insts = []
+    try:
+        for n, nc, seed in ((3, 2, 12), (1, 1, 11)):
+            fmu2 = write_fmu(structure_of(n, nc, seed), tmp_path / f"S{n}.fmu", fmi=2)
+            md = read_model_description(str(fmu2))
+            inst = fmi2.Instance(extract(str(fmu2), unzipdir=str(tmp_path / f"u{n}")), md.guid, "DryFrictionSystem",
+                                 name=f"s{n}")
+            insts.append(inst)
+            inst.setup_experiment(0.0)
+            inst.enter_initialization_mode()
+            inst.exit_initialization_mode()
+            inst.do_step(0.0, 0.1)
+        blob = insts[0].serialize_state(insts[0].get_state())
+        insts[0].set_state(insts[0].deserialize_state(blob))
+        with pytest.raises(FMUCallError) as err:
+            insts[1].deserialize_state(blob)
+        assert "rejected, its sizes n = 3, nc = 2 are not this instance's (n = 1, nc = 1, from its structure file or " \
+            "its build)" in str(err.value), str(err.value)
+    finally:
+        for inst in insts:
+            inst.free()
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no gcc")
+def test_fmi2_at_another_size_rebuilds_from_its_sources(tmp_path: Path) -> None:
+    """The written FMI 2.0 FMU (n = 3, nc = 2) rebuilt from its sources/ (a plain C99 compile of the
+    listed files: its binary's own sizes in system_config.h, the structure's in the file) runs the
+    structure: the prebuilt FMI 3.0 FMU's numbers."""
+    s = structure_of(3, 2, 12)
+    fmu2 = write_fmu(s, tmp_path / "R.fmu", fmi=2)
+    md = read_model_description(str(fmu2))
+    d = Path(extract(str(fmu2), unzipdir=str(tmp_path / "r")))
+    files = [str(d / "sources" / f) for f in md.buildConfigurations[0].sourceFileSets[0].sourceFiles]
+    so = d / "binaries" / "linux64" / "DryFrictionSystem.so"
+    so.unlink()
+    r = subprocess.run(["gcc", "-std=c99", "-O1", "-shared", "-fPIC", "-I", str(d / "sources"), *files, "-o", str(so),
+                        "-lm", "-Wl,--no-undefined"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    inst = fmi2.Instance(str(d), md.guid, "DryFrictionSystem", name="rebuilt")
+    try:
+        inst.setup_experiment(0.0)
+        inst.enter_initialization_mode()
+        inst.exit_initialization_mode()
+        inst.do_step(0.0, 0.5)
+        x = inst.get("Real", [vr[f"x[{i + 1}]"] for i in range(3)])
+    finally:
+        inst.free()
+    ref = trajectory(s, [0.0, 0.5]).x[-1]
+    assert x == ref.tolist() and np.max(np.abs(ref)) > 1e-3  # the same IEEE operations: bit for bit
+
+
+def test_the_layout_lets_an_array_run_past_the_next_ones_own_reference() -> None:
+    """The layout rule (dryfriction.model.fmi2_layout, the generator's): M's n^2 elements beyond
+    C's own value reference push C's after them; beyond 32 bits an error naming the array."""
+    from dryfriction.model import fmi2_layout
+
+    arrays = [("C", 200000, ("n", "n")), ("M", 100000, ("n", "n")), ("W", 800000, ("nc", "n"))]
+    lay = {a.name: a for a in fmi2_layout(arrays, {"n": 320, "nc": 2}, [("omega", 3)])}
+    assert (lay["M"].first, lay["C"].first, lay["W"].first) == (100001, 100001 + 320**2, 800001)
+    assert lay["C"].elements()[-1] == ((320, 320), 100001 + 2 * 320**2 - 1)
+    with pytest.raises(ValueError, match=r"with n = 70000, nc = 2 the FMI 2\.0 value references of M end at "
+                                         r"4900100000, beyond 32 bits \(4294967295\)"):
+        fmi2_layout(arrays, {"n": 70000, "nc": 2})
+    with pytest.raises(ValueError, match=r"scalar omega: value reference 100000 is not below the arrays' \(M: 100000\)"):
+        fmi2_layout(arrays, {"n": 2, "nc": 1}, [("omega", 100000)])
+
+
+@pytest.mark.skipif(not FMUSIM.is_file(), reason="fmusim not there (../shared/tools/fmusim; or set FMUSIM)")
+def test_fmusim_runs_fmi2_at_any_size(any_size: tuple[System, Path, Path], tmp_path: Path) -> None:
+    s, fmu2, _ = any_size
+    out = tmp_path / "out.csv"
+    r = subprocess.run([str(FMUSIM), "--interface-type", "cs", "--output-interval", "0.01", "--stop-time", "1",
+                        "--output-file", str(out), str(fmu2)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = out.read_text().splitlines()
+    head = [h.strip('"') for h in lines[0].split(",")]
+    last = lines[-1].split(",")
+    ref = run(s, 1.0, 0.01)
+    assert float(last[0]) == 1.0 and len(lines) == ref.t.size + 1
+    x = [float(last[head.index(f"x[{i + 1}]")]) for i in range(s.n)]
+    assert np.allclose(x, ref.x[-1], rtol=1e-15, atol=1e-17)  # fmusim prints 16 significant digits
+    assert [int(last[head.index(f"mode[{j + 1}]")]) for j in range(s.nc)] == ref.mode[-1].tolist()
 
 
 def test_the_run_command_is_system_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -24,6 +24,7 @@ the sentence the FMU logs for the same value.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import os
 import re
@@ -34,7 +35,8 @@ from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
-__all__ = ["Variable", "Effect", "ArrayLayout", "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu",
+__all__ = ["Variable", "Effect", "ArrayLayout", "fmi2_layout", "UINT32_MAX",
+           "ModelDescription", "parse", "parse_effects", "from_xml", "from_fmu",
            "repository", "default", "default_fmu_path", "LazyMapping", "LazySequence"]
 
 #: FMI 2.0: the C call family that reads/writes a variable of each declared type
@@ -121,6 +123,52 @@ class ArrayLayout:
         for i, n in zip(index, self.shape):
             k = k * n + (i - 1)
         return self.first + k
+
+    def elements(self) -> list[tuple[tuple[int, ...], int]]:
+        """(index, value reference) of every element, row-major (indices 1-based)."""
+        return [(idx, self.first + k)
+                for k, idx in enumerate(itertools.product(*(range(1, s + 1) for s in self.shape)))]
+
+
+#: the largest value reference (32 bits)
+UINT32_MAX = 2**32 - 1
+
+
+def fmi2_layout(arrays: Iterable[tuple[str, int, tuple[str, ...]]], sizes: Mapping[str, int],
+                scalars: Iterable[tuple[str, int]] = ()) -> tuple[ArrayLayout, ...]:
+    """The FMI 2.0 value references of the array elements for structural parameters ``sizes``
+    (``{"n": 7, "nc": 3}``), the one layout of the generator (fmu_src/gen_model_vars.py, the
+    builds' descriptions and DFO_FMI2_ARRAYS) and of a structure's FMI 2.0 FMU written for any
+    sizes (dryfriction.system.fmu, resources/structure.bin). ``arrays``: (name, its own value
+    reference, its dimensions' structural parameters row-major, ``("nc", "n")``); ``scalars``:
+    (name, value reference) of the scalars (no structural parameter). The arrays in the order of
+    their value references, each from the first value reference after its own and after the
+    previous array's elements (no fixed stride: the declared value references are kept where the
+    elements fit between them, any size as long as the last fits in 32 bits); the scalars' value
+    references must all come before the arrays'. ValueError otherwise, naming the variable."""
+    ordered = sorted(arrays, key=lambda a: a[1])
+    scalars = list(scalars)
+    if ordered and scalars:
+        top = max(scalars, key=lambda s: s[1])
+        if top[1] >= ordered[0][1]:
+            raise ValueError(f"scalar {top[0]}: value reference {top[1]} is not below the arrays' "
+                             f"({ordered[0][0]}: {ordered[0][1]})")
+    out: list[ArrayLayout] = []
+    end = 0
+    for name, vr, dims in ordered:
+        unknown = [d for d in dims if d not in sizes]
+        if unknown:
+            raise ValueError(f"array {name}: its dimension {unknown[0]} is not among the sizes "
+                             f"{', '.join(sizes)}")
+        first = max(vr + 1, end)
+        lay = ArrayLayout(name, vr, first, tuple(int(sizes[d]) for d in dims))
+        end = first + lay.count
+        if end - 1 > UINT32_MAX:
+            shown = ", ".join(f"{k} = {n}" for k, n in sizes.items())
+            raise ValueError(f"with {shown} the FMI 2.0 value references of {name} end at {end - 1}, "
+                             f"beyond 32 bits ({UINT32_MAX})")
+        out.append(lay)
+    return tuple(out)
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,12 @@
  *         12..15  uint32 the number of records
  *         16..23  uint64 n
  *         24..31  uint64 nc
+ *   version 2 then: uint32 the number of layout entries, uint32 0, and each entry uint32 an array's
+ *   own value reference, uint32 its first element's FMI 2.0 value reference: the layout of the FMI
+ *   2.0 description written for n, nc (dryfriction.model.fmi2_layout, the generator's), every array
+ *   once in the order of its value reference, each after the previous array's elements and within 32
+ *   bits; an FMI 2.0 binary resolves value references through it (any n, nc), an FMI 3.0 binary
+ *   checks it and has no use for it. Version 1 has none: an FMI 2.0 binary then serves its own sizes.
  *   then each record: uint32 a parameter's value reference (FMI 3.0's), uint32 0, uint64 the number
  *   of its values (1 for a scalar, its size at n, nc for an array), that many IEEE 754 doubles.
  * Every size is checked against the file's length and every value against the parameter's range;
@@ -21,12 +27,17 @@
 #include <string.h>
 
 #define RES_MAGIC "DFOSTRUC"
-#define RES_VERSION 1u
+#define RES_VERSION 2u /* the newest read; 1 is read too */
+#define RES_LAY_HEAD 8u
+#define RES_LAY_ENTRY 8u
 #define RES_HEAD 32u
 #define RES_REC_HEAD 16u
 
 /* What was read: the file's bytes. */
 typedef struct {
+#if defined(DFO_SYSTEM_FIXED_N)
+    sys_res_layout lay; /* first: sys_res_fmi2_first reads it through lc->res */
+#endif
     size_t len;
     unsigned char bytes[];
 } sys_res;
@@ -49,9 +60,79 @@ static double f64_at(const unsigned char *p)
     return x;
 }
 
+/* The layout section of a version 2 file at *pos (moved past it): every array of the model once, in
+ * the order of its value reference, each element's value reference after its own and after the previous
+ * array's elements, the last within 32 bits. Stored in res (an FMI 2.0 build; res NULL: only checked).
+ * NULL, or the problem in buf. */
+static const char *parse_layout(sys_res *res, const unsigned char *b, size_t len, size_t *pos, size_t n, size_t nc,
+                                char *buf, size_t blen)
+{
+    if (len - *pos < RES_LAY_HEAD) {
+        snprintf(buf, blen, "is truncated: its layout has no complete header (byte %lu of %lu)", (unsigned long)*pos,
+                 (unsigned long)len);
+        return buf;
+    }
+    const uint32_t nlay = u32_at(b + *pos);
+    *pos += RES_LAY_HEAD;
+    int narrays = 0;
+    for (int j = 0; j < DFO_NUM_VARS; j++) narrays += DFO_VARS[j].array != 0;
+    if (nlay != (uint32_t)narrays) {
+        snprintf(buf, blen, "has a layout of %lu arrays; this FMU has %d", (unsigned long)nlay, narrays);
+        return buf;
+    }
+    if ((len - *pos) / RES_LAY_ENTRY < nlay) {
+        snprintf(buf, blen, "is truncated: its layout of %lu arrays needs %lu bytes, %lu are left", (unsigned long)nlay,
+                 (unsigned long)(RES_LAY_ENTRY * nlay), (unsigned long)(len - *pos));
+        return buf;
+    }
+    uint64_t end = 0;
+    uint32_t prev = 0;
+    for (uint32_t k = 0; k < nlay; k++, *pos += RES_LAY_ENTRY) {
+        const uint32_t vr = u32_at(b + *pos), first = u32_at(b + *pos + 4);
+        const dfo_var_info *var = dfo_find_var(vr);
+        if (!var || !var->array) {
+            snprintf(buf, blen, "has in layout entry %lu the value reference %lu, which is no array of this FMU",
+                     (unsigned long)k + 1, (unsigned long)vr);
+            return buf;
+        }
+        if (k > 0 && vr <= prev) {
+            snprintf(buf, blen, "lists %s (value reference %lu) in its layout out of the order of the value references "
+                     "(after %lu)", var->name, (unsigned long)vr, (unsigned long)prev);
+            return buf;
+        }
+        const uint64_t count = (uint64_t)sys_var_count(var, n, nc);
+        if ((uint64_t)first <= (uint64_t)vr || (uint64_t)first < end || (uint64_t)first + count - 1 > 0xFFFFFFFFu) {
+            snprintf(buf, blen, "puts the %llu elements of %s at the value references from %lu; valid: from %llu "
+                     "(after its own %lu and the previous array's elements), the last at most 4294967295",
+                     (unsigned long long)count, var->name, (unsigned long)first,
+                     (unsigned long long)(end > (uint64_t)vr + 1 ? end : (uint64_t)vr + 1), (unsigned long)vr);
+            return buf;
+        }
+#if defined(DFO_SYSTEM_FIXED_N)
+        /* the build's arrays, in the same order (the generator's DFO_FMI2_ARRAYS) */
+        if (vr != DFO_FMI2_ARRAYS[k].vr) {
+            snprintf(buf, blen, "has in layout entry %lu the array %s (value reference %lu); this FMU's entry %lu is "
+                     "the array of value reference %u", (unsigned long)k + 1, var->name, (unsigned long)vr,
+                     (unsigned long)k + 1, DFO_FMI2_ARRAYS[k].vr);
+            return buf;
+        }
+        if (res) res->lay.first[k] = first;
+#endif
+        end = (uint64_t)first + count;
+        prev = vr;
+    }
+#if defined(DFO_SYSTEM_FIXED_N)
+    if (res) res->lay.has_layout = 1;
+#else
+    (void)res;
+#endif
+    return NULL;
+}
+
 /* Check the file (apply 0) or make its values the instance's (apply 1, after a check). NULL, or the
  * problem in buf. */
-static const char *parse(sys_instance *in, const unsigned char *b, size_t len, int apply, char *buf, size_t blen)
+static const char *parse(sys_instance *in, sys_res *res, const unsigned char *b, size_t len, int apply, char *buf,
+                         size_t blen)
 {
     if (len < RES_HEAD) {
         snprintf(buf, blen, "is truncated: %lu bytes, fewer than its %u-byte header", (unsigned long)len, RES_HEAD);
@@ -59,8 +140,9 @@ static const char *parse(sys_instance *in, const unsigned char *b, size_t len, i
     }
     if (memcmp(b, RES_MAGIC, 8) != 0) return "does not begin with the magic DFOSTRUC: not a structure file";
     const uint32_t version = u32_at(b + 8), nrec = u32_at(b + 12);
-    if (version != RES_VERSION) {
-        snprintf(buf, blen, "has the version %lu; this FMU reads version %u", (unsigned long)version, RES_VERSION);
+    if (version != 1u && version != RES_VERSION) {
+        snprintf(buf, blen, "has the version %lu; this FMU reads versions 1 to %u", (unsigned long)version,
+                 RES_VERSION);
         return buf;
     }
     const uint64_t n = u64_at(b + 16), nc = u64_at(b + 24);
@@ -69,12 +151,15 @@ static const char *parse(sys_instance *in, const unsigned char *b, size_t len, i
                  (unsigned long long)nc, (int)MAX_n, (int)MAX_nc);
         return buf;
     }
+    size_t pos = RES_HEAD;
+    const char *why = version == 1u ? NULL : parse_layout(res, b, len, &pos, (size_t)n, (size_t)nc, buf, blen);
+    if (why) return why;
 #if defined(DFO_SYSTEM_FIXED_N)
-    /* an FMI 2.0 build: its flattened elements' value references are laid out for its own sizes */
-    if (n != (uint64_t)DFO_SYSTEM_FIXED_N || nc != (uint64_t)DFO_SYSTEM_FIXED_NC) {
-        snprintf(buf, blen, "gives n = %llu, nc = %llu but this FMI 2.0 binary serves n = %d, nc = %d only (fixed when "
-                 "built)", (unsigned long long)n, (unsigned long long)nc, (int)DFO_SYSTEM_FIXED_N,
-                 (int)DFO_SYSTEM_FIXED_NC);
+    /* version 1: the flattened elements' value references are the build's, laid out for its sizes */
+    if (version == 1u && (n != (uint64_t)DFO_SYSTEM_FIXED_N || nc != (uint64_t)DFO_SYSTEM_FIXED_NC)) {
+        snprintf(buf, blen, "gives n = %llu, nc = %llu and no layout (version 1), but without one this FMI 2.0 binary "
+                 "serves n = %d, nc = %d only (its own layout)", (unsigned long long)n, (unsigned long long)nc,
+                 (int)DFO_SYSTEM_FIXED_N, (int)DFO_SYSTEM_FIXED_NC);
         return buf;
     }
 #endif
@@ -83,7 +168,6 @@ static const char *parse(sys_instance *in, const unsigned char *b, size_t len, i
         in->n_config = in->L.n;
         in->nc_config = in->L.nc;
     }
-    size_t pos = RES_HEAD;
     for (uint32_t r = 0; r < nrec; r++) {
         if (len - pos < RES_REC_HEAD) {
             snprintf(buf, blen, "is truncated: record %lu of %lu has no complete header (byte %lu of %lu)",
@@ -171,6 +255,9 @@ static dfo_inst_status load(sys_instance *in, const char *dir)
             st = dfo_inst_fail(lc, "instantiate: out of memory for the structure file %s (%ld bytes).", path, size);
         } else {
             res->len = (size_t)size;
+#if defined(DFO_SYSTEM_FIXED_N)
+            res->lay.has_layout = 0;
+#endif
             if (fread(res->bytes, 1, res->len, f) != res->len)
                 st = dfo_inst_fail(lc, "instantiate: the structure file %s cannot be read to its end.", path);
         }
@@ -178,8 +265,8 @@ static dfo_inst_status load(sys_instance *in, const char *dir)
     fclose(f);
     if (st == DFO_INST_OK) {
         char buf[256];
-        const char *why = parse(in, res->bytes, res->len, 0, buf, sizeof buf);
-        if (!why) why = parse(in, res->bytes, res->len, 1, buf, sizeof buf);
+        const char *why = parse(in, NULL, res->bytes, res->len, 0, buf, sizeof buf);
+        if (!why) why = parse(in, res, res->bytes, res->len, 1, buf, sizeof buf);
         if (why) {
             st = dfo_inst_fail(lc, "instantiate: the structure file %s %s.", path, why);
         } else {
@@ -204,7 +291,7 @@ dfo_inst_status sys_inst_resources(dfo_lifecycle *lc, const char *dir, int op)
     case DFO_RES_APPLY: {
         if (!res) return DFO_INST_OK;
         char buf[256];
-        const char *why = parse(in, res->bytes, res->len, 1, buf, sizeof buf);
+        const char *why = parse(in, res, res->bytes, res->len, 1, buf, sizeof buf);
         return why ? dfo_inst_fail(lc, "reset: the structure's start values %s.", why) : DFO_INST_OK;
     }
     case DFO_RES_FREE:

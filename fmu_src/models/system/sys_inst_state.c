@@ -157,7 +157,13 @@ static const char *implausible(sys_instance *in, const dfo_run *r, const double 
     if (!(dn >= 1.0 && dn <= (double)MAX_n && dn == floor(dn)) || !(dnc >= 0.0 && dnc <= (double)MAX_nc && dnc == floor(dnc)))
         return "the sizes n, nc are out of range";
 #if defined(DFO_SYSTEM_FIXED_N)
-    if (dn != (double)DFO_SYSTEM_FIXED_N || dnc != (double)DFO_SYSTEM_FIXED_NC) return "the sizes are not this build's";
+    /* FMI 2.0 has no configuration mode: the sizes are the instance's (its structure file's, else the
+     * build's), and its value references are laid out for them */
+    if (dn != (double)in->L.n || dnc != (double)in->L.nc) {
+        snprintf(buf, len, "its sizes n = %.17g, nc = %.17g are not this instance's (n = %lu, nc = %lu, from its "
+                 "structure file or its build)", dn, dnc, (unsigned long)in->L.n, (unsigned long)in->L.nc);
+        return buf;
+    }
 #endif
     const size_t n = (size_t)dn, nc = (size_t)dnc;
     const sys_layout L = sys_layout_of(n, nc);

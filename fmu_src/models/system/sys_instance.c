@@ -381,7 +381,10 @@ typedef struct {
     long elem; /* -1: the whole variable (a scalar, or every element of an array) */
 } sys_ref;
 
-static int resolve(unsigned int vr, sys_ref *r)
+/* FMI 2.0: the flattened elements' value references follow the layout of the structure file when it
+ * gives one (any n, nc: resources/structure.bin), the build's otherwise (DFO_FMI2_ARRAYS, its own
+ * sizes); array a's elements are first .. first + count - 1 for the instance's sizes. */
+static int resolve(const sys_instance *in, unsigned int vr, sys_ref *r)
 {
     const dfo_var_info *var = dfo_find_var(vr);
     r->var = NULL;
@@ -393,14 +396,16 @@ static int resolve(unsigned int vr, sys_ref *r)
         return 1;
     }
     for (size_t a = 0; a < DFO_FMI2_NUM_ARRAYS; a++) {
-        const dfo_fmi2_array *A = &DFO_FMI2_ARRAYS[a];
-        if (vr < A->first || vr - A->first >= A->count) continue;
-        r->var = dfo_find_var(A->vr);
-        r->elem = (long)(vr - A->first);
+        const unsigned int first = sys_res_fmi2_first(&in->lc, a);
+        const dfo_var_info *A = dfo_find_var(DFO_FMI2_ARRAYS[a].vr);
+        if (vr < first || vr - first >= sys_var_count(A, in->L.n, in->L.nc)) continue;
+        r->var = A;
+        r->elem = (long)(vr - first);
         return 1;
     }
     return 0;
 #else
+    (void)in;
     if (!var) return 0;
     r->var = var;
     r->elem = -1;
@@ -429,16 +434,47 @@ size_t dfo_inst_n_values(const dfo_lifecycle *lc, const unsigned int vr[], size_
     size_t total = 0;
     for (size_t i = 0; i < nvr; i++) {
         sys_ref r;
-        total += resolve(vr[i], &r) ? count(in, &r) : 1;
+        total += resolve(in, vr[i], &r) ? count(in, &r) : 1;
     }
     return total;
 }
 
 static int lookup(const sys_instance *in, const char *fn, unsigned int vr, dfo_var_type type, sys_ref *r)
 {
-    if (!resolve(vr, r)) {
+    if (!resolve(in, vr, r)) {
+#if defined(DFO_SYSTEM_FIXED_N)
+        /* the array whose elements would come just before vr: the nearest valid range */
+        long best = -1;
+        for (size_t a = 0; a < DFO_FMI2_NUM_ARRAYS; a++) {
+            const unsigned int first = sys_res_fmi2_first(&in->lc, a);
+            if (first <= vr && (best < 0 || first > sys_res_fmi2_first(&in->lc, (size_t)best))) best = (long)a;
+        }
+        if (best >= 0) {
+            const dfo_var_info *A = dfo_find_var(DFO_FMI2_ARRAYS[best].vr);
+            const unsigned int first = sys_res_fmi2_first(&in->lc, (size_t)best);
+            const size_t c = sys_var_count(A, in->L.n, in->L.nc);
+            char lo[48], hi[48];
+            element_name(in, A, 0, lo, sizeof lo);
+            element_name(in, A, c ? c - 1 : 0, hi, sizeof hi);
+            if (c)
+                dfo_inst_fail(&in->lc, "%s: value reference %u is no variable of this FMU: beyond the elements of %s, "
+                              "%s to %s at value references %u to %lu (n = %lu, nc = %lu).", fn, vr, A->name, lo, hi,
+                              first, (unsigned long)(first + c - 1), (unsigned long)in->L.n, (unsigned long)in->L.nc);
+            else
+                dfo_inst_fail(&in->lc, "%s: value reference %u is no variable of this FMU: %s has no elements with "
+                              "n = %lu, nc = %lu.", fn, vr, A->name, (unsigned long)in->L.n, (unsigned long)in->L.nc);
+            return 0;
+        }
+        char lo[48];
+        const dfo_var_info *A0 = dfo_find_var(DFO_FMI2_ARRAYS[0].vr);
+        element_name(in, A0, 0, lo, sizeof lo);
+        dfo_inst_fail(&in->lc, "%s: value reference %u is no variable of this FMU: no scalar has it and the array "
+                      "elements begin at %u (%s).", fn, vr, sys_res_fmi2_first(&in->lc, 0), lo);
+        return 0;
+#else
         dfo_inst_fail(&in->lc, "%s: unknown value reference %u.", fn, vr);
         return 0;
+#endif
     }
     if (r->var->type != type) {
         dfo_inst_fail(&in->lc, "%s: variable %s (value reference %u) is of type %s, not %s.", fn, r->var->name, vr,
@@ -612,7 +648,7 @@ static dfo_inst_status set_values(sys_instance *in, const char *fn, const unsign
     k = 0;
     for (size_t j = 0; j < n; j++) {
         sys_ref r;
-        (void)resolve(vr[j], &r);
+        (void)resolve(in, vr[j], &r);
         const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
         for (size_t i = 0; i < c; i++) *stored(in, r.var, i0 + i) = value[k + i];
         if (r.var->home == DFO_IN_INPUTS) in->vals[SYS_H_SET + (size_t)r.var->slot] = 1.0;
@@ -679,7 +715,7 @@ dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const uns
     }
     for (size_t j = 0; j < n; j++) {
         sys_ref r;
-        (void)resolve(vr[j], &r);
+        (void)resolve(in, vr[j], &r);
         if (r.var->slot == DFO_STRUCT_n) in->n_config = (size_t)value[j];
         else in->nc_config = (size_t)value[j];
     }

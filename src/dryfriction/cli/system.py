@@ -38,8 +38,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     f.add_argument("-o", "--output", type=path_arg("-o", "file"), required=True, metavar="NAME.fmu",
                    help="the FMU to write")
     f.add_argument("--fmi", type=int, choices=(2, 3), default=3,
-                   help="the FMI version (default 3; 2: only at the sizes of the prebuilt FMI 2.0 binary, "
-                        "n = 2, nc = 1)")
+                   help="the FMI version (default 3; 2: the flattened names M[1,2], x[3]; any sizes either "
+                        "way)")
     r = ss.add_parser("run", help="run the structure through the FMI 3.0 FMU",
                       description="Run the structure through the FMI 3.0 DryFrictionSystem FMU from t = 0.")
     r.add_argument("spec", type=path_arg("SPEC", "file"), metavar="SPEC", help="the TOML structure file")

@@ -546,9 +546,9 @@ class System:
         """Write this structure's own FMU to ``path`` (``NAME.fmu``) without a compiler: the
         package's prebuilt ``DryFrictionSystem`` binary, this system's values as the model
         description's start values and in ``resources/structure.bin``, read by the binary at
-        instantiation (:func:`dryfriction.system.fmu.write_fmu`). ``fmi``: 3 (FMI 3.0, any sizes) or
-        2 (FMI 2.0, flattened names ``M[1,2]``; only at the prebuilt FMI 2.0 binary's sizes, n = 2,
-        nc = 1). Returns the path written."""
+        instantiation (:func:`dryfriction.system.fmu.write_fmu`). ``fmi``: 3 (FMI 3.0) or 2 (FMI
+        2.0, flattened names ``M[1,2]``, their value references laid out for this structure's sizes
+        in the file too); any sizes either way. Returns the path written."""
         from .fmu import write_fmu
 
         return write_fmu(self, path, fmi=fmi, base=base)
