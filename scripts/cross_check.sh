@@ -4,7 +4,7 @@
 # FMU natively (Linux x86-64), under wine (Windows) and under qemu-aarch64 (Linux aarch64), and
 #   1. compare the outputs and serialised states of the 300 parameter sets bit for bit (the FMUs:
 #      FMUS below, one line each: the oscillator's with fmu_harness, the chain's with
-#      chain_harness, n = 1 ... 6 blocks, the three schemes),
+#      chain_harness, n = 1 ... 6 blocks, the three schemes, the structures' with system_harness),
 #   2. resume every set on every platform from the states serialised on every other platform and
 #      compare with the original run,
 #   3. compare the FMU's elementary functions (test_dmath --dump) bit for bit, and run the
@@ -61,6 +61,8 @@ FMUS=(
   "fmi3 fmi3 fmi3/DryFrictionOscillator.fmu fmu_harness"
   "chain2 fmi2 DryFrictionChain.fmu chain_harness"
   "chain3 fmi3 fmi3/DryFrictionChain.fmu chain_harness"
+  "system2 fmi2 DryFrictionSystem.fmu system_harness"
+  "system3 fmi3 fmi3/DryFrictionSystem.fmu system_harness"
 )
 declare -A FMI_OF FILE_OF HARNESS_NAME_OF ID_OF
 KEYS=()
