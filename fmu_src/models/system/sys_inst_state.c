@@ -40,6 +40,7 @@ static dfo_inst_status advance(dfo_lifecycle *lc, const char *fn, double t_targe
     hk.on_switch = on_switch;
     hk.switch_ctx = in;
     hk.stop_at_switch = stop_at_switch;
+    hk.obs = sys_observer(in);
     in->lc.switched = 0;
     if (sys_inputs_changed(vals, L)) {
         const eng_inputs old_in = sys_inputs_of(vals, L, 1), new_in = sys_inputs_of(vals, L, 0);

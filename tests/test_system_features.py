@@ -1,0 +1,208 @@
+"""The DryFrictionSystem FMU's features shared with the other models (build/fmi3/DryFrictionSystem.fmu
+through fmpy): the in-FMU observables x_max, x_min (per degree of freedom) and stick_fraction (per
+contact) over the window [t_obs_start, t_obs_stop] with the observe switch, against the oscillator
+FMU's observables for one degree of freedom and against the event-driven reference
+(dryfriction.references.system) for a structure with two contacts; their FMU state; their
+refusals and not-computed reads."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from dryfriction.references.system import simulate
+from dryfriction.system import Contact, System
+from test_system_fmu import OSC, OSC3, SCHEMES, SYS3, Fmu3
+
+OBS = ("x_max", "x_min", "stick_fraction")
+
+
+def observables(f: Fmu3, n: int, nc: int) -> np.ndarray:
+    """x_max, x_min (n each) and stick_fraction (nc) in one row."""
+    return np.concatenate([f.real("x_max", n), f.real("x_min", n), f.real("stick_fraction", nc)])
+
+
+def set_observe(f: Fmu3, on: bool) -> None:
+    f.s.setBoolean([f.vr["observe"]], [on])
+
+
+def run_obs(f: Fmu3, times: np.ndarray, n: int, nc: int) -> np.ndarray:
+    """The observables at the times (times[0] the start), one row each."""
+    rows = [observables(f, n, nc)]
+    for a, b in zip(times[:-1], times[1:]):
+        f.s.doStep(a, b - a)
+        rows.append(observables(f, n, nc))
+    return np.array(rows)
+
+
+# --------------------------------------------------------------------- one DOF: the oscillator's
+
+
+@pytest.mark.parametrize("scheme", list(SCHEMES))
+def test_one_dof_observables_are_the_oscillators(scheme: str, tmp_path: Path) -> None:
+    times = np.arange(81) * 0.05
+    window = {"t_obs_start": 1.02, "t_obs_stop": 3.31}
+    o = Fmu3(OSC3, tmp_path)
+    try:
+        o.start({**OSC, **window, "scheme": SCHEMES[scheme]})
+        ref = run_obs(o, times, 1, 1)
+    finally:
+        o.close()
+    p = OSC
+    f = Fmu3(SYS3, tmp_path, {"n": 1, "nc": 1})
+    try:
+        f.start({"M": [p["m"]], "K": [p["k"]], "C": [p["c"]], "F_c": [p["P0"]], "F_s": [0.0], "omega": p["omega"],
+                 "x0": [p["x0"]], "v0": [p["v0"]], "W": [1.0], "N": [p["N"]], "mu_s": [p["mu_s"]],
+                 "mu_k": [p["chi"] * p["mu_s"]], "h": p["h"], "alpha": p["alpha"], "scheme": SCHEMES[scheme],
+                 **window})
+        got = run_obs(f, times, 1, 1)
+    finally:
+        f.close()
+    before = times < window["t_obs_start"]
+    assert np.all(np.isnan(got[before, :2])) and np.all(np.isnan(ref[before, :2]))
+    assert np.all(got[before, 2] == 0.0) and np.all(ref[before, 2] == 0.0)
+    assert 0.1 < ref[-1, 2] < 0.9  # it sticks and slides inside the window
+    assert ref[-1, 0] > ref[-1, 1]
+    # the same engine, the oscillator's scalar specialisation against the dense instance: x to
+    # rounding (measured up to 5.4e-14 relative), the stuck shares up to 1.3e-14 (located)
+    scale = np.max(np.abs(ref[~before, :2]))
+    assert np.max(np.abs(got[~before, :2] - ref[~before, :2])) <= 1e-12 * scale
+    assert np.max(np.abs(got[:, 2] - ref[:, 2])) <= 1e-12
+
+
+# --------------------------------------------------------------------- against the reference
+
+def two_contacts(scheme: str = "located", h: float = 5e-4) -> System:
+    """Two masses, one contact on the ground, one between them (mu_s > mu_k: stick-slip)."""
+    M = np.diag([1.0, 0.5])
+    K = np.array([[150.0, -50.0], [-50.0, 70.0]])
+    C = np.array([[0.4, -0.1], [-0.1, 0.1]])
+    return System(M=M, K=K, C=C, contacts=[Contact(dof=0, N=4.5, mu_s=0.4, mu_k=0.3),
+                                           Contact(between=(1, 0), N=1.0, mu_s=0.3, mu_k=0.2)],
+                  F_c=[3.0, 1.0], omega=5.0, x0=[0.0, 0.01], h=h, scheme=scheme)
+
+
+def reference_observables(sys: System, w0: float, w1: float, t: float) -> np.ndarray:
+    """x_max, x_min over [w0, min(t, w1)] from the reference's dense motion and the stuck share of
+    each contact from its phases' modes."""
+    res = simulate(sys, t, t_eval=np.linspace(w0, min(t, w1), 20001))
+    stuck = np.zeros(sys.nc)
+    for ph in res.solution.phases:
+        lo, hi = max(ph.t0, w0), min(ph.t1, w1, t)
+        if hi > lo:
+            stuck += (np.array(ph.modes) == 0) * (hi - lo)
+    return np.concatenate([res.x.max(axis=0), res.x.min(axis=0), stuck / (min(t, w1) - w0)])
+
+
+def test_observables_are_the_event_driven_references(tmp_path: Path) -> None:
+    sys = two_contacts()
+    w0, w1 = 1.5, 4.5
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        f.start({k: v for k, v in sys.start_values().items() if k not in ("n", "nc")} |
+                {"t_obs_start": w0, "t_obs_stop": w1})
+        got = run_obs(f, np.array([0.0, 1.0, 3.0, 5.0]), 2, 2)
+    finally:
+        f.close()
+    for row, t in ((got[2], 3.0), (got[3], 5.0)):  # mid-window, and the window closed
+        ref = reference_observables(sys, w0, w1, t)
+        assert np.all((ref[4:] > 0.05) & (ref[4:] < 0.95)), ref  # both contacts stick and slide
+        # x: the scheme's error at h = 5e-4 (second order) and the step-end sampling; measured 3.2e-6
+        # relative to the largest |x|; the stuck shares: the located switch times, measured 3.5e-6
+        scale = np.max(np.abs(ref[:4]))
+        assert np.max(np.abs(row[:4] - ref[:4])) <= 2e-5 * scale, (row, ref)
+        assert np.max(np.abs(row[4:] - ref[4:])) <= 5e-5, (row, ref)
+
+
+def test_observables_survive_an_fmu_state_and_a_host_step_size(tmp_path: Path) -> None:
+    """The observables live in the FMU state (restored, the same bits) and do not depend on the
+    communication points (the stuck time added in one piece per stretch; x sampled at every internal
+    step's end)."""
+    sys = two_contacts(h=1e-3)
+    values = {k: v for k, v in sys.start_values().items() if k not in ("n", "nc")} | {"t_obs_start": 0.7,
+                                                                                        "t_obs_stop": 2.9}
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        f.start(values)
+        f.s.doStep(0.0, 1.5)
+        state = f.s.getFMUState()
+        f.s.doStep(1.5, 1.5)
+        first = observables(f, 2, 2)
+        f.s.setFMUState(state)
+        f.s.doStep(1.5, 1.5)
+        again = observables(f, 2, 2)
+        f.s.freeFMUState(state)
+    finally:
+        f.close()
+    assert first.tobytes() == again.tobytes()
+    g = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        g.start(values)
+        fine = run_obs(g, np.arange(31) * 0.1, 2, 2)[-1]
+    finally:
+        g.close()
+    assert np.all(np.isfinite(first))
+    # the same internal steps whatever the host's points (multiples of h): the same bits but for the
+    # stuck shares' sums of stretches (measured 0 to 1 ulp)
+    assert fine[:4].tobytes() == first[:4].tobytes()
+    assert np.max(np.abs(fine[4:] - first[4:])) <= 1e-14
+
+
+def test_observe_false_reads_nan_and_says_so_once(tmp_path: Path) -> None:
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        set_observe(f, False)
+        f.start({k: v for k, v in two_contacts().start_values().items() if k not in ("n", "nc")})
+        f.s.doStep(0.0, 0.5)
+        assert f.s.getBoolean([f.vr["observe"]]) == [False]
+        assert np.all(np.isnan(observables(f, 2, 2)))
+        assert np.all(np.isnan(observables(f, 2, 2)))
+        said = [m for m in f.messages if "observe is false" in m]
+        assert len(said) == 1 and "x_max" in said[0]
+        assert np.all(np.isfinite(f.real("x", 2)))
+    finally:
+        f.close()
+
+
+def test_before_the_window_x_extremes_are_nan_and_the_stuck_share_zero(tmp_path: Path) -> None:
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        f.start({k: v for k, v in two_contacts().start_values().items() if k not in ("n", "nc")} |
+                {"t_obs_start": 1.0})
+        f.s.doStep(0.0, 0.5)
+        obs = observables(f, 2, 2)
+        assert np.all(np.isnan(obs[:4])) and np.all(obs[4:] == 0.0)
+        assert any("has not taken a sample yet" in m for m in f.messages)
+        f.s.doStep(0.5, 1.0)
+        assert np.all(np.isfinite(observables(f, 2, 2)))
+    finally:
+        f.close()
+
+
+def test_a_window_that_ends_before_it_starts_is_refused(tmp_path: Path) -> None:
+    f = Fmu3(SYS3, tmp_path, {"n": 1, "nc": 1})
+    try:
+        with pytest.raises(Exception):
+            f.start({"t_obs_start": 2.0, "t_obs_stop": 1.0})
+        assert any("t_obs_stop = 1 is below t_obs_start = 2" in m for m in f.messages), f.messages
+    finally:
+        try:
+            f.close()
+        except Exception:
+            pass
+
+
+def test_the_start_inside_the_window_is_a_sample(tmp_path: Path) -> None:
+    x0 = [0.02, -0.03]
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        f.start({k: v for k, v in two_contacts().start_values().items() if k not in ("n", "nc")} | {"x0": x0})
+        obs = observables(f, 2, 2)
+    finally:
+        f.close()
+    assert obs[:2].tolist() == x0 and obs[2:4].tolist() == x0 and obs[4:].tolist() == [0.0, 0.0]
+    assert not any(math.isnan(v) for v in obs)
