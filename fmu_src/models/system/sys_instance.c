@@ -75,6 +75,8 @@ sys_layout sys_layout_of(size_t n, size_t nc)
     k += SYS_SNAP_NS + SYS_SNAP_NA_N * n + SYS_SNAP_NA_NC * nc;
     L.obs = k;
     k += SYS_OBS_SIZE(n, nc);
+    L.ud = k;
+    k += 2 * (n + nc);
     L.total = k;
     return L;
 }
@@ -352,6 +354,47 @@ void sys_obs_start(sys_instance *in)
         memcpy(o + n, in->s.X, n * sizeof(double));
         o[2 * n + 2 * nc] = 1.0;
     }
+}
+
+/* ---- input derivatives ------------------------------------------------------------------------ */
+
+int dfo_inst_max_input_order(void) { return 2; }
+
+static int ramped(const double *vals, const sys_layout *L)
+{
+    const double *ud = vals + L->ud;
+    for (size_t i = 0; i < 2 * (L->n + L->nc); i++)
+        if (ud[i] != 0.0) return 1;
+    return 0;
+}
+
+void sys_ramp_of(const double *vals, const sys_layout *L, double t_ref, eng_inputs *e)
+{
+    if (!ramped(vals, L)) return;
+    const size_t n = L->n, nc = L->nc;
+    for (int k = 0; k < 2; k++) {
+        const double *d = vals + L->ud + (size_t)k * (n + nc);
+        if (e->F_ext) e->dF_ext[k] = d;
+        if (e->N_ext && nc) e->dN_ext[k] = d + n;
+    }
+    e->t_ref = t_ref;
+}
+
+void sys_ramp_done(double *vals, const sys_layout *L, double t_ref, double t)
+{
+    if (!ramped(vals, L)) return;
+    const size_t n = L->n, nc = L->nc;
+    const double dt = t - t_ref;
+    double *d1 = vals + L->ud, *d2 = d1 + n + nc;
+    const int slots[2] = {DFO_AI_F_ext, DFO_AI_N_ext};
+    for (int a = 0; a < 2; a++) {
+        const size_t c = a ? nc : n, off = a ? n : 0;
+        if (vals[SYS_H_SET + slots[a]] == 0.0) continue;
+        double *u = vals + L->ai[slots[a]];
+        for (size_t i = 0; i < c; i++) u[i] += d1[off + i] * dt + d2[off + i] * dt * dt / 2.0;
+    }
+    memset(d1, 0, 2 * (n + nc) * sizeof(double));
+    sys_sync_inputs(vals, L); /* (the values at t: the inputs used from here on) */
 }
 
 /* ---- life cycle ------------------------------------------------------------------------------- */
@@ -800,6 +843,38 @@ dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const uns
         (void)resolve(vr[j], &r);
         if (r.var->slot == DFO_STRUCT_n) in->n_config = (size_t)value[j];
         else in->nc_config = (size_t)value[j];
+    }
+    return DFO_INST_OK;
+}
+
+/* ---- input derivatives (FMI 2.0's fmi2SetRealInputDerivatives: one value per element) ---------- */
+
+dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
+                                               const int order[], const double value[])
+{
+    sys_instance *in = sysi(lc);
+    const size_t n = in->L.n;
+    for (size_t j = 0; j < nvr; j++) {
+        sys_ref r;
+        if (!resolve(vr[j], &r)) return dfo_inst_fail(lc, "%s: unknown value reference %u.", fn, vr[j]);
+        const dfo_var_info *var = r.var;
+        if (var->home != DFO_IN_INPUTS || var->slot == DFO_AI_v_belt)
+            return dfo_inst_fail(lc, "%s: %s (value reference %u) takes no derivatives: only the inputs F_ext and "
+                                 "N_ext do (v_belt is held over a communication step).", fn, var->name, vr[j]);
+        if (order[j] < 1 || order[j] > 2)
+            return dfo_inst_fail(lc, "%s: invalid order %d of the derivative of %s (value reference %u); valid range: "
+                                 "1 to 2.", fn, order[j], var->name, vr[j]);
+        if (!isfinite(value[j]))
+            return dfo_inst_fail(lc, "%s: invalid value %.17g of the order-%d derivative of %s (value reference %u); "
+                                 "valid range: finite.", fn, value[j], order[j], var->name, vr[j]);
+    }
+    for (size_t j = 0; j < nvr; j++) {
+        sys_ref r;
+        (void)resolve(vr[j], &r);
+        const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
+        double *d = in->vals + in->L.ud + (size_t)(order[j] - 1) * (n + in->L.nc) + (r.var->slot == DFO_AI_F_ext ? 0 : n);
+        for (size_t i = 0; i < c; i++) d[i0 + i] = value[j];
+        in->vals[SYS_H_SET + (size_t)r.var->slot] = 1.0; /* the input's polynomial starts from its value */
     }
     return DFO_INST_OK;
 }

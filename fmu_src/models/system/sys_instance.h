@@ -65,6 +65,7 @@ typedef struct {
     size_t ai_used[DFO_NUM_AI];  /* array inputs of the last step */
     size_t snap;                 /* the engine state's snapshot */
     size_t obs;                  /* the observables' state (SYS_OBS_*) */
+    size_t ud;                   /* the input derivatives: orders 1, 2 of F_ext (n) then N_ext (nc) */
     size_t total;
 } sys_layout;
 
@@ -115,6 +116,13 @@ void sys_state_of(const double *vals, const sys_layout *L, eng_state *s);
 const eng_observer *sys_observer(sys_instance *in);
 /* The observables at the start (the start state sampled where t0 is inside the window). */
 void sys_obs_start(sys_instance *in);
+
+/* The input derivatives set for the next step (FMI 2.0's fmi2SetRealInputDerivatives) into e (its
+ * polynomials from t_ref), when any is not 0. */
+void sys_ramp_of(const double *vals, const sys_layout *L, double t_ref, eng_inputs *e);
+/* A step from t_ref ended at t: the inputs with derivatives take their polynomials' values at t and
+ * become the inputs used; the derivatives are forgotten (they hold for one step). */
+void sys_ramp_done(double *vals, const sys_layout *L, double t_ref, double t);
 
 /* The allocator of the engine and the model: the host's. */
 eng_alloc sys_allocator(sys_instance *in);
