@@ -166,6 +166,9 @@ sys_params sys_params_of(const double *vals, const sys_layout *L)
     p.mu_s = vals + L->ap[DFO_AP_mu_s];
     p.mu_k = vals + L->ap[DFO_AP_mu_k];
     p.k_t = vals + L->ap[DFO_AP_k_t];
+    p.law = vals + L->ap[DFO_AP_friction_law];
+    p.v_s = vals + L->ap[DFO_AP_v_s];
+    p.delta = vals + L->ap[DFO_AP_delta];
     p.omega = vals[L->sp + DFO_SP_omega];
     p.h = vals[L->sp + DFO_SP_h];
     p.alpha = vals[L->sp + DFO_SP_alpha];
@@ -797,10 +800,15 @@ dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsig
 dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                  const int value[])
 {
-    double x[BATCH];
-    if (n > BATCH) return dfo_inst_fail(lc, "%s: at most %d values per call.", fn, BATCH);
-    for (size_t i = 0; i < n; i++) x[i] = (double)value[i];
-    return set_values(sysi(lc), fn, vr, n, x, DFO_INTEGER);
+    /* (friction_law is an array of nc values: more than a batch goes through the host's memory) */
+    const size_t total = dfo_inst_n_values(lc, vr, n);
+    double batch[BATCH] = {0.0}, *x = batch;
+    if (total > BATCH && !(x = (double *)lc->host.alloc(lc->host.ctx, total, sizeof(double))))
+        return dfo_inst_fail(lc, "%s: out of memory for %lu values.", fn, (unsigned long)total);
+    for (size_t i = 0; i < total; i++) x[i] = (double)value[i];
+    const dfo_inst_status st = set_values(sysi(lc), fn, vr, n, x, DFO_INTEGER);
+    if (x != batch) lc->host.free(lc->host.ctx, x);
+    return st;
 }
 
 dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
