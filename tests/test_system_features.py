@@ -408,3 +408,65 @@ def test_a_law_the_engine_cannot_step_is_refused_naming_the_contact(values: dict
             f.close()
         except Exception:
             pass
+
+
+# --------------------------------------------------------------------- the rest rule's choice, logged
+
+AMBIGUOUS = {"M": [1.0, 0.6, 0.6, 1.0], "K": [40.0, 0.0, 0.0, 40.0], "C": [0.0] * 4, "F_c": [1.0, 0.9],
+             "F_s": [0.0, 0.0], "omega": 2.5, "x0": [0.0, 0.0], "W": [1.0, 0.0, 0.0, 1.0], "N": [1.0, 1.0],
+             "mu_s": [0.8, 0.8], "mu_k": [0.5, 0.5], "h": 1e-3, "scheme": 3}
+
+
+def consistent_sets() -> list[tuple[int, int]]:
+    """The mode sets at t = 0 (both contacts at rest, both pushed beyond their limit when held
+    together) in which every held contact's force is within its limit and every sliding one
+    accelerates the way it slides: by enumeration, from M a = F + f."""
+    M = np.array(AMBIGUOUS["M"]).reshape(2, 2)
+    F = np.array(AMBIGUOUS["F_c"])
+    Fb, Fk = 0.8, 0.5
+    out = []
+    for modes in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)]:
+        held = [j for j in range(2) if modes[j] == 0]
+        slide = np.array([-m * Fk for m in modes], dtype=float)
+        # unknowns: the held contacts' forces and the sliding DOFs' accelerations
+        A = np.zeros((2, 2))
+        b = F + slide
+        for j in range(2):
+            if modes[j] == 0:
+                A[:, j] = [-1.0 if i == j else 0.0 for i in range(2)]  # f_j moves to the left side
+            else:
+                A[:, j] = M[:, j]
+        y = np.linalg.solve(A, b)
+        ok = all(abs(y[j]) <= Fb for j in held) and all(modes[j] * y[j] > 0 for j in range(2) if modes[j])
+        if ok:
+            out.append(modes)
+    return out
+
+
+def test_the_rest_rule_picks_one_of_two_consistent_sets_and_logs_which(tmp_path: Path) -> None:
+    """Two contacts at rest at the start, coupled through M, each beyond its limit when both are held:
+    releasing either one leaves the other within its limit, and both may slide too: three mode sets
+    are consistent. The causal cascade releases the one most beyond its limit (contact 1: 0.2
+    against 0.1) and holds the other, as the event-driven reference does, and the event log says so."""
+    assert consistent_sets() == [(1, 0), (0, 1), (1, 1)]
+    f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+    try:
+        f.start(AMBIGUOUS)
+        modes = list(f.ints("mode", 2))
+        f.s.doStep(0.0, 0.01)
+        x = f.real("x", 2)
+    finally:
+        f.close()
+    assert modes == [1, 0] and x[0] > 0.0 and x[1] == 0.0
+    rest = [m for m in f.messages if "rest rule" in m]
+    assert len(rest) == 3, rest
+    assert rest[0].startswith("t = 0: the rest rule decides the rigid contacts at rest together (contacts 1, 2)")
+    assert 'the causal cascade from "all at rest held" picks one' in rest[0]
+    assert rest[1].startswith("t = 0: rest rule: contact 1 released (its holding force beyond its limit by 0.19999")
+    assert "to slide forward (mode +1)" in rest[1]
+    assert rest[2] == "t = 0: rest rule settled: contacts held 2; released 1."
+    sys = System(M=np.array(AMBIGUOUS["M"]).reshape(2, 2), K=np.diag([40.0, 40.0]),
+                 contacts=[Contact(dof=0, N=1.0, mu_s=0.8, mu_k=0.5), Contact(dof=1, N=1.0, mu_s=0.8, mu_k=0.5)],
+                 F_c=[1.0, 0.9], omega=2.5)
+    ref = simulate(sys, 0.01, t_eval=[0.0, 0.01])
+    assert [int(m) for m in ref.mode[1]] == modes

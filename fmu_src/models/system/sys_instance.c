@@ -193,7 +193,9 @@ const char *sys_build(sys_instance *in, char *buf, size_t len)
 {
     sys_free_model(in);
     const eng_alloc al = sys_allocator(in);
-    const sys_params p = sys_params_of(in->vals, &in->L);
+    sys_params p = sys_params_of(in->vals, &in->L);
+    p.on_rest = sys_on_rest; /* (the rest rule's choice in the event log) */
+    p.rest_ctx = in;
     const char *err = NULL;
     if (!sys_model_init(&in->m, &p, &al, 1, buf, len, &err)) return err;
     if (!eng_state_init(in->m.E, &in->s, 0)) {
@@ -398,6 +400,57 @@ void sys_ramp_done(double *vals, const sys_layout *L, double t_ref, double t)
     }
     memset(d1, 0, 2 * (n + nc) * sizeof(double));
     sys_sync_inputs(vals, L); /* (the values at t: the inputs used from here on) */
+}
+
+/* ---- the rest rule's log ------------------------------------------------------------------------ */
+
+/* The 1-based numbers of the contacts j with rest[j] and (modes NULL, or (modes[j] == 0) == held) into
+ * buf: "1, 3, 4" ("none"; cut with "..." when long). */
+static void contact_list(size_t nc, const int *rest, const int *modes, int held, char *buf, size_t len)
+{
+    size_t k = 0;
+    buf[0] = '\0';
+    for (size_t j = 0; j < nc; j++) {
+        if (!rest[j] || (modes && (modes[j] == 0) != held)) continue;
+        if (k + 24 >= len) {
+            snprintf(buf + k, len - k, ", ...");
+            return;
+        }
+        k += (size_t)snprintf(buf + k, len - k, "%s%lu", k ? ", " : "", (unsigned long)j + 1);
+    }
+    if (!k) snprintf(buf, len, "none");
+}
+
+void sys_on_rest(void *ctx, double t, int stage, size_t contact, int mode, double excess, const int *rest,
+                 const int *modes)
+{
+    sys_instance *in = (sys_instance *)ctx;
+    const dfo_lifecycle *lc = &in->lc;
+    if (!lc->host.log || !lc->log_on[DFO_LOG_EVENTS]) return;
+    const size_t nc = in->L.nc;
+    char a[200], b[200];
+    switch (stage) {
+    case ENG_REST_OPEN:
+        contact_list(nc, rest, NULL, 0, a, sizeof a);
+        dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS,
+                     "t = %.17g: the rest rule decides the rigid contacts at rest together (contacts %s); where "
+                     "more than one mode set is consistent, the causal cascade from \"all at rest held\" picks one: "
+                     "their holding forces solved together, the contact most beyond its limit released first, the "
+                     "forces solved again, until every held one is within its limit.", t, a);
+        break;
+    case ENG_REST_RELEASE:
+        dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS,
+                     "t = %.17g: rest rule: contact %lu released (its holding force beyond its limit by %.17g, the "
+                     "most of the held ones), to slide %s (mode %+d); the others solved again.", t,
+                     (unsigned long)contact + 1, excess, mode > 0 ? "forward" : "backward", mode);
+        break;
+    default:
+        contact_list(nc, rest, modes, 1, a, sizeof a);
+        contact_list(nc, rest, modes, 0, b, sizeof b);
+        dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS,
+                     "t = %.17g: rest rule settled: contacts held %s; released %s.", t, a, b);
+        break;
+    }
 }
 
 /* ---- life cycle ------------------------------------------------------------------------------- */

@@ -124,6 +124,11 @@ void sys_ramp_of(const double *vals, const sys_layout *L, double t_ref, eng_inpu
  * become the inputs used; the derivatives are forgotten (they hold for one step). */
 void sys_ramp_done(double *vals, const sys_layout *L, double t_ref, double t);
 
+/* The engine's report of its rest rule (eng_rest_fn; ctx: the instance), logged under logEvents: the
+ * rule that picks the mode set where several rigid contacts at rest are decided together. */
+void sys_on_rest(void *ctx, double t, int stage, size_t contact, int mode, double excess, const int *rest,
+                 const int *modes);
+
 /* The allocator of the engine and the model: the host's. */
 eng_alloc sys_allocator(sys_instance *in);
 

@@ -470,6 +470,8 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.snap_max_rel_h = 1e-5;
     S.snap_min_rel_h = 1e-7;
     S.snap_eps_t = 65536.0;
+    S.on_rest = p->on_rest;
+    S.rest_ctx = p->rest_ctx;
     m->E = eng_create(&S, al, err);
     if (!m->E) {
         if (!*err) *err = "out of memory";

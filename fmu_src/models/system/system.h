@@ -34,6 +34,8 @@ typedef struct {
                                       * contact Coulomb), Stribeck velocity and exponent */
     double omega, h, alpha;          /* excitation frequency, internal step (0: derived), Bossak alpha */
     int scheme, frictionUpdates;     /* DFO_SCHEME_*, the paper scheme's coefficient updates */
+    eng_rest_fn on_rest;             /* the engine's report of its rest rule (NULL: none), its context */
+    void *rest_ctx;
 } sys_params;
 
 typedef struct {
