@@ -520,7 +520,8 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stdout + r.stderr
     lines = out.read_text().splitlines()
     head = [c.strip('"') for c in lines[0].split(",")]
-    assert head == ["time", "E_friction", "x", "v", "a", "f", "s", "mode"] and len(lines) == 1257 + 1
+    assert head == ["time", "E_friction", "x", "v", "a", "f", "s", "x_max", "x_min", "stick_fraction", "mode"]
+    assert len(lines) == 1257 + 1
     last = lines[-1].split(",")
     assert float(last[0]) == pytest.approx(12.56, abs=1e-9)
     # the same run through fmpy with the same communication points: fmusim's numbers
@@ -531,13 +532,16 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
         for k in range(1, 1257):
             f.s.doStep((k - 1) * 0.01, 0.01)
         x, mode, E = f.real("x", 3), f.ints("mode", 2), f.real("E_friction")[0]
+        x_max, share = f.real("x_max", 3), f.real("stick_fraction", 2)
     finally:
         f.close()
     # the same numbers to the CSV's 16 digits (measured: 2.8e-17 in one element). (With h derived, not
     # a divisor of 0.01, every communication point ends a shortened step and the two hosts' rounding of
     # tc + dt differs: measured 1.1e-12 relative in x at the end.)
     assert np.allclose([float(v) for v in last[2].split()], x, rtol=1e-15, atol=0)
-    assert [int(v) for v in last[7].split()] == list(mode) and float(last[1]) == pytest.approx(E, rel=1e-15)
+    assert [int(v) for v in last[10].split()] == list(mode) and float(last[1]) == pytest.approx(E, rel=1e-15)
+    assert np.allclose([float(v) for v in last[7].split()], x_max, rtol=1e-15, atol=0)
+    assert np.allclose([float(v) for v in last[9].split()], share, rtol=1e-15, atol=0)
     assert last[6].split() == ["nan", "nan"]
 
 
@@ -556,10 +560,11 @@ def test_the_compliance_checker_runs_the_fmi2_fmu_to_the_end(tmp_path: Path) -> 
     assert r.returncode == 0 and "0 Warning(s)" in text and "0 Error(s)" in text, text
     lines = out.read_text().splitlines()
     head = [c.strip('"') for c in lines[0].split(",")]
-    assert head == ["time", "E_friction", "x[1]", "x[2]", "v[1]", "v[2]", "a[1]", "a[2]", "f[1]", "mode[1]", "s[1]"]
+    assert head == ["time", "E_friction", "x[1]", "x[2]", "v[1]", "v[2]", "a[1]", "a[2]", "f[1]", "mode[1]", "s[1]",
+                    "x_max[1]", "x_max[2]", "x_min[1]", "x_min[2]", "stick_fraction[1]"]
     rows = [line.split(",") for line in lines[1:]]
     t = [float(row[0]) for row in rows]
-    assert t[-1] == pytest.approx(12.56, abs=1e-12) and rows[-1][-1] == "NAN"
+    assert t[-1] == pytest.approx(12.56, abs=1e-12) and rows[-1][10] == "NAN"
     # the checker's communication points: its rows' times, and one it steps through without a row
     # (measured: 500 rows for 500 steps of 0.02512 s, none at 0.1256)
     dt = 12.56 / 500  # its default: 500 steps over the default experiment
@@ -573,9 +578,11 @@ def test_the_compliance_checker_runs_the_fmi2_fmu_to_the_end(tmp_path: Path) -> 
         for k in range(1, len(points)):
             f.s.doStep(points[k - 1], points[k] - points[k - 1])
         x = f.real("x", 2)
+        obs = np.concatenate([f.real("x_max", 2), f.real("x_min", 2), f.real("stick_fraction", 1)])
     finally:
         f.close()
     assert np.array_equal([float(v) for v in rows[-1][2:4]], x)  # (the CSV's 17 digits round-trip)
+    assert np.array_equal([float(v) for v in rows[-1][11:16]], obs)
 
 
 def test_static_checks_of_both_fmus() -> None:

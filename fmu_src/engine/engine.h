@@ -299,6 +299,16 @@ struct eng_held_step_s {
                                  * F at the run's first step, in its own layout, and read that instead) */
 };
 
+/* The rest rule's steps at an event where it decides two or more rigid contacts with friction at rest
+ * together (the causal cascade from "all at rest held", method.md section 13): stage ENG_REST_OPEN
+ * (contact = nc) with rest[] the contacts at rest; ENG_REST_RELEASE for each contact it releases, the
+ * most beyond its limit (by excess, its holding force's magnitude over its breakaway limit), to slide
+ * the way mode says; ENG_REST_SETTLED (contact = nc) with modes[] the set it ends with (0: held).
+ * For a model's event log (eng_setup.on_rest; ctx: eng_setup.rest_ctx), at the start too. */
+enum { ENG_REST_OPEN = 0, ENG_REST_RELEASE = 1, ENG_REST_SETTLED = 2 };
+typedef void (*eng_rest_fn)(void *ctx, double t, int stage, size_t contact, int mode, double excess,
+                            const int *rest, const int *modes);
+
 /* Everything set before a run. Arrays are the caller's and must outlive the engine (eng_create
  * copies none of them: a model keeps its parameters in its own struct and points at them). */
 typedef struct {
@@ -333,6 +343,8 @@ typedef struct {
      * of a grid point is that grid point (the oscillator: 1e-5, 1e-7, 2^16; the chain: 1e-7, 1e-7, 0) */
     double snap_max_rel_h, snap_min_rel_h, snap_eps_t;
     const eng_sparse *sparse;   /* the model's sparse-structure operators, or NULL (read while the engine lives) */
+    eng_rest_fn on_rest;        /* the rest rule's report (NULL: none), with its context */
+    void *rest_ctx;
 } eng_setup;
 
 /* ---- inputs ---------------------------------------------------------------------------------- */

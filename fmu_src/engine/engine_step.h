@@ -1110,8 +1110,15 @@ static ENG_HOT void free_modes(eng *E, eng_state *s, const eng_hooks *hk)
 static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, int *mode)
 {
     const size_t nc = ENG_NC(E);
-    for (size_t j = 0; j < nc; j++)
+    size_t rigid = 0;
+    for (size_t j = 0; j < nc; j++) {
         if (rest[j]) mode[j] = 0;
+        rigid += rest[j] && has_friction(E, j) && !is_jenk(E, j);
+    }
+    /* (the report: where two or more rigid contacts at rest are decided together) */
+    const eng_rest_fn tell = rigid >= 2 ? E->S.on_rest : NULL;
+    void *ctx = E->S.rest_ctx;
+    if (tell) tell(ctx, t, ENG_REST_OPEN, nc, 0, 0.0, rest, mode);
     for (size_t round = 0; round <= nc; round++) {
         phys_accel(E, s, t, mode, E->y2, E->f);
         size_t worst = nc;
@@ -1123,8 +1130,12 @@ static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, in
             const double e = fabs(E->f[j]) - E->Fb[j];
             if (e > excess) { excess = e; worst = j; }
         }
-        if (worst == nc) return 1;
+        if (worst == nc) {
+            if (tell) tell(ctx, t, ENG_REST_SETTLED, nc, 0, 0.0, rest, mode);
+            return 1;
+        }
         mode[worst] = -sgn(E->f[worst]); /* the holding force's opposite: the net applied force's side */
+        if (tell) tell(ctx, t, ENG_REST_RELEASE, worst, mode[worst], excess, rest, mode);
     }
     return 0;
 }

@@ -436,22 +436,35 @@ fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], si
 
 #define CHUNK 64 /* Int64 and Boolean values pass through the core's int in chunks */
 
+/* An int buffer of count values: buf (CHUNK) when it fits, else the host's memory (NULL: none). */
+static int *int_buffer(Instance *in, size_t count, int *buf)
+{
+    if (count <= CHUNK) return buf;
+    return (int *)in->core->host.alloc(in->core->host.ctx, count, sizeof(int));
+}
+
+static void int_buffer_free(Instance *in, int *p, int *buf)
+{
+    if (p && p != buf) in->core->host.free(in->core->host.ctx, p);
+}
+
+/* Int64 values pass through the core's int: nValues of them (an array of enumerations, such as a
+ * model's per-contact friction law, holds several), in one call so that a rejected call changes
+ * nothing. */
 fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int64 values[],
                         size_t nValues)
 {
     BEGIN(fmi3GetInt64);
     if (!check_arrays(in, "fmi3GetInt64", vr, nvr, values, nValues)) return fmi3Error;
     if (!check_int_kind(in, "fmi3GetInt64", vr, nvr, 1)) return fmi3Error;
-    dfo_inst_status worst = DFO_INST_OK;
-    for (size_t i0 = 0; i0 < nvr; i0 += CHUNK) {
-        const size_t n = nvr - i0 < CHUNK ? nvr - i0 : CHUNK;
-        int buf[CHUNK];
-        const dfo_inst_status st = dfo_inst_get_int(in->core, "fmi3GetInt64", vr + i0, n, buf);
-        if (st == DFO_INST_ERROR) return fmi3Error;
-        if (st > worst) worst = st;
-        for (size_t i = 0; i < n; i++) values[i0 + i] = buf[i];
-    }
-    return status_of(worst);
+    if (nvr == 0) return fmi3OK;
+    int stack[CHUNK], *buf = int_buffer(in, nValues, stack);
+    if (!buf) return FAIL("fmi3GetInt64: out of memory for %lu values.", (unsigned long)nValues);
+    const dfo_inst_status st = dfo_inst_get_int(in->core, "fmi3GetInt64", vr, nvr, buf);
+    if (st != DFO_INST_ERROR)
+        for (size_t i = 0; i < nValues; i++) values[i] = buf[i];
+    int_buffer_free(in, buf, stack);
+    return st == DFO_INST_ERROR ? fmi3Error : status_of(st);
 }
 
 fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int64 values[],
@@ -460,17 +473,22 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference vr[], si
     BEGIN(fmi3SetInt64);
     if (!check_arrays(in, "fmi3SetInt64", vr, nvr, values, nValues)) return fmi3Error;
     if (!check_int_kind(in, "fmi3SetInt64", vr, nvr, 1)) return fmi3Error;
-    if (nvr > CHUNK) return FAIL("fmi3SetInt64: at most %d values per call.", CHUNK);
-    int buf[CHUNK];
-    for (size_t i = 0; i < nvr; i++) {
-        if (values[i] < INT_MIN || values[i] > INT_MAX) {
-            const dfo_var_info *var = dfo_find_var(vr[i]);
-            return FAIL("fmi3SetInt64: invalid value %lld for variable %s (value reference %u); valid range: %s.",
-                        (long long)values[i], var ? var->name : "?", vr[i], var ? var->range : "?");
-        }
-        buf[i] = (int)values[i];
+    if (nvr == 0) return fmi3OK;
+    for (size_t i = 0, k = 0; i < nvr; i++) {
+        const size_t c = dfo_inst_n_values(in->core, &vr[i], 1);
+        for (size_t e = 0; e < c; e++, k++)
+            if (values[k] < INT_MIN || values[k] > INT_MAX) {
+                const dfo_var_info *var = dfo_find_var(vr[i]);
+                return FAIL("fmi3SetInt64: invalid value %lld for variable %s (value reference %u); valid range: %s.",
+                            (long long)values[k], var ? var->name : "?", vr[i], var ? var->range : "?");
+            }
     }
-    return status_of(dfo_inst_set_int(in->core, "fmi3SetInt64", vr, nvr, buf));
+    int stack[CHUNK], *buf = int_buffer(in, nValues, stack);
+    if (!buf) return FAIL("fmi3SetInt64: out of memory for %lu values.", (unsigned long)nValues);
+    for (size_t k = 0; k < nValues; k++) buf[k] = (int)values[k];
+    const dfo_inst_status st = dfo_inst_set_int(in->core, "fmi3SetInt64", vr, nvr, buf);
+    int_buffer_free(in, buf, stack);
+    return status_of(st);
 }
 
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],

@@ -40,13 +40,16 @@ static dfo_inst_status advance(dfo_lifecycle *lc, const char *fn, double t_targe
     hk.on_switch = on_switch;
     hk.switch_ctx = in;
     hk.stop_at_switch = stop_at_switch;
+    hk.obs = sys_observer(in);
     in->lc.switched = 0;
     if (sys_inputs_changed(vals, L)) {
         const eng_inputs old_in = sys_inputs_of(vals, L, 1), new_in = sys_inputs_of(vals, L, 0);
         eng_new_inputs(in->m.E, &old_in, &new_in, &in->s, &hk);
         sys_sync_inputs(vals, L);
     }
-    const eng_inputs e = sys_inputs_of(vals, L, 1);
+    eng_inputs e = sys_inputs_of(vals, L, 1);
+    const double t_ref = in->lc.run.time;
+    sys_ramp_of(vals, L, t_ref, &e);
     const eng_status st = eng_advance(in->m.E, &e, &in->s, t_target, &hk);
     if (st != ENG_OK && st != ENG_SWITCHED) {
         const double t_fail = in->s.t;
@@ -58,6 +61,7 @@ static dfo_inst_status advance(dfo_lifecycle *lc, const char *fn, double t_targe
     }
     const double snap = dfo_snap(in->m.h, t_target);
     in->lc.run.time = (st == ENG_SWITCHED && in->s.t < t_target - snap) ? in->s.t : t_target;
+    sys_ramp_done(vals, L, t_ref, in->lc.run.time);
     return DFO_INST_OK;
 }
 
@@ -236,20 +240,12 @@ dfo_inst_status dfo_inst_deserialize(dfo_lifecycle *lc, const char *fn, const un
     return st;
 }
 
-/* ---- no derivatives (the description: canInterpolateInputs false, maxOutputDerivativeOrder 0,
+/* ---- no output derivatives (the description: maxOutputDerivativeOrder 0,
  * providesDirectionalDerivative false) ------------------------------------------------------------ */
 
-int dfo_inst_max_input_order(void) { return 0; }
 int dfo_inst_max_output_order(void) { return 0; }
 
 #define NO_DERIVATIVES(lc, fn, what) dfo_inst_fail(lc, "%s: the DryFrictionSystem FMU provides no %s.", fn, what)
-
-dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
-                                               const int order[], const double value[])
-{
-    (void)vr, (void)nvr, (void)order, (void)value;
-    return NO_DERIVATIVES(lc, fn, "input derivatives");
-}
 
 dfo_inst_status dfo_inst_get_output_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[],
                                                 size_t nvr, const int order[], double value[])

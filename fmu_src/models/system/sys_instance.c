@@ -19,7 +19,8 @@ typedef char dfo_static_assert_fixed_n[(DFO_SYSTEM_FIXED_N >= 1 && DFO_SYSTEM_FI
                                         DFO_SYSTEM_FIXED_NC >= 0 && DFO_SYSTEM_FIXED_NC <= MAX_nc) ? 1 : -1];
 #endif
 
-#define WARNED_SLIP 1u /* lc.warned: the sentence on s was logged */
+#define WARNED_SLIP 1u    /* lc.warned: the sentence on s was logged */
+#define WARNED_OBSERVE 2u /* lc.warned: the sentence on an observable not computed was logged */
 
 /* ---- memory and layout ------------------------------------------------------------------------ */
 
@@ -72,6 +73,10 @@ sys_layout sys_layout_of(size_t n, size_t nc)
         }
     L.snap = k;
     k += SYS_SNAP_NS + SYS_SNAP_NA_N * n + SYS_SNAP_NA_NC * nc;
+    L.obs = k;
+    k += SYS_OBS_SIZE(n, nc);
+    L.ud = k;
+    k += 2 * (n + nc);
     L.total = k;
     return L;
 }
@@ -161,6 +166,9 @@ sys_params sys_params_of(const double *vals, const sys_layout *L)
     p.mu_s = vals + L->ap[DFO_AP_mu_s];
     p.mu_k = vals + L->ap[DFO_AP_mu_k];
     p.k_t = vals + L->ap[DFO_AP_k_t];
+    p.law = vals + L->ap[DFO_AP_friction_law];
+    p.v_s = vals + L->ap[DFO_AP_v_s];
+    p.delta = vals + L->ap[DFO_AP_delta];
     p.omega = vals[L->sp + DFO_SP_omega];
     p.h = vals[L->sp + DFO_SP_h];
     p.alpha = vals[L->sp + DFO_SP_alpha];
@@ -185,7 +193,9 @@ const char *sys_build(sys_instance *in, char *buf, size_t len)
 {
     sys_free_model(in);
     const eng_alloc al = sys_allocator(in);
-    const sys_params p = sys_params_of(in->vals, &in->L);
+    sys_params p = sys_params_of(in->vals, &in->L);
+    p.on_rest = sys_on_rest; /* (the rest rule's choice in the event log) */
+    p.rest_ctx = in;
     const char *err = NULL;
     if (!sys_model_init(&in->m, &p, &al, 1, buf, len, &err)) return err;
     if (!eng_state_init(in->m.E, &in->s, 0)) {
@@ -281,6 +291,168 @@ const char *sys_belt_refused(const double *vals, const sys_layout *L)
     return NULL;
 }
 
+/* ---- the observables -------------------------------------------------------------------------- */
+
+/* The part of [a, b] inside the window [w0, w1]. */
+static double in_window(double w0, double w1, double a, double b)
+{
+    const double lo = (a > w0) ? a : w0, hi = (b < w1) ? b : w1;
+    return (hi > lo) ? hi - lo : 0.0;
+}
+
+/* One phase [ta, tb] that overlaps the window (the engine calls no other), as the oscillator keeps its
+ * observables (osc_engine_ops.h): each contact's stuck stretch opened or closed at the phase's start
+ * (its part inside the window added in one piece when the contact leaves rest, so that the stuck time
+ * is the same however the steps are taken), and where the phase ends inside the window every x
+ * sampled. */
+static void observe_phase(void *ctx, const eng_phase *ph, const eng_state *es)
+{
+    sys_instance *in = (sys_instance *)ctx;
+    const size_t n = in->L.n, nc = in->L.nc;
+    double *o = in->vals + in->L.obs, *x_max = o, *x_min = o + n, *t_stuck = o + 2 * n, *from = t_stuck + nc;
+    const double w0 = in->obs.t_start, w1 = in->obs.t_stop;
+    (void)es;
+    for (size_t j = 0; j < nc; j++) {
+        if (ph->mode0[j] == 0) {
+            if (isnan(from[j])) from[j] = ph->ta;
+        } else if (!isnan(from[j])) {
+            t_stuck[j] += in_window(w0, w1, from[j], ph->ta);
+            from[j] = NAN;
+        }
+    }
+    if (ph->tb < w0 || ph->tb > w1) return;
+    double *observed = from + nc;
+    if (*observed == 0.0) {
+        memcpy(x_max, ph->X1, n * sizeof(double));
+        memcpy(x_min, ph->X1, n * sizeof(double));
+        *observed = 1.0;
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        const double x = ph->X1[i];
+        x_max[i] = (x > x_max[i]) ? x : x_max[i];
+        x_min[i] = (x < x_min[i]) ? x : x_min[i];
+    }
+}
+
+static int observing(const sys_instance *in) { return in->vals[in->L.sp + DFO_SP_observe] != 0.0; }
+
+const eng_observer *sys_observer(sys_instance *in)
+{
+    if (!observing(in)) return NULL;
+    in->obs.t_start = in->vals[in->L.sp + DFO_SP_t_obs_start];
+    in->obs.t_stop = in->vals[in->L.sp + DFO_SP_t_obs_stop];
+    in->obs.on_phase = observe_phase;
+    in->obs.ctx = in;
+    return &in->obs;
+}
+
+void sys_obs_start(sys_instance *in)
+{
+    const size_t n = in->L.n, nc = in->L.nc;
+    double *o = in->vals + in->L.obs;
+    memset(o, 0, SYS_OBS_SIZE(n, nc) * sizeof(double));
+    for (size_t j = 0; j < nc; j++) o[2 * n + nc + j] = NAN;
+    const double t0 = in->s.t, w0 = in->vals[in->L.sp + DFO_SP_t_obs_start], w1 = in->vals[in->L.sp + DFO_SP_t_obs_stop];
+    if (observing(in) && t0 >= w0 && t0 <= w1) {
+        memcpy(o, in->s.X, n * sizeof(double));
+        memcpy(o + n, in->s.X, n * sizeof(double));
+        o[2 * n + 2 * nc] = 1.0;
+    }
+}
+
+/* ---- input derivatives ------------------------------------------------------------------------ */
+
+int dfo_inst_max_input_order(void) { return 2; }
+
+static int ramped(const double *vals, const sys_layout *L)
+{
+    const double *ud = vals + L->ud;
+    for (size_t i = 0; i < 2 * (L->n + L->nc); i++)
+        if (ud[i] != 0.0) return 1;
+    return 0;
+}
+
+void sys_ramp_of(const double *vals, const sys_layout *L, double t_ref, eng_inputs *e)
+{
+    if (!ramped(vals, L)) return;
+    const size_t n = L->n, nc = L->nc;
+    for (int k = 0; k < 2; k++) {
+        const double *d = vals + L->ud + (size_t)k * (n + nc);
+        if (e->F_ext) e->dF_ext[k] = d;
+        if (e->N_ext && nc) e->dN_ext[k] = d + n;
+    }
+    e->t_ref = t_ref;
+}
+
+void sys_ramp_done(double *vals, const sys_layout *L, double t_ref, double t)
+{
+    if (!ramped(vals, L)) return;
+    const size_t n = L->n, nc = L->nc;
+    const double dt = t - t_ref;
+    double *d1 = vals + L->ud, *d2 = d1 + n + nc;
+    const int slots[2] = {DFO_AI_F_ext, DFO_AI_N_ext};
+    for (int a = 0; a < 2; a++) {
+        const size_t c = a ? nc : n, off = a ? n : 0;
+        if (vals[SYS_H_SET + slots[a]] == 0.0) continue;
+        double *u = vals + L->ai[slots[a]];
+        for (size_t i = 0; i < c; i++) u[i] += d1[off + i] * dt + d2[off + i] * dt * dt / 2.0;
+    }
+    memset(d1, 0, 2 * (n + nc) * sizeof(double));
+    sys_sync_inputs(vals, L); /* (the values at t: the inputs used from here on) */
+}
+
+/* ---- the rest rule's log ------------------------------------------------------------------------ */
+
+/* The 1-based numbers of the contacts j with rest[j] and (modes NULL, or (modes[j] == 0) == held) into
+ * buf: "1, 3, 4" ("none"; cut with "..." when long). */
+static void contact_list(size_t nc, const int *rest, const int *modes, int held, char *buf, size_t len)
+{
+    size_t k = 0;
+    buf[0] = '\0';
+    for (size_t j = 0; j < nc; j++) {
+        if (!rest[j] || (modes && (modes[j] == 0) != held)) continue;
+        if (k + 24 >= len) {
+            snprintf(buf + k, len - k, ", ...");
+            return;
+        }
+        k += (size_t)snprintf(buf + k, len - k, "%s%lu", k ? ", " : "", (unsigned long)j + 1);
+    }
+    if (!k) snprintf(buf, len, "none");
+}
+
+void sys_on_rest(void *ctx, double t, int stage, size_t contact, int mode, double excess, const int *rest,
+                 const int *modes)
+{
+    sys_instance *in = (sys_instance *)ctx;
+    const dfo_lifecycle *lc = &in->lc;
+    if (!lc->host.log || !lc->log_on[DFO_LOG_EVENTS]) return;
+    const size_t nc = in->L.nc;
+    char a[200], b[200];
+    switch (stage) {
+    case ENG_REST_OPEN:
+        contact_list(nc, rest, NULL, 0, a, sizeof a);
+        dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS,
+                     "t = %.17g: the rest rule decides the rigid contacts at rest together (contacts %s); where "
+                     "more than one mode set is consistent, the causal cascade from \"all at rest held\" picks one: "
+                     "their holding forces solved together, the contact most beyond its limit released first, the "
+                     "forces solved again, until every held one is within its limit.", t, a);
+        break;
+    case ENG_REST_RELEASE:
+        dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS,
+                     "t = %.17g: rest rule: contact %lu released (its holding force beyond its limit by %.17g, the "
+                     "most of the held ones), to slide %s (mode %+d); the others solved again.", t,
+                     (unsigned long)contact + 1, excess, mode > 0 ? "forward" : "backward", mode);
+        break;
+    default:
+        contact_list(nc, rest, modes, 1, a, sizeof a);
+        contact_list(nc, rest, modes, 0, b, sizeof b);
+        dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS,
+                     "t = %.17g: rest rule settled: contacts held %s; released %s.", t, a, b);
+        break;
+    }
+}
+
 /* ---- life cycle ------------------------------------------------------------------------------- */
 
 static void set_start_values(sys_instance *in)
@@ -320,6 +492,12 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     sys_instance *in = sysi(lc);
     char buf[320];
     const char *why = sys_belt_refused(in->vals, &in->L);
+    const double w0 = in->vals[in->L.sp + DFO_SP_t_obs_start], w1 = in->vals[in->L.sp + DFO_SP_t_obs_stop];
+    if (!why && !(w1 >= w0)) {
+        snprintf(buf, sizeof buf, "invalid observation window: t_obs_stop = %.17g is below t_obs_start = %.17g; "
+                 "valid range: t_obs_stop >= t_obs_start", w1, w0);
+        why = buf;
+    }
     if (!why) why = sys_build(in, buf, sizeof buf);
     if (why) return dfo_inst_fail(lc, "%s: %s.", fn, why);
     double *vals = in->vals;
@@ -328,6 +506,7 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     const eng_inputs e = sys_inputs_of(vals, L, 1);
     const sys_params p = sys_params_of(vals, L);
     eng_start(in->m.E, &e, in->lc.run.start_time, p.x0, p.v0, &in->s);
+    sys_obs_start(in);
     vals[SYS_H_STARTED] = 1.0;
     in->lc.run.time = in->lc.run.start_time;
     in->lc.run.phase = DFO_PHASE_STEP;
@@ -508,6 +687,50 @@ static void note_slip(sys_instance *in, const char *fn)
                  "its entry reads NaN; logged once per run.", fn, VR_s);
 }
 
+/* An observable not computed (observe false, or x_max, x_min before the window's first sample): NaN,
+ * with one sentence per run under logNotComputed. */
+static void note_observable(sys_instance *in, const char *fn, const dfo_var_info *var)
+{
+    if (in->lc.warned & WARNED_OBSERVE) return;
+    in->lc.warned |= WARNED_OBSERVE;
+    if (!observing(in))
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) is not computed while observe is false: the observables "
+                     "x_max, x_min, stick_fraction read NaN in this run; set observe = true (before initialisation) "
+                     "to compute them; logged once per run.", fn, var->name, var->vr);
+    else
+        dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                     "%s: variable %s (value reference %u) reads NaN: the observation window [%.17g, %.17g] has not "
+                     "taken a sample yet (t = %.17g); logged once per run.", fn, var->name, var->vr,
+                     in->vals[in->L.sp + DFO_SP_t_obs_start], in->vals[in->L.sp + DFO_SP_t_obs_stop], in->s.t);
+}
+
+/* The observables x_max, x_min (elements i0 ... i0 + c - 1) or stick_fraction, of a started run. */
+static void get_observables(sys_instance *in, const char *fn, const dfo_var_info *var, size_t i0, size_t c,
+                            double *dout)
+{
+    const size_t n = in->L.n, nc = in->L.nc;
+    const double *o = in->vals + in->L.obs, *t_stuck = o + 2 * n, *from = t_stuck + nc;
+    const int id = var->slot;
+    if (!observing(in) || (id != DFO_OUT_stick_fraction && o[2 * n + 2 * nc] == 0.0)) {
+        for (size_t i = 0; i < c; i++) dout[i] = NAN;
+        note_observable(in, fn, var);
+        return;
+    }
+    if (id != DFO_OUT_stick_fraction) {
+        memcpy(dout, o + (id == DFO_OUT_x_max ? 0 : n) + i0, c * sizeof(double));
+        return;
+    }
+    /* the stuck time over the part of the window already run (0 before the window opens) */
+    const double w0 = in->vals[in->L.sp + DFO_SP_t_obs_start], w1 = in->vals[in->L.sp + DFO_SP_t_obs_stop];
+    const double t = in->s.t, span = ((t < w1) ? t : w1) - w0;
+    for (size_t i = 0; i < c; i++) {
+        const size_t j = i0 + i;
+        const double stuck = t_stuck[j] + (isnan(from[j]) ? 0.0 : in_window(w0, w1, from[j], t));
+        dout[i] = span > 0.0 ? stuck / span : 0.0;
+    }
+}
+
 static double h_used(sys_instance *in)
 {
     if (in->m.E) return in->m.h;
@@ -567,6 +790,9 @@ static void get_outputs(sys_instance *in, const char *fn, const sys_ref *r, doub
     case DFO_OUT_mode:
         for (size_t i = 0; i < c; i++) iout[i] = s->mode[i0 + i];
         return;
+    case DFO_OUT_x_max:
+    case DFO_OUT_x_min:
+    case DFO_OUT_stick_fraction: get_observables(in, fn, r->var, i0, c, dout); return;
     default: break;
     }
     for (size_t i = 0; i < c; i++) dout[i] = src ? src[i0 + i] : NAN;
@@ -609,13 +835,7 @@ dfo_inst_status dfo_inst_get_int(dfo_lifecycle *lc, const char *fn, const unsign
 
 dfo_inst_status dfo_inst_get_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n, int value[])
 {
-    sys_instance *in = sysi(lc);
-    (void)value;
-    for (size_t j = 0; j < n; j++) {
-        sys_ref r;
-        if (!lookup(in, fn, vr[j], DFO_BOOLEAN, &r)) return DFO_INST_ERROR;
-    }
-    return DFO_INST_OK; /* the model has no Boolean variables: lookup has failed on any */
+    return get_values(sysi(lc), fn, vr, n, DFO_BOOLEAN, NULL, value); /* (observe: a scalar parameter) */
 }
 
 /* Check every value of every variable (type, causality and phase, range per element), then store:
@@ -669,22 +889,24 @@ dfo_inst_status dfo_inst_set_real(dfo_lifecycle *lc, const char *fn, const unsig
 dfo_inst_status dfo_inst_set_int(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                  const int value[])
 {
-    double x[BATCH];
-    if (n > BATCH) return dfo_inst_fail(lc, "%s: at most %d values per call.", fn, BATCH);
-    for (size_t i = 0; i < n; i++) x[i] = (double)value[i];
-    return set_values(sysi(lc), fn, vr, n, x, DFO_INTEGER);
+    /* (friction_law is an array of nc values: more than a batch goes through the host's memory) */
+    const size_t total = dfo_inst_n_values(lc, vr, n);
+    double batch[BATCH] = {0.0}, *x = batch;
+    if (total > BATCH && !(x = (double *)lc->host.alloc(lc->host.ctx, total, sizeof(double))))
+        return dfo_inst_fail(lc, "%s: out of memory for %lu values.", fn, (unsigned long)total);
+    for (size_t i = 0; i < total; i++) x[i] = (double)value[i];
+    const dfo_inst_status st = set_values(sysi(lc), fn, vr, n, x, DFO_INTEGER);
+    if (x != batch) lc->host.free(lc->host.ctx, x);
+    return st;
 }
 
 dfo_inst_status dfo_inst_set_bool(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
                                   const int value[])
 {
-    sys_instance *in = sysi(lc);
-    (void)value;
-    for (size_t j = 0; j < n; j++) {
-        sys_ref r;
-        if (!lookup(in, fn, vr[j], DFO_BOOLEAN, &r)) return DFO_INST_ERROR;
-    }
-    return DFO_INST_OK;
+    double x[BATCH];
+    if (n > BATCH) return dfo_inst_fail(lc, "%s: at most %d values per call.", fn, BATCH);
+    for (size_t i = 0; i < n; i++) x[i] = value[i] ? 1.0 : 0.0;
+    return set_values(sysi(lc), fn, vr, n, x, DFO_BOOLEAN);
 }
 
 dfo_inst_status dfo_inst_get_uint64(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t n,
@@ -718,6 +940,38 @@ dfo_inst_status dfo_inst_set_uint64(dfo_lifecycle *lc, const char *fn, const uns
         (void)resolve(in, vr[j], &r);
         if (r.var->slot == DFO_STRUCT_n) in->n_config = (size_t)value[j];
         else in->nc_config = (size_t)value[j];
+    }
+    return DFO_INST_OK;
+}
+
+/* ---- input derivatives (FMI 2.0's fmi2SetRealInputDerivatives: one value per element) ---------- */
+
+dfo_inst_status dfo_inst_set_input_derivatives(dfo_lifecycle *lc, const char *fn, const unsigned int vr[], size_t nvr,
+                                               const int order[], const double value[])
+{
+    sys_instance *in = sysi(lc);
+    const size_t n = in->L.n;
+    for (size_t j = 0; j < nvr; j++) {
+        sys_ref r;
+        if (!resolve(vr[j], &r)) return dfo_inst_fail(lc, "%s: unknown value reference %u.", fn, vr[j]);
+        const dfo_var_info *var = r.var;
+        if (var->home != DFO_IN_INPUTS || var->slot == DFO_AI_v_belt)
+            return dfo_inst_fail(lc, "%s: %s (value reference %u) takes no derivatives: only the inputs F_ext and "
+                                 "N_ext do (v_belt is held over a communication step).", fn, var->name, vr[j]);
+        if (order[j] < 1 || order[j] > 2)
+            return dfo_inst_fail(lc, "%s: invalid order %d of the derivative of %s (value reference %u); valid range: "
+                                 "1 to 2.", fn, order[j], var->name, vr[j]);
+        if (!isfinite(value[j]))
+            return dfo_inst_fail(lc, "%s: invalid value %.17g of the order-%d derivative of %s (value reference %u); "
+                                 "valid range: finite.", fn, value[j], order[j], var->name, vr[j]);
+    }
+    for (size_t j = 0; j < nvr; j++) {
+        sys_ref r;
+        (void)resolve(vr[j], &r);
+        const size_t c = count(in, &r), i0 = r.elem < 0 ? 0 : (size_t)r.elem;
+        double *d = in->vals + in->L.ud + (size_t)(order[j] - 1) * (n + in->L.nc) + (r.var->slot == DFO_AI_F_ext ? 0 : n);
+        for (size_t i = 0; i < c; i++) d[i0 + i] = value[j];
+        in->vals[SYS_H_SET + (size_t)r.var->slot] = 1.0; /* the input's polynomial starts from its value */
     }
     return DFO_INST_OK;
 }

@@ -52,6 +52,10 @@ enum {
 #define SYS_SNAP_NA_N 4
 #define SYS_SNAP_NA_NC 6
 
+/* The observables' state in vals from L.obs: x_max, x_min (n each), the stuck time inside the window
+ * and the start of the open stuck stretch (NaN: none) of each contact (nc each), the flag "x sampled". */
+#define SYS_OBS_SIZE(n, nc) (2 * (n) + 2 * (nc) + 1)
+
 /* Where each part of vals begins for sizes n, nc (in doubles). */
 typedef struct {
     size_t n, nc;
@@ -60,6 +64,8 @@ typedef struct {
     size_t ai[DFO_NUM_AI];       /* array inputs now */
     size_t ai_used[DFO_NUM_AI];  /* array inputs of the last step */
     size_t snap;                 /* the engine state's snapshot */
+    size_t obs;                  /* the observables' state (SYS_OBS_*) */
+    size_t ud;                   /* the input derivatives: orders 1, 2 of F_ext (n) then N_ext (nc) */
     size_t total;
 } sys_layout;
 
@@ -72,6 +78,7 @@ typedef struct {
     eng_state s;                 /* the engine's live state (arrays through the host) */
     int s_ready;
     double *scratch;             /* n + nc doubles: outputs a and f */
+    eng_observer obs;            /* the observables' observer (sys_observer) */
 } sys_instance;
 
 static inline sys_instance *sysi(dfo_lifecycle *lc) { return (sys_instance *)lc; }
@@ -104,6 +111,24 @@ dfo_inst_status sys_resize(sys_instance *in, const char *fn, size_t n, size_t nc
 /* The engine state's snapshot in vals from s, and back. */
 void sys_snap_of(const eng_state *s, double *vals, const sys_layout *L);
 void sys_state_of(const double *vals, const sys_layout *L, eng_state *s);
+/* The engine's observer of the observables (t_obs_start, t_obs_stop, observe), or NULL while observe is
+ * false; its values live in vals (L.obs), so that an FMU state holds them. */
+const eng_observer *sys_observer(sys_instance *in);
+/* The observables at the start (the start state sampled where t0 is inside the window). */
+void sys_obs_start(sys_instance *in);
+
+/* The input derivatives set for the next step (FMI 2.0's fmi2SetRealInputDerivatives) into e (its
+ * polynomials from t_ref), when any is not 0. */
+void sys_ramp_of(const double *vals, const sys_layout *L, double t_ref, eng_inputs *e);
+/* A step from t_ref ended at t: the inputs with derivatives take their polynomials' values at t and
+ * become the inputs used; the derivatives are forgotten (they hold for one step). */
+void sys_ramp_done(double *vals, const sys_layout *L, double t_ref, double t);
+
+/* The engine's report of its rest rule (eng_rest_fn; ctx: the instance), logged under logEvents: the
+ * rule that picks the mode set where several rigid contacts at rest are decided together. */
+void sys_on_rest(void *ctx, double t, int stage, size_t contact, int mode, double excess, const int *rest,
+                 const int *modes);
+
 /* The allocator of the engine and the model: the host's. */
 eng_alloc sys_allocator(sys_instance *in);
 

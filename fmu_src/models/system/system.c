@@ -237,6 +237,33 @@ static const char *check_with(const sys_params *p, double *L, char *buf, size_t 
     if (!nonneg("N", p->N, nc, buf, len) || !nonneg("mu_s", p->mu_s, nc, buf, len) ||
         !nonneg("mu_k", p->mu_k, nc, buf, len) || !nonneg("k_t", p->k_t, nc, buf, len))
         return buf;
+    for (size_t j = 0; p->law && j < nc; j++) {
+        if (p->law[j] != DFO_LAW_COULOMB && p->law[j] != DFO_LAW_STRIBECK) {
+            snprintf(buf, len, "invalid value %g for friction_law[%zu] (valid: 1 coulomb, 2 stribeck)", p->law[j], j + 1);
+            return buf;
+        }
+        if (p->law[j] != DFO_LAW_STRIBECK) continue;
+        if (!(p->v_s[j] > 0.0 && isfinite(p->v_s[j]))) {
+            snprintf(buf, len, "v_s[%zu] = %.17g is not > 0: contact %zu's Stribeck velocity", j + 1, p->v_s[j], j + 1);
+            return buf;
+        }
+        if (!(p->delta[j] >= 1.0 && isfinite(p->delta[j]))) {
+            snprintf(buf, len, "friction_law = stribeck supports delta >= 1 only, not %g for delta[%zu] (below 1 the "
+                     "friction's slope is infinite at zero slip speed)", p->delta[j], j + 1);
+            return buf;
+        }
+        if (p->scheme != DFO_SCHEME_LOCATED) {
+            snprintf(buf, len, "friction_law[%zu] = stribeck needs scheme located (the speed-dependent friction is "
+                     "solved inside its steps), as the oscillator and the chain: choose scheme located, or "
+                     "friction_law[%zu] = coulomb", j + 1, j + 1);
+            return buf;
+        }
+        if (p->k_t[j] > 0.0) {
+            snprintf(buf, len, "contact %zu is a Jenkins element (k_t[%zu] = %g > 0), which takes the Coulomb law only: "
+                     "set friction_law[%zu] = coulomb (1) or k_t[%zu] = 0", j + 1, j + 1, p->k_t[j], j + 1, j + 1);
+            return buf;
+        }
+    }
     return NULL;
 }
 
@@ -323,7 +350,7 @@ void sys_model_free(sys_model *m, const eng_alloc *al)
     if (m->E) eng_destroy(m->E);
     m->E = NULL;
     void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Pc, m->Ps, m->N, m->mu_s, m->mu_k, m->k_t,
-                      m->rows, m->idx, m->w, m->work};
+                      m->rows, m->idx, m->w, m->work, m->law};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         if (arrays[i]) al->release(al->env, arrays[i]);
     memset(m, 0, sizeof *m);
@@ -363,6 +390,9 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     m->idx = (size_t *)alloc_n(al, nnz, sizeof(size_t), &ok);
     m->w = (double *)alloc_n(al, nnz, sizeof(double), &ok);
     m->work = (double *)alloc_n(al, 2 * n, sizeof(double), &ok);
+    int stribeck = 0;
+    for (size_t j = 0; p->law && j < nc; j++) stribeck |= p->law[j] == DFO_LAW_STRIBECK;
+    if (stribeck) m->law = (dfo_friction_law *)alloc_n(al, nc, sizeof(dfo_friction_law), &ok);
     if (!ok) {
         sys_model_free(m, al);
         *err = "out of memory";
@@ -381,6 +411,14 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
         memcpy(m->k_t, p->k_t, nc * sizeof(double));
     }
     m->jenkins = any_jenkins(p);
+    for (size_t j = 0; m->law && j < nc; j++) {
+        dfo_friction_law *F = &m->law[j];
+        F->law = p->law[j] == DFO_LAW_STRIBECK ? DFO_LAW_STRIBECK : DFO_LAW_COULOMB;
+        F->mu_s = p->mu_s[j];
+        F->mu_k = p->mu_k[j];
+        F->v_s = p->v_s[j];
+        F->delta = p->delta[j];
+    }
     size_t k = 0;
     for (size_t j = 0; j < nc; j++) {
         m->rows[j].idx = m->idx + k;
@@ -420,6 +458,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.mu_s = m->mu_s;
     S.mu_k = m->mu_k;
     S.k_t = m->jenkins ? m->k_t : NULL; /* (all rigid: NULL, the rigid paths as they were) */
+    S.law = m->law;                     /* (all Coulomb: NULL) */
     S.h = m->h;
     S.alpha = p->alpha;
     S.scheme = p->scheme;
@@ -431,6 +470,8 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.snap_max_rel_h = 1e-5;
     S.snap_min_rel_h = 1e-7;
     S.snap_eps_t = 65536.0;
+    S.on_rest = p->on_rest;
+    S.rest_ctx = p->rest_ctx;
     m->E = eng_create(&S, al, err);
     if (!m->E) {
         if (!*err) *err = "out of memory";

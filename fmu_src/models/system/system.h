@@ -30,8 +30,12 @@ typedef struct {
     const double *W;                 /* nc x n, row-major: the contact rows */
     const double *N, *mu_s, *mu_k;   /* nc: normal forces, static and kinetic coefficients */
     const double *k_t;               /* nc: tangential stiffness (0: rigid; > 0: a Jenkins element) */
+    const double *law, *v_s, *delta; /* nc: friction law (DFO_LAW_COULOMB 1, DFO_LAW_STRIBECK 2; NULL: every
+                                      * contact Coulomb), Stribeck velocity and exponent */
     double omega, h, alpha;          /* excitation frequency, internal step (0: derived), Bossak alpha */
     int scheme, frictionUpdates;     /* DFO_SCHEME_*, the paper scheme's coefficient updates */
+    eng_rest_fn on_rest;             /* the engine's report of its rest rule (NULL: none), its context */
+    void *rest_ctx;
 } sys_params;
 
 typedef struct {
@@ -43,6 +47,7 @@ typedef struct {
     double *Pc, *Ps;                 /* n: the engine's excitation (Ps = -F_s; NULL when F_s = 0) */
     double *N, *mu_s, *mu_k, *k_t;   /* nc copies */
     int jenkins;                     /* some contact is a Jenkins element (k_t > 0) */
+    dfo_friction_law *law;           /* nc sliding laws, or NULL: every contact Coulomb */
     eng_row *rows;                   /* nc rows, their nonzeros in idx and w */
     size_t *idx;
     double *w;
