@@ -12,7 +12,8 @@ set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numer
     engine/engine_private.h engine/engine_step.h
     models/system/system.c models/system/system.h)
 # the instance core (core/instance.h's model API), split by concern (sys_instance.h)
-set(MODEL_CORE models/system/sys_instance.c models/system/sys_instance.h models/system/sys_inst_state.c
+set(MODEL_CORE models/system/sys_instance.c models/system/sys_instance.h models/system/sys_inst_values.c
+    models/system/sys_inst_state.c
     models/system/sys_inst_resources.c models/system/sys_inst_resources.h)
 # n and nc are structural parameters: FMI 3.0 sets them in configuration mode; an FMI 2.0 build fixes
 # them, with its description generated for those sizes and system_config.h saying them

@@ -107,6 +107,10 @@ const char *sys_build(sys_instance *in, char *buf, size_t len);
 void sys_free_model(sys_instance *in);
 /* Size the values for n, nc (start values when the size changes); DFO_INST_ERROR when out of memory
  * (nothing changed). */
+/* The values and scratch arrays back to the host (sys_inst_values.c). */
+void sys_free_values(sys_instance *in);
+/* Every value at its start (the run's flags cleared; sys_inst_values.c). */
+void sys_value_starts(double *vals, const sys_layout *L);
 dfo_inst_status sys_resize(sys_instance *in, const char *fn, size_t n, size_t nc);
 /* The engine state's snapshot in vals from s, and back. */
 void sys_snap_of(const eng_state *s, double *vals, const sys_layout *L);
