@@ -21,12 +21,13 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
     ("split_chain.py", ["--periods", "4"]),
     ("friction_pendulum.py", []),
     ("beam_friction_damper.py", ["--quick"]),
+    ("two_mass_jenkins.py", ["--quick"]),
 ])
 def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path) -> None:
-    if name in ("frequency_sweep.py", "friction_pendulum.py", "beam_friction_damper.py"):
+    if name in ("frequency_sweep.py", "friction_pendulum.py", "beam_friction_damper.py", "two_mass_jenkins.py"):
         args = [*args, "--out", str(tmp_path)]
     env = {**os.environ, "DFO_FMU": str(fmu_path), "MPLBACKEND": "Agg"}
-    if name == "beam_friction_damper.py" and "DFO_SYSTEM_FMU3" not in env:
+    if name in ("beam_friction_damper.py", "two_mass_jenkins.py") and "DFO_SYSTEM_FMU3" not in env:
         env["DFO_SYSTEM_FMU3"] = str(Path(__file__).resolve().parents[1] / "build" / "fmi3" / "DryFrictionSystem.fmu")
     r = subprocess.run([sys.executable, str(EXAMPLES / name), *args], capture_output=True, text=True, timeout=300,
                        env=env, cwd=tmp_path)
@@ -41,10 +42,11 @@ def test_example_runs(name: str, args: list[str], fmu_path: Path, tmp_path: Path
         assert "5 events" in r.stdout and ": stuck" in r.stdout and (tmp_path / "pendulum.png").stat().st_size > 0
     if name == "beam_friction_damper.py":  # its own checks: the closed forms of N = 0 and of the stuck damper
         assert "checks: pass" in r.stdout and (tmp_path / "beam_friction_damper.png").stat().st_size > 0
+    if name == "two_mass_jenkins.py":  # its own checks: the two linear limits' closed forms, the minimum inside
+        assert "checks: pass" in r.stdout and (tmp_path / "two_mass_jenkins.png").stat().st_size > 0
 
 
 def test_examples_are_all_tested() -> None:
     assert sorted(p.name for p in EXAMPLES.glob("*.py")) == ["beam_friction_damper.py", "cosimulation.py",
-                                                             "frequency_sweep.py",
-                                                                 "friction_pendulum.py", "rollback.py",
-                                                                 "split_chain.py"]
+                                                             "frequency_sweep.py", "friction_pendulum.py",
+                                                             "rollback.py", "split_chain.py", "two_mass_jenkins.py"]
