@@ -115,7 +115,8 @@ def test_rounding_is_not_an_error() -> None:
     (dict(dof=0, mu_s=0.2, mu_k=-0.1), r"Contact: mu_k is -0.1"),
     (dict(dof=0, k_t=-5.0), r"Contact: k_t is -5.0"),
     (dict(dof=0, N="1"), r"Contact: N must be a real number, not str"),
-    (dict(dof=0, law="stribeck"), r"law = 'stribeck' is not offered; valid: coulomb"),
+    (dict(dof=0, law="dahl"), r"law = 'dahl' is not offered; valid: coulomb, stribeck"),
+    (dict(dof=0, law="stribeck", delta=0.9), r"law = stribeck supports delta >= 1 only, not 0.9"),
 ])
 def test_a_bad_contact_names_the_field(kw: dict, message: str) -> None:
     with pytest.raises(UsageError, match=message):
