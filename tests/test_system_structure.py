@@ -202,7 +202,8 @@ def test_start_values_are_the_fmu_contract() -> None:
     s = _system()
     sv = s.start_values()
     assert set(sv) == {"n", "nc", "M", "C", "K", "F_c", "F_s", "x0", "v0", "W", "N", "mu_s", "mu_k", "k_t", "omega",
-                       "h", "alpha", "scheme"}
+                       "h", "alpha", "scheme", "friction_law", "v_s", "delta"}
+    assert sv["friction_law"] == [1, 1, 1] and sv["v_s"] == [0.01] * 3 and sv["delta"] == [1.0] * 3
     assert (sv["n"], sv["nc"], sv["scheme"], sv["h"], sv["alpha"]) == (3, 3, 2, 1e-3, -0.1)
     assert sv["M"] == M3.ravel().tolist() and sv["K"][1] == -100.0 and len(sv["C"]) == 9
     assert sv["W"] == [1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.5, 0.0, -0.5]          # row-major, nc x n
