@@ -47,7 +47,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     r.add_argument("--t-end", dest="t_end", type=number("--t-end", 0.0, True), required=True, help="end time, s")
     r.add_argument("--dt", type=number("--dt", 0.0, True), default=None,
                    help="output interval, s (default 1/100 of the excitation period)")
-    r.add_argument("--json", action="store_true", help="print one JSON object with every output time and the observables x_max, x_min, "
+    r.add_argument("--json", action="store_true",
+                   help="print one JSON object with every output time and the observables x_max, x_min, "
                         "stick_fraction over the run")
 
 
