@@ -134,7 +134,7 @@ def _rewrite(src: Path, dst: Path, data: bytes) -> Path:
 @pytest.mark.parametrize("cut, words", [
     (lambda b: b[:20], "is truncated: 20 bytes, fewer than its 32-byte header"),
     (lambda b: b[:-4], "is truncated: the value of scheme needs 8 bytes, 4 are left"),
-    (lambda b: b[:-8 - 4 * 24], "is truncated: the 2 values of k_t need 16 bytes, 8 are left"),
+    (lambda b: b[:-8 - 4 * 24], "is truncated: the 2 values of delta need 16 bytes, 8 are left"),
     (lambda b: b"NOTSTRUC" + b[8:], "does not begin with the magic DFOSTRUC"),
     (lambda b: b + b"\0", "has 1 bytes after its last record"),
     (lambda b: b[:8] + struct.pack("<I", 7) + b[12:], "has the version 7; this FMU reads versions 1 to 2"),
@@ -200,8 +200,8 @@ def test_the_driver_is_plain_fmpy_calls(sys3: System, tmp_path: Path) -> None:
         for name, value in sys3.start_values().items():
             if name in ("n", "nc"):
                 continue
-            if name == "scheme":
-                s.setInt64([vr[name]], [int(value)])
+            if name in ("scheme", "friction_law"):
+                s.setInt64([vr[name]], [int(v) for v in np.ravel(value)])
             else:
                 s.setFloat64([vr[name]], [float(v) for v in np.ravel(value)])
         s.setFloat64([vr["F_ext"]], [0.1, -0.2, 0.3])

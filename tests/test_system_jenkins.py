@@ -418,8 +418,8 @@ def test_early_return_ends_steps_at_the_sliders_switches(tmp_path: Path) -> None
         s.exitConfigurationMode()
         s.enterInitializationMode(startTime=0.0)
         for name, value in fmu_values(sysm, "located", T / 800).items():
-            if name == "scheme":
-                s.setInt64([vr[name]], [int(value)])
+            if name in ("scheme", "friction_law"):
+                s.setInt64([vr[name]], [int(x) for x in np.ravel(value)])
             else:
                 s.setFloat64([vr[name]], [float(x) for x in np.ravel(value)])
         s.exitInitializationMode()

@@ -115,7 +115,8 @@ def test_rounding_is_not_an_error() -> None:
     (dict(dof=0, mu_s=0.2, mu_k=-0.1), r"Contact: mu_k is -0.1"),
     (dict(dof=0, k_t=-5.0), r"Contact: k_t is -5.0"),
     (dict(dof=0, N="1"), r"Contact: N must be a real number, not str"),
-    (dict(dof=0, law="stribeck"), r"law = 'stribeck' is not offered; valid: coulomb"),
+    (dict(dof=0, law="dahl"), r"law = 'dahl' is not offered; valid: coulomb, stribeck"),
+    (dict(dof=0, law="stribeck", delta=0.9), r"law = stribeck supports delta >= 1 only, not 0.9"),
 ])
 def test_a_bad_contact_names_the_field(kw: dict, message: str) -> None:
     with pytest.raises(UsageError, match=message):
@@ -201,7 +202,8 @@ def test_start_values_are_the_fmu_contract() -> None:
     s = _system()
     sv = s.start_values()
     assert set(sv) == {"n", "nc", "M", "C", "K", "F_c", "F_s", "x0", "v0", "W", "N", "mu_s", "mu_k", "k_t", "omega",
-                       "h", "alpha", "scheme"}
+                       "h", "alpha", "scheme", "friction_law", "v_s", "delta"}
+    assert sv["friction_law"] == [1, 1, 1] and sv["v_s"] == [0.01] * 3 and sv["delta"] == [1.0] * 3
     assert (sv["n"], sv["nc"], sv["scheme"], sv["h"], sv["alpha"]) == (3, 3, 2, 1e-3, -0.1)
     assert sv["M"] == M3.ravel().tolist() and sv["K"][1] == -100.0 and len(sv["C"]) == 9
     assert sv["W"] == [1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.5, 0.0, -0.5]          # row-major, nc x n

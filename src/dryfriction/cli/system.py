@@ -9,7 +9,8 @@
 ``resources/structure.bin`` (:func:`dryfriction.system.fmu.write_fmu`; ``--fmi 2``: FMI 2.0, only at
 the sizes its prebuilt binary was built for); ``--fmu`` names another prebuilt system FMU to start
 from. ``run`` runs the structure through the FMI 3.0 FMU and
-prints the last output time's values (``--json``: one object with every output time).
+prints the last output time's values (``--json``: one object with every output time and the
+observables over the run, x_max, x_min and stick_fraction).
 """
 
 from __future__ import annotations
@@ -46,7 +47,9 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     r.add_argument("--t-end", dest="t_end", type=number("--t-end", 0.0, True), required=True, help="end time, s")
     r.add_argument("--dt", type=number("--dt", 0.0, True), default=None,
                    help="output interval, s (default 1/100 of the excitation period)")
-    r.add_argument("--json", action="store_true", help="print one JSON object with every output time")
+    r.add_argument("--json", action="store_true",
+                   help="print one JSON object with every output time and the observables x_max, x_min, "
+                        "stick_fraction over the run")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,7 +68,8 @@ def run(args: argparse.Namespace) -> int:
     res = run_system(system, args.t_end, args.dt, fmu_path=args.fmu)
     if args.json:
         print_json({"t": res.t.tolist(), "x": res.x.tolist(), "v": res.v.tolist(), "f": res.f.tolist(),
-                    "mode": res.mode.tolist(), "E_friction": res.E_friction.tolist()})
+                    "mode": res.mode.tolist(), "E_friction": res.E_friction.tolist(), "x_max": res.x_max.tolist(),
+                    "x_min": res.x_min.tolist(), "stick_fraction": res.stick_fraction.tolist()})
     else:
         print(f"t = {res.t[-1]:.6g}: x = {res.x[-1].tolist()}, mode = {res.mode[-1].tolist()}, "
               f"E_friction = {res.E_friction[-1]:.6g}")

@@ -2,7 +2,11 @@
 
 The structure's sizes ``n`` and ``nc`` are set in Configuration Mode, its values
 (:meth:`System.start_values`) in Initialization Mode, then the FMU steps on the host's points with
-the outputs ``x``, ``v``, ``a`` (n), ``f``, ``mode``, ``s`` (nc) and ``E_friction`` read at each::
+the outputs ``x``, ``v``, ``a`` (n), ``f``, ``mode``, ``s`` (nc) and ``E_friction`` read at each, and
+the in-FMU observables ``x_max``, ``x_min`` (n) and ``stick_fraction`` (nc) read at the end of the
+run. Their observation window is a run's option, as the oscillator's drivers take it (not the
+system's): ``observe`` (default true, the FMU's), ``t_obs_start`` (default the run's start) and
+``t_obs_stop`` (default the FMU's 1e300, open)::
 
     from dryfriction import System, Contact
     sys = System(M=[[1.0]], K=[[100.0]], contacts=[Contact(dof=0, N=1.0, mu_s=0.4, mu_k=0.3)],
@@ -39,12 +43,17 @@ from .chain import expand
 if TYPE_CHECKING:
     from ..system.structure import System
 
-__all__ = ["SystemFMU3", "SystemRun", "INPUTS", "OUTPUTS", "default_system_fmu3", "run", "trajectory"]
+__all__ = ["SystemFMU3", "SystemRun", "INPUTS", "OUTPUTS", "OBSERVABLES", "T_OBS_STOP", "default_system_fmu3", "run",
+           "trajectory"]
 
 #: the inputs and their sizes (``n`` per degree of freedom, ``nc`` per contact)
 INPUTS = {"F_ext": "n", "N_ext": "nc", "v_belt": "nc"}
 #: the outputs recorded, in the order the FMU is read
 OUTPUTS = ("x", "v", "a", "f", "s", "E_friction", "mode")
+#: the in-FMU observables, read at the end of a run: x_max, x_min (n), stick_fraction (nc)
+OBSERVABLES = ("x_max", "x_min", "stick_fraction")
+#: the FMU's default end of the observation window (open)
+T_OBS_STOP = 1e300
 _REALS = (("x", "n"), ("v", "n"), ("a", "n"), ("f", "nc"), ("s", "nc"), ("E_friction", None))
 
 Inputs = Mapping[str, Any] | Callable[[float, Mapping[str, np.ndarray]], Mapping[str, Any]]
@@ -60,7 +69,11 @@ def default_system_fmu3() -> Path:
 class SystemRun:
     """The outputs at the output times: ``t`` [nt]; ``x``, ``v``, ``a`` [nt, n]; ``f``, ``s``,
     ``mode`` [nt, nc] (mode -1 backward slip, 0 stuck, +1 forward slip; ``s`` NaN for a rigid
-    contact); ``E_friction`` [nt], the energy the contacts have taken since the start."""
+    contact); ``E_friction`` [nt], the energy the contacts have taken since the start; the in-FMU
+    observables at the end of the run over its observation window: ``x_max``, ``x_min`` [n], the
+    largest and smallest position of each degree of freedom (sampled at every internal step and
+    switch), ``stick_fraction`` [nc], the share of the window each contact spent stuck (all NaN
+    when the run was made with ``observe=False``)."""
 
     t: np.ndarray
     x: np.ndarray
@@ -70,6 +83,9 @@ class SystemRun:
     s: np.ndarray
     E_friction: np.ndarray
     mode: np.ndarray
+    x_max: np.ndarray
+    x_min: np.ndarray
+    stick_fraction: np.ndarray
 
     @property
     def n(self) -> int:
@@ -81,8 +97,9 @@ class SystemRun:
         """The number of contacts."""
         return int(self.f.shape[1])
 
-    def stick_fraction(self, t_from: float = -np.inf) -> np.ndarray:
-        """The share of the output times at or after ``t_from`` at which each contact is stuck."""
+    def stick_share(self, t_from: float = -np.inf) -> np.ndarray:
+        """The share of the output times at or after ``t_from`` at which each contact is stuck (of
+        the output times only; :attr:`stick_fraction` is the FMU's, over the whole window)."""
         return np.mean(self.mode[self.t >= t_from] == 0, axis=0)
 
     def __getitem__(self, name: str) -> np.ndarray:
@@ -152,6 +169,9 @@ class SystemFMU3(Driver):
         mode = self.vars["mode"]
         self._mode_dtype = fmi3.DTYPES[mode.call_type]
         self._get_modes = self.inst.bulk_get(mode.call_type, [mode.vr], self.nc) if self.nc else None
+        obs = [self.vars[k].vr for k in OBSERVABLES]
+        self._get_obs = self.inst.bulk_get("Float64", obs, 2 * self.n + self.nc)
+        self._observe = True
         self.time = 0.0
 
     def array_size(self, name: str) -> int:
@@ -183,10 +203,19 @@ class SystemFMU3(Driver):
         for vr, vals in self._inputs(values):
             self.inst.set("Float64", [vr], vals)
 
-    def start(self, start_time: float = 0.0, inputs: Mapping[str, Any] | None = None) -> None:
+    def start(self, start_time: float = 0.0, inputs: Mapping[str, Any] | None = None, *, observe: bool = True,
+              t_obs_start: float | None = None, t_obs_stop: float | None = None) -> None:
         """A fresh run of the system from ``start_time``: reset (after the first), ``n`` and ``nc``
-        in Configuration Mode, the system's values and ``inputs`` in Initialization Mode."""
+        in Configuration Mode, the system's values, ``inputs`` and the observation window in
+        Initialization Mode. ``observe``: compute the observables x_max, x_min, stick_fraction
+        (default true; false saves their cost and they read NaN); their window from ``t_obs_start``
+        (default ``start_time``) to ``t_obs_stop`` (default :data:`T_OBS_STOP`, open; >= t_obs_start)."""
         todo = self._inputs(inputs or {})  # checked before the FMU is touched
+        w0 = float(start_time) if t_obs_start is None else float(t_obs_start)
+        w1 = T_OBS_STOP if t_obs_stop is None else float(t_obs_stop)
+        if not (np.isfinite(w0) and np.isfinite(w1) and w1 >= w0):
+            raise ValueError(f"the observation window [t_obs_start, t_obs_stop] = [{w0!r}, {w1!r}] must be finite "
+                             "with t_obs_stop >= t_obs_start")
         inst = self.inst
         if not self._fresh:
             inst.reset()
@@ -202,6 +231,9 @@ class SystemFMU3(Driver):
             vals = [value] if np.ndim(value) == 0 else list(value)
             if vals:
                 inst.set(v.call_type, [v.vr], vals)
+        inst.set("Float64", [self.vars["t_obs_start"].vr, self.vars["t_obs_stop"].vr], [w0, w1])
+        inst.set("Boolean", [self.vars["observe"].vr], [bool(observe)])
+        self._observe = bool(observe)
         for vr, vals in todo:
             inst.set("Float64", [vr], vals)
         inst.exit_initialization_mode()
@@ -261,23 +293,39 @@ class SystemFMU3(Driver):
                 get_modes(base_m + i * row_m)
         self.inst.flush_warnings()
         x, v, a, f, s, E = self._split(reals)
-        return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8))
+        x_max, x_min, sf = self.observables()
+        return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8), x_max, x_min, sf)
 
-    def run(self, t_stop: float, dt: float, inputs: Inputs | None = None, start_time: float = 0.0) -> SystemRun:
-        """A fresh run (:meth:`start`) to ``t_stop`` on the grid ``start_time + k dt`` (the last step
-        shortened). Inputs given as values are set in Initialization Mode and held."""
+    def observables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The in-FMU observables now: x_max, x_min (n) and stick_fraction (nc) over the observation
+        window up to the current time (NaN each when the run was started with ``observe=False``)."""
+        n, nc = self.n, self.nc
+        if not self._observe:
+            return np.full(n, np.nan), np.full(n, np.nan), np.full(nc, np.nan)
+        vals = np.empty(2 * n + nc)
+        self._get_obs(vals.ctypes.data)
+        self.inst.flush_warnings()
+        return vals[:n].copy(), vals[n:2 * n].copy(), vals[2 * n:].copy()
+
+    def run(self, t_stop: float, dt: float, inputs: Inputs | None = None, start_time: float = 0.0, *,
+            observe: bool = True, t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
+        """A fresh run (:meth:`start`, with the observation window's options) to ``t_stop`` on the
+        grid ``start_time + k dt`` (the last step shortened). Inputs given as values are set in
+        Initialization Mode and held."""
         times = grid(float(start_time), float(t_stop), float(dt))
         held = None if inputs is None or callable(inputs) else inputs
-        self.start(start_time, held)
+        self.start(start_time, held, observe=observe, t_obs_start=t_obs_start, t_obs_stop=t_obs_stop)
         return self.record_at(times, inputs if callable(inputs) else None)
 
-    def trajectory(self, times: Iterable[float] | np.ndarray, inputs: Inputs | None = None) -> SystemRun:
-        """A fresh run (:meth:`start` at ``times[0]``) with the outputs at ``times``."""
+    def trajectory(self, times: Iterable[float] | np.ndarray, inputs: Inputs | None = None, *, observe: bool = True,
+                   t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
+        """A fresh run (:meth:`start` at ``times[0]``, with the observation window's options) with
+        the outputs at ``times``."""
         t = np.asarray(list(times) if not isinstance(times, np.ndarray) else times, dtype=float)
         if t.ndim != 1 or t.size < 1:
             raise ValueError("the output times must be a non-empty 1-D sequence")
         held = None if inputs is None or callable(inputs) else inputs
-        self.start(float(t[0]), held)
+        self.start(float(t[0]), held, observe=observe, t_obs_start=t_obs_start, t_obs_stop=t_obs_stop)
         return self.record_at(t, inputs if callable(inputs) else None)
 
     def __enter__(self) -> "SystemFMU3":
@@ -285,19 +333,24 @@ class SystemFMU3(Driver):
 
 
 def run(system: "System", t_end: float, dt: float | None = None, inputs: Inputs | None = None, *,
-        start_time: float = 0.0, fmu_path: str | os.PathLike[str] | None = None) -> SystemRun:
+        start_time: float = 0.0, fmu_path: str | os.PathLike[str] | None = None, observe: bool = True,
+        t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
     """``system`` through the FMI 3.0 FMU from ``start_time`` to ``t_end``, the outputs every ``dt``
-    (default: 1/100 of the excitation's period, or of the time span without one)."""
+    (default: 1/100 of the excitation's period, or of the time span without one); the observation
+    window's options as :meth:`SystemFMU3.start`'s."""
     if dt is None:
         span = float(t_end) - float(start_time)
         dt = 2.0 * np.pi / system.omega / 100.0 if system.omega > 0 else span / 100.0
         dt = min(dt, span) if span > 0 else 1.0
     with SystemFMU3(system, fmu_path) as fmu:
-        return fmu.run(t_end, dt, inputs, start_time)
+        return fmu.run(t_end, dt, inputs, start_time, observe=observe, t_obs_start=t_obs_start,
+                       t_obs_stop=t_obs_stop)
 
 
 def trajectory(system: "System", times: Iterable[float] | np.ndarray, inputs: Inputs | None = None, *,
-               fmu_path: str | os.PathLike[str] | None = None) -> SystemRun:
-    """``system`` through the FMI 3.0 FMU with the outputs at ``times`` (the first: the start)."""
+               fmu_path: str | os.PathLike[str] | None = None, observe: bool = True,
+               t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
+    """``system`` through the FMI 3.0 FMU with the outputs at ``times`` (the first: the start); the
+    observation window's options as :meth:`SystemFMU3.start`'s."""
     with SystemFMU3(system, fmu_path) as fmu:
-        return fmu.trajectory(times, inputs)
+        return fmu.trajectory(times, inputs, observe=observe, t_obs_start=t_obs_start, t_obs_stop=t_obs_stop)

@@ -388,10 +388,15 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
     sampled at ``t_eval`` (default: 101 points). ``F_ext`` a constant external force (n values),
     ``v_belt`` the constant speeds of the contacts' surfaces (nc values; default at rest).
 
-    Raises ValueError for a t_end that is not finite and > 0, RuntimeError when the integration
-    fails or more than ``max_phases`` phases (or a loop of switches at one time) occur."""
+    Raises ValueError for a t_end that is not finite and > 0 or a Stribeck contact (not modelled
+    here), RuntimeError when the integration fails or more than ``max_phases`` phases (or a loop of
+    switches at one time) occur."""
     if not (math.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be finite and > 0, not {t_end!r}")
+    stribeck = [j for j, c in enumerate(system.contacts) if c.law != "coulomb"]
+    if stribeck:
+        raise ValueError(f"system reference: contacts[{stribeck[0]}] has the Stribeck law, which this reference "
+                         "does not model (Coulomb contacts only)")
     m = _Model(system, F_ext, v_belt)
     n, nc = m.n, m.nc
     t_eval = np.linspace(0.0, t_end, 101) if t_eval is None else np.asarray(t_eval, dtype=float)

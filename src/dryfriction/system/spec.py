@@ -30,7 +30,9 @@ freedom indices are 0-based. Every table and key::
     mu_s = 0.3
     mu_k = 0.2                  # default mu_s
     k_t = 0.0                   # 0 rigid Coulomb contact (default), > 0 a Jenkins element
-    law = "coulomb"             # the only law offered
+    law = "coulomb"             # coulomb (default) or stribeck (a rigid contact, scheme located)
+    v_s = 0.01                  # Stribeck velocity, m/s (> 0; default 0.01)
+    delta = 1.0                 # Stribeck exponent (>= 1 with stribeck; default 1)
 
     [run]                       # optional
     h = 0.0                     # internal step (0: derived)
@@ -62,7 +64,7 @@ TABLES: dict[str, tuple[str, ...]] = {
     "structure": ("M", "K", "C"),
     "damping": ("rayleigh", "modal"),
     "excitation": ("omega", "F_c", "F_s", "dof", "amplitude", "phase"),
-    "contact": ("dof", "between", "w", "N", "mu_s", "mu_k", "k_t", "law"),
+    "contact": ("dof", "between", "w", "N", "mu_s", "mu_k", "k_t", "law", "v_s", "delta"),
     "run": ("h", "scheme", "alpha", "x0", "v0"),
 }
 #: the file formats of a matrix or a vector given by name

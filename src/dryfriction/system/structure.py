@@ -8,9 +8,11 @@
 between two), the normal load ``N_j``, the coefficients ``mu_s_j`` and ``mu_k_j`` (breakaway limit
 ``max(mu_s, mu_k) N``, sliding force ``mu_k N``) and the tangential stiffness ``k_t_j``: 0 a rigid
 Coulomb contact, > 0 a Jenkins element (a spring ``k_t`` in series with a massless slider).
-Degree-of-freedom indices are 0-based, as in numpy. The friction law is Coulomb's (constant
-``mu_k`` while sliding); the Stribeck law of the oscillator and the chain is not offered for a
-structure yet.
+Degree-of-freedom indices are 0-based, as in numpy. The friction law is per contact: Coulomb's
+(constant ``mu_k`` while sliding, the default) or Stribeck's, the oscillator's and the chain's
+``mu(u) = mu_k + (mu_s - mu_k) exp(-(u / v_s)^delta)`` at the slip speed ``u`` (a rigid contact
+only, scheme located, ``v_s > 0``, ``delta >= 1``, and no Jenkins element in the same structure:
+the engine steps Jenkins elements with the Coulomb law on every contact).
 
 Every value is checked when a System is made; an error is a :class:`~dryfriction.errors.UsageError`
 (a ValueError) whose one sentence names the array and the element, or the test that failed.
@@ -35,8 +37,8 @@ __all__ = ["Contact", "System", "SCHEMES", "LAWS", "SYMMETRY_RTOL", "EIGEN_RTOL"
 
 #: the time-stepping schemes and their values in the FMU's ``scheme`` enumeration
 SCHEMES: Mapping[str, int] = {"paper": 1, "consistent": 2, "located": 3}
-#: the friction laws a contact may have
-LAWS = ("coulomb",)
+#: the friction laws a contact may have and their values in the FMU's ``friction_law`` enumeration
+LAWS: Mapping[str, int] = {"coulomb": 1, "stribeck": 2}
 #: M, C and K count as symmetric when max |A - A'| <= SYMMETRY_RTOL * max |A|
 SYMMETRY_RTOL = 1e-12
 #: an eigenvalue of C or K counts as rounding when it is >= -EIGEN_RTOL * n * max |eigenvalue|
@@ -143,7 +145,11 @@ class Contact:
     slip of ``i`` relative to ``j`` (``w = e_i - e_j``); ``w=[...]``: a full row of n values.
     ``N`` the normal load (N, >= 0), ``mu_s`` and ``mu_k`` the static and kinetic coefficients
     (>= 0; ``mu_k`` defaults to ``mu_s``), ``k_t`` the tangential stiffness (N/m, >= 0: 0 a rigid
-    Coulomb contact, > 0 a Jenkins element), ``law`` the friction law (``"coulomb"`` only)."""
+    Coulomb contact, > 0 a Jenkins element), ``law`` the sliding friction law: ``"coulomb"``
+    (``mu_k`` while sliding, the default) or ``"stribeck"``, ``mu(u) = mu_k + (mu_s - mu_k)
+    exp(-(u / v_s)^delta)`` at the slip speed ``u``, with the Stribeck velocity ``v_s`` (m/s, > 0,
+    default 0.01) and exponent ``delta`` (>= 1, default 1) as the FMU's; a rigid contact only (a
+    Jenkins element takes the Coulomb law), and the system's scheme must be located."""
 
     dof: int | None = None
     between: tuple[int, int] | None = None
@@ -153,6 +159,8 @@ class Contact:
     mu_k: float | None = None
     k_t: float = 0.0
     law: str = "coulomb"
+    v_s: float = 0.01
+    delta: float = 1.0
 
     def __post_init__(self) -> None:
         """Check every field (UsageError naming it)."""
@@ -192,8 +200,22 @@ class Contact:
         mu_k = self.mu_s if self.mu_k is None else self.mu_k
         object.__setattr__(self, "mu_k", _nonneg("Contact: mu_k", mu_k))
         object.__setattr__(self, "k_t", _nonneg("Contact: k_t", self.k_t))
-        if self.law not in LAWS:
+        if not isinstance(self.law, str) or self.law not in LAWS:
             raise UsageError(f"Contact: law = {self.law!r} is not offered; valid: {', '.join(LAWS)}")
+        v_s = _number("Contact: v_s", self.v_s)
+        if not v_s > 0.0:
+            raise UsageError(f"Contact: v_s = {v_s!r} is not > 0: the contact's Stribeck velocity; valid range: > 0")
+        object.__setattr__(self, "v_s", v_s)
+        delta = _number("Contact: delta", self.delta)
+        if not delta > 0.0:
+            raise UsageError(f"Contact: delta = {delta!r} is out of range; valid range: > 0")
+        if self.law == "stribeck" and delta < 1.0:
+            raise UsageError(f"Contact: law = stribeck supports delta >= 1 only, not {delta!r} for delta (below 1 "
+                             "the friction's slope is infinite at zero slip speed)")
+        object.__setattr__(self, "delta", delta)
+        if self.law == "stribeck" and self.k_t > 0.0:
+            raise UsageError(f"Contact: a Jenkins element (k_t = {self.k_t!r} > 0) takes the Coulomb law only: "
+                             "set law = 'coulomb' or k_t = 0")
 
     @property
     def jenkins(self) -> bool:
@@ -248,7 +270,8 @@ class System:
         A value that is not valid, in one sentence naming the array and the element or the test
         that failed: sizes that disagree, NaN or inf, M not symmetric or not positive definite, K or C
         not symmetric or with a negative eigenvalue beyond rounding, a zero contact row, an index out
-        of range, a negative N, mu_s, mu_k or k_t.
+        of range, a negative N, mu_s, mu_k or k_t, a Stribeck contact with a scheme other than located
+        or in a structure with a Jenkins element.
     """
 
     __slots__ = ("_M", "_C", "_K", "_contacts", "_F_c", "_F_s", "_omega", "_x0", "_v0", "_h", "_scheme",
@@ -277,6 +300,16 @@ class System:
             if not isinstance(c, Contact):
                 raise UsageError(f"contacts[{j}] must be a Contact, not {type(c).__name__}")
             rows[j] = c.row(n, where=f"contacts[{j}]")
+            if c.law == "stribeck" and scheme in SCHEMES and scheme != "located":
+                raise UsageError(f"contacts[{j}]: law = stribeck needs scheme located (the speed-dependent "
+                                 f"friction is solved inside its steps), as the oscillator and the chain: choose "
+                                 f"scheme located, or law = coulomb, not scheme {scheme}")
+        laws = [c.law for c in cs]
+        jenkins = [j for j, c in enumerate(cs) if c.jenkins]
+        if "stribeck" in laws and jenkins:
+            raise UsageError(f"contacts[{laws.index('stribeck')}] has the Stribeck law and contacts[{jenkins[0]}] is a "
+                             "Jenkins element (k_t > 0): the engine steps Jenkins elements only with the Coulomb law "
+                             "on every contact; give every contact law = coulomb, or every contact k_t = 0")
         vec = {name: _vector(name, val, n) for name, val in (("F_c", F_c), ("F_s", F_s), ("x0", x0), ("v0", v0))}
         om = _nonneg("omega", omega)
         hh = _nonneg("h", h)
@@ -323,7 +356,8 @@ class System:
         """True when both have the same contact rows and the same friction per contact (the same
         direction given as dof, between or w counts as equal)."""
         return (self.nc == other.nc and np.array_equal(self.W, other.W)
-                and all(np.array_equal(getattr(self, a), getattr(other, a)) for a in ("N", "mu_s", "mu_k", "k_t")))
+                and all(np.array_equal(getattr(self, a), getattr(other, a))
+                        for a in ("N", "mu_s", "mu_k", "k_t", "friction_law", "v_s", "delta")))
 
     # --- the fields ---
     @property
@@ -424,6 +458,23 @@ class System:
     def k_t(self) -> np.ndarray:
         """The tangential stiffnesses (nc, N/m; 0 for a rigid contact)."""
         return self._per_contact("k_t")
+
+    @property
+    def friction_law(self) -> np.ndarray:
+        """The friction laws as the FMU's enumeration values (nc ints: 1 coulomb, 2 stribeck)."""
+        a = np.array([LAWS[c.law] for c in self._contacts], dtype=np.int64)
+        a.setflags(write=False)
+        return a
+
+    @property
+    def v_s(self) -> np.ndarray:
+        """The Stribeck velocities (nc, m/s; used by the Stribeck contacts)."""
+        return self._per_contact("v_s")
+
+    @property
+    def delta(self) -> np.ndarray:
+        """The Stribeck exponents (nc; used by the Stribeck contacts)."""
+        return self._per_contact("delta")
 
     @property
     def breakaway(self) -> np.ndarray:
@@ -557,13 +608,18 @@ class System:
     def start_values(self) -> dict[str, Any]:
         """The start values of the FMI 3.0 FMU ``DryFrictionSystem`` for this system: variable name
         -> value (matrices flattened row-major, arrays as Python lists of floats, ``n`` and ``nc`` as
-        ints, ``scheme`` as its enumeration value: paper 1, consistent 2, located 3)."""
+        ints, ``scheme`` as its enumeration value: paper 1, consistent 2, located 3, ``friction_law``
+        as a list of the enumeration's values: coulomb 1, stribeck 2). The observation window of the
+        observables (``t_obs_start``, ``t_obs_stop``, ``observe``) is a run's option, not the
+        system's (:meth:`dryfriction.drivers.system.SystemFMU3.start`)."""
         return {
             "n": self.n, "nc": self.nc,
             "M": self.M.ravel().tolist(), "C": self.C.ravel().tolist(), "K": self.K.ravel().tolist(),
             "F_c": self.F_c.tolist(), "F_s": self.F_s.tolist(), "x0": self.x0.tolist(), "v0": self.v0.tolist(),
             "W": self.W.ravel().tolist(), "N": self.N.tolist(), "mu_s": self.mu_s.tolist(),
             "mu_k": self.mu_k.tolist(), "k_t": self.k_t.tolist(),
+            "friction_law": [int(v) for v in self.friction_law], "v_s": self.v_s.tolist(),
+            "delta": self.delta.tolist(),
             "omega": self.omega, "h": self.h, "alpha": self.alpha, "scheme": SCHEMES[self.scheme],
         }
 
