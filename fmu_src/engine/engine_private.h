@@ -64,7 +64,6 @@ struct eng {
     int *jstop;                  /* nc: a sliding slider that stops at the located sub-step's end */
     double *jf0;                 /* nc: a stuck slider's force at the located phase's start, clamped to
                                   * its limit (jenk_phase_forces) */
-    const double *jsl;           /* the sliders of the state the current trial is from (trial_step) */
     double *tbk;                 /* nc: the candidates' closed-form breakaways (eng_sparse.contact_breakaway) */
     int *hmode;                  /* nc: held_solve's modes */
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */

@@ -788,6 +788,7 @@ typedef struct {
     dfo_bossak_kin kin;
     int slot;
     double cM, cC, cK;
+    const double *sl; /* the sliders of the state the trial starts from (Jenkins contacts' targets) */
 } trial;
 
 /* Whether an A of the step length hA is re-based on a step of length hh where alpha is not 0 (tol:
@@ -915,7 +916,7 @@ static ENG_HOT eng_status trial_step(eng *E, const eng_inputs *in, const eng_sta
                  *const ph = E->ph;
 #endif
     rebase_into(E, in, s, hh, t1, A0);
-    E->jsl = s->slider;
+    T->sl = s->slider;
     const dfo_bossak_kin K = T->kin;
     const double g1 = E->g1;
     /* x_pred, and p_hat = P1 + F_ext - K x_pred + M (-a A0 + (1 - a) (c1 V + g1 A0)) */
@@ -974,7 +975,7 @@ static ENG_HOT eng_status solve_trial(eng *E, const trial *T, int what, int *st,
             E->vbj[j] = E->vb[j];
             E->comp[j] = 0.0;
             if (!is_jenk(E, j)) continue;
-            E->vbj[j] = ((E->jsl[j] + hh * E->vb[j]) - row_dot(&S->rows[j], E->xp)) / cV;
+            E->vbj[j] = ((T->sl[j] + hh * E->vb[j]) - row_dot(&S->rows[j], E->xp)) / cV;
             E->comp[j] = 1.0 / (S->k_t[j] * cV);
         }
         P.vb = E->vbj;
@@ -1557,6 +1558,7 @@ static ENG_HOT int held_step(eng *E, eng_state *s, double t1, trial *T)
     if (!E->held_ready && ENG_STEP_HELD(E, &F, s)) return ENG_HELD_TAKEN;
     E->held_ready = 0;
     T->kin = *K;
+    T->sl = s->slider;
     T->slot = F.slot;
     T->cM = F.cM;
     T->cC = 1.0;
@@ -1743,6 +1745,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         margin_init(&mc, E, in, s, t_end, r);
         if (phase == 0 && E->fused_ready) { /* fused_steps' trial of this grid step, solved (as held_step's) */
             T.kin = E->kin_grid;
+            T.sl = s->slider;
             T.slot = ENG_SLOT_GRID;
             T.cM = (1.0 - S->alpha) * T.kin.c1;
             T.cC = 1.0;
