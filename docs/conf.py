@@ -65,6 +65,10 @@ html_show_sourcelink = False
 
 # -n (nitpicky): every reference into the package must resolve; names of other packages cannot,
 # offline (no intersphinx), so they are not checked
+# the structure's class as the drivers' and the FMU writer's annotations name it ("System" alone is
+# also the co-simulation master's)
+autodoc_type_aliases = {"Structure": "dryfriction.system.structure.System"}
+
 nitpick_ignore_regex = [
     ("py:.*", r"(numpy|np|pathlib|xarray|xr|pandas|collections|collections\.abc|typing|argparse|contextlib|"
               r"ctypes|os|io|concurrent|dask|distributed|matplotlib|fmpy|scipy|enum|types|threading|"
@@ -77,7 +81,7 @@ nitpick_ignore_regex = [
     ("py:class", r"(Path|Any|Callable|Iterator|Iterable|Sequence|Mapping|ndarray|Dataset|DataArray|"
                  r"ArgumentParser|Namespace|TextIO|Figure|Axes|NDArray|float|int|str|bool|complex|bytes|"
                  r"None|object|type|Self|optional|callable|array_like|array-like|Client|LocalCluster|module|"
-                 r"SimpleNamespace|Intermediate)"),
+                 r"SimpleNamespace|Intermediate|Inputs|Structure)"),
 ]
 
 

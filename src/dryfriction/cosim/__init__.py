@@ -1,4 +1,4 @@
-"""A co-simulation master for the package's FMUs (docs/coupling.md): :class:`System` couples
+"""A co-simulation master for the package's FMUs (docs/coupling.md): :class:`~dryfriction.cosim.system.System` couples
 started drivers (FMI 2.0 or FMI 3.0) under instance names through :class:`Connection` s
 (``"a.x" -> "b.F_ext"``) and coupling elements the master computes (:class:`SpringDamper`),
 by Jacobi or Gauss-Seidel, with inputs held, extrapolated from output derivatives or sent as

@@ -1,4 +1,4 @@
-"""What joins the units of a :class:`~dryfriction.cosim.System`: a connection (an input set
+"""What joins the units of a :class:`~dryfriction.cosim.system.System`: a connection (an input set
 from an output, times a gain) and the coupling elements the master computes itself (a
 :class:`SpringDamper` between two blocks). Every coupling here is linear in the outputs, so the
 system's inputs are ``u = G y`` with one matrix ``G`` (:func:`coupling_matrix`), which the master

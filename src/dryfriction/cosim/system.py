@@ -1,4 +1,4 @@
-"""The master (:class:`System`): FMUs under instance names, joined by connections and coupling
+"""The master (:class:`~dryfriction.cosim.system.System`): FMUs under instance names, joined by connections and coupling
 elements (docs/coupling.md).
 
     sys = System()

@@ -32,7 +32,7 @@ def _alias(name: str, table: Mapping[str, tuple[str, ...]]) -> tuple[str, ...]:
 
 
 class Unit:
-    """An FMU of a :class:`~dryfriction.cosim.System` under its instance name."""
+    """An FMU of a :class:`~dryfriction.cosim.system.System` under its instance name."""
 
     def __init__(self, name: str, driver: Any, derivatives: Mapping[str, tuple[str, ...]] | None = None) -> None:
         inst = getattr(driver, "inst", None)

@@ -1,7 +1,9 @@
-"""Running a :class:`dryfriction.System` through the FMI 3.0 ``DryFrictionSystem`` FMU (docs/system.md).
+"""Running a :class:`~dryfriction.system.structure.System` through the FMI 3.0 ``DryFrictionSystem``
+FMU (docs/system.md).
 
 The structure's sizes ``n`` and ``nc`` are set in Configuration Mode, its values
-(:meth:`System.start_values`) in Initialization Mode, then the FMU steps on the host's points with
+(:meth:`~dryfriction.system.structure.System.start_values`) in Initialization Mode, then the FMU
+steps on the host's points with
 the outputs ``x``, ``v``, ``a`` (n), ``f``, ``mode``, ``s`` (nc) and ``E_friction`` read at each, and
 the in-FMU observables ``x_max``, ``x_min`` (n) and ``stick_fraction`` (nc) read at the end of the
 run. Their observation window is a run's option, as the oscillator's drivers take it (not the
@@ -42,6 +44,7 @@ from .chain import expand
 
 if TYPE_CHECKING:
     from ..system.structure import System
+    from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["SystemFMU3", "SystemRun", "INPUTS", "OUTPUTS", "OBSERVABLES", "T_OBS_STOP", "default_system_fmu3", "run",
            "trajectory"]
@@ -108,16 +111,17 @@ class SystemRun:
 
 class SystemFMU3(Driver):
     """One instance of the FMI 3.0 ``DryFrictionSystem`` FMU running ``system``, as a context
-    manager; every :meth:`start` (and so every :meth:`run`) resets it, sets ``n``, ``nc`` in
+    manager; every :meth:`~dryfriction.drivers.system.SystemFMU3.start` (and so every
+    :meth:`~dryfriction.drivers.system.SystemFMU3.run`) resets it, sets ``n``, ``nc`` in
     Configuration Mode and the system's values in Initialization Mode.
 
     Parameters
     ----------
     system
-        The structure (:class:`dryfriction.System`).
+        The structure (:class:`~dryfriction.system.structure.System`).
     fmu_path
         The FMU; default: ``$DFO_SYSTEM_FMU3``, the installed package's, the checkout's
-        ``build/fmi3/``. A structure's own FMU (:meth:`System.fmu`) runs too.
+        ``build/fmi3/``. A structure's own FMU (:meth:`~dryfriction.system.structure.System.fmu`) runs too.
     logging
         Switch the FMU's debug logging on.
 
@@ -142,7 +146,7 @@ class SystemFMU3(Driver):
     KIND = paths.SYSTEM3
     TERMINATE_ON_CLOSE = True
 
-    def __init__(self, system: "System", fmu_path: str | os.PathLike[str] | None = None, *,
+    def __init__(self, system: "Structure", fmu_path: str | os.PathLike[str] | None = None, *,
                  logging: bool = False) -> None:
         from ..system.structure import System
 
@@ -332,7 +336,7 @@ class SystemFMU3(Driver):
         return self
 
 
-def run(system: "System", t_end: float, dt: float | None = None, inputs: Inputs | None = None, *,
+def run(system: "Structure", t_end: float, dt: float | None = None, inputs: Inputs | None = None, *,
         start_time: float = 0.0, fmu_path: str | os.PathLike[str] | None = None, observe: bool = True,
         t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
     """``system`` through the FMI 3.0 FMU from ``start_time`` to ``t_end``, the outputs every ``dt``
@@ -347,7 +351,7 @@ def run(system: "System", t_end: float, dt: float | None = None, inputs: Inputs 
                        t_obs_stop=t_obs_stop)
 
 
-def trajectory(system: "System", times: Iterable[float] | np.ndarray, inputs: Inputs | None = None, *,
+def trajectory(system: "Structure", times: Iterable[float] | np.ndarray, inputs: Inputs | None = None, *,
                fmu_path: str | os.PathLike[str] | None = None, observe: bool = True,
                t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
     """``system`` through the FMI 3.0 FMU with the outputs at ``times`` (the first: the start); the

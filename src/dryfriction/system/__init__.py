@@ -1,6 +1,7 @@
 """Any structure with dry-friction contacts (method.md section 13, docs/system.md): the structure
-(:class:`System`, its :class:`Contact` s) with its checks, damping helpers and the oscillator and the
-chain as systems, and the structure file (:mod:`dryfriction.system.spec`).
+(:class:`~dryfriction.system.structure.System`, its :class:`~dryfriction.system.structure.Contact`
+s) with its checks, damping helpers and the oscillator and the chain as systems, and the structure
+file (:mod:`dryfriction.system.spec`)::
 
     from dryfriction import System, Contact
     sys = System(M=M, K=K, contacts=[Contact(dof=3, N=10.0, mu_s=0.3, mu_k=0.2),

@@ -39,6 +39,7 @@ from ..model import LAYOUT_TOOL, ArrayLayout, fmi2_layout
 
 if TYPE_CHECKING:
     from .structure import System
+    from .structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["write_fmu", "structure_bytes", "fmi2_sizes", "RESOURCE", "MAGIC", "VERSION"]
 
@@ -61,7 +62,7 @@ def _text(x: Any) -> str:
     return repr(float(x))
 
 
-def structure_bytes(system: "System", vrs: dict[str, int], layout: tuple[ArrayLayout, ...] = ()) -> bytes:
+def structure_bytes(system: "Structure", vrs: dict[str, int], layout: tuple[ArrayLayout, ...] = ()) -> bytes:
     """The bytes of ``resources/structure.bin`` for ``system``; ``vrs``: the FMI 3.0 value
     reference of every parameter by name (from the model description); ``layout``: an FMI 2.0
     FMU's array layout (its elements' value references for the system's sizes), written as the
@@ -81,7 +82,7 @@ def structure_bytes(system: "System", vrs: dict[str, int], layout: tuple[ArrayLa
     return head + lay + b"".join(records)
 
 
-def _description(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[str, int], tuple[ArrayLayout, ...]]:
+def _description(xml: bytes, system: "Structure", name: str) -> tuple[bytes, dict[str, int], tuple[ArrayLayout, ...]]:
     """The prebuilt FMI 3.0 model description with this system's start values (and the value
     references of its parameters)."""
     root = ET.fromstring(xml)
@@ -141,7 +142,7 @@ def _element_name(name: str, idx: tuple[int, ...]) -> str:
     return f"{name}[{','.join(str(i) for i in idx)}]"
 
 
-def _description2(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[str, int], tuple[ArrayLayout, ...]]:
+def _description2(xml: bytes, system: "Structure", name: str) -> tuple[bytes, dict[str, int], tuple[ArrayLayout, ...]]:
     """The FMI 2.0 model description for this system's sizes, from the prebuilt one (whatever sizes
     it was built for): each array's elements flattened (``M[1,2]``, ``x0[3]``, 1-based) at the value
     references of the package's layout (:func:`dryfriction.model.fmi2_layout`, the generator's), each
@@ -269,7 +270,7 @@ def _description2(xml: bytes, system: "System", name: str) -> tuple[bytes, dict[
     return ET.tostring(root, encoding="utf-8", xml_declaration=True), vrs, layouts
 
 
-def write_fmu(system: "System", path: str | os.PathLike[str], fmi: int = 3,
+def write_fmu(system: "Structure", path: str | os.PathLike[str], fmi: int = 3,
               base: str | os.PathLike[str] | None = None) -> Path:
     """Write the FMU of ``system`` to ``path`` (a ``.fmu`` name; its folder must exist) from the
     prebuilt ``DryFrictionSystem`` FMU (``base``; default the package's, :mod:`dryfriction.paths`):

@@ -42,7 +42,7 @@ freedom indices are 0-based. Every table and key::
     v0 = 0.0
 
 An unknown table or key is an error naming it and its table; a missing file names the file; every
-value is then checked as :class:`System` checks it. Errors are :class:`~dryfriction.errors.UsageError`.
+value is then checked as :class:`~dryfriction.system.structure.System` checks it. Errors are :class:`~dryfriction.errors.UsageError`.
 """
 
 from __future__ import annotations

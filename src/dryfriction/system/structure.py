@@ -1,4 +1,5 @@
-"""A structure with dry-friction contacts (method.md section 13): :class:`Contact` and :class:`System`.
+"""A structure with dry-friction contacts (method.md section 13): :class:`~dryfriction.system.structure.Contact` and
+:class:`~dryfriction.system.structure.System`.
 
     M x'' + C x' + K x = F_c cos(omega t) + F_s sin(omega t) + F_ext + W' f,    g = W x
 
