@@ -7,7 +7,7 @@ set(MODEL_DESCRIPTION ${CMAKE_CURRENT_LIST_DIR}/modelDescription.xml)
 set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the engine and the numerics it uses included)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
-    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
+    numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h numerics/symeig.c numerics/symeig.h
     numerics/roots.c numerics/roots.h engine/engine.c engine/engine_generic.c engine/engine.h
     engine/engine_private.h engine/engine_step.h
     models/system/system.c models/system/system.h)
