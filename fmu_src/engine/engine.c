@@ -158,6 +158,7 @@ static int create_spans(eng *E, const char **err)
     T.ops = S->sparse->span_ops;
     E->sub_sparse.held_basis = 1;
     T.sparse = &E->sub_sparse;
+    T.coupling = NULL; /* (the span's operators are its own) */
     T.rows = E->lrows;
     T.N = E->lN;
     T.mu_s = E->lmus;

@@ -168,6 +168,26 @@ typedef struct {
     int dense_fallback;
 } eng_ops;
 
+/* Optional operators of the contacts' coupling through M_hat (eng_setup.coupling; NULL: none, the
+ * engine's columns). Without them the default friction solver (eng_dense_friction) and the engine's
+ * constrained solves form the Delassus matrix of a set S of contacts from the columns A_slot^-1 w_j
+ * (one solve each, kept per factor slot until it is refactored: O(|S| n^2) with a dense solve, anew
+ * after every refactorisation). A model that has A_slot^-1 in a cheaper form (the system's modal
+ * backend: A^-1 = Phi diag(d) Phi', the contact rows in modal coordinates U = W Phi kept) offers
+ *   delassus   D (m x m, row-major) := W_S A_slot^-1 W_S', S the contacts sel[0 .. m-1] (in that
+ *              order; each once), with the slot's last factorisation; symmetric to the bit
+ *   respond    y (n) += A_slot^-1 W_S' f, f (m) the forces of the contacts sel[0 .. m-1]
+ * each O(m^2 n) and O(m n + n^2) with the modal form. The engine then calls them where it used the
+ * columns: the constrained solves (csolve: basis solves, physical accelerations and jerks), Stribeck's
+ * Newton (stribeck_newton) and the Delassus matrix of the LCP (eng_dense_friction); the columns are
+ * then never solved. Both or neither; ctx is theirs (not eng_ops.ctx). A model's own friction solver
+ * (eng_ops.friction) and the spans do not use them (a span's sub-engine has none). */
+typedef struct {
+    void *ctx;
+    void (*delassus)(void *ctx, int slot, const int *sel, size_t m, double *D);
+    void (*respond)(void *ctx, int slot, const int *sel, size_t m, const double *f, double *y);
+} eng_coupling;
+
 /* The harmonic excitation P_i(t) = Pc[i] cos(omega t + phi0) - Ps[i] sin(omega t + phi0) (Pc, Ps:
  * n each; NULL: 0). On the grid t0 + k h the phase comes from the state's cache (excitation.h's
  * dfo_grid_phase: a pure function of k), elsewhere it is evaluated (dmath's dfo_cos / dfo_sin). */
@@ -343,6 +363,8 @@ typedef struct {
      * of a grid point is that grid point (the oscillator: 1e-5, 1e-7, 2^16; the chain: 1e-7, 1e-7, 0) */
     double snap_max_rel_h, snap_min_rel_h, snap_eps_t;
     const eng_sparse *sparse;   /* the model's sparse-structure operators, or NULL (read while the engine lives) */
+    const eng_coupling *coupling; /* the contacts' coupling operators, or NULL: the columns (read while the
+                                 * engine lives) */
     eng_rest_fn on_rest;        /* the rest rule's report (NULL: none), with its context */
     void *rest_ctx;
 } eng_setup;

@@ -376,8 +376,8 @@ static void columns(eng *E, int slot, size_t m)
 /* ---- constrained solves ------------------------------------------------------------------- */
 
 /* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
- * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S, their Delassus matrix by
- * Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
+ * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S (or the model's coupling
+ * operators, eng_setup.coupling), their Delassus matrix by Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
 static void csolve(eng *E, int slot, const double *r, const int *held, const double *target, const double *comp,
                    double *y, double *f)
 {
@@ -404,16 +404,26 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     for (size_t j = 0; j < nc; j++)
         if (held[j]) E->sel[m++] = (int)j;
     if (m == 0) return;
-    columns(E, slot, m);
+    const eng_coupling *Cp = S->coupling;
+    if (Cp) /* the model's Delassus matrix (no columns) */
+        Cp->delassus(Cp->ctx, slot, E->sel, m, E->D);
+    else
+        columns(E, slot, m);
     for (size_t a = 0; a < m; a++) {
         const eng_row *Ra = &S->rows[E->sel[a]];
-        for (size_t c = 0; c <= a; c++) E->D[a * m + c] = E->D[c * m + a] = row_dot(Ra, E->colp[c]);
+        if (!Cp)
+            for (size_t c = 0; c <= a; c++) E->D[a * m + c] = E->D[c * m + a] = row_dot(Ra, E->colp[c]);
         if (comp) E->D[a * m + a] += comp[E->sel[a]];
         E->rhs[a] = target[E->sel[a]] - row_dot(Ra, y);
     }
     int *dep = E->st2;
     chol(m, E->D, m, E->Lc, dep);
     chol_solve(m, E->Lc, m, dep, E->rhs, E->sol);
+    if (Cp) { /* y += A^-1 W_S' f_S */
+        for (size_t a = 0; a < m; a++) f[E->sel[a]] = E->sol[a];
+        Cp->respond(Cp->ctx, slot, E->sel, m, E->sol, y);
+        return;
+    }
     for (size_t a = 0; a < m; a++) {
         const double fa = E->sol[a];
         const double *col = E->colp[a];
@@ -575,9 +585,13 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
         if (!in && P->limit[j] > 0.0 && mode[j] != 0) row_axpy(&S->rows[j], f[j], E->r);
     }
     ENG_SOLVE(E, P->slot, E->r, V0);
-    columns(E, P->slot, m);
-    for (size_t a = 0; a < m; a++)
-        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[E->sel[a]], E->colp[c]);
+    if (S->coupling) {
+        S->coupling->delassus(S->coupling->ctx, P->slot, E->sel, m, E->D);
+    } else {
+        columns(E, P->slot, m);
+        for (size_t a = 0; a < m; a++)
+            for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[E->sel[a]], E->colp[c]);
+    }
     double *fs = E->sol, *dlt = E->rhs;
     for (size_t a = 0; a < m; a++) fs[a] = f[E->sel[a]];
     int done = 0;
@@ -632,6 +646,11 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
     }
     if (!done) return ENG_ERR_FRICTION;
     for (size_t i = 0; i < n; i++) V1[i] = V0[i];
+    if (S->coupling) {
+        for (size_t a = 0; a < m; a++) f[E->sel[a]] = fs[a];
+        S->coupling->respond(S->coupling->ctx, P->slot, E->sel, m, fs, V1);
+        return ENG_OK;
+    }
     for (size_t a = 0; a < m; a++) {
         f[E->sel[a]] = fs[a];
         const double *col = E->colp[a];
@@ -733,10 +752,14 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     if (E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
     /* c = W A^-1 p_hat - vb (frictionless contacts carry no force), D = W A^-1 W' */
     ENG_SOLVE(E, P->slot, P->p_hat, E->y);
-    columns(E, P->slot, m);
+    if (S->coupling)
+        S->coupling->delassus(S->coupling->ctx, P->slot, E->sel, m, E->D);
+    else
+        columns(E, P->slot, m);
     for (size_t a = 0; a < m; a++) {
         const size_t j = (size_t)E->sel[a];
-        for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
+        if (!S->coupling)
+            for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
         if (P->comp) E->D[a * m + a] += P->comp[j];
         E->rhs[a] = row_dot(&S->rows[j], E->y) - (P->vb ? P->vb[j] : 0.0);
     }

@@ -4,6 +4,7 @@
 
 #include "bossak.h"
 #include "excitation.h" /* DFO_PI */
+#include "symeig.h"
 
 #include <float.h>
 #include <math.h>
@@ -13,6 +14,20 @@
 #define SYM_TOL 1e-12  /* M, C, K symmetric: |A_ij - A_ji| <= SYM_TOL max|A| */
 #define PSD_TOL 1e-12  /* K, C: the Cholesky factorisation of A + PSD_TOL max|A| I must succeed */
 #define POWER_ITERS 200
+/* C is diagonal in the modal basis when its off-diagonal part E = offdiag(Phi' C Phi) is within
+ * rounding of 0 as the solves see it. In modal coordinates M_hat = G + cC E, G = diag(cM + cC c_r +
+ * cK lambda_r). For a step of length h' <= h, cM / cC = (1 - alpha) / (gamma h') >= 1.6 / h' >= 1 / h
+ * (gamma = 1/2 - alpha, alpha in [-1/3, 0]) and lambda_r >= 0 (to rounding), so G_r >= cC (c_r + 1 / h)
+ * and the dropped part's size relative to M_hat, ||G^-1/2 cC E G^-1/2||_2, is at most its largest row
+ * sum
+ *     rho = max_r sum_{s != r} |E_rs| / sqrt((c_r + 1/h) (c_s + 1/h))
+ * (a symmetric matrix's 2-norm is at most its infinity norm), which bounds the relative change of a
+ * solve by rho / (1 - rho). The modal backend takes C when rho <= SYS_MODAL_TOL = 1e-12: a change of
+ * the solves of the order of the dense Cholesky's own rounding (n eps cond(M_hat): 2e-14 at n = 100,
+ * 2e-13 at n = 1024 with cond 1). Rayleigh and modal damping computed in floating point give rho of
+ * 1e-18 to 1e-15 (tests/c/test_system_modal.c prints it); a non-proportional C of any physical size
+ * is far above (the dense backend). */
+#define SYS_MODAL_TOL 1e-12
 #define POWER_RTOL 1e-9
 
 /* ---- dense algebra ------------------------------------------------------------------------------ */
@@ -335,6 +350,19 @@ static int op_factor(void *ctx, int slot, double cM, double cC, double cK)
 {
     sys_model *m = (sys_model *)ctx;
     const size_t n = m->n;
+    if (m->modal) { /* d_r = 1 / (cM + cC c_r + cK lambda_r): positive, as the Cholesky pivots */
+        double *d = m->dm[slot];
+        for (size_t r = 0; r < n; r++) {
+            const double g = (cM + cC * m->cdiag[r]) + cK * m->lam[r];
+            if (!(g > 0.0) || !isfinite(g)) return 0;
+            d[r] = 1.0 / g;
+        }
+        if (++m->gen[slot] == 0) { /* (the stamps wrapped: forget every entry) */
+            memset(m->Dstamp[slot], 0, m->nc * m->nc * sizeof(unsigned));
+            m->gen[slot] = 1;
+        }
+        return 1;
+    }
     double *L = m->L[slot];
     /* A's lower triangle in place in L (cholesky reads A[i n + j], j <= i, before writing L[i n + j]) */
     for (size_t i = 0; i < n; i++)
@@ -345,10 +373,78 @@ static int op_factor(void *ctx, int slot, double cM, double cC, double cK)
     return cholesky(n, L, 0.0, L, NULL);
 }
 
+/* x = Phi (d .* (Phi' b)) (b and x may be the same array) */
+static void modal_solve(const sys_model *m, const double *d, const double *b, double *x)
+{
+    const size_t n = m->n;
+    double *z = m->z;
+    for (size_t r = 0; r < n; r++) {
+        const double *p = m->PhiT + r * n;
+        double s = 0.0;
+        for (size_t i = 0; i < n; i++) s += p[i] * b[i];
+        z[r] = d[r] * s;
+    }
+    for (size_t i = 0; i < n; i++) x[i] = 0.0;
+    for (size_t r = 0; r < n; r++) {
+        const double *p = m->PhiT + r * n;
+        const double zr = z[r];
+        for (size_t i = 0; i < n; i++) x[i] += zr * p[i];
+    }
+}
+
 static void op_solve(void *ctx, int slot, const double *b, double *x)
 {
     const sys_model *m = (const sys_model *)ctx;
+    if (m->modal) {
+        modal_solve(m, m->dm[slot], b, x);
+        return;
+    }
     chol_solve(m->n, m->L[slot], b, x);
+}
+
+/* eng_coupling.delassus: D_ab = sum_r U_ja d_r U_jb (j_a = sel[a]), each entry computed once per
+ * factorisation of the slot (the pair's lower index first: the same bits whichever order asks) */
+static void op_delassus(void *ctx, int slot, const int *sel, size_t k, double *D)
+{
+    sys_model *m = (sys_model *)ctx;
+    const size_t n = m->n, nc = m->nc;
+    const double *d = m->dm[slot];
+    double *Dc = m->Dc[slot];
+    unsigned *st = m->Dstamp[slot];
+    const unsigned gen = m->gen[slot];
+    for (size_t a = 0; a < k; a++)
+        for (size_t b = 0; b <= a; b++) {
+            const size_t ja = (size_t)sel[a], jb = (size_t)sel[b];
+            const size_t lo = ja < jb ? ja : jb, hi = ja < jb ? jb : ja, e = hi * nc + lo;
+            if (st[e] != gen) {
+                const double *ul = m->U + lo * n, *uh = m->U + hi * n;
+                double v = 0.0;
+                for (size_t r = 0; r < n; r++) v += (ul[r] * d[r]) * uh[r];
+                Dc[e] = v;
+                st[e] = gen;
+            }
+            D[a * k + b] = D[b * k + a] = Dc[e];
+        }
+}
+
+/* eng_coupling.respond: y += Phi (d .* (U_S' f)) */
+static void op_respond(void *ctx, int slot, const int *sel, size_t k, const double *f, double *y)
+{
+    sys_model *m = (sys_model *)ctx;
+    const size_t n = m->n;
+    const double *d = m->dm[slot];
+    double *z = m->z;
+    for (size_t r = 0; r < n; r++) z[r] = 0.0;
+    for (size_t a = 0; a < k; a++) {
+        const double *u = m->U + (size_t)sel[a] * n;
+        const double fa = f[a];
+        for (size_t r = 0; r < n; r++) z[r] += fa * u[r];
+    }
+    for (size_t r = 0; r < n; r++) {
+        const double *p = m->PhiT + r * n;
+        const double zr = z[r] * d[r];
+        for (size_t i = 0; i < n; i++) y[i] += zr * p[i];
+    }
 }
 
 /* ---- the engine --------------------------------------------------------------------------------- */
@@ -358,7 +454,9 @@ void sys_model_free(sys_model *m, const eng_alloc *al)
     if (m->E) eng_destroy(m->E);
     m->E = NULL;
     void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Pc, m->Ps, m->N, m->mu_s, m->mu_k, m->k_t,
-                      m->rows, m->idx, m->w, m->work, m->law};
+                      m->rows, m->idx, m->w, m->work, m->law, m->PhiT, m->lam, m->cdiag, m->dm[0], m->dm[1],
+                      m->dm[2], m->U, m->z, m->Dc[0], m->Dc[1], m->Dc[2], m->Dstamp[0], m->Dstamp[1],
+                      m->Dstamp[2]};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         if (arrays[i]) al->release(al->env, arrays[i]);
     memset(m, 0, sizeof *m);
@@ -369,6 +467,77 @@ static void *alloc_n(const eng_alloc *al, size_t count, size_t size, int *ok)
     void *p = al->allocate(al->env, count ? count : 1, size);
     if (!p) *ok = 0;
     return p;
+}
+
+/* The modal backend where C allows it (the model's M, C, K, rows and h set): the modes, C's test
+ * (SYS_MODAL_TOL), the per-slot and coupling arrays; m->modal = 1 when taken. 0 when memory fails. */
+static int modal_setup(sys_model *m, const sys_params *p, const eng_alloc *al)
+{
+    const size_t n = m->n, nc = m->nc;
+    m->c_offdiag = NAN;
+    if (n < 2 || p->dense) return 1; /* (n = 1: the 1 x 1 Cholesky, the oscillator's bits) */
+    int ok = 1;
+    double *tmp = (double *)alloc_n(al, dfo_symeig_work(n), sizeof(double), &ok);
+    m->PhiT = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    m->lam = (double *)alloc_n(al, n, sizeof(double), &ok);
+    m->cdiag = (double *)alloc_n(al, n, sizeof(double), &ok);
+    if (!ok) {
+        if (tmp) al->release(al->env, tmp);
+        return 0;
+    }
+    int modal = dfo_symeig(n, m->K, m->M, m->lam, m->PhiT, tmp);
+    if (modal && m->has_C) { /* Ct = Phi' C Phi: G (rows C phi_s), then Ct_rs = phi_r . G_s */
+        double *G = tmp, *Ct = tmp + n * n;
+        for (size_t r = 0; r < n; r++) matvec(n, m->C, m->PhiT + r * n, G + r * n);
+        for (size_t r = 0; r < n; r++)
+            for (size_t c = 0; c < n; c++) {
+                const double *a = m->PhiT + r * n, *g = G + c * n;
+                double v = 0.0;
+                for (size_t i = 0; i < n; i++) v += a[i] * g[i];
+                Ct[r * n + c] = v;
+            }
+        const double sig = 1.0 / m->h;
+        double rho = 0.0;
+        for (size_t r = 0; r < n; r++) {
+            m->cdiag[r] = Ct[r * n + r];
+            double row = 0.0;
+            for (size_t c = 0; c < n; c++)
+                if (c != r)
+                    row += fabs(Ct[r * n + c]) / sqrt((fmax(Ct[r * n + r], 0.0) + sig) * (fmax(Ct[c * n + c], 0.0) + sig));
+            rho = fmax(rho, row);
+        }
+        m->c_offdiag = rho;
+        modal = rho <= SYS_MODAL_TOL;
+    } else if (modal) {
+        m->c_offdiag = 0.0;
+    }
+    al->release(al->env, tmp);
+    if (!modal) { /* the dense backend */
+        void *arrays[] = {m->PhiT, m->lam, m->cdiag};
+        for (size_t i = 0; i < 3; i++) al->release(al->env, arrays[i]);
+        m->PhiT = m->lam = m->cdiag = NULL;
+        return 1;
+    }
+    for (int sl = 0; sl < ENG_NSLOTS; sl++) {
+        m->dm[sl] = (double *)alloc_n(al, n, sizeof(double), &ok);
+        m->Dc[sl] = (double *)alloc_n(al, nc * nc, sizeof(double), &ok);
+        m->Dstamp[sl] = (unsigned *)alloc_n(al, nc * nc, sizeof(unsigned), &ok);
+    }
+    m->U = (double *)alloc_n(al, nc * n, sizeof(double), &ok);
+    m->z = (double *)alloc_n(al, n, sizeof(double), &ok);
+    if (!ok) return 0;
+    for (size_t j = 0; j < nc; j++) /* U_jr = w_j . phi_r */
+        for (size_t r = 0; r < n; r++) {
+            double v = 0.0;
+            for (size_t k = 0; k < m->rows[j].nnz; k++) v += m->rows[j].w[k] * m->PhiT[r * n + m->rows[j].idx[k]];
+            m->U[j * n + r] = v;
+        }
+    for (int sl = 0; sl < ENG_NSLOTS; sl++) { /* (the Cholesky factors are not needed) */
+        al->release(al->env, m->L[sl]);
+        m->L[sl] = NULL;
+    }
+    m->modal = 1;
+    return 1;
 }
 
 int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int account_energy, char *buf, size_t len,
@@ -446,6 +615,11 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     /* (the stiffness with the sliders stuck in a factor slot's storage, before its first factorisation) */
     m->rate = rate_with(p, m->L[ENG_SLOT_MASS], m->work, m->work + n, m->L[ENG_SLOT_GRID]);
     m->h = dfo_step_rule(p->h, 2.0 * DFO_PI / m->rate); /* (no time scale, rate 0: the rule's fallback, 1 ms) */
+    if (!modal_setup(m, p, al)) {
+        sys_model_free(m, al);
+        *err = "out of memory";
+        return 0;
+    }
     eng_setup S;
     memset(&S, 0, sizeof S);
     S.n = n;
@@ -471,6 +645,12 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.alpha = p->alpha;
     S.scheme = p->scheme;
     S.friction_updates = p->frictionUpdates;
+    if (m->modal) {
+        m->coupling.ctx = m;
+        m->coupling.delassus = op_delassus;
+        m->coupling.respond = op_respond;
+        S.coupling = &m->coupling;
+    }
     S.account_energy = account_energy;
     S.fast_paths = 0; /* no closed-form breakaway: nothing to skip */
     S.rate_max = m->rate;

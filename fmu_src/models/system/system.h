@@ -11,8 +11,23 @@
  *
  * Stepped by the friction engine (engine.h) with its three Bossak schemes through its generic
  * function-pointer instance (engine_generic.c), as the TwoMass model. This file holds the model's
- * operators (dense products with K, C, M and the dense Cholesky factor of cM M + cC C + cK K in each
- * of the engine's slots), the structure checks and the engine's setup. Plain C, no FMI types. */
+ * operators (dense products with K, C, M and the solves with cM M + cC C + cK K in each of the
+ * engine's slots), the structure checks and the engine's setup.
+ *
+ * Two backends for the solves, chosen at sys_model_init:
+ *   modal  where C is diagonal in the modal basis (C = 0, Rayleigh C = a M + b K, modal damping):
+ *          the modes Phi (Phi' M Phi = I, Phi' K Phi = diag(lambda), Phi' C Phi = diag(c); symeig.h)
+ *          once, then a factorisation is d_r = 1 / (cM + cC c_r + cK lambda_r) (O(n)), a solve
+ *          Phi (d .* (Phi' b)) (O(n^2)), and the contacts' coupling (engine.h's eng_coupling) from
+ *          U = W Phi: the Delassus entries sum_r U_ar d_r U_br (O(n) each, kept per factorisation),
+ *          the response Phi (d .* (U_S' f)). C counts as diagonal when its off-diagonal part in the
+ *          modal basis changes M_hat by a relative 1e-12 at most for every step up to h (SYS_MODAL_TOL
+ *          in system.c);
+ *   dense  otherwise (a general C), for n = 1 (the oscillator's bits) or when asked (sys_params.dense):
+ *          the dense Cholesky factor of M_hat per slot (O(n^3) per factorisation, O(n^2) per solve),
+ *          the engine's columns for the coupling.
+ * Both are the same equations: the trajectories agree to rounding (amplified where a switch time
+ * is decided by a rounding-level margin). Plain C, no FMI types. */
 #ifndef DFO_SYSTEM_H
 #define DFO_SYSTEM_H
 
@@ -34,6 +49,8 @@ typedef struct {
                                       * contact Coulomb), Stribeck velocity and exponent */
     double omega, h, alpha;          /* excitation frequency, internal step (0: derived), Bossak alpha */
     int scheme, frictionUpdates;     /* DFO_SCHEME_*, the paper scheme's coefficient updates */
+    int dense;                       /* 1: the dense Cholesky backend whatever C (a comparison's); 0: the
+                                      * modal one where C allows it */
     eng_rest_fn on_rest;             /* the engine's report of its rest rule (NULL: none), its context */
     void *rest_ctx;
 } sys_params;
@@ -53,6 +70,19 @@ typedef struct {
     double *w;
     double *work;                    /* n: scratch of the checks and the rate */
     int has_C;
+    /* the modal backend (NULL arrays with the dense one; the slots' L then NULL) */
+    int modal;                       /* 1: the modal backend; 0: dense */
+    double c_offdiag;                /* C's off-diagonal share in the modal basis (the test against
+                                      * SYS_MODAL_TOL; 0 without C; NaN: not computed, n = 1 or dense asked) */
+    double *PhiT;                    /* n x n: row r the mode phi_r */
+    double *lam, *cdiag;             /* n: Phi' K Phi's and Phi' C Phi's diagonals */
+    double *dm[ENG_NSLOTS];          /* n per slot: 1 / (cM + cC c_r + cK lambda_r) */
+    double *U;                       /* nc x n: W Phi */
+    double *z;                       /* n: scratch of the solves */
+    double *Dc[ENG_NSLOTS];          /* nc x nc per slot: the Delassus entries computed (lower triangle) */
+    unsigned *Dstamp[ENG_NSLOTS];    /* nc x nc: the factorisation (gen) each entry of Dc is of */
+    unsigned gen[ENG_NSLOTS];        /* per slot: its factorisation's number (0: none yet) */
+    eng_coupling coupling;
     eng *E;
 } sys_model;
 
