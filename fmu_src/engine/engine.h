@@ -177,12 +177,16 @@ typedef struct {
  *   delassus   D (m x m, row-major) := W_S A_slot^-1 W_S', S the contacts sel[0 .. m-1] (in that
  *              order; each once), with the slot's last factorisation; symmetric to the bit
  *   respond    y (n) += A_slot^-1 W_S' f, f (m) the forces of the contacts sel[0 .. m-1]
- * each O(m^2 n) and O(m n + n^2) with the modal form. The engine then calls them where it used the
- * columns: the constrained solves (csolve: basis solves, physical accelerations and jerks), Stribeck's
- * Newton (stribeck_newton) and the Delassus matrix of the LCP (eng_dense_friction); the columns are
- * then never solved. Both or neither; ctx is theirs (not eng_ops.ctx). A model's own friction solver
- * (eng_ops.friction) and the spans do not use them (a span's sub-engine has none). */
+ * each O(m^2 n) and O(m n + n^2) with the modal form, for the slots flagged in slots (bit 1 << s for
+ * slot s): the slots refactored often (ENG_SLOT_TRIAL: every trial sub-step of a switch search),
+ * whereas the columns of a slot factored once a run (ENG_SLOT_GRID, ENG_SLOT_MASS) are solved once
+ * and then cost O(m nnz) a Delassus row and O(m n) a response. For those slots the engine calls them
+ * where it used the columns: the constrained solves (csolve: basis solves, physical accelerations and
+ * jerks), Stribeck's Newton (stribeck_newton) and the Delassus matrix of the LCP (eng_dense_friction).
+ * Both or neither; ctx is theirs (not eng_ops.ctx). A model's own friction solver (eng_ops.friction)
+ * and the spans do not use them (a span's sub-engine has none). */
 typedef struct {
+    unsigned slots;
     void *ctx;
     void (*delassus)(void *ctx, int slot, const int *sel, size_t m, double *D);
     void (*respond)(void *ctx, int slot, const int *sel, size_t m, const double *f, double *y);

@@ -353,6 +353,14 @@ static ENG_HOT int factor_slot(eng *E, int slot, double cM, double cC, double cK
     return E->slot_ok[slot];
 }
 
+/* The model's coupling operators for slot (eng_setup.coupling, where it serves the slot), or NULL: the
+ * columns. */
+static inline const eng_coupling *coupling_of(const eng *E, int slot)
+{
+    const eng_coupling *c = E->S.coupling;
+    return (c && ((c->slots >> slot) & 1)) ? c : NULL;
+}
+
 /* colp[a] := A_slot^-1 w_j for the selected contacts j = sel[a], a < m, each solved once per
  * factorisation of the slot. */
 static void columns(eng *E, int slot, size_t m)
@@ -404,7 +412,7 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     for (size_t j = 0; j < nc; j++)
         if (held[j]) E->sel[m++] = (int)j;
     if (m == 0) return;
-    const eng_coupling *Cp = S->coupling;
+    const eng_coupling *Cp = coupling_of(E, slot);
     if (Cp) /* the model's Delassus matrix (no columns) */
         Cp->delassus(Cp->ctx, slot, E->sel, m, E->D);
     else
@@ -585,8 +593,9 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
         if (!in && P->limit[j] > 0.0 && mode[j] != 0) row_axpy(&S->rows[j], f[j], E->r);
     }
     ENG_SOLVE(E, P->slot, E->r, V0);
-    if (S->coupling) {
-        S->coupling->delassus(S->coupling->ctx, P->slot, E->sel, m, E->D);
+    const eng_coupling *Cp = coupling_of(E, P->slot);
+    if (Cp) {
+        Cp->delassus(Cp->ctx, P->slot, E->sel, m, E->D);
     } else {
         columns(E, P->slot, m);
         for (size_t a = 0; a < m; a++)
@@ -646,9 +655,9 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
     }
     if (!done) return ENG_ERR_FRICTION;
     for (size_t i = 0; i < n; i++) V1[i] = V0[i];
-    if (S->coupling) {
+    if (Cp) {
         for (size_t a = 0; a < m; a++) f[E->sel[a]] = fs[a];
-        S->coupling->respond(S->coupling->ctx, P->slot, E->sel, m, fs, V1);
+        Cp->respond(Cp->ctx, P->slot, E->sel, m, fs, V1);
         return ENG_OK;
     }
     for (size_t a = 0; a < m; a++) {
@@ -752,13 +761,14 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     if (E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
     /* c = W A^-1 p_hat - vb (frictionless contacts carry no force), D = W A^-1 W' */
     ENG_SOLVE(E, P->slot, P->p_hat, E->y);
-    if (S->coupling)
-        S->coupling->delassus(S->coupling->ctx, P->slot, E->sel, m, E->D);
+    const eng_coupling *Cp = coupling_of(E, P->slot);
+    if (Cp)
+        Cp->delassus(Cp->ctx, P->slot, E->sel, m, E->D);
     else
         columns(E, P->slot, m);
     for (size_t a = 0; a < m; a++) {
         const size_t j = (size_t)E->sel[a];
-        if (!S->coupling)
+        if (!Cp)
             for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
         if (P->comp) E->D[a * m + a] += P->comp[j];
         E->rhs[a] = row_dot(&S->rows[j], E->y) - (P->vb ? P->vb[j] : 0.0);

@@ -386,8 +386,12 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     vals[SYS_H_STARTED] = 1.0;
     in->lc.run.time = in->lc.run.start_time;
     in->lc.run.phase = DFO_PHASE_STEP;
-    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: n = %lu, nc = %lu, h = %.17g.", in->s.t,
-                 (unsigned long)L->n, (unsigned long)L->nc, in->m.h);
+    char how[96] = "by dense Cholesky"; /* (system.h's backends) */
+    if (in->m.modal || !isnan(in->m.c_offdiag))
+        snprintf(how, sizeof how, "%s (C's off-diagonal share in the modal basis %.3g)",
+                 in->m.modal ? "modal" : "by dense Cholesky", in->m.c_offdiag);
+    dfo_inst_log(lc, DFO_INST_OK, DFO_LOG_EVENTS, "start at t = %.17g: n = %lu, nc = %lu, h = %.17g, solves %s.",
+                 in->s.t, (unsigned long)L->n, (unsigned long)L->nc, in->m.h, how);
     return DFO_INST_OK;
 }
 

@@ -357,7 +357,7 @@ static int op_factor(void *ctx, int slot, double cM, double cC, double cK)
             if (!(g > 0.0) || !isfinite(g)) return 0;
             d[r] = 1.0 / g;
         }
-        if (++m->gen[slot] == 0) { /* (the stamps wrapped: forget every entry) */
+        if (++m->gen[slot] == 0 && m->Dstamp[slot]) { /* (the stamps wrapped: forget every entry) */
             memset(m->Dstamp[slot], 0, m->nc * m->nc * sizeof(unsigned));
             m->gen[slot] = 1;
         }
@@ -520,6 +520,7 @@ static int modal_setup(sys_model *m, const sys_params *p, const eng_alloc *al)
     }
     for (int sl = 0; sl < ENG_NSLOTS; sl++) {
         m->dm[sl] = (double *)alloc_n(al, n, sizeof(double), &ok);
+        if (sl != ENG_SLOT_TRIAL) continue; /* (the coupling operators serve the trial slot only) */
         m->Dc[sl] = (double *)alloc_n(al, nc * nc, sizeof(double), &ok);
         m->Dstamp[sl] = (unsigned *)alloc_n(al, nc * nc, sizeof(unsigned), &ok);
     }
@@ -646,6 +647,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.scheme = p->scheme;
     S.friction_updates = p->frictionUpdates;
     if (m->modal) {
+        m->coupling.slots = 1u << ENG_SLOT_TRIAL; /* (the grid and mass slots: the engine's columns, once a run) */
         m->coupling.ctx = m;
         m->coupling.delassus = op_delassus;
         m->coupling.respond = op_respond;

@@ -18,9 +18,10 @@
  *   modal  where C is diagonal in the modal basis (C = 0, Rayleigh C = a M + b K, modal damping):
  *          the modes Phi (Phi' M Phi = I, Phi' K Phi = diag(lambda), Phi' C Phi = diag(c); symeig.h)
  *          once, then a factorisation is d_r = 1 / (cM + cC c_r + cK lambda_r) (O(n)), a solve
- *          Phi (d .* (Phi' b)) (O(n^2)), and the contacts' coupling (engine.h's eng_coupling) from
- *          U = W Phi: the Delassus entries sum_r U_ar d_r U_br (O(n) each, kept per factorisation),
- *          the response Phi (d .* (U_S' f)). C counts as diagonal when its off-diagonal part in the
+ *          Phi (d .* (Phi' b)) (O(n^2)), and for the trial slot (refactored at every trial sub-step
+ *          of a switch search) the contacts' coupling (engine.h's eng_coupling) from U = W Phi: the
+ *          Delassus entries sum_r U_ar d_r U_br (O(n) each, kept per factorisation), the response
+ *          Phi (d .* (U_S' f)) (the grid and mass slots: the engine's columns, solved once a run). C counts as diagonal when its off-diagonal part in the
  *          modal basis changes M_hat by a relative 1e-12 at most for every step up to h (SYS_MODAL_TOL
  *          in system.c);
  *   dense  otherwise (a general C), for n = 1 (the oscillator's bits) or when asked (sys_params.dense):
@@ -79,7 +80,8 @@ typedef struct {
     double *dm[ENG_NSLOTS];          /* n per slot: 1 / (cM + cC c_r + cK lambda_r) */
     double *U;                       /* nc x n: W Phi */
     double *z;                       /* n: scratch of the solves */
-    double *Dc[ENG_NSLOTS];          /* nc x nc per slot: the Delassus entries computed (lower triangle) */
+    double *Dc[ENG_NSLOTS];          /* nc x nc per slot served by the coupling (the trial slot; else
+                                      * NULL): the Delassus entries computed (lower triangle) */
     unsigned *Dstamp[ENG_NSLOTS];    /* nc x nc: the factorisation (gen) each entry of Dc is of */
     unsigned gen[ENG_NSLOTS];        /* per slot: its factorisation's number (0: none yet) */
     eng_coupling coupling;
