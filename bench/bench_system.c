@@ -27,8 +27,9 @@
  * more run of the same steps with the engine's default friction solver (eng_dense_friction: the
  * Delassus matrix W M_hat^-1 W' through the model's Cholesky solves, then the basis solve or
  * Lemke) called through a wrapper that times it with the monotonic clock (so the share includes
- * the Delassus matrix's assembly), and the model's factorisations of M_hat (dense Cholesky, O(n^3)
- * each) timed and counted the same way; that run ends in the same state to the bit (checked). Per
+ * the Delassus matrix's assembly), and the model's factorisations of M_hat (the modal backend's
+ * O(n) each on these Rayleigh-damped structures; the dense Cholesky's O(n^3) where C is not
+ * diagonal in the modal basis) timed and counted the same way; that run ends in the same state to the bit (checked). Per
  * case: ns per step, ns per step per DOF, the friction share, the share of steps with a pivot or a
  * located switch, switches per contact and period, the stuck share, the steps timed, the
  * factorisations' share and their number per step. Then the exponent p of
@@ -146,7 +147,7 @@ static void structure_make(structure *s, int kind, size_t n, size_t nc, double n
 typedef struct {
     eng_ops inner;
     eng *E;
-    double ns, ns_factor;            /* in the friction solver; in factor (M_hat's Cholesky) */
+    double ns, ns_factor;            /* in the friction solver; in factor (M_hat's factorisation) */
     long long calls, factors;
 } timed_ctx;
 
