@@ -23,6 +23,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
+from dryfriction import System
+
 ROOT = Path(__file__).resolve().parents[1]
 BUILD = ROOT / "build"
 SYS3 = Path(os.environ.get("DFO_SYSTEM_FMU3", BUILD / "fmi3" / "DryFrictionSystem.fmu"))
@@ -745,3 +747,29 @@ def test_friction_energy_closes_the_energy_balance(scheme: str, tmp_path: Path) 
     # friction takes energy: E_friction never falls by more than the step's rounding of a reversal
     # (the step's force times its displacement; measured -1.7e-8 J at worst, against 0.29 J in all)
     assert np.diff(E).min() >= -1e-6 * E[-1]
+
+
+@pytest.mark.parametrize("damping, backend", [("none", "modal"), ("rayleigh", "modal"), ("modal", "modal"),
+                                              ("dashpot", "by dense Cholesky")])
+def test_the_start_names_the_backend_of_the_solves(damping: str, backend: str, tmp_path: Path) -> None:
+    """The start's event message names the solves' backend (system.h): modal where C is diagonal in
+    the modal basis (C = 0, Rayleigh C = 0.1 M + 0.01 K, modal damping as System.with_modal_damping
+    builds it: C's off-diagonal share at most 1e-12), by dense Cholesky for a dashpot 0.5 on one DOF
+    (its share 1.8e-4 at h = 1 ms). (The two backends' trajectories: tests/c/test_system_modal.c; each
+    against the event-driven reference: test_system_validation.py.)"""
+    M, K = np.diag([1.0, 2.0, 1.5]), np.array([[40.0, -10.0, 0.0], [-10.0, 30.0, -5.0], [0.0, -5.0, 20.0]])
+    C = {"none": np.zeros((3, 3)), "rayleigh": 0.1 * M + 0.01 * K,
+         "modal": System(M=M, K=K).with_modal_damping(0.02).C,
+         "dashpot": 0.1 * M + 0.01 * K + np.diag([0.5, 0.0, 0.0])}[damping]
+    f = Fmu3(SYS3, tmp_path, {"n": 3, "nc": 1})
+    try:
+        f.start({"M": M, "K": K, "C": C, "F_c": [1.0, 0.0, 0.0], "F_s": [0.0] * 3, "x0": [0.0] * 3,
+                 "v0": [0.0] * 3, "W": [[0.0, 1.0, -1.0]], "N": [1.0], "mu_s": [0.3], "mu_k": [0.25], "k_t": [0.0],
+                 "omega": 3.0, "h": 1e-3})
+        f.s.doStep(0.0, 0.1)
+        start = [m for m in f.messages if m.startswith("start at t = ")]
+    finally:
+        f.close()
+    assert len(start) == 1 and f"solves {backend} (C's off-diagonal share in the modal basis " in start[0], start
+    share = float(start[0].split("modal basis ")[1].rstrip(").").split(")")[0])
+    assert (share <= 1e-12) if backend == "modal" else (share >= 1e-4), start[0]
