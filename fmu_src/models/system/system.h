@@ -16,6 +16,7 @@
 #ifndef DFO_SYSTEM_H
 #define DFO_SYSTEM_H
 
+#include "eng_one_dof.h"
 #include "engine.h"
 
 #include <stddef.h>
@@ -53,6 +54,11 @@ typedef struct {
     double *w;
     double *work;                    /* n: scratch of the checks and the rate */
     int has_C;
+    /* one DOF with one rigid contact along w = 1 (the oscillator's structure): the engine's one-DOF
+     * operators (eng_one_dof.h: scalar M_hat, the contact's LCP in closed form, the closed-form
+     * breakaway and the stuck fast path), so that it steps to the oscillator's bits */
+    int one_dof;
+    eng1_model one;
     eng *E;
 } sys_model;
 
