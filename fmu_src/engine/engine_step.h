@@ -2650,7 +2650,9 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         const int rest_step = at_rest && ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E);
         /* (stuck_until's answer, for step_located's phase 0 where no fused step moves the state first) */
         E->rest_known = declined ? (at_rest ? 1 : -1) : 0;
-        if (fuse && s->t == g_prev && !rest_step) {
+        /* (a state whose A is re-based on the grid step: the general path's, which fused_steps would
+         * leave to it before its first step) */
+        if (fuse && s->t == g_prev && !rest_step && !needs_rebase(E, s, h)) {
             E->rest_known = 0;
             loads_at(E, in, s->t);
             fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
