@@ -2595,8 +2595,16 @@ static void stuck_skip(eng *E, eng_state *s, long long m)
     const long long k = m - s->n_grid;
     for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) stuck_rest(E, s, K);
     double c, sn;
-    dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
-                   &sn);
+    if (s->exc_n >= 0 && s->exc_n < m && s->exc_n / DFO_EXC_ANCHOR == m / DFO_EXC_ANCHOR) {
+        /* (the cache in m's stretch between anchors: dfo_grid_phase's rotations from the anchor up to
+         * the cache's point, which give its values, taken; the rest from there, the same numbers) */
+        c = s->exc_c;
+        sn = s->exc_s;
+        for (long long i = s->exc_n; i < m; i++) dfo_phase_rotate(&c, &sn, E->rot_c, E->rot_s);
+    } else {
+        dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m,
+                       &c, &sn);
+    }
     s->exc_n = m;
     s->exc_c = c;
     s->exc_s = sn;
