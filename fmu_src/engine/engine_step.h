@@ -2670,7 +2670,9 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
             }
             if (!(s->t < t_target)) break;
         }
-        if (fuse_held && s->t == g_prev) {
+        /* (a structure at rest whose breakaway is known: held_steps' run would end before its first
+         * step, left to the stuck path's step_located) */
+        if (fuse_held && s->t == g_prev && !at_rest) {
             E->rest_known = 0;
             loads_at(E, in, s->t);
             held_steps(E, in, s, t_target, skip, hk, &g_prev);
