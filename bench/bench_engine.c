@@ -89,8 +89,8 @@ static eng_setup block_setup(bench_case *B, int variant)
     memset(&S, 0, sizeof S);
     S.n = 1;
     S.nc = 1;
-    const eng_ops ops = {&B->blk, osc_K, osc_C, osc_M, osc_factor, osc_solve,
-                         variant == V_DENSE ? NULL : osc_friction, variant == V_DENSE ? NULL : osc_breakaway, 1};
+    const eng_ops ops = {&B->blk, eng1_K, eng1_C, eng1_M, eng1_factor, eng1_solve,
+                         variant == V_DENSE ? NULL : eng1_friction, variant == V_DENSE ? NULL : eng1_breakaway, 1};
     S.ops = ops;
     S.rows = B->rows;
     S.exc.omega = OMEGA;

@@ -138,12 +138,28 @@ def test_one_dof_is_the_fmi3_oscillator(scheme: str, tmp_path: Path) -> None:
                                   "alpha": p["alpha"], "scheme": SCHEMES[scheme]}, times)
     assert np.array_equal(got[:, -1], ref[:, -1])  # the modes
     assert len(set(ref[:, -1])) == 3  # it sticks and slides both ways
-    # not bit for bit: the oscillator's own scalar specialisation of the engine against the generic
-    # dense instance (Delassus matrix, Lemke). Measured, relative to each output's largest magnitude:
-    # x and v 2.5e-14 (paper), 7.3e-14 (consistent), 6.0e-14 (located); f the same but for the paper
-    # scheme's stuck force, whose Bossak creep amplifies the rounding of x by m / (beta h^2): 9.6e-13
-    assert rel_diff(got[:, :2], ref[:, :2]) <= 1e-12, rel_diff(got[:, :2], ref[:, :2])
-    assert rel_diff(got[:, 2:3], ref[:, 2:3]) <= (1e-11 if scheme == "paper" else 1e-12)
+    # the same engine over the same one-DOF operators (eng_one_dof.h): bit for bit
+    assert got.tobytes() == ref.tobytes(), rel_diff(got, ref)
+
+
+def test_one_dof_stribeck_is_the_fmi3_oscillator(tmp_path: Path) -> None:
+    """The Stribeck law on one DOF (scheme located, the one that steps it): the oscillator's bits."""
+    times = np.arange(81) * 0.05
+    law = {"v_s": 0.03, "delta": 1.5}
+    o = Fmu3(OSC3, tmp_path)
+    try:
+        o.start({**OSC, "scheme": SCHEMES["located"], "friction_law": 2, **law})
+        ref = run(o, times, [("x", 1), ("v", 1), ("F_friction", 1)], [("mode", 1)])
+    finally:
+        o.close()
+    p = OSC
+    got = system(tmp_path, 1, 1, {"M": [p["m"]], "K": [p["k"]], "C": [p["c"]], "F_c": [p["P0"]], "F_s": [0.0],
+                                  "omega": p["omega"], "x0": [p["x0"]], "v0": [p["v0"]], "W": [1.0], "N": [p["N"]],
+                                  "mu_s": [p["mu_s"]], "mu_k": [p["chi"] * p["mu_s"]], "h": p["h"],
+                                  "alpha": p["alpha"], "scheme": SCHEMES["located"], "friction_law": [2],
+                                  "v_s": [law["v_s"]], "delta": [law["delta"]]}, times)
+    assert len(set(ref[:, -1])) == 3  # it sticks and slides both ways
+    assert got.tobytes() == ref.tobytes(), rel_diff(got, ref)
 
 
 # --------------------------------------------------------------------- TwoMass as a system

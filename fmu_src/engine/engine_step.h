@@ -1728,8 +1728,10 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
          * rests there, X, V = A = 0 as they are; the holding forces solved at that time and clamped to
          * their limits; the contact most beyond its limit released). Models with their contacts'
          * closed forms split the step at those instead (closed_breakaways, below). */
-        if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && stuck_at_rest(E, in, s)) {
-            double tp = stuck_tb(E, in, s);
+        const int known = (phase == 0) ? E->rest_known : 0; /* (eng_advance asked it of this state) */
+        if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && known >= 0 &&
+            (known == 1 || stuck_at_rest(E, in, s))) {
+            double tp = (known == 1) ? s->stick_tb : stuck_tb(E, in, s);
             if (tp > t_end) {
                 stuck_rest(E, s, &E->kin_grid);
                 s->t = t_end;
@@ -2580,8 +2582,9 @@ static double stuck_breakaway(eng *E, const eng_state *s, const eng_inputs *in)
 /* The stuck fast path (eng_setup.fast_paths with the model's ops.breakaway, or its contacts'
  * eng_sparse.contact_breakaway; the located scheme on a
  * grid it resolves, held inputs): on a grid point, with every contact held, every DOF pinned at rest
- * by a contact of its own and the belts still, the whole grid steps that end at least one grid step
- * before the model's breakaway and at or before t_target change nothing but the time and the
+ * by a contact of its own and the belts still, the whole grid steps that end before the model's
+ * breakaway (at least one grid step before its contacts' breakaways) and at or before t_target
+ * change nothing but the time and the
  * counters (the observer sees them as one phase at rest, which ends inside its window where it began
  * before the window's end: the positions, modes and forces it sees are those of each of them).
  * Returns the last grid index they reach (s->n_grid: none). */
@@ -2596,11 +2599,16 @@ static long long stuck_until(eng *E, const eng_inputs *in, eng_state *s, double 
     const double tb = stuck_tb(E, in, s);
     if (isnan(tb)) return s->n_grid;
     *at_rest = 1;
-    /* none unless a whole grid step ends at least one grid step before the breakaway (grid_below's
+    /* A model's breakaway of the whole structure (ENG_BREAKAWAY): step_located takes every step that
+     * ends before it as a stuck step without a trial (stuck_rest), as these are taken: all of them
+     * here. Its contacts' breakaways: the last whole step before the breakaway is left to a trial
+     * (its margins, where the closed forms' rounding may put a breakaway a hair early). */
+    const long long margin_steps = (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E)) ? 0 : 1;
+    /* none unless a whole grid step ends before the breakaway, by margin_steps grid steps (grid_below's
      * bound below is then past the next grid point: its grid points rise with their index) */
-    if (!(s->t0 + (double)(s->n_grid + 2) * h < min_b(tb, t_target + 2.0 * h))) return s->n_grid;
+    if (!(s->t0 + (double)(s->n_grid + 1 + margin_steps) * h < min_b(tb, t_target + 2.0 * h))) return s->n_grid;
     long long m = grid_below(s, h, t_target, 1);
-    const long long mb = grid_below(s, h, min_b(tb, t_target + 2.0 * h), 0) - 1;
+    const long long mb = grid_below(s, h, min_b(tb, t_target + 2.0 * h), 0) - margin_steps;
     if (mb < m) m = mb;
     if (hk && hk->obs && hk->obs->on_phase && s->t < hk->obs->t_stop) { /* a stretch in the window ends in it */
         const long long mo = grid_below(s, h, min_b(hk->obs->t_stop, t_target + 2.0 * h), 1);
@@ -2620,8 +2628,16 @@ static void stuck_skip(eng *E, eng_state *s, long long m)
     const long long k = m - s->n_grid;
     for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) stuck_rest(E, s, K);
     double c, sn;
-    dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
-                   &sn);
+    if (s->exc_n >= 0 && s->exc_n < m && s->exc_n / DFO_EXC_ANCHOR == m / DFO_EXC_ANCHOR) {
+        /* (the cache in m's stretch between anchors: dfo_grid_phase's rotations from the anchor up to
+         * the cache's point, which give its values, taken; the rest from there, the same numbers) */
+        c = s->exc_c;
+        sn = s->exc_s;
+        for (long long i = s->exc_n; i < m; i++) dfo_phase_rotate(&c, &sn, E->rot_c, E->rot_s);
+    } else {
+        dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m,
+                       &c, &sn);
+    }
     s->exc_n = m;
     s->exc_c = c;
     s->exc_s = sn;
@@ -2673,7 +2689,12 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         /* (a structure at rest whose model gives its breakaway, the step declined: step_located's,
          * which takes it as a stuck step or places the breakaway in it without a trial) */
         const int rest_step = at_rest && ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E);
-        if (fuse && s->t == g_prev && !rest_step) {
+        /* (stuck_until's answer, for step_located's phase 0 where no fused step moves the state first) */
+        E->rest_known = declined ? (at_rest ? 1 : -1) : 0;
+        /* (a state whose A is re-based on the grid step: the general path's, which fused_steps would
+         * leave to it before its first step) */
+        if (fuse && s->t == g_prev && !rest_step && !needs_rebase(E, s, h)) {
+            E->rest_known = 0;
             loads_at(E, in, s->t);
             fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
             if (s->n_grid - n_checked >= 16) { /* (runs test every 16 of their steps; short ones here) */
@@ -2682,7 +2703,10 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
             }
             if (!(s->t < t_target)) break;
         }
-        if (fuse_held && s->t == g_prev) {
+        /* (a structure at rest whose breakaway is known: held_steps' run would end before its first
+         * step, left to the stuck path's step_located) */
+        if (fuse_held && s->t == g_prev && !at_rest) {
+            E->rest_known = 0;
             loads_at(E, in, s->t);
             held_steps(E, in, s, t_target, skip, hk, &g_prev);
             if (s->n_grid - n_checked >= 16) {
@@ -2714,6 +2738,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         else st = step_lcp(E, in, s, t_end, hh, S->scheme == DFO_SCHEME_CONSISTENT, hk);
         E->held_ready = 0;
         E->fused_ready = 0;
+        E->rest_known = 0;
         switched = s->switches != sw0;
         if (st == ENG_SWITCHED || (hk && hk->stop_at_switch && switched)) {
             if (s->t < t_end && t_end == grid) s->n_grid--;

@@ -2,7 +2,7 @@
  * loads held over a communication step, the static force at rest, the rest rule (stick or slide),
  * the force held while stuck, the consistent acceleration of a slide that starts from rest, and the
  * next breakaway of a stick phase in closed form. The oscillator's start-up and outputs (newmark.c),
- * its exact scheme (exact.c, exact_free.c), its engine model's breakaway (osc_engine_ops.h) and the
+ * its exact scheme (exact.c, exact_free.c), its engine model's breakaway (eng_one_dof.h) and the
  * chain (one block at a time) use these and nothing else to decide stick and slip.
  *
  * Model-free: plain numbers (a block's mass, stiffness, loads, excitation), no model struct. Plain

@@ -147,7 +147,7 @@ static void test_block(checks *T)
         Bg.k = 1.0;
         Bi = Bg;
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, NULL, scheme, 1.0);
-        const eng_ops og = {&Bg, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+        const eng_ops og = {&Bg, eng1_K, eng1_C, eng1_M, eng1_factor, eng1_solve, eng1_friction, eng1_breakaway, 1};
         S.ops = og;
         eng_state sg, si;
         switch_log Lg, Li;
@@ -181,14 +181,14 @@ static eng_status count_friction(void *ctx, const eng_problem *P, int what, int 
                                  int *pivots)
 {
     counted->solves++;
-    return osc_friction(ctx, P, what, mode, V1, f, pivots);
+    return eng1_friction(ctx, P, what, mode, V1, f, pivots);
 }
 
 static double count_breakaway(void *ctx, const eng_harmonic *exc, const eng_state *s, const eng_inputs *in,
                               const double *Fb)
 {
     counted->asks++;
-    return osc_breakaway(ctx, exc, s, in, Fb);
+    return eng1_breakaway(ctx, exc, s, in, Fb);
 }
 
 static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
@@ -269,7 +269,7 @@ static void test_stuck_fast_path(checks *T)
         osc_eng_model B;
         unit_block(&B);
         eng_setup S = setup_common(1, &row, N, ms, mk, Pc, Ps, DFO_SCHEME_LOCATED, 1.0);
-        const eng_ops ops = {&B, osc_K, osc_C, osc_M, osc_factor, osc_solve, count_friction, count_breakaway, 1};
+        const eng_ops ops = {&B, eng1_K, eng1_C, eng1_M, eng1_factor, eng1_solve, count_friction, count_breakaway, 1};
         S.ops = ops;
         S.fast_paths = r & 1;
         counted = &R.H[r];
@@ -325,7 +325,7 @@ static eng_setup stick_block(stick_data *D, osc_eng_model *B, int scheme, double
     unit_block(B);
     eng_setup S = setup_common(1, &D->row, D->N, D->ms, D->mk, D->Pc, D->Ps, scheme, 1.0);
     S.h = h;
-    const eng_ops ops = {B, osc_K, osc_C, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+    const eng_ops ops = {B, eng1_K, eng1_C, eng1_M, eng1_factor, eng1_solve, eng1_friction, eng1_breakaway, 1};
     S.ops = ops;
     return S;
 }

@@ -11,7 +11,7 @@ set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numer
     models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/scheme_state.h
     models/oscillator/scheme.c models/oscillator/scheme.h models/oscillator/newmark.c
     models/oscillator/newmark.h models/oscillator/osc_bossak.c models/oscillator/osc_bossak.h models/oscillator/osc_engine.c
-    models/oscillator/osc_engine.h models/oscillator/osc_engine_ops.h models/oscillator/exact.c models/oscillator/exact.h
+    models/oscillator/osc_engine.h models/oscillator/osc_engine_ops.h engine/eng_one_dof.h models/oscillator/exact.c models/oscillator/exact.h
     models/oscillator/exact_private.h models/oscillator/exact_loop.h models/oscillator/exact_spring.c
     models/oscillator/exact_spring.h models/oscillator/exact_free.c models/oscillator/exact_free.h
     models/oscillator/exact_belt.c models/oscillator/exact_belt.h models/oscillator/exact_poly.c

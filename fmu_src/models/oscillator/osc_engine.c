@@ -14,26 +14,13 @@
 eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, const char **err)
 {
     const dfo_params *p = &M->p;
-    memset(O, 0, sizeof *O);
-    O->m = p->m;
-    O->c = p->c;
-    O->k = p->k;
-    O->idx[0] = 0;
-    O->w[0] = 1.0;
-    O->row.nnz = 1;
-    O->row.idx = O->idx;
-    O->row.w = O->w;
-    O->N[0] = p->N;
-    O->mu_s[0] = p->mu_s;
-    O->mu_k[0] = M->mu_k;
-    O->Pc[0] = p->P0;
-    O->law[0] = M->law;
+    eng1_init(O, p->m, p->c, p->k, p->N, p->mu_s, M->mu_k, &M->law, p->P0);
     eng_setup S;
     memset(&S, 0, sizeof S);
     S.n = 1;
     S.nc = 1;
     /* (no damping: no C, so that its terms and the accelerations only they read are not computed) */
-    const eng_ops ops = {O, osc_K, (p->c != 0.0) ? osc_C : NULL, osc_M, osc_factor, osc_solve, osc_friction, osc_breakaway, 1};
+    const eng_ops ops = {O, eng1_K, (p->c != 0.0) ? eng1_C : NULL, eng1_M, eng1_factor, eng1_solve, eng1_friction, eng1_breakaway, 1};
     S.ops = ops;
     S.rows = &O->row;
     S.exc.omega = p->omega;
@@ -53,6 +40,7 @@ eng *osc_eng_create(const dfo_model *M, osc_eng_model *O, const eng_alloc *al, c
     S.snap_min_rel_h = SNAP_MIN_REL_H;
     S.snap_eps_t = SNAP_EPS_T;
     O->E = eng_create(&S, al, err);
+    O->dense = osc_eng_dense_friction;
     return O->E;
 }
 
@@ -136,16 +124,16 @@ static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, doub
 #define ENG_ROW_DOT(E, j, x) ((void)(E), (void)(j), 0.0 + (x)[0]) /* row_dot of w = 1 */
 #define ENG_FUSED_NC 1
 #define ENG_CTX(E) ((E)->S.ops.ctx)
-#define ENG_APPLY_K(E, x, y) osc_K(ENG_CTX(E), (x), (y))
-#define ENG_APPLY_C(E, v, y) osc_C(ENG_CTX(E), (v), (y))
+#define ENG_APPLY_K(E, x, y) eng1_K(ENG_CTX(E), (x), (y))
+#define ENG_APPLY_C(E, v, y) eng1_C(ENG_CTX(E), (v), (y))
 #define ENG_HAS_C(E) ((void)(E), 1) /* (c v whatever c is; ops.apply_C: NULL where c = 0) */
 #define ENG_HAS_JENKINS(E) ((void)(E), 0) /* (no Jenkins contact: eng_create refuses one with the model's own friction solver) */
-#define ENG_APPLY_M(E, a, y) osc_M(ENG_CTX(E), (a), (y))
-#define ENG_FACTOR(E, slot, cM, cC, cK) osc_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
-#define ENG_SOLVE(E, slot, b, x) osc_solve(ENG_CTX(E), (slot), (b), (x))
+#define ENG_APPLY_M(E, a, y) eng1_M(ENG_CTX(E), (a), (y))
+#define ENG_FACTOR(E, slot, cM, cC, cK) eng1_factor(ENG_CTX(E), (slot), (cM), (cC), (cK))
+#define ENG_SOLVE(E, slot, b, x) eng1_solve(ENG_CTX(E), (slot), (b), (x))
 #define ENG_HAS_FRICTION(E) ((void)(E), 1)
-#define ENG_FRICTION(E, P, what, mode, V1, f, pivots) osc_friction(ENG_CTX(E), (P), (what), (mode), (V1), (f), (pivots))
+#define ENG_FRICTION(E, P, what, mode, V1, f, pivots) eng1_friction(ENG_CTX(E), (P), (what), (mode), (V1), (f), (pivots))
 #define ENG_HAS_BREAKAWAY(E) ((E)->S.ops.breakaway != NULL)
-#define ENG_BREAKAWAY(E, s, in, Fb) osc_breakaway(ENG_CTX(E), &(E)->S.exc, (s), (in), (Fb))
+#define ENG_BREAKAWAY(E, s, in, Fb) eng1_breakaway(ENG_CTX(E), &(E)->S.exc, (s), (in), (Fb))
 
 #include "engine_step.h"

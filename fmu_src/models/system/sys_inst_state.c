@@ -50,6 +50,10 @@ static dfo_inst_status advance(dfo_lifecycle *lc, const char *fn, double t_targe
     eng_inputs e = sys_inputs_of(vals, L, 1);
     const double t_ref = in->lc.run.time;
     sys_ramp_of(vals, L, t_ref, &e);
+    /* the state's stick breakaway (eng_state.stick_tb) is of these inputs: every change of them went
+     * through eng_new_inputs, which forgets it (a ramp keeps none): kept across the host's steps, so that
+     * a run split into steps places the breakaway where one step does */
+    hk.stick_kept = !(e.dF_ext[0] || e.dF_ext[1] || e.dN_ext[0] || e.dN_ext[1]);
     const eng_status st = eng_advance(in->m.E, &e, &in->s, t_target, &hk);
     if (st != ENG_OK && st != ENG_SWITCHED) {
         const double t_fail = in->s.t;

@@ -321,6 +321,8 @@ static double rate_with(const sys_params *p, const double *L, double *x, double 
                 for (size_t b = 0; b < n; b++) Kt[a * n + b] += p->k_t[j] * p->W[j * n + a] * p->W[j * n + b];
         K = Kt;
     }
+    if (n == 1) /* the eigenvalues in closed form (the oscillator's rate, to its bits) */
+        return sqrt(K[0] / p->M[0]) + p->C[0] / p->M[0] + fabs(p->omega);
     const double lk = largest_eig(n, L, K, x, y), lc = largest_eig(n, L, p->C, x, y);
     return sqrt(lk) + lc + fabs(p->omega);
 }
@@ -633,6 +635,14 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.ops.solve = op_solve;
     S.ops.friction = NULL; /* the engine's dense Delassus matrix and Lemke */
     S.rows = m->rows;
+    m->one_dof = n == 1 && nc == 1 && p->W[0] == 1.0 && !(p->k_t[0] > 0.0);
+    if (m->one_dof) { /* the oscillator's structure: the engine's one-DOF operators (eng_one_dof.h) */
+        eng1_init(&m->one, p->M[0], p->C[0], p->K[0], p->N[0], p->mu_s[0], p->mu_k[0], m->law, p->F_c[0]);
+        const eng_ops ops = {&m->one, eng1_K, m->has_C ? eng1_C : NULL, eng1_M, eng1_factor, eng1_solve,
+                             eng1_friction, eng1_breakaway, 1};
+        S.ops = ops;
+        S.rows = &m->one.row;
+    }
     S.exc.omega = p->omega;
     S.exc.phi0 = 0.0;
     S.exc.Pc = m->Pc;
@@ -654,7 +664,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
         S.coupling = &m->coupling;
     }
     S.account_energy = account_energy;
-    S.fast_paths = 0; /* no closed-form breakaway: nothing to skip */
+    S.fast_paths = m->one_dof; /* (else no closed-form breakaway: nothing to skip) */
     S.rate_max = m->rate;
     /* the oscillator's (and TwoMass's) snap of a host's rounded times to the grid */
     S.snap_max_rel_h = 1e-5;
@@ -663,6 +673,8 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.on_rest = p->on_rest;
     S.rest_ctx = p->rest_ctx;
     m->E = eng_create(&S, al, err);
+    m->one.E = m->E;
+    m->one.dense = eng_dense_friction; /* (a Stribeck contact's solver) */
     if (!m->E) {
         if (!*err) *err = "out of memory";
         sys_model_free(m, al);

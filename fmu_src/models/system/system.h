@@ -21,10 +21,11 @@
  *          Phi (d .* (Phi' b)) (O(n^2)), and for the trial slot (refactored at every trial sub-step
  *          of a switch search) the contacts' coupling (engine.h's eng_coupling) from U = W Phi: the
  *          Delassus entries sum_r U_ar d_r U_br (O(n) each, kept per factorisation), the response
- *          Phi (d .* (U_S' f)) (the grid and mass slots: the engine's columns, solved once a run). C counts as diagonal when its off-diagonal part in the
- *          modal basis changes M_hat by a relative 1e-12 at most for every step up to h (SYS_MODAL_TOL
- *          in system.c);
- *   dense  otherwise (a general C), for n = 1 (the oscillator's bits) or when asked (sys_params.dense):
+ *          Phi (d .* (U_S' f)) (the grid and mass slots: the engine's columns, solved once a run).
+ *          C counts as diagonal when its off-diagonal part in the modal basis changes M_hat by a
+ *          relative 1e-12 at most for every step up to h (SYS_MODAL_TOL in system.c);
+ *   dense  otherwise (a general C), for n = 1 (with one rigid contact on the engine's one-DOF
+ *          operators instead, below: the oscillator's bits) or when asked (sys_params.dense):
  *          the dense Cholesky factor of M_hat per slot (O(n^3) per factorisation, O(n^2) per solve),
  *          the engine's columns for the coupling.
  * Both are the same equations: the trajectories agree to rounding (amplified where a switch time
@@ -32,6 +33,7 @@
 #ifndef DFO_SYSTEM_H
 #define DFO_SYSTEM_H
 
+#include "eng_one_dof.h"
 #include "engine.h"
 
 #include <stddef.h>
@@ -85,6 +87,11 @@ typedef struct {
     unsigned *Dstamp[ENG_NSLOTS];    /* nc x nc: the factorisation (gen) each entry of Dc is of */
     unsigned gen[ENG_NSLOTS];        /* per slot: its factorisation's number (0: none yet) */
     eng_coupling coupling;
+    /* one DOF with one rigid contact along w = 1 (the oscillator's structure): the engine's one-DOF
+     * operators (eng_one_dof.h: scalar M_hat, the contact's LCP in closed form, the closed-form
+     * breakaway and the stuck fast path), so that it steps to the oscillator's bits */
+    int one_dof;
+    eng1_model one;
     eng *E;
 } sys_model;
 
