@@ -503,9 +503,9 @@ static int modal_setup(sys_model *m, const sys_params *p, const eng_alloc *al)
         for (size_t r = 0; r < n; r++) {
             m->cdiag[r] = Ct[r * n + r];
             double row = 0.0;
+            const double cr = fmax(Ct[r * n + r], 0.0) + sig;
             for (size_t c = 0; c < n; c++)
-                if (c != r)
-                    row += fabs(Ct[r * n + c]) / sqrt((fmax(Ct[r * n + r], 0.0) + sig) * (fmax(Ct[c * n + c], 0.0) + sig));
+                if (c != r) row += fabs(Ct[r * n + c]) / sqrt(cr * (fmax(Ct[c * n + c], 0.0) + sig));
             rho = fmax(rho, row);
         }
         m->c_offdiag = rho;
