@@ -537,3 +537,55 @@ def test_located_is_second_order_with_ramped_inputs(tmp_path: Path) -> None:
     ratios = [a / b for a, b in zip(errs[:-1], errs[1:])]
     # measured 4.00, 4.01, 4.05 (errors 6.3e-5 at h = 1e-3 to 9.8e-7 at h = 1.25e-4)
     assert all(3.6 <= r <= 4.4 for r in ratios), (errs, ratios)
+
+
+def test_a_stribeck_contact_beside_a_jenkins_element_each_dof_its_own_model(tmp_path: Path) -> None:
+    """Two uncoupled DOFs, contact 1 Stribeck (rigid), contact 2 a Jenkins element on DOF 2 without
+    friction (N = 0) or stuck throughout (N huge): DOF 1 is the FMI 3.0 oscillator with the Stribeck
+    law within 1e-12 (contact 2 never switches, so DOF 1's steps are split as the oscillator's), and
+    DOF 2 is the same structure with no contact 2 and its spring k_t in K (N huge) or without it
+    (N = 0): the stuck element's compliance enters the Stribeck Newton's held row."""
+    from test_system_fmu import run
+
+    p = OSC
+    times = np.arange(61) * 0.05
+    o = Fmu3(OSC3, tmp_path)
+    try:
+        o.start({**OSC, "scheme": SCHEMES["located"], "friction_law": 2, "v_s": 0.03, "delta": 1.5})
+        ref = run(o, times, [("x", 1), ("v", 1)], [("mode", 1)])
+    finally:
+        o.close()
+    kt = 80.0
+    base = {"C": [p["c"], 0, 0, p["c"]], "F_c": [p["P0"]] * 2, "F_s": [0.0, 0.0], "omega": p["omega"],
+            "x0": [p["x0"], 0.0], "h": p["h"], "alpha": p["alpha"], "scheme": SCHEMES["located"]}
+    for N2 in (0.0, 1e9):
+        f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
+        try:
+            f.start({**base, "M": [p["m"], 0, 0, p["m"]], "K": [p["k"], 0, 0, p["k"]], "W": [1.0, 0.0, 0.0, 1.0],
+                     "N": [p["N"], N2], "mu_s": [p["mu_s"]] * 2, "mu_k": [p["chi"] * p["mu_s"]] * 2,
+                     "k_t": [0.0, kt], "friction_law": [2, 1], "v_s": [0.03, 0.5], "delta": [1.5, 0.5]})
+            got = run(f, times, [("x", 2), ("v", 2), ("s", 2), ("f", 2), ("E_friction", 1)], [("mode", 2)])
+        finally:
+            f.close()
+        k2 = p["k"] + (kt if N2 > 0 else 0.0)  # the stuck spring in K, or no spring (no friction)
+        g = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 1})
+        try:
+            g.start({**base, "M": [p["m"], 0, 0, p["m"]], "K": [p["k"], 0, 0, k2], "W": [1.0, 0.0],
+                     "N": [p["N"]], "mu_s": [p["mu_s"]], "mu_k": [p["chi"] * p["mu_s"]], "k_t": [0.0],
+                     "friction_law": [2], "v_s": [0.03], "delta": [1.5]})
+            lin = run(g, times, [("x", 2), ("v", 2)], [("mode", 1)])
+        finally:
+            g.close()
+        x, v, s, fc, mode = got[:, 0:2], got[:, 2:4], got[:, 4:6], got[:, 6:8], got[:, 9:11]
+        assert np.array_equal(mode[:, 0], ref[:, 2]) and (N2 == 0 or np.all(mode[:, 1] == 0))
+        assert np.any(ref[:, 2] == 0) and np.any(ref[:, 2] != 0)  # DOF 1 sticks and slips
+        scale = np.max(np.abs(ref[:, :2]), axis=0)
+        d1 = np.max(np.abs(np.column_stack([x[:, 0], v[:, 0]]) - ref[:, :2]) / scale)
+        assert d1 <= 1e-12, (N2, d1)  # measured 7.6e-14
+        lin2 = np.column_stack([lin[:, 1], lin[:, 3]])
+        d2 = np.max(np.abs(np.column_stack([x[:, 1], v[:, 1]]) - lin2) / np.max(np.abs(lin2), axis=0))
+        assert d2 <= 1e-12, (N2, d2)  # measured 0 and 1.3e-13 (41 with the element held rigid)
+        assert np.max(np.abs(x[:, 1])) > 1e-3  # DOF 2 moves
+        if N2 > 0:  # the slider stays where it started; the spring carries -k_t x_2
+            assert np.all(s[:, 1] == 0.0)
+            np.testing.assert_allclose(fc[:, 1], -kt * x[:, 1], rtol=0, atol=1e-12 * kt * np.max(np.abs(x[:, 1])))

@@ -7,6 +7,7 @@ Stribeck blocks, the event-driven reference and the FMU read through fmpy."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -93,19 +94,23 @@ def test_stribeck_needs_scheme_located_and_the_reference_refuses_it() -> None:
         simulate(System(M=[[1.0]], K=[[100.0]], contacts=[c]), 1.0)
 
 
-def test_stribeck_and_jenkins_in_one_structure_are_refused_as_the_engine_refuses_them(tmp_path: Path) -> None:
+def test_stribeck_and_jenkins_in_one_structure_are_accepted_by_the_system_and_the_fmu(tmp_path: Path) -> None:
+    """A rigid Stribeck contact beside a Jenkins element: the System keeps each contact's law and
+    stiffness, and the FMU initialised from its start values steps it (the slider's position read
+    for the Jenkins element, NaN for the rigid contact)."""
     strib = Contact(dof=0, N=1.0, mu_s=0.4, mu_k=0.3, law="stribeck")
     jenk = Contact(dof=1, N=1.0, mu_s=0.4, k_t=50.0)
-    with pytest.raises(UsageError, match=r"contacts\[0\] has the Stribeck law and contacts\[1\] is a Jenkins element"):
-        System(M=np.eye(2), K=100 * np.eye(2), contacts=[strib, jenk])
-    # the FMU refuses the same structure at initialisation
+    sys = System(M=np.eye(2), K=100 * np.eye(2), contacts=[strib, jenk], F_c=[2.0, 2.0], omega=3.0)
+    v = sys.start_values()
+    assert v["friction_law"] == [2, 1] and v["k_t"] == [0.0, 50.0]
+    v.pop("n")
+    v.pop("nc")
     f = Fmu3(SYS3, tmp_path, {"n": 2, "nc": 2})
     try:
-        with pytest.raises(Exception):
-            f.start({"M": [1.0, 0, 0, 1.0], "K": [100.0, 0, 0, 100.0], "W": [1.0, 0, 0, 1.0], "N": [1.0, 1.0],
-                     "mu_s": [0.4, 0.4], "mu_k": [0.3, 0.4], "k_t": [0.0, 50.0], "friction_law": [2, 1]})
-        assert any("contact 1 takes the Stribeck law (friction_law[1] = stribeck) and contact 2 is a Jenkins element"
-                   in m for m in f.messages), f.messages
+        f.start(v)
+        f.s.doStep(0.0, 0.5)
+        s = f.real("s", 2)
+        assert math.isnan(s[0]) and math.isfinite(s[1]) and all(math.isfinite(a) for a in f.real("x", 2))
     finally:
         try:
             f.close()

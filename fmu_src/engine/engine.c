@@ -81,14 +81,11 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
             return buf;
         }
     }
-    int jenk = 0, strib = 0;
-    for (size_t j = 0; j < S->nc; j++) {
-        jenk |= S->k_t && S->k_t[j] > 0.0;
-        strib |= S->law && S->law[j].law == DFO_LAW_STRIBECK;
-    }
-    if (jenk && (strib || S->ops.friction || S->ops.breakaway || S->sparse)) {
-        snprintf(buf, len, "Jenkins contacts (k_t > 0) need the Coulomb law on every contact and the engine's "
-                           "default friction solver (no model solver, breakaway or sparse operators)");
+    int jenk = 0;
+    for (size_t j = 0; j < S->nc; j++) jenk |= S->k_t && S->k_t[j] > 0.0;
+    if (jenk && (S->ops.friction || S->ops.breakaway || S->sparse)) {
+        snprintf(buf, len, "Jenkins contacts (k_t > 0) need the engine's default friction solver (no model solver, "
+                           "breakaway or sparse operators)");
         return buf;
     }
     return NULL;

@@ -572,7 +572,8 @@ static void jerks(eng *E, const eng_inputs *in, const eng_state *s, const double
 /* ---- dense friction (the default solver) -------------------------------------------------- */
 
 /* Newton on the Stribeck contacts sliding in mode[] (with the held ones), the others' forces
- * fixed: f_T = -m N mu(max(m v_T, 0)), v = W V1 - vb, V1 = M_hat^-1 (p_hat + W' f). */
+ * fixed: f_T = -m N mu(max(m v_T, 0)), v = W V1 - vb, V1 = M_hat^-1 (p_hat + W' f); a held
+ * contact's slip v + comp_j f_j = 0 (P->comp: a stuck Jenkins element's spring; NULL: none). */
 static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode, double *V1, double *f)
 {
     const eng_setup *S = &E->S;
@@ -610,9 +611,11 @@ static eng_status stribeck_newton(eng *E, const eng_problem *P, const int *mode,
             const size_t j = (size_t)E->sel[a];
             double v = row_dot(&S->rows[j], V0) - (P->vb ? P->vb[j] : 0.0);
             for (size_t c = 0; c < m; c++) v += E->D[a * m + c] * fs[c];
-            if (mode[j] == 0) {
-                E->res[a] = v;
+            if (mode[j] == 0) { /* held: slip 0, a Jenkins element's with its spring's comp_j f_j */
+                const double cj = P->comp ? P->comp[j] : 0.0;
+                E->res[a] = v + cj * fs[a];
                 for (size_t c = 0; c < m; c++) E->Jn[a * m + c] = E->D[a * m + c];
+                E->Jn[a * m + a] += cj;
             } else {
                 const double u = mode[j] * v, up = fmax(u, 0.0);
                 E->res[a] = fs[a] + mode[j] * P->N[j] * dfo_friction_mu(&P->law[j], up);
@@ -696,7 +699,8 @@ static eng_status dense_basis(eng *E, const eng_problem *P, const int *mode, dou
         if (st != ENG_OK) return st;
         for (size_t j = 0; j < nc; j++) {
             const eng_row *R = &S->rows[j];
-            if (E->held[j] && R->nnz == 1) V1[R->idx[0]] = (P->vb ? P->vb[j] : 0.0) / R->w[0];
+            if (E->held[j] && R->nnz == 1 && !(P->comp && P->comp[j] != 0.0))
+                V1[R->idx[0]] = (P->vb ? P->vb[j] : 0.0) / R->w[0];
         }
     }
     return ENG_OK;

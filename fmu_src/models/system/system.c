@@ -278,14 +278,6 @@ static const char *check_with(const sys_params *p, double *L, char *buf, size_t 
                      "set friction_law[%zu] = coulomb (1) or k_t[%zu] = 0", j + 1, j + 1, p->k_t[j], j + 1, j + 1);
             return buf;
         }
-        for (size_t i = 0; i < nc; i++) /* (the engine steps Jenkins elements with Coulomb contacts only) */
-            if (p->k_t[i] > 0.0) {
-                snprintf(buf, len, "contact %zu takes the Stribeck law (friction_law[%zu] = stribeck) and contact %zu is a "
-                         "Jenkins element (k_t[%zu] = %g > 0): a structure with Jenkins elements takes the Coulomb "
-                         "law on every contact; set friction_law[%zu] = coulomb (1) or k_t[%zu] = 0", j + 1, j + 1,
-                         i + 1, i + 1, p->k_t[i], j + 1, i + 1);
-                return buf;
-            }
     }
     return NULL;
 }

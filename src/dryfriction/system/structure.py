@@ -12,8 +12,8 @@ Coulomb contact, > 0 a Jenkins element (a spring ``k_t`` in series with a massle
 Degree-of-freedom indices are 0-based, as in numpy. The friction law is per contact: Coulomb's
 (constant ``mu_k`` while sliding, the default) or Stribeck's, the oscillator's and the chain's
 ``mu(u) = mu_k + (mu_s - mu_k) exp(-(u / v_s)^delta)`` at the slip speed ``u`` (a rigid contact
-only, scheme located, ``v_s > 0``, ``delta >= 1``, and no Jenkins element in the same structure:
-the engine steps Jenkins elements with the Coulomb law on every contact).
+only, scheme located, ``v_s > 0``, ``delta >= 1``; a Jenkins element takes the Coulomb law, and
+Stribeck contacts and Jenkins elements may be in the same structure).
 
 Every value is checked when a System is made; an error is a :class:`~dryfriction.errors.UsageError`
 (a ValueError) whose one sentence names the array and the element, or the test that failed.
@@ -305,12 +305,6 @@ class System:
                 raise UsageError(f"contacts[{j}]: law = stribeck needs scheme located (the speed-dependent "
                                  f"friction is solved inside its steps), as the oscillator and the chain: choose "
                                  f"scheme located, or law = coulomb, not scheme {scheme}")
-        laws = [c.law for c in cs]
-        jenkins = [j for j, c in enumerate(cs) if c.jenkins]
-        if "stribeck" in laws and jenkins:
-            raise UsageError(f"contacts[{laws.index('stribeck')}] has the Stribeck law and contacts[{jenkins[0]}] is a "
-                             "Jenkins element (k_t > 0): the engine steps Jenkins elements only with the Coulomb law "
-                             "on every contact; give every contact law = coulomb, or every contact k_t = 0")
         vec = {name: _vector(name, val, n) for name, val in (("F_c", F_c), ("F_s", F_s), ("x0", x0), ("v0", v0))}
         om = _nonneg("omega", omega)
         hh = _nonneg("h", h)
