@@ -1853,6 +1853,11 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (mc.err != ENG_OK) return mc.err;
         }
         if (!(glo > 0.0)) { /* nothing resolvable before the switch: it happens now */
+            /* (to the candidates whose margin is not positive even in the shortest trial: a sliding
+             * one that slides on there is not stopping now, and setting its slip to 0 would jump its
+             * velocity; it switches in a later phase, found by the search) */
+            for (size_t j = 0; j < nc; j++)
+                if (E->cand[j] && margin(E, E->st, j, E->V1, E->f) > 0.0) E->cand[j] = 0;
             loads_at(E, in, s->t);
             for (size_t j = 0; j < nc; j++)
                 if (E->cand[j] && s->mode[j] != 0 && !is_jenk(E, j)) {
