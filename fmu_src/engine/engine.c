@@ -98,7 +98,7 @@ void eng_destroy(eng *E)
                           E->V1, E->r, E->y, E->y2, E->X0, E->acc, E->jk, E->rb, E->lim, E->f, E->f2, E->st,
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
-                          E->Dinv, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
+                          E->Dinv, E->gDinv, E->gd_cv, E->gd_sel, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->rpin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
@@ -219,6 +219,10 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     ok &= (E->D = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
     ok &= (E->Lc = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
     ok &= (E->Dinv = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->gDinv = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
+    ok &= (E->gd_cv = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    ok &= (E->gd_sel = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+    E->gd_ok = 0;
     ok &= (E->Jn = (double *)alloc_n(al, dnn, sizeof(double))) != NULL;
     ok &= (E->lM = (double *)alloc_n(al, 4 * dnn, sizeof(double))) != NULL;
     ok &= (E->lq = (double *)alloc_n(al, 2 * nc, sizeof(double))) != NULL;

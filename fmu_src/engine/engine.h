@@ -31,7 +31,9 @@
  * State passes through the arguments: eng_state (the trajectory, serialisable: scalars plus arrays)
  * and eng_inputs (the inputs of the current communication step, belts included). The engine object
  * (eng) holds the setup and workspace only: no field of it carries a value from one call to the
- * next, except the operators' factorisations, which are caches keyed by their coefficients.
+ * next, except the operators' factorisations, which are caches keyed by their coefficients, and
+ * what eng_dense_friction derives from the grid slot's (the columns A^-1 w_j, D^-1 of the contacts
+ * with friction), dropped when that slot is refactored.
  *
  * Memory: every array through the caller's allocation callbacks (eng_alloc), sized at eng_create
  * (O(n + nc^2) with the dense default, O(n + nc) with a model's friction solver). No global

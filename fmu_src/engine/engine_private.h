@@ -83,6 +83,13 @@ struct eng {
     const double **colp;
     double *D, *Lc, *rhs, *sol, *Dinv, *lM, *lq, *lz, *lw;
     int *zb, *guess, *sel;
+    /* the grid slot's D^-1 (nc x nc; the Lemke path's, a slot factored once a run) and its key: the
+     * set (gd_sel, gd_m), the compliances (gd_cv, gd_comp: some), D singular (gd_sing); valid while
+     * gd_ok (cleared where the slot is refactored) */
+    double *gDinv, *gd_cv;
+    int *gd_sel;
+    size_t gd_m;
+    int gd_comp, gd_sing, gd_ok;
     lcp_workspace *ws;           /* Lemke's, for 2 nc unknowns (NULL without contacts) */
     /* Stribeck's Newton */
     double *Jn, *res;

@@ -347,6 +347,7 @@ static ENG_HOT int factor_slot(eng *E, int slot, double cM, double cC, double cK
     if (E->slot_ok[slot] && c[0] == cM && c[1] == cC && c[2] == cK) return 1;
     E->slot_ok[slot] = ENG_FACTOR(E, slot, cM, cC, cK);
     for (size_t j = 0; j < ENG_NC(E); j++) E->cok[(size_t)slot * ENG_NC(E) + j] = 0; /* its columns anew */
+    if (slot == ENG_SLOT_GRID) E->gd_ok = 0; /* and its D^-1 */
     c[0] = cM;
     c[1] = cC;
     c[2] = cK;
@@ -739,6 +740,32 @@ static eng_status dense_active_set(eng *E, const eng_problem *P, int *mode, doub
     return ENG_ERR_LCP;
 }
 
+/* Whether the grid slot's cached D^-1 (gDinv) is that of problem P's set sel[0..m) and compliances:
+ * the slot not refactored since (factor_slot clears gd_ok), the same contacts, the same comp. */
+static int dinv_hit(const eng *E, const eng_problem *P, size_t m)
+{
+    if (!E->gd_ok || E->gd_m != m || E->gd_comp != (P->comp != NULL)) return 0;
+    for (size_t a = 0; a < m; a++) {
+        const int j = E->sel[a];
+        if (E->gd_sel[a] != j) return 0;
+        if (P->comp && !(E->gd_cv[a] == P->comp[j])) return 0;
+    }
+    return 1;
+}
+
+/* The key of the grid slot's D^-1 just computed (gDinv; singular: no inverse, the active set) */
+static void dinv_keep(eng *E, const eng_problem *P, size_t m, int singular)
+{
+    for (size_t a = 0; a < m; a++) {
+        E->gd_sel[a] = E->sel[a];
+        E->gd_cv[a] = P->comp ? P->comp[E->sel[a]] : 0.0;
+    }
+    E->gd_m = m;
+    E->gd_comp = P->comp != NULL;
+    E->gd_sing = singular;
+    E->gd_ok = 1;
+}
+
 ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P, int what, int *mode, double *V1, double *f,
                               int *pivots)
 {
@@ -763,34 +790,48 @@ ENG_API eng_status ENG_FN(eng_dense_friction)(void *engine, const eng_problem *P
     for (size_t j = 0; j < nc; j++)
         if (P->limit[j] > 0.0) E->sel[m++] = (int)j;
     if (E->any_law) return dense_active_set(E, P, mode, V1, f, pivots);
-    /* c = W A^-1 p_hat - vb (frictionless contacts carry no force), D = W A^-1 W' */
+    /* c = W A^-1 p_hat - vb (frictionless contacts carry no force) */
     ENG_SOLVE(E, P->slot, P->p_hat, E->y);
-    const eng_coupling *Cp = coupling_of(E, P->slot);
-    if (Cp)
-        Cp->delassus(Cp->ctx, P->slot, E->sel, m, E->D);
-    else
-        columns(E, P->slot, m);
     for (size_t a = 0; a < m; a++) {
         const size_t j = (size_t)E->sel[a];
-        if (!Cp)
-            for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
-        if (P->comp) E->D[a * m + a] += P->comp[j];
         E->rhs[a] = row_dot(&S->rows[j], E->y) - (P->vb ? P->vb[j] : 0.0);
     }
-    int *dep = E->st2;
-    chol(m, E->D, m, E->Lc, dep);
-    for (size_t a = 0; a < m; a++)
-        if (dep[a]) return dense_active_set(E, P, mode, V1, f, pivots); /* D singular: no inverse */
-    for (size_t c = 0; c < m; c++) { /* D^-1 column by column */
-        for (size_t a = 0; a < m; a++) E->sol[a] = (a == c) ? 1.0 : 0.0;
-        chol_solve(m, E->Lc, m, dep, E->sol, E->sol);
-        for (size_t a = 0; a < m; a++) E->Dinv[a * m + c] = E->sol[a];
-    }
+    /* D^-1 (D = W A^-1 W' + the compliances): the grid slot's from its cache where it holds this
+     * set and these compliances (dinv_hit), else anew (and kept for the grid slot) */
+    const int cache = P->slot == ENG_SLOT_GRID;
+    double *Dinv = cache ? E->gDinv : E->Dinv;
+    if (!(cache && dinv_hit(E, P, m))) {
+        if (cache) E->gd_ok = 0;
+        const eng_coupling *Cp = coupling_of(E, P->slot);
+        if (Cp)
+            Cp->delassus(Cp->ctx, P->slot, E->sel, m, E->D);
+        else
+            columns(E, P->slot, m);
+        for (size_t a = 0; a < m; a++) {
+            const size_t j = (size_t)E->sel[a];
+            if (!Cp)
+                for (size_t c = 0; c < m; c++) E->D[a * m + c] = row_dot(&S->rows[j], E->colp[c]);
+            if (P->comp) E->D[a * m + a] += P->comp[j];
+        }
+        int *dep = E->st2;
+        chol(m, E->D, m, E->Lc, dep);
+        int singular = 0;
+        for (size_t a = 0; a < m; a++) singular |= dep[a] != 0;
+        if (!singular)
+            for (size_t c = 0; c < m; c++) { /* D^-1 column by column */
+                for (size_t a = 0; a < m; a++) E->sol[a] = (a == c) ? 1.0 : 0.0;
+                chol_solve(m, E->Lc, m, dep, E->sol, E->sol);
+                for (size_t a = 0; a < m; a++) Dinv[a * m + c] = E->sol[a];
+            }
+        if (cache) dinv_keep(E, P, m, singular);
+        if (singular) return dense_active_set(E, P, mode, V1, f, pivots); /* D singular: no inverse */
+    } else if (E->gd_sing)
+        return dense_active_set(E, P, mode, V1, f, pivots);
     const size_t m2 = 2 * m;
     for (size_t a = 0; a < m; a++) {
         double dc = 0.0;
         for (size_t c = 0; c < m; c++) {
-            const double d = E->Dinv[a * m + c];
+            const double d = Dinv[a * m + c];
             E->lM[a * m2 + c] = d;
             E->lM[a * m2 + m + c] = -d;
             E->lM[(m + a) * m2 + c] = -d;
