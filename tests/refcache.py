@@ -94,5 +94,8 @@ class RefCache:
     def call(self, fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         """fn(*args, **kwargs), kept under fn's module and name and its arguments (fn: a module-level
         function of the references, whose result depends on its arguments and the code alone)."""
+        if fn.__module__.startswith(("test_", "conftest")):  # not in the key's fingerprint
+            raise ValueError(f"refcache.call: {fn.__qualname__} is defined in {fn.__module__}; a kept reference "
+                             "must be a function of src/dryfriction or of a helper module of tests/")
         return self.get(f"{fn.__module__}.{fn.__qualname__}", (args, sorted(kwargs.items())),
                         lambda: fn(*args, **kwargs))
