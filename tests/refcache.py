@@ -15,7 +15,7 @@ directory (``.pytest_cache/d/dfo-references/``), under a key that is the SHA-256
 What is compared with the reference (the FMU's or the C driver's run) is computed by every test
 every time: only the reference is reused. Without the cache (``-p no:cacheprovider``) every
 reference is computed. Entries are written whole (a temporary file renamed), so two xdist workers
-may share the folder."""
+may share the folder; a session removes the entries of other code (another fingerprint)."""
 
 from __future__ import annotations
 
@@ -58,13 +58,18 @@ class RefCache:
         self.fingerprint = code_fingerprint() if folder is not None else ""
         self.hits = 0
         self.misses = 0
+        if folder is not None:  # the entries of other code can never be read again: removed
+            for old in folder.glob("*.pkl"):
+                if not old.name.startswith(self.fingerprint[:16] + "-"):
+                    old.unlink(missing_ok=True)
 
     def key(self, name: str, inputs: Any) -> str:
-        """The file name of a reference: its name and the SHA-256 of its inputs and the code."""
+        """The file name of a reference: the code's fingerprint (its start), the reference's name and
+        the SHA-256 of its inputs and the code."""
         h = hashlib.sha256(self.fingerprint.encode())
         h.update(pickle.dumps((name, inputs), protocol=4))
         safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)[:40]
-        return f"{safe}-{h.hexdigest()[:32]}.pkl"
+        return f"{self.fingerprint[:16]}-{safe}-{h.hexdigest()[:32]}.pkl"
 
     def get(self, name: str, inputs: Any, compute: Callable[[], T]) -> T:
         """The reference `name` of these inputs: read from the folder, or computed by compute() (which

@@ -72,3 +72,15 @@ def test_a_reference_of_a_test_module_is_refused(tmp_path: Path) -> None:
 
     with pytest.raises(ValueError, match="test_refcache"):
         RefCache(tmp_path).call(local)
+
+
+def test_a_session_removes_the_entries_of_other_code(tmp_path: Path) -> None:
+    current = RefCache(tmp_path)
+    old = RefCache(tmp_path)
+    old.fingerprint = "f" * 64  # an earlier version of the code, run beside it
+    old.get("f", (1.0,), lambda: 1.0)
+    current.get("f", (1.0,), lambda: 2.0)
+    assert len(list(tmp_path.glob("*.pkl"))) == 2
+    RefCache(tmp_path)  # the next session of the current code
+    assert [p.name[:16] for p in tmp_path.glob("*.pkl")] == [current.fingerprint[:16]]
+
