@@ -109,18 +109,29 @@ lib_of() {
 PLATS=(x86_64-linux x86_64-windows aarch64-linux)
 
 # ---- 1. outputs and states ------------------------------------------------------------------------
+# The three platforms at once (one background job each, its FMUs in turn: wine's and qemu's start-ups
+# overlap), their lines printed in order afterwards.
 t0=$SECONDS
-for fmi in "${KEYS[@]}"; do
-  for p in "${PLATS[@]}"; do
+run_platform() {  # run_platform PLATFORM: every FMU's harness run on PLATFORM; failures into $W/fail_run_PLATFORM
+  local p=$1 fmi lib ts
+  for fmi in "${KEYS[@]}"; do
     lib=$(lib_of $fmi "$p")
     [ -n "$lib" ] || continue
-    [ -f "$lib" ] || { fail "$fmi $p: no binary $lib"; continue; }
+    [ -f "$lib" ] || { echo "$fmi $p: no binary $lib" >>"$W/fail_run_$p"; continue; }
     ts=$SECONDS
     run_on "$p" "$(harness_of $fmi "$p")" "${FMI_OF[$fmi]}" "$lib" run "$W/states_${fmi}_$p.txt" >"$W/run_${fmi}_$p.txt" 2>"$W/run_${fmi}_$p.err" </dev/null ||
-      fail "$fmi $p: fmu_harness failed ($(tail -1 "$W/run_${fmi}_$p.err"))"
-    tr -d '\r' <"$W/run_${fmi}_$p.txt" >"$W/run.tmp" && mv "$W/run.tmp" "$W/run_${fmi}_$p.txt"
-    echo "  $fmi $p: $(grep -c '^out' "$W/run_${fmi}_$p.txt") outputs, $(grep -c '^state' "$W/run_${fmi}_$p.txt") states, $(grep -c '^err' "$W/run_${fmi}_$p.txt" || true) failed calls ($((SECONDS - ts)) s)"
+      echo "$fmi $p: fmu_harness failed ($(tail -1 "$W/run_${fmi}_$p.err"))" >>"$W/fail_run_$p"
+    tr -d '\r' <"$W/run_${fmi}_$p.txt" >"$W/run_${fmi}_$p.tmp" && mv "$W/run_${fmi}_$p.tmp" "$W/run_${fmi}_$p.txt"
+    echo "  $fmi $p: $(grep -c '^out' "$W/run_${fmi}_$p.txt") outputs, $(grep -c '^state' "$W/run_${fmi}_$p.txt") states, $(grep -c '^err' "$W/run_${fmi}_$p.txt" || true) failed calls ($((SECONDS - ts)) s)" >"$W/log_run_${fmi}_$p"
   done
+}
+for p in "${PLATS[@]}"; do run_platform "$p" & done
+wait
+for fmi in "${KEYS[@]}"; do
+  for p in "${PLATS[@]}"; do [ ! -f "$W/log_run_${fmi}_$p" ] || cat "$W/log_run_${fmi}_$p"; done
+done
+for p in "${PLATS[@]}"; do
+  [ ! -f "$W/fail_run_$p" ] || while IFS= read -r line; do fail "$line"; done <"$W/fail_run_$p"
 done
 echo "harness runs: $((SECONDS - t0)) s"
 
@@ -162,18 +173,36 @@ for fmi in "${KEYS[@]}"; do
 done
 
 # ---- 2. states across platforms ---------------------------------------------------------------
+# Run on the three platforms at once (one background job per platform resuming every FMU's states
+# from every platform), then compared in order.
 t0=$SECONDS
 for fmi in "${KEYS[@]}"; do
   for from in "${PLATS[@]}"; do
-    states=$W/states_${fmi}_$from.txt
-    [ -s "$states" ] || continue
+    [ -s "$W/states_${fmi}_$from.txt" ] || continue
     grep -E '^out [0-9]+ (9|1[0-6]) ' "$W/run_${fmi}_$from.txt" >"$W/second_${fmi}_$from.txt" || true
+  done
+done
+resume_on() {  # resume_on PLATFORM: every FMU's states of every platform continued on PLATFORM
+  local to=$1 fmi from out
+  for fmi in "${KEYS[@]}"; do
+    [ -n "$(lib_of $fmi "$to")" ] || continue
+    for from in "${PLATS[@]}"; do
+      [ -s "$W/states_${fmi}_$from.txt" ] || continue
+      out=$W/resume_${fmi}_${from}_on_$to.txt
+      # (into a file: wine writes to a pipe ten times slower)
+      run_on "$to" "$(harness_of $fmi "$to")" "${FMI_OF[$fmi]}" "$(lib_of $fmi "$to")" resume "$W/states_${fmi}_$from.txt" >"$out.raw" 2>/dev/null </dev/null || true
+      tr -d '\r' <"$out.raw" >"$out"
+    done
+  done
+}
+for to in "${PLATS[@]}"; do resume_on "$to" & done
+wait
+for fmi in "${KEYS[@]}"; do
+  for from in "${PLATS[@]}"; do
+    [ -s "$W/states_${fmi}_$from.txt" ] || continue
     for to in "${PLATS[@]}"; do
       [ -n "$(lib_of $fmi "$to")" ] || continue
       out=$W/resume_${fmi}_${from}_on_$to.txt
-      # (into a file: wine writes to a pipe ten times slower)
-      run_on "$to" "$(harness_of $fmi "$to")" "${FMI_OF[$fmi]}" "$(lib_of $fmi "$to")" resume "$states" >"$out.raw" 2>/dev/null </dev/null || true
-      tr -d '\r' <"$out.raw" >"$out"
       nerr=$(grep -c '^err' "$out" || true)
       if cmp -s "$out" "$W/second_${fmi}_$from.txt"; then
         echo "  $fmi state from $from continued on $to: identical to the original run"

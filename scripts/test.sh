@@ -90,8 +90,19 @@ asan_pytest() {
     pytest_ -m "not no_sanitizer and not python_only"
 }
 fuzz() {  # libFuzzer + ASan/UBSan: the oscillator's FMI 2.0 entry points 60 s, the chain's FMI 3.0 30 s; installs clang if missing
-  PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" bash tests/fuzz/run_fuzz.sh 60
-  PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz" FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh 30
+  # both targets built first, then fuzzed at once (a fuzzer keeps one core busy: the two on the two
+  # cores, each for its whole time); the chain's messages printed after the oscillator's
+  local env=(env PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz") log rc1=0 rc2=0
+  "${env[@]}" FUZZ_STEP=build bash tests/fuzz/run_fuzz.sh
+  "${env[@]}" FUZZ_STEP=build FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh
+  log=$(mktemp)
+  "${env[@]}" FUZZ_STEP=run FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh 30 >"$log" 2>&1 &
+  local chain=$!
+  "${env[@]}" FUZZ_STEP=run bash tests/fuzz/run_fuzz.sh 60 || rc1=$?
+  wait "$chain" || rc2=$?
+  cat "$log"
+  rm -f "$log"
+  [ "$rc1" = 0 ] && [ "$rc2" = 0 ]
 }
 
 # The cross toolchains and emulators (Debian packages), installed when missing: the win32 thread
@@ -155,14 +166,27 @@ stage "ctest" ctest --test-dir build --output-on-failure -j2
 stage "host-libs" host_libs
 stage "pytest" pytest_
 stage "docs" bash scripts/docs.sh  # the site, warnings as errors, every internal link and anchor checked
-examples() {  # every example at its own size, in a scratch folder
-  local d f
+examples() {  # every example at its own size, each in a scratch folder of its own, two at a time (one core each); the outputs printed in order
+  local d i root=$PWD failed=()
+  local -a files pids
   d=$(mktemp -d)
-  for f in examples/*.py; do
-    echo "-- $f"
-    (cd "$d" && "$OLDPWD/.venv/bin/python" "$OLDPWD/$f") || return 1
+  files=(examples/*.py)
+  for i in "${!files[@]}"; do
+    mkdir "$d/$i"
+    (cd "$d/$i" && "$root/.venv/bin/python" "$root/${files[i]}") >"$d/$i.log" 2>&1 &
+    pids[i]=$!
+    if [ "$i" -ge 1 ]; then  # at most two running: wait for the one before this
+      wait "${pids[i - 1]}" || failed+=("${files[i - 1]}")
+    fi
+  done
+  i=$((${#files[@]} - 1))
+  wait "${pids[i]}" || failed+=("${files[i]}")
+  for i in "${!files[@]}"; do
+    echo "-- ${files[i]}"
+    cat "$d/$i.log"
   done
   rm -rf "$d"
+  [ ${#failed[@]} -eq 0 ] || { echo "examples failed: ${failed[*]}"; return 1; }
 }
 stage "examples" examples
 stage "siconos-peer" .venv/bin/python bench/siconos_peer.py --quick  # installs python3-siconos when missing

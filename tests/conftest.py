@@ -1,6 +1,7 @@
 """Shared fixtures: one FMU instance per test session, reused (reset) by every test; the paths of the
 four FMUs; the oscillator's FMI 2.0 FMU unzipped and one fmpy instance of it (fmi2_helpers.Inst);
-fmpy's reading of both oscillators' model descriptions; the references of the coupled chain cases.
+fmpy's reading of both oscillators' model descriptions; the references of the coupled chain cases;
+the cache of the slow pure-Python references (refcache.RefCache).
 Nothing here looks for an FMU before a fixture asks for one."""
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from dryfriction.paths import FMUFileError
 
 from chain_cases import CASES, PERIODS
 from fmi2_helpers import Inst
+from refcache import RefCache
 
 
 # The modules that load no FMU and run no C program (the pure-Python references and parsers): their
@@ -30,7 +32,7 @@ from fmi2_helpers import Inst
 PYTHON_ONLY = frozenset({"test_references.py", "test_belt_reference.py", "test_chain_driver.py",
                          "test_packaging_requirements.py", "test_c_layout.py", "test_two_mass_reference.py",
                          "test_layout.py", "test_roots.py",
-                         "test_system_structure.py", "test_system_reference.py"})
+                         "test_system_structure.py", "test_system_reference.py", "test_refcache.py"})
 FMU_FIXTURES = frozenset({"fmu", "fmu_path", "chain_fmu2", "chain_fmu3", "unzipped", "inst", "md2", "md3"})
 
 
@@ -98,9 +100,17 @@ def inst(unzipped: tuple[str, object]) -> Iterator[Inst]:
 
 
 @pytest.fixture(scope="session")
-def refs() -> dict:
+def refcache(pytestconfig: pytest.Config) -> RefCache:
+    """The slow pure-Python references kept in the pytest cache folder between runs (refcache.py: keyed
+    by their inputs and the code; computed every time without the cache provider)."""
+    cache = getattr(pytestconfig, "cache", None)
+    return RefCache(cache.mkdir("dfo-references") if cache is not None else None)
+
+
+@pytest.fixture(scope="session")
+def refs(refcache: RefCache) -> dict:
     """The event-driven references of the coupled chain cases (chain_cases.CASES) over PERIODS periods."""
-    return {name: solve_chain(ch, PERIODS * ch.period) for name, ch in CASES.items()}
+    return {name: refcache.call(solve_chain, ch, PERIODS * ch.period) for name, ch in CASES.items()}
 
 
 @pytest.fixture(scope="module")

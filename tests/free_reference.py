@@ -222,5 +222,13 @@ def reference_for(p, F_ext=0.0) -> FreeReference:
     return FreeReference(p.m, p.c, p.P0, p.omega, p.phi, p.N, p.mu_s, p.chi, p.x0, p.v0, F_ext)
 
 
+def solved_reference(p, F_ext=0.0, t_end=1.0, schedule=None) -> FreeReference:
+    """The reference of an Oscillator p (k = 0) under F_ext, solved up to t_end (schedule: as
+    FreeReference.solve's); a function of its arguments alone (tests keep it: refcache.py)."""
+    ref = reference_for(p, F_ext)
+    ref.solve(t_end, schedule=schedule)
+    return ref
+
+
 def period_of(p) -> float:
     return 2.0 * math.pi / p.omega if p.omega > 0 else 1.0

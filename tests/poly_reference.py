@@ -331,3 +331,27 @@ class PolyReference:
 
     def stuck_time(self):
         return sum((seg.t1 - seg.t0 for seg in self.segments if seg.mode == 0), mp.mpf(0))
+
+
+@dataclass
+class Solved:
+    """A reference solved up to t_end with what the tests read of it (the whole run's events,
+    extremes, stuck time and friction work; the friction work of given windows) computed once."""
+
+    ref: PolyReference
+    events: list
+    extremes: tuple
+    stuck_time: mp.mpf
+    friction_work: mp.mpf
+    window_work: dict
+
+
+def solve_case(params: dict, F, Next, t_end, windows=()) -> Solved:
+    """PolyReference(**params, F=F, Next=Next) solved up to t_end, with its events, extremes, stuck
+    time, friction work over the run and over each (t0, t1) of windows; a function of its arguments
+    alone (tests keep it: refcache.py)."""
+    ref = PolyReference(**params, F=F, Next=Next)
+    ref.solve(t_end)
+    return Solved(ref, ref.events(), ref.extremes(), ref.stuck_time(), ref.friction_work(),
+                  {w: ref.friction_work(*w) for w in windows})
+

@@ -18,6 +18,7 @@ from fmpy.fmi1 import FMICallException
 from dryfriction.references.belt import Belt, limit_cycle, simulate
 from dryfriction.drivers.oscillator3 import OscillatorFMU3
 from fmi3_helpers import FMI2Run, assert_fmi3_equals_fmi2_on_belt, kinds
+from refcache import RefCache
 
 EXACT = 4
 OUT = ["x", "v", "a", "F_friction", "mode", "x_max", "x_min", "stick_fraction", "transitions", "E_friction"]
@@ -146,7 +147,7 @@ CASES = {
 
 @pytest.mark.parametrize("name", [n if i == 0 else pytest.param(n, marks=pytest.mark.slow)
                                   for i, n in enumerate(CASES)])  # (the reference on 30001 points: 1.5-4.5 s each)
-def test_extremes_against_the_reference_on_a_fine_grid(name: str) -> None:
+def test_extremes_against_the_reference_on_a_fine_grid(name: str, refcache: RefCache) -> None:
     """x_max, x_min over [5, 30] (observe): at least the largest (least) x of the reference on a grid of
     1e-3 s, and within the grid's reach of it (the turning points inside slides are found: x is not
     monotone in a slide on a belt)."""
@@ -164,7 +165,7 @@ def test_extremes_against_the_reference_on_a_fine_grid(name: str) -> None:
     finally:
         r.close()
     grid = np.linspace(0.0, 30.0, 30001)
-    b = simulate(ref, grid, v_belt=vb, changes=changes)
+    b = refcache.call(simulate, ref, grid, v_belt=vb, changes=changes)
     w = grid >= 5.0
     xs, vs, ms = b.x[w], b.v[w], b.mode[w]
     reach = 1e-3 * np.abs(vs).max()  # (x moves at most by this between two grid points: a turning point lies within)
@@ -176,17 +177,17 @@ def test_extremes_against_the_reference_on_a_fine_grid(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", list(CASES))
-def test_against_the_event_driven_reference(name: str) -> None:
+def test_against_the_event_driven_reference(name: str, refcache: RefCache) -> None:
     params, ref, vb, changes = CASES[name]
     t, x, v, sw = run(params, vb, 30.0, 0.1, changes)
-    b = simulate(ref, t, v_belt=vb, changes=changes)
+    b = refcache.call(simulate, ref, t, v_belt=vb, changes=changes)
     assert np.max(np.abs(x - b.x)) < 1e-10 and np.max(np.abs(v - b.v)) < 1e-10, name
     assert kinds([(a, c) for _, a, c in sw]) == [k for _, k in b.events], (sw, b.events)
     assert len(sw) >= 4  # events happen
     assert np.max(np.abs(np.array([s[0] for s in sw]) - np.array([e[0] for e in b.events]))) < 1e-9
 
 
-def test_long_stick_phase_with_a_brief_crossing() -> None:
+def test_long_stick_phase_with_a_brief_crossing(refcache: RefCache) -> None:
     """A slow belt (0.002) drags the stuck block's holding force 0.05 cos(3 t) + 0.3 - 0.002 t down over
     some 180 excitation periods until one trough of the excitation dips past -F_s: one doStep of 400 s
     finds that breakaway (and the slides after it) at the reference's times."""
@@ -199,7 +200,7 @@ def test_long_stick_phase_with_a_brief_crossing() -> None:
         sw = list(r.switches)
     finally:
         r.close()
-    b = simulate(ref, [0.0, 400.0], v_belt=0.002)
+    b = refcache.call(simulate, ref, [0.0, 400.0], v_belt=0.002)
     assert sw and sw[0][1] == 0 and 300.0 < sw[0][0] < 400.0, sw
     assert kinds([(a, c) for _, a, c in sw]) == [k_ for _, k_ in b.events]
     assert np.max(np.abs(np.array([q[0] for q in sw]) - np.array([e[0] for e in b.events]))) < 1e-9
@@ -230,7 +231,7 @@ class RampBelt(Belt):
 
 
 @pytest.mark.parametrize("k", [1.0, 0.0], ids=["spring", "no spring"])
-def test_F_ext_ramp_on_a_belt(k: float) -> None:
+def test_F_ext_ramp_on_a_belt(k: float, refcache: RefCache) -> None:
     """F_ext = 0.05 + 0.01 t given at every communication point with its derivative (so the FMU's
     polynomial is the ramp itself), on a belt changed once: against the reference with that ramp."""
     F0, F1, vb, dt = 0.05, 0.01, 0.3, 0.1
@@ -255,7 +256,7 @@ def test_F_ext_ramp_on_a_belt(k: float) -> None:
     ref = RampBelt(m=1.0, k=k, c=0.05, N=1.0, mu_s=0.5, mu_k=0.3, P0=0.2 + F1 / 0.7, omega=0.7, F_ext=F0, F1=F1,
                    P_true=0.2, x0=x0)
     grid = np.arange(301) * dt
-    b = simulate(ref, grid, v_belt=vb, changes=[(15.0, -0.1)])
+    b = refcache.call(simulate, ref, grid, v_belt=vb, changes=[(15.0, -0.1)])
     assert np.max(np.abs(np.array(xs) - b.x[1:])) < 1e-10 and np.max(np.abs(np.array(vs) - b.v[1:])) < 1e-10
     assert kinds([(a, c) for _, a, c in sw]) == [k_ for _, k_ in b.events] and len(sw) >= 3, (sw, b.events)
 

@@ -19,6 +19,7 @@ from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.errors import FMUCallError
 from chain_cases import belt_run as _belt_run
 from helpers import assert_rounding_apart
+from refcache import RefCache
 
 # (chain, belts from the start, belts from the communication point at half the run, periods);
 # T = 2 pi / 0.6 where the chain is unforced
@@ -48,7 +49,7 @@ def _period(ch: Chain) -> float:
 
 
 @pytest.mark.parametrize("case", list(CASES))
-def test_stribeck_chain_second_order_against_reference(case: str) -> None:
+def test_stribeck_chain_second_order_against_reference(case: str, refcache: RefCache) -> None:
     """max |x - x_ref| falls 4x per halving of h (3.6 ... 4.4) from T/400 to T/3200 (measured, in
     docs/chain.md: n3-site-d1 1.15e-3 ... 1.83e-5, ratios 3.97 3.98 3.99; n2-site-d2 8.58e-4 ...
     1.38e-5, 3.93 3.98 3.99; Burridge-Knopoff 3.09e-2 ... 5.18e-4, 3.86 3.90 3.98), with stick-slip
@@ -59,7 +60,7 @@ def test_stribeck_chain_second_order_against_reference(case: str) -> None:
     npts = 40 * periods
     t = np.linspace(0.0, periods * T, npts + 1)
     half = npts // 2
-    ref = solve_chain(replace(ch, v_belt=np.array(vb0)), t[-1], belt_changes=[(t[half], vb1)])
+    ref = refcache.call(solve_chain, replace(ch, v_belt=np.array(vb0)), t[-1], belt_changes=[(t[half], vb1)])
     xr = ref.evaluate(t)["x"]
     e = []
     with ChainFMU3(n=ch.n) as fmu:

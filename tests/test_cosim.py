@@ -39,6 +39,7 @@ from dryfriction.errors import FMUCallError, FMUError
 from dryfriction.fmi._base import read_capabilities
 from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
+from refcache import RefCache
 
 # both blocks stick (3 % and 1 % of the time), amplitudes 3.8 and 6.1
 CASE: dict[str, Any] = dict(m=1.0, k=1.0, c=[0.05, 0.1], P0=[1.0, 0.0], N=[0.8, 0.5], mu_s=0.5, chi=0.7, omega=0.6)
@@ -48,8 +49,8 @@ DIVISIONS = (50, 100, 200, 400)
 
 
 @pytest.fixture(scope="module")
-def reference() -> ChainSolution:
-    return solve_chain(Chain.make(2, **CASE), PERIODS * T)
+def reference(refcache: RefCache) -> ChainSolution:
+    return refcache.call(solve_chain, Chain.make(2, **CASE), PERIODS * T)
 
 
 @pytest.fixture(scope="module")
@@ -182,7 +183,8 @@ def test_a_local_variable_is_recorded_when_asked(blocks: Any) -> None:
     ("damped-walled", [0.004034, 0.001064, 0.0002791, 7.206e-05]),
 ])
 def test_three_oscillators_are_the_three_block_chain_at_second_order(fmu_path: Path, case: str,
-                                                                      expected: list[float]) -> None:
+                                                                      expected: list[float],
+                                                                      refcache: RefCache) -> None:
     """The coupled cases of docs/chain.md split into three oscillators (two spring-dampers through
     the master), against the chain's reference over ten periods: second order with input
     derivatives on every case (held at the extrapolated mean, the stick-dominated case is only
@@ -194,7 +196,7 @@ def test_three_oscillators_are_the_three_block_chain_at_second_order(fmu_path: P
     names = ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0", "omega", "k_end", "c_end")
     params = {f: getattr(ch, f) for f in names}
     period = 2 * math.pi / ch.omega
-    ref = solve_chain(ch, PERIODS * period)
+    ref = refcache.call(solve_chain, ch, PERIODS * period)
     blocks, elements = split_chain(params, ch.n)
     drivers = [OscillatorFMU2(fmu_path) for _ in blocks]
     try:
@@ -219,7 +221,8 @@ def test_three_oscillators_are_the_three_block_chain_at_second_order(fmu_path: P
 
 
 @pytest.mark.slow
-def test_a_chain_fmu_and_an_oscillator_are_the_three_block_chain(chain_fmu2: Path, fmu_path: Path) -> None:
+def test_a_chain_fmu_and_an_oscillator_are_the_three_block_chain(chain_fmu2: Path, fmu_path: Path,
+                                                                 refcache: RefCache) -> None:
     """The FMI 2.0 chain (n = 2: blocks 1, 2) and an oscillator (block 3 with the far wall's spring)
     joined at x[2] and x: the damped, walled case of docs/chain.md, first order with held inputs,
     second order with input derivatives (both FMUs take them)."""
@@ -229,7 +232,7 @@ def test_a_chain_fmu_and_an_oscillator_are_the_three_block_chain(chain_fmu2: Pat
 
     ch = CASES["damped-walled"]
     period = 2 * math.pi / ch.omega
-    ref = solve_chain(ch, PERIODS * period)
+    ref = refcache.call(solve_chain, ch, PERIODS * period)
     sub = {f: getattr(ch, f)[:2].tolist() for f in ("m", "k", "c", "P0", "phi", "N", "mu_s", "chi", "x0", "v0")}
     b3 = Oscillator(m=ch.m[2], k=ch.k_end, c=ch.c_end, P0=ch.P0[2], phi=ch.phi[2], omega=ch.omega, N=ch.N[2],
                     mu_s=ch.mu_s[2], chi=ch.chi[2], x0=ch.x0[2], v0=ch.v0[2])
@@ -363,7 +366,7 @@ def test_input_derivatives_are_second_order(blocks: Any, reference: ChainSolutio
     assert np.all(orders(e)[:2] > 1.7), orders(e)
 
 
-def test_input_derivatives_in_the_exact_scheme(blocks: Any, reference: ChainSolution) -> None:
+def test_input_derivatives_in_the_exact_scheme(blocks: Any, reference: ChainSolution, refcache: RefCache) -> None:
     """The exact scheme follows input derivatives in closed form, the free block (k = 0) too: second
     order on the split chain (0.01943, 0.005064, 0.001269, 0.0003223 at H = T/50 ... T/400); with the far wall's k_end = 0.5 on block 2 (0.006327 ... 9.989e-05;
     located: 0.00632 ... 9.252e-05)."""
@@ -372,7 +375,7 @@ def test_input_derivatives_in_the_exact_scheme(blocks: Any, reference: ChainSolu
                   for n in DIVISIONS])
     assert np.all(orders(e) > 1.8), orders(e)
     walled = {**CASE, "k_end": 0.5}
-    ref = solve_chain(Chain.make(2, **walled), PERIODS * T)
+    ref = refcache.call(solve_chain, Chain.make(2, **walled), PERIODS * T)
     e = np.array([error(split(blocks, walled, "exact").run(PERIODS * T, T / n, inputs="derivatives"), ref)
                   for n in DIVISIONS])
     np.testing.assert_allclose(e, [0.006327, 0.001494, 0.0003886, 9.989e-05], rtol=1e-2)

@@ -15,7 +15,8 @@ import pytest
 
 from dryfriction.drivers.oscillator import OscillatorFMU2, Settings
 from dryfriction.params import Oscillator
-from free_reference import reference_for
+from free_reference import reference_for, solved_reference
+from refcache import RefCache
 
 EXACT = Settings(scheme="exact")
 TOL = 1e-12            # max error over the motion's size, exact scheme
@@ -81,15 +82,14 @@ def _errors(tr: dict, ref, t: np.ndarray) -> tuple[float, float, np.ndarray]:
 # the heavily damped case takes about 9 s (a long slide sampled per damping time): slow
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "c>0 heavy damping" else n
                                   for n in CASES])
-def test_against_the_40_digit_reference(fmu: OscillatorFMU2, name: str) -> None:
+def test_against_the_40_digit_reference(fmu: OscillatorFMU2, name: str, refcache: RefCache) -> None:
     p, F = CASES[name]
     T = p.period
     t = np.linspace(0.0, 12.0 * T, 481)
     n0 = len(fmu.messages)
     tr = fmu.trajectory(p, t, _settings(F), outputs=("x", "v", "a", "mode"))
     ev_fmu = _events(fmu, n0)
-    ref = reference_for(p, F)
-    ref.solve(t[-1])
+    ref = refcache.call(solved_reference, p, F, t[-1])
     ex, ev, mr = _errors(tr, ref, t)
     print(f"{name}: x {ex:.2e}, v {ev:.2e}, {len(ref.segments)} phases")
     assert ex <= TOL and ev <= TOL, (ex, ev)
@@ -108,7 +108,8 @@ def test_against_the_40_digit_reference(fmu: OscillatorFMU2, name: str) -> None:
         assert np.all(tr["a"][stuck] == 0.0) and np.all(tr["v"][stuck] == 0.0)
 
 
-def test_a_stop_needs_no_sign_change_and_a_slide_from_rest_at_zero_acceleration(fmu: OscillatorFMU2) -> None:
+def test_a_stop_needs_no_sign_change_and_a_slide_from_rest_at_zero_acceleration(fmu: OscillatorFMU2,
+                                                                                refcache: RefCache) -> None:
     """A touch: sliding forward with F_ext = mu_k N (f0 = 0, c = 0), v = v0 + (sin t - sin 0) / omega
     only touches 0 at t = 3 pi / 2 (v0 = 1 / omega): the block stops there (the touch is within
     rounding) and sticks, |P + F_ext| = mu_k N < mu_s N, until the force reaches mu_s N."""
@@ -119,13 +120,12 @@ def test_a_stop_needs_no_sign_change_and_a_slide_from_rest_at_zero_acceleration(
     tr = fmu.trajectory(p, t, _settings(F), outputs=("x", "v", "mode"))
     ev = _events(fmu, n0)
     assert ev[0][1:] == (1, 0) and abs(ev[0][0] - 1.5 * math.pi) <= 1e-6
-    ref = reference_for(p, F)
-    ref.solve(t[-1])
+    ref = refcache.call(solved_reference, p, F, t[-1])
     ex, evv, mr = _errors(tr, ref, t)
     assert ex <= TOL and np.array_equal(tr["mode"], mr)
 
 
-def test_inputs_held_over_communication_steps(fmu: OscillatorFMU2) -> None:
+def test_inputs_held_over_communication_steps(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     rng = np.random.default_rng(7)
     p = free(c=0.15, chi=0.8)
     T = p.period
@@ -139,14 +139,13 @@ def test_inputs_held_over_communication_steps(fmu: OscillatorFMU2) -> None:
         o = fmu.get(["x", "v"])
         x.append(o["x"])
         v.append(o["v"])
-    ref = reference_for(p)
-    ref.solve(t[-1], schedule=list(zip(t[:-1], F[:-1])))
+    ref = refcache.call(solved_reference, p, 0.0, t[-1], schedule=list(zip(t[:-1], F[:-1])))
     xr, vr, _ = ref.evaluate(t)
     err = float(np.abs(np.array(x) - np.array(xr)).max()) / float(np.abs(xr).max())
     assert err <= TOL, err
 
 
-def test_one_long_dostep_equals_many_and_h_has_no_effect(fmu: OscillatorFMU2) -> None:
+def test_one_long_dostep_equals_many_and_h_has_no_effect(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     """One doStep over n periods, n doSteps of a period, h: the same motion, within rounding. (The
     stop times are doubles: each event's rounding, ulp(t) / 4, shifts the later motion by that much,
     and a free mass keeps the resulting offset of x: 3e-13 after 200 periods.)"""
@@ -163,8 +162,7 @@ def test_one_long_dostep_equals_many_and_h_has_no_effect(fmu: OscillatorFMU2) ->
         assert abs(one["x"] - many["x"][-1]) <= TOL * size and one["mode"] == many["mode"][-1]
         assert float(np.abs(coarse["x"] - many["x"][::10]).max()) <= TOL * size
         if with_ref:
-            ref = reference_for(p, F)
-            ref.solve(t[-1])
+            ref = refcache.call(solved_reference, p, F, t[-1])
             xr, _, _ = ref.evaluate([t[-1]])
             assert abs(one["x"] - xr[0]) <= TOL * size and abs(many["x"][-1] - xr[0]) <= TOL * size
 
@@ -189,13 +187,12 @@ def test_a_long_slide_costs_a_few_evaluations(fmu: OscillatorFMU2) -> None:
 
 
 @pytest.mark.slow
-def test_observables(fmu: OscillatorFMU2) -> None:
+def test_observables(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     p, F = CASES["c=0 F_ext drift with sticks"]
     T = p.period
     w0, w1 = 2.3 * T, 9.1 * T
     o = fmu.observables(p, 10.0 * T, w0, w1, settings=_settings(F))
-    ref = reference_for(p, F)
-    ref.solve(10.0 * T)
+    ref = refcache.call(solved_reference, p, F, 10.0 * T)
     tt = np.linspace(w0, w1, 20001)
     xr, _, mr = ref.evaluate(tt)
     stuck = sum(float(min(s.t1, w1) - max(s.t0, w0)) for s in ref.segments if s.mode == 0 and s.t1 > w0 and s.t0 < w1)
@@ -211,12 +208,11 @@ def test_observables(fmu: OscillatorFMU2) -> None:
 # ---------------------------------------------------------------- the other schemes at k = 0
 
 
-def test_located_scheme_is_second_order_at_k0(fmu: OscillatorFMU2) -> None:
+def test_located_scheme_is_second_order_at_k0(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     p, F = CASES["c>0 chi=0.7 stick-slip"]
     T = p.period
     t = np.linspace(0.0, 10.0 * T, 201)
-    ref = reference_for(p, F)
-    ref.solve(t[-1])
+    ref = refcache.call(solved_reference, p, F, t[-1])
     xr = np.array(ref.evaluate(t)[0])
     size = float(np.abs(xr).max())
     errs = []
@@ -230,14 +226,13 @@ def test_located_scheme_is_second_order_at_k0(fmu: OscillatorFMU2) -> None:
 
 
 @pytest.mark.parametrize("scheme, tol", [("paper", 5e-2), ("consistent", 5e-2), ("located", 1e-5)])
-def test_the_bossak_schemes_run_at_k0(fmu: OscillatorFMU2, scheme: str, tol: float) -> None:
+def test_the_bossak_schemes_run_at_k0(fmu: OscillatorFMU2, scheme: str, tol: float, refcache: RefCache) -> None:
     """They accept k = 0 and converge there (paper and consistent at first order, docs/schemes.md)."""
     p, F = CASES["c=0 chi=0.7 stick-slip"]
     T = p.period
     t = np.linspace(0.0, 5.0 * T, 51)
     tr = fmu.trajectory(p, t, Settings(scheme=scheme, h=T / 2000), outputs=("x",))
-    ref = reference_for(p, F)
-    ref.solve(t[-1])
+    ref = refcache.call(solved_reference, p, F, t[-1])
     xr = np.array(ref.evaluate(t)[0])
     err = float(np.abs(tr["x"] - xr).max()) / float(np.abs(xr).max())
     print(f"{scheme} at k = 0, h = T/2000: {err:.2e}")

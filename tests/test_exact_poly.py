@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from poly_reference import PolyReference
+from poly_reference import Solved, solve_case
+from refcache import RefCache
 
 ROOT = Path(__file__).resolve().parents[1]
 DRIVER = Path(os.environ.get("DFO_POLY_DRIVER", ROOT / "build" / "tests" / "c" / "test_exact_poly"))
@@ -69,17 +70,23 @@ def run_driver(params: dict, F, Nx, t_end: float, steps: int, window=None) -> di
     return dict(t=pts[:, 0], x=pts[:, 1], v=pts[:, 2], mode=pts[:, 3].astype(int), switches=sw, obs=obs)
 
 
-@pytest.fixture(scope="module")
-def solved():
-    """The reference of every case, solved once (about 1 s each)."""
-    cache: dict[str, PolyReference] = {}
+#: the observation window of test_friction_work_in_a_window and its cases (their reference's work in
+#: it solved with the case)
+WINDOW = (10.3, 47.9)
+WINDOW_CASES = ["quadratic F_ext and N_ext", "no spring, c = 0, quadratic F_ext and N_ext"]
 
-    def get(name: str) -> PolyReference:
+
+@pytest.fixture(scope="module")
+def solved(refcache: RefCache):
+    """The reference of every case, solved once (about 1.5 s each with its friction work: kept in the
+    pytest cache, conftest.refcache)."""
+    cache: dict[str, Solved] = {}
+
+    def get(name: str) -> Solved:
         if name not in cache:
             kw, F, Nx, t_end, _ = CASES[name]
-            ref = PolyReference(**{**BASE, **kw}, F=F, Next=Nx)
-            ref.solve(t_end)
-            cache[name] = ref
+            cache[name] = refcache.call(solve_case, {**BASE, **kw}, F, Nx, t_end,
+                                         windows=(WINDOW,) if name in WINDOW_CASES else ())
         return cache[name]
     return get
 
@@ -88,7 +95,8 @@ def solved():
 def test_against_reference(name, solved):
     kw, F, Nx, t_end, steps = CASES[name]
     run = run_driver({**BASE, **kw}, F, Nx, t_end, steps)
-    ref = solved(name)
+    sol = solved(name)
+    ref = sol.ref
     xr, vr, mr = ref.evaluate(list(run["t"]))
     xr, vr = np.array(xr), np.array(vr)
     ex = np.abs(run["x"] - xr).max() / max(np.abs(xr).max(), 1e-300)
@@ -96,7 +104,7 @@ def test_against_reference(name, solved):
     assert ex < TOL and ev < TOL, (name, ex, ev)
     assert list(run["mode"]) == list(mr)
     # the events: the same kinds in the same order, at the same times
-    ev_ref = ref.events()
+    ev_ref = sol.events
     if not any(seg.free for seg in ref.segments):
         assert [(a, b) for _, a, b in run["switches"]] == [(a, b) for _, a, b in ev_ref]
         dt = max(abs(t - tr) for (t, _, _), (tr, _, _) in zip(run["switches"], ev_ref))
@@ -104,11 +112,11 @@ def test_against_reference(name, solved):
         assert len(ev_ref) >= 3
     # the observables over the whole run
     x_max, x_min, t_stuck, E, transitions = run["obs"]
-    xr_max, xr_min = ref.extremes()
+    xr_max, xr_min = sol.extremes
     scale = max(abs(float(xr_max)), abs(float(xr_min)))
     assert abs(x_max - float(xr_max)) < TOL * scale and abs(x_min - float(xr_min)) < TOL * scale
-    assert abs(t_stuck - float(ref.stuck_time())) < T_TOL * t_end * 10
-    W = float(ref.friction_work())
+    assert abs(t_stuck - float(sol.stuck_time)) < T_TOL * t_end * 10
+    W = float(sol.friction_work)
     assert abs(E - W) < W_TOL * W, (name, E, W)
 
 
@@ -118,10 +126,10 @@ def test_cases_cover_the_features(solved):
     refs = {name: solved(name) for name in ("ramp F_ext, stick-slip", "quadratic F_ext and N_ext",
                                             "normal force ramps to 0")}
     for name in ("ramp F_ext, stick-slip", "quadratic F_ext and N_ext"):
-        kinds = [(a, b) for _, a, b in refs[name].events()]
+        kinds = [(a, b) for _, a, b in refs[name].events]
         assert sum(1 for a, b in kinds if a == 0) >= 4, name   # breakaways
         assert sum(1 for a, b in kinds if b == 0) >= 4, name   # stops into stick
-    assert any(seg.free for seg in refs["normal force ramps to 0"].segments)
+    assert any(seg.free for seg in refs["normal force ramps to 0"].ref.segments)
 
 
 def test_one_polynomial_any_steps():
@@ -136,13 +144,12 @@ def test_one_polynomial_any_steps():
     assert all(k == kinds[0] for k in kinds)
 
 
-@pytest.mark.parametrize("name", ["quadratic F_ext and N_ext", "no spring, c = 0, quadratic F_ext and N_ext"])
+@pytest.mark.parametrize("name", WINDOW_CASES)
 def test_friction_work_in_a_window(name, solved):
     """The observation window's edges cut slides (both edges fall inside one, in both cases): the
     work of the parts inside (exactly by parts at k > 0, by quadrature at k = 0) against the
     reference's integral over the window."""
     kw, F, Nx, t_end, steps = CASES[name]
-    window = (10.3, 47.9)
-    run = run_driver({**BASE, **kw}, F, Nx, t_end, steps, window)
-    W = float(solved(name).friction_work(*window))
+    run = run_driver({**BASE, **kw}, F, Nx, t_end, steps, WINDOW)
+    W = float(solved(name).window_work[WINDOW])
     assert abs(run["obs"][3] - W) < W_TOL * W, (run["obs"][3], W)

@@ -57,6 +57,7 @@ from dryfriction.references.belt import Belt, simulate as simulate_belt
 from dryfriction.references.chain import Chain, solve_chain
 from dryfriction.references.exact import solve_exact
 from fmi2_helpers import Counting
+from refcache import RefCache
 from test_hosts import fmucheck, fmusim
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -715,7 +716,7 @@ def test_chain_fmu_state_in_model_exchange(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("solver", ["CVode", "Euler"])
-def test_chain_fmpy_runs_to_the_end(version: int, solver: str) -> None:
+def test_chain_fmpy_runs_to_the_end(version: int, solver: str, refcache: RefCache) -> None:
     """The default chain (2 blocks, k 100, P0 1, omega 5, N 1, mu_s 0.4, chi 0.7) with fmpy's defaults:
     to the end; CVode with the reference's switches and x within 1e-4; Euler (fmpy's step 1e-3)
     within 1e-2. FMI 2.0 (the build's n = 2) and 3.0 give the same numbers."""
@@ -728,7 +729,7 @@ def test_chain_fmpy_runs_to_the_end(version: int, solver: str) -> None:
         x, modes = np.asarray(r["x"]), np.asarray(r["mode"])
     assert r["time"][-1] == pytest.approx(12.56, abs=1e-12) and np.all(np.isfinite(x))
     ch = DEFAULT_CHAIN
-    ref = solve_chain(ch, 12.56)
+    ref = refcache.call(solve_chain, ch, 12.56)
     rows, n = _chain_switches(modes, ch)
     err = np.max(np.abs(x - ref.evaluate(r["time"])["x"]))
     if solver == "CVode":
@@ -756,12 +757,13 @@ CHAIN_ME_CASES = {
 }
 
 
-def _chain_accuracy(name: str, rtol: float, x_tol: float, t_tol: float) -> None:
+def _chain_accuracy(name: str, rtol: float, x_tol: float, t_tol: float, refcache: RefCache) -> None:
     """CVode at rtol over 10 excitation periods of CHAIN_ME_CASES[name] against the event-driven
-    reference: every block's x within x_tol, exactly its switches, their times within t_tol."""
+    reference (solved once: conftest.refcache): every block's x within x_tol, exactly its switches,
+    their times within t_tol."""
     ch = CHAIN_ME_CASES[name]
     t_end = 10 * ch.period
-    ref = solve_chain(ch, t_end)
+    ref = refcache.call(solve_chain, ch, t_end)
     r = simulate_chain_me(ch, t_end, _chain_fmu(3), relative_tolerance=rtol, output_interval=ch.period / 50,
                           record_events=True)
     x, modes = np.asarray(r["x"]), np.asarray(r["mode"])
@@ -775,20 +777,20 @@ def _chain_accuracy(name: str, rtol: float, x_tol: float, t_tol: float) -> None:
 
 
 @pytest.mark.parametrize("name", list(CHAIN_ME_CASES))
-def test_chain_cvode_accuracy_against_the_reference(name: str) -> None:
+def test_chain_cvode_accuracy_against_the_reference(name: str, refcache: RefCache) -> None:
     """CVode at 1e-10 over 10 excitation periods: every block's x within 3e-7 of the event-driven
     reference (dryfriction.references.chain; measured 8.6e-9 ... 2.4e-7, the largest on the five
     blocks whose x reaches 3 m), exactly its switches (count), at its times within 3e-6 s: a
     breakaway's time error is the position's error over the static force's rate (measured at most
     1.1e-6 s, five-blocks)."""
-    _chain_accuracy(name, 1e-10, 3e-7, 3e-6)
+    _chain_accuracy(name, 1e-10, 3e-7, 3e-6, refcache)
 
 
 @pytest.mark.parametrize("name", list(CHAIN_ME_CASES))
-def test_chain_cvode_accuracy_falls_with_the_tolerance(name: str) -> None:
+def test_chain_cvode_accuracy_falls_with_the_tolerance(name: str, refcache: RefCache) -> None:
     """At 1e-12 every block's x within 1e-8 of the reference (measured at most 3.9e-9), the switch
     times within 1e-7 s."""
-    _chain_accuracy(name, 1e-12, 1e-8, 1e-7)
+    _chain_accuracy(name, 1e-12, 1e-8, 1e-7, refcache)
 
 
 @pytest.mark.parametrize("start", [
@@ -820,7 +822,7 @@ def test_chain_belt_and_stribeck_against_cosimulation(start: dict[str, Any]) -> 
 @pytest.mark.slow
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("solver", ["cvode", "euler"])
-def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path) -> None:
+def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path, refcache: RefCache) -> None:
     """fmusim integrates the default chain (n = 2): to the end, no warning; CVODE at 1e-10 over its
     default 12.56 s with the reference's 41 switches and x within 1e-8; Euler at the step 1e-4 within
     1e-3 over the first 3 s (11 switches; at its default step, the description's 0.01, explicit
@@ -838,7 +840,7 @@ def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path) 
     t, x, modes = a[:, 0], a[:, 1:3], a[:, -2:]
     assert t[-1] == pytest.approx(t_end, abs=2e-4)
     ch = DEFAULT_CHAIN
-    ref = solve_chain(ch, t_end)
+    ref = refcache.call(solve_chain, ch, t_end)
     err = np.max(np.abs(x - ref.evaluate(t)["x"]))
     if solver == "cvode":
         assert _chain_switches(modes, ch)[1] == len(ref.events) == 41 and err < 1e-8
@@ -847,11 +849,11 @@ def test_fmusim_chain_model_exchange(version: int, solver: str, tmp_path: Path) 
 
 
 @pytest.mark.slow
-def test_compliance_checker_chain_model_exchange(tmp_path: Path) -> None:
+def test_compliance_checker_chain_model_exchange(tmp_path: Path, refcache: RefCache) -> None:
     """The Compliance Checker's Model Exchange run of the FMI 2.0 chain (its explicit Euler at 1e-3):
     no warning or error, to the end, x within 1e-2 of the reference."""
     data = np.genfromtxt(_fmucheck_me(_chain_fmu(2), 0.001, tmp_path), delimiter=",", skip_header=1)
     t, x = data[:, 0], data[:, 1:3]
     assert t[-1] == pytest.approx(12.56)
-    ref = solve_chain(DEFAULT_CHAIN, 12.56)
+    ref = refcache.call(solve_chain, DEFAULT_CHAIN, 12.56)
     assert np.max(np.abs(x - ref.evaluate(t)["x"])) < 1e-2

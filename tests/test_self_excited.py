@@ -27,6 +27,7 @@ from dryfriction.drivers.oscillator import OscillatorFMU2
 from dryfriction.params import Oscillator
 from dryfriction.analysis.self_excited import (BeltProblem, Branch, continue_orbits, equilibrium, find_orbit, hopf_formula,
                                       locate_hopf, self_excited)
+from refcache import RefCache
 
 MU_S, CHI = 0.5, 0.6                       # mu_k = 0.3
 UNDAMPED = Oscillator(m=1.0, k=1.0, c=0.0, P0=0.0, omega=0.0, N=1.0, mu_s=MU_S, chi=CHI, x0=0.0, v0=0.0)
@@ -92,7 +93,7 @@ def test_exact_scheme_on_the_closed_form_cycle(fmu: OscillatorFMU2) -> None:
 
 
 @pytest.mark.slow
-def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU2) -> None:
+def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     """Damped Coulomb with scheme exact (where the FMU has it on a belt): the reference's period to
     1e-9 (measured 6.5849654 both), against the located one's 5.7e-6."""
     prob = BeltProblem(DAMPED, 0.2, scheme="exact")
@@ -101,8 +102,8 @@ def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU2) ->
     except FMUError as e:
         assert "scheme exact supports v_belt = 0 only" in str(e)
         pytest.skip("this FMU's exact scheme refuses a moving belt")
-    ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=0.2),
-                   np.arange(0.0, 60.0, 1e-3), v_belt=0.2)
+    belt = Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=0.2)
+    ref = refcache.call(simulate, belt, np.arange(0.0, 60.0, 1e-3), v_belt=0.2)
     br = ref.times("breakaway")
     assert o.converged and o.jacobian == "sensitivity" and o.multipliers[1] == 0.0
     assert abs(o.period - (br[-1] - br[-2])) < 1e-9 * o.period
@@ -110,13 +111,13 @@ def test_exact_scheme_damped_orbit_against_the_reference(fmu: OscillatorFMU2) ->
 
 # ---- damped Coulomb against a long transient of the reference ---------------------------------------
 
-def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: OscillatorFMU2) -> None:
+def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     prob = BeltProblem(DAMPED, 0.2)
     r = self_excited(prob, fmu=fmu)
     o = r.orbit
     assert r.motion == "stick-slip" and o is not None and o.stable and o.multipliers[1] == 0.0
-    ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=0.2),
-                   np.arange(0.0, 60.0, 1e-3), v_belt=0.2)
+    belt = Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=0.2)
+    ref = refcache.call(simulate, belt, np.arange(0.0, 60.0, 1e-3), v_belt=0.2)
     br, st = ref.times("breakaway"), ref.times("stop")
     T = br[-1] - br[-2]
     assert np.ptp(np.diff(br)[-4:]) < 1e-9                 # the reference is on its cycle
@@ -131,13 +132,13 @@ def test_damped_coulomb_orbit_against_a_long_reference_transient(fmu: Oscillator
     assert r.equilibrium.stable and r.equilibrium.growth_rate == pytest.approx(-0.025, rel=1e-4)
 
 
-def test_slow_belt_long_stick_phases(fmu: OscillatorFMU2) -> None:
+def test_slow_belt_long_stick_phases(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     """v_belt = 1e-3: stuck 99 % of a 388 s cycle (the guess's transient covers five such cycles)."""
     prob = BeltProblem(DAMPED, 1e-3)
     o = self_excited(prob, fmu=fmu).orbit
     assert o is not None and o.converged and o.stick_fraction > 0.99
-    ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=1e-3),
-                   np.arange(0.0, 1300.0, 0.05), v_belt=1e-3)
+    belt = Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=prob.x_eq, v0=1e-3)
+    ref = refcache.call(simulate, belt, np.arange(0.0, 1300.0, 0.05), v_belt=1e-3)
     br = ref.times("breakaway")
     assert br.size >= 3 and abs(br[-1] - br[-2] - (br[-2] - br[-3])) < 1e-8
     # measured 9.8e-8 relative
@@ -243,15 +244,15 @@ def test_branch_stick_slip_leg_turns_at_the_grazing_and_ends_at_the_hopf(branch:
 
 
 @pytest.mark.slow
-def test_branch_end_against_reference_transients(branch: tuple[Branch, float]) -> None:
+def test_branch_end_against_reference_transients(branch: tuple[Branch, float], refcache: RefCache) -> None:
     """Just below the grazing speed the motion from riding on the belt stays stick-slip; just above it
     it decays (the reference: event-driven, none of the FMU's code)."""
     br, _ = branch
     for fac, sticks in ((0.995, True), (1.005, False)):
         vb = fac * br.grazing
         prob = stribeck(vb)
-        ref = simulate(Belt(m=1.0, k=1.0, c=0.1, N=1.0, mu_s=MU_S, mu_k=0.3, law="stribeck", v_s=V_S, x0=prob.x_eq,
-                            v0=vb), np.arange(0.0, 120.0, 0.01), v_belt=vb)
+        belt = Belt(m=1.0, k=1.0, c=0.1, N=1.0, mu_s=MU_S, mu_k=0.3, law="stribeck", v_s=V_S, x0=prob.x_eq, v0=vb)
+        ref = refcache.call(simulate, belt, np.arange(0.0, 120.0, 0.01), v_belt=vb)
         stops = ref.times("stop")
         late = ref.t > 90.0
         if sticks:
@@ -263,7 +264,7 @@ def test_branch_end_against_reference_transients(branch: tuple[Branch, float]) -
 
 
 @pytest.mark.slow
-def test_coulomb_branch_ends_at_its_grazing(fmu: OscillatorFMU2) -> None:
+def test_coulomb_branch_ends_at_its_grazing(fmu: OscillatorFMU2, refcache: RefCache) -> None:
     """Damped Coulomb: no Hopf (steady sliding is stable at every speed), no slip orbits; the stick-slip
     leg ends where its catch of the belt grazes, with a stick phase still there (measured v_g =
     0.3322743, stick share 0.095); the reference from the belt: stick-slip at 0.995 v_g, decay at 1.005."""
@@ -274,8 +275,8 @@ def test_coulomb_branch_ends_at_its_grazing(fmu: OscillatorFMU2) -> None:
     assert br.grazing == a["v_belt"][-1] and 0.33 < br.grazing < 0.335
     for fac, sticks in ((0.995, True), (1.005, False)):
         vb = fac * br.grazing
-        ref = simulate(Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=BeltProblem(DAMPED, vb).x_eq, v0=vb),
-                       np.arange(0.0, 120.0, 0.01), v_belt=vb)
+        belt = Belt(m=1.0, k=1.0, c=0.05, N=1.0, mu_s=MU_S, mu_k=0.3, x0=BeltProblem(DAMPED, vb).x_eq, v0=vb)
+        ref = refcache.call(simulate, belt, np.arange(0.0, 120.0, 0.01), v_belt=vb)
         stops = ref.times("stop")
         assert (stops.size > 15 and stops[-1] > 105.0) if sticks else stops.size == 0
 

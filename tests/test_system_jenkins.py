@@ -18,6 +18,7 @@ from scipy.linalg import expm
 
 from dryfriction.references.system import simulate
 from dryfriction.system.structure import Contact, System
+from refcache import RefCache
 from test_system_fmu import SCHEMES, SYS3, Fmu3, run
 
 
@@ -103,7 +104,7 @@ def errors(s: System, scheme: str, times: np.ndarray, ref: Any, tmp: Path) -> tu
 # --------------------------------------------------------------------- against the reference
 
 @pytest.mark.parametrize("chi", [0.7, 1.6])
-def test_two_mass_jenkins_located_is_second_order(chi: float, tmp_path: Path) -> None:
+def test_two_mass_jenkins_located_is_second_order(chi: float, tmp_path: Path, refcache: RefCache) -> None:
     """A Jenkins element between two masses over 3 periods, against the event-driven reference:
     located x, s and E_friction errors fall 3.6 to 4.4 times per halving (measured 3.97, 3.99 in x
     at chi = 0.7, 3.99, 4.00 at chi = 1.6); the consistent and paper schemes converge too (at least
@@ -111,7 +112,7 @@ def test_two_mass_jenkins_located_is_second_order(chi: float, tmp_path: Path) ->
     s = two_mass(chi)
     T = 2 * np.pi / s.omega
     times = np.linspace(0.0, 3 * T, 31)
-    ref = simulate(s, times[-1], times)
+    ref = refcache.call(simulate, s, times[-1], times)
     assert len(ref.switches) >= 10 and {-1, 0, 1} <= set(np.unique(ref.mode))
     ex, es, ee = errors(s, "located", times, ref, tmp_path)
     assert ex[0] < 1e-3 * np.max(np.abs(ref.x))
@@ -128,7 +129,8 @@ RANDOM = [(1, 1, 1, 0.7), (2, 2, 1, 1.3), (3, 3, 0, 0.6)]
 
 @pytest.mark.parametrize("seed,n_jenkins,n_rigid,chi", RANDOM, ids=[f"seed{c[0]}" for c in RANDOM])
 def test_random_structures_located_second_order_consistent_first(seed: int, n_jenkins: int, n_rigid: int,
-                                                                  chi: float, tmp_path: Path) -> None:
+                                                                  chi: float, tmp_path: Path,
+                                                                  refcache: RefCache) -> None:
     """Random structures with Jenkins and rigid contacts (chi on both sides of 1), 3 periods
     against the reference: located ratios 3.6 to 4.4 per halving (measured 3.97/3.95, 3.90/3.88,
     3.96/3.98); consistent about first order, irregular per halving (over the two halvings measured
@@ -137,7 +139,7 @@ def test_random_structures_located_second_order_consistent_first(seed: int, n_je
     assert int(np.sum(s.k_t > 0)) == n_jenkins and s.nc == n_jenkins + n_rigid
     T = 2 * np.pi / s.omega
     times = np.linspace(0.0, 3 * T, 31)
-    ref = simulate(s, times[-1], times)
+    ref = refcache.call(simulate, s, times[-1], times)
     assert len(ref.switches) >= 10
     ex, es, _ = errors(s, "located", times, ref, tmp_path)
     for e in (ex, es):
@@ -152,7 +154,7 @@ BELTS = [(-1, 0, 0, 0.7), (3, 3, 0, 0.6)]
 
 @pytest.mark.parametrize("seed,n_jenkins,n_rigid,chi", BELTS, ids=["two_mass", "seed3"])
 def test_moving_belts_keep_the_located_order(seed: int, n_jenkins: int, n_rigid: int, chi: float,
-                                              tmp_path: Path) -> None:
+                                              tmp_path: Path, refcache: RefCache) -> None:
     """The contacts' surfaces moving (v_belt, an input, set at the start): a stuck slider moves with
     its belt. Located x and s against the reference: ratios 3.6 to 4.4 per halving (measured
     3.97/3.98 and 3.82/3.91 in x)."""
@@ -160,7 +162,7 @@ def test_moving_belts_keep_the_located_order(seed: int, n_jenkins: int, n_rigid:
     vb = np.random.default_rng(seed + 100).uniform(-0.1, 0.1, s.nc)
     T = 2 * np.pi / s.omega
     times = np.linspace(0.0, 3 * T, 31)
-    ref = simulate(s, times[-1], times, v_belt=vb)
+    ref = refcache.call(simulate, s, times[-1], times, v_belt=vb)
     assert len(ref.switches) >= 10
     jen = s.k_t > 0
     ex, es = [], []
@@ -180,7 +182,8 @@ def test_moving_belts_keep_the_located_order(seed: int, n_jenkins: int, n_rigid:
 
 
 @pytest.mark.parametrize("mu_k", [0.55, 0.478], ids=["mu_k_above_mu_s", "mu_k_equal_mu_s"])
-def test_slider_stopping_beside_a_stuck_rigid_contact_stays_stuck(mu_k: float, tmp_path: Path) -> None:
+def test_slider_stopping_beside_a_stuck_rigid_contact_stays_stuck(mu_k: float, tmp_path: Path,
+                                                                   refcache: RefCache) -> None:
     """One DOF with a rigid contact and a Jenkins contact whose mu_k >= mu_s (its breakaway limit is
     its kinetic force): twice a period the rigid contact stops the DOF while the slider slides, so the
     slider stops with its force on its limit (a hair beyond it in rounding) and stays stuck there while
@@ -194,7 +197,7 @@ def test_slider_stopping_beside_a_stuck_rigid_contact_stays_stuck(mu_k: float, t
                          Contact(dof=0, N=0.903, mu_s=0.478, mu_k=mu_k, k_t=110.0)])
     T = 2 * np.pi / s.omega
     times = np.linspace(0.0, 4 * T, 41)
-    ref = simulate(s, times[-1], times)
+    ref = refcache.call(simulate, s, times[-1], times)
     # (the case: the rigid contact and the slider stopping at one time, the slider's force on its limit)
     stops = [(a.t, b.t) for a, b in zip(ref.switches, ref.switches[1:])
              if (a.contact, a.after, b.contact, b.after) == (0, 0, 1, 0) and b.t - a.t < 1e-9]
@@ -245,7 +248,7 @@ def test_huge_normal_force_makes_a_jenkins_contact_a_spring(tmp_path: Path) -> N
     assert 3.6 < e[0] / e[1] < 4.4, e
 
 
-def test_stiffening_jenkins_contact_tends_to_the_rigid_one(tmp_path: Path) -> None:
+def test_stiffening_jenkins_contact_tends_to_the_rigid_one(tmp_path: Path, refcache: RefCache) -> None:
     """mu_s = mu_k: the Jenkins contact with k_t = 1e2, 1e3, 1e4 times the structure's stiffness
     scale tends to the rigid contact (the same FMU with k_t = 0): the largest difference in x over 3
     periods falls as about k_t^-1/2 (measured 2.58e-2, 8.28e-3, 2.52e-3 of the motion's scale), as
@@ -255,13 +258,13 @@ def test_stiffening_jenkins_contact_tends_to_the_rigid_one(tmp_path: Path) -> No
     h = T / 2000
     rigid = fmu_outputs(two_mass(1.0, k_t=0.0), "located", h, times, tmp_path)
     assert np.all(np.isnan(rigid["s"]))
-    ref0 = simulate(two_mass(1.0, k_t=0.0), times[-1], times)
+    ref0 = refcache.call(simulate, two_mass(1.0, k_t=0.0), times[-1], times)
     scale = np.max(np.abs(rigid["x"]))
     d, dr = [], []
     for kt in (20.0 * 1e2, 20.0 * 1e3, 20.0 * 1e4):
         o = fmu_outputs(two_mass(1.0, k_t=kt), "located", h, times, tmp_path)
         d.append(np.max(np.abs(o["x"] - rigid["x"])) / scale)
-        ref = simulate(two_mass(1.0, k_t=kt), times[-1], times)
+        ref = refcache.call(simulate, two_mass(1.0, k_t=kt), times[-1], times)
         dr.append(np.max(np.abs(ref.x - ref0.x)) / scale)
     assert d[0] < 0.05 and d[1] < 0.4 * d[0] and d[2] < 0.4 * d[1], d
     np.testing.assert_allclose(d, dr, rtol=0.03)
@@ -397,7 +400,7 @@ def test_normal_force_changes_keep_the_energy_balance(scheme: str, tmp_path: Pat
     assert np.diff(E).min() >= 0.0
 
 
-def test_early_return_ends_steps_at_the_sliders_switches(tmp_path: Path) -> None:
+def test_early_return_ends_steps_at_the_sliders_switches(tmp_path: Path, refcache: RefCache) -> None:
     """FMI 3.0 with early return: a long step ends at each slider's stick and breakaway in turn,
     all of the reference's switches, each at its time to the located scheme's accuracy (measured
     1.8e-5 s at most at h = T/800 = 1.6e-3 s)."""
@@ -406,7 +409,7 @@ def test_early_return_ends_steps_at_the_sliders_switches(tmp_path: Path) -> None
 
     sysm = two_mass(0.7)
     T = 2 * np.pi / sysm.omega
-    ref = simulate(sysm, 2 * T, [2 * T])
+    ref = refcache.call(simulate, sysm, 2 * T, [2 * T])
     md = read_model_description(str(SYS3))
     d = extract(str(SYS3), unzipdir=str(tmp_path / "early"))
     vr = {v.name: v.valueReference for v in md.modelVariables}

@@ -31,6 +31,7 @@ import pytest
 from dryfriction import Contact, System
 from dryfriction.drivers.system import trajectory
 from dryfriction.references.system import simulate
+from refcache import RefCache
 
 
 # --------------------------------------------------------------------------- random structures
@@ -80,15 +81,16 @@ CASES = [(0, False, 2, 1), (1, True, 2, 2), (12, False, 3, 2), (3, True, 3, 3), 
 
 
 @pytest.fixture(scope="module")
-def convergence() -> list[dict]:
-    """Each structure's reference over two excitation periods (41 points) and the FMU's relative
-    max-norm error of x at h = T_min/100 / 2^k: located k = 0..3, consistent k = 0..5."""
+def convergence(refcache: RefCache) -> list[dict]:
+    """Each structure's reference over two excitation periods (41 points; computed once, kept in the
+    pytest cache: conftest.refcache) and the FMU's relative max-norm error of x at
+    h = T_min/100 / 2^k: located k = 0..3, consistent k = 0..5."""
     out = []
     for case in CASES:
         s = random_system(*case)
         t_end = 2.0 * 2.0 * math.pi / s.omega
         times = np.linspace(0.0, t_end, 41)
-        ref = simulate(s, t_end, t_eval=times)
+        ref = refcache.call(simulate, s, t_end, t_eval=times)
         scale = float(np.max(np.abs(ref.x)))
         h0 = fastest_period(s) / 100.0
         errs = {}

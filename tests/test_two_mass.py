@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from refcache import RefCache
 from test_two_mass_reference import BASE, GENERAL, PERIOD
 from two_mass_reference import TwoMass, simulate
 
@@ -37,9 +38,10 @@ def run(p: TwoMass, h: float, t_end: float, dt: float, scheme: str = "located") 
     return np.array([[float(x) for x in line.split()] for line in res.stdout.splitlines()])
 
 
-def errors(p: TwoMass, scheme: str, steps: tuple[int, ...]) -> list[float]:
-    """max |x - x_ref| over the communication points T/8 apart in 4 periods, at h = T/steps."""
-    ref = simulate(p, 4 * PERIOD)
+def errors(p: TwoMass, scheme: str, steps: tuple[int, ...], refcache: RefCache) -> list[float]:
+    """max |x - x_ref| over the communication points T/8 apart in 4 periods, at h = T/steps (the
+    reference solved once: conftest.refcache)."""
+    ref = refcache.call(simulate, p, 4 * PERIOD)
     out = []
     for n in steps:
         d = run(p, PERIOD / n, 4 * PERIOD, PERIOD / 8, scheme)
@@ -49,8 +51,8 @@ def errors(p: TwoMass, scheme: str, steps: tuple[int, ...]) -> list[float]:
 
 
 @pytest.mark.parametrize("case", list(CASES))
-def test_located_is_second_order_against_the_reference(case: str) -> None:
-    e = errors(CASES[case], "located", (400, 800, 1600))
+def test_located_is_second_order_against_the_reference(case: str, refcache: RefCache) -> None:
+    e = errors(CASES[case], "located", (400, 800, 1600), refcache)
     orders = [math.log2(e[i] / e[i + 1]) for i in range(2)]
     # measured: every mode set 4.3e-6, 1.1e-6, 2.7e-7 (orders 2.00, 2.00); both contacts 4.7e-6 ... 2.9e-7
     assert all(1.9 < o < 2.1 for o in orders), (e, orders)
@@ -58,9 +60,9 @@ def test_located_is_second_order_against_the_reference(case: str) -> None:
 
 
 @pytest.mark.parametrize("scheme", ["consistent", "paper"])
-def test_consistent_and_paper_stay_near_the_reference(scheme: str) -> None:
+def test_consistent_and_paper_stay_near_the_reference(scheme: str, refcache: RefCache) -> None:
     # measured at T/800: consistent 3e-5 ... 5e-4, paper 2e-4 ... 5e-4 (amplitudes about 2e-2)
-    e = errors(BASE, scheme, (800,))
+    e = errors(BASE, scheme, (800,), refcache)
     assert e[0] < 1e-3, e
 
 

@@ -5,7 +5,10 @@
 #                                            the time-exactness oracle, FUZZ_BUILD=<dir> for the build,
 #                                            FUZZ_TARGET=fuzz_fmi3 or fuzz_chain3 for the FMI 3.0
 #                                            oscillator or chain: corpus3 / corpus_chain3, and
-#                                            regressions3 / regressions_chain3 for the kept inputs)
+#                                            regressions3 / regressions_chain3 for the kept inputs,
+#                                            FUZZ_STEP=build to only build the target, FUZZ_STEP=run
+#                                            to fuzz a target built before: scripts/test.sh builds
+#                                            both of its targets, then fuzzes them at once)
 #
 # Installs clang when missing (apt-get, quiet), builds tests/fuzz with -DDFO_FUZZ=ON, fuzzes from
 # tests/fuzz/corpus (new coverage goes to a scratch corpus, not into the repository) and copies
@@ -28,44 +31,55 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 build=${FUZZ_BUILD:-/tmp/dfo-fuzz-build}
 oracle=${FUZZ_TIME_ORACLE:-1}
+step=${FUZZ_STEP:-all}
+case $step in all | build | run) ;; *) echo "run_fuzz: unknown FUZZ_STEP $step (all, build, run)" >&2; exit 2 ;; esac
 python=${PYTHON:-}
 if [ -z "$python" ]; then   # the interpreter with fmpy (the FMI headers come from it)
   if [ -x "$root/.venv/bin/python" ]; then python=$root/.venv/bin/python; else python=$(command -v python3); fi
 fi
 
-# clang with its libFuzzer and sanitizer runtimes: a one-line test build tells whether they work
-fuzzer_works() {
-  local d
-  d=$(mktemp -d /tmp/dfo-fuzz-probe.XXXXXX)
-  printf 'int LLVMFuzzerTestOneInput(const unsigned char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' >"$d/p.c"
-  clang -fsanitize=fuzzer,address,undefined "$d/p.c" -o "$d/p" >/dev/null 2>&1
-  local rc=$?
-  rm -rf "$d"
-  return $rc
-}
-if ! command -v clang >/dev/null 2>&1 || ! fuzzer_works; then
-  echo "run_fuzz: installing clang and its fuzzer runtime" >&2
-  export DEBIAN_FRONTEND=noninteractive
-  # wait for the dpkg lock (another install may hold it, e.g. on a CI runner starting up) rather
-  # than fail at once; without recommends, the runtime package (libclang-rt-dev: libFuzzer, ASan,
-  # UBSan) is named explicitly where the distribution has it
-  apt_log=$(mktemp /tmp/dfo-fuzz-apt.XXXXXX)
-  apt_get() { apt-get -o DPkg::Lock::Timeout=600 "$@" >>"$apt_log" 2>&1; }
-  if apt_get update -qq; then
-    apt_get install -y -qq --no-install-recommends clang libclang-rt-dev \
-      || apt_get install -y -qq --no-install-recommends clang || true
-  fi
+# clang (installed when missing), then the target's configure and build (FUZZ_STEP all or build)
+build_target() {
+  # clang with its libFuzzer and sanitizer runtimes: a one-line test build tells whether they work
+  fuzzer_works() {
+    local d
+    d=$(mktemp -d /tmp/dfo-fuzz-probe.XXXXXX)
+    printf 'int LLVMFuzzerTestOneInput(const unsigned char *d, unsigned long n) { (void)d; (void)n; return 0; }\n' >"$d/p.c"
+    clang -fsanitize=fuzzer,address,undefined "$d/p.c" -o "$d/p" >/dev/null 2>&1
+    local rc=$?
+    rm -rf "$d"
+    return $rc
+  }
   if ! command -v clang >/dev/null 2>&1 || ! fuzzer_works; then
-    echo "run_fuzz: could not install clang with a working libFuzzer (apt-get needs root and network; log: $apt_log)" >&2
+    echo "run_fuzz: installing clang and its fuzzer runtime" >&2
+    export DEBIAN_FRONTEND=noninteractive
+    # wait for the dpkg lock (another install may hold it, e.g. on a CI runner starting up) rather
+    # than fail at once; without recommends, the runtime package (libclang-rt-dev: libFuzzer, ASan,
+    # UBSan) is named explicitly where the distribution has it
+    apt_log=$(mktemp /tmp/dfo-fuzz-apt.XXXXXX)
+    apt_get() { apt-get -o DPkg::Lock::Timeout=600 "$@" >>"$apt_log" 2>&1; }
+    if apt_get update -qq; then
+      apt_get install -y -qq --no-install-recommends clang libclang-rt-dev \
+        || apt_get install -y -qq --no-install-recommends clang || true
+    fi
+    if ! command -v clang >/dev/null 2>&1 || ! fuzzer_works; then
+      echo "run_fuzz: could not install clang with a working libFuzzer (apt-get needs root and network; log: $apt_log)" >&2
+      exit 2
+    fi
+    rm -f "$apt_log"
+  fi
+
+  cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DDFO_FUZZ=ON -DFUZZ_TIME_ORACLE="$oracle" \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPython3_EXECUTABLE="$python" >/dev/null
+  if ! cmake --build "$build" --target "$target" -j2 >"$build/fuzz_build.log" 2>&1; then
+    echo "run_fuzz: building the fuzz target failed (log: $build/fuzz_build.log)" >&2
     exit 2
   fi
-  rm -f "$apt_log"
-fi
-
-cmake -S "$root" -B "$build" -DCMAKE_C_COMPILER=clang -DDFO_FUZZ=ON -DFUZZ_TIME_ORACLE="$oracle" \
-      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPython3_EXECUTABLE="$python" >/dev/null
-if ! cmake --build "$build" --target "$target" -j2 >"$build/fuzz_build.log" 2>&1; then
-  echo "run_fuzz: building the fuzz target failed (log: $build/fuzz_build.log)" >&2
+}
+[ "$step" = run ] || build_target
+[ "$step" != build ] || exit 0
+if [ ! -x "$build/tests/fuzz/$target" ]; then
+  echo "run_fuzz: $build/tests/fuzz/$target is not built (FUZZ_STEP=build first)" >&2
   exit 2
 fi
 
