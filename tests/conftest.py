@@ -7,7 +7,9 @@ Nothing here looks for an FMU before a fixture asks for one."""
 from __future__ import annotations
 
 import shutil
+import signal
 import tempfile
+import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -34,6 +36,62 @@ PYTHON_ONLY = frozenset({"test_references.py", "test_belt_reference.py", "test_c
                          "test_layout.py", "test_roots.py",
                          "test_system_structure.py", "test_system_reference.py", "test_refcache.py"})
 FMU_FIXTURES = frozenset({"fmu", "fmu_path", "chain_fmu2", "chain_fmu3", "unzipped", "inst", "md2", "md3"})
+
+
+# ---- the process's signal handling, as each test finds it ----------------------------------------------
+
+#: tests after which SIGINT's handler or the main thread's signal mask was not Python's default (the
+#: next test found it so): restored, and listed at the end of the run
+_SIGNAL_LEAKS: list[str] = []
+_LAST_TEST: list[str] = ["(the session's start)"]
+
+
+@pytest.fixture(autouse=True)
+def _default_signal_handling(request: pytest.FixtureRequest) -> Iterator[None]:
+    """Every test starts with Python's default SIGINT handling (KeyboardInterrupt) and SIGINT and
+    SIGTERM unblocked in the main thread, as a library caller has them: the command line's tests
+    (tests/test_cli_interrupt.py) raise signals in this process. Where the test before left them
+    otherwise, they are restored and that test is named in the run's summary."""
+    if threading.current_thread() is threading.main_thread():
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, set())
+        held = {signal.SIGINT, signal.SIGTERM} & set(mask)
+        if signal.getsignal(signal.SIGINT) is not signal.default_int_handler or held:
+            _SIGNAL_LEAKS.append(f"{_LAST_TEST[0]}: SIGINT handler {signal.getsignal(signal.SIGINT)!r}, "
+                                 f"blocked {sorted(int(s) for s in held)}")
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+            cache = getattr(request.config, "cache", None)
+            if cache is not None:  # (for the summary of the run: an xdist worker's own is not shown)
+                cache.set(f"dfo/signal-leaks-{_worker(request.config)}", _SIGNAL_LEAKS)
+    yield
+    _LAST_TEST[0] = request.node.nodeid
+
+
+def _worker(config: pytest.Config) -> str:
+    """This process's xdist worker id ("main" without xdist)."""
+    return str(getattr(config, "workerinput", {}).get("workerid", "main"))
+
+
+_WORKER_IDS = ["main"] + [f"gw{i}" for i in range(256)]
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """The run's list of signal leaks starts empty (the controlling process's)."""
+    cache = getattr(session.config, "cache", None)
+    if cache is not None and not hasattr(session.config, "workerinput"):
+        for w in _WORKER_IDS:
+            if cache.get(f"dfo/signal-leaks-{w}", None):
+                cache.set(f"dfo/signal-leaks-{w}", [])
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """The tests that left the signal handling changed (none expected), from every worker."""
+    cache = getattr(terminalreporter.config, "cache", None)
+    lines = list(_SIGNAL_LEAKS)
+    if cache is not None and not hasattr(terminalreporter.config, "workerinput"):
+        lines = [line for w in _WORKER_IDS for line in cache.get(f"dfo/signal-leaks-{w}", [])]
+    for line in lines:
+        terminalreporter.write_line(f"signal handling left changed by {line}")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

@@ -122,6 +122,13 @@ OSC = {"m": 1.3, "k": 40.0, "c": 0.2, "P0": 1.0, "omega": 2.5, "phi": 0.0, "N": 
        "x0": 0.01, "v0": 0.0, "h": 1e-3, "alpha": -0.1}
 
 
+def one_dof(p: dict[str, float], scheme: int) -> dict[str, Any]:
+    """The oscillator's parameters p as the values of a system with one DOF and one rigid contact."""
+    return {"M": [p["m"]], "K": [p["k"]], "C": [p["c"]], "F_c": [p["P0"]], "F_s": [0.0], "omega": p["omega"],
+            "x0": [p["x0"]], "v0": [p["v0"]], "W": [1.0], "N": [p["N"]], "mu_s": [p["mu_s"]],
+            "mu_k": [p["chi"] * p["mu_s"]], "h": p["h"], "alpha": p["alpha"], "scheme": scheme}
+
+
 @pytest.mark.parametrize("scheme", list(SCHEMES))
 def test_one_dof_is_the_fmi3_oscillator(scheme: str, tmp_path: Path) -> None:
     times = np.arange(81) * 0.05
@@ -131,11 +138,7 @@ def test_one_dof_is_the_fmi3_oscillator(scheme: str, tmp_path: Path) -> None:
         ref = run(o, times, [("x", 1), ("v", 1), ("F_friction", 1)], [("mode", 1)])
     finally:
         o.close()
-    p = OSC
-    got = system(tmp_path, 1, 1, {"M": [p["m"]], "K": [p["k"]], "C": [p["c"]], "F_c": [p["P0"]], "F_s": [0.0],
-                                  "omega": p["omega"], "x0": [p["x0"]], "v0": [p["v0"]], "W": [1.0], "N": [p["N"]],
-                                  "mu_s": [p["mu_s"]], "mu_k": [p["chi"] * p["mu_s"]], "h": p["h"],
-                                  "alpha": p["alpha"], "scheme": SCHEMES[scheme]}, times)
+    got = system(tmp_path, 1, 1, one_dof(OSC, SCHEMES[scheme]), times)
     assert np.array_equal(got[:, -1], ref[:, -1])  # the modes
     assert len(set(ref[:, -1])) == 3  # it sticks and slides both ways
     # the same engine over the same one-DOF operators (eng_one_dof.h): bit for bit
@@ -152,12 +155,8 @@ def test_one_dof_stribeck_is_the_fmi3_oscillator(tmp_path: Path) -> None:
         ref = run(o, times, [("x", 1), ("v", 1), ("F_friction", 1)], [("mode", 1)])
     finally:
         o.close()
-    p = OSC
-    got = system(tmp_path, 1, 1, {"M": [p["m"]], "K": [p["k"]], "C": [p["c"]], "F_c": [p["P0"]], "F_s": [0.0],
-                                  "omega": p["omega"], "x0": [p["x0"]], "v0": [p["v0"]], "W": [1.0], "N": [p["N"]],
-                                  "mu_s": [p["mu_s"]], "mu_k": [p["chi"] * p["mu_s"]], "h": p["h"],
-                                  "alpha": p["alpha"], "scheme": SCHEMES["located"], "friction_law": [2],
-                                  "v_s": [law["v_s"]], "delta": [law["delta"]]}, times)
+    got = system(tmp_path, 1, 1, {**one_dof(OSC, SCHEMES["located"]), "friction_law": [2], "v_s": [law["v_s"]],
+                                  "delta": [law["delta"]]}, times)
     assert len(set(ref[:, -1])) == 3  # it sticks and slides both ways
     assert got.tobytes() == ref.tobytes(), rel_diff(got, ref)
 

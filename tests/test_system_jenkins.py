@@ -270,6 +270,24 @@ def test_stiffening_jenkins_contact_tends_to_the_rigid_one(tmp_path: Path, refca
     np.testing.assert_allclose(d, dr, rtol=0.03)
 
 
+def energy_balance(s: System, t: np.ndarray, X: np.ndarray, V: np.ndarray, S: np.ndarray,
+                   E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The balance's residual at the times t (a uniform grid) and the excitation's work: the change of
+    0.5 v'Mv + 0.5 x'Kx + 0.5 sum_j k_t_j (w_j x - s_j)^2 (the Jenkins springs; S the sliders, nt x nc,
+    NaN at rigid contacts) minus the excitation's work, plus the damping's (trapezoidal rule) and
+    E_friction."""
+    h = t[1] - t[0]
+    springs = np.zeros(len(t))
+    for j in np.flatnonzero(np.asarray(s.k_t) > 0):
+        springs += 0.5 * s.k_t[j] * (X @ s.W[j] - S[:, j]) ** 2
+    mech = 0.5 * np.einsum("ti,ij,tj->t", V, s.M, V) + 0.5 * np.einsum("ti,ij,tj->t", X, s.K, X) + springs
+    pv = np.sum(np.outer(np.cos(s.omega * t), s.F_c) * V, 1)
+    w_in = np.concatenate([[0.0], np.cumsum(0.5 * h * (pv[1:] + pv[:-1]))])
+    cv = np.einsum("ti,ij,tj->t", V, s.C, V)
+    d = np.concatenate([[0.0], np.cumsum(0.5 * h * (cv[1:] + cv[:-1]))])
+    return mech - mech[0] - (w_in - d - E), w_in
+
+
 def test_energy_balance_counts_the_springs_and_the_released_energy(tmp_path: Path) -> None:
     """Located, chi = 0.7: the change of 0.5 v'Mv + 0.5 x'Kx + 0.5 k_t (w x - s)^2 equals the
     excitation's work minus the damping's (trapezoidal rule at every internal step) minus E_friction,
@@ -282,15 +300,8 @@ def test_energy_balance_counts_the_springs_and_the_released_energy(tmp_path: Pat
     t = np.arange(steps + 1) * h
     o = fmu_outputs(s, "located", h, t, tmp_path)
     X, V, S, E, mode = o["x"], o["v"], o["s"], o["E_friction"][:, 0], o["mode"][:, 0]
-    w, kt = s.W[0], s.k_t[0]
-    P = np.outer(np.cos(s.omega * t), s.F_c)
-    mech = (0.5 * np.einsum("ti,ij,tj->t", V, s.M, V) + 0.5 * np.einsum("ti,ij,tj->t", X, s.K, X)
-            + 0.5 * kt * (X @ w - S[:, 0]) ** 2)
-    pv = np.sum(P * V, 1)
-    w_in = np.concatenate([[0.0], np.cumsum(0.5 * h * (pv[1:] + pv[:-1]))])
-    cv = np.einsum("ti,ij,tj->t", V, s.C, V)
-    d = np.concatenate([[0.0], np.cumsum(0.5 * h * (cv[1:] + cv[:-1]))])
-    residual = mech - mech[0] - (w_in - d - E)
+    kt = s.k_t[0]
+    residual, w_in = energy_balance(s, t, X, V, S, E)
     breakaways = int(np.sum((mode[:-1] == 0) & (mode[1:] != 0)))
     Fb, Fk = s.mu_s[0] * s.N[0], s.mu_k[0] * s.N[0]
     released = breakaways * (Fb ** 2 - Fk ** 2) / (2 * kt)
@@ -388,14 +399,8 @@ def test_normal_force_changes_keep_the_energy_balance(scheme: str, tmp_path: Pat
         rows[change] = (np.array(X), np.array(V), np.array(S), np.array(E))
     X, V, S, E = rows[True]
     assert abs(E[-1] - rows[False][3][-1]) > 0.01 * E[-1]  # the changes matter
-    w, kt = s.W[0], s.k_t[0]
-    mech = (0.5 * np.einsum("ti,ij,tj->t", V, s.M, V) + 0.5 * np.einsum("ti,ij,tj->t", X, s.K, X)
-            + 0.5 * kt * (X @ w - S) ** 2)
-    pv = np.sum(np.outer(np.cos(s.omega * t), s.F_c) * V, 1)
-    w_in = np.concatenate([[0.0], np.cumsum(0.5 * h * (pv[1:] + pv[:-1]))])
-    cv = np.einsum("ti,ij,tj->t", V, s.C, V)
-    d = np.concatenate([[0.0], np.cumsum(0.5 * h * (cv[1:] + cv[:-1]))])
-    residual = np.max(np.abs(mech - mech[0] - (w_in - d - E)))
+    res, w_in = energy_balance(s, t, X, V, S[:, None], E)
+    residual = np.max(np.abs(res))
     assert residual < (1e-4 if scheme == "located" else 1e-3) * np.max(np.abs(w_in)), residual
     assert np.diff(E).min() >= 0.0
 
@@ -484,15 +489,7 @@ def test_beside_a_stribeck_contact_the_energy_balance_holds(tmp_path: Path) -> N
     t = np.arange(3001) * h
     o = fmu_outputs(s, "located", h, t, tmp_path)
     X, V, S, E, mode = o["x"], o["v"], o["s"], o["E_friction"][:, 0], o["mode"]
-    w, kt = s.W[1], s.k_t[1]
-    P = np.outer(np.cos(s.omega * t), s.F_c)
-    mech = (0.5 * np.einsum("ti,ij,tj->t", V, s.M, V) + 0.5 * np.einsum("ti,ij,tj->t", X, s.K, X)
-            + 0.5 * kt * (X @ w - S[:, 1]) ** 2)
-    pv = np.sum(P * V, 1)
-    w_in = np.concatenate([[0.0], np.cumsum(0.5 * h * (pv[1:] + pv[:-1]))])
-    cv = np.einsum("ti,ij,tj->t", V, s.C, V)
-    d = np.concatenate([[0.0], np.cumsum(0.5 * h * (cv[1:] + cv[:-1]))])
-    residual = mech - mech[0] - (w_in - d - E)
+    residual, w_in = energy_balance(s, t, X, V, S, E)
     assert np.all(np.isnan(S[:, 0]))  # (no slider at the rigid contact)
     assert np.mean(mode[:, 0] == 0) > 0.02 and np.mean(mode[:, 1] == 0) > 0.1
     assert E[-1] > 0.2 * np.max(np.abs(w_in))

@@ -274,7 +274,6 @@ def test_located_with_non_proportional_damping_against_the_reference(case: tuple
     h0 = fastest_period(s) / 100.0
     e = np.array([np.max(np.abs(trajectory(s.replace(h=h0 / 2.0 ** k), times).x - ref.x)) for k in range(4)])
     ratios = e[:-1] / e[1:]
-    print(case, "errors", e / np.max(np.abs(ref.x)), "ratios", ratios)
     assert np.all((ratios >= 3.6) & (ratios <= 4.4)), ratios
 
 
@@ -303,6 +302,5 @@ def test_located_runs_through_simultaneous_switches_of_coupled_contacts() -> Non
     errs = np.array([np.max(np.abs(trajectory(s.replace(h=h0 / 2.0 ** k), times).x - ref.x)) / scale
                      for k in range(3)])
     ratios = errs[:-1] / errs[1:]
-    print("errors", errs, "ratios", ratios)
     assert errs[0] < 2.5e-3, errs
     assert np.all((ratios >= 3.5) & (ratios <= 5.5)), (errs, ratios)
