@@ -54,9 +54,6 @@ struct eng {
     int fused_ready;             /* xp, ph, V1, f, A0, lim hold fused_steps' declined located grid step from the
                                   * state as it is (a contact switches in it: step_located's phase 0 takes it
                                   * as its trial; eng_advance clears it) */
-    int rest_known;              /* the state as it is was just asked stuck_until's question (eng_advance, for
-                                  * step_located's phase 0): 1 at rest with its breakaway in stick_tb, -1
-                                  * not at rest (or its breakaway unknown), 0 not asked */
     double *rb;                  /* n: the right-hand side of a basis solve (p_hat + the sliding forces) */
     /* per-contact workspace */
     double *lim, *f, *f2;

@@ -1738,7 +1738,7 @@ static void switch_now(eng *E, const eng_inputs *in, eng_state *s, double ta, do
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
-                               const eng_hooks *hk)
+                               const eng_hooks *hk, int rest_known)
 {
     const eng_setup *S = &E->S;
     const size_t nc = ENG_NC(E);
@@ -1773,7 +1773,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
          * rests there, X, V = A = 0 as they are; the holding forces solved at that time and clamped to
          * their limits; the contact most beyond its limit released). Models with their contacts'
          * closed forms split the step at those instead (closed_breakaways, below). */
-        const int known = (phase == 0) ? E->rest_known : 0; /* (eng_advance asked it of this state) */
+        const int known = (phase == 0) ? rest_known : 0; /* (eng_advance asked it of this state) */
         if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && known >= 0 &&
             (known == 1 || stuck_at_rest(E, in, s))) {
             double tp = (known == 1) ? s->stick_tb : stuck_tb(E, in, s);
@@ -1980,7 +1980,7 @@ static void contact_copy(eng_state *d, size_t j, const eng_state *s, size_t k)
  * inlined into itself. */
 static ENG_COLD eng_status step_located_sub(eng *B, const eng_inputs *in, eng_state *b, double t_end, double hh)
 {
-    return step_located(B, in, b, t_end, hh, NULL);
+    return step_located(B, in, b, t_end, hh, NULL, 0); /* (no stuck_until asked of a span) */
 }
 
 /* The located step with contacts switching (E->cand) by spans (eng_sparse.span): the whole step in
@@ -2678,16 +2678,8 @@ static void stuck_skip(eng *E, eng_state *s, long long m)
     const long long k = m - s->n_grid;
     for (int pass = 0; pass < ((k > 1) ? 2 : 1); pass++) stuck_rest(E, s, K);
     double c, sn;
-    if (s->exc_n >= 0 && s->exc_n < m && s->exc_n / DFO_EXC_ANCHOR == m / DFO_EXC_ANCHOR) {
-        /* (the cache in m's stretch between anchors: dfo_grid_phase's rotations from the anchor up to
-         * the cache's point, which give its values, taken; the rest from there, the same numbers) */
-        c = s->exc_c;
-        sn = s->exc_s;
-        for (long long i = s->exc_n; i < m; i++) dfo_phase_rotate(&c, &sn, E->rot_c, E->rot_s);
-    } else {
-        dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m,
-                       &c, &sn);
-    }
+    dfo_grid_phase(S->exc.omega, S->exc.phi0, s->t0, S->h, E->rot_c, E->rot_s, s->exc_n, s->exc_c, s->exc_s, m, &c,
+                   &sn);
     s->exc_n = m;
     s->exc_c = c;
     s->exc_s = sn;
@@ -2739,12 +2731,13 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         /* (a structure at rest whose model gives its breakaway, the step declined: step_located's,
          * which takes it as a stuck step or places the breakaway in it without a trial) */
         const int rest_step = at_rest && ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E);
-        /* (stuck_until's answer, for step_located's phase 0 where no fused step moves the state first) */
-        E->rest_known = declined ? (at_rest ? 1 : -1) : 0;
+        /* stuck_until's answer, for step_located's phase 0 where no fused step moves the state first: 1 at
+         * rest with its breakaway in stick_tb, -1 not at rest (or its breakaway unknown), 0 not asked */
+        int rest_known = declined ? (at_rest ? 1 : -1) : 0;
         /* (a state whose A is re-based on the grid step: the general path's, which fused_steps would
          * leave to it before its first step) */
         if (fuse && s->t == g_prev && !rest_step && !needs_rebase(E, s, h)) {
-            E->rest_known = 0;
+            rest_known = 0;
             loads_at(E, in, s->t);
             fused_steps(E, s, t_target, skip, declined, hk, &g_prev);
             if (s->n_grid - n_checked >= 16) { /* (runs test every 16 of their steps; short ones here) */
@@ -2756,7 +2749,7 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         /* (a structure at rest whose breakaway is known: held_steps' run would end before its first
          * step, left to the stuck path's step_located) */
         if (fuse_held && s->t == g_prev && !at_rest) {
-            E->rest_known = 0;
+            rest_known = 0;
             loads_at(E, in, s->t);
             held_steps(E, in, s, t_target, skip, hk, &g_prev);
             if (s->n_grid - n_checked >= 16) {
@@ -2784,11 +2777,10 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
         s->steps++;
         loads_at(E, in, t_end);
         eng_status st;
-        if (S->scheme == DFO_SCHEME_LOCATED) st = step_located(E, in, s, t_end, hh, hk);
+        if (S->scheme == DFO_SCHEME_LOCATED) st = step_located(E, in, s, t_end, hh, hk, rest_known);
         else st = step_lcp(E, in, s, t_end, hh, S->scheme == DFO_SCHEME_CONSISTENT, hk);
         E->held_ready = 0;
         E->fused_ready = 0;
-        E->rest_known = 0;
         switched = s->switches != sw0;
         if (st == ENG_SWITCHED || (hk && hk->stop_at_switch && switched)) {
             if (s->t < t_end && t_end == grid) s->n_grid--;

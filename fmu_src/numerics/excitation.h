@@ -48,20 +48,20 @@ static inline void dfo_phase_rotate(double *c, double *s, double rc, double rs)
     *c = cn;
 }
 
-/* cos and sin of the phase omega (t0 + n h) + phi at the grid point n >= 0 (not clamped), from the
- * cache (cache_n, cache_c, cache_s) of the point cache_n (-1: empty): one rotation when it holds
- * n - 1 and n is not an anchor, else an exact evaluation at the anchor below n and the rotations
- * from there. */
+/* cos and sin of the phase omega (t0 + n h) + phi at the grid point n >= 0 (not clamped): an exact
+ * evaluation at the anchor below n and the rotations from there, those up to the cache's point taken
+ * from the cache (cache_n, cache_c, cache_s; cache_n -1: empty) where it lies before n after the same
+ * anchor (it holds those rotations' values: the same numbers, fewer rotations). */
 static inline void dfo_grid_phase(double omega, double phi, double t0, double h, double rc, double rs,
                                   long long cache_n, double cache_c, double cache_s, long long n, double *c_out,
                                   double *s_out)
 {
     double c, s;
     long long i;
-    if (cache_n >= 0 && cache_n == n - 1 && n % DFO_EXC_ANCHOR != 0) {
+    if (cache_n >= 0 && cache_n < n && cache_n / DFO_EXC_ANCHOR == n / DFO_EXC_ANCHOR) {
         c = cache_c;
         s = cache_s;
-        i = n - 1;
+        i = cache_n;
     } else {
         i = n - n % DFO_EXC_ANCHOR;
         const double th = omega * (t0 + (double)i * h) + phi;
