@@ -102,7 +102,7 @@ void eng_destroy(eng *E)
                           E->sA, E->shA, E->sF, E->smode, E->pin, E->rpin, E->hlim, E->hf, E->hmode, E->tbk,
                           E->dlab, E->clab, E->lgh, E->ldof, E->lct, E->lidx, E->gmap, E->drng, E->crng, E->lrows, E->lrw, E->lN,
                           E->lmus, E->lmuk, E->lPc, E->lPs, E->lF, E->lNe, E->lvb, E->llaw, E->ghost, E->gX0, E->gV0, E->gX1,
-                          E->gV1, E->gidx, E->gve, E->ew, E->vbj, E->comp, E->jstop, E->jf0};
+                          E->gV1, E->gidx, E->gve, E->ew, E->vbj, E->comp, E->jstop, E->jf0, E->rel};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
@@ -206,6 +206,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     ok &= (E->comp = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (E->jstop = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     ok &= (E->jf0 = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+    ok &= (E->rel = (eng_release *)alloc_n(al, nc, sizeof(eng_release))) != NULL;
     ok &= (E->rpin = (int *)alloc_n(al, n, sizeof(int))) != NULL;
     E->rpin_ok = 0;
     if (S->account_energy) ok &= (E->ew = (double *)alloc_n(al, 3 * n, sizeof(double))) != NULL;
@@ -249,6 +250,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     E->vb = E->zero_nc;
     E->loads_for = NULL;
     E->pin_all = eng_pin_all(E);
+    E->rest_apart = eng_rest_apart(E);
     dfo_bossak_kin_for(S->h, E->g, E->b, &E->kin_grid);
     E->rot_c = dfo_cos(S->exc.omega * S->h);
     E->rot_s = dfo_sin(S->exc.omega * S->h);

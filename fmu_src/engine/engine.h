@@ -373,6 +373,12 @@ typedef struct {
                                  * engine lives) */
     eng_rest_fn on_rest;        /* the rest rule's report (NULL: none), with its context */
     void *rest_ctx;
+    /* M is diagonal and the model's solves of the mass slot keep it so to the bit (a held contact's
+     * force then reads its own DOFs only): where the contact rows also lie on distinct DOFs, their
+     * holding forces do not depend on one another's modes, and the rest rule releases every contact
+     * beyond its limit in one round, in the cascade's order (ENG_REST_RELEASE reports and modes as
+     * one a round), two solves instead of one per release. 0: unknown (one a round). */
+    int mass_diagonal;
 } eng_setup;
 
 /* ---- inputs ---------------------------------------------------------------------------------- */

@@ -26,6 +26,12 @@
 #define NEWTON_ITERS 60          /* Stribeck's Newton iteration */
 #define DEPENDENT_REL 1e-13      /* a Cholesky pivot below this share of its diagonal: a dependent row */
 
+/* A release of the rest rule's round: the contact and its excess over its limit */
+typedef struct {
+    double excess;
+    size_t j;
+} eng_release;
+
 struct eng {
     eng_setup S;
     eng_alloc al;
@@ -69,6 +75,9 @@ struct eng {
     int *pin;                    /* n: the DOFs a held contact pins alone (trial_step) */
     int pin_all;                 /* every DOF is some contact's only one (w_j = e_i): held, they pin the
                                   * whole structure (eng_pin_all) */
+    int rest_apart;              /* the contacts' holding forces independent of one another's modes
+                                  * (eng_setup.mass_diagonal, rows on distinct DOFs: eng_rest_apart) */
+    eng_release *rel;            /* nc: the rest rule's releases of one round, in its order */
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
     double trig_tc, trig_c, trig_ts, trig_s; /* cos and sin of omega t + phi0 at the last t each was evaluated
                                   * for (trig_at; NaN: none) */
@@ -131,6 +140,23 @@ static inline int eng_pin_all(eng *E)
     int all = 1;
     for (size_t i = 0; i < n; i++) all &= E->pin[i];
     return all;
+}
+
+/* Whether E's contacts hold apart (eng_rest_apart's rule): M diagonal to the bit and no two contact
+ * rows on one DOF, E->pin as scratch. */
+static inline int eng_rest_apart(eng *E)
+{
+    if (!E->S.mass_diagonal) return 0;
+    const size_t n = E->S.n;
+    for (size_t i = 0; i < n; i++) E->pin[i] = 0;
+    for (size_t j = 0; j < E->S.nc; j++) {
+        const eng_row *w = &E->S.rows[j];
+        for (size_t k = 0; k < w->nnz; k++) {
+            if (E->pin[w->idx[k]]) return 0;
+            E->pin[w->idx[k]] = 1;
+        }
+    }
+    return 1;
 }
 
 #endif

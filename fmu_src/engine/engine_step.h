@@ -1181,6 +1181,40 @@ static ENG_HOT void free_modes(eng *E, eng_state *s, const eng_hooks *hk)
     }
 }
 
+/* The rest rule's order of releases: a before b when its excess is larger, on ties when its index is
+ * lower (the contact the one-a-round cascade picks first: a strictly larger excess wins, the first
+ * on ties). A strict total order: any sort gives the one result. */
+static int release_before(const eng_release *a, const eng_release *b)
+{
+    return (a->excess != b->excess) ? a->excess > b->excess : a->j < b->j;
+}
+
+/* Sorts r[0 .. m-1] into release_before's order: heapsort, in place (no allocation), O(m log m). */
+static void sort_releases(eng_release *r, size_t m)
+{
+    if (m < 2) return;
+    for (size_t end = m, start = m / 2;;) {
+        if (start > 0) {
+            start--; /* build the heap (its root: the last in the order) */
+        } else {
+            if (--end == 0) return;
+            const eng_release t = r[0]; /* the root to the end of the sorted tail */
+            r[0] = r[end];
+            r[end] = t;
+        }
+        for (size_t i = start;;) { /* sift r[i] down */
+            size_t c = 2 * i + 1;
+            if (c >= end) break;
+            if (c + 1 < end && release_before(&r[c], &r[c + 1])) c++;
+            if (!release_before(&r[i], &r[c])) break;
+            const eng_release t = r[i];
+            r[i] = r[c];
+            r[c] = t;
+            i = c;
+        }
+    }
+}
+
 /* The rest rule for the contacts at rest in rest[] (slip 0 now; the held ones stay held): their
  * holding forces solved together with every stuck contact; the one most beyond its limit starts to
  * slide the way it is driven, and the rest are solved again (the causal cascade). Sets mode[] of
@@ -1200,21 +1234,31 @@ static int rest_decide(eng *E, const eng_state *s, double t, const int *rest, in
     if (tell) tell(ctx, t, ENG_REST_OPEN, nc, 0, 0.0, rest, mode);
     for (size_t round = 0; round <= nc; round++) {
         phys_accel(E, s, t, mode, E->y2, E->f);
-        size_t worst = nc;
+        size_t worst = nc, m = 0;
         double excess = 0.0;
         for (size_t j = 0; j < nc; j++) {
             /* (a slider that comes to rest sticks: its force is the kinetic one, at most on its limit,
              * where jenk_stuck_forces holds it) */
             if (!rest[j] || mode[j] != 0 || !has_friction(E, j) || is_jenk(E, j)) continue;
             const double e = fabs(E->f[j]) - E->Fb[j];
+            if (E->rest_apart && e > 0.0) E->rel[m++] = (eng_release){e, j};
             if (e > excess) { excess = e; worst = j; }
         }
         if (worst == nc) {
             if (tell) tell(ctx, t, ENG_REST_SETTLED, nc, 0, 0.0, rest, mode);
             return 1;
         }
-        mode[worst] = -sgn(E->f[worst]); /* the holding force's opposite: the net applied force's side */
-        if (tell) tell(ctx, t, ENG_REST_RELEASE, worst, mode[worst], excess, rest, mode);
+        if (!E->rest_apart) { /* the worst only: the others' forces change with its release */
+            E->rel[0] = (eng_release){excess, worst};
+            m = 1;
+        } else if (m > 1) { /* every one, as the rounds would release them: by excess, then index */
+            sort_releases(E->rel, m);
+        }
+        for (size_t k = 0; k < m; k++) {
+            const size_t j = E->rel[k].j;
+            mode[j] = -sgn(E->f[j]); /* the holding force's opposite: the net applied force's side */
+            if (tell) tell(ctx, t, ENG_REST_RELEASE, j, mode[j], E->rel[k].excess, rest, mode);
+        }
     }
     return 0;
 }
@@ -2090,6 +2134,7 @@ static ENG_COLD int step_spans(eng *E, const eng_inputs *in, eng_state *s, doubl
         for (int slot = 0; slot < ENG_NSLOTS; slot++) B->slot_ok[slot] = 0;
         sp->span_bind(S->ops.ctx, E->ldof, E->lgh, nd, E->lct, nct);
         B->pin_all = eng_pin_all(B);
+        B->rest_apart = eng_rest_apart(B);
         b->t0 = s->t0;
         b->t = t_start;
         b->n_grid = s->n_grid;

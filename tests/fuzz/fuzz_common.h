@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -417,8 +418,11 @@ static inline int fuzz_drive(const fuzz_target *T, const uint8_t *data, size_t s
         const unsigned op = u8(r) % T->n_ops;
         if (!X.c && op != 0) continue;
         const long before = X.errors_logged;
+        const clock_t c0 = clock();
         const fuzz_status st = T->call(&X, r, op);
-        if (getenv("FUZZ_TRACE")) fprintf(stderr, "call %d: op %u -> status %d (t = %.17g)\n", call, op, (int)st, X.t);
+        if (getenv("FUZZ_TRACE"))
+            fprintf(stderr, "call %d: op %u -> status %d (t = %.17g, %.3f s)\n", call, op, (int)st, X.t,
+                    (double)(clock() - c0) / CLOCKS_PER_SEC);
         after(&X, st, before);
         if (X.c) T->check_outputs(&X);
     }

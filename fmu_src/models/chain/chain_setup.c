@@ -159,6 +159,7 @@ static eng *make_engine(chain_model *M, const char **err)
         if (!M->damped) M->sparse.span_ops.apply_C = NULL;
     }
     S.sparse = &M->sparse;
+    S.mass_diagonal = 1; /* (the mass slot's solves: chain_op_diag, no coupling term) */
     S.rows = M->rows;
     S.exc.omega = M->omega;
     S.exc.phi0 = M->phi0;
