@@ -81,6 +81,16 @@ const char *eng_check_setup(const eng_setup *S, char *buf, size_t len)
             return buf;
         }
     }
+    if (S->tangent) {
+        int strib = 0;
+        for (size_t j = 0; j < S->nc; j++) strib |= S->law && S->law[j].law == DFO_LAW_STRIBECK;
+        if (S->scheme != DFO_SCHEME_LOCATED || strib || S->ops.friction || S->ops.breakaway || S->sparse) {
+            snprintf(buf, len, "the map's tangent is propagated by the located scheme with the Coulomb law and the "
+                               "engine's default friction solver only (scheme %d%s%s)", S->scheme,
+                     strib ? ", a Stribeck contact" : "", (S->ops.friction || S->sparse) ? ", a model solver" : "");
+            return buf;
+        }
+    }
     int jenk = 0;
     for (size_t j = 0; j < S->nc; j++) jenk |= S->k_t && S->k_t[j] > 0.0;
     if (jenk && (S->ops.friction || S->ops.breakaway || S->sparse)) {
@@ -105,6 +115,12 @@ void eng_destroy(eng *E)
                           E->gV1, E->gidx, E->gve, E->ew, E->vbj, E->comp, E->jstop, E->jf0, E->rel};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) E->al.release(E->al.env, ptrs[i]);
+    void *const tptrs[] = {E->tg2, E->th, E->tdh, E->tdf, E->tjk, E->tw1, E->tw2, E->tw3, E->tw4, E->tw5, E->tMV,
+                           E->tKV, E->trate, E->trate2, E->trhs, E->tsol, E->tfh, E->ttgt, E->tcomp, E->theld, E->trb,
+                           E->tset[0].sel, E->tset[0].dep, E->tset[0].D, E->tset[0].L, (void *)E->tset[0].col,
+                           E->tset[1].sel, E->tset[1].dep, E->tset[1].D, E->tset[1].L, (void *)E->tset[1].col};
+    for (size_t i = 0; i < sizeof tptrs / sizeof tptrs[0]; i++)
+        if (tptrs[i]) E->al.release(E->al.env, tptrs[i]);
     if (E->ps.X || E->ps.mode) eng_state_free(E, &E->ps);
     if (E->sub) {
         eng_state_free(E->sub, &E->ss);
@@ -235,6 +251,27 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
         const lcp_alloc la = {al->allocate, al->release, al->env};
         ok &= (E->ws = lcp_workspace_create((int)(2 * nc), &la)) != NULL;
     }
+    if (S->tangent) { /* the located map's tangent (engine_tangent.h) */
+        const size_t nz = 2 * n + nc, L = 4 * n + nc + 1;
+        double **tn[] = {&E->tw1, &E->tw2, &E->tw3, &E->tw4, &E->tw5, &E->tMV, &E->tKV, &E->trate, &E->trate2};
+        double **tc[] = {&E->tdf, &E->trhs, &E->tsol, &E->tfh, &E->ttgt, &E->tcomp};
+        for (size_t i = 0; i < sizeof tn / sizeof tn[0]; i++) ok &= (*tn[i] = (double *)alloc_n(al, n, sizeof(double))) != NULL;
+        for (size_t i = 0; i < sizeof tc / sizeof tc[0]; i++) ok &= (*tc[i] = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
+        ok &= (E->tg2 = (double *)alloc_n(al, nz * L, sizeof(double))) != NULL;
+        ok &= (E->th = (double *)alloc_n(al, L, sizeof(double))) != NULL;
+        ok &= (E->tdh = (double *)alloc_n(al, nz, sizeof(double))) != NULL;
+        ok &= (E->tjk = (double *)alloc_n(al, nz * n, sizeof(double))) != NULL;
+        ok &= (E->theld = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+        ok &= (E->trb = (int *)alloc_n(al, n, sizeof(int))) != NULL;
+        for (int k = 0; k < 2; k++) {
+            tan_set *T = &E->tset[k];
+            ok &= (T->sel = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+            ok &= (T->dep = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
+            ok &= (T->D = (double *)alloc_n(al, nc * nc, sizeof(double))) != NULL;
+            ok &= (T->L = (double *)alloc_n(al, nc * nc, sizeof(double))) != NULL;
+            ok &= (T->col = (const double **)alloc_n(al, nc, sizeof(double *))) != NULL;
+        }
+    }
     if (!ok) {
         eng_destroy(E);
         if (err) *err = oom;
@@ -290,14 +327,27 @@ int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian,
     ok &= (s->t_break = (double *)alloc_n(al, nc, sizeof(double))) != NULL;
     ok &= (s->break_dir = (int *)alloc_n(al, nc, sizeof(int))) != NULL;
     if (with_jacobian) ok &= (s->J = (double *)alloc_n(al, 4 * n * n, sizeof(double))) != NULL;
+    if (with_jacobian & 2) ok &= (s->tan = (double *)alloc_n(al, eng_tan_size(n, nc), sizeof(double))) != NULL;
     if (!ok) eng_state_release(al, s);
     return ok;
+}
+
+int eng_jacobian(const eng_state *s, double *J)
+{
+    if (!s->tan || s->tan_lost) return 0;
+    const size_t n = s->n, nc = s->nc, nz = 2 * n + nc, L = 4 * n + nc + 1;
+    for (size_t c = 0; c < nz; c++) {
+        const double *T = s->tan + c * L;
+        for (size_t i = 0; i < 2 * n; i++) J[i * nz + c] = T[i];
+        for (size_t j = 0; j < nc; j++) J[(2 * n + j) * nz + c] = T[4 * n + j];
+    }
+    return 1;
 }
 
 void eng_state_release(const eng_alloc *al, eng_state *s)
 {
     void *const ptrs[] = {s->X,    s->V,       s->A,       s->hA,         s->F, s->slider,
-                          s->mode, s->t_stick, s->t_break, s->break_dir, s->J};
+                          s->mode, s->t_stick, s->t_break, s->break_dir, s->J, s->tan};
     for (size_t i = 0; i < sizeof ptrs / sizeof ptrs[0]; i++)
         if (ptrs[i]) al->release(al->env, ptrs[i]);
     memset(s, 0, sizeof *s);
@@ -305,7 +355,7 @@ void eng_state_release(const eng_alloc *al, eng_state *s)
 
 int eng_state_init(const eng *E, eng_state *s, int with_jacobian)
 {
-    return eng_state_alloc(&E->al, E->S.n, E->S.nc, with_jacobian, s);
+    return eng_state_alloc(&E->al, E->S.n, E->S.nc, with_jacobian | (E->S.tangent ? 2 : 0), s);
 }
 
 void eng_state_free(const eng *E, eng_state *s) { eng_state_release(&E->al, s); }
@@ -316,6 +366,7 @@ void eng_state_copy(eng_state *dst, const eng_state *src)
     eng_state d = *src;
     d.X = dst->X; d.V = dst->V; d.A = dst->A; d.hA = dst->hA; d.F = dst->F; d.slider = dst->slider; d.mode = dst->mode;
     d.t_stick = dst->t_stick; d.t_break = dst->t_break; d.break_dir = dst->break_dir; d.J = dst->J;
+    d.tan = dst->tan;
     memcpy(d.X, src->X, n * sizeof(double));
     memcpy(d.V, src->V, n * sizeof(double));
     memcpy(d.A, src->A, n * sizeof(double));
@@ -329,6 +380,8 @@ void eng_state_copy(eng_state *dst, const eng_state *src)
         memcpy(d.break_dir, src->break_dir, nc * sizeof(int));
     }
     if (d.J && src->J) memcpy(d.J, src->J, 4 * n * n * sizeof(double));
+    if (d.tan && src->tan) memcpy(d.tan, src->tan, eng_tan_size(n, nc) * sizeof(double));
+    else if (d.tan) d.tan_lost = 1; /* (a tangent not carried over: not computed) */
     *dst = d;
 }
 

@@ -379,6 +379,13 @@ typedef struct {
      * beyond its limit in one round, in the cascade's order (ENG_REST_RELEASE reports and modes as
      * one a round), two solves instead of one per release. 0: unknown (one a round). */
     int mass_diagonal;
+    /* Propagate the located scheme's tangent: the derivative of the state (X, V, the sliders s) with
+     * respect to the state at the run's start (eng_start), through every step in its modes, every
+     * located switch (its time's derivative from its margin: the saltation) and every consistent
+     * restart; read with eng_jacobian. The located scheme only, Coulomb law, the default friction
+     * solver, no sparse operators (eng_check_setup says which); the schemes then take their
+     * general path (no fast paths: the same numbers). The state needs its tangent (eng_state_init). */
+    int tangent;
 } eng_setup;
 
 /* ---- inputs ---------------------------------------------------------------------------------- */
@@ -436,6 +443,12 @@ typedef struct eng_state_s {
     long long exc_n;            /* excitation cache: cos, sin of omega (t0 + exc_n h) + phi0 (-1: empty) */
     double exc_c, exc_s;
     double *J;                  /* (2n)^2 row-major d(X, V)/d(X, V)(t_ref), or NULL: not propagated (eng_caps) */
+    /* the located map's tangent (eng_setup.tangent; NULL without): 2 n + nc columns, one per start
+     * value (x0, v0, the sliders'), each of 4 n + nc + 1 entries, the derivatives of X, V, A, hA, the
+     * sliders and the time; read with eng_jacobian. tan_lost: a switch it could not follow (a margin
+     * whose rate is 0 at its root: a grazing), from then on not computed. */
+    double *tan;
+    int tan_lost;
 } eng_state;
 
 /* ---- hooks ------------------------------------------------------------------------------------- */
@@ -504,11 +517,21 @@ const eng_setup *eng_setup_of(const eng *E);
 enum { ENG_CAP_SENSITIVITY = 1 };
 int eng_caps(int scheme);
 
-/* State arrays through the engine's callbacks (with_jacobian: J too); 0 on failure. */
+/* The located map's Jacobian d(X, V, s)(t)/d(X, V, s)(t0) of the state's tangent (eng_setup.tangent)
+ * into J ((2 n + nc)^2, row-major: rows and columns x 1..n, v 1..n, then the contacts' sliders; a
+ * rigid contact's row and column 0). Returns 0 (J untouched) where the state has no tangent or it
+ * was lost (eng_state.tan_lost). */
+int eng_jacobian(const eng_state *s, double *J);
+
+/* The tangent's length (eng_state.tan): 2 n + nc columns of 4 n + nc + 1 */
+static inline size_t eng_tan_size(size_t n, size_t nc) { return (2 * n + nc) * (4 * n + nc + 1); }
+
+/* State arrays through the engine's callbacks (with_jacobian: J too; the tangent where the engine
+ * propagates it); 0 on failure. */
 int eng_state_init(const eng *E, eng_state *s, int with_jacobian);
 void eng_state_free(const eng *E, eng_state *s);
-/* The same for n DOFs and nc contacts through al, without an engine (a saved state); release with
- * eng_state_release and the same al. */
+/* The same for n DOFs and nc contacts through al, without an engine (a saved state; with_jacobian
+ * bit 1: J, bit 2: the tangent); release with eng_state_release and the same al. */
 int eng_state_alloc(const eng_alloc *al, size_t n, size_t nc, int with_jacobian, eng_state *s);
 void eng_state_release(const eng_alloc *al, eng_state *s);
 /* dst (initialised for the same sizes) := src, arrays included (J only when both have it). */
@@ -519,6 +542,12 @@ void eng_state_copy(eng_state *dst, const eng_state *src);
  * its limit released in the direction it is driven, repeated: the causal cascade from "all
  * stuck", method.md section 13) decides stick or slide; accelerations consistent with the modes. */
 void eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
+
+/* After eng_start: the Jenkins contacts' sliders at s0 (nc; a rigid contact's entry not read), each
+ * stuck (its spring force -k_t (w_j . x - s0_j) within its breakaway limit), the accelerations and
+ * forces consistent again, the tangent seeded anew. Returns 0 (s untouched) where a slider's force
+ * is beyond its limit. */
+int eng_set_sliders(eng *E, const eng_inputs *in, eng_state *s, const double *s0);
 
 /* The time eng_advance ends on for t_target: the grid point it snaps to, else t_target. */
 double eng_snap_target(const eng *E, const eng_state *s, double t_target);

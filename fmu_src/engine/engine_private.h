@@ -16,6 +16,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <stdlib.h>
 
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
@@ -31,6 +32,15 @@ typedef struct {
     double excess;
     size_t j;
 } eng_release;
+
+/* A held set of the tangent's constrained solves (engine_tangent.h's tan_prep) */
+typedef struct {
+    int slot;
+    size_t m;
+    int *sel, *dep;         /* nc */
+    double *D, *L;          /* nc x nc */
+    const double **col;     /* nc */
+} tan_set;
 
 struct eng {
     eng_setup S;
@@ -78,6 +88,16 @@ struct eng {
     int rest_apart;              /* the contacts' holding forces independent of one another's modes
                                   * (eng_setup.mass_diagonal, rows on distinct DOFs: eng_rest_apart) */
     eng_release *rel;            /* nc: the rest rule's releases of one round, in its order */
+    /* the located map's tangent (eng_setup.tangent; engine_tangent.h), NULL without: the next state's
+     * columns (tg2, nz x L), the derivative in hh (th, L), the columns' d hs (tdh, nz), forces' (tdf,
+     * nc), the phase start's jerks' (tjk, nz x n; tjk_ok), n-vectors (tw1 .. tw5, tMV, tKV, trate,
+     * trate2), the held sets (tset: 0 the trial's, 1 the mass slot's), their solves' (trhs, tsol, tfh,
+     * ttgt, tcomp: nc; theld: nc), the re-based DOFs (trb, n; tany_rb) */
+    double *tg2, *th, *tdh, *tdf, *tjk, *tw1, *tw2, *tw3, *tw4, *tw5, *tMV, *tKV, *trate, *trate2;
+    double *trhs, *tsol, *tfh, *ttgt, *tcomp;
+    int *theld, *trb;
+    int tjk_ok, tany_rb;
+    tan_set tset[2];
     double rot_c, rot_s;         /* cos, sin of omega h: the excitation phase's advance per grid step */
     double trig_tc, trig_c, trig_ts, trig_s; /* cos and sin of omega t + phi0 at the last t each was evaluated
                                   * for (trig_at; NaN: none) */

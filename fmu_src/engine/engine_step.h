@@ -106,6 +106,9 @@
 #define ENG_BREAKAWAY(E, s, in, Fb) ((E)->S.ops.breakaway((E)->S.ops.ctx, &(E)->S.exc, (s), (in), (Fb)))
 #endif
 
+#ifndef ENG_TANGENTS /* the located map's tangent propagated (eng_setup.tangent; a model without: 0) */
+#define ENG_TANGENTS(E) ((E)->S.tangent)
+#endif
 #ifndef ENG_ROW_DOT
 #define ENG_ROW_DOT(E, j, x) row_dot(&(E)->S.rows[(j)], (x))
 #endif
@@ -1137,6 +1140,7 @@ static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const en
     *ta = s->t;
     E->jk_ok = 0; /* the jerks of the phase's start: to be computed (trial_step) */
     E->rpin_ok = 0; /* (its pins likewise) */
+    E->tjk_ok = 0;  /* (and the tangent's jerks) */
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
@@ -1779,6 +1783,8 @@ static void switch_now(eng *E, const eng_inputs *in, eng_state *s, double ta, do
     loads_at(E, in, t_end);
 }
 
+#include "engine_tangent.h"
+
 /* The located step (method.md sections 4 and 13): phases in the current modes, each ended at the
  * earliest switch of a contact. */
 static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *s, double t_end, double hh,
@@ -1786,7 +1792,11 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
 {
     const eng_setup *S = &E->S;
     const size_t nc = ENG_NC(E);
-    if (S->rate_max * hh > STIFF_STEP) return step_lcp(E, in, s, t_end, hh, 1, hk);
+    const int tan = ENG_TANGENTS(E) && s->tan && !s->tan_lost;
+    if (S->rate_max * hh > STIFF_STEP) {
+        if (tan) s->tan_lost = 1; /* (the consistent test's step: no tangent) */
+        return step_lcp(E, in, s, t_end, hh, 1, hk);
+    }
     const long max_phases = MAX_PHASES_BASE + 4 * (long)nc;
     const long long sw0 = s->switches;
     const int stop = hk && hk->stop_at_switch;
@@ -1818,7 +1828,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
          * their limits; the contact most beyond its limit released). Models with their contacts'
          * closed forms split the step at those instead (closed_breakaways, below). */
         const int known = (phase == 0) ? rest_known : 0; /* (eng_advance asked it of this state) */
-        if (ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && known >= 0 &&
+        if (!tan && ENG_HAS_BREAKAWAY(E) && !ENG_HAS_CONTACT_BREAKAWAY(E) && known >= 0 &&
             (known == 1 || stuck_at_rest(E, in, s))) {
             double tp = (known == 1) ? s->stick_tb : stuck_tb(E, in, s);
             if (tp > t_end) {
@@ -1855,7 +1865,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         }
         trial T;
         int fused = ENG_HELD_UNTRIED;
-        if (phase == 0 && fused_ok(E, in, hh)) {
+        if (phase == 0 && !tan && fused_ok(E, in, hh)) {
             if (!ready)
                 for (size_t j = 0; j < nc; j++) E->lim[j] = (E->st[j] == 0) ? E->Fb[j] : E->mlN[j];
             fused = held_step(E, s, t_end, &T);
@@ -1888,22 +1898,24 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             ncand += (size_t)c;
         }
         if (ncand == 0) {
+            if (tan) tan_accept(E, in, s, &T, t_end, 0);
             finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
             free_modes(E, s, hk);
             rest_exact(E, s);
+            if (tan) tan_rest_exact(E, s);
             observe(E, s, ta, s->F, hk);
             return ENG_OK;
         }
         if (phase == 0) s->pivot_steps++;
-        if (phase == 0 && spans_usable(E, in, hk)) {
+        if (phase == 0 && !tan && spans_usable(E, in, hk)) {
             eng_status sst;
             if (step_spans(E, in, s, t_end, hh, &T, &sst)) return sst;
         }
         /* held contacts breaking away with closed forms: the step split at the earliest at once (a
          * breakaway at the phase's start itself, e.g. a limit below the rounding of the force, is
          * the margins' root instead: the closed form's time is passed, the force not yet beyond) */
-        const double tb = closed_breakaways(E, in, s);
+        const double tb = tan ? NAN : closed_breakaways(E, in, s);
         if (tb > s->t && tb <= t_end) {
             const double hs = tb - s->t;
             if (hs > 0.0) {
@@ -1948,8 +1960,11 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
                 if (E->cand[j] && s->mode[j] != 0 && !is_jenk(E, j)) {
                     const eng_row *R = &S->rows[j];
                     if (R->nnz == 1) s->V[R->idx[0]] = E->vb[j] / R->w[0];
+                    if (R->nnz == 1 && tan) /* (its velocity's derivative 0 likewise) */
+                        for (size_t c = 0; c < tan_nz(E); c++) s->tan[c * tan_L(E) + TAN_VO(ENG_N(E)) + R->idx[0]] = 0.0;
                 }
             apply_switches(E, s, 1, 0, hk);
+            if (tan) tan_switched(E, in, s);
             loads_at(E, in, t_end);
             observe(E, s, ta, s->F, hk);
             if (stop && s->switches != sw0) return ENG_SWITCHED;
@@ -1960,6 +1975,8 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         trial_again(&mc, hs, &T); /* (the root's last trial where it was of hs) */
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
+        const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
+        if (tan && t_new < t_end) tan_root(E, in, s, &T, t_new); /* (the root's d hs, in the phase's modes) */
         /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
         int again = 0;
         for (size_t j = 0; j < nc; j++) {
@@ -1981,7 +1998,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
-        const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
+        if (tan) tan_accept(E, in, s, &T, t_new, t_new < t_end);
         finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
         if (E->ghost) ghosts_now(E, s);
@@ -1994,6 +2011,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             E->cand[j] = stopping || breaking;
         }
         switch_now(E, in, s, ta, t_end, 0, hk);
+        if (tan) tan_switched(E, in, s);
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
@@ -2620,6 +2638,7 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
     restart(E, s, t0, rest_decide(E, s, t0, E->cand, s->mode));
     for (size_t j = 0; j < nc; j++)
         if (E->cand[j] && s->mode[j] != 0) s->F[j] = -s->mode[j] * slide_mag(E, j, 0.0);
+    if (ENG_TANGENTS(E) && s->tan) tan_seed(E, in, s);
     if (s->J) {
         for (size_t i = 0; i < 4 * n * n; i++) s->J[i] = 0.0;
         for (size_t i = 0; i < 2 * n; i++) s->J[i * 2 * n + i] = 1.0;
@@ -2630,6 +2649,22 @@ static double snap_tol(const eng *E, double t)
 {
     const eng_setup *S = &E->S;
     return min_b(S->snap_max_rel_h * S->h, max_b(S->snap_eps_t * DBL_EPSILON * fabs(t), S->snap_min_rel_h * S->h));
+}
+
+ENG_API int ENG_FN(eng_set_sliders)(eng *E, const eng_inputs *in, eng_state *s, const double *s0)
+{
+    E->loads_for = NULL;
+    loads_at(E, in, s->t);
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (is_jenk(E, j) && !(fabs(E->S.k_t[j] * (row_dot(&E->S.rows[j], s->X) - s0[j])) <= E->Fb[j])) return 0;
+    for (size_t j = 0; j < ENG_NC(E); j++)
+        if (is_jenk(E, j)) {
+            s->slider[j] = s0[j];
+            s->mode[j] = has_friction(E, j) ? 0 : s->mode[j];
+        }
+    restart(E, s, s->t, 0);
+    if (ENG_TANGENTS(E) && s->tan) tan_seed(E, in, s);
+    return 1;
 }
 
 ENG_API double ENG_FN(eng_snap_target)(const eng *E, const eng_state *s, double t_target)
@@ -2745,12 +2780,13 @@ ENG_API eng_status ENG_FN(eng_advance)(eng *E, const eng_inputs *in, eng_state *
     int switched = 0;
     E->fused_ready = 0;
     const long long sw0 = s->switches;
-    const int skip = S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
+    const int skip = !ENG_TANGENTS(E) && S->fast_paths && (ENG_HAS_BREAKAWAY(E) || ENG_HAS_CONTACT_BREAKAWAY(E)) &&
                      S->scheme == DFO_SCHEME_LOCATED &&
                      S->rate_max * h <= STIFF_STEP && !ramped(in);
     if (!(hk && hk->stick_kept)) s->stick_tb = NAN;
     /* (a model's own fused step: in the schemes; the energy accounts: the general path's) */
-    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy && !ENG_HAS_JENKINS(E);
+    const int fuse = !ramped(in) && !ENG_HAS_STEP_HELD(E) && !S->account_energy && !ENG_HAS_JENKINS(E) &&
+                     !ENG_TANGENTS(E);
     const int fuse_held = !ramped(in) && ENG_HAS_STEP_HELD(E) && !S->account_energy &&
                           S->scheme == DFO_SCHEME_LOCATED &&
                           !(hk && hk->report_turns && !E->all_friction); /* (turns: the general path's) */
@@ -2882,6 +2918,7 @@ static void jenk_new_loads(eng *E, eng_state *s, const eng_hooks *hk)
 
 ENG_API void ENG_FN(eng_new_inputs)(eng *E, const eng_inputs *old_in, const eng_inputs *new_in, eng_state *s, const eng_hooks *hk)
 {
+    if (ENG_TANGENTS(E) && s->tan) s->tan_lost = 1; /* (the map's tangent is of held inputs) */
     E->loads_for = NULL;
     const eng_setup *S = &E->S;
     const size_t n = ENG_N(E), nc = ENG_NC(E);

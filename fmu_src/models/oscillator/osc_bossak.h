@@ -10,7 +10,7 @@
 #include "osc_engine_ops.h"
 #include "oscillator.h"
 
-#define OSC_BOSSAK_ARENA 384 /* doubles (3 KiB): the engine of one DOF and one contact needs 2.5 KiB (318) */
+#define OSC_BOSSAK_ARENA 448 /* doubles (3.5 KiB): the engine of one DOF and one contact needs 3.0 KiB (386) */
 
 /* An arena of doubles the engine's memory comes from (eng_alloc over it; nothing is released). */
 typedef struct {
