@@ -537,7 +537,8 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stdout + r.stderr
     lines = out.read_text().splitlines()
     head = [c.strip('"') for c in lines[0].split(",")]
-    assert head == ["time", "E_friction", "x", "v", "a", "f", "s", "x_max", "x_min", "stick_fraction", "mode"]
+    jac = ["dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0", "dx_ds0", "dv_ds0", "ds_dx0", "ds_dv0", "ds_ds0"]
+    assert head == ["time", "E_friction", "x", "v", "a", "f", "s", "x_max", "x_min", "stick_fraction", *jac, "mode"]
     assert len(lines) == 1257 + 1
     last = lines[-1].split(",")
     assert float(last[0]) == pytest.approx(12.56, abs=1e-9)
@@ -556,7 +557,9 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
     # a divisor of 0.01, every communication point ends a shortened step and the two hosts' rounding of
     # tc + dt differs: measured 1.1e-12 relative in x at the end.)
     assert np.allclose([float(v) for v in last[2].split()], x, rtol=1e-15, atol=0)
-    assert [int(v) for v in last[10].split()] == list(mode) and float(last[1]) == pytest.approx(E, rel=1e-15)
+    assert [int(v) for v in last[19].split()] == list(mode) and float(last[1]) == pytest.approx(E, rel=1e-15)
+    # the map's Jacobian is not computed without sensitivity = true: NaN (logged once), not a number
+    assert all(v.strip().lower() == "nan" for v in last[10].split())
     assert np.allclose([float(v) for v in last[7].split()], x_max, rtol=1e-15, atol=0)
     assert np.allclose([float(v) for v in last[9].split()], share, rtol=1e-15, atol=0)
     assert last[6].split() == ["nan", "nan"]
@@ -577,11 +580,18 @@ def test_the_compliance_checker_runs_the_fmi2_fmu_to_the_end(tmp_path: Path) -> 
     assert r.returncode == 0 and "0 Warning(s)" in text and "0 Error(s)" in text, text
     lines = out.read_text().splitlines()
     head = [c.strip('"') for c in lines[0].split(",")]
-    assert head == ["time", "E_friction", "x[1]", "x[2]", "v[1]", "v[2]", "a[1]", "a[2]", "f[1]", "mode[1]", "s[1]",
-                    "x_max[1]", "x_max[2]", "x_min[1]", "x_min[2]", "stick_fraction[1]"]
+    jac = [f"{name}[{i},{k}]" for name, a, b in (("dx_dx0", 2, 2), ("dx_dv0", 2, 2), ("dv_dx0", 2, 2),
+                                                     ("dv_dv0", 2, 2), ("dx_ds0", 2, 1), ("dv_ds0", 2, 1),
+                                                     ("ds_dx0", 1, 2), ("ds_dv0", 1, 2), ("ds_ds0", 1, 1))
+           for i in range(1, a + 1) for k in range(1, b + 1)]
+    # (the checker writes the matrices' names, M[1,2], unquoted: its header is compared as a line)
+    assert lines[0].replace('"', "") == ",".join(
+        ["time", "E_friction", "x[1]", "x[2]", "v[1]", "v[2]", "a[1]", "a[2]", "f[1]", "mode[1]", "s[1]",
+         "x_max[1]", "x_max[2]", "x_min[1]", "x_min[2]", "stick_fraction[1]", *jac]), head
     rows = [line.split(",") for line in lines[1:]]
     t = [float(row[0]) for row in rows]
     assert t[-1] == pytest.approx(12.56, abs=1e-12) and rows[-1][10] == "NAN"
+    assert all(v == "NAN" for v in rows[-1][16:]) and len(rows[-1]) == 16 + len(jac)  # (sensitivity false)
     # the checker's communication points: its rows' times, and one it steps through without a row
     # (measured: 500 rows for 500 steps of 0.02512 s, none at 0.1256)
     dt = 12.56 / 500  # its default: 500 steps over the default experiment

@@ -7,7 +7,7 @@ set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
     numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h numerics/roots.c numerics/roots.h
-    engine/engine.h engine/engine_private.h engine/engine_step.h engine/engine.c
+    engine/engine.h engine/engine_private.h engine/engine_step.h engine/engine_tangent.h engine/engine.c
     models/chain/chain.h models/chain/chain_internal.h models/chain/chain_engine_ops.h models/chain/chain_setup.c
     models/chain/chain_forces.c models/chain/chain_engine.c)
 # the instance core (core/instance.h's model API), split by concern (chain_instance.h)

@@ -7,7 +7,7 @@ set(MODEL_FMI 2 3)
 # the physics: plain C, no FMI types (the numerics it uses included)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numerics/dmath.h numerics/ddouble.h numerics/lcp.c
     numerics/lcp.h numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
-    numerics/roots.c numerics/roots.h engine/engine.c engine/engine.h engine/engine_private.h engine/engine_step.h
+    numerics/roots.c numerics/roots.h engine/engine.c engine/engine.h engine/engine_private.h engine/engine_step.h engine/engine_tangent.h
     models/oscillator/oscillator.c models/oscillator/oscillator.h models/oscillator/scheme_state.h
     models/oscillator/scheme.c models/oscillator/scheme.h models/oscillator/newmark.c
     models/oscillator/newmark.h models/oscillator/osc_bossak.c models/oscillator/osc_bossak.h models/oscillator/osc_engine.c

@@ -9,7 +9,7 @@ set(MODEL_FMI 2 3)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
     numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h numerics/symeig.c numerics/symeig.h
     numerics/roots.c numerics/roots.h engine/engine.c engine/engine_generic.c engine/engine.h
-    engine/engine_private.h engine/engine_step.h
+    engine/engine_private.h engine/engine_step.h engine/engine_tangent.h
     models/system/system.c models/system/system.h engine/eng_one_dof.h)
 # the instance core (core/instance.h's model API), split by concern (sys_instance.h)
 set(MODEL_CORE models/system/sys_instance.c models/system/sys_instance.h models/system/sys_inst_values.c

@@ -21,6 +21,7 @@ typedef char dfo_static_assert_fixed_n[(DFO_SYSTEM_FIXED_N >= 1 && DFO_SYSTEM_FI
 
 #define WARNED_SLIP 1u    /* lc.warned: the sentence on s was logged */
 #define WARNED_OBSERVE 2u /* lc.warned: the sentence on an observable not computed was logged */
+#define WARNED_JACOBIAN 4u /* lc.warned: the sentence on the Jacobian not computed was logged */
 
 /* ---- parameters, inputs, the model ------------------------------------------------------------ */
 
@@ -50,6 +51,8 @@ sys_params sys_params_of(const double *vals, const sys_layout *L)
     p.alpha = vals[L->sp + DFO_SP_alpha];
     p.scheme = (int)vals[L->sp + DFO_SP_scheme];
     p.frictionUpdates = (int)vals[L->sp + DFO_SP_frictionUpdates];
+    p.sensitivity = vals[L->sp + DFO_SP_sensitivity] != 0.0;
+    p.f0 = vals + L->ap[DFO_AP_f0];
     return p;
 }
 
@@ -142,6 +145,7 @@ void sys_state_of(const double *vals, const sys_layout *L, eng_state *s)
     for (size_t j = 0; j < nc; j++) s->break_dir[j] = (int)vals[k + j];
     k += nc;
     if (nc) memcpy(s->slider, vals + k, nc * sizeof(double));
+    s->tan_lost = 1; /* (the map's Jacobian is not in the snapshot: not computed from here on) */
 }
 
 void sys_sync_inputs(double *vals, const sys_layout *L)
@@ -382,6 +386,19 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     const eng_inputs e = sys_inputs_of(vals, L, 1);
     const sys_params p = sys_params_of(vals, L);
     eng_start(in->m.E, &e, in->lc.run.start_time, p.x0, p.v0, &in->s);
+    int preloaded = 0; /* a Jenkins spring with an initial force: its slider where f0 puts it */
+    for (size_t j = 0; j < L->nc; j++) preloaded |= p.k_t[j] > 0.0 && p.f0[j] != 0.0;
+    if (preloaded) {
+        double *s0 = in->scratch + L->n;
+        for (size_t j = 0; j < L->nc; j++) {
+            double g = 0.0;
+            for (size_t i = 0; i < L->n; i++) g += p.W[j * L->n + i] * p.x0[i];
+            s0[j] = (p.k_t[j] > 0.0) ? g + p.f0[j] / p.k_t[j] : 0.0;
+        }
+        if (!eng_set_sliders(in->m.E, &e, &in->s, s0))
+            return dfo_inst_fail(lc, "%s: f0 is beyond a Jenkins contact's breakaway limit max(mu_s, mu_k) (N + N_ext) "
+                                 "with the inputs at the start (valid: |f0[j]| within it, its slider stuck).", fn);
+    }
     sys_obs_start(in);
     vals[SYS_H_STARTED] = 1.0;
     in->lc.run.time = in->lc.run.start_time;
@@ -477,7 +494,7 @@ static void element_name(const sys_instance *in, const dfo_var_info *var, size_t
 {
     if (!var->array) snprintf(buf, len, "%s", var->name);
     else if (var->ndims == 2) {
-        const size_t cols = in->L.n; /* every matrix has n columns */
+        const size_t cols = var->dims[1] == DFO_STRUCT_n ? in->L.n : in->L.nc;
         snprintf(buf, len, "%s[%lu,%lu]", var->name, (unsigned long)(i / cols + 1), (unsigned long)(i % cols + 1));
     } else snprintf(buf, len, "%s[%lu]", var->name, (unsigned long)i + 1);
 }
@@ -585,6 +602,44 @@ static void note_observable(sys_instance *in, const char *fn, const dfo_var_info
                      in->vals[in->L.sp + DFO_SP_t_obs_start], in->vals[in->L.sp + DFO_SP_t_obs_stop], in->s.t);
 }
 
+/* The located map's Jacobian block var (dx_dx0 ... ds_ds0), elements i0 ... i0 + c - 1, from the
+ * engine state's tangent (eng_state.tan: column k the derivatives with respect to start value k of
+ * x0, v0, s0; rows x, v at 0, n, the sliders at 4 n); NaN with one sentence per run where it is not
+ * computed (sensitivity false) or was lost. */
+static void get_jacobian(sys_instance *in, const char *fn, const dfo_var_info *var, size_t i0, size_t c, double *dout)
+{
+    const size_t n = in->L.n, nc = in->L.nc, L = 4 * n + nc + 1;
+    const eng_state *s = &in->s;
+    if (!s->tan || s->tan_lost) {
+        for (size_t i = 0; i < c; i++) dout[i] = NAN;
+        if (in->lc.warned & WARNED_JACOBIAN) return;
+        in->lc.warned |= WARNED_JACOBIAN;
+        if (!s->tan)
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) is not computed while sensitivity is false: the map's "
+                         "Jacobian dx_dx0 ... ds_ds0 reads NaN in this run; set sensitivity = true (before "
+                         "initialisation) to compute it; logged once per run.", fn, var->name, var->vr);
+        else
+            dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
+                         "%s: variable %s (value reference %u) is not computed from t = %.17g on: the map's Jacobian "
+                         "was lost (the inputs changed, an FMU state was restored, a step too long for the located "
+                         "scheme, or a switch whose margin's rate is 0: a grazing); it reads NaN; logged once per "
+                         "run.", fn, var->name, var->vr, s->t);
+        return;
+    }
+    const int id = var->slot;
+    const int row_v = id == DFO_OUT_dv_dx0 || id == DFO_OUT_dv_dv0 || id == DFO_OUT_dv_ds0;
+    const int row_s = id == DFO_OUT_ds_dx0 || id == DFO_OUT_ds_dv0 || id == DFO_OUT_ds_ds0;
+    const int col_v = id == DFO_OUT_dx_dv0 || id == DFO_OUT_dv_dv0 || id == DFO_OUT_ds_dv0;
+    const int col_s = id == DFO_OUT_dx_ds0 || id == DFO_OUT_dv_ds0 || id == DFO_OUT_ds_ds0;
+    const size_t row0 = row_s ? 4 * n : row_v ? n : 0, col0 = col_s ? 2 * n : col_v ? n : 0;
+    const size_t cols = col_s ? nc : n;
+    for (size_t i = 0; i < c; i++) {
+        const size_t e = i0 + i, r = e / cols, q = e % cols;
+        dout[i] = s->tan[(col0 + q) * L + row0 + r];
+    }
+}
+
 /* The observables x_max, x_min (elements i0 ... i0 + c - 1) or stick_fraction, of a started run. */
 static void get_observables(sys_instance *in, const char *fn, const dfo_var_info *var, size_t i0, size_t c,
                             double *dout)
@@ -673,6 +728,15 @@ static void get_outputs(sys_instance *in, const char *fn, const sys_ref *r, doub
     case DFO_OUT_x_max:
     case DFO_OUT_x_min:
     case DFO_OUT_stick_fraction: get_observables(in, fn, r->var, i0, c, dout); return;
+    case DFO_OUT_dx_dx0:
+    case DFO_OUT_dx_dv0:
+    case DFO_OUT_dv_dx0:
+    case DFO_OUT_dv_dv0:
+    case DFO_OUT_dx_ds0:
+    case DFO_OUT_dv_ds0:
+    case DFO_OUT_ds_dx0:
+    case DFO_OUT_ds_dv0:
+    case DFO_OUT_ds_ds0: get_jacobian(in, fn, r->var, i0, c, dout); return;
     default: break;
     }
     for (size_t i = 0; i < c; i++) dout[i] = src ? src[i0 + i] : NAN;

@@ -278,6 +278,26 @@ static const char *check_with(const sys_params *p, double *L, char *buf, size_t 
                      "set friction_law[%zu] = coulomb (1) or k_t[%zu] = 0", j + 1, j + 1, p->k_t[j], j + 1, j + 1);
             return buf;
         }
+        if (p->sensitivity) {
+            snprintf(buf, len, "sensitivity = true propagates the map's Jacobian with the Coulomb law only, and "
+                     "friction_law[%zu] = stribeck: set friction_law[%zu] = coulomb (1) or sensitivity = false", j + 1,
+                     j + 1);
+            return buf;
+        }
+    }
+    if (p->sensitivity && p->scheme != DFO_SCHEME_LOCATED) {
+        snprintf(buf, len, "sensitivity = true propagates the located scheme's Jacobian only, and scheme = %d: set "
+                 "scheme = located (3) or sensitivity = false", p->scheme);
+        return buf;
+    }
+    for (size_t j = 0; p->f0 && j < nc; j++) {
+        if (!(p->k_t[j] > 0.0)) continue; /* (not read for a rigid contact) */
+        const double Fb = fmax(p->mu_s[j], p->mu_k[j]) * p->N[j];
+        if (!(fabs(p->f0[j]) <= Fb)) {
+            snprintf(buf, len, "f0[%zu] = %.17g is beyond contact %zu's breakaway limit: valid range |f0[%zu]| <= "
+                     "max(mu_s, mu_k) N = %.17g (its slider starts stuck)", j + 1, p->f0[j], j + 1, j + 1, Fb);
+            return buf;
+        }
     }
     return NULL;
 }
@@ -627,7 +647,8 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.ops.solve = op_solve;
     S.ops.friction = NULL; /* the engine's dense Delassus matrix and Lemke */
     S.rows = m->rows;
-    m->one_dof = n == 1 && nc == 1 && p->W[0] == 1.0 && !(p->k_t[0] > 0.0);
+    /* (the Jacobian needs the engine's own solver: the general operators) */
+    m->one_dof = n == 1 && nc == 1 && p->W[0] == 1.0 && !(p->k_t[0] > 0.0) && !p->sensitivity;
     if (m->one_dof) { /* the oscillator's structure: the engine's one-DOF operators (eng_one_dof.h) */
         eng1_init(&m->one, p->M[0], p->C[0], p->K[0], p->N[0], p->mu_s[0], p->mu_k[0], m->law, p->F_c[0]);
         const eng_ops ops = {&m->one, eng1_K, m->has_C ? eng1_C : NULL, eng1_M, eng1_factor, eng1_solve,
@@ -664,6 +685,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.snap_eps_t = 65536.0;
     S.on_rest = p->on_rest;
     S.rest_ctx = p->rest_ctx;
+    S.tangent = p->sensitivity;
     m->E = eng_create(&S, al, err);
     m->one.E = m->E;
     m->one.dense = eng_dense_friction; /* (a Stribeck contact's solver) */

@@ -54,6 +54,8 @@ typedef struct {
     int scheme, frictionUpdates;     /* DFO_SCHEME_*, the paper scheme's coefficient updates */
     int dense;                       /* 1: the dense Cholesky backend whatever C (a comparison's); 0: the
                                       * modal one where C allows it */
+    int sensitivity;                 /* 1: propagate the located map's Jacobian (eng_setup.tangent) */
+    const double *f0;                /* nc: a Jenkins contact's initial spring force (NULL: 0, relaxed) */
     eng_rest_fn on_rest;             /* the engine's report of its rest rule (NULL: none), its context */
     void *rest_ctx;
 } sys_params;

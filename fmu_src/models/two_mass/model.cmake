@@ -7,7 +7,7 @@ set(MODEL_FMI 2 3)
 set(MODEL_PHYSICS numerics/dfo_fp.h numerics/dfo_inline.h numerics/dmath.c numerics/dmath.h numerics/lcp.c numerics/lcp.h
     numerics/friction.c numerics/friction.h numerics/bossak.h numerics/excitation.h
     numerics/roots.c numerics/roots.h engine/engine.c engine/engine_generic.c engine/engine.h
-    engine/engine_private.h engine/engine_step.h
+    engine/engine_private.h engine/engine_step.h engine/engine_tangent.h
     models/two_mass/two_mass.c models/two_mass/two_mass.h)
 # the instance core (core/instance.h's model API)
 set(MODEL_CORE models/two_mass/tm_instance.c)

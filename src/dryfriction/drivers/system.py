@@ -46,7 +46,7 @@ if TYPE_CHECKING:
     from ..system.structure import System
     from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
-__all__ = ["SystemFMU3", "SystemRun", "INPUTS", "OUTPUTS", "OBSERVABLES", "T_OBS_STOP", "default_system_fmu3", "run",
+__all__ = ["SystemFMU3", "SystemRun", "INPUTS", "OUTPUTS", "OBSERVABLES", "T_OBS_STOP", "JACOBIAN", "default_system_fmu3", "run",
            "trajectory"]
 
 #: the inputs and their sizes (``n`` per degree of freedom, ``nc`` per contact)
@@ -57,6 +57,10 @@ OUTPUTS = ("x", "v", "a", "f", "s", "E_friction", "mode")
 OBSERVABLES = ("x_max", "x_min", "stick_fraction")
 #: the FMU's default end of the observation window (open)
 T_OBS_STOP = 1e300
+#: the located map's Jacobian blocks (``sensitivity``): (name, rows, columns) of d(x, v, s)/d(x0, v0, s0)
+JACOBIAN = (("dx_dx0", "x", "x0"), ("dx_dv0", "x", "v0"), ("dx_ds0", "x", "s0"),
+            ("dv_dx0", "v", "x0"), ("dv_dv0", "v", "v0"), ("dv_ds0", "v", "s0"),
+            ("ds_dx0", "s", "x0"), ("ds_dv0", "s", "v0"), ("ds_ds0", "s", "s0"))
 _REALS = (("x", "n"), ("v", "n"), ("a", "n"), ("f", "nc"), ("s", "nc"), ("E_friction", None))
 
 Inputs = Mapping[str, Any] | Callable[[float, Mapping[str, np.ndarray]], Mapping[str, Any]]
@@ -179,10 +183,17 @@ class SystemFMU3(Driver):
         self.time = 0.0
 
     def array_size(self, name: str) -> int:
-        """The size of an array variable for this system (n, nc, n x n or nc x n)."""
+        """The size of an array variable for this system (n, nc, n x n, nc x n or nc x nc)."""
         dims = {"M": self.n * self.n, "C": self.n * self.n, "K": self.n * self.n, "W": self.nc * self.n}
         if name in dims:
             return dims[name]
+        square = {"dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0"}
+        if name in square:
+            return self.n * self.n
+        if name in {"dx_ds0", "dv_ds0", "ds_dx0", "ds_dv0"}:
+            return self.n * self.nc
+        if name == "ds_ds0":
+            return self.nc * self.nc
         per = {"F_c", "F_s", "x0", "v0", "F_ext", "x", "v", "a", "x_max", "x_min"}
         return self.n if name in per else self.nc
 
@@ -208,13 +219,21 @@ class SystemFMU3(Driver):
             self.inst.set("Float64", [vr], vals)
 
     def start(self, start_time: float = 0.0, inputs: Mapping[str, Any] | None = None, *, observe: bool = True,
-              t_obs_start: float | None = None, t_obs_stop: float | None = None) -> None:
+              t_obs_start: float | None = None, t_obs_stop: float | None = None, sensitivity: bool = False,
+              x0: Any = None, v0: Any = None, f0: Any = None) -> None:
         """A fresh run of the system from ``start_time``: reset (after the first), ``n`` and ``nc``
         in Configuration Mode, the system's values, ``inputs`` and the observation window in
         Initialization Mode. ``observe``: compute the observables x_max, x_min, stick_fraction
         (default true; false saves their cost and they read NaN); their window from ``t_obs_start``
-        (default ``start_time``) to ``t_obs_stop`` (default :data:`T_OBS_STOP`, open; >= t_obs_start)."""
+        (default ``start_time``) to ``t_obs_stop`` (default :data:`T_OBS_STOP`, open; >= t_obs_start).
+        ``sensitivity``: propagate the located map's Jacobian (read with
+        :meth:`~dryfriction.drivers.system.SystemFMU3.jacobian`). ``x0``, ``v0`` (n values) and ``f0``
+        (nc: each Jenkins spring's initial force, its slider stuck at ``w_j . x0 + f0_j / k_t``) start
+        the run from another state than the system's."""
         todo = self._inputs(inputs or {})  # checked before the FMU is touched
+        state = {name: expand(name, value, size).tolist()
+                 for name, value, size in (("x0", x0, self.n), ("v0", v0, self.n), ("f0", f0, self.nc))
+                 if value is not None and size}
         w0 = float(start_time) if t_obs_start is None else float(t_obs_start)
         w1 = T_OBS_STOP if t_obs_stop is None else float(t_obs_stop)
         if not (np.isfinite(w0) and np.isfinite(w1) and w1 >= w0):
@@ -236,8 +255,10 @@ class SystemFMU3(Driver):
             if vals:
                 inst.set(v.call_type, [v.vr], vals)
         inst.set("Float64", [self.vars["t_obs_start"].vr, self.vars["t_obs_stop"].vr], [w0, w1])
-        inst.set("Boolean", [self.vars["observe"].vr], [bool(observe)])
+        inst.set("Boolean", [self.vars["observe"].vr, self.vars["sensitivity"].vr], [bool(observe), bool(sensitivity)])
         self._observe = bool(observe)
+        for name, vals in state.items():
+            inst.set("Float64", [self.vars[name].vr], vals)
         for vr, vals in todo:
             inst.set("Float64", [vr], vals)
         inst.exit_initialization_mode()
@@ -251,6 +272,22 @@ class SystemFMU3(Driver):
         if self._get_modes is not None:
             self._get_modes(modes.ctypes.data)
         return dict(zip(OUTPUTS, (*self._split(reals), modes.astype(np.int8)), strict=True))
+
+    def jacobian(self) -> np.ndarray:
+        """The located map's Jacobian d(x, v, s)/d(x0, v0, s0) since the run's start, (2 n + nc)
+        square (rows and columns: x, v, then each contact's slider; a rigid contact's row and column
+        0), of a run started with ``sensitivity=True``; NaN where the FMU did not compute it (it logs
+        why: a :class:`~dryfriction.errors.DryFrictionWarning`)."""
+        n, nc = self.n, self.nc
+        size = {"x": n, "v": n, "s": nc, "x0": n, "v0": n, "s0": nc}
+        at = {"x": 0, "v": n, "s": 2 * n, "x0": 0, "v0": n, "s0": 2 * n}
+        J = np.zeros((2 * n + nc, 2 * n + nc))
+        for name, r, c in JACOBIAN:
+            count = size[r] * size[c]
+            if count:
+                block = np.array(self.inst.get("Float64", [self.vars[name].vr], count), dtype=float)
+                J[at[r]:at[r] + size[r], at[c]:at[c] + size[c]] = block.reshape(size[r], size[c])
+        return J
 
     def _split(self, reals: np.ndarray) -> list[np.ndarray]:
         """x, v, a, f, s, E_friction of the FMU's values (along the last axis)."""
