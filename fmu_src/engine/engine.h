@@ -544,7 +544,8 @@ void eng_state_copy(eng_state *dst, const eng_state *src);
 void eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const double *v0, eng_state *s);
 
 /* After eng_start: the Jenkins contacts' sliders at s0 (nc; a rigid contact's entry not read), each
- * stuck (its spring force -k_t (w_j . x - s0_j) within its breakaway limit), the accelerations and
+ * stuck (its spring force -k_t (w_j . x - s0_j) within its breakaway limit, 1e-12 of it beyond
+ * allowed: a force on the limit rounded), the accelerations and
  * forces consistent again, the tangent seeded anew. Returns 0 (s untouched) where a slider's force
  * is beyond its limit. */
 int eng_set_sliders(eng *E, const eng_inputs *in, eng_state *s, const double *s0);

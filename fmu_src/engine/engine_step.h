@@ -2655,8 +2655,10 @@ ENG_API int ENG_FN(eng_set_sliders)(eng *E, const eng_inputs *in, eng_state *s, 
 {
     E->loads_for = NULL;
     loads_at(E, in, s->t);
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (is_jenk(E, j) && !(fabs(E->S.k_t[j] * (row_dot(&E->S.rows[j], s->X) - s0[j])) <= E->Fb[j])) return 0;
+    for (size_t j = 0; j < ENG_NC(E); j++) /* (a force on its limit, rounded a hair beyond, holds) */
+        if (is_jenk(E, j) &&
+            !(fabs(E->S.k_t[j] * (row_dot(&E->S.rows[j], s->X) - s0[j])) <= E->Fb[j] * (1.0 + 1e-12)))
+            return 0;
     for (size_t j = 0; j < ENG_NC(E); j++)
         if (is_jenk(E, j)) {
             s->slider[j] = s0[j];

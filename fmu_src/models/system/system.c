@@ -293,7 +293,7 @@ static const char *check_with(const sys_params *p, double *L, char *buf, size_t 
     for (size_t j = 0; p->f0 && j < nc; j++) {
         if (!(p->k_t[j] > 0.0)) continue; /* (not read for a rigid contact) */
         const double Fb = fmax(p->mu_s[j], p->mu_k[j]) * p->N[j];
-        if (!(fabs(p->f0[j]) <= Fb)) {
+        if (!(fabs(p->f0[j]) <= Fb * (1.0 + 1e-12))) { /* (a force on the limit, rounded a hair beyond) */
             snprintf(buf, len, "f0[%zu] = %.17g is beyond contact %zu's breakaway limit: valid range |f0[%zu]| <= "
                      "max(mu_s, mu_k) N = %.17g (its slider starts stuck)", j + 1, p->f0[j], j + 1, j + 1, Fb);
             return buf;

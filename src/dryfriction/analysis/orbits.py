@@ -27,6 +27,7 @@ import cmath
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 from functools import cached_property
 
 import numpy as np
@@ -81,6 +82,12 @@ class Orbit:
     #                                  steady state but not an isolated one (the block at rest, a member of
     #                                  rest_interval; without a spring, one of a family shifted in x)
     rest_interval: tuple[float, float] | None = None   # the block at rest: every x (m) it can rest at
+
+    def __getitem__(self, name: str) -> Any:
+        """``orbit["x0"]``: the field ``name`` (KeyError for an unknown one)."""
+        if name not in self.__dataclass_fields__:
+            raise KeyError(f"Orbit has no field {name!r}; fields: {', '.join(self.__dataclass_fields__)}")
+        return getattr(self, name)
 
     @cached_property
     def mu_max(self) -> float:
@@ -422,7 +429,7 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
                 tol: float = 1e-12,
                 max_iter: int = 40,
                 keep_failed: bool = False,
-                samples: int = SAMPLES) -> list[Orbit]:
+                samples: int = SAMPLES, **system_options: Any) -> list[Orbit]:
     """Every distinct periodic orbit of ``period`` (K) excitation periods found by Newton shooting on
     the exact stroboscopic map (module doc), from:
 
@@ -463,7 +470,21 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     >>> orbits = find_orbits(p)
     >>> [(o.period, o.stable) for o in orbits]     # a mirror pair of stable period-1 orbits
     [(1, True), (1, True)]
+
+    A structure (:class:`dryfriction.System`) in place of the oscillator: its orbits on the located
+    scheme's map (:func:`dryfriction.analysis.system_orbits.find_system_orbits`, which takes the
+    keywords ``guesses``, ``transients``, ``tol``, ``max_iter``, ``keep_failed`` and its own).
     """
+    from ..system.structure import System
+
+    if isinstance(oscillator, System):
+        from .system_orbits import find_system_orbits
+
+        extra = {"transients": transients if transients != 60 else 40, "tol": tol if tol != 1e-12 else 1e-10,
+                 "max_iter": max_iter if max_iter != 40 else 30, "keep_failed": keep_failed, **system_options}
+        return find_system_orbits(oscillator, period, guesses, **extra)  # type: ignore[return-value]
+    if system_options:
+        raise TypeError(f"find_orbits: {', '.join(system_options)} apply to a dryfriction.System only")
     p = oscillator
     _check(p, period)
     own = fmu is None

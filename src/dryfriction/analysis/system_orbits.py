@@ -1,0 +1,393 @@
+"""Periodic orbits of a structure with friction contacts (:class:`~dryfriction.system.structure.System`)
+by Newton shooting on the located scheme's stroboscopic map (docs/system_orbits.md).
+
+The map P^K: z = (x, v, s) at the section time t_s -> z at t_s + K T, T = 2 pi / omega, s the
+Jenkins contacts' sliders, is one run of the ``DryFrictionSystem`` FMU from t_s (its start state
+set: ``x0``, ``v0`` and each Jenkins spring's force ``f0 = -k_t (w_j . x - s_j)``, its slider
+stuck). Its Jacobian is the FMU's own (``sensitivity = true``): the product of the step matrices in
+the contacts' modes, with the switch time's derivative at every located switch and the consistent
+restart after it; a rigid contact stuck at the section removes its direction (its slip's derivative
+0). Never a finite difference.
+
+Newton solves (J - I) dz = -r, r = P^K(z) - z, with a backtracking line search on the scaled
+residual; converged when the residual is at most ``tol`` relative: ``|S^-1 r|_inf / max(1,
+|S^-1 z|_inf)``, S the structure's own scales (each DOF's motion in the guess's cycle, its velocity
+that times omega). The orbit's error is the scheme's (second order in h): the orbit is solved again
+at h / 2 from the one at h, its amplitude extrapolated (Richardson) and the difference reported as
+the estimated error; with ``accuracy`` the step is halved until that estimate is within it.
+
+Section: t = 0 mod K T, unless a Jenkins contact with mu_s > mu_k slides there in the guess's cycle
+(the map's start state holds every slider stuck: a sliding one would wait for its static limit);
+then the middle of the longest stretch of the cycle in which every such slider is stuck. The state at
+t = 0 mod K T (``x0``, ``v0``, ``s0``) is read from a run of the converged orbit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ..drivers.system import SystemFMU3
+    from ..system.structure import System
+
+__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN"]
+
+#: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
+STABILITY_MARGIN = 1e-9
+#: samples per excitation period of the guess's cycle (the section's choice)
+SAMPLES = 256
+#: scaled distance under which two converged orbits are the same
+SAME = 1e-6
+#: step halvings at most in search of ``accuracy``
+MAX_HALVINGS = 6
+
+
+@dataclass
+class SystemOrbit:
+    """One periodic orbit of K excitation periods (``period``) of a structure, its state at
+    t = 0 mod K T. Read as ``orbit.x0`` or ``orbit["x0"]``."""
+
+    period: int
+    x0: np.ndarray                   # n positions at t = 0 mod K T, m
+    v0: np.ndarray                   # n velocities, m/s
+    s0: np.ndarray                   # nc sliders (NaN for a rigid contact), m
+    multipliers: np.ndarray          # eigenvalues of the K-period map's Jacobian (|mu| descending)
+    stable: bool                     # every |mu| < 1 - STABILITY_MARGIN
+    residual: float                  # the scaled Newton residual at the section
+    amplitude: np.ndarray            # n: (x_max - x_min) / 2 over the cycle (the FMU's observables), m
+    offset: np.ndarray               # n: (x_max + x_min) / 2, m
+    stick_fraction: np.ndarray       # nc: each contact's stuck share of the cycle
+    converged: bool
+    reason: str = ""                 # why not converged ("" when converged)
+    h: float = float("nan")          # the internal step of the orbit, s
+    error: float = float("nan")      # the amplitude's estimated error (max over DOFs), m (NaN: not estimated)
+    amplitude_extrapolated: np.ndarray = field(default_factory=lambda: np.zeros(0))  # Richardson's, n
+    section: float = 0.0             # the section time t_s in [0, K T) of the Newton solve, s
+    section_state: np.ndarray = field(default_factory=lambda: np.zeros(0))  # z = (x, v, s_jenkins) there
+    jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of P^K at the section
+    iterations: int = 0
+
+    def __getitem__(self, name: str) -> Any:
+        """``orbit["x0"]``: the field ``name`` (KeyError for an unknown one)."""
+        if name not in self.__dataclass_fields__:
+            raise KeyError(f"SystemOrbit has no field {name!r}; fields: {', '.join(self.__dataclass_fields__)}")
+        return getattr(self, name)
+
+    @property
+    def mu_max(self) -> float:
+        """The largest multiplier's modulus."""
+        return float(np.max(np.abs(self.multipliers))) if self.multipliers.size else float("nan")
+
+
+class _Map:
+    """The stroboscopic map of one structure at one step h through one FMU instance: z = (x, v,
+    s_jenkins) at t_s -> z at t_s + K T, its Jacobian and the cycle's observables."""
+
+    def __init__(self, fmu: "SystemFMU3", system: "System", K: int) -> None:
+        self.fmu = fmu
+        self.system = system
+        self.K = K
+        self.n = system.n
+        self.jenk = np.flatnonzero(system.k_t > 0.0)
+        self.KT = K * 2.0 * np.pi / system.omega
+        self.evaluations = 0
+
+    @property
+    def size(self) -> int:
+        return 2 * self.n + self.jenk.size
+
+    def f0(self, z: np.ndarray) -> np.ndarray:
+        """The Jenkins springs' forces of z (0 for the rigid contacts), clamped to their limits."""
+        sysm = self.system
+        f = np.zeros(sysm.nc)
+        if self.jenk.size:
+            g = sysm.W[self.jenk] @ z[:self.n]
+            lim = np.maximum(sysm.mu_s, sysm.mu_k)[self.jenk] * sysm.N[self.jenk]
+            f[self.jenk] = np.clip(-sysm.k_t[self.jenk] * (g - z[2 * self.n:]), -lim, lim)
+        return f
+
+    def project(self, z: np.ndarray) -> np.ndarray:
+        """z with each slider within its limit (the map's start holds it stuck)."""
+        if not self.jenk.size:
+            return z
+        out = z.copy()
+        g = self.system.W[self.jenk] @ z[:self.n]
+        out[2 * self.n:] = g + self.f0(z)[self.jenk] / self.system.k_t[self.jenk]
+        return out
+
+    def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True,
+                 span: float | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """P(z) from t_s over ``span`` (default K T), its Jacobian (NaN when not asked) and the
+        observables of that stretch (x_max, x_min, stick_fraction)."""
+        n = self.n
+        f = self.fmu
+        span = self.KT if span is None else span
+        f.start(t_s, observe=True, t_obs_start=t_s, t_obs_stop=t_s + span, sensitivity=jacobian,
+                x0=z[:n], v0=z[n:2 * n], f0=self.f0(z))
+        f.do_step(span)
+        self.evaluations += 1
+        out = f.outputs()
+        Pz = np.concatenate([out["x"], out["v"], out["s"][self.jenk]])
+        J = np.full((self.size, self.size), np.nan)
+        if jacobian:
+            full = f.jacobian()
+            keep = np.concatenate([np.arange(2 * n), 2 * n + self.jenk])
+            J = full[np.ix_(keep, keep)]
+        x_max, x_min, share = f.observables()
+        return Pz, J, {"x_max": x_max, "x_min": x_min, "stick_fraction": share}
+
+    def cycle(self, z: np.ndarray, t_s: float, samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+        """The modes over one K T from z at t_s, sampled ``samples`` times per period: (t, mode [nt, nc])."""
+        n = self.n
+        f = self.fmu
+        f.start(t_s, observe=False, x0=z[:n], v0=z[n:2 * n], f0=self.f0(z))
+        t = t_s + np.linspace(0.0, self.KT, self.K * samples + 1)
+        run = f.record_at(t)
+        return run.t, run.mode
+
+
+def _scales(system: "System", x_max: np.ndarray, x_min: np.ndarray, jenk: np.ndarray) -> np.ndarray:
+    """Each unknown's scale: a DOF's motion (its half range in the cycle, at least 1e-9 of the largest
+    one and of the structure's static deflection), its velocity that times omega, a slider's its DOFs'."""
+    amp = 0.5 * np.abs(np.asarray(x_max) - np.asarray(x_min))
+    amp = np.where(np.isfinite(amp), amp, 0.0)
+    force = float(np.max(np.abs(np.concatenate([system.F_c, system.F_s])))) if system.n else 0.0
+    kmax = float(np.max(np.abs(np.diag(system.K)))) if system.n else 0.0
+    static = force / kmax if kmax > 0 else 0.0
+    floor = max(1e-9 * float(np.max(amp, initial=0.0)), 1e-9 * static, 1e-300)
+    xs = np.maximum(amp, floor)
+    w = max(system.omega, 1e-300)
+    ss = np.array([float(np.max(np.abs(system.W[j]) * xs)) for j in jenk]) if jenk.size else np.zeros(0)
+    return np.concatenate([xs, w * xs, np.maximum(ss, floor)])
+
+
+def _section(M: _Map, z: np.ndarray) -> float:
+    """The section time (module doc): 0, or the middle of the longest stretch in which every Jenkins
+    slider with mu_s > mu_k is stuck. Raises ValueError when there is none."""
+    sysm = M.system
+    picky = [j for j in M.jenk if sysm.mu_s[j] > sysm.mu_k[j]]
+    if not picky:
+        return 0.0
+    t, mode = M.cycle(z, 0.0)
+    stuck = np.all(mode[:, picky] == 0, axis=1)
+    if stuck[0]:
+        return 0.0
+    best, start, run = -1, -1, (0, 0)
+    for k in range(len(stuck) + 1):
+        on = k < len(stuck) and stuck[k]
+        if on and start < 0:
+            start = k
+        elif not on and start >= 0:
+            if k - start > best:
+                best, run = k - start, (start, k - 1)
+            start = -1
+    if best < 2:
+        raise ValueError("a Jenkins contact with mu_s > mu_k slides throughout the cycle: the map's start state, "
+                         "which holds every slider stuck, cannot represent it")
+    return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
+
+
+def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray, tol: float,
+            max_iter: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int, str, dict[str, np.ndarray]]:
+    """Newton on P(z) - z from z at t_s: (z, P(z), J, scaled residual, iterations, reason, observables)."""
+    def res(z: np.ndarray, Pz: np.ndarray) -> float:
+        return float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
+
+    z = M.project(z)
+    Pz, J, obs = M(z, t_s)
+    r = res(z, Pz)
+    reason = ""
+    it = 0
+    for it in range(1, max_iter + 1):
+        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(Pz))):
+            return z, Pz, J, r, it, "the map's Jacobian was not computed (a switch it could not follow)", obs
+        if r <= tol:
+            return z, Pz, J, r, it - 1, "", obs
+        A = J - np.eye(J.shape[0])
+        try:
+            dz = np.linalg.solve(A, -(Pz - z))
+        except np.linalg.LinAlgError:
+            dz = np.linalg.lstsq(A, -(Pz - z), rcond=None)[0]
+        lam = 1.0
+        for _ in range(12):
+            zt = M.project(z + lam * dz)
+            Pt, Jt, ot = M(zt, t_s)
+            rt = res(zt, Pt)
+            if np.isfinite(rt) and rt < r:
+                z, Pz, J, r, obs = zt, Pt, Jt, rt, ot
+                break
+            lam *= 0.5
+        else:
+            reason = f"the line search found no decrease of the residual {r:.3g} (a non-smooth point)"
+            return z, Pz, J, r, it, reason, obs
+    if r > tol:
+        reason = f"no convergence in {max_iter} Newton steps (residual {r:.3g} > tol {tol:g})"
+    return z, Pz, J, r, it, reason, obs
+
+
+def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float, it: int, reason: str,
+                obs: dict[str, np.ndarray], t_s: float, h: float) -> SystemOrbit:
+    """The orbit of the converged z at t_s: its state at t = 0 mod K T, multipliers, observables."""
+    n, sysm = M.n, M.system
+    z0 = z
+    if t_s != 0.0:  # the state at the next multiple of K T
+        z0, _, _ = M(z, t_s, jacobian=False, span=M.KT - t_s)
+    s0 = np.full(sysm.nc, np.nan)
+    s0[M.jenk] = z0[2 * n:]
+    mult = np.linalg.eigvals(J) if np.all(np.isfinite(J)) else np.full(J.shape[0], np.nan)
+    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
+    ok = not reason
+    return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, multipliers=mult,
+                       stable=bool(ok and np.all(np.abs(mult) < 1.0 - STABILITY_MARGIN)), residual=r,
+                       amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
+                       stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
+                       section=t_s, section_state=z.copy(), jacobian=J, iterations=it)
+
+
+def _h_of(fmu: "SystemFMU3", system: "System") -> float:
+    """The internal step the FMU uses for the system (its h, or the derived one)."""
+    if system.h > 0:
+        return float(system.h)
+    fmu.start(0.0, observe=False)
+    return float(fmu.inst.get("Float64", [fmu.vars["h_used"].vr])[0])
+
+
+def system_map(system: "System", z: Sequence[float], period: int = 1, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """P^K(z) and its Jacobian for ``system`` (located scheme): z = (x, v, the Jenkins sliders) at
+    t_s, the map over ``period`` excitation periods (one FMU run; the Jacobian the FMU's)."""
+    from ..drivers.system import SystemFMU3
+
+    with SystemFMU3(system) as fmu:
+        M = _Map(fmu, system, int(period))
+        z = np.asarray(z, dtype=float)
+        if z.shape != (M.size,):
+            raise ValueError(f"z needs 2 n + (Jenkins contacts) = {M.size} values, not {z.size}")
+        Pz, J, _ = M(z, float(t_s))
+    return Pz, J
+
+
+def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequence[float]] | None = None, *,
+                       transients: int = 40, tol: float = 1e-10, max_iter: int = 30,
+                       accuracy: float | None = None, estimate_error: bool = True,
+                       keep_failed: bool = False) -> list[SystemOrbit]:
+    """The periodic orbits of ``period`` (K) excitation periods of ``system`` (scheme located, the
+    Coulomb law) found by Newton shooting on the located map with the FMU's Jacobian (module doc),
+    from:
+
+    - the end state of a transient of ``transients`` K-periods from the system's x0, v0 (the
+      attractor it reaches),
+    - ``guesses``: states z = (x, v, the Jenkins contacts' sliders) at t = 0 mod K T.
+
+    ``tol``: the scaled Newton residual. The error against the time step: with ``estimate_error``
+    (default) each orbit is solved again at h / 2, its ``amplitude`` is the h / 2 one, ``error`` the
+    estimate |A(h / 2) - A(h)| / 3 (max over DOFs) and ``amplitude_extrapolated`` Richardson's;
+    ``accuracy`` halves h further until ``error`` is within it (at most 6 halvings; an orbit that
+    does not get there says so in ``reason``). Orbits that did not converge are dropped unless
+    ``keep_failed``. Stable orbits first, then by the largest amplitude.
+    """
+    from ..drivers.system import SystemFMU3
+    from ..system.structure import System
+
+    if not isinstance(system, System):
+        raise TypeError(f"find_system_orbits needs a dryfriction.System, not {type(system).__name__}")
+    K = int(period)
+    if K < 1:
+        raise ValueError(f"period must be an integer >= 1, not {period!r}")
+    if not (system.omega > 0):
+        raise ValueError(f"orbits need an excitation frequency omega > 0, not {system.omega!r}")
+    if system.scheme != "located":
+        raise ValueError(f"orbits use the located scheme's map, and the system's scheme is {system.scheme!r}: "
+                         "System.replace(scheme='located')")
+    if np.any(np.asarray(system.friction_law) != 1):
+        raise ValueError("orbits need the Coulomb law on every contact (the map's Jacobian is not propagated with "
+                         "the Stribeck law)")
+    if not (tol > 0):
+        raise ValueError(f"tol must be > 0, not {tol!r}")
+    if accuracy is not None and not (accuracy > 0):
+        raise ValueError(f"accuracy must be > 0, not {accuracy!r}")
+    orbits: list[SystemOrbit] = []
+    with SystemFMU3(system) as fmu:
+        h0 = _h_of(fmu, system)
+        sysh = system.replace(h=h0)
+        fmu.system = sysh
+        M = _Map(fmu, sysh, K)
+        starts: list[np.ndarray] = []
+        if transients > 0:
+            z = np.concatenate([system.x0, system.v0, system.W[M.jenk] @ system.x0])
+            for _ in range(transients):
+                z, _, _ = M(M.project(z), 0.0, jacobian=False)
+            starts.append(z)
+        for g in guesses or ():
+            g = np.asarray(g, dtype=float)
+            if g.shape != (M.size,):
+                raise ValueError(f"a guess needs 2 n + (Jenkins contacts) = {M.size} values (x, v, sliders), "
+                                 f"not {g.size}")
+            starts.append(g)
+        for z in starts:
+            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            if not orbit.converged and not keep_failed:
+                continue
+            if any(_same(orbit, o) for o in orbits):
+                continue
+            orbits.append(orbit)
+    orbits.sort(key=lambda o: (not o.stable, -float(np.max(o.amplitude, initial=0.0))))
+    return orbits
+
+
+def _same(a: SystemOrbit, b: SystemOrbit) -> bool:
+    if not (a.converged and b.converged) or a.period != b.period:
+        return False
+    scale = max(float(np.max(np.abs(a.amplitude), initial=0.0)), 1e-300)
+    return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale and np.max(np.abs(a.amplitude - b.amplitude)) <= SAME * scale)
+
+
+def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
+           accuracy: float | None) -> SystemOrbit:
+    """The orbit from z at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks (module doc)."""
+    try:
+        t_s = _section(M, z)
+    except ValueError as e:
+        return _failed(M, z, str(e), h0)
+    if t_s != 0.0:  # the guess's state at the section
+        z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
+    _, _, obs = M(M.project(z), t_s, jacobian=False)
+    S = _scales(M.system, obs["x_max"], obs["x_min"], M.jenk)
+    z, Pz, J, r, it, reason, obs = _newton(M, z, t_s, S, tol, max_iter)
+    orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
+    if not orbit.converged or not (estimate_error or accuracy is not None):
+        return orbit
+    h, prev = h0, orbit
+    for _ in range(MAX_HALVINGS):
+        h *= 0.5
+        Mh = _Map(fmu, M.system.replace(h=h), M.K)
+        fmu.system = Mh.system
+        zh, Ph, Jh, rh, ith, why, obsh = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
+        fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
+        if not fine.converged:
+            prev.reason = f"the error estimate's solve at h = {h:.6g} did not converge: {why}"
+            break
+        diff = fine.amplitude - prev.amplitude
+        fine.error = float(np.max(np.abs(diff)) / 3.0)
+        fine.amplitude_extrapolated = fine.amplitude + diff / 3.0
+        prev = fine
+        if accuracy is None or fine.error <= accuracy:
+            break
+    else:
+        prev.reason = (f"the estimated error {prev.error:.3g} is above the accuracy {accuracy:g} after "
+                       f"{MAX_HALVINGS} halvings of h")
+        prev.converged = False
+    fmu.system = M.system
+    return prev
+
+
+def _failed(M: _Map, z: np.ndarray, reason: str, h: float) -> SystemOrbit:
+    n, nc = M.n, M.system.nc
+    nan_n, nan_c = np.full(n, np.nan), np.full(nc, np.nan)
+    return SystemOrbit(period=M.K, x0=z[:n].copy(), v0=z[n:2 * n].copy(), s0=nan_c.copy(),
+                       multipliers=np.zeros(0), stable=False, residual=float("nan"), amplitude=nan_n,
+                       offset=nan_n.copy(), stick_fraction=nan_c, converged=False, reason=reason, h=h)

@@ -1,0 +1,145 @@
+"""Periodic orbits of structures (dryfriction.analysis.system_orbits) on the located map with the FMU's
+Jacobian: the Jacobian against central differences of the same map, an orbit run on for 20 periods by
+a separate FMU, the frictionless structure against its harmonic closed form, one DOF against the
+oscillator's exact orbit, the amplitude's second order in h, and the refusals."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import dryfriction as dfo
+from dryfriction import Contact, Oscillator, System
+from dryfriction.analysis.system_orbits import SystemOrbit, find_system_orbits, system_map
+from dryfriction.drivers.system import SystemFMU3
+
+pytestmark = pytest.mark.no_sanitizer  # (FMU runs in a loop: the C side is tested under ASan in ctest)
+
+M2 = np.diag([1.0, 0.5])
+K2 = np.array([[3.0, -1.0], [-1.0, 1.0]])
+C2 = 0.02 * K2 + 0.02 * M2
+
+
+def two_mass(omega: float, N: float = 0.6, mu_s: float = 0.5, mu_k: float = 0.5, h: float = 0.0) -> System:
+    """The two-mass structure with a Jenkins element between the masses (the harmonic-balance tools' case)."""
+    return System(M=M2, K=K2, C=C2, F_c=[1.0, 0.0], omega=omega, h=h,
+                  contacts=[Contact(between=(0, 1), N=N, mu_s=mu_s, mu_k=mu_k, k_t=20.0)])
+
+
+def three_dofs() -> System:
+    """Three DOFs: a rigid contact on the ground, a rigid one between DOFs 2 and 3, a Jenkins one on 3."""
+    M = np.array([[1.0, 0.1, 0.0], [0.1, 0.8, 0.0], [0.0, 0.0, 1.2]])
+    K = np.array([[2.0, -1.0, 0.0], [-1.0, 2.5, -1.0], [0.0, -1.0, 1.5]])
+    return System(M=M, K=K, C=0.03 * K, F_c=[0.8, 0.0, -0.5], omega=1.1,
+                  contacts=[Contact(dof=0, N=0.4, mu_s=0.5, mu_k=0.4),
+                            Contact(between=(1, 2), N=0.3, mu_s=0.4, mu_k=0.4),
+                            Contact(dof=2, N=0.5, mu_s=0.3, mu_k=0.2, k_t=15.0)])
+
+
+@pytest.mark.parametrize("case", ["two_mass", "three_dofs"])
+def test_the_maps_jacobian_equals_central_differences(case: str) -> None:
+    """The FMU's Jacobian of the located map over a period, through its switches, against central
+    differences of the same map (step 1e-6): within 1e-6 of its scale, and so are the multipliers."""
+    system = two_mass(1.4) if case == "two_mass" else three_dofs()
+    n = system.n
+    jenk = np.flatnonzero(system.k_t > 0)
+    z = np.concatenate([[0.8, 0.4, -0.3][:n], [-0.3, 0.6, 0.2][:n], np.zeros(jenk.size)])
+    z[2 * n:] = system.W[jenk] @ z[:n] - 0.005  # (each spring loaded within its limit)
+    Pz, J = system_map(system, z)
+    fd = np.zeros_like(J)
+    for k in range(z.size):
+        d = 1e-6 * max(1.0, abs(z[k]))
+        zp, zm = z.copy(), z.copy()
+        zp[k] += d
+        zm[k] -= d
+        fd[:, k] = (system_map(system, zp)[0] - system_map(system, zm)[0]) / (2 * d)
+    scale = max(1.0, float(np.abs(J).max()))
+    assert np.abs(J - fd).max() <= 1e-6 * scale, (J, fd)
+    mu, mu_fd = np.sort_complex(np.linalg.eigvals(J)), np.sort_complex(np.linalg.eigvals(fd))
+    assert np.abs(mu - mu_fd).max() <= 1e-6
+    # the map moved the state through stick-slip (not a linear stretch): its Jacobian is not the
+    # frictionless one
+    free = system_map(system.replace(contacts=[dataclasses.replace(c, N=0.0) for c in system.contacts]), z)[1]
+    assert np.abs(J - free).max() > 1e-2
+
+
+def test_an_orbit_returns_to_itself_for_20_periods_in_another_fmu() -> None:
+    """The orbit shooting finds, run on for 20 periods from its state at t = 0 by a separate FMU, comes
+    back to that state at every period within the Newton tolerance (scaled by its amplitude)."""
+    system = two_mass(1.8)
+    (orbit,) = find_system_orbits(system, estimate_error=False)
+    assert orbit.converged and orbit.residual <= 1e-10 and orbit.stable
+    T = 2 * np.pi / system.omega
+    w = system.W[0]
+    f0 = -20.0 * (w @ orbit.x0 - orbit.s0[0])
+    with SystemFMU3(system.replace(h=orbit.h)) as fmu:
+        fmu.start(0.0, x0=orbit.x0, v0=orbit.v0, f0=[f0])
+        run = fmu.record_at(np.arange(21) * T)
+    scale = float(orbit.amplitude.max())
+    assert np.abs(run.x - orbit.x0).max() <= 1e-8 * scale
+    assert np.abs(run.v - orbit.v0).max() <= 1e-8 * scale * system.omega
+    assert np.abs(run.s[:, 0] - orbit.s0[0]).max() <= 1e-8 * scale
+    # the orbit slides and sticks: a friction orbit, not a linear one
+    assert 0.05 < orbit.stick_fraction[0] < 0.95
+
+
+def test_frictionless_response_equals_the_harmonic_closed_form() -> None:
+    """Without friction the orbit's amplitude is the linear closed form |(K - w^2 M + i w C)^-1 F| within
+    the scheme's error: second order (Richardson's estimate within 3x of the true error)."""
+    omega = 1.3
+    system = System(M=M2, K=K2, C=C2, F_c=[1.0, 0.0], omega=omega)
+    X = np.abs(np.linalg.solve(K2 - omega**2 * M2 + 1j * omega * C2, [1.0, 0.0]))
+    (orbit,) = find_system_orbits(system)
+    err = np.abs(orbit.amplitude - X).max()
+    assert err <= 2e-6 * X.max()
+    assert 0.3 * orbit.error <= err <= 3.0 * orbit.error
+    assert np.abs(orbit.amplitude_extrapolated - X).max() <= 0.2 * err
+    # the multipliers: the damped linear map's, exp(eigenvalue T), within the scheme's error
+    T = 2 * np.pi / omega
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(M2, K2), -np.linalg.solve(M2, C2)]])
+    exact = np.sort(np.abs(np.exp(np.linalg.eigvals(A) * T)))
+    assert np.allclose(np.sort(np.abs(orbit.multipliers)), exact, rtol=1e-4, atol=0)
+
+
+def test_one_dof_is_the_oscillators_orbit() -> None:
+    """n = 1 with one rigid contact: the located map's orbit is the oscillator's exact one within the
+    scheme's error (amplitude 1e-6, multiplier 1e-4 relative), whose estimate is honest."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4)
+    exact = dfo.find_orbits(p)[0]
+    (orbit,) = dfo.find_orbits(System.from_oscillator(p))  # (the package's one entry point)
+    assert isinstance(orbit, SystemOrbit)
+    assert abs(orbit.amplitude[0] - exact.amplitude) <= 1e-6 * exact.amplitude
+    assert abs(orbit.amplitude[0] - exact.amplitude) <= 5.0 * orbit.error
+    mu = exact.multipliers[np.argmax(np.abs(exact.multipliers))]
+    assert abs(orbit.multipliers[0] - mu) <= 1e-4 * abs(mu)
+    assert orbit["x0"] is orbit.x0 and exact["x0"] == exact.x0
+
+
+def test_the_amplitude_converges_at_second_order_in_h() -> None:
+    """The orbit's amplitude against the oscillator's exact one at h, h/2, h/4: error ratios near 4."""
+    p = Oscillator.from_nondimensional(lam=1.2, mu_s_sigma=0.5, chi=0.6)
+    exact = max(o.amplitude for o in dfo.find_orbits(p))
+    T = 2 * np.pi / p.omega
+    errs = []
+    for h in (T / 200, T / 400, T / 800):
+        (o,) = find_system_orbits(System.from_oscillator(p, h=h), estimate_error=False)
+        errs.append(abs(o.amplitude[0] - exact))
+    ratios = [errs[0] / errs[1], errs[1] / errs[2]]
+    assert all(3.0 < r < 5.5 for r in ratios), (errs, ratios)
+
+
+def test_orbits_refuse_what_the_map_does_not_cover() -> None:
+    """A scheme other than located, a Stribeck contact, period < 1, omega 0: one sentence each."""
+    base = two_mass(1.4)
+    with pytest.raises(ValueError, match="located"):
+        find_system_orbits(base.replace(scheme="consistent"))
+    strib = System(M=[[1.0]], K=[[1.0]], F_c=[1.0], omega=0.5,
+                   contacts=[Contact(dof=0, N=0.3, mu_s=0.5, mu_k=0.3, law="stribeck", v_s=0.1)])
+    with pytest.raises(ValueError, match="Coulomb"):
+        find_system_orbits(strib)
+    with pytest.raises(ValueError, match="period"):
+        find_system_orbits(base, period=0)
+    with pytest.raises(ValueError, match="omega"):
+        find_system_orbits(base.replace(omega=0.0))
