@@ -6,6 +6,8 @@ oscillator's exact orbit, the amplitude's second order in h, and the refusals.""
 from __future__ import annotations
 
 import dataclasses
+import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -143,3 +145,52 @@ def test_orbits_refuse_what_the_map_does_not_cover() -> None:
         find_system_orbits(base, period=0)
     with pytest.raises(ValueError, match="omega"):
         find_system_orbits(base.replace(omega=0.0))
+
+
+def test_the_frequency_response_follows_the_orbits() -> None:
+    """frequency_response(system, ...) (the package's one entry point): each frequency's orbit, followed
+    from the previous one, is the orbit found cold there (amplitudes within 1e-8); without friction the
+    amplitudes are the harmonic closed form's within the scheme's error."""
+    system = two_mass(1.0)
+    f = np.array([0.16, 0.2, 0.3])
+    ds = dfo.frequency_response(system, f, dof=1)
+    assert bool(ds["converged"].all()) and ds.attrs["dof"] == 1
+    for i, fi in enumerate(f):
+        (cold,) = find_system_orbits(system.replace(omega=2 * np.pi * fi))
+        assert np.allclose(ds["amplitude_m"].values[i], cold.amplitude, rtol=1e-8, atol=0)
+        assert bool(ds["stable"].values[i]) == cold.stable
+    assert np.array_equal(ds["amplitude_dof_m"].values, ds["amplitude_m"].values[:, 1])
+    free = System(M=M2, K=K2, C=C2, F_c=[1.0, 0.0], omega=1.0)
+    dsf = dfo.frequency_response(free, f)
+    for i, fi in enumerate(f):
+        w = 2 * np.pi * fi
+        X = np.abs(np.linalg.solve(K2 - w**2 * M2 + 1j * w * C2, [1.0, 0.0]))
+        assert np.abs(dsf["amplitude_m"].values[i] - X).max() <= 3.0 * dsf["error_m"].values[i] + 1e-12
+
+
+def test_the_command_line_writes_the_response_and_prints_orbits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``dryfriction system response`` writes response.csv, .nc and .png (the CSV's numbers the table's),
+    ``system orbits --json`` prints the orbit; a --dof beyond the structure is one readable line."""
+    from dryfriction.cli import main
+
+    spec = tmp_path / "s.toml"
+    spec.write_text("[structure]\nM = [[1.0, 0.0], [0.0, 0.5]]\nK = [[3.0, -1.0], [-1.0, 1.0]]\n"
+                    "[damping]\nrayleigh = [0.02, 0.02]\n[excitation]\nF_c = [1.0, 0.0]\nomega = 1.4\n"
+                    "[[contact]]\nbetween = [0, 1]\nN = 0.6\nmu_s = 0.5\nmu_k = 0.5\nk_t = 20.0\n")
+    out = tmp_path / "resp"
+    assert main(["system", "response", str(spec), "--f-start", "0.2", "--f-stop", "0.3", "--num", "3",
+                 "--out", str(out), "--no-progress"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["response.csv", "response.nc", "response.png"]
+    rows = (out / "response.csv").read_text().splitlines()
+    assert len(rows) == 4 and rows[0].startswith("f_hz,amplitude_m[0],amplitude_m[1]")
+    (orbit,) = find_system_orbits(two_mass(2 * np.pi * 0.3))
+    assert np.allclose([float(v) for v in rows[3].split(",")[1:3]], orbit.amplitude, rtol=1e-8, atol=0)
+    capsys.readouterr()
+    assert main(["system", "orbits", str(spec), "--json"]) == 0
+
+    got = json.loads(capsys.readouterr().out)["orbits"]
+    assert len(got) == 1 and got[0]["converged"] and got[0]["stable"]
+    assert np.allclose(got[0]["amplitude"], find_system_orbits(two_mass(1.4))[0].amplitude, rtol=1e-10)
+    assert main(["system", "response", str(spec), "--f-start", "0.2", "--f-stop", "0.3", "--dof", "5",
+                 "--json"]) == 2
+    assert "--dof 5" in capsys.readouterr().err

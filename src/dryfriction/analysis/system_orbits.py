@@ -34,10 +34,12 @@ if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
     from ..system.structure import System
 
-__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN"]
+__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN", "NEUTRAL"]
 
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
 STABILITY_MARGIN = 1e-9
+#: a multiplier this close to 1 is a neutral one (a stuck slider's continuum of rest positions)
+NEUTRAL = 1e-6
 #: samples per excitation period of the guess's cycle (the section's choice)
 SAMPLES = 256
 #: scaled distance under which two converged orbits are the same
@@ -56,7 +58,7 @@ class SystemOrbit:
     v0: np.ndarray                   # n velocities, m/s
     s0: np.ndarray                   # nc sliders (NaN for a rigid contact), m
     multipliers: np.ndarray          # eigenvalues of the K-period map's Jacobian (|mu| descending)
-    stable: bool                     # every |mu| < 1 - STABILITY_MARGIN
+    stable: bool                     # every |mu| < 1 - STABILITY_MARGIN (a neutral orbit's multipliers 1 aside)
     residual: float                  # the scaled Newton residual at the section
     amplitude: np.ndarray            # n: (x_max - x_min) / 2 over the cycle (the FMU's observables), m
     offset: np.ndarray               # n: (x_max + x_min) / 2, m
@@ -70,6 +72,8 @@ class SystemOrbit:
     section_state: np.ndarray = field(default_factory=lambda: np.zeros(0))  # z = (x, v, s_jenkins) there
     jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of P^K at the section
     iterations: int = 0
+    neutral: bool = False            # multipliers 1 along a continuum of orbits: a Jenkins slider stuck
+    #                                  all cycle may rest anywhere within its limits (one per such slider)
 
     def __getitem__(self, name: str) -> Any:
         """``orbit["x0"]``: the field ``name`` (KeyError for an unknown one)."""
@@ -191,22 +195,28 @@ def _section(M: _Map, z: np.ndarray) -> float:
     return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
 
 
-def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray, tol: float,
-            max_iter: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int, str, dict[str, np.ndarray]]:
-    """Newton on P(z) - z from z at t_s: (z, P(z), J, scaled residual, iterations, reason, observables)."""
-    def res(z: np.ndarray, Pz: np.ndarray) -> float:
-        return float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
-
+def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float,
+            max_iter: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int, str, dict[str, np.ndarray],
+                                    np.ndarray]:
+    """Newton on P(z) - z from z at t_s: (z, P(z), J, scaled residual, iterations, reason, observables,
+    the scales S: given, or those of the first evaluation's cycle)."""
     z = M.project(z)
     Pz, J, obs = M(z, t_s)
+    if S is None:
+        S = _scales(M.system, obs["x_max"], obs["x_min"], M.jenk)
+    scale = S
+
+    def res(z: np.ndarray, Pz: np.ndarray) -> float:
+        return float(np.max(np.abs((Pz - z) / scale)) / max(1.0, float(np.max(np.abs(z / scale)))))
+
     r = res(z, Pz)
     reason = ""
     it = 0
     for it in range(1, max_iter + 1):
         if not (np.all(np.isfinite(J)) and np.all(np.isfinite(Pz))):
-            return z, Pz, J, r, it, "the map's Jacobian was not computed (a switch it could not follow)", obs
+            return z, Pz, J, r, it, "the map's Jacobian was not computed (a switch it could not follow)", obs, S
         if r <= tol:
-            return z, Pz, J, r, it - 1, "", obs
+            return z, Pz, J, r, it - 1, "", obs, S
         A = J - np.eye(J.shape[0])
         try:
             dz = np.linalg.solve(A, -(Pz - z))
@@ -223,10 +233,10 @@ def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray, tol: float,
             lam *= 0.5
         else:
             reason = f"the line search found no decrease of the residual {r:.3g} (a non-smooth point)"
-            return z, Pz, J, r, it, reason, obs
+            return z, Pz, J, r, it, reason, obs, S
     if r > tol:
         reason = f"no convergence in {max_iter} Newton steps (residual {r:.3g} > tol {tol:g})"
-    return z, Pz, J, r, it, reason, obs
+    return z, Pz, J, r, it, reason, obs, S
 
 
 def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float, it: int, reason: str,
@@ -242,8 +252,13 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
     ok = not reason
+    share = np.asarray(obs["stick_fraction"])
+    stuck_all = int(np.sum(share[M.jenk] >= 1.0 - 1e-12)) if M.jenk.size else 0
+    near1 = np.abs(mult - 1.0) <= NEUTRAL
+    neutral = bool(ok and 0 < int(near1.sum()) <= stuck_all)
+    rest = mult[~near1] if neutral else mult
     return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, multipliers=mult,
-                       stable=bool(ok and np.all(np.abs(mult) < 1.0 - STABILITY_MARGIN)), residual=r,
+                       stable=bool(ok and np.all(np.abs(rest) < 1.0 - STABILITY_MARGIN)), residual=r, neutral=neutral,
                        amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
                        stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
                        section=t_s, section_state=z.copy(), jacobian=J, iterations=it)
@@ -355,9 +370,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         return _failed(M, z, str(e), h0)
     if t_s != 0.0:  # the guess's state at the section
         z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
-    _, _, obs = M(M.project(z), t_s, jacobian=False)
-    S = _scales(M.system, obs["x_max"], obs["x_min"], M.jenk)
-    z, Pz, J, r, it, reason, obs = _newton(M, z, t_s, S, tol, max_iter)
+    z, Pz, J, r, it, reason, obs, S = _newton(M, z, t_s, None, tol, max_iter)
     orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
     if not orbit.converged or not (estimate_error or accuracy is not None):
         return orbit
@@ -366,7 +379,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         h *= 0.5
         Mh = _Map(fmu, M.system.replace(h=h), M.K)
         fmu.system = Mh.system
-        zh, Ph, Jh, rh, ith, why, obsh = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
+        zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
         fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
         if not fine.converged:
             prev.reason = f"the error estimate's solve at h = {h:.6g} did not converge: {why}"

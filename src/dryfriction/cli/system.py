@@ -2,6 +2,8 @@
 
     dryfriction system fmu SPEC -o NAME.fmu [--fmi 2|3]   # the structure's own FMU, no compiler
     dryfriction system run SPEC --t-end 10 [--dt 0.01] [--json]
+    dryfriction system orbits SPEC [--period K] [--accuracy A] [--json]
+    dryfriction system response SPEC --f-start F0 --f-stop F1 [--num N] [--dof D] [--out DIR] [--json]
 
 ``SPEC`` is the TOML structure file (:mod:`dryfriction.system.spec`: the matrices inline or in
 ``.npy``, ``.csv`` or MatrixMarket ``.mtx`` files beside it). ``fmu`` writes the package's prebuilt
@@ -10,7 +12,12 @@
 the sizes its prebuilt binary was built for); ``--fmu`` names another prebuilt system FMU to start
 from. ``run`` runs the structure through the FMI 3.0 FMU and
 prints the last output time's values (``--json``: one object with every output time and the
-observables over the run, x_max, x_min and stick_fraction).
+observables over the run, x_max, x_min and stick_fraction). ``orbits`` prints the structure's periodic
+orbits at its omega (Newton shooting on the located map with the FMU's Jacobian:
+:func:`dryfriction.analysis.system_orbits.find_system_orbits`), ``response`` its steady response by
+orbits over a frequency range (:func:`dryfriction.analysis.system_response.system_frequency_response`)
+into ``--out`` (default results/system_response): response.csv, response.nc (NetCDF) and response.png,
+all or nothing; ``--json`` prints the table instead (files only with ``--out``).
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from .options import number, path_arg
+from .options import count, number, path_arg
 from .output import print_json
 
 __all__ = ["add_parser", "run"]
@@ -50,6 +57,37 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     r.add_argument("--json", action="store_true",
                    help="print one JSON object with every output time and the observables x_max, x_min, "
                         "stick_fraction over the run")
+    o = ss.add_parser("orbits", help="the structure's periodic orbits at its omega (located map, Newton shooting)",
+                      description="Periodic orbits of the structure at its excitation frequency, by Newton "
+                                  "shooting on the located scheme's map with the FMU's Jacobian: state at t = 0, "
+                                  "amplitude per DOF, stuck share per contact, multipliers, the estimated error.")
+    o.add_argument("spec", type=path_arg("SPEC", "file"), metavar="SPEC", help="the TOML structure file")
+    o.add_argument("--period", type=count("--period"), default=1, help="excitation periods K of the orbits (default 1)")
+    o.add_argument("--accuracy", type=number("--accuracy", 0.0, True), default=None,
+                   help="halve h until the amplitude's estimated error is within this, m (default: one halving, "
+                        "the error estimated)")
+    o.add_argument("--json", action="store_true", help="print the orbits as one JSON object")
+    q = ss.add_parser("response", help="the structure's steady response by periodic orbits over a frequency range",
+                      description="Steady response of the structure by its periodic orbits (located map, the "
+                                  "FMU's Jacobian) at --num frequencies from --f-start to --f-stop: amplitude per "
+                                  "DOF, stuck share per contact, stability, the estimated error; CSV, NetCDF, PNG.")
+    q.add_argument("spec", type=path_arg("SPEC", "file"), metavar="SPEC", help="the TOML structure file")
+    q.add_argument("--f-start", dest="f_start", type=number("--f-start", 0.0, True), required=True,
+                   help="first frequency, Hz")
+    q.add_argument("--f-stop", dest="f_stop", type=number("--f-stop", 0.0, True), required=True,
+                   help="last frequency, Hz")
+    q.add_argument("--num", type=count("--num"), default=41, help="number of frequencies (default 41)")
+    q.add_argument("--dof", type=count("--dof", 0), default=None,
+                   help="the DOF whose amplitude is amplitude_dof_m (0-based; default the largest)")
+    q.add_argument("--period", type=count("--period"), default=1, help="excitation periods K of the orbits (default 1)")
+    q.add_argument("--accuracy", type=number("--accuracy", 0.0, True), default=None,
+                   help="halve h until each amplitude's estimated error is within this, m")
+    q.add_argument("--out", type=path_arg("--out"), default=None,
+                   help="output folder (default results/system_response; with --json: no files unless --out is given)")
+    q.add_argument("--format", choices=("csv", "netcdf", "both"), default="both", help="table format (default both)")
+    q.add_argument("--no-plot", action="store_true", help="no PNG")
+    q.add_argument("--json", action="store_true", help="print the table as one JSON object on stdout")
+    q.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -63,6 +101,10 @@ def run(args: argparse.Namespace) -> int:
         out = write_fmu(system, Path(args.output), fmi=args.fmi, base=args.fmu)
         print(f"wrote {out}: n = {system.n}, nc = {system.nc} (FMI {args.fmi}.0)")
         return 0
+    if args.system_command == "orbits":
+        return _orbits(system, args)
+    if args.system_command == "response":
+        return _response(system, args)
     from ..drivers.system import run as run_system
 
     res = run_system(system, args.t_end, args.dt, fmu_path=args.fmu)
@@ -74,3 +116,106 @@ def run(args: argparse.Namespace) -> int:
         print(f"t = {res.t[-1]:.6g}: x = {res.x[-1].tolist()}, mode = {res.mode[-1].tolist()}, "
               f"E_friction = {res.E_friction[-1]:.6g}")
     return 0
+
+
+def _orbit_dict(o: Any) -> dict[str, Any]:
+    """One orbit as JSON-ready values."""
+    return {"period": o.period, "converged": o.converged, "reason": o.reason, "stable": o.stable,
+            "neutral": o.neutral, "x0": o.x0.tolist(), "v0": o.v0.tolist(), "s0": o.s0.tolist(),
+            "amplitude": o.amplitude.tolist(), "offset": o.offset.tolist(),
+            "stick_fraction": o.stick_fraction.tolist(), "mu_max": o.mu_max, "residual": o.residual,
+            "error": o.error, "h": o.h, "multipliers_abs": [abs(m) for m in o.multipliers]}
+
+
+def _orbits(system: Any, args: argparse.Namespace) -> int:
+    """``dryfriction system orbits``: the orbits printed (or as JSON); exit status 1 when none converged."""
+    from ..analysis.system_orbits import find_system_orbits
+
+    orbits = find_system_orbits(system, args.period, accuracy=args.accuracy, keep_failed=True)
+    if args.json:
+        print_json({"orbits": [_orbit_dict(o) for o in orbits]})
+    else:
+        for o in orbits:
+            state = "stable" if o.stable else "unstable"
+            if o.neutral:
+                state += ", neutral"
+            if not o.converged:
+                print(f"not converged: {o.reason}")
+                continue
+            print(f"period {o.period} ({state}): amplitude {', '.join(f'{a:.6g}' for a in o.amplitude)} m "
+                  f"(estimated error {o.error:.2g} m, h = {o.h:.4g} s), stuck share "
+                  f"{', '.join(f'{s:.3f}' for s in o.stick_fraction)}, |mu| max {o.mu_max:.4g}")
+    return 0 if any(o.converged for o in orbits) else 1
+
+
+def _response(system: Any, args: argparse.Namespace) -> int:
+    """``dryfriction system response``: the table (and its PNG) written all or nothing, or printed as
+    JSON; exit status 1 when some frequency did not converge."""
+    import sys
+
+    import numpy as np
+
+    from ..analysis.system_response import plot_system_response, system_frequency_response
+    from ..errors import UsageError
+    from .output import json_safe
+
+    if args.f_stop < args.f_start:
+        raise UsageError(f"--f-stop {args.f_stop:g} must be >= --f-start {args.f_start:g}")
+    if args.dof is not None and args.dof >= system.n:
+        raise UsageError(f"--dof {args.dof} is not a degree of freedom of the structure (0 .. {system.n - 1})")
+    f = np.linspace(args.f_start, args.f_stop, args.num) if args.num > 1 else np.array([args.f_start])
+    out = None
+    if args.out is not None or not args.json:
+        from ..budget import check_writable
+
+        out = check_writable(args.out or Path("results/system_response"), 2000.0 * f.size, "the response's files")
+    ds = system_frequency_response(system, f, dof=args.dof, period=args.period, accuracy=args.accuracy,
+                                   progress=not args.no_progress and sys.stderr.isatty(), fmu_path=args.fmu)
+    files: list[Path] = []
+    if out is not None:
+        from .console import result_set
+
+        with result_set(out) as stage:
+            if args.format in ("csv", "both"):
+                files.append(_csv(ds, stage / "response.csv"))
+            if args.format in ("netcdf", "both"):
+                from ..sweep.datasets import write_netcdf
+
+                files.append(write_netcdf(ds, stage / "response.nc"))
+            if not args.no_plot:
+                files.append(plot_system_response(ds, stage / "response.png", args.dof))
+        files = [out / p.relative_to(stage) for p in files]
+    conv = ds["converged"].values
+    if args.json:
+        print_json({name: json_safe(ds[name].values.tolist()) for name in
+                    ("f_hz", "amplitude_m", "amplitude_dof_m", "offset_m", "stick_fraction", "stable", "neutral",
+                     "mu_max", "residual", "error_m", "h_s", "converged", "reason")})
+    else:
+        k = int(np.nanargmax(ds["amplitude_dof_m"].values)) if np.any(np.isfinite(ds["amplitude_dof_m"].values)) else 0
+        print(f"{int(conv.sum())} of {conv.size} frequencies converged; DOF {ds.attrs['dof']}'s largest amplitude "
+              f"{ds['amplitude_dof_m'].values[k]:.6g} m at {f[k]:.6g} Hz; largest estimated error "
+              f"{np.nanmax(ds['error_m'].values):.2g} m")
+        for p in files:
+            print(f"wrote {p}")
+    return 0 if bool(conv.all()) else 1
+
+
+def _csv(ds: Any, path: Path) -> Path:
+    """The response as CSV: one row per frequency, one column per DOF and contact."""
+    import csv
+
+    n, nc = ds.sizes["dof"], ds.sizes["contact"]
+    head = (["f_hz"] + [f"amplitude_m[{i}]" for i in range(n)] + [f"offset_m[{i}]" for i in range(n)]
+            + [f"stick_fraction[{j}]" for j in range(nc)]
+            + ["stable", "neutral", "mu_max", "residual", "error_m", "h_s", "converged", "reason"])
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(head)
+        for i in range(ds.sizes["f_hz"]):
+            w.writerow([repr(float(ds["f_hz"].values[i]))] + [repr(float(v)) for v in ds["amplitude_m"].values[i]]
+                       + [repr(float(v)) for v in ds["offset_m"].values[i]]
+                       + [repr(float(v)) for v in ds["stick_fraction"].values[i]]
+                       + [int(ds["stable"].values[i]), int(ds["neutral"].values[i])]
+                       + [repr(float(ds[k].values[i])) for k in ("mu_max", "residual", "error_m", "h_s")]
+                       + [int(ds["converged"].values[i]), str(ds["reason"].values[i])])
+    return path

@@ -24,9 +24,15 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                        tol: float = TOL, min_periods: int = MIN_PERIODS, max_periods: int = MAX_PERIODS,
                        scheme: str | None = None, h: float = 0.0, period: int = 1, transients: int = 60,
                        cold_every: int = COLD_EVERY, workers: int = 0, progress: bool = False,
-                       fmu_path: str | os.PathLike[str] | None = None, max_work: float | None = None) -> Any:
+                       fmu_path: str | os.PathLike[str] | None = None, max_work: float | None = None,
+                       dof: int | None = None) -> Any:
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
     (dimension ``f_hz``; attributes: the oscillator and the settings, with units).
+
+    ``p`` a structure (:class:`dryfriction.System`): its response by orbits on the located map
+    (:func:`dryfriction.analysis.system_response.system_frequency_response`: dimensions ``f_hz``,
+    ``dof``, ``contact``; ``dof`` the DOF whose amplitude is ``amplitude_dof_m``; ``period``,
+    ``transients``, ``progress`` and ``fmu_path`` apply, the transient method's settings do not).
 
     ``method`` ``"orbit"`` (the default, unless a Bossak ``scheme`` is asked for: the orbits need the
     exact scheme's Jacobian): every periodic orbit of ``period`` excitation periods found
@@ -80,6 +86,17 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     >>> round(float(ds.amplitude_m.sel(f_hz=10).max()), 4)   # m, one stable orbit
     0.2356
     """
+    from ...system.structure import System
+
+    if isinstance(p, System):
+        from ..system_response import system_frequency_response
+
+        if method not in (None, "orbit"):
+            raise ValueError(f"a structure's response is by orbits (method 'orbit'), not {method!r}")
+        return system_frequency_response(p, f_hz, dof=dof, period=period, transients=min(transients, 40),
+                                         progress=progress, fmu_path=fmu_path)
+    if dof is not None:
+        raise ValueError("dof applies to a structure (dryfriction.System), not to the oscillator")
     import xarray as xr
 
     from ..chaos.batch import map_chunks

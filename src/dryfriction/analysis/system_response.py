@@ -1,0 +1,192 @@
+"""The frequency response of a structure with friction contacts by its periodic orbits
+(docs/system_orbits.md).
+
+At each excitation frequency the orbit of ``period`` periods is found by Newton shooting on the
+located map with the FMU's Jacobian (:mod:`dryfriction.analysis.system_orbits`): at the first
+frequency from a transient, at each next one from the previous frequency's orbit (its state at the
+section, the map's Jacobian telling Newton the way; two to four map evaluations), and from a fresh
+transient again where that does not converge. Each point carries its stability (the multipliers),
+its residual and the amplitude's error estimated against h / 2 (Richardson), so that a point that is
+not converged or not accurate says so. A frequency whose orbit is not found has NaN values,
+``converged`` False and the reason.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .system_orbits import SystemOrbit, _Map, _h_of, _solve
+
+if TYPE_CHECKING:
+    from ..system.structure import System
+
+__all__ = ["system_frequency_response", "plot_system_response"]
+
+
+def system_frequency_response(system: "System", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
+                              period: int = 1, tol: float = 1e-10, max_iter: int = 30, transients: int = 40,
+                              accuracy: float | None = None, estimate_error: bool = True, progress: bool = False,
+                              fmu_path: str | os.PathLike[str] | None = None) -> Any:
+    """The steady response of ``system`` at the frequencies ``f_hz`` (Hz) as an xarray Dataset
+    (dimensions ``f_hz``, ``dof``, ``contact``): per frequency its orbit's ``amplitude_m``,
+    ``offset_m``, ``x0_m``, ``v0_m_per_s`` (per DOF), ``stick_fraction`` (per contact), ``stable``, ``neutral`` (a stuck slider's continuum),
+    ``mu_max``, ``residual``, ``error_m`` (the amplitude's estimated error), ``h_s``, ``iterations``,
+    ``converged`` and ``reason``; ``amplitude_dof_m`` the amplitude of ``dof`` (default: the DOF
+    with the largest amplitude over the sweep). Settings and units in the attributes. ``accuracy``:
+    each orbit's h halved until its estimated error is within it (module doc of
+    :mod:`~dryfriction.analysis.system_orbits`)."""
+    import xarray as xr
+
+    from ..drivers.system import SystemFMU3
+    from ..system.structure import System
+
+    if not isinstance(system, System):
+        raise TypeError(f"system_frequency_response needs a dryfriction.System, not {type(system).__name__}")
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float))
+    if f.ndim != 1 or f.size < 1 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError("f_hz must be a non-empty 1-D sequence of finite frequencies > 0 (Hz)")
+    if dof is not None and not (0 <= int(dof) < system.n):
+        raise ValueError(f"dof must be a degree of freedom 0 .. {system.n - 1}, not {dof!r}")
+    if system.scheme != "located":
+        raise ValueError(f"the response by orbits uses the located scheme's map, and the system's scheme is "
+                         f"{system.scheme!r}: System.replace(scheme='located')")
+    n, nc, K = system.n, system.nc, int(period)
+    out = {name: np.full((f.size, n), np.nan) for name in ("amplitude_m", "offset_m", "x0_m", "v0_m_per_s")}
+    share = np.full((f.size, nc), np.nan)
+    scal = {name: np.full(f.size, np.nan) for name in ("mu_max", "residual", "error_m", "h_s")}
+    stable = np.zeros(f.size, dtype=bool)
+    neutral = np.zeros(f.size, dtype=bool)
+    conv = np.zeros(f.size, dtype=bool)
+    iters = np.zeros(f.size, dtype=np.int64)
+    reasons = [""] * f.size
+    bar = _progress(f.size, progress)
+    prev: SystemOrbit | None = None
+    with SystemFMU3(system, fmu_path) as fmu:
+        for i, fi in enumerate(f):
+            s_i = system.replace(omega=2.0 * math.pi * float(fi))
+            fmu.system = s_i
+            try:
+                h0 = _h_of(fmu, s_i)
+                s_h = s_i.replace(h=h0)
+                fmu.system = s_h
+                M = _Map(fmu, s_h, K)
+                orbit = None
+                if prev is not None and prev.converged:  # (its state at t = 0 mod K T)
+                    z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
+                    orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+                if orbit is None or not orbit.converged:  # a transient from the system's start
+                    z = np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0])
+                    for _ in range(transients):
+                        z, _, _ = M(M.project(z), 0.0, jacobian=False)
+                    orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            except Exception as e:  # noqa: BLE001 (an FMU's refusal at one frequency: reported, the sweep goes on)
+                reasons[i] = f"{type(e).__name__}: {e}"
+                prev = None
+                bar(i)
+                continue
+            prev = orbit
+            conv[i] = orbit.converged
+            reasons[i] = orbit.reason
+            if orbit.amplitude.size:
+                out["amplitude_m"][i] = orbit.amplitude
+                out["offset_m"][i] = orbit.offset
+                out["x0_m"][i] = orbit.x0
+                out["v0_m_per_s"][i] = orbit.v0
+                share[i] = orbit.stick_fraction
+            stable[i] = orbit.stable
+            neutral[i] = orbit.neutral
+            scal["mu_max"][i] = orbit.mu_max
+            scal["residual"][i] = orbit.residual
+            scal["error_m"][i] = orbit.error
+            scal["h_s"][i] = orbit.h
+            iters[i] = orbit.iterations
+            bar(i)
+    bar(-1)
+    pick = int(dof) if dof is not None else int(np.nanargmax(np.nanmax(out["amplitude_m"], axis=0))) \
+        if np.any(np.isfinite(out["amplitude_m"])) else 0
+    units = {"amplitude_m": "m", "offset_m": "m", "x0_m": "m", "v0_m_per_s": "m/s", "error_m": "m", "h_s": "s",
+             "mu_max": "1", "residual": "1", "stick_fraction": "1", "amplitude_dof_m": "m"}
+    data: dict[str, Any] = {name: (("f_hz", "dof"), v) for name, v in out.items()}
+    data["stick_fraction"] = (("f_hz", "contact"), share)
+    data.update({name: (("f_hz",), v) for name, v in scal.items()})
+    data["amplitude_dof_m"] = (("f_hz",), out["amplitude_m"][:, pick])
+    data["stable"] = (("f_hz",), stable)
+    data["neutral"] = (("f_hz",), neutral)
+    data["converged"] = (("f_hz",), conv)
+    data["iterations"] = (("f_hz",), iters)
+    data["reason"] = (("f_hz",), np.array(reasons, dtype=object))
+    ds = xr.Dataset(data, coords={"f_hz": f, "dof": np.arange(n), "contact": np.arange(nc)})
+    for name, u in units.items():
+        ds[name].attrs["units"] = u
+    ds["f_hz"].attrs["units"] = "Hz"
+    ds.attrs.update({"method": "orbit (located map, the FMU's Jacobian)", "period": K, "tol": tol, "dof": pick,
+                     "n": n, "nc": nc, "accuracy": float("nan") if accuracy is None else float(accuracy),
+                     "estimate_error": int(bool(estimate_error))})
+    return ds
+
+
+def _progress(total: int, on: bool) -> Any:
+    """A progress line on stderr (``on``): call with the index done, -1 at the end."""
+    if not on:
+        return lambda i: None
+
+    def bar(i: int) -> None:
+        if i < 0:
+            sys.stderr.write("\n")
+            return
+        done = i + 1
+        width = 30
+        fill = int(width * done / total)
+        sys.stderr.write(f"\rresponse [{'#' * fill}{'.' * (width - fill)}] {done}/{total}")
+        sys.stderr.flush()
+
+    return bar
+
+
+def plot_system_response(ds: Any, path: str | os.PathLike[str], dof: int | None = None) -> Path:
+    """The response's PNG: the amplitude of each DOF (or of ``dof``) against frequency, stable
+    orbits solid, unstable ones dashed, points not converged marked; the stuck share of each
+    contact below. Returns the path written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    f = ds["f_hz"].values
+    A = ds["amplitude_m"].values
+    dofs = [int(dof)] if dof is not None else list(range(A.shape[1]))
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    stable = ds["stable"].values
+    for d in dofs:
+        a_st = np.where(stable, A[:, d], np.nan)
+        a_un = np.where(~stable, A[:, d], np.nan)
+        line, = ax.plot(f, a_st, "-", label=f"DOF {d}")
+        ax.plot(f, a_un, "--", color=line.get_color())
+    bad = ~ds["converged"].values
+    if np.any(bad):
+        ax.plot(f[bad], np.zeros(int(bad.sum())), "rx", label="not converged")
+    ax.set_ylabel("amplitude, m")
+    ax.set_title("steady response by periodic orbits (located map)")
+    ax.legend(loc="best", fontsize="small")
+    ax.grid(True, alpha=0.3)
+    share = ds["stick_fraction"].values
+    for j in range(share.shape[1]):
+        bx.plot(f, share[:, j], label=f"contact {j}")
+    bx.set_ylabel("stuck share")
+    bx.set_xlabel("frequency, Hz")
+    bx.set_ylim(-0.05, 1.05)
+    bx.grid(True, alpha=0.3)
+    if share.shape[1]:
+        bx.legend(loc="best", fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
