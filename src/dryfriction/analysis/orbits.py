@@ -480,7 +480,7 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     if isinstance(oscillator, System):
         from .system_orbits import find_system_orbits
 
-        extra = {"transients": transients if transients != 60 else 40, "tol": tol if tol != 1e-12 else 1e-10,
+        extra = {"transients": transients if transients != 60 else 40, "tol": tol if tol != 1e-12 else 1e-8,
                  "max_iter": max_iter if max_iter != 40 else 30, "keep_failed": keep_failed, **system_options}
         return find_system_orbits(oscillator, period, guesses, **extra)  # type: ignore[return-value]
     if system_options:

@@ -16,10 +16,12 @@ that times omega). The orbit's error is the scheme's (second order in h): the or
 at h / 2 from the one at h, its amplitude extrapolated (Richardson) and the difference reported as
 the estimated error; with ``accuracy`` the step is halved until that estimate is within it.
 
-Section: t = 0 mod K T, unless a Jenkins contact with mu_s > mu_k slides there in the guess's cycle
-(the map's start state holds every slider stuck: a sliding one would wait for its static limit);
-then the middle of the longest stretch of the cycle in which every such slider is stuck. The state at
-t = 0 mod K T (``x0``, ``v0``, ``s0``) is read from a run of the converged orbit.
+Section: where the map is smooth in the state, chosen from the guess's cycle: the middle of the
+longest stretch in which every rigid contact slides (a stuck contact's velocity is held at its
+belt's, the map not smooth in it) and every Jenkins slider is stuck (the map's start holds each
+slider stuck: a sliding one would wait for its static limit), else of the longest stretch with the
+sliders stuck, else t = 0. The state at t = 0 mod K T (``x0``, ``v0``, ``s0``) is read from a run
+of the converged orbit.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..errors import FMUCallError
+
 if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
     from ..system.structure import System
@@ -38,7 +42,8 @@ __all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN"
 
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
 STABILITY_MARGIN = 1e-9
-#: a multiplier this close to 1 is a neutral one (a stuck slider's continuum of rest positions)
+#: a multiplier this close to 1 is a neutral one (a continuum of orbits: a stuck slider's rest positions,
+#: a free rigid-body mode held only by friction)
 NEUTRAL = 1e-6
 #: samples per excitation period of the guess's cycle (the section's choice)
 SAMPLES = 256
@@ -72,8 +77,8 @@ class SystemOrbit:
     section_state: np.ndarray = field(default_factory=lambda: np.zeros(0))  # z = (x, v, s_jenkins) there
     jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of P^K at the section
     iterations: int = 0
-    neutral: bool = False            # multipliers 1 along a continuum of orbits: a Jenkins slider stuck
-    #                                  all cycle may rest anywhere within its limits (one per such slider)
+    neutral: bool = False            # a multiplier 1: a continuum of orbits (a Jenkins slider stuck all
+    #                                  cycle rests anywhere within its limits; a free mode held by friction)
 
     def __getitem__(self, name: str) -> Any:
         """``orbit["x0"]``: the field ``name`` (KeyError for an unknown one)."""
@@ -169,30 +174,46 @@ def _scales(system: "System", x_max: np.ndarray, x_min: np.ndarray, jenk: np.nda
     return np.concatenate([xs, w * xs, np.maximum(ss, floor)])
 
 
-def _section(M: _Map, z: np.ndarray) -> float:
-    """The section time (module doc): 0, or the middle of the longest stretch in which every Jenkins
-    slider with mu_s > mu_k is stuck. Raises ValueError when there is none."""
-    sysm = M.system
-    picky = [j for j in M.jenk if sysm.mu_s[j] > sysm.mu_k[j]]
-    if not picky:
-        return 0.0
-    t, mode = M.cycle(z, 0.0)
-    stuck = np.all(mode[:, picky] == 0, axis=1)
-    if stuck[0]:
-        return 0.0
-    best, start, run = -1, -1, (0, 0)
-    for k in range(len(stuck) + 1):
-        on = k < len(stuck) and stuck[k]
+def _longest(good: np.ndarray) -> tuple[int, int] | None:
+    """The first and last index of the longest run of True in ``good`` (None: none)."""
+    best, start, run = 0, -1, None
+    for k in range(good.size + 1):
+        on = k < good.size and bool(good[k])
         if on and start < 0:
             start = k
         elif not on and start >= 0:
             if k - start > best:
                 best, run = k - start, (start, k - 1)
             start = -1
-    if best < 2:
+    return run
+
+
+def _section(M: _Map, z: np.ndarray) -> float:
+    """The section time (module doc): where the map is smooth in the state, from the modes of the
+    guess's cycle: every rigid contact with friction sliding (a stuck one's velocity is not a smooth
+    variable of the map) and every Jenkins slider stuck (the map's start holds each slider stuck);
+    the middle of the longest such stretch, or of the longest stretch with the sliders stuck, else
+    t = 0. Raises ValueError where a Jenkins contact with mu_s > mu_k slides throughout (its mode is
+    not a function of the state)."""
+    sysm = M.system
+    live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
+    if not live.any():
+        return 0.0
+    t, mode = M.cycle(z, 0.0)
+    jenk = [j for j in M.jenk if live[j]]
+    rigid = [j for j in range(sysm.nc) if live[j] and not sysm.k_t[j] > 0.0]
+    sliders_stuck = np.all(mode[:, jenk] == 0, axis=1) if jenk else np.ones(t.size, dtype=bool)
+    rigid_slide = np.all(mode[:, rigid] != 0, axis=1) if rigid else np.ones(t.size, dtype=bool)
+    for good in (sliders_stuck & rigid_slide, sliders_stuck):
+        if good[0] and good[-1] and good.all():
+            return 0.0
+        run = _longest(good[:-1])  # (the last sample is the first one a cycle later)
+        if run is not None and run[1] - run[0] >= 2:
+            return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
+    if any(sysm.mu_s[j] > sysm.mu_k[j] for j in jenk):
         raise ValueError("a Jenkins contact with mu_s > mu_k slides throughout the cycle: the map's start state, "
                          "which holds every slider stuck, cannot represent it")
-    return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
+    return 0.0
 
 
 def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float,
@@ -217,15 +238,19 @@ def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float
             return z, Pz, J, r, it, "the map's Jacobian was not computed (a switch it could not follow)", obs, S
         if r <= tol:
             return z, Pz, J, r, it - 1, "", obs, S
-        A = J - np.eye(J.shape[0])
-        try:
-            dz = np.linalg.solve(A, -(Pz - z))
-        except np.linalg.LinAlgError:
-            dz = np.linalg.lstsq(A, -(Pz - z), rcond=None)[0]
+        # the minimum-norm Newton step in the scaled unknowns: a multiplier 1 (a continuum of orbits:
+        # a stuck slider's rest positions, a free mode held by friction) leaves J - I singular, and
+        # the step then moves along none of its null directions
+        A = (J - np.eye(J.shape[0])) * scale[None, :] / scale[:, None]
+        dz = scale * np.linalg.lstsq(A, -(Pz - z) / scale, rcond=1e-10)[0]
         lam = 1.0
         for _ in range(12):
             zt = M.project(z + lam * dz)
-            Pt, Jt, ot = M(zt, t_s)
+            try:
+                Pt, Jt, ot = M(zt, t_s)
+            except FMUCallError:  # (a trial state the FMU refuses: a shorter step)
+                lam *= 0.5
+                continue
             rt = res(zt, Pt)
             if np.isfinite(rt) and rt < r:
                 z, Pz, J, r, obs = zt, Pt, Jt, rt, ot
@@ -252,10 +277,8 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
     ok = not reason
-    share = np.asarray(obs["stick_fraction"])
-    stuck_all = int(np.sum(share[M.jenk] >= 1.0 - 1e-12)) if M.jenk.size else 0
     near1 = np.abs(mult - 1.0) <= NEUTRAL
-    neutral = bool(ok and 0 < int(near1.sum()) <= stuck_all)
+    neutral = bool(ok and near1.any())
     rest = mult[~near1] if neutral else mult
     return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, multipliers=mult,
                        stable=bool(ok and np.all(np.abs(rest) < 1.0 - STABILITY_MARGIN)), residual=r, neutral=neutral,
@@ -287,7 +310,7 @@ def system_map(system: "System", z: Sequence[float], period: int = 1, t_s: float
 
 
 def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequence[float]] | None = None, *,
-                       transients: int = 40, tol: float = 1e-10, max_iter: int = 30,
+                       transients: int = 40, tol: float = 1e-8, max_iter: int = 30,
                        accuracy: float | None = None, estimate_error: bool = True,
                        keep_failed: bool = False) -> list[SystemOrbit]:
     """The periodic orbits of ``period`` (K) excitation periods of ``system`` (scheme located, the
@@ -298,7 +321,9 @@ def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequ
       attractor it reaches),
     - ``guesses``: states z = (x, v, the Jenkins contacts' sliders) at t = 0 mod K T.
 
-    ``tol``: the scaled Newton residual. The error against the time step: with ``estimate_error``
+    ``tol``: the scaled Newton residual (default 1e-8: far below the scheme's own error at the
+    default h, and above the map's rounding through many switches, measured up to 6e-10). The
+    error against the time step: with ``estimate_error``
     (default) each orbit is solved again at h / 2, its ``amplitude`` is the h / 2 one, ``error`` the
     estimate |A(h / 2) - A(h)| / 3 (max over DOFs) and ``amplitude_extrapolated`` Richardson's;
     ``accuracy`` halves h further until ``error`` is within it (at most 6 halvings; an orbit that

@@ -31,7 +31,7 @@ __all__ = ["system_frequency_response", "plot_system_response"]
 
 
 def system_frequency_response(system: "System", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
-                              period: int = 1, tol: float = 1e-10, max_iter: int = 30, transients: int = 40,
+                              period: int = 1, tol: float = 1e-8, max_iter: int = 30, transients: int = 40,
                               accuracy: float | None = None, estimate_error: bool = True, progress: bool = False,
                               fmu_path: str | os.PathLike[str] | None = None) -> Any:
     """The steady response of ``system`` at the frequencies ``f_hz`` (Hz) as an xarray Dataset
