@@ -149,7 +149,7 @@ def test_orbits_refuse_what_the_map_does_not_cover() -> None:
 
 def test_the_frequency_response_follows_the_orbits() -> None:
     """frequency_response(system, ...) (the package's one entry point): each frequency's orbit, followed
-    from the previous one, is the orbit found cold there (amplitudes within 1e-8); without friction the
+    from the previous one, is the orbit found cold there (amplitudes within 1e-6, both within the Newton tolerance); without friction the
     amplitudes are the harmonic closed form's within the scheme's error."""
     system = two_mass(1.0)
     f = np.array([0.16, 0.2, 0.3])
@@ -157,7 +157,7 @@ def test_the_frequency_response_follows_the_orbits() -> None:
     assert bool(ds["converged"].all()) and ds.attrs["dof"] == 1
     for i, fi in enumerate(f):
         (cold,) = find_system_orbits(system.replace(omega=2 * np.pi * fi))
-        assert np.allclose(ds["amplitude_m"].values[i], cold.amplitude, rtol=1e-8, atol=0)
+        assert np.allclose(ds["amplitude_m"].values[i], cold.amplitude, rtol=1e-6, atol=0)
         assert bool(ds["stable"].values[i]) == cold.stable
     assert np.array_equal(ds["amplitude_dof_m"].values, ds["amplitude_m"].values[:, 1])
     free = System(M=M2, K=K2, C=C2, F_c=[1.0, 0.0], omega=1.0)
@@ -184,13 +184,13 @@ def test_the_command_line_writes_the_response_and_prints_orbits(tmp_path: Path, 
     rows = (out / "response.csv").read_text().splitlines()
     assert len(rows) == 4 and rows[0].startswith("f_hz,amplitude_m[0],amplitude_m[1]")
     (orbit,) = find_system_orbits(two_mass(2 * np.pi * 0.3))
-    assert np.allclose([float(v) for v in rows[3].split(",")[1:3]], orbit.amplitude, rtol=1e-8, atol=0)
+    assert np.allclose([float(v) for v in rows[3].split(",")[1:3]], orbit.amplitude, rtol=1e-6, atol=0)
     capsys.readouterr()
     assert main(["system", "orbits", str(spec), "--json"]) == 0
 
     got = json.loads(capsys.readouterr().out)["orbits"]
     assert len(got) == 1 and got[0]["converged"] and got[0]["stable"]
-    assert np.allclose(got[0]["amplitude"], find_system_orbits(two_mass(1.4))[0].amplitude, rtol=1e-10)
+    assert np.allclose(got[0]["amplitude"], find_system_orbits(two_mass(1.4))[0].amplitude, rtol=1e-12)
     assert main(["system", "response", str(spec), "--f-start", "0.2", "--f-stop", "0.3", "--dof", "5",
                  "--json"]) == 2
     assert "--dof 5" in capsys.readouterr().err
