@@ -194,3 +194,26 @@ def test_the_command_line_writes_the_response_and_prints_orbits(tmp_path: Path, 
     assert main(["system", "response", str(spec), "--f-start", "0.2", "--f-stop", "0.3", "--dof", "5",
                  "--json"]) == 2
     assert "--dof 5" in capsys.readouterr().err
+
+
+def test_the_continuation_engine_follows_a_structures_orbits() -> None:
+    """continue_orbits(system, "omega", ...) (the project's continuation engine on the located map):
+    the branch reaches the end of its range through the first resonance, each point converged, its
+    amplitudes the cold solve's at that omega (within 1e-5: both within their tolerances), the peak
+    within 1e-3 of the orbit at omega = 1; a neutral start (a slider stuck all cycle) is refused."""
+    system = two_mass(0.9)
+    c = dfo.continue_orbits(system, "omega", 0.9, 1.2)
+    ds = c.dataset
+    assert len(c.branches) == 1 and c.branches[0].stopped.startswith("reached the end of the range")
+    assert bool(ds["converged"].all()) and ds.sizes["dof"] == 2 and ds.sizes["contact"] == 1
+    assert ds["param"].values[0] == pytest.approx(0.9) and ds["param"].values[-1] == pytest.approx(1.2)
+    for i in (1, ds.sizes["point"] // 2, ds.sizes["point"] - 2):
+        (cold,) = find_system_orbits(system.replace(omega=float(ds["param"].values[i])), estimate_error=False)
+        assert np.allclose(ds["amplitude_m"].values[i], cold.amplitude, rtol=1e-5, atol=0)
+    k = int(np.argmax(ds["amplitude_m"].values[:, 0]))
+    at_1 = find_system_orbits(system.replace(omega=1.0), estimate_error=False)[0].amplitude[0]
+    assert abs(ds["param"].values[k] - 1.0) < 0.02 and ds["amplitude_m"].values[k, 0] >= at_1 * (1 - 1e-3)
+    with pytest.raises(ValueError, match="neutral"):
+        dfo.continue_orbits(two_mass(0.6), "omega", 0.6, 0.7)
+    with pytest.raises(ValueError, match="valid: omega, N"):
+        dfo.continue_orbits(system, "zeta", 0.9, 1.0)

@@ -145,7 +145,7 @@ class Bifurcation:
     type: str
     param: float
     period: int
-    x0: float
+    x0: float                        # (a structure's: arrays over its DOFs, as v0, amplitude_m, offset_m)
     v0: float
     multipliers: np.ndarray          # of P^K at the located orbit (|mu| descending)
     branch: int
@@ -160,10 +160,15 @@ class Bifurcation:
 
     def as_dict(self) -> dict[str, Any]:
         """The bifurcation as a JSON-ready dict (multipliers as [real, imaginary] pairs)."""
-        return {"type": self.type, "param": self.param, "period": self.period, "x0": self.x0, "v0": self.v0,
+        def plain(v: Any) -> Any:  # (a structure's x0, v0, amplitude: arrays over its DOFs)
+            return np.asarray(v).tolist() if np.ndim(v) else v
+
+        return {"type": self.type, "param": self.param, "period": self.period, "x0": plain(self.x0),
+                "v0": plain(self.v0),
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
                 "branch": self.branch, "bracket": list(self.bracket), "test": self.test, "note": self.note,
-                "children": list(self.children), "amplitude_m": self.amplitude_m, "offset_m": self.offset_m}
+                "children": list(self.children), "amplitude_m": plain(self.amplitude_m),
+                "offset_m": plain(self.offset_m)}
 
 
 @dataclass
@@ -321,7 +326,7 @@ class _Eval(Evaluation):
     mode: int = 0
 
     def residual(self) -> float:
-        return float(np.max(np.abs(self.G)) / max(1.0, float(np.max(np.abs(self.u[:2])))))
+        return float(np.max(np.abs(self.G)) / max(1.0, float(np.max(np.abs(self.u[:-1])))))
 
 
 class _BranchMap:
@@ -341,6 +346,10 @@ class _BranchMap:
 
     def osc(self, q: float) -> Oscillator:
         return set_parameter(self.base, self.name, self.param(q))
+
+    def period(self, p: Oscillator) -> float:
+        """The excitation period of the branch's oscillator p, s."""
+        return p.period
 
     def span(self, p: Oscillator) -> float:
         return p.period / 2.0 if self.kind == "symmetric" else self.K * p.period
@@ -362,7 +371,7 @@ class _BranchMap:
         return Mz, J, int(out["mode"])
 
     def G(self, u: np.ndarray, p: Oscillator) -> tuple[np.ndarray, np.ndarray, int]:
-        z = self.S * u[:2]
+        z = self.S * u[:-1]
         Mz, J, md = self.raw(z, p)
         return (Mz - z) / self.S, J, md
 
@@ -370,13 +379,13 @@ class _BranchMap:
         """The residual at u with G_y (the FMU's Jacobian); CorrectorFailure when the parameter leaves
         its valid range or the Jacobian is not available."""
         try:
-            p = self.osc(float(u[2]))
+            p = self.osc(float(u[-1]))
             G, J, md = self.G(u, p)
         except ValueError as err:       # the parameter left its valid range
             raise CorrectorFailure(str(err)) from None
         if not np.all(np.isfinite(J)):
             raise CorrectorFailure("the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)")
-        Gy = (J - np.eye(2)) * self.S[None, :] / self.S[:, None]
+        Gy = (J - np.eye(J.shape[0])) * self.S[None, :] / self.S[:, None]
         return _Eval(np.array(u, dtype=float), G, Gy, None, p, J, md)
 
     def derive(self, e: Evaluation, parameter: bool) -> None:
@@ -395,7 +404,7 @@ class _BranchMap:
         return e.residual()
 
     def check(self, u: np.ndarray, du: np.ndarray) -> None:
-        if np.max(np.abs(du)) > 10.0 * max(1.0, float(np.max(np.abs(u[:2])))):
+        if np.max(np.abs(du)) > 10.0 * max(1.0, float(np.max(np.abs(u[:-1])))):
             raise CorrectorFailure("the corrector diverged")
 
     def derivative(self, e: _Eval) -> None:
@@ -404,7 +413,7 @@ class _BranchMap:
         side: list[np.ndarray | None] = []
         for sgn in (1.0, -1.0):
             try:
-                side.append(self.G(u, self.osc(float(u[2]) + sgn * h))[0])
+                side.append(self.G(u, self.osc(float(u[-1]) + sgn * h))[0])
             except ValueError:
                 side.append(None)
         Gp, Gm = side
@@ -474,7 +483,22 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
     >>> c = continue_orbits(p, "chi", 0.8, 0.22)
     >>> [b["type"] for b in c.as_dict()["bifurcations"]]
     ['symmetry_breaking', 'grazing', 'period_doubling', 'grazing', 'period_doubling']
+
+    A structure (:class:`dryfriction.System`) in place of the oscillator: its orbits on the located
+    map, continued by the same engine
+    (:func:`dryfriction.analysis.system_continuation.continue_system_orbits`; ``param`` one of
+    ``omega``, ``N``, ``mu_s``, ``mu_k``, ``force``; no symmetric map).
     """
+    from ..system.structure import System
+
+    if isinstance(oscillator, System):
+        from .system_continuation import continue_system_orbits
+
+        return continue_system_orbits(oscillator, param, start, stop, period=period, orbit=orbit,  # type: ignore[arg-type]
+                                      ds=ds, ds_min=ds_min, ds_max=min(ds_max, 0.5), max_points=max_points,
+                                      tol=max(tol, 1e-8), ptol=max(ptol, 1e-8), max_turn=max_turn, fd_step=fd_step,
+                                      max_iter=max_iter, switch=switch, max_branches=max_branches,
+                                      detect=[d for d in detect if d != "symmetry_breaking"], progress=progress)
     if param not in PARAMETERS:
         raise ValueError(f"unknown continuation parameter {param!r}; valid: {', '.join(PARAMETERS)}")
     for n, v in (("start", start), ("stop", stop)):
@@ -527,7 +551,7 @@ class _Run:
         self.switch, self.max_branches, self.use_symmetry, self.detect = switch, max_branches, symmetric, detect
         self.progress = progress
         self.p_s = max(abs(start), abs(stop), abs(stop - start))
-        self.xs, self.w = scales(p0)
+        self.init_scales(p0)
         # (start orbit or None, (map, u, tangent) of a switch or None, parent branch id)
         self.queue: list[tuple[Orbit | None, tuple[_BranchMap, np.ndarray, np.ndarray] | None, int | None]] = []
         self.branches: list[Branch] = []
@@ -537,7 +561,11 @@ class _Run:
         self.counter = [0]         # runs of a map (each one FMU doStep over its span)
         self.evaluations = 0       # other runs (cycles, event counts)
 
-    # -- helpers --
+    # -- helpers (a model's: a structure's run overrides them, dryfriction.analysis.system_continuation) --
+    def init_scales(self, p0: Any) -> None:
+        """The unknowns' scales of the branches (the oscillator's static deflection and rate)."""
+        self.xs, self.w = scales(p0)
+
     def new_map(self, K: int, kind: str, phase: float) -> _BranchMap:
         return _BranchMap(self.fmu, self.p0, self.name, self.start, self.p_s, K, kind, phase, self.xs, self.w,
                           self.fd, self.counter)
@@ -558,7 +586,7 @@ class _Run:
     def describe(self, m: _BranchMap, e: _Eval) -> dict[str, Any]:
         """The cycle's observables, multipliers and test functions at a converged point."""
         p = e.p
-        z = m.S * e.u[:2]
+        z = m.S * e.u[:-1]
         t_s = m.t_s(p)
         cm = _Map(self.fmu, p, m.K)
         cyc = cm.cycle(z, t_s)
@@ -585,14 +613,15 @@ class _Run:
         """The test functions at a converged point (module doc)."""
         J = e.J
         JP = m.full_jacobian(J)
-        out = {"fold": float(np.linalg.det(J - np.eye(2))), "period_doubling": float(np.linalg.det(JP + np.eye(2)))}
-        out["symmetry_breaking"] = float(np.linalg.det(J + np.eye(2))) if m.kind == "symmetric" else math.nan
+        eye = np.eye(J.shape[0])
+        out = {"fold": float(np.linalg.det(J - eye)), "period_doubling": float(np.linalg.det(JP + eye))}
+        out["symmetry_breaking"] = float(np.linalg.det(J + eye)) if m.kind == "symmetric" else math.nan
         return out
 
     def signature(self, m: _BranchMap, e: _Eval) -> tuple[int, bool]:
         """(transitions, sticks) over one K-cycle: one run with the FMU's observables."""
         p = e.p
-        z = m.S * e.u[:2]
+        z = m.S * e.u[:-1]
         t_s = m.t_s(p)
         KT = m.K * p.period
         st = Settings(scheme="exact", observe=True, t_obs_start=t_s, t_obs_stop=t_s + KT)
@@ -652,7 +681,7 @@ class _Run:
         if orbit is not None:
             b = Branch(len(self.branches), orbit.period, "full", parent)
             self.branches.append(b)
-            if orbit.stuck and orbit.rest_interval is not None:
+            if getattr(orbit, "stuck", False) and getattr(orbit, "rest_interval", None) is not None:
                 lo, hi = orbit.rest_interval
                 raise CorrectorFailure(f"the start orbit is the block at rest, one of the interval of rest positions "
                                f"[{lo:.6g}, {hi:.6g}] m (|k x| <= F_b - |P0|, a multiplier exactly 1): a continuum, "
@@ -661,12 +690,12 @@ class _Run:
             b.kind = m.kind
             e, _ = self.correct(m, u, None, None, 0.0)
             t = tangent(m, e)
-            if t[2] * (self.stop - self.start) < 0:
+            if t[-1] * (self.stop - self.start) < 0:
                 t = -t
-            if abs(t[2]) < 1e-12:
+            if abs(t[-1]) < 1e-12:
                 raise CorrectorFailure("the start orbit is at a fold in the parameter (dp/ds = 0)")
             pt = _Point(e, t, 0.0, self.describe(m, e))
-            self.record(b, m, pt, float(e.u[2]), True)
+            self.record(b, m, pt, float(e.u[-1]), True)
         else:
             assert sw is not None
             m, u, t = sw
@@ -679,7 +708,7 @@ class _Run:
             pt = self.first_step(b, m, pt)
             if pt is None:
                 return
-            self.record(b, m, pt, float(pt.e.u[2]), True)
+            self.record(b, m, pt, float(pt.e.u[-1]), True)
         self.walk(b, m, pt)
 
     def first_step(self, b: Branch, m: _BranchMap, pt: _Point) -> _Point | None:
@@ -687,7 +716,7 @@ class _Run:
         while ds >= self.ds_min:
             try:
                 e, _ = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds)
-                gap = float(np.max(np.abs(e.u[:2] - pt.e.u[:2])))
+                gap = float(np.max(np.abs(e.u[:-1] - pt.e.u[:-1])))
                 if gap >= 0.1 * ds:
                     t = tangent(m, e, pt.t)
             except CorrectorFailure:
@@ -711,7 +740,7 @@ class _Run:
             if ds < self.ds_min:
                 b.stopped = (f"the step fell below ds_min = {self.ds_min:g} at {self.name} = "
                              f"{self.param(pt):.10g}: {last}")
-                self.record(b, m, None, float(pt.e.u[2] + self.ds_min * pt.t[2]), False, last)
+                self.record(b, m, None, float(pt.e.u[-1] + self.ds_min * pt.t[-1]), False, last)
                 return
             u_pred = pt.e.u + ds * pt.t
             if not self.in_range(float(u_pred[2])):
@@ -722,7 +751,7 @@ class _Run:
                 if end is not None and s_end > 0:
                     self.locate_all(b, m, pt, end, s_end)
                     b.stopped = f"reached the end of the range at {self.name} = {self.param(end):.10g}"
-                    self.record(b, m, end, float(end.e.u[2]), True)
+                    self.record(b, m, end, float(end.e.u[-1]), True)
                     return
             try:
                 try:
@@ -750,14 +779,14 @@ class _Run:
                 ds /= 2.0
                 continue
             new = _Point(e, t, pt.s + ds, self.describe(m, e))
-            if not self.in_range(float(e.u[2])):
+            if not self.in_range(float(e.u[-1])):
                 self.locate_all(b, m, pt, new, ds)
                 end = self.end_point(m, pt, new)
                 b.stopped = f"reached the end of the range at {self.name} = {self.param(end or new):.10g}"
-                self.record(b, m, end or new, float((end or new).e.u[2]), True)
+                self.record(b, m, end or new, float((end or new).e.u[-1]), True)
                 return
             self.locate_all(b, m, pt, new, ds)
-            self.record(b, m, new, float(e.u[2]), True)
+            self.record(b, m, new, float(e.u[-1]), True)
             pt = new
             m, pt = self.maybe_move_section(m, pt)
             if it <= 3:
@@ -767,14 +796,14 @@ class _Run:
         """The orbit at the end of the range (start or stop) between a (inside) and c (a point or a
         predicted u outside), or None."""
         uc = c if isinstance(c, np.ndarray) else c.e.u
-        qa, qc = float(a.e.u[2]), float(uc[2])
+        qa, qc = float(a.e.u[-1]), float(uc[-1])
         v = self.start + qc * self.p_s
         q_end = (self.stop if abs(v - self.stop) < abs(v - self.start) else self.start) - self.start
         q_end /= self.p_s
         if qc == qa:
             return None
         u = a.e.u + (q_end - qa) / (qc - qa) * (uc - a.e.u)
-        u[2] = q_end
+        u[-1] = q_end
         try:
             e, _ = self.correct(m, u, None, None, 0.0)
             t = tangent(m, e, a.t)
@@ -788,7 +817,11 @@ class _Run:
         return _Point(e, t, a.s + float(np.linalg.norm(e.u - a.e.u)), self.describe(m, e))
 
     def param(self, pt: _Point) -> float:
-        return self.start + float(pt.e.u[2]) * self.p_s
+        return self.start + float(pt.e.u[-1]) * self.p_s
+
+    def param_unit(self) -> str:
+        """The continued parameter's unit (the oscillator's PARAMETERS)."""
+        return PARAMETERS[self.name][0]
 
     def maybe_move_section(self, m: _BranchMap, pt: _Point) -> tuple[_BranchMap, _Point]:
         """Choose the section again when a stick phase is near it (module doc)."""
@@ -809,7 +842,7 @@ class _Run:
         t_new = _slide_section(t, mode, t_s, KT)
         if t_new is None or math.isnan(t_new):
             return m, pt
-        if abs(pt.t[2]) < 1e-3:         # near a fold the orientation is not safe to carry over: keep it
+        if abs(pt.t[-1]) < 1e-3:         # near a fold the orientation is not safe to carry over: keep it
             return m, pt
         i = int(np.argmin(np.abs(t - t_new)))
         t_i = float(t[i])
@@ -819,11 +852,11 @@ class _Run:
             z = -z          # half a period on: the mirror image
         m2 = self.new_map(m.K, m.kind, off / span)
         try:
-            e, _ = self.correct(m2, np.array([*(z / m2.S), pt.e.u[2]]), None, None, 0.0)
+            e, _ = self.correct(m2, np.array([*(z / m2.S), pt.e.u[-1]]), None, None, 0.0)
             tn = tangent(m2, e)
         except CorrectorFailure:
             return m, pt
-        if tn[2] * pt.t[2] < 0:
+        if tn[2] * pt.t[-1] < 0:
             tn = -tn
         return m2, _Point(e, tn, pt.s, self.describe(m2, e))
 
@@ -834,14 +867,14 @@ class _Run:
         self._locate_all(b, m, a, c, ds)
         for s, pt, typ in sorted(self.pending, key=lambda x: x[0]):
             pt.s = s
-            self.record(b, m, pt, float(pt.e.u[2]), True, bifurcation=typ)
+            self.record(b, m, pt, float(pt.e.u[-1]), True, bifurcation=typ)
 
     def _locate_all(self, b: Branch, m: _BranchMap, a: _Point, c: _Point, ds: float) -> None:
         ia, ic = a.info, c.info
         tests: list[str] = []
         if "fold" in self.detect and _flip(ia["fold"], ic["fold"]):
             tests.append("fold")
-        elif "fold" in self.detect and _flip(float(a.t[2]), float(c.t[2])):
+        elif "fold" in self.detect and _flip(float(a.t[-1]), float(c.t[-1])):
             self.corner_fold(b, m, a, c)
         if "period_doubling" in self.detect and _flip(ia["period_doubling"], ic["period_doubling"]):
             tests.append("period_doubling")
@@ -853,7 +886,7 @@ class _Run:
         if "grazing" in self.detect and ia["signature"] != ic["signature"]:
             # at fixed parameter values, unless the step holds a fold too; if a corrector fails
             # there, again along the step's arclength
-            natural = not _flip(float(a.t[2]), float(c.t[2])) and abs(c.e.u[2] - a.e.u[2]) > 1e-3 * ds
+            natural = not _flip(float(a.t[-1]), float(c.t[-1])) and abs(c.e.u[-1] - a.e.u[-1]) > 1e-3 * ds
             self.locate(b, m, a, c, ds, "grazing", natural)
             if natural and self.bifs[-1].note.startswith("located only to the bracket"):
                 self.bifs.pop()
@@ -892,7 +925,7 @@ class _Run:
         # the tolerance in s: ptol in the parameter over the larger |dp/ds| of the two ends (on a line
         # of fixed parameters, natural, p is linear in s); a grazing to 1e-6 of the step too
         p_a, p_c = self.param(a), self.param(c)
-        slope = abs(p_c - p_a) / ds if natural else self.p_s * max(abs(float(a.t[2])), abs(float(c.t[2])))
+        slope = abs(p_c - p_a) / ds if natural else self.p_s * max(abs(float(a.t[-1])), abs(float(c.t[-1])))
         xtol = self.ptol * max(1.0, abs(p_a), abs(p_c)) / slope if slope > 0 else ds
         if kind == "grazing":
             xtol = min(xtol, 1e-6 * ds)
@@ -920,7 +953,7 @@ class _Run:
             e = cache[s_best][0]
         e0 = cache[s0][0] if s0 in cache else a.e
         e1 = cache[s1][0] if s1 in cache else c.e
-        bracket = tuple(sorted((self.start + float(e0.u[2]) * self.p_s, self.start + float(e1.u[2]) * self.p_s)))
+        bracket = tuple(sorted((self.start + float(e0.u[-1]) * self.p_s, self.start + float(e1.u[-1]) * self.p_s)))
         info = self.describe(m, e)
         test = 0.0 if kind == "grazing" else float(info[key])
         mu = info["mu"]
@@ -934,9 +967,9 @@ class _Run:
             if gap > 1e-4:
                 note = (note + "; " if note else "") + (f"non-smooth: the multiplier jumps across {target:+g} "
                                                        f"(nearest {gap:.2g} away; an event changes there)")
-            if kind == "fold" and not _flip(float(a.t[2]), float(c.t[2])):
+            if kind == "fold" and not _flip(float(a.t[-1]), float(c.t[-1])):
                 note = (note + "; " if note else "") + "dp/ds keeps its sign: a branch point, not a fold"
-        bif = Bifurcation(type=typ, param=self.start + float(e.u[2]) * self.p_s, period=m.K, x0=info["x0"],
+        bif = Bifurcation(type=typ, param=self.start + float(e.u[-1]) * self.p_s, period=m.K, x0=info["x0"],
                           v0=info["v0"], multipliers=mu, branch=b.id, bracket=(float(bracket[0]), float(bracket[1])),
                           test=test, note=note,
                           events=(sig0, sig1) if kind == "grazing" else None,
@@ -952,8 +985,8 @@ class _Run:
         corner (a non-smooth fold). Reported at the point of the two with the extreme parameter, not
         located (the tangent's orientation at trial points past a corner is not known)."""
         pa, pc = self.param(a), self.param(c)
-        # q (and p: p_s > 0) grew at a when a.t[2] > 0: the extreme is then the larger parameter
-        pt = a if (a.t[2] > 0) == (pa >= pc) else c
+        # q (and p: p_s > 0) grew at a when a.t[-1] > 0: the extreme is then the larger parameter
+        pt = a if (a.t[-1] > 0) == (pa >= pc) else c
         i = pt.info
         self.bifs.append(Bifurcation(
             type="fold", param=self.param(pt), period=m.K, x0=i["x0"], v0=i["v0"], multipliers=i["mu"],
@@ -964,7 +997,7 @@ class _Run:
 
     def spawn(self, b: Branch, m: _BranchMap, e: _Eval, bif: Bifurcation, kind: str) -> None:
         p = e.p
-        z = m.S * e.u[:2]
+        z = m.S * e.u[:-1]
         if kind == "period_doubling":
             JP = m.full_jacobian(e.J)
             w, V = np.linalg.eig(JP)
@@ -972,14 +1005,14 @@ class _Run:
             vec = np.real(V[:, j])
             K2 = 2 * m.K
             t_s = m.t_s(p)
-            m2 = self.new_map(K2, "full", t_s / (K2 * p.period))
+            m2 = self.new_map(K2, "full", t_s / (K2 * m.period(p)))
             dirs = [1.0]
         else:
             w, V = np.linalg.eig(e.J)
             j = int(np.argmin(np.abs(w + 1.0)))
             vec = np.real(V[:, j])
             t_s = m.t_s(p)
-            m2 = self.new_map(1, "full", t_s / p.period)
+            m2 = self.new_map(1, "full", t_s / m.period(p))
             dirs = [1.0, -1.0]
         v = vec / m2.S
         v = v / float(np.linalg.norm(v))
@@ -987,8 +1020,8 @@ class _Run:
             if len(self.branches) + len([x for x in self.queue if x[1] is not None]) >= self.max_branches:
                 bif.note = (bif.note + "; " if bif.note else "") + f"max_branches ({self.max_branches}) reached: not switched"
                 return
-            u = np.array([*(z / m2.S), e.u[2]])
-            t = np.array([sgn * v[0], sgn * v[1], 0.0])
+            u = np.array([*(z / m2.S), e.u[-1]])
+            t = np.array([*(sgn * v), 0.0])
             bif.children.append(len(self.branches) + len([x for x in self.queue if x[1] is not None]))
             self.queue.append((None, (m2, u, t), b.id))
 
@@ -1002,17 +1035,33 @@ class _Run:
         def col(k: str, default: Any = math.nan) -> np.ndarray:
             return np.array([r.get(k, default) for r in rows])
 
-        mu = np.array([r["mu"] if "mu" in r else np.full(2, np.nan, dtype=complex) for r in rows]).reshape(n, 2)
+        width = max([len(r["mu"]) for r in rows if "mu" in r] + [2])
+        mu = np.full((n, width), np.nan, dtype=complex)
+        for i, r in enumerate(rows):
+            if "mu" in r:
+                mu[i, :len(r["mu"])] = r["mu"]
+        # per point a number (the oscillator) or an array over the structure's DOFs / contacts
+        shaped: dict[str, Any] = {}
+        for k, dim in (("x0", "dof"), ("v0", "dof"), ("amplitude_m", "dof"), ("offset_m", "dof"),
+                       ("stick_fraction", "contact")):
+            sizes = [np.size(r[k]) for r in rows if k in r]
+            if sizes and (max(sizes) > 1 or any(np.ndim(r[k]) > 0 for r in rows if k in r)):
+                a = np.full((n, max(sizes)), np.nan)
+                for i, r in enumerate(rows):
+                    if k in r:
+                        a[i] = r[k]
+                shaped[k] = (("point", dim), a)
+            else:
+                shaped[k] = ("point", col(k).astype(float))
+        mag = np.abs(mu)
+        mu_max = np.where(np.isnan(mag).all(axis=1), np.nan, np.where(np.isnan(mag), -np.inf, mag).max(axis=1)) \
+            if n else np.zeros(0)
         ds = xr.Dataset(
             {
                 "param": ("point", col("param").astype(float)),
-                "x0": ("point", col("x0").astype(float)),
-                "v0": ("point", col("v0").astype(float)),
-                "amplitude_m": ("point", col("amplitude_m").astype(float)),
-                "offset_m": ("point", col("offset_m").astype(float)),
-                "stick_fraction": ("point", col("stick_fraction").astype(float)),
+                **shaped,
                 "transitions": ("point", col("transitions", -1).astype(np.int64)),
-                "mu_max": ("point", np.abs(mu).max(axis=1) if n else np.zeros(0)),
+                "mu_max": ("point", mu_max),
                 "multiplier_re": (("point", "multiplier"), mu.real),
                 "multiplier_im": (("point", "multiplier"), mu.imag),
                 "stable": ("point", col("stable", False).astype(bool)),
@@ -1026,9 +1075,9 @@ class _Run:
                 "section_s": ("point", col("section_s").astype(float)),
                 "arclength": ("point", col("arclength").astype(float)),
             },
-            coords={"point": np.arange(n), "multiplier": [0, 1]},
+            coords={"point": np.arange(n), "multiplier": np.arange(width)},
         )
-        ds["param"].attrs["long_name"] = f"{self.name} ({PARAMETERS[self.name][0]})"
+        ds["param"].attrs["long_name"] = f"{self.name} ({self.param_unit()})"
         ds["x0"].attrs["units"], ds["v0"].attrs["units"] = "m", "m/s"
         ds["amplitude_m"].attrs["units"] = ds["offset_m"].attrs["units"] = "m"
         ds["mu_max"].attrs["long_name"] = "largest |Floquet multiplier| of P^K"
