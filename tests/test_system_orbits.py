@@ -217,3 +217,25 @@ def test_the_continuation_engine_follows_a_structures_orbits() -> None:
         dfo.continue_orbits(two_mass(0.6), "omega", 0.6, 0.7)
     with pytest.raises(ValueError, match="valid: omega, N"):
         dfo.continue_orbits(system, "zeta", 0.9, 1.0)
+
+
+def test_the_command_line_continues_a_structures_orbits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``dryfriction system continuation``: continuation.nc, .csv, .png written; --json prints the
+    branch that reached the end of its range, its points' parameters from --start to --stop."""
+    from dryfriction.cli import main
+
+    spec = tmp_path / "s.toml"
+    spec.write_text("[structure]\nM = [[1.0, 0.0], [0.0, 0.5]]\nK = [[3.0, -1.0], [-1.0, 1.0]]\n"
+                    "[damping]\nrayleigh = [0.02, 0.02]\n[excitation]\nF_c = [1.0, 0.0]\nomega = 1.8\n"
+                    "[[contact]]\nbetween = [0, 1]\nN = 0.6\nmu_s = 0.5\nmu_k = 0.5\nk_t = 20.0\n")
+    out = tmp_path / "cont"
+    assert main(["system", "continuation", str(spec), "--param", "force", "--start", "1.0", "--stop", "1.5",
+                 "--out", str(out), "--json"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["continuation.csv", "continuation.nc", "continuation.png"]
+    got = json.loads(capsys.readouterr().out)
+    assert got["param"] == "force" and got["branches"][0]["stopped"].startswith("reached the end")
+    p = got["points"]["param"]
+    assert p[0] == pytest.approx(1.0) and p[-1] == pytest.approx(1.5) and len(p) >= 3
+    # the force's scale 1.5: the orbit of the structure with F_c 1.5 times the file's
+    (cold,) = find_system_orbits(two_mass(1.8).replace(F_c=[1.5, 0.0]), estimate_error=False)
+    assert np.allclose(got["points"]["amplitude_m"][-1], cold.amplitude, rtol=1e-5)

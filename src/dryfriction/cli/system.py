@@ -4,6 +4,7 @@
     dryfriction system run SPEC --t-end 10 [--dt 0.01] [--json]
     dryfriction system orbits SPEC [--period K] [--accuracy A] [--json]
     dryfriction system response SPEC --f-start F0 --f-stop F1 [--num N] [--dof D] [--out DIR] [--json]
+    dryfriction system continuation SPEC --param omega --start A --stop B [--out DIR] [--json]
 
 ``SPEC`` is the TOML structure file (:mod:`dryfriction.system.spec`: the matrices inline or in
 ``.npy``, ``.csv`` or MatrixMarket ``.mtx`` files beside it). ``fmu`` writes the package's prebuilt
@@ -17,7 +18,10 @@ orbits at its omega (Newton shooting on the located map with the FMU's Jacobian:
 :func:`dryfriction.analysis.system_orbits.find_system_orbits`), ``response`` its steady response by
 orbits over a frequency range (:func:`dryfriction.analysis.system_response.system_frequency_response`)
 into ``--out`` (default results/system_response): response.csv, response.nc (NetCDF) and response.png,
-all or nothing; ``--json`` prints the table instead (files only with ``--out``).
+all or nothing; ``--json`` prints the table instead (files only with ``--out``). ``continuation``
+follows the orbits in a parameter with the continuation engine
+(:func:`dryfriction.analysis.system_continuation.continue_system_orbits`) and writes
+continuation.nc, continuation.csv and continuation.png (or prints the branches and bifurcations).
 """
 
 from __future__ import annotations
@@ -88,6 +92,21 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     q.add_argument("--no-plot", action="store_true", help="no PNG")
     q.add_argument("--json", action="store_true", help="print the table as one JSON object on stdout")
     q.add_argument("--no-progress", action="store_true", help="no progress bar")
+    c = ss.add_parser("continuation", help="follow the structure's orbits in a parameter, with their bifurcations",
+                      description="Continue the structure's periodic orbits in omega, N, mu_s, mu_k or force (the "
+                                  "excitation's scale) from --start to --stop: folds, period doublings and grazings "
+                                  "located; continuation.nc, .csv and .png.")
+    c.add_argument("spec", type=path_arg("SPEC", "file"), metavar="SPEC", help="the TOML structure file")
+    c.add_argument("--param", choices=("omega", "N", "mu_s", "mu_k", "force"), required=True,
+                   help="the parameter (N, mu_s, mu_k: every contact's; force: F_c and F_s scaled)")
+    c.add_argument("--start", type=number("--start"), required=True, help="the parameter's first value")
+    c.add_argument("--stop", type=number("--stop"), required=True, help="the parameter's last value")
+    c.add_argument("--period", type=count("--period"), default=1, help="excitation periods K of the orbits (default 1)")
+    c.add_argument("--max-points", dest="max_points", type=count("--max-points", 2), default=400,
+                   help="points per branch at most (default 400)")
+    c.add_argument("--out", type=path_arg("--out"), default=None,
+                   help="output folder (default results/system_continuation; with --json: no files unless --out)")
+    c.add_argument("--json", action="store_true", help="print the branches, bifurcations and points as JSON")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -105,6 +124,8 @@ def run(args: argparse.Namespace) -> int:
         return _orbits(system, args)
     if args.system_command == "response":
         return _response(system, args)
+    if args.system_command == "continuation":
+        return _continuation(system, args)
     from ..drivers.system import run as run_system
 
     res = run_system(system, args.t_end, args.dt, fmu_path=args.fmu)
@@ -218,4 +239,97 @@ def _csv(ds: Any, path: Path) -> Path:
                        + [int(ds["stable"].values[i]), int(ds["neutral"].values[i])]
                        + [repr(float(ds[k].values[i])) for k in ("mu_max", "residual", "error_m", "h_s")]
                        + [int(ds["converged"].values[i]), str(ds["reason"].values[i])])
+    return path
+
+
+def _continuation(system: Any, args: argparse.Namespace) -> int:
+    """``dryfriction system continuation``: the branches written (NetCDF, CSV, PNG; all or nothing) or
+    printed as JSON; exit status 1 when a branch stopped before the end of the range."""
+    import numpy as np
+
+    from ..analysis.system_continuation import continue_system_orbits
+    from .output import json_safe
+
+    out = None
+    if args.out is not None or not args.json:
+        from ..budget import check_writable
+
+        out = check_writable(args.out or Path("results/system_continuation"), 1000.0 * args.max_points,
+                             "the continuation's files")
+    c = continue_system_orbits(system, args.param, args.start, args.stop, period=args.period,
+                               max_points=args.max_points)
+    ds = c.dataset
+    files: list[Path] = []
+    if out is not None:
+        from .console import result_set
+
+        with result_set(out) as stage:
+            from ..sweep.datasets import write_netcdf
+
+            files.append(write_netcdf(ds, stage / "continuation.nc"))
+            files.append(_continuation_csv(ds, stage / "continuation.csv"))
+            files.append(_continuation_png(ds, c, stage / "continuation.png"))
+        files = [out / p.relative_to(stage) for p in files]
+    ended = all(b.stopped.startswith("reached the end") for b in c.branches)
+    if args.json:
+        print_json({**c.as_dict(), "points": {k: json_safe(ds[k].values.tolist()) for k in
+                                              ("param", "amplitude_m", "stick_fraction", "mu_max", "stable",
+                                               "branch", "bifurcation")}})
+    else:
+        for b in c.branches:
+            print(f"branch {b.id} (period {b.period}): {b.points} points; {b.stopped}")
+        for f in c.bifurcations:
+            print(f"{f.type} at {args.param} = {f.param:.8g} (branch {f.branch}){': ' + f.note if f.note else ''}")
+        k = int(np.nanargmax(ds["amplitude_m"].values.max(axis=1))) if ds.sizes["point"] else 0
+        if ds.sizes["point"]:
+            print(f"largest amplitude {np.nanmax(ds['amplitude_m'].values[k]):.6g} m at {args.param} = "
+                  f"{float(ds['param'].values[k]):.6g}")
+        for p in files:
+            print(f"wrote {p}")
+    return 0 if ended else 1
+
+
+def _continuation_csv(ds: Any, path: Path) -> Path:
+    """The branch points as CSV: parameter, branch, amplitude per DOF, stuck share per contact, stability."""
+    import csv
+
+    n, nc = ds.sizes["dof"], ds.sizes["contact"]
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["param", "branch", *[f"amplitude_m[{i}]" for i in range(n)],
+                    *[f"stick_fraction[{j}]" for j in range(nc)], "mu_max", "stable", "bifurcation"])
+        for i in range(ds.sizes["point"]):
+            w.writerow([repr(float(ds["param"].values[i])), int(ds["branch"].values[i]),
+                        *[repr(float(v)) for v in ds["amplitude_m"].values[i]],
+                        *[repr(float(v)) for v in ds["stick_fraction"].values[i]],
+                        repr(float(ds["mu_max"].values[i])), int(ds["stable"].values[i]),
+                        str(ds["bifurcation"].values[i])])
+    return path
+
+
+def _continuation_png(ds: Any, c: Any, path: Path) -> Path:
+    """Each DOF's amplitude along the branches (stable solid, unstable dashed), the bifurcations marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    p, A, st, br = ds["param"].values, ds["amplitude_m"].values, ds["stable"].values, ds["branch"].values
+    for b in np.unique(br):
+        sel = br == b
+        for d in range(A.shape[1]):
+            line, = ax.plot(p[sel], np.where(st[sel], A[sel, d], np.nan), "-", label=f"DOF {d}" if b == br[0] else None)
+            ax.plot(p[sel], np.where(~st[sel], A[sel, d], np.nan), "--", color=line.get_color())
+    for f in c.bifurcations:
+        ax.plot([f.param] * np.size(f.amplitude_m), np.atleast_1d(f.amplitude_m), "kx")
+    ax.set_xlabel(c.param)
+    ax.set_ylabel("amplitude, m")
+    ax.set_title("orbits of the structure along the parameter (x: bifurcations)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
     return path
