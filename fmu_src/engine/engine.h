@@ -545,10 +545,11 @@ void eng_start(eng *E, const eng_inputs *in, double t0, const double *x0, const 
 
 /* After eng_start: the Jenkins contacts' sliders at s0 (nc; a rigid contact's entry not read), each
  * stuck (its spring force -k_t (w_j . x - s0_j) within its breakaway limit, 1e-12 of it beyond
- * allowed: a force on the limit rounded), the accelerations and
- * forces consistent again, the tangent seeded anew. Returns 0 (s untouched) where a slider's force
- * is beyond its limit. */
-int eng_set_sliders(eng *E, const eng_inputs *in, eng_state *s, const double *s0);
+ * allowed: a force on the limit rounded), or where slide (nc, NULL: none) is -1 or +1 sliding that
+ * way with its force the kinetic one (its slider where that puts it, s0 not read); the accelerations
+ * and forces consistent again, the tangent seeded anew. Returns 0 (s untouched) where a stuck
+ * slider's force is beyond its limit or a slide is not -1, 0 or +1. */
+int eng_set_sliders(eng *E, const eng_inputs *in, eng_state *s, const double *s0, const int *slide);
 
 /* The time eng_advance ends on for t_target: the grid point it snaps to, else t_target. */
 double eng_snap_target(const eng *E, const eng_state *s, double t_target);

@@ -2651,19 +2651,28 @@ static double snap_tol(const eng *E, double t)
     return min_b(S->snap_max_rel_h * S->h, max_b(S->snap_eps_t * DBL_EPSILON * fabs(t), S->snap_min_rel_h * S->h));
 }
 
-ENG_API int ENG_FN(eng_set_sliders)(eng *E, const eng_inputs *in, eng_state *s, const double *s0)
+ENG_API int ENG_FN(eng_set_sliders)(eng *E, const eng_inputs *in, eng_state *s, const double *s0, const int *slide)
 {
     E->loads_for = NULL;
     loads_at(E, in, s->t);
-    for (size_t j = 0; j < ENG_NC(E); j++) /* (a force on its limit, rounded a hair beyond, holds) */
-        if (is_jenk(E, j) &&
+    for (size_t j = 0; j < ENG_NC(E); j++) { /* (a force on its limit, rounded a hair beyond, holds) */
+        const int sl = (slide && has_friction(E, j)) ? slide[j] : 0;
+        if (is_jenk(E, j) && (sl < -1 || sl > 1)) return 0;
+        if (is_jenk(E, j) && sl == 0 &&
             !(fabs(E->S.k_t[j] * (row_dot(&E->S.rows[j], s->X) - s0[j])) <= E->Fb[j] * (1.0 + 1e-12)))
             return 0;
-    for (size_t j = 0; j < ENG_NC(E); j++)
-        if (is_jenk(E, j)) {
-            s->slider[j] = s0[j];
-            s->mode[j] = has_friction(E, j) ? 0 : s->mode[j];
+    }
+    for (size_t j = 0; j < ENG_NC(E); j++) {
+        if (!is_jenk(E, j)) continue;
+        const int sl = (slide && has_friction(E, j)) ? slide[j] : 0;
+        if (sl != 0) { /* sliding: its spring at the kinetic force against the slip's side */
+            s->mode[j] = sl;
+            s->slider[j] = row_dot(&E->S.rows[j], s->X) - sl * E->mukN[j] / E->S.k_t[j];
+            continue;
         }
+        s->slider[j] = s0[j];
+        s->mode[j] = has_friction(E, j) ? 0 : s->mode[j];
+    }
     restart(E, s, s->t, 0);
     if (ENG_TANGENTS(E) && s->tan) tan_seed(E, in, s);
     return 1;

@@ -131,8 +131,16 @@ static void tan_seed(eng *E, const eng_inputs *in, eng_state *s)
     const size_t n = ENG_N(E), nc = ENG_NC(E), L = tan_L(E), nz = tan_nz(E);
     for (size_t k = 0; k < nz * L; k++) s->tan[k] = 0.0;
     for (size_t i = 0; i < 2 * n; i++) s->tan[i * L + i] = 1.0;
-    for (size_t j = 0; j < nc; j++)
-        if (is_jenk(E, j)) s->tan[(2 * n + j) * L + TAN_SO(n) + j] = 1.0;
+    for (size_t j = 0; j < nc; j++) {
+        if (!is_jenk(E, j)) continue;
+        if (!(has_friction(E, j) && s->mode[j] != 0)) {
+            s->tan[(2 * n + j) * L + TAN_SO(n) + j] = 1.0;
+            continue;
+        }
+        /* a sliding slider sits where its kinetic force puts it: w_j . x less a constant (s0 not read) */
+        for (size_t c = 0; c < nz; c++)
+            s->tan[c * L + TAN_SO(n) + j] = row_dot(&E->S.rows[j], s->tan + c * L + TAN_XO);
+    }
     s->tan_lost = 0;
     tan_restart(E, in, s);
 }

@@ -116,6 +116,8 @@ static eng_setup setup_of(structure *Q, int tangent)
 
 /* The map from z = (x0, v0, s0) over t_end: the end state into out (2 n + nc; a rigid contact's
  * entry 0), the Jacobian into J where asked (tangent on). Returns the switches, -1 on failure. */
+static const int *SLIDE; /* the sliders' modes at the start (eng_set_sliders; NULL: stuck), per case */
+
 static long run_map(structure *Q, const double *z, double t_end, double *out, double *J, int tangent,
                     eng_state *keep)
 {
@@ -127,7 +129,7 @@ static long run_map(structure *Q, const double *z, double t_end, double *out, do
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng_start(E, &in, 0.0, z, z + n, &s);
     long sw = -1;
-    const int set = eng_set_sliders(E, &in, &s, z + 2 * n);
+    const int set = eng_set_sliders(E, &in, &s, z + 2 * n, SLIDE);
     const eng_status st = set ? eng_advance(E, &in, &s, t_end, NULL) : ENG_ERR_BAD_INPUT;
     if (st != ENG_OK) printf("    sliders set %d, advance: %s at t %g\n", set, eng_status_text(st), s.t);
     if (st == ENG_OK) {
@@ -251,6 +253,39 @@ static void test_two_mass_jenkins(checks *T)
     }
 }
 
+/* Two masses, the Jenkins slider started sliding forward (mu_s > mu_k: its mode is not a function of
+ * the state, eng_set_sliders' slide): the map does not depend on s0 (the slider where its kinetic force
+ * puts it), and the tangent equals the differences through the slider's stop and the switches after. */
+static void test_sliding_start(checks *T)
+{
+    structure Q;
+    memset(&Q, 0, sizeof Q);
+    Q.D.n = 2;
+    const double M[4] = {1.0, 0.0, 0.0, 0.5}, K[4] = {3.0, -1.0, -1.0, 1.0};
+    for (int k = 0; k < 4; k++) {
+        Q.D.M[k] = M[k];
+        Q.D.K[k] = K[k];
+        Q.D.C[k] = 0.02 * K[k] + 0.02 * M[k];
+    }
+    Q.nc = 1;
+    set_row(&Q, 0, 0, 1.0, 1, -1.0);
+    Q.N[0] = 0.6;
+    Q.mu_s[0] = 0.6;
+    Q.mu_k[0] = 0.4;
+    Q.k_t[0] = 20.0;
+    Q.Pc[0] = 1.0;
+    Q.omega = 1.4;
+    Q.h = 2.0 * 3.141592653589793 / Q.omega / 500.0;
+    Q.alpha = -0.1;
+    static const int forward[1] = {1};
+    SLIDE = forward;
+    check_context(T, "two masses, the Jenkins slider started sliding (mu_s > mu_k)");
+    const double z[5] = {0.8, 0.4, 0.9, -0.2, 0.0}; /* (slip velocity w . v = 1.1 > 0: forward) */
+    const double e = check_map(T, &Q, z, 2.0 * 3.141592653589793 / Q.omega, "two masses, a sliding start, a period");
+    CHECK(e < 1e-6);
+    SLIDE = NULL;
+}
+
 static void test_three_dofs(checks *T)
 {
     structure Q;
@@ -292,5 +327,6 @@ int main(void)
     test_block(T);
     test_two_mass_jenkins(T);
     test_three_dofs(T);
+    test_sliding_start(T);
     return checks_done(T, "test_engine_tangent");
 }

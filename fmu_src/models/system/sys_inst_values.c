@@ -115,7 +115,7 @@ dfo_inst_status sys_resize(sys_instance *in, const char *fn, size_t n, size_t nc
     if (in->vals && n == in->L.n && nc == in->L.nc) return DFO_INST_OK;
     const sys_layout L = sys_layout_of(n, nc);
     double *vals = (double *)in->lc.host.alloc(in->lc.host.ctx, L.total, sizeof(double));
-    double *scratch = (double *)in->lc.host.alloc(in->lc.host.ctx, n + nc + 1, sizeof(double));
+    double *scratch = (double *)in->lc.host.alloc(in->lc.host.ctx, n + 2 * nc + 1, sizeof(double));
     if (!vals || !scratch) {
         if (vals) in->lc.host.free(in->lc.host.ctx, vals);
         if (scratch) in->lc.host.free(in->lc.host.ctx, scratch);

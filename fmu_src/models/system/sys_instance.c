@@ -53,6 +53,7 @@ sys_params sys_params_of(const double *vals, const sys_layout *L)
     p.frictionUpdates = (int)vals[L->sp + DFO_SP_frictionUpdates];
     p.sensitivity = vals[L->sp + DFO_SP_sensitivity] != 0.0;
     p.f0 = vals + L->ap[DFO_AP_f0];
+    p.slide0 = vals + L->ap[DFO_AP_slide0];
     return p;
 }
 
@@ -386,16 +387,18 @@ dfo_inst_status dfo_inst_exit_init(dfo_lifecycle *lc, const char *fn)
     const eng_inputs e = sys_inputs_of(vals, L, 1);
     const sys_params p = sys_params_of(vals, L);
     eng_start(in->m.E, &e, in->lc.run.start_time, p.x0, p.v0, &in->s);
-    int preloaded = 0; /* a Jenkins spring with an initial force: its slider where f0 puts it */
-    for (size_t j = 0; j < L->nc; j++) preloaded |= p.k_t[j] > 0.0 && p.f0[j] != 0.0;
+    int preloaded = 0; /* a Jenkins spring with an initial force or slide: its slider where they put it */
+    for (size_t j = 0; j < L->nc; j++) preloaded |= p.k_t[j] > 0.0 && (p.f0[j] != 0.0 || p.slide0[j] != 0.0);
     if (preloaded) {
         double *s0 = in->scratch + L->n;
+        int *slide = (int *)(void *)(in->scratch + L->n + L->nc); /* (nc doubles' room) */
+        for (size_t j = 0; j < L->nc; j++) slide[j] = (int)p.slide0[j];
         for (size_t j = 0; j < L->nc; j++) {
             double g = 0.0;
             for (size_t i = 0; i < L->n; i++) g += p.W[j * L->n + i] * p.x0[i];
             s0[j] = (p.k_t[j] > 0.0) ? g + p.f0[j] / p.k_t[j] : 0.0;
         }
-        if (!eng_set_sliders(in->m.E, &e, &in->s, s0))
+        if (!eng_set_sliders(in->m.E, &e, &in->s, s0, slide))
             return dfo_inst_fail(lc, "%s: f0 is beyond a Jenkins contact's breakaway limit max(mu_s, mu_k) (N + N_ext) "
                                  "with the inputs at the start (valid: |f0[j]| within it, its slider stuck).", fn);
     }

@@ -77,7 +77,7 @@ typedef struct {
     sys_model m;                 /* built at the end of initialisation (m.E NULL before) */
     eng_state s;                 /* the engine's live state (arrays through the host) */
     int s_ready;
-    double *scratch;             /* n + nc doubles: outputs a and f */
+    double *scratch;             /* n + 2 nc + 1 doubles: outputs a and f; the start's sliders and slides */
     eng_observer obs;            /* the observables' observer (sys_observer) */
 } sys_instance;
 

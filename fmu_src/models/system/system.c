@@ -290,8 +290,13 @@ static const char *check_with(const sys_params *p, double *L, char *buf, size_t 
                  "scheme = located (3) or sensitivity = false", p->scheme);
         return buf;
     }
+    for (size_t j = 0; p->slide0 && j < nc; j++)
+        if (p->k_t[j] > 0.0 && p->slide0[j] != -1.0 && p->slide0[j] != 0.0 && p->slide0[j] != 1.0) {
+            snprintf(buf, len, "invalid value %g for slide0[%zu] (valid: -1, 0 or +1)", p->slide0[j], j + 1);
+            return buf;
+        }
     for (size_t j = 0; p->f0 && j < nc; j++) {
-        if (!(p->k_t[j] > 0.0)) continue; /* (not read for a rigid contact) */
+        if (!(p->k_t[j] > 0.0) || (p->slide0 && p->slide0[j] != 0.0)) continue; /* (not read: rigid, or sliding) */
         const double Fb = fmax(p->mu_s[j], p->mu_k[j]) * p->N[j];
         if (!(fabs(p->f0[j]) <= Fb * (1.0 + 1e-12))) { /* (a force on the limit, rounded a hair beyond) */
             snprintf(buf, len, "f0[%zu] = %.17g is beyond contact %zu's breakaway limit: valid range |f0[%zu]| <= "

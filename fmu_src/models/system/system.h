@@ -56,6 +56,7 @@ typedef struct {
                                       * modal one where C allows it */
     int sensitivity;                 /* 1: propagate the located map's Jacobian (eng_setup.tangent) */
     const double *f0;                /* nc: a Jenkins contact's initial spring force (NULL: 0, relaxed) */
+    const double *slide0;            /* nc: a Jenkins contact's initial slide (-1, 0 stuck, +1; NULL: stuck) */
     eng_rest_fn on_rest;             /* the engine's report of its rest rule (NULL: none), its context */
     void *rest_ctx;
 } sys_params;

@@ -20,8 +20,9 @@ Section: where the map is smooth in the state, chosen from the guess's cycle: th
 longest stretch in which every rigid contact slides (a stuck contact's velocity is held at its
 belt's, the map not smooth in it) and every Jenkins slider is stuck (the map's start holds each
 slider stuck: a sliding one would wait for its static limit), else of the longest stretch with the
-sliders stuck, else t = 0. The state at t = 0 mod K T (``x0``, ``v0``, ``s0``) is read from a run
-of the converged orbit.
+sliders stuck, else t = 0 with each slider started in its mode there (``slide0``: a sliding slider
+where its kinetic force puts it). The state at t = 0 mod K T (``x0``, ``v0``, ``s0``) is read from a
+run of the converged orbit.
 """
 
 from __future__ import annotations
@@ -62,6 +63,8 @@ class SystemOrbit:
     x0: np.ndarray                   # n positions at t = 0 mod K T, m
     v0: np.ndarray                   # n velocities, m/s
     s0: np.ndarray                   # nc sliders (NaN for a rigid contact), m
+    slide0: np.ndarray               # nc: each Jenkins slider's mode at t = 0 (0 stuck, -1 / +1 sliding; the
+    #                                  FMU's slide0 that starts the orbit); 0 for a rigid contact
     multipliers: np.ndarray          # eigenvalues of the K-period map's Jacobian (|mu| descending)
     stable: bool                     # every |mu| < 1 - STABILITY_MARGIN (a neutral orbit's multipliers 1 aside)
     residual: float                  # the scaled Newton residual at the section
@@ -104,6 +107,7 @@ class _Map:
         self.jenk = np.flatnonzero(system.k_t > 0.0)
         self.KT = K * 2.0 * np.pi / system.omega
         self.evaluations = 0
+        self.slide = np.zeros(system.nc, dtype=int)  # each Jenkins slider's mode at the section (0: stuck)
 
     @property
     def size(self) -> int:
@@ -120,12 +124,16 @@ class _Map:
         return f
 
     def project(self, z: np.ndarray) -> np.ndarray:
-        """z with each slider within its limit (the map's start holds it stuck)."""
+        """z with each stuck slider within its limit, each sliding one where its kinetic force puts it."""
         if not self.jenk.size:
             return z
+        sysm = self.system
         out = z.copy()
-        g = self.system.W[self.jenk] @ z[:self.n]
-        out[2 * self.n:] = g + self.f0(z)[self.jenk] / self.system.k_t[self.jenk]
+        g = sysm.W[self.jenk] @ z[:self.n]
+        kt = sysm.k_t[self.jenk]
+        m = self.slide[self.jenk]
+        out[2 * self.n:] = np.where(m != 0, g - m * sysm.mu_k[self.jenk] * sysm.N[self.jenk] / kt,
+                                    g + self.f0(z)[self.jenk] / kt)
         return out
 
     def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True,
@@ -136,10 +144,11 @@ class _Map:
         f = self.fmu
         span = self.KT if span is None else span
         f.start(t_s, observe=True, t_obs_start=t_s, t_obs_stop=t_s + span, sensitivity=jacobian,
-                x0=z[:n], v0=z[n:2 * n], f0=self.f0(z))
+                x0=z[:n], v0=z[n:2 * n], f0=self.f0(z), slide0=self.slide)
         f.do_step(span)
         self.evaluations += 1
         out = f.outputs()
+        self.last_mode = np.asarray(out["mode"], dtype=int)
         Pz = np.concatenate([out["x"], out["v"], out["s"][self.jenk]])
         J = np.full((self.size, self.size), np.nan)
         if jacobian:
@@ -153,7 +162,7 @@ class _Map:
         """The modes over one K T from z at t_s, sampled ``samples`` times per period: (t, mode [nt, nc])."""
         n = self.n
         f = self.fmu
-        f.start(t_s, observe=False, x0=z[:n], v0=z[n:2 * n], f0=self.f0(z))
+        f.start(t_s, observe=False, x0=z[:n], v0=z[n:2 * n], f0=self.f0(z), slide0=self.slide)
         t = t_s + np.linspace(0.0, self.KT, self.K * samples + 1)
         run = f.record_at(t)
         return run.t, run.mode
@@ -188,14 +197,14 @@ def _longest(good: np.ndarray) -> tuple[int, int] | None:
     return run
 
 
-def _section(M: _Map, z: np.ndarray) -> float:
+def _section(M: _Map, z: np.ndarray) -> float:  # noqa: C901 (the rule's cases, in order)
     """The section time (module doc): where the map is smooth in the state, from the modes of the
     guess's cycle: every rigid contact with friction sliding (a stuck one's velocity is not a smooth
     variable of the map) and every Jenkins slider stuck (the map's start holds each slider stuck);
     the middle of the longest such stretch, or of the longest stretch with the sliders stuck, else
-    t = 0. Raises ValueError where a Jenkins contact with mu_s > mu_k slides throughout (its mode is
-    not a function of the state)."""
+    t = 0 with each slider started in its mode there (M.slide: sliding sliders start sliding)."""
     sysm = M.system
+    M.slide[:] = 0
     live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
     if not live.any():
         return 0.0
@@ -210,9 +219,9 @@ def _section(M: _Map, z: np.ndarray) -> float:
         run = _longest(good[:-1])  # (the last sample is the first one a cycle later)
         if run is not None and run[1] - run[0] >= 2:
             return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
-    if any(sysm.mu_s[j] > sysm.mu_k[j] for j in jenk):
-        raise ValueError("a Jenkins contact with mu_s > mu_k slides throughout the cycle: the map's start state, "
-                         "which holds every slider stuck, cannot represent it")
+    # some slider slides at every time: the map starts there sliding (its mode from the guess's cycle)
+    for j in jenk:
+        M.slide[j] = int(mode[0, j])
     return 0.0
 
 
@@ -269,8 +278,11 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
     """The orbit of the converged z at t_s: its state at t = 0 mod K T, multipliers, observables."""
     n, sysm = M.n, M.system
     z0 = z
+    slide0 = np.zeros(sysm.nc, dtype=int)
+    slide0[M.jenk] = M.slide[M.jenk]
     if t_s != 0.0:  # the state at the next multiple of K T
         z0, _, _ = M(z, t_s, jacobian=False, span=M.KT - t_s)
+        slide0[M.jenk] = M.last_mode[M.jenk]
     s0 = np.full(sysm.nc, np.nan)
     s0[M.jenk] = z0[2 * n:]
     mult = np.linalg.eigvals(J) if np.all(np.isfinite(J)) else np.full(J.shape[0], np.nan)
@@ -280,7 +292,8 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
     near1 = np.abs(mult - 1.0) <= NEUTRAL
     neutral = bool(ok and near1.any())
     rest = mult[~near1] if neutral else mult
-    return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, multipliers=mult,
+    return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, slide0=slide0,
+                       multipliers=mult,
                        stable=bool(ok and np.all(np.abs(rest) < 1.0 - STABILITY_MARGIN)), residual=r, neutral=neutral,
                        amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
                        stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
@@ -403,6 +416,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
     for _ in range(MAX_HALVINGS):
         h *= 0.5
         Mh = _Map(fmu, M.system.replace(h=h), M.K)
+        Mh.slide[:] = M.slide  # (the same section, its sliders started as at h)
         fmu.system = Mh.system
         zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
         fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
@@ -427,5 +441,6 @@ def _failed(M: _Map, z: np.ndarray, reason: str, h: float) -> SystemOrbit:
     n, nc = M.n, M.system.nc
     nan_n, nan_c = np.full(n, np.nan), np.full(nc, np.nan)
     return SystemOrbit(period=M.K, x0=z[:n].copy(), v0=z[n:2 * n].copy(), s0=nan_c.copy(),
-                       multipliers=np.zeros(0), stable=False, residual=float("nan"), amplitude=nan_n,
+                       slide0=np.zeros(nc, dtype=int), multipliers=np.zeros(0), stable=False,
+                       residual=float("nan"), amplitude=nan_n,
                        offset=nan_n.copy(), stick_fraction=nan_c, converged=False, reason=reason, h=h)

@@ -220,7 +220,7 @@ class SystemFMU3(Driver):
 
     def start(self, start_time: float = 0.0, inputs: Mapping[str, Any] | None = None, *, observe: bool = True,
               t_obs_start: float | None = None, t_obs_stop: float | None = None, sensitivity: bool = False,
-              x0: Any = None, v0: Any = None, f0: Any = None) -> None:
+              x0: Any = None, v0: Any = None, f0: Any = None, slide0: Any = None) -> None:
         """A fresh run of the system from ``start_time``: reset (after the first), ``n`` and ``nc``
         in Configuration Mode, the system's values, ``inputs`` and the observation window in
         Initialization Mode. ``observe``: compute the observables x_max, x_min, stick_fraction
@@ -228,8 +228,9 @@ class SystemFMU3(Driver):
         (default ``start_time``) to ``t_obs_stop`` (default :data:`T_OBS_STOP`, open; >= t_obs_start).
         ``sensitivity``: propagate the located map's Jacobian (read with
         :meth:`~dryfriction.drivers.system.SystemFMU3.jacobian`). ``x0``, ``v0`` (n values) and ``f0``
-        (nc: each Jenkins spring's initial force, its slider stuck at ``w_j . x0 + f0_j / k_t``) start
-        the run from another state than the system's."""
+        (nc: each Jenkins spring's initial force, its slider stuck at ``w_j . x0 + f0_j / k_t``) and
+        ``slide0`` (nc: -1 or +1 a Jenkins slider sliding that way at the start, its force the kinetic
+        one; 0 stuck) start the run from another state than the system's."""
         todo = self._inputs(inputs or {})  # checked before the FMU is touched
         state = {name: expand(name, value, size).tolist()
                  for name, value, size in (("x0", x0, self.n), ("v0", v0, self.n), ("f0", f0, self.nc))
@@ -259,6 +260,9 @@ class SystemFMU3(Driver):
         self._observe = bool(observe)
         for name, vals in state.items():
             inst.set("Float64", [self.vars[name].vr], vals)
+        if slide0 is not None and self.nc:
+            v = self.vars["slide0"]
+            inst.set(v.call_type, [v.vr], [int(m) for m in np.broadcast_to(np.asarray(slide0), (self.nc,))])
         for vr, vals in todo:
             inst.set("Float64", [vr], vals)
         inst.exit_initialization_mode()
