@@ -13,8 +13,10 @@ Newton solves (J - I) dz = -r, r = P^K(z) - z, with a backtracking line search o
 residual; converged when the residual is at most ``tol`` relative: ``|S^-1 r|_inf / max(1,
 |S^-1 z|_inf)``, S the structure's own scales (each DOF's motion in the guess's cycle, its velocity
 that times omega). The orbit's error is the scheme's (second order in h): the orbit is solved again
-at h / 2 from the one at h, its amplitude extrapolated (Richardson) and the difference reported as
-the estimated error; with ``accuracy`` the step is halved until that estimate is within it.
+at h / 2 from the one at h (chord steps with the h orbit's Jacobian, on map runs without one: the
+orbits differ by O(h^2); its multipliers are the h orbit's), its amplitude extrapolated (Richardson)
+and the difference reported as the estimated error; with ``accuracy`` the step is halved until that
+estimate is within it.
 
 Section: where the map is smooth in the state, chosen from the guess's cycle: the middle of the
 longest stretch in which every rigid contact slides (a stuck contact's velocity is held at its
@@ -418,8 +420,10 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         Mh = _Map(fmu, M.system.replace(h=h), M.K)
         Mh.slide[:] = M.slide  # (the same section, its sliders started as at h)
         fmu.system = Mh.system
-        zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
-        fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
+        fine = _chord(Mh, prev, t_s, S, tol, h)  # (one step with the coarser orbit's Jacobian)
+        if fine is None:  # (a full Newton solve at h, the Jacobian's too)
+            zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
+            fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
         if not fine.converged:
             prev.reason = f"the error estimate's solve at h = {h:.6g} did not converge: {why}"
             break
@@ -435,6 +439,33 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         prev.converged = False
     fmu.system = M.system
     return prev
+
+
+def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float, h: float) -> SystemOrbit | None:
+    """The orbit at the finer step of M from the coarser one by chord steps (Newton with the coarser
+    orbit's Jacobian: the two orbits differ by the scheme's O(h^2), so two steps bring the residual
+    to ``tol``) on map evaluations without the Jacobian; its multipliers the coarser orbit's (they
+    differ by O(h^2) too). None where two steps do not get there (then a full Newton solve)."""
+    J = coarse.jacobian
+    if not np.all(np.isfinite(J)):
+        return None
+    A = (J - np.eye(J.shape[0])) * S[None, :] / S[:, None]
+    z = M.project(coarse.section_state)
+    for it in range(3):
+        try:
+            Pz, _, obs = M(z, t_s, jacobian=False)
+        except FMUCallError:
+            return None
+        r = float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
+        if r <= tol:
+            orbit = _make_orbit(M, z, Pz, J, r, it, "", obs, t_s, h)
+            orbit.multipliers = coarse.multipliers
+            orbit.stable, orbit.neutral = coarse.stable, coarse.neutral
+            return orbit
+        if it == 2:
+            return None
+        z = M.project(z + S * np.linalg.lstsq(A, -(Pz - z) / S, rcond=1e-10)[0])
+    return None
 
 
 def _failed(M: _Map, z: np.ndarray, reason: str, h: float) -> SystemOrbit:
