@@ -29,6 +29,7 @@ run of the converged orbit.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -306,6 +307,7 @@ def _h_of(fmu: "SystemFMU3", system: "System") -> float:
     """The internal step the FMU uses for the system (its h, or the derived one)."""
     if system.h > 0:
         return float(system.h)
+    fmu.system = system
     fmu.start(0.0, observe=False)
     return float(fmu.inst.get("Float64", [fmu.vars["h_used"].vr])[0])
 
@@ -327,7 +329,7 @@ def system_map(system: "System", z: Sequence[float], period: int = 1, t_s: float
 def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequence[float]] | None = None, *,
                        transients: int = 40, tol: float = 1e-8, max_iter: int = 30,
                        accuracy: float | None = None, estimate_error: bool = True,
-                       keep_failed: bool = False) -> list[SystemOrbit]:
+                       keep_failed: bool = False, fmu: "SystemFMU3 | None" = None) -> list[SystemOrbit]:
     """The periodic orbits of ``period`` (K) excitation periods of ``system`` (scheme located, the
     Coulomb law) found by Newton shooting on the located map with the FMU's Jacobian (module doc),
     from:
@@ -343,7 +345,10 @@ def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequ
     estimate |A(h / 2) - A(h)| / 3 (max over DOFs) and ``amplitude_extrapolated`` Richardson's;
     ``accuracy`` halves h further until ``error`` is within it (at most 6 halvings; an orbit that
     does not get there says so in ``reason``). Orbits that did not converge are dropped unless
-    ``keep_failed``. Stable orbits first, then by the largest amplitude.
+    ``keep_failed``. Stable orbits first, then by the largest amplitude. ``fmu``: an open
+    :class:`~dryfriction.drivers.system.SystemFMU3` of a structure of the same sizes to run the map
+    on (loading the FMU costs more than a map run of a small structure), else one is opened and
+    closed.
     """
     from ..drivers.system import SystemFMU3
     from ..system.structure import System
@@ -366,7 +371,9 @@ def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequ
     if accuracy is not None and not (accuracy > 0):
         raise ValueError(f"accuracy must be > 0, not {accuracy!r}")
     orbits: list[SystemOrbit] = []
-    with SystemFMU3(system) as fmu:
+    if fmu is not None and (fmu.n, fmu.nc) != (system.n, system.nc):
+        raise ValueError(f"the fmu runs a structure of n = {fmu.n}, nc = {fmu.nc}, not n = {system.n}, nc = {system.nc}")
+    with (SystemFMU3(system) if fmu is None else contextlib.nullcontext(fmu)) as fmu:
         h0 = _h_of(fmu, system)
         sysh = system.replace(h=h0)
         fmu.system = sysh
