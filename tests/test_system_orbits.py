@@ -17,7 +17,9 @@ from dryfriction import Contact, Oscillator, System
 from dryfriction.analysis.system_orbits import SystemOrbit, find_system_orbits, system_map
 from dryfriction.drivers.system import SystemFMU3
 
-pytestmark = pytest.mark.no_sanitizer  # (FMU runs in a loop: the C side is tested under ASan in ctest)
+#: the orbit solves run the FMU hundreds of times: outside the ASan/UBSan pass (the map's Jacobian, its
+#: C side, runs under the sanitizers in test_the_maps_jacobian_equals_central_differences and ctest)
+loops = pytest.mark.no_sanitizer
 
 M2 = np.diag([1.0, 0.5])
 K2 = np.array([[3.0, -1.0], [-1.0, 1.0]])
@@ -67,6 +69,7 @@ def test_the_maps_jacobian_equals_central_differences(case: str) -> None:
     assert np.abs(J - free).max() > 1e-2
 
 
+@loops
 def test_an_orbit_returns_to_itself_for_20_periods_in_another_fmu() -> None:
     """The orbit shooting finds, run on for 20 periods from its state at t = 0 by a separate FMU, comes
     back to that state at every period within the Newton tolerance (scaled by its amplitude)."""
@@ -87,6 +90,7 @@ def test_an_orbit_returns_to_itself_for_20_periods_in_another_fmu() -> None:
     assert 0.05 < orbit.stick_fraction[0] < 0.95
 
 
+@loops
 def test_frictionless_response_equals_the_harmonic_closed_form() -> None:
     """Without friction the orbit's amplitude is the linear closed form |(K - w^2 M + i w C)^-1 F| within
     the scheme's error: second order (Richardson's estimate within 3x of the true error)."""
@@ -105,6 +109,7 @@ def test_frictionless_response_equals_the_harmonic_closed_form() -> None:
     assert np.allclose(np.sort(np.abs(orbit.multipliers)), exact, rtol=1e-4, atol=0)
 
 
+@loops
 def test_one_dof_is_the_oscillators_orbit() -> None:
     """n = 1 with one rigid contact: the located map's orbit is the oscillator's exact one within the
     scheme's error (amplitude 1e-6, multiplier 1e-4 relative), whose estimate is honest."""
@@ -119,6 +124,7 @@ def test_one_dof_is_the_oscillators_orbit() -> None:
     assert orbit["x0"] is orbit.x0 and exact["x0"] == exact.x0
 
 
+@loops
 def test_the_amplitude_converges_at_second_order_in_h() -> None:
     """The orbit's amplitude against the oscillator's exact one at h, h/2, h/4: error ratios near 4."""
     p = Oscillator.from_nondimensional(lam=1.2, mu_s_sigma=0.5, chi=0.6)
@@ -132,6 +138,7 @@ def test_the_amplitude_converges_at_second_order_in_h() -> None:
     assert all(3.0 < r < 5.5 for r in ratios), (errs, ratios)
 
 
+@loops
 def test_orbits_refuse_what_the_map_does_not_cover() -> None:
     """A scheme other than located, a Stribeck contact, period < 1, omega 0: one sentence each."""
     base = two_mass(1.4)
@@ -147,6 +154,7 @@ def test_orbits_refuse_what_the_map_does_not_cover() -> None:
         find_system_orbits(base.replace(omega=0.0))
 
 
+@loops
 def test_the_frequency_response_follows_the_orbits() -> None:
     """frequency_response(system, ...) (the package's one entry point): each frequency's orbit, followed
     from the previous one, is the orbit found cold there (amplitudes within 1e-6, both within the Newton tolerance); without friction the
@@ -168,6 +176,7 @@ def test_the_frequency_response_follows_the_orbits() -> None:
         assert np.abs(dsf["amplitude_m"].values[i] - X).max() <= 3.0 * dsf["error_m"].values[i] + 1e-12
 
 
+@loops
 def test_the_command_line_writes_the_response_and_prints_orbits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``dryfriction system response`` writes response.csv, .nc and .png (the CSV's numbers the table's),
     ``system orbits --json`` prints the orbit; a --dof beyond the structure is one readable line."""
@@ -196,6 +205,7 @@ def test_the_command_line_writes_the_response_and_prints_orbits(tmp_path: Path, 
     assert "--dof 5" in capsys.readouterr().err
 
 
+@loops
 def test_the_continuation_engine_follows_a_structures_orbits() -> None:
     """continue_orbits(system, "omega", ...) (the project's continuation engine on the located map):
     the branch reaches the end of its range through the first resonance, each point converged, its
@@ -219,6 +229,7 @@ def test_the_continuation_engine_follows_a_structures_orbits() -> None:
         dfo.continue_orbits(system, "zeta", 0.9, 1.0)
 
 
+@loops
 def test_the_command_line_continues_a_structures_orbits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``dryfriction system continuation``: continuation.nc, .csv, .png written; --json prints the
     branch that reached the end of its range, its points' parameters from --start to --stop."""
