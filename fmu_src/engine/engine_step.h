@@ -2011,7 +2011,10 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             E->cand[j] = stopping || breaking;
         }
         switch_now(E, in, s, ta, t_end, 0, hk);
-        if (tan) tan_switched(E, in, s);
+        if (tan) {
+            tan_switched(E, in, s);
+            loads_at(E, in, t_end); /* (the loads of the step's end again, as switch_now leaves them) */
+        }
         if (stop && s->switches != sw0) return ENG_SWITCHED;
     }
     return ENG_OK;
