@@ -250,3 +250,19 @@ def test_the_command_line_continues_a_structures_orbits(tmp_path: Path, capsys: 
     # the force's scale 1.5: the orbit of the structure with F_c 1.5 times the file's
     (cold,) = find_system_orbits(two_mass(1.8).replace(F_c=[1.5, 0.0]), estimate_error=False)
     assert np.allclose(got["points"]["amplitude_m"][-1], cold.amplitude, rtol=1e-5)
+
+
+@loops
+def test_a_requested_accuracy_chooses_h() -> None:
+    """accuracy= (m) starts from a coarse step (1/32 of the period) and halves it until the amplitude's
+    estimated error is within it: n = 1 against the oscillator's exact orbit within twice the request,
+    at 1e-4 and 1e-7 of the amplitude, the finer request on a finer step."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4)
+    exact = dfo.find_orbits(p)[0].amplitude
+    steps = []
+    for rel in (1e-4, 1e-7):
+        (o,) = find_system_orbits(System.from_oscillator(p), accuracy=rel * exact)
+        assert o.converged and o.error <= rel * exact
+        assert abs(o.amplitude[0] - exact) <= 2.0 * rel * exact
+        steps.append(2 * np.pi / p.omega / o.h)
+    assert 32 <= steps[0] < steps[1]

@@ -54,7 +54,9 @@ SAMPLES = 256
 #: scaled distance under which two converged orbits are the same
 SAME = 1e-6
 #: step halvings at most in search of ``accuracy``
-MAX_HALVINGS = 6
+MAX_HALVINGS = 10
+#: with ``accuracy`` and the FMU's derived step: the orbits start at 1/COARSE_STEPS of the period
+COARSE_STEPS = 32
 
 
 @dataclass
@@ -303,13 +305,18 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
                        section=t_s, section_state=z.copy(), jacobian=J, iterations=it)
 
 
-def _h_of(fmu: "SystemFMU3", system: "System") -> float:
-    """The internal step the FMU uses for the system (its h, or the derived one)."""
+def _h_of(fmu: "SystemFMU3", system: "System", accuracy: float | None = None) -> float:
+    """The internal step of the orbits: the system's h; else the FMU's derived one (1/1000 of the
+    fastest period), or with ``accuracy`` a coarse start that the error estimate refines: the least
+    of 1/32 of the excitation period and half the fastest period (the located scheme resolves it)."""
     if system.h > 0:
         return float(system.h)
     fmu.system = system
     fmu.start(0.0, observe=False)
-    return float(fmu.inst.get("Float64", [fmu.vars["h_used"].vr])[0])
+    h = float(fmu.inst.get("Float64", [fmu.vars["h_used"].vr])[0])
+    if accuracy is None:
+        return h
+    return min(2.0 * np.pi / system.omega / COARSE_STEPS, 0.5 * 1000.0 * h)
 
 
 def system_map(system: "System", z: Sequence[float], period: int = 1, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -343,8 +350,9 @@ def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequ
     error against the time step: with ``estimate_error``
     (default) each orbit is solved again at h / 2, its ``amplitude`` is the h / 2 one, ``error`` the
     estimate |A(h / 2) - A(h)| / 3 (max over DOFs) and ``amplitude_extrapolated`` Richardson's;
-    ``accuracy`` halves h further until ``error`` is within it (at most 6 halvings; an orbit that
-    does not get there says so in ``reason``). Orbits that did not converge are dropped unless
+    ``accuracy`` (m) starts from a coarse h where the system's is derived (1/32 of the period, or
+    half the fastest one) and halves it until ``error`` is within it (at most 10 halvings; an orbit
+    that does not get there says so in ``reason``). Orbits that did not converge are dropped unless
     ``keep_failed``. Stable orbits first, then by the largest amplitude. ``fmu``: an open
     :class:`~dryfriction.drivers.system.SystemFMU3` of a structure of the same sizes to run the map
     on (loading the FMU costs more than a map run of a small structure), else one is opened and
@@ -374,7 +382,7 @@ def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequ
     if fmu is not None and (fmu.n, fmu.nc) != (system.n, system.nc):
         raise ValueError(f"the fmu runs a structure of n = {fmu.n}, nc = {fmu.nc}, not n = {system.n}, nc = {system.nc}")
     with (SystemFMU3(system) if fmu is None else contextlib.nullcontext(fmu)) as fmu:
-        h0 = _h_of(fmu, system)
+        h0 = _h_of(fmu, system, accuracy)
         sysh = system.replace(h=h0)
         fmu.system = sysh
         M = _Map(fmu, sysh, K)

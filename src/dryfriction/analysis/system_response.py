@@ -73,7 +73,7 @@ def system_frequency_response(system: "System", f_hz: Sequence[float] | np.ndarr
             s_i = system.replace(omega=2.0 * math.pi * float(fi))
             fmu.system = s_i
             try:
-                h0 = _h_of(fmu, s_i)
+                h0 = _h_of(fmu, s_i, accuracy)
                 s_h = s_i.replace(h=h0)
                 fmu.system = s_h
                 M = _Map(fmu, s_h, K)
