@@ -484,7 +484,7 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
     >>> [b["type"] for b in c.as_dict()["bifurcations"]]
     ['symmetry_breaking', 'grazing', 'period_doubling', 'grazing', 'period_doubling']
 
-    A structure (:class:`dryfriction.System`) in place of the oscillator: its orbits on the located
+    A structure (:class:`~dryfriction.system.structure.System`) in place of the oscillator: its orbits on the located
     map, continued by the same engine
     (:func:`dryfriction.analysis.system_continuation.continue_system_orbits`; ``param`` one of
     ``omega``, ``N``, ``mu_s``, ``mu_k``, ``force``; no symmetric map).

@@ -471,7 +471,7 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
     >>> [(o.period, o.stable) for o in orbits]     # a mirror pair of stable period-1 orbits
     [(1, True), (1, True)]
 
-    A structure (:class:`dryfriction.System`) in place of the oscillator: its orbits on the located
+    A structure (:class:`~dryfriction.system.structure.System`) in place of the oscillator: its orbits on the located
     scheme's map (:func:`dryfriction.analysis.system_orbits.find_system_orbits`, which takes the
     keywords ``guesses``, ``transients``, ``tol``, ``max_iter``, ``keep_failed`` and its own).
     """

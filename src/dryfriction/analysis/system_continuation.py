@@ -32,7 +32,7 @@ from .system_orbits import STABILITY_MARGIN, NEUTRAL, SystemOrbit, _h_of, _Map, 
 
 if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
-    from ..system.structure import System
+    from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["continue_system_orbits", "SYSTEM_PARAMETERS", "set_system_parameter"]
 
@@ -40,7 +40,7 @@ __all__ = ["continue_system_orbits", "SYSTEM_PARAMETERS", "set_system_parameter"
 SYSTEM_PARAMETERS = {"omega": "rad/s", "N": "N", "mu_s": "1", "mu_k": "1", "force": "1"}
 
 
-def set_system_parameter(base: "System", name: str, value: float) -> "System":
+def set_system_parameter(base: "Structure", name: str, value: float) -> "Structure":
     """``base`` with the parameter ``name`` at ``value`` (``force``: F_c and F_s scaled by it); a
     ValueError names a value the structure refuses."""
     if name == "omega":
@@ -55,7 +55,7 @@ def set_system_parameter(base: "System", name: str, value: float) -> "System":
 class _SystemBranchMap(_BranchMap):
     """The fixed points of a structure's branch map (module doc) as the engine's problem."""
 
-    def __init__(self, fmu: "SystemFMU3", base: "System", name: str, p_a: float, p_s: float, K: int, phase: float,
+    def __init__(self, fmu: "SystemFMU3", base: "Structure", name: str, p_a: float, p_s: float, K: int, phase: float,
                  S: np.ndarray, fd_step: float, counter: list[int]) -> None:
         self.counter = counter
         self.fmu, self.base, self.name, self.p_a, self.p_s = fmu, base, name, p_a, p_s
@@ -86,7 +86,7 @@ class _SystemBranchMap(_BranchMap):
 class _SystemRun(_Run):
     """The engine's walk on a structure's branches: its maps, branch points' descriptions and events."""
 
-    def __init__(self, fmu: "SystemFMU3", p0: "System", S: np.ndarray, *args: Any) -> None:
+    def __init__(self, fmu: "SystemFMU3", p0: "Structure", S: np.ndarray, *args: Any) -> None:
         self.S0 = S
         super().__init__(fmu, p0, *args)
 
@@ -161,7 +161,7 @@ class _SystemRun(_Run):
         return m, pt  # (module doc: the start orbit's section for the whole branch)
 
 
-def continue_system_orbits(system: "System", param: str, start: float, stop: float, *, period: int = 1,
+def continue_system_orbits(system: "Structure", param: str, start: float, stop: float, *, period: int = 1,
                            orbit: SystemOrbit | Sequence[SystemOrbit] | None = None,
                            ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 0.5, max_points: int = 400,
                            tol: float = 1e-8, ptol: float = 1e-8, max_turn: float = 0.3, fd_step: float = 1e-6,

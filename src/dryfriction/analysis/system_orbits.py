@@ -40,7 +40,7 @@ from ..errors import FMUCallError
 
 if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
-    from ..system.structure import System
+    from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN", "NEUTRAL"]
 
@@ -104,7 +104,7 @@ class _Map:
     """The stroboscopic map of one structure at one step h through one FMU instance: z = (x, v,
     s_jenkins) at t_s -> z at t_s + K T, its Jacobian and the cycle's observables."""
 
-    def __init__(self, fmu: "SystemFMU3", system: "System", K: int) -> None:
+    def __init__(self, fmu: "SystemFMU3", system: "Structure", K: int) -> None:
         self.fmu = fmu
         self.system = system
         self.K = K
@@ -173,7 +173,7 @@ class _Map:
         return run.t, run.mode
 
 
-def _scales(system: "System", x_max: np.ndarray, x_min: np.ndarray, jenk: np.ndarray) -> np.ndarray:
+def _scales(system: "Structure", x_max: np.ndarray, x_min: np.ndarray, jenk: np.ndarray) -> np.ndarray:
     """Each unknown's scale: a DOF's motion (its half range in the cycle, at least 1e-9 of the largest
     one and of the structure's static deflection), its velocity that times omega, a slider's its DOFs'."""
     amp = 0.5 * np.abs(np.asarray(x_max) - np.asarray(x_min))
@@ -305,7 +305,7 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
                        section=t_s, section_state=z.copy(), jacobian=J, iterations=it)
 
 
-def _h_of(fmu: "SystemFMU3", system: "System", accuracy: float | None = None) -> float:
+def _h_of(fmu: "SystemFMU3", system: "Structure", accuracy: float | None = None) -> float:
     """The internal step of the orbits: the system's h; else the FMU's derived one (1/1000 of the
     fastest period), or with ``accuracy`` a coarse start that the error estimate refines: the least
     of 1/32 of the excitation period and half the fastest period (the located scheme resolves it)."""
@@ -319,7 +319,7 @@ def _h_of(fmu: "SystemFMU3", system: "System", accuracy: float | None = None) ->
     return min(2.0 * np.pi / system.omega / COARSE_STEPS, 0.5 * 1000.0 * h)
 
 
-def system_map(system: "System", z: Sequence[float], period: int = 1, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def system_map(system: "Structure", z: Sequence[float], period: int = 1, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """P^K(z) and its Jacobian for ``system`` (located scheme): z = (x, v, the Jenkins sliders) at
     t_s, the map over ``period`` excitation periods (one FMU run; the Jacobian the FMU's)."""
     from ..drivers.system import SystemFMU3
@@ -333,7 +333,7 @@ def system_map(system: "System", z: Sequence[float], period: int = 1, t_s: float
     return Pz, J
 
 
-def find_system_orbits(system: "System", period: int = 1, guesses: Iterable[Sequence[float]] | None = None, *,
+def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[Sequence[float]] | None = None, *,
                        transients: int = 40, tol: float = 1e-8, max_iter: int = 30,
                        accuracy: float | None = None, estimate_error: bool = True,
                        keep_failed: bool = False, fmu: "SystemFMU3 | None" = None) -> list[SystemOrbit]:

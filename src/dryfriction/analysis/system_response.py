@@ -25,12 +25,12 @@ import numpy as np
 from .system_orbits import SystemOrbit, _Map, _h_of, _solve
 
 if TYPE_CHECKING:
-    from ..system.structure import System
+    from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["system_frequency_response", "plot_system_response"]
 
 
-def system_frequency_response(system: "System", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
+def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
                               period: int = 1, tol: float = 1e-8, max_iter: int = 30, transients: int = 40,
                               accuracy: float | None = None, estimate_error: bool = True, progress: bool = False,
                               fmu_path: str | os.PathLike[str] | None = None) -> Any:

@@ -29,7 +29,7 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
     (dimension ``f_hz``; attributes: the oscillator and the settings, with units).
 
-    ``p`` a structure (:class:`dryfriction.System`): its response by orbits on the located map
+    ``p`` a structure (:class:`~dryfriction.system.structure.System`): its response by orbits on the located map
     (:func:`dryfriction.analysis.system_response.system_frequency_response`: dimensions ``f_hz``,
     ``dof``, ``contact``; ``dof`` the DOF whose amplitude is ``amplitude_dof_m``; ``period``,
     ``transients``, ``progress`` and ``fmu_path`` apply, the transient method's settings do not).
