@@ -109,6 +109,45 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     c.add_argument("--json", action="store_true", help="print the branches, bifurcations and points as JSON")
 
 
+def _steps_per_period(system: Any) -> float:
+    """Internal steps per excitation period of the structure: T / h, h the system's or the FMU's derived
+    one (1/1000 of 2 pi over sqrt(lambda_max(M^-1 (K + sum k_t w w'))) + lambda_max(M^-1 C) + omega)."""
+    import math
+
+    import numpy as np
+
+    if system.h > 0:
+        h = float(system.h)
+    else:
+        Minv = np.linalg.inv(system.M)
+        K = system.K + sum(k * np.outer(w, w) for k, w in zip(system.k_t, system.W) if k > 0)
+        lam = float(np.max(np.abs(np.linalg.eigvals(Minv @ K)))) if system.n else 0.0
+        lc = float(np.max(np.abs(np.linalg.eigvals(Minv @ system.C)))) if system.n else 0.0
+        rate = math.sqrt(lam) + lc + float(system.omega)
+        h = 2.0 * math.pi / (1000.0 * rate) if rate > 0 else 1e-3
+    return (2.0 * math.pi / system.omega) / h if system.omega > 0 else 1.0 / h
+
+
+def work(args: argparse.Namespace) -> tuple[float, str] | None:
+    """The estimated work (internal steps) of ``system run | orbits | response | continuation``, refused
+    above ``--max-work`` before it starts (:mod:`dryfriction.budget`); ``system fmu`` does none."""
+    from ..budget import fmt
+    from ..system.spec import load
+
+    if args.system_command == "fmu":
+        return None
+    system = load(args.spec)
+    steps = _steps_per_period(system)
+    if args.system_command == "run":
+        n = float(args.t_end) * system.omega / (2.0 * 3.141592653589793) * steps if system.omega > 0 else \
+            float(args.t_end) / (1.0 / steps)
+        return n, f"{fmt(n)} steps to t = {args.t_end:g}"
+    K = int(getattr(args, "period", 1))
+    runs = {"orbits": 60, "response": 40 + 12 * int(getattr(args, "num", 1)),
+            "continuation": 40 + 30 * int(getattr(args, "max_points", 1))}[args.system_command]
+    return runs * K * steps, f"about {fmt(runs)} runs of the map x {K} periods x {fmt(steps)} steps"
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``dryfriction system SUBCOMMAND``."""
     from ..system.spec import load
