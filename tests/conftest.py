@@ -34,7 +34,8 @@ from refcache import RefCache
 PYTHON_ONLY = frozenset({"test_references.py", "test_belt_reference.py", "test_chain_driver.py",
                          "test_packaging_requirements.py", "test_c_layout.py", "test_two_mass_reference.py",
                          "test_layout.py", "test_roots.py",
-                         "test_system_structure.py", "test_system_reference.py", "test_refcache.py"})
+                         "test_system_structure.py", "test_system_reference.py", "test_refcache.py",
+                         "test_system_cases.py"})
 FMU_FIXTURES = frozenset({"fmu", "fmu_path", "chain_fmu2", "chain_fmu3", "unzipped", "inst", "md2", "md3"})
 
 
