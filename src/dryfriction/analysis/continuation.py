@@ -60,7 +60,8 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["Bifurcation", "Branch", "Continuation", "continue_orbits", "PARAMETERS", "set_parameter",
-           "get_parameter", "ArclengthProblem", "Evaluation", "CorrectorFailure", "correct", "tangent", "ARC_TOL"]
+           "get_parameter", "ArclengthProblem", "Evaluation", "CorrectorFailure", "correct", "tangent", "ARC_TOL",
+           "check_walk"]
 
 #: a stick phase nearer to the section than this share of the map's span: choose the section again
 SECTION_MARGIN = 0.03
@@ -442,6 +443,20 @@ class _Point:
 # ---- the continuation ---------------------------------------------------------------------------
 
 
+def check_walk(start: float, stop: float, period: int, ds: float, ds_min: float, ds_max: float) -> None:
+    """A continuation's range, period and arclength steps checked (ValueError with one sentence);
+    an oscillator's and a structure's alike."""
+    for n, v in (("start", start), ("stop", stop)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            raise ValueError(f"{n} must be a finite number, not {v!r}")
+    if start == stop:
+        raise ValueError(f"start and stop must differ (both {start!r})")
+    if not (isinstance(period, int) and period >= 1):
+        raise ValueError(f"period must be an integer >= 1 (excitation periods), not {period!r}")
+    if not (0 < ds_min <= ds <= ds_max):
+        raise ValueError(f"need 0 < ds_min <= ds <= ds_max (ds_min = {ds_min}, ds = {ds}, ds_max = {ds_max})")
+
+
 def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: float, *, period: int = 1,
                     orbit: Orbit | Sequence[Orbit] | None = None,
                     guesses: Iterable[Sequence[float]] | None = None,
@@ -501,15 +516,7 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
                                       detect=[d for d in detect if d != "symmetry_breaking"], progress=progress)
     if param not in PARAMETERS:
         raise ValueError(f"unknown continuation parameter {param!r}; valid: {', '.join(PARAMETERS)}")
-    for n, v in (("start", start), ("stop", stop)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v)):
-            raise ValueError(f"{n} must be a finite number, not {v!r}")
-    if start == stop:
-        raise ValueError(f"start and stop must differ (both {start!r})")
-    if not (isinstance(period, int) and period >= 1):
-        raise ValueError(f"period must be an integer >= 1 (excitation periods), not {period!r}")
-    if not (0 < ds_min <= ds <= ds_max):
-        raise ValueError(f"need 0 < ds_min <= ds <= ds_max (ds_min = {ds_min}, ds = {ds}, ds_max = {ds_max})")
+    check_walk(start, stop, period, ds, ds_min, ds_max)
     if not (isinstance(max_points, int) and max_points >= 2):
         raise ValueError(f"max_points must be an integer >= 2, not {max_points!r}")
     bad = [d for d in detect if d not in BIFURCATION_TYPES]

@@ -27,7 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .continuation import (BIFURCATION_TYPES, Continuation, CorrectorFailure, _BranchMap, _Eval, _Run)
+from .continuation import (BIFURCATION_TYPES, Continuation, CorrectorFailure, _BranchMap, _Eval, _Run,
+                           check_walk)
 from .system_orbits import STABILITY_MARGIN, NEUTRAL, SystemOrbit, _h_of, _Map, _scales, find_system_orbits
 
 if TYPE_CHECKING:
@@ -184,15 +185,7 @@ def continue_system_orbits(system: "Structure", param: str, start: float, stop: 
     if param not in SYSTEM_PARAMETERS:
         raise ValueError(f"unknown continuation parameter {param!r} of a structure; valid: "
                          f"{', '.join(SYSTEM_PARAMETERS)}")
-    for name, v in (("start", start), ("stop", stop)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v)):
-            raise ValueError(f"{name} must be a finite number, not {v!r}")
-    if start == stop:
-        raise ValueError(f"start and stop must differ (both {start!r})")
-    if not (isinstance(period, int) and period >= 1):
-        raise ValueError(f"period must be an integer >= 1 (excitation periods), not {period!r}")
-    if not (0 < ds_min <= ds <= ds_max):
-        raise ValueError(f"need 0 < ds_min <= ds <= ds_max (ds_min = {ds_min}, ds = {ds}, ds_max = {ds_max})")
+    check_walk(start, stop, period, ds, ds_min, ds_max)
     bad = [d for d in detect if d not in BIFURCATION_TYPES or d == "symmetry_breaking"]
     if bad:
         raise ValueError(f"bifurcation type(s) {bad} not detected on a structure; valid: fold, period_doubling, "
