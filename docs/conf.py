@@ -126,6 +126,13 @@ def _resolve_short_names(app, env, node, contnode):  # noqa: ANN001
     hits = [name for name in domain.objects if name.rsplit(".", 1)[-1] == last
             and name.startswith("dryfriction.") and ("." not in target or name.endswith(target.split(".", 1)[-1])
                                                     or target.startswith("dryfriction."))]
+    if len(hits) > 1:  # (one name in two modules: the one under the target's package, or the referrer's)
+        home = target.rsplit(".", 1)[0] + "." if "." in target else (node.get("py:module") or "") + "."
+        near = [name for name in hits if name.startswith(home)]
+        while not near and home.count(".") > 1:
+            home = home[:-1].rsplit(".", 1)[0] + "."
+            near = [name for name in hits if name.startswith(home)]
+        hits = near
     if len(hits) != 1:
         return None
     node["reftarget"] = hits[0]
