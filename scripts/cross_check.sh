@@ -190,8 +190,12 @@ resume_on() {  # resume_on PLATFORM: every FMU's states of every platform contin
       [ -s "$W/states_${fmi}_$from.txt" ] || continue
       out=$W/resume_${fmi}_${from}_on_$to.txt
       # (into a file: wine writes to a pipe ten times slower)
-      run_on "$to" "$(harness_of $fmi "$to")" "${FMI_OF[$fmi]}" "$(lib_of $fmi "$to")" resume "$W/states_${fmi}_$from.txt" >"$out.raw" 2>/dev/null </dev/null || true
-      tr -d '\r' <"$out.raw" >"$out"
+      for try in 1 2; do  # (a second run where the emulator's first ended short)
+        run_on "$to" "$(harness_of $fmi "$to")" "${FMI_OF[$fmi]}" "$(lib_of $fmi "$to")" resume "$W/states_${fmi}_$from.txt" >"$out.raw" 2>/dev/null </dev/null || true
+        tr -d '\r' <"$out.raw" >"$out"
+        [ "$(grep -c '^out' "$out" || true)" = "$(grep -c '^out' "$W/second_${fmi}_$from.txt" || true)" ] && break
+        [ "$try" = 1 ] && echo "  $fmi state from $from on $to: the run ended short, run again" >&2
+      done
     done
   done
 }
