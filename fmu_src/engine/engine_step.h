@@ -1898,7 +1898,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             ncand += (size_t)c;
         }
         if (ncand == 0) {
-            if (tan) tan_accept(E, in, s, &T, t_end, 0);
+            if (tan) tan_accept(E, in, s, &T, t_end, 0, 0);
             finish(E, s, &T, E->V1, E->f, t_end);
             s->t = t_end;
             free_modes(E, s, hk);
@@ -1976,7 +1976,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
         s->solves++;
         if (mc.err != ENG_OK) return mc.err;
         const double t_new = (hs >= r) ? t_end : fmax(s->t + hs, nextafter(s->t, INFINITY));
-        if (tan && t_new < t_end) tan_root(E, in, s, &T, t_new); /* (the root's d hs, in the phase's modes) */
+        const int rooted = tan && t_new < t_end && tan_root(E, in, s, &T, t_new); /* (d hs, the phase's modes) */
         /* a stopping contact ends the sub-step at rest: solved again with it held (its slip 0) */
         int again = 0;
         for (size_t j = 0; j < nc; j++) {
@@ -1998,7 +1998,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             for (size_t j = 0; j < nc; j++) /* the stopped ones slide on in the sub-step's account */
                 if (E->cand[j] && s->mode[j] != 0) E->f[j] = -s->mode[j] * E->mlN[j];
         }
-        if (tan) tan_accept(E, in, s, &T, t_new, t_new < t_end);
+        if (tan) tan_accept(E, in, s, &T, t_new, t_new < t_end, rooted && !again);
         finish(E, s, &T, E->V1, E->f, t_new);
         s->t = t_new;
         if (E->ghost) ghosts_now(E, s);

@@ -318,36 +318,40 @@ static size_t tan_root_contact(const eng *E)
 }
 
 /* The root's d hs per column (E->tdh), from the trial at hs as solved in the phase's modes (before a
- * stopping contact is held): the margin of the root's contact js stays 0. A margin whose rate in hh
- * is 0 (a grazing) loses the tangent. */
-static void tan_root(eng *E, const eng_inputs *in, eng_state *s, const trial *T, double t1)
+ * stopping contact is held): the margin of the root's contact js stays 0; its columns stay in E->tg2
+ * and E->th (tan_accept's where no contact stops). A margin whose rate in hh is 0 (a grazing) loses
+ * the tangent. Returns 1 when the columns were made. */
+static int tan_root(eng *E, const eng_inputs *in, eng_state *s, const trial *T, double t1)
 {
     const size_t nz = tan_nz(E), L = tan_L(E);
     const size_t js = tan_root_contact(E);
-    if (js == ENG_NC(E)) { s->tan_lost = 1; return; }
+    if (js == ENG_NC(E)) { s->tan_lost = 1; return 0; }
     tan_trial_prep(E, in, s, T, t1);
     tan_trial_col(E, s, T, nz, 1.0, E->th, E->tdf);
     const double gh = tan_margin(E, js, E->th, E->tdf);
-    if (!(fabs(gh) > 0.0) || !isfinite(gh)) { s->tan_lost = 1; return; }
+    if (!(fabs(gh) > 0.0) || !isfinite(gh)) { s->tan_lost = 1; return 0; }
     for (size_t c = 0; c < nz; c++) {
         tan_trial_col(E, s, T, c, 0.0, E->tg2 + c * L, E->tdf);
         E->tdh[c] = -tan_margin(E, js, E->tg2 + c * L, E->tdf) / gh;
     }
+    return 1;
 }
 
 /* The (sub-)step's end derivatives into s->tan (before finish moves the state): each column's
  * res_c + dhh res_h, dhh its E->tdh (root: tan_root's) or -dt (a remainder to the step's end). */
-static void tan_accept(eng *E, const eng_inputs *in, eng_state *s, const trial *T, double t1, int root)
+static void tan_accept(eng *E, const eng_inputs *in, eng_state *s, const trial *T, double t1, int root, int same)
 {
     const size_t n = ENG_N(E), nc = ENG_NC(E), nz = tan_nz(E), L = tan_L(E);
     if (s->tan_lost) return;
-    tan_trial_prep(E, in, s, T, t1);
+    /* same: tan_root's columns (E->tg2, E->th) are of this trial and held set (no contact stopped
+     * in it): only their combination is left */
+    if (!same) tan_trial_prep(E, in, s, T, t1);
     int need_h = root;
     for (size_t c = 0; c < nz && !need_h; c++) need_h = s->tan[c * L + TAN_TO(n, nc)] != 0.0;
-    if (need_h) tan_trial_col(E, s, T, nz, 1.0, E->th, E->tdf);
+    if (need_h && !same) tan_trial_col(E, s, T, nz, 1.0, E->th, E->tdf);
     for (size_t c = 0; c < nz; c++) {
         double *T0 = s->tan + c * L, *T1 = E->tg2 + c * L;
-        tan_trial_col(E, s, T, c, 0.0, T1, E->tdf);
+        if (!same) tan_trial_col(E, s, T, c, 0.0, T1, E->tdf);
         const double dhh = root ? E->tdh[c] : -T0[TAN_TO(n, nc)];
         if (need_h && dhh != 0.0)
             for (size_t k = 0; k < L; k++) T1[k] += dhh * E->th[k];
