@@ -42,11 +42,20 @@ def three_dofs() -> System:
                             Contact(dof=2, N=0.5, mu_s=0.3, mu_k=0.2, k_t=15.0)])
 
 
-@pytest.mark.parametrize("case", ["two_mass", "three_dofs"])
+def dependent_contacts() -> System:
+    """Two DOFs with rigid contacts whose rows are dependent: one to the ground on each DOF and two
+    parallel ones between the DOFs (docs/system.md, "Dependent contacts")."""
+    return System(M=M2, K=K2, C=C2, F_c=[1.0, 0.0], omega=1.2,
+                  contacts=[Contact(dof=0, N=0.5, mu_s=0.3, mu_k=0.2), Contact(dof=1, N=0.3, mu_s=0.3, mu_k=0.25),
+                            Contact(between=(0, 1), N=0.2, mu_s=0.3, mu_k=0.2),
+                            Contact(between=(0, 1), N=0.4, mu_s=0.5, mu_k=0.2)])
+
+
+@pytest.mark.parametrize("case", ["two_mass", "three_dofs", "dependent"])
 def test_the_maps_jacobian_equals_central_differences(case: str) -> None:
     """The FMU's Jacobian of the located map over a period, through its switches, against central
     differences of the same map (step 1e-6): within 1e-6 of its scale, and so are the multipliers."""
-    system = two_mass(1.4) if case == "two_mass" else three_dofs()
+    system = {"two_mass": lambda: two_mass(1.4), "three_dofs": three_dofs, "dependent": dependent_contacts}[case]()
     n = system.n
     jenk = np.flatnonzero(system.k_t > 0)
     z = np.concatenate([[0.8, 0.4, -0.3][:n], [-0.3, 0.6, 0.2][:n], np.zeros(jenk.size)])

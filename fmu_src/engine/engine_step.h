@@ -387,6 +387,54 @@ static void columns(eng *E, int slot, size_t m)
 
 /* ---- constrained solves ------------------------------------------------------------------- */
 
+/* The held contacts sel[0 .. m-1] whose rows are dependent (dep[] from chol of their Delassus matrix
+ * D, factor L): their forces are not unique (the basic ones fb, 0 on the dependent
+ * rows, plus any vector of D's null space). The rule: the forces that minimise
+ * sum_a sqrt(D_aa) f_a^2 / F_b,a, so that contacts along one direction (rows that are multiples of
+ * one another) each carry the same share of their limits: they reach their limits together and the
+ * group holds up to the sum of its limits (method.md section 13). The null space from the factor:
+ * a dependent row i's vector e_i - beta, D_II beta = D_Ii over the independent rows I. Returns fb
+ * when no row is dependent, else the shared forces (in E->lz; scratch: E->lM, E->lq, E->lw, the dense
+ * LCP's, idle while a basis is solved). */
+static const double *dependent_share(eng *E, size_t m, const int *sel, const double *D, const double *L,
+                                     const int *dep, const double *fb)
+{
+    size_t d = 0;
+    for (size_t a = 0; a < m; a++) d += dep[a] != 0;
+    if (d == 0) return fb;
+    const size_t nc = ENG_NC(E);
+    double *N = E->lM, *G = E->lM + m * d, *GL = G + d * d, *col = E->lw, *z = E->lq, *g = E->lq + nc;
+    double *out = E->lz, *c = E->lw + nc;
+    int *gdep = E->zb;
+    for (size_t a = 0, k = 0; a < m; a++) { /* N's columns; the weights c_a */
+        const double fl = E->Fb[sel[a]], daa = D[a * m + a];
+        c[a] = sqrt(daa > 0.0 ? daa : 0.0) / (fl > 0.0 ? fl : DBL_EPSILON);
+        if (!dep[a]) continue;
+        for (size_t b = 0; b < m; b++) col[b] = D[b * m + a];
+        chol_solve(m, L, m, dep, col, col);
+        for (size_t b = 0; b < m; b++) N[b * d + k] = ((b == a) ? 1.0 : 0.0) - col[b];
+        k++;
+    }
+    for (size_t p = 0; p < d; p++) { /* G = N' C N, g = -N' C fb */
+        double s = 0.0;
+        for (size_t b = 0; b < m; b++) s -= N[b * d + p] * c[b] * fb[b];
+        g[p] = s;
+        for (size_t q = 0; q <= p; q++) {
+            double t = 0.0;
+            for (size_t b = 0; b < m; b++) t += N[b * d + p] * c[b] * N[b * d + q];
+            G[p * d + q] = G[q * d + p] = t;
+        }
+    }
+    chol(d, G, d, GL, gdep);
+    chol_solve(d, GL, d, gdep, g, z);
+    for (size_t b = 0; b < m; b++) {
+        double s = fb[b];
+        for (size_t p = 0; p < d; p++) s += N[b * d + p] * z[p];
+        out[b] = s;
+    }
+    return out;
+}
+
 /* y = A_slot^-1 (r + W_S' f_S) with W_S y = target_S, S the contacts with held[j]; f_S out in
  * f (other entries untouched). m: |S|. Dense: the columns A^-1 w_j of S (or the model's coupling
  * operators, eng_setup.coupling), their Delassus matrix by Cholesky. Uses cols, D, Lc, rhs, sol, sel. */
@@ -431,16 +479,19 @@ static void csolve(eng *E, int slot, const double *r, const int *held, const dou
     int *dep = E->st2;
     chol(m, E->D, m, E->Lc, dep);
     chol_solve(m, E->Lc, m, dep, E->rhs, E->sol);
+    /* the response from the basic forces; the forces shared where rows are dependent (the response is
+     * the same: the shares differ by a vector W_S' maps to 0) */
+    const double *fs = dependent_share(E, m, E->sel, E->D, E->Lc, dep, E->sol);
     if (Cp) { /* y += A^-1 W_S' f_S */
-        for (size_t a = 0; a < m; a++) f[E->sel[a]] = E->sol[a];
         Cp->respond(Cp->ctx, slot, E->sel, m, E->sol, y);
+        for (size_t a = 0; a < m; a++) f[E->sel[a]] = fs[a];
         return;
     }
     for (size_t a = 0; a < m; a++) {
         const double fa = E->sol[a];
         const double *col = E->colp[a];
         for (size_t i = 0; i < n; i++) y[i] += col[i] * fa;
-        f[E->sel[a]] = fa;
+        f[E->sel[a]] = fs[a];
     }
 }
 

@@ -64,11 +64,13 @@ static void tan_csolve(eng *E, int k, const double *r, const double *target, dou
     for (size_t a = 0; a < m; a++)
         E->trhs[a] = (target ? target[T->sel[a]] : 0.0) - row_dot(&S->rows[T->sel[a]], y);
     chol_solve(m, T->L, m, T->dep, E->trhs, E->tsol);
+    /* (the forces shared over dependent rows as csolve shares them: linear, so their derivatives too) */
+    const double *fs = dependent_share(E, m, T->sel, T->D, T->L, T->dep, E->tsol);
     for (size_t a = 0; a < m; a++) {
         const double fa = E->tsol[a];
         const double *col = T->col[a];
         for (size_t i = 0; i < n; i++) y[i] += col[i] * fa;
-        f[T->sel[a]] = fa;
+        f[T->sel[a]] = fs[a];
     }
 }
 

@@ -17,8 +17,8 @@ velocity is ``w_j x' - v_belt_j``.
 ``f_j = -s mu_k N``. Stuck: the slip velocity stays 0; the stuck set H's holding forces and the accelerations solve the constrained
 (KKT) system ``M a = F + W_H' f_H``, ``W_H a = 0`` (F the applied, spring, damper and sliding
 forces), by its Schur complement: ``D f_H = -W_H M^-1 F``, ``D = W_H M^-1 W_H'`` (the Delassus
-matrix; its pseudo-inverse where the stuck rows are dependent: the minimum-norm forces, the
-accelerations unique all the same). All stuck contacts' forces are solved together.
+matrix; where the stuck rows are dependent the forces are not unique, and the rule below picks them,
+the accelerations unique all the same). All stuck contacts' forces are solved together.
 
 **Jenkins contacts** (k_t > 0): a spring k_t in series with a massless slider at ``s_j`` (part of
 the state), ``f_j = -k_t (g_j - s_j)``. Stuck: ``s_j' = v_belt_j``. Sliding in direction ``s`` (the
@@ -52,11 +52,13 @@ coupled through ``M`` another mode set can be consistent too (method.md section 
 the causal cascade from "all at rest held", picks one.
 
 **Dependent rows.** Where the held rigid contacts' rows are dependent (two contacts on one row,
-or more held contacts than independent directions) their forces are not unique: the reference
-takes the minimum-norm ones, as the engine does. When one of them is then released while the
-others still hold its row, it cannot slip and the rest rule does not settle: the reference stops
-with an error naming those contacts (a contact that saturates at its limit while staying stuck is
-not modelled).
+or more held contacts than independent directions) the holding forces are not unique (the
+accelerations are): the reference, as the engine, takes the ones that minimise
+``sum_j sqrt(D_jj) f_j^2 / F_b,j``, so that contacts along one direction (rows multiples of one
+another) each carry the same share of their limits, reach them together and break away together:
+the group holds up to the sum of its limits. Where one of them is still released while others hold
+its row (dependent rows that are not parallel), it cannot slip, the rest rule does not settle, and
+the reference stops with an error naming those contacts.
 
 Not modelled here: time-varying inputs (``F_ext`` and ``v_belt`` are constant), the Stribeck law.
 """
@@ -149,11 +151,18 @@ class _Model:
             H = self.held(modes)
             WH = self.W[H]
             A = self.Minv @ WH.T
-            P = np.linalg.pinv(WH @ A) @ WH @ self.Minv if H.size else np.zeros((0, self.n))
+            P = self._shares(H, WH @ A) @ WH @ self.Minv if H.size else np.zeros((0, self.n))
             ops = (f0, J, self.kt[J], self.W[J], 2 * self.n + np.array([self.slot[int(j)] for j in J], dtype=int),
                    H, A, P)
             self.cache[modes] = ops
         return ops
+
+    def _shares(self, H: np.ndarray, D: np.ndarray) -> np.ndarray:
+        """The operator from the held contacts' slip accelerations to their holding forces, D^+ where
+        their rows are independent; where they are dependent the forces that minimise
+        ``sum_j sqrt(D_jj) f_j^2 / F_b,j`` among all that hold (the module docstring)."""
+        S = 1.0 / np.sqrt(np.sqrt(np.diag(D)) / self.Fb[H])
+        return S[:, None] * np.linalg.pinv(D * S[None, :])
 
     def forces(self, modes: tuple[int, ...], t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The accelerations (n) and the contact forces (nc: sliding kinetic, stuck holding, a
@@ -199,6 +208,21 @@ class _Model:
         A = self.Minv @ WR.T
         v -= A @ (np.linalg.pinv(WR @ A) @ (WR @ v - self.vb[rest]))
         y[n:2 * n] = v
+
+    def stopped_with(self, y: np.ndarray, at_rest: Sequence[int], modes: Sequence[int]) -> list[int]:
+        """The sliding rigid contacts that stop with the contacts ``at_rest`` (their slip 0 then): rows
+        that depend on the at-rest rows, with the belt speed those rows give them."""
+        W = self.W[list(at_rest)]
+        v = y[self.n:2 * self.n]
+        out = []
+        for i in range(self.nc):
+            if i in at_rest or modes[i] == 0 or not self.active[i] or self.jenkins[i]:
+                continue
+            coef, *_ = np.linalg.lstsq(W.T, self.W[i], rcond=None)
+            if (np.linalg.norm(W.T @ coef - self.W[i]) <= 1e-12 * np.linalg.norm(self.W[i])
+                    and abs(coef @ self.vb[list(at_rest)] - self.vb[i]) <= 1e-12 * (1.0 + abs(self.vb[i]))):
+                out.append(i)
+        return out
 
     def rest_rule(self, t: float, y: np.ndarray, modes: list[int], rest: Sequence[int],
                   was: Sequence[int] | None = None) -> list[int]:
@@ -287,9 +311,8 @@ def _unsettled(m: _Model, modes: tuple[int, ...]) -> str:
     for group in groups + [rigid]:
         if len(group) > 1 and np.linalg.matrix_rank(m.W[group]) < len(group):
             return (f"the rigid contacts {', '.join(map(str, group))} have dependent rows, so one of them "
-                    "released while the others hold cannot slip, and their holding forces are not unique: "
-                    "the reference needs independent rows (give such contacts as one, with the sum of "
-                    "their limits)")
+                    "released while the others hold cannot slip: the reference needs such contacts' rows "
+                    "independent or parallel")
     return f"the rest rule does not settle the mode set {modes}"
 
 
@@ -458,7 +481,8 @@ def simulate(system: System, t_end: float, t_eval: Any = None, F_ext: Optional[S
             if md[j] != 0:                                   # a stop: the rest rule
                 at_rest = [i for i in range(nc) if i == j or (m.active[i] and not m.jenkins[i] and md[i] == 0)]
                 m.project_rest(y, np.array(at_rest, dtype=int))
-                new = m.rest_rule(t1, y, new, [j])
+                stops = [j] + m.stopped_with(y, at_rest, md)
+                new = m.rest_rule(t1, y, new, stops)
             else:                                            # a breakaway, then the others checked
                 _, f = m.forces(md, t1, y)
                 new[j] = -int(np.sign(f[j]))
