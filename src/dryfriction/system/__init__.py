@@ -1,7 +1,9 @@
 """Any structure with dry-friction contacts (method.md section 13, docs/system.md): the structure
 (:class:`~dryfriction.system.structure.System`, its :class:`~dryfriction.system.structure.Contact`
 s) with its checks, damping helpers and the oscillator and the chain as systems, and the structure
-file (:mod:`dryfriction.system.spec`), the field's benchmark structures (:mod:`dryfriction.system.cases`)::
+file (:mod:`dryfriction.system.spec`), the field's benchmark structures (:mod:`dryfriction.system.cases`),
+the Craig-Bampton reduction of a finite-element model to its contacts and a few modes
+(:mod:`dryfriction.system.reduction`)::
 
     from dryfriction import System, Contact
     sys = System(M=M, K=K, contacts=[Contact(dof=3, N=10.0, mu_s=0.3, mu_k=0.2),
@@ -12,7 +14,9 @@ file (:mod:`dryfriction.system.spec`), the field's benchmark structures (:mod:`d
 
 from . import cases
 from .cases import bladed_disk, two_mass_jenkins
+from .reduction import Reduction, craig_bampton
 from .spec import load
 from .structure import SCHEMES, Contact, System
 
-__all__ = ["System", "Contact", "SCHEMES", "load", "cases", "two_mass_jenkins", "bladed_disk"]
+__all__ = ["System", "Contact", "SCHEMES", "load", "cases", "two_mass_jenkins", "bladed_disk", "craig_bampton",
+           "Reduction"]
