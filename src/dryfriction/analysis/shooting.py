@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import cmath
 import sys
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from typing import Any, Generic, Protocol, TypeVar
 
 import numpy as np
@@ -33,9 +33,9 @@ __all__ = ["STABILITY_MARGIN", "OrbitRecord", "ShootingMap", "Newton", "newton",
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN (a neutral orbit's multipliers 1 aside)
 STABILITY_MARGIN = 1e-9
 
-Z = TypeVar("Z")        # a model's state: the oscillator's (x, v) floats, a structure's array
-J_ = TypeVar("J_")      # a model's Jacobian: the oscillator's four floats, a structure's matrix
-A = TypeVar("A")        # what else an evaluation returns: the mode at the end, the observables
+_Z = TypeVar("_Z")      # a model's state: the oscillator's (x, v) floats, a structure's array
+_J = TypeVar("_J")      # a model's Jacobian: the oscillator's four floats, a structure's matrix
+_A = TypeVar("_A")      # what else an evaluation returns: the mode at the end, the observables
 
 
 class OrbitRecord:
@@ -100,52 +100,52 @@ def classify(mu: Iterable[complex], one: float, margin: float = STABILITY_MARGIN
     return has_one, inside
 
 
-class ShootingMap(Protocol[Z, J_, A]):
+class ShootingMap(Protocol[_Z, _J, _A]):
     """What a model supplies to :func:`newton`: its stroboscopic map at a section time, in its own
     representation of a state z, of the map's Jacobian and of what else an evaluation returns."""
 
     #: exceptions of a trial evaluation that only shorten the line search's step (a state the FMU refuses)
     refused: tuple[type[BaseException], ...]
 
-    def evaluate(self, z: Z, t_s: float, final: bool) -> tuple[Z, J_, A]:
+    def evaluate(self, z: _Z, t_s: float, final: bool) -> tuple[_Z, _J, _A]:
         """(P^K(z), its Jacobian, the rest) for the state z at the section time t_s (``final``
         False: an evaluation unlikely to be the converged one)."""
         ...
 
-    def residual(self, z: Z, Pz: Z) -> float:
+    def residual(self, z: _Z, Pz: _Z) -> float:
         """The scaled residual of z (its image Pz), relative to the size of z."""
         ...
 
-    def step(self, z: Z, Pz: Z, J: J_) -> tuple[Z | None, str]:
+    def step(self, z: _Z, Pz: _Z, J: _J) -> tuple[_Z | None, str]:
         """(the Newton step dz, ""), or (None, why there is none)."""
         ...
 
-    def move(self, z: Z, dz: Z, lam: float) -> Z:
+    def move(self, z: _Z, dz: _Z, lam: float) -> _Z:
         """z + lam dz (within the model's constraints)."""
         ...
 
-    def step_size(self, z: Z, dz: Z) -> float:
+    def step_size(self, z: _Z, dz: _Z) -> float:
         """The scaled size of the step dz, relative to the size of z."""
         ...
 
-    def outside(self, z: Z, first: bool) -> str:
+    def outside(self, z: _Z, first: bool) -> str:
         """Why z is beyond the bound on Newton's iterates ("" when it is not; ``first``: the guess)."""
         ...
 
 
-class Newton(Generic[Z, J_, A]):
+class Newton(Generic[_Z, _J, _A]):
     """The result of :func:`newton`: the last state z, its image Pz, the Jacobian J there, the rest
     of its evaluation, the scaled residual, the Newton steps taken and why it did not converge ("")."""
 
     __slots__ = ("z", "Pz", "J", "aux", "residual", "iterations", "reason")
 
-    def __init__(self, z: Z, Pz: Z, J: J_, aux: A, residual: float, iterations: int, reason: str) -> None:
+    def __init__(self, z: _Z, Pz: _Z, J: _J, aux: _A, residual: float, iterations: int, reason: str) -> None:
         self.z, self.Pz, self.J, self.aux = z, Pz, J, aux
         self.residual, self.iterations, self.reason = residual, iterations, reason
 
 
-def newton(m: ShootingMap[Z, J_, A], z: Z, t_s: float, tol: float, max_iter: int, *, halvings: int = 30,
-           armijo: float = 1e-4, polish: int = 0, first: tuple[Z, J_, A] | None = None) -> Newton[Z, J_, A]:
+def newton(m: ShootingMap[_Z, _J, _A], z: _Z, t_s: float, tol: float, max_iter: int, *, halvings: int = 30,
+           armijo: float = 1e-4, polish: int = 0, first: tuple[_Z, _J, _A] | None = None) -> Newton[_Z, _J, _A]:
     """Newton on P^K(z) = z from z at the section time t_s with a backtracking line search (module
     doc): at most ``max_iter`` steps, ``halvings`` halvings of a step, ``polish`` steps after the
     residual is within ``tol`` while the step is not. ``first``: the evaluation of z if made already."""
@@ -200,12 +200,12 @@ def newton(m: ShootingMap[Z, J_, A], z: Z, t_s: float, tol: float, max_iter: int
     return Newton(z, Pz, J, aux, r, it, "")
 
 
-P = TypeVar("P")        # a point of a sweep: an oscillator, a structure
-S = TypeVar("S")        # what a point's solve returns: its orbits, its orbit
+_P = TypeVar("_P")      # a point of a sweep: an oscillator, a structure
+_S = TypeVar("_S")      # what a point's solve returns: its orbits, its orbit
 
 
-def sweep(points: Iterable[P], warm: Callable[[int, P, S], S | None], cold: Callable[[int, P, S | None], S],
-          record: Callable[[int, P, S], None], failed: Callable[[int, BaseException], None],
+def sweep(points: Iterable[_P], warm: Callable[[int, _P, _S], _S | None], cold: Callable[[int, _P, _S | None], _S],
+          record: Callable[[int, _P, _S], None], failed: Callable[[int, BaseException], None],
           errors: tuple[type[BaseException], ...], progress: Callable[[int], None] | None = None) -> None:
     """The frequency response's loop: at each point (in order) its steady states from the previous
     point's (``warm``: None where it cannot follow them), else from a fresh search (``cold``, also at
@@ -213,7 +213,7 @@ def sweep(points: Iterable[P], warm: Callable[[int, P, S], S | None], cold: Call
     point, what its solve returned), ``failed`` the
     error of a point where one of ``errors`` was raised (the sweep goes on, the next point cold);
     ``progress`` called with each index done."""
-    prev: S | None = None
+    prev: _S | None = None
     for i, p in enumerate(points):
         try:
             found = warm(i, p, prev) if prev is not None else None

@@ -11,7 +11,7 @@ import numpy as np
 
 from ...drivers.oscillator import FMUError, OscillatorFMU2
 from ...params import Oscillator
-from ..orbits import SAME, find_orbits, scales
+from ..orbits import ALIKE, SAME, find_orbits, scales
 from ..shooting import STABILITY_MARGIN, sweep
 from .transient import default_settings
 
@@ -121,13 +121,21 @@ def _follow(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branc
         if not b.orbit.stuck and b.orbit.period == 1:
             z, ph = b.guess(f)
             o = follow(p, z, ph * T)
+            if o is None and b.history:
+                # the prediction overshot (past a sharp resonance peak): from the orbit itself
+                o = follow(p, (b.point[0], b.point[1]), b.point[2] * T)
         if o is None:
             return None
         followed.append(_Branch(o, f, T, b))
     _mirrors(p, f, followed, follow)
     if not any(_attracting(b.orbit, p) for b in followed):
-        return None
-    if cold:
+        # the branch lost its stability (a fold, a symmetry-breaking pitchfork): the attractors from
+        # the cold search's transients, followed (find_orbits where one cannot be)
+        followed = _transient_check(inst, p, f, followed, opts)
+        if not any(_attracting(b.orbit, p) for b in followed):
+            return None
+        followed.sort(key=lambda b: (not b.orbit.stable, not b.orbit.neutral, -b.orbit.amplitude))   # as find_orbits
+    elif cold:
         followed = _transient_check(inst, p, f, followed, opts)
     if len(followed) == 1:
         return followed
@@ -191,9 +199,17 @@ def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[
 
     runs = opts["transient_runs"]         # one set of value arrays for the sweep's cold searches
     runs.retarget(p)
+    ends: list[tuple[float, float]] = []
     for z in _auto_guesses(p, DEFAULT_SPREAD):
         runs.run(float(z[0]), float(z[1]), 0.0, opts["transients"] * T)
         y = {"x": runs.real[0], "v": runs.real[1]}
+        # an end state at an orbit known already (a transient that ended on it), or at an earlier
+        # transient's end (a stick phase forgets where it came from): nothing new
+        e = (y["x"] / xs, y["v"] / (xs * w))
+        if known(y["x"], y["v"]) or any(max(abs(e[0] - q[0]), abs(e[1] - q[1])) <= ALIKE * max(1.0, abs(q[0]), abs(q[1]))
+                                        for q in ends):
+            continue
+        ends.append(e)
         o = follow(p, (y["x"], y["v"]), 0.0)
         if o is None:
             new = [q for q in find_orbits(p, guesses=[(y["x"], y["v"])], transients=0, spread=(), fmu=inst,
