@@ -52,7 +52,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from ..drivers.oscillator import OscillatorFMU2, Settings
-from .orbits import JACOBIAN, STABILITY_MARGIN, Orbit, _Map, _multipliers, _slide_section, find_orbits, scales
+from .orbits import JACOBIAN, Orbit, _Map, _slide_section, find_orbits, scales
+from .shooting import STABILITY_MARGIN, multipliers
 from ..params import Oscillator
 from ..roots import RootSearch
 
@@ -603,7 +604,7 @@ class _Run:
         i0 = int(np.argmin(np.abs(t - KT * math.floor((t_s + KT) / KT + 1e-12))))
         sticks = float(cyc["stick_fraction"]) > 0.0 or bool(np.any(cyc["mode"] == 0))
         JP = m.full_jacobian(e.J)
-        mu = _multipliers(JP, sticks)
+        mu = multipliers(JP, sticks)
         info: dict[str, Any] = {
             "x0": float(cyc["x"][i0]), "v0": float(cyc["v"][i0]),
             "amplitude": (float(cyc["x_max"]) - float(cyc["x_min"])) / 2.0,

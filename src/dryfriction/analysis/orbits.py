@@ -23,28 +23,27 @@ multipliers exactly 1 (along the interval: ``neutral``) and 0.
 
 from __future__ import annotations
 
-import cmath
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
-from functools import cached_property
 
 import numpy as np
 
 from ..drivers.oscillator import OscillatorFMU2, Restarts, Settings
 from ..params import Oscillator
+from .shooting import STABILITY_MARGIN, Newton, OrbitRecord, classify, multipliers, newton
 
 __all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "rest_interval",
            "neutral_margin", "STABILITY_MARGIN"]
 
 JACOBIAN = ("dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0")
-#: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
-STABILITY_MARGIN = 1e-9
 #: samples per excitation period of the cycle runs (section choice, events, stick share of the cycle)
 SAMPLES = 512
 #: scaled distance under which two converged states are the same orbit
 SAME = 1e-7
+#: scaled distance under which the end states of two transients are one guess (solved once)
+ALIKE = 1e-10
 #: Newton's iterates must stay within BOUND times the frictionless harmonic amplitude (plus the
 #: static deflections of the excitation and of friction), else the solve is reported as diverged
 BOUND = 1e3
@@ -56,8 +55,9 @@ POLISH = 2
 
 
 @dataclass
-class Orbit:
-    """One periodic orbit of K excitation periods (``period``), its state at t = 0 mod K T."""
+class Orbit(OrbitRecord):
+    """One periodic orbit of K excitation periods (``period``), its state at t = 0 mod K T. Read as
+    ``orbit.x0`` or ``orbit["x0"]``; ``orbit.mu_max`` the largest |multiplier|."""
 
     period: int
     x0: float                        # m, at t = 0 mod K T
@@ -82,17 +82,6 @@ class Orbit:
     #                                  steady state but not an isolated one (the block at rest, a member of
     #                                  rest_interval; without a spring, one of a family shifted in x)
     rest_interval: tuple[float, float] | None = None   # the block at rest: every x (m) it can rest at
-
-    def __getitem__(self, name: str) -> Any:
-        """``orbit["x0"]``: the field ``name`` (KeyError for an unknown one)."""
-        if name not in self.__dataclass_fields__:
-            raise KeyError(f"Orbit has no field {name!r}; fields: {', '.join(self.__dataclass_fields__)}")
-        return getattr(self, name)
-
-    @cached_property
-    def mu_max(self) -> float:
-        """The largest |multiplier| (computed once)."""
-        return float(np.abs(self.multipliers).max())
 
 
 def rest_interval(p: Oscillator) -> tuple[float, float] | None:
@@ -299,9 +288,6 @@ class _Solver:
         static = (abs(p.P0) + p.breakaway) / p.k if p.k > 0 else 0.0
         self.bound = BOUND * (1.0 + min(X / xs, MAX_AMPLIFICATION) + static / xs)
 
-    def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
-        return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
-
     def slides_throughout(self, z: np.ndarray, t_s: float) -> bool:
         """Whether the run of K periods from z at t_s never sticks (the FMU's stuck time over it is
         0 and it ends sliding): one run with the observables instead of a sampled cycle."""
@@ -328,74 +314,61 @@ class _Solver:
             s = e
         return r / s
 
-    def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
-        """(z, J, residual, iterations, reason, mode at the end): Newton with backtracking."""
-        x, v, ja, jb, jc, jd, r, it, reason, md = self.solve(float(z[0]), float(z[1]), t_s)
-        return np.array([x, v]), np.array([[ja, jb], [jc, jd]]), r, it, reason, md
+    # ---- the oscillator's ShootingMap (dryfriction.analysis.shooting): plain floats, a 2 x 2 system ----
+    #: (a trial state the FMU refuses is an error of the point: the sweep reports it)
+    refused: tuple[type[BaseException], ...] = ()
 
-    def solve(self, x: float, v: float,
-              t_s: float) -> tuple[float, float, float, float, float, float, float, int, str, int]:
-        """:meth:`newton` on plain floats (a 2 x 2 system): (x, v, the Jacobian's entries row by row,
-        residual, iterations, reason, mode at the end)."""
-        ev, res, tol = self.map.eval, self._residual, self.tol
+    def evaluate(self, z: Sequence[float], t_s: float,
+                 final: bool) -> tuple[tuple[float, float], tuple[float, float, float, float], int]:
+        """(P^K(z), its Jacobian's entries row by row, the mode at the end), plain floats."""
+        px, pv, a, b, c, d, md = self.map.eval(z[0], z[1], t_s, final)
+        return (px, pv), (a, b, c, d), md
+
+    def residual(self, z: Sequence[float], Pz: Sequence[float]) -> float:
+        """The scaled residual of z (module doc)."""
+        return self._residual(float(z[0]), float(z[1]), float(Pz[0]), float(Pz[1]))
+
+    def step(self, z: Sequence[float], Pz: Sequence[float],
+             J: Sequence[float]) -> tuple[tuple[float, float] | None, str]:
+        """The Newton step: (J - I) dz = -(P(z) - z) by Cramer's rule."""
+        a, b, c, d = J[0] - 1.0, J[1], J[2], J[3] - 1.0
+        if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c) and math.isfinite(d)):
+            return None, "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)"
+        det = a * d - b * c
+        if det == 0.0 or not math.isfinite(det):
+            return None, "J - I is singular (a multiplier 1: a fold or a family of orbits)"
+        r0, r1 = z[0] - Pz[0], z[1] - Pz[1]
+        return ((d * r0 - b * r1) / det, (a * r1 - c * r0) / det), ""
+
+    @staticmethod
+    def move(z: Sequence[float], dz: Sequence[float], lam: float) -> tuple[float, float]:
+        """z + lam dz."""
+        return z[0] + lam * dz[0], z[1] + lam * dz[1]
+
+    def step_size(self, z: Sequence[float], dz: Sequence[float]) -> float:
+        """The scaled step, relative to the scaled state (at least 1)."""
         xs, xw = self.map.xs, self.map.xs * self.map.w
-        px, pv, ja, jb, jc, jd, md = ev(x, v, t_s, False)      # the guess: rarely converged already
-        r = res(x, v, px, pv)
-        it = 0
-        if max(abs(x) / xs, abs(v) / xw) > self.bound:
-            return (x, v, ja, jb, jc, jd, r, it,
-                    f"the guess is beyond the bound of {BOUND:g} times the frictionless amplitude", md)
-        while r > tol:
-            if it >= self.max_iter:
-                return x, v, ja, jb, jc, jd, r, it, f"no convergence in {self.max_iter} Newton steps (residual {r:.3g})", md
-            a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
-            if not (math.isfinite(a) and math.isfinite(b) and math.isfinite(c) and math.isfinite(d)):
-                return (x, v, ja, jb, jc, jd, r, it,
-                        "the FMU's Jacobian is not available (NaN: e.g. a tangential breakaway)", md)
-            det = a * d - b * c
-            if det == 0.0 or not math.isfinite(det):
-                return (x, v, ja, jb, jc, jd, r, it,
-                        "J - I is singular (a multiplier 1: a fold or a family of orbits)", md)
-            r0, r1 = x - px, v - pv                         # (J - I) dz = -(P(z) - z)
-            dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
-            lam, accepted = 1.0, False
-            for _ in range(30):
-                xn, vn = x + lam * dx, v + lam * dv
-                pxn, pvn, ja_, jb_, jc_, jd_, mn = ev(xn, vn, t_s)
-                rn = res(xn, vn, pxn, pvn)
-                if rn < (1.0 - 1e-4 * lam) * r or rn <= tol:
-                    accepted = True
-                    break
-                lam *= 0.5
-            it += 1
-            if not accepted:
-                return x, v, ja, jb, jc, jd, r, it, f"the line search found no decrease (residual {r:.3g})", md
-            x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
-            if abs(x) / xs > self.bound or abs(v) / xw > self.bound:
-                return (x, v, ja, jb, jc, jd, r, it, f"Newton diverged: the state left the bound of {BOUND:g} "
-                        "times the frictionless amplitude", md)
-        for _ in range(POLISH):
-            # r <= tol, but the distance left to the fixed point is the Newton step, about r / |1 - mu|:
-            # far more than r where a multiplier is near 1 (a slow creep, e.g. at lambda 1e-6, or onto the
-            # edge of the interval of rest positions): step on while the step is above tol
-            a, b, c, d = ja - 1.0, jb, jc, jd - 1.0
-            det = a * d - b * c
-            if det == 0.0 or not math.isfinite(det):
-                break
-            r0, r1 = x - px, v - pv
-            dx, dv = (d * r0 - b * r1) / det, (a * r1 - c * r0) / det
-            size = max(1.0, abs(x) / xs, abs(v) / xw)
-            if not max(abs(dx) / xs, abs(dv) / xw) > tol * size:
-                break
-            xn, vn = x + dx, v + dv
-            pxn, pvn, ja_, jb_, jc_, jd_, mn = ev(xn, vn, t_s)
-            rn = res(xn, vn, pxn, pvn)
-            if not rn <= tol:
-                ev(x, v, t_s)            # the map's last evaluation is the state kept (its observables)
-                break
-            it += 1
-            x, v, px, pv, ja, jb, jc, jd, r, md = xn, vn, pxn, pvn, ja_, jb_, jc_, jd_, rn, mn
-        return x, v, ja, jb, jc, jd, r, it, "", md
+        return max(abs(dz[0]) / xs, abs(dz[1]) / xw) / max(1.0, abs(z[0]) / xs, abs(z[1]) / xw)
+
+    def outside(self, z: Sequence[float], first: bool) -> str:
+        """Why z is beyond the bound on Newton's iterates ("" if it is not)."""
+        xs, xw = self.map.xs, self.map.xs * self.map.w
+        if first:
+            if max(abs(z[0]) / xs, abs(z[1]) / xw) > self.bound:
+                return f"the guess is beyond the bound of {BOUND:g} times the frictionless amplitude"
+        elif abs(z[0]) / xs > self.bound or abs(z[1]) / xw > self.bound:
+            return f"Newton diverged: the state left the bound of {BOUND:g} times the frictionless amplitude"
+        return ""
+
+    def solve(self, x: float, v: float, t_s: float) -> Newton[tuple[float, float], tuple[float, float, float, float], int]:
+        """Newton shooting from the state (x, v) at the section time t_s (:func:`~dryfriction.analysis.shooting.newton`
+        with POLISH steps; its ``aux`` the mode at the end)."""
+        return newton(self, (x, v), t_s, self.tol, self.max_iter, polish=POLISH)
+
+    def newton(self, z: np.ndarray, t_s: float) -> tuple[np.ndarray, np.ndarray, float, int, str, int]:
+        """(z, J, residual, iterations, reason, mode at the end) of :meth:`solve` as arrays."""
+        n = self.solve(float(z[0]), float(z[1]), t_s)
+        return np.array(n.z), np.array(n.J).reshape(2, 2), n.residual, n.iterations, n.reason, n.aux
 
 
 def _check(p: Oscillator, K: int) -> None:
@@ -506,9 +479,17 @@ def _find(f: OscillatorFMU2, p: Oscillator, K: int, guesses: Iterable[Sequence[f
     starts = _auto_guesses(p, spread)
     if transients > 0 and starts:
         runs = f.restarts(p, Settings(scheme="exact"))     # reads x, v at the end
+        ends: list[np.ndarray] = []
         for z in starts:
             runs.run(float(z[0]), float(z[1]), 0.0, transients * KT)
-            todo.append((np.array(runs.real), 0.0, False))
+            end = np.array(runs.real)
+            # transients that ended in the same state (a stick phase forgets where it came from) give
+            # the same orbit: solved once
+            se = sol.map.scaled(end)
+            if any(np.max(np.abs(se - e)) <= ALIKE * max(1.0, float(np.max(np.abs(e)))) for e in ends):
+                continue
+            ends.append(se)
+            todo.append((end, 0.0, False))
     else:
         todo.extend((z, 0.0, False) for z in starts)
     for g in guesses or ():
@@ -640,13 +621,14 @@ def _creep_reason(drift: float, x_max: float, x_min: float) -> str:
             f"{x_max - x_min:.3g} m (a creep, e.g. onto the edge of the interval of rest positions)")
 
 
-def _neutral(mods: np.ndarray, p: Oscillator) -> bool:
-    """A multiplier 1 (within :func:`neutral_margin`), the other inside the unit circle: one of a
-    family of orbits shifted in x, neutrally stable (without a spring; or with one too weak against the
-    inertia for the FMU to tell the family's members apart)."""
-    lo, hi = float(min(mods)), float(max(mods))
-    margin = neutral_margin(p)
-    return abs(hi - 1.0) <= margin and lo < 1.0 - margin
+def _stability(mu: np.ndarray, p: Oscillator) -> tuple[bool, bool]:
+    """(neutral, stable) of the multipliers mu: neutral with a multiplier 1 (within
+    :func:`neutral_margin`) and the other inside the unit circle, one of a family of orbits shifted
+    in x (without a spring; or with one too weak against the inertia for the FMU to tell the family's
+    members apart); stable when not neutral and every |mu| < 1 - STABILITY_MARGIN."""
+    one, inside = classify(mu, neutral_margin(p))
+    neutral = one and inside
+    return neutral, inside and not one
 
 
 #: the exact scheme's relative rounding of positions, in its unit the static deflection |P0| / k
@@ -660,15 +642,6 @@ def neutral_margin(p: Oscillator) -> float:
     4.4e4 its members drift by 4e-8 of their offset per period, below the rounding of the map)."""
     ratio = p.m * p.omega ** 2 / p.k if p.k > 0 else 0.0
     return max(STABILITY_MARGIN, ROUNDING * ratio)
-
-
-def _multipliers(J: np.ndarray, sticks: bool) -> np.ndarray:
-    """Eigenvalues of J, |mu| descending. With a stick phase on the cycle J has rank one (the FMU sets
-    its v row to 0 there): its multipliers are then exactly trace(J) and 0."""
-    if sticks:
-        return np.array([complex(np.trace(J)), 0j])
-    mu = np.linalg.eigvals(J).astype(complex)
-    return mu[np.argsort(-np.abs(mu))]
 
 
 def _nondim(p: Oscillator, x: float, v: float) -> tuple[float, float]:
@@ -693,12 +666,12 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
     x0, v0 = float(cyc["x"][i0]), float(cyc["v"][i0])
     events = _events(cyc["mode"])
     events["transitions"] = int(cyc["transitions"])
-    mu = _multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)
+    # with a stick phase on the cycle J has rank one (the FMU sets its v row to 0 there)
+    mu = multipliers(J, float(cyc["stick_fraction"]) > 0.0 or events["stops"] > 0)
     z0, zd0 = _nondim(p, x0, v0)
     xmax, xmin = float(cyc["x_max"]), float(cyc["x_min"])
-    neutral = _neutral(np.abs(mu), p)
-    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
-                  stable=not neutral and bool(np.all(np.abs(mu) < 1.0 - STABILITY_MARGIN)), residual=r,
+    neutral, stable = _stability(mu, p)
+    orbit = Orbit(period=K, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral, stable=stable, residual=r,
                   amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0,
                   stick_fraction=float(cyc["stick_fraction"]), events=events, converged=True, section=t_s,
                   jacobian=J, section_state=np.array(z, dtype=float), iterations=it)
@@ -710,7 +683,7 @@ def _finish(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float,
 
 def _stuck_orbit(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float) -> Orbit:
     p = sol.p
-    mu = _multipliers(J, True)
+    mu = multipliers(J, True)
     x0 = float(z[0])
     z0, zd0 = _nondim(p, x0, 0.0)
     return Orbit(period=1, x0=x0, v0=0.0, z0=z0, zdot0=zd0, multipliers=mu, stable=False, residual=r,
@@ -752,7 +725,7 @@ def _rest_orbit(f: OscillatorFMU2, sol: _Solver, rest: tuple[float, float], peri
 def _failed(sol: _Solver, z: np.ndarray, t_s: float, J: np.ndarray, r: float, it: int, reason: str) -> Orbit:
     p = sol.p
     z0, zd0 = _nondim(p, float(z[0]), float(z[1]))
-    mu = np.linalg.eigvals(J).astype(complex) if np.all(np.isfinite(J)) else np.full(2, np.nan, dtype=complex)
+    mu = multipliers(J)
     return Orbit(period=sol.K, x0=float(z[0]), v0=float(z[1]), z0=z0, zdot0=zd0, multipliers=mu, stable=False,
                  residual=r, amplitude=math.nan, offset=math.nan, stick_fraction=math.nan, events={},
                  converged=False, reason=reason, section=t_s, jacobian=J, iterations=it)
@@ -814,8 +787,9 @@ class OrbitFollower:
             sol.retarget(p)
         m = sol.map
         t_s = float(section) % p.period
-        x, v, j00, j01, j10, j11, r, it, reason, md = sol.solve(float(state[0]), float(state[1]), t_s)
-        if reason or (md == 0 and not (float(state[1]) == 0.0 and v == 0.0)):   # stuck at a slide's section
+        n = sol.solve(float(state[0]), float(state[1]), t_s)
+        (x, v), J = n.z, n.J
+        if n.reason or (n.aux == 0 and not (float(state[1]) == 0.0 and v == 0.0)):   # stuck at a slide's section
             return None
         if not m.final:             # the guess was periodic already: run it again with the stop at the mark
             m.eval(x, v, t_s)
@@ -823,26 +797,16 @@ class OrbitFollower:
         stick = y["stick_fraction"]
         if stick >= 1.0 or _creeps(abs(m.end[0] - x), y["x_max"], y["x_min"]):
             return None                 # at rest for good, or creeping onto a rest position: find_orbits
-        if stick > 0.0:
-            mu = np.array([complex(j00 + j11), 0j])
-            mag = np.abs(mu)
-        else:
-            tr, det = j00 + j11, j00 * j11 - j01 * j10
-            root = cmath.sqrt(complex(tr * tr / 4.0 - det))
-            mu = np.array([tr / 2.0 + root, tr / 2.0 - root])
-            mag = np.abs(mu)                    # numpy's (its array abs may differ in the last bit)
-            if mag[1] > mag[0]:
-                mu, mag = mu[::-1], mag[::-1]
+        jac = np.array(J).reshape(2, 2)
+        mu = multipliers(jac, stick > 0.0, closed=True)
+        neutral, stable = _stability(mu, p)
         x0, v0 = y["x0"], y["v0"]
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = y["x_max"], y["x_min"]
-        lim = 1.0 - STABILITY_MARGIN
-        neutral = _neutral(mag, p)
-        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral,
-                     stable=not neutral and bool(mag[0] < lim and mag[1] < lim), residual=r,
-                     amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0, stick_fraction=stick,
-                     events={"transitions": y["transitions"]}, converged=True, section=t_s,
-                     jacobian=np.array([[j00, j01], [j10, j11]]), section_state=np.array([x, v]), iterations=it)
+        return Orbit(period=1, x0=x0, v0=v0, z0=z0, zdot0=zd0, multipliers=mu, neutral=neutral, stable=stable,
+                     residual=n.residual, amplitude=(xmax - xmin) / 2.0, offset=(xmax + xmin) / 2.0,
+                     stick_fraction=stick, events={"transitions": y["transitions"]}, converged=True, section=t_s,
+                     jacobian=jac, section_state=np.array([x, v]), iterations=n.iterations)
 
 
 def follow_orbit(oscillator: Oscillator, state: Sequence[float], section: float, *, fmu: OscillatorFMU2,

@@ -29,7 +29,8 @@ import numpy as np
 
 from .continuation import (BIFURCATION_TYPES, Continuation, CorrectorFailure, _BranchMap, _Eval, _Run,
                            check_walk)
-from .system_orbits import STABILITY_MARGIN, NEUTRAL, SystemOrbit, _h_of, _Map, _scales, find_system_orbits
+from .shooting import classify, multipliers
+from .system_orbits import NEUTRAL, SystemOrbit, _h_of, _Map, _scales, find_system_orbits
 
 if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
@@ -120,15 +121,13 @@ class _SystemRun(_Run):
         z0 = z if t_s == 0.0 else M(M.project(z), t_s, jacobian=False, span=M.KT - t_s)[0]
         self.evaluations += int(t_s != 0.0)
         n = M.n
-        mu = np.linalg.eigvals(m.full_jacobian(e.J))
-        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
-        near1 = np.abs(mu - 1.0) <= NEUTRAL
+        mu = multipliers(m.full_jacobian(e.J))
         x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
         info: dict[str, Any] = {
             "x0": z0[:n].copy(), "v0": z0[n:2 * n].copy(),
             "amplitude": 0.5 * (x_max - x_min), "offset": 0.5 * (x_max + x_min),
             "stick_fraction": np.asarray(obs["stick_fraction"]), "transitions": -1,
-            "mu": mu, "stable": bool(np.all(np.abs(mu[~near1]) < 1.0 - STABILITY_MARGIN)),
+            "mu": mu, "stable": classify(mu, NEUTRAL)[1],
             "section": t_s, "cycle": None,
         }
         info.update(self.tests(m, e))

@@ -32,11 +32,12 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import FMUCallError
+from .shooting import STABILITY_MARGIN, OrbitRecord, classify, multipliers, newton
 
 if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
@@ -44,8 +45,6 @@ if TYPE_CHECKING:
 
 __all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN", "NEUTRAL"]
 
-#: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN
-STABILITY_MARGIN = 1e-9
 #: a multiplier this close to 1 is a neutral one (a continuum of orbits: a stuck slider's rest positions,
 #: a free rigid-body mode held only by friction)
 NEUTRAL = 1e-6
@@ -60,9 +59,9 @@ COARSE_STEPS = 32
 
 
 @dataclass
-class SystemOrbit:
+class SystemOrbit(OrbitRecord):
     """One periodic orbit of K excitation periods (``period``) of a structure, its state at
-    t = 0 mod K T. Read as ``orbit.x0`` or ``orbit["x0"]``."""
+    t = 0 mod K T. Read as ``orbit.x0`` or ``orbit["x0"]``; ``orbit.mu_max`` the largest |multiplier|."""
 
     period: int
     x0: np.ndarray                   # n positions at t = 0 mod K T, m
@@ -87,17 +86,6 @@ class SystemOrbit:
     iterations: int = 0
     neutral: bool = False            # a multiplier 1: a continuum of orbits (a Jenkins slider stuck all
     #                                  cycle rests anywhere within its limits; a free mode held by friction)
-
-    def __getitem__(self, name: str) -> Any:
-        """``orbit["x0"]``: the field ``name`` (KeyError for an unknown one)."""
-        if name not in self.__dataclass_fields__:
-            raise KeyError(f"SystemOrbit has no field {name!r}; fields: {', '.join(self.__dataclass_fields__)}")
-        return getattr(self, name)
-
-    @property
-    def mu_max(self) -> float:
-        """The largest multiplier's modulus."""
-        return float(np.max(np.abs(self.multipliers))) if self.multipliers.size else float("nan")
 
 
 class _Map:
@@ -230,52 +218,65 @@ def _section(M: _Map, z: np.ndarray) -> float:  # noqa: C901 (the rule's cases, 
     return 0.0
 
 
+class _Shooting:
+    """A structure's :class:`~dryfriction.analysis.shooting.ShootingMap`: its map M with the Jacobian,
+    the residual in the scales S, the minimum-norm Newton step in the scaled unknowns (a multiplier 1,
+    a continuum of orbits: a stuck slider's rest positions, a free mode held by friction, leaves J - I
+    singular, and the step then moves along none of its null directions), each iterate projected onto
+    the sliders' limits (:meth:`_Map.project`); no bound on the iterates."""
+
+    #: a trial state the FMU refuses: a shorter step
+    refused: tuple[type[BaseException], ...] = (FMUCallError,)
+
+    def __init__(self, M: _Map, S: np.ndarray) -> None:
+        self.M, self.S = M, S
+
+    def evaluate(self, z: np.ndarray, t_s: float, final: bool) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(P(z), its Jacobian, the observables of the run)."""
+        return self.M(z, t_s)
+
+    def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
+        """``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` (module doc)."""
+        S = self.S
+        return float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
+
+    def step(self, z: np.ndarray, Pz: np.ndarray, J: np.ndarray) -> tuple[np.ndarray | None, str]:
+        """The minimum-norm Newton step in the scaled unknowns."""
+        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(Pz))):
+            return None, "the map's Jacobian was not computed (a switch it could not follow)"
+        S = self.S
+        A = (J - np.eye(J.shape[0])) * S[None, :] / S[:, None]
+        return S * np.linalg.lstsq(A, -(Pz - z) / S, rcond=1e-10)[0], ""
+
+    def move(self, z: np.ndarray, dz: np.ndarray, lam: float) -> np.ndarray:
+        """z + lam dz within the sliders' limits."""
+        return self.M.project(z + lam * dz)
+
+    def step_size(self, z: np.ndarray, dz: np.ndarray) -> float:
+        """The scaled step relative to the scaled state (at least 1)."""
+        S = self.S
+        return float(np.max(np.abs(dz / S)) / max(1.0, float(np.max(np.abs(z / S)))))
+
+    def outside(self, z: np.ndarray, first: bool) -> str:
+        """No bound on a structure's iterates."""
+        return ""
+
+
 def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float,
             max_iter: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int, str, dict[str, np.ndarray],
                                     np.ndarray]:
-    """Newton on P(z) - z from z at t_s: (z, P(z), J, scaled residual, iterations, reason, observables,
-    the scales S: given, or those of the first evaluation's cycle)."""
+    """Newton on P(z) - z from z at t_s (:func:`~dryfriction.analysis.shooting.newton`, 12 halvings of a
+    step, any decrease accepted): (z, P(z), J, scaled residual, iterations, reason, observables, the
+    scales S: given, or those of the first evaluation's cycle)."""
     z = M.project(z)
-    Pz, J, obs = M(z, t_s)
+    first = M(z, t_s)
     if S is None:
-        S = _scales(M.system, obs["x_max"], obs["x_min"], M.jenk)
-    scale = S
-
-    def res(z: np.ndarray, Pz: np.ndarray) -> float:
-        return float(np.max(np.abs((Pz - z) / scale)) / max(1.0, float(np.max(np.abs(z / scale)))))
-
-    r = res(z, Pz)
-    reason = ""
-    it = 0
-    for it in range(1, max_iter + 1):
-        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(Pz))):
-            return z, Pz, J, r, it, "the map's Jacobian was not computed (a switch it could not follow)", obs, S
-        if r <= tol:
-            return z, Pz, J, r, it - 1, "", obs, S
-        # the minimum-norm Newton step in the scaled unknowns: a multiplier 1 (a continuum of orbits:
-        # a stuck slider's rest positions, a free mode held by friction) leaves J - I singular, and
-        # the step then moves along none of its null directions
-        A = (J - np.eye(J.shape[0])) * scale[None, :] / scale[:, None]
-        dz = scale * np.linalg.lstsq(A, -(Pz - z) / scale, rcond=1e-10)[0]
-        lam = 1.0
-        for _ in range(12):
-            zt = M.project(z + lam * dz)
-            try:
-                Pt, Jt, ot = M(zt, t_s)
-            except FMUCallError:  # (a trial state the FMU refuses: a shorter step)
-                lam *= 0.5
-                continue
-            rt = res(zt, Pt)
-            if np.isfinite(rt) and rt < r:
-                z, Pz, J, r, obs = zt, Pt, Jt, rt, ot
-                break
-            lam *= 0.5
-        else:
-            reason = f"the line search found no decrease of the residual {r:.3g} (a non-smooth point)"
-            return z, Pz, J, r, it, reason, obs, S
-    if r > tol:
-        reason = f"no convergence in {max_iter} Newton steps (residual {r:.3g} > tol {tol:g})"
-    return z, Pz, J, r, it, reason, obs, S
+        S = _scales(M.system, first[2]["x_max"], first[2]["x_min"], M.jenk)
+    n = newton(_Shooting(M, S), z, t_s, tol, max_iter, halvings=12, armijo=0.0, first=first)
+    reason = n.reason
+    if not reason and not (np.all(np.isfinite(n.J)) and np.all(np.isfinite(n.Pz))):
+        reason = "the map's Jacobian was not computed (a switch it could not follow)"
+    return n.z, n.Pz, n.J, n.residual, n.iterations, reason, n.aux, S
 
 
 def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float, it: int, reason: str,
@@ -290,16 +291,12 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
         slide0[M.jenk] = M.last_mode[M.jenk]
     s0 = np.full(sysm.nc, np.nan)
     s0[M.jenk] = z0[2 * n:]
-    mult = np.linalg.eigvals(J) if np.all(np.isfinite(J)) else np.full(J.shape[0], np.nan)
-    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    mult = multipliers(J)
     x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
     ok = not reason
-    near1 = np.abs(mult - 1.0) <= NEUTRAL
-    neutral = bool(ok and near1.any())
-    rest = mult[~near1] if neutral else mult
+    one, inside = classify(mult, NEUTRAL)
     return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, slide0=slide0,
-                       multipliers=mult,
-                       stable=bool(ok and np.all(np.abs(rest) < 1.0 - STABILITY_MARGIN)), residual=r, neutral=neutral,
+                       multipliers=mult, stable=ok and inside, residual=r, neutral=ok and one,
                        amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
                        stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
                        section=t_s, section_state=z.copy(), jacobian=J, iterations=it)
@@ -464,14 +461,14 @@ def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float, 
     J = coarse.jacobian
     if not np.all(np.isfinite(J)):
         return None
-    A = (J - np.eye(J.shape[0])) * S[None, :] / S[:, None]
+    sh = _Shooting(M, S)
     z = M.project(coarse.section_state)
     for it in range(3):
         try:
             Pz, _, obs = M(z, t_s, jacobian=False)
         except FMUCallError:
             return None
-        r = float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
+        r = sh.residual(z, Pz)
         if r <= tol:
             orbit = _make_orbit(M, z, Pz, J, r, it, "", obs, t_s, h)
             orbit.multipliers = coarse.multipliers
@@ -479,7 +476,10 @@ def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float, 
             return orbit
         if it == 2:
             return None
-        z = M.project(z + S * np.linalg.lstsq(A, -(Pz - z) / S, rcond=1e-10)[0])
+        dz, _ = sh.step(z, Pz, J)
+        if dz is None:
+            return None
+        z = sh.move(z, dz, 1.0)
     return None
 
 

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .shooting import progress_bar, sweep
 from .system_orbits import SystemOrbit, _Map, _h_of, _solve
 
 if TYPE_CHECKING:
@@ -66,32 +66,41 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
     conv = np.zeros(f.size, dtype=bool)
     iters = np.zeros(f.size, dtype=np.int64)
     reasons = [""] * f.size
-    bar = _progress(f.size, progress)
-    prev: SystemOrbit | None = None
+    bar = progress_bar(f.size, progress)
     with SystemFMU3(system, fmu_path) as fmu:
-        for i, fi in enumerate(f):
-            s_i = system.replace(omega=2.0 * math.pi * float(fi))
-            fmu.system = s_i
-            try:
+        maps: dict[int, tuple[_Map, float]] = {}
+
+        def at(i: int, s_i: "Structure") -> tuple[_Map, float]:
+            """The map of the frequency i at its step h0 (made once per frequency)."""
+            if i not in maps:
+                maps.clear()
+                fmu.system = s_i
                 h0 = _h_of(fmu, s_i, accuracy)
                 s_h = s_i.replace(h=h0)
-                fmu.system = s_h
-                M = _Map(fmu, s_h, K)
-                orbit = None
-                if prev is not None and prev.converged:  # (its state at t = 0 mod K T)
-                    z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
-                    orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
-                if orbit is None or not orbit.converged:  # a transient from the system's start
-                    z = np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0])
-                    for _ in range(transients):
-                        z, _, _ = M(M.project(z), 0.0, jacobian=False)
-                    orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
-            except Exception as e:  # noqa: BLE001 (an FMU's refusal at one frequency: reported, the sweep goes on)
-                reasons[i] = f"{type(e).__name__}: {e}"
-                prev = None
-                bar(i)
-                continue
-            prev = orbit
+                maps[i] = (_Map(fmu, s_h, K), h0)
+            M, h0 = maps[i]
+            fmu.system = M.system
+            return M, h0
+
+        def warm(i: int, s_i: "Structure", prev: SystemOrbit) -> SystemOrbit | None:
+            """From the previous frequency's orbit (its state at t = 0 mod K T)."""
+            if not prev.converged:
+                return None
+            M, h0 = at(i, s_i)
+            z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
+            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            return orbit if orbit.converged else None
+
+        def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:
+            """From a transient from the system's start."""
+            M, h0 = at(i, s_i)
+            s_h = M.system
+            z = np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0])
+            for _ in range(transients):
+                z, _, _ = M(M.project(z), 0.0, jacobian=False)
+            return _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+
+        def record(i: int, s_i: "Structure", orbit: SystemOrbit) -> None:
             conv[i] = orbit.converged
             reasons[i] = orbit.reason
             if orbit.amplitude.size:
@@ -107,7 +116,13 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             scal["error_m"][i] = orbit.error
             scal["h_s"][i] = orbit.h
             iters[i] = orbit.iterations
-            bar(i)
+
+        def failed(i: int, e: BaseException) -> None:
+            reasons[i] = f"{type(e).__name__}: {e}"
+
+        # (an FMU's refusal at one frequency: reported, the sweep goes on)
+        sweep([system.replace(omega=2.0 * math.pi * float(fi)) for fi in f], warm, cold, record, failed,
+              (Exception,), bar)
     bar(-1)
     pick = int(dof) if dof is not None else int(np.nanargmax(np.nanmax(out["amplitude_m"], axis=0))) \
         if np.any(np.isfinite(out["amplitude_m"])) else 0
@@ -130,24 +145,6 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
                      "n": n, "nc": nc, "accuracy": float("nan") if accuracy is None else float(accuracy),
                      "estimate_error": int(bool(estimate_error))})
     return ds
-
-
-def _progress(total: int, on: bool) -> Any:
-    """A progress line on stderr (``on``): call with the index done, -1 at the end."""
-    if not on:
-        return lambda i: None
-
-    def bar(i: int) -> None:
-        if i < 0:
-            sys.stderr.write("\n")
-            return
-        done = i + 1
-        width = 30
-        fill = int(width * done / total)
-        sys.stderr.write(f"\rresponse [{'#' * fill}{'.' * (width - fill)}] {done}/{total}")
-        sys.stderr.flush()
-
-    return bar
 
 
 def plot_system_response(ds: Any, path: str | os.PathLike[str], dof: int | None = None) -> Path:

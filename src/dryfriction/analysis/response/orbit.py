@@ -11,7 +11,8 @@ import numpy as np
 
 from ...drivers.oscillator import FMUError, OscillatorFMU2
 from ...params import Oscillator
-from ..orbits import SAME, STABILITY_MARGIN, find_orbits, scales
+from ..orbits import ALIKE, SAME, find_orbits, scales
+from ..shooting import STABILITY_MARGIN, sweep
 from .transient import default_settings
 
 #: the orbit method's cold search (transients from several initial conditions) every this many
@@ -98,32 +99,56 @@ def _distinct(orbits: list[Any], p: Oscillator) -> list[Any]:
 
 def _orbits_at(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
                opts: Mapping[str, Any]) -> list[_Branch]:
-    """The orbits at the frequency f: each branch followed (Newton from its predicted section state,
-    :class:`dryfriction.analysis.orbits.OrbitFollower`), and with ``cold`` transients from the spread of
-    initial conditions followed too (:func:`_transient_check`); where a branch is lost (or K > 1),
-    find_orbits from the previous orbits; without branches or when none is stable, find_orbits from
-    transients too."""
+    """The orbits at the frequency f: each branch followed (:func:`_follow`), else searched for
+    (:func:`_search`)."""
+    followed = _follow(inst, p, f, branches, cold, opts) if branches else None
+    return followed if followed is not None else _search(inst, p, f, branches, opts)
+
+
+def _follow(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branch], cold: bool,
+            opts: Mapping[str, Any]) -> list[_Branch] | None:
+    """The orbits at the frequency f from the previous frequency's ``branches``: each followed
+    (Newton from its predicted section state, :class:`dryfriction.analysis.orbits.OrbitFollower`), and
+    with ``cold`` transients from the spread of initial conditions followed too
+    (:func:`_transient_check`); None where a branch is lost, none is stable or K > 1."""
     K, T = opts["period"], p.period
     follow = opts["follower"]
-    if K == 1 and branches:
-        followed: list[_Branch] = []
-        for b in branches:
-            o = None
-            if not b.orbit.stuck and b.orbit.period == 1:
-                z, ph = b.guess(f)
-                o = follow(p, z, ph * T)
-            if o is None:
-                break
-            followed.append(_Branch(o, f, T, b))
-        else:
-            _mirrors(p, f, followed, follow)
-            if any(_attracting(b.orbit, p) for b in followed):
-                if cold:
-                    followed = _transient_check(inst, p, f, followed, opts)
-                if len(followed) == 1:
-                    return followed
-                keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
-                return [b for b in followed if id(b.orbit) in keep]
+    if not (K == 1 and branches):
+        return None
+    followed: list[_Branch] = []
+    for b in branches:
+        o = None
+        if not b.orbit.stuck and b.orbit.period == 1:
+            z, ph = b.guess(f)
+            o = follow(p, z, ph * T)
+            if o is None and b.history:
+                # the prediction overshot (past a sharp resonance peak): from the orbit itself
+                o = follow(p, (b.point[0], b.point[1]), b.point[2] * T)
+        if o is None:
+            return None
+        followed.append(_Branch(o, f, T, b))
+    _mirrors(p, f, followed, follow)
+    if not any(_attracting(b.orbit, p) for b in followed):
+        # the branch lost its stability (a fold, a symmetry-breaking pitchfork): the attractors from
+        # the cold search's transients, followed (find_orbits where one cannot be)
+        followed = _transient_check(inst, p, f, followed, opts)
+        if not any(_attracting(b.orbit, p) for b in followed):
+            return None
+        followed.sort(key=lambda b: (not b.orbit.stable, not b.orbit.neutral, -b.orbit.amplitude))   # as find_orbits
+    elif cold:
+        followed = _transient_check(inst, p, f, followed, opts)
+    if len(followed) == 1:
+        return followed
+    keep = {id(o) for o in _distinct([b.orbit for b in followed], p)}
+    return [b for b in followed if id(b.orbit) in keep]
+
+
+def _search(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branch],
+            opts: Mapping[str, Any]) -> list[_Branch]:
+    """The orbits at the frequency f by find_orbits: from the previous orbits (``branches``), and
+    without them or when none is stable from transients too; with no stable orbit of K periods, of
+    2 K too."""
+    K, T = opts["period"], p.period
     guesses = [(b.orbit.x0, b.orbit.v0) for b in branches]
     kw = {"period": K, "guesses": guesses, "fmu": inst, "samples": ORBIT_SAMPLES}
     orbits = find_orbits(p, transients=0, spread=(), **kw) if branches else []
@@ -174,9 +199,17 @@ def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[
 
     runs = opts["transient_runs"]         # one set of value arrays for the sweep's cold searches
     runs.retarget(p)
+    ends: list[tuple[float, float]] = []
     for z in _auto_guesses(p, DEFAULT_SPREAD):
         runs.run(float(z[0]), float(z[1]), 0.0, opts["transients"] * T)
         y = {"x": runs.real[0], "v": runs.real[1]}
+        # an end state at an orbit known already (a transient that ended on it), or at an earlier
+        # transient's end (a stick phase forgets where it came from): nothing new
+        e = (y["x"] / xs, y["v"] / (xs * w))
+        if known(y["x"], y["v"]) or any(max(abs(e[0] - q[0]), abs(e[1] - q[1])) <= ALIKE * max(1.0, abs(q[0]), abs(q[1]))
+                                        for q in ends):
+            continue
+        ends.append(e)
         o = follow(p, (y["x"], y["v"]), 0.0)
         if o is None:
             new = [q for q in find_orbits(p, guesses=[(y["x"], y["v"])], transients=0, spread=(), fmu=inst,
@@ -192,6 +225,18 @@ def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[
     return out
 
 
+def _at_rest_once(branches: list[_Branch]) -> list[_Branch]:
+    """The branches with the block at rest (the interval of rest positions) once."""
+    out, stuck = [], False
+    for b in branches:
+        if b.orbit.stuck:
+            if stuck:
+                continue
+            stuck = True
+        out.append(b)
+    return out
+
+
 def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
                  opts: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """One Dask task (or the in-process sweep): every orbit at the frequencies f_hz in turn, the
@@ -204,38 +249,41 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
 
     inst = fmu_for(fmu)
     t0 = time.process_time()
-    table: list[list[tuple[float, ...]]] = []
-    reasons: list[str] = []
-    branches: list[_Branch] = []
     checked = Oscillator(**{**base, "omega": 2.0 * math.pi * float(f_hz[0])})
     # the transients of the cold searches read x, v at their end
     opts = {**opts, "follower": OrbitFollower(inst), "transient_runs": inst.restarts(checked, default_settings(checked))}
-    for i, f in enumerate(np.asarray(f_hz, dtype=float).tolist()):
+    freqs = np.asarray(f_hz, dtype=float).tolist()
+    table: list[list[tuple[float, ...]]] = [[] for _ in freqs]
+    reasons = [""] * len(freqs)
+
+    def at(f: float) -> Oscillator:
         # the oscillator at f: the checked one with omega replaced (f is checked finite and > 0 by
         # frequency_response; a new check per point would cost a fifth of the sweep)
         p = object.__new__(Oscillator)
         p.__dict__.update(checked.__dict__, omega=2.0 * math.pi * f)
-        try:
-            branches = _orbits_at(inst, p, f, branches, not branches or i % opts["cold_every"] == 0, opts)
-        except FMUError as e:   # this frequency is not computed: its row says why, the sweep goes on
-            table.append([])
-            reasons.append(e.message)
-            branches = []
-            continue
-        rows, kept, stuck = [], [], False
+        return p
+
+    def warm(i: int, p: Oscillator, branches: list[_Branch]) -> list[_Branch] | None:
+        found = _follow(inst, p, freqs[i], branches, i % opts["cold_every"] == 0, opts) if branches else None
+        return None if found is None else _at_rest_once(found)
+
+    def cold(i: int, p: Oscillator, branches: list[_Branch] | None) -> list[_Branch]:
+        return _at_rest_once(_search(inst, p, freqs[i], branches or [], opts))
+
+    def record(i: int, p: Oscillator, branches: list[_Branch]) -> None:
+        rows = []
         for b in branches:
             o = b.orbit
-            if o.stuck:        # the interval of rest positions: reported once
-                if stuck:
-                    continue
-                stuck = True
-            kept.append(b)
             lo, hi = o.rest_interval if o.rest_interval is not None else (math.nan, math.nan)
             rows.append((float(o.period), float(o.stable), o.mu_max, o.amplitude, o.offset, o.stick_fraction,
                          o.x0, o.v0, o.residual, float(o.neutral), lo, hi, float(_attracting(o, p))))
-        branches = kept
-        table.append(rows)
-        reasons.append("")
+        table[i] = rows
+
+    def failed(i: int, e: BaseException) -> None:
+        # this frequency is not computed: its row says why, the sweep goes on
+        reasons[i] = e.message if isinstance(e, FMUError) else str(e)
+
+    sweep((at(f) for f in freqs), warm, cold, record, failed, (FMUError,))
     width = max([len(r) for r in table] + [1])
     pad = (math.nan,) * (len(ORBIT_COLUMNS) + 1)
     out = np.array([rows + [pad] * (width - len(rows)) for rows in table], dtype=float).reshape(
