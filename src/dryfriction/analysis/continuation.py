@@ -770,13 +770,15 @@ class _Run:
                     # a short step that does not converge fast: next to a corner of the branch, where
                     # dG/dq straddles it (see correct)
                     e, it = self.correct(m, pt.e.u + ds * pt.t, pt.t, pt.e.u, ds, max_iter=LOCATE_ITERATIONS)
+                if float(np.linalg.norm(e.u - pt.e.u)) > KINK_REACH * ds:
+                    # (the arclength constraint holds along the tangent only: Newton may land far
+                    # across it, on another branch, whatever the tangent there)
+                    raise CorrectorFailure("the corrector went off to another branch")
                 t = tangent(m, e, pt.t)
                 turn = math.acos(max(-1.0, min(1.0, float(t @ pt.t))))
                 if turn > self.max_turn and ds > self.ds_min * 1.0001:
                     if self.signature(m, e) == pt.info["signature"]:
                         raise CorrectorFailure(f"the tangent turned by {turn:.3g} rad")
-                    if float(np.linalg.norm(e.u - pt.e.u)) > KINK_REACH * ds:
-                        raise CorrectorFailure("the corrector went off to another branch")
                     # an event changed: the branch has a corner there (grazing); go on along the new
                     # tangent, pointing away from the last point
                     t = tangent(m, e, e.u - pt.e.u)

@@ -1,0 +1,67 @@
+"""A structure's continuation (dryfriction.analysis.system_continuation: the located map with the FMU's
+Jacobian, the project's one continuation engine) locates the bifurcations of the oscillator's exact
+continuation, within the scheme's error: the one-DOF structure is the oscillator
+(``System.from_oscillator``), so its fold in frequency (the four-stop motion of Fig. 11/14) and the
+period doubling of the Fig. 8/9 band's asymmetric branch (in mu_k, chi = mu_k / mu_s) must fall
+where the exact map puts them (tests/test_continuation.py: lambda 0.1725095929, chi 0.2367840452),
+to O(h^2) at h = T/2000 (measured 7.6e-6 and 4.6e-6). The branches stay on their curve (no point
+further from the last than a few steps) and the doubled branch is a true 2-period orbit of a
+separate FMU's map.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from dryfriction import Oscillator, System, continue_orbits, find_orbits
+from dryfriction.analysis.system_orbits import system_map
+
+pytestmark = pytest.mark.slow
+
+LAM_FOLD = 0.1725095929       # the exact map's fold (tests/test_continuation.py)
+CHI_PD = 0.2367840452         # the exact map's period doubling on the asymmetric branch
+
+
+def structure(p: Oscillator) -> System:
+    return System.from_oscillator(p).replace(h=2 * np.pi / p.omega / 2000)
+
+
+def test_the_fold_in_frequency_of_the_four_stop_motion() -> None:
+    p = Oscillator.from_nondimensional(lam=0.15, mu_s_sigma=0.6, chi=0.7, phi=0.7)
+    (o4,) = [o for o in find_orbits(p) if o.events["transitions"] == 8]
+    s = structure(p)
+    (so,) = [o for o in find_orbits(s, guesses=[[o4.x0, o4.v0]]) if abs(o.amplitude[0] / o4.amplitude - 1) < 1e-3]
+    w0 = p.w0
+    c = continue_orbits(s, "omega", p.omega, 0.2 * w0, ds=0.2, orbit=so, max_points=30)
+    (f,) = [b for b in c.bifurcations if b.type == "fold"]
+    assert f.note == "" and abs(f.multipliers[0] - 1.0) <= 1e-6
+    assert abs(f.param / w0 - LAM_FOLD) < 2e-5, f.param / w0
+    lam = c.dataset.param.values / w0
+    i = int(np.argmax(lam))
+    assert lam.max() <= f.param / w0 + 1e-12 and bool(c.dataset.stable[0]) and not bool(c.dataset.stable[i + 1])
+    # on its curve: from the start up to the fold and back, each step short
+    assert lam.min() >= 0.15 - 1e-12 and np.all(np.abs(np.diff(lam)) < 0.02)
+
+
+def test_the_period_doubling_of_the_asymmetric_branch() -> None:
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.5)
+    asym = max((o for o in find_orbits(p) if o.stable), key=lambda o: o.offset)
+    s = structure(p)
+    (so,) = [o for o in find_orbits(s, guesses=[[asym.x0, asym.v0]]) if abs(o.offset[0] / asym.offset - 1) < 1e-3]
+    c = continue_orbits(s, "mu_k", p.mu_k, 0.22 * p.mu_s, orbit=so, ds=0.02, max_points=60)
+    (pd,) = [b for b in c.bifurcations if b.type == "period_doubling"]
+    assert abs(pd.multipliers[0] + 1.0) <= 1e-6 and pd.period == 1
+    assert abs(pd.param / p.mu_s - CHI_PD) < 2e-5, pd.param / p.mu_s
+    (child,) = pd.children
+    d = c.dataset.where(c.dataset.branch == child, drop=True)
+    assert np.all(d.period.values == 2) and bool(d.converged.all())
+    # a true 2-period orbit: two periods of a separate map run return to it, one does not
+    k = int(np.argmin(d.param.values))
+    sk = s.replace(contacts=[dataclasses.replace(s.contacts[0], mu_k=float(d.param[k]))])
+    z = np.array([float(d.x0[k, 0]), float(d.v0[k, 0])])
+    scale = float(d.amplitude_m[k, 0])
+    assert np.abs(system_map(sk, z, period=2)[0] - z).max() / scale <= 1e-6
+    assert np.abs(system_map(sk, z, period=1)[0] - z).max() / scale > 1e-2
