@@ -455,6 +455,8 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
 
         extra = {"transients": transients if transients != 60 else 40, "tol": tol if tol != 1e-12 else 1e-8,
                  "max_iter": max_iter if max_iter != 40 else 30, "keep_failed": keep_failed, **system_options}
+        if fmu is not None:  # (a SystemFMU3: find_system_orbits checks it)
+            extra["fmu"] = fmu
         return find_system_orbits(oscillator, period, guesses, **extra)  # type: ignore[return-value]
     if system_options:
         raise TypeError(f"find_orbits: {', '.join(system_options)} apply to a dryfriction.System only")

@@ -101,6 +101,12 @@ class _Map:
         self.KT = K * 2.0 * np.pi / system.omega
         self.evaluations = 0
         self.slide = np.zeros(system.nc, dtype=int)  # each Jenkins slider's mode at the section (0: stuck)
+        # the Jenkins contacts' rows, stiffnesses, limits and kinetic forces (read once: a System's
+        # per-contact arrays are built at each access)
+        j = self.jenk
+        self._Wj, self._kt = system.W[j], system.k_t[j]
+        self._lim = np.maximum(system.mu_s, system.mu_k)[j] * system.N[j]
+        self._fk = system.mu_k[j] * system.N[j]
 
     @property
     def size(self) -> int:
@@ -108,25 +114,20 @@ class _Map:
 
     def f0(self, z: np.ndarray) -> np.ndarray:
         """The Jenkins springs' forces of z (0 for the rigid contacts), clamped to their limits."""
-        sysm = self.system
-        f = np.zeros(sysm.nc)
+        f = np.zeros(self.system.nc)
         if self.jenk.size:
-            g = sysm.W[self.jenk] @ z[:self.n]
-            lim = np.maximum(sysm.mu_s, sysm.mu_k)[self.jenk] * sysm.N[self.jenk]
-            f[self.jenk] = np.clip(-sysm.k_t[self.jenk] * (g - z[2 * self.n:]), -lim, lim)
+            g = self._Wj @ z[:self.n]
+            f[self.jenk] = np.clip(-self._kt * (g - z[2 * self.n:]), -self._lim, self._lim)
         return f
 
     def project(self, z: np.ndarray) -> np.ndarray:
         """z with each stuck slider within its limit, each sliding one where its kinetic force puts it."""
         if not self.jenk.size:
             return z
-        sysm = self.system
         out = z.copy()
-        g = sysm.W[self.jenk] @ z[:self.n]
-        kt = sysm.k_t[self.jenk]
+        g = self._Wj @ z[:self.n]
         m = self.slide[self.jenk]
-        out[2 * self.n:] = np.where(m != 0, g - m * sysm.mu_k[self.jenk] * sysm.N[self.jenk] / kt,
-                                    g + self.f0(z)[self.jenk] / kt)
+        out[2 * self.n:] = np.where(m != 0, g - m * self._fk / self._kt, g + self.f0(z)[self.jenk] / self._kt)
         return out
 
     def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True,
@@ -376,6 +377,8 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
     if accuracy is not None and not (accuracy > 0):
         raise ValueError(f"accuracy must be > 0, not {accuracy!r}")
     orbits: list[SystemOrbit] = []
+    if fmu is not None and not isinstance(fmu, SystemFMU3):
+        raise TypeError(f"fmu must be an open SystemFMU3 for a structure, not {type(fmu).__name__}")
     if fmu is not None and (fmu.n, fmu.nc) != (system.n, system.nc):
         raise ValueError(f"the fmu runs a structure of n = {fmu.n}, nc = {fmu.nc}, not n = {system.n}, nc = {system.nc}")
     with (SystemFMU3(system) if fmu is None else contextlib.nullcontext(fmu)) as fmu:
@@ -413,15 +416,43 @@ def _same(a: SystemOrbit, b: SystemOrbit) -> bool:
     return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale and np.max(np.abs(a.amplitude - b.amplitude)) <= SAME * scale)
 
 
-def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
-           accuracy: float | None) -> SystemOrbit:
-    """The orbit from z at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks (module doc)."""
+def _warm_section(M: _Map, z: np.ndarray, phase: float) -> tuple[float, np.ndarray] | None:
+    """The section at ``phase`` (a fraction of M's period: a neighbouring orbit's section) when the
+    map is smooth there too, and the state z carried to it; None when the phase is 0 or the modes
+    there are not the section's (a Jenkins slider not stuck, a rigid contact not sliding): then
+    :func:`_section` chooses anew. One run to the section instead of the guess's sampled cycle."""
+    t_s = phase * M.KT
+    if not (0.0 < t_s < M.KT):
+        return None
+    sysm = M.system
+    live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
+    M.slide[:] = 0
     try:
-        t_s = _section(M, z)
-    except ValueError as e:
-        return _failed(M, z, str(e), h0)
-    if t_s != 0.0:  # the guess's state at the section
-        z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
+        zs, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
+    except FMUCallError:
+        return None
+    mode = M.last_mode
+    jenk = sysm.k_t > 0.0
+    if np.any(mode[live & jenk] != 0) or np.any(mode[live & ~jenk] == 0):
+        return None
+    return t_s, zs
+
+
+def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
+           accuracy: float | None, phase: float | None = None) -> SystemOrbit:
+    """The orbit from z at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks (module doc);
+    ``phase``: a neighbouring orbit's section (a fraction of the period), tried first
+    (:func:`_warm_section`)."""
+    warm = _warm_section(M, z, phase) if phase is not None else None
+    if warm is not None:
+        t_s, z = warm
+    else:
+        try:
+            t_s = _section(M, z)
+        except ValueError as e:
+            return _failed(M, z, str(e), h0)
+        if t_s != 0.0:  # the guess's state at the section
+            z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
     z, Pz, J, r, it, reason, obs, S = _newton(M, z, t_s, None, tol, max_iter)
     orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
     if not orbit.converged or not (estimate_error or accuracy is not None):

@@ -88,7 +88,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
                 return None
             M, h0 = at(i, s_i)
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
-            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
+            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy, phase)
             return orbit if orbit.converged else None
 
         def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:

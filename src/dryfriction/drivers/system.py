@@ -170,6 +170,12 @@ class SystemFMU3(Driver):
             shutil.rmtree(self.unzip_dir, ignore_errors=True)
             raise
         self._fresh = True
+        #: Initialization Mode states of the system's starts (fmi3GetFMUState), per start time,
+        #: restored by a start at the same time (a shooting method's map evaluations); the
+        #: states of a system no longer run are kept for reuse (their memory)
+        self._init: dict[float, Any] = {}
+        self._init_system: Any = None
+        self._spare: list[Any] = []
         self._step = self.inst.step_function()
         sizes = {"n": self.n, "nc": self.nc, None: 1}
         self._nreal = sum(sizes[d] for _, d in _REALS)
@@ -181,6 +187,17 @@ class SystemFMU3(Driver):
         self._get_obs = self.inst.bulk_get("Float64", obs, 2 * self.n + self.nc)
         self._observe = True
         self.time = 0.0
+        # the Jacobian's nine blocks: one bulk read, each block's rows and columns in J
+        n, nc = self.n, self.nc
+        size = {"x": n, "v": n, "s": nc, "x0": n, "v0": n, "s0": nc}
+        at = {"x": 0, "v": n, "s": 2 * n, "x0": 0, "v0": n, "s0": 2 * n}
+        blocks = [(name, r, c) for name, r, c in JACOBIAN if size[r] * size[c]]
+        self._njac = sum(size[r] * size[c] for _, r, c in blocks)
+        self._get_jac = self.inst.bulk_get("Float64", [self.vars[name].vr for name, _, _ in blocks], self._njac)
+        self._jac_at = [(slice(at[r], at[r] + size[r]), slice(at[c], at[c] + size[c])) for _, r, c in blocks]
+        ends = np.cumsum([size[r] * size[c] for _, r, c in blocks]).tolist()
+        self._jac_cut = list(zip([0, *ends[:-1]], ends))
+        self._cuts = np.cumsum([n, n, n, nc, nc]).tolist()
 
     def array_size(self, name: str) -> int:
         """The size of an array variable for this system (n, nc, n x n, nc x n or nc x nc)."""
@@ -241,20 +258,33 @@ class SystemFMU3(Driver):
             raise ValueError(f"the observation window [t_obs_start, t_obs_stop] = [{w0!r}, {w1!r}] must be finite "
                              "with t_obs_stop >= t_obs_start")
         inst = self.inst
-        if not self._fresh:
-            inst.reset()
-        self._fresh = False
-        inst.enter_configuration_mode()
-        inst.set("UInt64", [self.vars["n"].vr, self.vars["nc"].vr], [self.n, self.nc])
-        inst.exit_configuration_mode()
-        inst.enter_initialization_mode(float(start_time))
-        for name, value in self.system.start_values().items():
-            if name in ("n", "nc"):
-                continue
-            v = self.vars[name]
-            vals = [value] if np.ndim(value) == 0 else list(value)
-            if vals:
-                inst.set(v.call_type, [v.vr], vals)
+        if self._init_system is not self.system:  # (the kept states are of another system)
+            self._init_system = self.system
+            self._spare.extend(self._init.values())
+            self._init.clear()
+        key = float(start_time)
+        kept = self._init.get(key)
+        if kept is not None:
+            # the same system and options as a kept Initialization Mode state: restored (its values
+            # bit for bit what the calls below set), then only this run's own values
+            inst.set_state(kept)
+        else:
+            if not self._fresh:
+                inst.reset()
+            self._fresh = False
+            inst.enter_configuration_mode()
+            inst.set("UInt64", [self.vars["n"].vr, self.vars["nc"].vr], [self.n, self.nc])
+            inst.exit_configuration_mode()
+            inst.enter_initialization_mode(float(start_time))
+            for name, value in self.system.start_values().items():
+                if name in ("n", "nc"):
+                    continue
+                v = self.vars[name]
+                vals = [value] if np.ndim(value) == 0 else list(value)
+                if vals:
+                    inst.set(v.call_type, [v.vr], vals)
+            if len(self._init) < 4:  # (a shooting method alternates a few start times)
+                self._init[key] = inst.get_state(self._spare.pop() if self._spare else None)
         inst.set("Float64", [self.vars["t_obs_start"].vr, self.vars["t_obs_stop"].vr], [w0, w1])
         inst.set("Boolean", [self.vars["observe"].vr, self.vars["sensitivity"].vr], [bool(observe), bool(sensitivity)])
         self._observe = bool(observe)
@@ -282,22 +312,17 @@ class SystemFMU3(Driver):
         square (rows and columns: x, v, then each contact's slider; a rigid contact's row and column
         0), of a run started with ``sensitivity=True``; NaN where the FMU did not compute it (it logs
         why: a :class:`~dryfriction.errors.DryFrictionWarning`)."""
-        n, nc = self.n, self.nc
-        size = {"x": n, "v": n, "s": nc, "x0": n, "v0": n, "s0": nc}
-        at = {"x": 0, "v": n, "s": 2 * n, "x0": 0, "v0": n, "s0": 2 * n}
-        J = np.zeros((2 * n + nc, 2 * n + nc))
-        for name, r, c in JACOBIAN:
-            count = size[r] * size[c]
-            if count:
-                block = np.array(self.inst.get("Float64", [self.vars[name].vr], count), dtype=float)
-                J[at[r]:at[r] + size[r], at[c]:at[c] + size[c]] = block.reshape(size[r], size[c])
+        vals = np.empty(self._njac)
+        self._get_jac(vals.ctypes.data)  # (the nine blocks in one call, row-major each)
+        self.inst.flush_warnings()
+        J = np.zeros((2 * self.n + self.nc, 2 * self.n + self.nc))
+        for (rows, cols), (a, b) in zip(self._jac_at, self._jac_cut):
+            J[rows, cols] = vals[a:b].reshape(rows.stop - rows.start, cols.stop - cols.start)
         return J
 
     def _split(self, reals: np.ndarray) -> list[np.ndarray]:
         """x, v, a, f, s, E_friction of the FMU's values (along the last axis)."""
-        n, nc = self.n, self.nc
-        cuts = np.cumsum([n, n, n, nc, nc])
-        parts = np.split(reals, cuts, axis=-1)
+        parts = np.split(reals, self._cuts, axis=-1)
         parts[-1] = parts[-1][..., 0]
         return parts
 
