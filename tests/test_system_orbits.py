@@ -275,3 +275,36 @@ def test_a_requested_accuracy_chooses_h() -> None:
         assert abs(o.amplitude[0] - exact) <= 2.0 * rel * exact
         steps.append(2 * np.pi / p.omega / o.h)
     assert 32 <= steps[0] < steps[1]
+
+
+def test_map_runs_through_one_fmu_are_fresh_runs_bit_for_bit() -> None:
+    """One FMU instance restores its kept Initialization Mode states between runs (per system and
+    start time): runs alternating two systems, start times, options (Jacobian, observables, windows)
+    and states give the bits of the same runs each in a fresh FMU."""
+    from dryfriction.drivers.system import SystemFMU3
+
+    a, b = two_mass(1.4, h=0.05), two_mass(1.8, N=0.3, h=0.04)
+    rng = np.random.default_rng(7)
+    runs = []
+    for k in range(8):
+        s = a if k % 3 else b
+        n = s.n
+        runs.append((s, dict(start_time=[0.0, 0.7, 1.3][k % 3], sensitivity=bool(k % 2), observe=k != 5,
+                             t_obs_stop=[None, 2.5][k % 2], x0=rng.normal(size=n) * 0.2,
+                             v0=rng.normal(size=n) * 0.2)))
+
+    def go(fmu: SystemFMU3, s: System, kw: dict) -> list[np.ndarray]:
+        fmu.system = s
+        fmu.start(**kw)
+        fmu.do_step(3.0)
+        out = list(fmu.outputs().values()) + list(fmu.observables())
+        return out + ([fmu.jacobian()] if kw["sensitivity"] else [])
+
+    shared = {}
+    with SystemFMU3(a) as one:
+        for k, (s, kw) in enumerate(runs):
+            shared[k] = go(one, s, kw)
+    for k, (s, kw) in enumerate(runs):
+        with SystemFMU3(s) as f:
+            fresh = go(f, s, kw)
+        assert all(np.array_equal(x, y, equal_nan=True) for x, y in zip(shared[k], fresh)), k
