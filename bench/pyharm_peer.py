@@ -59,6 +59,7 @@ import subprocess
 import sys
 import tempfile
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -347,9 +348,10 @@ def main_system(args: Any, Maestro: Any, harmonics: list[int]) -> int:
                   f"converged {res['converged']}, residual {res['residual']:.2e}, pyHarm's flags {res['pyharm_flags']}",
                   file=sys.stderr)
         rows.append(row)
+    orbits = orbit_side(case, omegas, rows, args.repeats)
     version = importlib.import_module("pyHarm").__dict__.get("__version__", "?")
     out = {"case": case, "dof": k, "nti": nti if nti is not None else "pyHarm default (128)",
-           "pyharm_version": version, "rows": rows}
+           "pyharm_version": version, "rows": rows, "orbits": orbits}
     if args.json:
         print(json.dumps(out))
         return 0
@@ -360,7 +362,54 @@ def main_system(args: Any, Maestro: Any, harmonics: list[int]) -> int:
         for q in r["pyharm"]:
             print(f"{r['omega']:8g} {q['harmonics']:3d} {q['amplitude']:14.8g} {r['reference']['amplitude'][k]:14.10g} "
                   f"{q['error']:9.2e} {q['cpu_s']:7.3f} {'yes' if q['converged'] else 'NO':>4} {q['residual']:9.2e}")
+    if orbits:
+        print("\nthe orbit method beside it (bench/system_orbit_cost.py: a point of a sweep, FMU reused): for each "
+              "pyHarm point that converged, the cheapest orbit setting at least as accurate")
+        print(f"{'omega':>8} {'nh':>3} {'pyHarm err':>10} {'pyHarm ms':>9} {'orbit steps/T':>13} {'orbit err':>9} "
+              f"{'orbit ms':>8} {'ratio':>7}")
+        for c in orbits["comparison"]:
+            print(f"{c['omega']:8g} {c['harmonics']:3d} {c['pyharm_error']:10.2e} {1e3 * c['pyharm_cpu_s']:9.1f} "
+                  f"{c['orbit_setting']:>13} {c['orbit_error']:9.2e} {1e3 * c['orbit_cpu_s']:8.1f} {c['ratio']:6.1f}x")
+        for w, best in orbits["best"].items():
+            print(f"omega {w}: the orbit method's best {best['error']:.2e} ({best['setting']}, {1e3 * best['cpu_s']:.1f} ms); "
+                  f"pyHarm's best {orbits['pyharm_best'][w]:.2e}")
     return 0
+
+
+def orbit_side(case: str, omegas: Sequence[float], rows: list[dict[str, Any]], repeats: int) -> dict[str, Any] | None:
+    """The two-mass case: the orbit method's cost and error per frequency point at 25 to 3200 steps a
+    period, with and without Richardson (bench/system_orbit_cost.py, the same process), and per
+    converged pyHarm point the cheapest orbit setting at least as accurate (None for the disk)."""
+    if case != "two_mass":
+        return None
+    from system_orbit_cost import REFERENCE, measure
+
+    ws = [w for w in omegas if w in REFERENCE]
+    ours = measure(ws, [25, 50, 100, 200, 400, 800, 1600, 3200], max(1, repeats))
+
+    def setting(o: dict[str, Any]) -> str:
+        return f"{o['steps_per_period']}{' +R' if o['richardson'] else ''}"
+
+    comparison, best, ph_best = [], {}, {}
+    for r in rows:
+        w = r["omega"]
+        mine = [o for o in ours if o["omega"] == w and o["converged"]]
+        if not mine:
+            continue
+        b = min(mine, key=lambda o: o["error"])
+        best[w] = {"error": b["error"], "setting": setting(b), "cpu_s": b["cpu_s"]}
+        ph_best[w] = min((q["error"] for q in r["pyharm"] if q["converged"]), default=math.nan)
+        for q in r["pyharm"]:
+            if not q["converged"]:
+                continue
+            ok = [o for o in mine if o["error"] <= q["error"]]
+            if not ok:
+                continue
+            o = min(ok, key=lambda o: o["cpu_s"])
+            comparison.append({"omega": w, "harmonics": q["harmonics"], "pyharm_error": q["error"],
+                               "pyharm_cpu_s": q["cpu_s"], "orbit_setting": setting(o), "orbit_error": o["error"],
+                               "orbit_cpu_s": o["cpu_s"], "ratio": q["cpu_s"] / o["cpu_s"]})
+    return {"rows": ours, "comparison": comparison, "best": best, "pyharm_best": ph_best}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """What a structure's periodic orbit costs per frequency point against its accuracy: the orbit method
-(`find_orbits(system)`: Newton shooting on the located map with the FMU's Jacobian) at several
-internal steps, with and without its Richardson extrapolation, against the event-driven reference.
+(`frequency_response(system)`: Newton shooting on the located map with the FMU's Jacobian, each
+point from the last) at several internal steps, with and without its Richardson extrapolation,
+against the event-driven reference.
 
     python bench/system_orbit_cost.py [--omegas 1.0,1.4,1.8,2.5] [--steps 50,100,...] [--repeats 3] [--json]
 
@@ -10,11 +11,13 @@ tools take as their benchmark (M = diag(1, 0.5), K = [[3, -1], [-1, 1]], C = 0.0
 [1, 0] cos(omega t), k_t = 20, N = 0.6, mu = 0.5; :func:`case`). Reference: the amplitude of mass 0 of
 the event-driven reference run to its periodic state (`dryfriction.references.system`, DOP853 at rtol
 1e-12, every switch located by Brent's method, run long: estimated error below 3e-12; the constants
-in :data:`REFERENCE`, measured with `bench/pyharm_peer.py --case two_mass`'s reference). Each point:
-one FMU instance reused across points (as a frequency sweep does), the orbit of the neighbouring
-point's state as the guess (a sweep's warm start), the CPU time of `find_orbits` (process time, the
-least of ``--repeats``). Prints per omega and steps per period: the error of the amplitude at h, of
-Richardson's value from h and h / 2, and each one's CPU time; ``--json`` the rows.
+in :data:`REFERENCE`, measured with `bench/pyharm_peer.py --case two_mass`'s reference). A point's
+cost: a sweep of :data:`SWEEP_POINTS` frequencies over the last 2 % up to omega (one FMU instance,
+each point from the last point's orbit, as a frequency sweep runs), its CPU time (process time, the
+least of ``--repeats``) over the points; the error of the last point's amplitude (omega itself).
+Prints per omega and steps per period: the error of the amplitude at h, of Richardson's value from h
+and h / 2, and each one's CPU time; ``--json`` the rows. `bench/pyharm_peer.py --case two_mass` runs
+it beside pyHarm in one process.
 """
 
 from __future__ import annotations
@@ -29,11 +32,13 @@ from typing import Any
 import numpy as np
 
 from dryfriction import Contact, System
-from dryfriction.analysis.system_orbits import find_system_orbits
+from dryfriction.analysis.system_response import system_frequency_response
 from dryfriction.drivers.system import SystemFMU3
 
 #: mass 0's amplitude of the event-driven reference's periodic state at each omega (module doc)
 REFERENCE = {1.0: 5.22200001771, 1.4: 0.435961547973, 1.8: 0.446895397793, 2.5: 0.210591930011}
+#: a point's cost: a sweep of SWEEP_POINTS frequencies over the last SWEEP_SPAN of omega, up to omega
+SWEEP_POINTS, SWEEP_SPAN = 11, 0.02
 
 
 def case(omega: float, h: float = 0.0) -> System:
@@ -44,28 +49,30 @@ def case(omega: float, h: float = 0.0) -> System:
                   contacts=[Contact(between=(0, 1), N=0.6, mu_s=0.5, mu_k=0.5, k_t=20.0)])
 
 
-def measure(omegas: list[float], steps: list[int], repeats: int) -> list[dict[str, Any]]:
-    """The rows: per omega, steps per period and with / without Richardson, error and CPU time."""
+def measure(omegas: list[float], steps: list[int], repeats: int, points: int = SWEEP_POINTS) -> list[dict[str, Any]]:
+    """The rows: per omega, steps per period and with / without Richardson, error and CPU time per
+    frequency point of a sweep (module doc)."""
     rows = []
     with SystemFMU3(case(omegas[0])) as fmu:
         for w in omegas:
             ref = REFERENCE[w]
-            warm = find_system_orbits(case(w), estimate_error=False, fmu=fmu)[0]
-            z = np.concatenate([warm.x0, warm.v0, warm.s0[:1]])
             T = 2.0 * math.pi / w
+            f_hz = np.linspace(w * (1.0 - SWEEP_SPAN), w, points) / (2.0 * math.pi)
             for n in steps:
                 for richardson in (False, True):
-                    best, orbit = math.inf, None
+                    best, ds = math.inf, None
                     for _ in range(repeats):
                         t0 = time.process_time()
-                        orbit = find_system_orbits(case(w, T / n), guesses=[z], transients=0,
-                                                   estimate_error=richardson, fmu=fmu)[0]
+                        ds = system_frequency_response(case(w, T / n), f_hz, dof=0, estimate_error=richardson,
+                                                       fmu=fmu)
                         best = min(best, time.process_time() - t0)
-                    assert orbit is not None
-                    a = orbit.amplitude_extrapolated[0] if richardson else orbit.amplitude[0]
+                    assert ds is not None
+                    last = ds.isel(f_hz=-1)
+                    a = float(last["amplitude_extrapolated_m" if richardson else "amplitude_m"][0])
                     rows.append({"omega": w, "steps_per_period": n, "richardson": richardson,
-                                 "error": abs(a - ref) / ref, "cpu_s": best, "converged": orbit.converged,
-                                 "estimated_error": orbit.error / ref if richardson else None})
+                                 "error": abs(a - ref) / ref, "cpu_s": best / points,
+                                 "converged": bool(ds["converged"].all()),
+                                 "estimated_error": float(last["error_m"]) / ref if richardson else None})
     return rows
 
 

@@ -13,6 +13,7 @@ not converged or not accurate says so. A frequency whose orbit is not found has 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from collections.abc import Sequence
@@ -33,15 +34,18 @@ __all__ = ["system_frequency_response", "plot_system_response"]
 def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
                               period: int = 1, tol: float = 1e-8, max_iter: int = 30, transients: int = 40,
                               accuracy: float | None = None, estimate_error: bool = True, progress: bool = False,
-                              fmu_path: str | os.PathLike[str] | None = None) -> Any:
+                              fmu_path: str | os.PathLike[str] | None = None, fmu: "SystemFMU3 | None" = None) -> Any:
     """The steady response of ``system`` at the frequencies ``f_hz`` (Hz) as an xarray Dataset
     (dimensions ``f_hz``, ``dof``, ``contact``): per frequency its orbit's ``amplitude_m``,
     ``offset_m``, ``x0_m``, ``v0_m_per_s`` (per DOF), ``stick_fraction`` (per contact), ``stable``, ``neutral`` (a stuck slider's continuum),
     ``mu_max``, ``residual``, ``error_m`` (the amplitude's estimated error), ``h_s``, ``iterations``,
-    ``converged`` and ``reason``; ``amplitude_dof_m`` the amplitude of ``dof`` (default: the DOF
-    with the largest amplitude over the sweep). Settings and units in the attributes. ``accuracy``:
-    each orbit's h halved until its estimated error is within it (module doc of
-    :mod:`~dryfriction.analysis.system_orbits`)."""
+    ``converged`` and ``reason``; ``amplitude_extrapolated_m`` (per DOF) Richardson's value from
+    the error estimate's two steps (NaN without it); ``amplitude_dof_m`` the amplitude of ``dof``
+    (default: the DOF with the largest amplitude over the sweep). Settings and units in the
+    attributes. ``accuracy``: each orbit's h halved until its estimated error is within it (module
+    doc of :mod:`~dryfriction.analysis.system_orbits`). ``fmu``: an open
+    :class:`~dryfriction.drivers.system.SystemFMU3` of a structure of the same sizes to run on (else
+    one is opened, from ``fmu_path`` or the package's, and closed)."""
     import xarray as xr
 
     from ..drivers.system import SystemFMU3
@@ -58,7 +62,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
         raise ValueError(f"the response by orbits uses the located scheme's map, and the system's scheme is "
                          f"{system.scheme!r}: System.replace(scheme='located')")
     n, nc, K = system.n, system.nc, int(period)
-    out = {name: np.full((f.size, n), np.nan) for name in ("amplitude_m", "offset_m", "x0_m", "v0_m_per_s")}
+    out = {name: np.full((f.size, n), np.nan) for name in ("amplitude_m", "amplitude_extrapolated_m", "offset_m",
+                                                           "x0_m", "v0_m_per_s")}
     share = np.full((f.size, nc), np.nan)
     scal = {name: np.full(f.size, np.nan) for name in ("mu_max", "residual", "error_m", "h_s")}
     stable = np.zeros(f.size, dtype=bool)
@@ -67,7 +72,9 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
     iters = np.zeros(f.size, dtype=np.int64)
     reasons = [""] * f.size
     bar = progress_bar(f.size, progress)
-    with SystemFMU3(system, fmu_path) as fmu:
+    if fmu is not None and (not isinstance(fmu, SystemFMU3) or (fmu.n, fmu.nc) != (system.n, system.nc)):
+        raise ValueError("fmu must be an open SystemFMU3 of a structure of the system's sizes (n, nc)")
+    with (SystemFMU3(system, fmu_path) if fmu is None else contextlib.nullcontext(fmu)) as fmu:
         maps: dict[int, tuple[_Map, float]] = {}
 
         def at(i: int, s_i: "Structure") -> tuple[_Map, float]:
@@ -106,6 +113,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             reasons[i] = orbit.reason
             if orbit.amplitude.size:
                 out["amplitude_m"][i] = orbit.amplitude
+                if orbit.amplitude_extrapolated.size:
+                    out["amplitude_extrapolated_m"][i] = orbit.amplitude_extrapolated
                 out["offset_m"][i] = orbit.offset
                 out["x0_m"][i] = orbit.x0
                 out["v0_m_per_s"][i] = orbit.v0
@@ -127,7 +136,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
     bar(-1)
     pick = int(dof) if dof is not None else int(np.nanargmax(np.nanmax(out["amplitude_m"], axis=0))) \
         if np.any(np.isfinite(out["amplitude_m"])) else 0
-    units = {"amplitude_m": "m", "offset_m": "m", "x0_m": "m", "v0_m_per_s": "m/s", "error_m": "m", "h_s": "s",
+    units = {"amplitude_m": "m", "amplitude_extrapolated_m": "m", "offset_m": "m", "x0_m": "m", "v0_m_per_s": "m/s",
+             "error_m": "m", "h_s": "s",
              "mu_max": "1", "residual": "1", "stick_fraction": "1", "amplitude_dof_m": "m"}
     data: dict[str, Any] = {name: (("f_hz", "dof"), v) for name, v in out.items()}
     data["stick_fraction"] = (("f_hz", "contact"), share)
