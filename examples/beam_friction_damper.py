@@ -47,6 +47,7 @@ import numpy as np
 from dryfriction import Contact, System, frequency_response
 from dryfriction.drivers.system import trajectory
 from dryfriction.system import craig_bampton
+from dryfriction.system.cases import cantilever
 
 # the strip
 LENGTH, WIDTH, THICK = 0.5, 0.03, 0.004
@@ -62,23 +63,10 @@ CB_MODES = 8  # the fixed-interface modes the reduced beam keeps
 
 
 def beam_matrices(elements: int = ELEMENTS) -> tuple[np.ndarray, np.ndarray]:
-    """M and K of the clamped cantilever: the consistent Euler-Bernoulli element matrices
-    assembled over the nodes (deflection w, slope theta per node), the root's two DOFs removed.
-    DOF 2 (k - 1) is node k's deflection, 2 (k - 1) + 1 its slope (k = 1 .. elements)."""
-    le = LENGTH / elements
-    EI = E_MOD * WIDTH * THICK**3 / 12.0
-    rhoA = RHO * WIDTH * THICK
-    ke = EI / le**3 * np.array([[12, 6 * le, -12, 6 * le], [6 * le, 4 * le**2, -6 * le, 2 * le**2],
-                                [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le**2, -6 * le, 4 * le**2]])
-    me = rhoA * le / 420.0 * np.array([[156, 22 * le, 54, -13 * le], [22 * le, 4 * le**2, 13 * le, -3 * le**2],
-                                       [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le**2, -22 * le, 4 * le**2]])
-    nd = 2 * (elements + 1)
-    M, K = np.zeros((nd, nd)), np.zeros((nd, nd))
-    for e in range(elements):
-        s = slice(2 * e, 2 * e + 4)
-        M[s, s] += me
-        K[s, s] += ke
-    return M[2:, 2:], K[2:, 2:]
+    """M and K of the clamped steel strip (dryfriction.system.cases.cantilever: consistent
+    Euler-Bernoulli elements, the root's two DOFs removed). DOF 2 (k - 1) is node k's deflection,
+    2 (k - 1) + 1 its slope (k = 1 .. elements)."""
+    return cantilever(elements, LENGTH, E_MOD * WIDTH * THICK**3 / 12.0, RHO * WIDTH * THICK)
 
 
 def damper(N: float, k_t: float = 0.0) -> Contact:

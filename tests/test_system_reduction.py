@@ -18,23 +18,12 @@ import pytest
 
 from dryfriction import Contact, System, UsageError, find_orbits
 from dryfriction.system import craig_bampton
+from dryfriction.system.cases import cantilever
 
 
 def beam(elements: int = 10) -> tuple[np.ndarray, np.ndarray]:
-    """A clamped cantilever of Euler-Bernoulli elements (unit properties, length 1): M, K over the
-    deflection and slope of each free node."""
-    le = 1.0 / elements
-    ke = np.array([[12, 6 * le, -12, 6 * le], [6 * le, 4 * le**2, -6 * le, 2 * le**2],
-                   [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le**2, -6 * le, 4 * le**2]]) / le**3
-    me = le / 420.0 * np.array([[156, 22 * le, 54, -13 * le], [22 * le, 4 * le**2, 13 * le, -3 * le**2],
-                                [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le**2, -22 * le, 4 * le**2]])
-    n = 2 * (elements + 1)
-    M, K = np.zeros((n, n)), np.zeros((n, n))
-    for e in range(elements):
-        s = slice(2 * e, 2 * e + 4)
-        M[s, s] += me
-        K[s, s] += ke
-    return M[2:, 2:], K[2:, 2:]
+    """A clamped cantilever of 10 Euler-Bernoulli elements (unit properties, length 1)."""
+    return cantilever(elements)
 
 
 def beam_system(N: float = 0.0, omega: float = 3.0) -> System:

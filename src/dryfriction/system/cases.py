@@ -3,7 +3,9 @@
 - :func:`two_mass_jenkins`: two masses with a Jenkins element between them, the project's goal case
   for steady states of structures (pyHarm measured on it against an exact reference);
 - :func:`bladed_disk`: the lumped bladed disk with a friction ring damper of Laxalde et al. (2007),
-  with the parameters of pyHarm's tutorial 006.
+  with the parameters of pyHarm's tutorial 006;
+- :func:`cantilever`: the mass and stiffness matrices of a clamped Euler-Bernoulli cantilever (the
+  finite-element model of examples/beam_friction_damper.py).
 
 Each builder returns a checked System (every value goes through System's own checks); its
 parameters are keyword arguments. Degree-of-freedom indices are 0-based::
@@ -23,7 +25,7 @@ import numpy as np
 from ..errors import UsageError
 from .structure import Contact, System
 
-__all__ = ["two_mass_jenkins", "bladed_disk", "bladed_disk_sector", "bladed_disk_modes",
+__all__ = ["two_mass_jenkins", "bladed_disk", "bladed_disk_sector", "bladed_disk_modes", "cantilever",
            "TWO_MASS", "BLADED_DISK"]
 
 #: the two-mass case's fixed values: masses, stiffness matrix, Rayleigh factors, force on mass 0
@@ -69,6 +71,29 @@ def two_mass_jenkins(N: float = 0.6, *, mu_s: float = 0.5, mu_k: float | None = 
                   contacts=[Contact(between=(0, 1), N=N, mu_s=mu_s, mu_k=mu_s if mu_k is None else mu_k,
                                     k_t=k_t)])
     return base.with_rayleigh(TWO_MASS["alpha_M"], TWO_MASS["beta_K"])
+
+
+def cantilever(elements: int, length: float = 1.0, EI: float = 1.0, rhoA: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """M and K of a cantilever clamped at its root: ``elements`` Euler-Bernoulli elements of equal
+    length (bending stiffness ``EI``, mass per length ``rhoA``), their consistent element matrices
+    assembled over the nodes (deflection w, slope theta per node), the root's two DOFs removed: 2
+    ``elements`` DOFs, DOF 2 (k - 1) node k's deflection and 2 (k - 1) + 1 its slope (k = 1 ..
+    elements; the tip's deflection is DOF 2 elements - 2)."""
+    if int(elements) < 1 or not (length > 0 and EI > 0 and rhoA > 0):
+        raise UsageError(f"a cantilever needs elements >= 1 and length, EI, rhoA > 0 (got {elements}, {length}, "
+                         f"{EI}, {rhoA})")
+    le = length / int(elements)
+    ke = EI / le**3 * np.array([[12, 6 * le, -12, 6 * le], [6 * le, 4 * le**2, -6 * le, 2 * le**2],
+                                [-12, -6 * le, 12, -6 * le], [6 * le, 2 * le**2, -6 * le, 4 * le**2]])
+    me = rhoA * le / 420.0 * np.array([[156, 22 * le, 54, -13 * le], [22 * le, 4 * le**2, 13 * le, -3 * le**2],
+                                       [54, 13 * le, 156, -22 * le], [-13 * le, -3 * le**2, -22 * le, 4 * le**2]])
+    nd = 2 * (int(elements) + 1)
+    M, K = np.zeros((nd, nd)), np.zeros((nd, nd))
+    for e in range(int(elements)):
+        s = slice(2 * e, 2 * e + 4)
+        M[s, s] += me
+        K[s, s] += ke
+    return M[2:, 2:], K[2:, 2:]
 
 
 def _sector_blisk(p: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
