@@ -24,9 +24,10 @@ case "${1-}" in
 esac
 
 # pytest runs on the cores that are idle when it starts (pytest-xdist, one worker per idle core, one
-# test module per worker at a time: --dist loadfile builds a module's fixtures once); on busy cores
-# one process, as more workers would only add their start-up (the scheduler shares the CPU between
-# sessions, not processes).
+# test module per worker at a time: --dist loadfile builds a module's fixtures once; the modules
+# handed out in collection order, --no-loadscope-reorder, where conftest.py puts the longest first);
+# on busy cores one process, as more workers would only add their start-up (the scheduler shares
+# the CPU between sessions, not processes).
 idle_cores() {  # the idle share of the CPU over 1 s, in cores (rounded)
   local a b
   read -r -a a < <(head -1 /proc/stat); sleep 1; read -r -a b < <(head -1 /proc/stat)
@@ -39,7 +40,7 @@ pytest_() {  # pytest_ ARGS...: the pytest suite on the idle cores
   n=$(idle_cores)
   if [ "$n" -gt 1 ]; then
     echo "pytest: $n workers ($n of $(nproc) cores idle)"
-    .venv/bin/python -m pytest -q -n "$n" --dist loadfile "$@"
+    .venv/bin/python -m pytest -q -n "$n" --dist loadfile --no-loadscope-reorder "$@"
   else
     echo "pytest: one process (no two of the $(nproc) cores idle)"
     .venv/bin/python -m pytest -q "$@"
