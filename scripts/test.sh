@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # All tests, from a fresh clone: set up, C unit tests (ctest), the pytest suite through the FMU, the
-# documentation site (scripts/docs.sh), the examples (examples/*.py at full size), the lowest declared dependency versions
-# (scripts/check_min_versions.sh), the cross-platform check (Windows x86-64 under wine, Linux aarch64
-# under qemu: scripts/cross_check.sh), then the C tests and the pytest suite again with the FMU built
-# with AddressSanitizer and UBSan (every test that runs C: not the no_sanitizer and python_only
-# markers), and the fuzzer.
+# documentation site (scripts/docs.sh), the examples (examples/*.py at full size), the cross-platform
+# check (Windows x86-64 under wine, Linux aarch64 under qemu: scripts/cross_check.sh), then the C
+# tests and the pytest suite again with the FMU built with AddressSanitizer and UBSan (every test that
+# runs C: not the no_sanitizer and python_only markers), and the fuzzer, with the lowest declared
+# dependency versions (scripts/check_min_versions.sh) on the core the shorter fuzzer leaves.
 # Prints the duration of every stage at the end (also when a stage fails).
 #
 # bash scripts/test.sh --quick: the quick loop (about 100 s of CPU time once set up). Setup only
@@ -24,9 +24,10 @@ case "${1-}" in
 esac
 
 # pytest runs on the cores that are idle when it starts (pytest-xdist, one worker per idle core, one
-# test module per worker at a time: --dist loadfile builds a module's fixtures once); on busy cores
-# one process, as more workers would only add their start-up (the scheduler shares the CPU between
-# sessions, not processes).
+# test module per worker at a time: --dist loadfile builds a module's fixtures once; the modules
+# handed out in collection order, --no-loadscope-reorder, where conftest.py puts the longest first);
+# on busy cores one process, as more workers would only add their start-up (the scheduler shares
+# the CPU between sessions, not processes).
 idle_cores() {  # the idle share of the CPU over 1 s, in cores (rounded)
   local a b
   read -r -a a < <(head -1 /proc/stat); sleep 1; read -r -a b < <(head -1 /proc/stat)
@@ -39,7 +40,7 @@ pytest_() {  # pytest_ ARGS...: the pytest suite on the idle cores
   n=$(idle_cores)
   if [ "$n" -gt 1 ]; then
     echo "pytest: $n workers ($n of $(nproc) cores idle)"
-    .venv/bin/python -m pytest -q -n "$n" --dist loadfile "$@"
+    .venv/bin/python -m pytest -q -n "$n" --dist loadfile --no-loadscope-reorder "$@"
   else
     echo "pytest: one process (no two of the $(nproc) cores idle)"
     .venv/bin/python -m pytest -q "$@"
@@ -91,18 +92,27 @@ asan_pytest() {
 }
 fuzz() {  # libFuzzer + ASan/UBSan: the oscillator's FMI 2.0 entry points 60 s, the chain's FMI 3.0 30 s; installs clang if missing
   # both targets built first, then fuzzed at once (a fuzzer keeps one core busy: the two on the two
-  # cores, each for its whole time); the chain's messages printed after the oscillator's
-  local env=(env PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz") log rc1=0 rc2=0
+  # cores, each for its whole time); the lowest dependency versions (scripts/check_min_versions.sh:
+  # an install, then one pytest process) on the core the chain's fuzzer leaves after its 30 s, beside
+  # the oscillator's; the messages printed in that order, each after the other
+  local env=(env PYTHON="$PWD/.venv/bin/python" FUZZ_BUILD="$PWD/build-fuzz") log1 log2 log3 rc1=0 rc2=0 rc3=0 t0 took
   "${env[@]}" FUZZ_STEP=build bash tests/fuzz/run_fuzz.sh
   "${env[@]}" FUZZ_STEP=build FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh
-  log=$(mktemp)
-  "${env[@]}" FUZZ_STEP=run FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh 30 >"$log" 2>&1 &
+  log1=$(mktemp); log2=$(mktemp); log3=$(mktemp)
+  "${env[@]}" FUZZ_STEP=run FUZZ_TARGET=fuzz_chain3 bash tests/fuzz/run_fuzz.sh 30 >"$log2" 2>&1 &
   local chain=$!
-  "${env[@]}" FUZZ_STEP=run bash tests/fuzz/run_fuzz.sh 60 || rc1=$?
+  "${env[@]}" FUZZ_STEP=run bash tests/fuzz/run_fuzz.sh 60 >"$log1" 2>&1 &
+  local osc=$!
   wait "$chain" || rc2=$?
-  cat "$log"
-  rm -f "$log"
-  [ "$rc1" = 0 ] && [ "$rc2" = 0 ]
+  t0=$SECONDS
+  bash scripts/check_min_versions.sh >"$log3" 2>&1 || rc3=$?
+  took=$((SECONDS - t0))
+  wait "$osc" || rc1=$?
+  cat "$log1" "$log2"
+  echo "== min-versions (beside the fuzzer: $took s)"
+  cat "$log3"
+  rm -f "$log1" "$log2" "$log3"
+  [ "$rc1" = 0 ] && [ "$rc2" = 0 ] && [ "$rc3" = 0 ]
 }
 
 # The cross toolchains and emulators (Debian packages), installed when missing: the win32 thread
@@ -190,9 +200,8 @@ examples() {  # every example at its own size, each in a scratch folder of its o
 }
 stage "examples" examples
 stage "siconos-peer" .venv/bin/python bench/siconos_peer.py --quick  # installs python3-siconos when missing
-stage "min-versions" bash scripts/check_min_versions.sh
 stage "cross-platform" cross_platform
 stage "ASan/UBSan build" asan_build
 stage "ASan ctest" ctest --test-dir build-asan --output-on-failure -j2
 stage "ASan pytest" asan_pytest
-stage "fuzz" fuzz
+stage "fuzz, min-versions" fuzz

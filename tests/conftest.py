@@ -38,6 +38,19 @@ PYTHON_ONLY = frozenset({"test_references.py", "test_belt_reference.py", "test_c
                          "test_system_cases.py"})
 FMU_FIXTURES = frozenset({"fmu", "fmu_path", "chain_fmu2", "chain_fmu3", "unzipped", "inst", "md2", "md3"})
 
+# The modules that take longest (their tests' total time in one full run, longest first): collected
+# first, the others after them in their usual order. scripts/test.sh hands modules to the xdist
+# workers in collection order (--dist loadfile --no-loadscope-reorder), so the long ones start at
+# once and the run ends with short ones on both workers, not with one worker alone on a long module.
+LONGEST_FIRST = ("test_cli_interrupt.py", "test_packaging_rebuild.py", "test_sweep_faults.py", "test_studies.py",
+                 "test_packaging_wheel.py", "test_bench_smoke.py", "test_study_orbits.py", "test_cosim.py",
+                 "test_exact_free.py", "test_exact_poly.py", "test_chaos.py", "test_examples.py",
+                 "test_system_orbits.py", "test_exact_edges.py", "test_system_validation.py",
+                 "test_system_jenkins.py", "test_system_reference.py", "test_model_exchange.py", "test_hazards.py",
+                 "test_belt_exact.py", "test_self_excited.py", "test_system_fmu_writer.py", "test_system_fmu.py",
+                 "test_chain_physics.py", "test_belt_reference.py", "test_system_steady_reference.py",
+                 "test_layout.py", "test_packaging_locate.py", "test_main_job.py")
+
 
 # ---- the process's signal handling, as each test finds it ----------------------------------------------
 
@@ -96,12 +109,15 @@ def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Marks the tests of the PYTHON_ONLY modules python_only."""
+    """Marks the tests of the PYTHON_ONLY modules python_only; puts the LONGEST_FIRST modules first
+    (each module's tests in their order)."""
     for item in items:
         if item.path.name in PYTHON_ONLY:
             if used := FMU_FIXTURES.intersection(getattr(item, "fixturenames", ())):
                 raise pytest.UsageError(f"{item.nodeid}: a python_only module's test uses {sorted(used)}")
             item.add_marker(pytest.mark.python_only)
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
 
 
 # Every FMU comes from dryfriction.paths: DFO_FMU, DFO_FMU3, DFO_CHAIN_FMU, DFO_CHAIN_FMU3 select

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -43,11 +44,24 @@ def same(a: xr.Dataset, b: xr.Dataset) -> None:
 
 
 @pytest.fixture(scope="module")
-def clean(tmp_path_factory: pytest.TempPathFactory, fmu_path: Path) -> xr.Dataset:
-    """fig8_9 --quick computed once without a fault (12 chunks of 25 runs)."""
+def clean_run(tmp_path_factory: pytest.TempPathFactory, fmu_path: Path) -> Path:
+    """The output folder of fig8_9 --quick computed once without a fault (12 chunks of 25 runs),
+    not to be changed: a test that starts from a finished run takes a copy (clean_copy)."""
     out = tmp_path_factory.mktemp("clean")
     run(out, fmu_path)
-    return read_netcdf(out / "fig8_9" / "fig8_9.nc")
+    return out
+
+
+@pytest.fixture(scope="module")
+def clean(clean_run: Path) -> xr.Dataset:
+    """The numbers of fig8_9 --quick without a fault."""
+    return read_netcdf(clean_run / "fig8_9" / "fig8_9.nc")
+
+
+def clean_copy(clean_run: Path, out: Path) -> None:
+    """``out`` as a finished fig8_9 --quick run leaves it: a copy of the fault-free run's folder
+    (the same files a run into ``out`` writes: nothing in them names the folder)."""
+    shutil.copytree(clean_run / "fig8_9", out / "fig8_9")
 
 
 def _chunks(out: Path) -> list[Path]:
@@ -82,9 +96,9 @@ def _garbage(p: Path) -> str:
 
 
 @pytest.mark.parametrize("damage", [_flip, _swap, _empty, _truncate, _garbage])
-def test_damaged_chunk_is_recomputed_with_a_note(damage, tmp_path: Path, fmu_path: Path, clean: xr.Dataset,
-                                                 capsys: pytest.CaptureFixture[str]) -> None:
-    run(tmp_path, fmu_path)
+def test_damaged_chunk_is_recomputed_with_a_note(damage, tmp_path: Path, fmu_path: Path, clean_run: Path,
+                                                 clean: xr.Dataset, capsys: pytest.CaptureFixture[str]) -> None:
+    clean_copy(clean_run, tmp_path)
     chunks = _chunks(tmp_path)
     assert len(chunks) == 12 and all(c.read_bytes().startswith(CHUNK_MAGIC) for c in chunks)
     victim = chunks[5]
@@ -101,10 +115,10 @@ def test_damaged_chunk_is_recomputed_with_a_note(damage, tmp_path: Path, fmu_pat
     assert run(tmp_path, fmu_path).stats[0].loaded == 12
 
 
-def test_configuration_change_replaces_results_together(tmp_path: Path, fmu_path: Path, clean: xr.Dataset,
-                                                        capsys: pytest.CaptureFixture[str]) -> None:
+def test_configuration_change_replaces_results_together(tmp_path: Path, fmu_path: Path, clean_run: Path,
+                                                        clean: xr.Dataset, capsys: pytest.CaptureFixture[str]) -> None:
     folder = tmp_path / "fig8_9"
-    run(tmp_path, fmu_path)
+    clean_copy(clean_run, tmp_path)
     before = {p.name: p.read_bytes() for p in folder.iterdir() if p.is_file()}
     old_chunks = _chunks(tmp_path)
     # another configuration, stopped after one chunk: the folder is exactly as it was

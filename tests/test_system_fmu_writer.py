@@ -679,7 +679,8 @@ def test_fmi2_at_another_size_rebuilds_from_its_sources(tmp_path: Path) -> None:
     so = d / "binaries" / "linux64" / "DryFrictionSystem.so"
     so.unlink()
     r = subprocess.run(["gcc", "-std=c99", "-O1", "-shared", "-fPIC", "-I", str(d / "sources"), *files, "-o", str(so),
-                        "-lm", "-Wl,--no-undefined"], capture_output=True, text=True, timeout=300)
+                        "-lm", "-Wl,--no-undefined"], capture_output=True, text=True, timeout=300,
+                       env={k: v for k, v in os.environ.items() if k != "LD_PRELOAD"})  # gcc: not our C
     assert r.returncode == 0, r.stderr
     vr = {v.name: v.valueReference for v in md.modelVariables}
     inst = fmi2.Instance(str(d), md.guid, "DryFrictionSystem", name="rebuilt")

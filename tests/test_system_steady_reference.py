@@ -14,12 +14,15 @@ from dryfriction.drivers.system import SystemFMU3
 from dryfriction.references.system_steady import SteadyStateNotConverged, steady_state
 from dryfriction.system import two_mass_jenkins
 
+from refcache import RefCache
+
 OMEGA = 1.8
 
 
 @pytest.fixture(scope="module")
-def reference():
-    return steady_state(two_mass_jenkins(omega=OMEGA), periods=200, tol=1e-9)
+def reference(refcache: RefCache):
+    """The event-driven reference's steady state (kept between runs: refcache.py)."""
+    return refcache.call(steady_state, two_mass_jenkins(omega=OMEGA), periods=200, tol=1e-9)
 
 
 @pytest.mark.slow
