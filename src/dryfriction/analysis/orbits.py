@@ -32,7 +32,7 @@ import numpy as np
 
 from ..drivers.oscillator import OscillatorFMU2, Restarts, Settings
 from ..params import Oscillator
-from .shooting import STABILITY_MARGIN, Newton, OrbitRecord, classify, multipliers, newton
+from .shooting import STABILITY_MARGIN, Newton, OrbitRecord, _roots2, classify, multipliers, newton
 
 __all__ = ["Orbit", "OrbitFollower", "find_orbits", "follow_orbit", "stroboscopic_map", "scales", "rest_interval",
            "neutral_margin", "STABILITY_MARGIN"]
@@ -623,7 +623,7 @@ def _creep_reason(drift: float, x_max: float, x_min: float) -> str:
             f"{x_max - x_min:.3g} m (a creep, e.g. onto the edge of the interval of rest positions)")
 
 
-def _stability(mu: np.ndarray, p: Oscillator) -> tuple[bool, bool]:
+def _stability(mu: Iterable[complex], p: Oscillator) -> tuple[bool, bool]:
     """(neutral, stable) of the multipliers mu: neutral with a multiplier 1 (within
     :func:`neutral_margin`) and the other inside the unit circle, one of a family of orbits shifted
     in x (without a spring; or with one too weak against the inertia for the FMU to tell the family's
@@ -780,8 +780,9 @@ class OrbitFollower:
 
     def __call__(self, oscillator: Oscillator, state: Sequence[float], section: float) -> Orbit | None:
         p = oscillator
-        _check(p, 1)
         sol = self._sol
+        if sol is None or sol.p is not p:       # checked once per oscillator (a sweep follows several orbits of one)
+            _check(p, 1)
         if sol is None:
             self.map = _ObservingMap(self.fmu, p, 1)
             sol = self._sol = _Solver(self.fmu, p, 1, self.tol, self.max_iter, map_=self.map)
@@ -799,9 +800,18 @@ class OrbitFollower:
         stick = y["stick_fraction"]
         if stick >= 1.0 or _creeps(abs(m.end[0] - x), y["x_max"], y["x_min"]):
             return None                 # at rest for good, or creeping onto a rest position: find_orbits
-        jac = np.array(J).reshape(2, 2)
-        mu = multipliers(jac, stick > 0.0, closed=True)
-        neutral, stable = _stability(mu, p)
+        a, b, c, d = J
+        jac = np.array(((a, b), (c, d)))
+        # as multipliers(jac, stick > 0, closed=True), on plain floats (classified as Python complex numbers:
+        # the same arithmetic, without numpy's scalars)
+        if stick > 0.0:                                   # rank one: exactly trace(J) and 0
+            mus: list[complex] | np.ndarray = [complex(a + d), 0j]
+        elif math.isfinite(a) and math.isfinite(b) and math.isfinite(c) and math.isfinite(d):
+            mus = _roots2(a, b, c, d)
+        else:
+            mus = multipliers(jac)
+        mu = np.array(mus)
+        neutral, stable = _stability(mus, p)
         x0, v0 = y["x0"], y["v0"]
         z0, zd0 = _nondim(p, x0, v0)
         xmax, xmin = y["x_max"], y["x_min"]

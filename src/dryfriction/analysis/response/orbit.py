@@ -163,6 +163,63 @@ def _search(inst: OscillatorFMU2, p: Oscillator, f: float, branches: list[_Branc
     return [_Branch(o, f, T) for o in _distinct(orbits, p)]
 
 
+#: a transient's end state within this scaled distance of the orbit Newton followed it to (from t = 0)
+#: had settled on it: find_orbits' Newton from that end (at its own section) reaches the same orbit
+SETTLED = 1e-6
+
+
+def _settled_search(inst: OscillatorFMU2, p: Oscillator, f: float, opts: Mapping[str, Any]) -> list[_Branch] | None:
+    """The orbits of a cold search without find_orbits' sampled cycles, where that gives what
+    find_orbits gives: its transients (the same spread, the same length) each followed by Newton
+    from t = 0 (:func:`_transient_check`) and each orbit's mirror image. None (find_orbits then) with
+    K > 1, a block that can rest, a transient that cannot be followed or whose end is not within
+    SETTLED of its orbit (Newton from an unsettled end at find_orbits' section may reach another
+    orbit), or no steady state among them."""
+    from ..orbits import _auto_guesses, DEFAULT_SPREAD, rest_interval
+
+    if opts["period"] != 1 or opts["transients"] <= 0 or rest_interval(p) is not None:
+        return None
+    follow, T = opts["follower"], p.period
+    xs, w = scales(p)
+    runs = opts["transient_runs"]
+    runs.retarget(p)
+    out: list[_Branch] = []
+
+    def known(x: float, v: float) -> bool:
+        a = (x / xs, v / (xs * w))
+        tol = SAME * max(1.0, abs(a[0]), abs(a[1]))
+        return any(abs(a[0] - b.orbit.x0 / xs) <= tol and abs(a[1] - b.orbit.v0 / (xs * w)) <= tol for b in out)
+
+    ends: list[tuple[float, float]] = []
+    for z in _auto_guesses(p, DEFAULT_SPREAD):
+        runs.run(float(z[0]), float(z[1]), 0.0, opts["transients"] * T)
+        x, v = runs.real[0], runs.real[1]
+        a0, a1 = x / xs, v / (xs * w)
+        # at an earlier transient's end (a stick phase forgets where it came from): followed already
+        if any(max(abs(a0 - q0), abs(a1 - q1)) <= ALIKE * max(1.0, abs(q0), abs(q1)) for q0, q1 in ends):
+            continue
+        ends.append((a0, a1))
+        o = follow(p, (x, v), 0.0)
+        if o is None:
+            return None
+        b0, b1 = o.x0 / xs, o.v0 / (xs * w)
+        if not max(abs(a0 - b0), abs(a1 - b1)) <= SETTLED * max(1.0, abs(b0), abs(b1)):
+            return None
+        if known(o.x0, o.v0):
+            continue
+        out.append(_Branch(o, f, T))
+        image = follow(p, -o.section_state, o.section + 0.5 * T)
+        if image is None:
+            return None
+        if not known(image.x0, image.v0):
+            out.append(_Branch(image, f, T))
+    if not any(_attracting(b.orbit, p) for b in out):
+        return None
+    out.sort(key=lambda b: (not b.orbit.stable, not b.orbit.neutral, -b.orbit.amplitude))   # as find_orbits
+    keep = {id(o) for o in _distinct([b.orbit for b in out], p)}
+    return [b for b in out if id(b.orbit) in keep]
+
+
 def _mirrors(p: Oscillator, f: float, followed: list[_Branch], follow: Any) -> None:
     """Add the mirror image (x, v)(t) -> -(x, v)(t + T/2) of each asymmetric orbit followed whose
     image is not among them (a symmetric orbit followed through a symmetry-breaking pitchfork comes
@@ -268,7 +325,8 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
         return None if found is None else _at_rest_once(found)
 
     def cold(i: int, p: Oscillator, branches: list[_Branch] | None) -> list[_Branch]:
-        return _at_rest_once(_search(inst, p, freqs[i], branches or [], opts))
+        quick = None if branches else _settled_search(inst, p, freqs[i], opts)
+        return _at_rest_once(quick if quick is not None else _search(inst, p, freqs[i], branches or [], opts))
 
     def record(i: int, p: Oscillator, branches: list[_Branch]) -> None:
         rows = []
