@@ -10,6 +10,7 @@
 #include "check.h"
 #include "dfo_fp.h"
 #include "engine_private.h"
+#include "dense_model.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -23,57 +24,9 @@ static const eng_alloc ALLOC = {t_alloc, t_free, NULL};
 #define NDOF 3
 #define NC 3
 
-typedef struct {
-    double M[NDOF * NDOF], C[NDOF * NDOF], K[NDOF * NDOF];
-    double L[ENG_NSLOTS][NDOF * NDOF];
-} dense;
-
-static void mv(const double *A, const double *x, double *y)
-{
-    for (size_t i = 0; i < NDOF; i++) {
-        double s = 0.0;
-        for (size_t k = 0; k < NDOF; k++) s += A[i * NDOF + k] * x[k];
-        y[i] = s;
-    }
-}
-static void op_K(void *c, const double *x, double *y) { mv(((dense *)c)->K, x, y); }
-static void op_C(void *c, const double *x, double *y) { mv(((dense *)c)->C, x, y); }
-static void op_M(void *c, const double *x, double *y) { mv(((dense *)c)->M, x, y); }
-static int op_factor(void *c, int slot, double cM, double cC, double cK)
-{
-    dense *D = c;
-    double *L = D->L[slot];
-    for (size_t i = 0; i < NDOF; i++)
-        for (size_t j = 0; j <= i; j++) {
-            double s = cM * D->M[i * NDOF + j] + cC * D->C[i * NDOF + j] + cK * D->K[i * NDOF + j];
-            for (size_t k = 0; k < j; k++) s -= L[i * NDOF + k] * L[j * NDOF + k];
-            if (i == j) {
-                if (!(s > 0.0)) return 0;
-                L[i * NDOF + i] = sqrt(s);
-            } else {
-                L[i * NDOF + j] = s / L[j * NDOF + j];
-            }
-        }
-    return 1;
-}
-static void op_solve(void *c, int slot, const double *b, double *x)
-{
-    const double *L = ((const dense *)c)->L[slot];
-    double y[NDOF];
-    for (size_t i = 0; i < NDOF; i++) {
-        double s = b[i];
-        for (size_t k = 0; k < i; k++) s -= L[i * NDOF + k] * y[k];
-        y[i] = s / L[i * NDOF + i];
-    }
-    for (size_t i = NDOF; i-- > 0;) {
-        double s = y[i];
-        for (size_t k = i + 1; k < NDOF; k++) s -= L[k * NDOF + i] * x[k];
-        x[i] = s / L[i * NDOF + i];
-    }
-}
-
 /* three DOFs, contacts on DOF 0, on DOF 1, between DOFs 0 and 2 */
-static dense MODEL = {{2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 1.5},
+static dense MODEL = {NDOF,
+                      {2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 1.5},
                       {0.2, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.3},
                       {4.0, -1.0, 0.0, -1.0, 3.0, -1.0, 0.0, -1.0, 2.0},
                       {{0.0}}};
@@ -87,12 +40,7 @@ static eng *engine(eng_row *rows, double *Nn, double *mu)
     memset(&S, 0, sizeof S);
     S.n = NDOF;
     S.nc = NC;
-    S.ops.ctx = &MODEL;
-    S.ops.apply_K = op_K;
-    S.ops.apply_C = op_C;
-    S.ops.apply_M = op_M;
-    S.ops.factor = op_factor;
-    S.ops.solve = op_solve;
+    dense_ops(&MODEL, &S);
     for (size_t j = 0; j < NC; j++) {
         rows[j].nnz = NNZ[j];
         rows[j].idx = IDX[j];

@@ -7,6 +7,7 @@
  * and with Bossak alpha 0 and -0.3. The runs with the tangent on give the same trajectory bits as
  * without it (the general path: the fast paths' numbers). */
 #include "check.h"
+#include "dense_model.h"
 #include "engine.h"
 
 #include <math.h>
@@ -17,61 +18,6 @@
 static void *t_alloc(void *env, size_t nobj, size_t size) { (void)env; return calloc(nobj, size); }
 static void t_free(void *env, void *p) { (void)env; free(p); }
 static const eng_alloc ALLOC = {t_alloc, t_free, NULL};
-
-#define NMAX 4
-
-typedef struct {
-    size_t n;
-    double M[NMAX * NMAX], C[NMAX * NMAX], K[NMAX * NMAX];
-    double L[ENG_NSLOTS][NMAX * NMAX];
-} dense;
-
-static void mv(const dense *D, const double *A, const double *x, double *y)
-{
-    for (size_t i = 0; i < D->n; i++) {
-        double s = 0.0;
-        for (size_t k = 0; k < D->n; k++) s += A[i * D->n + k] * x[k];
-        y[i] = s;
-    }
-}
-static void op_K(void *c, const double *x, double *y) { mv(c, ((dense *)c)->K, x, y); }
-static void op_C(void *c, const double *x, double *y) { mv(c, ((dense *)c)->C, x, y); }
-static void op_M(void *c, const double *x, double *y) { mv(c, ((dense *)c)->M, x, y); }
-static int op_factor(void *c, int slot, double cM, double cC, double cK)
-{
-    dense *D = c;
-    const size_t n = D->n;
-    double *L = D->L[slot];
-    for (size_t i = 0; i < n; i++)
-        for (size_t j = 0; j <= i; j++) {
-            double s = cM * D->M[i * n + j] + cC * D->C[i * n + j] + cK * D->K[i * n + j];
-            for (size_t k = 0; k < j; k++) s -= L[i * n + k] * L[j * n + k];
-            if (i == j) {
-                if (!(s > 0.0)) return 0;
-                L[i * n + i] = sqrt(s);
-            } else {
-                L[i * n + j] = s / L[j * n + j];
-            }
-        }
-    return 1;
-}
-static void op_solve(void *c, int slot, const double *b, double *x)
-{
-    const dense *D = c;
-    const size_t n = D->n;
-    const double *L = D->L[slot];
-    double y[NMAX];
-    for (size_t i = 0; i < n; i++) {
-        double s = b[i];
-        for (size_t k = 0; k < i; k++) s -= L[i * n + k] * y[k];
-        y[i] = s / L[i * n + i];
-    }
-    for (size_t i = n; i-- > 0;) {
-        double s = y[i];
-        for (size_t k = i + 1; k < n; k++) s -= L[k * n + i] * x[k];
-        x[i] = s / L[i * n + i];
-    }
-}
 
 /* A structure and its contacts (rows of up to two entries) */
 typedef struct {
@@ -90,12 +36,7 @@ static eng_setup setup_of(structure *Q, int tangent)
     memset(&S, 0, sizeof S);
     S.n = Q->D.n;
     S.nc = Q->nc;
-    S.ops.ctx = &Q->D;
-    S.ops.apply_K = op_K;
-    S.ops.apply_C = op_C;
-    S.ops.apply_M = op_M;
-    S.ops.factor = op_factor;
-    S.ops.solve = op_solve;
+    dense_ops(&Q->D, &S);
     S.rows = Q->rows;
     S.exc.omega = Q->omega;
     S.exc.Pc = Q->Pc;
