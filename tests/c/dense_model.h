@@ -1,6 +1,7 @@
 /* A structure given by dense M, C, K (n <= NMAX) as the friction engine's operators (eng_ops): the
- * products, and a Cholesky factorisation per factor slot with its solve. For the C tests that build
- * an engine over a small structure of their own (test_engine_tangent.c, test_engine_dinv.c). */
+ * products, and a Cholesky factorisation per factor slot with its solve (the factorisations counted).
+ * For the C tests that build an engine over a small structure of their own (test_engine.c,
+ * test_engine_tangent.c, test_engine_dinv.c). NMAX: defined before the include, else 4. */
 #ifndef DFO_TEST_DENSE_MODEL_H
 #define DFO_TEST_DENSE_MODEL_H
 
@@ -9,12 +10,15 @@
 #include <math.h>
 #include <stddef.h>
 
+#ifndef NMAX
 #define NMAX 4
+#endif
 
 typedef struct {
     size_t n;
     double M[NMAX * NMAX], C[NMAX * NMAX], K[NMAX * NMAX];
     double L[ENG_NSLOTS][NMAX * NMAX];
+    long factors; /* factorisations done */
 } dense;
 
 static inline void mv(const dense *D, const double *A, const double *x, double *y)
@@ -33,6 +37,7 @@ static inline int op_factor(void *c, int slot, double cM, double cC, double cK)
     dense *D = c;
     const size_t n = D->n;
     double *L = D->L[slot];
+    D->factors++;
     for (size_t i = 0; i < n; i++)
         for (size_t j = 0; j <= i; j++) {
             double s = cM * D->M[i * n + j] + cC * D->C[i * n + j] + cK * D->K[i * n + j];

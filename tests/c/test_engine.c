@@ -23,63 +23,9 @@
 
 #define NMAX 8
 
-/* A dense model: M, C, K (n x n, row-major), factors by Cholesky in three slots. */
-typedef struct {
-    size_t n;
-    double M[NMAX * NMAX], C[NMAX * NMAX], K[NMAX * NMAX];
-    double L[ENG_NSLOTS][NMAX * NMAX];
-    long factors;  /* factorisations done */
-} dense_model;
-
-static void matvec(const dense_model *D, const double *A, const double *x, double *y)
-{
-    for (size_t i = 0; i < D->n; i++) {
-        double s = 0.0;
-        for (size_t k = 0; k < D->n; k++) s += A[i * D->n + k] * x[k];
-        y[i] = s;
-    }
-}
-static void op_K(void *c, const double *x, double *y) { const dense_model *D = c; matvec(D, D->K, x, y); }
-static void op_C(void *c, const double *x, double *y) { const dense_model *D = c; matvec(D, D->C, x, y); }
-static void op_M(void *c, const double *x, double *y) { const dense_model *D = c; matvec(D, D->M, x, y); }
-
-static int op_factor(void *c, int slot, double cM, double cC, double cK)
-{
-    dense_model *D = c;
-    const size_t n = D->n;
-    double *L = D->L[slot];
-    D->factors++;
-    for (size_t i = 0; i < n; i++)
-        for (size_t j = 0; j <= i; j++) {
-            double s = cM * D->M[i * n + j] + cC * D->C[i * n + j] + cK * D->K[i * n + j];
-            for (size_t k = 0; k < j; k++) s -= L[i * n + k] * L[j * n + k];
-            if (i == j) {
-                if (!(s > 0.0)) return 0;
-                L[i * n + i] = sqrt(s);
-            } else {
-                L[i * n + j] = s / L[j * n + j];
-            }
-        }
-    return 1;
-}
-
-static void op_solve(void *c, int slot, const double *b, double *x)
-{
-    const dense_model *D = c;
-    const size_t n = D->n;
-    const double *L = D->L[slot];
-    double y[NMAX];
-    for (size_t i = 0; i < n; i++) {
-        double s = b[i];
-        for (size_t k = 0; k < i; k++) s -= L[i * n + k] * y[k];
-        y[i] = s / L[i * n + i];
-    }
-    for (size_t i = n; i-- > 0;) {
-        double s = y[i];
-        for (size_t k = i + 1; k < n; k++) s -= L[k * n + i] * x[k];
-        x[i] = s / L[i * n + i];
-    }
-}
+/* A dense model: M, C, K (n x n, row-major), factors by Cholesky in three slots (dense_model.h) */
+#include "dense_model.h"
+typedef dense dense_model;
 
 /* A model's own friction solver, as the chain's: W = I (contact i on DOF i), no belts, M_hat
  * tridiagonal: the box LCP of numerics/lcp.h (lcp_box_basis in the given modes, lcp_box for the
