@@ -11,7 +11,7 @@ import numpy as np
 
 from ...drivers.oscillator import FMUError, OscillatorFMU2
 from ...params import Oscillator
-from ..orbits import ALIKE, SAME, find_orbits, scales
+from ..orbits import ALIKE, DEFAULT_SPREAD, SAME, OrbitFollower, _auto_guesses, find_orbits, rest_interval, scales
 from ..shooting import STABILITY_MARGIN, sweep
 from .transient import default_settings
 
@@ -175,8 +175,6 @@ def _settled_search(inst: OscillatorFMU2, p: Oscillator, f: float, opts: Mapping
     K > 1, a block that can rest, a transient that cannot be followed or whose end is not within
     SETTLED of its orbit (Newton from an unsettled end at find_orbits' section may reach another
     orbit), or no steady state among them."""
-    from ..orbits import _auto_guesses, DEFAULT_SPREAD, rest_interval
-
     if opts["period"] != 1 or opts["transients"] <= 0 or rest_interval(p) is not None:
         return None
     follow, T = opts["follower"], p.period
@@ -243,8 +241,6 @@ def _transient_check(inst: OscillatorFMU2, p: Oscillator, f: float, found: list[
     transients (its spread of initial conditions), each followed by Newton from t = 0 (as a
     section), find_orbits for one that cannot be; a new orbit's mirror image (the state -z half a
     period later) followed too."""
-    from ..orbits import _auto_guesses, DEFAULT_SPREAD
-
     follow, T = opts["follower"], p.period
     xs, w = scales(p)
     out = list(found)
@@ -301,8 +297,6 @@ def _orbit_chunk(fmu: str | bytes, base: Mapping[str, float], f_hz: np.ndarray,
     import time
 
     from ..chaos.batch import fmu_for
-
-    from ..orbits import OrbitFollower
 
     inst = fmu_for(fmu)
     t0 = time.process_time()
