@@ -30,6 +30,9 @@
 #define SYS_MODAL_TOL 1e-12
 #define POWER_RTOL 1e-9
 
+#define SPARSE_SHARE 8    /* a matrix with at most n^2 / SPARSE_SHARE nonzeros: its products in CSR */
+#define DELASSUS_BATCH 4  /* Delassus entries summed side by side */
+
 /* ---- dense algebra ------------------------------------------------------------------------------ */
 
 static void matvec(size_t n, const double *A, const double *x, double *y)
@@ -39,6 +42,24 @@ static void matvec(size_t n, const double *A, const double *x, double *y)
         double s = 0.0;
         for (size_t k = 0; k < n; k++) s += a[k] * x[k];
         y[i] = s;
+    }
+}
+
+/* y = A x as matvec sums it (sys_matop: the same bits) */
+static void matop_apply(size_t n, const sys_matop *A, const double *x, double *y)
+{
+    if (A->rp) {
+        for (size_t i = 0; i < n; i++) {
+            double s = 0.0;
+            for (size_t p = A->rp[i]; p < A->rp[i + 1]; p++) s += A->v[p] * x[A->ci[p]];
+            y[i] = s;
+        }
+        return;
+    }
+    for (size_t i = 0; i < n; i++) y[i] = 0.0;
+    for (size_t k = 0; k < n; k++) {
+        const double *col = A->v + k * n, xk = x[k];
+        for (size_t i = 0; i < n; i++) y[i] += col[i] * xk;
     }
 }
 
@@ -68,21 +89,6 @@ static int cholesky(size_t n, const double *A, double shift, double *L, size_t *
     return 1;
 }
 
-/* x = (L L')^-1 b (b and x may be the same array). */
-static void chol_solve(size_t n, const double *L, const double *b, double *x)
-{
-    for (size_t i = 0; i < n; i++) {
-        const double *li = L + i * n;
-        double s = b[i];
-        for (size_t k = 0; k < i; k++) s -= li[k] * x[k];
-        x[i] = s / li[i];
-    }
-    for (size_t i = n; i-- > 0;) {
-        double s = x[i];
-        for (size_t k = i + 1; k < n; k++) s -= L[k * n + i] * x[k];
-        x[i] = s / L[i * n + i];
-    }
-}
 
 /* y = L^-1 b (forward) or y = L^-T b (backward), in place. */
 static void tri_forward(size_t n, const double *L, double *x)
@@ -359,9 +365,9 @@ double sys_step(const sys_params *p, const eng_alloc *al)
 
 /* ---- operators ---------------------------------------------------------------------------------- */
 
-static void op_K(void *ctx, const double *x, double *y) { const sys_model *m = (const sys_model *)ctx; matvec(m->n, m->K, x, y); }
-static void op_C(void *ctx, const double *v, double *y) { const sys_model *m = (const sys_model *)ctx; matvec(m->n, m->C, v, y); }
-static void op_M(void *ctx, const double *a, double *y) { const sys_model *m = (const sys_model *)ctx; matvec(m->n, m->M, a, y); }
+static void op_K(void *ctx, const double *x, double *y) { const sys_model *m = (const sys_model *)ctx; matop_apply(m->n, &m->opK, x, y); }
+static void op_C(void *ctx, const double *v, double *y) { const sys_model *m = (const sys_model *)ctx; matop_apply(m->n, &m->opC, v, y); }
+static void op_M(void *ctx, const double *a, double *y) { const sys_model *m = (const sys_model *)ctx; matop_apply(m->n, &m->opM, a, y); }
 
 /* Cholesky of A = cM M + cC C + cK K into the slot (the lower triangle formed); 0 when A is not
  * positive definite. */
@@ -389,7 +395,31 @@ static int op_factor(void *ctx, int slot, double cM, double cC, double cK)
             const size_t k = i * n + j;
             L[k] = cM * m->M[k] + cC * m->C[k] + cK * m->K[k];
         }
-    return cholesky(n, L, 0.0, L, NULL);
+    if (!cholesky(n, L, 0.0, L, NULL)) return 0;
+    double *Lt = m->Lt[slot];
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < n; j++) Lt[j * n + i] = L[i * n + j];
+    return 1;
+}
+
+/* x = (L L')^-1 b (b and x may be the same array), Lt = L': the forward substitution by columns
+ * (x_i = (b_i - L_i0 x_0 - L_i1 x_1 - ...) / L_ii, each x_i's subtractions in that order, the rows
+ * side by side), the backward by rows of L' (contiguous). */
+static void chol_solve_t(size_t n, const double *Lt, const double *b, double *x)
+{
+    if (x != b) memcpy(x, b, n * sizeof *x);
+    for (size_t k = 0; k < n; k++) {
+        const double *col = Lt + k * n;
+        const double xk = x[k] / col[k];
+        x[k] = xk;
+        for (size_t i = k + 1; i < n; i++) x[i] -= col[i] * xk;
+    }
+    for (size_t i = n; i-- > 0;) {
+        const double *row = Lt + i * n;
+        double s = x[i];
+        for (size_t k = i + 1; k < n; k++) s -= row[k] * x[k];
+        x[i] = s / row[i];
+    }
 }
 
 /* x = Phi (d .* (Phi' b)) (b and x may be the same array) */
@@ -397,12 +427,13 @@ static void modal_solve(const sys_model *m, const double *d, const double *b, do
 {
     const size_t n = m->n;
     double *z = m->z;
-    for (size_t r = 0; r < n; r++) {
-        const double *p = m->PhiT + r * n;
-        double s = 0.0;
-        for (size_t i = 0; i < n; i++) s += p[i] * b[i];
-        z[r] = d[r] * s;
+    /* z_r = d_r (phi_r . b), each dot product summed over i ascending (Phi's rows added into z) */
+    for (size_t r = 0; r < n; r++) z[r] = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const double *p = m->Phi + i * n, bi = b[i];
+        for (size_t r = 0; r < n; r++) z[r] += p[r] * bi;
     }
+    for (size_t r = 0; r < n; r++) z[r] = d[r] * z[r];
     for (size_t i = 0; i < n; i++) x[i] = 0.0;
     for (size_t r = 0; r < n; r++) {
         const double *p = m->PhiT + r * n;
@@ -418,7 +449,39 @@ static void op_solve(void *ctx, int slot, const double *b, double *x)
         modal_solve(m, m->dm[slot], b, x);
         return;
     }
-    chol_solve(m->n, m->L[slot], b, x);
+    chol_solve_t(m->n, m->Lt[slot], b, x);
+}
+
+/* The Delassus entries (lo[q], hi[q]) of the slot, q <= DELASSUS_BATCH: sum_r (U_lo,r d_r) U_hi,r, r
+ * ascending, the q sums side by side (independent chains: each in its own order, the same bits). */
+static void delassus_entries(sys_model *m, int slot, const size_t *lo, const size_t *hi, size_t q)
+{
+    const size_t n = m->n, nc = m->nc;
+    const double *d = m->dm[slot];
+    double *Dc = m->Dc[slot];
+    if (q == DELASSUS_BATCH) {
+        const double *l0 = m->U + lo[0] * n, *l1 = m->U + lo[1] * n, *l2 = m->U + lo[2] * n, *l3 = m->U + lo[3] * n;
+        const double *h0 = m->U + hi[0] * n, *h1 = m->U + hi[1] * n, *h2 = m->U + hi[2] * n, *h3 = m->U + hi[3] * n;
+        double v0 = 0.0, v1 = 0.0, v2 = 0.0, v3 = 0.0;
+        for (size_t r = 0; r < n; r++) {
+            const double dr = d[r];
+            v0 += (l0[r] * dr) * h0[r];
+            v1 += (l1[r] * dr) * h1[r];
+            v2 += (l2[r] * dr) * h2[r];
+            v3 += (l3[r] * dr) * h3[r];
+        }
+        Dc[hi[0] * nc + lo[0]] = v0;
+        Dc[hi[1] * nc + lo[1]] = v1;
+        Dc[hi[2] * nc + lo[2]] = v2;
+        Dc[hi[3] * nc + lo[3]] = v3;
+        return;
+    }
+    for (size_t c = 0; c < q; c++) {
+        const double *ul = m->U + lo[c] * n, *uh = m->U + hi[c] * n;
+        double v = 0.0;
+        for (size_t r = 0; r < n; r++) v += (ul[r] * d[r]) * uh[r];
+        Dc[hi[c] * nc + lo[c]] = v;
+    }
 }
 
 /* eng_coupling.delassus: D_ab = sum_r U_ja d_r U_jb (j_a = sel[a]), each entry computed once per
@@ -426,23 +489,30 @@ static void op_solve(void *ctx, int slot, const double *b, double *x)
 static void op_delassus(void *ctx, int slot, const int *sel, size_t k, double *D)
 {
     sys_model *m = (sys_model *)ctx;
-    const size_t n = m->n, nc = m->nc;
-    const double *d = m->dm[slot];
+    const size_t nc = m->nc;
     double *Dc = m->Dc[slot];
     unsigned *st = m->Dstamp[slot];
     const unsigned gen = m->gen[slot];
-    for (size_t a = 0; a < k; a++)
+    size_t lo4[DELASSUS_BATCH], hi4[DELASSUS_BATCH], q = 0;
+    for (size_t a = 0; a < k; a++) /* the entries not yet computed, DELASSUS_BATCH at a time */
         for (size_t b = 0; b <= a; b++) {
             const size_t ja = (size_t)sel[a], jb = (size_t)sel[b];
             const size_t lo = ja < jb ? ja : jb, hi = ja < jb ? jb : ja, e = hi * nc + lo;
-            if (st[e] != gen) {
-                const double *ul = m->U + lo * n, *uh = m->U + hi * n;
-                double v = 0.0;
-                for (size_t r = 0; r < n; r++) v += (ul[r] * d[r]) * uh[r];
-                Dc[e] = v;
-                st[e] = gen;
+            if (st[e] == gen) continue;
+            st[e] = gen;
+            lo4[q] = lo;
+            hi4[q++] = hi;
+            if (q == DELASSUS_BATCH) {
+                delassus_entries(m, slot, lo4, hi4, q);
+                q = 0;
             }
-            D[a * k + b] = D[b * k + a] = Dc[e];
+        }
+    delassus_entries(m, slot, lo4, hi4, q);
+    for (size_t a = 0; a < k; a++)
+        for (size_t b = 0; b <= a; b++) {
+            const size_t ja = (size_t)sel[a], jb = (size_t)sel[b];
+            const size_t lo = ja < jb ? ja : jb, hi = ja < jb ? jb : ja;
+            D[a * k + b] = D[b * k + a] = Dc[hi * nc + lo];
         }
 }
 
@@ -472,10 +542,11 @@ void sys_model_free(sys_model *m, const eng_alloc *al)
 {
     if (m->E) eng_destroy(m->E);
     m->E = NULL;
-    void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Pc, m->Ps, m->N, m->mu_s, m->mu_k, m->k_t,
-                      m->rows, m->idx, m->w, m->work, m->law, m->PhiT, m->lam, m->cdiag, m->dm[0], m->dm[1],
-                      m->dm[2], m->U, m->z, m->Dc[0], m->Dc[1], m->Dc[2], m->Dstamp[0], m->Dstamp[1],
-                      m->Dstamp[2]};
+    void *arrays[] = {m->M, m->C, m->K, m->L[0], m->L[1], m->L[2], m->Lt[0], m->Lt[1], m->Lt[2], m->Pc, m->Ps,
+                      m->N, m->mu_s, m->mu_k, m->k_t, m->rows, m->idx, m->w, m->work, m->law, m->PhiT, m->Phi,
+                      m->lam, m->cdiag, m->dm[0], m->dm[1], m->dm[2], m->U, m->z, m->Dc[0], m->Dc[1], m->Dc[2],
+                      m->Dstamp[0], m->Dstamp[1], m->Dstamp[2], m->opM.rp, m->opM.ci, m->opM.v, m->opC.rp,
+                      m->opC.ci, m->opC.v, m->opK.rp, m->opK.ci, m->opK.v};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         if (arrays[i]) al->release(al->env, arrays[i]);
     memset(m, 0, sizeof *m);
@@ -486,6 +557,35 @@ static void *alloc_n(const eng_alloc *al, size_t count, size_t size, int *ok)
     void *p = al->allocate(al->env, count ? count : 1, size);
     if (!p) *ok = 0;
     return p;
+}
+
+/* The product of the n x n A (sys_matop): CSR where it has at most n^2 / SPARSE_SHARE nonzeros,
+ * else its transpose. *ok = 0 when memory fails. */
+static void matop_make(sys_matop *op, const eng_alloc *al, size_t n, const double *A, int *ok)
+{
+    size_t nnz = 0;
+    for (size_t k = 0; k < n * n; k++) nnz += A[k] != 0.0;
+    if (nnz * SPARSE_SHARE <= n * n) {
+        op->rp = (size_t *)alloc_n(al, n + 1, sizeof(size_t), ok);
+        op->ci = (size_t *)alloc_n(al, nnz, sizeof(size_t), ok);
+        op->v = (double *)alloc_n(al, nnz, sizeof(double), ok);
+        if (!*ok) return;
+        size_t p = 0;
+        for (size_t i = 0; i < n; i++) {
+            op->rp[i] = p;
+            for (size_t k = 0; k < n; k++)
+                if (A[i * n + k] != 0.0) {
+                    op->ci[p] = k;
+                    op->v[p++] = A[i * n + k];
+                }
+        }
+        op->rp[n] = p;
+        return;
+    }
+    op->v = (double *)alloc_n(al, n * n, sizeof(double), ok);
+    if (!*ok) return;
+    for (size_t i = 0; i < n; i++)
+        for (size_t k = 0; k < n; k++) op->v[k * n + i] = A[i * n + k];
 }
 
 /* The modal backend where C allows it (the model's M, C, K, rows and h set): the modes, C's test
@@ -502,6 +602,11 @@ static int modal_setup(sys_model *m, const sys_params *p, const eng_alloc *al)
     m->cdiag = (double *)alloc_n(al, n, sizeof(double), &ok);
     if (!ok) {
         if (tmp) al->release(al->env, tmp);
+        return 0;
+    }
+    m->Phi = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    if (!ok) {
+        al->release(al->env, tmp);
         return 0;
     }
     int modal = dfo_symeig(n, m->K, m->M, m->lam, m->PhiT, tmp);
@@ -532,11 +637,13 @@ static int modal_setup(sys_model *m, const sys_params *p, const eng_alloc *al)
     }
     al->release(al->env, tmp);
     if (!modal) { /* the dense backend */
-        void *arrays[] = {m->PhiT, m->lam, m->cdiag};
-        for (size_t i = 0; i < 3; i++) al->release(al->env, arrays[i]);
-        m->PhiT = m->lam = m->cdiag = NULL;
+        void *arrays[] = {m->PhiT, m->Phi, m->lam, m->cdiag};
+        for (size_t i = 0; i < 4; i++) al->release(al->env, arrays[i]);
+        m->PhiT = m->Phi = m->lam = m->cdiag = NULL;
         return 1;
     }
+    for (size_t r = 0; r < n; r++)
+        for (size_t i = 0; i < n; i++) m->Phi[i * n + r] = m->PhiT[r * n + i];
     for (int sl = 0; sl < ENG_NSLOTS; sl++) {
         m->dm[sl] = (double *)alloc_n(al, n, sizeof(double), &ok);
         if (sl != ENG_SLOT_TRIAL) continue; /* (the coupling operators serve the trial slot only) */
@@ -554,7 +661,8 @@ static int modal_setup(sys_model *m, const sys_params *p, const eng_alloc *al)
         }
     for (int sl = 0; sl < ENG_NSLOTS; sl++) { /* (the Cholesky factors are not needed) */
         al->release(al->env, m->L[sl]);
-        m->L[sl] = NULL;
+        al->release(al->env, m->Lt[sl]);
+        m->L[sl] = m->Lt[sl] = NULL;
     }
     m->modal = 1;
     return 1;
@@ -576,7 +684,10 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     m->M = (double *)alloc_n(al, n * n, sizeof(double), &ok);
     m->C = (double *)alloc_n(al, n * n, sizeof(double), &ok);
     m->K = (double *)alloc_n(al, n * n, sizeof(double), &ok);
-    for (int s = 0; s < ENG_NSLOTS; s++) m->L[s] = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    for (int s = 0; s < ENG_NSLOTS; s++) {
+        m->L[s] = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+        m->Lt[s] = (double *)alloc_n(al, n * n, sizeof(double), &ok);
+    }
     m->Pc = (double *)alloc_n(al, n, sizeof(double), &ok);
     if (has_Fs) m->Ps = (double *)alloc_n(al, n, sizeof(double), &ok);
     m->N = (double *)alloc_n(al, nc, sizeof(double), &ok);
@@ -598,6 +709,15 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     memcpy(m->M, p->M, n * n * sizeof(double));
     memcpy(m->C, p->C, n * n * sizeof(double));
     memcpy(m->K, p->K, n * n * sizeof(double));
+    m->has_C = max_abs(n * n, p->C) > 0.0;
+    matop_make(&m->opM, al, n, p->M, &ok);
+    matop_make(&m->opK, al, n, p->K, &ok);
+    if (m->has_C) matop_make(&m->opC, al, n, p->C, &ok);
+    if (!ok) {
+        sys_model_free(m, al);
+        *err = "out of memory";
+        return 0;
+    }
     memcpy(m->Pc, p->F_c, n * sizeof(double));
     if (m->Ps)
         for (size_t i = 0; i < n; i++) m->Ps[i] = -p->F_s[i]; /* the engine's P = Pc cos - Ps sin */
@@ -630,7 +750,6 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
         m->rows[j].nnz = c;
         k += c;
     }
-    m->has_C = max_abs(n * n, p->C) > 0.0;
     (void)cholesky(n, p->M, 0.0, m->L[ENG_SLOT_MASS], NULL); /* (passed sys_check) */
     /* (the stiffness with the sliders stuck in a factor slot's storage, before its first factorisation) */
     m->rate = rate_with(p, m->L[ENG_SLOT_MASS], m->work, m->work + n, m->L[ENG_SLOT_GRID]);

@@ -61,12 +61,23 @@ typedef struct {
     void *rest_ctx;
 } sys_params;
 
+/* A symmetric operator's product y = A x in the order of the row sums y_i = sum_k A_ik x_k (k
+ * ascending, from +0): CSR over the nonzeros where A is sparse (the zero terms add nothing: the same
+ * bits), else A's columns (A' row-major) added into y one after the other (each y_i's sum in the same
+ * order, the n sums side by side: vectorised). */
+typedef struct {
+    size_t *rp, *ci;                 /* CSR: row pointers (n + 1) and column indices; NULL: dense */
+    double *v;                       /* CSR: the nonzeros; dense: A' (n x n, row-major) */
+} sys_matop;
+
 typedef struct {
     size_t n, nc;
     double h;                        /* the internal step used */
     double rate;                     /* the fastest rate (1/s): sys_step's, the engine's rate_max */
     double *M, *C, *K;               /* n x n copies */
+    sys_matop opM, opC, opK;         /* their products (opC unset without C) */
     double *L[ENG_NSLOTS];           /* per slot: the lower Cholesky factor, n x n row-major */
+    double *Lt[ENG_NSLOTS];          /* per slot: its transpose (the solves' rows and columns contiguous) */
     double *Pc, *Ps;                 /* n: the engine's excitation (Ps = -F_s; NULL when F_s = 0) */
     double *N, *mu_s, *mu_k, *k_t;   /* nc copies */
     int jenkins;                     /* some contact is a Jenkins element (k_t > 0) */
@@ -81,6 +92,7 @@ typedef struct {
     double c_offdiag;                /* C's off-diagonal share in the modal basis (the test against
                                       * SYS_MODAL_TOL; 0 without C; NaN: not computed, n = 1 or dense asked) */
     double *PhiT;                    /* n x n: row r the mode phi_r */
+    double *Phi;                     /* n x n: its transpose (row i: the modes' entries at DOF i) */
     double *lam, *cdiag;             /* n: Phi' K Phi's and Phi' C Phi's diagonals */
     double *dm[ENG_NSLOTS];          /* n per slot: 1 / (cM + cC c_r + cK lambda_r) */
     double *U;                       /* nc x n: W Phi */
