@@ -19,6 +19,7 @@
 #include <stdlib.h>
 
 #define MAX_PHASES_BASE 64       /* switches one internal step may hold: 64 + 4 nc */
+#define START_REST_EPS 64.0     /* a start's slip within this many ulps of its terms: at rest */
 #define STIFF_STEP 10.0          /* rate_max h above which a step does not resolve the motion */
 #define PLACE_NUDGES 12          /* a placed breakaway: ulps (doubling) to a holding force at its limit */
 #define HALVINGS 60              /* search for a resolvable sub-step before the first switch */

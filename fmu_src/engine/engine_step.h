@@ -2677,7 +2677,12 @@ ENG_API void ENG_FN(eng_start)(eng *E, const eng_inputs *in, double t0, const do
     }
     loads_at(E, in, t0);
     for (size_t j = 0; j < nc; j++) {
-        const double v = slip(E, j, s->V);
+        /* (a slip within rounding of 0, of the row's terms and the belt's speed, is at rest: a state
+         * handed over by a host's arithmetic, e.g. a Newton step of a stuck contact's orbit) */
+        double v = slip(E, j, s->V), scale = fabs(E->vb[j]);
+        const eng_row *R = &E->S.rows[j];
+        for (size_t k = 0; k < R->nnz; k++) scale += fabs(R->w[k] * s->V[R->idx[k]]);
+        if (fabs(v) <= START_REST_EPS * DBL_EPSILON * scale) v = 0.0;
         s->mode[j] = sgn(v);
         E->cand[j] = has_friction(E, j) && v == 0.0;
         if (is_jenk(E, j)) { /* a slider starts stuck, its spring relaxed */

@@ -318,11 +318,17 @@ class _Solver:
     #: (a trial state the FMU refuses is an error of the point: the sweep reports it)
     refused: tuple[type[BaseException], ...] = ()
 
-    def evaluate(self, z: Sequence[float], t_s: float,
-                 final: bool) -> tuple[tuple[float, float], tuple[float, float, float, float], int]:
-        """(P^K(z), its Jacobian's entries row by row, the mode at the end), plain floats."""
+    def evaluate(self, z: Sequence[float], t_s: float, final: bool,
+                 jacobian: bool = True) -> tuple[tuple[float, float], tuple[float, float, float, float], int]:
+        """(P^K(z), its Jacobian's entries row by row, the mode at the end), plain floats (the
+        Jacobian always: two more columns cost next to nothing)."""
         px, pv, a, b, c, d, md = self.map.eval(z[0], z[1], t_s, final)
         return (px, pv), (a, b, c, d), md
+
+    @staticmethod
+    def expensive_jacobian() -> bool:
+        """No: the oscillator's Jacobian comes with the run."""
+        return False
 
     def residual(self, z: Sequence[float], Pz: Sequence[float]) -> float:
         """The scaled residual of z (module doc)."""

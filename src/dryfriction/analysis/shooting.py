@@ -10,7 +10,9 @@ sliders) and its bound on Newton's iterates. Newton (:func:`newton`) solves P^K(
 
 - a step dz from (J - I) dz = -(P^K(z) - z), from the model;
 - a backtracking line search: z + lam dz, lam = 1, 1/2, 1/4 ..., accepted when the scaled residual
-  falls, by the share ``armijo`` lam of itself at least (or is within ``tol``);
+  falls, by the share ``armijo`` lam of itself at least (or is within ``tol``); where the model's
+  Jacobian costs several map runs, the trials run without it and the accepted state's is computed
+  after (the same iterates, a fraction of the cost);
 - converged when the residual is at most ``tol``; then, while the Newton step is itself above ``tol``
   (a multiplier near 1: the residual understates the distance to the orbit), up to ``polish`` more
   steps.
@@ -107,9 +109,15 @@ class ShootingMap(Protocol[_Z, _J, _A]):
     #: exceptions of a trial evaluation that only shorten the line search's step (a state the FMU refuses)
     refused: tuple[type[BaseException], ...]
 
-    def evaluate(self, z: _Z, t_s: float, final: bool) -> tuple[_Z, _J, _A]:
+    def evaluate(self, z: _Z, t_s: float, final: bool, jacobian: bool = True) -> tuple[_Z, _J, _A]:
         """(P^K(z), its Jacobian, the rest) for the state z at the section time t_s (``final``
-        False: an evaluation unlikely to be the converged one)."""
+        False: an evaluation unlikely to be the converged one; ``jacobian`` False: the Jacobian may
+        be left out, not computed)."""
+        ...
+
+    def expensive_jacobian(self) -> bool:
+        """Whether the map's Jacobian costs several runs of the map (a large structure): the line
+        search then tries states without it and computes it at the accepted one only."""
         ...
 
     def residual(self, z: _Z, Pz: _Z) -> float:
@@ -163,10 +171,11 @@ def newton(m: ShootingMap[_Z, _J, _A], z: _Z, t_s: float, tol: float, max_iter: 
         if dz is None:
             return Newton(z, Pz, J, aux, r, it, why)
         lam = 1.0
+        lazy = m.expensive_jacobian()
         for _ in range(halvings):
             zt = m.move(z, dz, lam)
             try:
-                Pt, Jt, at = m.evaluate(zt, t_s, True)
+                Pt, Jt, at = m.evaluate(zt, t_s, True, jacobian=not lazy)
             except m.refused:
                 lam *= 0.5
                 continue
@@ -177,6 +186,8 @@ def newton(m: ShootingMap[_Z, _J, _A], z: _Z, t_s: float, tol: float, max_iter: 
         else:
             return Newton(z, Pz, J, aux, r, it + 1, f"the line search found no decrease of the residual {r:.3g} "
                                                     "(a non-smooth point)")
+        if lazy:  # the accepted state's Jacobian (the next step's, or the converged orbit's)
+            Pt, Jt, at = m.evaluate(zt, t_s, True)
         it += 1
         z, Pz, J, aux, r = zt, Pt, Jt, at, rt
         why = m.outside(z, False)
@@ -190,11 +201,14 @@ def newton(m: ShootingMap[_Z, _J, _A], z: _Z, t_s: float, tol: float, max_iter: 
         if dz is None or not m.step_size(z, dz) > tol:
             break
         zt = m.move(z, dz, 1.0)
-        Pt, Jt, at = m.evaluate(zt, t_s, True)
+        lazy = m.expensive_jacobian()
+        Pt, Jt, at = m.evaluate(zt, t_s, True, jacobian=not lazy)
         rt = res(zt, Pt)
         if not rt <= tol:
-            m.evaluate(z, t_s, True)     # the map's last evaluation is the state kept (its observables)
+            m.evaluate(z, t_s, True, jacobian=not lazy)  # the map's last evaluation is the state kept (its observables)
             break
+        if lazy:
+            Pt, Jt, at = m.evaluate(zt, t_s, True)
         it += 1
         z, Pz, J, aux, r = zt, Pt, Jt, at, rt
     return Newton(z, Pz, J, aux, r, it, "")

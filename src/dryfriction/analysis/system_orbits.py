@@ -30,6 +30,7 @@ run of the converged orbit.
 from __future__ import annotations
 
 import contextlib
+import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -43,7 +44,7 @@ if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
     from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
-__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "STABILITY_MARGIN", "NEUTRAL"]
+__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "stuck_start", "STABILITY_MARGIN", "NEUTRAL"]
 
 #: a multiplier this close to 1 is a neutral one (a continuum of orbits: a stuck slider's rest positions,
 #: a free rigid-body mode held only by friction)
@@ -56,6 +57,12 @@ SAME = 1e-6
 MAX_HALVINGS = 10
 #: with ``accuracy`` and the FMU's derived step: the orbits start at 1/COARSE_STEPS of the period
 COARSE_STEPS = 32
+#: a run with the Jacobian costing more than this many runs without: the line search's trials without it
+EXPENSIVE = 4.0
+#: a contact's stuck force amplitude within this share of its limit: the stuck start is taken
+STUCK_MARGIN = 1e-6
+#: a map of this many unknowns or more: its Jacobian taken as costly until both kinds of run are timed
+LAZY_SIZE = 32
 
 
 @dataclass
@@ -100,6 +107,8 @@ class _Map:
         self.jenk = np.flatnonzero(system.k_t > 0.0)
         self.KT = K * 2.0 * np.pi / system.omega
         self.evaluations = 0
+        # CPU seconds and counts of the runs with and without the Jacobian (expensive_jacobian)
+        self._cost = {True: [0.0, 0], False: [0.0, 0]}
         self.slide = np.zeros(system.nc, dtype=int)  # each Jenkins slider's mode at the section (0: stuck)
         # the Jenkins contacts' rows, stiffnesses, limits and kinetic forces (read once: a System's
         # per-contact arrays are built at each access)
@@ -111,6 +120,16 @@ class _Map:
     @property
     def size(self) -> int:
         return 2 * self.n + self.jenk.size
+
+    def expensive_jacobian(self) -> bool:
+        """Whether a run with the Jacobian has cost more than EXPENSIVE times one without (both
+        measured, per period): on a large structure the tangent's columns outweigh the run (the
+        bladed disk's 216 columns: some 50 runs' worth); before both are timed, whether the map has
+        LAZY_SIZE unknowns or more."""
+        (tj, nj), (tp, np_) = self._cost[True], self._cost[False]
+        if not (nj and np_):  # (not both timed yet: by the size)
+            return self.size >= LAZY_SIZE
+        return bool(tj / nj > EXPENSIVE * (tp / np_))
 
     def f0(self, z: np.ndarray) -> np.ndarray:
         """The Jenkins springs' forces of z (0 for the rigid contacts), clamped to their limits."""
@@ -137,9 +156,13 @@ class _Map:
         n = self.n
         f = self.fmu
         span = self.KT if span is None else span
+        c0 = time.process_time()
         f.start(t_s, observe=True, t_obs_start=t_s, t_obs_stop=t_s + span, sensitivity=jacobian,
                 x0=z[:n], v0=z[n:2 * n], f0=self.f0(z), slide0=self.slide)
         f.do_step(span)
+        cost = self._cost[bool(jacobian)]
+        cost[0] += (time.process_time() - c0) * self.KT / span
+        cost[1] += 1
         self.evaluations += 1
         out = f.outputs()
         self.last_mode = np.asarray(out["mode"], dtype=int)
@@ -213,10 +236,19 @@ def _section(M: _Map, z: np.ndarray) -> float:  # noqa: C901 (the rule's cases, 
         run = _longest(good[:-1])  # (the last sample is the first one a cycle later)
         if run is not None and run[1] - run[0] >= 2:
             return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
-    # some slider slides at every time: the map starts there sliding (its mode from the guess's cycle)
+    # some slider slides at every time (e.g. a travelling wave over many contacts): the map starts
+    # where no contact's mode changes for longest (the middle of the longest stretch of constant
+    # modes, rigid contacts sliding where such a stretch exists), each slider in its mode there
+    same = np.all(mode[1:, live] == mode[:-1, live], axis=1)       # sample k to k + 1 without a change
+    k = 0
+    for good in (same & rigid_slide[:-1] & rigid_slide[1:], same):
+        run = _longest(good)
+        if run is not None:
+            k = (run[0] + run[1] + 1) // 2
+            break
     for j in jenk:
-        M.slide[j] = int(mode[0, j])
-    return 0.0
+        M.slide[j] = int(mode[k, j])
+    return float(t[k] % M.KT)
 
 
 class _Shooting:
@@ -232,9 +264,14 @@ class _Shooting:
     def __init__(self, M: _Map, S: np.ndarray) -> None:
         self.M, self.S = M, S
 
-    def evaluate(self, z: np.ndarray, t_s: float, final: bool) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-        """(P(z), its Jacobian, the observables of the run)."""
-        return self.M(z, t_s)
+    def evaluate(self, z: np.ndarray, t_s: float, final: bool,
+                 jacobian: bool = True) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(P(z), its Jacobian (NaN without ``jacobian``), the observables of the run)."""
+        return self.M(z, t_s, jacobian=jacobian)
+
+    def expensive_jacobian(self) -> bool:
+        """The map's measured costs (:meth:`_Map.expensive_jacobian`)."""
+        return self.M.expensive_jacobian()
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
         """``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` (module doc)."""
@@ -339,6 +376,8 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
     Coulomb law) found by Newton shooting on the located map with the FMU's Jacobian (module doc),
     from:
 
+    - the linear steady response with every contact stuck, where no contact's force reaches its
+      limit in it (:func:`stuck_start`: then an orbit),
     - the end state of a transient of ``transients`` K-periods from the system's x0, v0 (the
       attractor it reaches),
     - ``guesses``: states z = (x, v, the Jenkins contacts' sliders) at t = 0 mod K T.
@@ -387,6 +426,9 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
         fmu.system = sysh
         M = _Map(fmu, sysh, K)
         starts: list[np.ndarray] = []
+        stuck = stuck_start(sysh)
+        if stuck is not None:  # (an orbit with every contact stuck: one Newton step)
+            starts.append(stuck)
         if transients > 0:
             z = np.concatenate([system.x0, system.v0, system.W[M.jenk] @ system.x0])
             for _ in range(transients):
@@ -409,11 +451,61 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
     return orbits
 
 
+def stuck_start(system: "Structure") -> np.ndarray | None:
+    """The steady response with every contact that has friction held (rigid contacts fixed at their
+    start, Jenkins sliders at rest with their springs relaxed on average), as a state z = (x, v,
+    sliders) at t = 0: the linear closed form of (K + sum k_t w w' - omega^2 M + i omega C) X = F
+    with the rigid contacts' constraints. When every contact's force stays within its breakaway
+    limit over the cycle (its amplitude below max(mu_s, mu_k) N, by STUCK_MARGIN), this is a periodic
+    orbit of the structure (of the located map to the scheme's O(h^2)): Newton converges from it in
+    one step. None where some contact would slip or the system is singular at omega."""
+    sysm = system
+    n, om = sysm.n, float(sysm.omega)
+    lim = np.maximum(sysm.mu_s, sysm.mu_k) * sysm.N
+    W, kt = sysm.W, sysm.k_t
+    live = lim > 0.0
+    jenk = np.flatnonzero(kt > 0.0)
+    held_j = jenk[live[jenk]]
+    rigid = np.flatnonzero(live & ~(kt > 0.0))
+    D = sysm.K - om * om * sysm.M + 1j * om * sysm.C
+    if held_j.size:
+        D = D + (W[held_j].T * kt[held_j]) @ W[held_j]
+    m = rigid.size
+    A = np.zeros((n + m, n + m), dtype=complex)
+    A[:n, :n] = D
+    A[:n, n:] = -W[rigid].T
+    A[n:, :n] = W[rigid]
+    rhs = np.concatenate([sysm.F_c - 1j * sysm.F_s, np.zeros(m)])
+    try:
+        sol = np.linalg.solve(A, rhs)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.all(np.isfinite(sol)):
+        return None
+    X = sol[:n]
+    force = np.zeros(sysm.nc, dtype=complex)
+    force[held_j] = -kt[held_j] * (W[held_j] @ X)
+    force[rigid] = sol[n:]
+    if np.any(np.abs(force[live]) >= (1.0 - STUCK_MARGIN) * lim[live]):
+        return None
+    sliders = np.zeros(jenk.size)  # (a slider without friction: its spring relaxed, as the map's start)
+    free = ~live[jenk]
+    sliders[free] = (W[jenk[free]] @ X).real
+    return np.concatenate([X.real, -om * X.imag, sliders])
+
+
 def _same(a: SystemOrbit, b: SystemOrbit) -> bool:
+    """Whether two orbits are one: the same state at t = 0 and amplitudes, or both stuck all cycle
+    with the same amplitudes (one continuum of rest positions, told apart only by where the contacts
+    rest)."""
     if not (a.converged and b.converged) or a.period != b.period:
         return False
     scale = max(float(np.max(np.abs(a.amplitude), initial=0.0)), 1e-300)
-    return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale and np.max(np.abs(a.amplitude - b.amplitude)) <= SAME * scale)
+    if not np.max(np.abs(a.amplitude - b.amplitude)) <= SAME * scale:
+        return False
+    if np.all(a.stick_fraction >= 1.0) and np.all(b.stick_fraction >= 1.0):
+        return True
+    return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale)
 
 
 def _warm_section(M: _Map, z: np.ndarray, phase: float) -> tuple[float, np.ndarray] | None:
@@ -451,8 +543,10 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
             t_s = _section(M, z)
         except ValueError as e:
             return _failed(M, z, str(e), h0)
-        if t_s != 0.0:  # the guess's state at the section
+        if t_s != 0.0:  # the guess's state at the section (from t = 0 with its sliders started stuck, as the guess's cycle)
+            slide, M.slide[:] = M.slide.copy(), 0
             z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
+            M.slide[:] = slide
     z, Pz, J, r, it, reason, obs, S = _newton(M, z, t_s, None, tol, max_iter)
     orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
     if not orbit.converged or not (estimate_error or accuracy is not None):

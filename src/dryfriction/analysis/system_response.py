@@ -5,7 +5,9 @@ At each excitation frequency the orbit of ``period`` periods is found by Newton 
 located map with the FMU's Jacobian (:mod:`dryfriction.analysis.system_orbits`): at the first
 frequency from a transient, at each next one from the previous frequency's orbit (its state at the
 section, the map's Jacobian telling Newton the way; two to four map evaluations), and from a fresh
-transient again where that does not converge. Each point carries its stability (the multipliers),
+transient again where that does not converge. Where no contact's force reaches its limit in the
+linear response with every contact stuck, that closed form is the start instead (the first
+frequency, a fresh start, or a previous orbit stuck throughout): an orbit, one Newton step. Each point carries its stability (the multipliers),
 its residual and the amplitude's error estimated against h / 2 (Richardson), so that a point that is
 not converged or not accurate says so. A frequency whose orbit is not found has NaN values,
 ``converged`` False and the reason.
@@ -23,12 +25,19 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .shooting import progress_bar, sweep
-from .system_orbits import SystemOrbit, _Map, _h_of, _solve
+from .system_orbits import SystemOrbit, _Map, _h_of, _solve, stuck_start
 
 if TYPE_CHECKING:
     from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["system_frequency_response", "plot_system_response"]
+
+
+def _all_stuck(system: "Structure", orbit: SystemOrbit) -> bool:
+    """Whether every contact with friction stayed stuck over ``orbit``'s whole cycle."""
+    live = np.maximum(system.mu_s, system.mu_k) * system.N > 0.0
+    share = np.asarray(orbit.stick_fraction)
+    return bool(share.size == live.size and np.all(share[live] >= 1.0))
 
 
 def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
@@ -94,15 +103,22 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             if not prev.converged:
                 return None
             M, h0 = at(i, s_i)
+            stuck = stuck_start(M.system)
+            if stuck is not None and _all_stuck(M.system, prev):  # (the stuck branch: its closed form)
+                return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
             phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
             orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy, phase)
             return orbit if orbit.converged else None
 
         def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:
-            """From a transient from the system's start."""
+            """From the stuck closed form where no contact slips in it, else from a transient from
+            the system's start."""
             M, h0 = at(i, s_i)
             s_h = M.system
+            stuck = stuck_start(s_h)
+            if stuck is not None:
+                return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
             z = np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0])
             for _ in range(transients):
                 z, _, _ = M(M.project(z), 0.0, jacobian=False)
