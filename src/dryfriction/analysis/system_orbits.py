@@ -61,6 +61,9 @@ COARSE_STEPS = 32
 EXPENSIVE = 4.0
 #: a contact's stuck force amplitude within this share of its limit: the stuck start is taken
 STUCK_MARGIN = 1e-6
+#: the error estimate's chord steps (the coarser orbit's Jacobian): at most CHORD_STEPS, each cutting
+#: the residual to CHORD_RATE of the last at least
+CHORD_STEPS, CHORD_RATE = 8, 0.25
 #: a map of this many unknowns or more: its Jacobian taken as costly until both kinds of run are timed
 LAZY_SIZE = 32
 
@@ -557,9 +560,9 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         Mh = _Map(fmu, M.system.replace(h=h), M.K)
         Mh.slide[:] = M.slide  # (the same section, its sliders started as at h)
         fmu.system = Mh.system
-        fine = _chord(Mh, prev, t_s, S, tol, h)  # (one step with the coarser orbit's Jacobian)
-        if fine is None:  # (a full Newton solve at h, the Jacobian's too)
-            zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, prev.section_state, t_s, S, tol, max_iter)
+        fine, zc = _chord(Mh, prev, t_s, S, tol, h)  # (steps with the coarser orbit's Jacobian)
+        if fine is None:  # (a full Newton solve at h, the Jacobian's too, from where the chord got)
+            zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, zc, t_s, S, tol, max_iter)
             fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
         if not fine.converged:
             prev.reason = f"the error estimate's solve at h = {h:.6g} did not converge: {why}"
@@ -578,34 +581,39 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
     return prev
 
 
-def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float, h: float) -> SystemOrbit | None:
+def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float,
+           h: float) -> tuple[SystemOrbit | None, np.ndarray]:
     """The orbit at the finer step of M from the coarser one by chord steps (Newton with the coarser
-    orbit's Jacobian: the two orbits differ by the scheme's O(h^2), so two steps bring the residual
-    to ``tol``) on map evaluations without the Jacobian; its multipliers the coarser orbit's (they
-    differ by O(h^2) too). None where two steps do not get there (then a full Newton solve)."""
+    orbit's Jacobian: the two orbits differ by the scheme's O(h^2), and each step cuts the residual by
+    about the two Jacobians' difference, O(h^2) too) on map evaluations without the Jacobian, while
+    each step cuts the residual to CHORD_RATE of the last at least (at most CHORD_STEPS steps); its
+    multipliers the coarser orbit's (they differ by O(h^2) too). (orbit, its state), or (None, the
+    last state reached) where the chord does not get there (then a full Newton solve from that state)."""
     J = coarse.jacobian
-    if not np.all(np.isfinite(J)):
-        return None
-    sh = _Shooting(M, S)
     z = M.project(coarse.section_state)
-    for it in range(3):
+    if not np.all(np.isfinite(J)):
+        return None, z
+    sh = _Shooting(M, S)
+    last = np.inf
+    for it in range(CHORD_STEPS + 1):
         try:
             Pz, _, obs = M(z, t_s, jacobian=False)
         except FMUCallError:
-            return None
+            return None, M.project(coarse.section_state)
         r = sh.residual(z, Pz)
         if r <= tol:
             orbit = _make_orbit(M, z, Pz, J, r, it, "", obs, t_s, h)
             orbit.multipliers = coarse.multipliers
             orbit.stable, orbit.neutral = coarse.stable, coarse.neutral
-            return orbit
-        if it == 2:
-            return None
+            return orbit, z
+        if it == CHORD_STEPS or not r <= CHORD_RATE * last:
+            return None, z
+        last = r
         dz, _ = sh.step(z, Pz, J)
         if dz is None:
-            return None
+            return None, z
         z = sh.move(z, dz, 1.0)
-    return None
+    return None, z
 
 
 def _failed(M: _Map, z: np.ndarray, reason: str, h: float) -> SystemOrbit:
