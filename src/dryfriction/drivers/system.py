@@ -285,11 +285,14 @@ class SystemFMU3(Driver):
                     inst.set(v.call_type, [v.vr], vals)
             if len(self._init) < 4:  # (a shooting method alternates a few start times)
                 self._init[key] = inst.get_state(self._spare.pop() if self._spare else None)
-        inst.set("Float64", [self.vars["t_obs_start"].vr, self.vars["t_obs_stop"].vr], [w0, w1])
+        # (the window and the run's state in one call: their value references and values in order)
+        vrs, vals = [self.vars["t_obs_start"].vr, self.vars["t_obs_stop"].vr], [w0, w1]
+        for name, values in state.items():
+            vrs.append(self.vars[name].vr)
+            vals.extend(values)
+        inst.set("Float64", vrs, vals)
         inst.set("Boolean", [self.vars["observe"].vr, self.vars["sensitivity"].vr], [bool(observe), bool(sensitivity)])
         self._observe = bool(observe)
-        for name, vals in state.items():
-            inst.set("Float64", [self.vars[name].vr], vals)
         if slide0 is not None and self.nc:
             v = self.vars["slide0"]
             inst.set(v.call_type, [v.vr], [int(m) for m in np.broadcast_to(np.asarray(slide0), (self.nc,))])
