@@ -18,6 +18,7 @@ import pytest
 
 from dryfriction import Oscillator, System, continue_orbits, find_orbits
 from dryfriction.analysis.system_orbits import system_map
+from dryfriction.drivers.system import SystemFMU3
 
 pytestmark = pytest.mark.slow
 
@@ -65,3 +66,32 @@ def test_the_period_doubling_of_the_asymmetric_branch() -> None:
     scale = float(d.amplitude_m[k, 0])
     assert np.abs(system_map(sk, z, period=2)[0] - z).max() / scale <= 1e-6
     assert np.abs(system_map(sk, z, period=1)[0] - z).max() / scale > 1e-2
+
+
+CHI_GRAZING = 0.5346710662    # the exact map's grazing on the asymmetric branch (tests/test_continuation.py)
+
+
+def test_the_grazing_where_a_reversal_turns_into_a_stop() -> None:
+    """Up the asymmetric branch from chi = 0.5 the direct reversal of the cycle (3 mode changes)
+    turns into a stop, a short stick and a breakaway (4) where the exact map puts it; the arclength
+    corrector does not converge across that corner, and the walk crosses it at fixed parameters
+    and goes on. The FMU's counts on either side (transitions, per contact) from separate solves."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.5)
+    asym = max((o for o in find_orbits(p) if o.stable), key=lambda o: o.offset)
+    s = structure(p)
+    (so,) = [o for o in find_orbits(s, guesses=[[asym.x0, asym.v0]]) if abs(o.offset[0] / asym.offset - 1) < 1e-3]
+    c = continue_orbits(s, "mu_k", p.mu_k, 0.545 * p.mu_s, orbit=so, ds=0.02, max_points=60)
+    (g,) = [b for b in c.bifurcations if b.type == "grazing"]
+    assert abs(g.param / p.mu_s - CHI_GRAZING) < 2e-5, g.param / p.mu_s
+    assert g.events == ((((3, True, True),), True), (((4, True, True),), True))
+    chi = c.dataset.param.values / p.mu_s
+    tr = c.dataset.transitions.values
+    assert chi.max() >= 0.545 - 1e-9 and bool(c.dataset.converged.all())
+    assert np.all(tr[chi < g.param / p.mu_s - 1e-9] == 3) and np.all(tr[chi > g.param / p.mu_s + 1e-6] == 4)
+    for d, count in ((-1e-4, 3), (1e-4, 4)):
+        q = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=CHI_GRAZING + d)
+        qa = max((o for o in find_orbits(q) if o.stable), key=lambda o: o.offset)
+        with SystemFMU3(structure(q)) as fmu:
+            fmu.start(0.0, x0=[qa.x0], v0=[qa.v0], t_obs_start=0.0, t_obs_stop=q.period)
+            fmu.do_step(q.period)
+            assert fmu.transitions().tolist() == [count]

@@ -25,8 +25,9 @@ OBS = ("x_max", "x_min", "stick_fraction")
 
 
 def observables(f: Fmu3, n: int, nc: int) -> np.ndarray:
-    """x_max, x_min (n each) and stick_fraction (nc) in one row."""
-    return np.concatenate([f.real("x_max", n), f.real("x_min", n), f.real("stick_fraction", nc)])
+    """x_max, x_min (n each), stick_fraction and transitions (nc each) in one row."""
+    return np.concatenate([f.real("x_max", n), f.real("x_min", n), f.real("stick_fraction", nc),
+                           f.ints("transitions", nc).astype(float)])
 
 
 def set_observe(f: Fmu3, on: bool) -> None:
@@ -69,6 +70,7 @@ def test_one_dof_observables_are_the_oscillators(scheme: str, tmp_path: Path) ->
     assert np.all(np.isnan(got[before, :2])) and np.all(np.isnan(ref[before, :2]))
     assert np.all(got[before, 2] == 0.0) and np.all(ref[before, 2] == 0.0)
     assert 0.1 < ref[-1, 2] < 0.9  # it sticks and slides inside the window
+    assert np.all(got[before, 3] == 0.0) and ref[-1, 3] >= 2  # (its mode changes in the window: counted alike)
     assert ref[-1, 0] > ref[-1, 1]
     # the same engine over the same one-DOF operators (eng_one_dof.h), and the same phases observed
     assert got.tobytes() == ref.tobytes()
@@ -91,11 +93,16 @@ def reference_observables(sys: System, w0: float, w1: float, t: float) -> np.nda
     each contact from its phases' modes."""
     res = simulate(sys, t, t_eval=np.linspace(w0, min(t, w1), 20001))
     stuck = np.zeros(sys.nc)
-    for ph in res.solution.phases:
+    changes = np.zeros(sys.nc)
+    phases = res.solution.phases
+    for ph in phases:
         lo, hi = max(ph.t0, w0), min(ph.t1, w1, t)
         if hi > lo:
             stuck += (np.array(ph.modes) == 0) * (hi - lo)
-    return np.concatenate([res.x.max(axis=0), res.x.min(axis=0), stuck / (min(t, w1) - w0)])
+    for a, b in zip(phases[:-1], phases[1:]):  # each contact's mode changes at the phases' joints in the window
+        if w0 < b.t0 <= min(w1, t):
+            changes += np.array(a.modes) != np.array(b.modes)
+    return np.concatenate([res.x.max(axis=0), res.x.min(axis=0), stuck / (min(t, w1) - w0), changes])
 
 
 def test_observables_are_the_event_driven_references(tmp_path: Path) -> None:
@@ -110,12 +117,14 @@ def test_observables_are_the_event_driven_references(tmp_path: Path) -> None:
         f.close()
     for row, t in ((got[2], 3.0), (got[3], 5.0)):  # mid-window, and the window closed
         ref = reference_observables(sys, w0, w1, t)
-        assert np.all((ref[4:] > 0.05) & (ref[4:] < 0.95)), ref  # both contacts stick and slide
+        assert np.all((ref[4:6] > 0.05) & (ref[4:6] < 0.95)), ref  # both contacts stick and slide
         # x: the scheme's error at h = 5e-4 (second order) and the step-end sampling; measured 3.2e-6
         # relative to the largest |x|; the stuck shares: the located switch times, measured 3.5e-6
         scale = np.max(np.abs(ref[:4]))
         assert np.max(np.abs(row[:4] - ref[:4])) <= 2e-5 * scale, (row, ref)
-        assert np.max(np.abs(row[4:] - ref[4:])) <= 5e-5, (row, ref)
+        assert np.max(np.abs(row[4:6] - ref[4:6])) <= 5e-5, (row, ref)
+        # each contact's mode changes in the window: the reference's, exactly
+        assert np.all(ref[6:] >= 2) and row[6:].tolist() == ref[6:].tolist(), (row, ref)
 
 
 def test_observables_survive_an_fmu_state_and_a_host_step_size(tmp_path: Path) -> None:
@@ -159,8 +168,8 @@ def test_observe_false_reads_nan_and_says_so_once(tmp_path: Path) -> None:
         f.start({k: v for k, v in two_contacts().start_values().items() if k not in ("n", "nc")})
         f.s.doStep(0.0, 0.5)
         assert f.s.getBoolean([f.vr["observe"]]) == [False]
-        assert np.all(np.isnan(observables(f, 2, 2)))
-        assert np.all(np.isnan(observables(f, 2, 2)))
+        assert np.all(np.isnan(observables(f, 2, 2)[:6])) and np.all(observables(f, 2, 2)[6:] == -1)
+        assert np.all(np.isnan(observables(f, 2, 2)[:6]))
         said = [m for m in f.messages if "observe is false" in m]
         assert len(said) == 1 and "x_max" in said[0]
         assert np.all(np.isfinite(f.real("x", 2)))
@@ -204,7 +213,7 @@ def test_the_start_inside_the_window_is_a_sample(tmp_path: Path) -> None:
         obs = observables(f, 2, 2)
     finally:
         f.close()
-    assert obs[:2].tolist() == x0 and obs[2:4].tolist() == x0 and obs[4:].tolist() == [0.0, 0.0]
+    assert obs[:2].tolist() == x0 and obs[2:4].tolist() == x0 and obs[4:].tolist() == [0.0, 0.0, 0.0, 0.0]
     assert not any(math.isnan(v) for v in obs)
 
 

@@ -538,7 +538,8 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
     lines = out.read_text().splitlines()
     head = [c.strip('"') for c in lines[0].split(",")]
     jac = ["dx_dx0", "dx_dv0", "dv_dx0", "dv_dv0", "dx_ds0", "dv_ds0", "ds_dx0", "ds_dv0", "ds_ds0"]
-    assert head == ["time", "E_friction", "x", "v", "a", "f", "s", "x_max", "x_min", "stick_fraction", *jac, "mode"]
+    assert head == ["time", "E_friction", "x", "v", "a", "f", "s", "x_max", "x_min", "stick_fraction", *jac, "mode",
+                    "transitions"]
     assert len(lines) == 1257 + 1
     last = lines[-1].split(",")
     assert float(last[0]) == pytest.approx(12.56, abs=1e-9)
@@ -551,6 +552,7 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
             f.s.doStep((k - 1) * 0.01, 0.01)
         x, mode, E = f.real("x", 3), f.ints("mode", 2), f.real("E_friction")[0]
         x_max, share = f.real("x_max", 3), f.real("stick_fraction", 2)
+        transitions = f.ints("transitions", 2)
     finally:
         f.close()
     # the same numbers to the CSV's 16 digits (measured: 2.8e-17 in one element). (With h derived, not
@@ -558,6 +560,7 @@ def test_fmusim_runs_it_to_the_end(tmp_path: Path) -> None:
     # tc + dt differs: measured 1.1e-12 relative in x at the end.)
     assert np.allclose([float(v) for v in last[2].split()], x, rtol=1e-15, atol=0)
     assert [int(v) for v in last[19].split()] == list(mode) and float(last[1]) == pytest.approx(E, rel=1e-15)
+    assert [int(v) for v in last[20].split()] == list(transitions) and min(transitions) > 0
     # the map's Jacobian is not computed without sensitivity = true: NaN (logged once), not a number
     assert all(v.strip().lower() == "nan" for v in last[10].split())
     assert np.allclose([float(v) for v in last[7].split()], x_max, rtol=1e-15, atol=0)
@@ -587,11 +590,11 @@ def test_the_compliance_checker_runs_the_fmi2_fmu_to_the_end(tmp_path: Path) -> 
     # (the checker writes the matrices' names, M[1,2], unquoted: its header is compared as a line)
     assert lines[0].replace('"', "") == ",".join(
         ["time", "E_friction", "x[1]", "x[2]", "v[1]", "v[2]", "a[1]", "a[2]", "f[1]", "mode[1]", "s[1]",
-         "x_max[1]", "x_max[2]", "x_min[1]", "x_min[2]", "stick_fraction[1]", *jac]), head
+         "x_max[1]", "x_max[2]", "x_min[1]", "x_min[2]", "stick_fraction[1]", *jac, "transitions[1]"]), head
     rows = [line.split(",") for line in lines[1:]]
     t = [float(row[0]) for row in rows]
     assert t[-1] == pytest.approx(12.56, abs=1e-12) and rows[-1][10] == "NAN"
-    assert all(v == "NAN" for v in rows[-1][16:]) and len(rows[-1]) == 16 + len(jac)  # (sensitivity false)
+    assert all(v == "NAN" for v in rows[-1][16:16 + len(jac)]) and len(rows[-1]) == 17 + len(jac)  # (sensitivity false)
     # the checker's communication points: its rows' times, and one it steps through without a row
     # (measured: 500 rows for 500 steps of 0.02512 s, none at 0.1256)
     dt = 12.56 / 500  # its default: 500 steps over the default experiment
@@ -606,10 +609,12 @@ def test_the_compliance_checker_runs_the_fmi2_fmu_to_the_end(tmp_path: Path) -> 
             f.s.doStep(points[k - 1], points[k] - points[k - 1])
         x = f.real("x", 2)
         obs = np.concatenate([f.real("x_max", 2), f.real("x_min", 2), f.real("stick_fraction", 1)])
+        transitions = f.ints("transitions", 1)
     finally:
         f.close()
     assert np.array_equal([float(v) for v in rows[-1][2:4]], x)  # (the CSV's 17 digits round-trip)
     assert np.array_equal([float(v) for v in rows[-1][11:16]], obs)
+    assert [int(rows[-1][-1])] == list(transitions) and transitions[0] > 0
 
 
 def test_static_checks_of_both_fmus() -> None:

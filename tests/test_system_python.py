@@ -196,7 +196,9 @@ def test_the_drivers_observables_are_the_references_and_the_fmus() -> None:
     for t_end in (3.0, 5.0):  # mid-window, and the window closed
         got = run(sys, t_end, 0.25, t_obs_start=w0, t_obs_stop=w1)
         ref = reference_observables(sys, w0, w1, t_end)
-        assert np.all((ref[4:] > 0.05) & (ref[4:] < 0.95)), ref  # both contacts stick and slide
+        assert np.all((ref[4:6] > 0.05) & (ref[4:6] < 0.95)), ref  # both contacts stick and slide
+        assert got.transitions.tolist() == ref[6:].tolist()  # each contact's mode changes in the window
+        ref = ref[:6]
         mine = np.concatenate([got.x_max, got.x_min, got.stick_fraction])
         # the FMU-level test's tolerances: x to 2e-5 of the largest |x| (second order at h = 5e-4 and
         # the step-end sampling), the stuck shares to 5e-5 (the located switch times)
@@ -243,3 +245,4 @@ def test_the_command_prints_the_observables(tmp_path: Path, capsys: pytest.Captu
     ref = run(loads(SPEC), 1.0, 0.1)
     assert out["x_max"] == ref.x_max.tolist() and out["x_min"] == ref.x_min.tolist()
     assert out["stick_fraction"] == ref.stick_fraction.tolist()
+    assert out["transitions"] == ref.transitions.tolist() and min(out["transitions"]) >= 0

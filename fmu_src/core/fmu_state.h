@@ -12,7 +12,8 @@
  * Version 4 was the first of this format; version 5 adds the oscillator's open stuck stretch (the
  * start of the stick being observed); in version 6 (the models on the friction engine) the mode of a
  * contact without friction is the direction of its slip relative to its belt (before: of the
- * block's velocity). Earlier versions (the oscillator's 3, magic "DFOSTATE",
+ * block's velocity); version 7 adds each contact's mode changes in the observation window to the
+ * structure's observables. Earlier versions (the oscillator's 3, magic "DFOSTATE",
  * and the chain's 1, magic "DFCSTATE", each with a 24-byte header) are refused with a sentence
  * naming the version found and the one expected. No FMI types. */
 #ifndef DFO_FMU_STATE_H
@@ -23,7 +24,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define DFO_STATE_VERSION 6u
+#define DFO_STATE_VERSION 7u
 #define DFO_STATE_HEADER_BYTES 32u
 #define DFO_STATE_RUN_BYTES 40u /* a dfo_run: time, start, stop (f64), stop_defined, phase, event (i32 x 4) */
 

@@ -53,7 +53,7 @@ int main(int argc, char **argv)
     snprintf(expected, sizeof expected, "format version %s", argv[2]);
     printf("refused: %s\n", g_last);
     EXPECT(strstr(g_last, expected) != NULL);
-    EXPECT(strstr(g_last, "reads format version 6") != NULL);
+    EXPECT(strstr(g_last, "reads format version 7") != NULL);
     /* the current format: serialise and deserialise a state of this instance */
     EXPECT(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
     EXPECT(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) <= fmi2Warning);
@@ -63,7 +63,7 @@ int main(int argc, char **argv)
     unsigned char *buf = (unsigned char *)malloc(size);
     fmi2FMUstate s2 = NULL;
     EXPECT(buf && fmi2SerializeFMUstate(c, s, (fmi2Byte *)buf, size) == fmi2OK);
-    EXPECT(buf && memcmp(buf, "DFOSTATE\x06\0\0\0", 12) == 0);
+    EXPECT(buf && memcmp(buf, "DFOSTATE\x07\0\0\0", 12) == 0);
     EXPECT(buf && fmi2DeSerializeFMUstate(c, (const fmi2Byte *)buf, size, &s2) == fmi2OK && s2 != NULL);
     EXPECT(fmi2SetFMUstate(c, s2) == fmi2OK);
     fmi2FreeFMUstate(c, &s);

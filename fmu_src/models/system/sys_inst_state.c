@@ -20,6 +20,9 @@ static void on_switch(void *ctx, double t, size_t contact, const eng_state *s, i
     sys_instance *in = (sys_instance *)ctx;
     (void)s;
     in->lc.switched = 1;
+    const double *sp = in->vals + in->L.sp;
+    if (sp[DFO_SP_observe] != 0.0 && t > sp[DFO_SP_t_obs_start] && t <= sp[DFO_SP_t_obs_stop])
+        in->vals[in->L.obs + SYS_OBS_TRANSITIONS(in->L.n, in->L.nc) + contact] += 1.0;
     dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_EVENTS, "t = %.17g: contact %lu switches from mode %d to %d.", t,
                  (unsigned long)contact + 1, from, to);
 }

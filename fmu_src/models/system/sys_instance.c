@@ -596,8 +596,8 @@ static void note_observable(sys_instance *in, const char *fn, const dfo_var_info
     if (!observing(in))
         dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
                      "%s: variable %s (value reference %u) is not computed while observe is false: the observables "
-                     "x_max, x_min, stick_fraction read NaN in this run; set observe = true (before initialisation) "
-                     "to compute them; logged once per run.", fn, var->name, var->vr);
+                     "x_max, x_min, stick_fraction read NaN and transitions -1 in this run; set observe = true "
+                     "(before initialisation) to compute them; logged once per run.", fn, var->name, var->vr);
     else
         dfo_inst_log(&in->lc, DFO_INST_OK, DFO_LOG_NOT_COMPUTED,
                      "%s: variable %s (value reference %u) reads NaN: the observation window [%.17g, %.17g] has not "
@@ -728,6 +728,12 @@ static void get_outputs(sys_instance *in, const char *fn, const sys_ref *r, doub
     case DFO_OUT_mode:
         for (size_t i = 0; i < c; i++) iout[i] = s->mode[i0 + i];
         return;
+    case DFO_OUT_transitions: {
+        const double *tr = in->vals + in->L.obs + SYS_OBS_TRANSITIONS(in->L.n, in->L.nc);
+        if (!observing(in)) note_observable(in, fn, r->var);
+        for (size_t i = 0; i < c; i++) iout[i] = observing(in) ? (int)tr[i0 + i] : -1; /* (not computed: -1, as the oscillator's) */
+        return;
+    }
     case DFO_OUT_x_max:
     case DFO_OUT_x_min:
     case DFO_OUT_stick_fraction: get_observables(in, fn, r->var, i0, c, dout); return;

@@ -53,8 +53,10 @@ enum {
 #define SYS_SNAP_NA_NC 6
 
 /* The observables' state in vals from L.obs: x_max, x_min (n each), the stuck time inside the window
- * and the start of the open stuck stretch (NaN: none) of each contact (nc each), the flag "x sampled". */
-#define SYS_OBS_SIZE(n, nc) (2 * (n) + 2 * (nc) + 1)
+ * and the start of the open stuck stretch (NaN: none) of each contact (nc each), the flag "x sampled",
+ * then each contact's mode changes inside the window (nc). */
+#define SYS_OBS_SIZE(n, nc) (2 * (n) + 3 * (nc) + 1)
+#define SYS_OBS_TRANSITIONS(n, nc) (2 * (n) + 2 * (nc) + 1)
 
 /* Where each part of vals begins for sizes n, nc (in doubles). */
 typedef struct {

@@ -71,6 +71,11 @@ SYMMETRIC = 1e-8
 #: past a corner of the branch the new point must lie within this many steps of the last one (else
 #: the corrector went off to another branch)
 KINK_REACH = 3.0
+#: past a corner where the arclength corrector fails: orbits at a fixed parameter these shares of ds0 along the tangent
+CORNER_STEPS = (1e-3, 1e-2, 1e-1)
+#: and such an orbit within this many of those steps of the last point (the branch's slope jumps at the
+#: corner: the one-DOF structure's grazing lands 8.6 steps away at every step length)
+CORNER_REACH = 20.0
 #: corrector steps allowed at the trial points of a location
 LOCATE_ITERATIONS = 60
 #: trial points of one location, at most
@@ -155,7 +160,8 @@ class Bifurcation:
     test: float                      # the test function at the located point (0 at a smooth one)
     note: str = ""                   # e.g. which events changed, or "non-smooth: the multiplier jumps"
     children: list[int] = field(default_factory=list)   # branches started here (doubled, asymmetric)
-    events: tuple[tuple[int, bool], tuple[int, bool]] | None = None   # grazing: (transitions, sticks) before/after
+    events: tuple[Any, Any] | None = None   # grazing: the events per cycle before/after (the oscillator's
+    #                                          (transitions, sticks); a structure's per contact, and sticks)
     half_multipliers: np.ndarray | None = None           # of H on a symmetric branch
     amplitude_m: float = math.nan                         # of the located orbit, m
     offset_m: float = math.nan
@@ -748,6 +754,10 @@ class _Run:
             if ds < self.ds_min:
                 b.stopped = (f"the step fell below ds_min = {self.ds_min:g} at {self.name} = "
                              f"{self.param(pt):.10g}: {last}")
+                crossed = self.cross_corner(b, m, pt) if "grazing" in self.detect else None
+                if crossed is not None:
+                    pt, ds, b.stopped = crossed, self.ds0 * CORNER_STEPS[-1], ""
+                    continue
                 self.record(b, m, None, float(pt.e.u[-1] + self.ds_min * pt.t[-1]), False, last)
                 return
             u_pred = pt.e.u + ds * pt.t
@@ -801,6 +811,31 @@ class _Run:
             m, pt = self.maybe_move_section(m, pt)
             if it <= 3:
                 ds = min(self.ds_max, 1.5 * ds)
+
+    def cross_corner(self, b: Branch, m: _BranchMap, pt: _Point) -> _Point | None:
+        """Past a corner of the branch (an event changes: a grazing) the arclength corrector may not
+        converge at any step (dG/dq straddles the corner, and a located scheme's discrete map bends
+        there): from the last point pt, orbits at a fixed parameter a step CORNER_STEPS ds0 along the
+        tangent; the first whose events per cycle differ from pt's is a point past the corner: the
+        grazing is located between the two (at fixed parameters) and the walk goes on from it. None
+        where no such orbit is found."""
+        for frac in CORNER_STEPS:
+            step = frac * self.ds0
+            try:
+                e, _ = self.correct(m, pt.e.u + step * pt.t, None, None, 0.0, max_iter=LOCATE_ITERATIONS)
+            except CorrectorFailure:
+                continue
+            dist = float(np.linalg.norm(e.u - pt.e.u))
+            if not 0.0 < dist <= CORNER_REACH * step:
+                continue
+            info = self.describe(m, e)
+            if info["signature"] == pt.info["signature"]:
+                continue
+            new = _Point(e, tangent(m, e, e.u - pt.e.u), pt.s + dist, info)
+            self.locate(b, m, pt, new, dist, "grazing", True)
+            self.record(b, m, new, float(e.u[-1]), True)
+            return new
+        return None
 
     def end_point(self, m: _BranchMap, a: _Point, c: _Point | np.ndarray) -> _Point | None:
         """The orbit at the end of the range (start or stop) between a (inside) and c (a point or a

@@ -9,7 +9,8 @@ map of a :class:`~dryfriction.system.structure.System`
 q), z = (x, v, the Jenkins sliders) at the section, S the start orbit's scales, q the parameter
 scaled as the oscillator's; G_y from the FMU's Jacobian; G_q a central difference in q (as the
 oscillator's); at each branch point the cycle's amplitude per DOF, stuck share per contact and
-mode changes (the grazing test: the events of each contact per cycle and whether it sticks). The
+mode changes (the grazing test: each contact's mode changes per cycle, the FMU's count, and whether it
+sticks and slides in it). The
 internal step h is the start structure's for the whole branch. The section stays where the start
 orbit's was (the oscillator's walk moves its section off a stick phase; a structure's is chosen
 once, :func:`~dryfriction.analysis.system_orbits.find_system_orbits`'s).
@@ -126,26 +127,29 @@ class _SystemRun(_Run):
         info: dict[str, Any] = {
             "x0": z0[:n].copy(), "v0": z0[n:2 * n].copy(),
             "amplitude": 0.5 * (x_max - x_min), "offset": 0.5 * (x_max + x_min),
-            "stick_fraction": np.asarray(obs["stick_fraction"]), "transitions": -1,
+            "stick_fraction": np.asarray(obs["stick_fraction"]), "transitions": int(np.sum(obs["transitions"])),
             "mu": mu, "stable": classify(mu, NEUTRAL)[1],
             "section": t_s, "cycle": None,
         }
         info.update(self.tests(m, e))
-        info["signature"] = self._signature(info["stick_fraction"])
+        info["signature"] = self._signature(obs)
         return info
 
     @staticmethod
-    def _signature(share: np.ndarray) -> tuple[int, bool]:
-        """The grazing test's events (module doc) from the contacts' stuck shares (exact in time, the
-        FMU's observable; a count of sampled mode changes would alias short phases): a code of which
-        contacts stick some of the cycle and which slide some of it, and whether any sticks."""
+    def _signature(obs: dict[str, np.ndarray]) -> tuple[tuple[tuple[int, bool, bool], ...], bool]:
+        """The grazing test's events (module doc) from the cycle's observables (the FMU's, exact in
+        time: a count of sampled mode changes would alias short phases): per contact its mode changes
+        in the cycle (a stop that turns into a direct reversal changes them while the contact still
+        sticks elsewhere in the cycle) and whether it sticks some of the cycle and slides some of it;
+        and whether any contact sticks."""
+        share = np.asarray(obs["stick_fraction"])
+        trans = np.asarray(obs["transitions"])
         sticks, slides = share > 0.0, share < 1.0
-        code = int(sum((1 << (2 * j)) * int(a) + (1 << (2 * j + 1)) * int(b)
-                       for j, (a, b) in enumerate(zip(sticks, slides))))
-        return code, bool(np.any(sticks))
+        per = tuple((int(t), bool(a), bool(b)) for t, a, b in zip(trans, sticks, slides))
+        return per, bool(np.any(sticks))
 
-    def signature(self, m: _BranchMap, e: _Eval) -> tuple[int, bool]:
-        return self._signature(np.asarray(self._cycle(m, e)[2]["stick_fraction"]))
+    def signature(self, m: _BranchMap, e: _Eval) -> tuple[tuple[tuple[int, bool, bool], ...], bool]:
+        return self._signature(self._cycle(m, e)[2])
 
     def start_map(self, o: Any) -> tuple[_BranchMap, np.ndarray]:
         if not isinstance(o, SystemOrbit):

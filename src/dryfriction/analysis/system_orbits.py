@@ -92,6 +92,8 @@ class SystemOrbit(OrbitRecord):
     amplitude_extrapolated: np.ndarray = field(default_factory=lambda: np.zeros(0))  # Richardson's, n
     section: float = 0.0             # the section time t_s in [0, K T) of the Newton solve, s
     section_state: np.ndarray = field(default_factory=lambda: np.zeros(0))  # z = (x, v, s_jenkins) there
+    section_slide: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # nc: each Jenkins
+    #                                  slider's mode at the section (the map's slide0 there), 0 for a rigid contact
     jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of P^K at the section
     iterations: int = 0
     neutral: bool = False            # a multiplier 1: a continuum of orbits (a Jenkins slider stuck all
@@ -155,7 +157,7 @@ class _Map:
     def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True,
                  span: float | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         """P(z) from t_s over ``span`` (default K T), its Jacobian (NaN when not asked) and the
-        observables of that stretch (x_max, x_min, stick_fraction)."""
+        observables of that stretch (x_max, x_min, stick_fraction, transitions)."""
         n = self.n
         f = self.fmu
         span = self.KT if span is None else span
@@ -176,7 +178,7 @@ class _Map:
             keep = np.concatenate([np.arange(2 * n), 2 * n + self.jenk])
             J = full[np.ix_(keep, keep)]
         x_max, x_min, share = f.observables()
-        return Pz, J, {"x_max": x_max, "x_min": x_min, "stick_fraction": share}
+        return Pz, J, {"x_max": x_max, "x_min": x_min, "stick_fraction": share, "transitions": f.transitions()}
 
     def cycle(self, z: np.ndarray, t_s: float, samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
         """The modes over one K T from z at t_s, sampled ``samples`` times per period: (t, mode [nt, nc])."""
@@ -324,6 +326,8 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
                 obs: dict[str, np.ndarray], t_s: float, h: float) -> SystemOrbit:
     """The orbit of the converged z at t_s: its state at t = 0 mod K T, multipliers, observables."""
     n, sysm = M.n, M.system
+    slide_s = np.zeros(sysm.nc, dtype=int)
+    slide_s[M.jenk] = M.slide[M.jenk]
     z0 = z
     slide0 = np.zeros(sysm.nc, dtype=int)
     slide0[M.jenk] = M.slide[M.jenk]
@@ -340,7 +344,7 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
                        multipliers=mult, stable=ok and inside, residual=r, neutral=ok and one,
                        amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
                        stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
-                       section=t_s, section_state=z.copy(), jacobian=J, iterations=it)
+                       section=t_s, section_state=z.copy(), section_slide=slide_s, jacobian=J, iterations=it)
 
 
 def _h_of(fmu: "SystemFMU3", system: "Structure", accuracy: float | None = None) -> float:
@@ -511,16 +515,18 @@ def _same(a: SystemOrbit, b: SystemOrbit) -> bool:
     return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale)
 
 
-def _warm_section(M: _Map, z: np.ndarray, phase: float) -> tuple[float, np.ndarray] | None:
-    """The section at ``phase`` (a fraction of M's period: a neighbouring orbit's section) when the
-    map is smooth there too, and the state z carried to it; None when the phase is 0 or the modes
-    there are not the section's (a Jenkins slider not stuck, a rigid contact not sliding): then
+def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None = None) -> tuple[float, np.ndarray] | None:
+    """The section at ``phase`` (a fraction of M's period: a neighbouring orbit's section, whose
+    sliders had the modes ``slide`` there: default all stuck) when the modes there are still that
+    section's (each live Jenkins slider in its mode, every rigid contact sliding), and the state z
+    carried to it, M.slide set to those modes; None when the phase is 0 or the modes differ: then
     :func:`_section` chooses anew. One run to the section instead of the guess's sampled cycle."""
     t_s = phase * M.KT
     if not (0.0 < t_s < M.KT):
         return None
     sysm = M.system
     live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
+    want = np.zeros(sysm.nc, dtype=int) if slide is None or np.size(slide) != sysm.nc else np.asarray(slide, dtype=int)
     M.slide[:] = 0
     try:
         zs, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
@@ -528,17 +534,18 @@ def _warm_section(M: _Map, z: np.ndarray, phase: float) -> tuple[float, np.ndarr
         return None
     mode = M.last_mode
     jenk = sysm.k_t > 0.0
-    if np.any(mode[live & jenk] != 0) or np.any(mode[live & ~jenk] == 0):
+    if np.any(mode[live & jenk] != want[live & jenk]) or np.any(mode[live & ~jenk] == 0):
         return None
+    M.slide[jenk] = want[jenk]
     return t_s, zs
 
 
 def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
-           accuracy: float | None, phase: float | None = None) -> SystemOrbit:
+           accuracy: float | None, phase: float | None = None, slide: np.ndarray | None = None) -> SystemOrbit:
     """The orbit from z at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks (module doc);
-    ``phase``: a neighbouring orbit's section (a fraction of the period), tried first
-    (:func:`_warm_section`)."""
-    warm = _warm_section(M, z, phase) if phase is not None else None
+    ``phase``: a neighbouring orbit's section (a fraction of the period; ``slide`` its sliders'
+    modes there), tried first (:func:`_warm_section`)."""
+    warm = _warm_section(M, z, phase, slide) if phase is not None else None
     if warm is not None:
         t_s, z = warm
     else:

@@ -13,7 +13,7 @@
 the sizes its prebuilt binary was built for); ``--fmu`` names another prebuilt system FMU to start
 from. ``run`` runs the structure through the FMI 3.0 FMU and
 prints the last output time's values (``--json``: one object with every output time and the
-observables over the run, x_max, x_min and stick_fraction). ``orbits`` prints the structure's periodic
+observables over the run, x_max, x_min, stick_fraction and transitions). ``orbits`` prints the structure's periodic
 orbits at its omega (Newton shooting on the located map with the FMU's Jacobian:
 :func:`dryfriction.analysis.system_orbits.find_system_orbits`), ``response`` its steady response by
 orbits over a frequency range (:func:`dryfriction.analysis.system_response.system_frequency_response`)
@@ -60,7 +60,7 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
                    help="output interval, s (default 1/100 of the excitation period)")
     r.add_argument("--json", action="store_true",
                    help="print one JSON object with every output time and the observables x_max, x_min, "
-                        "stick_fraction over the run")
+                        "stick_fraction, transitions over the run")
     o = ss.add_parser("orbits", help="the structure's periodic orbits at its omega (located map, Newton shooting)",
                       description="Periodic orbits of the structure at its excitation frequency, by Newton "
                                   "shooting on the located scheme's map with the FMU's Jacobian: state at t = 0, "
@@ -171,7 +171,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json({"t": res.t.tolist(), "x": res.x.tolist(), "v": res.v.tolist(), "f": res.f.tolist(),
                     "mode": res.mode.tolist(), "E_friction": res.E_friction.tolist(), "x_max": res.x_max.tolist(),
-                    "x_min": res.x_min.tolist(), "stick_fraction": res.stick_fraction.tolist()})
+                    "x_min": res.x_min.tolist(), "stick_fraction": res.stick_fraction.tolist(),
+                    "transitions": res.transitions.tolist()})
     else:
         print(f"t = {res.t[-1]:.6g}: x = {res.x[-1].tolist()}, mode = {res.mode[-1].tolist()}, "
               f"E_friction = {res.E_friction[-1]:.6g}")

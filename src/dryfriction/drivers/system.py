@@ -30,7 +30,7 @@ from __future__ import annotations
 import os
 import shutil
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -80,7 +80,8 @@ class SystemRun:
     observables at the end of the run over its observation window: ``x_max``, ``x_min`` [n], the
     largest and smallest position of each degree of freedom (sampled at every internal step and
     switch), ``stick_fraction`` [nc], the share of the window each contact spent stuck (all NaN
-    when the run was made with ``observe=False``)."""
+    when the run was made with ``observe=False``), ``transitions`` [nc], each contact's mode
+    changes in the window (-1 each with ``observe=False``)."""
 
     t: np.ndarray
     x: np.ndarray
@@ -93,6 +94,7 @@ class SystemRun:
     x_max: np.ndarray
     x_min: np.ndarray
     stick_fraction: np.ndarray
+    transitions: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def n(self) -> int:
@@ -185,6 +187,9 @@ class SystemFMU3(Driver):
         self._get_modes = self.inst.bulk_get(mode.call_type, [mode.vr], self.nc) if self.nc else None
         obs = [self.vars[k].vr for k in OBSERVABLES]
         self._get_obs = self.inst.bulk_get("Float64", obs, 2 * self.n + self.nc)
+        tr = self.vars["transitions"]
+        self._tr_dtype = fmi3.DTYPES[tr.call_type]
+        self._get_tr = self.inst.bulk_get(tr.call_type, [tr.vr], self.nc) if self.nc else None
         self._observe = True
         self.time = 0.0
         # the Jacobian's nine blocks: one bulk read, each block's rows and columns in J
@@ -367,7 +372,7 @@ class SystemFMU3(Driver):
         self.inst.flush_warnings()
         x, v, a, f, s, E = self._split(reals)
         x_max, x_min, sf = self.observables()
-        return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8), x_max, x_min, sf)
+        return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8), x_max, x_min, sf, self.transitions())
 
     def observables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The in-FMU observables now: x_max, x_min (n) and stick_fraction (nc) over the observation
@@ -379,6 +384,16 @@ class SystemFMU3(Driver):
         self._get_obs(vals.ctypes.data)
         self.inst.flush_warnings()
         return vals[:n].copy(), vals[n:2 * n].copy(), vals[2 * n:].copy()
+
+    def transitions(self) -> np.ndarray:
+        """Each contact's mode changes in the observation window up to the current time (a stop, a
+        breakaway, a direct reversal: one each), nc integers; -1 each when the run was started with
+        ``observe=False``."""
+        out = np.zeros(self.nc, dtype=self._tr_dtype)
+        if self._get_tr is not None:
+            self._get_tr(out.ctypes.data)
+            self.inst.flush_warnings()
+        return out.astype(np.int64)
 
     def run(self, t_stop: float, dt: float, inputs: Inputs | None = None, start_time: float = 0.0, *,
             observe: bool = True, t_obs_start: float | None = None, t_obs_stop: float | None = None) -> SystemRun:
