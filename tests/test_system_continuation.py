@@ -47,12 +47,18 @@ def test_the_fold_in_frequency_of_the_four_stop_motion() -> None:
     assert lam.min() >= 0.15 - 1e-12 and np.all(np.abs(np.diff(lam)) < 0.02)
 
 
-def test_the_period_doubling_of_the_asymmetric_branch() -> None:
+def asymmetric_branch(chi_stop: float) -> tuple[Oscillator, System, object]:
+    """The Fig. 8/9 band's asymmetric branch of the one-DOF structure continued in mu_k from chi = 0.5
+    (its start the structure's orbit next to the exact map's stable one of positive offset) to chi_stop."""
     p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.5)
     asym = max((o for o in find_orbits(p) if o.stable), key=lambda o: o.offset)
     s = structure(p)
     (so,) = [o for o in find_orbits(s, guesses=[[asym.x0, asym.v0]]) if abs(o.offset[0] / asym.offset - 1) < 1e-3]
-    c = continue_orbits(s, "mu_k", p.mu_k, 0.22 * p.mu_s, orbit=so, ds=0.02, max_points=60)
+    return p, s, continue_orbits(s, "mu_k", p.mu_k, chi_stop * p.mu_s, orbit=so, ds=0.02, max_points=60)
+
+
+def test_the_period_doubling_of_the_asymmetric_branch() -> None:
+    p, s, c = asymmetric_branch(0.22)
     (pd,) = [b for b in c.bifurcations if b.type == "period_doubling"]
     assert abs(pd.multipliers[0] + 1.0) <= 1e-6 and pd.period == 1
     assert abs(pd.param / p.mu_s - CHI_PD) < 2e-5, pd.param / p.mu_s
@@ -76,11 +82,7 @@ def test_the_grazing_where_a_reversal_turns_into_a_stop() -> None:
     turns into a stop, a short stick and a breakaway (4) where the exact map puts it; the arclength
     corrector does not converge across that corner, and the walk crosses it at fixed parameters
     and goes on. The FMU's counts on either side (transitions, per contact) from separate solves."""
-    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.5)
-    asym = max((o for o in find_orbits(p) if o.stable), key=lambda o: o.offset)
-    s = structure(p)
-    (so,) = [o for o in find_orbits(s, guesses=[[asym.x0, asym.v0]]) if abs(o.offset[0] / asym.offset - 1) < 1e-3]
-    c = continue_orbits(s, "mu_k", p.mu_k, 0.545 * p.mu_s, orbit=so, ds=0.02, max_points=60)
+    p, _, c = asymmetric_branch(0.545)
     (g,) = [b for b in c.bifurcations if b.type == "grazing"]
     assert abs(g.param / p.mu_s - CHI_GRAZING) < 2e-5, g.param / p.mu_s
     assert g.events == ((((3, True, True),), True), (((4, True, True),), True))
