@@ -97,3 +97,36 @@ def test_the_grazing_where_a_reversal_turns_into_a_stop() -> None:
             fmu.start(0.0, x0=[qa.x0], v0=[qa.v0], t_obs_start=0.0, t_obs_stop=q.period)
             fmu.do_step(q.period)
             assert fmu.transitions().tolist() == [count]
+
+
+CHI_SB = 0.5539500960          # the exact map's symmetry breaking of the Fig. 8/9 band's symmetric branch
+
+
+def test_the_symmetry_breaking_and_its_mirror_branches() -> None:
+    """Down the band's symmetric branch from chi = 0.8 (continued on the half-period map H =
+    -P^{1/2}), H's multiplier passes -1 where the exact map puts the symmetry breaking; the two mirror
+    branches off it are followed (each other's mirror image: offsets of opposite sign) through the
+    grazing where a reversal turns into a stop. Independent: orbits found on either side, one
+    symmetric stable orbit above, a stable mirror pair below."""
+    p = Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.8)
+    s = structure(p)
+    c = continue_orbits(s, "mu_k", p.mu_k, 0.5 * p.mu_s, ds=0.02, max_points=80)
+    (sb,) = [b for b in c.bifurcations if b.type == "symmetry_breaking"]
+    assert abs(sb.param / p.mu_s - CHI_SB) < 2e-5, sb.param / p.mu_s
+    assert c.branches[0].kind == "symmetric" and abs(sb.half_multipliers[np.argmin(np.abs(sb.half_multipliers + 1))] + 1) <= 1e-6
+    a, b = (c.dataset.where(c.dataset.branch == i, drop=True) for i in sb.children)
+    assert bool(a.converged.all()) and bool(b.converged.all())
+    end_a, end_b = float(a.offset_m[-1, 0]), float(b.offset_m[-1, 0])
+    assert float(a.param[-1]) == float(b.param[-1]) == pytest.approx(0.5 * p.mu_s)
+    assert end_a == pytest.approx(-end_b, rel=1e-6) and abs(end_a) > 1e-3
+    g = [x for x in c.bifurcations if x.type == "grazing"]
+    assert len(g) == 2 and {x.branch for x in g} == set(sb.children)
+    assert all(abs(x.param / p.mu_s - 0.5346710662) < 2e-5 for x in g)
+    for d, count in ((2e-3, 1), (-2e-3, 2)):
+        chi = sb.param / p.mu_s + d
+        q = System.from_oscillator(Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=chi)).replace(h=s.h)
+        near = [br.isel(point=int(np.argmin(np.abs(br.param.values / p.mu_s - chi))))
+                for br in (a, b, c.dataset.where(c.dataset.branch == 0, drop=True))]
+        found = [o for o in find_orbits(q, guesses=[[float(x.x0[0]), float(x.v0[0])] for x in near]) if o.stable]
+        offsets = sorted({round(float(o.offset[0]), 6) for o in found})
+        assert len(offsets) == count, offsets

@@ -509,7 +509,7 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
     A structure (:class:`~dryfriction.system.structure.System`) in place of the oscillator: its orbits on the located
     map, continued by the same engine
     (:func:`dryfriction.analysis.system_continuation.continue_system_orbits`; ``param`` one of
-    ``omega``, ``N``, ``mu_s``, ``mu_k``, ``force``; no symmetric map).
+    ``omega``, ``N``, ``mu_s``, ``mu_k``, ``force``; a symmetric orbit on the half-period map as here).
     """
     from ..system.structure import System
 
@@ -520,7 +520,7 @@ def continue_orbits(oscillator: Oscillator, param: str, start: float, stop: floa
                                       ds=ds, ds_min=ds_min, ds_max=min(ds_max, 0.5), max_points=max_points,
                                       tol=max(tol, 1e-8), ptol=max(ptol, 1e-8), max_turn=max_turn, fd_step=fd_step,
                                       max_iter=max_iter, switch=switch, max_branches=max_branches,
-                                      detect=[d for d in detect if d != "symmetry_breaking"], progress=progress)
+                                      detect=detect, symmetric=symmetric, progress=progress)
     if param not in PARAMETERS:
         raise ValueError(f"unknown continuation parameter {param!r}; valid: {', '.join(PARAMETERS)}")
     check_walk(start, stop, period, ds, ds_min, ds_max)
@@ -761,7 +761,7 @@ class _Run:
                 self.record(b, m, None, float(pt.e.u[-1] + self.ds_min * pt.t[-1]), False, last)
                 return
             u_pred = pt.e.u + ds * pt.t
-            if not self.in_range(float(u_pred[2])):
+            if not self.in_range(float(u_pred[-1])):
                 # the step would leave the range: solve at its end, at a fixed parameter (a
                 # parameter's valid range may end there, e.g. N = 0)
                 end = self.end_point(m, pt, u_pred)

@@ -13,7 +13,11 @@ mode changes (the grazing test: each contact's mode changes per cycle, the FMU's
 sticks and slides in it). The
 internal step h is the start structure's for the whole branch. The section stays where the start
 orbit's was (the oscillator's walk moves its section off a stick phase; a structure's is chosen
-once, :func:`~dryfriction.analysis.system_orbits.find_system_orbits`'s).
+once, :func:`~dryfriction.analysis.system_orbits.find_system_orbits`'s), each Jenkins slider started
+there in the start orbit's mode. A symmetric orbit of one period (every harmonic force changes sign
+over half a period, and Coulomb friction is odd: x(t + T/2) = -x(t), the sliders too) is continued
+on the half-period map H = -P^{1/2}, as the oscillator's, so that its symmetry breaking (a multiplier
+of H through -1) is located and the two mirror branches are followed off it.
 
 Parameters (:data:`SYSTEM_PARAMETERS`): ``omega`` (rad/s), ``N`` (every contact's normal force),
 ``mu_s``, ``mu_k`` (every contact's), ``force`` (the excitation's scale: F_c and F_s times it).
@@ -28,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .continuation import (BIFURCATION_TYPES, Continuation, CorrectorFailure, _BranchMap, _Eval, _Run,
+from .continuation import (BIFURCATION_TYPES, SYMMETRIC, Continuation, CorrectorFailure, _BranchMap, _Eval, _Run,
                            check_walk)
 from .shooting import classify, multipliers
 from .system_orbits import NEUTRAL, SystemOrbit, _h_of, _Map, _scales, find_system_orbits
@@ -58,12 +62,13 @@ def set_system_parameter(base: "Structure", name: str, value: float) -> "Structu
 class _SystemBranchMap(_BranchMap):
     """The fixed points of a structure's branch map (module doc) as the engine's problem."""
 
-    def __init__(self, fmu: "SystemFMU3", base: "Structure", name: str, p_a: float, p_s: float, K: int, phase: float,
-                 S: np.ndarray, fd_step: float, counter: list[int]) -> None:
+    def __init__(self, fmu: "SystemFMU3", base: "Structure", name: str, p_a: float, p_s: float, K: int, kind: str,
+                 phase: float, S: np.ndarray, fd_step: float, counter: list[int], slide: np.ndarray) -> None:
         self.counter = counter
         self.fmu, self.base, self.name, self.p_a, self.p_s = fmu, base, name, p_a, p_s
-        self.K, self.kind, self.phase, self.fd = K, "full", phase, fd_step
+        self.K, self.kind, self.phase, self.fd = K, kind, phase, fd_step
         self.S = np.asarray(S, dtype=float)
+        self.slide = np.asarray(slide, dtype=int)  # the Jenkins sliders' modes at the section (the map's start)
 
     def osc(self, q: float) -> Any:  # (the engine's name: the structure at q)
         return set_system_parameter(self.base, self.name, self.param(q))
@@ -72,13 +77,21 @@ class _SystemBranchMap(_BranchMap):
         return 2.0 * math.pi / float(p.omega)
 
     def span(self, p: Any) -> float:
-        return self.K * self.period(p)
+        return self.period(p) / 2.0 if self.kind == "symmetric" else self.K * self.period(p)
 
-    def raw(self, z: np.ndarray, p: Any) -> tuple[np.ndarray, np.ndarray, int]:
+    def new_map(self, p: Any) -> _Map:
+        """The structure p's map over this branch map's K periods, its sliders started in their modes."""
         self.fmu.system = p
         M = _Map(self.fmu, p, self.K)
-        Pz, J, _ = M(M.project(z), self.t_s(p))
+        M.slide[:] = self.slide
+        return M
+
+    def raw(self, z: np.ndarray, p: Any) -> tuple[np.ndarray, np.ndarray, int]:
+        M = self.new_map(p)
+        Pz, J, _ = M(M.project(z), self.t_s(p), span=self.span(p))
         self.counter[0] += 1
+        if self.kind == "symmetric":  # H = -P^{1/2}: x, v and the sliders mirrored
+            return -Pz, -J, 1
         return Pz, J, 1
 
     def check(self, u: np.ndarray, du: np.ndarray) -> None:
@@ -91,6 +104,7 @@ class _SystemRun(_Run):
 
     def __init__(self, fmu: "SystemFMU3", p0: "Structure", S: np.ndarray, *args: Any) -> None:
         self.S0 = S
+        self.slide = np.zeros(p0.nc, dtype=int)  # the sliders' modes at the section (the start orbit's)
         super().__init__(fmu, p0, *args)
 
     def init_scales(self, p0: Any) -> None:
@@ -99,18 +113,17 @@ class _SystemRun(_Run):
     def param_unit(self) -> str:
         return SYSTEM_PARAMETERS[self.name]
 
-    def new_map(self, K: int, kind: str, phase: float) -> _BranchMap:
-        if kind != "full":
-            raise CorrectorFailure("a structure's branch is continued on P^K (no symmetric map)")
-        return _SystemBranchMap(self.fmu, self.p0, self.name, self.start, self.p_s, K, phase, self.S0, self.fd,
-                                self.counter)
+    def new_map(self, K: int, kind: str, phase: float, slide: np.ndarray | None = None) -> _BranchMap:
+        return _SystemBranchMap(self.fmu, self.p0, self.name, self.start, self.p_s, K, kind, phase, self.S0, self.fd,
+                                self.counter, self.slide if slide is None else slide)
 
     def _cycle(self, m: _BranchMap, e: _Eval) -> tuple[_Map, np.ndarray, dict[str, np.ndarray]]:
-        """The branch point's map, its state at the section and the cycle's observables (one run)."""
+        """The branch point's map, its state at the section and the cycle's observables (one run of
+        the whole K-cycle, on a symmetric branch too)."""
         p = e.p
         z = m.S * e.u[:-1]
-        self.fmu.system = p
-        M = _Map(self.fmu, p, m.K)
+        assert isinstance(m, _SystemBranchMap)
+        M = m.new_map(p)
         _, _, obs = M(M.project(z), m.t_s(p), jacobian=False)
         self.evaluations += 1
         return M, z, obs
@@ -152,13 +165,32 @@ class _SystemRun(_Run):
         return self._signature(self._cycle(m, e)[2])
 
     def start_map(self, o: Any) -> tuple[_BranchMap, np.ndarray]:
+        """The start orbit's map: its section and sliders' modes there; where the orbit is symmetric
+        (H(z) = z within SYMMETRIC, K = 1) the symmetric map H = -P^{1/2} (module doc of the engine)."""
         if not isinstance(o, SystemOrbit):
             raise CorrectorFailure("a structure's branch starts from a SystemOrbit")
-        KT = o.period * 2.0 * math.pi / set_system_parameter(self.p0, self.name, self.start).omega
-        m = self.new_map(o.period, "full", (o.section % KT) / KT)
+        T = 2.0 * math.pi / set_system_parameter(self.p0, self.name, self.start).omega
+        KT = o.period * T
+        slide = np.asarray(o.section_slide, dtype=int) if np.size(o.section_slide) == self.p0.nc \
+            else np.zeros(self.p0.nc, dtype=int)
+        self.slide = slide
+        t_s = o.section % KT
+        m = self.new_map(o.period, "full", t_s / KT)
         z = np.asarray(o.section_state, dtype=float)
         if z.shape != m.S.shape or not np.all(np.isfinite(z)):
             raise CorrectorFailure("the start orbit has no section state")
+        if self.use_symmetry and o.period == 1:
+            # the section in the second half: the state (and the sliders' modes) half a period before
+            # is the mirror image
+            second = t_s >= T / 2.0
+            h = self.new_map(1, "symmetric", (t_s % (T / 2.0)) / (T / 2.0), -slide if second else slide)
+            u = np.array([*((-z if second else z) / h.S), 0.0])
+            try:
+                if h.evaluate(u).residual() <= SYMMETRIC:
+                    self.slide = h.slide
+                    return h, u
+            except CorrectorFailure:
+                pass
         return m, np.array([*(z / m.S), 0.0])
 
     def maybe_move_section(self, m: _BranchMap, pt: Any) -> tuple[_BranchMap, Any]:
@@ -170,16 +202,18 @@ def continue_system_orbits(system: "Structure", param: str, start: float, stop: 
                            ds: float = 0.02, ds_min: float = 1e-6, ds_max: float = 0.5, max_points: int = 400,
                            tol: float = 1e-8, ptol: float = 1e-8, max_turn: float = 0.3, fd_step: float = 1e-6,
                            max_iter: int = 8, switch: bool = True, max_branches: int = 8,
-                           detect: Sequence[str] = ("fold", "period_doubling", "grazing"),
-                           progress: Callable[[int], None] | None = None) -> Continuation:
+                           detect: Sequence[str] = ("fold", "period_doubling", "symmetry_breaking", "grazing"),
+                           symmetric: bool = True, progress: Callable[[int], None] | None = None) -> Continuation:
     """Continue the periodic orbits of ``period`` K excitation periods of ``system`` in ``param`` (a key
     of :data:`SYSTEM_PARAMETERS`) from ``start`` to ``stop`` with the project's continuation engine
     (module doc): the branches start from ``orbit`` (SystemOrbits of the structure with ``param =
     start``), else from the orbits :func:`~dryfriction.analysis.system_orbits.find_system_orbits`
     finds there. The result's Dataset has per point the parameter, the state at t = 0 and the
     amplitude and offset per DOF (dimension ``dof``), the stuck share per contact (``contact``),
-    the multipliers and stability; the folds, period doublings and grazings are located on it (a
-    period doubling's doubled branch continued with ``switch``)."""
+    the multipliers and stability; the folds, period doublings, symmetry breakings and grazings are
+    located on it (a period doubling's doubled branch and a symmetry breaking's two mirror branches
+    continued with ``switch``). ``symmetric``: continue a symmetric orbit (K = 1) on the half-period
+    map (module doc)."""
     from ..drivers.system import SystemFMU3
     from ..system.structure import System
 
@@ -189,10 +223,9 @@ def continue_system_orbits(system: "Structure", param: str, start: float, stop: 
         raise ValueError(f"unknown continuation parameter {param!r} of a structure; valid: "
                          f"{', '.join(SYSTEM_PARAMETERS)}")
     check_walk(start, stop, period, ds, ds_min, ds_max)
-    bad = [d for d in detect if d not in BIFURCATION_TYPES or d == "symmetry_breaking"]
+    bad = [d for d in detect if d not in BIFURCATION_TYPES]
     if bad:
-        raise ValueError(f"bifurcation type(s) {bad} not detected on a structure; valid: fold, period_doubling, "
-                         "grazing")
+        raise ValueError(f"bifurcation type(s) {bad} not detected; valid: {', '.join(BIFURCATION_TYPES)}")
     p_start = set_system_parameter(system, param, start)
     set_system_parameter(system, param, stop)  # (both ends valid: the error names the field)
     with SystemFMU3(p_start) as fmu:
@@ -211,7 +244,7 @@ def continue_system_orbits(system: "Structure", param: str, start: float, stop: 
         jenk = np.flatnonzero(p0.k_t > 0.0)
         S = _scales(p0, x_max, x_min, jenk)
         run = _SystemRun(fmu, base, S, param, float(start), float(stop), ds, ds_min, ds_max, max_points, tol, ptol,
-                         max_turn, fd_step, max_iter, switch, max_branches, False, tuple(detect), progress)
+                         max_turn, fd_step, max_iter, switch, max_branches, bool(symmetric), tuple(detect), progress)
         for o in starts:
             if not o.converged:
                 raise ValueError(f"the start orbit did not converge ({o.reason}): nothing to continue")
