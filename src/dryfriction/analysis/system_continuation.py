@@ -79,7 +79,7 @@ class _SystemBranchMap(_BranchMap):
     def span(self, p: Any) -> float:
         return self.period(p) / 2.0 if self.kind == "symmetric" else self.K * self.period(p)
 
-    def new_map(self, p: Any) -> _Map:
+    def map_of(self, p: Any) -> _Map:
         """The structure p's map over this branch map's K periods, its sliders started in their modes."""
         self.fmu.system = p
         M = _Map(self.fmu, p, self.K)
@@ -87,7 +87,7 @@ class _SystemBranchMap(_BranchMap):
         return M
 
     def raw(self, z: np.ndarray, p: Any) -> tuple[np.ndarray, np.ndarray, int]:
-        M = self.new_map(p)
+        M = self.map_of(p)
         Pz, J, _ = M(M.project(z), self.t_s(p), span=self.span(p))
         self.counter[0] += 1
         if self.kind == "symmetric":  # H = -P^{1/2}: x, v and the sliders mirrored
@@ -123,7 +123,7 @@ class _SystemRun(_Run):
         p = e.p
         z = m.S * e.u[:-1]
         assert isinstance(m, _SystemBranchMap)
-        M = m.new_map(p)
+        M = m.map_of(p)
         _, _, obs = M(M.project(z), m.t_s(p), jacobian=False)
         self.evaluations += 1
         return M, z, obs
