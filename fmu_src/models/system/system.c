@@ -493,7 +493,7 @@ static void op_delassus(void *ctx, int slot, const int *sel, size_t k, double *D
     double *Dc = m->Dc[slot];
     unsigned *st = m->Dstamp[slot];
     const unsigned gen = m->gen[slot];
-    size_t lo4[DELASSUS_BATCH], hi4[DELASSUS_BATCH], q = 0;
+    size_t lo4[DELASSUS_BATCH] = {0}, hi4[DELASSUS_BATCH] = {0}, q = 0;
     for (size_t a = 0; a < k; a++) /* the entries not yet computed, DELASSUS_BATCH at a time */
         for (size_t b = 0; b <= a; b++) {
             const size_t ja = (size_t)sel[a], jb = (size_t)sel[b];
@@ -507,7 +507,7 @@ static void op_delassus(void *ctx, int slot, const int *sel, size_t k, double *D
                 q = 0;
             }
         }
-    delassus_entries(m, slot, lo4, hi4, q);
+    if (q) delassus_entries(m, slot, lo4, hi4, q);
     for (size_t a = 0; a < k; a++)
         for (size_t b = 0; b <= a; b++) {
             const size_t ja = (size_t)sel[a], jb = (size_t)sel[b];
