@@ -125,6 +125,7 @@ class _SystemRun(_Run):
         assert isinstance(m, _SystemBranchMap)
         M = m.map_of(p)
         _, _, obs = M(M.project(z), m.t_s(p), jacobian=False)
+        obs["transitions"] = self.fmu.transitions()  # (the grazing test's: read for this run only)
         self.evaluations += 1
         return M, z, obs
 

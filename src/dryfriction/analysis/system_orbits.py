@@ -157,7 +157,8 @@ class _Map:
     def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True,
                  span: float | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         """P(z) from t_s over ``span`` (default K T), its Jacobian (NaN when not asked) and the
-        observables of that stretch (x_max, x_min, stick_fraction, transitions)."""
+        observables of that stretch (x_max, x_min, stick_fraction; each contact's mode changes, the
+        FMU's transitions, are read where wanted, after the run: SystemFMU3.transitions)."""
         n = self.n
         f = self.fmu
         span = self.KT if span is None else span
@@ -178,7 +179,7 @@ class _Map:
             keep = np.concatenate([np.arange(2 * n), 2 * n + self.jenk])
             J = full[np.ix_(keep, keep)]
         x_max, x_min, share = f.observables()
-        return Pz, J, {"x_max": x_max, "x_min": x_min, "stick_fraction": share, "transitions": f.transitions()}
+        return Pz, J, {"x_max": x_max, "x_min": x_min, "stick_fraction": share}
 
     def cycle(self, z: np.ndarray, t_s: float, samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
         """The modes over one K T from z at t_s, sampled ``samples`` times per period: (t, mode [nt, nc])."""

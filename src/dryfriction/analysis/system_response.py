@@ -103,8 +103,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             if not prev.converged:
                 return None
             M, h0 = at(i, s_i)
-            stuck = stuck_start(M.system)
-            if stuck is not None and _all_stuck(M.system, prev):  # (the stuck branch: its closed form)
+            stuck = stuck_start(M.system) if _all_stuck(M.system, prev) else None
+            if stuck is not None:  # (the stuck branch: its closed form)
                 return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
             phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
