@@ -40,10 +40,19 @@ QEMU=$(command -v qemu-aarch64 || command -v qemu-aarch64-static || true)
 [ -n "$WINE" ] || { echo "cross_check: wine not found (apt-get install wine64)" >&2; exit 2; }
 [ -n "$QEMU" ] || { echo "cross_check: qemu-aarch64 not found (apt-get install qemu-user)" >&2; exit 2; }
 export WINEPREFIX=$BUILD/wineprefix WINEDEBUG=-all
+# One wine server for the whole check (persistent, stopped on exit): by default it exits a few
+# seconds after its last client, and a client starting in that moment loses its connection
+# ("wine client error: recvmsg: Connection reset by peer"), which fails a run for the emulator's sake.
+WINESERVER=$(command -v wineserver || { [ -x /usr/lib/wine/wineserver ] && echo /usr/lib/wine/wineserver; } || true)
 AARCH64_SYSROOT=/usr/aarch64-linux-gnu
 
 FAILED=()
 fail() { FAILED+=("$1"); echo "FAIL: $1"; }
+
+if [ -n "$WINESERVER" ]; then
+  mkdir -p "$WINEPREFIX"
+  "$WINESERVER" -p && trap '"$WINESERVER" -k 2>/dev/null || true' EXIT
+fi
 
 # ---- build --------------------------------------------------------------------------------------
 t0=$SECONDS
@@ -119,8 +128,16 @@ run_platform() {  # run_platform PLATFORM: every FMU's harness run on PLATFORM; 
     [ -n "$lib" ] || continue
     [ -f "$lib" ] || { echo "$fmi $p: no binary $lib" >>"$W/fail_run_$p"; continue; }
     ts=$SECONDS
-    run_on "$p" "$(harness_of $fmi "$p")" "${FMI_OF[$fmi]}" "$lib" run "$W/states_${fmi}_$p.txt" >"$W/run_${fmi}_$p.txt" 2>"$W/run_${fmi}_$p.err" </dev/null ||
-      echo "$fmi $p: fmu_harness failed ($(tail -1 "$W/run_${fmi}_$p.err"))" >>"$W/fail_run_$p"
+    for try in 1 2; do  # (a second run only where the emulator itself failed, not the harness)
+      if run_on "$p" "$(harness_of $fmi "$p")" "${FMI_OF[$fmi]}" "$lib" run "$W/states_${fmi}_$p.txt" >"$W/run_${fmi}_$p.txt" 2>"$W/run_${fmi}_$p.err" </dev/null; then
+        break
+      elif [ "$try" = 1 ] && grep -q '^wine client error' "$W/run_${fmi}_$p.err"; then
+        echo "  $fmi $p: wine lost its server ($(tail -1 "$W/run_${fmi}_$p.err")), run again" >&2
+      else
+        echo "$fmi $p: fmu_harness failed ($(tail -1 "$W/run_${fmi}_$p.err"))" >>"$W/fail_run_$p"
+        break
+      fi
+    done
     tr -d '\r' <"$W/run_${fmi}_$p.txt" >"$W/run_${fmi}_$p.tmp" && mv "$W/run_${fmi}_$p.tmp" "$W/run_${fmi}_$p.txt"
     echo "  $fmi $p: $(grep -c '^out' "$W/run_${fmi}_$p.txt") outputs, $(grep -c '^state' "$W/run_${fmi}_$p.txt") states, $(grep -c '^err' "$W/run_${fmi}_$p.txt" || true) failed calls ($((SECONDS - ts)) s)" >"$W/log_run_${fmi}_$p"
   done
