@@ -57,6 +57,15 @@ def test_the_fields_rows_and_contact_arrays() -> None:
     with pytest.raises(AttributeError, match="frozen"):
         s.omega = 3.0  # type: ignore[misc]
     assert _system() == s and s.replace(omega=6.0) != s
+    # a copy with another frequency or step equals the system built with it, and is checked as it is
+    for kw in (dict(omega=6.0), dict(h=2e-3), dict(omega=0.5, h=0.0)):
+        r = s.replace(**kw)
+        assert type(r) is System and r == _system(**kw) and r.omega == kw.get("omega", 7.0)
+        assert r.M is s.M and s == _system()   # (the checked arrays shared, the original unchanged)
+    for kw, message in ((dict(omega=-1.0), r"omega is -1.0; valid range: >= 0"), (dict(h=math.nan), r"h is nan"),
+                        (dict(omega="fast"), r"omega")):
+        with pytest.raises(UsageError, match=message):
+            s.replace(**kw)
     assert pickle.loads(pickle.dumps(s)) == s and copy.deepcopy(s) == s
     assert np.array_equal(System(M=M3, K=K3, F_c=2.0).F_c, [2.0, 2.0, 2.0])   # a scalar for every DOF
     assert np.array_equal(System(M=M3, K=K3).C, np.zeros((3, 3)))

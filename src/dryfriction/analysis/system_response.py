@@ -108,7 +108,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
                 return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
             phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
-            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy, phase, prev.section_slide)
+            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy, phase, prev.section_slide,
+                           prev.section_state)
             return orbit if orbit.converged else None
 
         def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:
@@ -119,9 +120,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             stuck = stuck_start(s_h)
             if stuck is not None:
                 return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
-            z = np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0])
-            for _ in range(transients):
-                z, _, _ = M(M.project(z), 0.0, jacobian=False)
+            z = M.transient(np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0]), transients)
             return _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
 
         def record(i: int, s_i: "Structure", orbit: SystemOrbit) -> None:

@@ -490,6 +490,15 @@ class System:
         unknown = set(changes) - set(self._fields())
         if unknown:
             raise UsageError(f"System has no field {sorted(unknown)[0]!r}; fields: {', '.join(self._fields())}")
+        if changes and set(changes) <= {"omega", "h"}:
+            # (only the frequency or the step: the arrays, checked already, shared; the numbers
+            # checked as __init__ checks them. A sweep makes one copy per point and step.)
+            out = object.__new__(System)
+            for name in self.__slots__:
+                object.__setattr__(out, name, getattr(self, name))
+            for name, value in changes.items():
+                object.__setattr__(out, f"_{name}", _nonneg(name, value))
+            return out
         return System(**{**self._fields(), **changes})
 
     def with_rayleigh(self, alpha_M: float, beta_K: float) -> "System":
