@@ -279,15 +279,19 @@ def test_a_requested_accuracy_chooses_h() -> None:
 
 def test_map_runs_through_one_fmu_are_fresh_runs_bit_for_bit() -> None:
     """One FMU instance restores its kept Initialization Mode states between runs (per system and
-    start time): runs alternating two systems, start times, options (Jacobian, observables, windows)
-    and states give the bits of the same runs each in a fresh FMU."""
+    start time; a state kept for another system restored and only the values that differ set):
+    runs alternating four systems (another omega and h, normal load, mass matrix), start times,
+    options (Jacobian, observables, windows) and states give the bits of the same runs each in a
+    fresh FMU."""
     from dryfriction.drivers.system import SystemFMU3
 
     a, b = two_mass(1.4, h=0.05), two_mass(1.8, N=0.3, h=0.04)
+    c = a.replace(omega=1.5)
+    d = System(M=1.5 * a.M, K=a.K, C=a.C, contacts=a.contacts, F_c=a.F_c, omega=a.omega, h=a.h)
     rng = np.random.default_rng(7)
     runs = []
-    for k in range(8):
-        s = a if k % 3 else b
+    for k in range(16):
+        s = (a, b, a, c, d)[k % 5]
         n = s.n
         runs.append((s, dict(start_time=[0.0, 0.7, 1.3][k % 3], sensitivity=bool(k % 2), observe=k != 5,
                              t_obs_stop=[None, 2.5][k % 2], x0=rng.normal(size=n) * 0.2,

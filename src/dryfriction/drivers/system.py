@@ -175,9 +175,10 @@ class SystemFMU3(Driver):
         #: Initialization Mode states of the system's starts (fmi3GetFMUState), per start time,
         #: restored by a start at the same time (a shooting method's map evaluations); the
         #: states of a system no longer run are kept for reuse (their memory)
-        self._init: dict[float, Any] = {}
-        self._init_system: Any = None
-        self._spare: list[Any] = []
+        #: each with the start values it holds (a new system's: the kept state restored and only the
+        #: values that differ set, e.g. omega along a sweep, then kept again)
+        self._init: dict[float, tuple[Any, dict[str, Any]]] = {}
+        self._values: tuple[Any, dict[str, Any]] = (None, {})  # (system, its start values)
         self._step = self.inst.step_function()
         sizes = {"n": self.n, "nc": self.nc, None: 1}
         self._nreal = sum(sizes[d] for _, d in _REALS)
@@ -263,16 +264,20 @@ class SystemFMU3(Driver):
             raise ValueError(f"the observation window [t_obs_start, t_obs_stop] = [{w0!r}, {w1!r}] must be finite "
                              "with t_obs_stop >= t_obs_start")
         inst = self.inst
-        if self._init_system is not self.system:  # (the kept states are of another system)
-            self._init_system = self.system
-            self._spare.extend(self._init.values())
-            self._init.clear()
+        if self._values[0] is not self.system:
+            self._values = (self.system, self.system.start_values())
+        values = self._values[1]
         key = float(start_time)
         kept = self._init.get(key)
         if kept is not None:
-            # the same system and options as a kept Initialization Mode state: restored (its values
-            # bit for bit what the calls below set), then only this run's own values
-            inst.set_state(kept)
+            # a kept Initialization Mode state at this start time restored (its values bit for bit
+            # what setting them anew gives); where it holds another system's, the values that differ
+            # set (n and nc are this instance's) and the state kept again; then this run's own values
+            kept_state, held = kept
+            inst.set_state(kept_state)
+            if held is not values:
+                self._set_start_values({name: value for name, value in values.items() if held.get(name) != value})
+                self._init[key] = (inst.get_state(kept_state), values)
         else:
             if not self._fresh:
                 inst.reset()
@@ -281,15 +286,11 @@ class SystemFMU3(Driver):
             inst.set("UInt64", [self.vars["n"].vr, self.vars["nc"].vr], [self.n, self.nc])
             inst.exit_configuration_mode()
             inst.enter_initialization_mode(float(start_time))
-            for name, value in self.system.start_values().items():
-                if name in ("n", "nc"):
-                    continue
-                v = self.vars[name]
-                vals = [value] if np.ndim(value) == 0 else list(value)
-                if vals:
-                    inst.set(v.call_type, [v.vr], vals)
-            if len(self._init) < 4:  # (a shooting method alternates a few start times)
-                self._init[key] = inst.get_state(self._spare.pop() if self._spare else None)
+            self._set_start_values({name: value for name, value in values.items() if name not in ("n", "nc")})
+            # (a shooting method alternates a few start times: the last 4 kept, the oldest's
+            # memory reused)
+            into = self._init.pop(next(iter(self._init)))[0] if len(self._init) >= 4 else None
+            self._init[key] = (inst.get_state(into), values)
         # (the window and the run's state in one call: their value references and values in order)
         vrs, vals = [self.vars["t_obs_start"].vr, self.vars["t_obs_stop"].vr], [w0, w1]
         for name, values in state.items():
@@ -305,6 +306,20 @@ class SystemFMU3(Driver):
             inst.set("Float64", [vr], vals)
         inst.exit_initialization_mode()
         self.time = float(start_time)
+
+    def _set_start_values(self, values: Mapping[str, Any]) -> None:
+        """Some of :meth:`~dryfriction.system.structure.System.start_values` set (Initialization
+        Mode): one call per type, the variables in the order given."""
+        calls: dict[str, tuple[list[int], list[Any]]] = {}
+        for name, value in values.items():
+            v = self.vars[name]
+            vals = [value] if np.ndim(value) == 0 else value
+            if len(vals):
+                vrs, all_vals = calls.setdefault(v.call_type, ([], []))
+                vrs.append(v.vr)
+                all_vals.extend(vals)
+        for kind, (vrs, all_vals) in calls.items():
+            self.inst.set(kind, vrs, all_vals)
 
     def outputs(self) -> dict[str, np.ndarray]:
         """The current outputs (x, v, a, f, s, mode arrays; E_friction a 0-d array)."""
