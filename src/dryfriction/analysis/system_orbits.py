@@ -96,6 +96,8 @@ class SystemOrbit(OrbitRecord):
     #                                  slider's mode at the section (the map's slide0 there), 0 for a rigid contact
     jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of P^K at the section
     iterations: int = 0
+    # the error estimate's first halving at the section: z(h / 2) - z(h) (empty without the estimate)
+    section_shift: np.ndarray = field(default_factory=lambda: np.zeros(0))
     neutral: bool = False            # a multiplier 1: a continuum of orbits (a Jenkins slider stuck all
     #                                  cycle rests anywhere within its limits; a free mode held by friction)
 
@@ -556,10 +558,12 @@ def _warm_section(M: _Map, z_s: np.ndarray, phase: float, slide: np.ndarray | No
 
 def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
            accuracy: float | None, phase: float | None = None, slide: np.ndarray | None = None,
-           z_s: np.ndarray | None = None) -> SystemOrbit:
+           z_s: np.ndarray | None = None, shift: np.ndarray | None = None) -> SystemOrbit:
     """The orbit from z (at t = 0) at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks
     (module doc); ``phase``: a neighbouring orbit's section (a fraction of the period; ``z_s`` its
-    state there, ``slide`` its sliders' modes there), tried first (:func:`_warm_section`)."""
+    state there, ``slide`` its sliders' modes there), tried first (:func:`_warm_section`); where it
+    is kept, ``shift`` (that orbit's section_shift) starts the orbit at h0 / 2 from this one's at
+    h0 plus the neighbour's difference."""
     warm = _warm_section(M, z_s, phase, slide) if phase is not None and z_s is not None else None
     first = None
     if warm is not None:
@@ -578,18 +582,24 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
     if not orbit.converged or not (estimate_error or accuracy is not None):
         return orbit
     h, prev = h0, orbit
-    for _ in range(MAX_HALVINGS):
+    if warm is None or shift is None or np.size(shift) != M.size:
+        shift = None
+    for halving in range(MAX_HALVINGS):
         h *= 0.5
         Mh = _Map(fmu, M.system.replace(h=h), M.K)
         Mh.slide[:] = M.slide  # (the same section, its sliders started as at h)
         fmu.system = Mh.system
-        fine, zc = _chord(Mh, prev, t_s, S, tol, h)  # (steps with the coarser orbit's Jacobian)
+        # (steps with the coarser orbit's Jacobian)
+        fine, zc = _chord(Mh, prev, t_s, S, tol, h, shift if halving == 0 else None)
         if fine is None:  # (a full Newton solve at h, the Jacobian's too, from where the chord got)
             zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, zc, t_s, S, tol, max_iter)
             fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
         if not fine.converged:
             prev.reason = f"the error estimate's solve at h = {h:.6g} did not converge: {why}"
             break
+        if halving == 0:
+            first_shift = fine.section_state - orbit.section_state
+        fine.section_shift = first_shift
         diff = fine.amplitude - prev.amplitude
         fine.error = float(np.max(np.abs(diff)) / 3.0)
         fine.amplitude_extrapolated = fine.amplitude + diff / 3.0
@@ -605,15 +615,17 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
 
 
 def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float,
-           h: float) -> tuple[SystemOrbit | None, np.ndarray]:
+           h: float, shift: np.ndarray | None = None) -> tuple[SystemOrbit | None, np.ndarray]:
     """The orbit at the finer step of M from the coarser one by chord steps (Newton with the coarser
     orbit's Jacobian: the two orbits differ by the scheme's O(h^2), and each step cuts the residual by
     about the two Jacobians' difference, O(h^2) too) on map evaluations without the Jacobian, while
     each step cuts the residual to CHORD_RATE of the last at least (at most CHORD_STEPS steps); its
     multipliers the coarser orbit's (they differ by O(h^2) too). (orbit, its state), or (None, the
-    last state reached) where the chord does not get there (then a full Newton solve from that state)."""
+    last state reached) where the chord does not get there (then a full Newton solve from that state).
+    ``shift``: added to the coarser orbit's state for the first iterate (a neighbouring orbit's
+    difference between the two steps)."""
     J = coarse.jacobian
-    z = M.project(coarse.section_state)
+    z = M.project(coarse.section_state if shift is None else coarse.section_state + shift)
     if not np.all(np.isfinite(J)):
         return None, z
     sh = _Shooting(M, S)
