@@ -581,7 +581,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
     orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
     if not orbit.converged or not (estimate_error or accuracy is not None):
         return orbit
-    h, prev = h0, orbit
+    h, prev, first_shift = h0, orbit, np.zeros(0)
     if warm is None or shift is None or np.size(shift) != M.size:
         shift = None
     for halving in range(MAX_HALVINGS):

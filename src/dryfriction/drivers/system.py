@@ -172,11 +172,10 @@ class SystemFMU3(Driver):
             shutil.rmtree(self.unzip_dir, ignore_errors=True)
             raise
         self._fresh = True
-        #: Initialization Mode states of the system's starts (fmi3GetFMUState), per start time,
-        #: restored by a start at the same time (a shooting method's map evaluations); the
-        #: states of a system no longer run are kept for reuse (their memory)
-        #: each with the start values it holds (a new system's: the kept state restored and only the
-        #: values that differ set, e.g. omega along a sweep, then kept again)
+        #: Initialization Mode states of the starts (fmi3GetFMUState) of the last four start times,
+        #: each with the start values it holds, restored by a start at the same time (a shooting
+        #: method's map evaluations); for another system of these sizes restored with only the
+        #: values that differ set (omega along a sweep), then kept again
         self._init: dict[float, tuple[Any, dict[str, Any]]] = {}
         self._values: tuple[Any, dict[str, Any]] = (None, {})  # (system, its start values)
         self._step = self.inst.step_function()

@@ -493,7 +493,7 @@ class System:
         if changes and set(changes) <= {"omega", "h"}:
             # (only the frequency or the step: the arrays, checked already, shared; the numbers
             # checked as __init__ checks them. A sweep makes one copy per point and step.)
-            out = object.__new__(System)
+            out = object.__new__(type(self))
             for name in self.__slots__:
                 object.__setattr__(out, name, getattr(self, name))
             for name, value in changes.items():
