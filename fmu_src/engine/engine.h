@@ -361,6 +361,10 @@ typedef struct {
     int account_energy;         /* keep eng_state's energy accounts (O(n) per step; no stuck fast path) */
     int fast_paths;             /* skip work a run does not need, to the same numbers: the located scheme's
                                  * stuck fast path where the model supplies ops.breakaway */
+    /* the relative rounding of a trial's velocities and forces, in DBL_EPSILON of their magnitudes
+     * (0: a few ulps); the located switch search treats margins within it as zero (roots.h's fnoise:
+     * a search stops where its bracket's signs are rounding, not at the ulps of the time) */
+    double margin_rounding;
     double rate_max;            /* the model's fastest rate (1/s): a step with rate_max h > 10 does not
                                  * resolve the motion (located hands it to the consistent test), and
                                  * A is re-based on a new step length only where rate_max h <= 1 */
@@ -501,6 +505,12 @@ typedef struct {
 /* ---- the engine ---------------------------------------------------------------------------------- */
 
 typedef struct eng eng;
+
+/* eng_setup.margin_rounding for a model whose trials solve dense systems of size n (Cholesky or
+ * modal): 16 ulps a DOF of the margins' terms (n = 128: 1e-13 of a slip velocity's terms measured,
+ * 4.5e-13 given); 0 for n = 1 (a scalar solve rounds at an ulp, inside the time's tolerance: a
+ * one-DOF structure stays the oscillator to the bit). */
+static inline double eng_dense_margin_rounding(size_t n) { return (n > 1) ? 16.0 * (double)n : 0.0; }
 
 /* Check a setup; NULL when valid, else a sentence naming the field and value, written to buf. */
 const char *eng_check_setup(const eng_setup *S, char *buf, size_t len);

@@ -162,6 +162,14 @@ static double row_dot(const eng_row *R, const double *x)
     return d;
 }
 
+/* sum |w_k x_k| over the row (the terms of w . x) */
+static double row_abs_dot(const eng_row *R, const double *x)
+{
+    double d = 0.0;
+    for (size_t k = 0; k < R->nnz; k++) d += fabs(R->w[k] * x[R->idx[k]]);
+    return d;
+}
+
 /* y += c w_j */
 static void row_axpy(const eng_row *R, double c, double *y)
 {
@@ -1984,11 +1992,14 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             continue;
         }
         /* bracket the first switch: (lo, hi] with margin(lo) > 0 >= margin(hi) */
-        double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY;
+        double hi = r, ghi = INFINITY, lo = 0.0, glo = INFINITY, gscale = 0.0;
         for (size_t j = 0; j < nc; j++) {
             if (!E->cand[j]) continue;
             ghi = fmin(ghi, margin(E, E->st, j, E->V1, E->f));
             glo = (E->st[j] != 0) ? fmin(glo, E->st[j] * slip(E, j, s->V)) : -INFINITY;
+            if (S->margin_rounding > 0.0) /* (the margin's terms: the slip's, or the force and its limit) */
+                gscale = fmax(gscale, (E->st[j] != 0) ? row_abs_dot(&S->rows[j], E->V1) + fabs(E->vb[j])
+                                                      : E->Fb[j] + fabs(E->f[j]));
         }
         if (!(glo > 0.0)) {
             lo = r;
@@ -2021,7 +2032,7 @@ static ENG_HOT eng_status step_located(eng *E, const eng_inputs *in, eng_state *
             if (stop && s->switches != sw0) return ENG_SWITCHED;
             continue;
         }
-        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi);
+        double hs = dfo_root_bracketed(margin_fn, &mc, s->t, lo, glo, hi, ghi, S->margin_rounding * DBL_EPSILON * gscale);
         if (isnan(hs)) hs = hi; /* (no bracket: only a NaN margin, reported as an error below) */
         trial_again(&mc, hs, &T); /* (the root's last trial where it was of hs) */
         s->solves++;

@@ -5,9 +5,12 @@
 #include <float.h>
 #include <math.h>
 
-double dfo_root_bracketed(dfo_root_fn f, void *ctx, double x0, double lo, double flo, double hi, double fhi)
+double dfo_root_bracketed(dfo_root_fn f, void *ctx, double x0, double lo, double flo, double hi, double fhi,
+                          double fnoise)
 {
     if (isnan(flo) || isnan(fhi)) return NAN;
+    /* the x over which f changes by its rounding (0: none, or no finite slope) */
+    const double xnoise = (fnoise > 0.0 && isfinite(fhi - flo) && fhi != flo) ? fnoise * fabs((hi - lo) / (fhi - flo)) : 0.0;
     if (flo == 0.0) return lo;
     /* s f has s f(lo) > 0 >= s f(hi): the search below is written for that orientation (s = 1
      * keeps every value's bits, s = -1 flips the signs exactly) */
@@ -18,7 +21,8 @@ double dfo_root_bracketed(dfo_root_fn f, void *ctx, double x0, double lo, double
         if (fb == 0.0) return b;
         if ((fb > 0.0) == (fc > 0.0)) { c = a; fc = fa; d = e = b - a; }
         if (fabs(fc) < fabs(fb)) { a = b; b = c; c = a; fa = fb; fb = fc; fc = fa; }
-        const double tol = 4.0 * DBL_EPSILON * (fabs(x0) + fabs(b)) + DBL_MIN;
+        double tol = 4.0 * DBL_EPSILON * (fabs(x0) + fabs(b)) + DBL_MIN;
+        if (tol < xnoise) tol = xnoise;
         const double m = 0.5 * (c - b);
         if (fabs(m) <= tol) break;
         if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {

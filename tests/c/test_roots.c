@@ -10,7 +10,11 @@
  *    (the first exact zero met is returned), f constant on each side of r (a sign jump: the jump
  *    found to the tolerance, in at most as many evaluations as printed).
  * 4. Orientation: increasing f, lo > hi: the same root; no bracket (both ends of one sign, a NaN):
- *    NaN. */
+ *    NaN.
+ * 5. A noisy f (a line plus a deterministic rounding-like noise of amplitude d): with fnoise = d the
+ *    search stops within the x over which the line changes by about d (d / slope) of the root, on
+ *    hi's side, in fewer evaluations than without (which bisects on the noise's signs); fnoise = 0
+ *    keeps every bit of the search without it (the same x and evaluations). */
 #include "check.h"
 #include "roots.h"
 
@@ -24,7 +28,18 @@ typedef struct {
     long evals;
 } fn_ctx;
 
-enum { POLY1, POLY3, COS, EXPM2, POW9, FLAT_ZERO, JUMP, SMOOTH };
+enum { POLY1, POLY3, COS, EXPM2, POW9, FLAT_ZERO, JUMP, SMOOTH, NOISY };
+
+/* a deterministic noise in [-1, 1] of x's bits (a hash of them) */
+static double noise_of(double x)
+{
+    union { double d; unsigned long long u; } b = {x};
+    unsigned long long h = b.u * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 29;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 32;
+    return (double)(h >> 11) / 4503599627370496.0 - 1.0; /* (2^53 values over [0, 2), minus 1) */
+}
 
 static double f_eval(void *ctx, double x)
 {
@@ -40,6 +55,7 @@ static double f_eval(void *ctx, double x)
     case FLAT_ZERO: return (x < c->r) ? 1.0 : (x > c->r + c->a) ? -1.0 : 0.0;
     case JUMP: return (x < c->r) ? 3.0 : -0.5;
     case SMOOTH: return c->a * (c->r - x) + 0.3 * sin(7.0 * x) * (c->r - x) * (c->r - x);
+    case NOISY: return (c->r - x) + c->a * noise_of(x);
     }
     return NAN;
 }
@@ -53,7 +69,7 @@ static double check_root(checks *T, fn_ctx *c, double x0, double lo, double hi, 
     c->evals = 0;
     const double flo = f_eval(c, lo), fhi = f_eval(c, hi);
     c->evals = 0;
-    const double x = dfo_root_bracketed(f_eval, c, x0, lo, flo, hi, fhi);
+    const double x = dfo_root_bracketed(f_eval, c, x0, lo, flo, hi, fhi, 0.0);
     CHECK_RANGE(root - 2.0 * tol_at(x0, root), root + 2.0 * tol_at(x0, root), x);
     const double fx = f_eval(c, x);
     c->evals--;
@@ -102,9 +118,9 @@ static void test_ends(checks *T, long *evals)
     fn_ctx c = {POLY1, 0.0, 1.0, 0};
     double fz = f_eval(&c, 0.0);
     CHECK(fz == 0.0);
-    CHECK_SAME(0.0, dfo_root_bracketed(f_eval, &c, 0.0, 0.0, fz, 1.0, f_eval(&c, 1.0))); /* f(lo) = 0 */
+    CHECK_SAME(0.0, dfo_root_bracketed(f_eval, &c, 0.0, 0.0, fz, 1.0, f_eval(&c, 1.0), 0.0)); /* f(lo) = 0 */
     c.r = 1.0;
-    CHECK_SAME(1.0, dfo_root_bracketed(f_eval, &c, 0.0, 0.0, f_eval(&c, 0.0), 1.0, f_eval(&c, 1.0))); /* f(hi) = 0 */
+    CHECK_SAME(1.0, dfo_root_bracketed(f_eval, &c, 0.0, 0.0, f_eval(&c, 0.0), 1.0, f_eval(&c, 1.0), 0.0)); /* f(hi) = 0 */
     c.r = nextafter(0.0, 1.0) * 4;  /* just above lo */
     check_root(T, &c, 0.0, 0.0, 1.0, c.r, evals);
     c.r = nextafter(1.0, 0.0);      /* an ulp below hi */
@@ -122,7 +138,7 @@ static void test_flat(checks *T, long *evals_jump)
     long e = 0;
     check_root(T, &c, 0.0, 0.0, 1.0, 0.6, &e);
     c = (fn_ctx){FLAT_ZERO, 0.2, 0.3, 0};
-    const double x = dfo_root_bracketed(f_eval, &c, 0.0, 0.0, 1.0, 1.0, -1.0);
+    const double x = dfo_root_bracketed(f_eval, &c, 0.0, 0.0, 1.0, 1.0, -1.0, 0.0);
     CHECK_RANGE(0.2, 0.5, x);
     CHECK_SAME(0.0, f_eval(&c, x));
     for (int k = 0; k < 40; k++) {
@@ -140,10 +156,41 @@ static void test_orientation(checks *T)
     check_root(T, &c, 0.0, 0.0, 1.0, 0.3, NULL);
     c.a = 2.0;                        /* lo > hi */
     check_root(T, &c, 0.0, 1.0, 0.0, 0.3, NULL);
-    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, 1.0, 1.0, 2.0)));
-    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, -1.0, 1.0, -2.0)));
-    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, NAN, 1.0, -2.0)));
-    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, 1.0, 1.0, NAN)));
+    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, 1.0, 1.0, 2.0, 0.0)));
+    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, -1.0, 1.0, -2.0, 0.0)));
+    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, NAN, 1.0, -2.0, 0.0)));
+    CHECK(isnan(dfo_root_bracketed(f_eval, &c, 0.0, 0.0, 1.0, 1.0, NAN, 0.0)));
+    T->context = NULL;
+}
+
+static void test_noisy(checks *T)
+{
+    T->context = "noisy";
+    int fewer = 0;
+    long total_with = 0, total_without = 0;
+    for (int k = 0; k < 200; k++) {
+        const double d = ldexp(1.0, -40 - k % 8);         /* noise 9.1e-13 .. 7.1e-15 */
+        fn_ctx c = {NOISY, 0.3 + 1e-3 * k, d, 0};
+        const double x0 = (double)(k % 3), lo = 0.0, hi = 0.5 + 1e-3 * (k % 7);
+        const double flo = f_eval(&c, lo), fhi = f_eval(&c, hi);
+        c.evals = 0;
+        const double x = dfo_root_bracketed(f_eval, &c, x0, lo, flo, hi, fhi, d);
+        const long with = c.evals;
+        /* within the noise's reach of the root (d / slope, slope 1, plus the time tolerance), and
+         * on hi's side as every search returns it */
+        CHECK_RANGE(c.r - 4.0 * d - 2.0 * tol_at(x0, c.r), c.r + 4.0 * d + 2.0 * tol_at(x0, c.r), x);
+        CHECK(f_eval(&c, x) <= 0.0);
+        c.evals = 0;
+        const double x_plain = dfo_root_bracketed(f_eval, &c, x0, lo, flo, hi, fhi, 0.0);
+        const long without = c.evals;
+        total_with += with;
+        total_without += without;
+        fewer += with < without;
+        CHECK_RANGE(c.r - 4.0 * d - 2.0 * tol_at(x0, c.r), c.r + 4.0 * d + 2.0 * tol_at(x0, c.r), x_plain);
+    }
+    CHECK(fewer >= 100 && total_with < total_without);
+    printf("noisy f: fewer evaluations with its rounding given in %d of 200 searches (%ld against %ld)\n", fewer,
+           total_with, total_without);
     T->context = NULL;
 }
 
@@ -155,6 +202,7 @@ int main(void)
     test_ends(T, &evals);
     test_flat(T, &evals_jump);
     test_orientation(T);
+    test_noisy(T);
     printf("known roots and ends: at most %ld evaluations; a sign jump: at most %ld\n", evals, evals_jump);
     return checks_done(T, "test_roots");
 }

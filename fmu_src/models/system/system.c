@@ -803,6 +803,7 @@ int sys_model_init(sys_model *m, const sys_params *p, const eng_alloc *al, int a
     S.account_energy = account_energy;
     S.fast_paths = m->one_dof; /* (else no closed-form breakaway: nothing to skip) */
     S.rate_max = m->rate;
+    S.margin_rounding = eng_dense_margin_rounding(p->n); /* (dense solves: O(n) ulps) */
     /* the oscillator's (and TwoMass's) snap of a host's rounded times to the grid */
     S.snap_max_rel_h = 1e-5;
     S.snap_min_rel_h = 1e-7;

@@ -153,6 +153,7 @@ int tm_model_init(tm_model *m, const tm_params *p, const eng_alloc *al, char *bu
     S.friction_updates = p->frictionUpdates;
     S.fast_paths = p->fastPaths;
     S.rate_max = tm_rate_max(p);
+    S.margin_rounding = eng_dense_margin_rounding(2); /* (its dense 2 x 2 solves, as the structure's) */
     /* the oscillator's snap of a host's rounded times to the grid */
     S.snap_max_rel_h = 1e-5;
     S.snap_min_rel_h = 1e-7;
