@@ -312,3 +312,23 @@ def test_map_runs_through_one_fmu_are_fresh_runs_bit_for_bit() -> None:
         with SystemFMU3(s) as f:
             fresh = go(f, s, kw)
         assert all(np.array_equal(x, y, equal_nan=True) for x, y in zip(shared[k], fresh)), k
+
+
+def test_modes_at_reads_the_modes_record_at_reads() -> None:
+    """SystemFMU3.modes_at (the section's sampled cycle) steps as record_at does: the same modes at
+    every time, the same end state; bad times refused."""
+    from dryfriction.drivers.system import SystemFMU3
+
+    s = two_mass(1.4, h=0.05)
+    t = np.linspace(0.3, 0.3 + 2 * 2 * np.pi / 1.4, 301)
+    with SystemFMU3(s) as fmu:
+        fmu.start(0.3, observe=False, x0=[0.4, -0.2], v0=[0.1, 0.0])
+        run = fmu.record_at(t)
+        end = fmu.outputs()
+        fmu.start(0.3, observe=False, x0=[0.4, -0.2], v0=[0.1, 0.0])
+        modes = fmu.modes_at(t)
+        assert modes.dtype == np.int8 and modes.shape == run.mode.shape
+        assert np.array_equal(modes, run.mode) and len({tuple(m) for m in modes}) >= 2  # (it switches)
+        assert all(np.array_equal(a, b) for a, b in zip(fmu.outputs().values(), end.values()))
+        with pytest.raises(ValueError, match="strictly increasing"):
+            fmu.modes_at([fmu.time, fmu.time])

@@ -197,8 +197,7 @@ class _Map:
         f = self.fmu
         f.start(t_s, observe=False, x0=z[:n], v0=z[n:2 * n], f0=self.f0(z), slide0=self.slide)
         t = t_s + np.linspace(0.0, self.KT, self.K * samples + 1)
-        run = f.record_at(t)
-        return run.t, run.mode
+        return t, f.modes_at(t)
 
 
 def _scales(system: "Structure", x_max: np.ndarray, x_min: np.ndarray, jenk: np.ndarray) -> np.ndarray:

@@ -388,6 +388,29 @@ class SystemFMU3(Driver):
         x_max, x_min, sf = self.observables()
         return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8), x_max, x_min, sf, self.transitions())
 
+    def modes_at(self, times: np.ndarray) -> np.ndarray:
+        """Step from the current time through ``times`` (strictly increasing 1-D floats, the first the
+        current time) reading only the contacts' modes at each: [nt, nc] int8 (-1, 0, +1; what
+        :meth:`record_at` reads as ``mode``, without the other outputs)."""
+        t = np.asarray(times, dtype=float)
+        if t.ndim != 1 or t.size < 1 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0) or t[0] != self.time:
+            raise ValueError("the times must be a strictly increasing 1-D sequence from the current time")
+        modes = np.zeros((t.size, self.nc), dtype=self._mode_dtype)
+        get_modes, step = self._get_modes, self._step
+        if get_modes is None:  # (no contacts)
+            for i in range(1, t.size):
+                step(float(t[i - 1]), float(t[i] - t[i - 1]))
+        else:
+            base, row = modes.ctypes.data, modes.strides[0]
+            get_modes(base)
+            tl = t.tolist()
+            for i in range(1, t.size):
+                step(tl[i - 1], tl[i] - tl[i - 1])
+                get_modes(base + i * row)
+        self.time = float(t[-1])
+        self.inst.flush_warnings()
+        return modes.astype(np.int8)
+
     def observables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The in-FMU observables now: x_max, x_min (n) and stick_fraction (nc) over the observation
         window up to the current time (NaN each when the run was started with ``observe=False``)."""
