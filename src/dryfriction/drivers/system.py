@@ -172,7 +172,7 @@ class SystemFMU3(Driver):
             shutil.rmtree(self.unzip_dir, ignore_errors=True)
             raise
         self._fresh = True
-        #: Initialization Mode states of the starts (fmi3GetFMUState) of the last four start times,
+        #: Initialization Mode states of the starts (fmi3GetFMUState) of up to four start times,
         #: each with the start values it holds, restored by a start at the same time (a shooting
         #: method's map evaluations); for another system of these sizes restored with only the
         #: values that differ set (omega along a sweep), then kept again
@@ -286,8 +286,8 @@ class SystemFMU3(Driver):
             inst.exit_configuration_mode()
             inst.enter_initialization_mode(float(start_time))
             self._set_start_values({name: value for name, value in values.items() if name not in ("n", "nc")})
-            # (a shooting method alternates a few start times: the last 4 kept, the oldest's
-            # memory reused)
+            # (a shooting method alternates a few start times: 4 kept, a fifth replaces the one
+            # kept first, its memory reused)
             into = self._init.pop(next(iter(self._init)))[0] if len(self._init) >= 4 else None
             self._init[key] = (inst.get_state(into), values)
         # (the window and the run's state in one call: their value references and values in order)
@@ -359,6 +359,21 @@ class SystemFMU3(Driver):
         """Step from the current time through ``times`` (strictly increasing; the first is the
         current time), reading the outputs at each. ``inputs``: values held from now on, or a
         function ``(t, outputs) -> values`` called before each step."""
+        t, reals, modes = self._walk(times, inputs, True)
+        assert reals is not None
+        x, v, a, f, s, E = self._split(reals)
+        x_max, x_min, sf = self.observables()
+        return SystemRun(t, x, v, a, f, s, E, modes, x_max, x_min, sf, self.transitions())
+
+    def modes_at(self, times: Iterable[float] | np.ndarray) -> np.ndarray:
+        """Step as :meth:`record_at` does, reading only the contacts' modes at each time: [nt, nc]
+        int8 (-1, 0, +1), its ``mode`` without the other outputs (a section's sampled cycle)."""
+        return self._walk(times, None, False)[2]
+
+    def _walk(self, times: Iterable[float] | np.ndarray, inputs: Inputs | None,
+              with_reals: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """Step through ``times`` (checked), reading the modes and, ``with_reals``, the real outputs
+        at each: (t, reals [nt, *] or None, modes [nt, nc] int8)."""
         t = np.asarray(list(times) if not isinstance(times, np.ndarray) else times, dtype=float)
         if t.ndim != 1 or t.size < 1 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
             raise ValueError("the output times must be a non-empty, finite, strictly increasing 1-D sequence")
@@ -366,12 +381,14 @@ class SystemFMU3(Driver):
             raise ValueError(f"the first output time {t[0]!r} must be the current time {self.time!r}")
         if inputs is not None and not callable(inputs):
             self.set_inputs(inputs)
-        reals = np.empty((t.size, self._nreal))
+        reals = np.empty((t.size, self._nreal)) if with_reals else None
         modes = np.zeros((t.size, self.nc), dtype=self._mode_dtype)
-        base_r, row_r = reals.ctypes.data, reals.strides[0]
+        get_reals = self._get_reals if with_reals else None
+        get_modes, step = self._get_modes, self._step
+        base_r, row_r = (reals.ctypes.data, reals.strides[0]) if reals is not None else (0, 0)
         base_m, row_m = modes.ctypes.data, modes.strides[0]
-        get_reals, get_modes, step = self._get_reals, self._get_modes, self._step
-        get_reals(base_r)
+        if get_reals is not None:
+            get_reals(base_r)
         if get_modes is not None:
             get_modes(base_m)
         tl = t.tolist()
@@ -380,36 +397,12 @@ class SystemFMU3(Driver):
                 self.set_inputs(inputs(self.time, self.outputs()))
             step(self.time, tl[i] - self.time)
             self.time = tl[i]
-            get_reals(base_r + i * row_r)
+            if get_reals is not None:
+                get_reals(base_r + i * row_r)
             if get_modes is not None:
                 get_modes(base_m + i * row_m)
         self.inst.flush_warnings()
-        x, v, a, f, s, E = self._split(reals)
-        x_max, x_min, sf = self.observables()
-        return SystemRun(t, x, v, a, f, s, E, modes.astype(np.int8), x_max, x_min, sf, self.transitions())
-
-    def modes_at(self, times: np.ndarray) -> np.ndarray:
-        """Step from the current time through ``times`` (strictly increasing 1-D floats, the first the
-        current time) reading only the contacts' modes at each: [nt, nc] int8 (-1, 0, +1; what
-        :meth:`record_at` reads as ``mode``, without the other outputs)."""
-        t = np.asarray(times, dtype=float)
-        if t.ndim != 1 or t.size < 1 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0) or t[0] != self.time:
-            raise ValueError("the times must be a strictly increasing 1-D sequence from the current time")
-        modes = np.zeros((t.size, self.nc), dtype=self._mode_dtype)
-        get_modes, step = self._get_modes, self._step
-        if get_modes is None:  # (no contacts)
-            for i in range(1, t.size):
-                step(float(t[i - 1]), float(t[i] - t[i - 1]))
-        else:
-            base, row = modes.ctypes.data, modes.strides[0]
-            get_modes(base)
-            tl = t.tolist()
-            for i in range(1, t.size):
-                step(tl[i - 1], tl[i] - tl[i - 1])
-                get_modes(base + i * row)
-        self.time = float(t[-1])
-        self.inst.flush_warnings()
-        return modes.astype(np.int8)
+        return t, reals, modes.astype(np.int8)
 
     def observables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The in-FMU observables now: x_max, x_min (n) and stick_fraction (nc) over the observation
