@@ -316,15 +316,13 @@ class _Shooting:
 
 
 def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float,
-            max_iter: int, first: tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]] | None = None,
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int, str, dict[str, np.ndarray], np.ndarray]:
+            max_iter: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int, str, dict[str, np.ndarray],
+                                    np.ndarray]:
     """Newton on P(z) - z from z at t_s (:func:`~dryfriction.analysis.shooting.newton`, 12 halvings of a
     step, any decrease accepted): (z, P(z), J, scaled residual, iterations, reason, observables, the
-    scales S: given, or those of the first evaluation's cycle). ``first``: M(z, t_s) already
-    evaluated (z then projected already)."""
-    if first is None:
-        z = M.project(z)
-        first = M(z, t_s)
+    scales S: given, or those of the first evaluation's cycle)."""
+    z = M.project(z)
+    first = M(z, t_s)
     if S is None:
         S = _scales(M.system, first[2]["x_max"], first[2]["x_min"], M.jenk)
     n = newton(_Shooting(M, S), z, t_s, tol, max_iter, halvings=12, armijo=0.0, first=first)
@@ -525,48 +523,45 @@ def _same(a: SystemOrbit, b: SystemOrbit) -> bool:
     return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale)
 
 
-def _warm_section(M: _Map, z_s: np.ndarray, phase: float, slide: np.ndarray | None = None,
-                  ) -> tuple[float, np.ndarray, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] | None:
-    """Newton's first evaluation at a neighbouring orbit's section: at ``phase`` (a fraction of M's
-    period) from that orbit's state there ``z_s``, its sliders in the modes ``slide`` (default all
-    stuck), kept where the run ends (a period later, at the same phase) with the modes still that
-    section's (each live Jenkins slider in its mode, every rigid contact sliding): (t_s, the start
-    state, the evaluation), M.slide set to those modes. None when the phase is 0 or the modes
-    differ: then :func:`_section` chooses anew. No run to the section: the neighbour's state there is
-    the guess."""
+def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None = None) -> tuple[float, np.ndarray] | None:
+    """The section at ``phase`` (a fraction of M's period: a neighbouring orbit's section, whose
+    sliders had the modes ``slide`` there: default all stuck) when the modes there are still that
+    section's (each live Jenkins slider in its mode, every rigid contact sliding), and the state z
+    carried to it, M.slide set to those modes; None when the phase is 0 or the modes differ: then
+    :func:`_section` chooses anew. One run to the section (without the Jacobian) instead of the
+    guess's sampled cycle: it carries the neighbour's state under this structure's forces, a better
+    start than the neighbour's own state at the section where a Newton step (with the Jacobian)
+    costs several runs."""
     t_s = phase * M.KT
-    if not (0.0 < t_s < M.KT) or z_s is None or np.size(z_s) != M.size:
+    if not (0.0 < t_s < M.KT):
         return None
     sysm = M.system
     live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
     want = np.zeros(sysm.nc, dtype=int) if slide is None or np.size(slide) != sysm.nc else np.asarray(slide, dtype=int)
-    jenk = sysm.k_t > 0.0
-    M.slide[:] = np.where(jenk, want, 0)
-    z = M.project(np.asarray(z_s, dtype=float))
+    M.slide[:] = 0
     try:
-        first = M(z, t_s)
+        zs, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
     except FMUCallError:
-        M.slide[:] = 0
         return None
     mode = M.last_mode
+    jenk = sysm.k_t > 0.0
     if np.any(mode[live & jenk] != want[live & jenk]) or np.any(mode[live & ~jenk] == 0):
-        M.slide[:] = 0
         return None
-    return t_s, z, first
+    M.slide[jenk] = want[jenk]
+    return t_s, zs
 
 
 def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
            accuracy: float | None, phase: float | None = None, slide: np.ndarray | None = None,
-           z_s: np.ndarray | None = None, shift: np.ndarray | None = None) -> SystemOrbit:
+           shift: np.ndarray | None = None) -> SystemOrbit:
     """The orbit from z (at t = 0) at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks
-    (module doc); ``phase``: a neighbouring orbit's section (a fraction of the period; ``z_s`` its
-    state there, ``slide`` its sliders' modes there), tried first (:func:`_warm_section`); where it
-    is kept, ``shift`` (that orbit's section_shift) starts the orbit at h0 / 2 from this one's at
-    h0 plus the neighbour's difference."""
-    warm = _warm_section(M, z_s, phase, slide) if phase is not None and z_s is not None else None
-    first = None
+    (module doc); ``phase``: a neighbouring orbit's section (a fraction of the period; ``slide`` its
+    sliders' modes there), tried first (:func:`_warm_section`); where it is kept, ``shift`` (that
+    orbit's section_shift) starts the orbit at h0 / 2 from this one's at h0 plus the neighbour's
+    difference."""
+    warm = _warm_section(M, z, phase, slide) if phase is not None else None
     if warm is not None:
-        t_s, z, first = warm
+        t_s, z = warm
     else:
         try:
             t_s = _section(M, z)
@@ -576,7 +571,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
             slide, M.slide[:] = M.slide.copy(), 0
             z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
             M.slide[:] = slide
-    z, Pz, J, r, it, reason, obs, S = _newton(M, z, t_s, None, tol, max_iter, first)
+    z, Pz, J, r, it, reason, obs, S = _newton(M, z, t_s, None, tol, max_iter)
     orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
     if not orbit.converged or not (estimate_error or accuracy is not None):
         return orbit

@@ -109,7 +109,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
             phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
             orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy, phase, prev.section_slide,
-                           prev.section_state, prev.section_shift)
+                           prev.section_shift)
             return orbit if orbit.converged else None
 
         def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:
