@@ -186,6 +186,25 @@ def test_the_frequency_response_follows_the_orbits() -> None:
 
 
 @loops
+def test_a_response_through_a_resonance_from_its_branch_is_the_cold_orbits() -> None:
+    """Through the resonance at omega = 1 (mass 0 at 5.2, its slider stuck a sixty-fourth of the cycle,
+    the stretch moving along the cycle from point to point): each point started from the branch's
+    last orbits extrapolated (and its section found near the last one's) is the orbit found cold at
+    its frequency: amplitudes within the two error estimates (at 100 steps a period the orbits of two
+    sections differ by the scheme's error: their grids differ; measured 5e-5 relative), the same
+    stability."""
+    system = two_mass(1.0, h=2 * np.pi / 100)
+    f = np.linspace(0.98, 1.0, 7) / (2 * np.pi)
+    ds = dfo.frequency_response(system, f)
+    assert bool(ds["converged"].all())
+    for i, fi in enumerate(f):
+        (cold,) = find_system_orbits(system.replace(omega=2 * np.pi * fi))
+        bound = 2.0 * (float(ds["error_m"].values[i]) + cold.error)
+        assert np.abs(ds["amplitude_m"].values[i] - cold.amplitude).max() <= bound, (i, cold.amplitude, bound)
+        assert bool(ds["stable"].values[i]) == cold.stable
+
+
+@loops
 def test_the_command_line_writes_the_response_and_prints_orbits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``dryfriction system response`` writes response.csv, .nc and .png (the CSV's numbers the table's),
     ``system orbits --json`` prints the orbit; a --dof beyond the structure is one readable line."""

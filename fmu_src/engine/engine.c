@@ -105,7 +105,7 @@ void eng_destroy(eng *E)
 {
     if (!E) return;
     void *const ptrs[] = {E->mu_b, E->u, E->Nn, E->mukN, E->Fb, E->mlN, E->zero_nc, E->A0, E->xp, E->ph,
-                          E->V1, E->r, E->y, E->y2, E->X0, E->acc, E->jk, E->rb, E->lim, E->f, E->f2, E->st,
+                          E->V1, E->r, E->y, E->y2, E->X0, E->V0, E->acc, E->jk, E->rb, E->lim, E->f, E->f2, E->st,
                           E->cand, E->held, E->st2, E->mode0, E->frozen, E->tmode, E->ccol, E->cok, (void *)E->colp,
                           E->D, E->Lc, E->rhs, E->sol,
                           E->Dinv, E->gDinv, E->gd_cv, E->gd_sel, E->lM, E->lq, E->lz, E->lw, E->zb, E->guess, E->sel, E->Jn, E->res, E->sX, E->sV,
@@ -206,7 +206,7 @@ eng *eng_create(const eng_setup *S, const eng_alloc *al, const char **err)
     E->g = dfo_bossak_gamma(S->alpha);
     E->b = dfo_bossak_beta(S->alpha);
     E->g1 = (1.0 - E->g) / E->g;
-    double **dn[] = {&E->u, &E->A0, &E->xp, &E->ph, &E->V1, &E->r, &E->y, &E->y2, &E->X0, &E->acc, &E->jk, &E->rb,
+    double **dn[] = {&E->u, &E->A0, &E->xp, &E->ph, &E->V1, &E->r, &E->y, &E->y2, &E->X0, &E->V0, &E->acc, &E->jk, &E->rb,
                      &E->sX, &E->sV, &E->sA, &E->shA};
     double **dc[] = {&E->mu_b, &E->Nn, &E->mukN, &E->Fb, &E->mlN, &E->zero_nc, &E->lim, &E->f, &E->f2,
                      &E->rhs, &E->sol, &E->res, &E->sF, &E->hlim, &E->hf, &E->tbk};

@@ -473,6 +473,10 @@ typedef struct {
     const double *f;            /* nc: the contact forces over it (for the work: the step's end value, or
                                  * for Stribeck the mean of its ends) */
     const double *v_belt;       /* nc: belts (NULL: fixed) */
+    const double *V0;           /* n: velocities at ta (with V1: a smooth motion's cubic between its ends, for
+                                 * an observer's extremes inside the phase; NULL: not given, a model's own
+                                 * observer call) */
+    const double *V1;           /* n: velocities at tb (NULL with V0) */
 } eng_phase;
 
 /* The observer: on_phase is called only for phases that overlap [t_start, t_stop] (so a run that

@@ -61,7 +61,7 @@ struct eng {
     dfo_bossak_kin kin_grid;     /* the kinematics of a grid step h */
     double *zero_nc;
     /* per-DOF workspace */
-    double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *acc, *jk;
+    double *A0, *xp, *ph, *V1, *r, *y, *y2, *X0, *V0, *acc, *jk; /* (X0, V0: an observed phase's start) */
     double *ew;                  /* 3 n: the energy accounts' work (account; NULL without them) */
     int jk_ok;                   /* jk holds the jerks of the current phase's start (begin_phase clears it) */
     int *rpin;                   /* n: the pins (needs_rebase's) of the current phase's start, where rpin_ok */

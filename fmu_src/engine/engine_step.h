@@ -1202,6 +1202,7 @@ static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const en
     E->tjk_ok = 0;  /* (and the tangent's jerks) */
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
+    memcpy(E->V0, s->V, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }
 
@@ -1218,6 +1219,8 @@ static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double 
     ph.mode0 = E->mode0;
     ph.f = f;
     ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
+    ph.V0 = E->V0;
+    ph.V1 = s->V;
     ENG_OBSERVE(o, &ph, s);
 }
 
@@ -2324,6 +2327,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     double X[ENG_FUSED_N], V[ENG_FUSED_N], A[ENG_FUSED_N], hA[ENG_FUSED_N], X0[ENG_FUSED_N];
     double xp[ENG_FUSED_N], r[ENG_FUSED_N], y[ENG_FUSED_N], y2[ENG_FUSED_N], ph[ENG_FUSED_N], V1[ENG_FUSED_N];
     double X1[ENG_FUSED_N], F1[ENG_FUSED_NC + 1]; /* the observed phase's end (copies: X, F stay in registers) */
+    double V0o[ENG_FUSED_N], V1o[ENG_FUSED_N];    /* (and its velocities at both ends) */
     double F[ENG_FUSED_NC + 1], f[ENG_FUSED_NC + 1], lim[ENG_FUSED_NC + 1];
     int mode[ENG_FUSED_NC + 1], st[ENG_FUSED_NC + 1], mode0[ENG_FUSED_NC + 1], pin[ENG_FUSED_N];
     /* the state's arrays, their addresses read once (a store through one may not change them) */
@@ -2354,7 +2358,8 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     } while (0)
 #else
     double *const X = s->X, *const V = s->V, *const A = s->A, *const hA = s->hA, *const X0 = E->X0;
-    const double *const X1 = s->X, *const F1 = s->F;
+    const double *const X1 = s->X, *const F1 = s->F, *const V1o = s->V;
+    double *const V0o = E->V0;
     double *const xp = E->xp, *const r = E->r, *const y = E->y, *const y2 = E->y2, *const ph = E->ph, *const V1 = E->V1;
     double *const F = s->F, *const f = E->f, *const lim = E->lim;
     int *const mode = s->mode, *const st = E->st, *const mode0 = E->mode0, *const pin = E->pin;
@@ -2477,6 +2482,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         const int observed = obs_all || (obs && !(grid < obs_t0) && !(ta > obs_t1));
         if (observed) {
             for (size_t i = 0; i < n; i++) X0[i] = X[i];
+            for (size_t i = 0; i < n; i++) V0o[i] = V[i];
             for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
         }
         ng++;
@@ -2515,12 +2521,13 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         if (observed) {
 #if ENG_FUSED_LOCAL
             for (size_t i = 0; i < n; i++) X1[i] = X[i];
+            for (size_t i = 0; i < n; i++) V1o[i] = V[i];
             for (size_t j = 0; j < nc; j++) F1[j] = F[j];
 #else
             s->t = t;
             s->n_grid = ng;
 #endif
-            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs};
+            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs, V0o, V1o};
             ENG_OBS_RUN_PHASE(obs, obs_run, &phs, s);
         }
         if (turned) break;

@@ -101,7 +101,7 @@ static void osc_obs_run_call(const eng_observer *obs, double ta, double tb, doub
 {
     const double x0[1] = {X0}, x1[1] = {X1}, f1[1] = {f};
     const int m0[1] = {mode0};
-    const eng_phase ph = {ta, tb, x0, x1, m0, f1, v_belt};
+    const eng_phase ph = {ta, tb, x0, x1, m0, f1, v_belt, NULL, NULL};
     obs->on_phase(obs->ctx, &ph, s);
 }
 

@@ -181,6 +181,29 @@ static double in_window(double w0, double w1, double a, double b)
     return (hi > lo) ? hi - lo : 0.0;
 }
 
+/* The turn of the cubic through (0, x0) and (H, x1) with the slopes v0 and v1 (Hermite's), v0 and v1
+ * of opposite signs or v1 = 0: the cubic's extreme inside [0, H], where its slope vanishes: a smooth
+ * phase's position at its turn between the steps' ends (their error the scheme's, not the step's
+ * sampling of the peak). */
+static double hermite_turn(double H, double x0, double v0, double x1, double v1)
+{
+    /* p'(s) H = a s^2 + b s + c over s = t / H in [0, 1]: c = H v0, a + b + c = H v1, one root between */
+    const double d = x1 - x0, a = 3.0 * H * (v0 + v1) - 6.0 * d, b = 6.0 * d - 2.0 * H * (2.0 * v0 + v1),
+                 c = H * v0;
+    double s;
+    if (a == 0.0) {
+        s = (b != 0.0) ? -c / b : 1.0;
+    } else {
+        const double q = -0.5 * (b + copysign(sqrt(fmax(b * b - 4.0 * a * c, 0.0)), b));
+        const double r1 = q / a, r2 = (q != 0.0) ? c / q : r1;
+        s = (r1 >= 0.0 && r1 <= 1.0) ? r1 : r2;
+    }
+    s = fmin(fmax(s, 0.0), 1.0); /* (NaN: 0) */
+    const double s2 = s * s, s3 = s2 * s;
+    return (2.0 * s3 - 3.0 * s2 + 1.0) * x0 + (s3 - 2.0 * s2 + s) * H * v0 + (3.0 * s2 - 2.0 * s3) * x1 +
+           (s3 - s2) * H * v1;
+}
+
 /* One phase [ta, tb] that overlaps the window (the engine calls no other), as the oscillator keeps its
  * observables (osc_engine_ops.h): each contact's stuck stretch opened or closed at the phase's start
  * (its part inside the window added in one piece when the contact leaves rest, so that the stuck time
@@ -209,10 +232,17 @@ static void observe_phase(void *ctx, const eng_phase *ph, const eng_state *es)
         *observed = 1.0;
         return;
     }
+    const int turns = ph->V0 && ph->V1 && ph->ta >= w0;
     for (size_t i = 0; i < n; i++) {
-        const double x = ph->X1[i];
+        double x = ph->X1[i];
         x_max[i] = (x > x_max[i]) ? x : x_max[i];
         x_min[i] = (x < x_min[i]) ? x : x_min[i];
+        /* a turn inside the phase (the velocity's sign changes): the extreme of its cubic */
+        if (turns && ((ph->V0[i] > 0.0 && !(ph->V1[i] > 0.0)) || (ph->V0[i] < 0.0 && !(ph->V1[i] < 0.0)))) {
+            x = hermite_turn(ph->tb - ph->ta, ph->X0[i], ph->V0[i], ph->X1[i], ph->V1[i]);
+            x_max[i] = (x > x_max[i]) ? x : x_max[i];
+            x_min[i] = (x < x_min[i]) ? x : x_min[i];
+        }
     }
 }
 

@@ -17,6 +17,9 @@ sliders) and its bound on Newton's iterates. Newton (:func:`newton`) solves P^K(
   (a multiplier near 1: the residual understates the distance to the orbit), up to ``polish`` more
   steps.
 
+Along a frequency response each point starts from its branch's last orbits extrapolated to its
+frequency (:func:`extrapolate`: the Lagrange polynomial through up to four of them).
+
 No module here imports a model: the models import this one.
 """
 
@@ -24,13 +27,13 @@ from __future__ import annotations
 
 import cmath
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Generic, Protocol, TypeVar
 
 import numpy as np
 
 __all__ = ["STABILITY_MARGIN", "OrbitRecord", "ShootingMap", "Newton", "newton", "multipliers", "classify",
-           "sweep", "progress_bar"]
+           "sweep", "progress_bar", "extrapolate"]
 
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN (a neutral orbit's multipliers 1 aside)
 STABILITY_MARGIN = 1e-9
@@ -241,6 +244,20 @@ def sweep(points: Iterable[_P], warm: Callable[[int, _P, _S], _S | None], cold: 
             prev = found
         if progress is not None:
             progress(i)
+
+
+def extrapolate(at: Sequence[float], points: Sequence[Any], p: float) -> np.ndarray:
+    """The Lagrange polynomial through the points (``points[i]`` at the parameter ``at[i]``, the
+    parameters distinct; each a number or an array of one shape) at the parameter ``p``: a branch's
+    next point predicted from its last ones (a sweep's predictor)."""
+    out = np.zeros(np.shape(points[0]))
+    for ai, yi in zip(at, points, strict=True):
+        w = 1.0
+        for aj in at:
+            if aj != ai:
+                w *= (p - aj) / (ai - aj)
+        out = out + w * np.asarray(yi, dtype=float)
+    return out
 
 
 def progress_bar(total: int, on: bool, desc: str = "response") -> Callable[[int], None]:

@@ -51,6 +51,9 @@ __all__ = ["SystemOrbit", "find_system_orbits", "system_map", "stuck_start", "ST
 NEUTRAL = 1e-6
 #: samples per excitation period of the guess's cycle (the section's choice)
 SAMPLES = 256
+#: a warm section whose stretch moved: the samples (at SAMPLES a period) either side of it searched
+#: for the stretch before the whole cycle is sampled
+WINDOW = 16
 #: scaled distance under which two converged orbits are the same
 SAME = 1e-6
 #: step halvings at most in search of ``accuracy``
@@ -333,28 +336,42 @@ def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float
 
 
 def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float, it: int, reason: str,
-                obs: dict[str, np.ndarray], t_s: float, h: float) -> SystemOrbit:
-    """The orbit of the converged z at t_s: its state at t = 0 mod K T, multipliers, observables."""
+                obs: dict[str, np.ndarray], t_s: float, h: float, at_zero: bool = True) -> SystemOrbit:
+    """The orbit of the converged z at t_s: its multipliers, observables and, ``at_zero``, its state at
+    t = 0 mod K T (:func:`_read_zero`; else NaN until read)."""
     n, sysm = M.n, M.system
     slide_s = np.zeros(sysm.nc, dtype=int)
     slide_s[M.jenk] = M.slide[M.jenk]
-    z0 = z
-    slide0 = np.zeros(sysm.nc, dtype=int)
-    slide0[M.jenk] = M.slide[M.jenk]
-    if t_s != 0.0:  # the state at the next multiple of K T
-        z0, _, _ = M(z, t_s, jacobian=False, span=M.KT - t_s)
-        slide0[M.jenk] = M.last_mode[M.jenk]
-    s0 = np.full(sysm.nc, np.nan)
-    s0[M.jenk] = z0[2 * n:]
     mult = multipliers(J)
     x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
     ok = not reason
     one, inside = classify(mult, NEUTRAL)
-    return SystemOrbit(period=M.K, x0=z0[:n].copy(), v0=z0[n:2 * n].copy(), s0=s0, slide0=slide0,
-                       multipliers=mult, stable=ok and inside, residual=r, neutral=ok and one,
-                       amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
-                       stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
-                       section=t_s, section_state=z.copy(), section_slide=slide_s, jacobian=J, iterations=it)
+    nan_n = np.full(n, np.nan)
+    orbit = SystemOrbit(period=M.K, x0=nan_n, v0=nan_n.copy(), s0=np.full(sysm.nc, np.nan),
+                        slide0=slide_s.copy(), multipliers=mult, stable=ok and inside, residual=r,
+                        neutral=ok and one, amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
+                        stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
+                        section=t_s, section_state=z.copy(), section_slide=slide_s, jacobian=J, iterations=it)
+    if at_zero:
+        _read_zero(M, orbit)
+    return orbit
+
+
+def _read_zero(M: _Map, orbit: SystemOrbit) -> None:
+    """The orbit's state at t = 0 mod K T (x0, v0, s0, slide0) in place: its section state run to the
+    next multiple of K T (M the orbit's map, the FMU on M's system)."""
+    n, t_s, z0 = M.n, orbit.section, orbit.section_state
+    slide0 = orbit.section_slide.copy()
+    if t_s != 0.0:
+        slide = M.slide.copy()
+        M.slide[:] = orbit.section_slide
+        z0, _, _ = M(z0, t_s, jacobian=False, span=M.KT - t_s)
+        M.slide[:] = slide
+        slide0[M.jenk] = M.last_mode[M.jenk]
+    orbit.x0, orbit.v0 = z0[:n].copy(), z0[n:2 * n].copy()
+    orbit.s0 = np.full(M.system.nc, np.nan)
+    orbit.s0[M.jenk] = z0[2 * n:]
+    orbit.slide0 = slide0
 
 
 def _h_of(fmu: "SystemFMU3", system: "Structure", accuracy: float | None = None) -> float:
@@ -523,29 +540,51 @@ def _same(a: SystemOrbit, b: SystemOrbit) -> bool:
     return bool(np.max(np.abs(a.x0 - b.x0)) <= SAME * scale)
 
 
-def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None = None) -> tuple[float, np.ndarray] | None:
+def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None = None,
+                  slide0: np.ndarray | None = None) -> tuple[float, np.ndarray] | None:
     """The section at ``phase`` (a fraction of M's period: a neighbouring orbit's section, whose
     sliders had the modes ``slide`` there: default all stuck) when the modes there are still that
     section's (each live Jenkins slider in its mode, every rigid contact sliding), and the state z
-    carried to it, M.slide set to those modes; None when the phase is 0 or the modes differ: then
-    :func:`_section` chooses anew. One run to the section (without the Jacobian) instead of the
-    guess's sampled cycle: it carries the neighbour's state under this structure's forces, a better
-    start than the neighbour's own state at the section where a Newton step (with the Jacobian)
-    costs several runs."""
+    (at t = 0, its sliders in the modes ``slide0``: default stuck) carried to it, M.slide set to
+    those modes. Where they differ, the stretch of such modes has moved
+    along the cycle with the parameters: the middle of the longest one within WINDOW samples either
+    side (sampled as :func:`_section` does, from z at t = 0), and z carried there. None when the
+    phase is 0 or no such stretch is near: then :func:`_section` samples the whole cycle. One run to
+    the section (without the Jacobian) instead of the guess's sampled cycle: it carries the
+    neighbour's state under this structure's forces, a better start than the neighbour's own state
+    at the section where a Newton step (with the Jacobian) costs several runs."""
     t_s = phase * M.KT
     if not (0.0 < t_s < M.KT):
         return None
     sysm = M.system
     live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
-    want = np.zeros(sysm.nc, dtype=int) if slide is None or np.size(slide) != sysm.nc else np.asarray(slide, dtype=int)
-    M.slide[:] = 0
-    try:
-        zs, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
-    except FMUCallError:
-        return None
-    mode = M.last_mode
     jenk = sysm.k_t > 0.0
-    if np.any(mode[live & jenk] != want[live & jenk]) or np.any(mode[live & ~jenk] == 0):
+    want = np.zeros(sysm.nc, dtype=int) if slide is None or np.size(slide) != sysm.nc else np.asarray(slide, dtype=int)
+    start = np.zeros(sysm.nc, dtype=int)
+    if slide0 is not None and np.size(slide0) == sysm.nc:
+        start[jenk] = np.asarray(slide0, dtype=int)[jenk]
+
+    def good(mode: np.ndarray) -> np.ndarray:
+        """The samples (rows of modes) with the section's modes."""
+        return (np.all(mode[..., live & jenk] == want[live & jenk], axis=-1)
+                & np.all(mode[..., live & ~jenk] != 0, axis=-1))
+
+    M.slide[:] = start
+    z = M.project(z)
+    try:
+        zs, _, _ = M(z, 0.0, jacobian=False, span=t_s)
+        if not good(M.last_mode):
+            dt = M.KT / (M.K * SAMPLES)
+            t = t_s + dt * np.arange(-WINDOW, WINDOW + 1)
+            t = t[(t > 0.0) & (t < M.KT)]
+            f = M.fmu
+            f.start(0.0, observe=False, x0=z[:M.n], v0=z[M.n:2 * M.n], f0=M.f0(z), slide0=M.slide)
+            run = _longest(good(f.modes_at(np.concatenate([[0.0], t]))[1:]))
+            if run is None or run[1] - run[0] < 2:
+                return None
+            t_s = float(0.5 * (t[run[0]] + t[run[1]]))
+            zs, _, _ = M(z, 0.0, jacobian=False, span=t_s)
+    except FMUCallError:
         return None
     M.slide[jenk] = want[jenk]
     return t_s, zs
@@ -553,13 +592,20 @@ def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None
 
 def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int, h0: float, estimate_error: bool,
            accuracy: float | None, phase: float | None = None, slide: np.ndarray | None = None,
-           shift: np.ndarray | None = None) -> SystemOrbit:
+           shift: np.ndarray | None = None, slide0: np.ndarray | None = None, at_section: bool = False) -> SystemOrbit:
     """The orbit from z (at t = 0) at h0, then at h0 / 2, h0 / 4 ... as the error estimate asks
     (module doc); ``phase``: a neighbouring orbit's section (a fraction of the period; ``slide`` its
     sliders' modes there), tried first (:func:`_warm_section`); where it is kept, ``shift`` (that
     orbit's section_shift) starts the orbit at h0 / 2 from this one's at h0 plus the neighbour's
-    difference."""
-    warm = _warm_section(M, z, phase, slide) if phase is not None else None
+    difference. ``at_section``: z is the state at that section already (sliders in the modes
+    ``slide``), Newton starts there."""
+    warm: tuple[float, np.ndarray] | None
+    if at_section and phase is not None and slide is not None:
+        M.slide[:] = 0
+        M.slide[M.jenk] = np.asarray(slide, dtype=int)[M.jenk]
+        warm = (phase * M.KT, M.project(z))
+    else:
+        warm = _warm_section(M, z, phase, slide, slide0) if phase is not None else None
     if warm is not None:
         t_s, z = warm
     else:
@@ -572,12 +618,16 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
             z, _, _ = M(M.project(z), 0.0, jacobian=False, span=t_s)
             M.slide[:] = slide
     z, Pz, J, r, it, reason, obs, S = _newton(M, z, t_s, None, tol, max_iter)
-    orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0)
-    if not orbit.converged or not (estimate_error or accuracy is not None):
+    refine = estimate_error or accuracy is not None
+    # (the state at t = 0 read of the orbit returned only: the finest one where h is halved)
+    orbit = _make_orbit(M, z, Pz, J, r, it, reason, obs, t_s, h0, at_zero=not refine)
+    if not orbit.converged or not refine:
+        if not orbit.converged and refine:
+            _read_zero(M, orbit)
         return orbit
-    h, prev, first_shift = h0, orbit, np.zeros(0)
-    if warm is None or shift is None or np.size(shift) != M.size:
-        shift = None
+    h, prev, prev_map, first_shift = h0, orbit, M, np.zeros(0)
+    if warm is None or warm[0] != phase * M.KT or shift is None or np.size(shift) != M.size:
+        shift = None  # (the neighbour's shift belongs to its section)
     for halving in range(MAX_HALVINGS):
         h *= 0.5
         Mh = _Map(fmu, M.system.replace(h=h), M.K)
@@ -587,7 +637,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         fine, zc = _chord(Mh, prev, t_s, S, tol, h, shift if halving == 0 else None)
         if fine is None:  # (a full Newton solve at h, the Jacobian's too, from where the chord got)
             zh, Ph, Jh, rh, ith, why, obsh, _ = _newton(Mh, zc, t_s, S, tol, max_iter)
-            fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h)
+            fine = _make_orbit(Mh, zh, Ph, Jh, rh, ith, why, obsh, t_s, h, at_zero=False)
         if not fine.converged:
             prev.reason = f"the error estimate's solve at h = {h:.6g} did not converge: {why}"
             break
@@ -597,13 +647,15 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         diff = fine.amplitude - prev.amplitude
         fine.error = float(np.max(np.abs(diff)) / 3.0)
         fine.amplitude_extrapolated = fine.amplitude + diff / 3.0
-        prev = fine
+        prev, prev_map = fine, Mh
         if accuracy is None or fine.error <= accuracy:
             break
     else:
         prev.reason = (f"the estimated error {prev.error:.3g} is above the accuracy {accuracy:g} after "
                        f"{MAX_HALVINGS} halvings of h")
         prev.converged = False
+    fmu.system = prev_map.system
+    _read_zero(prev_map, prev)
     fmu.system = M.system
     return prev
 
@@ -631,7 +683,7 @@ def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float,
             return None, M.project(coarse.section_state)
         r = sh.residual(z, Pz)
         if r <= tol:
-            orbit = _make_orbit(M, z, Pz, J, r, it, "", obs, t_s, h)
+            orbit = _make_orbit(M, z, Pz, J, r, it, "", obs, t_s, h, at_zero=False)
             orbit.multipliers = coarse.multipliers
             orbit.stable, orbit.neutral = coarse.stable, coarse.neutral
             return orbit, z

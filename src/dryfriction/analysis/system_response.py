@@ -3,9 +3,11 @@
 
 At each excitation frequency the orbit of ``period`` periods is found by Newton shooting on the
 located map with the FMU's Jacobian (:mod:`dryfriction.analysis.system_orbits`): at the first
-frequency from a transient, at each next one from the previous frequency's orbit (its state at the
-section, the map's Jacobian telling Newton the way; two to four map evaluations), and from a fresh
-transient again where that does not converge. Where no contact's force reaches its limit in the
+frequency from a transient, at each next one from the branch's last orbits extrapolated to the
+frequency through up to four of them (their states at the section, at the response's step, where the
+section stayed; else their states at t = 0, carried to the section by a run; where that does not
+converge, the previous orbit's state at t = 0; the map's Jacobian telling Newton the way; two to
+four map evaluations), and from a fresh transient again where none converges. Where no contact's force reaches its limit in the
 linear response with every contact stuck, that closed form is the start instead (the first
 frequency, a fresh start, or a previous orbit stuck throughout): an orbit, one Newton step. Each point carries its stability (the multipliers),
 its residual and the amplitude's error estimated against h / 2 (Richardson), so that a point that is
@@ -20,11 +22,11 @@ import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from .shooting import progress_bar, sweep
+from .shooting import extrapolate, progress_bar, sweep
 from .system_orbits import SystemOrbit, _Map, _h_of, _solve, stuck_start
 
 if TYPE_CHECKING:
@@ -32,12 +34,60 @@ if TYPE_CHECKING:
 
 __all__ = ["system_frequency_response", "plot_system_response"]
 
+#: a point starts from the Lagrange polynomial through its branch's last PREDICT orbits (cubic, as the
+#: oscillator's response)
+PREDICT = 4
+#: Newton steps at most from a predicted start (it converges in two or three where the prediction
+#: holds; then from the previous orbit itself with the response's max_iter)
+PREDICTED_ITER = 8
+
 
 def _all_stuck(system: "Structure", orbit: SystemOrbit) -> bool:
     """Whether every contact with friction stayed stuck over ``orbit``'s whole cycle."""
     live = np.maximum(system.mu_s, system.mu_k) * system.N > 0.0
     share = np.asarray(orbit.stick_fraction)
     return bool(share.size == live.size and np.all(share[live] >= 1.0))
+
+
+class _Point(NamedTuple):
+    """An orbit of the branch as the next points' predictor reads it: its frequency, its state at
+    t = 0 (x0, v0, the Jenkins sliders), its section (a share of its period; its sliders' modes
+    there), its state there at the response's h0 (None where not known: h halved more than once) and
+    its section_shift."""
+
+    f: float
+    z0: np.ndarray
+    phase: float
+    slide: np.ndarray
+    coarse: np.ndarray | None
+    shift: np.ndarray
+
+
+def _point(orbit: SystemOrbit, f: float, system: "Structure", K: int, h0: float) -> _Point:
+    """The predictor's record of a converged orbit at the frequency f (h0: the response's step there)."""
+    jenk = np.flatnonzero(system.k_t > 0.0)
+    coarse = None
+    if orbit.h == h0:
+        coarse = orbit.section_state
+    elif orbit.h == 0.5 * h0 and orbit.section_shift.size == orbit.section_state.size:
+        coarse = orbit.section_state - orbit.section_shift
+    return _Point(f, np.concatenate([orbit.x0, orbit.v0, orbit.s0[jenk]]), orbit.section * f / K,
+                  orbit.section_slide, coarse, orbit.section_shift)
+
+
+def _same_section(branch: list[_Point]) -> list[_Point]:
+    """The branch's last orbits at the last one's section (the same share of the period, the same
+    sliders' modes there) whose states there at h0 are known."""
+    if not branch:
+        return []
+    out: list[_Point] = []
+    last = branch[-1]
+    for b in reversed(branch):
+        if (b.coarse is None or abs(b.phase - last.phase) > 1e-9 * max(1.0, abs(last.phase))
+                or not np.array_equal(b.slide, last.slide)):
+            break
+        out.append(b)
+    return out[::-1]
 
 
 def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
@@ -85,6 +135,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
         raise ValueError("fmu must be an open SystemFMU3 of a structure of the system's sizes (n, nc)")
     with (SystemFMU3(system, fmu_path) if fmu is None else contextlib.nullcontext(fmu)) as fmu:
         maps: dict[int, tuple[_Map, float]] = {}
+        branch: list[_Point] = []  # the branch's last orbits
 
         def at(i: int, s_i: "Structure") -> tuple[_Map, float]:
             """The map of the frequency i at its step h0 (made once per frequency)."""
@@ -99,7 +150,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             return M, h0
 
         def warm(i: int, s_i: "Structure", prev: SystemOrbit) -> SystemOrbit | None:
-            """From the previous frequency's orbit (its state at t = 0 mod K T)."""
+            """From the branch's last orbits, the previous frequency's last (module doc)."""
             if not prev.converged:
                 return None
             M, h0 = at(i, s_i)
@@ -108,14 +159,31 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
                 return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
             phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
+            same = _same_section(branch)
+            if len(same) > 1 and phase is not None:  # (Newton at the section from the states there at h0)
+                fs = [b.f for b in same]
+                zs = extrapolate(fs, [b.coarse for b in same], f[i])
+                shift = (extrapolate(fs, [b.shift for b in same], f[i]) if all(b.shift.size for b in same)
+                         else prev.section_shift)
+                orbit = _solve(M, fmu, zs, tol, min(max_iter, PREDICTED_ITER), h0, estimate_error, accuracy, phase,
+                               prev.section_slide, shift, at_section=True)
+                if orbit.converged:
+                    return orbit
+            if len(branch) > 1:  # (the branch extrapolated; the previous orbit itself where that fails)
+                zp = extrapolate([b.f for b in branch], [b.z0 for b in branch], f[i])
+                orbit = _solve(M, fmu, zp, tol, min(max_iter, PREDICTED_ITER), h0, estimate_error, accuracy, phase,
+                               prev.section_slide, prev.section_shift, prev.slide0)
+                if orbit.converged:
+                    return orbit
             orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy, phase, prev.section_slide,
-                           prev.section_shift)
+                           prev.section_shift, prev.slide0)
             return orbit if orbit.converged else None
 
         def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:
             """From the stuck closed form where no contact slips in it, else from a transient from
             the system's start."""
             M, h0 = at(i, s_i)
+            branch.clear()  # (a new branch from here)
             s_h = M.system
             stuck = stuck_start(s_h)
             if stuck is not None:
@@ -124,6 +192,10 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             return _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
 
         def record(i: int, s_i: "Structure", orbit: SystemOrbit) -> None:
+            if orbit.converged and orbit.x0.size:
+                branch[:] = [*branch[-(PREDICT - 1):], _point(orbit, float(f[i]), s_i, K, maps[i][1])]
+            else:
+                branch.clear()
             conv[i] = orbit.converged
             reasons[i] = orbit.reason
             if orbit.amplitude.size:
@@ -143,6 +215,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             iters[i] = orbit.iterations
 
         def failed(i: int, e: BaseException) -> None:
+            branch.clear()
             reasons[i] = f"{type(e).__name__}: {e}"
 
         # (an FMU's refusal at one frequency: reported, the sweep goes on)

@@ -12,7 +12,7 @@ import numpy as np
 from ...drivers.oscillator import FMUError, OscillatorFMU2
 from ...params import Oscillator
 from ..orbits import ALIKE, DEFAULT_SPREAD, SAME, OrbitFollower, _auto_guesses, find_orbits, rest_interval, scales
-from ..shooting import STABILITY_MARGIN, sweep
+from ..shooting import STABILITY_MARGIN, extrapolate, sweep
 from .transient import default_settings
 
 #: the orbit method's cold search (transients from several initial conditions) every this many
@@ -51,17 +51,7 @@ class _Branch:
             if abs(b.point[2] - ph0) > 0.25:
                 pts = pts[:1]                   # the section was chosen again: no extrapolation
                 break
-        fs = [b.f for b in pts]
-        x = v = ph = 0.0
-        for bi in pts:                          # Lagrange weights of the points at f
-            w, fi = 1.0, bi.f
-            for fj in fs:
-                if fj != fi:                    # the points' frequencies differ (history)
-                    w *= (f - fj) / (fi - fj)
-            px, pv, pp = bi.point
-            x += w * px
-            v += w * pv
-            ph += w * pp
+        x, v, ph = extrapolate([b.f for b in pts], [b.point for b in pts], f).tolist()
         return (x, v), ph
 
 
