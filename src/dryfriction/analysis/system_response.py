@@ -37,6 +37,10 @@ __all__ = ["system_frequency_response", "plot_system_response"]
 #: a point starts from the Lagrange polynomial through its branch's last PREDICT orbits (cubic, as the
 #: oscillator's response)
 PREDICT = 4
+#: a prediction is trusted where it would have predicted the branch's last orbit from the ones before
+#: within this share of that orbit's step from the one before it (else the frequencies are too far
+#: apart for the branch's curvature: the previous orbit is the start)
+TRUST = 0.25
 #: Newton steps at most from a predicted start (it converges in two or three where the prediction
 #: holds; then from the previous orbit itself with the response's max_iter)
 PREDICTED_ITER = 8
@@ -73,6 +77,19 @@ def _point(orbit: SystemOrbit, f: float, system: "Structure", K: int, h0: float)
         coarse = orbit.section_state - orbit.section_shift
     return _Point(f, np.concatenate([orbit.x0, orbit.v0, orbit.s0[jenk]]), orbit.section * f / K,
                   orbit.section_slide, coarse, orbit.section_shift)
+
+
+def _predict(fs: list[float], zs: list[np.ndarray], f: float) -> np.ndarray | None:
+    """The states zs at the frequencies fs extrapolated to f (:func:`extrapolate`), where trusted: the
+    same rule through all but the last predicts the last within TRUST of its step from the one
+    before (None: not trusted, or fewer than three)."""
+    if len(zs) < 3:
+        return None
+    back = extrapolate(fs[:-1], zs[:-1], fs[-1])
+    step = float(np.max(np.abs(zs[-1] - zs[-2])))
+    if not float(np.max(np.abs(back - zs[-1]))) <= TRUST * step:
+        return None
+    return extrapolate(fs, zs, f)
 
 
 def _same_section(branch: list[_Point]) -> list[_Point]:
@@ -160,17 +177,17 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             z = np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]])
             phase = prev.section * f[i - 1] / K if i > 0 else None  # (its section, a share of its period)
             same = _same_section(branch)
-            if len(same) > 1 and phase is not None:  # (Newton at the section from the states there at h0)
-                fs = [b.f for b in same]
-                zs = extrapolate(fs, [b.coarse for b in same], f[i])
+            fs = [b.f for b in same]
+            zs = _predict(fs, [b.coarse for b in same], f[i]) if phase is not None else None
+            if zs is not None:  # (Newton at the section from the states there at h0)
                 shift = (extrapolate(fs, [b.shift for b in same], f[i]) if all(b.shift.size for b in same)
                          else prev.section_shift)
                 orbit = _solve(M, fmu, zs, tol, min(max_iter, PREDICTED_ITER), h0, estimate_error, accuracy, phase,
                                prev.section_slide, shift, at_section=True)
                 if orbit.converged:
                     return orbit
-            if len(branch) > 1:  # (the branch extrapolated; the previous orbit itself where that fails)
-                zp = extrapolate([b.f for b in branch], [b.z0 for b in branch], f[i])
+            zp = _predict([b.f for b in branch], [b.z0 for b in branch], f[i])
+            if zp is not None:  # (the branch extrapolated; the previous orbit itself where that fails)
                 orbit = _solve(M, fmu, zp, tol, min(max_iter, PREDICTED_ITER), h0, estimate_error, accuracy, phase,
                                prev.section_slide, prev.section_shift, prev.slide0)
                 if orbit.converged:
