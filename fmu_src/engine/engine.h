@@ -474,8 +474,8 @@ typedef struct {
                                  * for Stribeck the mean of its ends) */
     const double *v_belt;       /* nc: belts (NULL: fixed) */
     const double *V0;           /* n: velocities at ta (with V1: a smooth motion's cubic between its ends, for
-                                 * an observer's extremes inside the phase; NULL: not given, a model's own
-                                 * observer call) */
+                                 * an observer's extremes inside the phase; NULL: not asked for,
+                                 * eng_observer.velocities, or a model's own observer call) */
     const double *V1;           /* n: velocities at tb (NULL with V0) */
 } eng_phase;
 
@@ -490,6 +490,8 @@ typedef struct {
     double t_start, t_stop;
     void (*on_phase)(void *ctx, const eng_phase *ph, const eng_state *s);
     void *ctx;
+    int velocities;             /* the phases carry their velocities at both ends (eng_phase.V0, V1); 0:
+                                 * NULL there, and the steps do not copy them */
 } eng_observer;
 
 typedef struct {

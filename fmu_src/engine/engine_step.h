@@ -1202,7 +1202,7 @@ static ENG_HOT void begin_phase(eng *E, const eng_state *s, double *ta, const en
     E->tjk_ok = 0;  /* (and the tangent's jerks) */
     if (!hk || !hk->obs || !hk->obs->on_phase) return;
     memcpy(E->X0, s->X, ENG_N(E) * sizeof(double));
-    memcpy(E->V0, s->V, ENG_N(E) * sizeof(double));
+    if (hk->obs->velocities) memcpy(E->V0, s->V, ENG_N(E) * sizeof(double));
     if (ENG_NC(E)) memcpy(E->mode0, s->mode, ENG_NC(E) * sizeof(int));
 }
 
@@ -1219,8 +1219,8 @@ static ENG_HOT void observe(eng *E, const eng_state *s, double ta, const double 
     ph.mode0 = E->mode0;
     ph.f = f;
     ph.v_belt = (E->vb == E->zero_nc) ? NULL : E->vb;
-    ph.V0 = E->V0;
-    ph.V1 = s->V;
+    ph.V0 = o->velocities ? E->V0 : NULL;
+    ph.V1 = o->velocities ? s->V : NULL;
     ENG_OBSERVE(o, &ph, s);
 }
 
@@ -2309,6 +2309,7 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
     const double obs_t0 = obs ? obs->t_start : 0.0, obs_t1 = obs ? obs->t_stop : 0.0;
     /* every step observed: the first grid point in the window, t_target at most its end */
     const int obs_all = obs && !(s->t0 + (double)(s->n_grid + 1) * S->h < obs_t0) && !(t_target > obs_t1);
+    const int obs_vel = obs && obs->velocities; /* (the phases' velocities asked for) */
     const double *const vb_obs = (E->vb == E->zero_nc) ? NULL : E->vb;
     ENG_OBS_RUN obs_run; /* the observer's values over the run (ENG_OBS_RUN_BEGIN) */
     ENG_OBS_RUN_BEGIN(obs, obs_run, s);
@@ -2482,7 +2483,8 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         const int observed = obs_all || (obs && !(grid < obs_t0) && !(ta > obs_t1));
         if (observed) {
             for (size_t i = 0; i < n; i++) X0[i] = X[i];
-            for (size_t i = 0; i < n; i++) V0o[i] = V[i];
+            if (obs_vel)
+                for (size_t i = 0; i < n; i++) V0o[i] = V[i];
             for (size_t j = 0; j < nc; j++) mode0[j] = mode[j];
         }
         ng++;
@@ -2521,13 +2523,14 @@ static ENG_HOT void fused_steps(eng *E, eng_state *s, double t_target, int skip,
         if (observed) {
 #if ENG_FUSED_LOCAL
             for (size_t i = 0; i < n; i++) X1[i] = X[i];
-            for (size_t i = 0; i < n; i++) V1o[i] = V[i];
+            if (obs_vel)
+                for (size_t i = 0; i < n; i++) V1o[i] = V[i];
             for (size_t j = 0; j < nc; j++) F1[j] = F[j];
 #else
             s->t = t;
             s->n_grid = ng;
 #endif
-            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs, V0o, V1o};
+            const eng_phase phs = {ta, t, X0, X1, mode0, F1, vb_obs, obs_vel ? V0o : NULL, obs_vel ? V1o : NULL};
             ENG_OBS_RUN_PHASE(obs, obs_run, &phs, s);
         }
         if (turned) break;

@@ -425,11 +425,14 @@ typedef struct {
     double max_rel_slip;
     long stuck_phases;
     double t_stuck;
+    long phases, velocities_off; /* the phases, and those whose velocities (asked for) are not the state's */
 } slip_watch;
 
 static void watch_phase(void *ctx, const eng_phase *ph, const eng_state *s)
 {
     slip_watch *W = ctx;
+    W->phases++;
+    W->velocities_off += !(ph->V0 && ph->V1 && ph->V1[0] == s->V[0] && ph->V1[1] == s->V[1]);
     if (ph->mode0[0] != 0 || s->mode[0] != 0) return;
     W->max_rel_slip = fmax(W->max_rel_slip, fabs(s->V[0] - s->V[1]));
     W->stuck_phases++;
@@ -463,7 +466,7 @@ static double two_mass_run(long steps_per_T, int scheme, double *x_out, slip_wat
     const eng_inputs in = {NULL, NULL, NULL, {NULL, NULL}, {NULL, NULL}, 0.0};
     eng *E = eng_begin(&S, &in, &s);
     int ok = 1;
-    const eng_observer obs = {T, 4.0 * T, watch_phase, W};
+    const eng_observer obs = {T, 4.0 * T, watch_phase, W, 1};
     const eng_hooks hk = {NULL, NULL, W ? &obs : NULL, 0, 0, 0};
     for (int k = 1; k <= 32 && ok; k++)
         ok = eng_advance(E, &in, &s, (double)(k * steps_per_T / 8) * S.h, &hk) == ENG_OK;
@@ -479,7 +482,7 @@ static void test_two_masses(checks *T)
 {
     check_context(T, "two masses, contact between them and to the ground, located");
     double x[4][2];
-    slip_watch W = {0.0, 0, 0.0};
+    slip_watch W = {0.0, 0, 0.0, 0, 0};
     long long sw = 0;
     const long base = 400;
     for (int r = 0; r < 4; r++)
@@ -494,6 +497,7 @@ static void test_two_masses(checks *T)
     CHECK_RANGE(3.0, 5.5, d2 / d3);
     CHECK(W.stuck_phases > 100);
     CHECK(W.max_rel_slip <= 1e-12);
+    CHECK(W.phases > 100 && W.velocities_off == 0); /* (each phase's end velocities, where asked for) */
     check_context(T, "two masses, consistent and paper run");
     double xc[2], xp[2];
     CHECK(two_mass_run(1600, DFO_SCHEME_CONSISTENT, xc, NULL, NULL) == 0.0);

@@ -171,7 +171,7 @@ static void test_block(checks *T)
  * breakaway questions counted behind the hooks, and an observer's phases summed. */
 typedef struct {
     long solves, asks;
-    long phases;
+    long phases, velocities; /* (the phases with velocities: none where not asked for) */
     double t_sum, x_max;
 } hook_count;
 
@@ -198,6 +198,7 @@ static void count_phase(void *ctx, const eng_phase *ph, const eng_state *s)
     H->t_sum += ph->tb - ph->ta;
     (void)s;
     H->x_max = fmax(H->x_max, ph->X1[0]);
+    H->velocities += ph->V0 != NULL || ph->V1 != NULL; /* (not asked for: none) */
 }
 
 /* Four runs of one block compared: their final states, engines, switches and observed phases. */
@@ -248,7 +249,7 @@ static eng *run_observed(checks *T, const eng_setup *S, const entry *X, const en
 {
     memset(H, 0, sizeof *H);
     H->x_max = -INFINITY;
-    const eng_observer obs = {12.0, w1, count_phase, H};
+    const eng_observer obs = {12.0, w1, count_phase, H, 0};
     return run_with(T, S, X, in1, in2, &obs, k_max, L, s);
 }
 
@@ -296,6 +297,7 @@ static void test_stuck_fast_path(checks *T)
     }
     CHECK(R.H[1].phases < R.H[0].phases);
     CHECK(R.H[0].phases > 100);
+    for (int r = 0; r < 4; r++) CHECK(R.H[r].velocities == 0);
     for (int r = 0; r < 4; r++) {
         eng_state_free(R.E[r], &R.s[r]);
         eng_destroy(R.E[r]);
@@ -399,7 +401,7 @@ static void test_observables_in_run(checks *T)
             d[r].x_max = 1e300; /* (not a sample: the first one replaces them) */
             d[r].x_min = -1e300;
             osc_observables O = {w0, 30.0, &d[r]};
-            const eng_observer obs = {w0, 30.0, (r == 2) ? other_observe : osc_eng_observe, &O};
+            const eng_observer obs = {w0, 30.0, (r == 2) ? other_observe : osc_eng_observe, &O, 0};
             E[r] = run_with(T, &S, &BLOCK, &HELD_NONE, &HELD_F, &obs, 30, &L[r], &s[r]);
         }
         printf("  observables in a fused run, %-10s, [%g, 30]: x in [%.6g, %.6g], stuck %.6g s, E_friction %.6g\n",

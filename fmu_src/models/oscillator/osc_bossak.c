@@ -168,6 +168,7 @@ static void hooks_of(const dfo_model *M, hook_ctx *H, eng_observer *obs, eng_hoo
     obs->t_stop = M->p.t_obs_stop;
     obs->on_phase = osc_eng_observe;
     obs->ctx = &H->obs;
+    obs->velocities = 0; /* (its extremes sampled at the phases' ends) */
     hk->obs = obs;
 }
 

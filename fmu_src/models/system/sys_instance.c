@@ -254,6 +254,7 @@ const eng_observer *sys_observer(sys_instance *in)
     in->obs.t_start = in->vals[in->L.sp + DFO_SP_t_obs_start];
     in->obs.t_stop = in->vals[in->L.sp + DFO_SP_t_obs_stop];
     in->obs.on_phase = observe_phase;
+    in->obs.velocities = 1; /* (the turns inside a step: observe_phase) */
     in->obs.ctx = in;
     return &in->obs;
 }

@@ -18,7 +18,8 @@ sliders) and its bound on Newton's iterates. Newton (:func:`newton`) solves P^K(
   steps.
 
 Along a frequency response each point starts from its branch's last orbits extrapolated to its
-frequency (:func:`extrapolate`: the Lagrange polynomial through up to four of them).
+frequency (:func:`extrapolate`, :func:`lagrange_weights`: the Lagrange polynomial through up to four
+of them).
 
 No module here imports a model: the models import this one.
 """
@@ -33,7 +34,7 @@ from typing import Any, Generic, Protocol, TypeVar
 import numpy as np
 
 __all__ = ["STABILITY_MARGIN", "OrbitRecord", "ShootingMap", "Newton", "newton", "multipliers", "classify",
-           "sweep", "progress_bar", "extrapolate"]
+           "sweep", "progress_bar", "extrapolate", "lagrange_weights"]
 
 #: an orbit is stable when every |mu| < 1 - STABILITY_MARGIN (a neutral orbit's multipliers 1 aside)
 STABILITY_MARGIN = 1e-9
@@ -246,16 +247,26 @@ def sweep(points: Iterable[_P], warm: Callable[[int, _P, _S], _S | None], cold: 
             progress(i)
 
 
-def extrapolate(at: Sequence[float], points: Sequence[Any], p: float) -> np.ndarray:
-    """The Lagrange polynomial through the points (``points[i]`` at the parameter ``at[i]``, the
-    parameters distinct; each a number or an array of one shape) at the parameter ``p``: a branch's
-    next point predicted from its last ones (a sweep's predictor)."""
-    out = np.zeros(np.shape(points[0]))
-    for ai, yi in zip(at, points, strict=True):
+def lagrange_weights(at: Sequence[float], p: float) -> list[float]:
+    """The weights of the Lagrange polynomial through points at the parameters ``at`` (distinct) at
+    the parameter ``p``: the point predicted there is sum_i w_i y_i (plain floats: the oscillator's
+    response sums its two-number states with them)."""
+    out = []
+    for ai in at:
         w = 1.0
         for aj in at:
             if aj != ai:
                 w *= (p - aj) / (ai - aj)
+        out.append(w)
+    return out
+
+
+def extrapolate(at: Sequence[float], points: Sequence[Any], p: float) -> np.ndarray:
+    """The Lagrange polynomial through the points (``points[i]`` at the parameter ``at[i]``, the
+    parameters distinct; each a number or an array of one shape) at the parameter ``p``: a branch's
+    next point predicted from its last ones (a sweep's predictor; :func:`lagrange_weights`)."""
+    out = np.zeros(np.shape(points[0]))
+    for w, yi in zip(lagrange_weights(at, p), points, strict=True):
         out = out + w * np.asarray(yi, dtype=float)
     return out
 

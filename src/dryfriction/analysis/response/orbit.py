@@ -12,7 +12,7 @@ import numpy as np
 from ...drivers.oscillator import FMUError, OscillatorFMU2
 from ...params import Oscillator
 from ..orbits import ALIKE, DEFAULT_SPREAD, SAME, OrbitFollower, _auto_guesses, find_orbits, rest_interval, scales
-from ..shooting import STABILITY_MARGIN, extrapolate, sweep
+from ..shooting import STABILITY_MARGIN, lagrange_weights, sweep
 from .transient import default_settings
 
 #: the orbit method's cold search (transients from several initial conditions) every this many
@@ -51,7 +51,11 @@ class _Branch:
             if abs(b.point[2] - ph0) > 0.25:
                 pts = pts[:1]                   # the section was chosen again: no extrapolation
                 break
-        x, v, ph = extrapolate([b.f for b in pts], [b.point for b in pts], f).tolist()
+        x = v = ph = 0.0
+        for w, (px, pv, pp) in zip(lagrange_weights([b.f for b in pts], f), [b.point for b in pts]):
+            x += w * px
+            v += w * pv
+            ph += w * pp
         return (x, v), ph
 
 
