@@ -198,7 +198,8 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
 
         def cold(i: int, s_i: "Structure", prev: SystemOrbit | None) -> SystemOrbit:
             """From the stuck closed form where no contact slips in it, else from a transient from
-            the system's start."""
+            the system's start; where that does not converge, from a transient from the previous
+            frequency's orbit (the attractor it settles to is the one the sweep follows)."""
             M, h0 = at(i, s_i)
             branch.clear()  # (a new branch from here)
             s_h = M.system
@@ -206,7 +207,14 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             if stuck is not None:
                 return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
             z = M.transient(np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0]), transients)
-            return _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            if orbit.converged or prev is None or not prev.converged:
+                return orbit
+            M.slide[:] = 0
+            M.slide[M.jenk] = prev.slide0[M.jenk]
+            z = M.transient(np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]]), transients)
+            again = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
+            return again if again.converged else orbit
 
         def record(i: int, s_i: "Structure", orbit: SystemOrbit) -> None:
             if orbit.converged and orbit.x0.size:
