@@ -206,15 +206,19 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
             stuck = stuck_start(s_h)
             if stuck is not None:
                 return _solve(M, fmu, stuck, tol, max_iter, h0, estimate_error, accuracy)
-            z = M.transient(np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0]), transients)
-            orbit = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
-            if orbit.converged or prev is None or not prev.converged:
-                return orbit
-            M.slide[:] = 0
-            M.slide[M.jenk] = prev.slide0[M.jenk]
-            z = M.transient(np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]]), transients)
-            again = _solve(M, fmu, z, tol, max_iter, h0, estimate_error, accuracy)
-            return again if again.converged else orbit
+            # (each transient from its state with its sliders' modes: the rest's stuck, the orbit's own)
+            starts = [(np.concatenate([s_h.x0, s_h.v0, s_h.W[M.jenk] @ s_h.x0]), np.zeros(s_h.nc, dtype=int))]
+            if prev is not None and prev.converged:
+                starts.append((np.concatenate([prev.x0, prev.v0, prev.s0[M.jenk]]), prev.slide0))
+            first: SystemOrbit | None = None
+            for z, slide in starts:
+                M.slide[:] = slide
+                orbit = _solve(M, fmu, M.transient(z, transients), tol, max_iter, h0, estimate_error, accuracy)
+                if orbit.converged:
+                    return orbit
+                first = orbit if first is None else first
+            assert first is not None
+            return first
 
         def record(i: int, s_i: "Structure", orbit: SystemOrbit) -> None:
             if orbit.converged and orbit.x0.size:
