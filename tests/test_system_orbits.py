@@ -296,6 +296,28 @@ def test_a_requested_accuracy_chooses_h() -> None:
     assert 32 <= steps[0] < steps[1]
 
 
+def test_a_failed_solve_says_where_the_step_leaves_the_stiffest_mode_coarse() -> None:
+    """stiffest_rate is the stuck structure's fastest natural rate (the two-mass case's closed form,
+    w^4 - (5 + 3 k_t) w^2 + 4 (1 + k_t) = 0); a Newton solve that stops short (max_iter = 0) names
+    that mode and the step that would give it 4 steps a period where h gives it fewer, and only there."""
+    from dryfriction.analysis.system_orbits import stiffest_rate
+    from dryfriction.system import cases
+
+    for k_t in (20.0, 2.0e4):
+        b = 5.0 + 3.0 * k_t
+        w = np.sqrt(0.5 * (b + np.sqrt(b * b - 16.0 * (1.0 + k_t))))
+        assert stiffest_rate(cases.two_mass_jenkins(k_t=k_t)) == pytest.approx(w, rel=1e-12)
+    w = stiffest_rate(cases.two_mass_jenkins(k_t=2.0e4))
+    T = 2.0 * np.pi
+    for steps, coarse in ((100, True), (int(np.ceil(4.0 * w)) + 1, False)):
+        s = cases.two_mass_jenkins(k_t=2.0e4, h=T / steps)
+        (o,) = find_system_orbits(s, max_iter=0, keep_failed=True, estimate_error=False)
+        assert not o.converged and o.reason.startswith("no convergence in 0 Newton steps")
+        assert ("the stiffest mode (" + f"{w:.4g} rad/s" in o.reason) == coarse, o.reason
+        if coarse:
+            assert f"h <= {T / (4.0 * w):.3g}" in o.reason
+
+
 def test_map_runs_through_one_fmu_are_fresh_runs_bit_for_bit() -> None:
     """One FMU instance restores its kept Initialization Mode states between runs (per system and
     start time; a state kept for another system restored and only the values that differ set):

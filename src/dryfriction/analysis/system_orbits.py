@@ -43,8 +43,9 @@ from .shooting import STABILITY_MARGIN, OrbitRecord, classify, multipliers, newt
 if TYPE_CHECKING:
     from ..drivers.system import SystemFMU3
     from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
+    from ..system.symmetry import CyclicSymmetry
 
-__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "stuck_start", "STABILITY_MARGIN", "NEUTRAL"]
+__all__ = ["SystemOrbit", "find_system_orbits", "system_map", "stuck_start", "stiffest_rate", "STABILITY_MARGIN", "NEUTRAL"]
 
 #: a multiplier this close to 1 is a neutral one (a continuum of orbits: a stuck slider's rest positions,
 #: a free rigid-body mode held only by friction)
@@ -67,6 +68,10 @@ STUCK_MARGIN = 1e-6
 #: the error estimate's chord steps (the coarser orbit's Jacobian): at most CHORD_STEPS, each cutting
 #: the residual to CHORD_RATE of the last at least
 CHORD_STEPS, CHORD_RATE = 8, 0.25
+#: a Newton solve that fails where the stiffest mode (the contacts stuck) has fewer than this many steps
+#: a period says so in its reason: a smaller h may converge (the located map steps such a mode stably
+#: but coarsely, and the ringing it leaves at every switch can make the map rough at Newton's scale)
+RESOLVED_STEPS = 4.0
 #: a map of this many unknowns or more: its Jacobian taken as costly until both kinds of run are timed
 LAZY_SIZE = 32
 
@@ -82,7 +87,8 @@ class SystemOrbit(OrbitRecord):
     s0: np.ndarray                   # nc sliders (NaN for a rigid contact), m
     slide0: np.ndarray               # nc: each Jenkins slider's mode at t = 0 (0 stuck, -1 / +1 sliding; the
     #                                  FMU's slide0 that starts the orbit); 0 for a rigid contact
-    multipliers: np.ndarray          # eigenvalues of the K-period map's Jacobian (|mu| descending)
+    multipliers: np.ndarray          # eigenvalues of the K-period map's Jacobian (|mu| descending; with a
+    #                                  symmetry the sector map's to the power ``sectors``: the same numbers)
     stable: bool                     # every |mu| < 1 - STABILITY_MARGIN (a neutral orbit's multipliers 1 aside)
     residual: float                  # the scaled Newton residual at the section
     amplitude: np.ndarray            # n: (x_max - x_min) / 2 over the cycle (the FMU's observables), m
@@ -93,29 +99,44 @@ class SystemOrbit(OrbitRecord):
     h: float = float("nan")          # the internal step of the orbit, s
     error: float = float("nan")      # the amplitude's estimated error (max over DOFs), m (NaN: not estimated)
     amplitude_extrapolated: np.ndarray = field(default_factory=lambda: np.zeros(0))  # Richardson's, n
-    section: float = 0.0             # the section time t_s in [0, K T) of the Newton solve, s
+    section: float = 0.0             # the section time t_s in [0, K T / sectors) of the Newton solve, s
     section_state: np.ndarray = field(default_factory=lambda: np.zeros(0))  # z = (x, v, s_jenkins) there
     section_slide: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # nc: each Jenkins
     #                                  slider's mode at the section (the map's slide0 there), 0 for a rigid contact
-    jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of P^K at the section
+    jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # of the map Newton solved at the
+    #                                  section: P^K, or with a symmetry the sector map (module doc)
     iterations: int = 0
     # the error estimate's first halving at the section: z(h / 2) - z(h) (empty without the estimate)
     section_shift: np.ndarray = field(default_factory=lambda: np.zeros(0))
     neutral: bool = False            # a multiplier 1: a continuum of orbits (a Jenkins slider stuck all
     #                                  cycle rests anywhere within its limits; a free mode held by friction)
+    sectors: int = 1                 # the cyclic symmetry's sectors the orbit was solved with (1: none)
 
 
 class _Map:
     """The stroboscopic map of one structure at one step h through one FMU instance: z = (x, v,
     s_jenkins) at t_s -> z at t_s + K T, its Jacobian and the cycle's observables."""
 
-    def __init__(self, fmu: "SystemFMU3", system: "Structure", K: int) -> None:
+    def __init__(self, fmu: "SystemFMU3", system: "Structure", K: int,
+                 symmetry: "CyclicSymmetry | None" = None) -> None:
         self.fmu = fmu
         self.system = system
         self.K = K
         self.n = system.n
         self.jenk = np.flatnonzero(system.k_t > 0.0)
         self.KT = K * 2.0 * np.pi / system.omega
+        # with a cyclic symmetry the map is one sector's share of the period, its end relabelled
+        # (module doc): span the run's length, perm the unknowns' and cperm the contacts' relabelling
+        self.symmetry = symmetry
+        self.span = self.KT / symmetry.sectors if symmetry is not None else self.KT
+        if symmetry is not None:
+            pos = np.full(system.nc, -1)
+            pos[self.jenk] = np.arange(self.jenk.size)
+            n = self.n
+            self.perm = np.concatenate([symmetry.dofs, n + symmetry.dofs, 2 * n + pos[symmetry.contacts[self.jenk]]])
+            self.cperm = symmetry.contacts
+            self._dof_orbits = symmetry.orbits(symmetry.dofs)
+            self._contact_orbits = symmetry.orbits(symmetry.contacts)
         self.evaluations = 0
         # CPU seconds and counts of the runs with and without the Jacobian (expensive_jacobian)
         self._cost = {True: [0.0, 0], False: [0.0, 0]}
@@ -159,14 +180,20 @@ class _Map:
         out[2 * self.n:] = np.where(m != 0, g - m * self._fk / self._kt, g + self.f0(z)[self.jenk] / self._kt)
         return out
 
-    def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True,
-                 span: float | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-        """P(z) from t_s over ``span`` (default K T), its Jacobian (NaN when not asked) and the
-        observables of that stretch (x_max, x_min, stick_fraction; each contact's mode changes, the
-        FMU's transitions, are read where wanted, after the run: SystemFMU3.transitions)."""
+    def __call__(self, z: np.ndarray, t_s: float, jacobian: bool = True, span: float | None = None,
+                 wrap: bool | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """P(z) from t_s over ``span`` (default the map's: K T, or one sector's share of it with a
+        symmetry), its Jacobian (NaN when not asked) and the observables of that stretch (x_max,
+        x_min, stick_fraction; with a symmetry, of the whole cycle: each DOF's extremes over the DOFs
+        whose motion it takes, each contact's stuck share their mean; each contact's mode changes, the
+        FMU's transitions, are read where wanted, after the run: SystemFMU3.transitions). ``wrap``
+        (default: the map's own span): the end state, its Jacobian's rows and the contacts' modes
+        relabelled by the symmetry (the state a sector earlier, a run that ends on a sector's end)."""
         n = self.n
         f = self.fmu
-        span = self.KT if span is None else span
+        if wrap is None:
+            wrap = span is None
+        span = self.span if span is None else span
         c0 = time.process_time()
         f.start(t_s, observe=True, t_obs_start=t_s, t_obs_stop=t_s + span, sensitivity=jacobian,
                 x0=z[:n], v0=z[n:2 * n], f0=self.f0(z), slide0=self.slide)
@@ -184,6 +211,14 @@ class _Map:
             keep = np.concatenate([np.arange(2 * n), 2 * n + self.jenk])
             J = full[np.ix_(keep, keep)]
         x_max, x_min, share = f.observables()
+        if self.symmetry is not None:
+            if wrap:
+                Pz, self.last_mode = Pz[self.perm], self.last_mode[self.cperm]
+                J = J[self.perm]
+            if span == self.span:  # (the sector's stretch: the cycle's by the symmetry)
+                x_max = np.max(np.asarray(x_max)[self._dof_orbits], axis=0)
+                x_min = np.min(np.asarray(x_min)[self._dof_orbits], axis=0)
+                share = np.mean(np.asarray(share)[self._contact_orbits], axis=0)
         return Pz, J, {"x_max": x_max, "x_min": x_min, "stick_fraction": share}
 
     def transient(self, z: np.ndarray, periods: int) -> np.ndarray:
@@ -195,11 +230,12 @@ class _Map:
         return Pz
 
     def cycle(self, z: np.ndarray, t_s: float, samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
-        """The modes over one K T from z at t_s, sampled ``samples`` times per period: (t, mode [nt, nc])."""
+        """The modes over the map's span (K T; with a symmetry one sector's share of it) from z at
+        t_s, sampled ``samples`` times per period (at least as many per span): (t, mode [nt, nc])."""
         n = self.n
         f = self.fmu
         f.start(t_s, observe=False, x0=z[:n], v0=z[n:2 * n], f0=self.f0(z), slide0=self.slide)
-        t = t_s + np.linspace(0.0, self.KT, self.K * samples + 1)
+        t = t_s + np.linspace(0.0, self.span, self.K * samples + 1)
         return t, f.modes_at(t)
 
 
@@ -253,7 +289,7 @@ def _section(M: _Map, z: np.ndarray) -> float:  # noqa: C901 (the rule's cases, 
             return 0.0
         run = _longest(good[:-1])  # (the last sample is the first one a cycle later)
         if run is not None and run[1] - run[0] >= 2:
-            return float(0.5 * (t[run[0]] + t[run[1]]) % M.KT)
+            return float(0.5 * (t[run[0]] + t[run[1]]) % M.span)
     # some slider slides at every time (e.g. a travelling wave over many contacts): the map starts
     # where no contact's mode changes for longest (the middle of the longest stretch of constant
     # modes, rigid contacts sliding where such a stretch exists), each slider in its mode there
@@ -266,7 +302,7 @@ def _section(M: _Map, z: np.ndarray) -> float:  # noqa: C901 (the rule's cases, 
             break
     for j in jenk:
         M.slide[j] = int(mode[k, j])
-    return float(t[k] % M.KT)
+    return float(t[k] % M.span)
 
 
 class _Shooting:
@@ -332,7 +368,37 @@ def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float
     reason = n.reason
     if not reason and not (np.all(np.isfinite(n.J)) and np.all(np.isfinite(n.Pz))):
         reason = "the map's Jacobian was not computed (a switch it could not follow)"
+    if reason:
+        reason += _coarse_hint(M.system)
     return n.z, n.Pz, n.J, n.residual, n.iterations, reason, n.aux, S
+
+
+def stiffest_rate(system: "Structure") -> float:
+    """The structure's fastest natural rate with every Jenkins element stuck (rad/s): the square root
+    of the largest eigenvalue of (K + sum_j k_t,j w_j w_j', M), the stiffness the FMU's derived step
+    resolves (its ``h`` parameter's rule, without the damping and omega terms)."""
+    from scipy.linalg import eigh
+
+    if system.n == 0:
+        return 0.0
+    Kt = np.array(system.K, dtype=float)
+    for j in np.flatnonzero(system.k_t > 0.0):
+        Kt += system.k_t[j] * np.outer(system.W[j], system.W[j])
+    lam = eigh(Kt, system.M, eigvals_only=True, subset_by_index=[system.n - 1, system.n - 1])
+    return float(np.sqrt(max(float(lam[-1]), 0.0)))
+
+
+def _coarse_hint(system: "Structure") -> str:
+    """What a failed solve's reason adds where the step resolves the stiffest mode by fewer than
+    RESOLVED_STEPS steps a period ("" otherwise)."""
+    h = float(system.h)
+    rate = stiffest_rate(system) if h > 0 else 0.0
+    if not (rate > 0.0) or 2.0 * np.pi / (rate * h) >= RESOLVED_STEPS:
+        return ""
+    return (f"; the stiffest mode ({rate:.4g} rad/s, the contacts stuck) has {2.0 * np.pi / (rate * h):.2g} steps a "
+            f"period at h = {h:.6g}: the map may be rough at Newton's scale there, a smaller h (at least "
+            f"{RESOLVED_STEPS:g} steps a period of that mode, h <= {2.0 * np.pi / (RESOLVED_STEPS * rate):.3g}) may "
+            "converge")
 
 
 def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float, it: int, reason: str,
@@ -343,6 +409,8 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
     slide_s = np.zeros(sysm.nc, dtype=int)
     slide_s[M.jenk] = M.slide[M.jenk]
     mult = multipliers(J)
+    if M.symmetry is not None:  # (the period's map is the sector map's sectors-th power at the orbit)
+        mult = mult ** M.symmetry.sectors
     x_max, x_min = np.asarray(obs["x_max"]), np.asarray(obs["x_min"])
     ok = not reason
     one, inside = classify(mult, NEUTRAL)
@@ -351,7 +419,8 @@ def _make_orbit(M: _Map, z: np.ndarray, Pz: np.ndarray, J: np.ndarray, r: float,
                         slide0=slide_s.copy(), multipliers=mult, stable=ok and inside, residual=r,
                         neutral=ok and one, amplitude=0.5 * (x_max - x_min), offset=0.5 * (x_max + x_min),
                         stick_fraction=np.asarray(obs["stick_fraction"]), converged=ok, reason=reason, h=h,
-                        section=t_s, section_state=z.copy(), section_slide=slide_s, jacobian=J, iterations=it)
+                        section=t_s, section_state=z.copy(), section_slide=slide_s, jacobian=J, iterations=it,
+                        sectors=1 if M.symmetry is None else M.symmetry.sectors)
     if at_zero:
         _read_zero(M, orbit)
     return orbit
@@ -365,7 +434,7 @@ def _read_zero(M: _Map, orbit: SystemOrbit) -> None:
     if t_s != 0.0:
         slide = M.slide.copy()
         M.slide[:] = orbit.section_slide
-        z0, _, _ = M(z0, t_s, jacobian=False, span=M.KT - t_s)
+        z0, _, _ = M(z0, t_s, jacobian=False, span=M.span - t_s, wrap=True)
         M.slide[:] = slide
         slide0[M.jenk] = M.last_mode[M.jenk]
     orbit.x0, orbit.v0 = z0[:n].copy(), z0[n:2 * n].copy()
@@ -405,7 +474,8 @@ def system_map(system: "Structure", z: Sequence[float], period: int = 1, t_s: fl
 def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[Sequence[float]] | None = None, *,
                        transients: int = 40, tol: float = 1e-8, max_iter: int = 30,
                        accuracy: float | None = None, estimate_error: bool = True,
-                       keep_failed: bool = False, fmu: "SystemFMU3 | None" = None) -> list[SystemOrbit]:
+                       keep_failed: bool = False, fmu: "SystemFMU3 | None" = None,
+                       symmetry: "CyclicSymmetry | None" = None) -> list[SystemOrbit]:
     """The periodic orbits of ``period`` (K) excitation periods of ``system`` (scheme located, the
     Coulomb law) found by Newton shooting on the located map with the FMU's Jacobian (module doc),
     from:
@@ -427,7 +497,10 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
     ``keep_failed``. Stable orbits first, then by the largest amplitude. ``fmu``: an open
     :class:`~dryfriction.drivers.system.SystemFMU3` of a structure of the same sizes to run the map
     on (loading the FMU costs more than a map run of a small structure), else one is opened and
-    closed.
+    closed. ``symmetry``: a :class:`~dryfriction.system.symmetry.CyclicSymmetry` of the structure and
+    its excitation (checked; ``period`` 1): the orbits that share it, by Newton on one sector's share
+    of the period (module doc), ``sectors`` times cheaper a run and a Jacobian; an orbit that breaks
+    the symmetry is not found this way.
     """
     from ..drivers.system import SystemFMU3
     from ..system.structure import System
@@ -449,6 +522,7 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
         raise ValueError(f"tol must be > 0, not {tol!r}")
     if accuracy is not None and not (accuracy > 0):
         raise ValueError(f"accuracy must be > 0, not {accuracy!r}")
+    _check_symmetry(system, symmetry, K)
     orbits: list[SystemOrbit] = []
     if fmu is not None and not isinstance(fmu, SystemFMU3):
         raise TypeError(f"fmu must be an open SystemFMU3 for a structure, not {type(fmu).__name__}")
@@ -458,7 +532,7 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
         h0 = _h_of(fmu, system, accuracy)
         sysh = system.replace(h=h0)
         fmu.system = sysh
-        M = _Map(fmu, sysh, K)
+        M = _Map(fmu, sysh, K, symmetry)
         starts: list[np.ndarray] = []
         stuck = stuck_start(sysh)
         if stuck is not None:  # (an orbit with every contact stuck: one Newton step)
@@ -481,6 +555,19 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
             orbits.append(orbit)
     orbits.sort(key=lambda o: (not o.stable, -float(np.max(o.amplitude, initial=0.0))))
     return orbits
+
+
+def _check_symmetry(system: "Structure", symmetry: "CyclicSymmetry | None", K: int) -> None:
+    """Raise where ``symmetry`` is not a CyclicSymmetry of the structure (its check's error) or K > 1."""
+    if symmetry is None:
+        return
+    from ..system.symmetry import CyclicSymmetry
+
+    if not isinstance(symmetry, CyclicSymmetry):
+        raise TypeError(f"symmetry must be a dryfriction.system.CyclicSymmetry, not {type(symmetry).__name__}")
+    if K != 1:
+        raise ValueError(f"a cyclic symmetry finds orbits of one period (its shift is a share of T), not period = {K}")
+    symmetry.check(system)
 
 
 def stuck_start(system: "Structure") -> np.ndarray | None:
@@ -554,7 +641,7 @@ def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None
     neighbour's state under this structure's forces, a better start than the neighbour's own state
     at the section where a Newton step (with the Jacobian) costs several runs."""
     t_s = phase * M.KT
-    if not (0.0 < t_s < M.KT):
+    if not (0.0 < t_s < M.span):
         return None
     sysm = M.system
     live = sysm.N * np.maximum(sysm.mu_s, sysm.mu_k) > 0.0
@@ -574,9 +661,9 @@ def _warm_section(M: _Map, z: np.ndarray, phase: float, slide: np.ndarray | None
     try:
         zs, _, _ = M(z, 0.0, jacobian=False, span=t_s)
         if not good(M.last_mode):
-            dt = M.KT / (M.K * SAMPLES)
+            dt = M.span / (M.K * SAMPLES)
             t = t_s + dt * np.arange(-WINDOW, WINDOW + 1)
-            t = t[(t > 0.0) & (t < M.KT)]
+            t = t[(t > 0.0) & (t < M.span)]
             f = M.fmu
             f.start(0.0, observe=False, x0=z[:M.n], v0=z[M.n:2 * M.n], f0=M.f0(z), slide0=M.slide)
             run = _longest(good(f.modes_at(np.concatenate([[0.0], t]))[1:]))
@@ -630,7 +717,7 @@ def _solve(M: _Map, fmu: "SystemFMU3", z: np.ndarray, tol: float, max_iter: int,
         shift = None  # (the neighbour's shift belongs to its section)
     for halving in range(MAX_HALVINGS):
         h *= 0.5
-        Mh = _Map(fmu, M.system.replace(h=h), M.K)
+        Mh = _Map(fmu, M.system.replace(h=h), M.K, M.symmetry)
         Mh.slide[:] = M.slide  # (the same section, its sliders started as at h)
         fmu.system = Mh.system
         # (steps with the coarser orbit's Jacobian)

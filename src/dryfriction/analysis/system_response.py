@@ -27,10 +27,11 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from .shooting import extrapolate, progress_bar, sweep
-from .system_orbits import SystemOrbit, _Map, _h_of, _solve, stuck_start
+from .system_orbits import SystemOrbit, _check_symmetry, _Map, _h_of, _solve, stuck_start
 
 if TYPE_CHECKING:
     from ..system.structure import System as Structure  # (the annotations' name: the API reference links it)
+    from ..system.symmetry import CyclicSymmetry
 
 __all__ = ["system_frequency_response", "plot_system_response"]
 
@@ -110,7 +111,8 @@ def _same_section(branch: list[_Point]) -> list[_Point]:
 def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.ndarray, *, dof: int | None = None,
                               period: int = 1, tol: float = 1e-8, max_iter: int = 30, transients: int = 40,
                               accuracy: float | None = None, estimate_error: bool = True, progress: bool = False,
-                              fmu_path: str | os.PathLike[str] | None = None, fmu: "SystemFMU3 | None" = None) -> Any:
+                              fmu_path: str | os.PathLike[str] | None = None, fmu: "SystemFMU3 | None" = None,
+                              symmetry: "CyclicSymmetry | None" = None) -> Any:
     """The steady response of ``system`` at the frequencies ``f_hz`` (Hz) as an xarray Dataset
     (dimensions ``f_hz``, ``dof``, ``contact``): per frequency its orbit's ``amplitude_m``,
     ``offset_m``, ``x0_m``, ``v0_m_per_s`` (per DOF), ``stick_fraction`` (per contact), ``stable``, ``neutral`` (a stuck slider's continuum),
@@ -121,7 +123,10 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
     attributes. ``accuracy``: each orbit's h halved until its estimated error is within it (module
     doc of :mod:`~dryfriction.analysis.system_orbits`). ``fmu``: an open
     :class:`~dryfriction.drivers.system.SystemFMU3` of a structure of the same sizes to run on (else
-    one is opened, from ``fmu_path`` or the package's, and closed)."""
+    one is opened, from ``fmu_path`` or the package's, and closed). ``symmetry``: a
+    :class:`~dryfriction.system.symmetry.CyclicSymmetry` of the structure and its excitation, the
+    orbits that share it (:func:`~dryfriction.analysis.system_orbits.find_system_orbits`' ``symmetry``;
+    ``period`` 1)."""
     import xarray as xr
 
     from ..drivers.system import SystemFMU3
@@ -138,6 +143,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
         raise ValueError(f"the response by orbits uses the located scheme's map, and the system's scheme is "
                          f"{system.scheme!r}: System.replace(scheme='located')")
     n, nc, K = system.n, system.nc, int(period)
+    _check_symmetry(system, symmetry, K)
     out = {name: np.full((f.size, n), np.nan) for name in ("amplitude_m", "amplitude_extrapolated_m", "offset_m",
                                                            "x0_m", "v0_m_per_s")}
     share = np.full((f.size, nc), np.nan)
@@ -161,7 +167,7 @@ def system_frequency_response(system: "Structure", f_hz: Sequence[float] | np.nd
                 fmu.system = s_i
                 h0 = _h_of(fmu, s_i, accuracy)
                 s_h = s_i.replace(h=h0)
-                maps[i] = (_Map(fmu, s_h, K), h0)
+                maps[i] = (_Map(fmu, s_h, K, symmetry), h0)
             M, h0 = maps[i]
             fmu.system = M.system
             return M, h0

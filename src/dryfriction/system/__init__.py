@@ -3,7 +3,8 @@
 s) with its checks, damping helpers and the oscillator and the chain as systems, and the structure
 file (:mod:`dryfriction.system.spec`), the field's benchmark structures (:mod:`dryfriction.system.cases`),
 the Craig-Bampton reduction of a finite-element model to its contacts and a few modes
-(:mod:`dryfriction.system.reduction`)::
+(:mod:`dryfriction.system.reduction`), the cyclic symmetry of a structure of identical sectors under a
+travelling wave (:mod:`dryfriction.system.symmetry`)::
 
     from dryfriction import System, Contact
     sys = System(M=M, K=K, contacts=[Contact(dof=3, N=10.0, mu_s=0.3, mu_k=0.2),
@@ -17,6 +18,7 @@ from .cases import bladed_disk, two_mass_jenkins
 from .reduction import Reduction, craig_bampton
 from .spec import load
 from .structure import SCHEMES, Contact, System
+from .symmetry import CyclicSymmetry
 
 __all__ = ["System", "Contact", "SCHEMES", "load", "cases", "two_mass_jenkins", "bladed_disk", "craig_bampton",
-           "Reduction"]
+           "Reduction", "CyclicSymmetry"]

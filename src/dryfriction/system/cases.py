@@ -2,7 +2,8 @@
 
 - :func:`two_mass_jenkins`: two masses with a Jenkins element between them, the project's goal case
   for steady states of structures (pyHarm measured on it against an exact reference);
-- :func:`bladed_disk`: the lumped bladed disk with a friction ring damper of Laxalde et al. (2007),
+- :func:`bladed_disk`: the lumped bladed disk with a friction ring damper of Laxalde et al. (2007)
+  (its travelling-wave symmetry: :func:`bladed_disk_symmetry`),
   with the parameters of pyHarm's tutorial 006;
 - :func:`cantilever`: the mass and stiffness matrices of a clamped Euler-Bernoulli cantilever (the
   finite-element model of examples/beam_friction_damper.py).
@@ -18,14 +19,17 @@ parameters are keyword arguments. Degree-of-freedom indices are 0-based::
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import UsageError
 from .structure import Contact, System
 
-__all__ = ["two_mass_jenkins", "bladed_disk", "bladed_disk_sector", "bladed_disk_modes", "cantilever",
+if TYPE_CHECKING:
+    from .symmetry import CyclicSymmetry
+
+__all__ = ["two_mass_jenkins", "bladed_disk", "bladed_disk_sector", "bladed_disk_modes", "bladed_disk_symmetry", "cantilever",
            "TWO_MASS", "BLADED_DISK"]
 
 #: the two-mass case's fixed values: masses, stiffness matrix, Rayleigh factors, force on mass 0
@@ -264,3 +268,20 @@ def bladed_disk(*, omega: float | None = None, engine_order: int = 1, N: float |
         raise UsageError("bladed_disk: N, mu and k_t are the ring's contacts' values: give them with ring=True")
     return System(M=M, K=K, C=C, contacts=contacts, F_c=F_c, F_s=F_s, omega=om, x0=x0, v0=v0, h=h,
                   scheme=scheme)
+
+
+def bladed_disk_symmetry(system: System) -> "CyclicSymmetry":
+    """The travelling-wave symmetry of a :func:`bladed_disk` (its sector s: DOFs ``3s``, ``3s+1``,
+    ``3s+2`` and, with the ring, ``3 n_sectors + s`` and contact s): the sector shift of its
+    engine order (:meth:`~dryfriction.system.symmetry.CyclicSymmetry.of_sectors`), for
+    ``find_system_orbits(..., symmetry=...)`` and the response's. Raises dryfriction.UsageError
+    where the excitation is not a travelling wave (engine order 0, or one that shares a factor
+    with the number of sectors)."""
+    from .symmetry import CyclicSymmetry
+
+    ring = system.nc > 0
+    ns = system.nc if ring else system.n // 3
+    if ns < 2 or system.n != (4 if ring else 3) * ns:
+        raise UsageError(f"bladed_disk_symmetry: n = {system.n}, nc = {system.nc} is not a bladed disk's layout")
+    dofs = [[3 * s, 3 * s + 1, 3 * s + 2] + ([3 * ns + s] if ring else []) for s in range(ns)]
+    return CyclicSymmetry.of_sectors(system, dofs, [[s] for s in range(ns)] if ring else ())
