@@ -132,3 +132,40 @@ def test_the_bladed_disks_symmetry_is_its_engine_orders_shift() -> None:
         assert list(sym.dofs[:3]) == [3 * shift, 3 * shift + 1, 3 * shift + 2] and sym.dofs[72] == 72 + shift
     with pytest.raises(UsageError):
         cases.bladed_disk_symmetry(cases.bladed_disk(omega=1080.0, engine_order=0))
+
+
+def test_with_sectors_in_antiphase_newton_keeps_to_the_smooth_subspace() -> None:
+    """On 4 sectors at engine order 1 the sectors 2 apart move in antiphase and their contacts switch
+    together: the map's Jacobian (one order of the two switches) is off the central differences in a
+    direction that breaks the antiphase, and equal to them (to the differences' error) along states that
+    keep it; of_sectors takes the antiphase, and the orbit so found is the full map's."""
+    s = ring(ns=4, steps=200)
+    sym = CyclicSymmetry.of_sectors(s, *sectors(4))
+    assert sym.antiphase and not CyclicSymmetry.of_sectors(s, *sectors(4), antiphase=False).antiphase
+    (part,) = find_system_orbits(s, estimate_error=False, transients=100, symmetry=sym)
+    (full,) = find_system_orbits(s, estimate_error=False, transients=100)
+    assert part.converged and full.converged
+    scale = float(np.max(full.amplitude))
+    assert np.max(np.abs(part.amplitude - full.amplitude)) <= 1e-4 * scale
+    z = part.section_state
+    with SystemFMU3(s) as fmu:
+        fmu.system = s
+        M = _Map(fmu, s, 1, sym)
+        anti = M.anti
+        assert anti is not None and np.max(np.abs(z + z[anti])) <= 1e-12 * scale
+
+        def G(x: np.ndarray) -> np.ndarray:
+            M.slide[:] = part.section_slide
+            return M(x, part.section, jacobian=False)[0]
+
+        M.slide[:] = part.section_slide
+        _, J, _ = M(z, part.section)
+        rng = np.random.default_rng(3)
+        eps = 1e-6 * scale
+        for keep in (True, True, False):
+            d = rng.standard_normal(z.size)
+            d[2 * s.n:] = 0.0                     # (x and v only: the sliders follow from the modes)
+            d = 0.5 * (d - d[anti]) if keep else 0.5 * (d + d[anti])
+            fd = (G(z + eps * d) - G(z - eps * d)) / (2.0 * eps)
+            off = float(np.max(np.abs(fd - J @ d)) / np.max(np.abs(J @ d)))
+            assert (off <= 1e-7) if keep else (off >= 1e-2), off   # (measured 7e-10, 2e-9; 7e-2)
