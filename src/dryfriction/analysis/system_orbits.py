@@ -137,10 +137,6 @@ class _Map:
             self.cperm = symmetry.contacts
             self._dof_orbits = symmetry.orbits(symmetry.dofs)
             self._contact_orbits = symmetry.orbits(symmetry.contacts)
-        # with the antiphase (CyclicSymmetry's doc): the unknowns' pairing half the disk apart, the
-        # states z = -z[anti] the subspace Newton keeps to
-        self.anti = symmetry.power(self.perm, symmetry.sectors // 2) if symmetry is not None and symmetry.antiphase \
-            else None
         self.evaluations = 0
         # CPU seconds and counts of the runs with and without the Jacobian (expensive_jacobian)
         self._cost = {True: [0.0, 0], False: [0.0, 0]}
@@ -175,10 +171,7 @@ class _Map:
         return f
 
     def project(self, z: np.ndarray) -> np.ndarray:
-        """z with each stuck slider within its limit, each sliding one where its kinetic force puts it
-        (with the antiphase, z first made antisymmetric: (z - z[anti]) / 2)."""
-        if self.anti is not None:
-            z = 0.5 * (z - z[self.anti])
+        """z with each stuck slider within its limit, each sliding one where its kinetic force puts it."""
         if not self.jenk.size:
             return z
         out = z.copy()
@@ -340,20 +333,12 @@ class _Shooting:
         return float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
 
     def step(self, z: np.ndarray, Pz: np.ndarray, J: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """The minimum-norm Newton step in the scaled unknowns (with the antiphase, within its
-        subspace: the map is smooth there, :class:`~dryfriction.system.symmetry.CyclicSymmetry`)."""
+        """The minimum-norm Newton step in the scaled unknowns."""
         if not (np.all(np.isfinite(J)) and np.all(np.isfinite(Pz))):
             return None, "the map's Jacobian was not computed (a switch it could not follow)"
         S = self.S
         A = (J - np.eye(J.shape[0])) * S[None, :] / S[:, None]
-        anti = self.M.anti
-        if anti is None:
-            return S * np.linalg.lstsq(A, -(Pz - z) / S, rcond=1e-10)[0], ""
-        i = np.flatnonzero(np.arange(anti.size) < anti)   # (a basis e_i - e_anti[i] of the subspace)
-        B = np.zeros((anti.size, i.size))
-        B[i, np.arange(i.size)] = 1.0
-        B[anti[i], np.arange(i.size)] = -1.0
-        return S * (B @ np.linalg.lstsq(A @ B, -(Pz - z) / S, rcond=1e-10)[0]), ""
+        return S * np.linalg.lstsq(A, -(Pz - z) / S, rcond=1e-10)[0], ""
 
     def move(self, z: np.ndarray, dz: np.ndarray, lam: float) -> np.ndarray:
         """z + lam dz within the sliders' limits."""

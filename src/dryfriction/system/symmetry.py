@@ -12,15 +12,6 @@ times cheaper per map run and per Jacobian than over the period, with the period
 ``sectors``-th powers of that map's. The orbits it finds are orbits of the full structure (the
 travelling wave); an orbit that breaks the symmetry (a localised or a standing response of a mistuned
 or bifurcated disk) is not among them.
-
-``antiphase``: with an even number of sectors and an odd engine order, sectors half the disk apart
-are driven in antiphase, and a travelling wave with the half-wave symmetry (x(t + T / 2) = -x(t), the
-friction law being odd) moves them in antiphase at every instant: x_{dofs^(sectors/2)[i]} = -x_i.
-Their contacts then switch at the same instants, where the map is not differentiable (the two
-orders of two switches give two Jacobians: the map has a kink on the orbit, and Newton's line
-search stalls there); within the states that keep the antiphase (a subspace the motion never
-leaves) it is smooth, and Newton's steps are taken in that subspace. The orbits found are those
-with both symmetries.
 """
 
 from __future__ import annotations
@@ -71,15 +62,11 @@ class CyclicSymmetry:
     sectors: int
     dofs: np.ndarray
     contacts: np.ndarray
-    antiphase: bool = False
 
     def __post_init__(self) -> None:
         s = self.sectors
         if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 2:
             raise UsageError(f"CyclicSymmetry: sectors = {s!r}; valid: an integer >= 2")
-        if self.antiphase and s % 2:
-            raise UsageError(f"CyclicSymmetry: antiphase needs an even number of sectors, not {s}")
-        object.__setattr__(self, "antiphase", bool(self.antiphase))
         object.__setattr__(self, "sectors", int(s))
         dofs = _permutation("dofs", self.dofs, int(np.size(self.dofs)))
         contacts = _permutation("contacts", self.contacts, int(np.size(self.contacts)))
@@ -92,13 +79,6 @@ class CyclicSymmetry:
                                  "must come back to itself after a period)")
         object.__setattr__(self, "dofs", dofs)
         object.__setattr__(self, "contacts", contacts)
-
-    def power(self, perm: np.ndarray, k: int) -> np.ndarray:
-        """The relabelling ``perm`` applied k times."""
-        q = np.arange(perm.size)
-        for _ in range(k):
-            q = perm[q]
-        return q
 
     def orbits(self, perm: np.ndarray) -> np.ndarray:
         """``sectors`` x size: row k the permutation applied k times (row 0 the identity): the
@@ -139,24 +119,16 @@ class CyclicSymmetry:
                 and _close(Fs[p] * math.cos(th) - Fc[p] * math.sin(th), Fs)):
             raise UsageError("CyclicSymmetry: the excitation is not a travelling wave of this symmetry (the force "
                              "on dofs[i] is not the force on i a share 1 / sectors of the period later)")
-        if self.antiphase:
-            half = self.power(p, self.sectors // 2)
-            if not (_close(Fc[half], -Fc) and _close(Fs[half], -Fs)):
-                raise UsageError("CyclicSymmetry: antiphase, but the sectors half the disk apart are not driven in "
-                                 "antiphase (an even engine order)")
 
     @classmethod
     def of_sectors(cls, system: "System", sector_dofs: Sequence[Sequence[int]] | np.ndarray,
-                   sector_contacts: Sequence[Sequence[int]] | np.ndarray = (),
-                   antiphase: bool | None = None) -> "CyclicSymmetry":
+                   sector_contacts: Sequence[Sequence[int]] | np.ndarray = ()) -> "CyclicSymmetry":
         """The symmetry of ``system`` that moves each sector's motion to another sector's:
         ``sector_dofs[s]`` the degrees of freedom of sector s (each sector's in the same order),
         ``sector_contacts[s]`` its contacts (empty: none); the sector shift over ``T / sectors``
         (the travelling wave's direction and speed: an engine order's) is the first of 1 ..
-        sectors - 1 that :meth:`check` accepts. ``antiphase`` (module doc): None (default) where the
-        sectors half the disk apart are driven in antiphase, else as given. Raises
-        dryfriction.UsageError where the arrays are not a partition into equal sectors or no shift
-        fits."""
+        sectors - 1 that :meth:`check` accepts. Raises dryfriction.UsageError where the arrays
+        are not a partition into equal sectors or no shift fits."""
         D = np.asarray(sector_dofs, dtype=np.int64)
         if D.ndim != 2 or D.shape[0] < 2:
             raise UsageError("CyclicSymmetry.of_sectors: sector_dofs must list the DOFs of each of at least 2 sectors")
@@ -174,18 +146,11 @@ class CyclicSymmetry:
             contacts = np.empty(nc, dtype=np.int64)
             contacts[Cn.ravel()] = np.roll(Cn, -m, axis=0).ravel()
             try:
-                sym = cls(ns, dofs, contacts, bool(antiphase))
+                sym = cls(ns, dofs, contacts)
                 sym.check(system)
             except UsageError as e:
                 why = str(e)
                 continue
-            if antiphase is None and ns % 2 == 0:
-                try:
-                    anti = cls(ns, dofs, contacts, True)
-                    anti.check(system)
-                except UsageError:
-                    return sym
-                return anti
             return sym
         raise UsageError(f"CyclicSymmetry.of_sectors: no sector shift is a symmetry of the structure and its "
                          f"excitation (the last tried: {why})")
