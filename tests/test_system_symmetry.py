@@ -132,3 +132,40 @@ def test_the_bladed_disks_symmetry_is_its_engine_orders_shift() -> None:
         assert list(sym.dofs[:3]) == [3 * shift, 3 * shift + 1, 3 * shift + 2] and sym.dofs[72] == 72 + shift
     with pytest.raises(UsageError):
         cases.bladed_disk_symmetry(cases.bladed_disk(omega=1080.0, engine_order=0))
+
+
+def test_contacts_in_antiphase_put_a_kink_on_the_orbit() -> None:
+    """On 4 sectors at engine order 1 the sectors 2 apart move in antiphase and their contacts switch
+    at the same instants: the sector map's Jacobian (one order of each pair of switches) equals its
+    central differences (to their error) along states that keep the antiphase, and is off them in a
+    direction that breaks it (the differences there average the two orders' derivatives: a kink on
+    the orbit). The orbit itself is the full map's within the scheme's error."""
+    s = ring(ns=4, steps=200)
+    sym = CyclicSymmetry.of_sectors(s, *sectors(4))
+    (part,) = find_system_orbits(s, estimate_error=False, transients=100, symmetry=sym)
+    (full,) = find_system_orbits(s, estimate_error=False, transients=100)
+    assert part.converged and full.converged
+    scale = float(np.max(full.amplitude))
+    assert np.max(np.abs(part.amplitude - full.amplitude)) <= 1e-4 * scale
+    z = part.section_state
+    with SystemFMU3(s) as fmu:
+        fmu.system = s
+        M = _Map(fmu, s, 1, sym)
+        anti = sym.power(M.perm, 2)               # (the unknowns' pairing half the disk apart)
+        assert np.max(np.abs(z + z[anti])) <= 1e-6 * scale
+
+        def G(x: np.ndarray) -> np.ndarray:
+            M.slide[:] = part.section_slide
+            return M(x, part.section, jacobian=False)[0]
+
+        M.slide[:] = part.section_slide
+        _, J, _ = M(z, part.section)
+        rng = np.random.default_rng(3)
+        eps = 1e-6 * scale
+        for keep in (True, True, False):
+            d = rng.standard_normal(z.size)
+            d[2 * s.n:] = 0.0                     # (x and v only: the sliders follow from the modes)
+            d = 0.5 * (d - d[anti]) if keep else 0.5 * (d + d[anti])
+            fd = (G(z + eps * d) - G(z - eps * d)) / (2.0 * eps)
+            off = float(np.max(np.abs(fd - J @ d)) / np.max(np.abs(J @ d)))
+            assert (off <= 1e-7) if keep else (off >= 1e-2), off   # (measured 6e-10, 2e-9; 4e-2)

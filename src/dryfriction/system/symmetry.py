@@ -80,6 +80,14 @@ class CyclicSymmetry:
         object.__setattr__(self, "dofs", dofs)
         object.__setattr__(self, "contacts", contacts)
 
+    def power(self, perm: np.ndarray, k: int) -> np.ndarray:
+        """The relabelling ``perm`` (``dofs``, ``contacts`` or an index array built from them)
+        applied k times."""
+        q = np.arange(perm.size)
+        for _ in range(k):
+            q = perm[q]
+        return q
+
     def orbits(self, perm: np.ndarray) -> np.ndarray:
         """``sectors`` x size: row k the permutation applied k times (row 0 the identity): the
         degrees of freedom (or contacts) whose motion each one takes over the period."""

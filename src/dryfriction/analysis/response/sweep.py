@@ -25,14 +25,15 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
                        scheme: str | None = None, h: float = 0.0, period: int = 1, transients: int = 60,
                        cold_every: int = COLD_EVERY, workers: int = 0, progress: bool = False,
                        fmu_path: str | os.PathLike[str] | None = None, max_work: float | None = None,
-                       dof: int | None = None) -> Any:
+                       dof: int | None = None, symmetry: Any = None) -> Any:
     """Steady states of ``p`` at the excitation frequencies ``f_hz`` (Hz), as an xarray Dataset
     (dimension ``f_hz``; attributes: the oscillator and the settings, with units).
 
     ``p`` a structure (:class:`~dryfriction.system.structure.System`): its response by orbits on the located map
     (:func:`dryfriction.analysis.system_response.system_frequency_response`: dimensions ``f_hz``,
-    ``dof``, ``contact``; ``dof`` the DOF whose amplitude is ``amplitude_dof_m``; ``period``,
-    ``transients``, ``progress`` and ``fmu_path`` apply, the transient method's settings do not).
+    ``dof``, ``contact``; ``dof`` the DOF whose amplitude is ``amplitude_dof_m``; ``symmetry`` a
+    :class:`~dryfriction.system.symmetry.CyclicSymmetry` of it; ``period``, ``transients``,
+    ``progress`` and ``fmu_path`` apply, the transient method's settings do not).
 
     ``method`` ``"orbit"`` (the default, unless a Bossak ``scheme`` is asked for: the orbits need the
     exact scheme's Jacobian): every periodic orbit of ``period`` excitation periods found
@@ -93,10 +94,12 @@ def frequency_response(p: Oscillator, f_hz: Sequence[float] | np.ndarray, *, met
 
         if method not in (None, "orbit"):
             raise ValueError(f"a structure's response is by orbits (method 'orbit'), not {method!r}")
-        return system_frequency_response(p, f_hz, dof=dof, period=period, transients=min(transients, 40),
-                                         progress=progress, fmu_path=fmu_path)
-    if dof is not None:
-        raise ValueError("dof applies to a structure (dryfriction.System), not to the oscillator")
+        # (the oscillator's default transient, 60 periods, is the structure's 40)
+        return system_frequency_response(p, f_hz, dof=dof, period=period,
+                                         transients=transients if transients != 60 else 40,
+                                         progress=progress, fmu_path=fmu_path, symmetry=symmetry)
+    if dof is not None or symmetry is not None:
+        raise ValueError("dof and symmetry apply to a structure (dryfriction.System), not to the oscillator")
     import xarray as xr
 
     from ..chaos.batch import map_chunks
