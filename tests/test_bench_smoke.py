@@ -179,6 +179,18 @@ def test_orbit_response_benchmark_smoke() -> None:
             assert t["converged"] == 5 and t["max_error"] <= t["tol"] + 1e-11 and t["seconds"] > 0
 
 
+def test_bladed_disk_orbits_benchmark_smoke() -> None:
+    """bench/bladed_disk_orbits.py at one stuck frequency (1070 rad/s, 768 steps a period): the
+    orbit by the cyclic symmetry converged, its amplitude within the scheme's error of the stuck
+    closed form and Richardson's 100x closer (measured 8.9e-5 and 5.2e-7). No timing asserted."""
+    res = subprocess.run([sys.executable, str(ROOT / "bench" / "bladed_disk_orbits.py"), "--omegas", "1070",
+                          "--steps", "768", "--transients", "0", "--json"], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
+    (row,) = json.loads(res.stdout.splitlines()[-1])["points"]
+    assert row["converged"] and row["reference_kind"] == "stuck closed form" and row["cpu_s"] > 0
+    assert row["amplitude_error"] <= 2e-4 and row["extrapolated_error"] <= 1e-2 * row["amplitude_error"]
+
+
 def _bench_system() -> Path:
     sys.path.insert(0, str(ROOT / "bench"))
     from siconos_system import bench_system_path
