@@ -111,9 +111,9 @@ def test_the_line_search_without_the_jacobian_takes_the_same_iterates(monkeypatc
     for lazy in (False, True):
         count = [0]
 
-        def counted(self, z, t_s, jacobian=True, span=None, _count=count):
+        def counted(self, z, t_s, jacobian=True, span=None, wrap=None, _count=count):
             _count[0] += bool(jacobian) and span is None
-            return call(self, z, t_s, jacobian=jacobian, span=span)
+            return call(self, z, t_s, jacobian=jacobian, span=span, wrap=wrap)
 
         monkeypatch.setattr(so._Map, "__call__", counted)
         monkeypatch.setattr(so._Map, "expensive_jacobian", lambda self, _lazy=lazy: _lazy)

@@ -72,6 +72,8 @@ CHORD_STEPS, CHORD_RATE = 8, 0.25
 #: a period says so in its reason: a smaller h may converge (the located map steps such a mode stably
 #: but coarsely, and the ringing it leaves at every switch can make the map rough at Newton's scale)
 RESOLVED_STEPS = 4.0
+#: Newton steps at most after the residual is within tol, while the step (the distance left) is not
+POLISH = 2
 #: a map of this many unknowns or more: its Jacobian taken as costly until both kinds of run are timed
 LAZY_SIZE = 32
 
@@ -328,9 +330,14 @@ class _Shooting:
         return self.M.expensive_jacobian()
 
     def residual(self, z: np.ndarray, Pz: np.ndarray) -> float:
-        """``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` (module doc)."""
+        """``|S^-1 r|_inf / max(1, |S^-1 z|_inf)`` (module doc); with a symmetry of N sectors N times
+        the sector map's: about the period's map's residual at the same state (near the orbit the
+        period's map is G^N, and along its slow directions, multipliers near 1, each of the N sector
+        maps adds the same), so that ``tol`` bounds the distance to the orbit as without the
+        symmetry (the sector map's residual alone would allow N times that distance)."""
         S = self.S
-        return float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
+        N = self.M.symmetry.sectors if self.M.symmetry is not None else 1
+        return N * float(np.max(np.abs((Pz - z) / S)) / max(1.0, float(np.max(np.abs(z / S)))))
 
     def step(self, z: np.ndarray, Pz: np.ndarray, J: np.ndarray) -> tuple[np.ndarray | None, str]:
         """The minimum-norm Newton step in the scaled unknowns."""
@@ -364,7 +371,9 @@ def _newton(M: _Map, z: np.ndarray, t_s: float, S: np.ndarray | None, tol: float
     first = M(z, t_s)
     if S is None:
         S = _scales(M.system, first[2]["x_max"], first[2]["x_min"], M.jenk)
-    n = newton(_Shooting(M, S), z, t_s, tol, max_iter, halvings=12, armijo=0.0, first=first)
+    # (POLISH steps: with a multiplier near 1 a residual within tol leaves a distance of about
+    # tol / (1 - mu) to the orbit, the Newton step's size; stepped on while that is above tol)
+    n = newton(_Shooting(M, S), z, t_s, tol, max_iter, halvings=12, armijo=0.0, first=first, polish=POLISH)
     reason = n.reason
     if not reason and not (np.all(np.isfinite(n.J)) and np.all(np.isfinite(n.Pz))):
         reason = "the map's Jacobian was not computed (a switch it could not follow)"
@@ -769,15 +778,18 @@ def _chord(M: _Map, coarse: SystemOrbit, t_s: float, S: np.ndarray, tol: float,
         except FMUCallError:
             return None, M.project(coarse.section_state)
         r = sh.residual(z, Pz)
-        if r <= tol:
+        dz, _ = sh.step(z, Pz, J)
+        # (converged where the residual and the step to the orbit, the distance left, are within tol:
+        # the coarser orbit's state has a residual within tol at a finer step whenever its distance to
+        # the finer orbit times 1 - mu is, and that distance is the error estimate's whole subject)
+        if r <= tol and (dz is None or sh.step_size(z, dz) <= tol):
             orbit = _make_orbit(M, z, Pz, J, r, it, "", obs, t_s, h, at_zero=False)
             orbit.multipliers = coarse.multipliers
             orbit.stable, orbit.neutral = coarse.stable, coarse.neutral
             return orbit, z
-        if it == CHORD_STEPS or not r <= CHORD_RATE * last:
+        if it == CHORD_STEPS or not (r <= CHORD_RATE * last or r <= tol):
             return None, z
         last = r
-        dz, _ = sh.step(z, Pz, J)
         if dz is None:
             return None, z
         z = sh.move(z, dz, 1.0)
