@@ -455,7 +455,8 @@ def _read_zero(M: _Map, orbit: SystemOrbit) -> None:
 def _h_of(fmu: "SystemFMU3", system: "Structure", accuracy: float | None = None) -> float:
     """The internal step of the orbits: the system's h; else the FMU's derived one (1/1000 of the
     fastest period), or with ``accuracy`` a coarse start that the error estimate refines: the least
-    of 1/32 of the excitation period and half the fastest period (the located scheme resolves it)."""
+    of 1/32 of the excitation period and 1/RESOLVED_STEPS of the fastest period (a coarser step
+    steps that mode stably but may leave the map rough at Newton's scale: _coarse_hint)."""
     if system.h > 0:
         return float(system.h)
     fmu.system = system
@@ -463,7 +464,7 @@ def _h_of(fmu: "SystemFMU3", system: "Structure", accuracy: float | None = None)
     h = float(fmu.inst.get("Float64", [fmu.vars["h_used"].vr])[0])
     if accuracy is None:
         return h
-    return min(2.0 * np.pi / system.omega / COARSE_STEPS, 0.5 * 1000.0 * h)
+    return min(2.0 * np.pi / system.omega / COARSE_STEPS, 1000.0 * h / RESOLVED_STEPS)
 
 
 def system_map(system: "Structure", z: Sequence[float], period: int = 1, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -501,7 +502,7 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
     (default) each orbit is solved again at h / 2, its ``amplitude`` is the h / 2 one, ``error`` the
     estimate |A(h / 2) - A(h)| / 3 (max over DOFs) and ``amplitude_extrapolated`` Richardson's;
     ``accuracy`` (m) starts from a coarse h where the system's is derived (1/32 of the period, or
-    half the fastest one) and halves it until ``error`` is within it (at most 10 halvings; an orbit
+    a quarter of the fastest one) and halves it until ``error`` is within it (at most 10 halvings; an orbit
     that does not get there says so in ``reason``). Orbits that did not converge are dropped unless
     ``keep_failed``. Stable orbits first, then by the largest amplitude. ``fmu``: an open
     :class:`~dryfriction.drivers.system.SystemFMU3` of a structure of the same sizes to run the map
