@@ -25,6 +25,15 @@ slider stuck: a sliding one would wait for its static limit), else of the longes
 sliders stuck, else t = 0 with each slider started in its mode there (``slide0``: a sliding slider
 where its kinetic force puts it). The state at t = 0 mod K T (``x0``, ``v0``, ``s0``) is read from a
 run of the converged orbit.
+
+With a cyclic symmetry (:class:`~dryfriction.system.symmetry.CyclicSymmetry`, N sectors: ``x_{dofs[i]}(t
++ T / N) = x_i(t)``) the map is the sector map G: one run of T / N from t_s, its end state relabelled
+(state i the end's ``dofs[i]``; the sliders and their modes by ``contacts``), so that a fixed point
+solves z(T / N) = P z(0), an orbit of the full structure; the period's map is G^N (the N sector runs
+are relabelled copies of one another), so the multipliers are G's to the power N; the observables
+of the run are combined over the relabelling (a DOF's extremes over the DOFs whose motion it takes, a
+contact's stuck share their mean); the section lies in [0, T / N); the residual is N times G's (about
+the period's map's: ``tol`` means the same distance to the orbit).
 """
 
 from __future__ import annotations
