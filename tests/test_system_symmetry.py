@@ -99,6 +99,24 @@ def test_the_response_by_the_sector_map_follows_the_full_one() -> None:
     assert np.all(a.error_m.values <= 10.0 * b.error_m.values + 1e-12)
 
 
+def test_the_package_entry_points_take_the_symmetry() -> None:
+    """dryfriction.find_orbits and frequency_response of a structure pass its CyclicSymmetry on (the
+    oscillator's find_orbits has a symmetry switch of its own, its mirror orbits: a CyclicSymmetry
+    there is refused, not taken for True)."""
+    from dryfriction import Oscillator, find_orbits, frequency_response
+
+    s = ring()
+    sym = CyclicSymmetry.of_sectors(s, *sectors())
+    (o,) = find_orbits(s, symmetry=sym, transients=100, estimate_error=False)
+    assert o.sectors == 5 and o.converged
+    ds = frequency_response(s, [1.3 / (2.0 * np.pi)], symmetry=sym, transients=100)
+    assert bool(ds.converged[0]) and ds.amplitude_m.values[0, 1] == pytest.approx(o.amplitude[1], rel=1e-3)
+    with pytest.raises(TypeError, match="mirror orbits"):
+        find_orbits(Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4), symmetry=sym)
+    with pytest.raises(ValueError, match="structure"):
+        frequency_response(Oscillator.from_nondimensional(lam=0.5, mu_s_sigma=0.6, chi=0.4), [0.1], symmetry=sym)
+
+
 def test_a_symmetry_the_structure_does_not_have_is_refused() -> None:
     """check names what breaks the symmetry; of_sectors finds the engine order's sector shift (3 on
     five sectors at engine order 2: 2 x 3 = 1 mod 5) and refuses a standing wave; period 2 and a

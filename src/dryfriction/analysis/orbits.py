@@ -404,7 +404,7 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
                 fmu: OscillatorFMU2 | None = None,
                 transients: int = 60,
                 spread: Sequence[tuple[float, float]] = DEFAULT_SPREAD,
-                symmetry: bool = True,
+                symmetry: Any = True,
                 tol: float = 1e-12,
                 max_iter: int = 40,
                 keep_failed: bool = False,
@@ -452,7 +452,8 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
 
     A structure (:class:`~dryfriction.system.structure.System`) in place of the oscillator: its orbits on the located
     scheme's map (:func:`dryfriction.analysis.system_orbits.find_system_orbits`, which takes the
-    keywords ``guesses``, ``transients``, ``tol``, ``max_iter``, ``keep_failed`` and its own).
+    keywords ``guesses``, ``transients``, ``tol``, ``max_iter``, ``keep_failed`` and its own;
+    ``symmetry`` there a :class:`~dryfriction.system.symmetry.CyclicSymmetry`, not the mirror switch).
     """
     from ..system.structure import System
 
@@ -463,9 +464,14 @@ def find_orbits(oscillator: Oscillator, period: int = 1,
                  "max_iter": max_iter if max_iter != 40 else 30, "keep_failed": keep_failed, **system_options}
         if fmu is not None:  # (a SystemFMU3: find_system_orbits checks it)
             extra["fmu"] = fmu
+        if not isinstance(symmetry, bool):  # (a structure's cyclic symmetry; the mirror switch is the oscillator's)
+            extra["symmetry"] = symmetry
         return find_system_orbits(oscillator, period, guesses, **extra)  # type: ignore[return-value]
     if system_options:
         raise TypeError(f"find_orbits: {', '.join(system_options)} apply to a dryfriction.System only")
+    if not isinstance(symmetry, bool):
+        raise TypeError(f"find_orbits: an oscillator's symmetry is True or False (its mirror orbits), not "
+                        f"{type(symmetry).__name__} (a CyclicSymmetry is a structure's)")
     p = oscillator
     _check(p, period)
     own = fmu is None
