@@ -97,6 +97,25 @@ def test_a_signal_once_the_results_are_committed_changes_nothing(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
+def test_a_library_failure_after_an_early_interrupt_is_the_interrupt() -> None:
+    """An interrupt during the imports that a library swallows (a bare except around an import),
+    which then fails on what it left half made: the program still says it was interrupted, exit
+    130 (it used to end with Python's report of that error on the silenced stderr: exit 1, nothing
+    said). A process of its own (the console script ends it with os._exit)."""
+    prog = (
+        "import os, signal\n"
+        "from dryfriction.cli import console\n"
+        "def command(argv):\n"
+        "    try:\n"
+        "        signal.raise_signal(signal.SIGINT)\n"
+        "    except BaseException:\n"
+        "        pass\n"
+        "    raise ImportError('cannot import name x from partially initialized module y')\n"
+        "console.main(command)\n")
+    r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True, timeout=120)
+    assert (r.returncode, r.stderr) == (130, "dryfriction: interrupted\n")
+
+
 def test_the_library_is_interrupted_as_usual(tmp_path: Path) -> None:
     """Outside the command line a result set does not hold SIGINT back: inside the block it is
     KeyboardInterrupt (nothing moved), after it too (everything moved)."""

@@ -361,6 +361,15 @@ def main(command: Callable[[list[str]], int] | None = None) -> NoReturn:
                 _silence()
             _say(_message(st.signum))
             code = 128 + st.signum
+        except BaseException:
+            # after the interrupt, a library's failure that it caused (a KeyboardInterrupt swallowed
+            # inside an import by a bare except leaves a module half made, and the next import of it
+            # fails): the interrupt is the news, as in guarded (stderr is silenced by then, so
+            # Python's own report of the error would be an empty exit 1)
+            if not st.signum:
+                raise
+            _say(_message(st.signum))
+            code = 128 + st.signum
         if st.signum:
             _flush_and_exit(code)
         if gate is not None:
