@@ -27,6 +27,7 @@ from ..errors import UsageError
 from .structure import Contact, System
 
 if TYPE_CHECKING:
+    from .structure import System as Structure  # (the annotations' name: the API reference links it)
     from .symmetry import CyclicSymmetry
 
 __all__ = ["two_mass_jenkins", "bladed_disk", "bladed_disk_sector", "bladed_disk_modes", "bladed_disk_symmetry", "cantilever",
@@ -270,7 +271,7 @@ def bladed_disk(*, omega: float | None = None, engine_order: int = 1, N: float |
                   scheme=scheme)
 
 
-def bladed_disk_symmetry(system: System) -> "CyclicSymmetry":
+def bladed_disk_symmetry(system: "Structure") -> "CyclicSymmetry":
     """The travelling-wave symmetry of a :func:`bladed_disk` (its sector s: DOFs ``3s``, ``3s+1``,
     ``3s+2`` and, with the ring, ``3 n_sectors + s`` and contact s): the sector shift of its
     engine order (:meth:`~dryfriction.system.symmetry.CyclicSymmetry.of_sectors`), for

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import UsageError
 
 if TYPE_CHECKING:
-    from .structure import System
+    from .structure import System as Structure  # (the annotations' name: the API reference links it)
 
 __all__ = ["CyclicSymmetry", "SYMMETRY_TOL"]
 
@@ -96,7 +96,7 @@ class CyclicSymmetry:
             rows.append(perm[rows[-1]])
         return np.array(rows, dtype=np.int64).reshape(self.sectors, perm.size)
 
-    def check(self, system: "System") -> None:
+    def check(self, system: "Structure") -> None:
         """Raise dryfriction.UsageError naming the first array the symmetry does not leave
         unchanged (within SYMMETRY_TOL of its largest entry): the sizes, M, C, K, the contacts'
         rows, loads, coefficients, stiffnesses and laws, the excitation (F_c, F_s rotated by
@@ -129,7 +129,7 @@ class CyclicSymmetry:
                              "on dofs[i] is not the force on i a share 1 / sectors of the period later)")
 
     @classmethod
-    def of_sectors(cls, system: "System", sector_dofs: Sequence[Sequence[int]] | np.ndarray,
+    def of_sectors(cls, system: "Structure", sector_dofs: Sequence[Sequence[int]] | np.ndarray,
                    sector_contacts: Sequence[Sequence[int]] | np.ndarray = ()) -> "CyclicSymmetry":
         """The symmetry of ``system`` that moves each sector's motion to another sector's:
         ``sector_dofs[s]`` the degrees of freedom of sector s (each sector's in the same order),
