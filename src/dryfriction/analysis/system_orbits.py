@@ -518,7 +518,7 @@ def find_system_orbits(system: "Structure", period: int = 1, guesses: Iterable[S
     on (loading the FMU costs more than a map run of a small structure), else one is opened and
     closed. ``symmetry``: a :class:`~dryfriction.system.symmetry.CyclicSymmetry` of the structure and
     its excitation (checked; ``period`` 1): the orbits that share it, by Newton on one sector's share
-    of the period (module doc), ``sectors`` times cheaper a run and a Jacobian; an orbit that breaks
+    of the period (module doc), ``sectors`` times fewer steps a run and a Jacobian; an orbit that breaks
     the symmetry is not found this way.
     """
     from ..drivers.system import SystemFMU3

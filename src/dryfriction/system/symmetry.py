@@ -8,7 +8,7 @@ after ``T / sectors``: ``x_{dofs[i]}(t + T / sectors) = x_i(t)``. Where the stru
 ``dofs[i]`` a share ``1 / sectors`` of the period after the force on ``i``), the periodic orbits
 that share the symmetry solve ``z(T / sectors) = P z(0)``: a shooting over one sector's share of
 the period (:func:`dryfriction.analysis.system_orbits.find_system_orbits`' ``symmetry``), ``sectors``
-times cheaper per map run and per Jacobian than over the period, with the period's multipliers the
+times fewer steps per map run and per Jacobian than over the period, with the period's multipliers the
 ``sectors``-th powers of that map's. The orbits it finds are orbits of the full structure (the
 travelling wave); an orbit that breaks the symmetry (a localised or a standing response of a mistuned
 or bifurcated disk) is not among them.
