@@ -71,10 +71,7 @@ class CyclicSymmetry:
         dofs = _permutation("dofs", self.dofs, int(np.size(self.dofs)))
         contacts = _permutation("contacts", self.contacts, int(np.size(self.contacts)))
         for name, p in (("dofs", dofs), ("contacts", contacts)):
-            q = np.arange(p.size)
-            for _ in range(int(s)):
-                q = p[q]
-            if not np.array_equal(q, np.arange(p.size)):
+            if not np.array_equal(self.power(p, int(s)), np.arange(p.size)):
                 raise UsageError(f"CyclicSymmetry: {name} applied {s} times is not the identity (the motion "
                                  "must come back to itself after a period)")
         object.__setattr__(self, "dofs", dofs)
@@ -91,9 +88,7 @@ class CyclicSymmetry:
     def orbits(self, perm: np.ndarray) -> np.ndarray:
         """``sectors`` x size: row k the permutation applied k times (row 0 the identity): the
         degrees of freedom (or contacts) whose motion each one takes over the period."""
-        rows = [np.arange(perm.size)]
-        for _ in range(self.sectors - 1):
-            rows.append(perm[rows[-1]])
+        rows = [self.power(perm, k) for k in range(self.sectors)]
         return np.array(rows, dtype=np.int64).reshape(self.sectors, perm.size)
 
     def check(self, system: "Structure") -> None:
